@@ -1,0 +1,186 @@
+"""The dampers: a free ball with clearance (MODEL.md section 2) and a tuned
+mass damper (section 3), with Den Hartog's design.
+
+All quantities SI.  A bar with no damper is ``damper=None``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from boringbar._validate import (
+    ParameterError,
+    check_choice,
+    check_nonnegative,
+    check_positive,
+    check_range,
+)
+
+GRAVITY = 9.81
+BALL_DIAMETER = 0.015
+BALL_DENSITY = {"carbide": 14_700.0, "steel": 7_850.0}
+#: The published carbide ball's mass (26 g, as published; 14.7 g/cm^3 gives 25.98 g).
+PUBLISHED_CARBIDE_MASS = 0.026
+#: The published rolling-resistance number, "0.6" (mm).
+PUBLISHED_FRICTION_NUMBER = 0.6
+#: The published absorber (MODEL.md section 3).
+PUBLISHED_TMD = {"mass": 0.39, "stiffness": 1.05e6, "damping": 505.0}
+FRICTION_KINDS = ("none", "rolling", "coulomb", "force", "paper-number")
+REACTIONS = ("reciprocal", "printed")
+
+
+@dataclass(frozen=True)
+class Friction:
+    """Friction between ball and cavity floor, F_b = -F_c sgn(y').
+
+    ``kind`` says how ``value`` gives the magnitude F_c for a ball of mass m,
+    radius r_m:
+
+    - ``rolling``: rolling-resistance length nu (m), F_c = nu m g / r_m
+      (published nu = 0.6 mm gives F_c = 0.08 m g, 0.0204 N for 26 g);
+    - ``coulomb``: coefficient mu_c, F_c = mu_c m g;
+    - ``force``: F_c itself (N);
+    - ``paper-number``: **friction force as computed in the paper**: the
+      published number (0.6, meant in mm) used with r_m in metres,
+      F_c = value m g / r_m (20.4 N for 0.6 and 26 g).  Kept so the published
+      results can be rerun; not physics.
+    - ``none``: F_c = 0.
+
+    ``reaction`` is how the bar feels it: ``reciprocal`` (-psi_d F_b, action
+    equals reaction) or ``printed``, the **bar reaction as printed**
+    (+psi_d F_b: the bar is pushed the same way as the ball; breaks momentum
+    and energy balance, which the results then report).
+    """
+
+    kind: str = "rolling"
+    value: float = PUBLISHED_FRICTION_NUMBER * 1e-3
+    reaction: str = "reciprocal"
+
+    def __post_init__(self):
+        check_choice("friction kind", self.kind, FRICTION_KINDS)
+        check_choice("friction reaction", self.reaction, REACTIONS)
+        check_nonnegative(f"friction value ({self.kind})", self.value)
+
+    def force(self, mass: float, radius: float) -> float:
+        """F_c (N) for a ball of ``mass`` (kg) and ``radius`` (m)."""
+        if self.kind == "none":
+            return 0.0
+        if self.kind == "rolling":
+            return self.value * mass * GRAVITY / radius
+        if self.kind == "coulomb":
+            return self.value * mass * GRAVITY
+        if self.kind == "force":
+            return self.value
+        return self.value * mass * GRAVITY / radius  # paper-number: value taken as metres
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "value": self.value, "reaction": self.reaction}
+
+
+NO_FRICTION = Friction("none", 0.0)
+
+
+@dataclass(frozen=True)
+class ImpactDamper:
+    """A free ball in a cavity at z_d with total clearance ``gap`` (delta).
+
+    The ball travels delta/2 each way from the cavity centre.  ``locked``
+    turns it into a rigid added mass at z_d (for comparison).
+    """
+
+    mass: float = PUBLISHED_CARBIDE_MASS
+    gap: float = 0.5e-3
+    restitution: float = 0.7
+    friction: Friction = Friction()
+    radius: float = BALL_DIAMETER / 2
+    locked: bool = False
+    material: str = "carbide"
+
+    def __post_init__(self):
+        check_positive("ball mass", self.mass, "kg")
+        check_positive("gap", self.gap, "m")
+        check_range("restitution", self.restitution, 0.0, 1.0)
+        check_positive("ball radius", self.radius, "m")
+        if not isinstance(self.friction, Friction):
+            raise ParameterError(f"friction = {self.friction!r} must be a Friction")
+
+    @classmethod
+    def ball(cls, material: str = "carbide", *, gap: float = 0.5e-3, restitution: float = 0.7,
+             friction: Friction = Friction(), diameter: float = BALL_DIAMETER,
+             mass: float | None = None, locked: bool = False) -> ImpactDamper:
+        """A ball of ``material`` (carbide: 26 g as published; steel: from density)."""
+        check_choice("ball material", material, tuple(BALL_DENSITY) + ("custom",))
+        check_positive("ball diameter", diameter, "m")
+        if mass is None:
+            if material == "custom":
+                raise ParameterError("ball material = 'custom' needs a mass")
+            if material == "carbide" and diameter == BALL_DIAMETER:
+                mass = PUBLISHED_CARBIDE_MASS
+            else:
+                mass = BALL_DENSITY[material] * math.pi / 6 * diameter**3
+        return cls(mass=mass, gap=gap, restitution=restitution, friction=friction,
+                   radius=diameter / 2, locked=locked, material=material)
+
+    @property
+    def friction_force(self) -> float:
+        """F_c (N)."""
+        return self.friction.force(self.mass, self.radius)
+
+    def to_dict(self) -> dict:
+        return {"type": "ball", "material": self.material, "mass_kg": self.mass,
+                "gap_m": self.gap, "restitution": self.restitution, "radius_m": self.radius,
+                "locked": self.locked, "friction": self.friction.to_dict(),
+                "friction_force_n": self.friction_force}
+
+
+@dataclass(frozen=True)
+class TunedMassDamper:
+    """An absorber of ``mass`` on spring ``stiffness`` and dashpot ``damping`` at z_a."""
+
+    mass: float
+    stiffness: float
+    damping: float
+    position: float = 0.096
+    design: str = "given"
+
+    def __post_init__(self):
+        check_positive("absorber mass", self.mass, "kg")
+        check_positive("absorber stiffness", self.stiffness, "N/m")
+        check_nonnegative("absorber damping", self.damping, "N s/m")
+        check_range("absorber position", self.position, 0.0, math.inf, lo_open=True,
+                    hi_open=True, unit="m")
+
+    @classmethod
+    def published(cls, position: float = 0.096) -> TunedMassDamper:
+        """The published design (m_a = 0.39 kg, k_a = 1.05 MN/m, c_a = 505 N s/m)."""
+        return cls(**PUBLISHED_TMD, position=position, design="published")
+
+    @classmethod
+    def den_hartog(cls, mass: float, bar, position: float | None = None) -> TunedMassDamper:
+        """Den Hartog's optimum for the first mode of ``bar`` (a ModalModel).
+
+        mu_a = m_a psi_a^2 / M, f_opt = 1/(1 + mu_a),
+        zeta_opt = sqrt(3 mu_a / (8 (1 + mu_a)^3)), k_a = m_a (f_opt omega_n)^2,
+        c_a = 2 zeta_opt m_a omega_n.  ``bar.psi_absorber`` must be psi(z_a).
+        """
+        check_positive("absorber mass", mass, "kg")
+        p = den_hartog_parameters(mass, bar)
+        return cls(mass=mass, stiffness=p["stiffness"], damping=p["damping"],
+                   position=bar.z_absorber if position is None else position,
+                   design="den-hartog")
+
+    def to_dict(self) -> dict:
+        return {"type": "tmd", "mass_kg": self.mass, "stiffness_n_per_m": self.stiffness,
+                "damping_n_s_per_m": self.damping, "position_m": self.position,
+                "design": self.design}
+
+
+def den_hartog_parameters(mass: float, bar) -> dict:
+    """Den Hartog's formulas (MODEL.md section 3) for mode 1 of ``bar``."""
+    mu = mass * bar.psi_absorber[0] ** 2 / bar.mass[0]
+    wn = bar.natural_frequency
+    f_opt = 1.0 / (1.0 + mu)
+    zeta = math.sqrt(3.0 * mu / (8.0 * (1.0 + mu) ** 3))
+    return {"mass_ratio": mu, "frequency_ratio": f_opt, "damping_ratio": zeta,
+            "stiffness": mass * (f_opt * wn) ** 2, "damping": 2.0 * zeta * mass * wn}

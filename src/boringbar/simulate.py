@@ -1,0 +1,358 @@
+"""``simulate``: one time-domain run of a bar under harmonic forcing.
+
+The description objects (System, Harmonic) are packed into the kernel's
+parameter vector here (layout in :mod:`boringbar.kernels.layout`); the
+kernel streams its metrics; this module turns them into a labelled
+:class:`Run`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from boringbar import __version__
+from boringbar._validate import ParameterError, check_positive, check_range
+from boringbar.analysis.patterns import Pattern, classify
+from boringbar.dampers import ImpactDamper, TunedMassDamper
+from boringbar.forcing import Harmonic
+from boringbar.kernels import layout as L
+from boringbar.kernels.rk4 import run_rk4
+from boringbar.system import System
+
+#: Impacts slower than this fraction of Omega delta/2 are contact, not impacts.
+IMPACT_THRESHOLD = 1e-3
+#: Stick intervals shorter than this fraction of the forcing period are not recorded.
+STICK_MIN_PERIODS = 0.01
+#: Smallest number of steps per period of the forcing and of the highest mode.
+MIN_STEPS_PER_PERIOD = 20
+
+
+@dataclass(frozen=True)
+class Initial:
+    """Initial conditions (MODEL.md section 1), SI.
+
+    The bar starts with tip displacement/velocity W0, W0' carried by the first
+    mode (u_1 = W0/psi_1(L), higher modes at rest); the ball at ``ball_position``
+    y0 in [-delta/2, delta/2] with relative velocity y0'; the absorber at rest
+    relative to the bar.  Default: everything at rest, ball centred.
+    """
+
+    tip_displacement: float = 0.0
+    tip_velocity: float = 0.0
+    ball_position: float = 0.0
+    ball_velocity: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class State:
+    """A run's final state, to continue from: x = [u, u', aux, aux'] at time t."""
+
+    x: np.ndarray
+    t: float
+
+
+@dataclass(eq=False)
+class Run:
+    """The result of :func:`simulate`: streamed metrics, events and (if asked) history."""
+
+    system: System
+    forcing: Harmonic
+    omega: float  #: forcing frequency (rad/s)
+    dt: float
+    t0: float
+    duration: float
+    steady_start: float  #: start of the steady part (s)
+    metrics: dict
+    impacts: np.ndarray  #: (n, 3): time, wall (+1/-1), relative velocity before
+    sticks: np.ndarray  #: (n, 2): start, end of stick intervals in the steady part
+    strobe: np.ndarray  #: (n, 5): Poincare samples t, W, W', aux, aux'
+    history: np.ndarray | None  #: (n, 6): t, W, W', aux, aux', force
+    initial: State
+    final: State
+    pattern: Pattern | None
+    elapsed_s: float
+    energy: dict = field(default_factory=dict)
+    thresholds: dict = field(default_factory=dict)
+
+    @property
+    def rms_tip(self) -> float:
+        """RMS of the sampled tip displacement W over the steady part (m)."""
+        return self.metrics["rms_tip_m"]
+
+    def config(self) -> dict:
+        return {
+            "boringbar_version": __version__,
+            "system": self.system.to_dict(),
+            "forcing": self.forcing.to_dict(),
+            "omega_rad_s": self.omega,
+            "integrator": "rk4",
+            "dt_s": self.dt,
+            "t0_s": self.t0,
+            "duration_s": self.duration,
+            "steady_start_s": self.steady_start,
+            "thresholds": self.thresholds,
+        }
+
+    def summary(self) -> dict:
+        """JSON-able summary (what ``boringbar simulate --json`` prints)."""
+        m = self.metrics
+        sys = self.system
+        return {
+            "bar": sys.kind,
+            "preset": sys.preset,
+            "readings": list(sys.readings),
+            "integrator": "rk4",
+            "natural_frequency_hz": sys.reference_frequency / (2 * math.pi),
+            "forcing_frequency_hz": self.omega / (2 * math.pi),
+            "ratio": self.omega / sys.reference_frequency,
+            "force_n": self.forcing.amplitude,
+            "rms_tip_m": m["rms_tip_m"],
+            "max_abs_tip_m": m["max_abs_tip_m"],
+            "pattern": None if self.pattern is None else self.pattern.name,
+            "impacts_per_cycle": None if self.pattern is None else
+            self.pattern.impacts_per_cycle,
+            "max_abs_rel_disp_m": m["max_abs_aux_m"],
+            "contact_time_s": m["contact_time_s"],
+            "stick_time_s": m["stick_time_s"],
+            "energy": self.energy,
+            "dt_s": self.dt,
+            "duration_s": self.duration,
+            "elapsed_s": self.elapsed_s,
+            "final_time_s": self.final.t,
+            "final_phase_rad": (self.omega * self.final.t) % (2 * math.pi),
+        }
+
+    def history_dataset(self):
+        """The decimated history as an xarray Dataset (needs ``record_every``)."""
+        import xarray as xr
+
+        if self.history is None:
+            raise ValueError("no history was recorded: run simulate(..., record_every=N)")
+        h = self.history
+        aux = "y" if self.system.kind in ("ball", "locked") else "absorber_stroke"
+        ds = xr.Dataset(
+            {
+                "tip_displacement": ("time", h[:, 1], {"units": "m"}),
+                "tip_velocity": ("time", h[:, 2], {"units": "m/s"}),
+                aux: ("time", h[:, 3], {"units": "m"}),
+                f"{aux}_velocity": ("time", h[:, 4], {"units": "m/s"}),
+                "force": ("time", h[:, 5], {"units": "N"}),
+            },
+            coords={"time": ("time", h[:, 0], {"units": "s"})},
+            attrs={"config": json.dumps(self.config()),
+                   "summary": json.dumps(self.summary())},
+        )
+        if self.impacts.size:
+            ds["impact_time"] = ("impact", self.impacts[:, 0], {"units": "s"})
+            ds["impact_wall"] = ("impact", self.impacts[:, 1])
+        return ds
+
+
+def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarray:
+    """The kernel's parameter vector for ``system`` under F0 sin(omega t)."""
+    bar = system.bar
+    n = bar.n_modes
+    if n > L.NMAX:
+        raise ParameterError(f"n_modes = {n} is outside the allowed range [1, {L.NMAX}]")
+    p = L.empty_params()
+    p[L.N_MODES] = n
+    p[L.FORCING] = L.HARMONIC
+    p[L.F0] = amplitude
+    p[L.OMEGA] = omega
+    p[L.M_:L.M_ + n] = bar.mass
+    p[L.K_:L.K_ + n] = bar.stiffness
+    p[L.C_:L.C_ + n] = bar.damping
+    p[L.PSI_L:L.PSI_L + n] = bar.psi_tip
+    p[L.PSI_D:L.PSI_D + n] = bar.psi_damper
+    p[L.PSI_A:L.PSI_A + n] = bar.psi_absorber
+    p[L.REACTION] = 1.0
+    d = system.damper
+    kind = system.kind
+    p[L.CASE] = {"solid": L.SOLID, "ball": L.BALL, "tmd": L.TMD, "locked": L.LOCKED}[kind]
+    if isinstance(d, ImpactDamper):
+        m = d.mass
+        meff = 1.0 / (1.0 / m + float(np.sum(bar.psi_damper**2 / bar.mass)))
+        p[L.BALL_MASS] = m
+        p[L.HALF_GAP] = d.gap / 2
+        p[L.RESTITUTION] = d.restitution
+        p[L.FRICTION] = d.friction_force
+        p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
+        p[L.M_EFF] = meff
+        ref = omega if omega > 0 else bar.natural_frequency
+        p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap / 2
+        p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force * dt / meff
+        p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
+    elif isinstance(d, TunedMassDamper):
+        p[L.TMD_MASS] = d.mass
+        p[L.TMD_K] = d.stiffness
+        p[L.TMD_C] = d.damping
+    return p
+
+
+def initial_state(system: System, initial: Initial) -> np.ndarray:
+    """x = [u, u', aux, aux'] from tip and ball initial conditions."""
+    bar = system.bar
+    n = bar.n_modes
+    x = np.zeros(2 * n + 2)
+    x[0] = initial.tip_displacement / bar.psi_tip[0]
+    x[n] = initial.tip_velocity / bar.psi_tip[0]
+    d = system.damper
+    if isinstance(d, ImpactDamper):
+        check_range("initial ball position", initial.ball_position, -d.gap / 2, d.gap / 2,
+                    unit="m")
+        x[2 * n] = initial.ball_position
+        x[2 * n + 1] = 0.0 if d.locked else initial.ball_velocity
+    elif isinstance(d, TunedMassDamper):
+        x[2 * n] = float(bar.psi_absorber @ x[:n])
+        x[2 * n + 1] = float(bar.psi_absorber @ x[n:2 * n])
+    return x
+
+
+def stored_energy(system: System, x: np.ndarray) -> float:
+    """Kinetic + potential energy of state x (J)."""
+    bar = system.bar
+    n = bar.n_modes
+    u, v = x[:n], x[n:2 * n]
+    e = 0.5 * float(np.sum(bar.mass * v**2) + np.sum(bar.stiffness * u**2))
+    d = system.damper
+    if isinstance(d, ImpactDamper):
+        ud = x[2 * n + 1] + float(bar.psi_damper @ v)
+        e += 0.5 * d.mass * ud**2
+    elif isinstance(d, TunedMassDamper):
+        rel = x[2 * n] - float(bar.psi_absorber @ u)
+        e += 0.5 * d.mass * x[2 * n + 1] ** 2 + 0.5 * d.stiffness * rel**2
+    return e
+
+
+def check_step(system: System, omega: float, dt: float) -> None:
+    """The step must resolve the forcing period and the highest retained mode."""
+    check_positive("dt", dt, "s")
+    periods = [2 * math.pi / w for w in system.bar.omegas]
+    if omega > 0:
+        periods.append(2 * math.pi / omega)
+    if isinstance(system.damper, TunedMassDamper):
+        periods.append(2 * math.pi * math.sqrt(system.damper.mass / system.damper.stiffness))
+    limit = min(periods) / MIN_STEPS_PER_PERIOD
+    if dt > limit:
+        raise ParameterError(f"dt = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
+                             f"({MIN_STEPS_PER_PERIOD} steps per period of the forcing and "
+                             "of the highest retained mode)")
+
+
+def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: float = 1e-6,
+             initial: Initial | State | None = None, record_every: int = 0,
+             steady_fraction: float = 0.8, strobe: bool = False) -> Run:
+    """Integrate ``system`` under ``forcing`` with the published RK4 scheme.
+
+    ``duration`` (s) and ``dt`` (s) as published by default (2 s, 1e-6 s);
+    RMS and patterns use the last ``steady_fraction`` of the record.
+    ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
+    to continue it (time, hence forcing phase, runs on).  ``record_every`` N
+    keeps every N-th step's state; ``strobe`` keeps Poincare samples at
+    Omega t = 0 mod 2 pi.
+    """
+    if not isinstance(system, System):
+        raise ParameterError(f"system = {system!r} must be a System (see make_system)")
+    if not isinstance(forcing, Harmonic):
+        raise ParameterError(f"forcing = {forcing!r} must be a Harmonic")
+    check_positive("duration", duration, "s")
+    check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
+    check_range("record_every", record_every, 0, math.inf, hi_open=True)
+    omega = forcing.omega(system.reference_frequency)
+    check_step(system, omega, dt)
+    n_steps = int(round(duration / dt))
+    if n_steps < 1:
+        raise ParameterError(f"duration = {duration:g} s is shorter than one step dt = {dt:g} s")
+
+    if isinstance(initial, State):
+        x = np.array(initial.x, dtype=float)
+        if x.shape != (2 * system.bar.n_modes + 2,):
+            raise ParameterError(f"initial state has {x.size} entries; this system needs "
+                                 f"{2 * system.bar.n_modes + 2}")
+        t0 = float(initial.t)
+    else:
+        x = initial_state(system, initial or Initial())
+        t0 = 0.0
+    x_start = x.copy()
+
+    p = pack(system, omega, forcing.amplitude, dt)
+    period = 2 * math.pi / omega if omega > 0 else duration
+    n_periods = duration / period
+    steady_steps = int(round((1.0 - steady_fraction) * n_steps))
+    if strobe:
+        p[L.STROBE_PERIOD] = period
+        p[L.STROBE_T0] = 0.0
+    cap_imp = int(max(1000, 40 * n_periods))
+    imp = np.zeros((cap_imp, 3))
+    stick = np.zeros((cap_imp, 2))
+    stb = np.zeros((int(n_periods) + 2 if strobe else 0, 5))
+    n_rec = n_steps // record_every if record_every else 0
+    rec = np.zeros((n_rec, 6))
+    met = np.zeros(L.MET_SIZE)
+    met[L.STEADY_MAX_W] = -np.inf
+    met[L.STEADY_MIN_W] = np.inf
+
+    tic = time.perf_counter()
+    run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb, met)
+    elapsed = time.perf_counter() - tic
+
+    n_imp = int(met[L.N_IMP_REC])
+    n_stk = int(met[L.N_STICK_REC])
+    t_end = t0 + n_steps * dt
+    t_steady = t0 + steady_steps * dt
+    n_st = max(met[L.N_STEADY], 1.0)
+    metrics = {
+        "rms_tip_m": math.sqrt(met[L.SUM_W2] / n_st),
+        "mean_tip_m": met[L.SUM_W] / n_st,
+        "max_abs_tip_m": met[L.MAX_ABS_W],
+        "max_abs_aux_m": met[L.MAX_ABS_AUX],
+        "max_abs_aux_all_m": met[L.MAX_ABS_AUX_ALL],
+        "rms_aux_m": math.sqrt(met[L.SUM_AUX2] / n_st),
+        "impacts_plus": int(met[L.N_IMP_PLUS]),
+        "impacts_minus": int(met[L.N_IMP_MINUS]),
+        "impacts_total": int(met[L.N_IMP_ALL]),
+        "micro_impacts": int(met[L.N_MICRO]),
+        "contact_time_s": met[L.T_CONTACT],
+        "stick_time_s": met[L.T_STICK],
+        "impacts_truncated": n_imp > cap_imp,
+    }
+    e0 = stored_energy(system, x_start)
+    e1 = stored_energy(system, x)
+    w_in = met[L.W_FORCE] + met[L.W_NONRECIP]
+    dissipated = met[L.D_VISC] + met[L.D_IMPACT] + met[L.D_FRICTION]
+    scale = max(abs(w_in), dissipated, abs(e1 - e0), 1e-300)
+    energy = {
+        "work_force_j": met[L.W_FORCE],
+        "work_nonreciprocal_friction_j": met[L.W_NONRECIP],
+        "dissipated_viscous_j": met[L.D_VISC],
+        "dissipated_impacts_j": met[L.D_IMPACT],
+        "dissipated_friction_j": met[L.D_FRICTION],
+        "stored_initial_j": e0,
+        "stored_final_j": e1,
+        "balance_residual_j": w_in - (e1 - e0) - dissipated,
+        "balance_relative": (w_in - (e1 - e0) - dissipated) / scale,
+    }
+    pattern = None
+    if system.kind == "ball":
+        pattern = classify(imp[:min(n_imp, cap_imp), 0], imp[:min(n_imp, cap_imp), 1],
+                           stick[:min(n_stk, cap_imp)], (t_steady, t_end), period, dt=dt,
+                           contact_time=met[L.T_CONTACT])
+    thresholds = {
+        "impact_velocity_m_s": p[L.V_IMPACT],
+        "stick_velocity_m_s": p[L.V_STICK],
+        "stick_min_duration_s": p[L.STICK_MIN],
+    }
+    return Run(
+        system=system, forcing=forcing, omega=omega, dt=dt, t0=t0, duration=n_steps * dt,
+        steady_start=t_steady, metrics=metrics, impacts=imp[:min(n_imp, cap_imp)].copy(),
+        sticks=stick[:min(n_stk, cap_imp)].copy(),
+        strobe=stb[:int(met[L.N_STROBE])].copy(),
+        history=rec[:int(met[L.N_REC])].copy() if record_every else None,
+        initial=State(x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
+        elapsed_s=elapsed, energy=energy, thresholds=thresholds,
+    )
