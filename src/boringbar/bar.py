@@ -327,7 +327,7 @@ class SteppedBar:
 
 def _element_matrices(length: float, ei: float, rho_a: float):
     """Hermite-cubic Euler-Bernoulli element: stiffness and consistent mass."""
-    l = length  # noqa: E741
+    l = length
     ke = ei / l**3 * np.array([
         [12.0, 6 * l, -12.0, 6 * l],
         [6 * l, 4 * l * l, -6 * l, 2 * l * l],

@@ -185,6 +185,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
         p[L.M_EFF] = meff
         ref = omega if omega > 0 else bar.natural_frequency
         p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap / 2
+        # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
         p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force * dt / meff
         p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
     elif isinstance(d, TunedMassDamper):

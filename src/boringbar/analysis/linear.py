@@ -155,10 +155,10 @@ def sims_parameters(mass: float, bar) -> dict:
     formula; f is the exact root of the same minimax problem (the larger
     root of 36 Y^2 - (12 + 12 s + 9 s^2) Y + 4 (5 + 3 mu + 2 s) = 0 with
     Y = (f (1 + mu))^2), identified to 50 digits against a high-precision
-    numerical minimax.  Both tend to Den Hartog's values as mu -> 0 only
-    to leading order: f is 1 + sqrt(mu/8) + O(mu), above 1, where Den Hartog
-    tunes below.  The host's own damping is ignored (``minimax_real_tuning``
-    includes it).
+    numerical minimax.  As mu -> 0, zeta_a -> sqrt(3 mu / 8) like Den
+    Hartog's, but f -> 1 + sqrt(mu / 8): Sims tunes the absorber above the
+    host, Den Hartog (f = 1/(1 + mu)) below it.  The host's own damping and
+    the other modes are ignored (``minimax_real_tuning`` includes them).
     """
     mu = absorber_mass_ratio(mass, bar)
     s = math.sqrt(4.0 + 3.0 * mu)

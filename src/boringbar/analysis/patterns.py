@@ -9,9 +9,11 @@ Tolerances (all stated here and in :func:`classify`):
 - time tolerance ``time_tol = 5 dt + 1e-3 T`` by default: the published scheme
   detects an impact at the end of a step, up to one step ``dt`` late, so
   impact times carry a jitter of one step; 1e-3 T absorbs residual transients;
-- contact time (ball resting on a wall, sub-threshold micro-impacts) counts as
-  sticking when it exceeds 1 % of the window; any stick interval overlapping
-  the window counts (the kernel already filtered them for a minimum duration);
+- stick time (clipped to the window) plus contact time (ball resting on a
+  wall, sub-threshold micro-impacts) counts as sticking when it exceeds 1 % of
+  the window: under the sgn() law friction chatters briefly whenever y'
+  passes zero while the bar's acceleration at the ball is small, and such
+  blips are not a sticking regime;
 - periodicity is judged on the last ``min(window, 50 T)`` of the window and a
   period kT (k = 1..8) is accepted only if it repeats for at least
   ``min_periods`` (default 3) whole kT-windows there;
@@ -40,7 +42,9 @@ PATTERN_LABELS = (
 TAIL_PERIODS = 50
 #: Repetitions of kT needed to accept period k when ``min_periods`` is None.
 DEFAULT_MIN_PERIODS = 3
-#: Contact time above this fraction of the window counts as sticking.
+#: Stick plus contact time above this fraction of the window counts as sticking
+#: (a sgn() friction law chatters briefly whenever y' passes zero while the bar's
+#: acceleration at the ball is small; such blips are not a sticking regime).
 CONTACT_FRACTION_THRESHOLD = 0.01
 
 
@@ -107,7 +111,7 @@ def classify(
         (the last ``min(window, 50 T)``); default 3, at least 2.
 
     Rules: no impacts -> 'no impact', or 'no impact with sticking' if there is
-    a stick interval or contact time > 1 % of the window; impacts with sticking
+    stick plus contact time > 1 % of the window; impacts with sticking
     -> 'sticking'.  Otherwise the smallest k <= max_k for which every impact is
     followed, n impacts later, by one on the same wall kT later within
     ``time_tol`` over the whole tail; 'symmetric' if the two walls have equal
@@ -136,7 +140,7 @@ def classify(
     overlap = np.minimum(intervals[:, 1], t_end) - np.maximum(intervals[:, 0], t_start)
     stick_fraction = float(np.clip(overlap, 0.0, None).sum() / duration)
     contact_fraction = contact_time / duration
-    sticks = stick_fraction > 0.0 or contact_fraction > CONTACT_FRACTION_THRESHOLD
+    sticks = (stick_fraction + contact_fraction) > CONTACT_FRACTION_THRESHOLD
 
     n, k, symmetric = 0, 0, False
     if times.size:

@@ -62,8 +62,8 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     sr = p[L.REACTION]
     meff = p[L.M_EFF]
     vimp = p[L.V_IMPACT]
-    vstick = p[L.V_STICK]
     stick_min = p[L.STICK_MIN]
+    vstick = p[L.V_STICK]
     ma = p[L.TMD_MASS]
     ka = p[L.TMD_K]
     ca = p[L.TMD_C]
@@ -269,17 +269,19 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
                         contact = True
                 else:
                     contact = True
-            # stick: off the walls, relative velocity inside the stick band
+            # stick: off the walls with |y'| inside the band where the sgn() law
+            # chatters (V_STICK = V_IMPACT + 2 F_c dt / m_eff)
             stuck = fc > 0.0 and not contact and abs(X[iyd]) < vstick
             if stuck and not in_stick:
                 in_stick = True
-                stick_t0 = t1
+                stick_t0 = t
             elif in_stick and not stuck:
                 in_stick = False
-                if t1 - stick_t0 >= stick_min and stick_t0 >= t_steady:
-                    t_stick += t1 - stick_t0
+                s0 = max(stick_t0, t_steady)  # clipped to the steady part
+                if t1 - s0 >= stick_min:
+                    t_stick += t1 - s0
                     if n_stk < cap_stk:
-                        stick[n_stk, 0] = stick_t0
+                        stick[n_stk, 0] = s0
                         stick[n_stk, 1] = t1
                     n_stk += 1
 
@@ -327,10 +329,11 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     # a stick interval still open at the end is closed there
     if in_stick:
         t_end = t0 + n_steps * dt
-        if t_end - stick_t0 >= stick_min and stick_t0 >= t_steady:
-            t_stick += t_end - stick_t0
+        s0 = max(stick_t0, t_steady)
+        if t_end - s0 >= stick_min:
+            t_stick += t_end - s0
             if n_stk < cap_stk:
-                stick[n_stk, 0] = stick_t0
+                stick[n_stk, 0] = s0
                 stick[n_stk, 1] = t_end
             n_stk += 1
 
@@ -365,22 +368,22 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
 
 # One compiled specialisation per mode count: with n a compile-time constant
 # the mode loops unroll (about 2.3x faster per step than a run-time n).
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_n1(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
     _rk4(1, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_n2(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
     _rk4(2, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_n3(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
     _rk4(3, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_any(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
     _rk4(int(p[L.N_MODES]), p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick,
          strobe, met)

@@ -1,0 +1,188 @@
+"""Frequency sweeps of tip RMS and impact pattern (MODEL.md section 6).
+
+Every (case, force, ratio) point is an independent run of the numba kernel
+(which releases the GIL), executed on a thread pool with one worker per core;
+each run streams its metrics, no trajectory is kept.  The result is an
+xarray Dataset with the full configuration in its attributes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass
+
+import numpy as np
+
+from boringbar import __version__
+from boringbar._validate import ParameterError, check_range
+from boringbar.forcing import Harmonic
+from boringbar.simulate import Initial, simulate
+from boringbar.system import System, make_system
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """One bar of a sweep: a label, the System, and what distinguishes it."""
+
+    label: str
+    system: System
+    bar: str
+    gap: float = math.nan
+    friction: str = "n/a"
+
+
+def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
+                    frictions=(False, True), preset: str = "physical", **overrides) -> list[Case]:
+    """The bars of the published sweeps: solid, TMD, and the ball damper for
+    every gap x friction.  ``overrides`` go to :func:`make_system`."""
+    cases = []
+    for bar in bars:
+        if bar == "ball":
+            for gap in gaps:
+                for fr in frictions:
+                    s = make_system("ball", preset, gap=gap, friction=fr, **overrides)
+                    label = f"ball gap={gap * 1e3:g}mm friction={'on' if fr else 'off'}"
+                    cases.append(Case(label, s, "ball", gap, "on" if fr else "off"))
+        else:
+            kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber",
+                                                               "tmd_mass", "tmd_design",
+                                                               "modal")}
+            cases.append(Case(bar, make_system(bar, preset, **kw), bar))
+    return cases
+
+
+def parse_range(text: str, name: str = "ratios") -> np.ndarray:
+    """'0.95:1.05:0.01' (inclusive) or '0.95,1.0,1.05' -> array."""
+    try:
+        if ":" in text:
+            start, stop, step = (float(v) for v in text.split(":"))
+            if step <= 0 or stop < start:
+                raise ValueError
+            n = int(math.floor((stop - start) / step + 1e-9)) + 1
+            return np.round(start + step * np.arange(n), 12)
+        return np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise ParameterError(f"{name} = {text!r} must be START:STOP:STEP with STEP > 0 and "
+                             "STOP >= START, or a comma-separated list of numbers") from None
+
+
+def _one(case: Case, force: float, ratio: float, duration: float, dt: float,
+         initial: Initial | None) -> dict:
+    run = simulate(case.system, Harmonic(force, ratio), duration=duration, dt=dt,
+                   initial=initial)
+    s = run.summary()
+    return {
+        "rms_tip_m": s["rms_tip_m"],
+        "max_abs_tip_m": s["max_abs_tip_m"],
+        "max_abs_rel_disp_m": s["max_abs_rel_disp_m"],
+        "impacts_per_cycle": math.nan if s["impacts_per_cycle"] is None
+        else s["impacts_per_cycle"],
+        "pattern": s["pattern"] or "",
+        "energy_balance_relative": s["energy"]["balance_relative"],
+        "elapsed_s": s["elapsed_s"],
+    }
+
+
+def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
+          dt: float = 1e-6, workers: int | None = None, initial: Initial | None = None,
+          progress=None):
+    """Tip RMS and impact pattern against Omega/omega_n for every case and force.
+
+    Returns an xarray Dataset with dims (case, force, ratio).  ``workers``:
+    threads (default: every core).  ``progress(done, total)`` is called as
+    points finish.
+    """
+    import xarray as xr
+
+    if not cases:
+        raise ParameterError("sweep needs at least one case")
+    ratios = np.atleast_1d(np.asarray(ratios, dtype=float))
+    forces = np.atleast_1d(np.asarray(forces, dtype=float))
+    for r in ratios:
+        check_range("ratio", r, 0.0, math.inf, lo_open=True, hi_open=True)
+    workers = int(workers or os.cpu_count() or 1)
+    check_range("workers", workers, 1, 4096)
+    shape = (len(cases), len(forces), len(ratios))
+    names = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
+             "energy_balance_relative", "elapsed_s")
+    out = {k: np.full(shape, np.nan) for k in names}
+    pattern = np.full(shape, "", dtype=object)
+    jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1])
+            for k in range(shape[2])]
+    # warm the JIT once per mode count before fanning out (compilation is not
+    # thread-parallel and would otherwise be repeated)
+    for nm in sorted({c.system.bar.n_modes for c in cases}):
+        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
+        simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6)
+    tic = time.perf_counter()
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        futures = {pool.submit(_one, cases[i], forces[j], ratios[k], duration, dt, initial):
+                   (i, j, k) for i, j, k in jobs}
+        done = 0
+        for fut in as_completed(futures):
+            i, j, k = futures[fut]
+            res = fut.result()
+            for key in names:
+                out[key][i, j, k] = res[key]
+            pattern[i, j, k] = res["pattern"]
+            done += 1
+            if progress is not None:
+                progress(done, len(jobs))
+    wall = time.perf_counter() - tic
+    units = {"rms_tip_m": "m", "max_abs_tip_m": "m", "max_abs_rel_disp_m": "m",
+             "impacts_per_cycle": "1/period", "elapsed_s": "s", "energy_balance_relative": "1"}
+    dims = ("case", "force", "ratio")
+    data = {k: (dims, v, {"units": units[k]}) for k, v in out.items()}
+    data["pattern"] = (dims, pattern.astype(str))
+    data["natural_frequency_hz"] = (("case",), np.array(
+        [c.system.reference_frequency / (2 * math.pi) for c in cases]), {"units": "Hz"})
+    ds = xr.Dataset(
+        data,
+        coords={
+            "case": [c.label for c in cases],
+            "force": ("force", forces, {"units": "N"}),
+            "ratio": ("ratio", ratios, {"long_name": "Omega / omega_n of the host bar"}),
+            "bar": ("case", [c.bar for c in cases]),
+            "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+            "friction": ("case", [c.friction for c in cases]),
+        },
+        attrs={
+            "title": "boringbar frequency sweep",
+            "boringbar_version": __version__,
+            "integrator": "rk4",
+            "dt_s": dt,
+            "duration_s": duration,
+            "workers": workers,
+            "wall_time_s": wall,
+            "preset": ",".join(sorted({c.system.preset for c in cases})),
+            "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
+            "initial": json.dumps((initial or Initial()).__dict__),
+        },
+    )
+    return ds
+
+
+def sweep_summary(ds) -> dict:
+    """JSON-able summary of a sweep (what ``boringbar sweep --json`` prints)."""
+    cases = []
+    for i, label in enumerate(ds["case"].values):
+        for j, force in enumerate(ds["force"].values):
+            cases.append({
+                "case": str(label),
+                "bar": str(ds["bar"].values[i]),
+                "gap_m": None if np.isnan(ds["gap"].values[i]) else float(ds["gap"].values[i]),
+                "friction": str(ds["friction"].values[i]),
+                "force_n": float(force),
+                "natural_frequency_hz": float(ds["natural_frequency_hz"].values[i]),
+                "ratio": [float(r) for r in ds["ratio"].values],
+                "rms_tip_m": [float(v) for v in ds["rms_tip_m"].values[i, j]],
+                "pattern": [str(v) for v in ds["pattern"].values[i, j]],
+                "impacts_per_cycle": [None if np.isnan(v) else float(v)
+                                      for v in ds["impacts_per_cycle"].values[i, j]],
+            })
+    return {"preset": ds.attrs.get("preset"), "integrator": ds.attrs.get("integrator"),
+            "wall_time_s": ds.attrs.get("wall_time_s"), "cases": cases}
