@@ -25,8 +25,9 @@ K_TIP = 1.5e6  # N/m, about the published bar's first-mode tip stiffness
 
 
 def tap_bar(zeta: float = 0.01, absorber_ratio: float = 0.5) -> ModalModel:
-    return ModalModel.from_tap_test(461.0, zeta, tip_stiffness=K_TIP, damper_ratio=0.5,
-                                    absorber_ratio=absorber_ratio)
+    return ModalModel.from_tap_test(
+        461.0, zeta, tip_stiffness=K_TIP, damper_ratio=0.5, absorber_ratio=absorber_ratio
+    )
 
 
 def absorber_mass_for(mu: float, bar: ModalModel) -> float:
@@ -71,8 +72,7 @@ def test_static_tip_compliance_is_the_zero_frequency_receptance():
     assert static_tip_compliance(bar) == pytest.approx(expected, rel=1e-14)
     tmd = TunedMassDamper.den_hartog(0.2, bar)
     for kwargs in ({}, {"tmd": tmd}, {"added_mass": 0.026}):
-        assert tip_frf(bar, 0.0, **kwargs) == pytest.approx(static_tip_compliance(bar),
-                                                             rel=1e-12)
+        assert tip_frf(bar, 0.0, **kwargs) == pytest.approx(static_tip_compliance(bar), rel=1e-12)
 
 
 # --- locked ball: a rigid added mass at z_d --------------------------------------
@@ -97,8 +97,9 @@ def test_locked_mass_lowers_the_undamped_resonance_to_sqrt_k_over_m_total():
 def test_locked_mass_couples_two_modes():
     """The poles are the eigenvalues of (diag K, diag M + m psi_d psi_d^T)."""
     bar = published_bar(True, 2)
-    bar = ModalModel(bar.mass, bar.stiffness, [0.0, 0.0], bar.psi_tip, bar.psi_damper,
-                     bar.psi_absorber)
+    bar = ModalModel(
+        bar.mass, bar.stiffness, [0.0, 0.0], bar.psi_tip, bar.psi_damper, bar.psi_absorber
+    )
     m_ball = 0.2
     mass = np.diag(bar.mass) + m_ball * np.outer(bar.psi_damper, bar.psi_damper)
     w_eig = np.sqrt(scipy.linalg.eigh(np.diag(bar.stiffness), mass, eigvals_only=True))
@@ -189,13 +190,11 @@ def test_sims_closed_form_is_the_exact_minimax_on_an_undamped_host():
     bar = tap_bar(zeta=0.0)
     m_a = absorber_mass_for(0.25, bar)
     sims = sims_tuning(m_a, bar)
-    best = minimax_real_tuning(m_a, bar, start=TunedMassDamper.den_hartog(m_a, bar),
-                               xatol=1e-9)
+    best = minimax_real_tuning(m_a, bar, start=TunedMassDamper.den_hartog(m_a, bar), xatol=1e-9)
     assert best.design == "minimax-real"
     assert best.stiffness == pytest.approx(sims.stiffness, rel=1e-5)
     assert best.damping == pytest.approx(sims.damping, rel=1e-4)
-    assert min_real_part(bar, best)[0] == pytest.approx(min_real_part(bar, sims)[0],
-                                                        rel=1e-8)
+    assert min_real_part(bar, best)[0] == pytest.approx(min_real_part(bar, sims)[0], rel=1e-8)
     # and it beats Den Hartog's tuning at what Sims optimises (about 40 % here)
     dh = min_real_part(bar, TunedMassDamper.den_hartog(m_a, bar))[0]
     assert min_real_part(bar, sims)[0] > 1.3 * dh

@@ -41,8 +41,9 @@ TROUGH_POINTS = 3601
 
 
 # --- frequency responses ------------------------------------------------------
-def tip_frf(bar, omega, *, tmd: TunedMassDamper | None = None,
-            added_mass: float = 0.0) -> np.ndarray:
+def tip_frf(
+    bar, omega, *, tmd: TunedMassDamper | None = None, added_mass: float = 0.0
+) -> np.ndarray:
     """Tip receptance G(i omega) = W / F (m/N) for a harmonic force F at the tip.
 
     ``bar`` is a :class:`~boringbar.bar.ModalModel`; ``omega`` (rad/s) is
@@ -90,7 +91,8 @@ def _check_position(bar, tmd) -> None:
     if abs(tmd.position - bar.z_absorber) > 1e-9:
         raise ParameterError(
             f"absorber position = {tmd.position!r} m differs from the modal model's "
-            f"z_absorber = {bar.z_absorber!r} m; rebuild the bar with z_absorber there")
+            f"z_absorber = {bar.z_absorber!r} m; rebuild the bar with z_absorber there"
+        )
 
 
 def static_tip_compliance(bar) -> float:
@@ -105,8 +107,9 @@ def absorber_mass_ratio(mass: float, bar) -> float:
 
 
 # --- the most negative real part ------------------------------------------------
-def min_real_part(bar, tmd: TunedMassDamper | None = None, omega=None, *,
-                  added_mass: float = 0.0) -> tuple[float, float]:
+def min_real_part(
+    bar, tmd: TunedMassDamper | None = None, omega=None, *, added_mass: float = 0.0
+) -> tuple[float, float]:
     """(min Re G (m/N), omega at the minimum (rad/s)) of the tip receptance.
 
     Searched on ``omega`` (default: omega_1 times ``TROUGH_BAND``,
@@ -120,15 +123,17 @@ def min_real_part(bar, tmd: TunedMassDamper | None = None, omega=None, *,
         omega = bar.natural_frequency * np.linspace(*TROUGH_BAND, TROUGH_POINTS)
     w = np.asarray(omega, dtype=float)
     if w.ndim != 1 or len(w) < 3:
-        raise ParameterError(f"omega must be a 1-D grid of at least 3 points (got shape "
-                             f"{w.shape})")
+        raise ParameterError(f"omega must be a 1-D grid of at least 3 points (got shape {w.shape})")
     re = tip_frf(bar, w, tmd=tmd, added_mass=added_mass).real
     best = (float(re.min()), float(w[np.argmin(re)]))
     for i in _local_minima(re):
         lo, hi = w[max(i - 1, 0)], w[min(i + 1, len(w) - 1)]
         res = scipy.optimize.minimize_scalar(
             lambda x: tip_frf(bar, x, tmd=tmd, added_mass=added_mass).real,
-            bounds=(lo, hi), method="bounded", options={"xatol": 1e-9 * hi})
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": 1e-9 * hi},
+        )
         if res.fun < best[0]:
             best = (float(res.fun), float(res.x))
     return best
@@ -166,19 +171,30 @@ def sims_parameters(mass: float, bar) -> dict:
     y = (12.0 + 12.0 * s + 9.0 * s * s + 9.0 * math.sqrt(mu * (3 * s + 2) * (s + 2))) / 72.0
     f = math.sqrt(y) / (1.0 + mu)
     wa = f * bar.natural_frequency
-    return {"mass_ratio": mu, "frequency_ratio": f, "damping_ratio": zeta,
-            "stiffness": mass * wa**2, "damping": 2.0 * zeta * mass * wa}
+    return {
+        "mass_ratio": mu,
+        "frequency_ratio": f,
+        "damping_ratio": zeta,
+        "stiffness": mass * wa**2,
+        "damping": 2.0 * zeta * mass * wa,
+    }
 
 
 def sims_tuning(mass: float, bar) -> TunedMassDamper:
     """A :class:`TunedMassDamper` of ``mass`` (kg) at ``bar.z_absorber``, Sims-tuned."""
     p = sims_parameters(mass, bar)
-    return TunedMassDamper(mass=mass, stiffness=p["stiffness"], damping=p["damping"],
-                           position=bar.z_absorber, design="sims")
+    return TunedMassDamper(
+        mass=mass,
+        stiffness=p["stiffness"],
+        damping=p["damping"],
+        position=bar.z_absorber,
+        design="sims",
+    )
 
 
-def minimax_real_tuning(mass: float, bar, *, start: TunedMassDamper | None = None,
-                        omega=None, xatol: float = 1e-7) -> TunedMassDamper:
+def minimax_real_tuning(
+    mass: float, bar, *, start: TunedMassDamper | None = None, omega=None, xatol: float = 1e-7
+) -> TunedMassDamper:
     """Absorber (k_a, c_a) minimising the most negative real part of the tip FRF.
 
     Nelder-Mead over (ln k_a, ln c_a) from ``start`` (default: Sims'
@@ -191,13 +207,21 @@ def minimax_real_tuning(mass: float, bar, *, start: TunedMassDamper | None = Non
     scale = bar.tip_stiffness
 
     def objective(p):
-        tmd = TunedMassDamper(mass=mass, stiffness=math.exp(p[0]), damping=math.exp(p[1]),
-                              position=bar.z_absorber)
+        tmd = TunedMassDamper(
+            mass=mass, stiffness=math.exp(p[0]), damping=math.exp(p[1]), position=bar.z_absorber
+        )
         return -min_real_part(bar, tmd, omega)[0] * scale
 
     res = scipy.optimize.minimize(
-        objective, [math.log(x0.stiffness), math.log(x0.damping)], method="Nelder-Mead",
-        options={"xatol": xatol, "fatol": 1e-12, "maxiter": 2000})
-    return TunedMassDamper(mass=mass, stiffness=math.exp(res.x[0]),
-                           damping=math.exp(res.x[1]), position=bar.z_absorber,
-                           design="minimax-real")
+        objective,
+        [math.log(x0.stiffness), math.log(x0.damping)],
+        method="Nelder-Mead",
+        options={"xatol": xatol, "fatol": 1e-12, "maxiter": 2000},
+    )
+    return TunedMassDamper(
+        mass=mass,
+        stiffness=math.exp(res.x[0]),
+        damping=math.exp(res.x[1]),
+        position=bar.z_absorber,
+        design="minimax-real",
+    )

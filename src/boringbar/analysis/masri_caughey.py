@@ -91,8 +91,14 @@ class ImpactSystem:
     def __post_init__(self):
         check_positive("modal mass M", self.mass)
         check_positive("modal stiffness K", self.stiffness)
-        check_range("modal damping C", self.damping, 0.0,
-                    2.0 * math.sqrt(self.stiffness * self.mass), hi_open=True, unit="N s/m")
+        check_range(
+            "modal damping C",
+            self.damping,
+            0.0,
+            2.0 * math.sqrt(self.stiffness * self.mass),
+            hi_open=True,
+            unit="N s/m",
+        )
         for name, value in (("psi_L", self.psi_tip), ("psi_d", self.psi_ball)):
             if not (math.isfinite(value) and value != 0.0):
                 raise ParameterError(f"{name} = {value!r} must be finite and non-zero")
@@ -101,6 +107,20 @@ class ImpactSystem:
         check_range("restitution e", self.restitution, 0.0, 1.0)
         check_nonnegative("force amplitude F0", self.force, "N")
         check_positive("forcing frequency Omega", self.omega, "rad/s")
+        self._check_not_resonant()
+
+    def _check_not_resonant(self) -> None:
+        """An undamped bar has no steady response at Omega = omega_n (H infinite) nor at
+        Omega = omega_n / (2 j + 1) (the alternating impulse train resonates)."""
+        dyn = abs(complex(self.stiffness - self.mass * self.omega**2, self.damping * self.omega))
+        train = abs(1.0 + np.exp(self.eigenvalue * self.half_period))
+        if dyn < 1e-9 * self.stiffness or train < 1e-9:
+            wn = math.sqrt(self.stiffness / self.mass)
+            raise ParameterError(
+                f"forcing frequency Omega = {self.omega!r} rad/s: an (almost) undamped bar "
+                f"(C = {self.damping!r}) has no steady two-impact orbit at resonance "
+                f"(Omega = omega_n / (2 j + 1), omega_n = {wn:.6g} rad/s)"
+            )
 
     # --- derived constants -------------------------------------------------
     @property
@@ -250,32 +270,49 @@ class Orbit:
         w = np.abs(self.tip(t))
         i = int(np.argmax(w))
         lo, hi = t[max(i - 1, 0)], t[min(i + 1, len(t) - 1)]
-        res = scipy.optimize.minimize_scalar(lambda x: -abs(float(self.tip(x))),
-                                             bounds=(lo, hi), method="bounded",
-                                             options={"xatol": 1e-12 * th})
+        res = scipy.optimize.minimize_scalar(
+            lambda x: -abs(float(self.tip(x))),
+            bounds=(lo, hi),
+            method="bounded",
+            options={"xatol": 1e-12 * th},
+        )
         return max(float(w[i]), -float(res.fun))
 
 
 # --- the closed form ----------------------------------------------------------
+def orbit_coefficients(system: ImpactSystem) -> tuple[float, float]:
+    """(A_g, A_r): the geometry and restitution conditions, linear in V.
+
+    Geometry V T_h = delta + 2 psi_d (u_F(t_0) + a0 P) with P = 2 m psi_d V:
+    A_g V = delta + 2 psi_d u_F(t_0), A_g = T_h - 4 m psi_d^2 a0.
+    Restitution (1 - e)(1 + mu psi_d^2) V = -(1 + e) psi_d (v_F(t_0) + b0 P):
+    A_r V = -(1 + e) psi_d v_F(t_0), A_r = (1 - e)(1 + mu psi_d^2) + 2 (1 + e) m psi_d^2 b0.
+    """
+    sys = system
+    a0, b0 = sys.impulse_train_constants()
+    m_psi2 = sys.ball_mass * sys.psi_ball**2
+    e = sys.restitution
+    a_r = (1 - e) * (1 + sys.effective_ratio) + 2 * (1 + e) * m_psi2 * b0
+    if abs(a_r) < 1e-300:
+        raise ParameterError(
+            "two_impact_orbit: the restitution condition is degenerate "
+            "(A_r = 0); the ball speed is not determined"
+        )
+    return sys.half_period - 4.0 * m_psi2 * a0, a_r
+
+
 def phase_equation(system: ImpactSystem) -> tuple[float, float, float]:
     """(a, b, c) of a cos phi + b sin phi = c, the orbit's phase equation.
 
-    With q = psi_L F0 psi_d, H = H_r + i H_i, (a0, b0) from
-    :meth:`ImpactSystem.impulse_train_constants`,
-    A_g = T_h - 4 m psi_d^2 a0 (geometry) and
-    A_r = (1 - e)(1 + mu psi_d^2) + 2 (1 + e) m psi_d^2 b0 (restitution),
+    Eliminating V between the two conditions of :func:`orbit_coefficients`,
+    with u_F(t_0) = q' (H_r sin phi + H_i cos phi), v_F(t_0) = q' Omega
+    (H_r cos phi - H_i sin phi), q' = psi_L F0, q = q' psi_d and
     r = (1 + e) Omega A_g / A_r:
 
         a = -q (r H_r + 2 H_i),   b = -q (2 H_r - r H_i),   c = delta.
     """
     sys = system
-    a0, b0 = sys.impulse_train_constants()
-    m_psi2 = sys.ball_mass * sys.psi_ball**2
-    a_g = sys.half_period - 4.0 * m_psi2 * a0
-    a_r = (1 - sys.restitution) * (1 + sys.effective_ratio) + 2 * (1 + sys.restitution) * m_psi2 * b0
-    if abs(a_r) < 1e-300:
-        raise ParameterError("two_impact_orbit: the restitution condition is degenerate "
-                             "(A_r = 0); the ball speed is not determined")
+    a_g, a_r = orbit_coefficients(sys)
     r = (1 + sys.restitution) * sys.omega * a_g / a_r
     q = sys.psi_tip * sys.force * sys.psi_ball
     h = sys.receptance
@@ -283,17 +320,25 @@ def phase_equation(system: ImpactSystem) -> tuple[float, float, float]:
 
 
 def ball_speed(system: ImpactSystem, phase: float) -> float:
-    """V from the restitution condition: V A_r = -(1 + e) psi_d v_F(t_0) (m/s)."""
+    """V (m/s) from the restitution condition, A_r V = -(1 + e) psi_d v_F(phi / Omega)."""
     sys = system
-    _, b0 = sys.impulse_train_constants()
-    m_psi2 = sys.ball_mass * sys.psi_ball**2
-    a_r = (1 - sys.restitution) * (1 + sys.effective_ratio) + 2 * (1 + sys.restitution) * m_psi2 * b0
+    _, a_r = orbit_coefficients(sys)
     v_f = sys.forced_modal(phase / sys.omega)[1]
     return float(-(1 + sys.restitution) * sys.psi_ball * v_f / a_r)
 
 
-def two_impact_orbit(M: float, K: float, C: float, psi_L: float, psi_d: float, m: float,
-                     gap: float, e: float, F0: float, Omega: float) -> list[Orbit]:
+def two_impact_orbit(
+    M: float,
+    K: float,
+    C: float,
+    psi_L: float,
+    psi_d: float,
+    m: float,
+    gap: float,
+    e: float,
+    F0: float,
+    Omega: float,
+) -> list[Orbit]:
     """Every symmetric two-impacts-per-period orbit, in closed form.
 
     Arguments as :class:`ImpactSystem` (M, K, C modal; m, gap in kg, m;
@@ -314,20 +359,34 @@ def two_impact_orbit(M: float, K: float, C: float, psi_L: float, psi_d: float, m
 def _orbit(sys: ImpactSystem, phase: float) -> Orbit:
     v = ball_speed(sys, phase)
     p = 2 * sys.ball_mass * sys.psi_ball * v
-    draft = Orbit(phase=phase, ball_speed=v, impulse=-2 * sys.ball_mass * v,
-                  bar_velocity_before=0.0, bar_velocity_after=0.0, admissible=False,
-                  message="", system=sys)
-    a0, b0 = sys.impulse_train_constants()
+    draft = Orbit(
+        phase=phase,
+        ball_speed=v,
+        impulse=-2 * sys.ball_mass * v,
+        bar_velocity_before=0.0,
+        bar_velocity_after=0.0,
+        admissible=False,
+        message="",
+        system=sys,
+    )
+    _, b0 = sys.impulse_train_constants()
     v_mean = sys.forced_modal(phase / sys.omega)[1] + b0 * p
     before, after = v_mean - 0.5 * p / sys.mass, v_mean + 0.5 * p / sys.mass
     message = _inadmissible(draft, before)
-    multipliers = impact_map_multipliers(draft, before, after) if not message else ()
+    multipliers = impact_map_multipliers(draft, after) if not message else ()
     stable = bool(np.all(np.abs(multipliers) < 1.0)) if not message else None
-    return Orbit(phase=phase, ball_speed=v, impulse=-2 * sys.ball_mass * v,
-                 bar_velocity_before=sys.psi_ball * before,
-                 bar_velocity_after=sys.psi_ball * after, admissible=not message,
-                 message=message, system=sys, stable=stable,
-                 multipliers=tuple(multipliers))
+    return Orbit(
+        phase=phase,
+        ball_speed=v,
+        impulse=-2 * sys.ball_mass * v,
+        bar_velocity_before=sys.psi_ball * before,
+        bar_velocity_after=sys.psi_ball * after,
+        admissible=not message,
+        message=message,
+        system=sys,
+        stable=stable,
+        multipliers=tuple(multipliers),
+    )
 
 
 def _inadmissible(orbit: Orbit, modal_velocity_before: float) -> str:
@@ -346,8 +405,7 @@ def _inadmissible(orbit: Orbit, modal_velocity_before: float) -> str:
 
 
 # --- stability: the linearised impact-to-impact map ---------------------------
-def impact_map_multipliers(orbit: Orbit, modal_velocity_before: float,
-                           modal_velocity_after: float) -> np.ndarray:
+def impact_map_multipliers(orbit: Orbit, modal_velocity_after: float) -> np.ndarray:
     """Eigenvalues of the impact-to-impact map linearised about the orbit.
 
     The state just after a + wall impact is (t, u, u', u_d') with u_d fixed
@@ -359,11 +417,22 @@ def impact_map_multipliers(orbit: Orbit, modal_velocity_before: float,
     neutral (the forcing fixes the phase), so all four multipliers count.
     """
     sys = orbit.system
-    x0 = np.array([orbit.impact_time, float(orbit.modal_displacement(orbit.impact_time)),
-                   modal_velocity_after, -orbit.ball_speed])
-    scales = np.array([1.0 / sys.omega, abs(x0[1]) + sys.gap / abs(sys.psi_ball),
-                       abs(x0[2]) + sys.gap * sys.omega / abs(sys.psi_ball),
-                       orbit.ball_speed + sys.gap * sys.omega])
+    x0 = np.array(
+        [
+            orbit.impact_time,
+            float(orbit.modal_displacement(orbit.impact_time)),
+            modal_velocity_after,
+            -orbit.ball_speed,
+        ]
+    )
+    scales = np.array(
+        [
+            1.0 / sys.omega,
+            abs(x0[1]) + sys.gap / abs(sys.psi_ball),
+            abs(x0[2]) + sys.gap * sys.omega / abs(sys.psi_ball),
+            orbit.ball_speed + sys.gap * sys.omega,
+        ]
+    )
     jac = np.empty((4, 4))
     h = 1e-6
     for j in range(4):

@@ -1,0 +1,85 @@
+"""The bar model against closed forms that do not come from our code."""
+
+import math
+
+import numpy as np
+import pytest
+
+from boringbar._validate import ParameterError
+from boringbar.bar import ModalModel, Section, SteppedBar, published_bar
+
+E, RHO, D, LEN = 200e9, 7850.0, 0.025, 0.2
+
+
+def uniform_cantilever_f1() -> float:
+    """(1.8751^2 / 2 pi) sqrt(EI / (rho A L^4)), the Euler-Bernoulli closed form."""
+    beta1 = 1.875104068711961
+    area = math.pi / 4 * D**2
+    inertia = math.pi / 64 * D**4
+    return beta1**2 / (2 * math.pi) * math.sqrt(E * inertia / (RHO * area * LEN**4))
+
+
+def test_uniform_cantilever_matches_closed_form_and_converges():
+    exact = uniform_cantilever_f1()
+    errors = []
+    for h in (0.1, 0.05, 0.025, 0.0125):
+        bar = SteppedBar(sections=(Section(0.0, LEN, D),), max_element_length=h)
+        f1 = bar.modes(1)[0][0] / (2 * math.pi)
+        errors.append(abs(f1 / exact - 1))
+    assert errors[-1] < 1e-6
+    # Hermite cubics converge at O(h^4) in frequency: each halving gains > 8x
+    for coarse, fine in zip(errors, errors[1:], strict=False):
+        assert fine < coarse / 8
+    default = SteppedBar(sections=(Section(0.0, LEN, D),))
+    assert abs(default.modes(1)[0][0] / (2 * math.pi) / exact - 1) < 1e-3 * 0.1  # 0.01 %
+
+
+def test_second_mode_of_uniform_cantilever():
+    beta2 = 4.694091132974175
+    bar = SteppedBar(sections=(Section(0.0, LEN, D),))
+    f = bar.modes(2)[0] / (2 * math.pi)
+    ratio = (beta2 / 1.875104068711961) ** 2  # 6.267
+    assert f[1] / f[0] == pytest.approx(ratio, rel=1e-5)
+
+
+def test_published_bar_converged_in_mesh_and_shapes():
+    coarse = published_bar(True, 1, max_element_length=0.005)
+    fine = published_bar(True, 1, max_element_length=0.00125)
+    assert coarse.natural_frequency_hz == pytest.approx(fine.natural_frequency_hz, rel=1e-4)
+    assert coarse.psi_tip[0] == 1.0
+    assert 0.0 < coarse.psi_damper[0] < 1.0  # ball between clamp and tip
+    assert coarse.psi_absorber[0] < coarse.psi_damper[0]  # absorber nearer the clamp
+    solid = published_bar(False, 1)
+    # removing material near the tip stiffens the first mode a little
+    assert coarse.natural_frequency_hz > solid.natural_frequency_hz
+
+
+def test_modal_quantities_do_not_depend_on_normalisation():
+    m = published_bar(True, 2)
+    s = m.normalised([2.5, -0.3])
+    assert np.allclose(s.omegas, m.omegas, rtol=1e-13)
+    assert s.tip_stiffness == pytest.approx(m.tip_stiffness, rel=1e-13)
+    assert np.allclose(s.psi_damper / s.psi_tip, m.psi_damper / m.psi_tip, rtol=1e-13)
+
+
+def test_tap_test_model():
+    m = ModalModel.from_tap_test(461.0, 0.01, tip_stiffness=1.0e6, damper_ratio=0.5)
+    assert m.natural_frequency_hz == pytest.approx(461.0, rel=1e-14)
+    assert m.tip_stiffness == pytest.approx(1.0e6, rel=1e-14)
+    assert m.tip_mass == pytest.approx(1.0e6 / (2 * math.pi * 461.0) ** 2, rel=1e-14)
+    with pytest.raises(ParameterError, match="frequency_hz"):
+        ModalModel.from_tap_test(-1.0, tip_stiffness=1e6)
+
+
+def test_calibration_keeps_mass_and_shape():
+    m = published_bar(True, 1)
+    c = m.with_first_frequency(461.0)
+    assert c.natural_frequency_hz == pytest.approx(461.0, rel=1e-12)
+    assert c.mass[0] == m.mass[0] and c.psi_damper[0] == m.psi_damper[0]
+
+
+def test_bad_geometry_is_named():
+    with pytest.raises(ValueError, match="contiguous"):
+        SteppedBar(sections=(Section(0.0, 0.1, D), Section(0.11, 0.2, D)))
+    with pytest.raises(ParameterError, match="section diameter"):
+        Section(0.0, 0.1, -0.01)
