@@ -12,6 +12,7 @@ directly with :meth:`ModalModel.from_tap_test`.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 
@@ -237,7 +238,7 @@ class SteppedBar:
         if abs(self.sections[0].start) > 1e-12:
             raise ValueError(f"the first section must start at the clamp, z = 0 "
                              f"(got {self.sections[0].start!r} m)")
-        for a, b in zip(self.sections, self.sections[1:]):
+        for a, b in itertools.pairwise(self.sections):
             if abs(a.end - b.start) > 1e-12:
                 raise ValueError(f"sections must be contiguous: one ends at {a.end!r} m, the "
                                  f"next starts at {b.start!r} m")
@@ -258,7 +259,7 @@ class SteppedBar:
             brk.add(float(z))
         brk = np.array(sorted(brk))
         nodes = [brk[0]]
-        for a, b in zip(brk[:-1], brk[1:]):
+        for a, b in itertools.pairwise(brk):
             if b - a < 1e-12:
                 continue
             n_el = max(1, math.ceil((b - a) / self.max_element_length - 1e-9))
@@ -279,7 +280,7 @@ class SteppedBar:
         n_dof = 2 * len(nodes)
         K = np.zeros((n_dof, n_dof))
         M = np.zeros((n_dof, n_dof))
-        for e, (a, b) in enumerate(zip(nodes[:-1], nodes[1:])):
+        for e, (a, b) in enumerate(itertools.pairwise(nodes)):
             sec = self._section_at(0.5 * (a + b))
             ei = self.youngs_modulus * sec.second_moment
             ra = self.density * sec.area

@@ -17,6 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+# read once at import (os.umask can only be read by setting it)
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+
 
 @contextlib.contextmanager
 def _atomic(path):
@@ -25,6 +29,7 @@ def _atomic(path):
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
+    os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; give what open() would
     try:
         yield Path(tmp)
         _fsync_file(tmp)

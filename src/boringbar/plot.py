@@ -37,16 +37,18 @@ def pattern_class(name: str) -> str:
 
 # --- one run ---------------------------------------------------------------------
 
-def plot_run(run_or_ds, path) -> Path:
+def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     """Time traces of one run, saved to ``path``.
 
     ``run_or_ds``: a :class:`~boringbar.simulate.Run` simulated with
-    ``record_every`` or its ``history_dataset()``.  Two panels sharing time:
+    ``record_every`` or its ``history_dataset()``.  Two rows sharing time:
     tip displacement W (mm); below it the ball's displacement y relative to
     the bar (mm) with the walls at +-delta/2 dashed (ball bar), the absorber
-    stroke (mm) (TMD bar), or the cutting force (N) (solid bar, locked ball).
-    A dotted line marks the start of the steady part over which the RMS and
-    the pattern are computed.
+    stroke (mm) (TMD bar), or the force at the tip (N) (solid bar, locked ball).
+    The left column is the whole record (a dotted line marks the start of the
+    steady part, over which RMS and pattern are computed); the right column
+    zooms on its last ``zoom_periods`` forcing periods, where the impact
+    pattern can be seen.
     """
     ds = run_or_ds.history_dataset() if hasattr(run_or_ds, "history_dataset") else run_or_ds
     summary = json.loads(ds.attrs.get("summary", "{}"))
@@ -54,50 +56,67 @@ def plot_run(run_or_ds, path) -> Path:
     damper = (config.get("system") or {}).get("damper") or {}
     kind = summary.get("bar", "?")
     t = ds["time"].values
+    w = ds["tip_displacement"].values * 1e3
+    if kind == "ball" and "y" in ds:
+        lower, lower_label, colour = ds["y"].values * 1e3, "ball displacement y\nrelative to " \
+            "bar (mm)", "#2ca02c"
+    elif kind == "tmd" and "absorber_stroke" in ds:
+        lower, lower_label, colour = (ds["absorber_stroke"].values * 1e3,
+                                      "absorber stroke (mm)", "#9467bd")
+    else:
+        lower, lower_label, colour = ds["force"].values, "tip force f (N)", "#8c564b"
 
-    fig = Figure(figsize=(10, 6.5), layout="constrained")
-    ax_w, ax_2 = fig.subplots(2, 1, sharex=True)
-    ax_w.plot(t, ds["tip_displacement"].values * 1e3, lw=0.6, color="#1f77b4")
-    ax_w.set_ylabel("tip displacement W (mm)")
+    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
+    freq = summary.get("forcing_frequency_hz") or 0.0
+    t_zoom = t[-1] - zoom_periods / freq if freq > 0 and t.size else -np.inf
+    zoom = t >= t_zoom
+    for col, sel in enumerate((slice(None), zoom)):
+        axes[0, col].plot(t[sel], w[sel], lw=0.6 if col == 0 else 1.0, color="#1f77b4")
+        axes[1, col].plot(t[sel], lower[sel], lw=0.6 if col == 0 else 1.0, color=colour)
+        axes[1, col].set_xlabel("time t (s)")
+        if t[sel].size:
+            axes[0, col].set_xlim(t[sel][0], t[sel][-1])
+    axes[0, 0].set_ylabel("tip displacement W (mm)")
+    axes[1, 0].set_ylabel(lower_label)
+    axes[0, 1].set_title(f"last {zoom_periods:g} periods", fontsize="medium")
+
     rms = summary.get("rms_tip_m")
     if rms is not None:
-        ax_w.axhline(rms * 1e3, color="#555555", lw=0.8, ls="-.",
-                     label=f"steady RMS = {rms * 1e3:.4g} mm")
-
-    if kind == "ball" and "y" in ds:
+        for ax in axes[0]:
+            ax.axhline(rms * 1e3, color="#555555", lw=0.9, ls="-.",
+                       label=f"steady RMS = {rms * 1e3:.4g} mm" if ax is axes[0, 0] else None)
+    if kind == "ball":
         half = damper.get("gap_m", math.nan) / 2 * 1e3
-        ax_2.plot(t, ds["y"].values * 1e3, lw=0.6, color="#2ca02c")
-        for s in (1, -1):
-            ax_2.axhline(s * half, color="black", ls="--", lw=1.0,
-                         label=r"walls $\pm\delta/2$" if s == 1 else None)
-        ax_2.set_ylim(-1.25 * half, 1.25 * half)
-        ax_2.set_ylabel("ball displacement y\nrelative to bar (mm)")
-    elif kind == "tmd" and "absorber_stroke" in ds:
-        ax_2.plot(t, ds["absorber_stroke"].values * 1e3, lw=0.6, color="#9467bd")
-        ax_2.set_ylabel("absorber stroke (mm)")
-    else:
-        ax_2.plot(t, ds["force"].values, lw=0.6, color="#8c564b")
-        ax_2.set_ylabel("cutting force f (N)")
-    ax_2.set_xlabel("time t (s)")
-
+        for ax in axes[1]:
+            for s in (1, -1):
+                ax.axhline(s * half, color="black", ls="--", lw=1.0,
+                           label=r"walls at $\pm\delta/2$" if s == 1 and ax is axes[1, 0]
+                           else None)
+        axes[1, 0].set_ylim(-1.25 * half, 1.25 * half)
     steady = config.get("steady_start_s")
     if steady is not None:
-        for ax in (ax_w, ax_2):
-            ax.axvline(steady, color="#555555", ls=":", lw=1.0,
-                       label="start of steady part" if ax is ax_w else None)
-    for ax in (ax_w, ax_2):
+        for ax in axes[:, 0]:
+            ax.axvline(steady, color="#555555", ls=":", lw=1.2,
+                       label="start of steady part" if ax is axes[0, 0] else None)
+    for ax in axes.flat:
         ax.grid(alpha=0.3)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small",
-                      frameon=False)
-    ax_w.set_xlim(t[0] if t.size else 0, t[-1] if t.size else 1)
+    handles, labels = [], []
+    for ax in axes[:, 0]:
+        h, lab = ax.get_legend_handles_labels()
+        handles += h
+        labels += lab
+    if handles:
+        fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
+                   fontsize="small", frameon=False)
     fig.suptitle(_run_title(summary, damper))
     return save_figure_atomic(fig, path)
 
 
 def _run_title(summary: dict, damper: dict) -> str:
     kind = summary.get("bar", "?")
-    line1 = (f"{kind} bar, {summary.get('preset', '?')} preset: "
+    name = "ball bar (ball locked)" if kind == "locked" else f"{kind} bar"
+    line1 = (f"{name}, {summary.get('preset', '?')} preset: "
              f"F0 = {summary.get('force_n', math.nan):g} N, "
              f"$\\Omega/\\omega_n$ = {summary.get('ratio', math.nan):.4g} "
              f"({summary.get('forcing_frequency_hz', math.nan):.1f} Hz)")
@@ -110,9 +129,12 @@ def _run_title(summary: dict, damper: dict) -> str:
         ipc = summary.get("impacts_per_cycle")
         parts.append(f"pattern: {summary['pattern']}"
                      + (f" ({ipc:.3g} impacts/period)" if ipc is not None else ""))
+    if kind == "tmd":
+        parts.append(f"absorber: {damper.get('design', '?')} design")
+    lines = [line1, ", ".join(parts)]
     if summary.get("readings"):
-        parts.append("readings: " + ", ".join(summary["readings"]))
-    return line1 + ("\n" + ", ".join(parts) if parts else "")
+        lines.append("published readings: " + ", ".join(summary["readings"]))
+    return "\n".join(x for x in lines if x)
 
 
 # --- a sweep ---------------------------------------------------------------------
@@ -129,7 +151,9 @@ def plot_sweep(ds, path, force=None) -> list[Path]:
     Each figure has one panel per (gap x friction) of the ball cases, rows
     by gap and columns by friction (2 x 2 for the published study), each
     showing the solid bar, the TMD bar and that ball case; every ball point
-    is marked by its impact-pattern class (legend below the panels).
+    is marked by its impact-pattern class (legend below the panels), with
+    the number of impacts per period, n (or n/k per k periods), written
+    beside the n-symmetric and n-asymmetric ones.
     Without ball cases there is one panel.
     """
     path = Path(path)
@@ -180,6 +204,11 @@ def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
                     seen_patterns.add(cls)
                     ax.plot([x], [y], ls="none", marker=marker, color=colour, ms=7,
                             markeredgecolor="black", markeredgewidth=0.5)
+                    if cls in ("symmetric", "asymmetric"):  # n (per k periods) beside it
+                        n = re.sub(r"^(\d+)\D*(?:period (\d+)\))?$", r"\1/\2",
+                                   str(name)).rstrip("/")
+                        ax.annotate(n, (x, y), xytext=(5, 5), textcoords="offset points",
+                                    fontsize=7, color=colour)
             if balls:
                 ax.set_title(f"gap {gap * 1e3:g} mm, friction {fr}", fontsize="medium")
             ax.grid(alpha=0.3)
@@ -194,8 +223,10 @@ def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
         marker, colour = PATTERN_STYLE[cls]
         handles.append(axes[0, 0].plot([], [], ls="none", marker=marker, color=colour, ms=7,
                                        markeredgecolor="black", markeredgewidth=0.5)[0])
-        labels.append(f"pattern: {cls or 'none (locked)'}")
-    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 5),
+        labels.append(f"pattern: n {cls}" if cls in ("symmetric", "asymmetric")
+                      else f"pattern: {cls or 'none (locked ball)'}")
+    ncol = len(labels) if len(labels) <= 6 else math.ceil(len(labels) / 2)
+    fig.legend(handles, labels, loc="outside lower center", ncol=ncol,
                fontsize="small", frameon=False)
     fig.suptitle(f"Tip RMS against frequency ratio, F0 = {force:g} N "
                  f"({attrs.get('preset', '?')} preset; {attrs.get('duration_s', math.nan):g} s "

@@ -96,7 +96,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
     ``bar``: "solid", "ball" (ball damper; ``locked`` fixes the ball) or
     "tmd".  ``friction`` on/off; ``friction_number`` is the published
     rolling-resistance number (0.6 nominal, read as the preset reads it);
-    ``friction_force`` (N) overrides both.  ``tmd_design``: "den-hartog"
+    ``friction_force`` (N) overrides the number when friction is on.  ``tmd_design``: "den-hartog"
     (physical default) or "published" (paper default).  ``modal`` replaces
     the FE model (e.g. :meth:`ModalModel.from_tap_test`).
     """
@@ -130,10 +130,10 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
     check_choice("ball", ball, BALLS)
     reaction = friction_reaction or ("printed" if paper else "reciprocal")
     check_choice("friction_reaction", reaction, ("reciprocal", "printed"))
-    if friction_force is not None:
-        fr = Friction("force", friction_force, reaction)
-    elif not friction:
+    if not friction:
         fr = NO_FRICTION
+    elif friction_force is not None:
+        fr = Friction("force", friction_force, reaction)
     else:
         number = PUBLISHED_FRICTION_NUMBER if friction_number is None else friction_number
         check_range("friction_number", number, 0.0, 100.0)

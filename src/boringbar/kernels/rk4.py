@@ -136,7 +136,7 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
 
     for k in range(n_steps):
         t = t0 + k * dt
-        t1 = t + dt
+        t1 = t0 + (k + 1) * dt  # not t + dt: keeps event times inside [t0, t_end]
         if k % _RESYNC == 0:
             sn = math.sin(om * t)
             cn = math.cos(om * t)

@@ -1,0 +1,7 @@
+"""``python -m boringbar``: the ``boringbar`` command."""
+
+import sys
+
+from boringbar.cli import main
+
+sys.exit(main())

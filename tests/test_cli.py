@@ -1,0 +1,143 @@
+"""The ``boringbar`` command end to end, on real files (STYLE.md tier 4).
+
+Runs are short (0.02-0.05 s simulated) so the file stays fast; the physics
+is tested elsewhere, here only what the command promises: its files, its
+JSON, its exit codes and its one-line errors.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from boringbar.cli import main
+
+SIMULATE_KEYS = {"natural_frequency_hz", "rms_tip_m", "pattern", "impacts_per_cycle",
+                 "max_abs_rel_disp_m", "preset", "integrator", "elapsed_s", "files"}
+
+
+def _json_out(capsys) -> dict:
+    captured = capsys.readouterr()
+    lines = captured.out.strip().splitlines()
+    assert len(lines) == 1, captured.out  # exactly one JSON object on stdout
+    return json.loads(lines[0])
+
+
+def test_simulate_json_files_and_config(tmp_path, capsys):
+    out = tmp_path / "run"
+    rc = main(["simulate", "--bar", "ball", "--gap-mm", "0.1", "--force-n", "20",
+               "--duration-s", "0.05", "--out", str(out), "--json"])
+    assert rc == 0
+    s = _json_out(capsys)
+    assert SIMULATE_KEYS <= s.keys()
+    assert s["preset"] == "physical" and s["integrator"] == "rk4" and s["bar"] == "ball"
+    assert s["rms_tip_m"] > 0 and isinstance(s["pattern"], str)
+    assert 0 < s["max_abs_rel_disp_m"] <= 0.05e-3 + 1e-12  # never beyond the wall
+
+    assert s["files"] == {"netcdf": str(out / "run.nc"), "png": str(out / "run.png"),
+                          "summary": str(out / "summary.json")}
+    for path in s["files"].values():
+        assert Path(path).stat().st_size > 0
+    assert (out / "run.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(out.glob(".*.tmp"))  # atomic writes leave no temporaries
+    with xr.open_dataset(out / "run.nc") as ds:
+        config = json.loads(ds.attrs["config"])
+        assert config["system"]["damper"]["gap_m"] == pytest.approx(0.1e-3)
+        assert config["forcing"]["amplitude_n"] == 20
+        assert {"tip_displacement", "y", "force"} <= set(ds.data_vars)
+        assert 20000 <= ds.sizes["time"] <= 40000  # default record_every: ~20000 rows
+    saved = json.loads((out / "summary.json").read_text())
+    assert saved["rms_tip_m"] == s["rms_tip_m"] and "config" in saved
+
+
+@pytest.mark.parametrize("bar", ["solid", "tmd"])
+def test_simulate_text_summary(tmp_path, capsys, bar):
+    rc = main(["simulate", "--bar", bar, "--duration-s", "0.02", "--record-every", "10",
+               "--out", str(tmp_path)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert f"{bar} bar" in text and "natural frequency" in text and "tip RMS" in text
+    with xr.open_dataset(tmp_path / "run.nc") as ds:
+        assert ds.sizes["time"] == 2000
+
+
+def test_simulate_quiet_prints_nothing(tmp_path, capsys):
+    assert main(["simulate", "--bar", "solid", "--duration-s", "0.01", "--quiet",
+                 "--out", str(tmp_path)]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""
+    assert (tmp_path / "run.nc").exists()
+
+
+def test_sweep_files_and_json(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    rc = main(["sweep", "--bar", "solid", "--bar", "ball", "--gap-mm", "0.1", "--friction",
+               "off", "--ratios", "0.98:1.0:0.01", "--force-n", "10,20", "--duration-s",
+               "0.05", "--workers", "2", "--out", str(out), "--json"])
+    assert rc == 0
+    captured = capsys.readouterr()
+    assert "sweep:" not in captured.err  # progress only on a terminal
+    s = json.loads(captured.out)
+    assert len(s["cases"]) == 2 * 2  # (solid, ball) x (10 N, 20 N)
+    for case in s["cases"]:
+        assert case["ratio"] == pytest.approx([0.98, 0.99, 1.0])
+        assert len(case["rms_tip_m"]) == len(case["pattern"]) == 3
+    assert {c["bar"] for c in s["cases"]} == {"solid", "ball"}
+    with xr.open_dataset(out / "sweep.nc") as ds:
+        assert dict(ds.sizes) == {"case": 2, "force": 2, "ratio": 3}
+        assert "systems" in ds.attrs
+    pngs = sorted(p.name for p in out.glob("*.png"))
+    assert pngs == ["sweep_F10N.png", "sweep_F20N.png"]  # one figure per force
+    assert s["files"]["png"] == [str(out / p) for p in pngs]
+
+
+def test_sweep_table_one_force(tmp_path, capsys):
+    rc = main(["sweep", "--bar", "tmd", "--ratios", "1.0", "--force-n", "10",
+               "--duration-s", "0.02", "--out", str(tmp_path)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "F0 = 10 N" in text and "tmd" in text
+    assert (tmp_path / "sweep.png").exists()
+
+
+@pytest.mark.parametrize("argv, name", [
+    (["simulate", "--gap-mm", "-0.1"], "--gap-mm"),
+    (["simulate", "--restitution", "1.5"], "--restitution"),
+    (["simulate", "--dt-s", "1e-3", "--duration-s", "0.01"], "dt"),
+    (["simulate", "--no-such-option", "1"], "--no-such-option"),
+    (["simulate", "--force-n", "ten"], "--force-n"),
+    (["simulate", "--friction", "maybe"], "--friction"),
+    (["simulate", "--bar", "solid", "--gap-mm", "0.1"], "--gap-mm"),
+    (["simulate", "--ball-position-mm", "0.3"], "--ball-position-mm"),
+    (["sweep", "--ratios", "1.05:0.95:0.01"], "--ratios"),
+    (["sweep", "--ratios", "0.95-1.05"], "--ratios"),
+    (["sweep", "--gap-mm", "0.5,-1"], "--gap-mm"),
+    (["sweep", "--bar", "solid,boat"], "--bar"),
+    ([], "COMMAND"),
+])
+def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, name):
+    out = tmp_path / "out"
+    assert main(argv + ["--out", str(out)] if argv else argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("boringbar: error:") and name in err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()  # nothing written
+
+
+def test_console_script_and_module(tmp_path):
+    script = Path(sys.executable).with_name("boringbar")
+    if not script.exists():
+        pytest.skip("console script not installed (pip install -e .)")
+    proc = subprocess.run([str(script), "simulate", "--bar", "solid", "--duration-s", "0.02",
+                           "--json", "--out", str(tmp_path)], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["bar"] == "solid"
+    assert (tmp_path / "run.nc").exists()
+    proc = subprocess.run([sys.executable, "-m", "boringbar", "simulate", "--restitution", "2"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.startswith("boringbar: error: --restitution")
