@@ -85,8 +85,8 @@ def main() -> None:
         steps = round(run.duration / run.dt)
         if n == 1:
             base = wall
-        print(f"kernel rk4, {n} mode(s): {wall:.4f} s per 2 s run, {wall / steps * 1e9:.1f} ns/step,"
-              f" {run.duration / wall:.1f} simulated s per wall s, "
+        print(f"kernel rk4, {n} mode(s): {wall:.4f} s per 2 s run, "
+              f"{wall / steps * 1e9:.1f} ns/step, {run.duration / wall:.1f} simulated s per wall s, "
               f"{run.metrics['impacts_total']} impacts, pattern {run.pattern.name}")
     if not args.skip_scipy:
         tic = time.perf_counter()
