@@ -86,7 +86,8 @@ def main() -> None:
         if n == 1:
             base = wall
         print(f"kernel rk4, {n} mode(s): {wall:.4f} s per 2 s run, "
-              f"{wall / steps * 1e9:.1f} ns/step, {run.duration / wall:.1f} simulated s per wall s, "
+              f"{wall / steps * 1e9:.1f} ns/step, "
+              f"{run.duration / wall:.1f} simulated s per wall s, "
               f"{run.metrics['impacts_total']} impacts, pattern {run.pattern.name}")
     if not args.skip_scipy:
         tic = time.perf_counter()

@@ -62,3 +62,17 @@ def test_ball_damper_matches_masri_caughey_two_impact_orbit():
         errors.append(abs(run.rms_tip / orbit.rms_tip() - 1.0))
     assert errors[1] < 2e-3
     assert errors[2] < errors[0]
+
+
+def test_poincare_strobe_of_linear_bar_is_the_analytic_steady_state():
+    """At Omega t = 0 mod 2 pi the steady W = F0 Im G and W' = F0 Omega Re G."""
+    system = make_system("solid", "physical")
+    run = simulate(system, Harmonic(10.0, 1.01), duration=0.8, strobe=True)
+    omega = 1.01 * system.reference_frequency
+    g = tip_frf(system.bar, np.array([omega]), tmd=None)[0]
+    late = run.strobe[run.strobe[:, 0] > 0.6]  # transient decayed by exp(-19)
+    assert len(late) > 50
+    assert np.allclose(np.mod(omega * late[:, 0] + 1e-9, 2 * np.pi), 1e-9, atol=1e-8)
+    assert np.allclose(late[:, 1], 10.0 * g.imag, rtol=0, atol=1e-6 * 10.0 * abs(g))
+    assert np.allclose(late[:, 2], 10.0 * omega * g.real, rtol=0,
+                       atol=1e-6 * 10.0 * omega * abs(g))

@@ -117,7 +117,8 @@ def classify(
     ``time_tol`` over the whole tail; 'symmetric' if the two walls have equal
     counts and y(t + s) = -y(t) for some s = (2j+1) T/2, j = 0..k-1: the - wall's
     impacts are the + wall's shifted by s and vice versa, within ``time_tol``
-    (for k > 1 only k odd, s = kT/2 can pass), else 'asymmetric'; no such k -> 'non-uniform'.  Each kT-window is compared with
+    (for k > 1 only k odd, s = kT/2 can pass), else 'asymmetric'; no such
+    k -> 'non-uniform'.  Each kT-window is compared with
     the previous one, so a phase drift below ``time_tol`` per kT passes.
     """
     times = np.asarray(impact_times, dtype=float)
