@@ -40,3 +40,66 @@ class Harmonic:
     def to_dict(self) -> dict:
         return {"type": "harmonic", "amplitude_n": self.amplitude, "ratio": self.ratio,
                 "frequency_hz": self.frequency_hz}
+
+
+INTERPOLATIONS = ("cubic", "linear")
+STARTS = ("rest", "static")
+#: Aluminium, MODEL.md section 4.
+KR_ALUMINIUM = 850e6
+
+
+@dataclass(frozen=True)
+class Regenerative:
+    """Regenerative turning/boring, radial direction (MODEL.md section 4).
+
+    f(t) = Kr b h(t), h(t) = max(0, min_{k=1..N} [k h_m + W(t - k tau)] - W(t)),
+    tau = 60 / rpm; the surface before the cut started is W = 0 (``start =
+    "rest"``, as published: the mean force arrives as a step) or the static
+    deflection under the mean force (``start = "static"``, a steady cut).
+    The delayed W at RK4 stages is interpolated from the stored history
+    with a cubic Hermite from W and W' (4th order, default) or linearly.
+    ``stop_at_zero`` ends the run at the first h = 0 (a lobe search needs no
+    more); ``bounded_fraction``: the amplitude criterion's threshold, as a
+    fraction of h_m.
+    """
+
+    depth: float  #: b, depth of cut (m)
+    rpm: float  #: spindle speed (rev/min)
+    kr: float = KR_ALUMINIUM  #: specific radial cutting force (Pa)
+    feed: float = 0.1e-3  #: h_m, feed per revolution (m)
+    revolutions: int = 3  #: N, past revolutions in the chip-thickness minimum
+    interpolation: str = "cubic"
+    start: str = "rest"
+    stop_at_zero: bool = False
+    bounded_fraction: float = 0.1
+
+    def __post_init__(self):
+        check_nonnegative("depth of cut", self.depth, "m")
+        check_positive("rpm", self.rpm)
+        check_positive("kr", self.kr, "Pa")
+        check_positive("feed", self.feed, "m")
+        if not (isinstance(self.revolutions, int) and 1 <= self.revolutions <= 50):
+            raise ParameterError(f"revolutions = {self.revolutions!r} is outside the allowed "
+                                 "range [1, 50] (whole revolutions)")
+        if self.interpolation not in INTERPOLATIONS:
+            raise ParameterError(f"interpolation = {self.interpolation!r} is not one of "
+                                 f"{', '.join(INTERPOLATIONS)}")
+        if self.start not in STARTS:
+            raise ParameterError(f"start = {self.start!r} is not one of {', '.join(STARTS)}")
+        check_positive("bounded_fraction", self.bounded_fraction)
+
+    @property
+    def tau(self) -> float:
+        """Delay: one spindle revolution (s)."""
+        return 60.0 / self.rpm
+
+    @property
+    def mean_force(self) -> float:
+        """Kr b h_m (N)."""
+        return self.kr * self.depth * self.feed
+
+    def to_dict(self) -> dict:
+        return {"type": "regenerative", "depth_m": self.depth, "rpm": self.rpm,
+                "kr_pa": self.kr, "feed_m": self.feed, "revolutions": self.revolutions,
+                "interpolation": self.interpolation, "start": self.start,
+                "stop_at_zero": self.stop_at_zero, "bounded_fraction": self.bounded_fraction}

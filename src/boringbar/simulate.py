@@ -1,4 +1,4 @@
-"""``simulate``: one time-domain run of a bar under harmonic forcing.
+"""``simulate``: one time-domain run of a bar under harmonic or cutting forces.
 
 The description objects (System, Harmonic) are packed into the kernel's
 parameter vector here (layout in :mod:`boringbar.kernels.layout`); the
@@ -19,7 +19,7 @@ from boringbar import __version__
 from boringbar._validate import ParameterError, check_positive, check_range
 from boringbar.analysis.patterns import Pattern, classify
 from boringbar.dampers import ImpactDamper, TunedMassDamper
-from boringbar.forcing import Harmonic
+from boringbar.forcing import Harmonic, Regenerative
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.system import System
@@ -61,8 +61,8 @@ class Run:
     """The result of :func:`simulate`: streamed metrics, events and (if asked) history."""
 
     system: System
-    forcing: Harmonic
-    omega: float  #: forcing frequency (rad/s)
+    forcing: Harmonic | Regenerative
+    omega: float  #: forcing frequency, or spindle frequency for cutting (rad/s)
     dt: float
     t0: float
     duration: float
@@ -91,6 +91,7 @@ class Run:
             "forcing": self.forcing.to_dict(),
             "omega_rad_s": self.omega,
             "integrator": "rk4",
+            "delay_interpolation": getattr(self.forcing, "interpolation", None),
             "dt_s": self.dt,
             "t0_s": self.t0,
             "duration_s": self.duration,
@@ -110,7 +111,7 @@ class Run:
             "natural_frequency_hz": sys.reference_frequency / (2 * math.pi),
             "forcing_frequency_hz": self.omega / (2 * math.pi),
             "ratio": self.omega / sys.reference_frequency,
-            "force_n": self.forcing.amplitude,
+            "force_n": getattr(self.forcing, "amplitude", None),
             "rms_tip_m": m["rms_tip_m"],
             "max_abs_tip_m": m["max_abs_tip_m"],
             "pattern": None if self.pattern is None else self.pattern.name,
@@ -125,6 +126,28 @@ class Run:
             "elapsed_s": self.elapsed_s,
             "final_time_s": self.final.t,
             "final_phase_rad": (self.omega * self.final.t) % (2 * math.pi),
+            **({"cutting": self.cutting} if isinstance(self.forcing, Regenerative) else {}),
+        }
+
+    @property
+    def cutting(self) -> dict:
+        """Chatter verdicts of a regenerative run (MODEL.md section 4)."""
+        m = self.metrics
+        f = self.forcing
+        return {
+            "depth_m": f.depth,
+            "rpm": f.rpm,
+            "chatter": m["first_zero_time_s"] is not None,
+            "first_zero_time_s": m["first_zero_time_s"],
+            "steps_with_zero_force": m["steps_with_zero_force"],
+            "max_force_n": m["max_force_n"],
+            "mean_force_n": m["mean_force_n"],
+            "amplitude_m": m["amplitude_m"],
+            "bounded_chatter": m["amplitude_m"] > f.bounded_fraction * f.feed,
+            "bounded_threshold_m": f.bounded_fraction * f.feed,
+            "static_deflection_m": m["static_deflection_m"],
+            "delay_interpolation": f.interpolation,
+            "start": f.start,
         }
 
     def history_dataset(self):
@@ -154,7 +177,10 @@ class Run:
 
 
 def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarray:
-    """The kernel's parameter vector for ``system`` under F0 sin(omega t)."""
+    """The kernel's parameter vector for ``system`` under F0 sin(omega t).
+
+    ``omega`` = 0 (no harmonic force) refers the impact threshold to omega_n.
+    """
     bar = system.bar
     n = bar.n_modes
     if n > L.NMAX:
@@ -259,13 +285,17 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     """
     if not isinstance(system, System):
         raise ParameterError(f"system = {system!r} must be a System (see make_system)")
-    if not isinstance(forcing, Harmonic):
-        raise ParameterError(f"forcing = {forcing!r} must be a Harmonic")
+    if not isinstance(forcing, Harmonic | Regenerative):
+        raise ParameterError(f"forcing = {forcing!r} must be a Harmonic or a Regenerative")
+    cutting = isinstance(forcing, Regenerative)
     check_positive("duration", duration, "s")
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     check_range("record_every", record_every, 0, math.inf, hi_open=True)
-    omega = forcing.omega(system.reference_frequency)
+    omega = 2 * math.pi / forcing.tau if cutting else forcing.omega(system.reference_frequency)
     check_step(system, omega, dt)
+    if cutting and forcing.tau < 4 * dt:
+        raise ParameterError(f"dt = {dt:g} s must be under a quarter of the spindle period "
+                             f"{forcing.tau:g} s")
     n_steps = int(round(duration / dt))
     if n_steps < 1:
         raise ParameterError(f"duration = {duration:g} s is shorter than one step dt = {dt:g} s")
@@ -279,10 +309,37 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     else:
         x = initial_state(system, initial or Initial())
         t0 = 0.0
+    w_static = 0.0
+    if cutting:
+        # static deflection under the mean force, mode by mode (absorber relaxed)
+        bar = system.bar
+        u_static = bar.psi_tip * forcing.mean_force / bar.stiffness
+        w_static = float(bar.psi_tip @ u_static)
+        if forcing.start == "static" and not isinstance(initial, State):
+            # the static deflection plus whatever initial motion was asked for
+            # (a perfect static start has nothing to grow from)
+            n = bar.n_modes
+            x[:n] += u_static
+            if system.kind == "tmd":
+                x[2 * n] += float(bar.psi_absorber @ u_static)
     x_start = x.copy()
 
-    p = pack(system, omega, forcing.amplitude, dt)
-    period = 2 * math.pi / omega if omega > 0 else duration
+    if cutting:
+        p = pack(system, 0.0, 0.0, dt)
+        p[L.FORCING] = L.REGENERATIVE
+        p[L.KR_B] = forcing.kr * forcing.depth
+        p[L.FEED] = forcing.feed
+        p[L.TAU] = forcing.tau
+        p[L.N_REV] = forcing.revolutions
+        p[L.INTERP] = 1.0 if forcing.interpolation == "cubic" else 0.0
+        p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
+        p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
+        buf = np.zeros((int(math.ceil(forcing.revolutions * forcing.tau / dt)) + 3, 2))
+        period = 2 * math.pi / system.reference_frequency
+    else:
+        p = pack(system, omega, forcing.amplitude, dt)
+        buf = None
+        period = 2 * math.pi / omega if omega > 0 else duration
     n_periods = duration / period
     steady_steps = int(round((1.0 - steady_fraction) * n_steps))
     if strobe:
@@ -297,10 +354,13 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     met = np.zeros(L.MET_SIZE)
     met[L.STEADY_MAX_W] = -np.inf
     met[L.STEADY_MIN_W] = np.inf
+    met[L.FIRST_ZERO_T] = -1.0
 
     tic = time.perf_counter()
-    run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb, met)
+    run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb, met,
+            buf)
     elapsed = time.perf_counter() - tic
+    n_steps = int(met[L.STEPS_DONE])  # fewer if a cut stopped at its first h = 0
 
     n_imp = int(met[L.N_IMP_REC])
     n_stk = int(met[L.N_STICK_REC])
@@ -321,12 +381,18 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
         "contact_time_s": met[L.T_CONTACT],
         "stick_time_s": met[L.T_STICK],
         "impacts_truncated": n_imp > cap_imp,
+        "first_zero_time_s": met[L.FIRST_ZERO_T] if met[L.FIRST_ZERO_T] >= 0 else None,
+        "steps_with_zero_force": int(met[L.N_ZERO_STEPS]),
+        "max_force_n": met[L.MAX_FORCE],
+        "mean_force_n": met[L.SUM_F] / n_st,
+        "amplitude_m": max(0.0, (met[L.STEADY_MAX_W] - met[L.STEADY_MIN_W]) / 2),
+        "static_deflection_m": w_static,
     }
     e0 = stored_energy(system, x_start)
     e1 = stored_energy(system, x)
     w_in = met[L.W_FORCE] + met[L.W_NONRECIP]
     dissipated = met[L.D_VISC] + met[L.D_IMPACT] + met[L.D_FRICTION]
-    scale = max(abs(w_in), dissipated, abs(e1 - e0), 1e-300)
+    scale = max(abs(w_in), dissipated, abs(e1 - e0), e0, e1, 1e-300)
     energy = {
         "work_force_j": met[L.W_FORCE],
         "work_nonreciprocal_friction_j": met[L.W_NONRECIP],
@@ -339,7 +405,7 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
         "balance_relative": (w_in - (e1 - e0) - dissipated) / scale,
     }
     pattern = None
-    if system.kind == "ball":
+    if system.kind == "ball" and not cutting:
         pattern = classify(imp[:min(n_imp, cap_imp), 0], imp[:min(n_imp, cap_imp), 1],
                            stick[:min(n_stk, cap_imp)], (t_steady, t_end), period, dt=dt,
                            contact_time=met[L.T_CONTACT])

@@ -43,6 +43,7 @@ _SCALARS = (
     "N_REV",  # past revolutions in the chip-thickness minimum
     "INTERP",  # 0 linear, 1 cubic Hermite for the delayed W
     "STOP_AT_ZERO",  # 1: stop the run at the first h = 0
+    "HIST_W0",  # W of the surface before the cut began (0: from rest)
 )
 for _i, _name in enumerate(_SCALARS):
     globals()[_name] = _i

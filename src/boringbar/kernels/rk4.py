@@ -38,7 +38,7 @@ _RESYNC = 256
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
+def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
     """Advance state ``x`` (updated in place) by ``n_steps`` RK4 steps from ``t0``.
 
     Steps with index >= ``steady_start`` are the steady part.  Outputs:
@@ -47,7 +47,10 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     (start, end of stick intervals in the steady part), ``strobe`` (Poincare
     samples t, W, W', aux, aux' at t = STROBE_T0 + j STROBE_PERIOD), ``met``
     (metrics, see layout; pass zeros, with STEADY_MAX_W = -inf and
-    STEADY_MIN_W = +inf, for a fresh run).
+    STEADY_MIN_W = +inf, for a fresh run), ``buf`` (regenerative cutting:
+    the circular history of W, W' at step ends, at least
+    N_REV TAU / dt + 3 rows; node g is time t_cut + g dt, counted over every
+    call since the cut began, and times before the cut read HIST_W0).
     """
     case = int(p[L.CASE])
     M = p[L.M_:L.M_ + n].copy()
@@ -58,6 +61,37 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     pA = p[L.PSI_A:L.PSI_A + n].copy()
     invM = 1.0 / M
     f0 = p[L.F0]
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
+    krb = p[L.KR_B]
+    feed = p[L.FEED]
+    nrev = int(p[L.N_REV]) if regen else 0
+    cubic = p[L.INTERP] > 0.0
+    stop_at_zero = p[L.STOP_AT_ZERO] > 0.0
+    w_before_cut = p[L.HIST_W0]
+    nbuf = buf.shape[0]
+    kg0 = int(met[L.STEPS_DONE])  # steps since the cut began
+    # delayed node offsets: stage time t + c_s dt minus j tau lies at node
+    # kg + c_s - j tau / dt = kg + off[s, j] + frac[s, j]
+    off = np.zeros((4, max(nrev, 1)), dtype=np.int64)
+    frac = np.zeros((4, max(nrev, 1)))
+    for st in range(4):
+        for j in range(nrev):
+            d = (0.0, 0.5, 0.5, 1.0)[st] - (j + 1) * p[L.TAU] / dt
+            off[st, j] = math.floor(d)
+            frac[st, j] = d - math.floor(d)
+    # row pointers into the circular buffer, advanced by one each step (no modulo
+    # in the loop): ptr[j] is the row of node kg + off[0, j]
+    ptr = np.zeros(max(nrev, 1), dtype=np.int64)
+    dst = np.zeros((4, max(nrev, 1)), dtype=np.int64)
+    for j in range(nrev):
+        ptr[j] = (kg0 + off[0, j]) % nbuf
+        for st in range(4):
+            dst[st, j] = off[st, j] - off[0, j]
+    hsurf = np.zeros(4)
+    max_force = met[L.MAX_FORCE]
+    first_zero = met[L.FIRST_ZERO_T]
+    n_zero = met[L.N_ZERO_STEPS]
+    steps_run = n_steps
     om = p[L.OMEGA]
     m = p[L.BALL_MASS]
     half = p[L.HALF_GAP]
@@ -137,6 +171,9 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
         if case == L.TMD:
             aux_prev -= pA[i] * X[i]
             auxd_prev -= pA[i] * X[n + i]
+    if regen and kg0 == 0:
+        buf[0, 0] = w_prev
+        buf[0, 1] = wd_prev
     t_next = 0.0
     if tstrobe > 0.0:
         t_next = p[L.STROBE_T0]
@@ -149,6 +186,45 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
         if k % _RESYNC == 0:
             sn = math.sin(om * t)
             cn = math.cos(om * t)
+        kg = kg0 + k
+        cut_zero = False
+        if regen:
+            # the surface the tool meets at each stage time: min_j [j h_m + W(t_s - j tau)],
+            # from the stored history (stages 2 and 3 share t + dt/2).  Until h first
+            # reaches zero the j = 1 term is the minimum (MODEL.md section 4), so the
+            # other revolutions are read only after that.
+            nr_eff = nrev if first_zero >= 0.0 else 1
+            for st in (0, 1, 3):
+                hmin = 1e300
+                for j in range(nr_eff):
+                    a = kg + off[st, j]  # global node; its row is ptr[j] + dst[st, j]
+                    fr = frac[st, j]
+                    ia = ptr[j] + dst[st, j]
+                    if ia >= nbuf:
+                        ia -= nbuf
+                    ib = ia + 1
+                    if ib >= nbuf:
+                        ib -= nbuf
+                    wa = w_before_cut
+                    wda = 0.0
+                    wb = w_before_cut
+                    wdb = 0.0
+                    if a >= 0:
+                        wa = buf[ia, 0]
+                        wda = buf[ia, 1]
+                    if a + 1 >= 0:
+                        wb = buf[ib, 0]
+                        wdb = buf[ib, 1]
+                    if cubic:
+                        f2 = fr * fr
+                        f3 = f2 * fr
+                        wdel = ((2 * f3 - 3 * f2 + 1) * wa + (f3 - 2 * f2 + fr) * dt * wda
+                                + (-2 * f3 + 3 * f2) * wb + (f3 - f2) * dt * wdb)
+                    else:
+                        wdel = (1.0 - fr) * wa + fr * wb
+                    hmin = min(hmin, (j + 1) * feed + wdel)
+                hsurf[st] = hmin
+            hsurf[2] = hsurf[1]
         s_h = sn * chh + cn * shh
         c_h = cn * chh - sn * shh
         s_1 = s_h * chh + c_h * shh
@@ -166,6 +242,22 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
             for j in range(nx):
                 Xs[j] = X[j] + cs * Kd[j]
             f = fst[st]
+            if regen:
+                # f = Kr b h, h = max(0, min_j [j h_m + W(t - j tau)] - W(t))
+                ws = 0.0
+                for i in range(n):
+                    ws += pL[i] * Xs[i]
+                hmin = hsurf[st]
+                hh = hmin - ws
+                if hh <= 0.0:
+                    hh = 0.0
+                    if not cut_zero:
+                        cut_zero = True
+                        if first_zero < 0.0:
+                            first_zero = t + (0.0, 0.5, 0.5, 1.0)[st] * dt
+                f = krb * hh
+                fst[st] = f
+                max_force = max(max_force, f)
             w_s = wst[st]
             # bar: M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f (+ damper terms below)
             wd = 0.0
@@ -318,6 +410,16 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
             max_aux_all = max(max_aux_all, abs(aux))
         aux_prev = aux
         auxd_prev = auxd
+        if regen:
+            ik = (kg + 1) % nbuf
+            buf[ik, 0] = w
+            buf[ik, 1] = wd
+            for j in range(nrev):
+                ptr[j] += 1
+                if ptr[j] == nbuf:
+                    ptr[j] = 0
+            if cut_zero:
+                n_zero += 1
         if steady:
             sum_w2 += w * w
             sum_w += w
@@ -340,10 +442,13 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
             n_rec += 1
         sn = s_1
         cn = c_1
+        if cut_zero and stop_at_zero:
+            steps_run = k + 1
+            break
 
     # a stick interval still open at the end is closed there
     if in_stick:
-        t_end = t0 + n_steps * dt
+        t_end = t0 + steps_run * dt
         s0 = max(stick_t0, t_steady)
         if t_end - s0 >= stick_min:
             t_stick += t_end - s0
@@ -378,37 +483,43 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     met[L.N_STICK_REC] = n_stk
     met[L.N_REC] = n_rec
     met[L.N_STROBE] = n_stb
-    met[L.STEPS_DONE] += n_steps
+    met[L.MAX_FORCE] = max_force
+    met[L.FIRST_ZERO_T] = first_zero
+    met[L.N_ZERO_STEPS] = n_zero
+    met[L.STEPS_DONE] += steps_run
 
 
 # One compiled specialisation per mode count: with n a compile-time constant
 # the mode loops unroll (about 2.3x faster per step than a run-time n).
 @njit(cache=True, error_model="numpy", nogil=True)
-def _rk4_n1(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
-    _rk4(1, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met)
+def _rk4_n1(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
+    _rk4(1, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _rk4_n2(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
-    _rk4(2, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met)
+def _rk4_n2(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
+    _rk4(2, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _rk4_n3(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
-    _rk4(3, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met)
+def _rk4_n3(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
+    _rk4(3, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _rk4_any(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
+def _rk4_any(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
     _rk4(int(p[L.N_MODES]), p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick,
-         strobe, met)
+         strobe, met, buf)
 
 
 _BY_MODES = {1: _rk4_n1, 2: _rk4_n2, 3: _rk4_n3}
 
 
-def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met):
+def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
+            buf=None):
     """Advance ``x`` by ``n_steps`` RK4 steps (see :func:`_rk4` for the arguments)."""
     kernel = _BY_MODES.get(int(p[L.N_MODES]), _rk4_any)
+    if buf is None:
+        buf = np.zeros((0, 2))
     kernel(p, x, float(t0), float(dt), int(n_steps), int(steady_start), int(rec_every), rec,
-           imp, stick, strobe, met)
+           imp, stick, strobe, met, buf)
