@@ -32,6 +32,9 @@ BAR_KINDS = ("solid", "ball", "tmd")
 BALLS = ("carbide", "steel")
 PUBLISHED_F1_HZ = {"ball": 461.0, "solid": 456.0}
 PUBLISHED_TMD_MASS = 0.39
+#: "published": the published absorber; "den-hartog": Den Hartog's optimum for
+#: the FRF magnitude; "sims": Sims' equal-real-trough optimum for chatter
+TMD_DESIGNS = ("published", "den-hartog", "sims")
 
 #: The published readings, by name, with the reason each exists.
 READINGS = {
@@ -96,8 +99,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
     ``bar``: "solid", "ball" (ball damper; ``locked`` fixes the ball) or
     "tmd".  ``friction`` on/off; ``friction_number`` is the published
     rolling-resistance number (0.6 nominal, read as the preset reads it);
-    ``friction_force`` (N) overrides the number when friction is on.  ``tmd_design``: "den-hartog"
-    (physical default) or "published" (paper default).  ``modal`` replaces
+    ``friction_force`` (N) overrides the number when friction is on.
+    ``tmd_design``: "den-hartog" (physical default), "published" (paper
+    default) or "sims" (Sims' equal-real-trough tuning, for chatter).  ``modal`` replaces
     the FE model (e.g. :meth:`ModalModel.from_tap_test`).
     """
     check_choice("bar", bar, BAR_KINDS)
@@ -120,9 +124,13 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
         return System(modal, None, preset, tuple(readings))
     if bar == "tmd":
         design = tmd_design or ("published" if paper else "den-hartog")
-        check_choice("tmd_design", design, ("published", "den-hartog"))
+        check_choice("tmd_design", design, TMD_DESIGNS)
         if design == "published":
             tmd = TunedMassDamper.published(position=modal.z_absorber)
+        elif design == "sims":
+            from boringbar.analysis.linear import sims_tuning
+
+            tmd = sims_tuning(tmd_mass, modal)
         else:
             tmd = TunedMassDamper.den_hartog(tmd_mass, modal)
         return System(modal, tmd, preset, tuple(readings))
