@@ -14,7 +14,7 @@ absolute displacement x_a (TMD).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -169,3 +169,93 @@ def tip(p: np.ndarray, X: np.ndarray) -> np.ndarray:
     """Tip displacement W = psi_L . u for states X (rows)."""
     n = int(p[L.N_MODES])
     return X[..., :n] @ p[L.PSI_L:L.PSI_L + n]
+
+
+# --- regenerative cutting (MODEL.md section 4) -------------------------------------------
+@dataclass(frozen=True)
+class CutModel(Model):
+    """A :class:`Model` whose tip force is given: the cutting force of one RK4 stage."""
+
+    tip_force: float = 0.0
+
+    def force(self, t: float) -> float:
+        return self.tip_force
+
+
+def delayed_tip(W: list, Wd: list, s: float, dt: float, w_before: float, cubic: bool) -> float:
+    """W at time ``s`` (s after the cut began) from the full history of step-end values
+    W[g], W'[g] at times g dt; before the cut the surface is ``w_before`` (W' = 0).
+
+    Between two stored nodes: cubic Hermite from W and W' at both ends, or linear.
+    """
+    q = s / dt
+    a = int(np.floor(q))
+    fr = q - a
+
+    def node(g):
+        return (W[g], Wd[g]) if g >= 0 else (w_before, 0.0)
+
+    wa, wda = node(a)
+    wb, wdb = node(a + 1)
+    if not cubic:
+        return (1.0 - fr) * wa + fr * wb
+    h00 = 2 * fr**3 - 3 * fr**2 + 1
+    h10 = fr**3 - 2 * fr**2 + fr
+    h01 = -2 * fr**3 + 3 * fr**2
+    h11 = fr**3 - fr**2
+    return h00 * wa + h10 * dt * wda + h01 * wb + h11 * dt * wdb
+
+
+def regenerative_run(p: np.ndarray, x0: np.ndarray, dt: float, n_steps: int):
+    """Integrate a regenerative cut for ``n_steps`` RK4 steps from ``x0`` at t = 0.
+
+    At every stage the cutting force is f = Kr b h with
+    h = max(0, min_{k=1..N} [k h_m + W(t - k tau)] - W(t)), the delayed W read
+    from the full stored history (:func:`delayed_tip`), W(t) = psi_L . u of the
+    stage state.  Returns (t, X, force, first_zero, zero_steps): times and states
+    at every step end, the force at each step's last stage (what the kernel
+    records), the first stage time with h = 0 (None if never) and the number of
+    steps with h = 0 at some stage.
+    """
+    model = CutModel.from_packed(p)
+    n = model.n
+    krb, feed, tau = p[L.KR_B], p[L.FEED], p[L.TAU]
+    revs, cubic, w_before = int(p[L.N_REV]), p[L.INTERP] > 0.0, p[L.HIST_W0]
+    x = np.array(x0, dtype=float)
+    if model.case == L.LOCKED:
+        x[2 * n + 1] = 0.0
+    W = [float(model.psi_L @ x[:n])]
+    Wd = [float(model.psi_L @ x[n:2 * n])]
+    X = np.empty((n_steps + 1, x.size))
+    X[0] = x
+    force = np.empty(n_steps)
+    first_zero, zero_steps = None, 0
+
+    def chip(ts: float, xs: np.ndarray) -> float:
+        surface = min(k * feed + delayed_tip(W, Wd, ts - k * tau, dt, w_before, cubic)
+                      for k in range(1, revs + 1))
+        return max(0.0, surface - float(model.psi_L @ xs[:n]))
+
+    for step in range(n_steps):
+        t = step * dt
+        ks, zero = [], False
+        xs = x
+        for c, a in ((0.0, 0.0), (0.5, 0.5), (0.5, 0.5), (1.0, 1.0)):
+            if ks:
+                xs = x + a * dt * ks[-1]
+            h = chip(t + c * dt, xs)
+            if h == 0.0:
+                zero = True
+                if first_zero is None:
+                    first_zero = t + c * dt
+            f = krb * h
+            ks.append(rhs(replace(model, tip_force=f), t + c * dt, xs))
+        x = x + dt / 6 * (ks[0] + 2 * ks[1] + 2 * ks[2] + ks[3])
+        if model.case == L.BALL:
+            x, _ = walls(model, x)
+        force[step] = f
+        zero_steps += zero
+        X[step + 1] = x
+        W.append(float(model.psi_L @ x[:n]))
+        Wd.append(float(model.psi_L @ x[n:2 * n]))
+    return dt * np.arange(n_steps + 1), X, force, first_zero, zero_steps

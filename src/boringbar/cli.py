@@ -1,4 +1,4 @@
-"""The ``boringbar`` command: ``boringbar simulate`` and ``boringbar sweep``.
+"""The ``boringbar`` command: ``boringbar simulate``, ``sweep`` and ``lobes``.
 
 Units are in the option names (MODEL.md section 7): ``--gap-mm``,
 ``--force-n``, ``--duration-s``...; everything is converted to SI here and
@@ -17,8 +17,11 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
+
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_range
+from boringbar.forcing import INTERPOLATIONS, STARTS
 from boringbar.system import BALLS, BAR_KINDS, PRESETS, READINGS
 
 PROG = "boringbar"
@@ -50,12 +53,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _add_simulate(sub)
     _add_sweep(sub)
+    _add_lobes(sub)
     return parser
 
 
-def _add_common(p: argparse.ArgumentParser, many: bool) -> dict:
-    """Options shared by simulate and sweep; ``many``: the sweep's list forms.
-    Returns the option groups by name, for command-specific options."""
+def _add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
+                initial: bool = True) -> dict:
+    """Options shared by simulate, sweep and lobes; ``many``: the list forms of
+    sweep and lobes; ``harmonic``: the F0 and Omega options; ``initial``: the
+    initial conditions.  Returns the option groups by name, for
+    command-specific options."""
     groups = {}
     lst = ", comma list" if many else ""
     g = p.add_argument_group("bar and damper")
@@ -87,29 +94,30 @@ def _add_common(p: argparse.ArgumentParser, many: bool) -> dict:
                    help="TMD tuning (default: physical den-hartog, paper published)")
 
     g = groups["run"] = p.add_argument_group("forcing and integration")
-    if many:
+    if harmonic and many:
         g.add_argument("--force-n", default="10,20", metavar="N,...",
                        help="harmonic force amplitudes F0 in N (default: 10,20)")
         g.add_argument("--ratios", default="0.95:1.05:0.01", metavar="START:STOP:STEP",
                        help="Omega/omega_n values, START:STOP:STEP (inclusive) or comma list "
                             "(default: 0.95:1.05:0.01)")
-    else:
-        g.add_argument("--force-n", type=float, default=10.0, metavar="N",
+    elif harmonic:  # None: not given (a cut refuses them); defaults in _cmd_simulate
+        g.add_argument("--force-n", type=float, metavar="N",
                        help="harmonic force amplitude F0 in N (default: 10)")
-        g.add_argument("--ratio", type=float, default=1.0, metavar="R",
+        g.add_argument("--ratio", type=float, metavar="R",
                        help="Omega/omega_n of the host bar (default: 1.0)")
     g.add_argument("--duration-s", type=float, default=2.0, metavar="S",
                    help="simulated time in s (default: 2.0)")
     g.add_argument("--dt-s", type=float, default=1e-6, metavar="S",
                    help="RK4 time step in s (default: 1e-6)")
 
-    g = p.add_argument_group("initial conditions (default: at rest, ball centred)")
-    g.add_argument("--tip-displacement-mm", type=float, default=0.0, metavar="MM")
-    g.add_argument("--tip-velocity-m-s", type=float, default=0.0, metavar="M/S")
-    g.add_argument("--ball-position-mm", type=float, metavar="MM",
-                   help="ball position relative to the cavity centre, in [-gap/2, gap/2]")
-    g.add_argument("--ball-velocity-m-s", type=float, metavar="M/S",
-                   help="ball velocity relative to the bar")
+    if initial:
+        g = p.add_argument_group("initial conditions (default: at rest, ball centred)")
+        g.add_argument("--tip-displacement-mm", type=float, default=0.0, metavar="MM")
+        g.add_argument("--tip-velocity-m-s", type=float, default=0.0, metavar="M/S")
+        g.add_argument("--ball-position-mm", type=float, metavar="MM",
+                       help="ball position relative to the cavity centre, in [-gap/2, gap/2]")
+        g.add_argument("--ball-velocity-m-s", type=float, metavar="M/S",
+                       help="ball velocity relative to the bar")
 
     g = groups["output"] = p.add_argument_group("output")
     g.add_argument("--out", default="out", metavar="DIR", help="output directory (default: out)")
@@ -118,10 +126,37 @@ def _add_common(p: argparse.ArgumentParser, many: bool) -> dict:
     return groups
 
 
+def _add_cutting(g) -> None:
+    """The cut's description, shared by simulate and lobes (MODEL.md section 4).
+    Defaults are None here (so simulate can refuse them without a cut) and
+    applied in :func:`_cut_options`."""
+    g.add_argument("--kr-mpa", type=float, metavar="MPA",
+                   help="specific radial cutting force Kr in MPa (default: 850, aluminium)")
+    g.add_argument("--feed-mm", type=float, metavar="MM",
+                   help="feed per revolution h_m in mm (default: 0.1)")
+    g.add_argument("--revolutions", type=int, metavar="N",
+                   help="past revolutions N in the chip-thickness minimum (default: 3)")
+    g.add_argument("--delay-interp", choices=INTERPOLATIONS,
+                   help="delayed W at RK4 stages: cubic Hermite (default) or linear")
+    g.add_argument("--start", choices=STARTS,
+                   help="rest (default, as published: the mean force arrives as a step) or "
+                        "static (from the static deflection under the mean force)")
+    g.add_argument("--bounded-fraction", type=float, metavar="X",
+                   help="bounded chatter: steady amplitude above X h_m (default: 0.1)")
+
+
 def _add_simulate(sub) -> None:
-    p = sub.add_parser("simulate", help="one time-domain run under harmonic forcing",
-                       description="One run; writes DIR/run.nc, DIR/run.png, DIR/summary.json.")
+    p = sub.add_parser("simulate", help="one time-domain run under harmonic forcing or a cut",
+                       description="One run; writes DIR/run.nc, DIR/run.png, DIR/summary.json. "
+                                   "Harmonic forcing (--force-n, --ratio) by default; "
+                                   "--rpm with --depth-mm runs a regenerative cut instead.")
     groups = _add_common(p, many=False)
+    g = p.add_argument_group("regenerative cutting (instead of harmonic forcing)")
+    g.add_argument("--rpm", type=float, metavar="RPM", help="spindle speed in rev/min")
+    g.add_argument("--depth-mm", type=float, metavar="MM", help="depth of cut b in mm")
+    _add_cutting(g)
+    g.add_argument("--stop-at-zero", action="store_true",
+                   help="end the run when the cutting force first reaches zero (chatter)")
     groups["output"].add_argument("--record-every", type=int, metavar="N",
                    help=f"keep every N-th step in run.nc (default: about {HISTORY_ROWS} rows)")
     p.set_defaults(func=_cmd_simulate)
@@ -136,6 +171,41 @@ def _add_sweep(sub) -> None:
     groups["run"].add_argument("--workers", type=int, metavar="N",
                                help="threads (default: every core)")
     p.set_defaults(func=_cmd_sweep)
+
+
+def _add_lobes(sub) -> None:
+    p = sub.add_parser("lobes", help="stability lobes by time-domain simulation of cuts",
+                       description="Stability lobes of the published study (MODEL.md section "
+                                   "6): depth of cut against spindle speed, every grid point a "
+                                   "regenerative cut; writes DIR/lobes.nc and DIR/lobes.png "
+                                   "(with --examples also DIR/examples.nc and "
+                                   "DIR/examples.png).")
+    groups = _add_common(p, many=True, harmonic=False, initial=False)
+    g = p.add_argument_group("lobe grid")
+    g.add_argument("--rpm", metavar="START:STOP:STEP",
+                   help="spindle speeds in rev/min, START:STOP:STEP (inclusive) or comma list "
+                        "(default: 900:1600:50, published)")
+    g.add_argument("--depth-step-mm", type=float, default=0.01, metavar="MM",
+                   help="depth-of-cut step in mm (default: 0.01)")
+    g.add_argument("--max-depth-mm", type=float, default=3.0, metavar="MM",
+                   help="deepest cut tried in mm (default: 3)")
+    g.add_argument("--method", choices=("scan", "search"), default="scan",
+                   help="scan: every depth upwards (default, published); search: doubling "
+                        "and bisection (faster; assumes stability monotone below the bracket)")
+    g.add_argument("--successive", type=int, default=3, metavar="N",
+                   help="a speed's scan ends after N successive chattering depths (default: 3)")
+    g.add_argument("--criterion", choices=("zero", "bounded"), default="zero",
+                   help="chatter: the force reaches zero (default, published) or bounded "
+                        "(also a steady amplitude above --bounded-fraction of the feed)")
+    g = p.add_argument_group("regenerative cutting")
+    _add_cutting(g)
+    groups["run"].add_argument("--workers", type=int, metavar="N",
+                               help="threads (default: every core)")
+    groups["output"].add_argument("--examples", action="store_true",
+                                  help="rerun a stable and an unstable grid point of the "
+                                       "first case with history: DIR/examples.nc, "
+                                       "DIR/examples.png")
+    p.set_defaults(func=_cmd_lobes)
 
 
 # --- option checks (errors name the option, its value and the allowed range) -----
@@ -166,7 +236,7 @@ def _numbers(text: str, name: str) -> list[float]:
 def _check_common(args, bars: list[str]) -> None:
     has_ball = "ball" in bars
     if not has_ball:
-        given = [o for o in BALL_OPTIONS if getattr(args, o) not in (None, False)]
+        given = [o for o in BALL_OPTIONS if getattr(args, o, None) not in (None, False)]
         if given:
             opt = "--" + given[0].replace("_", "-")
             raise ParameterError(f"{opt} applies only to --bar ball (bar = {','.join(bars)})")
@@ -208,6 +278,25 @@ def _initial(args, gaps_m: list[float]):
     )
 
 
+def _cut_options(args) -> dict:
+    """The cut options as Regenerative keywords (SI), checked, defaults applied."""
+    kr = 850.0 if args.kr_mpa is None else args.kr_mpa
+    feed = 0.1 if args.feed_mm is None else args.feed_mm
+    revolutions = 3 if args.revolutions is None else args.revolutions
+    fraction = 0.1 if args.bounded_fraction is None else args.bounded_fraction
+    check_range("--kr-mpa", kr, 0, math.inf, lo_open=True, hi_open=True, unit="MPa")
+    check_range("--feed-mm", feed, 0, math.inf, lo_open=True, hi_open=True, unit="mm")
+    check_range("--revolutions", revolutions, 1, 50)
+    check_range("--bounded-fraction", fraction, 0, math.inf, lo_open=True, hi_open=True)
+    return {"kr": kr * 1e6, "feed": feed * 1e-3, "revolutions": revolutions,
+            "interpolation": args.delay_interp or "cubic", "start": args.start or "rest",
+            "bounded_fraction": fraction}
+
+
+def _check_rpm(rpm: float, name: str = "--rpm") -> float:
+    return check_range(name, rpm, 0, math.inf, lo_open=True, hi_open=True, unit="rpm")
+
+
 def _system_overrides(args) -> dict:
     """make_system keywords the user set (the preset decides the rest)."""
     kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
@@ -219,7 +308,6 @@ def _system_overrides(args) -> dict:
 # --- simulate --------------------------------------------------------------------
 
 def _cmd_simulate(args) -> int:
-    from boringbar.forcing import Harmonic
     from boringbar.simulate import simulate
     from boringbar.system import make_system
 
@@ -238,8 +326,7 @@ def _cmd_simulate(args) -> int:
         raise ParameterError("--friction off conflicts with --friction-force-n / "
                              "--friction-number")
     gap = _check_gap(0.5 if args.gap_mm is None else args.gap_mm)
-    check_range("--force-n", args.force_n, 0, math.inf, hi_open=True, unit="N")
-    check_range("--ratio", args.ratio, 0, math.inf, lo_open=True, hi_open=True)
+    forcing = _simulate_forcing(args)
     n_steps = int(round(args.duration_s / args.dt_s))
     record_every = args.record_every or max(1, n_steps // HISTORY_ROWS)
     check_range("--record-every", record_every, 1, max(n_steps, 1))
@@ -249,15 +336,15 @@ def _cmd_simulate(args) -> int:
         kw.update(gap=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
     initial = _initial(args, [gap] if bar == "ball" else [])
-    run = simulate(system, Harmonic(args.force_n, args.ratio), duration=args.duration_s,
-                   dt=args.dt_s, initial=initial, record_every=record_every)
+    run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s, initial=initial,
+                   record_every=record_every)
 
     from boringbar.io import write_json_atomic, write_netcdf_atomic
     from boringbar.plot import plot_run
 
     out = Path(args.out)
     files = {"netcdf": out / "run.nc", "png": out / "run.png", "summary": out / "summary.json"}
-    ds = run.history_dataset()
+    ds = _history_dataset(run)
     write_netcdf_atomic(ds, files["netcdf"])
     plot_run(ds, files["png"])
     summary = {**run.summary(), "files": {k: str(v) for k, v in files.items()}}
@@ -265,8 +352,84 @@ def _cmd_simulate(args) -> int:
     if args.json:
         _print_json(summary)
     elif not args.quiet:
-        print(_simulate_text(summary, run))
+        print(_cut_text(summary) if "cutting" in summary else _simulate_text(summary, run))
     return 0
+
+
+#: simulate options that describe a cut (dest names); refused with harmonic forcing
+CUT_ONLY = ("kr_mpa", "feed_mm", "revolutions", "delay_interp", "start", "bounded_fraction",
+            "stop_at_zero")
+
+
+def _simulate_forcing(args):
+    """Harmonic(F0, ratio), or Regenerative when --rpm and --depth-mm are given."""
+    from boringbar.forcing import Harmonic, Regenerative
+
+    if args.rpm is not None:
+        _check_rpm(args.rpm)
+    if args.depth_mm is not None:
+        check_range("--depth-mm", args.depth_mm, 0, math.inf, lo_open=True, hi_open=True,
+                    unit="mm")
+    if args.rpm is None and args.depth_mm is None:
+        given = [o for o in CUT_ONLY if getattr(args, o) not in (None, False)]
+        if given:
+            raise ParameterError(f"--{given[0].replace('_', '-')} applies only to a cut "
+                                 "(--rpm with --depth-mm)")
+        force = 10.0 if args.force_n is None else args.force_n
+        ratio = 1.0 if args.ratio is None else args.ratio
+        check_range("--force-n", force, 0, math.inf, hi_open=True, unit="N")
+        check_range("--ratio", ratio, 0, math.inf, lo_open=True, hi_open=True)
+        return Harmonic(force, ratio)
+    if args.rpm is None or args.depth_mm is None:
+        have, need = ("--rpm", "--depth-mm") if args.depth_mm is None else ("--depth-mm",
+                                                                            "--rpm")
+        raise ParameterError(f"{have} needs {need}: a cut takes both")
+    for name, value in (("--force-n", args.force_n), ("--ratio", args.ratio)):
+        if value is not None:
+            raise ParameterError(f"{name} = {value:g} is harmonic forcing and cannot be mixed "
+                                 "with a cut (--rpm, --depth-mm): give one or the other")
+    return Regenerative(depth=args.depth_mm * 1e-3, rpm=args.rpm,
+                        stop_at_zero=args.stop_at_zero, **_cut_options(args))
+
+
+def _history_dataset(run):
+    """``run.history_dataset()``, with the metrics as plain Python numbers first.
+
+    Workaround: the kernel's metrics are numpy floats, so ``Run.cutting``'s
+    ``bounded_chatter`` comes out a numpy bool, which the ``json.dumps`` inside
+    ``history_dataset`` refuses.  The values are unchanged.
+    """
+    run.metrics = {k: v.item() if isinstance(v, np.generic) else v
+                   for k, v in run.metrics.items()}
+    return run.history_dataset()
+
+
+def _cut_text(s: dict) -> str:
+    c = s["cutting"]
+    cfg = "static start" if c["start"] == "static" else "from rest"
+    lines = [
+        f"{s['bar']} bar, {s['preset']} preset: cut at {c['rpm']:g} rpm "
+        f"({s['forcing_frequency_hz']:.2f} Hz), depth {c['depth_m'] * 1e3:g} mm, {cfg}",
+        f"  natural frequency  {s['natural_frequency_hz']:.2f} Hz",
+    ]
+    if c["chatter"]:
+        lines.append(f"  verdict            CHATTER: the force first reaches zero at "
+                     f"t = {c['first_zero_time_s']:.4g} s (the tool leaves the cut)")
+    else:
+        lines.append(f"  verdict            stable: the force never reaches zero in "
+                     f"{s['duration_s']:g} s")
+    lines += [
+        f"  bounded chatter    {'yes' if c['bounded_chatter'] else 'no'} (steady amplitude "
+        f"{c['amplitude_m'] * 1e3:.4g} mm, threshold {c['bounded_threshold_m'] * 1e3:.4g} mm)",
+        f"  cutting force      mean {c['mean_force_n']:.4g} N, max {c['max_force_n']:.4g} N "
+        f"({c['steps_with_zero_force']} steps at zero)",
+        f"  tip                static deflection {c['static_deflection_m'] * 1e3:.4g} mm, "
+        f"max |W| {s['max_abs_tip_m'] * 1e3:.4g} mm",
+        f"  delay interp.      {c['delay_interpolation']}",
+        f"  elapsed            {s['elapsed_s']:.2f} s",
+        "  wrote " + ", ".join(s["files"].values()),
+    ]
+    return "\n".join(lines)
 
 
 def _simulate_text(s: dict, run) -> str:
@@ -296,15 +459,7 @@ def _simulate_text(s: dict, run) -> str:
 def _cmd_sweep(args) -> int:
     from boringbar.analysis.sweep import parse_range, sweep, sweep_summary
 
-    bars = _words(args.bar, "--bar", BAR_KINDS, ["solid", "tmd", "ball"])
-    _check_common(args, bars)
-    gaps = [_check_gap(g) for g in _numbers(args.gap_mm or "0.5,0.1", "--gap-mm")]
-    frictions = [w == "on" for w in _words(args.friction, "--friction", ("on", "off"),
-                                           ["off", "on"])]
-    if not any(frictions) and (args.friction_force_n is not None
-                               or args.friction_number is not None):
-        raise ParameterError("--friction off conflicts with --friction-force-n / "
-                             "--friction-number")
+    cases, bars, gaps = _many_cases(args)
     forces = _numbers(args.force_n, "--force-n")
     for f in forces:
         check_range("--force-n", f, 0, math.inf, hi_open=True, unit="N")
@@ -314,13 +469,8 @@ def _cmd_sweep(args) -> int:
     if args.workers is not None:
         check_range("--workers", args.workers, 1, 4096)
 
-    cases = _sweep_cases(args, bars, gaps, frictions)
     initial = _initial(args, gaps if "ball" in bars else [])
-    progress = None
-    if not args.quiet and sys.stderr.isatty():
-        def progress(done, total):
-            end = "\n" if done == total else ""
-            print(f"\r{PROG} sweep: {done}/{total} runs", end=end, file=sys.stderr, flush=True)
+    progress = _progress(args, "sweep", "runs")
     ds = sweep(cases, ratios, forces, duration=args.duration_s, dt=args.dt_s,
                workers=args.workers, initial=initial, progress=progress)
 
@@ -337,6 +487,33 @@ def _cmd_sweep(args) -> int:
         print(_sweep_text(ds))
         print("wrote " + ", ".join([str(nc)] + [str(p) for p in pngs]))
     return 0
+
+
+def _progress(args, command: str, what: str):
+    """A progress(done, total) printer on a terminal's stderr, else None."""
+    if args.quiet or not sys.stderr.isatty():
+        return None
+
+    def progress(done, total):
+        end = "\n" if done == total else ""
+        print(f"\r{PROG} {command}: {done}/{total} {what}", end=end, file=sys.stderr,
+              flush=True)
+    return progress
+
+
+def _many_cases(args) -> tuple[list, list[str], list[float]]:
+    """The cases of sweep and lobes from --bar, --gap-mm, --friction and the
+    overrides: (cases, bars, gaps in m)."""
+    bars = _words(args.bar, "--bar", BAR_KINDS, ["solid", "tmd", "ball"])
+    _check_common(args, bars)
+    gaps = [_check_gap(g) for g in _numbers(args.gap_mm or "0.5,0.1", "--gap-mm")]
+    frictions = [w == "on" for w in _words(args.friction, "--friction", ("on", "off"),
+                                           ["off", "on"])]
+    if not any(frictions) and (args.friction_force_n is not None
+                               or args.friction_number is not None):
+        raise ParameterError("--friction off conflicts with --friction-force-n / "
+                             "--friction-number")
+    return _sweep_cases(args, bars, gaps, frictions), bars, gaps
 
 
 def _sweep_cases(args, bars, gaps, frictions) -> list:
@@ -391,6 +568,162 @@ def _sweep_text(ds) -> str:
     lines.append("patterns: Ns = N symmetric impacts per period, Na/k = N asymmetric impacts "
                  "per k periods, st = sticking, 0 = no impact, 0+st = no impact with sticking, "
                  "nu = non-uniform")
+    return "\n".join(lines)
+
+
+# --- lobes -----------------------------------------------------------------------
+
+def _cmd_lobes(args) -> int:
+    from boringbar.analysis.lobes import PUBLISHED_RPM, lobes, lobes_summary
+    from boringbar.analysis.sweep import parse_range
+
+    cases, _, _ = _many_cases(args)
+    rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
+    for r in rpm:
+        _check_rpm(r)
+    step = check_range("--depth-step-mm", args.depth_step_mm, 0, math.inf, lo_open=True,
+                       hi_open=True, unit="mm")
+    check_range("--max-depth-mm", args.max_depth_mm, step, 1000, unit="mm")
+    check_range("--successive", args.successive, 1, 100)
+    if args.workers is not None:
+        check_range("--workers", args.workers, 1, 4096)
+    cut = _cut_options(args)
+    ds = lobes(cases, rpm, method=args.method, depth_step=step * 1e-3,
+               max_depth=args.max_depth_mm * 1e-3, successive=args.successive,
+               criterion=args.criterion, duration=args.duration_s, dt=args.dt_s,
+               workers=args.workers, progress=_progress(args, "lobes", "(case, speed) columns"),
+               **cut)
+
+    from boringbar.io import write_netcdf_atomic
+    from boringbar.plot import plot_lobe_examples, plot_lobes
+
+    out = Path(args.out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "lobes.nc"),
+             "png": plot_lobes(ds, out / "lobes.png")}
+    examples = []
+    if args.examples:
+        exds = _lobe_examples(ds, cases[0], args, cut)
+        files["examples_netcdf"] = write_netcdf_atomic(exds, out / "examples.nc")
+        files["examples_png"] = plot_lobe_examples(exds, out / "examples.png")
+        examples = [{"example": str(e), "case": exds.attrs["case"],
+                     "rpm": float(exds["rpm"].values[k]),
+                     "depth_m": float(exds["depth"].values[k]),
+                     "chatter": bool(exds["chatter"].values[k]),
+                     "bounded_chatter": bool(exds["bounded_chatter"].values[k]),
+                     "first_zero_time_s": float(exds["first_zero_time"].values[k])}
+                    for k, e in enumerate(exds["example"].values)]
+    summary = {**lobes_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    if args.examples:
+        summary["examples"] = examples
+    if args.json:
+        _print_json(summary)
+    elif not args.quiet:
+        print(_lobes_text(ds))
+        for e in examples:
+            verdict = (f"chatter (force first zero at {e['first_zero_time_s']:.3g} s)"
+                       if e["chatter"] else "stable (force never zero)")
+            print(f"example {e['example']}: {e['case']} at {e['rpm']:g} rpm, depth "
+                  f"{e['depth_m'] * 1e3:g} mm: {verdict}")
+        print("wrote " + ", ".join(str(v) for v in files.values()))
+    return 0
+
+
+def _example_points(ds) -> list[tuple[str, float, float]]:
+    """(name, rpm, depth) of a stable and an unstable grid point of the first case:
+    the limiting and the first unstable depth at the speed of the minimum
+    chatter-free depth (the stable one at the speed of the largest limit if the
+    minimum is 0; only a stable one if nothing chattered)."""
+    rpm = ds["rpm"].values
+    limit = ds["limit_depth"].values[0]
+    first = ds["first_unstable_depth"].values[0]
+    if not np.isfinite(limit).any():  # no chatter up to the deepest cut tried
+        run = ds["verdict"].values[0] >= 0
+        j = len(rpm) // 2
+        return [("stable", float(rpm[j]), float(ds["depth"].values[run[j]].max()))]
+    j = int(np.nanargmin(limit))
+    points = [("unstable", float(rpm[j]), float(first[j]))]
+    if limit[j] <= 0:
+        j = int(np.nanargmax(limit))
+    if limit[j] > 0:
+        points.insert(0, ("stable", float(rpm[j]), float(limit[j])))
+    return points
+
+
+def _lobe_examples(ds, case, args, cut: dict):
+    """Rerun the example points with history (no stop at the first zero): one
+    Dataset with dims (example, time)."""
+    import pandas as pd
+    import xarray as xr
+
+    from boringbar.forcing import Regenerative
+    from boringbar.simulate import simulate
+
+    points = _example_points(ds)
+    n_steps = int(round(args.duration_s / args.dt_s))
+    parts = []
+    for _, rpm, depth in points:
+        run = simulate(case.system, Regenerative(depth=depth, rpm=rpm, **cut),
+                       duration=args.duration_s, dt=args.dt_s,
+                       record_every=max(1, n_steps // HISTORY_ROWS))
+        h = _history_dataset(run)
+        h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
+        c = run.cutting
+        h = h.assign_coords(rpm=rpm, depth=depth, chatter=bool(c["chatter"]),
+                            bounded_chatter=bool(c["bounded_chatter"]),
+                            first_zero_time=math.nan if c["first_zero_time_s"] is None
+                            else float(c["first_zero_time_s"]),
+                            mean_force=float(run.forcing.mean_force),
+                            static_deflection=float(c["static_deflection_m"]))
+        parts.append(h)
+    exds = xr.concat(parts, dim=pd.Index([p[0] for p in points], name="example"),
+                     coords="all", join="outer", combine_attrs="drop")
+    exds["rpm"].attrs["units"] = "rev/min"
+    for name in ("depth", "static_deflection"):
+        exds[name].attrs["units"] = "m"
+    exds["first_zero_time"].attrs["units"] = "s"
+    exds["mean_force"].attrs.update(units="N", long_name="Kr b h_m")
+    exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
+                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap,
+                  "friction": case.friction, "preset": case.system.preset,
+                  "criterion": ds.attrs["criterion"],
+                  "boringbar_version": ds.attrs["boringbar_version"],
+                  "configs": "[" + ", ".join(p.attrs["config"] for p in parts) + "]",
+                  "summaries": "[" + ", ".join(p.attrs["summary"] for p in parts) + "]"}
+    return exds
+
+
+def _lobes_text(ds) -> str:
+    lines = []
+    analytic = ds["analytic_limit"].values if "analytic_limit" in ds else None
+    depths = ds["depth"].values
+    chosen = ds["verdict" if ds.attrs["criterion"] == "zero" else "verdict_bounded"].values
+
+    def mm(v: float) -> str:
+        return f"{v * 1e3:.3f}" if math.isfinite(v) else "-"
+
+    for i, label in enumerate(ds["case"].values):
+        limit = ds["limit_depth"].values[i]
+        first = ds["first_unstable_depth"].values[i]
+        mcf = float(ds["min_chatter_free_depth"].values[i])
+        at = (f" at {ds['rpm'].values[int(np.nanargmin(limit))]:g} rpm"
+              if np.isfinite(limit).any() else "")
+        lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}")
+        lines.append(f"{'rpm':>8} {'limit (mm)':>12} {'first unstable (mm)':>20} "
+                     f"{'analytic (mm)':>14}")
+        islands = []
+        for j, r in enumerate(ds["rpm"].values):
+            a = math.nan if analytic is None else float(analytic[i, j])
+            lines.append(f"{r:8g} {mm(limit[j]):>12} {mm(first[j]):>20} {mm(a):>14}")
+            above = (depths > first[j]) & (chosen[i, j] == 1)
+            if math.isfinite(first[j]) and above.any():
+                islands.append(f"{r:g}")
+        if islands:
+            lines.append(f"  stable islands above the first unstable depth at "
+                         f"{', '.join(islands)} rpm")
+        lines.append("")
+    lines.append(f"'-': no chatter up to the deepest cut tried (or no analytic limit); "
+                 f"method {ds.attrs['method']}, criterion {ds.attrs['criterion']}, "
+                 f"{ds.attrs['runs']} runs in {ds.attrs['wall_time_s']:.1f} s")
     return "\n".join(lines)
 
 

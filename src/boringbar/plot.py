@@ -1,4 +1,4 @@
-"""Figures of runs and sweeps (matplotlib; the edge of the package).
+"""Figures of runs, sweeps and stability lobes (matplotlib; the edge of the package).
 
 Only the command line and users import this module; the core never imports
 matplotlib.  Figures are built as ``matplotlib.figure.Figure`` objects and
@@ -45,6 +45,8 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     tip displacement W (mm); below it the ball's displacement y relative to
     the bar (mm) with the walls at +-delta/2 dashed (ball bar), the absorber
     stroke (mm) (TMD bar), or the force at the tip (N) (solid bar, locked ball).
+    A regenerative cut is drawn by :func:`_cut_figure` instead: tip
+    displacement and cutting force, the chatter verdict in the title.
     The left column is the whole record (a dotted line marks the start of the
     steady part, over which RMS and pattern are computed); the right column
     zooms on its last ``zoom_periods`` forcing periods, where the impact
@@ -53,6 +55,8 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     ds = run_or_ds.history_dataset() if hasattr(run_or_ds, "history_dataset") else run_or_ds
     summary = json.loads(ds.attrs.get("summary", "{}"))
     config = json.loads(ds.attrs.get("config", "{}"))
+    if "cutting" in summary:
+        return save_figure_atomic(_cut_figure(ds, summary, config), path)
     damper = (config.get("system") or {}).get("damper") or {}
     kind = summary.get("bar", "?")
     t = ds["time"].values
@@ -232,3 +236,242 @@ def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
                  f"({attrs.get('preset', '?')} preset; {attrs.get('duration_s', math.nan):g} s "
                  f"runs, dt = {attrs.get('dt_s', math.nan):g} s)")
     return fig
+
+
+# --- a cut -----------------------------------------------------------------------
+
+def _legend_below(fig, axes, ncol: int | None = None) -> None:
+    """One legend below the panels, each label once, from every axis in ``axes``."""
+    entries: dict[str, object] = {}
+    for ax in np.ravel(axes):
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries.setdefault(lab, h)
+    if entries:
+        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
+                   ncol=ncol or len(entries), fontsize="small", frameon=False)
+
+
+#: Colours of the cut figures: tip, force, the first zero of the force.
+CUT_COLOURS = {"tip": "#1f77b4", "force": "#8c564b", "zero": "#d62728"}
+
+
+def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30) -> Figure:
+    """Tip displacement W (mm) and cutting force f (N) against time for one
+    cut; the right column zooms on the last ``zoom_cycles`` periods of the
+    bar's first mode (about the chatter period)."""
+    cut = summary["cutting"]
+    forcing = config.get("forcing") or {}
+    t = ds["time"].values
+    rows = ((ds["tip_displacement"].values * 1e3, "tip displacement W (mm)", "tip"),
+            (ds["force"].values, "cutting force f (N)", "force"))
+    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
+    fn = summary.get("natural_frequency_hz") or 0.0
+    span = zoom_cycles / fn if fn > 0 else math.inf
+    zoom = t >= (t[-1] - span if t.size else 0.0)
+    for col, sel in enumerate((slice(None), zoom)):
+        for row, (y, _, key) in enumerate(rows):
+            axes[row, col].plot(t[sel], y[sel], lw=0.6 if col == 0 else 1.0,
+                                color=CUT_COLOURS[key])
+        axes[1, col].set_xlabel("time t (s)")
+        if t[sel].size > 1:
+            axes[0, col].set_xlim(t[sel][0], t[sel][-1])
+    for row, (_, label, _) in enumerate(rows):
+        axes[row, 0].set_ylabel(label)
+    if math.isfinite(span):
+        axes[0, 1].set_title(f"last {span * 1e3:.0f} ms ({zoom_cycles:g} periods of "
+                             f"{fn:.0f} Hz)", fontsize="medium")
+    mean_force = forcing.get("kr_pa", math.nan) * cut["depth_m"] * forcing.get("feed_m",
+                                                                                math.nan)
+    for col in (0, 1):
+        _cut_guides(axes[:, col], cut["static_deflection_m"], mean_force,
+                    cut["first_zero_time_s"], labels=col == 0, values=True)
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+    _legend_below(fig, axes)
+    name = f"{summary.get('bar', '?')} bar"
+    line1 = (f"{name}, {summary.get('preset', '?')} preset: cut at {cut['rpm']:g} rpm, "
+             f"depth {cut['depth_m'] * 1e3:g} mm (Kr {forcing.get('kr_pa', math.nan) / 1e6:g} "
+             f"MPa, feed {forcing.get('feed_m', math.nan) * 1e3:g} mm/rev, "
+             f"{'static start' if cut['start'] == 'static' else 'from rest'})")
+    fig.suptitle(line1 + "\n" + _cut_verdict(cut, summary.get("duration_s")))
+    return fig
+
+
+def _cut_verdict(cut: dict, duration=None) -> str:
+    """'CHATTER: ...' or 'stable: ...', with the bounded-chatter verdict."""
+    if cut["chatter"]:
+        text = (f"CHATTER: the cutting force first reaches zero at "
+                f"t = {cut['first_zero_time_s']:.4g} s")
+    else:
+        text = "stable: the cutting force never reaches zero" + (
+            f" in {duration:g} s" if duration else "")
+    amp, thr = cut["amplitude_m"] * 1e3, cut["bounded_threshold_m"] * 1e3
+    rel = ">" if cut["bounded_chatter"] else "<="
+    return text + f"; steady amplitude {amp:.3g} mm {rel} {thr:.3g} mm (bounded criterion)"
+
+
+def _cut_guides(axes, static_m: float, mean_force: float, first_zero, labels: bool = True,
+                values: bool = False):
+    """Static deflection, mean force Kr b h_m, zero force and the first zero;
+    ``values``: their values in the legend labels."""
+    lab = (lambda text: text) if labels else (lambda text: None)
+    axes[0].axhline(static_m * 1e3, color="#555555", ls="--", lw=0.9,
+                    label=lab("static deflection under the mean force"
+                              + (f" ({static_m * 1e3:.3g} mm)" if values else "")))
+    axes[1].axhline(mean_force, color="#555555", ls="-.", lw=0.9,
+                    label=lab("mean force Kr b h_m"
+                              + (f" = {mean_force:.3g} N" if values else "")))
+    if first_zero is not None and math.isfinite(first_zero):  # else zero would squash f
+        axes[1].axhline(0.0, color="black", lw=0.8)
+        for k, ax in enumerate(axes):
+            ax.axvline(first_zero, color=CUT_COLOURS["zero"], ls=":", lw=1.3,
+                       label=lab("first zero of the force") if k == 0 else None)
+
+
+# --- stability lobes -------------------------------------------------------------
+
+#: Marker styles of the lobe grid points.
+LOBE_STYLE = {
+    "stable": dict(marker="o", mfc="none", mec="#2ca02c", color="#2ca02c", mew=1.0),
+    "bounded": dict(marker="^", mfc="none", mec="#ff7f0e", color="#ff7f0e", mew=1.0),
+    "chatter": dict(marker="x", color="#d62728", mew=1.2),
+}
+
+
+def case_title(label: str, bar: str, gap: float, friction: str) -> str:
+    """'ball gap=0.5mm friction=on' -> 'ball damper, gap 0.5 mm, friction on'."""
+    if bar == "ball":
+        return f"ball damper, gap {gap * 1e3:g} mm, friction {friction}"
+    return {"solid": "solid bar", "tmd": "TMD bar"}.get(bar, str(label))
+
+
+def plot_lobes(ds, path) -> Path:
+    """Stability lobes in the layout of the published panels, saved to ``path``.
+
+    One panel per case: depth of cut (mm) against spindle speed (rpm); every
+    grid point that was run marked stable (open green circle), chatter under
+    the published criterion (red cross) or bounded chatter only (open orange
+    triangle: the force stays above zero but the steady amplitude exceeds the
+    bounded threshold); the limit line (limiting chatter-free depth per speed,
+    under the dataset's criterion) and, for the linear bars, the analytic
+    limit over ``rpm_fine``.  The minimum chatter-free depth is in each
+    panel's title.
+    """
+    n = ds.sizes["case"]
+    ncol = 1 if n == 1 else 2 if n in (2, 4) else 3
+    nrow = math.ceil(n / ncol)
+    width = max(5.4 * ncol + 0.4, 8.0)  # room for the legend and title under one panel
+    fig = Figure(figsize=(width, 3.9 * nrow + 1.5), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(nrow, ncol, sharex=True, squeeze=False).ravel())
+    legend: dict[str, object] = {}
+    for i in range(n):
+        _lobe_panel(axes[i], ds, i, legend)
+        if i // ncol == nrow - 1 or i + ncol >= n:
+            axes[i].set_xlabel("spindle speed (rpm)")
+            axes[i].tick_params(labelbottom=True)
+        if i % ncol == 0:
+            axes[i].set_ylabel("depth of cut b (mm)")
+    for ax in axes[n:]:
+        ax.set_visible(False)
+    fig.legend(list(legend.values()), list(legend), loc="outside lower center",
+               ncol=min(len(legend), 2 if ncol == 1 else 3), fontsize="small",
+               frameon=False)
+    a = ds.attrs
+    crit = ("force reaches zero" if a.get("criterion") == "zero"
+            else "bounded chatter")
+    fig.suptitle(f"Stability lobes by time-domain simulation ({a.get('preset', '?')} preset, "
+                 f"{a.get('method', '?')})\nchatter criterion: {crit}; Kr "
+                 f"{a.get('kr_pa', math.nan) / 1e6:g} MPa, feed "
+                 f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev; "
+                 f"{a.get('duration_s', math.nan):g} s runs, dt = {a.get('dt_s', math.nan):g} s",
+                 fontsize="medium")
+    return save_figure_atomic(fig, path)
+
+
+def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
+    rpm = ds["rpm"].values
+    depth_mm = ds["depth"].values * 1e3
+    v = ds["verdict"].values[i]
+    vb = ds["verdict_bounded"].values[i]
+    rr, dd = np.meshgrid(rpm, depth_mm, indexing="ij")
+    run = v >= 0
+    levels = np.flatnonzero(run.any(axis=0))
+    top = depth_mm[levels[-1]] if levels.size else depth_mm[-1]
+    ms = float(np.clip(150.0 / max(levels.size, 1), 2.0, 6.5))
+    masks = {"stable": (v == 1) & (vb == 1), "bounded": (v == 1) & (vb == 0),
+             "chatter": v == 0}
+    names = {"stable": "stable", "bounded": "bounded chatter only (force stays > 0)",
+             "chatter": "chatter (force reaches zero)"}
+    for key, mask in masks.items():
+        if mask.any():
+            h, = ax.plot(rr[mask], dd[mask], ls="none", ms=ms, **LOBE_STYLE[key])
+            legend.setdefault(names[key], h)
+    limit = ds["limit_depth"].values[i] * 1e3
+    h, = ax.plot(rpm, limit, color="black", lw=1.6, marker=".", ms=4)
+    legend.setdefault("limit: last stable depth below the first chatter", h)
+    ymax = top
+    if "analytic_curve" in ds and np.isfinite(ds["analytic_curve"].values[i]).any():
+        curve = ds["analytic_curve"].values[i] * 1e3
+        h, = ax.plot(ds["rpm_fine"].values, curve, color="#1f77b4", lw=0.9)
+        legend.setdefault("analytic limit (linear, frequency domain)", h)
+        on_grid = ds["analytic_limit"].values[i] * 1e3
+        ymax = max(ymax, min(float(np.nanmax(on_grid)), 3 * top))
+    ax.set_ylim(0, 1.08 * ymax)
+    pad = 0.5 * (rpm[1] - rpm[0]) if rpm.size > 1 else 25.0
+    ax.set_xlim(rpm.min() - pad, rpm.max() + pad)
+    ax.grid(alpha=0.3)
+    title = case_title(ds["case"].values[i], str(ds["bar"].values[i]),
+                       float(ds["gap"].values[i]), str(ds["friction"].values[i]))
+    mcf = float(ds["min_chatter_free_depth"].values[i])
+    if np.isfinite(limit).any() and math.isfinite(mcf):
+        j = int(np.nanargmin(limit))
+        ax.plot([rpm[j]], [limit[j]], ls="none", marker="*", ms=11, color="black",
+                mfc="gold", zorder=5)
+        sub = f"min chatter-free depth {mcf * 1e3:.3g} mm at {rpm[j]:g} rpm"
+    else:
+        sub = f"no chatter up to {top:.3g} mm"
+    ax.set_title(f"{title}\n{sub}", fontsize="medium")
+
+
+def plot_lobe_examples(ds, path) -> Path:
+    """Tip displacement W (mm) and cutting force f (N) against time for the
+    example grid points of a lobe study (dims example x time, as written by
+    ``boringbar lobes --examples``), one column per example; saved to ``path``."""
+    t = ds["time"].values
+    n = ds.sizes["example"]
+    fig = Figure(figsize=(6.0 * n + 0.4, 6.5), layout="constrained")
+    axes = np.asarray(fig.subplots(2, n, sharex=True, squeeze=False))
+    duration = float(t[-1]) if t.size else None
+    for k, name in enumerate(ds["example"].values):
+        ex = ds.isel(example=k)
+        axes[0, k].plot(t, ex["tip_displacement"].values * 1e3, lw=0.5,
+                        color=CUT_COLOURS["tip"])
+        axes[1, k].plot(t, ex["force"].values, lw=0.5, color=CUT_COLOURS["force"])
+        fz = float(ex["first_zero_time"].values)
+        _cut_guides(axes[:, k], float(ex["static_deflection"].values),
+                    float(ex["mean_force"].values), fz)
+        if bool(ex["chatter"].values):
+            verdict = f"chatter: the force first reaches zero at t = {fz:.3g} s"
+        else:
+            verdict = "the force never reaches zero" + (f" in {duration:.2g} s" if duration
+                                                        else "")
+        axes[0, k].set_title(f"{name} grid point: {float(ex['rpm'].values):g} rpm, depth "
+                             f"{float(ex['depth'].values) * 1e3:g} mm\n{verdict}",
+                             fontsize="medium",
+                             color=CUT_COLOURS["zero"] if bool(ex["chatter"].values)
+                             else "#2ca02c")
+        axes[1, k].set_xlabel("time t (s)")
+        if t.size > 1:
+            axes[0, k].set_xlim(t[0], t[-1])
+    axes[0, 0].set_ylabel("tip displacement W (mm)")
+    axes[1, 0].set_ylabel("cutting force f (N)")
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+    _legend_below(fig, axes)
+    a = ds.attrs
+    case = case_title(a.get("case", "?"), a.get("bar", "?"), a.get("gap_m", math.nan),
+                      a.get("friction", "?"))
+    fig.suptitle(f"Lobe examples: {case} ({a.get('preset', '?')} preset), rerun with "
+                 "history, not stopped at the first zero of the force", fontsize="medium")
+    return save_figure_atomic(fig, path)

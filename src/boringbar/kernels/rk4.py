@@ -29,10 +29,13 @@ arguments there) or goes through memory that might alias.
 import math
 
 import numpy as np
-from numba import njit
+from numba import carray, njit
 
 from boringbar.kernels import layout as L
+from boringbar.kernels.stack import stack_ptr
 
+#: length of the stack scratch vectors (the largest state)
+_NX_MAX = 2 * L.NMAX + 2
 #: exact sin/cos resynchronisation interval of the forcing-phase recurrence
 _RESYNC = 256
 
@@ -112,12 +115,17 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     nx = 2 * n + 2
     iy = 2 * n
     iyd = 2 * n + 1
-    X = x.copy()
+    # the step's state and scratch live on the stack (kernels/stack.py)
+    X = carray(stack_ptr(_NX_MAX, np.float64), nx)
+    for j in range(nx):
+        X[j] = x[j]
     if case == L.LOCKED:
         X[iyd] = 0.0
-    Xs = np.empty(nx)  # stage state
-    Kd = np.zeros(nx)  # stage derivative
-    acc = np.empty(nx)  # weighted sum of stage derivatives
+    Xs = carray(stack_ptr(_NX_MAX, np.float64), nx)  # stage state
+    Kd = carray(stack_ptr(_NX_MAX, np.float64), nx)  # stage derivative
+    acc = carray(stack_ptr(_NX_MAX, np.float64), nx)  # sum of weighted derivatives
+    for j in range(nx):
+        Kd[j] = 0.0
     fst = np.empty(4)  # forcing at the stages
     cst = np.array([0.0, 0.5, 0.5, 1.0]) * dt  # c_s h
     wst = np.array([1.0, 2.0, 2.0, 1.0]) * (dt / 6.0)  # b_s h

@@ -1,0 +1,122 @@
+"""``boringbar lobes`` and ``boringbar simulate --rpm`` end to end, on real files
+(STYLE.md tier 4).
+
+Runs are short (0.3 s simulated, a coarse depth grid) so the file stays fast;
+the physics of lobes is tested elsewhere, here only what the commands
+promise: their files, their JSON, their exit codes and their one-line errors.
+"""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from boringbar.cli import main
+
+#: A solid-bar lobe grid that has both stable and chattering points in 0.3 s runs.
+SMALL = ["--bar", "solid", "--rpm", "1000:1100:50", "--duration-s", "0.3",
+         "--max-depth-mm", "0.2", "--depth-step-mm", "0.02"]
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _json_out(capsys) -> dict:
+    captured = capsys.readouterr()
+    lines = captured.out.strip().splitlines()
+    assert len(lines) == 1, captured.out  # exactly one JSON object on stdout
+    return json.loads(lines[0])
+
+
+def test_lobes_files_json_and_verdicts(tmp_path, capsys):
+    out = tmp_path / "lobes"
+    assert main(["lobes", *SMALL, "--workers", "2", "--out", str(out), "--json"]) == 0
+    s = _json_out(capsys)
+    assert s["method"] == "scan" and s["criterion"] == "zero"
+    assert s["files"] == {"netcdf": str(out / "lobes.nc"), "png": str(out / "lobes.png")}
+    assert (out / "lobes.png").read_bytes()[:8] == PNG
+    assert not list(out.glob(".*.tmp"))  # atomic writes leave no temporaries
+    assert s["min_chatter_free_depth_m"] > 0
+    (case,) = s["cases"]
+    assert case["case"] == "solid" and case["min_chatter_free_depth_m"] > 0
+    assert [v["rpm"] for v in case["speeds"]] == pytest.approx([1000, 1050, 1100])
+    for speed in case["speeds"]:
+        assert {"rpm", "limit_depth_m", "first_unstable_depth_m", "analytic_limit_m"} \
+            <= speed.keys()
+        assert speed["limit_depth_m"] < speed["first_unstable_depth_m"] <= 0.2e-3 + 1e-12
+    with xr.open_dataset(out / "lobes.nc") as ds:
+        verdict = ds["verdict"].values
+        assert (verdict == 1).any() and (verdict == 0).any()  # stable and chatter points
+        assert ds.sizes["rpm"] == 3 and ds.attrs["method"] == "scan"
+        assert np.isfinite(ds["analytic_curve"].values).all()  # the solid bar is linear
+        assert float(ds["min_chatter_free_depth"].values[0]) == pytest.approx(
+            case["min_chatter_free_depth_m"])
+
+
+def test_lobes_search_and_examples(tmp_path, capsys):
+    out = tmp_path / "lobes"
+    assert main(["lobes", *SMALL, "--method", "search", "--examples", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "limit (mm)" in text and "first unstable (mm)" in text and "analytic (mm)" in text
+    assert "example stable" in text and "example unstable" in text
+    for name in ("lobes.nc", "lobes.png", "examples.nc", "examples.png"):
+        assert (out / name).stat().st_size > 0
+    assert (out / "examples.png").read_bytes()[:8] == PNG
+    with xr.open_dataset(out / "lobes.nc") as ds:
+        assert ds.attrs["method"] == "search"
+        limit = ds["limit_depth"].values[0]
+        first = ds["first_unstable_depth"].values[0]
+    with xr.open_dataset(out / "examples.nc") as ex:
+        assert list(ex["example"].values) == ["stable", "unstable"]
+        assert list(ex["chatter"].values) == [False, True]
+        j = int(np.nanargmin(limit))  # the speed of the minimum chatter-free depth
+        assert ex["depth"].values == pytest.approx([limit[j], first[j]])
+        assert ex["time"].values[-1] == pytest.approx(0.3, rel=1e-3)  # not stopped at zero
+        assert {"tip_displacement", "force"} <= set(ex.data_vars)
+
+
+def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):
+    out = tmp_path / "cut"
+    assert main(["simulate", "--bar", "solid", "--rpm", "1200", "--depth-mm", "0.2",
+                 "--stop-at-zero", "--out", str(out), "--json"]) == 0
+    s = _json_out(capsys)
+    c = s["cutting"]
+    assert c["chatter"] is True and c["rpm"] == 1200 and c["depth_m"] == pytest.approx(2e-4)
+    assert 0 < c["first_zero_time_s"] == pytest.approx(s["duration_s"])  # stopped there
+    assert (out / "run.png").read_bytes()[:8] == PNG
+    with xr.open_dataset(out / "run.nc") as ds:
+        assert json.loads(ds.attrs["config"])["forcing"]["type"] == "regenerative"
+        assert ds["force"].values.max() > 0
+
+
+def test_simulate_cut_text(tmp_path, capsys):
+    assert main(["simulate", "--bar", "solid", "--rpm", "1200", "--depth-mm", "0.02",
+                 "--duration-s", "0.05", "--delay-interp", "linear", "--start", "static",
+                 "--out", str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    assert "cut at 1200 rpm" in text and "stable" in text and "linear" in text
+
+
+@pytest.mark.parametrize("argv, name", [
+    (["simulate", "--rpm", "0", "--depth-mm", "0.1"], "--rpm"),
+    (["simulate", "--rpm", "1200", "--depth-mm", "-1"], "--depth-mm"),
+    (["simulate", "--rpm", "1200", "--depth-mm", "0.1", "--ratio", "1.0"], "--ratio"),
+    (["simulate", "--rpm", "1200", "--depth-mm", "0.1", "--force-n", "10"], "--force-n"),
+    (["simulate", "--rpm", "1200"], "--depth-mm"),
+    (["simulate", "--kr-mpa", "900"], "--kr-mpa"),
+    (["simulate", "--rpm", "1200", "--depth-mm", "0.1", "--revolutions", "0"],
+     "--revolutions"),
+    (["lobes", "--rpm", "0"], "--rpm"),
+    (["lobes", "--rpm", "1600:900:50"], "--rpm"),
+    (["lobes", "--depth-step-mm", "0"], "--depth-step-mm"),
+    (["lobes", "--max-depth-mm", "0.001"], "--max-depth-mm"),
+    (["lobes", "--feed-mm", "-0.1"], "--feed-mm"),
+    (["lobes", "--method", "guess"], "--method"),
+    (["lobes", "--bar", "solid", "--gap-mm", "0.1"], "--gap-mm"),
+])
+def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, name):
+    out = tmp_path / "out"
+    assert main(argv + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("boringbar: error:") and name in err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()  # nothing written
