@@ -408,7 +408,7 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
             h, = ax.plot(rr[mask], dd[mask], ls="none", ms=ms, **LOBE_STYLE[key])
             legend.setdefault(names[key], h)
     limit = ds["limit_depth"].values[i] * 1e3
-    h, = ax.plot(rpm, limit, color="black", lw=1.6, marker=".", ms=4)
+    h, = ax.plot(rpm, limit, color="black", lw=1.6, marker=".", ms=4, zorder=1.5)
     legend.setdefault("limit: last stable depth below the first chatter", h)
     ymax = top
     if "analytic_curve" in ds and np.isfinite(ds["analytic_curve"].values[i]).any():

@@ -143,7 +143,7 @@ class Run:
             "max_force_n": m["max_force_n"],
             "mean_force_n": m["mean_force_n"],
             "amplitude_m": m["amplitude_m"],
-            "bounded_chatter": m["amplitude_m"] > f.bounded_fraction * f.feed,
+            "bounded_chatter": bool(m["amplitude_m"] > f.bounded_fraction * f.feed),
             "bounded_threshold_m": f.bounded_fraction * f.feed,
             "static_deflection_m": m["static_deflection_m"],
             "delay_interpolation": f.interpolation,
@@ -366,26 +366,30 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     n_stk = int(met[L.N_STICK_REC])
     t_end = t0 + n_steps * dt
     t_steady = t0 + steady_steps * dt
-    n_st = max(met[L.N_STEADY], 1.0)
+    n_st = met[L.N_STEADY]
+    nan = math.nan
+    # a cut stopped at its first zero may end before the steady part begins:
+    # its steady statistics are then undefined (NaN), not zero
     metrics = {
-        "rms_tip_m": math.sqrt(met[L.SUM_W2] / n_st),
-        "mean_tip_m": met[L.SUM_W] / n_st,
-        "max_abs_tip_m": met[L.MAX_ABS_W],
-        "max_abs_aux_m": met[L.MAX_ABS_AUX],
-        "max_abs_aux_all_m": met[L.MAX_ABS_AUX_ALL],
-        "rms_aux_m": math.sqrt(met[L.SUM_AUX2] / n_st),
+        "rms_tip_m": math.sqrt(met[L.SUM_W2] / n_st) if n_st else nan,
+        "mean_tip_m": float(met[L.SUM_W] / n_st) if n_st else nan,
+        "max_abs_tip_m": float(met[L.MAX_ABS_W]) if n_st else nan,
+        "max_abs_aux_m": float(met[L.MAX_ABS_AUX]) if n_st else nan,
+        "max_abs_aux_all_m": float(met[L.MAX_ABS_AUX_ALL]),
+        "rms_aux_m": math.sqrt(met[L.SUM_AUX2] / n_st) if n_st else nan,
         "impacts_plus": int(met[L.N_IMP_PLUS]),
         "impacts_minus": int(met[L.N_IMP_MINUS]),
         "impacts_total": int(met[L.N_IMP_ALL]),
         "micro_impacts": int(met[L.N_MICRO]),
-        "contact_time_s": met[L.T_CONTACT],
-        "stick_time_s": met[L.T_STICK],
-        "impacts_truncated": n_imp > cap_imp,
-        "first_zero_time_s": met[L.FIRST_ZERO_T] if met[L.FIRST_ZERO_T] >= 0 else None,
+        "contact_time_s": float(met[L.T_CONTACT]),
+        "stick_time_s": float(met[L.T_STICK]),
+        "impacts_truncated": bool(n_imp > cap_imp),
+        "first_zero_time_s": float(met[L.FIRST_ZERO_T]) if met[L.FIRST_ZERO_T] >= 0 else None,
         "steps_with_zero_force": int(met[L.N_ZERO_STEPS]),
-        "max_force_n": met[L.MAX_FORCE],
-        "mean_force_n": met[L.SUM_F] / n_st,
-        "amplitude_m": max(0.0, (met[L.STEADY_MAX_W] - met[L.STEADY_MIN_W]) / 2),
+        "max_force_n": float(met[L.MAX_FORCE]),
+        "mean_force_n": float(met[L.SUM_F] / n_st) if n_st else nan,
+        "amplitude_m": float(max(0.0, (met[L.STEADY_MAX_W] - met[L.STEADY_MIN_W]) / 2))
+        if n_st else nan,
         "static_deflection_m": w_static,
     }
     e0 = stored_energy(system, x_start)
@@ -394,15 +398,15 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     dissipated = met[L.D_VISC] + met[L.D_IMPACT] + met[L.D_FRICTION]
     scale = max(abs(w_in), dissipated, abs(e1 - e0), e0, e1, 1e-300)
     energy = {
-        "work_force_j": met[L.W_FORCE],
-        "work_nonreciprocal_friction_j": met[L.W_NONRECIP],
-        "dissipated_viscous_j": met[L.D_VISC],
-        "dissipated_impacts_j": met[L.D_IMPACT],
-        "dissipated_friction_j": met[L.D_FRICTION],
+        "work_force_j": float(met[L.W_FORCE]),
+        "work_nonreciprocal_friction_j": float(met[L.W_NONRECIP]),
+        "dissipated_viscous_j": float(met[L.D_VISC]),
+        "dissipated_impacts_j": float(met[L.D_IMPACT]),
+        "dissipated_friction_j": float(met[L.D_FRICTION]),
         "stored_initial_j": e0,
         "stored_final_j": e1,
-        "balance_residual_j": w_in - (e1 - e0) - dissipated,
-        "balance_relative": (w_in - (e1 - e0) - dissipated) / scale,
+        "balance_residual_j": float(w_in - (e1 - e0) - dissipated),
+        "balance_relative": float((w_in - (e1 - e0) - dissipated) / scale),
     }
     pattern = None
     if system.kind == "ball" and not cutting:
@@ -410,9 +414,9 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
                            stick[:min(n_stk, cap_imp)], (t_steady, t_end), period, dt=dt,
                            contact_time=met[L.T_CONTACT])
     thresholds = {
-        "impact_velocity_m_s": p[L.V_IMPACT],
-        "stick_velocity_m_s": p[L.V_STICK],
-        "stick_min_duration_s": p[L.STICK_MIN],
+        "impact_velocity_m_s": float(p[L.V_IMPACT]),
+        "stick_velocity_m_s": float(p[L.V_STICK]),
+        "stick_min_duration_s": float(p[L.STICK_MIN]),
     }
     return Run(
         system=system, forcing=forcing, omega=omega, dt=dt, t0=t0, duration=n_steps * dt,

@@ -87,7 +87,7 @@ def _column(case: Case, rpm: float, opts: dict) -> dict:
         return done
     lo, hi = 0, 1
     while hi <= n_max and not chatter(hi):
-        lo, hi = hi, min(2 * hi, n_max + 1) if hi < n_max else n_max + 1
+        lo, hi = hi, min(2 * hi, n_max) if hi < n_max else n_max + 1
     if hi > n_max:
         return done
     while hi - lo > 1:

@@ -90,7 +90,7 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
         ptr[j] = (kg0 + off[0, j]) % nbuf
         for st in range(4):
             dst[st, j] = off[st, j] - off[0, j]
-    hsurf = np.zeros(4)
+    hsurf = carray(stack_ptr(4, np.float64), 4)
     max_force = met[L.MAX_FORCE]
     first_zero = met[L.FIRST_ZERO_T]
     n_zero = met[L.N_ZERO_STEPS]
@@ -126,9 +126,12 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     acc = carray(stack_ptr(_NX_MAX, np.float64), nx)  # sum of weighted derivatives
     for j in range(nx):
         Kd[j] = 0.0
-    fst = np.empty(4)  # forcing at the stages
-    cst = np.array([0.0, 0.5, 0.5, 1.0]) * dt  # c_s h
-    wst = np.array([1.0, 2.0, 2.0, 1.0]) * (dt / 6.0)  # b_s h
+    fst = carray(stack_ptr(4, np.float64), 4)  # forcing at the stages
+    cst = carray(stack_ptr(4, np.float64), 4)  # c_s h
+    wst = carray(stack_ptr(4, np.float64), 4)  # b_s h
+    for st in range(4):
+        cst[st] = (0.0, 0.5, 0.5, 1.0)[st] * dt
+        wst[st] = (1.0, 2.0, 2.0, 1.0)[st] * (dt / 6.0)
 
     chh = math.cos(om * 0.5 * dt)
     shh = math.sin(om * 0.5 * dt)
