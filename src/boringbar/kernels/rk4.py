@@ -36,6 +36,10 @@ from boringbar.kernels.stack import stack_ptr
 
 #: length of the stack scratch vectors (the largest state)
 _NX_MAX = 2 * L.NMAX + 2
+#: most past revolutions in the chip-thickness minimum
+_NREV_MAX = 50
+_NREV_X3 = 3 * _NREV_MAX
+_NREV_X12 = 12 * _NREV_MAX
 #: exact sin/cos resynchronisation interval of the forcing-phase recurrence
 _RESYNC = 256
 
@@ -73,23 +77,33 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     w_before_cut = p[L.HIST_W0]
     nbuf = buf.shape[0]
     kg0 = int(met[L.STEPS_DONE])  # steps since the cut began
-    # delayed node offsets: stage time t + c_s dt minus j tau lies at node
-    # kg + c_s - j tau / dt = kg + off[s, j] + frac[s, j]
-    off = np.zeros((4, max(nrev, 1)), dtype=np.int64)
-    frac = np.zeros((4, max(nrev, 1)))
-    for st in range(4):
+    # The delayed W at the three distinct stage times (c = 0, 1/2, 1) minus
+    # j tau: node kg + c - j tau / dt = kg + off[q, j] + fraction, interpolated
+    # between two stored nodes with fixed weights (cubic Hermite from W and W',
+    # or linear), so each lookup is four multiply-adds.  ptr[j] is the buffer
+    # row of node kg + off[0, j], advanced by one each step (no modulo).
+    off = carray(stack_ptr(_NREV_X3, np.int64), (3, _NREV_MAX))
+    wts = carray(stack_ptr(_NREV_X12, np.float64), (3, _NREV_MAX, 4))
+    ptr = carray(stack_ptr(_NREV_MAX, np.int64), _NREV_MAX)
+    for q in range(3):
         for j in range(nrev):
-            d = (0.0, 0.5, 0.5, 1.0)[st] - (j + 1) * p[L.TAU] / dt
-            off[st, j] = math.floor(d)
-            frac[st, j] = d - math.floor(d)
-    # row pointers into the circular buffer, advanced by one each step (no modulo
-    # in the loop): ptr[j] is the row of node kg + off[0, j]
-    ptr = np.zeros(max(nrev, 1), dtype=np.int64)
-    dst = np.zeros((4, max(nrev, 1)), dtype=np.int64)
+            d = 0.5 * q - (j + 1) * p[L.TAU] / dt
+            off[q, j] = math.floor(d)
+            fr = d - math.floor(d)
+            if cubic:
+                f2 = fr * fr
+                f3 = f2 * fr
+                wts[q, j, 0] = 2 * f3 - 3 * f2 + 1
+                wts[q, j, 1] = (f3 - 2 * f2 + fr) * dt
+                wts[q, j, 2] = -2 * f3 + 3 * f2
+                wts[q, j, 3] = (f3 - f2) * dt
+            else:
+                wts[q, j, 0] = 1.0 - fr
+                wts[q, j, 1] = 0.0
+                wts[q, j, 2] = fr
+                wts[q, j, 3] = 0.0
     for j in range(nrev):
         ptr[j] = (kg0 + off[0, j]) % nbuf
-        for st in range(4):
-            dst[st, j] = off[st, j] - off[0, j]
     hsurf = carray(stack_ptr(4, np.float64), 4)
     max_force = met[L.MAX_FORCE]
     first_zero = met[L.FIRST_ZERO_T]
@@ -182,6 +196,7 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
         if case == L.TMD:
             aux_prev -= pA[i] * X[i]
             auxd_prev -= pA[i] * X[n + i]
+    wptr = kg0 % nbuf if regen else 0  # the row of the newest node
     if regen and kg0 == 0:
         buf[0, 0] = w_prev
         buf[0, 1] = wd_prev
@@ -205,36 +220,24 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
             # reaches zero the j = 1 term is the minimum (MODEL.md section 4), so the
             # other revolutions are read only after that.
             nr_eff = nrev if first_zero >= 0.0 else 1
-            for st in (0, 1, 3):
+            for q in range(3):
                 hmin = 1e300
                 for j in range(nr_eff):
-                    a = kg + off[st, j]  # global node; its row is ptr[j] + dst[st, j]
-                    fr = frac[st, j]
-                    ia = ptr[j] + dst[st, j]
-                    if ia >= nbuf:
-                        ia -= nbuf
-                    ib = ia + 1
-                    if ib >= nbuf:
-                        ib -= nbuf
-                    wa = w_before_cut
-                    wda = 0.0
-                    wb = w_before_cut
-                    wdb = 0.0
+                    a = kg + off[q, j]
                     if a >= 0:
-                        wa = buf[ia, 0]
-                        wda = buf[ia, 1]
-                    if a + 1 >= 0:
-                        wb = buf[ib, 0]
-                        wdb = buf[ib, 1]
-                    if cubic:
-                        f2 = fr * fr
-                        f3 = f2 * fr
-                        wdel = ((2 * f3 - 3 * f2 + 1) * wa + (f3 - 2 * f2 + fr) * dt * wda
-                                + (-2 * f3 + 3 * f2) * wb + (f3 - f2) * dt * wdb)
+                        ia = ptr[j] + (off[q, j] - off[0, j])
+                        if ia >= nbuf:
+                            ia -= nbuf
+                        ib = ia + 1 if ia + 1 < nbuf else 0
+                        wdel = (wts[q, j, 0] * buf[ia, 0] + wts[q, j, 1] * buf[ia, 1]
+                                + wts[q, j, 2] * buf[ib, 0] + wts[q, j, 3] * buf[ib, 1])
+                    elif a + 1 >= 0:  # between the surface before the cut and node 0
+                        wdel = ((wts[q, j, 0]) * w_before_cut + wts[q, j, 2] * buf[0, 0]
+                                + wts[q, j, 3] * buf[0, 1])
                     else:
-                        wdel = (1.0 - fr) * wa + fr * wb
+                        wdel = w_before_cut
                     hmin = min(hmin, (j + 1) * feed + wdel)
-                hsurf[st] = hmin
+                hsurf[q if q < 2 else 3] = hmin  # stages 0, 1 (2 shares it), 3
             hsurf[2] = hsurf[1]
         s_h = sn * chh + cn * shh
         c_h = cn * chh - sn * shh
@@ -422,9 +425,11 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
         aux_prev = aux
         auxd_prev = auxd
         if regen:
-            ik = (kg + 1) % nbuf
-            buf[ik, 0] = w
-            buf[ik, 1] = wd
+            wptr += 1  # the row of node kg + 1
+            if wptr == nbuf:
+                wptr = 0
+            buf[wptr, 0] = w
+            buf[wptr, 1] = wd
             for j in range(nrev):
                 ptr[j] += 1
                 if ptr[j] == nbuf:
