@@ -7,11 +7,18 @@ starts:
 - ``scan`` (published): depths step, 2 step, 3 step ... until ``successive``
   (3) depths in a row chatter.  The first unstable depth and the limiting
   (chatter-free) depth, the last stable depth below it, are reported.
-- ``search`` (faster): doubling from one step until a depth chatters, then
-  bisection on the depth grid between the last stable and the first
-  unstable depth, then the ``successive - 1`` depths above the first
+- ``search`` (faster): from a seed depth, steps of 1, 2, 4 ... grid depths
+  up (or down) until a bracket [stable, chatter] is found, then bisection on
+  the depth grid, then the ``successive - 1`` depths above the first
   unstable one are run to confirm the published rule; if one of them is
   stable (non-monotone stability) the search continues as a scan from there.
+  The seed is the analytic (frequency-domain) limit of the linear host at
+  that speed: the solid, TMD or locked-ball bar itself, and for the free
+  ball the bare cavity bar (at the onset of chatter the vibration is far
+  smaller than the gap, so the ball does not yet touch a wall).  A finite
+  run can only place the simulated limit at or above the analytic one, so
+  the seed sits just below the answer and few stable (full-length) runs
+  are needed.
   It assumes that everything below the bracket it found is stable; where
   stability is not monotone in depth (a ball damper may chatter in a band
   and be stable above it) the scan can find a lower first unstable depth.
@@ -85,11 +92,22 @@ def _column(case: Case, rpm: float, opts: dict) -> dict:
     if opts["method"] == "scan":
         scan_from(1)
         return done
-    lo, hi = 0, 1
-    while hi <= n_max and not chatter(hi):
-        lo, hi = hi, min(2 * hi, n_max) if hi < n_max else n_max + 1
-    if hi > n_max:
-        return done
+    # bracket [lo stable, hi chatter], growing away from the seed in doubling steps
+    seed = min(max(1, opts["seeds"].get((case.label, rpm), 1)), n_max)
+    if chatter(seed):
+        lo, hi = seed, seed
+        width = 1
+        while lo > 0 and chatter(lo):
+            hi, lo = lo, max(0, lo - width)
+            width *= 2
+    else:
+        lo, hi = seed, seed + 1
+        width = 1
+        while hi <= n_max and not chatter(hi):
+            lo, hi = hi, min(hi + width, n_max) if hi < n_max else n_max + 1
+            width *= 2
+        if hi > n_max:
+            return done
     while hi - lo > 1:
         mid = (lo + hi) // 2
         if chatter(mid):
@@ -101,6 +119,23 @@ def _column(case: Case, rpm: float, opts: dict) -> dict:
             scan_from(i + 1)
             break
     return done
+
+
+def _seeds(cases: list[Case], rpm: np.ndarray, kr: float, step: float) -> dict:
+    """Grid index of the analytic limit of each case's linear host at each speed."""
+    from boringbar.analysis.stability import limit_at_speeds
+    from boringbar.system import System
+
+    seeds = {}
+    for case in cases:
+        host = case.system
+        if host.kind == "ball":  # the bare cavity bar: the ball is not touching yet
+            host = System(host.bar, None, host.preset, host.readings)
+        lim = limit_at_speeds(host, rpm, kr)
+        for r, b in zip(rpm, lim, strict=True):
+            if math.isfinite(b):
+                seeds[(case.label, float(r))] = int(math.floor(b / step + 1e-9))
+    return seeds
 
 
 def _limits(verdicts: np.ndarray, depths: np.ndarray) -> tuple[float, float]:
@@ -154,6 +189,7 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
     Regenerative(depth=depth_step, rpm=float(rpm[0]), kr=kr, feed=feed,
                  revolutions=revolutions, interpolation=interpolation, start=start,
                  bounded_fraction=bounded_fraction)
+    opts["seeds"] = _seeds(cases, rpm, kr, depth_step) if method == "search" else {}
     for nm in sorted({c.system.bar.n_modes for c in cases}):  # warm the JIT once
         c0 = next(c for c in cases if c.system.bar.n_modes == nm)
         _cut(c0, float(rpm[0]), depth_step, dict(opts, duration=2e-4))
