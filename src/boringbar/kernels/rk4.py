@@ -34,7 +34,8 @@ from numba import carray, njit
 from boringbar.kernels import layout as L
 from boringbar.kernels.stack import stack_ptr
 
-#: length of the stack scratch vectors (the largest state)
+#: lengths of the stack scratch vectors (numba needs them as literal globals)
+_NMAX = L.NMAX
 _NX_MAX = 2 * L.NMAX + 2
 #: most past revolutions in the chip-thickness minimum
 _NREV_MAX = 50
@@ -140,6 +141,20 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     acc = carray(stack_ptr(_NX_MAX, np.float64), nx)  # sum of weighted derivatives
     for j in range(nx):
         Kd[j] = 0.0
+    # premultiplied modal constants: a_i = fm f - km u - cm v - dm F_b (ball)
+    fm = carray(stack_ptr(_NMAX, np.float64), n)
+    km = carray(stack_ptr(_NMAX, np.float64), n)
+    cm = carray(stack_ptr(_NMAX, np.float64), n)
+    dm = carray(stack_ptr(_NMAX, np.float64), n)
+    lm = carray(stack_ptr(_NMAX, np.float64), n)
+    kappa = 1.0 / m if m > 0.0 else 0.0
+    for i in range(n):
+        fm[i] = pL[i] * invM[i]
+        km[i] = K[i] * invM[i]
+        cm[i] = C[i] * invM[i]
+        dm[i] = sr * pD[i] * invM[i]
+        lm[i] = meff * pD[i] * invM[i]
+        kappa += pD[i] * dm[i]
     fst = carray(stack_ptr(4, np.float64), 4)  # forcing at the stages
     cst = carray(stack_ptr(4, np.float64), 4)  # c_s h
     wst = carray(stack_ptr(4, np.float64), 4)  # b_s h
@@ -273,13 +288,18 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
                 fst[st] = f
                 max_force = max(max_force, f)
             w_s = wst[st]
-            # bar: M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f (+ damper terms below)
+            # bar: M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f (+ damper terms below),
+            # written with premultiplied constants and the stage velocity last, so
+            # that little of it waits on the previous stage
             wd = 0.0
             pvisc = 0.0
+            sfree = 0.0  # sum_i psi_d,i a_i of the free accelerations
             for i in range(n):
                 vi = Xs[n + i]
                 Kd[i] = vi
-                Kd[n + i] = (pL[i] * f - C[i] * vi - K[i] * Xs[i]) * invM[i]
+                ai = (fm[i] * f - km[i] * Xs[i]) - cm[i] * vi
+                Kd[n + i] = ai
+                sfree += pD[i] * ai
                 wd += pL[i] * vi
                 pvisc += C[i] * vi * vi
             ydd = 0.0
@@ -290,14 +310,13 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
                     fb = -fc
                 elif yds < 0.0:
                     fb = fc
-                sa = 0.0
                 pdv = 0.0
                 for i in range(n):
                     # reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
-                    Kd[n + i] -= sr * pD[i] * fb * invM[i]
-                    sa += pD[i] * Kd[n + i]
+                    Kd[n + i] -= dm[i] * fb
                     pdv += pD[i] * Xs[n + i]
-                ydd = fb / m - sa
+                # y'' = F_b / m - sum psi_d u'' = kappa F_b - sum psi_d a_free
+                ydd = kappa * fb - sfree
                 d_fric -= w_s * fb * yds
                 w_nr += w_s * (1.0 - sr) * fb * pdv
             elif case == L.TMD:
@@ -312,13 +331,10 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
                 ydd = -ft / ma
                 pvisc += ca * reld * reld
             elif case == L.LOCKED:
-                # the force that carries the ball with the bar: m_eff sum psi_d a0
-                sa = 0.0
+                # the force that carries the ball with the bar, m_eff sum psi_d a_free,
+                # acts on mode i with psi_d,i
                 for i in range(n):
-                    sa += pD[i] * Kd[n + i]
-                fl = meff * sa
-                for i in range(n):
-                    Kd[n + i] -= pD[i] * fl * invM[i]
+                    Kd[n + i] -= lm[i] * sfree
             Kd[iy] = Xs[iyd] if has_aux else 0.0
             Kd[iyd] = ydd
             for j in range(nx):
