@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 import xarray as xr
+from cli_output import json_out
 
 from boringbar.cli import main
 
@@ -19,19 +20,12 @@ SIMULATE_KEYS = {"natural_frequency_hz", "rms_tip_m", "pattern", "impacts_per_cy
                  "max_abs_rel_disp_m", "preset", "integrator", "elapsed_s", "files"}
 
 
-def _json_out(capsys) -> dict:
-    captured = capsys.readouterr()
-    lines = captured.out.strip().splitlines()
-    assert len(lines) == 1, captured.out  # exactly one JSON object on stdout
-    return json.loads(lines[0])
-
-
 def test_simulate_json_files_and_config(tmp_path, capsys):
     out = tmp_path / "run"
     rc = main(["simulate", "--bar", "ball", "--gap-mm", "0.1", "--force-n", "20",
                "--duration-s", "0.05", "--out", str(out), "--json"])
     assert rc == 0
-    s = _json_out(capsys)
+    s = json_out(capsys)
     assert SIMULATE_KEYS <= s.keys()
     assert s["preset"] == "physical" and s["integrator"] == "rk4" and s["bar"] == "ball"
     assert s["rms_tip_m"] > 0 and isinstance(s["pattern"], str)

@@ -11,6 +11,7 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
+from cli_output import json_out
 
 from boringbar.cli import main
 
@@ -20,17 +21,10 @@ SMALL = ["--bar", "solid", "--rpm", "1000:1100:50", "--duration-s", "0.3",
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
-def _json_out(capsys) -> dict:
-    captured = capsys.readouterr()
-    lines = captured.out.strip().splitlines()
-    assert len(lines) == 1, captured.out  # exactly one JSON object on stdout
-    return json.loads(lines[0])
-
-
 def test_lobes_files_json_and_verdicts(tmp_path, capsys):
     out = tmp_path / "lobes"
     assert main(["lobes", *SMALL, "--workers", "2", "--out", str(out), "--json"]) == 0
-    s = _json_out(capsys)
+    s = json_out(capsys)
     assert s["method"] == "scan" and s["criterion"] == "zero"
     assert s["files"] == {"netcdf": str(out / "lobes.nc"), "png": str(out / "lobes.png")}
     assert (out / "lobes.png").read_bytes()[:8] == PNG
@@ -78,7 +72,7 @@ def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):
     out = tmp_path / "cut"
     assert main(["simulate", "--bar", "solid", "--rpm", "1200", "--depth-mm", "0.2",
                  "--stop-at-zero", "--out", str(out), "--json"]) == 0
-    s = _json_out(capsys)
+    s = json_out(capsys)
     c = s["cutting"]
     assert c["chatter"] is True and c["rpm"] == 1200 and c["depth_m"] == pytest.approx(2e-4)
     assert 0 < c["first_zero_time_s"] == pytest.approx(s["duration_s"])  # stopped there
