@@ -1,0 +1,137 @@
+"""Basins of attraction and sensitivity studies (MODEL.md section 6).
+
+Known truths: a linear bar has one attractor; the closed-form symmetric
+two-impact orbit (Masri-Caughey, 30 N at Omega = omega_n, one mode, no
+friction; stable, multiplier 0.915 per half period) attracts the grid cells
+around its own state with the pattern '2 symmetric'.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from boringbar import Harmonic, make_system
+from boringbar._validate import ParameterError
+from boringbar.analysis.basins import BasinTolerance, basin_summary, basins, signature
+from boringbar.analysis.masri_caughey import two_impact_orbit
+from boringbar.analysis.sensitivity import Cuts, sensitivity
+
+SMALL = {"displacement": (-1.5e-3, 1.5e-3, 4), "velocity": (-1.5, 1.5, 4), "duration": 0.3}
+
+
+def published_point():
+    return make_system("ball", "paper", gap=0.5e-3, friction=False), Harmonic(10.0, 1.01)
+
+
+def test_fractions_sum_to_one_and_serial_equals_parallel():
+    system, forcing = published_point()
+    serial = basins(system, forcing, workers=1, **SMALL)
+    parallel = basins(system, forcing, workers=2, **SMALL)
+    assert serial["fraction"].sum() == pytest.approx(1.0, abs=1e-12)
+    assert int(serial["count"].sum()) == 16
+    assert set(np.unique(serial["attractor"])) == set(serial["attractor_id"].values)
+    summary = basin_summary(parallel)
+    assert (serial.attrs.pop("workers"), parallel.attrs.pop("workers")) == (1, 2)
+    serial.attrs.pop("wall_time_s"), parallel.attrs.pop("wall_time_s")
+    assert serial.identical(parallel), "serial and parallel basins differ"
+    json.dumps(summary)
+    assert sum(a["fraction"] for a in summary["attractors"]) == pytest.approx(1.0)
+    assert set(summary["attractors"][0]["representative"]) == {"tip_displacement_m",
+                                                               "tip_velocity_m_s"}
+
+
+def test_linear_bar_has_one_attractor():
+    ds = basins(make_system("solid", "paper"), Harmonic(10.0, 1.01),
+                displacement=(-1.5e-3, 1.5e-3, 3), velocity=(-1.5, 1.5, 3), duration=0.3)
+    assert ds.sizes["attractor_id"] == 1
+    assert float(ds["fraction"][0]) == 1.0
+    assert int(ds["attractor_period"][0]) == 1
+    assert ds["attractor_pattern"].values[0] == ""  # no ball, no impact pattern
+
+
+def test_two_impact_orbit_attracts_its_neighbourhood():
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    bar, ball = system.bar, system.damper
+    orbit = next(o for o in two_impact_orbit(
+        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass, ball.gap, ball.restitution, 30.0, bar.natural_frequency)
+        if o.admissible and o.stable)
+    w0 = float(orbit.tip(0.0))
+    v0 = bar.psi_tip[0] * float(orbit.modal_velocity(0.0))
+    h = 1e-9  # y' at t = 0 (mid-flight) by a central difference of the closed form
+    y0 = float(orbit.relative_displacement(0.0))
+    dy0 = float(orbit.relative_displacement(h) - orbit.relative_displacement(-h)) / (2 * h)
+    ds = basins(system, Harmonic(30.0, 1.0), displacement=(1.1 * w0, 0.9 * w0, 3),
+                velocity=(1.5 * v0, 0.5 * v0, 3), duration=0.3, ball_position=y0,
+                ball_velocity=dy0, workers=2)
+    symmetric = [a for a in ds["attractor_id"].values
+                 if ds["attractor_pattern"].values[a] == "2 symmetric"]
+    assert len(symmetric) == 1
+    a = symmetric[0]
+    assert float(ds["fraction"][a]) >= 0.5
+    assert int(ds["attractor_period"][a]) == 1
+    assert float(ds["attractor_rms_tip_m"][a]) == pytest.approx(orbit.rms_tip(), rel=0.01)
+    cell = np.argwhere(ds["attractor"].values == a)[0]
+    w = float(ds["signature_tip_m"].values[cell[0], cell[1], 0])
+    v = float(ds["signature_tip_velocity_m_s"].values[cell[0], cell[1], 0])
+    amp = math.sqrt(2) * orbit.rms_tip()
+    omega = bar.natural_frequency
+    assert abs(w - w0) < 0.02 * amp and abs(v - v0) < 0.02 * amp * omega
+
+
+def test_signature_is_invariant_to_where_the_cycle_starts():
+    cycle = np.array([[1.0, 0.2], [-0.5, 0.7], [0.3, -0.9]])
+    strobe = np.tile(cycle, (20, 1))
+    k, centres = signature(strobe, 1.0, 1.0)
+    k2, centres2 = signature(strobe[1:], 1.0, 1.0)
+    assert k == k2 == 3
+    np.testing.assert_array_equal(centres, centres2)
+    rng = np.random.default_rng(0)
+    k3, last = signature(rng.normal(size=(60, 2)), 1.0, 1.0)
+    assert k3 == 0 and last.shape == (8, 2)
+
+
+def test_bad_grid_and_tolerances_are_refused():
+    system, forcing = published_point()
+    with pytest.raises(ParameterError, match="displacement count"):
+        basins(system, forcing, displacement=(-1e-3, 1e-3, 0))
+    with pytest.raises(ParameterError, match="velocity"):
+        basins(system, forcing, velocity=(1.0, -1.0, 3))
+    with pytest.raises(ParameterError, match="tol.match"):
+        BasinTolerance(match=0.0)
+
+
+@pytest.mark.parametrize("kind, values", [("restitution", (0.6, 0.7, 0.8)),
+                                          ("ball", ("carbide", "steel")),
+                                          ("friction_number", (0.2, 0.8)),
+                                          ("initial", ((0.5e-3, 0.5), (1e-3, 1.0)))])
+def test_sensitivity_gives_one_result_per_value(kind, values):
+    ds = sensitivity(kind, values, preset="paper", ratios=(1.0, 1.01), duration=0.05)
+    assert ds["rms_tip_m"].dims[0] == kind
+    assert ds.sizes[kind] == len(values)
+    assert ds["rms_tip_m"].shape == (len(values), 1, 2)
+    assert np.all(np.isfinite(ds["rms_tip_m"]))
+
+
+def test_sensitivity_of_cuts():
+    cuts = Cuts(rpm=1200.0, depths=(0.05e-3, 0.10e-3), duration=0.05)
+    ds = sensitivity("restitution", (0.6, 0.8), preset="paper", cutting=cuts)
+    assert ds["chatter"].dims == ("restitution", "depth")
+    assert ds["chatter"].shape == (2, 2) and ds["chatter"].dtype == bool
+    assert np.all(ds["amplitude_m"] >= 0)
+    with pytest.raises(ParameterError, match="kind"):
+        sensitivity("gap", (1e-4,))
+
+
+@pytest.mark.slow
+def test_published_basin_30_by_30():
+    """The published grid at 10 N, r = 1.01, gap 0.5 mm, no friction (900 runs of 2 s)."""
+    system, forcing = published_point()
+    ds = basins(system, forcing)
+    assert ds["attractor"].shape == (30, 30)
+    assert float(ds["fraction"].sum()) == pytest.approx(1.0, abs=1e-12)
+    json.dumps(basin_summary(ds))
