@@ -475,3 +475,338 @@ def plot_lobe_examples(ds, path) -> Path:
     fig.suptitle(f"Lobe examples: {case} ({a.get('preset', '?')} preset), rerun with "
                  "history, not stopped at the first zero of the force", fontsize="medium")
     return save_figure_atomic(fig, path)
+
+
+# --- bifurcation diagram ---------------------------------------------------------
+
+#: Marker styles of the continuation directions: backward drawn smaller and a
+#: little to the right, so points where both agree show both colours.
+DIRECTION_STYLE = {
+    "forward": dict(color="#1f77b4", s=9, offset=0.0),
+    "backward": dict(color="#d62728", s=3, offset=0.25),
+}
+HYSTERESIS_COLOUR = "#ffe082"
+#: Axis label and display scale (per SI unit) of the bifurcation parameters.
+PARAMETER_AXES = {
+    "force": ("force amplitude F0 (N)", 1.0),
+    "ratio": (r"frequency ratio $\Omega/\omega_n$", 1.0),
+    "gap": (r"gap $\delta$ (mm)", 1e3),
+    "restitution": ("coefficient of restitution e", 1.0),
+}
+
+
+def _verdict_code(verdict: str) -> str:
+    """'period-2' -> '2', 'transient' -> 't', 'quasi-periodic' -> 'q', ..."""
+    if verdict.startswith("period-"):
+        return verdict[len("period-"):]
+    return {"transient": "t", "quasi-periodic": "q", "chaotic-like": "c"}.get(verdict, "?")
+
+
+def plot_bifurcation(ds, path) -> Path:
+    """Bifurcation diagram of :func:`~boringbar.analysis.bifurcation.bifurcation`,
+    saved to ``path``.
+
+    Top: the stroboscopic Poincare samples of the tip displacement W (mm)
+    against the parameter, forward (blue) and backward (red, smaller, offset a
+    quarter step to the right); the ranges in ``ds.attrs["hysteresis_ranges"]``
+    (JSON, as ``boringbar bifurcation`` writes them) shaded.  Middle: each
+    run's verdict (period k, t transient, q quasi-periodic, c chaotic-like,
+    ? undetermined).  Bottom: the tip RMS (mm) of each run.
+    """
+    param = ds.attrs.get("parameter", "?")
+    xlabel, k = PARAMETER_AXES.get(param, (f"{param} ({ds.attrs.get('units', '')})", 1.0))
+    x = ds["value"].values * k
+    step = float(np.min(np.abs(np.diff(x)))) if x.size > 1 else 1.0
+    directions = [str(d) for d in ds["direction"].values]
+    fig = Figure(figsize=(12, 8), layout="constrained")
+    top, mid, bottom = fig.subplots(3, 1, sharex=True, height_ratios=(4, 0.55, 1.4))
+    ranges = json.loads(ds.attrs.get("hysteresis_ranges", "null") or "null") or []
+    for a, b in ranges:
+        for ax in (top, mid, bottom):
+            ax.axvspan(a * k - 0.5 * step, b * k + 0.5 * step, color=HYSTERESIS_COLOUR,
+                       lw=0, zorder=0,
+                       label="forward and backward differ" if ax is top else None)
+    for row, d in enumerate(directions):
+        style = DIRECTION_STYLE.get(d, dict(color="black", s=4, offset=0.0))
+        sel = ds.sel(direction=d)
+        xd = x + style["offset"] * step
+        w = sel["tip_displacement"].values * 1e3
+        xx = np.broadcast_to(xd[:, None], w.shape)
+        ok = np.isfinite(w)
+        top.scatter(xx[ok], w[ok], s=style["s"], color=style["color"], lw=0, alpha=0.6,
+                    rasterized=True)
+        top.scatter([], [], s=25, color=style["color"], label=f"{d} sweep")
+        bottom.plot(xd, sel["rms_tip_m"].values * 1e3, marker="o", ms=3, lw=1.0,
+                    color=style["color"], label=d)
+        for xi, verdict in zip(x, sel["verdict"].values, strict=True):
+            mid.text(xi, 1 - row, _verdict_code(str(verdict)), ha="center", va="center",
+                     fontsize=7 if x.size <= 50 else 5, color=style["color"])
+    top.set_ylabel("tip displacement W (mm)\nat $\\Omega t = 0$ mod $2\\pi$")
+    mid.set_ylim(-0.7, 1.7)
+    mid.set_yticks([1, 0][:len(directions)], directions)
+    mid.tick_params(axis="y", length=0, labelsize="small")
+    mid.set_ylabel("verdict", fontsize="small")
+    bottom.set_ylabel("tip RMS (mm)")
+    bottom.set_xlabel(xlabel)
+    bottom.set_ylim(bottom=0)
+    pad = 0.6 * step
+    bottom.set_xlim(x.min() - pad, x.max() + pad)
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    handles, labels = top.get_legend_handles_labels()
+    if "backward" in directions and not ranges:
+        handles.append(top.plot([], [], ls="none")[0])
+        labels.append("forward and backward agree at every value")
+    handles.append(top.plot([], [], ls="none")[0])
+    labels.append("verdicts: k = period k, t transient, q quasi-periodic, c chaotic-like, "
+                  "? undetermined")
+    fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
+               fontsize="small", frameon=False)
+    fig.suptitle(_bifurcation_title(ds, param), fontsize="medium")
+    return save_figure_atomic(fig, path)
+
+
+def _system_words(system: dict) -> str:
+    """'ball damper, gap 0.1 mm, friction off, e = 0.7' from System.to_dict()."""
+    kind = system.get("kind", "?")
+    damper = system.get("damper") or {}
+    if kind in ("ball", "locked"):
+        fr = damper.get("friction_force_n", 0.0)
+        return (f"{'locked ball' if kind == 'locked' else 'ball damper'} "
+                f"({damper.get('material', '?')}), gap {damper.get('gap_m', math.nan) * 1e3:g} "
+                f"mm, friction {f'{fr:.3g} N' if fr else 'off'}, "
+                f"e = {damper.get('restitution', math.nan):g}")
+    return {"solid": "solid bar", "tmd": "TMD bar"}.get(kind, str(kind))
+
+
+def _bifurcation_title(ds, param: str) -> str:
+    config = json.loads(ds.attrs.get("config", "{}"))
+    systems = config.get("systems") or [{}]
+    words = _system_words(systems[0])
+    if param == "gap":
+        words = re.sub(r", gap [^,]*", "", words)
+    elif param == "restitution":
+        words = re.sub(r", e = .*$", "", words)
+    base = config.get("base_forcing") or {}
+    fixed = []
+    if param != "force":
+        fixed.append(f"F0 = {base.get('amplitude_n', math.nan):g} N")
+    if param != "ratio":
+        fixed.append(f"$\\Omega/\\omega_n$ = {base.get('ratio', math.nan):g}")
+    preset = systems[0].get("preset", "?")
+    return (f"Bifurcation diagram: {words}, {', '.join(fixed)} ({preset} preset)\n"
+            f"continuation forward then backward; {ds.attrs.get('duration_s', math.nan):g} s "
+            f"runs, first {100 * ds.attrs.get('drop', math.nan):g} % dropped, "
+            f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
+
+
+# --- basins of attraction --------------------------------------------------------
+
+#: Attractors beyond this many are drawn together in grey.
+MAX_ATTRACTOR_COLOURS = 20
+OTHER_COLOUR = "#bdbdbd"
+
+
+def _attractor_colours(n: int) -> list:
+    from matplotlib import colormaps
+
+    cmap = colormaps["tab10" if n <= 10 else "tab20"]
+    return [cmap(i) for i in range(min(n, MAX_ATTRACTOR_COLOURS))] + \
+        [OTHER_COLOUR] * max(0, n - MAX_ATTRACTOR_COLOURS)
+
+
+def _attractor_label(ds, a: int) -> str:
+    k = int(ds["attractor_period"].values[a])
+    pattern = str(ds["attractor_pattern"].values[a]) or "no pattern"
+    motion = f"period {k}" if k else "non-periodic"
+    rms = float(ds["attractor_rms_tip_m"].values[a]) * 1e3
+    return (f"{a}: {pattern}, {motion}, RMS {rms:.3g} mm, "
+            f"{100 * float(ds['fraction'].values[a]):.1f} %")
+
+
+def plot_basins(ds, path) -> Path:
+    """Basins of attraction of :func:`~boringbar.analysis.basins.basins`, saved to
+    ``path``.
+
+    Left: initial tip displacement (mm) x initial tip velocity (m/s), each cell
+    coloured by its attractor; the legend gives each attractor's impact
+    pattern, Poincare period, tip RMS and basin fraction; the attractor id is
+    written at its representative cell.  Right: if ``ds`` holds
+    ``poincare_from_tip_m`` (as ``boringbar basins`` writes it), the Poincare
+    map (W, W' once per forcing period) of that run, with every periodic
+    attractor's Poincare points as open markers in its colour.
+    """
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    w0 = ds["displacement"].values * 1e3
+    v0 = ds["velocity"].values
+    label = ds["attractor"].values  # (displacement, velocity)
+    n = ds.sizes["attractor_id"]
+    colours = _attractor_colours(n)
+    has_map = "poincare_from_tip_m" in ds
+    fig = Figure(figsize=(13.5 if has_map else 8, 6.8), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, 2 if has_map else 1,
+                                      width_ratios=(1, 1) if has_map else None))
+    ax = axes[0]
+    ax.pcolormesh(w0, v0, label.T, shading="nearest", cmap=ListedColormap(colours),
+                  norm=BoundaryNorm(np.arange(n + 1) - 0.5, n), rasterized=True)
+    for a in range(min(n, MAX_ATTRACTOR_COLOURS)):
+        rw = float(ds["representative_tip_displacement_m"].values[a]) * 1e3
+        rv = float(ds["representative_tip_velocity_m_s"].values[a])
+        ax.annotate(str(a), (rw, rv), ha="center", va="center", fontsize=8,
+                    fontweight="bold", color="white",
+                    bbox=dict(boxstyle="circle,pad=0.15", fc="black", ec="none", alpha=0.6))
+    ax.set_xlabel("initial tip displacement $W_0$ (mm)")
+    ax.set_ylabel("initial tip velocity $W'_0$ (m/s)")
+    ax.set_title(f"basins: {ds.sizes['displacement']} x {ds.sizes['velocity']} initial "
+                 f"conditions, {n} attractor{'s' if n != 1 else ''}", fontsize="medium")
+    handles = [Patch(color=colours[a], label=_attractor_label(ds, a))
+               for a in range(min(n, MAX_ATTRACTOR_COLOURS))]
+    if n > MAX_ATTRACTOR_COLOURS:
+        rest = float(ds["fraction"].values[MAX_ATTRACTOR_COLOURS:].sum())
+        handles.append(Patch(color=OTHER_COLOUR, label=f"{n - MAX_ATTRACTOR_COLOURS} "
+                                                      f"more attractors, {100 * rest:.1f} %"))
+    if has_map:
+        _poincare_panel(axes[1], ds, colours, ax)
+    fig.legend(handles=handles, loc="outside lower center",
+               ncol=1 if len(handles) <= 3 else 2, fontsize="small", frameon=False,
+               title="attractor: impact pattern, Poincare period, tip RMS, basin fraction",
+               title_fontsize="small")
+    forcing = json.loads(ds.attrs.get("forcing", "{}"))
+    system = json.loads(ds.attrs.get("system", "{}"))
+    fig.suptitle(f"Basins of attraction: {_system_words(system)} "
+                 f"({ds.attrs.get('preset', '?')} preset)\nF0 = "
+                 f"{forcing.get('amplitude_n', math.nan):g} N, $\\Omega/\\omega_n$ = "
+                 f"{forcing.get('ratio', math.nan):g}; {ds.attrs.get('duration_s', math.nan):g}"
+                 f" s runs, first {100 * ds.attrs.get('drop', math.nan):g} % dropped, "
+                 f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
+    return save_figure_atomic(fig, path)
+
+
+def _poincare_panel(ax, ds, colours, basin_ax) -> None:
+    info = json.loads(ds.attrs.get("poincare_from", "{}"))
+    w = ds["poincare_from_tip_m"].values * 1e3
+    v = ds["poincare_from_tip_velocity_m_s"].values
+    ok = np.isfinite(w) & np.isfinite(v)
+    few = ok.sum() < 200 or info.get("period", 0)
+    ax.scatter(w[ok], v[ok], s=18 if few else 3, color="black", lw=0, zorder=3,
+               label=f"from $W_0$ = {info.get('tip_displacement_m', math.nan) * 1e3:g} mm, "
+                     f"$W'_0$ = {info.get('tip_velocity_m_s', math.nan):g} m/s")
+    for a in range(min(ds.sizes["attractor_id"], MAX_ATTRACTOR_COLOURS)):
+        k = int(ds["attractor_period"].values[a])
+        if not k:
+            continue
+        cells = np.argwhere(ds["attractor"].values == a)
+        if not len(cells):
+            continue
+        i, j = cells[0]
+        cw = ds["signature_tip_m"].values[i, j, :k] * 1e3
+        cv = ds["signature_tip_velocity_m_s"].values[i, j, :k]
+        ax.scatter(cw, cv, s=110, facecolors="none", edgecolors=[colours[a]], lw=1.8,
+                   zorder=2, label=f"attractor {a} (period {k})")
+    basin_ax.plot([info.get("tip_displacement_m", math.nan) * 1e3],
+                  [info.get("tip_velocity_m_s", math.nan)], marker="*", ms=15, color="white",
+                  mec="black", mew=1.0, ls="none", zorder=5)
+    ax.set_xlabel("tip displacement W (mm)")
+    ax.set_ylabel("tip velocity W' (m/s)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small", loc="best")
+    verdict = info.get("verdict", "?")
+    ax.set_title(f"Poincare map at $\\Omega t = 0$ mod $2\\pi$ from the star: {verdict}, "
+                 f"{int(ok.sum())} samples\npattern {info.get('pattern') or '-'}, tip RMS "
+                 f"{info.get('rms_tip_m', math.nan) * 1e3:.3g} mm", fontsize="medium")
+
+
+# --- sensitivity -----------------------------------------------------------------
+
+def plot_sensitivity(ds, path) -> Path:
+    """A sensitivity study (:func:`~boringbar.analysis.sensitivity.sensitivity`),
+    saved to ``path``: one panel per force, tip RMS (mm) against Omega/omega_n,
+    one line per value of the varied parameter; with cuts (``cut_*`` variables,
+    as ``boringbar sensitivity`` writes them) one more panel, the steady tip
+    amplitude (mm) against depth of cut (mm), chatter (the force reaches zero)
+    marked by filled crosses, no chatter by open circles.
+    """
+    from matplotlib import colormaps
+
+    kind = ds.attrs.get("sensitivity", "?")
+    values = [str(v) for v in ds[kind].values]
+    forces = ds["force"].values
+    cuts = "cut_chatter" in ds
+    cmap = colormaps["viridis" if kind in ("friction_number", "restitution") else "tab10"]
+    colours = ([cmap(0.9 * i / max(len(values) - 1, 1)) for i in range(len(values))]
+               if cmap.name == "viridis" else [cmap(i % 10) for i in range(len(values))])
+    n = len(forces) + cuts
+    width = max(5.4 * n + 0.6, 9.5)  # room for the title and the legend under one panel
+    fig = Figure(figsize=(width, 5.4), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, n, squeeze=False).ravel())
+    ratio = ds["ratio"].values
+    for j, force in enumerate(forces):
+        ax = axes[j]
+        for i, v in enumerate(values):
+            ax.plot(ratio, ds["rms_tip_m"].values[i, j] * 1e3, marker="o",
+                    ms=3.5 if ratio.size > 3 else 7, lw=1.2, color=colours[i],
+                    label=_value_label(kind, v), alpha=0.85)
+        ax.set_xlabel(r"frequency ratio $\Omega/\omega_n$")
+        ax.set_ylabel("tip RMS (mm)")
+        _zero_based(ax, ds["rms_tip_m"].values[:, j] * 1e3)
+        ax.set_title(f"harmonic forcing, F0 = {force:g} N", fontsize="medium")
+        ax.grid(alpha=0.3)
+    if cuts:
+        ax = axes[-1]
+        depth = ds["depth"].values * 1e3
+        for i in range(len(values)):
+            amp = ds["cut_amplitude_m"].values[i] * 1e3
+            chat = ds["cut_chatter"].values[i].astype(bool)
+            ax.plot(depth, amp, lw=1.2, color=colours[i])
+            ax.plot(depth[chat], amp[chat], ls="none", marker="X", ms=8, color=colours[i],
+                    mec="black", mew=0.5)
+            ax.plot(depth[~chat], amp[~chat], ls="none", marker="o", ms=6, mfc="none",
+                    mec=colours[i], mew=1.3)
+        ax.plot([], [], ls="none", marker="X", ms=8, color="grey", mec="black", mew=0.5,
+                label="chatter (force reaches zero)")
+        ax.plot([], [], ls="none", marker="o", ms=6, mfc="none", mec="grey", mew=1.3,
+                label="no chatter")
+        ax.legend(fontsize="small", loc="best")
+        ax.set_xlabel("depth of cut b (mm)")
+        ax.set_ylabel("steady tip amplitude (mm)")
+        _zero_based(ax, ds["cut_amplitude_m"].values * 1e3)
+        ax.set_title(f"cuts at {ds.attrs.get('cut_rpm', math.nan):g} rpm", fontsize="medium")
+        ax.grid(alpha=0.3)
+    _legend_below(fig, axes[:len(forces)], ncol=min(len(values), max(1, int(width // 4.5))))
+    systems = json.loads(ds.attrs.get("systems", "{}"))
+    first = next(iter(systems.values()), {})
+    words = _system_words(first)
+    if kind == "restitution":
+        words = re.sub(r", e = .*$", "", words)
+    elif kind == "ball":  # the friction force follows the ball's mass
+        words = re.sub(r" \(\w+\)|, friction [^,]*", "", words)
+    elif kind == "friction_number":
+        words = re.sub(r", friction [^,]*", "", words)
+    what = "initial conditions" if kind == "initial" else kind.replace("_", " ")
+    fig.suptitle(f"Sensitivity to {what}: {words} "
+                 f"({ds.attrs.get('preset', '?')} preset)\n"
+                 f"{ds.attrs.get('duration_s', math.nan):g} s runs, "
+                 f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
+    return save_figure_atomic(fig, path)
+
+
+def _zero_based(ax, values) -> None:
+    """y from 0 to a little above the largest finite value."""
+    top = np.nanmax(values) if np.isfinite(values).any() else 0.0
+    ax.set_ylim(0, 1.1 * top if top > 0 else 1.0)
+
+
+def _value_label(kind: str, value: str) -> str:
+    if kind == "initial":  # 'W0=0.0005m W0'=0.5m/s y0=0m y0'=0m/s'
+        nums = [float(x) for x in re.findall(r"=([-+0-9.eE]+)", value)]
+        if len(nums) == 4:
+            text = f"$W_0$ = {nums[0] * 1e3:g} mm, $W'_0$ = {nums[1]:g} m/s"
+            if nums[2] or nums[3]:
+                text += f", $y_0$ = {nums[2] * 1e3:g} mm, $y'_0$ = {nums[3]:g} m/s"
+            return text
+        return value
+    name = {"ball": "ball", "friction_number": "friction number",
+            "restitution": "e"}.get(kind, kind)
+    return f"{name} = {value}" if kind != "ball" else f"{value} ball"
