@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 import xarray as xr
-from cli_output import json_out
+from cli_output import assert_one_line_error, json_out
 
 from boringbar.cli import main
 
@@ -139,8 +139,4 @@ def test_sensitivity_initial_text(tmp_path, capsys):
 ])
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, name):
     out = tmp_path / "out"
-    assert main(argv + ["--out", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("boringbar: error:") and name in err
-    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
-    assert not out.exists()  # nothing written
+    assert_one_line_error(main, argv + ["--out", str(out)], out, name, capsys)

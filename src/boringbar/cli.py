@@ -248,11 +248,16 @@ def _add_bifurcation(sub) -> None:
                         "published; 10 when another parameter is swept)")
     g.add_argument("--ratio", metavar="R|START:STOP:STEP",
                    help="Omega/omega_n of the host bar (default: 1.0)")
-    g.add_argument("--drop", type=float, default=0.2, metavar="X",
-                   help="fraction of each run dropped before sampling, in [0, 1) (default: 0.2)")
+    _add_drop(g)
     g.add_argument("--no-backward", action="store_true",
                    help="forward sweep only (then no hysteresis ranges)")
     p.set_defaults(func=_cmd_bifurcation)
+
+
+def _add_drop(group) -> None:
+    group.add_argument("--drop", type=float, default=0.2, metavar="X",
+                       help="fraction of each run dropped before sampling, in [0, 1) "
+                            "(default: 0.2)")
 
 
 def _add_basins(sub) -> None:
@@ -272,8 +277,7 @@ def _add_basins(sub) -> None:
                                    "the run from --poincare-from.")
     groups = _add_common(p, many=False, initial=False)
     g = groups["run"]
-    g.add_argument("--drop", type=float, default=0.2, metavar="X",
-                   help="fraction of each run dropped before sampling, in [0, 1) (default: 0.2)")
+    _add_drop(g)
     g.add_argument("--workers", type=int, metavar="N", help="threads (default: every core)")
     g = p.add_argument_group("initial conditions")
     g.add_argument("--displacement-mm", default="-1.5:1.5:30", metavar="LO:HI:COUNT",
