@@ -554,6 +554,9 @@ _BY_MODES = {1: _rk4_n1, 2: _rk4_n2, 3: _rk4_n3}
 def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
             buf=None):
     """Advance ``x`` by ``n_steps`` RK4 steps (see :func:`_rk4` for the arguments)."""
+    if not 1 <= int(p[L.N_MODES]) <= L.NMAX or int(p[L.N_REV]) > _NREV_MAX:
+        raise ValueError(f"kernel: {int(p[L.N_MODES])} modes (1..{L.NMAX}) and "
+                         f"{int(p[L.N_REV])} revolutions (at most {_NREV_MAX}) are supported")
     kernel = _BY_MODES.get(int(p[L.N_MODES]), _rk4_any)
     if buf is None:
         buf = np.zeros((0, 2))
