@@ -135,3 +135,11 @@ def test_published_basin_30_by_30():
     assert ds["attractor"].shape == (30, 30)
     assert float(ds["fraction"].sum()) == pytest.approx(1.0, abs=1e-12)
     json.dumps(basin_summary(ds))
+
+
+def test_sensitivity_refuses_fixing_the_varied_parameter():
+    from boringbar._validate import ParameterError
+    from boringbar.analysis.sensitivity import sensitivity
+
+    with pytest.raises(ParameterError, match="restitution"):
+        sensitivity("restitution", [0.6, 0.7], restitution=0.8, duration=0.01)

@@ -128,6 +128,11 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     if kind != "initial" and bar != "ball":
         raise ParameterError(f"bar = {bar!r}: kind = {kind!r} varies the ball damper; "
                              "it needs bar = 'ball'")
+    varied = {"ball": "ball", "friction_number": "friction_number",
+              "restitution": "restitution"}.get(kind)
+    if varied in overrides:
+        raise ParameterError(f"{varied} = {overrides[varied]!r} cannot be fixed while "
+                             f"kind = {kind!r} varies it")
     values = list(PUBLISHED_VALUES[kind] if values is None else values)
     if not values:
         raise ParameterError(f"values = {values!r} must hold at least one {kind}")
