@@ -587,10 +587,10 @@ def _simulate_text(s: dict, run) -> str:
 
 # --- sweep -----------------------------------------------------------------------
 
-def _cmd_sweep(args) -> int:
-    from boringbar.analysis.sweep import parse_range, sweep, sweep_summary
+def _forces_and_ratios(args):
+    """--force-n and --ratios lists, checked, and --workers checked."""
+    from boringbar.analysis.sweep import parse_range
 
-    cases, bars, gaps = _many_cases(args)
     forces = _numbers(args.force_n, "--force-n")
     for f in forces:
         check_range("--force-n", f, 0, math.inf, hi_open=True, unit="N")
@@ -599,6 +599,14 @@ def _cmd_sweep(args) -> int:
         check_range("--ratios", r, 0, math.inf, lo_open=True, hi_open=True)
     if args.workers is not None:
         check_range("--workers", args.workers, 1, 4096)
+    return forces, ratios
+
+
+def _cmd_sweep(args) -> int:
+    from boringbar.analysis.sweep import sweep, sweep_summary
+
+    cases, bars, gaps = _many_cases(args)
+    forces, ratios = _forces_and_ratios(args)
 
     initial = _initial(args, gaps if "ball" in bars else [])
     progress = _progress(args, "sweep", "runs")
@@ -1218,14 +1226,7 @@ def _cmd_sensitivity(args) -> int:
                              "size from --values)")
     gap = _check_gap(0.5 if args.gap_mm is None else args.gap_mm)
     values = _sensitivity_values(args, bar, gap)
-    forces = _numbers(args.force_n, "--force-n")
-    for f in forces:
-        check_range("--force-n", f, 0, math.inf, hi_open=True, unit="N")
-    ratios = parse_range(args.ratios, "--ratios")
-    for r in ratios:
-        check_range("--ratios", r, 0, math.inf, lo_open=True, hi_open=True)
-    if args.workers is not None:
-        check_range("--workers", args.workers, 1, 4096)
+    forces, ratios = _forces_and_ratios(args)
     cuts = None
     if args.cut_rpm is not None or args.depths_mm is not None:
         rpm = _check_rpm(1200.0 if args.cut_rpm is None else args.cut_rpm, "--cut-rpm")
