@@ -69,6 +69,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bifurcation(sub)
     _add_basins(sub)
     _add_sensitivity(sub)
+    from boringbar.cli_study import add_run
+
+    add_run(sub)
     return parser
 
 

@@ -167,29 +167,14 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
     under the chosen ``criterion``; per case the minimum chatter-free depth;
     and, for the linear bars (solid, TMD, locked ball), the analytic limit.
     """
-    import xarray as xr
-
     if not cases:
         raise ParameterError("lobes needs at least one case")
-    check_choice("method", method, METHODS)
-    check_choice("criterion", criterion, CRITERIA)
-    check_positive("depth_step", depth_step, "m")
-    check_range("max_depth", max_depth, depth_step, 1.0, unit="m")
-    check_range("successive", successive, 1, 100)
     rpm = np.atleast_1d(np.asarray(rpm, dtype=float))
-    for r in rpm:
-        check_positive("rpm", r)
     workers = int(workers or os.cpu_count() or 1)
-    n_max = int(math.floor(max_depth / depth_step + 1e-9))
-    opts = {"kr": kr, "feed": feed, "revolutions": revolutions, "interpolation": interpolation,
-            "start": start, "bounded_fraction": bounded_fraction, "duration": duration,
-            "dt": dt, "depth_step": depth_step, "max_index": n_max, "criterion": criterion,
-            "successive": int(successive), "method": method}
-    # validate the cut description once, before any work
-    Regenerative(depth=depth_step, rpm=float(rpm[0]), kr=kr, feed=feed,
-                 revolutions=revolutions, interpolation=interpolation, start=start,
-                 bounded_fraction=bounded_fraction)
-    opts["seeds"] = _seeds(cases, rpm, kr, depth_step) if method == "search" else {}
+    opts = _options(cases, rpm, method=method, depth_step=depth_step, max_depth=max_depth,
+                    successive=successive, criterion=criterion, kr=kr, feed=feed,
+                    revolutions=revolutions, interpolation=interpolation, start=start,
+                    bounded_fraction=bounded_fraction, duration=duration, dt=dt)
     for nm in sorted({c.system.bar.n_modes for c in cases}):  # warm the JIT once
         c0 = next(c for c in cases if c.system.bar.n_modes == nm)
         _cut(c0, float(rpm[0]), depth_step, dict(opts, duration=2e-4))
@@ -204,7 +189,44 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
             if progress is not None:
                 progress(n_done, len(futs))
     wall = time.perf_counter() - tic
+    return _dataset(cases, rpm, columns, opts, analytic,
+                    {"workers": workers, "wall_time_s": wall})
 
+
+def _options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step: float,
+             max_depth: float, successive: int, criterion: str, kr: float, feed: float,
+             revolutions: int, interpolation: str, start: str, bounded_fraction: float,
+             duration: float, dt: float) -> dict:
+    """Check the lobe options (before any work) and pack what :func:`_column` needs,
+    the search's seeds included."""
+    check_choice("method", method, METHODS)
+    check_choice("criterion", criterion, CRITERIA)
+    check_positive("depth_step", depth_step, "m")
+    check_range("max_depth", max_depth, depth_step, 1.0, unit="m")
+    check_range("successive", successive, 1, 100)
+    for r in rpm:
+        check_positive("rpm", r)
+    n_max = int(math.floor(max_depth / depth_step + 1e-9))
+    opts = {"kr": kr, "feed": feed, "revolutions": revolutions, "interpolation": interpolation,
+            "start": start, "bounded_fraction": bounded_fraction, "duration": duration,
+            "dt": dt, "depth_step": depth_step, "max_index": n_max, "criterion": criterion,
+            "successive": int(successive), "method": method}
+    # validate the cut description once, before any work
+    Regenerative(depth=depth_step, rpm=float(rpm[0]), kr=kr, feed=feed,
+                 revolutions=revolutions, interpolation=interpolation, start=start,
+                 bounded_fraction=bounded_fraction)
+    opts["seeds"] = _seeds(cases, rpm, kr, depth_step) if method == "search" else {}
+    return opts
+
+
+def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, analytic: bool,
+             attrs: dict):
+    """The lobes Dataset from the columns ((case index, rpm index) -> {depth index:
+    result} of :func:`_column`); ``attrs`` go after the configuration's."""
+    import xarray as xr
+
+    depth_step, criterion = opts["depth_step"], opts["criterion"]
+    bounded_fraction, interpolation = opts["bounded_fraction"], opts["interpolation"]
     top = max((max(d) for d in columns.values() if d), default=1)
     depths = depth_step * np.arange(1, top + 1)
     shape = (len(cases), len(rpm), top)
@@ -254,26 +276,25 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
         attrs={
             "title": "boringbar stability lobes (time domain)",
             "boringbar_version": __version__,
-            "method": method,
+            "method": opts["method"],
             "criterion": criterion,
-            "successive": int(successive),
+            "successive": opts["successive"],
             "integrator": "rk4",
             "delay_interpolation": interpolation,
-            "start": start,
-            "kr_pa": kr,
-            "feed_m": feed,
-            "revolutions": revolutions,
-            "duration_s": duration,
-            "dt_s": dt,
+            "start": opts["start"],
+            "kr_pa": opts["kr"],
+            "feed_m": opts["feed"],
+            "revolutions": opts["revolutions"],
+            "duration_s": opts["duration"],
+            "dt_s": opts["dt"],
             "runs": n_runs,
-            "workers": workers,
-            "wall_time_s": wall,
             "preset": ",".join(sorted({c.system.preset for c in cases})),
             "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
+            **attrs,
         },
     )
     if analytic:
-        _add_analytic(ds, cases, rpm, kr)
+        _add_analytic(ds, cases, rpm, opts["kr"])
     return ds
 
 

@@ -96,8 +96,6 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
     threads (default: every core).  ``progress(done, total)`` is called as
     points finish.
     """
-    import xarray as xr
-
     if not cases:
         raise ParameterError("sweep needs at least one case")
     ratios = np.atleast_1d(np.asarray(ratios, dtype=float))
@@ -133,6 +131,22 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
             if progress is not None:
                 progress(done, len(jobs))
     wall = time.perf_counter() - tic
+    return _dataset(cases, forces, ratios, out, pattern, {
+        "integrator": "rk4",
+        "dt_s": dt,
+        "duration_s": duration,
+        "workers": workers,
+        "wall_time_s": wall,
+        "initial": json.dumps((initial or Initial()).__dict__),
+    })
+
+
+def _dataset(cases: list[Case], forces: np.ndarray, ratios: np.ndarray, out: dict,
+             pattern: np.ndarray, attrs: dict):
+    """The sweep Dataset from the per-point arrays ``out`` (name -> (case, force,
+    ratio) array) and ``pattern``; ``attrs`` go after the configuration's."""
+    import xarray as xr
+
     units = {"rms_tip_m": "m", "max_abs_tip_m": "m", "max_abs_rel_disp_m": "m",
              "impacts_per_cycle": "1/period", "elapsed_s": "s", "energy_balance_relative": "1"}
     dims = ("case", "force", "ratio")
@@ -153,14 +167,9 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
         attrs={
             "title": "boringbar frequency sweep",
             "boringbar_version": __version__,
-            "integrator": "rk4",
-            "dt_s": dt,
-            "duration_s": duration,
-            "workers": workers,
-            "wall_time_s": wall,
             "preset": ",".join(sorted({c.system.preset for c in cases})),
             "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
-            "initial": json.dumps((initial or Initial()).__dict__),
+            **attrs,
         },
     )
     return ds

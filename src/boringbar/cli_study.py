@@ -1,0 +1,65 @@
+"""``boringbar run STUDY.toml``: run a study file (see docs/studies.md).
+
+Registered in :mod:`boringbar.cli` by :func:`add_run`; errors are
+ParameterErrors (one line, exit code 2) like every other command.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from boringbar.runner import EXECUTORS
+
+
+def add_run(sub) -> None:
+    p = sub.add_parser(
+        "run", help="run a study file (TOML): many runs of one analysis, resumable",
+        description="Run the study described in STUDY.toml (docs/studies.md): every point of "
+                    "its grid, in chunks, serially, on local processes (default, every core) "
+                    "or on a Dask cluster.  Finished chunks are kept in OUT.partial/ so the "
+                    "same command after an interruption runs only what is missing; OUT (.nc "
+                    "NetCDF or .zarr Zarr) is written atomically when everything is done, "
+                    "with the resolved configuration, package version and run time in its "
+                    "attributes.  A finished OUT of the same study is not recomputed.")
+    p.add_argument("study", metavar="STUDY.toml", help="the study file")
+    p.add_argument("--out", metavar="PATH",
+                   help="result file, .nc or .zarr (default: [study] out, else NAME.nc)")
+    p.add_argument("--executor", choices=EXECUTORS, default=None,
+                   help="serial | processes (default) | dask")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="worker processes (default: every core)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="address of a Dask scheduler (implies --executor dask)")
+    p.add_argument("--dask-local", type=int, metavar="N",
+                   help="start a Dask LocalCluster of N workers (implies --executor dask)")
+    p.add_argument("--chunk-size", type=int, metavar="N",
+                   help="points per task (default: about four tasks per worker, at most 64)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar, no summary line")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object (the run's report) on stdout")
+    p.set_defaults(func=cmd_run)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    import json
+
+    from boringbar.io import jsonable
+    from boringbar.runner import RunReport, run_study
+    from boringbar.study import load_study
+
+    study = load_study(args.study)
+    executor = args.executor
+    if executor is None:
+        executor = "dask" if (args.scheduler or args.dask_local) else "processes"
+    report = RunReport()
+    run_study(study, args.out, executor=executor, workers=args.workers,
+              scheduler=args.scheduler, dask_local=args.dask_local, chunk_size=args.chunk_size,
+              quiet=args.quiet or not sys.stderr.isatty(), report=report)
+    if args.json:
+        print(json.dumps(jsonable({"study": study.name, **report.to_dict()}), allow_nan=False))
+        if not args.quiet:
+            print(f"boringbar run: {report.line()}", file=sys.stderr)
+    elif not args.quiet:
+        print(f"boringbar run: {report.line()}")
+    return 0

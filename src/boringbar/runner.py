@@ -1,0 +1,453 @@
+"""Run a study: chunks of its points on an executor, into a resumable store.
+
+:func:`run_study` expands a :class:`~boringbar.study.Study` into its points
+(:mod:`boringbar.studies`), cuts the points not yet done into chunks and runs
+them serially, on local processes or on a Dask cluster.  Every finished
+chunk is written at once, atomically, to ``OUT.partial/`` (one pickle file
+per chunk, beside a manifest holding the study's configuration hash), so a
+run that is killed, even with SIGKILL, and started again with the same
+study computes only the missing points.  When every point is done the
+Dataset is assembled in point order, written to ``OUT`` atomically (a
+temporary file or directory in the same folder, then a rename) and the
+partial directory is removed.  Each point is a pure function of the study,
+so the result is the same, bit for bit, whichever executor ran which chunk
+and however often the run was interrupted.
+
+Executors: ``serial`` (this process); ``processes`` (default: one worker
+process per core; a worker that dies breaks the pool, which is recreated and
+the unfinished chunks resubmitted); ``dask`` (``scheduler`` address, or
+``dask_local`` = N starts a LocalCluster of N single-threaded worker processes;
+tasks of a worker that dies are rerun by the scheduler).
+
+Fault injection for tests: with ``BORINGBAR_FAULT_KILL_CHUNK=i`` and
+``BORINGBAR_FAULT_MARKER=PATH`` in the environment, the first worker process
+to start chunk ``i`` creates PATH and kills itself (``os._exit``); the serial
+executor never does.  Nothing happens unless both are set.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import math
+import os
+import pickle
+import shutil
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+
+from boringbar import __version__
+from boringbar._validate import ParameterError
+from boringbar.io import _atomic, _fsync_dir
+from boringbar.study import Study, StudyError
+
+log = logging.getLogger("boringbar.runner")
+
+EXECUTORS = ("serial", "processes", "dask")
+MANIFEST = "manifest.json"
+#: How often a broken process pool is recreated without any chunk finishing.
+MAX_POOL_RESTARTS = 3
+
+
+@dataclass
+class RunReport:
+    """What :func:`run_study` did (the CLI prints it as the summary line)."""
+
+    out: str = ""
+    analysis: str = ""
+    points: int = 0
+    computed: int = 0
+    resumed: int = 0
+    skipped: bool = False  #: OUT already held this study's finished result
+    executor: str = ""
+    workers: int = 0
+    wall_time_s: float = 0.0
+    restarts: list = field(default_factory=list)
+
+    @property
+    def rate(self) -> float:
+        return self.computed / self.wall_time_s if self.wall_time_s > 0 else math.nan
+
+    def line(self) -> str:
+        if self.skipped:
+            return (f"{self.analysis}: {self.out} already holds this study's result "
+                    f"({self.points} points); nothing to do")
+        resumed = f", {self.resumed} resumed" if self.resumed else ""
+        return (f"{self.analysis}: {self.points} points ({self.computed} run{resumed}) in "
+                f"{self.wall_time_s:.1f} s, {self.rate:.2f} points/s on {self.executor} "
+                f"x{self.workers} -> {self.out}")
+
+    def to_dict(self) -> dict:
+        return {"out": self.out, "analysis": self.analysis, "points": self.points,
+                "computed": self.computed, "resumed": self.resumed, "skipped": self.skipped,
+                "executor": self.executor, "workers": self.workers,
+                "wall_time_s": self.wall_time_s,
+                "points_per_s": None if math.isnan(self.rate) else self.rate,
+                "restarts": self.restarts}
+
+
+# --- work done in a worker ---------------------------------------------------------
+
+_PLANS: dict[str, tuple] = {}
+
+
+def _planned(study: Study, key: str):
+    """(analysis, plan) of ``study``, made and warmed once per process."""
+    if key not in _PLANS:
+        from boringbar.studies import ANALYSES
+
+        analysis = ANALYSES[study.analysis]
+        plan = analysis.plan(study)
+        analysis.warm(plan.context)
+        _PLANS.clear()
+        _PLANS[key] = (analysis, plan)
+    return _PLANS[key]
+
+
+def _maybe_die(chunk: int) -> None:
+    target, marker = (os.environ.get("BORINGBAR_FAULT_KILL_CHUNK"),
+                      os.environ.get("BORINGBAR_FAULT_MARKER"))
+    if target is None or marker is None or int(target) != chunk:
+        return
+    try:
+        fd = os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+    except FileExistsError:
+        return
+    os.close(fd)
+    os._exit(17)  # a real process death: no cleanup, no exception
+
+
+def compute_chunk(study: Study, key: str, chunk: int, indices: list, remote: bool = True):
+    """The results of the points ``indices`` of ``study`` (what every executor runs)."""
+    if remote:
+        _maybe_die(chunk)
+    analysis, plan = _planned(study, key)
+    return chunk, [analysis.compute(plan.context, plan.points[i]) for i in indices]
+
+
+# --- the store -----------------------------------------------------------------------
+
+def _format(study: Study, out: Path) -> str:
+    fmt = study.format or ("zarr" if out.suffix == ".zarr" else "netcdf")
+    if fmt == "zarr" and out.suffix not in (".zarr", ""):
+        log.info("writing Zarr to %s (format = 'zarr')", out)
+    return fmt
+
+
+def _open(out: Path, fmt: str):
+    import xarray as xr
+
+    if fmt == "zarr":
+        with xr.open_zarr(out, consolidated=None) as ds:
+            return ds.load()
+    return xr.load_dataset(out)
+
+
+def _finished(out: Path, fmt: str, key: str):
+    """The finished result at ``out`` if it is this study's; None if ``out`` does not
+    exist; StudyError if it holds something else."""
+    if not out.exists():
+        return None
+    try:
+        ds = _open(out, fmt)
+    except Exception as exc:  # noqa: BLE001 - any unreadable file is refused the same way
+        raise StudyError(f"{out} exists and is not a readable study result ({exc}); "
+                         "remove it or choose another output") from None
+    if ds.attrs.get("study_config_hash") != key:
+        raise StudyError(f"{out} holds the result of a different study (configuration hash "
+                         f"{str(ds.attrs.get('study_config_hash'))[:12]}, this study "
+                         f"{key[:12]}); remove it or choose another output")
+    return ds
+
+
+class _Partial:
+    """``OUT.partial/``: the manifest and one file per finished chunk."""
+
+    def __init__(self, out: Path, study: Study, key: str, n_points: int):
+        self.dir = out.with_name(out.name + ".partial")
+        self.key = key
+        manifest = self.dir / MANIFEST
+        if manifest.exists():
+            m = json.loads(manifest.read_text())
+            if m.get("config_hash") != key:
+                raise StudyError(
+                    f"{self.dir} holds the unfinished chunks of a different study "
+                    f"(configuration hash {str(m.get('config_hash'))[:12]}, this study "
+                    f"{key[:12]}, from {m.get('source')}); run that study to finish it, or "
+                    "remove the directory to start this one")
+        else:
+            self.dir.mkdir(parents=True, exist_ok=True)
+            from boringbar.io import write_json_atomic
+
+            write_json_atomic({"config_hash": key, "source": study.source,
+                               "analysis": study.analysis, "points": n_points,
+                               "boringbar_version": __version__, "config": study.to_dict()},
+                              manifest)
+
+    def load(self) -> dict:
+        """index -> result of every point already done."""
+        done = {}
+        for f in sorted(self.dir.glob("chunk-*.pkl")):
+            try:
+                with open(f, "rb") as fh:
+                    rec = pickle.load(fh)
+                if rec["config_hash"] != self.key:
+                    continue
+            except Exception:  # noqa: BLE001 - cannot happen with atomic writes; redo it
+                log.warning("ignoring unreadable chunk file %s", f)
+                continue
+            done.update(zip(rec["indices"], rec["results"], strict=True))
+        return done
+
+    def save(self, indices: list, results: list) -> None:
+        path = self.dir / f"chunk-{indices[0]:09d}-{indices[-1]:09d}.pkl"
+        with _atomic(path) as tmp, open(tmp, "wb") as fh:
+            pickle.dump({"config_hash": self.key, "indices": list(indices),
+                         "results": results}, fh, protocol=pickle.HIGHEST_PROTOCOL)
+
+    def remove(self) -> None:
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def _write(ds, out: Path, fmt: str) -> None:
+    if fmt == "netcdf":
+        from boringbar.io import write_netcdf_atomic
+
+        write_netcdf_atomic(ds, out)
+        return
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp"))
+    try:
+        ds.to_zarr(tmp, mode="w", zarr_format=2, consolidated=True)
+        os.replace(tmp, out)  # out does not exist (checked before the run)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    _fsync_dir(out.parent)
+
+
+# --- progress ------------------------------------------------------------------------
+
+class Progress:
+    """A one-line progress bar on stderr: done/total, points per second, time left.
+    Drawn only when ``enabled`` (the CLI: stderr is a terminal and not --quiet)."""
+
+    def __init__(self, total: int, done: int = 0, enabled: bool = True, stream=None,
+                 label: str = "points"):
+        self.total, self.start_done, self.done = total, done, done
+        self.enabled, self.stream, self.label = enabled, stream or sys.stderr, label
+        self.tic = time.perf_counter()
+        self.last = 0.0
+
+    def __call__(self, n: int = 1) -> None:
+        self.done += n
+        now = time.perf_counter()
+        if self.enabled and (now - self.last > 0.2 or self.done == self.total):
+            self.last = now
+            self._draw(now)
+
+    def _draw(self, now: float) -> None:
+        ran = self.done - self.start_done
+        rate = ran / (now - self.tic) if now > self.tic else 0.0
+        left = (self.total - self.done) / rate if rate > 0 else math.nan
+        width = 30
+        fill = int(width * self.done / max(self.total, 1))
+        eta = "--:--" if math.isnan(left) else _clock(left)
+        self.stream.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {self.done}/{self.total} "
+                          f"{self.label}  {rate:.2f}/s  left {eta} ")
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _clock(seconds: float) -> str:
+    s = int(round(seconds))
+    if s >= 3600:
+        return f"{s // 3600}:{s % 3600 // 60:02d}:{s % 60:02d}"
+    return f"{s // 60}:{s % 60:02d}"
+
+
+# --- executors -----------------------------------------------------------------------
+
+def _run_serial(study, key, chunks, on_done, report):
+    for cid, idx in chunks.items():
+        on_done(*compute_chunk(study, key, cid, idx, remote=False))
+
+
+def _mp_context(mp):
+    """fork where there is one: no re-import of the caller's main module (a script
+    without an ``if __name__ == "__main__"`` guard works) and a fast start; the
+    runner holds no threads or locks while it forks."""
+    return mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+
+
+def _run_processes(study, key, chunks, on_done, report, workers):
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
+
+    pending = dict(chunks)
+    restarts = 0
+    while pending:
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)),
+                                   mp_context=_mp_context(mp))
+        progressed = False
+        try:
+            futs = {pool.submit(compute_chunk, study, key, cid, idx): cid
+                    for cid, idx in pending.items()}
+            for fut in as_completed(futs):
+                cid, results = fut.result()
+                on_done(cid, results)
+                pending.pop(cid)
+                progressed = True
+        except BrokenProcessPool:
+            restarts = 0 if progressed else restarts + 1
+            msg = (f"a worker process died; {len(pending)} unfinished chunks are "
+                   "resubmitted to a new pool")
+            log.warning(msg)
+            report.restarts.append(msg)
+            if restarts > MAX_POOL_RESTARTS:
+                raise RuntimeError(f"worker processes died {restarts} times in a row without "
+                                   "finishing a chunk; giving up (the finished chunks are "
+                                   "kept: run the same command again to resume)") from None
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _run_dask(study, key, chunks, on_done, report, scheduler, dask_local):
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise ParameterError("executor = 'dask' needs dask and distributed: "
+                             "pip install 'boringbar[dask]'") from None
+    with contextlib.ExitStack() as stack:
+        if scheduler is None:
+            cluster = stack.enter_context(LocalCluster(
+                n_workers=int(dask_local), threads_per_worker=1, processes=True,
+                dashboard_address=None, silence_logs=logging.ERROR))
+            client = stack.enter_context(Client(cluster))
+        else:
+            client = stack.enter_context(Client(scheduler))
+        report.workers = len(client.scheduler_info().get("workers", {})) or report.workers
+        futs = [client.submit(compute_chunk, study, key, cid, idx, pure=False, retries=2,
+                              key=f"boringbar-chunk-{key[:12]}-{cid}")
+                for cid, idx in chunks.items()]
+        for fut in as_completed(futs):
+            cid, results = fut.result()
+            on_done(cid, results)
+
+
+# --- entry point ---------------------------------------------------------------------
+
+def run_study(study: Study, out=None, *, executor: str = "processes", workers: int | None = None,
+              scheduler: str | None = None, dask_local: int | None = None,
+              chunk_size: int | None = None, quiet: bool = True, progress=None,
+              report: RunReport | None = None):
+    """Run ``study`` into ``out`` (``.nc`` NetCDF, ``.zarr`` Zarr; default the
+    study's own output) and return the Dataset as written.
+
+    ``executor``: "serial", "processes" (``workers`` processes, default every
+    core) or "dask" (``scheduler`` address, or ``dask_local`` workers on a
+    LocalCluster; giving either selects Dask).  ``chunk_size``: points per task
+    (default: about four tasks per worker, at most 64 points).  ``quiet`` False
+    draws a progress bar on stderr; ``progress(done, total)`` is called as chunks
+    finish.  ``report``: a :class:`RunReport` filled in with what was done.
+
+    Resumable: finished chunks are kept in ``OUT.partial/`` until the whole
+    result is written; the same call after an interruption runs only the
+    missing points.  If ``out`` already holds this study's finished result it
+    is returned without running anything; if it holds anything else, or the
+    partial directory belongs to another study, StudyError says what to do.
+    """
+    from boringbar.studies import ANALYSES
+
+    report = RunReport() if report is None else report
+    if scheduler is not None or dask_local is not None:
+        if executor not in ("dask", "processes"):
+            raise ParameterError(f"executor = {executor!r} conflicts with a Dask scheduler "
+                                 "or LocalCluster (use executor 'dask')")
+        if scheduler is not None and dask_local is not None:
+            raise ParameterError("give at most one of scheduler and dask_local")
+        executor = "dask"
+    if executor not in EXECUTORS:
+        raise ParameterError(f"executor = {executor!r} is not one of {', '.join(EXECUTORS)}")
+    if executor == "dask" and scheduler is None and dask_local is None:
+        dask_local = workers or os.cpu_count() or 1
+    for name, v in (("workers", workers), ("dask_local", dask_local), ("chunk_size", chunk_size)):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
+            raise ParameterError(f"{name} = {v!r} must be an integer >= 1")
+    workers = 1 if executor == "serial" else int(dask_local or workers or os.cpu_count() or 1)
+
+    out = study.output_path(out)
+    fmt = _format(study, out)
+    key = study.config_hash()
+    analysis = ANALYSES[study.analysis]
+    report.__dict__.update(out=str(out), analysis=study.analysis, executor=executor,
+                           workers=workers)
+    tic = time.perf_counter()
+    ds = _finished(out, fmt, key)
+    plan = analysis.plan(study)  # validates everything before any work
+    n = len(plan.points)
+    report.points = n
+    if ds is not None:
+        report.skipped = True
+        log.info("%s already holds this study's result; not recomputed", out)
+        return ds
+
+    part = _Partial(out, study, key, n)
+    done = part.load()
+    report.resumed = len(done)
+    missing = [i for i in range(n) if i not in done]
+    if done:
+        log.info("resuming %s: %d of %d points already done", out, len(done), n)
+    if chunk_size is None:
+        chunk_size = max(1, min(64, math.ceil(len(missing) / (4 * workers)))) if missing else 1
+    chunks = {c: missing[s:s + chunk_size]
+              for c, s in enumerate(range(0, len(missing), chunk_size))}
+    bar = Progress(n, len(done), enabled=not quiet)
+
+    def on_done(cid: int, results: list) -> None:
+        idx = chunks[cid]
+        part.save(idx, results)
+        done.update(zip(idx, results, strict=True))
+        report.computed += len(idx)
+        bar(len(idx))
+        if progress is not None:
+            progress(len(done), n)
+
+    try:
+        if chunks:
+            if executor == "serial":
+                _run_serial(study, key, chunks, on_done, report)
+            elif executor == "processes":
+                _run_processes(study, key, chunks, on_done, report, workers)
+            else:
+                _run_dask(study, key, chunks, on_done, report, scheduler, dask_local)
+    finally:
+        bar.close()
+    wall = time.perf_counter() - tic
+    ds = analysis.assemble(study, plan, [done[i] for i in range(n)])
+    ds.attrs.update({
+        "boringbar_version": __version__,
+        "study_name": study.name,
+        "study_source": str(study.source),
+        "study_config": json.dumps(study.to_dict(), sort_keys=True),
+        "study_config_hash": key,
+        "run_finished_utc": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "run_wall_time_s": wall,
+        "run_executor": executor,
+        "run_workers": workers,
+        "run_points": n,
+    })
+    _write(ds, out, fmt)
+    part.remove()
+    report.wall_time_s = wall
+    return _open(out, fmt)

@@ -1,0 +1,665 @@
+"""The analyses a study file can run, as a registry.
+
+A study is a list of independent *points*, each computed by one pure,
+deterministic function, and a Dataset assembled from the point results in
+order.  An analysis is added by subclassing :class:`Analysis` and
+implementing three methods, then registering it in ``ANALYSES``:
+
+- ``plan(study) -> Plan``: the context (systems, options: everything every
+  point needs, picklable) and the ordered list of points;
+- ``compute(context, point) -> result``: one point (picklable; the same
+  point always gives the same result, bit for bit, wherever it runs);
+- ``assemble(study, plan, results) -> xarray.Dataset``: the ordered results
+  into the analysis's Dataset (the same variables as the in-process
+  function returns; wall-clock timings only in the attributes).
+
+``options`` (the keys of ``[analysis]``), ``grid_keys`` (what ``[grid]``
+may vary), ``default_axes`` and ``check`` describe its part of the schema.
+The runner (:mod:`boringbar.runner`) does the rest: chunking, executors,
+resumable stores, progress.
+
+The analyses reuse the per-point code of the in-process functions:
+``sweep``: :func:`boringbar.analysis.sweep._one` per (case, force, ratio);
+``lobes``: :func:`boringbar.analysis.lobes._column` per (case, rpm);
+``bifurcation``: one case's whole forward + backward continuation;
+``basins``: one grid cell's run and signature, grouped at assembly;
+``sensitivity``: one (value, force, ratio) harmonic run or one (value,
+depth) cut.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from boringbar.study import SETTINGS, SYSTEM_KEYS, Setting, Study
+
+
+@dataclass
+class Plan:
+    """What a study computes: ``points`` in result order and the ``context`` they share."""
+
+    context: object
+    points: list
+    extra: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Range:
+    """An option given as a list of numbers or {start, stop, step} (or, with
+    ``count``, {start, stop, count}: count values, both ends included)."""
+
+    default: tuple
+    count: bool = False
+    lo: float | None = None
+    lo_open: bool = False
+
+    def allowed(self) -> str:
+        spec = "{start, stop, count}" if self.count else "a list of numbers or {start, stop, step}"
+        if self.lo is not None:
+            spec += f", every value {'>' if self.lo_open else '>='} {self.lo:g}"
+        return spec
+
+    def check(self, v):
+        if self.count:
+            if not isinstance(v, dict) or set(v) != {"start", "stop", "count"}:
+                raise ValueError(self.allowed())
+            lo, hi, n = v["start"], v["stop"], v["count"]
+            if (not all(isinstance(x, int | float) and not isinstance(x, bool) for x in (lo, hi))
+                    or isinstance(n, bool) or not isinstance(n, int) or n < 1 or hi < lo):
+                raise ValueError("{start, stop, count} with stop >= start and an integer "
+                                 "count >= 1")
+            return {"start": float(lo), "stop": float(hi), "count": int(n)}
+        if isinstance(v, dict):
+            if set(v) != {"start", "stop", "step"}:
+                raise ValueError(self.allowed())
+            try:
+                a, b, s = (float(v[x]) for x in ("start", "stop", "step"))
+            except (TypeError, ValueError):
+                raise ValueError(self.allowed()) from None
+            if not (s > 0 and b >= a):
+                raise ValueError("{start, stop, step} needs step > 0 and stop >= start")
+            n = int(math.floor((b - a) / s + 1e-9)) + 1
+            v = [round(a + i * s, 12) for i in range(n)]
+        if (not isinstance(v, list) or not v
+                or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)):
+            raise ValueError(self.allowed())
+        v = [float(x) for x in v]
+        if self.lo is not None and any((x <= self.lo) if self.lo_open else (x < self.lo)
+                                       for x in v):
+            raise ValueError(self.allowed())
+        return tuple(v)
+
+
+@dataclass(frozen=True)
+class Values:
+    """A list of values of any TOML scalar type (or lists of numbers)."""
+
+    default: object = None
+
+    def allowed(self) -> str:
+        return "a non-empty list of distinct values"
+
+    def check(self, v):
+        if not isinstance(v, list) or not v:
+            raise ValueError(self.allowed())
+        return tuple(tuple(x) if isinstance(x, list) else x for x in v)
+
+
+class Analysis:
+    """The contract of a study analysis (module docstring)."""
+
+    name = ""
+    options: dict = {}
+    grid_keys: tuple = ()
+
+    def default_axes(self, settings: dict, options: dict) -> dict:
+        """Axes (key -> values) used when the study sets neither the key nor its axis."""
+        return {}
+
+    def check(self, study: Study) -> None:
+        """Raise ParameterError if the study cannot run (called by the loader)."""
+        self.plan(study)
+
+    def plan(self, study: Study) -> Plan:
+        raise NotImplementedError
+
+    def compute(self, context, point):
+        raise NotImplementedError
+
+    def assemble(self, study: Study, plan: Plan, results: list):
+        raise NotImplementedError
+
+    def warm(self, context) -> None:
+        """Compile the kernel once in this process (optional)."""
+
+
+# --- shared pieces ----------------------------------------------------------------
+
+#: System keys that matter for each bar kind (the others are ignored for it).
+_RELEVANT = {
+    "solid": ("kind", "n_modes", "z_absorber_mm"),
+    "tmd": ("kind", "n_modes", "z_absorber_mm", "tmd_design", "tmd_mass_kg"),
+    "ball": ("kind", "n_modes", "z_absorber_mm") + tuple(
+        k for k in SYSTEM_KEYS if k not in ("kind", "n_modes", "z_absorber_mm", "tmd_design",
+                                             "tmd_mass_kg")),
+}
+
+
+def make_study_system(preset: str, s: dict):
+    """The System of the flat bar + damper settings ``s`` (units as in the keys)."""
+    from boringbar.system import make_system
+
+    kw = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
+    if s["kind"] == "tmd":
+        kw.update(tmd_mass=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
+    if s["kind"] == "ball":
+        kw.update(gap=s["gap_mm"] * 1e-3, friction=s["friction"], ball=s["ball"],
+                  restitution=s["restitution"], friction_number=s["friction_number"],
+                  friction_force=s["friction_force_n"],
+                  friction_reaction=s["friction_reaction"], locked=s["locked"])
+    return make_system(s["kind"], preset, **kw)
+
+
+def _fmt(v) -> str:
+    if isinstance(v, bool):
+        return "on" if v else "off"
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def study_cases(study: Study) -> tuple[list, dict]:
+    """The cases (:class:`~boringbar.analysis.sweep.Case`) of the system axes of
+    ``study``, in the cartesian order of its grid, with settings that do not
+    apply to a bar kind collapsed (a solid bar has no gap); and per varied key
+    the value of each case (None where it does not apply)."""
+    from boringbar.analysis.sweep import Case
+
+    base = {k: study.value(k) for k in SYSTEM_KEYS}
+    varied = [k for k in study.axes if k in SYSTEM_KEYS]
+    seen, cases, values = set(), [], {k: [] for k in varied}
+    for combo in itertools.product(*(study.axes[k] for k in varied)):
+        s = dict(base, **dict(zip(varied, combo, strict=True)))
+        relevant = _RELEVANT[s["kind"]]
+        key = tuple((k, s[k]) for k in relevant)
+        if key in seen:
+            continue
+        seen.add(key)
+        if s["kind"] == "ball":
+            label = f"ball gap={s['gap_mm']:g}mm friction={'on' if s['friction'] else 'off'}"
+        else:
+            label = s["kind"]
+        extra = [k for k in varied if k not in ("kind", "gap_mm", "friction") and k in relevant]
+        label += "".join(f" {k}={_fmt(s[k])}" for k in extra)
+        system = make_study_system(study.preset, s)
+        ball = s["kind"] == "ball"
+        cases.append(Case(label, system, s["kind"], s["gap_mm"] * 1e-3 if ball else math.nan,
+                          ("on" if s["friction"] else "off") if ball else "n/a"))
+        for k in varied:
+            values[k].append(s[k] if k in relevant else None)
+    return cases, values
+
+
+def _case_coords(values: dict) -> dict:
+    """Coordinates along ``case`` for the varied system keys (kind, gap and friction
+    are the bar, gap and friction coordinates already)."""
+    out = {}
+    for k, vals in values.items():
+        if k in ("kind", "gap_mm", "friction"):
+            continue
+        if all(v is None or (isinstance(v, int | float) and not isinstance(v, bool))
+               for v in vals):
+            out[k] = ("case", np.array([math.nan if v is None else float(v) for v in vals]))
+        else:
+            out[k] = ("case", np.array(["n/a" if v is None else _fmt(v) for v in vals]))
+    return out
+
+
+def _initial(study: Study):
+    from boringbar.simulate import Initial
+
+    return Initial(study.value("tip_displacement_mm") * 1e-3, study.value("tip_velocity_m_s"),
+                   study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s"))
+
+
+def _axis(study: Study, key: str) -> np.ndarray:
+    return np.array(study.axes[key] if key in study.axes else [study.value(key)], dtype=float)
+
+
+def _provenance(study: Study) -> dict:
+    return {"study": study.name, "study_analysis": study.analysis}
+
+
+def _warm_harmonic(cases) -> None:
+    from boringbar.forcing import Harmonic
+    from boringbar.simulate import simulate
+
+    for nm in sorted({c.system.bar.n_modes for c in cases}):
+        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
+        simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6)
+
+
+# --- sweep ------------------------------------------------------------------------
+
+_SWEEP_NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
+                "energy_balance_relative")
+
+
+class Sweep(Analysis):
+    """Frequency sweeps: tip RMS and impact pattern per (case, force, ratio)."""
+
+    name = "sweep"
+    options = {}
+    grid_keys = SYSTEM_KEYS + ("force_n", "ratio")
+
+    def default_axes(self, settings, options):
+        return {"ratio": [round(0.95 + 0.01 * i, 12) for i in range(11)]}
+
+    def plan(self, study):
+        cases, values = study_cases(study)
+        forces, ratios = _axis(study, "force_n"), _axis(study, "ratio")
+        ctx = {"cases": cases, "forces": forces, "ratios": ratios, "initial": _initial(study),
+               "duration": study.value("duration_s"), "dt": study.value("dt_s")}
+        points = list(itertools.product(range(len(cases)), range(len(forces)),
+                                        range(len(ratios))))
+        return Plan(ctx, points, {"values": values})
+
+    def warm(self, ctx):
+        _warm_harmonic(ctx["cases"])
+
+    def compute(self, ctx, point):
+        from boringbar.analysis.sweep import _one
+
+        i, j, k = point
+        res = _one(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
+                   ctx["dt"], ctx["initial"])
+        res.pop("elapsed_s")
+        return res
+
+    def assemble(self, study, plan, results):
+        from boringbar.analysis.sweep import _dataset
+
+        ctx = plan.context
+        shape = (len(ctx["cases"]), len(ctx["forces"]), len(ctx["ratios"]))
+        out = {k: np.array([r[k] for r in results], dtype=float).reshape(shape)
+               for k in _SWEEP_NAMES}
+        pattern = np.array([r["pattern"] for r in results], dtype=object).reshape(shape)
+        ds = _dataset(ctx["cases"], ctx["forces"], ctx["ratios"], out, pattern, {
+            "integrator": study.value("integrator"), "dt_s": ctx["dt"],
+            "duration_s": ctx["duration"], "initial": json.dumps(ctx["initial"].__dict__),
+            **_provenance(study)})
+        return ds.assign_coords(_case_coords(plan.extra["values"]))
+
+
+# --- lobes ------------------------------------------------------------------------
+
+class Lobes(Analysis):
+    """Stability lobes: every verdict of every (case, rpm) column."""
+
+    name = "lobes"
+    options = {
+        "method": Setting("str", "scan", choices=("scan", "search")),
+        "criterion": Setting("str", "zero", choices=("zero", "bounded")),
+        "depth_step_mm": Setting("float", 0.01, 0.0, 1.0, True),
+        "max_depth_mm": Setting("float", 3.0, 0.0, 1000.0, True),
+        "successive": Setting("int", 3, 1, 100),
+        "analytic": Setting("bool", True),
+    }
+    grid_keys = SYSTEM_KEYS + ("rpm",)
+
+    def default_axes(self, settings, options):
+        return {"rpm": [900.0 + 50.0 * i for i in range(15)]}
+
+    def plan(self, study):
+        from boringbar.analysis.lobes import _options
+
+        cases, values = study_cases(study)
+        rpm = _axis(study, "rpm")
+        o = study.options
+        opts = _options(cases, rpm, method=o["method"], depth_step=o["depth_step_mm"] * 1e-3,
+                        max_depth=o["max_depth_mm"] * 1e-3, successive=o["successive"],
+                        criterion=o["criterion"], kr=study.value("kr_mpa") * 1e6,
+                        feed=study.value("feed_mm") * 1e-3,
+                        revolutions=study.value("revolutions"),
+                        interpolation=study.value("interpolation"), start=study.value("start"),
+                        bounded_fraction=study.value("bounded_fraction"),
+                        duration=study.value("duration_s"), dt=study.value("dt_s"))
+        points = list(itertools.product(range(len(cases)), range(len(rpm))))
+        return Plan({"cases": cases, "rpm": rpm, "opts": opts}, points, {"values": values})
+
+    def warm(self, ctx):
+        from boringbar.analysis.lobes import _cut
+
+        for nm in sorted({c.system.bar.n_modes for c in ctx["cases"]}):
+            c0 = next(c for c in ctx["cases"] if c.system.bar.n_modes == nm)
+            _cut(c0, float(ctx["rpm"][0]), ctx["opts"]["depth_step"],
+                 dict(ctx["opts"], duration=2e-4))
+
+    def compute(self, ctx, point):
+        from boringbar.analysis.lobes import _column
+
+        i, j = point
+        return _column(ctx["cases"][i], float(ctx["rpm"][j]), ctx["opts"])
+
+    def assemble(self, study, plan, results):
+        from boringbar.analysis.lobes import _dataset
+
+        ctx = plan.context
+        columns = dict(zip(plan.points, results, strict=True))
+        ds = _dataset(ctx["cases"], ctx["rpm"], columns, ctx["opts"],
+                      study.options["analytic"], _provenance(study))
+        return ds.assign_coords(_case_coords(plan.extra["values"]))
+
+
+# --- bifurcation ------------------------------------------------------------------
+
+class Bifurcation(Analysis):
+    """Bifurcation diagrams: one continuation (forward, then backward) per case."""
+
+    name = "bifurcation"
+    options = {
+        "parameter": Setting("str", "force", choices=("force", "ratio")),
+        "values": Range(tuple(float(f) for f in range(5, 51)), lo=0.0),
+        "backward": Setting("bool", True),
+        "tol": Setting("float", 1e-3, 0.0, 1.0, True),
+        "max_k": Setting("int", 16, 1, 64),
+    }
+    grid_keys = SYSTEM_KEYS
+
+    def plan(self, study):
+        from boringbar.forcing import Harmonic
+
+        cases, values = study_cases(study)
+        o = study.options
+        v = np.asarray(o["values"], dtype=float)
+        if o["parameter"] == "ratio" and np.any(v <= 0):
+            from boringbar._validate import ParameterError
+
+            raise ParameterError(f"analysis.values = {v.tolist()} must be > 0 for parameter "
+                                 "'ratio'")
+        ctx = {"cases": cases, "values": v, "parameter": o["parameter"],
+               "base": Harmonic(study.value("force_n"), study.value("ratio")),
+               "duration": study.value("duration_s"), "dt": study.value("dt_s"),
+               "drop": study.value("drop"), "initial": _initial(study),
+               "backward": o["backward"], "tol": o["tol"], "max_k": o["max_k"]}
+        return Plan(ctx, list(range(len(cases))), {"values": values})
+
+    def warm(self, ctx):
+        _warm_harmonic(ctx["cases"])
+
+    def compute(self, ctx, i):
+        from boringbar.analysis.bifurcation import bifurcation
+
+        ds = bifurcation(ctx["cases"][i].system, ctx["parameter"], ctx["values"],
+                         base_forcing=ctx["base"], duration=ctx["duration"], dt=ctx["dt"],
+                         drop=ctx["drop"], initial=ctx["initial"], backward=ctx["backward"],
+                         tol=ctx["tol"], max_k=ctx["max_k"])
+        return {"data": {k: ds[k].values for k in ds.data_vars if k != "elapsed_s"},
+                "attrs": {k: ds[k].attrs for k in ds.data_vars},
+                "config": json.loads(ds.attrs["config"]), "ds_attrs": dict(ds.attrs)}
+
+    def assemble(self, study, plan, results):
+        import xarray as xr
+
+        ctx = plan.context
+        n_sample = max(r["data"]["tip_displacement"].shape[-1] for r in results)
+        data = {}
+        for k, a0 in results[0]["data"].items():
+            arrs = []
+            for r in results:
+                a = r["data"][k]
+                if a.ndim == 3 and a.shape[-1] < n_sample:
+                    pad = np.full(a.shape[:2] + (n_sample - a.shape[-1],), np.nan)
+                    a = np.concatenate([a, pad], axis=-1)
+                arrs.append(a)
+            dims = ("case", "direction", "value") + (("sample",) if a0.ndim == 3 else ())
+            data[k] = (dims, np.stack(arrs), results[0]["attrs"][k])
+        first = results[0]["ds_attrs"]
+        cfg = {k: v for k, v in results[0]["config"].items()
+               if k not in ("systems", "wall_time_s")}
+        cases = ctx["cases"]
+        ds = xr.Dataset(
+            data,
+            coords={
+                "case": [c.label for c in cases],
+                "direction": list(first.get("directions", ["forward", "backward"]
+                                            if ctx["backward"] else ["forward"])),
+                "value": ("value", ctx["values"], {"long_name": first["parameter"],
+                                                   "units": first["units"]}),
+                "bar": ("case", [c.bar for c in cases]),
+                "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+                "friction": ("case", [c.friction for c in cases]),
+            },
+            attrs={
+                **{k: first[k] for k in ("title", "boringbar_version", "parameter", "units",
+                                         "dt_s", "duration_s", "drop", "classification",
+                                         "continuation")},
+                "integrator": study.value("integrator"),
+                "config": json.dumps(cfg),
+                "systems": json.dumps({c.label: r["config"]["systems"]
+                                       for c, r in zip(cases, results, strict=True)}),
+                **_provenance(study),
+            },
+        )
+        return ds.assign_coords(_case_coords(plan.extra["values"]))
+
+
+# --- basins -----------------------------------------------------------------------
+
+class Basins(Analysis):
+    """Basins of attraction of one operating point: one point per grid cell."""
+
+    name = "basins"
+    options = {
+        "displacement_mm": Range({"start": -1.5, "stop": 1.5, "count": 30}, count=True),
+        "velocity_m_s": Range({"start": -1.5, "stop": 1.5, "count": 30}, count=True),
+    }
+    grid_keys = ()
+
+    def plan(self, study):
+        from boringbar.analysis.basins import BasinTolerance, _grid
+        from boringbar.forcing import Harmonic
+        from boringbar.simulate import Initial
+
+        cases, _ = study_cases(study)
+        system = cases[0].system
+        d, v = study.options["displacement_mm"], study.options["velocity_m_s"]
+        w0 = _grid("displacement", (d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]))
+        v0 = _grid("velocity", (v["start"], v["stop"], v["count"]))
+        bp, bv = study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s")
+        initials = [Initial(float(w), float(v), bp, bv) for w in w0 for v in v0]
+        forcing = Harmonic(study.value("force_n"), study.value("ratio"))
+        ctx = {"system": system, "forcing": forcing, "duration": study.value("duration_s"),
+               "dt": study.value("dt_s"), "drop": study.value("drop"),
+               "tol": BasinTolerance(), "initials": initials, "w0": w0, "v0": v0}
+        return Plan(ctx, list(range(len(initials))))
+
+    def warm(self, ctx):
+        from boringbar.simulate import simulate
+
+        simulate(ctx["system"], ctx["forcing"], duration=2e-5, dt=1e-6)
+
+    def compute(self, ctx, i):
+        from boringbar.analysis.basins import _run
+
+        return _run(ctx["system"], ctx["forcing"], ctx["initials"][i], ctx["duration"],
+                    ctx["dt"], ctx["drop"], ctx["tol"])
+
+    def assemble(self, study, plan, results):
+        from dataclasses import asdict
+
+        import xarray as xr
+
+        from boringbar.analysis.basins import _dataset, group
+
+        c = plan.context
+        omega = c["forcing"].omega(c["system"].reference_frequency)
+        label, leaders = group(results, omega, c["tol"])
+        return _dataset(xr, c["system"], c["forcing"], c["w0"], c["v0"], results, label,
+                        leaders, c["initials"], {
+                            "dt_s": c["dt"], "duration_s": c["duration"], "drop": c["drop"],
+                            "ball_position_m": c["initials"][0].ball_position,
+                            "ball_velocity_m_s": c["initials"][0].ball_velocity,
+                            "tolerances": json.dumps(asdict(c["tol"])),
+                            **_provenance(study)})
+
+
+# --- sensitivity ------------------------------------------------------------------
+
+class Sensitivity(Analysis):
+    """One parameter varied (``kind``): harmonic runs per (value, force, ratio), or
+    (``cuts = true``) full-length cuts per (value, depth) at ``[forcing] rpm``."""
+
+    name = "sensitivity"
+    options = {
+        "kind": Setting("str", "restitution",
+                        choices=("ball", "friction_number", "restitution", "initial")),
+        "values": Values(None),
+        "cuts": Setting("bool", False),
+        "depths_mm": Range((0.05, 0.06, 0.07, 0.08, 0.09, 0.1), lo=0.0, lo_open=True),
+    }
+    grid_keys = ("force_n", "ratio")
+
+    def plan(self, study):
+        from boringbar.analysis.sensitivity import (
+            PUBLISHED_VALUES,
+            Cuts,
+            _cases,
+            _initial,
+            _label,
+        )
+        from boringbar.study import StudyError
+
+        o = study.options
+        kind = o["kind"]
+        values = list(PUBLISHED_VALUES[kind] if o["values"] is None else o["values"])
+        s = {k: study.value(k) for k in SYSTEM_KEYS}
+        if kind != "initial" and s["kind"] != "ball":
+            raise StudyError(f"{study.source}: key 'analysis.kind' = {kind!r}: varies the ball "
+                             "damper; it needs bar.kind = 'ball'")
+        varied = {"ball": "ball", "friction_number": "friction_number",
+                  "restitution": "restitution"}.get(kind)
+        if varied and study.value(varied) != SETTINGS["damper"][varied].default:
+            raise StudyError(f"{study.source}: key 'damper.{varied}' = "
+                             f"{study.value(varied)!r}: cannot be fixed while analysis.kind "
+                             f"= {kind!r} varies it")
+        overrides = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
+        if s["kind"] == "ball":
+            overrides.update(ball=s["ball"], restitution=s["restitution"],
+                             friction_number=s["friction_number"],
+                             friction_force=s["friction_force_n"],
+                             friction_reaction=s["friction_reaction"], locked=s["locked"])
+        if s["kind"] == "tmd":
+            overrides.update(tmd_mass=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
+        if varied:
+            overrides.pop(varied, None)
+        if kind == "initial":
+            values = [tuple(v) if isinstance(v, list | tuple) else v for v in values]
+            initials = [_initial(v) for v in values]
+            cases = _cases(kind, [None], s["kind"], study.preset, s["gap_mm"] * 1e-3,
+                           s["friction"], overrides) * len(values)
+        else:
+            initials = [_initial_or_none(study)] * len(values)
+            cases = _cases(kind, values, s["kind"], study.preset, s["gap_mm"] * 1e-3,
+                           s["friction"], overrides)
+        labels = [_label(kind, v) for v in values]
+        if len(set(labels)) != len(labels):
+            raise StudyError(f"{study.source}: key 'analysis.values' = {values!r}: the values "
+                             "must be distinct")
+        ctx = {"kind": kind, "values": values, "labels": labels, "cases": cases,
+               "initials": initials, "dt": study.value("dt_s"),
+               "duration": study.value("duration_s")}
+        if o["cuts"]:
+            opts = {"kr": study.value("kr_mpa") * 1e6, "feed": study.value("feed_mm") * 1e-3,
+                    "revolutions": study.value("revolutions"),
+                    "interpolation": study.value("interpolation"),
+                    "start": study.value("start"),
+                    "bounded_fraction": study.value("bounded_fraction")}
+            ctx["cuts"] = Cuts(study.value("rpm"),
+                               tuple(round(d * 1e-3, 15) for d in o["depths_mm"]),
+                               study.value("duration_s"), opts)
+            points = list(itertools.product(range(len(values)), range(len(o["depths_mm"]))))
+        else:
+            ctx["forces"], ctx["ratios"] = _axis(study, "force_n"), _axis(study, "ratio")
+            points = list(itertools.product(range(len(values)), range(len(ctx["forces"])),
+                                            range(len(ctx["ratios"]))))
+        return Plan(ctx, points)
+
+    def warm(self, ctx):
+        _warm_harmonic(ctx["cases"][:1])
+
+    def compute(self, ctx, point):
+        if "cuts" in ctx:
+            from boringbar.analysis.sensitivity import _cut
+
+            i, j = point
+            return _cut(ctx["cases"][i], ctx["initials"][i], ctx["cuts"],
+                        ctx["cuts"].depths[j], ctx["dt"])
+        from boringbar.analysis.sweep import _one
+
+        i, j, k = point
+        res = _one(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
+                   ctx["dt"], ctx["initials"][i])
+        res.pop("elapsed_s")
+        return res
+
+    def assemble(self, study, plan, results):
+        import xarray as xr
+
+        from boringbar.analysis.sweep import _dataset
+
+        c = plan.context
+        kind, values, labels = c["kind"], c["values"], c["labels"]
+        coord = labels if kind == "initial" else list(values)
+        attrs = {"integrator": study.value("integrator"), "dt_s": c["dt"],
+                 **_provenance(study)}
+        if "cuts" in c:
+            cuts = c["cuts"]
+            shape = (len(values), len(cuts.depths))
+            units = {"amplitude_m": "m", "max_force_n": "N", "first_zero_time_s": "s"}
+            data = {k: (("case", "depth"), np.array([r[k] for r in results]).reshape(shape),
+                        {"units": units[k]} if k in units else {}) for k in results[0]}
+            from boringbar import __version__
+
+            ds = xr.Dataset(
+                data, coords={"depth": ("depth", np.asarray(cuts.depths), {"units": "m"})},
+                attrs={"title": "boringbar sensitivity (cuts)",
+                       "boringbar_version": __version__, "rpm": cuts.rpm,
+                       "duration_s": cuts.duration,
+                       "forcing_options": json.dumps(cuts.options),
+                       "systems": json.dumps({x.label: x.system.to_dict()
+                                              for x in c["cases"]}), **attrs})
+            ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
+        else:
+            shape = (len(values), len(c["forces"]), len(c["ratios"]))
+            out = {k: np.array([r[k] for r in results], dtype=float).reshape(shape)
+                   for k in _SWEEP_NAMES}
+            pattern = np.array([r["pattern"] for r in results], dtype=object).reshape(shape)
+            attrs["duration_s"] = c["duration"]
+            if kind != "initial":
+                attrs["initial"] = json.dumps(c["initials"][0].__dict__
+                                              if c["initials"][0] else {})
+            ds = _dataset(c["cases"], c["forces"], c["ratios"], out, pattern, attrs)
+            ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
+            if kind == "initial":
+                for name in ("tip_displacement", "tip_velocity", "ball_position",
+                             "ball_velocity"):
+                    ds = ds.assign_coords({name: ("case", [getattr(i, name)
+                                                           for i in c["initials"]])})
+        ds = ds.swap_dims({"case": kind})
+        if kind == "initial":
+            ds = ds.drop_vars("case")
+        ds.attrs.update({"sensitivity": kind, "values": json.dumps([str(v) for v in values])})
+        return ds
+
+
+def _initial_or_none(study: Study):
+    ini = _initial(study)
+    return None if all(v == 0.0 for v in ini.__dict__.values()) else ini
+
+
+ANALYSES: dict[str, Analysis] = {a.name: a for a in (Sweep(), Lobes(), Bifurcation(),
+                                                      Basins(), Sensitivity())}

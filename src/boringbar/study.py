@@ -1,0 +1,374 @@
+"""Study files: a whole study (many runs of one analysis) described in TOML.
+
+A study file has the sections ``[study]`` (which analysis, name, preset,
+output), ``[bar]`` and ``[damper]`` (the keys of
+:func:`~boringbar.system.make_system`, units in the names), ``[forcing]``
+(harmonic force and ratio, or a cut: rpm, depth, Kr, feed ...), ``[run]``
+(duration, step, integrator, initial conditions), ``[analysis]`` (the
+options of the chosen analysis) and ``[grid]``: any gridable setting given
+as a list or as ``{start, stop, step}`` becomes an axis, and the study is
+the cartesian product of its axes.  Defaults are the published study
+(MODEL.md section 6).  Every key is checked before any work starts: an
+unknown key, a wrong type or a value out of range raises :class:`StudyError`
+with the file, the key, the value and what is allowed.
+
+The schema (``SETTINGS`` and each analysis's ``OPTIONS``) is the single
+source of truth; docs/studies.md describes it for users.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from boringbar._validate import ParameterError
+
+SECTIONS = ("study", "bar", "damper", "forcing", "run", "analysis", "grid")
+FORMATS = ("netcdf", "zarr")
+
+
+class StudyError(ParameterError):
+    """A study file (or dict) that cannot be run; the message is one line:
+    ``FILE: key 'a.b' = VALUE: what is allowed``."""
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One key of the schema: its type, default and allowed values.
+
+    ``kind``: "float", "int", "bool", "str" or "onoff" (true/false or
+    "on"/"off", stored as a bool).  ``lo``/``hi``: closed range for numbers
+    (``lo_open``: lo excluded).  ``choices``: allowed strings.  ``default``
+    None: unset (the library's own default applies).
+    """
+
+    kind: str
+    default: object = None
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    choices: tuple = ()
+    doc: str = ""
+
+    def allowed(self) -> str:
+        if self.choices:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        if self.kind == "bool":
+            return "true or false"
+        if self.kind == "onoff":
+            return "true/false or 'on'/'off'"
+        if self.kind == "str":
+            return "a string"
+        what = "an integer" if self.kind == "int" else "a number"
+        if self.lo is not None or self.hi is not None:
+            lo = "-inf" if self.lo is None else f"{self.lo:g}"
+            hi = "inf" if self.hi is None else f"{self.hi:g}"
+            what += f" in {'(' if self.lo_open else '['}{lo}, {hi}{')' if self.hi is None else ']'}"
+        return what
+
+    def check(self, value):
+        """The value as stored, or raise ValueError (the caller adds file and key)."""
+        k = self.kind
+        if k == "bool":
+            if not isinstance(value, bool):
+                raise ValueError
+            return value
+        if k == "onoff":
+            if isinstance(value, bool):
+                return value
+            if value in ("on", "off"):
+                return value == "on"
+            raise ValueError
+        if k == "str":
+            if not isinstance(value, str) or (self.choices and value not in self.choices):
+                raise ValueError
+            return value
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError
+        if k == "int":
+            if isinstance(value, float) and not value.is_integer():
+                raise ValueError
+            value = int(value)
+        else:
+            value = float(value)
+        if not math.isfinite(value):
+            raise ValueError
+        if self.lo is not None and (value <= self.lo if self.lo_open else value < self.lo):
+            raise ValueError
+        if self.hi is not None and value > self.hi:
+            raise ValueError
+        return value
+
+
+def _f(default=None, lo=None, hi=None, lo_open=False, doc=""):
+    return Setting("float", default, lo, hi, lo_open, (), doc)
+
+
+def _pos(default=None, doc=""):
+    return Setting("float", default, 0.0, None, True, (), doc)
+
+
+#: Every scalar setting, by section.  Flat key names are unique across the
+#: sections, so a [grid] axis is named by its key alone.
+SETTINGS: dict[str, dict[str, Setting]] = {
+    "study": {
+        "analysis": Setting("str", None, doc="the analysis (see ANALYSES)"),
+        "name": Setting("str", None, doc="a label; default: the file's stem"),
+        "preset": Setting("str", "physical", choices=("physical", "paper")),
+        "out": Setting("str", None, doc="result path (.nc or .zarr); default NAME.nc"),
+        "format": Setting("str", None, choices=FORMATS, doc="default: from the suffix of out"),
+    },
+    "bar": {
+        "kind": Setting("str", "ball", choices=("solid", "ball", "tmd")),
+        "n_modes": Setting("int", None, 1, 8, doc="default: 2 (physical), 1 (paper)"),
+        "tmd_design": Setting("str", None, choices=("published", "den-hartog", "sims")),
+        "tmd_mass_kg": _pos(0.39),
+        "z_absorber_mm": _pos(96.0),
+    },
+    "damper": {
+        "gap_mm": _pos(0.5),
+        "friction": Setting("onoff", True),
+        "ball": Setting("str", "carbide", choices=("carbide", "steel")),
+        "restitution": _f(0.7, 0.0, 1.0),
+        "friction_number": _f(None, 0.0, 100.0, doc="published rolling-resistance number"),
+        "friction_force_n": _f(None, 0.0, None, doc="Coulomb force, overrides the number"),
+        "friction_reaction": Setting("str", None, choices=("reciprocal", "printed")),
+        "locked": Setting("bool", False),
+    },
+    "forcing": {
+        "force_n": _f(10.0, 0.0, None),
+        "ratio": _pos(1.0, doc="Omega / omega_n of the host bar"),
+        "rpm": _pos(1200.0),
+        "depth_mm": _f(0.05, 0.0, None),
+        "kr_mpa": _pos(850.0),
+        "feed_mm": _pos(0.1),
+        "revolutions": Setting("int", 3, 1, 50),
+        "interpolation": Setting("str", "cubic", choices=("cubic", "linear")),
+        "start": Setting("str", "rest", choices=("rest", "static")),
+        "bounded_fraction": _pos(0.1),
+    },
+    "run": {
+        "duration_s": _pos(2.0),
+        "dt_s": _f(1e-6, 0.0, 1e-3, lo_open=True),
+        "integrator": Setting("str", "rk4", choices=("rk4",)),
+        "drop": _f(0.2, 0.0, 0.99),
+        "tip_displacement_mm": _f(0.0),
+        "tip_velocity_m_s": _f(0.0),
+        "ball_position_mm": _f(0.0),
+        "ball_velocity_m_s": _f(0.0),
+    },
+}
+
+#: The section of every flat key.
+SECTION_OF = {k: s for s, keys in SETTINGS.items() for k in keys if s != "study"}
+#: Keys that describe the System (one case per distinct combination).
+SYSTEM_KEYS = tuple(SETTINGS["bar"]) + tuple(SETTINGS["damper"])
+
+
+def _integrators() -> tuple[str, ...]:
+    """The integrators a study may name.  Only the published "rk4" until the
+    analyses take an ``integrator`` argument (a study must never name one that
+    would be silently ignored)."""
+    return ("rk4",)
+
+
+@dataclass(frozen=True)
+class Study:
+    """A resolved study: every setting with its value (defaults filled in).
+
+    ``settings``: section -> key -> value for bar, damper, forcing, run;
+    ``options``: the analysis's options; ``axes``: grid key -> tuple of values,
+    in the file's order; ``given``: the flat keys the file set (in a section
+    or the grid), so an analysis can tell a default from a choice.
+    """
+
+    analysis: str
+    name: str
+    preset: str
+    settings: dict
+    options: dict
+    axes: dict
+    source: str = "<dict>"
+    out: str | None = None
+    format: str | None = None
+    given: frozenset = field(default_factory=frozenset)
+
+    def value(self, key: str):
+        """The fixed value of a flat setting (its [section] value or default)."""
+        return self.settings[SECTION_OF[key]][key]
+
+    def to_dict(self) -> dict:
+        """The full resolved configuration (JSON-able); :func:`study_from_dict`
+        of it gives the same study.  ``out`` and ``format`` are where the result
+        goes, not what it is, and are left out."""
+        return {
+            "study": {"analysis": self.analysis, "name": self.name, "preset": self.preset},
+            **{s: {k: v for k, v in self.settings[s].items()
+                   if v is not None and k not in self.axes}
+               for s in ("bar", "damper", "forcing", "run")},
+            "analysis": _jsonable(self.options),
+            "grid": {k: list(v) for k, v in self.axes.items()},
+        }
+
+    def config_hash(self) -> str:
+        """SHA-256 of the resolved configuration: what a result store is keyed by."""
+        text = json.dumps(self.to_dict(), sort_keys=True, allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def output_path(self, out=None) -> Path:
+        """``out``, or the file's ``[study] out`` (relative to the file), or NAME.nc."""
+        if out is not None:
+            return Path(out)
+        if self.out is not None:
+            p = Path(self.out)
+            if not p.is_absolute() and self.source not in ("<dict>", ""):
+                p = Path(self.source).parent / p
+            return p
+        return Path(f"{self.name}.nc")
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    return obj
+
+
+def load_study(path) -> Study:
+    """Read and validate the TOML study file ``path``."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except OSError as exc:
+        raise StudyError(f"{path}: cannot read the study file: {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError(f"{path}: not valid TOML: {exc}") from None
+    return study_from_dict(data, str(path))
+
+
+def study_from_dict(d: dict, source: str = "<dict>") -> Study:
+    """Validate the study description ``d`` (the parsed TOML) into a :class:`Study`."""
+    from boringbar.studies import ANALYSES
+
+    def fail(key: str, value, allowed: str):
+        shown = json.dumps(value, default=str) if not isinstance(value, str) else repr(value)
+        raise StudyError(f"{source}: key '{key}' = {shown}: {allowed}")
+
+    if not isinstance(d, dict):
+        raise StudyError(f"{source}: a study is a table of sections, not {type(d).__name__}")
+    for s in d:
+        if s not in SECTIONS:
+            fail(s, d[s], "unknown section; allowed: " + ", ".join(f"[{x}]" for x in SECTIONS))
+        if not isinstance(d[s], dict):
+            fail(s, d[s], f"[{s}] must be a table")
+
+    resolved: dict[str, dict] = {}
+    given: set[str] = set()
+    for s in ("study", "bar", "damper", "forcing", "run"):
+        table = d.get(s, {})
+        out = {}
+        for k, v in table.items():
+            if k not in SETTINGS[s]:
+                fail(f"{s}.{k}", v, "unknown key; allowed: " + ", ".join(SETTINGS[s]))
+        for k, spec in SETTINGS[s].items():
+            if k in table:
+                v = table[k]
+                if k == "integrator":
+                    spec = Setting("str", "rk4", choices=_integrators())
+                try:
+                    out[k] = spec.check(v)
+                except ValueError:
+                    fail(f"{s}.{k}", v, spec.allowed())
+                given.add(k)
+            else:
+                out[k] = spec.default
+        resolved[s] = out
+
+    study = resolved.pop("study")
+    if study["analysis"] is None:
+        fail("study.analysis", None, "required; one of " + ", ".join(map(repr, ANALYSES)))
+    if study["analysis"] not in ANALYSES:
+        fail("study.analysis", study["analysis"], "one of " + ", ".join(map(repr, ANALYSES)))
+    analysis = ANALYSES[study["analysis"]]
+    name = study["name"] or (Path(source).stem if source not in ("<dict>", "") else "study")
+
+    # analysis options
+    table = d.get("analysis", {})
+    options = {}
+    for k, v in table.items():
+        if k not in analysis.options:
+            allowed = ", ".join(analysis.options) or "none"
+            fail(f"analysis.{k}", v, f"unknown key for a {analysis.name} study; allowed: "
+                 f"{allowed}")
+    for k, spec in analysis.options.items():
+        if k in table:
+            try:
+                options[k] = spec.check(table[k])
+            except ValueError as exc:
+                fail(f"analysis.{k}", table[k], str(exc) or spec.allowed())
+        else:
+            options[k] = spec.default
+
+    # grid axes
+    axes = {}
+    for k, v in d.get("grid", {}).items():
+        if k not in SECTION_OF:
+            fail(f"grid.{k}", v, "unknown setting; a grid axis is one of the [bar], [damper], "
+                 "[forcing] or [run] keys")
+        if k not in analysis.grid_keys:
+            fail(f"grid.{k}", v, f"cannot be an axis of a {analysis.name} study; allowed axes: "
+                 + ", ".join(analysis.grid_keys))
+        if k in d.get(SECTION_OF[k], {}):
+            fail(f"grid.{k}", v, f"also set in [{SECTION_OF[k]}]; give it in one place")
+        values = _axis_values(v, SETTINGS[SECTION_OF[k]][k], f"grid.{k}", fail)
+        axes[k] = tuple(values)
+        given.add(k)
+    for k, values in analysis.default_axes(resolved, options).items():
+        if k not in given:
+            axes[k] = tuple(values)
+
+    result = Study(analysis=analysis.name, name=name, preset=study["preset"],
+                   settings=resolved, options=options, axes=axes, source=source,
+                   out=study["out"], format=study["format"], given=frozenset(given))
+    try:
+        analysis.check(result)
+    except StudyError:
+        raise
+    except ParameterError as exc:
+        raise StudyError(f"{source}: {exc}") from None
+    return result
+
+
+def _axis_values(v, spec: Setting, key: str, fail) -> list:
+    """A grid axis: a non-empty list of distinct allowed values, or
+    {start, stop, step} (numbers; stop included when on the grid)."""
+    if isinstance(v, dict):
+        if spec.kind not in ("float", "int") or set(v) != {"start", "stop", "step"}:
+            fail(key, v, "a list of values, or {start, stop, step} for a number")
+        try:
+            start, stop, step = (float(v[x]) for x in ("start", "stop", "step"))
+        except (TypeError, ValueError):
+            fail(key, v, "start, stop and step must be numbers")
+        if not (step > 0 and stop >= start):
+            fail(key, v, "{start, stop, step} needs step > 0 and stop >= start")
+        n = int(math.floor((stop - start) / step + 1e-9)) + 1
+        if n > 1_000_000:
+            fail(key, v, "at most 1000000 values on one axis")
+        v = [round(start + i * step, 12) for i in range(n)]
+    if not isinstance(v, list) or not v:
+        fail(key, v, "a non-empty list of values, or {start, stop, step}")
+    out = []
+    for x in v:
+        try:
+            out.append(spec.check(x))
+        except ValueError:
+            fail(key, x, f"each value must be {spec.allowed()}")
+    if len(set(out)) != len(out):
+        fail(key, v, "the values of an axis must be distinct")
+    return out
