@@ -1,0 +1,167 @@
+"""Running studies: executors give identical arrays, interrupted runs resume to the
+same file, dead workers are survived, finished studies are not recomputed.
+
+Studies are tiny (0.02-0.05 s simulated) so the file stays fast; the Dask tests
+start a real LocalCluster of worker processes.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from boringbar.runner import RunReport, run_study
+from boringbar.study import StudyError, study_from_dict
+
+SMALL = {"study": {"analysis": "sweep", "name": "small"},
+         "run": {"duration_s": 0.02},
+         "grid": {"gap_mm": [0.5, 0.1], "friction": ["off", "on"], "force_n": [10.0, 20.0],
+                  "ratio": [0.99, 1.01]}}
+PROVENANCE = ("run_finished_utc", "run_wall_time_s", "run_executor", "run_workers")
+
+
+def assert_same_data(a: xr.Dataset, b: xr.Dataset) -> None:
+    """Every data variable and coordinate bit for bit (NaN where NaN)."""
+    assert set(a.data_vars) == set(b.data_vars) and set(a.coords) == set(b.coords)
+    for k in list(a.data_vars) + list(a.coords):
+        x, y = a[k].values, b[k].values
+        assert x.dtype == y.dtype and x.shape == y.shape, k
+        if x.dtype.kind == "f":
+            assert np.array_equal(x.view(np.uint64), y.view(np.uint64)), k
+        else:
+            assert np.array_equal(x, y), k
+    strip = lambda attrs: {k: v for k, v in attrs.items() if k not in PROVENANCE}  # noqa: E731
+    assert strip(a.attrs) == strip(b.attrs)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ref") / "small.nc"
+    ds = run_study(study_from_dict(SMALL), out, executor="serial")
+    return out, ds
+
+
+def test_result_file_is_self_explaining(reference):
+    out, ds = reference
+    assert "elapsed_s" not in ds.data_vars  # timings are provenance, not data
+    cfg = json.loads(ds.attrs["study_config"])
+    assert cfg["grid"]["gap_mm"] == [0.5, 0.1] and cfg["run"]["duration_s"] == 0.02
+    assert study_from_dict(cfg).config_hash() == ds.attrs["study_config_hash"]
+    assert ds.attrs["boringbar_version"] and ds.attrs["run_finished_utc"].endswith("Z")
+    assert dict(ds.sizes) == {"case": 4, "force": 2, "ratio": 2}
+    assert not out.with_name("small.nc.partial").exists()
+    assert not list(out.parent.glob(".*.tmp"))
+
+
+def test_processes_give_identical_arrays(reference, tmp_path):
+    ds = run_study(study_from_dict(SMALL), tmp_path / "p.nc", executor="processes", workers=2,
+                   chunk_size=3)
+    assert_same_data(ds, reference[1])
+
+
+def test_dask_local_cluster_gives_identical_arrays(reference, tmp_path):
+    pytest.importorskip("distributed")
+    report = RunReport()
+    ds = run_study(study_from_dict(SMALL), tmp_path / "d.nc", dask_local=2, report=report)
+    assert report.executor == "dask" and report.computed == 16
+    assert_same_data(ds, reference[1])
+
+
+def test_zarr_store_equals_netcdf(reference, tmp_path):
+    pytest.importorskip("zarr")
+    ds = run_study(study_from_dict(SMALL), tmp_path / "z.zarr", executor="serial")
+    assert (tmp_path / "z.zarr").is_dir()
+    assert_same_data(ds, reference[1])
+
+
+def test_finished_study_is_not_recomputed(reference, tmp_path, monkeypatch):
+    out = tmp_path / "f.nc"
+    out.write_bytes(reference[0].read_bytes())
+    import boringbar.runner as runner
+
+    def boom(*a, **k):
+        raise AssertionError("recomputed")
+
+    monkeypatch.setattr(runner, "compute_chunk", boom)
+    report = RunReport()
+    ds = run_study(study_from_dict(SMALL), out, executor="serial", report=report)
+    assert report.skipped and report.computed == 0
+    assert_same_data(ds, reference[1])
+
+
+def test_other_study_at_out_is_refused(reference, tmp_path):
+    out = tmp_path / "f.nc"
+    out.write_bytes(reference[0].read_bytes())
+    other = dict(SMALL, run={"duration_s": 0.03})
+    with pytest.raises(StudyError, match="different study"):
+        run_study(study_from_dict(other), out, executor="serial")
+    part = tmp_path / "g.nc.partial"
+    part.mkdir()
+    (part / "manifest.json").write_text(json.dumps({"config_hash": "0" * 64}))
+    with pytest.raises(StudyError, match="unfinished chunks of a different study"):
+        run_study(study_from_dict(SMALL), tmp_path / "g.nc", executor="serial")
+
+
+@pytest.mark.parametrize("executor", ["processes", "dask"])
+def test_a_worker_that_dies_is_survived(reference, tmp_path, monkeypatch, executor):
+    if executor == "dask":
+        pytest.importorskip("distributed")
+    marker = tmp_path / "killed"
+    monkeypatch.setenv("BORINGBAR_FAULT_KILL_CHUNK", "2")
+    monkeypatch.setenv("BORINGBAR_FAULT_MARKER", str(marker))
+    kw = {"dask_local": 2} if executor == "dask" else {"executor": "processes", "workers": 2}
+    report = RunReport()
+    ds = run_study(study_from_dict(SMALL), tmp_path / "w.nc", chunk_size=2, report=report, **kw)
+    assert marker.exists()  # a worker process really died on chunk 2
+    if executor == "processes":
+        assert report.restarts
+    assert_same_data(ds, reference[1])
+
+
+def _study_file(tmp_path) -> Path:
+    path = tmp_path / "kill.toml"
+    path.write_text(
+        '[study]\nanalysis = "sweep"\nname = "kill"\n[run]\nduration_s = 0.05\n'
+        '[grid]\ngap_mm = [0.5, 0.1]\nfriction = ["off", "on"]\n'
+        'ratio = {start = 0.96, stop = 1.04, step = 0.01}\n')
+    return path
+
+
+def test_sigkill_then_resume_equals_uninterrupted_run(tmp_path):
+    study = _study_file(tmp_path)
+    out = tmp_path / "kill.nc"
+    part = tmp_path / "kill.nc.partial"
+    cmd = [sys.executable, "-m", "boringbar", "run", str(study), "--out", str(out),
+           "--executor", "processes", "--workers", "2", "--chunk-size", "1", "--quiet"]
+    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 120
+    while len(list(part.glob("chunk-*.pkl"))) < 4:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "no chunk finished in 120 s"
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    assert not out.exists()  # nothing finished-looking where the result belongs
+    n_done = len(list(part.glob("chunk-*.pkl")))
+    assert 4 <= n_done < 36
+
+    rerun = subprocess.run(cmd[:-1] + ["--json"], capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    report = json.loads(rerun.stdout)
+    assert report["resumed"] >= n_done and report["computed"] == 36 - report["resumed"]
+    assert out.exists() and not part.exists()
+
+    from boringbar.study import load_study
+
+    fresh = run_study(load_study(study), tmp_path / "fresh.nc", executor="serial")
+    with xr.open_dataset(out) as resumed:
+        assert_same_data(resumed.load(), fresh)

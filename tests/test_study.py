@@ -1,0 +1,109 @@
+"""Study files: the schema, its defaults and its errors (before any work)."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from boringbar.cli import main
+from boringbar.studies import ANALYSES
+from boringbar.study import StudyError, load_study, study_from_dict
+
+EXAMPLES = sorted((Path(__file__).parent.parent / "examples" / "studies").glob("*.toml"))
+
+
+def _write(tmp_path, text: str) -> Path:
+    p = tmp_path / "study.toml"
+    p.write_text(text)
+    return p
+
+
+def test_defaults_are_the_published_study():
+    s = study_from_dict({"study": {"analysis": "sweep"}})
+    assert s.preset == "physical" and s.value("gap_mm") == 0.5 and s.value("friction") is True
+    assert s.value("force_n") == 10.0 and s.value("dt_s") == 1e-6 and s.value("duration_s") == 2
+    assert s.axes["ratio"][0] == 0.95 and s.axes["ratio"][-1] == 1.05 and len(s.axes["ratio"]) == 11
+    lobes = study_from_dict({"study": {"analysis": "lobes"}})
+    assert lobes.axes["rpm"] == tuple(900.0 + 50 * i for i in range(15))
+    assert lobes.options["depth_step_mm"] == 0.01 and lobes.options["successive"] == 3
+    bif = study_from_dict({"study": {"analysis": "bifurcation"}})
+    assert bif.options["values"] == tuple(float(v) for v in range(5, 51))
+
+
+def test_grid_forms_and_case_collapse():
+    s = study_from_dict({"study": {"analysis": "sweep"},
+                         "grid": {"kind": ["solid", "tmd", "ball"], "gap_mm": [0.5, 0.1],
+                                  "friction": ["off", "on"],
+                                  "ratio": {"start": 0.98, "stop": 1.02, "step": 0.02}}})
+    assert s.axes["ratio"] == (0.98, 1.0, 1.02)
+    plan = ANALYSES["sweep"].plan(s)
+    labels = [c.label for c in plan.context["cases"]]
+    # a solid or TMD bar has no gap or friction: one case each, as published_cases
+    assert labels == ["solid", "tmd", "ball gap=0.5mm friction=off", "ball gap=0.5mm friction=on",
+                      "ball gap=0.1mm friction=off", "ball gap=0.1mm friction=on"]
+    assert len(plan.points) == 6 * 1 * 3
+
+
+def test_to_dict_round_trips_and_is_json():
+    s = study_from_dict({"study": {"analysis": "basins", "name": "b"},
+                         "analysis": {"displacement_mm": {"start": -1, "stop": 1, "count": 3}},
+                         "forcing": {"ratio": 1.01}})
+    d = json.loads(json.dumps(s.to_dict()))
+    again = study_from_dict(d)
+    assert again.config_hash() == s.config_hash() and again.to_dict() == s.to_dict()
+
+
+@pytest.mark.parametrize("text, key, value, allowed", [
+    ('[study]\nanalysis = "sweep"\n[damper]\ngapmm = 0.5\n', "damper.gapmm", "0.5",
+     "unknown key"),
+    ('[study]\nanalysis = "sweep"\n[damper]\ngap_mm = -0.5\n', "damper.gap_mm", "-0.5",
+     "a number in (0, inf)"),
+    ('[study]\nanalysis = "sweep"\n[damper]\ngap_mm = "wide"\n', "damper.gap_mm", "'wide'",
+     "a number"),
+    ('[study]\nanalysis = "sweep"\n[damper]\nball = "glass"\n', "damper.ball", "'glass'",
+     "one of 'carbide', 'steel'"),
+    ('[study]\nanalysis = "sweep"\n[bar]\nn_modes = 2.5\n', "bar.n_modes", "2.5", "an integer"),
+    ('[study]\nanalysis = "swoop"\n', "study.analysis", "'swoop'", "'sweep'"),
+    ('[study]\nanalysis = "sweep"\n[gird]\ngap_mm = [1]\n', "gird", "", "unknown section"),
+    ('[study]\nanalysis = "lobes"\n[grid]\nforce_n = [10, 20]\n', "grid.force_n", "[10, 20]",
+     "allowed axes"),
+    ('[study]\nanalysis = "sweep"\n[grid]\ngap_mm = [0.5, 0.5]\n', "grid.gap_mm", "",
+     "distinct"),
+    ('[study]\nanalysis = "sweep"\n[grid]\nratio = {start = 1, stop = 0.9, step = 0.1}\n',
+     "grid.ratio", "", "stop >= start"),
+    ('[study]\nanalysis = "lobes"\n[analysis]\nmethod = "guess"\n', "analysis.method",
+     "'guess'", "one of 'scan', 'search'"),
+    ('[study]\nanalysis = "sweep"\n[analysis]\nmethod = "scan"\n', "analysis.method", "",
+     "unknown key for a sweep study"),
+    ('[study]\nanalysis = "sweep"\n[run]\nintegrator = "euler"\n', "run.integrator",
+     "'euler'", "one of"),
+])
+def test_invalid_files_name_file_key_value_and_what_is_allowed(tmp_path, text, key, value,
+                                                                allowed):
+    path = _write(tmp_path, text)
+    with pytest.raises(StudyError) as err:
+        load_study(path)
+    msg = str(err.value)
+    assert msg.startswith(f"{path}: key '{key}'"), msg
+    assert value in msg and allowed in msg and "\n" not in msg
+
+
+def test_cli_rejects_a_bad_file_before_any_work(tmp_path, capsys):
+    path = _write(tmp_path, '[study]\nanalysis = "sweep"\nout = "r.nc"\n[forcing]\nforce_n = -1\n')
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("boringbar: error:") and "forcing.force_n" in err and "-1" in err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not (tmp_path / "r.nc").exists() and not (tmp_path / "r.nc.partial").exists()
+
+
+def test_not_toml(tmp_path):
+    path = _write(tmp_path, "[study\n")
+    with pytest.raises(StudyError, match="not valid TOML"):
+        load_study(path)
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+def test_examples_load_and_plan(path):
+    s = load_study(path)
+    assert ANALYSES[s.analysis].plan(s).points
