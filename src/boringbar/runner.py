@@ -412,6 +412,11 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
         chunk_size = max(1, min(64, math.ceil(len(missing) / (4 * workers)))) if missing else 1
     chunks = {c: missing[s:s + chunk_size]
               for c, s in enumerate(range(0, len(missing), chunk_size))}
+    if chunks and executor != "dask":
+        # plan and compile once here: forked workers inherit both
+        analysis.warm(plan.context)
+        _PLANS.clear()
+        _PLANS[key] = (analysis, plan)
     bar = Progress(n, len(done), enabled=not quiet)
 
     def on_done(cid: int, results: list) -> None:

@@ -137,6 +137,30 @@ class Analysis:
     def warm(self, context) -> None:
         """Compile the kernel once in this process (optional)."""
 
+    def point_functions(self) -> list:
+        """The library functions ``compute`` calls: an integrator other than rk4 is
+        offered only when every one of them takes an ``integrator`` argument."""
+        return []
+
+    def integrators(self) -> tuple:
+        from boringbar import simulate
+
+        fns = self.point_functions()
+        if fns and all(_takes(f, "integrator") for f in fns):
+            return tuple(getattr(simulate, "INTEGRATORS", ("rk4",)))
+        return ("rk4",)
+
+
+def _takes(fn, name: str) -> bool:
+    import inspect
+
+    return name in inspect.signature(fn).parameters
+
+
+def _integrator(fn, ctx) -> dict:
+    """``{"integrator": ...}`` for ``fn`` if it takes one (else the study's is rk4)."""
+    return {"integrator": ctx["integrator"]} if _takes(fn, "integrator") else {}
+
 
 # --- shared pieces ----------------------------------------------------------------
 
@@ -262,7 +286,8 @@ class Sweep(Analysis):
         cases, values = study_cases(study)
         forces, ratios = _axis(study, "force_n"), _axis(study, "ratio")
         ctx = {"cases": cases, "forces": forces, "ratios": ratios, "initial": _initial(study),
-               "duration": study.value("duration_s"), "dt": study.value("dt_s")}
+               "duration": study.value("duration_s"), "dt": study.value("dt_s"),
+               "integrator": study.value("integrator")}
         points = list(itertools.product(range(len(cases)), range(len(forces)),
                                         range(len(ratios))))
         return Plan(ctx, points, {"values": values})
@@ -275,9 +300,14 @@ class Sweep(Analysis):
 
         i, j, k = point
         res = _one(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
-                   ctx["dt"], ctx["initial"])
+                   ctx["dt"], ctx["initial"], **_integrator(_one, ctx))
         res.pop("elapsed_s")
         return res
+
+    def point_functions(self):
+        from boringbar.analysis.sweep import _one
+
+        return [_one]
 
     def assemble(self, study, plan, results):
         from boringbar.analysis.sweep import _dataset
@@ -326,7 +356,8 @@ class Lobes(Analysis):
                         revolutions=study.value("revolutions"),
                         interpolation=study.value("interpolation"), start=study.value("start"),
                         bounded_fraction=study.value("bounded_fraction"),
-                        duration=study.value("duration_s"), dt=study.value("dt_s"))
+                        duration=study.value("duration_s"), dt=study.value("dt_s"),
+                        **_integrator(_options, {"integrator": study.value("integrator")}))
         points = list(itertools.product(range(len(cases)), range(len(rpm))))
         return Plan({"cases": cases, "rpm": rpm, "opts": opts}, points, {"values": values})
 
@@ -343,6 +374,11 @@ class Lobes(Analysis):
 
         i, j = point
         return _column(ctx["cases"][i], float(ctx["rpm"][j]), ctx["opts"])
+
+    def point_functions(self):
+        from boringbar.analysis.lobes import _options
+
+        return [_options]
 
     def assemble(self, study, plan, results):
         from boringbar.analysis.lobes import _dataset
@@ -384,7 +420,8 @@ class Bifurcation(Analysis):
                "base": Harmonic(study.value("force_n"), study.value("ratio")),
                "duration": study.value("duration_s"), "dt": study.value("dt_s"),
                "drop": study.value("drop"), "initial": _initial(study),
-               "backward": o["backward"], "tol": o["tol"], "max_k": o["max_k"]}
+               "backward": o["backward"], "tol": o["tol"], "max_k": o["max_k"],
+               "integrator": study.value("integrator")}
         return Plan(ctx, list(range(len(cases))), {"values": values})
 
     def warm(self, ctx):
@@ -396,10 +433,16 @@ class Bifurcation(Analysis):
         ds = bifurcation(ctx["cases"][i].system, ctx["parameter"], ctx["values"],
                          base_forcing=ctx["base"], duration=ctx["duration"], dt=ctx["dt"],
                          drop=ctx["drop"], initial=ctx["initial"], backward=ctx["backward"],
-                         tol=ctx["tol"], max_k=ctx["max_k"])
+                         tol=ctx["tol"], max_k=ctx["max_k"],
+                         **_integrator(bifurcation, ctx))
         return {"data": {k: ds[k].values for k in ds.data_vars if k != "elapsed_s"},
                 "attrs": {k: ds[k].attrs for k in ds.data_vars},
                 "config": json.loads(ds.attrs["config"]), "ds_attrs": dict(ds.attrs)}
+
+    def point_functions(self):
+        from boringbar.analysis.bifurcation import bifurcation
+
+        return [bifurcation]
 
     def assemble(self, study, plan, results):
         import xarray as xr
@@ -474,7 +517,8 @@ class Basins(Analysis):
         forcing = Harmonic(study.value("force_n"), study.value("ratio"))
         ctx = {"system": system, "forcing": forcing, "duration": study.value("duration_s"),
                "dt": study.value("dt_s"), "drop": study.value("drop"),
-               "tol": BasinTolerance(), "initials": initials, "w0": w0, "v0": v0}
+               "tol": BasinTolerance(), "initials": initials, "w0": w0, "v0": v0,
+               "integrator": study.value("integrator")}
         return Plan(ctx, list(range(len(initials))))
 
     def warm(self, ctx):
@@ -486,7 +530,12 @@ class Basins(Analysis):
         from boringbar.analysis.basins import _run
 
         return _run(ctx["system"], ctx["forcing"], ctx["initials"][i], ctx["duration"],
-                    ctx["dt"], ctx["drop"], ctx["tol"])
+                    ctx["dt"], ctx["drop"], ctx["tol"], **_integrator(_run, ctx))
+
+    def point_functions(self):
+        from boringbar.analysis.basins import _run
+
+        return [_run]
 
     def assemble(self, study, plan, results):
         from dataclasses import asdict
@@ -571,7 +620,7 @@ class Sensitivity(Analysis):
                              "must be distinct")
         ctx = {"kind": kind, "values": values, "labels": labels, "cases": cases,
                "initials": initials, "dt": study.value("dt_s"),
-               "duration": study.value("duration_s")}
+               "duration": study.value("duration_s"), "integrator": study.value("integrator")}
         if o["cuts"]:
             opts = {"kr": study.value("kr_mpa") * 1e6, "feed": study.value("feed_mm") * 1e-3,
                     "revolutions": study.value("revolutions"),
@@ -597,14 +646,20 @@ class Sensitivity(Analysis):
 
             i, j = point
             return _cut(ctx["cases"][i], ctx["initials"][i], ctx["cuts"],
-                        ctx["cuts"].depths[j], ctx["dt"])
+                        ctx["cuts"].depths[j], ctx["dt"], **_integrator(_cut, ctx))
         from boringbar.analysis.sweep import _one
 
         i, j, k = point
         res = _one(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
-                   ctx["dt"], ctx["initials"][i])
+                   ctx["dt"], ctx["initials"][i], **_integrator(_one, ctx))
         res.pop("elapsed_s")
         return res
+
+    def point_functions(self):
+        from boringbar.analysis.sensitivity import _cut
+        from boringbar.analysis.sweep import _one
+
+        return [_one, _cut]
 
     def assemble(self, study, plan, results):
         import xarray as xr
