@@ -51,16 +51,25 @@ class Friction:
     equals reaction) or ``printed``, the **bar reaction as printed**
     (+psi_d F_b: the bar is pushed the same way as the ball; breaks momentum
     and energy balance, which the results then report).
+
+    ``static_ratio`` = F_s / F_c >= 1, the static limit of true stick-slip
+    (MODEL.md section 5): the ball sticks while the force needed to carry it
+    with the bar is at most F_s.  Only the exact integrator models it; the
+    published RK4 scheme has the sgn() law, whose chatter is stick-slip with
+    F_s = F_c, and refuses any other ratio.
     """
 
     kind: str = "rolling"
     value: float = PUBLISHED_FRICTION_NUMBER * 1e-3
     reaction: str = "reciprocal"
+    static_ratio: float = 1.0
 
     def __post_init__(self):
         check_choice("friction kind", self.kind, FRICTION_KINDS)
         check_choice("friction reaction", self.reaction, REACTIONS)
         check_nonnegative(f"friction value ({self.kind})", self.value)
+        check_range("friction static_ratio (F_s / F_c)", self.static_ratio, 1.0, math.inf,
+                    hi_open=True)
 
     def force(self, mass: float, radius: float) -> float:
         """F_c (N) for a ball of ``mass`` (kg) and ``radius`` (m)."""
@@ -75,7 +84,8 @@ class Friction:
         return self.value * mass * GRAVITY / radius  # paper-number: value taken as metres
 
     def to_dict(self) -> dict:
-        return {"kind": self.kind, "value": self.value, "reaction": self.reaction}
+        return {"kind": self.kind, "value": self.value, "reaction": self.reaction,
+                "static_ratio": self.static_ratio}
 
 
 NO_FRICTION = Friction("none", 0.0)

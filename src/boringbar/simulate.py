@@ -16,11 +16,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_positive, check_range
+from boringbar._validate import ParameterError, check_choice, check_positive, check_range
 from boringbar.analysis.patterns import Pattern, classify
 from boringbar.dampers import ImpactDamper, TunedMassDamper
 from boringbar.forcing import Harmonic, Regenerative
 from boringbar.kernels import layout as L
+from boringbar.kernels.exact import run_exact
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.system import System
 
@@ -30,6 +31,8 @@ IMPACT_THRESHOLD = 1e-3
 STICK_MIN_PERIODS = 0.01
 #: Smallest number of steps per period of the forcing and of the highest mode.
 MIN_STEPS_PER_PERIOD = 20
+#: The time integrators: the published fixed-step RK4, or exact and event-driven.
+INTEGRATORS = ("rk4", "exact")
 
 
 @dataclass(frozen=True)
@@ -78,6 +81,7 @@ class Run:
     elapsed_s: float
     energy: dict = field(default_factory=dict)
     thresholds: dict = field(default_factory=dict)
+    integrator: str = "rk4"
 
     @property
     def rms_tip(self) -> float:
@@ -90,7 +94,7 @@ class Run:
             "system": self.system.to_dict(),
             "forcing": self.forcing.to_dict(),
             "omega_rad_s": self.omega,
-            "integrator": "rk4",
+            "integrator": self.integrator,
             "delay_interpolation": getattr(self.forcing, "interpolation", None),
             "dt_s": self.dt,
             "t0_s": self.t0,
@@ -107,7 +111,7 @@ class Run:
             "bar": sys.kind,
             "preset": sys.preset,
             "readings": list(sys.readings),
-            "integrator": "rk4",
+            "integrator": self.integrator,
             "natural_frequency_hz": sys.reference_frequency / (2 * math.pi),
             "forcing_frequency_hz": self.omega / (2 * math.pi),
             "ratio": self.omega / sys.reference_frequency,
@@ -207,6 +211,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
         p[L.HALF_GAP] = d.gap / 2
         p[L.RESTITUTION] = d.restitution
         p[L.FRICTION] = d.friction_force
+        p[L.STATIC_FRICTION] = d.friction_force * d.friction.static_ratio
         p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
         p[L.M_EFF] = meff
         ref = omega if omega > 0 else bar.natural_frequency
@@ -273,8 +278,9 @@ def check_step(system: System, omega: float, dt: float) -> None:
 
 def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: float = 1e-6,
              initial: Initial | State | None = None, record_every: int = 0,
-             steady_fraction: float = 0.8, strobe: bool = False) -> Run:
-    """Integrate ``system`` under ``forcing`` with the published RK4 scheme.
+             steady_fraction: float = 0.8, strobe: bool = False,
+             integrator: str = "rk4") -> Run:
+    """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
 
     ``duration`` (s) and ``dt`` (s) as published by default (2 s, 1e-6 s);
     RMS and patterns use the last ``steady_fraction`` of the record.
@@ -282,12 +288,29 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     to continue it (time, hence forcing phase, runs on).  ``record_every`` N
     keeps every N-th step's state; ``strobe`` keeps Poincare samples at
     Omega t = 0 mod 2 pi.
+
+    ``integrator``: ``"rk4"`` (the published scheme, MODEL.md section 5) or
+    ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
+    harmonic forcing only; ``dt`` is then only the step of the recorded history
+    and of the duration and steady-window rounding, and the steady RMS is the
+    exact integral over the window).  True stick-slip (a static friction limit,
+    ``Friction(static_ratio > 1)``) needs ``"exact"``.
     """
+    check_choice("integrator", integrator, INTEGRATORS)
     if not isinstance(system, System):
         raise ParameterError(f"system = {system!r} must be a System (see make_system)")
     if not isinstance(forcing, Harmonic | Regenerative):
         raise ParameterError(f"forcing = {forcing!r} must be a Harmonic or a Regenerative")
     cutting = isinstance(forcing, Regenerative)
+    if integrator == "exact" and cutting:
+        raise ParameterError("integrator = 'exact' supports harmonic forcing only: regenerative "
+                             "cutting (delayed chip thickness) needs integrator = 'rk4'")
+    d = system.damper
+    if (integrator == "rk4" and isinstance(d, ImpactDamper)
+            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
+        raise ParameterError(f"friction static_ratio = {d.friction.static_ratio!r}: the rk4 "
+                             "integrator has only the sgn() law (static_ratio = 1); use "
+                             "integrator = 'exact' for true stick-slip")
     check_positive("duration", duration, "s")
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     check_range("record_every", record_every, 0, math.inf, hi_open=True)
@@ -357,8 +380,16 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     met[L.FIRST_ZERO_T] = -1.0
 
     tic = time.perf_counter()
-    run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb, met,
-            buf)
+    if integrator == "exact":
+        run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt, record_every * dt, rec,
+                  imp, stick, stb, met)
+        met[L.STEPS_DONE] = n_steps
+        if met[L.EXACT_STATUS] != 0:
+            raise RuntimeError(f"exact integrator stopped at an impasse (status "
+                               f"{int(met[L.EXACT_STATUS])} after {int(met[L.N_EVENTS])} events)")
+    else:
+        run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb,
+                met, buf)
     elapsed = time.perf_counter() - tic
     n_steps = int(met[L.STEPS_DONE])  # fewer if a cut stopped at its first h = 0
 
@@ -391,6 +422,7 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
         "amplitude_m": float(max(0.0, (met[L.STEADY_MAX_W] - met[L.STEADY_MIN_W]) / 2))
         if n_st else nan,
         "static_deflection_m": w_static,
+        "events": int(met[L.N_EVENTS]),
     }
     e0 = stored_energy(system, x_start)
     e1 = stored_energy(system, x)
@@ -425,5 +457,5 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
         strobe=stb[:int(met[L.N_STROBE])].copy(),
         history=rec[:int(met[L.N_REC])].copy() if record_every else None,
         initial=State(x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
-        elapsed_s=elapsed, energy=energy, thresholds=thresholds,
+        elapsed_s=elapsed, energy=energy, thresholds=thresholds, integrator=integrator,
     )

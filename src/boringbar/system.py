@@ -93,7 +93,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
                 friction_force: float | None = None, friction_reaction: str | None = None,
                 locked: bool = False, tmd_mass: float = PUBLISHED_TMD_MASS,
                 z_absorber: float = ABSORBER_POSITION, tmd_design: str | None = None,
-                modal: ModalModel | None = None) -> System:
+                modal: ModalModel | None = None, static_ratio: float = 1.0) -> System:
     """Build one of the three bars under a preset, with explicit overrides.
 
     ``bar``: "solid", "ball" (ball damper; ``locked`` fixes the ball) or
@@ -102,7 +102,8 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
     ``friction_force`` (N) overrides the number when friction is on.
     ``tmd_design``: "den-hartog" (physical default), "published" (paper
     default) or "sims" (Sims' equal-real-trough tuning, for chatter).  ``modal`` replaces
-    the FE model (e.g. :meth:`ModalModel.from_tap_test`).
+    the FE model (e.g. :meth:`ModalModel.from_tap_test`).  ``static_ratio``:
+    F_s / F_c of true stick-slip (exact integrator only; see :class:`Friction`).
     """
     check_choice("bar", bar, BAR_KINDS)
     check_choice("preset", preset, PRESETS)
@@ -141,15 +142,15 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
     if not friction:
         fr = NO_FRICTION
     elif friction_force is not None:
-        fr = Friction("force", friction_force, reaction)
+        fr = Friction("force", friction_force, reaction, static_ratio)
     else:
         number = PUBLISHED_FRICTION_NUMBER if friction_number is None else friction_number
         check_range("friction_number", number, 0.0, 100.0)
         if paper:
-            fr = Friction("paper-number", number, reaction)
+            fr = Friction("paper-number", number, reaction, static_ratio)
             readings.append("paper-friction-force")
         else:
-            fr = Friction("rolling", number * 1e-3, reaction)
+            fr = Friction("rolling", number * 1e-3, reaction, static_ratio)
     if fr.kind != "none" and reaction == "printed":
         readings.append("printed-bar-reaction")
     damper = ImpactDamper.ball(ball, gap=gap, restitution=restitution, friction=fr,

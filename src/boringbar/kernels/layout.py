@@ -44,6 +44,7 @@ _SCALARS = (
     "INTERP",  # 0 linear, 1 cubic Hermite for the delayed W
     "STOP_AT_ZERO",  # 1: stop the run at the first h = 0
     "HIST_W0",  # W of the surface before the cut began (0: from rest)
+    "STATIC_FRICTION",  # F_s >= F_c, static limit of true stick-slip (exact integrator) (N)
 )
 for _i, _name in enumerate(_SCALARS):
     globals()[_name] = _i
@@ -88,6 +89,8 @@ _METRICS = (
     "SUM_AUX2",  # steady sum of aux^2 (ball y or absorber stroke)
     "STEADY_MAX_W",
     "STEADY_MIN_W",
+    "N_EVENTS",  # exact integrator: events handled (impacts, switches, releases)
+    "EXACT_STATUS",  # exact integrator: 0 done, 1 event cap reached, 2 stalled (zero-length events)
 )
 for _i, _name in enumerate(_METRICS):
     globals()[_name] = _i

@@ -1,0 +1,999 @@
+"""The exact event-driven integrator (MODEL.md sections 2 and 5).
+
+Between events the motion is linear with a constant friction force and the
+harmonic input F0 sin(Omega t), so it has a closed form.  The ball case has
+three regimes, each a linear system X' = A_r X + B_r f(t) + c_r F_b of the
+bar coordinates X = [u, u'] (the ball is treated separately):
+
+- FREE (the ball slides or flies): the modes decouple, A is block diagonal,
+  F_b = -F_c sgn(y') is constant on the segment, and the ball's absolute
+  motion is a parabola, u_d'' = F_b / m;
+- STICK (off the walls, y' = 0): the ball is carried by the bar through
+  friction, the bar sees (M + s m psi_d psi_d^T) u'' + C u' + K u = psi_L f
+  with s = p[REACTION] (the reaction as printed, s = -1, applies to the
+  friction force that carries the ball);
+- CONTACT (on a wall, y' = 0): the same with s = +1 (a wall force is always
+  reciprocal).
+
+The solid bar (one FREE regime without ball), the locked ball (one coupled
+regime) and the TMD bar (one regime of the 2n + 2 coordinates
+[u, u', x_a, x_a']) have no events.  For each regime the per-run setup
+(:func:`prepare`, NumPy, once per run) diagonalises A_r = V diag(lambda) V^-1
+and solves for the particular solutions: X_p(t) = Im(Z e^{i Omega t}) + F_b D.
+On a segment that starts at t_s the state is
+
+    X(t_s + tau) = X_p(t_s + tau) + Re(V (q0 * exp(lambda tau))),
+    q0 = V^-1 (X(t_s) - X_p(t_s)),
+
+evaluated directly (complex exponentials) wherever an answer is needed, and
+by the recurrence q <- q exp(lambda h) on the event-search grid.
+
+Events (located by a safeguarded regula falsi, Illinois variant, to a
+bracket of 4 ulp of t):
+
+- FREE: y = +-delta/2 (impact, or capture on the wall when the impact is
+  slower than p[V_IMPACT], the threshold of MODEL.md section 2: a Zeno
+  sequence ends in CONTACT after finitely many impacts); y' = 0 when
+  F_c > 0 (a friction switch: the ball sticks if the force needed to carry
+  it, |F_req| = |psi_d . a_0| / (1/m + s sum psi_d^2 / M), is at most F_s,
+  else it slides back);
+- STICK: |F_req| = F_s (slip starts, in the direction opposite to F_req);
+- CONTACT: the wall force needed changes sign, wall * F_req = F_s (released
+  into FREE, sliding inward).
+
+Event search grid: h = (shortest period among the forcing and every
+regime's eigenvalues) / ``GRID_PER_PERIOD``.  A sign change of an event
+function between grid points brackets the event.  Grazing (a double
+crossing inside one grid step) is guarded where it can happen: with
+friction the ball's relative motion is monotone in a sliding segment (the
+y' = 0 switch ends the segment first), and without friction a sign change
+of y' inside a step is located and the extremum of y checked against the
+walls, which splits the step into two monotone pieces.  What is not
+guarded is an excursion of F_req across F_s and back inside one grid step
+(1/32 of the shortest period), or a double zero of y' inside one step.
+
+Metrics: the same vector as the RK4 kernel, but the steady sums are exact
+integrals over the steady window [t_steady, t_end]: SUM_W2 = int W^2 dt,
+SUM_W = int W dt, SUM_F = int f dt and N_STEADY = the window length (s), so
+that SUM_W2 / N_STEADY is the mean square in both kernels.  The energy flows
+are exact too: the work of the force, int f psi_L . u' dt, and the viscous
+loss, int sum C_i u_i'^2 dt (+ the absorber's dashpot), are integrals of
+products of exponentials, done in closed form per segment; friction
+dissipation is -F_b (y(t_e) - y(t_s)) per sliding segment; the
+non-reciprocal work (1 - s) int F_b psi_d . u' dt is closed form too.  The
+balance then closes to round-off.  Only SUM_AUX2 (the ball's or absorber's
+RMS) uses the endpoint-corrected trapezoid rule on the grid (O(h^4)),
+because the ball's parabola is outside the exponential basis.  Maxima of
+|W| are located exactly (W' = 0 roots on the grid); maxima of |aux| are
+taken on the grid and at events.
+
+Regenerative forcing is not supported here (simulate refuses it under
+``integrator="exact"``).
+"""
+
+import cmath
+import math
+
+import numpy as np
+from numba import njit
+
+from boringbar.kernels import layout as L
+
+#: event-search grid points per shortest period
+GRID_PER_PERIOD = 16
+#: most events in one run before it stops with EXACT_STATUS = 1
+MAX_EVENTS = 50_000_000
+#: consecutive zero-length events before a run stops with EXACT_STATUS = 2
+MAX_ZERO_LENGTH = 64
+
+FREE, STICK, CONTACT = 0, 1, 2
+# event kinds; an event happens where g goes from <= 0 to > 0
+EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WEXT = range(8)
+
+
+# --- per-run setup (NumPy, once per run) --------------------------------------------------
+def _eig(A: np.ndarray, what: str):
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) > 1e10:
+        raise ValueError(f"exact integrator: the {what} regime is not diagonalisable "
+                         "(critically damped mode?)")
+    return lam, V, np.linalg.inv(V)
+
+
+def prepare(p: np.ndarray) -> dict:
+    """Per-run matrices of the exact kernel from the packed parameter vector ``p``."""
+    n = int(p[L.N_MODES])
+    case = int(p[L.CASE])
+    M = p[L.M_:L.M_ + n].copy()
+    K = p[L.K_:L.K_ + n].copy()
+    C = p[L.C_:L.C_ + n].copy()
+    pL = p[L.PSI_L:L.PSI_L + n].copy()
+    pD = p[L.PSI_D:L.PSI_D + n].copy()
+    pA = p[L.PSI_A:L.PSI_A + n].copy()
+    om = p[L.OMEGA]
+    f0 = p[L.F0]
+    m = p[L.BALL_MASS]
+    sr = p[L.REACTION]
+    eye = np.eye(n)
+    regimes = []  # (A, B, c)
+
+    def coupled(s):
+        Mm = np.diag(M) + s * m * np.outer(pD, pD)
+        Mi = np.linalg.inv(Mm)
+        A = np.block([[np.zeros((n, n)), eye], [-Mi @ np.diag(K), -Mi @ np.diag(C)]])
+        return A, np.concatenate([np.zeros(n), Mi @ pL]), np.zeros(2 * n)
+
+    if case == L.TMD:
+        ma, ka, ca = p[L.TMD_MASS], p[L.TMD_K], p[L.TMD_C]
+        nz = 2 * n + 2
+        A = np.zeros((nz, nz))
+        A[:n, n:2 * n] = eye
+        A[2 * n, 2 * n + 1] = 1.0
+        # bar: M u'' = psi_L f - K u - C u' + psi_a (k_a rel + c_a rel')
+        A[n:2 * n, :n] = -np.diag(K / M) - ka * np.outer(pA, pA) / M[:, None]
+        A[n:2 * n, n:2 * n] = -np.diag(C / M) - ca * np.outer(pA, pA) / M[:, None]
+        A[n:2 * n, 2 * n] = ka * pA / M
+        A[n:2 * n, 2 * n + 1] = ca * pA / M
+        A[2 * n + 1, :n] = ka * pA / ma
+        A[2 * n + 1, n:2 * n] = ca * pA / ma
+        A[2 * n + 1, 2 * n] = -ka / ma
+        A[2 * n + 1, 2 * n + 1] = -ca / ma
+        B = np.zeros(nz)
+        B[n:2 * n] = pL / M
+        regimes.append((A, B, np.zeros(nz)))
+    else:
+        nz = 2 * n
+        if case == L.LOCKED:
+            regimes.append(coupled(1.0))
+        else:
+            A = np.block([[np.zeros((n, n)), eye], [-np.diag(K / M), -np.diag(C / M)]])
+            c = np.zeros(nz)
+            if case == L.BALL:
+                c[n:] = -sr * pD / M  # the bar's reaction to a unit F_b
+            regimes.append((A, np.concatenate([np.zeros(n), pL / M]), c))
+            if case == L.BALL:
+                regimes.append(coupled(sr))
+                regimes.append(coupled(1.0))
+    R = len(regimes)
+    lam = np.zeros((R, nz), complex)
+    V = np.zeros((R, nz, nz), complex)
+    Vi = np.zeros((R, nz, nz), complex)
+    Z = np.zeros((R, nz), complex)
+    D = np.zeros((R, nz))
+    for r, (A, B, c) in enumerate(regimes):
+        lam[r], V[r], Vi[r] = _eig(A, ("free", "stick", "contact")[r] if case == L.BALL
+                                   else "linear")
+        Z[r] = np.linalg.solve(1j * om * np.eye(nz) - A, B * f0)
+        D[r] = -np.linalg.solve(A, c)
+    fastest = max(float(np.max(np.abs(lam))), om)
+    h = 2 * math.pi / fastest / GRID_PER_PERIOD
+    # dashpots: D_visc = sum_d c_d int (l_d . X)^2 dt
+    lv = [np.eye(nz)[n + i] for i in range(n)]
+    cv = list(C)
+    if case == L.TMD:
+        row = np.zeros(nz)
+        row[2 * n + 1] = 1.0
+        row[n:2 * n] = -pA
+        lv.append(row)
+        cv.append(p[L.TMD_C])
+    return {"lam": lam, "V": V, "Vi": Vi, "Z": Z, "D": D, "eh": np.exp(lam * h), "h": h,
+            "lvis": np.array(lv), "cvis": np.array(cv)}
+
+
+# --- the kernel ----------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _eval(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X):
+    """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts)."""
+    nz = X.shape[0]
+    ph = cmath.exp(1j * om * (ts + tau))
+    for k in range(nz):
+        q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
+    for j in range(nz):
+        s = (Z[r, j] * ph).imag + fb * D[r, j]
+        for k in range(nz):
+            s += (V[r, j, k] * q[k]).real
+        X[j] = s
+
+
+@njit(cache=True, inline="always")
+def _from_q(r, q, ph, fb, Z, D, V, X):
+    """X from the eigen-coordinates q and the forcing phasor ph = e^{i Omega t}."""
+    nz = X.shape[0]
+    for j in range(nz):
+        s = (Z[r, j] * ph).imag + fb * D[r, j]
+        for k in range(nz):
+            s += (V[r, j, k] * q[k]).real
+        X[j] = s
+
+
+@njit(cache=True, inline="always")
+def _freq(X, t, n, f0, om, mk, kappa):
+    """The force that carries the ball with the bar, psi_d . a_0 / kappa (N)."""
+    f = f0 * math.sin(om * t)
+    s = 0.0
+    for i in range(n):
+        s += mk[4, i] * (mk[3, i] * f - mk[1, i] * X[i] - mk[2, i] * X[n + i]) / mk[0, i]
+    return s / kappa
+
+
+@njit(cache=True)
+def _g(kind, tau, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om):
+    """Event function ``kind`` at tau on the segment described by ``seg``.
+
+    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m]
+    """
+    ts = seg[0]
+    fb = seg[1]
+    _eval(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X)
+    if kind == EV_WEXT:
+        s = 0.0
+        for i in range(n):
+            s += mk[3, i] * X[n + i]
+        return s
+    if kind <= EV_YEXT:
+        pdu = 0.0
+        pdv = 0.0
+        for i in range(n):
+            pdu += mk[4, i] * X[i]
+            pdv += mk[4, i] * X[n + i]
+        acc = fb / seg[10]
+        if kind == EV_PLUS or kind == EV_MINUS:
+            y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
+            return y - seg[9] if kind == EV_PLUS else -seg[9] - y
+        yd = seg[3] + acc * tau - pdv
+        return -seg[5] * yd if kind == EV_VSTOP else yd
+    F = _freq(X, ts + tau, n, f0, om, mk, seg[7])
+    if kind == EV_REL_NEG:
+        return F - seg[8]
+    if kind == EV_REL_POS:
+        return -F - seg[8]
+    return seg[6] * F - seg[8]
+
+
+@njit(cache=True)
+def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om):
+    """The root of g in [a, b] (ga, gb of opposite signs or ga = 0): Illinois regula falsi
+    with a bisection whenever the bracket fails to halve; returns the upper end."""
+    ts = seg[0]
+    side = 0
+    w_ref = b - a
+    slow = 0
+    for _ in range(200):
+        tol = 4.4e-16 * (abs(ts) + abs(b)) + 1e-300
+        if b - a <= tol:
+            break
+        c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
+        if slow >= 3 or not (a < c < b):
+            c = 0.5 * (a + b)
+            slow = 0
+            if not (a < c < b):
+                break
+        gc = _g(kind, c, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om)
+        if gc == 0.0:
+            b = c
+            break
+        if (gc > 0.0) == (gb > 0.0):
+            b = c
+            gb = gc
+            if side == 1:
+                ga *= 0.5
+            side = 1
+        else:
+            a = c
+            ga = gc
+            if side == -1:
+                gb *= 0.5
+            side = -1
+        if b - a <= 0.5 * w_ref:
+            w_ref = b - a
+            slow = 0
+        else:
+            slow += 1
+    return b
+
+
+@njit(cache=True)
+def _root_wall(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, n, mk, om):
+    """The root of g = +-y -+ delta/2 in [a, b] (ga <= 0 < gb): Newton with the exact
+    derivative +-y', kept inside the bracket (bisection when it leaves); the upper end."""
+    ts = seg[0]
+    sgn = 1.0 if kind == EV_PLUS else -1.0
+    acc = seg[1] / seg[10]
+    c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
+    for _ in range(100):
+        tol = 4.4e-16 * (abs(ts) + abs(b)) + 1e-300
+        if b - a <= tol:
+            break
+        if not (a < c < b):
+            c = 0.5 * (a + b)
+            if not (a < c < b):
+                break
+        _eval(r, q0, ts, c, seg[1], om, lam, V, Z, D, q, X)
+        pdu = 0.0
+        pdv = 0.0
+        for i in range(n):
+            pdu += mk[4, i] * X[i]
+            pdv += mk[4, i] * X[n + i]
+        g = sgn * (seg[2] + c * (seg[3] + 0.5 * acc * c) - pdu) - seg[9]
+        dg = sgn * (seg[3] + acc * c - pdv)
+        if g > 0.0:
+            b = c
+        elif g < 0.0:
+            a = c
+        else:
+            b = c
+            break
+        step = g / dg if dg != 0.0 else 0.0
+        cn = c - step
+        if dg != 0.0 and abs(step) <= tol and a <= cn <= b:
+            return cn  # the next Newton step is below round-off
+        c = cn if (dg != 0.0 and a < cn < b) else 0.5 * (a + b)
+    return b
+
+
+@njit(cache=True)
+def _phi1(z, T):
+    """int_0^T exp(z tau / T) dtau = T (e^z - 1) / z."""
+    if abs(z) < 0.125:  # series: 12 terms reach 1e-17
+        s = 0.0 + 0.0j
+        for k in range(13, 0, -1):
+            s = (s * z + 1.0) * (1.0 / k) if k > 1 else s * z + 1.0
+        return T * s
+    return T * (cmath.exp(z) - 1.0) / z
+
+
+@njit(cache=True)
+def _integrals(r, q0, ts, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis, stick_k, sr,
+               mu, em, G, Cx, cf, ca, cb, out):
+    """Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
+    sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u']."""
+    nz = lam.shape[1]
+    nb = nz + 3
+    for k in range(nz):
+        mu[k] = lam[r, k]
+    mu[nz] = 1j * om
+    mu[nz + 1] = -1j * om
+    mu[nz + 2] = 0.0
+    for k in range(nb):
+        em[k] = cmath.exp(mu[k] * T)
+    for a in range(nb):
+        for b in range(a, nb):
+            s = mu[a] + mu[b]
+            z = s * T
+            if abs(z) < 0.125:
+                g = _phi1(z, T)
+            else:
+                g = (em[a] * em[b] - 1.0) / s
+            G[a, b] = g
+            G[b, a] = g
+    ph = cmath.exp(1j * om * ts)
+    for j in range(nz):
+        for k in range(nz):
+            Cx[j, k] = V[r, j, k] * q0[k]
+        zz = Z[r, j] * ph / 2j
+        Cx[j, nz] = zz
+        Cx[j, nz + 1] = zz.conjugate()
+        Cx[j, nz + 2] = fb * D[r, j]
+    for k in range(nb):
+        cf[k] = 0.0
+    cf[nz] = f0 * ph / 2j
+    cf[nz + 1] = cf[nz].conjugate()
+    # work of the force: f psi_L . u'
+    for k in range(nb):
+        s = 0.0 + 0.0j
+        for i in range(n):
+            s += mk[3, i] * Cx[n + i, k]
+        ca[k] = s
+    out[0] = _quad(cf, ca, G, nb)
+    out[4] = 0.0
+    for k in range(nb):
+        out[4] += (cf[k] * G[k, nb - 1]).real
+    # viscous loss
+    dv = 0.0
+    for d in range(lvis.shape[0]):
+        for k in range(nb):
+            s = 0.0 + 0.0j
+            for j in range(nz):
+                s += lvis[d, j] * Cx[j, k]
+            ca[k] = s
+        dv += cvis[d] * _quad(ca, ca, G, nb)
+    out[1] = dv
+    # W = psi_L . u
+    for k in range(nb):
+        s = 0.0 + 0.0j
+        for i in range(n):
+            s += mk[3, i] * Cx[i, k]
+        ca[k] = s
+    out[2] = _quad(ca, ca, G, nb)
+    w1 = 0.0
+    for k in range(nb):
+        w1 += (ca[k] * G[k, nb - 1]).real
+    out[3] = w1
+    out[5] = 0.0
+    if stick_k != 0.0 and sr != 1.0:
+        # F_stick = psi_d . a_0 / kappa, a_0,i = (psi_L,i f - K_i u_i - C_i u_i') / M_i
+        for k in range(nb):
+            s = 0.0 + 0.0j
+            pv = 0.0 + 0.0j
+            for i in range(n):
+                s += mk[4, i] * (mk[3, i] * cf[k] - mk[1, i] * Cx[i, k]
+                                 - mk[2, i] * Cx[n + i, k]) / mk[0, i]
+                pv += mk[4, i] * Cx[n + i, k]
+            ca[k] = s / stick_k
+            cb[k] = pv
+        out[5] = (1.0 - sr) * _quad(ca, cb, G, nb)
+
+
+@njit(cache=True, inline="always")
+def _quad(a, b, G, nb):
+    s = 0.0
+    for i in range(nb):
+        t = 0.0 + 0.0j
+        for j in range(nb):
+            t += G[i, j] * b[j]
+        s += (a[i] * t).real
+    return s
+
+
+@njit(cache=True)
+def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
+           lam, V, Vi, Z, D, eh, h, lvis, cvis):
+    n = int(p[L.N_MODES])
+    case = int(p[L.CASE])
+    nz = lam.shape[1]
+    nb = nz + 3
+    ball = case == L.BALL
+    mk = np.zeros((6, n))  # M, K, C, psi_L, psi_d, psi_a
+    for i in range(n):
+        mk[0, i] = p[L.M_ + i]
+        mk[1, i] = p[L.K_ + i]
+        mk[2, i] = p[L.C_ + i]
+        mk[3, i] = p[L.PSI_L + i]
+        mk[4, i] = p[L.PSI_D + i]
+        mk[5, i] = p[L.PSI_A + i]
+    f0 = p[L.F0]
+    om = p[L.OMEGA]
+    m = p[L.BALL_MASS]
+    half = p[L.HALF_GAP]
+    e = p[L.RESTITUTION]
+    fc = p[L.FRICTION]
+    fs = max(p[L.STATIC_FRICTION], fc)
+    sr = p[L.REACTION]
+    meff = p[L.M_EFF]
+    vimp = p[L.V_IMPACT]
+    stick_min = p[L.STICK_MIN]
+    tstrobe = p[L.STROBE_PERIOD]
+    spd = 0.0
+    for i in range(n):
+        spd += mk[4, i] * mk[4, i] / mk[0, i]
+    kappa_stick = (1.0 / m + sr * spd) if m > 0.0 else 1.0
+    kappa_wall = (1.0 / m + spd) if m > 0.0 else 1.0
+
+    # scratch
+    X = np.zeros(nz)
+    Xa = np.zeros(nz)
+    q0 = np.zeros(nz, np.complex128)
+    qs = np.zeros(nz, np.complex128)
+    qg = np.zeros(nz, np.complex128)
+    mu = np.zeros(nb, np.complex128)
+    em = np.zeros(nb, np.complex128)
+    G = np.zeros((nb, nb), np.complex128)
+    Cx = np.zeros((nz, nb), np.complex128)
+    cf = np.zeros(nb, np.complex128)
+    ca = np.zeros(nb, np.complex128)
+    cb = np.zeros(nb, np.complex128)
+    out = np.zeros(6)
+    seg = np.zeros(11)
+    dX = np.zeros(nz)
+    ev_a = np.zeros(8)
+    ev_b = np.zeros(8)
+
+    for j in range(nz):
+        X[j] = x[j]
+    y = x[2 * n] if ball or case == L.LOCKED else 0.0
+    yd = x[2 * n + 1] if ball else 0.0
+
+    sum_w2 = met[L.SUM_W2]
+    sum_w = met[L.SUM_W]
+    n_steady = met[L.N_STEADY]
+    max_abs_w = met[L.MAX_ABS_W]
+    max_w = met[L.STEADY_MAX_W]
+    min_w = met[L.STEADY_MIN_W]
+    max_aux = met[L.MAX_ABS_AUX]
+    max_aux_all = met[L.MAX_ABS_AUX_ALL]
+    sum_aux2 = met[L.SUM_AUX2]
+    sum_f = met[L.SUM_F]
+    n_plus = met[L.N_IMP_PLUS]
+    n_minus = met[L.N_IMP_MINUS]
+    n_all = met[L.N_IMP_ALL]
+    n_micro = met[L.N_MICRO]
+    t_contact = met[L.T_CONTACT]
+    t_stick = met[L.T_STICK]
+    w_force = met[L.W_FORCE]
+    d_visc = met[L.D_VISC]
+    d_imp = met[L.D_IMPACT]
+    d_fric = met[L.D_FRICTION]
+    w_nr = met[L.W_NONRECIP]
+    n_imp = int(met[L.N_IMP_REC])
+    n_stk = int(met[L.N_STICK_REC])
+    n_rec = int(met[L.N_REC])
+    n_stb = int(met[L.N_STROBE])
+    n_ev = int(met[L.N_EVENTS])
+    status = 0
+    cap_imp = imp.shape[0]
+    cap_stk = stick.shape[0]
+    cap_rec = rec.shape[0]
+    cap_stb = strobe.shape[0]
+
+    # next output sample times
+    k_rec = 1
+    t_next_strobe = 0.0
+    if tstrobe > 0.0:
+        t_next_strobe = p[L.STROBE_T0]
+        if t_next_strobe <= t0:
+            t_next_strobe += (math.floor((t0 - t_next_strobe) / tstrobe) + 1) * tstrobe
+
+    # --- the initial regime ---------------------------------------------------------------
+    mode = FREE
+    sdir = 0.0
+    wall = 0.0
+    if ball:
+        if yd != 0.0:
+            sdir = 1.0 if yd > 0.0 else -1.0
+        elif abs(y) >= half:
+            wall = 1.0 if y > 0.0 else -1.0
+            y = wall * half
+            F = _freq(X, t0, n, f0, om, mk, kappa_wall)
+            if wall * F <= fs:
+                mode = CONTACT
+            elif fc > 0.0:
+                sdir = -wall
+        elif fc > 0.0:
+            F = _freq(X, t0, n, f0, om, mk, kappa_stick)
+            if abs(F) <= fs:
+                mode = STICK
+            else:
+                sdir = -1.0 if F > 0.0 else 1.0
+    in_stick = mode == STICK
+    stick_t0 = t0
+    n_zero = 0
+
+    t = t0
+    while t < t_end:
+        if n_ev >= MAX_EVENTS:
+            status = 1
+            break
+        t_stop = t_steady if t < t_steady else t_end
+        steady = t >= t_steady
+        r = 0
+        if ball:
+            r = mode
+        fb = 0.0
+        if mode == FREE and ball:
+            fb = -fc * sdir
+        kap = kappa_stick if mode == STICK else kappa_wall
+        # eigen-coordinates of the homogeneous part at t
+        ph = cmath.exp(1j * om * t)
+        for j in range(nz):
+            dX[j] = X[j] - ((Z[r, j] * ph).imag + fb * D[r, j])
+        for k in range(nz):
+            s = 0.0 + 0.0j
+            for j in range(nz):
+                s += Vi[r, k, j] * dX[j]
+            q0[k] = s
+        pdu = 0.0
+        pdv = 0.0
+        for i in range(n):
+            pdu += mk[4, i] * X[i]
+            pdv += mk[4, i] * X[n + i]
+        seg[0] = t
+        seg[1] = fb
+        seg[2] = y + pdu  # the ball's absolute position and velocity
+        seg[3] = yd + pdv
+        seg[4] = y
+        seg[5] = sdir
+        seg[6] = wall
+        seg[7] = kap
+        seg[8] = fs
+        seg[9] = half
+        seg[10] = m if m > 0.0 else 1.0
+        acc = fb / seg[10]
+        # which events are watched
+        watch_wall = ball and mode == FREE
+        watch_v = watch_wall and fc > 0.0 and sdir != 0.0
+        watch_ext = watch_wall and not watch_v
+        tlen = t_stop - t
+        # values at tau = 0
+        a = 0.0
+        for j in range(nz):
+            Xa[j] = X[j]
+        for k in range(nz):
+            qg[k] = q0[k]
+        phg = ph
+        rot = cmath.exp(1j * om * h)
+        ev_kind = -1
+        tau_ev = tlen
+        istep = 0
+        # the values at a (carried over from the previous grid point)
+        wa = 0.0
+        wda = 0.0
+        for i in range(n):
+            wa += mk[3, i] * Xa[i]
+            wda += mk[3, i] * Xa[n + i]
+        _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+        auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
+        while True:
+            b = a + h
+            full = True
+            if b >= tlen:
+                b = tlen
+                full = False
+            istep += 1
+            if full and istep % 64 != 0:
+                for k in range(nz):
+                    qg[k] = qg[k] * eh[r, k]
+                phg = phg * rot
+                _from_q(r, qg, phg, fb, Z, D, V, X)
+            else:
+                _eval(r, q0, t, b, fb, om, lam, V, Z, D, qg, X)
+                phg = cmath.exp(1j * om * (t + b))
+            _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+            # --- events in [a, b]
+            best = b
+            kind = -1
+            if ball and mode != FREE:
+                for kk in (EV_REL_NEG, EV_REL_POS, EV_WALL_REL):
+                    if (mode == STICK) == (kk != EV_WALL_REL):
+                        if ev_a[kk] <= 0.0 < ev_b[kk]:
+                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, Z,
+                                       D, qs, dX, n, mk, f0, om)
+                            if tr < best or kind < 0:
+                                best = tr
+                                kind = kk
+            elif watch_wall:
+                lo = a
+                hi = b
+                # without friction, split the step at an extremum of y, if the extremum
+                # can reach a wall: y' changes sign inside, so |y'| <= |y'(a)| + |y'(b)|
+                # there to first order, and the excursion past the ends is below
+                # h (|y'(a)| + |y'(b)|) (a factor 2 of margin on the mean value theorem)
+                near = False
+                if watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0:
+                    reach = (b - a) * (abs(ev_a[EV_YEXT]) + abs(ev_b[EV_YEXT]))
+                    dmin = -max(ev_a[EV_PLUS], ev_a[EV_MINUS], ev_b[EV_PLUS], ev_b[EV_MINUS])
+                    near = dmin <= reach
+                if near:
+                    te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
+                               V, Z, D, qs, dX, n, mk, f0, om)
+                    gp = _g(EV_PLUS, te, seg, r, q0, lam, V, Z, D, qs, dX, n, mk, f0, om)
+                    gm = -2.0 * half - gp
+                    for kk in (EV_PLUS, EV_MINUS):
+                        ge = gp if kk == EV_PLUS else gm
+                        if ev_a[kk] <= 0.0 < ge:
+                            tr = _root_wall(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, Z, D,
+                                            qs, dX, n, mk, om)
+                            if kind < 0 or tr < best:
+                                best = tr
+                                kind = kk
+                    if kind < 0:
+                        for kk in (EV_PLUS, EV_MINUS):
+                            ge = gp if kk == EV_PLUS else gm
+                            if ge <= 0.0 < ev_b[kk]:
+                                tr = _root_wall(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V,
+                                                Z, D, qs, dX, n, mk, om)
+                                if kind < 0 or tr < best:
+                                    best = tr
+                                    kind = kk
+                    lo = hi  # handled
+                if lo < hi:
+                    for kk in (EV_PLUS, EV_MINUS, EV_VSTOP):
+                        if kk == EV_VSTOP and not watch_v:
+                            continue
+                        if ev_a[kk] <= 0.0 < ev_b[kk]:
+                            if kk == EV_VSTOP:
+                                tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V,
+                                           Z, D, qs, dX, n, mk, f0, om)
+                            else:
+                                tr = _root_wall(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam,
+                                                V, Z, D, qs, dX, n, mk, om)
+                            if kind < 0 or tr < best:
+                                best = tr
+                                kind = kk
+            if kind >= 0:
+                b = best
+                _eval(r, q0, t, b, fb, om, lam, V, Z, D, qs, X)
+                ev_kind = kind
+                tau_ev = b
+            # --- outputs on (a, b]
+            wb = 0.0
+            wdb = 0.0
+            for i in range(n):
+                wb += mk[3, i] * X[i]
+                wdb += mk[3, i] * X[n + i]
+            if steady:
+                max_abs_w = max(max_abs_w, abs(wb))
+                max_w = max(max_w, wb)
+                min_w = min(min_w, wb)
+                if wda * wdb < 0.0:
+                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, Z, D, qs, dX, n,
+                               mk, f0, om)
+                    _eval(r, q0, t, te, fb, om, lam, V, Z, D, qs, dX)
+                    we = 0.0
+                    for i in range(n):
+                        we += mk[3, i] * dX[i]
+                    max_abs_w = max(max_abs_w, abs(we))
+                    max_w = max(max_w, we)
+                    min_w = min(min_w, we)
+            # aux and aux' at a and b
+            auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
+            max_aux_all = max(max_aux_all, abs(auxb))
+            if steady:
+                max_aux = max(max_aux, abs(auxb))
+                hh = b - a
+                sum_aux2 += (0.5 * hh * (auxa * auxa + auxb * auxb)
+                             + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
+            # history and strobe samples in (t + a, t + b]
+            while rec_dt > 0.0 and n_rec < cap_rec and t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt:
+                ts_ = t0 + k_rec * rec_dt
+                if ts_ > t_end:
+                    break
+                _eval(r, q0, t, ts_ - t, fb, om, lam, V, Z, D, qs, dX)
+                wv = 0.0
+                wdv = 0.0
+                for i in range(n):
+                    wv += mk[3, i] * dX[i]
+                    wdv += mk[3, i] * dX[n + i]
+                av, adv = _aux(dX, ts_ - t, seg, mode, case, n, mk, x, ball)
+                rec[n_rec, 0] = ts_
+                rec[n_rec, 1] = wv
+                rec[n_rec, 2] = wdv
+                rec[n_rec, 3] = av
+                rec[n_rec, 4] = adv
+                rec[n_rec, 5] = f0 * math.sin(om * ts_)
+                n_rec += 1
+                k_rec += 1
+            while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
+                if n_stb < cap_stb:
+                    _eval(r, q0, t, t_next_strobe - t, fb, om, lam, V, Z, D, qs, dX)
+                    wv = 0.0
+                    wdv = 0.0
+                    for i in range(n):
+                        wv += mk[3, i] * dX[i]
+                        wdv += mk[3, i] * dX[n + i]
+                    av, adv = _aux(dX, t_next_strobe - t, seg, mode, case, n, mk, x, ball)
+                    strobe[n_stb, 0] = t_next_strobe
+                    strobe[n_stb, 1] = wv
+                    strobe[n_stb, 2] = wdv
+                    strobe[n_stb, 3] = av
+                    strobe[n_stb, 4] = adv
+                    n_stb += 1
+                t_next_strobe += tstrobe
+            if kind >= 0 or not full:
+                break
+            a = b
+            wa = wb
+            wda = wdb
+            auxa = auxb
+            auxda = auxdb
+            for kk in range(8):
+                ev_a[kk] = ev_b[kk]
+
+        # --- close the segment [t, t + T] ----------------------------------------------
+        T = tau_ev
+        _integrals(r, q0, t, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis,
+                   kappa_stick if (ball and mode == STICK) else 0.0, sr,
+                   mu, em, G, Cx, cf, ca, cb, out)
+        w_force += out[0]
+        d_visc += out[1]
+        w_nr += out[5]
+        if steady:
+            sum_w2 += out[2]
+            sum_w += out[3]
+            sum_f += out[4]
+            n_steady += T
+            if mode == CONTACT:
+                t_contact += T
+        if ball:
+            pdu1 = 0.0
+            pdv1 = 0.0
+            for i in range(n):
+                pdu1 += mk[4, i] * X[i]
+                pdv1 += mk[4, i] * X[n + i]
+            if mode == FREE:
+                ynew = seg[2] + T * (seg[3] + 0.5 * acc * T) - pdu1
+                yd = seg[3] + acc * T - pdv1
+                d_fric -= fb * (ynew - y)
+                w_nr += (1.0 - sr) * fb * (pdu1 - pdu)
+                y = ynew
+        t_new = t + T if ev_kind >= 0 else t_stop
+        if ev_kind < 0:
+            t = t_new
+            continue
+        n_ev += 1
+        if T <= 0.0:
+            n_zero += 1
+            if n_zero > MAX_ZERO_LENGTH:
+                status = 2
+                t = t_new
+                break
+        else:
+            n_zero = 0
+        t = t_new
+        steady = t >= t_steady
+        # --- apply the event -------------------------------------------------------------
+        was_stick = mode == STICK
+        if ev_kind == EV_PLUS or ev_kind == EV_MINUS:
+            w_ = 1.0 if ev_kind == EV_PLUS else -1.0
+            y = w_ * half
+            vb = yd
+            if w_ * vb > 0.0:
+                ee = e if abs(vb) > vimp else 0.0  # Zeno: captured on the wall
+                g_ = (1.0 + ee) * meff * vb
+                for i in range(n):
+                    X[n + i] += g_ * mk[4, i] / mk[0, i]
+                yd = -ee * vb
+                d_imp += 0.5 * (1.0 - ee * ee) * meff * vb * vb
+                if abs(vb) > vimp:
+                    n_all += 1
+                    if steady:
+                        if w_ > 0:
+                            n_plus += 1
+                        else:
+                            n_minus += 1
+                        if n_imp < cap_imp:
+                            imp[n_imp, 0] = t
+                            imp[n_imp, 1] = w_
+                            imp[n_imp, 2] = vb
+                        n_imp += 1
+                else:
+                    n_micro += 1
+            else:
+                yd = 0.0
+            if yd != 0.0:
+                mode = FREE
+                sdir = 1.0 if yd > 0.0 else -1.0
+            else:
+                mode, sdir, wall = _at_wall(X, t, w_, n, f0, om, mk, kappa_wall, fs, fc)
+        elif ev_kind == EV_VSTOP:
+            yd = 0.0
+            F = _freq(X, t, n, f0, om, mk, kappa_stick)
+            if abs(F) <= fs:
+                mode = STICK
+                sdir = 0.0
+            else:
+                mode = FREE
+                sdir = -1.0 if F > 0.0 else 1.0
+        elif ev_kind == EV_REL_NEG or ev_kind == EV_REL_POS:
+            mode = FREE
+            yd = 0.0
+            sdir = -1.0 if ev_kind == EV_REL_NEG else 1.0
+        elif ev_kind == EV_WALL_REL:
+            mode = FREE
+            yd = 0.0
+            sdir = -wall if fc > 0.0 else 0.0
+            y = wall * half
+        if mode == FREE and fc == 0.0 and yd == 0.0:
+            sdir = 0.0
+        # stick intervals
+        if mode == STICK and not was_stick:
+            stick_t0 = t
+        elif was_stick and mode != STICK:
+            s0 = max(stick_t0, t_steady)
+            if t - s0 >= stick_min:
+                t_stick += t - s0
+                if n_stk < cap_stk:
+                    stick[n_stk, 0] = s0
+                    stick[n_stk, 1] = t
+                n_stk += 1
+        in_stick = mode == STICK
+
+    if in_stick:
+        s0 = max(stick_t0, t_steady)
+        if t - s0 >= stick_min:
+            t_stick += t - s0
+            if n_stk < cap_stk:
+                stick[n_stk, 0] = s0
+                stick[n_stk, 1] = t
+            n_stk += 1
+
+    for j in range(nz):
+        x[j] = X[j]
+    if ball:
+        x[2 * n] = y
+        x[2 * n + 1] = yd
+    met[L.SUM_W2] = sum_w2
+    met[L.SUM_W] = sum_w
+    met[L.N_STEADY] = n_steady
+    met[L.MAX_ABS_W] = max_abs_w
+    met[L.STEADY_MAX_W] = max_w
+    met[L.STEADY_MIN_W] = min_w
+    met[L.MAX_ABS_AUX] = max_aux
+    met[L.MAX_ABS_AUX_ALL] = max_aux_all
+    met[L.SUM_AUX2] = sum_aux2
+    met[L.SUM_F] = sum_f
+    met[L.N_IMP_PLUS] = n_plus
+    met[L.N_IMP_MINUS] = n_minus
+    met[L.N_IMP_ALL] = n_all
+    met[L.N_MICRO] = n_micro
+    met[L.T_CONTACT] = t_contact
+    met[L.T_STICK] = t_stick
+    met[L.W_FORCE] = w_force
+    met[L.D_VISC] = d_visc
+    met[L.D_IMPACT] = d_imp
+    met[L.D_FRICTION] = d_fric
+    met[L.W_NONRECIP] = w_nr
+    met[L.N_IMP_REC] = n_imp
+    met[L.N_STICK_REC] = n_stk
+    met[L.N_REC] = n_rec
+    met[L.N_STROBE] = n_stb
+    met[L.N_EVENTS] = n_ev
+    met[L.EXACT_STATUS] = status
+    return t
+
+
+@njit(cache=True, inline="always")
+def _at_wall(X, t, w_, n, f0, om, mk, kappa_wall, fs, fc):
+    """Regime of a ball at rest on wall w_: held (CONTACT) or leaving inward (FREE)."""
+    F = _freq(X, t, n, f0, om, mk, kappa_wall)
+    if w_ * F <= fs:
+        return CONTACT, 0.0, w_
+    return FREE, (-w_ if fc > 0.0 else 0.0), w_
+
+
+@njit(cache=True, inline="always")
+def _events(ev, X, tau, seg, mode, n, mk, f0, om):
+    """All event functions from the state X at tau (see :func:`_g`)."""
+    pdu = 0.0
+    pdv = 0.0
+    for i in range(n):
+        pdu += mk[4, i] * X[i]
+        pdv += mk[4, i] * X[n + i]
+    fb = seg[1]
+    acc = fb / seg[10]
+    y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
+    yd = seg[3] + acc * tau - pdv
+    ev[EV_PLUS] = y - seg[9]
+    ev[EV_MINUS] = -seg[9] - y
+    ev[EV_VSTOP] = -seg[5] * yd
+    ev[EV_YEXT] = yd
+    if mode != FREE:
+        F = _freq(X, seg[0] + tau, n, f0, om, mk, seg[7])
+        ev[EV_REL_NEG] = F - seg[8]
+        ev[EV_REL_POS] = -F - seg[8]
+        ev[EV_WALL_REL] = seg[6] * F - seg[8]
+
+
+@njit(cache=True, inline="always")
+def _aux(X, tau, seg, mode, case, n, mk, x, ball):
+    """(aux, aux'): the ball's y, y' or the absorber's stroke and its rate."""
+    if ball:
+        if mode != FREE:
+            return seg[4], 0.0
+        pdu = 0.0
+        pdv = 0.0
+        for i in range(n):
+            pdu += mk[4, i] * X[i]
+            pdv += mk[4, i] * X[n + i]
+        acc = seg[1] / seg[10]
+        return seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu, seg[3] + acc * tau - pdv
+    if case == L.TMD:
+        a = X[2 * n]
+        ad = X[2 * n + 1]
+        for i in range(n):
+            a -= mk[5, i] * X[i]
+            ad -= mk[5, i] * X[n + i]
+        return a, ad
+    if case == L.LOCKED:
+        return x[2 * n], 0.0
+    return 0.0, 0.0
+
+
+def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None):
+    """Advance ``x`` exactly from ``t0`` to ``t_end``; same outputs as ``run_rk4`` (the
+    steady sums are integrals, see the module docstring).  ``prep``: :func:`prepare`'s
+    result, computed here if not given.  Returns the time reached."""
+    if prep is None:
+        prep = prepare(p)
+    return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
+                  stick, strobe, met, prep["lam"], prep["V"], prep["Vi"], prep["Z"],
+                  prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"])
