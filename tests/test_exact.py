@@ -205,3 +205,52 @@ def test_run_records_its_integrator():
     assert run.config()["integrator"] == "exact"
     assert run.summary()["integrator"] == "exact"
     assert simulate(s, Harmonic(10.0, 1.0), duration=1e-3).summary()["integrator"] == "rk4"
+
+
+# --- the command line ----------------------------------------------------------------------------
+def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
+    import json
+
+    import xarray as xr
+    from cli_output import json_out
+
+    from boringbar.cli import main
+
+    out = tmp_path / "run"
+    rc = main(["simulate", "--bar", "ball", "--gap-mm", "0.1", "--force-n", "20",
+               "--duration-s", "0.05", "--integrator", "exact", "--static-ratio", "1.5",
+               "--out", str(out), "--json"])
+    assert rc == 0
+    s = json_out(capsys)
+    assert s["integrator"] == "exact" and s["rms_tip_m"] > 0
+    assert 0 < s["max_abs_rel_disp_m"] <= 0.05e-3 * (1 + 1e-12)
+    assert abs(s["energy"]["balance_relative"]) < 1e-9
+    with xr.open_dataset(out / "run.nc") as ds:
+        config = json.loads(ds.attrs["config"])
+        assert config["integrator"] == "exact"
+        assert config["system"]["damper"]["friction"]["static_ratio"] == 1.5
+        assert ds.sizes["time"] > 1000
+
+
+def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
+    from cli_output import assert_one_line_error
+
+    from boringbar import cli
+    from boringbar.simulate import INTEGRATORS
+
+    assert cli.INTEGRATORS == INTEGRATORS
+    out = tmp_path / "x"
+    assert_one_line_error(cli.main, ["simulate", "--static-ratio", "2", "--duration-s",
+                                     "0.01", "--out", str(out)], out, "static_ratio", capsys)
+    assert_one_line_error(cli.main, ["simulate", "--rpm", "1200", "--depth-mm", "0.05",
+                                     "--integrator", "exact", "--duration-s", "0.01",
+                                     "--out", str(out)], out, "harmonic forcing only", capsys)
+
+
+def test_sweep_records_its_integrator():
+    from boringbar.analysis.sweep import published_cases, sweep
+
+    cases = published_cases(("ball",), gaps=(0.1e-3,), frictions=(False,))
+    ds = sweep(cases, [1.0], [20.0], duration=0.05, workers=1, integrator="exact")
+    assert ds.attrs["integrator"] == "exact"
+    assert float(ds["energy_balance_relative"].max()) < 1e-9

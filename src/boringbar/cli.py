@@ -28,12 +28,16 @@ from boringbar.forcing import INTERPOLATIONS, STARTS
 from boringbar.system import BALLS, BAR_KINDS, PRESETS, READINGS
 
 PROG = "boringbar"
+#: the time integrators (boringbar.simulate.INTEGRATORS; not imported here, which would
+#: load numba before the arguments are even parsed)
+INTEGRATORS = ("rk4", "exact")
 #: Default history length of ``simulate`` (rows), when --record-every is not given.
 HISTORY_ROWS = 20000
 #: bifurcation's published sweep: F0 from 5 to 50 N in 1 N steps
 PUBLISHED_FORCES = "5:50:1"
 BALL_OPTIONS = ("gap_mm", "friction", "friction_force_n", "friction_number", "ball",
-                "restitution", "locked", "ball_position_mm", "ball_velocity_m_s")
+                "restitution", "locked", "ball_position_mm", "ball_velocity_m_s",
+                "static_ratio")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -110,6 +114,9 @@ def _add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                    metavar="E|START:STOP:STEP" if ranges else "E",
                    help=f"coefficient of restitution in [0, 1]{swept} (default: 0.7)")
     g.add_argument("--locked", action="store_true", help="fix the ball to the bar")
+    g.add_argument("--static-ratio", type=float, metavar="X",
+                   help="static friction limit F_s/F_c >= 1 of true stick-slip (default: 1; "
+                        "other values need --integrator exact)")
     g.add_argument("--modes", type=int, metavar="N",
                    help="retained bending modes (default: physical 2, paper 1)")
     g.add_argument("--tmd-design", choices=("published", "den-hartog"),
@@ -130,7 +137,11 @@ def _add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     g.add_argument("--duration-s", type=float, default=2.0, metavar="S",
                    help="simulated time in s (default: 2.0)")
     g.add_argument("--dt-s", type=float, default=1e-6, metavar="S",
-                   help="RK4 time step in s (default: 1e-6)")
+                   help="RK4 time step in s; with --integrator exact, the step of the "
+                        "recorded history (default: 1e-6)")
+    g.add_argument("--integrator", choices=INTEGRATORS, default="rk4",
+                   help="rk4: the published fixed-step scheme (default); exact: "
+                        "event-driven, exact between events (harmonic forcing only)")
 
     if initial:
         g = p.add_argument_group("initial conditions (default: at rest, ball centred)")
@@ -429,7 +440,8 @@ def _system_overrides(args) -> dict:
     """make_system keywords the user set (the preset decides the rest)."""
     kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
           "friction_number": args.friction_number, "friction_force": args.friction_force_n,
-          "tmd_design": args.tmd_design, "locked": args.locked or None}
+          "tmd_design": args.tmd_design, "locked": args.locked or None,
+          "static_ratio": args.static_ratio}
     return {k: v for k, v in kw.items() if v is not None}
 
 
@@ -452,7 +464,7 @@ def _cmd_simulate(args) -> int:
     system = make_system(bar, args.preset, **kw)
     initial = _initial(args, [gap] if bar == "ball" else [])
     run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s, initial=initial,
-                   record_every=record_every)
+                   record_every=record_every, integrator=args.integrator)
 
     from boringbar.io import write_json_atomic, write_netcdf_atomic
     from boringbar.plot import plot_run
@@ -614,7 +626,8 @@ def _cmd_sweep(args) -> int:
     initial = _initial(args, gaps if "ball" in bars else [])
     progress = _progress(args, "sweep", "runs")
     ds = sweep(cases, ratios, forces, duration=args.duration_s, dt=args.dt_s,
-               workers=args.workers, initial=initial, progress=progress)
+               workers=args.workers, initial=initial, progress=progress,
+               integrator=args.integrator)
 
     from boringbar.io import write_netcdf_atomic
     from boringbar.plot import plot_sweep
@@ -737,7 +750,7 @@ def _cmd_lobes(args) -> int:
                max_depth=args.max_depth_mm * 1e-3, successive=args.successive,
                criterion=args.criterion, duration=args.duration_s, dt=args.dt_s,
                workers=args.workers, progress=_progress(args, "lobes", "(case, speed) columns"),
-               **cut)
+               integrator=args.integrator, **cut)
 
     from boringbar.io import write_netcdf_atomic
     from boringbar.plot import plot_lobe_examples, plot_lobes
@@ -958,7 +971,8 @@ def _cmd_bifurcation(args) -> int:
                      duration=args.duration_s, dt=args.dt_s, drop=args.drop,
                      initial=_initial(args, gaps if bar == "ball" else []),
                      backward=not args.no_backward, units="m" if parameter == "gap" else "1",
-                     progress=_progress(args, "bifurcation", "runs"))
+                     progress=_progress(args, "bifurcation", "runs"),
+                     integrator=args.integrator)
     ranges = hysteresis_ranges(ds) if not args.no_backward else None
     ds.attrs.update(preset=args.preset, bar=bar, swept_option=option,
                     hysteresis_ranges=json.dumps(ranges),
@@ -1105,11 +1119,11 @@ def _cmd_basins(args) -> int:
     ds = basins(system, forcing, displacement=displacement, velocity=velocity,
                 duration=args.duration_s, dt=args.dt_s, drop=args.drop, ball_position=y0,
                 ball_velocity=yv0, workers=args.workers,
-                progress=_progress(args, "basins", "runs"))
+                progress=_progress(args, "basins", "runs"), integrator=args.integrator)
     # the Poincare map beside the basins: data first, so it goes into basins.nc
     run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s,
                    initial=Initial(w0 * 1e-3, v0, y0, yv0), steady_fraction=1 - args.drop,
-                   strobe=True)
+                   strobe=True, integrator=args.integrator)
     pm = poincare_map(run, args.drop)
     verdict = pm.classify()
     ds = ds.assign(
@@ -1246,7 +1260,7 @@ def _cmd_sensitivity(args) -> int:
 
     common = dict(preset=args.preset, bar=bar, gap=gap, friction=friction_on,
                   duration=args.duration_s, dt=args.dt_s, workers=args.workers,
-                  **_system_overrides(args))
+                  integrator=args.integrator, **_system_overrides(args))
     ds = sensitivity(kind, values, forces=forces, ratios=ratios,
                      progress=_progress(args, f"sensitivity {kind}", "runs"), **common)
     if cuts is not None:

@@ -143,9 +143,9 @@ def signature(strobe: np.ndarray, scale: float, omega: float,
 
 
 def _run(system: System, forcing: Harmonic, initial: Initial, duration: float, dt: float,
-         drop: float, tol: BasinTolerance) -> _Cell:
+         drop: float, tol: BasinTolerance, integrator: str = "rk4") -> _Cell:
     run = simulate(system, forcing, duration=duration, dt=dt, initial=initial,
-                   steady_fraction=1.0 - drop, strobe=True)
+                   steady_fraction=1.0 - drop, strobe=True, integrator=integrator)
     keep = run.strobe[run.strobe[:, 0] >= run.steady_start - 0.5 * dt, 1:3]
     rms = run.rms_tip
     scale = max(math.sqrt(2.0) * rms, tol.floor) if math.isfinite(rms) else tol.floor
@@ -210,7 +210,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
            velocity=PUBLISHED_VELOCITY, duration: float = 2.0, dt: float = 1e-6,
            drop: float = 0.2, ball_position: float = 0.0, ball_velocity: float = 0.0,
            workers: int | None = None, progress=None,
-           tol: BasinTolerance | None = None):
+           tol: BasinTolerance | None = None, integrator: str = "rk4"):
     """Basins of attraction over initial tip displacement x tip velocity.
 
     ``displacement`` (m) and ``velocity`` (m/s): (start, stop, count), both ends
@@ -219,7 +219,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
     starts at ``ball_position`` (m) with relative velocity ``ball_velocity``
     (m/s).  ``workers``: threads (default: every core); ``progress(done, total)``
     is called as cells finish.  ``tol``: :class:`BasinTolerance`; the grouping is
-    in the module docstring.
+    in the module docstring.  ``integrator``: "rk4" (published) or "exact".
 
     Returns an xarray Dataset with, per cell (dims displacement, velocity):
     ``attractor`` id, ``rms_tip_m``, ``pattern``, ``period`` (0: non-periodic),
@@ -251,13 +251,14 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
                 for w in w0 for v in v0]
     # validates everything else (dt, ball position) and warms the JIT before fanning out
     first = simulate(system, forcing, duration=min(duration, 50 * dt), dt=dt,
-                     initial=initials[0])
+                     initial=initials[0], integrator=integrator)
     omega = first.omega
 
     cells: list[_Cell | None] = [None] * len(initials)
     tic = time.perf_counter()
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(_run, system, forcing, ini, duration, dt, drop, tol): i
+        futures = {pool.submit(_run, system, forcing, ini, duration, dt, drop, tol,
+                               integrator): i
                    for i, ini in enumerate(initials)}
         for done, fut in enumerate(as_completed(futures), 1):
             cells[futures[fut]] = fut.result()
@@ -269,6 +270,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
         "dt_s": dt, "duration_s": duration, "drop": drop, "workers": workers,
         "wall_time_s": wall, "ball_position_m": ball_position,
         "ball_velocity_m_s": ball_velocity, "tolerances": json.dumps(asdict(tol)),
+        "integrator": integrator,
     })
 
 
@@ -325,7 +327,6 @@ def _dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, attrs
         attrs={
             "title": "boringbar basins of attraction",
             "boringbar_version": __version__,
-            "integrator": "rk4",
             "preset": system.preset,
             "system": json.dumps(system.to_dict()),
             "forcing": json.dumps(forcing.to_dict()),

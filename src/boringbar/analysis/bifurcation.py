@@ -136,6 +136,7 @@ def bifurcation(
     max_k: int = 16,
     units: str | None = None,
     progress=None,
+    integrator: str = "rk4",
 ):
     """Continuation sweep of ``parameter`` over ``values`` with Poincare samples.
 
@@ -149,7 +150,8 @@ def bifurcation(
     starts from ``initial`` (default: rest, ball centred); each later one from
     the previous run's final state (module docstring: phase continuity).
     Verdicts: :meth:`PoincareMap.classify` with ``tol``, ``max_k``.
-    ``progress(done, total)`` is called after each run.
+    ``progress(done, total)`` is called after each run.  ``integrator``: "rk4"
+    (published) or "exact" (see :func:`~boringbar.simulate.simulate`).
 
     Returns an xarray Dataset, dims (direction, value, sample): the Poincare
     samples ``tip_displacement`` W (m) and ``tip_velocity`` W' (m/s), NaN-padded;
@@ -181,6 +183,7 @@ def bifurcation(
                 initial=start,
                 steady_fraction=1.0 - drop,
                 strobe=True,
+                integrator=integrator,
             )
             records[d, i] = {**_record(run, drop, tol, max_k), "restarted": restarted}
             systems.setdefault(i, sys_i.to_dict())
@@ -198,7 +201,7 @@ def bifurcation(
         "drop": drop,
         "tol": tol,
         "max_k": max_k,
-        "integrator": "rk4",
+        "integrator": integrator,
         "wall_time_s": time.perf_counter() - tic,
     }
     return _dataset(records, directions, v, FORCING_PARAMETERS.get(parameter, units or ""), config)

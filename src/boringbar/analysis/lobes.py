@@ -157,7 +157,7 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
           feed: float = 0.1e-3, revolutions: int = 3, interpolation: str = "cubic",
           start: str = "rest", bounded_fraction: float = 0.1, duration: float = 2.0,
           dt: float = 1e-6, workers: int | None = None, analytic: bool = True,
-          progress=None):
+          progress=None, integrator: str = "rk4"):
     """Stability lobes of every case over ``rpm`` by time-domain simulation.
 
     Returns an xarray Dataset: per (case, rpm, depth) the verdict of every grid
@@ -166,7 +166,12 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
     (case, rpm) the limiting (chatter-free) depth and the first unstable depth
     under the chosen ``criterion``; per case the minimum chatter-free depth;
     and, for the linear bars (solid, TMD, locked ball), the analytic limit.
+    ``integrator`` must be "rk4": the exact integrator has no regenerative cut yet.
     """
+    if integrator != "rk4":
+        raise ParameterError(f"integrator = {integrator!r}: lobes are regenerative cuts, "
+                             "which only the 'rk4' integrator runs (the exact integrator "
+                             "supports harmonic forcing only)")
     if not cases:
         raise ParameterError("lobes needs at least one case")
     rpm = np.atleast_1d(np.asarray(rpm, dtype=float))

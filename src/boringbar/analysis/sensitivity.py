@@ -110,7 +110,8 @@ def _cases(kind, values, bar, preset, gap, friction, overrides) -> list[Case]:
 def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = "ball",
                 gap: float = 0.5e-3, friction: bool = True, forces=(10.0,), ratios=(1.0,),
                 cutting: Cuts | None = None, duration: float = 2.0, dt: float = 1e-6,
-                workers: int | None = None, progress=None, **overrides):
+                workers: int | None = None, progress=None, integrator: str = "rk4",
+                **overrides):
     """Vary one parameter (``kind``, see the module doc) over ``values`` (default:
     the published ones).
 
@@ -122,7 +123,8 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     (``kind``, depth) with the chatter verdict (the force reached zero),
     bounded chatter, steady amplitude (m), first zero time (s) and peak force (N)
     of each full-length cut.  ``overrides`` go to
-    :func:`~boringbar.system.make_system`; one result per value.
+    :func:`~boringbar.system.make_system`; one result per value.  ``integrator``:
+    "rk4" (published) or "exact" (harmonic runs only; cuts need "rk4").
     """
     check_choice("kind", kind, KINDS)
     if kind != "initial" and bar != "ball":
@@ -147,14 +149,15 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
         raise ParameterError(f"values = {values!r} must be distinct")
     coord = labels if kind == "initial" else values
     if cutting is not None:
-        ds = _cuts(cases, initials, cutting, dt, workers)
+        ds = _cuts(cases, initials, cutting, dt, workers, integrator)
         ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
     elif kind == "initial":
         import xarray as xr
 
         # sweep takes one initial condition: one sweep (over forces x ratios) each
         parts = [sweep(cases[:1], ratios, forces, duration=duration, dt=dt, workers=workers,
-                       initial=ini, progress=progress) for ini in initials]
+                       initial=ini, progress=progress, integrator=integrator)
+                 for ini in initials]
         ds = xr.concat(parts, dim="case", data_vars="all", coords="different",
                        compat="equals", combine_attrs="override")
         ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
@@ -163,7 +166,7 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
             ds = ds.assign_coords({name: ("case", [getattr(i, name) for i in initials])})
     else:
         ds = sweep(cases, ratios, forces, duration=duration, dt=dt, workers=workers,
-                   progress=progress)
+                   progress=progress, integrator=integrator)
         ds = ds.assign_coords({kind: ("case", coord)})
     ds = ds.swap_dims({"case": kind})
     if kind == "initial":
@@ -172,16 +175,19 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     return ds
 
 
-def _cut(case: Case, initial: Initial | None, cuts: Cuts, depth: float, dt: float) -> dict:
+def _cut(case: Case, initial: Initial | None, cuts: Cuts, depth: float, dt: float,
+         integrator: str = "rk4") -> dict:
     forcing = Regenerative(depth, cuts.rpm, stop_at_zero=False, **cuts.options)
-    c = simulate(case.system, forcing, duration=cuts.duration, dt=dt, initial=initial).cutting
+    c = simulate(case.system, forcing, duration=cuts.duration, dt=dt, initial=initial,
+                 integrator=integrator).cutting
     return {"chatter": c["chatter"], "bounded_chatter": c["chatter"] or c["bounded_chatter"],
             "amplitude_m": c["amplitude_m"], "max_force_n": c["max_force_n"],
             "first_zero_time_s": math.nan if c["first_zero_time_s"] is None
             else c["first_zero_time_s"]}
 
 
-def _cuts(cases, initials, cuts: Cuts, dt: float, workers: int | None):
+def _cuts(cases, initials, cuts: Cuts, dt: float, workers: int | None,
+          integrator: str = "rk4"):
     import xarray as xr
 
     workers = int(workers or os.cpu_count() or 1)
@@ -189,11 +195,11 @@ def _cuts(cases, initials, cuts: Cuts, dt: float, workers: int | None):
     depths = np.asarray(cuts.depths, dtype=float)
     jobs = [(i, j) for i in range(len(cases)) for j in range(len(depths))]
     _cut(cases[0], initials[0], Cuts(cuts.rpm, cuts.depths[:1], 50 * dt, cuts.options),
-         depths[0], dt)  # validates and warms the JIT before fanning out
+         depths[0], dt, integrator)  # validates and warms the JIT before fanning out
     tic = time.perf_counter()
     with ThreadPoolExecutor(max_workers=workers) as pool:
         results = list(pool.map(lambda ij: _cut(cases[ij[0]], initials[ij[0]], cuts,
-                                                depths[ij[1]], dt), jobs))
+                                                depths[ij[1]], dt, integrator), jobs))
     wall = time.perf_counter() - tic
     shape = (len(cases), len(depths))
     units = {"amplitude_m": "m", "max_force_n": "N", "first_zero_time_s": "s"}
@@ -204,7 +210,7 @@ def _cuts(cases, initials, cuts: Cuts, dt: float, workers: int | None):
         data,
         coords={"depth": ("depth", depths, {"units": "m"})},
         attrs={"title": "boringbar sensitivity (cuts)", "boringbar_version": __version__,
-               "integrator": "rk4", "rpm": cuts.rpm, "dt_s": dt, "duration_s": cuts.duration,
+               "integrator": integrator, "rpm": cuts.rpm, "dt_s": dt, "duration_s": cuts.duration,
                "workers": workers, "wall_time_s": wall,
                "forcing_options": json.dumps(cuts.options),
                "systems": json.dumps({c.label: c.system.to_dict() for c in cases})},

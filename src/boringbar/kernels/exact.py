@@ -435,7 +435,7 @@ def _quad(a, b, G, nb):
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis):
     n = int(p[L.N_MODES])
