@@ -90,9 +90,15 @@ def test_finished_study_is_not_recomputed(reference, tmp_path, monkeypatch):
         raise AssertionError("recomputed")
 
     monkeypatch.setattr(runner, "compute_chunk", boom)
+    # as left by a run killed between writing OUT and removing its chunks
+    stale = tmp_path / "f.nc.partial"
+    stale.mkdir()
+    (stale / "manifest.json").write_text(json.dumps(
+        {"config_hash": reference[1].attrs["study_config_hash"]}))
     report = RunReport()
     ds = run_study(study_from_dict(SMALL), out, executor="serial", report=report)
     assert report.skipped and report.computed == 0
+    assert not stale.exists()
     assert_same_data(ds, reference[1])
 
 

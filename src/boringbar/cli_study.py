@@ -53,6 +53,14 @@ def cmd_run(args: argparse.Namespace) -> int:
     if executor is None:
         executor = "dask" if (args.scheduler or args.dask_local) else "processes"
     report = RunReport()
+    if not args.quiet:  # resume and worker-loss notes, one line each on stderr
+        import logging
+
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("boringbar run: %(message)s"))
+        logger = logging.getLogger("boringbar.runner")
+        logger.addHandler(handler)
+        logger.setLevel(logging.INFO)
     run_study(study, args.out, executor=executor, workers=args.workers,
               scheduler=args.scheduler, dask_local=args.dask_local, chunk_size=args.chunk_size,
               quiet=args.quiet or not sys.stderr.isatty(), report=report)

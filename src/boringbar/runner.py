@@ -189,6 +189,12 @@ class _Partial:
                                "boringbar_version": __version__, "config": study.to_dict()},
                               manifest)
 
+    @staticmethod
+    def belongs(directory: Path, key: str) -> bool:
+        with contextlib.suppress(OSError, ValueError):
+            return json.loads((directory / MANIFEST).read_text()).get("config_hash") == key
+        return False
+
     def load(self) -> dict:
         """index -> result of every point already done."""
         done = {}
@@ -399,7 +405,10 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
     report.points = n
     if ds is not None:
         report.skipped = True
-        log.info("%s already holds this study's result; not recomputed", out)
+        stale = out.with_name(out.name + ".partial")
+        if stale.is_dir() and _Partial.belongs(stale, key):
+            shutil.rmtree(stale, ignore_errors=True)  # killed after OUT was written
+        log.debug("%s already holds this study's result; not recomputed", out)
         return ds
 
     part = _Partial(out, study, key, n)
