@@ -90,7 +90,8 @@ def test_exact_integrator_follows_the_masri_caughey_orbit(orbit_case):
     run = simulate(s, Harmonic(30.0, 1.0), duration=n_per * period, dt=period / 2000,
                    initial=start, steady_fraction=1.0, integrator="exact")
     imp = run.impacts
-    assert len(imp) == 2 * n_per  # one + and one - impact per period; the last at t_end
+    # one + and one - impact per period; the last falls on t_end (in or out by round-off)
+    assert len(imp) in (2 * n_per - 1, 2 * n_per)
     walls = imp[:, 1]
     assert np.all(walls[1:] == -walls[:-1]) and walls[0] == -1
     k = np.arange(1, len(imp) + 1)

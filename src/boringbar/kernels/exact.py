@@ -176,8 +176,12 @@ def prepare(p: np.ndarray) -> dict:
         row[n:2 * n] = -pA
         lv.append(row)
         cv.append(p[L.TMD_C])
+    mu = np.concatenate([lam, np.tile([1j * om, -1j * om, 0.0], (R, 1))], axis=1)
+    ssum = mu[:, :, None] + mu[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        isum = np.where(ssum != 0, 1.0 / np.where(ssum != 0, ssum, 1.0), 0.0)
     return {"lam": lam, "V": V, "Vi": Vi, "Z": Z, "D": D, "eh": np.exp(lam * h), "h": h,
-            "lvis": np.array(lv), "cvis": np.array(cv)}
+            "lvis": np.array(lv), "cvis": np.array(cv), "isum": isum.astype(complex)}
 
 
 # --- the kernel ----------------------------------------------------------------------------
@@ -250,84 +254,112 @@ def _g(kind, tau, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om):
     return seg[6] * F - seg[8]
 
 
+@njit(cache=True, inline="always")
+def _eval2(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X, Xd):
+    """X and X' at ts + tau on the segment (see :func:`_eval`)."""
+    nz = X.shape[0]
+    ph = cmath.exp(1j * om * (ts + tau))
+    for k in range(nz):
+        q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
+    for j in range(nz):
+        zp = Z[r, j] * ph
+        s = zp.imag + fb * D[r, j]
+        sd = om * zp.real
+        for k in range(nz):
+            vq = V[r, j, k] * q[k]
+            s += vq.real
+            sd += (vq * lam[r, k]).real
+        X[j] = s
+        Xd[j] = sd
+
+
 @njit(cache=True)
-def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om):
-    """The root of g in [a, b] (ga, gb of opposite signs or ga = 0): Illinois regula falsi
-    with a bisection whenever the bracket fails to halve; returns the upper end."""
+def _gd(kind, tau, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om):
+    """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
     ts = seg[0]
-    side = 0
+    fb = seg[1]
+    _eval2(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X, Xd)
+    if kind == EV_WEXT:
+        g = 0.0
+        dg = 0.0
+        for i in range(n):
+            g += mk[3, i] * X[n + i]
+            dg += mk[3, i] * Xd[n + i]
+        return g, dg
+    if kind <= EV_YEXT:
+        pdu = 0.0
+        pdv = 0.0
+        pda = 0.0
+        for i in range(n):
+            pdu += mk[4, i] * X[i]
+            pdv += mk[4, i] * X[n + i]
+            pda += mk[4, i] * Xd[n + i]
+        acc = fb / seg[10]
+        y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
+        yd = seg[3] + acc * tau - pdv
+        ydd = acc - pda
+        if kind == EV_PLUS:
+            return y - seg[9], yd
+        if kind == EV_MINUS:
+            return -seg[9] - y, -yd
+        if kind == EV_VSTOP:
+            return -seg[5] * yd, -seg[5] * ydd
+        return yd, ydd
+    t = ts + tau
+    f = f0 * math.sin(om * t)
+    fd = f0 * om * math.cos(om * t)
+    F = 0.0
+    Fd = 0.0
+    for i in range(n):
+        F += mk[4, i] * (mk[3, i] * f - mk[1, i] * X[i] - mk[2, i] * X[n + i]) / mk[0, i]
+        Fd += mk[4, i] * (mk[3, i] * fd - mk[1, i] * X[n + i] - mk[2, i] * Xd[n + i]) / mk[0, i]
+    F /= seg[7]
+    Fd /= seg[7]
+    if kind == EV_REL_NEG:
+        return F - seg[8], Fd
+    if kind == EV_REL_POS:
+        return -F - seg[8], -Fd
+    return seg[6] * F - seg[8], seg[6] * Fd
+
+
+@njit(cache=True)
+def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om):
+    """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
+    Newton with the exact derivative, kept inside the shrinking bracket (a bisection
+    whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
+    Newton step below that.  Returns the end on gb's side (the event has happened)."""
+    ts = seg[0]
+    pos = gb > 0.0
+    c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
     w_ref = b - a
     slow = 0
-    for _ in range(200):
+    for _ in range(100):
         tol = 4.4e-16 * (abs(ts) + abs(b)) + 1e-300
         if b - a <= tol:
             break
-        c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
         if slow >= 3 or not (a < c < b):
             c = 0.5 * (a + b)
             slow = 0
             if not (a < c < b):
                 break
-        gc = _g(kind, c, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om)
-        if gc == 0.0:
+        g, dg = _gd(kind, c, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om)
+        if g == 0.0:
+            return c
+        if (g > 0.0) == pos:
             b = c
-            break
-        if (gc > 0.0) == (gb > 0.0):
-            b = c
-            gb = gc
-            if side == 1:
-                ga *= 0.5
-            side = 1
         else:
             a = c
-            ga = gc
-            if side == -1:
-                gb *= 0.5
-            side = -1
         if b - a <= 0.5 * w_ref:
             w_ref = b - a
             slow = 0
         else:
             slow += 1
-    return b
-
-
-@njit(cache=True)
-def _root_wall(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, n, mk, om):
-    """The root of g = +-y -+ delta/2 in [a, b] (ga <= 0 < gb): Newton with the exact
-    derivative +-y', kept inside the bracket (bisection when it leaves); the upper end."""
-    ts = seg[0]
-    sgn = 1.0 if kind == EV_PLUS else -1.0
-    acc = seg[1] / seg[10]
-    c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
-    for _ in range(100):
-        tol = 4.4e-16 * (abs(ts) + abs(b)) + 1e-300
-        if b - a <= tol:
-            break
-        if not (a < c < b):
-            c = 0.5 * (a + b)
-            if not (a < c < b):
-                break
-        _eval(r, q0, ts, c, seg[1], om, lam, V, Z, D, q, X)
-        pdu = 0.0
-        pdv = 0.0
-        for i in range(n):
-            pdu += mk[4, i] * X[i]
-            pdv += mk[4, i] * X[n + i]
-        g = sgn * (seg[2] + c * (seg[3] + 0.5 * acc * c) - pdu) - seg[9]
-        dg = sgn * (seg[3] + acc * c - pdv)
-        if g > 0.0:
-            b = c
-        elif g < 0.0:
-            a = c
-        else:
-            b = c
-            break
-        step = g / dg if dg != 0.0 else 0.0
-        cn = c - step
-        if dg != 0.0 and abs(step) <= tol and a <= cn <= b:
-            return cn  # the next Newton step is below round-off
-        c = cn if (dg != 0.0 and a < cn < b) else 0.5 * (a + b)
+        cn = 0.5 * (a + b)
+        if dg != 0.0:
+            cn = c - g / dg
+            if abs(cn - c) <= tol and a <= cn <= b:
+                return b if pos == (g > 0.0) else min(b, cn + tol)
+        c = cn
     return b
 
 
@@ -344,9 +376,13 @@ def _phi1(z, T):
 
 @njit(cache=True)
 def _integrals(r, q0, ts, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis, stick_k, sr,
-               mu, em, G, Cx, cf, ca, cb, out):
+               mu, em, G, Cx, cf, ca, cb, out, isum, steady):
     """Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
-    sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u']."""
+    sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u']
+    (the steady-only ones, 2-4, only if ``steady``).  Every quantity is
+    sum_m c_m exp(mu_m tau) over mu = (lambda_r, i Omega, -i Omega, 0), so a
+    product integrates to sum_ml a_m b_l G_ml, G_ml = int_0^T exp((mu_m + mu_l) tau);
+    ``isum`` holds 1 / (mu_m + mu_l), precomputed per regime."""
     nz = lam.shape[1]
     nb = nz + 3
     for k in range(nz):
@@ -356,14 +392,14 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis, stick_
     mu[nz + 2] = 0.0
     for k in range(nb):
         em[k] = cmath.exp(mu[k] * T)
+    lim = 0.015625 / (T * T)  # |mu_m + mu_l| T < 1/8: the series
     for a in range(nb):
         for b in range(a, nb):
             s = mu[a] + mu[b]
-            z = s * T
-            if abs(z) < 0.125:
-                g = _phi1(z, T)
+            if s.real * s.real + s.imag * s.imag < lim:
+                g = _phi1(s * T, T)
             else:
-                g = (em[a] * em[b] - 1.0) / s
+                g = (em[a] * em[b] - 1.0) * isum[r, a, b]
             G[a, b] = g
             G[b, a] = g
     ph = cmath.exp(1j * om * ts)
@@ -388,27 +424,6 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis, stick_
     out[4] = 0.0
     for k in range(nb):
         out[4] += (cf[k] * G[k, nb - 1]).real
-    # viscous loss
-    dv = 0.0
-    for d in range(lvis.shape[0]):
-        for k in range(nb):
-            s = 0.0 + 0.0j
-            for j in range(nz):
-                s += lvis[d, j] * Cx[j, k]
-            ca[k] = s
-        dv += cvis[d] * _quad(ca, ca, G, nb)
-    out[1] = dv
-    # W = psi_L . u
-    for k in range(nb):
-        s = 0.0 + 0.0j
-        for i in range(n):
-            s += mk[3, i] * Cx[i, k]
-        ca[k] = s
-    out[2] = _quad(ca, ca, G, nb)
-    w1 = 0.0
-    for k in range(nb):
-        w1 += (ca[k] * G[k, nb - 1]).real
-    out[3] = w1
     out[5] = 0.0
     if stick_k != 0.0 and sr != 1.0:
         # F_stick = psi_d . a_0 / kappa, a_0,i = (psi_L,i f - K_i u_i - C_i u_i') / M_i
@@ -422,6 +437,41 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis, stick_
             ca[k] = s / stick_k
             cb[k] = pv
         out[5] = (1.0 - sr) * _quad(ca, cb, G, nb)
+    # viscous loss
+    dv = 0.0
+    for d in range(lvis.shape[0]):
+        for k in range(nb):
+            s = 0.0 + 0.0j
+            for j in range(nz):
+                s += lvis[d, j] * Cx[j, k]
+            ca[k] = s
+        dv += cvis[d] * _quad_sym(ca, G, nb)
+    out[1] = dv
+    if not steady:
+        return
+    # W = psi_L . u
+    for k in range(nb):
+        s = 0.0 + 0.0j
+        for i in range(n):
+            s += mk[3, i] * Cx[i, k]
+        ca[k] = s
+    out[2] = _quad_sym(ca, G, nb)
+    w1 = 0.0
+    for k in range(nb):
+        w1 += (ca[k] * G[k, nb - 1]).real
+    out[3] = w1
+
+
+@njit(cache=True, inline="always")
+def _quad_sym(a, G, nb):
+    """Re(a^T G a) for a symmetric G."""
+    s = 0.0
+    for i in range(nb):
+        t = 0.5 * G[i, i] * a[i]
+        for j in range(i + 1, nb):
+            t += G[i, j] * a[j]
+        s += (a[i] * t).real
+    return 2.0 * s
 
 
 @njit(cache=True, inline="always")
@@ -437,7 +487,7 @@ def _quad(a, b, G, nb):
 
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
-           lam, V, Vi, Z, D, eh, h, lvis, cvis):
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum):
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     nz = lam.shape[1]
@@ -472,6 +522,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     # scratch
     X = np.zeros(nz)
     Xa = np.zeros(nz)
+    Xd = np.zeros(nz)
     q0 = np.zeros(nz, np.complex128)
     qs = np.zeros(nz, np.complex128)
     qg = np.zeros(nz, np.complex128)
@@ -646,7 +697,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     if (mode == STICK) == (kk != EV_WALL_REL):
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
                             tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, Z,
-                                       D, qs, dX, n, mk, f0, om)
+                                       D, qs, dX, Xd, n, mk, f0, om)
                             if tr < best or kind < 0:
                                 best = tr
                                 kind = kk
@@ -664,14 +715,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     near = dmin <= reach
                 if near:
                     te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                               V, Z, D, qs, dX, n, mk, f0, om)
+                               V, Z, D, qs, dX, Xd, n, mk, f0, om)
                     gp = _g(EV_PLUS, te, seg, r, q0, lam, V, Z, D, qs, dX, n, mk, f0, om)
                     gm = -2.0 * half - gp
                     for kk in (EV_PLUS, EV_MINUS):
                         ge = gp if kk == EV_PLUS else gm
                         if ev_a[kk] <= 0.0 < ge:
-                            tr = _root_wall(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, Z, D,
-                                            qs, dX, n, mk, om)
+                            tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, Z, D,
+                                            qs, dX, Xd, n, mk, f0, om)
                             if kind < 0 or tr < best:
                                 best = tr
                                 kind = kk
@@ -679,8 +730,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         for kk in (EV_PLUS, EV_MINUS):
                             ge = gp if kk == EV_PLUS else gm
                             if ge <= 0.0 < ev_b[kk]:
-                                tr = _root_wall(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V,
-                                                Z, D, qs, dX, n, mk, om)
+                                tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V,
+                                                Z, D, qs, dX, Xd, n, mk, f0, om)
                                 if kind < 0 or tr < best:
                                     best = tr
                                     kind = kk
@@ -690,12 +741,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         if kk == EV_VSTOP and not watch_v:
                             continue
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
-                            if kk == EV_VSTOP:
-                                tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V,
-                                           Z, D, qs, dX, n, mk, f0, om)
-                            else:
-                                tr = _root_wall(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam,
-                                                V, Z, D, qs, dX, n, mk, om)
+                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, Z,
+                                       D, qs, dX, Xd, n, mk, f0, om)
                             if kind < 0 or tr < best:
                                 best = tr
                                 kind = kk
@@ -715,8 +762,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_w = max(max_w, wb)
                 min_w = min(min_w, wb)
                 if wda * wdb < 0.0:
-                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, Z, D, qs, dX, n,
-                               mk, f0, om)
+                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, Z, D, qs, dX, Xd,
+                               n, mk, f0, om)
                     _eval(r, q0, t, te, fb, om, lam, V, Z, D, qs, dX)
                     we = 0.0
                     for i in range(n):
@@ -782,7 +829,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         T = tau_ev
         _integrals(r, q0, t, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis,
                    kappa_stick if (ball and mode == STICK) else 0.0, sr,
-                   mu, em, G, Cx, cf, ca, cb, out)
+                   mu, em, G, Cx, cf, ca, cb, out, isum, steady)
         w_force += out[0]
         d_visc += out[1]
         w_nr += out[5]
@@ -996,4 +1043,5 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
         prep = prepare(p)
     return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
                   stick, strobe, met, prep["lam"], prep["V"], prep["Vi"], prep["Z"],
-                  prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"])
+                  prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
+                  prep["isum"])
