@@ -18,7 +18,8 @@ import pytest
 import xarray as xr
 
 from boringbar.runner import RunReport, run_study
-from boringbar.study import StudyError, study_from_dict
+from boringbar.studies import ANALYSES
+from boringbar.study import StudyError, load_study, study_from_dict
 
 SMALL = {"study": {"analysis": "sweep", "name": "small"},
          "run": {"duration_s": 0.02},
@@ -166,8 +167,6 @@ def test_sigkill_then_resume_equals_uninterrupted_run(tmp_path):
     assert report["resumed"] >= n_done and report["computed"] == 36 - report["resumed"]
     assert out.exists() and not part.exists()
 
-    from boringbar.study import load_study
-
     fresh = run_study(load_study(study), tmp_path / "fresh.nc", executor="serial")
     with xr.open_dataset(out) as resumed:
         assert_same_data(resumed.load(), fresh)
@@ -198,3 +197,72 @@ def test_example_studies_run_shortened(path, tmp_path):
                    report=report)
     assert report.computed == report.points > 0
     assert ds.attrs["study_name"] == s.name and ds.data_vars
+
+
+def _in_process(name: str):
+    """(study dict, the in-process function's Dataset) of the same tiny computation."""
+    from boringbar.analysis.sweep import Case
+    from boringbar.forcing import Harmonic
+    from boringbar.system import make_system
+
+    if name == "sweep":
+        from boringbar.analysis.sweep import published_cases, sweep
+
+        cases = published_cases(bars=("solid", "ball"), gaps=(0.5e-3,))
+        return ({"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02},
+                 "grid": {"kind": ["solid", "ball"], "friction": ["off", "on"],
+                          "ratio": [0.99, 1.01]}},
+                sweep(cases, [0.99, 1.01], duration=0.02, workers=1))
+    if name == "lobes":
+        from boringbar.analysis.lobes import lobes
+
+        return ({"study": {"analysis": "lobes"}, "bar": {"kind": "solid"},
+                 "run": {"duration_s": 0.05}, "grid": {"rpm": [1000.0, 1200.0]},
+                 "analysis": {"depth_step_mm": 0.05, "max_depth_mm": 0.5}},
+                lobes([Case("solid", make_system("solid"), "solid")], [1000.0, 1200.0],
+                      depth_step=0.05e-3, max_depth=0.5e-3, duration=0.05, workers=1))
+    if name == "bifurcation":
+        from boringbar.analysis.bifurcation import bifurcation
+
+        ref = bifurcation(make_system("ball"), "force", [5.0, 10.0], duration=0.02)
+        return ({"study": {"analysis": "bifurcation"}, "run": {"duration_s": 0.02},
+                 "analysis": {"values": [5.0, 10.0]}},
+                ref.expand_dims(case=["ball gap=0.5mm friction=on"]).assign_coords(
+                    bar=("case", ["ball"]), gap=("case", [0.5e-3]),
+                    friction=("case", ["on"])))
+    if name == "basins":
+        from boringbar.analysis.basins import basins
+
+        return ({"study": {"analysis": "basins"}, "run": {"duration_s": 0.02},
+                 "analysis": {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
+                              "velocity_m_s": {"start": -1, "stop": 1, "count": 2}}},
+                basins(make_system("ball"), Harmonic(10.0, 1.0), displacement=(-1e-3, 1e-3, 2),
+                       velocity=(-1.0, 1.0, 2), duration=0.02, workers=1))
+    if name == "sensitivity":
+        from boringbar.analysis.sensitivity import sensitivity
+
+        return ({"study": {"analysis": "sensitivity"}, "run": {"duration_s": 0.02},
+                 "analysis": {"kind": "ball"}},
+                sensitivity("ball", duration=0.02, workers=1))
+    raise AssertionError(f"no in-process reference for the analysis {name!r}: add one")
+
+
+@pytest.mark.parametrize("name", sorted(ANALYSES))
+def test_study_result_equals_the_in_process_function(name, tmp_path):
+    """A study gives the in-process function's variables and values, bit for bit
+    (wall-clock timings aside), for every registered analysis."""
+    d, ref = _in_process(name)
+    ds = run_study(study_from_dict(d), tmp_path / "s.nc", executor="serial")
+    ref = ref.drop_vars(["elapsed_s"], errors="ignore")
+    assert set(ds.data_vars) == set(ref.data_vars)
+    for k in ref.data_vars:
+        x, y = ds[k].values, ref[k].values
+        if k in ("tip_displacement", "tip_velocity"):
+            x = x[..., : y.shape[-1]]
+        assert x.shape == y.shape, k
+        assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), k
+    assert set(ref.coords) <= set(ds.coords)
+
+
+def test_every_analysis_has_an_example_study():
+    assert {load_study(p).analysis for p in EXAMPLES} == set(ANALYSES)
