@@ -37,6 +37,7 @@ import shutil
 import sys
 import tempfile
 import time
+import uuid
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -306,6 +307,7 @@ def _run_processes(study, key, chunks, on_done, report, workers):
         pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)),
                                    mp_context=_mp_context(mp))
         progressed = False
+        futs: dict = {}
         try:
             futs = {pool.submit(compute_chunk, study, key, cid, idx): cid
                     for cid, idx in pending.items()}
@@ -315,6 +317,12 @@ def _run_processes(study, key, chunks, on_done, report, workers):
                 pending.pop(cid)
                 progressed = True
         except BrokenProcessPool:
+            for fut, cid in futs.items():  # keep what finished before the break
+                if (cid in pending and fut.done() and not fut.cancelled()
+                        and fut.exception() is None):
+                    on_done(*fut.result())
+                    pending.pop(cid)
+                    progressed = True
             restarts = 0 if progressed else restarts + 1
             msg = (f"a worker process died; {len(pending)} unfinished chunks are "
                    "resubmitted to a new pool")
@@ -343,8 +351,9 @@ def _run_dask(study, key, chunks, on_done, report, scheduler, dask_local):
         else:
             client = stack.enter_context(Client(scheduler))
         report.workers = len(client.scheduler_info().get("workers", {})) or report.workers
+        run_id = uuid.uuid4().hex[:8]  # task keys unique to this run on a shared cluster
         futs = [client.submit(compute_chunk, study, key, cid, idx, pure=False, retries=2,
-                              key=f"boringbar-chunk-{key[:12]}-{cid}")
+                              key=f"boringbar-chunk-{key[:12]}-{run_id}-{cid}")
                 for cid, idx in chunks.items()]
         for fut in as_completed(futs):
             cid, results = fut.result()
