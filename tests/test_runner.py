@@ -266,3 +266,26 @@ def test_study_result_equals_the_in_process_function(name, tmp_path):
 
 def test_every_analysis_has_an_example_study():
     assert {load_study(p).analysis for p in EXAMPLES} == set(ANALYSES)
+
+
+def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_path):
+    from boringbar.analysis.basins import basins
+    from boringbar.forcing import Harmonic
+    from boringbar.system import make_system
+
+    grid = {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
+            "velocity_m_s": {"start": -1, "stop": 1, "count": 2}}
+    ds = run_study(study_from_dict({"study": {"analysis": "basins"}, "run": {"duration_s": 0.02},
+                                    "grid": {"friction": ["off", "on"], "force_n": [10, 20]},
+                                    "analysis": grid}),
+                   tmp_path / "b.nc", executor="serial")
+    assert list(ds["case"].values)[3] == "ball gap=0.5mm friction=on F0=20N"
+    ref = basins(make_system("ball", friction=True), Harmonic(20.0, 1.0),
+                 displacement=(-1e-3, 1e-3, 2), velocity=(-1.0, 1.0, 2), duration=0.02,
+                 workers=1)
+    one = ds.isel(case=3)
+    for k in ref.data_vars:
+        y = ref[k].values
+        x = one[k].values[tuple(slice(0, n) for n in y.shape)]
+        assert np.array_equal(x, y, equal_nan=y.dtype.kind == "f"), k
+    assert int(ds["count"].sum()) == 4 * 4  # every cell of every operating point

@@ -493,43 +493,60 @@ class Bifurcation(Analysis):
 # --- basins -----------------------------------------------------------------------
 
 class Basins(Analysis):
-    """Basins of attraction of one operating point: one point per grid cell."""
+    """Basins of attraction: one point per (operating point, grid cell).
+
+    One operating point (no grid) gives exactly the Dataset of
+    :func:`~boringbar.analysis.basins.basins`; several (a grid over bar, damper,
+    ``force_n`` or ``ratio``) give those Datasets stacked along a leading
+    ``case`` dimension, the attractors of each padded to the largest count
+    (``count`` 0, ``attractor_period`` -1, NaN and "" beyond its own).
+    """
 
     name = "basins"
     options = {
         "displacement_mm": Range({"start": -1.5, "stop": 1.5, "count": 30}, count=True),
         "velocity_m_s": Range({"start": -1.5, "stop": 1.5, "count": 30}, count=True),
     }
-    grid_keys = ()
+    grid_keys = SYSTEM_KEYS + ("force_n", "ratio")
 
     def plan(self, study):
         from boringbar.analysis.basins import BasinTolerance, _grid
         from boringbar.forcing import Harmonic
         from boringbar.simulate import Initial
 
-        cases, _ = study_cases(study)
-        system = cases[0].system
+        cases, values = study_cases(study)
+        forces, ratios = _axis(study, "force_n"), _axis(study, "ratio")
+        ops = []  # (label, case index, forcing)
+        for i, case in enumerate(cases):
+            for f in forces:
+                for r in ratios:
+                    label = case.label
+                    if "force_n" in study.axes:
+                        label += f" F0={f:g}N"
+                    if "ratio" in study.axes:
+                        label += f" r={r:g}"
+                    ops.append((label, i, Harmonic(float(f), float(r))))
         d, v = study.options["displacement_mm"], study.options["velocity_m_s"]
         w0 = _grid("displacement", (d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]))
         v0 = _grid("velocity", (v["start"], v["stop"], v["count"]))
         bp, bv = study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s")
         initials = [Initial(float(w), float(v), bp, bv) for w in w0 for v in v0]
-        forcing = Harmonic(study.value("force_n"), study.value("ratio"))
-        ctx = {"system": system, "forcing": forcing, "duration": study.value("duration_s"),
+        ctx = {"cases": cases, "ops": ops, "duration": study.value("duration_s"),
                "dt": study.value("dt_s"), "drop": study.value("drop"),
                "tol": BasinTolerance(), "initials": initials, "w0": w0, "v0": v0,
                "integrator": study.value("integrator")}
-        return Plan(ctx, list(range(len(initials))))
+        points = list(itertools.product(range(len(ops)), range(len(initials))))
+        return Plan(ctx, points, {"values": values})
 
     def warm(self, ctx):
-        from boringbar.simulate import simulate
+        _warm_harmonic(ctx["cases"])
 
-        simulate(ctx["system"], ctx["forcing"], duration=2e-5, dt=1e-6)
-
-    def compute(self, ctx, i):
+    def compute(self, ctx, point):
         from boringbar.analysis.basins import _run
 
-        return _run(ctx["system"], ctx["forcing"], ctx["initials"][i], ctx["duration"],
+        op, cell = point
+        _, i, forcing = ctx["ops"][op]
+        return _run(ctx["cases"][i].system, forcing, ctx["initials"][cell], ctx["duration"],
                     ctx["dt"], ctx["drop"], ctx["tol"], **_integrator(_run, ctx))
 
     def point_functions(self):
@@ -545,15 +562,60 @@ class Basins(Analysis):
         from boringbar.analysis.basins import _dataset, group
 
         c = plan.context
-        omega = c["forcing"].omega(c["system"].reference_frequency)
-        label, leaders = group(results, omega, c["tol"])
-        return _dataset(xr, c["system"], c["forcing"], c["w0"], c["v0"], results, label,
-                        leaders, c["initials"], {
-                            "dt_s": c["dt"], "duration_s": c["duration"], "drop": c["drop"],
-                            "ball_position_m": c["initials"][0].ball_position,
-                            "ball_velocity_m_s": c["initials"][0].ball_velocity,
-                            "tolerances": json.dumps(asdict(c["tol"])),
-                            **_provenance(study)})
+        n_cells = len(c["initials"])
+        parts = []
+        for op, (_, i, forcing) in enumerate(c["ops"]):
+            cells = results[op * n_cells:(op + 1) * n_cells]
+            system = c["cases"][i].system
+            label, leaders = group(cells, forcing.omega(system.reference_frequency), c["tol"])
+            parts.append(_dataset(xr, system, forcing, c["w0"], c["v0"], cells, label, leaders,
+                                  c["initials"], {
+                                      "dt_s": c["dt"], "duration_s": c["duration"],
+                                      "drop": c["drop"],
+                                      "ball_position_m": c["initials"][0].ball_position,
+                                      "ball_velocity_m_s": c["initials"][0].ball_velocity,
+                                      "tolerances": json.dumps(asdict(c["tol"])),
+                                      **_provenance(study)}))
+        if len(parts) == 1:
+            return parts[0]
+        return _stack_basins(parts, c, plan.extra["values"])
+
+
+def _stack_basins(parts: list, c: dict, values: dict):
+    """Basin Datasets of several operating points along a leading ``case`` dim."""
+    import xarray as xr
+
+    n_att = max(p.sizes["attractor_id"] for p in parts)
+    n_sample = max(p.sizes["sample"] for p in parts)
+    fill = {"count": 0, "attractor_period": -1, "attractor_pattern": ""}
+    padded = []
+    for p in parts:
+        attrs = {k: p[k].attrs for k in p.variables}
+        p = p.reindex(attractor_id=np.arange(n_att), fill_value=fill)
+        p = p.pad(sample=(0, n_sample - p.sizes["sample"]))
+        for k, a in attrs.items():
+            p[k].attrs = a
+        padded.append(p)
+    ds = xr.concat(padded, dim="case", data_vars="all", coords="minimal",
+                   compat="override", combine_attrs="drop")
+    cases = c["cases"]
+    idx = [i for _, i, _ in c["ops"]]
+    ds = ds.assign_coords({
+        "case": [label for label, _, _ in c["ops"]],
+        "bar": ("case", [cases[i].bar for i in idx]),
+        "gap": ("case", np.array([cases[i].gap for i in idx]), {"units": "m"}),
+        "friction": ("case", [cases[i].friction for i in idx]),
+        "force": ("case", np.array([f.amplitude for _, _, f in c["ops"]]), {"units": "N"}),
+        "ratio": ("case", np.array([f.ratio for _, _, f in c["ops"]])),
+    })
+    ds = ds.assign_coords({k: ("case", [v[i] for i in idx])
+                           for k, (_, v) in _case_coords(values).items()})
+    first = parts[0].attrs
+    ds.attrs = {k: v for k, v in first.items() if k not in ("system", "forcing")}
+    ds.attrs["systems"] = json.dumps({label: cases[i].system.to_dict()
+                                      for label, i, _ in c["ops"]})
+    ds.attrs["forcings"] = json.dumps({label: f.to_dict() for label, _, f in c["ops"]})
+    return ds
 
 
 # --- sensitivity ------------------------------------------------------------------
