@@ -329,7 +329,7 @@ def _run_processes(study, key, chunks, on_done, report, workers):
             log.warning(msg)
             report.restarts.append(msg)
             if restarts > MAX_POOL_RESTARTS:
-                raise RuntimeError(f"worker processes died {restarts} times in a row without "
+                raise ChildProcessError(f"worker processes died {restarts} times in a row without "
                                    "finishing a chunk; giving up (the finished chunks are "
                                    "kept: run the same command again to resume)") from None
         finally:
@@ -356,7 +356,14 @@ def _run_dask(study, key, chunks, on_done, report, scheduler, dask_local):
                               key=f"boringbar-chunk-{key[:12]}-{run_id}-{cid}")
                 for cid, idx in chunks.items()]
         for fut in as_completed(futs):
-            cid, results = fut.result()
+            try:
+                cid, results = fut.result()
+            except Exception as exc:
+                if type(exc).__name__ != "KilledWorker":
+                    raise
+                raise ChildProcessError(f"Dask gave up on a chunk whose workers kept dying "
+                                        f"({exc}); the finished chunks are kept: run the same "
+                                        "command again to resume") from None
             on_done(cid, results)
 
 
