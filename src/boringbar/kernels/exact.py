@@ -220,7 +220,7 @@ def _freq(X, t, n, f0, om, mk, kappa):
     return s / kappa
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _g(kind, tau, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om):
     """Event function ``kind`` at tau on the segment described by ``seg``.
 
@@ -273,7 +273,7 @@ def _eval2(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X, Xd):
         Xd[j] = sd
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _gd(kind, tau, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om):
     """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
     ts = seg[0]
@@ -322,15 +322,58 @@ def _gd(kind, tau, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om):
     return seg[6] * F - seg[8], seg[6] * Fd
 
 
+@njit(cache=True, inline="always")
+def _hermite(a, b, p0, p1, d0, d1, order):
+    """Where the cubic Hermite interpolant of values p0, p1 and slopes d0, d1 on [a, b]
+    (order 0), or its derivative (order 1), changes sign: a starting point for
+    :func:`_root`, found by a few safeguarded Newton steps on the cubic (no
+    exponentials)."""
+    h = b - a
+    m0 = d0 * h
+    m1 = d1 * h
+    lo = 0.0
+    hi = 1.0
+    if order == 0:
+        flo = p0
+        x = p0 / (p0 - p1) if p0 != p1 else 0.5
+    else:
+        flo = m0
+        x = m0 / (m0 - m1) if m0 != m1 else 0.5
+    for _ in range(8):
+        if not (lo < x < hi):
+            x = 0.5 * (lo + hi)
+        s2 = x * x
+        if order == 0:
+            f = ((2 * s2 * x - 3 * s2 + 1) * p0 + (s2 * x - 2 * s2 + x) * m0
+                 + (-2 * s2 * x + 3 * s2) * p1 + (s2 * x - s2) * m1)
+            df = ((6 * s2 - 6 * x) * p0 + (3 * s2 - 4 * x + 1) * m0
+                  + (-6 * s2 + 6 * x) * p1 + (3 * s2 - 2 * x) * m1)
+        else:
+            f = ((6 * s2 - 6 * x) * p0 + (3 * s2 - 4 * x + 1) * m0
+                 + (-6 * s2 + 6 * x) * p1 + (3 * s2 - 2 * x) * m1)
+            df = ((12 * x - 6) * p0 + (6 * x - 4) * m0 + (-12 * x + 6) * p1
+                  + (6 * x - 2) * m1)
+        if (f > 0.0) == (flo > 0.0):
+            lo = x
+        else:
+            hi = x
+        x = x - f / df if df != 0.0 else 0.5 * (lo + hi)
+    if not (0.0 < x < 1.0):
+        x = 0.5 * (lo + hi)
+    return a + x * h
+
+
 @njit(cache=True)
-def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om):
+def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om, c0):
     """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
     Newton with the exact derivative, kept inside the shrinking bracket (a bisection
     whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
     Newton step below that.  Returns the end on gb's side (the event has happened)."""
     ts = seg[0]
     pos = gb > 0.0
-    c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
+    c = c0
+    if not (a < c < b):
+        c = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
     w_ref = b - a
     slow = 0
     for _ in range(100):
@@ -363,7 +406,7 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om)
     return b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _phi1(z, T):
     """int_0^T exp(z tau / T) dtau = T (e^z - 1) / z."""
     if abs(z) < 0.125:  # series: 12 terms reach 1e-17
@@ -697,7 +740,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     if (mode == STICK) == (kk != EV_WALL_REL):
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
                             tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, Z,
-                                       D, qs, dX, Xd, n, mk, f0, om)
+                                       D, qs, dX, Xd, n, mk, f0, om, -1.0)
                             if tr < best or kind < 0:
                                 best = tr
                                 kind = kk
@@ -715,14 +758,19 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     near = dmin <= reach
                 if near:
                     te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                               V, Z, D, qs, dX, Xd, n, mk, f0, om)
+                               V, Z, D, qs, dX, Xd, n, mk, f0, om,
+                               _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
+                                        ev_b[EV_YEXT], 1))
                     gp = _g(EV_PLUS, te, seg, r, q0, lam, V, Z, D, qs, dX, n, mk, f0, om)
                     gm = -2.0 * half - gp
                     for kk in (EV_PLUS, EV_MINUS):
                         ge = gp if kk == EV_PLUS else gm
                         if ev_a[kk] <= 0.0 < ge:
+                            sg = 1.0 if kk == EV_PLUS else -1.0
                             tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, Z, D,
-                                            qs, dX, Xd, n, mk, f0, om)
+                                       qs, dX, Xd, n, mk, f0, om,
+                                       _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
+                                                0))
                             if kind < 0 or tr < best:
                                 best = tr
                                 kind = kk
@@ -730,8 +778,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         for kk in (EV_PLUS, EV_MINUS):
                             ge = gp if kk == EV_PLUS else gm
                             if ge <= 0.0 < ev_b[kk]:
+                                sg = 1.0 if kk == EV_PLUS else -1.0
                                 tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V,
-                                                Z, D, qs, dX, Xd, n, mk, f0, om)
+                                           Z, D, qs, dX, Xd, n, mk, f0, om,
+                                           _hermite(te, b, ge, ev_b[kk], 0.0,
+                                                    sg * ev_b[EV_YEXT], 0))
                                 if kind < 0 or tr < best:
                                     best = tr
                                     kind = kk
@@ -741,8 +792,13 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         if kk == EV_VSTOP and not watch_v:
                             continue
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
+                            c0 = -1.0
+                            if kk != EV_VSTOP:
+                                sg = 1.0 if kk == EV_PLUS else -1.0
+                                c0 = _hermite(a, b, ev_a[kk], ev_b[kk], sg * ev_a[EV_YEXT],
+                                              sg * ev_b[EV_YEXT], 0)
                             tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, Z,
-                                       D, qs, dX, Xd, n, mk, f0, om)
+                                       D, qs, dX, Xd, n, mk, f0, om, c0)
                             if kind < 0 or tr < best:
                                 best = tr
                                 kind = kk
@@ -763,7 +819,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 min_w = min(min_w, wb)
                 if wda * wdb < 0.0:
                     te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, Z, D, qs, dX, Xd,
-                               n, mk, f0, om)
+                               n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
                     _eval(r, q0, t, te, fb, om, lam, V, Z, D, qs, dX)
                     we = 0.0
                     for i in range(n):
