@@ -289,3 +289,18 @@ def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_p
         x = one[k].values[tuple(slice(0, n) for n in y.shape)]
         assert np.array_equal(x, y, equal_nan=y.dtype.kind == "f"), k
     assert int(ds["count"].sum()) == 4 * 4  # every cell of every operating point
+
+
+def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
+    from boringbar.analysis.sweep import published_cases, sweep
+
+    d = {"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02, "integrator": "exact"},
+         "damper": {"static_ratio": 1.5}, "grid": {"ratio": [0.99, 1.01]}}
+    ds = run_study(study_from_dict(d), tmp_path / "e.nc", executor="processes", workers=2)
+    ref = sweep(published_cases(bars=("ball",), gaps=(0.5e-3,), frictions=(True,),
+                                static_ratio=1.5),
+                [0.99, 1.01], duration=0.02, workers=1, integrator="exact")
+    assert ds.attrs["integrator"] == "exact"
+    for k in ds.data_vars:
+        assert np.array_equal(ds[k].values, ref[k].values,
+                              equal_nan=ds[k].dtype.kind == "f"), k

@@ -122,8 +122,15 @@ class Analysis:
         return {}
 
     def check(self, study: Study) -> None:
-        """Raise ParameterError if the study cannot run (called by the loader)."""
-        self.plan(study)
+        """Raise ParameterError if the study cannot run (called by the loader):
+        the plan, and the checks ``simulate`` would make of every run."""
+        plan = self.plan(study)
+        for system, omega, cutting in self.runs(plan):
+            _check_run(study, system, omega, cutting)
+
+    def runs(self, plan: Plan):
+        """(System, largest forcing omega (rad/s), whether a cut) of the distinct runs."""
+        return []
 
     def plan(self, study: Study) -> Plan:
         raise NotImplementedError
@@ -143,12 +150,35 @@ class Analysis:
         return []
 
     def integrators(self) -> tuple:
-        from boringbar import simulate
+        import importlib
 
         fns = self.point_functions()
         if fns and all(_takes(f, "integrator") for f in fns):
-            return tuple(getattr(simulate, "INTEGRATORS", ("rk4",)))
+            module = importlib.import_module("boringbar.simulate")
+            return tuple(getattr(module, "INTEGRATORS", ("rk4",)))
         return ("rk4",)
+
+
+def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
+    """What :func:`~boringbar.simulate.simulate` refuses, checked before any work."""
+    from boringbar._validate import ParameterError
+    from boringbar.dampers import ImpactDamper
+    from boringbar.simulate import check_step
+
+    integrator = study.value("integrator")
+    if cutting and integrator != "rk4":
+        raise ParameterError(f"key 'run.integrator' = {integrator!r}: regenerative cuts need "
+                             "'rk4' (the exact integrator supports harmonic forcing only)")
+    d = system.damper
+    if (integrator == "rk4" and isinstance(d, ImpactDamper)
+            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
+        raise ParameterError(f"key 'damper.static_ratio' = {d.friction.static_ratio!r}: the "
+                             "rk4 integrator has only the sgn() law (static_ratio = 1); set "
+                             "run.integrator = 'exact' for true stick-slip")
+    try:
+        check_step(system, omega, study.value("dt_s"))
+    except ParameterError as exc:
+        raise ParameterError(f"key 'run.dt_s' = {study.value('dt_s')!r}: {exc}") from None
 
 
 def _takes(fn, name: str) -> bool:
@@ -186,6 +216,8 @@ def make_study_system(preset: str, s: dict):
                   restitution=s["restitution"], friction_number=s["friction_number"],
                   friction_force=s["friction_force_n"],
                   friction_reaction=s["friction_reaction"], locked=s["locked"])
+        if s["static_ratio"] != 1.0:  # only where the system takes it
+            kw["static_ratio"] = s["static_ratio"]
     return make_system(s["kind"], preset, **kw)
 
 
@@ -257,13 +289,14 @@ def _provenance(study: Study) -> dict:
     return {"study": study.name, "study_analysis": study.analysis}
 
 
-def _warm_harmonic(cases) -> None:
+def _warm_harmonic(cases, integrator: str = "rk4") -> None:
     from boringbar.forcing import Harmonic
     from boringbar.simulate import simulate
 
+    kw = {} if integrator == "rk4" else {"integrator": integrator}
     for nm in sorted({c.system.bar.n_modes for c in cases}):
         c0 = next(c for c in cases if c.system.bar.n_modes == nm)
-        simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6)
+        simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6, **kw)
 
 
 # --- sweep ------------------------------------------------------------------------
@@ -293,7 +326,12 @@ class Sweep(Analysis):
         return Plan(ctx, points, {"values": values})
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"])
+        _warm_harmonic(ctx["cases"], ctx["integrator"])
+
+    def runs(self, plan):
+        c = plan.context
+        return [(x.system, max(c["ratios"]) * x.system.reference_frequency, False)
+                for x in c["cases"]]
 
     def compute(self, ctx, point):
         from boringbar.analysis.sweep import _one
@@ -361,6 +399,10 @@ class Lobes(Analysis):
         points = list(itertools.product(range(len(cases)), range(len(rpm))))
         return Plan({"cases": cases, "rpm": rpm, "opts": opts}, points, {"values": values})
 
+    def runs(self, plan):
+        c = plan.context
+        return [(x.system, 2 * math.pi * max(c["rpm"]) / 60.0, True) for x in c["cases"]]
+
     def warm(self, ctx):
         from boringbar.analysis.lobes import _cut
 
@@ -425,7 +467,12 @@ class Bifurcation(Analysis):
         return Plan(ctx, list(range(len(cases))), {"values": values})
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"])
+        _warm_harmonic(ctx["cases"], ctx["integrator"])
+
+    def runs(self, plan):
+        c = plan.context
+        r = max(c["values"]) if c["parameter"] == "ratio" else c["base"].ratio
+        return [(x.system, r * x.system.reference_frequency, False) for x in c["cases"]]
 
     def compute(self, ctx, i):
         from boringbar.analysis.bifurcation import bifurcation
@@ -539,7 +586,12 @@ class Basins(Analysis):
         return Plan(ctx, points, {"values": values})
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"])
+        _warm_harmonic(ctx["cases"], ctx["integrator"])
+
+    def runs(self, plan):
+        c = plan.context
+        return [(c["cases"][i].system, f.omega(c["cases"][i].system.reference_frequency), False)
+                for _, i, f in c["ops"]]
 
     def compute(self, ctx, point):
         from boringbar.analysis.basins import _run
@@ -575,6 +627,7 @@ class Basins(Analysis):
                                       "ball_position_m": c["initials"][0].ball_position,
                                       "ball_velocity_m_s": c["initials"][0].ball_velocity,
                                       "tolerances": json.dumps(asdict(c["tol"])),
+                                      "integrator": c["integrator"],
                                       **_provenance(study)}))
         if len(parts) == 1:
             return parts[0]
@@ -700,7 +753,14 @@ class Sensitivity(Analysis):
         return Plan(ctx, points)
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"][:1])
+        _warm_harmonic(ctx["cases"][:1], ctx["integrator"])
+
+    def runs(self, plan):
+        c = plan.context
+        if "cuts" in c:
+            return [(x.system, 2 * math.pi * c["cuts"].rpm / 60.0, True) for x in c["cases"]]
+        return [(x.system, max(c["ratios"]) * x.system.reference_frequency, False)
+                for x in c["cases"]]
 
     def compute(self, ctx, point):
         if "cuts" in ctx:

@@ -138,6 +138,8 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "friction_force_n": _f(None, 0.0, None, doc="Coulomb force, overrides the number"),
         "friction_reaction": Setting("str", None, choices=("reciprocal", "printed")),
         "locked": Setting("bool", False),
+        "static_ratio": Setting("float", 1.0, 1.0, None, doc="F_s / F_c of true stick-slip "
+                                "(integrator 'exact' only)"),
     },
     "forcing": {
         "force_n": _f(10.0, 0.0, None),
