@@ -304,3 +304,23 @@ def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
     for k in ds.data_vars:
         assert np.array_equal(ds[k].values, ref[k].values,
                               equal_nan=ds[k].dtype.kind == "f"), k
+
+
+def test_cli_run_json_then_skipped(tmp_path, capsys):
+    from cli_output import json_out
+
+    from boringbar.cli import main
+
+    study = tmp_path / "s.toml"
+    study.write_text('[study]\nanalysis = "sweep"\nname = "s"\nout = "res.nc"\n'
+                     '[run]\nduration_s = 0.02\n[grid]\nratio = [0.99, 1.0]\n')
+    assert main(["run", str(study), "--executor", "serial", "--json"]) == 0
+    first = json_out(capsys)
+    assert first["points"] == 2 and first["computed"] == 2 and not first["skipped"]
+    assert first["out"] == str(tmp_path / "res.nc") and (tmp_path / "res.nc").exists()
+    assert main(["run", str(study), "--json", "--quiet"]) == 0
+    again = json_out(capsys)
+    assert again["skipped"] and again["computed"] == 0
+    assert main(["run", str(study), "--executor", "serial", "--scheduler", "tcp://x:1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("boringbar: error:") and "scheduler" in err
