@@ -96,10 +96,10 @@ def test_exact_integrator_follows_the_masri_caughey_orbit(orbit_case):
     assert np.all(walls[1:] == -walls[:-1]) and walls[0] == -1
     k = np.arange(1, len(imp) + 1)
     t_ref = start.t + k * o.system.half_period
-    assert np.max(np.abs(imp[:, 0] - t_ref)) < 1e-13  # achieved: 2e-15 s
-    assert run.rms_tip == pytest.approx(o.rms_tip(), rel=1e-11)  # achieved: 1e-14
+    assert np.max(np.abs(imp[:, 0] - t_ref)) < 1e-13  # achieved: 2e-17 s
+    assert run.rms_tip == pytest.approx(o.rms_tip(), rel=1e-11)  # achieved: 5e-14
     approach = o.ball_speed - o.bar_velocity_before
-    np.testing.assert_allclose(np.abs(imp[:, 2]), approach, rtol=1e-10)  # 1e-13
+    np.testing.assert_allclose(np.abs(imp[:, 2]), approach, rtol=1e-10)  # 1.4e-14
 
 
 def test_rk4_converges_to_the_exact_impact_times_at_first_order(orbit_case):

@@ -100,6 +100,24 @@ def _eig(A: np.ndarray, what: str):
     return lam, V, np.linalg.inv(V)
 
 
+def _conjugate_pairs(lam: np.ndarray):
+    """An ordering [l1, conj l1, l2, conj l2, ...] of ``lam``, or None if its values are
+    not all complex conjugate pairs (an overdamped mode)."""
+    if np.any(np.abs(lam.imag) <= 1e-12 * np.abs(lam)):
+        return None
+    up = np.flatnonzero(lam.imag > 0)
+    down = np.flatnonzero(lam.imag < 0)
+    if len(up) != len(down):
+        return None
+    order = []
+    for i in up:
+        j = down[np.argmin(np.abs(lam[down] - np.conj(lam[i])))]
+        if abs(lam[j] - np.conj(lam[i])) > 1e-9 * abs(lam[i]):
+            return None
+        order += [i, j]
+    return np.array(order)
+
+
 def prepare(p: np.ndarray) -> dict:
     """Per-run matrices of the exact kernel from the packed parameter vector ``p``."""
     n = int(p[L.N_MODES])
@@ -160,9 +178,22 @@ def prepare(p: np.ndarray) -> dict:
     Vi = np.zeros((R, nz, nz), complex)
     Z = np.zeros((R, nz), complex)
     D = np.zeros((R, nz))
+    kstep = np.ones(R, np.int64)
+    Vh = np.zeros((R, nz, nz), complex)
     for r, (A, B, c) in enumerate(regimes):
         lam[r], V[r], Vi[r] = _eig(A, ("free", "stick", "contact")[r] if case == L.BALL
                                    else "linear")
+        order = _conjugate_pairs(lam[r])
+        Vh[r] = V[r]
+        if order is not None:
+            # X is real, so a conjugate pair contributes 2 Re(V_k q_k): evaluate the
+            # first of each pair, twice (halves the exponentials on the hot path)
+            lam[r], V[r], Vi[r] = lam[r][order], V[r][:, order], Vi[r][order]
+            V[r][:, 1::2] = np.conj(V[r][:, 0::2])
+            Vi[r][1::2] = np.conj(Vi[r][0::2])
+            Vh[r] = 0.0
+            Vh[r][:, 0::2] = 2.0 * V[r][:, 0::2]
+            kstep[r] = 2
         Z[r] = np.linalg.solve(1j * om * np.eye(nz) - A, B * f0)
         D[r] = -np.linalg.solve(A, c)
     fastest = max(float(np.max(np.abs(lam))), om)
@@ -180,32 +211,33 @@ def prepare(p: np.ndarray) -> dict:
     ssum = mu[:, :, None] + mu[:, None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
         isum = np.where(ssum != 0, 1.0 / np.where(ssum != 0, ssum, 1.0), 0.0)
-    return {"lam": lam, "V": V, "Vi": Vi, "Z": Z, "D": D, "eh": np.exp(lam * h), "h": h,
-            "lvis": np.array(lv), "cvis": np.array(cv), "isum": isum.astype(complex)}
+    return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "Vi": Vi, "Z": Z, "D": D,
+            "eh": np.exp(lam * h), "h": h, "lvis": np.array(lv), "cvis": np.array(cv),
+            "isum": isum.astype(complex)}
 
 
 # --- the kernel ----------------------------------------------------------------------------
 @njit(cache=True, inline="always")
-def _eval(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X):
+def _eval(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X):
     """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts)."""
     nz = X.shape[0]
     ph = cmath.exp(1j * om * (ts + tau))
-    for k in range(nz):
+    for k in range(0, nz, ks):
         q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for k in range(nz):
+        for k in range(0, nz, ks):
             s += (V[r, j, k] * q[k]).real
         X[j] = s
 
 
 @njit(cache=True, inline="always")
-def _from_q(r, q, ph, fb, Z, D, V, X):
+def _from_q(r, q, ph, fb, Z, D, V, ks, X):
     """X from the eigen-coordinates q and the forcing phasor ph = e^{i Omega t}."""
     nz = X.shape[0]
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for k in range(nz):
+        for k in range(0, nz, ks):
             s += (V[r, j, k] * q[k]).real
         X[j] = s
 
@@ -221,14 +253,14 @@ def _freq(X, t, n, f0, om, mk, kappa):
 
 
 @njit(cache=True, inline="always")
-def _g(kind, tau, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om):
+def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, n, mk, f0, om):
     """Event function ``kind`` at tau on the segment described by ``seg``.
 
     seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m]
     """
     ts = seg[0]
     fb = seg[1]
-    _eval(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X)
+    _eval(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X)
     if kind == EV_WEXT:
         s = 0.0
         for i in range(n):
@@ -255,17 +287,17 @@ def _g(kind, tau, seg, r, q0, lam, V, Z, D, q, X, n, mk, f0, om):
 
 
 @njit(cache=True, inline="always")
-def _eval2(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X, Xd):
+def _eval2(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X, Xd):
     """X and X' at ts + tau on the segment (see :func:`_eval`)."""
     nz = X.shape[0]
     ph = cmath.exp(1j * om * (ts + tau))
-    for k in range(nz):
+    for k in range(0, nz, ks):
         q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
     for j in range(nz):
         zp = Z[r, j] * ph
         s = zp.imag + fb * D[r, j]
         sd = om * zp.real
-        for k in range(nz):
+        for k in range(0, nz, ks):
             vq = V[r, j, k] * q[k]
             s += vq.real
             sd += (vq * lam[r, k]).real
@@ -274,11 +306,11 @@ def _eval2(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X, Xd):
 
 
 @njit(cache=True, inline="always")
-def _gd(kind, tau, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om):
+def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om):
     """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
     ts = seg[0]
     fb = seg[1]
-    _eval2(r, q0, ts, tau, fb, om, lam, V, Z, D, q, X, Xd)
+    _eval2(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X, Xd)
     if kind == EV_WEXT:
         g = 0.0
         dg = 0.0
@@ -364,7 +396,7 @@ def _hermite(a, b, p0, p1, d0, d1, order):
 
 
 @njit(cache=True)
-def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om, c0):
+def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om, c0):
     """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
     Newton with the exact derivative, kept inside the shrinking bracket (a bisection
     whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
@@ -385,7 +417,7 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om,
             slow = 0
             if not (a < c < b):
                 break
-        g, dg = _gd(kind, c, seg, r, q0, lam, V, Z, D, q, X, Xd, n, mk, f0, om)
+        g, dg = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om)
         if g == 0.0:
             return c
         if (g > 0.0) == pos:
@@ -418,7 +450,7 @@ def _phi1(z, T):
 
 
 @njit(cache=True)
-def _integrals(r, q0, ts, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis, stick_k, sr,
+def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
                mu, em, G, Cx, cf, ca, cb, out, isum, steady):
     """Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
     sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u']
@@ -448,7 +480,7 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis, stick_
     ph = cmath.exp(1j * om * ts)
     for j in range(nz):
         for k in range(nz):
-            Cx[j, k] = V[r, j, k] * q0[k]
+            Cx[j, k] = VF[r, j, k] * q0[k]
         zz = Z[r, j] * ph / 2j
         Cx[j, nz] = zz
         Cx[j, nz + 1] = zz.conjugate()
@@ -530,7 +562,7 @@ def _quad(a, b, G, nb):
 
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
-           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum):
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep):
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     nz = lam.shape[1]
@@ -666,6 +698,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         if mode == FREE and ball:
             fb = -fc * sdir
         kap = kappa_stick if mode == STICK else kappa_wall
+        ks = kstep[r]
         # eigen-coordinates of the homogeneous part at t
         ph = cmath.exp(1j * om * t)
         for j in range(nz):
@@ -724,12 +757,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 full = False
             istep += 1
             if full and istep % 64 != 0:
-                for k in range(nz):
+                for k in range(0, nz, ks):
                     qg[k] = qg[k] * eh[r, k]
                 phg = phg * rot
-                _from_q(r, qg, phg, fb, Z, D, V, X)
+                _from_q(r, qg, phg, fb, Z, D, V, ks, X)
             else:
-                _eval(r, q0, t, b, fb, om, lam, V, Z, D, qg, X)
+                _eval(r, q0, t, b, fb, om, lam, V, ks, Z, D, qg, X)
                 phg = cmath.exp(1j * om * (t + b))
             _events(ev_b, X, b, seg, mode, n, mk, f0, om)
             # --- events in [a, b]
@@ -739,7 +772,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 for kk in (EV_REL_NEG, EV_REL_POS, EV_WALL_REL):
                     if (mode == STICK) == (kk != EV_WALL_REL):
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
-                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, Z,
+                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
                                        D, qs, dX, Xd, n, mk, f0, om, -1.0)
                             if tr < best or kind < 0:
                                 best = tr
@@ -758,16 +791,16 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     near = dmin <= reach
                 if near:
                     te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                               V, Z, D, qs, dX, Xd, n, mk, f0, om,
+                               V, ks, Z, D, qs, dX, Xd, n, mk, f0, om,
                                _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
                                         ev_b[EV_YEXT], 1))
-                    gp = _g(EV_PLUS, te, seg, r, q0, lam, V, Z, D, qs, dX, n, mk, f0, om)
+                    gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk, f0, om)
                     gm = -2.0 * half - gp
                     for kk in (EV_PLUS, EV_MINUS):
                         ge = gp if kk == EV_PLUS else gm
                         if ev_a[kk] <= 0.0 < ge:
                             sg = 1.0 if kk == EV_PLUS else -1.0
-                            tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, Z, D,
+                            tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D,
                                        qs, dX, Xd, n, mk, f0, om,
                                        _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
                                                 0))
@@ -779,7 +812,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                             ge = gp if kk == EV_PLUS else gm
                             if ge <= 0.0 < ev_b[kk]:
                                 sg = 1.0 if kk == EV_PLUS else -1.0
-                                tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V,
+                                tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
                                            Z, D, qs, dX, Xd, n, mk, f0, om,
                                            _hermite(te, b, ge, ev_b[kk], 0.0,
                                                     sg * ev_b[EV_YEXT], 0))
@@ -797,14 +830,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                                 sg = 1.0 if kk == EV_PLUS else -1.0
                                 c0 = _hermite(a, b, ev_a[kk], ev_b[kk], sg * ev_a[EV_YEXT],
                                               sg * ev_b[EV_YEXT], 0)
-                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, Z,
+                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
                                        D, qs, dX, Xd, n, mk, f0, om, c0)
                             if kind < 0 or tr < best:
                                 best = tr
                                 kind = kk
             if kind >= 0:
                 b = best
-                _eval(r, q0, t, b, fb, om, lam, V, Z, D, qs, X)
+                _eval(r, q0, t, b, fb, om, lam, V, ks, Z, D, qs, X)
                 ev_kind = kind
                 tau_ev = b
             # --- outputs on (a, b]
@@ -818,9 +851,9 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_w = max(max_w, wb)
                 min_w = min(min_w, wb)
                 if wda * wdb < 0.0:
-                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, Z, D, qs, dX, Xd,
+                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, qs, dX, Xd,
                                n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
-                    _eval(r, q0, t, te, fb, om, lam, V, Z, D, qs, dX)
+                    _eval(r, q0, t, te, fb, om, lam, V, ks, Z, D, qs, dX)
                     we = 0.0
                     for i in range(n):
                         we += mk[3, i] * dX[i]
@@ -840,7 +873,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 ts_ = t0 + k_rec * rec_dt
                 if ts_ > t_end:
                     break
-                _eval(r, q0, t, ts_ - t, fb, om, lam, V, Z, D, qs, dX)
+                _eval(r, q0, t, ts_ - t, fb, om, lam, V, ks, Z, D, qs, dX)
                 wv = 0.0
                 wdv = 0.0
                 for i in range(n):
@@ -857,7 +890,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 k_rec += 1
             while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
                 if n_stb < cap_stb:
-                    _eval(r, q0, t, t_next_strobe - t, fb, om, lam, V, Z, D, qs, dX)
+                    _eval(r, q0, t, t_next_strobe - t, fb, om, lam, V, ks, Z, D, qs, dX)
                     wv = 0.0
                     wdv = 0.0
                     for i in range(n):
@@ -883,7 +916,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
 
         # --- close the segment [t, t + T] ----------------------------------------------
         T = tau_ev
-        _integrals(r, q0, t, T, fb, om, f0, lam, V, Z, D, n, mk, lvis, cvis,
+        _integrals(r, q0, t, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
                    kappa_stick if (ball and mode == STICK) else 0.0, sr,
                    mu, em, G, Cx, cf, ca, cb, out, isum, steady)
         w_force += out[0]
@@ -1098,6 +1131,6 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
     if prep is None:
         prep = prepare(p)
     return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
-                  stick, strobe, met, prep["lam"], prep["V"], prep["Vi"], prep["Z"],
+                  stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
                   prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
-                  prep["isum"])
+                  prep["isum"], prep["V"], prep["kstep"])
