@@ -87,6 +87,8 @@ MAX_EVENTS = 50_000_000
 MAX_ZERO_LENGTH = 64
 
 FREE, STICK, CONTACT = 0, 1, 2
+_RECIP = (0.0, 1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 5, 1 / 6, 1 / 7, 1 / 8, 1 / 9, 1 / 10, 1 / 11,
+          1 / 12, 1 / 13)
 # event kinds; an event happens where g goes from <= 0 to > 0
 EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WEXT = range(8)
 
@@ -443,8 +445,9 @@ def _phi1(z, T):
     """int_0^T exp(z tau / T) dtau = T (e^z - 1) / z."""
     if abs(z) < 0.125:  # series: 12 terms reach 1e-17
         s = 0.0 + 0.0j
-        for k in range(13, 0, -1):
-            s = (s * z + 1.0) * (1.0 / k) if k > 1 else s * z + 1.0
+        for k in range(13, 1, -1):
+            s = (s * z + 1.0) * _RECIP[k]
+        s = s * z + 1.0
         return T * s
     return T * (cmath.exp(z) - 1.0) / z
 
