@@ -44,13 +44,17 @@ bracket of 4 ulp of t):
 Event search grid: h = (shortest period among the forcing and every
 regime's eigenvalues) / ``GRID_PER_PERIOD``.  A sign change of an event
 function between grid points brackets the event.  Grazing (a double
-crossing inside one grid step) is guarded where it can happen: with
-friction the ball's relative motion is monotone in a sliding segment (the
-y' = 0 switch ends the segment first), and without friction a sign change
-of y' inside a step is located and the extremum of y checked against the
-walls, which splits the step into two monotone pieces.  What is not
-guarded is an excursion of F_req across F_s and back inside one grid step
-(1/32 of the shortest period), or a double zero of y' inside one step.
+crossing inside one grid step) is guarded three ways: with friction the
+ball's relative motion is monotone up to the y' = 0 switch, so walls are
+sought on [a, switch] when the switch falls in the step; without friction
+a sign change of y' inside a step near a wall is located and the extremum
+of y checked, which splits the step into two monotone pieces; and when the
+cubic Hermite interpolant of y (from y, y' at the step ends), widened by
+twice its error bound h^4 max|y^(4)| / 384 (max|y^(4)| bounded per segment
+from the closed form), comes within reach of a wall, the step is searched
+again on NSUB sub-steps.  A segment never starts past a wall (y(0) is
+clamped for the search).  Not guarded: an excursion of F_req across F_s and
+back inside one grid step.
 
 Metrics: the same vector as the RK4 kernel, but the steady sums are exact
 integrals over the steady window [t_steady, t_end]: SUM_W2 = int W^2 dt,
@@ -83,7 +87,8 @@ from boringbar.kernels import layout as L
 GRID_PER_PERIOD = 16
 #: most events in one run before it stops with EXACT_STATUS = 1
 MAX_EVENTS = 50_000_000
-#: consecutive zero-length events before a run stops with EXACT_STATUS = 2
+#: consecutive zero-length events (shorter than 1e-14 (|t| + h)) before a run stops with
+#: EXACT_STATUS = 2
 MAX_ZERO_LENGTH = 64
 
 FREE, STICK, CONTACT = 0, 1, 2
@@ -563,6 +568,127 @@ def _quad(a, b, G, nb):
     return s
 
 
+#: sub-steps of a grid step in which the bound on y^(4) allows an undetected graze
+NSUB = 16
+
+
+@njit(cache=True, inline="always")
+def _may_graze(a, b, ev_a, ev_b, half, b4):
+    """Whether y may pass a wall inside (a, b] although the ends say nothing: the cubic
+    Hermite interpolant of y from y, y' at the ends, widened by its error bound
+    b4 h^4 / 384 (twice, for safety), reaches a wall at b or at an interior extremum."""
+    h = b - a
+    p0 = ev_a[EV_PLUS] + half
+    p1 = ev_b[EV_PLUS] + half
+    m0 = ev_a[EV_YEXT] * h
+    m1 = ev_b[EV_YEXT] * h
+    margin = b4 * h ** 4 / 192.0
+    hi = p1
+    lo = p1
+    # p'(s) = qa s^2 + qb s + qc on (0, 1)
+    qa = 6 * p0 + 3 * m0 - 6 * p1 + 3 * m1
+    qb = -6 * p0 - 4 * m0 + 6 * p1 - 2 * m1
+    qc = m0
+    r0 = -1.0
+    r1 = -1.0
+    if abs(qa) > 1e-300:
+        disc = qb * qb - 4 * qa * qc
+        if disc >= 0.0:
+            sq = math.sqrt(disc)
+            r0 = (-qb - sq) / (2 * qa)
+            r1 = (-qb + sq) / (2 * qa)
+    elif abs(qb) > 1e-300:
+        r0 = -qc / qb
+    for x in (r0, r1):
+        if 0.0 < x < 1.0:
+            s2 = x * x
+            v = ((2 * s2 * x - 3 * s2 + 1) * p0 + (s2 * x - 2 * s2 + x) * m0
+                 + (-2 * s2 * x + 3 * s2) * p1 + (s2 * x - s2) * m1)
+            hi = max(hi, v)
+            lo = min(lo, v)
+    return hi + margin >= half or lo - margin <= -half
+
+
+@njit(cache=True)
+def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, ks, Z, D, qs,
+               dX, Xd, n, mk, f0, om):
+    """The first wall or friction-switch event of a FREE ball in [a, b], from the event
+    functions at the ends: (kind, time), kind -1 if none."""
+    best = b
+    kind = -1
+    lo = a
+    hi = b
+    # without friction, split the step at an extremum of y, if the extremum
+    # can reach a wall: y' changes sign inside, so |y'| <= |y'(a)| + |y'(b)|
+    # there to first order, and the excursion past the ends is below
+    # h (|y'(a)| + |y'(b)|) (a factor 2 of margin on the mean value theorem)
+    near = False
+    if watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0:
+        reach = (b - a) * (abs(ev_a[EV_YEXT]) + abs(ev_b[EV_YEXT]))
+        dmin = -max(ev_a[EV_PLUS], ev_a[EV_MINUS], ev_b[EV_PLUS], ev_b[EV_MINUS])
+        near = dmin <= reach
+    if near:
+        te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
+                   V, ks, Z, D, qs, dX, Xd, n, mk, f0, om,
+                   _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
+                            ev_b[EV_YEXT], 1))
+        gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk, f0, om)
+        gm = -2.0 * half - gp
+        for kk in (EV_PLUS, EV_MINUS):
+            ge = gp if kk == EV_PLUS else gm
+            if ev_a[kk] <= 0.0 < ge:
+                sg = 1.0 if kk == EV_PLUS else -1.0
+                tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D,
+                           qs, dX, Xd, n, mk, f0, om,
+                           _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
+                                    0))
+                if kind < 0 or tr < best:
+                    best = tr
+                    kind = kk
+        if kind < 0:
+            for kk in (EV_PLUS, EV_MINUS):
+                ge = gp if kk == EV_PLUS else gm
+                if ge <= 0.0 < ev_b[kk]:
+                    sg = 1.0 if kk == EV_PLUS else -1.0
+                    tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
+                               Z, D, qs, dX, Xd, n, mk, f0, om,
+                               _hermite(te, b, ge, ev_b[kk], 0.0,
+                                        sg * ev_b[EV_YEXT], 0))
+                    if kind < 0 or tr < best:
+                        best = tr
+                        kind = kk
+        lo = hi  # handled
+    if lo < hi:
+        # with friction, y is monotone only up to the y' = 0 switch: if the
+        # switch falls in this step, look for the walls on [a, switch] only
+        # (the ball may reach a wall and, past it, turn back inside the step)
+        bend = b
+        gpe = ev_b[EV_PLUS]
+        gme = ev_b[EV_MINUS]
+        yde = ev_b[EV_YEXT]
+        if watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP]:
+            best = _root(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
+                         q0, lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om, -1.0)
+            kind = EV_VSTOP
+            bend = best
+            gpe = _g(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk,
+                     f0, om)
+            gme = -2.0 * half - gpe
+            yde = 0.0
+        for kk in (EV_PLUS, EV_MINUS):
+            ge = gpe if kk == EV_PLUS else gme
+            if ev_a[kk] <= 0.0 < ge:
+                sg = 1.0 if kk == EV_PLUS else -1.0
+                c0 = _hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
+                              0)
+                tr = _root(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
+                           D, qs, dX, Xd, n, mk, f0, om, c0)
+                if kind < 0 or tr <= best:
+                    best = tr
+                    kind = kk
+    return kind, best
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep):
@@ -616,6 +742,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     dX = np.zeros(nz)
     ev_a = np.zeros(8)
     ev_b = np.zeros(8)
+    ev_s = np.zeros(8)
+    ev_t = np.zeros(8)
 
     for j in range(nz):
         X[j] = x[j]
@@ -716,6 +844,18 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for i in range(n):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
+        # a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
+        b4 = 0.0
+        if ball:
+            zd = 0.0 + 0.0j
+            for i in range(n):
+                zd += mk[4, i] * Z[r, i]
+            b4 = om ** 4 * abs(zd)
+            for k in range(nz):
+                vd = 0.0 + 0.0j
+                for i in range(n):
+                    vd += mk[4, i] * Vfull[r, i, k]
+                b4 += abs(lam[r, k]) ** 4 * abs(vd * q0[k])
         seg[0] = t
         seg[1] = fb
         seg[2] = y + pdu  # the ball's absolute position and velocity
@@ -751,6 +891,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             wa += mk[3, i] * Xa[i]
             wda += mk[3, i] * Xa[n + i]
         _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+        # a segment never starts beyond a wall (events put the ball on it); the closed
+        # form's y(0) may be a few ulp past it, which would hide a return to that wall
+        ev_a[EV_PLUS] = min(ev_a[EV_PLUS], 0.0)
+        ev_a[EV_MINUS] = min(ev_a[EV_MINUS], 0.0)
         auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
         while True:
             b = a + h
@@ -781,63 +925,30 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                                 best = tr
                                 kind = kk
             elif watch_wall:
-                lo = a
-                hi = b
-                # without friction, split the step at an extremum of y, if the extremum
-                # can reach a wall: y' changes sign inside, so |y'| <= |y'(a)| + |y'(b)|
-                # there to first order, and the excursion past the ends is below
-                # h (|y'(a)| + |y'(b)|) (a factor 2 of margin on the mean value theorem)
-                near = False
-                if watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0:
-                    reach = (b - a) * (abs(ev_a[EV_YEXT]) + abs(ev_b[EV_YEXT]))
-                    dmin = -max(ev_a[EV_PLUS], ev_a[EV_MINUS], ev_b[EV_PLUS], ev_b[EV_MINUS])
-                    near = dmin <= reach
-                if near:
-                    te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                               V, ks, Z, D, qs, dX, Xd, n, mk, f0, om,
-                               _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
-                                        ev_b[EV_YEXT], 1))
-                    gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk, f0, om)
-                    gm = -2.0 * half - gp
-                    for kk in (EV_PLUS, EV_MINUS):
-                        ge = gp if kk == EV_PLUS else gm
-                        if ev_a[kk] <= 0.0 < ge:
-                            sg = 1.0 if kk == EV_PLUS else -1.0
-                            tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D,
-                                       qs, dX, Xd, n, mk, f0, om,
-                                       _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
-                                                0))
-                            if kind < 0 or tr < best:
-                                best = tr
-                                kind = kk
-                    if kind < 0:
-                        for kk in (EV_PLUS, EV_MINUS):
-                            ge = gp if kk == EV_PLUS else gm
-                            if ge <= 0.0 < ev_b[kk]:
-                                sg = 1.0 if kk == EV_PLUS else -1.0
-                                tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
-                                           Z, D, qs, dX, Xd, n, mk, f0, om,
-                                           _hermite(te, b, ge, ev_b[kk], 0.0,
-                                                    sg * ev_b[EV_YEXT], 0))
-                                if kind < 0 or tr < best:
-                                    best = tr
-                                    kind = kk
-                    lo = hi  # handled
-                if lo < hi:
-                    for kk in (EV_PLUS, EV_MINUS, EV_VSTOP):
-                        if kk == EV_VSTOP and not watch_v:
-                            continue
-                        if ev_a[kk] <= 0.0 < ev_b[kk]:
-                            c0 = -1.0
-                            if kk != EV_VSTOP:
-                                sg = 1.0 if kk == EV_PLUS else -1.0
-                                c0 = _hermite(a, b, ev_a[kk], ev_b[kk], sg * ev_a[EV_YEXT],
-                                              sg * ev_b[EV_YEXT], 0)
-                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
-                                       D, qs, dX, Xd, n, mk, f0, om, c0)
-                            if kind < 0 or tr < best:
-                                best = tr
-                                kind = kk
+                kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0,
+                                        lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om)
+                if kind < 0 and _may_graze(a, b, ev_a, ev_b, half, b4):
+                    # the bound on y^(4) allows a crossing and return inside the step:
+                    # look again on NSUB sub-steps (direct evaluations)
+                    for kk in range(8):
+                        ev_s[kk] = ev_a[kk]
+                    sa = a
+                    for j in range(1, NSUB + 1):
+                        sb = a + (b - a) * j / NSUB if j < NSUB else b
+                        if j < NSUB:
+                            _eval(r, q0, t, sb, fb, om, lam, V, ks, Z, D, qs, dX)
+                            _events(ev_t, dX, sb, seg, mode, n, mk, f0, om)
+                        else:
+                            for kk in range(8):
+                                ev_t[kk] = ev_b[kk]
+                        kind, best = _wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
+                                                seg, r, q0, lam, V, ks, Z, D, qs, dX, Xd, n,
+                                                mk, f0, om)
+                        if kind >= 0:
+                            break
+                        sa = sb
+                        for kk in range(8):
+                            ev_s[kk] = ev_t[kk]
             if kind >= 0:
                 b = best
                 _eval(r, q0, t, b, fb, om, lam, V, ks, Z, D, qs, X)
@@ -865,6 +976,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     min_w = min(min_w, we)
             # aux and aux' at a and b
             auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
+            if kind == EV_PLUS or kind == EV_MINUS:
+                auxb = half if kind == EV_PLUS else -half  # on the wall, up to round-off
             max_aux_all = max(max_aux_all, abs(auxb))
             if steady:
                 max_aux = max(max_aux, abs(auxb))
@@ -949,7 +1062,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             t = t_new
             continue
         n_ev += 1
-        if T <= 0.0:
+        if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
             n_zero += 1
             if n_zero > MAX_ZERO_LENGTH:
                 status = 2
