@@ -925,8 +925,13 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                                 best = tr
                                 kind = kk
             elif watch_wall:
-                kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0,
-                                        lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om)
+                # call the (not inlined) search only when an end value shows something
+                if ((ev_a[EV_PLUS] <= 0.0 < ev_b[EV_PLUS])
+                        or (ev_a[EV_MINUS] <= 0.0 < ev_b[EV_MINUS])
+                        or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
+                        or (watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)):
+                    kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
+                                            q0, lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om)
                 if kind < 0 and _may_graze(a, b, ev_a, ev_b, half, b4):
                     # the bound on y^(4) allows a crossing and return inside the step:
                     # look again on NSUB sub-steps (direct evaluations)
