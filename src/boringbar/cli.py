@@ -1,5 +1,6 @@
 """The ``boringbar`` command: ``simulate``, ``sweep``, ``lobes``, ``bifurcation``,
-``basins`` and ``sensitivity``.
+``basins`` and ``sensitivity``; ``run`` (study files) and ``paper`` (the whole
+published study) are in :mod:`boringbar.cli_study`.
 
 Units are in the option names (MODEL.md section 7): ``--gap-mm``,
 ``--force-n``, ``--duration-s``...; everything is converted to SI here and
@@ -73,9 +74,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bifurcation(sub)
     _add_basins(sub)
     _add_sensitivity(sub)
-    from boringbar.cli_study import add_run
+    from boringbar.cli_study import add_paper, add_run
 
     add_run(sub)
+    add_paper(sub)
     return parser
 
 

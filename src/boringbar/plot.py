@@ -810,3 +810,38 @@ def _value_label(kind: str, value: str) -> str:
     name = {"ball": "ball", "friction_number": "friction number",
             "restitution": "e"}.get(kind, kind)
     return f"{name} = {value}" if kind != "ball" else f"{value} ball"
+
+
+# --- the corrections ladder --------------------------------------------------------
+
+def plot_ladder(ds, path) -> Path:
+    """The readings ladder (:func:`~boringbar.analysis.corrections.readings_ladder`),
+    saved to ``path``: tip RMS (mm) of each rung, from the paper preset to the
+    physical one, one bar per gap, each labelled with its impact pattern."""
+    rungs = [str(r) for r in ds["rung"].values]
+    gaps = ds["gap"].values
+    fig = Figure(figsize=(10, 5.2), layout="constrained")
+    ax = fig.subplots()
+    x = np.arange(len(rungs))
+    width = 0.8 / len(gaps)
+    for j, gap in enumerate(gaps):
+        rms = ds["rms_tip_m"].values[:, j] * 1e3
+        pos = x + (j - (len(gaps) - 1) / 2) * width
+        ax.bar(pos, rms, width * 0.95, label=f"gap {gap * 1e3:g} mm",
+               color=("#1f77b4", "#ff7f0e", "#2ca02c")[j % 3])
+        for xi, r, pat in zip(pos, rms, ds["pattern"].values[:, j], strict=True):
+            ax.text(xi, r, " " + str(pat), rotation=90, ha="center", va="bottom",
+                    fontsize="x-small")
+    ax.set_xticks(x, [f"{r}\n{ds['friction_force_n'].values[i, 0]:.3g} N, "
+                      f"{ds['host_frequency_hz'].values[i]:.0f} Hz"
+                      for i, r in enumerate(rungs)], fontsize="small")
+    ax.set_ylabel("tip RMS (mm)")
+    _zero_based(ax, ds["rms_tip_m"].values * 1e3 * 1.6)
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(loc="upper left", fontsize="small")
+    ax.set_title("Ball damper, friction on, F0 = "
+                 f"{ds.attrs.get('force_n', math.nan):g} N, r = "
+                 f"{ds.attrs.get('ratio', math.nan):g}: the published readings dropped one "
+                 f"at a time\n(each rung keeps the changes to its left; "
+                 f"{ds.attrs.get('duration_s', math.nan):g} s runs)", fontsize="medium")
+    return save_figure_atomic(fig, path)

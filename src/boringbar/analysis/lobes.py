@@ -66,8 +66,11 @@ def _cut(case: Case, rpm: float, depth: float, opts: dict) -> dict:
                            bounded_fraction=opts["bounded_fraction"])
     run = simulate(case.system, forcing, duration=opts["duration"], dt=opts["dt"])
     c = run.cutting
+    ball = case.system.kind == "ball"
     return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
             "amplitude": c["amplitude_m"],
+            "impacts": run.metrics["impacts_total"] if ball else -1,
+            "max_rel_disp": run.metrics["max_abs_aux_all_m"] if ball else math.nan,
             "first_zero": math.nan if c["first_zero_time_s"] is None
             else c["first_zero_time_s"]}
 
@@ -124,18 +127,24 @@ def _column(case: Case, rpm: float, opts: dict) -> dict:
 def _seeds(cases: list[Case], rpm: np.ndarray, kr: float, step: float) -> dict:
     """Grid index of the analytic limit of each case's linear host at each speed."""
     from boringbar.analysis.stability import limit_at_speeds
-    from boringbar.system import System
 
     seeds = {}
     for case in cases:
-        host = case.system
-        if host.kind == "ball":  # the bare cavity bar: the ball is not touching yet
-            host = System(host.bar, None, host.preset, host.readings)
-        lim = limit_at_speeds(host, rpm, kr)
+        lim = limit_at_speeds(_linear_host(case.system), rpm, kr)
         for r, b in zip(rpm, lim, strict=True):
             if math.isfinite(b):
                 seeds[(case.label, float(r))] = int(math.floor(b / step + 1e-9))
     return seeds
+
+
+def _linear_host(system):
+    """The linear bar a cut sees at the onset of chatter: for the free ball the
+    bare cavity bar (the ball is not touching yet), else the system itself."""
+    from boringbar.system import System
+
+    if system.kind == "ball":
+        return System(system.bar, None, system.preset, system.readings)
+    return system
 
 
 def _limits(verdicts: np.ndarray, depths: np.ndarray) -> tuple[float, float]:
@@ -239,6 +248,8 @@ def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, anal
     v_bounded = np.full(shape, NOT_RUN, dtype=np.int8)
     amplitude = np.full(shape, np.nan)
     first_zero = np.full(shape, np.nan)
+    impacts = np.full(shape, -1, dtype=np.int64)
+    max_rel = np.full(shape, np.nan)
     n_runs = 0
     for (i, j), done in columns.items():
         for k, res in done.items():
@@ -246,6 +257,8 @@ def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, anal
             v_bounded[i, j, k - 1] = CHATTER if res["bounded"] else STABLE
             amplitude[i, j, k - 1] = res["amplitude"]
             first_zero[i, j, k - 1] = res["first_zero"]
+            impacts[i, j, k - 1] = res["impacts"]
+            max_rel[i, j, k - 1] = res["max_rel_disp"]
             n_runs += 1
     chosen = v_zero if criterion == "zero" else v_bounded
     limit = np.full(shape[:2], np.nan)
@@ -264,6 +277,11 @@ def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, anal
                                  "codes": "1 stable, 0 chatter, -1 not run"}),
             "amplitude": (("case", "rpm", "depth"), amplitude, {"units": "m"}),
             "first_zero_time": (("case", "rpm", "depth"), first_zero, {"units": "s"}),
+            "impacts": (("case", "rpm", "depth"), impacts, {
+                "long_name": "counted ball impacts over the run (-1: no ball or not run)"}),
+            "max_rel_disp": (("case", "rpm", "depth"), max_rel, {
+                "units": "m", "long_name": "largest |y|, the ball's excursion from the "
+                                           "cavity centre, over the run (ball cases)"}),
             "limit_depth": (("case", "rpm"), limit, {"units": "m",
                             "long_name": "limiting (chatter-free) depth of cut"}),
             "first_unstable_depth": (("case", "rpm"), first_unstable, {"units": "m"}),
@@ -304,17 +322,24 @@ def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, anal
 
 
 def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
-    """The frequency-domain limit of the linear bars (NaN for the free ball)."""
+    """The frequency-domain limit of the linear bars (NaN for the free ball), and of
+    every case's linear host (the bare cavity bar for the free ball, which is the
+    bar the cut sees while the ball does not touch a wall)."""
     from boringbar.analysis.stability import limit_at_speeds
 
     fine = np.linspace(rpm.min(), rpm.max(), max(200, 20 * len(rpm)))
     on_grid = np.full((len(cases), len(rpm)), np.nan)
     curve = np.full((len(cases), len(fine)), np.nan)
+    host_grid = np.full((len(cases), len(rpm)), np.nan)
     for i, case in enumerate(cases):
+        host_grid[i] = limit_at_speeds(_linear_host(case.system), rpm, kr)
         if case.system.kind in ("solid", "tmd", "locked"):
-            on_grid[i] = limit_at_speeds(case.system, rpm, kr)
+            on_grid[i] = host_grid[i]
             curve[i] = limit_at_speeds(case.system, fine, kr)
     ds["analytic_limit"] = (("case", "rpm"), on_grid, {"units": "m"})
+    ds["host_analytic_limit"] = (("case", "rpm"), host_grid, {
+        "units": "m", "long_name": "analytic limit of the linear host (bare cavity bar for "
+                                   "the free ball)"})
     ds.coords["rpm_fine"] = ("rpm_fine", fine, {"units": "rev/min"})
     ds["analytic_curve"] = (("case", "rpm_fine"), curve, {"units": "m"})
 
@@ -329,7 +354,9 @@ def lobes_summary(ds) -> dict:
             "speeds": [{"rpm": float(r),
                         "limit_depth_m": _num(ds["limit_depth"].values[i, j]),
                         "first_unstable_depth_m": _num(ds["first_unstable_depth"].values[i, j]),
-                        **({"analytic_limit_m": _num(ds["analytic_limit"].values[i, j])}
+                        **({"analytic_limit_m": _num(ds["analytic_limit"].values[i, j]),
+                            "host_analytic_limit_m":
+                                _num(ds["host_analytic_limit"].values[i, j])}
                            if "analytic_limit" in ds else {})}
                        for j, r in enumerate(ds["rpm"].values)],
         })
