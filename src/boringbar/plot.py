@@ -220,7 +220,9 @@ def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
                 ax.set_xlabel(r"frequency ratio $\Omega/\omega_n$")
             if c == 0:
                 ax.set_ylabel("tip RMS (mm)")
-            ax.set_ylim(bottom=0)
+    # once, after every panel is drawn: the panels share y, and a limit set while
+    # drawing would freeze it before the later panels' larger values
+    _zero_based(axes[0, 0], rms)
 
     handles, labels = axes[0, 0].get_legend_handles_labels()
     for cls in (k for k in PATTERN_STYLE if k in seen_patterns):
