@@ -100,15 +100,19 @@ def cmd_paper(args: argparse.Namespace) -> int:
 
     from boringbar._validate import ParameterError
     from boringbar.io import jsonable
-    from boringbar.paper import PRESET_ORDER, run_paper
+    from boringbar.paper import PRESET_ORDER, StepFailed, run_paper
 
     presets = [w.strip() for w in args.presets.split(",") if w.strip()]
     bad = [w for w in presets if w not in PRESET_ORDER]
     if bad or not presets or len(set(presets)) != len(presets):
         raise ParameterError(f"--presets = {args.presets!r}: a comma list of distinct "
                              f"presets from {', '.join(PRESET_ORDER)}")
-    manifest = run_paper(args.out, quick=args.quick, quiet=args.quiet,
-                         presets=tuple(p for p in PRESET_ORDER if p in presets))
+    try:
+        manifest = run_paper(args.out, quick=args.quick, quiet=args.quiet,
+                             presets=tuple(p for p in PRESET_ORDER if p in presets))
+    except StepFailed as exc:  # one analysis failed: the others finished are kept
+        print(f"boringbar: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 1
     if args.json:
         print(json.dumps(jsonable(manifest), allow_nan=False))
     elif not args.quiet:

@@ -88,6 +88,10 @@ def command_line(step: Step, preset: str, out: Path) -> str:
     return " ".join(["boringbar", *step.argv, "--preset", preset, "--out", str(out)])
 
 
+class StepFailed(RuntimeError):
+    """A step's ``boringbar`` command exited non-zero (its one-line error inside)."""
+
+
 def _run_cli(argv: list[str]) -> dict:
     """Run one ``boringbar`` subcommand in this process; its ``--json`` summary."""
     from boringbar import cli
@@ -97,7 +101,7 @@ def _run_cli(argv: list[str]) -> dict:
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
         code = cli.main([*argv, "--json"])
     if code != 0:
-        raise RuntimeError(f"boringbar {' '.join(argv)} failed: {err.getvalue().strip()}")
+        raise StepFailed(f"boringbar {' '.join(argv)} failed: {err.getvalue().strip()}")
     return json.loads(buf.getvalue().strip().splitlines()[-1])
 
 

@@ -426,48 +426,58 @@ class _Report:
 
 
 def _ball_at_limit(ds, raises: bool) -> str:
-    """Why the ball cases' limits are what they are, from the lobes data: at each
-    speed's limiting depth, how far the ball travelled against half the gap and
-    how often it struck, and the first chattering depth against the analytic
-    limit of the bare cavity bar."""
+    """Why the ball cases' limits are what they are, from the lobes data: per
+    case, the first chattering depth against the analytic limit of the bare
+    cavity bar, and at each speed's limiting depth how far the ball travelled
+    against half the gap and how often it struck a wall."""
     depth = ds["depth"].values
-    reach, strikes, ratio, solid_ratio = [], 0, [], []
+    rows, reach_all, strikes_all, below = [], [], 0, []
     for i in range(ds.sizes["case"]):
         bar = str(ds["bar"].values[i])
+        if bar not in ("solid", "ball"):
+            continue
+        first = ds["first_unstable_depth"].values[i]
+        ratio = first / ds["host_analytic_limit"].values[i]
+        ratio = ratio[np.isfinite(ratio)]
+        reach, strikes = [], 0
         for j in range(ds.sizes["rpm"]):
             lim = float(ds["limit_depth"].values[i, j])
-            first = float(ds["first_unstable_depth"].values[i, j])
-            host = float(ds["host_analytic_limit"].values[i, j])
-            if math.isfinite(first) and math.isfinite(host):
-                (solid_ratio if bar == "solid" else ratio if bar == "ball" else []).append(
-                    first / host)
-            if bar != "ball" or not math.isfinite(lim):
-                continue
-            k = int(round(lim / depth[0])) - 1
-            reach.append(float(ds["max_rel_disp"].values[i, j, k]) /
-                         (0.5 * float(ds["gap"].values[i])))
-            strikes += max(0, int(ds["impacts"].values[i, j, k]))
-    if not reach or not ratio:
+            if bar == "ball" and math.isfinite(lim):
+                k = int(round(lim / depth[0])) - 1
+                reach.append(float(ds["max_rel_disp"].values[i, j, k]) /
+                             (0.5 * float(ds["gap"].values[i])))
+                strikes += max(0, int(ds["impacts"].values[i, j, k]))
+        if bar == "ball":
+            reach_all += reach
+            strikes_all += strikes
+            if ratio.size and ratio.min() < 1.0:
+                below.append((str(ds["case"].values[i]), int((ratio < 1.0).sum())))
+        rows.append([str(ds["case"].values[i]),
+                     f"{ratio.min():.2f}-{ratio.max():.2f}" if ratio.size else "-",
+                     f"{max(reach):.0%}" if reach else "-",
+                     str(strikes) if bar == "ball" else "-"])
+    if not reach_all:
         return ""
-    text = (f"At the limiting depth of every speed and ball case ({len(reach)} cuts) the "
-            f"ball travelled at most {max(reach):.0%} of the way to a wall "
-            f"(median {float(np.median(reach)):.0%}) and struck a wall {strikes} times in "
-            f"all. The first chattering depths are {min(ratio):.2f}-{max(ratio):.2f} times "
-            "the analytic limit of the bare cavity bar (the bar without its ball)")
-    if solid_ratio:
-        text += (f"; the solid bar's are {min(solid_ratio):.2f}-{max(solid_ratio):.2f} "
-                 "times its own (a finite run places the first chattering depth at or above "
-                 "the analytic limit)")
-    if strikes == 0 and not raises:
-        text += (". At the onset of chatter the vibration is too small for the ball to reach "
-                 "a wall, so the bar cuts as the bare cavity bar; a ball can only bound a "
-                 "vibration that has already grown to the gap (see --criterion bounded).")
-    elif strikes == 0:
-        text += (". The ball never struck a wall at a limiting depth: what it adds comes "
-                 "from friction while it slides, not from impacts (compare the cases "
-                 "without friction in the table above).")
-    else:
-        text += "."
+    text = ("Per case, the first chattering depth at each speed against the analytic limit "
+            "of the bar the cut sees while the ball does not touch (the bare cavity bar; the "
+            "solid bar's own for the solid bar, where a finite run can only place it at or "
+            "above), and the ball at each speed's limiting depth:" +
+            _table(["case", "first chattering depth / analytic limit of the host",
+                    "ball's largest excursion / half gap", "impacts"], rows))
+    if strikes_all == 0 and not raises:
+        text += ("The ball struck no wall at any limiting depth: at the onset of chatter the "
+                 "vibration is too small for it to reach a wall, so the bar cuts as the bare "
+                 "cavity bar; a ball can only bound a vibration that has already grown to the "
+                 "gap (see --criterion bounded).")
+    elif strikes_all == 0:
+        text += ("The ball struck no wall at any limiting depth: what it adds comes from "
+                 "friction while it slides, not from impacts.")
+    if below:
+        text += (" Below 1, the cut chattered shallower than the bare cavity bar would at "
+                 + ", ".join(f"{n} speed{'s' * (n > 1)} ({_e(c)})" for c, n in below)
+                 + ": the ball there adds to the bar instead of damping it (a ball carried "
+                   "by friction adds its mass; the printed reaction feeds energy in, as "
+                   "measured under the corrections).")
     return text
 
 
