@@ -94,8 +94,18 @@ MAX_ZERO_LENGTH = 64
 FREE, STICK, CONTACT = 0, 1, 2
 _RECIP = (0.0, 1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 5, 1 / 6, 1 / 7, 1 / 8, 1 / 9, 1 / 10, 1 / 11,
           1 / 12, 1 / 13)
+_RFACT = tuple(1.0 / math.factorial(k) for k in range(20))  # 1 / k!
 # event kinds; an event happens where g goes from <= 0 to > 0
 EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WEXT = range(8)
+# regenerative cut: the tool leaves (in the cut) or re-enters (out of it) where the chip
+# thickness h = S - W crosses zero; EV_HEXT = h' guards a graze of h = 0 inside a step
+EV_CUT, EV_HEXT = 8, 9
+N_EV = 10
+# the segment's description ``seg``: see :func:`_g`
+SEG_SIZE = 17
+SEG_KRB = 11  # Kr b in the cut, 0 out of it (and for harmonic forcing)
+SEG_S = 12  # S(tau) = seg[12] + seg[13] tau + seg[14] tau^2 + seg[15] tau^3, the surface
+SEG_CDIR = 16  # +1 in the cut, -1 out of it, 0 harmonic forcing
 
 
 # --- per-run setup (NumPy, once per run) --------------------------------------------------
@@ -179,7 +189,16 @@ def prepare(p: np.ndarray) -> dict:
             if case == L.BALL:
                 regimes.append(coupled(sr))
                 regimes.append(coupled(1.0))
+    nreg = len(regimes)
+    if int(p[L.FORCING]) == L.REGENERATIVE:
+        # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
+        krb = p[L.KR_B]
+        for A, B, c in list(regimes):
+            Ac = A.copy()
+            Ac[:, :n] -= krb * np.outer(B, pL)
+            regimes.append((Ac, B, c))
     R = len(regimes)
+    bq = np.zeros((R, nz), complex)
     lam = np.zeros((R, nz), complex)
     V = np.zeros((R, nz, nz), complex)
     Vi = np.zeros((R, nz, nz), complex)
@@ -188,7 +207,7 @@ def prepare(p: np.ndarray) -> dict:
     kstep = np.ones(R, np.int64)
     Vh = np.zeros((R, nz, nz), complex)
     for r, (A, B, c) in enumerate(regimes):
-        lam[r], V[r], Vi[r] = _eig(A, ("free", "stick", "contact")[r] if case == L.BALL
+        lam[r], V[r], Vi[r] = _eig(A, ("free", "stick", "contact")[r % nreg] if case == L.BALL
                                    else "linear")
         order = _conjugate_pairs(lam[r])
         Vh[r] = V[r]
@@ -201,6 +220,7 @@ def prepare(p: np.ndarray) -> dict:
             Vh[r] = 0.0
             Vh[r][:, 0::2] = 2.0 * V[r][:, 0::2]
             kstep[r] = 2
+        bq[r] = Vi[r] @ B
         Z[r] = np.linalg.solve(1j * om * np.eye(nz) - A, B * f0)
         D[r] = -np.linalg.solve(A, c)
     fastest = max(float(np.max(np.abs(lam))), om)
@@ -220,17 +240,63 @@ def prepare(p: np.ndarray) -> dict:
         isum = np.where(ssum != 0, 1.0 / np.where(ssum != 0, ssum, 1.0), 0.0)
     return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "Vi": Vi, "Z": Z, "D": D,
             "eh": np.exp(lam * h), "h": h, "lvis": np.array(lv), "cvis": np.array(cv),
-            "isum": isum.astype(complex)}
+            "isum": isum.astype(complex), "bq": bq, "nreg": nreg}
 
 
 # --- the kernel ----------------------------------------------------------------------------
 @njit(cache=True, inline="always")
-def _eval(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X):
-    """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts)."""
+def _phis(x):
+    """(e^x, phi_1(x), .., phi_4(x)), phi_k(x) = sum_m x^m / (m + k)!: the Taylor series of
+    phi_4 then phi_k = 1/k! + x phi_{k+1} for |x| < 1 (no cancellation), the recurrence
+    phi_{k+1} = (phi_k - 1/k!) / x from e^x otherwise (each step divides the error by
+    |x| >= 1)."""
+    if x.real * x.real + x.imag * x.imag < 1.0:
+        p4 = 0.0 + 0.0j
+        for m in range(14, -1, -1):
+            p4 = p4 * x + _RFACT[m + 4]
+        p3 = 1.0 / 6.0 + x * p4
+        p2 = 0.5 + x * p3
+        p1 = 1.0 + x * p2
+        return 1.0 + x * p1, p1, p2, p3, p4
+    ex = cmath.exp(x)
+    p1 = (ex - 1.0) / x
+    p2 = (p1 - 1.0) / x
+    p3 = (p2 - 0.5) / x
+    return ex, p1, p2, p3, (p3 - 1.0 / 6.0) / x
+
+
+@njit(cache=True, inline="always")
+def _surface(seg, tau):
+    """S(tau) and S'(tau): the cut surface's cubic on the segment (MODEL.md section 4)."""
+    s1 = seg[SEG_S + 1]
+    s2 = seg[SEG_S + 2]
+    s3 = seg[SEG_S + 3]
+    return (seg[SEG_S] + tau * (s1 + tau * (s2 + tau * s3)),
+            s1 + tau * (2.0 * s2 + 3.0 * tau * s3))
+
+
+@njit(cache=True, inline="always")
+def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
+    """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg[0]).
+
+    In a cut the input Kr b S(tau) (a cubic, seg[SEG_S:SEG_S + 4]) adds
+    bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to each eigen-coordinate."""
     nz = X.shape[0]
+    ts = seg[0]
+    fb = seg[1]
     ph = cmath.exp(1j * om * (ts + tau))
-    for k in range(0, nz, ks):
-        q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
+    krb = seg[SEG_KRB]
+    if krb != 0.0:
+        c0 = seg[SEG_S] * tau
+        c1 = seg[SEG_S + 1] * tau * tau
+        c2 = 2.0 * seg[SEG_S + 2] * tau ** 3
+        c3 = 6.0 * seg[SEG_S + 3] * tau ** 4
+        for k in range(0, nz, ks):
+            ex, p1, p2, p3, p4 = _phis(lam[r, k] * tau)
+            q[k] = q0[k] * ex + krb * bq[r, k] * (c0 * p1 + c1 * p2 + c2 * p3 + c3 * p4)
+    else:
+        for k in range(0, nz, ks):
+            q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
         for k in range(0, nz, ks):
@@ -250,9 +316,21 @@ def _from_q(r, q, ph, fb, Z, D, V, ks, X):
 
 
 @njit(cache=True, inline="always")
-def _freq(X, t, n, f0, om, mk, kappa):
-    """The force that carries the ball with the bar, psi_d . a_0 / kappa (N)."""
-    f = f0 * math.sin(om * t)
+def _force(seg, tau, X, n, mk, f0, om):
+    """The force at the tip at ts + tau: F0 sin(Omega t), or Kr b (S(tau) - W) in a cut."""
+    f = f0 * math.sin(om * (seg[0] + tau))
+    if seg[SEG_KRB] != 0.0:
+        w = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+        f += seg[SEG_KRB] * (_surface(seg, tau)[0] - w)
+    return f
+
+
+@njit(cache=True, inline="always")
+def _freq(X, f, n, mk, kappa):
+    """The force that carries the ball with the bar, psi_d . a_0 / kappa (N), under the
+    tip force f."""
     s = 0.0
     for i in range(n):
         s += mk[4, i] * (mk[3, i] * f - mk[1, i] * X[i] - mk[2, i] * X[n + i]) / mk[0, i]
@@ -260,19 +338,28 @@ def _freq(X, t, n, f0, om, mk, kappa):
 
 
 @njit(cache=True, inline="always")
-def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, n, mk, f0, om):
+def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
     """Event function ``kind`` at tau on the segment described by ``seg``.
 
-    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m]
+    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir]
+    (SEG_* name the cut's slots).
     """
     ts = seg[0]
     fb = seg[1]
-    _eval(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X)
+    _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
     if kind == EV_WEXT:
         s = 0.0
         for i in range(n):
             s += mk[3, i] * X[n + i]
         return s
+    if kind == EV_CUT or kind == EV_HEXT:
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        sv, sd = _surface(seg, tau)
+        return seg[SEG_CDIR] * (w - sv) if kind == EV_CUT else sd - wd
     if kind <= EV_YEXT:
         pdu = 0.0
         pdv = 0.0
@@ -285,7 +372,7 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, n, mk, f0, om):
             return y - seg[9] if kind == EV_PLUS else -seg[9] - y
         yd = seg[3] + acc * tau - pdv
         return -seg[5] * yd if kind == EV_VSTOP else yd
-    F = _freq(X, ts + tau, n, f0, om, mk, seg[7])
+    F = _freq(X, _force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
     if kind == EV_REL_NEG:
         return F - seg[8]
     if kind == EV_REL_POS:
@@ -294,30 +381,26 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, n, mk, f0, om):
 
 
 @njit(cache=True, inline="always")
-def _eval2(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X, Xd):
-    """X and X' at ts + tau on the segment (see :func:`_eval`)."""
+def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
+    """X and X' at ts + tau on the segment (see :func:`_eval`); in a cut
+    q' = lambda q + bq Kr b S(tau)."""
     nz = X.shape[0]
-    ph = cmath.exp(1j * om * (ts + tau))
-    for k in range(0, nz, ks):
-        q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
+    _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
+    ph = cmath.exp(1j * om * (seg[0] + tau))
+    sin_ = seg[SEG_KRB] * _surface(seg, tau)[0]
     for j in range(nz):
-        zp = Z[r, j] * ph
-        s = zp.imag + fb * D[r, j]
-        sd = om * zp.real
+        sd = om * (Z[r, j] * ph).real
         for k in range(0, nz, ks):
-            vq = V[r, j, k] * q[k]
-            s += vq.real
-            sd += (vq * lam[r, k]).real
-        X[j] = s
+            sd += (V[r, j, k] * (q[k] * lam[r, k] + sin_ * bq[r, k])).real
         Xd[j] = sd
 
 
 @njit(cache=True, inline="always")
-def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om):
+def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
     """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
     ts = seg[0]
     fb = seg[1]
-    _eval2(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X, Xd)
+    _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd)
     if kind == EV_WEXT:
         g = 0.0
         dg = 0.0
@@ -325,6 +408,18 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om):
             g += mk[3, i] * X[n + i]
             dg += mk[3, i] * Xd[n + i]
         return g, dg
+    if kind == EV_CUT or kind == EV_HEXT:
+        w = 0.0
+        wd = 0.0
+        wdd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+            wdd += mk[3, i] * Xd[n + i]
+        sv, sd = _surface(seg, tau)
+        if kind == EV_CUT:
+            return seg[SEG_CDIR] * (w - sv), seg[SEG_CDIR] * (wd - sd)
+        return sd - wd, 2.0 * seg[SEG_S + 2] + 6.0 * seg[SEG_S + 3] * tau - wdd
     if kind <= EV_YEXT:
         pdu = 0.0
         pdv = 0.0
@@ -347,6 +442,15 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om):
     t = ts + tau
     f = f0 * math.sin(om * t)
     fd = f0 * om * math.cos(om * t)
+    if seg[SEG_KRB] != 0.0:
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        sv, sd = _surface(seg, tau)
+        f += seg[SEG_KRB] * (sv - w)
+        fd += seg[SEG_KRB] * (sd - wd)
     F = 0.0
     Fd = 0.0
     for i in range(n):
@@ -403,7 +507,7 @@ def _hermite(a, b, p0, p1, d0, d1, order):
 
 
 @njit(cache=True)
-def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om, c0):
+def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
     """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
     Newton with the exact derivative, kept inside the shrinking bracket (a bisection
     whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
@@ -424,7 +528,7 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0,
             slow = 0
             if not (a < c < b):
                 break
-        g, dg = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om)
+        g, dg = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om)
         if g == 0.0:
             return c
         if (g > 0.0) == pos:
@@ -610,7 +714,7 @@ def _may_graze(a, b, ev_a, ev_b, half, b4):
 
 
 @njit(cache=True)
-def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, ks, Z, D, qs,
+def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, ks, Z, D, bq, qs,
                dX, Xd, n, mk, f0, om):
     """The first wall or friction-switch event of a FREE ball in [a, b], from the event
     functions at the ends: (kind, time), kind -1 if none."""
@@ -629,16 +733,16 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         near = dmin <= reach
     if near:
         te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                   V, ks, Z, D, qs, dX, Xd, n, mk, f0, om,
+                   V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
                    _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
                             ev_b[EV_YEXT], 1))
-        gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk, f0, om)
+        gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
         gm = -2.0 * half - gp
         for kk in (EV_PLUS, EV_MINUS):
             ge = gp if kk == EV_PLUS else gm
             if ev_a[kk] <= 0.0 < ge:
                 sg = 1.0 if kk == EV_PLUS else -1.0
-                tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D,
+                tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D, bq,
                            qs, dX, Xd, n, mk, f0, om,
                            _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
                                     0))
@@ -651,7 +755,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 if ge <= 0.0 < ev_b[kk]:
                     sg = 1.0 if kk == EV_PLUS else -1.0
                     tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
-                               Z, D, qs, dX, Xd, n, mk, f0, om,
+                               Z, D, bq, qs, dX, Xd, n, mk, f0, om,
                                _hermite(te, b, ge, ev_b[kk], 0.0,
                                         sg * ev_b[EV_YEXT], 0))
                     if kind < 0 or tr < best:
@@ -668,10 +772,10 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         yde = ev_b[EV_YEXT]
         if watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP]:
             best = _root(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
-                         q0, lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om, -1.0)
+                         q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
             kind = EV_VSTOP
             bend = best
-            gpe = _g(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk,
+            gpe = _g(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk,
                      f0, om)
             gme = -2.0 * half - gpe
             yde = 0.0
@@ -682,16 +786,180 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 c0 = _hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
                               0)
                 tr = _root(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
-                           D, qs, dX, Xd, n, mk, f0, om, c0)
+                           D, bq, qs, dX, Xd, n, mk, f0, om, c0)
                 if kind < 0 or tr <= best:
                     best = tr
                     kind = kk
     return kind, best
 
 
+#: Gauss-Legendre nodes and weights on [0, 1], 4 points
+_GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179242816,
+         0.5 + 0.4305681557970263)
+_GL_W = (0.17392742256872692, 0.3260725774312731, 0.3260725774312731, 0.17392742256872692)
+
+
+@njit(cache=True)
+def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, stick, kappa,
+              sr, acc, steady):
+    """Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of
+    :func:`_integrals`' ``out``) by 4-point Gauss-Legendre: error O((b - a)^9) per step,
+    far below the scheme's O(H^4).  Returns the largest force at the nodes."""
+    fmax = 0.0
+    hh = b - a
+    for g in range(4):
+        tau = a + _GL_X[g] * hh
+        wg = _GL_W[g] * hh
+        _eval(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
+        f = _force(seg, tau, X, n, mk, 0.0, 0.0)
+        fmax = max(fmax, f)
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        acc[0] += wg * f * wd
+        dv = 0.0
+        for d in range(lvis.shape[0]):
+            v = 0.0
+            for j in range(X.shape[0]):
+                v += lvis[d, j] * X[j]
+            dv += cvis[d] * v * v
+        acc[1] += wg * dv
+        if steady:
+            acc[2] += wg * w * w
+            acc[3] += wg * w
+            acc[4] += wg * f
+        if stick and sr != 1.0:
+            pdv = 0.0
+            for i in range(n):
+                pdv += mk[4, i] * X[n + i]
+            acc[5] += wg * (1.0 - sr) * _freq(X, f, n, mk, kappa) * pdv
+    return fmax
+
+
+@njit(cache=True)
+def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol):
+    """Store the knot (t, W, W'- from Xm, W'+ from Xp); one closer than ``ttol`` to the last
+    knot replaces its value and W'+.  Drops knots no revolution needs any more when the
+    store is full, and doubles it if that frees less than half.  Returns (kn, nk)."""
+    w = 0.0
+    wdm = 0.0
+    wdp = 0.0
+    for i in range(n):
+        w += mk[3, i] * Xp[i]
+        wdm += mk[3, i] * Xm[n + i]
+        wdp += mk[3, i] * Xp[n + i]
+    if nk > 0 and t <= kn[nk - 1, 0] + ttol:
+        kn[nk - 1, 1] = w
+        kn[nk - 1, 3] = wdp
+        return kn, nk
+    if nk == kn.shape[0]:
+        lo = nk
+        for k in range(1, ip.shape[0]):
+            lo = min(lo, ip[k])
+        if lo > 0:
+            for i in range(lo, nk):
+                for c in range(4):
+                    kn[i - lo, c] = kn[i, c]
+            nk -= lo
+            for k in range(1, ip.shape[0]):
+                ip[k] -= lo
+        if nk > kn.shape[0] // 2:
+            big = np.zeros((2 * kn.shape[0], 4))
+            big[:nk] = kn[:nk]
+            kn = big
+    kn[nk, 0] = t
+    kn[nk, 1] = w
+    kn[nk, 2] = wdm
+    kn[nk, 3] = wdp
+    return kn, nk + 1
+
+
+@njit(cache=True)
+def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before, tau_d, seg):
+    """The surface min_k [k h_m + W(t + tau - k tau)] from ``t`` as one cubic in tau, into
+    seg[SEG_S:SEG_S + 4], and the time (<= ``t_end``) up to which it is one cubic: the next
+    delayed knot of any revolution, or where another revolution becomes the minimum.
+
+    Advances the pointers ip[k] (all revolutions, so that old knots can be dropped);
+    sc[k] receives revolution k's cubic."""
+    t_piece = t_end
+    for k in range(1, nrev + 1):
+        kt = k * tau_d
+        i = ip[k]
+        while i + 1 < nk and kn[i + 1, 0] + kt <= t + ttol:
+            i += 1
+        ip[k] = i
+        if k > nr_eff:
+            continue
+        if i < 0:  # before the cut: the surface W = HIST_W0
+            sc[k, 0] = k * feed + w_before
+            sc[k, 1] = 0.0
+            sc[k, 2] = 0.0
+            sc[k, 3] = 0.0
+        else:
+            # cubic Hermite on [t_i, t_i+1] from W, W'+ at t_i and W, W'- at t_i+1, in
+            # x = t' - t_i, shifted to tau = t' - (t - k tau)
+            ln = kn[i + 1, 0] - kn[i, 0]
+            p0 = kn[i, 1]
+            d0 = kn[i, 3]
+            p1 = kn[i + 1, 1]
+            d1 = kn[i + 1, 2]
+            c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln
+            c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln)
+            x0 = (t - kt) - kn[i, 0]
+            sc[k, 0] = k * feed + p0 + x0 * (d0 + x0 * (c2 + x0 * c3))
+            sc[k, 1] = d0 + x0 * (2.0 * c2 + 3.0 * c3 * x0)
+            sc[k, 2] = c2 + 3.0 * c3 * x0
+            sc[k, 3] = c3
+        if i + 1 < nk:
+            tn = kn[i + 1, 0] + kt
+            if t + ttol < tn < t_piece:
+                t_piece = tn
+    # the minimising revolution at t (a tie goes to the one falling faster)
+    km = 1
+    tie = 1e-12 * feed
+    for k in range(2, nr_eff + 1):
+        if (sc[k, 0] < sc[km, 0] - tie
+                or (abs(sc[k, 0] - sc[km, 0]) <= tie and sc[k, 1] < sc[km, 1])):
+            km = k
+    # where another revolution drops below it: 16 samples, then bisection on the cubic
+    T = t_piece - t
+    for k in range(1, nr_eff + 1):
+        if k == km:
+            continue
+        lo = 0.0
+        for j in range(1, 17):
+            x = T * j / 16.0
+            d = 0.0
+            for c in range(3, -1, -1):
+                d = d * x + (sc[k, c] - sc[km, c])
+            if d < 0.0:
+                hi = x
+                for _ in range(60):
+                    mid = 0.5 * (lo + hi)
+                    d = 0.0
+                    for c in range(3, -1, -1):
+                        d = d * mid + (sc[k, c] - sc[km, c])
+                    if d < 0.0:
+                        hi = mid
+                    else:
+                        lo = mid
+                    if hi - lo <= ttol:
+                        break
+                if hi > ttol and hi < T:
+                    T = hi
+                break
+            lo = x
+    for c in range(4):
+        seg[SEG_S + c] = sc[km, c]
+    return t + T if T < t_piece - t else t_piece
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
-           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep):
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out):
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     nz = lam.shape[1]
@@ -738,15 +1006,62 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     ca = np.zeros(nb, np.complex128)
     cb = np.zeros(nb, np.complex128)
     out = np.zeros(6)
-    seg = np.zeros(11)
+    seg = np.zeros(SEG_SIZE)
     dX = np.zeros(nz)
-    ev_a = np.zeros(8)
-    ev_b = np.zeros(8)
-    ev_s = np.zeros(8)
-    ev_t = np.zeros(8)
+    ev_a = np.zeros(N_EV)
+    ev_b = np.zeros(N_EV)
+    ev_s = np.zeros(N_EV)
+    ev_t = np.zeros(N_EV)
 
     for j in range(nz):
         X[j] = x[j]
+    # --- regenerative cut (MODEL.md section 4): the history of W as knots -----------------
+    # Knots (t, W, W'-, W'+) at the nodes t0 + j H, H = tau / m <= dt_out (so the delayed
+    # nodes fall on nodes), and at every event (W' jumps at impacts, W'' at friction
+    # switches).  The surface min_k [k h_m + W(t - k tau)] is the cubic Hermite of W, W'
+    # between the two knots around t - k tau; a segment ends where any delayed knot falls,
+    # so the input is one cubic on it.  ip[k]: the knot at or before t - k tau (-1: before
+    # the cut, where W = HIST_W0).
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
+    krb = p[L.KR_B]
+    feed = p[L.FEED]
+    tau_d = p[L.TAU]
+    nrev = int(p[L.N_REV]) if regen else 0
+    stop_at_zero = p[L.STOP_AT_ZERO] > 0.0
+    w_before = p[L.HIST_W0]
+    m_rev = max(2, int(math.ceil(tau_d / dt_out - 1e-9))) if regen else 1
+    hh_ = tau_d / m_rev if regen else 0.0  # H
+    ttol = max(1e-9 * hh_, 4.0 * 2.2e-16 * (abs(t0) + abs(t_end)))
+    cap_kn = nrev * m_rev + 64 if regen else 1
+    kn = np.zeros((cap_kn, 4))
+    nk = 0
+    ip = np.full(nrev + 1, -1, np.int64)
+    sc = np.zeros((nrev + 1, 4))
+    qsum = np.zeros(6)
+    first_zero = met[L.FIRST_ZERO_T]
+    max_force = met[L.MAX_FORCE]
+    n_zero_steps = met[L.N_ZERO_STEPS]
+    last_zero_step = -1
+    j_node = 0  # the last node reached
+    incut = False
+    if regen:
+        w_ = 0.0
+        wd_ = 0.0
+        for i in range(n):
+            w_ += mk[3, i] * X[i]
+            wd_ += mk[3, i] * X[n + i]
+        kn[0, 0] = t0
+        kn[0, 1] = w_
+        kn[0, 2] = wd_
+        kn[0, 3] = wd_
+        nk = 1
+        incut = feed + w_before - w_ > 0.0
+        if not incut and first_zero < 0.0:
+            first_zero = t0
+        max_force = max(max_force, krb * max(0.0, feed + w_before - w_))
+    f_t0 = f0 * math.sin(om * t0)
+    if incut:
+        f_t0 += krb * (feed + w_before - kn[0, 1])
     y = x[2 * n] if ball or case == L.LOCKED else 0.0
     yd = x[2 * n + 1] if ball else 0.0
 
@@ -800,13 +1115,13 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         elif abs(y) >= half:
             wall = 1.0 if y > 0.0 else -1.0
             y = wall * half
-            F = _freq(X, t0, n, f0, om, mk, kappa_wall)
+            F = _freq(X, f_t0, n, mk, kappa_wall)
             if wall * F <= fs:
                 mode = CONTACT
             elif fc > 0.0:
                 sdir = -wall
         elif fc > 0.0:
-            F = _freq(X, t0, n, f0, om, mk, kappa_stick)
+            F = _freq(X, f_t0, n, mk, kappa_stick)
             if abs(F) <= fs:
                 mode = STICK
             else:
@@ -820,11 +1135,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         if n_ev >= MAX_EVENTS:
             status = 1
             break
-        t_stop = t_steady if t < t_steady else t_end
+        t_stop = min(t_steady, t_end) if t < t_steady else t_end
+        t_seg_end = t_stop
         steady = t >= t_steady
         r = 0
         if ball:
             r = mode
+        if incut:
+            r += nreg
         fb = 0.0
         if mode == FREE and ball:
             fb = -fc * sdir
@@ -839,6 +1157,22 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             for j in range(nz):
                 s += Vi[r, k, j] * dX[j]
             q0[k] = s
+        at_node = False
+        if regen:
+            # this segment ends at the next node, delayed knot or change of the minimising
+            # revolution: the surface is one cubic on it
+            while t0 + (j_node + 1) * hh_ <= t + ttol:
+                j_node += 1
+            t_seg_end = min(t0 + (j_node + 1) * hh_, t_stop)
+            at_node = t_seg_end < t_stop
+            nr_eff = nrev if first_zero >= 0.0 else 1
+            t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed,
+                                     w_before, tau_d, seg)
+            if t_piece < t_seg_end:
+                t_seg_end = t_piece
+                at_node = False
+            seg[SEG_KRB] = krb if incut else 0.0
+            seg[SEG_CDIR] = 1.0 if incut else -1.0
         pdu = 0.0
         pdv = 0.0
         for i in range(n):
@@ -855,7 +1189,17 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 vd = 0.0 + 0.0j
                 for i in range(n):
                     vd += mk[4, i] * Vfull[r, i, k]
-                b4 += abs(lam[r, k]) ** 4 * abs(vd * q0[k])
+                qk = q0[k]
+                if incut:
+                    # minus the polynomial particular solution P of q' = lambda q + g(tau)
+                    # (P^(4) = 0 for a cubic g); |exp(lambda tau)| <= 1 still
+                    lk = lam[r, k]
+                    gk = krb * bq[r, k]
+                    p3 = -gk * seg[SEG_S + 3] / lk
+                    p2 = (3.0 * p3 - gk * seg[SEG_S + 2]) / lk
+                    p1 = (2.0 * p2 - gk * seg[SEG_S + 1]) / lk
+                    qk = qk - (p1 - gk * seg[SEG_S]) / lk
+                b4 += abs(lam[r, k]) ** 4 * abs(vd * qk)
         seg[0] = t
         seg[1] = fb
         seg[2] = y + pdu  # the ball's absolute position and velocity
@@ -872,7 +1216,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         watch_wall = ball and mode == FREE
         watch_v = watch_wall and fc > 0.0 and sdir != 0.0
         watch_ext = watch_wall and not watch_v
-        tlen = t_stop - t
+        tlen = t_seg_end - t
         # values at tau = 0
         a = 0.0
         for j in range(nz):
@@ -895,6 +1239,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         # form's y(0) may be a few ulp past it, which would hide a return to that wall
         ev_a[EV_PLUS] = min(ev_a[EV_PLUS], 0.0)
         ev_a[EV_MINUS] = min(ev_a[EV_MINUS], 0.0)
+        # nor past h = 0 (an event put it there; the re-evaluated h may be a few ulp off)
+        ev_a[EV_CUT] = min(ev_a[EV_CUT], 0.0)
+        for c in range(6):
+            qsum[c] = 0.0
         auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
         while True:
             b = a + h
@@ -903,13 +1251,13 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 b = tlen
                 full = False
             istep += 1
-            if full and istep % 64 != 0:
+            if full and istep % 64 != 0 and not regen:
                 for k in range(0, nz, ks):
                     qg[k] = qg[k] * eh[r, k]
                 phg = phg * rot
                 _from_q(r, qg, phg, fb, Z, D, V, ks, X)
             else:
-                _eval(r, q0, t, b, fb, om, lam, V, ks, Z, D, qg, X)
+                _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
                 phg = cmath.exp(1j * om * (t + b))
             _events(ev_b, X, b, seg, mode, n, mk, f0, om)
             # --- events in [a, b]
@@ -920,7 +1268,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     if (mode == STICK) == (kk != EV_WALL_REL):
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
                             tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
-                                       D, qs, dX, Xd, n, mk, f0, om, -1.0)
+                                       D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                             if tr < best or kind < 0:
                                 best = tr
                                 kind = kk
@@ -931,32 +1279,49 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
                         or (watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)):
                     kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
-                                            q0, lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om)
+                                            q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om)
                 if kind < 0 and _may_graze(a, b, ev_a, ev_b, half, b4):
                     # the bound on y^(4) allows a crossing and return inside the step:
                     # look again on NSUB sub-steps (direct evaluations)
-                    for kk in range(8):
+                    for kk in range(N_EV):
                         ev_s[kk] = ev_a[kk]
                     sa = a
                     for j in range(1, NSUB + 1):
                         sb = a + (b - a) * j / NSUB if j < NSUB else b
                         if j < NSUB:
-                            _eval(r, q0, t, sb, fb, om, lam, V, ks, Z, D, qs, dX)
+                            _eval(r, q0, seg, sb, om, lam, V, ks, Z, D, bq, qs, dX)
                             _events(ev_t, dX, sb, seg, mode, n, mk, f0, om)
                         else:
-                            for kk in range(8):
+                            for kk in range(N_EV):
                                 ev_t[kk] = ev_b[kk]
                         kind, best = _wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
-                                                seg, r, q0, lam, V, ks, Z, D, qs, dX, Xd, n,
+                                                seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n,
                                                 mk, f0, om)
                         if kind >= 0:
                             break
                         sa = sb
-                        for kk in range(8):
+                        for kk in range(N_EV):
                             ev_s[kk] = ev_t[kk]
+            if regen:
+                # the tool leaves (in the cut) or re-enters (out of it): h = 0, or a graze
+                # of h = 0 between the step's ends, found at the extremum of h
+                tr = -1.0
+                if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
+                    tr = _root(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
+                               ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
+                    te = _root(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
+                               ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                    ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
+                    if ev_a[EV_CUT] <= 0.0 < ge:
+                        tr = _root(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
+                                   D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                if tr >= 0.0 and (kind < 0 or tr < best):
+                    best = tr
+                    kind = EV_CUT
             if kind >= 0:
                 b = best
-                _eval(r, q0, t, b, fb, om, lam, V, ks, Z, D, qs, X)
+                _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
                 ev_kind = kind
                 tau_ev = b
             # --- outputs on (a, b]
@@ -970,15 +1335,22 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_w = max(max_w, wb)
                 min_w = min(min_w, wb)
                 if wda * wdb < 0.0:
-                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, qs, dX, Xd,
+                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd,
                                n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
-                    _eval(r, q0, t, te, fb, om, lam, V, ks, Z, D, qs, dX)
+                    _eval(r, q0, seg, te, om, lam, V, ks, Z, D, bq, qs, dX)
                     we = 0.0
                     for i in range(n):
                         we += mk[3, i] * dX[i]
                     max_abs_w = max(max_abs_w, abs(we))
                     max_w = max(max_w, we)
                     min_w = min(min_w, we)
+            if regen:
+                # Gauss-Legendre (4 points, exact to degree 7) for the flows of the step:
+                # the input is a cubic, no longer a sum of exponentials
+                max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, qs,
+                                                     dX, n, mk, lvis, cvis, mode == STICK,
+                                                     kappa_stick, sr, qsum, steady))
+                max_force = max(max_force, _force(seg, b, X, n, mk, f0, om))
             # aux and aux' at a and b
             auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
             if kind == EV_PLUS or kind == EV_MINUS:
@@ -994,7 +1366,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 ts_ = t0 + k_rec * rec_dt
                 if ts_ > t_end:
                     break
-                _eval(r, q0, t, ts_ - t, fb, om, lam, V, ks, Z, D, qs, dX)
+                _eval(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
                 wv = 0.0
                 wdv = 0.0
                 for i in range(n):
@@ -1006,12 +1378,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 rec[n_rec, 2] = wdv
                 rec[n_rec, 3] = av
                 rec[n_rec, 4] = adv
-                rec[n_rec, 5] = f0 * math.sin(om * ts_)
+                rec[n_rec, 5] = _force(seg, ts_ - t, dX, n, mk, f0, om)
                 n_rec += 1
                 k_rec += 1
             while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
                 if n_stb < cap_stb:
-                    _eval(r, q0, t, t_next_strobe - t, fb, om, lam, V, ks, Z, D, qs, dX)
+                    _eval(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
                     wv = 0.0
                     wdv = 0.0
                     for i in range(n):
@@ -1032,14 +1404,24 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             wda = wdb
             auxa = auxb
             auxda = auxdb
-            for kk in range(8):
+            for kk in range(N_EV):
                 ev_a[kk] = ev_b[kk]
 
         # --- close the segment [t, t + T] ----------------------------------------------
         T = tau_ev
-        _integrals(r, q0, t, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
-                   kappa_stick if (ball and mode == STICK) else 0.0, sr,
-                   mu, em, G, Cx, cf, ca, cb, out, isum, steady)
+        if regen:
+            for c in range(6):
+                out[c] = qsum[c]
+            if not incut:  # the steps of length dt_out touched with h = 0
+                js = max(int(math.floor((t - t0) / dt_out)), last_zero_step + 1)
+                je = int(math.ceil((t + T - t0) / dt_out)) - 1
+                if je >= js:
+                    n_zero_steps += je - js + 1
+                    last_zero_step = je
+        else:
+            _integrals(r, q0, t, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
+                       kappa_stick if (ball and mode == STICK) else 0.0, sr,
+                       mu, em, G, Cx, cf, ca, cb, out, isum, steady)
         w_force += out[0]
         d_visc += out[1]
         w_nr += out[5]
@@ -1062,9 +1444,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 d_fric -= fb * (ynew - y)
                 w_nr += (1.0 - sr) * fb * (pdu1 - pdu)
                 y = ynew
-        t_new = t + T if ev_kind >= 0 else t_stop
+        t_new = t + T if ev_kind >= 0 else t_seg_end
+        f_ev = _force(seg, T, X, n, mk, f0, om)  # the tip force at the event
         if ev_kind < 0:
             t = t_new
+            if at_node:
+                kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol)
             continue
         n_ev += 1
         if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
@@ -1077,6 +1462,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             n_zero = 0
         t = t_new
         steady = t >= t_steady
+        for j in range(nz):
+            Xa[j] = X[j]  # before the event (a knot keeps W'- and W'+)
         # --- apply the event -------------------------------------------------------------
         was_stick = mode == STICK
         if ev_kind == EV_PLUS or ev_kind == EV_MINUS:
@@ -1110,10 +1497,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 mode = FREE
                 sdir = 1.0 if yd > 0.0 else -1.0
             else:
-                mode, sdir, wall = _at_wall(X, t, w_, n, f0, om, mk, kappa_wall, fs, fc)
+                mode, sdir, wall = _at_wall(X, f_ev, w_, n, mk, kappa_wall, fs, fc)
         elif ev_kind == EV_VSTOP:
             yd = 0.0
-            F = _freq(X, t, n, f0, om, mk, kappa_stick)
+            F = _freq(X, f_ev, n, mk, kappa_stick)
             if abs(F) <= fs:
                 mode = STICK
                 sdir = 0.0
@@ -1129,6 +1516,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             yd = 0.0
             sdir = -wall if fc > 0.0 else 0.0
             y = wall * half
+        elif ev_kind == EV_CUT:
+            incut = not incut
+            if not incut and first_zero < 0.0:
+                first_zero = t  # the chatter verdict (MODEL.md section 4)
+                if stop_at_zero:  # finish the step of length dt_out, as RK4 does
+                    t_end = min(t_end, t0 + math.ceil((t - t0) / dt_out - 1e-9) * dt_out)
+        if regen:
+            kn, nk = _knot(kn, nk, ip, t, Xa, X, n, mk, ttol)
         if mode == FREE and fc == 0.0 and yd == 0.0:
             sdir = 0.0
         # stick intervals
@@ -1185,13 +1580,18 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     met[L.N_STROBE] = n_stb
     met[L.N_EVENTS] = n_ev
     met[L.EXACT_STATUS] = status
+    if regen:
+        met[L.FIRST_ZERO_T] = first_zero
+        met[L.MAX_FORCE] = max_force
+        met[L.N_ZERO_STEPS] = n_zero_steps
     return t
 
 
 @njit(cache=True, inline="always")
-def _at_wall(X, t, w_, n, f0, om, mk, kappa_wall, fs, fc):
-    """Regime of a ball at rest on wall w_: held (CONTACT) or leaving inward (FREE)."""
-    F = _freq(X, t, n, f0, om, mk, kappa_wall)
+def _at_wall(X, f, w_, n, mk, kappa_wall, fs, fc):
+    """Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
+    inward (FREE)."""
+    F = _freq(X, f, n, mk, kappa_wall)
     if w_ * F <= fs:
         return CONTACT, 0.0, w_
     return FREE, (-w_ if fc > 0.0 else 0.0), w_
@@ -1213,8 +1613,17 @@ def _events(ev, X, tau, seg, mode, n, mk, f0, om):
     ev[EV_MINUS] = -seg[9] - y
     ev[EV_VSTOP] = -seg[5] * yd
     ev[EV_YEXT] = yd
+    if seg[SEG_CDIR] != 0.0:
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        sv, sd = _surface(seg, tau)
+        ev[EV_CUT] = seg[SEG_CDIR] * (w - sv)
+        ev[EV_HEXT] = sd - wd
     if mode != FREE:
-        F = _freq(X, seg[0] + tau, n, f0, om, mk, seg[7])
+        F = _freq(X, _force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
         ev[EV_REL_NEG] = F - seg[8]
         ev[EV_REL_POS] = -F - seg[8]
         ev[EV_WALL_REL] = seg[6] * F - seg[8]
@@ -1245,13 +1654,19 @@ def _aux(X, tau, seg, mode, case, n, mk, x, ball):
     return 0.0, 0.0
 
 
-def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None):
+def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None,
+              dt=0.0):
     """Advance ``x`` exactly from ``t0`` to ``t_end``; same outputs as ``run_rk4`` (the
     steady sums are integrals, see the module docstring).  ``prep``: :func:`prepare`'s
-    result, computed here if not given.  Returns the time reached."""
+    result, computed here if not given.  ``dt``: a regenerative cut's history step
+    (H = tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the
+    unit of N_ZERO_STEPS.  Returns the time reached."""
     if prep is None:
         prep = prepare(p)
+    if int(p[L.FORCING]) == L.REGENERATIVE and not dt > 0.0:
+        raise ValueError("exact integrator: a regenerative cut needs dt > 0")
     return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
                   stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
                   prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
-                  prep["isum"], prep["V"], prep["kstep"])
+                  prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
+                  float(dt))
