@@ -793,24 +793,75 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
     return kind, best
 
 
+@njit(cache=True)
+def history_step(tau, dt):
+    """H = tau / ceil(tau / dt), at least two per revolution: a cut's knot spacing."""
+    return tau / max(2, int(math.ceil(tau / dt - 1e-9)))
+
+
+def cut_tables(prep, p, H):
+    """exp(lambda tau_p) and Kr b bq j! tau_p^(j+1) phi_(j+1)(lambda tau_p) at the Gauss
+    nodes and the end of a whole step H, per regime (the out-of-cut ones have no input):
+    a whole step then needs no exponential."""
+    lam = prep["lam"]
+    R, nz = lam.shape
+    taus = [x * H for x in _GL_X] + [H]
+    tabE = np.zeros((R, 5, nz), complex)
+    tabP = np.zeros((R, 5, 4, nz), complex)
+    krb = p[L.KR_B]
+    for r in range(R):
+        for i, tau in enumerate(taus):
+            for k in range(nz):
+                ex, *ph = _phis(complex(lam[r, k] * tau))
+                tabE[r, i, k] = ex
+                if r >= prep["nreg"]:
+                    for j in range(4):
+                        tabP[r, i, j, k] = (krb * prep["bq"][r, k] * math.factorial(j)
+                                            * tau ** (j + 1) * ph[j])
+    return tabE, tabP
+
+
+@njit(cache=True, inline="always")
+def _eval_tab(r, ip_, q0, seg, tabE, tabP, V, ks, D, q, X):
+    """X at the tabulated point ip_ of a whole step (see :func:`cut_tables`)."""
+    nz = X.shape[0]
+    fb = seg[1]
+    s0 = seg[SEG_S]
+    s1 = seg[SEG_S + 1]
+    s2 = seg[SEG_S + 2]
+    s3 = seg[SEG_S + 3]
+    for k in range(0, nz, ks):
+        q[k] = (q0[k] * tabE[r, ip_, k] + s0 * tabP[r, ip_, 0, k] + s1 * tabP[r, ip_, 1, k]
+                + s2 * tabP[r, ip_, 2, k] + s3 * tabP[r, ip_, 3, k])
+    for j in range(nz):
+        s = fb * D[r, j]
+        for k in range(0, nz, ks):
+            s += (V[r, j, k] * q[k]).real
+        X[j] = s
+
+
 #: Gauss-Legendre nodes and weights on [0, 1], 4 points
 _GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179242816,
          0.5 + 0.4305681557970263)
 _GL_W = (0.17392742256872692, 0.3260725774312731, 0.3260725774312731, 0.17392742256872692)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, stick, kappa,
-              sr, acc, steady):
+              sr, acc, steady, tab, tabE, tabP):
     """Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of
     :func:`_integrals`' ``out``) by 4-point Gauss-Legendre: error O((b - a)^9) per step,
-    far below the scheme's O(H^4).  Returns the largest force at the nodes."""
+    far below the scheme's O(H^4).  ``tab``: [a, b] is a whole step H from a node, whose
+    values are tabulated.  Returns the largest force at the nodes."""
     fmax = 0.0
     hh = b - a
     for g in range(4):
         tau = a + _GL_X[g] * hh
         wg = _GL_W[g] * hh
-        _eval(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
+        if tab:
+            _eval_tab(r, g, q0, seg, tabE, tabP, V, ks, D, q, X)
+        else:
+            _eval(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
         f = _force(seg, tau, X, n, mk, 0.0, 0.0)
         fmax = max(fmax, f)
         w = 0.0
@@ -839,9 +890,9 @@ def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, s
 
 
 @njit(cache=True)
-def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol):
-    """Store the knot (t, W, W'- from Xm, W'+ from Xp); one closer than ``ttol`` to the last
-    knot replaces its value and W'+.  Drops knots no revolution needs any more when the
+def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol, node):
+    """Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1); one closer than
+    ``ttol`` to the last knot replaces its value and W'+.  Drops knots no revolution needs any more when the
     store is full, and doubles it if that frees less than half.  Returns (kn, nk)."""
     w = 0.0
     wdm = 0.0
@@ -853,6 +904,7 @@ def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol):
     if nk > 0 and t <= kn[nk - 1, 0] + ttol:
         kn[nk - 1, 1] = w
         kn[nk - 1, 3] = wdp
+        kn[nk - 1, 4] = max(kn[nk - 1, 4], node)
         return kn, nk
     if nk == kn.shape[0]:
         lo = nk
@@ -860,30 +912,33 @@ def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol):
             lo = min(lo, ip[k])
         if lo > 0:
             for i in range(lo, nk):
-                for c in range(4):
+                for c in range(5):
                     kn[i - lo, c] = kn[i, c]
             nk -= lo
             for k in range(1, ip.shape[0]):
                 ip[k] -= lo
         if nk > kn.shape[0] // 2:
-            big = np.zeros((2 * kn.shape[0], 4))
+            big = np.zeros((2 * kn.shape[0], 5))
             big[:nk] = kn[:nk]
             kn = big
     kn[nk, 0] = t
     kn[nk, 1] = w
     kn[nk, 2] = wdm
     kn[nk, 3] = wdp
+    kn[nk, 4] = node
     return kn, nk + 1
 
 
-@njit(cache=True)
-def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before, tau_d, seg):
+@njit(cache=True, inline="always")
+def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before, tau_d, seg,
+                   j_now, m_rev):
     """The surface min_k [k h_m + W(t + tau - k tau)] from ``t`` as one cubic in tau, into
     seg[SEG_S:SEG_S + 4], and the time (<= ``t_end``) up to which it is one cubic: the next
     delayed knot of any revolution, or where another revolution becomes the minimum.
 
     Advances the pointers ip[k] (all revolutions, so that old knots can be dropped);
-    sc[k] receives revolution k's cubic."""
+    sc[k] receives revolution k's cubic.  ``j_now``: the node t is on (-1: none); a
+    delayed node then falls exactly on its knot (no rounding of t - k tau)."""
     t_piece = t_end
     for k in range(1, nrev + 1):
         kt = k * tau_d
@@ -909,13 +964,15 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
             c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln
             c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln)
             x0 = (t - kt) - kn[i, 0]
+            if j_now >= 0 and kn[i, 4] == j_now - k * m_rev:
+                x0 = 0.0
             sc[k, 0] = k * feed + p0 + x0 * (d0 + x0 * (c2 + x0 * c3))
             sc[k, 1] = d0 + x0 * (2.0 * c2 + 3.0 * c3 * x0)
             sc[k, 2] = c2 + 3.0 * c3 * x0
             sc[k, 3] = c3
         if i + 1 < nk:
             tn = kn[i + 1, 0] + kt
-            if t + ttol < tn < t_piece:
+            if t + ttol < tn < t_piece - ttol:  # (a delayed node is the node itself)
                 t_piece = tn
     # the minimising revolution at t (a tie goes to the one falling faster)
     km = 1
@@ -959,7 +1016,8 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
 
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
-           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out):
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
+           tabE, tabP):
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     nz = lam.shape[1]
@@ -1029,11 +1087,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     nrev = int(p[L.N_REV]) if regen else 0
     stop_at_zero = p[L.STOP_AT_ZERO] > 0.0
     w_before = p[L.HIST_W0]
-    m_rev = max(2, int(math.ceil(tau_d / dt_out - 1e-9))) if regen else 1
-    hh_ = tau_d / m_rev if regen else 0.0  # H
+    m_rev = int(round(tau_d / hist_step)) if regen else 1
+    hh_ = hist_step  # H
     ttol = max(1e-9 * hh_, 4.0 * 2.2e-16 * (abs(t0) + abs(t_end)))
     cap_kn = nrev * m_rev + 64 if regen else 1
-    kn = np.zeros((cap_kn, 4))
+    kn = np.zeros((cap_kn, 5))
     nk = 0
     ip = np.full(nrev + 1, -1, np.int64)
     sc = np.zeros((nrev + 1, 4))
@@ -1054,6 +1112,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         kn[0, 1] = w_
         kn[0, 2] = wd_
         kn[0, 3] = wd_
+        kn[0, 4] = 0.0
         nk = 1
         incut = feed + w_before - w_ > 0.0
         if not incut and first_zero < 0.0:
@@ -1158,6 +1217,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 s += Vi[r, k, j] * dX[j]
             q0[k] = s
         at_node = False
+        whole = False
         if regen:
             # this segment ends at the next node, delayed knot or change of the minimising
             # revolution: the surface is one cubic on it
@@ -1165,14 +1225,17 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 j_node += 1
             t_seg_end = min(t0 + (j_node + 1) * hh_, t_stop)
             at_node = t_seg_end < t_stop
+            from_node = abs(t - (t0 + j_node * hh_)) <= ttol
             nr_eff = nrev if first_zero >= 0.0 else 1
             t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed,
-                                     w_before, tau_d, seg)
+                                     w_before, tau_d, seg, j_node if from_node else -1, m_rev)
             if t_piece < t_seg_end:
                 t_seg_end = t_piece
                 at_node = False
             seg[SEG_KRB] = krb if incut else 0.0
             seg[SEG_CDIR] = 1.0 if incut else -1.0
+            # a whole step H from node to node, inside one grid step: tabulated values
+            whole = at_node and from_node and hh_ <= h
         pdu = 0.0
         pdv = 0.0
         for i in range(n):
@@ -1256,6 +1319,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     qg[k] = qg[k] * eh[r, k]
                 phg = phg * rot
                 _from_q(r, qg, phg, fb, Z, D, V, ks, X)
+            elif whole and not full:
+                _eval_tab(r, 4, q0, seg, tabE, tabP, V, ks, D, qg, X)
             else:
                 _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
                 phg = cmath.exp(1j * om * (t + b))
@@ -1349,7 +1414,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 # the input is a cubic, no longer a sum of exponentials
                 max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, qs,
                                                      dX, n, mk, lvis, cvis, mode == STICK,
-                                                     kappa_stick, sr, qsum, steady))
+                                                     kappa_stick, sr, qsum, steady,
+                                                     whole and kind < 0, tabE, tabP))
                 max_force = max(max_force, _force(seg, b, X, n, mk, f0, om))
             # aux and aux' at a and b
             auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
@@ -1449,7 +1515,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         if ev_kind < 0:
             t = t_new
             if at_node:
-                kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol)
+                kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
             continue
         n_ev += 1
         if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
@@ -1523,7 +1589,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 if stop_at_zero:  # finish the step of length dt_out, as RK4 does
                     t_end = min(t_end, t0 + math.ceil((t - t0) / dt_out - 1e-9) * dt_out)
         if regen:
-            kn, nk = _knot(kn, nk, ip, t, Xa, X, n, mk, ttol)
+            kn, nk = _knot(kn, nk, ip, t, Xa, X, n, mk, ttol, -1.0)
         if mode == FREE and fc == 0.0 and yd == 0.0:
             sdir = 0.0
         # stick intervals
@@ -1665,8 +1731,14 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
         prep = prepare(p)
     if int(p[L.FORCING]) == L.REGENERATIVE and not dt > 0.0:
         raise ValueError("exact integrator: a regenerative cut needs dt > 0")
+    H = 0.0
+    tabE = np.zeros((1, 5, 1), complex)
+    tabP = np.zeros((1, 5, 4, 1), complex)
+    if int(p[L.FORCING]) == L.REGENERATIVE:
+        H = history_step(float(p[L.TAU]), float(dt))
+        tabE, tabP = cut_tables(prep, p, H)
     return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
                   stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
                   prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
                   prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
-                  float(dt))
+                  float(dt), H, tabE, tabP)
