@@ -143,7 +143,8 @@ def _add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                         "recorded history (default: 1e-6)")
     g.add_argument("--integrator", choices=INTEGRATORS, default="rk4",
                    help="rk4: the published fixed-step scheme (default); exact: "
-                        "event-driven, exact between events (harmonic forcing only)")
+                        "event-driven, exact between events (a cut: the delayed surface "
+                        "from a history of step <= dt)")
 
     if initial:
         g = p.add_argument_group("initial conditions (default: at rest, ball centred)")

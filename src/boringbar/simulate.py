@@ -291,9 +291,12 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
 
     ``integrator``: ``"rk4"`` (the published scheme, MODEL.md section 5) or
     ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
-    harmonic forcing only; ``dt`` is then only the step of the recorded history
+    under harmonic forcing ``dt`` is then only the step of the recorded history
     and of the duration and steady-window rounding, and the steady RMS is the
-    exact integral over the window).  True stick-slip (a static friction limit,
+    exact integral over the window; in a cut the delayed surface comes from a
+    history of step H = tau / ceil(tau / dt), interpolated as
+    ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
+    the first zero of the force is located in time).  True stick-slip (a static friction limit,
     ``Friction(static_ratio > 1)``) needs ``"exact"``.
     """
     check_choice("integrator", integrator, INTEGRATORS)

@@ -931,14 +931,15 @@ def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol, node):
 
 @njit(cache=True, inline="always")
 def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before, tau_d, seg,
-                   j_now, m_rev):
+                   j_now, m_rev, cubic):
     """The surface min_k [k h_m + W(t + tau - k tau)] from ``t`` as one cubic in tau, into
     seg[SEG_S:SEG_S + 4], and the time (<= ``t_end``) up to which it is one cubic: the next
     delayed knot of any revolution, or where another revolution becomes the minimum.
 
     Advances the pointers ip[k] (all revolutions, so that old knots can be dropped);
     sc[k] receives revolution k's cubic.  ``j_now``: the node t is on (-1: none); a
-    delayed node then falls exactly on its knot (no rounding of t - k tau)."""
+    delayed node then falls exactly on its knot (no rounding of t - k tau).  ``cubic``
+    false: linear interpolation of W instead (MODEL.md section 4's option)."""
     t_piece = t_end
     for k in range(1, nrev + 1):
         kt = k * tau_d
@@ -961,8 +962,13 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
             d0 = kn[i, 3]
             p1 = kn[i + 1, 1]
             d1 = kn[i + 1, 2]
-            c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln
-            c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln)
+            if cubic:
+                c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln
+                c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln)
+            else:
+                d0 = (p1 - p0) / ln
+                c2 = 0.0
+                c3 = 0.0
             x0 = (t - kt) - kn[i, 0]
             if j_now >= 0 and kn[i, 4] == j_now - k * m_rev:
                 x0 = 0.0
@@ -1087,6 +1093,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     nrev = int(p[L.N_REV]) if regen else 0
     stop_at_zero = p[L.STOP_AT_ZERO] > 0.0
     w_before = p[L.HIST_W0]
+    cubic = p[L.INTERP] > 0.0
     m_rev = int(round(tau_d / hist_step)) if regen else 1
     hh_ = hist_step  # H
     ttol = max(1e-9 * hh_, 4.0 * 2.2e-16 * (abs(t0) + abs(t_end)))
@@ -1228,7 +1235,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             from_node = abs(t - (t0 + j_node * hh_)) <= ttol
             nr_eff = nrev if first_zero >= 0.0 else 1
             t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed,
-                                     w_before, tau_d, seg, j_node if from_node else -1, m_rev)
+                                     w_before, tau_d, seg, j_node if from_node else -1, m_rev,
+                                     cubic)
             if t_piece < t_seg_end:
                 t_seg_end = t_piece
                 at_node = False
