@@ -21,7 +21,6 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.linear import tip_frf
 from boringbar.analysis.masri_caughey import two_impact_orbit
 from boringbar.dampers import Friction
-from boringbar.forcing import Regenerative
 
 
 # --- linear cases: closed forms ----------------------------------------------------------
