@@ -71,8 +71,18 @@ because the ball's parabola is outside the exponential basis.  Maxima of
 |W| are located exactly (W' = 0 roots on the grid); maxima of |aux| are
 taken on the grid and at events.
 
-Regenerative forcing is not supported here (simulate refuses it under
-``integrator="exact"``).
+Regenerative cutting (MODEL.md section 4; docs/exact.md "Regenerative cuts"):
+in the cut f = Kr b (S(t) - W), and -Kr b W joins the matrix (a second set of
+regimes, ``prepare``); the surface S = min_k [k h_m + W(t - k tau)] is one cubic
+per segment, the cubic Hermite of W, W' between stored knots (at the nodes
+t0 + j H, H = tau / ceil(tau / dt), and at every event), and the input
+bq Kr b S is propagated exactly with phi-functions (:func:`_eval`), so the
+error is the interpolation's, O(H^4).  Segments end at every node, delayed
+knot and change of the minimising revolution.  The tool leaving and
+re-entering the cut (h = 0) are events (EV_CUT, with the extremum of h,
+EV_HEXT, against grazes); the first exit is the chatter verdict.  The flows
+of a cut are integrated by 4-point Gauss-Legendre per step (O(H^9) per step);
+a whole step from node to node uses tabulated exponentials and phi's.
 """
 
 import cmath
@@ -822,22 +832,20 @@ def cut_tables(prep, p, H):
 
 
 @njit(cache=True, inline="always")
-def _eval_tab(r, ip_, q0, seg, tabE, tabP, V, ks, D, q, X):
-    """X at the tabulated point ip_ of a whole step (see :func:`cut_tables`)."""
-    nz = X.shape[0]
-    fb = seg[1]
-    s0 = seg[SEG_S]
-    s1 = seg[SEG_S + 1]
-    s2 = seg[SEG_S + 2]
-    s3 = seg[SEG_S + 3]
-    for k in range(0, nz, ks):
-        q[k] = (q0[k] * tabE[r, ip_, k] + s0 * tabP[r, ip_, 0, k] + s1 * tabP[r, ip_, 1, k]
-                + s2 * tabP[r, ip_, 2, k] + s3 * tabP[r, ip_, 3, k])
-    for j in range(nz):
-        s = fb * D[r, j]
-        for k in range(0, nz, ks):
-            s += (V[r, j, k] * q[k]).real
-        X[j] = s
+def _hermite_at(t0, p0, d0, t1, p1, d1, x0, cubic):
+    """The cubic Hermite interpolant on [t0, t1] of values p0, p1 and slopes d0 (right of
+    t0), d1 (left of t1), as a cubic in x - x0 (x = t' - t0): its 4 coefficients.
+    ``cubic`` false: the straight line through p0, p1."""
+    ln = t1 - t0
+    if cubic:
+        c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln
+        c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln)
+    else:
+        d0 = (p1 - p0) / ln
+        c2 = 0.0
+        c3 = 0.0
+    return (p0 + x0 * (d0 + x0 * (c2 + x0 * c3)), d0 + x0 * (2.0 * c2 + 3.0 * c3 * x0),
+            c2 + 3.0 * c3 * x0, c3)
 
 
 #: Gauss-Legendre nodes and weights on [0, 1], 4 points
@@ -848,20 +856,17 @@ _GL_W = (0.17392742256872692, 0.3260725774312731, 0.3260725774312731, 0.17392742
 
 @njit(cache=True, inline="always")
 def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, stick, kappa,
-              sr, acc, steady, tab, tabE, tabP):
+              sr, acc, steady):
     """Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of
     :func:`_integrals`' ``out``) by 4-point Gauss-Legendre: error O((b - a)^9) per step,
-    far below the scheme's O(H^4).  ``tab``: [a, b] is a whole step H from a node, whose
-    values are tabulated.  Returns the largest force at the nodes."""
+    far below the scheme's O(H^4).  Returns the largest force at the nodes.  (A whole
+    step, from the tables, is written out in :func:`_exact`.)"""
     fmax = 0.0
     hh = b - a
     for g in range(4):
         tau = a + _GL_X[g] * hh
         wg = _GL_W[g] * hh
-        if tab:
-            _eval_tab(r, g, q0, seg, tabE, tabP, V, ks, D, q, X)
-        else:
-            _eval(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
+        _eval(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
         f = _force(seg, tau, X, n, mk, 0.0, 0.0)
         fmax = max(fmax, f)
         w = 0.0
@@ -955,26 +960,14 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
             sc[k, 2] = 0.0
             sc[k, 3] = 0.0
         else:
-            # cubic Hermite on [t_i, t_i+1] from W, W'+ at t_i and W, W'- at t_i+1, in
-            # x = t' - t_i, shifted to tau = t' - (t - k tau)
-            ln = kn[i + 1, 0] - kn[i, 0]
-            p0 = kn[i, 1]
-            d0 = kn[i, 3]
-            p1 = kn[i + 1, 1]
-            d1 = kn[i + 1, 2]
-            if cubic:
-                c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln
-                c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln)
-            else:
-                d0 = (p1 - p0) / ln
-                c2 = 0.0
-                c3 = 0.0
             x0 = (t - kt) - kn[i, 0]
             if j_now >= 0 and kn[i, 4] == j_now - k * m_rev:
                 x0 = 0.0
-            sc[k, 0] = k * feed + p0 + x0 * (d0 + x0 * (c2 + x0 * c3))
-            sc[k, 1] = d0 + x0 * (2.0 * c2 + 3.0 * c3 * x0)
-            sc[k, 2] = c2 + 3.0 * c3 * x0
+            c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+                                         kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
+            sc[k, 0] = k * feed + c0
+            sc[k, 1] = c1
+            sc[k, 2] = c2
             sc[k, 3] = c3
         if i + 1 < nk:
             tn = kn[i + 1, 0] + kt
@@ -1215,7 +1208,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         kap = kappa_stick if mode == STICK else kappa_wall
         ks = kstep[r]
         # eigen-coordinates of the homogeneous part at t
-        ph = cmath.exp(1j * om * t)
+        ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
         for j in range(nz):
             dX[j] = X[j] - ((Z[r, j] * ph).imag + fb * D[r, j])
         for k in range(nz):
@@ -1225,6 +1218,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             q0[k] = s
         at_node = False
         whole = False
+        sticking = mode == STICK
+        krb_seg = 0.0
+        s_0 = 0.0
+        s_1 = 0.0
+        s_2 = 0.0
+        s_3 = 0.0
         if regen:
             # this segment ends at the next node, delayed knot or change of the minimising
             # revolution: the surface is one cubic on it
@@ -1233,17 +1232,52 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             t_seg_end = min(t0 + (j_node + 1) * hh_, t_stop)
             at_node = t_seg_end < t_stop
             from_node = abs(t - (t0 + j_node * hh_)) <= ttol
-            nr_eff = nrev if first_zero >= 0.0 else 1
-            t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed,
-                                     w_before, tau_d, seg, j_node if from_node else -1, m_rev,
-                                     cubic)
-            if t_piece < t_seg_end:
-                t_seg_end = t_piece
-                at_node = False
+            if first_zero < 0.0:
+                # one revolution (the minimum until the first zero): written out, as
+                # _surface_piece's k = 1 (no call: see the whole step below)
+                for k in range(1, nrev + 1):
+                    kt = k * tau_d
+                    i = ip[k]
+                    while i + 1 < nk and kn[i + 1, 0] + kt <= t + ttol:
+                        i += 1
+                    ip[k] = i
+                i = ip[1]
+                if i < 0:
+                    seg[SEG_S] = feed + w_before
+                    seg[SEG_S + 1] = 0.0
+                    seg[SEG_S + 2] = 0.0
+                    seg[SEG_S + 3] = 0.0
+                else:
+                    x0 = (t - tau_d) - kn[i, 0]
+                    if from_node and kn[i, 4] == j_node - m_rev:
+                        x0 = 0.0
+                    c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+                                                 kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
+                    seg[SEG_S] = feed + c0
+                    seg[SEG_S + 1] = c1
+                    seg[SEG_S + 2] = c2
+                    seg[SEG_S + 3] = c3
+                if i + 1 < nk:
+                    tn = kn[i + 1, 0] + tau_d
+                    if t + ttol < tn < t_seg_end - ttol:
+                        t_seg_end = tn
+                        at_node = False
+            else:
+                t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
+                                         w_before, tau_d, seg, j_node if from_node else -1,
+                                         m_rev, cubic)
+                if t_piece < t_seg_end:
+                    t_seg_end = t_piece
+                    at_node = False
             seg[SEG_KRB] = krb if incut else 0.0
             seg[SEG_CDIR] = 1.0 if incut else -1.0
             # a whole step H from node to node, inside one grid step: tabulated values
             whole = at_node and from_node and hh_ <= h
+            krb_seg = seg[SEG_KRB]
+            s_0 = seg[SEG_S]
+            s_1 = seg[SEG_S + 1]
+            s_2 = seg[SEG_S + 2]
+            s_3 = seg[SEG_S + 3]
         pdu = 0.0
         pdv = 0.0
         for i in range(n):
@@ -1295,7 +1329,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for k in range(nz):
             qg[k] = q0[k]
         phg = ph
-        rot = cmath.exp(1j * om * h)
+        rot = cmath.exp(1j * om * h) if om != 0.0 else 1.0 + 0.0j
         ev_kind = -1
         tau_ev = tlen
         istep = 0
@@ -1305,7 +1339,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for i in range(n):
             wa += mk[3, i] * Xa[i]
             wda += mk[3, i] * Xa[n + i]
-        _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+        if ball or not regen:
+            _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+        else:  # only h matters; written out (no call, see the whole step below)
+            ev_a[EV_CUT] = seg[SEG_CDIR] * (wa - s_0)
+            ev_a[EV_HEXT] = s_1 - wda
         # a segment never starts beyond a wall (events put the ball on it); the closed
         # form's y(0) may be a few ulp past it, which would hide a return to that wall
         ev_a[EV_PLUS] = min(ev_a[EV_PLUS], 0.0)
@@ -1314,7 +1352,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         ev_a[EV_CUT] = min(ev_a[EV_CUT], 0.0)
         for c in range(6):
             qsum[c] = 0.0
-        auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
+        auxa = 0.0
+        auxda = 0.0
+        if case != L.SOLID:
+            auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
         while True:
             b = a + h
             full = True
@@ -1328,11 +1369,30 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 phg = phg * rot
                 _from_q(r, qg, phg, fb, Z, D, V, ks, X)
             elif whole and not full:
-                _eval_tab(r, 4, q0, seg, tabE, tabP, V, ks, D, qg, X)
+                # the tabulated end of a whole step, written out: numba reference-counts
+                # the array arguments of every call, even inlined (docs/performance.md)
+                for k in range(0, nz, ks):
+                    qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
+                             + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
+                             + s_3 * tabP[r, 4, 3, k])
+                for j in range(nz):
+                    sx = fb * D[r, j]
+                    for k in range(0, nz, ks):
+                        sx += (V[r, j, k] * qg[k]).real
+                    X[j] = sx
             else:
                 _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
                 phg = cmath.exp(1j * om * (t + b))
-            _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+            if ball or not regen:
+                _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+            else:
+                wq = 0.0
+                wdq = 0.0
+                for i in range(n):
+                    wq += mk[3, i] * X[i]
+                    wdq += mk[3, i] * X[n + i]
+                ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
+                ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
             # --- events in [a, b]
             best = b
             kind = -1
@@ -1420,13 +1480,50 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             if regen:
                 # Gauss-Legendre (4 points, exact to degree 7) for the flows of the step:
                 # the input is a cubic, no longer a sum of exponentials
-                max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, qs,
-                                                     dX, n, mk, lvis, cvis, mode == STICK,
-                                                     kappa_stick, sr, qsum, steady,
-                                                     whole and kind < 0, tabE, tabP))
-                max_force = max(max_force, _force(seg, b, X, n, mk, f0, om))
+                if whole and kind < 0 and not (sticking and sr != 1.0):
+                    # a whole step: tabulated values, written out (as above)
+                    for g in range(4):
+                        for k in range(0, nz, ks):
+                            qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
+                                     + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
+                                     + s_3 * tabP[r, g, 3, k])
+                        for j in range(nz):
+                            sx = fb * D[r, j]
+                            for k in range(0, nz, ks):
+                                sx += (V[r, j, k] * qs[k]).real
+                            dX[j] = sx
+                        wq = 0.0
+                        wdq = 0.0
+                        for i in range(n):
+                            wq += mk[3, i] * dX[i]
+                            wdq += mk[3, i] * dX[n + i]
+                        xg = _GL_X[g] * b
+                        fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq)
+                        max_force = max(max_force, fq)
+                        wg = _GL_W[g] * b
+                        qsum[0] += wg * fq * wdq
+                        dv = 0.0
+                        for d in range(lvis.shape[0]):
+                            vv = 0.0
+                            for j in range(nz):
+                                vv += lvis[d, j] * dX[j]
+                            dv += cvis[d] * vv * vv
+                        qsum[1] += wg * dv
+                        if steady:
+                            qsum[2] += wg * wq * wq
+                            qsum[3] += wg * wq
+                            qsum[4] += wg * fq
+                else:
+                    max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq,
+                                                         qs, dX, n, mk, lvis, cvis,
+                                                         mode == STICK, kappa_stick, sr, qsum,
+                                                         steady))
+                max_force = max(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb))
             # aux and aux' at a and b
-            auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
+            auxb = 0.0
+            auxdb = 0.0
+            if case != L.SOLID:
+                auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
             if kind == EV_PLUS or kind == EV_MINUS:
                 auxb = half if kind == EV_PLUS else -half  # on the wall, up to round-off
             max_aux_all = max(max_aux_all, abs(auxb))
@@ -1519,13 +1616,21 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 w_nr += (1.0 - sr) * fb * (pdu1 - pdu)
                 y = ynew
         t_new = t + T if ev_kind >= 0 else t_seg_end
-        f_ev = _force(seg, T, X, n, mk, f0, om)  # the tip force at the event
         if ev_kind < 0:
             t = t_new
             if at_node:
-                kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
+                if nk < kn.shape[0] and t > kn[nk - 1, 0] + ttol:  # written out
+                    kn[nk, 0] = t
+                    kn[nk, 1] = wb
+                    kn[nk, 2] = wdb
+                    kn[nk, 3] = wdb
+                    kn[nk, 4] = j_node + 1.0
+                    nk += 1
+                else:
+                    kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
             continue
         n_ev += 1
+        f_ev = _force(seg, T, X, n, mk, f0, om)  # the tip force at the event
         if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
             n_zero += 1
             if n_zero > MAX_ZERO_LENGTH:
