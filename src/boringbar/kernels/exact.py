@@ -354,7 +354,6 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
     seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir]
     (SEG_* name the cut's slots).
     """
-    ts = seg[0]
     fb = seg[1]
     _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
     if kind == EV_WEXT:
@@ -897,8 +896,9 @@ def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, s
 @njit(cache=True)
 def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol, node):
     """Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1); one closer than
-    ``ttol`` to the last knot replaces its value and W'+.  Drops knots no revolution needs any more when the
-    store is full, and doubles it if that frees less than half.  Returns (kn, nk)."""
+    ``ttol`` to the last knot replaces its value and W'+.  Drops knots no revolution
+    needs any more when the store is full, and doubles it if that frees less than half.
+    Returns (kn, nk)."""
     w = 0.0
     wdm = 0.0
     wdp = 0.0
@@ -1468,8 +1468,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_w = max(max_w, wb)
                 min_w = min(min_w, wb)
                 if wda * wdb < 0.0:
-                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd,
-                               n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
+                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX,
+                               Xd, n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
                     _eval(r, q0, seg, te, om, lam, V, ks, Z, D, bq, qs, dX)
                     we = 0.0
                     for i in range(n):
