@@ -272,11 +272,13 @@ def test_cli_lobes_exact(tmp_path, capsys):
 
     out = tmp_path / "lobes"
     assert main(["lobes", "--bar", "solid", "--rpm", "1250", "--method", "search",
-                 "--duration-s", "0.2", "--dt-s", "4e-6", "--max-depth-mm", "0.5",
-                 "--integrator", "exact", "--out", str(out)]) == 0
+                 "--examples", "--duration-s", "0.2", "--dt-s", "4e-6", "--max-depth-mm",
+                 "0.5", "--integrator", "exact", "--out", str(out)]) == 0
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["integrator"] == "exact"
         assert float(ds["limit_depth"].max()) > 0
+    with xr.open_dataset(out / "examples.nc") as ex:
+        assert {c["integrator"] for c in json.loads(ex.attrs["configs"])} == {"exact"}
 
 
 def test_study_file_with_an_exact_cut_loads(tmp_path):

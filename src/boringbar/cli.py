@@ -825,7 +825,8 @@ def _lobe_examples(ds, case, args, cut: dict):
     for _, rpm, depth in points:
         run = simulate(case.system, Regenerative(depth=depth, rpm=rpm, **cut),
                        duration=args.duration_s, dt=args.dt_s,
-                       record_every=max(1, n_steps // HISTORY_ROWS))
+                       record_every=max(1, n_steps // HISTORY_ROWS),
+                       integrator=args.integrator)
         h = _history_dataset(run)
         h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
         c = run.cutting
