@@ -71,6 +71,19 @@ def test_the_cut_is_fourth_order_in_the_history_step(factor, duration):
     assert errs[-1] < 1e-9
 
 
+def test_linear_delay_interpolation_is_second_order():
+    """MODEL.md section 4's option, honoured by the exact integrator: measured errors
+    (against cubic at H = 1 us) 8.0e-4, 2.0e-4, 5.0e-5 at H = 8, 4, 2 us (orders 2.00,
+    2.00; RK4 with linear interpolation at dt = 2 us: 4.3e-5)."""
+    system = make_system("solid")
+    ref = _cut(system, 2.0, dt=1e-6, duration=0.9)
+    runs = [_cut(system, 2.0, dt=dt, duration=0.9, interpolation="linear")
+            for dt in (8e-6, 4e-6, 2e-6)]
+    errs = [_w_error(r, ref) for r in runs]
+    assert all(1.8 < math.log2(a / b) < 2.2 for a, b in zip(errs, errs[1:], strict=False))
+    assert runs[0].config()["delay_interpolation"] == "linear"
+
+
 def test_rk4_converges_to_the_exact_cut():
     """RK4 (cubic history, dt = 2, 1, 0.5 us) against exact at H = 1 us, chattering cut
     up to its first zero.  W: measured 1.4e-8, 8.9e-10, 9.3e-11 (RK4's own fourth
