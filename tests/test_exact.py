@@ -21,7 +21,6 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.linear import tip_frf
 from boringbar.analysis.masri_caughey import two_impact_orbit
 from boringbar.dampers import Friction
-from boringbar.forcing import Regenerative
 
 
 # --- linear cases: closed forms ----------------------------------------------------------
@@ -196,8 +195,6 @@ def test_refusals():
         Friction(static_ratio=0.5)
     with pytest.raises(ParameterError, match="static_ratio"):
         simulate(_stick_case(1.5), Harmonic(10.0, 1.0), duration=1e-3)
-    with pytest.raises(ParameterError, match="harmonic forcing only"):
-        simulate(s, Regenerative(depth=0.05e-3, rpm=1200), duration=1e-2, integrator="exact")
 
 
 def test_run_records_its_integrator():
@@ -243,9 +240,6 @@ def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
     out = tmp_path / "x"
     assert_one_line_error(cli.main, ["simulate", "--static-ratio", "2", "--duration-s",
                                      "0.01", "--out", str(out)], out, "static_ratio", capsys)
-    assert_one_line_error(cli.main, ["simulate", "--rpm", "1200", "--depth-mm", "0.05",
-                                     "--integrator", "exact", "--duration-s", "0.01",
-                                     "--out", str(out)], out, "harmonic forcing only", capsys)
 
 
 def test_sweep_records_its_integrator():

@@ -77,14 +77,10 @@ def test_to_dict_round_trips_and_is_json():
      "unknown key for a sweep study"),
     ('[study]\nanalysis = "sweep"\n[run]\nintegrator = "euler"\n', "run.integrator",
      "'euler'", "one of"),
-    ('[study]\nanalysis = "lobes"\n[run]\nintegrator = "exact"\n', "run.integrator",
-     "'exact'", "one of 'rk4' for a lobes study"),
     ('[study]\nanalysis = "sweep"\n[run]\ndt_s = 1e-4\n', "run.dt_s", "0.0001",
      "too coarse"),
     ('[study]\nanalysis = "sweep"\n[damper]\nstatic_ratio = 1.5\n', "damper.static_ratio",
      "1.5", "integrator = 'exact'"),
-    ('[study]\nanalysis = "sensitivity"\n[run]\nintegrator = "exact"\n[analysis]\n'
-     'cuts = true\n', "run.integrator", "'exact'", "harmonic forcing only"),
 ])
 def test_invalid_files_name_file_key_value_and_what_is_allowed(tmp_path, text, key, value,
                                                                 allowed):

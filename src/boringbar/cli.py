@@ -143,7 +143,8 @@ def _add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                         "recorded history (default: 1e-6)")
     g.add_argument("--integrator", choices=INTEGRATORS, default="rk4",
                    help="rk4: the published fixed-step scheme (default); exact: "
-                        "event-driven, exact between events (harmonic forcing only)")
+                        "event-driven, exact between events (a cut: the delayed surface "
+                        "from a history of step <= dt)")
 
     if initial:
         g = p.add_argument_group("initial conditions (default: at rest, ball centred)")
@@ -824,7 +825,8 @@ def _lobe_examples(ds, case, args, cut: dict):
     for _, rpm, depth in points:
         run = simulate(case.system, Regenerative(depth=depth, rpm=rpm, **cut),
                        duration=args.duration_s, dt=args.dt_s,
-                       record_every=max(1, n_steps // HISTORY_ROWS))
+                       record_every=max(1, n_steps // HISTORY_ROWS),
+                       integrator=args.integrator)
         h = _history_dataset(run)
         h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
         c = run.cutting

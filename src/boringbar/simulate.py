@@ -291,9 +291,12 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
 
     ``integrator``: ``"rk4"`` (the published scheme, MODEL.md section 5) or
     ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
-    harmonic forcing only; ``dt`` is then only the step of the recorded history
+    under harmonic forcing ``dt`` is then only the step of the recorded history
     and of the duration and steady-window rounding, and the steady RMS is the
-    exact integral over the window).  True stick-slip (a static friction limit,
+    exact integral over the window; in a cut the delayed surface comes from a
+    history of step H = tau / ceil(tau / dt), interpolated as
+    ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
+    the first zero of the force is located in time).  True stick-slip (a static friction limit,
     ``Friction(static_ratio > 1)``) needs ``"exact"``.
     """
     check_choice("integrator", integrator, INTEGRATORS)
@@ -302,9 +305,6 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     if not isinstance(forcing, Harmonic | Regenerative):
         raise ParameterError(f"forcing = {forcing!r} must be a Harmonic or a Regenerative")
     cutting = isinstance(forcing, Regenerative)
-    if integrator == "exact" and cutting:
-        raise ParameterError("integrator = 'exact' supports harmonic forcing only: regenerative "
-                             "cutting (delayed chip thickness) needs integrator = 'rk4'")
     d = system.damper
     if (integrator == "rk4" and isinstance(d, ImpactDamper)
             and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
@@ -381,9 +381,10 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
 
     tic = time.perf_counter()
     if integrator == "exact":
-        run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt, record_every * dt, rec,
-                  imp, stick, stb, met)
-        met[L.STEPS_DONE] = n_steps
+        t_reached = run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt,
+                              record_every * dt, rec, imp, stick, stb, met, dt=dt)
+        # a cut stopped at its first zero finishes that step of dt
+        met[L.STEPS_DONE] = min(n_steps, int(round((t_reached - t0) / dt)))
         if met[L.EXACT_STATUS] != 0:
             raise RuntimeError(f"exact integrator stopped at an impasse (status "
                                f"{int(met[L.EXACT_STATUS])} after {int(met[L.N_EVENTS])} events)")

@@ -48,7 +48,7 @@ from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
 from boringbar.analysis.sweep import Case
 from boringbar.forcing import KR_ALUMINIUM, Regenerative
-from boringbar.simulate import simulate
+from boringbar.simulate import INTEGRATORS, simulate
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
 PUBLISHED_DEPTH_STEP = 0.01e-3
@@ -64,7 +64,8 @@ def _cut(case: Case, rpm: float, depth: float, opts: dict) -> dict:
                            revolutions=opts["revolutions"], interpolation=opts["interpolation"],
                            start=opts["start"], stop_at_zero=True,
                            bounded_fraction=opts["bounded_fraction"])
-    run = simulate(case.system, forcing, duration=opts["duration"], dt=opts["dt"])
+    run = simulate(case.system, forcing, duration=opts["duration"], dt=opts["dt"],
+                   integrator=opts.get("integrator", "rk4"))
     c = run.cutting
     ball = case.system.kind == "ball"
     return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
@@ -175,12 +176,9 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
     (case, rpm) the limiting (chatter-free) depth and the first unstable depth
     under the chosen ``criterion``; per case the minimum chatter-free depth;
     and, for the linear bars (solid, TMD, locked ball), the analytic limit.
-    ``integrator`` must be "rk4": the exact integrator has no regenerative cut yet.
+    ``integrator``: "rk4" (published) or "exact" (see ``simulate``: the delayed surface
+    from a history of step H = tau / ceil(tau / dt), the first zero of the force located).
     """
-    if integrator != "rk4":
-        raise ParameterError(f"integrator = {integrator!r}: lobes are regenerative cuts, "
-                             "which only the 'rk4' integrator runs (the exact integrator "
-                             "supports harmonic forcing only)")
     if not cases:
         raise ParameterError("lobes needs at least one case")
     rpm = np.atleast_1d(np.asarray(rpm, dtype=float))
@@ -188,7 +186,8 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
     opts = _options(cases, rpm, method=method, depth_step=depth_step, max_depth=max_depth,
                     successive=successive, criterion=criterion, kr=kr, feed=feed,
                     revolutions=revolutions, interpolation=interpolation, start=start,
-                    bounded_fraction=bounded_fraction, duration=duration, dt=dt)
+                    bounded_fraction=bounded_fraction, duration=duration, dt=dt,
+                    integrator=integrator)
     for nm in sorted({c.system.bar.n_modes for c in cases}):  # warm the JIT once
         c0 = next(c for c in cases if c.system.bar.n_modes == nm)
         _cut(c0, float(rpm[0]), depth_step, dict(opts, duration=2e-4))
@@ -210,7 +209,7 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
 def _options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step: float,
              max_depth: float, successive: int, criterion: str, kr: float, feed: float,
              revolutions: int, interpolation: str, start: str, bounded_fraction: float,
-             duration: float, dt: float) -> dict:
+             duration: float, dt: float, integrator: str = "rk4") -> dict:
     """Check the lobe options (before any work) and pack what :func:`_column` needs,
     the search's seeds included."""
     check_choice("method", method, METHODS)
@@ -218,13 +217,14 @@ def _options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step: flo
     check_positive("depth_step", depth_step, "m")
     check_range("max_depth", max_depth, depth_step, 1.0, unit="m")
     check_range("successive", successive, 1, 100)
+    check_choice("integrator", integrator, INTEGRATORS)
     for r in rpm:
         check_positive("rpm", r)
     n_max = int(math.floor(max_depth / depth_step + 1e-9))
     opts = {"kr": kr, "feed": feed, "revolutions": revolutions, "interpolation": interpolation,
             "start": start, "bounded_fraction": bounded_fraction, "duration": duration,
             "dt": dt, "depth_step": depth_step, "max_index": n_max, "criterion": criterion,
-            "successive": int(successive), "method": method}
+            "successive": int(successive), "method": method, "integrator": integrator}
     # validate the cut description once, before any work
     Regenerative(depth=depth_step, rpm=float(rpm[0]), kr=kr, feed=feed,
                  revolutions=revolutions, interpolation=interpolation, start=start,
@@ -302,7 +302,7 @@ def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, anal
             "method": opts["method"],
             "criterion": criterion,
             "successive": opts["successive"],
-            "integrator": "rk4",
+            "integrator": opts.get("integrator", "rk4"),
             "delay_interpolation": interpolation,
             "start": opts["start"],
             "kr_pa": opts["kr"],

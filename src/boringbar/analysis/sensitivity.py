@@ -124,7 +124,7 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     bounded chatter, steady amplitude (m), first zero time (s) and peak force (N)
     of each full-length cut.  ``overrides`` go to
     :func:`~boringbar.system.make_system`; one result per value.  ``integrator``:
-    "rk4" (published) or "exact" (harmonic runs only; cuts need "rk4").
+    "rk4" (published) or "exact" (see :func:`~boringbar.simulate.simulate`).
     """
     check_choice("kind", kind, KINDS)
     if kind != "initial" and bar != "ball":

@@ -71,8 +71,18 @@ because the ball's parabola is outside the exponential basis.  Maxima of
 |W| are located exactly (W' = 0 roots on the grid); maxima of |aux| are
 taken on the grid and at events.
 
-Regenerative forcing is not supported here (simulate refuses it under
-``integrator="exact"``).
+Regenerative cutting (MODEL.md section 4; docs/exact.md "Regenerative cuts"):
+in the cut f = Kr b (S(t) - W), and -Kr b W joins the matrix (a second set of
+regimes, ``prepare``); the surface S = min_k [k h_m + W(t - k tau)] is one cubic
+per segment, the cubic Hermite of W, W' between stored knots (at the nodes
+t0 + j H, H = tau / ceil(tau / dt), and at every event), and the input
+bq Kr b S is propagated exactly with phi-functions (:func:`_eval`), so the
+error is the interpolation's, O(H^4).  Segments end at every node, delayed
+knot and change of the minimising revolution.  The tool leaving and
+re-entering the cut (h = 0) are events (EV_CUT, with the extremum of h,
+EV_HEXT, against grazes); the first exit is the chatter verdict.  The flows
+of a cut are integrated by 4-point Gauss-Legendre per step (O(H^9) per step);
+a whole step from node to node uses tabulated exponentials and phi's.
 """
 
 import cmath
@@ -94,8 +104,18 @@ MAX_ZERO_LENGTH = 64
 FREE, STICK, CONTACT = 0, 1, 2
 _RECIP = (0.0, 1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 5, 1 / 6, 1 / 7, 1 / 8, 1 / 9, 1 / 10, 1 / 11,
           1 / 12, 1 / 13)
+_RFACT = tuple(1.0 / math.factorial(k) for k in range(20))  # 1 / k!
 # event kinds; an event happens where g goes from <= 0 to > 0
 EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WEXT = range(8)
+# regenerative cut: the tool leaves (in the cut) or re-enters (out of it) where the chip
+# thickness h = S - W crosses zero; EV_HEXT = h' guards a graze of h = 0 inside a step
+EV_CUT, EV_HEXT = 8, 9
+N_EV = 10
+# the segment's description ``seg``: see :func:`_g`
+SEG_SIZE = 17
+SEG_KRB = 11  # Kr b in the cut, 0 out of it (and for harmonic forcing)
+SEG_S = 12  # S(tau) = seg[12] + seg[13] tau + seg[14] tau^2 + seg[15] tau^3, the surface
+SEG_CDIR = 16  # +1 in the cut, -1 out of it, 0 harmonic forcing
 
 
 # --- per-run setup (NumPy, once per run) --------------------------------------------------
@@ -179,7 +199,16 @@ def prepare(p: np.ndarray) -> dict:
             if case == L.BALL:
                 regimes.append(coupled(sr))
                 regimes.append(coupled(1.0))
+    nreg = len(regimes)
+    if int(p[L.FORCING]) == L.REGENERATIVE:
+        # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
+        krb = p[L.KR_B]
+        for A, B, c in list(regimes):
+            Ac = A.copy()
+            Ac[:, :n] -= krb * np.outer(B, pL)
+            regimes.append((Ac, B, c))
     R = len(regimes)
+    bq = np.zeros((R, nz), complex)
     lam = np.zeros((R, nz), complex)
     V = np.zeros((R, nz, nz), complex)
     Vi = np.zeros((R, nz, nz), complex)
@@ -188,7 +217,7 @@ def prepare(p: np.ndarray) -> dict:
     kstep = np.ones(R, np.int64)
     Vh = np.zeros((R, nz, nz), complex)
     for r, (A, B, c) in enumerate(regimes):
-        lam[r], V[r], Vi[r] = _eig(A, ("free", "stick", "contact")[r] if case == L.BALL
+        lam[r], V[r], Vi[r] = _eig(A, ("free", "stick", "contact")[r % nreg] if case == L.BALL
                                    else "linear")
         order = _conjugate_pairs(lam[r])
         Vh[r] = V[r]
@@ -201,6 +230,7 @@ def prepare(p: np.ndarray) -> dict:
             Vh[r] = 0.0
             Vh[r][:, 0::2] = 2.0 * V[r][:, 0::2]
             kstep[r] = 2
+        bq[r] = Vi[r] @ B
         Z[r] = np.linalg.solve(1j * om * np.eye(nz) - A, B * f0)
         D[r] = -np.linalg.solve(A, c)
     fastest = max(float(np.max(np.abs(lam))), om)
@@ -220,17 +250,63 @@ def prepare(p: np.ndarray) -> dict:
         isum = np.where(ssum != 0, 1.0 / np.where(ssum != 0, ssum, 1.0), 0.0)
     return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "Vi": Vi, "Z": Z, "D": D,
             "eh": np.exp(lam * h), "h": h, "lvis": np.array(lv), "cvis": np.array(cv),
-            "isum": isum.astype(complex)}
+            "isum": isum.astype(complex), "bq": bq, "nreg": nreg}
 
 
 # --- the kernel ----------------------------------------------------------------------------
 @njit(cache=True, inline="always")
-def _eval(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X):
-    """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts)."""
+def _phis(x):
+    """(e^x, phi_1(x), .., phi_4(x)), phi_k(x) = sum_m x^m / (m + k)!: the Taylor series of
+    phi_4 then phi_k = 1/k! + x phi_{k+1} for |x| < 1 (no cancellation), the recurrence
+    phi_{k+1} = (phi_k - 1/k!) / x from e^x otherwise (each step divides the error by
+    |x| >= 1)."""
+    if x.real * x.real + x.imag * x.imag < 1.0:
+        p4 = 0.0 + 0.0j
+        for m in range(14, -1, -1):
+            p4 = p4 * x + _RFACT[m + 4]
+        p3 = 1.0 / 6.0 + x * p4
+        p2 = 0.5 + x * p3
+        p1 = 1.0 + x * p2
+        return 1.0 + x * p1, p1, p2, p3, p4
+    ex = cmath.exp(x)
+    p1 = (ex - 1.0) / x
+    p2 = (p1 - 1.0) / x
+    p3 = (p2 - 0.5) / x
+    return ex, p1, p2, p3, (p3 - 1.0 / 6.0) / x
+
+
+@njit(cache=True, inline="always")
+def _surface(seg, tau):
+    """S(tau) and S'(tau): the cut surface's cubic on the segment (MODEL.md section 4)."""
+    s1 = seg[SEG_S + 1]
+    s2 = seg[SEG_S + 2]
+    s3 = seg[SEG_S + 3]
+    return (seg[SEG_S] + tau * (s1 + tau * (s2 + tau * s3)),
+            s1 + tau * (2.0 * s2 + 3.0 * tau * s3))
+
+
+@njit(cache=True, inline="always")
+def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
+    """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg[0]).
+
+    In a cut the input Kr b S(tau) (a cubic, seg[SEG_S:SEG_S + 4]) adds
+    bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to each eigen-coordinate."""
     nz = X.shape[0]
+    ts = seg[0]
+    fb = seg[1]
     ph = cmath.exp(1j * om * (ts + tau))
-    for k in range(0, nz, ks):
-        q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
+    krb = seg[SEG_KRB]
+    if krb != 0.0:
+        c0 = seg[SEG_S] * tau
+        c1 = seg[SEG_S + 1] * tau * tau
+        c2 = 2.0 * seg[SEG_S + 2] * tau ** 3
+        c3 = 6.0 * seg[SEG_S + 3] * tau ** 4
+        for k in range(0, nz, ks):
+            ex, p1, p2, p3, p4 = _phis(lam[r, k] * tau)
+            q[k] = q0[k] * ex + krb * bq[r, k] * (c0 * p1 + c1 * p2 + c2 * p3 + c3 * p4)
+    else:
+        for k in range(0, nz, ks):
+            q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
         for k in range(0, nz, ks):
@@ -250,9 +326,21 @@ def _from_q(r, q, ph, fb, Z, D, V, ks, X):
 
 
 @njit(cache=True, inline="always")
-def _freq(X, t, n, f0, om, mk, kappa):
-    """The force that carries the ball with the bar, psi_d . a_0 / kappa (N)."""
-    f = f0 * math.sin(om * t)
+def _force(seg, tau, X, n, mk, f0, om):
+    """The force at the tip at ts + tau: F0 sin(Omega t), or Kr b (S(tau) - W) in a cut."""
+    f = f0 * math.sin(om * (seg[0] + tau))
+    if seg[SEG_KRB] != 0.0:
+        w = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+        f += seg[SEG_KRB] * (_surface(seg, tau)[0] - w)
+    return f
+
+
+@njit(cache=True, inline="always")
+def _freq(X, f, n, mk, kappa):
+    """The force that carries the ball with the bar, psi_d . a_0 / kappa (N), under the
+    tip force f."""
     s = 0.0
     for i in range(n):
         s += mk[4, i] * (mk[3, i] * f - mk[1, i] * X[i] - mk[2, i] * X[n + i]) / mk[0, i]
@@ -260,19 +348,27 @@ def _freq(X, t, n, f0, om, mk, kappa):
 
 
 @njit(cache=True, inline="always")
-def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, n, mk, f0, om):
+def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
     """Event function ``kind`` at tau on the segment described by ``seg``.
 
-    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m]
+    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir]
+    (SEG_* name the cut's slots).
     """
-    ts = seg[0]
     fb = seg[1]
-    _eval(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X)
+    _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
     if kind == EV_WEXT:
         s = 0.0
         for i in range(n):
             s += mk[3, i] * X[n + i]
         return s
+    if kind == EV_CUT or kind == EV_HEXT:
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        sv, sd = _surface(seg, tau)
+        return seg[SEG_CDIR] * (w - sv) if kind == EV_CUT else sd - wd
     if kind <= EV_YEXT:
         pdu = 0.0
         pdv = 0.0
@@ -285,7 +381,7 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, n, mk, f0, om):
             return y - seg[9] if kind == EV_PLUS else -seg[9] - y
         yd = seg[3] + acc * tau - pdv
         return -seg[5] * yd if kind == EV_VSTOP else yd
-    F = _freq(X, ts + tau, n, f0, om, mk, seg[7])
+    F = _freq(X, _force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
     if kind == EV_REL_NEG:
         return F - seg[8]
     if kind == EV_REL_POS:
@@ -294,30 +390,26 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, n, mk, f0, om):
 
 
 @njit(cache=True, inline="always")
-def _eval2(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X, Xd):
-    """X and X' at ts + tau on the segment (see :func:`_eval`)."""
+def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
+    """X and X' at ts + tau on the segment (see :func:`_eval`); in a cut
+    q' = lambda q + bq Kr b S(tau)."""
     nz = X.shape[0]
-    ph = cmath.exp(1j * om * (ts + tau))
-    for k in range(0, nz, ks):
-        q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
+    _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
+    ph = cmath.exp(1j * om * (seg[0] + tau))
+    sin_ = seg[SEG_KRB] * _surface(seg, tau)[0]
     for j in range(nz):
-        zp = Z[r, j] * ph
-        s = zp.imag + fb * D[r, j]
-        sd = om * zp.real
+        sd = om * (Z[r, j] * ph).real
         for k in range(0, nz, ks):
-            vq = V[r, j, k] * q[k]
-            s += vq.real
-            sd += (vq * lam[r, k]).real
-        X[j] = s
+            sd += (V[r, j, k] * (q[k] * lam[r, k] + sin_ * bq[r, k])).real
         Xd[j] = sd
 
 
 @njit(cache=True, inline="always")
-def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om):
+def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
     """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
     ts = seg[0]
     fb = seg[1]
-    _eval2(r, q0, ts, tau, fb, om, lam, V, ks, Z, D, q, X, Xd)
+    _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd)
     if kind == EV_WEXT:
         g = 0.0
         dg = 0.0
@@ -325,6 +417,18 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om):
             g += mk[3, i] * X[n + i]
             dg += mk[3, i] * Xd[n + i]
         return g, dg
+    if kind == EV_CUT or kind == EV_HEXT:
+        w = 0.0
+        wd = 0.0
+        wdd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+            wdd += mk[3, i] * Xd[n + i]
+        sv, sd = _surface(seg, tau)
+        if kind == EV_CUT:
+            return seg[SEG_CDIR] * (w - sv), seg[SEG_CDIR] * (wd - sd)
+        return sd - wd, 2.0 * seg[SEG_S + 2] + 6.0 * seg[SEG_S + 3] * tau - wdd
     if kind <= EV_YEXT:
         pdu = 0.0
         pdv = 0.0
@@ -347,6 +451,15 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om):
     t = ts + tau
     f = f0 * math.sin(om * t)
     fd = f0 * om * math.cos(om * t)
+    if seg[SEG_KRB] != 0.0:
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        sv, sd = _surface(seg, tau)
+        f += seg[SEG_KRB] * (sv - w)
+        fd += seg[SEG_KRB] * (sd - wd)
     F = 0.0
     Fd = 0.0
     for i in range(n):
@@ -403,7 +516,7 @@ def _hermite(a, b, p0, p1, d0, d1, order):
 
 
 @njit(cache=True)
-def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om, c0):
+def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
     """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
     Newton with the exact derivative, kept inside the shrinking bracket (a bisection
     whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
@@ -424,7 +537,7 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0,
             slow = 0
             if not (a < c < b):
                 break
-        g, dg = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, q, X, Xd, n, mk, f0, om)
+        g, dg = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om)
         if g == 0.0:
             return c
         if (g > 0.0) == pos:
@@ -610,7 +723,7 @@ def _may_graze(a, b, ev_a, ev_b, half, b4):
 
 
 @njit(cache=True)
-def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, ks, Z, D, qs,
+def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, ks, Z, D, bq, qs,
                dX, Xd, n, mk, f0, om):
     """The first wall or friction-switch event of a FREE ball in [a, b], from the event
     functions at the ends: (kind, time), kind -1 if none."""
@@ -629,16 +742,16 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         near = dmin <= reach
     if near:
         te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                   V, ks, Z, D, qs, dX, Xd, n, mk, f0, om,
+                   V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
                    _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
                             ev_b[EV_YEXT], 1))
-        gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk, f0, om)
+        gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
         gm = -2.0 * half - gp
         for kk in (EV_PLUS, EV_MINUS):
             ge = gp if kk == EV_PLUS else gm
             if ev_a[kk] <= 0.0 < ge:
                 sg = 1.0 if kk == EV_PLUS else -1.0
-                tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D,
+                tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D, bq,
                            qs, dX, Xd, n, mk, f0, om,
                            _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
                                     0))
@@ -651,7 +764,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 if ge <= 0.0 < ev_b[kk]:
                     sg = 1.0 if kk == EV_PLUS else -1.0
                     tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
-                               Z, D, qs, dX, Xd, n, mk, f0, om,
+                               Z, D, bq, qs, dX, Xd, n, mk, f0, om,
                                _hermite(te, b, ge, ev_b[kk], 0.0,
                                         sg * ev_b[EV_YEXT], 0))
                     if kind < 0 or tr < best:
@@ -668,10 +781,10 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         yde = ev_b[EV_YEXT]
         if watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP]:
             best = _root(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
-                         q0, lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om, -1.0)
+                         q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
             kind = EV_VSTOP
             bend = best
-            gpe = _g(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, qs, dX, n, mk,
+            gpe = _g(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk,
                      f0, om)
             gme = -2.0 * half - gpe
             yde = 0.0
@@ -682,16 +795,228 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 c0 = _hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
                               0)
                 tr = _root(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
-                           D, qs, dX, Xd, n, mk, f0, om, c0)
+                           D, bq, qs, dX, Xd, n, mk, f0, om, c0)
                 if kind < 0 or tr <= best:
                     best = tr
                     kind = kk
     return kind, best
 
 
+@njit(cache=True)
+def history_step(tau, dt):
+    """H = tau / ceil(tau / dt), at least two per revolution: a cut's knot spacing."""
+    return tau / max(2, int(math.ceil(tau / dt - 1e-9)))
+
+
+def cut_tables(prep, p, H):
+    """exp(lambda tau_p) and Kr b bq j! tau_p^(j+1) phi_(j+1)(lambda tau_p) at the Gauss
+    nodes and the end of a whole step H, per regime (the out-of-cut ones have no input):
+    a whole step then needs no exponential."""
+    lam = prep["lam"]
+    R, nz = lam.shape
+    taus = [x * H for x in _GL_X] + [H]
+    tabE = np.zeros((R, 5, nz), complex)
+    tabP = np.zeros((R, 5, 4, nz), complex)
+    krb = p[L.KR_B]
+    for r in range(R):
+        for i, tau in enumerate(taus):
+            for k in range(nz):
+                ex, *ph = _phis(complex(lam[r, k] * tau))
+                tabE[r, i, k] = ex
+                if r >= prep["nreg"]:
+                    for j in range(4):
+                        tabP[r, i, j, k] = (krb * prep["bq"][r, k] * math.factorial(j)
+                                            * tau ** (j + 1) * ph[j])
+    return tabE, tabP
+
+
+@njit(cache=True, inline="always")
+def _hermite_at(t0, p0, d0, t1, p1, d1, x0, cubic):
+    """The cubic Hermite interpolant on [t0, t1] of values p0, p1 and slopes d0 (right of
+    t0), d1 (left of t1), as a cubic in x - x0 (x = t' - t0): its 4 coefficients.
+    ``cubic`` false: the straight line through p0, p1."""
+    ln = t1 - t0
+    if cubic:
+        c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln
+        c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln)
+    else:
+        d0 = (p1 - p0) / ln
+        c2 = 0.0
+        c3 = 0.0
+    return (p0 + x0 * (d0 + x0 * (c2 + x0 * c3)), d0 + x0 * (2.0 * c2 + 3.0 * c3 * x0),
+            c2 + 3.0 * c3 * x0, c3)
+
+
+#: Gauss-Legendre nodes and weights on [0, 1], 4 points
+_GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179242816,
+         0.5 + 0.4305681557970263)
+_GL_W = (0.17392742256872692, 0.3260725774312731, 0.3260725774312731, 0.17392742256872692)
+
+
+@njit(cache=True, inline="always")
+def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, stick, kappa,
+              sr, acc, steady):
+    """Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of
+    :func:`_integrals`' ``out``) by 4-point Gauss-Legendre: error O((b - a)^9) per step,
+    far below the scheme's O(H^4).  Returns the largest force at the nodes.  (A whole
+    step, from the tables, is written out in :func:`_exact`.)"""
+    fmax = 0.0
+    hh = b - a
+    for g in range(4):
+        tau = a + _GL_X[g] * hh
+        wg = _GL_W[g] * hh
+        _eval(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
+        f = _force(seg, tau, X, n, mk, 0.0, 0.0)
+        fmax = max(fmax, f)
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        acc[0] += wg * f * wd
+        dv = 0.0
+        for d in range(lvis.shape[0]):
+            v = 0.0
+            for j in range(X.shape[0]):
+                v += lvis[d, j] * X[j]
+            dv += cvis[d] * v * v
+        acc[1] += wg * dv
+        if steady:
+            acc[2] += wg * w * w
+            acc[3] += wg * w
+            acc[4] += wg * f
+        if stick and sr != 1.0:
+            pdv = 0.0
+            for i in range(n):
+                pdv += mk[4, i] * X[n + i]
+            acc[5] += wg * (1.0 - sr) * _freq(X, f, n, mk, kappa) * pdv
+    return fmax
+
+
+@njit(cache=True)
+def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol, node):
+    """Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1); one closer than
+    ``ttol`` to the last knot replaces its value and W'+.  Drops knots no revolution
+    needs any more when the store is full, and doubles it if that frees less than half.
+    Returns (kn, nk)."""
+    w = 0.0
+    wdm = 0.0
+    wdp = 0.0
+    for i in range(n):
+        w += mk[3, i] * Xp[i]
+        wdm += mk[3, i] * Xm[n + i]
+        wdp += mk[3, i] * Xp[n + i]
+    if nk > 0 and t <= kn[nk - 1, 0] + ttol:
+        kn[nk - 1, 1] = w
+        kn[nk - 1, 3] = wdp
+        kn[nk - 1, 4] = max(kn[nk - 1, 4], node)
+        return kn, nk
+    if nk == kn.shape[0]:
+        lo = nk
+        for k in range(1, ip.shape[0]):
+            lo = min(lo, ip[k])
+        if lo > 0:
+            for i in range(lo, nk):
+                for c in range(5):
+                    kn[i - lo, c] = kn[i, c]
+            nk -= lo
+            for k in range(1, ip.shape[0]):
+                ip[k] -= lo
+        if nk > kn.shape[0] // 2:
+            big = np.zeros((2 * kn.shape[0], 5))
+            big[:nk] = kn[:nk]
+            kn = big
+    kn[nk, 0] = t
+    kn[nk, 1] = w
+    kn[nk, 2] = wdm
+    kn[nk, 3] = wdp
+    kn[nk, 4] = node
+    return kn, nk + 1
+
+
+@njit(cache=True, inline="always")
+def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before, tau_d, seg,
+                   j_now, m_rev, cubic):
+    """The surface min_k [k h_m + W(t + tau - k tau)] from ``t`` as one cubic in tau, into
+    seg[SEG_S:SEG_S + 4], and the time (<= ``t_end``) up to which it is one cubic: the next
+    delayed knot of any revolution, or where another revolution becomes the minimum.
+
+    Advances the pointers ip[k] (all revolutions, so that old knots can be dropped);
+    sc[k] receives revolution k's cubic.  ``j_now``: the node t is on (-1: none); a
+    delayed node then falls exactly on its knot (no rounding of t - k tau).  ``cubic``
+    false: linear interpolation of W instead (MODEL.md section 4's option)."""
+    t_piece = t_end
+    for k in range(1, nrev + 1):
+        kt = k * tau_d
+        i = ip[k]
+        while i + 1 < nk and kn[i + 1, 0] + kt <= t + ttol:
+            i += 1
+        ip[k] = i
+        if k > nr_eff:
+            continue
+        if i < 0:  # before the cut: the surface W = HIST_W0
+            sc[k, 0] = k * feed + w_before
+            sc[k, 1] = 0.0
+            sc[k, 2] = 0.0
+            sc[k, 3] = 0.0
+        else:
+            x0 = (t - kt) - kn[i, 0]
+            if j_now >= 0 and kn[i, 4] == j_now - k * m_rev:
+                x0 = 0.0
+            c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+                                         kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
+            sc[k, 0] = k * feed + c0
+            sc[k, 1] = c1
+            sc[k, 2] = c2
+            sc[k, 3] = c3
+        if i + 1 < nk:
+            tn = kn[i + 1, 0] + kt
+            if t + ttol < tn < t_piece - ttol:  # (a delayed node is the node itself)
+                t_piece = tn
+    # the minimising revolution at t (a tie goes to the one falling faster)
+    km = 1
+    tie = 1e-12 * feed
+    for k in range(2, nr_eff + 1):
+        if (sc[k, 0] < sc[km, 0] - tie
+                or (abs(sc[k, 0] - sc[km, 0]) <= tie and sc[k, 1] < sc[km, 1])):
+            km = k
+    # where another revolution drops below it: 16 samples, then bisection on the cubic
+    T = t_piece - t
+    for k in range(1, nr_eff + 1):
+        if k == km:
+            continue
+        lo = 0.0
+        for j in range(1, 17):
+            x = T * j / 16.0
+            d = 0.0
+            for c in range(3, -1, -1):
+                d = d * x + (sc[k, c] - sc[km, c])
+            if d < 0.0:
+                hi = x
+                for _ in range(60):
+                    mid = 0.5 * (lo + hi)
+                    d = 0.0
+                    for c in range(3, -1, -1):
+                        d = d * mid + (sc[k, c] - sc[km, c])
+                    if d < 0.0:
+                        hi = mid
+                    else:
+                        lo = mid
+                    if hi - lo <= ttol:
+                        break
+                if hi > ttol and hi < T:
+                    T = hi
+                break
+            lo = x
+    for c in range(4):
+        seg[SEG_S + c] = sc[km, c]
+    return t + T if T < t_piece - t else t_piece
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
-           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep):
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
+           tabE, tabP):
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     nz = lam.shape[1]
@@ -738,15 +1063,64 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     ca = np.zeros(nb, np.complex128)
     cb = np.zeros(nb, np.complex128)
     out = np.zeros(6)
-    seg = np.zeros(11)
+    seg = np.zeros(SEG_SIZE)
     dX = np.zeros(nz)
-    ev_a = np.zeros(8)
-    ev_b = np.zeros(8)
-    ev_s = np.zeros(8)
-    ev_t = np.zeros(8)
+    ev_a = np.zeros(N_EV)
+    ev_b = np.zeros(N_EV)
+    ev_s = np.zeros(N_EV)
+    ev_t = np.zeros(N_EV)
 
     for j in range(nz):
         X[j] = x[j]
+    # --- regenerative cut (MODEL.md section 4): the history of W as knots -----------------
+    # Knots (t, W, W'-, W'+) at the nodes t0 + j H, H = tau / m <= dt_out (so the delayed
+    # nodes fall on nodes), and at every event (W' jumps at impacts, W'' at friction
+    # switches).  The surface min_k [k h_m + W(t - k tau)] is the cubic Hermite of W, W'
+    # between the two knots around t - k tau; a segment ends where any delayed knot falls,
+    # so the input is one cubic on it.  ip[k]: the knot at or before t - k tau (-1: before
+    # the cut, where W = HIST_W0).
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
+    krb = p[L.KR_B]
+    feed = p[L.FEED]
+    tau_d = p[L.TAU]
+    nrev = int(p[L.N_REV]) if regen else 0
+    stop_at_zero = p[L.STOP_AT_ZERO] > 0.0
+    w_before = p[L.HIST_W0]
+    cubic = p[L.INTERP] > 0.0
+    m_rev = int(round(tau_d / hist_step)) if regen else 1
+    hh_ = hist_step  # H
+    ttol = max(1e-9 * hh_, 4.0 * 2.2e-16 * (abs(t0) + abs(t_end)))
+    cap_kn = nrev * m_rev + 64 if regen else 1
+    kn = np.zeros((cap_kn, 5))
+    nk = 0
+    ip = np.full(nrev + 1, -1, np.int64)
+    sc = np.zeros((nrev + 1, 4))
+    qsum = np.zeros(6)
+    first_zero = met[L.FIRST_ZERO_T]
+    max_force = met[L.MAX_FORCE]
+    n_zero_steps = met[L.N_ZERO_STEPS]
+    last_zero_step = -1
+    j_node = 0  # the last node reached
+    incut = False
+    if regen:
+        w_ = 0.0
+        wd_ = 0.0
+        for i in range(n):
+            w_ += mk[3, i] * X[i]
+            wd_ += mk[3, i] * X[n + i]
+        kn[0, 0] = t0
+        kn[0, 1] = w_
+        kn[0, 2] = wd_
+        kn[0, 3] = wd_
+        kn[0, 4] = 0.0
+        nk = 1
+        incut = feed + w_before - w_ > 0.0
+        if not incut and first_zero < 0.0:
+            first_zero = t0
+        max_force = max(max_force, krb * max(0.0, feed + w_before - w_))
+    f_t0 = f0 * math.sin(om * t0)
+    if incut:
+        f_t0 += krb * (feed + w_before - kn[0, 1])
     y = x[2 * n] if ball or case == L.LOCKED else 0.0
     yd = x[2 * n + 1] if ball else 0.0
 
@@ -800,13 +1174,13 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         elif abs(y) >= half:
             wall = 1.0 if y > 0.0 else -1.0
             y = wall * half
-            F = _freq(X, t0, n, f0, om, mk, kappa_wall)
+            F = _freq(X, f_t0, n, mk, kappa_wall)
             if wall * F <= fs:
                 mode = CONTACT
             elif fc > 0.0:
                 sdir = -wall
         elif fc > 0.0:
-            F = _freq(X, t0, n, f0, om, mk, kappa_stick)
+            F = _freq(X, f_t0, n, mk, kappa_stick)
             if abs(F) <= fs:
                 mode = STICK
             else:
@@ -820,18 +1194,21 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         if n_ev >= MAX_EVENTS:
             status = 1
             break
-        t_stop = t_steady if t < t_steady else t_end
+        t_stop = min(t_steady, t_end) if t < t_steady else t_end
+        t_seg_end = t_stop
         steady = t >= t_steady
         r = 0
         if ball:
             r = mode
+        if incut:
+            r += nreg
         fb = 0.0
         if mode == FREE and ball:
             fb = -fc * sdir
         kap = kappa_stick if mode == STICK else kappa_wall
         ks = kstep[r]
         # eigen-coordinates of the homogeneous part at t
-        ph = cmath.exp(1j * om * t)
+        ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
         for j in range(nz):
             dX[j] = X[j] - ((Z[r, j] * ph).imag + fb * D[r, j])
         for k in range(nz):
@@ -839,6 +1216,68 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             for j in range(nz):
                 s += Vi[r, k, j] * dX[j]
             q0[k] = s
+        at_node = False
+        whole = False
+        sticking = mode == STICK
+        krb_seg = 0.0
+        s_0 = 0.0
+        s_1 = 0.0
+        s_2 = 0.0
+        s_3 = 0.0
+        if regen:
+            # this segment ends at the next node, delayed knot or change of the minimising
+            # revolution: the surface is one cubic on it
+            while t0 + (j_node + 1) * hh_ <= t + ttol:
+                j_node += 1
+            t_seg_end = min(t0 + (j_node + 1) * hh_, t_stop)
+            at_node = t_seg_end < t_stop
+            from_node = abs(t - (t0 + j_node * hh_)) <= ttol
+            if first_zero < 0.0:
+                # one revolution (the minimum until the first zero): written out, as
+                # _surface_piece's k = 1 (no call: see the whole step below)
+                for k in range(1, nrev + 1):
+                    kt = k * tau_d
+                    i = ip[k]
+                    while i + 1 < nk and kn[i + 1, 0] + kt <= t + ttol:
+                        i += 1
+                    ip[k] = i
+                i = ip[1]
+                if i < 0:
+                    seg[SEG_S] = feed + w_before
+                    seg[SEG_S + 1] = 0.0
+                    seg[SEG_S + 2] = 0.0
+                    seg[SEG_S + 3] = 0.0
+                else:
+                    x0 = (t - tau_d) - kn[i, 0]
+                    if from_node and kn[i, 4] == j_node - m_rev:
+                        x0 = 0.0
+                    c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+                                                 kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
+                    seg[SEG_S] = feed + c0
+                    seg[SEG_S + 1] = c1
+                    seg[SEG_S + 2] = c2
+                    seg[SEG_S + 3] = c3
+                if i + 1 < nk:
+                    tn = kn[i + 1, 0] + tau_d
+                    if t + ttol < tn < t_seg_end - ttol:
+                        t_seg_end = tn
+                        at_node = False
+            else:
+                t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
+                                         w_before, tau_d, seg, j_node if from_node else -1,
+                                         m_rev, cubic)
+                if t_piece < t_seg_end:
+                    t_seg_end = t_piece
+                    at_node = False
+            seg[SEG_KRB] = krb if incut else 0.0
+            seg[SEG_CDIR] = 1.0 if incut else -1.0
+            # a whole step H from node to node, inside one grid step: tabulated values
+            whole = at_node and from_node and hh_ <= h
+            krb_seg = seg[SEG_KRB]
+            s_0 = seg[SEG_S]
+            s_1 = seg[SEG_S + 1]
+            s_2 = seg[SEG_S + 2]
+            s_3 = seg[SEG_S + 3]
         pdu = 0.0
         pdv = 0.0
         for i in range(n):
@@ -855,7 +1294,17 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 vd = 0.0 + 0.0j
                 for i in range(n):
                     vd += mk[4, i] * Vfull[r, i, k]
-                b4 += abs(lam[r, k]) ** 4 * abs(vd * q0[k])
+                qk = q0[k]
+                if incut:
+                    # minus the polynomial particular solution P of q' = lambda q + g(tau)
+                    # (P^(4) = 0 for a cubic g); |exp(lambda tau)| <= 1 still
+                    lk = lam[r, k]
+                    gk = krb * bq[r, k]
+                    p3 = -gk * seg[SEG_S + 3] / lk
+                    p2 = (3.0 * p3 - gk * seg[SEG_S + 2]) / lk
+                    p1 = (2.0 * p2 - gk * seg[SEG_S + 1]) / lk
+                    qk = qk - (p1 - gk * seg[SEG_S]) / lk
+                b4 += abs(lam[r, k]) ** 4 * abs(vd * qk)
         seg[0] = t
         seg[1] = fb
         seg[2] = y + pdu  # the ball's absolute position and velocity
@@ -872,7 +1321,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         watch_wall = ball and mode == FREE
         watch_v = watch_wall and fc > 0.0 and sdir != 0.0
         watch_ext = watch_wall and not watch_v
-        tlen = t_stop - t
+        tlen = t_seg_end - t
         # values at tau = 0
         a = 0.0
         for j in range(nz):
@@ -880,7 +1329,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for k in range(nz):
             qg[k] = q0[k]
         phg = ph
-        rot = cmath.exp(1j * om * h)
+        rot = cmath.exp(1j * om * h) if om != 0.0 else 1.0 + 0.0j
         ev_kind = -1
         tau_ev = tlen
         istep = 0
@@ -890,12 +1339,23 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for i in range(n):
             wa += mk[3, i] * Xa[i]
             wda += mk[3, i] * Xa[n + i]
-        _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+        if ball or not regen:
+            _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+        else:  # only h matters; written out (no call, see the whole step below)
+            ev_a[EV_CUT] = seg[SEG_CDIR] * (wa - s_0)
+            ev_a[EV_HEXT] = s_1 - wda
         # a segment never starts beyond a wall (events put the ball on it); the closed
         # form's y(0) may be a few ulp past it, which would hide a return to that wall
         ev_a[EV_PLUS] = min(ev_a[EV_PLUS], 0.0)
         ev_a[EV_MINUS] = min(ev_a[EV_MINUS], 0.0)
-        auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
+        # nor past h = 0 (an event put it there; the re-evaluated h may be a few ulp off)
+        ev_a[EV_CUT] = min(ev_a[EV_CUT], 0.0)
+        for c in range(6):
+            qsum[c] = 0.0
+        auxa = 0.0
+        auxda = 0.0
+        if case != L.SOLID:
+            auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
         while True:
             b = a + h
             full = True
@@ -903,15 +1363,36 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 b = tlen
                 full = False
             istep += 1
-            if full and istep % 64 != 0:
+            if full and istep % 64 != 0 and not regen:
                 for k in range(0, nz, ks):
                     qg[k] = qg[k] * eh[r, k]
                 phg = phg * rot
                 _from_q(r, qg, phg, fb, Z, D, V, ks, X)
+            elif whole and not full:
+                # the tabulated end of a whole step, written out: numba reference-counts
+                # the array arguments of every call, even inlined (docs/performance.md)
+                for k in range(0, nz, ks):
+                    qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
+                             + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
+                             + s_3 * tabP[r, 4, 3, k])
+                for j in range(nz):
+                    sx = fb * D[r, j]
+                    for k in range(0, nz, ks):
+                        sx += (V[r, j, k] * qg[k]).real
+                    X[j] = sx
             else:
-                _eval(r, q0, t, b, fb, om, lam, V, ks, Z, D, qg, X)
+                _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
                 phg = cmath.exp(1j * om * (t + b))
-            _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+            if ball or not regen:
+                _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+            else:
+                wq = 0.0
+                wdq = 0.0
+                for i in range(n):
+                    wq += mk[3, i] * X[i]
+                    wdq += mk[3, i] * X[n + i]
+                ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
+                ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
             # --- events in [a, b]
             best = b
             kind = -1
@@ -920,7 +1401,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     if (mode == STICK) == (kk != EV_WALL_REL):
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
                             tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
-                                       D, qs, dX, Xd, n, mk, f0, om, -1.0)
+                                       D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                             if tr < best or kind < 0:
                                 best = tr
                                 kind = kk
@@ -931,32 +1412,49 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
                         or (watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)):
                     kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
-                                            q0, lam, V, ks, Z, D, qs, dX, Xd, n, mk, f0, om)
+                                            q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om)
                 if kind < 0 and _may_graze(a, b, ev_a, ev_b, half, b4):
                     # the bound on y^(4) allows a crossing and return inside the step:
                     # look again on NSUB sub-steps (direct evaluations)
-                    for kk in range(8):
+                    for kk in range(N_EV):
                         ev_s[kk] = ev_a[kk]
                     sa = a
                     for j in range(1, NSUB + 1):
                         sb = a + (b - a) * j / NSUB if j < NSUB else b
                         if j < NSUB:
-                            _eval(r, q0, t, sb, fb, om, lam, V, ks, Z, D, qs, dX)
+                            _eval(r, q0, seg, sb, om, lam, V, ks, Z, D, bq, qs, dX)
                             _events(ev_t, dX, sb, seg, mode, n, mk, f0, om)
                         else:
-                            for kk in range(8):
+                            for kk in range(N_EV):
                                 ev_t[kk] = ev_b[kk]
                         kind, best = _wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
-                                                seg, r, q0, lam, V, ks, Z, D, qs, dX, Xd, n,
+                                                seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n,
                                                 mk, f0, om)
                         if kind >= 0:
                             break
                         sa = sb
-                        for kk in range(8):
+                        for kk in range(N_EV):
                             ev_s[kk] = ev_t[kk]
+            if regen:
+                # the tool leaves (in the cut) or re-enters (out of it): h = 0, or a graze
+                # of h = 0 between the step's ends, found at the extremum of h
+                tr = -1.0
+                if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
+                    tr = _root(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
+                               ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
+                    te = _root(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
+                               ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                    ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
+                    if ev_a[EV_CUT] <= 0.0 < ge:
+                        tr = _root(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
+                                   D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                if tr >= 0.0 and (kind < 0 or tr < best):
+                    best = tr
+                    kind = EV_CUT
             if kind >= 0:
                 b = best
-                _eval(r, q0, t, b, fb, om, lam, V, ks, Z, D, qs, X)
+                _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
                 ev_kind = kind
                 tau_ev = b
             # --- outputs on (a, b]
@@ -970,17 +1468,62 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_w = max(max_w, wb)
                 min_w = min(min_w, wb)
                 if wda * wdb < 0.0:
-                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, qs, dX, Xd,
-                               n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
-                    _eval(r, q0, t, te, fb, om, lam, V, ks, Z, D, qs, dX)
+                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX,
+                               Xd, n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
+                    _eval(r, q0, seg, te, om, lam, V, ks, Z, D, bq, qs, dX)
                     we = 0.0
                     for i in range(n):
                         we += mk[3, i] * dX[i]
                     max_abs_w = max(max_abs_w, abs(we))
                     max_w = max(max_w, we)
                     min_w = min(min_w, we)
+            if regen:
+                # Gauss-Legendre (4 points, exact to degree 7) for the flows of the step:
+                # the input is a cubic, no longer a sum of exponentials
+                if whole and kind < 0 and not (sticking and sr != 1.0):
+                    # a whole step: tabulated values, written out (as above)
+                    for g in range(4):
+                        for k in range(0, nz, ks):
+                            qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
+                                     + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
+                                     + s_3 * tabP[r, g, 3, k])
+                        for j in range(nz):
+                            sx = fb * D[r, j]
+                            for k in range(0, nz, ks):
+                                sx += (V[r, j, k] * qs[k]).real
+                            dX[j] = sx
+                        wq = 0.0
+                        wdq = 0.0
+                        for i in range(n):
+                            wq += mk[3, i] * dX[i]
+                            wdq += mk[3, i] * dX[n + i]
+                        xg = _GL_X[g] * b
+                        fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq)
+                        max_force = max(max_force, fq)
+                        wg = _GL_W[g] * b
+                        qsum[0] += wg * fq * wdq
+                        dv = 0.0
+                        for d in range(lvis.shape[0]):
+                            vv = 0.0
+                            for j in range(nz):
+                                vv += lvis[d, j] * dX[j]
+                            dv += cvis[d] * vv * vv
+                        qsum[1] += wg * dv
+                        if steady:
+                            qsum[2] += wg * wq * wq
+                            qsum[3] += wg * wq
+                            qsum[4] += wg * fq
+                else:
+                    max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq,
+                                                         qs, dX, n, mk, lvis, cvis,
+                                                         mode == STICK, kappa_stick, sr, qsum,
+                                                         steady))
+                max_force = max(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb))
             # aux and aux' at a and b
-            auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
+            auxb = 0.0
+            auxdb = 0.0
+            if case != L.SOLID:
+                auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
             if kind == EV_PLUS or kind == EV_MINUS:
                 auxb = half if kind == EV_PLUS else -half  # on the wall, up to round-off
             max_aux_all = max(max_aux_all, abs(auxb))
@@ -994,7 +1537,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 ts_ = t0 + k_rec * rec_dt
                 if ts_ > t_end:
                     break
-                _eval(r, q0, t, ts_ - t, fb, om, lam, V, ks, Z, D, qs, dX)
+                _eval(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
                 wv = 0.0
                 wdv = 0.0
                 for i in range(n):
@@ -1006,12 +1549,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 rec[n_rec, 2] = wdv
                 rec[n_rec, 3] = av
                 rec[n_rec, 4] = adv
-                rec[n_rec, 5] = f0 * math.sin(om * ts_)
+                rec[n_rec, 5] = _force(seg, ts_ - t, dX, n, mk, f0, om)
                 n_rec += 1
                 k_rec += 1
             while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
                 if n_stb < cap_stb:
-                    _eval(r, q0, t, t_next_strobe - t, fb, om, lam, V, ks, Z, D, qs, dX)
+                    _eval(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
                     wv = 0.0
                     wdv = 0.0
                     for i in range(n):
@@ -1032,14 +1575,24 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             wda = wdb
             auxa = auxb
             auxda = auxdb
-            for kk in range(8):
+            for kk in range(N_EV):
                 ev_a[kk] = ev_b[kk]
 
         # --- close the segment [t, t + T] ----------------------------------------------
         T = tau_ev
-        _integrals(r, q0, t, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
-                   kappa_stick if (ball and mode == STICK) else 0.0, sr,
-                   mu, em, G, Cx, cf, ca, cb, out, isum, steady)
+        if regen:
+            for c in range(6):
+                out[c] = qsum[c]
+            if not incut:  # the steps of length dt_out touched with h = 0
+                js = max(int(math.floor((t - t0) / dt_out)), last_zero_step + 1)
+                je = int(math.ceil((t + T - t0) / dt_out)) - 1
+                if je >= js:
+                    n_zero_steps += je - js + 1
+                    last_zero_step = je
+        else:
+            _integrals(r, q0, t, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
+                       kappa_stick if (ball and mode == STICK) else 0.0, sr,
+                       mu, em, G, Cx, cf, ca, cb, out, isum, steady)
         w_force += out[0]
         d_visc += out[1]
         w_nr += out[5]
@@ -1062,11 +1615,22 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 d_fric -= fb * (ynew - y)
                 w_nr += (1.0 - sr) * fb * (pdu1 - pdu)
                 y = ynew
-        t_new = t + T if ev_kind >= 0 else t_stop
+        t_new = t + T if ev_kind >= 0 else t_seg_end
         if ev_kind < 0:
             t = t_new
+            if at_node:
+                if nk < kn.shape[0] and t > kn[nk - 1, 0] + ttol:  # written out
+                    kn[nk, 0] = t
+                    kn[nk, 1] = wb
+                    kn[nk, 2] = wdb
+                    kn[nk, 3] = wdb
+                    kn[nk, 4] = j_node + 1.0
+                    nk += 1
+                else:
+                    kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
             continue
         n_ev += 1
+        f_ev = _force(seg, T, X, n, mk, f0, om)  # the tip force at the event
         if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
             n_zero += 1
             if n_zero > MAX_ZERO_LENGTH:
@@ -1077,6 +1641,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             n_zero = 0
         t = t_new
         steady = t >= t_steady
+        for j in range(nz):
+            Xa[j] = X[j]  # before the event (a knot keeps W'- and W'+)
         # --- apply the event -------------------------------------------------------------
         was_stick = mode == STICK
         if ev_kind == EV_PLUS or ev_kind == EV_MINUS:
@@ -1110,10 +1676,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 mode = FREE
                 sdir = 1.0 if yd > 0.0 else -1.0
             else:
-                mode, sdir, wall = _at_wall(X, t, w_, n, f0, om, mk, kappa_wall, fs, fc)
+                mode, sdir, wall = _at_wall(X, f_ev, w_, n, mk, kappa_wall, fs, fc)
         elif ev_kind == EV_VSTOP:
             yd = 0.0
-            F = _freq(X, t, n, f0, om, mk, kappa_stick)
+            F = _freq(X, f_ev, n, mk, kappa_stick)
             if abs(F) <= fs:
                 mode = STICK
                 sdir = 0.0
@@ -1129,6 +1695,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             yd = 0.0
             sdir = -wall if fc > 0.0 else 0.0
             y = wall * half
+        elif ev_kind == EV_CUT:
+            incut = not incut
+            if not incut and first_zero < 0.0:
+                first_zero = t  # the chatter verdict (MODEL.md section 4)
+                if stop_at_zero:  # finish the step of length dt_out, as RK4 does
+                    t_end = min(t_end, t0 + math.ceil((t - t0) / dt_out - 1e-9) * dt_out)
+        if regen:
+            kn, nk = _knot(kn, nk, ip, t, Xa, X, n, mk, ttol, -1.0)
         if mode == FREE and fc == 0.0 and yd == 0.0:
             sdir = 0.0
         # stick intervals
@@ -1185,13 +1759,18 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     met[L.N_STROBE] = n_stb
     met[L.N_EVENTS] = n_ev
     met[L.EXACT_STATUS] = status
+    if regen:
+        met[L.FIRST_ZERO_T] = first_zero
+        met[L.MAX_FORCE] = max_force
+        met[L.N_ZERO_STEPS] = n_zero_steps
     return t
 
 
 @njit(cache=True, inline="always")
-def _at_wall(X, t, w_, n, f0, om, mk, kappa_wall, fs, fc):
-    """Regime of a ball at rest on wall w_: held (CONTACT) or leaving inward (FREE)."""
-    F = _freq(X, t, n, f0, om, mk, kappa_wall)
+def _at_wall(X, f, w_, n, mk, kappa_wall, fs, fc):
+    """Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
+    inward (FREE)."""
+    F = _freq(X, f, n, mk, kappa_wall)
     if w_ * F <= fs:
         return CONTACT, 0.0, w_
     return FREE, (-w_ if fc > 0.0 else 0.0), w_
@@ -1213,8 +1792,17 @@ def _events(ev, X, tau, seg, mode, n, mk, f0, om):
     ev[EV_MINUS] = -seg[9] - y
     ev[EV_VSTOP] = -seg[5] * yd
     ev[EV_YEXT] = yd
+    if seg[SEG_CDIR] != 0.0:
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        sv, sd = _surface(seg, tau)
+        ev[EV_CUT] = seg[SEG_CDIR] * (w - sv)
+        ev[EV_HEXT] = sd - wd
     if mode != FREE:
-        F = _freq(X, seg[0] + tau, n, f0, om, mk, seg[7])
+        F = _freq(X, _force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
         ev[EV_REL_NEG] = F - seg[8]
         ev[EV_REL_POS] = -F - seg[8]
         ev[EV_WALL_REL] = seg[6] * F - seg[8]
@@ -1245,13 +1833,25 @@ def _aux(X, tau, seg, mode, case, n, mk, x, ball):
     return 0.0, 0.0
 
 
-def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None):
+def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None,
+              dt=0.0):
     """Advance ``x`` exactly from ``t0`` to ``t_end``; same outputs as ``run_rk4`` (the
     steady sums are integrals, see the module docstring).  ``prep``: :func:`prepare`'s
-    result, computed here if not given.  Returns the time reached."""
+    result, computed here if not given.  ``dt``: a regenerative cut's history step
+    (H = tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the
+    unit of N_ZERO_STEPS.  Returns the time reached."""
     if prep is None:
         prep = prepare(p)
+    if int(p[L.FORCING]) == L.REGENERATIVE and not dt > 0.0:
+        raise ValueError("exact integrator: a regenerative cut needs dt > 0")
+    H = 0.0
+    tabE = np.zeros((1, 5, 1), complex)
+    tabP = np.zeros((1, 5, 4, 1), complex)
+    if int(p[L.FORCING]) == L.REGENERATIVE:
+        H = history_step(float(p[L.TAU]), float(dt))
+        tabE, tabP = cut_tables(prep, p, H)
     return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
                   stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
                   prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
-                  prep["isum"], prep["V"], prep["kstep"])
+                  prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
+                  float(dt), H, tabE, tabP)
