@@ -28,10 +28,10 @@ other runs share its batch.
 import math
 
 import numpy as np
-from numba import carray, njit, types
-from numba.extending import intrinsic
+from numba import carray, njit
 
 from boringbar.kernels import layout as L
+from boringbar.kernels.interp import hermite, lerp
 from boringbar.kernels.stack import stack_ptr
 
 #: most runs in one batch
@@ -40,49 +40,44 @@ _NX_MAX = 2 * L.NMAX + 2
 _B = BMAX
 _BN = BMAX * L.NMAX
 _BX = BMAX * _NX_MAX
-_B4 = BMAX * 4
 _BM = BMAX * L.MET_SIZE
+_B4 = BMAX * 4
 _RESYNC = 256
 
 
-@intrinsic
-def _fma(typingctx, a, b, c):
-    """a * b + c rounded once (llvm.fma), where the contraction must be pinned."""
-    def codegen(context, builder, signature, args):
-        return builder.fma(*args)
-
-    return types.float64(types.float64, types.float64, types.float64), codegen
-
-
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
-def _rk4_batch(n, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
+def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
     """Advance the states ``x`` ((nb, 2n+2), updated in place) by ``n_steps`` steps.
 
+    ``n`` modes and ``case`` (layout.SOLID, BALL, TMD, LOCKED) are the batch's;
     ``P`` (nb, P_SIZE) the runs' parameter vectors; ``met`` (nb, MET_SIZE) their
     metrics (fresh: zeros, STEADY_MAX_W = -inf, STEADY_MIN_W = +inf); ``imp``
     (nb, cap, 3), ``stick`` (nb, cap, 2), ``strobe`` (nb, cap, 5) their records,
     as in :func:`boringbar.kernels.rk4._rk4` (no history, no cutting).
+
+    Per-run values are stored run-minor (``X[j, r]``), and the stages are loops
+    over the runs with no branch that depends on a run's state except through
+    selects, so LLVM vectorises them across runs (4 runs per AVX2 instruction).
+    The step-end events (strobe, walls, stick) are a scalar loop over the runs.
     """
-    nb = P.shape[0]
     f8 = np.float64
-    case = int(P[0, L.CASE])
     ball = case == L.BALL
     has_aux = case == L.BALL or case == L.TMD
     nx = 2 * n + 2
     iy = 2 * n
     iyd = 2 * n + 1
 
-    # per-run modal constants, premultiplied as in _rk4
-    pL = carray(stack_ptr(_BN, f8), (nb, n))
-    pD = carray(stack_ptr(_BN, f8), (nb, n))
-    pA = carray(stack_ptr(_BN, f8), (nb, n))
-    C = carray(stack_ptr(_BN, f8), (nb, n))
-    invM = carray(stack_ptr(_BN, f8), (nb, n))
-    fm = carray(stack_ptr(_BN, f8), (nb, n))
-    km = carray(stack_ptr(_BN, f8), (nb, n))
-    cm = carray(stack_ptr(_BN, f8), (nb, n))
-    dm = carray(stack_ptr(_BN, f8), (nb, n))
-    lm = carray(stack_ptr(_BN, f8), (nb, n))
+    # per-run modal constants, premultiplied as in _rk4: [mode, run]
+    pL = carray(stack_ptr(_BN, f8), (n, nb))
+    pD = carray(stack_ptr(_BN, f8), (n, nb))
+    pA = carray(stack_ptr(_BN, f8), (n, nb))
+    C = carray(stack_ptr(_BN, f8), (n, nb))
+    invM = carray(stack_ptr(_BN, f8), (n, nb))
+    fm = carray(stack_ptr(_BN, f8), (n, nb))
+    km = carray(stack_ptr(_BN, f8), (n, nb))
+    cm = carray(stack_ptr(_BN, f8), (n, nb))
+    dm = carray(stack_ptr(_BN, f8), (n, nb))
+    lm = carray(stack_ptr(_BN, f8), (n, nb))
     # per-run scalars
     f0 = carray(stack_ptr(_B, f8), nb)
     om = carray(stack_ptr(_B, f8), nb)
@@ -103,30 +98,25 @@ def _rk4_batch(n, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
     shh = carray(stack_ptr(_B, f8), nb)
     sn = carray(stack_ptr(_B, f8), nb)
     cn = carray(stack_ptr(_B, f8), nb)
-    s1 = carray(stack_ptr(_B, f8), nb)
-    c1 = carray(stack_ptr(_B, f8), nb)
     t_next = carray(stack_ptr(_B, f8), nb)
     w_prev = carray(stack_ptr(_B, f8), nb)
     wd_prev = carray(stack_ptr(_B, f8), nb)
     aux_prev = carray(stack_ptr(_B, f8), nb)
     auxd_prev = carray(stack_ptr(_B, f8), nb)
     stick_t0 = carray(stack_ptr(_B, f8), nb)
+    contact = carray(stack_ptr(_B, f8), nb)  # 1.0: the ball is on a wall this step
     in_stick = carray(stack_ptr(_B, np.int64), nb)
     n_imp = carray(stack_ptr(_B, np.int64), nb)
     n_stk = carray(stack_ptr(_B, np.int64), nb)
     n_stb = carray(stack_ptr(_B, np.int64), nb)
-    # energy flows (the per-stage accumulators) and the other metrics
-    w_force = carray(stack_ptr(_B, f8), nb)
-    d_visc = carray(stack_ptr(_B, f8), nb)
-    d_fric = carray(stack_ptr(_B, f8), nb)
-    w_nr = carray(stack_ptr(_B, f8), nb)
-    ms = carray(stack_ptr(_BM, f8), (nb, L.MET_SIZE))
-    # state, stage derivative, sum of weighted derivatives; the stage state
-    X = carray(stack_ptr(_BX, f8), (nb, nx))
-    Kd = carray(stack_ptr(_BX, f8), (nb, nx))
-    acc = carray(stack_ptr(_BX, f8), (nb, nx))
-    Xs = carray(stack_ptr(_NX_MAX, f8), nx)
-    fst = carray(stack_ptr(_B4, f8), (nb, 4))
+    # streamed metrics: [metric, run]
+    ms = carray(stack_ptr(_BM, f8), (L.MET_SIZE, nb))
+    # state, stage derivative, weighted sum of the stage derivatives: [component, run]
+    X = carray(stack_ptr(_BX, f8), (nx, nb))
+    Kd = carray(stack_ptr(_BX, f8), (nx, nb))
+    acc = carray(stack_ptr(_BX, f8), (nx, nb))
+    fst = carray(stack_ptr(_B4, f8), (4, nb))  # forcing at the stages
+    Xs = carray(stack_ptr(_NX_MAX, f8), nx)  # one run's stage state (registers)
     cst = carray(stack_ptr(4, f8), 4)
     wst = carray(stack_ptr(4, f8), 4)
     for st in range(4):
@@ -137,12 +127,11 @@ def _rk4_batch(n, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
     for r in range(nb):
         p = P[r]
         for i in range(n):
-            M_i = p[L.M_ + i]
-            invM[r, i] = 1.0 / M_i
-            C[r, i] = p[L.C_ + i]
-            pL[r, i] = p[L.PSI_L + i]
-            pD[r, i] = p[L.PSI_D + i]
-            pA[r, i] = p[L.PSI_A + i]
+            invM[i, r] = 1.0 / p[L.M_ + i]
+            C[i, r] = p[L.C_ + i]
+            pL[i, r] = p[L.PSI_L + i]
+            pD[i, r] = p[L.PSI_D + i]
+            pA[i, r] = p[L.PSI_A + i]
         f0[r] = p[L.F0]
         om[r] = p[L.OMEGA]
         m = p[L.BALL_MASS]
@@ -160,45 +149,40 @@ def _rk4_batch(n, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
         tstrobe[r] = p[L.STROBE_PERIOD]
         kap = 1.0 / m if m > 0.0 else 0.0
         for i in range(n):
-            fm[r, i] = pL[r, i] * invM[r, i]
-            km[r, i] = p[L.K_ + i] * invM[r, i]
-            cm[r, i] = C[r, i] * invM[r, i]
-            dm[r, i] = sr[r] * pD[r, i] * invM[r, i]
-            lm[r, i] = meff[r] * pD[r, i] * invM[r, i]
-            kap += pD[r, i] * dm[r, i]
+            fm[i, r] = pL[i, r] * invM[i, r]
+            km[i, r] = p[L.K_ + i] * invM[i, r]
+            cm[i, r] = C[i, r] * invM[i, r]
+            dm[i, r] = sr[r] * pD[i, r] * invM[i, r]
+            lm[i, r] = meff[r] * pD[i, r] * invM[i, r]
+            kap += pD[i, r] * dm[i, r]
         kappa[r] = kap
         chh[r] = math.cos(om[r] * 0.5 * dt)
         shh[r] = math.sin(om[r] * 0.5 * dt)
         sn[r] = 0.0
         cn[r] = 1.0
-
         for j in range(nx):
-            X[r, j] = x[r, j]
-            Kd[r, j] = 0.0
+            X[j, r] = x[r, j]
+            Kd[j, r] = 0.0
         if case == L.LOCKED:
-            X[r, iyd] = 0.0
+            X[iyd, r] = 0.0
         for q in range(L.MET_SIZE):
-            ms[r, q] = met[r, q]
-        w_force[r] = met[r, L.W_FORCE]
-        d_visc[r] = met[r, L.D_VISC]
-        d_fric[r] = met[r, L.D_FRICTION]
-        w_nr[r] = met[r, L.W_NONRECIP]
+            ms[q, r] = met[r, q]
         n_imp[r] = int(met[r, L.N_IMP_REC])
         n_stk[r] = int(met[r, L.N_STICK_REC])
         n_stb[r] = int(met[r, L.N_STROBE])
         in_stick[r] = 0
         stick_t0[r] = 0.0
-
+        contact[r] = 0.0
         wp = 0.0
         wdp = 0.0
-        ap = X[r, iy]
-        adp = X[r, iyd]
+        ap = X[iy, r]
+        adp = X[iyd, r]
         for i in range(n):
-            wp += pL[r, i] * X[r, i]
-            wdp += pL[r, i] * X[r, n + i]
+            wp += pL[i, r] * X[i, r]
+            wdp += pL[i, r] * X[n + i, r]
             if case == L.TMD:
-                ap -= pA[r, i] * X[r, i]
-                adp -= pA[r, i] * X[r, n + i]
+                ap -= pA[i, r] * X[i, r]
+                adp -= pA[i, r] * X[n + i, r]
         w_prev[r] = wp
         wd_prev[r] = wdp
         aux_prev[r] = ap
@@ -216,198 +200,188 @@ def _rk4_batch(n, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
     for k in range(n_steps):
         t = t0 + k * dt
         t1 = t0 + (k + 1) * dt  # not t + dt: keeps event times inside [t0, t_end]
-        resync = k % _RESYNC == 0
-        for r in range(nb):
-            if resync:
+        steady = k >= steady_start
+        if k % _RESYNC == 0:
+            for r in range(nb):
                 sn[r] = math.sin(om[r] * t)
                 cn[r] = math.cos(om[r] * t)
+        for r in range(nb):
             s_h = sn[r] * chh[r] + cn[r] * shh[r]
             c_h = cn[r] * chh[r] - sn[r] * shh[r]
-            s1[r] = s_h * chh[r] + c_h * shh[r]
-            c1[r] = c_h * chh[r] - s_h * shh[r]
-            fst[r, 0] = f0[r] * sn[r]
-            fst[r, 1] = f0[r] * s_h
-            fst[r, 2] = fst[r, 1]
-            fst[r, 3] = f0[r] * s1[r]
+            s_1 = s_h * chh[r] + c_h * shh[r]
+            c_1 = c_h * chh[r] - s_h * shh[r]
+            fst[0, r] = f0[r] * sn[r]
+            fst[1, r] = f0[r] * s_h
+            fst[2, r] = fst[1, r]
+            fst[3, r] = f0[r] * s_1
+            sn[r] = s_1
+            cn[r] = c_1
             for j in range(nx):
-                acc[r, j] = 0.0
+                acc[j, r] = 0.0
 
-        # --- four RK4 stages, each over every run of the batch --------------------
+        # --- four RK4 stages, each a loop over the runs --------------------------
         for st in range(4):
             cs = cst[st]
             w_s = wst[st]
             for r in range(nb):
                 for j in range(nx):
-                    Xs[j] = X[r, j] + cs * Kd[r, j]
-                f = fst[r, st]
+                    Xs[j] = X[j, r] + cs * Kd[j, r]
+                f = fst[st, r]
                 wd = 0.0
                 pvisc = 0.0
                 sfree = 0.0
                 for i in range(n):
                     vi = Xs[n + i]
-                    Kd[r, i] = vi
-                    ai = (fm[r, i] * f - km[r, i] * Xs[i]) - cm[r, i] * vi
-                    Kd[r, n + i] = ai
-                    sfree += pD[r, i] * ai
-                    wd += pL[r, i] * vi
-                    pvisc += C[r, i] * vi * vi
+                    Kd[i, r] = vi
+                    ai = (fm[i, r] * f - km[i, r] * Xs[i]) - cm[i, r] * vi
+                    Kd[n + i, r] = ai
+                    sfree += pD[i, r] * ai
+                    wd += pL[i, r] * vi
+                    pvisc += C[i, r] * vi * vi
                 ydd = 0.0
                 if ball:
                     yds = Xs[iyd]
-                    fb = 0.0  # F_b = -F_c sgn(y'), sgn(0) = 0
-                    if yds > 0.0:
-                        fb = -fc[r]
-                    elif yds < 0.0:
-                        fb = fc[r]
+                    # F_b = -F_c sgn(y'), sgn(0) = 0
+                    fb = -fc[r] if yds > 0.0 else (fc[r] if yds < 0.0 else 0.0)
                     pdv = 0.0
                     for i in range(n):
-                        Kd[r, n + i] -= dm[r, i] * fb
-                        pdv += pD[r, i] * Xs[n + i]
+                        Kd[n + i, r] -= dm[i, r] * fb
+                        pdv += pD[i, r] * Xs[n + i]
                     ydd = kappa[r] * fb - sfree
-                    d_fric[r] -= w_s * fb * yds
-                    w_nr[r] += w_s * (1.0 - sr[r]) * fb * pdv
+                    ms[L.D_FRICTION, r] -= w_s * fb * yds
+                    ms[L.W_NONRECIP, r] += w_s * (1.0 - sr[r]) * fb * pdv
                 elif case == L.TMD:
                     rel = Xs[iy]
                     reld = Xs[iyd]
                     for i in range(n):
-                        rel -= pA[r, i] * Xs[i]
-                        reld -= pA[r, i] * Xs[n + i]
+                        rel -= pA[i, r] * Xs[i]
+                        reld -= pA[i, r] * Xs[n + i]
                     ft = ka[r] * rel + ca[r] * reld
                     for i in range(n):
-                        Kd[r, n + i] += pA[r, i] * ft * invM[r, i]
+                        Kd[n + i, r] += pA[i, r] * ft * invM[i, r]
                     ydd = -ft / ma[r]
                     pvisc += ca[r] * reld * reld
                 elif case == L.LOCKED:
                     for i in range(n):
-                        Kd[r, n + i] -= lm[r, i] * sfree
-                Kd[r, iy] = Xs[iyd] if has_aux else 0.0
-                Kd[r, iyd] = ydd
+                        Kd[n + i, r] -= lm[i, r] * sfree
+                Kd[iy, r] = Xs[iyd] if has_aux else 0.0
+                Kd[iyd, r] = ydd
                 for j in range(nx):
-                    acc[r, j] += w_s * Kd[r, j]
-                w_force[r] += w_s * f * wd
-                d_visc[r] += w_s * pvisc
-        steady = k >= steady_start
-
+                    acc[j, r] += w_s * Kd[j, r]
+                ms[L.W_FORCE, r] += w_s * f * wd
+                ms[L.D_VISC, r] += w_s * pvisc
         for r in range(nb):
             for j in range(nx):
-                X[r, j] += acc[r, j]
+                X[j, r] += acc[j, r]
 
-            # --- Poincare strobe: cubic Hermite in [t, t1] ------------------------
+        # --- step-end events, run by run ----------------------------------------
+        for r in range(nb):
+            # Poincare strobe: cubic Hermite in [t, t1]
             if tstrobe[r] > 0.0 and t_next[r] <= t1:
                 tn = t_next[r]
                 if tn > t and n_stb[r] < cap_stb:
                     w1 = 0.0
                     wd1 = 0.0
                     for i in range(n):
-                        w1 += pL[r, i] * X[r, i]
-                        wd1 += pL[r, i] * X[r, n + i]
+                        w1 += pL[i, r] * X[i, r]
+                        wd1 += pL[i, r] * X[n + i, r]
                     s = (tn - t) / dt
-                    s2 = s * s
-                    s3 = s2 * s
-                    wp = w_prev[r]
-                    wdp = wd_prev[r]
                     q = n_stb[r]
                     strobe[r, q, 0] = tn
-                    strobe[r, q, 1] = ((2 * s3 - 3 * s2 + 1) * wp
-                                       + (s3 - 2 * s2 + s) * dt * wdp
-                                       + (-2 * s3 + 3 * s2) * w1 + (s3 - s2) * dt * wd1)
-                    strobe[r, q, 2] = ((6 * s2 - 6 * s) / dt * (wp - w1)
-                                       + (3 * s2 - 4 * s + 1) * wdp + (3 * s2 - 2 * s) * wd1)
-                    a1 = X[r, iy]
-                    ad1 = X[r, iyd]
+                    strobe[r, q, 1], strobe[r, q, 2] = hermite(s, dt, w_prev[r], wd_prev[r],
+                                                               w1, wd1)
+                    a1 = X[iy, r]
+                    ad1 = X[iyd, r]
                     if case == L.TMD:
                         for i in range(n):
-                            a1 -= pA[r, i] * X[r, i]
-                            ad1 -= pA[r, i] * X[r, n + i]
-                    # _rk4's LLVM contracts (1 - s) a0 + s a1 to this fma; left to
-                    # itself it picks the other product here
-                    strobe[r, q, 3] = _fma(1 - s, aux_prev[r], s * a1)
-                    strobe[r, q, 4] = _fma(1 - s, auxd_prev[r], s * ad1)
+                            a1 -= pA[i, r] * X[i, r]
+                            ad1 -= pA[i, r] * X[n + i, r]
+                    strobe[r, q, 3] = lerp(s, aux_prev[r], a1)
+                    strobe[r, q, 4] = lerp(s, auxd_prev[r], ad1)
                     n_stb[r] += 1
                 t_next[r] = tn + tstrobe[r]
-
-            # --- walls (MODEL.md section 2) --------------------------------------
-            contact = False
-            if ball:
-                y = X[r, iy]
-                if abs(y) >= half[r]:
-                    wall = 1.0 if y > 0.0 else -1.0
-                    X[r, iy] = wall * half[r]
-                    vb = X[r, iyd]
-                    if wall * vb > 0.0:
-                        X[r, iyd] = -e[r] * vb
-                        g = (1.0 + e[r]) * meff[r] * vb
-                        for i in range(n):
-                            X[r, n + i] += g * pD[r, i] * invM[r, i]
-                        ms[r, L.D_IMPACT] += 0.5 * (1.0 - e[r] * e[r]) * meff[r] * vb * vb
-                        if abs(vb) > vimp[r]:
-                            ms[r, L.N_IMP_ALL] += 1
-                            if steady:
-                                if wall > 0:
-                                    ms[r, L.N_IMP_PLUS] += 1
-                                else:
-                                    ms[r, L.N_IMP_MINUS] += 1
-                                q = n_imp[r]
-                                if q < cap_imp:
-                                    imp[r, q, 0] = t1
-                                    imp[r, q, 1] = wall
-                                    imp[r, q, 2] = vb
-                                n_imp[r] = q + 1
-                        else:
-                            ms[r, L.N_MICRO] += 1
-                            contact = True
+            if not ball:
+                continue
+            # walls (MODEL.md section 2)
+            hit = False
+            y = X[iy, r]
+            if abs(y) >= half[r]:
+                wall = 1.0 if y > 0.0 else -1.0
+                X[iy, r] = wall * half[r]
+                vb = X[iyd, r]
+                if wall * vb > 0.0:
+                    X[iyd, r] = -e[r] * vb
+                    g = (1.0 + e[r]) * meff[r] * vb
+                    for i in range(n):
+                        X[n + i, r] += g * pD[i, r] * invM[i, r]
+                    ms[L.D_IMPACT, r] += 0.5 * (1.0 - e[r] * e[r]) * meff[r] * vb * vb
+                    if abs(vb) > vimp[r]:
+                        ms[L.N_IMP_ALL, r] += 1
+                        if steady:
+                            if wall > 0:
+                                ms[L.N_IMP_PLUS, r] += 1
+                            else:
+                                ms[L.N_IMP_MINUS, r] += 1
+                            q = n_imp[r]
+                            if q < cap_imp:
+                                imp[r, q, 0] = t1
+                                imp[r, q, 1] = wall
+                                imp[r, q, 2] = vb
+                            n_imp[r] = q + 1
                     else:
-                        contact = True
-                # stick: off the walls with |y'| inside the chattering band
-                stuck = fc[r] > 0.0 and not contact and abs(X[r, iyd]) < vstick[r]
-                if stuck and in_stick[r] == 0:
-                    in_stick[r] = 1
-                    stick_t0[r] = t
-                elif in_stick[r] != 0 and not stuck:
-                    in_stick[r] = 0
-                    s0 = max(stick_t0[r], t_steady)
-                    if t1 - s0 >= stick_min[r]:
-                        ms[r, L.T_STICK] += t1 - s0
-                        q = n_stk[r]
-                        if q < cap_stk:
-                            stick[r, q, 0] = s0
-                            stick[r, q, 1] = t1
-                        n_stk[r] = q + 1
+                        ms[L.N_MICRO, r] += 1
+                        hit = True
+                else:
+                    hit = True
+            contact[r] = 1.0 if hit else 0.0
+            # stick: off the walls with |y'| inside the chattering band
+            stuck = fc[r] > 0.0 and not hit and abs(X[iyd, r]) < vstick[r]
+            if stuck and in_stick[r] == 0:
+                in_stick[r] = 1
+                stick_t0[r] = t
+            elif in_stick[r] != 0 and not stuck:
+                in_stick[r] = 0
+                s0 = max(stick_t0[r], t_steady)
+                if t1 - s0 >= stick_min[r]:
+                    ms[L.T_STICK, r] += t1 - s0
+                    q = n_stk[r]
+                    if q < cap_stk:
+                        stick[r, q, 0] = s0
+                        stick[r, q, 1] = t1
+                    n_stk[r] = q + 1
 
-            # --- streamed metrics ------------------------------------------------
+        # --- streamed metrics, a loop over the runs ----------------------------------
+        for r in range(nb):
             w = 0.0
             wd = 0.0
             for i in range(n):
-                w += pL[r, i] * X[r, i]
-                wd += pL[r, i] * X[r, n + i]
+                w += pL[i, r] * X[i, r]
+                wd += pL[i, r] * X[n + i, r]
             w_prev[r] = w
             wd_prev[r] = wd
             aux = 0.0
             auxd = 0.0
             if has_aux:
-                aux = X[r, iy]
-                auxd = X[r, iyd]
+                aux = X[iy, r]
+                auxd = X[iyd, r]
                 if case == L.TMD:
                     for i in range(n):
-                        aux -= pA[r, i] * X[r, i]
-                        auxd -= pA[r, i] * X[r, n + i]
-                ms[r, L.MAX_ABS_AUX_ALL] = max(ms[r, L.MAX_ABS_AUX_ALL], abs(aux))
+                        aux -= pA[i, r] * X[i, r]
+                        auxd -= pA[i, r] * X[n + i, r]
+                ms[L.MAX_ABS_AUX_ALL, r] = max(ms[L.MAX_ABS_AUX_ALL, r], abs(aux))
             aux_prev[r] = aux
             auxd_prev[r] = auxd
             if steady:
-                ms[r, L.SUM_W2] += w * w
-                ms[r, L.SUM_W] += w
-                ms[r, L.N_STEADY] += 1.0
-                ms[r, L.SUM_AUX2] += aux * aux
-                ms[r, L.SUM_F] += fst[r, 3]
-                ms[r, L.MAX_ABS_W] = max(ms[r, L.MAX_ABS_W], abs(w))
-                ms[r, L.STEADY_MAX_W] = max(ms[r, L.STEADY_MAX_W], w)
-                ms[r, L.STEADY_MIN_W] = min(ms[r, L.STEADY_MIN_W], w)
-                ms[r, L.MAX_ABS_AUX] = max(ms[r, L.MAX_ABS_AUX], abs(aux))
-                if contact:
-                    ms[r, L.T_CONTACT] += dt
-            sn[r] = s1[r]
-            cn[r] = c1[r]
+                ms[L.SUM_W2, r] += w * w
+                ms[L.SUM_W, r] += w
+                ms[L.N_STEADY, r] += 1.0
+                ms[L.SUM_AUX2, r] += aux * aux
+                ms[L.SUM_F, r] += fst[3, r]
+                ms[L.MAX_ABS_W, r] = max(ms[L.MAX_ABS_W, r], abs(w))
+                ms[L.STEADY_MAX_W, r] = max(ms[L.STEADY_MAX_W, r], w)
+                ms[L.STEADY_MIN_W, r] = min(ms[L.STEADY_MIN_W, r], w)
+                ms[L.MAX_ABS_AUX, r] = max(ms[L.MAX_ABS_AUX, r], abs(aux))
+                ms[L.T_CONTACT, r] += contact[r] * dt
 
     t_end = t0 + n_steps * dt
     for r in range(nb):
@@ -415,49 +389,113 @@ def _rk4_batch(n, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
         if in_stick[r] != 0:
             s0 = max(stick_t0[r], t_steady)
             if t_end - s0 >= stick_min[r]:
-                ms[r, L.T_STICK] += t_end - s0
+                ms[L.T_STICK, r] += t_end - s0
                 q = n_stk[r]
                 if q < cap_stk:
                     stick[r, q, 0] = s0
                     stick[r, q, 1] = t_end
                 n_stk[r] = q + 1
         for j in range(nx):
-            x[r, j] = X[r, j]
+            x[r, j] = X[j, r]
         for q in range(L.MET_SIZE):
-            met[r, q] = ms[r, q]
-        met[r, L.W_FORCE] = w_force[r]
-        met[r, L.D_VISC] = d_visc[r]
-        met[r, L.D_FRICTION] = d_fric[r]
-        met[r, L.W_NONRECIP] = w_nr[r]
+            met[r, q] = ms[q, r]
         met[r, L.N_IMP_REC] = n_imp[r]
         met[r, L.N_STICK_REC] = n_stk[r]
         met[r, L.N_STROBE] = n_stb[r]
         met[r, L.STEPS_DONE] += n_steps
 
 
-# One compiled specialisation per mode count (the mode loops unroll), as _rk4's.
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _rk4_batch_n1(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
-    _rk4_batch(1, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met)
+# One compiled specialisation per mode count and case (written out: numba
+# caches functions, not closures), and per batch size: ``lanes`` is a tuple of
+# nb zeros, whose length is part of its type.  With all three compile-time
+# constants the mode loops unroll, the case branches fold away and the loops
+# over the runs have constant strides and trip counts, so LLVM vectorises them
+# without run-time overlap checks.  Each compiles on first use.
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _rk4_batch_n2(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
-    _rk4_batch(2, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met)
-
-
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _rk4_batch_n3(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
-    _rk4_batch(3, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met)
-
-
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _rk4_batch_any(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
-    _rk4_batch(int(P[0, L.N_MODES]), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+def _b1_solid(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(1, L.SOLID, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-_BY_MODES = {1: _rk4_batch_n1, 2: _rk4_batch_n2, 3: _rk4_batch_n3}
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b1_ball(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(1, L.BALL, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b1_tmd(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(1, L.TMD, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b1_locked(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(1, L.LOCKED, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b2_solid(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(2, L.SOLID, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b2_ball(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(2, L.BALL, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b2_tmd(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(2, L.TMD, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b2_locked(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(2, L.LOCKED, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b3_solid(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(3, L.SOLID, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b3_ball(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(3, L.BALL, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b3_tmd(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(3, L.TMD, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b3_locked(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(3, L.LOCKED, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
+               met)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _b_any(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
+    _rk4_batch(int(P[0, L.N_MODES]), int(P[0, L.CASE]), len(lanes), P, x, t0, dt, n_steps,
+               steady_start, imp, stick, strobe, met)
+
+
+_SPECIALISED = {
+    (1, L.SOLID): _b1_solid, (1, L.BALL): _b1_ball, (1, L.TMD): _b1_tmd, (1, L.LOCKED): _b1_locked,
+    (2, L.SOLID): _b2_solid, (2, L.BALL): _b2_ball, (2, L.TMD): _b2_tmd, (2, L.LOCKED): _b2_locked,
+    (3, L.SOLID): _b3_solid, (3, L.BALL): _b3_ball, (3, L.TMD): _b3_tmd, (3, L.LOCKED): _b3_locked,
+}
 
 
 def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
@@ -482,5 +520,6 @@ def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
     if (x.shape != (nb, nx) or met.shape != (nb, L.MET_SIZE) or imp.shape[0] != nb
             or stick.shape[0] != nb or strobe.shape[0] != nb):
         raise ValueError("kernel: x, met, imp, stick and strobe need one row per run")
-    _BY_MODES.get(n, _rk4_batch_any)(P, x, float(t0), float(dt), int(n_steps),
-                                     int(steady_start), imp, stick, strobe, met)
+    kernel = _SPECIALISED.get((n, int(cases[0])), _b_any)
+    kernel(P, x, float(t0), float(dt), int(n_steps), int(steady_start), imp, stick, strobe, met,
+           (0,) * nb)
