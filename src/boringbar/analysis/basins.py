@@ -276,11 +276,15 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
     first = simulate(system, forcing, duration=min(duration, 50 * dt), dt=dt,
                      initial=initials[0], integrator=integrator)
     omega = first.omega
+    batched = integrator == "rk4" and batch > 1
+    if batched:  # the lock-step kernel of a full batch
+        simulate_batch([(system, forcing, initials[0])] * min(batch, len(initials)),
+                       duration=min(duration, 50 * dt), dt=dt)
 
     cells: list[_Cell | None] = [None] * len(initials)
     tic = time.perf_counter()
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        if integrator == "rk4" and batch > 1:
+        if batched:
             futures = {pool.submit(_run_batch, system, forcing, initials[i:i + batch], duration,
                                    dt, drop, tol): i
                        for i in range(0, len(initials), batch)}
@@ -303,7 +307,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
         "dt_s": dt, "duration_s": duration, "drop": drop, "workers": workers,
         "wall_time_s": wall, "ball_position_m": ball_position,
         "ball_velocity_m_s": ball_velocity, "tolerances": json.dumps(asdict(tol)),
-        "integrator": integrator, "batch": batch if integrator == "rk4" else 1,
+        "integrator": integrator, "batch": batch if batched else 1,
     })
 
 
