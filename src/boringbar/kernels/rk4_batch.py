@@ -4,7 +4,8 @@ One RK4 step is a chain of four dependent stage evaluations, so a single
 run waits on latency (``kernels/rk4.py``, "Where the rest goes" in
 docs/performance.md).  This kernel advances up to ``BMAX`` independent runs
 together: every stage, the step-end impact law and the streamed metrics are
-loops over the runs, innermost, so the CPU overlaps the runs' chains.
+loops over the runs, innermost, so the runs' chains overlap (the stage loops
+are vectorised: four runs to an instruction).
 
 The runs of a batch share the mode count, the case (solid, ball, locked,
 tmd), ``t0``, ``dt``, the number of steps and the steady start; each has its
@@ -30,7 +31,8 @@ becomes a select), which LLVM vectorises four runs to an AVX2 instruction.
 With a run-time batch size LLVM guarded the vector loop with overlap checks
 between the rows of the run-minor arrays and ran the scalar loop instead.
 The step-end events (strobe, walls, stick intervals) are a scalar loop over
-the runs; the streamed metrics again a vectorised one.
+the runs; the streamed metrics vectorised loops (the steady part's its own
+loop: folded into the other, ``if steady`` became masked loads and stores).
 """
 
 import math
@@ -518,7 +520,10 @@ def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
     """Advance the batch's states ``x`` by ``n_steps`` RK4 steps (see :func:`_rk4_batch`).
 
     Every row of ``P`` must have the same mode count and case and harmonic
-    forcing; at most ``BMAX`` rows.
+    forcing; at most ``BMAX`` rows.  Each batch size compiles once (per mode
+    count and case); the sizes of ``LANES`` give the single-run kernel's results
+    bit for bit (tests/test_batch.py), others are not checked (a batch of one,
+    straight-line code, differs in the last bits).
     """
     nb = P.shape[0]
     if not 1 <= nb <= BMAX:
