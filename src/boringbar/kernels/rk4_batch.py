@@ -383,9 +383,11 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
                     for i in range(n):
                         aux -= pA[i, r] * X[i, r]
                         auxd -= pA[i, r] * X[n + i, r]
-                ms[L.MAX_ABS_AUX_ALL, r] = max(ms[L.MAX_ABS_AUX_ALL, r], abs(aux))
             aux_prev[r] = aux
             auxd_prev[r] = auxd
+        if has_aux:  # a loop of its own, else a masked store again
+            for r in range(nb):
+                ms[L.MAX_ABS_AUX_ALL, r] = max(ms[L.MAX_ABS_AUX_ALL, r], abs(aux_prev[r]))
         if steady:
             for r in range(nb):
                 w = w_prev[r]
