@@ -23,6 +23,7 @@ from boringbar.forcing import Harmonic, Regenerative
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact import run_exact
 from boringbar.kernels.rk4 import run_rk4
+from boringbar.kernels.rk4_batch import BMAX, LANES, run_rk4_batch
 from boringbar.system import System
 
 #: Impacts slower than this fraction of Omega delta/2 are contact, not impacts.
@@ -276,29 +277,36 @@ def check_step(system: System, omega: float, dt: float) -> None:
                              "of the highest retained mode)")
 
 
-def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: float = 1e-6,
-             initial: Initial | State | None = None, record_every: int = 0,
-             steady_fraction: float = 0.8, strobe: bool = False,
-             integrator: str = "rk4") -> Run:
-    """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
+@dataclass(eq=False)
+class _Setup:
+    """One run, checked and packed for a kernel, and the arrays it fills."""
 
-    ``duration`` (s) and ``dt`` (s) as published by default (2 s, 1e-6 s);
-    RMS and patterns use the last ``steady_fraction`` of the record.
-    ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
-    to continue it (time, hence forcing phase, runs on).  ``record_every`` N
-    keeps every N-th step's state; ``strobe`` keeps Poincare samples at
-    Omega t = 0 mod 2 pi.
+    system: System
+    forcing: Harmonic | Regenerative
+    integrator: str
+    omega: float
+    dt: float
+    t0: float
+    n_steps: int
+    steady_steps: int
+    record_every: int
+    cutting: bool
+    period: float
+    w_static: float
+    p: np.ndarray
+    x: np.ndarray
+    x_start: np.ndarray
+    buf: np.ndarray | None
+    imp: np.ndarray
+    stick: np.ndarray
+    stb: np.ndarray
+    rec: np.ndarray
+    met: np.ndarray
 
-    ``integrator``: ``"rk4"`` (the published scheme, MODEL.md section 5) or
-    ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
-    under harmonic forcing ``dt`` is then only the step of the recorded history
-    and of the duration and steady-window rounding, and the steady RMS is the
-    exact integral over the window; in a cut the delayed surface comes from a
-    history of step H = tau / ceil(tau / dt), interpolated as
-    ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
-    the first zero of the force is located in time).  True stick-slip (a static friction limit,
-    ``Friction(static_ratio > 1)``) needs ``"exact"``.
-    """
+
+def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
+           integrator) -> _Setup:
+    """Check the arguments of :func:`simulate` and pack the run."""
     check_choice("integrator", integrator, INTEGRATORS)
     if not isinstance(system, System):
         raise ParameterError(f"system = {system!r} must be a System (see make_system)")
@@ -379,8 +387,18 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     met[L.STEADY_MIN_W] = np.inf
     met[L.FIRST_ZERO_T] = -1.0
 
+    return _Setup(system, forcing, integrator, omega, dt, t0, n_steps, steady_steps,
+                  int(record_every), cutting, period, w_static, p, x, x_start, buf, imp, stick,
+                  stb, rec, met)
+
+
+def _run_kernel(su: _Setup) -> float:
+    """Run the kernel of ``su`` in place; the wall time (s)."""
+    p, x, t0, dt, n_steps, steady_steps = su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps
+    record_every, rec, imp, stick, stb, met = (su.record_every, su.rec, su.imp, su.stick, su.stb,
+                                               su.met)
     tic = time.perf_counter()
-    if integrator == "exact":
+    if su.integrator == "exact":
         t_reached = run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt,
                               record_every * dt, rec, imp, stick, stb, met, dt=dt)
         # a cut stopped at its first zero finishes that step of dt
@@ -390,8 +408,19 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
                                f"{int(met[L.EXACT_STATUS])} after {int(met[L.N_EVENTS])} events)")
     else:
         run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb,
-                met, buf)
-    elapsed = time.perf_counter() - tic
+                met, su.buf)
+    return time.perf_counter() - tic
+
+
+def _result(su: _Setup, elapsed: float) -> Run:
+    """The labelled :class:`Run` from a finished kernel run."""
+    system, forcing, integrator, omega, dt, t0 = (su.system, su.forcing, su.integrator, su.omega,
+                                                  su.dt, su.t0)
+    steady_steps, record_every, cutting, period, w_static = (su.steady_steps, su.record_every,
+                                                             su.cutting, su.period, su.w_static)
+    p, x, x_start, imp, stick, stb, rec, met = (su.p, su.x, su.x_start, su.imp, su.stick, su.stb,
+                                                su.rec, su.met)
+    cap_imp = imp.shape[0]
     n_steps = int(met[L.STEPS_DONE])  # fewer if a cut stopped at its first h = 0
 
     n_imp = int(met[L.N_IMP_REC])
@@ -460,3 +489,98 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
         initial=State(x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
         elapsed_s=elapsed, energy=energy, thresholds=thresholds, integrator=integrator,
     )
+
+
+def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: float = 1e-6,
+             initial: Initial | State | None = None, record_every: int = 0,
+             steady_fraction: float = 0.8, strobe: bool = False,
+             integrator: str = "rk4") -> Run:
+    """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
+
+    ``duration`` (s) and ``dt`` (s) as published by default (2 s, 1e-6 s);
+    RMS and patterns use the last ``steady_fraction`` of the record.
+    ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
+    to continue it (time, hence forcing phase, runs on).  ``record_every`` N
+    keeps every N-th step's state; ``strobe`` keeps Poincare samples at
+    Omega t = 0 mod 2 pi.
+
+    ``integrator``: ``"rk4"`` (the published scheme, MODEL.md section 5) or
+    ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
+    under harmonic forcing ``dt`` is then only the step of the recorded history
+    and of the duration and steady-window rounding, and the steady RMS is the
+    exact integral over the window; in a cut the delayed surface comes from a
+    history of step H = tau / ceil(tau / dt), interpolated as
+    ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
+    the first zero of the force is located in time).  True stick-slip (a static friction limit,
+    ``Friction(static_ratio > 1)``) needs ``"exact"``.
+    """
+    su = _setup(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
+                integrator)
+    return _result(su, _run_kernel(su))
+
+
+def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
+                   steady_fraction: float = 0.8, strobe: bool = False) -> list[Run]:
+    """Several harmonic runs of the published RK4 scheme, advanced together in lock-step.
+
+    ``runs``: up to :data:`~boringbar.kernels.rk4_batch.BMAX` triples (system,
+    forcing, initial), as :func:`simulate` takes them, whose systems share the
+    bar kind and the number of retained modes, whose forcings are
+    :class:`Harmonic` (each its own amplitude and frequency) and whose initial
+    conditions start at the same time (``Initial`` or ``None``: t = 0; a
+    ``State``: its t).  ``duration``, ``dt``, ``steady_fraction`` and
+    ``strobe`` are the batch's, as in :func:`simulate`.
+
+    The runs go through one call of :mod:`boringbar.kernels.rk4_batch`, whose
+    arithmetic per run is the single-run kernel's: each returned :class:`Run`
+    equals ``simulate(system, forcing, initial=initial, ...)`` of its triple,
+    bit for bit, except ``elapsed_s``, the batch's wall time shared equally.
+    A batch is padded to 4, 8 or 16 runs (:data:`~boringbar.kernels.rk4_batch.LANES`)
+    with copies of its last run, whose results are dropped: LLVM vectorises the
+    loops over the runs of these sizes 4 runs to an instruction, which keeps a
+    run's arithmetic that of the single-run kernel (tests/test_batch.py); a batch
+    of one, compiled as straight-line code, contracted some sums differently.
+    """
+    runs = list(runs)
+    if not runs:
+        return []
+    if len(runs) > BMAX:
+        raise ParameterError(f"simulate_batch takes at most {BMAX} runs, not {len(runs)}")
+    sus = []
+    for system, forcing, initial in runs:
+        if not isinstance(forcing, Harmonic):
+            raise ParameterError(f"forcing = {forcing!r}: simulate_batch takes harmonic forcing "
+                                 "only (regenerative cuts: simulate)")
+        sus.append(_setup(system, forcing, duration, dt, initial, 0, steady_fraction, strobe,
+                          "rk4"))
+    first = sus[0]
+    for su in sus[1:]:
+        if (su.system.kind, su.system.bar.n_modes) != (first.system.kind,
+                                                       first.system.bar.n_modes):
+            raise ParameterError(f"simulate_batch: a {su.system.kind} bar with "
+                                 f"{su.system.bar.n_modes} modes cannot share a batch with a "
+                                 f"{first.system.kind} bar with {first.system.bar.n_modes}")
+        if su.t0 != first.t0:
+            raise ParameterError(f"simulate_batch: initial states at t = {su.t0:g} s and "
+                                 f"{first.t0:g} s cannot share a batch")
+    # pad with copies of the last run (dropped after) to a compiled batch size
+    nb = next(b for b in LANES if b >= len(sus))
+    lanes = sus + [sus[-1]] * (nb - len(sus))
+    P = np.array([su.p for su in lanes])
+    X = np.array([su.x for su in lanes])
+    met = np.array([su.met for su in lanes])
+    # each run writes at most its own capacity (the kernel writes a row only while
+    # its count is below the array's), so the rows kept are simulate()'s
+    imp = np.zeros((nb, max(len(su.imp) for su in sus), 3))
+    stick = np.zeros((nb, max(len(su.stick) for su in sus), 2))
+    stb = np.zeros((nb, max(len(su.stb) for su in sus), 5))
+    tic = time.perf_counter()
+    run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
+    elapsed = time.perf_counter() - tic
+    for r, su in enumerate(sus):
+        su.x[:] = X[r]
+        su.met[:] = met[r]
+        su.imp[:] = imp[r, :len(su.imp)]
+        su.stick[:] = stick[r, :len(su.stick)]
+        su.stb[:] = stb[r, :len(su.stb)]
+    return [_result(su, elapsed / len(sus)) for su in sus]

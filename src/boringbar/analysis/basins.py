@@ -3,10 +3,13 @@
 Every cell of an initial tip displacement x initial tip velocity grid is an
 independent run of the kernel (the ball starts at ``ball_position`` with
 relative velocity ``ball_velocity``, by default at rest and centred, as
-published).  Cells run on a thread pool (the kernel releases the GIL) and
-are assembled by index, so a serial and a parallel run give bit-identical
-results.  The end states are then grouped into attractors, serially, in
-grid order.
+published).  With the published RK4 scheme the cells advance in lock-step
+batches of ``BATCH`` consecutive cells in grid order
+(:func:`~boringbar.simulate.simulate_batch`, whose runs equal single runs bit
+for bit); batches (or single cells) run on a thread pool (the kernel
+releases the GIL) and are assembled by index, so serial, parallel and
+unbatched runs give bit-identical results.  The end states are then
+grouped into attractors, serially, in grid order.
 
 Grouping (all tolerances in :class:`BasinTolerance`):
 
@@ -55,7 +58,8 @@ import numpy as np
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_positive, check_range
 from boringbar.forcing import Harmonic
-from boringbar.simulate import Initial, simulate
+from boringbar.kernels.rk4_batch import BMAX
+from boringbar.simulate import Initial, simulate, simulate_batch
 from boringbar.system import System
 
 #: Largest period, in forcing periods, looked for in the strobe (as the pattern classifier).
@@ -67,6 +71,8 @@ MIN_REPEATS = 3
 #: Published grid: tip displacement (m) and velocity (m/s), (start, stop, count).
 PUBLISHED_DISPLACEMENT = (-1.5e-3, 1.5e-3, 30)
 PUBLISHED_VELOCITY = (-1.5, 1.5, 30)
+#: Cells per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
+BATCH = 16
 
 
 @dataclass(frozen=True)
@@ -146,6 +152,18 @@ def _run(system: System, forcing: Harmonic, initial: Initial, duration: float, d
          drop: float, tol: BasinTolerance, integrator: str = "rk4") -> _Cell:
     run = simulate(system, forcing, duration=duration, dt=dt, initial=initial,
                    steady_fraction=1.0 - drop, strobe=True, integrator=integrator)
+    return _cell(run, dt, tol)
+
+
+def _run_batch(system: System, forcing: Harmonic, initials: list[Initial], duration: float,
+               dt: float, drop: float, tol: BasinTolerance) -> list[_Cell]:
+    """The cells of ``initials`` advanced in lock-step (RK4): each equals :func:`_run`'s."""
+    runs = simulate_batch([(system, forcing, ini) for ini in initials], duration=duration,
+                          dt=dt, steady_fraction=1.0 - drop, strobe=True)
+    return [_cell(run, dt, tol) for run in runs]
+
+
+def _cell(run, dt: float, tol: BasinTolerance) -> _Cell:
     keep = run.strobe[run.strobe[:, 0] >= run.steady_start - 0.5 * dt, 1:3]
     rms = run.rms_tip
     scale = max(math.sqrt(2.0) * rms, tol.floor) if math.isfinite(rms) else tol.floor
@@ -210,7 +228,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
            velocity=PUBLISHED_VELOCITY, duration: float = 2.0, dt: float = 1e-6,
            drop: float = 0.2, ball_position: float = 0.0, ball_velocity: float = 0.0,
            workers: int | None = None, progress=None,
-           tol: BasinTolerance | None = None, integrator: str = "rk4"):
+           tol: BasinTolerance | None = None, integrator: str = "rk4", batch: int = BATCH):
     """Basins of attraction over initial tip displacement x tip velocity.
 
     ``displacement`` (m) and ``velocity`` (m/s): (start, stop, count), both ends
@@ -220,6 +238,10 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
     (m/s).  ``workers``: threads (default: every core); ``progress(done, total)``
     is called as cells finish.  ``tol``: :class:`BasinTolerance`; the grouping is
     in the module docstring.  ``integrator``: "rk4" (published) or "exact".
+    ``batch``: with "rk4", cells advanced together in lock-step
+    (:func:`~boringbar.simulate.simulate_batch`, up to 16), taken in grid order
+    so that a batch's cells do not depend on ``workers``; 1: one cell at a time.
+    The results are the same, bit for bit, whatever ``batch`` and ``workers``.
 
     Returns an xarray Dataset with, per cell (dims displacement, velocity):
     ``attractor`` id, ``rms_tip_m``, ``pattern``, ``period`` (0: non-periodic),
@@ -247,21 +269,36 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
         raise ParameterError(f"tol = {tol!r} must be a BasinTolerance")
     workers = int(workers or os.cpu_count() or 1)
     check_range("workers", workers, 1, 4096)
+    check_range("batch", batch, 1, BMAX)
     initials = [Initial(float(w), float(v), ball_position, ball_velocity)
                 for w in w0 for v in v0]
     # validates everything else (dt, ball position) and warms the JIT before fanning out
     first = simulate(system, forcing, duration=min(duration, 50 * dt), dt=dt,
                      initial=initials[0], integrator=integrator)
     omega = first.omega
+    batched = integrator == "rk4" and batch > 1
+    if batched:  # the lock-step kernel of a full batch
+        simulate_batch([(system, forcing, initials[0])] * min(batch, len(initials)),
+                       duration=min(duration, 50 * dt), dt=dt)
 
     cells: list[_Cell | None] = [None] * len(initials)
     tic = time.perf_counter()
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(_run, system, forcing, ini, duration, dt, drop, tol,
-                               integrator): i
-                   for i, ini in enumerate(initials)}
-        for done, fut in enumerate(as_completed(futures), 1):
-            cells[futures[fut]] = fut.result()
+        if batched:
+            futures = {pool.submit(_run_batch, system, forcing, initials[i:i + batch], duration,
+                                   dt, drop, tol): i
+                       for i in range(0, len(initials), batch)}
+        else:
+            futures = {pool.submit(_run, system, forcing, ini, duration, dt, drop, tol,
+                                   integrator): i
+                       for i, ini in enumerate(initials)}
+        done = 0
+        for fut in as_completed(futures):
+            res = fut.result()
+            res = res if isinstance(res, list) else [res]
+            i = futures[fut]
+            cells[i:i + len(res)] = res
+            done += len(res)
             if progress is not None:
                 progress(done, len(initials))
     wall = time.perf_counter() - tic
@@ -270,7 +307,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
         "dt_s": dt, "duration_s": duration, "drop": drop, "workers": workers,
         "wall_time_s": wall, "ball_position_m": ball_position,
         "ball_velocity_m_s": ball_velocity, "tolerances": json.dumps(asdict(tol)),
-        "integrator": integrator,
+        "integrator": integrator, "batch": batch if batched else 1,
     })
 
 

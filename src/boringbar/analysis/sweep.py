@@ -2,7 +2,10 @@
 
 Every (case, force, ratio) point is an independent run of the numba kernel
 (which releases the GIL), executed on a thread pool with one worker per core;
-each run streams its metrics, no trajectory is kept.  The result is an
+with the published RK4 scheme, points of the same bar kind and mode count go
+in lock-step batches (:func:`~boringbar.simulate.simulate_batch`, the same
+results as single runs, bit for bit).  Each run streams its metrics, no
+trajectory is kept.  The result is an
 xarray Dataset with the full configuration in its attributes.
 """
 
@@ -20,8 +23,12 @@ import numpy as np
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_range
 from boringbar.forcing import Harmonic
-from boringbar.simulate import Initial, simulate
+from boringbar.kernels.rk4_batch import BMAX
+from boringbar.simulate import Initial, simulate, simulate_batch
 from boringbar.system import System, make_system
+
+#: Points per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
+BATCH = 16
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,6 +81,19 @@ def _one(case: Case, force: float, ratio: float, duration: float, dt: float,
          initial: Initial | None, integrator: str = "rk4") -> dict:
     run = simulate(case.system, Harmonic(force, ratio), duration=duration, dt=dt,
                    initial=initial, integrator=integrator)
+    return _point(run)
+
+
+def _batch(points: list[tuple[Case, float, float]], duration: float, dt: float,
+           initial: Initial | None) -> list[dict]:
+    """(case, force, ratio) points of one bar kind and mode count, advanced in
+    lock-step (RK4): each equals :func:`_one`'s."""
+    runs = simulate_batch([(c.system, Harmonic(f, r), initial) for c, f, r in points],
+                          duration=duration, dt=dt)
+    return [_point(run) for run in runs]
+
+
+def _point(run) -> dict:
     s = run.summary()
     return {
         "rms_tip_m": s["rms_tip_m"],
@@ -89,12 +109,17 @@ def _one(case: Case, force: float, ratio: float, duration: float, dt: float,
 
 def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
           dt: float = 1e-6, workers: int | None = None, initial: Initial | None = None,
-          progress=None, integrator: str = "rk4"):
+          progress=None, integrator: str = "rk4", batch: int = BATCH):
     """Tip RMS and impact pattern against Omega/omega_n for every case and force.
 
     Returns an xarray Dataset with dims (case, force, ratio).  ``workers``:
     threads (default: every core).  ``progress(done, total)`` is called as
     points finish.  ``integrator``: "rk4" (published) or "exact" (see ``simulate``).
+    ``batch``: with "rk4", points of the same bar kind and mode count advanced
+    together in lock-step (:func:`~boringbar.simulate.simulate_batch`, up to 16),
+    taken in (case, force, ratio) order; 1: one point at a time.  The results are
+    the same, bit for bit, whatever ``batch`` and ``workers`` (``elapsed_s`` of a
+    batched point is its share of its batch's time).
     """
     if not cases:
         raise ParameterError("sweep needs at least one case")
@@ -104,6 +129,7 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
         check_range("ratio", r, 0.0, math.inf, lo_open=True, hi_open=True)
     workers = int(workers or os.cpu_count() or 1)
     check_range("workers", workers, 1, 4096)
+    check_range("batch", batch, 1, BMAX)
     shape = (len(cases), len(forces), len(ratios))
     names = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
              "energy_balance_relative", "elapsed_s")
@@ -111,29 +137,47 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
     pattern = np.full(shape, "", dtype=object)
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1])
             for k in range(shape[2])]
-    # warm the JIT once per mode count before fanning out (compilation is not
+    batched = integrator == "rk4" and batch > 1
+    if batched:
+        # points of one bar kind and mode count share a batch, in job order
+        groups: dict[tuple, list] = {}
+        for ijk in jobs:
+            system = cases[ijk[0]].system
+            groups.setdefault((system.kind, system.bar.n_modes), []).append(ijk)
+        batches = [g[a:a + batch] for g in groups.values() for a in range(0, len(g), batch)]
+    # warm the JIT once per kernel before fanning out (compilation is not
     # thread-parallel and would otherwise be repeated)
-    for nm in sorted({c.system.bar.n_modes for c in cases}):
-        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
-        simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6, integrator=integrator)
+    warm = {(c.system.kind if batched else "", c.system.bar.n_modes): c for c in cases}
+    for c0 in warm.values():
+        if batched:
+            simulate_batch([(c0.system, Harmonic(1.0, 1.0), None)] * min(batch, len(jobs)),
+                           duration=2e-5, dt=1e-6)
+        else:
+            simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6,
+                     integrator=integrator)
     tic = time.perf_counter()
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(_one, cases[i], forces[j], ratios[k], duration, dt, initial,
-                               integrator):
-                   (i, j, k) for i, j, k in jobs}
+        if batched:
+            futures = {pool.submit(_batch, [(cases[i], forces[j], ratios[k]) for i, j, k in b],
+                                   duration, dt, initial): b for b in batches}
+        else:
+            futures = {pool.submit(_one, cases[i], forces[j], ratios[k], duration, dt, initial,
+                                   integrator): [(i, j, k)] for i, j, k in jobs}
         done = 0
         for fut in as_completed(futures):
-            i, j, k = futures[fut]
-            res = fut.result()
-            for key in names:
-                out[key][i, j, k] = res[key]
-            pattern[i, j, k] = res["pattern"]
-            done += 1
+            results = fut.result()
+            results = results if isinstance(results, list) else [results]
+            for (i, j, k), res in zip(futures[fut], results, strict=True):
+                for key in names:
+                    out[key][i, j, k] = res[key]
+                pattern[i, j, k] = res["pattern"]
+            done += len(results)
             if progress is not None:
                 progress(done, len(jobs))
     wall = time.perf_counter() - tic
     return _dataset(cases, forces, ratios, out, pattern, {
         "integrator": integrator,
+        "batch": batch if batched else 1,
         "dt_s": dt,
         "duration_s": duration,
         "workers": workers,

@@ -36,6 +36,7 @@ import numpy as np
 from numba import carray, njit
 
 from boringbar.kernels import layout as L
+from boringbar.kernels.interp import hermite, lerp
 from boringbar.kernels.stack import stack_ptr
 
 #: lengths of the stack scratch vectors (numba needs them as literal globals)
@@ -358,22 +359,17 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
                     w1 += pL[i] * X[i]
                     wd1 += pL[i] * X[n + i]
                 s = (t_next - t) / dt
-                s2 = s * s
-                s3 = s2 * s
                 strobe[n_stb, 0] = t_next
-                strobe[n_stb, 1] = ((2 * s3 - 3 * s2 + 1) * w_prev
-                                    + (s3 - 2 * s2 + s) * dt * wd_prev
-                                    + (-2 * s3 + 3 * s2) * w1 + (s3 - s2) * dt * wd1)
-                strobe[n_stb, 2] = ((6 * s2 - 6 * s) / dt * (w_prev - w1)
-                                    + (3 * s2 - 4 * s + 1) * wd_prev + (3 * s2 - 2 * s) * wd1)
+                # roundings pinned (kernels/interp.py): the batched kernel gives the same
+                strobe[n_stb, 1], strobe[n_stb, 2] = hermite(s, dt, w_prev, wd_prev, w1, wd1)
                 a1 = X[iy]
                 ad1 = X[iyd]
                 if case == L.TMD:  # the absorber's stroke, as in the history
                     for i in range(n):
                         a1 -= pA[i] * X[i]
                         ad1 -= pA[i] * X[n + i]
-                strobe[n_stb, 3] = (1 - s) * aux_prev + s * a1
-                strobe[n_stb, 4] = (1 - s) * auxd_prev + s * ad1
+                strobe[n_stb, 3] = lerp(s, aux_prev, a1)
+                strobe[n_stb, 4] = lerp(s, auxd_prev, ad1)
                 n_stb += 1
             t_next += tstrobe
 
