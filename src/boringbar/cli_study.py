@@ -86,7 +86,7 @@ def add_paper(sub) -> None:
     p.add_argument("--out", default="out/paper", metavar="DIR",
                    help="output directory (default: out/paper)")
     p.add_argument("--quick", action="store_true",
-                   help="coarser grids and 0.5 s runs: a few minutes on 2 cores")
+                   help="coarser grids and 0.5 s runs (1 s cuts): a few minutes on 2 cores")
     p.add_argument("--presets", default="paper,physical", metavar="P,...",
                    help="presets to run, comma list (default: paper,physical)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
