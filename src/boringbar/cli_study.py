@@ -1,6 +1,7 @@
-"""``boringbar run STUDY.toml``: run a study file (see docs/studies.md).
+"""``boringbar run STUDY.toml``: run a study file (see docs/studies.md); and
+``boringbar paper``: the whole published study with its report (:mod:`boringbar.paper`).
 
-Registered in :mod:`boringbar.cli` by :func:`add_run`; errors are
+Registered in :mod:`boringbar.cli` by :func:`add_run` and :func:`add_paper`; errors are
 ParameterErrors (one line, exit code 2) like every other command.
 """
 
