@@ -243,10 +243,7 @@ class _Report:
         if rec is None:
             return ""
         s = rec["summary"]
-        import xarray as xr
-
-        with xr.open_dataset(s["ladder_netcdf"]) as ds:
-            ladder = ds.load()
+        ladder = _load(s["ladder_netcdf"])
         rungs = [str(r) for r in ladder["rung"].values]
         gaps = ladder["gap"].values
         rows = []
@@ -365,10 +362,7 @@ class _Report:
                 f"raises the chatter-free depth</b> ({_e(preset)} preset). The best ball "
                 f"case ({_e(best['case'])}) has a minimum chatter-free depth of "
                 f"{_mm(b_best)} mm against {_mm(b_solid)} mm for the solid bar.")
-        import xarray as xr
-
-        with xr.open_dataset(s["files"]["netcdf"]) as ds:
-            ds = ds.load()
+        ds = _load(s["files"]["netcdf"])
         if "max_rel_disp" in ds and "host_analytic_limit" in ds:
             text += " " + _ball_at_limit(ds, raises)
         return text + "</li>"
@@ -423,6 +417,14 @@ class _Report:
                 "<title>boringbar: the published study</title>"
                 f"<style>{_CSS}</style></head><body data-figures='pending'>"
                 + "\n".join(body) + _SCRIPT + "</body></html>")
+
+
+def _load(path):
+    """A NetCDF file read whole into memory (the file is closed again)."""
+    import xarray as xr
+
+    with xr.open_dataset(path) as ds:
+        return ds.load()
 
 
 def _ball_at_limit(ds, raises: bool) -> str:
