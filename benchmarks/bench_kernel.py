@@ -21,20 +21,27 @@ from scipy.integrate import solve_ivp
 
 from boringbar import Harmonic, make_system, simulate
 from boringbar.analysis.sweep import published_cases, sweep
+from boringbar.simulate import simulate_stage_loop
 
 CASE = {"bar": "ball", "preset": "paper", "gap": 0.1e-3, "friction": False}
 FORCE, RATIO = 10.0, 1.0
 
 
-def kernel_run(n_modes: int, duration: float = 2.0, dt: float = 1e-6):
+def kernel_run(n_modes: int, duration: float = 2.0, dt: float = 1e-6, friction=None):
+    """Best of three of the kernel (step map) and of its stage loop, rounds interleaved."""
     system = make_system(CASE["bar"], CASE["preset"], gap=CASE["gap"],
-                         friction=CASE["friction"], n_modes=n_modes)
-    simulate(system, Harmonic(FORCE, RATIO), duration=1e-4, dt=dt)  # JIT warm-up / cache load
-    best = math.inf
+                         friction=CASE["friction"] if friction is None else friction,
+                         n_modes=n_modes)
+    forcing = Harmonic(FORCE, RATIO)
+    for f in (simulate, simulate_stage_loop):  # JIT warm-up / cache load
+        f(system, forcing, duration=1e-4, dt=dt)
+    best = [math.inf, math.inf]
+    runs = [None, None]
     for _ in range(3):
-        run = simulate(system, Harmonic(FORCE, RATIO), duration=duration, dt=dt)
-        best = min(best, run.elapsed_s)
-    return run, best
+        for i, f in enumerate((simulate, simulate_stage_loop)):
+            runs[i] = f(system, forcing, duration=duration, dt=dt)
+            best[i] = min(best[i], runs[i].elapsed_s)
+    return runs[0], best[0], runs[1], best[1]
 
 
 def scipy_run(duration: float, rtol: float = 1e-8):
@@ -81,14 +88,23 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} cores; case {CASE}, F0 = {FORCE} N, ratio {RATIO}")
     base = None
     for n in (1, 2, 3):
-        run, wall = kernel_run(n)
+        run, wall, run_s, wall_s = kernel_run(n)
         steps = round(run.duration / run.dt)
         if n == 1:
             base = wall
         print(f"kernel rk4, {n} mode(s): {wall:.4f} s per 2 s run, "
               f"{wall / steps * 1e9:.1f} ns/step, "
               f"{run.duration / wall:.1f} simulated s per wall s, "
-              f"{run.metrics['impacts_total']} impacts, pattern {run.pattern.name}")
+              f"{run.metrics['impacts_total']} impacts, pattern {run.pattern.name}; "
+              f"stage loop every step: {wall_s / steps * 1e9:.1f} ns/step "
+              f"({wall_s / wall:.2f}x), {run_s.metrics['impacts_total']} impacts")
+    for n in (1, 2):
+        run, wall, run_s, wall_s = kernel_run(n, friction=True)
+        steps = round(run.duration / run.dt)
+        print(f"kernel rk4, {n} mode(s), friction on ({run.system.damper.friction_force:.3g} N):"
+              f" {wall / steps * 1e9:.1f} ns/step, "
+              f"{run.metrics['impacts_total']} impacts, pattern {run.pattern.name}; "
+              f"stage loop every step: {wall_s / steps * 1e9:.1f} ns/step ({wall_s / wall:.2f}x)")
     if not args.skip_scipy:
         tic = time.perf_counter()
         n_imp = scipy_run(args.scipy_duration)

@@ -519,6 +519,24 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     return _result(su, _run_kernel(su))
 
 
+def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 2.0,
+                        dt: float = 1e-6, initial: Initial | State | None = None,
+                        record_every: int = 0, steady_fraction: float = 0.8,
+                        strobe: bool = False) -> Run:
+    """:func:`simulate` (rk4) with every step through the RK4 stage loop.
+
+    The kernel normally takes a step with no friction switch as one affine
+    map (:mod:`boringbar.kernels.linmap`); this runs the four stages every
+    step instead: the same scheme, equal to round-off.  It is the reference
+    of the map in tests/test_kernel.py and the baseline of
+    benchmarks/bench_kernel.py.
+    """
+    su = _setup(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
+                "rk4")
+    su.p[L.STAGE_LOOP] = 1.0
+    return _result(su, _run_kernel(su))
+
+
 def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
                    steady_fraction: float = 0.8, strobe: bool = False) -> list[Run]:
     """Several harmonic runs of the published RK4 scheme, advanced together in lock-step.

@@ -45,6 +45,7 @@ _SCALARS = (
     "STOP_AT_ZERO",  # 1: stop the run at the first h = 0
     "HIST_W0",  # W of the surface before the cut began (0: from rest)
     "STATIC_FRICTION",  # F_s >= F_c, static limit of true stick-slip (exact integrator) (N)
+    "STAGE_LOOP",  # 1: every RK4 step by the stage loop, never the step map (tests, benchmarks)
 )
 for _i, _name in enumerate(_SCALARS):
     globals()[_name] = _i

@@ -20,14 +20,22 @@ dt = 1e-6; tests/test_kernel.py).  The state is one vector
 X = [u_1..u_n, u_1'..u_n', aux, aux'] where aux is the ball's relative
 displacement y (BALL, LOCKED) or the absorber's displacement x_a (TMD).
 
-Speed: the four stages run as one loop over a Butcher tableau inside a
-single function, with every accumulator a local scalar and the state and
-scratch vectors on the stack (kernels/stack.py), so that nothing in the
-step crosses a function boundary (numba would reference-count array
-arguments there) or goes through memory that might alias; one compiled
-specialisation per mode count lets the mode loops unroll; and the only
-fast-math flag is ``contract`` (a * b + c may become one fused multiply-add,
-rounded once: about 20 % faster, results equal to round-off).
+Speed: under harmonic forcing a step in which the ball's y' keeps one sign
+at all four stages (every step of the solid, TMD and locked bars and of a
+frictionless ball) is the same RK4 step written as one affine map of the
+state, sin and cos of the forcing phase and F_b (kernels/linmap.py): its
+critical path is a short dot product per component instead of four
+dependent stage evaluations (1.4-1.8x faster per step,
+benchmarks/bench_kernel.py).  Steps with a friction switch inside, y' = 0 or
+inside the sgn() chatter band, and regenerative cuts take the stage loop:
+the four stages as one loop over a Butcher tableau inside a single
+function, with every accumulator a local scalar and the state and scratch
+vectors on the stack (kernels/stack.py), so that nothing in the step
+crosses a function boundary (numba would reference-count array arguments
+there) or goes through memory that might alias.  One compiled
+specialisation per mode count lets the mode loops unroll.  No fast-math
+flag: plain IEEE arithmetic keeps the batched kernel's results equal to
+these bit for bit (see the note above the specialisations).
 """
 
 import math
@@ -37,6 +45,7 @@ from numba import carray, njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.interp import hermite, lerp
+from boringbar.kernels.linmap import build_map
 from boringbar.kernels.stack import stack_ptr
 
 #: lengths of the stack scratch vectors (numba needs them as literal globals)
@@ -48,10 +57,17 @@ _NREV_X3 = 3 * _NREV_MAX
 _NREV_X12 = 12 * _NREV_MAX
 #: exact sin/cos resynchronisation interval of the forcing-phase recurrence
 _RESYNC = 256
+#: sizes of the step-map tables (kernels/linmap.py)
+_NZ_MAX = _NX_MAX + 3
+_PD_MAX = _NX_MAX * _NZ_MAX
+_YR_MAX = 3 * _NZ_MAX
+_VR_MAX = 3 * (_NMAX + 1) * _NZ_MAX
+_WV_MAX = 4 * (_NMAX + 1)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
-def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
+@njit(cache=True, error_model="numpy", inline="always")
+def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe,
+         met, buf):
     """Advance state ``x`` (updated in place) by ``n_steps`` RK4 steps from ``t0``.
 
     Steps with index >= ``steady_start`` are the steady part.  Outputs:
@@ -65,7 +81,6 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     N_REV TAU / dt + 3 rows; node g is time t_cut + g dt, counted over every
     call since the cut began, and times before the cut read HIST_W0).
     """
-    case = int(p[L.CASE])
     M = p[L.M_:L.M_ + n].copy()
     K = p[L.K_:L.K_ + n].copy()
     C = p[L.C_:L.C_ + n].copy()
@@ -74,7 +89,6 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     pA = p[L.PSI_A:L.PSI_A + n].copy()
     invM = 1.0 / M
     f0 = p[L.F0]
-    regen = int(p[L.FORCING]) == L.REGENERATIVE
     krb = p[L.KR_B]
     feed = p[L.FEED]
     nrev = int(p[L.N_REV]) if regen else 0
@@ -166,6 +180,25 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     for st in range(4):
         cst[st] = (0.0, 0.5, 0.5, 1.0)[st] * dt
         wst[st] = (1.0, 2.0, 2.0, 1.0)[st] * (dt / 6.0)
+
+    # the step as an affine map where F_b cannot switch (kernels/linmap.py)
+    linear = not regen and p[L.STAGE_LOOP] == 0.0
+    nz = nx + 3
+    iS = nx
+    iC = nx + 1
+    iF = nx + 2
+    tmd = case == L.TMD
+    Pd = carray(stack_ptr(_PD_MAX, np.float64), (nx, nz))
+    Yr = carray(stack_ptr(_YR_MAX, np.float64), (3, nz))
+    Vr = carray(stack_ptr(_VR_MAX, np.float64), (3, n + 1, nz))
+    Wv = carray(stack_ptr(_WV_MAX, np.float64), (4, n + 1))
+    Fs = carray(stack_ptr(_NZ_MAX, np.float64), nz)
+    Fc = carray(stack_ptr(_NZ_MAX, np.float64), nz)
+    dX = carray(stack_ptr(_NX_MAX, np.float64), nx)
+    if linear:
+        build_map(n, p, dt, Pd, Yr, Vr, Wv, Fs, Fc)
+    check_fb = ball and fc > 0.0
+    diag = case == L.SOLID or case == L.BALL
 
     chh = math.cos(om * 0.5 * dt)
     shh = math.sin(om * 0.5 * dt)
@@ -268,86 +301,172 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
         fst[2] = fst[1]
         fst[3] = f0 * s_1
 
-        # --- four RK4 stages --------------------------------------------------
-        for j in range(nx):
-            acc[j] = 0.0
-        for st in range(4):
-            cs = cst[st]
-            for j in range(nx):
-                Xs[j] = X[j] + cs * Kd[j]
-            f = fst[st]
-            if regen:
-                # f = Kr b h, h = max(0, min_j [j h_m + W(t - j tau)] - W(t))
-                ws = 0.0
+        # --- the step as an affine map, if F_b keeps its sign ---------------------
+        use_map = linear
+        fz = 0.0
+        if check_fb:
+            yd0 = X[iyd]
+            if yd0 > 0.0:
+                fz = -fc
+            else:
+                fz = fc
+            if abs(yd0) < vstick:  # inside the band where sgn() chatters
+                use_map = False
+            else:
+                # y' at stages 2-4 must keep y0's sign, by more than their round-off
+                for s3 in range(3):
+                    ys = Yr[s3, iS] * sn + Yr[s3, iC] * cn + Yr[s3, iF] * fz
+                    for j in range(nx):
+                        ys += Yr[s3, j] * X[j]
+                    if ys * yd0 <= 1e-12 * (yd0 * yd0 + abs(yd0 * (ys - yd0))):
+                        use_map = False
+        if use_map:
+            # the increments; in the solid and ball bars a mode's rows involve only
+            # its own u, u' (the modes are coupled through F_b alone)
+            if diag:
                 for i in range(n):
-                    ws += pL[i] * Xs[i]
-                hmin = hsurf[st]
-                hh = hmin - ws
-                if hh <= 0.0:
-                    hh = 0.0
-                    if not cut_zero:
-                        cut_zero = True
-                        if first_zero < 0.0:
-                            first_zero = t + (0.0, 0.5, 0.5, 1.0)[st] * dt
-                f = krb * hh
-                fst[st] = f
-                max_force = max(max_force, f)
-            w_s = wst[st]
-            # bar: M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f (+ damper terms below),
-            # written with premultiplied constants and the stage velocity last, so
-            # that little of it waits on the previous stage
-            wd = 0.0
-            pvisc = 0.0
-            sfree = 0.0  # sum_i psi_d,i a_i of the free accelerations
+                    a = i
+                    dX[a] = (Pd[a, iS] * sn + Pd[a, iC] * cn + Pd[a, iF] * fz
+                             + Pd[a, i] * X[i] + Pd[a, n + i] * X[n + i])
+                    a = n + i
+                    dX[a] = (Pd[a, iS] * sn + Pd[a, iC] * cn + Pd[a, iF] * fz
+                             + Pd[a, i] * X[i] + Pd[a, n + i] * X[n + i])
+                dX[iy] = 0.0
+                dX[iyd] = 0.0
+                if ball:
+                    for a in range(iy, nx):
+                        dj = Pd[a, iS] * sn + Pd[a, iC] * cn + Pd[a, iF] * fz
+                        for q in range(nx):
+                            dj += Pd[a, q] * X[q]
+                        dX[a] = dj
+            else:
+                for a in range(nx):
+                    dj = Pd[a, iS] * sn + Pd[a, iC] * cn + Pd[a, iF] * fz
+                    for q in range(nx):
+                        dj += Pd[a, q] * X[q]
+                    dX[a] = dj
+            # viscous loss: the RK4 weights on the stage velocities squared
+            pv = 0.0
             for i in range(n):
-                vi = Xs[n + i]
-                Kd[i] = vi
-                ai = (fm[i] * f - km[i] * Xs[i]) - cm[i] * vi
-                Kd[n + i] = ai
-                sfree += pD[i] * ai
-                wd += pL[i] * vi
-                pvisc += C[i] * vi * vi
-            ydd = 0.0
+                pv += Wv[0, i] * X[n + i] * X[n + i]
+            if tmd:
+                rd = X[iyd]
+                for i in range(n):
+                    rd -= pA[i] * X[n + i]
+                pv += Wv[0, n] * rd * rd
+            for s3 in range(3):
+                for i in range(n):
+                    v = Vr[s3, i, iS] * sn + Vr[s3, i, iC] * cn + Vr[s3, i, iF] * fz
+                    if diag:
+                        v += Vr[s3, i, i] * X[i] + Vr[s3, i, n + i] * X[n + i]
+                    else:
+                        for q in range(nx):
+                            v += Vr[s3, i, q] * X[q]
+                    pv += Wv[s3 + 1, i] * v * v
+                if tmd:  # the absorber's stroke rate
+                    v = Vr[s3, n, iS] * sn + Vr[s3, n, iC] * cn
+                    for q in range(nx):
+                        v += Vr[s3, n, q] * X[q]
+                    pv += Wv[s3 + 1, n] * v * v
+            d_visc += pv
+            # the force's work, S (Fs . z) + C (Fc . z)
+            ws_ = Fs[iS] * sn + Fs[iC] * cn + Fs[iF] * fz
+            wc_ = Fc[iS] * sn + Fc[iC] * cn + Fc[iF] * fz
+            for q in range(nx):
+                ws_ += Fs[q] * X[q]
+                wc_ += Fc[q] * X[q]
+            w_force += sn * ws_ + cn * wc_
             if ball:
-                yds = Xs[iyd]
-                fb = 0.0  # F_b = -F_c sgn(y'), sgn(0) = 0
-                if yds > 0.0:
-                    fb = -fc
-                elif yds < 0.0:
-                    fb = fc
-                pdv = 0.0
+                # sum_s b_s F_b y'_s = F_b dy; sum_s b_s psi_d u'_s = psi_d du
+                d_fric -= fz * dX[iy]
+                pdu = 0.0
                 for i in range(n):
-                    # reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
-                    Kd[n + i] -= dm[i] * fb
-                    pdv += pD[i] * Xs[n + i]
-                # y'' = F_b / m - sum psi_d u'' = kappa F_b - sum psi_d a_free
-                ydd = kappa * fb - sfree
-                d_fric -= w_s * fb * yds
-                w_nr += w_s * (1.0 - sr) * fb * pdv
-            elif case == L.TMD:
-                rel = Xs[iy]
-                reld = Xs[iyd]
-                for i in range(n):
-                    rel -= pA[i] * Xs[i]
-                    reld -= pA[i] * Xs[n + i]
-                ft = ka * rel + ca * reld
-                for i in range(n):
-                    Kd[n + i] += pA[i] * ft * invM[i]
-                ydd = -ft / ma
-                pvisc += ca * reld * reld
-            elif case == L.LOCKED:
-                # the force that carries the ball with the bar, m_eff sum psi_d a_free,
-                # acts on mode i with psi_d,i
-                for i in range(n):
-                    Kd[n + i] -= lm[i] * sfree
-            Kd[iy] = Xs[iyd] if has_aux else 0.0
-            Kd[iyd] = ydd
+                    pdu += pD[i] * dX[i]
+                w_nr += (1.0 - sr) * fz * pdu
             for j in range(nx):
-                acc[j] += w_s * Kd[j]
-            w_force += w_s * f * wd
-            d_visc += w_s * pvisc
-        for j in range(nx):
-            X[j] += acc[j]
+                X[j] += dX[j]
+
+        # --- otherwise the four RK4 stages ------------------------------------
+        if not use_map:
+            for j in range(nx):
+                acc[j] = 0.0
+            for st in range(4):
+                cs = cst[st]
+                for j in range(nx):
+                    Xs[j] = X[j] + cs * Kd[j]
+                f = fst[st]
+                if regen:
+                    # f = Kr b h, h = max(0, min_j [j h_m + W(t - j tau)] - W(t))
+                    ws = 0.0
+                    for i in range(n):
+                        ws += pL[i] * Xs[i]
+                    hmin = hsurf[st]
+                    hh = hmin - ws
+                    if hh <= 0.0:
+                        hh = 0.0
+                        if not cut_zero:
+                            cut_zero = True
+                            if first_zero < 0.0:
+                                first_zero = t + (0.0, 0.5, 0.5, 1.0)[st] * dt
+                    f = krb * hh
+                    fst[st] = f
+                    max_force = max(max_force, f)
+                w_s = wst[st]
+                # bar: M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f (+ damper terms below),
+                # written with premultiplied constants and the stage velocity last, so
+                # that little of it waits on the previous stage
+                wd = 0.0
+                pvisc = 0.0
+                sfree = 0.0  # sum_i psi_d,i a_i of the free accelerations
+                for i in range(n):
+                    vi = Xs[n + i]
+                    Kd[i] = vi
+                    ai = (fm[i] * f - km[i] * Xs[i]) - cm[i] * vi
+                    Kd[n + i] = ai
+                    sfree += pD[i] * ai
+                    wd += pL[i] * vi
+                    pvisc += C[i] * vi * vi
+                ydd = 0.0
+                if ball:
+                    yds = Xs[iyd]
+                    fb = 0.0  # F_b = -F_c sgn(y'), sgn(0) = 0
+                    if yds > 0.0:
+                        fb = -fc
+                    elif yds < 0.0:
+                        fb = fc
+                    pdv = 0.0
+                    for i in range(n):
+                        # reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
+                        Kd[n + i] -= dm[i] * fb
+                        pdv += pD[i] * Xs[n + i]
+                    # y'' = F_b / m - sum psi_d u'' = kappa F_b - sum psi_d a_free
+                    ydd = kappa * fb - sfree
+                    d_fric -= w_s * fb * yds
+                    w_nr += w_s * (1.0 - sr) * fb * pdv
+                elif case == L.TMD:
+                    rel = Xs[iy]
+                    reld = Xs[iyd]
+                    for i in range(n):
+                        rel -= pA[i] * Xs[i]
+                        reld -= pA[i] * Xs[n + i]
+                    ft = ka * rel + ca * reld
+                    for i in range(n):
+                        Kd[n + i] += pA[i] * ft * invM[i]
+                    ydd = -ft / ma
+                    pvisc += ca * reld * reld
+                elif case == L.LOCKED:
+                    # the force that carries the ball with the bar, m_eff sum psi_d a_free,
+                    # acts on mode i with psi_d,i
+                    for i in range(n):
+                        Kd[n + i] -= lm[i] * sfree
+                Kd[iy] = Xs[iyd] if has_aux else 0.0
+                Kd[iyd] = ydd
+                for j in range(nx):
+                    acc[j] += w_s * Kd[j]
+                w_force += w_s * f * wd
+                d_visc += w_s * pvisc
+            for j in range(nx):
+                X[j] += acc[j]
         steady = k >= steady_start
 
         # --- Poincare strobe: cubic Hermite in [t, t1] ------------------------
@@ -522,29 +641,55 @@ def _rk4(n, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
 
 
 # One compiled specialisation per mode count: with n a compile-time constant
-# the mode loops unroll (about 2.3x faster per step than a run-time n).
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+# the mode loops unroll (about 2.3x faster per step than a run-time n).  The
+# harmonic ball damper with 1 and 2 modes (the published bar, the physical
+# preset) has its own, with the case and the forcing constant as well, so
+# that LLVM drops the other bars' and cutting's branches (measured in
+# benchmarks/bench_kernel.py).  No fast-math flag at all: with multiply-adds
+# allowed to fuse (``contract``), LLVM fused differently in differently
+# shaped code, and the batched kernel's results no longer equalled these bit
+# for bit; under plain IEEE arithmetic the same operations in the same order
+# give the same bits whatever the code around them.
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_n1(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
-    _rk4(1, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf)
+    _rk4(1, int(p[L.CASE]), int(p[L.FORCING]) == L.REGENERATIVE, p, x, t0, dt, n_steps,
+         steady_start, rec_every, rec, imp, stick, strobe, met, buf)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_n2(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
-    _rk4(2, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf)
+    _rk4(2, int(p[L.CASE]), int(p[L.FORCING]) == L.REGENERATIVE, p, x, t0, dt, n_steps,
+         steady_start, rec_every, rec, imp, stick, strobe, met, buf)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_n3(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
-    _rk4(3, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf)
+    _rk4(3, int(p[L.CASE]), int(p[L.FORCING]) == L.REGENERATIVE, p, x, t0, dt, n_steps,
+         steady_start, rec_every, rec, imp, stick, strobe, met, buf)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _rk4_any(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf):
-    _rk4(int(p[L.N_MODES]), p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick,
+    _rk4(int(p[L.N_MODES]), int(p[L.CASE]), int(p[L.FORCING]) == L.REGENERATIVE, p, x, t0, dt,
+         n_steps, steady_start, rec_every, rec, imp, stick, strobe, met, buf)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _rk4_ball1(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
+               buf):
+    _rk4(1, L.BALL, False, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick,
+         strobe, met, buf)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _rk4_ball2(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
+               buf):
+    _rk4(2, L.BALL, False, p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick,
          strobe, met, buf)
 
 
 _BY_MODES = {1: _rk4_n1, 2: _rk4_n2, 3: _rk4_n3}
+_BALL_BY_MODES = {1: _rk4_ball1, 2: _rk4_ball2}
 
 
 def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
@@ -553,7 +698,10 @@ def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     if not 1 <= int(p[L.N_MODES]) <= L.NMAX or int(p[L.N_REV]) > _NREV_MAX:
         raise ValueError(f"kernel: {int(p[L.N_MODES])} modes (1..{L.NMAX}) and "
                          f"{int(p[L.N_REV])} revolutions (at most {_NREV_MAX}) are supported")
-    kernel = _BY_MODES.get(int(p[L.N_MODES]), _rk4_any)
+    n = int(p[L.N_MODES])
+    kernel = _BY_MODES.get(n, _rk4_any)
+    if int(p[L.CASE]) == L.BALL and int(p[L.FORCING]) == L.HARMONIC:
+        kernel = _BALL_BY_MODES.get(n, kernel)
     if buf is None:
         buf = np.zeros((0, 2))
     kernel(p, x, float(t0), float(dt), int(n_steps), int(steady_start), int(rec_every), rec,

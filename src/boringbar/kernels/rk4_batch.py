@@ -42,6 +42,7 @@ from numba import carray, njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.interp import hermite, lerp
+from boringbar.kernels.linmap import build_map
 from boringbar.kernels.stack import stack_ptr
 
 #: most runs in one batch
@@ -56,9 +57,19 @@ _BX = BMAX * _NX_MAX
 _BM = BMAX * L.MET_SIZE
 _B4 = BMAX * 4
 _RESYNC = 256
+_NZ1 = _NX_MAX + 3
+_PD1 = _NX_MAX * _NZ1
+_YR1 = 3 * _NZ1
+_VR1 = 3 * (L.NMAX + 1) * _NZ1
+_WV1 = 4 * (L.NMAX + 1)
+_BPD = BMAX * _PD1
+_BYR = BMAX * _YR1
+_BVR = BMAX * _VR1
+_BWV = BMAX * _WV1
+_BNZ = BMAX * _NZ1
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met):
     """Advance the states ``x`` ((nb, 2n+2), updated in place) by ``n_steps`` steps.
 
@@ -210,6 +221,48 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
     cap_stk = stick.shape[1]
     cap_stb = strobe.shape[1]
 
+    # the step as an affine map where F_b cannot switch (kernels/linmap.py), per
+    # run: the single-run kernel's tables and arithmetic, run-minor
+    tmd = case == L.TMD
+    diag = case == L.SOLID or case == L.BALL
+    nz = nx + 3
+    iS = nx
+    iC = nx + 1
+    iF = nx + 2
+    Pd = carray(stack_ptr(_BPD, f8), (nx, nz, nb))
+    Yr = carray(stack_ptr(_BYR, f8), (3, nz, nb))
+    Vr = carray(stack_ptr(_BVR, f8), (3, n + 1, nz, nb))
+    Wv = carray(stack_ptr(_BWV, f8), (4, n + 1, nb))
+    Fs = carray(stack_ptr(_BNZ, f8), (nz, nb))
+    Fc = carray(stack_ptr(_BNZ, f8), (nz, nb))
+    Pd1 = carray(stack_ptr(_PD1, f8), (nx, nz))
+    Yr1 = carray(stack_ptr(_YR1, f8), (3, nz))
+    Vr1 = carray(stack_ptr(_VR1, f8), (3, n + 1, nz))
+    Wv1 = carray(stack_ptr(_WV1, f8), (4, n + 1))
+    Fs1 = carray(stack_ptr(_NZ1, f8), nz)
+    Fc1 = carray(stack_ptr(_NZ1, f8), nz)
+    dX = carray(stack_ptr(_BX, f8), (nx, nb))
+    S0 = carray(stack_ptr(_B, f8), nb)  # sin, cos of Omega t at the step's start
+    C0 = carray(stack_ptr(_B, f8), nb)
+    fz = carray(stack_ptr(_B, f8), nb)  # F_b of a mapped step
+    um = carray(stack_ptr(_B, np.int64), nb)  # 1: the run takes the map this step
+    staged = carray(stack_ptr(_B, np.int64), nb)  # 1: the run may take the map at all
+    for r in range(nb):
+        build_map(n, P[r], dt, Pd1, Yr1, Vr1, Wv1, Fs1, Fc1)
+        for a in range(nz):
+            for s3 in range(3):
+                Yr[s3, a, r] = Yr1[s3, a]
+                for i in range(n + 1):
+                    Vr[s3, i, a, r] = Vr1[s3, i, a]
+            Fs[a, r] = Fs1[a]
+            Fc[a, r] = Fc1[a]
+            for j in range(nx):
+                Pd[j, a, r] = Pd1[j, a]
+        for s4 in range(4):
+            for i in range(n + 1):
+                Wv[s4, i, r] = Wv1[s4, i]
+        staged[r] = 1 if P[r, L.STAGE_LOOP] != 0.0 else 0
+
     for k in range(n_steps):
         t = t0 + k * dt
         t1 = t0 + (k + 1) * dt  # not t + dt: keeps event times inside [t0, t_end]
@@ -219,6 +272,8 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
                 sn[r] = math.sin(om[r] * t)
                 cn[r] = math.cos(om[r] * t)
         for r in range(nb):
+            S0[r] = sn[r]
+            C0[r] = cn[r]
             s_h = sn[r] * chh[r] + cn[r] * shh[r]
             c_h = cn[r] * chh[r] - sn[r] * shh[r]
             s_1 = s_h * chh[r] + c_h * shh[r]
@@ -232,60 +287,144 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
             for j in range(nx):
                 acc[j, r] = 0.0
 
-        # --- four RK4 stages, each a loop over the runs --------------------------
-        for st in range(4):
-            cs = cst[st]
-            w_s = wst[st]
-            for r in range(nb):
-                for j in range(nx):
-                    Xs[j] = X[j, r] + cs * Kd[j, r]
-                f = fst[st, r]
-                wd = 0.0
-                pvisc = 0.0
-                sfree = 0.0
+        # --- the step as an affine map for the runs whose F_b keeps its sign ------
+        # (the decision and the arithmetic of kernels/rk4.py, run by run)
+        n_staged = 0
+        for r in range(nb):
+            ok = staged[r] == 0
+            fzr = 0.0
+            if ball and fc[r] > 0.0:
+                yd0 = X[iyd, r]
+                fzr = -fc[r] if yd0 > 0.0 else fc[r]
+                ok = ok and abs(yd0) >= vstick[r]
+                for s3 in range(3):
+                    ys = Yr[s3, iS, r] * S0[r] + Yr[s3, iC, r] * C0[r] + Yr[s3, iF, r] * fzr
+                    for j in range(nx):
+                        ys += Yr[s3, j, r] * X[j, r]
+                    ok = ok and ys * yd0 > 1e-12 * (yd0 * yd0 + abs(yd0 * (ys - yd0)))
+            fz[r] = fzr
+            um[r] = 1 if ok else 0
+            n_staged += 0 if ok else 1
+        for r in range(nb):
+            sn0 = S0[r]
+            cn0 = C0[r]
+            fzr = fz[r]
+            if diag:
                 for i in range(n):
-                    vi = Xs[n + i]
-                    Kd[i, r] = vi
-                    ai = (fm[i, r] * f - km[i, r] * Xs[i]) - cm[i, r] * vi
-                    Kd[n + i, r] = ai
-                    sfree += pD[i, r] * ai
-                    wd += pL[i, r] * vi
-                    pvisc += C[i, r] * vi * vi
-                ydd = 0.0
+                    a = i
+                    dX[a, r] = (Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
+                                + Pd[a, i, r] * X[i, r] + Pd[a, n + i, r] * X[n + i, r])
+                    a = n + i
+                    dX[a, r] = (Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
+                                + Pd[a, i, r] * X[i, r] + Pd[a, n + i, r] * X[n + i, r])
+                dX[iy, r] = 0.0
+                dX[iyd, r] = 0.0
                 if ball:
-                    yds = Xs[iyd]
-                    # F_b = -F_c sgn(y'), sgn(0) = 0
-                    fb = -fc[r] if yds > 0.0 else (fc[r] if yds < 0.0 else 0.0)
-                    pdv = 0.0
+                    for a in range(iy, nx):
+                        dj = Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
+                        for q in range(nx):
+                            dj += Pd[a, q, r] * X[q, r]
+                        dX[a, r] = dj
+            else:
+                for a in range(nx):
+                    dj = Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
+                    for q in range(nx):
+                        dj += Pd[a, q, r] * X[q, r]
+                    dX[a, r] = dj
+            pv = 0.0
+            for i in range(n):
+                pv += Wv[0, i, r] * X[n + i, r] * X[n + i, r]
+            if tmd:
+                rd = X[iyd, r]
+                for i in range(n):
+                    rd -= pA[i, r] * X[n + i, r]
+                pv += Wv[0, n, r] * rd * rd
+            for s3 in range(3):
+                for i in range(n):
+                    v = Vr[s3, i, iS, r] * sn0 + Vr[s3, i, iC, r] * cn0 + Vr[s3, i, iF, r] * fzr
+                    if diag:
+                        v += Vr[s3, i, i, r] * X[i, r] + Vr[s3, i, n + i, r] * X[n + i, r]
+                    else:
+                        for q in range(nx):
+                            v += Vr[s3, i, q, r] * X[q, r]
+                    pv += Wv[s3 + 1, i, r] * v * v
+                if tmd:
+                    v = Vr[s3, n, iS, r] * sn0 + Vr[s3, n, iC, r] * cn0
+                    for q in range(nx):
+                        v += Vr[s3, n, q, r] * X[q, r]
+                    pv += Wv[s3 + 1, n, r] * v * v
+            ws_ = Fs[iS, r] * sn0 + Fs[iC, r] * cn0 + Fs[iF, r] * fzr
+            wc_ = Fc[iS, r] * sn0 + Fc[iC, r] * cn0 + Fc[iF, r] * fzr
+            for q in range(nx):
+                ws_ += Fs[q, r] * X[q, r]
+                wc_ += Fc[q, r] * X[q, r]
+            if um[r] != 0:
+                ms[L.D_VISC, r] += pv
+                ms[L.W_FORCE, r] += sn0 * ws_ + cn0 * wc_
+                if ball:
+                    ms[L.D_FRICTION, r] -= fzr * dX[iy, r]
+                    pdu = 0.0
                     for i in range(n):
-                        Kd[n + i, r] -= dm[i, r] * fb
-                        pdv += pD[i, r] * Xs[n + i]
-                    ydd = kappa[r] * fb - sfree
-                    ms[L.D_FRICTION, r] -= w_s * fb * yds
-                    ms[L.W_NONRECIP, r] += w_s * (1.0 - sr[r]) * fb * pdv
-                elif case == L.TMD:
-                    rel = Xs[iy]
-                    reld = Xs[iyd]
+                        pdu += pD[i, r] * dX[i, r]
+                    ms[L.W_NONRECIP, r] += (1.0 - sr[r]) * fzr * pdu
+
+        # --- the others: the four RK4 stages, each a loop over the runs ---------
+        if n_staged > 0:
+            for st in range(4):
+                cs = cst[st]
+                w_s = wst[st]
+                for r in range(nb):
+                    for j in range(nx):
+                        Xs[j] = X[j, r] + cs * Kd[j, r]
+                    f = fst[st, r]
+                    wd = 0.0
+                    pvisc = 0.0
+                    sfree = 0.0
                     for i in range(n):
-                        rel -= pA[i, r] * Xs[i]
-                        reld -= pA[i, r] * Xs[n + i]
-                    ft = ka[r] * rel + ca[r] * reld
-                    for i in range(n):
-                        Kd[n + i, r] += pA[i, r] * ft * invM[i, r]
-                    ydd = -ft / ma[r]
-                    pvisc += ca[r] * reld * reld
-                elif case == L.LOCKED:
-                    for i in range(n):
-                        Kd[n + i, r] -= lm[i, r] * sfree
-                Kd[iy, r] = Xs[iyd] if has_aux else 0.0
-                Kd[iyd, r] = ydd
-                for j in range(nx):
-                    acc[j, r] += w_s * Kd[j, r]
-                ms[L.W_FORCE, r] += w_s * f * wd
-                ms[L.D_VISC, r] += w_s * pvisc
+                        vi = Xs[n + i]
+                        Kd[i, r] = vi
+                        ai = (fm[i, r] * f - km[i, r] * Xs[i]) - cm[i, r] * vi
+                        Kd[n + i, r] = ai
+                        sfree += pD[i, r] * ai
+                        wd += pL[i, r] * vi
+                        pvisc += C[i, r] * vi * vi
+                    ydd = 0.0
+                    if ball:
+                        yds = Xs[iyd]
+                        # F_b = -F_c sgn(y'), sgn(0) = 0
+                        fb = -fc[r] if yds > 0.0 else (fc[r] if yds < 0.0 else 0.0)
+                        pdv = 0.0
+                        for i in range(n):
+                            Kd[n + i, r] -= dm[i, r] * fb
+                            pdv += pD[i, r] * Xs[n + i]
+                        ydd = kappa[r] * fb - sfree
+                        if um[r] == 0:
+                            ms[L.D_FRICTION, r] -= w_s * fb * yds
+                            ms[L.W_NONRECIP, r] += w_s * (1.0 - sr[r]) * fb * pdv
+                    elif case == L.TMD:
+                        rel = Xs[iy]
+                        reld = Xs[iyd]
+                        for i in range(n):
+                            rel -= pA[i, r] * Xs[i]
+                            reld -= pA[i, r] * Xs[n + i]
+                        ft = ka[r] * rel + ca[r] * reld
+                        for i in range(n):
+                            Kd[n + i, r] += pA[i, r] * ft * invM[i, r]
+                        ydd = -ft / ma[r]
+                        pvisc += ca[r] * reld * reld
+                    elif case == L.LOCKED:
+                        for i in range(n):
+                            Kd[n + i, r] -= lm[i, r] * sfree
+                    Kd[iy, r] = Xs[iyd] if has_aux else 0.0
+                    Kd[iyd, r] = ydd
+                    for j in range(nx):
+                        acc[j, r] += w_s * Kd[j, r]
+                    if um[r] == 0:
+                        ms[L.W_FORCE, r] += w_s * f * wd
+                        ms[L.D_VISC, r] += w_s * pvisc
         for r in range(nb):
             for j in range(nx):
-                X[j, r] += acc[j, r]
+                X[j, r] += dX[j, r] if um[r] != 0 else acc[j, r]
 
         # --- step-end events, run by run ----------------------------------------
         for r in range(nb):
@@ -433,79 +572,79 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
 # without run-time overlap checks.  Each compiles on first use.
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b1_solid(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(1, L.SOLID, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b1_ball(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(1, L.BALL, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b1_tmd(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(1, L.TMD, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b1_locked(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(1, L.LOCKED, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b2_solid(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(2, L.SOLID, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b2_ball(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(2, L.BALL, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b2_tmd(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(2, L.TMD, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b2_locked(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(2, L.LOCKED, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b3_solid(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(3, L.SOLID, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b3_ball(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(3, L.BALL, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b3_tmd(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(3, L.TMD, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b3_locked(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(3, L.LOCKED, len(lanes), P, x, t0, dt, n_steps, steady_start, imp, stick, strobe,
                met)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True)
 def _b_any(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met, lanes):
     _rk4_batch(int(P[0, L.N_MODES]), int(P[0, L.CASE]), len(lanes), P, x, t0, dt, n_steps,
                steady_start, imp, stick, strobe, met)
