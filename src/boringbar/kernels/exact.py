@@ -89,9 +89,11 @@ import cmath
 import math
 
 import numpy as np
-from numba import njit
+from numba import carray, njit
 
 from boringbar.kernels import layout as L
+from boringbar.kernels.stack import stack_ptr
+from boringbar.kernels.views import borrow
 
 #: event-search grid points per shortest period
 GRID_PER_PERIOD = 16
@@ -100,6 +102,13 @@ MAX_EVENTS = 50_000_000
 #: consecutive zero-length events (shorter than 1e-14 (|t| + h)) before a run stops with
 #: EXACT_STATUS = 2
 MAX_ZERO_LENGTH = 64
+
+#: lengths of the stack scratch (numba needs them as literal globals)
+_NZ_MAX = 2 * L.NMAX + 2
+_NB_MAX = _NZ_MAX + 3
+_NB_MAX2 = _NB_MAX * _NB_MAX
+_NZB_MAX = _NZ_MAX * _NB_MAX
+_NMAX6 = 6 * L.NMAX
 
 FREE, STICK, CONTACT = 0, 1, 2
 _RECIP = (0.0, 1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 5, 1 / 6, 1 / 7, 1 / 8, 1 / 9, 1 / 10, 1 / 11,
@@ -1013,16 +1022,59 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
     return t + T if T < t_piece - t else t_piece
 
 
+@njit(cache=True, inline="always")
+def _zeros(ptr, n):
+    """n zeros at ``ptr`` (stack scratch: kernels/stack.py)."""
+    a = carray(ptr, n)
+    for i in range(n):
+        a[i] = 0.0
+    return a
+
+
+@njit(cache=True, inline="always")
+def _zeros2(ptr, n, m):
+    """An n x m array of zeros at ``ptr``."""
+    a = carray(ptr, (n, m))
+    for i in range(n):
+        for j in range(m):
+            a[i, j] = 0.0
+    return a
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
            tabE, tabP):
+    # borrowed views of the arguments and scratch on the stack: numba reference-counts
+    # every array argument of every call, even inlined (an atomic operation each time:
+    # 40 % of the run time), but not arrays without a memory owner (kernels/views.py)
+    p = borrow(p)
+    x = borrow(x)
+    rec = borrow(rec)
+    imp = borrow(imp)
+    stick = borrow(stick)
+    strobe = borrow(strobe)
+    met = borrow(met)
+    lam = borrow(lam)
+    V = borrow(V)
+    Vi = borrow(Vi)
+    Z = borrow(Z)
+    D = borrow(D)
+    eh = borrow(eh)
+    lvis = borrow(lvis)
+    cvis = borrow(cvis)
+    isum = borrow(isum)
+    Vfull = borrow(Vfull)
+    kstep = borrow(kstep)
+    bq = borrow(bq)
+    tabE = borrow(tabE)
+    tabP = borrow(tabP)
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     nz = lam.shape[1]
     nb = nz + 3
     ball = case == L.BALL
-    mk = np.zeros((6, n))  # M, K, C, psi_L, psi_d, psi_a
+    mk = _zeros2(stack_ptr(_NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
     for i in range(n):
         mk[0, i] = p[L.M_ + i]
         mk[1, i] = p[L.K_ + i]
@@ -1049,26 +1101,26 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     kappa_wall = (1.0 / m + spd) if m > 0.0 else 1.0
 
     # scratch
-    X = np.zeros(nz)
-    Xa = np.zeros(nz)
-    Xd = np.zeros(nz)
-    q0 = np.zeros(nz, np.complex128)
-    qs = np.zeros(nz, np.complex128)
-    qg = np.zeros(nz, np.complex128)
-    mu = np.zeros(nb, np.complex128)
-    em = np.zeros(nb, np.complex128)
-    G = np.zeros((nb, nb), np.complex128)
-    Cx = np.zeros((nz, nb), np.complex128)
-    cf = np.zeros(nb, np.complex128)
-    ca = np.zeros(nb, np.complex128)
-    cb = np.zeros(nb, np.complex128)
-    out = np.zeros(6)
-    seg = np.zeros(SEG_SIZE)
-    dX = np.zeros(nz)
-    ev_a = np.zeros(N_EV)
-    ev_b = np.zeros(N_EV)
-    ev_s = np.zeros(N_EV)
-    ev_t = np.zeros(N_EV)
+    X = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    Xa = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    Xd = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    q0 = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    qs = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    qg = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    mu = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    em = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    G = _zeros2(stack_ptr(_NB_MAX2, np.complex128), nb, nb)
+    Cx = _zeros2(stack_ptr(_NZB_MAX, np.complex128), nz, nb)
+    cf = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    ca = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    cb = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    out = _zeros(stack_ptr(6, np.float64), 6)
+    seg = _zeros(stack_ptr(SEG_SIZE, np.float64), SEG_SIZE)
+    dX = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    ev_a = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_b = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_s = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_t = _zeros(stack_ptr(N_EV, np.float64), N_EV)
 
     for j in range(nz):
         X[j] = x[j]
@@ -1095,7 +1147,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     nk = 0
     ip = np.full(nrev + 1, -1, np.int64)
     sc = np.zeros((nrev + 1, 4))
-    qsum = np.zeros(6)
+    qsum = _zeros(stack_ptr(6, np.float64), 6)
     first_zero = met[L.FIRST_ZERO_T]
     max_force = met[L.MAX_FORCE]
     n_zero_steps = met[L.N_ZERO_STEPS]
