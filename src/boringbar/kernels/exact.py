@@ -121,10 +121,11 @@ EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WE
 EV_CUT, EV_HEXT = 8, 9
 N_EV = 10
 # the segment's description ``seg``: see :func:`_g`
-SEG_SIZE = 17
+SEG_SIZE = 18
 SEG_KRB = 11  # Kr b in the cut, 0 out of it (and for harmonic forcing)
 SEG_S = 12  # S(tau) = seg[12] + seg[13] tau + seg[14] tau^2 + seg[15] tau^3, the surface
 SEG_CDIR = 16  # +1 in the cut, -1 out of it, 0 harmonic forcing
+SEG_ACC = 17  # fb / m, the ball's acceleration (one division per segment)
 
 
 # --- per-run setup (NumPy, once per run) --------------------------------------------------
@@ -264,6 +265,14 @@ def prepare(p: np.ndarray) -> dict:
 
 # --- the kernel ----------------------------------------------------------------------------
 @njit(cache=True, inline="always")
+def _nq(nz, ks):
+    """How many eigen-coordinates are evaluated: nz, or nz / 2 when ks = 2 (conjugate
+    pairs, the first of each).  A loop over range(0, nz, ks) would cost an integer
+    division per loop (its trip count), several per grid step."""
+    return nz if ks == 1 else nz >> 1
+
+
+@njit(cache=True, inline="always")
 def _phis(x):
     """(e^x, phi_1(x), .., phi_4(x)), phi_k(x) = sum_m x^m / (m + k)!: the Taylor series of
     phi_4 then phi_k = 1/k! + x phi_{k+1} for |x| < 1 (no cancellation), the recurrence
@@ -311,15 +320,18 @@ def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
         c1 = seg[SEG_S + 1] * tau * tau
         c2 = 2.0 * seg[SEG_S + 2] * tau ** 3
         c3 = 6.0 * seg[SEG_S + 3] * tau ** 4
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             ex, p1, p2, p3, p4 = _phis(lam[r, k] * tau)
             q[k] = q0[k] * ex + krb * bq[r, k] * (c0 * p1 + c1 * p2 + c2 * p3 + c3 * p4)
     else:
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             s += (V[r, j, k] * q[k]).real
         X[j] = s
     return ph
@@ -331,7 +343,8 @@ def _from_q(r, q, ph, fb, Z, D, V, ks, X):
     nz = X.shape[0]
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             s += (V[r, j, k] * q[k]).real
         X[j] = s
 
@@ -362,8 +375,8 @@ def _freq(X, f, n, mk, kappa):
 def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
     """Event function ``kind`` at tau on the segment described by ``seg``.
 
-    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir]
-    (SEG_* name the cut's slots).
+    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir, fb / m]
+    (SEG_* name the cut's slots and SEG_ACC the last).
     """
     fb = seg[1]
     _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
@@ -386,7 +399,7 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
         for i in range(n):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
-        acc = fb / seg[10]
+        acc = seg[SEG_ACC]
         if kind == EV_PLUS or kind == EV_MINUS:
             y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
             return y - seg[9] if kind == EV_PLUS else -seg[9] - y
@@ -409,7 +422,8 @@ def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
     sin_ = seg[SEG_KRB] * _surface(seg, tau)[0]
     for j in range(nz):
         sd = om * (Z[r, j] * ph).real
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             sd += (V[r, j, k] * (q[k] * lam[r, k] + sin_ * bq[r, k])).real
         Xd[j] = sd
 
@@ -447,7 +461,7 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
             pda += mk[4, i] * Xd[n + i]
-        acc = fb / seg[10]
+        acc = seg[SEG_ACC]
         y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
         yd = seg[3] + acc * tau - pdv
         ydd = acc - pda
@@ -1439,6 +1453,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         seg[9] = half
         seg[10] = m if m > 0.0 else 1.0
         acc = fb / seg[10]
+        seg[SEG_ACC] = acc
         # which events are watched
         watch_wall = ball and mode == FREE
         watch_v = watch_wall and fc > 0.0 and sdir != 0.0
@@ -1485,20 +1500,23 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 full = False
             istep += 1
             if full and istep % 64 != 0 and not regen:
-                for k in range(0, nz, ks):
+                for kq in range(_nq(nz, ks)):
+                    k = kq * ks
                     qg[k] = qg[k] * eh[r, k]
                 phg = phg * rot
                 _from_q(r, qg, phg, fb, Z, D, V, ks, X)
             elif whole and not full:
                 # the tabulated end of a whole step, written out: numba reference-counts
                 # the array arguments of every call, even inlined (docs/performance.md)
-                for k in range(0, nz, ks):
+                for kq in range(_nq(nz, ks)):
+                    k = kq * ks
                     qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
                              + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
                              + s_3 * tabP[r, 4, 3, k])
                 for j in range(nz):
                     sx = fb * D[r, j]
-                    for k in range(0, nz, ks):
+                    for kq in range(_nq(nz, ks)):
+                        k = kq * ks
                         sx += (V[r, j, k] * qg[k]).real
                     X[j] = sx
             else:
@@ -1600,13 +1618,15 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 if whole and kind < 0 and not (sticking and sr != 1.0):
                     # a whole step: tabulated values, written out (as above)
                     for g in range(4):
-                        for k in range(0, nz, ks):
+                        for kq in range(_nq(nz, ks)):
+                            k = kq * ks
                             qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
                                      + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
                                      + s_3 * tabP[r, g, 3, k])
                         for j in range(nz):
                             sx = fb * D[r, j]
-                            for k in range(0, nz, ks):
+                            for kq in range(_nq(nz, ks)):
+                                k = kq * ks
                                 sx += (V[r, j, k] * qs[k]).real
                             dX[j] = sx
                         wq = 0.0
@@ -1902,7 +1922,7 @@ def _events(ev, X, tau, seg, mode, n, mk, f0, om):
         pdu += mk[4, i] * X[i]
         pdv += mk[4, i] * X[n + i]
     fb = seg[1]
-    acc = fb / seg[10]
+    acc = seg[SEG_ACC]
     y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
     yd = seg[3] + acc * tau - pdv
     ev[EV_PLUS] = y - seg[9]
@@ -1936,7 +1956,7 @@ def _aux(X, tau, seg, mode, case, n, mk, x, ball):
         for i in range(n):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
-        acc = seg[1] / seg[10]
+        acc = seg[SEG_ACC]
         return seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu, seg[3] + acc * tau - pdv
     if case == L.TMD:
         a = X[2 * n]
