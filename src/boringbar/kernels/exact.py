@@ -378,7 +378,6 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
     seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir, fb / m]
     (SEG_* name the cut's slots and SEG_ACC the last).
     """
-    fb = seg[1]
     _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
     if kind == EV_WEXT:
         s = 0.0
@@ -432,7 +431,6 @@ def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
 def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
     """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
     ts = seg[0]
-    fb = seg[1]
     _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd)
     if kind == EV_WEXT:
         g = 0.0
@@ -1921,7 +1919,6 @@ def _events(ev, X, tau, seg, mode, n, mk, f0, om):
     for i in range(n):
         pdu += mk[4, i] * X[i]
         pdv += mk[4, i] * X[n + i]
-    fb = seg[1]
     acc = seg[SEG_ACC]
     y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
     yd = seg[3] + acc * tau - pdv
