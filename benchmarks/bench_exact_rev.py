@@ -47,7 +47,7 @@ def export(rev: str) -> Path:
         root.mkdir(parents=True, exist_ok=True)
         tar = root / "src.tar"
         with open(tar, "wb") as fh:
-            subprocess.run(["git", "archive", sha, "src/boringbar"], cwd=HERE, stdout=fh,
+            subprocess.run(["git", "archive", sha, "src/boringbar"], cwd=HERE.parent, stdout=fh,
                            check=True)
         with tarfile.open(tar) as tf:
             tf.extractall(root)
