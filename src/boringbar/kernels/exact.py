@@ -89,9 +89,11 @@ import cmath
 import math
 
 import numpy as np
-from numba import njit
+from numba import carray, njit
 
 from boringbar.kernels import layout as L
+from boringbar.kernels.stack import stack_ptr
+from boringbar.kernels.views import borrow
 
 #: event-search grid points per shortest period
 GRID_PER_PERIOD = 16
@@ -100,6 +102,13 @@ MAX_EVENTS = 50_000_000
 #: consecutive zero-length events (shorter than 1e-14 (|t| + h)) before a run stops with
 #: EXACT_STATUS = 2
 MAX_ZERO_LENGTH = 64
+
+#: lengths of the stack scratch (numba needs them as literal globals)
+_NZ_MAX = 2 * L.NMAX + 2
+_NB_MAX = _NZ_MAX + 3
+_NB_MAX2 = _NB_MAX * _NB_MAX
+_NZB_MAX = _NZ_MAX * _NB_MAX
+_NMAX6 = 6 * L.NMAX
 
 FREE, STICK, CONTACT = 0, 1, 2
 _RECIP = (0.0, 1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 5, 1 / 6, 1 / 7, 1 / 8, 1 / 9, 1 / 10, 1 / 11,
@@ -112,10 +121,11 @@ EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WE
 EV_CUT, EV_HEXT = 8, 9
 N_EV = 10
 # the segment's description ``seg``: see :func:`_g`
-SEG_SIZE = 17
+SEG_SIZE = 18
 SEG_KRB = 11  # Kr b in the cut, 0 out of it (and for harmonic forcing)
 SEG_S = 12  # S(tau) = seg[12] + seg[13] tau + seg[14] tau^2 + seg[15] tau^3, the surface
 SEG_CDIR = 16  # +1 in the cut, -1 out of it, 0 harmonic forcing
+SEG_ACC = 17  # fb / m, the ball's acceleration (one division per segment)
 
 
 # --- per-run setup (NumPy, once per run) --------------------------------------------------
@@ -255,6 +265,14 @@ def prepare(p: np.ndarray) -> dict:
 
 # --- the kernel ----------------------------------------------------------------------------
 @njit(cache=True, inline="always")
+def _nq(nz, ks):
+    """How many eigen-coordinates are evaluated: nz, or nz / 2 when ks = 2 (conjugate
+    pairs, the first of each).  A loop over range(0, nz, ks) would cost an integer
+    division per loop (its trip count), several per grid step."""
+    return nz if ks == 1 else nz >> 1
+
+
+@njit(cache=True, inline="always")
 def _phis(x):
     """(e^x, phi_1(x), .., phi_4(x)), phi_k(x) = sum_m x^m / (m + k)!: the Taylor series of
     phi_4 then phi_k = 1/k! + x phi_{k+1} for |x| < 1 (no cancellation), the recurrence
@@ -287,7 +305,8 @@ def _surface(seg, tau):
 
 @njit(cache=True, inline="always")
 def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
-    """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg[0]).
+    """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg[0]);
+    returns the forcing phasor e^{i Omega (ts + tau)}.
 
     In a cut the input Kr b S(tau) (a cubic, seg[SEG_S:SEG_S + 4]) adds
     bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to each eigen-coordinate."""
@@ -301,17 +320,21 @@ def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
         c1 = seg[SEG_S + 1] * tau * tau
         c2 = 2.0 * seg[SEG_S + 2] * tau ** 3
         c3 = 6.0 * seg[SEG_S + 3] * tau ** 4
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             ex, p1, p2, p3, p4 = _phis(lam[r, k] * tau)
             q[k] = q0[k] * ex + krb * bq[r, k] * (c0 * p1 + c1 * p2 + c2 * p3 + c3 * p4)
     else:
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             s += (V[r, j, k] * q[k]).real
         X[j] = s
+    return ph
 
 
 @njit(cache=True, inline="always")
@@ -320,7 +343,8 @@ def _from_q(r, q, ph, fb, Z, D, V, ks, X):
     nz = X.shape[0]
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             s += (V[r, j, k] * q[k]).real
         X[j] = s
 
@@ -351,10 +375,9 @@ def _freq(X, f, n, mk, kappa):
 def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
     """Event function ``kind`` at tau on the segment described by ``seg``.
 
-    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir]
-    (SEG_* name the cut's slots).
+    seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir, fb / m]
+    (SEG_* name the cut's slots and SEG_ACC the last).
     """
-    fb = seg[1]
     _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
     if kind == EV_WEXT:
         s = 0.0
@@ -375,7 +398,7 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
         for i in range(n):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
-        acc = fb / seg[10]
+        acc = seg[SEG_ACC]
         if kind == EV_PLUS or kind == EV_MINUS:
             y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
             return y - seg[9] if kind == EV_PLUS else -seg[9] - y
@@ -394,12 +417,12 @@ def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
     """X and X' at ts + tau on the segment (see :func:`_eval`); in a cut
     q' = lambda q + bq Kr b S(tau)."""
     nz = X.shape[0]
-    _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
-    ph = cmath.exp(1j * om * (seg[0] + tau))
+    ph = _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
     sin_ = seg[SEG_KRB] * _surface(seg, tau)[0]
     for j in range(nz):
         sd = om * (Z[r, j] * ph).real
-        for k in range(0, nz, ks):
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
             sd += (V[r, j, k] * (q[k] * lam[r, k] + sin_ * bq[r, k])).real
         Xd[j] = sd
 
@@ -408,7 +431,6 @@ def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
 def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
     """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
     ts = seg[0]
-    fb = seg[1]
     _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd)
     if kind == EV_WEXT:
         g = 0.0
@@ -437,7 +459,7 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
             pda += mk[4, i] * Xd[n + i]
-        acc = fb / seg[10]
+        acc = seg[SEG_ACC]
         y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
         yd = seg[3] + acc * tau - pdv
         ydd = acc - pda
@@ -570,6 +592,18 @@ def _phi1(z, T):
     return T * (cmath.exp(z) - 1.0) / z
 
 
+@njit(cache=True, inline="always")
+def _phi1_real(z, T):
+    """:func:`_phi1` for a real z (the same operations on the real parts)."""
+    if z == 0.0:
+        return T
+    s = 0.0
+    for k in range(13, 1, -1):
+        s = (s * z + 1.0) * _RECIP[k]
+    s = s * z + 1.0
+    return T * s
+
+
 @njit(cache=True)
 def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
                mu, em, G, Cx, cf, ca, cb, out, isum, steady):
@@ -586,13 +620,24 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     mu[nz] = 1j * om
     mu[nz + 1] = -1j * om
     mu[nz + 2] = 0.0
-    for k in range(nb):
-        em[k] = cmath.exp(mu[k] * T)
+    # exp(conj z) = conj(exp(z)) exactly: a conjugate pair's second exponential and the
+    # forcing's -i Omega are conjugates, exp(0) = 1
+    for k in range(nz):
+        if k > 0 and mu[k] == mu[k - 1].conjugate():
+            em[k] = em[k - 1].conjugate()
+        else:
+            em[k] = cmath.exp(mu[k] * T)
+    em[nz] = cmath.exp(mu[nz] * T)
+    em[nz + 1] = em[nz].conjugate()
+    em[nz + 2] = 1.0
     lim = 0.015625 / (T * T)  # |mu_m + mu_l| T < 1/8: the series
     for a in range(nb):
         for b in range(a, nb):
             s = mu[a] + mu[b]
-            if s.real * s.real + s.imag * s.imag < lim:
+            if s.imag == 0.0 and s.real * s.real < lim:
+                # a conjugate pair, or the forcing's two terms, or 0: a real series
+                g = _phi1_real(s.real * T, T) + 0.0j
+            elif s.real * s.real + s.imag * s.imag < lim:
                 g = _phi1(s * T, T)
             else:
                 g = (em[a] * em[b] - 1.0) * isum[r, a, b]
@@ -610,16 +655,20 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
         cf[k] = 0.0
     cf[nz] = f0 * ph / 2j
     cf[nz + 1] = cf[nz].conjugate()
-    # work of the force: f psi_L . u'
+    # work of the force: f psi_L . u' (f has only the terms nz, nz + 1)
     for k in range(nb):
         s = 0.0 + 0.0j
         for i in range(n):
             s += mk[3, i] * Cx[n + i, k]
         ca[k] = s
-    out[0] = _quad(cf, ca, G, nb)
-    out[4] = 0.0
-    for k in range(nb):
-        out[4] += (cf[k] * G[k, nb - 1]).real
+    w = 0.0
+    for i in range(nz, nz + 2):
+        t = 0.0 + 0.0j
+        for j in range(nb):
+            t += G[i, j] * ca[j]
+        w += (cf[i] * t).real
+    out[0] = w
+    out[4] = (cf[nz] * G[nz, nb - 1]).real + (cf[nz + 1] * G[nz + 1, nb - 1]).real
     out[5] = 0.0
     if stick_k != 0.0 and sr != 1.0:
         # F_stick = psi_d . a_0 / kappa, a_0,i = (psi_L,i f - K_i u_i - C_i u_i') / M_i
@@ -639,7 +688,8 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
         for k in range(nb):
             s = 0.0 + 0.0j
             for j in range(nz):
-                s += lvis[d, j] * Cx[j, k]
+                if lvis[d, j] != 0.0:
+                    s += lvis[d, j] * Cx[j, k]
             ca[k] = s
         dv += cvis[d] * _quad_sym(ca, G, nb)
     out[1] = dv
@@ -681,6 +731,42 @@ def _quad(a, b, G, nb):
     return s
 
 
+@njit(cache=True)
+def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
+    """W at its extremum in [a, b], where W' changes sign (ga, gb: W' at a, b): Newton on W'
+    from c0, kept inside the shrinking bracket, until the step is below 1e-9 h; then W plus
+    the step's quadratic correction, W - W'^2 / (2 W'').  The value's error is then of
+    order (Omega_max dt)^3 relative, far below round-off (h is 1/16 of the shortest
+    period, so Omega_max dt < 4e-10): no need to locate the time to 4 ulp."""
+    pos = gb > 0.0
+    c = c0 if a < c0 < b else 0.5 * (a + b)
+    tol = 1e-9 * h
+    w = 0.0
+    for _ in range(100):
+        _eval2(r, q0, seg, c, om, lam, V, ks, Z, D, bq, q, X, Xd)
+        w = 0.0
+        wd = 0.0
+        wdd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+            wdd += mk[3, i] * Xd[n + i]
+        if wd == 0.0:
+            return w
+        step = -wd / wdd if wdd != 0.0 else b - a
+        if abs(step) <= tol:
+            return w + 0.5 * wd * step
+        if (wd > 0.0) == pos:
+            b = c
+        else:
+            a = c
+        if b - a <= tol:
+            return w
+        cn = c + step
+        c = cn if a < cn < b else 0.5 * (a + b)
+    return w
+
+
 #: sub-steps of a grid step in which the bound on y^(4) allows an undetected graze
 NSUB = 16
 
@@ -696,6 +782,10 @@ def _may_graze(a, b, ev_a, ev_b, half, b4):
     m0 = ev_a[EV_YEXT] * h
     m1 = ev_b[EV_YEXT] * h
     margin = b4 * h ** 4 / 192.0
+    # |p| <= max(|p0|, |p1|) + 4/27 (|m0| + |m1|) on [0, 1] (the Hermite basis): far from
+    # both walls, nothing more to check
+    if max(abs(p0), abs(p1)) + 0.15 * (abs(m0) + abs(m1)) + margin < half:
+        return False
     hi = p1
     lo = p1
     # p'(s) = qa s^2 + qb s + qc on (0, 1)
@@ -1013,16 +1103,59 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
     return t + T if T < t_piece - t else t_piece
 
 
+@njit(cache=True, inline="always")
+def _zeros(ptr, n):
+    """n zeros at ``ptr`` (stack scratch: kernels/stack.py)."""
+    a = carray(ptr, n)
+    for i in range(n):
+        a[i] = 0.0
+    return a
+
+
+@njit(cache=True, inline="always")
+def _zeros2(ptr, n, m):
+    """An n x m array of zeros at ``ptr``."""
+    a = carray(ptr, (n, m))
+    for i in range(n):
+        for j in range(m):
+            a[i, j] = 0.0
+    return a
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
            tabE, tabP):
+    # borrowed views of the arguments and scratch on the stack: numba reference-counts
+    # every array argument of every call, even inlined (an atomic operation each time:
+    # 40 % of the run time), but not arrays without a memory owner (kernels/views.py)
+    p = borrow(p)
+    x = borrow(x)
+    rec = borrow(rec)
+    imp = borrow(imp)
+    stick = borrow(stick)
+    strobe = borrow(strobe)
+    met = borrow(met)
+    lam = borrow(lam)
+    V = borrow(V)
+    Vi = borrow(Vi)
+    Z = borrow(Z)
+    D = borrow(D)
+    eh = borrow(eh)
+    lvis = borrow(lvis)
+    cvis = borrow(cvis)
+    isum = borrow(isum)
+    Vfull = borrow(Vfull)
+    kstep = borrow(kstep)
+    bq = borrow(bq)
+    tabE = borrow(tabE)
+    tabP = borrow(tabP)
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     nz = lam.shape[1]
     nb = nz + 3
     ball = case == L.BALL
-    mk = np.zeros((6, n))  # M, K, C, psi_L, psi_d, psi_a
+    mk = _zeros2(stack_ptr(_NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
     for i in range(n):
         mk[0, i] = p[L.M_ + i]
         mk[1, i] = p[L.K_ + i]
@@ -1049,26 +1182,26 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     kappa_wall = (1.0 / m + spd) if m > 0.0 else 1.0
 
     # scratch
-    X = np.zeros(nz)
-    Xa = np.zeros(nz)
-    Xd = np.zeros(nz)
-    q0 = np.zeros(nz, np.complex128)
-    qs = np.zeros(nz, np.complex128)
-    qg = np.zeros(nz, np.complex128)
-    mu = np.zeros(nb, np.complex128)
-    em = np.zeros(nb, np.complex128)
-    G = np.zeros((nb, nb), np.complex128)
-    Cx = np.zeros((nz, nb), np.complex128)
-    cf = np.zeros(nb, np.complex128)
-    ca = np.zeros(nb, np.complex128)
-    cb = np.zeros(nb, np.complex128)
-    out = np.zeros(6)
-    seg = np.zeros(SEG_SIZE)
-    dX = np.zeros(nz)
-    ev_a = np.zeros(N_EV)
-    ev_b = np.zeros(N_EV)
-    ev_s = np.zeros(N_EV)
-    ev_t = np.zeros(N_EV)
+    X = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    Xa = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    Xd = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    q0 = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    qs = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    qg = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    mu = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    em = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    G = _zeros2(stack_ptr(_NB_MAX2, np.complex128), nb, nb)
+    Cx = _zeros2(stack_ptr(_NZB_MAX, np.complex128), nz, nb)
+    cf = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    ca = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    cb = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    out = _zeros(stack_ptr(6, np.float64), 6)
+    seg = _zeros(stack_ptr(SEG_SIZE, np.float64), SEG_SIZE)
+    dX = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    ev_a = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_b = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_s = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_t = _zeros(stack_ptr(N_EV, np.float64), N_EV)
 
     for j in range(nz):
         X[j] = x[j]
@@ -1095,7 +1228,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     nk = 0
     ip = np.full(nrev + 1, -1, np.int64)
     sc = np.zeros((nrev + 1, 4))
-    qsum = np.zeros(6)
+    qsum = _zeros(stack_ptr(6, np.float64), 6)
     first_zero = met[L.FIRST_ZERO_T]
     max_force = met[L.MAX_FORCE]
     n_zero_steps = met[L.N_ZERO_STEPS]
@@ -1189,6 +1322,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     stick_t0 = t0
     n_zero = 0
 
+    rot = cmath.exp(1j * om * h) if om != 0.0 else 1.0 + 0.0j  # the grid's phase step
     t = t0
     while t < t_end:
         if n_ev >= MAX_EVENTS:
@@ -1317,6 +1451,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         seg[9] = half
         seg[10] = m if m > 0.0 else 1.0
         acc = fb / seg[10]
+        seg[SEG_ACC] = acc
         # which events are watched
         watch_wall = ball and mode == FREE
         watch_v = watch_wall and fc > 0.0 and sdir != 0.0
@@ -1329,7 +1464,6 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for k in range(nz):
             qg[k] = q0[k]
         phg = ph
-        rot = cmath.exp(1j * om * h) if om != 0.0 else 1.0 + 0.0j
         ev_kind = -1
         tau_ev = tlen
         istep = 0
@@ -1364,20 +1498,23 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 full = False
             istep += 1
             if full and istep % 64 != 0 and not regen:
-                for k in range(0, nz, ks):
+                for kq in range(_nq(nz, ks)):
+                    k = kq * ks
                     qg[k] = qg[k] * eh[r, k]
                 phg = phg * rot
                 _from_q(r, qg, phg, fb, Z, D, V, ks, X)
             elif whole and not full:
                 # the tabulated end of a whole step, written out: numba reference-counts
                 # the array arguments of every call, even inlined (docs/performance.md)
-                for k in range(0, nz, ks):
+                for kq in range(_nq(nz, ks)):
+                    k = kq * ks
                     qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
                              + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
                              + s_3 * tabP[r, 4, 3, k])
                 for j in range(nz):
                     sx = fb * D[r, j]
-                    for k in range(0, nz, ks):
+                    for kq in range(_nq(nz, ks)):
+                        k = kq * ks
                         sx += (V[r, j, k] * qg[k]).real
                     X[j] = sx
             else:
@@ -1468,12 +1605,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_w = max(max_w, wb)
                 min_w = min(min_w, wb)
                 if wda * wdb < 0.0:
-                    te = _root(EV_WEXT, a, wda, b, wdb, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX,
-                               Xd, n, mk, f0, om, _hermite(a, b, wa, wb, wda, wdb, 1))
-                    _eval(r, q0, seg, te, om, lam, V, ks, Z, D, bq, qs, dX)
-                    we = 0.0
-                    for i in range(n):
-                        we += mk[3, i] * dX[i]
+                    we = _w_extremum(a, wda, b, wdb, _hermite(a, b, wa, wb, wda, wdb, 1), h, seg,
+                                     r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, om)
                     max_abs_w = max(max_abs_w, abs(we))
                     max_w = max(max_w, we)
                     min_w = min(min_w, we)
@@ -1483,13 +1616,15 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 if whole and kind < 0 and not (sticking and sr != 1.0):
                     # a whole step: tabulated values, written out (as above)
                     for g in range(4):
-                        for k in range(0, nz, ks):
+                        for kq in range(_nq(nz, ks)):
+                            k = kq * ks
                             qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
                                      + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
                                      + s_3 * tabP[r, g, 3, k])
                         for j in range(nz):
                             sx = fb * D[r, j]
-                            for k in range(0, nz, ks):
+                            for kq in range(_nq(nz, ks)):
+                                k = kq * ks
                                 sx += (V[r, j, k] * qs[k]).real
                             dX[j] = sx
                         wq = 0.0
@@ -1784,8 +1919,7 @@ def _events(ev, X, tau, seg, mode, n, mk, f0, om):
     for i in range(n):
         pdu += mk[4, i] * X[i]
         pdv += mk[4, i] * X[n + i]
-    fb = seg[1]
-    acc = fb / seg[10]
+    acc = seg[SEG_ACC]
     y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
     yd = seg[3] + acc * tau - pdv
     ev[EV_PLUS] = y - seg[9]
@@ -1819,7 +1953,7 @@ def _aux(X, tau, seg, mode, case, n, mk, x, ball):
         for i in range(n):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
-        acc = seg[1] / seg[10]
+        acc = seg[SEG_ACC]
         return seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu, seg[3] + acc * tau - pdv
     if case == L.TMD:
         a = X[2 * n]

@@ -1,0 +1,143 @@
+"""The exact kernel against its own version at a git revision, in one process.
+
+    .venv/bin/python benchmarks/bench_exact_rev.py REV [--repeat 7]
+
+Exports ``src/boringbar`` at REV into a temporary directory as the package
+``boringbar_rev`` (its imports renamed, so both versions compile side by side;
+the first run compiles it, about 2 minutes), then times ``run_exact`` of both
+on the harmonic cases of ``bench_exact.py`` (interleaved, best of
+``--repeat``, the per-run ``prepare`` excluded and timed apart), with RK4 at
+dt = 1e-6 as the machine's yardstick, and compares the results: metrics, final
+state and impacts, bit for bit or the largest relative difference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from bench_exact import CASES, orbit_start  # noqa: E402
+
+from boringbar import Harmonic, make_system, simulate  # noqa: E402
+from boringbar.kernels import exact as E  # noqa: E402
+from boringbar.kernels import layout as L  # noqa: E402
+from boringbar.kernels.rk4 import run_rk4  # noqa: E402
+from boringbar.simulate import _setup  # noqa: E402
+
+
+def export(rev: str) -> Path:
+    """src/boringbar at ``rev`` as the package boringbar_rev (cached per commit)."""
+    sha = subprocess.run(["git", "rev-parse", rev], cwd=HERE, capture_output=True, text=True,
+                         check=True).stdout.strip()
+    root = Path(tempfile.gettempdir()) / f"boringbar_rev_{sha[:12]}"
+    pkg = root / "boringbar_rev"
+    if not pkg.exists():
+        root.mkdir(parents=True, exist_ok=True)
+        tar = root / "src.tar"
+        with open(tar, "wb") as fh:
+            subprocess.run(["git", "archive", sha, "src/boringbar"], cwd=HERE.parent, stdout=fh,
+                           check=True)
+        with tarfile.open(tar) as tf:
+            tf.extractall(root)
+        (root / "src" / "boringbar").rename(pkg)
+        for f in pkg.rglob("*.py"):
+            s = f.read_text()
+            s = re.sub(r"\bfrom boringbar([ .])", r"from boringbar_rev\1", s)
+            s = re.sub(r"\bimport boringbar\b", "import boringbar_rev", s)
+            f.write_text(s)
+    sys.path.insert(0, str(root))
+    return root
+
+
+def cases():
+    for label, preset, kw, force, ratio, periodic in CASES:
+        s = make_system("ball", preset, **kw)
+        f = Harmonic(force, ratio)
+        dur, dt, init = 2.0, 1e-6, None
+        if periodic == "orbit":
+            orbit, start = orbit_start(s, force)
+            period = 2 * orbit.system.half_period
+            init, dur, dt = start, 5 * round(2.0 / period / 5) * period, period / 2000
+        elif periodic == "settled":
+            init = simulate(s, f, integrator="exact").final
+        yield label, _setup(s, f, dur, dt, init, 0, 0.8, False, "exact")
+
+
+def fresh(su):
+    return (su.p, su.x.copy(), su.rec.copy(), su.imp.copy(), su.stick.copy(), su.stb.copy(),
+            su.met.copy())
+
+
+def run(mod, su, prep):
+    p, x, rec, imp, stick, stb, met = fresh(su)
+    tic = time.perf_counter()
+    mod.run_exact(p, x, su.t0, su.t0 + su.n_steps * su.dt, su.t0 + su.steady_steps * su.dt,
+                  su.record_every * su.dt, rec, imp, stick, stb, met, prep=prep, dt=su.dt)
+    return time.perf_counter() - tic, met, x, imp
+
+
+def rk4(su):
+    s2 = _setup(su.system, su.forcing, 2.0, 1e-6, None, 0, 0.8, False, "rk4")
+    p, x, rec, imp, stick, stb, met = fresh(s2)
+    tic = time.perf_counter()
+    run_rk4(p, x, s2.t0, s2.dt, s2.n_steps, s2.steady_steps, 0, rec, imp, stick, stb, met,
+            s2.buf)
+    return time.perf_counter() - tic
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("rev", help="git revision of the kernel to compare against")
+    ap.add_argument("--repeat", type=int, default=7)
+    args = ap.parse_args()
+    export(args.rev)
+    import boringbar_rev.kernels.exact as E0
+
+    print(f"machine: {os.cpu_count()} cores; exact kernel at {args.rev} (old) against the "
+          "working tree (new), best of", args.repeat)
+    for label, su in cases():
+        tic = time.perf_counter()
+        prep0 = E0.prepare(su.p)
+        tp0 = time.perf_counter() - tic
+        tic = time.perf_counter()
+        prep1 = E.prepare(su.p)
+        tp1 = time.perf_counter() - tic
+        run(E0, su, prep0)
+        run(E, su, prep1)
+        b0 = b1 = br = np.inf
+        for _ in range(args.repeat):
+            t, m0, x0, i0 = run(E0, su, prep0)
+            b0 = min(b0, t)
+            t, m1, x1, i1 = run(E, su, prep1)
+            b1 = min(b1, t)
+            br = min(br, rk4(su))
+        ev = m1[L.N_EVENTS]
+        if np.array_equal(m0, m1) and np.array_equal(x0, x1) and np.array_equal(i0, i1):
+            same = "bit-identical"
+        else:
+            rel = np.max(np.abs(m1 - m0) / np.maximum(np.abs(m0), 1e-300))
+            same = (f"metrics: {np.count_nonzero(m0 != m1)} differ, by {rel:.1e} relative "
+                    f"at most; "
+                    f"final state {'equal' if np.array_equal(x0, x1) else 'differs'}, "
+                    f"impacts {'equal' if np.array_equal(i0, i1) else 'differ'}")
+        print(f"\n{label} ({int(ev)} events)")
+        print(f"  rk4 dt=1e-6 {br * 1e3:7.2f} ms   exact old {b0 * 1e3:6.2f} ms   new "
+              f"{b1 * 1e3:6.2f} ms   new/old speed-up {b0 / b1:4.2f}x   rk4/exact "
+              f"{br / b0:4.1f}x -> {br / b1:4.1f}x   {b1 / ev * 1e9:5.0f} ns per event")
+        print(f"  prepare {tp0 * 1e3:.2f} / {tp1 * 1e3:.2f} ms   {same}")
+
+
+if __name__ == "__main__":
+    main()
