@@ -1805,6 +1805,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         n_imp += 1
                 else:
                     n_micro += 1
+            elif w_ * vb < -vimp:
+                # moving inward, faster than a capture: not a wall contact but the
+                # round-off of a segment a few ulp long just after an impact (its end
+                # a few ulp past the wall); the ball goes on, from the wall
+                yd = vb
             else:
                 yd = 0.0
             if yd != 0.0:
