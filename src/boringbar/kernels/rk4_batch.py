@@ -305,68 +305,69 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
             fz[r] = fzr
             um[r] = 1 if ok else 0
             n_staged += 0 if ok else 1
-        for r in range(nb):
-            sn0 = S0[r]
-            cn0 = C0[r]
-            fzr = fz[r]
-            if diag:
-                for i in range(n):
-                    a = i
-                    dX[a, r] = (Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
-                                + Pd[a, i, r] * X[i, r] + Pd[a, n + i, r] * X[n + i, r])
-                    a = n + i
-                    dX[a, r] = (Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
-                                + Pd[a, i, r] * X[i, r] + Pd[a, n + i, r] * X[n + i, r])
-                dX[iy, r] = 0.0
-                dX[iyd, r] = 0.0
-                if ball:
-                    for a in range(iy, nx):
+        if n_staged < nb:  # the map, unless no run takes it (every ball sticking, say)
+            for r in range(nb):
+                sn0 = S0[r]
+                cn0 = C0[r]
+                fzr = fz[r]
+                if diag:
+                    for i in range(n):
+                        a = i
+                        dX[a, r] = (Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
+                                    + Pd[a, i, r] * X[i, r] + Pd[a, n + i, r] * X[n + i, r])
+                        a = n + i
+                        dX[a, r] = (Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
+                                    + Pd[a, i, r] * X[i, r] + Pd[a, n + i, r] * X[n + i, r])
+                    dX[iy, r] = 0.0
+                    dX[iyd, r] = 0.0
+                    if ball:
+                        for a in range(iy, nx):
+                            dj = Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
+                            for q in range(nx):
+                                dj += Pd[a, q, r] * X[q, r]
+                            dX[a, r] = dj
+                else:
+                    for a in range(nx):
                         dj = Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
                         for q in range(nx):
                             dj += Pd[a, q, r] * X[q, r]
                         dX[a, r] = dj
-            else:
-                for a in range(nx):
-                    dj = Pd[a, iS, r] * sn0 + Pd[a, iC, r] * cn0 + Pd[a, iF, r] * fzr
-                    for q in range(nx):
-                        dj += Pd[a, q, r] * X[q, r]
-                    dX[a, r] = dj
-            pv = 0.0
-            for i in range(n):
-                pv += Wv[0, i, r] * X[n + i, r] * X[n + i, r]
-            if tmd:
-                rd = X[iyd, r]
+                pv = 0.0
                 for i in range(n):
-                    rd -= pA[i, r] * X[n + i, r]
-                pv += Wv[0, n, r] * rd * rd
-            for s3 in range(3):
-                for i in range(n):
-                    v = Vr[s3, i, iS, r] * sn0 + Vr[s3, i, iC, r] * cn0 + Vr[s3, i, iF, r] * fzr
-                    if diag:
-                        v += Vr[s3, i, i, r] * X[i, r] + Vr[s3, i, n + i, r] * X[n + i, r]
-                    else:
-                        for q in range(nx):
-                            v += Vr[s3, i, q, r] * X[q, r]
-                    pv += Wv[s3 + 1, i, r] * v * v
+                    pv += Wv[0, i, r] * X[n + i, r] * X[n + i, r]
                 if tmd:
-                    v = Vr[s3, n, iS, r] * sn0 + Vr[s3, n, iC, r] * cn0
-                    for q in range(nx):
-                        v += Vr[s3, n, q, r] * X[q, r]
-                    pv += Wv[s3 + 1, n, r] * v * v
-            ws_ = Fs[iS, r] * sn0 + Fs[iC, r] * cn0 + Fs[iF, r] * fzr
-            wc_ = Fc[iS, r] * sn0 + Fc[iC, r] * cn0 + Fc[iF, r] * fzr
-            for q in range(nx):
-                ws_ += Fs[q, r] * X[q, r]
-                wc_ += Fc[q, r] * X[q, r]
-            if um[r] != 0:
-                ms[L.D_VISC, r] += pv
-                ms[L.W_FORCE, r] += sn0 * ws_ + cn0 * wc_
-                if ball:
-                    ms[L.D_FRICTION, r] -= fzr * dX[iy, r]
-                    pdu = 0.0
+                    rd = X[iyd, r]
                     for i in range(n):
-                        pdu += pD[i, r] * dX[i, r]
-                    ms[L.W_NONRECIP, r] += (1.0 - sr[r]) * fzr * pdu
+                        rd -= pA[i, r] * X[n + i, r]
+                    pv += Wv[0, n, r] * rd * rd
+                for s3 in range(3):
+                    for i in range(n):
+                        v = Vr[s3, i, iS, r] * sn0 + Vr[s3, i, iC, r] * cn0 + Vr[s3, i, iF, r] * fzr
+                        if diag:
+                            v += Vr[s3, i, i, r] * X[i, r] + Vr[s3, i, n + i, r] * X[n + i, r]
+                        else:
+                            for q in range(nx):
+                                v += Vr[s3, i, q, r] * X[q, r]
+                        pv += Wv[s3 + 1, i, r] * v * v
+                    if tmd:
+                        v = Vr[s3, n, iS, r] * sn0 + Vr[s3, n, iC, r] * cn0
+                        for q in range(nx):
+                            v += Vr[s3, n, q, r] * X[q, r]
+                        pv += Wv[s3 + 1, n, r] * v * v
+                ws_ = Fs[iS, r] * sn0 + Fs[iC, r] * cn0 + Fs[iF, r] * fzr
+                wc_ = Fc[iS, r] * sn0 + Fc[iC, r] * cn0 + Fc[iF, r] * fzr
+                for q in range(nx):
+                    ws_ += Fs[q, r] * X[q, r]
+                    wc_ += Fc[q, r] * X[q, r]
+                if um[r] != 0:
+                    ms[L.D_VISC, r] += pv
+                    ms[L.W_FORCE, r] += sn0 * ws_ + cn0 * wc_
+                    if ball:
+                        ms[L.D_FRICTION, r] -= fzr * dX[iy, r]
+                        pdu = 0.0
+                        for i in range(n):
+                            pdu += pD[i, r] * dX[i, r]
+                        ms[L.W_NONRECIP, r] += (1.0 - sr[r]) * fzr * pdu
 
         # --- the others: the four RK4 stages, each a loop over the runs ---------
         if n_staged > 0:
