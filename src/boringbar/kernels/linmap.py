@@ -34,8 +34,8 @@ every harmonic step where the ball's y' has one sign at all four stages
 (and every step of the solid, TMD and locked bars, and of a frictionless
 ball), and the stage loop otherwise: a friction switch inside the step,
 y' = 0 at a stage, a regenerative cut.  The two give the same RK4 step to
-round-off (tests/test_kernel.py compares both with the NumPy reference
-stepper); the map's critical path is one short dot product per state
+round-off (tests/test_kernel.py compares the two, and both with the NumPy
+reference stepper); the map's critical path is one short dot product per state
 component instead of four dependent stage evaluations.
 """
 
@@ -48,12 +48,12 @@ from boringbar.kernels import layout as L
 from boringbar.kernels.stack import stack_ptr
 
 _NX_MAX = 2 * L.NMAX + 2
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def nz_of(n):
-    """Length of z for ``n`` modes: the state, S, C and F_b."""
-    return 2 * n + 5
+#: most entries of the tables (stack allocations in the kernels need literal sizes)
+NZ_MAX = _NX_MAX + 3
+PD_MAX = _NX_MAX * NZ_MAX
+YR_MAX = 3 * NZ_MAX
+VR_MAX = 3 * (L.NMAX + 1) * NZ_MAX
+WV_MAX = 4 * (L.NMAX + 1)
 
 
 @njit(cache=True, error_model="numpy")

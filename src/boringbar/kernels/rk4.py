@@ -25,7 +25,7 @@ at all four stages (every step of the solid, TMD and locked bars and of a
 frictionless ball) is the same RK4 step written as one affine map of the
 state, sin and cos of the forcing phase and F_b (kernels/linmap.py): its
 critical path is a short dot product per component instead of four
-dependent stage evaluations (1.4-1.8x faster per step,
+dependent stage evaluations (1.3-1.4x faster per step,
 benchmarks/bench_kernel.py).  Steps with a friction switch inside, y' = 0 or
 inside the sgn() chatter band, and regenerative cuts take the stage loop:
 the four stages as one loop over a Butcher tableau inside a single
@@ -45,7 +45,7 @@ from numba import carray, njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.interp import hermite, lerp
-from boringbar.kernels.linmap import build_map
+from boringbar.kernels.linmap import NZ_MAX, PD_MAX, VR_MAX, WV_MAX, YR_MAX, build_map
 from boringbar.kernels.stack import stack_ptr
 
 #: lengths of the stack scratch vectors (numba needs them as literal globals)
@@ -57,12 +57,6 @@ _NREV_X3 = 3 * _NREV_MAX
 _NREV_X12 = 12 * _NREV_MAX
 #: exact sin/cos resynchronisation interval of the forcing-phase recurrence
 _RESYNC = 256
-#: sizes of the step-map tables (kernels/linmap.py)
-_NZ_MAX = _NX_MAX + 3
-_PD_MAX = _NX_MAX * _NZ_MAX
-_YR_MAX = 3 * _NZ_MAX
-_VR_MAX = 3 * (_NMAX + 1) * _NZ_MAX
-_WV_MAX = 4 * (_NMAX + 1)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -188,12 +182,12 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
     iC = nx + 1
     iF = nx + 2
     tmd = case == L.TMD
-    Pd = carray(stack_ptr(_PD_MAX, np.float64), (nx, nz))
-    Yr = carray(stack_ptr(_YR_MAX, np.float64), (3, nz))
-    Vr = carray(stack_ptr(_VR_MAX, np.float64), (3, n + 1, nz))
-    Wv = carray(stack_ptr(_WV_MAX, np.float64), (4, n + 1))
-    Fs = carray(stack_ptr(_NZ_MAX, np.float64), nz)
-    Fc = carray(stack_ptr(_NZ_MAX, np.float64), nz)
+    Pd = carray(stack_ptr(PD_MAX, np.float64), (nx, nz))
+    Yr = carray(stack_ptr(YR_MAX, np.float64), (3, nz))
+    Vr = carray(stack_ptr(VR_MAX, np.float64), (3, n + 1, nz))
+    Wv = carray(stack_ptr(WV_MAX, np.float64), (4, n + 1))
+    Fs = carray(stack_ptr(NZ_MAX, np.float64), nz)
+    Fc = carray(stack_ptr(NZ_MAX, np.float64), nz)
     dX = carray(stack_ptr(_NX_MAX, np.float64), nx)
     if linear:
         build_map(n, p, dt, Pd, Yr, Vr, Wv, Fs, Fc)

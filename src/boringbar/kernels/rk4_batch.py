@@ -42,7 +42,7 @@ from numba import carray, njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.interp import hermite, lerp
-from boringbar.kernels.linmap import build_map
+from boringbar.kernels.linmap import NZ_MAX, PD_MAX, VR_MAX, WV_MAX, YR_MAX, build_map
 from boringbar.kernels.stack import stack_ptr
 
 #: most runs in one batch
@@ -57,16 +57,11 @@ _BX = BMAX * _NX_MAX
 _BM = BMAX * L.MET_SIZE
 _B4 = BMAX * 4
 _RESYNC = 256
-_NZ1 = _NX_MAX + 3
-_PD1 = _NX_MAX * _NZ1
-_YR1 = 3 * _NZ1
-_VR1 = 3 * (L.NMAX + 1) * _NZ1
-_WV1 = 4 * (L.NMAX + 1)
-_BPD = BMAX * _PD1
-_BYR = BMAX * _YR1
-_BVR = BMAX * _VR1
-_BWV = BMAX * _WV1
-_BNZ = BMAX * _NZ1
+_BPD = BMAX * PD_MAX
+_BYR = BMAX * YR_MAX
+_BVR = BMAX * VR_MAX
+_BWV = BMAX * WV_MAX
+_BNZ = BMAX * NZ_MAX
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -235,12 +230,12 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
     Wv = carray(stack_ptr(_BWV, f8), (4, n + 1, nb))
     Fs = carray(stack_ptr(_BNZ, f8), (nz, nb))
     Fc = carray(stack_ptr(_BNZ, f8), (nz, nb))
-    Pd1 = carray(stack_ptr(_PD1, f8), (nx, nz))
-    Yr1 = carray(stack_ptr(_YR1, f8), (3, nz))
-    Vr1 = carray(stack_ptr(_VR1, f8), (3, n + 1, nz))
-    Wv1 = carray(stack_ptr(_WV1, f8), (4, n + 1))
-    Fs1 = carray(stack_ptr(_NZ1, f8), nz)
-    Fc1 = carray(stack_ptr(_NZ1, f8), nz)
+    Pd1 = carray(stack_ptr(PD_MAX, f8), (nx, nz))
+    Yr1 = carray(stack_ptr(YR_MAX, f8), (3, nz))
+    Vr1 = carray(stack_ptr(VR_MAX, f8), (3, n + 1, nz))
+    Wv1 = carray(stack_ptr(WV_MAX, f8), (4, n + 1))
+    Fs1 = carray(stack_ptr(NZ_MAX, f8), nz)
+    Fc1 = carray(stack_ptr(NZ_MAX, f8), nz)
     dX = carray(stack_ptr(_BX, f8), (nx, nb))
     S0 = carray(stack_ptr(_B, f8), nb)  # sin, cos of Omega t at the step's start
     C0 = carray(stack_ptr(_B, f8), nb)
