@@ -323,29 +323,3 @@ def test_a_graze_inside_one_grid_step_is_found():
                    initial=ini, record_every=1, integrator="exact")
     assert np.max(np.abs(run.history[:, 3])) <= 0.5e-4 * (1 + 1e-9)
 
-
-@pytest.mark.parametrize("preset, kw", [("paper", {"gap": 0.1e-3, "friction": False}),
-                                        ("physical", {"gap": 0.5e-3})])
-def test_specialised_kernel_gives_the_generic_kernels_bits(preset, kw):
-    """The harmonic ball damper's specialisations (1 and 2 modes, constants folded) run the
-    same operations in the same order as the generic kernel: the same bits, impacts,
-    friction switches and all (0.05 s from rest, history every 10 us)."""
-    from boringbar.kernels import exact as E
-    from boringbar.kernels import layout as L
-    from boringbar.simulate import _setup
-
-    s = make_system("ball", preset, **kw)
-    su = _setup(s, Harmonic(20.0, 1.0), 0.05, 1e-6, None, 10, 0.5, False, "exact")
-    prep = E.prepare(su.p)
-    assert E.kernel_for(su.p, prep) is not E._exact_any
-    out = []
-    for specialised in (True, False):
-        x, rec, imp, met = su.x.copy(), su.rec.copy(), su.imp.copy(), su.met.copy()
-        t = E.run_exact(su.p, x, su.t0, su.t0 + su.n_steps * su.dt,
-                        su.t0 + su.steady_steps * su.dt, su.record_every * su.dt, rec, imp,
-                        su.stick.copy(), su.stb.copy(), met, prep=prep, dt=su.dt,
-                        specialised=specialised)
-        out.append((t, x, rec, imp, met))
-    assert out[0][4][L.N_EVENTS] > 20
-    for a, b in zip(out[0], out[1], strict=True):
-        assert np.array_equal(a, b)

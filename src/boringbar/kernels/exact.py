@@ -1163,8 +1163,8 @@ def _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met
            Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, dt_out, hist_step, tabE, tabP):
     """The kernel's body.  spec = (n modes, bar case, regen (a regenerative cut), pairs (every
     regime's eigenvalues are conjugate pairs, so one of each pair is evaluated), the number
-    of regimes per cut state): constants in the specialisations below, run-time values in
-    :func:`_exact_any`.  (One tuple: a call with more than 30 arguments compiles to
+    of regimes per cut state): run-time values in :func:`_exact_any`, constants in a
+    specialisation.  (One tuple: a call with more than 30 arguments compiles to
     ``f(*args)``, which numba cannot inline.)"""
     n, case, regen, pairs, nreg = spec
     # borrowed views of the arguments and scratch on the stack: numba reference-counts
@@ -1960,12 +1960,10 @@ def _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met
     return t
 
 
-# One generic compilation for every bar, forcing and mode count, and one per mode count for
-# the harmonic ball damper (the published bar and the physical preset, with every regime's
-# eigenvalues in conjugate pairs): with n, the case, the forcing and the pair stride
-# compile-time constants LLVM unrolls the mode loops and drops the other bars' and the
-# cut's branches (1.25-1.4x; the same operations in the same order, so the results are
-# bit-identical to the generic kernel's: tests/test_exact.py).
+# One compilation for every bar, forcing and mode count.  Specialisations with the spec
+# constant (the harmonic ball damper with 1 and 2 modes) were 1.13-1.3x faster and gave the
+# same bits, but each took 1.5-4 minutes to compile cold, more than the test suite's budget
+# (docs/performance.md); ``spec`` stays so that one can be added back in a few lines.
 @njit(cache=True, nogil=True)
 def _exact_any(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, lam, V, Vi, Z,
                D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step, tabE,
@@ -1975,37 +1973,6 @@ def _exact_any(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, 
     return _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, lam,
                   V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, dt_out, hist_step,
                   tabE, tabP)
-
-
-@njit(cache=True, nogil=True)
-def _exact_ball1(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, lam, V, Vi,
-                 Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step, tabE,
-                 tabP):
-    return _exact((1, L.BALL, False, True, 3), p, x, t0, t_end, t_steady, rec_dt, rec, imp,
-                  stick, strobe, met, lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep,
-                  bq, dt_out, hist_step, tabE, tabP)
-
-
-@njit(cache=True, nogil=True)
-def _exact_ball2(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, lam, V, Vi,
-                 Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step, tabE,
-                 tabP):
-    return _exact((2, L.BALL, False, True, 3), p, x, t0, t_end, t_steady, rec_dt, rec, imp,
-                  stick, strobe, met, lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep,
-                  bq, dt_out, hist_step, tabE, tabP)
-
-
-_BALL_BY_MODES = {1: _exact_ball1, 2: _exact_ball2}
-
-
-def kernel_for(p: np.ndarray, prep: dict):
-    """The compiled kernel that runs ``p``: a harmonic ball damper's specialisation where
-    there is one, else the generic kernel."""
-    n = int(p[L.N_MODES])
-    if (int(p[L.CASE]) == L.BALL and int(p[L.FORCING]) == L.HARMONIC and n in _BALL_BY_MODES
-            and np.all(prep["kstep"] == 2)):
-        return _BALL_BY_MODES[n]
-    return _exact_any
 
 
 @njit(cache=True, inline="always")
@@ -2075,14 +2042,12 @@ def _aux(X, tau, seg, mode, case, n, mk, x, ball):
 
 
 def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None,
-              dt=0.0, specialised=True):
+              dt=0.0):
     """Advance ``x`` exactly from ``t0`` to ``t_end``; same outputs as ``run_rk4`` (the
     steady sums are integrals, see the module docstring).  ``prep``: :func:`prepare`'s
     result, computed here if not given.  ``dt``: a regenerative cut's history step
     (H = tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the
-    unit of N_ZERO_STEPS.  ``specialised=False`` runs the generic kernel even where a
-    specialisation exists (the two give the same bits: tests/test_exact.py).  Returns the
-    time reached."""
+    unit of N_ZERO_STEPS.  Returns the time reached."""
     if prep is None:
         prep = prepare(p)
     if int(p[L.FORCING]) == L.REGENERATIVE and not dt > 0.0:
@@ -2093,9 +2058,8 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
     if int(p[L.FORCING]) == L.REGENERATIVE:
         H = history_step(float(p[L.TAU]), float(dt))
         tabE, tabP = cut_tables(prep, p, H)
-    kernel = kernel_for(p, prep) if specialised else _exact_any
-    return kernel(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
-                  stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
-                  prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
-                  prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
-                  float(dt), H, tabE, tabP)
+    return _exact_any(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
+                      stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
+                      prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
+                      prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
+                      float(dt), H, tabE, tabP)
