@@ -1158,15 +1158,16 @@ def _zeros2(ptr, n, m):
     return a
 
 
-@njit(cache=True, inline="always")
-def _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, lam, V, Vi,
-           Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, dt_out, hist_step, tabE, tabP):
-    """The kernel's body.  spec = (n modes, bar case, regen (a regenerative cut), pairs (every
-    regime's eigenvalues are conjugate pairs, so one of each pair is evaluated), the number
-    of regimes per cut state): run-time values in :func:`_exact_any`, constants in a
-    specialisation.  (One tuple: a call with more than 30 arguments compiles to
-    ``f(*args)``, which numba cannot inline.)"""
-    n, case, regen, pairs, nreg = spec
+@njit(cache=True, nogil=True)
+def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
+           tabE, tabP):
+    # one compilation for every bar, forcing and mode count: specialisations (the harmonic
+    # ball with 1 and 2 modes) were 1.13-1.3x faster with the same bits, but each took
+    # minutes to compile cold, more than the test suite's budget (docs/performance.md)
+    n = int(p[L.N_MODES])
+    case = int(p[L.CASE])
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
     # borrowed views of the arguments and scratch on the stack: numba reference-counts
     # every array argument of every call, even inlined (an atomic operation each time:
     # 40 % of the run time), but not arrays without a memory owner (kernels/views.py)
@@ -1191,7 +1192,7 @@ def _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met
     bq = borrow(bq)
     tabE = borrow(tabE)
     tabP = borrow(tabP)
-    nz = 2 * n + 2 if case == L.TMD else 2 * n  # prepare's
+    nz = lam.shape[1]
     nb = nz + 3
     ball = case == L.BALL
     mk = _zeros2(stack_ptr(_NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
@@ -1378,7 +1379,7 @@ def _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met
         if mode == FREE and ball:
             fb = -fc * sdir
         kap = kappa_stick if mode == STICK else kappa_wall
-        ks = 2 if pairs else kstep[r]
+        ks = kstep[r]
         # eigen-coordinates of the homogeneous part at t
         ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
         for j in range(nz):
@@ -1960,21 +1961,6 @@ def _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met
     return t
 
 
-# One compilation for every bar, forcing and mode count.  Specialisations with the spec
-# constant (the harmonic ball damper with 1 and 2 modes) were 1.13-1.3x faster and gave the
-# same bits, but each took 1.5-4 minutes to compile cold, more than the test suite's budget
-# (docs/performance.md); ``spec`` stays so that one can be added back in a few lines.
-@njit(cache=True, nogil=True)
-def _exact_any(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, lam, V, Vi, Z,
-               D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step, tabE,
-               tabP):
-    spec = (int(p[L.N_MODES]), int(p[L.CASE]), int(p[L.FORCING]) == L.REGENERATIVE, False,
-            nreg)
-    return _exact(spec, p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, lam,
-                  V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, dt_out, hist_step,
-                  tabE, tabP)
-
-
 @njit(cache=True, inline="always")
 def _at_wall(X, f, w_, n, mk, kappa_wall, fs, fc):
     """Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
@@ -2058,8 +2044,8 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
     if int(p[L.FORCING]) == L.REGENERATIVE:
         H = history_step(float(p[L.TAU]), float(dt))
         tabE, tabP = cut_tables(prep, p, H)
-    return _exact_any(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
-                      stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
-                      prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
-                      prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
-                      float(dt), H, tabE, tabP)
+    return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
+                  stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
+                  prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
+                  prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
+                  float(dt), H, tabE, tabP)
