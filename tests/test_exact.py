@@ -322,4 +322,3 @@ def test_a_graze_inside_one_grid_step_is_found():
     run = simulate(s, Harmonic(27.334895166275178, 0.8848664733799202), duration=0.2,
                    initial=ini, record_every=1, integrator="exact")
     assert np.max(np.abs(run.history[:, 3])) <= 0.5e-4 * (1 + 1e-9)
-
