@@ -146,12 +146,16 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
             groups.setdefault((system.kind, system.bar.n_modes), []).append(ijk)
         batches = [g[a:a + batch] for g in groups.values() for a in range(0, len(g), batch)]
     # warm the JIT once per kernel before fanning out (compilation is not
-    # thread-parallel and would otherwise be repeated)
+    # thread-parallel and would otherwise be repeated); batched, the kernel of each
+    # batch size the group's batches use (it is compiled per size: warming another
+    # size would compile one that no batch runs)
     warm = {(c.system.kind if batched else "", c.system.bar.n_modes): c for c in cases}
-    for c0 in warm.values():
+    for key, c0 in warm.items():
         if batched:
-            simulate_batch([(c0.system, Harmonic(1.0, 1.0), None)] * min(batch, len(jobs)),
-                           duration=2e-5, dt=1e-6)
+            g = groups[key]
+            for size in sorted({min(batch, len(g) - a) for a in range(0, len(g), batch)}):
+                simulate_batch([(c0.system, Harmonic(1.0, 1.0), None)] * size,
+                               duration=2e-5, dt=1e-6)
         else:
             simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6,
                      integrator=integrator)
