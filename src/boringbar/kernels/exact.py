@@ -557,6 +557,18 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
     Newton with the exact derivative, kept inside the shrinking bracket (a bisection
     whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
     Newton step below that.  Returns the end on gb's side (the event has happened)."""
+    # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
+    seg = borrow(seg)
+    q0 = borrow(q0)
+    lam = borrow(lam)
+    V = borrow(V)
+    Z = borrow(Z)
+    D = borrow(D)
+    bq = borrow(bq)
+    q = borrow(q)
+    X = borrow(X)
+    Xd = borrow(Xd)
+    mk = borrow(mk)
     ts = seg[0]
     pos = gb > 0.0
     c = c0
@@ -627,6 +639,24 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     sum_m c_m exp(mu_m tau) over mu = (lambda_r, i Omega, -i Omega, 0), so a
     product integrates to sum_ml a_m b_l G_ml, G_ml = int_0^T exp((mu_m + mu_l) tau);
     ``isum`` holds 1 / (mu_m + mu_l), precomputed per regime."""
+    # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
+    q0 = borrow(q0)
+    lam = borrow(lam)
+    VF = borrow(VF)
+    Z = borrow(Z)
+    D = borrow(D)
+    mk = borrow(mk)
+    lvis = borrow(lvis)
+    cvis = borrow(cvis)
+    mu = borrow(mu)
+    em = borrow(em)
+    G = borrow(G)
+    Cx = borrow(Cx)
+    cf = borrow(cf)
+    ca = borrow(ca)
+    cb = borrow(cb)
+    out = borrow(out)
+    isum = borrow(isum)
     nz = lam.shape[1]
     nb = nz + 3
     for k in range(nz):
@@ -752,6 +782,18 @@ def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd,
     the step's quadratic correction, W - W'^2 / (2 W'').  The value's error is then of
     order (Omega_max dt)^3 relative, far below round-off (h is 1/16 of the shortest
     period, so Omega_max dt < 4e-10): no need to locate the time to 4 ulp."""
+    # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
+    seg = borrow(seg)
+    q0 = borrow(q0)
+    lam = borrow(lam)
+    V = borrow(V)
+    Z = borrow(Z)
+    D = borrow(D)
+    bq = borrow(bq)
+    q = borrow(q)
+    X = borrow(X)
+    Xd = borrow(Xd)
+    mk = borrow(mk)
     pos = gb > 0.0
     c = c0 if a < c0 < b else 0.5 * (a + b)
     tol = 1e-9 * h
@@ -853,6 +895,20 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                dX, Xd, n, mk, f0, om):
     """The first wall or friction-switch event of a FREE ball in [a, b], from the event
     functions at the ends: (kind, time), kind -1 if none."""
+    # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
+    ev_a = borrow(ev_a)
+    ev_b = borrow(ev_b)
+    seg = borrow(seg)
+    q0 = borrow(q0)
+    lam = borrow(lam)
+    V = borrow(V)
+    Z = borrow(Z)
+    D = borrow(D)
+    bq = borrow(bq)
+    qs = borrow(qs)
+    dX = borrow(dX)
+    Xd = borrow(Xd)
+    mk = borrow(mk)
     best = b
     kind = -1
     lo = a
