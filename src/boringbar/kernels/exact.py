@@ -443,7 +443,9 @@ def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
 
 @njit(cache=True, inline="always")
 def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
-    """Event function ``kind`` (see :func:`_g`) and its time derivative at tau."""
+    """Event function ``kind`` (see :func:`_g`), its time derivative and its second
+    derivative at tau: the second only where it comes free (the walls and the cut's h),
+    NaN elsewhere."""
     ts = seg[0]
     _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd)
     if kind == EV_WEXT:
@@ -452,7 +454,7 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
         for i in range(n):
             g += mk[3, i] * X[n + i]
             dg += mk[3, i] * Xd[n + i]
-        return g, dg
+        return g, dg, math.nan
     if kind == EV_CUT or kind == EV_HEXT:
         w = 0.0
         wd = 0.0
@@ -462,9 +464,11 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
             wd += mk[3, i] * X[n + i]
             wdd += mk[3, i] * Xd[n + i]
         sv, sd = _surface(seg, tau)
+        sdd = 2.0 * seg[SEG_S + 2] + 6.0 * seg[SEG_S + 3] * tau
         if kind == EV_CUT:
-            return seg[SEG_CDIR] * (w - sv), seg[SEG_CDIR] * (wd - sd)
-        return sd - wd, 2.0 * seg[SEG_S + 2] + 6.0 * seg[SEG_S + 3] * tau - wdd
+            return (seg[SEG_CDIR] * (w - sv), seg[SEG_CDIR] * (wd - sd),
+                    seg[SEG_CDIR] * (wdd - sdd))
+        return sd - wd, sdd - wdd, math.nan
     if kind <= EV_YEXT:
         pdu = 0.0
         pdv = 0.0
@@ -478,12 +482,12 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
         yd = seg[3] + acc * tau - pdv
         ydd = acc - pda
         if kind == EV_PLUS:
-            return y - seg[9], yd
+            return y - seg[9], yd, ydd
         if kind == EV_MINUS:
-            return -seg[9] - y, -yd
+            return -seg[9] - y, -yd, -ydd
         if kind == EV_VSTOP:
-            return -seg[5] * yd, -seg[5] * ydd
-        return yd, ydd
+            return -seg[5] * yd, -seg[5] * ydd, math.nan
+        return yd, ydd, math.nan
     t = ts + tau
     f = f0 * math.sin(om * t)
     fd = f0 * om * math.cos(om * t)
@@ -504,10 +508,10 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
     F /= seg[7]
     Fd /= seg[7]
     if kind == EV_REL_NEG:
-        return F - seg[8], Fd
+        return F - seg[8], Fd, math.nan
     if kind == EV_REL_POS:
-        return -F - seg[8], -Fd
-    return seg[6] * F - seg[8], seg[6] * Fd
+        return -F - seg[8], -Fd, math.nan
+    return seg[6] * F - seg[8], seg[6] * Fd, math.nan
 
 
 @njit(cache=True, inline="always")
@@ -556,7 +560,9 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
     """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
     Newton with the exact derivative, kept inside the shrinking bracket (a bisection
     whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
-    Newton step below that.  Returns the end on gb's side (the event has happened)."""
+    Newton step below that, or a step whose own error, |g''| s^2 / (2 |g'|) to leading
+    order, is below a quarter of that (where g'' comes free: usually one evaluation
+    fewer).  Returns the end on gb's side (the event has happened)."""
     # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
     seg = borrow(seg)
     q0 = borrow(q0)
@@ -585,7 +591,7 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
             slow = 0
             if not (a < c < b):
                 break
-        g, dg = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om)
+        g, dg, ddg = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om)
         if g == 0.0:
             return c
         if (g > 0.0) == pos:
@@ -602,6 +608,10 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
             cn = c - g / dg
             if abs(cn - c) <= tol and a <= cn <= b:
                 return b if pos == (g > 0.0) else min(b, cn + tol)
+            # the root is within |g''| s^2 / (2 |g'|) < tol / 4 of cn (NaN: not known)
+            s_ = cn - c
+            if a <= cn <= b and abs(ddg) * s_ * s_ <= 0.5 * tol * abs(dg):
+                return min(b, cn + tol)
         c = cn
     return b
 
@@ -778,10 +788,12 @@ def _quad(a, b, G, nb):
 @njit(cache=True)
 def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
     """W at its extremum in [a, b], where W' changes sign (ga, gb: W' at a, b): Newton on W'
-    from c0, kept inside the shrinking bracket, until the step is below 1e-9 h; then W plus
-    the step's quadratic correction, W - W'^2 / (2 W'').  The value's error is then of
-    order (Omega_max dt)^3 relative, far below round-off (h is 1/16 of the shortest
-    period, so Omega_max dt < 4e-10): no need to locate the time to 4 ulp."""
+    from c0, kept inside the shrinking bracket, until the step s is below 1e-6 h; then W
+    plus the step's quadratic correction, W - W'^2 / (2 W'').  The value's error is then
+    of order |W^(3)| s^3 / 6, (Omega_max s)^3 / 6 relative, far below round-off (h is
+    1/16.382 of the shortest period, so Omega_max s < 4e-7 and the error below 1e-20):
+    no need to locate the time to 4 ulp.  From the Hermite start that takes two
+    evaluations."""
     # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
     seg = borrow(seg)
     q0 = borrow(q0)
@@ -796,7 +808,7 @@ def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd,
     mk = borrow(mk)
     pos = gb > 0.0
     c = c0 if a < c0 < b else 0.5 * (a + b)
-    tol = 1e-9 * h
+    tol = 1e-6 * h
     w = 0.0
     for _ in range(100):
         _eval2(r, q0, seg, c, om, lam, V, ks, Z, D, bq, q, X, Xd)
