@@ -549,7 +549,11 @@ def _hermite(a, b, p0, p1, d0, d1, order):
             lo = x
         else:
             hi = x
-        x = x - f / df if df != 0.0 else 0.5 * (lo + hi)
+        xn = x - f / df if df != 0.0 else 0.5 * (lo + hi)
+        if abs(xn - x) <= 1e-13:  # converged (the cubic is only a starting point)
+            x = xn
+            break
+        x = xn
     if not (0.0 < x < 1.0):
         x = 0.5 * (lo + hi)
     return a + x * h
@@ -641,14 +645,15 @@ def _phi1_real(z, T):
 
 
 @njit(cache=True)
-def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
+def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
                mu, em, G, Cx, cf, ca, cb, out, isum, steady):
     """Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
     sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u']
     (the steady-only ones, 2-4, only if ``steady``).  Every quantity is
     sum_m c_m exp(mu_m tau) over mu = (lambda_r, i Omega, -i Omega, 0), so a
     product integrates to sum_ml a_m b_l G_ml, G_ml = int_0^T exp((mu_m + mu_l) tau);
-    ``isum`` holds 1 / (mu_m + mu_l), precomputed per regime."""
+    ``isum`` holds 1 / (mu_m + mu_l), precomputed per regime; ``ph`` = exp(i Omega ts),
+    the segment's forcing phasor at its start (the caller's)."""
     # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
     q0 = borrow(q0)
     lam = borrow(lam)
@@ -697,17 +702,17 @@ def _integrals(r, q0, ts, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
                 g = (em[a] * em[b] - 1.0) * isum[r, a, b]
             G[a, b] = g
             G[b, a] = g
-    ph = cmath.exp(1j * om * ts)
+    ph2 = -0.5j * ph  # a sine's phasors: Im(z e^{i Omega t}) = (z ph2) e^{..} + conj; no division
     for j in range(nz):
         for k in range(nz):
             Cx[j, k] = VF[r, j, k] * q0[k]
-        zz = Z[r, j] * ph / 2j
+        zz = Z[r, j] * ph2
         Cx[j, nz] = zz
         Cx[j, nz + 1] = zz.conjugate()
         Cx[j, nz + 2] = fb * D[r, j]
     for k in range(nb):
         cf[k] = 0.0
-    cf[nz] = f0 * ph / 2j
+    cf[nz] = f0 * ph2
     cf[nz + 1] = cf[nz].conjugate()
     # work of the force: f psi_L . u' (f has only the terms nz, nz + 1)
     for k in range(nb):
@@ -1848,7 +1853,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     n_zero_steps += je - js + 1
                     last_zero_step = je
         else:
-            _integrals(r, q0, t, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
+            _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
                        kappa_stick if (ball and mode == STICK) else 0.0, sr,
                        mu, em, G, Cx, cf, ca, cb, out, isum, steady)
         w_force += out[0]
