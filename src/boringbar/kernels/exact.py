@@ -621,39 +621,45 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
 
 
 @njit(cache=True, inline="always")
-def _phi1(z, T):
-    """int_0^T exp(z tau / T) dtau = T (e^z - 1) / z."""
-    if abs(z) < 0.125:  # series: 12 terms reach 1e-17
-        s = 0.0 + 0.0j
-        for k in range(13, 1, -1):
-            s = (s * z + 1.0) * _RECIP[k]
-        s = s * z + 1.0
-        return T * s
-    return T * (cmath.exp(z) - 1.0) / z
-
-
-@njit(cache=True, inline="always")
-def _phi1_real(z, T):
-    """:func:`_phi1` for a real z (the same operations on the real parts)."""
-    if z == 0.0:
-        return T
-    s = 0.0
-    for k in range(13, 1, -1):
+def _phi1s(z, T, z2):
+    """int_0^T exp(z tau / T) dtau = T (e^z - 1) / z by its series, for |z|^2 = z2 < 1/64
+    (where the closed form cancels), with as many terms as |z| needs: the first term left
+    out, |z|^(K+1) / (K+2)!, is below 3.1e-18."""
+    top = 11 if z2 > 9e-4 else (8 if z2 > 2.5e-5 else 6)
+    s = 0.0 + 0.0j
+    for k in range(top, 1, -1):
         s = (s * z + 1.0) * _RECIP[k]
     s = s * z + 1.0
     return T * s
 
 
+@njit(cache=True, inline="always")
+def _conj_index(k, nz, ks):
+    """The basis function conjugate to exp(mu_k tau): the other of a conjugate pair
+    (ks = 2), -i Omega for i Omega and back, itself for 0 (and for all with ks = 1)."""
+    if k < nz:
+        return k ^ 1 if ks == 2 else k
+    if k == nz:
+        return nz + 1
+    if k == nz + 1:
+        return nz
+    return k
+
+
 @njit(cache=True)
 def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
-               mu, em, G, Cx, cf, ca, cb, out, isum, steady):
+               mu, em, G, Cx, cf, ca, cb, out, isum, steady, ks):
     """Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
     sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u']
     (the steady-only ones, 2-4, only if ``steady``).  Every quantity is
     sum_m c_m exp(mu_m tau) over mu = (lambda_r, i Omega, -i Omega, 0), so a
     product integrates to sum_ml a_m b_l G_ml, G_ml = int_0^T exp((mu_m + mu_l) tau);
     ``isum`` holds 1 / (mu_m + mu_l), precomputed per regime; ``ph`` = exp(i Omega ts),
-    the segment's forcing phasor at its start (the caller's)."""
+    the segment's forcing phasor at its start (the caller's); ``ks`` = 2 when the
+    eigenvalues come in adjacent conjugate pairs.  G is conjugate-symmetric (G of the
+    conjugate basis functions is conj(G)), so only one of each conjugate entry is
+    computed; where |mu_m + mu_l| T < 1/8 the closed form would cancel, and a series
+    (complex) or expm1 (real) takes its place."""
     # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
     q0 = borrow(q0)
     lam = borrow(lam)
@@ -691,15 +697,26 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     em[nz + 2] = 1.0
     lim = 0.015625 / (T * T)  # |mu_m + mu_l| T < 1/8: the series
     for a in range(nb):
+        ja = _conj_index(a, nz, ks)
         for b in range(a, nb):
-            s = mu[a] + mu[b]
-            if s.imag == 0.0 and s.real * s.real < lim:
-                # a conjugate pair, or the forcing's two terms, or 0: a real series
-                g = _phi1_real(s.real * T, T) + 0.0j
-            elif s.real * s.real + s.imag * s.imag < lim:
-                g = _phi1(s * T, T)
+            jb = _conj_index(b, nz, ks)
+            lo = min(ja, jb)
+            hi = max(ja, jb)
+            if lo < a or (lo == a and hi < b):
+                # the conjugate entry, already computed: G is conjugate-symmetric
+                g = G[lo, hi].conjugate()
             else:
-                g = (em[a] * em[b] - 1.0) * isum[r, a, b]
+                s = mu[a] + mu[b]
+                if s.imag == 0.0:
+                    # a conjugate pair, or the forcing's two terms, or 0: real
+                    x = s.real * T
+                    g = (T * math.expm1(x) / x if x != 0.0 else T) + 0.0j
+                else:
+                    z2 = s.real * s.real + s.imag * s.imag
+                    if z2 < lim:
+                        g = _phi1s(s * T, T, z2 * T * T)
+                    else:
+                        g = (em[a] * em[b] - 1.0) * isum[r, a, b]
             G[a, b] = g
             G[b, a] = g
     ph2 = -0.5j * ph  # a sine's phasors: Im(z e^{i Omega t}) = (z ph2) e^{..} + conj; no division
@@ -1855,7 +1872,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         else:
             _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
                        kappa_stick if (ball and mode == STICK) else 0.0, sr,
-                       mu, em, G, Cx, cf, ca, cb, out, isum, steady)
+                       mu, em, G, Cx, cf, ca, cb, out, isum, steady, ks)
         w_force += out[0]
         d_visc += out[1]
         w_nr += out[5]
