@@ -268,13 +268,19 @@ def prepare(p: np.ndarray) -> dict:
         row[n:2 * n] = -pA
         lv.append(row)
         cv.append(p[L.TMD_C])
+    # the bounds on |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are
+    # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants
+    bnd = np.empty((R, 2, nz + 1))
+    for row, psi in ((0, pD), (1, pL)):
+        bnd[:, row, :nz] = np.abs(lam) ** 4 * np.abs(np.einsum("i,rik->rk", psi, V[:, :n, :]))
+        bnd[:, row, nz] = om ** 4 * np.abs(Z[:, :n] @ psi)
     mu = np.concatenate([lam, np.tile([1j * om, -1j * om, 0.0], (R, 1))], axis=1)
     ssum = mu[:, :, None] + mu[:, None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
         isum = np.where(ssum != 0, 1.0 / np.where(ssum != 0, ssum, 1.0), 0.0)
     return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "Vi": Vi, "Z": Z, "D": D,
             "eh": np.exp(lam * h), "h": h, "lvis": np.array(lv), "cvis": np.array(cv),
-            "isum": isum.astype(complex), "bq": bq, "nreg": nreg}
+            "isum": isum.astype(complex), "bq": bq, "nreg": nreg, "bnd": bnd}
 
 
 # --- the kernel ----------------------------------------------------------------------------
@@ -1251,7 +1257,7 @@ def _zeros2(ptr, n, m):
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
-           tabE, tabP):
+           tabE, tabP, bnd):
     # one compilation for every bar, forcing and mode count: specialisations (the harmonic
     # ball with 1 and 2 modes) were 1.13-1.3x faster with the same bits, but each took
     # minutes to compile cold, more than the test suite's budget (docs/performance.md)
@@ -1282,6 +1288,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     bq = borrow(bq)
     tabE = borrow(tabE)
     tabP = borrow(tabP)
+    bnd = borrow(bnd)
     nz = lam.shape[1]
     nb = nz + 3
     ball = case == L.BALL
@@ -1452,6 +1459,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     n_zero = 0
 
     rot = cmath.exp(1j * om * h) if om != 0.0 else 1.0 + 0.0j  # the grid's phase step
+    ph_next = 1.0 + 0.0j
+    ph_next_ok = False
     t = t0
     while t < t_end:
         if n_ev >= MAX_EVENTS:
@@ -1471,7 +1480,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         kap = kappa_stick if mode == STICK else kappa_wall
         ks = kstep[r]
         # eigen-coordinates of the homogeneous part at t
-        ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
+        if ph_next_ok:
+            ph = ph_next  # exp(i Omega t), from the event's evaluation (the same expression)
+        else:
+            ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
+        ph_next_ok = False
         for j in range(nz):
             dX[j] = X[j] - ((Z[r, j] * ph).imag + fb * D[r, j])
         for k in range(nz):
@@ -1549,14 +1562,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         # a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
         b4 = 0.0
         if ball:
-            zd = 0.0 + 0.0j
-            for i in range(n):
-                zd += mk[4, i] * Z[r, i]
-            b4 = om ** 4 * abs(zd)
+            b4 = bnd[r, 0, nz]  # Omega^4 |psi_d . Z| (prepare's bnd)
             for k in range(nz):
-                vd = 0.0 + 0.0j
-                for i in range(n):
-                    vd += mk[4, i] * Vfull[r, i, k]
                 qk = q0[k]
                 if incut:
                     # minus the polynomial particular solution P of q' = lambda q + g(tau)
@@ -1567,20 +1574,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     p2 = (3.0 * p3 - gk * seg[SEG_S + 2]) / lk
                     p1 = (2.0 * p2 - gk * seg[SEG_S + 1]) / lk
                     qk = qk - (p1 - gk * seg[SEG_S]) / lk
-                b4 += abs(lam[r, k]) ** 4 * abs(vd * qk)
+                b4 += bnd[r, 0, k] * abs(qk)  # |lambda_k|^4 |psi_d . V_k| |q_k|
         # the same bound on |W^(4)| = |psi_L . u^(4)| in the steady window under harmonic
         # forcing: a W' = 0 extremum is located only where it may beat the running extremes
         bw4 = -1.0
         if steady and not regen:
-            zw = 0.0 + 0.0j
-            for i in range(n):
-                zw += mk[3, i] * Z[r, i]
-            bw4 = om ** 4 * abs(zw)
+            bw4 = bnd[r, 1, nz]
             for k in range(nz):
-                vw = 0.0 + 0.0j
-                for i in range(n):
-                    vw += mk[3, i] * Vfull[r, i, k]
-                bw4 += abs(lam[r, k]) ** 4 * abs(vw * q0[k])
+                bw4 += bnd[r, 1, k] * abs(q0[k])
         seg[0] = t
         seg[1] = fb
         seg[2] = y + pdu  # the ball's absolute position and velocity
@@ -1735,7 +1736,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     kind = EV_CUT
             if kind >= 0:
                 b = best
-                _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
+                ph_next = _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
                 ev_kind = kind
                 tau_ev = b
             # --- outputs on (a, b]
@@ -1910,6 +1911,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
             continue
         n_ev += 1
+        # the next segment starts at t + T = seg[0] + T, where the event's evaluation was
+        ph_next_ok = om != 0.0
         f_ev = _force(seg, T, X, n, mk, f0, om)  # the tip force at the event
         if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
             n_zero += 1
@@ -2138,4 +2141,4 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
                   stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
                   prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
                   prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
-                  float(dt), H, tabE, tabP)
+                  float(dt), H, tabE, tabP, prep["bnd"])
