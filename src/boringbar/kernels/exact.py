@@ -209,8 +209,9 @@ def prepare(p: np.ndarray) -> dict:
                 c[n:] = -sr * pD / M  # the bar's reaction to a unit F_b
             regimes.append((A, np.concatenate([np.zeros(n), pL / M]), c))
             if case == L.BALL:
-                regimes.append(coupled(sr))
-                regimes.append(coupled(1.0))
+                stick = coupled(sr)
+                regimes.append(stick)
+                regimes.append(stick if sr == 1.0 else coupled(1.0))  # contact: s = 1
     nreg = len(regimes)
     if int(p[L.FORCING]) == L.REGENERATIVE:
         # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
@@ -260,7 +261,7 @@ def prepare(p: np.ndarray) -> dict:
     fastest = max(float(np.max(np.abs(lam))), om)
     h = 2 * math.pi / fastest / GRID_PER_PERIOD
     # dashpots: D_visc = sum_d c_d int (l_d . X)^2 dt
-    lv = [np.eye(nz)[n + i] for i in range(n)]
+    lv = list(np.eye(nz)[n:2 * n])
     cv = list(C)
     if case == L.TMD:
         row = np.zeros(nz)
@@ -271,9 +272,9 @@ def prepare(p: np.ndarray) -> dict:
     # the bounds on |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are
     # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants
     bnd = np.empty((R, 2, nz + 1))
-    for row, psi in ((0, pD), (1, pL)):
-        bnd[:, row, :nz] = np.abs(lam) ** 4 * np.abs(np.einsum("i,rik->rk", psi, V[:, :n, :]))
-        bnd[:, row, nz] = om ** 4 * np.abs(Z[:, :n] @ psi)
+    psis = np.array([pD, pL])
+    bnd[:, :, :nz] = np.abs(lam[:, None, :]) ** 4 * np.abs(psis @ V[:, :n, :])
+    bnd[:, :, nz] = om ** 4 * np.abs(Z[:, :n] @ psis.T)
     mu = np.concatenate([lam, np.tile([1j * om, -1j * om, 0.0], (R, 1))], axis=1)
     ssum = mu[:, :, None] + mu[:, None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
