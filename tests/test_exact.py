@@ -62,6 +62,30 @@ def test_steady_amplitude_is_the_frequency_response(bar, ratio):
     assert run.energy["balance_relative"] == pytest.approx(0.0, abs=1e-12)
 
 
+def test_overdamped_absorber_mode_is_integrated_without_conjugate_pairs():
+    """A TMD damped at 3x its critical value has two real eigenvalues beside the complex
+    pairs, so prepare does not pair them (kstep 1) and the segment integrals may not use
+    the conjugate symmetry of a paired basis (a complex lambda - i Omega is then not
+    the conjugate of lambda + i Omega): max |W| is the frequency response, the energy
+    balance closes.  (With that symmetry wrongly applied it was off by 5.0e-5.)"""
+    import dataclasses
+
+    from boringbar.kernels.exact import prepare
+    from boringbar.simulate import _setup
+
+    s = make_system("tmd", "physical")
+    d = s.damper
+    s = dataclasses.replace(s, damper=dataclasses.replace(
+        d, damping=3.0 * 2.0 * math.sqrt(d.stiffness * d.mass)))
+    f = Harmonic(10.0, 1.0)
+    prep = prepare(_setup(s, f, 0.01, 1e-6, None, 0, 0.8, False, "exact").p)
+    assert list(prep["kstep"]) == [1] and np.any(prep["lam"][0].imag != 0.0)
+    run = simulate(s, f, duration=2.0, steady_fraction=0.1, integrator="exact")
+    g = abs(complex(tip_frf(s.bar, s.reference_frequency, tmd=s.damper)))
+    assert run.metrics["max_abs_tip_m"] == pytest.approx(10.0 * g, rel=1e-10)  # 3e-16
+    assert run.energy["balance_relative"] == pytest.approx(0.0, abs=1e-12)  # 3.4e-15
+
+
 # --- the Masri-Caughey orbit ---------------------------------------------------------------
 @pytest.fixture(scope="module")
 def orbit_case():

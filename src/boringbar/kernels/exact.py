@@ -642,10 +642,15 @@ def _phi1s(z, T, z2):
 
 @njit(cache=True, inline="always")
 def _conj_index(k, nz, ks):
-    """The basis function conjugate to exp(mu_k tau): the other of a conjugate pair
-    (ks = 2), -i Omega for i Omega and back, itself for 0 (and for all with ks = 1)."""
+    """The basis function conjugate to exp(mu_k tau) when every eigenvalue has its
+    conjugate beside it (ks = 2): the other of its pair, -i Omega for i Omega and back,
+    itself for 0.  With ks = 1 (an overdamped mode among the others: a complex lambda_k
+    may have no conjugate in the basis, and lambda_k - i Omega is then not conjugate
+    to lambda_k + i Omega) every function is its own, and G is computed whole."""
+    if ks != 2:
+        return k
     if k < nz:
-        return k ^ 1 if ks == 2 else k
+        return k ^ 1
     if k == nz:
         return nz + 1
     if k == nz + 1:
@@ -1260,8 +1265,9 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
            tabE, tabP, bnd):
     # one compilation for every bar, forcing and mode count: specialisations (the harmonic
-    # ball with 1 and 2 modes) were 1.13-1.3x faster with the same bits, but each took
-    # minutes to compile cold, more than the test suite's budget (docs/performance.md)
+    # ball with 1 and 2 modes) were 1.13-1.35x faster with the same bits, but each took
+    # minutes to compile cold (the 1-mode one 220 s), more than the test suite's budget
+    # allows (docs/performance.md)
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     regen = int(p[L.FORCING]) == L.REGENERATIVE
