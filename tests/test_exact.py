@@ -11,6 +11,7 @@ are quoted beside each tolerance.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -21,6 +22,8 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.linear import tip_frf
 from boringbar.analysis.masri_caughey import two_impact_orbit
 from boringbar.dampers import Friction
+from boringbar.kernels.exact import prepare
+from boringbar.simulate import _setup
 
 
 # --- linear cases: closed forms ----------------------------------------------------------
@@ -68,11 +71,6 @@ def test_overdamped_absorber_mode_is_integrated_without_conjugate_pairs():
     the conjugate symmetry of a paired basis (a complex lambda - i Omega is then not
     the conjugate of lambda + i Omega): max |W| is the frequency response, the energy
     balance closes.  (With that symmetry wrongly applied it was off by 5.0e-5.)"""
-    import dataclasses
-
-    from boringbar.kernels.exact import prepare
-    from boringbar.simulate import _setup
-
     s = make_system("tmd", "physical")
     d = s.damper
     s = dataclasses.replace(s, damper=dataclasses.replace(
