@@ -54,7 +54,9 @@ twice its error bound h^4 max|y^(4)| / 384 (max|y^(4)| bounded per segment
 from the closed form), comes within reach of a wall, the step is searched
 again on NSUB sub-steps.  A segment never starts past a wall (y(0) is
 clamped for the search).  Not guarded: an excursion of F_req across F_s and
-back inside one grid step.
+back inside one grid step.  A free ball with more than one mode steps 2 h,
+4 h, ... where Taylor bounds (|y'''|, |W'''| bounded per segment) prove that
+the step holds no event and no new extremum (docs/exact.md, "Longer steps").
 
 Metrics: the same vector as the RK4 kernel, but the steady sums are exact
 integrals over the steady window [t_steady, t_end]: SUM_W2 = int W^2 dt,
@@ -65,9 +67,9 @@ loss, int sum C_i u_i'^2 dt (+ the absorber's dashpot), are integrals of
 products of exponentials, done in closed form per segment; friction
 dissipation is -F_b (y(t_e) - y(t_s)) per sliding segment; the
 non-reciprocal work (1 - s) int F_b psi_d . u' dt is closed form too.  The
-balance then closes to round-off.  Only SUM_AUX2 (the ball's or absorber's
-RMS) uses the endpoint-corrected trapezoid rule on the grid (O(h^4)),
-because the ball's parabola is outside the exponential basis.  Maxima of
+balance then closes to round-off.  The ball's int y^2 (SUM_AUX2) is closed
+form too (a parabola minus exponentials: phi_j functions); only an absorber's
+stroke (TMD) uses the endpoint-corrected trapezoid rule on the grid (O(h^4)).  Maxima of
 |W| are located exactly (W' = 0 roots on the grid); maxima of |aux| are
 taken on the grid and at events.
 
@@ -99,6 +101,9 @@ from boringbar.kernels.views import borrow
 #: events half a forcing period apart (the symmetric two-impact orbit, started at an impact)
 #: do not fall on grid points, where the graze guard would search the step again for nothing
 GRID_PER_PERIOD = 16.382
+#: step lengths of the grid of a free ball: h, 2 h, 4 h, 8 h; a step longer than h is taken
+#: only where Taylor bounds prove that no event and no new extremum can fall in it
+GRID_LEVELS = 4
 #: most events in one run before it stops with EXACT_STATUS = 1
 MAX_EVENTS = 50_000_000
 #: consecutive zero-length events (shorter than 1e-14 (|t| + h)) before a run stops with
@@ -111,10 +116,10 @@ _NB_MAX = _NZ_MAX + 3
 _NB_MAX2 = _NB_MAX * _NB_MAX
 _NZB_MAX = _NZ_MAX * _NB_MAX
 _NMAX6 = 6 * L.NMAX
+_DDC = 4 * (L.NMAX + 2)
 
 FREE, STICK, CONTACT = 0, 1, 2
-_RECIP = (0.0, 1.0, 1 / 2, 1 / 3, 1 / 4, 1 / 5, 1 / 6, 1 / 7, 1 / 8, 1 / 9, 1 / 10, 1 / 11,
-          1 / 12, 1 / 13)
+_RECIP = (0.0,) + tuple(1.0 / k for k in range(1, 24))  # 1 / k
 _RFACT = tuple(1.0 / math.factorial(k) for k in range(20))  # 1 / k!
 # event kinds; an event happens where g goes from <= 0 to > 0
 EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WEXT = range(8)
@@ -270,17 +275,34 @@ def prepare(p: np.ndarray) -> dict:
         lv.append(row)
         cv.append(p[L.TMD_C])
     # the bounds on |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are
-    # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants
-    bnd = np.empty((R, 2, nz + 1))
+    # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants;
+    # rows 2 and 3 the same with the third powers, for |y'''| and |W'''|
+    bnd = np.empty((R, 4, nz + 1))
     psis = np.array([pD, pL])
-    bnd[:, :, :nz] = np.abs(lam[:, None, :]) ** 4 * np.abs(psis @ V[:, :n, :])
-    bnd[:, :, nz] = om ** 4 * np.abs(Z[:, :n] @ psis.T)
+    pv = np.abs(psis @ V[:, :n, :])
+    pz = np.abs(Z[:, :n] @ psis.T)
+    al = np.abs(lam[:, None, :])
+    bnd[:, :2, :nz] = al ** 4 * pv
+    bnd[:, :2, nz] = om ** 4 * pz
+    bnd[:, 2:, :nz] = al ** 3 * pv
+    bnd[:, 2:, nz] = om ** 3 * pz
+    hl = h * 2.0 ** np.arange(GRID_LEVELS)
+    # the longest step worth trying per regime: 2^levmax h, where 2^levmax is how many times
+    # faster the fastest eigenvalue is than the slower of the forcing and the slowest one
+    # (one retained mode: h already fits it, no longer step)
+    al1 = np.abs(lam)
+    slow = np.maximum(np.min(np.where(al1 > 0, al1, np.inf), axis=1), om)
+    with np.errstate(divide="ignore"):
+        ratio = np.max(al1, axis=1) / slow
+    levmax = np.clip(np.floor(np.log2(np.maximum(ratio, 1.0))), 0, GRID_LEVELS - 1)
     mu = np.concatenate([lam, np.tile([1j * om, -1j * om, 0.0], (R, 1))], axis=1)
     ssum = mu[:, :, None] + mu[:, None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
         isum = np.where(ssum != 0, 1.0 / np.where(ssum != 0, ssum, 1.0), 0.0)
-    return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "Vi": Vi, "Z": Z, "D": D,
-            "eh": np.exp(lam * h), "h": h, "lvis": np.array(lv), "cvis": np.array(cv),
+    return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "levmax": levmax.astype(np.int64),
+            "Vi": Vi, "Z": Z, "D": D,
+            "eh": np.exp(lam[:, None, :] * hl[None, :, None]), "h": h, "lvis": np.array(lv),
+            "cvis": np.array(cv),
             "isum": isum.astype(complex), "bq": bq, "nreg": nreg, "bnd": bnd}
 
 
@@ -641,6 +663,35 @@ def _phi1s(z, T, z2):
 
 
 @njit(cache=True, inline="always")
+def _phij(z, ez, iz, phj):
+    """phj[j] = phi_j(z) = int_0^1 s^j exp(z s) ds, j = 0, 1, 2 (ez = exp(z), iz = 1 / z):
+    the upward recurrence phi_j = (e^z - j phi_(j-1)) / z for |z| >= 1, the series
+    sum_m z^m / (m! (m + j + 1)) below (where the recurrence cancels), to the first
+    term below 1e-18."""
+    if z.real * z.real + z.imag * z.imag >= 1.0:
+        f0 = (ez - 1.0) * iz
+        f1 = (ez - f0) * iz
+        phj[0] = f0
+        phj[1] = f1
+        phj[2] = (ez - 2.0 * f1) * iz
+        return
+    term = 1.0 + 0.0j
+    f0 = 0.0 + 0.0j
+    f1 = 0.0 + 0.0j
+    f2 = 0.0 + 0.0j
+    for mm in range(20):
+        f0 += term * _RECIP[mm + 1]
+        f1 += term * _RECIP[mm + 2]
+        f2 += term * _RECIP[mm + 3]
+        term = term * z * _RECIP[mm + 1]
+        if term.real * term.real + term.imag * term.imag < 1e-36:
+            break
+    phj[0] = f0
+    phj[1] = f1
+    phj[2] = f2
+
+
+@njit(cache=True, inline="always")
 def _conj_index(k, nz, ks):
     """The basis function conjugate to exp(mu_k tau) when every eigenvalue has its
     conjugate beside it (ks = 2): the other of its pair, -i Omega for i Omega and back,
@@ -660,11 +711,12 @@ def _conj_index(k, nz, ks):
 
 @njit(cache=True)
 def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
-               mu, em, G, Cx, cf, ca, cb, out, isum, steady, ks):
+               mu, em, G, Cx, cf, ca, cb, out, isum, steady, ks, yfree, p0, p1, p2, phj):
     """Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
-    sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u']
-    (the steady-only ones, 2-4, only if ``steady``).  Every quantity is
-    sum_m c_m exp(mu_m tau) over mu = (lambda_r, i Omega, -i Omega, 0), so a
+    sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
+    (the steady-only ones, 2-4 and 6, only if ``steady``; 6 only if ``yfree``: a free
+    ball, whose y = P(tau) - psi_d . u, P = p0 + p1 tau + p2 tau^2 its absolute position).
+    Every quantity is sum_m c_m exp(mu_m tau) over mu = (lambda_r, i Omega, -i Omega, 0), so a
     product integrates to sum_ml a_m b_l G_ml, G_ml = int_0^T exp((mu_m + mu_l) tau);
     ``isum`` holds 1 / (mu_m + mu_l), precomputed per regime; ``ph`` = exp(i Omega ts),
     the segment's forcing phasor at its start (the caller's); ``ks`` = 2 when the
@@ -690,6 +742,7 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     cb = borrow(cb)
     out = borrow(out)
     isum = borrow(isum)
+    phj = borrow(phj)
     nz = lam.shape[1]
     nb = nz + 3
     for k in range(nz):
@@ -794,6 +847,31 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     for k in range(nb):
         w1 += (ca[k] * G[k, nb - 1]).real
     out[3] = w1
+    if not yfree:
+        return
+    # int y^2 = int P^2 - 2 int P psi_d.u + int (psi_d.u)^2, with
+    # int_0^T tau^j exp(mu tau) = T^(j+1) phi_j(mu T), phi_j(z) = int_0^1 s^j e^(z s) ds
+    for k in range(nb):
+        s = 0.0 + 0.0j
+        for i in range(n):
+            s += mk[4, i] * Cx[i, k]
+        cb[k] = s
+    uu = _quad_sym(cb, G, nb)
+    cross = 0.0
+    for k in range(nb):
+        jk = _conj_index(k, nz, ks)
+        if jk < k:
+            continue  # the conjugate of an earlier term: counted there
+        if k == nb - 1:  # mu = 0: phi_j = 1 / (j + 1)
+            v = cb[k] * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))
+        else:
+            # 1 / mu_k = 2 isum[r, k, k], precomputed: no division
+            _phij(mu[k] * T, em[k], 2.0 * isum[r, k, k] / T, phj)
+            v = cb[k] * T * (p0 * phj[0] + T * (p1 * phj[1] + T * p2 * phj[2]))
+        cross += v.real if jk == k else 2.0 * v.real
+    pp = T * (p0 * p0 + T * (p0 * p1 + T * ((p1 * p1 + 2.0 * p0 * p2) / 3.0
+                                            + T * (0.5 * p1 * p2 + 0.2 * T * p2 * p2))))
+    out[6] = pp - 2.0 * cross + uu
 
 
 @njit(cache=True, inline="always")
@@ -867,6 +945,21 @@ def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd,
         cn = c + step
         c = cn if a < cn < b else 0.5 * (a + b)
     return w
+
+
+@njit(cache=True, inline="always")
+def _quad_range(p, d, dd, s):
+    """(lowest, highest) value of p + d x + dd x^2 / 2 on [0, s]."""
+    p1 = p + s * (d + 0.5 * dd * s)
+    lo = min(p, p1)
+    hi = max(p, p1)
+    if dd != 0.0:
+        x = -d / dd
+        if 0.0 < x < s:
+            v = p + 0.5 * d * x
+            lo = min(lo, v)
+            hi = max(hi, v)
+    return lo, hi
 
 
 #: sub-steps of a grid step in which the bound on y^(4) allows an undetected graze
@@ -1263,7 +1356,7 @@ def _zeros2(ptr, n, m):
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
-           tabE, tabP, bnd):
+           tabE, tabP, bnd, levmax):
     # one compilation for every bar, forcing and mode count: specialisations (the harmonic
     # ball with 1 and 2 modes) were 1.13-1.35x faster with the same bits, but each took
     # minutes to compile cold (the 1-mode one 220 s), more than the test suite's budget
@@ -1292,6 +1385,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     isum = borrow(isum)
     Vfull = borrow(Vfull)
     kstep = borrow(kstep)
+    levmax = borrow(levmax)
     bq = borrow(bq)
     tabE = borrow(tabE)
     tabP = borrow(tabP)
@@ -1323,6 +1417,16 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     for i in range(n):
         spd += mk[4, i] * mk[4, i] / mk[0, i]
     kappa_stick = (1.0 / m + sr * spd) if m > 0.0 else 1.0
+    # psi . u'' of a free ball's bar from its state, force f and F_b: rows 0 (psi_d) and 1
+    # (psi_L) hold the coefficients of u_i, then of f and F_b; rows 2 and 3 those of u_i'
+    ddc = _zeros2(stack_ptr(_DDC, np.float64), 4, n + 2)
+    for i in range(n):
+        for row in range(2):
+            pr = mk[4 - row, i] / mk[0, i]  # psi_d,i / M_i, then psi_L,i / M_i
+            ddc[row, i] = -pr * mk[1, i]
+            ddc[row + 2, i] = -pr * mk[2, i]
+            ddc[row, n] += pr * mk[3, i]
+            ddc[row, n + 1] -= pr * sr * mk[4, i]
     kappa_wall = (1.0 / m + spd) if m > 0.0 else 1.0
 
     # scratch
@@ -1339,7 +1443,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     cf = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
     ca = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
     cb = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
-    out = _zeros(stack_ptr(6, np.float64), 6)
+    out = _zeros(stack_ptr(7, np.float64), 7)
+    phj = _zeros(stack_ptr(3, np.complex128), 3)
     seg = _zeros(stack_ptr(SEG_SIZE, np.float64), SEG_SIZE)
     dX = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
     ev_a = _zeros(stack_ptr(N_EV, np.float64), N_EV)
@@ -1465,7 +1570,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     stick_t0 = t0
     n_zero = 0
 
-    rot = cmath.exp(1j * om * h) if om != 0.0 else 1.0 + 0.0j  # the grid's phase step
+    # the grid's step lengths (h, 2 h, 4 h, ...) and their phase steps
+    hl = _zeros(stack_ptr(GRID_LEVELS, np.float64), GRID_LEVELS)
+    rotl = _zeros(stack_ptr(GRID_LEVELS, np.complex128), GRID_LEVELS)
+    for lv in range(GRID_LEVELS):
+        hl[lv] = h * 2.0 ** lv
+        rotl[lv] = cmath.exp(1j * om * hl[lv]) if om != 0.0 else 1.0 + 0.0j
     ph_next = 1.0 + 0.0j
     ph_next_ok = False
     t = t0
@@ -1589,6 +1699,18 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             bw4 = bnd[r, 1, nz]
             for k in range(nz):
                 bw4 += bnd[r, 1, k] * abs(q0[k])
+        # a free ball under harmonic forcing steps longer than h where it can: bounds on
+        # |y'''| = |psi_d . u'''| and |W'''| over the segment
+        adapt = ball and mode == FREE and not regen and levmax[r] > 0
+        b3y = 0.0
+        b3w = 0.0
+        if adapt:
+            b3y = bnd[r, 2, nz]
+            b3w = bnd[r, 3, nz]
+            for k in range(nz):
+                aq = abs(q0[k])
+                b3y += bnd[r, 2, k] * aq
+                b3w += bnd[r, 3, k] * aq
         seg[0] = t
         seg[1] = fb
         seg[2] = y + pdu  # the ball's absolute position and velocity
@@ -1641,7 +1763,44 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         if case != L.SOLID:
             auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
         while True:
-            b = a + h
+            # the step: h, or 2^lv h where Taylor's theorem proves that it holds no event
+            # and no new extremum of |y| or (steady) of W: on [a, a + s], y lies within
+            # b3y s^3 / 6 of its quadratic Taylor polynomial at a, y' within b3y s^2 / 2 of
+            # its linear one, W within b3w s^3 / 6 of its quadratic; the step is taken if
+            # these ranges stay inside the walls and below the largest |y| seen, keep y' off
+            # 0 (friction) and keep W strictly between its running extremes
+            lev = 0
+            if adapt:
+                ylim = min(half, max_aux if steady else max_aux_all) * (1.0 - 1e-9)
+                ya = ev_a[EV_PLUS] + half
+                yda = ev_a[EV_YEXT]
+                # y'' = acc - psi_d . u'' and W'' = psi_L . u'' at a, from the bar's equation
+                # M u'' = psi_L f - K u - C u' - s psi_d F_b (the rows of ddc)
+                fa = f0 * phg.imag
+                ydda = acc - (ddc[0, n] * fa + ddc[0, n + 1] * fb)
+                wdd = ddc[1, n] * fa + ddc[1, n + 1] * fb
+                for i in range(n):
+                    ydda -= ddc[0, i] * X[i] + ddc[2, i] * X[n + i]
+                    wdd += ddc[1, i] * X[i] + ddc[3, i] * X[n + i]
+                wmar = 1e-9 * max_abs_w
+                for lv in range(1, levmax[r] + 1):
+                    hs = hl[lv]
+                    lo, hi = _quad_range(ya, yda, ydda, hs)
+                    e3 = b3y * hs * hs * hs / 6.0
+                    if not (hi + e3 < ylim and lo - e3 > -ylim):
+                        break
+                    if watch_v:
+                        e2 = b3y * hs * hs * (0.5 + 1e-9)
+                        v1 = yda + ydda * hs
+                        if not ((yda > e2 and v1 > e2) or (yda < -e2 and v1 < -e2)):
+                            break
+                    if steady:
+                        lo, hi = _quad_range(wa, wda, wdd, hs)
+                        e3 = b3w * hs * hs * hs / 6.0 + wmar
+                        if not (hi + e3 < max_w and lo - e3 > min_w):
+                            break
+                    lev = lv
+            b = a + hl[lev]
             full = True
             if b >= tlen:
                 b = tlen
@@ -1650,8 +1809,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             if full and istep % 64 != 0 and not regen:
                 for kq in range(_nq(nz, ks)):
                     k = kq * ks
-                    qg[k] = qg[k] * eh[r, k]
-                phg = phg * rot
+                    qg[k] = qg[k] * eh[r, lev, k]
+                phg = phg * rotl[lev]
                 _from_q(r, qg, phg, fb, Z, D, V, ks, X)
             elif whole and not full:
                 # the tabulated end of a whole step, written out: numba reference-counts
@@ -1695,7 +1854,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             elif watch_wall:
                 # call the (not inlined) search only when an end value shows something, or
                 # y' changes sign and the bound on y lets the ball reach a wall
-                graze = _may_graze(a, b, ev_a, ev_b, half, b4)
+                # (a longer step than h holds no wall event: see its choice)
+                graze = lev == 0 and _may_graze(a, b, ev_a, ev_b, half, b4)
                 if ((ev_a[EV_PLUS] <= 0.0 < ev_b[EV_PLUS])
                         or (ev_a[EV_MINUS] <= 0.0 < ev_b[EV_MINUS])
                         or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
@@ -1756,7 +1916,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_abs_w = max(max_abs_w, abs(wb))
                 max_w = max(max_w, wb)
                 min_w = min(min_w, wb)
-                if wda * wdb < 0.0 and (bw4 < 0.0 or _w_may_exceed(
+                if lev == 0 and wda * wdb < 0.0 and (bw4 < 0.0 or _w_may_exceed(
                         b - a, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w)):
                     we = _w_extremum(a, wda, b, wdb, _hermite(a, b, wa, wb, wda, wdb, 1), h, seg,
                                      r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, om)
@@ -1817,9 +1977,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             max_aux_all = max(max_aux_all, abs(auxb))
             if steady:
                 max_aux = max(max_aux, abs(auxb))
-                hh = b - a
-                sum_aux2 += (0.5 * hh * (auxa * auxa + auxb * auxb)
-                             + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
+                if regen or not ball:  # a ball's int y^2 is closed form (_integrals)
+                    hh = b - a
+                    sum_aux2 += (0.5 * hh * (auxa * auxa + auxb * auxb)
+                                 + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
             # history and strobe samples in (t + a, t + b]
             while rec_dt > 0.0 and n_rec < cap_rec and t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt:
                 ts_ = t0 + k_rec * rec_dt
@@ -1878,9 +2039,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     n_zero_steps += je - js + 1
                     last_zero_step = je
         else:
-            _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis,
-                       kappa_stick if (ball and mode == STICK) else 0.0, sr,
-                       mu, em, G, Cx, cf, ca, cb, out, isum, steady, ks)
+            kst = kappa_stick if (ball and mode == STICK) else 0.0
+            yfree = ball and mode == FREE
+            _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis, kst, sr,
+                       mu, em, G, Cx, cf, ca, cb, out, isum, steady, ks, yfree, seg[2], seg[3],
+                       0.5 * seg[SEG_ACC], phj)
+            if ball and steady:
+                # the ball's int y^2: closed form when free, y constant otherwise
+                sum_aux2 += out[6] if mode == FREE else seg[4] * seg[4] * T
         w_force += out[0]
         d_visc += out[1]
         w_nr += out[5]
@@ -2148,4 +2314,4 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
                   stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
                   prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
                   prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
-                  float(dt), H, tabE, tabP, prep["bnd"])
+                  float(dt), H, tabE, tabP, prep["bnd"], prep["levmax"])
