@@ -663,18 +663,10 @@ def _phi1s(z, T, z2):
 
 
 @njit(cache=True, inline="always")
-def _phij(z, ez, iz, phj):
-    """phj[j] = phi_j(z) = int_0^1 s^j exp(z s) ds, j = 0, 1, 2 (ez = exp(z), iz = 1 / z):
-    the upward recurrence phi_j = (e^z - j phi_(j-1)) / z for |z| >= 1, the series
-    sum_m z^m / (m! (m + j + 1)) below (where the recurrence cancels), to the first
-    term below 1e-18."""
-    if z.real * z.real + z.imag * z.imag >= 1.0:
-        f0 = (ez - 1.0) * iz
-        f1 = (ez - f0) * iz
-        phj[0] = f0
-        phj[1] = f1
-        phj[2] = (ez - 2.0 * f1) * iz
-        return
+def _phij(z, phj):
+    """phj[j] = phi_j(z) = int_0^1 s^j exp(z s) ds, j = 0, 1, 2, for |z| < 1 (where the
+    upward recurrence phi_j = (e^z - j phi_(j-1)) / z cancels) by the series
+    sum_m z^m / (m! (m + j + 1)), to the first term below 1e-18."""
     term = 1.0 + 0.0j
     f0 = 0.0 + 0.0j
     f1 = 0.0 + 0.0j
@@ -857,18 +849,27 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
             s += mk[4, i] * Cx[i, k]
         cb[k] = s
     uu = _quad_sym(cb, G, nb)
-    cross = 0.0
-    for k in range(nb):
+    # mu = 0 (the last basis function): phi_j = 1 / (j + 1)
+    cross = (cb[nb - 1] * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))).real
+    for k in range(nb - 1):
         jk = _conj_index(k, nz, ks)
         if jk < k:
             continue  # the conjugate of an earlier term: counted there
-        if k == nb - 1:  # mu = 0: phi_j = 1 / (j + 1)
-            v = cb[k] * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))
+        z = mu[k] * T
+        if z.real * z.real + z.imag * z.imag >= 1.0:
+            # upward recurrence phi_j = (e^z - j phi_(j-1)) / z; 1 / mu_k = 2 isum[r, k, k]
+            iz = 2.0 * isum[r, k, k] / T
+            ez = em[k]
+            f0_ = (ez - 1.0) * iz
+            f1_ = (ez - f0_) * iz
+            acc_ = p0 * f0_ + T * p1 * f1_
+            if p2 != 0.0:
+                acc_ += T * T * p2 * ((ez - 2.0 * f1_) * iz)
         else:
-            # 1 / mu_k = 2 isum[r, k, k], precomputed: no division
-            _phij(mu[k] * T, em[k], 2.0 * isum[r, k, k] / T, phj)
-            v = cb[k] * T * (p0 * phj[0] + T * (p1 * phj[1] + T * p2 * phj[2]))
-        cross += v.real if jk == k else 2.0 * v.real
+            _phij(z, phj)
+            acc_ = p0 * phj[0] + T * (p1 * phj[1] + T * p2 * phj[2])
+        v = (cb[k] * acc_).real * T
+        cross += v if jk == k else 2.0 * v
     pp = T * (p0 * p0 + T * (p0 * p1 + T * ((p1 * p1 + 2.0 * p0 * p2) / 3.0
                                             + T * (0.5 * p1 * p2 + 0.2 * T * p2 * p2))))
     out[6] = pp - 2.0 * cross + uu
