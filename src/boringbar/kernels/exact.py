@@ -135,102 +135,229 @@ SEG_CDIR = 16  # +1 in the cut, -1 out of it, 0 harmonic forcing
 SEG_ACC = 17  # fb / m, the ball's acceleration (one division per segment)
 
 
-# --- per-run setup (NumPy, once per run) --------------------------------------------------
-def _conjugate_pairs(lam: np.ndarray):
-    """An ordering [l1, conj l1, l2, conj l2, ...] of ``lam``, or None if its values are
-    not all complex conjugate pairs (an overdamped mode)."""
-    if np.any(np.abs(lam.imag) <= 1e-12 * np.abs(lam)):
-        return None
-    up = np.flatnonzero(lam.imag > 0)
-    down = np.flatnonzero(lam.imag < 0)
+# --- per-run setup (once per run: LAPACK through NumPy, the bookkeeping compiled) ---------
+@njit(cache=True)
+def _coupled(p, n, s, A, B):
+    """A bar carrying the ball (share s of its inertia): (M + s m psi_d psi_d^T) u'' =
+    psi_L f - K u - C u', into A and B."""
+    m = p[L.BALL_MASS]
+    Mm = np.zeros((n, n))
+    for i in range(n):
+        Mm[i, i] = p[L.M_ + i]
+        for j in range(n):
+            Mm[i, j] += s * m * p[L.PSI_D + i] * p[L.PSI_D + j]
+    Mi = np.linalg.inv(Mm)
+    for i in range(n):
+        A[i, n + i] = 1.0
+        b = 0.0
+        for j in range(n):
+            A[n + i, j] = -Mi[i, j] * p[L.K_ + j]
+            A[n + i, n + j] = -Mi[i, j] * p[L.C_ + j]
+            b += Mi[i, j] * p[L.PSI_L + j]
+        B[n + i] = b
+
+
+@njit(cache=True)
+def _regimes(p):
+    """The regimes' X' = A X + B f + c F_b, stacked: (A, B, c, nreg).  Ball: free, stick
+    (reaction share s), contact (s = 1); other bars one regime; a regenerative cut adds
+    each one's twin with -Kr b psi_L . u in A (in the cut)."""
+    n = int(p[L.N_MODES])
+    case = int(p[L.CASE])
+    sr = p[L.REACTION]
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
+    nz = 2 * n + 2 if case == L.TMD else 2 * n
+    nreg = 3 if case == L.BALL else 1
+    R = 2 * nreg if regen else nreg
+    A = np.zeros((R, nz, nz))
+    B = np.zeros((R, nz))
+    c = np.zeros((R, nz))
+    if case == L.LOCKED:
+        _coupled(p, n, 1.0, A[0], B[0])
+    else:
+        for i in range(n):
+            Mi = p[L.M_ + i]
+            A[0, i, n + i] = 1.0
+            A[0, n + i, i] = -p[L.K_ + i] / Mi
+            A[0, n + i, n + i] = -p[L.C_ + i] / Mi
+            B[0, n + i] = p[L.PSI_L + i] / Mi
+            if case == L.BALL:
+                c[0, n + i] = -sr * p[L.PSI_D + i] / Mi  # the bar's reaction to a unit F_b
+    if case == L.TMD:
+        ma, ka, ca = p[L.TMD_MASS], p[L.TMD_K], p[L.TMD_C]
+        A[0, 2 * n, 2 * n + 1] = 1.0
+        # bar: M u'' = psi_L f - K u - C u' + psi_a (k_a rel + c_a rel')
+        for i in range(n):
+            Mi = p[L.M_ + i]
+            pai = p[L.PSI_A + i]
+            for j in range(n):
+                paj = p[L.PSI_A + j]
+                A[0, n + i, j] -= ka * pai * paj / Mi
+                A[0, n + i, n + j] -= ca * pai * paj / Mi
+            A[0, n + i, 2 * n] = ka * pai / Mi
+            A[0, n + i, 2 * n + 1] = ca * pai / Mi
+            A[0, 2 * n + 1, i] = ka * pai / ma
+            A[0, 2 * n + 1, n + i] = ca * pai / ma
+        A[0, 2 * n + 1, 2 * n] = -ka / ma
+        A[0, 2 * n + 1, 2 * n + 1] = -ca / ma
+    if case == L.BALL:
+        _coupled(p, n, sr, A[1], B[1])  # stick
+        _coupled(p, n, 1.0, A[2], B[2])  # contact: s = 1 (the same numbers if sr = 1)
+    if regen:
+        # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
+        krb = p[L.KR_B]
+        for r in range(nreg):
+            A[nreg + r] = A[r]
+            B[nreg + r] = B[r]
+            c[nreg + r] = c[r]
+            for j in range(nz):
+                for i in range(n):
+                    A[nreg + r, j, i] -= krb * B[r, j] * p[L.PSI_L + i]
+    return A, B, c, nreg
+
+
+@njit(cache=True)
+def _pair_order(lr):
+    """An ordering [l1, conj l1, l2, conj l2, ...] of ``lr`` (LAPACK's own when each pair is
+    adjacent, + imaginary first), or an empty array if its values are not all complex
+    conjugate pairs (an overdamped mode)."""
+    nz = lr.shape[0]
+    none = np.empty(0, np.int64)
+    ok = nz % 2 == 0
+    if ok:
+        for i in range(0, nz, 2):
+            a = lr[i]
+            if not (a.imag > 1e-12 * abs(a)) or lr[i + 1] != a.conjugate():
+                ok = False
+                break
+    if ok:
+        return np.arange(nz)
+    for i in range(nz):
+        if abs(lr[i].imag) <= 1e-12 * abs(lr[i]):
+            return none
+    up = np.array([i for i in range(nz) if lr[i].imag > 0])
+    down = np.array([i for i in range(nz) if lr[i].imag < 0])
     if len(up) != len(down):
-        return None
-    order = []
-    for i in up:
-        j = down[np.argmin(np.abs(lam[down] - np.conj(lam[i])))]
-        if abs(lam[j] - np.conj(lam[i])) > 1e-9 * abs(lam[i]):
-            return None
-        order += [i, j]
-    return np.array(order)
+        return none
+    order = np.empty(nz, np.int64)
+    for u in range(len(up)):
+        i = up[u]
+        cj = lr[i].conjugate()
+        j = down[0]
+        for d in down:
+            if abs(lr[d] - cj) < abs(lr[j] - cj):
+                j = d
+        if abs(lr[j] - cj) > 1e-9 * abs(lr[i]):
+            return none
+        order[2 * u] = i
+        order[2 * u + 1] = j
+    return order
+
+
+@njit(cache=True)
+def _finish(p, lam, V, Vi, Z, B):
+    """The conjugate-pair ordering (in place in lam, V, Vi), the halved eigenvectors Vh,
+    kstep, bq = Vi B, the grid step h and its levels' exp(lambda 2^l h), levmax, the bound
+    constants bnd and isum = 1 / (mu_m + mu_l) over the basis mu = (lambda, i Omega,
+    -i Omega, 0)."""
+    n = int(p[L.N_MODES])
+    om = p[L.OMEGA]
+    R, nz = lam.shape
+    kstep = np.ones(R, np.int64)
+    Vh = V.copy()
+    for r in range(R):
+        order = _pair_order(lam[r])
+        if order.shape[0] == 0:
+            continue
+        # X is real, so a conjugate pair contributes 2 Re(V_k q_k): evaluate the first of
+        # each pair, twice (halves the exponentials on the hot path)
+        lr = lam[r].copy()
+        Vr = V[r].copy()
+        Vir = Vi[r].copy()
+        for k in range(nz):
+            lam[r, k] = lr[order[k]]
+            V[r, :, k] = Vr[:, order[k]]
+            Vi[r, k, :] = Vir[order[k], :]
+        for k in range(0, nz, 2):
+            V[r, :, k + 1] = np.conj(V[r, :, k])
+            Vi[r, k + 1, :] = np.conj(Vi[r, k, :])
+            Vh[r, :, k] = 2.0 * V[r, :, k]
+            Vh[r, :, k + 1] = 0.0
+        kstep[r] = 2
+    bq = np.zeros((R, nz), np.complex128)
+    for r in range(R):
+        for k in range(nz):
+            s = 0.0 + 0.0j
+            for j in range(nz):
+                s += Vi[r, k, j] * B[r, j]
+            bq[r, k] = s
+    fastest = om
+    for r in range(R):
+        for k in range(nz):
+            fastest = max(fastest, abs(lam[r, k]))
+    h = 2 * math.pi / fastest / GRID_PER_PERIOD
+    # the bounds on |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are
+    # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants;
+    # rows 2 and 3 the same with the third powers, for |y'''| and |W'''|
+    bnd = np.empty((R, 4, nz + 1))
+    for r in range(R):
+        for row in range(2):
+            ps = L.PSI_D if row == 0 else L.PSI_L
+            for k in range(nz + 1):
+                s = 0.0 + 0.0j
+                for i in range(n):
+                    s += p[ps + i] * (V[r, i, k] if k < nz else Z[r, i])
+                a = abs(lam[r, k]) if k < nz else om
+                bnd[r, row, k] = a * a * a * a * abs(s)
+                bnd[r, row + 2, k] = a * a * a * abs(s)
+    # the longest step worth trying per regime: 2^levmax h, where 2^levmax is how many times
+    # faster the fastest eigenvalue is than the slower of the forcing and the slowest one
+    # (one retained mode: h already fits it, no longer step)
+    levmax = np.zeros(R, np.int64)
+    for r in range(R):
+        lo = math.inf
+        hi = 0.0
+        for k in range(nz):
+            a = abs(lam[r, k])
+            hi = max(hi, a)
+            if a > 0.0:
+                lo = min(lo, a)
+        ratio = hi / max(lo, om)
+        lv = 0
+        while lv < GRID_LEVELS - 1 and ratio >= 2.0 ** (lv + 1):
+            lv += 1
+        levmax[r] = lv
+    eh = np.empty((R, GRID_LEVELS, nz), np.complex128)
+    for r in range(R):
+        for lv in range(GRID_LEVELS):
+            for k in range(nz):
+                eh[r, lv, k] = cmath.exp(lam[r, k] * (h * 2.0 ** lv))
+    nb = nz + 3
+    mu = np.zeros(nb, np.complex128)
+    isum = np.zeros((R, nb, nb), np.complex128)
+    for r in range(R):
+        for k in range(nz):
+            mu[k] = lam[r, k]
+        mu[nz] = 1j * om
+        mu[nz + 1] = -1j * om
+        mu[nz + 2] = 0.0
+        for a in range(nb):
+            for b in range(nb):
+                sab = mu[a] + mu[b]
+                if sab != 0.0:
+                    isum[r, a, b] = 1.0 / sab
+    return Vh, kstep, bq, h, bnd, levmax, eh, isum
 
 
 def prepare(p: np.ndarray) -> dict:
     """Per-run matrices of the exact kernel from the packed parameter vector ``p``."""
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
-    M = p[L.M_:L.M_ + n].copy()
-    K = p[L.K_:L.K_ + n].copy()
-    C = p[L.C_:L.C_ + n].copy()
-    pL = p[L.PSI_L:L.PSI_L + n].copy()
-    pD = p[L.PSI_D:L.PSI_D + n].copy()
-    pA = p[L.PSI_A:L.PSI_A + n].copy()
     om = p[L.OMEGA]
-    f0 = p[L.F0]
-    m = p[L.BALL_MASS]
-    sr = p[L.REACTION]
-    eye = np.eye(n)
-    regimes = []  # (A, B, c)
-
-    def coupled(s):
-        Mm = np.diag(M) + s * m * np.outer(pD, pD)
-        Mi = np.linalg.inv(Mm)
-        A = np.zeros((2 * n, 2 * n))
-        A[:n, n:] = eye
-        A[n:, :n] = -Mi * K  # = -Mi @ diag(K)
-        A[n:, n:] = -Mi * C
-        B = np.zeros(2 * n)
-        B[n:] = Mi @ pL
-        return A, B, np.zeros(2 * n)
-
-    if case == L.TMD:
-        ma, ka, ca = p[L.TMD_MASS], p[L.TMD_K], p[L.TMD_C]
-        nz = 2 * n + 2
-        A = np.zeros((nz, nz))
-        A[:n, n:2 * n] = eye
-        A[2 * n, 2 * n + 1] = 1.0
-        # bar: M u'' = psi_L f - K u - C u' + psi_a (k_a rel + c_a rel')
-        A[n:2 * n, :n] = -np.diag(K / M) - ka * np.outer(pA, pA) / M[:, None]
-        A[n:2 * n, n:2 * n] = -np.diag(C / M) - ca * np.outer(pA, pA) / M[:, None]
-        A[n:2 * n, 2 * n] = ka * pA / M
-        A[n:2 * n, 2 * n + 1] = ca * pA / M
-        A[2 * n + 1, :n] = ka * pA / ma
-        A[2 * n + 1, n:2 * n] = ca * pA / ma
-        A[2 * n + 1, 2 * n] = -ka / ma
-        A[2 * n + 1, 2 * n + 1] = -ca / ma
-        B = np.zeros(nz)
-        B[n:2 * n] = pL / M
-        regimes.append((A, B, np.zeros(nz)))
-    else:
-        nz = 2 * n
-        if case == L.LOCKED:
-            regimes.append(coupled(1.0))
-        else:
-            A = np.zeros((nz, nz))
-            A[:n, n:] = eye
-            A[n:, :n] = -np.diag(K / M)
-            A[n:, n:] = -np.diag(C / M)
-            c = np.zeros(nz)
-            if case == L.BALL:
-                c[n:] = -sr * pD / M  # the bar's reaction to a unit F_b
-            regimes.append((A, np.concatenate([np.zeros(n), pL / M]), c))
-            if case == L.BALL:
-                stick = coupled(sr)
-                regimes.append(stick)
-                regimes.append(stick if sr == 1.0 else coupled(1.0))  # contact: s = 1
-    nreg = len(regimes)
-    if int(p[L.FORCING]) == L.REGENERATIVE:
-        # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
-        krb = p[L.KR_B]
-        for A, B, c in list(regimes):
-            Ac = A.copy()
-            Ac[:, :n] -= krb * np.outer(B, pL)
-            regimes.append((Ac, B, c))
-    R = len(regimes)
+    A, B, c, nreg = _regimes(p)
+    R, nz = B.shape
     # one stacked LAPACK call per kind (the same routine per matrix, so the same numbers as
     # one call per regime, without the Python overhead of a dozen small calls)
-    A = np.array([rg[0] for rg in regimes])
-    B = np.array([rg[1] for rg in regimes])
-    c = np.array([rg[2] for rg in regimes])
     lam, V = np.linalg.eig(A)
     Vi = np.linalg.inv(V)
     cond = (np.max(np.sum(np.abs(V), axis=2), axis=1)
@@ -240,70 +367,22 @@ def prepare(p: np.ndarray) -> dict:
             what = ("free", "stick", "contact")[r % nreg] if case == L.BALL else "linear"
             raise ValueError(f"exact integrator: the {what} regime is not diagonalisable "
                              "(critically damped mode?)")
-    Z = np.linalg.solve(1j * om * np.eye(nz) - A, (B * f0)[:, :, None])[:, :, 0]
+    Z = np.linalg.solve(1j * om * np.eye(nz) - A, (B * p[L.F0])[:, :, None])[:, :, 0]
     D = -np.linalg.solve(A, c[:, :, None])[:, :, 0]
-    kstep = np.ones(R, np.int64)
-    Vh = V.copy()
-    for r in range(R):
-        lr = lam[r]
-        if (np.all(lr[0::2].imag > 1e-12 * np.abs(lr[0::2]))
-                and np.array_equal(lr[1::2], np.conj(lr[0::2]))):
-            order = np.arange(nz)  # LAPACK's order: each pair adjacent, + imaginary first
-        else:
-            order = _conjugate_pairs(lr)
-        if order is not None:
-            # X is real, so a conjugate pair contributes 2 Re(V_k q_k): evaluate the
-            # first of each pair, twice (halves the exponentials on the hot path)
-            lam[r], V[r], Vi[r] = lr[order], V[r][:, order], Vi[r][order]
-            V[r][:, 1::2] = np.conj(V[r][:, 0::2])
-            Vi[r][1::2] = np.conj(Vi[r][0::2])
-            Vh[r] = 0.0
-            Vh[r][:, 0::2] = 2.0 * V[r][:, 0::2]
-            kstep[r] = 2
-        else:
-            Vh[r] = V[r]
-    bq = np.array([Vi[r] @ B[r] for r in range(R)])
-    fastest = max(float(np.max(np.abs(lam))), om)
-    h = 2 * math.pi / fastest / GRID_PER_PERIOD
+    Vh, kstep, bq, h, bnd, levmax, eh, isum = _finish(p, lam, V, Vi, Z, B)
     # dashpots: D_visc = sum_d c_d int (l_d . X)^2 dt
-    lv = list(np.eye(nz)[n:2 * n])
-    cv = list(C)
+    nd = n + 1 if case == L.TMD else n
+    lv = np.zeros((nd, nz))
+    cv = np.zeros(nd)
+    lv[np.arange(n), n + np.arange(n)] = 1.0
+    cv[:n] = p[L.C_:L.C_ + n]
     if case == L.TMD:
-        row = np.zeros(nz)
-        row[2 * n + 1] = 1.0
-        row[n:2 * n] = -pA
-        lv.append(row)
-        cv.append(p[L.TMD_C])
-    # the bounds on |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are
-    # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants;
-    # rows 2 and 3 the same with the third powers, for |y'''| and |W'''|
-    bnd = np.empty((R, 4, nz + 1))
-    psis = np.array([pD, pL])
-    pv = np.abs(psis @ V[:, :n, :])
-    pz = np.abs(Z[:, :n] @ psis.T)
-    al = np.abs(lam[:, None, :])
-    bnd[:, :2, :nz] = al ** 4 * pv
-    bnd[:, :2, nz] = om ** 4 * pz
-    bnd[:, 2:, :nz] = al ** 3 * pv
-    bnd[:, 2:, nz] = om ** 3 * pz
-    hl = h * 2.0 ** np.arange(GRID_LEVELS)
-    # the longest step worth trying per regime: 2^levmax h, where 2^levmax is how many times
-    # faster the fastest eigenvalue is than the slower of the forcing and the slowest one
-    # (one retained mode: h already fits it, no longer step)
-    al1 = np.abs(lam)
-    slow = np.maximum(np.min(np.where(al1 > 0, al1, np.inf), axis=1), om)
-    with np.errstate(divide="ignore"):
-        ratio = np.max(al1, axis=1) / slow
-    levmax = np.clip(np.floor(np.log2(np.maximum(ratio, 1.0))), 0, GRID_LEVELS - 1)
-    mu = np.concatenate([lam, np.tile([1j * om, -1j * om, 0.0], (R, 1))], axis=1)
-    ssum = mu[:, :, None] + mu[:, None, :]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        isum = np.where(ssum != 0, 1.0 / np.where(ssum != 0, ssum, 1.0), 0.0)
-    return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "levmax": levmax.astype(np.int64),
-            "Vi": Vi, "Z": Z, "D": D,
-            "eh": np.exp(lam[:, None, :] * hl[None, :, None]), "h": h, "lvis": np.array(lv),
-            "cvis": np.array(cv),
-            "isum": isum.astype(complex), "bq": bq, "nreg": nreg, "bnd": bnd}
+        lv[n, 2 * n + 1] = 1.0
+        lv[n, n:2 * n] = -p[L.PSI_A:L.PSI_A + n]
+        cv[n] = p[L.TMD_C]
+    return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "levmax": levmax, "Vi": Vi, "Z": Z,
+            "D": D, "eh": eh, "h": h, "lvis": lv, "cvis": cv, "isum": isum, "bq": bq,
+            "nreg": nreg, "bnd": bnd}
 
 
 # --- the kernel ----------------------------------------------------------------------------
