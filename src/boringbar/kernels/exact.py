@@ -668,67 +668,37 @@ def _hermite(a, b, p0, p1, d0, d1, order):
 
 
 @njit(cache=True, inline="always")
-def _hermite5(a, b, p0, p1, d0, d1, e0, e1):
+def _hermite5(a, b, p0, p1, d0, d1, e0, e1, order):
     """Where the quintic Hermite interpolant of values p0, p1, slopes d0, d1 and second
-    derivatives e0, e1 on [a, b] changes sign: the cubic's zero (:func:`_hermite`)
-    refined by safeguarded Newton on the quintic.  Its error is O(h^6) instead of
-    O(h^4): at a wall the root search then usually accepts its first evaluation."""
-    x0 = _hermite(a, b, p0, p1, d0, d1, 0)
+    derivatives e0, e1 on [a, b] (order 0), or its derivative (order 1, given d0 d1 < 0),
+    changes sign: the cubic's (:func:`_hermite`) refined by safeguarded Newton on the
+    quintic.  Its error is O(h^6) (order 0) or O(h^5) (order 1) instead of O(h^4) or
+    O(h^3): the root search then usually accepts its first evaluation."""
+    x0 = _hermite(a, b, p0, p1, d0, d1, order)
     h = b - a
     m0 = d0 * h
     m1 = d1 * h
     k0 = e0 * h * h
     k1 = e1 * h * h
+    # p(x) = p0 + m0 x + k0 x^2 / 2 + c3 x^3 + c4 x^4 + c5 x^5 on [0, 1]
     c3 = -10.0 * p0 - 6.0 * m0 - 1.5 * k0 + 0.5 * k1 - 4.0 * m1 + 10.0 * p1
     c4 = 15.0 * p0 + 8.0 * m0 + 1.5 * k0 - k1 + 7.0 * m1 - 15.0 * p1
     c5 = -6.0 * p0 - 3.0 * m0 - 0.5 * k0 + 0.5 * k1 - 3.0 * m1 + 6.0 * p1
-    c2 = 0.5 * k0
+    flo = p0 if order == 0 else m0
     lo = 0.0
     hi = 1.0
     x = (x0 - a) / h
     for _ in range(6):
         if not (lo < x < hi):
             x = 0.5 * (lo + hi)
-        f = p0 + x * (m0 + x * (c2 + x * (c3 + x * (c4 + x * c5))))
-        df = m0 + x * (2.0 * c2 + x * (3.0 * c3 + x * (4.0 * c4 + x * 5.0 * c5)))
-        if (f > 0.0) == (p0 > 0.0):
-            lo = x
+        dp = m0 + x * (k0 + x * (3.0 * c3 + x * (4.0 * c4 + x * 5.0 * c5)))
+        if order == 0:
+            f = p0 + x * (m0 + x * (0.5 * k0 + x * (c3 + x * (c4 + x * c5))))
+            df = dp
         else:
-            hi = x
-        xn = x - f / df if df != 0.0 else 0.5 * (lo + hi)
-        if abs(xn - x) <= 1e-15:
-            x = xn
-            break
-        x = xn
-    if not (0.0 < x < 1.0):
-        return x0
-    return a + x * h
-
-
-@njit(cache=True, inline="always")
-def _hermite5d(a, b, p0, p1, d0, d1, e0, e1):
-    """Where the derivative of the quintic Hermite interpolant (values p0, p1, slopes d0,
-    d1, second derivatives e0, e1 on [a, b]) changes sign, given d0 d1 < 0: the cubic's
-    (:func:`_hermite`, order 1) refined by safeguarded Newton; an extremum's starting
-    point with error O(h^5) instead of O(h^3)."""
-    x0 = _hermite(a, b, p0, p1, d0, d1, 1)
-    h = b - a
-    m0 = d0 * h
-    m1 = d1 * h
-    k0 = e0 * h * h
-    k1 = e1 * h * h
-    c3 = -10.0 * p0 - 6.0 * m0 - 1.5 * k0 + 0.5 * k1 - 4.0 * m1 + 10.0 * p1
-    c4 = 15.0 * p0 + 8.0 * m0 + 1.5 * k0 - k1 + 7.0 * m1 - 15.0 * p1
-    c5 = -6.0 * p0 - 3.0 * m0 - 0.5 * k0 + 0.5 * k1 - 3.0 * m1 + 6.0 * p1
-    lo = 0.0
-    hi = 1.0
-    x = (x0 - a) / h
-    for _ in range(6):
-        if not (lo < x < hi):
-            x = 0.5 * (lo + hi)
-        f = m0 + x * (k0 + x * (3.0 * c3 + x * (4.0 * c4 + x * 5.0 * c5)))
-        df = k0 + x * (6.0 * c3 + x * (12.0 * c4 + x * 20.0 * c5))
-        if (f > 0.0) == (m0 > 0.0):
+            f = dp
+            df = k0 + x * (6.0 * c3 + x * (12.0 * c4 + x * 20.0 * c5))
+        if (f > 0.0) == (flo > 0.0):
             lo = x
         else:
             hi = x
@@ -1282,7 +1252,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 sg = 1.0 if kk == EV_PLUS else -1.0
                 if bend == b and ydd_a == ydd_a and ydd_b == ydd_b:  # y'' known at both ends
                     c0 = _hermite5(a, b, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
-                                   sg * ydd_a, sg * ydd_b)
+                                   sg * ydd_a, sg * ydd_b, 0)
                 else:
                     c0 = _hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
                                   0)
@@ -2096,7 +2066,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 if lev == 0 and wda * wdb < 0.0 and (bw4 < 0.0 or _w_may_exceed(
                         b - a, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w)):
                     if kind < 0 and wdd_a == wdd_a and wdd_b == wdd_b:  # W'' at both ends
-                        c0 = _hermite5d(a, b, wa, wb, wda, wdb, wdd_a, wdd_b)
+                        c0 = _hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1)
                     else:
                         c0 = _hermite(a, b, wa, wb, wda, wdb, 1)
                     we = _w_extremum(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, qs,
