@@ -68,8 +68,9 @@ products of exponentials, done in closed form per segment; friction
 dissipation is -F_b (y(t_e) - y(t_s)) per sliding segment; the
 non-reciprocal work (1 - s) int F_b psi_d . u' dt is closed form too.  The
 balance then closes to round-off.  The ball's int y^2 (SUM_AUX2) is closed
-form too (a parabola minus exponentials: phi_j functions); only an absorber's
-stroke (TMD) uses the endpoint-corrected trapezoid rule on the grid (O(h^4)).  Maxima of
+form too under harmonic forcing (a parabola minus exponentials: phi_j
+functions); an absorber's stroke (TMD) and a ball in a regenerative cut use the
+endpoint-corrected trapezoid rule on the grid.  Maxima of
 |W| are located exactly (W' = 0 roots on the grid); maxima of |aux| are
 taken on the grid and at events.
 
