@@ -255,6 +255,16 @@ def _pair_order(lr):
     return order
 
 
+@njit(cache=True, inline="always")
+def _basis(lam, r, om, nz, mu):
+    """mu = (lambda_r, i Omega, -i Omega, 0): the exponents of a segment's basis functions."""
+    for k in range(nz):
+        mu[k] = lam[r, k]
+    mu[nz] = 1j * om
+    mu[nz + 1] = -1j * om
+    mu[nz + 2] = 0.0
+
+
 @njit(cache=True)
 def _finish(p, lam, V, Vi, Z, B):
     """The conjugate-pair ordering (in place in lam, V, Vi), the halved eigenvectors Vh,
@@ -337,11 +347,7 @@ def _finish(p, lam, V, Vi, Z, B):
     mu = np.zeros(nb, np.complex128)
     isum = np.zeros((R, nb, nb), np.complex128)
     for r in range(R):
-        for k in range(nz):
-            mu[k] = lam[r, k]
-        mu[nz] = 1j * om
-        mu[nz + 1] = -1j * om
-        mu[nz + 2] = 0.0
+        _basis(lam, r, om, nz, mu)
         for a in range(nb):
             for b in range(nb):
                 sab = mu[a] + mu[b]
@@ -862,11 +868,7 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     phj = borrow(phj)
     nz = lam.shape[1]
     nb = nz + 3
-    for k in range(nz):
-        mu[k] = lam[r, k]
-    mu[nz] = 1j * om
-    mu[nz + 1] = -1j * om
-    mu[nz + 2] = 0.0
+    _basis(lam, r, om, nz, mu)
     # exp(conj z) = conj(exp(z)) exactly: a conjugate pair's second exponential and the
     # forcing's -i Omega are conjugates, exp(0) = 1
     for k in range(nz):
@@ -914,11 +916,7 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     cf[nz] = f0 * ph2
     cf[nz + 1] = cf[nz].conjugate()
     # work of the force: f psi_L . u' (f has only the terms nz, nz + 1)
-    for k in range(nb):
-        s = 0.0 + 0.0j
-        for i in range(n):
-            s += mk[3, i] * Cx[n + i, k]
-        ca[k] = s
+    _psi_dot(mk, 3, Cx, n, n, nb, ca)
     w = 0.0
     for i in range(nz, nz + 2):
         t = 0.0 + 0.0j
@@ -954,11 +952,7 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     if not steady:
         return
     # W = psi_L . u
-    for k in range(nb):
-        s = 0.0 + 0.0j
-        for i in range(n):
-            s += mk[3, i] * Cx[i, k]
-        ca[k] = s
+    _psi_dot(mk, 3, Cx, 0, n, nb, ca)
     out[2] = _quad_sym(ca, G, nb)
     w1 = 0.0
     for k in range(nb):
@@ -968,11 +962,7 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
         return
     # int y^2 = int P^2 - 2 int P psi_d.u + int (psi_d.u)^2, with
     # int_0^T tau^j exp(mu tau) = T^(j+1) phi_j(mu T), phi_j(z) = int_0^1 s^j e^(z s) ds
-    for k in range(nb):
-        s = 0.0 + 0.0j
-        for i in range(n):
-            s += mk[4, i] * Cx[i, k]
-        cb[k] = s
+    _psi_dot(mk, 4, Cx, 0, n, nb, cb)  # psi_d . u
     uu = _quad_sym(cb, G, nb)
     # mu = 0 (the last basis function): phi_j = 1 / (j + 1)
     cross = (cb[nb - 1] * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))).real
@@ -998,6 +988,17 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
     pp = T * (p0 * p0 + T * (p0 * p1 + T * ((p1 * p1 + 2.0 * p0 * p2) / 3.0
                                             + T * (0.5 * p1 * p2 + 0.2 * T * p2 * p2))))
     out[6] = pp - 2.0 * cross + uu
+
+
+@njit(cache=True, inline="always")
+def _psi_dot(mk, row, Cx, off, n, nb, dst):
+    """dst[k] = sum_i mk[row, i] Cx[off + i, k]: the basis coefficients of psi . u (off 0)
+    or psi . u' (off n), psi the row of mk (3: psi_L, 4: psi_d)."""
+    for k in range(nb):
+        s = 0.0 + 0.0j
+        for i in range(n):
+            s += mk[row, i] * Cx[off + i, k]
+        dst[k] = s
 
 
 @njit(cache=True, inline="always")
