@@ -203,7 +203,11 @@ def _regimes(p):
         A[0, 2 * n + 1, 2 * n + 1] = -ca / ma
     if case == L.BALL:
         _coupled(p, n, sr, A[1], B[1])  # stick
-        _coupled(p, n, 1.0, A[2], B[2])  # contact: s = 1 (the same numbers if sr = 1)
+        if sr == 1.0:  # contact: s = 1, the stick regime's matrices when sr = 1
+            A[2] = A[1]
+            B[2] = B[1]
+        else:
+            _coupled(p, n, 1.0, A[2], B[2])
     if regen:
         # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
         krb = p[L.KR_B]
@@ -1842,9 +1846,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             bw4 = bnd[r, 1, nz]
             for k in range(nz):
                 bw4 += bnd[r, 1, k] * abs(q0[k])
-        # a free ball under harmonic forcing steps longer than h where it can: bounds on
-        # |y'''| = |psi_d . u'''| and |W'''| over the segment
-        adapt = ball and mode == FREE and not regen and levmax[r] > 0
+        # a free ball under harmonic forcing: y'' and W'' at its grid points (the walls'
+        # and extrema's quintic starts); with more than one mode it steps longer than h
+        # where it can, from bounds on |y'''| = |psi_d . u'''| and |W'''| over the segment
+        ydd_on = ball and mode == FREE and not regen
+        adapt = ydd_on and levmax[r] > 0
         b3y = 0.0
         b3w = 0.0
         if adapt:
@@ -1905,9 +1911,6 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         auxda = 0.0
         if case != L.SOLID:
             auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
-        # y'' and W'' at the grid points of a free ball (harmonic forcing): the longer
-        # steps' Taylor polynomials and the walls' quintic starting points
-        ydd_on = ball and mode == FREE and not regen
         ydd_a = math.nan
         wdd_a = math.nan
         ydd_b = math.nan
@@ -1926,22 +1929,20 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 ylim = min(half, max_aux if steady else max_aux_all) * (1.0 - 1e-9)
                 ya = ev_a[EV_PLUS] + half
                 yda = ev_a[EV_YEXT]
-                ydda = ydd_a
-                wdd = wdd_a
                 wmar = 1e-9 * max_abs_w
                 for lv in range(1, levmax[r] + 1):
                     hs = hl[lv]
-                    lo, hi = _quad_range(ya, yda, ydda, hs)
+                    lo, hi = _quad_range(ya, yda, ydd_a, hs)
                     e3 = b3y * hs * hs * hs / 6.0
                     if not (hi + e3 < ylim and lo - e3 > -ylim):
                         break
                     if watch_v:
                         e2 = b3y * hs * hs * (0.5 + 1e-9)
-                        v1 = yda + ydda * hs
+                        v1 = yda + ydd_a * hs
                         if not ((yda > e2 and v1 > e2) or (yda < -e2 and v1 < -e2)):
                             break
                     if steady:
-                        lo, hi = _quad_range(wa, wda, wdd, hs)
+                        lo, hi = _quad_range(wa, wda, wdd_a, hs)
                         e3 = b3w * hs * hs * hs / 6.0 + wmar
                         if not (hi + e3 < max_w and lo - e3 > min_w):
                             break
