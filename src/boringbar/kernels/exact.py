@@ -96,7 +96,7 @@ from numba import carray, njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.stack import stack_ptr
-from boringbar.kernels.views import borrow
+from boringbar.kernels.views import borrow, with_len
 
 #: event-search grid points per shortest period: about 16, but not a whole number, so that
 #: events half a forcing period apart (the symmetric two-impact orbit, started at an impact)
@@ -724,14 +724,16 @@ def _hermite5(a, b, p0, p1, d0, d1, e0, e1, order):
     return a + x * h
 
 
-@njit(cache=True)
-def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
+@njit(cache=True, inline="always")
+def _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om,
+               c0, nz):
     """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
     Newton with the exact derivative, kept inside the shrinking bracket (a bisection
     whenever Newton leaves it or fails to halve it), to a bracket of 4 ulp of t or a
     Newton step below that, or a step whose own error, |g''| s^2 / (2 |g'|) to leading
     order, is below a quarter of that (where g'' comes free: usually one evaluation
-    fewer).  Returns the end on gb's side (the event has happened)."""
+    fewer).  Returns the end on gb's side (the event has happened).  X and Xd are seen
+    with length ``nz``, constant in the specialisations (:func:`_root_any`)."""
     # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
     seg = borrow(seg)
     q0 = borrow(q0)
@@ -741,8 +743,8 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
     D = borrow(D)
     bq = borrow(bq)
     q = borrow(q)
-    X = borrow(X)
-    Xd = borrow(Xd)
+    X = with_len(X, nz)
+    Xd = with_len(Xd, nz)
     mk = borrow(mk)
     ts = seg[0]
     pos = gb > 0.0
@@ -783,6 +785,38 @@ def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
                 return min(b, cn + tol)
         c = cn
     return b
+
+
+@njit(cache=True)
+def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
+    """:func:`_root_body` for any bar."""
+    return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
+                      f0, om, c0, X.shape[0])
+
+
+@njit(cache=True)
+def _root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0):
+    """:func:`_root_body` for one mode and its conjugate pair (n = 1, nz = 2, ks = 2)."""
+    return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 1, mk, f0,
+                      om, c0, 2)
+
+
+@njit(cache=True)
+def _root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0):
+    """:func:`_root_body` for two modes in conjugate pairs (n = 2, nz = 4, ks = 2)."""
+    return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 2, mk, f0,
+                      om, c0, 4)
+
+
+@njit(cache=True, inline="always")
+def _root_any(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
+    """:func:`_root`, or its compilation with the sizes constant where they fit (the
+    ball or solid bar with one or two modes): the same operations, unrolled."""
+    if ks == 2 and n == 1 and X.shape[0] == 2:
+        return _root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0)
+    if ks == 2 and n == 2 and X.shape[0] == 4:
+        return _root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0)
+    return _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0)
 
 
 @njit(cache=True, inline="always")
@@ -1060,8 +1094,9 @@ def _quad(a, b, G, nb):
     return s
 
 
-@njit(cache=True)
-def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
+@njit(cache=True, inline="always")
+def _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
+                     om, nz):
     """W at its extremum in [a, b], where W' changes sign (ga, gb: W' at a, b): Newton on W'
     from c0, kept inside the shrinking bracket, until the step s is below 2e-5 h; then W
     plus the step's quadratic correction, W - W'^2 / (2 W'').  The value's error is then
@@ -1078,8 +1113,8 @@ def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd,
     D = borrow(D)
     bq = borrow(bq)
     q = borrow(q)
-    X = borrow(X)
-    Xd = borrow(Xd)
+    X = with_len(X, nz)
+    Xd = with_len(Xd, nz)
     mk = borrow(mk)
     pos = gb > 0.0
     c = c0 if a < c0 < b else 0.5 * (a + b)
@@ -1108,6 +1143,37 @@ def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd,
         cn = c + step
         c = cn if a < cn < b else 0.5 * (a + b)
     return w
+
+
+@njit(cache=True)
+def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
+    """:func:`_w_extremum_body` for any bar."""
+    return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n,
+                            mk, om, X.shape[0])
+
+
+@njit(cache=True)
+def _w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om):
+    """:func:`_w_extremum_body` for n = 1, nz = 2, ks = 2."""
+    return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 1,
+                            mk, om, 2)
+
+
+@njit(cache=True)
+def _w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om):
+    """:func:`_w_extremum_body` for n = 2, nz = 4, ks = 2."""
+    return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 2,
+                            mk, om, 4)
+
+
+@njit(cache=True, inline="always")
+def _w_extremum_any(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
+    """:func:`_w_extremum`, or a compilation with the sizes constant (see :func:`_root_any`)."""
+    if ks == 2 and n == 1 and X.shape[0] == 2:
+        return _w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
+    if ks == 2 and n == 2 and X.shape[0] == 4:
+        return _w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
+    return _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om)
 
 
 @njit(cache=True, inline="always")
@@ -1237,7 +1303,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         dmin = -max(ev_a[EV_PLUS], ev_a[EV_MINUS], ev_b[EV_PLUS], ev_b[EV_MINUS])
         near = dmin <= reach
     if near:
-        te = _root(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
+        te = _root_any(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
                    V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
                    _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
                             ev_b[EV_YEXT], 1))
@@ -1247,7 +1313,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
             ge = gp if kk == EV_PLUS else gm
             if ev_a[kk] <= 0.0 < ge:
                 sg = 1.0 if kk == EV_PLUS else -1.0
-                tr = _root(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D, bq,
+                tr = _root_any(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D, bq,
                            qs, dX, Xd, n, mk, f0, om,
                            _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
                                     0))
@@ -1259,7 +1325,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 ge = gp if kk == EV_PLUS else gm
                 if ge <= 0.0 < ev_b[kk]:
                     sg = 1.0 if kk == EV_PLUS else -1.0
-                    tr = _root(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
+                    tr = _root_any(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
                                Z, D, bq, qs, dX, Xd, n, mk, f0, om,
                                _hermite(te, b, ge, ev_b[kk], 0.0,
                                         sg * ev_b[EV_YEXT], 0))
@@ -1276,7 +1342,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         gme = ev_b[EV_MINUS]
         yde = ev_b[EV_YEXT]
         if watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP]:
-            best = _root(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
+            best = _root_any(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
                          q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
             kind = EV_VSTOP
             bend = best
@@ -1294,7 +1360,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 else:
                     c0 = _hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
                                   0)
-                tr = _root(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
+                tr = _root_any(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
                            D, bq, qs, dX, Xd, n, mk, f0, om, c0)
                 if kind < 0 or tr <= best:
                     best = tr
@@ -2026,7 +2092,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 for kk in (EV_REL_NEG, EV_REL_POS, EV_WALL_REL):
                     if (mode == STICK) == (kk != EV_WALL_REL):
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
-                            tr = _root(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
+                            tr = _root_any(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
                                        D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                             if tr < best or kind < 0:
                                 best = tr
@@ -2070,14 +2136,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 # of h = 0 between the step's ends, found at the extremum of h
                 tr = -1.0
                 if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
-                    tr = _root(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
+                    tr = _root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
                                ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                 elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
-                    te = _root(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
+                    te = _root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
                                ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                     ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
                     if ev_a[EV_CUT] <= 0.0 < ge:
-                        tr = _root(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
+                        tr = _root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
                                    D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                 if tr >= 0.0 and (kind < 0 or tr < best):
                     best = tr
@@ -2103,7 +2169,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                         c0 = _hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1)
                     else:
                         c0 = _hermite(a, b, wa, wb, wda, wdb, 1)
-                    we = _w_extremum(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, qs,
+                    we = _w_extremum_any(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D,
+                                         bq, qs,
                                      dX, Xd, n, mk, om)
                     max_abs_w = max(max_abs_w, abs(we))
                     max_w = max(max_w, we)

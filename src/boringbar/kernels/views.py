@@ -9,7 +9,7 @@ view: borrow only arrays that the caller holds (arguments) or that stay
 referenced until the view's last use.
 """
 
-from numba.core import cgutils
+from numba.core import cgutils, types
 from numba.extending import intrinsic
 
 
@@ -30,3 +30,27 @@ def borrow(typingctx, arr):
         return dst._getvalue()
 
     return arr(arr), impl
+
+
+@intrinsic
+def with_len(typingctx, arr, n):
+    """The 1-d array ``arr`` seen with length ``n`` (at most its own; not checked) and
+    without its memory owner: where ``n`` is a constant, loops over ``arr.shape[0]``
+    unroll (the kernel's specialisations by mode count)."""
+    if not (isinstance(arr, types.Array) and arr.ndim == 1 and isinstance(n, types.Integer)):
+        return None
+
+    def impl(context, builder, signature, args):
+        src = cgutils.create_struct_proxy(arr)(context, builder, value=args[0])
+        dst = cgutils.create_struct_proxy(arr)(context, builder)
+        ln = context.cast(builder, args[1], n, types.intp)
+        dst.meminfo = cgutils.get_null_value(src.meminfo.type)
+        dst.parent = cgutils.get_null_value(src.parent.type)
+        dst.nitems = ln
+        dst.itemsize = src.itemsize
+        dst.data = src.data
+        dst.shape = cgutils.pack_array(builder, [ln])
+        dst.strides = src.strides
+        return dst._getvalue()
+
+    return arr(arr, n), impl
