@@ -1177,6 +1177,26 @@ def _w_extremum_any(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X,
 
 
 @njit(cache=True, inline="always")
+def _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X, ev, b, seg, mode, n, mk, f0, om,
+                ydd_on, acc, ddc, nz):
+    """A whole grid step of level ``lev`` outside a cut: the eigen-coordinates qg and the
+    forcing phasor phg advanced (returned), X from them, the event functions at the step's
+    end b and (if ``ydd_on``) y'' and W'' there (else NaN).  X is seen with length ``nz``:
+    the kernel inlines this with n, ks and nz constant for one and two modes."""
+    X = with_len(X, nz)
+    for kq in range(_nq(nz, ks)):
+        k = kq * ks
+        qg[k] = qg[k] * eh[r, lev, k]
+    phg = phg * rot
+    _from_q(r, qg, phg, fb, Z, D, V, ks, X)
+    _events(ev, X, b, seg, mode, n, mk, f0, om)
+    if ydd_on:
+        ydd, wdd = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
+        return phg, ydd, wdd
+    return phg, math.nan, math.nan
+
+
+@njit(cache=True, inline="always")
 def _ydd(X, f, fb, acc, ddc, n):
     """(y'', W'') of a free ball's bar state X under the tip force f and F_b: y'' = acc -
     psi_d . u'', W'' = psi_L . u'', M u'' = psi_L f - K u - C u' - s psi_d F_b (ddc's rows)."""
@@ -2051,11 +2071,20 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 full = False
             istep += 1
             if full and istep % 64 != 0 and not regen:
-                for kq in range(_nq(nz, ks)):
-                    k = kq * ks
-                    qg[k] = qg[k] * eh[r, lev, k]
-                phg = phg * rotl[lev]
-                _from_q(r, qg, phg, fb, Z, D, V, ks, X)
+                # the usual grid point, inlined with the sizes constant for one and two modes
+                rot = rotl[lev]
+                if ks == 2 and n == 1 and nz == 2:
+                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                                    ev_b, b, seg, mode, 1, mk, f0, om, ydd_on,
+                                                    acc, ddc, 2)
+                elif ks == 2 and n == 2 and nz == 4:
+                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                                    ev_b, b, seg, mode, 2, mk, f0, om, ydd_on,
+                                                    acc, ddc, 4)
+                else:
+                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X,
+                                                    ev_b, b, seg, mode, n, mk, f0, om, ydd_on,
+                                                    acc, ddc, nz)
             elif whole and not full:
                 # the tabulated end of a whole step, written out: numba reference-counts
                 # the array arguments of every call, even inlined (docs/performance.md)
@@ -2073,11 +2102,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             else:
                 _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
                 phg = cmath.exp(1j * om * (t + b))
-            if ball or not regen:
+            if not (full and istep % 64 != 0 and not regen) and (ball or not regen):
                 _events(ev_b, X, b, seg, mode, n, mk, f0, om)
                 if ydd_on:
                     ydd_b, wdd_b = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
-            else:
+            elif regen:
                 wq = 0.0
                 wdq = 0.0
                 for i in range(n):
