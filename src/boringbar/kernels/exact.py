@@ -1622,10 +1622,12 @@ def _zeros2(ptr, n, m):
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
            tabE, tabP, bnd, levmax):
-    # one compilation for every bar, forcing and mode count: specialisations (the harmonic
-    # ball with 1 and 2 modes) were 1.13-1.35x faster with the same bits, but each took
-    # minutes to compile cold (the 1-mode one 220 s), more than the test suite's budget
-    # allows (docs/performance.md)
+    # one compilation of this body for every bar, forcing and mode count; its hot parts
+    # (segment integrals, event roots, W extrema, the usual grid point) run compiled or
+    # inlined with the sizes constant where n = 1 or 2, nz = 2 n and ks = 2 (the ball or
+    # solid bar with one or two modes): 1.2-1.4x, the same bits, under a minute more to
+    # compile.  The whole body specialised was as fast but took minutes per mode count
+    # (docs/performance.md)
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     regen = int(p[L.FORCING]) == L.REGENERATIVE
