@@ -812,6 +812,9 @@ def _root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, 
 def _root_any(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
     """:func:`_root`, or its compilation with the sizes constant where they fit (the
     ball or solid bar with one or two modes): the same operations, unrolled."""
+    # a run-time kind: numba types the constants EV_* as literals and would compile each
+    # function once per event kind passed as a constant (five times, 2 minutes cold)
+    kind = kind + 0
     if ks == 2 and n == 1 and X.shape[0] == 2:
         return _root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0)
     if ks == 2 and n == 2 and X.shape[0] == 4:
