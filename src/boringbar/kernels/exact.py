@@ -1327,9 +1327,9 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         near = dmin <= reach
     if near:
         te = _root_any(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                   V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
-                   _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
-                            ev_b[EV_YEXT], 1))
+                       V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
+                       _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
+                                ev_b[EV_YEXT], 1))
         gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
         gm = -2.0 * half - gp
         for kk in (EV_PLUS, EV_MINUS):
@@ -1337,9 +1337,9 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
             if ev_a[kk] <= 0.0 < ge:
                 sg = 1.0 if kk == EV_PLUS else -1.0
                 tr = _root_any(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D, bq,
-                           qs, dX, Xd, n, mk, f0, om,
-                           _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
-                                    0))
+                               qs, dX, Xd, n, mk, f0, om,
+                               _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
+                                        0))
                 if kind < 0 or tr < best:
                     best = tr
                     kind = kk
@@ -1349,9 +1349,9 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 if ge <= 0.0 < ev_b[kk]:
                     sg = 1.0 if kk == EV_PLUS else -1.0
                     tr = _root_any(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
-                               Z, D, bq, qs, dX, Xd, n, mk, f0, om,
-                               _hermite(te, b, ge, ev_b[kk], 0.0,
-                                        sg * ev_b[EV_YEXT], 0))
+                                   Z, D, bq, qs, dX, Xd, n, mk, f0, om,
+                                   _hermite(te, b, ge, ev_b[kk], 0.0,
+                                            sg * ev_b[EV_YEXT], 0))
                     if kind < 0 or tr < best:
                         best = tr
                         kind = kk
@@ -1366,7 +1366,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         yde = ev_b[EV_YEXT]
         if watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP]:
             best = _root_any(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
-                         q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                             q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
             kind = EV_VSTOP
             bend = best
             gpe = _g(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk,
@@ -1384,7 +1384,7 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                     c0 = _hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
                                   0)
                 tr = _root_any(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
-                           D, bq, qs, dX, Xd, n, mk, f0, om, c0)
+                               D, bq, qs, dX, Xd, n, mk, f0, om, c0)
                 if kind < 0 or tr <= best:
                     best = tr
                     kind = kk
@@ -2075,7 +2075,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 b = tlen
                 full = False
             istep += 1
-            if full and istep % 64 != 0 and not regen:
+            usual = full and istep % 64 != 0 and not regen
+            if usual:
                 # the usual grid point, inlined with the sizes constant for one and two modes
                 rot = rotl[lev]
                 if ks == 2 and n == 1 and nz == 2:
@@ -2107,7 +2108,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             else:
                 _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
                 phg = cmath.exp(1j * om * (t + b))
-            if not (full and istep % 64 != 0 and not regen) and (ball or not regen):
+            if not usual and (ball or not regen):
                 _events(ev_b, X, b, seg, mode, n, mk, f0, om)
                 if ydd_on:
                     ydd_b, wdd_b = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
@@ -2127,7 +2128,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     if (mode == STICK) == (kk != EV_WALL_REL):
                         if ev_a[kk] <= 0.0 < ev_b[kk]:
                             tr = _root_any(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
-                                       D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                                           D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                             if tr < best or kind < 0:
                                 best = tr
                                 kind = kk
@@ -2171,14 +2172,14 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 tr = -1.0
                 if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
                     tr = _root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
-                               ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                                   ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                 elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
                     te = _root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
-                               ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                                   ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                     ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
                     if ev_a[EV_CUT] <= 0.0 < ge:
                         tr = _root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
-                                   D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                                       D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                 if tr >= 0.0 and (kind < 0 or tr < best):
                     best = tr
                     kind = EV_CUT
@@ -2204,8 +2205,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     else:
                         c0 = _hermite(a, b, wa, wb, wda, wdb, 1)
                     we = _w_extremum_any(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D,
-                                         bq, qs,
-                                     dX, Xd, n, mk, om)
+                                         bq, qs, dX, Xd, n, mk, om)
                     max_abs_w = max(max_abs_w, abs(we))
                     max_w = max(max_w, we)
                     min_w = min(min_w, we)
