@@ -725,6 +725,16 @@ def _hermite5(a, b, p0, p1, d0, d1, e0, e1, order):
 
 
 @njit(cache=True, inline="always")
+def _sizes(ks, n, nz):
+    """Which compilation with constant sizes fits a regime: 1 (one mode, nz = 2) or 2 (two
+    modes, nz = 4), each in conjugate pairs (ks = 2): the ball and the solid bar; 0 for any
+    other (a TMD, an overdamped mode, three or more modes), which takes the generic code."""
+    if ks == 2 and nz == 2 * n and n <= 2:
+        return n
+    return 0
+
+
+@njit(cache=True, inline="always")
 def _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om,
                c0, nz):
     """The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0):
@@ -815,9 +825,10 @@ def _root_any(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n,
     # a run-time kind: numba types the constants EV_* as literals and would compile each
     # function once per event kind passed as a constant (five times, 2 minutes cold)
     kind = kind + 0
-    if ks == 2 and n == 1 and X.shape[0] == 2:
+    sz = _sizes(ks, n, X.shape[0])
+    if sz == 1:
         return _root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0)
-    if ks == 2 and n == 2 and X.shape[0] == 4:
+    if sz == 2:
         return _root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0)
     return _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0)
 
@@ -1172,9 +1183,10 @@ def _w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, m
 @njit(cache=True, inline="always")
 def _w_extremum_any(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
     """:func:`_w_extremum`, or a compilation with the sizes constant (see :func:`_root_any`)."""
-    if ks == 2 and n == 1 and X.shape[0] == 2:
+    sz = _sizes(ks, n, X.shape[0])
+    if sz == 1:
         return _w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
-    if ks == 2 and n == 2 and X.shape[0] == 4:
+    if sz == 2:
         return _w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
     return _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om)
 
@@ -1865,6 +1877,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             fb = -fc * sdir
         kap = kappa_stick if mode == STICK else kappa_wall
         ks = kstep[r]
+        sz = _sizes(ks, n, nz)  # 1, 2: the helpers compiled with constant sizes; 0: generic
         # eigen-coordinates of the homogeneous part at t
         if ph_next_ok:
             ph = ph_next  # exp(i Omega t), from the event's evaluation (the same expression)
@@ -2079,11 +2092,11 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             if usual:
                 # the usual grid point, inlined with the sizes constant for one and two modes
                 rot = rotl[lev]
-                if ks == 2 and n == 1 and nz == 2:
+                if sz == 1:
                     phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
                                                     ev_b, b, seg, mode, 1, mk, f0, om, ydd_on,
                                                     acc, ddc, 2)
-                elif ks == 2 and n == 2 and nz == 4:
+                elif sz == 2:
                     phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
                                                     ev_b, b, seg, mode, 2, mk, f0, om, ydd_on,
                                                     acc, ddc, 4)
@@ -2333,10 +2346,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             level = (2 if ball and mode == FREE else 1) if steady else 0
             # compiled with the sizes constant for one and two modes (kept out of line:
             # the kernel's own compilation does not grow)
-            if ks == 2 and n == 1 and nz == 2:
+            if sz == 1:
                 _integrals_1(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
                              sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
-            elif ks == 2 and n == 2 and nz == 4:
+            elif sz == 2:
                 _integrals_2(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
                              sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
             else:
