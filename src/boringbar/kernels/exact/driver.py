@@ -1,0 +1,1072 @@
+"""The exact kernel's driver: :func:`_exact`, the event loop over segments, and
+:func:`run_exact`, its entry point.
+"""
+
+import cmath
+import math
+
+import numpy as np
+from numba import carray, njit
+
+from boringbar.kernels import layout as L
+from boringbar.kernels.exact.consts import (
+    CONTACT, EV_CUT, EV_HEXT, EV_MINUS, EV_PLUS, EV_REL_NEG, EV_REL_POS, EV_VSTOP, EV_WALL_REL,
+    EV_YEXT, FREE, GRID_LEVELS, MAX_EVENTS, MAX_ZERO_LENGTH, N_EV, SEG_ACC, SEG_CDIR, SEG_KRB,
+    SEG_S, SEG_SIZE, STICK, _DDC, _NB_MAX, _NB_MAX2, _NB_MAX_2, _NMAX6, _NZB_MAX, _NZ_MAX)
+from boringbar.kernels.exact.cut import (
+    _GL_W, _GL_X, _hermite_at, _knot, _quad_cut, _surface_piece, cut_tables, history_step)
+from boringbar.kernels.exact.events import (
+    NSUB, _g, _hermite, _hermite5, _may_graze, _quad_range, _root_any, _w_extremum_any,
+    _w_may_exceed, _wall_step)
+from boringbar.kernels.exact.prepare import prepare
+from boringbar.kernels.exact.propagate import (
+    _eval, _force, _freq, _from_q, _integrals, _integrals_1, _integrals_2, _nq, _sizes,
+    _surface)
+from boringbar.kernels.stack import stack_ptr
+from boringbar.kernels.views import borrow, with_len
+
+
+@njit(cache=True, inline="always")
+def _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X, ev, b, seg, mode, n, mk, f0, om,
+                ydd_on, acc, ddc, nz):
+    """A whole grid step of level ``lev`` outside a cut: the eigen-coordinates qg and the
+    forcing phasor phg advanced (returned), X from them, the event functions at the step's
+    end b and (if ``ydd_on``) y'' and W'' there (else NaN).  X is seen with length ``nz``:
+    the kernel inlines this with n, ks and nz constant for one and two modes."""
+    X = with_len(X, nz)
+    for kq in range(_nq(nz, ks)):
+        k = kq * ks
+        qg[k] = qg[k] * eh[r, lev, k]
+    phg = phg * rot
+    _from_q(r, qg, phg, fb, Z, D, V, ks, X)
+    _events(ev, X, b, seg, mode, n, mk, f0, om)
+    if ydd_on:
+        ydd, wdd = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
+        return phg, ydd, wdd
+    return phg, math.nan, math.nan
+
+
+@njit(cache=True, inline="always")
+def _ydd(X, f, fb, acc, ddc, n):
+    """(y'', W'') of a free ball's bar state X under the tip force f and F_b: y'' = acc -
+    psi_d . u'', W'' = psi_L . u'', M u'' = psi_L f - K u - C u' - s psi_d F_b (ddc's rows)."""
+    ydd = acc - (ddc[0, n] * f + ddc[0, n + 1] * fb)
+    wdd = ddc[1, n] * f + ddc[1, n + 1] * fb
+    for i in range(n):
+        ydd -= ddc[0, i] * X[i] + ddc[2, i] * X[n + i]
+        wdd += ddc[1, i] * X[i] + ddc[3, i] * X[n + i]
+    return ydd, wdd
+
+
+@njit(cache=True, inline="always")
+def _zeros(ptr, n):
+    """n zeros at ``ptr`` (stack scratch: kernels/stack.py)."""
+    a = carray(ptr, n)
+    for i in range(n):
+        a[i] = 0.0
+    return a
+
+
+@njit(cache=True, inline="always")
+def _zeros2(ptr, n, m):
+    """An n x m array of zeros at ``ptr``."""
+    a = carray(ptr, (n, m))
+    for i in range(n):
+        for j in range(m):
+            a[i, j] = 0.0
+    return a
+
+
+@njit(cache=True, nogil=True)
+def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
+           tabE, tabP, bnd, levmax):
+    # one compilation of this body for every bar, forcing and mode count; its hot parts
+    # (segment integrals, event roots, W extrema, the usual grid point) run compiled or
+    # inlined with the sizes constant where n = 1 or 2, nz = 2 n and ks = 2 (the ball or
+    # solid bar with one or two modes): 1.2-1.4x, the same bits, under a minute more to
+    # compile.  The whole body specialised was as fast but took minutes per mode count
+    # (docs/performance.md)
+    n = int(p[L.N_MODES])
+    case = int(p[L.CASE])
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
+    # borrowed views of the arguments and scratch on the stack: numba reference-counts
+    # every array argument of every call, even inlined (an atomic operation each time:
+    # 40 % of the run time), but not arrays without a memory owner (kernels/views.py)
+    p = borrow(p)
+    x = borrow(x)
+    rec = borrow(rec)
+    imp = borrow(imp)
+    stick = borrow(stick)
+    strobe = borrow(strobe)
+    met = borrow(met)
+    lam = borrow(lam)
+    V = borrow(V)
+    Vi = borrow(Vi)
+    Z = borrow(Z)
+    D = borrow(D)
+    eh = borrow(eh)
+    lvis = borrow(lvis)
+    cvis = borrow(cvis)
+    isum = borrow(isum)
+    Vfull = borrow(Vfull)
+    kstep = borrow(kstep)
+    levmax = borrow(levmax)
+    bq = borrow(bq)
+    tabE = borrow(tabE)
+    tabP = borrow(tabP)
+    bnd = borrow(bnd)
+    nz = lam.shape[1]
+    nb = nz + 3
+    ball = case == L.BALL
+    mk = _zeros2(stack_ptr(_NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
+    for i in range(n):
+        mk[0, i] = p[L.M_ + i]
+        mk[1, i] = p[L.K_ + i]
+        mk[2, i] = p[L.C_ + i]
+        mk[3, i] = p[L.PSI_L + i]
+        mk[4, i] = p[L.PSI_D + i]
+        mk[5, i] = p[L.PSI_A + i]
+    f0 = p[L.F0]
+    om = p[L.OMEGA]
+    m = p[L.BALL_MASS]
+    half = p[L.HALF_GAP]
+    e = p[L.RESTITUTION]
+    fc = p[L.FRICTION]
+    fs = max(p[L.STATIC_FRICTION], fc)
+    sr = p[L.REACTION]
+    meff = p[L.M_EFF]
+    vimp = p[L.V_IMPACT]
+    stick_min = p[L.STICK_MIN]
+    tstrobe = p[L.STROBE_PERIOD]
+    spd = 0.0
+    for i in range(n):
+        spd += mk[4, i] * mk[4, i] / mk[0, i]
+    kappa_stick = (1.0 / m + sr * spd) if m > 0.0 else 1.0
+    # psi . u'' of a free ball's bar from its state, force f and F_b: rows 0 (psi_d) and 1
+    # (psi_L) hold the coefficients of u_i, then of f and F_b; rows 2 and 3 those of u_i'
+    ddc = _zeros2(stack_ptr(_DDC, np.float64), 4, n + 2)
+    for i in range(n):
+        for row in range(2):
+            pr = mk[4 - row, i] / mk[0, i]  # psi_d,i / M_i, then psi_L,i / M_i
+            ddc[row, i] = -pr * mk[1, i]
+            ddc[row + 2, i] = -pr * mk[2, i]
+            ddc[row, n] += pr * mk[3, i]
+            ddc[row, n + 1] -= pr * sr * mk[4, i]
+    kappa_wall = (1.0 / m + spd) if m > 0.0 else 1.0
+
+    # scratch
+    X = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    Xa = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    Xd = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    q0 = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    qs = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    qg = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
+    me = _zeros2(stack_ptr(_NB_MAX_2, np.complex128), 2, nb)  # mu, exp(mu T)
+    G = _zeros2(stack_ptr(_NB_MAX2, np.complex128), nb, nb)
+    Cx = _zeros2(stack_ptr(_NZB_MAX, np.complex128), nz, nb)
+    cf = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    ca = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    cb = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    out = _zeros(stack_ptr(7, np.float64), 7)
+    phj = _zeros(stack_ptr(3, np.complex128), 3)
+    seg = _zeros(stack_ptr(SEG_SIZE, np.float64), SEG_SIZE)
+    dX = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    ev_a = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_b = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_s = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+    ev_t = _zeros(stack_ptr(N_EV, np.float64), N_EV)
+
+    for j in range(nz):
+        X[j] = x[j]
+    # --- regenerative cut (MODEL.md section 4): the history of W as knots -----------------
+    # Knots (t, W, W'-, W'+) at the nodes t0 + j H, H = tau / m <= dt_out (so the delayed
+    # nodes fall on nodes), and at every event (W' jumps at impacts, W'' at friction
+    # switches).  The surface min_k [k h_m + W(t - k tau)] is the cubic Hermite of W, W'
+    # between the two knots around t - k tau; a segment ends where any delayed knot falls,
+    # so the input is one cubic on it.  ip[k]: the knot at or before t - k tau (-1: before
+    # the cut, where W = HIST_W0).
+    krb = p[L.KR_B]
+    feed = p[L.FEED]
+    tau_d = p[L.TAU]
+    nrev = int(p[L.N_REV]) if regen else 0
+    stop_at_zero = p[L.STOP_AT_ZERO] > 0.0
+    w_before = p[L.HIST_W0]
+    cubic = p[L.INTERP] > 0.0
+    m_rev = int(round(tau_d / hist_step)) if regen else 1
+    hh_ = hist_step  # H
+    ttol = max(1e-9 * hh_, 4.0 * 2.2e-16 * (abs(t0) + abs(t_end)))
+    cap_kn = nrev * m_rev + 64 if regen else 1
+    kn = np.zeros((cap_kn, 5))
+    nk = 0
+    ip = np.full(nrev + 1, -1, np.int64)
+    sc = np.zeros((nrev + 1, 4))
+    qsum = _zeros(stack_ptr(6, np.float64), 6)
+    first_zero = met[L.FIRST_ZERO_T]
+    max_force = met[L.MAX_FORCE]
+    n_zero_steps = met[L.N_ZERO_STEPS]
+    last_zero_step = -1
+    j_node = 0  # the last node reached
+    incut = False
+    if regen:
+        w_ = 0.0
+        wd_ = 0.0
+        for i in range(n):
+            w_ += mk[3, i] * X[i]
+            wd_ += mk[3, i] * X[n + i]
+        kn[0, 0] = t0
+        kn[0, 1] = w_
+        kn[0, 2] = wd_
+        kn[0, 3] = wd_
+        kn[0, 4] = 0.0
+        nk = 1
+        incut = feed + w_before - w_ > 0.0
+        if not incut and first_zero < 0.0:
+            first_zero = t0
+        max_force = max(max_force, krb * max(0.0, feed + w_before - w_))
+    f_t0 = f0 * math.sin(om * t0)
+    if incut:
+        f_t0 += krb * (feed + w_before - kn[0, 1])
+    y = x[2 * n] if ball or case == L.LOCKED else 0.0
+    yd = x[2 * n + 1] if ball else 0.0
+
+    sum_w2 = met[L.SUM_W2]
+    sum_w = met[L.SUM_W]
+    n_steady = met[L.N_STEADY]
+    max_abs_w = met[L.MAX_ABS_W]
+    max_w = met[L.STEADY_MAX_W]
+    min_w = met[L.STEADY_MIN_W]
+    max_aux = met[L.MAX_ABS_AUX]
+    max_aux_all = met[L.MAX_ABS_AUX_ALL]
+    sum_aux2 = met[L.SUM_AUX2]
+    sum_f = met[L.SUM_F]
+    n_plus = met[L.N_IMP_PLUS]
+    n_minus = met[L.N_IMP_MINUS]
+    n_all = met[L.N_IMP_ALL]
+    n_micro = met[L.N_MICRO]
+    t_contact = met[L.T_CONTACT]
+    t_stick = met[L.T_STICK]
+    w_force = met[L.W_FORCE]
+    d_visc = met[L.D_VISC]
+    d_imp = met[L.D_IMPACT]
+    d_fric = met[L.D_FRICTION]
+    w_nr = met[L.W_NONRECIP]
+    n_imp = int(met[L.N_IMP_REC])
+    n_stk = int(met[L.N_STICK_REC])
+    n_rec = int(met[L.N_REC])
+    n_stb = int(met[L.N_STROBE])
+    n_ev = int(met[L.N_EVENTS])
+    status = 0
+    cap_imp = imp.shape[0]
+    cap_stk = stick.shape[0]
+    cap_rec = rec.shape[0]
+    cap_stb = strobe.shape[0]
+
+    # next output sample times
+    k_rec = 1
+    t_next_strobe = 0.0
+    if tstrobe > 0.0:
+        t_next_strobe = p[L.STROBE_T0]
+        if t_next_strobe <= t0:
+            t_next_strobe += (math.floor((t0 - t_next_strobe) / tstrobe) + 1) * tstrobe
+
+    # --- the initial regime ---------------------------------------------------------------
+    mode = FREE
+    sdir = 0.0
+    wall = 0.0
+    if ball:
+        if yd != 0.0:
+            sdir = 1.0 if yd > 0.0 else -1.0
+        elif abs(y) >= half:
+            wall = 1.0 if y > 0.0 else -1.0
+            y = wall * half
+            F = _freq(X, f_t0, n, mk, kappa_wall)
+            if wall * F <= fs:
+                mode = CONTACT
+            elif fc > 0.0:
+                sdir = -wall
+        elif fc > 0.0:
+            F = _freq(X, f_t0, n, mk, kappa_stick)
+            if abs(F) <= fs:
+                mode = STICK
+            else:
+                sdir = -1.0 if F > 0.0 else 1.0
+    in_stick = mode == STICK
+    stick_t0 = t0
+    n_zero = 0
+
+    # the grid's step lengths (h, 2 h, 4 h, ...) and their phase steps
+    hl = _zeros(stack_ptr(GRID_LEVELS, np.float64), GRID_LEVELS)
+    rotl = _zeros(stack_ptr(GRID_LEVELS, np.complex128), GRID_LEVELS)
+    for lv in range(GRID_LEVELS):
+        hl[lv] = h * 2.0 ** lv
+        rotl[lv] = cmath.exp(1j * om * hl[lv]) if om != 0.0 else 1.0 + 0.0j
+    ph_next = 1.0 + 0.0j
+    ph_next_ok = False
+    t = t0
+    while t < t_end:
+        if n_ev >= MAX_EVENTS:
+            status = 1
+            break
+        t_stop = min(t_steady, t_end) if t < t_steady else t_end
+        t_seg_end = t_stop
+        steady = t >= t_steady
+        r = 0
+        if ball:
+            r = mode
+        if incut:
+            r += nreg
+        fb = 0.0
+        if mode == FREE and ball:
+            fb = -fc * sdir
+        kap = kappa_stick if mode == STICK else kappa_wall
+        ks = kstep[r]
+        sz = _sizes(ks, n, nz)  # 1, 2: the helpers compiled with constant sizes; 0: generic
+        # eigen-coordinates of the homogeneous part at t
+        if ph_next_ok:
+            ph = ph_next  # exp(i Omega t), from the event's evaluation (the same expression)
+        else:
+            ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
+        ph_next_ok = False
+        for j in range(nz):
+            dX[j] = X[j] - ((Z[r, j] * ph).imag + fb * D[r, j])
+        for k in range(nz):
+            s = 0.0 + 0.0j
+            for j in range(nz):
+                s += Vi[r, k, j] * dX[j]
+            q0[k] = s
+        at_node = False
+        whole = False
+        sticking = mode == STICK
+        krb_seg = 0.0
+        s_0 = 0.0
+        s_1 = 0.0
+        s_2 = 0.0
+        s_3 = 0.0
+        if regen:
+            # this segment ends at the next node, delayed knot or change of the minimising
+            # revolution: the surface is one cubic on it
+            while t0 + (j_node + 1) * hh_ <= t + ttol:
+                j_node += 1
+            t_seg_end = min(t0 + (j_node + 1) * hh_, t_stop)
+            at_node = t_seg_end < t_stop
+            from_node = abs(t - (t0 + j_node * hh_)) <= ttol
+            if first_zero < 0.0:
+                # one revolution (the minimum until the first zero): written out, as
+                # _surface_piece's k = 1 (no call: see the whole step below)
+                for k in range(1, nrev + 1):
+                    kt = k * tau_d
+                    i = ip[k]
+                    while i + 1 < nk and kn[i + 1, 0] + kt <= t + ttol:
+                        i += 1
+                    ip[k] = i
+                i = ip[1]
+                if i < 0:
+                    seg[SEG_S] = feed + w_before
+                    seg[SEG_S + 1] = 0.0
+                    seg[SEG_S + 2] = 0.0
+                    seg[SEG_S + 3] = 0.0
+                else:
+                    x0 = (t - tau_d) - kn[i, 0]
+                    if from_node and kn[i, 4] == j_node - m_rev:
+                        x0 = 0.0
+                    c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+                                                 kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
+                    seg[SEG_S] = feed + c0
+                    seg[SEG_S + 1] = c1
+                    seg[SEG_S + 2] = c2
+                    seg[SEG_S + 3] = c3
+                if i + 1 < nk:
+                    tn = kn[i + 1, 0] + tau_d
+                    if t + ttol < tn < t_seg_end - ttol:
+                        t_seg_end = tn
+                        at_node = False
+            else:
+                t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
+                                         w_before, tau_d, seg, j_node if from_node else -1,
+                                         m_rev, cubic)
+                if t_piece < t_seg_end:
+                    t_seg_end = t_piece
+                    at_node = False
+            seg[SEG_KRB] = krb if incut else 0.0
+            seg[SEG_CDIR] = 1.0 if incut else -1.0
+            # a whole step H from node to node, inside one grid step: tabulated values
+            whole = at_node and from_node and hh_ <= h
+            krb_seg = seg[SEG_KRB]
+            s_0 = seg[SEG_S]
+            s_1 = seg[SEG_S + 1]
+            s_2 = seg[SEG_S + 2]
+            s_3 = seg[SEG_S + 3]
+        pdu = 0.0
+        pdv = 0.0
+        for i in range(n):
+            pdu += mk[4, i] * X[i]
+            pdv += mk[4, i] * X[n + i]
+        # a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
+        b4 = 0.0
+        if ball:
+            b4 = bnd[r, 0, nz]  # Omega^4 |psi_d . Z| (prepare's bnd)
+            for k in range(nz):
+                qk = q0[k]
+                if incut:
+                    # minus the polynomial particular solution P of q' = lambda q + g(tau)
+                    # (P^(4) = 0 for a cubic g); |exp(lambda tau)| <= 1 still
+                    lk = lam[r, k]
+                    gk = krb * bq[r, k]
+                    p3 = -gk * seg[SEG_S + 3] / lk
+                    p2 = (3.0 * p3 - gk * seg[SEG_S + 2]) / lk
+                    p1 = (2.0 * p2 - gk * seg[SEG_S + 1]) / lk
+                    qk = qk - (p1 - gk * seg[SEG_S]) / lk
+                b4 += bnd[r, 0, k] * abs(qk)  # |lambda_k|^4 |psi_d . V_k| |q_k|
+        # the same bound on |W^(4)| = |psi_L . u^(4)| in the steady window under harmonic
+        # forcing: a W' = 0 extremum is located only where it may beat the running extremes
+        bw4 = -1.0
+        if steady and not regen:
+            bw4 = bnd[r, 1, nz]
+            for k in range(nz):
+                bw4 += bnd[r, 1, k] * abs(q0[k])
+        # a free ball under harmonic forcing: y'' and W'' at its grid points (the walls'
+        # and extrema's quintic starts); with more than one mode it steps longer than h
+        # where it can, from bounds on |y'''| = |psi_d . u'''| and |W'''| over the segment
+        ydd_on = ball and mode == FREE and not regen
+        adapt = ydd_on and levmax[r] > 0
+        b3y = 0.0
+        b3w = 0.0
+        if adapt:
+            b3y = bnd[r, 2, nz]
+            b3w = bnd[r, 3, nz]
+            for k in range(nz):
+                aq = abs(q0[k])
+                b3y += bnd[r, 2, k] * aq
+                b3w += bnd[r, 3, k] * aq
+        seg[0] = t
+        seg[1] = fb
+        seg[2] = y + pdu  # the ball's absolute position and velocity
+        seg[3] = yd + pdv
+        seg[4] = y
+        seg[5] = sdir
+        seg[6] = wall
+        seg[7] = kap
+        seg[8] = fs
+        seg[9] = half
+        seg[10] = m if m > 0.0 else 1.0
+        acc = fb / seg[10]
+        seg[SEG_ACC] = acc
+        # which events are watched
+        watch_wall = ball and mode == FREE
+        watch_v = watch_wall and fc > 0.0 and sdir != 0.0
+        watch_ext = watch_wall and not watch_v
+        tlen = t_seg_end - t
+        # values at tau = 0
+        a = 0.0
+        for j in range(nz):
+            Xa[j] = X[j]
+        for k in range(nz):
+            qg[k] = q0[k]
+        phg = ph
+        ev_kind = -1
+        tau_ev = tlen
+        istep = 0
+        # the values at a (carried over from the previous grid point)
+        wa = 0.0
+        wda = 0.0
+        for i in range(n):
+            wa += mk[3, i] * Xa[i]
+            wda += mk[3, i] * Xa[n + i]
+        if ball or not regen:
+            _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+        else:  # only h matters; written out (no call, see the whole step below)
+            ev_a[EV_CUT] = seg[SEG_CDIR] * (wa - s_0)
+            ev_a[EV_HEXT] = s_1 - wda
+        # a segment never starts beyond a wall (events put the ball on it); the closed
+        # form's y(0) may be a few ulp past it, which would hide a return to that wall
+        ev_a[EV_PLUS] = min(ev_a[EV_PLUS], 0.0)
+        ev_a[EV_MINUS] = min(ev_a[EV_MINUS], 0.0)
+        # nor past h = 0 (an event put it there; the re-evaluated h may be a few ulp off)
+        ev_a[EV_CUT] = min(ev_a[EV_CUT], 0.0)
+        for c in range(6):
+            qsum[c] = 0.0
+        auxa = 0.0
+        auxda = 0.0
+        if case != L.SOLID:
+            auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
+        ydd_a = math.nan
+        wdd_a = math.nan
+        ydd_b = math.nan
+        wdd_b = math.nan
+        if ydd_on:
+            ydd_a, wdd_a = _ydd(Xa, f0 * ph.imag, fb, acc, ddc, n)
+        while True:
+            # the step: h, or 2^lv h where Taylor's theorem proves that it holds no event
+            # and no new extremum of |y| or (steady) of W: on [a, a + s], y lies within
+            # b3y s^3 / 6 of its quadratic Taylor polynomial at a, y' within b3y s^2 / 2 of
+            # its linear one, W within b3w s^3 / 6 of its quadratic; the step is taken if
+            # these ranges stay inside the walls and below the largest |y| seen, keep y' off
+            # 0 (friction) and keep W strictly between its running extremes
+            lev = 0
+            if adapt:
+                ylim = min(half, max_aux if steady else max_aux_all) * (1.0 - 1e-9)
+                ya = ev_a[EV_PLUS] + half
+                yda = ev_a[EV_YEXT]
+                wmar = 1e-9 * max_abs_w
+                for lv in range(1, levmax[r] + 1):
+                    hs = hl[lv]
+                    lo, hi = _quad_range(ya, yda, ydd_a, hs)
+                    e3 = b3y * hs * hs * hs / 6.0
+                    if not (hi + e3 < ylim and lo - e3 > -ylim):
+                        break
+                    if watch_v:
+                        e2 = b3y * hs * hs * (0.5 + 1e-9)
+                        v1 = yda + ydd_a * hs
+                        if not ((yda > e2 and v1 > e2) or (yda < -e2 and v1 < -e2)):
+                            break
+                    if steady:
+                        lo, hi = _quad_range(wa, wda, wdd_a, hs)
+                        e3 = b3w * hs * hs * hs / 6.0 + wmar
+                        if not (hi + e3 < max_w and lo - e3 > min_w):
+                            break
+                    lev = lv
+            b = a + hl[lev]
+            full = True
+            if b >= tlen:
+                b = tlen
+                full = False
+            istep += 1
+            usual = full and istep % 64 != 0 and not regen
+            if usual:
+                # the usual grid point, inlined with the sizes constant for one and two modes
+                rot = rotl[lev]
+                if sz == 1:
+                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                                    ev_b, b, seg, mode, 1, mk, f0, om, ydd_on,
+                                                    acc, ddc, 2)
+                elif sz == 2:
+                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                                    ev_b, b, seg, mode, 2, mk, f0, om, ydd_on,
+                                                    acc, ddc, 4)
+                else:
+                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X,
+                                                    ev_b, b, seg, mode, n, mk, f0, om, ydd_on,
+                                                    acc, ddc, nz)
+            elif whole and not full:
+                # the tabulated end of a whole step, written out: numba reference-counts
+                # the array arguments of every call, even inlined (docs/performance.md)
+                for kq in range(_nq(nz, ks)):
+                    k = kq * ks
+                    qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
+                             + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
+                             + s_3 * tabP[r, 4, 3, k])
+                for j in range(nz):
+                    sx = fb * D[r, j]
+                    for kq in range(_nq(nz, ks)):
+                        k = kq * ks
+                        sx += (V[r, j, k] * qg[k]).real
+                    X[j] = sx
+            else:
+                _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
+                phg = cmath.exp(1j * om * (t + b))
+            if not usual and (ball or not regen):
+                _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+                if ydd_on:
+                    ydd_b, wdd_b = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
+            elif regen:
+                wq = 0.0
+                wdq = 0.0
+                for i in range(n):
+                    wq += mk[3, i] * X[i]
+                    wdq += mk[3, i] * X[n + i]
+                ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
+                ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
+            # --- events in [a, b]
+            best = b
+            kind = -1
+            if ball and mode != FREE:
+                for kk in (EV_REL_NEG, EV_REL_POS, EV_WALL_REL):
+                    if (mode == STICK) == (kk != EV_WALL_REL):
+                        if ev_a[kk] <= 0.0 < ev_b[kk]:
+                            tr = _root_any(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
+                                           D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                            if tr < best or kind < 0:
+                                best = tr
+                                kind = kk
+            elif watch_wall:
+                # call the (not inlined) search only when an end value shows something, or
+                # y' changes sign and the bound on y lets the ball reach a wall
+                # (a longer step than h holds no wall event: see its choice)
+                graze = lev == 0 and _may_graze(a, b, ev_a, ev_b, half, b4)
+                if ((ev_a[EV_PLUS] <= 0.0 < ev_b[EV_PLUS])
+                        or (ev_a[EV_MINUS] <= 0.0 < ev_b[EV_MINUS])
+                        or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
+                        or (graze and watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)):
+                    kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
+                                            q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
+                                            ydd_a, ydd_b)
+                if kind < 0 and graze:
+                    # the bound on y^(4) allows a crossing and return inside the step:
+                    # look again on NSUB sub-steps (direct evaluations)
+                    for kk in range(N_EV):
+                        ev_s[kk] = ev_a[kk]
+                    sa = a
+                    for j in range(1, NSUB + 1):
+                        sb = a + (b - a) * j / NSUB if j < NSUB else b
+                        if j < NSUB:
+                            _eval(r, q0, seg, sb, om, lam, V, ks, Z, D, bq, qs, dX)
+                            _events(ev_t, dX, sb, seg, mode, n, mk, f0, om)
+                        else:
+                            for kk in range(N_EV):
+                                ev_t[kk] = ev_b[kk]
+                        kind, best = _wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
+                                                seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n,
+                                                mk, f0, om, math.nan, math.nan)
+                        if kind >= 0:
+                            break
+                        sa = sb
+                        for kk in range(N_EV):
+                            ev_s[kk] = ev_t[kk]
+            if regen:
+                # the tool leaves (in the cut) or re-enters (out of it): h = 0, or a graze
+                # of h = 0 between the step's ends, found at the extremum of h
+                tr = -1.0
+                if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
+                    tr = _root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
+                                   ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
+                    te = _root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
+                                   ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                    ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
+                    if ev_a[EV_CUT] <= 0.0 < ge:
+                        tr = _root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
+                                       D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                if tr >= 0.0 and (kind < 0 or tr < best):
+                    best = tr
+                    kind = EV_CUT
+            if kind >= 0:
+                b = best
+                ph_next = _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
+                ev_kind = kind
+                tau_ev = b
+            # --- outputs on (a, b]
+            wb = 0.0
+            wdb = 0.0
+            for i in range(n):
+                wb += mk[3, i] * X[i]
+                wdb += mk[3, i] * X[n + i]
+            if steady:
+                max_abs_w = max(max_abs_w, abs(wb))
+                max_w = max(max_w, wb)
+                min_w = min(min_w, wb)
+                if lev == 0 and wda * wdb < 0.0 and (bw4 < 0.0 or _w_may_exceed(
+                        b - a, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w)):
+                    if kind < 0 and wdd_a == wdd_a and wdd_b == wdd_b:  # W'' at both ends
+                        c0 = _hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1)
+                    else:
+                        c0 = _hermite(a, b, wa, wb, wda, wdb, 1)
+                    we = _w_extremum_any(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D,
+                                         bq, qs, dX, Xd, n, mk, om)
+                    max_abs_w = max(max_abs_w, abs(we))
+                    max_w = max(max_w, we)
+                    min_w = min(min_w, we)
+            if regen:
+                # Gauss-Legendre (4 points, exact to degree 7) for the flows of the step:
+                # the input is a cubic, no longer a sum of exponentials
+                if whole and kind < 0 and not (sticking and sr != 1.0):
+                    # a whole step: tabulated values, written out (as above)
+                    for g in range(4):
+                        for kq in range(_nq(nz, ks)):
+                            k = kq * ks
+                            qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
+                                     + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
+                                     + s_3 * tabP[r, g, 3, k])
+                        for j in range(nz):
+                            sx = fb * D[r, j]
+                            for kq in range(_nq(nz, ks)):
+                                k = kq * ks
+                                sx += (V[r, j, k] * qs[k]).real
+                            dX[j] = sx
+                        wq = 0.0
+                        wdq = 0.0
+                        for i in range(n):
+                            wq += mk[3, i] * dX[i]
+                            wdq += mk[3, i] * dX[n + i]
+                        xg = _GL_X[g] * b
+                        fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq)
+                        max_force = max(max_force, fq)
+                        wg = _GL_W[g] * b
+                        qsum[0] += wg * fq * wdq
+                        dv = 0.0
+                        for d in range(lvis.shape[0]):
+                            vv = 0.0
+                            for j in range(nz):
+                                vv += lvis[d, j] * dX[j]
+                            dv += cvis[d] * vv * vv
+                        qsum[1] += wg * dv
+                        if steady:
+                            qsum[2] += wg * wq * wq
+                            qsum[3] += wg * wq
+                            qsum[4] += wg * fq
+                else:
+                    max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq,
+                                                         qs, dX, n, mk, lvis, cvis,
+                                                         mode == STICK, kappa_stick, sr, qsum,
+                                                         steady))
+                max_force = max(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb))
+            # aux and aux' at a and b
+            auxb = 0.0
+            auxdb = 0.0
+            if case != L.SOLID:
+                auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
+            if kind == EV_PLUS or kind == EV_MINUS:
+                auxb = half if kind == EV_PLUS else -half  # on the wall, up to round-off
+            max_aux_all = max(max_aux_all, abs(auxb))
+            if steady:
+                max_aux = max(max_aux, abs(auxb))
+                if regen or not ball:  # a ball's int y^2 is closed form (_integrals)
+                    hh = b - a
+                    sum_aux2 += (0.5 * hh * (auxa * auxa + auxb * auxb)
+                                 + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
+            # history and strobe samples in (t + a, t + b]
+            while rec_dt > 0.0 and n_rec < cap_rec and t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt:
+                ts_ = t0 + k_rec * rec_dt
+                if ts_ > t_end:
+                    break
+                _eval(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
+                wv = 0.0
+                wdv = 0.0
+                for i in range(n):
+                    wv += mk[3, i] * dX[i]
+                    wdv += mk[3, i] * dX[n + i]
+                av, adv = _aux(dX, ts_ - t, seg, mode, case, n, mk, x, ball)
+                rec[n_rec, 0] = ts_
+                rec[n_rec, 1] = wv
+                rec[n_rec, 2] = wdv
+                rec[n_rec, 3] = av
+                rec[n_rec, 4] = adv
+                rec[n_rec, 5] = _force(seg, ts_ - t, dX, n, mk, f0, om)
+                n_rec += 1
+                k_rec += 1
+            while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
+                if n_stb < cap_stb:
+                    _eval(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
+                    wv = 0.0
+                    wdv = 0.0
+                    for i in range(n):
+                        wv += mk[3, i] * dX[i]
+                        wdv += mk[3, i] * dX[n + i]
+                    av, adv = _aux(dX, t_next_strobe - t, seg, mode, case, n, mk, x, ball)
+                    strobe[n_stb, 0] = t_next_strobe
+                    strobe[n_stb, 1] = wv
+                    strobe[n_stb, 2] = wdv
+                    strobe[n_stb, 3] = av
+                    strobe[n_stb, 4] = adv
+                    n_stb += 1
+                t_next_strobe += tstrobe
+            if kind >= 0 or not full:
+                break
+            a = b
+            wa = wb
+            wda = wdb
+            ydd_a = ydd_b
+            wdd_a = wdd_b
+            auxa = auxb
+            auxda = auxdb
+            for kk in range(N_EV):
+                ev_a[kk] = ev_b[kk]
+
+        # --- close the segment [t, t + T] ----------------------------------------------
+        T = tau_ev
+        if regen:
+            for c in range(6):
+                out[c] = qsum[c]
+            if not incut:  # the steps of length dt_out touched with h = 0
+                js = max(int(math.floor((t - t0) / dt_out)), last_zero_step + 1)
+                je = int(math.ceil((t + T - t0) / dt_out)) - 1
+                if je >= js:
+                    n_zero_steps += je - js + 1
+                    last_zero_step = je
+        else:
+            kst = kappa_stick if (ball and mode == STICK) else 0.0
+            # what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a
+            # free ball's y^2
+            level = (2 if ball and mode == FREE else 1) if steady else 0
+            # compiled with the sizes constant for one and two modes (kept out of line:
+            # the kernel's own compilation does not grow)
+            if sz == 1:
+                _integrals_1(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
+                             sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
+            elif sz == 2:
+                _integrals_2(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
+                             sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
+            else:
+                _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis, kst,
+                           sr, me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj)
+            if ball and steady:
+                # the ball's int y^2: closed form when free, y constant otherwise
+                sum_aux2 += out[6] if mode == FREE else seg[4] * seg[4] * T
+        w_force += out[0]
+        d_visc += out[1]
+        w_nr += out[5]
+        if steady:
+            sum_w2 += out[2]
+            sum_w += out[3]
+            sum_f += out[4]
+            n_steady += T
+            if mode == CONTACT:
+                t_contact += T
+        if ball:
+            pdu1 = 0.0
+            pdv1 = 0.0
+            for i in range(n):
+                pdu1 += mk[4, i] * X[i]
+                pdv1 += mk[4, i] * X[n + i]
+            if mode == FREE:
+                ynew = seg[2] + T * (seg[3] + 0.5 * acc * T) - pdu1
+                yd = seg[3] + acc * T - pdv1
+                d_fric -= fb * (ynew - y)
+                w_nr += (1.0 - sr) * fb * (pdu1 - pdu)
+                y = ynew
+        t_new = t + T if ev_kind >= 0 else t_seg_end
+        if ev_kind < 0:
+            t = t_new
+            if at_node:
+                if nk < kn.shape[0] and t > kn[nk - 1, 0] + ttol:  # written out
+                    kn[nk, 0] = t
+                    kn[nk, 1] = wb
+                    kn[nk, 2] = wdb
+                    kn[nk, 3] = wdb
+                    kn[nk, 4] = j_node + 1.0
+                    nk += 1
+                else:
+                    kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
+            continue
+        n_ev += 1
+        # the next segment starts at t + T = seg[0] + T, where the event's evaluation was
+        ph_next_ok = om != 0.0
+        f_ev = _force(seg, T, X, n, mk, f0, om)  # the tip force at the event
+        if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
+            n_zero += 1
+            if n_zero > MAX_ZERO_LENGTH:
+                status = 2
+                t = t_new
+                break
+        else:
+            n_zero = 0
+        t = t_new
+        steady = t >= t_steady
+        for j in range(nz):
+            Xa[j] = X[j]  # before the event (a knot keeps W'- and W'+)
+        # --- apply the event -------------------------------------------------------------
+        was_stick = mode == STICK
+        if ev_kind == EV_PLUS or ev_kind == EV_MINUS:
+            w_ = 1.0 if ev_kind == EV_PLUS else -1.0
+            y = w_ * half
+            vb = yd
+            if w_ * vb > 0.0:
+                ee = e if abs(vb) > vimp else 0.0  # Zeno: captured on the wall
+                g_ = (1.0 + ee) * meff * vb
+                for i in range(n):
+                    X[n + i] += g_ * mk[4, i] / mk[0, i]
+                yd = -ee * vb
+                d_imp += 0.5 * (1.0 - ee * ee) * meff * vb * vb
+                if abs(vb) > vimp:
+                    n_all += 1
+                    if steady:
+                        if w_ > 0:
+                            n_plus += 1
+                        else:
+                            n_minus += 1
+                        if n_imp < cap_imp:
+                            imp[n_imp, 0] = t
+                            imp[n_imp, 1] = w_
+                            imp[n_imp, 2] = vb
+                        n_imp += 1
+                else:
+                    n_micro += 1
+            elif w_ * vb < -vimp:
+                # moving inward, faster than a capture: not a wall contact but the
+                # round-off of a segment a few ulp long just after an impact (its end
+                # a few ulp past the wall); the ball goes on, from the wall
+                yd = vb
+            else:
+                yd = 0.0
+            if yd != 0.0:
+                mode = FREE
+                sdir = 1.0 if yd > 0.0 else -1.0
+            else:
+                mode, sdir, wall = _at_wall(X, f_ev, w_, n, mk, kappa_wall, fs, fc)
+        elif ev_kind == EV_VSTOP:
+            yd = 0.0
+            F = _freq(X, f_ev, n, mk, kappa_stick)
+            if abs(F) <= fs:
+                mode = STICK
+                sdir = 0.0
+            else:
+                mode = FREE
+                sdir = -1.0 if F > 0.0 else 1.0
+        elif ev_kind == EV_REL_NEG or ev_kind == EV_REL_POS:
+            mode = FREE
+            yd = 0.0
+            sdir = -1.0 if ev_kind == EV_REL_NEG else 1.0
+        elif ev_kind == EV_WALL_REL:
+            mode = FREE
+            yd = 0.0
+            sdir = -wall if fc > 0.0 else 0.0
+            y = wall * half
+        elif ev_kind == EV_CUT:
+            incut = not incut
+            if not incut and first_zero < 0.0:
+                first_zero = t  # the chatter verdict (MODEL.md section 4)
+                if stop_at_zero:  # finish the step of length dt_out, as RK4 does
+                    t_end = min(t_end, t0 + math.ceil((t - t0) / dt_out - 1e-9) * dt_out)
+        if regen:
+            kn, nk = _knot(kn, nk, ip, t, Xa, X, n, mk, ttol, -1.0)
+        if mode == FREE and fc == 0.0 and yd == 0.0:
+            sdir = 0.0
+        # stick intervals
+        if mode == STICK and not was_stick:
+            stick_t0 = t
+        elif was_stick and mode != STICK:
+            s0 = max(stick_t0, t_steady)
+            if t - s0 >= stick_min:
+                t_stick += t - s0
+                if n_stk < cap_stk:
+                    stick[n_stk, 0] = s0
+                    stick[n_stk, 1] = t
+                n_stk += 1
+        in_stick = mode == STICK
+
+    if in_stick:
+        s0 = max(stick_t0, t_steady)
+        if t - s0 >= stick_min:
+            t_stick += t - s0
+            if n_stk < cap_stk:
+                stick[n_stk, 0] = s0
+                stick[n_stk, 1] = t
+            n_stk += 1
+
+    for j in range(nz):
+        x[j] = X[j]
+    if ball:
+        x[2 * n] = y
+        x[2 * n + 1] = yd
+    met[L.SUM_W2] = sum_w2
+    met[L.SUM_W] = sum_w
+    met[L.N_STEADY] = n_steady
+    met[L.MAX_ABS_W] = max_abs_w
+    met[L.STEADY_MAX_W] = max_w
+    met[L.STEADY_MIN_W] = min_w
+    met[L.MAX_ABS_AUX] = max_aux
+    met[L.MAX_ABS_AUX_ALL] = max_aux_all
+    met[L.SUM_AUX2] = sum_aux2
+    met[L.SUM_F] = sum_f
+    met[L.N_IMP_PLUS] = n_plus
+    met[L.N_IMP_MINUS] = n_minus
+    met[L.N_IMP_ALL] = n_all
+    met[L.N_MICRO] = n_micro
+    met[L.T_CONTACT] = t_contact
+    met[L.T_STICK] = t_stick
+    met[L.W_FORCE] = w_force
+    met[L.D_VISC] = d_visc
+    met[L.D_IMPACT] = d_imp
+    met[L.D_FRICTION] = d_fric
+    met[L.W_NONRECIP] = w_nr
+    met[L.N_IMP_REC] = n_imp
+    met[L.N_STICK_REC] = n_stk
+    met[L.N_REC] = n_rec
+    met[L.N_STROBE] = n_stb
+    met[L.N_EVENTS] = n_ev
+    met[L.EXACT_STATUS] = status
+    if regen:
+        met[L.FIRST_ZERO_T] = first_zero
+        met[L.MAX_FORCE] = max_force
+        met[L.N_ZERO_STEPS] = n_zero_steps
+    return t
+
+
+@njit(cache=True, inline="always")
+def _at_wall(X, f, w_, n, mk, kappa_wall, fs, fc):
+    """Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
+    inward (FREE)."""
+    F = _freq(X, f, n, mk, kappa_wall)
+    if w_ * F <= fs:
+        return CONTACT, 0.0, w_
+    return FREE, (-w_ if fc > 0.0 else 0.0), w_
+
+
+@njit(cache=True, inline="always")
+def _events(ev, X, tau, seg, mode, n, mk, f0, om):
+    """All event functions from the state X at tau (see :func:`_g`)."""
+    pdu = 0.0
+    pdv = 0.0
+    for i in range(n):
+        pdu += mk[4, i] * X[i]
+        pdv += mk[4, i] * X[n + i]
+    acc = seg[SEG_ACC]
+    y = seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu
+    yd = seg[3] + acc * tau - pdv
+    ev[EV_PLUS] = y - seg[9]
+    ev[EV_MINUS] = -seg[9] - y
+    ev[EV_VSTOP] = -seg[5] * yd
+    ev[EV_YEXT] = yd
+    if seg[SEG_CDIR] != 0.0:
+        w = 0.0
+        wd = 0.0
+        for i in range(n):
+            w += mk[3, i] * X[i]
+            wd += mk[3, i] * X[n + i]
+        sv, sd = _surface(seg, tau)
+        ev[EV_CUT] = seg[SEG_CDIR] * (w - sv)
+        ev[EV_HEXT] = sd - wd
+    if mode != FREE:
+        F = _freq(X, _force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
+        ev[EV_REL_NEG] = F - seg[8]
+        ev[EV_REL_POS] = -F - seg[8]
+        ev[EV_WALL_REL] = seg[6] * F - seg[8]
+
+
+@njit(cache=True, inline="always")
+def _aux(X, tau, seg, mode, case, n, mk, x, ball):
+    """(aux, aux'): the ball's y, y' or the absorber's stroke and its rate."""
+    if ball:
+        if mode != FREE:
+            return seg[4], 0.0
+        pdu = 0.0
+        pdv = 0.0
+        for i in range(n):
+            pdu += mk[4, i] * X[i]
+            pdv += mk[4, i] * X[n + i]
+        acc = seg[SEG_ACC]
+        return seg[2] + tau * (seg[3] + 0.5 * acc * tau) - pdu, seg[3] + acc * tau - pdv
+    if case == L.TMD:
+        a = X[2 * n]
+        ad = X[2 * n + 1]
+        for i in range(n):
+            a -= mk[5, i] * X[i]
+            ad -= mk[5, i] * X[n + i]
+        return a, ad
+    if case == L.LOCKED:
+        return x[2 * n], 0.0
+    return 0.0, 0.0
+
+
+def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None,
+              dt=0.0):
+    """Advance ``x`` exactly from ``t0`` to ``t_end``; same outputs as ``run_rk4`` (the
+    steady sums are integrals, see the module docstring).  ``prep``: :func:`prepare`'s
+    result, computed here if not given.  ``dt``: a regenerative cut's history step
+    (H = tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the
+    unit of N_ZERO_STEPS.  Returns the time reached."""
+    if prep is None:
+        prep = prepare(p)
+    if int(p[L.FORCING]) == L.REGENERATIVE and not dt > 0.0:
+        raise ValueError("exact integrator: a regenerative cut needs dt > 0")
+    H = 0.0
+    tabE = np.zeros((1, 5, 1), complex)
+    tabP = np.zeros((1, 5, 4, 1), complex)
+    if int(p[L.FORCING]) == L.REGENERATIVE:
+        H = history_step(float(p[L.TAU]), float(dt))
+        tabE, tabP = cut_tables(prep, p, H)
+    return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
+                  stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
+                  prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
+                  prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),
+                  float(dt), H, tabE, tabP, prep["bnd"], prep["levmax"])
