@@ -103,7 +103,14 @@ The package, by concern:
 from boringbar.kernels.exact.consts import EV_PLUS, EV_WEXT, SEG_SIZE
 from boringbar.kernels.exact.driver import run_exact
 from boringbar.kernels.exact.events import (
-    _g, _root, _root_1, _root_2, _w_extremum, _w_extremum_1, _w_extremum_2)
+    _g,
+    _root,
+    _root_1,
+    _root_2,
+    _w_extremum,
+    _w_extremum_1,
+    _w_extremum_2,
+)
 from boringbar.kernels.exact.prepare import prepare
 from boringbar.kernels.exact.propagate import _integrals, _integrals_1, _integrals_2
 

@@ -6,7 +6,6 @@ import math
 
 from boringbar.kernels import layout as L
 
-
 #: event-search grid points per shortest period: about 16, but not a whole number, so that
 #: events half a forcing period apart (the symmetric two-impact orbit, started at an impact)
 #: do not fall on grid points, where the graze guard would search the step again for nothing
@@ -44,3 +43,44 @@ SEG_KRB = 11  # Kr b in the cut, 0 out of it (and for harmonic forcing)
 SEG_S = 12  # S(tau) = seg[12] + seg[13] tau + seg[14] tau^2 + seg[15] tau^3, the surface
 SEG_CDIR = 16  # +1 in the cut, -1 out of it, 0 harmonic forcing
 SEG_ACC = 17  # fb / m, the ball's acceleration (one division per segment)
+
+# the driver's run constants, packed into one array ``cp`` (the driver's pieces take it
+# whole instead of a dozen scalars)
+CP_HALF = 0  # delta / 2
+CP_E = 1  # restitution
+CP_FC = 2  # kinetic friction F_c
+CP_FS = 3  # static friction max(F_s, F_c)
+CP_SR = 4  # reaction share s
+CP_MEFF = 5  # effective mass of an impact
+CP_VIMP = 6  # capture threshold
+CP_KSTICK = 7  # kappa of a stuck ball
+CP_KWALL = 8  # kappa on a wall
+CP_STICK_MIN = 9  # shortest stick interval recorded
+CP_T0 = 10  # the run's start
+CP_T_STEADY = 11  # the steady window's start
+CP_DT_OUT = 12  # a cut's step (the unit of N_ZERO_STEPS)
+CP_STOP_AT_ZERO = 13  # 1: a cut stops at its first zero
+CP_SIZE = 14
+# the run's state between segments, packed into one array ``rs`` (floats; the regime and
+# the cut flag as 0.0, 1.0, 2.0)
+RS_MODE = 0  # FREE, STICK, CONTACT
+RS_SDIR = 1  # the direction a free ball slides, 0 if it does not
+RS_WALL = 2  # the wall a ball in CONTACT is on
+RS_Y = 3  # the ball's y and y'
+RS_YD = 4
+RS_INCUT = 5  # 1.0 while the tool cuts
+RS_FIRST_ZERO = 6  # the chatter verdict: the first exit from the cut (-1: none yet)
+RS_T_END = 7  # the run's end (a cut stopped at its first zero ends early)
+RS_STICK_T0 = 8  # when the current stick interval began
+RS_SIZE = 9
+# a regenerative cut's constants, packed into one array ``cq`` (the counts as floats)
+CQ_T0 = 0  # the run's start, the first node
+CQ_H = 1  # the history step H
+CQ_TTOL = 2  # times closer than this are one
+CQ_NREV = 3  # revolutions in the surface's minimum
+CQ_TAU = 4  # the delay tau
+CQ_FEED = 5  # h_m
+CQ_W0 = 6  # W before the cut
+CQ_MREV = 7  # nodes per revolution
+CQ_CUBIC = 8  # 1: cubic Hermite history, 0: linear
+CQ_SIZE = 9

@@ -4,24 +4,112 @@
 
 import cmath
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import carray, njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact.consts import (
-    CONTACT, EV_CUT, EV_HEXT, EV_MINUS, EV_PLUS, EV_REL_NEG, EV_REL_POS, EV_VSTOP, EV_WALL_REL,
-    EV_YEXT, FREE, GRID_LEVELS, MAX_EVENTS, MAX_ZERO_LENGTH, N_EV, SEG_ACC, SEG_CDIR, SEG_KRB,
-    SEG_S, SEG_SIZE, STICK, _DDC, _NB_MAX, _NB_MAX2, _NB_MAX_2, _NMAX6, _NZB_MAX, _NZ_MAX)
+    _DDC,
+    _NB_MAX,
+    _NB_MAX2,
+    _NB_MAX_2,
+    _NMAX6,
+    _NZ_MAX,
+    _NZB_MAX,
+    CONTACT,
+    CP_DT_OUT,
+    CP_E,
+    CP_FC,
+    CP_FS,
+    CP_HALF,
+    CP_KSTICK,
+    CP_KWALL,
+    CP_MEFF,
+    CP_SIZE,
+    CP_SR,
+    CP_STICK_MIN,
+    CP_STOP_AT_ZERO,
+    CP_T0,
+    CP_T_STEADY,
+    CP_VIMP,
+    CQ_CUBIC,
+    CQ_FEED,
+    CQ_H,
+    CQ_MREV,
+    CQ_NREV,
+    CQ_SIZE,
+    CQ_T0,
+    CQ_TAU,
+    CQ_TTOL,
+    CQ_W0,
+    EV_CUT,
+    EV_HEXT,
+    EV_MINUS,
+    EV_PLUS,
+    EV_REL_NEG,
+    EV_REL_POS,
+    EV_VSTOP,
+    EV_WALL_REL,
+    EV_YEXT,
+    FREE,
+    GRID_LEVELS,
+    MAX_EVENTS,
+    MAX_ZERO_LENGTH,
+    N_EV,
+    RS_FIRST_ZERO,
+    RS_INCUT,
+    RS_MODE,
+    RS_SDIR,
+    RS_SIZE,
+    RS_STICK_T0,
+    RS_T_END,
+    RS_WALL,
+    RS_Y,
+    RS_YD,
+    SEG_ACC,
+    SEG_CDIR,
+    SEG_KRB,
+    SEG_S,
+    SEG_SIZE,
+    STICK,
+)
 from boringbar.kernels.exact.cut import (
-    _GL_W, _GL_X, _hermite_at, _knot, _quad_cut, _surface_piece, cut_tables, history_step)
+    _GL_W,
+    _GL_X,
+    _hermite_at,
+    _knot,
+    _quad_cut,
+    _surface_piece,
+    cut_tables,
+    history_step,
+)
 from boringbar.kernels.exact.events import (
-    NSUB, _g, _hermite, _hermite5, _may_graze, _quad_range, _root_any, _w_extremum_any,
-    _w_may_exceed, _wall_step)
+    NSUB,
+    _g,
+    _hermite,
+    _hermite5,
+    _may_graze,
+    _quad_range,
+    _root_any,
+    _w_extremum_any,
+    _w_may_exceed,
+    _wall_step,
+)
 from boringbar.kernels.exact.prepare import prepare
 from boringbar.kernels.exact.propagate import (
-    _eval, _force, _freq, _from_q, _integrals, _integrals_1, _integrals_2, _nq, _sizes,
-    _surface)
+    _eval,
+    _force,
+    _freq,
+    _from_q,
+    _integrals,
+    _integrals_1,
+    _integrals_2,
+    _nq,
+    _sizes,
+    _surface,
+)
 from boringbar.kernels.stack import stack_ptr
 from boringbar.kernels.views import borrow, with_len
 
@@ -77,6 +165,608 @@ def _zeros2(ptr, n, m):
     return a
 
 
+@njit(cache=True, inline="always")
+def _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out):
+    """The bar's rows ``mk`` (M, K, C, psi_L, psi_d, psi_a), a free ball's y'' and W''
+    coefficients ``ddc`` and the run's constants ``cp`` (CP_*) from ``p``."""
+    for i in range(n):
+        mk[0, i] = p[L.M_ + i]
+        mk[1, i] = p[L.K_ + i]
+        mk[2, i] = p[L.C_ + i]
+        mk[3, i] = p[L.PSI_L + i]
+        mk[4, i] = p[L.PSI_D + i]
+        mk[5, i] = p[L.PSI_A + i]
+    m = p[L.BALL_MASS]
+    fc = p[L.FRICTION]
+    sr = p[L.REACTION]
+    spd = 0.0
+    for i in range(n):
+        spd += mk[4, i] * mk[4, i] / mk[0, i]
+    # psi . u'' of a free ball's bar from its state, force f and F_b: rows 0 (psi_d) and 1
+    # (psi_L) hold the coefficients of u_i, then of f and F_b; rows 2 and 3 those of u_i'
+    for i in range(n):
+        for row in range(2):
+            pr = mk[4 - row, i] / mk[0, i]  # psi_d,i / M_i, then psi_L,i / M_i
+            ddc[row, i] = -pr * mk[1, i]
+            ddc[row + 2, i] = -pr * mk[2, i]
+            ddc[row, n] += pr * mk[3, i]
+            ddc[row, n + 1] -= pr * sr * mk[4, i]
+    cp[CP_HALF] = p[L.HALF_GAP]
+    cp[CP_E] = p[L.RESTITUTION]
+    cp[CP_FC] = fc
+    cp[CP_FS] = max(p[L.STATIC_FRICTION], fc)
+    cp[CP_SR] = sr
+    cp[CP_MEFF] = p[L.M_EFF]
+    cp[CP_VIMP] = p[L.V_IMPACT]
+    cp[CP_KSTICK] = (1.0 / m + sr * spd) if m > 0.0 else 1.0
+    cp[CP_KWALL] = (1.0 / m + spd) if m > 0.0 else 1.0
+    cp[CP_STICK_MIN] = p[L.STICK_MIN]
+    cp[CP_T0] = t0
+    cp[CP_T_STEADY] = t_steady
+    cp[CP_DT_OUT] = dt_out
+    cp[CP_STOP_AT_ZERO] = 1.0 if p[L.STOP_AT_ZERO] > 0.0 else 0.0
+
+
+@njit(cache=True, inline="always")
+def _cut_start(kn, X, n, mk, t0, krb, feed, w_before, rs, max_force):
+    """The first knot of a cut, at t0, and whether the tool starts in it (into ``rs``);
+    returns the largest cutting force so far."""
+    w_ = 0.0
+    wd_ = 0.0
+    for i in range(n):
+        w_ += mk[3, i] * X[i]
+        wd_ += mk[3, i] * X[n + i]
+    kn[0, 0] = t0
+    kn[0, 1] = w_
+    kn[0, 2] = wd_
+    kn[0, 3] = wd_
+    kn[0, 4] = 0.0
+    incut = feed + w_before - w_ > 0.0
+    rs[RS_INCUT] = 1.0 if incut else 0.0
+    if not incut and rs[RS_FIRST_ZERO] < 0.0:
+        rs[RS_FIRST_ZERO] = t0
+    return max(max_force, krb * max(0.0, feed + w_before - w_))
+
+
+@njit(cache=True, inline="always")
+def _initial_regime(X, f_t0, n, mk, cp, rs):
+    """A ball's regime at the start (into ``rs``), from y, y' and the tip force f_t0."""
+    half = cp[CP_HALF]
+    fc = cp[CP_FC]
+    fs = cp[CP_FS]
+    y = rs[RS_Y]
+    yd = rs[RS_YD]
+    mode = FREE
+    sdir = 0.0
+    wall = 0.0
+    if yd != 0.0:
+        sdir = 1.0 if yd > 0.0 else -1.0
+    elif abs(y) >= half:
+        wall = 1.0 if y > 0.0 else -1.0
+        y = wall * half
+        F = _freq(X, f_t0, n, mk, cp[CP_KWALL])
+        if wall * F <= fs:
+            mode = CONTACT
+        elif fc > 0.0:
+            sdir = -wall
+    elif fc > 0.0:
+        F = _freq(X, f_t0, n, mk, cp[CP_KSTICK])
+        if abs(F) <= fs:
+            mode = STICK
+        else:
+            sdir = -1.0 if F > 0.0 else 1.0
+    rs[RS_MODE] = mode
+    rs[RS_SDIR] = sdir
+    rs[RS_WALL] = wall
+    rs[RS_Y] = y
+
+
+@njit(cache=True, inline="always")
+def _apply_event(ev_kind, t, steady, X, f_ev, n, mk, cp, rs, imp, stick, met):
+    """The event ``ev_kind`` at t under the tip force f_ev: an impact (X' jumps), a
+    capture, a stick, a slip or a release of the ball, or the tool leaving or re-entering
+    the cut, into the run's state ``rs``; its counts and the stick interval it closes
+    into ``met``, ``imp`` and ``stick``."""
+    mode = int(rs[RS_MODE])
+    sdir = rs[RS_SDIR]
+    wall = rs[RS_WALL]
+    y = rs[RS_Y]
+    yd = rs[RS_YD]
+    half = cp[CP_HALF]
+    fc = cp[CP_FC]
+    fs = cp[CP_FS]
+    vimp = cp[CP_VIMP]
+    was_stick = mode == STICK
+    if ev_kind == EV_PLUS or ev_kind == EV_MINUS:
+        w_ = 1.0 if ev_kind == EV_PLUS else -1.0
+        y = w_ * half
+        vb = yd
+        if w_ * vb > 0.0:
+            ee = cp[CP_E] if abs(vb) > vimp else 0.0  # Zeno: captured on the wall
+            g_ = (1.0 + ee) * cp[CP_MEFF] * vb
+            for i in range(n):
+                X[n + i] += g_ * mk[4, i] / mk[0, i]
+            yd = -ee * vb
+            met[L.D_IMPACT] += 0.5 * (1.0 - ee * ee) * cp[CP_MEFF] * vb * vb
+            if abs(vb) > vimp:
+                met[L.N_IMP_ALL] += 1
+                if steady:
+                    if w_ > 0:
+                        met[L.N_IMP_PLUS] += 1
+                    else:
+                        met[L.N_IMP_MINUS] += 1
+                    n_imp = int(met[L.N_IMP_REC])
+                    if n_imp < imp.shape[0]:
+                        imp[n_imp, 0] = t
+                        imp[n_imp, 1] = w_
+                        imp[n_imp, 2] = vb
+                    met[L.N_IMP_REC] += 1
+            else:
+                met[L.N_MICRO] += 1
+        elif w_ * vb < -vimp:
+            # moving inward, faster than a capture: not a wall contact but the
+            # round-off of a segment a few ulp long just after an impact (its end
+            # a few ulp past the wall); the ball goes on, from the wall
+            yd = vb
+        else:
+            yd = 0.0
+        if yd != 0.0:
+            mode = FREE
+            sdir = 1.0 if yd > 0.0 else -1.0
+        else:
+            mode, sdir, wall = _at_wall(X, f_ev, w_, n, mk, cp[CP_KWALL], fs, fc)
+    elif ev_kind == EV_VSTOP:
+        yd = 0.0
+        F = _freq(X, f_ev, n, mk, cp[CP_KSTICK])
+        if abs(F) <= fs:
+            mode = STICK
+            sdir = 0.0
+        else:
+            mode = FREE
+            sdir = -1.0 if F > 0.0 else 1.0
+    elif ev_kind == EV_REL_NEG or ev_kind == EV_REL_POS:
+        mode = FREE
+        yd = 0.0
+        sdir = -1.0 if ev_kind == EV_REL_NEG else 1.0
+    elif ev_kind == EV_WALL_REL:
+        mode = FREE
+        yd = 0.0
+        sdir = -wall if fc > 0.0 else 0.0
+        y = wall * half
+    elif ev_kind == EV_CUT:
+        incut = rs[RS_INCUT] == 0.0
+        rs[RS_INCUT] = 1.0 if incut else 0.0
+        if not incut and rs[RS_FIRST_ZERO] < 0.0:
+            rs[RS_FIRST_ZERO] = t  # the chatter verdict (MODEL.md section 4)
+            if cp[CP_STOP_AT_ZERO] != 0.0:  # finish the step of length dt_out, as RK4 does
+                t0 = cp[CP_T0]
+                dt_out = cp[CP_DT_OUT]
+                rs[RS_T_END] = min(rs[RS_T_END],
+                                   t0 + math.ceil((t - t0) / dt_out - 1e-9) * dt_out)
+    if mode == FREE and fc == 0.0 and yd == 0.0:
+        sdir = 0.0
+    # stick intervals
+    if mode == STICK and not was_stick:
+        rs[RS_STICK_T0] = t
+    elif was_stick and mode != STICK:
+        _stick_interval(t, cp, rs, stick, met)
+    rs[RS_MODE] = mode
+    rs[RS_SDIR] = sdir
+    rs[RS_WALL] = wall
+    rs[RS_Y] = y
+    rs[RS_YD] = yd
+
+
+@njit(cache=True, inline="always")
+def _stick_interval(t, cp, rs, stick, met):
+    """Records the stick interval from rs[RS_STICK_T0] (or the steady window's start) to t
+    if it is long enough."""
+    s0 = max(rs[RS_STICK_T0], cp[CP_T_STEADY])
+    if t - s0 >= cp[CP_STICK_MIN]:
+        met[L.T_STICK] += t - s0
+        n_stk = int(met[L.N_STICK_REC])
+        if n_stk < stick.shape[0]:
+            stick[n_stk, 0] = s0
+            stick[n_stk, 1] = t
+        met[L.N_STICK_REC] += 1
+
+
+@njit(cache=True, inline="always")
+def _close_flows(T, steady, mode, ball, fb, acc, pdu, out, seg, X, n, mk, cp, rs, met):
+    """Adds a segment's flows ``out`` (over its length T) to the metrics and moves a free
+    ball to the segment's end (into ``rs``; pdu: psi_d . u at its start)."""
+    met[L.W_FORCE] += out[0]
+    met[L.D_VISC] += out[1]
+    met[L.W_NONRECIP] += out[5]
+    if steady:
+        met[L.SUM_W2] += out[2]
+        met[L.SUM_W] += out[3]
+        met[L.SUM_F] += out[4]
+        met[L.N_STEADY] += T
+        if mode == CONTACT:
+            met[L.T_CONTACT] += T
+    if ball:
+        pdu1 = 0.0
+        pdv1 = 0.0
+        for i in range(n):
+            pdu1 += mk[4, i] * X[i]
+            pdv1 += mk[4, i] * X[n + i]
+        if mode == FREE:
+            y = rs[RS_Y]
+            ynew = seg[2] + T * (seg[3] + 0.5 * acc * T) - pdu1
+            rs[RS_YD] = seg[3] + acc * T - pdv1
+            met[L.D_FRICTION] -= fb * (ynew - y)
+            met[L.W_NONRECIP] += (1.0 - cp[CP_SR]) * fb * (pdu1 - pdu)
+            rs[RS_Y] = ynew
+
+
+#: the driver's arrays, passed whole to its pieces (all borrowed or on the stack): states
+#: and scratch, the segment record, the event functions at a, b and a sub-step's ends,
+#: a cut's flow sums, the bar's rows, the run's constants and prepare's matrices
+Work = namedtuple("Work", "X Xa Xd dX q0 qs qg seg ev_a ev_b ev_s ev_t qsum mk cp lam V Z D bq "
+                  "lvis cvis tabE tabP")
+
+
+@njit(cache=True, inline="always")
+def _cut_segment(t, t_stop, j_node, kn, nk, ip, sc, seg, cq, rs):
+    """Where a segment of a cut that starts at t ends (the next node, delayed knot or
+    change of the minimising revolution, before t_stop) and the surface on it, one cubic
+    (into seg[SEG_S:SEG_S + 4]): (its end, whether that is a node, whether t is one, the
+    last node reached).  ``cq``: the cut's constants (CQ_*)."""
+    t0 = cq[CQ_T0]
+    hh_ = cq[CQ_H]
+    ttol = cq[CQ_TTOL]
+    nrev = int(cq[CQ_NREV])
+    tau_d = cq[CQ_TAU]
+    feed = cq[CQ_FEED]
+    w_before = cq[CQ_W0]
+    m_rev = int(cq[CQ_MREV])
+    cubic = cq[CQ_CUBIC] != 0.0
+    # this segment ends at the next node, delayed knot or change of the minimising
+    # revolution: the surface is one cubic on it
+    while t0 + (j_node + 1) * hh_ <= t + ttol:
+        j_node += 1
+    t_seg_end = min(t0 + (j_node + 1) * hh_, t_stop)
+    at_node = t_seg_end < t_stop
+    from_node = abs(t - (t0 + j_node * hh_)) <= ttol
+    if rs[RS_FIRST_ZERO] < 0.0:
+        # one revolution (the minimum until the first zero): written out, as
+        # _surface_piece's k = 1 (no call: see the whole step below)
+        for k in range(1, nrev + 1):
+            kt = k * tau_d
+            i = ip[k]
+            while i + 1 < nk and kn[i + 1, 0] + kt <= t + ttol:
+                i += 1
+            ip[k] = i
+        i = ip[1]
+        if i < 0:
+            seg[SEG_S] = feed + w_before
+            seg[SEG_S + 1] = 0.0
+            seg[SEG_S + 2] = 0.0
+            seg[SEG_S + 3] = 0.0
+        else:
+            x0 = (t - tau_d) - kn[i, 0]
+            if from_node and kn[i, 4] == j_node - m_rev:
+                x0 = 0.0
+            c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+                                         kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
+            seg[SEG_S] = feed + c0
+            seg[SEG_S + 1] = c1
+            seg[SEG_S + 2] = c2
+            seg[SEG_S + 3] = c3
+        if i + 1 < nk:
+            tn = kn[i + 1, 0] + tau_d
+            if t + ttol < tn < t_seg_end - ttol:
+                t_seg_end = tn
+                at_node = False
+    else:
+        t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
+                                 w_before, tau_d, seg, j_node if from_node else -1,
+                                 m_rev, cubic)
+        if t_piece < t_seg_end:
+            t_seg_end = t_piece
+            at_node = False
+    return t_seg_end, at_node, from_node, j_node
+
+
+@njit(cache=True, inline="always")
+def _bounds(r, q0, seg, lam, bq, bnd, krb, ball, incut, w_steady, adapt):
+    """Bounds over a segment (regime r, eigen-coordinates q0) from prepare's ``bnd``:
+    (|y^(4)| if ``ball``, |W^(4)| if ``w_steady`` (else -1), |y^(3)| and |W^(3)| if
+    ``adapt`` (else 0))."""
+    nz = q0.shape[0]
+    # a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
+    b4 = 0.0
+    if ball:
+        b4 = bnd[r, 0, nz]  # Omega^4 |psi_d . Z| (prepare's bnd)
+        for k in range(nz):
+            qk = q0[k]
+            if incut:
+                # minus the polynomial particular solution P of q' = lambda q + g(tau)
+                # (P^(4) = 0 for a cubic g); |exp(lambda tau)| <= 1 still
+                lk = lam[r, k]
+                gk = krb * bq[r, k]
+                p3 = -gk * seg[SEG_S + 3] / lk
+                p2 = (3.0 * p3 - gk * seg[SEG_S + 2]) / lk
+                p1 = (2.0 * p2 - gk * seg[SEG_S + 1]) / lk
+                qk = qk - (p1 - gk * seg[SEG_S]) / lk
+            b4 += bnd[r, 0, k] * abs(qk)  # |lambda_k|^4 |psi_d . V_k| |q_k|
+    # the same bound on |W^(4)| = |psi_L . u^(4)| in the steady window under harmonic
+    # forcing: a W' = 0 extremum is located only where it may beat the running extremes
+    bw4 = -1.0
+    if w_steady:
+        bw4 = bnd[r, 1, nz]
+        for k in range(nz):
+            bw4 += bnd[r, 1, k] * abs(q0[k])
+    # a free ball under harmonic forcing: y'' and W'' at its grid points (the walls'
+    # and extrema's quintic starts); with more than one mode it steps longer than h
+    # where it can, from bounds on |y'''| = |psi_d . u'''| and |W'''| over the segment
+    b3y = 0.0
+    b3w = 0.0
+    if adapt:
+        b3y = bnd[r, 2, nz]
+        b3w = bnd[r, 3, nz]
+        for k in range(nz):
+            aq = abs(q0[k])
+            b3y += bnd[r, 2, k] * aq
+            b3w += bnd[r, 3, k] * aq
+    return b4, bw4, b3y, b3w
+
+
+@njit(cache=True, inline="always")
+def _level(ya, yda, ydd_a, wa, wda, wdd_a, b3y, b3w, ylim, wmar, max_w, min_w, hl, top,
+           watch_v, steady):
+    """The longest step 2^lev h (lev <= top) from a free ball's grid point a (y + delta/2 = ya,
+    y' = yda, y'' = ydd_a, W, W', W'' = wa, wda, wdd_a) that Taylor's
+    theorem proves free of events and of new extrema of |y| (below ylim) or (steady) of W:
+    on [a, a + s], y lies within b3y s^3 / 6 of its quadratic Taylor polynomial at a, y'
+    within b3y s^2 / 2 of its linear one, W within b3w s^3 / 6 of its quadratic; the step
+    is taken if these ranges stay inside the walls and below the largest |y| seen, keep y'
+    off 0 (friction) and keep W strictly between its running extremes (less wmar)."""
+    lev = 0
+    for lv in range(1, top + 1):
+        hs = hl[lv]
+        lo, hi = _quad_range(ya, yda, ydd_a, hs)
+        e3 = b3y * hs * hs * hs / 6.0
+        if not (hi + e3 < ylim and lo - e3 > -ylim):
+            break
+        if watch_v:
+            e2 = b3y * hs * hs * (0.5 + 1e-9)
+            v1 = yda + ydd_a * hs
+            if not ((yda > e2 and v1 > e2) or (yda < -e2 and v1 < -e2)):
+                break
+        if steady:
+            lo, hi = _quad_range(wa, wda, wdd_a, hs)
+            e3 = b3w * hs * hs * hs / 6.0 + wmar
+            if not (hi + e3 < max_w and lo - e3 > min_w):
+                break
+        lev = lv
+    return lev
+
+
+@njit(cache=True, inline="always")
+def _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v, watch_ext, b4, lev,
+                ydd_a, ydd_b):
+    """The first event in the grid step [a, b] of the segment (regime r, ``mode``) from the
+    event functions at its ends (w.ev_a, w.ev_b) and (a free ball) y'' there: (kind, time),
+    kind -1 if none.  ``w``: the driver's arrays (:data:`Work`); b4 bounds |y^(4)|."""
+    seg = w.seg
+    q0 = w.q0
+    lam = w.lam
+    V = w.V
+    Z = w.Z
+    D = w.D
+    bq = w.bq
+    qs = w.qs
+    dX = w.dX
+    Xd = w.Xd
+    mk = w.mk
+    ev_a = w.ev_a
+    ev_b = w.ev_b
+    ev_s = w.ev_s
+    ev_t = w.ev_t
+    half = w.cp[CP_HALF]
+    watch_wall = ball and mode == FREE
+    best = b
+    kind = -1
+    if ball and mode != FREE:
+        for kk in (EV_REL_NEG, EV_REL_POS, EV_WALL_REL):
+            if (mode == STICK) == (kk != EV_WALL_REL):
+                if ev_a[kk] <= 0.0 < ev_b[kk]:
+                    tr = _root_any(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
+                                   D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+                    if tr < best or kind < 0:
+                        best = tr
+                        kind = kk
+    elif watch_wall:
+        # call the (not inlined) search only when an end value shows something, or
+        # y' changes sign and the bound on y lets the ball reach a wall
+        # (a longer step than h holds no wall event: see its choice)
+        graze = lev == 0 and _may_graze(a, b, ev_a, ev_b, half, b4)
+        if ((ev_a[EV_PLUS] <= 0.0 < ev_b[EV_PLUS])
+                or (ev_a[EV_MINUS] <= 0.0 < ev_b[EV_MINUS])
+                or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
+                or (graze and watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)):
+            kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
+                                    q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
+                                    ydd_a, ydd_b)
+        if kind < 0 and graze:
+            # the bound on y^(4) allows a crossing and return inside the step:
+            # look again on NSUB sub-steps (direct evaluations)
+            for kk in range(N_EV):
+                ev_s[kk] = ev_a[kk]
+            sa = a
+            for j in range(1, NSUB + 1):
+                sb = a + (b - a) * j / NSUB if j < NSUB else b
+                if j < NSUB:
+                    _eval(r, q0, seg, sb, om, lam, V, ks, Z, D, bq, qs, dX)
+                    _events(ev_t, dX, sb, seg, mode, n, mk, f0, om)
+                else:
+                    for kk in range(N_EV):
+                        ev_t[kk] = ev_b[kk]
+                kind, best = _wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
+                                        seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n,
+                                        mk, f0, om, math.nan, math.nan)
+                if kind >= 0:
+                    break
+                sa = sb
+                for kk in range(N_EV):
+                    ev_s[kk] = ev_t[kk]
+    if regen:
+        # the tool leaves (in the cut) or re-enters (out of it): h = 0, or a graze
+        # of h = 0 between the step's ends, found at the extremum of h
+        tr = -1.0
+        if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
+            tr = _root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
+                           ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+        elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
+            te = _root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
+                           ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+            ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
+            if ev_a[EV_CUT] <= 0.0 < ge:
+                tr = _root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
+                               D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
+        if tr >= 0.0 and (kind < 0 or tr < best):
+            best = tr
+            kind = EV_CUT
+    return kind, best
+
+
+@njit(cache=True, inline="always")
+def _cut_flows(w, a, b, r, ks, n, whole, sticking, steady, wb, max_force):
+    """Adds a cut's flows over the grid step [a, b] to w.qsum (the slots of
+    :func:`_integrals`' ``out``); ``whole``: a whole step H from a node, without event, from
+    the tables (written out: no call); wb: W at b.  Returns the largest cutting force so
+    far."""
+    seg = w.seg
+    q0 = w.q0
+    lam = w.lam
+    V = w.V
+    Z = w.Z
+    D = w.D
+    bq = w.bq
+    qs = w.qs
+    dX = w.dX
+    mk = w.mk
+    qsum = w.qsum
+    tabE = w.tabE
+    tabP = w.tabP
+    lvis = w.lvis
+    cvis = w.cvis
+    nz = q0.shape[0]
+    fb = seg[1]
+    sr = w.cp[CP_SR]
+    kappa_stick = w.cp[CP_KSTICK]
+    krb_seg = seg[SEG_KRB]
+    s_0 = seg[SEG_S]
+    s_1 = seg[SEG_S + 1]
+    s_2 = seg[SEG_S + 2]
+    s_3 = seg[SEG_S + 3]
+    # Gauss-Legendre (4 points, exact to degree 7) for the flows of the step:
+    # the input is a cubic, no longer a sum of exponentials
+    if whole and not (sticking and sr != 1.0):
+        # a whole step: tabulated values, written out (as above)
+        for g in range(4):
+            for kq in range(_nq(nz, ks)):
+                k = kq * ks
+                qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
+                         + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
+                         + s_3 * tabP[r, g, 3, k])
+            for j in range(nz):
+                sx = fb * D[r, j]
+                for kq in range(_nq(nz, ks)):
+                    k = kq * ks
+                    sx += (V[r, j, k] * qs[k]).real
+                dX[j] = sx
+            wq = 0.0
+            wdq = 0.0
+            for i in range(n):
+                wq += mk[3, i] * dX[i]
+                wdq += mk[3, i] * dX[n + i]
+            xg = _GL_X[g] * b
+            fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq)
+            max_force = max(max_force, fq)
+            wg = _GL_W[g] * b
+            qsum[0] += wg * fq * wdq
+            dv = 0.0
+            for d in range(lvis.shape[0]):
+                vv = 0.0
+                for j in range(nz):
+                    vv += lvis[d, j] * dX[j]
+                dv += cvis[d] * vv * vv
+            qsum[1] += wg * dv
+            if steady:
+                qsum[2] += wg * wq * wq
+                qsum[3] += wg * wq
+                qsum[4] += wg * fq
+    else:
+        max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq,
+                                             qs, dX, n, mk, lvis, cvis,
+                                             sticking, kappa_stick, sr, qsum,
+                                             steady))
+    max_force = max(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb))
+    return max_force
+
+
+@njit(cache=True, inline="always")
+def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe, rec_dt,
+             tstrobe, k_rec, t_next_strobe, met):
+    """The history rows (every rec_dt from t0) and strobe rows (every tstrobe) that fall in
+    (t + a, t + b] of the segment from t; returns the next ones' (k_rec, t_next_strobe)."""
+    seg = w.seg
+    q0 = w.q0
+    lam = w.lam
+    V = w.V
+    Z = w.Z
+    D = w.D
+    bq = w.bq
+    qs = w.qs
+    dX = w.dX
+    mk = w.mk
+    t0 = w.cp[CP_T0]
+    n_rec = int(met[L.N_REC])
+    while (rec_dt > 0.0 and n_rec < rec.shape[0]
+           and t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt):
+        ts_ = t0 + k_rec * rec_dt
+        if ts_ > t_end:
+            break
+        _eval(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
+        wv = 0.0
+        wdv = 0.0
+        for i in range(n):
+            wv += mk[3, i] * dX[i]
+            wdv += mk[3, i] * dX[n + i]
+        av, adv = _aux(dX, ts_ - t, seg, mode, case, n, mk, x, ball)
+        rec[n_rec, 0] = ts_
+        rec[n_rec, 1] = wv
+        rec[n_rec, 2] = wdv
+        rec[n_rec, 3] = av
+        rec[n_rec, 4] = adv
+        rec[n_rec, 5] = _force(seg, ts_ - t, dX, n, mk, f0, om)
+        n_rec += 1
+        k_rec += 1
+    met[L.N_REC] = n_rec
+    n_stb = int(met[L.N_STROBE])
+    while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
+        if n_stb < strobe.shape[0]:
+            _eval(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
+            wv = 0.0
+            wdv = 0.0
+            for i in range(n):
+                wv += mk[3, i] * dX[i]
+                wdv += mk[3, i] * dX[n + i]
+            av, adv = _aux(dX, t_next_strobe - t, seg, mode, case, n, mk, x, ball)
+            strobe[n_stb, 0] = t_next_strobe
+            strobe[n_stb, 1] = wv
+            strobe[n_stb, 2] = wdv
+            strobe[n_stb, 3] = av
+            strobe[n_stb, 4] = adv
+            n_stb += 1
+        t_next_strobe += tstrobe
+    met[L.N_STROBE] = n_stb
+    return k_rec, t_next_strobe
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
@@ -120,40 +810,19 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     nb = nz + 3
     ball = case == L.BALL
     mk = _zeros2(stack_ptr(_NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
-    for i in range(n):
-        mk[0, i] = p[L.M_ + i]
-        mk[1, i] = p[L.K_ + i]
-        mk[2, i] = p[L.C_ + i]
-        mk[3, i] = p[L.PSI_L + i]
-        mk[4, i] = p[L.PSI_D + i]
-        mk[5, i] = p[L.PSI_A + i]
+    ddc = _zeros2(stack_ptr(_DDC, np.float64), 4, n + 2)
+    cp = _zeros(stack_ptr(CP_SIZE, np.float64), CP_SIZE)
+    _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out)
     f0 = p[L.F0]
     om = p[L.OMEGA]
     m = p[L.BALL_MASS]
-    half = p[L.HALF_GAP]
-    e = p[L.RESTITUTION]
-    fc = p[L.FRICTION]
-    fs = max(p[L.STATIC_FRICTION], fc)
-    sr = p[L.REACTION]
-    meff = p[L.M_EFF]
-    vimp = p[L.V_IMPACT]
-    stick_min = p[L.STICK_MIN]
+    half = cp[CP_HALF]
+    fc = cp[CP_FC]
+    fs = cp[CP_FS]
+    sr = cp[CP_SR]
     tstrobe = p[L.STROBE_PERIOD]
-    spd = 0.0
-    for i in range(n):
-        spd += mk[4, i] * mk[4, i] / mk[0, i]
-    kappa_stick = (1.0 / m + sr * spd) if m > 0.0 else 1.0
-    # psi . u'' of a free ball's bar from its state, force f and F_b: rows 0 (psi_d) and 1
-    # (psi_L) hold the coefficients of u_i, then of f and F_b; rows 2 and 3 those of u_i'
-    ddc = _zeros2(stack_ptr(_DDC, np.float64), 4, n + 2)
-    for i in range(n):
-        for row in range(2):
-            pr = mk[4 - row, i] / mk[0, i]  # psi_d,i / M_i, then psi_L,i / M_i
-            ddc[row, i] = -pr * mk[1, i]
-            ddc[row + 2, i] = -pr * mk[2, i]
-            ddc[row, n] += pr * mk[3, i]
-            ddc[row, n + 1] -= pr * sr * mk[4, i]
-    kappa_wall = (1.0 / m + spd) if m > 0.0 else 1.0
+    kappa_stick = cp[CP_KSTICK]
+    kappa_wall = cp[CP_KWALL]
 
     # scratch
     X = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
@@ -190,7 +859,6 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     feed = p[L.FEED]
     tau_d = p[L.TAU]
     nrev = int(p[L.N_REV]) if regen else 0
-    stop_at_zero = p[L.STOP_AT_ZERO] > 0.0
     w_before = p[L.HIST_W0]
     cubic = p[L.INTERP] > 0.0
     m_rev = int(round(tau_d / hist_step)) if regen else 1
@@ -202,65 +870,42 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     ip = np.full(nrev + 1, -1, np.int64)
     sc = np.zeros((nrev + 1, 4))
     qsum = _zeros(stack_ptr(6, np.float64), 6)
-    first_zero = met[L.FIRST_ZERO_T]
+    cq = _zeros(stack_ptr(CQ_SIZE, np.float64), CQ_SIZE)
+    cq[CQ_T0] = t0
+    cq[CQ_H] = hh_
+    cq[CQ_TTOL] = ttol
+    cq[CQ_NREV] = nrev
+    cq[CQ_TAU] = tau_d
+    cq[CQ_FEED] = feed
+    cq[CQ_W0] = w_before
+    cq[CQ_MREV] = m_rev
+    cq[CQ_CUBIC] = 1.0 if cubic else 0.0
+    rs = _zeros(stack_ptr(RS_SIZE, np.float64), RS_SIZE)
+    rs[RS_FIRST_ZERO] = met[L.FIRST_ZERO_T]
+    rs[RS_T_END] = t_end
     max_force = met[L.MAX_FORCE]
-    n_zero_steps = met[L.N_ZERO_STEPS]
     last_zero_step = -1
     j_node = 0  # the last node reached
-    incut = False
     if regen:
-        w_ = 0.0
-        wd_ = 0.0
-        for i in range(n):
-            w_ += mk[3, i] * X[i]
-            wd_ += mk[3, i] * X[n + i]
-        kn[0, 0] = t0
-        kn[0, 1] = w_
-        kn[0, 2] = wd_
-        kn[0, 3] = wd_
-        kn[0, 4] = 0.0
+        max_force = _cut_start(kn, X, n, mk, t0, krb, feed, w_before, rs, max_force)
         nk = 1
-        incut = feed + w_before - w_ > 0.0
-        if not incut and first_zero < 0.0:
-            first_zero = t0
-        max_force = max(max_force, krb * max(0.0, feed + w_before - w_))
     f_t0 = f0 * math.sin(om * t0)
-    if incut:
+    if rs[RS_INCUT] != 0.0:
         f_t0 += krb * (feed + w_before - kn[0, 1])
-    y = x[2 * n] if ball or case == L.LOCKED else 0.0
-    yd = x[2 * n + 1] if ball else 0.0
+    rs[RS_Y] = x[2 * n] if ball or case == L.LOCKED else 0.0
+    rs[RS_YD] = x[2 * n + 1] if ball else 0.0
 
-    sum_w2 = met[L.SUM_W2]
-    sum_w = met[L.SUM_W]
-    n_steady = met[L.N_STEADY]
+    w = Work(X, Xa, Xd, dX, q0, qs, qg, seg, ev_a, ev_b, ev_s, ev_t, qsum, mk, cp, lam, V, Z, D,
+             bq, lvis, cvis, tabE, tabP)
+
+    # the running extremes (the other metrics add up in ``met`` itself)
     max_abs_w = met[L.MAX_ABS_W]
     max_w = met[L.STEADY_MAX_W]
     min_w = met[L.STEADY_MIN_W]
     max_aux = met[L.MAX_ABS_AUX]
     max_aux_all = met[L.MAX_ABS_AUX_ALL]
-    sum_aux2 = met[L.SUM_AUX2]
-    sum_f = met[L.SUM_F]
-    n_plus = met[L.N_IMP_PLUS]
-    n_minus = met[L.N_IMP_MINUS]
-    n_all = met[L.N_IMP_ALL]
-    n_micro = met[L.N_MICRO]
-    t_contact = met[L.T_CONTACT]
-    t_stick = met[L.T_STICK]
-    w_force = met[L.W_FORCE]
-    d_visc = met[L.D_VISC]
-    d_imp = met[L.D_IMPACT]
-    d_fric = met[L.D_FRICTION]
-    w_nr = met[L.W_NONRECIP]
-    n_imp = int(met[L.N_IMP_REC])
-    n_stk = int(met[L.N_STICK_REC])
-    n_rec = int(met[L.N_REC])
-    n_stb = int(met[L.N_STROBE])
     n_ev = int(met[L.N_EVENTS])
     status = 0
-    cap_imp = imp.shape[0]
-    cap_stk = stick.shape[0]
-    cap_rec = rec.shape[0]
-    cap_stb = strobe.shape[0]
 
     # next output sample times
     k_rec = 1
@@ -271,28 +916,9 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             t_next_strobe += (math.floor((t0 - t_next_strobe) / tstrobe) + 1) * tstrobe
 
     # --- the initial regime ---------------------------------------------------------------
-    mode = FREE
-    sdir = 0.0
-    wall = 0.0
     if ball:
-        if yd != 0.0:
-            sdir = 1.0 if yd > 0.0 else -1.0
-        elif abs(y) >= half:
-            wall = 1.0 if y > 0.0 else -1.0
-            y = wall * half
-            F = _freq(X, f_t0, n, mk, kappa_wall)
-            if wall * F <= fs:
-                mode = CONTACT
-            elif fc > 0.0:
-                sdir = -wall
-        elif fc > 0.0:
-            F = _freq(X, f_t0, n, mk, kappa_stick)
-            if abs(F) <= fs:
-                mode = STICK
-            else:
-                sdir = -1.0 if F > 0.0 else 1.0
-    in_stick = mode == STICK
-    stick_t0 = t0
+        _initial_regime(X, f_t0, n, mk, cp, rs)
+    rs[RS_STICK_T0] = t0
     n_zero = 0
 
     # the grid's step lengths (h, 2 h, 4 h, ...) and their phase steps
@@ -308,6 +934,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         if n_ev >= MAX_EVENTS:
             status = 1
             break
+        mode = int(rs[RS_MODE])
+        sdir = rs[RS_SDIR]
+        wall = rs[RS_WALL]
+        y = rs[RS_Y]
+        yd = rs[RS_YD]
+        incut = rs[RS_INCUT] != 0.0
         t_stop = min(t_steady, t_end) if t < t_steady else t_end
         t_seg_end = t_stop
         steady = t >= t_steady
@@ -337,62 +969,17 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             q0[k] = s
         at_node = False
         whole = False
-        sticking = mode == STICK
-        krb_seg = 0.0
         s_0 = 0.0
         s_1 = 0.0
         s_2 = 0.0
         s_3 = 0.0
         if regen:
-            # this segment ends at the next node, delayed knot or change of the minimising
-            # revolution: the surface is one cubic on it
-            while t0 + (j_node + 1) * hh_ <= t + ttol:
-                j_node += 1
-            t_seg_end = min(t0 + (j_node + 1) * hh_, t_stop)
-            at_node = t_seg_end < t_stop
-            from_node = abs(t - (t0 + j_node * hh_)) <= ttol
-            if first_zero < 0.0:
-                # one revolution (the minimum until the first zero): written out, as
-                # _surface_piece's k = 1 (no call: see the whole step below)
-                for k in range(1, nrev + 1):
-                    kt = k * tau_d
-                    i = ip[k]
-                    while i + 1 < nk and kn[i + 1, 0] + kt <= t + ttol:
-                        i += 1
-                    ip[k] = i
-                i = ip[1]
-                if i < 0:
-                    seg[SEG_S] = feed + w_before
-                    seg[SEG_S + 1] = 0.0
-                    seg[SEG_S + 2] = 0.0
-                    seg[SEG_S + 3] = 0.0
-                else:
-                    x0 = (t - tau_d) - kn[i, 0]
-                    if from_node and kn[i, 4] == j_node - m_rev:
-                        x0 = 0.0
-                    c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
-                                                 kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
-                    seg[SEG_S] = feed + c0
-                    seg[SEG_S + 1] = c1
-                    seg[SEG_S + 2] = c2
-                    seg[SEG_S + 3] = c3
-                if i + 1 < nk:
-                    tn = kn[i + 1, 0] + tau_d
-                    if t + ttol < tn < t_seg_end - ttol:
-                        t_seg_end = tn
-                        at_node = False
-            else:
-                t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
-                                         w_before, tau_d, seg, j_node if from_node else -1,
-                                         m_rev, cubic)
-                if t_piece < t_seg_end:
-                    t_seg_end = t_piece
-                    at_node = False
+            t_seg_end, at_node, from_node, j_node = _cut_segment(
+                t, t_stop, j_node, borrow(kn), nk, borrow(ip), borrow(sc), seg, cq, rs)
             seg[SEG_KRB] = krb if incut else 0.0
             seg[SEG_CDIR] = 1.0 if incut else -1.0
             # a whole step H from node to node, inside one grid step: tabulated values
             whole = at_node and from_node and hh_ <= h
-            krb_seg = seg[SEG_KRB]
             s_0 = seg[SEG_S]
             s_1 = seg[SEG_S + 1]
             s_2 = seg[SEG_S + 2]
@@ -402,43 +989,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for i in range(n):
             pdu += mk[4, i] * X[i]
             pdv += mk[4, i] * X[n + i]
-        # a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
-        b4 = 0.0
-        if ball:
-            b4 = bnd[r, 0, nz]  # Omega^4 |psi_d . Z| (prepare's bnd)
-            for k in range(nz):
-                qk = q0[k]
-                if incut:
-                    # minus the polynomial particular solution P of q' = lambda q + g(tau)
-                    # (P^(4) = 0 for a cubic g); |exp(lambda tau)| <= 1 still
-                    lk = lam[r, k]
-                    gk = krb * bq[r, k]
-                    p3 = -gk * seg[SEG_S + 3] / lk
-                    p2 = (3.0 * p3 - gk * seg[SEG_S + 2]) / lk
-                    p1 = (2.0 * p2 - gk * seg[SEG_S + 1]) / lk
-                    qk = qk - (p1 - gk * seg[SEG_S]) / lk
-                b4 += bnd[r, 0, k] * abs(qk)  # |lambda_k|^4 |psi_d . V_k| |q_k|
-        # the same bound on |W^(4)| = |psi_L . u^(4)| in the steady window under harmonic
-        # forcing: a W' = 0 extremum is located only where it may beat the running extremes
-        bw4 = -1.0
-        if steady and not regen:
-            bw4 = bnd[r, 1, nz]
-            for k in range(nz):
-                bw4 += bnd[r, 1, k] * abs(q0[k])
-        # a free ball under harmonic forcing: y'' and W'' at its grid points (the walls'
-        # and extrema's quintic starts); with more than one mode it steps longer than h
-        # where it can, from bounds on |y'''| = |psi_d . u'''| and |W'''| over the segment
+        # bounds on |y^(4)|, |W^(4)| (steady, harmonic) and |y^(3)|, |W^(3)| (a free ball)
+        # over the segment
         ydd_on = ball and mode == FREE and not regen
         adapt = ydd_on and levmax[r] > 0
-        b3y = 0.0
-        b3w = 0.0
-        if adapt:
-            b3y = bnd[r, 2, nz]
-            b3w = bnd[r, 3, nz]
-            for k in range(nz):
-                aq = abs(q0[k])
-                b3y += bnd[r, 2, k] * aq
-                b3w += bnd[r, 3, k] * aq
+        b4, bw4, b3y, b3w = _bounds(r, q0, seg, lam, bq, bnd, krb, ball, incut,
+                                    steady and not regen, adapt)
         seg[0] = t
         seg[1] = fb
         seg[2] = y + pdu  # the ball's absolute position and velocity
@@ -506,26 +1062,9 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             lev = 0
             if adapt:
                 ylim = min(half, max_aux if steady else max_aux_all) * (1.0 - 1e-9)
-                ya = ev_a[EV_PLUS] + half
-                yda = ev_a[EV_YEXT]
-                wmar = 1e-9 * max_abs_w
-                for lv in range(1, levmax[r] + 1):
-                    hs = hl[lv]
-                    lo, hi = _quad_range(ya, yda, ydd_a, hs)
-                    e3 = b3y * hs * hs * hs / 6.0
-                    if not (hi + e3 < ylim and lo - e3 > -ylim):
-                        break
-                    if watch_v:
-                        e2 = b3y * hs * hs * (0.5 + 1e-9)
-                        v1 = yda + ydd_a * hs
-                        if not ((yda > e2 and v1 > e2) or (yda < -e2 and v1 < -e2)):
-                            break
-                    if steady:
-                        lo, hi = _quad_range(wa, wda, wdd_a, hs)
-                        e3 = b3w * hs * hs * hs / 6.0 + wmar
-                        if not (hi + e3 < max_w and lo - e3 > min_w):
-                            break
-                    lev = lv
+                lev = _level(ev_a[EV_PLUS] + half, ev_a[EV_YEXT], ydd_a, wa, wda, wdd_a, b3y,
+                             b3w, ylim, 1e-9 * max_abs_w, max_w, min_w, hl, levmax[r], watch_v,
+                             steady)
             b = a + hl[lev]
             full = True
             if b >= tlen:
@@ -578,68 +1117,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
                 ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
             # --- events in [a, b]
-            best = b
-            kind = -1
-            if ball and mode != FREE:
-                for kk in (EV_REL_NEG, EV_REL_POS, EV_WALL_REL):
-                    if (mode == STICK) == (kk != EV_WALL_REL):
-                        if ev_a[kk] <= 0.0 < ev_b[kk]:
-                            tr = _root_any(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
-                                           D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
-                            if tr < best or kind < 0:
-                                best = tr
-                                kind = kk
-            elif watch_wall:
-                # call the (not inlined) search only when an end value shows something, or
-                # y' changes sign and the bound on y lets the ball reach a wall
-                # (a longer step than h holds no wall event: see its choice)
-                graze = lev == 0 and _may_graze(a, b, ev_a, ev_b, half, b4)
-                if ((ev_a[EV_PLUS] <= 0.0 < ev_b[EV_PLUS])
-                        or (ev_a[EV_MINUS] <= 0.0 < ev_b[EV_MINUS])
-                        or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
-                        or (graze and watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)):
-                    kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
-                                            q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
-                                            ydd_a, ydd_b)
-                if kind < 0 and graze:
-                    # the bound on y^(4) allows a crossing and return inside the step:
-                    # look again on NSUB sub-steps (direct evaluations)
-                    for kk in range(N_EV):
-                        ev_s[kk] = ev_a[kk]
-                    sa = a
-                    for j in range(1, NSUB + 1):
-                        sb = a + (b - a) * j / NSUB if j < NSUB else b
-                        if j < NSUB:
-                            _eval(r, q0, seg, sb, om, lam, V, ks, Z, D, bq, qs, dX)
-                            _events(ev_t, dX, sb, seg, mode, n, mk, f0, om)
-                        else:
-                            for kk in range(N_EV):
-                                ev_t[kk] = ev_b[kk]
-                        kind, best = _wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
-                                                seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n,
-                                                mk, f0, om, math.nan, math.nan)
-                        if kind >= 0:
-                            break
-                        sa = sb
-                        for kk in range(N_EV):
-                            ev_s[kk] = ev_t[kk]
-            if regen:
-                # the tool leaves (in the cut) or re-enters (out of it): h = 0, or a graze
-                # of h = 0 between the step's ends, found at the extremum of h
-                tr = -1.0
-                if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
-                    tr = _root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
-                                   ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
-                elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
-                    te = _root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
-                                   ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
-                    ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
-                    if ev_a[EV_CUT] <= 0.0 < ge:
-                        tr = _root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
-                                       D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
-                if tr >= 0.0 and (kind < 0 or tr < best):
-                    best = tr
-                    kind = EV_CUT
+            kind, best = _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v,
+                                     watch_ext, b4, lev, ydd_a, ydd_b)
             if kind >= 0:
                 b = best
                 ph_next = _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
@@ -667,49 +1146,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     max_w = max(max_w, we)
                     min_w = min(min_w, we)
             if regen:
-                # Gauss-Legendre (4 points, exact to degree 7) for the flows of the step:
-                # the input is a cubic, no longer a sum of exponentials
-                if whole and kind < 0 and not (sticking and sr != 1.0):
-                    # a whole step: tabulated values, written out (as above)
-                    for g in range(4):
-                        for kq in range(_nq(nz, ks)):
-                            k = kq * ks
-                            qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
-                                     + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
-                                     + s_3 * tabP[r, g, 3, k])
-                        for j in range(nz):
-                            sx = fb * D[r, j]
-                            for kq in range(_nq(nz, ks)):
-                                k = kq * ks
-                                sx += (V[r, j, k] * qs[k]).real
-                            dX[j] = sx
-                        wq = 0.0
-                        wdq = 0.0
-                        for i in range(n):
-                            wq += mk[3, i] * dX[i]
-                            wdq += mk[3, i] * dX[n + i]
-                        xg = _GL_X[g] * b
-                        fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq)
-                        max_force = max(max_force, fq)
-                        wg = _GL_W[g] * b
-                        qsum[0] += wg * fq * wdq
-                        dv = 0.0
-                        for d in range(lvis.shape[0]):
-                            vv = 0.0
-                            for j in range(nz):
-                                vv += lvis[d, j] * dX[j]
-                            dv += cvis[d] * vv * vv
-                        qsum[1] += wg * dv
-                        if steady:
-                            qsum[2] += wg * wq * wq
-                            qsum[3] += wg * wq
-                            qsum[4] += wg * fq
-                else:
-                    max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq,
-                                                         qs, dX, n, mk, lvis, cvis,
-                                                         mode == STICK, kappa_stick, sr, qsum,
-                                                         steady))
-                max_force = max(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb))
+                max_force = _cut_flows(w, a, b, r, ks, n, whole and kind < 0, mode == STICK,
+                                       steady, wb, max_force)
             # aux and aux' at a and b
             auxb = 0.0
             auxdb = 0.0
@@ -722,44 +1160,13 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 max_aux = max(max_aux, abs(auxb))
                 if regen or not ball:  # a ball's int y^2 is closed form (_integrals)
                     hh = b - a
-                    sum_aux2 += (0.5 * hh * (auxa * auxa + auxb * auxb)
+                    met[L.SUM_AUX2] += (0.5 * hh * (auxa * auxa + auxb * auxb)
                                  + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
             # history and strobe samples in (t + a, t + b]
-            while rec_dt > 0.0 and n_rec < cap_rec and t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt:
-                ts_ = t0 + k_rec * rec_dt
-                if ts_ > t_end:
-                    break
-                _eval(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
-                wv = 0.0
-                wdv = 0.0
-                for i in range(n):
-                    wv += mk[3, i] * dX[i]
-                    wdv += mk[3, i] * dX[n + i]
-                av, adv = _aux(dX, ts_ - t, seg, mode, case, n, mk, x, ball)
-                rec[n_rec, 0] = ts_
-                rec[n_rec, 1] = wv
-                rec[n_rec, 2] = wdv
-                rec[n_rec, 3] = av
-                rec[n_rec, 4] = adv
-                rec[n_rec, 5] = _force(seg, ts_ - t, dX, n, mk, f0, om)
-                n_rec += 1
-                k_rec += 1
-            while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
-                if n_stb < cap_stb:
-                    _eval(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
-                    wv = 0.0
-                    wdv = 0.0
-                    for i in range(n):
-                        wv += mk[3, i] * dX[i]
-                        wdv += mk[3, i] * dX[n + i]
-                    av, adv = _aux(dX, t_next_strobe - t, seg, mode, case, n, mk, x, ball)
-                    strobe[n_stb, 0] = t_next_strobe
-                    strobe[n_stb, 1] = wv
-                    strobe[n_stb, 2] = wdv
-                    strobe[n_stb, 3] = av
-                    strobe[n_stb, 4] = adv
-                    n_stb += 1
-                t_next_strobe += tstrobe
+            if rec_dt > 0.0 or tstrobe > 0.0:
+                k_rec, t_next_strobe = _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case,
+                                                ball, x, rec, strobe, rec_dt, tstrobe, k_rec,
+                                                t_next_strobe, met)
             if kind >= 0 or not full:
                 break
             a = b
@@ -781,7 +1188,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                 js = max(int(math.floor((t - t0) / dt_out)), last_zero_step + 1)
                 je = int(math.ceil((t + T - t0) / dt_out)) - 1
                 if je >= js:
-                    n_zero_steps += je - js + 1
+                    met[L.N_ZERO_STEPS] += je - js + 1
                     last_zero_step = je
         else:
             kst = kappa_stick if (ball and mode == STICK) else 0.0
@@ -801,29 +1208,8 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                            sr, me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj)
             if ball and steady:
                 # the ball's int y^2: closed form when free, y constant otherwise
-                sum_aux2 += out[6] if mode == FREE else seg[4] * seg[4] * T
-        w_force += out[0]
-        d_visc += out[1]
-        w_nr += out[5]
-        if steady:
-            sum_w2 += out[2]
-            sum_w += out[3]
-            sum_f += out[4]
-            n_steady += T
-            if mode == CONTACT:
-                t_contact += T
-        if ball:
-            pdu1 = 0.0
-            pdv1 = 0.0
-            for i in range(n):
-                pdu1 += mk[4, i] * X[i]
-                pdv1 += mk[4, i] * X[n + i]
-            if mode == FREE:
-                ynew = seg[2] + T * (seg[3] + 0.5 * acc * T) - pdu1
-                yd = seg[3] + acc * T - pdv1
-                d_fric -= fb * (ynew - y)
-                w_nr += (1.0 - sr) * fb * (pdu1 - pdu)
-                y = ynew
+                met[L.SUM_AUX2] += out[6] if mode == FREE else seg[4] * seg[4] * T
+        _close_flows(T, steady, mode, ball, fb, acc, pdu, out, seg, X, n, mk, cp, rs, met)
         t_new = t + T if ev_kind >= 0 else t_seg_end
         if ev_kind < 0:
             t = t_new
@@ -855,130 +1241,29 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         for j in range(nz):
             Xa[j] = X[j]  # before the event (a knot keeps W'- and W'+)
         # --- apply the event -------------------------------------------------------------
-        was_stick = mode == STICK
-        if ev_kind == EV_PLUS or ev_kind == EV_MINUS:
-            w_ = 1.0 if ev_kind == EV_PLUS else -1.0
-            y = w_ * half
-            vb = yd
-            if w_ * vb > 0.0:
-                ee = e if abs(vb) > vimp else 0.0  # Zeno: captured on the wall
-                g_ = (1.0 + ee) * meff * vb
-                for i in range(n):
-                    X[n + i] += g_ * mk[4, i] / mk[0, i]
-                yd = -ee * vb
-                d_imp += 0.5 * (1.0 - ee * ee) * meff * vb * vb
-                if abs(vb) > vimp:
-                    n_all += 1
-                    if steady:
-                        if w_ > 0:
-                            n_plus += 1
-                        else:
-                            n_minus += 1
-                        if n_imp < cap_imp:
-                            imp[n_imp, 0] = t
-                            imp[n_imp, 1] = w_
-                            imp[n_imp, 2] = vb
-                        n_imp += 1
-                else:
-                    n_micro += 1
-            elif w_ * vb < -vimp:
-                # moving inward, faster than a capture: not a wall contact but the
-                # round-off of a segment a few ulp long just after an impact (its end
-                # a few ulp past the wall); the ball goes on, from the wall
-                yd = vb
-            else:
-                yd = 0.0
-            if yd != 0.0:
-                mode = FREE
-                sdir = 1.0 if yd > 0.0 else -1.0
-            else:
-                mode, sdir, wall = _at_wall(X, f_ev, w_, n, mk, kappa_wall, fs, fc)
-        elif ev_kind == EV_VSTOP:
-            yd = 0.0
-            F = _freq(X, f_ev, n, mk, kappa_stick)
-            if abs(F) <= fs:
-                mode = STICK
-                sdir = 0.0
-            else:
-                mode = FREE
-                sdir = -1.0 if F > 0.0 else 1.0
-        elif ev_kind == EV_REL_NEG or ev_kind == EV_REL_POS:
-            mode = FREE
-            yd = 0.0
-            sdir = -1.0 if ev_kind == EV_REL_NEG else 1.0
-        elif ev_kind == EV_WALL_REL:
-            mode = FREE
-            yd = 0.0
-            sdir = -wall if fc > 0.0 else 0.0
-            y = wall * half
-        elif ev_kind == EV_CUT:
-            incut = not incut
-            if not incut and first_zero < 0.0:
-                first_zero = t  # the chatter verdict (MODEL.md section 4)
-                if stop_at_zero:  # finish the step of length dt_out, as RK4 does
-                    t_end = min(t_end, t0 + math.ceil((t - t0) / dt_out - 1e-9) * dt_out)
+        _apply_event(ev_kind, t, steady, X, f_ev, n, mk, cp, rs, imp, stick, met)
+        t_end = rs[RS_T_END]
         if regen:
             kn, nk = _knot(kn, nk, ip, t, Xa, X, n, mk, ttol, -1.0)
-        if mode == FREE and fc == 0.0 and yd == 0.0:
-            sdir = 0.0
-        # stick intervals
-        if mode == STICK and not was_stick:
-            stick_t0 = t
-        elif was_stick and mode != STICK:
-            s0 = max(stick_t0, t_steady)
-            if t - s0 >= stick_min:
-                t_stick += t - s0
-                if n_stk < cap_stk:
-                    stick[n_stk, 0] = s0
-                    stick[n_stk, 1] = t
-                n_stk += 1
-        in_stick = mode == STICK
 
-    if in_stick:
-        s0 = max(stick_t0, t_steady)
-        if t - s0 >= stick_min:
-            t_stick += t - s0
-            if n_stk < cap_stk:
-                stick[n_stk, 0] = s0
-                stick[n_stk, 1] = t
-            n_stk += 1
+    if rs[RS_MODE] == STICK:
+        _stick_interval(t, cp, rs, stick, met)
 
     for j in range(nz):
         x[j] = X[j]
     if ball:
-        x[2 * n] = y
-        x[2 * n + 1] = yd
-    met[L.SUM_W2] = sum_w2
-    met[L.SUM_W] = sum_w
-    met[L.N_STEADY] = n_steady
+        x[2 * n] = rs[RS_Y]
+        x[2 * n + 1] = rs[RS_YD]
     met[L.MAX_ABS_W] = max_abs_w
     met[L.STEADY_MAX_W] = max_w
     met[L.STEADY_MIN_W] = min_w
     met[L.MAX_ABS_AUX] = max_aux
     met[L.MAX_ABS_AUX_ALL] = max_aux_all
-    met[L.SUM_AUX2] = sum_aux2
-    met[L.SUM_F] = sum_f
-    met[L.N_IMP_PLUS] = n_plus
-    met[L.N_IMP_MINUS] = n_minus
-    met[L.N_IMP_ALL] = n_all
-    met[L.N_MICRO] = n_micro
-    met[L.T_CONTACT] = t_contact
-    met[L.T_STICK] = t_stick
-    met[L.W_FORCE] = w_force
-    met[L.D_VISC] = d_visc
-    met[L.D_IMPACT] = d_imp
-    met[L.D_FRICTION] = d_fric
-    met[L.W_NONRECIP] = w_nr
-    met[L.N_IMP_REC] = n_imp
-    met[L.N_STICK_REC] = n_stk
-    met[L.N_REC] = n_rec
-    met[L.N_STROBE] = n_stb
     met[L.N_EVENTS] = n_ev
     met[L.EXACT_STATUS] = status
     if regen:
-        met[L.FIRST_ZERO_T] = first_zero
+        met[L.FIRST_ZERO_T] = rs[RS_FIRST_ZERO]
         met[L.MAX_FORCE] = max_force
-        met[L.N_ZERO_STEPS] = n_zero_steps
     return t
 
 

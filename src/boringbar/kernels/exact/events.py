@@ -8,8 +8,20 @@ import math
 from numba import njit
 
 from boringbar.kernels.exact.consts import (
-    EV_CUT, EV_HEXT, EV_MINUS, EV_PLUS, EV_REL_NEG, EV_REL_POS, EV_VSTOP, EV_WEXT, EV_YEXT,
-    SEG_ACC, SEG_CDIR, SEG_KRB, SEG_S)
+    EV_CUT,
+    EV_HEXT,
+    EV_MINUS,
+    EV_PLUS,
+    EV_REL_NEG,
+    EV_REL_POS,
+    EV_VSTOP,
+    EV_WEXT,
+    EV_YEXT,
+    SEG_ACC,
+    SEG_CDIR,
+    SEG_KRB,
+    SEG_S,
+)
 from boringbar.kernels.exact.propagate import _eval, _eval2, _force, _freq, _sizes, _surface
 from boringbar.kernels.views import borrow, with_len
 

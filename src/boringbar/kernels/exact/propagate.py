@@ -7,7 +7,7 @@ import math
 
 from numba import njit
 
-from boringbar.kernels.exact.consts import SEG_ACC, SEG_KRB, SEG_S, _RECIP, _RFACT
+from boringbar.kernels.exact.consts import _RECIP, _RFACT, SEG_ACC, SEG_KRB, SEG_S
 from boringbar.kernels.exact.prepare import _basis
 from boringbar.kernels.views import borrow
 
