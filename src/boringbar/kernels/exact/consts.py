@@ -60,7 +60,12 @@ CP_T0 = 10  # the run's start
 CP_T_STEADY = 11  # the steady window's start
 CP_DT_OUT = 12  # a cut's step (the unit of N_ZERO_STEPS)
 CP_STOP_AT_ZERO = 13  # 1: a cut stops at its first zero
-CP_SIZE = 14
+CP_F0 = 14  # the harmonic force's amplitude and circular frequency
+CP_OM = 15
+CP_H = 16  # the event-search grid step h
+CP_REC_DT = 17  # the history's sampling step (0: none)
+CP_TSTROBE = 18  # the strobe's period (0: none)
+CP_SIZE = 19
 # the run's state between segments, packed into one array ``rs`` (floats; the regime and
 # the cut flag as 0.0, 1.0, 2.0)
 RS_MODE = 0  # FREE, STICK, CONTACT
@@ -84,3 +89,28 @@ CQ_W0 = 6  # W before the cut
 CQ_MREV = 7  # nodes per revolution
 CQ_CUBIC = 8  # 1: cubic Hermite history, 0: linear
 CQ_SIZE = 9
+# the driver's running outputs, packed into one array ``ro`` (k_rec, the next history
+# row's index, as a float)
+RO_MAX_ABS_W = 0  # the largest |W| (steady)
+RO_MAX_W = 1  # the steady extremes of W
+RO_MIN_W = 2
+RO_MAX_AUX = 3  # the largest |aux|, steady and over the run
+RO_MAX_AUX_ALL = 4
+RO_MAX_FORCE = 5  # a cut's largest force
+RO_K_REC = 6  # the next history row is at t0 + k_rec rec_dt
+RO_T_STROBE = 7  # the next strobe time
+RO_SIZE = 8
+# a segment's description for its search, packed into one array ``sv`` (flags 0.0 or 1.0)
+SV_TLEN = 0  # its length
+SV_B4 = 1  # bounds over it on |y^(4)|, |W^(4)| (-1: not needed), |y'''| and |W'''|
+SV_BW4 = 2
+SV_B3Y = 3
+SV_B3W = 4
+SV_STEADY = 5  # in the steady window
+SV_WHOLE = 6  # a cut's whole step H from a node
+SV_ADAPT = 7  # steps longer than h allowed
+SV_YDD = 8  # y'' and W'' wanted at the grid points
+SV_WATCH_V = 9  # a free ball's y' = 0 switch watched
+SV_WATCH_EXT = 10  # a free ball's y extremum watched against grazes
+SV_REGEN = 11  # a regenerative cut
+SV_SIZE = 12

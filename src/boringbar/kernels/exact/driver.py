@@ -21,18 +21,23 @@ from boringbar.kernels.exact.consts import (
     CONTACT,
     CP_DT_OUT,
     CP_E,
+    CP_F0,
     CP_FC,
     CP_FS,
+    CP_H,
     CP_HALF,
     CP_KSTICK,
     CP_KWALL,
     CP_MEFF,
+    CP_OM,
+    CP_REC_DT,
     CP_SIZE,
     CP_SR,
     CP_STICK_MIN,
     CP_STOP_AT_ZERO,
     CP_T0,
     CP_T_STEADY,
+    CP_TSTROBE,
     CP_VIMP,
     CQ_CUBIC,
     CQ_FEED,
@@ -58,6 +63,15 @@ from boringbar.kernels.exact.consts import (
     MAX_EVENTS,
     MAX_ZERO_LENGTH,
     N_EV,
+    RO_K_REC,
+    RO_MAX_ABS_W,
+    RO_MAX_AUX,
+    RO_MAX_AUX_ALL,
+    RO_MAX_FORCE,
+    RO_MAX_W,
+    RO_MIN_W,
+    RO_SIZE,
+    RO_T_STROBE,
     RS_FIRST_ZERO,
     RS_INCUT,
     RS_MODE,
@@ -74,6 +88,19 @@ from boringbar.kernels.exact.consts import (
     SEG_S,
     SEG_SIZE,
     STICK,
+    SV_ADAPT,
+    SV_B3W,
+    SV_B3Y,
+    SV_B4,
+    SV_BW4,
+    SV_REGEN,
+    SV_SIZE,
+    SV_STEADY,
+    SV_TLEN,
+    SV_WATCH_EXT,
+    SV_WATCH_V,
+    SV_WHOLE,
+    SV_YDD,
 )
 from boringbar.kernels.exact.cut import (
     _GL_W,
@@ -166,7 +193,7 @@ def _zeros2(ptr, n, m):
 
 
 @njit(cache=True, inline="always")
-def _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out):
+def _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out, h, rec_dt):
     """The bar's rows ``mk`` (M, K, C, psi_L, psi_d, psi_a), a free ball's y'' and W''
     coefficients ``ddc`` and the run's constants ``cp`` (CP_*) from ``p``."""
     for i in range(n):
@@ -205,6 +232,11 @@ def _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out):
     cp[CP_T_STEADY] = t_steady
     cp[CP_DT_OUT] = dt_out
     cp[CP_STOP_AT_ZERO] = 1.0 if p[L.STOP_AT_ZERO] > 0.0 else 0.0
+    cp[CP_F0] = p[L.F0]
+    cp[CP_OM] = p[L.OMEGA]
+    cp[CP_H] = h
+    cp[CP_REC_DT] = rec_dt
+    cp[CP_TSTROBE] = p[L.STROBE_PERIOD]
 
 
 @njit(cache=True, inline="always")
@@ -402,9 +434,10 @@ def _close_flows(T, steady, mode, ball, fb, acc, pdu, out, seg, X, n, mk, cp, rs
 
 #: the driver's arrays, passed whole to its pieces (all borrowed or on the stack): states
 #: and scratch, the segment record, the event functions at a, b and a sub-step's ends,
-#: a cut's flow sums, the bar's rows, the run's constants and prepare's matrices
-Work = namedtuple("Work", "X Xa Xd dX q0 qs qg seg ev_a ev_b ev_s ev_t qsum mk cp lam V Z D bq "
-                  "lvis cvis tabE tabP")
+#: a cut's flow sums, the bar's rows and y'' coefficients, the run's constants, state and
+#: running outputs, prepare's matrices, the grid's steps and phase steps, the outputs
+Work = namedtuple("Work", "X Xa Xd dX q0 qs qg seg ev_a ev_b ev_s ev_t qsum mk ddc cp rs ro lam V "
+                  "Z D bq lvis cvis tabE tabP eh levmax hl rotl x rec strobe met")
 
 
 @njit(cache=True, inline="always")
@@ -767,6 +800,258 @@ def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe,
     return k_rec, t_next_strobe
 
 
+@njit(cache=True, inline="always")
+def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
+    """The grid search of the segment from t (regime r, ``mode``, forcing phasor ph at t,
+    its description ``sv``, SV_*) for its first event, with the outputs on the way: the
+    running extremes and output times in w.ro (RO_*), a cut's flows in w.qsum, history
+    and strobe rows.  Returns (event kind or -1, its time from t or the segment's length,
+    the forcing phasor there, W and W' there)."""
+    X = w.X
+    Xa = w.Xa
+    Xd = w.Xd
+    dX = w.dX
+    q0 = w.q0
+    qs = w.qs
+    qg = w.qg
+    seg = w.seg
+    ev_a = w.ev_a
+    ev_b = w.ev_b
+    qsum = w.qsum
+    mk = w.mk
+    lam = w.lam
+    V = w.V
+    Z = w.Z
+    D = w.D
+    bq = w.bq
+    tabE = w.tabE
+    tabP = w.tabP
+    eh = w.eh
+    levmax = w.levmax
+    hl = w.hl
+    rotl = w.rotl
+    ddc = w.ddc
+    x = w.x
+    rec = w.rec
+    strobe = w.strobe
+    met = w.met
+    ro = w.ro
+    cp = w.cp
+    nz = q0.shape[0]
+    ball = case == L.BALL
+    f0 = cp[CP_F0]
+    om = cp[CP_OM]
+    h = cp[CP_H]
+    half = cp[CP_HALF]
+    rec_dt = cp[CP_REC_DT]
+    tstrobe = cp[CP_TSTROBE]
+    t_end = w.rs[RS_T_END]
+    fb = seg[1]
+    acc = seg[SEG_ACC]
+    s_0 = seg[SEG_S]
+    s_1 = seg[SEG_S + 1]
+    s_2 = seg[SEG_S + 2]
+    s_3 = seg[SEG_S + 3]
+    tlen = sv[SV_TLEN]
+    b4 = sv[SV_B4]
+    bw4 = sv[SV_BW4]
+    b3y = sv[SV_B3Y]
+    b3w = sv[SV_B3W]
+    steady = sv[SV_STEADY] != 0.0
+    whole = sv[SV_WHOLE] != 0.0
+    adapt = sv[SV_ADAPT] != 0.0
+    ydd_on = sv[SV_YDD] != 0.0
+    watch_v = sv[SV_WATCH_V] != 0.0
+    watch_ext = sv[SV_WATCH_EXT] != 0.0
+    regen = sv[SV_REGEN] != 0.0
+    max_abs_w = ro[RO_MAX_ABS_W]
+    max_w = ro[RO_MAX_W]
+    min_w = ro[RO_MIN_W]
+    max_aux = ro[RO_MAX_AUX]
+    max_aux_all = ro[RO_MAX_AUX_ALL]
+    max_force = ro[RO_MAX_FORCE]
+    k_rec = ro[RO_K_REC]
+    t_next_strobe = ro[RO_T_STROBE]
+    ph_next = ph
+    wb = 0.0
+    wdb = 0.0
+    # values at tau = 0
+    a = 0.0
+    for j in range(nz):
+        Xa[j] = X[j]
+    for k in range(nz):
+        qg[k] = q0[k]
+    phg = ph
+    ev_kind = -1
+    tau_ev = tlen
+    istep = 0
+    # the values at a (carried over from the previous grid point)
+    wa = 0.0
+    wda = 0.0
+    for i in range(n):
+        wa += mk[3, i] * Xa[i]
+        wda += mk[3, i] * Xa[n + i]
+    if ball or not regen:
+        _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
+    else:  # only h matters; written out (no call, see the whole step below)
+        ev_a[EV_CUT] = seg[SEG_CDIR] * (wa - s_0)
+        ev_a[EV_HEXT] = s_1 - wda
+    # a segment never starts beyond a wall (events put the ball on it); the closed
+    # form's y(0) may be a few ulp past it, which would hide a return to that wall
+    ev_a[EV_PLUS] = min(ev_a[EV_PLUS], 0.0)
+    ev_a[EV_MINUS] = min(ev_a[EV_MINUS], 0.0)
+    # nor past h = 0 (an event put it there; the re-evaluated h may be a few ulp off)
+    ev_a[EV_CUT] = min(ev_a[EV_CUT], 0.0)
+    for c in range(6):
+        qsum[c] = 0.0
+    auxa = 0.0
+    auxda = 0.0
+    if case != L.SOLID:
+        auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
+    ydd_a = math.nan
+    wdd_a = math.nan
+    ydd_b = math.nan
+    wdd_b = math.nan
+    if ydd_on:
+        ydd_a, wdd_a = _ydd(Xa, f0 * ph.imag, fb, acc, ddc, n)
+    while True:
+        # the step: h, or 2^lv h where Taylor's theorem proves that it holds no event
+        # and no new extremum of |y| or (steady) of W: on [a, a + s], y lies within
+        # b3y s^3 / 6 of its quadratic Taylor polynomial at a, y' within b3y s^2 / 2 of
+        # its linear one, W within b3w s^3 / 6 of its quadratic; the step is taken if
+        # these ranges stay inside the walls and below the largest |y| seen, keep y' off
+        # 0 (friction) and keep W strictly between its running extremes
+        lev = 0
+        if adapt:
+            ylim = min(half, max_aux if steady else max_aux_all) * (1.0 - 1e-9)
+            lev = _level(ev_a[EV_PLUS] + half, ev_a[EV_YEXT], ydd_a, wa, wda, wdd_a, b3y,
+                         b3w, ylim, 1e-9 * max_abs_w, max_w, min_w, hl, levmax[r], watch_v,
+                         steady)
+        b = a + hl[lev]
+        full = True
+        if b >= tlen:
+            b = tlen
+            full = False
+        istep += 1
+        usual = full and istep % 64 != 0 and not regen
+        if usual:
+            # the usual grid point, inlined with the sizes constant for one and two modes
+            rot = rotl[lev]
+            if sz == 1:
+                phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                                ev_b, b, seg, mode, 1, mk, f0, om, ydd_on,
+                                                acc, ddc, 2)
+            elif sz == 2:
+                phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                                ev_b, b, seg, mode, 2, mk, f0, om, ydd_on,
+                                                acc, ddc, 4)
+            else:
+                phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X,
+                                                ev_b, b, seg, mode, n, mk, f0, om, ydd_on,
+                                                acc, ddc, nz)
+        elif whole and not full:
+            # the tabulated end of a whole step, written out: numba reference-counts
+            # the array arguments of every call, even inlined (docs/performance.md)
+            for kq in range(_nq(nz, ks)):
+                k = kq * ks
+                qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
+                         + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
+                         + s_3 * tabP[r, 4, 3, k])
+            for j in range(nz):
+                sx = fb * D[r, j]
+                for kq in range(_nq(nz, ks)):
+                    k = kq * ks
+                    sx += (V[r, j, k] * qg[k]).real
+                X[j] = sx
+        else:
+            _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
+            phg = cmath.exp(1j * om * (t + b))
+        if not usual and (ball or not regen):
+            _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+            if ydd_on:
+                ydd_b, wdd_b = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
+        elif regen:
+            wq = 0.0
+            wdq = 0.0
+            for i in range(n):
+                wq += mk[3, i] * X[i]
+                wdq += mk[3, i] * X[n + i]
+            ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
+            ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
+        # --- events in [a, b]
+        kind, best = _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v,
+                                 watch_ext, b4, lev, ydd_a, ydd_b)
+        if kind >= 0:
+            b = best
+            ph_next = _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
+            ev_kind = kind
+            tau_ev = b
+        # --- outputs on (a, b]
+        wb = 0.0
+        wdb = 0.0
+        for i in range(n):
+            wb += mk[3, i] * X[i]
+            wdb += mk[3, i] * X[n + i]
+        if steady:
+            max_abs_w = max(max_abs_w, abs(wb))
+            max_w = max(max_w, wb)
+            min_w = min(min_w, wb)
+            if lev == 0 and wda * wdb < 0.0 and (bw4 < 0.0 or _w_may_exceed(
+                    b - a, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w)):
+                if kind < 0 and wdd_a == wdd_a and wdd_b == wdd_b:  # W'' at both ends
+                    c0 = _hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1)
+                else:
+                    c0 = _hermite(a, b, wa, wb, wda, wdb, 1)
+                we = _w_extremum_any(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D,
+                                     bq, qs, dX, Xd, n, mk, om)
+                max_abs_w = max(max_abs_w, abs(we))
+                max_w = max(max_w, we)
+                min_w = min(min_w, we)
+        if regen:
+            max_force = _cut_flows(w, a, b, r, ks, n, whole and kind < 0, mode == STICK,
+                                   steady, wb, max_force)
+        # aux and aux' at a and b
+        auxb = 0.0
+        auxdb = 0.0
+        if case != L.SOLID:
+            auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
+        if kind == EV_PLUS or kind == EV_MINUS:
+            auxb = half if kind == EV_PLUS else -half  # on the wall, up to round-off
+        max_aux_all = max(max_aux_all, abs(auxb))
+        if steady:
+            max_aux = max(max_aux, abs(auxb))
+            if regen or not ball:  # a ball's int y^2 is closed form (_integrals)
+                hh = b - a
+                met[L.SUM_AUX2] += (0.5 * hh * (auxa * auxa + auxb * auxb)
+                             + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
+        # history and strobe samples in (t + a, t + b]
+        if rec_dt > 0.0 or tstrobe > 0.0:
+            k_rec, t_next_strobe = _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case,
+                                            ball, x, rec, strobe, rec_dt, tstrobe, k_rec,
+                                            t_next_strobe, met)
+        if kind >= 0 or not full:
+            break
+        a = b
+        wa = wb
+        wda = wdb
+        ydd_a = ydd_b
+        wdd_a = wdd_b
+        auxa = auxb
+        auxda = auxdb
+        for kk in range(N_EV):
+            ev_a[kk] = ev_b[kk]
+
+    ro[RO_MAX_ABS_W] = max_abs_w
+    ro[RO_MAX_W] = max_w
+    ro[RO_MIN_W] = min_w
+    ro[RO_MAX_AUX] = max_aux
+    ro[RO_MAX_AUX_ALL] = max_aux_all
+    ro[RO_MAX_FORCE] = max_force
+    ro[RO_K_REC] = k_rec
+    ro[RO_T_STROBE] = t_next_strobe
+    return ev_kind, tau_ev, ph_next, wb, wdb
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
@@ -812,7 +1097,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     mk = _zeros2(stack_ptr(_NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
     ddc = _zeros2(stack_ptr(_DDC, np.float64), 4, n + 2)
     cp = _zeros(stack_ptr(CP_SIZE, np.float64), CP_SIZE)
-    _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out)
+    _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out, h, rec_dt)
     f0 = p[L.F0]
     om = p[L.OMEGA]
     m = p[L.BALL_MASS]
@@ -895,25 +1180,22 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     rs[RS_Y] = x[2 * n] if ball or case == L.LOCKED else 0.0
     rs[RS_YD] = x[2 * n + 1] if ball else 0.0
 
-    w = Work(X, Xa, Xd, dX, q0, qs, qg, seg, ev_a, ev_b, ev_s, ev_t, qsum, mk, cp, lam, V, Z, D,
-             bq, lvis, cvis, tabE, tabP)
-
-    # the running extremes (the other metrics add up in ``met`` itself)
-    max_abs_w = met[L.MAX_ABS_W]
-    max_w = met[L.STEADY_MAX_W]
-    min_w = met[L.STEADY_MIN_W]
-    max_aux = met[L.MAX_ABS_AUX]
-    max_aux_all = met[L.MAX_ABS_AUX_ALL]
-    n_ev = int(met[L.N_EVENTS])
-    status = 0
-
-    # next output sample times
-    k_rec = 1
-    t_next_strobe = 0.0
+    # the running extremes and output times (the other metrics add up in ``met`` itself)
+    ro = _zeros(stack_ptr(RO_SIZE, np.float64), RO_SIZE)
+    ro[RO_MAX_ABS_W] = met[L.MAX_ABS_W]
+    ro[RO_MAX_W] = met[L.STEADY_MAX_W]
+    ro[RO_MIN_W] = met[L.STEADY_MIN_W]
+    ro[RO_MAX_AUX] = met[L.MAX_ABS_AUX]
+    ro[RO_MAX_AUX_ALL] = met[L.MAX_ABS_AUX_ALL]
+    ro[RO_MAX_FORCE] = max_force
+    ro[RO_K_REC] = 1.0  # the next history row is at t0 + k_rec rec_dt
     if tstrobe > 0.0:
         t_next_strobe = p[L.STROBE_T0]
         if t_next_strobe <= t0:
             t_next_strobe += (math.floor((t0 - t_next_strobe) / tstrobe) + 1) * tstrobe
+        ro[RO_T_STROBE] = t_next_strobe
+    n_ev = int(met[L.N_EVENTS])
+    status = 0
 
     # --- the initial regime ---------------------------------------------------------------
     if ball:
@@ -927,6 +1209,10 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     for lv in range(GRID_LEVELS):
         hl[lv] = h * 2.0 ** lv
         rotl[lv] = cmath.exp(1j * om * hl[lv]) if om != 0.0 else 1.0 + 0.0j
+    w = Work(X, Xa, Xd, dX, q0, qs, qg, seg, ev_a, ev_b, ev_s, ev_t, qsum, mk, ddc, cp, rs, ro, lam,
+             V, Z, D, bq, lvis, cvis, tabE, tabP, eh, levmax, hl, rotl, x, rec, strobe, met)
+    sv = _zeros(stack_ptr(SV_SIZE, np.float64), SV_SIZE)
+    sv[SV_REGEN] = 1.0 if regen else 0.0
     ph_next = 1.0 + 0.0j
     ph_next_ok = False
     t = t0
@@ -969,10 +1255,6 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             q0[k] = s
         at_node = False
         whole = False
-        s_0 = 0.0
-        s_1 = 0.0
-        s_2 = 0.0
-        s_3 = 0.0
         if regen:
             t_seg_end, at_node, from_node, j_node = _cut_segment(
                 t, t_stop, j_node, borrow(kn), nk, borrow(ip), borrow(sc), seg, cq, rs)
@@ -980,10 +1262,6 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             seg[SEG_CDIR] = 1.0 if incut else -1.0
             # a whole step H from node to node, inside one grid step: tabulated values
             whole = at_node and from_node and hh_ <= h
-            s_0 = seg[SEG_S]
-            s_1 = seg[SEG_S + 1]
-            s_2 = seg[SEG_S + 2]
-            s_3 = seg[SEG_S + 3]
         pdu = 0.0
         pdv = 0.0
         for i in range(n):
@@ -1013,171 +1291,18 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         watch_v = watch_wall and fc > 0.0 and sdir != 0.0
         watch_ext = watch_wall and not watch_v
         tlen = t_seg_end - t
-        # values at tau = 0
-        a = 0.0
-        for j in range(nz):
-            Xa[j] = X[j]
-        for k in range(nz):
-            qg[k] = q0[k]
-        phg = ph
-        ev_kind = -1
-        tau_ev = tlen
-        istep = 0
-        # the values at a (carried over from the previous grid point)
-        wa = 0.0
-        wda = 0.0
-        for i in range(n):
-            wa += mk[3, i] * Xa[i]
-            wda += mk[3, i] * Xa[n + i]
-        if ball or not regen:
-            _events(ev_a, Xa, a, seg, mode, n, mk, f0, om)
-        else:  # only h matters; written out (no call, see the whole step below)
-            ev_a[EV_CUT] = seg[SEG_CDIR] * (wa - s_0)
-            ev_a[EV_HEXT] = s_1 - wda
-        # a segment never starts beyond a wall (events put the ball on it); the closed
-        # form's y(0) may be a few ulp past it, which would hide a return to that wall
-        ev_a[EV_PLUS] = min(ev_a[EV_PLUS], 0.0)
-        ev_a[EV_MINUS] = min(ev_a[EV_MINUS], 0.0)
-        # nor past h = 0 (an event put it there; the re-evaluated h may be a few ulp off)
-        ev_a[EV_CUT] = min(ev_a[EV_CUT], 0.0)
-        for c in range(6):
-            qsum[c] = 0.0
-        auxa = 0.0
-        auxda = 0.0
-        if case != L.SOLID:
-            auxa, auxda = _aux(Xa, a, seg, mode, case, n, mk, x, ball)
-        ydd_a = math.nan
-        wdd_a = math.nan
-        ydd_b = math.nan
-        wdd_b = math.nan
-        if ydd_on:
-            ydd_a, wdd_a = _ydd(Xa, f0 * ph.imag, fb, acc, ddc, n)
-        while True:
-            # the step: h, or 2^lv h where Taylor's theorem proves that it holds no event
-            # and no new extremum of |y| or (steady) of W: on [a, a + s], y lies within
-            # b3y s^3 / 6 of its quadratic Taylor polynomial at a, y' within b3y s^2 / 2 of
-            # its linear one, W within b3w s^3 / 6 of its quadratic; the step is taken if
-            # these ranges stay inside the walls and below the largest |y| seen, keep y' off
-            # 0 (friction) and keep W strictly between its running extremes
-            lev = 0
-            if adapt:
-                ylim = min(half, max_aux if steady else max_aux_all) * (1.0 - 1e-9)
-                lev = _level(ev_a[EV_PLUS] + half, ev_a[EV_YEXT], ydd_a, wa, wda, wdd_a, b3y,
-                             b3w, ylim, 1e-9 * max_abs_w, max_w, min_w, hl, levmax[r], watch_v,
-                             steady)
-            b = a + hl[lev]
-            full = True
-            if b >= tlen:
-                b = tlen
-                full = False
-            istep += 1
-            usual = full and istep % 64 != 0 and not regen
-            if usual:
-                # the usual grid point, inlined with the sizes constant for one and two modes
-                rot = rotl[lev]
-                if sz == 1:
-                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
-                                                    ev_b, b, seg, mode, 1, mk, f0, om, ydd_on,
-                                                    acc, ddc, 2)
-                elif sz == 2:
-                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
-                                                    ev_b, b, seg, mode, 2, mk, f0, om, ydd_on,
-                                                    acc, ddc, 4)
-                else:
-                    phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X,
-                                                    ev_b, b, seg, mode, n, mk, f0, om, ydd_on,
-                                                    acc, ddc, nz)
-            elif whole and not full:
-                # the tabulated end of a whole step, written out: numba reference-counts
-                # the array arguments of every call, even inlined (docs/performance.md)
-                for kq in range(_nq(nz, ks)):
-                    k = kq * ks
-                    qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
-                             + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
-                             + s_3 * tabP[r, 4, 3, k])
-                for j in range(nz):
-                    sx = fb * D[r, j]
-                    for kq in range(_nq(nz, ks)):
-                        k = kq * ks
-                        sx += (V[r, j, k] * qg[k]).real
-                    X[j] = sx
-            else:
-                _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
-                phg = cmath.exp(1j * om * (t + b))
-            if not usual and (ball or not regen):
-                _events(ev_b, X, b, seg, mode, n, mk, f0, om)
-                if ydd_on:
-                    ydd_b, wdd_b = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
-            elif regen:
-                wq = 0.0
-                wdq = 0.0
-                for i in range(n):
-                    wq += mk[3, i] * X[i]
-                    wdq += mk[3, i] * X[n + i]
-                ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
-                ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
-            # --- events in [a, b]
-            kind, best = _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v,
-                                     watch_ext, b4, lev, ydd_a, ydd_b)
-            if kind >= 0:
-                b = best
-                ph_next = _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
-                ev_kind = kind
-                tau_ev = b
-            # --- outputs on (a, b]
-            wb = 0.0
-            wdb = 0.0
-            for i in range(n):
-                wb += mk[3, i] * X[i]
-                wdb += mk[3, i] * X[n + i]
-            if steady:
-                max_abs_w = max(max_abs_w, abs(wb))
-                max_w = max(max_w, wb)
-                min_w = min(min_w, wb)
-                if lev == 0 and wda * wdb < 0.0 and (bw4 < 0.0 or _w_may_exceed(
-                        b - a, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w)):
-                    if kind < 0 and wdd_a == wdd_a and wdd_b == wdd_b:  # W'' at both ends
-                        c0 = _hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1)
-                    else:
-                        c0 = _hermite(a, b, wa, wb, wda, wdb, 1)
-                    we = _w_extremum_any(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D,
-                                         bq, qs, dX, Xd, n, mk, om)
-                    max_abs_w = max(max_abs_w, abs(we))
-                    max_w = max(max_w, we)
-                    min_w = min(min_w, we)
-            if regen:
-                max_force = _cut_flows(w, a, b, r, ks, n, whole and kind < 0, mode == STICK,
-                                       steady, wb, max_force)
-            # aux and aux' at a and b
-            auxb = 0.0
-            auxdb = 0.0
-            if case != L.SOLID:
-                auxb, auxdb = _aux(X, b, seg, mode, case, n, mk, x, ball)
-            if kind == EV_PLUS or kind == EV_MINUS:
-                auxb = half if kind == EV_PLUS else -half  # on the wall, up to round-off
-            max_aux_all = max(max_aux_all, abs(auxb))
-            if steady:
-                max_aux = max(max_aux, abs(auxb))
-                if regen or not ball:  # a ball's int y^2 is closed form (_integrals)
-                    hh = b - a
-                    met[L.SUM_AUX2] += (0.5 * hh * (auxa * auxa + auxb * auxb)
-                                 + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
-            # history and strobe samples in (t + a, t + b]
-            if rec_dt > 0.0 or tstrobe > 0.0:
-                k_rec, t_next_strobe = _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case,
-                                                ball, x, rec, strobe, rec_dt, tstrobe, k_rec,
-                                                t_next_strobe, met)
-            if kind >= 0 or not full:
-                break
-            a = b
-            wa = wb
-            wda = wdb
-            ydd_a = ydd_b
-            wdd_a = wdd_b
-            auxa = auxb
-            auxda = auxdb
-            for kk in range(N_EV):
-                ev_a[kk] = ev_b[kk]
+        sv[SV_TLEN] = tlen
+        sv[SV_B4] = b4
+        sv[SV_BW4] = bw4
+        sv[SV_B3Y] = b3y
+        sv[SV_B3W] = b3w
+        sv[SV_STEADY] = 1.0 if steady else 0.0
+        sv[SV_WHOLE] = 1.0 if whole else 0.0
+        sv[SV_ADAPT] = 1.0 if adapt else 0.0
+        sv[SV_YDD] = 1.0 if ydd_on else 0.0
+        sv[SV_WATCH_V] = 1.0 if watch_v else 0.0
+        sv[SV_WATCH_EXT] = 1.0 if watch_ext else 0.0
+        ev_kind, tau_ev, ph_next, wb, wdb = _search(w, t, r, ks, sz, n, case, mode, ph, sv)
 
         # --- close the segment [t, t + T] ----------------------------------------------
         T = tau_ev
@@ -1254,16 +1379,16 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     if ball:
         x[2 * n] = rs[RS_Y]
         x[2 * n + 1] = rs[RS_YD]
-    met[L.MAX_ABS_W] = max_abs_w
-    met[L.STEADY_MAX_W] = max_w
-    met[L.STEADY_MIN_W] = min_w
-    met[L.MAX_ABS_AUX] = max_aux
-    met[L.MAX_ABS_AUX_ALL] = max_aux_all
+    met[L.MAX_ABS_W] = ro[RO_MAX_ABS_W]
+    met[L.STEADY_MAX_W] = ro[RO_MAX_W]
+    met[L.STEADY_MIN_W] = ro[RO_MIN_W]
+    met[L.MAX_ABS_AUX] = ro[RO_MAX_AUX]
+    met[L.MAX_ABS_AUX_ALL] = ro[RO_MAX_AUX_ALL]
     met[L.N_EVENTS] = n_ev
     met[L.EXACT_STATUS] = status
     if regen:
         met[L.FIRST_ZERO_T] = rs[RS_FIRST_ZERO]
-        met[L.MAX_FORCE] = max_force
+        met[L.MAX_FORCE] = ro[RO_MAX_FORCE]
     return t
 
 
