@@ -65,7 +65,8 @@ CP_OM = 15
 CP_H = 16  # the event-search grid step h
 CP_REC_DT = 17  # the history's sampling step (0: none)
 CP_TSTROBE = 18  # the strobe's period (0: none)
-CP_SIZE = 19
+CP_M = 19  # the ball's mass
+CP_SIZE = 20
 # the run's state between segments, packed into one array ``rs`` (floats; the regime and
 # the cut flag as 0.0, 1.0, 2.0)
 RS_MODE = 0  # FREE, STICK, CONTACT
@@ -88,7 +89,8 @@ CQ_FEED = 5  # h_m
 CQ_W0 = 6  # W before the cut
 CQ_MREV = 7  # nodes per revolution
 CQ_CUBIC = 8  # 1: cubic Hermite history, 0: linear
-CQ_SIZE = 9
+CQ_KRB = 9  # Kr b
+CQ_SIZE = 10
 # the driver's running outputs, packed into one array ``ro`` (k_rec, the next history
 # row's index, as a float)
 RO_MAX_ABS_W = 0  # the largest |W| (steady)

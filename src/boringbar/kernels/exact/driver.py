@@ -28,6 +28,7 @@ from boringbar.kernels.exact.consts import (
     CP_HALF,
     CP_KSTICK,
     CP_KWALL,
+    CP_M,
     CP_MEFF,
     CP_OM,
     CP_REC_DT,
@@ -42,6 +43,7 @@ from boringbar.kernels.exact.consts import (
     CQ_CUBIC,
     CQ_FEED,
     CQ_H,
+    CQ_KRB,
     CQ_MREV,
     CQ_NREV,
     CQ_SIZE,
@@ -237,6 +239,7 @@ def _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out, h, rec_dt):
     cp[CP_H] = h
     cp[CP_REC_DT] = rec_dt
     cp[CP_TSTROBE] = p[L.STROBE_PERIOD]
+    cp[CP_M] = m
 
 
 @njit(cache=True, inline="always")
@@ -436,8 +439,9 @@ def _close_flows(T, steady, mode, ball, fb, acc, pdu, out, seg, X, n, mk, cp, rs
 #: and scratch, the segment record, the event functions at a, b and a sub-step's ends,
 #: a cut's flow sums, the bar's rows and y'' coefficients, the run's constants, state and
 #: running outputs, prepare's matrices, the grid's steps and phase steps, the outputs
-Work = namedtuple("Work", "X Xa Xd dX q0 qs qg seg ev_a ev_b ev_s ev_t qsum mk ddc cp rs ro lam V "
-                  "Z D bq lvis cvis tabE tabP eh levmax hl rotl x rec strobe met")
+Work = namedtuple("Work", "X Xa Xd dX q0 qs qg seg ev_a ev_b ev_s ev_t qsum out me G Cx cf ca cb "
+                  "phj mk ddc cp rs ro lam V Vi Vfull Z D bq lvis cvis isum kstep bnd levmax "
+                  "eh tabE tabP hl rotl x rec strobe met")
 
 
 @njit(cache=True, inline="always")
@@ -801,6 +805,85 @@ def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe,
 
 
 @njit(cache=True, inline="always")
+def _advance(w, t, r, ks, sz, n, mode, lev, b, usual, tab_end, regen, ball, ydd_on, phg, ydd_b,
+             wdd_b):
+    """The state at the grid point b of the segment from t into w.X (and w.qg, the
+    eigen-coordinates, and phg, the forcing phasor, on the usual grid) and the event
+    functions there into w.ev_b: a usual grid step (``usual``) of level ``lev``, the
+    tabulated end of a cut's whole step (``tab_end``), or the closed form.  Returns
+    (phg, y'' and W'' at b, or ydd_b and wdd_b as they were where not evaluated)."""
+    X = w.X
+    q0 = w.q0
+    qg = w.qg
+    seg = w.seg
+    ev_b = w.ev_b
+    mk = w.mk
+    ddc = w.ddc
+    lam = w.lam
+    V = w.V
+    Z = w.Z
+    D = w.D
+    bq = w.bq
+    eh = w.eh
+    tabE = w.tabE
+    tabP = w.tabP
+    nz = q0.shape[0]
+    f0 = w.cp[CP_F0]
+    om = w.cp[CP_OM]
+    fb = seg[1]
+    acc = seg[SEG_ACC]
+    s_0 = seg[SEG_S]
+    s_1 = seg[SEG_S + 1]
+    s_2 = seg[SEG_S + 2]
+    s_3 = seg[SEG_S + 3]
+    if usual:
+        # the usual grid point, inlined with the sizes constant for one and two modes
+        rot = w.rotl[lev]
+        if sz == 1:
+            phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                            ev_b, b, seg, mode, 1, mk, f0, om, ydd_on,
+                                            acc, ddc, 2)
+        elif sz == 2:
+            phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
+                                            ev_b, b, seg, mode, 2, mk, f0, om, ydd_on,
+                                            acc, ddc, 4)
+        else:
+            phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X,
+                                            ev_b, b, seg, mode, n, mk, f0, om, ydd_on,
+                                            acc, ddc, nz)
+    elif tab_end:
+        # the tabulated end of a whole step, written out: numba reference-counts
+        # the array arguments of every call, even inlined (docs/performance.md)
+        for kq in range(_nq(nz, ks)):
+            k = kq * ks
+            qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
+                     + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
+                     + s_3 * tabP[r, 4, 3, k])
+        for j in range(nz):
+            sx = fb * D[r, j]
+            for kq in range(_nq(nz, ks)):
+                k = kq * ks
+                sx += (V[r, j, k] * qg[k]).real
+            X[j] = sx
+    else:
+        _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
+        phg = cmath.exp(1j * om * (t + b))
+    if not usual and (ball or not regen):
+        _events(ev_b, X, b, seg, mode, n, mk, f0, om)
+        if ydd_on:
+            ydd_b, wdd_b = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
+    elif regen:
+        wq = 0.0
+        wdq = 0.0
+        for i in range(n):
+            wq += mk[3, i] * X[i]
+            wdq += mk[3, i] * X[n + i]
+        ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
+        ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
+    return phg, ydd_b, wdd_b
+
+
+@njit(cache=True, inline="always")
 def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
     """The grid search of the segment from t (regime r, ``mode``, forcing phasor ph at t,
     its description ``sv``, SV_*) for its first event, with the outputs on the way: the
@@ -824,12 +907,8 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
     Z = w.Z
     D = w.D
     bq = w.bq
-    tabE = w.tabE
-    tabP = w.tabP
-    eh = w.eh
     levmax = w.levmax
     hl = w.hl
-    rotl = w.rotl
     ddc = w.ddc
     x = w.x
     rec = w.rec
@@ -850,8 +929,6 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
     acc = seg[SEG_ACC]
     s_0 = seg[SEG_S]
     s_1 = seg[SEG_S + 1]
-    s_2 = seg[SEG_S + 2]
-    s_3 = seg[SEG_S + 3]
     tlen = sv[SV_TLEN]
     b4 = sv[SV_B4]
     bw4 = sv[SV_BW4]
@@ -934,50 +1011,9 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
             full = False
         istep += 1
         usual = full and istep % 64 != 0 and not regen
-        if usual:
-            # the usual grid point, inlined with the sizes constant for one and two modes
-            rot = rotl[lev]
-            if sz == 1:
-                phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
-                                                ev_b, b, seg, mode, 1, mk, f0, om, ydd_on,
-                                                acc, ddc, 2)
-            elif sz == 2:
-                phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, 2, X,
-                                                ev_b, b, seg, mode, 2, mk, f0, om, ydd_on,
-                                                acc, ddc, 4)
-            else:
-                phg, ydd_b, wdd_b = _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X,
-                                                ev_b, b, seg, mode, n, mk, f0, om, ydd_on,
-                                                acc, ddc, nz)
-        elif whole and not full:
-            # the tabulated end of a whole step, written out: numba reference-counts
-            # the array arguments of every call, even inlined (docs/performance.md)
-            for kq in range(_nq(nz, ks)):
-                k = kq * ks
-                qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
-                         + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
-                         + s_3 * tabP[r, 4, 3, k])
-            for j in range(nz):
-                sx = fb * D[r, j]
-                for kq in range(_nq(nz, ks)):
-                    k = kq * ks
-                    sx += (V[r, j, k] * qg[k]).real
-                X[j] = sx
-        else:
-            _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
-            phg = cmath.exp(1j * om * (t + b))
-        if not usual and (ball or not regen):
-            _events(ev_b, X, b, seg, mode, n, mk, f0, om)
-            if ydd_on:
-                ydd_b, wdd_b = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
-        elif regen:
-            wq = 0.0
-            wdq = 0.0
-            for i in range(n):
-                wq += mk[3, i] * X[i]
-                wdq += mk[3, i] * X[n + i]
-            ev_b[EV_CUT] = seg[SEG_CDIR] * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))))
-            ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq
+        phg, ydd_b, wdd_b = _advance(w, t, r, ks, sz, n, mode, lev, b, usual,
+                                     whole and not full, regen, ball, ydd_on, phg, ydd_b,
+                                     wdd_b)
         # --- events in [a, b]
         kind, best = _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v,
                                  watch_ext, b4, lev, ydd_a, ydd_b)
@@ -1052,6 +1088,185 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
     return ev_kind, tau_ev, ph_next, wb, wdb
 
 
+@njit(cache=True, inline="always")
+def _start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, sv):
+    """A segment from t (forcing phasor ph there) in the run's state w.rs: its regime r,
+    its eigen-coordinates into w.q0, its record into w.seg, its description into ``sv``
+    (SV_*) and, in a cut, its end and surface.  Returns (r, ks, its end (at most t_stop),
+    whether that is a cut's node, the last node reached, psi_d . u at t)."""
+    X = w.X
+    dX = w.dX
+    q0 = w.q0
+    seg = w.seg
+    mk = w.mk
+    lam = w.lam
+    Z = w.Z
+    D = w.D
+    bq = w.bq
+    Vi = w.Vi
+    bnd = w.bnd
+    rs = w.rs
+    cp = w.cp
+    nz = q0.shape[0]
+    ball = case == L.BALL
+    regen = sv[SV_REGEN] != 0.0
+    t_steady = cp[CP_T_STEADY]
+    fc = cp[CP_FC]
+    kappa_stick = cp[CP_KSTICK]
+    kappa_wall = cp[CP_KWALL]
+    fs = cp[CP_FS]
+    half = cp[CP_HALF]
+    m = cp[CP_M]
+    h = cp[CP_H]
+    hh_ = cq[CQ_H]
+    krb = cq[CQ_KRB]
+    mode = int(rs[RS_MODE])
+    sdir = rs[RS_SDIR]
+    wall = rs[RS_WALL]
+    y = rs[RS_Y]
+    yd = rs[RS_YD]
+    incut = rs[RS_INCUT] != 0.0
+    t_seg_end = t_stop
+    steady = t >= t_steady
+    r = 0
+    if ball:
+        r = mode
+    if incut:
+        r += nreg
+    fb = 0.0
+    if mode == FREE and ball:
+        fb = -fc * sdir
+    kap = kappa_stick if mode == STICK else kappa_wall
+    ks = w.kstep[r]
+    for j in range(nz):
+        dX[j] = X[j] - ((Z[r, j] * ph).imag + fb * D[r, j])
+    for k in range(nz):
+        s = 0.0 + 0.0j
+        for j in range(nz):
+            s += Vi[r, k, j] * dX[j]
+        q0[k] = s
+    at_node = False
+    whole = False
+    if regen:
+        t_seg_end, at_node, from_node, j_node = _cut_segment(t, t_stop, j_node, kn, nk, ip, sc,
+                                                             seg, cq, rs)
+        seg[SEG_KRB] = krb if incut else 0.0
+        seg[SEG_CDIR] = 1.0 if incut else -1.0
+        # a whole step H from node to node, inside one grid step: tabulated values
+        whole = at_node and from_node and hh_ <= h
+    pdu = 0.0
+    pdv = 0.0
+    for i in range(n):
+        pdu += mk[4, i] * X[i]
+        pdv += mk[4, i] * X[n + i]
+    # bounds on |y^(4)|, |W^(4)| (steady, harmonic) and |y^(3)|, |W^(3)| (a free ball)
+    # over the segment
+    ydd_on = ball and mode == FREE and not regen
+    adapt = ydd_on and w.levmax[r] > 0
+    b4, bw4, b3y, b3w = _bounds(r, q0, seg, lam, bq, bnd, krb, ball, incut,
+                                steady and not regen, adapt)
+    seg[0] = t
+    seg[1] = fb
+    seg[2] = y + pdu  # the ball's absolute position and velocity
+    seg[3] = yd + pdv
+    seg[4] = y
+    seg[5] = sdir
+    seg[6] = wall
+    seg[7] = kap
+    seg[8] = fs
+    seg[9] = half
+    seg[10] = m if m > 0.0 else 1.0
+    acc = fb / seg[10]
+    seg[SEG_ACC] = acc
+    # which events are watched
+    watch_wall = ball and mode == FREE
+    watch_v = watch_wall and fc > 0.0 and sdir != 0.0
+    watch_ext = watch_wall and not watch_v
+    tlen = t_seg_end - t
+    sv[SV_TLEN] = tlen
+    sv[SV_B4] = b4
+    sv[SV_BW4] = bw4
+    sv[SV_B3Y] = b3y
+    sv[SV_B3W] = b3w
+    sv[SV_STEADY] = 1.0 if steady else 0.0
+    sv[SV_WHOLE] = 1.0 if whole else 0.0
+    sv[SV_ADAPT] = 1.0 if adapt else 0.0
+    sv[SV_YDD] = 1.0 if ydd_on else 0.0
+    sv[SV_WATCH_V] = 1.0 if watch_v else 0.0
+    sv[SV_WATCH_EXT] = 1.0 if watch_ext else 0.0
+    return r, ks, t_seg_end, at_node, j_node, pdu
+
+
+@njit(cache=True, inline="always")
+def _close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero_step):
+    """The flows of the segment [t, t + T] (regime r, forcing phasor ph at t; a cut's from
+    w.qsum, else closed form) into the metrics, a cut's steps with h = 0 counted, a free
+    ball moved to t + T.  Returns the last step of length dt_out counted with h = 0."""
+    X = w.X
+    q0 = w.q0
+    seg = w.seg
+    mk = w.mk
+    out = w.out
+    qsum = w.qsum
+    met = w.met
+    cp = w.cp
+    lam = w.lam
+    Vfull = w.Vfull
+    Z = w.Z
+    D = w.D
+    lvis = w.lvis
+    cvis = w.cvis
+    isum = w.isum
+    me = w.me
+    G = w.G
+    Cx = w.Cx
+    cf = w.cf
+    ca = w.ca
+    cb = w.cb
+    phj = w.phj
+    ball = case == L.BALL
+    regen = seg[SEG_CDIR] != 0.0  # +-1 in a cut, 0 under harmonic forcing
+    incut = w.rs[RS_INCUT] != 0.0
+    t0 = cp[CP_T0]
+    dt_out = cp[CP_DT_OUT]
+    f0 = cp[CP_F0]
+    om = cp[CP_OM]
+    sr = cp[CP_SR]
+    kappa_stick = cp[CP_KSTICK]
+    fb = seg[1]
+    acc = seg[SEG_ACC]
+    if regen:
+        for c in range(6):
+            out[c] = qsum[c]
+        if not incut:  # the steps of length dt_out touched with h = 0
+            js = max(int(math.floor((t - t0) / dt_out)), last_zero_step + 1)
+            je = int(math.ceil((t + T - t0) / dt_out)) - 1
+            if je >= js:
+                met[L.N_ZERO_STEPS] += je - js + 1
+                last_zero_step = je
+    else:
+        kst = kappa_stick if (ball and mode == STICK) else 0.0
+        # what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a
+        # free ball's y^2
+        level = (2 if ball and mode == FREE else 1) if steady else 0
+        # compiled with the sizes constant for one and two modes (kept out of line:
+        # the kernel's own compilation does not grow)
+        if sz == 1:
+            _integrals_1(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
+                         sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
+        elif sz == 2:
+            _integrals_2(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
+                         sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
+        else:
+            _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis, kst,
+                       sr, me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj)
+        if ball and steady:
+            # the ball's int y^2: closed form when free, y constant otherwise
+            met[L.SUM_AUX2] += out[6] if mode == FREE else seg[4] * seg[4] * T
+    _close_flows(T, steady, mode, ball, fb, acc, pdu, out, seg, X, n, mk, cp, w.rs, met)
+    return last_zero_step
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
@@ -1100,14 +1315,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out, h, rec_dt)
     f0 = p[L.F0]
     om = p[L.OMEGA]
-    m = p[L.BALL_MASS]
-    half = cp[CP_HALF]
-    fc = cp[CP_FC]
-    fs = cp[CP_FS]
-    sr = cp[CP_SR]
     tstrobe = p[L.STROBE_PERIOD]
-    kappa_stick = cp[CP_KSTICK]
-    kappa_wall = cp[CP_KWALL]
 
     # scratch
     X = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
@@ -1165,6 +1373,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     cq[CQ_W0] = w_before
     cq[CQ_MREV] = m_rev
     cq[CQ_CUBIC] = 1.0 if cubic else 0.0
+    cq[CQ_KRB] = krb
     rs = _zeros(stack_ptr(RS_SIZE, np.float64), RS_SIZE)
     rs[RS_FIRST_ZERO] = met[L.FIRST_ZERO_T]
     rs[RS_T_END] = t_end
@@ -1209,8 +1418,9 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     for lv in range(GRID_LEVELS):
         hl[lv] = h * 2.0 ** lv
         rotl[lv] = cmath.exp(1j * om * hl[lv]) if om != 0.0 else 1.0 + 0.0j
-    w = Work(X, Xa, Xd, dX, q0, qs, qg, seg, ev_a, ev_b, ev_s, ev_t, qsum, mk, ddc, cp, rs, ro, lam,
-             V, Z, D, bq, lvis, cvis, tabE, tabP, eh, levmax, hl, rotl, x, rec, strobe, met)
+    w = Work(X, Xa, Xd, dX, q0, qs, qg, seg, ev_a, ev_b, ev_s, ev_t, qsum, out, me, G, Cx, cf, ca,
+             cb, phj, mk, ddc, cp, rs, ro, lam, V, Vi, Vfull, Z, D, bq, lvis, cvis, isum, kstep,
+             bnd, levmax, eh, tabE, tabP, hl, rotl, x, rec, strobe, met)
     sv = _zeros(stack_ptr(SV_SIZE, np.float64), SV_SIZE)
     sv[SV_REGEN] = 1.0 if regen else 0.0
     ph_next = 1.0 + 0.0j
@@ -1220,121 +1430,25 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         if n_ev >= MAX_EVENTS:
             status = 1
             break
-        mode = int(rs[RS_MODE])
-        sdir = rs[RS_SDIR]
-        wall = rs[RS_WALL]
-        y = rs[RS_Y]
-        yd = rs[RS_YD]
-        incut = rs[RS_INCUT] != 0.0
-        t_stop = min(t_steady, t_end) if t < t_steady else t_end
-        t_seg_end = t_stop
-        steady = t >= t_steady
-        r = 0
-        if ball:
-            r = mode
-        if incut:
-            r += nreg
-        fb = 0.0
-        if mode == FREE and ball:
-            fb = -fc * sdir
-        kap = kappa_stick if mode == STICK else kappa_wall
-        ks = kstep[r]
-        sz = _sizes(ks, n, nz)  # 1, 2: the helpers compiled with constant sizes; 0: generic
         # eigen-coordinates of the homogeneous part at t
         if ph_next_ok:
             ph = ph_next  # exp(i Omega t), from the event's evaluation (the same expression)
         else:
             ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
         ph_next_ok = False
-        for j in range(nz):
-            dX[j] = X[j] - ((Z[r, j] * ph).imag + fb * D[r, j])
-        for k in range(nz):
-            s = 0.0 + 0.0j
-            for j in range(nz):
-                s += Vi[r, k, j] * dX[j]
-            q0[k] = s
-        at_node = False
-        whole = False
-        if regen:
-            t_seg_end, at_node, from_node, j_node = _cut_segment(
-                t, t_stop, j_node, borrow(kn), nk, borrow(ip), borrow(sc), seg, cq, rs)
-            seg[SEG_KRB] = krb if incut else 0.0
-            seg[SEG_CDIR] = 1.0 if incut else -1.0
-            # a whole step H from node to node, inside one grid step: tabulated values
-            whole = at_node and from_node and hh_ <= h
-        pdu = 0.0
-        pdv = 0.0
-        for i in range(n):
-            pdu += mk[4, i] * X[i]
-            pdv += mk[4, i] * X[n + i]
-        # bounds on |y^(4)|, |W^(4)| (steady, harmonic) and |y^(3)|, |W^(3)| (a free ball)
-        # over the segment
-        ydd_on = ball and mode == FREE and not regen
-        adapt = ydd_on and levmax[r] > 0
-        b4, bw4, b3y, b3w = _bounds(r, q0, seg, lam, bq, bnd, krb, ball, incut,
-                                    steady and not regen, adapt)
-        seg[0] = t
-        seg[1] = fb
-        seg[2] = y + pdu  # the ball's absolute position and velocity
-        seg[3] = yd + pdv
-        seg[4] = y
-        seg[5] = sdir
-        seg[6] = wall
-        seg[7] = kap
-        seg[8] = fs
-        seg[9] = half
-        seg[10] = m if m > 0.0 else 1.0
-        acc = fb / seg[10]
-        seg[SEG_ACC] = acc
-        # which events are watched
-        watch_wall = ball and mode == FREE
-        watch_v = watch_wall and fc > 0.0 and sdir != 0.0
-        watch_ext = watch_wall and not watch_v
-        tlen = t_seg_end - t
-        sv[SV_TLEN] = tlen
-        sv[SV_B4] = b4
-        sv[SV_BW4] = bw4
-        sv[SV_B3Y] = b3y
-        sv[SV_B3W] = b3w
-        sv[SV_STEADY] = 1.0 if steady else 0.0
-        sv[SV_WHOLE] = 1.0 if whole else 0.0
-        sv[SV_ADAPT] = 1.0 if adapt else 0.0
-        sv[SV_YDD] = 1.0 if ydd_on else 0.0
-        sv[SV_WATCH_V] = 1.0 if watch_v else 0.0
-        sv[SV_WATCH_EXT] = 1.0 if watch_ext else 0.0
+        t_stop = min(t_steady, t_end) if t < t_steady else t_end
+        r, ks, t_seg_end, at_node, j_node, pdu = _start_segment(
+            w, t, t_stop, ph, n, case, nreg, j_node, borrow(kn), nk, borrow(ip), borrow(sc), cq,
+            sv)
+        mode = int(rs[RS_MODE])
+        steady = t >= t_steady
+        sz = _sizes(ks, n, nz)  # 1, 2: the helpers compiled with constant sizes; 0: generic
         ev_kind, tau_ev, ph_next, wb, wdb = _search(w, t, r, ks, sz, n, case, mode, ph, sv)
 
         # --- close the segment [t, t + T] ----------------------------------------------
         T = tau_ev
-        if regen:
-            for c in range(6):
-                out[c] = qsum[c]
-            if not incut:  # the steps of length dt_out touched with h = 0
-                js = max(int(math.floor((t - t0) / dt_out)), last_zero_step + 1)
-                je = int(math.ceil((t + T - t0) / dt_out)) - 1
-                if je >= js:
-                    met[L.N_ZERO_STEPS] += je - js + 1
-                    last_zero_step = je
-        else:
-            kst = kappa_stick if (ball and mode == STICK) else 0.0
-            # what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a
-            # free ball's y^2
-            level = (2 if ball and mode == FREE else 1) if steady else 0
-            # compiled with the sizes constant for one and two modes (kept out of line:
-            # the kernel's own compilation does not grow)
-            if sz == 1:
-                _integrals_1(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
-                             sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
-            elif sz == 2:
-                _integrals_2(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
-                             sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
-            else:
-                _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis, kst,
-                           sr, me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj)
-            if ball and steady:
-                # the ball's int y^2: closed form when free, y constant otherwise
-                met[L.SUM_AUX2] += out[6] if mode == FREE else seg[4] * seg[4] * T
-        _close_flows(T, steady, mode, ball, fb, acc, pdu, out, seg, X, n, mk, cp, rs, met)
+        last_zero_step = _close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu,
+                                        last_zero_step)
         t_new = t + T if ev_kind >= 0 else t_seg_end
         if ev_kind < 0:
             t = t_new
