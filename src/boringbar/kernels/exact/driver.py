@@ -1267,6 +1267,62 @@ def _close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero
     return last_zero_step
 
 
+@njit(cache=True, inline="always")
+def _cut_consts(p, cq, t0, t_end, hist_step, regen):
+    """A regenerative cut's constants into ``cq`` (CQ_*) from ``p``, the run's span and the
+    history step H."""
+    tau_d = p[L.TAU]
+    cq[CQ_T0] = t0
+    cq[CQ_H] = hist_step
+    cq[CQ_TTOL] = max(1e-9 * hist_step, 4.0 * 2.2e-16 * (abs(t0) + abs(t_end)))
+    cq[CQ_NREV] = int(p[L.N_REV]) if regen else 0
+    cq[CQ_TAU] = tau_d
+    cq[CQ_FEED] = p[L.FEED]
+    cq[CQ_W0] = p[L.HIST_W0]
+    cq[CQ_MREV] = int(round(tau_d / hist_step)) if regen else 1
+    cq[CQ_CUBIC] = 1.0 if p[L.INTERP] > 0.0 else 0.0
+    cq[CQ_KRB] = p[L.KR_B]
+
+
+@njit(cache=True, inline="always")
+def _outputs_start(ro, met, p, t0, max_force):
+    """The running extremes from ``met`` and the first output times into ``ro`` (RO_*)."""
+    tstrobe = p[L.STROBE_PERIOD]
+    ro[RO_MAX_ABS_W] = met[L.MAX_ABS_W]
+    ro[RO_MAX_W] = met[L.STEADY_MAX_W]
+    ro[RO_MIN_W] = met[L.STEADY_MIN_W]
+    ro[RO_MAX_AUX] = met[L.MAX_ABS_AUX]
+    ro[RO_MAX_AUX_ALL] = met[L.MAX_ABS_AUX_ALL]
+    ro[RO_MAX_FORCE] = max_force
+    ro[RO_K_REC] = 1.0  # the next history row is at t0 + k_rec rec_dt
+    if tstrobe > 0.0:
+        t_next_strobe = p[L.STROBE_T0]
+        if t_next_strobe <= t0:
+            t_next_strobe += (math.floor((t0 - t_next_strobe) / tstrobe) + 1) * tstrobe
+        ro[RO_T_STROBE] = t_next_strobe
+
+
+@njit(cache=True, inline="always")
+def _finish_run(x, X, met, rs, ro, n, ball, regen, n_ev, status):
+    """The final state into ``x`` and the running outputs into ``met``."""
+    nz = X.shape[0]
+    for j in range(nz):
+        x[j] = X[j]
+    if ball:
+        x[2 * n] = rs[RS_Y]
+        x[2 * n + 1] = rs[RS_YD]
+    met[L.MAX_ABS_W] = ro[RO_MAX_ABS_W]
+    met[L.STEADY_MAX_W] = ro[RO_MAX_W]
+    met[L.STEADY_MIN_W] = ro[RO_MIN_W]
+    met[L.MAX_ABS_AUX] = ro[RO_MAX_AUX]
+    met[L.MAX_ABS_AUX_ALL] = ro[RO_MAX_AUX_ALL]
+    met[L.N_EVENTS] = n_ev
+    met[L.EXACT_STATUS] = status
+    if regen:
+        met[L.FIRST_ZERO_T] = rs[RS_FIRST_ZERO]
+        met[L.MAX_FORCE] = ro[RO_MAX_FORCE]
+
+
 @njit(cache=True, nogil=True)
 def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
            lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
@@ -1315,7 +1371,6 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out, h, rec_dt)
     f0 = p[L.F0]
     om = p[L.OMEGA]
-    tstrobe = p[L.STROBE_PERIOD]
 
     # scratch
     X = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
@@ -1348,32 +1403,18 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     # between the two knots around t - k tau; a segment ends where any delayed knot falls,
     # so the input is one cubic on it.  ip[k]: the knot at or before t - k tau (-1: before
     # the cut, where W = HIST_W0).
-    krb = p[L.KR_B]
-    feed = p[L.FEED]
-    tau_d = p[L.TAU]
-    nrev = int(p[L.N_REV]) if regen else 0
-    w_before = p[L.HIST_W0]
-    cubic = p[L.INTERP] > 0.0
-    m_rev = int(round(tau_d / hist_step)) if regen else 1
-    hh_ = hist_step  # H
-    ttol = max(1e-9 * hh_, 4.0 * 2.2e-16 * (abs(t0) + abs(t_end)))
-    cap_kn = nrev * m_rev + 64 if regen else 1
-    kn = np.zeros((cap_kn, 5))
+    cq = _zeros(stack_ptr(CQ_SIZE, np.float64), CQ_SIZE)
+    _cut_consts(p, cq, t0, t_end, hist_step, regen)
+    krb = cq[CQ_KRB]
+    feed = cq[CQ_FEED]
+    w_before = cq[CQ_W0]
+    nrev = int(cq[CQ_NREV])
+    ttol = cq[CQ_TTOL]
+    kn = np.zeros((nrev * int(cq[CQ_MREV]) + 64 if regen else 1, 5))
     nk = 0
     ip = np.full(nrev + 1, -1, np.int64)
     sc = np.zeros((nrev + 1, 4))
     qsum = _zeros(stack_ptr(6, np.float64), 6)
-    cq = _zeros(stack_ptr(CQ_SIZE, np.float64), CQ_SIZE)
-    cq[CQ_T0] = t0
-    cq[CQ_H] = hh_
-    cq[CQ_TTOL] = ttol
-    cq[CQ_NREV] = nrev
-    cq[CQ_TAU] = tau_d
-    cq[CQ_FEED] = feed
-    cq[CQ_W0] = w_before
-    cq[CQ_MREV] = m_rev
-    cq[CQ_CUBIC] = 1.0 if cubic else 0.0
-    cq[CQ_KRB] = krb
     rs = _zeros(stack_ptr(RS_SIZE, np.float64), RS_SIZE)
     rs[RS_FIRST_ZERO] = met[L.FIRST_ZERO_T]
     rs[RS_T_END] = t_end
@@ -1391,18 +1432,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
 
     # the running extremes and output times (the other metrics add up in ``met`` itself)
     ro = _zeros(stack_ptr(RO_SIZE, np.float64), RO_SIZE)
-    ro[RO_MAX_ABS_W] = met[L.MAX_ABS_W]
-    ro[RO_MAX_W] = met[L.STEADY_MAX_W]
-    ro[RO_MIN_W] = met[L.STEADY_MIN_W]
-    ro[RO_MAX_AUX] = met[L.MAX_ABS_AUX]
-    ro[RO_MAX_AUX_ALL] = met[L.MAX_ABS_AUX_ALL]
-    ro[RO_MAX_FORCE] = max_force
-    ro[RO_K_REC] = 1.0  # the next history row is at t0 + k_rec rec_dt
-    if tstrobe > 0.0:
-        t_next_strobe = p[L.STROBE_T0]
-        if t_next_strobe <= t0:
-            t_next_strobe += (math.floor((t0 - t_next_strobe) / tstrobe) + 1) * tstrobe
-        ro[RO_T_STROBE] = t_next_strobe
+    _outputs_start(ro, met, p, t0, max_force)
     n_ev = int(met[L.N_EVENTS])
     status = 0
 
@@ -1488,21 +1518,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     if rs[RS_MODE] == STICK:
         _stick_interval(t, cp, rs, stick, met)
 
-    for j in range(nz):
-        x[j] = X[j]
-    if ball:
-        x[2 * n] = rs[RS_Y]
-        x[2 * n + 1] = rs[RS_YD]
-    met[L.MAX_ABS_W] = ro[RO_MAX_ABS_W]
-    met[L.STEADY_MAX_W] = ro[RO_MAX_W]
-    met[L.STEADY_MIN_W] = ro[RO_MIN_W]
-    met[L.MAX_ABS_AUX] = ro[RO_MAX_AUX]
-    met[L.MAX_ABS_AUX_ALL] = ro[RO_MAX_AUX_ALL]
-    met[L.N_EVENTS] = n_ev
-    met[L.EXACT_STATUS] = status
-    if regen:
-        met[L.FIRST_ZERO_T] = rs[RS_FIRST_ZERO]
-        met[L.MAX_FORCE] = ro[RO_MAX_FORCE]
+    _finish_run(x, X, met, rs, ro, n, ball, regen, n_ev, status)
     return t
 
 
