@@ -96,7 +96,10 @@ The package, by concern:
   (:func:`_integrals`);
 - :mod:`.events`: the event functions, their roots, the W extrema and a free ball's wall step;
 - :mod:`.cut`: a regenerative cut's delay history (knots, surface, Gauss-Legendre flows);
-- :mod:`.driver`: the kernel :func:`_exact` and its entry point :func:`run_exact`.
+- :mod:`.segment`: one segment between two events: its start, the grid search for its
+  first event (with the outputs on the way) and its flows, inlined into the driver;
+- :mod:`.driver`: the kernel :func:`_exact` (the run's setup, the loop over segments, the
+  events applied between them) and its entry point :func:`run_exact`.
 """
 
 # the names the rest of the package, the tests and the benchmarks import from here
