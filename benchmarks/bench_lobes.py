@@ -24,9 +24,9 @@ import time
 
 from boringbar import Harmonic, make_system, simulate
 from boringbar.analysis.lobes import PUBLISHED_RPM, compare_methods, lobes
-from boringbar.analysis.stability import limit_at_speeds
 from boringbar.analysis.sweep import Case, published_cases
-from boringbar.forcing import Regenerative
+from boringbar.model.forcing import Regenerative
+from boringbar.reference.stability import limit_at_speeds
 
 
 def timed_lobes(cases, rpm, method):

@@ -17,8 +17,8 @@ import pytest
 from boringbar import Harmonic, make_system
 from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinTolerance, basin_summary, basins, signature
-from boringbar.analysis.masri_caughey import two_impact_orbit
 from boringbar.analysis.sensitivity import Cuts, sensitivity
+from boringbar.reference.masri_caughey import two_impact_orbit
 
 SMALL = {"displacement": (-1.5e-3, 1.5e-3, 4), "velocity": (-1.5, 1.5, 4), "duration": 0.3}
 

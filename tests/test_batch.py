@@ -16,9 +16,9 @@ import pytest
 
 from boringbar import Harmonic, Initial, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.forcing import Regenerative
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4_batch import BMAX, run_rk4_batch
+from boringbar.model.forcing import Regenerative
 from boringbar.simulate import simulate_batch
 
 DURATION = 0.06  # 60,000 steps: several hundred impacts, stick, 25+ strobe periods

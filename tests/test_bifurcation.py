@@ -11,14 +11,14 @@ import pytest
 from boringbar import Harmonic, State, make_system, simulate
 from boringbar._validate import ParameterError
 from boringbar.analysis.bifurcation import bifurcation, continued_state, hysteresis_ranges
-from boringbar.analysis.linear import tip_frf
-from boringbar.analysis.masri_caughey import two_impact_orbit
 from boringbar.analysis.poincare import (
     classify_cloud,
     impact_map,
     poincare_map,
     zero_one_test,
 )
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.masri_caughey import two_impact_orbit
 
 
 def _logistic(n, r=3.97, x0=0.3):

@@ -53,13 +53,13 @@ import pytest
 
 from boringbar import Initial, make_system, simulate
 from boringbar.analysis.lobes import PUBLISHED_RPM, compare_methods, lobes, lobes_summary
-from boringbar.analysis.stability import limit_at_speeds
 from boringbar.analysis.sweep import Case
-from boringbar.forcing import KR_ALUMINIUM, Regenerative
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4 import run_rk4
+from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
+from boringbar.model.system import System
+from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import pack
-from boringbar.system import System
 
 KR = KR_ALUMINIUM
 FEED = 0.1e-3

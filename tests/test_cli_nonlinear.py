@@ -13,7 +13,7 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.cli import main
+from boringbar.cli.main import main
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -19,12 +19,12 @@ import pytest
 
 from boringbar import Harmonic, Initial, State, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.analysis.linear import tip_frf
-from boringbar.analysis.masri_caughey import two_impact_orbit
-from boringbar.dampers import Friction
 from boringbar.kernels import exact as E
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact import prepare, run_exact
+from boringbar.model.dampers import Friction
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import _setup
 
 
@@ -250,7 +250,7 @@ def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
     import xarray as xr
     from cli_output import json_out
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     out = tmp_path / "run"
     rc = main(["simulate", "--bar", "ball", "--gap-mm", "0.1", "--force-n", "20",
@@ -271,7 +271,7 @@ def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
 def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
     from cli_output import assert_one_line_error
 
-    from boringbar import cli
+    from boringbar.cli import main as cli
     from boringbar.simulate import INTEGRATORS
 
     assert cli.INTEGRATORS == INTEGRATORS

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from boringbar import make_system, simulate
-from boringbar.analysis.stability import limit_at_speeds
-from boringbar.forcing import KR_ALUMINIUM, Regenerative
+from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
+from boringbar.reference.stability import limit_at_speeds
 
 KR = KR_ALUMINIUM
 FEED = 0.1e-3
@@ -263,7 +263,7 @@ def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
     import xarray as xr
     from cli_output import json_out
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     out = tmp_path / "cut"
     assert main(["simulate", "--bar", "solid", "--rpm", "1200", "--depth-mm", "0.05",
@@ -281,7 +281,7 @@ def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
 def test_cli_lobes_exact(tmp_path, capsys):
     import xarray as xr
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     out = tmp_path / "lobes"
     assert main(["lobes", "--bar", "solid", "--rpm", "1250", "--method", "search",
@@ -295,8 +295,8 @@ def test_cli_lobes_exact(tmp_path, capsys):
 
 
 def test_study_file_with_an_exact_cut_loads(tmp_path):
-    from boringbar.studies import ANALYSES
-    from boringbar.study import load_study
+    from boringbar.studies.registry import ANALYSES
+    from boringbar.studies.schema import load_study
 
     path = tmp_path / "s.toml"
     path.write_text('[study]\nanalysis = "lobes"\n[run]\nintegrator = "exact"\n')

@@ -17,9 +17,9 @@ import pytest
 
 from boringbar import Harmonic, Initial, State, System, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.analysis.masri_caughey import two_impact_orbit
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4 import run_rk4
+from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import initial_state, pack, stored_energy
 
 DT = 1e-6

@@ -1,4 +1,4 @@
-"""Linear tip FRFs and TMD tuning (boringbar.analysis.linear) against closed forms."""
+"""Linear tip FRFs and TMD tuning (boringbar.reference.linear) against closed forms."""
 
 from __future__ import annotations
 
@@ -9,7 +9,9 @@ import pytest
 import scipy.linalg
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.linear import (
+from boringbar.model.bar import ModalModel, published_bar
+from boringbar.model.dampers import TunedMassDamper, den_hartog_parameters
+from boringbar.reference.linear import (
     absorber_mass_ratio,
     min_real_part,
     minimax_real_tuning,
@@ -18,8 +20,6 @@ from boringbar.analysis.linear import (
     static_tip_compliance,
     tip_frf,
 )
-from boringbar.bar import ModalModel, published_bar
-from boringbar.dampers import TunedMassDamper, den_hartog_parameters
 
 K_TIP = 1.5e6  # N/m, about the published bar's first-mode tip stiffness
 

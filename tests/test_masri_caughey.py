@@ -1,4 +1,4 @@
-"""The closed-form two-impact orbit (boringbar.analysis.masri_caughey).
+"""The closed-form two-impact orbit (boringbar.reference.masri_caughey).
 
 The reference is independent of the closed form: the same model integrated
 with scipy's DOP853 from impact to impact (terminal events at the walls,
@@ -20,12 +20,12 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.masri_caughey import (
+from boringbar.model.bar import published_bar
+from boringbar.reference.masri_caughey import (
     ImpactSystem,
     phase_equation,
     two_impact_orbit,
 )
-from boringbar.bar import published_bar
 
 BALL, GAP, E = 0.026, 0.5e-3, 0.7
 

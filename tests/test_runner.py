@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from boringbar.runner import RunReport, run_study
-from boringbar.studies import ANALYSES
-from boringbar.study import StudyError, load_study, study_from_dict
+from boringbar.studies.registry import ANALYSES
+from boringbar.studies.runner import RunReport, run_study
+from boringbar.studies.schema import StudyError, load_study, study_from_dict
 
 SMALL = {"study": {"analysis": "sweep", "name": "small"},
          "run": {"duration_s": 0.02},
@@ -85,7 +85,7 @@ def test_zarr_store_equals_netcdf(reference, tmp_path):
 def test_finished_study_is_not_recomputed(reference, tmp_path, monkeypatch):
     out = tmp_path / "f.nc"
     out.write_bytes(reference[0].read_bytes())
-    import boringbar.runner as runner
+    import boringbar.studies.runner as runner
 
     def boom(*a, **k):
         raise AssertionError("recomputed")
@@ -202,8 +202,8 @@ def test_example_studies_run_shortened(path, tmp_path):
 def _in_process(name: str):
     """(study dict, the in-process function's Dataset) of the same tiny computation."""
     from boringbar.analysis.sweep import Case
-    from boringbar.forcing import Harmonic
-    from boringbar.system import make_system
+    from boringbar.model.forcing import Harmonic
+    from boringbar.model.system import make_system
 
     if name == "sweep":
         from boringbar.analysis.sweep import published_cases, sweep
@@ -270,8 +270,8 @@ def test_every_analysis_has_an_example_study():
 
 def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_path):
     from boringbar.analysis.basins import basins
-    from boringbar.forcing import Harmonic
-    from boringbar.system import make_system
+    from boringbar.model.forcing import Harmonic
+    from boringbar.model.system import make_system
 
     grid = {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
             "velocity_m_s": {"start": -1, "stop": 1, "count": 2}}
@@ -309,7 +309,7 @@ def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
 def test_cli_run_json_then_skipped(tmp_path, capsys):
     from cli_output import json_out
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     study = tmp_path / "s.toml"
     study.write_text('[study]\nanalysis = "sweep"\nname = "s"\nout = "res.nc"\n'

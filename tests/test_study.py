@@ -5,9 +5,9 @@ from pathlib import Path
 
 import pytest
 
-from boringbar.cli import main
-from boringbar.studies import ANALYSES
-from boringbar.study import StudyError, load_study, study_from_dict
+from boringbar.cli.main import main
+from boringbar.studies.registry import ANALYSES
+from boringbar.studies.schema import StudyError, load_study, study_from_dict
 
 EXAMPLES = sorted((Path(__file__).parent.parent / "examples" / "studies").glob("*.toml"))
 

@@ -5,16 +5,16 @@ Public names only; see docs/architecture.md for the layers behind them.
 
 __version__ = "0.1.0"
 
-from boringbar.bar import ModalModel, Section, SteppedBar, published_bar  # noqa: E402
-from boringbar.dampers import (  # noqa: E402
+from boringbar.model.bar import ModalModel, Section, SteppedBar, published_bar  # noqa: E402
+from boringbar.model.dampers import (  # noqa: E402
     Friction,
     ImpactDamper,
     TunedMassDamper,
     den_hartog_parameters,
 )
-from boringbar.forcing import Harmonic  # noqa: E402
+from boringbar.model.forcing import Harmonic  # noqa: E402
+from boringbar.model.system import PRESETS, READINGS, System, make_system  # noqa: E402
 from boringbar.simulate import Initial, Run, State, simulate  # noqa: E402
-from boringbar.system import PRESETS, READINGS, System, make_system  # noqa: E402
 
 __all__ = [
     "PRESETS",

@@ -817,7 +817,7 @@ def _value_label(kind: str, value: str) -> str:
 # --- the corrections ladder --------------------------------------------------------
 
 def plot_ladder(ds, path) -> Path:
-    """The readings ladder (:func:`~boringbar.analysis.corrections.readings_ladder`),
+    """The readings ladder (:func:`~boringbar.report.corrections.readings_ladder`),
     saved to ``path``: tip RMS (mm) of each rung, from the paper preset to the
     physical one, one bar per gap, each labelled with its impact pattern."""
     rungs = [str(r) for r in ds["rung"].values]

@@ -17,14 +17,14 @@ import numpy as np
 
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
-from boringbar.analysis.patterns import Pattern, classify
-from boringbar.dampers import ImpactDamper, TunedMassDamper
-from boringbar.forcing import Harmonic, Regenerative
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact import run_exact
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.kernels.rk4_batch import BMAX, LANES, run_rk4_batch
-from boringbar.system import System
+from boringbar.model.dampers import ImpactDamper, TunedMassDamper
+from boringbar.model.forcing import Harmonic, Regenerative
+from boringbar.model.system import System
+from boringbar.patterns import Pattern, classify
 
 #: Impacts slower than this fraction of Omega delta/2 are contact, not impacts.
 IMPACT_THRESHOLD = 1e-3

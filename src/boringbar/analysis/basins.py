@@ -57,10 +57,10 @@ import numpy as np
 
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_positive, check_range
-from boringbar.forcing import Harmonic
 from boringbar.kernels.rk4_batch import BMAX
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System
 from boringbar.simulate import Initial, simulate, simulate_batch
-from boringbar.system import System
 
 #: Largest period, in forcing periods, looked for in the strobe (as the pattern classifier).
 MAX_K = 8

@@ -37,10 +37,10 @@ import numpy as np
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_positive, check_range
 from boringbar.analysis.poincare import METHOD, poincare_map
-from boringbar.dampers import ImpactDamper
-from boringbar.forcing import Harmonic
+from boringbar.model.dampers import ImpactDamper
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System
 from boringbar.simulate import Initial, State, simulate
-from boringbar.system import System
 
 #: Parameters that change only the forcing, with their units.
 FORCING_PARAMETERS = {"force": "N", "ratio": "1"}

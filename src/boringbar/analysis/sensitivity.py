@@ -2,7 +2,7 @@
 
 A thin layer over the existing machinery: each value of the parameter
 becomes a :class:`~boringbar.analysis.sweep.Case` (built by
-:func:`~boringbar.system.make_system`), and the harmonic runs are one
+:func:`~boringbar.model.system.make_system`), and the harmonic runs are one
 :func:`~boringbar.analysis.sweep.sweep` over all of them; cuts at a fixed
 spindle speed are :func:`~boringbar.simulate.simulate` runs with
 ``Regenerative(depth, rpm, stop_at_zero=False)`` on a thread pool.
@@ -33,9 +33,9 @@ import numpy as np
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
 from boringbar.analysis.sweep import Case, sweep
-from boringbar.forcing import Regenerative
+from boringbar.model.forcing import Regenerative
+from boringbar.model.system import make_system
 from boringbar.simulate import Initial, simulate
-from boringbar.system import make_system
 
 KINDS = ("ball", "friction_number", "restitution", "initial")
 PUBLISHED_VALUES = {
@@ -50,7 +50,7 @@ PUBLISHED_VALUES = {
 class Cuts:
     """Cuts at one spindle speed over a few depths of cut (published: 1200 rpm,
     0.05..0.10 mm).  ``rpm`` (rev/min), ``depths`` (m), ``duration`` (s) of each
-    full-length run; ``options``: further :class:`~boringbar.forcing.Regenerative`
+    full-length run; ``options``: further :class:`~boringbar.model.forcing.Regenerative`
     fields (kr, feed, start, ...)."""
 
     rpm: float = 1200.0
@@ -123,7 +123,7 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     (``kind``, depth) with the chatter verdict (the force reached zero),
     bounded chatter, steady amplitude (m), first zero time (s) and peak force (N)
     of each full-length cut.  ``overrides`` go to
-    :func:`~boringbar.system.make_system`; one result per value.  ``integrator``:
+    :func:`~boringbar.model.system.make_system`; one result per value.  ``integrator``:
     "rk4" (published) or "exact" (see :func:`~boringbar.simulate.simulate`).
     """
     check_choice("kind", kind, KINDS)

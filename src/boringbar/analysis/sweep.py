@@ -22,10 +22,10 @@ import numpy as np
 
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_range
-from boringbar.forcing import Harmonic
 from boringbar.kernels.rk4_batch import BMAX
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System, make_system
 from boringbar.simulate import Initial, simulate, simulate_batch
-from boringbar.system import System, make_system
 
 #: Points per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
 BATCH = 16

@@ -18,8 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from boringbar._validate import ParameterError, check_choice, check_range
-from boringbar.bar import ABSORBER_POSITION, ModalModel, published_bar
-from boringbar.dampers import (
+from boringbar.model.bar import ABSORBER_POSITION, ModalModel, published_bar
+from boringbar.model.dampers import (
     NO_FRICTION,
     PUBLISHED_FRICTION_NUMBER,
     Friction,
@@ -129,7 +129,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
         if design == "published":
             tmd = TunedMassDamper.published(position=modal.z_absorber)
         elif design == "sims":
-            from boringbar.analysis.linear import sims_tuning
+            from boringbar.reference.linear import sims_tuning
 
             tmd = sims_tuning(tmd_mass, modal)
         else:

@@ -15,7 +15,7 @@ implementing three methods, then registering it in ``ANALYSES``:
 
 ``options`` (the keys of ``[analysis]``), ``grid_keys`` (what ``[grid]``
 may vary), ``default_axes`` and ``check`` describe its part of the schema.
-The runner (:mod:`boringbar.runner`) does the rest: chunking, executors,
+The runner (:mod:`boringbar.studies.runner`) does the rest: chunking, executors,
 resumable stores, progress.
 
 The analyses reuse the per-point code of the in-process functions:
@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from boringbar.study import SETTINGS, SYSTEM_KEYS, Setting, Study
+from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study
 
 
 @dataclass
@@ -162,7 +162,7 @@ class Analysis:
 def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
     """What :func:`~boringbar.simulate.simulate` refuses, checked before any work."""
     from boringbar._validate import ParameterError
-    from boringbar.dampers import ImpactDamper
+    from boringbar.model.dampers import ImpactDamper
     from boringbar.simulate import check_step
 
     integrator = study.value("integrator")
@@ -203,7 +203,7 @@ _RELEVANT = {
 
 def make_study_system(preset: str, s: dict):
     """The System of the flat bar + damper settings ``s`` (units as in the keys)."""
-    from boringbar.system import make_system
+    from boringbar.model.system import make_system
 
     kw = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
     if s["kind"] == "tmd":
@@ -287,7 +287,7 @@ def _provenance(study: Study) -> dict:
 
 
 def _warm_harmonic(cases, integrator: str = "rk4") -> None:
-    from boringbar.forcing import Harmonic
+    from boringbar.model.forcing import Harmonic
     from boringbar.simulate import simulate
 
     kw = {} if integrator == "rk4" else {"integrator": integrator}
@@ -445,7 +445,7 @@ class Bifurcation(Analysis):
     grid_keys = SYSTEM_KEYS
 
     def plan(self, study):
-        from boringbar.forcing import Harmonic
+        from boringbar.model.forcing import Harmonic
 
         cases, values = study_cases(study)
         o = study.options
@@ -555,7 +555,7 @@ class Basins(Analysis):
 
     def plan(self, study):
         from boringbar.analysis.basins import BasinTolerance, _grid
-        from boringbar.forcing import Harmonic
+        from boringbar.model.forcing import Harmonic
         from boringbar.simulate import Initial
 
         cases, values = study_cases(study)
@@ -692,7 +692,7 @@ class Sensitivity(Analysis):
             _initial,
             _label,
         )
-        from boringbar.study import StudyError
+        from boringbar.studies.schema import StudyError
 
         o = study.options
         kind = o["kind"]

@@ -2,7 +2,7 @@
 
 A study file has the sections ``[study]`` (which analysis, name, preset,
 output), ``[bar]`` and ``[damper]`` (the keys of
-:func:`~boringbar.system.make_system`, units in the names), ``[forcing]``
+:func:`~boringbar.model.system.make_system`, units in the names), ``[forcing]``
 (harmonic force and ratio, or a cut: rpm, depth, Kr, feed ...), ``[run]``
 (duration, step, integrator, initial conditions), ``[analysis]`` (the
 options of the chosen analysis) and ``[grid]``: any gridable setting given
@@ -250,7 +250,7 @@ def load_study(path) -> Study:
 
 def study_from_dict(d: dict, source: str = "<dict>") -> Study:
     """Validate the study description ``d`` (the parsed TOML) into a :class:`Study`."""
-    from boringbar.studies import ANALYSES
+    from boringbar.studies.registry import ANALYSES
 
     def fail(key: str, value, allowed: str):
         shown = json.dumps(value, default=str) if not isinstance(value, str) else repr(value)

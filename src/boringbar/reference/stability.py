@@ -8,7 +8,7 @@ frequency omega the characteristic equation is (Tobias/Tlusty; Altintas,
 
     1 + Kr b (1 - exp(-i omega tau)) G(i omega) = 0,
 
-G the tip receptance of :func:`boringbar.analysis.linear.tip_frf`.  Writing
+G the tip receptance of :func:`boringbar.reference.linear.tip_frf`.  Writing
 G = R + i I and theta = omega tau, its imaginary part gives
 (1 - cos theta) I + sin theta R = 0, i.e. cot(theta / 2) = -I / R, and then its
 real part gives 1 + 2 Kr b R = 0:
@@ -23,7 +23,7 @@ psi lies in [-pi, -pi/2) and eps in [pi, 2 pi).  Lobe j is the curve
 region where Re G < 0; the speed-independent minimum of all lobes is
 -1 / (2 Kr min Re G).
 
-A :class:`~boringbar.system.System` brings its own damper: a tuned mass
+A :class:`~boringbar.model.system.System` brings its own damper: a tuned mass
 damper enters G, a locked ball is a rigid mass at z_d, and a free ball (which
 in its clearance does not touch the bar under small vibration) leaves the
 bare host bar.
@@ -38,9 +38,9 @@ import numpy as np
 import scipy.linalg
 
 from boringbar._validate import ParameterError, check_nonnegative, check_positive, check_range
-from boringbar.analysis.linear import _dynamic_stiffness, min_real_part, tip_frf
-from boringbar.bar import ModalModel
-from boringbar.dampers import TunedMassDamper
+from boringbar.model.bar import ModalModel
+from boringbar.model.dampers import TunedMassDamper
+from boringbar.reference.linear import _dynamic_stiffness, min_real_part, tip_frf
 
 #: Radial cutting-force coefficient of the published study (aluminium), Pa.
 KR_ALUMINIUM = 850e6
@@ -93,7 +93,7 @@ def natural_frequencies(
     """Undamped natural frequencies (rad/s) of the coupled linear system.
 
     The mass and stiffness matrices are read off the dynamic stiffness of
-    :mod:`boringbar.analysis.linear` (Z(0) = K, Re Z(1) = K - M), so this
+    :mod:`boringbar.reference.linear` (Z(0) = K, Re Z(1) = K - M), so this
     stays the one place that assembles them.
     """
     z = _dynamic_stiffness(bar, np.array([0.0, 1.0]), tmd, float(added_mass)).real
@@ -141,9 +141,9 @@ def analytic_lobes(
 ) -> dict:
     """Stability lobes of regenerative turning, one curve per lobe number j.
 
-    ``system_or_bar``: a :class:`~boringbar.system.System` or a
-    :class:`~boringbar.bar.ModalModel` (then ``tmd``, ``added_mass`` (kg) as
-    in :func:`~boringbar.analysis.linear.tip_frf`).  ``kr`` (Pa) is the
+    ``system_or_bar``: a :class:`~boringbar.model.system.System` or a
+    :class:`~boringbar.model.bar.ModalModel` (then ``tmd``, ``added_mass`` (kg) as
+    in :func:`~boringbar.reference.linear.tip_frf`).  ``kr`` (Pa) is the
     radial cutting-force coefficient.  The chatter frequency runs over a
     geometric grid of ``n_freq`` points, ``freq_range`` (Hz) or by default
     0.5 x the lowest to 2 x the highest undamped natural frequency of the
@@ -285,7 +285,7 @@ def min_limit(
 
     The bottom of every lobe touches it.  min Re G is searched on the grid
     of :func:`analytic_lobes` and refined by
-    :func:`~boringbar.analysis.linear.min_real_part`.  For one mode with tip
+    :func:`~boringbar.reference.linear.min_real_part`.  For one mode with tip
     stiffness k = K / psi_L^2 and damping ratio zeta it is
     2 k zeta (1 + zeta) / Kr, reached at omega = omega_n sqrt(1 + 2 zeta).
     """

@@ -28,13 +28,13 @@ import math
 import numpy as np
 
 from boringbar import __version__
-from boringbar.analysis.linear import absorber_mass_ratio, sims_tuning, tip_frf
-from boringbar.analysis.stability import KR_ALUMINIUM, min_limit
-from boringbar.bar import published_bar
-from boringbar.dampers import TunedMassDamper
-from boringbar.forcing import Harmonic
+from boringbar.model.bar import published_bar
+from boringbar.model.dampers import TunedMassDamper
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System, make_system
+from boringbar.reference.linear import absorber_mass_ratio, sims_tuning, tip_frf
+from boringbar.reference.stability import KR_ALUMINIUM, min_limit
 from boringbar.simulate import simulate
-from boringbar.system import System, make_system
 
 #: The rungs of :func:`readings_ladder`, from the paper preset to the physical one.
 LADDER = (

@@ -16,7 +16,7 @@ frequency.
 
 Tuning (mode 1 of the bar, absorber mass ratio mu = m_a psi_a^2 / M):
 
-- Den Hartog (equal peaks of |G|): :func:`boringbar.dampers.den_hartog_parameters`.
+- Den Hartog (equal peaks of |G|): :func:`boringbar.model.dampers.den_hartog_parameters`.
 - Sims (equal real troughs, N. D. Sims, J. Sound Vib. 301 (2007) 592-607):
   :func:`sims_parameters`, the closed form for an undamped single-mode host;
   it maximises the limiting depth of cut, which is inversely proportional
@@ -33,7 +33,7 @@ import numpy as np
 import scipy.optimize
 
 from boringbar._validate import ParameterError, check_nonnegative, check_positive
-from boringbar.dampers import TunedMassDamper
+from boringbar.model.dampers import TunedMassDamper
 
 #: Default search band for the real-part trough, in units of omega_1.
 TROUGH_BAND = (0.4, 2.2)
@@ -46,7 +46,7 @@ def tip_frf(
 ) -> np.ndarray:
     """Tip receptance G(i omega) = W / F (m/N) for a harmonic force F at the tip.
 
-    ``bar`` is a :class:`~boringbar.bar.ModalModel`; ``omega`` (rad/s) is
+    ``bar`` is a :class:`~boringbar.model.bar.ModalModel`; ``omega`` (rad/s) is
     array-like and the result has its shape (complex).  The dynamic
     stiffness solved at each frequency is, with kc = k_a + i omega c_a,
 

@@ -1,7 +1,7 @@
 """``boringbar run STUDY.toml``: run a study file (see docs/studies.md); and
-``boringbar paper``: the whole published study with its report (:mod:`boringbar.paper`).
+``boringbar paper``: the whole published study with its report (:mod:`boringbar.report.paper`).
 
-Registered in :mod:`boringbar.cli` by :func:`add_run` and :func:`add_paper`; errors are
+Registered in :mod:`boringbar.cli.main` by :func:`add_run` and :func:`add_paper`; errors are
 ParameterErrors (one line, exit code 2) like every other command.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from boringbar.runner import EXECUTORS
+from boringbar.studies.runner import EXECUTORS
 
 
 def add_run(sub) -> None:
@@ -46,8 +46,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     import json
 
     from boringbar.io import jsonable
-    from boringbar.runner import RunReport, run_study
-    from boringbar.study import load_study
+    from boringbar.studies.runner import RunReport, run_study
+    from boringbar.studies.schema import load_study
 
     study = load_study(args.study)
     executor = args.executor
@@ -59,7 +59,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
         handler = logging.StreamHandler(sys.stderr)
         handler.setFormatter(logging.Formatter("boringbar run: %(message)s"))
-        logger = logging.getLogger("boringbar.runner")
+        logger = logging.getLogger("boringbar.studies.runner")
         logger.addHandler(handler)
         logger.setLevel(logging.INFO)
     run_study(study, args.out, executor=executor, workers=args.workers,
@@ -101,7 +101,7 @@ def cmd_paper(args: argparse.Namespace) -> int:
 
     from boringbar._validate import ParameterError
     from boringbar.io import jsonable
-    from boringbar.paper import PRESET_ORDER, StepFailed, run_paper
+    from boringbar.report.paper import PRESET_ORDER, StepFailed, run_paper
 
     presets = [w.strip() for w in args.presets.split(",") if w.strip()]
     bad = [w for w in presets if w not in PRESET_ORDER]

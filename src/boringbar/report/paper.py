@@ -12,8 +12,8 @@ it stopped. ``--quick`` runs the same steps on coarser grids and shorter runs
 (written in the report, and in each step's command).
 
 Beside the published analyses, ``corrections`` measures what each of the
-MODEL.md corrections changes (:mod:`boringbar.analysis.corrections`). The
-report (:mod:`boringbar.report`) is written last, from the files on disk.
+MODEL.md corrections changes (:mod:`boringbar.report.corrections`). The
+report (:mod:`boringbar.report.html`) is written last, from the files on disk.
 """
 
 from __future__ import annotations
@@ -94,7 +94,7 @@ class StepFailed(RuntimeError):
 
 def _run_cli(argv: list[str]) -> dict:
     """Run one ``boringbar`` subcommand in this process; its ``--json`` summary."""
-    from boringbar import cli
+    from boringbar.cli import main as cli
 
     buf = io.StringIO()
     err = io.StringIO()
@@ -157,7 +157,7 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
     meta = {"key": "corrections", "section": "corrections",
             "title": "What the corrections to the published equations change",
             "preset": "both",
-            "command": (f"boringbar.analysis.corrections: readings_ladder(duration={duration}), "
+            "command": (f"boringbar.report.corrections: readings_ladder(duration={duration}), "
                         f"impact_law_check(), absorber_designs() for {', '.join(presets)}")}
     where = out / "corrections"
     records.append(_step(where, meta, lambda: _corrections(where, presets, duration), say,
@@ -173,7 +173,7 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
         "steps": records,
     }
     write_json_atomic(jsonable(manifest), out / "manifest.json")
-    from boringbar.report import write_report
+    from boringbar.report.html import write_report
 
     manifest["report"] = str(write_report(out, manifest))
     say(f"boringbar paper: report {manifest['report']} "
@@ -184,9 +184,9 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
 def _corrections(where: Path, presets, duration: float) -> dict:
     """The corrections measurements, into ``where``: the readings ladder, the impact
     law, and the absorber designs of each preset; returns their summary."""
-    from boringbar.analysis.corrections import absorber_designs, impact_law_check, readings_ladder
+    from boringbar.model.system import make_system
     from boringbar.plot import plot_ladder
-    from boringbar.system import make_system
+    from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
 
     ladder = readings_ladder(duration=duration)
     nc = write_netcdf_atomic(ladder, where / "ladder.nc")

@@ -1,6 +1,6 @@
 """The ``boringbar`` command: ``simulate``, ``sweep``, ``lobes``, ``bifurcation``,
 ``basins`` and ``sensitivity``; ``run`` (study files) and ``paper`` (the whole
-published study) are in :mod:`boringbar.cli_study`.
+published study) are in :mod:`boringbar.cli.study`.
 
 Units are in the option names (MODEL.md section 7): ``--gap-mm``,
 ``--force-n``, ``--duration-s``...; everything is converted to SI here and
@@ -25,8 +25,8 @@ import numpy as np
 
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_range
-from boringbar.forcing import INTERPOLATIONS, STARTS
-from boringbar.system import BALLS, BAR_KINDS, PRESETS, READINGS
+from boringbar.model.forcing import INTERPOLATIONS, STARTS
+from boringbar.model.system import BALLS, BAR_KINDS, PRESETS, READINGS
 
 PROG = "boringbar"
 #: the time integrators (boringbar.simulate.INTEGRATORS; not imported here, which would
@@ -74,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_bifurcation(sub)
     _add_basins(sub)
     _add_sensitivity(sub)
-    from boringbar.cli_study import add_paper, add_run
+    from boringbar.cli.study import add_paper, add_run
 
     add_run(sub)
     add_paper(sub)
@@ -451,8 +451,8 @@ def _system_overrides(args) -> dict:
 # --- simulate --------------------------------------------------------------------
 
 def _cmd_simulate(args) -> int:
+    from boringbar.model.system import make_system
     from boringbar.simulate import simulate
-    from boringbar.system import make_system
 
     bar, friction_on = _one_bar(args, "simulate")
     gap = _check_gap(0.5 if args.gap_mm is None else args.gap_mm)
@@ -512,7 +512,7 @@ CUT_ONLY = ("kr_mpa", "feed_mm", "revolutions", "delay_interp", "start", "bounde
 
 def _simulate_forcing(args):
     """Harmonic(F0, ratio), or Regenerative when --rpm and --depth-mm are given."""
-    from boringbar.forcing import Harmonic, Regenerative
+    from boringbar.model.forcing import Harmonic, Regenerative
 
     if args.rpm is not None:
         _check_rpm(args.rpm)
@@ -816,7 +816,7 @@ def _lobe_examples(ds, case, args, cut: dict):
     import pandas as pd
     import xarray as xr
 
-    from boringbar.forcing import Regenerative
+    from boringbar.model.forcing import Regenerative
     from boringbar.simulate import simulate
 
     points = _example_points(ds)
@@ -951,8 +951,8 @@ def _swept(args) -> tuple[str, np.ndarray]:
 
 def _cmd_bifurcation(args) -> int:
     from boringbar.analysis.bifurcation import bifurcation, hysteresis_ranges
-    from boringbar.forcing import Harmonic
-    from boringbar.system import make_system
+    from boringbar.model.forcing import Harmonic
+    from boringbar.model.system import make_system
 
     args = argparse.Namespace(**vars(args))  # _swept turns the strings into numbers
     option, values = _swept(args)
@@ -1091,10 +1091,10 @@ def _pair(text: str, name: str) -> tuple[float, float]:
 def _cmd_basins(args) -> int:
     from boringbar.analysis.basins import basin_summary, basins
     from boringbar.analysis.poincare import poincare_map
-    from boringbar.forcing import Harmonic
     from boringbar.io import jsonable
+    from boringbar.model.forcing import Harmonic
+    from boringbar.model.system import make_system
     from boringbar.simulate import Initial, simulate
-    from boringbar.system import make_system
 
     bar, friction_on = _one_bar(args, "basins")
     gap = _check_gap(0.5 if args.gap_mm is None else args.gap_mm)
@@ -1193,7 +1193,7 @@ KIND_OPTIONS = {"ball": ("ball", "--ball"), "restitution": ("restitution", "--re
 
 def _sensitivity_values(args, bar: str, gap: float):
     """--values as the library takes them (SI), or None for the published ones."""
-    from boringbar.system import BALLS
+    from boringbar.model.system import BALLS
 
     kind, text = args.kind, args.values
     if text is None:

@@ -1,7 +1,7 @@
 """Run a study: chunks of its points on an executor, into a resumable store.
 
-:func:`run_study` expands a :class:`~boringbar.study.Study` into its points
-(:mod:`boringbar.studies`), cuts the points not yet done into chunks and runs
+:func:`run_study` expands a :class:`~boringbar.studies.schema.Study` into its points
+(:mod:`boringbar.studies.registry`), cuts the points not yet done into chunks and runs
 them serially, on local processes or on a Dask cluster.  Every finished
 chunk is written at once, atomically, to ``OUT.partial/`` (one pickle file
 per chunk, beside a manifest holding the study's configuration hash), so a
@@ -45,9 +45,9 @@ from pathlib import Path
 from boringbar import __version__
 from boringbar._validate import ParameterError
 from boringbar.io import _atomic, _fsync_dir
-from boringbar.study import Study, StudyError
+from boringbar.studies.schema import Study, StudyError
 
-log = logging.getLogger("boringbar.runner")
+log = logging.getLogger("boringbar.studies.runner")
 
 EXECUTORS = ("serial", "processes", "dask")
 MANIFEST = "manifest.json"
@@ -100,7 +100,7 @@ _PLANS: dict[str, tuple] = {}
 def _planned(study: Study, key: str):
     """(analysis, plan) of ``study``, made and warmed once per process."""
     if key not in _PLANS:
-        from boringbar.studies import ANALYSES
+        from boringbar.studies.registry import ANALYSES
 
         analysis = ANALYSES[study.analysis]
         plan = analysis.plan(study)
@@ -389,7 +389,7 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
     is returned without running anything; if it holds anything else, or the
     partial directory belongs to another study, StudyError says what to do.
     """
-    from boringbar.studies import ANALYSES
+    from boringbar.studies.registry import ANALYSES
 
     report = RunReport() if report is None else report
     if scheduler is not None or dask_local is not None:
