@@ -10,13 +10,16 @@ import scipy.linalg
 
 from boringbar._validate import ParameterError
 from boringbar.model.bar import ModalModel, published_bar
-from boringbar.model.dampers import TunedMassDamper, den_hartog_parameters
-from boringbar.reference.linear import (
+from boringbar.model.dampers import (
+    TunedMassDamper,
     absorber_mass_ratio,
-    min_real_part,
-    minimax_real_tuning,
+    den_hartog_parameters,
     sims_parameters,
     sims_tuning,
+)
+from boringbar.reference.linear import (
+    min_real_part,
+    minimax_real_tuning,
     static_tip_compliance,
     tip_frf,
 )

@@ -21,8 +21,9 @@ import pytest
 
 from boringbar._validate import ParameterError
 from boringbar.model.bar import ModalModel
+from boringbar.model.dampers import sims_tuning
 from boringbar.model.system import make_system
-from boringbar.reference.linear import min_real_part, sims_tuning, tip_frf
+from boringbar.reference.linear import min_real_part, tip_frf
 from boringbar.reference.stability import (
     KR_ALUMINIUM,
     analytic_lobes,

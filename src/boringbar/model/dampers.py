@@ -194,3 +194,56 @@ def den_hartog_parameters(mass: float, bar) -> dict:
     zeta = math.sqrt(3.0 * mu / (8.0 * (1.0 + mu) ** 3))
     return {"mass_ratio": mu, "frequency_ratio": f_opt, "damping_ratio": zeta,
             "stiffness": mass * (f_opt * wn) ** 2, "damping": 2.0 * zeta * mass * wn}
+
+
+def absorber_mass_ratio(mass: float, bar) -> float:
+    """mu = m_a psi_a,1^2 / M_1 (mode 1; independent of the mode's normalisation)."""
+    check_positive("absorber mass", mass, "kg")
+    return float(mass * bar.psi_absorber[0] ** 2 / bar.mass[0])
+
+
+# --- Sims' equal-real-trough tuning ---------------------------------------------
+def sims_parameters(mass: float, bar) -> dict:
+    """Sims' equal-real-trough optimum for an absorber on mode 1 of ``bar``.
+
+    With mu = m_a psi_a^2 / M and s = sqrt(4 + 3 mu), for an undamped
+    single-mode host the tuning that minimises max(-Re G) is
+
+        zeta_a = sqrt((8 + 9 mu - 4 s) / (16 (1 + mu)))     [= c_a / (2 m_a omega_a)]
+        f      = omega_a / omega_n
+               = sqrt(12 + 12 s + 9 s^2 + 9 sqrt(mu (3 s + 2)(s + 2))) / (sqrt(72) (1 + mu))
+
+    k_a = m_a (f omega_n)^2, c_a = 2 zeta_a m_a f omega_n.  zeta_a is Sims'
+    formula; f is the exact root of the same minimax problem (the larger
+    root of 36 Y^2 - (12 + 12 s + 9 s^2) Y + 4 (5 + 3 mu + 2 s) = 0 with
+    Y = (f (1 + mu))^2), identified to 50 digits against a high-precision
+    numerical minimax.  As mu -> 0, zeta_a -> sqrt(3 mu / 8) like Den
+    Hartog's, but f -> 1 + sqrt(mu / 8): Sims tunes the absorber above the
+    host, Den Hartog (f = 1/(1 + mu)) below it.  The host's own damping and
+    the other modes are ignored (``minimax_real_tuning`` includes them).
+    """
+    mu = absorber_mass_ratio(mass, bar)
+    s = math.sqrt(4.0 + 3.0 * mu)
+    zeta = math.sqrt((8.0 + 9.0 * mu - 4.0 * s) / (16.0 * (1.0 + mu)))
+    y = (12.0 + 12.0 * s + 9.0 * s * s + 9.0 * math.sqrt(mu * (3 * s + 2) * (s + 2))) / 72.0
+    f = math.sqrt(y) / (1.0 + mu)
+    wa = f * bar.natural_frequency
+    return {
+        "mass_ratio": mu,
+        "frequency_ratio": f,
+        "damping_ratio": zeta,
+        "stiffness": mass * wa**2,
+        "damping": 2.0 * zeta * mass * wa,
+    }
+
+
+def sims_tuning(mass: float, bar) -> TunedMassDamper:
+    """A :class:`TunedMassDamper` of ``mass`` (kg) at ``bar.z_absorber``, Sims-tuned."""
+    p = sims_parameters(mass, bar)
+    return TunedMassDamper(
+        mass=mass,
+        stiffness=p["stiffness"],
+        damping=p["damping"],
+        position=bar.z_absorber,
+        design="sims",
+    )

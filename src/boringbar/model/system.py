@@ -25,6 +25,7 @@ from boringbar.model.dampers import (
     Friction,
     ImpactDamper,
     TunedMassDamper,
+    sims_tuning,
 )
 
 PRESETS = ("physical", "paper")
@@ -129,8 +130,6 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
         if design == "published":
             tmd = TunedMassDamper.published(position=modal.z_absorber)
         elif design == "sims":
-            from boringbar.reference.linear import sims_tuning
-
             tmd = sims_tuning(tmd_mass, modal)
         else:
             tmd = TunedMassDamper.den_hartog(tmd_mass, modal)

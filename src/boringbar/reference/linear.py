@@ -18,7 +18,7 @@ Tuning (mode 1 of the bar, absorber mass ratio mu = m_a psi_a^2 / M):
 
 - Den Hartog (equal peaks of |G|): :func:`boringbar.model.dampers.den_hartog_parameters`.
 - Sims (equal real troughs, N. D. Sims, J. Sound Vib. 301 (2007) 592-607):
-  :func:`sims_parameters`, the closed form for an undamped single-mode host;
+  :func:`boringbar.model.dampers.sims_parameters`, the closed form for an undamped single-mode host;
   it maximises the limiting depth of cut, which is inversely proportional
   to the most negative real part of G.
 - :func:`minimax_real_tuning`: the same objective minimised numerically on
@@ -32,8 +32,8 @@ import math
 import numpy as np
 import scipy.optimize
 
-from boringbar._validate import ParameterError, check_nonnegative, check_positive
-from boringbar.model.dampers import TunedMassDamper
+from boringbar._validate import ParameterError, check_nonnegative
+from boringbar.model.dampers import TunedMassDamper, sims_tuning
 
 #: Default search band for the real-part trough, in units of omega_1.
 TROUGH_BAND = (0.4, 2.2)
@@ -100,12 +100,6 @@ def static_tip_compliance(bar) -> float:
     return float(np.sum(bar.psi_tip**2 / bar.stiffness))
 
 
-def absorber_mass_ratio(mass: float, bar) -> float:
-    """mu = m_a psi_a,1^2 / M_1 (mode 1; independent of the mode's normalisation)."""
-    check_positive("absorber mass", mass, "kg")
-    return float(mass * bar.psi_absorber[0] ** 2 / bar.mass[0])
-
-
 # --- the most negative real part ------------------------------------------------
 def min_real_part(
     bar, tmd: TunedMassDamper | None = None, omega=None, *, added_mass: float = 0.0
@@ -143,53 +137,6 @@ def _local_minima(values: np.ndarray) -> np.ndarray:
     """Indices i with values[i] <= both neighbours (interior points only)."""
     v = np.asarray(values)
     return np.flatnonzero((v[1:-1] <= v[:-2]) & (v[1:-1] <= v[2:])) + 1
-
-
-# --- Sims' equal-real-trough tuning ---------------------------------------------
-def sims_parameters(mass: float, bar) -> dict:
-    """Sims' equal-real-trough optimum for an absorber on mode 1 of ``bar``.
-
-    With mu = m_a psi_a^2 / M and s = sqrt(4 + 3 mu), for an undamped
-    single-mode host the tuning that minimises max(-Re G) is
-
-        zeta_a = sqrt((8 + 9 mu - 4 s) / (16 (1 + mu)))     [= c_a / (2 m_a omega_a)]
-        f      = omega_a / omega_n
-               = sqrt(12 + 12 s + 9 s^2 + 9 sqrt(mu (3 s + 2)(s + 2))) / (sqrt(72) (1 + mu))
-
-    k_a = m_a (f omega_n)^2, c_a = 2 zeta_a m_a f omega_n.  zeta_a is Sims'
-    formula; f is the exact root of the same minimax problem (the larger
-    root of 36 Y^2 - (12 + 12 s + 9 s^2) Y + 4 (5 + 3 mu + 2 s) = 0 with
-    Y = (f (1 + mu))^2), identified to 50 digits against a high-precision
-    numerical minimax.  As mu -> 0, zeta_a -> sqrt(3 mu / 8) like Den
-    Hartog's, but f -> 1 + sqrt(mu / 8): Sims tunes the absorber above the
-    host, Den Hartog (f = 1/(1 + mu)) below it.  The host's own damping and
-    the other modes are ignored (``minimax_real_tuning`` includes them).
-    """
-    mu = absorber_mass_ratio(mass, bar)
-    s = math.sqrt(4.0 + 3.0 * mu)
-    zeta = math.sqrt((8.0 + 9.0 * mu - 4.0 * s) / (16.0 * (1.0 + mu)))
-    y = (12.0 + 12.0 * s + 9.0 * s * s + 9.0 * math.sqrt(mu * (3 * s + 2) * (s + 2))) / 72.0
-    f = math.sqrt(y) / (1.0 + mu)
-    wa = f * bar.natural_frequency
-    return {
-        "mass_ratio": mu,
-        "frequency_ratio": f,
-        "damping_ratio": zeta,
-        "stiffness": mass * wa**2,
-        "damping": 2.0 * zeta * mass * wa,
-    }
-
-
-def sims_tuning(mass: float, bar) -> TunedMassDamper:
-    """A :class:`TunedMassDamper` of ``mass`` (kg) at ``bar.z_absorber``, Sims-tuned."""
-    p = sims_parameters(mass, bar)
-    return TunedMassDamper(
-        mass=mass,
-        stiffness=p["stiffness"],
-        damping=p["damping"],
-        position=bar.z_absorber,
-        design="sims",
-    )
 
 
 def minimax_real_tuning(

@@ -29,10 +29,10 @@ import numpy as np
 
 from boringbar import __version__
 from boringbar.model.bar import published_bar
-from boringbar.model.dampers import TunedMassDamper
+from boringbar.model.dampers import TunedMassDamper, absorber_mass_ratio, sims_tuning
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
-from boringbar.reference.linear import absorber_mass_ratio, sims_tuning, tip_frf
+from boringbar.reference.linear import tip_frf
 from boringbar.reference.stability import KR_ALUMINIUM, min_limit
 from boringbar.simulate import simulate
 

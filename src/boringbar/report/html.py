@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from boringbar.io import _atomic
+from boringbar.io import atomic_path
 
 _CSS = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1500px;
@@ -501,6 +501,6 @@ def write_report(out, manifest: dict | None = None) -> Path:
         manifest = json.loads((out / "manifest.json").read_text())
     text = _Report(out, manifest).render()
     path = out / "report.html"
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         Path(tmp).write_text(text, encoding="utf-8")
     return path

@@ -44,7 +44,7 @@ from pathlib import Path
 
 from boringbar import __version__
 from boringbar._validate import ParameterError
-from boringbar.io import _atomic, _fsync_dir
+from boringbar.io import atomic_path, fsync_dir
 from boringbar.studies.schema import Study, StudyError
 
 log = logging.getLogger("boringbar.studies.runner")
@@ -213,7 +213,7 @@ class _Partial:
 
     def save(self, indices: list, results: list) -> None:
         path = self.dir / f"chunk-{indices[0]:09d}-{indices[-1]:09d}.pkl"
-        with _atomic(path) as tmp, open(tmp, "wb") as fh:
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             pickle.dump({"config_hash": self.key, "indices": list(indices),
                          "results": results}, fh, protocol=pickle.HIGHEST_PROTOCOL)
 
@@ -235,7 +235,7 @@ def _write(ds, out: Path, fmt: str) -> None:
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    _fsync_dir(out.parent)
+    fsync_dir(out.parent)
 
 
 # --- progress ------------------------------------------------------------------------
