@@ -295,8 +295,8 @@ def test_cli_lobes_exact(tmp_path, capsys):
 
 
 def test_study_file_with_an_exact_cut_loads(tmp_path):
+    from boringbar.studies.load import load_study
     from boringbar.studies.registry import ANALYSES
-    from boringbar.studies.schema import load_study
 
     path = tmp_path / "s.toml"
     path.write_text('[study]\nanalysis = "lobes"\n[run]\nintegrator = "exact"\n')

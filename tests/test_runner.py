@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from boringbar.studies.load import load_study, study_from_dict
 from boringbar.studies.registry import ANALYSES
 from boringbar.studies.runner import RunReport, run_study
-from boringbar.studies.schema import StudyError, load_study, study_from_dict
+from boringbar.studies.schema import StudyError
 
 SMALL = {"study": {"analysis": "sweep", "name": "small"},
          "run": {"duration_s": 0.02},

@@ -6,8 +6,9 @@ from pathlib import Path
 import pytest
 
 from boringbar.cli.main import main
+from boringbar.studies.load import load_study, study_from_dict
 from boringbar.studies.registry import ANALYSES
-from boringbar.studies.schema import StudyError, load_study, study_from_dict
+from boringbar.studies.schema import StudyError
 
 EXAMPLES = sorted((Path(__file__).parent.parent / "examples" / "studies").glob("*.toml"))
 

@@ -115,7 +115,7 @@ class _Cell:
     strobe: np.ndarray  #: (n, 2) the kept Poincare samples
 
 
-def _grid(name: str, spec) -> np.ndarray:
+def basin_grid(name: str, spec) -> np.ndarray:
     try:
         lo, hi, n = spec
     except (TypeError, ValueError):
@@ -148,7 +148,7 @@ def signature(strobe: np.ndarray, scale: float, omega: float,
     return 0, tail[-MAX_K:].copy()
 
 
-def _run(system: System, forcing: Harmonic, initial: Initial, duration: float, dt: float,
+def basin_run(system: System, forcing: Harmonic, initial: Initial, duration: float, dt: float,
          drop: float, tol: BasinTolerance, integrator: str = "rk4") -> _Cell:
     run = simulate(system, forcing, duration=duration, dt=dt, initial=initial,
                    steady_fraction=1.0 - drop, strobe=True, integrator=integrator)
@@ -157,7 +157,7 @@ def _run(system: System, forcing: Harmonic, initial: Initial, duration: float, d
 
 def _run_batch(system: System, forcing: Harmonic, initials: list[Initial], duration: float,
                dt: float, drop: float, tol: BasinTolerance) -> list[_Cell]:
-    """The cells of ``initials`` advanced in lock-step (RK4): each equals :func:`_run`'s."""
+    """The cells of ``initials`` advanced in lock-step (RK4): each equals :func:`basin_run`'s."""
     runs = simulate_batch([(system, forcing, ini) for ini in initials], duration=duration,
                           dt=dt, steady_fraction=1.0 - drop, strobe=True)
     return [_cell(run, dt, tol) for run in runs]
@@ -260,8 +260,8 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
     if not isinstance(forcing, Harmonic):
         raise ParameterError(f"forcing = {forcing!r} must be a Harmonic (basins are of a "
                              "periodically forced system)")
-    w0 = _grid("displacement", displacement)
-    v0 = _grid("velocity", velocity)
+    w0 = basin_grid("displacement", displacement)
+    v0 = basin_grid("velocity", velocity)
     check_positive("duration", duration, "s")
     check_range("drop", drop, 0.0, 1.0, hi_open=True)
     tol = BasinTolerance() if tol is None else tol
@@ -289,7 +289,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
                                    dt, drop, tol): i
                        for i in range(0, len(initials), batch)}
         else:
-            futures = {pool.submit(_run, system, forcing, ini, duration, dt, drop, tol,
+            futures = {pool.submit(basin_run, system, forcing, ini, duration, dt, drop, tol,
                                    integrator): i
                        for i, ini in enumerate(initials)}
         done = 0
@@ -303,7 +303,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
                 progress(done, len(initials))
     wall = time.perf_counter() - tic
     label, leaders = group(cells, omega, tol)
-    return _dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, {
+    return basins_dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, {
         "dt_s": dt, "duration_s": duration, "drop": drop, "workers": workers,
         "wall_time_s": wall, "ball_position_m": ball_position,
         "ball_velocity_m_s": ball_velocity, "tolerances": json.dumps(asdict(tol)),
@@ -318,7 +318,7 @@ def _padded(arrays: list[np.ndarray], n: int) -> np.ndarray:
     return out
 
 
-def _dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, attrs):
+def basins_dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, attrs):
     shape = (len(w0), len(v0))
     grid = ("displacement", "velocity")
     sig = _padded([c.centres for c in cells], MAX_K)

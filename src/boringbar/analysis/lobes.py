@@ -58,7 +58,7 @@ CRITERIA = ("zero", "bounded")
 NOT_RUN, CHATTER, STABLE = -1, 0, 1
 
 
-def _cut(case: Case, rpm: float, depth: float, opts: dict) -> dict:
+def lobe_cut(case: Case, rpm: float, depth: float, opts: dict) -> dict:
     """One cut, stopped at the first zero of the force."""
     forcing = Regenerative(depth=depth, rpm=rpm, kr=opts["kr"], feed=opts["feed"],
                            revolutions=opts["revolutions"], interpolation=opts["interpolation"],
@@ -76,7 +76,7 @@ def _cut(case: Case, rpm: float, depth: float, opts: dict) -> dict:
             else c["first_zero_time_s"]}
 
 
-def _column(case: Case, rpm: float, opts: dict) -> dict:
+def lobe_column(case: Case, rpm: float, opts: dict) -> dict:
     """All the runs at one speed, by the chosen method; returns {index: result}."""
     step, n_max = opts["depth_step"], opts["max_index"]
     key, need = opts["criterion"], opts["successive"]
@@ -84,7 +84,7 @@ def _column(case: Case, rpm: float, opts: dict) -> dict:
 
     def chatter(i: int) -> bool:
         if i not in done:
-            done[i] = _cut(case, rpm, i * step, opts)
+            done[i] = lobe_cut(case, rpm, i * step, opts)
         return done[i][key]
 
     def scan_from(i: int) -> None:
@@ -183,34 +183,34 @@ def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
         raise ParameterError("lobes needs at least one case")
     rpm = np.atleast_1d(np.asarray(rpm, dtype=float))
     workers = int(workers or os.cpu_count() or 1)
-    opts = _options(cases, rpm, method=method, depth_step=depth_step, max_depth=max_depth,
+    opts = lobe_options(cases, rpm, method=method, depth_step=depth_step, max_depth=max_depth,
                     successive=successive, criterion=criterion, kr=kr, feed=feed,
                     revolutions=revolutions, interpolation=interpolation, start=start,
                     bounded_fraction=bounded_fraction, duration=duration, dt=dt,
                     integrator=integrator)
     for nm in sorted({c.system.bar.n_modes for c in cases}):  # warm the JIT once
         c0 = next(c for c in cases if c.system.bar.n_modes == nm)
-        _cut(c0, float(rpm[0]), depth_step, dict(opts, duration=2e-4))
+        lobe_cut(c0, float(rpm[0]), depth_step, dict(opts, duration=2e-4))
 
     tic = time.perf_counter()
     columns: dict[tuple[int, int], dict] = {}
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        futs = {pool.submit(_column, case, float(r), opts): (i, j)
+        futs = {pool.submit(lobe_column, case, float(r), opts): (i, j)
                 for i, case in enumerate(cases) for j, r in enumerate(rpm)}
         for n_done, fut in enumerate(as_completed(futs), 1):
             columns[futs[fut]] = fut.result()
             if progress is not None:
                 progress(n_done, len(futs))
     wall = time.perf_counter() - tic
-    return _dataset(cases, rpm, columns, opts, analytic,
+    return lobes_dataset(cases, rpm, columns, opts, analytic,
                     {"workers": workers, "wall_time_s": wall})
 
 
-def _options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step: float,
+def lobe_options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step: float,
              max_depth: float, successive: int, criterion: str, kr: float, feed: float,
              revolutions: int, interpolation: str, start: str, bounded_fraction: float,
              duration: float, dt: float, integrator: str = "rk4") -> dict:
-    """Check the lobe options (before any work) and pack what :func:`_column` needs,
+    """Check the lobe options (before any work) and pack what :func:`lobe_column` needs,
     the search's seeds included."""
     check_choice("method", method, METHODS)
     check_choice("criterion", criterion, CRITERIA)
@@ -233,10 +233,10 @@ def _options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step: flo
     return opts
 
 
-def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, analytic: bool,
+def lobes_dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, analytic: bool,
              attrs: dict):
     """The lobes Dataset from the columns ((case index, rpm index) -> {depth index:
-    result} of :func:`_column`); ``attrs`` go after the configuration's."""
+    result} of :func:`lobe_column`); ``attrs`` go after the configuration's."""
     import xarray as xr
 
     depth_step, criterion = opts["depth_step"], opts["criterion"]

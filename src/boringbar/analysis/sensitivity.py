@@ -67,7 +67,7 @@ class Cuts:
         check_positive("cuts duration", self.duration, "s")
 
 
-def _initial(value) -> Initial:
+def sensitivity_initial(value) -> Initial:
     if isinstance(value, Initial):
         return value
     try:
@@ -77,15 +77,15 @@ def _initial(value) -> Initial:
                              "(W0, W0'[, y0, y0'])") from None
 
 
-def _label(kind: str, value) -> str:
+def sensitivity_label(kind: str, value) -> str:
     if kind == "initial":
-        i = _initial(value)
+        i = sensitivity_initial(value)
         return (f"W0={i.tip_displacement:g}m W0'={i.tip_velocity:g}m/s "
                 f"y0={i.ball_position:g}m y0'={i.ball_velocity:g}m/s")
     return f"{kind}={value}"
 
 
-def _cases(kind, values, bar, preset, gap, friction, overrides) -> list[Case]:
+def sensitivity_cases(kind, values, bar, preset, gap, friction, overrides) -> list[Case]:
     cases = []
     for v in values:
         kw = dict(overrides)
@@ -101,7 +101,7 @@ def _cases(kind, values, bar, preset, gap, friction, overrides) -> list[Case]:
             system = make_system(bar, preset, gap=gap, friction=fr, **kw)
         else:
             system = make_system(bar, preset, **kw)
-        label = "fixed system" if kind == "initial" else _label(kind, v)
+        label = "fixed system" if kind == "initial" else sensitivity_label(kind, v)
         cases.append(Case(label, system, bar, gap if bar == "ball" else math.nan,
                           ("on" if fr else "off") if bar == "ball" else "n/a"))
     return cases
@@ -139,12 +139,12 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     if not values:
         raise ParameterError(f"values = {values!r} must hold at least one {kind}")
     if kind != "initial":
-        cases = _cases(kind, values, bar, preset, gap, friction, overrides)
+        cases = sensitivity_cases(kind, values, bar, preset, gap, friction, overrides)
         initials = [None] * len(values)
     else:
-        initials = [_initial(v) for v in values]
-        cases = _cases(kind, [None], bar, preset, gap, friction, overrides) * len(values)
-    labels = [_label(kind, v) for v in values]
+        initials = [sensitivity_initial(v) for v in values]
+        cases = sensitivity_cases(kind, [None], bar, preset, gap, friction, overrides) * len(values)
+    labels = [sensitivity_label(kind, v) for v in values]
     if len(set(labels)) != len(labels):
         raise ParameterError(f"values = {values!r} must be distinct")
     coord = labels if kind == "initial" else values
@@ -175,7 +175,7 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     return ds
 
 
-def _cut(case: Case, initial: Initial | None, cuts: Cuts, depth: float, dt: float,
+def sensitivity_cut(case: Case, initial: Initial | None, cuts: Cuts, depth: float, dt: float,
          integrator: str = "rk4") -> dict:
     forcing = Regenerative(depth, cuts.rpm, stop_at_zero=False, **cuts.options)
     c = simulate(case.system, forcing, duration=cuts.duration, dt=dt, initial=initial,
@@ -194,11 +194,11 @@ def _cuts(cases, initials, cuts: Cuts, dt: float, workers: int | None,
     check_range("workers", workers, 1, 4096)
     depths = np.asarray(cuts.depths, dtype=float)
     jobs = [(i, j) for i in range(len(cases)) for j in range(len(depths))]
-    _cut(cases[0], initials[0], Cuts(cuts.rpm, cuts.depths[:1], 50 * dt, cuts.options),
+    sensitivity_cut(cases[0], initials[0], Cuts(cuts.rpm, cuts.depths[:1], 50 * dt, cuts.options),
          depths[0], dt, integrator)  # validates and warms the JIT before fanning out
     tic = time.perf_counter()
     with ThreadPoolExecutor(max_workers=workers) as pool:
-        results = list(pool.map(lambda ij: _cut(cases[ij[0]], initials[ij[0]], cuts,
+        results = list(pool.map(lambda ij: sensitivity_cut(cases[ij[0]], initials[ij[0]], cuts,
                                                 depths[ij[1]], dt, integrator), jobs))
     wall = time.perf_counter() - tic
     shape = (len(cases), len(depths))

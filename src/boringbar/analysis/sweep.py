@@ -77,7 +77,7 @@ def parse_range(text: str, name: str = "ratios") -> np.ndarray:
                              "STOP >= START, or a comma-separated list of numbers") from None
 
 
-def _one(case: Case, force: float, ratio: float, duration: float, dt: float,
+def sweep_point(case: Case, force: float, ratio: float, duration: float, dt: float,
          initial: Initial | None, integrator: str = "rk4") -> dict:
     run = simulate(case.system, Harmonic(force, ratio), duration=duration, dt=dt,
                    initial=initial, integrator=integrator)
@@ -87,7 +87,7 @@ def _one(case: Case, force: float, ratio: float, duration: float, dt: float,
 def _batch(points: list[tuple[Case, float, float]], duration: float, dt: float,
            initial: Initial | None) -> list[dict]:
     """(case, force, ratio) points of one bar kind and mode count, advanced in
-    lock-step (RK4): each equals :func:`_one`'s."""
+    lock-step (RK4): each equals :func:`sweep_point`'s."""
     runs = simulate_batch([(c.system, Harmonic(f, r), initial) for c, f, r in points],
                           duration=duration, dt=dt)
     return [_point(run) for run in runs]
@@ -165,8 +165,8 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
             futures = {pool.submit(_batch, [(cases[i], forces[j], ratios[k]) for i, j, k in b],
                                    duration, dt, initial): b for b in batches}
         else:
-            futures = {pool.submit(_one, cases[i], forces[j], ratios[k], duration, dt, initial,
-                                   integrator): [(i, j, k)] for i, j, k in jobs}
+            futures = {pool.submit(sweep_point, cases[i], forces[j], ratios[k], duration, dt,
+                                   initial, integrator): [(i, j, k)] for i, j, k in jobs}
         done = 0
         for fut in as_completed(futures):
             results = fut.result()
@@ -179,7 +179,7 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
             if progress is not None:
                 progress(done, len(jobs))
     wall = time.perf_counter() - tic
-    return _dataset(cases, forces, ratios, out, pattern, {
+    return sweep_dataset(cases, forces, ratios, out, pattern, {
         "integrator": integrator,
         "batch": batch if batched else 1,
         "dt_s": dt,
@@ -190,7 +190,7 @@ def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
     })
 
 
-def _dataset(cases: list[Case], forces: np.ndarray, ratios: np.ndarray, out: dict,
+def sweep_dataset(cases: list[Case], forces: np.ndarray, ratios: np.ndarray, out: dict,
              pattern: np.ndarray, attrs: dict):
     """The sweep Dataset from the per-point arrays ``out`` (name -> (case, force,
     ratio) array) and ``pattern``; ``attrs`` go after the configuration's."""

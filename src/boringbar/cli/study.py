@@ -46,8 +46,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     import json
 
     from boringbar.io import jsonable
+    from boringbar.studies.load import load_study
     from boringbar.studies.runner import RunReport, run_study
-    from boringbar.studies.schema import load_study
 
     study = load_study(args.study)
     executor = args.executor

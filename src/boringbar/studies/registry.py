@@ -19,8 +19,8 @@ The runner (:mod:`boringbar.studies.runner`) does the rest: chunking, executors,
 resumable stores, progress.
 
 The analyses reuse the per-point code of the in-process functions:
-``sweep``: :func:`boringbar.analysis.sweep._one` per (case, force, ratio);
-``lobes``: :func:`boringbar.analysis.lobes._column` per (case, rpm);
+``sweep``: :func:`boringbar.analysis.sweep.sweep_point` per (case, force, ratio);
+``lobes``: :func:`boringbar.analysis.lobes.lobe_column` per (case, rpm);
 ``bifurcation``: one case's whole forward + backward continuation;
 ``basins``: one grid cell's run and signature, grouped at assembly;
 ``sensitivity``: one (value, force, ratio) harmonic run or one (value,
@@ -29,14 +29,34 @@ depth) cut.
 
 from __future__ import annotations
 
+import inspect
 import itertools
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
+import xarray as xr
 
-from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study
+from boringbar import __version__
+from boringbar._validate import ParameterError
+from boringbar.analysis.basins import BasinTolerance, basin_grid, basin_run, basins_dataset, group
+from boringbar.analysis.bifurcation import bifurcation
+from boringbar.analysis.lobes import lobe_column, lobe_cut, lobe_options, lobes_dataset
+from boringbar.analysis.sensitivity import (
+    PUBLISHED_VALUES,
+    Cuts,
+    sensitivity_cases,
+    sensitivity_cut,
+    sensitivity_initial,
+    sensitivity_label,
+)
+from boringbar.analysis.sweep import Case, sweep_dataset, sweep_point
+from boringbar.model.dampers import ImpactDamper
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import make_system
+from boringbar.simulate import INTEGRATORS, Initial, check_step, simulate
+from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study, StudyError
 
 
 @dataclass
@@ -150,20 +170,14 @@ class Analysis:
         return []
 
     def integrators(self) -> tuple:
-        import importlib
-
         fns = self.point_functions()
         if fns and all(_takes(f, "integrator") for f in fns):
-            module = importlib.import_module("boringbar.simulate")
-            return tuple(getattr(module, "INTEGRATORS", ("rk4",)))
+            return INTEGRATORS
         return ("rk4",)
 
 
 def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
     """What :func:`~boringbar.simulate.simulate` refuses, checked before any work."""
-    from boringbar._validate import ParameterError
-    from boringbar.model.dampers import ImpactDamper
-    from boringbar.simulate import check_step
 
     integrator = study.value("integrator")
     d = system.damper
@@ -179,8 +193,6 @@ def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
 
 
 def _takes(fn, name: str) -> bool:
-    import inspect
-
     return name in inspect.signature(fn).parameters
 
 
@@ -203,7 +215,6 @@ _RELEVANT = {
 
 def make_study_system(preset: str, s: dict):
     """The System of the flat bar + damper settings ``s`` (units as in the keys)."""
-    from boringbar.model.system import make_system
 
     kw = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
     if s["kind"] == "tmd":
@@ -229,7 +240,6 @@ def study_cases(study: Study) -> tuple[list, dict]:
     ``study``, in the cartesian order of its grid, with settings that do not
     apply to a bar kind collapsed (a solid bar has no gap); and per varied key
     the value of each case (None where it does not apply)."""
-    from boringbar.analysis.sweep import Case
 
     base = {k: study.value(k) for k in SYSTEM_KEYS}
     varied = [k for k in study.axes if k in SYSTEM_KEYS]
@@ -272,8 +282,6 @@ def _case_coords(values: dict) -> dict:
 
 
 def _initial(study: Study):
-    from boringbar.simulate import Initial
-
     return Initial(study.value("tip_displacement_mm") * 1e-3, study.value("tip_velocity_m_s"),
                    study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s"))
 
@@ -287,9 +295,6 @@ def _provenance(study: Study) -> dict:
 
 
 def _warm_harmonic(cases, integrator: str = "rk4") -> None:
-    from boringbar.model.forcing import Harmonic
-    from boringbar.simulate import simulate
-
     kw = {} if integrator == "rk4" else {"integrator": integrator}
     for nm in sorted({c.system.bar.n_modes for c in cases}):
         c0 = next(c for c in cases if c.system.bar.n_modes == nm)
@@ -331,28 +336,22 @@ class Sweep(Analysis):
                 for x in c["cases"]]
 
     def compute(self, ctx, point):
-        from boringbar.analysis.sweep import _one
-
         i, j, k = point
-        res = _one(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
-                   ctx["dt"], ctx["initial"], **_integrator(_one, ctx))
+        res = sweep_point(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
+                   ctx["dt"], ctx["initial"], **_integrator(sweep_point, ctx))
         res.pop("elapsed_s")
         return res
 
     def point_functions(self):
-        from boringbar.analysis.sweep import _one
-
-        return [_one]
+        return [sweep_point]
 
     def assemble(self, study, plan, results):
-        from boringbar.analysis.sweep import _dataset
-
         ctx = plan.context
         shape = (len(ctx["cases"]), len(ctx["forces"]), len(ctx["ratios"]))
         out = {k: np.array([r[k] for r in results], dtype=float).reshape(shape)
                for k in _SWEEP_NAMES}
         pattern = np.array([r["pattern"] for r in results], dtype=object).reshape(shape)
-        ds = _dataset(ctx["cases"], ctx["forces"], ctx["ratios"], out, pattern, {
+        ds = sweep_dataset(ctx["cases"], ctx["forces"], ctx["ratios"], out, pattern, {
             "integrator": study.value("integrator"), "dt_s": ctx["dt"],
             "duration_s": ctx["duration"], "initial": json.dumps(ctx["initial"].__dict__),
             **_provenance(study)})
@@ -379,12 +378,10 @@ class Lobes(Analysis):
         return {"rpm": [900.0 + 50.0 * i for i in range(15)]}
 
     def plan(self, study):
-        from boringbar.analysis.lobes import _options
-
         cases, values = study_cases(study)
         rpm = _axis(study, "rpm")
         o = study.options
-        opts = _options(cases, rpm, method=o["method"], depth_step=o["depth_step_mm"] * 1e-3,
+        opts = lobe_options(cases, rpm, method=o["method"], depth_step=o["depth_step_mm"] * 1e-3,
                         max_depth=o["max_depth_mm"] * 1e-3, successive=o["successive"],
                         criterion=o["criterion"], kr=study.value("kr_mpa") * 1e6,
                         feed=study.value("feed_mm") * 1e-3,
@@ -392,7 +389,7 @@ class Lobes(Analysis):
                         interpolation=study.value("interpolation"), start=study.value("start"),
                         bounded_fraction=study.value("bounded_fraction"),
                         duration=study.value("duration_s"), dt=study.value("dt_s"),
-                        **_integrator(_options, {"integrator": study.value("integrator")}))
+                        **_integrator(lobe_options, {"integrator": study.value("integrator")}))
         points = list(itertools.product(range(len(cases)), range(len(rpm))))
         return Plan({"cases": cases, "rpm": rpm, "opts": opts}, points, {"values": values})
 
@@ -401,30 +398,22 @@ class Lobes(Analysis):
         return [(x.system, 2 * math.pi * max(c["rpm"]) / 60.0, True) for x in c["cases"]]
 
     def warm(self, ctx):
-        from boringbar.analysis.lobes import _cut
-
         for nm in sorted({c.system.bar.n_modes for c in ctx["cases"]}):
             c0 = next(c for c in ctx["cases"] if c.system.bar.n_modes == nm)
-            _cut(c0, float(ctx["rpm"][0]), ctx["opts"]["depth_step"],
+            lobe_cut(c0, float(ctx["rpm"][0]), ctx["opts"]["depth_step"],
                  dict(ctx["opts"], duration=2e-4))
 
     def compute(self, ctx, point):
-        from boringbar.analysis.lobes import _column
-
         i, j = point
-        return _column(ctx["cases"][i], float(ctx["rpm"][j]), ctx["opts"])
+        return lobe_column(ctx["cases"][i], float(ctx["rpm"][j]), ctx["opts"])
 
     def point_functions(self):
-        from boringbar.analysis.lobes import _options
-
-        return [_options]
+        return [lobe_options]
 
     def assemble(self, study, plan, results):
-        from boringbar.analysis.lobes import _dataset
-
         ctx = plan.context
         columns = dict(zip(plan.points, results, strict=True))
-        ds = _dataset(ctx["cases"], ctx["rpm"], columns, ctx["opts"],
+        ds = lobes_dataset(ctx["cases"], ctx["rpm"], columns, ctx["opts"],
                       study.options["analytic"], _provenance(study))
         return ds.assign_coords(_case_coords(plan.extra["values"]))
 
@@ -445,14 +434,10 @@ class Bifurcation(Analysis):
     grid_keys = SYSTEM_KEYS
 
     def plan(self, study):
-        from boringbar.model.forcing import Harmonic
-
         cases, values = study_cases(study)
         o = study.options
         v = np.asarray(o["values"], dtype=float)
         if o["parameter"] == "ratio" and np.any(v <= 0):
-            from boringbar._validate import ParameterError
-
             raise ParameterError(f"analysis.values = {v.tolist()} must be > 0 for parameter "
                                  "'ratio'")
         ctx = {"cases": cases, "values": v, "parameter": o["parameter"],
@@ -472,8 +457,6 @@ class Bifurcation(Analysis):
         return [(x.system, r * x.system.reference_frequency, False) for x in c["cases"]]
 
     def compute(self, ctx, i):
-        from boringbar.analysis.bifurcation import bifurcation
-
         ds = bifurcation(ctx["cases"][i].system, ctx["parameter"], ctx["values"],
                          base_forcing=ctx["base"], duration=ctx["duration"], dt=ctx["dt"],
                          drop=ctx["drop"], initial=ctx["initial"], backward=ctx["backward"],
@@ -484,13 +467,9 @@ class Bifurcation(Analysis):
                 "config": json.loads(ds.attrs["config"]), "ds_attrs": dict(ds.attrs)}
 
     def point_functions(self):
-        from boringbar.analysis.bifurcation import bifurcation
-
         return [bifurcation]
 
     def assemble(self, study, plan, results):
-        import xarray as xr
-
         ctx = plan.context
         n_sample = max(r["data"]["tip_displacement"].shape[-1] for r in results)
         data = {}
@@ -554,10 +533,6 @@ class Basins(Analysis):
     grid_keys = SYSTEM_KEYS + ("force_n", "ratio")
 
     def plan(self, study):
-        from boringbar.analysis.basins import BasinTolerance, _grid
-        from boringbar.model.forcing import Harmonic
-        from boringbar.simulate import Initial
-
         cases, values = study_cases(study)
         forces, ratios = _axis(study, "force_n"), _axis(study, "ratio")
         ops = []  # (label, case index, forcing)
@@ -571,8 +546,8 @@ class Basins(Analysis):
                         label += f" r={r:g}"
                     ops.append((label, i, Harmonic(float(f), float(r))))
         d, v = study.options["displacement_mm"], study.options["velocity_m_s"]
-        w0 = _grid("displacement", (d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]))
-        v0 = _grid("velocity", (v["start"], v["stop"], v["count"]))
+        w0 = basin_grid("displacement", (d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]))
+        v0 = basin_grid("velocity", (v["start"], v["stop"], v["count"]))
         bp, bv = study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s")
         initials = [Initial(float(w), float(v), bp, bv) for w in w0 for v in v0]
         ctx = {"cases": cases, "ops": ops, "duration": study.value("duration_s"),
@@ -591,25 +566,15 @@ class Basins(Analysis):
                 for _, i, f in c["ops"]]
 
     def compute(self, ctx, point):
-        from boringbar.analysis.basins import _run
-
         op, cell = point
         _, i, forcing = ctx["ops"][op]
-        return _run(ctx["cases"][i].system, forcing, ctx["initials"][cell], ctx["duration"],
-                    ctx["dt"], ctx["drop"], ctx["tol"], **_integrator(_run, ctx))
+        return basin_run(ctx["cases"][i].system, forcing, ctx["initials"][cell], ctx["duration"],
+                    ctx["dt"], ctx["drop"], ctx["tol"], **_integrator(basin_run, ctx))
 
     def point_functions(self):
-        from boringbar.analysis.basins import _run
-
-        return [_run]
+        return [basin_run]
 
     def assemble(self, study, plan, results):
-        from dataclasses import asdict
-
-        import xarray as xr
-
-        from boringbar.analysis.basins import _dataset, group
-
         c = plan.context
         n_cells = len(c["initials"])
         parts = []
@@ -617,7 +582,8 @@ class Basins(Analysis):
             cells = results[op * n_cells:(op + 1) * n_cells]
             system = c["cases"][i].system
             label, leaders = group(cells, forcing.omega(system.reference_frequency), c["tol"])
-            parts.append(_dataset(xr, system, forcing, c["w0"], c["v0"], cells, label, leaders,
+            parts.append(basins_dataset(xr, system, forcing, c["w0"], c["v0"], cells, label,
+                                        leaders,
                                   c["initials"], {
                                       "dt_s": c["dt"], "duration_s": c["duration"],
                                       "drop": c["drop"],
@@ -633,7 +599,6 @@ class Basins(Analysis):
 
 def _stack_basins(parts: list, c: dict, values: dict):
     """Basin Datasets of several operating points along a leading ``case`` dim."""
-    import xarray as xr
 
     n_att = max(p.sizes["attractor_id"] for p in parts)
     n_sample = max(p.sizes["sample"] for p in parts)
@@ -685,15 +650,6 @@ class Sensitivity(Analysis):
     grid_keys = ("force_n", "ratio")
 
     def plan(self, study):
-        from boringbar.analysis.sensitivity import (
-            PUBLISHED_VALUES,
-            Cuts,
-            _cases,
-            _initial,
-            _label,
-        )
-        from boringbar.studies.schema import StudyError
-
         o = study.options
         kind = o["kind"]
         values = list(PUBLISHED_VALUES[kind] if o["values"] is None else o["values"])
@@ -719,14 +675,14 @@ class Sensitivity(Analysis):
             overrides.pop(varied, None)
         if kind == "initial":
             values = [tuple(v) if isinstance(v, list | tuple) else v for v in values]
-            initials = [_initial(v) for v in values]
-            cases = _cases(kind, [None], s["kind"], study.preset, s["gap_mm"] * 1e-3,
+            initials = [sensitivity_initial(v) for v in values]
+            cases = sensitivity_cases(kind, [None], s["kind"], study.preset, s["gap_mm"] * 1e-3,
                            s["friction"], overrides) * len(values)
         else:
             initials = [_initial_or_none(study)] * len(values)
-            cases = _cases(kind, values, s["kind"], study.preset, s["gap_mm"] * 1e-3,
+            cases = sensitivity_cases(kind, values, s["kind"], study.preset, s["gap_mm"] * 1e-3,
                            s["friction"], overrides)
-        labels = [_label(kind, v) for v in values]
+        labels = [sensitivity_label(kind, v) for v in values]
         if len(set(labels)) != len(labels):
             raise StudyError(f"{study.source}: key 'analysis.values' = {values!r}: the values "
                              "must be distinct")
@@ -761,30 +717,20 @@ class Sensitivity(Analysis):
 
     def compute(self, ctx, point):
         if "cuts" in ctx:
-            from boringbar.analysis.sensitivity import _cut
-
             i, j = point
-            return _cut(ctx["cases"][i], ctx["initials"][i], ctx["cuts"],
-                        ctx["cuts"].depths[j], ctx["dt"], **_integrator(_cut, ctx))
-        from boringbar.analysis.sweep import _one
+            return sensitivity_cut(ctx["cases"][i], ctx["initials"][i], ctx["cuts"],
+                        ctx["cuts"].depths[j], ctx["dt"], **_integrator(sensitivity_cut, ctx))
 
         i, j, k = point
-        res = _one(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
-                   ctx["dt"], ctx["initials"][i], **_integrator(_one, ctx))
+        res = sweep_point(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
+                   ctx["dt"], ctx["initials"][i], **_integrator(sweep_point, ctx))
         res.pop("elapsed_s")
         return res
 
     def point_functions(self):
-        from boringbar.analysis.sensitivity import _cut
-        from boringbar.analysis.sweep import _one
-
-        return [_one, _cut]
+        return [sweep_point, sensitivity_cut]
 
     def assemble(self, study, plan, results):
-        import xarray as xr
-
-        from boringbar.analysis.sweep import _dataset
-
         c = plan.context
         kind, values, labels = c["kind"], c["values"], c["labels"]
         coord = labels if kind == "initial" else list(values)
@@ -796,7 +742,6 @@ class Sensitivity(Analysis):
             units = {"amplitude_m": "m", "max_force_n": "N", "first_zero_time_s": "s"}
             data = {k: (("case", "depth"), np.array([r[k] for r in results]).reshape(shape),
                         {"units": units[k]} if k in units else {}) for k in results[0]}
-            from boringbar import __version__
 
             ds = xr.Dataset(
                 data, coords={"depth": ("depth", np.asarray(cuts.depths), {"units": "m"})},
@@ -816,7 +761,7 @@ class Sensitivity(Analysis):
             if kind != "initial":
                 attrs["initial"] = json.dumps(c["initials"][0].__dict__
                                               if c["initials"][0] else {})
-            ds = _dataset(c["cases"], c["forces"], c["ratios"], out, pattern, attrs)
+            ds = sweep_dataset(c["cases"], c["forces"], c["ratios"], out, pattern, attrs)
             ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
             if kind == "initial":
                 for name in ("tip_displacement", "tip_velocity", "ball_position",

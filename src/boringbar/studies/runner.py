@@ -31,6 +31,7 @@ import contextlib
 import json
 import logging
 import math
+import multiprocessing as mp
 import os
 import pickle
 import shutil
@@ -38,13 +39,18 @@ import sys
 import tempfile
 import time
 import uuid
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
+import xarray as xr
+
 from boringbar import __version__
 from boringbar._validate import ParameterError
-from boringbar.io import atomic_path, fsync_dir
+from boringbar.io import atomic_path, fsync_dir, write_json_atomic, write_netcdf_atomic
+from boringbar.studies.registry import ANALYSES
 from boringbar.studies.schema import Study, StudyError
 
 log = logging.getLogger("boringbar.studies.runner")
@@ -100,8 +106,6 @@ _PLANS: dict[str, tuple] = {}
 def _planned(study: Study, key: str):
     """(analysis, plan) of ``study``, made and warmed once per process."""
     if key not in _PLANS:
-        from boringbar.studies.registry import ANALYSES
-
         analysis = ANALYSES[study.analysis]
         plan = analysis.plan(study)
         analysis.warm(plan.context)
@@ -141,8 +145,6 @@ def _format(study: Study, out: Path) -> str:
 
 
 def _open(out: Path, fmt: str):
-    import xarray as xr
-
     if fmt == "zarr":
         with xr.open_zarr(out, consolidated=None) as ds:
             return ds.load()
@@ -183,7 +185,6 @@ class _Partial:
                     "remove the directory to start this one")
         else:
             self.dir.mkdir(parents=True, exist_ok=True)
-            from boringbar.io import write_json_atomic
 
             write_json_atomic({"config_hash": key, "source": study.source,
                                "analysis": study.analysis, "points": n_points,
@@ -223,8 +224,6 @@ class _Partial:
 
 def _write(ds, out: Path, fmt: str) -> None:
     if fmt == "netcdf":
-        from boringbar.io import write_netcdf_atomic
-
         write_netcdf_atomic(ds, out)
         return
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -297,10 +296,6 @@ def _mp_context(mp):
 
 
 def _run_processes(study, key, chunks, on_done, report, workers):
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
-
     pending = dict(chunks)
     restarts = 0
     while pending:
@@ -389,7 +384,6 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
     is returned without running anything; if it holds anything else, or the
     partial directory belongs to another study, StudyError says what to do.
     """
-    from boringbar.studies.registry import ANALYSES
 
     report = RunReport() if report is None else report
     if scheduler is not None or dask_local is not None:
