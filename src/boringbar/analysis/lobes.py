@@ -43,11 +43,14 @@ import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 
 import numpy as np
+import xarray as xr
 
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
 from boringbar.analysis.sweep import Case
 from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
+from boringbar.model.system import System
+from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import INTEGRATORS, simulate
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
@@ -127,7 +130,6 @@ def lobe_column(case: Case, rpm: float, opts: dict) -> dict:
 
 def _seeds(cases: list[Case], rpm: np.ndarray, kr: float, step: float) -> dict:
     """Grid index of the analytic limit of each case's linear host at each speed."""
-    from boringbar.reference.stability import limit_at_speeds
 
     seeds = {}
     for case in cases:
@@ -141,7 +143,6 @@ def _seeds(cases: list[Case], rpm: np.ndarray, kr: float, step: float) -> dict:
 def _linear_host(system):
     """The linear bar a cut sees at the onset of chatter: for the free ball the
     bare cavity bar (the ball is not touching yet), else the system itself."""
-    from boringbar.model.system import System
 
     if system.kind == "ball":
         return System(system.bar, None, system.preset, system.readings)
@@ -237,7 +238,6 @@ def lobes_dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict,
              attrs: dict):
     """The lobes Dataset from the columns ((case index, rpm index) -> {depth index:
     result} of :func:`lobe_column`); ``attrs`` go after the configuration's."""
-    import xarray as xr
 
     depth_step, criterion = opts["depth_step"], opts["criterion"]
     bounded_fraction, interpolation = opts["bounded_fraction"], opts["interpolation"]
@@ -325,7 +325,6 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
     """The frequency-domain limit of the linear bars (NaN for the free ball), and of
     every case's linear host (the bare cavity bar for the free ball, which is the
     bar the cut sees while the ball does not touch a wall)."""
-    from boringbar.reference.stability import limit_at_speeds
 
     fine = np.linspace(rpm.min(), rpm.max(), max(200, 20 * len(rpm)))
     on_grid = np.full((len(cases), len(rpm)), np.nan)

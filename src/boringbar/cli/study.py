@@ -8,9 +8,15 @@ ParameterErrors (one line, exit code 2) like every other command.
 from __future__ import annotations
 
 import argparse
+import json
+import logging
 import sys
 
-from boringbar.studies.runner import EXECUTORS
+from boringbar._validate import ParameterError
+from boringbar.io import jsonable
+from boringbar.report.paper import PRESET_ORDER, StepFailed, run_paper
+from boringbar.studies.load import load_study
+from boringbar.studies.runner import EXECUTORS, RunReport, run_study
 
 
 def add_run(sub) -> None:
@@ -43,19 +49,12 @@ def add_run(sub) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    import json
-
-    from boringbar.io import jsonable
-    from boringbar.studies.load import load_study
-    from boringbar.studies.runner import RunReport, run_study
-
     study = load_study(args.study)
     executor = args.executor
     if executor is None:
         executor = "dask" if (args.scheduler or args.dask_local) else "processes"
     report = RunReport()
     if not args.quiet:  # resume and worker-loss notes, one line each on stderr
-        import logging
 
         handler = logging.StreamHandler(sys.stderr)
         handler.setFormatter(logging.Formatter("boringbar run: %(message)s"))
@@ -74,7 +73,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_paper(sub) -> None:
+def add_paper(sub, run_step) -> None:
+    """``boringbar paper``; ``run_step(argv) -> summary`` runs one step's command."""
     p = sub.add_parser(
         "paper", help="rerun the whole published study under both presets, with an HTML report",
         description="Rerun every published analysis (MODEL.md section 6: frequency sweeps, "
@@ -93,23 +93,17 @@ def add_paper(sub) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object (the manifest) on stdout")
-    p.set_defaults(func=cmd_paper)
+    p.set_defaults(func=cmd_paper, run_step=run_step)
 
 
 def cmd_paper(args: argparse.Namespace) -> int:
-    import json
-
-    from boringbar._validate import ParameterError
-    from boringbar.io import jsonable
-    from boringbar.report.paper import PRESET_ORDER, StepFailed, run_paper
-
     presets = [w.strip() for w in args.presets.split(",") if w.strip()]
     bad = [w for w in presets if w not in PRESET_ORDER]
     if bad or not presets or len(set(presets)) != len(presets):
         raise ParameterError(f"--presets = {args.presets!r}: a comma list of distinct "
                              f"presets from {', '.join(PRESET_ORDER)}")
     try:
-        manifest = run_paper(args.out, quick=args.quick, quiet=args.quiet,
+        manifest = run_paper(args.out, args.run_step, quick=args.quick, quiet=args.quiet,
                              presets=tuple(p for p in PRESET_ORDER if p in presets))
     except StepFailed as exc:  # one analysis failed: the others finished are kept
         print(f"boringbar: error: {' '.join(str(exc).split())}", file=sys.stderr)

@@ -60,14 +60,14 @@ def tip_frf(
     """
     w = np.asarray(omega, dtype=float)
     check_nonnegative("added_mass", added_mass, "kg")
-    z = _dynamic_stiffness(bar, w.ravel(), tmd, float(added_mass))
+    z = dynamic_stiffness(bar, w.ravel(), tmd, float(added_mass))
     rhs = np.zeros(z.shape[:2] + (1,), dtype=complex)
     rhs[:, : bar.n_modes, 0] = bar.psi_tip
     u = np.linalg.solve(z, rhs)[:, : bar.n_modes, 0]
     return (u @ bar.psi_tip).reshape(w.shape)
 
 
-def _dynamic_stiffness(bar, w: np.ndarray, tmd, added_mass: float) -> np.ndarray:
+def dynamic_stiffness(bar, w: np.ndarray, tmd, added_mass: float) -> np.ndarray:
     """Batched dynamic stiffness matrices, shape (len(w), n [+1], n [+1])."""
     n = bar.n_modes
     size = n + (tmd is not None)

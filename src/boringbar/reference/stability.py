@@ -40,7 +40,7 @@ import scipy.linalg
 from boringbar._validate import ParameterError, check_nonnegative, check_positive, check_range
 from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import TunedMassDamper
-from boringbar.reference.linear import _dynamic_stiffness, min_real_part, tip_frf
+from boringbar.reference.linear import dynamic_stiffness, min_real_part, tip_frf
 
 #: Radial cutting-force coefficient of the published study (aluminium), Pa.
 KR_ALUMINIUM = 850e6
@@ -96,7 +96,7 @@ def natural_frequencies(
     :mod:`boringbar.reference.linear` (Z(0) = K, Re Z(1) = K - M), so this
     stays the one place that assembles them.
     """
-    z = _dynamic_stiffness(bar, np.array([0.0, 1.0]), tmd, float(added_mass)).real
+    z = dynamic_stiffness(bar, np.array([0.0, 1.0]), tmd, float(added_mass)).real
     k, m = z[0], z[0] - z[1]
     return np.sqrt(scipy.linalg.eigh(k, m, eigvals_only=True))
 

@@ -18,8 +18,6 @@ report (:mod:`boringbar.report.html`) is written last, from the files on disk.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import sys
 import time
@@ -28,6 +26,10 @@ from pathlib import Path
 
 from boringbar import __version__
 from boringbar.io import jsonable, write_json_atomic, write_netcdf_atomic
+from boringbar.model.system import make_system
+from boringbar.plot import plot_ladder
+from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
+from boringbar.report.html import write_report
 
 PRESET_ORDER = ("paper", "physical")
 
@@ -92,19 +94,6 @@ class StepFailed(RuntimeError):
     """A step's ``boringbar`` command exited non-zero (its one-line error inside)."""
 
 
-def _run_cli(argv: list[str]) -> dict:
-    """Run one ``boringbar`` subcommand in this process; its ``--json`` summary."""
-    from boringbar.cli import main as cli
-
-    buf = io.StringIO()
-    err = io.StringIO()
-    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
-        code = cli.main([*argv, "--json"])
-    if code != 0:
-        raise StepFailed(f"boringbar {' '.join(argv)} failed: {err.getvalue().strip()}")
-    return json.loads(buf.getvalue().strip().splitlines()[-1])
-
-
 def _done(path: Path, command: str) -> dict | None:
     """The finished step's record, if ``path`` holds one for ``command``."""
     try:
@@ -130,10 +119,15 @@ def _step(where: Path, meta: dict, compute, say, label: str) -> dict:
     return {**record, "reused": False}
 
 
-def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = False,
+def run_paper(out, run_step, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = False,
               log=None) -> dict:
     """Run every published analysis under each preset into ``out`` and write the
-    report; returns the manifest (also ``out/manifest.json``)."""
+    report; returns the manifest (also ``out/manifest.json``).
+
+    ``run_step(argv) -> dict`` runs one step's ``boringbar`` command line in this
+    process and returns its ``--json`` summary, raising :class:`StepFailed` if it
+    fails (:func:`boringbar.cli.main.run_json`; passed in, so this layer does not
+    import the command line that sits on top of it)."""
     shown = Path(out)  # as the user wrote it, for the commands in the report
     out = shown.resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -150,7 +144,7 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
             meta = {"key": step.key, "section": step.section, "title": step.title,
                     "preset": preset,
                     "command": command_line(step, preset, shown / preset / step.key)}
-            records.append(_step(where, meta, lambda argv=argv: _run_cli(argv), say,
+            records.append(_step(where, meta, lambda argv=argv: run_step(argv), say,
                                  f"boringbar paper: [{len(records) + 1}/{total}] "
                                  f"{preset} {step.key}"))
     duration = 0.5 if quick else 2.0
@@ -173,8 +167,6 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
         "steps": records,
     }
     write_json_atomic(jsonable(manifest), out / "manifest.json")
-    from boringbar.report.html import write_report
-
     manifest["report"] = str(write_report(out, manifest))
     say(f"boringbar paper: report {manifest['report']} "
         f"({manifest['wall_time_s']:.0f} s)")
@@ -184,10 +176,6 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
 def _corrections(where: Path, presets, duration: float) -> dict:
     """The corrections measurements, into ``where``: the readings ladder, the impact
     law, and the absorber designs of each preset; returns their summary."""
-    from boringbar.model.system import make_system
-    from boringbar.plot import plot_ladder
-    from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
-
     ladder = readings_ladder(duration=duration)
     nc = write_netcdf_atomic(ladder, where / "ladder.nc")
     png = plot_ladder(ladder, where / "ladder.png")

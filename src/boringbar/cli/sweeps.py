@@ -1,0 +1,281 @@
+"""``boringbar sweep`` and ``boringbar lobes``: frequency sweeps and stability lobes."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from boringbar._validate import check_range
+from boringbar.analysis.lobes import PUBLISHED_RPM, lobes, lobes_summary
+from boringbar.analysis.sweep import parse_range, sweep, sweep_summary
+from boringbar.cli.options import (
+    PATTERN_KEY,
+    add_common,
+    add_cutting,
+    check_rpm,
+    cut_options,
+    forces_and_ratios,
+    initial_conditions,
+    many_cases,
+    print_json,
+    progress_printer,
+)
+from boringbar.cli.simulate import HISTORY_ROWS, history_dataset
+from boringbar.io import write_netcdf_atomic
+from boringbar.model.forcing import Regenerative
+from boringbar.plot import plot_lobe_examples, plot_lobes, plot_sweep
+from boringbar.simulate import simulate
+
+
+def add_sweep(sub) -> None:
+    p = sub.add_parser("sweep", help="tip RMS and impact pattern against Omega/omega_n",
+                       description="Frequency sweep of the published study (MODEL.md section "
+                                   "6); writes DIR/sweep.nc and DIR/sweep.png (one "
+                                   "DIR/sweep_F<F0>N.png per force when several).")
+    groups = add_common(p, many=True)
+    groups["run"].add_argument("--workers", type=int, metavar="N",
+                               help="threads (default: every core)")
+    p.set_defaults(func=_cmd_sweep)
+
+
+def add_lobes(sub) -> None:
+    p = sub.add_parser("lobes", help="stability lobes by time-domain simulation of cuts",
+                       description="Stability lobes of the published study (MODEL.md section "
+                                   "6): depth of cut against spindle speed, every grid point a "
+                                   "regenerative cut; writes DIR/lobes.nc and DIR/lobes.png "
+                                   "(with --examples also DIR/examples.nc and "
+                                   "DIR/examples.png).")
+    groups = add_common(p, many=True, harmonic=False, initial=False)
+    g = p.add_argument_group("lobe grid")
+    g.add_argument("--rpm", metavar="START:STOP:STEP",
+                   help="spindle speeds in rev/min, START:STOP:STEP (inclusive) or comma list "
+                        "(default: 900:1600:50, published)")
+    g.add_argument("--depth-step-mm", type=float, default=0.01, metavar="MM",
+                   help="depth-of-cut step in mm (default: 0.01)")
+    g.add_argument("--max-depth-mm", type=float, default=3.0, metavar="MM",
+                   help="deepest cut tried in mm (default: 3)")
+    g.add_argument("--method", choices=("scan", "search"), default="scan",
+                   help="scan: every depth upwards (default, published); search: doubling "
+                        "and bisection (faster; assumes stability monotone below the bracket)")
+    g.add_argument("--successive", type=int, default=3, metavar="N",
+                   help="a speed's scan ends after N successive chattering depths (default: 3)")
+    g.add_argument("--criterion", choices=("zero", "bounded"), default="zero",
+                   help="chatter: the force reaches zero (default, published) or bounded "
+                        "(also a steady amplitude above --bounded-fraction of the feed)")
+    g = p.add_argument_group("regenerative cutting")
+    add_cutting(g)
+    groups["run"].add_argument("--workers", type=int, metavar="N",
+                               help="threads (default: every core)")
+    groups["output"].add_argument("--examples", action="store_true",
+                                  help="rerun a stable and an unstable grid point of the "
+                                       "first case with history: DIR/examples.nc, "
+                                       "DIR/examples.png")
+    p.set_defaults(func=_cmd_lobes)
+
+
+def _cmd_sweep(args) -> int:
+    cases, bars, gaps = many_cases(args)
+    forces, ratios = forces_and_ratios(args)
+
+    initial = initial_conditions(args, gaps if "ball" in bars else [])
+    progress = progress_printer(args, "sweep", "runs")
+    ds = sweep(cases, ratios, forces, duration=args.duration_s, dt=args.dt_s,
+               workers=args.workers, initial=initial, progress=progress,
+               integrator=args.integrator)
+
+
+    out = Path(args.out)
+    nc = write_netcdf_atomic(ds, out / "sweep.nc")
+    pngs = plot_sweep(ds, out / "sweep.png")
+    summary = {**sweep_summary(ds), "files": {"netcdf": str(nc), "png": [str(p) for p in pngs]}}
+    if args.json:
+        print_json(summary)
+    elif not args.quiet:
+        print(_sweep_text(ds))
+        print("wrote " + ", ".join([str(nc)] + [str(p) for p in pngs]))
+    return 0
+
+
+def short_pattern(name: str) -> str:
+    """'2 symmetric' -> '2s', '3 asymmetric (period 2)' -> '3a/2', for the table."""
+    name = str(name)
+    fixed = {"": "", "no impact": "0", "sticking": "st", "no impact with sticking": "0+st",
+             "non-uniform": "nu"}
+    if name in fixed:
+        return fixed[name]
+    parts = name.replace("(period ", "").replace(")", "").split()
+    code = parts[0] + ("s" if parts[1] == "symmetric" else "a")
+    return code + (f"/{parts[2]}" if len(parts) > 2 else "")
+
+
+def _sweep_text(ds) -> str:
+    heads = []
+    for label, bar, gap, fr in zip(ds["case"].values, ds["bar"].values, ds["gap"].values,
+                                   ds["friction"].values, strict=True):
+        heads.append(f"ball {gap * 1e3:g}/{fr}" if bar == "ball" else str(label))
+    width = max(14, *(len(h) + 2 for h in heads))
+    lines = []
+    for j, force in enumerate(ds["force"].values):
+        lines.append(f"F0 = {force:g} N: tip RMS (mm) [pattern]; ball columns: gap mm/friction")
+        lines.append("ratio ".rjust(8) + "".join(h.rjust(width) for h in heads))
+        for k, ratio in enumerate(ds["ratio"].values):
+            cells = []
+            for i in range(len(heads)):
+                pat = short_pattern(ds["pattern"].values[i, j, k])
+                cell = f"{ds['rms_tip_m'].values[i, j, k] * 1e3:.4f}"
+                cells.append((cell + (f" [{pat}]" if pat else "")).rjust(width))
+            lines.append(f"{ratio:7.3f} " + "".join(cells))
+        lines.append("")
+    lines.append(PATTERN_KEY)
+    return "\n".join(lines)
+
+
+def _cmd_lobes(args) -> int:
+    cases, _, _ = many_cases(args)
+    rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
+    for r in rpm:
+        check_rpm(r)
+    step = check_range("--depth-step-mm", args.depth_step_mm, 0, math.inf, lo_open=True,
+                       hi_open=True, unit="mm")
+    check_range("--max-depth-mm", args.max_depth_mm, step, 1000, unit="mm")
+    check_range("--successive", args.successive, 1, 100)
+    if args.workers is not None:
+        check_range("--workers", args.workers, 1, 4096)
+    cut = cut_options(args)
+    ds = lobes(cases, rpm, method=args.method, depth_step=step * 1e-3,
+               max_depth=args.max_depth_mm * 1e-3, successive=args.successive,
+               criterion=args.criterion, duration=args.duration_s, dt=args.dt_s,
+               workers=args.workers,
+               progress=progress_printer(args, "lobes", "(case, speed) columns"),
+               integrator=args.integrator, **cut)
+
+
+    out = Path(args.out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "lobes.nc"),
+             "png": plot_lobes(ds, out / "lobes.png")}
+    examples = []
+    if args.examples:
+        exds = _lobe_examples(ds, cases[0], args, cut)
+        files["examples_netcdf"] = write_netcdf_atomic(exds, out / "examples.nc")
+        files["examples_png"] = plot_lobe_examples(exds, out / "examples.png")
+        examples = [{"example": str(e), "case": exds.attrs["case"],
+                     "rpm": float(exds["rpm"].values[k]),
+                     "depth_m": float(exds["depth"].values[k]),
+                     "chatter": bool(exds["chatter"].values[k]),
+                     "bounded_chatter": bool(exds["bounded_chatter"].values[k]),
+                     "first_zero_time_s": float(exds["first_zero_time"].values[k])}
+                    for k, e in enumerate(exds["example"].values)]
+    summary = {**lobes_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    if args.examples:
+        summary["examples"] = examples
+    if args.json:
+        print_json(summary)
+    elif not args.quiet:
+        print(_lobes_text(ds))
+        for e in examples:
+            verdict = (f"chatter (force first zero at {e['first_zero_time_s']:.3g} s)"
+                       if e["chatter"] else "stable (force never zero)")
+            print(f"example {e['example']}: {e['case']} at {e['rpm']:g} rpm, depth "
+                  f"{e['depth_m'] * 1e3:g} mm: {verdict}")
+        print("wrote " + ", ".join(str(v) for v in files.values()))
+    return 0
+
+
+def _example_points(ds) -> list[tuple[str, float, float]]:
+    """(name, rpm, depth) of a stable and an unstable grid point of the first case:
+    the limiting and the first unstable depth at the speed of the minimum
+    chatter-free depth (the stable one at the speed of the largest limit if the
+    minimum is 0; only a stable one if nothing chattered)."""
+    rpm = ds["rpm"].values
+    limit = ds["limit_depth"].values[0]
+    first = ds["first_unstable_depth"].values[0]
+    if not np.isfinite(limit).any():  # no chatter up to the deepest cut tried
+        run = ds["verdict"].values[0] >= 0
+        j = len(rpm) // 2
+        return [("stable", float(rpm[j]), float(ds["depth"].values[run[j]].max()))]
+    j = int(np.nanargmin(limit))
+    points = [("unstable", float(rpm[j]), float(first[j]))]
+    if limit[j] <= 0:
+        j = int(np.nanargmax(limit))
+    if limit[j] > 0:
+        points.insert(0, ("stable", float(rpm[j]), float(limit[j])))
+    return points
+
+
+def _lobe_examples(ds, case, args, cut: dict):
+    """Rerun the example points with history (no stop at the first zero): one
+    Dataset with dims (example, time)."""
+
+
+    points = _example_points(ds)
+    n_steps = int(round(args.duration_s / args.dt_s))
+    parts = []
+    for _, rpm, depth in points:
+        run = simulate(case.system, Regenerative(depth=depth, rpm=rpm, **cut),
+                       duration=args.duration_s, dt=args.dt_s,
+                       record_every=max(1, n_steps // HISTORY_ROWS),
+                       integrator=args.integrator)
+        h = history_dataset(run)
+        h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
+        c = run.cutting
+        h = h.assign_coords(rpm=rpm, depth=depth, chatter=bool(c["chatter"]),
+                            bounded_chatter=bool(c["bounded_chatter"]),
+                            first_zero_time=math.nan if c["first_zero_time_s"] is None
+                            else float(c["first_zero_time_s"]),
+                            mean_force=float(run.forcing.mean_force),
+                            static_deflection=float(c["static_deflection_m"]))
+        parts.append(h)
+    exds = xr.concat(parts, dim=pd.Index([p[0] for p in points], name="example"),
+                     coords="all", join="outer", combine_attrs="drop")
+    exds["rpm"].attrs["units"] = "rev/min"
+    for name in ("depth", "static_deflection"):
+        exds[name].attrs["units"] = "m"
+    exds["first_zero_time"].attrs["units"] = "s"
+    exds["mean_force"].attrs.update(units="N", long_name="Kr b h_m")
+    exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
+                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap,
+                  "friction": case.friction, "preset": case.system.preset,
+                  "criterion": ds.attrs["criterion"],
+                  "boringbar_version": ds.attrs["boringbar_version"],
+                  "configs": "[" + ", ".join(p.attrs["config"] for p in parts) + "]",
+                  "summaries": "[" + ", ".join(p.attrs["summary"] for p in parts) + "]"}
+    return exds
+
+
+def _lobes_text(ds) -> str:
+    lines = []
+    analytic = ds["analytic_limit"].values if "analytic_limit" in ds else None
+    depths = ds["depth"].values
+    chosen = ds["verdict" if ds.attrs["criterion"] == "zero" else "verdict_bounded"].values
+
+    def mm(v: float) -> str:
+        return f"{v * 1e3:.3f}" if math.isfinite(v) else "-"
+
+    for i, label in enumerate(ds["case"].values):
+        limit = ds["limit_depth"].values[i]
+        first = ds["first_unstable_depth"].values[i]
+        mcf = float(ds["min_chatter_free_depth"].values[i])
+        at = (f" at {ds['rpm'].values[int(np.nanargmin(limit))]:g} rpm"
+              if np.isfinite(limit).any() else "")
+        lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}")
+        lines.append(f"{'rpm':>8} {'limit (mm)':>12} {'first unstable (mm)':>20} "
+                     f"{'analytic (mm)':>14}")
+        islands = []
+        for j, r in enumerate(ds["rpm"].values):
+            a = math.nan if analytic is None else float(analytic[i, j])
+            lines.append(f"{r:8g} {mm(limit[j]):>12} {mm(first[j]):>20} {mm(a):>14}")
+            above = (depths > first[j]) & (chosen[i, j] == 1)
+            if math.isfinite(first[j]) and above.any():
+                islands.append(f"{r:g}")
+        if islands:
+            lines.append(f"  stable islands above the first unstable depth at "
+                         f"{', '.join(islands)} rpm")
+        lines.append("")
+    lines.append(f"'-': no chatter up to the deepest cut tried (or no analytic limit); "
+                 f"method {ds.attrs['method']}, criterion {ds.attrs['criterion']}, "
+                 f"{ds.attrs['runs']} runs in {ds.attrs['wall_time_s']:.1f} s")
+    return "\n".join(lines)
