@@ -41,7 +41,7 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     """Time traces of one run, saved to ``path``.
 
     ``run_or_ds``: a :class:`~boringbar.simulate.Run` simulated with
-    ``record_every`` or its ``history_dataset()``.  Two rows sharing time:
+    ``record_every`` or its ``to_xarray()``.  Two rows sharing time:
     tip displacement W (mm); below it the ball's displacement y relative to
     the bar (mm) with the walls at +-delta/2 dashed (ball bar), the absorber
     stroke (mm) (TMD bar), or the force at the tip (N) (solid bar, locked ball).
@@ -52,7 +52,7 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     zooms on its last ``zoom_periods`` forcing periods, where the impact
     pattern can be seen.
     """
-    ds = run_or_ds.history_dataset() if hasattr(run_or_ds, "history_dataset") else run_or_ds
+    ds = run_or_ds.to_xarray() if hasattr(run_or_ds, "to_xarray") else run_or_ds
     summary = json.loads(ds.attrs.get("summary", "{}"))
     config = json.loads(ds.attrs.get("config", "{}"))
     if "cutting" in summary:

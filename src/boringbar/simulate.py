@@ -14,6 +14,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import xarray as xr
 
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
@@ -60,9 +61,11 @@ class State:
     t: float
 
 
-@dataclass(eq=False)
+@dataclass(frozen=True, eq=False)
 class Run:
-    """The result of :func:`simulate`: streamed metrics, events and (if asked) history."""
+    """The result of :func:`simulate` (frozen): streamed metrics, events and (if asked)
+    history; :meth:`summary` and :meth:`config` as JSON-able dicts, :meth:`to_xarray`
+    as a labelled Dataset."""
 
     system: System
     forcing: Harmonic | Regenerative
@@ -155,10 +158,9 @@ class Run:
             "start": f.start,
         }
 
-    def history_dataset(self):
-        """The decimated history as an xarray Dataset (needs ``record_every``)."""
-        import xarray as xr
-
+    def to_xarray(self):
+        """The decimated history as an xarray Dataset (needs ``record_every``), with the
+        configuration and the summary as JSON in its attributes."""
         if self.history is None:
             raise ValueError("no history was recorded: run simulate(..., record_every=N)")
         h = self.history
@@ -172,13 +174,39 @@ class Run:
                 "force": ("time", h[:, 5], {"units": "N"}),
             },
             coords={"time": ("time", h[:, 0], {"units": "s"})},
-            attrs={"config": json.dumps(self.config()),
-                   "summary": json.dumps(self.summary())},
+            attrs={"config": json.dumps(self.config(), default=_plain),
+                   "summary": json.dumps(self.summary(), default=_plain)},
         )
         if self.impacts.size:
             ds["impact_time"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
         return ds
+
+
+def _plain(value):
+    """A numpy scalar as the Python number it holds (for json.dumps)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
+
+
+class IntegrationError(RuntimeError):
+    """The exact integrator could not finish a run: ``status`` is the kernel's code
+    (:data:`EXACT_STATUS_MESSAGES`), the message says what happened and what to do."""
+
+    def __init__(self, status: int, events: int, t_reached: float):
+        self.status, self.events, self.t_reached = status, events, t_reached
+        super().__init__(f"exact integrator: {EXACT_STATUS_MESSAGES.get(status, 'unknown')} "
+                         f"(status {status}, after {events} events, at t = {t_reached:.6g} s)")
+
+
+#: What the exact integrator's status codes mean (kernels/layout.py, EXACT_STATUS).
+EXACT_STATUS_MESSAGES = {
+    1: "the event cap was reached (too many impacts or switches for one run; shorten "
+       "the run or continue it from its final state)",
+    2: "stalled on events of zero length (the motion could not be continued past a "
+       "chattering contact)",
+}
 
 
 def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarray:
@@ -404,8 +432,7 @@ def _run_kernel(su: _Setup) -> float:
         # a cut stopped at its first zero finishes that step of dt
         met[L.STEPS_DONE] = min(n_steps, int(round((t_reached - t0) / dt)))
         if met[L.EXACT_STATUS] != 0:
-            raise RuntimeError(f"exact integrator stopped at an impasse (status "
-                               f"{int(met[L.EXACT_STATUS])} after {int(met[L.N_EVENTS])} events)")
+            raise IntegrationError(int(met[L.EXACT_STATUS]), int(met[L.N_EVENTS]), t_reached)
     else:
         run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb,
                 met, su.buf)
@@ -491,7 +518,8 @@ def _result(su: _Setup, elapsed: float) -> Run:
     )
 
 
-def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: float = 1e-6,
+def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: float = 2.0,
+             dt: float = 1e-6,
              initial: Initial | State | None = None, record_every: int = 0,
              steady_fraction: float = 0.8, strobe: bool = False,
              integrator: str = "rk4") -> Run:

@@ -5,8 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import numpy as np
-
 from boringbar._validate import ParameterError, check_range
 from boringbar.cli.options import (
     CUT_ONLY,
@@ -66,7 +64,7 @@ def cmd_simulate(args) -> int:
 
     out = Path(args.out)
     files = {"netcdf": out / "run.nc", "png": out / "run.png", "summary": out / "summary.json"}
-    ds = history_dataset(run)
+    ds = run.to_xarray()
     write_netcdf_atomic(ds, files["netcdf"])
     plot_run(ds, files["png"])
     summary = {**run.summary(), "files": {k: str(v) for k, v in files.items()}}
@@ -106,18 +104,6 @@ def _simulate_forcing(args):
                                  "with a cut (--rpm, --depth-mm): give one or the other")
     return Regenerative(depth=args.depth_mm * 1e-3, rpm=args.rpm,
                         stop_at_zero=args.stop_at_zero, **cut_options(args))
-
-
-def history_dataset(run):
-    """``run.history_dataset()``, with the metrics as plain Python numbers first.
-
-    Workaround: the kernel's metrics are numpy floats, so ``Run.cutting``'s
-    ``bounded_chatter`` comes out a numpy bool, which the ``json.dumps`` inside
-    ``history_dataset`` refuses.  The values are unchanged.
-    """
-    run.metrics = {k: v.item() if isinstance(v, np.generic) else v
-                   for k, v in run.metrics.items()}
-    return run.history_dataset()
 
 
 def _cut_text(s: dict) -> str:

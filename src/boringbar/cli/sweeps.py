@@ -24,7 +24,7 @@ from boringbar.cli.options import (
     print_json,
     progress_printer,
 )
-from boringbar.cli.simulate import HISTORY_ROWS, history_dataset
+from boringbar.cli.simulate import HISTORY_ROWS
 from boringbar.io import write_netcdf_atomic
 from boringbar.model.forcing import Regenerative
 from boringbar.plot import plot_lobe_examples, plot_lobes, plot_sweep
@@ -219,7 +219,7 @@ def _lobe_examples(ds, case, args, cut: dict):
                        duration=args.duration_s, dt=args.dt_s,
                        record_every=max(1, n_steps // HISTORY_ROWS),
                        integrator=args.integrator)
-        h = history_dataset(run)
+        h = run.to_xarray()
         h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
         c = run.cutting
         h = h.assign_coords(rpm=rpm, depth=depth, chatter=bool(c["chatter"]),
