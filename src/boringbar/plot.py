@@ -3,7 +3,8 @@
 Only the command line and users import this module; the core never imports
 matplotlib.  Figures are built as ``matplotlib.figure.Figure`` objects and
 rendered by the Agg canvas, without pyplot, so no global backend or figure
-state is touched (safe in threads, in notebooks, on headless machines).
+state is touched (safe in threads, in notebooks, on headless machines).  Each
+``plot_*`` function returns its Figure; :func:`boringbar.io.save_figure_atomic` saves it.
 """
 
 from __future__ import annotations
@@ -11,12 +12,9 @@ from __future__ import annotations
 import json
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
-
-from boringbar.io import save_figure_atomic
 
 #: Marker and colour per impact-pattern class (patterns.PATTERN_LABELS).
 PATTERN_STYLE = {
@@ -37,8 +35,8 @@ def pattern_class(name: str) -> str:
 
 # --- one run ---------------------------------------------------------------------
 
-def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
-    """Time traces of one run, saved to ``path``.
+def plot_run(run_or_ds, zoom_periods: float = 5) -> Figure:
+    """Time traces of one run, as a Figure (save it with :func:`boringbar.io.save_figure_atomic`).
 
     ``run_or_ds``: a :class:`~boringbar.simulate.Run` simulated with
     ``record_every`` or its ``to_xarray()``.  Two rows sharing time:
@@ -56,7 +54,7 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     summary = json.loads(ds.attrs.get("summary", "{}"))
     config = json.loads(ds.attrs.get("config", "{}"))
     if "cutting" in summary:
-        return save_figure_atomic(_cut_figure(ds, summary, config), path)
+        return _cut_figure(ds, summary, config)
     damper = (config.get("system") or {}).get("damper") or {}
     kind = summary.get("bar", "?")
     t = ds["time"].values
@@ -114,7 +112,7 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
         fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
                    fontsize="small", frameon=False)
     fig.suptitle(_run_title(summary, damper))
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _run_title(summary: dict, damper: dict) -> str:
@@ -143,14 +141,9 @@ def _run_title(summary: dict, damper: dict) -> str:
 
 # --- a sweep ---------------------------------------------------------------------
 
-def plot_sweep(ds, path, force=None) -> list[Path]:
-    """Tip RMS against Omega/omega_n in the layout of the published figures.
-
-    One figure per force.  With ``force`` given, only that force is drawn,
-    to ``path``.  With ``force=None`` and one force in ``ds`` the figure goes
-    to ``path``; with several forces, one file per force, named ``path``
-    with ``_F<force>N`` before the suffix (``sweep_F10N.png``,
-    ``sweep_F20N.png``).  Returns the paths written.
+def plot_sweep(ds, force: float | None = None) -> Figure:
+    """Tip RMS against Omega/omega_n at one ``force`` (N; may be omitted when
+    ``ds`` holds one force), in the layout of the published figures.
 
     Each figure has one panel per (gap x friction) of the ball cases, rows
     by gap and columns by friction (2 x 2 for the published study), each
@@ -160,18 +153,13 @@ def plot_sweep(ds, path, force=None) -> list[Path]:
     beside the n-symmetric and n-asymmetric ones.
     Without ball cases there is one panel.
     """
-    path = Path(path)
     forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
-    if force is not None:
-        targets = [(float(force), path)]
-    elif len(forces) == 1:
-        targets = [(forces[0], path)]
-    else:
-        targets = [(f, path.with_name(f"{path.stem}_F{f:g}N{path.suffix}")) for f in forces]
-    written = []
-    for f, p in targets:
-        written.append(save_figure_atomic(_sweep_figure(ds.sel(force=f), f, ds.attrs), p))
-    return written
+    if force is None:
+        if len(forces) != 1:
+            raise ValueError(f"force = None: the sweep holds {len(forces)} forces "
+                             f"({', '.join(f'{f:g}' for f in forces)} N); give one")
+        force = forces[0]
+    return _sweep_figure(ds.sel(force=float(force)), float(force), ds.attrs)
 
 
 def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
@@ -348,8 +336,8 @@ def case_title(label: str, bar: str, gap: float, friction: str) -> str:
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(bar, str(label))
 
 
-def plot_lobes(ds, path) -> Path:
-    """Stability lobes in the layout of the published panels, saved to ``path``.
+def plot_lobes(ds) -> Figure:
+    """Stability lobes in the layout of the published panels, as a Figure.
 
     One panel per case: depth of cut (mm) against spindle speed (rpm); every
     grid point that was run marked stable (open green circle), chatter under
@@ -388,7 +376,7 @@ def plot_lobes(ds, path) -> Path:
                  f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev; "
                  f"{a.get('duration_s', math.nan):g} s runs, dt = {a.get('dt_s', math.nan):g} s",
                  fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
@@ -436,10 +424,10 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     ax.set_title(f"{title}\n{sub}", fontsize="medium")
 
 
-def plot_lobe_examples(ds, path) -> Path:
+def plot_lobe_examples(ds) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for the
     example grid points of a lobe study (dims example x time, as written by
-    ``boringbar lobes --examples``), one column per example; saved to ``path``."""
+    ``boringbar lobes --examples``), one column per example; as a Figure."""
     t = ds["time"].values
     n = ds.sizes["example"]
     fig = Figure(figsize=(6.0 * n + 0.4, 6.5), layout="constrained")
@@ -476,7 +464,7 @@ def plot_lobe_examples(ds, path) -> Path:
                       a.get("friction", "?"))
     fig.suptitle(f"Lobe examples: {case} ({a.get('preset', '?')} preset), rerun with "
                  "history, not stopped at the first zero of the force", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 # --- bifurcation diagram ---------------------------------------------------------
@@ -504,9 +492,9 @@ def _verdict_code(verdict: str) -> str:
     return {"transient": "t", "quasi-periodic": "q", "chaotic-like": "c"}.get(verdict, "?")
 
 
-def plot_bifurcation(ds, path) -> Path:
+def plot_bifurcation(ds) -> Figure:
     """Bifurcation diagram of :func:`~boringbar.analysis.bifurcation.bifurcation`,
-    saved to ``path``.
+    as a Figure.
 
     Top: the stroboscopic Poincare samples of the tip displacement W (mm)
     against the parameter, forward (blue) and backward (red, smaller, offset a
@@ -565,7 +553,7 @@ def plot_bifurcation(ds, path) -> Path:
     fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
                fontsize="small", frameon=False)
     fig.suptitle(_bifurcation_title(ds, param), fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _system_words(system: dict) -> str:
@@ -626,9 +614,9 @@ def _attractor_label(ds, a: int) -> str:
             f"{100 * float(ds['fraction'].values[a]):.1f} %")
 
 
-def plot_basins(ds, path) -> Path:
-    """Basins of attraction of :func:`~boringbar.analysis.basins.basins`, saved to
-    ``path``.
+def plot_basins(ds) -> Figure:
+    """Basins of attraction of :func:`~boringbar.analysis.basins.basins`, as a
+    Figure.
 
     Left: initial tip displacement (mm) x initial tip velocity (m/s), each cell
     coloured by its attractor; the legend gives each attractor's impact
@@ -683,7 +671,7 @@ def plot_basins(ds, path) -> Path:
                  f"{forcing.get('ratio', math.nan):g}; {ds.attrs.get('duration_s', math.nan):g}"
                  f" s runs, first {100 * ds.attrs.get('drop', math.nan):g} % dropped, "
                  f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _poincare_panel(ax, ds, colours, basin_ax) -> None:
@@ -722,9 +710,9 @@ def _poincare_panel(ax, ds, colours, basin_ax) -> None:
 
 # --- sensitivity -----------------------------------------------------------------
 
-def plot_sensitivity(ds, path) -> Path:
+def plot_sensitivity(ds) -> Figure:
     """A sensitivity study (:func:`~boringbar.analysis.sensitivity.sensitivity`),
-    saved to ``path``: one panel per force, tip RMS (mm) against Omega/omega_n,
+    as a Figure: one panel per force, tip RMS (mm) against Omega/omega_n,
     one line per value of the varied parameter; with cuts (``cut_*`` variables,
     as ``boringbar sensitivity`` writes them) one more panel, the steady tip
     amplitude (mm) against depth of cut (mm), chatter (the force reaches zero)
@@ -791,7 +779,7 @@ def plot_sensitivity(ds, path) -> Path:
                  f"({ds.attrs.get('preset', '?')} preset)\n"
                  f"{ds.attrs.get('duration_s', math.nan):g} s runs, "
                  f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _zero_based(ax, values) -> None:
@@ -816,9 +804,9 @@ def _value_label(kind: str, value: str) -> str:
 
 # --- the corrections ladder --------------------------------------------------------
 
-def plot_ladder(ds, path) -> Path:
+def plot_ladder(ds) -> Figure:
     """The readings ladder (:func:`~boringbar.report.corrections.readings_ladder`),
-    saved to ``path``: tip RMS (mm) of each rung, from the paper preset to the
+    as a Figure: tip RMS (mm) of each rung, from the paper preset to the
     physical one, one bar per gap, each labelled with its impact pattern."""
     rungs = [str(r) for r in ds["rung"].values]
     gaps = ds["gap"].values
@@ -846,4 +834,4 @@ def plot_ladder(ds, path) -> Path:
                  f"{ds.attrs.get('ratio', math.nan):g}: the published readings dropped one "
                  f"at a time\n(each rung keeps the changes to its left; "
                  f"{ds.attrs.get('duration_s', math.nan):g} s runs)", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig

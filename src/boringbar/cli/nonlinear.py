@@ -35,7 +35,7 @@ from boringbar.cli.options import (
     system_overrides,
 )
 from boringbar.cli.sweeps import short_pattern
-from boringbar.io import jsonable, write_netcdf_atomic
+from boringbar.io import jsonable, save_figure_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import BALLS, make_system
 from boringbar.plot import plot_basins, plot_bifurcation, plot_sensitivity
@@ -234,7 +234,7 @@ def _cmd_bifurcation(args) -> int:
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "bifurcation.nc"),
-             "png": plot_bifurcation(ds, out / "bifurcation.png")}
+             "png": save_figure_atomic(plot_bifurcation(ds), out / "bifurcation.png")}
     summary = {**_bifurcation_summary(ds, ranges),
                "files": {k: str(v) for k, v in files.items()}}
     if args.json:
@@ -385,7 +385,7 @@ def _cmd_basins(args) -> int:
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "basins.nc"),
-             "png": plot_basins(ds, out / "basins.png")}
+             "png": save_figure_atomic(plot_basins(ds), out / "basins.png")}
     summary = {**basin_summary(ds), "poincare_from": poincare,
                "files": {k: str(v) for k, v in files.items()}}
     if args.json:
@@ -501,7 +501,7 @@ def _cmd_sensitivity(args) -> int:
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "sensitivity.nc"),
-             "png": plot_sensitivity(ds, out / "sensitivity.png")}
+             "png": save_figure_atomic(plot_sensitivity(ds), out / "sensitivity.png")}
     summary = {**_sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.json:
         print_json(summary)

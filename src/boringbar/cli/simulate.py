@@ -18,7 +18,7 @@ from boringbar.cli.options import (
     print_json,
     system_overrides,
 )
-from boringbar.io import write_json_atomic, write_netcdf_atomic
+from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import make_system
 from boringbar.plot import plot_run
@@ -66,7 +66,7 @@ def cmd_simulate(args) -> int:
     files = {"netcdf": out / "run.nc", "png": out / "run.png", "summary": out / "summary.json"}
     ds = run.to_xarray()
     write_netcdf_atomic(ds, files["netcdf"])
-    plot_run(ds, files["png"])
+    save_figure_atomic(plot_run(ds), files["png"])
     summary = {**run.summary(), "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic({**summary, "config": run.config()}, files["summary"])
     if args.json:

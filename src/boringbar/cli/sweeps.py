@@ -25,7 +25,7 @@ from boringbar.cli.options import (
     progress_printer,
 )
 from boringbar.cli.simulate import HISTORY_ROWS
-from boringbar.io import write_netcdf_atomic
+from boringbar.io import save_figure_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Regenerative
 from boringbar.plot import plot_lobe_examples, plot_lobes, plot_sweep
 from boringbar.simulate import simulate
@@ -90,7 +90,7 @@ def _cmd_sweep(args) -> int:
 
     out = Path(args.out)
     nc = write_netcdf_atomic(ds, out / "sweep.nc")
-    pngs = plot_sweep(ds, out / "sweep.png")
+    pngs = [save_figure_atomic(plot_sweep(ds, f), path) for f, path in sweep_pngs(ds, out)]
     summary = {**sweep_summary(ds), "files": {"netcdf": str(nc), "png": [str(p) for p in pngs]}}
     if args.json:
         print_json(summary)
@@ -98,6 +98,15 @@ def _cmd_sweep(args) -> int:
         print(_sweep_text(ds))
         print("wrote " + ", ".join([str(nc)] + [str(p) for p in pngs]))
     return 0
+
+
+def sweep_pngs(ds, out: Path) -> list[tuple[float, Path]]:
+    """(force, file) of each sweep figure: ``out/sweep.png`` for one force, else one
+    ``out/sweep_F<force>N.png`` per force."""
+    forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
+    if len(forces) == 1:
+        return [(forces[0], out / "sweep.png")]
+    return [(f, out / f"sweep_F{f:g}N.png") for f in forces]
 
 
 def short_pattern(name: str) -> str:
@@ -156,12 +165,13 @@ def _cmd_lobes(args) -> int:
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "lobes.nc"),
-             "png": plot_lobes(ds, out / "lobes.png")}
+             "png": save_figure_atomic(plot_lobes(ds), out / "lobes.png")}
     examples = []
     if args.examples:
         exds = _lobe_examples(ds, cases[0], args, cut)
         files["examples_netcdf"] = write_netcdf_atomic(exds, out / "examples.nc")
-        files["examples_png"] = plot_lobe_examples(exds, out / "examples.png")
+        files["examples_png"] = save_figure_atomic(plot_lobe_examples(exds),
+                                                    out / "examples.png")
         examples = [{"example": str(e), "case": exds.attrs["case"],
                      "rpm": float(exds["rpm"].values[k]),
                      "depth_m": float(exds["depth"].values[k]),

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from boringbar import __version__
-from boringbar.io import jsonable, write_json_atomic, write_netcdf_atomic
+from boringbar.io import jsonable, save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.model.system import make_system
 from boringbar.plot import plot_ladder
 from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
@@ -178,7 +178,7 @@ def _corrections(where: Path, presets, duration: float) -> dict:
     law, and the absorber designs of each preset; returns their summary."""
     ladder = readings_ladder(duration=duration)
     nc = write_netcdf_atomic(ladder, where / "ladder.nc")
-    png = plot_ladder(ladder, where / "ladder.png")
+    png = save_figure_atomic(plot_ladder(ladder), where / "ladder.png")
     impact = impact_law_check(make_system("ball", "paper", gap=0.1e-3, friction=False))
     return {"ladder_netcdf": str(nc), "ladder_png": str(png), "impact_law": impact,
             "absorbers": {p: absorber_designs(p) for p in presets}}
