@@ -13,6 +13,7 @@ from boringbar.analysis.sweep import parse_range, published_cases
 from boringbar.io import jsonable
 from boringbar.model.forcing import INTERPOLATIONS, STARTS
 from boringbar.model.system import BALLS, BAR_KINDS, PRESETS
+from boringbar.progress import ProgressCallback
 from boringbar.simulate import INTEGRATORS, Initial
 
 PROG = "boringbar"
@@ -264,15 +265,10 @@ def forces_and_ratios(args):
 
 
 def progress_printer(args, command: str, what: str):
-    """A progress(done, total) printer on a terminal's stderr, else None."""
+    """A progress(done, total) bar on a terminal's stderr, else None."""
     if args.quiet or not sys.stderr.isatty():
         return None
-
-    def progress(done, total):
-        end = "\n" if done == total else ""
-        print(f"\r{PROG} {command}: {done}/{total} {what}", end=end, file=sys.stderr,
-              flush=True)
-    return progress
+    return ProgressCallback(f"{PROG} {command}", what)
 
 
 def many_cases(args) -> tuple[list, list[str], list[float]]:

@@ -35,7 +35,6 @@ import multiprocessing as mp
 import os
 import pickle
 import shutil
-import sys
 import tempfile
 import time
 import uuid
@@ -50,6 +49,7 @@ import xarray as xr
 from boringbar import __version__
 from boringbar._validate import ParameterError
 from boringbar.io import atomic_path, fsync_dir, write_json_atomic, write_netcdf_atomic
+from boringbar.progress import progress_bar
 from boringbar.studies.registry import ANALYSES
 from boringbar.studies.schema import Study, StudyError
 
@@ -237,50 +237,6 @@ def _write(ds, out: Path, fmt: str) -> None:
     fsync_dir(out.parent)
 
 
-# --- progress ------------------------------------------------------------------------
-
-class Progress:
-    """A one-line progress bar on stderr: done/total, points per second, time left.
-    Drawn only when ``enabled`` (the CLI: stderr is a terminal and not --quiet)."""
-
-    def __init__(self, total: int, done: int = 0, enabled: bool = True, stream=None,
-                 label: str = "points"):
-        self.total, self.start_done, self.done = total, done, done
-        self.enabled, self.stream, self.label = enabled, stream or sys.stderr, label
-        self.tic = time.perf_counter()
-        self.last = 0.0
-
-    def __call__(self, n: int = 1) -> None:
-        self.done += n
-        now = time.perf_counter()
-        if self.enabled and (now - self.last > 0.2 or self.done == self.total):
-            self.last = now
-            self._draw(now)
-
-    def _draw(self, now: float) -> None:
-        ran = self.done - self.start_done
-        rate = ran / (now - self.tic) if now > self.tic else 0.0
-        left = (self.total - self.done) / rate if rate > 0 else math.nan
-        width = 30
-        fill = int(width * self.done / max(self.total, 1))
-        eta = "--:--" if math.isnan(left) else _clock(left)
-        self.stream.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {self.done}/{self.total} "
-                          f"{self.label}  {rate:.2f}/s  left {eta} ")
-        self.stream.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _clock(seconds: float) -> str:
-    s = int(round(seconds))
-    if s >= 3600:
-        return f"{s // 3600}:{s % 3600 // 60:02d}:{s % 60:02d}"
-    return f"{s // 60}:{s % 60:02d}"
-
-
 # --- executors -----------------------------------------------------------------------
 
 def _run_serial(study, key, chunks, on_done, report):
@@ -436,14 +392,14 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
         analysis.warm(plan.context)
         _PLANS.clear()
         _PLANS[key] = (analysis, plan)
-    bar = Progress(n, len(done), enabled=not quiet)
+    bar = progress_bar(n, done=len(done), enabled=not quiet)
 
     def on_done(cid: int, results: list) -> None:
         idx = chunks[cid]
         part.save(idx, results)
         done.update(zip(idx, results, strict=True))
         report.computed += len(idx)
-        bar(len(idx))
+        bar.update(len(idx))
         if progress is not None:
             progress(len(done), n)
 
