@@ -28,18 +28,15 @@ executor never does.  Nothing happens unless both are set.
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import logging
 import math
-import multiprocessing as mp
 import os
 import pickle
 import shutil
 import tempfile
 import time
-import uuid
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -48,6 +45,7 @@ import xarray as xr
 
 from boringbar import __version__
 from boringbar._validate import ParameterError
+from boringbar.execute import Execution, stream
 from boringbar.io import atomic_path, fsync_dir, write_json_atomic, write_netcdf_atomic
 from boringbar.progress import progress_bar
 from boringbar.studies.registry import ANALYSES
@@ -55,10 +53,9 @@ from boringbar.studies.schema import Study, StudyError
 
 log = logging.getLogger("boringbar.studies.runner")
 
+#: the executors a study runs on (boringbar.execute; threads would not survive a kill)
 EXECUTORS = ("serial", "processes", "dask")
 MANIFEST = "manifest.json"
-#: How often a broken process pool is recreated without any chunk finishing.
-MAX_POOL_RESTARTS = 3
 
 
 @dataclass
@@ -127,8 +124,10 @@ def _maybe_die(chunk: int) -> None:
     os._exit(17)  # a real process death: no cleanup, no exception
 
 
-def compute_chunk(study: Study, key: str, chunk: int, indices: list, remote: bool = True):
-    """The results of the points ``indices`` of ``study`` (what every executor runs)."""
+def compute_chunk(study: Study, key: str, remote: bool, task: tuple[int, list]):
+    """The results of the points ``indices`` of chunk ``task = (chunk, indices)`` of
+    ``study`` (what every executor runs; ``remote``: in a worker, not this process)."""
+    chunk, indices = task
     if remote:
         _maybe_die(chunk)
     analysis, plan = _planned(study, key)
@@ -183,6 +182,11 @@ class _Partial:
                     f"(configuration hash {str(m.get('config_hash'))[:12]}, this study "
                     f"{key[:12]}, from {m.get('source')}); run that study to finish it, or "
                     "remove the directory to start this one")
+            if m.get("points", n_points) != n_points:
+                raise StudyError(
+                    f"{self.dir} holds chunks of this study cut into {m.get('points')} points "
+                    f"by another version of boringbar (this one makes {n_points}); remove the "
+                    "directory to start again")
         else:
             self.dir.mkdir(parents=True, exist_ok=True)
 
@@ -237,87 +241,6 @@ def _write(ds, out: Path, fmt: str) -> None:
     fsync_dir(out.parent)
 
 
-# --- executors -----------------------------------------------------------------------
-
-def _run_serial(study, key, chunks, on_done, report):
-    for cid, idx in chunks.items():
-        on_done(*compute_chunk(study, key, cid, idx, remote=False))
-
-
-def _mp_context(mp):
-    """fork where there is one: no re-import of the caller's main module (a script
-    without an ``if __name__ == "__main__"`` guard works) and a fast start; the
-    runner holds no threads or locks while it forks."""
-    return mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
-
-
-def _run_processes(study, key, chunks, on_done, report, workers):
-    pending = dict(chunks)
-    restarts = 0
-    while pending:
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)),
-                                   mp_context=_mp_context(mp))
-        progressed = False
-        futs: dict = {}
-        try:
-            futs = {pool.submit(compute_chunk, study, key, cid, idx): cid
-                    for cid, idx in pending.items()}
-            for fut in as_completed(futs):
-                cid, results = fut.result()
-                on_done(cid, results)
-                pending.pop(cid)
-                progressed = True
-        except BrokenProcessPool:
-            for fut, cid in futs.items():  # keep what finished before the break
-                if (cid in pending and fut.done() and not fut.cancelled()
-                        and fut.exception() is None):
-                    on_done(*fut.result())
-                    pending.pop(cid)
-                    progressed = True
-            restarts = 0 if progressed else restarts + 1
-            msg = (f"a worker process died; {len(pending)} unfinished chunks are "
-                   "resubmitted to a new pool")
-            log.warning(msg)
-            report.restarts.append(msg)
-            if restarts > MAX_POOL_RESTARTS:
-                raise ChildProcessError(f"worker processes died {restarts} times in a row without "
-                                   "finishing a chunk; giving up (the finished chunks are "
-                                   "kept: run the same command again to resume)") from None
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _run_dask(study, key, chunks, on_done, report, scheduler, dask_local):
-    try:
-        from distributed import Client, LocalCluster, as_completed
-    except ImportError:
-        raise ParameterError("executor = 'dask' needs dask and distributed: "
-                             "pip install 'boringbar[dask]'") from None
-    with contextlib.ExitStack() as stack:
-        if scheduler is None:
-            cluster = stack.enter_context(LocalCluster(
-                n_workers=int(dask_local), threads_per_worker=1, processes=True,
-                dashboard_address=None, silence_logs=logging.ERROR))
-            client = stack.enter_context(Client(cluster))
-        else:
-            client = stack.enter_context(Client(scheduler))
-        report.workers = len(client.scheduler_info().get("workers", {})) or report.workers
-        run_id = uuid.uuid4().hex[:8]  # task keys unique to this run on a shared cluster
-        futs = [client.submit(compute_chunk, study, key, cid, idx, pure=False, retries=2,
-                              key=f"boringbar-chunk-{key[:12]}-{run_id}-{cid}")
-                for cid, idx in chunks.items()]
-        for fut in as_completed(futs):
-            try:
-                cid, results = fut.result()
-            except Exception as exc:
-                if type(exc).__name__ != "KilledWorker":
-                    raise
-                raise ChildProcessError(f"Dask gave up on a chunk whose workers kept dying "
-                                        f"({exc}); the finished chunks are kept: run the same "
-                                        "command again to resume") from None
-            on_done(cid, results)
-
-
 # --- entry point ---------------------------------------------------------------------
 
 def run_study(study: Study, out=None, *, executor: str = "processes", workers: int | None = None,
@@ -353,10 +276,11 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
         raise ParameterError(f"executor = {executor!r} is not one of {', '.join(EXECUTORS)}")
     if executor == "dask" and scheduler is None and dask_local is None:
         dask_local = workers or os.cpu_count() or 1
-    for name, v in (("workers", workers), ("dask_local", dask_local), ("chunk_size", chunk_size)):
-        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < 1):
-            raise ParameterError(f"{name} = {v!r} must be an integer >= 1")
-    workers = 1 if executor == "serial" else int(dask_local or workers or os.cpu_count() or 1)
+    if chunk_size is not None and (isinstance(chunk_size, bool) or not isinstance(chunk_size, int)
+                                   or chunk_size < 1):
+        raise ParameterError(f"chunk_size = {chunk_size!r} must be an integer >= 1")
+    execution = Execution(executor, workers, scheduler, dask_local)
+    workers = execution.n_workers
 
     out = study.output_path(out)
     fmt = _format(study, out)
@@ -403,14 +327,18 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
         if progress is not None:
             progress(len(done), n)
 
+    def on_restart(msg: str) -> None:
+        log.warning(msg)
+        report.restarts.append(msg)
+
+    fn = functools.partial(compute_chunk, study, key, execution.executor != "serial")
     try:
-        if chunks:
-            if executor == "serial":
-                _run_serial(study, key, chunks, on_done, report)
-            elif executor == "processes":
-                _run_processes(study, key, chunks, on_done, report, workers)
-            else:
-                _run_dask(study, key, chunks, on_done, report, scheduler, dask_local)
+        stream(fn, {cid: (cid, idx) for cid, idx in chunks.items()},
+               lambda cid, res: on_done(*res), execution=execution, on_restart=on_restart,
+               task_name=f"boringbar-chunk-{key[:12]}")
+    except ChildProcessError as exc:
+        raise ChildProcessError(f"{exc} (the finished chunks are kept: run the same command "
+                                "again to resume)") from None
     finally:
         bar.close()
     wall = time.perf_counter() - tic
