@@ -30,7 +30,7 @@ from boringbar.analysis import sweep as sweep_mod
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.kernels.rk4_batch import run_rk4_batch
-from boringbar.simulate import initial_state, pack
+from boringbar.simulate import Integration, initial_state, pack
 
 FORCE, RATIO, DT = 10.0, 1.01, 1e-6
 
@@ -101,9 +101,10 @@ def sweep_figures() -> None:
     for preset in ("paper", "physical"):
         cases = sweep_mod.published_cases(preset=preset)
         for b in (1, sweep_mod.BATCH):  # warm every kernel used
-            sweep_mod.sweep(cases, ratios, forces=(FORCE,), duration=1e-3, batch=b)
-        one, t1 = timed(sweep_mod.sweep, cases, ratios, forces=(FORCE,), batch=1)
-        many, tb = timed(sweep_mod.sweep, cases, ratios, forces=(FORCE,))
+            sweep_mod.sweep(cases, sweep_mod.SweepOptions(ratios, (FORCE,), batch=b),
+                            integration=Integration(duration_s=1e-3))
+        one, t1 = timed(sweep_mod.sweep, cases, sweep_mod.SweepOptions(ratios, (FORCE,), batch=1))
+        many, tb = timed(sweep_mod.sweep, cases, sweep_mod.SweepOptions(ratios, (FORCE,)))
         print(f"published sweep ({preset}, {len(ratios)} ratios x {len(cases)} cases, 2 s each, "
               f"{many.attrs['workers']} workers): one run at a time {t1:.2f} s, "
               f"batches of {many.attrs['batch']} {tb:.2f} s ({t1 / tb:.2f}x); "

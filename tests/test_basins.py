@@ -17,8 +17,9 @@ import pytest
 from boringbar import Harmonic, make_system
 from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinTolerance, basin_summary, basins, signature
-from boringbar.analysis.sensitivity import Cuts, sensitivity
+from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity
 from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.simulate import Integration
 
 SMALL = {"displacement": (-1.5e-3, 1.5e-3, 4), "velocity": (-1.5, 1.5, 4), "duration": 0.3}
 
@@ -110,7 +111,8 @@ def test_bad_grid_and_tolerances_are_refused():
                                           ("friction_number", (0.2, 0.8)),
                                           ("initial", ((0.5e-3, 0.5), (1e-3, 1.0)))])
 def test_sensitivity_gives_one_result_per_value(kind, values):
-    ds = sensitivity(kind, values, preset="paper", ratios=(1.0, 1.01), duration=0.05)
+    ds = sensitivity(SensitivityOptions(kind, values, ratios=(1.0, 1.01)), preset="paper",
+                     integration=Integration(duration_s=0.05))
     assert ds["rms_tip_m"].dims[0] == kind
     assert ds.sizes[kind] == len(values)
     assert ds["rms_tip_m"].shape == (len(values), 1, 2)
@@ -119,12 +121,12 @@ def test_sensitivity_gives_one_result_per_value(kind, values):
 
 def test_sensitivity_of_cuts():
     cuts = Cuts(rpm=1200.0, depths=(0.05e-3, 0.10e-3), duration=0.05)
-    ds = sensitivity("restitution", (0.6, 0.8), preset="paper", cutting=cuts)
+    ds = sensitivity(SensitivityOptions("restitution", (0.6, 0.8), cuts=cuts), preset="paper")
     assert ds["chatter"].dims == ("restitution", "depth")
     assert ds["chatter"].shape == (2, 2) and ds["chatter"].dtype == bool
     assert np.all(ds["amplitude_m"] >= 0)
     with pytest.raises(ParameterError, match="kind"):
-        sensitivity("gap", (1e-4,))
+        SensitivityOptions("gap", (1e-4,))
 
 
 @pytest.mark.slow
@@ -139,7 +141,8 @@ def test_published_basin_30_by_30():
 
 def test_sensitivity_refuses_fixing_the_varied_parameter():
     from boringbar._validate import ParameterError
-    from boringbar.analysis.sensitivity import sensitivity
+    from boringbar.analysis.sensitivity import SensitivityOptions, sensitivity
 
     with pytest.raises(ParameterError, match="restitution"):
-        sensitivity("restitution", [0.6, 0.7], restitution=0.8, duration=0.01)
+        sensitivity(SensitivityOptions("restitution", [0.6, 0.7]), overrides={"restitution": 0.8},
+                    integration=Integration(duration_s=0.01))

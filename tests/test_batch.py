@@ -16,10 +16,12 @@ import pytest
 
 from boringbar import Harmonic, Initial, make_system, simulate
 from boringbar._validate import ParameterError
+from boringbar.analysis.sweep import SweepOptions
+from boringbar.execute import Execution
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4_batch import BMAX, run_rk4_batch
 from boringbar.model.forcing import Regenerative
-from boringbar.simulate import simulate_batch
+from boringbar.simulate import Integration, simulate_batch
 
 DURATION = 0.06  # 60,000 steps: several hundred impacts, stick, 25+ strobe periods
 
@@ -147,8 +149,11 @@ def test_basins_and_sweep_are_the_same_batched_or_not():
 
     cases = published_cases(preset="paper")  # solid, tmd and four ball dampers
     ratios = [0.98, 1.0, 1.02]
-    one = sweep(cases, ratios, forces=(10.0, 20.0), duration=0.02, batch=1, workers=2)
-    many = sweep(cases, ratios, forces=(10.0, 20.0), duration=0.02, batch=16, workers=2)
+    short, two = Integration(duration_s=0.02), Execution(workers=2)
+    one = sweep(cases, SweepOptions(ratios, (10.0, 20.0), batch=1), integration=short,
+                execution=two)
+    many = sweep(cases, SweepOptions(ratios, (10.0, 20.0), batch=16), integration=short,
+                 execution=two)
+    assert (one.attrs["batch"], many.attrs["batch"]) == (1, 16)
     for k in one.data_vars:
-        if k != "elapsed_s":
-            np.testing.assert_array_equal(one[k].values, many[k].values, err_msg=k)
+        np.testing.assert_array_equal(one[k].values, many[k].values, err_msg=k)

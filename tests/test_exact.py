@@ -279,10 +279,13 @@ def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
 
 
 def test_sweep_records_its_integrator():
-    from boringbar.analysis.sweep import published_cases, sweep
+    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+    from boringbar.execute import Execution
+    from boringbar.simulate import Integration
 
     cases = published_cases(("ball",), gaps=(0.1e-3,), frictions=(False,))
-    ds = sweep(cases, [1.0], [20.0], duration=0.05, workers=1, integrator="exact")
+    ds = sweep(cases, SweepOptions([1.0], [20.0]), execution=Execution(workers=1),
+               integration=Integration(duration_s=0.05, integrator="exact"))
     assert ds.attrs["integrator"] == "exact"
     assert float(ds["energy_balance_relative"].max()) < 1e-9
 
@@ -292,13 +295,15 @@ def test_sweep_records_its_integrator():
 def test_published_sweep_runs_exactly_and_balances_energy(preset):
     """Every published case, both forces, 11 ratios: no stall, balance to 1e-9, and the
     linear bars equal to RK4's sampled RMS to its O(dt^2) (achieved: 3e-7)."""
-    from boringbar.analysis.sweep import published_cases, sweep
+    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+    from boringbar.simulate import Integration
 
     cases = published_cases(preset=preset)
     ratios = np.round(np.arange(0.95, 1.05 + 1e-9, 0.01), 2)
-    ex = sweep(cases, ratios, (10.0, 20.0), integrator="exact")
+    ex = sweep(cases, SweepOptions(ratios, (10.0, 20.0)),
+               integration=Integration(integrator="exact"))
     assert np.nanmax(np.abs(ex["energy_balance_relative"].values)) < 1e-9  # 6e-12
-    rk = sweep(cases[:2], ratios, (10.0, 20.0))  # solid and TMD
+    rk = sweep(cases[:2], SweepOptions(ratios, (10.0, 20.0)))  # solid and TMD
     rel = np.abs(ex["rms_tip_m"].values[:2] / rk["rms_tip_m"].values - 1)
     assert np.max(rel) < 1e-6
 

@@ -17,6 +17,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from boringbar.execute import Execution
+from boringbar.simulate import Integration
 from boringbar.studies.load import load_study, study_from_dict
 from boringbar.studies.registry import ANALYSES
 from boringbar.studies.runner import RunReport, run_study
@@ -207,13 +209,14 @@ def _in_process(name: str):
     from boringbar.model.system import make_system
 
     if name == "sweep":
-        from boringbar.analysis.sweep import published_cases, sweep
+        from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
 
         cases = published_cases(bars=("solid", "ball"), gaps=(0.5e-3,))
         return ({"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02},
                  "grid": {"kind": ["solid", "ball"], "friction": ["off", "on"],
                           "ratio": [0.99, 1.01]}},
-                sweep(cases, [0.99, 1.01], duration=0.02, workers=1))
+                sweep(cases, SweepOptions([0.99, 1.01]), integration=Integration(duration_s=0.02),
+                      execution=Execution(workers=1)))
     if name == "lobes":
         from boringbar.analysis.lobes import lobes
 
@@ -240,11 +243,12 @@ def _in_process(name: str):
                 basins(make_system("ball"), Harmonic(10.0, 1.0), displacement=(-1e-3, 1e-3, 2),
                        velocity=(-1.0, 1.0, 2), duration=0.02, workers=1))
     if name == "sensitivity":
-        from boringbar.analysis.sensitivity import sensitivity
+        from boringbar.analysis.sensitivity import SensitivityOptions, sensitivity
 
         return ({"study": {"analysis": "sensitivity"}, "run": {"duration_s": 0.02},
                  "analysis": {"kind": "ball"}},
-                sensitivity("ball", duration=0.02, workers=1))
+                sensitivity(SensitivityOptions("ball"), integration=Integration(duration_s=0.02),
+                            execution=Execution(workers=1)))
     raise AssertionError(f"no in-process reference for the analysis {name!r}: add one")
 
 
@@ -293,14 +297,15 @@ def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_p
 
 
 def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
-    from boringbar.analysis.sweep import published_cases, sweep
+    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
 
     d = {"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02, "integrator": "exact"},
          "damper": {"static_ratio": 1.5}, "grid": {"ratio": [0.99, 1.01]}}
     ds = run_study(study_from_dict(d), tmp_path / "e.nc", executor="processes", workers=2)
     ref = sweep(published_cases(bars=("ball",), gaps=(0.5e-3,), frictions=(True,),
                                 static_ratio=1.5),
-                [0.99, 1.01], duration=0.02, workers=1, integrator="exact")
+                SweepOptions([0.99, 1.01]), execution=Execution(workers=1),
+                integration=Integration(duration_s=0.02, integrator="exact"))
     assert ds.attrs["integrator"] == "exact"
     for k in ds.data_vars:
         assert np.array_equal(ds[k].values, ref[k].values,

@@ -22,8 +22,9 @@ from boringbar.analysis.basins import basins  # noqa: E402
 from boringbar.analysis.bifurcation import bifurcation  # noqa: E402
 from boringbar.analysis.lobes import lobes  # noqa: E402
 from boringbar.analysis.poincare import poincare_map  # noqa: E402
-from boringbar.analysis.sensitivity import sensitivity  # noqa: E402
-from boringbar.analysis.sweep import Case, published_cases, sweep  # noqa: E402
+from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity  # noqa: E402
+from boringbar.analysis.sweep import Case, SweepOptions, published_cases, sweep  # noqa: E402
+from boringbar.execute import Execution  # noqa: E402
 from boringbar.model.bar import ModalModel, Section, SteppedBar, published_bar  # noqa: E402
 from boringbar.model.dampers import (  # noqa: E402
     Friction,
@@ -35,7 +36,7 @@ from boringbar.model.dampers import (  # noqa: E402
 from boringbar.model.forcing import Harmonic, Regenerative  # noqa: E402
 from boringbar.model.system import PRESETS, READINGS, System, make_system  # noqa: E402
 from boringbar.reference.linear import min_real_part, tip_frf  # noqa: E402
-from boringbar.simulate import Initial, IntegrationError, Run, State, simulate  # noqa: E402
+from boringbar.simulate import Initial, Integration, IntegrationError, Run, State, simulate  # noqa: E402
 from boringbar.studies.load import load_study  # noqa: E402
 from boringbar.studies.runner import run_study  # noqa: E402
 
@@ -43,18 +44,23 @@ __all__ = [
     "PRESETS",
     "READINGS",
     "Case",
+    "Cuts",
+    "Execution",
     "Friction",
     "Harmonic",
     "ImpactDamper",
     "Initial",
+    "Integration",
     "IntegrationError",
     "ModalModel",
     "ParameterError",
     "Regenerative",
     "Run",
     "Section",
+    "SensitivityOptions",
     "State",
     "SteppedBar",
+    "SweepOptions",
     "System",
     "TunedMassDamper",
     "basins",

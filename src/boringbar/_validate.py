@@ -40,3 +40,19 @@ def check_choice(name: str, value, choices) -> str:
     if value not in choices:
         raise ParameterError(f"{name} = {value!r} is not one of {', '.join(map(str, choices))}")
     return value
+
+
+def check_values(name: str, values, lo: float, hi: float, *, lo_open: bool = False,
+                 hi_open: bool = False, unit: str = "") -> tuple[float, ...]:
+    """A number or a non-empty sequence of numbers, each in the range of
+    :func:`check_range`, as a tuple of floats."""
+    seq = [values] if isinstance(values, int | float) else values
+    try:
+        items = list(seq)
+    except TypeError:
+        raise ParameterError(f"{name} = {values!r} is not a number or a list of "
+                             "numbers") from None
+    if not items:
+        raise ParameterError(f"{name} is empty: give at least one value")
+    return tuple(check_range(f"{name}[{i}]", v, lo, hi, lo_open=lo_open, hi_open=hi_open,
+                             unit=unit) for i, v in enumerate(items))

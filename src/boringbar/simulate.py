@@ -53,6 +53,40 @@ class Initial:
     ball_velocity: float = 0.0
 
 
+@dataclass(frozen=True)
+class Integration:
+    """How every run of an analysis is integrated (the options of :func:`simulate`).
+
+    ``duration_s`` and ``dt_s`` (s) as published by default (2 s, 1e-6 s);
+    ``integrator``: one of :data:`INTEGRATORS` ("rk4", the published scheme, or
+    "exact"); ``steady_fraction``: the last part of each run over which RMS,
+    patterns and Poincare samples are taken (0.8: the first 20 % dropped);
+    ``initial``: the initial conditions of every run (default: at rest).
+    """
+
+    duration_s: float = 2.0
+    dt_s: float = 1e-6
+    integrator: str = "rk4"
+    steady_fraction: float = 0.8
+    initial: Initial | None = None
+
+    def __post_init__(self):
+        check_positive("duration_s", self.duration_s, "s")
+        check_positive("dt_s", self.dt_s, "s")
+        check_choice("integrator", self.integrator, INTEGRATORS)
+        check_range("steady_fraction", self.steady_fraction, 0.0, 1.0, lo_open=True)
+
+    def kwargs(self) -> dict:
+        """The keyword arguments of :func:`simulate` these options stand for."""
+        return {"duration": self.duration_s, "dt": self.dt_s, "integrator": self.integrator,
+                "steady_fraction": self.steady_fraction, "initial": self.initial}
+
+    def to_dict(self) -> dict:
+        return {"duration_s": self.duration_s, "dt_s": self.dt_s,
+                "integrator": self.integrator, "steady_fraction": self.steady_fraction,
+                "initial": (self.initial or Initial()).__dict__}
+
+
 @dataclass(frozen=True, eq=False)
 class State:
     """A run's final state, to continue from: x = [u, u', aux, aux'] at time t."""

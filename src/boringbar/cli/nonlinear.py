@@ -8,13 +8,13 @@ import math
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
 from boringbar._validate import ParameterError, check_range
 from boringbar.analysis.basins import basin_summary, basins
 from boringbar.analysis.bifurcation import bifurcation, hysteresis_ranges
 from boringbar.analysis.poincare import poincare_map
-from boringbar.analysis.sensitivity import KINDS, Cuts, sensitivity
+from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
+from boringbar.analysis.sensitivity import summary as sensitivity_summary
 from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import (
     CUT_ONLY,
@@ -25,8 +25,10 @@ from boringbar.cli.options import (
     check_gap,
     check_rpm,
     cut_options,
+    execution,
     forces_and_ratios,
     initial_conditions,
+    integration,
     one_bar,
     parse_numbers,
     parse_words,
@@ -491,65 +493,23 @@ def _cmd_sensitivity(args) -> int:
                                  "(--cut-rpm or --depths-mm)")
 
     common = dict(preset=args.preset, bar=bar, gap=gap, friction=friction_on,
-                  duration=args.duration_s, dt=args.dt_s, workers=args.workers,
-                  integrator=args.integrator, **system_overrides(args))
-    ds = sensitivity(kind, values, forces=forces, ratios=ratios,
+                  overrides=system_overrides(args), integration=integration(args),
+                  execution=execution(args))
+    ds = sensitivity(SensitivityOptions(kind, values, tuple(forces), tuple(ratios)),
                      progress=progress_printer(args, f"sensitivity {kind}", "runs"), **common)
     if cuts is not None:
-        ds = _with_cuts(ds, sensitivity(kind, values, cutting=cuts, **common))
-
+        ds = with_cuts(ds, sensitivity(SensitivityOptions(kind, values, cuts=cuts), **common))
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "sensitivity.nc"),
              "png": save_figure_atomic(plot_sensitivity(ds), out / "sensitivity.png")}
-    summary = {**_sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    summary = {**sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.json:
         print_json(summary)
     elif not args.quiet:
         print(_sensitivity_text(summary))
         print("wrote " + ", ".join(str(v) for v in files.values()))
     return 0
-
-
-def _with_cuts(ds, cuts):
-    """The harmonic and the cut results in one Dataset: the cut variables and
-    attributes prefixed ``cut_``."""
-
-    cuts = cuts.rename({k: f"cut_{k}" for k in cuts.data_vars})
-    keep = ("rpm", "duration_s", "wall_time_s", "forcing_options", "title")
-    attrs = {f"cut_{k}": v for k, v in cuts.attrs.items() if k in keep}
-    merged = xr.merge([ds, cuts.drop_vars([c for c in ("case",) if c in cuts.coords])],
-                      combine_attrs="override")
-    merged.attrs.update(attrs)
-    return merged
-
-
-def _sensitivity_summary(ds) -> dict:
-    kind = ds.attrs["sensitivity"]
-    labels = [str(v) for v in ds[kind].values]
-    values = [v.item() if isinstance(v, np.generic) else v for v in ds[kind].values]
-    harmonic = []
-    for i, value in enumerate(values):
-        for j, force in enumerate(ds["force"].values):
-            harmonic.append({"value": value, "force_n": float(force),
-                             "ratio": ds["ratio"].values.tolist(),
-                             "rms_tip_m": ds["rms_tip_m"].values[i, j].tolist(),
-                             "pattern": [str(p) for p in ds["pattern"].values[i, j]]})
-    summary = {"kind": kind, "values": values, "preset": ds.attrs.get("preset"),
-               "harmonic": harmonic, "cuts": None, "wall_time_s": ds.attrs.get("wall_time_s")}
-    if kind == "initial":
-        summary["initial"] = [{name: float(ds[name].values[i]) for name in
-                               ("tip_displacement", "tip_velocity", "ball_position",
-                                "ball_velocity")} for i in range(len(labels))]
-    if "cut_chatter" in ds:
-        summary["cuts"] = {
-            "rpm": ds.attrs["cut_rpm"], "depth_m": ds["depth"].values.tolist(),
-            "results": [{"value": value,
-                         **{k: ds[f"cut_{k}"].values[i].tolist()
-                            for k in ("chatter", "bounded_chatter", "amplitude_m",
-                                      "max_force_n", "first_zero_time_s")}}
-                        for i, value in enumerate(values)]}
-    return summary
 
 
 def _sensitivity_text(s: dict) -> str:

@@ -10,11 +10,12 @@ import sys
 
 from boringbar._validate import ParameterError, check_range
 from boringbar.analysis.sweep import parse_range, published_cases
+from boringbar.execute import Execution
 from boringbar.io import jsonable
 from boringbar.model.forcing import INTERPOLATIONS, STARTS
 from boringbar.model.system import BALLS, BAR_KINDS, PRESETS
 from boringbar.progress import ProgressCallback
-from boringbar.simulate import INTEGRATORS, Initial
+from boringbar.simulate import INTEGRATORS, Initial, Integration
 
 PROG = "boringbar"
 
@@ -311,3 +312,13 @@ PATTERN_KEY = ("patterns: Ns = N symmetric impacts per period, Na/k = N asymmetr
 
 def print_json(obj) -> None:
     print(json.dumps(jsonable(obj), allow_nan=False))
+
+
+def integration(args, initial=None, steady_fraction: float = 0.8) -> Integration:
+    """The integration options of a command (--duration-s, --dt-s, --integrator)."""
+    return Integration(args.duration_s, args.dt_s, args.integrator, steady_fraction, initial)
+
+
+def execution(args) -> Execution:
+    """Where a command's points run: a thread per core, or --workers threads."""
+    return Execution("threads", args.workers)

@@ -11,15 +11,18 @@ import xarray as xr
 
 from boringbar._validate import check_range
 from boringbar.analysis.lobes import PUBLISHED_RPM, lobes, lobes_summary
-from boringbar.analysis.sweep import parse_range, sweep, sweep_summary
+from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
+from boringbar.analysis.sweep import summary as sweep_summary
 from boringbar.cli.options import (
     PATTERN_KEY,
     add_common,
     add_cutting,
     check_rpm,
     cut_options,
+    execution,
     forces_and_ratios,
     initial_conditions,
+    integration,
     many_cases,
     print_json,
     progress_printer,
@@ -82,12 +85,9 @@ def _cmd_sweep(args) -> int:
     forces, ratios = forces_and_ratios(args)
 
     initial = initial_conditions(args, gaps if "ball" in bars else [])
-    progress = progress_printer(args, "sweep", "runs")
-    ds = sweep(cases, ratios, forces, duration=args.duration_s, dt=args.dt_s,
-               workers=args.workers, initial=initial, progress=progress,
-               integrator=args.integrator)
-
-
+    ds = sweep(cases, SweepOptions(tuple(ratios), tuple(forces)),
+               integration=integration(args, initial), execution=execution(args),
+               progress=progress_printer(args, "sweep", "batches of runs"))
     out = Path(args.out)
     nc = write_netcdf_atomic(ds, out / "sweep.nc")
     pngs = [save_figure_atomic(plot_sweep(ds, f), path) for f, path in sweep_pngs(ds, out)]

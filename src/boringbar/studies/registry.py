@@ -19,7 +19,7 @@ The runner (:mod:`boringbar.studies.runner`) does the rest: chunking, executors,
 resumable stores, progress.
 
 The analyses reuse the per-point code of the in-process functions:
-``sweep``: :func:`boringbar.analysis.sweep.sweep_point` per (case, force, ratio);
+``sweep``: :func:`boringbar.analysis.sweep.compute` per lock-step batch of runs;
 ``lobes``: :func:`boringbar.analysis.lobes.lobe_column` per (case, rpm);
 ``bifurcation``: one case's whole forward + backward continuation;
 ``basins``: one grid cell's run and signature, grouped at assembly;
@@ -29,43 +29,28 @@ depth) cut.
 
 from __future__ import annotations
 
-import inspect
 import itertools
 import json
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError
+from boringbar.analysis import sensitivity as sensitivity_mod
+from boringbar.analysis import sweep as sweep_mod
+from boringbar.analysis.base import Plan
 from boringbar.analysis.basins import BasinTolerance, basin_grid, basin_run, basins_dataset, group
 from boringbar.analysis.bifurcation import bifurcation
 from boringbar.analysis.lobes import lobe_column, lobe_cut, lobe_options, lobes_dataset
-from boringbar.analysis.sensitivity import (
-    PUBLISHED_VALUES,
-    Cuts,
-    sensitivity_cases,
-    sensitivity_cut,
-    sensitivity_initial,
-    sensitivity_label,
-)
-from boringbar.analysis.sweep import Case, sweep_dataset, sweep_point
+from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
+from boringbar.analysis.sweep import Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.simulate import INTEGRATORS, Initial, check_step, simulate
+from boringbar.simulate import INTEGRATORS, Initial, Integration, check_step, simulate
 from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study, StudyError
-
-
-@dataclass
-class Plan:
-    """What a study computes: ``points`` in result order and the ``context`` they share."""
-
-    context: object
-    points: list
-    extra: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -164,16 +149,9 @@ class Analysis:
     def warm(self, context) -> None:
         """Compile the kernel once in this process (optional)."""
 
-    def point_functions(self) -> list:
-        """The library functions ``compute`` calls: an integrator other than rk4 is
-        offered only when every one of them takes an ``integrator`` argument."""
-        return []
-
     def integrators(self) -> tuple:
-        fns = self.point_functions()
-        if fns and all(_takes(f, "integrator") for f in fns):
-            return INTEGRATORS
-        return ("rk4",)
+        """The integrators a study of this analysis may choose."""
+        return INTEGRATORS
 
 
 def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
@@ -190,15 +168,6 @@ def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
         check_step(system, omega, study.value("dt_s"))
     except ParameterError as exc:
         raise ParameterError(f"key 'run.dt_s' = {study.value('dt_s')!r}: {exc}") from None
-
-
-def _takes(fn, name: str) -> bool:
-    return name in inspect.signature(fn).parameters
-
-
-def _integrator(fn, ctx) -> dict:
-    """``{"integrator": ...}`` for ``fn`` if it takes one (else the study's is rk4)."""
-    return {"integrator": ctx["integrator"]} if _takes(fn, "integrator") else {}
 
 
 # --- shared pieces ----------------------------------------------------------------
@@ -281,6 +250,14 @@ def _case_coords(values: dict) -> dict:
     return out
 
 
+def _integration(study: Study, steady_fraction: float = 0.8, initial=False) -> Integration:
+    """The study's integration options (``[run]``), every run from ``initial`` (default
+    the study's initial conditions)."""
+    return Integration(study.value("duration_s"), study.value("dt_s"),
+                       study.value("integrator"), steady_fraction,
+                       _initial(study) if initial is False else initial)
+
+
 def _initial(study: Study):
     return Initial(study.value("tip_displacement_mm") * 1e-3, study.value("tip_velocity_m_s"),
                    study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s"))
@@ -319,42 +296,24 @@ class Sweep(Analysis):
 
     def plan(self, study):
         cases, values = study_cases(study)
-        forces, ratios = _axis(study, "force_n"), _axis(study, "ratio")
-        ctx = {"cases": cases, "forces": forces, "ratios": ratios, "initial": _initial(study),
-               "duration": study.value("duration_s"), "dt": study.value("dt_s"),
-               "integrator": study.value("integrator")}
-        points = list(itertools.product(range(len(cases)), range(len(forces)),
-                                        range(len(ratios))))
-        return Plan(ctx, points, {"values": values})
+        options = SweepOptions(tuple(_axis(study, "ratio")), tuple(_axis(study, "force_n")))
+        plan = sweep_mod.plan(cases, options, _integration(study))
+        plan.extra["values"] = values
+        return plan
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"], ctx["integrator"])
+        sweep_mod.warm(ctx)
 
     def runs(self, plan):
         c = plan.context
-        return [(x.system, max(c["ratios"]) * x.system.reference_frequency, False)
+        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
                 for x in c["cases"]]
 
     def compute(self, ctx, point):
-        i, j, k = point
-        res = sweep_point(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
-                   ctx["dt"], ctx["initial"], **_integrator(sweep_point, ctx))
-        res.pop("elapsed_s")
-        return res
-
-    def point_functions(self):
-        return [sweep_point]
+        return sweep_mod.compute(ctx, point)
 
     def assemble(self, study, plan, results):
-        ctx = plan.context
-        shape = (len(ctx["cases"]), len(ctx["forces"]), len(ctx["ratios"]))
-        out = {k: np.array([r[k] for r in results], dtype=float).reshape(shape)
-               for k in _SWEEP_NAMES}
-        pattern = np.array([r["pattern"] for r in results], dtype=object).reshape(shape)
-        ds = sweep_dataset(ctx["cases"], ctx["forces"], ctx["ratios"], out, pattern, {
-            "integrator": study.value("integrator"), "dt_s": ctx["dt"],
-            "duration_s": ctx["duration"], "initial": json.dumps(ctx["initial"].__dict__),
-            **_provenance(study)})
+        ds = sweep_mod.assemble(plan, results, _provenance(study))
         return ds.assign_coords(_case_coords(plan.extra["values"]))
 
 
@@ -389,7 +348,7 @@ class Lobes(Analysis):
                         interpolation=study.value("interpolation"), start=study.value("start"),
                         bounded_fraction=study.value("bounded_fraction"),
                         duration=study.value("duration_s"), dt=study.value("dt_s"),
-                        **_integrator(lobe_options, {"integrator": study.value("integrator")}))
+                        integrator=study.value("integrator"))
         points = list(itertools.product(range(len(cases)), range(len(rpm))))
         return Plan({"cases": cases, "rpm": rpm, "opts": opts}, points, {"values": values})
 
@@ -407,8 +366,6 @@ class Lobes(Analysis):
         i, j = point
         return lobe_column(ctx["cases"][i], float(ctx["rpm"][j]), ctx["opts"])
 
-    def point_functions(self):
-        return [lobe_options]
 
     def assemble(self, study, plan, results):
         ctx = plan.context
@@ -461,13 +418,11 @@ class Bifurcation(Analysis):
                          base_forcing=ctx["base"], duration=ctx["duration"], dt=ctx["dt"],
                          drop=ctx["drop"], initial=ctx["initial"], backward=ctx["backward"],
                          tol=ctx["tol"], max_k=ctx["max_k"],
-                         **_integrator(bifurcation, ctx))
+                         integrator=ctx["integrator"])
         return {"data": {k: ds[k].values for k in ds.data_vars if k != "elapsed_s"},
                 "attrs": {k: ds[k].attrs for k in ds.data_vars},
                 "config": json.loads(ds.attrs["config"]), "ds_attrs": dict(ds.attrs)}
 
-    def point_functions(self):
-        return [bifurcation]
 
     def assemble(self, study, plan, results):
         ctx = plan.context
@@ -569,10 +524,8 @@ class Basins(Analysis):
         op, cell = point
         _, i, forcing = ctx["ops"][op]
         return basin_run(ctx["cases"][i].system, forcing, ctx["initials"][cell], ctx["duration"],
-                    ctx["dt"], ctx["drop"], ctx["tol"], **_integrator(basin_run, ctx))
+                    ctx["dt"], ctx["drop"], ctx["tol"], integrator=ctx["integrator"])
 
-    def point_functions(self):
-        return [basin_run]
 
     def assemble(self, study, plan, results):
         c = plan.context
@@ -652,127 +605,65 @@ class Sensitivity(Analysis):
     def plan(self, study):
         o = study.options
         kind = o["kind"]
-        values = list(PUBLISHED_VALUES[kind] if o["values"] is None else o["values"])
         s = {k: study.value(k) for k in SYSTEM_KEYS}
-        if kind != "initial" and s["kind"] != "ball":
-            raise StudyError(f"{study.source}: key 'analysis.kind' = {kind!r}: varies the ball "
-                             "damper; it needs bar.kind = 'ball'")
         varied = {"ball": "ball", "friction_number": "friction_number",
                   "restitution": "restitution"}.get(kind)
         if varied and study.value(varied) != SETTINGS["damper"][varied].default:
             raise StudyError(f"{study.source}: key 'damper.{varied}' = "
                              f"{study.value(varied)!r}: cannot be fixed while analysis.kind "
                              f"= {kind!r} varies it")
-        overrides = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
-        if s["kind"] == "ball":
-            overrides.update(ball=s["ball"], restitution=s["restitution"],
-                             friction_number=s["friction_number"],
-                             friction_force=s["friction_force_n"],
-                             friction_reaction=s["friction_reaction"], locked=s["locked"])
-        if s["kind"] == "tmd":
-            overrides.update(tmd_mass=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
-        if varied:
-            overrides.pop(varied, None)
-        if kind == "initial":
-            values = [tuple(v) if isinstance(v, list | tuple) else v for v in values]
-            initials = [sensitivity_initial(v) for v in values]
-            cases = sensitivity_cases(kind, [None], s["kind"], study.preset, s["gap_mm"] * 1e-3,
-                           s["friction"], overrides) * len(values)
-        else:
-            initials = [_initial_or_none(study)] * len(values)
-            cases = sensitivity_cases(kind, values, s["kind"], study.preset, s["gap_mm"] * 1e-3,
-                           s["friction"], overrides)
-        labels = [sensitivity_label(kind, v) for v in values]
-        if len(set(labels)) != len(labels):
-            raise StudyError(f"{study.source}: key 'analysis.values' = {values!r}: the values "
-                             "must be distinct")
-        ctx = {"kind": kind, "values": values, "labels": labels, "cases": cases,
-               "initials": initials, "dt": study.value("dt_s"),
-               "duration": study.value("duration_s"), "integrator": study.value("integrator")}
+        cuts = None
         if o["cuts"]:
-            opts = {"kr": study.value("kr_mpa") * 1e6, "feed": study.value("feed_mm") * 1e-3,
-                    "revolutions": study.value("revolutions"),
-                    "interpolation": study.value("interpolation"),
-                    "start": study.value("start"),
-                    "bounded_fraction": study.value("bounded_fraction")}
-            ctx["cuts"] = Cuts(study.value("rpm"),
-                               tuple(round(d * 1e-3, 15) for d in o["depths_mm"]),
-                               study.value("duration_s"), opts)
-            points = list(itertools.product(range(len(values)), range(len(o["depths_mm"]))))
-        else:
-            ctx["forces"], ctx["ratios"] = _axis(study, "force_n"), _axis(study, "ratio")
-            points = list(itertools.product(range(len(values)), range(len(ctx["forces"])),
-                                            range(len(ctx["ratios"]))))
-        return Plan(ctx, points)
+            cuts = Cuts(study.value("rpm"), tuple(round(d * 1e-3, 15) for d in o["depths_mm"]),
+                        study.value("duration_s"), _cut_options(study))
+        try:
+            options = SensitivityOptions(kind, o["values"], tuple(_axis(study, "force_n")),
+                                         tuple(_axis(study, "ratio")), cuts)
+            return sensitivity_mod.plan(
+                options, _integration(study, initial=_initial_or_none(study)),
+                preset=study.preset, bar=s["kind"], gap=s["gap_mm"] * 1e-3,
+                friction=s["friction"], overrides=_overrides(s, varied))
+        except ParameterError as exc:
+            raise StudyError(f"{study.source}: [analysis] {exc}") from None
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"][:1], ctx["integrator"])
+        sensitivity_mod.warm(ctx)
 
     def runs(self, plan):
         c = plan.context
-        if "cuts" in c:
+        if c["mode"] == "cuts":
             return [(x.system, 2 * math.pi * c["cuts"].rpm / 60.0, True) for x in c["cases"]]
-        return [(x.system, max(c["ratios"]) * x.system.reference_frequency, False)
+        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
                 for x in c["cases"]]
 
     def compute(self, ctx, point):
-        if "cuts" in ctx:
-            i, j = point
-            return sensitivity_cut(ctx["cases"][i], ctx["initials"][i], ctx["cuts"],
-                        ctx["cuts"].depths[j], ctx["dt"], **_integrator(sensitivity_cut, ctx))
-
-        i, j, k = point
-        res = sweep_point(ctx["cases"][i], ctx["forces"][j], ctx["ratios"][k], ctx["duration"],
-                   ctx["dt"], ctx["initials"][i], **_integrator(sweep_point, ctx))
-        res.pop("elapsed_s")
-        return res
-
-    def point_functions(self):
-        return [sweep_point, sensitivity_cut]
+        return sensitivity_mod.compute(ctx, point)
 
     def assemble(self, study, plan, results):
-        c = plan.context
-        kind, values, labels = c["kind"], c["values"], c["labels"]
-        coord = labels if kind == "initial" else list(values)
-        attrs = {"integrator": study.value("integrator"), "dt_s": c["dt"],
-                 **_provenance(study)}
-        if "cuts" in c:
-            cuts = c["cuts"]
-            shape = (len(values), len(cuts.depths))
-            units = {"amplitude_m": "m", "max_force_n": "N", "first_zero_time_s": "s"}
-            data = {k: (("case", "depth"), np.array([r[k] for r in results]).reshape(shape),
-                        {"units": units[k]} if k in units else {}) for k in results[0]}
+        return sensitivity_mod.assemble(plan, results, _provenance(study))
 
-            ds = xr.Dataset(
-                data, coords={"depth": ("depth", np.asarray(cuts.depths), {"units": "m"})},
-                attrs={"title": "boringbar sensitivity (cuts)",
-                       "boringbar_version": __version__, "rpm": cuts.rpm,
-                       "duration_s": cuts.duration,
-                       "forcing_options": json.dumps(cuts.options),
-                       "systems": json.dumps({x.label: x.system.to_dict()
-                                              for x in c["cases"]}), **attrs})
-            ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
-        else:
-            shape = (len(values), len(c["forces"]), len(c["ratios"]))
-            out = {k: np.array([r[k] for r in results], dtype=float).reshape(shape)
-                   for k in _SWEEP_NAMES}
-            pattern = np.array([r["pattern"] for r in results], dtype=object).reshape(shape)
-            attrs["duration_s"] = c["duration"]
-            if kind != "initial":
-                attrs["initial"] = json.dumps(c["initials"][0].__dict__
-                                              if c["initials"][0] else {})
-            ds = sweep_dataset(c["cases"], c["forces"], c["ratios"], out, pattern, attrs)
-            ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
-            if kind == "initial":
-                for name in ("tip_displacement", "tip_velocity", "ball_position",
-                             "ball_velocity"):
-                    ds = ds.assign_coords({name: ("case", [getattr(i, name)
-                                                           for i in c["initials"]])})
-        ds = ds.swap_dims({"case": kind})
-        if kind == "initial":
-            ds = ds.drop_vars("case")
-        ds.attrs.update({"sensitivity": kind, "values": json.dumps([str(v) for v in values])})
-        return ds
+
+def _overrides(s: dict, varied: str | None) -> dict:
+    """make_system arguments of the flat settings ``s`` beyond kind, gap and friction
+    (without the ``varied`` one)."""
+    overrides = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
+    if s["kind"] == "ball":
+        overrides.update(ball=s["ball"], restitution=s["restitution"],
+                         friction_number=s["friction_number"],
+                         friction_force=s["friction_force_n"],
+                         friction_reaction=s["friction_reaction"], locked=s["locked"])
+    if s["kind"] == "tmd":
+        overrides.update(tmd_mass=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
+    overrides.pop(varied, None)
+    return overrides
+
+
+def _cut_options(study: Study) -> dict:
+    """The Regenerative options of the study's ``[forcing]`` (SI)."""
+    return {"kr": study.value("kr_mpa") * 1e6, "feed": study.value("feed_mm") * 1e-3,
+            "revolutions": study.value("revolutions"),
+            "interpolation": study.value("interpolation"), "start": study.value("start"),
+            "bounded_fraction": study.value("bounded_fraction")}
 
 
 def _initial_or_none(study: Study):
