@@ -1,4 +1,4 @@
-"""Basins of attraction and sensitivity studies (MODEL.md section 6).
+"""Basins of attraction and sensitivity studies (docs/model.md, section 6).
 
 Known truths: a linear bar has one attractor; the closed-form symmetric
 two-impact orbit (Masri-Caughey, 30 N at Omega = omega_n, one mode, no

@@ -1,4 +1,4 @@
-"""Bifurcation diagrams and Poincare maps (MODEL.md section 6): closed-form
+"""Bifurcation diagrams and Poincare maps (docs/model.md, section 6): closed-form
 truths (the linear bar's steady state, the two-impact orbit) and the 0-1 test
 on synthetic signals."""
 
@@ -246,7 +246,7 @@ def test_system_parameter_sweep_through_a_factory():
 @pytest.mark.slow
 def test_published_bifurcation_gap_01mm():
     """F0 5..50 N step 1 at Omega = omega_n, gap 0.1 mm, no friction, paper preset,
-    2 s runs (MODEL.md section 6): about 15 s; forward and backward agree on the
+    2 s runs (docs/model.md, section 6): about 15 s; forward and backward agree on the
     periodic windows (2 symmetric at 5-7 N, 4 symmetric at 18-20 N, 6 symmetric
     at 35-37 N: one Poincare point each)."""
     system = make_system("ball", "paper", gap=0.1e-3, friction=False)

@@ -1,4 +1,4 @@
-"""Regenerative cutting (MODEL.md sections 4 and 6): the kernel against a slow
+"""Regenerative cutting (docs/model.md, sections 4 and 6): the kernel against a slow
 reference, closed-form truths of the linear cut, the time-domain limit against
 the analytic lobes, delay interpolation, energy balance, and the lobe methods.
 

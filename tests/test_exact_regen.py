@@ -72,7 +72,7 @@ def test_the_cut_is_fourth_order_in_the_history_step(factor, duration):
 
 
 def test_linear_delay_interpolation_is_second_order():
-    """MODEL.md section 4's option, honoured by the exact integrator: measured errors
+    """docs/model.md, section 4's option, honoured by the exact integrator: measured errors
     (against cubic at H = 1 us) 8.0e-4, 2.0e-4, 5.0e-5 at H = 8, 4, 2 us (orders 2.00,
     2.00; RK4 with linear interpolation at dt = 2 us: 4.3e-5)."""
     system = make_system("solid")

@@ -145,7 +145,7 @@ def test_den_hartog_parameters_are_the_textbook_formulas():
     assert p["stiffness"] == pytest.approx(m_a * f**2 * wn**2, rel=1e-14)
     assert p["damping"] == pytest.approx(2.0 * zeta * m_a * wn, rel=1e-14)
     assert absorber_mass_ratio(m_a, bar) == pytest.approx(mu, rel=1e-14)
-    assert 0.2 < mu < 0.35  # MODEL.md: about 0.25 at z_a = 96 mm
+    assert 0.2 < mu < 0.35  # docs/model.md: about 0.25 at z_a = 96 mm
 
 
 @pytest.mark.parametrize("mu", [0.05, 0.25])

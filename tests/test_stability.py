@@ -33,7 +33,7 @@ from boringbar.reference.stability import (
 )
 
 KR = KR_ALUMINIUM
-GRID = np.arange(900.0, 1601.0, 50.0)  # the published speeds (MODEL.md section 6)
+GRID = np.arange(900.0, 1601.0, 50.0)  # the published speeds (docs/model.md, section 6)
 
 
 def residual(g, b, omega, rpm, kr=KR):

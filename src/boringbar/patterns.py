@@ -1,4 +1,4 @@
-"""Impact-pattern classifier (MODEL.md section 6).
+"""Impact-pattern classifier (docs/model.md, section 6).
 
 Labels the steady part of a harmonically forced run (forcing period T) from
 its counted impact times, the walls hit, the stick intervals and the time in
@@ -93,7 +93,7 @@ def classify(
     max_k: int = 8,
     min_periods: int | None = None,
 ) -> Pattern:
-    """Classify the impact pattern of a run's steady part (MODEL.md section 6).
+    """Classify the impact pattern of a run's steady part (docs/model.md, section 6).
 
     Parameters (SI)
     ---------------

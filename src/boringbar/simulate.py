@@ -39,7 +39,7 @@ INTEGRATORS = ("rk4", "exact")
 
 @dataclass(frozen=True)
 class Initial:
-    """Initial conditions (MODEL.md section 1), SI.
+    """Initial conditions (docs/model.md, section 1), SI.
 
     The bar starts with tip displacement/velocity W0, W0' carried by the first
     mode (u_1 = W0/psi_1(L), higher modes at rest); the ball at ``ball_position``
@@ -173,7 +173,7 @@ class Run:
 
     @property
     def cutting(self) -> dict:
-        """Chatter verdicts of a regenerative run (MODEL.md section 4)."""
+        """Chatter verdicts of a regenerative run (docs/model.md, section 4)."""
         m = self.metrics
         f = self.forcing
         return {
@@ -566,7 +566,7 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
     keeps every N-th step's state; ``strobe`` keeps Poincare samples at
     Omega t = 0 mod 2 pi.
 
-    ``integrator``: ``"rk4"`` (the published scheme, MODEL.md section 5) or
+    ``integrator``: ``"rk4"`` (the published scheme, docs/model.md, section 5) or
     ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
     under harmonic forcing ``dt`` is then only the step of the recorded history
     and of the duration and steady-window rounding, and the steady RMS is the

@@ -1,4 +1,4 @@
-"""Basins of attraction over a grid of initial conditions (MODEL.md section 6).
+"""Basins of attraction over a grid of initial conditions (docs/model.md, section 6).
 
 Every cell of an initial tip displacement x initial tip velocity grid is an
 independent run of the kernel (the ball starts at ``ball_position`` with

@@ -1,4 +1,4 @@
-"""Bifurcation diagrams by continuation (MODEL.md section 6).
+"""Bifurcation diagrams by continuation (docs/model.md, section 6).
 
 One run per parameter value, each started from the previous run's final
 state: forward through ``values`` in the order given, then (``backward``)

@@ -1,4 +1,4 @@
-"""Stability lobes by time-domain simulation (MODEL.md sections 4 and 6).
+"""Stability lobes by time-domain simulation (docs/model.md, sections 4 and 6).
 
 Every grid point (spindle speed x depth of cut) is a regenerative-cutting run
 of the kernel.  Two ways to find, at each speed, the depth where chatter

@@ -1,4 +1,4 @@
-"""Poincare maps of one run and a verdict on the sample cloud (MODEL.md section 6).
+"""Poincare maps of one run and a verdict on the sample cloud (docs/model.md, section 6).
 
 Two sections of a harmonically forced run (forcing period T = 2 pi / Omega):
 
@@ -235,7 +235,7 @@ class PoincareMap:
     The verdict uses the whole sampled state: (W, W') and, for a free ball or
     an absorber, the auxiliary pair (y, y') or (stroke, stroke rate); the
     ball's state separates irregular impact sequences that barely move the
-    bar (MODEL.md's non-uniform patterns at gap 0.1 mm scatter W by ~2 % of
+    bar (docs/model.md's non-uniform patterns at gap 0.1 mm scatter W by ~2 % of
     its amplitude but y across the whole clearance).
     """
 

@@ -1,4 +1,4 @@
-"""Sensitivity studies (MODEL.md section 6): one parameter varied, everything else fixed.
+"""Sensitivity studies (docs/model.md, section 6): one parameter varied, everything else fixed.
 
 A thin layer over the sweep: each value of the parameter becomes a
 :class:`~boringbar.analysis.sweep.Case` (built by

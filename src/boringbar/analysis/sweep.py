@@ -1,4 +1,4 @@
-"""Frequency sweeps of tip RMS and impact pattern (MODEL.md section 6).
+"""Frequency sweeps of tip RMS and impact pattern (docs/model.md, section 6).
 
 Every (case, force, ratio) run is independent; with the published RK4 scheme,
 runs of the same bar kind and mode count go in lock-step batches

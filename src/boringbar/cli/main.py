@@ -2,7 +2,7 @@
 ``basins`` and ``sensitivity``; ``run`` (study files) and ``paper`` (the whole
 published study) are in :mod:`boringbar.cli.study`.
 
-Units are in the option names (MODEL.md section 7): ``--gap-mm``,
+Units are in the option names (docs/model.md, section 7): ``--gap-mm``,
 ``--force-n``, ``--duration-s``...; everything is converted to SI here and
 handed to the library.  Every bad value ends the command with one line,
 ``boringbar: error: <message>``, and exit code 2; results go to files in

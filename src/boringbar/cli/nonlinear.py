@@ -50,7 +50,7 @@ PUBLISHED_FORCES = "5:50:1"
 def add_bifurcation(sub) -> None:
     p = sub.add_parser("bifurcation",
                        help="Poincare samples of the tip against F0 (or Omega/omega_n, gap, e)",
-                       description="Bifurcation diagram by continuation (MODEL.md section 6): "
+                       description="Bifurcation diagram by continuation (docs/model.md, section 6): "
                                    "one run per value of the swept parameter, each from the "
                                    "previous run's final state (forcing phase continuous), "
                                    "forward and then backward; stroboscopic Poincare samples "
@@ -77,7 +77,7 @@ def add_bifurcation(sub) -> None:
 def add_basins(sub) -> None:
     p = sub.add_parser("basins", help="basins of attraction over initial tip displacement x "
                                       "velocity",
-                       description="Basins of attraction (MODEL.md section 6): one run per "
+                       description="Basins of attraction (docs/model.md, section 6): one run per "
                                    "initial tip displacement x initial tip velocity of a grid "
                                    "(ball centred and at rest unless --ball-position-mm / "
                                    "--ball-velocity-m-s), the final motions grouped into "
@@ -114,7 +114,7 @@ def add_basins(sub) -> None:
 def add_sensitivity(sub) -> None:
     p = sub.add_parser("sensitivity", help="tip RMS (and chatter of cuts) for several values "
                                            "of one parameter",
-                       description="Sensitivity study (MODEL.md section 6): KIND varies one "
+                       description="Sensitivity study (docs/model.md, section 6): KIND varies one "
                                    "thing, everything else fixed.  ball: carbide,steel; "
                                    "friction_number: 0.2,0.4,0.6,0.8 (read as the preset reads "
                                    "it; friction on); restitution: 0.6,0.7,0.8; initial: "

@@ -109,7 +109,7 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
 
 
 def add_cutting(g) -> None:
-    """The cut's description, shared by simulate and lobes (MODEL.md section 4).
+    """The cut's description, shared by simulate and lobes (docs/model.md, section 4).
     Defaults are None here (so simulate can refuse them without a cut) and
     applied in :func:`cut_options`."""
     g.add_argument("--kr-mpa", type=float, metavar="MPA",

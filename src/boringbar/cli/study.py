@@ -77,7 +77,7 @@ def add_paper(sub, run_step) -> None:
     """``boringbar paper``; ``run_step(argv) -> summary`` runs one step's command."""
     p = sub.add_parser(
         "paper", help="rerun the whole published study under both presets, with an HTML report",
-        description="Rerun every published analysis (MODEL.md section 6: frequency sweeps, "
+        description="Rerun every published analysis (docs/model.md, section 6: frequency sweeps, "
                     "stability lobes, bifurcation diagrams, basins of attraction, sensitivity) "
                     "under the paper and the physical preset, measure what each correction "
                     "to the published equations changes, and write DIR/report.html with the "

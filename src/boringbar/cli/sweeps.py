@@ -36,7 +36,7 @@ from boringbar.simulate import simulate
 
 def add_sweep(sub) -> None:
     p = sub.add_parser("sweep", help="tip RMS and impact pattern against Omega/omega_n",
-                       description="Frequency sweep of the published study (MODEL.md section "
+                       description="Frequency sweep of the published study (docs/model.md, section "
                                    "6); writes DIR/sweep.nc and DIR/sweep.png (one "
                                    "DIR/sweep_F<F0>N.png per force when several).")
     groups = add_common(p, many=True)
@@ -47,7 +47,7 @@ def add_sweep(sub) -> None:
 
 def add_lobes(sub) -> None:
     p = sub.add_parser("lobes", help="stability lobes by time-domain simulation of cuts",
-                       description="Stability lobes of the published study (MODEL.md section "
+                       description="Stability lobes of the published study (docs/model.md, section "
                                    "6): depth of cut against spindle speed, every grid point a "
                                    "regenerative cut; writes DIR/lobes.nc and DIR/lobes.png "
                                    "(with --examples also DIR/examples.nc and "

@@ -1,4 +1,4 @@
-"""The exact event-driven integrator (MODEL.md sections 2 and 5).
+"""The exact event-driven integrator (docs/model.md, sections 2 and 5).
 
 Between events the motion is linear with a constant friction force and the
 harmonic input F0 sin(Omega t), so it has a closed form.  The ball case has
@@ -32,7 +32,7 @@ Events (located by a safeguarded regula falsi, Illinois variant, to a
 bracket of 4 ulp of t):
 
 - FREE: y = +-delta/2 (impact, or capture on the wall when the impact is
-  slower than p[V_IMPACT], the threshold of MODEL.md section 2: a Zeno
+  slower than p[V_IMPACT], the threshold of docs/model.md, section 2: a Zeno
   sequence ends in CONTACT after finitely many impacts); y' = 0 when
   F_c > 0 (a friction switch: the ball sticks if the force needed to carry
   it, |F_req| = |psi_d . a_0| / (1/m + s sum psi_d^2 / M), is at most F_s,
@@ -74,7 +74,7 @@ endpoint-corrected trapezoid rule on the grid.  Maxima of
 |W| are located exactly (W' = 0 roots on the grid); maxima of |aux| are
 taken on the grid and at events.
 
-Regenerative cutting (MODEL.md section 4; docs/exact.md "Regenerative cuts"):
+Regenerative cutting (docs/model.md, section 4; docs/exact.md "Regenerative cuts"):
 in the cut f = Kr b (S(t) - W), and -Kr b W joins the matrix (a second set of
 regimes, ``prepare``); the surface S = min_k [k h_m + W(t - k tau)] is one cubic
 per segment, the cubic Hermite of W, W' between stored knots (at the nodes
@@ -429,7 +429,7 @@ def _phis(x):
 
 @njit(cache=True, inline="always")
 def _surface(seg, tau):
-    """S(tau) and S'(tau): the cut surface's cubic on the segment (MODEL.md section 4)."""
+    """S(tau) and S'(tau): the cut surface's cubic on the segment (docs/model.md, section 4)."""
     s1 = seg[SEG_S + 1]
     s2 = seg[SEG_S + 2]
     s3 = seg[SEG_S + 3]
@@ -1545,7 +1545,7 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
     Advances the pointers ip[k] (all revolutions, so that old knots can be dropped);
     sc[k] receives revolution k's cubic.  ``j_now``: the node t is on (-1: none); a
     delayed node then falls exactly on its knot (no rounding of t - k tau).  ``cubic``
-    false: linear interpolation of W instead (MODEL.md section 4's option)."""
+    false: linear interpolation of W instead (docs/model.md, section 4's option)."""
     t_piece = t_end
     for k in range(1, nrev + 1):
         kt = k * tau_d
@@ -1735,7 +1735,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
 
     for j in range(nz):
         X[j] = x[j]
-    # --- regenerative cut (MODEL.md section 4): the history of W as knots -----------------
+    # --- regenerative cut (docs/model.md, section 4): the history of W as knots -----------------
     # Knots (t, W, W'-, W'+) at the nodes t0 + j H, H = tau / m <= dt_out (so the delayed
     # nodes fall on nodes), and at every event (W' jumps at impacts, W'' at friction
     # switches).  The surface min_k [k h_m + W(t - k tau)] is the cubic Hermite of W, W'
@@ -2470,7 +2470,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         elif ev_kind == EV_CUT:
             incut = not incut
             if not incut and first_zero < 0.0:
-                first_zero = t  # the chatter verdict (MODEL.md section 4)
+                first_zero = t  # the chatter verdict (docs/model.md, section 4)
                 if stop_at_zero:  # finish the step of length dt_out, as RK4 does
                     t_end = min(t_end, t0 + math.ceil((t - t0) / dt_out - 1e-9) * dt_out)
         if regen:

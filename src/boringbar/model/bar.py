@@ -1,6 +1,6 @@
 """The bar: a stepped Euler-Bernoulli cantilever reduced to a few bending modes.
 
-MODEL.md section 1. The finite-element model uses Hermite-cubic beam elements
+docs/model.md, section 1. The finite-element model uses Hermite-cubic beam elements
 with consistent mass, clamped at z = 0 and free at z = L (the cutting end).
 Nodes sit at every section boundary and at every point where a mode-shape
 value is wanted (the ball at z_d, the absorber at z_a), so psi(z_d) and
@@ -21,7 +21,7 @@ import scipy.linalg
 
 from boringbar._validate import check_positive, check_range
 
-#: Published geometry (MODEL.md section 1), metres.
+#: Published geometry (docs/model.md, section 1), metres.
 BAR_LENGTH = 0.200
 BALL_POSITION = 0.12955
 ABSORBER_POSITION = 0.096
@@ -63,7 +63,7 @@ class Section:
 
 
 def published_sections(cavity: bool = True) -> tuple[Section, ...]:
-    """The published bar (MODEL.md section 1): with the ball cavity, or solid."""
+    """The published bar (docs/model.md, section 1): with the ball cavity, or solid."""
     d2 = 0.017 if cavity else 0.025
     return (
         Section(0.0, 0.122, 0.025),
@@ -161,7 +161,7 @@ class ModalModel:
         """Keep masses and mode shapes, scale every K so that f1 = ``frequency_hz``.
 
         This is the published-frequency calibration of the ``paper`` preset
-        (MODEL.md section 2); it is a uniform change of E.
+        (docs/model.md, section 2); it is a uniform change of E.
         """
         check_positive("calibration frequency_hz", frequency_hz)
         factor = (frequency_hz / self.natural_frequency_hz) ** 2

@@ -1,4 +1,4 @@
-"""The dampers: a free ball with clearance (MODEL.md section 2) and a tuned
+"""The dampers: a free ball with clearance (docs/model.md, section 2) and a tuned
 mass damper (section 3), with Den Hartog's design.
 
 All quantities SI.  A bar with no damper is ``damper=None``.
@@ -24,7 +24,7 @@ BALL_DENSITY = {"carbide": 14_700.0, "steel": 7_850.0}
 PUBLISHED_CARBIDE_MASS = 0.026
 #: The published rolling-resistance number, "0.6" (mm).
 PUBLISHED_FRICTION_NUMBER = 0.6
-#: The published absorber (MODEL.md section 3).
+#: The published absorber (docs/model.md, section 3).
 PUBLISHED_TMD = {"mass": 0.39, "stiffness": 1.05e6, "damping": 505.0}
 FRICTION_KINDS = ("none", "rolling", "coulomb", "force", "paper-number")
 REACTIONS = ("reciprocal", "printed")
@@ -53,7 +53,7 @@ class Friction:
     and energy balance, which the results then report).
 
     ``static_ratio`` = F_s / F_c >= 1, the static limit of true stick-slip
-    (MODEL.md section 5): the ball sticks while the force needed to carry it
+    (docs/model.md, section 5): the ball sticks while the force needed to carry it
     with the bar is at most F_s.  Only the exact integrator models it; the
     published RK4 scheme has the sgn() law, whose chatter is stick-slip with
     F_s = F_c, and refuses any other ratio.
@@ -187,7 +187,7 @@ class TunedMassDamper:
 
 
 def den_hartog_parameters(mass: float, bar) -> dict:
-    """Den Hartog's formulas (MODEL.md section 3) for mode 1 of ``bar``."""
+    """Den Hartog's formulas (docs/model.md, section 3) for mode 1 of ``bar``."""
     mu = mass * bar.psi_absorber[0] ** 2 / bar.mass[0]
     wn = bar.natural_frequency
     f_opt = 1.0 / (1.0 + mu)

@@ -1,4 +1,4 @@
-"""Forcing at the cutting end (MODEL.md section 4)."""
+"""Forcing at the cutting end (docs/model.md, section 4)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from boringbar._validate import ParameterError, check_nonnegative, check_positiv
 class Harmonic:
     """f(t) = amplitude sin(Omega t) at the tip.
 
-    Give the frequency as ``ratio`` = Omega / omega_n of the host bar (MODEL.md
+    Give the frequency as ``ratio`` = Omega / omega_n of the host bar (docs/model.md,
     section 6: the ball-cavity bar for the ball damper, the solid bar for the
     solid and TMD bars) or as ``frequency_hz``, not both.
     """
@@ -44,13 +44,13 @@ class Harmonic:
 
 INTERPOLATIONS = ("cubic", "linear")
 STARTS = ("rest", "static")
-#: Aluminium, MODEL.md section 4.
+#: Aluminium, docs/model.md, section 4.
 KR_ALUMINIUM = 850e6
 
 
 @dataclass(frozen=True)
 class Regenerative:
-    """Regenerative turning/boring, radial direction (MODEL.md section 4).
+    """Regenerative turning/boring, radial direction (docs/model.md, section 4).
 
     f(t) = Kr b h(t), h(t) = max(0, min_{k=1..N} [k h_m + W(t - k tau)] - W(t)),
     tau = 60 / rpm; the surface before the cut started is W = 0 (``start =

@@ -1,7 +1,7 @@
-"""A bar with its damper, and the two presets (MODEL.md section 2).
+"""A bar with its damper, and the two presets (docs/model.md, section 2).
 
 ``physical`` (the default) is the model as physics demands.  ``paper``
-switches on exactly the published readings that MODEL.md names, so the
+switches on exactly the published readings that docs/model.md names, so the
 published study can be rerun as it was done:
 
 - **friction force as computed in the paper**: the rolling-resistance
@@ -75,7 +75,7 @@ class System:
     @property
     def reference_frequency(self) -> float:
         """omega_n (rad/s) of the host bar without the damper's mass: what
-        Omega/omega_n refers to (MODEL.md section 6)."""
+        Omega/omega_n refers to (docs/model.md, section 6)."""
         return self.bar.natural_frequency
 
     def to_dict(self) -> dict:

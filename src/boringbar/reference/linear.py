@@ -1,6 +1,6 @@
 """Linear frequency responses of the bar, and tuned-mass-damper tuning.
 
-MODEL.md sections 1 and 3.  The bar is the n-mode modal model
+docs/model.md, sections 1 and 3.  The bar is the n-mode modal model
 
     M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f,        W = psi_L . u,
 
@@ -111,7 +111,7 @@ def min_real_part(
     refined by a bounded scalar minimisation between its neighbours, so the
     value is accurate to the solver tolerance, not to the grid spacing.
     The limiting depth of cut of a regenerative cut is inversely
-    proportional to -min Re G (MODEL.md section 3).
+    proportional to -min Re G (docs/model.md, section 3).
     """
     if omega is None:
         omega = bar.natural_frequency * np.linspace(*TROUGH_BAND, TROUGH_POINTS)

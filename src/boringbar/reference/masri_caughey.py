@@ -1,7 +1,7 @@
 """Closed-form symmetric two-impacts-per-period orbit of the ball damper.
 
 The Masri-Caughey solution (S. F. Masri and T. K. Caughey, J. Appl. Mech.
-33 (1966) 586-592) rederived for this package's model (MODEL.md section 2)
+33 (1966) 586-592) rederived for this package's model (docs/model.md, section 2)
 with one mode, no friction, and the bar's modal damping C kept (the motion
 is linear between impacts, so a closed form still exists):
 

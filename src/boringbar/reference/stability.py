@@ -1,4 +1,4 @@
-"""Analytic stability lobes of regenerative turning/boring (MODEL.md section 4).
+"""Analytic stability lobes of regenerative turning/boring (docs/model.md, section 4).
 
 The cutting force at the tip is f = Kr b h with h = h_m + W(t - tau) - W(t)
 (single-pass regeneration, tau = 60 / rpm).  Linearised about the steady cut,

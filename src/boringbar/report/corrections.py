@@ -1,7 +1,7 @@
-"""What each correction MODEL.md makes to the published equations changes, measured.
+"""What each correction docs/model.md makes to the published equations changes, measured.
 
 The ``paper`` preset reruns the study with three published readings
-(MODEL.md section 2): the friction force as computed in the paper
+(docs/model.md, section 2): the friction force as computed in the paper
 (20.4 N), the bar reaction as printed (+psi_d F_b) and the stiffness
 calibrated to the published frequencies; it also keeps one mode and the
 published absorber.  The ``physical`` preset drops all of them.  Three

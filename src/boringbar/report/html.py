@@ -133,7 +133,7 @@ class _Report:
             return "".join(parts)
         text = ["<h2 id='sweeps'>Frequency sweeps</h2>",
                 "<p>Tip RMS against the frequency ratio, referred to the host bar "
-                "(MODEL.md section 6): solid bar, TMD bar and the ball damper for each gap "
+                "(docs/model.md, section 6): solid bar, TMD bar and the ball damper for each gap "
                 "and friction. Points are marked by impact pattern.</p>",
                 self.pair("sweep", body), self._sweep_findings()]
         return "\n".join(text)
@@ -266,7 +266,7 @@ class _Report:
         parts = [
             "<h2 id='corrections'>The corrections to the published equations, and what each "
             "changes</h2>",
-            "<p>MODEL.md restates the published model with these corrections. The "
+            "<p>docs/model.md restates the published model with these corrections. The "
             "<code>paper</code> preset keeps the three published readings that can be run "
             "(friction force, bar reaction, calibrated stiffness, with one mode and the "
             "published absorber); the impact law is always the corrected one. Each is "
@@ -402,7 +402,7 @@ class _Report:
         return (f"<h1>{_e(m['title'])}</h1>"
                 f"<p>boringbar {_e(m['boringbar_version'])}; <code>{_e(m['command'])}</code>; "
                 f"{timing}.{quick}</p>"
-                "<p>Each published analysis (MODEL.md section 6) is shown with the "
+                "<p>Each published analysis (docs/model.md, section 6) is shown with the "
                 "<code>paper</code> preset (the published readings: 20.4 N friction, "
                 "printed bar reaction, stiffness calibrated to 461/456 Hz, one mode, the "
                 "published absorber) on the left and the <code>physical</code> preset (FE "

@@ -1,4 +1,4 @@
-"""``boringbar paper``: the whole published study (MODEL.md section 6) under both
+"""``boringbar paper``: the whole published study (docs/model.md, section 6) under both
 presets, and a report comparing them.
 
 The study is a list of :class:`Step` s. Each step is one published analysis
@@ -12,7 +12,7 @@ it stopped. ``--quick`` runs the same steps on coarser grids and shorter runs
 (written in the report, and in each step's command).
 
 Beside the published analyses, ``corrections`` measures what each of the
-MODEL.md corrections changes (:mod:`boringbar.report.corrections`). The
+docs/model.md corrections changes (:mod:`boringbar.report.corrections`). The
 report (:mod:`boringbar.report.html`) is written last, from the files on disk.
 """
 
@@ -46,7 +46,7 @@ class Step:
 
 
 def published_steps(quick: bool = False) -> list[Step]:
-    """The steps of the published study (MODEL.md section 6); ``quick``: coarser."""
+    """The steps of the published study (docs/model.md, section 6); ``quick``: coarser."""
     dur = ("--duration-s", "0.5") if quick else ()
     steps = [Step("sweep", "sweeps", "Frequency sweeps of tip RMS, F0 = 10 and 20 N",
                   ("sweep", "--force-n", "10,20",

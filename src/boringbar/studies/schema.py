@@ -8,7 +8,7 @@ output), ``[bar]`` and ``[damper]`` (the keys of
 options of the chosen analysis) and ``[grid]``: any gridable setting given
 as a list or as ``{start, stop, step}`` becomes an axis, and the study is
 the cartesian product of its axes.  Defaults are the published study
-(MODEL.md section 6).  Every key is checked before any work starts: an
+(docs/model.md, section 6).  Every key is checked before any work starts: an
 unknown key, a wrong type or a value out of range raises :class:`StudyError`
 with the file, the key, the value and what is allowed.
 
