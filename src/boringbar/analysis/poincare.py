@@ -235,7 +235,7 @@ class PoincareMap:
     The verdict uses the whole sampled state: (W, W') and, for a free ball or
     an absorber, the auxiliary pair (y, y') or (stroke, stroke rate); the
     ball's state separates irregular impact sequences that barely move the
-    bar (docs/model.md's non-uniform patterns at gap 0.1 mm scatter W by ~2 % of
+    bar (the published non-uniform patterns at gap 0.1 mm scatter W by ~2 % of
     its amplitude but y across the whole clearance).
     """
 

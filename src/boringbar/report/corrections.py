@@ -1,4 +1,5 @@
-"""What each correction docs/model.md makes to the published equations changes, measured.
+"""What each correction to the published equations (docs/model.md, section 8)
+changes, measured.
 
 The ``paper`` preset reruns the study with three published readings
 (docs/model.md, section 2): the friction force as computed in the paper

@@ -266,7 +266,7 @@ class _Report:
         parts = [
             "<h2 id='corrections'>The corrections to the published equations, and what each "
             "changes</h2>",
-            "<p>docs/model.md restates the published model with these corrections. The "
+            "<p>The model (docs/model.md, section 8) corrects the published equations. The "
             "<code>paper</code> preset keeps the three published readings that can be run "
             "(friction force, bar reaction, calibrated stiffness, with one mode and the "
             "published absorber); the impact law is always the corrected one. Each is "

@@ -11,9 +11,9 @@ summary is there with the same command, so an interrupted study resumes where
 it stopped. ``--quick`` runs the same steps on coarser grids and shorter runs
 (written in the report, and in each step's command).
 
-Beside the published analyses, ``corrections`` measures what each of the
-docs/model.md corrections changes (:mod:`boringbar.report.corrections`). The
-report (:mod:`boringbar.report.html`) is written last, from the files on disk.
+Beside the published analyses, ``corrections`` measures what each correction
+to the published equations (docs/model.md, section 8) changes
+(:mod:`boringbar.report.corrections`). The report (:mod:`boringbar.report.html`) is written last, from the files on disk.
 """
 
 from __future__ import annotations
