@@ -50,8 +50,8 @@ PUBLISHED_FORCES = "5:50:1"
 def add_bifurcation(sub) -> None:
     p = sub.add_parser("bifurcation",
                        help="Poincare samples of the tip against F0 (or Omega/omega_n, gap, e)",
-                       description="Bifurcation diagram by continuation (docs/model.md, section 6): "
-                                   "one run per value of the swept parameter, each from the "
+                       description="Bifurcation diagram by continuation (docs/model.md, "
+                                   "section 6): one run per value of the swept parameter, each from the "
                                    "previous run's final state (forcing phase continuous), "
                                    "forward and then backward; stroboscopic Poincare samples "
                                    "of the tip (Omega t = 0 mod 2 pi) after dropping the first "

@@ -13,7 +13,8 @@ it stopped. ``--quick`` runs the same steps on coarser grids and shorter runs
 
 Beside the published analyses, ``corrections`` measures what each correction
 to the published equations (docs/model.md, section 8) changes
-(:mod:`boringbar.report.corrections`). The report (:mod:`boringbar.report.html`) is written last, from the files on disk.
+(:mod:`boringbar.report.corrections`). The report (:mod:`boringbar.report.html`)
+is written last, from the files on disk.
 """
 
 from __future__ import annotations
