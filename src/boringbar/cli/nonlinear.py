@@ -52,8 +52,8 @@ def add_bifurcation(sub) -> None:
                        help="Poincare samples of the tip against F0 (or Omega/omega_n, gap, e)",
                        description="Bifurcation diagram by continuation (docs/model.md, "
                                    "section 6): one run per value of the swept parameter, "
-                                   "each from the previous run's final state (forcing phase continuous), "
-                                   "forward and then backward; stroboscopic Poincare samples "
+                                   "each from the previous run's final state (forcing phase "
+                                   "continuous), forward and then backward; stroboscopic Poincare samples "
                                    "of the tip (Omega t = 0 mod 2 pi) after dropping the first "
                                    "--drop of each run.  Exactly one of --force-n, --ratio, "
                                    "--gap-mm, --restitution is swept, written START:STOP:STEP "
