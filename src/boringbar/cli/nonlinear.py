@@ -50,17 +50,16 @@ PUBLISHED_FORCES = "5:50:1"
 def add_bifurcation(sub) -> None:
     p = sub.add_parser("bifurcation",
                        help="Poincare samples of the tip against F0 (or Omega/omega_n, gap, e)",
-                       description="Bifurcation diagram by continuation (docs/model.md, "
-                                   "section 6): one run per value of the swept parameter, "
-                                   "each from the previous run's final state (forcing phase "
-                                   "continuous), forward and then backward; stroboscopic Poincare samples "
-                                   "of the tip (Omega t = 0 mod 2 pi) after dropping the first "
-                                   "--drop of each run.  Exactly one of --force-n, --ratio, "
-                                   "--gap-mm, --restitution is swept, written START:STOP:STEP "
-                                   "(inclusive) or as a comma list in sweep order; the others "
-                                   "take one value.  Default: --force-n 5:50:1 at --ratio 1 "
-                                   "(published).  Writes DIR/bifurcation.nc and "
-                                   "DIR/bifurcation.png.")
+                       description="Bifurcation diagram by continuation (docs/model.md, section "
+                                   "6): one run per value of the swept parameter, each from the "
+                                   "previous run's final state (forcing phase continuous), forward"
+                                   " and then backward; stroboscopic Poincare samples of the tip "
+                                   "(Omega t = 0 mod 2 pi) after dropping the first --drop of each"
+                                   " run.  Exactly one of --force-n, --ratio, --gap-mm, "
+                                   "--restitution is swept, written START:STOP:STEP (inclusive) or"
+                                   " as a comma list in sweep order; the others take one value.  "
+                                   "Default: --force-n 5:50:1 at --ratio 1 (published).  Writes "
+                                   "DIR/bifurcation.nc and DIR/bifurcation.png.")
     groups = add_common(p, many=False, harmonic=False, ranges=True)
     g = groups["run"]
     g.add_argument("--force-n", metavar="N|START:STOP:STEP",
