@@ -45,6 +45,8 @@ class Initial:
     mode (u_1 = W0/psi_1(L), higher modes at rest); the ball at ``ball_position``
     y0 in [-delta/2, delta/2] with relative velocity y0'; the absorber at rest
     relative to the bar.  Default: everything at rest, ball centred.
+    ``tip_displacement`` (m), ``tip_velocity`` (m/s), ``ball_position`` (m),
+    ``ball_velocity`` (m/s).
     """
 
     tip_displacement: float = 0.0
@@ -99,7 +101,17 @@ class State:
 class Run:
     """The result of :func:`simulate` (frozen): streamed metrics, events and (if asked)
     history; :meth:`summary` and :meth:`config` as JSON-able dicts, :meth:`to_xarray`
-    as a labelled Dataset."""
+    as a labelled Dataset.
+
+    ``system`` and ``forcing`` as run; ``omega``: forcing (or spindle) frequency
+    (rad/s); ``dt``, ``t0``, ``duration`` (s) and ``steady_start`` (s), where RMS and
+    patterns begin; ``metrics``: the streamed metrics; ``impacts`` (time, wall,
+    relative velocity), ``sticks`` (start, end), ``strobe`` (Poincare samples) and
+    ``history`` (t, W, W', aux, aux', force; None unless recorded); ``initial`` and
+    ``final``: the states it started from and ended at; ``pattern``: the impact
+    pattern; ``energy``: the energy flows and their balance; ``thresholds``: the
+    pattern classifier's tolerances; ``integrator`` and ``elapsed_s`` (wall time).
+    """
 
     system: System
     forcing: Harmonic | Regenerative
@@ -226,7 +238,8 @@ def _plain(value):
 
 class IntegrationError(RuntimeError):
     """The exact integrator could not finish a run: ``status`` is the kernel's code
-    (:data:`EXACT_STATUS_MESSAGES`), the message says what happened and what to do."""
+    (:data:`EXACT_STATUS_MESSAGES`), ``events`` the events it had handled and
+    ``t_reached`` (s) where it stopped; the message says what happened and what to do."""
 
     def __init__(self, status: int, events: int, t_reached: float):
         self.status, self.events, self.t_reached = status, events, t_reached

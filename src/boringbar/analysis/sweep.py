@@ -12,6 +12,7 @@ attributes.
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
 import sys
@@ -40,8 +41,10 @@ NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle"
 
 @dataclass(frozen=True, eq=False)
 class Case:
-    """One bar of a sweep: a label, the System, and what distinguishes it; ``initial``:
-    this case's initial conditions (default: the integration's)."""
+    """One bar of a sweep: a ``label``, the ``system``, and what distinguishes it:
+    ``bar`` kind, ``gap`` (m, NaN without a ball) and ``friction`` ("on", "off",
+    "n/a"); ``initial``: this case's initial conditions (default: the
+    integration's)."""
 
     label: str
     system: System
@@ -51,10 +54,21 @@ class Case:
     initial: Initial | None = None
 
 
+#: what published_cases passes on to make_system
+_OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap",
+                                                                 "friction"}
+
+
 def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
                     frictions=(False, True), preset: str = "physical", **overrides) -> list[Case]:
-    """The bars of the published sweeps: solid, TMD, and the ball damper for
-    every gap x friction.  ``overrides`` go to :func:`make_system`."""
+    """The bars of the published sweeps under ``preset``: those of ``bars`` among solid,
+    TMD, and the ball damper for every gap of ``gaps`` (m) x friction of ``frictions``
+    (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones;
+    the bar arguments only to the ball cases)."""
+    unknown = sorted(set(overrides) - _OVERRIDABLE)
+    if unknown:
+        raise TypeError(f"published_cases() got unexpected keyword arguments {unknown}; "
+                        f"make_system takes {sorted(_OVERRIDABLE)}")
     cases = []
     for bar in bars:
         if bar == "ball":

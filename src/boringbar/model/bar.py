@@ -82,6 +82,12 @@ class ModalModel:
     values at the tip (psi_tip), at the ball (psi_damper) and at the
     absorber (psi_absorber).  Any normalisation of a mode is allowed; the
     physical outputs (tip displacement W = psi_tip . u) do not depend on it.
+
+    ``mass``, ``stiffness``, ``damping_ratio``: M_i, K_i, zeta_i per mode;
+    ``psi_tip``, ``psi_damper``, ``psi_absorber``: the mode shapes at the tip, at
+    the ball ``z_damper`` and at the absorber ``z_absorber`` (m from the clamp);
+    ``source``: where the model came from ("fe", "tap-test", with a calibration
+    note appended); ``info``: free-form provenance.
     """
 
     mass: np.ndarray  #: modal masses M_i (kg, in the units the mode is normalised)
@@ -223,7 +229,13 @@ class ModalModel:
 
 @dataclass(frozen=True)
 class SteppedBar:
-    """A stepped cantilever: clamped at z = 0, free at the end of the last section."""
+    """A stepped cantilever: clamped at z = 0, free at the end of the last section.
+
+    ``sections``: contiguous :class:`Section` s from the clamp; ``youngs_modulus``
+    (Pa) and ``density`` (kg/m^3) of the material; ``damping_ratio``: modal damping
+    of every mode; ``max_element_length`` (m): the finite-element mesh size
+    (nodes also at every section boundary and at the points asked for).
+    """
 
     sections: tuple[Section, ...] = published_sections(cavity=True)
     youngs_modulus: float = STEEL_E
@@ -346,7 +358,9 @@ def _element_matrices(length: float, ei: float, rho_a: float):
 
 def published_bar(cavity: bool = True, n_modes: int = 1, z_absorber: float = ABSORBER_POSITION,
                   max_element_length: float = 0.005) -> ModalModel:
-    """The published boring bar's modal model (ball-cavity bar, or solid)."""
+    """The published boring bar's modal model: the ball-cavity bar (``cavity``) or the
+    solid one, ``n_modes`` retained, the absorber's mode shape at ``z_absorber`` (m),
+    meshed at ``max_element_length`` (m)."""
     bar = SteppedBar(sections=published_sections(cavity),
                      max_element_length=max_element_length)
     return bar.modal_model(n_modes=n_modes, z_damper=BALL_POSITION, z_absorber=z_absorber)

@@ -93,10 +93,14 @@ NO_FRICTION = Friction("none", 0.0)
 
 @dataclass(frozen=True)
 class ImpactDamper:
-    """A free ball in a cavity at z_d with total clearance ``gap`` (delta).
+    """A free ball in a cavity at z_d with total clearance ``gap`` (delta, m).
 
-    The ball travels delta/2 each way from the cavity centre.  ``locked``
+    The ball (``mass`` kg, ``radius`` m, ``material`` a name for the record)
+    travels delta/2 each way from the cavity centre; ``restitution`` is the
+    coefficient of restitution of its impacts (0-1); ``friction`` (a
+    :class:`Friction`) acts while it rolls or slides along the cavity.  ``locked``
     turns it into a rigid added mass at z_d (for comparison).
+    :meth:`ball` builds one from a material and a diameter.
     """
 
     mass: float = PUBLISHED_CARBIDE_MASS
@@ -146,7 +150,9 @@ class ImpactDamper:
 
 @dataclass(frozen=True)
 class TunedMassDamper:
-    """An absorber of ``mass`` on spring ``stiffness`` and dashpot ``damping`` at z_a."""
+    """An absorber of ``mass`` (kg) on spring ``stiffness`` (N/m) and dashpot ``damping``
+    (N s/m) at ``position`` z_a (m from the clamp); ``design`` names where the values
+    came from ("given", "published", "den-hartog", "sims")."""
 
     mass: float
     stiffness: float
@@ -187,7 +193,9 @@ class TunedMassDamper:
 
 
 def den_hartog_parameters(mass: float, bar) -> dict:
-    """Den Hartog's formulas (docs/model.md, section 3) for mode 1 of ``bar``."""
+    """Den Hartog's formulas (docs/model.md, section 3) for an absorber of ``mass`` (kg)
+    on mode 1 of ``bar`` (a ModalModel): mass ratio, frequency and damping ratios,
+    stiffness (N/m) and damping (N s/m)."""
     mu = mass * bar.psi_absorber[0] ** 2 / bar.mass[0]
     wn = bar.natural_frequency
     f_opt = 1.0 / (1.0 + mu)

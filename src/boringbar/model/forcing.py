@@ -58,6 +58,9 @@ class Regenerative:
     deflection under the mean force (``start = "static"``, a steady cut).
     The delayed W at RK4 stages is interpolated from the stored history
     with a cubic Hermite from W and W' (4th order, default) or linearly.
+    ``depth`` b (m), ``rpm`` (rev/min), ``kr`` the specific radial cutting force
+    (Pa), ``feed`` h_m per revolution (m), ``revolutions`` N of the minimum;
+    ``interpolation``: "cubic" or "linear".
     ``stop_at_zero`` ends the run at the first h = 0 (a lobe search needs no
     more); ``bounded_fraction``: the amplitude criterion's threshold, as a
     fraction of h_m.

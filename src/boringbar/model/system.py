@@ -50,7 +50,9 @@ READINGS = {
 
 @dataclass(frozen=True, eq=False)
 class System:
-    """A bar (modal model of the host bar) and its damper (or none)."""
+    """A bar (modal model of the host bar) and its damper (or none); ``preset`` names
+    the preset that built it ("custom" otherwise) and ``readings`` the published
+    readings it applies (:data:`READINGS`)."""
 
     bar: ModalModel
     damper: ImpactDamper | TunedMassDamper | None = None
@@ -98,9 +100,14 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5
     """Build one of the three bars under a preset, with explicit overrides.
 
     ``bar``: "solid", "ball" (ball damper; ``locked`` fixes the ball) or
-    "tmd".  ``friction`` on/off; ``friction_number`` is the published
+    "tmd"; ``preset``: "physical" or "paper" (:data:`READINGS`).  Ball: ``gap``
+    (m), ``ball`` ("carbide", "steel"), ``restitution``; ``friction`` on/off;
+    ``friction_reaction``: "reciprocal" (physical) or "printed" (the published
+    sign of the bar's reaction); ``friction_number`` is the published
     rolling-resistance number (0.6 nominal, read as the preset reads it);
     ``friction_force`` (N) overrides the number when friction is on.
+    ``n_modes``: retained bending modes (default 1 paper, 2 physical);
+    ``tmd_mass`` (kg) at ``z_absorber`` (m from the clamp);
     ``tmd_design``: "den-hartog" (physical default), "published" (paper
     default) or "sims" (Sims' equal-real-trough tuning, for chatter).  ``modal`` replaces
     the FE model (e.g. :meth:`ModalModel.from_tap_test`).  ``static_ratio``:

@@ -104,7 +104,9 @@ def static_tip_compliance(bar) -> float:
 def min_real_part(
     bar, tmd: TunedMassDamper | None = None, omega=None, *, added_mass: float = 0.0
 ) -> tuple[float, float]:
-    """(min Re G (m/N), omega at the minimum (rad/s)) of the tip receptance.
+    """(min Re G (m/N), omega at the minimum (rad/s)) of the tip receptance of ``bar``
+    (a ModalModel) with the absorber ``tmd`` (or none) and a rigid ``added_mass`` (kg)
+    at the ball's position.
 
     Searched on ``omega`` (default: omega_1 times ``TROUGH_BAND``,
     ``TROUGH_POINTS`` points); every local minimum of the grid is then
