@@ -51,7 +51,7 @@ from boringbar import __version__
 from boringbar._validate import ParameterError
 from boringbar.io import atomic_path, fsync_dir, write_json_atomic, write_netcdf_atomic
 from boringbar.studies.registry import ANALYSES
-from boringbar.studies.schema import Study, StudyError
+from boringbar.studies.schema import Study, StudyError, output_format
 
 log = logging.getLogger("boringbar.studies.runner")
 
@@ -137,11 +137,13 @@ def compute_chunk(study: Study, key: str, chunk: int, indices: list, remote: boo
 
 # --- the store -----------------------------------------------------------------------
 
-def _format(study: Study, out: Path) -> str:
-    fmt = study.format or ("zarr" if out.suffix == ".zarr" else "netcdf")
-    if fmt == "zarr" and out.suffix not in (".zarr", ""):
-        log.info("writing Zarr to %s (format = 'zarr')", out)
-    return fmt
+def _format(study: Study, out: Path, given: bool) -> str:
+    """The result's format: from the suffix of ``out`` (.nc or .zarr), which must
+    match the study's ``format``."""
+    try:
+        return output_format(out, study.format, "out" if given else "key 'study.out'")
+    except ParameterError as exc:
+        raise StudyError(f"{study.source}: {exc}") from None
 
 
 def _open(out: Path, fmt: str):
@@ -402,8 +404,8 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
             raise ParameterError(f"{name} = {v!r} must be an integer >= 1")
     workers = 1 if executor == "serial" else int(dask_local or workers or os.cpu_count() or 1)
 
+    fmt = _format(study, study.output_path(out), given=out is not None)
     out = study.output_path(out)
-    fmt = _format(study, out)
     key = study.config_hash()
     analysis = ANALYSES[study.analysis]
     report.__dict__.update(out=str(out), analysis=study.analysis, executor=executor,
