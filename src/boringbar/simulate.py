@@ -327,9 +327,10 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     return e
 
 
-def check_step(system: System, omega: float, dt: float) -> None:
-    """The step must resolve the forcing period and the highest retained mode."""
-    check_positive("dt", dt, "s")
+def check_step(system: System, omega: float, dt: float, name: str = "dt") -> None:
+    """The step must resolve the forcing period and the highest retained mode
+    (``name``: how the caller calls dt)."""
+    check_positive(name, dt, "s")
     periods = [2 * math.pi / w for w in system.bar.omegas]
     if omega > 0:
         periods.append(2 * math.pi / omega)
@@ -337,7 +338,7 @@ def check_step(system: System, omega: float, dt: float) -> None:
         periods.append(2 * math.pi * math.sqrt(system.damper.mass / system.damper.stiffness))
     limit = min(periods) / MIN_STEPS_PER_PERIOD
     if dt > limit:
-        raise ParameterError(f"dt = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
+        raise ParameterError(f"{name} = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
                              f"({MIN_STEPS_PER_PERIOD} steps per period of the forcing and "
                              "of the highest retained mode)")
 

@@ -23,6 +23,7 @@ from boringbar.cli.options import (
     add_cutting,
     add_drop,
     check_depth,
+    check_dt,
     check_force,
     check_gap,
     check_ratio,
@@ -370,6 +371,7 @@ def _cmd_basins(args) -> int:
         kw.update(gap=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
     forcing = Harmonic(force, ratio)
+    check_dt(args, [system], ratio)
     ds = basins(system, forcing, displacement=displacement, velocity=velocity,
                 duration=args.duration_s, dt=args.dt_s, drop=args.drop, ball_position=y0,
                 ball_velocity=yv0, workers=args.workers,

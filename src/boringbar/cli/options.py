@@ -28,6 +28,7 @@ from boringbar.simulate import (
     MAX_INITIAL_VELOCITY,
     Initial,
     check_delay,
+    check_step,
     check_steps,
 )
 
@@ -201,6 +202,13 @@ def _check_common(args, bars: list[str]) -> None:
 
 def check_gap(gap_mm: float) -> float:
     return check_range("--gap-mm", gap_mm, 0, MAX_GAP * 1e3, lo_open=True, unit="mm") * 1e-3
+
+
+def check_dt(args, systems, ratio: float = 0.0) -> None:
+    """--dt-s resolves the highest mode of every system and the forcing at ``ratio``
+    (the largest Omega/omega_n; 0: only the modes)."""
+    for system in systems:
+        check_step(system, ratio * system.reference_frequency, args.dt_s, "--dt-s")
 
 
 def check_workers(workers, name: str = "--workers") -> None:

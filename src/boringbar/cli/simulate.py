@@ -10,6 +10,7 @@ from boringbar.cli.options import (
     add_common,
     add_cutting,
     check_depth,
+    check_dt,
     check_force,
     check_gap,
     check_ratio,
@@ -61,6 +62,7 @@ def cmd_simulate(args) -> int:
     if bar == "ball":
         kw.update(gap=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
+    check_dt(args, [system], getattr(forcing, "ratio", 0.0))
     initial = initial_conditions(args, [gap] if bar == "ball" else [])
     run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s, initial=initial,
                    record_every=record_every, integrator=args.integrator)

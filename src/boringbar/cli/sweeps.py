@@ -17,6 +17,7 @@ from boringbar.cli.options import (
     add_common,
     add_cutting,
     check_depth,
+    check_dt,
     check_rpm,
     check_workers,
     cut_options,
@@ -82,6 +83,7 @@ def add_lobes(sub) -> None:
 def _cmd_sweep(args) -> int:
     cases, bars, gaps = many_cases(args)
     forces, ratios = forces_and_ratios(args)
+    check_dt(args, [c.system for c in cases], max(ratios))
 
     initial = initial_conditions(args, gaps if "ball" in bars else [])
     progress = progress_printer(args, "sweep", "runs")
