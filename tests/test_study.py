@@ -58,7 +58,7 @@ def test_to_dict_round_trips_and_is_json():
     ('[study]\nanalysis = "sweep"\n[damper]\ngapmm = 0.5\n', "damper.gapmm", "0.5",
      "unknown key"),
     ('[study]\nanalysis = "sweep"\n[damper]\ngap_mm = -0.5\n', "damper.gap_mm", "-0.5",
-     "a number in (0, inf)"),
+     "a number in (0, 2]"),
     ('[study]\nanalysis = "sweep"\n[damper]\ngap_mm = "wide"\n', "damper.gap_mm", "'wide'",
      "a number"),
     ('[study]\nanalysis = "sweep"\n[damper]\nball = "glass"\n', "damper.ball", "'glass'",

@@ -17,7 +17,14 @@ import numpy as np
 import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_choice, check_positive, check_range
+from boringbar._validate import (
+    ParameterError,
+    check_choice,
+    check_finite,
+    check_int,
+    check_positive,
+    check_range,
+)
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact import run_exact
 from boringbar.kernels.rk4 import run_rk4
@@ -36,6 +43,22 @@ MIN_STEPS_PER_PERIOD = 20
 #: The time integrators: the published fixed-step RK4, or exact and event-driven.
 INTEGRATORS = ("rk4", "exact")
 
+# Resource bounds: far beyond any study (the published runs are 2e6 steps, 922
+# periods and 20000 history rows), small enough that a run's arrays fit in memory.
+#: Most time steps of one run, round(duration / dt) (the published run: 2e6).
+MAX_STEPS = 10_000_000_000
+#: Most history rows of one run, steps // record_every (6 floats a row: 480 MB), and
+#: most rows of a cut's delay history, revolutions tau / dt (2 floats a row).
+MAX_HISTORY_ROWS = 10_000_000
+#: Most impact and stick rows kept (the counts in the metrics are always complete;
+#: ``impacts_truncated`` says when the steady part had more impacts than this), and
+#: most Poincare (strobe) samples, one per period (5 floats a row).
+MAX_EVENT_ROWS = 10_000_000
+#: Largest |initial tip displacement| (m) and |initial velocity| (m/s): a boring bar
+#: 0.2 m long cannot deflect a metre; the bounds keep the arithmetic finite.
+MAX_INITIAL_DISPLACEMENT = 1.0
+MAX_INITIAL_VELOCITY = 1000.0
+
 
 @dataclass(frozen=True)
 class Initial:
@@ -53,6 +76,13 @@ class Initial:
     tip_velocity: float = 0.0
     ball_position: float = 0.0
     ball_velocity: float = 0.0
+
+    def __post_init__(self):
+        d, v = MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY
+        check_range("initial tip_displacement", self.tip_displacement, -d, d, unit="m")
+        check_range("initial tip_velocity", self.tip_velocity, -v, v, unit="m/s")
+        check_range("initial ball_position", self.ball_position, -d, d, unit="m")
+        check_range("initial ball_velocity", self.ball_velocity, -v, v, unit="m/s")
 
 
 @dataclass(frozen=True)
@@ -95,6 +125,13 @@ class State:
 
     x: np.ndarray
     t: float
+
+    def __post_init__(self):
+        x = np.asarray(self.x, dtype=float)
+        if x.ndim != 1 or not np.all(np.isfinite(x)):
+            raise ParameterError(f"initial state x = {self.x!r} must be a 1-d array of finite "
+                                 "numbers")
+        check_finite("initial state t", self.t, "s")
 
 
 @dataclass(frozen=True, eq=False)
@@ -337,9 +374,10 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     return e
 
 
-def check_step(system: System, omega: float, dt: float) -> None:
-    """The step must resolve the forcing period and the highest retained mode."""
-    check_positive("dt", dt, "s")
+def check_step(system: System, omega: float, dt: float, name: str = "dt") -> None:
+    """The step must resolve the forcing period and the highest retained mode
+    (``name``: how the caller calls dt)."""
+    check_positive(name, dt, "s")
     periods = [2 * math.pi / w for w in system.bar.omegas]
     if omega > 0:
         periods.append(2 * math.pi / omega)
@@ -347,9 +385,56 @@ def check_step(system: System, omega: float, dt: float) -> None:
         periods.append(2 * math.pi * math.sqrt(system.damper.mass / system.damper.stiffness))
     limit = min(periods) / MIN_STEPS_PER_PERIOD
     if dt > limit:
-        raise ParameterError(f"dt = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
+        raise ParameterError(f"{name} = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
                              f"({MIN_STEPS_PER_PERIOD} steps per period of the forcing and "
                              "of the highest retained mode)")
+
+
+def check_steps(duration: float, dt: float, names: tuple[str, str] = ("duration", "dt")) -> int:
+    """round(duration / dt), the run's number of steps: at least 1 and at most
+    :data:`MAX_STEPS`, else ParameterError naming both (``names``: how the caller
+    calls them, e.g. the CLI's options)."""
+    d_name, dt_name = names
+    check_positive(d_name, duration, "s")
+    check_positive(dt_name, dt, "s")
+    steps = duration / dt
+    if steps > MAX_STEPS:
+        raise ParameterError(f"{d_name} = {duration:g} s with {dt_name} = {dt:g} s is "
+                             f"{steps:.3g} steps; the allowed maximum is {MAX_STEPS:.0e} steps "
+                             "(shorten the run, or continue it from its final state)")
+    n_steps = int(round(steps))
+    if n_steps < 1:
+        raise ParameterError(f"{d_name} = {duration:g} s is shorter than one step {dt_name} = "
+                             f"{dt:g} s")
+    return n_steps
+
+
+def check_history(n_steps: int, record_every: int, name: str = "record_every") -> int:
+    """The number of history rows, n_steps // record_every: at most
+    :data:`MAX_HISTORY_ROWS`, else ParameterError naming ``name``."""
+    rows = n_steps // record_every
+    if rows > MAX_HISTORY_ROWS:
+        raise ParameterError(f"{name} = {record_every} keeps {rows} history rows of "
+                             f"{n_steps} steps; the allowed maximum is {MAX_HISTORY_ROWS:.0e} "
+                             f"rows ({name} >= {math.ceil(n_steps / MAX_HISTORY_ROWS)})")
+    return rows
+
+
+def check_delay(rpm: float, revolutions: int, dt: float, name: str = "rpm") -> int:
+    """The rows of a cut's delay history, ceil(revolutions 60 / rpm / dt) + 3: the
+    spindle period must hold 4 steps, and the rows be at most
+    :data:`MAX_HISTORY_ROWS`, else ParameterError naming ``name`` (the speed)."""
+    tau = 60.0 / check_positive(name, rpm, "rpm")
+    if tau < 4 * dt:
+        raise ParameterError(f"{name} = {rpm:g} rpm: dt = {dt:g} s must be under a quarter "
+                             f"of the spindle period {tau:g} s")
+    rows = revolutions * tau / dt + 3
+    if rows > MAX_HISTORY_ROWS:
+        raise ParameterError(f"{name} = {rpm:g} rpm: {revolutions} revolutions of {tau:g} s "
+                             f"are {rows:.3g} steps of dt = {dt:g} s of delay history; the "
+                             f"allowed maximum is {MAX_HISTORY_ROWS:.0e} (raise the speed "
+                             "or dt)")
+    return int(math.ceil(revolutions * tau / dt)) + 3
 
 
 @dataclass(eq=False)
@@ -394,17 +479,15 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
         raise ParameterError(f"friction static_ratio = {d.friction.static_ratio!r}: the rk4 "
                              "integrator has only the sgn() law (static_ratio = 1); use "
                              "integrator = 'exact' for true stick-slip")
-    check_positive("duration", duration, "s")
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
-    check_range("record_every", record_every, 0, math.inf, hi_open=True)
+    record_every = check_int("record_every", record_every, 0, MAX_STEPS)
     omega = 2 * math.pi / forcing.tau if cutting else forcing.omega(system.reference_frequency)
     check_step(system, omega, dt)
-    if cutting and forcing.tau < 4 * dt:
-        raise ParameterError(f"dt = {dt:g} s must be under a quarter of the spindle period "
-                             f"{forcing.tau:g} s")
-    n_steps = int(round(duration / dt))
-    if n_steps < 1:
-        raise ParameterError(f"duration = {duration:g} s is shorter than one step dt = {dt:g} s")
+    if cutting:
+        check_delay(forcing.rpm, forcing.revolutions, dt)
+    n_steps = check_steps(duration, dt)
+    if record_every:
+        check_history(n_steps, record_every)
 
     if isinstance(initial, State):
         x = np.array(initial.x, dtype=float)
@@ -440,7 +523,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
         p[L.INTERP] = 1.0 if forcing.interpolation == "cubic" else 0.0
         p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
         p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
-        buf = np.zeros((int(math.ceil(forcing.revolutions * forcing.tau / dt)) + 3, 2))
+        buf = np.zeros((check_delay(forcing.rpm, forcing.revolutions, dt), 2))
         period = 2 * math.pi / system.reference_frequency
     else:
         p = pack(system, omega, forcing.amplitude, dt)
@@ -451,7 +534,11 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     if strobe:
         p[L.STROBE_PERIOD] = period
         p[L.STROBE_T0] = 0.0
-    cap_imp = int(max(1000, 40 * n_periods))
+    if strobe and n_periods + 2 > MAX_EVENT_ROWS:
+        raise ParameterError(f"duration = {duration:g} s is {n_periods:.3g} periods of "
+                             f"{period:g} s: at most {MAX_EVENT_ROWS:.0e} Poincare samples "
+                             "(one a period) are kept; shorten the run")
+    cap_imp = int(min(MAX_EVENT_ROWS, max(1000, 40 * n_periods)))
     imp = np.zeros((cap_imp, 3))
     stick = np.zeros((cap_imp, 2))
     stb = np.zeros((int(n_periods) + 2 if strobe else 0, 5))
@@ -576,8 +663,15 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
     RMS and patterns use the last ``steady_fraction`` of the record.
     ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
     to continue it (time, hence forcing phase, runs on).  ``record_every`` N
-    keeps every N-th step's state; ``strobe`` keeps Poincare samples at
-    Omega t = 0 mod 2 pi.
+    keeps every N-th step's state (0, the default: no history); ``strobe`` keeps
+    Poincare samples at Omega t = 0 mod 2 pi.
+
+    Limits (a ParameterError names the parameter, its value and the maximum): every
+    number finite; at most :data:`MAX_STEPS` (1e10) steps duration / dt; at most
+    :data:`MAX_HISTORY_ROWS` (1e7) history rows (steps // record_every) and as many
+    rows of a cut's delay history (revolutions 60 / rpm / dt); at most
+    :data:`MAX_EVENT_ROWS` (1e7) Poincare samples.  Impacts and stick intervals beyond
+    1e7 rows are counted in the metrics but not kept (``impacts_truncated``).
 
     ``integrator``: ``"rk4"`` (the published scheme, docs/model.md, section 5) or
     ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;

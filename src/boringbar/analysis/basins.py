@@ -56,7 +56,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_positive, check_range
+from boringbar._validate import ParameterError, check_int, check_positive, check_range
 from boringbar.kernels.rk4_batch import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
@@ -71,6 +71,9 @@ MIN_REPEATS = 3
 #: Published grid: tip displacement (m) and velocity (m/s), (start, stop, count).
 PUBLISHED_DISPLACEMENT = (-1.5e-3, 1.5e-3, 30)
 PUBLISHED_VELOCITY = (-1.5, 1.5, 30)
+#: Most cells (runs) of one basin grid, displacement count x velocity count
+#: (published: 900); a cell keeps its Poincare samples until they are grouped.
+MAX_BASIN_CELLS = 1_000_000
 #: Cells per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
 BATCH = 16
 
@@ -122,9 +125,23 @@ def basin_grid(name: str, spec) -> np.ndarray:
         raise ParameterError(f"{name} = {spec!r} must be (start, stop, count)") from None
     check_range(f"{name} start", lo, -math.inf, math.inf, lo_open=True, hi_open=True)
     check_range(f"{name} stop", hi, float(lo), math.inf, hi_open=True)
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-        raise ParameterError(f"{name} count = {n!r} must be an integer >= 1")
+    if isinstance(n, bool) or not isinstance(n, int | np.integer):
+        raise ParameterError(f"{name} count = {n!r} must be an integer in [1, "
+                             f"{MAX_BASIN_CELLS}]")
+    check_int(f"{name} count", n, 1, MAX_BASIN_CELLS)
     return np.linspace(float(lo), float(hi), int(n))
+
+
+def check_cells(n_displacement: int, n_velocity: int,
+                names: tuple[str, str] = ("displacement", "velocity")) -> int:
+    """The cells of a basin grid, n_displacement x n_velocity: at most
+    :data:`MAX_BASIN_CELLS`, else ParameterError naming both axes."""
+    cells = int(n_displacement) * int(n_velocity)
+    if cells > MAX_BASIN_CELLS:
+        raise ParameterError(f"{names[0]} count = {n_displacement} x {names[1]} count = "
+                             f"{n_velocity} is {cells} runs; the allowed maximum is "
+                             f"{MAX_BASIN_CELLS} cells")
+    return cells
 
 
 def signature(strobe: np.ndarray, scale: float, omega: float,
@@ -262,6 +279,7 @@ def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACE
                              "periodically forced system)")
     w0 = basin_grid("displacement", displacement)
     v0 = basin_grid("velocity", velocity)
+    check_cells(len(w0), len(v0))
     check_positive("duration", duration, "s")
     check_range("drop", drop, 0.0, 1.0, hi_open=True)
     tol = BasinTolerance() if tol is None else tol

@@ -46,15 +46,24 @@ import numpy as np
 import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_choice, check_positive, check_range
+from boringbar._validate import (
+    ParameterError,
+    check_choice,
+    check_int,
+    check_positive,
+    check_range,
+)
 from boringbar.analysis.sweep import Case
 from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
 from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds
-from boringbar.simulate import INTEGRATORS, simulate
+from boringbar.simulate import INTEGRATORS, check_delay, simulate
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
 PUBLISHED_DEPTH_STEP = 0.01e-3
+#: Most depths on one speed's grid, max_depth / depth_step (published: 300); each
+#: (case, speed, depth) holds a few numbers in the Dataset.
+MAX_DEPTHS = 100_000
 METHODS = ("scan", "search")
 CRITERIA = ("zero", "bounded")
 #: codes of the verdict arrays
@@ -217,11 +226,15 @@ def lobe_options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step:
     check_choice("criterion", criterion, CRITERIA)
     check_positive("depth_step", depth_step, "m")
     check_range("max_depth", max_depth, depth_step, 1.0, unit="m")
-    check_range("successive", successive, 1, 100)
+    check_int("successive", successive, 1, 100)
     check_choice("integrator", integrator, INTEGRATORS)
     for r in rpm:
         check_positive("rpm", r)
     n_max = int(math.floor(max_depth / depth_step + 1e-9))
+    if n_max > MAX_DEPTHS:
+        raise ParameterError(f"depth_step = {depth_step:g} m gives {n_max} depths up to "
+                             f"max_depth = {max_depth:g} m; the allowed maximum is "
+                             f"{MAX_DEPTHS} depths")
     opts = {"kr": kr, "feed": feed, "revolutions": revolutions, "interpolation": interpolation,
             "start": start, "bounded_fraction": bounded_fraction, "duration": duration,
             "dt": dt, "depth_step": depth_step, "max_index": n_max, "criterion": criterion,
@@ -230,6 +243,8 @@ def lobe_options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step:
     Regenerative(depth=depth_step, rpm=float(rpm[0]), kr=kr, feed=feed,
                  revolutions=revolutions, interpolation=interpolation, start=start,
                  bounded_fraction=bounded_fraction)
+    for r in rpm:
+        check_delay(r, revolutions, dt)
     opts["seeds"] = _seeds(cases, rpm, kr, depth_step) if method == "search" else {}
     return opts
 

@@ -37,6 +37,9 @@ PUBLISHED_RATIOS = tuple(round(0.95 + 0.01 * i, 12) for i in range(11))
 #: The numeric results of every run.
 NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
          "energy_balance_relative")
+#: Most values of one START:STOP:STEP range or list (:func:`parse_range`; the
+#: published sweep has 11 ratios, the bifurcation 46 forces).
+MAX_GRID_VALUES = 100_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,14 +93,24 @@ def parse_range(text: str, name: str = "ratios") -> np.ndarray:
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
-            if step <= 0 or stop < start:
+            if not (math.isfinite(start) and math.isfinite(stop) and step > 0
+                    and stop >= start):
                 raise ValueError
-            n = int(math.floor((stop - start) / step + 1e-9)) + 1
+            n = math.floor((stop - start) / step + 1e-9) + 1
+            if n > MAX_GRID_VALUES:
+                raise ParameterError(f"{name} = {text!r} has {n:.3g} values; the allowed "
+                                     f"maximum is {MAX_GRID_VALUES}")
             return np.round(start + step * np.arange(n), 12)
-        return np.array([float(v) for v in text.split(",")])
-    except ValueError:
+        values = np.array([float(v) for v in text.split(",")])
+    except (ValueError, OverflowError) as exc:
+        if isinstance(exc, ParameterError):
+            raise
         raise ParameterError(f"{name} = {text!r} must be START:STOP:STEP with STEP > 0 and "
                              "STOP >= START, or a comma-separated list of numbers") from None
+    if len(values) > MAX_GRID_VALUES or not np.all(np.isfinite(values)):
+        raise ParameterError(f"{name} = {text!r} must be at most {MAX_GRID_VALUES} finite "
+                             "numbers")
+    return values
 
 
 @dataclass(frozen=True)

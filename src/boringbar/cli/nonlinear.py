@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from boringbar._validate import ParameterError, check_range
-from boringbar.analysis.basins import basin_summary, basins
+from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.basins import MAX_BASIN_CELLS, basin_summary, basins, check_cells
 from boringbar.analysis.bifurcation import bifurcation, hysteresis_ranges
 from boringbar.analysis.poincare import poincare_map
 from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
@@ -22,8 +22,13 @@ from boringbar.cli.options import (
     add_common,
     add_cutting,
     add_drop,
+    check_depth,
+    check_dt,
+    check_force,
     check_gap,
+    check_ratio,
     check_rpm,
+    check_workers,
     cut_options,
     execution,
     forces_and_ratios,
@@ -38,10 +43,11 @@ from boringbar.cli.options import (
 )
 from boringbar.cli.sweeps import short_pattern
 from boringbar.io import jsonable, save_figure_atomic, write_netcdf_atomic
-from boringbar.model.forcing import Harmonic
+from boringbar.model.dampers import MAX_GAP
+from boringbar.model.forcing import MAX_FORCE, MAX_RATIO, Harmonic
 from boringbar.model.system import BALLS, make_system
 from boringbar.plot import plot_basins, plot_bifurcation, plot_sensitivity
-from boringbar.simulate import Initial, simulate
+from boringbar.simulate import MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY, Initial, simulate
 
 #: bifurcation's published sweep: F0 from 5 to 50 N in 1 N steps
 PUBLISHED_FORCES = "5:50:1"
@@ -147,9 +153,9 @@ def add_sensitivity(sub) -> None:
 #: What bifurcation can sweep: option -> (library parameter, SI per option unit,
 #: allowed range (lo, hi, lo_open, hi_open), unit).
 SWEEPABLE = {
-    "--force-n": ("force", 1.0, (0.0, math.inf, False, True), "N"),
-    "--ratio": ("ratio", 1.0, (0.0, math.inf, True, True), ""),
-    "--gap-mm": ("gap", 1e-3, (0.0, math.inf, True, True), "mm"),
+    "--force-n": ("force", 1.0, (0.0, MAX_FORCE, False, False), "N"),
+    "--ratio": ("ratio", 1.0, (0.0, MAX_RATIO, True, False), ""),
+    "--gap-mm": ("gap", 1e-3, (0.0, MAX_GAP * 1e3, True, False), "mm"),
     "--restitution": ("restitution", 1.0, (0.0, 1.0, False, False), ""),
 }
 
@@ -321,15 +327,17 @@ def _grid(text: str, name: str) -> tuple[float, float, int]:
                              "to HI, both included; COUNT an integer)") from None
     check_range(f"{name} LO", lo, -math.inf, math.inf, lo_open=True, hi_open=True)
     check_range(f"{name} HI", hi, lo, math.inf, hi_open=True)
-    check_range(f"{name} COUNT", n, 1, 10000)
+    check_int(f"{name} COUNT", n, 1, MAX_BASIN_CELLS)
     return lo, hi, n
 
 
 def _pair(text: str, name: str) -> tuple[float, float]:
     values = parse_numbers(text, name)
-    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+    if len(values) != 2:
         raise ParameterError(f"{name} = {text!r} must be two numbers, MM,M/S")
-    return values[0], values[1]
+    d, v = MAX_INITIAL_DISPLACEMENT * 1e3, MAX_INITIAL_VELOCITY
+    return (check_range(f"{name} MM", values[0], -d, d, unit="mm"),
+            check_range(f"{name} M/S", values[1], -v, v, unit="m/s"))
 
 
 def _cmd_basins(args) -> int:
@@ -337,26 +345,34 @@ def _cmd_basins(args) -> int:
     gap = check_gap(0.5 if args.gap_mm is None else args.gap_mm)
     force = 10.0 if args.force_n is None else args.force_n
     ratio = 1.0 if args.ratio is None else args.ratio
-    check_range("--force-n", force, 0, math.inf, hi_open=True, unit="N")
-    check_range("--ratio", ratio, 0, math.inf, lo_open=True, hi_open=True)
+    check_force(force)
+    check_ratio(ratio)
     check_range("--drop", args.drop, 0, 1, hi_open=True)
     lo, hi, n = _grid(args.displacement_mm, "--displacement-mm")
+    d = MAX_INITIAL_DISPLACEMENT * 1e3
+    check_range("--displacement-mm LO", lo, -d, d, unit="mm")
+    check_range("--displacement-mm HI", hi, -d, d, unit="mm")
     displacement = (lo * 1e-3, hi * 1e-3, n)
     velocity = _grid(args.velocity_m_s, "--velocity-m-s")
+    for end, value in zip(("LO", "HI"), velocity[:2], strict=True):
+        check_range(f"--velocity-m-s {end}", value, -MAX_INITIAL_VELOCITY,
+                    MAX_INITIAL_VELOCITY, unit="m/s")
+    check_cells(n, velocity[2], ("--displacement-mm", "--velocity-m-s"))
     w0, v0 = _pair(args.poincare_from, "--poincare-from")
-    if args.workers is not None:
-        check_range("--workers", args.workers, 1, 4096)
+    check_workers(args.workers)
     y0 = 0.0
     if args.ball_position_mm is not None:
         y0 = check_range("--ball-position-mm", args.ball_position_mm, -gap / 2 * 1e3,
                          gap / 2 * 1e3, unit="mm") * 1e-3
-    yv0 = args.ball_velocity_m_s or 0.0
+    yv0 = check_range("--ball-velocity-m-s", args.ball_velocity_m_s or 0.0,
+                      -MAX_INITIAL_VELOCITY, MAX_INITIAL_VELOCITY, unit="m/s")
 
     kw = system_overrides(args)
     if bar == "ball":
         kw.update(gap=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
     forcing = Harmonic(force, ratio)
+    check_dt(args, [system], ratio)
     ds = basins(system, forcing, displacement=displacement, velocity=velocity,
                 duration=args.duration_s, dt=args.dt_s, drop=args.drop, ball_position=y0,
                 ball_velocity=yv0, workers=args.workers,
@@ -449,6 +465,9 @@ def _sensitivity_values(args, bar: str, gap: float):
                                  "MM/M_S/Y_MM/Y_M_S (tip displacement mm / tip velocity m/s "
                                  "/ ball position mm / ball velocity m/s), comma "
                                  "separated") from None
+        d, v = MAX_INITIAL_DISPLACEMENT * 1e3, MAX_INITIAL_VELOCITY
+        for x, bound, unit in zip(parts, (d, v, d, v), ("mm", "m/s", "mm", "m/s"), strict=False):
+            check_range(f"--values ({kind})", x, -bound, bound, unit=unit)
         if len(parts) == 4:
             if bar != "ball":
                 raise ParameterError(f"--values = {item!r}: a ball position and velocity "
@@ -479,10 +498,10 @@ def _cmd_sensitivity(args) -> int:
     forces, ratios = forces_and_ratios(args)
     cuts = None
     if args.cut_rpm is not None or args.depths_mm is not None:
-        rpm = check_rpm(1200.0 if args.cut_rpm is None else args.cut_rpm, "--cut-rpm")
+        rpm = check_rpm(1200.0 if args.cut_rpm is None else args.cut_rpm, args, "--cut-rpm")
         depths = parse_range(args.depths_mm or "0.05:0.10:0.01", "--depths-mm")
         for d in depths:
-            check_range("--depths-mm", d, 0, math.inf, lo_open=True, hi_open=True, unit="mm")
+            check_depth(d, "--depths-mm")
         cuts = Cuts(rpm, tuple(float(d) * 1e-3 for d in depths), args.duration_s,
                     cut_options(args))
     else:

@@ -8,20 +8,36 @@ import json
 import math
 import sys
 
-from boringbar._validate import ParameterError, check_range
-from boringbar.analysis.sweep import parse_range, published_cases
+from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
 from boringbar.execute import Execution
 from boringbar.io import jsonable
-from boringbar.model.forcing import INTERPOLATIONS, STARTS
+from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
+from boringbar.model.forcing import (
+    INTERPOLATIONS,
+    MAX_DEPTH,
+    MAX_FEED,
+    MAX_FORCE,
+    MAX_KR,
+    MAX_RATIO,
+    STARTS,
+)
 from boringbar.model.system import BALLS, BAR_KINDS, PRESETS
 from boringbar.progress import ProgressCallback
-from boringbar.simulate import INTEGRATORS, Initial, Integration
+from boringbar.simulate import (
+    INTEGRATORS,
+    MAX_INITIAL_DISPLACEMENT,
+    MAX_INITIAL_VELOCITY,
+    Initial,
+    Integration,
+    check_delay,
+    check_step,
+    check_steps,
+)
 
 PROG = "boringbar"
-
-
-
-
+#: Most worker threads or processes an option may ask for.
+MAX_WORKERS = 4096
 BALL_OPTIONS = ("gap_mm", "friction", "friction_force_n", "friction_number", "ball",
                 "restitution", "locked", "ball_position_mm", "ball_velocity_m_s",
                 "static_ratio")
@@ -149,11 +165,16 @@ def parse_words(values, name: str, choices, default) -> list[str]:
 
 
 def parse_numbers(text: str, name: str) -> list[float]:
+    """A comma list of at most MAX_GRID_VALUES numbers (each checked by the caller)."""
     try:
-        return [float(v) for v in text.split(",")]
+        values = [float(v) for v in text.split(",")]
     except ValueError:
         raise ParameterError(f"{name} = {text!r} must be a comma-separated list of "
                              "numbers") from None
+    if len(values) > MAX_GRID_VALUES:
+        raise ParameterError(f"{name} has {len(values)} values; the allowed maximum is "
+                             f"{MAX_GRID_VALUES}")
+    return values
 
 
 def _check_common(args, bars: list[str]) -> None:
@@ -169,31 +190,47 @@ def _check_common(args, bars: list[str]) -> None:
     if args.friction_force_n is not None and args.friction_number is not None:
         raise ParameterError("give at most one of --friction-force-n and --friction-number")
     if args.friction_force_n is not None:
-        check_range("--friction-force-n", args.friction_force_n, 0, math.inf, hi_open=True,
+        check_range("--friction-force-n", args.friction_force_n, 0, MAX_FRICTION_FORCE,
                     unit="N")
     if args.friction_number is not None:
         check_range("--friction-number", args.friction_number, 0, 100)
+    if args.static_ratio is not None:
+        check_range("--static-ratio", args.static_ratio, 1, math.inf, hi_open=True)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, 0, 1)
     if args.modes is not None:
         check_range("--modes", args.modes, 1, 8)
-    check_range("--duration-s", args.duration_s, 0, math.inf, lo_open=True, hi_open=True,
-                unit="s")
-    check_range("--dt-s", args.dt_s, 0, math.inf, lo_open=True, hi_open=True, unit="s")
+    check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
 
 
 def check_gap(gap_mm: float) -> float:
-    return check_range("--gap-mm", gap_mm, 0, math.inf, lo_open=True, hi_open=True,
-                       unit="mm") * 1e-3
+    return check_range("--gap-mm", gap_mm, 0, MAX_GAP * 1e3, lo_open=True, unit="mm") * 1e-3
+
+
+def check_dt(args, systems, ratio: float = 0.0) -> None:
+    """--dt-s resolves the highest mode of every system and the forcing at ``ratio``
+    (the largest Omega/omega_n; 0: only the modes)."""
+    for system in systems:
+        check_step(system, ratio * system.reference_frequency, args.dt_s, "--dt-s")
+
+
+def check_workers(workers, name: str = "--workers") -> None:
+    if workers is not None:
+        check_int(name, workers, 1, MAX_WORKERS)
 
 
 def initial_conditions(args, gaps_m: list[float]):
+    d, v = MAX_INITIAL_DISPLACEMENT * 1e3, MAX_INITIAL_VELOCITY
     if args.ball_position_mm is not None and gaps_m:
         half = min(gaps_m) / 2 * 1e3
         check_range("--ball-position-mm", args.ball_position_mm, -half, half, unit="mm")
+    if args.ball_velocity_m_s is not None:
+        check_range("--ball-velocity-m-s", args.ball_velocity_m_s, -v, v, unit="m/s")
     return Initial(
-        tip_displacement=args.tip_displacement_mm * 1e-3,
-        tip_velocity=args.tip_velocity_m_s,
+        tip_displacement=check_range("--tip-displacement-mm", args.tip_displacement_mm, -d, d,
+                                     unit="mm") * 1e-3,
+        tip_velocity=check_range("--tip-velocity-m-s", args.tip_velocity_m_s, -v, v,
+                                 unit="m/s"),
         ball_position=(args.ball_position_mm or 0.0) * 1e-3,
         ball_velocity=args.ball_velocity_m_s or 0.0,
     )
@@ -205,17 +242,27 @@ def cut_options(args) -> dict:
     feed = 0.1 if args.feed_mm is None else args.feed_mm
     revolutions = 3 if args.revolutions is None else args.revolutions
     fraction = 0.1 if args.bounded_fraction is None else args.bounded_fraction
-    check_range("--kr-mpa", kr, 0, math.inf, lo_open=True, hi_open=True, unit="MPa")
-    check_range("--feed-mm", feed, 0, math.inf, lo_open=True, hi_open=True, unit="mm")
-    check_range("--revolutions", revolutions, 1, 50)
+    check_range("--kr-mpa", kr, 0, MAX_KR * 1e-6, lo_open=True, unit="MPa")
+    check_range("--feed-mm", feed, 0, MAX_FEED * 1e3, lo_open=True, unit="mm")
+    check_int("--revolutions", revolutions, 1, 50)
     check_range("--bounded-fraction", fraction, 0, math.inf, lo_open=True, hi_open=True)
     return {"kr": kr * 1e6, "feed": feed * 1e-3, "revolutions": revolutions,
             "interpolation": args.delay_interp or "cubic", "start": args.start or "rest",
             "bounded_fraction": fraction}
 
 
-def check_rpm(rpm: float, name: str = "--rpm") -> float:
-    return check_range(name, rpm, 0, math.inf, lo_open=True, hi_open=True, unit="rpm")
+def check_rpm(rpm: float, args, name: str = "--rpm") -> float:
+    """A spindle speed: positive, its period at least 4 steps of --dt-s, its delay
+    history (--revolutions) within the allowed rows."""
+    revolutions = 3 if args.revolutions is None else args.revolutions
+    check_int("--revolutions", revolutions, 1, 50)
+    check_delay(rpm, revolutions, args.dt_s, name)
+    return float(rpm)
+
+
+def check_depth(depth_mm: float, name: str) -> float:
+    """A depth of cut in mm, (0, MAX_DEPTH]."""
+    return check_range(name, depth_mm, 0, MAX_DEPTH * 1e3, lo_open=True, unit="mm")
 
 
 def system_overrides(args) -> dict:
@@ -256,13 +303,20 @@ def forces_and_ratios(args):
 
     forces = parse_numbers(args.force_n, "--force-n")
     for f in forces:
-        check_range("--force-n", f, 0, math.inf, hi_open=True, unit="N")
+        check_force(f)
     ratios = parse_range(args.ratios, "--ratios")
     for r in ratios:
-        check_range("--ratios", r, 0, math.inf, lo_open=True, hi_open=True)
-    if args.workers is not None:
-        check_range("--workers", args.workers, 1, 4096)
+        check_ratio(r, "--ratios")
+    check_workers(args.workers)
     return forces, ratios
+
+
+def check_force(force: float, name: str = "--force-n") -> float:
+    return check_range(name, force, 0, MAX_FORCE, unit="N")
+
+
+def check_ratio(ratio: float, name: str = "--ratio") -> float:
+    return check_range(name, ratio, 0, MAX_RATIO, lo_open=True)
 
 
 def progress_printer(args, command: str, what: str):

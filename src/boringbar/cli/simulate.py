@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
-from boringbar._validate import ParameterError, check_range
+from boringbar._validate import ParameterError, check_int
 from boringbar.cli.options import (
     CUT_ONLY,
     add_common,
     add_cutting,
+    check_depth,
+    check_dt,
+    check_force,
     check_gap,
+    check_ratio,
     check_rpm,
     cut_options,
     initial_conditions,
@@ -22,7 +25,7 @@ from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_ato
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import make_system
 from boringbar.plot import plot_run
-from boringbar.simulate import simulate
+from boringbar.simulate import check_history, check_steps, simulate
 
 #: Default history length of ``simulate`` (rows), when --record-every is not given.
 HISTORY_ROWS = 20000
@@ -49,14 +52,17 @@ def cmd_simulate(args) -> int:
     bar, friction_on = one_bar(args, "simulate")
     gap = check_gap(0.5 if args.gap_mm is None else args.gap_mm)
     forcing = _simulate_forcing(args)
-    n_steps = int(round(args.duration_s / args.dt_s))
-    record_every = args.record_every or max(1, n_steps // HISTORY_ROWS)
-    check_range("--record-every", record_every, 1, max(n_steps, 1))
+    n_steps = check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
+    record_every = max(1, n_steps // HISTORY_ROWS)
+    if args.record_every is not None:  # every N-th step: N = 0 means nothing
+        record_every = check_int("--record-every", args.record_every, 1, n_steps)
+        check_history(n_steps, record_every, "--record-every")
 
     kw = system_overrides(args)
     if bar == "ball":
         kw.update(gap=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
+    check_dt(args, [system], getattr(forcing, "ratio", 0.0))
     initial = initial_conditions(args, [gap] if bar == "ball" else [])
     run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s, initial=initial,
                    record_every=record_every, integrator=args.integrator)
@@ -80,10 +86,9 @@ def _simulate_forcing(args):
     """Harmonic(F0, ratio), or Regenerative when --rpm and --depth-mm are given."""
 
     if args.rpm is not None:
-        check_rpm(args.rpm)
+        check_rpm(args.rpm, args)
     if args.depth_mm is not None:
-        check_range("--depth-mm", args.depth_mm, 0, math.inf, lo_open=True, hi_open=True,
-                    unit="mm")
+        check_depth(args.depth_mm, "--depth-mm")
     if args.rpm is None and args.depth_mm is None:
         given = [o for o in CUT_ONLY if getattr(args, o) not in (None, False)]
         if given:
@@ -91,9 +96,7 @@ def _simulate_forcing(args):
                                  "(--rpm with --depth-mm)")
         force = 10.0 if args.force_n is None else args.force_n
         ratio = 1.0 if args.ratio is None else args.ratio
-        check_range("--force-n", force, 0, math.inf, hi_open=True, unit="N")
-        check_range("--ratio", ratio, 0, math.inf, lo_open=True, hi_open=True)
-        return Harmonic(force, ratio)
+        return Harmonic(check_force(force), check_ratio(ratio))
     if args.rpm is None or args.depth_mm is None:
         have, need = ("--rpm", "--depth-mm") if args.depth_mm is None else ("--depth-mm",
                                                                             "--rpm")

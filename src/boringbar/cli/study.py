@@ -11,12 +11,15 @@ import argparse
 import json
 import logging
 import sys
+from pathlib import Path
 
 from boringbar._validate import ParameterError
+from boringbar.cli.options import check_workers
 from boringbar.io import jsonable
 from boringbar.report.paper import PRESET_ORDER, StepFailed, run_paper
 from boringbar.studies.load import load_study
 from boringbar.studies.runner import EXECUTORS, RunReport, run_study
+from boringbar.studies.schema import output_format
 
 
 def add_run(sub) -> None:
@@ -50,6 +53,10 @@ def add_run(sub) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     study = load_study(args.study)
+    if args.out is not None:
+        output_format(Path(args.out), study.format, "--out")
+    for name in ("workers", "dask_local", "chunk_size"):
+        check_workers(getattr(args, name), "--" + name.replace("_", "-"))
     executor = args.executor
     if executor is None:
         executor = "dask" if (args.scheduler or args.dask_local) else "processes"

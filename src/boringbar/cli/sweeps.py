@@ -9,15 +9,18 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from boringbar._validate import check_range
-from boringbar.analysis.lobes import PUBLISHED_RPM, lobes, lobes_summary
+from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.lobes import MAX_DEPTHS, PUBLISHED_RPM, lobes, lobes_summary
 from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
 from boringbar.analysis.sweep import summary as sweep_summary
 from boringbar.cli.options import (
     PATTERN_KEY,
     add_common,
     add_cutting,
+    check_depth,
+    check_dt,
     check_rpm,
+    check_workers,
     cut_options,
     execution,
     forces_and_ratios,
@@ -29,7 +32,7 @@ from boringbar.cli.options import (
 )
 from boringbar.cli.simulate import HISTORY_ROWS
 from boringbar.io import save_figure_atomic, write_netcdf_atomic
-from boringbar.model.forcing import Regenerative
+from boringbar.model.forcing import MAX_DEPTH, Regenerative
 from boringbar.plot import plot_lobe_examples, plot_lobes, plot_sweep
 from boringbar.simulate import simulate
 
@@ -83,6 +86,7 @@ def add_lobes(sub) -> None:
 def _cmd_sweep(args) -> int:
     cases, bars, gaps = many_cases(args)
     forces, ratios = forces_and_ratios(args)
+    check_dt(args, [c.system for c in cases], max(ratios))
 
     initial = initial_conditions(args, gaps if "ball" in bars else [])
     ds = sweep(cases, SweepOptions(tuple(ratios), tuple(forces)),
@@ -147,13 +151,15 @@ def _cmd_lobes(args) -> int:
     cases, _, _ = many_cases(args)
     rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
     for r in rpm:
-        check_rpm(r)
-    step = check_range("--depth-step-mm", args.depth_step_mm, 0, math.inf, lo_open=True,
-                       hi_open=True, unit="mm")
-    check_range("--max-depth-mm", args.max_depth_mm, step, 1000, unit="mm")
-    check_range("--successive", args.successive, 1, 100)
-    if args.workers is not None:
-        check_range("--workers", args.workers, 1, 4096)
+        check_rpm(r, args)
+    step = check_depth(args.depth_step_mm, "--depth-step-mm")
+    check_range("--max-depth-mm", args.max_depth_mm, step, MAX_DEPTH * 1e3, unit="mm")
+    if args.max_depth_mm / step > MAX_DEPTHS + 1e-6:
+        raise ParameterError(f"--depth-step-mm = {step:g} mm gives "
+                             f"{args.max_depth_mm / step:.3g} depths up to --max-depth-mm = "
+                             f"{args.max_depth_mm:g} mm; the allowed maximum is {MAX_DEPTHS}")
+    check_int("--successive", args.successive, 1, 100)
+    check_workers(args.workers)
     cut = cut_options(args)
     ds = lobes(cases, rpm, method=args.method, depth_step=step * 1e-3,
                max_depth=args.max_depth_mm * 1e-3, successive=args.successive,

@@ -5,7 +5,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from boringbar._validate import ParameterError, check_nonnegative, check_positive
+from boringbar._validate import ParameterError, check_int, check_positive, check_range
+
+#: Upper bounds that no machining needs but that keep the kernels' arithmetic
+#: finite (a force of 1e300 N overflows the energy sums): force amplitude (N),
+#: depth of cut (m), feed per revolution (m), specific cutting force (Pa).
+MAX_FORCE = 1e6
+MAX_DEPTH = 1.0
+MAX_FEED = 0.1
+MAX_KR = 1e12
+#: Largest Omega / omega_n and forcing frequency (Hz) of harmonic forcing (the
+#: published sweeps: 0.95 to 1.05); above, no step resolves the forcing anyway.
+MAX_RATIO = 100.0
+MAX_FREQUENCY_HZ = 1e6
 
 
 @dataclass(frozen=True)
@@ -22,14 +34,15 @@ class Harmonic:
     frequency_hz: float | None = None
 
     def __post_init__(self):
-        check_nonnegative("force amplitude", self.amplitude, "N")
+        check_range("force amplitude", self.amplitude, 0.0, MAX_FORCE, unit="N")
         if (self.ratio is None) == (self.frequency_hz is None):
             raise ParameterError("harmonic forcing: give exactly one of ratio "
                                  "(Omega/omega_n) or frequency_hz")
         if self.ratio is not None:
-            check_positive("ratio (Omega/omega_n)", self.ratio)
+            check_range("ratio (Omega/omega_n)", self.ratio, 0.0, MAX_RATIO, lo_open=True)
         else:
-            check_positive("frequency_hz", self.frequency_hz, "Hz")
+            check_range("frequency_hz", self.frequency_hz, 0.0, MAX_FREQUENCY_HZ, lo_open=True,
+                        unit="Hz")
 
     def omega(self, reference: float) -> float:
         """Omega (rad/s), with ``reference`` = omega_n of the host bar."""
@@ -77,13 +90,14 @@ class Regenerative:
     bounded_fraction: float = 0.1
 
     def __post_init__(self):
-        check_nonnegative("depth of cut", self.depth, "m")
+        check_range("depth of cut", self.depth, 0.0, MAX_DEPTH, unit="m")
         check_positive("rpm", self.rpm)
-        check_positive("kr", self.kr, "Pa")
-        check_positive("feed", self.feed, "m")
-        if not (isinstance(self.revolutions, int) and 1 <= self.revolutions <= 50):
-            raise ParameterError(f"revolutions = {self.revolutions!r} is outside the allowed "
-                                 "range [1, 50] (whole revolutions)")
+        check_range("kr", self.kr, 0.0, MAX_KR, lo_open=True, unit="Pa")
+        check_range("feed", self.feed, 0.0, MAX_FEED, lo_open=True, unit="m")
+        if isinstance(self.revolutions, float):  # 3.0 is not accepted: a count
+            raise ParameterError(f"revolutions = {self.revolutions!r} is not a whole number "
+                                 "(allowed range [1, 50])")
+        check_int("revolutions", self.revolutions, 1, 50)
         if self.interpolation not in INTERPOLATIONS:
             raise ParameterError(f"interpolation = {self.interpolation!r} is not one of "
                                  f"{', '.join(INTERPOLATIONS)}")

@@ -11,7 +11,16 @@ from pathlib import Path
 
 from boringbar._validate import ParameterError
 from boringbar.studies.registry import ANALYSES
-from boringbar.studies.schema import SECTION_OF, SECTIONS, SETTINGS, Setting, Study, StudyError
+from boringbar.studies.schema import (
+    MAX_POINTS,
+    SECTION_OF,
+    SECTIONS,
+    SETTINGS,
+    Setting,
+    Study,
+    StudyError,
+    output_format,
+)
 
 
 def load_study(path) -> Study:
@@ -72,6 +81,11 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
         fail("run.integrator", resolved["run"]["integrator"],
              f"one of {', '.join(map(repr, allowed))} for a {analysis.name} study")
     name = study["name"] or (Path(source).stem if source not in ("<dict>", "") else "study")
+    if study["out"] is not None:
+        try:
+            output_format(Path(study["out"]), study["format"], "key 'study.out'")
+        except ParameterError as exc:
+            raise StudyError(f"{source}: {exc}") from None
 
     # analysis options
     table = d.get("analysis", {})
@@ -107,6 +121,10 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
     for k, values in analysis.default_axes(resolved, options).items():
         if k not in given:
             axes[k] = tuple(values)
+    points = math.prod(len(v) for v in axes.values())
+    if points > MAX_POINTS:
+        fail("grid", {k: f"{len(v)} values" for k, v in axes.items()},
+             f"{points} grid points; the allowed maximum is {MAX_POINTS}")
 
     result = Study(analysis=analysis.name, name=name, preset=study["preset"],
                    settings=resolved, options=options, axes=axes, source=source,
@@ -130,7 +148,7 @@ def _axis_values(v, spec: Setting, key: str, fail) -> list:
             start, stop, step = (float(v[x]) for x in ("start", "stop", "step"))
         except (TypeError, ValueError):
             fail(key, v, "start, stop and step must be numbers")
-        if not (step > 0 and stop >= start):
+        if not (math.isfinite(start) and math.isfinite(stop) and step > 0 and stop >= start):
             fail(key, v, "{start, stop, step} needs step > 0 and stop >= start")
         n = int(math.floor((stop - start) / step + 1e-9)) + 1
         if n > 1_000_000:

@@ -37,19 +37,35 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, check_range
 from boringbar.analysis import sensitivity as sensitivity_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
-from boringbar.analysis.basins import BasinTolerance, basin_grid, basin_run, basins_dataset, group
+from boringbar.analysis.basins import (
+    MAX_BASIN_CELLS,
+    BasinTolerance,
+    basin_grid,
+    basin_run,
+    basins_dataset,
+    check_cells,
+    group,
+)
 from boringbar.analysis.bifurcation import bifurcation
 from boringbar.analysis.lobes import lobe_column, lobe_cut, lobe_options, lobes_dataset
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
-from boringbar.analysis.sweep import Case, SweepOptions
+from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.simulate import INTEGRATORS, Initial, Integration, check_step, simulate
+from boringbar.simulate import (
+    INTEGRATORS,
+    Initial,
+    Integration,
+    check_delay,
+    check_step,
+    check_steps,
+    simulate,
+)
 from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study, StudyError
 
 
@@ -74,10 +90,10 @@ class Range:
             if not isinstance(v, dict) or set(v) != {"start", "stop", "count"}:
                 raise ValueError(self.allowed())
             lo, hi, n = v["start"], v["stop"], v["count"]
-            if (not all(isinstance(x, int | float) and not isinstance(x, bool) for x in (lo, hi))
-                    or isinstance(n, bool) or not isinstance(n, int) or n < 1 or hi < lo):
-                raise ValueError("{start, stop, count} with stop >= start and an integer "
-                                 "count >= 1")
+            if (not all(_finite(x) for x in (lo, hi)) or isinstance(n, bool)
+                    or not isinstance(n, int) or not 1 <= n <= MAX_BASIN_CELLS or hi < lo):
+                raise ValueError("{start, stop, count}: finite numbers with stop >= start and "
+                                 f"an integer count in [1, {MAX_BASIN_CELLS}]")
             return {"start": float(lo), "stop": float(hi), "count": int(n)}
         if isinstance(v, dict):
             if set(v) != {"start", "stop", "step"}:
@@ -86,18 +102,26 @@ class Range:
                 a, b, s = (float(v[x]) for x in ("start", "stop", "step"))
             except (TypeError, ValueError):
                 raise ValueError(self.allowed()) from None
-            if not (s > 0 and b >= a):
-                raise ValueError("{start, stop, step} needs step > 0 and stop >= start")
-            n = int(math.floor((b - a) / s + 1e-9)) + 1
+            if not (math.isfinite(a) and math.isfinite(b) and s > 0 and b >= a):
+                raise ValueError("{start, stop, step}: finite numbers with step > 0 and "
+                                 "stop >= start")
+            n = math.floor((b - a) / s + 1e-9) + 1
+            if n > MAX_GRID_VALUES:
+                raise ValueError(f"{n:.3g} values; the allowed maximum is {MAX_GRID_VALUES}")
             v = [round(a + i * s, 12) for i in range(n)]
-        if (not isinstance(v, list) or not v
-                or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)):
-            raise ValueError(self.allowed())
+        if (not isinstance(v, list) or not v or len(v) > MAX_GRID_VALUES
+                or not all(_finite(x) for x in v)):
+            raise ValueError(self.allowed() + ", finite")
         v = [float(x) for x in v]
         if self.lo is not None and any((x <= self.lo) if self.lo_open else (x < self.lo)
                                        for x in v):
             raise ValueError(self.allowed())
         return tuple(v)
+
+
+def _finite(x) -> bool:
+    """A finite TOML number (not a boolean)."""
+    return isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
 
 
 @dataclass(frozen=True)
@@ -168,6 +192,15 @@ def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
         check_step(system, omega, study.value("dt_s"))
     except ParameterError as exc:
         raise ParameterError(f"key 'run.dt_s' = {study.value('dt_s')!r}: {exc}") from None
+    check_steps(study.value("duration_s"), study.value("dt_s"),
+                ("key 'run.duration_s'", "key 'run.dt_s'"))
+    if isinstance(d, ImpactDamper):
+        half = d.gap / 2 * 1e3
+        check_range(f"key 'run.ball_position_mm' (within +-gap/2 of a {d.gap * 1e3:g} mm gap)",
+                    study.value("ball_position_mm"), -half, half, unit="mm")
+    if cutting:
+        check_delay(60.0 * omega / (2 * math.pi), study.value("revolutions"),
+                    study.value("dt_s"), "key 'forcing.rpm'")
 
 
 # --- shared pieces ----------------------------------------------------------------
@@ -503,6 +536,8 @@ class Basins(Analysis):
         d, v = study.options["displacement_mm"], study.options["velocity_m_s"]
         w0 = basin_grid("displacement", (d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]))
         v0 = basin_grid("velocity", (v["start"], v["stop"], v["count"]))
+        check_cells(len(w0), len(v0), ("key 'analysis.displacement_mm'",
+                                       "key 'analysis.velocity_m_s'"))
         bp, bv = study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s")
         initials = [Initial(float(w), float(v), bp, bv) for w in w0 for v in v0]
         ctx = {"cases": cases, "ops": ops, "duration": study.value("duration_s"),

@@ -49,7 +49,7 @@ from boringbar.execute import Execution, stream
 from boringbar.io import atomic_path, fsync_dir, write_json_atomic, write_netcdf_atomic
 from boringbar.progress import progress_bar
 from boringbar.studies.registry import ANALYSES
-from boringbar.studies.schema import Study, StudyError
+from boringbar.studies.schema import Study, StudyError, output_format
 
 log = logging.getLogger("boringbar.studies.runner")
 
@@ -136,11 +136,13 @@ def compute_chunk(study: Study, key: str, remote: bool, task: tuple[int, list]):
 
 # --- the store -----------------------------------------------------------------------
 
-def _format(study: Study, out: Path) -> str:
-    fmt = study.format or ("zarr" if out.suffix == ".zarr" else "netcdf")
-    if fmt == "zarr" and out.suffix not in (".zarr", ""):
-        log.info("writing Zarr to %s (format = 'zarr')", out)
-    return fmt
+def _format(study: Study, out: Path, given: bool) -> str:
+    """The result's format: from the suffix of ``out`` (.nc or .zarr), which must
+    match the study's ``format``."""
+    try:
+        return output_format(out, study.format, "out" if given else "key 'study.out'")
+    except ParameterError as exc:
+        raise StudyError(f"{study.source}: {exc}") from None
 
 
 def _open(out: Path, fmt: str):
@@ -282,8 +284,8 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
     execution = Execution(executor, workers, scheduler, dask_local)
     workers = execution.n_workers
 
+    fmt = _format(study, study.output_path(out), given=out is not None)
     out = study.output_path(out)
-    fmt = _format(study, out)
     key = study.config_hash()
     analysis = ANALYSES[study.analysis]
     report.__dict__.update(out=str(out), analysis=study.analysis, executor=executor,

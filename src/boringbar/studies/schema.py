@@ -25,9 +25,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from boringbar._validate import ParameterError
+from boringbar.model.bar import BAR_LENGTH
+from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
+from boringbar.model.forcing import MAX_DEPTH, MAX_FEED, MAX_FORCE, MAX_KR, MAX_RATIO
+from boringbar.simulate import MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY
 
 SECTIONS = ("study", "bar", "damper", "forcing", "run", "analysis", "grid")
 FORMATS = ("netcdf", "zarr")
+#: The file name ending of each output format.
+SUFFIXES = {"netcdf": ".nc", "zarr": ".zarr"}
+#: Most points (runs or columns) of one study, the product of its axes.
+MAX_POINTS = 10_000_000
 
 
 class StudyError(ParameterError):
@@ -107,8 +115,11 @@ def _f(default=None, lo=None, hi=None, lo_open=False, doc=""):
     return Setting("float", default, lo, hi, lo_open, (), doc)
 
 
-def _pos(default=None, doc=""):
-    return Setting("float", default, 0.0, None, True, (), doc)
+def _pos(default=None, hi=None, doc=""):
+    return Setting("float", default, 0.0, hi, True, (), doc)
+
+
+_D, _V = MAX_INITIAL_DISPLACEMENT * 1e3, MAX_INITIAL_VELOCITY
 
 
 #: Every scalar setting, by section.  Flat key names are unique across the
@@ -126,27 +137,28 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "n_modes": Setting("int", None, 1, 8, doc="default: 2 (physical), 1 (paper)"),
         "tmd_design": Setting("str", None, choices=("published", "den-hartog", "sims")),
         "tmd_mass_kg": _pos(0.39),
-        "z_absorber_mm": _pos(96.0),
+        "z_absorber_mm": _pos(96.0, BAR_LENGTH * 1e3),
     },
     "damper": {
-        "gap_mm": _pos(0.5),
+        "gap_mm": _pos(0.5, MAX_GAP * 1e3),
         "friction": Setting("onoff", True),
         "ball": Setting("str", "carbide", choices=("carbide", "steel")),
         "restitution": _f(0.7, 0.0, 1.0),
         "friction_number": _f(None, 0.0, 100.0, doc="published rolling-resistance number"),
-        "friction_force_n": _f(None, 0.0, None, doc="Coulomb force, overrides the number"),
+        "friction_force_n": _f(None, 0.0, MAX_FRICTION_FORCE,
+                               doc="Coulomb force, overrides the number"),
         "friction_reaction": Setting("str", None, choices=("reciprocal", "printed")),
         "locked": Setting("bool", False),
         "static_ratio": Setting("float", 1.0, 1.0, None, doc="F_s / F_c of true stick-slip "
                                 "(integrator 'exact' only)"),
     },
     "forcing": {
-        "force_n": _f(10.0, 0.0, None),
-        "ratio": _pos(1.0, doc="Omega / omega_n of the host bar"),
+        "force_n": _f(10.0, 0.0, MAX_FORCE),
+        "ratio": _pos(1.0, MAX_RATIO, doc="Omega / omega_n of the host bar"),
         "rpm": _pos(1200.0),
-        "depth_mm": _f(0.05, 0.0, None),
-        "kr_mpa": _pos(850.0),
-        "feed_mm": _pos(0.1),
+        "depth_mm": _f(0.05, 0.0, MAX_DEPTH * 1e3),
+        "kr_mpa": _pos(850.0, MAX_KR * 1e-6),
+        "feed_mm": _pos(0.1, MAX_FEED * 1e3),
         "revolutions": Setting("int", 3, 1, 50),
         "interpolation": Setting("str", "cubic", choices=("cubic", "linear")),
         "start": Setting("str", "rest", choices=("rest", "static")),
@@ -158,10 +170,11 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "integrator": Setting("str", "rk4", doc="rk4 (published); others where the "
                               "analysis's point functions take an integrator"),
         "drop": _f(0.2, 0.0, 0.99),
-        "tip_displacement_mm": _f(0.0),
-        "tip_velocity_m_s": _f(0.0),
-        "ball_position_mm": _f(0.0),
-        "ball_velocity_m_s": _f(0.0),
+        "tip_displacement_mm": _f(0.0, -_D, _D),
+        "tip_velocity_m_s": _f(0.0, -_V, _V),
+        "ball_position_mm": _f(0.0, -MAX_GAP / 2 * 1e3, MAX_GAP / 2 * 1e3,
+                              doc="within [-gap/2, gap/2]"),
+        "ball_velocity_m_s": _f(0.0, -_V, _V),
     },
 }
 
@@ -223,7 +236,7 @@ class Study:
             if not p.is_absolute() and self.source not in ("<dict>", ""):
                 p = Path(self.source).parent / p
             return p
-        return Path(f"{self.name}.nc")
+        return Path(self.name + SUFFIXES[self.format or "netcdf"])
 
 
 def _jsonable(obj):
@@ -232,3 +245,16 @@ def _jsonable(obj):
     if isinstance(obj, list | tuple):
         return [_jsonable(v) for v in obj]
     return obj
+
+
+def output_format(out: Path, fmt: str | None, name: str = "out") -> str:
+    """The format of the result path ``out``: its suffix must be .nc (NetCDF) or .zarr
+    (Zarr) and match ``fmt`` if given; else ParameterError naming ``name``."""
+    by_suffix = {v: k for k, v in SUFFIXES.items()}
+    suffix = Path(out).suffix
+    if suffix not in by_suffix:
+        raise ParameterError(f"{name} = {str(out)!r} must end in .nc (NetCDF) or .zarr (Zarr)")
+    if fmt is not None and by_suffix[suffix] != fmt:
+        raise ParameterError(f"{name} = {str(out)!r} is {by_suffix[suffix]} by its suffix but "
+                             f"format = {fmt!r} (a {fmt} result ends in {SUFFIXES[fmt]})")
+    return by_suffix[suffix]
