@@ -42,7 +42,10 @@ def test_grid_forms_and_case_collapse():
     # a solid or TMD bar has no gap or friction: one case each, as published_cases
     assert labels == ["solid", "tmd", "ball gap=0.5mm friction=off", "ball gap=0.5mm friction=on",
                       "ball gap=0.1mm friction=off", "ball gap=0.1mm friction=on"]
-    assert len(plan.points) == 6 * 1 * 3
+    # every (case, force, ratio) run once, in lock-step batches of one bar kind each
+    assert sorted(r for point in plan.points for r in point) == [
+        (i, 0, k) for i in range(6) for k in range(3)]
+    assert [len(point) for point in plan.points] == [3, 3, 12]
 
 
 def test_to_dict_round_trips_and_is_json():
