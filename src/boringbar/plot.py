@@ -5,6 +5,8 @@ matplotlib.  Figures are built as ``matplotlib.figure.Figure`` objects and
 rendered by the Agg canvas, without pyplot, so no global backend or figure
 state is touched (safe in threads, in notebooks, on headless machines).  Each
 ``plot_*`` function returns its Figure; :func:`boringbar.io.save_figure_atomic` saves it.
+A multi-panel figure is drawn into ``fig`` when given (a Figure, or a SubFigure from
+``Figure.subfigures`` to place it beside others); the single-panel ladder into ``ax``.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ def pattern_class(name: str) -> str:
 
 # --- one run ---------------------------------------------------------------------
 
-def plot_run(run_or_ds, zoom_periods: float = 5) -> Figure:
+def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     """Time traces of one run, as a Figure (save it with :func:`boringbar.io.save_figure_atomic`).
 
     ``run_or_ds``: a :class:`~boringbar.simulate.Run` simulated with
@@ -54,7 +56,7 @@ def plot_run(run_or_ds, zoom_periods: float = 5) -> Figure:
     summary = json.loads(ds.attrs.get("summary", "{}"))
     config = json.loads(ds.attrs.get("config", "{}"))
     if "cutting" in summary:
-        return _cut_figure(ds, summary, config)
+        return _cut_figure(ds, summary, config, fig=fig)
     damper = (config.get("system") or {}).get("damper") or {}
     kind = summary.get("bar", "?")
     t = ds["time"].values
@@ -68,7 +70,8 @@ def plot_run(run_or_ds, zoom_periods: float = 5) -> Figure:
     else:
         lower, lower_label, colour = ds["force"].values, "tip force f (N)", "#8c564b"
 
-    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
     freq = summary.get("forcing_frequency_hz") or 0.0
     t_zoom = t[-1] - zoom_periods / freq if freq > 0 and t.size else -np.inf
@@ -141,7 +144,7 @@ def _run_title(summary: dict, damper: dict) -> str:
 
 # --- a sweep ---------------------------------------------------------------------
 
-def plot_sweep(ds, force: float | None = None) -> Figure:
+def plot_sweep(ds, force: float | None = None, *, fig=None) -> Figure:
     """Tip RMS against Omega/omega_n at one ``force`` (N; may be omitted when
     ``ds`` holds one force), in the layout of the published figures.
 
@@ -159,10 +162,10 @@ def plot_sweep(ds, force: float | None = None) -> Figure:
             raise ValueError(f"force = None: the sweep holds {len(forces)} forces "
                              f"({', '.join(f'{f:g}' for f in forces)} N); give one")
         force = forces[0]
-    return _sweep_figure(ds.sel(force=float(force)), float(force), ds.attrs)
+    return _sweep_figure(ds.sel(force=float(force)), float(force), ds.attrs, fig)
 
 
-def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
+def _sweep_figure(ds, force: float, attrs: dict, fig=None) -> Figure:
     bars = [str(b) for b in ds["bar"].values]
     gaps = ds["gap"].values
     fric = [str(v) for v in ds["friction"].values]
@@ -175,7 +178,8 @@ def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
     pattern = ds["pattern"].values
 
     nr, nc = len(gap_rows), len(fric_cols)
-    fig = Figure(figsize=(5.2 * nc + 0.6, 3.8 * nr + 1.3), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(5.2 * nc + 0.6, 3.8 * nr + 1.3), layout="constrained")
     axes = np.atleast_2d(fig.subplots(nr, nc, sharex=True, sharey=True, squeeze=False))
     seen_patterns = set()
     for r, gap in enumerate(gap_rows):
@@ -245,7 +249,8 @@ def _legend_below(fig, axes, ncol: int | None = None) -> None:
 CUT_COLOURS = {"tip": "#1f77b4", "force": "#8c564b", "zero": "#d62728"}
 
 
-def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30) -> Figure:
+def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
+                fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for one
     cut; the right column zooms on the last ``zoom_cycles`` periods of the
     bar's first mode (about the chatter period)."""
@@ -254,7 +259,8 @@ def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30) -> Fig
     t = ds["time"].values
     rows = ((ds["tip_displacement"].values * 1e3, "tip displacement W (mm)", "tip"),
             (ds["force"].values, "cutting force f (N)", "force"))
-    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
     fn = summary.get("natural_frequency_hz") or 0.0
     span = zoom_cycles / fn if fn > 0 else math.inf
@@ -336,7 +342,7 @@ def case_title(label: str, bar: str, gap: float, friction: str) -> str:
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(bar, str(label))
 
 
-def plot_lobes(ds) -> Figure:
+def plot_lobes(ds, *, fig=None) -> Figure:
     """Stability lobes in the layout of the published panels, as a Figure.
 
     One panel per case: depth of cut (mm) against spindle speed (rpm); every
@@ -352,7 +358,8 @@ def plot_lobes(ds) -> Figure:
     ncol = 1 if n == 1 else 2 if n in (2, 4) else 3
     nrow = math.ceil(n / ncol)
     width = max(5.4 * ncol + 0.4, 8.0)  # room for the legend and title under one panel
-    fig = Figure(figsize=(width, 3.9 * nrow + 1.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(width, 3.9 * nrow + 1.5), layout="constrained")
     axes = np.atleast_1d(fig.subplots(nrow, ncol, sharex=True, squeeze=False).ravel())
     legend: dict[str, object] = {}
     for i in range(n):
@@ -424,13 +431,14 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     ax.set_title(f"{title}\n{sub}", fontsize="medium")
 
 
-def plot_lobe_examples(ds) -> Figure:
+def plot_lobe_examples(ds, *, fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for the
     example grid points of a lobe study (dims example x time, as written by
     ``boringbar lobes --examples``), one column per example; as a Figure."""
     t = ds["time"].values
     n = ds.sizes["example"]
-    fig = Figure(figsize=(6.0 * n + 0.4, 6.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(6.0 * n + 0.4, 6.5), layout="constrained")
     axes = np.asarray(fig.subplots(2, n, sharex=True, squeeze=False))
     duration = float(t[-1]) if t.size else None
     for k, name in enumerate(ds["example"].values):
@@ -492,7 +500,7 @@ def _verdict_code(verdict: str) -> str:
     return {"transient": "t", "quasi-periodic": "q", "chaotic-like": "c"}.get(verdict, "?")
 
 
-def plot_bifurcation(ds) -> Figure:
+def plot_bifurcation(ds, *, fig=None) -> Figure:
     """Bifurcation diagram of :func:`~boringbar.analysis.bifurcation.bifurcation`,
     as a Figure.
 
@@ -508,7 +516,8 @@ def plot_bifurcation(ds) -> Figure:
     x = ds["value"].values * k
     step = float(np.min(np.abs(np.diff(x)))) if x.size > 1 else 1.0
     directions = [str(d) for d in ds["direction"].values]
-    fig = Figure(figsize=(12, 8), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(12, 8), layout="constrained")
     top, mid, bottom = fig.subplots(3, 1, sharex=True, height_ratios=(4, 0.55, 1.4))
     ranges = json.loads(ds.attrs.get("hysteresis_ranges", "null") or "null") or []
     for a, b in ranges:
@@ -614,7 +623,7 @@ def _attractor_label(ds, a: int) -> str:
             f"{100 * float(ds['fraction'].values[a]):.1f} %")
 
 
-def plot_basins(ds) -> Figure:
+def plot_basins(ds, *, fig=None) -> Figure:
     """Basins of attraction of :func:`~boringbar.analysis.basins.basins`, as a
     Figure.
 
@@ -635,7 +644,8 @@ def plot_basins(ds) -> Figure:
     n = ds.sizes["attractor_id"]
     colours = _attractor_colours(n)
     has_map = "poincare_from_tip_m" in ds
-    fig = Figure(figsize=(13.5 if has_map else 8, 6.8), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(13.5 if has_map else 8, 6.8), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, 2 if has_map else 1,
                                       width_ratios=(1, 1) if has_map else None))
     ax = axes[0]
@@ -710,7 +720,7 @@ def _poincare_panel(ax, ds, colours, basin_ax) -> None:
 
 # --- sensitivity -----------------------------------------------------------------
 
-def plot_sensitivity(ds) -> Figure:
+def plot_sensitivity(ds, *, fig=None) -> Figure:
     """A sensitivity study (:func:`~boringbar.analysis.sensitivity.sensitivity`),
     as a Figure: one panel per force, tip RMS (mm) against Omega/omega_n,
     one line per value of the varied parameter; with cuts (``cut_*`` variables,
@@ -729,7 +739,8 @@ def plot_sensitivity(ds) -> Figure:
                if cmap.name == "viridis" else [cmap(i % 10) for i in range(len(values))])
     n = len(forces) + cuts
     width = max(5.4 * n + 0.6, 9.5)  # room for the title and the legend under one panel
-    fig = Figure(figsize=(width, 5.4), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(width, 5.4), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, n, squeeze=False).ravel())
     ratio = ds["ratio"].values
     for j, force in enumerate(forces):
@@ -804,14 +815,17 @@ def _value_label(kind: str, value: str) -> str:
 
 # --- the corrections ladder --------------------------------------------------------
 
-def plot_ladder(ds) -> Figure:
+def plot_ladder(ds, *, ax=None) -> Figure:
     """The readings ladder (:func:`~boringbar.report.corrections.readings_ladder`),
     as a Figure: tip RMS (mm) of each rung, from the paper preset to the
-    physical one, one bar per gap, each labelled with its impact pattern."""
+    physical one, one bar per gap, each labelled with its impact pattern; drawn on
+    ``ax`` (a matplotlib Axes) if given, whose figure is returned."""
     rungs = [str(r) for r in ds["rung"].values]
     gaps = ds["gap"].values
-    fig = Figure(figsize=(10, 5.2), layout="constrained")
-    ax = fig.subplots()
+    if ax is None:
+        fig = Figure(figsize=(10, 5.2), layout="constrained")
+        ax = fig.subplots()
+    fig = ax.figure
     x = np.arange(len(rungs))
     width = 0.8 / len(gaps)
     for j, gap in enumerate(gaps):
