@@ -218,13 +218,14 @@ def _in_process(name: str):
                 sweep(cases, SweepOptions([0.99, 1.01]), integration=Integration(duration_s=0.02),
                       execution=Execution(workers=1)))
     if name == "lobes":
-        from boringbar.analysis.lobes import lobes
+        from boringbar.analysis.lobes import LobesOptions, lobes
 
         return ({"study": {"analysis": "lobes"}, "bar": {"kind": "solid"},
                  "run": {"duration_s": 0.05}, "grid": {"rpm": [1000.0, 1200.0]},
                  "analysis": {"depth_step_mm": 0.05, "max_depth_mm": 0.5}},
-                lobes([Case("solid", make_system("solid"), "solid")], [1000.0, 1200.0],
-                      depth_step=0.05e-3, max_depth=0.5e-3, duration=0.05, workers=1))
+                lobes([Case("solid", make_system("solid"), "solid")],
+                      LobesOptions([1000.0, 1200.0], depth_step_m=0.05e-3, max_depth_m=0.5e-3),
+                      integration=Integration(duration_s=0.05), execution=Execution(workers=1)))
     if name == "bifurcation":
         from boringbar.analysis.bifurcation import bifurcation
 

@@ -20,7 +20,7 @@ resumable stores, progress.
 
 The analyses reuse the per-point code of the in-process functions:
 ``sweep``: :func:`boringbar.analysis.sweep.compute` per lock-step batch of runs;
-``lobes``: :func:`boringbar.analysis.lobes.lobe_column` per (case, rpm);
+``lobes``: :func:`boringbar.analysis.lobes.compute` per (case, rpm) column;
 ``bifurcation``: one case's whole forward + backward continuation;
 ``basins``: one grid cell's run and signature, grouped at assembly;
 ``sensitivity``: one (value, force, ratio) harmonic run or one (value,
@@ -38,12 +38,13 @@ import numpy as np
 import xarray as xr
 
 from boringbar._validate import ParameterError
+from boringbar.analysis import lobes as lobes_mod
 from boringbar.analysis import sensitivity as sensitivity_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
 from boringbar.analysis.basins import BasinTolerance, basin_grid, basin_run, basins_dataset, group
 from boringbar.analysis.bifurcation import bifurcation
-from boringbar.analysis.lobes import lobe_column, lobe_cut, lobe_options, lobes_dataset
+from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
 from boringbar.analysis.sweep import Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
@@ -338,40 +339,35 @@ class Lobes(Analysis):
 
     def plan(self, study):
         cases, values = study_cases(study)
-        rpm = _axis(study, "rpm")
         o = study.options
-        opts = lobe_options(cases, rpm, method=o["method"], depth_step=o["depth_step_mm"] * 1e-3,
-                        max_depth=o["max_depth_mm"] * 1e-3, successive=o["successive"],
-                        criterion=o["criterion"], kr=study.value("kr_mpa") * 1e6,
-                        feed=study.value("feed_mm") * 1e-3,
-                        revolutions=study.value("revolutions"),
-                        interpolation=study.value("interpolation"), start=study.value("start"),
-                        bounded_fraction=study.value("bounded_fraction"),
-                        duration=study.value("duration_s"), dt=study.value("dt_s"),
-                        integrator=study.value("integrator"))
-        points = list(itertools.product(range(len(cases)), range(len(rpm))))
-        return Plan({"cases": cases, "rpm": rpm, "opts": opts}, points, {"values": values})
+        if o["max_depth_mm"] < o["depth_step_mm"]:
+            raise StudyError(f"{study.source}: key 'analysis.max_depth_mm' = "
+                             f"{o['max_depth_mm']!r} must be >= analysis.depth_step_mm = "
+                             f"{o['depth_step_mm']!r}")
+        try:
+            options = LobesOptions(
+                tuple(_axis(study, "rpm")), o["method"], o["criterion"],
+                o["depth_step_mm"] * 1e-3, o["max_depth_mm"] * 1e-3, o["successive"],
+                **_cut_options(study), analytic=o["analytic"])
+        except ParameterError as exc:
+            raise StudyError(f"{study.source}: [analysis] {exc}") from None
+        plan = lobes_mod.plan(cases, options, _integration(study, initial=None))
+        plan.extra["values"] = values
+        return plan
 
     def runs(self, plan):
         c = plan.context
-        return [(x.system, 2 * math.pi * max(c["rpm"]) / 60.0, True) for x in c["cases"]]
+        return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True)
+                for x in c["cases"]]
 
     def warm(self, ctx):
-        for nm in sorted({c.system.bar.n_modes for c in ctx["cases"]}):
-            c0 = next(c for c in ctx["cases"] if c.system.bar.n_modes == nm)
-            lobe_cut(c0, float(ctx["rpm"][0]), ctx["opts"]["depth_step"],
-                 dict(ctx["opts"], duration=2e-4))
+        lobes_mod.warm(ctx)
 
     def compute(self, ctx, point):
-        i, j = point
-        return lobe_column(ctx["cases"][i], float(ctx["rpm"][j]), ctx["opts"])
-
+        return lobes_mod.compute(ctx, point)
 
     def assemble(self, study, plan, results):
-        ctx = plan.context
-        columns = dict(zip(plan.points, results, strict=True))
-        ds = lobes_dataset(ctx["cases"], ctx["rpm"], columns, ctx["opts"],
-                      study.options["analytic"], _provenance(study))
+        ds = lobes_mod.assemble(plan, results, _provenance(study))
         return ds.assign_coords(_case_coords(plan.extra["values"]))
 
 
@@ -615,7 +611,7 @@ class Sensitivity(Analysis):
         cuts = None
         if o["cuts"]:
             cuts = Cuts(study.value("rpm"), tuple(round(d * 1e-3, 15) for d in o["depths_mm"]),
-                        study.value("duration_s"), _cut_options(study))
+                        study.value("duration_s"), _regenerative_options(study))
         try:
             options = SensitivityOptions(kind, o["values"], tuple(_axis(study, "force_n")),
                                          tuple(_axis(study, "ratio")), cuts)
@@ -659,11 +655,17 @@ def _overrides(s: dict, varied: str | None) -> dict:
 
 
 def _cut_options(study: Study) -> dict:
-    """The Regenerative options of the study's ``[forcing]`` (SI)."""
-    return {"kr": study.value("kr_mpa") * 1e6, "feed": study.value("feed_mm") * 1e-3,
+    """The cut of the study's ``[forcing]`` (SI), as :class:`LobesOptions` fields."""
+    return {"kr_pa": study.value("kr_mpa") * 1e6, "feed_m": study.value("feed_mm") * 1e-3,
             "revolutions": study.value("revolutions"),
             "interpolation": study.value("interpolation"), "start": study.value("start"),
             "bounded_fraction": study.value("bounded_fraction")}
+
+
+def _regenerative_options(study: Study) -> dict:
+    """The Regenerative options of the study's ``[forcing]`` (SI)."""
+    c = _cut_options(study)
+    return {"kr": c.pop("kr_pa"), "feed": c.pop("feed_m"), **c}
 
 
 def _initial_or_none(study: Study):
