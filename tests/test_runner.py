@@ -227,9 +227,10 @@ def _in_process(name: str):
                       LobesOptions([1000.0, 1200.0], depth_step_m=0.05e-3, max_depth_m=0.5e-3),
                       integration=Integration(duration_s=0.05), execution=Execution(workers=1)))
     if name == "bifurcation":
-        from boringbar.analysis.bifurcation import bifurcation
+        from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
 
-        ref = bifurcation(make_system("ball"), "force", [5.0, 10.0], duration=0.02)
+        ref = bifurcation(make_system("ball"), BifurcationOptions("force", [5.0, 10.0]),
+                          integration=Integration(duration_s=0.02))
         return ({"study": {"analysis": "bifurcation"}, "run": {"duration_s": 0.02},
                  "analysis": {"values": [5.0, 10.0]}},
                 ref.expand_dims(case=["ball gap=0.5mm friction=on"]).assign_coords(

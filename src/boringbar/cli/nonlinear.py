@@ -11,7 +11,8 @@ import numpy as np
 
 from boringbar._validate import ParameterError, check_range
 from boringbar.analysis.basins import basin_summary, basins
-from boringbar.analysis.bifurcation import bifurcation, hysteresis_ranges
+from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.bifurcation import summary as bifurcation_summary
 from boringbar.analysis.poincare import poincare_map
 from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
 from boringbar.analysis.sensitivity import summary as sensitivity_summary
@@ -220,65 +221,26 @@ def _cmd_bifurcation(args) -> int:
     if parameter in ("gap", "restitution"):
         def target(value):  # the factory: one System per value
             return make_system(bar, args.preset, **{**kw, parameter: value})
-    ds = bifurcation(target, parameter, values * si, base_forcing=Harmonic(force, ratio),
-                     duration=args.duration_s, dt=args.dt_s, drop=args.drop,
-                     initial=initial_conditions(args, gaps if bar == "ball" else []),
-                     backward=not args.no_backward, units="m" if parameter == "gap" else "1",
-                     progress=progress_printer(args, "bifurcation", "runs"),
-                     integrator=args.integrator)
-    ranges = hysteresis_ranges(ds) if not args.no_backward else None
-    ds.attrs.update(preset=args.preset, bar=bar, swept_option=option,
-                    hysteresis_ranges=json.dumps(ranges),
-                    hysteresis_note="parameter ranges (start, stop) in the parameter's SI "
-                                    "units where the forward and backward Poincare sets "
-                                    "differ (analysis.bifurcation.hysteresis_ranges)")
-
+    options = BifurcationOptions(parameter, tuple(values * si), force, ratio,
+                                 backward=not args.no_backward,
+                                 units="m" if parameter == "gap" else "1")
+    initial = initial_conditions(args, gaps if bar == "ball" else [])
+    ds = bifurcation(target, options,
+                     integration=integration(args, initial, steady_fraction=1.0 - args.drop),
+                     progress=progress_printer(args, "bifurcation", "continuations"))
+    ds = with_hysteresis(ds)
+    ds.attrs.update(preset=args.preset, bar=bar, swept_option=option)
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "bifurcation.nc"),
              "png": save_figure_atomic(plot_bifurcation(ds), out / "bifurcation.png")}
-    summary = {**_bifurcation_summary(ds, ranges),
-               "files": {k: str(v) for k, v in files.items()}}
+    summary = {**bifurcation_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.json:
         print_json(summary)
     elif not args.quiet:
-        print(_bifurcation_text(ds, ranges))
+        print(_bifurcation_text(ds, summary["hysteresis_ranges"]))
         print("wrote " + ", ".join(str(v) for v in files.values()))
     return 0
-
-
-def _bifurcation_summary(ds, ranges) -> dict:
-    """What ``bifurcation --json`` prints: per direction and value the W samples (m)."""
-    config = json.loads(ds.attrs["config"])
-    dirs = [str(d) for d in ds["direction"].values]
-
-    def per_value(name: str, direction: str) -> list:
-        return ds[name].sel(direction=direction).values.tolist()
-
-    def samples(direction: str) -> list[list[float]]:
-        row = ds.sel(direction=direction)
-        return [w[:n].tolist() for w, n in zip(row["tip_displacement"].values,
-                                               row["n_samples"].values, strict=True)]
-
-    return {
-        "parameter": ds.attrs["parameter"],
-        "units": ds.attrs["units"],
-        "values": ds["value"].values.tolist(),
-        "preset": ds.attrs["preset"],
-        "bar": ds.attrs["bar"],
-        "base_forcing": config["base_forcing"],
-        "duration_s": config["duration_s"],
-        "dt_s": config["dt_s"],
-        "drop": config["drop"],
-        "forward": samples("forward"),
-        "backward": samples("backward") if "backward" in dirs else None,
-        "verdicts": {d: per_value("verdict", d) for d in dirs},
-        "period": {d: per_value("period", d) for d in dirs},
-        "rms_tip_m": {d: per_value("rms_tip_m", d) for d in dirs},
-        "pattern": {d: per_value("pattern", d) for d in dirs},
-        "hysteresis_ranges": None if ranges is None else [list(r) for r in ranges],
-        "wall_time_s": ds.attrs["wall_time_s"],
-    }
 
 
 #: How bifurcation shows each parameter: (label, unit, option units per SI unit).

@@ -21,7 +21,8 @@ resumable stores, progress.
 The analyses reuse the per-point code of the in-process functions:
 ``sweep``: :func:`boringbar.analysis.sweep.compute` per lock-step batch of runs;
 ``lobes``: :func:`boringbar.analysis.lobes.compute` per (case, rpm) column;
-``bifurcation``: one case's whole forward + backward continuation;
+``bifurcation``: :func:`boringbar.analysis.bifurcation.compute`, one case's whole
+forward + backward continuation;
 ``basins``: one grid cell's run and signature, grouped at assembly;
 ``sensitivity``: one (value, force, ratio) harmonic run or one (value,
 depth) cut.
@@ -38,12 +39,13 @@ import numpy as np
 import xarray as xr
 
 from boringbar._validate import ParameterError
+from boringbar.analysis import bifurcation as bifurcation_mod
 from boringbar.analysis import lobes as lobes_mod
 from boringbar.analysis import sensitivity as sensitivity_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
 from boringbar.analysis.basins import BasinTolerance, basin_grid, basin_run, basins_dataset, group
-from boringbar.analysis.bifurcation import bifurcation
+from boringbar.analysis.bifurcation import BifurcationOptions
 from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
 from boringbar.analysis.sweep import Case, SweepOptions
@@ -393,74 +395,30 @@ class Bifurcation(Analysis):
         if o["parameter"] == "ratio" and np.any(v <= 0):
             raise ParameterError(f"analysis.values = {v.tolist()} must be > 0 for parameter "
                                  "'ratio'")
-        ctx = {"cases": cases, "values": v, "parameter": o["parameter"],
-               "base": Harmonic(study.value("force_n"), study.value("ratio")),
-               "duration": study.value("duration_s"), "dt": study.value("dt_s"),
-               "drop": study.value("drop"), "initial": _initial(study),
-               "backward": o["backward"], "tol": o["tol"], "max_k": o["max_k"],
-               "integrator": study.value("integrator")}
-        return Plan(ctx, list(range(len(cases))), {"values": values})
+        try:
+            options = BifurcationOptions(o["parameter"], tuple(v.tolist()),
+                                         study.value("force_n"), study.value("ratio"),
+                                         o["backward"], o["tol"], o["max_k"])
+        except ParameterError as exc:
+            raise StudyError(f"{study.source}: [analysis] {exc}") from None
+        plan = bifurcation_mod.plan(cases, options,
+                                    _integration(study, 1.0 - study.value("drop")))
+        plan.extra["values"] = values
+        return plan
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"], ctx["integrator"])
+        bifurcation_mod.warm(ctx)
 
     def runs(self, plan):
-        c = plan.context
-        r = max(c["values"]) if c["parameter"] == "ratio" else c["base"].ratio
-        return [(x.system, r * x.system.reference_frequency, False) for x in c["cases"]]
+        o = plan.context["options"]
+        r = max(o.values) if o.parameter == "ratio" else o.ratio
+        return [(x.system, r * x.system.reference_frequency, False) for x in plan.extra["cases"]]
 
     def compute(self, ctx, i):
-        ds = bifurcation(ctx["cases"][i].system, ctx["parameter"], ctx["values"],
-                         base_forcing=ctx["base"], duration=ctx["duration"], dt=ctx["dt"],
-                         drop=ctx["drop"], initial=ctx["initial"], backward=ctx["backward"],
-                         tol=ctx["tol"], max_k=ctx["max_k"],
-                         integrator=ctx["integrator"])
-        return {"data": {k: ds[k].values for k in ds.data_vars if k != "elapsed_s"},
-                "attrs": {k: ds[k].attrs for k in ds.data_vars},
-                "config": json.loads(ds.attrs["config"]), "ds_attrs": dict(ds.attrs)}
-
+        return bifurcation_mod.compute(ctx, i)
 
     def assemble(self, study, plan, results):
-        ctx = plan.context
-        n_sample = max(r["data"]["tip_displacement"].shape[-1] for r in results)
-        data = {}
-        for k, a0 in results[0]["data"].items():
-            arrs = []
-            for r in results:
-                a = r["data"][k]
-                if a.ndim == 3 and a.shape[-1] < n_sample:
-                    pad = np.full(a.shape[:2] + (n_sample - a.shape[-1],), np.nan)
-                    a = np.concatenate([a, pad], axis=-1)
-                arrs.append(a)
-            dims = ("case", "direction", "value") + (("sample",) if a0.ndim == 3 else ())
-            data[k] = (dims, np.stack(arrs), results[0]["attrs"][k])
-        first = results[0]["ds_attrs"]
-        cfg = {k: v for k, v in results[0]["config"].items()
-               if k not in ("systems", "wall_time_s")}
-        cases = ctx["cases"]
-        ds = xr.Dataset(
-            data,
-            coords={
-                "case": [c.label for c in cases],
-                "direction": list(first.get("directions", ["forward", "backward"]
-                                            if ctx["backward"] else ["forward"])),
-                "value": ("value", ctx["values"], {"long_name": first["parameter"],
-                                                   "units": first["units"]}),
-                "bar": ("case", [c.bar for c in cases]),
-                "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
-                "friction": ("case", [c.friction for c in cases]),
-            },
-            attrs={
-                **{k: first[k] for k in ("title", "boringbar_version", "parameter", "units",
-                                         "dt_s", "duration_s", "drop", "classification",
-                                         "continuation")},
-                "integrator": study.value("integrator"),
-                "config": json.dumps(cfg),
-                "systems": json.dumps({c.label: r["config"]["systems"]
-                                       for c, r in zip(cases, results, strict=True)}),
-                **_provenance(study),
-            },
-        )
+        ds = bifurcation_mod.assemble(plan, results, _provenance(study))
         return ds.assign_coords(_case_coords(plan.extra["values"]))
 
 
