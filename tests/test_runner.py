@@ -205,7 +205,6 @@ def test_example_studies_run_shortened(path, tmp_path):
 def _in_process(name: str):
     """(study dict, the in-process function's Dataset) of the same tiny computation."""
     from boringbar.analysis.sweep import Case
-    from boringbar.model.forcing import Harmonic
     from boringbar.model.system import make_system
 
     if name == "sweep":
@@ -237,13 +236,14 @@ def _in_process(name: str):
                     bar=("case", ["ball"]), gap=("case", [0.5e-3]),
                     friction=("case", ["on"])))
     if name == "basins":
-        from boringbar.analysis.basins import basins
+        from boringbar.analysis.basins import BasinOptions, basins
 
         return ({"study": {"analysis": "basins"}, "run": {"duration_s": 0.02},
                  "analysis": {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
                               "velocity_m_s": {"start": -1, "stop": 1, "count": 2}}},
-                basins(make_system("ball"), Harmonic(10.0, 1.0), displacement=(-1e-3, 1e-3, 2),
-                       velocity=(-1.0, 1.0, 2), duration=0.02, workers=1))
+                basins(make_system("ball"),
+                       BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2), force_n=10.0, ratio=1.0),
+                       integration=Integration(duration_s=0.02), execution=Execution(workers=1)))
     if name == "sensitivity":
         from boringbar.analysis.sensitivity import SensitivityOptions, sensitivity
 
@@ -276,8 +276,7 @@ def test_every_analysis_has_an_example_study():
 
 
 def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_path):
-    from boringbar.analysis.basins import basins
-    from boringbar.model.forcing import Harmonic
+    from boringbar.analysis.basins import BasinOptions, basins
     from boringbar.model.system import make_system
 
     grid = {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
@@ -287,9 +286,9 @@ def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_p
                                     "analysis": grid}),
                    tmp_path / "b.nc", executor="serial")
     assert list(ds["case"].values)[3] == "ball gap=0.5mm friction=on F0=20N"
-    ref = basins(make_system("ball", friction=True), Harmonic(20.0, 1.0),
-                 displacement=(-1e-3, 1e-3, 2), velocity=(-1.0, 1.0, 2), duration=0.02,
-                 workers=1)
+    ref = basins(make_system("ball", friction=True),
+                 BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2), force_n=20.0, ratio=1.0),
+                 integration=Integration(duration_s=0.02), execution=Execution(workers=1))
     one = ds.isel(case=3)
     for k in ref.data_vars:
         y = ref[k].values

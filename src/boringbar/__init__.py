@@ -18,7 +18,7 @@ layers behind them.
 __version__ = "0.1.0"
 
 from boringbar._validate import ParameterError  # noqa: E402
-from boringbar.analysis.basins import basins  # noqa: E402
+from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
 from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
 from boringbar.analysis.poincare import poincare_map  # noqa: E402
@@ -43,6 +43,7 @@ from boringbar.studies.runner import run_study  # noqa: E402
 __all__ = [
     "PRESETS",
     "READINGS",
+    "BasinOptions",
     "BifurcationOptions",
     "Case",
     "Cuts",

@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from boringbar._validate import ParameterError, check_range
-from boringbar.analysis.basins import basin_summary, basins
+from boringbar.analysis.basins import BasinOptions, basins
+from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
 from boringbar.analysis.bifurcation import summary as bifurcation_summary
-from boringbar.analysis.poincare import poincare_map
 from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
 from boringbar.analysis.sensitivity import summary as sensitivity_summary
 from boringbar.analysis.sweep import parse_range
@@ -38,11 +37,9 @@ from boringbar.cli.options import (
     system_overrides,
 )
 from boringbar.cli.sweeps import short_pattern
-from boringbar.io import jsonable, save_figure_atomic, write_netcdf_atomic
-from boringbar.model.forcing import Harmonic
+from boringbar.io import save_figure_atomic, write_netcdf_atomic
 from boringbar.model.system import BALLS, make_system
 from boringbar.plot import plot_basins, plot_bifurcation, plot_sensitivity
-from boringbar.simulate import Initial, simulate
 
 #: bifurcation's published sweep: F0 from 5 to 50 N in 1 N steps
 PUBLISHED_FORCES = "5:50:1"
@@ -318,40 +315,17 @@ def _cmd_basins(args) -> int:
     kw = system_overrides(args)
     if bar == "ball":
         kw.update(gap=gap, friction=friction_on)
-    system = make_system(bar, args.preset, **kw)
-    forcing = Harmonic(force, ratio)
-    ds = basins(system, forcing, displacement=displacement, velocity=velocity,
-                duration=args.duration_s, dt=args.dt_s, drop=args.drop, ball_position=y0,
-                ball_velocity=yv0, workers=args.workers,
-                progress=progress_printer(args, "basins", "runs"), integrator=args.integrator)
-    # the Poincare map beside the basins: data first, so it goes into basins.nc
-    run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s,
-                   initial=Initial(w0 * 1e-3, v0, y0, yv0), steady_fraction=1 - args.drop,
-                   strobe=True, integrator=args.integrator)
-    pm = poincare_map(run, args.drop)
-    verdict = pm.classify()
-    ds = ds.assign(
-        poincare_from_tip_m=("poincare_sample", pm.tip_displacement,
-                             {"units": "m", "long_name": "W at Omega t = 0 mod 2 pi, from "
-                                                         "--poincare-from"}),
-        poincare_from_tip_velocity_m_s=("poincare_sample", pm.tip_velocity,
-                                        {"units": "m/s", "long_name": "W' at Omega t = 0 mod "
-                                                                      "2 pi, from "
-                                                                      "--poincare-from"}))
-    poincare = {"tip_displacement_m": w0 * 1e-3, "tip_velocity_m_s": v0,
-                "ball_position_m": y0, "ball_velocity_m_s": yv0,
-                "verdict": verdict["verdict"], "period": verdict["k"],
-                "distinct": verdict["distinct"], "n_samples": len(pm.time),
-                "rms_tip_m": run.rms_tip,
-                "pattern": "" if run.pattern is None else run.pattern.name}
-    ds.attrs.update(bar=bar, poincare_from=json.dumps(jsonable(poincare)))
-
+    options = BasinOptions(displacement, velocity, y0, yv0, force, ratio,
+                           poincare_from=(w0 * 1e-3, v0))
+    ds = basins(make_system(bar, args.preset, **kw), options,
+                integration=integration(args, steady_fraction=1.0 - args.drop),
+                execution=execution(args), progress=progress_printer(args, "basins", "batches"))
+    ds.attrs.update(bar=bar)
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "basins.nc"),
              "png": save_figure_atomic(plot_basins(ds), out / "basins.png")}
-    summary = {**basin_summary(ds), "poincare_from": poincare,
-               "files": {k: str(v) for k, v in files.items()}}
+    summary = {**basins_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.json:
         print_json(summary)
     elif not args.quiet:

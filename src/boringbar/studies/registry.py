@@ -23,7 +23,8 @@ The analyses reuse the per-point code of the in-process functions:
 ``lobes``: :func:`boringbar.analysis.lobes.compute` per (case, rpm) column;
 ``bifurcation``: :func:`boringbar.analysis.bifurcation.compute`, one case's whole
 forward + backward continuation;
-``basins``: one grid cell's run and signature, grouped at assembly;
+``basins``: :func:`boringbar.analysis.basins.compute`, a lock-step batch of grid
+cells (or one cell), grouped at assembly;
 ``sensitivity``: one (value, force, ratio) harmonic run or one (value,
 depth) cut.
 """
@@ -31,20 +32,19 @@ depth) cut.
 from __future__ import annotations
 
 import itertools
-import json
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
-import xarray as xr
 
 from boringbar._validate import ParameterError
+from boringbar.analysis import basins as basins_mod
 from boringbar.analysis import bifurcation as bifurcation_mod
 from boringbar.analysis import lobes as lobes_mod
 from boringbar.analysis import sensitivity as sensitivity_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
-from boringbar.analysis.basins import BasinTolerance, basin_grid, basin_run, basins_dataset, group
+from boringbar.analysis.basins import BasinOptions, OperatingPoint
 from boringbar.analysis.bifurcation import BifurcationOptions
 from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
@@ -52,7 +52,7 @@ from boringbar.analysis.sweep import Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.simulate import INTEGRATORS, Initial, Integration, check_step, simulate
+from boringbar.simulate import INTEGRATORS, Initial, Integration, check_step
 from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study, StudyError
 
 
@@ -274,13 +274,6 @@ def _provenance(study: Study) -> dict:
     return {"study": study.name, "study_analysis": study.analysis}
 
 
-def _warm_harmonic(cases, integrator: str = "rk4") -> None:
-    kw = {} if integrator == "rk4" else {"integrator": integrator}
-    for nm in sorted({c.system.bar.n_modes for c in cases}):
-        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
-        simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6, **kw)
-
-
 # --- sweep ------------------------------------------------------------------------
 
 _SWEEP_NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
@@ -425,7 +418,7 @@ class Bifurcation(Analysis):
 # --- basins -----------------------------------------------------------------------
 
 class Basins(Analysis):
-    """Basins of attraction: one point per (operating point, grid cell).
+    """Basins of attraction: one point per (operating point, lock-step batch of cells).
 
     One operating point (no grid) gives exactly the Dataset of
     :func:`~boringbar.analysis.basins.basins`; several (a grid over bar, damper,
@@ -444,8 +437,8 @@ class Basins(Analysis):
     def plan(self, study):
         cases, values = study_cases(study)
         forces, ratios = _axis(study, "force_n"), _axis(study, "ratio")
-        ops = []  # (label, case index, forcing)
-        for i, case in enumerate(cases):
+        operating = []
+        for case in cases:
             for f in forces:
                 for r in ratios:
                     label = case.label
@@ -453,91 +446,37 @@ class Basins(Analysis):
                         label += f" F0={f:g}N"
                     if "ratio" in study.axes:
                         label += f" r={r:g}"
-                    ops.append((label, i, Harmonic(float(f), float(r))))
+                    operating.append(OperatingPoint(label, case, Harmonic(float(f), float(r))))
         d, v = study.options["displacement_mm"], study.options["velocity_m_s"]
-        w0 = basin_grid("displacement", (d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]))
-        v0 = basin_grid("velocity", (v["start"], v["stop"], v["count"]))
-        bp, bv = study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s")
-        initials = [Initial(float(w), float(v), bp, bv) for w in w0 for v in v0]
-        ctx = {"cases": cases, "ops": ops, "duration": study.value("duration_s"),
-               "dt": study.value("dt_s"), "drop": study.value("drop"),
-               "tol": BasinTolerance(), "initials": initials, "w0": w0, "v0": v0,
-               "integrator": study.value("integrator")}
-        points = list(itertools.product(range(len(ops)), range(len(initials))))
-        return Plan(ctx, points, {"values": values})
+        try:
+            options = BasinOptions((d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]),
+                                   (v["start"], v["stop"], v["count"]),
+                                   study.value("ball_position_mm") * 1e-3,
+                                   study.value("ball_velocity_m_s"))
+        except ParameterError as exc:
+            raise StudyError(f"{study.source}: [analysis] {exc}") from None
+        integration = _integration(study, 1.0 - study.value("drop"), initial=None)
+        plan = basins_mod.plan(operating, options, integration)
+        plan.extra.update(values=values, case_index=[cases.index(op.case) for op in operating])
+        return plan
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"], ctx["integrator"])
+        basins_mod.warm(ctx)
 
     def runs(self, plan):
-        c = plan.context
-        return [(c["cases"][i].system, f.omega(c["cases"][i].system.reference_frequency), False)
-                for _, i, f in c["ops"]]
+        return [(op.case.system, op.forcing.omega(op.case.system.reference_frequency), False)
+                for op in plan.context["operating"]]
 
     def compute(self, ctx, point):
-        op, cell = point
-        _, i, forcing = ctx["ops"][op]
-        return basin_run(ctx["cases"][i].system, forcing, ctx["initials"][cell], ctx["duration"],
-                    ctx["dt"], ctx["drop"], ctx["tol"], integrator=ctx["integrator"])
-
+        return basins_mod.compute(ctx, point)
 
     def assemble(self, study, plan, results):
-        c = plan.context
-        n_cells = len(c["initials"])
-        parts = []
-        for op, (_, i, forcing) in enumerate(c["ops"]):
-            cells = results[op * n_cells:(op + 1) * n_cells]
-            system = c["cases"][i].system
-            label, leaders = group(cells, forcing.omega(system.reference_frequency), c["tol"])
-            parts.append(basins_dataset(xr, system, forcing, c["w0"], c["v0"], cells, label,
-                                        leaders,
-                                  c["initials"], {
-                                      "dt_s": c["dt"], "duration_s": c["duration"],
-                                      "drop": c["drop"],
-                                      "ball_position_m": c["initials"][0].ball_position,
-                                      "ball_velocity_m_s": c["initials"][0].ball_velocity,
-                                      "tolerances": json.dumps(asdict(c["tol"])),
-                                      "integrator": c["integrator"],
-                                      **_provenance(study)}))
-        if len(parts) == 1:
-            return parts[0]
-        return _stack_basins(parts, c, plan.extra["values"])
-
-
-def _stack_basins(parts: list, c: dict, values: dict):
-    """Basin Datasets of several operating points along a leading ``case`` dim."""
-
-    n_att = max(p.sizes["attractor_id"] for p in parts)
-    n_sample = max(p.sizes["sample"] for p in parts)
-    fill = {"count": 0, "attractor_period": -1, "attractor_pattern": ""}
-    padded = []
-    for p in parts:
-        attrs = {k: p[k].attrs for k in p.variables}
-        p = p.reindex(attractor_id=np.arange(n_att), fill_value=fill)
-        p = p.pad(sample=(0, n_sample - p.sizes["sample"]))
-        for k, a in attrs.items():
-            p[k].attrs = a
-        padded.append(p)
-    ds = xr.concat(padded, dim="case", data_vars="all", coords="minimal",
-                   compat="override", combine_attrs="drop")
-    cases = c["cases"]
-    idx = [i for _, i, _ in c["ops"]]
-    ds = ds.assign_coords({
-        "case": [label for label, _, _ in c["ops"]],
-        "bar": ("case", [cases[i].bar for i in idx]),
-        "gap": ("case", np.array([cases[i].gap for i in idx]), {"units": "m"}),
-        "friction": ("case", [cases[i].friction for i in idx]),
-        "force": ("case", np.array([f.amplitude for _, _, f in c["ops"]]), {"units": "N"}),
-        "ratio": ("case", np.array([f.ratio for _, _, f in c["ops"]])),
-    })
-    ds = ds.assign_coords({k: ("case", [v[i] for i in idx])
-                           for k, (_, v) in _case_coords(values).items()})
-    first = parts[0].attrs
-    ds.attrs = {k: v for k, v in first.items() if k not in ("system", "forcing")}
-    ds.attrs["systems"] = json.dumps({label: cases[i].system.to_dict()
-                                      for label, i, _ in c["ops"]})
-    ds.attrs["forcings"] = json.dumps({label: f.to_dict() for label, _, f in c["ops"]})
-    return ds
+        ds = basins_mod.assemble(plan, results, _provenance(study))
+        if "case" not in ds.dims:  # one operating point: exactly basins()'s Dataset
+            return ds
+        idx = plan.extra["case_index"]
+        return ds.assign_coords({k: ("case", [v[i] for i in idx])
+                                 for k, (_, v) in _case_coords(plan.extra["values"]).items()})
 
 
 # --- sensitivity ------------------------------------------------------------------
