@@ -287,6 +287,33 @@ def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:
     return plan.context["options"].depth_step_m * np.arange(1, top + 1), arrays, n_runs
 
 
+def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
+               bounded_fraction: float) -> dict:
+    """The lobes Dataset's data variables from the per-run arrays ``a`` (:func:`_grid`)
+    and the per-column limits."""
+    dims = ("case", "rpm", "depth")
+    codes = "1 stable, 0 chatter, -1 not run"
+    return {
+        "verdict": (dims, a["zero"], {"long_name": "published criterion: force reaches zero",
+                                      "codes": codes}),
+        "verdict_bounded": (dims, a["bounded"], {
+            "long_name": f"bounded chatter: amplitude > {bounded_fraction:g} h_m, or force "
+                         "reaches zero", "codes": codes}),
+        "amplitude": (dims, a["amplitude"], {"units": "m"}),
+        "first_zero_time": (dims, a["first_zero"], {"units": "s"}),
+        "impacts": (dims, a["impacts"], {
+            "long_name": "counted ball impacts over the run (-1: no ball or not run)"}),
+        "max_rel_disp": (dims, a["max_rel_disp"], {
+            "units": "m", "long_name": "largest |y|, the ball's excursion from the cavity "
+                                       "centre, over the run (ball cases)"}),
+        "limit_depth": (("case", "rpm"), limit, {
+            "units": "m", "long_name": "limiting (chatter-free) depth of cut"}),
+        "first_unstable_depth": (("case", "rpm"), first_unstable, {"units": "m"}),
+        "min_chatter_free_depth": (("case",), np.nanmin(np.where(
+            np.isnan(limit), np.inf, limit), axis=1), {"units": "m"}),
+    }
+
+
 def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
     """The lobes Dataset from the columns (:func:`compute` results in plan order);
     ``attrs`` go after the configuration's."""
@@ -300,28 +327,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
     for i in range(chosen.shape[0]):
         for j in range(chosen.shape[1]):
             limit[i, j], first_unstable[i, j] = _limits(chosen[i, j], depths)
-    dims = ("case", "rpm", "depth")
-    codes = "1 stable, 0 chatter, -1 not run"
     ds = xr.Dataset(
-        {
-            "verdict": (dims, a["zero"], {"long_name": "published criterion: force reaches "
-                                                       "zero", "codes": codes}),
-            "verdict_bounded": (dims, a["bounded"], {
-                "long_name": f"bounded chatter: amplitude > {o.bounded_fraction:g} h_m, or "
-                             "force reaches zero", "codes": codes}),
-            "amplitude": (dims, a["amplitude"], {"units": "m"}),
-            "first_zero_time": (dims, a["first_zero"], {"units": "s"}),
-            "impacts": (dims, a["impacts"], {
-                "long_name": "counted ball impacts over the run (-1: no ball or not run)"}),
-            "max_rel_disp": (dims, a["max_rel_disp"], {
-                "units": "m", "long_name": "largest |y|, the ball's excursion from the "
-                                           "cavity centre, over the run (ball cases)"}),
-            "limit_depth": (("case", "rpm"), limit, {"units": "m",
-                            "long_name": "limiting (chatter-free) depth of cut"}),
-            "first_unstable_depth": (("case", "rpm"), first_unstable, {"units": "m"}),
-            "min_chatter_free_depth": (("case",), np.nanmin(np.where(
-                np.isnan(limit), np.inf, limit), axis=1), {"units": "m"}),
-        },
+        _variables(a, limit, first_unstable, o.bounded_fraction),
         coords={
             "case": [c.label for c in cases],
             "rpm": ("rpm", rpm, {"units": "rev/min"}),
