@@ -135,14 +135,18 @@ def test_full_batch_and_kernel_arguments():
 def test_basins_and_sweep_are_the_same_batched_or_not():
     """Batches (in grid / job order, padded) change nothing in the results, whatever
     the workers; an uneven grid leaves a partial last batch."""
-    from boringbar.analysis.basins import basins
+    from boringbar.analysis.basins import BasinOptions, basins
     from boringbar.analysis.sweep import published_cases, sweep
 
     system = make_system("ball", "paper", gap=0.5e-3, friction=True)
-    grid = {"displacement": (-1e-3, 1e-3, 3), "velocity": (-1.0, 1.0, 5), "duration": 0.03}
-    one = basins(system, Harmonic(10.0, 1.01), batch=1, workers=1, **grid)
+    grid = {"displacement_m": (-1e-3, 1e-3, 3), "velocity_m_s": (-1.0, 1.0, 5),
+            "force_n": 10.0, "ratio": 1.01}
+    short = Integration(duration_s=0.03)
+    one = basins(system, BasinOptions(**grid, batch=1), integration=short,
+                 execution=Execution(workers=1))
     for batch in (4, 16):  # 4 batches, the last of 3 cells; one batch of 15
-        many = basins(system, Harmonic(10.0, 1.01), batch=batch, workers=2, **grid)
+        many = basins(system, BasinOptions(**grid, batch=batch), integration=short,
+                      execution=Execution(workers=2))
         assert (one.attrs["batch"], many.attrs["batch"]) == (1, batch)
         for k in one.data_vars:
             np.testing.assert_array_equal(one[k].values, many[k].values, err_msg=k)

@@ -248,13 +248,17 @@ def test_stuck_ball_with_the_printed_reaction_in_a_cut():
 
 # --- selectable everywhere --------------------------------------------------------------
 def test_lobes_run_exactly_and_agree_with_rk4():
-    from boringbar.analysis.lobes import lobes
+    from boringbar.analysis.lobes import LobesOptions, lobes
     from boringbar.analysis.sweep import Case
+    from boringbar.execute import Execution
+    from boringbar.simulate import Integration
 
     cases = [Case("solid", make_system("solid"), "solid")]
-    kw = dict(method="search", duration=0.5, dt=2e-6, workers=1, max_depth=0.5e-3)
-    ex = lobes(cases, [1250.0], integrator="exact", **kw)
-    rk = lobes(cases, [1250.0], **kw)
+    options = LobesOptions([1250.0], method="search", max_depth_m=0.5e-3)
+    ex = lobes(cases, options, integration=Integration(0.5, 2e-6, "exact"),
+               execution=Execution(workers=1))
+    rk = lobes(cases, options, integration=Integration(0.5, 2e-6),
+               execution=Execution(workers=1))
     assert ex.attrs["integrator"] == "exact" and rk.attrs["integrator"] == "rk4"
     np.testing.assert_array_equal(ex["limit_depth"].values, rk["limit_depth"].values)
 

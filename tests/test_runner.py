@@ -205,7 +205,6 @@ def test_example_studies_run_shortened(path, tmp_path):
 def _in_process(name: str):
     """(study dict, the in-process function's Dataset) of the same tiny computation."""
     from boringbar.analysis.sweep import Case
-    from boringbar.model.forcing import Harmonic
     from boringbar.model.system import make_system
 
     if name == "sweep":
@@ -218,30 +217,33 @@ def _in_process(name: str):
                 sweep(cases, SweepOptions([0.99, 1.01]), integration=Integration(duration_s=0.02),
                       execution=Execution(workers=1)))
     if name == "lobes":
-        from boringbar.analysis.lobes import lobes
+        from boringbar.analysis.lobes import LobesOptions, lobes
 
         return ({"study": {"analysis": "lobes"}, "bar": {"kind": "solid"},
                  "run": {"duration_s": 0.05}, "grid": {"rpm": [1000.0, 1200.0]},
                  "analysis": {"depth_step_mm": 0.05, "max_depth_mm": 0.5}},
-                lobes([Case("solid", make_system("solid"), "solid")], [1000.0, 1200.0],
-                      depth_step=0.05e-3, max_depth=0.5e-3, duration=0.05, workers=1))
+                lobes([Case("solid", make_system("solid"), "solid")],
+                      LobesOptions([1000.0, 1200.0], depth_step_m=0.05e-3, max_depth_m=0.5e-3),
+                      integration=Integration(duration_s=0.05), execution=Execution(workers=1)))
     if name == "bifurcation":
-        from boringbar.analysis.bifurcation import bifurcation
+        from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
 
-        ref = bifurcation(make_system("ball"), "force", [5.0, 10.0], duration=0.02)
+        ref = bifurcation(make_system("ball"), BifurcationOptions("force", [5.0, 10.0]),
+                          integration=Integration(duration_s=0.02))
         return ({"study": {"analysis": "bifurcation"}, "run": {"duration_s": 0.02},
                  "analysis": {"values": [5.0, 10.0]}},
                 ref.expand_dims(case=["ball gap=0.5mm friction=on"]).assign_coords(
                     bar=("case", ["ball"]), gap=("case", [0.5e-3]),
                     friction=("case", ["on"])))
     if name == "basins":
-        from boringbar.analysis.basins import basins
+        from boringbar.analysis.basins import BasinOptions, basins
 
         return ({"study": {"analysis": "basins"}, "run": {"duration_s": 0.02},
                  "analysis": {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
                               "velocity_m_s": {"start": -1, "stop": 1, "count": 2}}},
-                basins(make_system("ball"), Harmonic(10.0, 1.0), displacement=(-1e-3, 1e-3, 2),
-                       velocity=(-1.0, 1.0, 2), duration=0.02, workers=1))
+                basins(make_system("ball"),
+                       BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2), force_n=10.0, ratio=1.0),
+                       integration=Integration(duration_s=0.02), execution=Execution(workers=1)))
     if name == "sensitivity":
         from boringbar.analysis.sensitivity import SensitivityOptions, sensitivity
 
@@ -274,8 +276,7 @@ def test_every_analysis_has_an_example_study():
 
 
 def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_path):
-    from boringbar.analysis.basins import basins
-    from boringbar.model.forcing import Harmonic
+    from boringbar.analysis.basins import BasinOptions, basins
     from boringbar.model.system import make_system
 
     grid = {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
@@ -285,9 +286,9 @@ def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_p
                                     "analysis": grid}),
                    tmp_path / "b.nc", executor="serial")
     assert list(ds["case"].values)[3] == "ball gap=0.5mm friction=on F0=20N"
-    ref = basins(make_system("ball", friction=True), Harmonic(20.0, 1.0),
-                 displacement=(-1e-3, 1e-3, 2), velocity=(-1.0, 1.0, 2), duration=0.02,
-                 workers=1)
+    ref = basins(make_system("ball", friction=True),
+                 BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2), force_n=20.0, ratio=1.0),
+                 integration=Integration(duration_s=0.02), execution=Execution(workers=1))
     one = ds.isel(case=3)
     for k in ref.data_vars:
         y = ref[k].values

@@ -18,9 +18,9 @@ layers behind them.
 __version__ = "0.1.0"
 
 from boringbar._validate import ParameterError  # noqa: E402
-from boringbar.analysis.basins import basins  # noqa: E402
-from boringbar.analysis.bifurcation import bifurcation  # noqa: E402
-from boringbar.analysis.lobes import lobes  # noqa: E402
+from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
+from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
+from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
 from boringbar.analysis.poincare import poincare_map  # noqa: E402
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity  # noqa: E402
 from boringbar.analysis.sweep import Case, SweepOptions, published_cases, sweep  # noqa: E402
@@ -43,6 +43,8 @@ from boringbar.studies.runner import run_study  # noqa: E402
 __all__ = [
     "PRESETS",
     "READINGS",
+    "BasinOptions",
+    "BifurcationOptions",
     "Case",
     "Cuts",
     "Execution",
@@ -52,6 +54,7 @@ __all__ = [
     "Initial",
     "Integration",
     "IntegrationError",
+    "LobesOptions",
     "ModalModel",
     "ParameterError",
     "Regenerative",

@@ -578,6 +578,14 @@ def _system_words(system: dict) -> str:
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(kind, str(kind))
 
 
+def _dropped_percent(attrs) -> float:
+    """The dropped first part of each run, in %: 1 - steady_fraction (files written
+    before steady_fraction: their ``drop``)."""
+    if "steady_fraction" in attrs:
+        return 100 * (1.0 - attrs["steady_fraction"])
+    return 100 * attrs.get("drop", math.nan)
+
+
 def _bifurcation_title(ds, param: str) -> str:
     config = json.loads(ds.attrs.get("config", "{}"))
     systems = config.get("systems") or [{}]
@@ -595,7 +603,7 @@ def _bifurcation_title(ds, param: str) -> str:
     preset = systems[0].get("preset", "?")
     return (f"Bifurcation diagram: {words}, {', '.join(fixed)} ({preset} preset)\n"
             f"continuation forward then backward; {ds.attrs.get('duration_s', math.nan):g} s "
-            f"runs, first {100 * ds.attrs.get('drop', math.nan):g} % dropped, "
+            f"runs, first {_dropped_percent(ds.attrs):g} % dropped, "
             f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
 
 
@@ -679,7 +687,7 @@ def plot_basins(ds, *, fig=None) -> Figure:
                  f"({ds.attrs.get('preset', '?')} preset)\nF0 = "
                  f"{forcing.get('amplitude_n', math.nan):g} N, $\\Omega/\\omega_n$ = "
                  f"{forcing.get('ratio', math.nan):g}; {ds.attrs.get('duration_s', math.nan):g}"
-                 f" s runs, first {100 * ds.attrs.get('drop', math.nan):g} % dropped, "
+                 f" s runs, first {_dropped_percent(ds.attrs):g} % dropped, "
                  f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
     return fig
 

@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_range
-from boringbar.analysis.basins import MAX_BASIN_CELLS, basin_summary, basins, check_cells
-from boringbar.analysis.bifurcation import bifurcation, hysteresis_ranges
-from boringbar.analysis.poincare import poincare_map
+from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, basins, check_cells
+from boringbar.analysis.basins import summary as basins_summary
+from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.bifurcation import summary as bifurcation_summary
 from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
 from boringbar.analysis.sensitivity import summary as sensitivity_summary
 from boringbar.analysis.sweep import parse_range
@@ -42,12 +42,12 @@ from boringbar.cli.options import (
     system_overrides,
 )
 from boringbar.cli.sweeps import short_pattern
-from boringbar.io import jsonable, save_figure_atomic, write_netcdf_atomic
+from boringbar.io import save_figure_atomic, write_netcdf_atomic
 from boringbar.model.dampers import MAX_GAP
-from boringbar.model.forcing import MAX_FORCE, MAX_RATIO, Harmonic
+from boringbar.model.forcing import MAX_FORCE, MAX_RATIO
 from boringbar.model.system import BALLS, make_system
 from boringbar.plot import plot_basins, plot_bifurcation, plot_sensitivity
-from boringbar.simulate import MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY, Initial, simulate
+from boringbar.simulate import MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY
 
 #: bifurcation's published sweep: F0 from 5 to 50 N in 1 N steps
 PUBLISHED_FORCES = "5:50:1"
@@ -225,65 +225,26 @@ def _cmd_bifurcation(args) -> int:
     if parameter in ("gap", "restitution"):
         def target(value):  # the factory: one System per value
             return make_system(bar, args.preset, **{**kw, parameter: value})
-    ds = bifurcation(target, parameter, values * si, base_forcing=Harmonic(force, ratio),
-                     duration=args.duration_s, dt=args.dt_s, drop=args.drop,
-                     initial=initial_conditions(args, gaps if bar == "ball" else []),
-                     backward=not args.no_backward, units="m" if parameter == "gap" else "1",
-                     progress=progress_printer(args, "bifurcation", "runs"),
-                     integrator=args.integrator)
-    ranges = hysteresis_ranges(ds) if not args.no_backward else None
-    ds.attrs.update(preset=args.preset, bar=bar, swept_option=option,
-                    hysteresis_ranges=json.dumps(ranges),
-                    hysteresis_note="parameter ranges (start, stop) in the parameter's SI "
-                                    "units where the forward and backward Poincare sets "
-                                    "differ (analysis.bifurcation.hysteresis_ranges)")
-
+    options = BifurcationOptions(parameter, tuple(values * si), force, ratio,
+                                 backward=not args.no_backward,
+                                 units="m" if parameter == "gap" else "1")
+    initial = initial_conditions(args, gaps if bar == "ball" else [])
+    ds = bifurcation(target, options,
+                     integration=integration(args, initial, steady_fraction=1.0 - args.drop),
+                     progress=progress_printer(args, "bifurcation", "continuations"))
+    ds = with_hysteresis(ds)
+    ds.attrs.update(preset=args.preset, bar=bar, swept_option=option)
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "bifurcation.nc"),
              "png": save_figure_atomic(plot_bifurcation(ds), out / "bifurcation.png")}
-    summary = {**_bifurcation_summary(ds, ranges),
-               "files": {k: str(v) for k, v in files.items()}}
+    summary = {**bifurcation_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.json:
         print_json(summary)
     elif not args.quiet:
-        print(_bifurcation_text(ds, ranges))
+        print(_bifurcation_text(ds, summary["hysteresis_ranges"]))
         print("wrote " + ", ".join(str(v) for v in files.values()))
     return 0
-
-
-def _bifurcation_summary(ds, ranges) -> dict:
-    """What ``bifurcation --json`` prints: per direction and value the W samples (m)."""
-    config = json.loads(ds.attrs["config"])
-    dirs = [str(d) for d in ds["direction"].values]
-
-    def per_value(name: str, direction: str) -> list:
-        return ds[name].sel(direction=direction).values.tolist()
-
-    def samples(direction: str) -> list[list[float]]:
-        row = ds.sel(direction=direction)
-        return [w[:n].tolist() for w, n in zip(row["tip_displacement"].values,
-                                               row["n_samples"].values, strict=True)]
-
-    return {
-        "parameter": ds.attrs["parameter"],
-        "units": ds.attrs["units"],
-        "values": ds["value"].values.tolist(),
-        "preset": ds.attrs["preset"],
-        "bar": ds.attrs["bar"],
-        "base_forcing": config["base_forcing"],
-        "duration_s": config["duration_s"],
-        "dt_s": config["dt_s"],
-        "drop": config["drop"],
-        "forward": samples("forward"),
-        "backward": samples("backward") if "backward" in dirs else None,
-        "verdicts": {d: per_value("verdict", d) for d in dirs},
-        "period": {d: per_value("period", d) for d in dirs},
-        "rms_tip_m": {d: per_value("rms_tip_m", d) for d in dirs},
-        "pattern": {d: per_value("pattern", d) for d in dirs},
-        "hysteresis_ranges": None if ranges is None else [list(r) for r in ranges],
-        "wall_time_s": ds.attrs["wall_time_s"],
-    }
 
 
 #: How bifurcation shows each parameter: (label, unit, option units per SI unit).
@@ -371,40 +332,18 @@ def _cmd_basins(args) -> int:
     if bar == "ball":
         kw.update(gap=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
-    forcing = Harmonic(force, ratio)
     check_dt(args, [system], ratio)
-    ds = basins(system, forcing, displacement=displacement, velocity=velocity,
-                duration=args.duration_s, dt=args.dt_s, drop=args.drop, ball_position=y0,
-                ball_velocity=yv0, workers=args.workers,
-                progress=progress_printer(args, "basins", "runs"), integrator=args.integrator)
-    # the Poincare map beside the basins: data first, so it goes into basins.nc
-    run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s,
-                   initial=Initial(w0 * 1e-3, v0, y0, yv0), steady_fraction=1 - args.drop,
-                   strobe=True, integrator=args.integrator)
-    pm = poincare_map(run, args.drop)
-    verdict = pm.classify()
-    ds = ds.assign(
-        poincare_from_tip_m=("poincare_sample", pm.tip_displacement,
-                             {"units": "m", "long_name": "W at Omega t = 0 mod 2 pi, from "
-                                                         "--poincare-from"}),
-        poincare_from_tip_velocity_m_s=("poincare_sample", pm.tip_velocity,
-                                        {"units": "m/s", "long_name": "W' at Omega t = 0 mod "
-                                                                      "2 pi, from "
-                                                                      "--poincare-from"}))
-    poincare = {"tip_displacement_m": w0 * 1e-3, "tip_velocity_m_s": v0,
-                "ball_position_m": y0, "ball_velocity_m_s": yv0,
-                "verdict": verdict["verdict"], "period": verdict["k"],
-                "distinct": verdict["distinct"], "n_samples": len(pm.time),
-                "rms_tip_m": run.rms_tip,
-                "pattern": "" if run.pattern is None else run.pattern.name}
-    ds.attrs.update(bar=bar, poincare_from=json.dumps(jsonable(poincare)))
-
+    options = BasinOptions(displacement, velocity, y0, yv0, force, ratio,
+                           poincare_from=(w0 * 1e-3, v0))
+    ds = basins(system, options,
+                integration=integration(args, steady_fraction=1.0 - args.drop),
+                execution=execution(args), progress=progress_printer(args, "basins", "batches"))
+    ds.attrs.update(bar=bar)
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "basins.nc"),
              "png": save_figure_atomic(plot_basins(ds), out / "basins.png")}
-    summary = {**basin_summary(ds), "poincare_from": poincare,
-               "files": {k: str(v) for k, v in files.items()}}
+    summary = {**basins_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.json:
         print_json(summary)
     elif not args.quiet:

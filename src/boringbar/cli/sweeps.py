@@ -6,11 +6,17 @@ import math
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
-import xarray as xr
 
 from boringbar._validate import ParameterError, check_int, check_range
-from boringbar.analysis.lobes import MAX_DEPTHS, PUBLISHED_RPM, lobes, lobes_summary
+from boringbar.analysis.lobes import (
+    MAX_DEPTHS,
+    PUBLISHED_RPM,
+    LobesOptions,
+    examples_summary,
+    lobes,
+)
+from boringbar.analysis.lobes import examples as lobe_examples
+from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
 from boringbar.analysis.sweep import summary as sweep_summary
 from boringbar.cli.options import (
@@ -32,9 +38,8 @@ from boringbar.cli.options import (
 )
 from boringbar.cli.simulate import HISTORY_ROWS
 from boringbar.io import save_figure_atomic, write_netcdf_atomic
-from boringbar.model.forcing import MAX_DEPTH, Regenerative
+from boringbar.model.forcing import MAX_DEPTH
 from boringbar.plot import plot_lobe_examples, plot_lobes, plot_sweep
-from boringbar.simulate import simulate
 
 
 def add_sweep(sub) -> None:
@@ -161,30 +166,25 @@ def _cmd_lobes(args) -> int:
     check_int("--successive", args.successive, 1, 100)
     check_workers(args.workers)
     cut = cut_options(args)
-    ds = lobes(cases, rpm, method=args.method, depth_step=step * 1e-3,
-               max_depth=args.max_depth_mm * 1e-3, successive=args.successive,
-               criterion=args.criterion, duration=args.duration_s, dt=args.dt_s,
-               workers=args.workers,
-               progress=progress_printer(args, "lobes", "(case, speed) columns"),
-               integrator=args.integrator, **cut)
-
+    options = LobesOptions(tuple(rpm), args.method, args.criterion, step * 1e-3,
+                           args.max_depth_mm * 1e-3, args.successive, kr_pa=cut["kr"],
+                           feed_m=cut["feed"], revolutions=cut["revolutions"],
+                           interpolation=cut["interpolation"], start=cut["start"],
+                           bounded_fraction=cut["bounded_fraction"])
+    integ = integration(args)
+    ds = lobes(cases, options, integration=integ, execution=execution(args),
+               progress=progress_printer(args, "lobes", "(case, speed) columns"))
 
     out = Path(args.out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "lobes.nc"),
              "png": save_figure_atomic(plot_lobes(ds), out / "lobes.png")}
     examples = []
     if args.examples:
-        exds = _lobe_examples(ds, cases[0], args, cut)
+        exds = lobe_examples(ds, cases[0], options, integration=integ, rows=HISTORY_ROWS)
         files["examples_netcdf"] = write_netcdf_atomic(exds, out / "examples.nc")
         files["examples_png"] = save_figure_atomic(plot_lobe_examples(exds),
                                                     out / "examples.png")
-        examples = [{"example": str(e), "case": exds.attrs["case"],
-                     "rpm": float(exds["rpm"].values[k]),
-                     "depth_m": float(exds["depth"].values[k]),
-                     "chatter": bool(exds["chatter"].values[k]),
-                     "bounded_chatter": bool(exds["bounded_chatter"].values[k]),
-                     "first_zero_time_s": float(exds["first_zero_time"].values[k])}
-                    for k, e in enumerate(exds["example"].values)]
+        examples = examples_summary(exds)
     summary = {**lobes_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.examples:
         summary["examples"] = examples
@@ -199,67 +199,6 @@ def _cmd_lobes(args) -> int:
                   f"{e['depth_m'] * 1e3:g} mm: {verdict}")
         print("wrote " + ", ".join(str(v) for v in files.values()))
     return 0
-
-
-def _example_points(ds) -> list[tuple[str, float, float]]:
-    """(name, rpm, depth) of a stable and an unstable grid point of the first case:
-    the limiting and the first unstable depth at the speed of the minimum
-    chatter-free depth (the stable one at the speed of the largest limit if the
-    minimum is 0; only a stable one if nothing chattered)."""
-    rpm = ds["rpm"].values
-    limit = ds["limit_depth"].values[0]
-    first = ds["first_unstable_depth"].values[0]
-    if not np.isfinite(limit).any():  # no chatter up to the deepest cut tried
-        run = ds["verdict"].values[0] >= 0
-        j = len(rpm) // 2
-        return [("stable", float(rpm[j]), float(ds["depth"].values[run[j]].max()))]
-    j = int(np.nanargmin(limit))
-    points = [("unstable", float(rpm[j]), float(first[j]))]
-    if limit[j] <= 0:
-        j = int(np.nanargmax(limit))
-    if limit[j] > 0:
-        points.insert(0, ("stable", float(rpm[j]), float(limit[j])))
-    return points
-
-
-def _lobe_examples(ds, case, args, cut: dict):
-    """Rerun the example points with history (no stop at the first zero): one
-    Dataset with dims (example, time)."""
-
-
-    points = _example_points(ds)
-    n_steps = int(round(args.duration_s / args.dt_s))
-    parts = []
-    for _, rpm, depth in points:
-        run = simulate(case.system, Regenerative(depth=depth, rpm=rpm, **cut),
-                       duration=args.duration_s, dt=args.dt_s,
-                       record_every=max(1, n_steps // HISTORY_ROWS),
-                       integrator=args.integrator)
-        h = run.to_xarray()
-        h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
-        c = run.cutting
-        h = h.assign_coords(rpm=rpm, depth=depth, chatter=bool(c["chatter"]),
-                            bounded_chatter=bool(c["bounded_chatter"]),
-                            first_zero_time=math.nan if c["first_zero_time_s"] is None
-                            else float(c["first_zero_time_s"]),
-                            mean_force=float(run.forcing.mean_force),
-                            static_deflection=float(c["static_deflection_m"]))
-        parts.append(h)
-    exds = xr.concat(parts, dim=pd.Index([p[0] for p in points], name="example"),
-                     coords="all", join="outer", combine_attrs="drop")
-    exds["rpm"].attrs["units"] = "rev/min"
-    for name in ("depth", "static_deflection"):
-        exds[name].attrs["units"] = "m"
-    exds["first_zero_time"].attrs["units"] = "s"
-    exds["mean_force"].attrs.update(units="N", long_name="Kr b h_m")
-    exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
-                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap,
-                  "friction": case.friction, "preset": case.system.preset,
-                  "criterion": ds.attrs["criterion"],
-                  "boringbar_version": ds.attrs["boringbar_version"],
-                  "configs": "[" + ", ".join(p.attrs["config"] for p in parts) + "]",
-                  "summaries": "[" + ", ".join(p.attrs["summary"] for p in parts) + "]"}
-    return exds
 
 
 def _lobes_text(ds) -> str:

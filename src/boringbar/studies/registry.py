@@ -20,9 +20,11 @@ resumable stores, progress.
 
 The analyses reuse the per-point code of the in-process functions:
 ``sweep``: :func:`boringbar.analysis.sweep.compute` per lock-step batch of runs;
-``lobes``: :func:`boringbar.analysis.lobes.lobe_column` per (case, rpm);
-``bifurcation``: one case's whole forward + backward continuation;
-``basins``: one grid cell's run and signature, grouped at assembly;
+``lobes``: :func:`boringbar.analysis.lobes.compute` per (case, rpm) column;
+``bifurcation``: :func:`boringbar.analysis.bifurcation.compute`, one case's whole
+forward + backward continuation;
+``basins``: :func:`boringbar.analysis.basins.compute`, a lock-step batch of grid
+cells (or one cell), grouped at assembly;
 ``sensitivity``: one (value, force, ratio) harmonic run or one (value,
 depth) cut.
 """
@@ -30,28 +32,21 @@ depth) cut.
 from __future__ import annotations
 
 import itertools
-import json
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
-import xarray as xr
 
 from boringbar._validate import ParameterError, check_range
+from boringbar.analysis import basins as basins_mod
+from boringbar.analysis import bifurcation as bifurcation_mod
+from boringbar.analysis import lobes as lobes_mod
 from boringbar.analysis import sensitivity as sensitivity_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
-from boringbar.analysis.basins import (
-    MAX_BASIN_CELLS,
-    BasinTolerance,
-    basin_grid,
-    basin_run,
-    basins_dataset,
-    check_cells,
-    group,
-)
-from boringbar.analysis.bifurcation import bifurcation
-from boringbar.analysis.lobes import lobe_column, lobe_cut, lobe_options, lobes_dataset
+from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, OperatingPoint, check_cells
+from boringbar.analysis.bifurcation import BifurcationOptions
+from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
 from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
@@ -64,7 +59,6 @@ from boringbar.simulate import (
     check_delay,
     check_step,
     check_steps,
-    simulate,
 )
 from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study, StudyError
 
@@ -304,13 +298,6 @@ def _provenance(study: Study) -> dict:
     return {"study": study.name, "study_analysis": study.analysis}
 
 
-def _warm_harmonic(cases, integrator: str = "rk4") -> None:
-    kw = {} if integrator == "rk4" else {"integrator": integrator}
-    for nm in sorted({c.system.bar.n_modes for c in cases}):
-        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
-        simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6, **kw)
-
-
 # --- sweep ------------------------------------------------------------------------
 
 _SWEEP_NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
@@ -371,40 +358,35 @@ class Lobes(Analysis):
 
     def plan(self, study):
         cases, values = study_cases(study)
-        rpm = _axis(study, "rpm")
         o = study.options
-        opts = lobe_options(cases, rpm, method=o["method"], depth_step=o["depth_step_mm"] * 1e-3,
-                        max_depth=o["max_depth_mm"] * 1e-3, successive=o["successive"],
-                        criterion=o["criterion"], kr=study.value("kr_mpa") * 1e6,
-                        feed=study.value("feed_mm") * 1e-3,
-                        revolutions=study.value("revolutions"),
-                        interpolation=study.value("interpolation"), start=study.value("start"),
-                        bounded_fraction=study.value("bounded_fraction"),
-                        duration=study.value("duration_s"), dt=study.value("dt_s"),
-                        integrator=study.value("integrator"))
-        points = list(itertools.product(range(len(cases)), range(len(rpm))))
-        return Plan({"cases": cases, "rpm": rpm, "opts": opts}, points, {"values": values})
+        if o["max_depth_mm"] < o["depth_step_mm"]:
+            raise StudyError(f"{study.source}: key 'analysis.max_depth_mm' = "
+                             f"{o['max_depth_mm']!r} must be >= analysis.depth_step_mm = "
+                             f"{o['depth_step_mm']!r}")
+        try:
+            options = LobesOptions(
+                tuple(_axis(study, "rpm")), o["method"], o["criterion"],
+                o["depth_step_mm"] * 1e-3, o["max_depth_mm"] * 1e-3, o["successive"],
+                **_cut_options(study), analytic=o["analytic"])
+        except ParameterError as exc:
+            raise StudyError(f"{study.source}: [analysis] {exc}") from None
+        plan = lobes_mod.plan(cases, options, _integration(study, initial=None))
+        plan.extra["values"] = values
+        return plan
 
     def runs(self, plan):
         c = plan.context
-        return [(x.system, 2 * math.pi * max(c["rpm"]) / 60.0, True) for x in c["cases"]]
+        return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True)
+                for x in c["cases"]]
 
     def warm(self, ctx):
-        for nm in sorted({c.system.bar.n_modes for c in ctx["cases"]}):
-            c0 = next(c for c in ctx["cases"] if c.system.bar.n_modes == nm)
-            lobe_cut(c0, float(ctx["rpm"][0]), ctx["opts"]["depth_step"],
-                 dict(ctx["opts"], duration=2e-4))
+        lobes_mod.warm(ctx)
 
     def compute(self, ctx, point):
-        i, j = point
-        return lobe_column(ctx["cases"][i], float(ctx["rpm"][j]), ctx["opts"])
-
+        return lobes_mod.compute(ctx, point)
 
     def assemble(self, study, plan, results):
-        ctx = plan.context
-        columns = dict(zip(plan.points, results, strict=True))
-        ds = lobes_dataset(ctx["cases"], ctx["rpm"], columns, ctx["opts"],
-                      study.options["analytic"], _provenance(study))
+        ds = lobes_mod.assemble(plan, results, _provenance(study))
         return ds.assign_coords(_case_coords(plan.extra["values"]))
 
 
@@ -430,81 +412,37 @@ class Bifurcation(Analysis):
         if o["parameter"] == "ratio" and np.any(v <= 0):
             raise ParameterError(f"analysis.values = {v.tolist()} must be > 0 for parameter "
                                  "'ratio'")
-        ctx = {"cases": cases, "values": v, "parameter": o["parameter"],
-               "base": Harmonic(study.value("force_n"), study.value("ratio")),
-               "duration": study.value("duration_s"), "dt": study.value("dt_s"),
-               "drop": study.value("drop"), "initial": _initial(study),
-               "backward": o["backward"], "tol": o["tol"], "max_k": o["max_k"],
-               "integrator": study.value("integrator")}
-        return Plan(ctx, list(range(len(cases))), {"values": values})
+        try:
+            options = BifurcationOptions(o["parameter"], tuple(v.tolist()),
+                                         study.value("force_n"), study.value("ratio"),
+                                         o["backward"], o["tol"], o["max_k"])
+        except ParameterError as exc:
+            raise StudyError(f"{study.source}: [analysis] {exc}") from None
+        plan = bifurcation_mod.plan(cases, options,
+                                    _integration(study, 1.0 - study.value("drop")))
+        plan.extra["values"] = values
+        return plan
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"], ctx["integrator"])
+        bifurcation_mod.warm(ctx)
 
     def runs(self, plan):
-        c = plan.context
-        r = max(c["values"]) if c["parameter"] == "ratio" else c["base"].ratio
-        return [(x.system, r * x.system.reference_frequency, False) for x in c["cases"]]
+        o = plan.context["options"]
+        r = max(o.values) if o.parameter == "ratio" else o.ratio
+        return [(x.system, r * x.system.reference_frequency, False) for x in plan.extra["cases"]]
 
     def compute(self, ctx, i):
-        ds = bifurcation(ctx["cases"][i].system, ctx["parameter"], ctx["values"],
-                         base_forcing=ctx["base"], duration=ctx["duration"], dt=ctx["dt"],
-                         drop=ctx["drop"], initial=ctx["initial"], backward=ctx["backward"],
-                         tol=ctx["tol"], max_k=ctx["max_k"],
-                         integrator=ctx["integrator"])
-        return {"data": {k: ds[k].values for k in ds.data_vars if k != "elapsed_s"},
-                "attrs": {k: ds[k].attrs for k in ds.data_vars},
-                "config": json.loads(ds.attrs["config"]), "ds_attrs": dict(ds.attrs)}
-
+        return bifurcation_mod.compute(ctx, i)
 
     def assemble(self, study, plan, results):
-        ctx = plan.context
-        n_sample = max(r["data"]["tip_displacement"].shape[-1] for r in results)
-        data = {}
-        for k, a0 in results[0]["data"].items():
-            arrs = []
-            for r in results:
-                a = r["data"][k]
-                if a.ndim == 3 and a.shape[-1] < n_sample:
-                    pad = np.full(a.shape[:2] + (n_sample - a.shape[-1],), np.nan)
-                    a = np.concatenate([a, pad], axis=-1)
-                arrs.append(a)
-            dims = ("case", "direction", "value") + (("sample",) if a0.ndim == 3 else ())
-            data[k] = (dims, np.stack(arrs), results[0]["attrs"][k])
-        first = results[0]["ds_attrs"]
-        cfg = {k: v for k, v in results[0]["config"].items()
-               if k not in ("systems", "wall_time_s")}
-        cases = ctx["cases"]
-        ds = xr.Dataset(
-            data,
-            coords={
-                "case": [c.label for c in cases],
-                "direction": list(first.get("directions", ["forward", "backward"]
-                                            if ctx["backward"] else ["forward"])),
-                "value": ("value", ctx["values"], {"long_name": first["parameter"],
-                                                   "units": first["units"]}),
-                "bar": ("case", [c.bar for c in cases]),
-                "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
-                "friction": ("case", [c.friction for c in cases]),
-            },
-            attrs={
-                **{k: first[k] for k in ("title", "boringbar_version", "parameter", "units",
-                                         "dt_s", "duration_s", "drop", "classification",
-                                         "continuation")},
-                "integrator": study.value("integrator"),
-                "config": json.dumps(cfg),
-                "systems": json.dumps({c.label: r["config"]["systems"]
-                                       for c, r in zip(cases, results, strict=True)}),
-                **_provenance(study),
-            },
-        )
+        ds = bifurcation_mod.assemble(plan, results, _provenance(study))
         return ds.assign_coords(_case_coords(plan.extra["values"]))
 
 
 # --- basins -----------------------------------------------------------------------
 
 class Basins(Analysis):
-    """Basins of attraction: one point per (operating point, grid cell).
+    """Basins of attraction: one point per (operating point, lock-step batch of cells).
 
     One operating point (no grid) gives exactly the Dataset of
     :func:`~boringbar.analysis.basins.basins`; several (a grid over bar, damper,
@@ -523,8 +461,8 @@ class Basins(Analysis):
     def plan(self, study):
         cases, values = study_cases(study)
         forces, ratios = _axis(study, "force_n"), _axis(study, "ratio")
-        ops = []  # (label, case index, forcing)
-        for i, case in enumerate(cases):
+        operating = []
+        for case in cases:
             for f in forces:
                 for r in ratios:
                     label = case.label
@@ -532,93 +470,39 @@ class Basins(Analysis):
                         label += f" F0={f:g}N"
                     if "ratio" in study.axes:
                         label += f" r={r:g}"
-                    ops.append((label, i, Harmonic(float(f), float(r))))
+                    operating.append(OperatingPoint(label, case, Harmonic(float(f), float(r))))
         d, v = study.options["displacement_mm"], study.options["velocity_m_s"]
-        w0 = basin_grid("displacement", (d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]))
-        v0 = basin_grid("velocity", (v["start"], v["stop"], v["count"]))
-        check_cells(len(w0), len(v0), ("key 'analysis.displacement_mm'",
-                                       "key 'analysis.velocity_m_s'"))
-        bp, bv = study.value("ball_position_mm") * 1e-3, study.value("ball_velocity_m_s")
-        initials = [Initial(float(w), float(v), bp, bv) for w in w0 for v in v0]
-        ctx = {"cases": cases, "ops": ops, "duration": study.value("duration_s"),
-               "dt": study.value("dt_s"), "drop": study.value("drop"),
-               "tol": BasinTolerance(), "initials": initials, "w0": w0, "v0": v0,
-               "integrator": study.value("integrator")}
-        points = list(itertools.product(range(len(ops)), range(len(initials))))
-        return Plan(ctx, points, {"values": values})
+        check_cells(d["count"], v["count"], ("key 'analysis.displacement_mm'",
+                                             "key 'analysis.velocity_m_s'"))
+        try:
+            options = BasinOptions((d["start"] * 1e-3, d["stop"] * 1e-3, d["count"]),
+                                   (v["start"], v["stop"], v["count"]),
+                                   study.value("ball_position_mm") * 1e-3,
+                                   study.value("ball_velocity_m_s"))
+        except ParameterError as exc:
+            raise StudyError(f"{study.source}: [analysis] {exc}") from None
+        integration = _integration(study, 1.0 - study.value("drop"), initial=None)
+        plan = basins_mod.plan(operating, options, integration)
+        plan.extra.update(values=values, case_index=[cases.index(op.case) for op in operating])
+        return plan
 
     def warm(self, ctx):
-        _warm_harmonic(ctx["cases"], ctx["integrator"])
+        basins_mod.warm(ctx)
 
     def runs(self, plan):
-        c = plan.context
-        return [(c["cases"][i].system, f.omega(c["cases"][i].system.reference_frequency), False)
-                for _, i, f in c["ops"]]
+        return [(op.case.system, op.forcing.omega(op.case.system.reference_frequency), False)
+                for op in plan.context["operating"]]
 
     def compute(self, ctx, point):
-        op, cell = point
-        _, i, forcing = ctx["ops"][op]
-        return basin_run(ctx["cases"][i].system, forcing, ctx["initials"][cell], ctx["duration"],
-                    ctx["dt"], ctx["drop"], ctx["tol"], integrator=ctx["integrator"])
-
+        return basins_mod.compute(ctx, point)
 
     def assemble(self, study, plan, results):
-        c = plan.context
-        n_cells = len(c["initials"])
-        parts = []
-        for op, (_, i, forcing) in enumerate(c["ops"]):
-            cells = results[op * n_cells:(op + 1) * n_cells]
-            system = c["cases"][i].system
-            label, leaders = group(cells, forcing.omega(system.reference_frequency), c["tol"])
-            parts.append(basins_dataset(xr, system, forcing, c["w0"], c["v0"], cells, label,
-                                        leaders,
-                                  c["initials"], {
-                                      "dt_s": c["dt"], "duration_s": c["duration"],
-                                      "drop": c["drop"],
-                                      "ball_position_m": c["initials"][0].ball_position,
-                                      "ball_velocity_m_s": c["initials"][0].ball_velocity,
-                                      "tolerances": json.dumps(asdict(c["tol"])),
-                                      "integrator": c["integrator"],
-                                      **_provenance(study)}))
-        if len(parts) == 1:
-            return parts[0]
-        return _stack_basins(parts, c, plan.extra["values"])
-
-
-def _stack_basins(parts: list, c: dict, values: dict):
-    """Basin Datasets of several operating points along a leading ``case`` dim."""
-
-    n_att = max(p.sizes["attractor_id"] for p in parts)
-    n_sample = max(p.sizes["sample"] for p in parts)
-    fill = {"count": 0, "attractor_period": -1, "attractor_pattern": ""}
-    padded = []
-    for p in parts:
-        attrs = {k: p[k].attrs for k in p.variables}
-        p = p.reindex(attractor_id=np.arange(n_att), fill_value=fill)
-        p = p.pad(sample=(0, n_sample - p.sizes["sample"]))
-        for k, a in attrs.items():
-            p[k].attrs = a
-        padded.append(p)
-    ds = xr.concat(padded, dim="case", data_vars="all", coords="minimal",
-                   compat="override", combine_attrs="drop")
-    cases = c["cases"]
-    idx = [i for _, i, _ in c["ops"]]
-    ds = ds.assign_coords({
-        "case": [label for label, _, _ in c["ops"]],
-        "bar": ("case", [cases[i].bar for i in idx]),
-        "gap": ("case", np.array([cases[i].gap for i in idx]), {"units": "m"}),
-        "friction": ("case", [cases[i].friction for i in idx]),
-        "force": ("case", np.array([f.amplitude for _, _, f in c["ops"]]), {"units": "N"}),
-        "ratio": ("case", np.array([f.ratio for _, _, f in c["ops"]])),
-    })
-    ds = ds.assign_coords({k: ("case", [v[i] for i in idx])
-                           for k, (_, v) in _case_coords(values).items()})
-    first = parts[0].attrs
-    ds.attrs = {k: v for k, v in first.items() if k not in ("system", "forcing")}
-    ds.attrs["systems"] = json.dumps({label: cases[i].system.to_dict()
-                                      for label, i, _ in c["ops"]})
-    ds.attrs["forcings"] = json.dumps({label: f.to_dict() for label, _, f in c["ops"]})
-    return ds
+        ds = basins_mod.assemble(plan, results, _provenance(study))
+        if "case" not in ds.dims:  # one operating point: exactly basins()'s Dataset
+            return ds
+        idx = plan.extra["case_index"]
+        return ds.assign_coords({k: ("case", [v[i] for i in idx])
+                                 for k, (_, v) in _case_coords(plan.extra["values"]).items()})
 
 
 # --- sensitivity ------------------------------------------------------------------
@@ -650,7 +534,7 @@ class Sensitivity(Analysis):
         cuts = None
         if o["cuts"]:
             cuts = Cuts(study.value("rpm"), tuple(round(d * 1e-3, 15) for d in o["depths_mm"]),
-                        study.value("duration_s"), _cut_options(study))
+                        study.value("duration_s"), _regenerative_options(study))
         try:
             options = SensitivityOptions(kind, o["values"], tuple(_axis(study, "force_n")),
                                          tuple(_axis(study, "ratio")), cuts)
@@ -694,11 +578,17 @@ def _overrides(s: dict, varied: str | None) -> dict:
 
 
 def _cut_options(study: Study) -> dict:
-    """The Regenerative options of the study's ``[forcing]`` (SI)."""
-    return {"kr": study.value("kr_mpa") * 1e6, "feed": study.value("feed_mm") * 1e-3,
+    """The cut of the study's ``[forcing]`` (SI), as :class:`LobesOptions` fields."""
+    return {"kr_pa": study.value("kr_mpa") * 1e6, "feed_m": study.value("feed_mm") * 1e-3,
             "revolutions": study.value("revolutions"),
             "interpolation": study.value("interpolation"), "start": study.value("start"),
             "bounded_fraction": study.value("bounded_fraction")}
+
+
+def _regenerative_options(study: Study) -> dict:
+    """The Regenerative options of the study's ``[forcing]`` (SI)."""
+    c = _cut_options(study)
+    return {"kr": c.pop("kr_pa"), "feed": c.pop("feed_m"), **c}
 
 
 def _initial_or_none(study: Study):
