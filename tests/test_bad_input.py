@@ -87,7 +87,7 @@ BAD_OPTIONS = {
                               "-1:1:100000", "-1:1", "abc"),
         "--velocity-m-s": ("nan:1:3", "-1:inf:3", "-1:1:0", "-1e300:1:3", "-1:1:100000"),
         "--poincare-from": ("nan,0", "1e300,0", "0,inf", "1", "a,b"),
-        "--drop": (*NOT_FINITE, "1", "-0.1"),
+        "--steady-fraction": (*NOT_FINITE, "0", "1.5", "-0.1"),
         "--force-n": (*NOT_FINITE, "-1", "1e300"),
         "--dt-s": ("1", "0", "nan"),
         "--workers": ("0",),
@@ -97,7 +97,7 @@ BAD_OPTIONS = {
         "--ratio": ("nan", "0.9:1.1:0", "-1", "1e300"),
         "--gap-mm": ("0.1:5:0.1", "nan", "0"),
         "--restitution": ("0.5:1.5:0.1", "nan"),
-        "--drop": (*NOT_FINITE, "1"),
+        "--steady-fraction": (*NOT_FINITE, "0"),
     }),
     "sensitivity": (["sensitivity", "restitution"], {
         "--values": ("nan", "2", "-1", "0.5,inf", "abc"),

@@ -521,7 +521,7 @@ def with_poincare(ds, system: System, forcing: Harmonic, initial: Initial,
     integration = integration or Integration()
     run = simulate(system, forcing, **{**integration.kwargs(), "initial": initial},
                    strobe=True)
-    pm = poincare_map(run, 1.0 - integration.steady_fraction)
+    pm = poincare_map(run, integration.steady_fraction)
     verdict = pm.classify()
     ds = ds.assign(
         poincare_from_tip_m=("poincare_sample", pm.tip_displacement,

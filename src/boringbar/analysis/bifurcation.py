@@ -185,7 +185,6 @@ def compute(context: dict, i: int) -> dict:
     o, integ = context["options"], context["integration"]
     system, v = context["systems"][i], o.values
     directions = DIRECTIONS if o.backward else DIRECTIONS[:1]
-    drop = 1.0 - integ.steady_fraction
     records: dict[tuple[int, int], dict] = {}
     systems: dict[int, dict] = {}
     previous, omega_old = None, math.nan
@@ -197,7 +196,8 @@ def compute(context: dict, i: int) -> dict:
             start, restarted = _start(previous, integ.initial, sys_j, omega, omega_old)
             run = simulate(sys_j, forcing, **{**integ.kwargs(), "initial": start},
                            strobe=True)
-            records[d, j] = {**_record(run, drop, o.tol, o.max_k), "restarted": restarted}
+            records[d, j] = {**_record(run, integ.steady_fraction, o.tol, o.max_k),
+                             "restarted": restarted}
             systems.setdefault(j, sys_j.to_dict())
             previous, omega_old = run.final, omega
     return {"records": records, "directions": directions,
@@ -271,9 +271,9 @@ _FIELDS = {
 }
 
 
-def _record(run, drop: float, tol: float, max_k: int) -> dict:
+def _record(run, steady_fraction: float, tol: float, max_k: int) -> dict:
     """One run's Poincare samples, verdict and metrics (the fields of ``_FIELDS``)."""
-    pm = poincare_map(run, drop)
+    pm = poincare_map(run, steady_fraction)
     verdict = pm.classify(tol, max_k)
     return {
         "points": pm.points,

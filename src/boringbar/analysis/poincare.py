@@ -301,10 +301,10 @@ def _scales(run, samples: np.ndarray) -> np.ndarray:
     return np.array(scale)
 
 
-def poincare_map(run, drop: float = 0.2) -> PoincareMap:
-    """Stroboscopic Poincare map of ``run`` (simulated with ``strobe=True``),
-    without the samples in the first ``drop`` fraction of the run's time."""
-    drop = check_range("drop", drop, 0.0, 1.0, hi_open=True)
+def poincare_map(run, steady_fraction: float = 0.8) -> PoincareMap:
+    """Stroboscopic Poincare map of ``run`` (simulated with ``strobe=True``): the
+    samples in the last ``steady_fraction`` of the run's time."""
+    drop = 1.0 - check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     if run.strobe.size == 0 and run.duration * run.omega > 4 * math.pi:
         raise ParameterError("the run has no stroboscopic samples: simulate it with strobe=True")
     s = run.strobe[run.strobe[:, 0] >= run.t0 + drop * run.duration]
@@ -352,14 +352,14 @@ class ImpactMap:
         )
 
 
-def impact_map(run, wall: int | None = 1, drop: float = 0.0) -> ImpactMap:
+def impact_map(run, wall: int | None = 1, steady_fraction: float = 1.0) -> ImpactMap:
     """Impact map of ``run``: the impacts counted in its steady part (the last
     ``steady_fraction`` of :func:`~boringbar.simulate.simulate`) on ``wall``
-    (+1, -1, or None for both), without those in the first ``drop`` of the
-    run's time."""
+    (+1, -1, or None for both), and of those only the ones in the last
+    ``steady_fraction`` here of the run's time (default: all)."""
     if wall not in (1, -1, None):
         raise ParameterError(f"wall = {wall!r} is not one of 1, -1, None")
-    drop = check_range("drop", drop, 0.0, 1.0, hi_open=True)
+    drop = 1.0 - check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     imp = run.impacts
     keep = imp[:, 0] >= run.t0 + drop * run.duration
     if wall is not None:

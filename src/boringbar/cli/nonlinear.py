@@ -21,7 +21,7 @@ from boringbar.cli.options import (
     PATTERN_KEY,
     add_common,
     add_cutting,
-    add_drop,
+    add_steady_fraction,
     check_depth,
     check_dt,
     check_force,
@@ -60,7 +60,7 @@ def add_bifurcation(sub) -> None:
                                    "6): one run per value of the swept parameter, each from the "
                                    "previous run's final state (forcing phase continuous), forward"
                                    " and then backward; stroboscopic Poincare samples of the tip "
-                                   "(Omega t = 0 mod 2 pi) after dropping the first --drop of each"
+                                   "(Omega t = 0 mod 2 pi) over the last --steady-fraction of each"
                                    " run.  Exactly one of --force-n, --ratio, --gap-mm, "
                                    "--restitution is swept, written START:STOP:STEP (inclusive) or"
                                    " as a comma list in sweep order; the others take one value.  "
@@ -73,7 +73,7 @@ def add_bifurcation(sub) -> None:
                         "published; 10 when another parameter is swept)")
     g.add_argument("--ratio", metavar="R|START:STOP:STEP",
                    help="Omega/omega_n of the host bar (default: 1.0)")
-    add_drop(g)
+    add_steady_fraction(g)
     g.add_argument("--no-backward", action="store_true",
                    help="forward sweep only (then no hysteresis ranges)")
     p.set_defaults(func=_cmd_bifurcation)
@@ -96,7 +96,7 @@ def add_basins(sub) -> None:
                                    "the run from --poincare-from.")
     groups = add_common(p, many=False, initial=False)
     g = groups["run"]
-    add_drop(g)
+    add_steady_fraction(g)
     g.add_argument("--workers", type=int, metavar="N", help="threads (default: every core)")
     g = p.add_argument_group("initial conditions")
     g.add_argument("--displacement-mm", default="-1.5:1.5:30", metavar="LO:HI:COUNT",
@@ -211,7 +211,7 @@ def _cmd_bifurcation(args) -> int:
     args = argparse.Namespace(**vars(args))  # _swept turns the strings into numbers
     option, values = _swept(args)
     bar, friction_on = one_bar(args, "bifurcation")
-    check_range("--drop", args.drop, 0, 1, hi_open=True)
+    check_range("--steady-fraction", args.steady_fraction, 0, 1, lo_open=True)
     parameter, si = SWEEPABLE[option][:2]
     gaps = values if option == "--gap-mm" else [0.5 if args.gap_mm is None else args.gap_mm]
     gaps = [check_gap(g) for g in gaps]
@@ -230,7 +230,7 @@ def _cmd_bifurcation(args) -> int:
                                  units="m" if parameter == "gap" else "1")
     initial = initial_conditions(args, gaps if bar == "ball" else [])
     ds = bifurcation(target, options,
-                     integration=integration(args, initial, steady_fraction=1.0 - args.drop),
+                     integration=integration(args, initial, steady_fraction=args.steady_fraction),
                      progress=progress_printer(args, "bifurcation", "continuations"))
     ds = with_hysteresis(ds)
     ds.attrs.update(preset=args.preset, bar=bar, swept_option=option)
@@ -308,7 +308,7 @@ def _cmd_basins(args) -> int:
     ratio = 1.0 if args.ratio is None else args.ratio
     check_force(force)
     check_ratio(ratio)
-    check_range("--drop", args.drop, 0, 1, hi_open=True)
+    check_range("--steady-fraction", args.steady_fraction, 0, 1, lo_open=True)
     lo, hi, n = _grid(args.displacement_mm, "--displacement-mm")
     d = MAX_INITIAL_DISPLACEMENT * 1e3
     check_range("--displacement-mm LO", lo, -d, d, unit="mm")
@@ -336,7 +336,7 @@ def _cmd_basins(args) -> int:
     options = BasinOptions(displacement, velocity, y0, yv0, force, ratio,
                            poincare_from=(w0 * 1e-3, v0))
     ds = basins(system, options,
-                integration=integration(args, steady_fraction=1.0 - args.drop),
+                integration=integration(args, steady_fraction=args.steady_fraction),
                 execution=execution(args), progress=progress_printer(args, "basins", "batches"))
     ds.attrs.update(bar=bar)
 

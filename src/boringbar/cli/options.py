@@ -143,10 +143,11 @@ def add_cutting(g) -> None:
                    help="bounded chatter: steady amplitude above X h_m (default: 0.1)")
 
 
-def add_drop(group) -> None:
-    group.add_argument("--drop", type=float, default=0.2, metavar="X",
-                       help="fraction of each run dropped before sampling, in [0, 1) "
-                            "(default: 0.2)")
+def add_steady_fraction(group) -> None:
+    group.add_argument("--steady-fraction", type=float, default=0.8, metavar="F",
+                       help="the last part of each run that is sampled (RMS, patterns, "
+                            "Poincare samples), in (0, 1] (default: 0.8: the first 20 %% "
+                            "dropped)")
 
 
 def parse_words(values, name: str, choices, default) -> list[str]:

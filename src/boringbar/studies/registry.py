@@ -419,7 +419,7 @@ class Bifurcation(Analysis):
         except ParameterError as exc:
             raise StudyError(f"{study.source}: [analysis] {exc}") from None
         plan = bifurcation_mod.plan(cases, options,
-                                    _integration(study, 1.0 - study.value("drop")))
+                                    _integration(study, study.value("steady_fraction")))
         plan.extra["values"] = values
         return plan
 
@@ -481,7 +481,7 @@ class Basins(Analysis):
                                    study.value("ball_velocity_m_s"))
         except ParameterError as exc:
             raise StudyError(f"{study.source}: [analysis] {exc}") from None
-        integration = _integration(study, 1.0 - study.value("drop"), initial=None)
+        integration = _integration(study, study.value("steady_fraction"), initial=None)
         plan = basins_mod.plan(operating, options, integration)
         plan.extra.update(values=values, case_index=[cases.index(op.case) for op in operating])
         return plan

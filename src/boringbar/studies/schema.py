@@ -169,7 +169,7 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "dt_s": _f(1e-6, 0.0, 1e-3, lo_open=True),
         "integrator": Setting("str", "rk4", doc="rk4 (published); others where the "
                               "analysis's point functions take an integrator"),
-        "drop": _f(0.2, 0.0, 0.99),
+        "steady_fraction": _f(0.8, 0.0, 1.0, lo_open=True),
         "tip_displacement_mm": _f(0.0, -_D, _D),
         "tip_velocity_m_s": _f(0.0, -_V, _V),
         "ball_position_mm": _f(0.0, -MAX_GAP / 2 * 1e3, MAX_GAP / 2 * 1e3,
