@@ -27,6 +27,8 @@ def check_range(name: str, value, lo: float, hi: float, *, lo_open: bool = False
     """Return ``value`` as float if it is finite and lo <= value <= hi (open ends as
     asked), else raise ParameterError naming ``name``, the value and the range."""
     u = f" {unit}" if unit else ""
+    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
+        value = value.item()  # a numpy scalar, shown as the number it is
     if isinstance(value, bool):
         raise ParameterError(f"{name} = {value!r} is not a number (allowed range "
                              f"{_interval(lo, hi, lo_open, hi_open, u)})")

@@ -14,16 +14,13 @@ builds its subparser and a ``_cmd_<name>(args) -> int`` handler.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
-import json
 import re
 import sys
 import textwrap
 
 from boringbar import __version__
 from boringbar.cli.nonlinear import add_basins, add_bifurcation, add_sensitivity
-from boringbar.cli.options import PROG
+from boringbar.cli.options import PROG, Outcome
 from boringbar.cli.simulate import add_simulate
 from boringbar.cli.study import add_paper, add_run
 from boringbar.cli.sweeps import add_lobes, add_sweep
@@ -69,16 +66,18 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def run_json(argv: list[str]) -> dict:
-    """Run one ``boringbar`` subcommand in this process and return its ``--json``
-    summary (what ``boringbar paper`` does for each step); raises StepFailed with
-    the command's one-line error if it exits non-zero."""
-    buf = io.StringIO()
-    err = io.StringIO()
-    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
-        code = main([*argv, "--json"])
-    if code != 0:
-        raise StepFailed(f"boringbar {' '.join(argv)} failed: {err.getvalue().strip()}")
-    return json.loads(buf.getvalue().strip().splitlines()[-1])
+    """Run one analysis subcommand in this process and return its summary (what
+    ``--json`` prints; what ``boringbar paper`` does for each step), printing
+    nothing; raises StepFailed with the command's one-line error if it fails."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args([*argv, "--quiet"])
+    except SystemExit:
+        raise StepFailed(f"boringbar {' '.join(argv)}: not a valid command line") from None
+    try:
+        return args.func(args).summary
+    except (ValueError, OSError) as exc:
+        raise StepFailed(f"boringbar {' '.join(argv)} failed: {_one_line(exc)}") from None
 
 
 def main(argv=None) -> int:
@@ -89,7 +88,11 @@ def main(argv=None) -> int:
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 0
     try:
-        return args.func(args)
+        outcome = args.func(args)
+        if isinstance(outcome, Outcome):
+            outcome.report(args)
+            return 0
+        return outcome
     except ValueError as exc:  # ParameterError is a ValueError
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return 2

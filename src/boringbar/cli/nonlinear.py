@@ -19,6 +19,7 @@ from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import (
     CUT_ONLY,
     PATTERN_KEY,
+    Outcome,
     add_common,
     add_cutting,
     add_steady_fraction,
@@ -37,7 +38,6 @@ from boringbar.cli.options import (
     one_bar,
     parse_numbers,
     parse_words,
-    print_json,
     progress_printer,
     system_overrides,
 )
@@ -207,7 +207,7 @@ def _swept(args) -> tuple[str, np.ndarray]:
     return option, values
 
 
-def _cmd_bifurcation(args) -> int:
+def _cmd_bifurcation(args) -> Outcome:
     args = argparse.Namespace(**vars(args))  # _swept turns the strings into numbers
     option, values = _swept(args)
     bar, friction_on = one_bar(args, "bifurcation")
@@ -239,12 +239,12 @@ def _cmd_bifurcation(args) -> int:
     files = {"netcdf": write_netcdf_atomic(ds, out / "bifurcation.nc"),
              "png": save_figure_atomic(plot_bifurcation(ds), out / "bifurcation.png")}
     summary = {**bifurcation_summary(ds), "files": {k: str(v) for k, v in files.items()}}
-    if args.json:
-        print_json(summary)
-    elif not args.quiet:
-        print(_bifurcation_text(ds, summary["hysteresis_ranges"]))
-        print("wrote " + ", ".join(str(v) for v in files.values()))
-    return 0
+
+    def text(say) -> None:
+        say(_bifurcation_text(ds, summary["hysteresis_ranges"]))
+        say("wrote " + ", ".join(str(v) for v in files.values()))
+
+    return Outcome(summary, text)
 
 
 #: How bifurcation shows each parameter: (label, unit, option units per SI unit).
@@ -301,7 +301,7 @@ def _pair(text: str, name: str) -> tuple[float, float]:
             check_range(f"{name} M/S", values[1], -v, v, unit="m/s"))
 
 
-def _cmd_basins(args) -> int:
+def _cmd_basins(args) -> Outcome:
     bar, friction_on = one_bar(args, "basins")
     gap = check_gap(0.5 if args.gap_mm is None else args.gap_mm)
     force = 10.0 if args.force_n is None else args.force_n
@@ -344,12 +344,12 @@ def _cmd_basins(args) -> int:
     files = {"netcdf": write_netcdf_atomic(ds, out / "basins.nc"),
              "png": save_figure_atomic(plot_basins(ds), out / "basins.png")}
     summary = {**basins_summary(ds), "files": {k: str(v) for k, v in files.items()}}
-    if args.json:
-        print_json(summary)
-    elif not args.quiet:
-        print(_basins_text(summary))
-        print("wrote " + ", ".join(str(v) for v in files.values()))
-    return 0
+
+    def text(say) -> None:
+        say(_basins_text(summary))
+        say("wrote " + ", ".join(str(v) for v in files.values()))
+
+    return Outcome(summary, text)
 
 
 def _basins_text(s: dict) -> str:
@@ -419,7 +419,7 @@ def _sensitivity_values(args, bar: str, gap: float):
     return out
 
 
-def _cmd_sensitivity(args) -> int:
+def _cmd_sensitivity(args) -> Outcome:
     kind = args.kind
     bar, friction_on = one_bar(args, f"sensitivity {kind}")
     if kind != "initial" and bar != "ball":
@@ -461,12 +461,12 @@ def _cmd_sensitivity(args) -> int:
     files = {"netcdf": write_netcdf_atomic(ds, out / "sensitivity.nc"),
              "png": save_figure_atomic(plot_sensitivity(ds), out / "sensitivity.png")}
     summary = {**sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}
-    if args.json:
-        print_json(summary)
-    elif not args.quiet:
-        print(_sensitivity_text(summary))
-        print("wrote " + ", ".join(str(v) for v in files.values()))
-    return 0
+
+    def text(say) -> None:
+        say(_sensitivity_text(summary))
+        say("wrote " + ", ".join(str(v) for v in files.values()))
+
+    return Outcome(summary, text)
 
 
 def _sensitivity_text(s: dict) -> str:

@@ -7,6 +7,8 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
@@ -367,6 +369,23 @@ PATTERN_KEY = ("patterns: Ns = N symmetric impacts per period, Na/k = N asymmetr
 
 def print_json(obj) -> None:
     print(json.dumps(jsonable(obj), allow_nan=False))
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a command produced: its ``summary`` (the --json object) and ``text(say)``,
+    which says the human-readable report line by line (``say`` is print, or a
+    collector)."""
+
+    summary: dict
+    text: Callable[[Callable[[str], None]], None]
+
+    def report(self, args) -> None:
+        """Print the summary as JSON (--json), or the text unless --quiet."""
+        if args.json:
+            print_json(self.summary)
+        elif not args.quiet:
+            self.text(print)
 
 
 def integration(args, initial=None, steady_fraction: float = 0.8) -> Integration:

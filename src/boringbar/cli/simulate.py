@@ -7,6 +7,7 @@ from pathlib import Path
 from boringbar._validate import ParameterError, check_int
 from boringbar.cli.options import (
     CUT_ONLY,
+    Outcome,
     add_common,
     add_cutting,
     check_depth,
@@ -18,7 +19,6 @@ from boringbar.cli.options import (
     cut_options,
     initial_conditions,
     one_bar,
-    print_json,
     system_overrides,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
@@ -48,7 +48,7 @@ def add_simulate(sub) -> None:
     p.set_defaults(func=cmd_simulate)
 
 
-def cmd_simulate(args) -> int:
+def cmd_simulate(args) -> Outcome:
     bar, friction_on = one_bar(args, "simulate")
     gap = check_gap(0.5 if args.gap_mm is None else args.gap_mm)
     forcing = _simulate_forcing(args)
@@ -75,11 +75,11 @@ def cmd_simulate(args) -> int:
     save_figure_atomic(plot_run(ds), files["png"])
     summary = {**run.summary(), "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic({**summary, "config": run.config()}, files["summary"])
-    if args.json:
-        print_json(summary)
-    elif not args.quiet:
-        print(_cut_text(summary) if "cutting" in summary else _simulate_text(summary, run))
-    return 0
+
+    def text(say) -> None:
+        say(_cut_text(summary) if "cutting" in summary else _simulate_text(summary, run))
+
+    return Outcome(summary, text)
 
 
 def _simulate_forcing(args):

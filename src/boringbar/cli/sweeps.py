@@ -21,6 +21,7 @@ from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
 from boringbar.analysis.sweep import summary as sweep_summary
 from boringbar.cli.options import (
     PATTERN_KEY,
+    Outcome,
     add_common,
     add_cutting,
     check_depth,
@@ -33,7 +34,6 @@ from boringbar.cli.options import (
     initial_conditions,
     integration,
     many_cases,
-    print_json,
     progress_printer,
 )
 from boringbar.cli.simulate import HISTORY_ROWS
@@ -88,7 +88,7 @@ def add_lobes(sub) -> None:
     p.set_defaults(func=_cmd_lobes)
 
 
-def _cmd_sweep(args) -> int:
+def _cmd_sweep(args) -> Outcome:
     cases, bars, gaps = many_cases(args)
     forces, ratios = forces_and_ratios(args)
     check_dt(args, [c.system for c in cases], max(ratios))
@@ -101,12 +101,12 @@ def _cmd_sweep(args) -> int:
     nc = write_netcdf_atomic(ds, out / "sweep.nc")
     pngs = [save_figure_atomic(plot_sweep(ds, f), path) for f, path in sweep_pngs(ds, out)]
     summary = {**sweep_summary(ds), "files": {"netcdf": str(nc), "png": [str(p) for p in pngs]}}
-    if args.json:
-        print_json(summary)
-    elif not args.quiet:
-        print(_sweep_text(ds))
-        print("wrote " + ", ".join([str(nc)] + [str(p) for p in pngs]))
-    return 0
+
+    def text(say) -> None:
+        say(_sweep_text(ds))
+        say("wrote " + ", ".join([str(nc)] + [str(p) for p in pngs]))
+
+    return Outcome(summary, text)
 
 
 def sweep_pngs(ds, out: Path) -> list[tuple[float, Path]]:
@@ -152,7 +152,7 @@ def _sweep_text(ds) -> str:
     return "\n".join(lines)
 
 
-def _cmd_lobes(args) -> int:
+def _cmd_lobes(args) -> Outcome:
     cases, _, _ = many_cases(args)
     rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
     for r in rpm:
@@ -188,17 +188,17 @@ def _cmd_lobes(args) -> int:
     summary = {**lobes_summary(ds), "files": {k: str(v) for k, v in files.items()}}
     if args.examples:
         summary["examples"] = examples
-    if args.json:
-        print_json(summary)
-    elif not args.quiet:
-        print(_lobes_text(ds))
+
+    def text(say) -> None:
+        say(_lobes_text(ds))
         for e in examples:
             verdict = (f"chatter (force first zero at {e['first_zero_time_s']:.3g} s)"
                        if e["chatter"] else "stable (force never zero)")
-            print(f"example {e['example']}: {e['case']} at {e['rpm']:g} rpm, depth "
+            say(f"example {e['example']}: {e['case']} at {e['rpm']:g} rpm, depth "
                   f"{e['depth_m'] * 1e3:g} mm: {verdict}")
-        print("wrote " + ", ".join(str(v) for v in files.values()))
-    return 0
+        say("wrote " + ", ".join(str(v) for v in files.values()))
+
+    return Outcome(summary, text)
 
 
 def _lobes_text(ds) -> str:
