@@ -305,7 +305,7 @@ def test_study_file_with_an_exact_cut_loads(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text('[study]\nanalysis = "lobes"\n[run]\nintegrator = "exact"\n')
     study = load_study(path)
-    assert ANALYSES["lobes"].plan(study).context["opts"]["integrator"] == "exact"
+    assert ANALYSES["lobes"].plan(study).context["integration"].integrator == "exact"
     path.write_text('[study]\nanalysis = "sensitivity"\n[run]\nintegrator = "exact"\n'
                     '[analysis]\ncuts = true\n')
     assert ANALYSES["sensitivity"].plan(load_study(path)).points

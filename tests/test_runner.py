@@ -25,7 +25,7 @@ from boringbar.studies.runner import RunReport, run_study
 from boringbar.studies.schema import StudyError
 
 SMALL = {"study": {"analysis": "sweep", "name": "small"},
-         "run": {"duration_s": 0.02},
+         "run": {"duration_s": 0.02}, "analysis": {"batch": 1},  # a point per run
          "grid": {"gap_mm": [0.5, 0.1], "friction": ["off", "on"], "force_n": [10.0, 20.0],
                   "ratio": [0.99, 1.01]}}
 PROVENANCE = ("run_finished_utc", "run_wall_time_s", "run_executor", "run_workers")
@@ -139,6 +139,7 @@ def _study_file(tmp_path) -> Path:
     path = tmp_path / "kill.toml"
     path.write_text(
         '[study]\nanalysis = "sweep"\nname = "kill"\n[run]\nduration_s = 0.05\n'
+        '[analysis]\nbatch = 1\n'
         '[grid]\ngap_mm = [0.5, 0.1]\nfriction = ["off", "on"]\n'
         'ratio = {start = 0.96, stop = 1.04, step = 0.01}\n')
     return path
@@ -320,6 +321,7 @@ def test_cli_run_json_then_skipped(tmp_path, capsys):
 
     study = tmp_path / "s.toml"
     study.write_text('[study]\nanalysis = "sweep"\nname = "s"\nout = "res.nc"\n'
+                     '[analysis]\nbatch = 1\n'
                      '[run]\nduration_s = 0.02\n[grid]\nratio = [0.99, 1.0]\n')
     assert main(["run", str(study), "--executor", "serial", "--json"]) == 0
     first = json_out(capsys)

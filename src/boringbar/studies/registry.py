@@ -308,7 +308,9 @@ class Sweep(Analysis):
     """Frequency sweeps: tip RMS and impact pattern per (case, force, ratio)."""
 
     name = "sweep"
-    options = {}
+    #: batch: runs advanced together in lock-step (RK4), each batch one point of the
+    #: study; 1 makes every run its own point (finer chunks, the same numbers)
+    options = {"batch": Setting("int", sweep_mod.BATCH, 1, sweep_mod.BATCH)}
     grid_keys = SYSTEM_KEYS + ("force_n", "ratio")
 
     def default_axes(self, settings, options):
@@ -316,7 +318,8 @@ class Sweep(Analysis):
 
     def plan(self, study):
         cases, values = study_cases(study)
-        options = SweepOptions(tuple(_axis(study, "ratio")), tuple(_axis(study, "force_n")))
+        options = SweepOptions(tuple(_axis(study, "ratio")), tuple(_axis(study, "force_n")),
+                               study.options["batch"])
         plan = sweep_mod.plan(cases, options, _integration(study))
         plan.extra["values"] = values
         return plan
