@@ -374,6 +374,17 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     return e
 
 
+def check_friction_law(system: System, integrator: str) -> None:
+    """True stick-slip (a static friction above the sliding one) needs the exact
+    integrator: RK4 has only the published sgn() law."""
+    d = system.damper
+    if (integrator == "rk4" and isinstance(d, ImpactDamper)
+            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
+        raise ParameterError(f"friction static_ratio = {d.friction.static_ratio!r}: the rk4 "
+                             "integrator has only the sgn() law (static_ratio = 1); use "
+                             "integrator = 'exact' for true stick-slip")
+
+
 def check_step(system: System, omega: float, dt: float, name: str = "dt") -> None:
     """The step must resolve the forcing period and the highest retained mode
     (``name``: how the caller calls dt)."""
@@ -473,12 +484,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     if not isinstance(forcing, Harmonic | Regenerative):
         raise ParameterError(f"forcing = {forcing!r} must be a Harmonic or a Regenerative")
     cutting = isinstance(forcing, Regenerative)
-    d = system.damper
-    if (integrator == "rk4" and isinstance(d, ImpactDamper)
-            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
-        raise ParameterError(f"friction static_ratio = {d.friction.static_ratio!r}: the rk4 "
-                             "integrator has only the sgn() law (static_ratio = 1); use "
-                             "integrator = 'exact' for true stick-slip")
+    check_friction_law(system, integrator)
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     record_every = check_int("record_every", record_every, 0, MAX_STEPS)
     omega = 2 * math.pi / forcing.tau if cutting else forcing.omega(system.reference_frequency)

@@ -34,6 +34,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 
@@ -57,6 +58,7 @@ from boringbar.simulate import (
     Initial,
     Integration,
     check_delay,
+    check_friction_law,
     check_step,
     check_steps,
 )
@@ -134,9 +136,11 @@ class Values:
 
 
 class Analysis:
-    """The contract of a study analysis (module docstring)."""
+    """The study adapter of an analysis module (module docstring): ``plan`` turns a
+    study into the module's plan; points, warming and assembly are the module's."""
 
     name = ""
+    module: ModuleType  #: the analysis module (boringbar.analysis.*)
     options: dict = {}
     grid_keys: tuple = ()
 
@@ -159,13 +163,17 @@ class Analysis:
         raise NotImplementedError
 
     def compute(self, context, point):
-        raise NotImplementedError
+        return self.module.compute(context, point)
 
     def assemble(self, study: Study, plan: Plan, results: list):
-        raise NotImplementedError
+        """The module's Dataset, with the study's provenance and the varied keys as
+        coordinates along ``case``."""
+        ds = self.module.assemble(plan, results, _provenance(study))
+        return ds.assign_coords(_case_coords(plan.extra["values"]))
 
     def warm(self, context) -> None:
-        """Compile the kernel once in this process (optional)."""
+        """Compile the kernels once in this process."""
+        self.module.warm(context)
 
     def integrators(self) -> tuple:
         """The integrators a study of this analysis may choose."""
@@ -174,14 +182,13 @@ class Analysis:
 
 def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
     """What :func:`~boringbar.simulate.simulate` refuses, checked before any work."""
-
-    integrator = study.value("integrator")
     d = system.damper
-    if (integrator == "rk4" and isinstance(d, ImpactDamper)
-            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
+    try:
+        check_friction_law(system, study.value("integrator"))
+    except ParameterError:
         raise ParameterError(f"key 'damper.static_ratio' = {d.friction.static_ratio!r}: the "
                              "rk4 integrator has only the sgn() law (static_ratio = 1); set "
-                             "run.integrator = 'exact' for true stick-slip")
+                             "run.integrator = 'exact' for true stick-slip") from None
     try:
         check_step(system, omega, study.value("dt_s"))
     except ParameterError as exc:
@@ -308,6 +315,7 @@ class Sweep(Analysis):
     """Frequency sweeps: tip RMS and impact pattern per (case, force, ratio)."""
 
     name = "sweep"
+    module = sweep_mod
     #: batch: runs advanced together in lock-step (RK4), each batch one point of the
     #: study; 1 makes every run its own point (finer chunks, the same numbers)
     options = {"batch": Setting("int", sweep_mod.BATCH, 1, sweep_mod.BATCH)}
@@ -324,20 +332,10 @@ class Sweep(Analysis):
         plan.extra["values"] = values
         return plan
 
-    def warm(self, ctx):
-        sweep_mod.warm(ctx)
-
     def runs(self, plan):
         c = plan.context
         return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
                 for x in c["cases"]]
-
-    def compute(self, ctx, point):
-        return sweep_mod.compute(ctx, point)
-
-    def assemble(self, study, plan, results):
-        ds = sweep_mod.assemble(plan, results, _provenance(study))
-        return ds.assign_coords(_case_coords(plan.extra["values"]))
 
 
 # --- lobes ------------------------------------------------------------------------
@@ -346,6 +344,7 @@ class Lobes(Analysis):
     """Stability lobes: every verdict of every (case, rpm) column."""
 
     name = "lobes"
+    module = lobes_mod
     options = {
         "method": Setting("str", "scan", choices=("scan", "search")),
         "criterion": Setting("str", "zero", choices=("zero", "bounded")),
@@ -382,16 +381,6 @@ class Lobes(Analysis):
         return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True)
                 for x in c["cases"]]
 
-    def warm(self, ctx):
-        lobes_mod.warm(ctx)
-
-    def compute(self, ctx, point):
-        return lobes_mod.compute(ctx, point)
-
-    def assemble(self, study, plan, results):
-        ds = lobes_mod.assemble(plan, results, _provenance(study))
-        return ds.assign_coords(_case_coords(plan.extra["values"]))
-
 
 # --- bifurcation ------------------------------------------------------------------
 
@@ -399,6 +388,7 @@ class Bifurcation(Analysis):
     """Bifurcation diagrams: one continuation (forward, then backward) per case."""
 
     name = "bifurcation"
+    module = bifurcation_mod
     options = {
         "parameter": Setting("str", "force", choices=("force", "ratio")),
         "values": Range(tuple(float(f) for f in range(5, 51)), lo=0.0),
@@ -426,20 +416,10 @@ class Bifurcation(Analysis):
         plan.extra["values"] = values
         return plan
 
-    def warm(self, ctx):
-        bifurcation_mod.warm(ctx)
-
     def runs(self, plan):
         o = plan.context["options"]
         r = max(o.values) if o.parameter == "ratio" else o.ratio
         return [(x.system, r * x.system.reference_frequency, False) for x in plan.extra["cases"]]
-
-    def compute(self, ctx, i):
-        return bifurcation_mod.compute(ctx, i)
-
-    def assemble(self, study, plan, results):
-        ds = bifurcation_mod.assemble(plan, results, _provenance(study))
-        return ds.assign_coords(_case_coords(plan.extra["values"]))
 
 
 # --- basins -----------------------------------------------------------------------
@@ -455,6 +435,7 @@ class Basins(Analysis):
     """
 
     name = "basins"
+    module = basins_mod
     options = {
         "displacement_mm": Range({"start": -1.5, "stop": 1.5, "count": 30}, count=True),
         "velocity_m_s": Range({"start": -1.5, "stop": 1.5, "count": 30}, count=True),
@@ -489,15 +470,9 @@ class Basins(Analysis):
         plan.extra.update(values=values, case_index=[cases.index(op.case) for op in operating])
         return plan
 
-    def warm(self, ctx):
-        basins_mod.warm(ctx)
-
     def runs(self, plan):
         return [(op.case.system, op.forcing.omega(op.case.system.reference_frequency), False)
                 for op in plan.context["operating"]]
-
-    def compute(self, ctx, point):
-        return basins_mod.compute(ctx, point)
 
     def assemble(self, study, plan, results):
         ds = basins_mod.assemble(plan, results, _provenance(study))
@@ -515,6 +490,7 @@ class Sensitivity(Analysis):
     (``cuts = true``) full-length cuts per (value, depth) at ``[forcing] rpm``."""
 
     name = "sensitivity"
+    module = sensitivity_mod
     options = {
         "kind": Setting("str", "restitution",
                         choices=("ball", "friction_number", "restitution", "initial")),
@@ -548,9 +524,6 @@ class Sensitivity(Analysis):
         except ParameterError as exc:
             raise StudyError(f"{study.source}: [analysis] {exc}") from None
 
-    def warm(self, ctx):
-        sensitivity_mod.warm(ctx)
-
     def runs(self, plan):
         c = plan.context
         if c["mode"] == "cuts":
@@ -558,11 +531,8 @@ class Sensitivity(Analysis):
         return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
                 for x in c["cases"]]
 
-    def compute(self, ctx, point):
-        return sensitivity_mod.compute(ctx, point)
-
     def assemble(self, study, plan, results):
-        return sensitivity_mod.assemble(plan, results, _provenance(study))
+        return sensitivity_mod.assemble(plan, results, _provenance(study))  # no case dim
 
 
 def _overrides(s: dict, varied: str | None) -> dict:
