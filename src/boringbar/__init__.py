@@ -17,6 +17,7 @@ layers behind them.
 
 __version__ = "0.1.0"
 
+from boringbar import plot  # noqa: E402, F401  (registers Run.plot)
 from boringbar._validate import ParameterError  # noqa: E402
 from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402

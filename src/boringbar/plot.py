@@ -18,6 +18,8 @@ import re
 import numpy as np
 from matplotlib.figure import Figure
 
+from boringbar.simulate import FIGURES
+
 #: Marker and colour per impact-pattern class (patterns.PATTERN_LABELS).
 PATTERN_STYLE = {
     "no impact": ("o", "#9e9e9e"),
@@ -857,3 +859,6 @@ def plot_ladder(ds, *, ax=None) -> Figure:
                  f"at a time\n(each rung keeps the changes to its left; "
                  f"{ds.attrs.get('duration_s', math.nan):g} s runs)", fontsize="medium")
     return fig
+
+
+FIGURES["run"] = plot_run  # Run.plot()

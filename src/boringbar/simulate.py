@@ -134,6 +134,11 @@ class State:
         check_finite("initial state t", self.t, "s")
 
 
+#: Figure makers by what they draw ("run" -> plot_run), registered by boringbar.plot so
+#: that Run.plot works without this layer importing matplotlib.
+FIGURES: dict = {}
+
+
 @dataclass(frozen=True, eq=False)
 class Run:
     """The result of :func:`simulate` (frozen): streamed metrics, events and (if asked)
@@ -240,6 +245,15 @@ class Run:
             "delay_interpolation": f.interpolation,
             "start": f.start,
         }
+
+    def plot(self, **kwargs):
+        """The run's figure (a matplotlib Figure; needs ``record_every``): what
+        :func:`boringbar.plot.plot_run` draws, with its ``kwargs`` (``zoom_periods``,
+        ``fig``).  The plotting module sits above this one and registers itself
+        (:data:`FIGURES`) when ``boringbar`` is imported."""
+        if "run" not in FIGURES:
+            raise RuntimeError("no figure maker registered: import boringbar.plot")
+        return FIGURES["run"](self, **kwargs)
 
     def to_xarray(self):
         """The decimated history as an xarray Dataset (needs ``record_every``), with the
