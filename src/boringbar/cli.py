@@ -26,6 +26,7 @@ import numpy as np
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_range
 from boringbar.forcing import INTERPOLATIONS, STARTS
+from boringbar.kernels.compile import notices as compile_notices
 from boringbar.system import BALLS, BAR_KINDS, PRESETS, READINGS
 
 PROG = "boringbar"
@@ -1373,6 +1374,7 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 0
+    compile_notices(not getattr(args, "quiet", False))  # --quiet: no compile notice either
     try:
         return args.func(args)
     except ValueError as exc:  # ParameterError is a ValueError
