@@ -113,3 +113,27 @@ def test_fma_rounds_once():
     fused, plain = _fma(a, b, -1.0)
     assert plain == 0.0
     assert fused == -(2.0**-60)
+
+
+def test_the_inliner_copies_with_one_memo():
+    """kernels/inline_copy.py found numba's text to replace (else compiles take up to twice
+    as long, and this numba is not the one it was written for)."""
+    from numba.core.inline_closurecall import InlineWorker
+
+    from boringbar.kernels import inline_copy
+
+    assert inline_copy.applied()
+    assert InlineWorker.inline_ir.__wrapped__ is inline_copy._ORIGINAL
+
+    @njit(inline="always")
+    def inner(a, k):
+        s = 0.0
+        for i in range(k):
+            s += a[i] * i
+        return s
+
+    @njit
+    def outer(a):
+        return inner(a, 3) + inner(a, 2)
+
+    assert outer(np.arange(4.0)) == (0 + 1 + 4) + (0 + 1)
