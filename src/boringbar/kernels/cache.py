@@ -29,7 +29,10 @@ except ImportError:  # Windows: no flock; numba as it is
 
 from numba.core import caching
 
-_ORIGINAL_SAVE = caching.IndexDataCacheFile.save
+#: numba's own save (unwrapped if this module was loaded before: a second lock on the
+#: same file from one process would wait for itself)
+_ORIGINAL_SAVE = getattr(caching.IndexDataCacheFile.save, "_boringbar_unlocked",
+                         caching.IndexDataCacheFile.save)
 
 
 def _locked_save(self, key, data):
@@ -42,6 +45,7 @@ def _locked_save(self, key, data):
 
 
 functools.update_wrapper(_locked_save, _ORIGINAL_SAVE)
+_locked_save._boringbar_unlocked = _ORIGINAL_SAVE
 
 
 def lock_cache_saves(enabled: bool = True) -> bool:

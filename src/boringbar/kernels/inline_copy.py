@@ -29,7 +29,8 @@ _OLD = """        for block_label, block in the_ir.blocks.items():
 _NEW = """        memo = {}  # boringbar.kernels.inline_copy: the scope copied once per copy
         for block_label, block in the_ir.blocks.items():
             new_block = copy.deepcopy(the_ir.blocks[block_label], memo)"""
-_ORIGINAL = _icc.InlineWorker.inline_ir
+#: numba's own (unwrapped if this module was loaded before)
+_ORIGINAL = getattr(_icc.InlineWorker.inline_ir, "__wrapped__", _icc.InlineWorker.inline_ir)
 _PATCHED = None
 
 
