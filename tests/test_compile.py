@@ -84,3 +84,7 @@ def test_a_cold_compile_announces_and_a_cached_load_does_not(tmp_path):
     assert [r.stdout.strip() for r in runs] == ["compiled", "cached"], runs[0].stderr
     assert runs[0].stderr.splitlines() == [C.notice(C.Spec("rk4", 1, "ball"))]
     assert runs[1].stderr == ""
+
+
+def test_every_specialisation_has_a_measured_estimate():
+    assert set(C.ESTIMATE_S) == {s.name for s in C.specs()}

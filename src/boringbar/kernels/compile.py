@@ -106,13 +106,30 @@ def specs(kinds: Iterable[str] = KINDS) -> list[Spec]:
 
 
 # --- measured cold compile times ---------------------------------------------------------
-#: Seconds to compile each specialisation on an empty cache, measured on the
-#: development machine (one core each; benchmarks/... see docs); the notice rounds them.
+#: CPU seconds to compile each specialisation on an empty cache (``compile_all(workers=2)``
+#: on the development machine's 2 cores, shared, 2026-11-24, numba 0.68.1, with
+#: kernels/inline_copy.py); wall time is about this on an idle core.  Before
+#: inline_copy.py: exact 129 s, rk4 15-20 s, rk4_batch 10-19 s (836 s in all, now 418 s).
 ESTIMATE_S: dict[str, float] = {
-    "exact": 180.0,
+    "exact": 100.0, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
+    "rk4 n=4-8": 8.8, "rk4 n=2 ball": 6.0, "rk4_batch n=1 ball x16": 6.8,
+    "rk4_batch n=1 locked x16": 7.3, "rk4_batch n=1 solid x16": 7.0,
+    "rk4_batch n=1 tmd x16": 6.9, "rk4_batch n=1 ball x4": 6.5, "rk4_batch n=1 locked x4": 6.4,
+    "rk4_batch n=1 solid x4": 6.7, "rk4_batch n=1 tmd x4": 6.8, "rk4_batch n=1 ball x8": 6.7,
+    "rk4_batch n=1 locked x8": 8.6, "rk4_batch n=1 solid x8": 6.6, "rk4_batch n=1 tmd x8": 7.3,
+    "rk4_batch n=2 ball x16": 6.6, "rk4_batch n=2 locked x16": 6.8,
+    "rk4_batch n=2 solid x16": 6.4, "rk4_batch n=2 tmd x16": 8.2, "rk4_batch n=2 ball x4": 6.8,
+    "rk4_batch n=2 locked x4": 6.2, "rk4_batch n=2 solid x4": 6.8, "rk4_batch n=2 tmd x4": 6.0,
+    "rk4_batch n=2 ball x8": 7.3, "rk4_batch n=2 locked x8": 7.0,
+    "rk4_batch n=2 solid x8": 6.8, "rk4_batch n=2 tmd x8": 7.1, "rk4_batch n=3 ball x16": 8.3,
+    "rk4_batch n=3 locked x16": 6.8, "rk4_batch n=3 solid x16": 6.2,
+    "rk4_batch n=3 tmd x16": 8.3, "rk4_batch n=3 ball x4": 5.0, "rk4_batch n=3 locked x4": 5.7,
+    "rk4_batch n=3 solid x4": 5.9, "rk4_batch n=3 tmd x4": 5.1, "rk4_batch n=3 ball x8": 6.6,
+    "rk4_batch n=3 locked x8": 7.0, "rk4_batch n=3 solid x8": 6.9, "rk4_batch n=3 tmd x8": 6.1,
+    "rk4_batch n=4-8 x16": 9.8, "rk4_batch n=4-8 x4": 8.6, "rk4_batch n=4-8 x8": 8.5,
 }
 #: estimates of the specialisations not measured one by one, per kind
-_KIND_ESTIMATE_S = {"exact": 180.0, "rk4": 9.0, "rk4_batch": 25.0}
+_KIND_ESTIMATE_S = {"exact": 100.0, "rk4": 10.0, "rk4_batch": 10.0}
 #: compiles estimated under this many seconds get no notice
 NOTICE_MIN_S = 2.0
 _notices = {"on": True}
