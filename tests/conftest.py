@@ -19,9 +19,9 @@ module fixtures are then built once).  pytest-xdist's own ``xdist_group`` marks
 are not used: with pytest 9.2 they no longer group (pytest-xdist issue 1386).
 """
 
-import functools
-
 import pytest
+
+import boringbar.kernels  # noqa: F401  locks numba's cache saves across the workers (kernels/cache.py)
 
 ONE_MODE, TWO_MODES, EXACT = "rk4-batch-1-mode", "rk4-batch-2-modes", "exact"
 #: the groups in the order the workers take them; then the other modules, in file order
@@ -74,37 +74,3 @@ def pytest_collection_modifyitems(items):
     keyed = sorted(enumerate(items), key=lambda ix: (
         rank.get(kernel_group(ix[1].nodeid), len(ORDER)), ix[0]))
     items[:] = [item for _, item in keyed]
-
-
-def _lock_numba_cache_saves():
-    """Serialise numba's cache writes across processes (the workers and their forks).
-
-    numba keeps one index per function (``*.nbi``) naming the data file (``*.nbc``)
-    of each compiled signature; saving a signature reads the index, adds the entry
-    and rewrites it, unlocked (numba/core/caching.py, ``IndexDataCacheFile.save``).
-    Two workers saving different signatures of one function at the same moment
-    would both take the first free file number: one entry is lost, and the index
-    may name the other signature's code.  Each file is replaced atomically, so
-    one signature saved by two processes at once is harmless.
-    """
-    try:
-        import fcntl
-
-        from numba.core.caching import IndexDataCacheFile
-    except ImportError:  # no fcntl (Windows) or another numba layout: as numba is
-        return
-    save = IndexDataCacheFile.save
-
-    @functools.wraps(save)
-    def locked_save(self, key, data):
-        index = getattr(self, "_index_path", None)
-        if index is None:
-            return save(self, key, data)
-        with open(index + ".lock", "a") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            return save(self, key, data)
-
-    IndexDataCacheFile.save = locked_save
-
-
-_lock_numba_cache_saves()

@@ -26,6 +26,7 @@ from boringbar._validate import (
     check_range,
 )
 from boringbar.kernels import layout as L
+from boringbar.kernels.compile import announce
 from boringbar.kernels.exact import run_exact
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.kernels.rk4_batch import BMAX, LANES, run_rk4_batch
@@ -574,6 +575,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
                   stb, rec, met)
 
 
+@announce()
 def _run_kernel(su: _Setup) -> float:
     """Run the kernel of ``su`` in place; the wall time (s)."""
     p, x, t0, dt, n_steps, steady_steps = su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps
@@ -782,7 +784,8 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
     stick = np.zeros((nb, max(len(su.stick) for su in sus), 2))
     stb = np.zeros((nb, max(len(su.stb) for su in sus), 5))
     tic = time.perf_counter()
-    run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
+    with announce():
+        run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
     elapsed = time.perf_counter() - tic
     for r, su in enumerate(sus):
         su.x[:] = X[r]

@@ -19,11 +19,13 @@ import sys
 import textwrap
 
 from boringbar import __version__
+from boringbar.cli.compile import add_compile
 from boringbar.cli.nonlinear import add_basins, add_bifurcation, add_sensitivity
 from boringbar.cli.options import PROG, Outcome
 from boringbar.cli.simulate import add_simulate
 from boringbar.cli.study import add_paper, add_run
 from boringbar.cli.sweeps import add_lobes, add_sweep
+from boringbar.kernels.compile import notices as compile_notices
 from boringbar.model.system import READINGS
 from boringbar.report.paper import StepFailed
 
@@ -61,6 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_sensitivity(sub)
 
     add_run(sub)
+    add_compile(sub)
     add_paper(sub, run_json)
     return parser
 
@@ -87,6 +90,7 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 0
+    compile_notices(not getattr(args, "quiet", False))  # --quiet: no compile notice either
     try:
         outcome = args.func(args)
         if isinstance(outcome, Outcome):
