@@ -267,34 +267,20 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
     """
 
     report = RunReport() if report is None else report
-    if scheduler is not None or dask_local is not None:
-        if executor not in ("dask", "processes"):
-            raise ParameterError(f"executor = {executor!r} conflicts with a Dask scheduler "
-                                 "or LocalCluster (use executor 'dask')")
-        if scheduler is not None and dask_local is not None:
-            raise ParameterError("give at most one of scheduler and dask_local")
-        executor = "dask"
-    if executor not in EXECUTORS:
-        raise ParameterError(f"executor = {executor!r} is not one of {', '.join(EXECUTORS)}")
-    if executor == "dask" and scheduler is None and dask_local is None:
-        dask_local = workers or os.cpu_count() or 1
+    execution = _execution(executor, workers, scheduler, dask_local)
     if chunk_size is not None and (isinstance(chunk_size, bool) or not isinstance(chunk_size, int)
                                    or chunk_size < 1):
         raise ParameterError(f"chunk_size = {chunk_size!r} must be an integer >= 1")
-    execution = Execution(executor, workers, scheduler, dask_local)
-    workers = execution.n_workers
-
     fmt = _format(study, study.output_path(out), given=out is not None)
     out = study.output_path(out)
     key = study.config_hash()
     analysis = ANALYSES[study.analysis]
-    report.__dict__.update(out=str(out), analysis=study.analysis, executor=executor,
-                           workers=workers)
+    report.__dict__.update(out=str(out), analysis=study.analysis,
+                           executor=execution.executor, workers=execution.n_workers)
     tic = time.perf_counter()
     ds = _finished(out, fmt, key)
     plan = analysis.plan(study)  # validates everything before any work
-    n = len(plan.points)
-    report.points = n
+    report.points = len(plan.points)
     if ds is not None:
         report.skipped = True
         stale = out.with_name(out.name + ".partial")
@@ -302,18 +288,47 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
             shutil.rmtree(stale, ignore_errors=True)  # killed after OUT was written
         log.debug("%s already holds this study's result; not recomputed", out)
         return ds
+    part = _Partial(out, study, key, len(plan.points))
+    done = _run_missing(study, key, analysis, plan, part, execution, chunk_size,
+                        quiet, progress, report)
+    wall = time.perf_counter() - tic
+    ds = analysis.assemble(study, plan, [done[i] for i in range(len(plan.points))])
+    ds.attrs.update(_provenance(study, key, wall, execution, len(plan.points)))
+    _write(ds, out, fmt)
+    part.remove()
+    report.wall_time_s = wall
+    return _open(out, fmt)
 
-    part = _Partial(out, study, key, n)
+
+def _execution(executor: str, workers, scheduler, dask_local) -> Execution:
+    """The study's executor (a scheduler or a LocalCluster selects Dask)."""
+    if scheduler is not None or dask_local is not None:
+        if executor not in ("dask", "processes"):
+            raise ParameterError(f"executor = {executor!r} conflicts with a Dask scheduler "
+                                 "or LocalCluster (use executor 'dask')")
+        executor = "dask"
+    if executor not in EXECUTORS:
+        raise ParameterError(f"executor = {executor!r} is not one of {', '.join(EXECUTORS)}")
+    if executor == "dask" and scheduler is None and dask_local is None:
+        dask_local = workers or os.cpu_count() or 1
+    return Execution(executor, workers, scheduler, dask_local)
+
+
+def _run_missing(study, key, analysis, plan, part, execution, chunk_size, quiet, progress,
+                 report) -> dict:
+    """Every point not in ``part`` yet, in chunks on ``execution``, each chunk saved to
+    ``part`` as it finishes; index -> result of every point."""
+    n = len(plan.points)
     done = part.load()
     report.resumed = len(done)
     missing = [i for i in range(n) if i not in done]
     if done:
-        log.info("resuming %s: %d of %d points already done", out, len(done), n)
+        log.info("resuming %s: %d of %d points already done", part.dir, len(done), n)
     if chunk_size is None:
-        chunk_size = max(1, min(64, math.ceil(len(missing) / (4 * workers)))) if missing else 1
+        chunk_size = max(1, min(64, math.ceil(len(missing) / (4 * execution.n_workers))))
     chunks = {c: missing[s:s + chunk_size]
               for c, s in enumerate(range(0, len(missing), chunk_size))}
-    if chunks and executor != "dask":
+    if chunks and execution.executor != "dask":
         # plan and compile once here: forked workers inherit both
         analysis.warm(plan.context)
         _PLANS.clear()
@@ -343,9 +358,12 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
                                 "again to resume)") from None
     finally:
         bar.close()
-    wall = time.perf_counter() - tic
-    ds = analysis.assemble(study, plan, [done[i] for i in range(n)])
-    ds.attrs.update({
+    return done
+
+
+def _provenance(study: Study, key: str, wall: float, execution: Execution, n: int) -> dict:
+    """The result file's provenance attributes."""
+    return {
         "boringbar_version": __version__,
         "study_name": study.name,
         "study_source": str(study.source),
@@ -353,11 +371,7 @@ def run_study(study: Study, out=None, *, executor: str = "processes", workers: i
         "study_config_hash": key,
         "run_finished_utc": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "run_wall_time_s": wall,
-        "run_executor": executor,
-        "run_workers": workers,
+        "run_executor": execution.executor,
+        "run_workers": execution.n_workers,
         "run_points": n,
-    })
-    _write(ds, out, fmt)
-    part.remove()
-    report.wall_time_s = wall
-    return _open(out, fmt)
+    }
