@@ -3,11 +3,11 @@
 Most of a run from a fresh clone is numba compiling: each specialisation of a
 kernel (``cache=True``: src/boringbar/kernels/__pycache__) compiles once, in the
 first process that needs it, and every later process loads it from disk.
-Measured cold on one core: the exact kernel 190 s (with its 1- and 2-mode
-helpers, 2026-11-23); the lock-step batch kernels (one per mode count, case and
-batch size, kernels/rk4_batch.py) 20-30 s each, 18 of them; the single-run RK4
-kernels 17 s each, 5 of them; the runs themselves about 220 s, of which
-test_paper's quick study 90 s.
+Measured cold (CPU seconds, kernels/compile.py ESTIMATE_S, 2026-11-24, with the
+inliner fix of kernels/inline_copy.py): the exact kernel 100 s; the lock-step
+batch kernels (one per mode count, case and batch size, kernels/rk4_batch.py)
+6-9 s each; the single-run RK4 kernels 5-10 s each; the runs themselves about
+220 s, of which test_paper's quick study 90 s.
 
 The two workers take work in groups (:func:`kernel_group`), one group at a time
 and in the order of ``ORDER``, so that the tests sharing specialisations compile
