@@ -4,17 +4,13 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, basins, check_cells
-from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
-from boringbar.analysis.bifurcation import summary as bifurcation_summary
 from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
-from boringbar.analysis.sensitivity import summary as sensitivity_summary
 from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import (
     CUT_ONLY,
@@ -42,11 +38,10 @@ from boringbar.cli.options import (
     system_overrides,
 )
 from boringbar.cli.sweeps import short_pattern
-from boringbar.io import save_figure_atomic, write_netcdf_atomic
 from boringbar.model.dampers import MAX_GAP
 from boringbar.model.forcing import MAX_FORCE, MAX_RATIO
 from boringbar.model.system import BALLS, make_system
-from boringbar.plot import plot_basins, plot_bifurcation, plot_sensitivity
+from boringbar.report.outputs import basins_files, bifurcation_files, sensitivity_files
 from boringbar.simulate import MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY
 
 #: bifurcation's published sweep: F0 from 5 to 50 N in 1 N steps
@@ -235,14 +230,11 @@ def _cmd_bifurcation(args) -> Outcome:
     ds = with_hysteresis(ds)
     ds.attrs.update(preset=args.preset, bar=bar, swept_option=option)
 
-    out = Path(args.out)
-    files = {"netcdf": write_netcdf_atomic(ds, out / "bifurcation.nc"),
-             "png": save_figure_atomic(plot_bifurcation(ds), out / "bifurcation.png")}
-    summary = {**bifurcation_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    summary = bifurcation_files(ds, args.out)
 
     def text(say) -> None:
         say(_bifurcation_text(ds, summary["hysteresis_ranges"]))
-        say("wrote " + ", ".join(str(v) for v in files.values()))
+        say("wrote " + ", ".join(summary["files"].values()))
 
     return Outcome(summary, text)
 
@@ -340,14 +332,11 @@ def _cmd_basins(args) -> Outcome:
                 execution=execution(args), progress=progress_printer(args, "basins", "batches"))
     ds.attrs.update(bar=bar)
 
-    out = Path(args.out)
-    files = {"netcdf": write_netcdf_atomic(ds, out / "basins.nc"),
-             "png": save_figure_atomic(plot_basins(ds), out / "basins.png")}
-    summary = {**basins_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    summary = basins_files(ds, args.out)
 
     def text(say) -> None:
         say(_basins_text(summary))
-        say("wrote " + ", ".join(str(v) for v in files.values()))
+        say("wrote " + ", ".join(summary["files"].values()))
 
     return Outcome(summary, text)
 
@@ -457,14 +446,11 @@ def _cmd_sensitivity(args) -> Outcome:
     if cuts is not None:
         ds = with_cuts(ds, sensitivity(SensitivityOptions(kind, values, cuts=cuts), **common))
 
-    out = Path(args.out)
-    files = {"netcdf": write_netcdf_atomic(ds, out / "sensitivity.nc"),
-             "png": save_figure_atomic(plot_sensitivity(ds), out / "sensitivity.png")}
-    summary = {**sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    summary = sensitivity_files(ds, args.out)
 
     def text(say) -> None:
         say(_sensitivity_text(summary))
-        say("wrote " + ", ".join(str(v) for v in files.values()))
+        say("wrote " + ", ".join(summary["files"].values()))
 
     return Outcome(summary, text)
 

@@ -25,10 +25,8 @@ from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_ato
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import make_system
 from boringbar.plot import plot_run
+from boringbar.report.outputs import HISTORY_ROWS
 from boringbar.simulate import check_history, check_steps, simulate
-
-#: Default history length of ``simulate`` (rows), when --record-every is not given.
-HISTORY_ROWS = 20000
 
 
 def add_simulate(sub) -> None:

@@ -3,22 +3,13 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_range
-from boringbar.analysis.lobes import (
-    MAX_DEPTHS,
-    PUBLISHED_RPM,
-    LobesOptions,
-    examples_summary,
-    lobes,
-)
+from boringbar.analysis.lobes import MAX_DEPTHS, PUBLISHED_RPM, LobesOptions, lobes
 from boringbar.analysis.lobes import examples as lobe_examples
-from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
-from boringbar.analysis.sweep import summary as sweep_summary
 from boringbar.cli.options import (
     PATTERN_KEY,
     Outcome,
@@ -36,10 +27,8 @@ from boringbar.cli.options import (
     many_cases,
     progress_printer,
 )
-from boringbar.cli.simulate import HISTORY_ROWS
-from boringbar.io import save_figure_atomic, write_netcdf_atomic
 from boringbar.model.forcing import MAX_DEPTH
-from boringbar.plot import plot_lobe_examples, plot_lobes, plot_sweep
+from boringbar.report.outputs import HISTORY_ROWS, lobes_files, sweep_files
 
 
 def add_sweep(sub) -> None:
@@ -97,25 +86,14 @@ def _cmd_sweep(args) -> Outcome:
     ds = sweep(cases, SweepOptions(tuple(ratios), tuple(forces)),
                integration=integration(args, initial), execution=execution(args),
                progress=progress_printer(args, "sweep", "batches of runs"))
-    out = Path(args.out)
-    nc = write_netcdf_atomic(ds, out / "sweep.nc")
-    pngs = [save_figure_atomic(plot_sweep(ds, f), path) for f, path in sweep_pngs(ds, out)]
-    summary = {**sweep_summary(ds), "files": {"netcdf": str(nc), "png": [str(p) for p in pngs]}}
+    summary = sweep_files(ds, args.out)
 
     def text(say) -> None:
         say(_sweep_text(ds))
-        say("wrote " + ", ".join([str(nc)] + [str(p) for p in pngs]))
+        files = summary["files"]
+        say("wrote " + ", ".join([files["netcdf"], *files["png"]]))
 
     return Outcome(summary, text)
-
-
-def sweep_pngs(ds, out: Path) -> list[tuple[float, Path]]:
-    """(force, file) of each sweep figure: ``out/sweep.png`` for one force, else one
-    ``out/sweep_F<force>N.png`` per force."""
-    forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
-    if len(forces) == 1:
-        return [(forces[0], out / "sweep.png")]
-    return [(f, out / f"sweep_F{f:g}N.png") for f in forces]
 
 
 def short_pattern(name: str) -> str:
@@ -175,19 +153,11 @@ def _cmd_lobes(args) -> Outcome:
     ds = lobes(cases, options, integration=integ, execution=execution(args),
                progress=progress_printer(args, "lobes", "(case, speed) columns"))
 
-    out = Path(args.out)
-    files = {"netcdf": write_netcdf_atomic(ds, out / "lobes.nc"),
-             "png": save_figure_atomic(plot_lobes(ds), out / "lobes.png")}
-    examples = []
+    exds = None
     if args.examples:
         exds = lobe_examples(ds, cases[0], options, integration=integ, rows=HISTORY_ROWS)
-        files["examples_netcdf"] = write_netcdf_atomic(exds, out / "examples.nc")
-        files["examples_png"] = save_figure_atomic(plot_lobe_examples(exds),
-                                                    out / "examples.png")
-        examples = examples_summary(exds)
-    summary = {**lobes_summary(ds), "files": {k: str(v) for k, v in files.items()}}
-    if args.examples:
-        summary["examples"] = examples
+    summary = lobes_files(ds, args.out, exds)
+    examples = summary.get("examples", [])
 
     def text(say) -> None:
         say(_lobes_text(ds))
@@ -196,7 +166,7 @@ def _cmd_lobes(args) -> Outcome:
                        if e["chatter"] else "stable (force never zero)")
             say(f"example {e['example']}: {e['case']} at {e['rpm']:g} rpm, depth "
                   f"{e['depth_m'] * 1e3:g} mm: {verdict}")
-        say("wrote " + ", ".join(str(v) for v in files.values()))
+        say("wrote " + ", ".join(summary["files"].values()))
 
     return Outcome(summary, text)
 
