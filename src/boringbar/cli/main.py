@@ -27,7 +27,6 @@ from boringbar.cli.study import add_paper, add_run
 from boringbar.cli.sweeps import add_lobes, add_sweep
 from boringbar.kernels.compile import notices as compile_notices
 from boringbar.model.system import READINGS
-from boringbar.report.paper import StepFailed
 
 
 class _Parser(argparse.ArgumentParser):
@@ -64,23 +63,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_run(sub)
     add_compile(sub)
-    add_paper(sub, run_json)
+    add_paper(sub)
     return parser
-
-
-def run_json(argv: list[str]) -> dict:
-    """Run one analysis subcommand in this process and return its summary (what
-    ``--json`` prints; what ``boringbar paper`` does for each step), printing
-    nothing; raises StepFailed with the command's one-line error if it fails."""
-    parser = build_parser()
-    try:
-        args = parser.parse_args([*argv, "--quiet"])
-    except SystemExit:
-        raise StepFailed(f"boringbar {' '.join(argv)}: not a valid command line") from None
-    try:
-        return args.func(args).summary
-    except (ValueError, OSError) as exc:
-        raise StepFailed(f"boringbar {' '.join(argv)} failed: {_one_line(exc)}") from None
 
 
 def main(argv=None) -> int:

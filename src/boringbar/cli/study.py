@@ -80,8 +80,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_paper(sub, run_step) -> None:
-    """``boringbar paper``; ``run_step(argv) -> summary`` runs one step's command."""
+def add_paper(sub) -> None:
     p = sub.add_parser(
         "paper", help="rerun the whole published study under both presets, with an HTML report",
         description="Rerun every published analysis (docs/model.md, section 6: frequency sweeps, "
@@ -100,7 +99,7 @@ def add_paper(sub, run_step) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object (the manifest) on stdout")
-    p.set_defaults(func=cmd_paper, run_step=run_step)
+    p.set_defaults(func=cmd_paper)
 
 
 def cmd_paper(args: argparse.Namespace) -> int:
@@ -110,7 +109,7 @@ def cmd_paper(args: argparse.Namespace) -> int:
         raise ParameterError(f"--presets = {args.presets!r}: a comma list of distinct "
                              f"presets from {', '.join(PRESET_ORDER)}")
     try:
-        manifest = run_paper(args.out, args.run_step, quick=args.quick, quiet=args.quiet,
+        manifest = run_paper(args.out, quick=args.quick, quiet=args.quiet,
                              presets=tuple(p for p in PRESET_ORDER if p in presets))
     except StepFailed as exc:  # one analysis failed: the others finished are kept
         print(f"boringbar: error: {' '.join(str(exc).split())}", file=sys.stderr)
