@@ -5,12 +5,13 @@ The study is a list of :class:`Step` s. Each step is one published analysis,
 run with the library (its files written by :mod:`boringbar.report.outputs`, as
 the commands write them) once per preset into ``OUT/<preset>/<step>/``, beside
 the ``boringbar`` command that reruns it by hand (shown in the report with the
-figure; tests/test_paper_steps.py checks that it gives the same numbers). Steps finish atomically: a step's
-``summary.json`` is written last, after its NetCDF files and figures, and a
-rerun of ``boringbar paper`` with the same options skips every step whose
-summary is there with the same command, so an interrupted study resumes where
-it stopped. ``--quick`` runs the same steps on coarser grids and shorter runs
-(written in the report, and in each step's command).
+figure; tests/test_paper_steps.py checks that it gives the same numbers).  Steps
+finish atomically: a step's ``summary.json`` is written last, after its NetCDF
+files and figures, and a rerun of ``boringbar paper`` with the same options
+skips every step whose summary is there with the same command, so an
+interrupted study resumes where it stopped. ``--quick`` runs the same steps on
+coarser grids and shorter runs (written in the report, and in each step's
+command).
 
 Beside the published analyses, ``corrections`` measures what each correction
 to the published equations (docs/model.md, section 8) changes
