@@ -21,16 +21,17 @@ import argparse
 import math
 import os
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from boringbar import Harmonic, Initial, make_system
+from boringbar import Initial, make_system
 from boringbar.analysis import basins as basins_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.kernels.rk4_batch import run_rk4_batch
-from boringbar.simulate import initial_state, pack
+from boringbar.simulate import Integration, initial_state, pack
 
 FORCE, RATIO, DT = 10.0, 1.01, 1e-6
 
@@ -101,9 +102,10 @@ def sweep_figures() -> None:
     for preset in ("paper", "physical"):
         cases = sweep_mod.published_cases(preset=preset)
         for b in (1, sweep_mod.BATCH):  # warm every kernel used
-            sweep_mod.sweep(cases, ratios, forces=(FORCE,), duration=1e-3, batch=b)
-        one, t1 = timed(sweep_mod.sweep, cases, ratios, forces=(FORCE,), batch=1)
-        many, tb = timed(sweep_mod.sweep, cases, ratios, forces=(FORCE,))
+            sweep_mod.sweep(cases, sweep_mod.SweepOptions(ratios, (FORCE,), batch=b),
+                            integration=Integration(duration_s=1e-3))
+        one, t1 = timed(sweep_mod.sweep, cases, sweep_mod.SweepOptions(ratios, (FORCE,), batch=1))
+        many, tb = timed(sweep_mod.sweep, cases, sweep_mod.SweepOptions(ratios, (FORCE,)))
         print(f"published sweep ({preset}, {len(ratios)} ratios x {len(cases)} cases, 2 s each, "
               f"{many.attrs['workers']} workers): one run at a time {t1:.2f} s, "
               f"batches of {many.attrs['batch']} {tb:.2f} s ({t1 / tb:.2f}x); "
@@ -112,12 +114,14 @@ def sweep_figures() -> None:
 
 def basin_figures() -> None:
     system = make_system("ball", "paper", gap=0.5e-3, friction=False)
-    forcing = Harmonic(FORCE, RATIO)
-    small = {"displacement": (-1.5e-3, 1.5e-3, 4), "velocity": (-1.5, 1.5, 4), "duration": 1e-3}
-    basins_mod.basins(system, forcing, batch=1, **small)  # warm
-    basins_mod.basins(system, forcing, **small)
-    one, t1 = timed(basins_mod.basins, system, forcing, batch=1)
-    many, tb = timed(basins_mod.basins, system, forcing)
+    published = basins_mod.BasinOptions(force_n=FORCE, ratio=RATIO)
+    small = basins_mod.BasinOptions((-1.5e-3, 1.5e-3, 4), (-1.5, 1.5, 4), force_n=FORCE,
+                                    ratio=RATIO)
+    warm = Integration(duration_s=1e-3)
+    basins_mod.basins(system, replace(small, batch=1), integration=warm)
+    basins_mod.basins(system, small, integration=warm)
+    one, t1 = timed(basins_mod.basins, system, replace(published, batch=1))
+    many, tb = timed(basins_mod.basins, system, published)
     print(f"published 30 x 30 basin (900 runs of 2 s, {many.attrs['workers']} workers): "
           f"one run at a time {t1:.1f} s, batches of {many.attrs['batch']} {tb:.1f} s "
           f"({t1 / tb:.2f}x); identical: {same(one, many)}")

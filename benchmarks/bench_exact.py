@@ -29,9 +29,9 @@ import os
 import numpy as np
 
 from boringbar import Harmonic, State, make_system, simulate
-from boringbar.analysis.masri_caughey import two_impact_orbit
-from boringbar.analysis.stability import limit_at_speeds
-from boringbar.forcing import Regenerative
+from boringbar.model.forcing import Regenerative
+from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.reference.stability import limit_at_speeds
 
 CASES = [
     ("Masri-Caughey orbit: 1 mode, gap 0.5 mm, no friction, 30 N, r = 1.00, started on it",

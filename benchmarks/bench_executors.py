@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from boringbar.runner import RunReport, run_study
-from boringbar.study import study_from_dict
+from boringbar.studies.load import study_from_dict
+from boringbar.studies.runner import RunReport, run_study
 
 
 def study(duration: float):

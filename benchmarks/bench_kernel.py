@@ -20,8 +20,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from boringbar import Harmonic, make_system, simulate
-from boringbar.analysis.sweep import published_cases, sweep
-from boringbar.simulate import simulate_stage_loop
+from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+from boringbar.simulate import Integration, simulate_stage_loop
 
 CASE = {"bar": "ball", "preset": "paper", "gap": 0.1e-3, "friction": False}
 FORCE, RATIO = 10.0, 1.0
@@ -116,9 +116,9 @@ def main() -> None:
     for preset in ("paper", "physical"):
         cases = published_cases(preset=preset)
         ratios = np.round(np.arange(0.95, 1.05 + 1e-9, 0.01), 2)
-        sweep(cases[:1], ratios[:1], duration=1e-3)  # warm
+        sweep(cases[:1], SweepOptions(ratios[:1]), integration=Integration(duration_s=1e-3))
         tic = time.perf_counter()
-        ds = sweep(cases, ratios, forces=(FORCE,))
+        ds = sweep(cases, SweepOptions(ratios, (FORCE,)))
         wall = time.perf_counter() - tic
         print(f"published sweep ({preset}, {ds.sizes['ratio']} ratios x {ds.sizes['case']} cases, "
               f"2 s each) on {ds.attrs['workers']} workers: {wall:.2f} s "

@@ -23,15 +23,15 @@ import os
 import time
 
 from boringbar import Harmonic, make_system, simulate
-from boringbar.analysis.lobes import PUBLISHED_RPM, compare_methods, lobes
-from boringbar.analysis.stability import limit_at_speeds
+from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, compare_methods, lobes
 from boringbar.analysis.sweep import Case, published_cases
-from boringbar.forcing import Regenerative
+from boringbar.model.forcing import Regenerative
+from boringbar.reference.stability import limit_at_speeds
 
 
 def timed_lobes(cases, rpm, method):
     tic = time.perf_counter()
-    ds = lobes(cases, rpm, method=method)
+    ds = lobes(cases, LobesOptions(rpm, method=method))
     return ds, time.perf_counter() - tic
 
 

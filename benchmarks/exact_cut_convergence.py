@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from boringbar import make_system, simulate
-from boringbar.analysis.stability import limit_at_speeds
-from boringbar.forcing import Regenerative
+from boringbar.model.forcing import Regenerative
+from boringbar.reference.stability import limit_at_speeds
 
 STEPS = [16e-6, 8e-6, 4e-6, 2e-6, 1e-6, 5e-7]
 REF_DT = 1.25e-7

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from boringbar import Harmonic, State, make_system, simulate
-from boringbar.analysis.masri_caughey import two_impact_orbit
+from boringbar.reference.masri_caughey import two_impact_orbit
 
 DTS = [4e-6, 2e-6, 1e-6, 5e-7, 2.5e-7]
 N_PERIODS = 40

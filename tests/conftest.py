@@ -3,11 +3,11 @@
 Most of a run from a fresh clone is numba compiling: each specialisation of a
 kernel (``cache=True``: src/boringbar/kernels/__pycache__) compiles once, in the
 first process that needs it, and every later process loads it from disk.
-Measured cold on one core: the exact kernel 190 s (with its 1- and 2-mode
-helpers, 2026-11-23); the lock-step batch kernels (one per mode count, case and
-batch size, kernels/rk4_batch.py) 20-30 s each, 18 of them; the single-run RK4
-kernels 17 s each, 5 of them; the runs themselves about 220 s, of which
-test_paper's quick study 90 s.
+Measured cold (CPU seconds, kernels/compile.py ESTIMATE_S, 2026-11-24, with the
+inliner fix of kernels/inline_copy.py): the exact kernel 100 s; the lock-step
+batch kernels (one per mode count, case and batch size, kernels/rk4_batch.py)
+6-9 s each; the single-run RK4 kernels 5-10 s each; the runs themselves about
+220 s, of which test_paper's quick study 90 s.
 
 The two workers take work in groups (:func:`kernel_group`), one group at a time
 and in the order of ``ORDER``, so that the tests sharing specialisations compile
@@ -19,9 +19,9 @@ module fixtures are then built once).  pytest-xdist's own ``xdist_group`` marks
 are not used: with pytest 9.2 they no longer group (pytest-xdist issue 1386).
 """
 
-import functools
-
 import pytest
+
+import boringbar.kernels  # noqa: F401  locks numba's cache saves across the workers (kernels/cache.py)
 
 ONE_MODE, TWO_MODES, EXACT = "rk4-batch-1-mode", "rk4-batch-2-modes", "exact"
 #: the groups in the order the workers take them; then the other modules, in file order
@@ -74,37 +74,3 @@ def pytest_collection_modifyitems(items):
     keyed = sorted(enumerate(items), key=lambda ix: (
         rank.get(kernel_group(ix[1].nodeid), len(ORDER)), ix[0]))
     items[:] = [item for _, item in keyed]
-
-
-def _lock_numba_cache_saves():
-    """Serialise numba's cache writes across processes (the workers and their forks).
-
-    numba keeps one index per function (``*.nbi``) naming the data file (``*.nbc``)
-    of each compiled signature; saving a signature reads the index, adds the entry
-    and rewrites it, unlocked (numba/core/caching.py, ``IndexDataCacheFile.save``).
-    Two workers saving different signatures of one function at the same moment
-    would both take the first free file number: one entry is lost, and the index
-    may name the other signature's code.  Each file is replaced atomically, so
-    one signature saved by two processes at once is harmless.
-    """
-    try:
-        import fcntl
-
-        from numba.core.caching import IndexDataCacheFile
-    except ImportError:  # no fcntl (Windows) or another numba layout: as numba is
-        return
-    save = IndexDataCacheFile.save
-
-    @functools.wraps(save)
-    def locked_save(self, key, data):
-        index = getattr(self, "_index_path", None)
-        if index is None:
-            return save(self, key, data)
-        with open(index + ".lock", "a") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            return save(self, key, data)
-
-    IndexDataCacheFile.save = locked_save
-
-
-_lock_numba_cache_saves()

@@ -1,8 +1,8 @@
-"""A slow, obviously-correct reference of the published scheme (MODEL.md sections 1-3, 5).
+"""A slow, obviously-correct reference of the published scheme (docs/model.md, sections 1-3, 5).
 
-Written from MODEL.md, not from the kernel: the right-hand side is a plain
+Written from docs/model.md, not from the kernel: the right-hand side is a plain
 function f(t, x), the RK4 step is written out with k1..k4, and the wall rule
-and impact law of MODEL.md section 2 are applied after every step.  It reads
+and impact law of docs/model.md, section 2 are applied after every step.  It reads
 the same packed parameter vector ``p`` as the kernel (slots named in
 :mod:`boringbar.kernels.layout`), so both run the same configuration; of the
 derived slots it uses none (the effective impact mass is recomputed here).
@@ -23,7 +23,7 @@ from boringbar.kernels import layout as L
 
 @dataclass(frozen=True)
 class Model:
-    """The parameters of ``p``, unpacked and named as in MODEL.md."""
+    """The parameters of ``p``, unpacked and named as in docs/model.md."""
 
     case: int
     n: int
@@ -60,7 +60,7 @@ class Model:
 
 
 def rhs(model: Model, t: float, x: np.ndarray) -> np.ndarray:
-    """dx/dt of the modal equations (MODEL.md sections 1-3)."""
+    """dx/dt of the modal equations (docs/model.md, sections 1-3)."""
     n = model.n
     u, v = x[:n], x[n:2 * n]
     aux, aux_d = x[2 * n], x[2 * n + 1]
@@ -123,7 +123,7 @@ def impact(model: Model, x: np.ndarray) -> np.ndarray:
 
 
 def walls(model: Model, x: np.ndarray) -> tuple[np.ndarray, tuple | None]:
-    """The wall rule of MODEL.md section 2 at the end of a step.
+    """The wall rule of docs/model.md, section 2 at the end of a step.
 
     Returns the new state and (wall, y'-) if the impact law was applied.
     """
@@ -171,7 +171,7 @@ def tip(p: np.ndarray, X: np.ndarray) -> np.ndarray:
     return X[..., :n] @ p[L.PSI_L:L.PSI_L + n]
 
 
-# --- regenerative cutting (MODEL.md section 4) -------------------------------------------
+# --- regenerative cutting (docs/model.md, section 4) -------------------------------------------
 @dataclass(frozen=True)
 class CutModel(Model):
     """A :class:`Model` whose tip force is given: the cutting force of one RK4 stage."""

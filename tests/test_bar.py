@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from boringbar._validate import ParameterError
-from boringbar.bar import ModalModel, Section, SteppedBar, published_bar
+from boringbar.model.bar import ModalModel, Section, SteppedBar, published_bar
 
 E, RHO, D, LEN = 200e9, 7850.0, 0.025, 0.2
 

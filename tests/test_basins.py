@@ -1,4 +1,4 @@
-"""Basins of attraction and sensitivity studies (MODEL.md section 6).
+"""Basins of attraction and sensitivity studies (docs/model.md, section 6).
 
 Known truths: a linear bar has one attractor; the closed-form symmetric
 two-impact orbit (Masri-Caughey, 30 N at Omega = omega_n, one mode, no
@@ -16,11 +16,15 @@ import pytest
 
 from boringbar import Harmonic, make_system
 from boringbar._validate import ParameterError
-from boringbar.analysis.basins import BasinTolerance, basin_summary, basins, signature
-from boringbar.analysis.masri_caughey import two_impact_orbit
-from boringbar.analysis.sensitivity import Cuts, sensitivity
+from boringbar.analysis.basins import BasinOptions, BasinTolerance, basins, signature
+from boringbar.analysis.basins import summary as basin_summary
+from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity
+from boringbar.execute import Execution
+from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.simulate import Integration
 
-SMALL = {"displacement": (-1.5e-3, 1.5e-3, 4), "velocity": (-1.5, 1.5, 4), "duration": 0.3}
+SMALL = BasinOptions((-1.5e-3, 1.5e-3, 4), (-1.5, 1.5, 4), force_n=10.0, ratio=1.01)
+SHORT = Integration(duration_s=0.3)
 
 
 def published_point():
@@ -29,8 +33,9 @@ def published_point():
 
 def test_fractions_sum_to_one_and_serial_equals_parallel():
     system, forcing = published_point()
-    serial = basins(system, forcing, workers=1, **SMALL)
-    parallel = basins(system, forcing, workers=2, **SMALL)
+    assert SMALL.forcing == forcing
+    serial = basins(system, SMALL, integration=SHORT, execution=Execution(workers=1))
+    parallel = basins(system, SMALL, integration=SHORT, execution=Execution(workers=2))
     assert serial["fraction"].sum() == pytest.approx(1.0, abs=1e-12)
     assert int(serial["count"].sum()) == 16
     assert set(np.unique(serial["attractor"])) == set(serial["attractor_id"].values)
@@ -45,8 +50,9 @@ def test_fractions_sum_to_one_and_serial_equals_parallel():
 
 
 def test_linear_bar_has_one_attractor():
-    ds = basins(make_system("solid", "paper"), Harmonic(10.0, 1.01),
-                displacement=(-1.5e-3, 1.5e-3, 3), velocity=(-1.5, 1.5, 3), duration=0.3)
+    ds = basins(make_system("solid", "paper"),
+                BasinOptions((-1.5e-3, 1.5e-3, 3), (-1.5, 1.5, 3), force_n=10.0, ratio=1.01),
+                integration=SHORT)
     assert ds.sizes["attractor_id"] == 1
     assert float(ds["fraction"][0]) == 1.0
     assert int(ds["attractor_period"][0]) == 1
@@ -65,9 +71,9 @@ def test_two_impact_orbit_attracts_its_neighbourhood():
     h = 1e-9  # y' at t = 0 (mid-flight) by a central difference of the closed form
     y0 = float(orbit.relative_displacement(0.0))
     dy0 = float(orbit.relative_displacement(h) - orbit.relative_displacement(-h)) / (2 * h)
-    ds = basins(system, Harmonic(30.0, 1.0), displacement=(1.1 * w0, 0.9 * w0, 3),
-                velocity=(1.5 * v0, 0.5 * v0, 3), duration=0.3, ball_position=y0,
-                ball_velocity=dy0, workers=2)
+    ds = basins(system, BasinOptions((1.1 * w0, 0.9 * w0, 3), (1.5 * v0, 0.5 * v0, 3), y0,
+                                     dy0, force_n=30.0, ratio=1.0),
+                integration=SHORT, execution=Execution(workers=2))
     symmetric = [a for a in ds["attractor_id"].values
                  if ds["attractor_pattern"].values[a] == "2 symmetric"]
     assert len(symmetric) == 1
@@ -97,12 +103,14 @@ def test_signature_is_invariant_to_where_the_cycle_starts():
 
 def test_bad_grid_and_tolerances_are_refused():
     system, forcing = published_point()
-    with pytest.raises(ParameterError, match="displacement count"):
-        basins(system, forcing, displacement=(-1e-3, 1e-3, 0))
+    with pytest.raises(ParameterError, match="displacement_m count"):
+        BasinOptions(displacement_m=(-1e-3, 1e-3, 0))
     with pytest.raises(ParameterError, match="velocity"):
-        basins(system, forcing, velocity=(1.0, -1.0, 3))
+        BasinOptions(velocity_m_s=(1.0, -1.0, 3))
     with pytest.raises(ParameterError, match="tol.match"):
         BasinTolerance(match=0.0)
+    with pytest.raises(ParameterError, match="must be a System"):
+        basins(forcing, BasinOptions())
 
 
 @pytest.mark.parametrize("kind, values", [("restitution", (0.6, 0.7, 0.8)),
@@ -110,7 +118,8 @@ def test_bad_grid_and_tolerances_are_refused():
                                           ("friction_number", (0.2, 0.8)),
                                           ("initial", ((0.5e-3, 0.5), (1e-3, 1.0)))])
 def test_sensitivity_gives_one_result_per_value(kind, values):
-    ds = sensitivity(kind, values, preset="paper", ratios=(1.0, 1.01), duration=0.05)
+    ds = sensitivity(SensitivityOptions(kind, values, ratios=(1.0, 1.01)), preset="paper",
+                     integration=Integration(duration_s=0.05))
     assert ds["rms_tip_m"].dims[0] == kind
     assert ds.sizes[kind] == len(values)
     assert ds["rms_tip_m"].shape == (len(values), 1, 2)
@@ -119,19 +128,19 @@ def test_sensitivity_gives_one_result_per_value(kind, values):
 
 def test_sensitivity_of_cuts():
     cuts = Cuts(rpm=1200.0, depths=(0.05e-3, 0.10e-3), duration=0.05)
-    ds = sensitivity("restitution", (0.6, 0.8), preset="paper", cutting=cuts)
+    ds = sensitivity(SensitivityOptions("restitution", (0.6, 0.8), cuts=cuts), preset="paper")
     assert ds["chatter"].dims == ("restitution", "depth")
     assert ds["chatter"].shape == (2, 2) and ds["chatter"].dtype == bool
     assert np.all(ds["amplitude_m"] >= 0)
     with pytest.raises(ParameterError, match="kind"):
-        sensitivity("gap", (1e-4,))
+        SensitivityOptions("gap", (1e-4,))
 
 
 @pytest.mark.slow
 def test_published_basin_30_by_30():
     """The published grid at 10 N, r = 1.01, gap 0.5 mm, no friction (900 runs of 2 s)."""
     system, forcing = published_point()
-    ds = basins(system, forcing)
+    ds = basins(system, BasinOptions(force_n=forcing.amplitude, ratio=forcing.ratio))
     assert ds["attractor"].shape == (30, 30)
     assert float(ds["fraction"].sum()) == pytest.approx(1.0, abs=1e-12)
     json.dumps(basin_summary(ds))
@@ -139,7 +148,8 @@ def test_published_basin_30_by_30():
 
 def test_sensitivity_refuses_fixing_the_varied_parameter():
     from boringbar._validate import ParameterError
-    from boringbar.analysis.sensitivity import sensitivity
+    from boringbar.analysis.sensitivity import SensitivityOptions, sensitivity
 
     with pytest.raises(ParameterError, match="restitution"):
-        sensitivity("restitution", [0.6, 0.7], restitution=0.8, duration=0.01)
+        sensitivity(SensitivityOptions("restitution", [0.6, 0.7]), overrides={"restitution": 0.8},
+                    integration=Integration(duration_s=0.01))

@@ -16,10 +16,12 @@ import pytest
 
 from boringbar import Harmonic, Initial, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.forcing import Regenerative
+from boringbar.analysis.sweep import SweepOptions
+from boringbar.execute import Execution
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4_batch import BMAX, run_rk4_batch
-from boringbar.simulate import simulate_batch
+from boringbar.model.forcing import Regenerative
+from boringbar.simulate import Integration, simulate_batch
 
 DURATION = 0.06  # 60,000 steps: several hundred impacts, stick, 25+ strobe periods
 
@@ -133,22 +135,29 @@ def test_full_batch_and_kernel_arguments():
 def test_basins_and_sweep_are_the_same_batched_or_not():
     """Batches (in grid / job order, padded) change nothing in the results, whatever
     the workers; an uneven grid leaves a partial last batch."""
-    from boringbar.analysis.basins import basins
+    from boringbar.analysis.basins import BasinOptions, basins
     from boringbar.analysis.sweep import published_cases, sweep
 
     system = make_system("ball", "paper", gap=0.5e-3, friction=True)
-    grid = {"displacement": (-1e-3, 1e-3, 3), "velocity": (-1.0, 1.0, 5), "duration": 0.03}
-    one = basins(system, Harmonic(10.0, 1.01), batch=1, workers=1, **grid)
+    grid = {"displacement_m": (-1e-3, 1e-3, 3), "velocity_m_s": (-1.0, 1.0, 5),
+            "force_n": 10.0, "ratio": 1.01}
+    short = Integration(duration_s=0.03)
+    one = basins(system, BasinOptions(**grid, batch=1), integration=short,
+                 execution=Execution(workers=1))
     for batch in (4, 16):  # 4 batches, the last of 3 cells; one batch of 15
-        many = basins(system, Harmonic(10.0, 1.01), batch=batch, workers=2, **grid)
+        many = basins(system, BasinOptions(**grid, batch=batch), integration=short,
+                      execution=Execution(workers=2))
         assert (one.attrs["batch"], many.attrs["batch"]) == (1, batch)
         for k in one.data_vars:
             np.testing.assert_array_equal(one[k].values, many[k].values, err_msg=k)
 
     cases = published_cases(preset="paper")  # solid, tmd and four ball dampers
     ratios = [0.98, 1.0, 1.02]
-    one = sweep(cases, ratios, forces=(10.0, 20.0), duration=0.02, batch=1, workers=2)
-    many = sweep(cases, ratios, forces=(10.0, 20.0), duration=0.02, batch=16, workers=2)
+    short, two = Integration(duration_s=0.02), Execution(workers=2)
+    one = sweep(cases, SweepOptions(ratios, (10.0, 20.0), batch=1), integration=short,
+                execution=two)
+    many = sweep(cases, SweepOptions(ratios, (10.0, 20.0), batch=16), integration=short,
+                 execution=two)
+    assert (one.attrs["batch"], many.attrs["batch"]) == (1, 16)
     for k in one.data_vars:
-        if k != "elapsed_s":
-            np.testing.assert_array_equal(one[k].values, many[k].values, err_msg=k)
+        np.testing.assert_array_equal(one[k].values, many[k].values, err_msg=k)

@@ -1,4 +1,4 @@
-"""Bifurcation diagrams and Poincare maps (MODEL.md section 6): closed-form
+"""Bifurcation diagrams and Poincare maps (docs/model.md, section 6): closed-form
 truths (the linear bar's steady state, the two-impact orbit) and the 0-1 test
 on synthetic signals."""
 
@@ -10,15 +10,21 @@ import pytest
 
 from boringbar import Harmonic, State, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.analysis.bifurcation import bifurcation, continued_state, hysteresis_ranges
-from boringbar.analysis.linear import tip_frf
-from boringbar.analysis.masri_caughey import two_impact_orbit
+from boringbar.analysis.bifurcation import (
+    BifurcationOptions,
+    bifurcation,
+    continued_state,
+    hysteresis_ranges,
+)
 from boringbar.analysis.poincare import (
     classify_cloud,
     impact_map,
     poincare_map,
     zero_one_test,
 )
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.simulate import Integration
 
 
 def _logistic(n, r=3.97, x0=0.3):
@@ -67,9 +73,8 @@ DROP = 0.5
 def linear_force_sweep():
     system = make_system("solid", "physical")
     forces = [5.0, 10.0, 15.0, 20.0]
-    ds = bifurcation(
-        system, "force", forces, base_forcing=Harmonic(10.0, 1.0), duration=DURATION, drop=DROP
-    )
+    ds = bifurcation(system, BifurcationOptions("force", forces, 10.0, 1.0),
+                     integration=Integration(DURATION, steady_fraction=1.0 - DROP))
     return system, forces, ds
 
 
@@ -108,9 +113,8 @@ def test_hysteresis_ranges_report_where_the_sweeps_differ(linear_force_sweep):
 def test_ratio_sweep_keeps_the_forcing_phase_continuous():
     system = make_system("solid", "physical")
     ratios = [0.95, 1.0, 1.05]
-    ds = bifurcation(
-        system, "ratio", ratios, base_forcing=Harmonic(10.0, 1.0), duration=DURATION, drop=DROP
-    )
+    ds = bifurcation(system, BifurcationOptions("ratio", ratios, 10.0, 1.0),
+                     integration=Integration(DURATION, steady_fraction=1.0 - DROP))
     _assert_analytic_points(ds, system, [10.0] * 3, ratios)
     assert hysteresis_ranges(ds) == []
     omega = ds["omega"].sel(direction="forward").values
@@ -171,14 +175,8 @@ def test_two_impact_orbit_is_one_poincare_point():
         assert (imp["verdict"], imp["distinct"]) == ("period-1", 1)
     assert impact_map(run, None).classify()["verdict"] == "period-2"  # two impacts per T
     # the same through a one-value continuation sweep
-    ds = bifurcation(
-        system,
-        "force",
-        [30.0],
-        base_forcing=Harmonic(30.0, 1.0),
-        duration=0.3,
-        initial=State(x0, 0.0),
-    )
+    ds = bifurcation(system, BifurcationOptions("force", [30.0], 30.0, 1.0),
+                     integration=Integration(0.3, initial=State(x0, 0.0)))
     assert str(ds["verdict"].values[0, 0]) == "period-1"
     assert int(ds["distinct"].values[0, 0]) == 1
 
@@ -216,11 +214,13 @@ def test_classify_cloud_verdicts():
 def test_bifurcation_rejects_bad_arguments():
     system = make_system("solid", "physical")
     with pytest.raises(ParameterError, match="gap"):
-        bifurcation(system, "gap", [1e-4, 2e-4])
+        bifurcation(system, BifurcationOptions("gap", [1e-4, 2e-4]))
     with pytest.raises(ParameterError, match="strictly"):
-        bifurcation(system, "force", [5.0, 5.0])
-    with pytest.raises(ParameterError, match="drop"):
-        bifurcation(system, "force", [5.0], drop=1.0)
+        BifurcationOptions("force", [5.0, 5.0])
+    with pytest.raises(ParameterError, match="steady_fraction"):
+        Integration(steady_fraction=0.0)  # drop = 1: nothing kept
+    with pytest.raises(ParameterError, match="values"):
+        BifurcationOptions("ratio", [0.0, 1.0])
 
 
 def test_system_parameter_sweep_through_a_factory():
@@ -229,15 +229,10 @@ def test_system_parameter_sweep_through_a_factory():
     def factory(gap):
         return make_system("ball", "physical", n_modes=1, friction=False, gap=gap)
 
-    ds = bifurcation(
-        factory,
-        "gap",
-        [0.4e-3, 0.5e-3],
-        base_forcing=Harmonic(30.0, 1.0),
-        duration=0.1,
-        backward=False,
-        units="m",
-    )
+    ds = bifurcation(factory,
+                     BifurcationOptions("gap", [0.4e-3, 0.5e-3], 30.0, 1.0, backward=False,
+                                        units="m"),
+                     integration=Integration(0.1))
     assert ds.sizes["direction"] == 1 and not ds["restarted"].values.any()
     assert ds["value"].attrs["units"] == "m"
     assert ds["start_time_s"].values[0, 1] == pytest.approx(ds["end_time_s"].values[0, 0])
@@ -246,11 +241,11 @@ def test_system_parameter_sweep_through_a_factory():
 @pytest.mark.slow
 def test_published_bifurcation_gap_01mm():
     """F0 5..50 N step 1 at Omega = omega_n, gap 0.1 mm, no friction, paper preset,
-    2 s runs (MODEL.md section 6): about 15 s; forward and backward agree on the
+    2 s runs (docs/model.md, section 6): about 15 s; forward and backward agree on the
     periodic windows (2 symmetric at 5-7 N, 4 symmetric at 18-20 N, 6 symmetric
     at 35-37 N: one Poincare point each)."""
     system = make_system("ball", "paper", gap=0.1e-3, friction=False)
-    ds = bifurcation(system, "force", np.arange(5.0, 51.0), base_forcing=Harmonic(5.0, 1.0))
+    ds = bifurcation(system, BifurcationOptions("force", np.arange(5.0, 51.0), 5.0, 1.0))
     assert ds.sizes["value"] == 46
     assert np.all(ds["n_samples"].values > 700)
     windows = [5.0, 6.0, 7.0, 18.0, 19.0, 20.0, 35.0, 36.0, 37.0]
@@ -266,7 +261,7 @@ def test_ratio_sweep_shows_the_no_impact_impact_hysteresis():
     keeps hitting them (2 symmetric impacts at r = 0.90-0.93)."""
     system = make_system("ball", "paper", gap=0.5e-3, friction=False)
     ratios = np.round(np.arange(0.90, 1.0001, 0.01), 3)
-    ds = bifurcation(system, "ratio", ratios, base_forcing=Harmonic(20.0, 1.0))
+    ds = bifurcation(system, BifurcationOptions("ratio", ratios, 20.0, 1.0))
     ranges = hysteresis_ranges(ds)
     assert ranges and ranges[0][0] == 0.9 and ranges[0][1] >= 0.95
     low = ds.sel(value=[0.9, 0.91, 0.92, 0.93])

@@ -1,4 +1,4 @@
-"""Regenerative cutting (MODEL.md sections 4 and 6): the kernel against a slow
+"""Regenerative cutting (docs/model.md, sections 4 and 6): the kernel against a slow
 reference, closed-form truths of the linear cut, the time-domain limit against
 the analytic lobes, delay interpolation, energy balance, and the lobe methods.
 
@@ -52,14 +52,15 @@ import numpy as np
 import pytest
 
 from boringbar import Initial, make_system, simulate
-from boringbar.analysis.lobes import PUBLISHED_RPM, compare_methods, lobes, lobes_summary
-from boringbar.analysis.stability import limit_at_speeds
+from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, compare_methods, lobes
+from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sweep import Case
-from boringbar.forcing import KR_ALUMINIUM, Regenerative
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4 import run_rk4
+from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
+from boringbar.model.system import System
+from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import pack
-from boringbar.system import System
 
 KR = KR_ALUMINIUM
 FEED = 0.1e-3
@@ -427,8 +428,8 @@ def test_energy_balance_with_cutting(factor):
 def test_scan_and_search_agree_on_the_solid_bar():
     cases = [Case("solid", make_system("solid"), "solid")]
     speeds = list(DEFAULT_SPEEDS)
-    scan = lobes(cases, speeds, method="scan")
-    search = lobes(cases, speeds, method="search")
+    scan = lobes(cases, LobesOptions(speeds, method="scan"))
+    search = lobes(cases, LobesOptions(speeds, method="search"))
     np.testing.assert_array_equal(scan["limit_depth"].values, search["limit_depth"].values)
     np.testing.assert_array_equal(scan["first_unstable_depth"].values,
                                   search["first_unstable_depth"].values)

@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.cli import main
+from boringbar.cli.main import main
 
 SIMULATE_KEYS = {"natural_frequency_hz", "rms_tip_m", "pattern", "impacts_per_cycle",
                  "max_abs_rel_disp_m", "preset", "integrator", "elapsed_s", "files"}

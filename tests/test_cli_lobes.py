@@ -13,7 +13,7 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.cli import main
+from boringbar.cli.main import main
 
 #: A solid-bar lobe grid that has both stable and chattering points in 0.3 s runs.
 SMALL = ["--bar", "solid", "--rpm", "1000:1100:50", "--duration-s", "0.3",

@@ -13,7 +13,7 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.cli import main
+from boringbar.cli.main import main
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -124,7 +124,7 @@ def test_sensitivity_initial_text(tmp_path, capsys):
     (["bifurcation", "--force-n", "5,7,6"], "--force-n"),
     (["bifurcation", "--restitution", "0.5:1.2:0.1"], "--restitution"),
     (["bifurcation", "--bar", "solid", "--gap-mm", "0.1:0.3:0.1"], "--gap-mm"),
-    (["bifurcation", "--drop", "1"], "--drop"),
+    (["bifurcation", "--steady-fraction", "0"], "--steady-fraction"),
     (["basins", "--displacement-mm", "1:2"], "--displacement-mm"),
     (["basins", "--velocity-m-s", "-1:1:0"], "--velocity-m-s"),
     (["basins", "--displacement-mm", "1:-1:3"], "--displacement-mm"),

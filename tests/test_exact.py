@@ -19,12 +19,12 @@ import pytest
 
 from boringbar import Harmonic, Initial, State, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.analysis.linear import tip_frf
-from boringbar.analysis.masri_caughey import two_impact_orbit
-from boringbar.dampers import Friction
 from boringbar.kernels import exact as E
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact import prepare, run_exact
+from boringbar.model.dampers import Friction
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import _setup
 
 
@@ -250,7 +250,7 @@ def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
     import xarray as xr
     from cli_output import json_out
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     out = tmp_path / "run"
     rc = main(["simulate", "--bar", "ball", "--gap-mm", "0.1", "--force-n", "20",
@@ -271,20 +271,21 @@ def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
 def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
     from cli_output import assert_one_line_error
 
-    from boringbar import cli
-    from boringbar.simulate import INTEGRATORS
+    from boringbar.cli.main import main
 
-    assert cli.INTEGRATORS == INTEGRATORS
     out = tmp_path / "x"
-    assert_one_line_error(cli.main, ["simulate", "--static-ratio", "2", "--duration-s",
+    assert_one_line_error(main, ["simulate", "--static-ratio", "2", "--duration-s",
                                      "0.01", "--out", str(out)], out, "static_ratio", capsys)
 
 
 def test_sweep_records_its_integrator():
-    from boringbar.analysis.sweep import published_cases, sweep
+    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+    from boringbar.execute import Execution
+    from boringbar.simulate import Integration
 
     cases = published_cases(("ball",), gaps=(0.1e-3,), frictions=(False,))
-    ds = sweep(cases, [1.0], [20.0], duration=0.05, workers=1, integrator="exact")
+    ds = sweep(cases, SweepOptions([1.0], [20.0]), execution=Execution(workers=1),
+               integration=Integration(duration_s=0.05, integrator="exact"))
     assert ds.attrs["integrator"] == "exact"
     assert float(ds["energy_balance_relative"].max()) < 1e-9
 
@@ -294,13 +295,15 @@ def test_sweep_records_its_integrator():
 def test_published_sweep_runs_exactly_and_balances_energy(preset):
     """Every published case, both forces, 11 ratios: no stall, balance to 1e-9, and the
     linear bars equal to RK4's sampled RMS to its O(dt^2) (achieved: 3e-7)."""
-    from boringbar.analysis.sweep import published_cases, sweep
+    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+    from boringbar.simulate import Integration
 
     cases = published_cases(preset=preset)
     ratios = np.round(np.arange(0.95, 1.05 + 1e-9, 0.01), 2)
-    ex = sweep(cases, ratios, (10.0, 20.0), integrator="exact")
+    ex = sweep(cases, SweepOptions(ratios, (10.0, 20.0)),
+               integration=Integration(integrator="exact"))
     assert np.nanmax(np.abs(ex["energy_balance_relative"].values)) < 1e-9  # 6e-12
-    rk = sweep(cases[:2], ratios, (10.0, 20.0))  # solid and TMD
+    rk = sweep(cases[:2], SweepOptions(ratios, (10.0, 20.0)))  # solid and TMD
     rel = np.abs(ex["rms_tip_m"].values[:2] / rk["rms_tip_m"].values - 1)
     assert np.max(rel) < 1e-6
 

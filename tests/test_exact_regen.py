@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from boringbar import make_system, simulate
-from boringbar.analysis.stability import limit_at_speeds
-from boringbar.forcing import KR_ALUMINIUM, Regenerative
+from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
+from boringbar.reference.stability import limit_at_speeds
 
 KR = KR_ALUMINIUM
 FEED = 0.1e-3
@@ -72,7 +72,7 @@ def test_the_cut_is_fourth_order_in_the_history_step(factor, duration):
 
 
 def test_linear_delay_interpolation_is_second_order():
-    """MODEL.md section 4's option, honoured by the exact integrator: measured errors
+    """docs/model.md, section 4's option, honoured by the exact integrator: measured errors
     (against cubic at H = 1 us) 8.0e-4, 2.0e-4, 5.0e-5 at H = 8, 4, 2 us (orders 2.00,
     2.00; RK4 with linear interpolation at dt = 2 us: 4.3e-5)."""
     system = make_system("solid")
@@ -248,13 +248,17 @@ def test_stuck_ball_with_the_printed_reaction_in_a_cut():
 
 # --- selectable everywhere --------------------------------------------------------------
 def test_lobes_run_exactly_and_agree_with_rk4():
-    from boringbar.analysis.lobes import lobes
+    from boringbar.analysis.lobes import LobesOptions, lobes
     from boringbar.analysis.sweep import Case
+    from boringbar.execute import Execution
+    from boringbar.simulate import Integration
 
     cases = [Case("solid", make_system("solid"), "solid")]
-    kw = dict(method="search", duration=0.5, dt=2e-6, workers=1, max_depth=0.5e-3)
-    ex = lobes(cases, [1250.0], integrator="exact", **kw)
-    rk = lobes(cases, [1250.0], **kw)
+    options = LobesOptions([1250.0], method="search", max_depth_m=0.5e-3)
+    ex = lobes(cases, options, integration=Integration(0.5, 2e-6, "exact"),
+               execution=Execution(workers=1))
+    rk = lobes(cases, options, integration=Integration(0.5, 2e-6),
+               execution=Execution(workers=1))
     assert ex.attrs["integrator"] == "exact" and rk.attrs["integrator"] == "rk4"
     np.testing.assert_array_equal(ex["limit_depth"].values, rk["limit_depth"].values)
 
@@ -263,7 +267,7 @@ def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
     import xarray as xr
     from cli_output import json_out
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     out = tmp_path / "cut"
     assert main(["simulate", "--bar", "solid", "--rpm", "1200", "--depth-mm", "0.05",
@@ -281,7 +285,7 @@ def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
 def test_cli_lobes_exact(tmp_path, capsys):
     import xarray as xr
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     out = tmp_path / "lobes"
     assert main(["lobes", "--bar", "solid", "--rpm", "1250", "--method", "search",
@@ -295,13 +299,13 @@ def test_cli_lobes_exact(tmp_path, capsys):
 
 
 def test_study_file_with_an_exact_cut_loads(tmp_path):
-    from boringbar.studies import ANALYSES
-    from boringbar.study import load_study
+    from boringbar.studies.load import load_study
+    from boringbar.studies.registry import ANALYSES
 
     path = tmp_path / "s.toml"
     path.write_text('[study]\nanalysis = "lobes"\n[run]\nintegrator = "exact"\n')
     study = load_study(path)
-    assert ANALYSES["lobes"].plan(study).context["opts"]["integrator"] == "exact"
+    assert ANALYSES["lobes"].plan(study).context["integration"].integrator == "exact"
     path.write_text('[study]\nanalysis = "sensitivity"\n[run]\nintegrator = "exact"\n'
                     '[analysis]\ncuts = true\n')
     assert ANALYSES["sensitivity"].plan(load_study(path)).points

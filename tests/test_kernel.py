@@ -1,6 +1,6 @@
 """The numba RK4 kernel (boringbar.kernels.rk4) against the slow reference in
 ``naive.py``, and the published scheme's conservation, convergence and
-closed-form properties (MODEL.md sections 1-3, 5).
+closed-form properties (docs/model.md, sections 1-3, 5).
 
 Configurations come from ``make_system`` (physical preset, FE bar normalised to
 psi(L) = 1) unless a test says otherwise.  Measured values are quoted beside
@@ -17,9 +17,9 @@ import pytest
 
 from boringbar import Harmonic, Initial, State, System, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.analysis.masri_caughey import two_impact_orbit
 from boringbar.kernels import layout as L
 from boringbar.kernels.rk4 import run_rk4
+from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import initial_state, pack, stored_energy
 
 DT = 1e-6
@@ -239,7 +239,7 @@ def test_paper_friction_balance_error_is_first_order_sgn_chatter():
     """With the paper's 20.4 N the ball sticks and sgn(y') flips inside steps; the
     RK4-weighted friction work then differs from the step's energy change by
     O(F_c^2 dt^2 / m) per chattering step, so the residual is first order in dt
-    (a property of the published scheme, MODEL.md section 5, not a bookkeeping slip)."""
+    (a property of the published scheme, docs/model.md, section 5, not a bookkeeping slip)."""
     system = make_system("ball", "paper", gap=0.1e-3)
     res = []
     for dt in (1e-6, 5e-7):

@@ -1,4 +1,4 @@
-"""Linear tip FRFs and TMD tuning (boringbar.analysis.linear) against closed forms."""
+"""Linear tip FRFs and TMD tuning (boringbar.reference.linear) against closed forms."""
 
 from __future__ import annotations
 
@@ -9,17 +9,20 @@ import pytest
 import scipy.linalg
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.linear import (
+from boringbar.model.bar import ModalModel, published_bar
+from boringbar.model.dampers import (
+    TunedMassDamper,
     absorber_mass_ratio,
-    min_real_part,
-    minimax_real_tuning,
+    den_hartog_parameters,
     sims_parameters,
     sims_tuning,
+)
+from boringbar.reference.linear import (
+    min_real_part,
+    minimax_real_tuning,
     static_tip_compliance,
     tip_frf,
 )
-from boringbar.bar import ModalModel, published_bar
-from boringbar.dampers import TunedMassDamper, den_hartog_parameters
 
 K_TIP = 1.5e6  # N/m, about the published bar's first-mode tip stiffness
 
@@ -142,7 +145,7 @@ def test_den_hartog_parameters_are_the_textbook_formulas():
     assert p["stiffness"] == pytest.approx(m_a * f**2 * wn**2, rel=1e-14)
     assert p["damping"] == pytest.approx(2.0 * zeta * m_a * wn, rel=1e-14)
     assert absorber_mass_ratio(m_a, bar) == pytest.approx(mu, rel=1e-14)
-    assert 0.2 < mu < 0.35  # MODEL.md: about 0.25 at z_a = 96 mm
+    assert 0.2 < mu < 0.35  # docs/model.md: about 0.25 at z_a = 96 mm
 
 
 @pytest.mark.parametrize("mu", [0.05, 0.25])

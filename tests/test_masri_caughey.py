@@ -1,8 +1,8 @@
-"""The closed-form two-impact orbit (boringbar.analysis.masri_caughey).
+"""The closed-form two-impact orbit (boringbar.reference.masri_caughey).
 
 The reference is independent of the closed form: the same model integrated
 with scipy's DOP853 from impact to impact (terminal events at the walls,
-the impact law applied, restart), as in MODEL.md section 2.
+the impact law applied, restart), as in docs/model.md, section 2.
 
 Case: the published ball-cavity bar, one mode, carbide ball 26 g, gap
 0.5 mm, e = 0.7, Omega = omega_n.  At the published F0 = 10 N no symmetric
@@ -20,12 +20,12 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.masri_caughey import (
+from boringbar.model.bar import published_bar
+from boringbar.reference.masri_caughey import (
     ImpactSystem,
     phase_equation,
     two_impact_orbit,
 )
-from boringbar.bar import published_bar
 
 BALL, GAP, E = 0.026, 0.5e-3, 0.7
 
@@ -54,7 +54,7 @@ def admissible(orbits):
 def integrate(sys: ImpactSystem, state, t0: float, n_periods: float):
     """Integrate (u, u', u_d, u_d', int W^2 dt) from t0; returns (impacts, state, t).
 
-    impacts: list of (time, wall = +1 or -1).  Impact law of MODEL.md section 2:
+    impacts: list of (time, wall = +1 or -1).  Impact law of docs/model.md, section 2:
     y'+ = -e y'-,  u'+ = u'- + (1 + e) mu psi_d y'- / (1 + mu psi_d^2).
     """
     mu = sys.ball_mass / sys.mass

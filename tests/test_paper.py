@@ -21,9 +21,9 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error
 
-from boringbar.cli import main
-from boringbar.paper import PRESET_ORDER, published_steps
-from boringbar.report import _mm, write_report
+from boringbar.cli.main import main
+from boringbar.report.html import _mm, write_report
+from boringbar.report.paper import PRESET_ORDER, published_steps
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 N_STEPS = len(published_steps(quick=True)) * len(PRESET_ORDER) + 1  # + corrections

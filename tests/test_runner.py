@@ -17,12 +17,15 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from boringbar.runner import RunReport, run_study
-from boringbar.studies import ANALYSES
-from boringbar.study import StudyError, load_study, study_from_dict
+from boringbar.execute import Execution
+from boringbar.simulate import Integration
+from boringbar.studies.load import load_study, study_from_dict
+from boringbar.studies.registry import ANALYSES
+from boringbar.studies.runner import RunReport, run_study
+from boringbar.studies.schema import StudyError
 
 SMALL = {"study": {"analysis": "sweep", "name": "small"},
-         "run": {"duration_s": 0.02},
+         "run": {"duration_s": 0.02}, "analysis": {"batch": 1},  # a point per run
          "grid": {"gap_mm": [0.5, 0.1], "friction": ["off", "on"], "force_n": [10.0, 20.0],
                   "ratio": [0.99, 1.01]}}
 PROVENANCE = ("run_finished_utc", "run_wall_time_s", "run_executor", "run_workers")
@@ -85,7 +88,7 @@ def test_zarr_store_equals_netcdf(reference, tmp_path):
 def test_finished_study_is_not_recomputed(reference, tmp_path, monkeypatch):
     out = tmp_path / "f.nc"
     out.write_bytes(reference[0].read_bytes())
-    import boringbar.runner as runner
+    import boringbar.studies.runner as runner
 
     def boom(*a, **k):
         raise AssertionError("recomputed")
@@ -136,6 +139,7 @@ def _study_file(tmp_path) -> Path:
     path = tmp_path / "kill.toml"
     path.write_text(
         '[study]\nanalysis = "sweep"\nname = "kill"\n[run]\nduration_s = 0.05\n'
+        '[analysis]\nbatch = 1\n'
         '[grid]\ngap_mm = [0.5, 0.1]\nfriction = ["off", "on"]\n'
         'ratio = {start = 0.96, stop = 1.04, step = 0.01}\n')
     return path
@@ -202,48 +206,52 @@ def test_example_studies_run_shortened(path, tmp_path):
 def _in_process(name: str):
     """(study dict, the in-process function's Dataset) of the same tiny computation."""
     from boringbar.analysis.sweep import Case
-    from boringbar.forcing import Harmonic
-    from boringbar.system import make_system
+    from boringbar.model.system import make_system
 
     if name == "sweep":
-        from boringbar.analysis.sweep import published_cases, sweep
+        from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
 
         cases = published_cases(bars=("solid", "ball"), gaps=(0.5e-3,))
         return ({"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02},
                  "grid": {"kind": ["solid", "ball"], "friction": ["off", "on"],
                           "ratio": [0.99, 1.01]}},
-                sweep(cases, [0.99, 1.01], duration=0.02, workers=1))
+                sweep(cases, SweepOptions([0.99, 1.01]), integration=Integration(duration_s=0.02),
+                      execution=Execution(workers=1)))
     if name == "lobes":
-        from boringbar.analysis.lobes import lobes
+        from boringbar.analysis.lobes import LobesOptions, lobes
 
         return ({"study": {"analysis": "lobes"}, "bar": {"kind": "solid"},
                  "run": {"duration_s": 0.05}, "grid": {"rpm": [1000.0, 1200.0]},
                  "analysis": {"depth_step_mm": 0.05, "max_depth_mm": 0.5}},
-                lobes([Case("solid", make_system("solid"), "solid")], [1000.0, 1200.0],
-                      depth_step=0.05e-3, max_depth=0.5e-3, duration=0.05, workers=1))
+                lobes([Case("solid", make_system("solid"), "solid")],
+                      LobesOptions([1000.0, 1200.0], depth_step_m=0.05e-3, max_depth_m=0.5e-3),
+                      integration=Integration(duration_s=0.05), execution=Execution(workers=1)))
     if name == "bifurcation":
-        from boringbar.analysis.bifurcation import bifurcation
+        from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
 
-        ref = bifurcation(make_system("ball"), "force", [5.0, 10.0], duration=0.02)
+        ref = bifurcation(make_system("ball"), BifurcationOptions("force", [5.0, 10.0]),
+                          integration=Integration(duration_s=0.02))
         return ({"study": {"analysis": "bifurcation"}, "run": {"duration_s": 0.02},
                  "analysis": {"values": [5.0, 10.0]}},
                 ref.expand_dims(case=["ball gap=0.5mm friction=on"]).assign_coords(
                     bar=("case", ["ball"]), gap=("case", [0.5e-3]),
                     friction=("case", ["on"])))
     if name == "basins":
-        from boringbar.analysis.basins import basins
+        from boringbar.analysis.basins import BasinOptions, basins
 
         return ({"study": {"analysis": "basins"}, "run": {"duration_s": 0.02},
                  "analysis": {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
                               "velocity_m_s": {"start": -1, "stop": 1, "count": 2}}},
-                basins(make_system("ball"), Harmonic(10.0, 1.0), displacement=(-1e-3, 1e-3, 2),
-                       velocity=(-1.0, 1.0, 2), duration=0.02, workers=1))
+                basins(make_system("ball"),
+                       BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2), force_n=10.0, ratio=1.0),
+                       integration=Integration(duration_s=0.02), execution=Execution(workers=1)))
     if name == "sensitivity":
-        from boringbar.analysis.sensitivity import sensitivity
+        from boringbar.analysis.sensitivity import SensitivityOptions, sensitivity
 
         return ({"study": {"analysis": "sensitivity"}, "run": {"duration_s": 0.02},
                  "analysis": {"kind": "ball"}},
-                sensitivity("ball", duration=0.02, workers=1))
+                sensitivity(SensitivityOptions("ball"), integration=Integration(duration_s=0.02),
+                            execution=Execution(workers=1)))
     raise AssertionError(f"no in-process reference for the analysis {name!r}: add one")
 
 
@@ -269,9 +277,8 @@ def test_every_analysis_has_an_example_study():
 
 
 def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_path):
-    from boringbar.analysis.basins import basins
-    from boringbar.forcing import Harmonic
-    from boringbar.system import make_system
+    from boringbar.analysis.basins import BasinOptions, basins
+    from boringbar.model.system import make_system
 
     grid = {"displacement_mm": {"start": -1, "stop": 1, "count": 2},
             "velocity_m_s": {"start": -1, "stop": 1, "count": 2}}
@@ -280,9 +287,9 @@ def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_p
                                     "analysis": grid}),
                    tmp_path / "b.nc", executor="serial")
     assert list(ds["case"].values)[3] == "ball gap=0.5mm friction=on F0=20N"
-    ref = basins(make_system("ball", friction=True), Harmonic(20.0, 1.0),
-                 displacement=(-1e-3, 1e-3, 2), velocity=(-1.0, 1.0, 2), duration=0.02,
-                 workers=1)
+    ref = basins(make_system("ball", friction=True),
+                 BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2), force_n=20.0, ratio=1.0),
+                 integration=Integration(duration_s=0.02), execution=Execution(workers=1))
     one = ds.isel(case=3)
     for k in ref.data_vars:
         y = ref[k].values
@@ -292,14 +299,15 @@ def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_p
 
 
 def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
-    from boringbar.analysis.sweep import published_cases, sweep
+    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
 
     d = {"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02, "integrator": "exact"},
          "damper": {"static_ratio": 1.5}, "grid": {"ratio": [0.99, 1.01]}}
     ds = run_study(study_from_dict(d), tmp_path / "e.nc", executor="processes", workers=2)
     ref = sweep(published_cases(bars=("ball",), gaps=(0.5e-3,), frictions=(True,),
                                 static_ratio=1.5),
-                [0.99, 1.01], duration=0.02, workers=1, integrator="exact")
+                SweepOptions([0.99, 1.01]), execution=Execution(workers=1),
+                integration=Integration(duration_s=0.02, integrator="exact"))
     assert ds.attrs["integrator"] == "exact"
     for k in ds.data_vars:
         assert np.array_equal(ds[k].values, ref[k].values,
@@ -309,10 +317,11 @@ def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
 def test_cli_run_json_then_skipped(tmp_path, capsys):
     from cli_output import json_out
 
-    from boringbar.cli import main
+    from boringbar.cli.main import main
 
     study = tmp_path / "s.toml"
     study.write_text('[study]\nanalysis = "sweep"\nname = "s"\nout = "res.nc"\n'
+                     '[analysis]\nbatch = 1\n'
                      '[run]\nduration_s = 0.02\n[grid]\nratio = [0.99, 1.0]\n')
     assert main(["run", str(study), "--executor", "serial", "--json"]) == 0
     first = json_out(capsys)

@@ -1,4 +1,4 @@
-"""Analytic stability lobes (boringbar.analysis.stability) against closed forms.
+"""Analytic stability lobes (boringbar.reference.stability) against closed forms.
 
 Measured on the published grid, rpm 900..1600 step 50, Kr = 850 MPa:
 
@@ -20,19 +20,20 @@ import numpy as np
 import pytest
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.linear import min_real_part, sims_tuning, tip_frf
-from boringbar.analysis.stability import (
+from boringbar.model.bar import ModalModel
+from boringbar.model.dampers import sims_tuning
+from boringbar.model.system import make_system
+from boringbar.reference.linear import min_real_part, tip_frf
+from boringbar.reference.stability import (
     KR_ALUMINIUM,
     analytic_lobes,
     limit_at_speeds,
     min_limit,
     regeneration_phase,
 )
-from boringbar.bar import ModalModel
-from boringbar.system import make_system
 
 KR = KR_ALUMINIUM
-GRID = np.arange(900.0, 1601.0, 50.0)  # the published speeds (MODEL.md section 6)
+GRID = np.arange(900.0, 1601.0, 50.0)  # the published speeds (docs/model.md, section 6)
 
 
 def residual(g, b, omega, rpm, kr=KR):

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from boringbar import Harmonic, State, make_system, simulate
-from boringbar.analysis.linear import tip_frf
-from boringbar.analysis.masri_caughey import two_impact_orbit
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.masri_caughey import two_impact_orbit
 
 RATIOS = np.round(np.arange(0.95, 1.05 + 1e-9, 0.01), 2)
 

@@ -2,6 +2,6 @@
 
 import sys
 
-from boringbar.cli import main
+from boringbar.cli.main import main
 
 sys.exit(main())

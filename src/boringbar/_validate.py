@@ -1,31 +1,53 @@
 """Parameter checks at the boundary: every error names the parameter, its value
-and the allowed range (STYLE.md rule 6)."""
+and the allowed range (STYLE.md rule 6).
+
+Every number checked here must be finite: NaN and +-inf are refused by every
+helper, whatever the range (a NaN compares False with every bound, so a range
+test alone would let it through), and so are booleans (``True`` is not 1.0 to
+a user)."""
 
 from __future__ import annotations
 
 import math
+import numbers
 
 
 class ParameterError(ValueError):
     """A parameter outside its allowed range. The message is one line."""
 
 
+def _interval(lo, hi, lo_open: bool, hi_open: bool, unit: str) -> str:
+    left = "(" if lo_open else "["
+    right = ")" if hi_open else "]"
+    return f"{left}{lo:g}, {hi:g}{right}{unit}"
+
+
 def check_range(name: str, value, lo: float, hi: float, *, lo_open: bool = False,
                 hi_open: bool = False, unit: str = "") -> float:
-    """Return ``value`` as float if lo <= value <= hi (open ends as asked), else raise."""
+    """Return ``value`` as float if it is finite and lo <= value <= hi (open ends as
+    asked), else raise ParameterError naming ``name``, the value and the range."""
+    u = f" {unit}" if unit else ""
+    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
+        value = value.item()  # a numpy scalar, shown as the number it is
+    if isinstance(value, bool):
+        raise ParameterError(f"{name} = {value!r} is not a number (allowed range "
+                             f"{_interval(lo, hi, lo_open, hi_open, u)})")
     try:
         v = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ParameterError(f"{name} = {value!r} is not a number") from None
-    ok = math.isfinite(v) or (v == hi == math.inf)
-    ok = ok and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
-    if not ok:
-        u = f" {unit}" if unit else ""
-        left = "(" if lo_open else "["
-        right = ")" if hi_open else "]"
+    if not math.isfinite(v):
+        raise ParameterError(f"{name} = {value!r}{u} is not a finite number (allowed range "
+                             f"{_interval(lo, hi, lo_open, hi_open, u)})")
+    if not ((v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)):
         raise ParameterError(f"{name} = {value!r}{u} is outside the allowed range "
-                             f"{left}{lo:g}, {hi:g}{right}{u}")
+                             f"{_interval(lo, hi, lo_open, hi_open, u)}")
     return v
+
+
+def check_finite(name: str, value, unit: str = "") -> float:
+    """Any finite number."""
+    return check_range(name, value, -math.inf, math.inf, lo_open=True, hi_open=True, unit=unit)
 
 
 def check_positive(name: str, value, unit: str = "") -> float:
@@ -36,7 +58,35 @@ def check_nonnegative(name: str, value, unit: str = "") -> float:
     return check_range(name, value, 0.0, math.inf, hi_open=True, unit=unit)
 
 
+def check_int(name: str, value, lo: int, hi: float) -> int:
+    """Return ``value`` as int if it is a whole number in [lo, hi] (an integral
+    float such as 3.0 is accepted; 2.5, NaN, inf and booleans are not)."""
+    whole = isinstance(value, numbers.Integral) or (
+        isinstance(value, numbers.Real) and math.isfinite(value) and float(value).is_integer())
+    if isinstance(value, bool) or not whole:
+        raise ParameterError(f"{name} = {value!r} is not a whole number (allowed range "
+                             f"[{lo:g}, {hi:g}])")
+    check_range(name, value, lo, hi)
+    return int(value)
+
+
 def check_choice(name: str, value, choices) -> str:
     if value not in choices:
         raise ParameterError(f"{name} = {value!r} is not one of {', '.join(map(str, choices))}")
     return value
+
+
+def check_values(name: str, values, lo: float, hi: float, *, lo_open: bool = False,
+                 hi_open: bool = False, unit: str = "") -> tuple[float, ...]:
+    """A number or a non-empty sequence of numbers, each in the range of
+    :func:`check_range`, as a tuple of floats."""
+    seq = [values] if isinstance(values, int | float) else values
+    try:
+        items = list(seq)
+    except TypeError:
+        raise ParameterError(f"{name} = {values!r} is not a number or a list of "
+                             "numbers") from None
+    if not items:
+        raise ParameterError(f"{name} is empty: give at least one value")
+    return tuple(check_range(f"{name}[{i}]", v, lo, hi, lo_open=lo_open, hi_open=hi_open,
+                             unit=unit) for i, v in enumerate(items))

@@ -23,7 +23,7 @@ os.umask(_UMASK)
 
 
 @contextlib.contextmanager
-def _atomic(path):
+def atomic_path(path):
     """Yield a temporary path next to ``path``; on success move it onto ``path``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -38,7 +38,7 @@ def _atomic(path):
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
-    _fsync_dir(path.parent)
+    fsync_dir(path.parent)
 
 
 def _fsync_file(path) -> None:
@@ -49,15 +49,16 @@ def _fsync_file(path) -> None:
         os.close(fd)
 
 
-def _fsync_dir(path) -> None:
-    # makes the rename itself durable; not possible on every platform
+def fsync_dir(path) -> None:
+    """fsync the directory ``path``: makes a rename in it durable (not possible on
+    every platform; silently skipped there)."""
     with contextlib.suppress(OSError):
         _fsync_file(path)
 
 
 def write_netcdf_atomic(ds, path) -> Path:
     """Write the xarray Dataset ``ds`` to ``path`` (NetCDF4) atomically."""
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         ds.to_netcdf(tmp)
     return Path(path)
 
@@ -83,7 +84,7 @@ def jsonable(obj):
 def write_json_atomic(obj, path) -> Path:
     """Write ``obj`` as indented, strict JSON (see :func:`jsonable`) atomically."""
     text = json.dumps(jsonable(obj), indent=2, allow_nan=False) + "\n"
-    with _atomic(path) as tmp:
+    with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)
 
@@ -93,6 +94,6 @@ def save_figure_atomic(fig, path, **savefig_kw) -> Path:
     comes from the suffix of ``path`` (PNG if it has none)."""
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
     savefig_kw.setdefault("dpi", 150)
-    with _atomic(path) as tmp, open(tmp, "wb") as f:
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
         fig.savefig(f, format=fmt, **savefig_kw)
     return Path(path)

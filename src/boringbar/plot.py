@@ -3,7 +3,10 @@
 Only the command line and users import this module; the core never imports
 matplotlib.  Figures are built as ``matplotlib.figure.Figure`` objects and
 rendered by the Agg canvas, without pyplot, so no global backend or figure
-state is touched (safe in threads, in notebooks, on headless machines).
+state is touched (safe in threads, in notebooks, on headless machines).  Each
+``plot_*`` function returns its Figure; :func:`boringbar.io.save_figure_atomic` saves it.
+A multi-panel figure is drawn into ``fig`` when given (a Figure, or a SubFigure from
+``Figure.subfigures`` to place it beside others); the single-panel ladder into ``ax``.
 """
 
 from __future__ import annotations
@@ -11,12 +14,11 @@ from __future__ import annotations
 import json
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from boringbar.io import save_figure_atomic
+from boringbar.simulate import FIGURES
 
 #: Marker and colour per impact-pattern class (patterns.PATTERN_LABELS).
 PATTERN_STYLE = {
@@ -37,11 +39,11 @@ def pattern_class(name: str) -> str:
 
 # --- one run ---------------------------------------------------------------------
 
-def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
-    """Time traces of one run, saved to ``path``.
+def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
+    """Time traces of one run, as a Figure (save it with :func:`boringbar.io.save_figure_atomic`).
 
     ``run_or_ds``: a :class:`~boringbar.simulate.Run` simulated with
-    ``record_every`` or its ``history_dataset()``.  Two rows sharing time:
+    ``record_every`` or its ``to_xarray()``.  Two rows sharing time:
     tip displacement W (mm); below it the ball's displacement y relative to
     the bar (mm) with the walls at +-delta/2 dashed (ball bar), the absorber
     stroke (mm) (TMD bar), or the force at the tip (N) (solid bar, locked ball).
@@ -52,11 +54,11 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     zooms on its last ``zoom_periods`` forcing periods, where the impact
     pattern can be seen.
     """
-    ds = run_or_ds.history_dataset() if hasattr(run_or_ds, "history_dataset") else run_or_ds
+    ds = run_or_ds.to_xarray() if hasattr(run_or_ds, "to_xarray") else run_or_ds
     summary = json.loads(ds.attrs.get("summary", "{}"))
     config = json.loads(ds.attrs.get("config", "{}"))
     if "cutting" in summary:
-        return save_figure_atomic(_cut_figure(ds, summary, config), path)
+        return _cut_figure(ds, summary, config, fig=fig)
     damper = (config.get("system") or {}).get("damper") or {}
     kind = summary.get("bar", "?")
     t = ds["time"].values
@@ -70,7 +72,8 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
     else:
         lower, lower_label, colour = ds["force"].values, "tip force f (N)", "#8c564b"
 
-    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
     freq = summary.get("forcing_frequency_hz") or 0.0
     t_zoom = t[-1] - zoom_periods / freq if freq > 0 and t.size else -np.inf
@@ -114,7 +117,7 @@ def plot_run(run_or_ds, path, zoom_periods: float = 5) -> Path:
         fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
                    fontsize="small", frameon=False)
     fig.suptitle(_run_title(summary, damper))
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _run_title(summary: dict, damper: dict) -> str:
@@ -143,14 +146,9 @@ def _run_title(summary: dict, damper: dict) -> str:
 
 # --- a sweep ---------------------------------------------------------------------
 
-def plot_sweep(ds, path, force=None) -> list[Path]:
-    """Tip RMS against Omega/omega_n in the layout of the published figures.
-
-    One figure per force.  With ``force`` given, only that force is drawn,
-    to ``path``.  With ``force=None`` and one force in ``ds`` the figure goes
-    to ``path``; with several forces, one file per force, named ``path``
-    with ``_F<force>N`` before the suffix (``sweep_F10N.png``,
-    ``sweep_F20N.png``).  Returns the paths written.
+def plot_sweep(ds, force: float | None = None, *, fig=None) -> Figure:
+    """Tip RMS against Omega/omega_n at one ``force`` (N; may be omitted when
+    ``ds`` holds one force), in the layout of the published figures.
 
     Each figure has one panel per (gap x friction) of the ball cases, rows
     by gap and columns by friction (2 x 2 for the published study), each
@@ -160,21 +158,16 @@ def plot_sweep(ds, path, force=None) -> list[Path]:
     beside the n-symmetric and n-asymmetric ones.
     Without ball cases there is one panel.
     """
-    path = Path(path)
     forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
-    if force is not None:
-        targets = [(float(force), path)]
-    elif len(forces) == 1:
-        targets = [(forces[0], path)]
-    else:
-        targets = [(f, path.with_name(f"{path.stem}_F{f:g}N{path.suffix}")) for f in forces]
-    written = []
-    for f, p in targets:
-        written.append(save_figure_atomic(_sweep_figure(ds.sel(force=f), f, ds.attrs), p))
-    return written
+    if force is None:
+        if len(forces) != 1:
+            raise ValueError(f"force = None: the sweep holds {len(forces)} forces "
+                             f"({', '.join(f'{f:g}' for f in forces)} N); give one")
+        force = forces[0]
+    return _sweep_figure(ds.sel(force=float(force)), float(force), ds.attrs, fig)
 
 
-def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
+def _sweep_figure(ds, force: float, attrs: dict, fig=None) -> Figure:
     bars = [str(b) for b in ds["bar"].values]
     gaps = ds["gap"].values
     fric = [str(v) for v in ds["friction"].values]
@@ -187,7 +180,8 @@ def _sweep_figure(ds, force: float, attrs: dict) -> Figure:
     pattern = ds["pattern"].values
 
     nr, nc = len(gap_rows), len(fric_cols)
-    fig = Figure(figsize=(5.2 * nc + 0.6, 3.8 * nr + 1.3), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(5.2 * nc + 0.6, 3.8 * nr + 1.3), layout="constrained")
     axes = np.atleast_2d(fig.subplots(nr, nc, sharex=True, sharey=True, squeeze=False))
     seen_patterns = set()
     for r, gap in enumerate(gap_rows):
@@ -257,7 +251,8 @@ def _legend_below(fig, axes, ncol: int | None = None) -> None:
 CUT_COLOURS = {"tip": "#1f77b4", "force": "#8c564b", "zero": "#d62728"}
 
 
-def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30) -> Figure:
+def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
+                fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for one
     cut; the right column zooms on the last ``zoom_cycles`` periods of the
     bar's first mode (about the chatter period)."""
@@ -266,7 +261,8 @@ def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30) -> Fig
     t = ds["time"].values
     rows = ((ds["tip_displacement"].values * 1e3, "tip displacement W (mm)", "tip"),
             (ds["force"].values, "cutting force f (N)", "force"))
-    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
     fn = summary.get("natural_frequency_hz") or 0.0
     span = zoom_cycles / fn if fn > 0 else math.inf
@@ -348,8 +344,8 @@ def case_title(label: str, bar: str, gap: float, friction: str) -> str:
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(bar, str(label))
 
 
-def plot_lobes(ds, path) -> Path:
-    """Stability lobes in the layout of the published panels, saved to ``path``.
+def plot_lobes(ds, *, fig=None) -> Figure:
+    """Stability lobes in the layout of the published panels, as a Figure.
 
     One panel per case: depth of cut (mm) against spindle speed (rpm); every
     grid point that was run marked stable (open green circle), chatter under
@@ -364,7 +360,8 @@ def plot_lobes(ds, path) -> Path:
     ncol = 1 if n == 1 else 2 if n in (2, 4) else 3
     nrow = math.ceil(n / ncol)
     width = max(5.4 * ncol + 0.4, 8.0)  # room for the legend and title under one panel
-    fig = Figure(figsize=(width, 3.9 * nrow + 1.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(width, 3.9 * nrow + 1.5), layout="constrained")
     axes = np.atleast_1d(fig.subplots(nrow, ncol, sharex=True, squeeze=False).ravel())
     legend: dict[str, object] = {}
     for i in range(n):
@@ -388,7 +385,7 @@ def plot_lobes(ds, path) -> Path:
                  f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev; "
                  f"{a.get('duration_s', math.nan):g} s runs, dt = {a.get('dt_s', math.nan):g} s",
                  fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
@@ -436,13 +433,14 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     ax.set_title(f"{title}\n{sub}", fontsize="medium")
 
 
-def plot_lobe_examples(ds, path) -> Path:
+def plot_lobe_examples(ds, *, fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for the
     example grid points of a lobe study (dims example x time, as written by
-    ``boringbar lobes --examples``), one column per example; saved to ``path``."""
+    ``boringbar lobes --examples``), one column per example; as a Figure."""
     t = ds["time"].values
     n = ds.sizes["example"]
-    fig = Figure(figsize=(6.0 * n + 0.4, 6.5), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(6.0 * n + 0.4, 6.5), layout="constrained")
     axes = np.asarray(fig.subplots(2, n, sharex=True, squeeze=False))
     duration = float(t[-1]) if t.size else None
     for k, name in enumerate(ds["example"].values):
@@ -476,7 +474,7 @@ def plot_lobe_examples(ds, path) -> Path:
                       a.get("friction", "?"))
     fig.suptitle(f"Lobe examples: {case} ({a.get('preset', '?')} preset), rerun with "
                  "history, not stopped at the first zero of the force", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 # --- bifurcation diagram ---------------------------------------------------------
@@ -504,9 +502,9 @@ def _verdict_code(verdict: str) -> str:
     return {"transient": "t", "quasi-periodic": "q", "chaotic-like": "c"}.get(verdict, "?")
 
 
-def plot_bifurcation(ds, path) -> Path:
+def plot_bifurcation(ds, *, fig=None) -> Figure:
     """Bifurcation diagram of :func:`~boringbar.analysis.bifurcation.bifurcation`,
-    saved to ``path``.
+    as a Figure.
 
     Top: the stroboscopic Poincare samples of the tip displacement W (mm)
     against the parameter, forward (blue) and backward (red, smaller, offset a
@@ -520,7 +518,8 @@ def plot_bifurcation(ds, path) -> Path:
     x = ds["value"].values * k
     step = float(np.min(np.abs(np.diff(x)))) if x.size > 1 else 1.0
     directions = [str(d) for d in ds["direction"].values]
-    fig = Figure(figsize=(12, 8), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(12, 8), layout="constrained")
     top, mid, bottom = fig.subplots(3, 1, sharex=True, height_ratios=(4, 0.55, 1.4))
     ranges = json.loads(ds.attrs.get("hysteresis_ranges", "null") or "null") or []
     for a, b in ranges:
@@ -565,7 +564,7 @@ def plot_bifurcation(ds, path) -> Path:
     fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
                fontsize="small", frameon=False)
     fig.suptitle(_bifurcation_title(ds, param), fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _system_words(system: dict) -> str:
@@ -579,6 +578,14 @@ def _system_words(system: dict) -> str:
                 f"mm, friction {f'{fr:.3g} N' if fr else 'off'}, "
                 f"e = {damper.get('restitution', math.nan):g}")
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(kind, str(kind))
+
+
+def _dropped_percent(attrs) -> float:
+    """The dropped first part of each run, in %: 1 - steady_fraction (files written
+    before steady_fraction: their ``drop``)."""
+    if "steady_fraction" in attrs:
+        return 100 * (1.0 - attrs["steady_fraction"])
+    return 100 * attrs.get("drop", math.nan)
 
 
 def _bifurcation_title(ds, param: str) -> str:
@@ -598,7 +605,7 @@ def _bifurcation_title(ds, param: str) -> str:
     preset = systems[0].get("preset", "?")
     return (f"Bifurcation diagram: {words}, {', '.join(fixed)} ({preset} preset)\n"
             f"continuation forward then backward; {ds.attrs.get('duration_s', math.nan):g} s "
-            f"runs, first {100 * ds.attrs.get('drop', math.nan):g} % dropped, "
+            f"runs, first {_dropped_percent(ds.attrs):g} % dropped, "
             f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
 
 
@@ -626,9 +633,9 @@ def _attractor_label(ds, a: int) -> str:
             f"{100 * float(ds['fraction'].values[a]):.1f} %")
 
 
-def plot_basins(ds, path) -> Path:
-    """Basins of attraction of :func:`~boringbar.analysis.basins.basins`, saved to
-    ``path``.
+def plot_basins(ds, *, fig=None) -> Figure:
+    """Basins of attraction of :func:`~boringbar.analysis.basins.basins`, as a
+    Figure.
 
     Left: initial tip displacement (mm) x initial tip velocity (m/s), each cell
     coloured by its attractor; the legend gives each attractor's impact
@@ -647,7 +654,8 @@ def plot_basins(ds, path) -> Path:
     n = ds.sizes["attractor_id"]
     colours = _attractor_colours(n)
     has_map = "poincare_from_tip_m" in ds
-    fig = Figure(figsize=(13.5 if has_map else 8, 6.8), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(13.5 if has_map else 8, 6.8), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, 2 if has_map else 1,
                                       width_ratios=(1, 1) if has_map else None))
     ax = axes[0]
@@ -681,9 +689,9 @@ def plot_basins(ds, path) -> Path:
                  f"({ds.attrs.get('preset', '?')} preset)\nF0 = "
                  f"{forcing.get('amplitude_n', math.nan):g} N, $\\Omega/\\omega_n$ = "
                  f"{forcing.get('ratio', math.nan):g}; {ds.attrs.get('duration_s', math.nan):g}"
-                 f" s runs, first {100 * ds.attrs.get('drop', math.nan):g} % dropped, "
+                 f" s runs, first {_dropped_percent(ds.attrs):g} % dropped, "
                  f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _poincare_panel(ax, ds, colours, basin_ax) -> None:
@@ -722,9 +730,9 @@ def _poincare_panel(ax, ds, colours, basin_ax) -> None:
 
 # --- sensitivity -----------------------------------------------------------------
 
-def plot_sensitivity(ds, path) -> Path:
+def plot_sensitivity(ds, *, fig=None) -> Figure:
     """A sensitivity study (:func:`~boringbar.analysis.sensitivity.sensitivity`),
-    saved to ``path``: one panel per force, tip RMS (mm) against Omega/omega_n,
+    as a Figure: one panel per force, tip RMS (mm) against Omega/omega_n,
     one line per value of the varied parameter; with cuts (``cut_*`` variables,
     as ``boringbar sensitivity`` writes them) one more panel, the steady tip
     amplitude (mm) against depth of cut (mm), chatter (the force reaches zero)
@@ -741,7 +749,8 @@ def plot_sensitivity(ds, path) -> Path:
                if cmap.name == "viridis" else [cmap(i % 10) for i in range(len(values))])
     n = len(forces) + cuts
     width = max(5.4 * n + 0.6, 9.5)  # room for the title and the legend under one panel
-    fig = Figure(figsize=(width, 5.4), layout="constrained")
+    if fig is None:
+        fig = Figure(figsize=(width, 5.4), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, n, squeeze=False).ravel())
     ratio = ds["ratio"].values
     for j, force in enumerate(forces):
@@ -791,7 +800,7 @@ def plot_sensitivity(ds, path) -> Path:
                  f"({ds.attrs.get('preset', '?')} preset)\n"
                  f"{ds.attrs.get('duration_s', math.nan):g} s runs, "
                  f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
 
 
 def _zero_based(ax, values) -> None:
@@ -816,14 +825,17 @@ def _value_label(kind: str, value: str) -> str:
 
 # --- the corrections ladder --------------------------------------------------------
 
-def plot_ladder(ds, path) -> Path:
-    """The readings ladder (:func:`~boringbar.analysis.corrections.readings_ladder`),
-    saved to ``path``: tip RMS (mm) of each rung, from the paper preset to the
-    physical one, one bar per gap, each labelled with its impact pattern."""
+def plot_ladder(ds, *, ax=None) -> Figure:
+    """The readings ladder (:func:`~boringbar.report.corrections.readings_ladder`),
+    as a Figure: tip RMS (mm) of each rung, from the paper preset to the
+    physical one, one bar per gap, each labelled with its impact pattern; drawn on
+    ``ax`` (a matplotlib Axes) if given, whose figure is returned."""
     rungs = [str(r) for r in ds["rung"].values]
     gaps = ds["gap"].values
-    fig = Figure(figsize=(10, 5.2), layout="constrained")
-    ax = fig.subplots()
+    if ax is None:
+        fig = Figure(figsize=(10, 5.2), layout="constrained")
+        ax = fig.subplots()
+    fig = ax.figure
     x = np.arange(len(rungs))
     width = 0.8 / len(gaps)
     for j, gap in enumerate(gaps):
@@ -846,4 +858,7 @@ def plot_ladder(ds, path) -> Path:
                  f"{ds.attrs.get('ratio', math.nan):g}: the published readings dropped one "
                  f"at a time\n(each rung keeps the changes to its left; "
                  f"{ds.attrs.get('duration_s', math.nan):g} s runs)", fontsize="medium")
-    return save_figure_atomic(fig, path)
+    return fig
+
+
+FIGURES["run"] = plot_run  # Run.plot()

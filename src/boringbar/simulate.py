@@ -14,17 +14,26 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_choice, check_positive, check_range
-from boringbar.analysis.patterns import Pattern, classify
-from boringbar.dampers import ImpactDamper, TunedMassDamper
-from boringbar.forcing import Harmonic, Regenerative
+from boringbar._validate import (
+    ParameterError,
+    check_choice,
+    check_finite,
+    check_int,
+    check_positive,
+    check_range,
+)
 from boringbar.kernels import layout as L
+from boringbar.kernels.compile import announce
 from boringbar.kernels.exact import run_exact
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.kernels.rk4_batch import BMAX, LANES, run_rk4_batch
-from boringbar.system import System
+from boringbar.model.dampers import ImpactDamper, TunedMassDamper
+from boringbar.model.forcing import Harmonic, Regenerative
+from boringbar.model.system import System
+from boringbar.patterns import Pattern, classify
 
 #: Impacts slower than this fraction of Omega delta/2 are contact, not impacts.
 IMPACT_THRESHOLD = 1e-3
@@ -35,21 +44,80 @@ MIN_STEPS_PER_PERIOD = 20
 #: The time integrators: the published fixed-step RK4, or exact and event-driven.
 INTEGRATORS = ("rk4", "exact")
 
+# Resource bounds: far beyond any study (the published runs are 2e6 steps, 922
+# periods and 20000 history rows), small enough that a run's arrays fit in memory.
+#: Most time steps of one run, round(duration / dt) (the published run: 2e6).
+MAX_STEPS = 10_000_000_000
+#: Most history rows of one run, steps // record_every (6 floats a row: 480 MB), and
+#: most rows of a cut's delay history, revolutions tau / dt (2 floats a row).
+MAX_HISTORY_ROWS = 10_000_000
+#: Most impact and stick rows kept (the counts in the metrics are always complete;
+#: ``impacts_truncated`` says when the steady part had more impacts than this), and
+#: most Poincare (strobe) samples, one per period (5 floats a row).
+MAX_EVENT_ROWS = 10_000_000
+#: Largest |initial tip displacement| (m) and |initial velocity| (m/s): a boring bar
+#: 0.2 m long cannot deflect a metre; the bounds keep the arithmetic finite.
+MAX_INITIAL_DISPLACEMENT = 1.0
+MAX_INITIAL_VELOCITY = 1000.0
+
 
 @dataclass(frozen=True)
 class Initial:
-    """Initial conditions (MODEL.md section 1), SI.
+    """Initial conditions (docs/model.md, section 1), SI.
 
     The bar starts with tip displacement/velocity W0, W0' carried by the first
     mode (u_1 = W0/psi_1(L), higher modes at rest); the ball at ``ball_position``
     y0 in [-delta/2, delta/2] with relative velocity y0'; the absorber at rest
     relative to the bar.  Default: everything at rest, ball centred.
+    ``tip_displacement`` (m), ``tip_velocity`` (m/s), ``ball_position`` (m),
+    ``ball_velocity`` (m/s).
     """
 
     tip_displacement: float = 0.0
     tip_velocity: float = 0.0
     ball_position: float = 0.0
     ball_velocity: float = 0.0
+
+    def __post_init__(self):
+        d, v = MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY
+        check_range("initial tip_displacement", self.tip_displacement, -d, d, unit="m")
+        check_range("initial tip_velocity", self.tip_velocity, -v, v, unit="m/s")
+        check_range("initial ball_position", self.ball_position, -d, d, unit="m")
+        check_range("initial ball_velocity", self.ball_velocity, -v, v, unit="m/s")
+
+
+@dataclass(frozen=True)
+class Integration:
+    """How every run of an analysis is integrated (the options of :func:`simulate`).
+
+    ``duration_s`` and ``dt_s`` (s) as published by default (2 s, 1e-6 s);
+    ``integrator``: one of :data:`INTEGRATORS` ("rk4", the published scheme, or
+    "exact"); ``steady_fraction``: the last part of each run over which RMS,
+    patterns and Poincare samples are taken (0.8: the first 20 % dropped);
+    ``initial``: the initial conditions of every run (default: at rest).
+    """
+
+    duration_s: float = 2.0
+    dt_s: float = 1e-6
+    integrator: str = "rk4"
+    steady_fraction: float = 0.8
+    initial: Initial | None = None
+
+    def __post_init__(self):
+        check_positive("duration_s", self.duration_s, "s")
+        check_positive("dt_s", self.dt_s, "s")
+        check_choice("integrator", self.integrator, INTEGRATORS)
+        check_range("steady_fraction", self.steady_fraction, 0.0, 1.0, lo_open=True)
+
+    def kwargs(self) -> dict:
+        """The keyword arguments of :func:`simulate` these options stand for."""
+        return {"duration": self.duration_s, "dt": self.dt_s, "integrator": self.integrator,
+                "steady_fraction": self.steady_fraction, "initial": self.initial}
+
+    def to_dict(self) -> dict:
+        return {"duration_s": self.duration_s, "dt_s": self.dt_s,
+                "integrator": self.integrator, "steady_fraction": self.steady_fraction,
+                "initial": (self.initial or Initial()).__dict__}
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,10 +127,34 @@ class State:
     x: np.ndarray
     t: float
 
+    def __post_init__(self):
+        x = np.asarray(self.x, dtype=float)
+        if x.ndim != 1 or not np.all(np.isfinite(x)):
+            raise ParameterError(f"initial state x = {self.x!r} must be a 1-d array of finite "
+                                 "numbers")
+        check_finite("initial state t", self.t, "s")
 
-@dataclass(eq=False)
+
+#: Figure makers by what they draw ("run" -> plot_run), registered by boringbar.plot so
+#: that Run.plot works without this layer importing matplotlib.
+FIGURES: dict = {}
+
+
+@dataclass(frozen=True, eq=False)
 class Run:
-    """The result of :func:`simulate`: streamed metrics, events and (if asked) history."""
+    """The result of :func:`simulate` (frozen): streamed metrics, events and (if asked)
+    history; :meth:`summary` and :meth:`config` as JSON-able dicts, :meth:`to_xarray`
+    as a labelled Dataset.
+
+    ``system`` and ``forcing`` as run; ``omega``: forcing (or spindle) frequency
+    (rad/s); ``dt``, ``t0``, ``duration`` (s) and ``steady_start`` (s), where RMS and
+    patterns begin; ``metrics``: the streamed metrics; ``impacts`` (time, wall,
+    relative velocity), ``sticks`` (start, end), ``strobe`` (Poincare samples) and
+    ``history`` (t, W, W', aux, aux', force; None unless recorded); ``initial`` and
+    ``final``: the states it started from and ended at; ``pattern``: the impact
+    pattern; ``energy``: the energy flows and their balance; ``thresholds``: the
+    pattern classifier's tolerances; ``integrator`` and ``elapsed_s`` (wall time).
+    """
 
     system: System
     forcing: Harmonic | Regenerative
@@ -136,7 +228,7 @@ class Run:
 
     @property
     def cutting(self) -> dict:
-        """Chatter verdicts of a regenerative run (MODEL.md section 4)."""
+        """Chatter verdicts of a regenerative run (docs/model.md, section 4)."""
         m = self.metrics
         f = self.forcing
         return {
@@ -155,10 +247,18 @@ class Run:
             "start": f.start,
         }
 
-    def history_dataset(self):
-        """The decimated history as an xarray Dataset (needs ``record_every``)."""
-        import xarray as xr
+    def plot(self, **kwargs):
+        """The run's figure (a matplotlib Figure; needs ``record_every``): what
+        :func:`boringbar.plot.plot_run` draws, with its ``kwargs`` (``zoom_periods``,
+        ``fig``).  The plotting module sits above this one and registers itself
+        (:data:`FIGURES`) when ``boringbar`` is imported."""
+        if "run" not in FIGURES:
+            raise RuntimeError("no figure maker registered: import boringbar.plot")
+        return FIGURES["run"](self, **kwargs)
 
+    def to_xarray(self):
+        """The decimated history as an xarray Dataset (needs ``record_every``), with the
+        configuration and the summary as JSON in its attributes."""
         if self.history is None:
             raise ValueError("no history was recorded: run simulate(..., record_every=N)")
         h = self.history
@@ -172,13 +272,40 @@ class Run:
                 "force": ("time", h[:, 5], {"units": "N"}),
             },
             coords={"time": ("time", h[:, 0], {"units": "s"})},
-            attrs={"config": json.dumps(self.config()),
-                   "summary": json.dumps(self.summary())},
+            attrs={"config": json.dumps(self.config(), default=_plain),
+                   "summary": json.dumps(self.summary(), default=_plain)},
         )
         if self.impacts.size:
             ds["impact_time"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
         return ds
+
+
+def _plain(value):
+    """A numpy scalar as the Python number it holds (for json.dumps)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
+
+
+class IntegrationError(RuntimeError):
+    """The exact integrator could not finish a run: ``status`` is the kernel's code
+    (:data:`EXACT_STATUS_MESSAGES`), ``events`` the events it had handled and
+    ``t_reached`` (s) where it stopped; the message says what happened and what to do."""
+
+    def __init__(self, status: int, events: int, t_reached: float):
+        self.status, self.events, self.t_reached = status, events, t_reached
+        super().__init__(f"exact integrator: {EXACT_STATUS_MESSAGES.get(status, 'unknown')} "
+                         f"(status {status}, after {events} events, at t = {t_reached:.6g} s)")
+
+
+#: What the exact integrator's status codes mean (kernels/layout.py, EXACT_STATUS).
+EXACT_STATUS_MESSAGES = {
+    1: "the event cap was reached (too many impacts or switches for one run; shorten "
+       "the run or continue it from its final state)",
+    2: "stalled on events of zero length (the motion could not be continued past a "
+       "chattering contact)",
+}
 
 
 def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarray:
@@ -262,9 +389,21 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     return e
 
 
-def check_step(system: System, omega: float, dt: float) -> None:
-    """The step must resolve the forcing period and the highest retained mode."""
-    check_positive("dt", dt, "s")
+def check_friction_law(system: System, integrator: str) -> None:
+    """True stick-slip (a static friction above the sliding one) needs the exact
+    integrator: RK4 has only the published sgn() law."""
+    d = system.damper
+    if (integrator == "rk4" and isinstance(d, ImpactDamper)
+            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
+        raise ParameterError(f"friction static_ratio = {d.friction.static_ratio!r}: the rk4 "
+                             "integrator has only the sgn() law (static_ratio = 1); use "
+                             "integrator = 'exact' for true stick-slip")
+
+
+def check_step(system: System, omega: float, dt: float, name: str = "dt") -> None:
+    """The step must resolve the forcing period and the highest retained mode
+    (``name``: how the caller calls dt)."""
+    check_positive(name, dt, "s")
     periods = [2 * math.pi / w for w in system.bar.omegas]
     if omega > 0:
         periods.append(2 * math.pi / omega)
@@ -272,9 +411,56 @@ def check_step(system: System, omega: float, dt: float) -> None:
         periods.append(2 * math.pi * math.sqrt(system.damper.mass / system.damper.stiffness))
     limit = min(periods) / MIN_STEPS_PER_PERIOD
     if dt > limit:
-        raise ParameterError(f"dt = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
+        raise ParameterError(f"{name} = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
                              f"({MIN_STEPS_PER_PERIOD} steps per period of the forcing and "
                              "of the highest retained mode)")
+
+
+def check_steps(duration: float, dt: float, names: tuple[str, str] = ("duration", "dt")) -> int:
+    """round(duration / dt), the run's number of steps: at least 1 and at most
+    :data:`MAX_STEPS`, else ParameterError naming both (``names``: how the caller
+    calls them, e.g. the CLI's options)."""
+    d_name, dt_name = names
+    check_positive(d_name, duration, "s")
+    check_positive(dt_name, dt, "s")
+    steps = duration / dt
+    if steps > MAX_STEPS:
+        raise ParameterError(f"{d_name} = {duration:g} s with {dt_name} = {dt:g} s is "
+                             f"{steps:.3g} steps; the allowed maximum is {MAX_STEPS:.0e} steps "
+                             "(shorten the run, or continue it from its final state)")
+    n_steps = int(round(steps))
+    if n_steps < 1:
+        raise ParameterError(f"{d_name} = {duration:g} s is shorter than one step {dt_name} = "
+                             f"{dt:g} s")
+    return n_steps
+
+
+def check_history(n_steps: int, record_every: int, name: str = "record_every") -> int:
+    """The number of history rows, n_steps // record_every: at most
+    :data:`MAX_HISTORY_ROWS`, else ParameterError naming ``name``."""
+    rows = n_steps // record_every
+    if rows > MAX_HISTORY_ROWS:
+        raise ParameterError(f"{name} = {record_every} keeps {rows} history rows of "
+                             f"{n_steps} steps; the allowed maximum is {MAX_HISTORY_ROWS:.0e} "
+                             f"rows ({name} >= {math.ceil(n_steps / MAX_HISTORY_ROWS)})")
+    return rows
+
+
+def check_delay(rpm: float, revolutions: int, dt: float, name: str = "rpm") -> int:
+    """The rows of a cut's delay history, ceil(revolutions 60 / rpm / dt) + 3: the
+    spindle period must hold 4 steps, and the rows be at most
+    :data:`MAX_HISTORY_ROWS`, else ParameterError naming ``name`` (the speed)."""
+    tau = 60.0 / check_positive(name, rpm, "rpm")
+    if tau < 4 * dt:
+        raise ParameterError(f"{name} = {rpm:g} rpm: dt = {dt:g} s must be under a quarter "
+                             f"of the spindle period {tau:g} s")
+    rows = revolutions * tau / dt + 3
+    if rows > MAX_HISTORY_ROWS:
+        raise ParameterError(f"{name} = {rpm:g} rpm: {revolutions} revolutions of {tau:g} s "
+                             f"are {rows:.3g} steps of dt = {dt:g} s of delay history; the "
+                             f"allowed maximum is {MAX_HISTORY_ROWS:.0e} (raise the speed "
+                             "or dt)")
+    return int(math.ceil(revolutions * tau / dt)) + 3
 
 
 @dataclass(eq=False)
@@ -313,23 +499,16 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     if not isinstance(forcing, Harmonic | Regenerative):
         raise ParameterError(f"forcing = {forcing!r} must be a Harmonic or a Regenerative")
     cutting = isinstance(forcing, Regenerative)
-    d = system.damper
-    if (integrator == "rk4" and isinstance(d, ImpactDamper)
-            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
-        raise ParameterError(f"friction static_ratio = {d.friction.static_ratio!r}: the rk4 "
-                             "integrator has only the sgn() law (static_ratio = 1); use "
-                             "integrator = 'exact' for true stick-slip")
-    check_positive("duration", duration, "s")
+    check_friction_law(system, integrator)
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
-    check_range("record_every", record_every, 0, math.inf, hi_open=True)
+    record_every = check_int("record_every", record_every, 0, MAX_STEPS)
     omega = 2 * math.pi / forcing.tau if cutting else forcing.omega(system.reference_frequency)
     check_step(system, omega, dt)
-    if cutting and forcing.tau < 4 * dt:
-        raise ParameterError(f"dt = {dt:g} s must be under a quarter of the spindle period "
-                             f"{forcing.tau:g} s")
-    n_steps = int(round(duration / dt))
-    if n_steps < 1:
-        raise ParameterError(f"duration = {duration:g} s is shorter than one step dt = {dt:g} s")
+    if cutting:
+        check_delay(forcing.rpm, forcing.revolutions, dt)
+    n_steps = check_steps(duration, dt)
+    if record_every:
+        check_history(n_steps, record_every)
 
     if isinstance(initial, State):
         x = np.array(initial.x, dtype=float)
@@ -365,7 +544,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
         p[L.INTERP] = 1.0 if forcing.interpolation == "cubic" else 0.0
         p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
         p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
-        buf = np.zeros((int(math.ceil(forcing.revolutions * forcing.tau / dt)) + 3, 2))
+        buf = np.zeros((check_delay(forcing.rpm, forcing.revolutions, dt), 2))
         period = 2 * math.pi / system.reference_frequency
     else:
         p = pack(system, omega, forcing.amplitude, dt)
@@ -376,7 +555,11 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     if strobe:
         p[L.STROBE_PERIOD] = period
         p[L.STROBE_T0] = 0.0
-    cap_imp = int(max(1000, 40 * n_periods))
+    if strobe and n_periods + 2 > MAX_EVENT_ROWS:
+        raise ParameterError(f"duration = {duration:g} s is {n_periods:.3g} periods of "
+                             f"{period:g} s: at most {MAX_EVENT_ROWS:.0e} Poincare samples "
+                             "(one a period) are kept; shorten the run")
+    cap_imp = int(min(MAX_EVENT_ROWS, max(1000, 40 * n_periods)))
     imp = np.zeros((cap_imp, 3))
     stick = np.zeros((cap_imp, 2))
     stb = np.zeros((int(n_periods) + 2 if strobe else 0, 5))
@@ -392,6 +575,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
                   stb, rec, met)
 
 
+@announce()
 def _run_kernel(su: _Setup) -> float:
     """Run the kernel of ``su`` in place; the wall time (s)."""
     p, x, t0, dt, n_steps, steady_steps = su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps
@@ -404,8 +588,7 @@ def _run_kernel(su: _Setup) -> float:
         # a cut stopped at its first zero finishes that step of dt
         met[L.STEPS_DONE] = min(n_steps, int(round((t_reached - t0) / dt)))
         if met[L.EXACT_STATUS] != 0:
-            raise RuntimeError(f"exact integrator stopped at an impasse (status "
-                               f"{int(met[L.EXACT_STATUS])} after {int(met[L.N_EVENTS])} events)")
+            raise IntegrationError(int(met[L.EXACT_STATUS]), int(met[L.N_EVENTS]), t_reached)
     else:
         run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb,
                 met, su.buf)
@@ -491,7 +674,8 @@ def _result(su: _Setup, elapsed: float) -> Run:
     )
 
 
-def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: float = 1e-6,
+def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: float = 2.0,
+             dt: float = 1e-6,
              initial: Initial | State | None = None, record_every: int = 0,
              steady_fraction: float = 0.8, strobe: bool = False,
              integrator: str = "rk4") -> Run:
@@ -501,10 +685,17 @@ def simulate(system: System, forcing: Harmonic, *, duration: float = 2.0, dt: fl
     RMS and patterns use the last ``steady_fraction`` of the record.
     ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
     to continue it (time, hence forcing phase, runs on).  ``record_every`` N
-    keeps every N-th step's state; ``strobe`` keeps Poincare samples at
-    Omega t = 0 mod 2 pi.
+    keeps every N-th step's state (0, the default: no history); ``strobe`` keeps
+    Poincare samples at Omega t = 0 mod 2 pi.
 
-    ``integrator``: ``"rk4"`` (the published scheme, MODEL.md section 5) or
+    Limits (a ParameterError names the parameter, its value and the maximum): every
+    number finite; at most :data:`MAX_STEPS` (1e10) steps duration / dt; at most
+    :data:`MAX_HISTORY_ROWS` (1e7) history rows (steps // record_every) and as many
+    rows of a cut's delay history (revolutions 60 / rpm / dt); at most
+    :data:`MAX_EVENT_ROWS` (1e7) Poincare samples.  Impacts and stick intervals beyond
+    1e7 rows are counted in the metrics but not kept (``impacts_truncated``).
+
+    ``integrator``: ``"rk4"`` (the published scheme, docs/model.md, section 5) or
     ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
     under harmonic forcing ``dt`` is then only the step of the recorded history
     and of the duration and steady-window rounding, and the steady RMS is the
@@ -593,7 +784,8 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
     stick = np.zeros((nb, max(len(su.stick) for su in sus), 2))
     stb = np.zeros((nb, max(len(su.stb) for su in sus), 5))
     tic = time.perf_counter()
-    run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
+    with announce():
+        run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
     elapsed = time.perf_counter() - tic
     for r, su in enumerate(sus):
         su.x[:] = X[r]

@@ -1,4 +1,4 @@
-"""Basins of attraction over a grid of initial conditions (MODEL.md section 6).
+"""Basins of attraction over a grid of initial conditions (docs/model.md, section 6).
 
 Every cell of an initial tip displacement x initial tip velocity grid is an
 independent run of the kernel (the ball starts at ``ball_position`` with
@@ -6,15 +6,17 @@ relative velocity ``ball_velocity``, by default at rest and centred, as
 published).  With the published RK4 scheme the cells advance in lock-step
 batches of ``BATCH`` consecutive cells in grid order
 (:func:`~boringbar.simulate.simulate_batch`, whose runs equal single runs bit
-for bit); batches (or single cells) run on a thread pool (the kernel
-releases the GIL) and are assembled by index, so serial, parallel and
-unbatched runs give bit-identical results.  The end states are then
+for bit); batches (or single cells) are the points of the plan (the contract:
+:mod:`boringbar.analysis.base`), run on an executor (default: a thread per
+core; the kernel releases the GIL) and assembled in order, so serial,
+parallel and unbatched runs give bit-identical results.  The end states are then
 grouped into attractors, serially, in grid order.
 
 Grouping (all tolerances in :class:`BasinTolerance`):
 
 1. **Signature of a run.**  The stroboscopic Poincare samples (W, W') at
-   Omega t = 0 mod 2 pi after dropping the first ``drop`` of the run are
+   Omega t = 0 mod 2 pi of the run's steady part (the last
+   ``Integration.steady_fraction`` of it) are
    scaled by the run's amplitude scale A = sqrt(2) RMS(W) (W / A, W' /
    (Omega A); A is floored at ``floor`` so a bar at rest does not divide by
    zero).  On the last ``TAIL`` samples the smallest k = 1..``MAX_K`` with
@@ -48,19 +50,22 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import time
-from concurrent.futures import ThreadPoolExecutor, as_completed
+import sys
 from dataclasses import asdict, dataclass
 
 import numpy as np
+import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_positive, check_range
-from boringbar.forcing import Harmonic
+from boringbar._validate import ParameterError, check_int, check_positive, check_range
+from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.poincare import poincare_map
+from boringbar.analysis.sweep import Case
+from boringbar.execute import Execution
 from boringbar.kernels.rk4_batch import BMAX
-from boringbar.simulate import Initial, simulate, simulate_batch
-from boringbar.system import System
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System
+from boringbar.simulate import Initial, Integration, simulate, simulate_batch
 
 #: Largest period, in forcing periods, looked for in the strobe (as the pattern classifier).
 MAX_K = 8
@@ -71,8 +76,14 @@ MIN_REPEATS = 3
 #: Published grid: tip displacement (m) and velocity (m/s), (start, stop, count).
 PUBLISHED_DISPLACEMENT = (-1.5e-3, 1.5e-3, 30)
 PUBLISHED_VELOCITY = (-1.5, 1.5, 30)
+#: Most cells (runs) of one basin grid, displacement count x velocity count
+#: (published: 900); a cell keeps its Poincare samples until they are grouped.
+MAX_BASIN_CELLS = 1_000_000
 #: Cells per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
 BATCH = 16
+GROUPING = ("Poincare period and centres (Hausdorff, scaled by sqrt(2) RMS) + impact pattern + "
+            "RMS; non-periodic runs by pattern + RMS band; mirrored orbit pairs are distinct "
+            "attractors")
 
 
 @dataclass(frozen=True)
@@ -115,16 +126,100 @@ class _Cell:
     strobe: np.ndarray  #: (n, 2) the kept Poincare samples
 
 
-def _grid(name: str, spec) -> np.ndarray:
+def basin_grid(name: str, spec) -> np.ndarray:
     try:
         lo, hi, n = spec
     except (TypeError, ValueError):
         raise ParameterError(f"{name} = {spec!r} must be (start, stop, count)") from None
     check_range(f"{name} start", lo, -math.inf, math.inf, lo_open=True, hi_open=True)
     check_range(f"{name} stop", hi, float(lo), math.inf, hi_open=True)
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-        raise ParameterError(f"{name} count = {n!r} must be an integer >= 1")
+    if isinstance(n, bool) or not isinstance(n, int | np.integer):
+        raise ParameterError(f"{name} count = {n!r} must be an integer in [1, "
+                             f"{MAX_BASIN_CELLS}]")
+    check_int(f"{name} count", n, 1, MAX_BASIN_CELLS)
     return np.linspace(float(lo), float(hi), int(n))
+
+
+def check_cells(n_displacement: int, n_velocity: int,
+                names: tuple[str, str] = ("displacement", "velocity")) -> int:
+    """The cells of a basin grid, n_displacement x n_velocity: at most
+    :data:`MAX_BASIN_CELLS`, else ParameterError naming both axes."""
+    cells = int(n_displacement) * int(n_velocity)
+    if cells > MAX_BASIN_CELLS:
+        raise ParameterError(f"{names[0]} count = {n_displacement} x {names[1]} count = "
+                             f"{n_velocity} is {cells} runs; the allowed maximum is "
+                             f"{MAX_BASIN_CELLS} cells")
+    return cells
+
+
+@dataclass(frozen=True)
+class BasinOptions:
+    """A basin map's grid and how its cells are judged.
+
+    ``displacement_m`` (m) and ``velocity_m_s`` (m/s): initial tip displacement
+    and velocity, (start, stop, count), both ends included (published: -1.5..1.5
+    mm x -1.5..1.5 m/s, 30 x 30); the ball starts at ``ball_position_m`` (m) with
+    relative velocity ``ball_velocity_m_s`` (m/s); the forcing F0 = ``force_n`` (N)
+    at ``ratio`` (Omega/omega_n); ``tolerance``: :class:`BasinTolerance` of the
+    grouping; ``batch``: with the RK4 integrator, cells advanced together in
+    lock-step (up to 16), taken in grid order (1: one cell at a time; the results
+    are the same, bit for bit); ``poincare_from``: (W0 (m), W0' (m/s)) of a run
+    whose Poincare map :func:`basins` adds (:func:`with_poincare`), or None.
+    """
+
+    displacement_m: tuple = PUBLISHED_DISPLACEMENT
+    velocity_m_s: tuple = PUBLISHED_VELOCITY
+    ball_position_m: float = 0.0
+    ball_velocity_m_s: float = 0.0
+    force_n: float = 10.0
+    ratio: float = 1.0
+    tolerance: BasinTolerance = BasinTolerance()
+    batch: int = BATCH
+    poincare_from: tuple[float, float] | None = None
+
+    def __post_init__(self):
+        check_cells(len(basin_grid("displacement_m", self.displacement_m)),
+                    len(basin_grid("velocity_m_s", self.velocity_m_s)),
+                    ("displacement_m", "velocity_m_s"))
+        check_range("ball_position_m", self.ball_position_m, -math.inf, math.inf,
+                    lo_open=True, hi_open=True, unit="m")
+        check_range("ball_velocity_m_s", self.ball_velocity_m_s, -math.inf, math.inf,
+                    lo_open=True, hi_open=True, unit="m/s")
+        check_range("force_n", self.force_n, 0.0, math.inf, hi_open=True, unit="N")
+        check_range("ratio", self.ratio, 0.0, math.inf, lo_open=True, hi_open=True)
+        if not isinstance(self.tolerance, BasinTolerance):
+            raise ParameterError(f"tolerance = {self.tolerance!r} must be a BasinTolerance")
+        check_range("batch", self.batch, 1, BMAX)
+        if self.poincare_from is not None:
+            try:
+                w0, v0 = self.poincare_from
+            except (TypeError, ValueError):
+                raise ParameterError(f"poincare_from = {self.poincare_from!r} must be "
+                                     "(W0 (m), W0' (m/s))") from None
+            check_range("poincare_from W0", w0, -math.inf, math.inf, lo_open=True,
+                        hi_open=True, unit="m")
+            check_range("poincare_from W0'", v0, -math.inf, math.inf, lo_open=True,
+                        hi_open=True, unit="m/s")
+
+    @property
+    def forcing(self) -> Harmonic:
+        return Harmonic(self.force_n, self.ratio)
+
+    def initials(self) -> list[Initial]:
+        """The initial conditions of the cells, in grid order (displacement-major)."""
+        return [Initial(float(w), float(v), self.ball_position_m, self.ball_velocity_m_s)
+                for w in basin_grid("displacement_m", self.displacement_m)
+                for v in basin_grid("velocity_m_s", self.velocity_m_s)]
+
+
+@dataclass(frozen=True, eq=False)
+class OperatingPoint:
+    """One basin map of several (a study's grid): ``label``, the ``case``
+    (:class:`~boringbar.analysis.sweep.Case`) and its ``forcing``."""
+
+    label: str
+    case: Case
+    forcing: Harmonic
 
 
 def signature(strobe: np.ndarray, scale: float, omega: float,
@@ -146,21 +241,6 @@ def signature(strobe: np.ndarray, scale: float, omega: float,
             cyc = tail[len(tail) - n:].reshape(-1, k, 2).mean(axis=0)
             return k, cyc[np.lexsort((cyc[:, 1], cyc[:, 0]))]
     return 0, tail[-MAX_K:].copy()
-
-
-def _run(system: System, forcing: Harmonic, initial: Initial, duration: float, dt: float,
-         drop: float, tol: BasinTolerance, integrator: str = "rk4") -> _Cell:
-    run = simulate(system, forcing, duration=duration, dt=dt, initial=initial,
-                   steady_fraction=1.0 - drop, strobe=True, integrator=integrator)
-    return _cell(run, dt, tol)
-
-
-def _run_batch(system: System, forcing: Harmonic, initials: list[Initial], duration: float,
-               dt: float, drop: float, tol: BasinTolerance) -> list[_Cell]:
-    """The cells of ``initials`` advanced in lock-step (RK4): each equals :func:`_run`'s."""
-    runs = simulate_batch([(system, forcing, ini) for ini in initials], duration=duration,
-                          dt=dt, steady_fraction=1.0 - drop, strobe=True)
-    return [_cell(run, dt, tol) for run in runs]
 
 
 def _cell(run, dt: float, tol: BasinTolerance) -> _Cell:
@@ -224,91 +304,65 @@ def group(cells: list[_Cell], omega: float, tol: BasinTolerance) -> tuple[np.nda
     return rank[label], [leaders[a] for a in order]
 
 
-def basins(system: System, forcing: Harmonic, *, displacement=PUBLISHED_DISPLACEMENT,
-           velocity=PUBLISHED_VELOCITY, duration: float = 2.0, dt: float = 1e-6,
-           drop: float = 0.2, ball_position: float = 0.0, ball_velocity: float = 0.0,
-           workers: int | None = None, progress=None,
-           tol: BasinTolerance | None = None, integrator: str = "rk4", batch: int = BATCH):
-    """Basins of attraction over initial tip displacement x tip velocity.
-
-    ``displacement`` (m) and ``velocity`` (m/s): (start, stop, count), both ends
-    included (published: -1.5..1.5 mm x -1.5..1.5 m/s, 30 x 30); each cell runs
-    ``duration`` s with step ``dt`` s, the first ``drop`` of it dropped; the ball
-    starts at ``ball_position`` (m) with relative velocity ``ball_velocity``
-    (m/s).  ``workers``: threads (default: every core); ``progress(done, total)``
-    is called as cells finish.  ``tol``: :class:`BasinTolerance`; the grouping is
-    in the module docstring.  ``integrator``: "rk4" (published) or "exact".
-    ``batch``: with "rk4", cells advanced together in lock-step
-    (:func:`~boringbar.simulate.simulate_batch`, up to 16), taken in grid order
-    so that a batch's cells do not depend on ``workers``; 1: one cell at a time.
-    The results are the same, bit for bit, whatever ``batch`` and ``workers``.
-
-    Returns an xarray Dataset with, per cell (dims displacement, velocity):
-    ``attractor`` id, ``rms_tip_m``, ``pattern``, ``period`` (0: non-periodic),
-    ``impacts_per_cycle`` and the final Poincare signature ``signature_tip_m``,
-    ``signature_tip_velocity_m_s`` (dim point: the k centres, NaN beyond k; for a
-    non-periodic run its last MAX_K samples); per
-    attractor (dim attractor, ids ordered by basin size): ``fraction`` (sums to
-    1), ``count``, ``pattern``, ``period``, ``rms_tip_m``, the representative's
-    initial condition and its kept Poincare samples ``poincare_tip_m``,
-    ``poincare_tip_velocity_m_s`` (dim sample).
-    """
-    import xarray as xr
-
-    if not isinstance(system, System):
+def plan(system, options: BasinOptions, integration: Integration) -> Plan:
+    """Every cell of every operating point (``system``: a System under
+    ``options.forcing``, or a list of :class:`OperatingPoint`); a point is
+    (operating point index, [cell indices]): a lock-step batch of ``options.batch``
+    consecutive cells in grid order (RK4) or one cell."""
+    if isinstance(system, list | tuple):
+        operating = list(system)
+    elif isinstance(system, System):
+        operating = [OperatingPoint("", Case("", system, system.kind), options.forcing)]
+    else:
         raise ParameterError(f"system = {system!r} must be a System (see make_system)")
-    if not isinstance(forcing, Harmonic):
-        raise ParameterError(f"forcing = {forcing!r} must be a Harmonic (basins are of a "
-                             "periodically forced system)")
-    w0 = _grid("displacement", displacement)
-    v0 = _grid("velocity", velocity)
-    check_positive("duration", duration, "s")
-    check_range("drop", drop, 0.0, 1.0, hi_open=True)
-    tol = BasinTolerance() if tol is None else tol
-    if not isinstance(tol, BasinTolerance):
-        raise ParameterError(f"tol = {tol!r} must be a BasinTolerance")
-    workers = int(workers or os.cpu_count() or 1)
-    check_range("workers", workers, 1, 4096)
-    check_range("batch", batch, 1, BMAX)
-    initials = [Initial(float(w), float(v), ball_position, ball_velocity)
-                for w in w0 for v in v0]
-    # validates everything else (dt, ball position) and warms the JIT before fanning out
-    first = simulate(system, forcing, duration=min(duration, 50 * dt), dt=dt,
-                     initial=initials[0], integrator=integrator)
-    omega = first.omega
-    batched = integrator == "rk4" and batch > 1
-    if batched:  # the lock-step kernel of a full batch
-        simulate_batch([(system, forcing, initials[0])] * min(batch, len(initials)),
-                       duration=min(duration, 50 * dt), dt=dt)
+    if not operating:
+        raise ParameterError("basins needs at least one operating point")
+    initials = options.initials()
+    batched = integration.integrator == "rk4" and options.batch > 1
+    size = options.batch if batched else 1
+    points = [(i, list(range(a, min(a + size, len(initials)))))
+              for i in range(len(operating)) for a in range(0, len(initials), size)]
+    context = {"operating": operating, "options": options, "integration": integration,
+               "batched": batched, "initials": initials,
+               "w0": basin_grid("displacement_m", options.displacement_m),
+               "v0": basin_grid("velocity_m_s", options.velocity_m_s)}
+    return Plan(context, points)
 
-    cells: list[_Cell | None] = [None] * len(initials)
-    tic = time.perf_counter()
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        if batched:
-            futures = {pool.submit(_run_batch, system, forcing, initials[i:i + batch], duration,
-                                   dt, drop, tol): i
-                       for i in range(0, len(initials), batch)}
-        else:
-            futures = {pool.submit(_run, system, forcing, ini, duration, dt, drop, tol,
-                                   integrator): i
-                       for i, ini in enumerate(initials)}
-        done = 0
-        for fut in as_completed(futures):
-            res = fut.result()
-            res = res if isinstance(res, list) else [res]
-            i = futures[fut]
-            cells[i:i + len(res)] = res
-            done += len(res)
-            if progress is not None:
-                progress(done, len(initials))
-    wall = time.perf_counter() - tic
-    label, leaders = group(cells, omega, tol)
-    return _dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, {
-        "dt_s": dt, "duration_s": duration, "drop": drop, "workers": workers,
-        "wall_time_s": wall, "ball_position_m": ball_position,
-        "ball_velocity_m_s": ball_velocity, "tolerances": json.dumps(asdict(tol)),
-        "integrator": integrator, "batch": batch if batched else 1,
-    })
+
+def compute(context: dict, point: tuple[int, list[int]]) -> list[_Cell]:
+    """The cells of one point (a lock-step batch, or one cell), in grid order."""
+    op = context["operating"][point[0]]
+    integ, tol = context["integration"], context["options"].tolerance
+    initials = [context["initials"][j] for j in point[1]]
+    if context["batched"]:
+        runs = simulate_batch([(op.case.system, op.forcing, ini) for ini in initials],
+                              duration=integ.duration_s, dt=integ.dt_s,
+                              steady_fraction=integ.steady_fraction, strobe=True)
+    else:
+        runs = [simulate(op.case.system, op.forcing, **{**integ.kwargs(), "initial": ini},
+                         strobe=True) for ini in initials]
+    return [_cell(run, integ.dt_s, tol) for run in runs]
+
+
+def warm(context: dict) -> None:
+    """Compile the kernels once in this process (and check each operating point's
+    first cell before any work): a short run of each, and batched, the lock-step
+    kernel of each batch size the points use, per bar kind and mode count."""
+    integ, first = context["integration"], context["initials"][0]
+    short = min(integ.duration_s, 50 * integ.dt_s)
+    n, batch = len(context["initials"]), context["options"].batch
+    sizes = sorted({min(batch, n - a) for a in range(0, n, batch)})
+    seen = set()
+    for op in context["operating"]:
+        system = op.case.system
+        simulate(system, op.forcing, duration=short, dt=integ.dt_s, initial=first,
+                 integrator=integ.integrator)
+        key = (system.kind, system.bar.n_modes)
+        if context["batched"] and key not in seen:
+            seen.add(key)
+            for size in sizes:
+                simulate_batch([(system, op.forcing, first)] * size, duration=short,
+                               dt=integ.dt_s)
 
 
 def _padded(arrays: list[np.ndarray], n: int) -> np.ndarray:
@@ -318,23 +372,26 @@ def _padded(arrays: list[np.ndarray], n: int) -> np.ndarray:
     return out
 
 
-def _dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, attrs):
+def _dataset(system: System, forcing: Harmonic, cells: list[_Cell], context: dict,
+             attrs: dict):
+    """The Dataset of one operating point's cells (grid order), grouped."""
+    o = context["options"]
+    w0, v0, initials = context["w0"], context["v0"], context["initials"]
+    label, leaders = group(cells, forcing.omega(system.reference_frequency), o.tolerance)
     shape = (len(w0), len(v0))
     grid = ("displacement", "velocity")
-    sig = _padded([c.centres for c in cells], MAX_K)
-    sig = sig.reshape(*shape, MAX_K, 2)
+    sig = _padded([c.centres for c in cells], MAX_K).reshape(*shape, MAX_K, 2)
     reps = [cells[j] for j in leaders]
-    n_samples = max(len(c.strobe) for c in reps)
-    poincare = _padded([c.strobe for c in reps], n_samples)
+    poincare = _padded([c.strobe for c in reps], max(len(c.strobe) for c in reps))
     counts = np.bincount(label, minlength=len(leaders))
+    per_cell = lambda f: np.array([f(c) for c in cells]).reshape(shape)  # noqa: E731
     data = {
         "attractor": (grid, label.reshape(shape)),
-        "rms_tip_m": (grid, np.array([c.rms for c in cells]).reshape(shape), {"units": "m"}),
+        "rms_tip_m": (grid, per_cell(lambda c: c.rms), {"units": "m"}),
         "pattern": (grid, np.array([c.pattern for c in cells], dtype=str).reshape(shape)),
-        "period": (grid, np.array([c.period for c in cells]).reshape(shape),
+        "period": (grid, per_cell(lambda c: c.period),
                    {"long_name": "Poincare period in forcing periods; 0: non-periodic"}),
-        "impacts_per_cycle": (grid, np.array([c.impacts_per_cycle for c in cells])
-                              .reshape(shape)),
+        "impacts_per_cycle": (grid, per_cell(lambda c: c.impacts_per_cycle)),
         "signature_tip_m": ((*grid, "point"), sig[..., 0], {"units": "m"}),
         "signature_tip_velocity_m_s": ((*grid, "point"), sig[..., 1], {"units": "m/s"}),
         "fraction": ("attractor_id", counts / len(cells)),
@@ -353,30 +410,142 @@ def _dataset(xr, system, forcing, w0, v0, cells, label, leaders, initials, attrs
         "poincare_tip_velocity_m_s": (("attractor_id", "sample"), poincare[..., 1],
                                       {"units": "m/s"}),
     }
-    return xr.Dataset(
-        data,
-        coords={
-            "displacement": ("displacement", w0, {"units": "m",
-                                                  "long_name": "initial tip displacement"}),
-            "velocity": ("velocity", v0, {"units": "m/s", "long_name": "initial tip velocity"}),
-            "attractor_id": np.arange(len(leaders)),
-        },
-        attrs={
-            "title": "boringbar basins of attraction",
-            "boringbar_version": __version__,
-            "preset": system.preset,
-            "system": json.dumps(system.to_dict()),
-            "forcing": json.dumps(forcing.to_dict()),
-            "grouping": "Poincare period and centres (Hausdorff, scaled by sqrt(2) RMS) + "
-                        "impact pattern + RMS; non-periodic runs by pattern + RMS band; "
-                        "mirrored orbit pairs are distinct attractors",
-            **attrs,
-        },
-    )
+    coords = {
+        "displacement": ("displacement", w0, {"units": "m",
+                                              "long_name": "initial tip displacement"}),
+        "velocity": ("velocity", v0, {"units": "m/s", "long_name": "initial tip velocity"}),
+        "attractor_id": np.arange(len(leaders)),
+    }
+    return xr.Dataset(data, coords=coords, attrs={
+        "title": "boringbar basins of attraction", "boringbar_version": __version__,
+        "preset": system.preset, "system": json.dumps(system.to_dict()),
+        "forcing": json.dumps(forcing.to_dict()), "grouping": GROUPING, **attrs})
 
 
-def basin_summary(ds) -> dict:
-    """JSON-able summary of :func:`basins` (attractors largest basin first)."""
+def _stack(parts: list, context: dict):
+    """Basin Datasets of several operating points along a leading ``case`` dim, the
+    attractors of each padded to the largest count (``count`` 0, ``attractor_period``
+    -1, NaN and "" beyond its own)."""
+    n_att = max(p.sizes["attractor_id"] for p in parts)
+    n_sample = max(p.sizes["sample"] for p in parts)
+    fill = {"count": 0, "attractor_period": -1, "attractor_pattern": ""}
+    padded = []
+    for p in parts:
+        attrs = {k: p[k].attrs for k in p.variables}
+        p = p.reindex(attractor_id=np.arange(n_att), fill_value=fill)
+        p = p.pad(sample=(0, n_sample - p.sizes["sample"]))
+        for k, a in attrs.items():
+            p[k].attrs = a
+        padded.append(p)
+    ds = xr.concat(padded, dim="case", data_vars="all", coords="minimal",
+                   compat="override", combine_attrs="drop")
+    ops = context["operating"]
+    ds = ds.assign_coords({
+        "case": [op.label for op in ops],
+        "bar": ("case", [op.case.bar for op in ops]),
+        "gap": ("case", np.array([op.case.gap for op in ops]), {"units": "m"}),
+        "friction": ("case", [op.case.friction for op in ops]),
+        "force": ("case", np.array([op.forcing.amplitude for op in ops]), {"units": "N"}),
+        "ratio": ("case", np.array([op.forcing.ratio for op in ops])),
+    })
+    ds.attrs = {k: v for k, v in parts[0].attrs.items() if k not in ("system", "forcing")}
+    ds.attrs["systems"] = json.dumps({op.label: op.case.system.to_dict() for op in ops})
+    ds.attrs["forcings"] = json.dumps({op.label: op.forcing.to_dict() for op in ops})
+    return ds
+
+
+def assemble(plan: Plan, results: list[list[_Cell]], attrs: dict | None = None):
+    """The basins Dataset of the one operating point, or (several) theirs stacked along
+    ``case`` (:func:`_stack`); ``attrs`` go after the configuration's."""
+    ctx = plan.context
+    o, integ = ctx["options"], ctx["integration"]
+    cells: dict[int, list[_Cell]] = {}
+    for (op, _), res in zip(plan.points, results, strict=True):
+        cells.setdefault(op, []).extend(res)
+    config = {"dt_s": integ.dt_s, "duration_s": integ.duration_s,
+              "steady_fraction": integ.steady_fraction, "ball_position_m": o.ball_position_m,
+              "ball_velocity_m_s": o.ball_velocity_m_s,
+              "tolerances": json.dumps(asdict(o.tolerance)), "integrator": integ.integrator,
+              "batch": o.batch if ctx["batched"] else 1, **(attrs or {})}
+    parts = [_dataset(op.case.system, op.forcing, cells[i], ctx, config)
+             for i, op in enumerate(ctx["operating"])]
+    return parts[0] if len(parts) == 1 else _stack(parts, ctx)
+
+
+def basins(system: System, options: BasinOptions | None = None, *,
+           integration: Integration | None = None, execution: Execution | None = None,
+           progress=None):
+    """Basins of attraction over initial tip displacement x tip velocity.
+
+    ``system`` under F0 sin(Omega t) (``options.force_n``, ``options.ratio``);
+    ``options``: :class:`BasinOptions` (the grid, the ball's start, the
+    tolerances of the grouping (module docstring), the lock-step batch, and
+    ``poincare_from``); ``integration``: each cell's duration, step, integrator and
+    steady window (``steady_fraction``: the kept last part of each run; its
+    ``initial`` is not used, the grid sets it); ``execution``: where the points
+    (lock-step batches of cells, or cells) run; ``progress(done, total)`` as they
+    finish.  The results are the same, bit for bit, whatever the batch, the
+    executor and its workers.
+
+    Returns an xarray Dataset with, per cell (dims displacement, velocity):
+    ``attractor`` id, ``rms_tip_m``, ``pattern``, ``period`` (0: non-periodic),
+    ``impacts_per_cycle`` and the final Poincare signature ``signature_tip_m``,
+    ``signature_tip_velocity_m_s`` (dim point: the k centres, NaN beyond k; for a
+    non-periodic run its last MAX_K samples); per
+    attractor (dim attractor, ids ordered by basin size): ``fraction`` (sums to
+    1), ``count``, ``pattern``, ``period``, ``rms_tip_m``, the representative's
+    initial condition and its kept Poincare samples ``poincare_tip_m``,
+    ``poincare_tip_velocity_m_s`` (dim sample); with ``options.poincare_from``,
+    :func:`with_poincare`'s variables.
+    """
+    options = options or BasinOptions()
+    integration = integration or Integration()
+    p = plan(system, options, integration)
+    results, wall = run_plan(sys.modules[__name__], p, execution, progress)
+    ds = assemble(p, results, execution_attrs(execution, wall))
+    if options.poincare_from is None:
+        return ds
+    w0, v0 = options.poincare_from
+    return with_poincare(ds, system, options.forcing,
+                         Initial(w0, v0, options.ball_position_m, options.ball_velocity_m_s),
+                         integration)
+
+
+def with_poincare(ds, system: System, forcing: Harmonic, initial: Initial,
+                  integration: Integration | None = None):
+    """``ds`` with the stroboscopic Poincare map of one run of ``system`` under
+    ``forcing`` from ``initial`` (the samples of its steady part): the variables
+    ``poincare_from_tip_m``, ``poincare_from_tip_velocity_m_s`` (dim
+    poincare_sample) and, as JSON in the attribute ``poincare_from``, its initial
+    condition, verdict, period, distinct points, samples, RMS and pattern."""
+    integration = integration or Integration()
+    run = simulate(system, forcing, **{**integration.kwargs(), "initial": initial},
+                   strobe=True)
+    pm = poincare_map(run, integration.steady_fraction)
+    verdict = pm.classify()
+    ds = ds.assign(
+        poincare_from_tip_m=("poincare_sample", pm.tip_displacement,
+                             {"units": "m", "long_name": "W at Omega t = 0 mod 2 pi, from "
+                                                         "poincare_from"}),
+        poincare_from_tip_velocity_m_s=("poincare_sample", pm.tip_velocity,
+                                        {"units": "m/s", "long_name": "W' at Omega t = 0 mod "
+                                                                      "2 pi, from "
+                                                                      "poincare_from"}))
+    poincare = {"tip_displacement_m": float(initial.tip_displacement),
+                "tip_velocity_m_s": float(initial.tip_velocity),
+                "ball_position_m": float(initial.ball_position),
+                "ball_velocity_m_s": float(initial.ball_velocity),
+                "verdict": verdict["verdict"], "period": int(verdict["k"]),
+                "distinct": int(verdict["distinct"]), "n_samples": len(pm.time),
+                "rms_tip_m": float(run.rms_tip),
+                "pattern": "" if run.pattern is None else run.pattern.name}
+    ds.attrs["poincare_from"] = json.dumps(poincare)
+    return ds
+
+
+def summary(ds) -> dict:
+    """JSON-able summary of :func:`basins` (attractors largest basin first; the
+    :func:`with_poincare` run where there is one)."""
     attractors = []
     for a in ds["attractor_id"].values:
         k = int(ds["attractor_period"].values[a])
@@ -412,4 +581,6 @@ def basin_summary(ds) -> dict:
         "workers": ds.attrs.get("workers"),
         "wall_time_s": ds.attrs.get("wall_time_s"),
         "attractors": attractors,
+        "poincare_from": json.loads(ds.attrs["poincare_from"]) if "poincare_from" in ds.attrs
+        else None,
     }

@@ -1,4 +1,4 @@
-"""Bifurcation diagrams by continuation (MODEL.md section 6).
+"""Bifurcation diagrams by continuation (docs/model.md, section 6).
 
 One run per parameter value, each started from the previous run's final
 state: forward through ``values`` in the order given, then (``backward``)
@@ -28,25 +28,34 @@ from __future__ import annotations
 
 import json
 import math
-import time
+import sys
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
+import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_positive, check_range
+from boringbar._validate import ParameterError, check_positive, check_range, check_values
+from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.poincare import METHOD, poincare_map
-from boringbar.dampers import ImpactDamper
-from boringbar.forcing import Harmonic
-from boringbar.simulate import Initial, State, simulate
-from boringbar.system import System
+from boringbar.execute import Execution
+from boringbar.model.dampers import ImpactDamper
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System
+from boringbar.simulate import Initial, Integration, State, simulate
 
 #: Parameters that change only the forcing, with their units.
 FORCING_PARAMETERS = {"force": "N", "ratio": "1"}
 DIRECTIONS = ("forward", "backward")
 #: What the swept parameter leaves unset by default: 10 N at Omega = omega_n.
 DEFAULT_FORCING = Harmonic(10.0, 1.0)
+#: The published sweep: F0 = 5..50 N in 1 N steps.
+PUBLISHED_FORCES = tuple(float(f) for f in range(5, 51))
+CONTINUATION = ("each run starts from the previous run's final state; time runs on, or when "
+                "Omega changes the next run starts at t' = (Omega t mod 2 pi) / Omega' so the "
+                "forcing phase is continuous; backward starts from the forward sweep's final "
+                "state")
 
 
 def continued_state(state: State, omega_old: float, omega_new: float) -> State:
@@ -90,9 +99,59 @@ def _point(system, parameter: str, value: float, base: Harmonic) -> tuple[System
     return made, base
 
 
-def _check(system, parameter: str, values, base_forcing, duration, dt, drop) -> np.ndarray:
-    if not isinstance(parameter, str) or not parameter:
-        raise ParameterError(f"parameter = {parameter!r} must be a name")
+@dataclass(frozen=True)
+class BifurcationOptions:
+    """What a continuation sweeps and how its runs are judged.
+
+    ``parameter``: "force" (F0, N) or "ratio" (Omega/omega_n) for a System; any
+    other name for a factory ``value -> System`` (``units`` labels its values);
+    ``values``: visited in the order given (strictly increasing or decreasing;
+    default F0 = 5..50 N, published); the forcing the parameter does not set:
+    ``force_n`` (N) at ``ratio`` (Omega/omega_n); ``backward``: then back through
+    the values in reverse; verdicts: :meth:`PoincareMap.classify` with ``tol`` and
+    ``max_k``.
+    """
+
+    parameter: str = "force"
+    values: tuple[float, ...] = PUBLISHED_FORCES
+    force_n: float = DEFAULT_FORCING.amplitude
+    ratio: float = DEFAULT_FORCING.ratio
+    backward: bool = True
+    tol: float = 1e-3
+    max_k: int = 16
+    units: str | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.parameter, str) or not self.parameter:
+            raise ParameterError(f"parameter = {self.parameter!r} must be a name")
+        v = np.atleast_1d(np.asarray(self.values, dtype=float))
+        if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
+            raise ParameterError(f"values = {self.values!r} must be a non-empty 1-D list of "
+                                 "numbers")
+        step = np.diff(v)
+        if v.size > 1 and not (np.all(step > 0) or np.all(step < 0)):
+            raise ParameterError(f"values = {v.tolist()!r} must be strictly increasing or "
+                                 "strictly decreasing (the sweep visits them in order)")
+        if self.parameter == "ratio":
+            check_values("values", v.tolist(), 0.0, math.inf, lo_open=True)
+        if self.parameter == "force":
+            check_values("values", v.tolist(), 0.0, math.inf, unit="N")
+        object.__setattr__(self, "values", tuple(v.tolist()))
+        check_range("force_n", self.force_n, 0.0, math.inf, unit="N")
+        check_range("ratio", self.ratio, 0.0, math.inf, lo_open=True)
+        check_positive("tol", self.tol)
+        check_range("max_k", self.max_k, 1, 64)
+
+    @property
+    def base_forcing(self) -> Harmonic:
+        return Harmonic(self.force_n, self.ratio)
+
+    def unit(self) -> str:
+        """The units of the values."""
+        return FORCING_PARAMETERS.get(self.parameter, self.units or "")
+
+
+def _check_system(system, parameter: str) -> None:
     if parameter in FORCING_PARAMETERS:
         if not isinstance(system, System):
             raise ParameterError(
@@ -104,54 +163,78 @@ def _check(system, parameter: str, values, base_forcing, duration, dt, drop) -> 
             f"parameter = {parameter!r} is not one of "
             f"{', '.join(FORCING_PARAMETERS)}: pass a factory value -> System"
         )
-    if not isinstance(base_forcing, Harmonic):
-        raise ParameterError(f"base_forcing = {base_forcing!r} must be a Harmonic")
-    v = np.atleast_1d(np.asarray(values, dtype=float))
-    if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
-        raise ParameterError(f"values = {values!r} must be a non-empty 1-D list of numbers")
-    step = np.diff(v)
-    if v.size > 1 and not (np.all(step > 0) or np.all(step < 0)):
-        raise ParameterError(
-            f"values = {v.tolist()!r} must be strictly increasing or "
-            "strictly decreasing (the sweep visits them in order)"
-        )
-    check_positive("duration", duration, "s")
-    check_positive("dt", dt, "s")
-    check_range("drop", drop, 0.0, 1.0, hi_open=True)
-    return v
 
 
-def bifurcation(
-    system: System | Callable[[float], System],
-    parameter: str,
-    values,
-    *,
-    base_forcing: Harmonic | None = None,
-    duration: float = 2.0,
-    dt: float = 1e-6,
-    drop: float = 0.2,
-    initial: Initial | State | None = None,
-    backward: bool = True,
-    tol: float = 1e-3,
-    max_k: int = 16,
-    units: str | None = None,
-    progress=None,
-    integrator: str = "rk4",
-):
-    """Continuation sweep of ``parameter`` over ``values`` with Poincare samples.
+def plan(systems, options: BifurcationOptions, integration: Integration) -> Plan:
+    """One point per continuation (sequential by nature): of ``systems``, a System or
+    a factory ``value -> System`` (the Dataset of one), or a list of
+    :class:`~boringbar.analysis.sweep.Case` (their Datasets stacked along ``case``)."""
+    cases = list(systems) if isinstance(systems, list | tuple) else None
+    targets = [c.system for c in cases] if cases is not None else [systems]
+    if not targets:
+        raise ParameterError("bifurcation needs at least one system")
+    for target in targets:
+        _check_system(target, options.parameter)
+    context = {"systems": targets, "options": options, "integration": integration}
+    return Plan(context, list(range(len(targets))), {"cases": cases})
 
-    ``parameter``: "force" (F0, N) or "ratio" (Omega/omega_n) with ``system`` a
-    System; any other name with ``system`` a factory ``value -> System`` (e.g.
-    ``lambda g: make_system("ball", gap=g)``; ``units`` labels the values).
-    ``base_forcing`` (default 10 N at ratio 1) supplies what the parameter does
-    not set.  Each run lasts
-    ``duration`` (s) with step ``dt`` (s); its first ``drop`` of time is dropped
-    from the Poincare samples, the RMS and the pattern.  The first forward run
-    starts from ``initial`` (default: rest, ball centred); each later one from
-    the previous run's final state (module docstring: phase continuity).
-    Verdicts: :meth:`PoincareMap.classify` with ``tol``, ``max_k``.
-    ``progress(done, total)`` is called after each run.  ``integrator``: "rk4"
-    (published) or "exact" (see :func:`~boringbar.simulate.simulate`).
+
+def compute(context: dict, i: int) -> dict:
+    """The whole continuation (forward, then backward) of system ``i``: per run its
+    record (:data:`_FIELDS`, Poincare points), and each value's System as a dict."""
+    o, integ = context["options"], context["integration"]
+    system, v = context["systems"][i], o.values
+    directions = DIRECTIONS if o.backward else DIRECTIONS[:1]
+    records: dict[tuple[int, int], dict] = {}
+    systems: dict[int, dict] = {}
+    previous, omega_old = None, math.nan
+    for d, direction in enumerate(directions):
+        order = range(len(v)) if direction == "forward" else range(len(v) - 1, -1, -1)
+        for j in order:
+            sys_j, forcing = _point(system, o.parameter, v[j], o.base_forcing)
+            omega = forcing.omega(sys_j.reference_frequency)
+            start, restarted = _start(previous, integ.initial, sys_j, omega, omega_old)
+            run = simulate(sys_j, forcing, **{**integ.kwargs(), "initial": start},
+                           strobe=True)
+            records[d, j] = {**_record(run, integ.steady_fraction, o.tol, o.max_k),
+                             "restarted": restarted}
+            systems.setdefault(j, sys_j.to_dict())
+            previous, omega_old = run.final, omega
+    return {"records": records, "directions": directions,
+            "systems": [systems[j] for j in range(len(v))]}
+
+
+def warm(context: dict) -> None:
+    """Compile the kernel once in this process: a short harmonic run per mode count."""
+    o, integ = context["options"], context["integration"]
+    seen = set()
+    for target in context["systems"]:
+        system = _point(target, o.parameter, o.values[0], o.base_forcing)[0]
+        if system.bar.n_modes not in seen:
+            seen.add(system.bar.n_modes)
+            simulate(system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6,
+                     integrator=integ.integrator)
+
+
+def bifurcation(system: System | Callable[[float], System],
+                options: BifurcationOptions | None = None, *,
+                integration: Integration | None = None, execution: Execution | None = None,
+                progress=None):
+    """Continuation sweep of ``options.parameter`` over ``options.values`` with
+    Poincare samples.
+
+    ``system``: a System for "force" (F0, N) or "ratio" (Omega/omega_n); for any
+    other parameter a factory ``value -> System`` (e.g. ``lambda g:
+    make_system("ball", gap=g)``).  ``options``: :class:`BifurcationOptions`
+    (default: F0 5..50 N at ratio 1, forward and backward).  ``integration``:
+    each run's duration, step, integrator and steady window
+    (``steady_fraction``: the Poincare samples, the RMS and the pattern are of the
+    last part of each run); the first forward run starts from
+    ``integration.initial`` (default: rest, ball centred; an
+    :class:`~boringbar.simulate.Initial` or a :class:`~boringbar.simulate.State`),
+    each later one from the previous run's final state (module docstring: phase
+    continuity).  ``execution`` and ``progress(done, total)``: the contract's
+    (one point: the whole continuation).
 
     Returns an xarray Dataset, dims (direction, value, sample): the Poincare
     samples ``tip_displacement`` W (m) and ``tip_velocity`` W' (m/s), NaN-padded;
@@ -159,52 +242,14 @@ def bifurcation(
     ``zero_one_K`` and ``zero_one_signal`` (the coordinate it ran on),
     ``n_samples``, ``tolerance`` (relative, jitter included), ``rms_tip_m``,
     ``pattern``, ``impacts_per_cycle``, ``restarted``, ``start_time_s``,
-    ``end_time_s``, ``elapsed_s``, ``omega`` (rad/s); the configuration (every
-    value's System included) as JSON in the attributes.
+    ``end_time_s``, ``omega`` (rad/s); the configuration (every value's System
+    included) as JSON in the attributes.
     """
-    base_forcing = DEFAULT_FORCING if base_forcing is None else base_forcing
-    v = _check(system, parameter, values, base_forcing, duration, dt, drop)
-    directions = DIRECTIONS if backward else DIRECTIONS[:1]
-    records: dict[tuple[int, int], dict] = {}
-    systems: dict[int, dict] = {}
-    previous, omega_old = None, math.nan
-    tic = time.perf_counter()
-    for d, direction in enumerate(directions):
-        order = range(len(v)) if direction == "forward" else range(len(v) - 1, -1, -1)
-        for i in order:
-            sys_i, forcing = _point(system, parameter, float(v[i]), base_forcing)
-            omega = forcing.omega(sys_i.reference_frequency)
-            start, restarted = _start(previous, initial, sys_i, omega, omega_old)
-            run = simulate(
-                sys_i,
-                forcing,
-                duration=duration,
-                dt=dt,
-                initial=start,
-                steady_fraction=1.0 - drop,
-                strobe=True,
-                integrator=integrator,
-            )
-            records[d, i] = {**_record(run, drop, tol, max_k), "restarted": restarted}
-            systems.setdefault(i, sys_i.to_dict())
-            previous, omega_old = run.final, omega
-            if progress is not None:
-                progress(len(records), len(directions) * len(v))
-    config = {
-        "parameter": parameter,
-        "values": v.tolist(),
-        "base_forcing": base_forcing.to_dict(),
-        "systems": [systems[i] for i in range(len(v))],
-        "initial": _initial_dict(initial),
-        "duration_s": duration,
-        "dt_s": dt,
-        "drop": drop,
-        "tol": tol,
-        "max_k": max_k,
-        "integrator": integrator,
-        "wall_time_s": time.perf_counter() - tic,
-    }
-    return _dataset(records, directions, v, FORCING_PARAMETERS.get(parameter, units or ""), config)
+    options = options or BifurcationOptions()
+    integration = integration or Integration()
+    p = plan(system, options, integration)
+    results, wall = run_plan(sys.modules[__name__], p, execution, progress)
+    return assemble(p, results, execution_attrs(execution, wall))
 
 
 #: Per-run outputs: name -> (dtype, units).
@@ -223,13 +268,12 @@ _FIELDS = {
     "omega": (float, "rad/s"),
     "start_time_s": (float, "s"),
     "end_time_s": (float, "s"),
-    "elapsed_s": (float, "s"),
 }
 
 
-def _record(run, drop: float, tol: float, max_k: int) -> dict:
+def _record(run, steady_fraction: float, tol: float, max_k: int) -> dict:
     """One run's Poincare samples, verdict and metrics (the fields of ``_FIELDS``)."""
-    pm = poincare_map(run, drop)
+    pm = poincare_map(run, steady_fraction)
     verdict = pm.classify(tol, max_k)
     return {
         "points": pm.points,
@@ -246,62 +290,78 @@ def _record(run, drop: float, tol: float, max_k: int) -> dict:
         "omega": run.omega,
         "start_time_s": run.t0,
         "end_time_s": run.final.t,
-        "elapsed_s": run.elapsed_s,
     }
 
 
-def _dataset(records: dict, directions, values: np.ndarray, unit: str, config: dict):
-    import xarray as xr
-
-    shape = (len(directions), len(values))
-    n_sample = max([len(r["points"]) for r in records.values()] + [1])
+def _arrays(result: dict, n_values: int, n_sample: int) -> dict:
+    """One continuation's records as arrays over (direction, value[, sample]):
+    ``samples`` (..., 2) NaN-padded to ``n_sample``, and each field of ``_FIELDS``."""
+    shape = (len(result["directions"]), n_values)
     samples = np.full(shape + (n_sample, 2), np.nan)
     fields = {k: np.zeros(shape, dtype=object if t is str else t) for k, (t, _) in _FIELDS.items()}
-    for (d, i), rec in records.items():
+    for (d, i), rec in result["records"].items():
         samples[d, i, : len(rec["points"])] = rec["points"]
         for k in fields:
             fields[k][d, i] = rec[k]
-    dims2 = ("direction", "value")
+    return {"samples": samples,
+            **{k: fields[k].astype(str) if t is str else fields[k]
+               for k, (t, _) in _FIELDS.items()}}
+
+
+def _data(arrays: list[dict], lead: tuple) -> dict:
+    """The data variables of the stacked ``arrays`` (one per continuation) with the
+    leading dims ``lead`` (() for one continuation, ("case",) for several)."""
+    pick = (lambda k: arrays[0][k]) if not lead else (lambda k: np.stack([a[k] for a in arrays]))
+    samples = pick("samples")
+    dims2 = lead + ("direction", "value")
     dims3 = dims2 + ("sample",)
     data = {
-        "tip_displacement": (
-            dims3,
-            samples[..., 0],
-            {"units": "m", "long_name": "W at Omega t = 0 mod 2 pi"},
-        ),
-        "tip_velocity": (
-            dims3,
-            samples[..., 1],
-            {"units": "m/s", "long_name": "W' at Omega t = 0 mod 2 pi"},
-        ),
+        "tip_displacement": (dims3, samples[..., 0],
+                             {"units": "m", "long_name": "W at Omega t = 0 mod 2 pi"}),
+        "tip_velocity": (dims3, samples[..., 1],
+                         {"units": "m/s", "long_name": "W' at Omega t = 0 mod 2 pi"}),
     }
-    for k, (t, u) in _FIELDS.items():
-        a = fields[k].astype(str) if t is str else fields[k]
-        data[k] = (dims2, a, {"units": u} if u else {})
-    parameter = config["parameter"]
-    return xr.Dataset(
-        data,
-        coords={
-            "direction": list(directions),
-            "value": ("value", values, {"long_name": parameter, "units": unit}),
-        },
-        attrs={
-            "title": f"boringbar bifurcation diagram over {parameter}",
-            "boringbar_version": __version__,
-            "parameter": parameter,
-            "units": unit,
-            "dt_s": config["dt_s"],
-            "duration_s": config["duration_s"],
-            "drop": config["drop"],
-            "wall_time_s": config["wall_time_s"],
-            "classification": METHOD,
-            "continuation": "each run starts from the previous run's final state; time runs "
-            "on, or when Omega changes the next run starts at t' = (Omega t mod 2 pi) / "
-            "Omega' so the forcing phase is continuous; backward starts from the forward "
-            "sweep's final state",
-            "config": json.dumps(config),
-        },
-    )
+    for k, (_, u) in _FIELDS.items():
+        data[k] = (dims2, pick(k), {"units": u} if u else {})
+    return data
+
+
+def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
+    """The bifurcation Dataset of one continuation (dims direction, value, sample), or,
+    for a list of cases, theirs stacked along ``case``; ``attrs`` after the
+    configuration's."""
+    ctx, cases = plan.context, plan.extra["cases"]
+    o, integ = ctx["options"], ctx["integration"]
+    n_sample = max([len(r["points"]) for res in results for r in res["records"].values()]
+                   + [1])
+    arrays = [_arrays(r, len(o.values), n_sample) for r in results]
+    data = _data(arrays, () if cases is None else ("case",))
+    directions = results[0]["directions"]
+    coords = {"direction": list(directions),
+              "value": ("value", np.array(o.values), {"long_name": o.parameter,
+                                                       "units": o.unit()})}
+    config = {"parameter": o.parameter, "values": list(o.values),
+              "base_forcing": o.base_forcing.to_dict(),
+              "initial": _initial_dict(integ.initial), "duration_s": integ.duration_s,
+              "dt_s": integ.dt_s, "steady_fraction": integ.steady_fraction, "tol": o.tol,
+              "max_k": o.max_k, "integrator": integ.integrator}
+    if cases is None:
+        config["systems"] = results[0]["systems"]
+        extra = {}
+    else:
+        coords.update({"case": [c.label for c in cases], "bar": ("case", [c.bar for c in cases]),
+                       "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+                       "friction": ("case", [c.friction for c in cases])})
+        extra = {"systems": json.dumps({c.label: r["systems"]
+                                        for c, r in zip(cases, results, strict=True)})}
+    return xr.Dataset(data, coords=coords, attrs={
+        "title": f"boringbar bifurcation diagram over {o.parameter}",
+        "boringbar_version": __version__, "parameter": o.parameter, "units": o.unit(),
+        "preset": ",".join(sorted({r["systems"][0]["preset"] for r in results})),
+        "dt_s": integ.dt_s, "duration_s": integ.duration_s,
+        "steady_fraction": integ.steady_fraction, "integrator": integ.integrator,
+        "classification": METHOD, "continuation": CONTINUATION,
+        "config": json.dumps(config), **extra, **(attrs or {})})
 
 
 def _initial_dict(initial) -> dict | None:
@@ -410,3 +470,55 @@ def hysteresis_ranges(ds, tol: float = 0.02) -> list[tuple[float, float]]:
     if current is not None:
         ranges.append((current[0], current[1]))
     return ranges
+
+
+HYSTERESIS_NOTE = ("parameter ranges (start, stop) in the parameter's SI units where the "
+                   "forward and backward Poincare sets differ "
+                   "(analysis.bifurcation.hysteresis_ranges)")
+
+
+def with_hysteresis(ds, tol: float = 0.02):
+    """``ds`` with its :func:`hysteresis_ranges` (JSON, null without a backward sweep)
+    in the attribute ``hysteresis_ranges``, as :func:`summary` and the plot read them."""
+    ranges = hysteresis_ranges(ds, tol) if "backward" in list(ds["direction"].values) else None
+    ds = ds.copy()
+    ds.attrs.update(hysteresis_ranges=json.dumps(ranges), hysteresis_note=HYSTERESIS_NOTE)
+    return ds
+
+
+def summary(ds, ranges=None) -> dict:
+    """JSON-able summary (what ``boringbar bifurcation --json`` prints): per direction
+    and value the W samples (m), verdicts, periods, RMS and patterns; ``ranges``: the
+    hysteresis ranges (default: those :func:`with_hysteresis` stored, if any)."""
+    if ranges is None and ds.attrs.get("hysteresis_ranges") is not None:
+        ranges = json.loads(ds.attrs["hysteresis_ranges"])
+    config = json.loads(ds.attrs["config"])
+    dirs = [str(d) for d in ds["direction"].values]
+
+    def per_value(name: str, direction: str) -> list:
+        return ds[name].sel(direction=direction).values.tolist()
+
+    def samples(direction: str) -> list[list[float]]:
+        row = ds.sel(direction=direction)
+        return [w[:n].tolist() for w, n in zip(row["tip_displacement"].values,
+                                               row["n_samples"].values, strict=True)]
+
+    return {
+        "parameter": ds.attrs["parameter"],
+        "units": ds.attrs["units"],
+        "values": ds["value"].values.tolist(),
+        "preset": ds.attrs.get("preset"),
+        "bar": ds.attrs.get("bar"),
+        "base_forcing": config["base_forcing"],
+        "duration_s": config["duration_s"],
+        "dt_s": config["dt_s"],
+        "steady_fraction": config["steady_fraction"],
+        "forward": samples("forward"),
+        "backward": samples("backward") if "backward" in dirs else None,
+        "verdicts": {d: per_value("verdict", d) for d in dirs},
+        "period": {d: per_value("period", d) for d in dirs},
+        "rms_tip_m": {d: per_value("rms_tip_m", d) for d in dirs},
+        "pattern": {d: per_value("pattern", d) for d in dirs},
+        "hysteresis_ranges": None if ranges is None else [list(r) for r in ranges],
+        "wall_time_s": ds.attrs.get("wall_time_s"),
+    }

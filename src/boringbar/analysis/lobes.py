@@ -1,4 +1,4 @@
-"""Stability lobes by time-domain simulation (MODEL.md sections 4 and 6).
+"""Stability lobes by time-domain simulation (docs/model.md, sections 4 and 6).
 
 Every grid point (spindle speed x depth of cut) is a regenerative-cutting run
 of the kernel.  Two ways to find, at each speed, the depth where chatter
@@ -24,8 +24,11 @@ starts:
   and be stable above it) the scan can find a lower first unstable depth.
   :func:`compare_methods` lists where the two differ.
 
-Each (case, speed) column is one task; tasks run on a thread pool (the kernel
-releases the GIL).  Every verdict of every grid point that was run is kept.
+Each (case, speed) column is one point of the plan (the contract:
+:mod:`boringbar.analysis.base`), run on an executor (default: a thread per
+core; the kernel releases the GIL).  Every verdict of every grid point that
+was run is kept.  :func:`examples` reruns a stable and an unstable grid point
+with history.
 
 Verdicts: the published criterion (the cutting force reaches zero: the tool
 leaves the cut) and, beside it, bounded chatter (the steady vibration
@@ -38,34 +41,108 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import time
-from concurrent.futures import ThreadPoolExecutor, as_completed
+import sys
+from dataclasses import dataclass, replace
 
 import numpy as np
+import pandas as pd
+import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_choice, check_positive, check_range
+from boringbar._validate import (
+    ParameterError,
+    check_choice,
+    check_int,
+    check_positive,
+    check_range,
+    check_values,
+)
+from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.sweep import Case
-from boringbar.forcing import KR_ALUMINIUM, Regenerative
-from boringbar.simulate import INTEGRATORS, simulate
+from boringbar.execute import Execution
+from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
+from boringbar.model.system import System
+from boringbar.reference.stability import limit_at_speeds
+from boringbar.simulate import Integration, check_delay, simulate
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
 PUBLISHED_DEPTH_STEP = 0.01e-3
+#: Most depths on one speed's grid, max_depth / depth_step (published: 300); each
+#: (case, speed, depth) holds a few numbers in the Dataset.
+MAX_DEPTHS = 100_000
 METHODS = ("scan", "search")
 CRITERIA = ("zero", "bounded")
 #: codes of the verdict arrays
 NOT_RUN, CHATTER, STABLE = -1, 0, 1
+#: History rows of an example rerun (about; every n-th step is kept).
+EXAMPLE_ROWS = 20000
 
 
-def _cut(case: Case, rpm: float, depth: float, opts: dict) -> dict:
-    """One cut, stopped at the first zero of the force."""
-    forcing = Regenerative(depth=depth, rpm=rpm, kr=opts["kr"], feed=opts["feed"],
-                           revolutions=opts["revolutions"], interpolation=opts["interpolation"],
-                           start=opts["start"], stop_at_zero=True,
-                           bounded_fraction=opts["bounded_fraction"])
-    run = simulate(case.system, forcing, duration=opts["duration"], dt=opts["dt"],
-                   integrator=opts.get("integrator", "rk4"))
+@dataclass(frozen=True)
+class LobesOptions:
+    """A lobe study's grid, rule and cut.
+
+    ``rpm``: spindle speeds (rev/min, > 0; default the published 900..1600 step
+    50); ``method``: "scan" (published) or "search" (module doc); ``criterion``:
+    "zero" (published: the force reaches zero) or "bounded"; depths
+    ``depth_step_m``, 2 ``depth_step_m``, ... up to ``max_depth_m`` (m);
+    ``successive``: chattering depths in a row that end a scan.  The cut
+    (:class:`~boringbar.model.forcing.Regenerative`): ``kr_pa`` (Pa), ``feed_m``
+    (m), ``revolutions``, ``interpolation``, ``start``, ``bounded_fraction`` (of
+    the feed).  ``analytic``: add the frequency-domain limits of the linear hosts.
+    """
+
+    rpm: tuple[float, ...] = tuple(float(r) for r in PUBLISHED_RPM)
+    method: str = "scan"
+    criterion: str = "zero"
+    depth_step_m: float = PUBLISHED_DEPTH_STEP
+    max_depth_m: float = 3e-3
+    successive: int = 3
+    kr_pa: float = KR_ALUMINIUM
+    feed_m: float = 0.1e-3
+    revolutions: int = 3
+    interpolation: str = "cubic"
+    start: str = "rest"
+    bounded_fraction: float = 0.1
+    analytic: bool = True
+
+    def __post_init__(self):
+        object.__setattr__(self, "rpm", check_values("rpm", np.atleast_1d(self.rpm).tolist(),
+                                                     0.0, math.inf, lo_open=True,
+                                                     unit="rev/min"))
+        check_choice("method", self.method, METHODS)
+        check_choice("criterion", self.criterion, CRITERIA)
+        check_positive("depth_step_m", self.depth_step_m, "m")
+        check_range("max_depth_m", self.max_depth_m, self.depth_step_m, 1.0, unit="m")
+        check_int("successive", self.successive, 1, 100)
+        check_choice("interpolation", self.interpolation, INTERPOLATIONS)
+        check_choice("start", self.start, STARTS)
+        if self.max_index > MAX_DEPTHS:
+            raise ParameterError(f"depth_step_m = {self.depth_step_m:g} m gives "
+                                 f"{self.max_index} depths up to max_depth_m = "
+                                 f"{self.max_depth_m:g} m; the allowed maximum is "
+                                 f"{MAX_DEPTHS} depths")
+        self.forcing(self.depth_step_m, self.rpm[0])  # validates the cut
+
+    @property
+    def max_index(self) -> int:
+        """The deepest grid index tried (depth = index x depth_step_m)."""
+        return int(math.floor(self.max_depth_m / self.depth_step_m + 1e-9))
+
+    def forcing(self, depth: float, rpm: float, stop_at_zero: bool = True) -> Regenerative:
+        """The cut at ``depth`` (m) and ``rpm``."""
+        return Regenerative(depth=depth, rpm=rpm, kr=self.kr_pa, feed=self.feed_m,
+                            revolutions=self.revolutions, interpolation=self.interpolation,
+                            start=self.start, stop_at_zero=stop_at_zero,
+                            bounded_fraction=self.bounded_fraction)
+
+
+def cut(case: Case, rpm: float, depth: float, options: LobesOptions,
+        integration: Integration) -> dict:
+    """One cut, stopped at the first zero of the force: its verdicts and metrics."""
+    run = simulate(case.system, options.forcing(depth, rpm), duration=integration.duration_s,
+                   dt=integration.dt_s, integrator=integration.integrator,
+                   steady_fraction=integration.steady_fraction)
     c = run.cutting
     ball = case.system.kind == "ball"
     return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
@@ -76,15 +153,16 @@ def _cut(case: Case, rpm: float, depth: float, opts: dict) -> dict:
             else c["first_zero_time_s"]}
 
 
-def _column(case: Case, rpm: float, opts: dict) -> dict:
-    """All the runs at one speed, by the chosen method; returns {index: result}."""
-    step, n_max = opts["depth_step"], opts["max_index"]
-    key, need = opts["criterion"], opts["successive"]
+def column(case: Case, rpm: float, options: LobesOptions, integration: Integration,
+           seed: int = 1) -> dict:
+    """All the runs at one speed, by ``options.method`` (``seed``: the search's first
+    grid index); returns {depth index: :func:`cut` result}."""
+    n_max, key, need = options.max_index, options.criterion, options.successive
     done: dict[int, dict] = {}
 
     def chatter(i: int) -> bool:
         if i not in done:
-            done[i] = _cut(case, rpm, i * step, opts)
+            done[i] = cut(case, rpm, i * options.depth_step_m, options, integration)
         return done[i][key]
 
     def scan_from(i: int) -> None:
@@ -93,25 +171,12 @@ def _column(case: Case, rpm: float, opts: dict) -> dict:
             run_of = run_of + 1 if chatter(i) else 0
             i += 1
 
-    if opts["method"] == "scan":
+    if options.method == "scan":
         scan_from(1)
         return done
-    # bracket [lo stable, hi chatter], growing away from the seed in doubling steps
-    seed = min(max(1, opts["seeds"].get((case.label, rpm), 1)), n_max)
-    if chatter(seed):
-        lo, hi = seed, seed
-        width = 1
-        while lo > 0 and chatter(lo):
-            hi, lo = lo, max(0, lo - width)
-            width *= 2
-    else:
-        lo, hi = seed, seed + 1
-        width = 1
-        while hi <= n_max and not chatter(hi):
-            lo, hi = hi, min(hi + width, n_max) if hi < n_max else n_max + 1
-            width *= 2
-        if hi > n_max:
-            return done
+    lo, hi = _bracket(chatter, min(max(1, seed), n_max), n_max)
+    if hi > n_max:
+        return done
     while hi - lo > 1:
         mid = (lo + hi) // 2
         if chatter(mid):
@@ -125,9 +190,25 @@ def _column(case: Case, rpm: float, opts: dict) -> dict:
     return done
 
 
-def _seeds(cases: list[Case], rpm: np.ndarray, kr: float, step: float) -> dict:
+def _bracket(chatter, seed: int, n_max: int) -> tuple[int, int]:
+    """[lo stable, hi chatter] grid indices, growing away from ``seed`` in doubling
+    steps (hi = n_max + 1: nothing chattered up to the deepest cut)."""
+    width = 1
+    if chatter(seed):
+        lo, hi = seed, seed
+        while lo > 0 and chatter(lo):
+            hi, lo = lo, max(0, lo - width)
+            width *= 2
+        return lo, hi
+    lo, hi = seed, seed + 1
+    while hi <= n_max and not chatter(hi):
+        lo, hi = hi, min(hi + width, n_max) if hi < n_max else n_max + 1
+        width *= 2
+    return lo, hi
+
+
+def _seeds(cases: list[Case], rpm, kr: float, step: float) -> dict:
     """Grid index of the analytic limit of each case's linear host at each speed."""
-    from boringbar.analysis.stability import limit_at_speeds
 
     seeds = {}
     for case in cases:
@@ -141,7 +222,6 @@ def _seeds(cases: list[Case], rpm: np.ndarray, kr: float, step: float) -> dict:
 def _linear_host(system):
     """The linear bar a cut sees at the onset of chatter: for the free ball the
     bare cavity bar (the ball is not touching yet), else the system itself."""
-    from boringbar.system import System
 
     if system.kind == "ball":
         return System(system.bar, None, system.preset, system.readings)
@@ -161,133 +241,105 @@ def _limits(verdicts: np.ndarray, depths: np.ndarray) -> tuple[float, float]:
     return float(limit), float(depths[first])
 
 
-def lobes(cases: list[Case], rpm=PUBLISHED_RPM, *, method: str = "scan",
-          depth_step: float = PUBLISHED_DEPTH_STEP, max_depth: float = 3e-3,
-          successive: int = 3, criterion: str = "zero", kr: float = KR_ALUMINIUM,
-          feed: float = 0.1e-3, revolutions: int = 3, interpolation: str = "cubic",
-          start: str = "rest", bounded_fraction: float = 0.1, duration: float = 2.0,
-          dt: float = 1e-6, workers: int | None = None, analytic: bool = True,
-          progress=None, integrator: str = "rk4"):
-    """Stability lobes of every case over ``rpm`` by time-domain simulation.
-
-    Returns an xarray Dataset: per (case, rpm, depth) the verdict of every grid
-    point that was run under both criteria (1 stable, 0 chatter, -1 not run),
-    the steady amplitude and the time of the first zero of the force; per
-    (case, rpm) the limiting (chatter-free) depth and the first unstable depth
-    under the chosen ``criterion``; per case the minimum chatter-free depth;
-    and, for the linear bars (solid, TMD, locked ball), the analytic limit.
-    ``integrator``: "rk4" (published) or "exact" (see ``simulate``: the delayed surface
-    from a history of step H = tau / ceil(tau / dt), the first zero of the force located).
-    """
+def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> Plan:
+    """A point per (case, rpm) column; the search's seeds (the analytic limit of each
+    case's linear host) in the context."""
     if not cases:
         raise ParameterError("lobes needs at least one case")
-    rpm = np.atleast_1d(np.asarray(rpm, dtype=float))
-    workers = int(workers or os.cpu_count() or 1)
-    opts = _options(cases, rpm, method=method, depth_step=depth_step, max_depth=max_depth,
-                    successive=successive, criterion=criterion, kr=kr, feed=feed,
-                    revolutions=revolutions, interpolation=interpolation, start=start,
-                    bounded_fraction=bounded_fraction, duration=duration, dt=dt,
-                    integrator=integrator)
-    for nm in sorted({c.system.bar.n_modes for c in cases}):  # warm the JIT once
-        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
-        _cut(c0, float(rpm[0]), depth_step, dict(opts, duration=2e-4))
-
-    tic = time.perf_counter()
-    columns: dict[tuple[int, int], dict] = {}
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        futs = {pool.submit(_column, case, float(r), opts): (i, j)
-                for i, case in enumerate(cases) for j, r in enumerate(rpm)}
-        for n_done, fut in enumerate(as_completed(futs), 1):
-            columns[futs[fut]] = fut.result()
-            if progress is not None:
-                progress(n_done, len(futs))
-    wall = time.perf_counter() - tic
-    return _dataset(cases, rpm, columns, opts, analytic,
-                    {"workers": workers, "wall_time_s": wall})
-
-
-def _options(cases: list[Case], rpm: np.ndarray, *, method: str, depth_step: float,
-             max_depth: float, successive: int, criterion: str, kr: float, feed: float,
-             revolutions: int, interpolation: str, start: str, bounded_fraction: float,
-             duration: float, dt: float, integrator: str = "rk4") -> dict:
-    """Check the lobe options (before any work) and pack what :func:`_column` needs,
-    the search's seeds included."""
-    check_choice("method", method, METHODS)
-    check_choice("criterion", criterion, CRITERIA)
-    check_positive("depth_step", depth_step, "m")
-    check_range("max_depth", max_depth, depth_step, 1.0, unit="m")
-    check_range("successive", successive, 1, 100)
-    check_choice("integrator", integrator, INTEGRATORS)
+    if integration.initial is not None:
+        raise ParameterError(f"initial = {integration.initial!r}: a cut starts as "
+                             "options.start says (rest or static), not from initial "
+                             "conditions")
+    rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
-        check_positive("rpm", r)
-    n_max = int(math.floor(max_depth / depth_step + 1e-9))
-    opts = {"kr": kr, "feed": feed, "revolutions": revolutions, "interpolation": interpolation,
-            "start": start, "bounded_fraction": bounded_fraction, "duration": duration,
-            "dt": dt, "depth_step": depth_step, "max_index": n_max, "criterion": criterion,
-            "successive": int(successive), "method": method, "integrator": integrator}
-    # validate the cut description once, before any work
-    Regenerative(depth=depth_step, rpm=float(rpm[0]), kr=kr, feed=feed,
-                 revolutions=revolutions, interpolation=interpolation, start=start,
-                 bounded_fraction=bounded_fraction)
-    opts["seeds"] = _seeds(cases, rpm, kr, depth_step) if method == "search" else {}
-    return opts
+        check_delay(r, options.revolutions, integration.dt_s)
+    context = {"cases": cases, "options": options, "integration": integration,
+               "seeds": _seeds(cases, rpm, options.kr_pa, options.depth_step_m)
+               if options.method == "search" else {}}
+    points = [(i, j) for i in range(len(cases)) for j in range(len(rpm))]
+    return Plan(context, points)
 
 
-def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, analytic: bool,
-             attrs: dict):
-    """The lobes Dataset from the columns ((case index, rpm index) -> {depth index:
-    result} of :func:`_column`); ``attrs`` go after the configuration's."""
-    import xarray as xr
+def compute(context: dict, point: tuple[int, int]) -> dict:
+    """The column of one (case index, rpm index): {depth index: result}."""
+    i, j = point
+    case, rpm = context["cases"][i], context["options"].rpm[j]
+    return column(case, rpm, context["options"], context["integration"],
+                  context["seeds"].get((case.label, rpm), 1))
 
-    depth_step, criterion = opts["depth_step"], opts["criterion"]
-    bounded_fraction, interpolation = opts["bounded_fraction"], opts["interpolation"]
-    top = max((max(d) for d in columns.values() if d), default=1)
-    depths = depth_step * np.arange(1, top + 1)
-    shape = (len(cases), len(rpm), top)
-    v_zero = np.full(shape, NOT_RUN, dtype=np.int8)
-    v_bounded = np.full(shape, NOT_RUN, dtype=np.int8)
-    amplitude = np.full(shape, np.nan)
-    first_zero = np.full(shape, np.nan)
-    impacts = np.full(shape, -1, dtype=np.int64)
-    max_rel = np.full(shape, np.nan)
+
+def warm(context: dict) -> None:
+    """Compile the kernel once in this process: a short cut per mode count."""
+    cases, options = context["cases"], context["options"]
+    short = replace(context["integration"], duration_s=2e-4)
+    for nm in sorted({c.system.bar.n_modes for c in cases}):
+        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
+        cut(c0, options.rpm[0], options.depth_step_m, options, short)
+
+
+def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:
+    """(depths, per-run arrays over (case, rpm, depth), number of runs) of the columns."""
+    top = max((max(d) for d in results if d), default=1)
+    shape = (len(plan.context["cases"]), len(plan.context["options"].rpm), top)
+    arrays = {"zero": np.full(shape, NOT_RUN, dtype=np.int8),
+              "bounded": np.full(shape, NOT_RUN, dtype=np.int8),
+              "amplitude": np.full(shape, np.nan), "first_zero": np.full(shape, np.nan),
+              "impacts": np.full(shape, -1, dtype=np.int64),
+              "max_rel_disp": np.full(shape, np.nan)}
     n_runs = 0
-    for (i, j), done in columns.items():
+    for (i, j), done in zip(plan.points, results, strict=True):
         for k, res in done.items():
-            v_zero[i, j, k - 1] = CHATTER if res["zero"] else STABLE
-            v_bounded[i, j, k - 1] = CHATTER if res["bounded"] else STABLE
-            amplitude[i, j, k - 1] = res["amplitude"]
-            first_zero[i, j, k - 1] = res["first_zero"]
-            impacts[i, j, k - 1] = res["impacts"]
-            max_rel[i, j, k - 1] = res["max_rel_disp"]
+            for name, a in arrays.items():
+                v = res[name]
+                if name in ("zero", "bounded"):
+                    v = CHATTER if v else STABLE
+                a[i, j, k - 1] = v
             n_runs += 1
-    chosen = v_zero if criterion == "zero" else v_bounded
-    limit = np.full(shape[:2], np.nan)
-    first_unstable = np.full(shape[:2], np.nan)
-    for i in range(shape[0]):
-        for j in range(shape[1]):
+    return plan.context["options"].depth_step_m * np.arange(1, top + 1), arrays, n_runs
+
+
+def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
+               bounded_fraction: float) -> dict:
+    """The lobes Dataset's data variables from the per-run arrays ``a`` (:func:`_grid`)
+    and the per-column limits."""
+    dims = ("case", "rpm", "depth")
+    codes = "1 stable, 0 chatter, -1 not run"
+    return {
+        "verdict": (dims, a["zero"], {"long_name": "published criterion: force reaches zero",
+                                      "codes": codes}),
+        "verdict_bounded": (dims, a["bounded"], {
+            "long_name": f"bounded chatter: amplitude > {bounded_fraction:g} h_m, or force "
+                         "reaches zero", "codes": codes}),
+        "amplitude": (dims, a["amplitude"], {"units": "m"}),
+        "first_zero_time": (dims, a["first_zero"], {"units": "s"}),
+        "impacts": (dims, a["impacts"], {
+            "long_name": "counted ball impacts over the run (-1: no ball or not run)"}),
+        "max_rel_disp": (dims, a["max_rel_disp"], {
+            "units": "m", "long_name": "largest |y|, the ball's excursion from the cavity "
+                                       "centre, over the run (ball cases)"}),
+        "limit_depth": (("case", "rpm"), limit, {
+            "units": "m", "long_name": "limiting (chatter-free) depth of cut"}),
+        "first_unstable_depth": (("case", "rpm"), first_unstable, {"units": "m"}),
+        "min_chatter_free_depth": (("case",), np.nanmin(np.where(
+            np.isnan(limit), np.inf, limit), axis=1), {"units": "m"}),
+    }
+
+
+def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
+    """The lobes Dataset from the columns (:func:`compute` results in plan order);
+    ``attrs`` go after the configuration's."""
+    ctx = plan.context
+    cases, o, integ = ctx["cases"], ctx["options"], ctx["integration"]
+    rpm = np.asarray(o.rpm, dtype=float)
+    depths, a, n_runs = _grid(plan, results)
+    chosen = a["zero"] if o.criterion == "zero" else a["bounded"]
+    limit = np.full(chosen.shape[:2], np.nan)
+    first_unstable = np.full(chosen.shape[:2], np.nan)
+    for i in range(chosen.shape[0]):
+        for j in range(chosen.shape[1]):
             limit[i, j], first_unstable[i, j] = _limits(chosen[i, j], depths)
     ds = xr.Dataset(
-        {
-            "verdict": (("case", "rpm", "depth"), v_zero,
-                        {"long_name": "published criterion: force reaches zero",
-                         "codes": "1 stable, 0 chatter, -1 not run"}),
-            "verdict_bounded": (("case", "rpm", "depth"), v_bounded,
-                                {"long_name": f"bounded chatter: amplitude > "
-                                 f"{bounded_fraction:g} h_m, or force reaches zero",
-                                 "codes": "1 stable, 0 chatter, -1 not run"}),
-            "amplitude": (("case", "rpm", "depth"), amplitude, {"units": "m"}),
-            "first_zero_time": (("case", "rpm", "depth"), first_zero, {"units": "s"}),
-            "impacts": (("case", "rpm", "depth"), impacts, {
-                "long_name": "counted ball impacts over the run (-1: no ball or not run)"}),
-            "max_rel_disp": (("case", "rpm", "depth"), max_rel, {
-                "units": "m", "long_name": "largest |y|, the ball's excursion from the "
-                                           "cavity centre, over the run (ball cases)"}),
-            "limit_depth": (("case", "rpm"), limit, {"units": "m",
-                            "long_name": "limiting (chatter-free) depth of cut"}),
-            "first_unstable_depth": (("case", "rpm"), first_unstable, {"units": "m"}),
-            "min_chatter_free_depth": (("case",), np.nanmin(np.where(
-                np.isnan(limit), np.inf, limit), axis=1), {"units": "m"}),
-        },
+        _variables(a, limit, first_unstable, o.bounded_fraction),
         coords={
             "case": [c.label for c in cases],
             "rpm": ("rpm", rpm, {"units": "rev/min"}),
@@ -299,33 +351,62 @@ def _dataset(cases: list[Case], rpm: np.ndarray, columns: dict, opts: dict, anal
         attrs={
             "title": "boringbar stability lobes (time domain)",
             "boringbar_version": __version__,
-            "method": opts["method"],
-            "criterion": criterion,
-            "successive": opts["successive"],
-            "integrator": opts.get("integrator", "rk4"),
-            "delay_interpolation": interpolation,
-            "start": opts["start"],
-            "kr_pa": opts["kr"],
-            "feed_m": opts["feed"],
-            "revolutions": opts["revolutions"],
-            "duration_s": opts["duration"],
-            "dt_s": opts["dt"],
+            "method": o.method,
+            "criterion": o.criterion,
+            "successive": o.successive,
+            "integrator": integ.integrator,
+            "delay_interpolation": o.interpolation,
+            "start": o.start,
+            "kr_pa": o.kr_pa,
+            "feed_m": o.feed_m,
+            "revolutions": o.revolutions,
+            "duration_s": integ.duration_s,
+            "dt_s": integ.dt_s,
+            "steady_fraction": integ.steady_fraction,
             "runs": n_runs,
             "preset": ",".join(sorted({c.system.preset for c in cases})),
             "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
-            **attrs,
+            **(attrs or {}),
         },
     )
-    if analytic:
-        _add_analytic(ds, cases, rpm, opts["kr"])
+    if o.analytic:
+        _add_analytic(ds, cases, rpm, o.kr_pa)
     return ds
+
+
+def lobes(cases: list[Case], options: LobesOptions | None = None, *,
+          integration: Integration | None = None, execution: Execution | None = None,
+          progress=None):
+    """Stability lobes of every case over ``options.rpm`` by time-domain simulation.
+
+    ``cases``: the bars (:func:`~boringbar.analysis.sweep.published_cases`, or
+    :class:`~boringbar.analysis.sweep.Case` s); ``options``: :class:`LobesOptions`
+    (default: the published scan); ``integration``: duration, step and integrator
+    of each cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed
+    surface from a history of step H = tau / ceil(tau / dt), the first zero of the
+    force located; no initial conditions: a cut starts as ``options.start`` says);
+    ``execution``: where the (case, rpm) columns run (default a thread per core);
+    ``progress(done, total)`` as columns finish.
+
+    Returns an xarray Dataset: per (case, rpm, depth) the verdict of every grid
+    point that was run under both criteria (1 stable, 0 chatter, -1 not run),
+    the steady amplitude and the time of the first zero of the force; per
+    (case, rpm) the limiting (chatter-free) depth and the first unstable depth
+    under the chosen criterion; per case the minimum chatter-free depth;
+    and, with ``options.analytic``, for the linear bars (solid, TMD, locked
+    ball) the analytic limit.
+    """
+    options = options or LobesOptions()
+    integration = integration or Integration()
+    p = plan(cases, options, integration)
+    results, wall = run_plan(sys.modules[__name__], p, execution, progress)
+    return assemble(p, results, execution_attrs(execution, wall))
 
 
 def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
     """The frequency-domain limit of the linear bars (NaN for the free ball), and of
     every case's linear host (the bare cavity bar for the free ball, which is the
     bar the cut sees while the ball does not touch a wall)."""
-    from boringbar.analysis.stability import limit_at_speeds
 
     fine = np.linspace(rpm.min(), rpm.max(), max(200, 20 * len(rpm)))
     on_grid = np.full((len(cases), len(rpm)), np.nan)
@@ -344,7 +425,7 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
     ds["analytic_curve"] = (("case", "rpm_fine"), curve, {"units": "m"})
 
 
-def lobes_summary(ds) -> dict:
+def summary(ds) -> dict:
     """JSON-able summary (what ``boringbar lobes --json`` prints)."""
     out = []
     for i, label in enumerate(ds["case"].values):
@@ -364,6 +445,85 @@ def lobes_summary(ds) -> dict:
             "runs": int(ds.attrs["runs"]), "wall_time_s": float(ds.attrs["wall_time_s"]),
             "min_chatter_free_depth_m": _num(np.nanmin(ds["min_chatter_free_depth"].values)),
             "cases": out}
+
+
+def example_points(ds) -> list[tuple[str, float, float]]:
+    """(name, rpm, depth) of a stable and an unstable grid point of the first case:
+    the limiting and the first unstable depth at the speed of the minimum
+    chatter-free depth (the stable one at the speed of the largest limit if the
+    minimum is 0; only a stable one if nothing chattered)."""
+    rpm = ds["rpm"].values
+    limit = ds["limit_depth"].values[0]
+    first = ds["first_unstable_depth"].values[0]
+    if not np.isfinite(limit).any():  # no chatter up to the deepest cut tried
+        run = ds["verdict"].values[0] >= 0
+        j = len(rpm) // 2
+        return [("stable", float(rpm[j]), float(ds["depth"].values[run[j]].max()))]
+    j = int(np.nanargmin(limit))
+    points = [("unstable", float(rpm[j]), float(first[j]))]
+    if limit[j] <= 0:
+        j = int(np.nanargmax(limit))
+    if limit[j] > 0:
+        points.insert(0, ("stable", float(rpm[j]), float(limit[j])))
+    return points
+
+
+def _example_run(case: Case, rpm: float, depth: float, options: LobesOptions,
+                 integration: Integration, rows: int):
+    """One grid point rerun with history (no stop at the first zero) as a Dataset."""
+    n_steps = int(round(integration.duration_s / integration.dt_s))
+    run = simulate(case.system, options.forcing(depth, rpm, stop_at_zero=False),
+                   duration=integration.duration_s, dt=integration.dt_s,
+                   record_every=max(1, n_steps // rows), integrator=integration.integrator,
+                   steady_fraction=integration.steady_fraction)
+    h = run.to_xarray()
+    h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
+    c = run.cutting
+    return h.assign_coords(rpm=rpm, depth=depth, chatter=bool(c["chatter"]),
+                           bounded_chatter=bool(c["bounded_chatter"]),
+                           first_zero_time=math.nan if c["first_zero_time_s"] is None
+                           else float(c["first_zero_time_s"]),
+                           mean_force=float(run.forcing.mean_force),
+                           static_deflection=float(c["static_deflection_m"]))
+
+
+def examples(ds, case: Case, options: LobesOptions | None = None, *,
+             integration: Integration | None = None, rows: int = EXAMPLE_ROWS):
+    """The :func:`example_points` of the lobes Dataset ``ds`` (of ``case``, its first
+    case, cut as ``options`` and ``integration`` say: those of the lobes) rerun with
+    history of about ``rows`` rows, not stopped at the first zero of the force:
+    one Dataset with dims (example, time)."""
+    options = options or LobesOptions()
+    integration = integration or Integration()
+    points = example_points(ds)
+    parts = [_example_run(case, rpm, depth, options, integration, rows)
+             for _, rpm, depth in points]
+    exds = xr.concat(parts, dim=pd.Index([p[0] for p in points], name="example"),
+                     coords="all", join="outer", combine_attrs="drop")
+    exds["rpm"].attrs["units"] = "rev/min"
+    for name in ("depth", "static_deflection"):
+        exds[name].attrs["units"] = "m"
+    exds["first_zero_time"].attrs["units"] = "s"
+    exds["mean_force"].attrs.update(units="N", long_name="Kr b h_m")
+    exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
+                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap,
+                  "friction": case.friction, "preset": case.system.preset,
+                  "criterion": ds.attrs["criterion"],
+                  "boringbar_version": ds.attrs["boringbar_version"],
+                  "configs": "[" + ", ".join(p.attrs["config"] for p in parts) + "]",
+                  "summaries": "[" + ", ".join(p.attrs["summary"] for p in parts) + "]"}
+    return exds
+
+
+def examples_summary(exds) -> list[dict]:
+    """JSON-able list of the examples of :func:`examples`."""
+    return [{"example": str(e), "case": exds.attrs["case"],
+             "rpm": float(exds["rpm"].values[k]),
+             "depth_m": float(exds["depth"].values[k]),
+             "chatter": bool(exds["chatter"].values[k]),
+             "bounded_chatter": bool(exds["bounded_chatter"].values[k]),
+             "first_zero_time_s": float(exds["first_zero_time"].values[k])}
+            for k, e in enumerate(exds["example"].values)]
 
 
 def _num(v) -> float | None:

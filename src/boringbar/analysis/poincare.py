@@ -1,4 +1,4 @@
-"""Poincare maps of one run and a verdict on the sample cloud (MODEL.md section 6).
+"""Poincare maps of one run and a verdict on the sample cloud (docs/model.md, section 6).
 
 Two sections of a harmonically forced run (forcing period T = 2 pi / Omega):
 
@@ -235,7 +235,7 @@ class PoincareMap:
     The verdict uses the whole sampled state: (W, W') and, for a free ball or
     an absorber, the auxiliary pair (y, y') or (stroke, stroke rate); the
     ball's state separates irregular impact sequences that barely move the
-    bar (MODEL.md's non-uniform patterns at gap 0.1 mm scatter W by ~2 % of
+    bar (the published non-uniform patterns at gap 0.1 mm scatter W by ~2 % of
     its amplitude but y across the whole clearance).
     """
 
@@ -301,10 +301,10 @@ def _scales(run, samples: np.ndarray) -> np.ndarray:
     return np.array(scale)
 
 
-def poincare_map(run, drop: float = 0.2) -> PoincareMap:
-    """Stroboscopic Poincare map of ``run`` (simulated with ``strobe=True``),
-    without the samples in the first ``drop`` fraction of the run's time."""
-    drop = check_range("drop", drop, 0.0, 1.0, hi_open=True)
+def poincare_map(run, steady_fraction: float = 0.8) -> PoincareMap:
+    """Stroboscopic Poincare map of ``run`` (simulated with ``strobe=True``): the
+    samples in the last ``steady_fraction`` of the run's time."""
+    drop = 1.0 - check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     if run.strobe.size == 0 and run.duration * run.omega > 4 * math.pi:
         raise ParameterError("the run has no stroboscopic samples: simulate it with strobe=True")
     s = run.strobe[run.strobe[:, 0] >= run.t0 + drop * run.duration]
@@ -352,14 +352,14 @@ class ImpactMap:
         )
 
 
-def impact_map(run, wall: int | None = 1, drop: float = 0.0) -> ImpactMap:
+def impact_map(run, wall: int | None = 1, steady_fraction: float = 1.0) -> ImpactMap:
     """Impact map of ``run``: the impacts counted in its steady part (the last
     ``steady_fraction`` of :func:`~boringbar.simulate.simulate`) on ``wall``
-    (+1, -1, or None for both), without those in the first ``drop`` of the
-    run's time."""
+    (+1, -1, or None for both), and of those only the ones in the last
+    ``steady_fraction`` here of the run's time (default: all)."""
     if wall not in (1, -1, None):
         raise ParameterError(f"wall = {wall!r} is not one of 1, -1, None")
-    drop = check_range("drop", drop, 0.0, 1.0, hi_open=True)
+    drop = 1.0 - check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     imp = run.impacts
     keep = imp[:, 0] >= run.t0 + drop * run.duration
     if wall is not None:

@@ -1,11 +1,13 @@
-"""Sensitivity studies (MODEL.md section 6): one parameter varied, everything else fixed.
+"""Sensitivity studies (docs/model.md, section 6): one parameter varied, everything else fixed.
 
-A thin layer over the existing machinery: each value of the parameter
-becomes a :class:`~boringbar.analysis.sweep.Case` (built by
-:func:`~boringbar.system.make_system`), and the harmonic runs are one
-:func:`~boringbar.analysis.sweep.sweep` over all of them; cuts at a fixed
-spindle speed are :func:`~boringbar.simulate.simulate` runs with
-``Regenerative(depth, rpm, stop_at_zero=False)`` on a thread pool.
+A thin layer over the sweep: each value of the parameter becomes a
+:class:`~boringbar.analysis.sweep.Case` (built by
+:func:`~boringbar.model.system.make_system`; for initial conditions, the same
+system with its own ``initial``), and the harmonic runs are the sweep's plan over
+all of them; cuts at a fixed spindle speed are one point per (value, depth), a
+:func:`~boringbar.simulate.simulate` run with
+``Regenerative(depth, rpm, stop_at_zero=False)``.  The contract:
+:mod:`boringbar.analysis.base`.
 
 Parameters (``kind``) and their published values:
 
@@ -23,19 +25,21 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import time
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+import sys
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+import xarray as xr
 
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
-from boringbar.analysis.sweep import Case, sweep
-from boringbar.forcing import Regenerative
-from boringbar.simulate import Initial, simulate
-from boringbar.system import make_system
+from boringbar.analysis import sweep as sweep_mod
+from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.sweep import Case, SweepOptions
+from boringbar.execute import Execution
+from boringbar.model.forcing import Regenerative
+from boringbar.model.system import make_system
+from boringbar.simulate import Initial, Integration, simulate
 
 KINDS = ("ball", "friction_number", "restitution", "initial")
 PUBLISHED_VALUES = {
@@ -50,7 +54,7 @@ PUBLISHED_VALUES = {
 class Cuts:
     """Cuts at one spindle speed over a few depths of cut (published: 1200 rpm,
     0.05..0.10 mm).  ``rpm`` (rev/min), ``depths`` (m), ``duration`` (s) of each
-    full-length run; ``options``: further :class:`~boringbar.forcing.Regenerative`
+    full-length run; ``options``: further :class:`~boringbar.model.forcing.Regenerative`
     fields (kr, feed, start, ...)."""
 
     rpm: float = 1200.0
@@ -67,7 +71,7 @@ class Cuts:
         check_positive("cuts duration", self.duration, "s")
 
 
-def _initial(value) -> Initial:
+def sensitivity_initial(value) -> Initial:
     if isinstance(value, Initial):
         return value
     try:
@@ -77,15 +81,15 @@ def _initial(value) -> Initial:
                              "(W0, W0'[, y0, y0'])") from None
 
 
-def _label(kind: str, value) -> str:
+def sensitivity_label(kind: str, value) -> str:
     if kind == "initial":
-        i = _initial(value)
+        i = sensitivity_initial(value)
         return (f"W0={i.tip_displacement:g}m W0'={i.tip_velocity:g}m/s "
                 f"y0={i.ball_position:g}m y0'={i.ball_velocity:g}m/s")
     return f"{kind}={value}"
 
 
-def _cases(kind, values, bar, preset, gap, friction, overrides) -> list[Case]:
+def sensitivity_cases(kind, values, bar, preset, gap, friction, overrides) -> list[Case]:
     cases = []
     for v in values:
         kw = dict(overrides)
@@ -101,32 +105,57 @@ def _cases(kind, values, bar, preset, gap, friction, overrides) -> list[Case]:
             system = make_system(bar, preset, gap=gap, friction=fr, **kw)
         else:
             system = make_system(bar, preset, **kw)
-        label = "fixed system" if kind == "initial" else _label(kind, v)
+        label = "fixed system" if kind == "initial" else sensitivity_label(kind, v)
         cases.append(Case(label, system, bar, gap if bar == "ball" else math.nan,
                           ("on" if fr else "off") if bar == "ball" else "n/a"))
     return cases
 
 
-def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = "ball",
-                gap: float = 0.5e-3, friction: bool = True, forces=(10.0,), ratios=(1.0,),
-                cutting: Cuts | None = None, duration: float = 2.0, dt: float = 1e-6,
-                workers: int | None = None, progress=None, integrator: str = "rk4",
-                **overrides):
-    """Vary one parameter (``kind``, see the module doc) over ``values`` (default:
-    the published ones).
+@dataclass(frozen=True)
+class SensitivityOptions:
+    """What a sensitivity study varies and where it looks.
 
-    Harmonic (``cutting`` None): the :func:`~boringbar.analysis.sweep.sweep`
-    Dataset over ``forces`` (N) x ``ratios`` (Omega/omega_n) with a new leading
-    dimension named ``kind`` holding the values (for "initial": their labels,
-    with ``tip_displacement``, ``tip_velocity``, ``ball_position``,
-    ``ball_velocity`` coordinates).  Cutting (a :class:`Cuts`): a Dataset over
-    (``kind``, depth) with the chatter verdict (the force reached zero),
-    bounded chatter, steady amplitude (m), first zero time (s) and peak force (N)
-    of each full-length cut.  ``overrides`` go to
-    :func:`~boringbar.system.make_system`; one result per value.  ``integrator``:
-    "rk4" (published) or "exact" (see :func:`~boringbar.simulate.simulate`).
+    ``kind``: one of :data:`KINDS` (the module doc); ``values``: its values
+    (default: the published ones); harmonic runs over ``forces_n`` (N) x ``ratios``
+    (Omega/omega_n), or, with ``cuts`` (a :class:`Cuts`), full-length cuts instead.
     """
-    check_choice("kind", kind, KINDS)
+
+    kind: str = "restitution"
+    values: tuple | None = None
+    forces_n: tuple[float, ...] = (10.0,)
+    ratios: tuple[float, ...] = (1.0,)
+    cuts: Cuts | None = None
+
+    def __post_init__(self):
+        check_choice("kind", self.kind, KINDS)
+        values = PUBLISHED_VALUES[self.kind] if self.values is None else self.values
+        if isinstance(values, str) or not len(values):
+            raise ParameterError(f"values = {values!r} must hold at least one {self.kind}")
+        if self.kind == "initial":
+            values = [tuple(v) if isinstance(v, list) else v for v in values]
+            for v in values:
+                sensitivity_initial(v)  # validates
+        object.__setattr__(self, "values", tuple(values))
+        labels = self.labels()
+        if len(set(labels)) != len(labels):
+            raise ParameterError(f"values = {list(self.values)!r} must be distinct")
+        sweep_options = SweepOptions(self.ratios, self.forces_n)  # validates both
+        object.__setattr__(self, "ratios", sweep_options.ratios)
+        object.__setattr__(self, "forces_n", sweep_options.forces_n)
+
+    def labels(self) -> list[str]:
+        return [sensitivity_label(self.kind, v) for v in self.values]
+
+
+def plan(options: SensitivityOptions, integration: Integration, *, preset: str = "physical",
+         bar: str = "ball", gap: float = 0.5e-3, friction: bool = True,
+         overrides: dict | None = None) -> Plan:
+    """One case per value (the system of ``preset``, ``bar``, ``gap``, ``friction`` and
+    ``overrides`` for :func:`~boringbar.model.system.make_system`, with the value set);
+    harmonic: the :func:`~boringbar.analysis.sweep.plan` of those cases; cuts: a point
+    per (value, depth)."""
+    overrides = dict(overrides or {})
+    kind = options.kind
     if kind != "initial" and bar != "ball":
         raise ParameterError(f"bar = {bar!r}: kind = {kind!r} varies the ball damper; "
                              "it needs bar = 'ball'")
@@ -135,39 +164,70 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     if varied in overrides:
         raise ParameterError(f"{varied} = {overrides[varied]!r} cannot be fixed while "
                              f"kind = {kind!r} varies it")
-    values = list(PUBLISHED_VALUES[kind] if values is None else values)
-    if not values:
-        raise ParameterError(f"values = {values!r} must hold at least one {kind}")
-    if kind != "initial":
-        cases = _cases(kind, values, bar, preset, gap, friction, overrides)
-        initials = [None] * len(values)
+    if kind == "initial":
+        fixed = sensitivity_cases(kind, [None], bar, preset, gap, friction, overrides)[0]
+        cases = [replace(fixed, label=label, initial=sensitivity_initial(v))
+                 for label, v in zip(options.labels(), options.values, strict=True)]
     else:
-        initials = [_initial(v) for v in values]
-        cases = _cases(kind, [None], bar, preset, gap, friction, overrides) * len(values)
-    labels = [_label(kind, v) for v in values]
-    if len(set(labels)) != len(labels):
-        raise ParameterError(f"values = {values!r} must be distinct")
-    coord = labels if kind == "initial" else values
-    if cutting is not None:
-        ds = _cuts(cases, initials, cutting, dt, workers, integrator)
-        ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
-    elif kind == "initial":
-        import xarray as xr
+        cases = sensitivity_cases(kind, options.values, bar, preset, gap, friction, overrides)
+    extra = {"kind": kind, "values": list(options.values), "labels": options.labels()}
+    if options.cuts is None:
+        p = sweep_mod.plan(cases, SweepOptions(options.ratios, options.forces_n), integration)
+        p.context["mode"] = "harmonic"
+        p.extra.update(extra)
+        return p
+    points = [(i, j) for i in range(len(cases)) for j in range(len(options.cuts.depths))]
+    context = {"mode": "cuts", "cases": cases, "cuts": options.cuts,
+               "integration": integration}
+    return Plan(context, points, extra)
 
-        # sweep takes one initial condition: one sweep (over forces x ratios) each
-        parts = [sweep(cases[:1], ratios, forces, duration=duration, dt=dt, workers=workers,
-                       initial=ini, progress=progress, integrator=integrator)
-                 for ini in initials]
-        ds = xr.concat(parts, dim="case", data_vars="all", coords="different",
-                       compat="equals", combine_attrs="override")
-        ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
+
+def compute(context: dict, point):
+    """A harmonic point (a sweep batch) or one cut (value, depth)."""
+    if context["mode"] == "harmonic":
+        return sweep_mod.compute(context, point)
+    i, j = point
+    cuts, integ = context["cuts"], context["integration"]
+    return sensitivity_cut(context["cases"][i], cuts, cuts.depths[j], integ)
+
+
+def warm(context: dict) -> None:
+    """Compile the kernels once in this process: the sweep's, or one short cut."""
+    if context["mode"] == "harmonic":
+        sweep_mod.warm(context)
+        return
+    cuts, integ = context["cuts"], context["integration"]
+    short = Cuts(cuts.rpm, cuts.depths[:1], 50 * integ.dt_s, cuts.options)
+    sensitivity_cut(context["cases"][0], short, cuts.depths[0], integ)
+
+
+def sensitivity_cut(case: Case, cuts: Cuts, depth: float, integration: Integration) -> dict:
+    """One full-length cut of ``case`` at ``depth`` (m): its chatter verdicts."""
+    forcing = Regenerative(depth, cuts.rpm, stop_at_zero=False, **cuts.options)
+    c = simulate(case.system, forcing, duration=cuts.duration, dt=integration.dt_s,
+                 initial=case.initial or integration.initial,
+                 integrator=integration.integrator).cutting
+    return {"chatter": c["chatter"], "bounded_chatter": c["chatter"] or c["bounded_chatter"],
+            "amplitude_m": c["amplitude_m"], "max_force_n": c["max_force_n"],
+            "first_zero_time_s": math.nan if c["first_zero_time_s"] is None
+            else c["first_zero_time_s"]}
+
+
+def assemble(plan: Plan, results: list, attrs: dict | None = None):
+    """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth), with the
+    varied parameter as the leading dimension, named after its kind."""
+    kind, values, labels = plan.extra["kind"], plan.extra["values"], plan.extra["labels"]
+    cases = plan.context["cases"]
+    if plan.context["mode"] == "harmonic":
+        ds = sweep_mod.assemble(plan, results, attrs)
+    else:
+        ds = _cuts_dataset(plan, results, attrs)
+    coord = labels if kind == "initial" else values
+    ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
+    if kind == "initial":
         ds.attrs.pop("initial", None)
         for name in ("tip_displacement", "tip_velocity", "ball_position", "ball_velocity"):
-            ds = ds.assign_coords({name: ("case", [getattr(i, name) for i in initials])})
-    else:
-        ds = sweep(cases, ratios, forces, duration=duration, dt=dt, workers=workers,
-                   progress=progress, integrator=integrator)
-        ds = ds.assign_coords({kind: ("case", coord)})
+            ds = ds.assign_coords({name: ("case", [getattr(c.initial, name) for c in cases])})
     ds = ds.swap_dims({"case": kind})
     if kind == "initial":
         ds = ds.drop_vars("case")  # the labels are the coordinate itself
@@ -175,43 +235,90 @@ def sensitivity(kind: str, values=None, *, preset: str = "physical", bar: str = 
     return ds
 
 
-def _cut(case: Case, initial: Initial | None, cuts: Cuts, depth: float, dt: float,
-         integrator: str = "rk4") -> dict:
-    forcing = Regenerative(depth, cuts.rpm, stop_at_zero=False, **cuts.options)
-    c = simulate(case.system, forcing, duration=cuts.duration, dt=dt, initial=initial,
-                 integrator=integrator).cutting
-    return {"chatter": c["chatter"], "bounded_chatter": c["chatter"] or c["bounded_chatter"],
-            "amplitude_m": c["amplitude_m"], "max_force_n": c["max_force_n"],
-            "first_zero_time_s": math.nan if c["first_zero_time_s"] is None
-            else c["first_zero_time_s"]}
-
-
-def _cuts(cases, initials, cuts: Cuts, dt: float, workers: int | None,
-          integrator: str = "rk4"):
-    import xarray as xr
-
-    workers = int(workers or os.cpu_count() or 1)
-    check_range("workers", workers, 1, 4096)
-    depths = np.asarray(cuts.depths, dtype=float)
-    jobs = [(i, j) for i in range(len(cases)) for j in range(len(depths))]
-    _cut(cases[0], initials[0], Cuts(cuts.rpm, cuts.depths[:1], 50 * dt, cuts.options),
-         depths[0], dt, integrator)  # validates and warms the JIT before fanning out
-    tic = time.perf_counter()
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        results = list(pool.map(lambda ij: _cut(cases[ij[0]], initials[ij[0]], cuts,
-                                                depths[ij[1]], dt, integrator), jobs))
-    wall = time.perf_counter() - tic
-    shape = (len(cases), len(depths))
+def _cuts_dataset(plan: Plan, results: list, attrs: dict | None):
+    ctx = plan.context
+    cases, cuts, integ = ctx["cases"], ctx["cuts"], ctx["integration"]
+    shape = (len(cases), len(cuts.depths))
     units = {"amplitude_m": "m", "max_force_n": "N", "first_zero_time_s": "s"}
     data = {k: (("case", "depth"), np.array([r[k] for r in results]).reshape(shape),
                 {"units": units[k]} if k in units else {})
             for k in results[0]}
     return xr.Dataset(
         data,
-        coords={"depth": ("depth", depths, {"units": "m"})},
+        coords={"depth": ("depth", np.asarray(cuts.depths, dtype=float), {"units": "m"})},
         attrs={"title": "boringbar sensitivity (cuts)", "boringbar_version": __version__,
-               "integrator": integrator, "rpm": cuts.rpm, "dt_s": dt, "duration_s": cuts.duration,
-               "workers": workers, "wall_time_s": wall,
-               "forcing_options": json.dumps(cuts.options),
-               "systems": json.dumps({c.label: c.system.to_dict() for c in cases})},
+               "integrator": integ.integrator, "rpm": cuts.rpm, "dt_s": integ.dt_s,
+               "duration_s": cuts.duration, "forcing_options": json.dumps(cuts.options),
+               "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
+               **(attrs or {})},
     )
+
+
+def sensitivity(options: SensitivityOptions | None = None, *, preset: str = "physical",
+                bar: str = "ball", gap: float = 0.5e-3, friction: bool = True,
+                overrides: dict | None = None, integration: Integration | None = None,
+                execution: Execution | None = None, progress=None):
+    """Vary one parameter (``options.kind``, see the module doc) over its values.
+
+    ``preset``, ``bar``, ``gap`` (m), ``friction`` and ``overrides`` (further
+    :func:`~boringbar.model.system.make_system` arguments) describe the fixed
+    system; ``integration`` and ``execution`` as for
+    :func:`~boringbar.analysis.sweep.sweep`; ``progress(done, total)`` as points
+    finish.
+
+    Harmonic (``options.cuts`` None): the :func:`~boringbar.analysis.sweep.sweep`
+    Dataset over forces x ratios with a leading dimension named after the kind
+    holding the values (for "initial": their labels, with ``tip_displacement``,
+    ``tip_velocity``, ``ball_position``, ``ball_velocity`` coordinates).  Cutting:
+    a Dataset over (kind, depth) with the chatter verdict (the force reached
+    zero), bounded chatter, steady amplitude (m), first zero time (s) and peak
+    force (N) of each full-length cut.
+    """
+    options = options or SensitivityOptions()
+    integration = integration or Integration()
+    p = plan(options, integration, preset=preset, bar=bar, gap=gap, friction=friction,
+             overrides=overrides)
+    results, wall = run_plan(sys.modules[__name__], p, execution, progress)
+    return assemble(p, results, execution_attrs(execution, wall))
+
+
+def with_cuts(ds, cuts):
+    """The harmonic and the cut results in one Dataset: the cut variables and
+    attributes prefixed ``cut_``."""
+    cuts = cuts.rename({k: f"cut_{k}" for k in cuts.data_vars})
+    keep = ("rpm", "duration_s", "wall_time_s", "forcing_options", "title")
+    attrs = {f"cut_{k}": v for k, v in cuts.attrs.items() if k in keep}
+    merged = xr.merge([ds, cuts.drop_vars([c for c in ("case",) if c in cuts.coords])],
+                      combine_attrs="override")
+    merged.attrs.update(attrs)
+    return merged
+
+
+def summary(ds) -> dict:
+    """JSON-able summary of a sensitivity Dataset (what ``boringbar sensitivity --json``
+    prints; the cut results where :func:`with_cuts` merged them in)."""
+    kind = ds.attrs["sensitivity"]
+    labels = [str(v) for v in ds[kind].values]
+    values = [v.item() if isinstance(v, np.generic) else v for v in ds[kind].values]
+    harmonic = []
+    for i, value in enumerate(values):
+        for j, force in enumerate(ds["force"].values):
+            harmonic.append({"value": value, "force_n": float(force),
+                             "ratio": ds["ratio"].values.tolist(),
+                             "rms_tip_m": ds["rms_tip_m"].values[i, j].tolist(),
+                             "pattern": [str(p) for p in ds["pattern"].values[i, j]]})
+    summary = {"kind": kind, "values": values, "preset": ds.attrs.get("preset"),
+               "harmonic": harmonic, "cuts": None, "wall_time_s": ds.attrs.get("wall_time_s")}
+    if kind == "initial":
+        summary["initial"] = [{name: float(ds[name].values[i]) for name in
+                               ("tip_displacement", "tip_velocity", "ball_position",
+                                "ball_velocity")} for i in range(len(labels))]
+    if "cut_chatter" in ds:
+        summary["cuts"] = {
+            "rpm": ds.attrs["cut_rpm"], "depth_m": ds["depth"].values.tolist(),
+            "results": [{"value": value,
+                         **{k: ds[f"cut_{k}"].values[i].tolist()
+                            for k in ("chatter", "bounded_chatter", "amplitude_m",
+                                      "max_force_n", "first_zero_time_s")}}
+                        for i, value in enumerate(values)]}
+    return summary

@@ -1,51 +1,77 @@
-"""Frequency sweeps of tip RMS and impact pattern (MODEL.md section 6).
+"""Frequency sweeps of tip RMS and impact pattern (docs/model.md, section 6).
 
-Every (case, force, ratio) point is an independent run of the numba kernel
-(which releases the GIL), executed on a thread pool with one worker per core;
-with the published RK4 scheme, points of the same bar kind and mode count go
-in lock-step batches (:func:`~boringbar.simulate.simulate_batch`, the same
-results as single runs, bit for bit).  Each run streams its metrics, no
-trajectory is kept.  The result is an
-xarray Dataset with the full configuration in its attributes.
+Every (case, force, ratio) run is independent; with the published RK4 scheme,
+runs of the same bar kind and mode count go in lock-step batches
+(:func:`~boringbar.simulate.simulate_batch`, the same results as single runs,
+bit for bit), each batch one point of the plan (the contract:
+:mod:`boringbar.analysis.base`), run on an executor (default: a thread per core;
+the kernels release the GIL).  Each run streams its metrics, no trajectory is
+kept.  The result is an xarray Dataset with the full configuration in its
+attributes.
 """
 
 from __future__ import annotations
 
+import inspect
 import json
 import math
-import os
-import time
-from concurrent.futures import ThreadPoolExecutor, as_completed
+import sys
 from dataclasses import dataclass
 
 import numpy as np
+import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_range
-from boringbar.forcing import Harmonic
+from boringbar._validate import ParameterError, check_range, check_values
+from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.execute import Execution
 from boringbar.kernels.rk4_batch import BMAX
-from boringbar.simulate import Initial, simulate, simulate_batch
-from boringbar.system import System, make_system
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System, make_system
+from boringbar.simulate import Initial, Integration, simulate, simulate_batch
 
-#: Points per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
+#: Runs per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
 BATCH = 16
+#: The published sweep's frequency ratios, 0.95 to 1.05 in steps of 0.01.
+PUBLISHED_RATIOS = tuple(round(0.95 + 0.01 * i, 12) for i in range(11))
+#: The numeric results of every run.
+NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
+         "energy_balance_relative")
+#: Most values of one START:STOP:STEP range or list (:func:`parse_range`; the
+#: published sweep has 11 ratios, the bifurcation 46 forces).
+MAX_GRID_VALUES = 100_000
 
 
 @dataclass(frozen=True, eq=False)
 class Case:
-    """One bar of a sweep: a label, the System, and what distinguishes it."""
+    """One bar of a sweep: a ``label``, the ``system``, and what distinguishes it:
+    ``bar`` kind, ``gap`` (m, NaN without a ball) and ``friction`` ("on", "off",
+    "n/a"); ``initial``: this case's initial conditions (default: the
+    integration's)."""
 
     label: str
     system: System
     bar: str
     gap: float = math.nan
     friction: str = "n/a"
+    initial: Initial | None = None
+
+
+#: what published_cases passes on to make_system
+_OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap",
+                                                                 "friction"}
 
 
 def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
                     frictions=(False, True), preset: str = "physical", **overrides) -> list[Case]:
-    """The bars of the published sweeps: solid, TMD, and the ball damper for
-    every gap x friction.  ``overrides`` go to :func:`make_system`."""
+    """The bars of the published sweeps under ``preset``: those of ``bars`` among solid,
+    TMD, and the ball damper for every gap of ``gaps`` (m) x friction of ``frictions``
+    (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones;
+    the bar arguments only to the ball cases)."""
+    unknown = sorted(set(overrides) - _OVERRIDABLE)
+    if unknown:
+        raise TypeError(f"published_cases() got unexpected keyword arguments {unknown}; "
+                        f"make_system takes {sorted(_OVERRIDABLE)}")
     cases = []
     for bar in bars:
         if bar == "ball":
@@ -67,30 +93,108 @@ def parse_range(text: str, name: str = "ratios") -> np.ndarray:
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
-            if step <= 0 or stop < start:
+            if not (math.isfinite(start) and math.isfinite(stop) and step > 0
+                    and stop >= start):
                 raise ValueError
-            n = int(math.floor((stop - start) / step + 1e-9)) + 1
+            n = math.floor((stop - start) / step + 1e-9) + 1
+            if n > MAX_GRID_VALUES:
+                raise ParameterError(f"{name} = {text!r} has {n:.3g} values; the allowed "
+                                     f"maximum is {MAX_GRID_VALUES}")
             return np.round(start + step * np.arange(n), 12)
-        return np.array([float(v) for v in text.split(",")])
-    except ValueError:
+        values = np.array([float(v) for v in text.split(",")])
+    except (ValueError, OverflowError) as exc:
+        if isinstance(exc, ParameterError):
+            raise
         raise ParameterError(f"{name} = {text!r} must be START:STOP:STEP with STEP > 0 and "
                              "STOP >= START, or a comma-separated list of numbers") from None
+    if len(values) > MAX_GRID_VALUES or not np.all(np.isfinite(values)):
+        raise ParameterError(f"{name} = {text!r} must be at most {MAX_GRID_VALUES} finite "
+                             "numbers")
+    return values
 
 
-def _one(case: Case, force: float, ratio: float, duration: float, dt: float,
-         initial: Initial | None, integrator: str = "rk4") -> dict:
-    run = simulate(case.system, Harmonic(force, ratio), duration=duration, dt=dt,
-                   initial=initial, integrator=integrator)
-    return _point(run)
+@dataclass(frozen=True)
+class SweepOptions:
+    """A frequency sweep's grid: ``ratios`` Omega/omega_n of each case's host bar (> 0),
+    ``forces_n`` F0 (N, >= 0), and ``batch``: with the RK4 integrator, runs of the same
+    bar kind and mode count advanced together in lock-step (up to 16; 1: one at a
+    time; the results are the same, bit for bit)."""
+
+    ratios: tuple[float, ...] = PUBLISHED_RATIOS
+    forces_n: tuple[float, ...] = (10.0,)
+    batch: int = BATCH
+
+    def __post_init__(self):
+        object.__setattr__(self, "ratios", check_values("ratios", self.ratios, 0.0, math.inf,
+                                                        lo_open=True))
+        object.__setattr__(self, "forces_n", check_values("forces_n", self.forces_n, 0.0,
+                                                          math.inf, unit="N"))
+        check_range("batch", self.batch, 1, BMAX)
 
 
-def _batch(points: list[tuple[Case, float, float]], duration: float, dt: float,
-           initial: Initial | None) -> list[dict]:
-    """(case, force, ratio) points of one bar kind and mode count, advanced in
-    lock-step (RK4): each equals :func:`_one`'s."""
-    runs = simulate_batch([(c.system, Harmonic(f, r), initial) for c, f, r in points],
-                          duration=duration, dt=dt)
-    return [_point(run) for run in runs]
+def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> Plan:
+    """Every (case, force, ratio) run; a point is a lock-step batch of them (RK4,
+    ``options.batch`` > 1: runs of one bar kind and mode count, in (case, force,
+    ratio) order) or one run."""
+    if not cases:
+        raise ParameterError("sweep needs at least one case")
+    shape = (len(cases), len(options.forces_n), len(options.ratios))
+    jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
+    batched = integration.integrator == "rk4" and options.batch > 1
+    if batched:
+        groups: dict[tuple, list] = {}
+        for ijk in jobs:
+            system = cases[ijk[0]].system
+            groups.setdefault((system.kind, system.bar.n_modes), []).append(ijk)
+        points = [g[a:a + options.batch] for g in groups.values()
+                  for a in range(0, len(g), options.batch)]
+    else:
+        points = [[ijk] for ijk in jobs]
+    context = {"cases": cases, "options": options, "integration": integration,
+               "batched": batched}
+    return Plan(context, points, {"shape": shape})
+
+
+def compute(context: dict, point: list) -> list[dict]:
+    """The runs of one point (a batch, or one run): their metrics and patterns."""
+    cases, o, integ = context["cases"], context["options"], context["integration"]
+    runs = [(cases[i].system, Harmonic(o.forces_n[j], o.ratios[k]),
+             cases[i].initial or integ.initial) for i, j, k in point]
+    if context["batched"]:
+        results = simulate_batch(runs, duration=integ.duration_s, dt=integ.dt_s,
+                                 steady_fraction=integ.steady_fraction)
+    else:
+        kw = integ.kwargs()
+        results = [simulate(system, forcing, **{**kw, "initial": initial})
+                   for system, forcing, initial in runs]
+    return [_point(run) for run in results]
+
+
+def warm(context: dict) -> None:
+    """Compile, once in this process, the kernel of every point: per mode count, and
+    batched, per batch size the points use (the batch kernel is compiled per size)."""
+    cases, integ = context["cases"], context["integration"]
+    seen = set()
+    for c in cases:
+        key = (c.system.kind if context["batched"] else "", c.system.bar.n_modes)
+        if key in seen:
+            continue
+        seen.add(key)
+        if context["batched"]:
+            for size in _batch_sizes(context, key):
+                simulate_batch([(c.system, Harmonic(1.0, 1.0), None)] * size,
+                               duration=2e-5, dt=1e-6)
+        else:
+            simulate(c.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6,
+                     integrator=integ.integrator)
+
+
+def _batch_sizes(context: dict, key: tuple) -> list[int]:
+    """The sizes of the batches of one (bar kind, mode count) group."""
+    cases, o = context["cases"], context["options"]
+    group = [c for c in cases if (c.system.kind, c.system.bar.n_modes) == key]
+    n = len(group) * len(o.forces_n) * len(o.ratios)
+    return sorted({min(o.batch, n - a) for a in range(0, n, o.batch)})
 
 
 def _point(run) -> dict:
@@ -103,112 +207,36 @@ def _point(run) -> dict:
         else s["impacts_per_cycle"],
         "pattern": s["pattern"] or "",
         "energy_balance_relative": s["energy"]["balance_relative"],
-        "elapsed_s": s["elapsed_s"],
     }
 
 
-def sweep(cases: list[Case], ratios, forces=(10.0,), *, duration: float = 2.0,
-          dt: float = 1e-6, workers: int | None = None, initial: Initial | None = None,
-          progress=None, integrator: str = "rk4", batch: int = BATCH):
-    """Tip RMS and impact pattern against Omega/omega_n for every case and force.
-
-    Returns an xarray Dataset with dims (case, force, ratio).  ``workers``:
-    threads (default: every core).  ``progress(done, total)`` is called as
-    points finish.  ``integrator``: "rk4" (published) or "exact" (see ``simulate``).
-    ``batch``: with "rk4", points of the same bar kind and mode count advanced
-    together in lock-step (:func:`~boringbar.simulate.simulate_batch`, up to 16),
-    taken in (case, force, ratio) order; 1: one point at a time.  The results are
-    the same, bit for bit, whatever ``batch`` and ``workers`` (``elapsed_s`` of a
-    batched point is its share of its batch's time).
-    """
-    if not cases:
-        raise ParameterError("sweep needs at least one case")
-    ratios = np.atleast_1d(np.asarray(ratios, dtype=float))
-    forces = np.atleast_1d(np.asarray(forces, dtype=float))
-    for r in ratios:
-        check_range("ratio", r, 0.0, math.inf, lo_open=True, hi_open=True)
-    workers = int(workers or os.cpu_count() or 1)
-    check_range("workers", workers, 1, 4096)
-    check_range("batch", batch, 1, BMAX)
-    shape = (len(cases), len(forces), len(ratios))
-    names = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
-             "energy_balance_relative", "elapsed_s")
-    out = {k: np.full(shape, np.nan) for k in names}
+def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
+    """The sweep Dataset, dims (case, force, ratio), from the points' results in plan
+    order; ``attrs`` go after the configuration's."""
+    ctx = plan.context
+    cases, o, integ = ctx["cases"], ctx["options"], ctx["integration"]
+    shape = plan.extra["shape"]
+    out = {k: np.full(shape, np.nan) for k in NAMES}
     pattern = np.full(shape, "", dtype=object)
-    jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1])
-            for k in range(shape[2])]
-    batched = integrator == "rk4" and batch > 1
-    if batched:
-        # points of one bar kind and mode count share a batch, in job order
-        groups: dict[tuple, list] = {}
-        for ijk in jobs:
-            system = cases[ijk[0]].system
-            groups.setdefault((system.kind, system.bar.n_modes), []).append(ijk)
-        batches = [g[a:a + batch] for g in groups.values() for a in range(0, len(g), batch)]
-    # warm the JIT once per kernel before fanning out (compilation is not
-    # thread-parallel and would otherwise be repeated); batched, the kernel of each
-    # batch size the group's batches use (it is compiled per size: warming another
-    # size would compile one that no batch runs)
-    warm = {(c.system.kind if batched else "", c.system.bar.n_modes): c for c in cases}
-    for key, c0 in warm.items():
-        if batched:
-            g = groups[key]
-            for size in sorted({min(batch, len(g) - a) for a in range(0, len(g), batch)}):
-                simulate_batch([(c0.system, Harmonic(1.0, 1.0), None)] * size,
-                               duration=2e-5, dt=1e-6)
-        else:
-            simulate(c0.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6,
-                     integrator=integrator)
-    tic = time.perf_counter()
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        if batched:
-            futures = {pool.submit(_batch, [(cases[i], forces[j], ratios[k]) for i, j, k in b],
-                                   duration, dt, initial): b for b in batches}
-        else:
-            futures = {pool.submit(_one, cases[i], forces[j], ratios[k], duration, dt, initial,
-                                   integrator): [(i, j, k)] for i, j, k in jobs}
-        done = 0
-        for fut in as_completed(futures):
-            results = fut.result()
-            results = results if isinstance(results, list) else [results]
-            for (i, j, k), res in zip(futures[fut], results, strict=True):
-                for key in names:
-                    out[key][i, j, k] = res[key]
-                pattern[i, j, k] = res["pattern"]
-            done += len(results)
-            if progress is not None:
-                progress(done, len(jobs))
-    wall = time.perf_counter() - tic
-    return _dataset(cases, forces, ratios, out, pattern, {
-        "integrator": integrator,
-        "batch": batch if batched else 1,
-        "dt_s": dt,
-        "duration_s": duration,
-        "workers": workers,
-        "wall_time_s": wall,
-        "initial": json.dumps((initial or Initial()).__dict__),
-    })
-
-
-def _dataset(cases: list[Case], forces: np.ndarray, ratios: np.ndarray, out: dict,
-             pattern: np.ndarray, attrs: dict):
-    """The sweep Dataset from the per-point arrays ``out`` (name -> (case, force,
-    ratio) array) and ``pattern``; ``attrs`` go after the configuration's."""
-    import xarray as xr
-
+    for point, res in zip(plan.points, results, strict=True):
+        for ijk, r in zip(point, res, strict=True):
+            for k in NAMES:
+                out[k][ijk] = r[k]
+            pattern[ijk] = r["pattern"]
     units = {"rms_tip_m": "m", "max_abs_tip_m": "m", "max_abs_rel_disp_m": "m",
-             "impacts_per_cycle": "1/period", "elapsed_s": "s", "energy_balance_relative": "1"}
+             "impacts_per_cycle": "1/period", "energy_balance_relative": "1"}
     dims = ("case", "force", "ratio")
     data = {k: (dims, v, {"units": units[k]}) for k, v in out.items()}
     data["pattern"] = (dims, pattern.astype(str))
     data["natural_frequency_hz"] = (("case",), np.array(
         [c.system.reference_frequency / (2 * math.pi) for c in cases]), {"units": "Hz"})
-    ds = xr.Dataset(
+    return xr.Dataset(
         data,
         coords={
             "case": [c.label for c in cases],
-            "force": ("force", forces, {"units": "N"}),
-            "ratio": ("ratio", ratios, {"long_name": "Omega / omega_n of the host bar"}),
+            "force": ("force", np.array(o.forces_n), {"units": "N"}),
+            "ratio": ("ratio", np.array(o.ratios),
+                      {"long_name": "Omega / omega_n of the host bar"}),
             "bar": ("case", [c.bar for c in cases]),
             "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
@@ -218,13 +246,42 @@ def _dataset(cases: list[Case], forces: np.ndarray, ratios: np.ndarray, out: dic
             "boringbar_version": __version__,
             "preset": ",".join(sorted({c.system.preset for c in cases})),
             "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
-            **attrs,
+            "integrator": integ.integrator,
+            "dt_s": integ.dt_s,
+            "duration_s": integ.duration_s,
+            "steady_fraction": integ.steady_fraction,
+            "initial": json.dumps((integ.initial or Initial()).__dict__),
+            "batch": o.batch if ctx["batched"] else 1,
+            **(attrs or {}),
         },
     )
-    return ds
 
 
-def sweep_summary(ds) -> dict:
+def sweep(cases: list[Case], options: SweepOptions | None = None, *,
+          integration: Integration | None = None, execution: Execution | None = None,
+          progress=None):
+    """Tip RMS and impact pattern against Omega/omega_n for every case and force.
+
+    ``cases``: the bars (:func:`published_cases`, or :class:`Case` s of your own
+    systems); ``options``: the grid (:class:`SweepOptions`; default the published
+    ratios 0.95-1.05 at 10 N); ``integration``: how each run is integrated
+    (:class:`~boringbar.simulate.Integration`); ``execution``: where the points run
+    (:class:`~boringbar.execute.Execution`; default a thread per core);
+    ``progress(done, total)`` is called as points finish.
+
+    Returns an xarray Dataset with dims (case, force, ratio): ``rms_tip_m``,
+    ``max_abs_tip_m``, ``max_abs_rel_disp_m``, ``impacts_per_cycle``, ``pattern``,
+    ``energy_balance_relative``; the configuration in its attributes.  The results
+    are the same, bit for bit, whatever the batch size and the executor.
+    """
+    options = options or SweepOptions()
+    integration = integration or Integration()
+    p = plan(cases, options, integration)
+    results, wall = run_plan(sys.modules[__name__], p, execution, progress)
+    return assemble(p, results, execution_attrs(execution, wall))
+
+
+def summary(ds) -> dict:
     """JSON-able summary of a sweep (what ``boringbar sweep --json`` prints)."""
     cases = []
     for i, label in enumerate(ds["case"].values):

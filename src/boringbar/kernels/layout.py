@@ -36,7 +36,7 @@ _SCALARS = (
     "TMD_C",
     "STROBE_PERIOD",  # Poincare sampling period (s); 0 = off
     "STROBE_T0",  # first strobe time (s)
-    # regenerative cutting (MODEL.md section 4)
+    # regenerative cutting (docs/model.md, section 4)
     "KR_B",  # Kr * b (N/m)
     "FEED",  # h_m (m)
     "TAU",  # delay, one spindle revolution (s)

@@ -1,6 +1,6 @@
 """The published scheme: classical RK4 at a fixed step, impacts at step ends.
 
-MODEL.md sections 2 and 5.  Per step:
+docs/model.md, sections 2 and 5.  Per step:
 
 1. four RK4 stages of the smooth equations, with the friction force
    F_b = -F_c sgn(y') (sgn(0) = 0) and the forcing evaluated at every stage;
@@ -264,7 +264,7 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
         if regen:
             # the surface the tool meets at each stage time: min_j [j h_m + W(t_s - j tau)],
             # from the stored history (stages 2 and 3 share t + dt/2).  Until h first
-            # reaches zero the j = 1 term is the minimum (MODEL.md section 4), so the
+            # reaches zero the j = 1 term is the minimum (docs/model.md, section 4), so the
             # other revolutions are read only after that.
             nr_eff = nrev if first_zero >= 0.0 else 1
             for q in range(3):
@@ -486,7 +486,7 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
                 n_stb += 1
             t_next += tstrobe
 
-        # --- walls (MODEL.md section 2) ----------------------------------------
+        # --- walls (docs/model.md, section 2) ----------------------------------------
         contact = False
         if ball:
             y = X[iy]

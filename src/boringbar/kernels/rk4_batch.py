@@ -450,7 +450,7 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
                 t_next[r] = tn + tstrobe[r]
             if not ball:
                 continue
-            # walls (MODEL.md section 2)
+            # walls (docs/model.md, section 2)
             hit = False
             y = X[iy, r]
             if abs(y) >= half[r]:

@@ -1,4 +1,4 @@
-"""The exact event-driven integrator (MODEL.md sections 2 and 5).
+"""The exact event-driven integrator (docs/model.md, sections 2 and 5).
 
 Between events the motion is linear with a constant friction force and the
 harmonic input F0 sin(Omega t), so it has a closed form.  The ball case has
@@ -32,7 +32,7 @@ Events (located by a safeguarded regula falsi, Illinois variant, to a
 bracket of 4 ulp of t):
 
 - FREE: y = +-delta/2 (impact, or capture on the wall when the impact is
-  slower than p[V_IMPACT], the threshold of MODEL.md section 2: a Zeno
+  slower than p[V_IMPACT], the threshold of docs/model.md, section 2: a Zeno
   sequence ends in CONTACT after finitely many impacts); y' = 0 when
   F_c > 0 (a friction switch: the ball sticks if the force needed to carry
   it, |F_req| = |psi_d . a_0| / (1/m + s sum psi_d^2 / M), is at most F_s,
@@ -74,7 +74,7 @@ endpoint-corrected trapezoid rule on the grid.  Maxima of
 |W| are located exactly (W' = 0 roots on the grid); maxima of |aux| are
 taken on the grid and at events.
 
-Regenerative cutting (MODEL.md section 4; docs/exact.md "Regenerative cuts"):
+Regenerative cutting (docs/model.md, section 4; docs/exact.md "Regenerative cuts"):
 in the cut f = Kr b (S(t) - W), and -Kr b W joins the matrix (a second set of
 regimes, ``prepare``); the surface S = min_k [k h_m + W(t - k tau)] is one cubic
 per segment, the cubic Hermite of W, W' between stored knots (at the nodes

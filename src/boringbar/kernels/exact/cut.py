@@ -1,5 +1,5 @@
 """A regenerative cut's delay history: the history step, the tabulated whole step, the knots
-of W and the surface as one cubic per segment (MODEL.md section 4; docs/exact.md
+of W and the surface as one cubic per segment (docs/model.md, section 4; docs/exact.md
 "Regenerative cuts"), and its Gauss-Legendre flows.
 """
 
@@ -155,7 +155,7 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
     Advances the pointers ip[k] (all revolutions, so that old knots can be dropped);
     sc[k] receives revolution k's cubic.  ``j_now``: the node t is on (-1: none); a
     delayed node then falls exactly on its knot (no rounding of t - k tau).  ``cubic``
-    false: linear interpolation of W instead (MODEL.md section 4's option)."""
+    false: linear interpolation of W instead (docs/model.md, section 4's option)."""
     t_piece = t_end
     for k in range(1, nrev + 1):
         kt = k * tau_d

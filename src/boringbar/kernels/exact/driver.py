@@ -293,7 +293,7 @@ def _apply_event(ev_kind, t, steady, X, f_ev, n, mk, cp, rs, imp, stick, met):
         incut = rs[RS_INCUT] == 0.0
         rs[RS_INCUT] = 1.0 if incut else 0.0
         if not incut and rs[RS_FIRST_ZERO] < 0.0:
-            rs[RS_FIRST_ZERO] = t  # the chatter verdict (MODEL.md section 4)
+            rs[RS_FIRST_ZERO] = t  # the chatter verdict (docs/model.md, section 4)
             if cp[CP_STOP_AT_ZERO] != 0.0:  # finish the step of length dt_out, as RK4 does
                 t0 = cp[CP_T0]
                 dt_out = cp[CP_DT_OUT]
@@ -465,7 +465,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
 
     for j in range(nz):
         X[j] = x[j]
-    # --- regenerative cut (MODEL.md section 4): the history of W as knots -----------------
+    # --- regenerative cut (docs/model.md, section 4): the history of W as knots -----------------
     # Knots (t, W, W'-, W'+) at the nodes t0 + j H, H = tau / m <= dt_out (so the delayed
     # nodes fall on nodes), and at every event (W' jumps at impacts, W'' at friction
     # switches).  The surface min_k [k h_m + W(t - k tau)] is the cubic Hermite of W, W'

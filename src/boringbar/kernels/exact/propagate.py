@@ -43,7 +43,7 @@ def _phis(x):
 
 @njit(cache=True, inline="always")
 def _surface(seg, tau):
-    """S(tau) and S'(tau): the cut surface's cubic on the segment (MODEL.md section 4)."""
+    """S(tau) and S'(tau): the cut surface's cubic on the segment (docs/model.md, section 4)."""
     s1 = seg[SEG_S + 1]
     s2 = seg[SEG_S + 2]
     s3 = seg[SEG_S + 3]

@@ -1,0 +1,398 @@
+"""Options and checks shared by the ``boringbar`` subcommands: the common option groups,
+the parsing of lists and ranges, and progress lines."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
+from boringbar.execute import Execution
+from boringbar.io import jsonable
+from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
+from boringbar.model.forcing import (
+    INTERPOLATIONS,
+    MAX_DEPTH,
+    MAX_FEED,
+    MAX_FORCE,
+    MAX_KR,
+    MAX_RATIO,
+    STARTS,
+)
+from boringbar.model.system import BALLS, BAR_KINDS, PRESETS
+from boringbar.progress import ProgressCallback
+from boringbar.simulate import (
+    INTEGRATORS,
+    MAX_INITIAL_DISPLACEMENT,
+    MAX_INITIAL_VELOCITY,
+    Initial,
+    Integration,
+    check_delay,
+    check_step,
+    check_steps,
+)
+
+PROG = "boringbar"
+#: Most worker threads or processes an option may ask for.
+MAX_WORKERS = 4096
+BALL_OPTIONS = ("gap_mm", "friction", "friction_force_n", "friction_number", "ball",
+                "restitution", "locked", "ball_position_mm", "ball_velocity_m_s",
+                "static_ratio")
+
+
+def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
+                initial: bool = True, ranges: bool = False) -> dict:
+    """Options shared by every command; ``many``: the list forms of sweep and
+    lobes; ``harmonic``: the F0 and Omega options; ``initial``: the initial
+    conditions; ``ranges``: --gap-mm and --restitution also take
+    START:STOP:STEP (bifurcation; strings, parsed by the command).  Returns
+    the option groups by name, for command-specific options."""
+    groups = {}
+    lst = ", comma list" if many else ""
+    g = p.add_argument_group("bar and damper")
+    g.add_argument("--bar", action="append", metavar="solid|ball|tmd",
+                   help="solid bar, ball damper or tuned mass damper"
+                        + ("; repeatable or comma list (default: solid,tmd,ball)" if many
+                           else " (default: ball)"))
+    g.add_argument("--preset", choices=PRESETS, default="physical",
+                   help="physical (default) or paper (the published readings)")
+    swept = ", or START:STOP:STEP to sweep it" if ranges else ""
+    g.add_argument("--gap-mm", metavar="MM" + (",..." if many else "|START:STOP:STEP" if ranges
+                                               else ""),
+                   type=None if many or ranges else float,
+                   help=f"total ball clearance delta in mm{lst}{swept} "
+                        f"(default: {'0.5,0.1' if many else '0.5'})")
+    g.add_argument("--friction", metavar="on|off" + (",..." if many else ""),
+                   help=f"ball friction{lst} (default: {'off,on' if many else 'on'}); "
+                        "its size depends on the preset")
+    g.add_argument("--friction-force-n", type=float, metavar="N",
+                   help="friction force F_c in N (overrides the preset's)")
+    g.add_argument("--friction-number", type=float, metavar="X",
+                   help="published rolling-resistance number (0.6 nominal), read as the "
+                        "preset reads it")
+    g.add_argument("--ball", choices=BALLS, help="ball material (default: carbide)")
+    g.add_argument("--restitution", type=None if ranges else float,
+                   metavar="E|START:STOP:STEP" if ranges else "E",
+                   help=f"coefficient of restitution in [0, 1]{swept} (default: 0.7)")
+    g.add_argument("--locked", action="store_true", help="fix the ball to the bar")
+    g.add_argument("--static-ratio", type=float, metavar="X",
+                   help="static friction limit F_s/F_c >= 1 of true stick-slip (default: 1; "
+                        "other values need --integrator exact)")
+    g.add_argument("--modes", type=int, metavar="N",
+                   help="retained bending modes (default: physical 2, paper 1)")
+    g.add_argument("--tmd-design", choices=("published", "den-hartog"),
+                   help="TMD tuning (default: physical den-hartog, paper published)")
+
+    g = groups["run"] = p.add_argument_group("forcing and integration")
+    if harmonic and many:
+        g.add_argument("--force-n", default="10,20", metavar="N,...",
+                       help="harmonic force amplitudes F0 in N (default: 10,20)")
+        g.add_argument("--ratios", default="0.95:1.05:0.01", metavar="START:STOP:STEP",
+                       help="Omega/omega_n values, START:STOP:STEP (inclusive) or comma list "
+                            "(default: 0.95:1.05:0.01)")
+    elif harmonic:  # None: not given (a cut refuses them); defaults in cmd_simulate
+        g.add_argument("--force-n", type=float, metavar="N",
+                       help="harmonic force amplitude F0 in N (default: 10)")
+        g.add_argument("--ratio", type=float, metavar="R",
+                       help="Omega/omega_n of the host bar (default: 1.0)")
+    g.add_argument("--duration-s", type=float, default=2.0, metavar="S",
+                   help="simulated time in s (default: 2.0)")
+    g.add_argument("--dt-s", type=float, default=1e-6, metavar="S",
+                   help="RK4 time step in s; with --integrator exact, the step of the "
+                        "recorded history (default: 1e-6)")
+    g.add_argument("--integrator", choices=INTEGRATORS, default="rk4",
+                   help="rk4: the published fixed-step scheme (default); exact: "
+                        "event-driven, exact between events (a cut: the delayed surface "
+                        "from a history of step <= dt)")
+
+    if initial:
+        g = p.add_argument_group("initial conditions (default: at rest, ball centred)")
+        g.add_argument("--tip-displacement-mm", type=float, default=0.0, metavar="MM")
+        g.add_argument("--tip-velocity-m-s", type=float, default=0.0, metavar="M/S")
+        g.add_argument("--ball-position-mm", type=float, metavar="MM",
+                       help="ball position relative to the cavity centre, in [-gap/2, gap/2]")
+        g.add_argument("--ball-velocity-m-s", type=float, metavar="M/S",
+                       help="ball velocity relative to the bar")
+
+    g = groups["output"] = p.add_argument_group("output")
+    g.add_argument("--out", default="out", metavar="DIR", help="output directory (default: out)")
+    g.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    g.add_argument("--quiet", action="store_true", help="no progress and no human summary")
+    return groups
+
+
+def add_cutting(g) -> None:
+    """The cut's description, shared by simulate and lobes (docs/model.md, section 4).
+    Defaults are None here (so simulate can refuse them without a cut) and
+    applied in :func:`cut_options`."""
+    g.add_argument("--kr-mpa", type=float, metavar="MPA",
+                   help="specific radial cutting force Kr in MPa (default: 850, aluminium)")
+    g.add_argument("--feed-mm", type=float, metavar="MM",
+                   help="feed per revolution h_m in mm (default: 0.1)")
+    g.add_argument("--revolutions", type=int, metavar="N",
+                   help="past revolutions N in the chip-thickness minimum (default: 3)")
+    g.add_argument("--delay-interp", choices=INTERPOLATIONS,
+                   help="delayed W at RK4 stages: cubic Hermite (default) or linear")
+    g.add_argument("--start", choices=STARTS,
+                   help="rest (default, as published: the mean force arrives as a step) or "
+                        "static (from the static deflection under the mean force)")
+    g.add_argument("--bounded-fraction", type=float, metavar="X",
+                   help="bounded chatter: steady amplitude above X h_m (default: 0.1)")
+
+
+def add_steady_fraction(group) -> None:
+    group.add_argument("--steady-fraction", type=float, default=0.8, metavar="F",
+                       help="the last part of each run that is sampled (RMS, patterns, "
+                            "Poincare samples), in (0, 1] (default: 0.8: the first 20 %% "
+                            "dropped)")
+
+
+def parse_words(values, name: str, choices, default) -> list[str]:
+    """Repeatable and/or comma-separated choices -> list, in order, without repeats."""
+    if values is None:
+        return list(default)
+    if isinstance(values, str):
+        values = [values]
+    out = []
+    for w in (w.strip() for v in values for w in v.split(",")):
+        if w not in choices:
+            raise ParameterError(f"{name} = {w!r} is not one of {', '.join(choices)}")
+        if w not in out:
+            out.append(w)
+    return out
+
+
+def parse_numbers(text: str, name: str) -> list[float]:
+    """A comma list of at most MAX_GRID_VALUES numbers (each checked by the caller)."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ParameterError(f"{name} = {text!r} must be a comma-separated list of "
+                             "numbers") from None
+    if len(values) > MAX_GRID_VALUES:
+        raise ParameterError(f"{name} has {len(values)} values; the allowed maximum is "
+                             f"{MAX_GRID_VALUES}")
+    return values
+
+
+def _check_common(args, bars: list[str]) -> None:
+    has_ball = "ball" in bars
+    if not has_ball:
+        given = [o for o in BALL_OPTIONS if getattr(args, o, None) not in (None, False)]
+        if given:
+            opt = "--" + given[0].replace("_", "-")
+            raise ParameterError(f"{opt} applies only to --bar ball (bar = {','.join(bars)})")
+    if args.tmd_design is not None and "tmd" not in bars:
+        raise ParameterError(f"--tmd-design applies only to --bar tmd "
+                             f"(bar = {','.join(bars)})")
+    if args.friction_force_n is not None and args.friction_number is not None:
+        raise ParameterError("give at most one of --friction-force-n and --friction-number")
+    if args.friction_force_n is not None:
+        check_range("--friction-force-n", args.friction_force_n, 0, MAX_FRICTION_FORCE,
+                    unit="N")
+    if args.friction_number is not None:
+        check_range("--friction-number", args.friction_number, 0, 100)
+    if args.static_ratio is not None:
+        check_range("--static-ratio", args.static_ratio, 1, math.inf, hi_open=True)
+    if args.restitution is not None:
+        check_range("--restitution", args.restitution, 0, 1)
+    if args.modes is not None:
+        check_range("--modes", args.modes, 1, 8)
+    check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
+
+
+def check_gap(gap_mm: float) -> float:
+    return check_range("--gap-mm", gap_mm, 0, MAX_GAP * 1e3, lo_open=True, unit="mm") * 1e-3
+
+
+def check_dt(args, systems, ratio: float = 0.0) -> None:
+    """--dt-s resolves the highest mode of every system and the forcing at ``ratio``
+    (the largest Omega/omega_n; 0: only the modes)."""
+    for system in systems:
+        check_step(system, ratio * system.reference_frequency, args.dt_s, "--dt-s")
+
+
+def check_workers(workers, name: str = "--workers") -> None:
+    if workers is not None:
+        check_int(name, workers, 1, MAX_WORKERS)
+
+
+def initial_conditions(args, gaps_m: list[float]):
+    d, v = MAX_INITIAL_DISPLACEMENT * 1e3, MAX_INITIAL_VELOCITY
+    if args.ball_position_mm is not None and gaps_m:
+        half = min(gaps_m) / 2 * 1e3
+        check_range("--ball-position-mm", args.ball_position_mm, -half, half, unit="mm")
+    if args.ball_velocity_m_s is not None:
+        check_range("--ball-velocity-m-s", args.ball_velocity_m_s, -v, v, unit="m/s")
+    return Initial(
+        tip_displacement=check_range("--tip-displacement-mm", args.tip_displacement_mm, -d, d,
+                                     unit="mm") * 1e-3,
+        tip_velocity=check_range("--tip-velocity-m-s", args.tip_velocity_m_s, -v, v,
+                                 unit="m/s"),
+        ball_position=(args.ball_position_mm or 0.0) * 1e-3,
+        ball_velocity=args.ball_velocity_m_s or 0.0,
+    )
+
+
+def cut_options(args) -> dict:
+    """The cut options as Regenerative keywords (SI), checked, defaults applied."""
+    kr = 850.0 if args.kr_mpa is None else args.kr_mpa
+    feed = 0.1 if args.feed_mm is None else args.feed_mm
+    revolutions = 3 if args.revolutions is None else args.revolutions
+    fraction = 0.1 if args.bounded_fraction is None else args.bounded_fraction
+    check_range("--kr-mpa", kr, 0, MAX_KR * 1e-6, lo_open=True, unit="MPa")
+    check_range("--feed-mm", feed, 0, MAX_FEED * 1e3, lo_open=True, unit="mm")
+    check_int("--revolutions", revolutions, 1, 50)
+    check_range("--bounded-fraction", fraction, 0, math.inf, lo_open=True, hi_open=True)
+    return {"kr": kr * 1e6, "feed": feed * 1e-3, "revolutions": revolutions,
+            "interpolation": args.delay_interp or "cubic", "start": args.start or "rest",
+            "bounded_fraction": fraction}
+
+
+def check_rpm(rpm: float, args, name: str = "--rpm") -> float:
+    """A spindle speed: positive, its period at least 4 steps of --dt-s, its delay
+    history (--revolutions) within the allowed rows."""
+    revolutions = 3 if args.revolutions is None else args.revolutions
+    check_int("--revolutions", revolutions, 1, 50)
+    check_delay(rpm, revolutions, args.dt_s, name)
+    return float(rpm)
+
+
+def check_depth(depth_mm: float, name: str) -> float:
+    """A depth of cut in mm, (0, MAX_DEPTH]."""
+    return check_range(name, depth_mm, 0, MAX_DEPTH * 1e3, lo_open=True, unit="mm")
+
+
+def system_overrides(args) -> dict:
+    """make_system keywords the user set (the preset decides the rest)."""
+    kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
+          "friction_number": args.friction_number, "friction_force": args.friction_force_n,
+          "tmd_design": args.tmd_design, "locked": args.locked or None,
+          "static_ratio": args.static_ratio}
+    return {k: v for k, v in kw.items() if v is not None}
+
+
+def one_bar(args, command: str) -> tuple[str, bool]:
+    """--bar and --friction of the commands that run one system, checked with
+    the common options: (bar, friction on)."""
+    bars = parse_words(args.bar, "--bar", BAR_KINDS, ["ball"])
+    if len(bars) != 1:
+        raise ParameterError(f"--bar = {','.join(bars)!r}: {command} runs one bar "
+                             f"(one of {', '.join(BAR_KINDS)})")
+    _check_common(args, bars)
+    friction = parse_words(args.friction, "--friction", ("on", "off"), ["on"])
+    if len(friction) != 1:
+        raise ParameterError(f"--friction = {args.friction!r} must be one of on, off")
+    friction_on = friction[0] == "on"
+    if not friction_on and (args.friction_force_n is not None
+                            or args.friction_number is not None):
+        raise ParameterError("--friction off conflicts with --friction-force-n / "
+                             "--friction-number")
+    return bars[0], friction_on
+
+
+#: simulate options that describe a cut (dest names); refused with harmonic forcing
+CUT_ONLY = ("kr_mpa", "feed_mm", "revolutions", "delay_interp", "start", "bounded_fraction",
+            "stop_at_zero")
+
+
+def forces_and_ratios(args):
+    """--force-n and --ratios lists, checked, and --workers checked."""
+
+    forces = parse_numbers(args.force_n, "--force-n")
+    for f in forces:
+        check_force(f)
+    ratios = parse_range(args.ratios, "--ratios")
+    for r in ratios:
+        check_ratio(r, "--ratios")
+    check_workers(args.workers)
+    return forces, ratios
+
+
+def check_force(force: float, name: str = "--force-n") -> float:
+    return check_range(name, force, 0, MAX_FORCE, unit="N")
+
+
+def check_ratio(ratio: float, name: str = "--ratio") -> float:
+    return check_range(name, ratio, 0, MAX_RATIO, lo_open=True)
+
+
+def progress_printer(args, command: str, what: str):
+    """A progress(done, total) bar on a terminal's stderr, else None."""
+    if args.quiet or not sys.stderr.isatty():
+        return None
+    return ProgressCallback(f"{PROG} {command}", what)
+
+
+def many_cases(args) -> tuple[list, list[str], list[float]]:
+    """The cases of sweep and lobes from --bar, --gap-mm, --friction and the
+    overrides: (cases, bars, gaps in m)."""
+    bars = parse_words(args.bar, "--bar", BAR_KINDS, ["solid", "tmd", "ball"])
+    _check_common(args, bars)
+    gaps = [check_gap(g) for g in parse_numbers(args.gap_mm or "0.5,0.1", "--gap-mm")]
+    frictions = [w == "on" for w in parse_words(args.friction, "--friction", ("on", "off"),
+                                           ["off", "on"])]
+    if not any(frictions) and (args.friction_force_n is not None
+                               or args.friction_number is not None):
+        raise ParameterError("--friction off conflicts with --friction-force-n / "
+                             "--friction-number")
+    return _sweep_cases(args, bars, gaps, frictions), bars, gaps
+
+
+def _sweep_cases(args, bars, gaps, frictions) -> list:
+    """published_cases, in the user's order; a friction override applies to the
+    friction-on ball cases only (make_system would otherwise give the 'off'
+    cases that friction too)."""
+
+    kw = system_overrides(args)
+    cases = []
+    for bar in bars:
+        if bar != "ball":
+            cases += published_cases((bar,), preset=args.preset, **kw)
+            continue
+        for gap in gaps:
+            for fr in frictions:
+                ov = kw if fr else {k: v for k, v in kw.items() if k != "friction_force"}
+                cases += published_cases(("ball",), (gap,), (fr,), args.preset, **ov)
+    return cases
+
+
+PATTERN_KEY = ("patterns: Ns = N symmetric impacts per period, Na/k = N asymmetric impacts "
+               "per k periods, st = sticking, 0 = no impact, 0+st = no impact with sticking, "
+               "nu = non-uniform")
+
+
+def print_json(obj) -> None:
+    print(json.dumps(jsonable(obj), allow_nan=False))
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a command produced: its ``summary`` (the --json object) and ``text(say)``,
+    which says the human-readable report line by line (``say`` is print, or a
+    collector)."""
+
+    summary: dict
+    text: Callable[[Callable[[str], None]], None]
+
+    def report(self, args) -> None:
+        """Print the summary as JSON (--json), or the text unless --quiet."""
+        if args.json:
+            print_json(self.summary)
+        elif not args.quiet:
+            self.text(print)
+
+
+def integration(args, initial=None, steady_fraction: float = 0.8) -> Integration:
+    """The integration options of a command (--duration-s, --dt-s, --integrator)."""
+    return Integration(args.duration_s, args.dt_s, args.integrator, steady_fraction, initial)
+
+
+def execution(args) -> Execution:
+    """Where a command's points run: a thread per core, or --workers threads."""
+    return Execution("threads", args.workers)

@@ -1,0 +1,157 @@
+"""``boringbar simulate``: one run under harmonic forcing or a regenerative cut."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from boringbar._validate import ParameterError, check_int
+from boringbar.cli.options import (
+    CUT_ONLY,
+    Outcome,
+    add_common,
+    add_cutting,
+    check_depth,
+    check_dt,
+    check_force,
+    check_gap,
+    check_ratio,
+    check_rpm,
+    cut_options,
+    initial_conditions,
+    one_bar,
+    system_overrides,
+)
+from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
+from boringbar.model.forcing import Harmonic, Regenerative
+from boringbar.model.system import make_system
+from boringbar.plot import plot_run
+from boringbar.report.outputs import HISTORY_ROWS
+from boringbar.simulate import check_history, check_steps, simulate
+
+
+def add_simulate(sub) -> None:
+    p = sub.add_parser("simulate", help="one time-domain run under harmonic forcing or a cut",
+                       description="One run; writes DIR/run.nc, DIR/run.png, DIR/summary.json. "
+                                   "Harmonic forcing (--force-n, --ratio) by default; "
+                                   "--rpm with --depth-mm runs a regenerative cut instead.")
+    groups = add_common(p, many=False)
+    g = p.add_argument_group("regenerative cutting (instead of harmonic forcing)")
+    g.add_argument("--rpm", type=float, metavar="RPM", help="spindle speed in rev/min")
+    g.add_argument("--depth-mm", type=float, metavar="MM", help="depth of cut b in mm")
+    add_cutting(g)
+    g.add_argument("--stop-at-zero", action="store_true",
+                   help="end the run when the cutting force first reaches zero (chatter)")
+    groups["output"].add_argument("--record-every", type=int, metavar="N",
+                   help=f"keep every N-th step in run.nc (default: about {HISTORY_ROWS} rows)")
+    p.set_defaults(func=cmd_simulate)
+
+
+def cmd_simulate(args) -> Outcome:
+    bar, friction_on = one_bar(args, "simulate")
+    gap = check_gap(0.5 if args.gap_mm is None else args.gap_mm)
+    forcing = _simulate_forcing(args)
+    n_steps = check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
+    record_every = max(1, n_steps // HISTORY_ROWS)
+    if args.record_every is not None:  # every N-th step: N = 0 means nothing
+        record_every = check_int("--record-every", args.record_every, 1, n_steps)
+        check_history(n_steps, record_every, "--record-every")
+
+    kw = system_overrides(args)
+    if bar == "ball":
+        kw.update(gap=gap, friction=friction_on)
+    system = make_system(bar, args.preset, **kw)
+    check_dt(args, [system], getattr(forcing, "ratio", 0.0))
+    initial = initial_conditions(args, [gap] if bar == "ball" else [])
+    run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s, initial=initial,
+                   record_every=record_every, integrator=args.integrator)
+
+
+    out = Path(args.out)
+    files = {"netcdf": out / "run.nc", "png": out / "run.png", "summary": out / "summary.json"}
+    ds = run.to_xarray()
+    write_netcdf_atomic(ds, files["netcdf"])
+    save_figure_atomic(plot_run(ds), files["png"])
+    summary = {**run.summary(), "files": {k: str(v) for k, v in files.items()}}
+    write_json_atomic({**summary, "config": run.config()}, files["summary"])
+
+    def text(say) -> None:
+        say(_cut_text(summary) if "cutting" in summary else _simulate_text(summary, run))
+
+    return Outcome(summary, text)
+
+
+def _simulate_forcing(args):
+    """Harmonic(F0, ratio), or Regenerative when --rpm and --depth-mm are given."""
+
+    if args.rpm is not None:
+        check_rpm(args.rpm, args)
+    if args.depth_mm is not None:
+        check_depth(args.depth_mm, "--depth-mm")
+    if args.rpm is None and args.depth_mm is None:
+        given = [o for o in CUT_ONLY if getattr(args, o) not in (None, False)]
+        if given:
+            raise ParameterError(f"--{given[0].replace('_', '-')} applies only to a cut "
+                                 "(--rpm with --depth-mm)")
+        force = 10.0 if args.force_n is None else args.force_n
+        ratio = 1.0 if args.ratio is None else args.ratio
+        return Harmonic(check_force(force), check_ratio(ratio))
+    if args.rpm is None or args.depth_mm is None:
+        have, need = ("--rpm", "--depth-mm") if args.depth_mm is None else ("--depth-mm",
+                                                                            "--rpm")
+        raise ParameterError(f"{have} needs {need}: a cut takes both")
+    for name, value in (("--force-n", args.force_n), ("--ratio", args.ratio)):
+        if value is not None:
+            raise ParameterError(f"{name} = {value:g} is harmonic forcing and cannot be mixed "
+                                 "with a cut (--rpm, --depth-mm): give one or the other")
+    return Regenerative(depth=args.depth_mm * 1e-3, rpm=args.rpm,
+                        stop_at_zero=args.stop_at_zero, **cut_options(args))
+
+
+def _cut_text(s: dict) -> str:
+    c = s["cutting"]
+    cfg = "static start" if c["start"] == "static" else "from rest"
+    lines = [
+        f"{s['bar']} bar, {s['preset']} preset: cut at {c['rpm']:g} rpm "
+        f"({s['forcing_frequency_hz']:.2f} Hz), depth {c['depth_m'] * 1e3:g} mm, {cfg}",
+        f"  natural frequency  {s['natural_frequency_hz']:.2f} Hz",
+    ]
+    if c["chatter"]:
+        lines.append(f"  verdict            CHATTER: the force first reaches zero at "
+                     f"t = {c['first_zero_time_s']:.4g} s (the tool leaves the cut)")
+    else:
+        lines.append(f"  verdict            stable: the force never reaches zero in "
+                     f"{s['duration_s']:g} s")
+    lines += [
+        f"  bounded chatter    {'yes' if c['bounded_chatter'] else 'no'} (steady amplitude "
+        f"{c['amplitude_m'] * 1e3:.4g} mm, threshold {c['bounded_threshold_m'] * 1e3:.4g} mm)",
+        f"  cutting force      mean {c['mean_force_n']:.4g} N, max {c['max_force_n']:.4g} N "
+        f"({c['steps_with_zero_force']} steps at zero)",
+        f"  tip                static deflection {c['static_deflection_m'] * 1e3:.4g} mm, "
+        f"max |W| {s['max_abs_tip_m'] * 1e3:.4g} mm",
+        f"  delay interp.      {c['delay_interpolation']}",
+        f"  elapsed            {s['elapsed_s']:.2f} s",
+        "  wrote " + ", ".join(s["files"].values()),
+    ]
+    return "\n".join(lines)
+
+
+def _simulate_text(s: dict, run) -> str:
+    lines = [
+        f"{s['bar']} bar, {s['preset']} preset: F0 = {s['force_n']:g} N, "
+        f"Omega/omega_n = {s['ratio']:.4g} ({s['forcing_frequency_hz']:.2f} Hz)",
+        f"  natural frequency  {s['natural_frequency_hz']:.2f} Hz",
+        f"  tip RMS            {s['rms_tip_m'] * 1e3:.4g} mm (steady part)",
+        f"  max |tip|          {s['max_abs_tip_m'] * 1e3:.4g} mm",
+    ]
+    if s["bar"] == "ball":
+        lines.append(f"  pattern            {s['pattern']} "
+                     f"({s['impacts_per_cycle']:.3g} impacts per cycle)")
+        lines.append(f"  max |y|            {s['max_abs_rel_disp_m'] * 1e3:.4g} mm "
+                     f"(walls at +-{run.system.damper.gap / 2 * 1e3:g} mm)")
+    elif s["bar"] == "tmd":
+        lines.append(f"  max stroke         {s['max_abs_rel_disp_m'] * 1e3:.4g} mm")
+    if s["readings"]:
+        lines.append(f"  published readings {', '.join(s['readings'])}")
+    lines.append(f"  elapsed            {s['elapsed_s']:.2f} s")
+    lines.append("  wrote " + ", ".join(s["files"].values()))
+    return "\n".join(lines)

@@ -1,0 +1,206 @@
+"""``boringbar sweep`` and ``boringbar lobes``: frequency sweeps and stability lobes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.lobes import MAX_DEPTHS, PUBLISHED_RPM, LobesOptions, lobes
+from boringbar.analysis.lobes import examples as lobe_examples
+from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
+from boringbar.cli.options import (
+    PATTERN_KEY,
+    Outcome,
+    add_common,
+    add_cutting,
+    check_depth,
+    check_dt,
+    check_rpm,
+    check_workers,
+    cut_options,
+    execution,
+    forces_and_ratios,
+    initial_conditions,
+    integration,
+    many_cases,
+    progress_printer,
+)
+from boringbar.model.forcing import MAX_DEPTH
+from boringbar.report.outputs import HISTORY_ROWS, lobes_files, sweep_files
+
+
+def add_sweep(sub) -> None:
+    p = sub.add_parser("sweep", help="tip RMS and impact pattern against Omega/omega_n",
+                       description="Frequency sweep of the published study (docs/model.md, section "
+                                   "6); writes DIR/sweep.nc and DIR/sweep.png (one "
+                                   "DIR/sweep_F<F0>N.png per force when several).")
+    groups = add_common(p, many=True)
+    groups["run"].add_argument("--workers", type=int, metavar="N",
+                               help="threads (default: every core)")
+    p.set_defaults(func=_cmd_sweep)
+
+
+def add_lobes(sub) -> None:
+    p = sub.add_parser("lobes", help="stability lobes by time-domain simulation of cuts",
+                       description="Stability lobes of the published study (docs/model.md, section "
+                                   "6): depth of cut against spindle speed, every grid point a "
+                                   "regenerative cut; writes DIR/lobes.nc and DIR/lobes.png "
+                                   "(with --examples also DIR/examples.nc and "
+                                   "DIR/examples.png).")
+    groups = add_common(p, many=True, harmonic=False, initial=False)
+    g = p.add_argument_group("lobe grid")
+    g.add_argument("--rpm", metavar="START:STOP:STEP",
+                   help="spindle speeds in rev/min, START:STOP:STEP (inclusive) or comma list "
+                        "(default: 900:1600:50, published)")
+    g.add_argument("--depth-step-mm", type=float, default=0.01, metavar="MM",
+                   help="depth-of-cut step in mm (default: 0.01)")
+    g.add_argument("--max-depth-mm", type=float, default=3.0, metavar="MM",
+                   help="deepest cut tried in mm (default: 3)")
+    g.add_argument("--method", choices=("scan", "search"), default="scan",
+                   help="scan: every depth upwards (default, published); search: doubling "
+                        "and bisection (faster; assumes stability monotone below the bracket)")
+    g.add_argument("--successive", type=int, default=3, metavar="N",
+                   help="a speed's scan ends after N successive chattering depths (default: 3)")
+    g.add_argument("--criterion", choices=("zero", "bounded"), default="zero",
+                   help="chatter: the force reaches zero (default, published) or bounded "
+                        "(also a steady amplitude above --bounded-fraction of the feed)")
+    g = p.add_argument_group("regenerative cutting")
+    add_cutting(g)
+    groups["run"].add_argument("--workers", type=int, metavar="N",
+                               help="threads (default: every core)")
+    groups["output"].add_argument("--examples", action="store_true",
+                                  help="rerun a stable and an unstable grid point of the "
+                                       "first case with history: DIR/examples.nc, "
+                                       "DIR/examples.png")
+    p.set_defaults(func=_cmd_lobes)
+
+
+def _cmd_sweep(args) -> Outcome:
+    cases, bars, gaps = many_cases(args)
+    forces, ratios = forces_and_ratios(args)
+    check_dt(args, [c.system for c in cases], max(ratios))
+
+    initial = initial_conditions(args, gaps if "ball" in bars else [])
+    ds = sweep(cases, SweepOptions(tuple(ratios), tuple(forces)),
+               integration=integration(args, initial), execution=execution(args),
+               progress=progress_printer(args, "sweep", "batches of runs"))
+    summary = sweep_files(ds, args.out)
+
+    def text(say) -> None:
+        say(_sweep_text(ds))
+        files = summary["files"]
+        say("wrote " + ", ".join([files["netcdf"], *files["png"]]))
+
+    return Outcome(summary, text)
+
+
+def short_pattern(name: str) -> str:
+    """'2 symmetric' -> '2s', '3 asymmetric (period 2)' -> '3a/2', for the table."""
+    name = str(name)
+    fixed = {"": "", "no impact": "0", "sticking": "st", "no impact with sticking": "0+st",
+             "non-uniform": "nu"}
+    if name in fixed:
+        return fixed[name]
+    parts = name.replace("(period ", "").replace(")", "").split()
+    code = parts[0] + ("s" if parts[1] == "symmetric" else "a")
+    return code + (f"/{parts[2]}" if len(parts) > 2 else "")
+
+
+def _sweep_text(ds) -> str:
+    heads = []
+    for label, bar, gap, fr in zip(ds["case"].values, ds["bar"].values, ds["gap"].values,
+                                   ds["friction"].values, strict=True):
+        heads.append(f"ball {gap * 1e3:g}/{fr}" if bar == "ball" else str(label))
+    width = max(14, *(len(h) + 2 for h in heads))
+    lines = []
+    for j, force in enumerate(ds["force"].values):
+        lines.append(f"F0 = {force:g} N: tip RMS (mm) [pattern]; ball columns: gap mm/friction")
+        lines.append("ratio ".rjust(8) + "".join(h.rjust(width) for h in heads))
+        for k, ratio in enumerate(ds["ratio"].values):
+            cells = []
+            for i in range(len(heads)):
+                pat = short_pattern(ds["pattern"].values[i, j, k])
+                cell = f"{ds['rms_tip_m'].values[i, j, k] * 1e3:.4f}"
+                cells.append((cell + (f" [{pat}]" if pat else "")).rjust(width))
+            lines.append(f"{ratio:7.3f} " + "".join(cells))
+        lines.append("")
+    lines.append(PATTERN_KEY)
+    return "\n".join(lines)
+
+
+def _cmd_lobes(args) -> Outcome:
+    cases, _, _ = many_cases(args)
+    rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
+    for r in rpm:
+        check_rpm(r, args)
+    step = check_depth(args.depth_step_mm, "--depth-step-mm")
+    check_range("--max-depth-mm", args.max_depth_mm, step, MAX_DEPTH * 1e3, unit="mm")
+    if args.max_depth_mm / step > MAX_DEPTHS + 1e-6:
+        raise ParameterError(f"--depth-step-mm = {step:g} mm gives "
+                             f"{args.max_depth_mm / step:.3g} depths up to --max-depth-mm = "
+                             f"{args.max_depth_mm:g} mm; the allowed maximum is {MAX_DEPTHS}")
+    check_int("--successive", args.successive, 1, 100)
+    check_workers(args.workers)
+    cut = cut_options(args)
+    options = LobesOptions(tuple(rpm), args.method, args.criterion, step * 1e-3,
+                           args.max_depth_mm * 1e-3, args.successive, kr_pa=cut["kr"],
+                           feed_m=cut["feed"], revolutions=cut["revolutions"],
+                           interpolation=cut["interpolation"], start=cut["start"],
+                           bounded_fraction=cut["bounded_fraction"])
+    integ = integration(args)
+    ds = lobes(cases, options, integration=integ, execution=execution(args),
+               progress=progress_printer(args, "lobes", "(case, speed) columns"))
+
+    exds = None
+    if args.examples:
+        exds = lobe_examples(ds, cases[0], options, integration=integ, rows=HISTORY_ROWS)
+    summary = lobes_files(ds, args.out, exds)
+    examples = summary.get("examples", [])
+
+    def text(say) -> None:
+        say(_lobes_text(ds))
+        for e in examples:
+            verdict = (f"chatter (force first zero at {e['first_zero_time_s']:.3g} s)"
+                       if e["chatter"] else "stable (force never zero)")
+            say(f"example {e['example']}: {e['case']} at {e['rpm']:g} rpm, depth "
+                  f"{e['depth_m'] * 1e3:g} mm: {verdict}")
+        say("wrote " + ", ".join(summary["files"].values()))
+
+    return Outcome(summary, text)
+
+
+def _lobes_text(ds) -> str:
+    lines = []
+    analytic = ds["analytic_limit"].values if "analytic_limit" in ds else None
+    depths = ds["depth"].values
+    chosen = ds["verdict" if ds.attrs["criterion"] == "zero" else "verdict_bounded"].values
+
+    def mm(v: float) -> str:
+        return f"{v * 1e3:.3f}" if math.isfinite(v) else "-"
+
+    for i, label in enumerate(ds["case"].values):
+        limit = ds["limit_depth"].values[i]
+        first = ds["first_unstable_depth"].values[i]
+        mcf = float(ds["min_chatter_free_depth"].values[i])
+        at = (f" at {ds['rpm'].values[int(np.nanargmin(limit))]:g} rpm"
+              if np.isfinite(limit).any() else "")
+        lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}")
+        lines.append(f"{'rpm':>8} {'limit (mm)':>12} {'first unstable (mm)':>20} "
+                     f"{'analytic (mm)':>14}")
+        islands = []
+        for j, r in enumerate(ds["rpm"].values):
+            a = math.nan if analytic is None else float(analytic[i, j])
+            lines.append(f"{r:8g} {mm(limit[j]):>12} {mm(first[j]):>20} {mm(a):>14}")
+            above = (depths > first[j]) & (chosen[i, j] == 1)
+            if math.isfinite(first[j]) and above.any():
+                islands.append(f"{r:g}")
+        if islands:
+            lines.append(f"  stable islands above the first unstable depth at "
+                         f"{', '.join(islands)} rpm")
+        lines.append("")
+    lines.append(f"'-': no chatter up to the deepest cut tried (or no analytic limit); "
+                 f"method {ds.attrs['method']}, criterion {ds.attrs['criterion']}, "
+                 f"{ds.attrs['runs']} runs in {ds.attrs['wall_time_s']:.1f} s")
+    return "\n".join(lines)

@@ -1,0 +1,27 @@
+"""Generic executors: a pure function over a list of points, on one of four backends.
+
+They know no analysis.  :func:`run_points` returns the results in point order;
+:func:`stream` hands each result to a callback as it finishes (the study runner
+keeps them in its resumable store).  Whatever runs which point, the results are
+the same, bit for bit: every point is computed by the same pure function.
+
+- ``serial``: in this process, in order;
+- ``threads`` (the default of the library's analyses): a thread pool of ``workers``
+  (every core); the numba kernels release the GIL;
+- ``processes``: a process pool (fork where there is one); a worker that dies
+  breaks the pool, which is recreated and the unfinished tasks resubmitted
+  (at most :data:`MAX_POOL_RESTARTS` times in a row without progress);
+- ``dask``: a Dask cluster at ``scheduler``, or a LocalCluster of ``dask_local``
+  single-threaded worker processes started here; tasks of a worker that dies
+  are rerun by the scheduler (twice).
+"""
+
+from boringbar.execute.executors import (
+    EXECUTORS,
+    MAX_POOL_RESTARTS,
+    Execution,
+    run_points,
+    stream,
+)
+
+__all__ = ["EXECUTORS", "MAX_POOL_RESTARTS", "Execution", "run_points", "stream"]

@@ -1,0 +1,181 @@
+"""The executors of :mod:`boringbar.execute` (see its docstring)."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import multiprocessing as mp
+import os
+import uuid
+from collections.abc import Callable, Hashable
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+
+from boringbar._validate import ParameterError
+
+EXECUTORS = ("serial", "threads", "processes", "dask")
+#: How often a broken process pool is recreated without any task finishing.
+MAX_POOL_RESTARTS = 3
+
+
+@dataclass(frozen=True)
+class Execution:
+    """Where the points of an analysis run.
+
+    ``executor``: one of :data:`EXECUTORS`; ``workers``: threads or processes
+    (default: every core); ``scheduler``: a Dask scheduler's address, or
+    ``dask_local``: the number of workers of a LocalCluster started for the run
+    (either one selects ``dask``).
+    """
+
+    executor: str = "threads"
+    workers: int | None = None
+    scheduler: str | None = None
+    dask_local: int | None = None
+
+    def __post_init__(self):
+        if self.scheduler is not None and self.dask_local is not None:
+            raise ParameterError("give at most one of scheduler and dask_local")
+        if self.executor not in EXECUTORS:
+            raise ParameterError(f"executor = {self.executor!r} is not one of "
+                                 f"{', '.join(EXECUTORS)}")
+        if (self.scheduler is not None or self.dask_local is not None) \
+                and self.executor != "dask":
+            object.__setattr__(self, "executor", "dask")
+        for name in ("workers", "dask_local"):
+            v = getattr(self, name)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int)
+                                  or not 1 <= v <= 4096):
+                raise ParameterError(f"{name} = {v!r} must be an integer from 1 to 4096")
+
+    @property
+    def n_workers(self) -> int:
+        """The number of workers the run will have (1 for serial)."""
+        if self.executor == "serial":
+            return 1
+        return int(self.dask_local or self.workers or os.cpu_count() or 1)
+
+
+def run_points(fn: Callable, points: list, *, execution: Execution | None = None,
+               progress: Callable[[int, int], None] | None = None) -> list:
+    """``[fn(p) for p in points]``, run on ``execution``'s executor, in point order.
+
+    ``progress(done, total)`` is called (in this thread) as points finish.
+    ``fn`` and the points must pickle for ``processes`` and ``dask`` (a
+    module-level function, or a ``functools.partial`` of one).
+    """
+    results: list = [None] * len(points)
+    done = 0
+
+    def on_done(i, result):
+        nonlocal done
+        results[i] = result
+        done += 1
+        if progress is not None:
+            progress(done, len(points))
+
+    stream(fn, dict(enumerate(points)), on_done, execution=execution)
+    return results
+
+
+def stream(fn: Callable, tasks: dict[Hashable, object], on_done: Callable,
+           *, execution: Execution | None = None, on_restart: Callable | None = None,
+           task_name: str = "boringbar") -> None:
+    """Run ``fn(task)`` for every value of ``tasks`` and call ``on_done(key, result)``
+    in this thread as each finishes (in any order).  ``on_restart(message)`` is told
+    when a broken process pool is recreated.  ``task_name`` prefixes Dask task keys."""
+    execution = execution or Execution()
+    if not tasks:
+        return
+    if execution.executor == "serial":
+        for k, task in tasks.items():
+            on_done(k, fn(task))
+    elif execution.executor == "threads":
+        _threads(fn, tasks, on_done, execution.n_workers)
+    elif execution.executor == "processes":
+        _processes(fn, tasks, on_done, execution.n_workers, on_restart)
+    else:
+        _dask(fn, tasks, on_done, execution, task_name)
+
+
+def _threads(fn, tasks, on_done, workers):
+    with ThreadPoolExecutor(max_workers=min(workers, len(tasks))) as pool:
+        futs = {pool.submit(fn, task): k for k, task in tasks.items()}
+        for fut in as_completed(futs):
+            on_done(futs[fut], fut.result())
+
+
+def _mp_context():
+    """fork where there is one: no re-import of the caller's main module (a script
+    without an ``if __name__ == "__main__"`` guard works) and a fast start."""
+    return mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+
+
+def _processes(fn, tasks, on_done, workers, on_restart):
+    pending = dict(tasks)
+    restarts = 0
+    while pending:
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)),
+                                   mp_context=_mp_context())
+        progressed = False
+        futs: dict = {}
+        try:
+            futs = {pool.submit(fn, task): k for k, task in pending.items()}
+            for fut in as_completed(futs):
+                k = futs[fut]
+                on_done(k, fut.result())
+                pending.pop(k)
+                progressed = True
+        except BrokenProcessPool:
+            progressed |= _keep_finished(futs, pending, on_done)
+            restarts = 0 if progressed else restarts + 1
+            if on_restart is not None:
+                on_restart(f"a worker process died; {len(pending)} unfinished tasks are "
+                           "resubmitted to a new pool")
+            if restarts > MAX_POOL_RESTARTS:
+                raise ChildProcessError(
+                    f"worker processes died {restarts} times in a row without finishing a "
+                    "task; giving up") from None
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _keep_finished(futs, pending, on_done) -> bool:
+    """Hand on what finished before a pool broke; whether anything did."""
+    kept = False
+    for fut, k in futs.items():
+        if k in pending and fut.done() and not fut.cancelled() and fut.exception() is None:
+            on_done(k, fut.result())
+            pending.pop(k)
+            kept = True
+    return kept
+
+
+def _dask(fn, tasks, on_done, execution, task_name):
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise ParameterError("executor = 'dask' needs dask and distributed: "
+                             "pip install 'boringbar[dask]'") from None
+    with contextlib.ExitStack() as stack:
+        if execution.scheduler is None:
+            cluster = stack.enter_context(LocalCluster(
+                n_workers=execution.n_workers, threads_per_worker=1, processes=True,
+                dashboard_address=None, silence_logs=logging.ERROR))
+            client = stack.enter_context(Client(cluster))
+        else:
+            client = stack.enter_context(Client(execution.scheduler))
+        run_id = uuid.uuid4().hex[:8]  # task keys unique to this run on a shared cluster
+        futs = {client.submit(fn, task, pure=False, retries=2,
+                              key=f"{task_name}-{run_id}-{i}"): k
+                for i, (k, task) in enumerate(tasks.items())}
+        for fut in as_completed(list(futs)):
+            try:
+                result = fut.result()
+            except Exception as exc:
+                if type(exc).__name__ != "KilledWorker":
+                    raise
+                raise ChildProcessError(f"Dask gave up on a task whose workers kept dying "
+                                        f"({exc})") from None
+            on_done(futs[fut], result)

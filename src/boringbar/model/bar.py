@@ -1,0 +1,366 @@
+"""The bar: a stepped Euler-Bernoulli cantilever reduced to a few bending modes.
+
+docs/model.md, section 1. The finite-element model uses Hermite-cubic beam elements
+with consistent mass, clamped at z = 0 and free at z = L (the cutting end).
+Nodes sit at every section boundary and at every point where a mode-shape
+value is wanted (the ball at z_d, the absorber at z_a), so psi(z_d) and
+psi(z_a) are nodal values, not interpolations.
+
+A user with a tap test instead of drawings builds a :class:`ModalModel`
+directly with :meth:`ModalModel.from_tap_test`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.linalg
+
+from boringbar._validate import check_positive, check_range
+
+#: Published geometry (docs/model.md, section 1), metres.
+BAR_LENGTH = 0.200
+BALL_POSITION = 0.12955
+ABSORBER_POSITION = 0.096
+STEEL_E = 200e9
+STEEL_RHO = 7850.0
+DAMPING_RATIO = 0.01
+
+
+@dataclass(frozen=True)
+class Section:
+    """One prismatic piece of the bar, from ``start`` to ``end`` (m, from the clamp).
+
+    ``diameter`` is the outer (model) diameter in m; ``inner_diameter`` > 0
+    makes it a tube.
+    """
+
+    start: float
+    end: float
+    diameter: float
+    inner_diameter: float = 0.0
+
+    def __post_init__(self):
+        check_range("section start", self.start, 0.0, math.inf)
+        if not self.end > self.start:
+            raise ValueError(
+                f"section end = {self.end!r} m must be greater than its start = {self.start!r} m"
+            )
+        check_positive("section diameter", self.diameter)
+        check_range("section inner_diameter", self.inner_diameter, 0.0, self.diameter,
+                    hi_open=True)
+
+    @property
+    def area(self) -> float:
+        return math.pi / 4.0 * (self.diameter**2 - self.inner_diameter**2)
+
+    @property
+    def second_moment(self) -> float:
+        return math.pi / 64.0 * (self.diameter**4 - self.inner_diameter**4)
+
+
+def published_sections(cavity: bool = True) -> tuple[Section, ...]:
+    """The published bar (docs/model.md, section 1): with the ball cavity, or solid."""
+    d2 = 0.017 if cavity else 0.025
+    return (
+        Section(0.0, 0.122, 0.025),
+        Section(0.122, 0.1371, d2),
+        Section(0.1371, 0.170, 0.022),
+        Section(0.170, 0.200, 0.019),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class ModalModel:
+    """The bar reduced to ``n`` uncoupled bending modes (modal coordinates u_i).
+
+    Each mode i obeys M_i u_i'' + C_i u_i' + K_i u_i = (generalised forces),
+    with C_i = 2 zeta_i sqrt(K_i M_i).  Mode shapes enter only through their
+    values at the tip (psi_tip), at the ball (psi_damper) and at the
+    absorber (psi_absorber).  Any normalisation of a mode is allowed; the
+    physical outputs (tip displacement W = psi_tip . u) do not depend on it.
+
+    ``mass``, ``stiffness``, ``damping_ratio``: M_i, K_i, zeta_i per mode;
+    ``psi_tip``, ``psi_damper``, ``psi_absorber``: the mode shapes at the tip, at
+    the ball ``z_damper`` and at the absorber ``z_absorber`` (m from the clamp);
+    ``source``: where the model came from ("fe", "tap-test", with a calibration
+    note appended); ``info``: free-form provenance.
+    """
+
+    mass: np.ndarray  #: modal masses M_i (kg, in the units the mode is normalised)
+    stiffness: np.ndarray  #: modal stiffnesses K_i
+    damping_ratio: np.ndarray  #: zeta_i
+    psi_tip: np.ndarray  #: psi_i(L)
+    psi_damper: np.ndarray  #: psi_i(z_d)
+    psi_absorber: np.ndarray  #: psi_i(z_a)
+    z_damper: float = BALL_POSITION
+    z_absorber: float = ABSORBER_POSITION
+    source: str = "fe"  #: "fe", "tap-test", or with a calibration note appended
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        n = len(np.atleast_1d(self.mass))
+        for name in ("mass", "stiffness", "damping_ratio", "psi_tip", "psi_damper",
+                     "psi_absorber"):
+            arr = np.atleast_1d(np.asarray(getattr(self, name), dtype=float)).copy()
+            if arr.shape != (n,):
+                raise ValueError(f"modal model: {name} has shape {arr.shape}, expected ({n},)")
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"modal model: {name} = {arr!r} must be finite")
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        for i in range(n):
+            check_positive(f"modal mass of mode {i + 1}", self.mass[i])
+            check_positive(f"modal stiffness of mode {i + 1}", self.stiffness[i])
+            check_range(f"damping ratio of mode {i + 1}", self.damping_ratio[i], 0.0, 1.0,
+                        hi_open=True)
+        if n < 1 or np.any(self.psi_tip == 0.0):
+            raise ValueError("modal model: every mode needs a non-zero tip value psi_tip")
+
+    # --- derived quantities -------------------------------------------------
+    @property
+    def n_modes(self) -> int:
+        return len(self.mass)
+
+    @property
+    def omegas(self) -> np.ndarray:
+        """Natural frequencies of the retained modes (rad/s)."""
+        return np.sqrt(self.stiffness / self.mass)
+
+    @property
+    def natural_frequency(self) -> float:
+        """First natural frequency omega_n (rad/s)."""
+        return float(self.omegas[0])
+
+    @property
+    def natural_frequency_hz(self) -> float:
+        return self.natural_frequency / (2.0 * math.pi)
+
+    @property
+    def damping(self) -> np.ndarray:
+        """Modal viscous coefficients C_i = 2 zeta_i sqrt(K_i M_i)."""
+        return 2.0 * self.damping_ratio * np.sqrt(self.stiffness * self.mass)
+
+    @property
+    def tip_stiffness(self) -> float:
+        """Static-like stiffness of the first mode at the tip, K_1 / psi_1(L)^2 (N/m)."""
+        return float(self.stiffness[0] / self.psi_tip[0] ** 2)
+
+    @property
+    def tip_mass(self) -> float:
+        """First-mode mass referred to the tip, M_1 / psi_1(L)^2 (kg)."""
+        return float(self.mass[0] / self.psi_tip[0] ** 2)
+
+    # --- transformations ----------------------------------------------------
+    def truncated(self, n_modes: int) -> ModalModel:
+        """The first ``n_modes`` modes."""
+        check_range("n_modes", n_modes, 1, self.n_modes)
+        n = int(n_modes)
+        return replace(self, mass=self.mass[:n], stiffness=self.stiffness[:n],
+                       damping_ratio=self.damping_ratio[:n], psi_tip=self.psi_tip[:n],
+                       psi_damper=self.psi_damper[:n], psi_absorber=self.psi_absorber[:n])
+
+    def with_first_frequency(self, frequency_hz: float) -> ModalModel:
+        """Keep masses and mode shapes, scale every K so that f1 = ``frequency_hz``.
+
+        This is the published-frequency calibration of the ``paper`` preset
+        (docs/model.md, section 2); it is a uniform change of E.
+        """
+        check_positive("calibration frequency_hz", frequency_hz)
+        factor = (frequency_hz / self.natural_frequency_hz) ** 2
+        info = dict(self.info, stiffness_scale=factor, calibrated_f1_hz=frequency_hz)
+        return replace(self, stiffness=self.stiffness * factor,
+                       source=f"{self.source}+calibrated-to-{frequency_hz:g}Hz", info=info)
+
+    def normalised(self, scale) -> ModalModel:
+        """The same model with mode i's shape multiplied by ``scale[i]``.
+
+        M and K scale by scale^2; physical results are unchanged (a test).
+        """
+        s = np.broadcast_to(np.asarray(scale, dtype=float), (self.n_modes,))
+        return replace(self, mass=self.mass * s**2, stiffness=self.stiffness * s**2,
+                       psi_tip=self.psi_tip * s, psi_damper=self.psi_damper * s,
+                       psi_absorber=self.psi_absorber * s)
+
+    def to_dict(self) -> dict:
+        return {
+            "source": self.source,
+            "n_modes": self.n_modes,
+            "natural_frequencies_hz": (self.omegas / (2 * math.pi)).tolist(),
+            "modal_mass": self.mass.tolist(),
+            "modal_stiffness": self.stiffness.tolist(),
+            "damping_ratio": self.damping_ratio.tolist(),
+            "psi_tip": self.psi_tip.tolist(),
+            "psi_damper": self.psi_damper.tolist(),
+            "psi_absorber": self.psi_absorber.tolist(),
+            "z_damper_m": self.z_damper,
+            "z_absorber_m": self.z_absorber,
+            **{k: v for k, v in self.info.items()},
+        }
+
+    @classmethod
+    def from_tap_test(cls, frequency_hz: float, damping_ratio: float = DAMPING_RATIO, *,
+                      tip_stiffness: float | None = None, tip_mass: float | None = None,
+                      damper_ratio: float = 1.0, absorber_ratio: float = 1.0) -> ModalModel:
+        """One mode from measured data, normalised to psi(L) = 1.
+
+        Give ``tip_stiffness`` k_tip (N/m) or ``tip_mass`` (kg, = k_tip/omega_n^2);
+        ``damper_ratio`` = psi_d/psi_L and ``absorber_ratio`` = psi_a/psi_L.
+        """
+        check_positive("frequency_hz", frequency_hz)
+        omega = 2 * math.pi * frequency_hz
+        if (tip_stiffness is None) == (tip_mass is None):
+            raise ValueError("from_tap_test: give exactly one of tip_stiffness (N/m) or "
+                             "tip_mass (kg)")
+        if tip_stiffness is not None:
+            check_positive("tip_stiffness", tip_stiffness)
+            mass = tip_stiffness / omega**2
+        else:
+            check_positive("tip_mass", tip_mass)
+            mass = float(tip_mass)
+        return cls(mass=np.array([mass]), stiffness=np.array([mass * omega**2]),
+                   damping_ratio=np.array([damping_ratio]), psi_tip=np.array([1.0]),
+                   psi_damper=np.array([float(damper_ratio)]),
+                   psi_absorber=np.array([float(absorber_ratio)]), source="tap-test")
+
+
+@dataclass(frozen=True)
+class SteppedBar:
+    """A stepped cantilever: clamped at z = 0, free at the end of the last section.
+
+    ``sections``: contiguous :class:`Section` s from the clamp; ``youngs_modulus``
+    (Pa) and ``density`` (kg/m^3) of the material; ``damping_ratio``: modal damping
+    of every mode; ``max_element_length`` (m): the finite-element mesh size
+    (nodes also at every section boundary and at the points asked for).
+    """
+
+    sections: tuple[Section, ...] = published_sections(cavity=True)
+    youngs_modulus: float = STEEL_E
+    density: float = STEEL_RHO
+    damping_ratio: float = DAMPING_RATIO
+    max_element_length: float = 0.005
+
+    def __post_init__(self):
+        object.__setattr__(self, "sections", tuple(self.sections))
+        if not self.sections:
+            raise ValueError("a SteppedBar needs at least one section")
+        if abs(self.sections[0].start) > 1e-12:
+            raise ValueError(f"the first section must start at the clamp, z = 0 "
+                             f"(got {self.sections[0].start!r} m)")
+        for a, b in itertools.pairwise(self.sections):
+            if abs(a.end - b.start) > 1e-12:
+                raise ValueError(f"sections must be contiguous: one ends at {a.end!r} m, the "
+                                 f"next starts at {b.start!r} m")
+        check_positive("youngs_modulus", self.youngs_modulus)
+        check_positive("density", self.density)
+        check_range("damping_ratio", self.damping_ratio, 0.0, 1.0, hi_open=True)
+        check_positive("max_element_length", self.max_element_length)
+
+    @property
+    def length(self) -> float:
+        return self.sections[-1].end
+
+    def mesh(self, points=()) -> np.ndarray:
+        """Node positions: every section boundary and every requested point."""
+        brk = {0.0, self.length} | {s.end for s in self.sections}
+        for z in points:
+            check_range("mode-shape point z", z, 0.0, self.length)
+            brk.add(float(z))
+        brk = np.array(sorted(brk))
+        nodes = [brk[0]]
+        for a, b in itertools.pairwise(brk):
+            if b - a < 1e-12:
+                continue
+            n_el = max(1, math.ceil((b - a) / self.max_element_length - 1e-9))
+            nodes.extend(np.linspace(a, b, n_el + 1)[1:])
+        return np.array(nodes)
+
+    def _section_at(self, z: float) -> Section:
+        for s in self.sections:
+            if s.start - 1e-12 <= z <= s.end + 1e-12:
+                return s
+        raise ValueError(f"z = {z!r} m lies outside the bar [0, {self.length}] m")
+
+    def matrices(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Global stiffness and consistent mass matrices, clamp DOFs removed.
+
+        DOFs per node: deflection w and slope theta.
+        """
+        n_dof = 2 * len(nodes)
+        K = np.zeros((n_dof, n_dof))
+        M = np.zeros((n_dof, n_dof))
+        for e, (a, b) in enumerate(itertools.pairwise(nodes)):
+            sec = self._section_at(0.5 * (a + b))
+            ei = self.youngs_modulus * sec.second_moment
+            ra = self.density * sec.area
+            ke, me = _element_matrices(b - a, ei, ra)
+            idx = slice(2 * e, 2 * e + 4)
+            K[idx, idx] += ke
+            M[idx, idx] += me
+        return K[2:, 2:], M[2:, 2:]
+
+    def modes(self, n_modes: int = 1, points=()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """First ``n_modes`` (omega rad/s, node positions, deflection shapes (nodes, n))."""
+        nodes = self.mesh(points)
+        K, M = self.matrices(nodes)
+        n = int(n_modes)
+        check_range("n_modes", n, 1, K.shape[0])
+        w2, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, n - 1])
+        defl = np.vstack([np.zeros((1, n)), vec[0::2, :]])  # clamp node has w = 0
+        return np.sqrt(w2), nodes, defl
+
+    def modal_model(self, n_modes: int = 1, z_damper: float = BALL_POSITION,
+                    z_absorber: float = ABSORBER_POSITION) -> ModalModel:
+        """Reduce to ``n_modes`` modes, normalised to psi_i(L) = 1."""
+        nodes = self.mesh((z_damper, z_absorber))
+        K, M = self.matrices(nodes)
+        n = int(n_modes)
+        check_range("n_modes", n, 1, K.shape[0])
+        _, vec = scipy.linalg.eigh(K, M, subset_by_index=[0, n - 1])
+        vec = vec / vec[-2, :]  # psi_i(L) = 1: the tip deflection DOF
+        masses = np.einsum("ij,ik,kj->j", vec, M, vec)
+        stiff = np.einsum("ij,ik,kj->j", vec, K, vec)
+        w = np.vstack([np.zeros((1, vec.shape[1])), vec[0::2, :]])
+
+        def at(z):
+            i = int(np.argmin(np.abs(nodes - z)))
+            return w[i, :]
+
+        return ModalModel(mass=masses, stiffness=stiff,
+                          damping_ratio=np.full(len(masses), self.damping_ratio),
+                          psi_tip=np.ones(len(masses)), psi_damper=at(z_damper),
+                          psi_absorber=at(z_absorber), z_damper=float(z_damper),
+                          z_absorber=float(z_absorber), source="fe",
+                          info={"n_elements": len(nodes) - 1,
+                                "bar_length_m": self.length})
+
+
+def _element_matrices(length: float, ei: float, rho_a: float):
+    """Hermite-cubic Euler-Bernoulli element: stiffness and consistent mass."""
+    l = length
+    ke = ei / l**3 * np.array([
+        [12.0, 6 * l, -12.0, 6 * l],
+        [6 * l, 4 * l * l, -6 * l, 2 * l * l],
+        [-12.0, -6 * l, 12.0, -6 * l],
+        [6 * l, 2 * l * l, -6 * l, 4 * l * l],
+    ])
+    me = rho_a * l / 420.0 * np.array([
+        [156.0, 22 * l, 54.0, -13 * l],
+        [22 * l, 4 * l * l, 13 * l, -3 * l * l],
+        [54.0, 13 * l, 156.0, -22 * l],
+        [-13 * l, -3 * l * l, -22 * l, 4 * l * l],
+    ])
+    return ke, me
+
+
+def published_bar(cavity: bool = True, n_modes: int = 1, z_absorber: float = ABSORBER_POSITION,
+                  max_element_length: float = 0.005) -> ModalModel:
+    """The published boring bar's modal model: the ball-cavity bar (``cavity``) or the
+    solid one, ``n_modes`` retained, the absorber's mode shape at ``z_absorber`` (m),
+    meshed at ``max_element_length`` (m)."""
+    bar = SteppedBar(sections=published_sections(cavity),
+                     max_element_length=max_element_length)
+    return bar.modal_model(n_modes=n_modes, z_damper=BALL_POSITION, z_absorber=z_absorber)

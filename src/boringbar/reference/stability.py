@@ -1,0 +1,296 @@
+"""Analytic stability lobes of regenerative turning/boring (docs/model.md, section 4).
+
+The cutting force at the tip is f = Kr b h with h = h_m + W(t - tau) - W(t)
+(single-pass regeneration, tau = 60 / rpm).  Linearised about the steady cut,
+a perturbation W = G f obeys W = G Kr b (W(t - tau) - W(t)), so at a chatter
+frequency omega the characteristic equation is (Tobias/Tlusty; Altintas,
+*Manufacturing Automation*, ch. 3)
+
+    1 + Kr b (1 - exp(-i omega tau)) G(i omega) = 0,
+
+G the tip receptance of :func:`boringbar.reference.linear.tip_frf`.  Writing
+G = R + i I and theta = omega tau, its imaginary part gives
+(1 - cos theta) I + sin theta R = 0, i.e. cot(theta / 2) = -I / R, and then its
+real part gives 1 + 2 Kr b R = 0:
+
+    b_lim(omega) = -1 / (2 Kr Re G(i omega))            (only where Re G < 0)
+    omega tau    = eps + 2 pi j,   j = 0, 1, 2, ...
+    eps          = 3 pi + 2 psi  (mod 2 pi),   psi = arg G = atan2(Im G, Re G).
+
+A tip receptance is a driving-point FRF, so Im G <= 0 and, where Re G < 0,
+psi lies in [-pi, -pi/2) and eps in [pi, 2 pi).  Lobe j is the curve
+(rpm, b) = (60 omega / (eps + 2 pi j), b_lim(omega)) as omega runs over the
+region where Re G < 0; the speed-independent minimum of all lobes is
+-1 / (2 Kr min Re G).
+
+A :class:`~boringbar.model.system.System` brings its own damper: a tuned mass
+damper enters G, a locked ball is a rigid mass at z_d, and a free ball (which
+in its clearance does not touch the bar under small vibration) leaves the
+bare host bar.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+import scipy.linalg
+
+from boringbar._validate import ParameterError, check_nonnegative, check_positive, check_range
+from boringbar.model.bar import ModalModel
+from boringbar.model.dampers import TunedMassDamper
+from boringbar.reference.linear import dynamic_stiffness, min_real_part, tip_frf
+
+#: Radial cutting-force coefficient of the published study (aluminium), Pa.
+KR_ALUMINIUM = 850e6
+#: Default frequency grid spans these multiples of the lowest / highest
+#: undamped natural frequency of the coupled system.
+GRID_SPAN = (0.5, 2.0)
+#: Bisection steps refining each lobe crossing (bracket shrinks 2^-60).
+BISECTION_STEPS = 60
+TWO_PI = 2.0 * math.pi
+
+
+# --- the phase relation ------------------------------------------------------------
+def regeneration_phase(g) -> np.ndarray:
+    """eps = 3 pi + 2 arg G (mod 2 pi), the phase of lobe j = 0 (rad).
+
+    With theta = omega tau = eps + 2 pi j the characteristic equation
+    1 + Kr b (1 - exp(-i theta)) G = 0 holds for b = -1 / (2 Kr Re G)
+    (module docstring).  Meaningful where Re G < 0; there eps is in [pi, 2 pi).
+    """
+    g = np.asarray(g, dtype=complex)
+    return np.mod(3.0 * math.pi + 2.0 * np.angle(g), TWO_PI)
+
+
+# --- inputs ------------------------------------------------------------------------
+def _resolve(system_or_bar, tmd, added_mass):
+    """(ModalModel, TunedMassDamper | None, added mass kg) of a System or a bar."""
+    if isinstance(system_or_bar, ModalModel):
+        if tmd is not None and not isinstance(tmd, TunedMassDamper):
+            raise ParameterError(f"tmd = {tmd!r} must be a TunedMassDamper or None")
+        return system_or_bar, tmd, check_nonnegative("added_mass", added_mass, "kg")
+    bar = getattr(system_or_bar, "bar", None)
+    if not isinstance(bar, ModalModel):
+        raise ParameterError(f"system_or_bar = {system_or_bar!r} must be a System or a ModalModel")
+    if tmd is not None or added_mass != 0.0:
+        raise ParameterError(
+            "tmd and added_mass are taken from the System; give them only with a ModalModel "
+            f"(got tmd = {tmd!r}, added_mass = {added_mass!r})"
+        )
+    kind = system_or_bar.kind
+    if kind == "tmd":
+        return bar, system_or_bar.damper, 0.0
+    if kind == "locked":
+        return bar, None, float(system_or_bar.damper.mass)
+    return bar, None, 0.0  # solid bar, or a free ball that does not act on the bar
+
+
+def natural_frequencies(
+    bar: ModalModel, tmd: TunedMassDamper | None = None, added_mass: float = 0.0
+) -> np.ndarray:
+    """Undamped natural frequencies (rad/s) of the coupled linear system.
+
+    The mass and stiffness matrices are read off the dynamic stiffness of
+    :mod:`boringbar.reference.linear` (Z(0) = K, Re Z(1) = K - M), so this
+    stays the one place that assembles them.
+    """
+    z = dynamic_stiffness(bar, np.array([0.0, 1.0]), tmd, float(added_mass)).real
+    k, m = z[0], z[0] - z[1]
+    return np.sqrt(scipy.linalg.eigh(k, m, eigvals_only=True))
+
+
+def _frequency_grid(bar, tmd, added_mass, n_freq, freq_range) -> np.ndarray:
+    """Geometric grid (rad/s): constant relative resolution at every mode."""
+    n = int(check_range("n_freq", n_freq, 100, 10_000_000))
+    if freq_range is None:
+        wn = natural_frequencies(bar, tmd, added_mass)
+        lo, hi = GRID_SPAN[0] * wn.min(), GRID_SPAN[1] * wn.max()
+    else:
+        try:
+            f_lo, f_hi = (float(f) for f in freq_range)
+        except (TypeError, ValueError):
+            raise ParameterError(f"freq_range = {freq_range!r} must be (low, high) in Hz") from None
+        check_positive("freq_range low", f_lo, "Hz")
+        check_range("freq_range high", f_hi, f_lo, math.inf, lo_open=True, hi_open=True, unit="Hz")
+        lo, hi = TWO_PI * f_lo, TWO_PI * f_hi
+    return np.geomspace(lo, hi, n)
+
+
+def _lobe_numbers(lobes) -> np.ndarray:
+    try:
+        j = np.array(list(lobes), dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"lobes = {lobes!r} must be an iterable of integers >= 0") from None
+    if j.ndim != 1 or len(j) == 0 or np.any(j < 0) or np.any(j != np.round(j)):
+        raise ParameterError(f"lobes = {lobes!r} must be a non-empty list of integers >= 0")
+    return j.astype(int)
+
+
+# --- lobes -------------------------------------------------------------------------
+def analytic_lobes(
+    system_or_bar,
+    kr: float = KR_ALUMINIUM,
+    *,
+    tmd: TunedMassDamper | None = None,
+    added_mass: float = 0.0,
+    lobes: Iterable[int] = range(0, 40),
+    n_freq: int = 20000,
+    freq_range: tuple[float, float] | None = None,
+) -> dict:
+    """Stability lobes of regenerative turning, one curve per lobe number j.
+
+    ``system_or_bar``: a :class:`~boringbar.model.system.System` or a
+    :class:`~boringbar.model.bar.ModalModel` (then ``tmd``, ``added_mass`` (kg) as
+    in :func:`~boringbar.reference.linear.tip_frf`).  ``kr`` (Pa) is the
+    radial cutting-force coefficient.  The chatter frequency runs over a
+    geometric grid of ``n_freq`` points, ``freq_range`` (Hz) or by default
+    0.5 x the lowest to 2 x the highest undamped natural frequency of the
+    coupled system (every retained mode and the absorber).
+
+    Returns a dict: ``lobe`` (j, shape (n_lobes,)); ``rpm``, ``b_lim`` (m)
+    and ``frequency_hz``, each (n_lobes, n_freq), NaN where Re G >= 0 (no
+    chatter there; NaN also breaks plotted lines between separate regions);
+    ``phase`` (eps, rad, (n_freq,)); ``kr``.  rpm = 60 omega / (eps + 2 pi j),
+    b_lim = -1 / (2 Kr Re G) (module docstring).
+    """
+    kr = check_positive("kr", kr, "Pa")
+    bar, tmd, added_mass = _resolve(system_or_bar, tmd, added_mass)
+    j = _lobe_numbers(lobes)
+    w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
+    g = tip_frf(bar, w, tmd=tmd, added_mass=added_mass)
+    chatter = g.real < 0.0
+    eps = regeneration_phase(g)
+    b = np.where(chatter, -0.5 / (kr * np.where(chatter, g.real, -1.0)), np.nan)
+    rpm = 60.0 * w / (eps[None, :] + TWO_PI * j[:, None])
+    shape = (len(j), len(w))
+    return {
+        "lobe": j,
+        "rpm": np.where(chatter, rpm, np.nan),
+        "b_lim": np.broadcast_to(b, shape).copy(),
+        "frequency_hz": np.broadcast_to(np.where(chatter, w / TWO_PI, np.nan), shape).copy(),
+        "phase": eps,
+        "kr": kr,
+    }
+
+
+def limit_at_speeds(
+    system_or_bar,
+    rpm,
+    kr: float = KR_ALUMINIUM,
+    *,
+    tmd: TunedMassDamper | None = None,
+    added_mass: float = 0.0,
+    lobes: Iterable[int] | None = None,
+    n_freq: int = 20000,
+    freq_range: tuple[float, float] | None = None,
+    with_frequency: bool = False,
+):
+    """The analytic limiting depth of cut b_lim (m) at each spindle speed ``rpm``.
+
+    At tau = 60 / rpm every lobe that passes through this speed is a root
+    omega of omega tau - eps(omega) = 2 pi j on the region Re G < 0; the
+    limit is the smallest b_lim = -1 / (2 Kr Re G) over all those roots.
+    Finding the roots in omega, rather than interpolating each lobe curve
+    in rpm, takes the left and right branches of every lobe (and lobes that
+    fold back in rpm) as they come: each sign change on the frequency grid
+    is one crossing, refined by bisection to machine precision, so the
+    value is exact up to crossings closer together than one grid step.
+
+    ``lobes`` restricts j (default: every j >= 0 that the grid reaches);
+    other keywords as :func:`analytic_lobes`.  Returns an array shaped like
+    ``rpm`` (inf where no lobe reaches the speed), or with
+    ``with_frequency`` the pair (b_lim (m), chatter frequency (Hz)).
+    """
+    kr = check_positive("kr", kr, "Pa")
+    bar, tmd, added_mass = _resolve(system_or_bar, tmd, added_mass)
+    speeds = np.asarray(rpm, dtype=float)
+    flat = speeds.ravel()
+    for s in flat:
+        check_positive("rpm", s, "rev/min")
+    allowed = None if lobes is None else _lobe_numbers(lobes)
+    w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
+    g = tip_frf(bar, w, tmd=tmd, added_mass=added_mass)
+    eps = regeneration_phase(g)
+    b_out = np.full(flat.shape, np.inf)
+    f_out = np.full(flat.shape, np.nan)
+    for k, speed in enumerate(flat):
+        lo, hi, j, tau = _crossings(w, g, eps, 60.0 / speed, allowed)
+        if len(j) == 0:
+            continue
+        root = _bisect(bar, tmd, added_mass, lo, hi, j, tau)
+        re = tip_frf(bar, root, tmd=tmd, added_mass=added_mass).real
+        b = np.where(re < 0.0, -0.5 / (kr * np.minimum(re, -1e-300)), np.inf)
+        best = int(np.argmin(b))
+        b_out[k], f_out[k] = b[best], root[best] / TWO_PI
+    b_out, f_out = b_out.reshape(speeds.shape), f_out.reshape(speeds.shape)
+    return (b_out, f_out) if with_frequency else b_out
+
+
+def _crossings(w, g, eps, tau, allowed):
+    """Brackets [lo, hi] (rad/s) and lobe numbers j of every crossing at ``tau``.
+
+    h(omega) = (omega tau - eps) / 2 pi is continuous inside a region where
+    Re G < 0; each integer j >= 0 it passes between two grid points is one
+    lobe crossing.
+    """
+    h = (w * tau - eps) / TWO_PI
+    inside = (g.real[:-1] < 0.0) & (g.real[1:] < 0.0)
+    top = np.floor(np.maximum(h[:-1], h[1:]))
+    bottom = np.floor(np.minimum(h[:-1], h[1:]))
+    count = np.where(inside, top - bottom, 0).astype(int)
+    idx = np.repeat(np.arange(len(count)), count)
+    # the integers crossed in interval i are bottom_i + 1 .. top_i
+    offset = np.arange(len(idx)) - np.repeat(np.cumsum(count) - count, count)
+    j = bottom[idx] + 1 + offset
+    keep = j >= 0
+    if allowed is not None:
+        keep &= np.isin(j, allowed)
+    idx, j = idx[keep], j[keep]
+    return w[idx], w[idx + 1], j, tau
+
+
+def _bisect(bar, tmd, added_mass, lo, hi, j, tau):
+    """Vectorised bisection of omega tau - eps(omega) - 2 pi j on [lo, hi]."""
+    lo, hi = lo.copy(), hi.copy()
+
+    def f(x):
+        return (
+            x * tau
+            - regeneration_phase(tip_frf(bar, x, tmd=tmd, added_mass=added_mass))
+            - TWO_PI * j
+        )
+
+    f_lo = f(lo)
+    for _ in range(BISECTION_STEPS):
+        mid = 0.5 * (lo + hi)
+        f_mid = f(mid)
+        same = np.sign(f_mid) == np.sign(f_lo)
+        lo, f_lo = np.where(same, mid, lo), np.where(same, f_mid, f_lo)
+        hi = np.where(same, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def min_limit(
+    system_or_bar,
+    kr: float = KR_ALUMINIUM,
+    *,
+    tmd: TunedMassDamper | None = None,
+    added_mass: float = 0.0,
+    n_freq: int = 20000,
+    freq_range: tuple[float, float] | None = None,
+) -> float:
+    """The absolute (speed-independent) limiting depth -1 / (2 Kr min Re G) (m).
+
+    The bottom of every lobe touches it.  min Re G is searched on the grid
+    of :func:`analytic_lobes` and refined by
+    :func:`~boringbar.reference.linear.min_real_part`.  For one mode with tip
+    stiffness k = K / psi_L^2 and damping ratio zeta it is
+    2 k zeta (1 + zeta) / Kr, reached at omega = omega_n sqrt(1 + 2 zeta).
+    """
+    kr = check_positive("kr", kr, "Pa")
+    bar, tmd, added_mass = _resolve(system_or_bar, tmd, added_mass)
+    w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
+    re, _ = min_real_part(bar, tmd, w, added_mass=added_mass)
+    return math.inf if re >= 0.0 else -0.5 / (kr * re)

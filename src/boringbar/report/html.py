@@ -1,0 +1,399 @@
+"""The HTML report of ``boringbar paper`` (the edge of the package, like plot.py).
+
+Written from the files on disk (each step's ``summary.json``, NetCDF files and
+figures), so it can be rebuilt without rerunning anything
+(:func:`write_report`). The page is the jinja2 template
+``templates/report.html.j2`` (package data); this module only reads the files
+and hands the template plain data: table rows of formatted numbers, figure
+paths, and the facts each finding is worded from (counts, numbers, which way a
+comparison went). Every number in the page is read from those files; every
+statement that compares the presets or answers a published claim is worded by
+the template from those facts, not written in advance. Figures are linked by
+relative paths, so the output folder can be moved or served as it is. A small
+script at the end of the page counts the figures that loaded and writes the
+count into ``<body data-figures>`` (the headless-browser test reads it).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
+
+from boringbar.io import atomic_path
+
+_ENV = Environment(
+    loader=PackageLoader("boringbar.report", "templates"),
+    autoescape=select_autoescape(enabled_extensions=("html", "j2"), default_for_string=True),
+    undefined=StrictUndefined,  # a value the template needs and is not given fails loudly
+    trim_blocks=True,
+    lstrip_blocks=True,
+    keep_trailing_newline=False,
+)
+
+
+def _mm(value_m, digits: int = 3) -> str:
+    if value_m is None or not math.isfinite(float(value_m)):
+        return "-"
+    return f"{float(value_m) * 1e3:.{digits}g}"
+
+
+def _table(head: list, rows: list[list]) -> dict:
+    """A table for the template: header and rows as strings."""
+    return {"head": [str(h) for h in head], "rows": [[str(c) for c in row] for row in rows]}
+
+
+class _Report:
+    """The template's data, read from the manifest and the files it names."""
+
+    def __init__(self, out: Path, manifest: dict):
+        self.out = out
+        self.manifest = manifest
+        self.presets = manifest["presets"]
+        self.steps: dict[tuple[str, str], dict] = {}
+        for rec in manifest["steps"]:
+            self.steps[(rec["preset"], rec["key"])] = rec
+        self.keys = list(dict.fromkeys(r["key"] for r in manifest["steps"]
+                                       if r["key"] != "corrections"))
+
+    # --- helpers -------------------------------------------------------------
+    def img(self, path, alt: str) -> dict:
+        return {"src": os.path.relpath(Path(path), self.out).replace(os.sep, "/"), "alt": alt}
+
+    def summary(self, preset: str, key: str) -> dict | None:
+        rec = self.steps.get((preset, key))
+        return None if rec is None else rec["summary"]
+
+    def pair(self, key: str, body) -> list[dict]:
+        """One column per preset: body(preset, record) -> the column's figures,
+        table and any facts; ``run`` False where the step is missing."""
+        cols = []
+        for preset in self.presets:
+            rec = self.steps.get((preset, key))
+            if rec is None:
+                cols.append({"preset": preset, "run": False})
+                continue
+            cols.append({"preset": preset, "run": True, "command": rec["command"],
+                         "wall_time": f"{rec['wall_time_s']:.1f}", **body(preset, rec)})
+        return cols
+
+    def per_key(self, prefix: str, body) -> list[dict]:
+        """A titled pair for every step whose key starts with ``prefix``:
+        body(preset, record, key) -> the column's content."""
+        groups = []
+        for key in [k for k in self.keys if k.startswith(prefix)]:
+            title = self.steps[(self.presets[0], key)]["title"]
+            groups.append({"title": title, "columns": self.pair(
+                key, lambda preset, rec, key=key: body(preset, rec, key))})
+        return groups
+
+    # --- sections ------------------------------------------------------------
+    def sweeps(self) -> dict:
+        def body(preset, rec):
+            s = rec["summary"]
+            rows = []
+            for c in s["cases"]:
+                rms = [-1.0 if v is None else v for v in c["rms_tip_m"]]
+                top = max(range(len(rms)), key=rms.__getitem__)
+                k = _nearest(c["ratio"], 1.0)
+                rows.append([_case_words(c), f"{c['force_n']:g}", _mm(c["rms_tip_m"][top]),
+                             f"{c['ratio'][top]:g}", f"{c['ratio'][k]:g}",
+                             _mm(c["rms_tip_m"][k]), c["pattern"][k]])
+            return {"images": [self.img(p, f"sweep {preset}") for p in s["files"]["png"]],
+                    "table": _table(["case", "F0 (N)", "peak RMS (mm)", "peak at r",
+                                     "r nearest 1", "RMS there (mm)", "pattern there"], rows)}
+        return {"columns": self.pair("sweep", body), "sticking": self._sweep_sticking()}
+
+    def _sweep_sticking(self) -> list[dict]:
+        """Per preset, how many friction-on ball points stick (where there are any)."""
+        counts = []
+        for preset in self.presets:
+            s = self.summary(preset, "sweep")
+            if s is None:
+                continue
+            patterns = [str(p) for c in s["cases"]
+                        if c["bar"] == "ball" and c["friction"] == "on" for p in c["pattern"]]
+            if patterns:
+                counts.append({"preset": preset, "total": len(patterns),
+                               "sticking": sum("sticking" in p for p in patterns)})
+        return counts
+
+    def lobes(self) -> dict:
+        def body(preset, rec):
+            s = rec["summary"]
+            files = s["files"]
+            images = [self.img(files["png"], f"lobes {preset}")]
+            if "examples_png" in files:
+                images.append(self.img(files["examples_png"], f"lobe examples {preset}"))
+            rows = []
+            for c in s["cases"]:
+                analytic = [sp.get("analytic_limit_m") for sp in c["speeds"]]
+                analytic = [a for a in analytic if a is not None]
+                rows.append([c["case"], _mm(c["min_chatter_free_depth_m"]),
+                             _mm(min(analytic)) if analytic else "-"])
+            return {"images": images,
+                    "table": _table(["case", "min chatter-free depth, simulated (mm)",
+                                     "analytic min over these speeds (mm)"], rows)}
+        return {"columns": self.pair("lobes", body)}
+
+    def bifurcation(self) -> list[dict]:
+        def body(preset, rec, key):
+            s = rec["summary"]
+            ranges = [{"low": f"{a:g}", "high": None if a == b else f"{b:g}"}
+                      for a, b in s.get("hysteresis_ranges") or []]
+            return {"images": [self.img(s["files"]["png"], f"{key} {preset}")],
+                    "table": None, "hysteresis": ranges}
+        return self.per_key("bifurcation", body)
+
+    def basins(self) -> list[dict]:
+        def body(preset, rec, key):
+            s = rec["summary"]
+            rows = [[a["id"], f"{a['fraction']:.3f}", a["pattern"],
+                     a["period"] or "non-periodic", _mm(a["rms_tip_m"])]
+                    for a in s["attractors"]]
+            return {"images": [self.img(s["files"]["png"], f"{key} {preset}")],
+                    "table": _table(["attractor", "basin fraction", "pattern", "period",
+                                     "tip RMS (mm)"], rows)}
+        return self.per_key("basins", body)
+
+    def sensitivity(self) -> list[dict]:
+        def body(preset, rec, key):
+            s = rec["summary"]
+            rows = []
+            for h in s["harmonic"]:
+                k = _nearest(h["ratio"], 1.0)
+                row = [h["value"], f"{h['ratio'][k]:g}", _mm(h["rms_tip_m"][k]),
+                       h["pattern"][k]]
+                if s.get("cuts"):
+                    res = next(r for r in s["cuts"]["results"] if r["value"] == h["value"])
+                    n_ch = sum(bool(c) for c in res["chatter"])
+                    row.append(f"{n_ch} of {len(res['chatter'])}")
+                rows.append(row)
+            head = ["value", "r nearest 1", "RMS at r (mm)", "pattern at r"]
+            if s.get("cuts"):
+                head.append("cuts that chatter")
+            return {"images": [self.img(s["files"]["png"], f"{key} {preset}")],
+                    "table": _table(head, rows)}
+        return self.per_key("sensitivity", body)
+
+    def corrections(self) -> dict | None:
+        rec = next((r for r in self.manifest["steps"] if r["key"] == "corrections"), None)
+        if rec is None:
+            return None
+        s = rec["summary"]
+        ladder = _load(s["ladder_netcdf"])
+        return {"impact": _impact_law(s["impact_law"]),
+                "ladder": {"force": f"{ladder.attrs['force_n']:g}",
+                           "ratio": f"{ladder.attrs['ratio']:g}",
+                           "image": self.img(Path(s["ladder_png"]), "readings ladder"),
+                           "table": _ladder_table(ladder)},
+                **_ladder_findings(ladder),
+                "absorbers": [_absorbers(preset, rows) for preset, rows
+                              in s["absorbers"].items()],
+                "command": rec["command"]}
+
+    def cannot(self) -> list[dict]:
+        """The published claims, each checked against this run's data: the facts
+        (reproduced or not, and the numbers that say why) for the template."""
+        items = [self._ball_lobes_claim(preset) for preset in self.presets]
+        items += [self._basins_claim(preset) for preset in self.presets]
+        return [i for i in items if i]
+
+    def _ball_lobes_claim(self, preset: str) -> dict | None:
+        s = self.summary(preset, "lobes")
+        if s is None:
+            return None
+        solid = next((c for c in s["cases"] if c["case"] == "solid"), None)
+        balls = [c for c in s["cases"] if c["case"].startswith("ball")]
+        if solid is None or not balls:
+            return None
+        best = max(balls, key=lambda c: c["min_chatter_free_depth_m"] or 0.0)
+        b_best = best["min_chatter_free_depth_m"] or 0.0
+        b_solid = solid["min_chatter_free_depth_m"] or 0.0
+        ds = _load(s["files"]["netcdf"])
+        why = (_ball_at_limit(ds) if "max_rel_disp" in ds and "host_analytic_limit" in ds
+               else None)
+        return {"claim": "ball_lobes", "preset": preset, "reproduced": b_best > b_solid,
+                "best_case": best["case"], "best_depth": _mm(b_best),
+                "solid_depth": _mm(b_solid), "why": why}
+
+    def _basins_claim(self, preset: str) -> dict | None:
+        counts = []
+        for key in [k for k in self.keys if k.startswith("basins")]:
+            s = self.summary(preset, key)
+            if s is not None:
+                counts.append({"grid": key.replace("basins-", ""),
+                               "attractors": len(s["attractors"]),
+                               "largest": f"{max(a['fraction'] for a in s['attractors']):.0%}"})
+        if not counts:
+            return None
+        single = all(c["attractors"] == 1 for c in counts)
+        return {"claim": "basins", "preset": preset, "reproduced": not single,
+                "counts": counts}
+
+    def header(self) -> dict:
+        m = self.manifest
+        return {"title": m["title"], "version": m["boringbar_version"],
+                "command": m["command"], "quick": bool(m["quick"]),
+                "reused": m.get("compute_time_s", 0) > m["wall_time_s"] + 1,
+                "compute_time": f"{m.get('compute_time_s', 0):.0f}",
+                "wall_time": f"{m['wall_time_s']:.0f}"}
+
+    def context(self) -> dict:
+        return {"header": self.header(), "sweeps": self.sweeps(), "lobes": self.lobes(),
+                "bifurcation": self.bifurcation(), "basins": self.basins(),
+                "sensitivity": self.sensitivity(), "corrections": self.corrections(),
+                "cannot": self.cannot()}
+
+
+def _load(path):
+    """A NetCDF file read whole into memory (the file is closed again)."""
+    with xr.open_dataset(path) as ds:
+        return ds.load()
+
+
+def _impact_law(imp: dict) -> dict:
+    """The impact-law check (corrected against printed) for the template."""
+    rows = [[law, f"{imp['momentum_change_max'][law]:.3g}",
+             f"{imp['impacts_gaining_energy'][law]} of {imp['impacts']}",
+             f"{imp['largest_relative_energy_gain'][law]:.3g}"]
+            for law in ("corrected", "printed")]
+    return {"impacts": imp["impacts"], "duration": f"{imp['duration_s']:g}",
+            "force": f"{imp['force_n']:g}", "ratio": f"{imp['ratio']:g}",
+            "table": _table(["law", "largest momentum change / (m |y'-|)",
+                             "impacts gaining energy", "largest relative energy gain"], rows)}
+
+
+def _ladder_table(ladder) -> dict:
+    """One row per rung of the readings ladder, one RMS column per gap."""
+    gaps = ladder["gap"].values
+    rows = []
+    for i, r in enumerate(ladder["rung"].values):
+        rows.append([str(r), str(ladder["description"].values[i]),
+                     f"{ladder['friction_force_n'].values[i, 0]:.4g}",
+                     f"{ladder['host_frequency_hz'].values[i]:.1f}",
+                     *[f"{_mm(ladder['rms_tip_m'].values[i, j])} "
+                       f"[{ladder['pattern'].values[i, j]}]" for j in range(len(gaps))],
+                     f"{ladder['nonreciprocal_work_fraction'].values[i, 0]:.3g}",
+                     _mm(ladder["host_min_depth_m"].values[i])])
+    head = ["rung", "change", "F_c (N)", "host f1 (Hz)",
+            *[f"RMS (mm) [pattern], gap {g * 1e3:g} mm" for g in gaps],
+            "work injected / work of force", "host min depth (mm)"]
+    return _table(head, rows)
+
+
+def _ladder_findings(ladder) -> dict:
+    """The facts of the three findings under the ladder: friction force, bar
+    reaction, calibrated stiffness (paper rung against the later ones)."""
+    rungs = [str(r) for r in ladder["rung"].values]
+    paper_i, rec_i, roll_i = (rungs.index(r) for r in ("paper", "reciprocal", "rolling"))
+    gaps = ladder["gap"].values
+    rms = ladder["rms_tip_m"].values
+    pattern = ladder["pattern"].values
+    hz = ladder["host_frequency_hz"].values
+    depth = ladder["host_min_depth_m"].values
+    return {
+        "friction": {"gap_first": f"{gaps[0] * 1e3:g}", "gap_last": f"{gaps[-1] * 1e3:g}",
+                     "paper_first": _mm(rms[paper_i, 0]), "paper_last": _mm(rms[paper_i, -1]),
+                     "gap_irrelevant": bool(abs(rms[paper_i, 0] - rms[paper_i, -1])
+                                            <= 0.01 * rms[paper_i, 0]),
+                     "rolling_first": _mm(rms[roll_i, 0]),
+                     "rolling_last": _mm(rms[roll_i, -1]),
+                     "rolling_pattern_first": str(pattern[roll_i, 0]),
+                     "rolling_pattern_last": str(pattern[roll_i, -1])},
+        "reaction": {"work_fraction":
+                     f"{ladder['nonreciprocal_work_fraction'].values[paper_i, 0]:.3g}",
+                     "printed": _mm(rms[paper_i, 0], 4), "corrected": _mm(rms[rec_i, 0], 4)},
+        "stiffness": {"fe_hz": f"{hz[-1]:.1f}", "published_hz": f"{hz[paper_i]:.0f}",
+                      "paper_depth": _mm(depth[paper_i]), "fe_depth": _mm(depth[-1])},
+    }
+
+
+def _absorbers(preset: str, rows_a: list[dict]) -> dict:
+    """The absorber designs on one preset's solid bar, and how the published one
+    compares with the best."""
+    rows = [[a["design"], f"{a['stiffness_n_m'] / 1e6:.3g}", f"{a['damping_n_s_m']:.3g}",
+             f"{a['mass_ratio']:.3g}",
+             "-" if a["tuning_ratio"] is None or not math.isfinite(a["tuning_ratio"])
+             else f"{a['tuning_ratio']:.3g}",
+             f"{a['peak_receptance_m_n'] * 1e6:.3g}", _mm(a["min_depth_m"])] for a in rows_a]
+    best = max(rows_a, key=lambda a: a["min_depth_m"])
+    pub = next(a for a in rows_a if a["design"] == "published")
+    return {"preset": preset,
+            "table": _table(["design", "k_a (MN/m)", "c_a (N s/m)", "mass ratio",
+                             "tuning omega_a/omega_n", "peak |G| (um/N)",
+                             "analytic min depth (mm)"], rows),
+            "published_of_best": f"{pub['min_depth_m'] / best['min_depth_m']:.2f}",
+            "best": best["design"]}
+
+
+def _ball_at_limit(ds) -> dict | None:
+    """Why the ball cases' limits are what they are, from the lobes data: per
+    case, the first chattering depth against the analytic limit of the bare
+    cavity bar, and at each speed's limiting depth how far the ball travelled
+    against half the gap and how often it struck a wall. None when no ball
+    case has a limiting depth."""
+    depth = ds["depth"].values
+    rows, reach_all, strikes_all, below = [], [], 0, []
+    for i in range(ds.sizes["case"]):
+        bar = str(ds["bar"].values[i])
+        if bar not in ("solid", "ball"):
+            continue
+        ratio = ds["first_unstable_depth"].values[i] / ds["host_analytic_limit"].values[i]
+        ratio = ratio[np.isfinite(ratio)]
+        reach, strikes = [], 0
+        for j in range(ds.sizes["rpm"]):
+            lim = float(ds["limit_depth"].values[i, j])
+            if bar == "ball" and math.isfinite(lim):
+                k = int(round(lim / depth[0])) - 1
+                reach.append(float(ds["max_rel_disp"].values[i, j, k]) /
+                             (0.5 * float(ds["gap"].values[i])))
+                strikes += max(0, int(ds["impacts"].values[i, j, k]))
+        if bar == "ball":
+            reach_all += reach
+            strikes_all += strikes
+            if ratio.size and ratio.min() < 1.0:
+                below.append({"case": str(ds["case"].values[i]),
+                              "speeds": int((ratio < 1.0).sum())})
+        rows.append([str(ds["case"].values[i]),
+                     f"{ratio.min():.2f}-{ratio.max():.2f}" if ratio.size else "-",
+                     f"{max(reach):.0%}" if reach else "-",
+                     str(strikes) if bar == "ball" else "-"])
+    if not reach_all:
+        return None
+    return {"table": _table(["case", "first chattering depth / analytic limit of the host",
+                             "ball's largest excursion / half gap", "impacts"], rows),
+            "strikes": strikes_all, "below": below}
+
+
+def _nearest(values: list, target: float) -> int:
+    """Index of the value nearest ``target`` (the ratio closest to resonance)."""
+    return min(range(len(values)), key=lambda i: abs(values[i] - target))
+
+
+def _case_words(c: dict) -> str:
+    if c["bar"] != "ball":
+        return c["bar"]
+    return f"ball, gap {c['gap_m'] * 1e3:g} mm, friction {c['friction']}"
+
+
+def render_report(out, manifest: dict) -> str:
+    """The report's HTML for the study in ``out`` described by ``manifest``."""
+    return _ENV.get_template("report.html.j2").render(_Report(Path(out), manifest).context())
+
+
+def write_report(out, manifest: dict | None = None) -> Path:
+    """Write ``out/report.html`` from ``out/manifest.json`` (or ``manifest``)."""
+    out = Path(out)
+    if manifest is None:
+        manifest = json.loads((out / "manifest.json").read_text())
+    text = render_report(out, manifest)
+    path = out / "report.html"
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8")
+    return path

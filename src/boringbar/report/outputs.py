@@ -1,0 +1,92 @@
+"""The files of each analysis and its summary: what ``boringbar sweep``, ``lobes``,
+``bifurcation``, ``basins`` and ``sensitivity`` write into their ``--out``
+directory, shared by those commands and by ``boringbar paper``
+(:mod:`boringbar.report.paper`), so both write the same files the same way.
+
+Each ``*_files(ds, out)`` writes the analysis's NetCDF file and figures into
+``out`` (atomically) and returns its summary (what ``--json`` prints), with the
+paths written under ``"files"``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from boringbar.analysis.basins import summary as basins_summary
+from boringbar.analysis.bifurcation import summary as bifurcation_summary
+from boringbar.analysis.lobes import examples_summary
+from boringbar.analysis.lobes import summary as lobes_summary
+from boringbar.analysis.sensitivity import summary as sensitivity_summary
+from boringbar.analysis.sweep import summary as sweep_summary
+from boringbar.io import save_figure_atomic, write_netcdf_atomic
+from boringbar.plot import (
+    plot_basins,
+    plot_bifurcation,
+    plot_lobe_examples,
+    plot_lobes,
+    plot_sensitivity,
+    plot_sweep,
+)
+
+#: Rows of a recorded history (a run's run.nc, the lobe examples): about this many.
+HISTORY_ROWS = 20000
+
+
+def sweep_pngs(ds, out: Path) -> list[tuple[float, Path]]:
+    """(force, file) of each sweep figure: ``out/sweep.png`` for one force, else one
+    ``out/sweep_F<force>N.png`` per force."""
+    forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
+    if len(forces) == 1:
+        return [(forces[0], out / "sweep.png")]
+    return [(f, out / f"sweep_F{f:g}N.png") for f in forces]
+
+
+def sweep_files(ds, out) -> dict:
+    """``out/sweep.nc`` and the sweep figures (:func:`sweep_pngs`); the summary."""
+    out = Path(out)
+    nc = write_netcdf_atomic(ds, out / "sweep.nc")
+    pngs = [save_figure_atomic(plot_sweep(ds, f), path) for f, path in sweep_pngs(ds, out)]
+    return {**sweep_summary(ds), "files": {"netcdf": str(nc), "png": [str(p) for p in pngs]}}
+
+
+def lobes_files(ds, out, examples=None) -> dict:
+    """``out/lobes.nc``, ``out/lobes.png`` and, given the ``examples`` dataset
+    (:func:`boringbar.analysis.lobes.examples`), ``out/examples.nc`` and
+    ``out/examples.png``; the summary (with ``"examples"`` when given)."""
+    out = Path(out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "lobes.nc"),
+             "png": save_figure_atomic(plot_lobes(ds), out / "lobes.png")}
+    if examples is not None:
+        files["examples_netcdf"] = write_netcdf_atomic(examples, out / "examples.nc")
+        files["examples_png"] = save_figure_atomic(plot_lobe_examples(examples),
+                                                    out / "examples.png")
+    summary = {**lobes_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    if examples is not None:
+        summary["examples"] = examples_summary(examples)
+    return summary
+
+
+def bifurcation_files(ds, out) -> dict:
+    """``out/bifurcation.nc`` and ``out/bifurcation.png``; the summary."""
+    out = Path(out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "bifurcation.nc"),
+             "png": save_figure_atomic(plot_bifurcation(ds), out / "bifurcation.png")}
+    return {**bifurcation_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+
+
+def basins_files(ds, out) -> dict:
+    """``out/basins.nc`` and ``out/basins.png``; the summary."""
+    out = Path(out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "basins.nc"),
+             "png": save_figure_atomic(plot_basins(ds), out / "basins.png")}
+    return {**basins_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+
+
+def sensitivity_files(ds, out) -> dict:
+    """``out/sensitivity.nc`` and ``out/sensitivity.png``; the summary."""
+    out = Path(out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "sensitivity.nc"),
+             "png": save_figure_atomic(plot_sensitivity(ds), out / "sensitivity.png")}
+    return {**sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}

@@ -1,0 +1,338 @@
+"""``boringbar paper``: the whole published study (docs/model.md, section 6) under both
+presets, and a report comparing them.
+
+The study is a list of :class:`Step` s. Each step is one published analysis,
+run with the library (its files written by :mod:`boringbar.report.outputs`, as
+the commands write them) once per preset into ``OUT/<preset>/<step>/``, beside
+the ``boringbar`` command that reruns it by hand (shown in the report with the
+figure; tests/test_paper_steps.py checks that it gives the same numbers).  Steps
+finish atomically: a step's ``summary.json`` is written last, after its NetCDF
+files and figures, and a rerun of ``boringbar paper`` with the same options
+skips every step whose summary is there with the same command, so an
+interrupted study resumes where it stopped. ``--quick`` runs the same steps on
+coarser grids and shorter runs (written in the report, and in each step's
+command).
+
+Beside the published analyses, ``corrections`` measures what each correction
+to the published equations (docs/model.md, section 8) changes
+(:mod:`boringbar.report.corrections`). The report (:mod:`boringbar.report.html`)
+is written last, from the files on disk.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from boringbar import __version__
+from boringbar.analysis.basins import BasinOptions, basins
+from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, lobes
+from boringbar.analysis.lobes import examples as lobe_examples
+from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity, with_cuts
+from boringbar.analysis.sweep import SweepOptions, parse_range, published_cases, sweep
+from boringbar.execute import Execution
+from boringbar.io import jsonable, save_figure_atomic, write_json_atomic, write_netcdf_atomic
+from boringbar.model.system import make_system
+from boringbar.plot import plot_ladder
+from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
+from boringbar.report.html import write_report
+from boringbar.report.outputs import (
+    HISTORY_ROWS,
+    basins_files,
+    bifurcation_files,
+    lobes_files,
+    sensitivity_files,
+    sweep_files,
+)
+from boringbar.simulate import Initial, Integration
+
+PRESET_ORDER = ("paper", "physical")
+
+#: The command line's defaults, as the steps' commands leave them: the time step
+#: (s), the integrator, the sampled part of each run, the ball damper's gap (mm)
+#: and a cut's description (``boringbar lobes`` and ``sensitivity``, SI).
+DT_S = 1e-6
+INTEGRATOR = "rk4"
+STEADY_FRACTION = 0.8
+GAP_MM = 0.5
+CUT = {"kr": 850.0 * 1e6, "feed": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
+       "start": "rest", "bounded_fraction": 0.1}
+
+
+@dataclass(frozen=True)
+class Step:
+    """One published analysis: ``run(preset, out) -> summary`` computes it with the
+    library and writes its files into ``out``; ``argv`` is the ``boringbar`` command
+    (without ``--preset``, ``--out`` and ``--json``) that does the same by hand,
+    shown in the report."""
+
+    key: str
+    section: str
+    title: str
+    argv: tuple[str, ...]
+    run: Callable[[str, Path], dict]
+
+
+def _integration(duration_s: float, initial: Initial | None = None) -> Integration:
+    return Integration(duration_s, DT_S, INTEGRATOR, STEADY_FRACTION, initial)
+
+
+def _at_rest() -> Initial:
+    """The initial conditions the command line gives sweep and bifurcation."""
+    return Initial(0.0 * 1e-3, 0.0, 0.0 * 1e-3, 0.0)
+
+
+def _sweep_cases(preset: str) -> list:
+    """The cases of sweep and lobes by default: solid, TMD, and the ball damper at
+    each gap (0.5, 0.1 mm) x friction (off, on), in the command line's order."""
+    cases = []
+    for bar in ("solid", "tmd"):
+        cases += published_cases((bar,), preset=preset)
+    for gap in (0.5 * 1e-3, 0.1 * 1e-3):
+        for fr in (False, True):
+            cases += published_cases(("ball",), (gap,), (fr,), preset)
+    return cases
+
+
+def _sweep_run(forces: str, ratios: str, duration_s: float):
+    def run(preset: str, out: Path) -> dict:
+        options = SweepOptions(tuple(parse_range(ratios, "--ratios")),
+                               tuple(float(f) for f in forces.split(",")))
+        ds = sweep(_sweep_cases(preset), options,
+                   integration=_integration(duration_s, _at_rest()), execution=Execution())
+        return sweep_files(ds, out)
+    return run
+
+
+def _lobes_run(method: str, rpm: str | None, duration_s: float):
+    def run(preset: str, out: Path) -> dict:
+        cases = _sweep_cases(preset)
+        speeds = PUBLISHED_RPM if rpm is None else parse_range(rpm, "--rpm")
+        options = LobesOptions(tuple(speeds), method, "zero", 0.01 * 1e-3, 3.0 * 1e-3, 3,
+                               kr_pa=CUT["kr"], feed_m=CUT["feed"],
+                               revolutions=CUT["revolutions"],
+                               interpolation=CUT["interpolation"], start=CUT["start"],
+                               bounded_fraction=CUT["bounded_fraction"])
+        integration = _integration(duration_s)
+        ds = lobes(cases, options, integration=integration, execution=Execution())
+        exds = lobe_examples(ds, cases[0], options, integration=integration, rows=HISTORY_ROWS)
+        return lobes_files(ds, out, exds)
+    return run
+
+
+def _bifurcation_run(gap_mm: str, friction: bool, forces: str, ratio: str, duration_s: float):
+    def run(preset: str, out: Path) -> dict:
+        values = parse_range(forces, "--force-n")
+        system = make_system("ball", preset, gap=float(gap_mm) * 1e-3, friction=friction)
+        # the command line sets the swept option to its first value
+        options = BifurcationOptions("force", tuple(values * 1.0), float(values[0]), float(ratio),
+                                     backward=True, units="1")
+        ds = with_hysteresis(bifurcation(system, options,
+                                         integration=_integration(duration_s, _at_rest())))
+        ds.attrs.update(preset=preset, bar="ball", swept_option="--force-n")
+        return bifurcation_files(ds, out)
+    return run
+
+
+def _grid(text: str) -> tuple[float, float, int]:
+    lo, hi, n = text.split(":")
+    return float(lo), float(hi), int(n)
+
+
+def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement_mm: str,
+                velocity_m_s: str, duration_s: float):
+    def run(preset: str, out: Path) -> dict:
+        lo, hi, n = _grid(displacement_mm)
+        w0, v0 = (float(v) for v in start.split(","))
+        system = make_system("ball", preset, gap=GAP_MM * 1e-3, friction=friction)
+        options = BasinOptions((lo * 1e-3, hi * 1e-3, n), _grid(velocity_m_s), 0.0, 0.0,
+                               float(force), float(ratio), poincare_from=(w0 * 1e-3, v0))
+        ds = basins(system, options, integration=_integration(duration_s),
+                    execution=Execution())
+        ds.attrs.update(bar="ball")
+        return basins_files(ds, out)
+    return run
+
+
+def _sensitivity_run(kind: str, force: str, ratios: str, cut_rpm: str | None,
+                     depths_mm: str | None, duration_s: float):
+    def run(preset: str, out: Path) -> dict:
+        common = dict(preset=preset, bar="ball", gap=GAP_MM * 1e-3, friction=True,
+                      overrides={}, integration=_integration(duration_s),
+                      execution=Execution())
+        ds = sensitivity(SensitivityOptions(kind, None, (float(force),),
+                                            tuple(parse_range(ratios, "--ratios"))), **common)
+        if cut_rpm is not None:
+            depths = parse_range(depths_mm, "--depths-mm")
+            cuts = Cuts(float(cut_rpm), tuple(float(d) * 1e-3 for d in depths), duration_s,
+                        dict(CUT))
+            ds = with_cuts(ds, sensitivity(SensitivityOptions(kind, None, cuts=cuts), **common))
+        return sensitivity_files(ds, out)
+    return run
+
+
+def published_steps(quick: bool = False) -> list[Step]:
+    """The steps of the published study (docs/model.md, section 6); ``quick``: coarser."""
+    duration = 0.5 if quick else 2.0
+    dur = ("--duration-s", "0.5") if quick else ()
+    ratios = "0.95:1.05:" + ("0.02" if quick else "0.01")
+    steps = [Step("sweep", "sweeps", "Frequency sweeps of tip RMS, F0 = 10 and 20 N",
+                  ("sweep", "--force-n", "10,20", "--ratios", ratios, *dur),
+                  _sweep_run("10,20", ratios, duration))]
+    # the published scan in full; the bisection search (the same limits on every
+    # published case, docs) on a coarser speed grid with 1 s cuts in the quick version
+    if quick:
+        steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
+                          ("lobes", "--examples", "--method", "search", "--rpm",
+                           "900:1600:100", "--duration-s", "1.0"),
+                          _lobes_run("search", "900:1600:100", 1.0)))
+    else:
+        steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
+                          ("lobes", "--examples", "--method", "scan"),
+                          _lobes_run("scan", None, 2.0)))
+    forces = "5:50:" + ("5" if quick else "1")
+    for gap in ("0.1", "0.5"):
+        for fr in ("off", "on"):
+            steps.append(Step(
+                f"bifurcation-gap{gap}-friction{fr}", "bifurcation",
+                f"Bifurcation diagram over F0, gap {gap} mm, friction {fr}",
+                ("bifurcation", "--bar", "ball", "--gap-mm", gap, "--friction", fr,
+                 "--force-n", forces, "--ratio", "1.0", *dur),
+                _bifurcation_run(gap, fr == "on", forces, "1.0", duration)))
+    cells = "-1.5:1.5:" + ("8" if quick else "30")
+    grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
+    for key, force, ratio, fr, start in (("basins-10N-r1.01-off", "10", "1.01", "off", "0.5,0.5"),
+                                         ("basins-10N-r1.01-on", "10", "1.01", "on", "1.0,1.0"),
+                                         ("basins-20N-r1.00-off", "20", "1.00", "off", "0.5,0.5")):
+        steps.append(Step(key, "basins",
+                          f"Basins of attraction, {force} N, r = {ratio}, gap 0.5 mm, "
+                          f"friction {fr}",
+                          ("basins", "--bar", "ball", "--gap-mm", "0.5", "--friction", fr,
+                           "--force-n", force, "--ratio", ratio, "--poincare-from", start,
+                           *grid, *dur),
+                          _basins_run(force, ratio, fr == "on", start, cells, cells, duration)))
+    ratios = "0.95:1.05:" + ("0.05" if quick else "0.01")
+    cut_rpm, depths = "1200", "0.05:0.10:0.01"
+    for kind in ("ball", "friction_number", "restitution", "initial"):
+        cut = kind in ("ball", "friction_number")
+        extra = ("--cut-rpm", cut_rpm, "--depths-mm", depths) if cut else ()
+        steps.append(Step(f"sensitivity-{kind}", "sensitivity",
+                          f"Sensitivity to {kind.replace('_', ' ')}",
+                          ("sensitivity", kind, "--bar", "ball", "--gap-mm", "0.5",
+                           "--force-n", "10", "--ratios", ratios, *extra, *dur),
+                          _sensitivity_run(kind, "10", ratios, cut_rpm if cut else None,
+                                           depths if cut else None, duration)))
+    return steps
+
+
+def command_line(step: Step, preset: str, out: Path) -> str:
+    """The shell command that reruns ``step`` by hand."""
+    return " ".join(["boringbar", *step.argv, "--preset", preset, "--out", str(out)])
+
+
+class StepFailed(RuntimeError):
+    """A step failed (its one-line error inside)."""
+
+
+def _done(path: Path, command: str) -> dict | None:
+    """The finished step's record, if ``path`` holds one for ``command``."""
+    try:
+        record = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return record if record.get("command") == command else None
+
+
+def _step(where: Path, meta: dict, compute, say, label: str) -> dict:
+    """One step of the study: its record from ``where/summary.json`` if a run of
+    the same command finished there, else ``compute()`` (its summary), recorded
+    with its wall time.  The record comes back with ``reused`` set."""
+    record = _done(where / "summary.json", meta["command"])
+    if record is not None:
+        say(f"{label}: done before, kept")
+        return {**record, "reused": True}
+    t0 = time.perf_counter()
+    summary = compute()
+    record = {**meta, "wall_time_s": time.perf_counter() - t0, "summary": summary}
+    write_json_atomic(jsonable(record), where / "summary.json")  # last: marks it done
+    say(f"{label}: {record['wall_time_s']:.1f} s")
+    return {**record, "reused": False}
+
+
+def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = False,
+              log=None) -> dict:
+    """Run every published analysis under each preset into ``out`` and write the
+    report; returns the manifest (also ``out/manifest.json``).  A step that fails
+    (bad input or an I/O error) raises :class:`StepFailed`; the steps finished
+    before it are kept."""
+    shown = Path(out)  # as the user wrote it, for the commands in the report
+    out = shown.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    say = log or ((lambda msg: None) if quiet else (lambda msg: print(msg, file=sys.stderr,
+                                                                      flush=True)))
+    tic = time.perf_counter()
+    steps = published_steps(quick)
+    total = len(steps) * len(presets) + 1
+    records = []
+    for preset in presets:
+        for step in steps:
+            where = out / preset / step.key
+            meta = {"key": step.key, "section": step.section, "title": step.title,
+                    "preset": preset,
+                    "command": command_line(step, preset, shown / preset / step.key)}
+            records.append(_step(where, meta, _compute(step, preset, where, meta["command"]),
+                                 say,
+                                 f"boringbar paper: [{len(records) + 1}/{total}] "
+                                 f"{preset} {step.key}"))
+    duration = 0.5 if quick else 2.0
+    meta = {"key": "corrections", "section": "corrections",
+            "title": "What the corrections to the published equations change",
+            "preset": "both",
+            "command": (f"boringbar.report.corrections: readings_ladder(duration={duration}), "
+                        f"impact_law_check(), absorber_designs() for {', '.join(presets)}")}
+    where = out / "corrections"
+    records.append(_step(where, meta, lambda: _corrections(where, presets, duration), say,
+                         f"boringbar paper: [{total}/{total}] corrections"))
+    manifest = {
+        "title": "boringbar: the published study rerun under the paper and physical presets",
+        "boringbar_version": __version__,
+        "quick": quick,
+        "presets": list(presets),
+        "command": "boringbar paper --out " + str(shown) + (" --quick" if quick else ""),
+        "wall_time_s": time.perf_counter() - tic,
+        "compute_time_s": sum(r["wall_time_s"] for r in records),
+        "steps": records,
+    }
+    write_json_atomic(jsonable(manifest), out / "manifest.json")
+    manifest["report"] = str(write_report(out, manifest))
+    say(f"boringbar paper: report {manifest['report']} "
+        f"({manifest['wall_time_s']:.0f} s)")
+    return manifest
+
+
+def _compute(step: Step, preset: str, where: Path, command: str):
+    """``step.run(preset, where)`` as a ``compute()`` of :func:`_step`; a bad value
+    or an I/O error becomes :class:`StepFailed` naming the step's command."""
+    def compute() -> dict:
+        try:
+            return step.run(preset, where)
+        except (ValueError, OSError) as exc:
+            message = " ".join(str(exc).split()) or type(exc).__name__
+            raise StepFailed(f"{command} failed: {message}") from None
+    return compute
+
+
+def _corrections(where: Path, presets, duration: float) -> dict:
+    """The corrections measurements, into ``where``: the readings ladder, the impact
+    law, and the absorber designs of each preset; returns their summary."""
+    ladder = readings_ladder(duration=duration)
+    nc = write_netcdf_atomic(ladder, where / "ladder.nc")
+    png = save_figure_atomic(plot_ladder(ladder), where / "ladder.png")
+    impact = impact_law_check(make_system("ball", "paper", gap=0.1e-3, friction=False))
+    return {"ladder_netcdf": str(nc), "ladder_png": str(png), "impact_law": impact,
+            "absorbers": {p: absorber_designs(p) for p in presets}}

@@ -1,0 +1,90 @@
+"""kernels/compile.py: the notice before a long compile, and the list compile_all works through."""
+
+import io
+import subprocess
+import sys
+
+import pytest
+from numba import types
+from numba.core import event
+
+from boringbar.kernels import compile as C
+from boringbar.kernels import rk4, rk4_batch
+
+
+def test_specs_name_every_specialisation_once():
+    names = [s.name for s in C.specs()]
+    assert len(names) == len(set(names)) == 1 + 6 + 13 * len(rk4_batch.LANES)
+    assert [s.kind for s in C.specs(["rk4"])] == ["rk4"] * 6
+    with pytest.raises(ValueError):
+        C.specs(["rk5"])
+
+
+def test_every_dispatched_kernel_maps_to_a_spec():
+    """The kernels run_rk4 and run_rk4_batch dispatch to are the ones compile_all compiles."""
+    known = set(C.specs())
+    singles = [*rk4._BY_MODES.values(), *rk4._BALL_BY_MODES.values(), rk4._rk4_any]
+    assert {C._spec_of(d, ()) for d in singles} == set(C.specs(["rk4"]))
+    for size in rk4_batch.LANES:
+        lanes = (types.UniTuple(types.int64, size),)
+        for d in [*rk4_batch._SPECIALISED.values(), rk4_batch._b_any]:
+            assert C._spec_of(d, lanes) in known
+    assert C._spec_of(None, ()) is None
+
+
+def _fire(dispatcher, args=()):
+    with event.trigger_event("numba:compile", data={"dispatcher": dispatcher, "args": args,
+                                                     "return_type": None}):
+        pass
+
+
+def test_announce_prints_one_line_at_the_first_kernel_compile_only():
+    out = io.StringIO()
+    with C.announce(out):
+        pass  # nothing compiled: nothing printed
+    assert out.getvalue() == ""
+    with C.announce(out):
+        _fire(rk4._rk4_ball2)
+        _fire(rk4._rk4_n1)  # nested or later compiles in the same call: no second line
+    lines = out.getvalue().splitlines()
+    assert lines == [C.notice(C.Spec("rk4", 2, "ball"))]
+    assert lines[0].startswith("boringbar: compiling the RK4 kernel (2 modes, ball damper) "
+                               "(first use on this machine, about ")
+    _fire(rk4._rk4_ball2)  # outside announce: nothing
+    assert len(out.getvalue().splitlines()) == 1
+
+
+def test_announce_is_silenced_by_notices_off():
+    out = io.StringIO()
+    C.notices(False)
+    try:
+        with C.announce(out):
+            _fire(rk4._rk4_ball2)
+    finally:
+        C.notices(True)
+    assert out.getvalue() == ""
+
+
+def test_notice_durations():
+    assert C.notice(C.Spec("exact")).endswith(" min; cached afterwards)")
+    assert C._duration(9.0) == "10 s" and C._duration(1.0) == "5 s"
+    assert C._duration(170) == "3 min"
+
+
+@pytest.mark.slow
+def test_a_cold_compile_announces_and_a_cached_load_does_not(tmp_path):
+    """End to end in fresh processes on an empty cache: the 1-mode RK4 kernel compiles with
+    one notice, then loads from the cache silently."""
+    code = ("import sys; from boringbar.kernels import compile as C\n"
+            "with C.announce(): r = C.compile_one(C.Spec('rk4', 1, 'ball'))\n"
+            "print(r.status)")
+    env = {"NUMBA_CACHE_DIR": str(tmp_path), "PATH": "/usr/bin:/bin"}
+    runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           env=env, timeout=600) for _ in range(2)]
+    assert [r.stdout.strip() for r in runs] == ["compiled", "cached"], runs[0].stderr
+    assert runs[0].stderr.splitlines() == [C.notice(C.Spec("rk4", 1, "ball"))]
+    assert runs[1].stderr == ""
+
+
+def test_every_specialisation_has_a_measured_estimate():
+    assert set(C.ESTIMATE_S) == {s.name for s in C.specs()}

@@ -1,0 +1,47 @@
+"""``boringbar paper`` runs each step with the library; the command shown beside it in
+the report must reproduce the same numbers.  For the cheapest steps of the quick
+study, the step's library run and its command line write into two directories and
+every NetCDF data variable must agree bit for bit."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from boringbar.cli.main import build_parser, main
+from boringbar.report.paper import published_steps
+
+STEPS = {s.key: s for s in published_steps(quick=True)}
+
+
+@pytest.mark.parametrize("quick", [True, False])
+def test_every_step_command_is_a_valid_command_line(quick):
+    parser = build_parser()
+    for step in published_steps(quick):
+        args = parser.parse_args([*step.argv, "--preset", "paper", "--out", "x"])
+        assert args.command == step.argv[0]
+
+
+@pytest.mark.parametrize("key", ["sensitivity-restitution", "basins-10N-r1.01-on"])
+def test_library_step_is_its_command_bit_for_bit(key, tmp_path):
+    step = STEPS[key]
+    lib, cli = tmp_path / "library", tmp_path / "cli"
+    summary = step.run("paper", lib)
+    assert main([*step.argv, "--preset", "paper", "--out", str(cli), "--quiet"]) == 0
+    ncs = sorted(p.name for p in lib.glob("*.nc"))
+    assert ncs and ncs == sorted(p.name for p in cli.glob("*.nc"))
+    assert summary["files"]["netcdf"] == str(lib / ncs[0])
+    for name in ncs:
+        with xr.open_dataset(lib / name) as a, xr.open_dataset(cli / name) as b:
+            assert set(a.data_vars) == set(b.data_vars)
+            for var in a.data_vars:
+                if var == "elapsed_s":  # wall time of each run
+                    continue
+                u, v = a[var].values, b[var].values
+                assert u.shape == v.shape, var
+                if u.dtype.kind in "fc":
+                    assert np.array_equal(u, v, equal_nan=True), var
+                else:
+                    assert np.array_equal(u, v), var
+            skip = {"wall_time_s", "elapsed_s"}
+            assert {k: str(v) for k, v in a.attrs.items() if k not in skip} == \
+                {k: str(v) for k, v in b.attrs.items() if k not in skip}
