@@ -427,9 +427,9 @@ def test_specialised_helpers_give_the_generic_bits(preset, n_modes):
     seg = np.zeros(E.SEG_SIZE)
     seg[0], seg[2], seg[3], seg[9] = 3e-3, 1e-5, 0.8, 5e-5  # ts, y, y', half gap
     om, f0 = p[L.OMEGA], p[L.F0]
-    spec_i = {1: E._integrals_1, 2: E._integrals_2}[n]
-    spec_r = {1: E._root_1, 2: E._root_2}[n]
-    spec_w = {1: E._w_extremum_1, 2: E._w_extremum_2}[n]
+    spec_i = {1: E.segment_integrals_1, 2: E.segment_integrals_2}[n]
+    spec_r = {1: E.find_root_1, 2: E.find_root_2}[n]
+    spec_w = {1: E.w_extremum_1, 2: E.w_extremum_2}[n]
 
     def scratch():
         return (np.zeros((2, nb), complex), np.zeros((nb, nb), complex),
@@ -445,18 +445,18 @@ def test_specialised_helpers_give_the_generic_bits(preset, n_modes):
             tail = (mk, prep["lvis"], prep["cvis"], kst, 0.5, me, G, Cx, cf, ca, cb, out,
                     prep["isum"], level)
             if generic:
-                E._integrals(*head, n, *tail, 2, seg, np.zeros(3, complex))
+                E.segment_integrals(*head, n, *tail, 2, seg, np.zeros(3, complex))
             else:
                 spec_i(*head, *tail, seg, np.zeros(3, complex))
             outs.append(out)
         assert np.array_equal(outs[0], outs[1]) and np.any(outs[0] != 0.0)
 
     def g(kind, tau):
-        return E._g(kind, tau, seg, 0, q0, lam, V, 2, Z, D, bq, np.zeros(nz, complex),
+        return E.g_value(kind, tau, seg, 0, q0, lam, V, 2, Z, D, bq, np.zeros(nz, complex),
                     np.zeros(nz), n, mk, f0, om)
 
     grid = np.linspace(0.0, 2.5e-3, 201)  # the ball reaches the wall; W' changes sign
-    for kind, fn_g, fn_s in ((E.EV_PLUS, E._root, spec_r), (E.EV_WEXT, E._w_extremum, spec_w)):
+    for kind, fn_g, fn_s in ((E.EV_PLUS, E.find_root, spec_r), (E.EV_WEXT, E.w_extremum, spec_w)):
         v = np.array([g(kind, t) for t in grid])
         i = int(np.flatnonzero(np.sign(v[:-1]) != np.sign(v[1:]))[0])
         a, b = grid[i], grid[i + 1]

@@ -79,7 +79,7 @@ in the cut f = Kr b (S(t) - W), and -Kr b W joins the matrix (a second set of
 regimes, ``prepare``); the surface S = min_k [k h_m + W(t - k tau)] is one cubic
 per segment, the cubic Hermite of W, W' between stored knots (at the nodes
 t0 + j H, H = tau / ceil(tau / dt), and at every event), and the input
-bq Kr b S is propagated exactly with phi-functions (:func:`_eval`), so the
+bq Kr b S is propagated exactly with phi-functions (:func:`state_at`), so the
 error is the interpolation's, O(H^4).  Segments end at every node, delayed
 knot and change of the minimising revolution.  The tool leaving and
 re-entering the cut (h = 0) are events (EV_CUT, with the extremum of h,
@@ -92,8 +92,8 @@ The package, by concern:
 - :mod:`.consts`: the grid, the limits, the regimes, the event kinds, the segment
   record's slots (``SEG_*``) and the stack scratch's sizes;
 - :mod:`.prepare`: the per-run setup, :func:`prepare` (the regimes' matrices, diagonalised);
-- :mod:`.propagate`: the closed form on a segment (:func:`_eval`) and its integrals
-  (:func:`_integrals`);
+- :mod:`.propagate`: the closed form on a segment (:func:`state_at`) and its integrals
+  (:func:`segment_integrals`);
 - :mod:`.events`: the event functions, their roots, the W extrema and a free ball's wall step;
 - :mod:`.cut`: a regenerative cut's delay history (knots, surface, Gauss-Legendre flows);
 - :mod:`.segment`: one segment between two events: its start, the grid search for its
@@ -106,17 +106,35 @@ The package, by concern:
 from boringbar.kernels.exact.consts import EV_PLUS, EV_WEXT, SEG_SIZE
 from boringbar.kernels.exact.driver import run_exact
 from boringbar.kernels.exact.events import (
-    _g,
-    _root,
-    _root_1,
-    _root_2,
-    _w_extremum,
-    _w_extremum_1,
-    _w_extremum_2,
+    find_root,
+    find_root_1,
+    find_root_2,
+    g_value,
+    w_extremum,
+    w_extremum_1,
+    w_extremum_2,
 )
 from boringbar.kernels.exact.prepare import prepare
-from boringbar.kernels.exact.propagate import _integrals, _integrals_1, _integrals_2
+from boringbar.kernels.exact.propagate import (
+    segment_integrals,
+    segment_integrals_1,
+    segment_integrals_2,
+)
 
-__all__ = ["EV_PLUS", "EV_WEXT", "SEG_SIZE", "_g", "_integrals", "_integrals_1", "_integrals_2",
-           "_root", "_root_1", "_root_2", "_w_extremum", "_w_extremum_1", "_w_extremum_2",
-           "prepare", "run_exact"]
+__all__ = [
+    "EV_PLUS",
+    "EV_WEXT",
+    "SEG_SIZE",
+    "g_value",
+    "segment_integrals",
+    "segment_integrals_1",
+    "segment_integrals_2",
+    "find_root",
+    "find_root_1",
+    "find_root_2",
+    "w_extremum",
+    "w_extremum_1",
+    "w_extremum_2",
+    "prepare",
+    "run_exact",
+]

@@ -20,24 +20,24 @@ MAX_EVENTS = 50_000_000
 MAX_ZERO_LENGTH = 64
 
 #: lengths of the stack scratch (numba needs them as literal globals)
-_NZ_MAX = 2 * L.NMAX + 2
-_NB_MAX = _NZ_MAX + 3
-_NB_MAX2 = _NB_MAX * _NB_MAX
-_NZB_MAX = _NZ_MAX * _NB_MAX
-_NB_MAX_2 = 2 * _NB_MAX
-_NMAX6 = 6 * L.NMAX
-_DDC = 4 * (L.NMAX + 2)
+NZ_MAX = 2 * L.NMAX + 2
+NB_MAX = NZ_MAX + 3
+NB_MAX2 = NB_MAX * NB_MAX
+NZB_MAX = NZ_MAX * NB_MAX
+NB_MAX_2 = 2 * NB_MAX
+NMAX6 = 6 * L.NMAX
+DDC = 4 * (L.NMAX + 2)
 
 FREE, STICK, CONTACT = 0, 1, 2
-_RECIP = (0.0,) + tuple(1.0 / k for k in range(1, 24))  # 1 / k
-_RFACT = tuple(1.0 / math.factorial(k) for k in range(20))  # 1 / k!
+RECIP = (0.0,) + tuple(1.0 / k for k in range(1, 24))  # 1 / k
+RFACT = tuple(1.0 / math.factorial(k) for k in range(20))  # 1 / k!
 # event kinds; an event happens where g goes from <= 0 to > 0
 EV_PLUS, EV_MINUS, EV_VSTOP, EV_YEXT, EV_REL_NEG, EV_REL_POS, EV_WALL_REL, EV_WEXT = range(8)
 # regenerative cut: the tool leaves (in the cut) or re-enters (out of it) where the chip
 # thickness h = S - W crosses zero; EV_HEXT = h' guards a graze of h = 0 inside a step
 EV_CUT, EV_HEXT = 8, 9
 N_EV = 10
-# the segment's description ``seg``: see :func:`_g`
+# the segment's description ``seg``: see :func:`g_value`
 SEG_SIZE = 18
 SEG_KRB = 11  # Kr b in the cut, 0 out of it (and for harmonic forcing)
 SEG_S = 12  # S(tau) = seg[12] + seg[13] tau + seg[14] tau^2 + seg[15] tau^3, the surface

@@ -10,7 +10,7 @@ from numba import njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact.consts import SEG_S
-from boringbar.kernels.exact.propagate import _eval, _force, _freq, _phis
+from boringbar.kernels.exact.propagate import cut_force, freq_rhs, phis, state_at
 
 
 @njit(cache=True)
@@ -25,14 +25,14 @@ def cut_tables(prep, p, H):
     a whole step then needs no exponential."""
     lam = prep["lam"]
     R, nz = lam.shape
-    taus = [x * H for x in _GL_X] + [H]
+    taus = [x * H for x in GL_X] + [H]
     tabE = np.zeros((R, 5, nz), complex)
     tabP = np.zeros((R, 5, 4, nz), complex)
     krb = p[L.KR_B]
     for r in range(R):
         for i, tau in enumerate(taus):
             for k in range(nz):
-                ex, *ph = _phis(complex(lam[r, k] * tau))
+                ex, *ph = phis(complex(lam[r, k] * tau))
                 tabE[r, i, k] = ex
                 if r >= prep["nreg"]:
                     for j in range(4):
@@ -42,7 +42,7 @@ def cut_tables(prep, p, H):
 
 
 @njit(cache=True, inline="always")
-def _hermite_at(t0, p0, d0, t1, p1, d1, x0, cubic):
+def hermite_at(t0, p0, d0, t1, p1, d1, x0, cubic):
     """The cubic Hermite interpolant on [t0, t1] of values p0, p1 and slopes d0 (right of
     t0), d1 (left of t1), as a cubic in x - x0 (x = t' - t0): its 4 coefficients.
     ``cubic`` false: the straight line through p0, p1."""
@@ -59,25 +59,25 @@ def _hermite_at(t0, p0, d0, t1, p1, d1, x0, cubic):
 
 
 #: Gauss-Legendre nodes and weights on [0, 1], 4 points
-_GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179242816,
+GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179242816,
          0.5 + 0.4305681557970263)
-_GL_W = (0.17392742256872692, 0.3260725774312731, 0.3260725774312731, 0.17392742256872692)
+GL_W = (0.17392742256872692, 0.3260725774312731, 0.3260725774312731, 0.17392742256872692)
 
 
 @njit(cache=True, inline="always")
-def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, stick, kappa,
+def quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, stick, kappa,
               sr, acc, steady):
     """Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of
-    :func:`_integrals`' ``out``) by 4-point Gauss-Legendre: error O((b - a)^9) per step,
+    :func:`segment_integrals`' ``out``) by 4-point Gauss-Legendre: error O((b - a)^9) per step,
     far below the scheme's O(H^4).  Returns the largest force at the nodes.  (A whole
     step, from the tables, is written out in :func:`_exact`.)"""
     fmax = 0.0
     hh = b - a
     for g in range(4):
-        tau = a + _GL_X[g] * hh
-        wg = _GL_W[g] * hh
-        _eval(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
-        f = _force(seg, tau, X, n, mk, 0.0, 0.0)
+        tau = a + GL_X[g] * hh
+        wg = GL_W[g] * hh
+        state_at(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X)
+        f = cut_force(seg, tau, X, n, mk, 0.0, 0.0)
         fmax = max(fmax, f)
         w = 0.0
         wd = 0.0
@@ -100,12 +100,12 @@ def _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, lvis, cvis, s
             pdv = 0.0
             for i in range(n):
                 pdv += mk[4, i] * X[n + i]
-            acc[5] += wg * (1.0 - sr) * _freq(X, f, n, mk, kappa) * pdv
+            acc[5] += wg * (1.0 - sr) * freq_rhs(X, f, n, mk, kappa) * pdv
     return fmax
 
 
 @njit(cache=True)
-def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol, node):
+def add_knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol, node):
     """Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1); one closer than
     ``ttol`` to the last knot replaces its value and W'+.  Drops knots no revolution
     needs any more when the store is full, and doubles it if that frees less than half.
@@ -146,7 +146,7 @@ def _knot(kn, nk, ip, t, Xm, Xp, n, mk, ttol, node):
 
 
 @njit(cache=True, inline="always")
-def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before, tau_d, seg,
+def surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before, tau_d, seg,
                    j_now, m_rev, cubic):
     """The surface min_k [k h_m + W(t + tau - k tau)] from ``t`` as one cubic in tau, into
     seg[SEG_S:SEG_S + 4], and the time (<= ``t_end``) up to which it is one cubic: the next
@@ -174,7 +174,7 @@ def _surface_piece(t, t_end, ttol, kn, nk, ip, sc, nrev, nr_eff, feed, w_before,
             x0 = (t - kt) - kn[i, 0]
             if j_now >= 0 and kn[i, 4] == j_now - k * m_rev:
                 x0 = 0.0
-            c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+            c0, c1, c2, c3 = hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
                                          kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
             sc[k, 0] = k * feed + c0
             sc[k, 1] = c1

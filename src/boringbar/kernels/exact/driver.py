@@ -12,13 +12,6 @@ from numba import carray, njit
 
 from boringbar.kernels import layout as L
 from boringbar.kernels.exact.consts import (
-    _DDC,
-    _NB_MAX,
-    _NB_MAX2,
-    _NB_MAX_2,
-    _NMAX6,
-    _NZ_MAX,
-    _NZB_MAX,
     CONTACT,
     CP_DT_OUT,
     CP_E,
@@ -52,6 +45,7 @@ from boringbar.kernels.exact.consts import (
     CQ_TAU,
     CQ_TTOL,
     CQ_W0,
+    DDC,
     EV_CUT,
     EV_MINUS,
     EV_PLUS,
@@ -64,6 +58,12 @@ from boringbar.kernels.exact.consts import (
     MAX_EVENTS,
     MAX_ZERO_LENGTH,
     N_EV,
+    NB_MAX,
+    NB_MAX2,
+    NB_MAX_2,
+    NMAX6,
+    NZ_MAX,
+    NZB_MAX,
     RO_K_REC,
     RO_MAX_ABS_W,
     RO_MAX_AUX,
@@ -88,10 +88,10 @@ from boringbar.kernels.exact.consts import (
     SV_REGEN,
     SV_SIZE,
 )
-from boringbar.kernels.exact.cut import _knot, cut_tables, history_step
+from boringbar.kernels.exact.cut import add_knot, cut_tables, history_step
 from boringbar.kernels.exact.prepare import prepare
-from boringbar.kernels.exact.propagate import _force, _freq, _sizes
-from boringbar.kernels.exact.segment import _close_segment, _search, _start_segment
+from boringbar.kernels.exact.propagate import const_sizes, cut_force, freq_rhs
+from boringbar.kernels.exact.segment import close_segment, search_segment, start_segment
 from boringbar.kernels.stack import stack_ptr
 from boringbar.kernels.views import borrow
 
@@ -200,13 +200,13 @@ def _initial_regime(X, f_t0, n, mk, cp, rs):
     elif abs(y) >= half:
         wall = 1.0 if y > 0.0 else -1.0
         y = wall * half
-        F = _freq(X, f_t0, n, mk, cp[CP_KWALL])
+        F = freq_rhs(X, f_t0, n, mk, cp[CP_KWALL])
         if wall * F <= fs:
             mode = CONTACT
         elif fc > 0.0:
             sdir = -wall
     elif fc > 0.0:
-        F = _freq(X, f_t0, n, mk, cp[CP_KSTICK])
+        F = freq_rhs(X, f_t0, n, mk, cp[CP_KSTICK])
         if abs(F) <= fs:
             mode = STICK
         else:
@@ -273,7 +273,7 @@ def _apply_event(ev_kind, t, steady, X, f_ev, n, mk, cp, rs, imp, stick, met):
             mode, sdir, wall = _at_wall(X, f_ev, w_, n, mk, cp[CP_KWALL], fs, fc)
     elif ev_kind == EV_VSTOP:
         yd = 0.0
-        F = _freq(X, f_ev, n, mk, cp[CP_KSTICK])
+        F = freq_rhs(X, f_ev, n, mk, cp[CP_KSTICK])
         if abs(F) <= fs:
             mode = STICK
             sdir = 0.0
@@ -434,30 +434,30 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     nz = lam.shape[1]
     nb = nz + 3
     ball = case == L.BALL
-    mk = _zeros2(stack_ptr(_NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
-    ddc = _zeros2(stack_ptr(_DDC, np.float64), 4, n + 2)
+    mk = _zeros2(stack_ptr(NMAX6, np.float64), 6, n)  # M, K, C, psi_L, psi_d, psi_a
+    ddc = _zeros2(stack_ptr(DDC, np.float64), 4, n + 2)
     cp = _zeros(stack_ptr(CP_SIZE, np.float64), CP_SIZE)
     _bar(p, n, mk, ddc, cp, t0, t_steady, dt_out, h, rec_dt)
     f0 = p[L.F0]
     om = p[L.OMEGA]
 
     # scratch
-    X = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
-    Xa = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
-    Xd = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
-    q0 = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
-    qs = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
-    qg = _zeros(stack_ptr(_NZ_MAX, np.complex128), nz)
-    me = _zeros2(stack_ptr(_NB_MAX_2, np.complex128), 2, nb)  # mu, exp(mu T)
-    G = _zeros2(stack_ptr(_NB_MAX2, np.complex128), nb, nb)
-    Cx = _zeros2(stack_ptr(_NZB_MAX, np.complex128), nz, nb)
-    cf = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
-    ca = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
-    cb = _zeros(stack_ptr(_NB_MAX, np.complex128), nb)
+    X = _zeros(stack_ptr(NZ_MAX, np.float64), nz)
+    Xa = _zeros(stack_ptr(NZ_MAX, np.float64), nz)
+    Xd = _zeros(stack_ptr(NZ_MAX, np.float64), nz)
+    q0 = _zeros(stack_ptr(NZ_MAX, np.complex128), nz)
+    qs = _zeros(stack_ptr(NZ_MAX, np.complex128), nz)
+    qg = _zeros(stack_ptr(NZ_MAX, np.complex128), nz)
+    me = _zeros2(stack_ptr(NB_MAX_2, np.complex128), 2, nb)  # mu, exp(mu T)
+    G = _zeros2(stack_ptr(NB_MAX2, np.complex128), nb, nb)
+    Cx = _zeros2(stack_ptr(NZB_MAX, np.complex128), nz, nb)
+    cf = _zeros(stack_ptr(NB_MAX, np.complex128), nb)
+    ca = _zeros(stack_ptr(NB_MAX, np.complex128), nb)
+    cb = _zeros(stack_ptr(NB_MAX, np.complex128), nb)
     out = _zeros(stack_ptr(7, np.float64), 7)
     phj = _zeros(stack_ptr(3, np.complex128), 3)
     seg = _zeros(stack_ptr(SEG_SIZE, np.float64), SEG_SIZE)
-    dX = _zeros(stack_ptr(_NZ_MAX, np.float64), nz)
+    dX = _zeros(stack_ptr(NZ_MAX, np.float64), nz)
     ev_a = _zeros(stack_ptr(N_EV, np.float64), N_EV)
     ev_b = _zeros(stack_ptr(N_EV, np.float64), N_EV)
     ev_s = _zeros(stack_ptr(N_EV, np.float64), N_EV)
@@ -536,17 +536,17 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             ph = cmath.exp(1j * om * t) if om != 0.0 else 1.0 + 0.0j
         ph_next_ok = False
         t_stop = min(t_steady, t_end) if t < t_steady else t_end
-        r, ks, t_seg_end, at_node, j_node, pdu = _start_segment(
+        r, ks, t_seg_end, at_node, j_node, pdu = start_segment(
             w, t, t_stop, ph, n, case, nreg, j_node, borrow(kn), nk, borrow(ip), borrow(sc), cq,
             sv)
         mode = int(rs[RS_MODE])
         steady = t >= t_steady
-        sz = _sizes(ks, n, nz)  # 1, 2: the helpers compiled with constant sizes; 0: generic
-        ev_kind, tau_ev, ph_next, wb, wdb = _search(w, t, r, ks, sz, n, case, mode, ph, sv)
+        sz = const_sizes(ks, n, nz)  # 1, 2: the helpers compiled with constant sizes; 0: generic
+        ev_kind, tau_ev, ph_next, wb, wdb = search_segment(w, t, r, ks, sz, n, case, mode, ph, sv)
 
         # --- close the segment [t, t + T] ----------------------------------------------
         T = tau_ev
-        last_zero_step = _close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu,
+        last_zero_step = close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu,
                                         last_zero_step)
         t_new = t + T if ev_kind >= 0 else t_seg_end
         if ev_kind < 0:
@@ -560,12 +560,12 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
                     kn[nk, 4] = j_node + 1.0
                     nk += 1
                 else:
-                    kn, nk = _knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
+                    kn, nk = add_knot(kn, nk, ip, t, X, X, n, mk, ttol, float(j_node + 1))
             continue
         n_ev += 1
         # the next segment starts at t + T = seg[0] + T, where the event's evaluation was
         ph_next_ok = om != 0.0
-        f_ev = _force(seg, T, X, n, mk, f0, om)  # the tip force at the event
+        f_ev = cut_force(seg, T, X, n, mk, f0, om)  # the tip force at the event
         if T <= 1e-14 * (abs(t) + h):  # no progress: a few ulp of t
             n_zero += 1
             if n_zero > MAX_ZERO_LENGTH:
@@ -582,7 +582,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         _apply_event(ev_kind, t, steady, X, f_ev, n, mk, cp, rs, imp, stick, met)
         t_end = rs[RS_T_END]
         if regen:
-            kn, nk = _knot(kn, nk, ip, t, Xa, X, n, mk, ttol, -1.0)
+            kn, nk = add_knot(kn, nk, ip, t, Xa, X, n, mk, ttol, -1.0)
 
     if rs[RS_MODE] == STICK:
         _stick_interval(t, cp, rs, stick, met)
@@ -595,7 +595,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
 def _at_wall(X, f, w_, n, mk, kappa_wall, fs, fc):
     """Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
     inward (FREE)."""
-    F = _freq(X, f, n, mk, kappa_wall)
+    F = freq_rhs(X, f, n, mk, kappa_wall)
     if w_ * F <= fs:
         return CONTACT, 0.0, w_
     return FREE, (-w_ if fc > 0.0 else 0.0), w_

@@ -1,6 +1,6 @@
 """The exact kernel's event functions and their roots: Hermite starts, the safeguarded
-Newton search (:func:`_root`), W extrema, the ranges that rule steps out and a free
-ball's wall step (:func:`_wall_step`).
+Newton search (:func:`find_root`), W extrema, the ranges that rule steps out and a free
+ball's wall step (:func:`wall_step`).
 """
 
 import math
@@ -22,18 +22,25 @@ from boringbar.kernels.exact.consts import (
     SEG_KRB,
     SEG_S,
 )
-from boringbar.kernels.exact.propagate import _eval, _eval2, _force, _freq, _sizes, _surface
+from boringbar.kernels.exact.propagate import (
+    const_sizes,
+    cut_force,
+    freq_rhs,
+    state_at,
+    state_at2,
+    surface_at,
+)
 from boringbar.kernels.views import borrow, with_len
 
 
 @njit(cache=True, inline="always")
-def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
+def g_value(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
     """Event function ``kind`` at tau on the segment described by ``seg``.
 
     seg = [ts, fb, ud0, vd0, y0, sdir, wall, kappa, fs, half, m, krb, S_0..S_3, cdir, fb / m]
     (SEG_* name the cut's slots and SEG_ACC the last).
     """
-    _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
+    state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
     if kind == EV_WEXT:
         s = 0.0
         for i in range(n):
@@ -45,7 +52,7 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
         for i in range(n):
             w += mk[3, i] * X[i]
             wd += mk[3, i] * X[n + i]
-        sv, sd = _surface(seg, tau)
+        sv, sd = surface_at(seg, tau)
         return seg[SEG_CDIR] * (w - sv) if kind == EV_CUT else sd - wd
     if kind <= EV_YEXT:
         pdu = 0.0
@@ -59,7 +66,7 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
             return y - seg[9] if kind == EV_PLUS else -seg[9] - y
         yd = seg[3] + acc * tau - pdv
         return -seg[5] * yd if kind == EV_VSTOP else yd
-    F = _freq(X, _force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
+    F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
     if kind == EV_REL_NEG:
         return F - seg[8]
     if kind == EV_REL_POS:
@@ -69,11 +76,11 @@ def _g(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, n, mk, f0, om):
 
 @njit(cache=True, inline="always")
 def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
-    """Event function ``kind`` (see :func:`_g`), its time derivative and its second
+    """Event function ``kind`` (see :func:`g_value`), its time derivative and its second
     derivative at tau: the second only where it comes free (the walls and the cut's h),
     NaN elsewhere."""
     ts = seg[0]
-    _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd)
+    state_at2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd)
     if kind == EV_WEXT:
         g = 0.0
         dg = 0.0
@@ -89,7 +96,7 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
             w += mk[3, i] * X[i]
             wd += mk[3, i] * X[n + i]
             wdd += mk[3, i] * Xd[n + i]
-        sv, sd = _surface(seg, tau)
+        sv, sd = surface_at(seg, tau)
         sdd = 2.0 * seg[SEG_S + 2] + 6.0 * seg[SEG_S + 3] * tau
         if kind == EV_CUT:
             return (seg[SEG_CDIR] * (w - sv), seg[SEG_CDIR] * (wd - sd),
@@ -123,7 +130,7 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
         for i in range(n):
             w += mk[3, i] * X[i]
             wd += mk[3, i] * X[n + i]
-        sv, sd = _surface(seg, tau)
+        sv, sd = surface_at(seg, tau)
         f += seg[SEG_KRB] * (sv - w)
         fd += seg[SEG_KRB] * (sd - wd)
     F = 0.0
@@ -141,10 +148,10 @@ def _gd(kind, tau, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om):
 
 
 @njit(cache=True, inline="always")
-def _hermite(a, b, p0, p1, d0, d1, order):
+def hermite(a, b, p0, p1, d0, d1, order):
     """Where the cubic Hermite interpolant of values p0, p1 and slopes d0, d1 on [a, b]
     (order 0), or its derivative (order 1), changes sign: a starting point for
-    :func:`_root`, found by a few safeguarded Newton steps on the cubic (no
+    :func:`find_root`, found by a few safeguarded Newton steps on the cubic (no
     exponentials)."""
     h = b - a
     m0 = d0 * h
@@ -186,13 +193,13 @@ def _hermite(a, b, p0, p1, d0, d1, order):
 
 
 @njit(cache=True, inline="always")
-def _hermite5(a, b, p0, p1, d0, d1, e0, e1, order):
+def hermite5(a, b, p0, p1, d0, d1, e0, e1, order):
     """Where the quintic Hermite interpolant of values p0, p1, slopes d0, d1 and second
     derivatives e0, e1 on [a, b] (order 0), or its derivative (order 1, given d0 d1 < 0),
-    changes sign: the cubic's (:func:`_hermite`) refined by safeguarded Newton on the
+    changes sign: the cubic's (:func:`hermite`) refined by safeguarded Newton on the
     quintic.  Its error is O(h^6) (order 0) or O(h^5) (order 1) instead of O(h^4) or
     O(h^3): the root search then usually accepts its first evaluation."""
-    x0 = _hermite(a, b, p0, p1, d0, d1, order)
+    x0 = hermite(a, b, p0, p1, d0, d1, order)
     h = b - a
     m0 = d0 * h
     m1 = d1 * h
@@ -239,7 +246,7 @@ def _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n
     Newton step below that, or a step whose own error, |g''| s^2 / (2 |g'|) to leading
     order, is below a quarter of that (where g'' comes free: usually one evaluation
     fewer).  Returns the end on gb's side (the event has happened).  X and Xd are seen
-    with length ``nz``, constant in the specialisations (:func:`_root_any`)."""
+    with length ``nz``, constant in the specialisations (:func:`find_root_any`)."""
     # borrowed: not reference-counted in this call's inlined helpers (kernels/views.py)
     seg = borrow(seg)
     q0 = borrow(q0)
@@ -294,39 +301,43 @@ def _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n
 
 
 @njit(cache=True)
-def _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
+def find_root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
     """:func:`_root_body` for any bar."""
     return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
                       f0, om, c0, X.shape[0])
 
 
 @njit(cache=True)
-def _root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0):
+def find_root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0):
     """:func:`_root_body` for one mode and its conjugate pair (n = 1, nz = 2, ks = 2)."""
     return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 1, mk, f0,
                       om, c0, 2)
 
 
 @njit(cache=True)
-def _root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0):
+def find_root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0):
     """:func:`_root_body` for two modes in conjugate pairs (n = 2, nz = 4, ks = 2)."""
     return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 2, mk, f0,
                       om, c0, 4)
 
 
 @njit(cache=True, inline="always")
-def _root_any(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0):
-    """:func:`_root`, or its compilation with the sizes constant where they fit (the
+def find_root_any(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om,
+                  c0):
+    """:func:`find_root`, or its compilation with the sizes constant where they fit (the
     ball or solid bar with one or two modes): the same operations, unrolled."""
     # a run-time kind: numba types the constants EV_* as literals and would compile each
     # function once per event kind passed as a constant (five times, 2 minutes cold)
     kind = kind + 0
-    sz = _sizes(ks, n, X.shape[0])
+    sz = const_sizes(ks, n, X.shape[0])
     if sz == 1:
-        return _root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0)
+        return find_root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0,
+                           om, c0)
     if sz == 2:
-        return _root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0, om, c0)
-    return _root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om, c0)
+        return find_root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0,
+                           om, c0)
+    return find_root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0,
+                     om, c0)
 
 
 @njit(cache=True, inline="always")
@@ -356,7 +367,7 @@ def _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X
     tol = 2e-5 * h
     w = 0.0
     for _ in range(100):
-        _eval2(r, q0, seg, c, om, lam, V, ks, Z, D, bq, q, X, Xd)
+        state_at2(r, q0, seg, c, om, lam, V, ks, Z, D, bq, q, X, Xd)
         w = 0.0
         wd = 0.0
         wdd = 0.0
@@ -381,39 +392,39 @@ def _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X
 
 
 @njit(cache=True)
-def _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
+def w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
     """:func:`_w_extremum_body` for any bar."""
     return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n,
                             mk, om, X.shape[0])
 
 
 @njit(cache=True)
-def _w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om):
+def w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om):
     """:func:`_w_extremum_body` for n = 1, nz = 2, ks = 2."""
     return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 1,
                             mk, om, 2)
 
 
 @njit(cache=True)
-def _w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om):
+def w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om):
     """:func:`_w_extremum_body` for n = 2, nz = 4, ks = 2."""
     return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 2,
                             mk, om, 4)
 
 
 @njit(cache=True, inline="always")
-def _w_extremum_any(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
-    """:func:`_w_extremum`, or a compilation with the sizes constant (see :func:`_root_any`)."""
-    sz = _sizes(ks, n, X.shape[0])
+def w_extremum_any(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om):
+    """:func:`w_extremum`, or a compilation with the sizes constant (see :func:`find_root_any`)."""
+    sz = const_sizes(ks, n, X.shape[0])
     if sz == 1:
-        return _w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
+        return w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
     if sz == 2:
-        return _w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
-    return _w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om)
+        return w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, om)
+    return w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, om)
 
 
 @njit(cache=True, inline="always")
-def _quad_range(p, d, dd, s):
+def quad_range(p, d, dd, s):
     """(lowest, highest) value of p + d x + dd x^2 / 2 on [0, s]."""
     p1 = p + s * (d + 0.5 * dd * s)
     lo = min(p, p1)
@@ -463,7 +474,7 @@ def _cubic_range(p0, p1, m0, m1):
 
 
 @njit(cache=True, inline="always")
-def _may_graze(a, b, ev_a, ev_b, half, b4):
+def may_graze(a, b, ev_a, ev_b, half, b4):
     """Whether y may reach a wall inside [a, b]: the cubic Hermite interpolant of y from
     y, y' at the ends, widened by its error bound b4 h^4 / 384 (twice, for safety), comes
     within reach of a wall.  False guarantees that no wall event lies in the step (and
@@ -483,7 +494,7 @@ def _may_graze(a, b, ev_a, ev_b, half, b4):
 
 
 @njit(cache=True, inline="always")
-def _w_may_exceed(h, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w):
+def w_may_exceed(h, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w):
     """Whether W may go above max_w, below min_w or beyond max_abs_w in magnitude inside a
     step of length h: the cubic Hermite interpolant of W, W' at the ends, widened by twice
     its error bound bw4 h^4 / 384 (bw4 bounds |W^(4)| on the step)."""
@@ -495,7 +506,7 @@ def _w_may_exceed(h, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w):
 
 
 @njit(cache=True)
-def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, ks, Z, D, bq, qs,
+def wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, ks, Z, D, bq, qs,
                dX, Xd, n, mk, f0, om, ydd_a, ydd_b):
     """The first wall or friction-switch event of a FREE ball in [a, b], from the event
     functions at the ends and y'' there (NaN: not known): (kind, time), kind -1 if none."""
@@ -527,19 +538,19 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         dmin = -max(ev_a[EV_PLUS], ev_a[EV_MINUS], ev_b[EV_PLUS], ev_b[EV_MINUS])
         near = dmin <= reach
     if near:
-        te = _root_any(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
+        te = find_root_any(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
                        V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
-                       _hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
+                       hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
                                 ev_b[EV_YEXT], 1))
-        gp = _g(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
+        gp = g_value(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
         gm = -2.0 * half - gp
         for kk in (EV_PLUS, EV_MINUS):
             ge = gp if kk == EV_PLUS else gm
             if ev_a[kk] <= 0.0 < ge:
                 sg = 1.0 if kk == EV_PLUS else -1.0
-                tr = _root_any(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D, bq,
+                tr = find_root_any(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z, D, bq,
                                qs, dX, Xd, n, mk, f0, om,
-                               _hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
+                               hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT], 0.0,
                                         0))
                 if kind < 0 or tr < best:
                     best = tr
@@ -549,9 +560,9 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
                 ge = gp if kk == EV_PLUS else gm
                 if ge <= 0.0 < ev_b[kk]:
                     sg = 1.0 if kk == EV_PLUS else -1.0
-                    tr = _root_any(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
+                    tr = find_root_any(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
                                    Z, D, bq, qs, dX, Xd, n, mk, f0, om,
-                                   _hermite(te, b, ge, ev_b[kk], 0.0,
+                                   hermite(te, b, ge, ev_b[kk], 0.0,
                                             sg * ev_b[EV_YEXT], 0))
                     if kind < 0 or tr < best:
                         best = tr
@@ -566,11 +577,11 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
         gme = ev_b[EV_MINUS]
         yde = ev_b[EV_YEXT]
         if watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP]:
-            best = _root_any(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
+            best = find_root_any(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r,
                              q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
             kind = EV_VSTOP
             bend = best
-            gpe = _g(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk,
+            gpe = g_value(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk,
                      f0, om)
             gme = -2.0 * half - gpe
             yde = 0.0
@@ -579,12 +590,12 @@ def _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r, q0, lam, V, k
             if ev_a[kk] <= 0.0 < ge:
                 sg = 1.0 if kk == EV_PLUS else -1.0
                 if bend == b and ydd_a == ydd_a and ydd_b == ydd_b:  # y'' known at both ends
-                    c0 = _hermite5(a, b, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
+                    c0 = hermite5(a, b, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
                                    sg * ydd_a, sg * ydd_b, 0)
                 else:
-                    c0 = _hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
+                    c0 = hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde,
                                   0)
-                tr = _root_any(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
+                tr = find_root_any(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
                                D, bq, qs, dX, Xd, n, mk, f0, om, c0)
                 if kind < 0 or tr <= best:
                     best = tr

@@ -136,7 +136,7 @@ def _pair_order(lr):
 
 
 @njit(cache=True, inline="always")
-def _basis(lam, r, om, nz, mu):
+def basis_exponents(lam, r, om, nz, mu):
     """mu = (lambda_r, i Omega, -i Omega, 0): the exponents of a segment's basis functions."""
     for k in range(nz):
         mu[k] = lam[r, k]
@@ -227,7 +227,7 @@ def _finish(p, lam, V, Vi, Z, B):
     mu = np.zeros(nb, np.complex128)
     isum = np.zeros((R, nb, nb), np.complex128)
     for r in range(R):
-        _basis(lam, r, om, nz, mu)
+        basis_exponents(lam, r, om, nz, mu)
         for a in range(nb):
             for b in range(nb):
                 sab = mu[a] + mu[b]

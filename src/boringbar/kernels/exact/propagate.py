@@ -1,5 +1,5 @@
-"""The closed form on a segment: the state at any time (:func:`_eval`), the forces, and the
-segment's integrals of products of exponentials (:func:`_integrals`).
+"""The closed form on a segment: the state at any time (:func:`state_at`), the forces, and the
+segment's integrals of products of exponentials (:func:`segment_integrals`).
 """
 
 import cmath
@@ -7,13 +7,13 @@ import math
 
 from numba import njit
 
-from boringbar.kernels.exact.consts import _RECIP, _RFACT, SEG_ACC, SEG_KRB, SEG_S
-from boringbar.kernels.exact.prepare import _basis
+from boringbar.kernels.exact.consts import RECIP, RFACT, SEG_ACC, SEG_KRB, SEG_S
+from boringbar.kernels.exact.prepare import basis_exponents
 from boringbar.kernels.views import borrow
 
 
 @njit(cache=True, inline="always")
-def _nq(nz, ks):
+def nq(nz, ks):
     """How many eigen-coordinates are evaluated: nz, or nz / 2 when ks = 2 (conjugate
     pairs, the first of each).  A loop over range(0, nz, ks) would cost an integer
     division per loop (its trip count), several per grid step."""
@@ -21,7 +21,7 @@ def _nq(nz, ks):
 
 
 @njit(cache=True, inline="always")
-def _phis(x):
+def phis(x):
     """(e^x, phi_1(x), .., phi_4(x)), phi_k(x) = sum_m x^m / (m + k)!: the Taylor series of
     phi_4 then phi_k = 1/k! + x phi_{k+1} for |x| < 1 (no cancellation), the recurrence
     phi_{k+1} = (phi_k - 1/k!) / x from e^x otherwise (each step divides the error by
@@ -29,7 +29,7 @@ def _phis(x):
     if x.real * x.real + x.imag * x.imag < 1.0:
         p4 = 0.0 + 0.0j
         for m in range(14, -1, -1):
-            p4 = p4 * x + _RFACT[m + 4]
+            p4 = p4 * x + RFACT[m + 4]
         p3 = 1.0 / 6.0 + x * p4
         p2 = 0.5 + x * p3
         p1 = 1.0 + x * p2
@@ -42,7 +42,7 @@ def _phis(x):
 
 
 @njit(cache=True, inline="always")
-def _surface(seg, tau):
+def surface_at(seg, tau):
     """S(tau) and S'(tau): the cut surface's cubic on the segment (docs/model.md, section 4)."""
     s1 = seg[SEG_S + 1]
     s2 = seg[SEG_S + 2]
@@ -52,7 +52,7 @@ def _surface(seg, tau):
 
 
 @njit(cache=True, inline="always")
-def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
+def state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
     """X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg[0]);
     returns the forcing phasor e^{i Omega (ts + tau)}.
 
@@ -68,17 +68,17 @@ def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
         c1 = seg[SEG_S + 1] * tau * tau
         c2 = 2.0 * seg[SEG_S + 2] * tau ** 3
         c3 = 6.0 * seg[SEG_S + 3] * tau ** 4
-        for kq in range(_nq(nz, ks)):
+        for kq in range(nq(nz, ks)):
             k = kq * ks
-            ex, p1, p2, p3, p4 = _phis(lam[r, k] * tau)
+            ex, p1, p2, p3, p4 = phis(lam[r, k] * tau)
             q[k] = q0[k] * ex + krb * bq[r, k] * (c0 * p1 + c1 * p2 + c2 * p3 + c3 * p4)
     else:
-        for kq in range(_nq(nz, ks)):
+        for kq in range(nq(nz, ks)):
             k = kq * ks
             q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for kq in range(_nq(nz, ks)):
+        for kq in range(nq(nz, ks)):
             k = kq * ks
             s += (V[r, j, k] * q[k]).real
         X[j] = s
@@ -86,31 +86,31 @@ def _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
 
 
 @njit(cache=True, inline="always")
-def _from_q(r, q, ph, fb, Z, D, V, ks, X):
+def from_q(r, q, ph, fb, Z, D, V, ks, X):
     """X from the eigen-coordinates q and the forcing phasor ph = e^{i Omega t}."""
     nz = X.shape[0]
     for j in range(nz):
         s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for kq in range(_nq(nz, ks)):
+        for kq in range(nq(nz, ks)):
             k = kq * ks
             s += (V[r, j, k] * q[k]).real
         X[j] = s
 
 
 @njit(cache=True, inline="always")
-def _force(seg, tau, X, n, mk, f0, om):
+def cut_force(seg, tau, X, n, mk, f0, om):
     """The force at the tip at ts + tau: F0 sin(Omega t), or Kr b (S(tau) - W) in a cut."""
     f = f0 * math.sin(om * (seg[0] + tau))
     if seg[SEG_KRB] != 0.0:
         w = 0.0
         for i in range(n):
             w += mk[3, i] * X[i]
-        f += seg[SEG_KRB] * (_surface(seg, tau)[0] - w)
+        f += seg[SEG_KRB] * (surface_at(seg, tau)[0] - w)
     return f
 
 
 @njit(cache=True, inline="always")
-def _freq(X, f, n, mk, kappa):
+def freq_rhs(X, f, n, mk, kappa):
     """The force that carries the ball with the bar, psi_d . a_0 / kappa (N), under the
     tip force f."""
     s = 0.0
@@ -120,22 +120,22 @@ def _freq(X, f, n, mk, kappa):
 
 
 @njit(cache=True, inline="always")
-def _eval2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
-    """X and X' at ts + tau on the segment (see :func:`_eval`); in a cut
+def state_at2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd):
+    """X and X' at ts + tau on the segment (see :func:`state_at`); in a cut
     q' = lambda q + bq Kr b S(tau)."""
     nz = X.shape[0]
-    ph = _eval(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
-    sin_ = seg[SEG_KRB] * _surface(seg, tau)[0]
+    ph = state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X)
+    sin_ = seg[SEG_KRB] * surface_at(seg, tau)[0]
     for j in range(nz):
         sd = om * (Z[r, j] * ph).real
-        for kq in range(_nq(nz, ks)):
+        for kq in range(nq(nz, ks)):
             k = kq * ks
             sd += (V[r, j, k] * (q[k] * lam[r, k] + sin_ * bq[r, k])).real
         Xd[j] = sd
 
 
 @njit(cache=True, inline="always")
-def _sizes(ks, n, nz):
+def const_sizes(ks, n, nz):
     """Which compilation with constant sizes fits a regime: 1 (one mode, nz = 2) or 2 (two
     modes, nz = 4), each in conjugate pairs (ks = 2): the ball and the solid bar; 0 for any
     other (a TMD, an overdamped mode, three or more modes), which takes the generic code."""
@@ -152,7 +152,7 @@ def _phi1s(z, T, z2):
     top = 11 if z2 > 9e-4 else (8 if z2 > 2.5e-5 else 6)
     s = 0.0 + 0.0j
     for k in range(top, 1, -1):
-        s = (s * z + 1.0) * _RECIP[k]
+        s = (s * z + 1.0) * RECIP[k]
     s = s * z + 1.0
     return T * s
 
@@ -167,10 +167,10 @@ def _phij(z, phj):
     f1 = 0.0 + 0.0j
     f2 = 0.0 + 0.0j
     for mm in range(20):
-        f0 += term * _RECIP[mm + 1]
-        f1 += term * _RECIP[mm + 2]
-        f2 += term * _RECIP[mm + 3]
-        term = term * z * _RECIP[mm + 1]
+        f0 += term * RECIP[mm + 1]
+        f1 += term * RECIP[mm + 2]
+        f2 += term * RECIP[mm + 3]
+        term = term * z * RECIP[mm + 1]
         if term.real * term.real + term.imag * term.imag < 1e-36:
             break
     phj[0] = f0
@@ -239,7 +239,7 @@ def _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, 
     p1 = seg[3]
     p2 = 0.5 * seg[SEG_ACC]
     nb = nz + 3
-    _basis(lam, r, om, nz, mu)
+    basis_exponents(lam, r, om, nz, mu)
     # exp(conj z) = conj(exp(z)) exactly: a conjugate pair's second exponential and the
     # forcing's -i Omega are conjugates, exp(0) = 1
     for k in range(nz):
@@ -362,7 +362,7 @@ def _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, 
 
 
 @njit(cache=True)
-def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
+def segment_integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
                me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj):
     """:func:`_integrals_body` for any bar, regime and basis (nz = lam.shape[1])."""
     _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
@@ -370,7 +370,7 @@ def _integrals(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick
 
 
 @njit(cache=True)
-def _integrals_1(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
+def segment_integrals_1(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
                  me, G, Cx, cf, ca, cb, out, isum, level, seg, phj):
     """:func:`_integrals_body` for one mode and its conjugate pair (n = 1, nz = 2, ks = 2)."""
     _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 1, mk, lvis, cvis, stick_k, sr,
@@ -378,7 +378,7 @@ def _integrals_1(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_
 
 
 @njit(cache=True)
-def _integrals_2(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
+def segment_integrals_2(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
                  me, G, Cx, cf, ca, cb, out, isum, level, seg, phj):
     """:func:`_integrals_body` for two modes in conjugate pairs (n = 2, nz = 4, ks = 2)."""
     _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 2, mk, lvis, cvis, stick_k, sr,

@@ -1,6 +1,6 @@
-"""One segment of the exact kernel, between two events: its start (:func:`_start_segment`),
-the grid search for its first event with the outputs on the way (:func:`_search`) and its
-flows (:func:`_close_segment`); the pieces are inlined into the driver.
+"""One segment of the exact kernel, between two events: its start (:func:`start_segment`),
+the grid search for its first event with the outputs on the way (:func:`search_segment`) and its
+flows (:func:`close_segment`); the pieces are inlined into the driver.
 """
 
 import cmath
@@ -81,29 +81,29 @@ from boringbar.kernels.exact.consts import (
     SV_WHOLE,
     SV_YDD,
 )
-from boringbar.kernels.exact.cut import _GL_W, _GL_X, _hermite_at, _quad_cut, _surface_piece
+from boringbar.kernels.exact.cut import GL_W, GL_X, hermite_at, quad_cut, surface_piece
 from boringbar.kernels.exact.events import (
     NSUB,
-    _g,
-    _hermite,
-    _hermite5,
-    _may_graze,
-    _quad_range,
-    _root_any,
-    _w_extremum_any,
-    _w_may_exceed,
-    _wall_step,
+    find_root_any,
+    g_value,
+    hermite,
+    hermite5,
+    may_graze,
+    quad_range,
+    w_extremum_any,
+    w_may_exceed,
+    wall_step,
 )
 from boringbar.kernels.exact.propagate import (
-    _eval,
-    _force,
-    _freq,
-    _from_q,
-    _integrals,
-    _integrals_1,
-    _integrals_2,
-    _nq,
-    _surface,
+    cut_force,
+    freq_rhs,
+    from_q,
+    nq,
+    segment_integrals,
+    segment_integrals_1,
+    segment_integrals_2,
+    state_at,
+    surface_at,
 )
 from boringbar.kernels.views import with_len
 
@@ -116,11 +116,11 @@ def _grid_point(r, lev, qg, eh, phg, rot, fb, Z, D, V, ks, X, ev, b, seg, mode, 
     end b and (if ``ydd_on``) y'' and W'' there (else NaN).  X is seen with length ``nz``:
     the kernel inlines this with n, ks and nz constant for one and two modes."""
     X = with_len(X, nz)
-    for kq in range(_nq(nz, ks)):
+    for kq in range(nq(nz, ks)):
         k = kq * ks
         qg[k] = qg[k] * eh[r, lev, k]
     phg = phg * rot
-    _from_q(r, qg, phg, fb, Z, D, V, ks, X)
+    from_q(r, qg, phg, fb, Z, D, V, ks, X)
     _events(ev, X, b, seg, mode, n, mk, f0, om)
     if ydd_on:
         ydd, wdd = _ydd(X, f0 * phg.imag, fb, acc, ddc, n)
@@ -193,7 +193,7 @@ def _cut_segment(t, t_stop, j_node, kn, nk, ip, sc, seg, cq, rs):
     from_node = abs(t - (t0 + j_node * hh_)) <= ttol
     if rs[RS_FIRST_ZERO] < 0.0:
         # one revolution (the minimum until the first zero): written out, as
-        # _surface_piece's k = 1 (no call: see the whole step below)
+        # surface_piece's k = 1 (no call: see the whole step below)
         for k in range(1, nrev + 1):
             kt = k * tau_d
             i = ip[k]
@@ -210,7 +210,7 @@ def _cut_segment(t, t_stop, j_node, kn, nk, ip, sc, seg, cq, rs):
             x0 = (t - tau_d) - kn[i, 0]
             if from_node and kn[i, 4] == j_node - m_rev:
                 x0 = 0.0
-            c0, c1, c2, c3 = _hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
+            c0, c1, c2, c3 = hermite_at(kn[i, 0], kn[i, 1], kn[i, 3], kn[i + 1, 0],
                                          kn[i + 1, 1], kn[i + 1, 2], x0, cubic)
             seg[SEG_S] = feed + c0
             seg[SEG_S + 1] = c1
@@ -222,7 +222,7 @@ def _cut_segment(t, t_stop, j_node, kn, nk, ip, sc, seg, cq, rs):
                 t_seg_end = tn
                 at_node = False
     else:
-        t_piece = _surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
+        t_piece = surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
                                  w_before, tau_d, seg, j_node if from_node else -1,
                                  m_rev, cubic)
         if t_piece < t_seg_end:
@@ -288,7 +288,7 @@ def _level(ya, yda, ydd_a, wa, wda, wdd_a, b3y, b3w, ylim, wmar, max_w, min_w, h
     lev = 0
     for lv in range(1, top + 1):
         hs = hl[lv]
-        lo, hi = _quad_range(ya, yda, ydd_a, hs)
+        lo, hi = quad_range(ya, yda, ydd_a, hs)
         e3 = b3y * hs * hs * hs / 6.0
         if not (hi + e3 < ylim and lo - e3 > -ylim):
             break
@@ -298,7 +298,7 @@ def _level(ya, yda, ydd_a, wa, wda, wdd_a, b3y, b3w, ylim, wmar, max_w, min_w, h
             if not ((yda > e2 and v1 > e2) or (yda < -e2 and v1 < -e2)):
                 break
         if steady:
-            lo, hi = _quad_range(wa, wda, wdd_a, hs)
+            lo, hi = quad_range(wa, wda, wdd_a, hs)
             e3 = b3w * hs * hs * hs / 6.0 + wmar
             if not (hi + e3 < max_w and lo - e3 > min_w):
                 break
@@ -335,7 +335,7 @@ def _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v, watch_ext
         for kk in (EV_REL_NEG, EV_REL_POS, EV_WALL_REL):
             if (mode == STICK) == (kk != EV_WALL_REL):
                 if ev_a[kk] <= 0.0 < ev_b[kk]:
-                    tr = _root_any(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
+                    tr = find_root_any(kk, a, ev_a[kk], b, ev_b[kk], seg, r, q0, lam, V, ks, Z,
                                    D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
                     if tr < best or kind < 0:
                         best = tr
@@ -344,12 +344,12 @@ def _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v, watch_ext
         # call the (not inlined) search only when an end value shows something, or
         # y' changes sign and the bound on y lets the ball reach a wall
         # (a longer step than h holds no wall event: see its choice)
-        graze = lev == 0 and _may_graze(a, b, ev_a, ev_b, half, b4)
+        graze = lev == 0 and may_graze(a, b, ev_a, ev_b, half, b4)
         if ((ev_a[EV_PLUS] <= 0.0 < ev_b[EV_PLUS])
                 or (ev_a[EV_MINUS] <= 0.0 < ev_b[EV_MINUS])
                 or (watch_v and ev_a[EV_VSTOP] <= 0.0 < ev_b[EV_VSTOP])
                 or (graze and watch_ext and ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)):
-            kind, best = _wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
+            kind, best = wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, seg, r,
                                     q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
                                     ydd_a, ydd_b)
         if kind < 0 and graze:
@@ -361,12 +361,12 @@ def _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v, watch_ext
             for j in range(1, NSUB + 1):
                 sb = a + (b - a) * j / NSUB if j < NSUB else b
                 if j < NSUB:
-                    _eval(r, q0, seg, sb, om, lam, V, ks, Z, D, bq, qs, dX)
+                    state_at(r, q0, seg, sb, om, lam, V, ks, Z, D, bq, qs, dX)
                     _events(ev_t, dX, sb, seg, mode, n, mk, f0, om)
                 else:
                     for kk in range(N_EV):
                         ev_t[kk] = ev_b[kk]
-                kind, best = _wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
+                kind, best = wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
                                         seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, Xd, n,
                                         mk, f0, om, math.nan, math.nan)
                 if kind >= 0:
@@ -379,14 +379,14 @@ def _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v, watch_ext
         # of h = 0 between the step's ends, found at the extremum of h
         tr = -1.0
         if ev_a[EV_CUT] <= 0.0 < ev_b[EV_CUT]:
-            tr = _root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
+            tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], seg, r, q0, lam, V,
                            ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
         elif ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0:
-            te = _root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
+            te = find_root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], seg, r, q0, lam, V,
                            ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
-            ge = _g(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
+            ge = g_value(EV_CUT, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0, om)
             if ev_a[EV_CUT] <= 0.0 < ge:
-                tr = _root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
+                tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, seg, r, q0, lam, V, ks, Z,
                                D, bq, qs, dX, Xd, n, mk, f0, om, -1.0)
         if tr >= 0.0 and (kind < 0 or tr < best):
             best = tr
@@ -397,7 +397,7 @@ def _find_event(w, a, b, r, ks, n, f0, om, mode, ball, regen, watch_v, watch_ext
 @njit(cache=True, inline="always")
 def _cut_flows(w, a, b, r, ks, n, whole, sticking, steady, wb, max_force):
     """Adds a cut's flows over the grid step [a, b] to w.qsum (the slots of
-    :func:`_integrals`' ``out``); ``whole``: a whole step H from a node, without event, from
+    :func:`segment_integrals`' ``out``); ``whole``: a whole step H from a node, without event, from
     the tables (written out: no call); wb: W at b.  Returns the largest cutting force so
     far."""
     seg = w.seg
@@ -429,14 +429,14 @@ def _cut_flows(w, a, b, r, ks, n, whole, sticking, steady, wb, max_force):
     if whole and not (sticking and sr != 1.0):
         # a whole step: tabulated values, written out (as above)
         for g in range(4):
-            for kq in range(_nq(nz, ks)):
+            for kq in range(nq(nz, ks)):
                 k = kq * ks
                 qs[k] = (q0[k] * tabE[r, g, k] + s_0 * tabP[r, g, 0, k]
                          + s_1 * tabP[r, g, 1, k] + s_2 * tabP[r, g, 2, k]
                          + s_3 * tabP[r, g, 3, k])
             for j in range(nz):
                 sx = fb * D[r, j]
-                for kq in range(_nq(nz, ks)):
+                for kq in range(nq(nz, ks)):
                     k = kq * ks
                     sx += (V[r, j, k] * qs[k]).real
                 dX[j] = sx
@@ -445,10 +445,10 @@ def _cut_flows(w, a, b, r, ks, n, whole, sticking, steady, wb, max_force):
             for i in range(n):
                 wq += mk[3, i] * dX[i]
                 wdq += mk[3, i] * dX[n + i]
-            xg = _GL_X[g] * b
+            xg = GL_X[g] * b
             fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq)
             max_force = max(max_force, fq)
-            wg = _GL_W[g] * b
+            wg = GL_W[g] * b
             qsum[0] += wg * fq * wdq
             dv = 0.0
             for d in range(lvis.shape[0]):
@@ -462,7 +462,7 @@ def _cut_flows(w, a, b, r, ks, n, whole, sticking, steady, wb, max_force):
                 qsum[3] += wg * wq
                 qsum[4] += wg * fq
     else:
-        max_force = max(max_force, _quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq,
+        max_force = max(max_force, quad_cut(a, b, seg, r, q0, lam, V, ks, Z, D, bq,
                                              qs, dX, n, mk, lvis, cvis,
                                              sticking, kappa_stick, sr, qsum,
                                              steady))
@@ -492,7 +492,7 @@ def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe,
         ts_ = t0 + k_rec * rec_dt
         if ts_ > t_end:
             break
-        _eval(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
+        state_at(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
         wv = 0.0
         wdv = 0.0
         for i in range(n):
@@ -504,14 +504,14 @@ def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe,
         rec[n_rec, 2] = wdv
         rec[n_rec, 3] = av
         rec[n_rec, 4] = adv
-        rec[n_rec, 5] = _force(seg, ts_ - t, dX, n, mk, f0, om)
+        rec[n_rec, 5] = cut_force(seg, ts_ - t, dX, n, mk, f0, om)
         n_rec += 1
         k_rec += 1
     met[L.N_REC] = n_rec
     n_stb = int(met[L.N_STROBE])
     while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
         if n_stb < strobe.shape[0]:
-            _eval(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
+            state_at(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
             wv = 0.0
             wdv = 0.0
             for i in range(n):
@@ -579,19 +579,19 @@ def _advance(w, t, r, ks, sz, n, mode, lev, b, usual, tab_end, regen, ball, ydd_
     elif tab_end:
         # the tabulated end of a whole step, written out: numba reference-counts
         # the array arguments of every call, even inlined (docs/performance.md)
-        for kq in range(_nq(nz, ks)):
+        for kq in range(nq(nz, ks)):
             k = kq * ks
             qg[k] = (q0[k] * tabE[r, 4, k] + s_0 * tabP[r, 4, 0, k]
                      + s_1 * tabP[r, 4, 1, k] + s_2 * tabP[r, 4, 2, k]
                      + s_3 * tabP[r, 4, 3, k])
         for j in range(nz):
             sx = fb * D[r, j]
-            for kq in range(_nq(nz, ks)):
+            for kq in range(nq(nz, ks)):
                 k = kq * ks
                 sx += (V[r, j, k] * qg[k]).real
             X[j] = sx
     else:
-        _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
+        state_at(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qg, X)
         phg = cmath.exp(1j * om * (t + b))
     if not usual and (ball or not regen):
         _events(ev_b, X, b, seg, mode, n, mk, f0, om)
@@ -609,7 +609,7 @@ def _advance(w, t, r, ks, sz, n, mode, lev, b, usual, tab_end, regen, ball, ydd_
 
 
 @njit(cache=True, inline="always")
-def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
+def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv):
     """The grid search of the segment from t (regime r, ``mode``, forcing phasor ph at t,
     its description ``sv``, SV_*) for its first event, with the outputs on the way: the
     running extremes and output times in w.ro (RO_*), a cut's flows in w.qsum, history
@@ -744,7 +744,7 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
                                  watch_ext, b4, lev, ydd_a, ydd_b)
         if kind >= 0:
             b = best
-            ph_next = _eval(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
+            ph_next = state_at(r, q0, seg, b, om, lam, V, ks, Z, D, bq, qs, X)
             ev_kind = kind
             tau_ev = b
         # --- outputs on (a, b]
@@ -757,13 +757,13 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
             max_abs_w = max(max_abs_w, abs(wb))
             max_w = max(max_w, wb)
             min_w = min(min_w, wb)
-            if lev == 0 and wda * wdb < 0.0 and (bw4 < 0.0 or _w_may_exceed(
+            if lev == 0 and wda * wdb < 0.0 and (bw4 < 0.0 or w_may_exceed(
                     b - a, wa, wb, wda, wdb, bw4, max_w, min_w, max_abs_w)):
                 if kind < 0 and wdd_a == wdd_a and wdd_b == wdd_b:  # W'' at both ends
-                    c0 = _hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1)
+                    c0 = hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1)
                 else:
-                    c0 = _hermite(a, b, wa, wb, wda, wdb, 1)
-                we = _w_extremum_any(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D,
+                    c0 = hermite(a, b, wa, wb, wda, wdb, 1)
+                we = w_extremum_any(a, wda, b, wdb, c0, h, seg, r, q0, lam, V, ks, Z, D,
                                      bq, qs, dX, Xd, n, mk, om)
                 max_abs_w = max(max_abs_w, abs(we))
                 max_w = max(max_w, we)
@@ -781,7 +781,7 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
         max_aux_all = max(max_aux_all, abs(auxb))
         if steady:
             max_aux = max(max_aux, abs(auxb))
-            if regen or not ball:  # a ball's int y^2 is closed form (_integrals)
+            if regen or not ball:  # a ball's int y^2 is closed form (segment_integrals)
                 hh = b - a
                 met[L.SUM_AUX2] += (0.5 * hh * (auxa * auxa + auxb * auxb)
                              + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb))
@@ -814,7 +814,7 @@ def _search(w, t, r, ks, sz, n, case, mode, ph, sv):
 
 
 @njit(cache=True, inline="always")
-def _start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, sv):
+def start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, sv):
     """A segment from t (forcing phasor ph there) in the run's state w.rs: its regime r,
     its eigen-coordinates into w.q0, its record into w.seg, its description into ``sv``
     (SV_*) and, in a cut, its end and surface.  Returns (r, ks, its end (at most t_stop),
@@ -923,7 +923,7 @@ def _start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, 
 
 
 @njit(cache=True, inline="always")
-def _close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero_step):
+def close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero_step):
     """The flows of the segment [t, t + T] (regime r, forcing phasor ph at t; a cut's from
     w.qsum, else closed form) into the metrics, a cut's steps with h = 0 counted, a free
     ball moved to t + T.  Returns the last step of length dt_out counted with h = 0."""
@@ -977,13 +977,13 @@ def _close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero
         # compiled with the sizes constant for one and two modes (kept out of line:
         # the kernel's own compilation does not grow)
         if sz == 1:
-            _integrals_1(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
+            segment_integrals_1(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
                          sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
         elif sz == 2:
-            _integrals_2(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
+            segment_integrals_2(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, mk, lvis, cvis, kst,
                          sr, me, G, Cx, cf, ca, cb, out, isum, level, seg, phj)
         else:
-            _integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis, kst,
+            segment_integrals(r, q0, ph, T, fb, om, f0, lam, Vfull, Z, D, n, mk, lvis, cvis, kst,
                        sr, me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj)
         if ball and steady:
             # the ball's int y^2: closed form when free, y constant otherwise
@@ -994,7 +994,7 @@ def _close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero
 
 @njit(cache=True, inline="always")
 def _events(ev, X, tau, seg, mode, n, mk, f0, om):
-    """All event functions from the state X at tau (see :func:`_g`)."""
+    """All event functions from the state X at tau (see :func:`g_value`)."""
     pdu = 0.0
     pdv = 0.0
     for i in range(n):
@@ -1013,11 +1013,11 @@ def _events(ev, X, tau, seg, mode, n, mk, f0, om):
         for i in range(n):
             w += mk[3, i] * X[i]
             wd += mk[3, i] * X[n + i]
-        sv, sd = _surface(seg, tau)
+        sv, sd = surface_at(seg, tau)
         ev[EV_CUT] = seg[SEG_CDIR] * (w - sv)
         ev[EV_HEXT] = sd - wd
     if mode != FREE:
-        F = _freq(X, _force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
+        F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om), n, mk, seg[7])
         ev[EV_REL_NEG] = F - seg[8]
         ev[EV_REL_POS] = -F - seg[8]
         ev[EV_WALL_REL] = seg[6] * F - seg[8]
