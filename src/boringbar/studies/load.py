@@ -49,9 +49,29 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
             fail(s, d[s], "unknown section; allowed: " + ", ".join(f"[{x}]" for x in SECTIONS))
         if not isinstance(d[s], dict):
             fail(s, d[s], f"[{s}] must be a table")
-
-    resolved: dict[str, dict] = {}
     given: set[str] = set()
+    resolved = _settings(d, given, fail)
+    study = resolved.pop("study")
+    analysis = _analysis(study, resolved, source, fail)
+    options = _options(d.get("analysis", {}), analysis, fail)
+    axes = _axes(d, analysis, resolved, options, given, fail)
+    name = study["name"] or (Path(source).stem if source not in ("<dict>", "") else "study")
+    result = Study(analysis=analysis.name, name=name, preset=study["preset"],
+                   settings=resolved, options=options, axes=axes, source=source,
+                   out=study["out"], format=study["format"], given=frozenset(given))
+    try:
+        analysis.check(result)
+    except StudyError:
+        raise
+    except ParameterError as exc:
+        raise StudyError(f"{source}: {exc}") from None
+    return result
+
+
+def _settings(d: dict, given: set, fail) -> dict[str, dict]:
+    """Every section's settings, checked, with the defaults of those not given (whose
+    names go into ``given``)."""
+    resolved: dict[str, dict] = {}
     for s in ("study", "bar", "damper", "forcing", "run"):
         table = d.get(s, {})
         out = {}
@@ -69,8 +89,11 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
             else:
                 out[k] = spec.default
         resolved[s] = out
+    return resolved
 
-    study = resolved.pop("study")
+
+def _analysis(study: dict, resolved: dict, source: str, fail):
+    """The study's analysis (its registry adapter), its integrator and output checked."""
     if study["analysis"] is None:
         fail("study.analysis", None, "required; one of " + ", ".join(map(repr, ANALYSES)))
     if study["analysis"] not in ANALYSES:
@@ -80,15 +103,16 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
     if resolved["run"]["integrator"] not in allowed:
         fail("run.integrator", resolved["run"]["integrator"],
              f"one of {', '.join(map(repr, allowed))} for a {analysis.name} study")
-    name = study["name"] or (Path(source).stem if source not in ("<dict>", "") else "study")
     if study["out"] is not None:
         try:
             output_format(Path(study["out"]), study["format"], "key 'study.out'")
         except ParameterError as exc:
             raise StudyError(f"{source}: {exc}") from None
+    return analysis
 
-    # analysis options
-    table = d.get("analysis", {})
+
+def _options(table: dict, analysis, fail) -> dict:
+    """The ``[analysis]`` options, checked, with the defaults of those not given."""
     options = {}
     for k, v in table.items():
         if k not in analysis.options:
@@ -103,8 +127,12 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
                 fail(f"analysis.{k}", table[k], str(exc) or spec.allowed())
         else:
             options[k] = spec.default
+    return options
 
-    # grid axes
+
+def _axes(d: dict, analysis, resolved: dict, options: dict, given: set, fail) -> dict:
+    """The ``[grid]`` axes, checked, then the analysis's default axes for keys not given;
+    at most :data:`MAX_POINTS` points in all."""
     axes = {}
     for k, v in d.get("grid", {}).items():
         if k not in SECTION_OF:
@@ -115,8 +143,7 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
                  + ", ".join(analysis.grid_keys))
         if k in d.get(SECTION_OF[k], {}):
             fail(f"grid.{k}", v, f"also set in [{SECTION_OF[k]}]; give it in one place")
-        values = _axis_values(v, SETTINGS[SECTION_OF[k]][k], f"grid.{k}", fail)
-        axes[k] = tuple(values)
+        axes[k] = tuple(_axis_values(v, SETTINGS[SECTION_OF[k]][k], f"grid.{k}", fail))
         given.add(k)
     for k, values in analysis.default_axes(resolved, options).items():
         if k not in given:
@@ -125,17 +152,7 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
     if points > MAX_POINTS:
         fail("grid", {k: f"{len(v)} values" for k, v in axes.items()},
              f"{points} grid points; the allowed maximum is {MAX_POINTS}")
-
-    result = Study(analysis=analysis.name, name=name, preset=study["preset"],
-                   settings=resolved, options=options, axes=axes, source=source,
-                   out=study["out"], format=study["format"], given=frozenset(given))
-    try:
-        analysis.check(result)
-    except StudyError:
-        raise
-    except ParameterError as exc:
-        raise StudyError(f"{source}: {exc}") from None
-    return result
+    return axes
 
 
 def _axis_values(v, spec: Setting, key: str, fail) -> list:
