@@ -36,6 +36,7 @@ from boringbar.cli.options import (
     parse_words,
     progress_printer,
     system_overrides,
+    wrote,
 )
 from boringbar.cli.sweeps import short_pattern
 from boringbar.model.dampers import MAX_GAP
@@ -234,7 +235,7 @@ def _cmd_bifurcation(args) -> Outcome:
 
     def text(say) -> None:
         say(_bifurcation_text(ds, summary["hysteresis_ranges"]))
-        say("wrote " + ", ".join(summary["files"].values()))
+        say(wrote(summary["files"]))
 
     return Outcome(summary, text)
 
@@ -336,7 +337,7 @@ def _cmd_basins(args) -> Outcome:
 
     def text(say) -> None:
         say(_basins_text(summary))
-        say("wrote " + ", ".join(summary["files"].values()))
+        say(wrote(summary["files"]))
 
     return Outcome(summary, text)
 
@@ -450,7 +451,7 @@ def _cmd_sensitivity(args) -> Outcome:
 
     def text(say) -> None:
         say(_sensitivity_text(summary))
-        say("wrote " + ", ".join(summary["files"].values()))
+        say(wrote(summary["files"]))
 
     return Outcome(summary, text)
 

@@ -367,6 +367,12 @@ PATTERN_KEY = ("patterns: Ns = N symmetric impacts per period, Na/k = N asymmetr
                "nu = non-uniform")
 
 
+def wrote(files: dict) -> str:
+    """The line naming the files a command wrote (a value may be a list of paths)."""
+    paths = [p for v in files.values() for p in (v if isinstance(v, list) else [v])]
+    return "wrote " + ", ".join(map(str, paths))
+
+
 def print_json(obj) -> None:
     print(json.dumps(jsonable(obj), allow_nan=False))
 

@@ -20,6 +20,7 @@ from boringbar.cli.options import (
     initial_conditions,
     one_bar,
     system_overrides,
+    wrote,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Harmonic, Regenerative
@@ -130,7 +131,7 @@ def _cut_text(s: dict) -> str:
         f"max |W| {s['max_abs_tip_m'] * 1e3:.4g} mm",
         f"  delay interp.      {c['delay_interpolation']}",
         f"  elapsed            {s['elapsed_s']:.2f} s",
-        "  wrote " + ", ".join(s["files"].values()),
+        "  " + wrote(s["files"]),
     ]
     return "\n".join(lines)
 
@@ -153,5 +154,5 @@ def _simulate_text(s: dict, run) -> str:
     if s["readings"]:
         lines.append(f"  published readings {', '.join(s['readings'])}")
     lines.append(f"  elapsed            {s['elapsed_s']:.2f} s")
-    lines.append("  wrote " + ", ".join(s["files"].values()))
+    lines.append("  " + wrote(s["files"]))
     return "\n".join(lines)

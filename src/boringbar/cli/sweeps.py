@@ -26,6 +26,7 @@ from boringbar.cli.options import (
     integration,
     many_cases,
     progress_printer,
+    wrote,
 )
 from boringbar.model.forcing import MAX_DEPTH
 from boringbar.report.outputs import HISTORY_ROWS, lobes_files, sweep_files
@@ -90,8 +91,7 @@ def _cmd_sweep(args) -> Outcome:
 
     def text(say) -> None:
         say(_sweep_text(ds))
-        files = summary["files"]
-        say("wrote " + ", ".join([files["netcdf"], *files["png"]]))
+        say(wrote(summary["files"]))
 
     return Outcome(summary, text)
 
@@ -166,7 +166,7 @@ def _cmd_lobes(args) -> Outcome:
                        if e["chatter"] else "stable (force never zero)")
             say(f"example {e['example']}: {e['case']} at {e['rpm']:g} rpm, depth "
                   f"{e['depth_m'] * 1e3:g} mm: {verdict}")
-        say("wrote " + ", ".join(summary["files"].values()))
+        say(wrote(summary["files"]))
 
     return Outcome(summary, text)
 
