@@ -76,12 +76,7 @@ def state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X):
         for kq in range(nq(nz, ks)):
             k = kq * ks
             q[k] = q0[k] * cmath.exp(lam[r, k] * tau)
-    for j in range(nz):
-        s = (Z[r, j] * ph).imag + fb * D[r, j]
-        for kq in range(nq(nz, ks)):
-            k = kq * ks
-            s += (V[r, j, k] * q[k]).real
-        X[j] = s
+    from_q(r, q, ph, fb, Z, D, V, ks, X)
     return ph
 
 

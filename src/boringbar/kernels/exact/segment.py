@@ -471,18 +471,30 @@ def _cut_flows(w, a, b, r, ks, n, whole, sticking, steady, wb, max_force):
 
 
 @njit(cache=True, inline="always")
+def _sample(w, tau, r, ks, n, om, mode, case, ball, x, row):
+    """The state at ``tau`` into the work vector dX and row[1:5]: W, W', aux, aux' (a
+    history or strobe row; its time, row[0], is the caller's)."""
+    dX = w.dX
+    mk = w.mk
+    state_at(r, w.q0, w.seg, tau, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, dX)
+    wv = 0.0
+    wdv = 0.0
+    for i in range(n):
+        wv += mk[3, i] * dX[i]
+        wdv += mk[3, i] * dX[n + i]
+    av, adv = _aux(dX, tau, w.seg, mode, case, n, mk, x, ball)
+    row[1] = wv
+    row[2] = wdv
+    row[3] = av
+    row[4] = adv
+
+
+@njit(cache=True, inline="always")
 def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe, rec_dt,
              tstrobe, k_rec, t_next_strobe, met):
     """The history rows (every rec_dt from t0) and strobe rows (every tstrobe) that fall in
     (t + a, t + b] of the segment from t; returns the next ones' (k_rec, t_next_strobe)."""
     seg = w.seg
-    q0 = w.q0
-    lam = w.lam
-    V = w.V
-    Z = w.Z
-    D = w.D
-    bq = w.bq
-    qs = w.qs
     dX = w.dX
     mk = w.mk
     t0 = w.cp[CP_T0]
@@ -492,18 +504,8 @@ def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe,
         ts_ = t0 + k_rec * rec_dt
         if ts_ > t_end:
             break
-        state_at(r, q0, seg, ts_ - t, om, lam, V, ks, Z, D, bq, qs, dX)
-        wv = 0.0
-        wdv = 0.0
-        for i in range(n):
-            wv += mk[3, i] * dX[i]
-            wdv += mk[3, i] * dX[n + i]
-        av, adv = _aux(dX, ts_ - t, seg, mode, case, n, mk, x, ball)
         rec[n_rec, 0] = ts_
-        rec[n_rec, 1] = wv
-        rec[n_rec, 2] = wdv
-        rec[n_rec, 3] = av
-        rec[n_rec, 4] = adv
+        _sample(w, ts_ - t, r, ks, n, om, mode, case, ball, x, rec[n_rec])
         rec[n_rec, 5] = cut_force(seg, ts_ - t, dX, n, mk, f0, om)
         n_rec += 1
         k_rec += 1
@@ -511,18 +513,8 @@ def _samples(w, t, b, t_end, r, ks, n, f0, om, mode, case, ball, x, rec, strobe,
     n_stb = int(met[L.N_STROBE])
     while tstrobe > 0.0 and t_next_strobe <= t + b and t_next_strobe <= t_end:
         if n_stb < strobe.shape[0]:
-            state_at(r, q0, seg, t_next_strobe - t, om, lam, V, ks, Z, D, bq, qs, dX)
-            wv = 0.0
-            wdv = 0.0
-            for i in range(n):
-                wv += mk[3, i] * dX[i]
-                wdv += mk[3, i] * dX[n + i]
-            av, adv = _aux(dX, t_next_strobe - t, seg, mode, case, n, mk, x, ball)
             strobe[n_stb, 0] = t_next_strobe
-            strobe[n_stb, 1] = wv
-            strobe[n_stb, 2] = wdv
-            strobe[n_stb, 3] = av
-            strobe[n_stb, 4] = adv
+            _sample(w, t_next_strobe - t, r, ks, n, om, mode, case, ball, x, strobe[n_stb])
             n_stb += 1
         t_next_strobe += tstrobe
     met[L.N_STROBE] = n_stb
