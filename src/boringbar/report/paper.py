@@ -90,13 +90,7 @@ def _at_rest() -> Initial:
 def _sweep_cases(preset: str) -> list:
     """The cases of sweep and lobes by default: solid, TMD, and the ball damper at
     each gap (0.5, 0.1 mm) x friction (off, on), in the command line's order."""
-    cases = []
-    for bar in ("solid", "tmd"):
-        cases += published_cases((bar,), preset=preset)
-    for gap in (0.5 * 1e-3, 0.1 * 1e-3):
-        for fr in (False, True):
-            cases += published_cases(("ball",), (gap,), (fr,), preset)
-    return cases
+    return published_cases(preset=preset, gaps=(0.5 * 1e-3, 0.1 * 1e-3))
 
 
 def _sweep_run(forces: str, ratios: str, duration_s: float):
