@@ -46,8 +46,11 @@ class Plan:
 def run_plan(module: ModuleType, plan: Plan, execution: Execution | None = None,
              progress=None) -> tuple[list, float]:
     """``module.warm`` then ``module.compute`` of every point of ``plan`` on
-    ``execution``; (results in point order, wall time in s)."""
-    module.warm(plan.context)
+    ``execution``; (results in point order, wall time in s).  Threads and forked
+    processes share what this process compiled; Dask's workers compile their own, so
+    a Dask run is not warmed here (as the study runner)."""
+    if (execution or Execution()).executor != "dask":
+        module.warm(plan.context)
     tic = time.perf_counter()
     results = run_points(functools.partial(module.compute, plan.context), plan.points,
                          execution=execution, progress=progress)
