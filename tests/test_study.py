@@ -65,7 +65,7 @@ def test_to_dict_round_trips_and_is_json():
     ('[study]\nanalysis = "sweep"\n[damper]\ngap_mm = "wide"\n', "damper.gap_mm", "'wide'",
      "a number"),
     ('[study]\nanalysis = "sweep"\n[damper]\nball = "glass"\n', "damper.ball", "'glass'",
-     "one of 'carbide', 'steel'"),
+     "one of 'steel', 'carbide', 'heavy-metal', 'tungsten'"),
     ('[study]\nanalysis = "sweep"\n[bar]\nn_modes = 2.5\n', "bar.n_modes", "2.5", "an integer"),
     ('[study]\nanalysis = "swoop"\n', "study.analysis", "'swoop'", "'sweep'"),
     ('[study]\nanalysis = "sweep"\n[gird]\ngap_mm = [1]\n', "gird", "", "unknown section"),

@@ -17,6 +17,7 @@ import re
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.patches import Circle
 
 from boringbar.simulate import FIGURES
 
@@ -862,3 +863,52 @@ def plot_ladder(ds, *, ax=None) -> Figure:
 
 
 FIGURES["run"] = plot_run  # Run.plot()
+
+
+# --- a bar's geometry and mode shapes -------------------------------------------------
+def plot_modes(spec, cavity: bool, n_modes: int, title: str = "", *, fig=None) -> Figure:
+    """The bar of the system file ``spec`` drawn to scale (sections, coolant bores,
+    the cavity's section and its ball, the absorber) above its first ``n_modes``
+    mode shapes (divided by their tip value), ball and absorber marked."""
+    fig = fig or Figure(figsize=(8.0, 6.0), layout="constrained")
+    geo, shp = fig.subplots(2, 1, sharex=True, height_ratios=(1, 2))
+    bar = spec.stepped_bar(cavity)
+    mm = 1e3
+    for s in bar.sections:
+        x = [s.start * mm, s.end * mm]
+        geo.fill_between(x, -s.diameter / 2 * mm, s.diameter / 2 * mm, color="#b0bec5",
+                         edgecolor="#455a64", lw=0.8)
+        if s.inner_diameter > 0:
+            geo.fill_between(x, -s.inner_diameter / 2 * mm, s.inner_diameter / 2 * mm,
+                             color="white", edgecolor="#455a64", lw=0.5, ls="--")
+    geo.axvline(0.0, color="black", lw=3)
+    if cavity and spec.cavity is not None and spec.ball is not None:
+        c, b = spec.cavity, spec.ball
+        geo.add_patch(_circle((c.position * mm, 0.0), b.diameter / 2 * mm, "#d84315"))
+        geo.annotate(f"ball {b.diameter * mm:g} mm {b.material}", (c.position * mm,
+                     c.depth / 2 * mm), ha="center", va="bottom", fontsize=8)
+    if spec.tmd is not None and not cavity:
+        geo.plot([spec.tmd.position * mm], [0.0], "s", color="#6a1b9a", ms=9,
+                 label="absorber")
+    geo.set_aspect("equal", adjustable="datalim")
+    geo.set_ylabel("mm")
+    geo.set_title(title or f"{spec.name}: geometry and mode shapes")
+    nodes, shapes, freqs = spec.mode_shapes(cavity, n_modes)
+    for i in range(shapes.shape[1]):
+        shp.plot(nodes * mm, shapes[:, i], label=f"mode {i + 1}: {freqs[i]:.1f} Hz")
+    shp.axhline(0.0, color="0.6", lw=0.6)
+    points = [("ball", spec.ball_position, "#d84315")] if cavity and spec.ball else []
+    if spec.tmd is not None:
+        points.append(("absorber", spec.absorber_position, "#6a1b9a"))
+    for name, z, colour in points:
+        shp.axvline(z * mm, color=colour, ls=":", lw=1.0)
+        shp.annotate(name, (z * mm, shp.get_ylim()[1]), color=colour, fontsize=8,
+                     ha="center", va="top")
+    shp.set_xlabel("z from the clamp (mm)")
+    shp.set_ylabel("psi(z) / psi(tip)")
+    shp.legend(fontsize=8, loc="lower left")
+    return fig
+
+
+def _circle(centre, radius, colour):
+    return Circle(centre, radius, facecolor=colour, edgecolor="black", lw=0.6, alpha=0.8)

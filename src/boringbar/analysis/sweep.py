@@ -83,7 +83,7 @@ def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
         else:
             kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber",
                                                                "tmd_mass", "tmd_design",
-                                                               "modal")}
+                                                               "modal", "spec")}
             cases.append(Case(bar, make_system(bar, preset, **kw), bar))
     return cases
 

@@ -29,6 +29,7 @@ from boringbar.cli.options import (
     cut_options,
     execution,
     forces_and_ratios,
+    gap_default_mm,
     initial_conditions,
     integration,
     one_bar,
@@ -209,7 +210,8 @@ def _cmd_bifurcation(args) -> Outcome:
     bar, friction_on = one_bar(args, "bifurcation")
     check_range("--steady-fraction", args.steady_fraction, 0, 1, lo_open=True)
     parameter, si = SWEEPABLE[option][:2]
-    gaps = values if option == "--gap-mm" else [0.5 if args.gap_mm is None else args.gap_mm]
+    fixed_gap = gap_default_mm(args) if args.gap_mm is None else args.gap_mm
+    gaps = values if option == "--gap-mm" else [fixed_gap]
     gaps = [check_gap(g) for g in gaps]
     force = 10.0 if args.force_n is None else args.force_n
     ratio = 1.0 if args.ratio is None else args.ratio
@@ -296,7 +298,7 @@ def _pair(text: str, name: str) -> tuple[float, float]:
 
 def _cmd_basins(args) -> Outcome:
     bar, friction_on = one_bar(args, "basins")
-    gap = check_gap(0.5 if args.gap_mm is None else args.gap_mm)
+    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm)
     force = 10.0 if args.force_n is None else args.force_n
     ratio = 1.0 if args.ratio is None else args.ratio
     check_force(force)
@@ -422,7 +424,7 @@ def _cmd_sensitivity(args) -> Outcome:
         given = "--friction-force-n" if args.friction_force_n is not None else "--friction off"
         raise ParameterError(f"{given} conflicts with KIND friction_number (friction on, its "
                              "size from --values)")
-    gap = check_gap(0.5 if args.gap_mm is None else args.gap_mm)
+    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm)
     values = _sensitivity_values(args, bar, gap)
     forces, ratios = forces_and_ratios(args)
     cuts = None

@@ -24,7 +24,9 @@ from boringbar.model.forcing import (
     MAX_RATIO,
     STARTS,
 )
-from boringbar.model.system import BALLS, BAR_KINDS, PRESETS
+from boringbar.model.modal_fit import ModalFit
+from boringbar.model.system import BALLS, BAR_KINDS, PRESETS, published_system_spec
+from boringbar.model.system_file import load_system
 from boringbar.progress import ProgressCallback
 from boringbar.simulate import (
     INTEGRATORS,
@@ -55,6 +57,16 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     groups = {}
     lst = ", comma list" if many else ""
     g = p.add_argument_group("bar and damper")
+    g.add_argument("--system", metavar="FILE.toml",
+                   help="your own bar: a system file (docs/systems.md); default: the "
+                        "published bar (examples/systems/published.toml)")
+    g.add_argument("--frf", metavar="FIT.json",
+                   help="a modal model fitted to a measured tip FRF (boringbar fit-frf) in "
+                        "place of the FE bar; give --frf-ball-ratio / --frf-absorber-ratio")
+    g.add_argument("--frf-ball-ratio", type=float, metavar="R",
+                   help="psi(z_ball)/psi(tip) of every fitted mode (a tip FRF cannot know it)")
+    g.add_argument("--frf-absorber-ratio", type=float, metavar="R",
+                   help="psi(z_absorber)/psi(tip) of every fitted mode")
     g.add_argument("--bar", action="append", metavar="solid|ball|tmd",
                    help="solid bar, ball damper or tuned mass damper"
                         + ("; repeatable or comma list (default: solid,tmd,ball)" if many
@@ -66,7 +78,8 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                                                else ""),
                    type=None if many or ranges else float,
                    help=f"total ball clearance delta in mm{lst}{swept} "
-                        f"(default: {'0.5,0.1' if many else '0.5'})")
+                        "(default: " + ("0.5,0.1; with --system, its gap" if many
+                                      else "the system file's, 0.5 published") + ")")
     g.add_argument("--friction", metavar="on|off" + (",..." if many else ""),
                    help=f"ball friction{lst} (default: {'off,on' if many else 'on'}); "
                         "its size depends on the preset")
@@ -85,8 +98,9 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                         "other values need --integrator exact)")
     g.add_argument("--modes", type=int, metavar="N",
                    help="retained bending modes (default: physical 2, paper 1)")
-    g.add_argument("--tmd-design", choices=("published", "den-hartog"),
-                   help="TMD tuning (default: physical den-hartog, paper published)")
+    g.add_argument("--tmd-design", choices=("given", "published", "den-hartog", "sims"),
+                   help="TMD tuning: given (the system file's absorber; published: the same), "
+                        "den-hartog or sims (default: physical the file's tuning, paper given)")
 
     g = groups["run"] = p.add_argument_group("forcing and integration")
     if harmonic and many:
@@ -181,6 +195,7 @@ def parse_numbers(text: str, name: str) -> list[float]:
 
 
 def _check_common(args, bars: list[str]) -> None:
+    resolve_files(args, bars)
     has_ball = "ball" in bars
     if not has_ball:
         given = [o for o in BALL_OPTIONS if getattr(args, o, None) not in (None, False)]
@@ -204,6 +219,51 @@ def _check_common(args, bars: list[str]) -> None:
     if args.modes is not None:
         check_range("--modes", args.modes, 1, 8)
     check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
+
+
+def system_spec(args):
+    """The --system file, read once (``args.system_spec``; None: not given)."""
+    if not hasattr(args, "system_spec"):
+        args.system_spec = None if args.system is None else load_system(args.system)
+    return args.system_spec
+
+
+def default_bars(args, many: bool) -> list[str]:
+    """The bars a command runs when --bar is not given: the ball damper (``many``:
+    the solid bar, the TMD and the ball damper), of those the system file has."""
+    spec = system_spec(args) or published_system_spec()
+    have = ["solid"] + (["tmd"] if spec.tmd else []) + (["ball"] if spec.ball else [])
+    if many:
+        return have
+    return [have[-1]]
+
+
+def resolve_files(args, bars: list[str]) -> None:
+    """Read --system and --frf once into ``args.system_spec`` and ``args.frf_modal``."""
+    system_spec(args)
+    args.frf_modal = None
+    ratios = {"ball": ("--frf-ball-ratio", args.frf_ball_ratio),
+              "tmd": ("--frf-absorber-ratio", args.frf_absorber_ratio)}
+    if args.frf is None:
+        given = [opt for opt, v in ratios.values() if v is not None]
+        if given:
+            raise ParameterError(f"{given[0]} applies only with --frf")
+        return
+    for bar in bars:
+        if bar in ratios and ratios[bar][1] is None:
+            raise ParameterError(f"--frf with --bar {bar} needs {ratios[bar][0]}: a tip FRF "
+                                 "cannot know the mode shape there")
+    for opt, value in ratios.values():
+        if value is not None:
+            check_range(opt, value, -10, 10)
+    args.frf_modal = ModalFit.read(args.frf).to_modal_model(
+        args.frf_ball_ratio or 1.0, args.frf_absorber_ratio or 1.0)
+
+
+def gap_default_mm(args) -> float:
+    """The gap (mm) when --gap-mm is not given: the system file's (0.5 published)."""
+    spec = args.system_spec or published_system_spec()
+    return spec.data["ball"]["gap_mm"] if spec.ball is not None else 0.5
 
 
 def check_gap(gap_mm: float) -> float:
@@ -273,14 +333,15 @@ def system_overrides(args) -> dict:
     kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
           "friction_number": args.friction_number, "friction_force": args.friction_force_n,
           "tmd_design": args.tmd_design, "locked": args.locked or None,
-          "static_ratio": args.static_ratio}
+          "static_ratio": args.static_ratio, "spec": args.system_spec,
+          "modal": args.frf_modal}
     return {k: v for k, v in kw.items() if v is not None}
 
 
 def one_bar(args, command: str) -> tuple[str, bool]:
     """--bar and --friction of the commands that run one system, checked with
     the common options: (bar, friction on)."""
-    bars = parse_words(args.bar, "--bar", BAR_KINDS, ["ball"])
+    bars = parse_words(args.bar, "--bar", BAR_KINDS, default_bars(args, many=False))
     if len(bars) != 1:
         raise ParameterError(f"--bar = {','.join(bars)!r}: {command} runs one bar "
                              f"(one of {', '.join(BAR_KINDS)})")
@@ -332,9 +393,10 @@ def progress_printer(args, command: str, what: str):
 def many_cases(args) -> tuple[list, list[str], list[float]]:
     """The cases of sweep and lobes from --bar, --gap-mm, --friction and the
     overrides: (cases, bars, gaps in m)."""
-    bars = parse_words(args.bar, "--bar", BAR_KINDS, ["solid", "tmd", "ball"])
+    bars = parse_words(args.bar, "--bar", BAR_KINDS, default_bars(args, many=True))
     _check_common(args, bars)
-    gaps = [check_gap(g) for g in parse_numbers(args.gap_mm or "0.5,0.1", "--gap-mm")]
+    default = "0.5,0.1" if args.system is None else repr(gap_default_mm(args))
+    gaps = [check_gap(g) for g in parse_numbers(args.gap_mm or default, "--gap-mm")]
     frictions = [w == "on" for w in parse_words(args.friction, "--friction", ("on", "off"),
                                            ["off", "on"])]
     if not any(frictions) and (args.friction_force_n is not None

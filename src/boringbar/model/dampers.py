@@ -16,6 +16,7 @@ from boringbar._validate import (
     check_positive,
     check_range,
 )
+from boringbar.model.materials import MATERIALS
 
 GRAVITY = 9.81
 BALL_DIAMETER = 0.015
@@ -30,7 +31,8 @@ MAX_GAP = 2e-3
 #: far above any rolling or Coulomb force of a 26 g ball, small enough that the
 #: kernel's arithmetic stays finite.
 MAX_FRICTION_FORCE = 1e6
-BALL_DENSITY = {"carbide": 14_700.0, "steel": 7_850.0}
+#: Ball densities (kg/m^3) by material name (model/materials.py).
+BALL_DENSITY = {name: m.density for name, m in MATERIALS.items()}
 #: The published carbide ball's mass (26 g, as published; 14.7 g/cm^3 gives 25.98 g).
 PUBLISHED_CARBIDE_MASS = 0.026
 #: The published rolling-resistance number, "0.6" (mm).
@@ -102,6 +104,12 @@ class Friction:
                 "static_ratio": self.static_ratio}
 
 
+    @classmethod
+    def from_dict(cls, d: dict) -> Friction:
+        """The friction :meth:`to_dict` describes."""
+        return cls(d["kind"], d["value"], d["reaction"], d["static_ratio"])
+
+
 NO_FRICTION = Friction("none", 0.0)
 
 
@@ -161,6 +169,13 @@ class ImpactDamper:
                 "locked": self.locked, "friction": self.friction.to_dict(),
                 "friction_force_n": self.friction_force}
 
+    @classmethod
+    def from_dict(cls, d: dict) -> ImpactDamper:
+        """The ball :meth:`to_dict` describes."""
+        return cls(mass=d["mass_kg"], gap=d["gap_m"], restitution=d["restitution"],
+                   friction=Friction.from_dict(d["friction"]), radius=d["radius_m"],
+                   locked=d["locked"], material=d["material"])
+
 
 @dataclass(frozen=True)
 class TunedMassDamper:
@@ -204,6 +219,12 @@ class TunedMassDamper:
         return {"type": "tmd", "mass_kg": self.mass, "stiffness_n_per_m": self.stiffness,
                 "damping_n_s_per_m": self.damping, "position_m": self.position,
                 "design": self.design}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> TunedMassDamper:
+        """The absorber :meth:`to_dict` describes."""
+        return cls(d["mass_kg"], d["stiffness_n_per_m"], d["damping_n_s_per_m"],
+                   d["position_m"], d["design"])
 
 
 def den_hartog_parameters(mass: float, bar) -> dict:

@@ -15,27 +15,31 @@ published study can be rerun as it was done:
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from boringbar._validate import ParameterError, check_choice, check_range
-from boringbar.model.bar import ABSORBER_POSITION, ModalModel, published_bar
+from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import (
     NO_FRICTION,
-    PUBLISHED_FRICTION_NUMBER,
     Friction,
     ImpactDamper,
     TunedMassDamper,
     sims_tuning,
 )
+from boringbar.model.materials import MATERIALS
+from boringbar.model.system_file import SystemSpec, parse_system, published_system
 
 PRESETS = ("physical", "paper")
 BAR_KINDS = ("solid", "ball", "tmd")
-BALLS = ("carbide", "steel")
-PUBLISHED_F1_HZ = {"ball": 461.0, "solid": 456.0}
-PUBLISHED_TMD_MASS = 0.39
-#: "published": the published absorber; "den-hartog": Den Hartog's optimum for
-#: the FRF magnitude; "sims": Sims' equal-real-trough optimum for chatter
-TMD_DESIGNS = ("published", "den-hartog", "sims")
+BALLS = tuple(MATERIALS)
+#: "given" (alias "published"): the absorber the system file gives (the published
+#: absorber in the shipped file); "den-hartog": Den Hartog's optimum for the FRF
+#: magnitude; "sims": Sims' equal-real-trough optimum for chatter
+TMD_DESIGNS = ("given", "published", "den-hartog", "sims")
 
 #: The published readings, by name, with the reason each exists.
 READINGS = {
@@ -51,13 +55,17 @@ READINGS = {
 @dataclass(frozen=True, eq=False)
 class System:
     """A bar (modal model of the host bar) and its damper (or none); ``preset`` names
-    the preset that built it ("custom" otherwise) and ``readings`` the published
-    readings it applies (:data:`READINGS`)."""
+    the preset that built it ("custom" otherwise), ``readings`` the published
+    readings it applies (:data:`READINGS`) and ``spec`` the system file it was
+    built from.  :meth:`to_dict` is what results carry; :meth:`from_dict` of it
+    rebuilds the same system, bit for bit."""
 
     bar: ModalModel
     damper: ImpactDamper | TunedMassDamper | None = None
     preset: str = "custom"
     readings: tuple[str, ...] = ()
+    #: the system file it was built from (None: built by hand)
+    spec: SystemSpec | None = None
 
     def __post_init__(self):
         if self.damper is not None and not isinstance(self.damper,
@@ -87,78 +95,183 @@ class System:
             "readings": list(self.readings),
             "bar": self.bar.to_dict(),
             "damper": None if self.damper is None else self.damper.to_dict(),
+            "system_file": None if self.spec is None else self.spec.to_dict(),
         }
 
+    @classmethod
+    def from_dict(cls, d: dict) -> System:
+        """The system a result's ``system`` attribute (:meth:`to_dict`) describes."""
+        damper = d.get("damper")
+        if damper is not None:
+            damper = (TunedMassDamper.from_dict(damper) if damper["type"] == "tmd"
+                      else ImpactDamper.from_dict(damper))
+        spec = d.get("system_file")
+        return cls(ModalModel.from_dict(d["bar"]), damper, d.get("preset", "custom"),
+                   tuple(d.get("readings", ())),
+                   None if spec is None else parse_system(spec, "<result>"))
 
-def make_system(bar: str = "ball", preset: str = "physical", *, gap: float = 0.5e-3,
-                friction: bool = True, ball: str = "carbide", restitution: float = 0.7,
-                n_modes: int | None = None, friction_number: float | None = None,
-                friction_force: float | None = None, friction_reaction: str | None = None,
-                locked: bool = False, tmd_mass: float = PUBLISHED_TMD_MASS,
-                z_absorber: float = ABSORBER_POSITION, tmd_design: str | None = None,
-                modal: ModalModel | None = None, static_ratio: float = 1.0) -> System:
-    """Build one of the three bars under a preset, with explicit overrides.
 
-    ``bar``: "solid", "ball" (ball damper; ``locked`` fixes the ball) or
-    "tmd"; ``preset``: "physical" or "paper" (:data:`READINGS`).  Ball: ``gap``
-    (m), ``ball`` ("carbide", "steel"), ``restitution``; ``friction`` on/off;
+@functools.cache
+def published_system_spec() -> SystemSpec:
+    """The published bar's system file, read once (the presets' default)."""
+    return published_system()
+
+
+def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | None = None,
+                friction: bool = True, ball: str | None = None,
+                restitution: float | None = None, n_modes: int | None = None,
+                friction_number: float | None = None, friction_force: float | None = None,
+                friction_reaction: str | None = None, locked: bool = False,
+                tmd_mass: float | None = None, z_absorber: float | None = None,
+                tmd_design: str | None = None, modal: ModalModel | None = None,
+                static_ratio: float | None = None, spec: SystemSpec | None = None) -> System:
+    """Build one of the three bars of a system file under a preset, with explicit
+    overrides.
+
+    ``spec``: the system file (:func:`~boringbar.model.system_file.load_system`;
+    default: the published bar, shipped with the package).  ``bar``: "solid" (the
+    file's bar without its cavity), "ball" (with the cavity and its ball;
+    ``locked`` fixes the ball) or "tmd" (without the cavity, with the file's
+    absorber); ``preset``: "physical" or "paper" (:data:`READINGS`).  Every
+    other argument left None takes the file's value.  Ball: ``gap`` (m), ``ball``
+    (a material of :data:`BALLS`; its mass then follows from its density and the
+    file's diameter), ``restitution``; ``friction`` on/off;
     ``friction_reaction``: "reciprocal" (physical) or "printed" (the published
     sign of the bar's reaction); ``friction_number`` is the published
     rolling-resistance number (0.6 nominal, read as the preset reads it);
-    ``friction_force`` (N) overrides the number when friction is on.
-    ``n_modes``: retained bending modes (default 1 paper, 2 physical);
-    ``tmd_mass`` (kg) at ``z_absorber`` (m from the clamp);
-    ``tmd_design``: "den-hartog" (physical default), "published" (paper
-    default) or "sims" (Sims' equal-real-trough tuning, for chatter).  ``modal`` replaces
-    the FE model (e.g. :meth:`ModalModel.from_tap_test`).  ``static_ratio``:
-    F_s / F_c of true stick-slip (exact integrator only; see :class:`Friction`).
+    ``friction_force`` (N) overrides the file's friction when friction is on.
+    ``n_modes``: retained bending modes (default: the file's, else 1 paper, 2
+    physical); ``tmd_mass`` (kg) at ``z_absorber`` (m from the clamp);
+    ``tmd_design``: the file's tuning (physical default), "given" (paper
+    default where the file gives the absorber's stiffness and damping;
+    "published" is the same) or "den-hartog", "sims" (Sims' equal-real-trough
+    tuning, for chatter).  ``modal`` replaces the FE model (e.g.
+    :meth:`ModalModel.from_tap_test`).  ``static_ratio``: F_s / F_c of true
+    stick-slip (exact integrator only; see :class:`Friction`).
     """
     check_choice("bar", bar, BAR_KINDS)
     check_choice("preset", preset, PRESETS)
+    spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
+    modal, readings = _modal(spec, bar, paper, n_modes, z_absorber, modal)
+    if bar == "solid":
+        return System(modal, None, preset, tuple(readings), spec)
+    if bar == "tmd":
+        tmd = _tmd(spec, modal, paper, tmd_mass, tmd_design)
+        return System(modal, tmd, preset, tuple(readings), spec)
+    if spec.ball is None:
+        raise ParameterError(f"bar = 'ball' needs a [cavity] and a [ball] in the system file "
+                             f"{spec.source}")
+    fr = _friction(spec, paper, friction, friction_number, friction_force,
+                   friction_reaction, static_ratio, readings)
+    b = spec.ball
+    gap = b.gap if gap is None else gap
+    if spec.max_gap() < gap:
+        check_range("gap", gap, 0.0, spec.max_gap(), lo_open=True, unit="m (the cavity's "
+                    "depth less the ball)")
+    material = b.material if ball is None else check_choice("ball", ball, BALLS)
+    damper = ImpactDamper.ball(material, gap=gap,
+                               restitution=b.restitution if restitution is None else restitution,
+                               friction=fr, diameter=b.diameter,
+                               mass=b.mass if material == b.material else None, locked=locked)
+    return System(modal, damper, preset, tuple(readings), spec)
+
+
+def _modal(spec: SystemSpec, bar: str, paper: bool, n_modes, z_absorber, modal):
+    """The host bar's modal model and the readings it applies."""
     if n_modes is None:
-        n_modes = 1 if paper else 2
+        n_modes = spec.n_modes or (1 if paper else 2)
     check_range("n_modes", n_modes, 1, 8)
     readings: list[str] = []
     cavity = bar == "ball"
     if modal is None:
-        modal = published_bar(cavity=cavity, n_modes=int(n_modes), z_absorber=z_absorber)
-        if paper:
-            modal = modal.with_first_frequency(PUBLISHED_F1_HZ["ball" if cavity else "solid"])
+        modal = spec.modal(cavity, int(n_modes), z_absorber)
+        calibration = spec.calibration.get("ball" if cavity else "solid")
+        if paper and calibration is not None:
+            modal = modal.with_first_frequency(calibration)
             readings.append("calibrated-stiffness")
     elif n_modes < modal.n_modes:
         modal = modal.truncated(int(n_modes))
+    return modal, readings
 
-    if bar == "solid":
-        return System(modal, None, preset, tuple(readings))
-    if bar == "tmd":
-        design = tmd_design or ("published" if paper else "den-hartog")
-        check_choice("tmd_design", design, TMD_DESIGNS)
-        if design == "published":
-            tmd = TunedMassDamper.published(position=modal.z_absorber)
-        elif design == "sims":
-            tmd = sims_tuning(tmd_mass, modal)
-        else:
-            tmd = TunedMassDamper.den_hartog(tmd_mass, modal)
-        return System(modal, tmd, preset, tuple(readings))
 
-    check_choice("ball", ball, BALLS)
-    reaction = friction_reaction or ("printed" if paper else "reciprocal")
+def _tmd(spec: SystemSpec, modal: ModalModel, paper: bool, mass, design) -> TunedMassDamper:
+    t = spec.tmd
+    if t is None and mass is None:
+        raise ParameterError(f"bar = 'tmd' needs a [tmd] in the system file {spec.source} "
+                             "(or a tmd_mass)")
+    given = t is not None and t.stiffness is not None
+    default = "den-hartog" if t is None else ("given" if paper and given else t.tuning)
+    design = check_choice("tmd_design", design or default, TMD_DESIGNS)
+    mass = t.mass if mass is None else mass
+    if design in ("given", "published"):
+        if not given:
+            raise ParameterError(f"tmd_design = {design!r} needs the absorber's stiffness_n_m "
+                                 f"and damping_n_s_m in the system file {spec.source}")
+        return TunedMassDamper(t.mass, t.stiffness, t.damping, modal.z_absorber, t.label)
+    if design == "sims":
+        return sims_tuning(mass, modal)
+    return TunedMassDamper.den_hartog(mass, modal)
+
+
+def _friction(spec: SystemSpec, paper: bool, on: bool, number, force, reaction, static_ratio,
+              readings: list) -> Friction:
+    """The ball's friction: the file's, or the overrides; appends the readings."""
+    b = spec.ball
+    reaction = reaction or b.friction_reaction or ("printed" if paper else "reciprocal")
     check_choice("friction_reaction", reaction, ("reciprocal", "printed"))
-    if not friction:
-        fr = NO_FRICTION
-    elif friction_force is not None:
-        fr = Friction("force", friction_force, reaction, static_ratio)
-    else:
-        number = PUBLISHED_FRICTION_NUMBER if friction_number is None else friction_number
+    ratio = b.static_ratio if static_ratio is None else static_ratio
+    if not on or (b.friction_kind == "none" and number is None and force is None):
+        return NO_FRICTION
+    if force is not None:
+        fr = Friction("force", force, reaction, ratio)
+    elif number is not None or b.friction_kind == "published-number":
+        number = b.friction_value if number is None else number
         check_range("friction_number", number, 0.0, 100.0)
         if paper:
-            fr = Friction("paper-number", number, reaction, static_ratio)
+            fr = Friction("paper-number", number, reaction, ratio)
             readings.append("paper-friction-force")
         else:
-            fr = Friction("rolling", number * 1e-3, reaction, static_ratio)
-    if fr.kind != "none" and reaction == "printed":
+            fr = Friction("rolling", number * 1e-3, reaction, ratio)
+    else:
+        value = b.friction_value * (1e-3 if b.friction_kind == "rolling" else 1.0)
+        fr = Friction(b.friction_kind, value, reaction, ratio)
+    if reaction == "printed":
         readings.append("printed-bar-reaction")
-    damper = ImpactDamper.ball(ball, gap=gap, restitution=restitution, friction=fr,
-                               locked=locked)
-    return System(modal, damper, preset, tuple(readings))
+    return fr
+
+
+def describe_modes(system: System) -> dict:
+    """The modal model of ``system``'s host bar, as ``boringbar modes`` prints it:
+    ``modes`` (per mode: frequency_hz, modal_mass_kg and modal_stiffness_n_m
+    referred to the tip, damping_ratio, psi_tip, psi_ball, psi_absorber, each
+    psi divided by psi_tip; None where the file has no ball or no absorber) and
+    ``tip_static_stiffness_n_m``: from the full
+    finite-element model (every mode, the clamp's springs, the paper preset's
+    calibration) when the bar comes from a system file, else the retained
+    modes' sum."""
+    m = system.bar
+    scale = m.psi_tip**2
+    modes = [{"frequency_hz": float(m.omegas[i] / (2 * math.pi)),
+              "modal_mass_kg": float(m.mass[i] / scale[i]),
+              "modal_stiffness_n_m": float(m.stiffness[i] / scale[i]),
+              "damping_ratio": float(m.damping_ratio[i]),
+              "psi_tip": 1.0, "psi_ball": float(m.psi_damper[i] / m.psi_tip[i]),
+              "psi_absorber": float(m.psi_absorber[i] / m.psi_tip[i])}
+             for i in range(m.n_modes)]
+    spec = system.spec
+    for name, missing in (("psi_ball", spec is not None and spec.cavity is None),
+                          ("psi_absorber", spec is not None and spec.tmd is None)):
+        if missing and m.source.startswith("fe"):  # no such point on this bar
+            for mode in modes:
+                mode[name] = None
+    if system.spec is not None and m.source.startswith("fe"):
+        fe = system.spec.stepped_bar(system.kind in ("ball", "locked"))
+        static = fe.static_tip_stiffness() * m.info.get("stiffness_scale", 1.0)
+        static_from = "finite-element model"
+    else:
+        static = 1.0 / float(np.sum(scale / m.stiffness))
+        static_from = "retained modes"
+    return {"modes": modes, "tip_static_stiffness_n_m": static,
+            "tip_static_stiffness_from": static_from, "source": m.source,
+            "z_ball_m": m.z_damper, "z_absorber_m": m.z_absorber}

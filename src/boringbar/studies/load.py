@@ -10,6 +10,7 @@ import tomllib
 from pathlib import Path
 
 from boringbar._validate import ParameterError
+from boringbar.model.system_file import SystemSpec, load_system, parse_system
 from boringbar.studies.registry import ANALYSES
 from boringbar.studies.schema import (
     MAX_POINTS,
@@ -52,13 +53,17 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
     given: set[str] = set()
     resolved = _settings(d, given, fail)
     study = resolved.pop("study")
+    system = _system(d, study["system"], source, fail)
+    if system is not None:
+        _system_defaults(resolved, system, given)
     analysis = _analysis(study, resolved, source, fail)
     options = _options(d.get("analysis", {}), analysis, fail)
     axes = _axes(d, analysis, resolved, options, given, fail)
     name = study["name"] or (Path(source).stem if source not in ("<dict>", "") else "study")
     result = Study(analysis=analysis.name, name=name, preset=study["preset"],
                    settings=resolved, options=options, axes=axes, source=source,
-                   out=study["out"], format=study["format"], given=frozenset(given))
+                   out=study["out"], format=study["format"], given=frozenset(given),
+                   system=system)
     try:
         analysis.check(result)
     except StudyError:
@@ -66,6 +71,36 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
     except ParameterError as exc:
         raise StudyError(f"{source}: {exc}") from None
     return result
+
+
+def _system(d: dict, path: str | None, source: str, fail) -> SystemSpec | None:
+    """The study's system file: ``[study] system`` (a path, relative to the study
+    file) or an inline ``[system]`` table; None: the published bar."""
+    if "system" in d and path is not None:
+        fail("study.system", path, "give the system file or an inline [system] table, not "
+                                   "both")
+    if "system" in d:
+        return parse_system(d["system"], f"{source} [system]")
+    if path is None:
+        return None
+    p = Path(path)
+    if not p.is_absolute() and source not in ("<dict>", ""):
+        p = Path(source).parent / p
+    return load_system(p)
+
+
+def _system_defaults(resolved: dict, system: SystemSpec, given: set) -> None:
+    """The system file's values for the bar and damper keys the study did not set."""
+    data = system.data
+    defaults = {}
+    if system.ball is not None:
+        defaults.update(gap_mm=data["ball"]["gap_mm"], ball=system.ball.material,
+                        restitution=system.ball.restitution)
+    if system.tmd is not None:
+        defaults.update(tmd_mass_kg=system.tmd.mass, z_absorber_mm=data["tmd"]["position_mm"])
+    for k, v in defaults.items():
+        if k not in given:
+            resolved[SECTION_OF[k]][k] = v
 
 
 def _settings(d: dict, given: set, fail) -> dict[str, dict]:

@@ -62,7 +62,7 @@ from boringbar.simulate import (
     check_step,
     check_steps,
 )
-from boringbar.studies.schema import SETTINGS, SYSTEM_KEYS, Setting, Study, StudyError
+from boringbar.studies.schema import SYSTEM_KEYS, Setting, Study, StudyError
 
 
 @dataclass(frozen=True)
@@ -216,10 +216,11 @@ _RELEVANT = {
 }
 
 
-def make_study_system(preset: str, s: dict):
-    """The System of the flat bar + damper settings ``s`` (units as in the keys)."""
+def make_study_system(preset: str, s: dict, spec=None):
+    """The System of the flat bar + damper settings ``s`` (units as in the keys) of
+    the system file ``spec`` (None: the published bar)."""
 
-    kw = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
+    kw = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3, "spec": spec}
     if s["kind"] == "tmd":
         kw.update(tmd_mass=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
     if s["kind"] == "ball":
@@ -260,7 +261,7 @@ def study_cases(study: Study) -> tuple[list, dict]:
             label = s["kind"]
         extra = [k for k in varied if k not in ("kind", "gap_mm", "friction") and k in relevant]
         label += "".join(f" {k}={_fmt(s[k])}" for k in extra)
-        system = make_study_system(study.preset, s)
+        system = make_study_system(study.preset, s, study.system)
         ball = s["kind"] == "ball"
         cases.append(Case(label, system, s["kind"], s["gap_mm"] * 1e-3 if ball else math.nan,
                           ("on" if s["friction"] else "off") if ball else "n/a"))
@@ -506,7 +507,7 @@ class Sensitivity(Analysis):
         s = {k: study.value(k) for k in SYSTEM_KEYS}
         varied = {"ball": "ball", "friction_number": "friction_number",
                   "restitution": "restitution"}.get(kind)
-        if varied and study.value(varied) != SETTINGS["damper"][varied].default:
+        if varied and varied in study.given:
             raise StudyError(f"{study.source}: key 'damper.{varied}' = "
                              f"{study.value(varied)!r}: cannot be fixed while analysis.kind "
                              f"= {kind!r} varies it")
@@ -520,7 +521,7 @@ class Sensitivity(Analysis):
             return sensitivity_mod.plan(
                 options, _integration(study, initial=_initial_or_none(study)),
                 preset=study.preset, bar=s["kind"], gap=s["gap_mm"] * 1e-3,
-                friction=s["friction"], overrides=_overrides(s, varied))
+                friction=s["friction"], overrides=_overrides(s, varied, study.system))
         except ParameterError as exc:
             raise StudyError(f"{study.source}: [analysis] {exc}") from None
 
@@ -535,10 +536,11 @@ class Sensitivity(Analysis):
         return sensitivity_mod.assemble(plan, results, _provenance(study))  # no case dim
 
 
-def _overrides(s: dict, varied: str | None) -> dict:
+def _overrides(s: dict, varied: str | None, spec=None) -> dict:
     """make_system arguments of the flat settings ``s`` beyond kind, gap and friction
-    (without the ``varied`` one)."""
-    overrides = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3}
+    (without the ``varied`` one), of the system file ``spec``."""
+    overrides = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3,
+                 "spec": spec}
     if s["kind"] == "ball":
         overrides.update(ball=s["ball"], restitution=s["restitution"],
                          friction_number=s["friction_number"],

@@ -1,7 +1,9 @@
 """Study files: a whole study (many runs of one analysis) described in TOML.
 
 A study file has the sections ``[study]`` (which analysis, name, preset,
-output), ``[bar]`` and ``[damper]`` (the keys of
+output, and the system file it runs: ``system = "bar.toml"``, or an inline
+``[system]`` table in the system file's format; default: the published bar),
+``[bar]`` and ``[damper]`` (overrides of the system file's values) (the keys of
 :func:`~boringbar.model.system.make_system`, units in the names), ``[forcing]``
 (harmonic force and ratio, or a cut: rpm, depth, Kr, feed ...), ``[run]``
 (duration, step, integrator, initial conditions), ``[analysis]`` (the
@@ -25,15 +27,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from boringbar._validate import ParameterError
-from boringbar.model.bar import BAR_LENGTH
 from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
 from boringbar.model.forcing import MAX_DEPTH, MAX_FEED, MAX_FORCE, MAX_KR, MAX_RATIO
+from boringbar.model.materials import MATERIALS
 from boringbar.simulate import MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY
 
-SECTIONS = ("study", "bar", "damper", "forcing", "run", "analysis", "grid")
+SECTIONS = ("study", "system", "bar", "damper", "forcing", "run", "analysis", "grid")
 FORMATS = ("netcdf", "zarr")
 #: The file name ending of each output format.
 SUFFIXES = {"netcdf": ".nc", "zarr": ".zarr"}
+#: The longest bar a position may name (mm); the bar's own length is checked when
+#: the system is built.
+MAX_BAR_LENGTH_MM = 10_000.0
 #: Most points (runs or columns) of one study, the product of its axes.
 MAX_POINTS = 10_000_000
 
@@ -131,18 +136,21 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "preset": Setting("str", "physical", choices=("physical", "paper")),
         "out": Setting("str", None, doc="result path (.nc or .zarr); default NAME.nc"),
         "format": Setting("str", None, choices=FORMATS, doc="default: from the suffix of out"),
+        "system": Setting("str", None, doc="a system file (docs/systems.md), relative to the "
+                          "study file; or an inline [system] table; default: the published "
+                          "bar"),
     },
     "bar": {
         "kind": Setting("str", "ball", choices=("solid", "ball", "tmd")),
         "n_modes": Setting("int", None, 1, 8, doc="default: 2 (physical), 1 (paper)"),
-        "tmd_design": Setting("str", None, choices=("published", "den-hartog", "sims")),
+        "tmd_design": Setting("str", None, choices=("given", "published", "den-hartog", "sims")),
         "tmd_mass_kg": _pos(0.39),
-        "z_absorber_mm": _pos(96.0, BAR_LENGTH * 1e3),
+        "z_absorber_mm": _pos(96.0, MAX_BAR_LENGTH_MM, doc="within the bar"),
     },
     "damper": {
         "gap_mm": _pos(0.5, MAX_GAP * 1e3),
         "friction": Setting("onoff", True),
-        "ball": Setting("str", "carbide", choices=("carbide", "steel")),
+        "ball": Setting("str", "carbide", choices=tuple(MATERIALS)),
         "restitution": _f(0.7, 0.0, 1.0),
         "friction_number": _f(None, 0.0, 100.0, doc="published rolling-resistance number"),
         "friction_force_n": _f(None, 0.0, MAX_FRICTION_FORCE,
@@ -204,6 +212,8 @@ class Study:
     out: str | None = None
     format: str | None = None
     given: frozenset = field(default_factory=frozenset)
+    #: the system file (a SystemSpec), or None: the published bar
+    system: object = None
 
     def value(self, key: str):
         """The fixed value of a flat setting (its [section] value or default)."""
@@ -218,6 +228,7 @@ class Study:
             **{s: {k: v for k, v in self.settings[s].items()
                    if v is not None and k not in self.axes}
                for s in ("bar", "damper", "forcing", "run")},
+            **({} if self.system is None else {"system": self.system.to_dict()}),
             "analysis": _jsonable(self.options),
             "grid": {k: list(v) for k, v in self.axes.items()},
         }

@@ -1,0 +1,505 @@
+"""System files: any impact-damped or tuned-mass-damped boring bar, described in TOML.
+
+A system file describes the bar (sections along it, each with an outer diameter
+and an optional coolant bore; a named material or E and density; damping; the
+clamp), the cavity and its ball (position, size, material or mass, gap,
+restitution, friction) and a tuned mass damper (mass, position, tuning).  Every
+key carries its unit in its name; docs/systems.md lists each key with its unit,
+default and range.  The published bar is such a file, shipped with the package
+(``published.toml`` beside this module), and the presets of
+:func:`~boringbar.model.system.make_system` build from it.
+
+:func:`load_system` reads and checks a file into a :class:`SystemSpec`; every
+error is one line naming the file, the key, the value and what is allowed.
+:meth:`SystemSpec.to_dict` is the resolved description (every default filled
+in), which results carry in their attributes; :func:`parse_system` of it
+rebuilds the same spec.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+from boringbar._validate import ParameterError
+from boringbar.model.bar import ModalModel, Section, SteppedBar
+from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
+from boringbar.model.materials import MATERIALS
+
+#: The file the presets build from.
+PUBLISHED_FILE = "published.toml"
+TUNINGS = ("den-hartog", "sims", "given")
+#: The forms a ball's friction may take (one per file): key -> Friction kind.
+FRICTION_FORMS = {"published_number": "published-number", "rolling_mm": "rolling",
+                  "coulomb": "coulomb", "force_n": "force", "none": "none"}
+REACTIONS = ("reciprocal", "printed")
+#: Snap tolerance (m): a cavity end this close to a section boundary is on it.
+SNAP = 1e-9
+_TOP_KEYS = ("name", "description", "bar", "clamp", "cavity", "ball", "tmd", "paper")
+
+
+class SystemFileError(ParameterError):
+    """A system file that cannot describe a bar; the message is one line:
+    ``FILE: key 'a.b' = VALUE: what is allowed``."""
+
+
+@dataclass(frozen=True)
+class CavitySpec:
+    """The ball's cavity: its centre ``position`` (m from the clamp), its ``length``
+    along the bar (m), the ``section_diameter`` (m) of the solid round section
+    with the bar's stiffness through it (its ``section_bore``, m, kept from the
+    host section), and its ``depth`` (m) in the direction the ball travels."""
+
+    position: float
+    length: float
+    section_diameter: float
+    section_bore: float
+    depth: float
+
+
+@dataclass(frozen=True)
+class BallSpec:
+    """The ball (``material``, ``diameter`` m, ``mass`` kg or None: from the
+    density) and its behaviour: ``gap`` (m), ``restitution``, friction
+    (``friction_kind`` one of FRICTION_FORMS's values, ``friction_value`` in
+    its unit, ``friction_reaction`` or None: the preset's, ``static_ratio``)."""
+
+    material: str
+    diameter: float
+    mass: float | None
+    gap: float
+    restitution: float
+    friction_kind: str
+    friction_value: float
+    friction_reaction: str | None
+    static_ratio: float
+
+
+@dataclass(frozen=True)
+class TmdSpec:
+    """A tuned mass damper: ``mass`` (kg) at ``position`` (m from the clamp),
+    ``tuning`` (den-hartog, sims, given) and the given ``stiffness`` (N/m) and
+    ``damping`` (N s/m), or None; ``label`` names the given design in results."""
+
+    mass: float
+    position: float
+    tuning: str
+    stiffness: float | None
+    damping: float | None
+    label: str
+
+
+@dataclass(frozen=True, eq=False)
+class SystemSpec:
+    """A resolved system file (SI units).  ``bar`` is the host bar without the
+    cavity (the solid and TMD bars); ``cavity``, ``ball``, ``tmd`` may be None;
+    ``damping`` one ratio per mode (a 1-tuple applies to all); ``n_modes`` None:
+    the preset's; ``calibration``: f1 (Hz) by bar ("ball", "solid") that the
+    paper preset calibrates to; ``data``: the resolved description
+    (:meth:`to_dict`); ``source``: the file."""
+
+    bar: SteppedBar
+    damping: tuple[float, ...]
+    n_modes: int | None
+    cavity: CavitySpec | None
+    ball: BallSpec | None
+    tmd: TmdSpec | None
+    calibration: dict
+    name: str
+    data: dict = field(repr=False)
+    source: str = "<dict>"
+
+    @property
+    def ball_position(self) -> float:
+        """z_d (m): the cavity's centre (the bar's tip if there is no cavity)."""
+        return self.cavity.position if self.cavity else self.bar.length
+
+    @property
+    def absorber_position(self) -> float:
+        """z_a (m): the absorber's position (the bar's tip if there is none)."""
+        return self.tmd.position if self.tmd else self.bar.length
+
+    def stepped_bar(self, cavity: bool) -> SteppedBar:
+        """The FE bar: with the cavity's section (``cavity``) or without."""
+        if not cavity or self.cavity is None:
+            return self.bar
+        return _with_cavity(self.bar, self.cavity)
+
+    def modal(self, cavity: bool, n_modes: int, z_absorber: float | None = None) -> ModalModel:
+        """The modal model of :meth:`stepped_bar`, ``n_modes`` retained, psi at the
+        ball and at the absorber (``z_absorber`` m, default the file's)."""
+        za = self.absorber_position if z_absorber is None else z_absorber
+        model = self.stepped_bar(cavity).modal_model(n_modes, self.ball_position, za)
+        if len(self.damping) == 1:
+            return model
+        ratios = [self.damping[min(i, len(self.damping) - 1)] for i in range(n_modes)]
+        return ModalModel(mass=model.mass, stiffness=model.stiffness,
+                          damping_ratio=ratios, psi_tip=model.psi_tip,
+                          psi_damper=model.psi_damper, psi_absorber=model.psi_absorber,
+                          z_damper=model.z_damper, z_absorber=model.z_absorber,
+                          source=model.source, info=model.info)
+
+    def mode_shapes(self, cavity: bool, n_modes: int):
+        """(z m of the FE nodes, deflection shapes (nodes, n) divided by their tip
+        value, frequencies Hz) of :meth:`stepped_bar`."""
+        omegas, nodes, shapes = self.stepped_bar(cavity).modes(
+            n_modes, (self.ball_position, self.absorber_position))
+        return nodes, shapes / shapes[-1, :], omegas / (2 * math.pi)
+
+    def max_gap(self) -> float:
+        """The largest gap (m) the cavity allows: its depth less the ball's
+        diameter, and at most the model's MAX_GAP."""
+        if self.cavity is None or self.ball is None:
+            return MAX_GAP
+        return min(MAX_GAP, self.cavity.depth - self.ball.diameter)
+
+    def to_dict(self) -> dict:
+        """The resolved description (JSON-able; every default filled in)."""
+        return json.loads(json.dumps(self.data))
+
+
+def load_system(path) -> SystemSpec:
+    """Read and check the TOML system file ``path``."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except OSError as exc:
+        raise SystemFileError(f"{path}: cannot read the system file: {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SystemFileError(f"{path}: not valid TOML: {exc}") from None
+    return parse_system(data, str(path))
+
+
+def published_system() -> SystemSpec:
+    """The published bar, from the file shipped with the package."""
+    text = resources.files("boringbar.model").joinpath(PUBLISHED_FILE).read_text()
+    return parse_system(tomllib.loads(text), PUBLISHED_FILE)
+
+
+def published_file_text() -> str:
+    """The shipped published system file, as text."""
+    return resources.files("boringbar.model").joinpath(PUBLISHED_FILE).read_text()
+
+
+# --- reading -------------------------------------------------------------------------
+
+class _Reader:
+    """Checks keys of one file, failing with one line: file, key, value, allowed."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, key: str, value, allowed: str):
+        shown = repr(value) if isinstance(value, str) else json.dumps(value, default=str)
+        raise SystemFileError(f"{self.source}: key '{key}' = {shown}: {allowed}")
+
+    def table(self, value, key: str, allowed: tuple) -> dict:
+        """``value`` (the table at ``key``), its keys checked against ``allowed``."""
+        if not isinstance(value, dict):
+            self.fail(key, value, "must be a table")
+        for k in value:
+            if k not in allowed:
+                self.fail(f"{key}.{k}", value[k], "unknown key; allowed: " + ", ".join(allowed))
+        return value
+
+    def number(self, d: dict, key: str, lo: float, hi: float = math.inf, *, default=None,
+               lo_open: bool = False, hi_open: bool = False, unit: str = "") -> float | None:
+        name = key.rsplit(".", 1)[-1]
+        if name not in d:
+            return default
+        value = d[name]
+        ok = isinstance(value, int | float) and not isinstance(value, bool)
+        if ok:
+            v = float(value)
+            ok = math.isfinite(v) and (v > lo if lo_open else v >= lo) and (
+                v < hi if hi_open else v <= hi)
+        if not ok:
+            left, right = "(" if lo_open else "[", ")" if hi_open or hi == math.inf else "]"
+            self.fail(key, value, f"must be a number in {left}{lo:g}, {hi:g}{right}"
+                                  + (f" {unit}" if unit else ""))
+        return float(value)
+
+    def required(self, d: dict, key: str, *args, **kw) -> float:
+        if key.rsplit(".", 1)[-1] not in d:
+            self.fail(key, None, "is required")
+        return self.number(d, key, *args, **kw)
+
+    def choice(self, d: dict, key: str, choices, default=None):
+        name = key.rsplit(".", 1)[-1]
+        if name not in d:
+            return default
+        if d[name] not in choices:
+            self.fail(key, d[name], "must be one of " + ", ".join(map(repr, choices)))
+        return d[name]
+
+    def text(self, d: dict, key: str, default: str) -> str:
+        name = key.rsplit(".", 1)[-1]
+        value = d.get(name, default)
+        if not isinstance(value, str):
+            self.fail(key, value, "must be a string")
+        return value
+
+
+def parse_system(d: dict, source: str = "<dict>") -> SystemSpec:
+    """Check the system description ``d`` (a parsed TOML file) into a SystemSpec."""
+    r = _Reader(source)
+    if not isinstance(d, dict):
+        raise SystemFileError(f"{source}: a system file is a table, not {type(d).__name__}")
+    for k in d:
+        if k not in _TOP_KEYS:
+            r.fail(k, d[k], "unknown key; allowed: " + ", ".join(_TOP_KEYS))
+    if "bar" not in d:
+        r.fail("bar", None, "is required: the bar's sections and material")
+    bar, damping, n_modes, bar_data = _bar(r, d)
+    cavity, cav_data = _cavity(r, d, bar)
+    ball, ball_data = _ball(r, d, bar, cavity)
+    tmd, tmd_data = _tmd(r, d, bar)
+    calibration = _paper(r, d)
+    name = r.text(d, "name", Path(source).stem if source not in ("<dict>", "") else "system")
+    data = {"name": name, "description": r.text(d, "description", ""), **bar_data,
+            **cav_data, **ball_data, **tmd_data}
+    if calibration:
+        data["paper"] = {f"first_frequency_hz_{k}": v for k, v in calibration.items()}
+    return SystemSpec(bar, damping, n_modes, cavity, ball, tmd, calibration, name, data,
+                      source)
+
+
+_BAR_KEYS = ("material", "youngs_modulus_gpa", "density_kg_m3", "damping_ratio", "modes",
+             "element_length_mm", "sections")
+_SECTION_KEYS = ("end_mm", "diameter_mm", "bore_mm")
+_CLAMP_KEYS = ("translational_stiffness_n_m", "rotational_stiffness_n_m_per_rad")
+
+
+def _material(r: _Reader, t: dict) -> tuple[float, float, str | None]:
+    name = r.choice(t, "bar.material", tuple(MATERIALS))
+    e, rho = t.get("youngs_modulus_gpa"), t.get("density_kg_m3")
+    if name is not None and (e is not None or rho is not None):
+        r.fail("bar.material", name, "give a material name or youngs_modulus_gpa and "
+                                     "density_kg_m3, not both")
+    if name is not None:
+        m = MATERIALS[name]
+        return m.youngs_modulus, m.density, name
+    if e is None or rho is None:
+        r.fail("bar.material", None, "give a material (" + ", ".join(MATERIALS)
+               + ") or both youngs_modulus_gpa and density_kg_m3")
+    return (r.number(t, "bar.youngs_modulus_gpa", 0, 2000, lo_open=True, unit="GPa") * 1e9,
+            r.number(t, "bar.density_kg_m3", 0, 30_000, lo_open=True, unit="kg/m^3"), None)
+
+
+def _sections(r: _Reader, t: dict) -> tuple[Section, ...]:
+    rows = t.get("sections")
+    if not isinstance(rows, list) or not rows:
+        r.fail("bar.sections", rows, "is required: a list of tables [[bar.sections]] with "
+                                     "end_mm, diameter_mm and optional bore_mm")
+    sections, start, data = [], 0.0, []
+    for i, row in enumerate(rows):
+        key = f"bar.sections[{i}]"
+        if not isinstance(row, dict):
+            r.fail(key, row, "must be a table with end_mm, diameter_mm, bore_mm")
+        r.table(row, key, _SECTION_KEYS)
+        end = r.required(row, f"{key}.end_mm", start * 1e3, 10_000, lo_open=True, unit="mm")
+        dia = r.required(row, f"{key}.diameter_mm", 0, 1000, lo_open=True, unit="mm")
+        bore = r.number(row, f"{key}.bore_mm", 0, dia, default=0.0, hi_open=True, unit="mm")
+        sections.append(Section(start, end / 1000, dia / 1000, bore / 1000))
+        data.append({"end_mm": end, "diameter_mm": dia, "bore_mm": bore})
+        start = end / 1000
+    return tuple(sections), data
+
+
+def _bar(r: _Reader, d: dict):
+    t = r.table(d["bar"], "bar", _BAR_KEYS)
+    e, rho, material = _material(r, t)
+    sections, section_data = _sections(r, t)
+    damping = t.get("damping_ratio", 0.01)
+    ratios = damping if isinstance(damping, list) else [damping]
+    if not ratios:
+        r.fail("bar.damping_ratio", damping, "one ratio in [0, 1), or a list per mode")
+    for i, z in enumerate(ratios):
+        r.number({"damping_ratio": z}, "bar.damping_ratio" + (f"[{i}]" if len(ratios) > 1
+                                                              else ""), 0, 1, hi_open=True)
+    modes = t.get("modes")
+    if modes is not None and (isinstance(modes, bool) or not isinstance(modes, int)
+                              or not 1 <= modes <= 8):
+        r.fail("bar.modes", modes, "must be a whole number in [1, 8]")
+    h = r.number(t, "bar.element_length_mm", 0, 1000, default=5.0, lo_open=True, unit="mm")
+    c = r.table(d.get("clamp", {}), "clamp", _CLAMP_KEYS)
+    kt = r.number(c, "clamp.translational_stiffness_n_m", 0, 1e14, default=math.inf,
+                  lo_open=True, unit="N/m")
+    kr = r.number(c, "clamp.rotational_stiffness_n_m_per_rad", 0, 1e14, default=math.inf,
+                  lo_open=True, unit="N m/rad")
+    bar = SteppedBar(sections, e, rho, float(ratios[0]), h / 1000, kt, kr)
+    data = {"bar": {"material": material, "youngs_modulus_gpa": e / 1e9,
+                    "density_kg_m3": rho, "damping_ratio": [float(z) for z in ratios],
+                    "modes": modes, "element_length_mm": h,
+                    "sections": section_data},
+            "clamp": {k: v for k, v in (("translational_stiffness_n_m", kt),
+                                        ("rotational_stiffness_n_m_per_rad", kr))
+                      if v != math.inf}}
+    if material is None:
+        del data["bar"]["material"]
+    else:
+        del data["bar"]["youngs_modulus_gpa"], data["bar"]["density_kg_m3"]
+    if modes is None:
+        del data["bar"]["modes"]
+    return bar, tuple(float(z) for z in ratios), modes, data
+
+
+_CAVITY_KEYS = ("position_mm", "length_mm", "section_diameter_mm", "depth_mm")
+
+
+def _host_section(r: _Reader, bar: SteppedBar, lo: float, hi: float, z: float) -> Section:
+    """The one section holding [lo, hi] (m), or a one-line error."""
+    if lo < -SNAP or hi > bar.length + SNAP:
+        r.fail("cavity.position_mm", z * 1e3,
+               f"the cavity spans [{lo * 1e3:g}, {hi * 1e3:g}] mm, outside the bar "
+               f"[0, {bar.length * 1e3:g}] mm")
+    for s in bar.sections:
+        if s.start - SNAP <= lo and hi <= s.end + SNAP:
+            return s
+        if s.start + SNAP < lo < s.end - SNAP or s.start + SNAP < hi < s.end - SNAP:
+            edge = s.end if lo < s.end - SNAP else s.start
+            r.fail("cavity.position_mm", z * 1e3,
+                   f"the cavity [{lo * 1e3:g}, {hi * 1e3:g}] mm crosses the section boundary "
+                   f"at {edge * 1e3:g} mm; a cavity must lie within one section (split the "
+                   "sections at the cavity's ends)")
+    raise AssertionError("unreachable")
+
+
+def _cavity(r: _Reader, d: dict, bar: SteppedBar):
+    if "cavity" not in d:
+        return None, {}
+    t = r.table(d["cavity"], "cavity", _CAVITY_KEYS)
+    z_mm = r.required(t, "cavity.position_mm", 0, bar.length * 1e3, lo_open=True,
+                      hi_open=True, unit="mm")
+    length_mm = r.required(t, "cavity.length_mm", 0, bar.length * 1e3, lo_open=True,
+                           unit="mm")
+    z, length = z_mm / 1000, length_mm / 1000
+    host = _host_section(r, bar, z - length / 2, z + length / 2, z)
+    dia_mm = r.required(t, "cavity.section_diameter_mm", host.inner_diameter * 1e3,
+                        host.diameter * 1e3, lo_open=True, unit="mm (above the host "
+                        "section's bore, at most its outer diameter)")
+    dia = dia_mm / 1000
+    depth = r.number(t, "cavity.depth_mm", 0, host.diameter * 1e3, default=host.diameter * 1e3,
+                     lo_open=True, unit="mm (at most the host section's outer diameter)")
+    cavity = CavitySpec(z, length, dia, host.inner_diameter, depth / 1000)
+    return cavity, {"cavity": {"position_mm": z_mm, "length_mm": length_mm,
+                               "section_diameter_mm": dia_mm, "depth_mm": depth}}
+
+
+_BALL_KEYS = ("material", "diameter_mm", "mass_g", "gap_mm", "restitution", "friction")
+_FRICTION_KEYS = tuple(FRICTION_FORMS) + ("reaction", "static_ratio")
+
+
+def _friction(r: _Reader, t: dict) -> tuple[str, float, str | None, float]:
+    f = t.get("friction", {"published_number": 0.6})
+    if not isinstance(f, dict):
+        r.fail("ball.friction", f, "must be a table, e.g. { rolling_mm = 0.6 }")
+    r.table(f, "ball.friction", _FRICTION_KEYS)
+    forms = [k for k in FRICTION_FORMS if k in f]
+    if len(forms) != 1:
+        r.fail("ball.friction", f, "give exactly one of " + ", ".join(FRICTION_FORMS))
+    form = forms[0]
+    if form == "none":
+        if f["none"] is not True:
+            r.fail("ball.friction.none", f["none"], "must be true")
+        value = 0.0
+    else:
+        hi = MAX_FRICTION_FORCE if form == "force_n" else 100.0
+        value = r.number(f, f"ball.friction.{form}", 0, hi)
+    reaction = r.choice(f, "ball.friction.reaction", REACTIONS)
+    ratio = r.number(f, "ball.friction.static_ratio", 1, 1e6, default=1.0)
+    return FRICTION_FORMS[form], value, reaction, ratio
+
+
+def _ball(r: _Reader, d: dict, bar: SteppedBar, cavity: CavitySpec | None):
+    if "ball" not in d:
+        return None, {}
+    if cavity is None:
+        r.fail("ball", d["ball"], "a ball needs a [cavity] (its position and size)")
+    t = r.table(d["ball"], "ball", _BALL_KEYS)
+    material = r.choice(t, "ball.material", tuple(MATERIALS), default="carbide")
+    dia = r.number(t, "ball.diameter_mm", 0, cavity.length * 1e3, default=15.0,
+                   lo_open=True, unit=f"mm (the cavity is {cavity.length * 1e3:g} mm long)")
+    if dia / 1000 >= cavity.depth:
+        r.fail("ball.diameter_mm", dia, f"must be less than the cavity's depth "
+                                        f"{cavity.depth * 1e3:g} mm")
+    mass = r.number(t, "ball.mass_g", 0, 100_000, lo_open=True, unit="g")
+    room = min(MAX_GAP, cavity.depth - dia / 1000) * 1e3
+    gap = r.number(t, "ball.gap_mm", 0, room, default=min(0.5, room), lo_open=True,
+                   unit=f"mm (cavity depth {cavity.depth * 1e3:g} mm less the ball, at most "
+                        f"{MAX_GAP * 1e3:g} mm)")
+    e = r.number(t, "ball.restitution", 0, 1, default=0.7)
+    kind, value, reaction, ratio = _friction(r, t)
+    ball = BallSpec(material, dia / 1000, None if mass is None else mass / 1000, gap / 1000,
+                    e, kind, value, reaction, ratio)
+    form = next(k for k, v in FRICTION_FORMS.items() if v == kind)
+    friction = {form: True if form == "none" else value, "static_ratio": ratio}
+    if reaction is not None:
+        friction["reaction"] = reaction
+    data = {"material": material, "diameter_mm": dia, "gap_mm": gap, "restitution": e,
+            "friction": friction}
+    if mass is not None:
+        data["mass_g"] = mass
+    return ball, {"ball": data}
+
+
+_TMD_KEYS = ("mass_kg", "position_mm", "tuning", "stiffness_n_m", "damping_n_s_m", "label")
+
+
+def _tmd(r: _Reader, d: dict, bar: SteppedBar):
+    if "tmd" not in d:
+        return None, {}
+    t = r.table(d["tmd"], "tmd", _TMD_KEYS)
+    mass = r.required(t, "tmd.mass_kg", 0, 1000, lo_open=True, unit="kg")
+    z_mm = r.required(t, "tmd.position_mm", 0, bar.length * 1e3, lo_open=True, unit="mm")
+    z = z_mm / 1000
+    tuning = r.choice(t, "tmd.tuning", TUNINGS, default="den-hartog")
+    k = r.number(t, "tmd.stiffness_n_m", 0, 1e12, lo_open=True, unit="N/m")
+    c = r.number(t, "tmd.damping_n_s_m", 0, 1e9, unit="N s/m")
+    if tuning == "given" and (k is None or c is None):
+        r.fail("tmd.tuning", tuning, "'given' needs stiffness_n_m and damping_n_s_m")
+    label = r.text(t, "tmd.label", "given")
+    data = {"mass_kg": mass, "position_mm": z_mm, "tuning": tuning, "label": label}
+    if k is not None and c is not None:
+        data.update(stiffness_n_m=k, damping_n_s_m=c)
+    elif k is not None or c is not None:
+        r.fail("tmd.stiffness_n_m" if k is None else "tmd.damping_n_s_m", None,
+               "give both stiffness_n_m and damping_n_s_m, or neither")
+    return TmdSpec(mass, z, tuning, k, c, label), {"tmd": data}
+
+
+def _paper(r: _Reader, d: dict) -> dict:
+    t = r.table(d.get("paper", {}), "paper",
+                ("first_frequency_hz_ball", "first_frequency_hz_solid"))
+    out = {}
+    for kind in ("ball", "solid"):
+        f = r.number(t, f"paper.first_frequency_hz_{kind}", 0, 1e6, lo_open=True, unit="Hz")
+        if f is not None:
+            out[kind] = f
+    return out
+
+
+def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
+    """``bar`` with the cavity's span given the cavity's equivalent section; the
+    host section is split at the cavity's ends unless they sit on its own."""
+    lo, hi = cavity.position - cavity.length / 2, cavity.position + cavity.length / 2
+    out = []
+    for s in bar.sections:
+        if not (s.start - SNAP <= lo and hi <= s.end + SNAP):
+            out.append(s)
+            continue
+        a = s.start if abs(lo - s.start) <= SNAP else lo
+        b = s.end if abs(hi - s.end) <= SNAP else hi
+        if a > s.start:
+            out.append(Section(s.start, a, s.diameter, s.inner_diameter))
+        out.append(Section(a, b, cavity.section_diameter, cavity.section_bore))
+        if b < s.end:
+            out.append(Section(b, s.end, s.diameter, s.inner_diameter))
+    return SteppedBar(tuple(out), bar.youngs_modulus, bar.density, bar.damping_ratio,
+                      bar.max_element_length, bar.clamp_translational_stiffness,
+                      bar.clamp_rotational_stiffness)
