@@ -51,7 +51,7 @@ def test_uniform_cantilever_from_a_file_matches_the_closed_form():
         closed = beta_l**2 / (2 * math.pi) * math.sqrt(ei / (rho_a * L**4))
         assert fe[i] == pytest.approx(closed, rel=1e-3)
     static = describe_modes(make_system("solid", spec=spec))["tip_static_stiffness_n_m"]
-    assert static == pytest.approx(3 * ei / L**3, rel=1e-7)  # Hermite cubics: exact but for round-off
+    assert static == pytest.approx(3 * ei / L**3, rel=1e-7)  # exact but for round-off
 
 
 def spring_supported_f1(kt: float, kr: float) -> float:
