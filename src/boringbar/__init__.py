@@ -5,7 +5,9 @@ layers behind them.
 
 - Descriptions: :class:`SteppedBar`, :class:`ModalModel`, :class:`ImpactDamper`,
   :class:`Friction`, :class:`TunedMassDamper`, :class:`System` and
-  :func:`make_system` (the two presets); forcing: :class:`Harmonic`,
+  :func:`make_system` (the two presets); your own bar: :func:`load_system`
+  (system files) -> :class:`SystemSpec`, :func:`describe_modes`, :class:`ModalFit`
+  (a fitted tip FRF); forcing: :class:`Harmonic`,
   :class:`Regenerative`.
 - One run: :func:`simulate` -> :class:`Run`.
 - Analyses: :func:`sweep`, :func:`lobes`, :func:`bifurcation`, :func:`basins`,
@@ -35,7 +37,15 @@ from boringbar.model.dampers import (  # noqa: E402
     sims_tuning,
 )
 from boringbar.model.forcing import Harmonic, Regenerative  # noqa: E402
-from boringbar.model.system import PRESETS, READINGS, System, make_system  # noqa: E402
+from boringbar.model.modal_fit import ModalFit  # noqa: E402
+from boringbar.model.system import (  # noqa: E402
+    PRESETS,
+    READINGS,
+    System,
+    describe_modes,
+    make_system,
+)
+from boringbar.model.system_file import SystemSpec, load_system  # noqa: E402
 from boringbar.reference.linear import min_real_part, tip_frf  # noqa: E402
 from boringbar.simulate import Initial, Integration, IntegrationError, Run, State, simulate  # noqa: E402
 from boringbar.studies.load import load_study  # noqa: E402
@@ -56,6 +66,7 @@ __all__ = [
     "Integration",
     "IntegrationError",
     "LobesOptions",
+    "ModalFit",
     "ModalModel",
     "ParameterError",
     "Regenerative",
@@ -66,11 +77,14 @@ __all__ = [
     "SteppedBar",
     "SweepOptions",
     "System",
+    "SystemSpec",
     "TunedMassDamper",
     "basins",
     "bifurcation",
     "den_hartog_parameters",
+    "describe_modes",
     "load_study",
+    "load_system",
     "lobes",
     "make_system",
     "min_real_part",
