@@ -40,7 +40,10 @@ MODE_KEYS = ("frequency_hz", "damping_ratio", "modal_stiffness_n_m")
 
 @dataclass(frozen=True, eq=False)
 class ModalFit:
-    """Modes fitted to a tip FRF: f_i (Hz), zeta_i and tip-referred k_i (N/m)."""
+    """Modes fitted to a tip FRF: ``frequency_hz`` f_i (Hz), ``damping_ratio``
+    zeta_i and ``modal_stiffness_n_m`` k_i (N/m, referred to the tip), one value
+    per mode; ``source`` (where the FRF came from, how it was fitted) and
+    ``quality`` (fit residuals) are free-form provenance."""
 
     frequency_hz: tuple[float, ...]
     damping_ratio: tuple[float, ...]

@@ -99,7 +99,7 @@ class SystemSpec:
     cavity (the solid and TMD bars); ``cavity``, ``ball``, ``tmd`` may be None;
     ``damping`` one ratio per mode (a 1-tuple applies to all); ``n_modes`` None:
     the preset's; ``calibration``: f1 (Hz) by bar ("ball", "solid") that the
-    paper preset calibrates to; ``data``: the resolved description
+    paper preset calibrates to; ``name``: the bar's name; ``data``: the resolved description
     (:meth:`to_dict`); ``source``: the file."""
 
     bar: SteppedBar
