@@ -20,6 +20,7 @@ import textwrap
 
 from boringbar import __version__
 from boringbar.cli.compile import add_compile
+from boringbar.cli.frf import add_fit_frf
 from boringbar.cli.modes import add_modes
 from boringbar.cli.nonlinear import add_basins, add_bifurcation, add_sensitivity
 from boringbar.cli.options import PROG, Outcome
@@ -56,6 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     add_modes(sub)
+    add_fit_frf(sub)
     add_simulate(sub)
     add_sweep(sub)
     add_lobes(sub)

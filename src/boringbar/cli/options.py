@@ -9,6 +9,7 @@ import math
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
@@ -24,6 +25,7 @@ from boringbar.model.forcing import (
     MAX_RATIO,
     STARTS,
 )
+from boringbar.model.measured_frf import CSV_SUFFIXES, UFF_SUFFIXES, read_frf
 from boringbar.model.modal_fit import ModalFit
 from boringbar.model.system import BALLS, BAR_KINDS, PRESETS, published_system_spec
 from boringbar.model.system_file import load_system
@@ -62,7 +64,8 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                         "published bar (examples/systems/published.toml)")
     g.add_argument("--frf", metavar="FIT.json",
                    help="a modal model fitted to a measured tip FRF (boringbar fit-frf) in "
-                        "place of the FE bar; give --frf-ball-ratio / --frf-absorber-ratio")
+                        "place of the FE bar; give --frf-ball-ratio / --frf-absorber-ratio "
+                        "(lobes --analytic: also a measured FRF, .csv or .uff, as it is)")
     g.add_argument("--frf-ball-ratio", type=float, metavar="R",
                    help="psi(z_ball)/psi(tip) of every fitted mode (a tip FRF cannot know it)")
     g.add_argument("--frf-absorber-ratio", type=float, metavar="R",
@@ -241,13 +244,20 @@ def default_bars(args, many: bool) -> list[str]:
 def resolve_files(args, bars: list[str]) -> None:
     """Read --system and --frf once into ``args.system_spec`` and ``args.frf_modal``."""
     system_spec(args)
-    args.frf_modal = None
+    args.frf_modal = args.frf_measured = None
     ratios = {"ball": ("--frf-ball-ratio", args.frf_ball_ratio),
               "tmd": ("--frf-absorber-ratio", args.frf_absorber_ratio)}
     if args.frf is None:
         given = [opt for opt, v in ratios.values() if v is not None]
         if given:
             raise ParameterError(f"{given[0]} applies only with --frf")
+        return
+    if Path(args.frf).suffix.lower() in CSV_SUFFIXES + UFF_SUFFIXES:
+        if not getattr(args, "analytic", False):
+            raise ParameterError(f"--frf = {args.frf!r} is a measured FRF: fit it first "
+                                 f"(boringbar fit-frf {args.frf}) and give its modal_fit.json, "
+                                 "or draw its classical lobes with 'lobes --analytic'")
+        args.frf_measured = read_frf(args.frf)
         return
     for bar in bars:
         if bar in ratios and ratios[bar][1] is None:

@@ -10,6 +10,7 @@ from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.lobes import MAX_DEPTHS, PUBLISHED_RPM, LobesOptions, lobes
 from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
+from boringbar.cli.frf import analytic_lobes_outcome
 from boringbar.cli.options import (
     PATTERN_KEY,
     Outcome,
@@ -55,6 +56,10 @@ def add_lobes(sub) -> None:
     g.add_argument("--rpm", metavar="START:STOP:STEP",
                    help="spindle speeds in rev/min, START:STOP:STEP (inclusive) or comma list "
                         "(default: 900:1600:50, published)")
+    g.add_argument("--analytic", action="store_true",
+                   help="the classical frequency-domain lobes of the tip FRF instead of "
+                        "simulated cuts (with --frf: of a measured FRF as it is); writes "
+                        "DIR/lobes_analytic.json and .png (default --rpm: 500:5000:50)")
     g.add_argument("--depth-step-mm", type=float, default=0.01, metavar="MM",
                    help="depth-of-cut step in mm (default: 0.01)")
     g.add_argument("--max-depth-mm", type=float, default=3.0, metavar="MM",
@@ -131,6 +136,8 @@ def _sweep_text(ds) -> str:
 
 
 def _cmd_lobes(args) -> Outcome:
+    if args.analytic:
+        return analytic_lobes_outcome(args, cut_options(args)["kr"])
     cases, _, _ = many_cases(args)
     rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
     for r in rpm:

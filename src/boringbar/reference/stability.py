@@ -157,9 +157,18 @@ def analytic_lobes(
     """
     kr = check_positive("kr", kr, "Pa")
     bar, tmd, added_mass = _resolve(system_or_bar, tmd, added_mass)
-    j = _lobe_numbers(lobes)
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
-    g = tip_frf(bar, w, tmd=tmd, added_mass=added_mass)
+    return lobes_of_receptance(w, tip_frf(bar, w, tmd=tmd, added_mass=added_mass), kr, lobes)
+
+
+def lobes_of_receptance(w, g, kr: float = KR_ALUMINIUM,
+                        lobes: Iterable[int] = range(0, 40)) -> dict:
+    """The lobes of :func:`analytic_lobes` from a tip receptance ``g`` (m/N) sampled
+    at ``w`` (rad/s, increasing): a model's, or a measured FRF as it is, without a
+    modal fit (the classical frequency-domain method)."""
+    kr = check_positive("kr", kr, "Pa")
+    j = _lobe_numbers(lobes)
+    w, g = np.asarray(w, dtype=float), np.asarray(g, dtype=complex)
     chatter = g.real < 0.0
     eps = regeneration_phase(g)
     b = np.where(chatter, -0.5 / (kr * np.where(chatter, g.real, -1.0)), np.nan)
@@ -270,6 +279,35 @@ def _bisect(bar, tmd, added_mass, lo, hi, j, tau):
         lo, f_lo = np.where(same, mid, lo), np.where(same, f_mid, f_lo)
         hi = np.where(same, hi, mid)
     return 0.5 * (lo + hi)
+
+
+def sampled_limits(w, g, rpm, kr: float = KR_ALUMINIUM) -> dict:
+    """The analytic limit of a tip receptance known only at samples ``w`` (rad/s),
+    ``g`` (m/N), as measured: ``min_limit`` -1 / (2 Kr min Re G) over the samples
+    and its ``frequency_hz``; ``limit`` (m) at each speed of ``rpm``, from every
+    lobe crossing of :func:`limit_at_speeds` between two samples, the frequency and
+    Re G interpolated linearly between them (inf where no lobe reaches a speed)."""
+    kr = check_positive("kr", kr, "Pa")
+    w, g = np.asarray(w, dtype=float), np.asarray(g, dtype=complex)
+    eps = regeneration_phase(g)
+    i = int(np.argmin(g.real))
+    low = -0.5 / (kr * g.real[i]) if g.real[i] < 0.0 else math.inf
+    speeds = np.atleast_1d(np.asarray(rpm, dtype=float))
+    limits = np.full(speeds.shape, np.inf)
+    for k, speed in enumerate(speeds):
+        tau = 60.0 / check_positive("rpm", speed, "rev/min")
+        lo, hi, j, _ = _crossings(w, g, eps, tau, None)
+        if len(j) == 0:
+            continue
+        a = np.searchsorted(w, lo)
+        h_lo = (w[a] * tau - eps[a]) / TWO_PI - j
+        h_hi = (w[a + 1] * tau - eps[a + 1]) / TWO_PI - j
+        t = h_lo / (h_lo - h_hi)
+        re = (1 - t) * g.real[a] + t * g.real[a + 1]
+        b = np.where(re < 0.0, -0.5 / (kr * np.minimum(re, -1e-300)), np.inf)
+        limits[k] = b.min()
+    return {"min_limit": low, "frequency_hz": w[i] / TWO_PI, "rpm": speeds,
+            "limit": limits}
 
 
 def min_limit(

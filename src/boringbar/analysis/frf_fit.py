@@ -1,0 +1,115 @@
+"""Modal parameters from a measured tip FRF, with sdypy-EMA (LSCF poles, LSFD constants).
+
+The fit is sdypy-EMA's, not ours. We add only what a fit without a person at a
+stabilisation chart needs, and the conversion to boringbar's modal model:
+
+1. **Band.** The lines in ``band_hz`` (default: the whole measurement above
+   its first line).
+2. **Poles.** LSCF poles for model orders up to ``max_order``
+   (``Model.get_poles``).
+3. **Which poles.** The stable poles of the stabilisation chart that sit closest
+   to the ``n_modes`` most prominent peaks of |H|; "stable" means frequency
+   within 0.1 % and damping within 5 % from one order to the next, sdypy's own
+   criterion (``Model.select_closest_poles``). This rule stands in for the
+   person at the chart. It finds lightly damped modes that stand out of the
+   noise, and a fit it does not know is refused rather than guessed: fewer
+   peaks than modes asked is an error.
+4. **Constants.** LSFD modal constants with lower and upper residuals
+   (``Model.get_constants``).
+5. **Our modal model.** A receptance mode reads
+   A/(i w - lambda) + conj(A)/(i w - conj(lambda)), with lambda = -zeta w_n + i w_d.
+   For a real (proportionally damped) mode of tip stiffness k that is
+   w_n^2 / (k (w_n^2 - w^2 + 2 i zeta w_n w)), so A = -i w_n^2 / (2 k w_d) and
+   k = w_n^2 / (2 w_d (-Im A)). The part of A that is not imaginary (a complex
+   mode, or noise) is dropped, and its size goes into the quality figures
+   (``complexity``) beside the fit's relative residual over the band.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import warnings
+
+import numpy as np
+import scipy.signal
+from sdypy import EMA
+
+from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.model.measured_frf import MeasuredFrf
+from boringbar.model.modal_fit import ModalFit
+
+#: Highest LSCF model order tried by default.
+MAX_ORDER = 40
+#: How far a peak of |H| must stand above its surroundings to count as a mode.
+PEAK_FACTOR = 2.0
+#: sdypy's stability tolerances: relative frequency and damping change per order.
+STABLE_FREQUENCY = 1e-3
+STABLE_DAMPING = 5e-2
+
+
+def fit_frf(frf: MeasuredFrf, n_modes: int = 1, *, band_hz: tuple | None = None,
+            max_order: int = MAX_ORDER) -> tuple[ModalFit, np.ndarray]:
+    """Fit ``n_modes`` modes to the measured tip receptance ``frf`` in ``band_hz``
+    (Hz, default the whole measurement): (the :class:`ModalFit`, the
+    reconstructed receptance at the band's lines)."""
+    n = check_int("n_modes", n_modes, 1, 8)
+    check_int("max_order", max_order, 2 * n + 2, 200)
+    data = _band(frf, band_hz)
+    peaks = _peaks(data, n)
+    model = EMA.Model(frf=data.receptance[None, :], freq=data.frequency_hz,
+                      lower=float(data.frequency_hz[0]), upper=float(data.frequency_hz[-1]),
+                      pol_order_high=int(max_order), frf_form="receptance")
+    # sdypy's stabilisation chart always draws a tqdm bar on stderr: keep it off ours
+    with warnings.catch_warnings(), contextlib.redirect_stderr(io.StringIO()):
+        warnings.simplefilter("ignore")
+        model.get_poles(method="lscf", show_progress=False)
+        model.select_closest_poles(list(peaks), fn_temp=STABLE_FREQUENCY,
+                                   xi_temp=STABLE_DAMPING)
+        _, constants = model.get_constants(method="lsfd")
+    f_n = np.asarray(model.nat_freq, dtype=float)
+    zeta = np.asarray(model.nat_xi, dtype=float)
+    order = np.argsort(f_n)
+    f_n, zeta, a = f_n[order], zeta[order], np.asarray(constants)[0, order]
+    w_n = 2 * math.pi * f_n
+    w_d = w_n * np.sqrt(1 - zeta**2)
+    if np.any(-a.imag <= 0) or np.any(zeta <= 0):
+        raise ParameterError(f"{frf.source.get('file', 'FRF')}: a fitted mode has a "
+                             "non-physical constant (negative stiffness or damping); try "
+                             "--band-hz around the modes, or fewer --modes")
+    k = w_n**2 / (2 * w_d * (-a.imag))
+    fit = ModalFit(tuple(f_n), tuple(zeta), tuple(k))
+    h_fit = fit.tip_frf(data.frequency_hz)
+    residual = float(np.linalg.norm(h_fit - data.receptance) / np.linalg.norm(data.receptance))
+    quality = {"relative_residual": residual,
+               "complexity": (np.abs(a.real) / np.abs(a)).tolist(),
+               "peaks_hz": sorted(float(p) for p in peaks)}
+    source = {**frf.source, "method": "sdypy-EMA LSCF poles + LSFD constants",
+              "max_order": int(max_order), "band_hz": [float(data.frequency_hz[0]),
+                                                       float(data.frequency_hz[-1])],
+              "pole_selection": "stable poles closest to the most prominent peaks of |H|"}
+    return ModalFit(tuple(f_n), tuple(zeta), tuple(k), source, quality), h_fit
+
+
+def _band(frf: MeasuredFrf, band_hz) -> MeasuredFrf:
+    if band_hz is None:
+        return frf
+    lo, hi = band_hz
+    check_range("band low", lo, 0, math.inf, hi_open=True, unit="Hz")
+    check_range("band high", hi, lo, math.inf, lo_open=True, hi_open=True, unit="Hz")
+    return frf.band(lo, hi)
+
+
+def _peaks(frf: MeasuredFrf, n: int) -> np.ndarray:
+    """The frequencies (Hz) of the ``n`` most prominent peaks of |H|: prominence on a
+    log scale, so a stiff higher mode counts as much as the first, and a peak must
+    stand a factor PEAK_FACTOR above its surroundings (noise of a few per cent
+    does not)."""
+    log_mag = np.log(np.abs(frf.receptance))
+    idx, props = scipy.signal.find_peaks(log_mag, prominence=math.log(PEAK_FACTOR))
+    if len(idx) < n:
+        raise ParameterError(f"{frf.source.get('file', 'FRF')}: {len(idx)} clear peak(s) in "
+                             f"the band, fewer than the {n} modes asked for")
+    best = idx[np.argsort(props["prominences"])[::-1][:n]]
+    return frf.frequency_hz[np.sort(best)]

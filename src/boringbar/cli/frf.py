@@ -1,0 +1,173 @@
+"""Measured FRFs on the command line: ``boringbar fit-frf`` (modal parameters of a
+measured tip FRF, with sdypy-EMA) and ``boringbar lobes --analytic`` (the classical
+frequency-domain lobes, from a measured FRF as it is, or from a bar's model)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from boringbar._validate import ParameterError, check_int, check_positive
+from boringbar.analysis.frf_fit import MAX_ORDER, fit_frf
+from boringbar.analysis.sweep import parse_range
+from boringbar.cli.options import Outcome, many_cases, resolve_files, wrote
+from boringbar.io import save_figure_atomic, write_json_atomic
+from boringbar.model.measured_frf import read_frf
+from boringbar.plot import plot_analytic_lobes, plot_frf_fit
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.stability import (
+    GRID_SPAN,
+    TWO_PI,
+    limit_at_speeds,
+    lobes_of_receptance,
+    min_limit,
+    natural_frequencies,
+    sampled_limits,
+)
+
+#: Speeds at which the figure's lower envelope is evaluated.
+ENVELOPE_SPEEDS = 600
+
+
+def add_fit_frf(sub) -> None:
+    p = sub.add_parser("fit-frf", help="fit modes to a measured tip FRF (tap test)",
+                       description="Fit modal parameters (frequency, damping ratio, tip "
+                                   "stiffness) to a measured tip receptance with sdypy-EMA "
+                                   "(LSCF poles, LSFD constants; docs/frf.md). FILE: CSV "
+                                   "(frequency Hz, real, imaginary m/N) or UFF dataset 58. "
+                                   "Writes DIR/modal_fit.json (what --frf reads) and "
+                                   "DIR/fit.png (measured against fitted).")
+    p.add_argument("file", metavar="FILE", help="the measured FRF (.csv, .txt, .uff, .unv)")
+    p.add_argument("--modes", type=int, default=1, metavar="N",
+                   help="modes to fit, 1 to 8 (default: 1)")
+    p.add_argument("--band-hz", metavar="LO:HI", help="fit within this band (default: all)")
+    p.add_argument("--max-order", type=int, default=MAX_ORDER, metavar="N",
+                   help=f"highest LSCF model order (default: {MAX_ORDER})")
+    p.add_argument("--out", default="out", metavar="DIR")
+    p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=cmd_fit_frf)
+
+
+def cmd_fit_frf(args) -> Outcome:
+    n = check_int("--modes", args.modes, 1, 8)
+    band = None if args.band_hz is None else _band(args.band_hz)
+    measured = read_frf(args.file)
+    fit, fitted = fit_frf(measured, n, band_hz=band, max_order=args.max_order)
+    f = measured.frequency_hz if band is None else measured.band(*band).frequency_hz
+    data = measured if band is None else measured.band(*band)
+    out = Path(args.out)
+    files = {"json": out / "modal_fit.json", "png": out / "fit.png"}
+    write_json_atomic(fit.to_dict(), files["json"])
+    save_figure_atomic(plot_frf_fit(f, data.receptance, fitted, fit), files["png"])
+    summary = {**fit.to_dict(), "files": {k: str(v) for k, v in files.items()}}
+
+    def text(say) -> None:
+        say(f"{args.file}: {n} mode(s) fitted by {fit.source['method']}")
+        say("  mode  f (Hz)      zeta       k_tip (N/m)")
+        for i, m in enumerate(summary["modes"]):
+            say(f"  {i + 1:<4}  {m['frequency_hz']:<10.2f}  {m['damping_ratio']:<9.4g}  "
+                f"{m['modal_stiffness_n_m']:.4g}")
+        say(f"  relative residual {fit.quality['relative_residual']:.3g} over the band")
+        say("  " + wrote(summary["files"]))
+
+    return Outcome(summary, text)
+
+
+def _band(text: str) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ParameterError(f"--band-hz = {text!r} must be LO:HI in Hz") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
+        raise ParameterError(f"--band-hz = {text!r} must be LO:HI with 0 <= LO < HI")
+    return lo, hi
+
+
+def analytic_lobes_outcome(args, kr: float) -> Outcome:
+    """``lobes --analytic``: the classical lobes of each case's tip FRF, or of the
+    measured FRF of --frf as it is; no time-domain cut is simulated."""
+    check_positive("--kr-mpa", kr * 1e-6, "MPa")
+    resolve_files(args, [])
+    rpm = np.asarray(parse_range(args.rpm or "500:5000:50", "--rpm"), dtype=float)
+    for r in rpm:
+        check_positive("--rpm", r, "rev/min")
+    lo, hi = (rpm.min(), rpm.max()) if len(rpm) > 1 else (0.8 * rpm[0], 1.2 * rpm[0])
+    dense = np.linspace(lo, hi, ENVELOPE_SPEEDS)
+    rows, curves = [], []
+    for label, w, g, limits in _distinct(_sources(args, kr, rpm, dense)):
+        lobes = lobes_of_receptance(w, g, kr)
+        rows.append({"case": label, "min_limit_m": limits["min_limit"],
+                     "frequency_hz": limits["frequency_hz"],
+                     "speeds": [{"rpm": float(r), "limit_m": float(b)}
+                                for r, b in zip(rpm, limits["limit"], strict=True)]})
+        curves.append((label, lobes, dense, limits["envelope"]))
+    out = Path(args.out)
+    files = {"json": out / "lobes_analytic.json", "png": out / "lobes_analytic.png"}
+    summary = {"method": "analytic", "kr_pa": kr, "cases": rows,
+               "files": {k: str(v) for k, v in files.items()}}
+    save_figure_atomic(plot_analytic_lobes(curves, (float(lo), float(hi))), files["png"])
+    write_json_atomic(summary, files["json"])
+
+    def text(say) -> None:
+        for row in rows:
+            say(f"{row['case']}: speed-independent limit {row['min_limit_m'] * 1e3:.4g} mm "
+                f"(chatter at {row['frequency_hz']:.1f} Hz)")
+            for s in row["speeds"][:12]:
+                say(f"  {s['rpm']:8g} rpm  {s['limit_m'] * 1e3:.4g} mm")
+            if len(row["speeds"]) > 12:
+                say(f"  ... {len(row['speeds'])} speeds in {files['json']}")
+        say(wrote(summary["files"]))
+
+    return Outcome(summary, text)
+
+
+def _sources(args, kr, rpm, dense):
+    """(label, w rad/s, tip receptance, limits) of the measured FRF or of each case."""
+    measured = getattr(args, "frf_measured", None)
+    if measured is not None:
+        w, g = measured.omega, measured.receptance
+        limits = sampled_limits(w, g, rpm, kr)
+        limits["envelope"] = sampled_limits(w, g, dense, kr)["limit"]
+        yield f"measured FRF {Path(args.frf).name}", w, g, limits
+        return
+    cases, _, _ = many_cases(args)
+    for case in cases:
+        kw = _frf_damper(case.system)
+        wn = natural_frequencies(case.system.bar, kw.get("tmd"), kw.get("added_mass", 0.0))
+        w = np.geomspace(GRID_SPAN[0] * wn.min(), GRID_SPAN[1] * wn.max(), 20000)
+        g = tip_frf(case.system.bar, w, **kw)
+        low = min_limit(case.system, kr)
+        at = np.argmin(g.real)
+        limits = {"min_limit": low, "frequency_hz": float(w[at] / TWO_PI),
+                  "limit": limit_at_speeds(case.system, rpm, kr),
+                  "envelope": sampled_limits(w, g, dense, kr)["limit"]}
+        yield case.label, w, g, limits
+
+
+def _distinct(sources):
+    """The sources with distinct FRFs, labels joined: the free-ball cases share one
+    (in the linear limit the ball does not touch the bar)."""
+    out, labels = [], []
+    for label, w, g, limits in sources:
+        same = next((i for i, o in enumerate(out) if o[2].shape == g.shape
+                     and np.array_equal(o[2], g)), None)
+        if same is None:
+            out.append((label, w, g, limits))
+            labels.append([label])
+        else:
+            labels[same].append(label)
+    return [(names[0] + (f" (and {len(names) - 1} more with the same FRF)" if len(names) > 1
+                         else ""), *rest) for names, (_, *rest) in zip(labels, out, strict=True)]
+
+
+def _frf_damper(system) -> dict:
+    """tip_frf's damper keywords for a system (a locked ball is an added mass; a free
+    ball does not act on the bar in the linear limit)."""
+    if system.kind == "tmd":
+        return {"tmd": system.damper}
+    if system.kind == "locked":
+        return {"added_mass": system.damper.mass}
+    return {}
