@@ -19,6 +19,7 @@ import sys
 import textwrap
 
 from boringbar import __version__
+from boringbar.cli.audit import add_audit
 from boringbar.cli.compile import add_compile
 from boringbar.cli.frf import add_fit_frf
 from boringbar.cli.modes import add_modes
@@ -68,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_run(sub)
     add_compile(sub)
     add_paper(sub)
+    add_audit(sub)
     return parser
 
 

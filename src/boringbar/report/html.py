@@ -26,6 +26,8 @@ import xarray as xr
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from boringbar.io import atomic_path
+from boringbar.report.audit import audit, count_line
+from boringbar.report.audit_data import TOLERANCE
 
 _ENV = Environment(
     loader=PackageLoader("boringbar.report", "templates"),
@@ -244,8 +246,28 @@ class _Report:
                 "compute_time": f"{m.get('compute_time_s', 0):.0f}",
                 "wall_time": f"{m['wall_time_s']:.0f}"}
 
+    def audit(self) -> dict:
+        """The audit table (report/audit.py) for the template."""
+        result = audit(self.out)
+        css = {"reproduced": "reproduced", "partly": "partly", "not reproduced": "not",
+               "not available": "na"}
+        rows = []
+        for c in result["claims"]:
+            published = "; ".join(f"{p['name']} {p['value']}{' ' + p['unit'] if p['unit'] else ''}"
+                                  for p in c["published"])
+            cells = [{"verdict": c["verdict"][p], "css": css[c["verdict"][p]],
+                      "reason": c["reason"][p], "figure": c["figure"][p],
+                      "measured": "; ".join(f"{k} {v}" for k, v in c["measured"][p].items())}
+                     for p in result["presets"]]
+            rows.append({"id": c["id"], "source": c["source"], "statement": c["statement"],
+                         "published": published, "cells": cells})
+        return {"rows": rows, "presets": result["presets"], "quick": result["quick"],
+                "counts": [count_line(result, p) for p in result["presets"]],
+                "tolerance": f"{TOLERANCE:.0%}"}
+
     def context(self) -> dict:
-        return {"header": self.header(), "sweeps": self.sweeps(), "lobes": self.lobes(),
+        return {"header": self.header(), "audit": self.audit(), "sweeps": self.sweeps(),
+                "lobes": self.lobes(),
                 "bifurcation": self.bifurcation(), "basins": self.basins(),
                 "sensitivity": self.sensitivity(), "corrections": self.corrections(),
                 "cannot": self.cannot()}
