@@ -971,3 +971,50 @@ def plot_analytic_lobes(curves, rpm_range, *, fig=None) -> Figure:
                  "speed-independent limit)", fontsize=9)
     ax.legend(fontsize=8, loc="upper left")
     return fig
+
+
+# --- design search -------------------------------------------------------------------------
+def plot_design(ds, *, fig=None) -> Figure:
+    """The objective's statistic of every trial against each design variable; the
+    best trial marked, the file's own design as a dashed line."""
+    names = [k for k in ds.data_vars if ds[k].dims == ("trial",)
+             and k not in ("statistic", "error", "wall_time_s")]
+    fig = fig or Figure(figsize=(4.2 * len(names), 3.8), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(names), sharey=True))
+    stat, best = ds["statistic"].values, int(ds.attrs["best_trial"])
+    for ax, name in zip(axes, names, strict=True):
+        x = ds[name].values
+        numeric = np.issubdtype(x.dtype, np.number)
+        ax.errorbar(x if numeric else np.searchsorted(np.unique(x), x), stat,
+                    yerr=ds["error"].values, fmt="o", ms=3, alpha=0.6, lw=0.6)
+        bx = x[best] if numeric else np.searchsorted(np.unique(x), x[best])
+        ax.plot([bx], [stat[best]], "*", color="#d84315", ms=14, label="best")
+        ax.axhline(ds.attrs["published_statistic"], color="0.3", ls="--", lw=1,
+                   label="file's design")
+        if not numeric:
+            ax.set_xticks(range(len(np.unique(x))), np.unique(x))
+        ax.set_xlabel(name)
+    axes[0].set_ylabel(f"{ds.attrs['statistic']} of {ds.attrs['objective']}")
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"design search: {ds.sizes['trial']} trials ({ds.attrs['sampler']}, "
+                 f"{ds.attrs['samples']} Monte Carlo samples each)", fontsize=10)
+    return fig
+
+
+def plot_design_comparison(cmp: dict, *, fig=None) -> Figure:
+    """The best design's response beside the file's own design and the bare bar."""
+    fig = fig or Figure(figsize=(7.0, 4.2), layout="constrained")
+    ax = fig.subplots()
+    styles = {"best design": ("#d84315", "-"), "file's design": ("#1565c0", "--"),
+              "bare bar": ("0.4", ":")}
+    for name, y in cmp["curves"].items():
+        colour, ls = styles.get(name, ("k", "-"))
+        ax.plot(cmp["x"], y, ls, color=colour, lw=1.6, marker="o" if len(y) < 40 else None,
+                ms=3, label=name)
+    ax.set_xlabel(cmp["xlabel"])
+    ax.set_ylabel(cmp["ylabel"])
+    ax.set_yscale("log")
+    ax.legend(fontsize=8)
+    ax.set_title("the best design against the file's own and the bare bar (nominal values)",
+                 fontsize=9)
+    return fig

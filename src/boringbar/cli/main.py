@@ -21,6 +21,7 @@ import textwrap
 from boringbar import __version__
 from boringbar.cli.audit import add_audit
 from boringbar.cli.compile import add_compile
+from boringbar.cli.design import add_design
 from boringbar.cli.frf import add_fit_frf
 from boringbar.cli.modes import add_modes
 from boringbar.cli.nonlinear import add_basins, add_bifurcation, add_sensitivity
@@ -70,6 +71,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_compile(sub)
     add_paper(sub)
     add_audit(sub)
+    add_design(sub)
     return parser
 
 
