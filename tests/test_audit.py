@@ -294,6 +294,10 @@ def discussion_cases():
                                                      "steel": [0.9e-4] * 3},
                                           {"carbide": first_chatter(3),
                                            "steel": first_chatter(5)})}, "not reproduced"
+    yield "D4", {"sensitivity-ball": sens(balls, pp, {"carbide": [1e-4] * 3,
+                                                     "steel": [1.1e-4] * 3},
+                                          {"carbide": first_chatter(0),
+                                           "steel": first_chatter(0)})}, "partly"
     mu = [0.2, 0.4, 0.6, 0.8]
     pm = [[NI] * 3] * 4
     yield "D5", {"sensitivity-friction_number": sens(mu, pm, chatter={

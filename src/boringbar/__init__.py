@@ -11,7 +11,8 @@ layers behind them.
   :class:`Regenerative`.
 - One run: :func:`simulate` -> :class:`Run`.
 - Analyses: :func:`sweep`, :func:`lobes`, :func:`bifurcation`, :func:`basins`,
-  :func:`sensitivity`, :func:`poincare_map`.
+  :func:`sensitivity`, :func:`poincare_map`; design search: :func:`design`
+  (:class:`DesignOptions`, :class:`Variable`, :class:`Uncertain`, :func:`load_design`).
 - Closed-form references: :func:`tip_frf`, :func:`min_real_part`,
   :func:`sims_tuning`, :func:`den_hartog_parameters`.
 - Study files: :func:`load_study`, :func:`run_study`.
@@ -23,6 +24,8 @@ from boringbar import plot  # noqa: E402, F401  (registers Run.plot)
 from boringbar._validate import ParameterError  # noqa: E402
 from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
+from boringbar.analysis.design import DesignOptions, Uncertain, Variable, design  # noqa: E402
+from boringbar.analysis.design_file import load_design  # noqa: E402
 from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
 from boringbar.analysis.poincare import poincare_map  # noqa: E402
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity  # noqa: E402
@@ -58,6 +61,7 @@ __all__ = [
     "BifurcationOptions",
     "Case",
     "Cuts",
+    "DesignOptions",
     "Execution",
     "Friction",
     "Harmonic",
@@ -79,10 +83,14 @@ __all__ = [
     "System",
     "SystemSpec",
     "TunedMassDamper",
+    "Uncertain",
+    "Variable",
     "basins",
     "bifurcation",
     "den_hartog_parameters",
     "describe_modes",
+    "design",
+    "load_design",
     "load_study",
     "load_system",
     "lobes",

@@ -101,8 +101,9 @@ class Variable:
 
 @dataclass(frozen=True)
 class Uncertain:
-    """An uncertain parameter (one of :data:`UNCERTAIN`), ``uniform`` on [a, b] or
-    ``normal`` with mean a and standard deviation b (0: fixed at a)."""
+    """An uncertain parameter ``name`` (one of :data:`UNCERTAIN`) and its
+    ``distribution``: ``uniform`` on [a, b], or ``normal`` with mean a and standard
+    deviation b (0: fixed at a)."""
 
     name: str
     distribution: str

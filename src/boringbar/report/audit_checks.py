@@ -406,7 +406,8 @@ def check_d2(ev: Evidence, preset: str) -> Verdict:
                        f"{changes} pattern change(s), all NI -> NU",
                        ev.figure(preset, "sensitivity-initial"))
     return Verdict("partly" if len(other) <= changes / 2 else "not reproduced", m,
-                   f"{changes} pattern changes, {len(other)} of them not NI -> NU "
+                   f"{changes} pattern change{'s' if changes > 1 else ''}, {len(other)} "
+                   "of them not NI -> NU "
                    f"({', '.join(sorted(set(other)))})", ev.figure(preset, "sensitivity-initial"))
 
 
@@ -505,6 +506,15 @@ def check_d4(ev: Evidence, preset: str) -> Verdict:
     depths = s["cuts"]["depth_m"]
     d_c, d_s = (_chatter_free(cuts[v], depths) for v in ("carbide", "steel"))
     change = (d_s / d_c - 1) * 100 if d_c > 0 else math.nan
+    if d_c == 0 and d_s == 0:  # both chatter from the shallowest cut tried
+        m = {"RMS at r = 1 carbide / steel mm": [round(rms_c * 1e3, 4), round(rms_s * 1e3, 4)]}
+        higher = rms_s > rms_c
+        return Verdict("partly" if higher else "not reproduced", m,
+                       f"both balls chatter from the shallowest cut tried "
+                       f"({depths[0] * 1e3:g} mm at 1200 rpm), so the depths cannot be "
+                       f"compared; the steel ball's RMS is "
+                       f"{'higher' if higher else 'not higher'} ({rms_s * 1e3:.3g} against "
+                       f"{rms_c * 1e3:.3g} mm)", ev.figure(preset, "sensitivity-ball"))
     m = {"RMS at r = 1 carbide / steel mm": [round(rms_c * 1e3, 4), round(rms_s * 1e3, 4)],
          "chatter-free depth at 1200 rpm carbide / steel mm": [round(d_c, 4), round(d_s, 4)],
          "depth change %": None if math.isnan(change) else round(change, 0)}
@@ -531,7 +541,8 @@ def check_d5(ev: Evidence, preset: str) -> Verdict:
     rising = values[-1] > values[0] and all(a <= b for a, b in zip(values, values[1:],
                                                                    strict=False))
     m = {"chatter-free depth mm by friction number": {str(k): v for k, v in free.items()}}
-    words = ", ".join(f"{k:g}: {v:g}" for k, v in free.items())
+    below = f"< {depths[0] * 1e3:g}"  # chatters from the shallowest cut tried
+    words = ", ".join(f"{k:g}: {v:g}" if v > 0 else f"{k:g}: {below}" for k, v in free.items())
     return _judge(low_worse or rising, low_worse and rising, m,
                   f"chatter-free depths ({words} mm) do not rise with friction",
                   f"chatter-free depths ({words} mm): "
@@ -553,7 +564,8 @@ def check_d6(ev: Evidence, preset: str) -> Verdict:
               for x, y in zip(h[v]["rms_tip_m"], base["rms_tip_m"], strict=True))
     m = {"pattern changes": changed, "largest RMS change %": round(rms * 100, 1)}
     return _judge(changed == 0, rms <= TOLERANCE, m,
-                  f"{changed} pattern change(s) between e = 0.6, 0.7 and 0.8",
+                  f"{changed} pattern change{'s' if changed > 1 else ''} between e = 0.6, "
+                  "0.7 and 0.8",
                   f"patterns unchanged; the RMS changes by up to {rms:.0%}",
                   ev.figure(preset, "sensitivity-restitution"))
 

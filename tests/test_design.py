@@ -1,0 +1,177 @@
+"""Design search (analysis/design.py): Den Hartog's and Sims' optima recovered, a 1-D
+search against brute force, the Monte Carlo statistic, resume after a kill, design files
+and the command line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import optuna
+import pytest
+from cli_output import assert_one_line_error, json_out
+
+from boringbar.analysis.design import (
+    DesignOptions,
+    Uncertain,
+    Variable,
+    design,
+    evaluate,
+    summary,
+    uncertain_samples,
+)
+from boringbar.analysis.design_file import DesignFileError, design_from_dict
+from boringbar.cli.main import main
+from boringbar.execute import Execution
+from boringbar.model.dampers import den_hartog_parameters, sims_parameters
+from boringbar.model.system import make_system, published_system_spec
+from boringbar.model.system_file import parse_system
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+MASS = 0.01  # the absorber: mass ratio 0.052 on the bar below
+TUNING = (Variable("tmd_frequency_ratio", 0.85, 1.15), Variable("tmd_damping_ratio", 0.02, 0.4))
+
+
+@pytest.fixture(scope="module")
+def host():
+    """One undamped bending mode (Den Hartog's and Sims' host), absorber at the tip."""
+    return parse_system({"bar": {"material": "steel", "damping_ratio": 0.0, "modes": 1,
+                                 "sections": [{"end_mm": 200, "diameter_mm": 25}]},
+                         "tmd": {"mass_kg": MASS, "position_mm": 200}}, "one mode")
+
+
+def best(ds) -> dict:
+    return summary(ds)["best"]
+
+
+def test_den_hartog_is_recovered(host):
+    bar = make_system("tmd", spec=host).bar
+    dh = den_hartog_parameters(MASS, bar)
+    f, zeta_a = dh["frequency_ratio"], dh["damping_ratio"] / dh["frequency_ratio"]  # c/(2 m wa)
+    options = DesignOptions("tmd", TUNING, objective="frf_peak", trials=300, sampler="cmaes",
+                            seed=3)
+    ds = design(options, spec=host)
+    b = best(ds)
+    assert b["tmd_frequency_ratio"] == pytest.approx(f, rel=0.02)
+    assert b["tmd_damping_ratio"] == pytest.approx(zeta_a, rel=0.02)
+    at_dh = evaluate(host, options, {"tmd_frequency_ratio": f, "tmd_damping_ratio": zeta_a},
+                     uncertain_samples(options)).statistic
+    assert summary(ds)["objective"] == pytest.approx(at_dh, rel=0.005)
+    # Den Hartog's damping is the fixed-point approximation: the search may only beat it
+    assert summary(ds)["objective"] <= at_dh * (1 + 1e-9)
+
+
+def test_sims_is_recovered(host):
+    bar = make_system("tmd", spec=host).bar
+    sims = sims_parameters(MASS, bar)
+    options = DesignOptions("tmd", TUNING, objective="min_real", trials=300, sampler="cmaes",
+                            seed=3)
+    b = best(design(options, spec=host))
+    assert b["tmd_frequency_ratio"] == pytest.approx(sims["frequency_ratio"], rel=0.02)
+    assert b["tmd_damping_ratio"] == pytest.approx(sims["damping_ratio"], rel=0.02)
+
+
+def test_a_gap_search_finds_the_brute_force_best():
+    spec = published_system_spec()
+    options = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), ratios=(0.98, 1.0, 1.02),
+                            forces_n=(20.0,), duration_s=0.5, trials=20, seed=2)
+    grid = np.linspace(0.05, 1.0, 20)
+    samples = uncertain_samples(options)
+    values = [evaluate(spec, options, {"gap_mm": g}, samples).statistic for g in grid]
+    s = summary(design(options, spec=spec))
+    step = grid[1] - grid[0]
+    assert abs(s["best"]["gap_mm"] - grid[int(np.argmin(values))]) <= step
+    assert s["objective"] <= min(values) * 1.05
+
+
+def test_zero_spread_equals_the_deterministic_objective():
+    spec = published_system_spec()
+    base = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), ratios=(1.0,),
+                         duration_s=0.3)
+    fixed = DesignOptions("ball", base.variables, ratios=(1.0,), duration_s=0.3, samples=4,
+                          uncertain=(Uncertain("restitution", "normal", 0.7, 0.0),
+                                     Uncertain("damping_ratio", "uniform", 0.01, 0.01)))
+    a = evaluate(spec, base, {"gap_mm": 0.3}, uncertain_samples(base))
+    b = evaluate(spec, fixed, {"gap_mm": 0.3}, uncertain_samples(fixed))
+    assert np.all(b.samples == a.statistic) and b.statistic == a.statistic and b.error == 0.0
+
+
+def test_the_sampling_error_shrinks_as_one_over_root_n(host):
+    errors = []
+    for n in (50, 200, 800):
+        o = DesignOptions("tmd", TUNING, objective="frf_peak", samples=n, seed=5,
+                          uncertain=(Uncertain("damping_ratio", "uniform", 0.0, 0.03),))
+        errors.append(evaluate(host, o, {"tmd_frequency_ratio": 0.95,
+                                         "tmd_damping_ratio": 0.13},
+                               uncertain_samples(o)).error)
+    assert errors[0] / errors[1] == pytest.approx(2.0, rel=0.15)
+    assert errors[1] / errors[2] == pytest.approx(2.0, rel=0.15)
+
+
+def test_a_killed_search_resumes_to_the_same_trial_table(host, tmp_path):
+    options = DesignOptions("tmd", TUNING, objective="frf_peak", trials=14, seed=7,
+                            samples=3, uncertain=(Uncertain("damping_ratio", "uniform",
+                                                            0.0, 0.02),))
+    whole = design(options, spec=host, storage=tmp_path / "a.db")
+    design(options, spec=host, storage=tmp_path / "b.db", stop_after=6)  # the kill
+    study = optuna.load_study(study_name="boringbar-design",
+                              storage=f"sqlite:///{tmp_path / 'b.db'}")
+    study.ask()  # a trial that was running when the process died
+    resumed = design(options, spec=host, storage=tmp_path / "b.db")
+    for name in ("tmd_frequency_ratio", "tmd_damping_ratio", "statistic"):
+        np.testing.assert_array_equal(resumed[name].values, whole[name].values)
+    np.testing.assert_array_equal(resumed["objective_samples"].values,
+                                  whole["objective_samples"].values)
+    other = DesignOptions("tmd", TUNING, objective="min_real", trials=14, seed=7)
+    with pytest.raises(ValueError, match="another design study"):
+        design(other, spec=host, storage=tmp_path / "b.db")
+
+
+def test_candidates_run_on_a_dask_cluster_as_on_threads():
+    spec = published_system_spec()
+    options = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), ratios=(0.99, 1.01),
+                            duration_s=0.2, trials=3, seed=4)
+    a = design(options, spec=spec, execution=Execution("threads", 2))
+    b = design(options, spec=spec, execution=Execution("dask", dask_local=1))
+    np.testing.assert_array_equal(a["statistic"].values, b["statistic"].values)
+
+
+# --- files and the command line -----------------------------------------------------------
+@pytest.mark.parametrize(("patch", "words"), [
+    ({"variables": {"gap_mm": [0.05, 3.0]}}, "variables.gap_mm"),
+    ({"variables": {"colour": [1, 2]}}, "unknown variable"),
+    ({"uncertain": {"restitution": {"triangular": [0.6, 0.8]}}}, "uncertain.restitution"),
+    ({"design": {"bar": "ball", "objective": "frf_peak"}}, "linear bar"),
+    ({"design": {"bar": "tmd", "trials": 0}}, "trials"),
+    ({"extras": {}}, "unknown section"),
+])
+def test_bad_design_files_are_one_line(patch, words):
+    d = {"design": {"bar": "ball"}, "variables": {"gap_mm": [0.05, 1.0]}}
+    for k, v in patch.items():
+        d[k] = v
+    if "tmd" in str(patch.get("design", {})):
+        d["variables"] = {"tmd_damping_ratio": [0.02, 0.3]}
+    with pytest.raises(DesignFileError) as err:
+        design_from_dict(d, "d.toml")
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_design_command_on_the_tmd_example(tmp_path, capsys):
+    out = tmp_path / "d"
+    argv = ["design", str(EXAMPLES / "design" / "steel_tmd.toml"), "--trials", "12", "--out",
+            str(out), "--json"]
+    assert main(argv) == 0
+    s = json_out(capsys)
+    assert {"best", "objective", "published_objective", "trials", "wall_time_s"} <= s.keys()
+    assert s["trials"] == 12 and s["objective"] > 0
+    assert "best design" in s["summary"]
+    for f in ("design.nc", "trials.csv", "design.png", "best.png", "design.db"):
+        assert (out / f).stat().st_size > 0
+    assert main(argv) == 0  # rerun: resumes, nothing new to do
+    assert json_out(capsys)["objective"] == s["objective"]
+
+
+def test_design_command_bad_input(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert_one_line_error(main, ["design", "missing.toml", "--out", str(out)], out,
+                          "cannot read", capsys)
