@@ -272,10 +272,12 @@ def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
     return replace(system, bar=bar, damper=d), Initial(**ini)
 
 
-def _rms_run(task) -> float:
-    system, ratio, force, initial, duration, integrator = task
-    return simulate(system, Harmonic(force, ratio), duration=duration, initial=initial,
-                    integrator=integrator).rms_tip
+def _rms_runs(task) -> list[float]:
+    """The tip RMS of one system over forces x ratios: one executor task (a sample's
+    band), coarse enough that a process or Dask worker spends its time running."""
+    system, ratios, forces, initial, duration, integrator = task
+    return [simulate(system, Harmonic(f, r), duration=duration, initial=initial,
+                     integrator=integrator).rms_tip for f in forces for r in ratios]
 
 
 def frf_objective(system: System, objective: str) -> float:
@@ -300,10 +302,9 @@ def evaluate(spec: SystemSpec, options: DesignOptions, values: dict, samples: np
     names = tuple(p.name for p in options.uncertain)
     sampled = [sampled_system(system, names, row) for row in samples]
     if options.objective == "rms_band":
-        tasks = [(s, r, f, ini, options.duration_s, options.integrator)
-                 for s, ini in sampled for f in options.forces_n for r in options.ratios]
-        rms = np.array(run_points(_rms_run, tasks, execution=execution))
-        rms = rms.reshape(len(sampled), -1)
+        tasks = [(s, options.ratios, options.forces_n, ini, options.duration_s,
+                  options.integrator) for s, ini in sampled]
+        rms = np.array(run_points(_rms_runs, tasks, execution=execution))
         values_per_sample = rms.max(axis=1) if options.band == "worst" else rms.mean(axis=1)
     else:
         values_per_sample = np.array([frf_objective(s, options.objective) for s, _ in sampled])
@@ -473,9 +474,9 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
         lo, hi = min(options.ratios), max(options.ratios)
         x = np.linspace(lo - 0.02, hi + 0.02, n) if lo == hi else np.linspace(lo, hi, n)
         force = options.forces_n[0]
-        tasks = [(s, r, force, Initial(), options.duration_s, options.integrator)
-                 for s in bars.values() for r in x]
-        y = np.array(run_points(_rms_run, tasks, execution=execution)).reshape(len(bars), -1)
+        tasks = [(s, tuple(x), (force,), Initial(), options.duration_s, options.integrator)
+                 for s in bars.values()]
+        y = np.array(run_points(_rms_runs, tasks, execution=execution))
         return {"x": x, "xlabel": "Omega / omega_n", "ylabel": f"tip RMS (m), F0 = {force:g} N",
                 "curves": dict(zip(bars, y, strict=True))}
     wn = bars["bare bar"].bar.natural_frequency
