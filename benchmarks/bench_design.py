@@ -23,7 +23,8 @@ import time
 
 from distributed import LocalCluster
 
-from boringbar.analysis.design import DesignOptions, Uncertain, Variable, design
+from boringbar.analysis.design import design
+from boringbar.analysis.design_options import DesignOptions, Uncertain, Variable
 from boringbar.execute import Execution
 from boringbar.model.system import published_system_spec
 from boringbar.model.system_file import parse_system

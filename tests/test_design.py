@@ -11,21 +11,22 @@ import optuna
 import pytest
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.analysis.design import (
+from boringbar.analysis.design import candidate_system, design, evaluate, summary
+from boringbar.analysis.design_file import DesignFileError, design_from_dict
+from boringbar.analysis.design_options import (
     DesignOptions,
     Uncertain,
     Variable,
-    design,
-    evaluate,
-    summary,
     uncertain_samples,
 )
-from boringbar.analysis.design_file import DesignFileError, design_from_dict
+from boringbar.analysis.lobes import LobesOptions, lobes
+from boringbar.analysis.sweep import Case
 from boringbar.cli.main import main
 from boringbar.execute import Execution
 from boringbar.model.dampers import den_hartog_parameters, sims_parameters
 from boringbar.model.system import make_system, published_system_spec
 from boringbar.model.system_file import parse_system
+from boringbar.simulate import Integration
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 MASS = 0.01  # the absorber: mass ratio 0.052 on the bar below
@@ -55,7 +56,7 @@ def test_den_hartog_is_recovered(host):
     assert b["tmd_frequency_ratio"] == pytest.approx(f, rel=0.02)
     assert b["tmd_damping_ratio"] == pytest.approx(zeta_a, rel=0.02)
     at_dh = evaluate(host, options, {"tmd_frequency_ratio": f, "tmd_damping_ratio": zeta_a},
-                     uncertain_samples(options)).statistic
+                     uncertain_samples(options)).statistic[0]
     assert summary(ds)["objective"] == pytest.approx(at_dh, rel=0.005)
     # Den Hartog's damping is the fixed-point approximation: the search may only beat it
     assert summary(ds)["objective"] <= at_dh * (1 + 1e-9)
@@ -77,7 +78,7 @@ def test_a_gap_search_finds_the_brute_force_best():
                             forces_n=(20.0,), duration_s=0.5, trials=20, seed=2)
     grid = np.linspace(0.05, 1.0, 20)
     samples = uncertain_samples(options)
-    values = [evaluate(spec, options, {"gap_mm": g}, samples).statistic for g in grid]
+    values = [evaluate(spec, options, {"gap_mm": g}, samples).statistic[0] for g in grid]
     s = summary(design(options, spec=spec))
     step = grid[1] - grid[0]
     assert abs(s["best"]["gap_mm"] - grid[int(np.argmin(values))]) <= step
@@ -93,7 +94,8 @@ def test_zero_spread_equals_the_deterministic_objective():
                                      Uncertain("damping_ratio", "uniform", 0.01, 0.01)))
     a = evaluate(spec, base, {"gap_mm": 0.3}, uncertain_samples(base))
     b = evaluate(spec, fixed, {"gap_mm": 0.3}, uncertain_samples(fixed))
-    assert np.all(b.samples == a.statistic) and b.statistic == a.statistic and b.error == 0.0
+    assert np.all(b.samples == a.statistic[0]) and b.statistic[0] == a.statistic[0]
+    assert b.error[0] == 0.0
 
 
 def test_the_sampling_error_shrinks_as_one_over_root_n(host):
@@ -103,7 +105,7 @@ def test_the_sampling_error_shrinks_as_one_over_root_n(host):
                           uncertain=(Uncertain("damping_ratio", "uniform", 0.0, 0.03),))
         errors.append(evaluate(host, o, {"tmd_frequency_ratio": 0.95,
                                          "tmd_damping_ratio": 0.13},
-                               uncertain_samples(o)).error)
+                               uncertain_samples(o)).error[0])
     assert errors[0] / errors[1] == pytest.approx(2.0, rel=0.15)
     assert errors[1] / errors[2] == pytest.approx(2.0, rel=0.15)
 
@@ -175,3 +177,52 @@ def test_design_command_bad_input(tmp_path, capsys):
     out = tmp_path / "out"
     assert_one_line_error(main, ["design", "missing.toml", "--out", str(out)], out,
                           "cannot read", capsys)
+
+
+def test_a_pareto_search_spans_den_hartog_and_sims(host):
+    """frf_peak against min_real: NSGA-II's front runs from Den Hartog's peak to Sims'
+    trough, and no trial on it is dominated by another."""
+    bar = make_system("tmd", spec=host).bar
+    dh, sims = den_hartog_parameters(MASS, bar), sims_parameters(MASS, bar)
+    options = DesignOptions("tmd", TUNING, objective=("frf_peak", "min_real"),
+                            sampler="nsga2", trials=400, seed=3)
+    ds = design(options, spec=host)
+    samples = uncertain_samples(options)
+    peak = evaluate(host, options, {"tmd_frequency_ratio": dh["frequency_ratio"],
+                                    "tmd_damping_ratio": dh["damping_ratio"]
+                                    / dh["frequency_ratio"]}, samples).statistic[0]
+    trough = evaluate(host, options, {"tmd_frequency_ratio": sims["frequency_ratio"],
+                                      "tmd_damping_ratio": sims["damping_ratio"]},
+                      samples).statistic[1]
+    front = ds["statistic"].values[ds["pareto"].values]
+    assert front[:, 0].min() == pytest.approx(peak, rel=0.02)
+    assert front[:, 1].min() == pytest.approx(trough, rel=0.02)
+    for row in front:
+        assert not np.any(np.all(front <= row, axis=1) & np.any(front < row, axis=1))
+    assert len(summary(ds)["pareto"]) >= 2
+
+
+def test_chatter_probability_of_a_cut():
+    spec = published_system_spec()
+    common = dict(objective="cut_amplitude", statistic="chatter_probability", samples=4,
+                  duration_s=0.3, uncertain=(Uncertain("friction_force_n", "uniform",
+                                                       0.0, 0.5),))
+    shallow = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), depth_mm=0.005, **common)
+    deep = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), depth_mm=0.5, **common)
+    for options, p in ((shallow, 0.0), (deep, 1.0)):
+        c = evaluate(spec, options, {"gap_mm": 0.5}, uncertain_samples(options))
+        assert c.statistic[0] == p and c.error[0] == 0.0
+
+
+def test_min_depth_is_the_lobes_search_of_the_candidate():
+    spec = published_system_spec()
+    options = DesignOptions("tmd", (Variable("tmd_damping_ratio", 0.05, 0.3),),
+                            objective="min_depth", rpms=(1000.0, 1400.0), max_depth_mm=0.4,
+                            depth_step_mm=0.02, duration_s=0.3)
+    values = {"tmd_damping_ratio": 0.02 + 0.03}
+    c = evaluate(spec, options, values, uncertain_samples(options))
+    system = candidate_system(spec, options, values)
+    ds = lobes([Case("tmd", system, "tmd")],
+               LobesOptions((1000.0, 1400.0), "search", "zero", 2e-5, 4e-4, analytic=False),
+               integration=Integration(0.3, 1e-6, "rk4"))
+    assert c.statistic[0] == min(float(ds["min_chatter_free_depth"].values[0]), 4e-4)

@@ -24,8 +24,9 @@ from boringbar import plot  # noqa: E402, F401  (registers Run.plot)
 from boringbar._validate import ParameterError  # noqa: E402
 from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
-from boringbar.analysis.design import DesignOptions, Uncertain, Variable, design  # noqa: E402
+from boringbar.analysis.design import design  # noqa: E402
 from boringbar.analysis.design_file import load_design  # noqa: E402
+from boringbar.analysis.design_options import DesignOptions, Uncertain, Variable  # noqa: E402
 from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
 from boringbar.analysis.poincare import poincare_map  # noqa: E402
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity  # noqa: E402

@@ -37,152 +37,29 @@ from pathlib import Path
 
 import numpy as np
 import optuna
-import scipy.special
 import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_choice, check_int, check_range
+from boringbar._validate import ParameterError
+from boringbar.analysis.design_objectives import objective_samples, rms_runs, statistic
+from boringbar.analysis.design_options import DesignOptions, sampled_system, uncertain_samples
 from boringbar.execute import Execution, run_points
-from boringbar.model.bar import ModalModel
-from boringbar.model.dampers import MAX_GAP, Friction, TunedMassDamper
-from boringbar.model.forcing import Harmonic
-from boringbar.model.materials import MATERIALS
+from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system, published_system_spec
 from boringbar.model.system_file import SystemSpec, parse_system
 from boringbar.reference.linear import tip_frf
-from boringbar.simulate import Initial, simulate
-
-OBJECTIVES = ("rms_band", "frf_peak", "min_real")
-BAND_REDUCTIONS = ("worst", "mean")
-STATISTICS = ("mean", "quantile", "max")
-SAMPLERS = ("tpe", "cmaes")
-#: variable -> (bars it applies to, unit, lowest allowed, highest allowed)
-VARIABLES = {
-    "gap_mm": (("ball",), "mm", 0.0, MAX_GAP * 1e3),
-    "ball_material": (("ball",), "", None, None),
-    "ball_diameter_mm": (("ball",), "mm", 1.0, 100.0),
-    "cavity_position_mm": (("ball",), "mm", 0.0, math.inf),
-    "restitution": (("ball",), "", 0.0, 1.0),
-    "tmd_mass_kg": (("tmd",), "kg", 0.0, 100.0),
-    "tmd_frequency_ratio": (("tmd",), "", 0.1, 10.0),
-    "tmd_damping_ratio": (("tmd",), "", 0.0, 2.0),
-}
-UNCERTAIN = ("friction_force_n", "restitution", "ball_position_mm", "ball_velocity_m_s",
-             "damping_ratio")
-DISTRIBUTIONS = ("uniform", "normal")
-#: Frequency lines of the FRF objectives, over FRF_SPAN x the host's f1.
-FRF_LINES = 6001
-FRF_SPAN = (0.3, 2.0)
-BOOTSTRAP = 400
-
-
-@dataclass(frozen=True)
-class Variable:
-    """A design variable: ``name`` (one of :data:`VARIABLES`), its range
-    ``low``-``high`` (units as in the name), or ``choices`` (ball_material)."""
-
-    name: str
-    low: float | None = None
-    high: float | None = None
-    choices: tuple = ()
-
-    def __post_init__(self):
-        check_choice("design variable", self.name, tuple(VARIABLES))
-        _, unit, lo, hi = VARIABLES[self.name]
-        if self.name == "ball_material":
-            if not self.choices:
-                raise ParameterError("ball_material needs choices, e.g. ['carbide', 'steel']")
-            for c in self.choices:
-                check_choice("ball_material choice", c, tuple(MATERIALS))
-            return
-        check_range(f"{self.name} low", self.low, lo, hi, unit=unit)
-        check_range(f"{self.name} high", self.high, self.low, hi, lo_open=True, unit=unit)
-
-
-@dataclass(frozen=True)
-class Uncertain:
-    """An uncertain parameter ``name`` (one of :data:`UNCERTAIN`) and its
-    ``distribution``: ``uniform`` on [a, b], or ``normal`` with mean a and standard
-    deviation b (0: fixed at a)."""
-
-    name: str
-    distribution: str
-    a: float
-    b: float
-
-    def __post_init__(self):
-        check_choice("uncertain parameter", self.name, UNCERTAIN)
-        check_choice(f"{self.name} distribution", self.distribution, DISTRIBUTIONS)
-        check_range(f"{self.name} a", self.a, -math.inf, math.inf, lo_open=True, hi_open=True)
-        if self.distribution == "uniform":
-            check_range(f"{self.name} b", self.b, self.a, math.inf, hi_open=True)
-        else:
-            check_range(f"{self.name} standard deviation", self.b, 0.0, math.inf,
-                        hi_open=True)
-
-    def draw(self, u: np.ndarray) -> np.ndarray:
-        """Values for the standard samples ``u`` (uniform on (0, 1))."""
-        if self.distribution == "uniform":
-            return self.a + (self.b - self.a) * u
-        return self.a + self.b * math.sqrt(2.0) * scipy.special.erfinv(2.0 * u - 1.0)
-
-
-@dataclass(frozen=True)
-class DesignOptions:
-    """A design study: ``bar`` ("ball" or "tmd"), ``variables``, ``objective``
-    (:data:`OBJECTIVES`; ``band``: worst or mean over ``ratios`` x ``forces_n`` for
-    rms_band), ``uncertain`` parameters and ``samples`` Monte Carlo samples,
-    ``statistic`` (:data:`STATISTICS`; ``quantile`` q), ``trials`` and
-    ``sampler`` (:data:`SAMPLERS`) with ``seed``; runs of ``duration_s`` with
-    ``integrator``; ``preset``."""
-
-    bar: str
-    variables: tuple[Variable, ...]
-    objective: str = "rms_band"
-    band: str = "worst"
-    ratios: tuple[float, ...] = (0.95, 1.0, 1.05)
-    forces_n: tuple[float, ...] = (10.0,)
-    uncertain: tuple[Uncertain, ...] = ()
-    samples: int = 1
-    statistic: str = "mean"
-    quantile: float = 0.9
-    trials: int = 50
-    sampler: str = "tpe"
-    seed: int = 1
-    duration_s: float = 2.0
-    integrator: str = "exact"
-    preset: str = "physical"
-
-    def __post_init__(self):
-        check_choice("bar", self.bar, ("ball", "tmd"))
-        check_choice("objective", self.objective, OBJECTIVES)
-        check_choice("band", self.band, BAND_REDUCTIONS)
-        check_choice("statistic", self.statistic, STATISTICS)
-        check_choice("sampler", self.sampler, SAMPLERS)
-        check_int("samples", self.samples, 1, 100_000)
-        check_int("trials", self.trials, 1, 100_000)
-        check_int("seed", self.seed, 0, 2**31 - 1)
-        check_range("quantile", self.quantile, 0.0, 1.0, lo_open=True, hi_open=True)
-        if not self.variables:
-            raise ParameterError("a design study needs at least one variable")
-        for v in self.variables:
-            if self.bar not in VARIABLES[v.name][0]:
-                raise ParameterError(f"variable {v.name!r} applies to a "
-                                     f"{VARIABLES[v.name][0][0]} bar, not bar = {self.bar!r}")
-        if self.objective != "rms_band" and self.bar == "ball":
-            raise ParameterError(f"objective = {self.objective!r} is a linear bar's (the "
-                                 "tip FRF); a ball damper takes objective 'rms_band'")
+from boringbar.simulate import Initial
 
 
 @dataclass
 class Candidate:
-    """One evaluated design: ``values`` (variable -> value), the objective's
-    ``samples``, its ``statistic`` and ``error``, ``wall_time_s``."""
+    """One evaluated design: ``values`` (variable -> value), per objective its
+    ``samples`` (objective, sample), ``statistic`` and ``error``; ``wall_time_s``."""
 
     values: dict
     samples: np.ndarray
-    statistic: float
-    error: float
+    statistic: np.ndarray
+    error: np.ndarray
     wall_time_s: float = 0.0
     system: dict = field(default_factory=dict)
 
@@ -240,100 +117,34 @@ def _cavity_moved(data: dict, position_mm: float) -> dict:
 
 
 # --- one candidate -------------------------------------------------------------------
-def uncertain_samples(options: DesignOptions) -> np.ndarray:
-    """(samples, uncertain) values: the common random numbers of every candidate."""
-    rng = np.random.default_rng(options.seed)
-    u = rng.random((options.samples, len(options.uncertain)))
-    u = np.clip(u, 1e-12, 1 - 1e-12)
-    return np.column_stack([p.draw(u[:, j]) for j, p in enumerate(options.uncertain)]) \
-        if options.uncertain else np.zeros((options.samples, 0))
-
-
-def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
-    """``system`` and the initial state with one sample of the uncertain parameters."""
-    d, bar, ini = system.damper, system.bar, {}
-    for name, v in zip(names, row, strict=True):
-        if name == "friction_force_n":
-            d = replace(d, friction=Friction("force", max(float(v), 0.0), d.friction.reaction,
-                                             d.friction.static_ratio))
-        elif name == "restitution":
-            d = replace(d, restitution=float(np.clip(v, 0.0, 1.0)))
-        elif name == "damping_ratio":
-            bar = ModalModel(mass=bar.mass, stiffness=bar.stiffness,
-                             damping_ratio=np.full(bar.n_modes, float(np.clip(v, 0.0, 0.99))),
-                             psi_tip=bar.psi_tip, psi_damper=bar.psi_damper,
-                             psi_absorber=bar.psi_absorber, z_damper=bar.z_damper,
-                             z_absorber=bar.z_absorber, source=bar.source, info=bar.info)
-        elif name == "ball_position_mm":
-            half = d.gap / 2
-            ini["ball_position"] = float(np.clip(v * 1e-3, -half, half))
-        elif name == "ball_velocity_m_s":
-            ini["ball_velocity"] = float(v)
-    return replace(system, bar=bar, damper=d), Initial(**ini)
-
-
-def _rms_runs(task) -> list[float]:
-    """The tip RMS of one system over forces x ratios: one executor task (a sample's
-    band), coarse enough that a process or Dask worker spends its time running."""
-    system, ratios, forces, initial, duration, integrator = task
-    return [simulate(system, Harmonic(f, r), duration=duration, initial=initial,
-                     integrator=integrator).rms_tip for f in forces for r in ratios]
-
-
-def frf_objective(system: System, objective: str) -> float:
-    """The FRF peak |G| (m/N), or -min Re G (m/N), of a linear bar, on FRF_LINES
-    lines over FRF_SPAN x the host's f1, refined by a parabola at the extreme."""
-    wn = system.bar.natural_frequency
-    w = np.linspace(FRF_SPAN[0] * wn, FRF_SPAN[1] * wn, FRF_LINES)
-    kw = {"tmd": system.damper} if system.kind == "tmd" else {}
-    g = tip_frf(system.bar, w, **kw)
-    y = np.abs(g) if objective == "frf_peak" else -g.real
-    i = int(np.clip(np.argmax(y), 1, len(y) - 2))
-    a, b, c = y[i - 1], y[i], y[i + 1]
-    denom = a - 2 * b + c
-    return float(b - 0.125 * (a - c) ** 2 / denom) if denom < 0 else float(b)
-
-
 def evaluate(spec: SystemSpec, options: DesignOptions, values: dict, samples: np.ndarray,
              execution: Execution | None = None) -> Candidate:
-    """The objective of the design ``values`` over the uncertain ``samples``."""
+    """Each objective of the design ``values`` over the uncertain ``samples``."""
     t0 = time.perf_counter()
     system = candidate_system(spec, options, values)
     names = tuple(p.name for p in options.uncertain)
     sampled = [sampled_system(system, names, row) for row in samples]
-    if options.objective == "rms_band":
-        tasks = [(s, options.ratios, options.forces_n, ini, options.duration_s,
-                  options.integrator) for s, ini in sampled]
-        rms = np.array(run_points(_rms_runs, tasks, execution=execution))
-        values_per_sample = rms.max(axis=1) if options.band == "worst" else rms.mean(axis=1)
-    else:
-        values_per_sample = np.array([frf_objective(s, options.objective) for s, _ in sampled])
-    stat, err = statistic(values_per_sample, options)
-    return Candidate(dict(values), values_per_sample, stat, err, time.perf_counter() - t0,
-                     system.to_dict())
+    per, stats, errors = [], [], []
+    for objective in options.objectives:
+        x, chatter = objective_samples(options, objective, sampled, execution)
+        stat, err = statistic(x, options, chatter)
+        per.append(x)
+        stats.append(stat)
+        errors.append(err)
+    return Candidate(dict(values), np.array(per), np.array(stats), np.array(errors),
+                     time.perf_counter() - t0, system.to_dict())
 
 
-def statistic(x: np.ndarray, options: DesignOptions) -> tuple[float, float]:
-    """The statistic of the samples ``x`` and its sampling error."""
-    n = len(x)
-    if options.statistic == "max":
-        return float(np.max(x)), 0.0
-    if options.statistic == "mean":
-        return float(np.mean(x)), float(np.std(x, ddof=1) / math.sqrt(n)) if n > 1 else 0.0
-    q = float(np.quantile(x, options.quantile))
-    if n == 1:
-        return q, 0.0
-    rng = np.random.default_rng(options.seed + 1)
-    boot = np.quantile(x[rng.integers(0, n, (BOOTSTRAP, n))], options.quantile, axis=1)
-    return q, float(np.std(boot, ddof=1))
-
-
-# --- the search --------------------------------------------------------------------
 def _sampler(options: DesignOptions, k: int):
+    """The sampler of trial ``k``: seeded by the number of trials finished before it,
+    so a resumed search asks what an uninterrupted one would."""
     seed = options.seed * 1_000_003 + k
+    startup = min(10, options.trials)
     if options.sampler == "cmaes":
-        return optuna.samplers.CmaEsSampler(seed=seed, n_startup_trials=min(10, options.trials))
-    return optuna.samplers.TPESampler(seed=seed, n_startup_trials=min(10, options.trials))
+        return optuna.samplers.CmaEsSampler(seed=seed, n_startup_trials=startup)
+    if options.sampler == "nsga2":
+        return optuna.samplers.NSGAIISampler(seed=seed, population_size=max(4, startup))
+    return optuna.samplers.TPESampler(seed=seed, n_startup_trials=startup)
 
 
 def _suggest(trial, variables) -> dict:
@@ -367,9 +178,9 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
         trial = study.ask()
         cand = evaluate(spec, options, _suggest(trial, options.variables), samples, execution)
         trial.set_user_attr("samples", cand.samples.tolist())
-        trial.set_user_attr("error", cand.error)
+        trial.set_user_attr("error", cand.error.tolist())
         trial.set_user_attr("wall_time_s", cand.wall_time_s)
-        study.tell(trial, cand.statistic)
+        study.tell(trial, cand.statistic.tolist())
         new += 1
         done = _complete(study)
         if progress is not None:
@@ -391,7 +202,7 @@ def _study(options: DesignOptions, storage, fingerprint: str) -> optuna.Study:
     if storage is not None:
         Path(storage).parent.mkdir(parents=True, exist_ok=True)
     study = optuna.create_study(storage=url, study_name="boringbar-design",
-                                direction="minimize", load_if_exists=True,
+                                directions=options.directions, load_if_exists=True,
                                 sampler=_sampler(options, 0))
     stored = study.user_attrs.get("fingerprint")
     if stored is None:
@@ -423,60 +234,99 @@ def _published_candidate(spec, options, samples, execution) -> Candidate:
 
 def assemble(options: DesignOptions, trials: list, published: Candidate,
              wall_time_s: float) -> xr.Dataset:
-    """The trial table (trial x variable values, objective samples, statistic, error,
-    wall time), the best design and the published one, as a Dataset."""
+    """The trial table (trial x variable values; per objective the samples, statistic,
+    error; wall time), the best trial (one objective) or the Pareto set (several),
+    and the file's own design under the same objectives, as a Dataset."""
     names = [v.name for v in options.variables]
-    n = len(trials)
-    coords = {"trial": np.arange(n), "sample": np.arange(options.samples)}
+    coords = {"trial": np.arange(len(trials)), "objective": list(options.objectives),
+              "sample": np.arange(options.samples)}
     data = {name: ("trial", [t.params[name] for t in trials]) for name in names}
-    data["statistic"] = ("trial", [t.value for t in trials])
-    data["error"] = ("trial", [t.user_attrs["error"] for t in trials])
+    data["statistic"] = (("trial", "objective"), np.reshape([t.values for t in trials],
+                                                            (len(trials), -1)))
+    data["error"] = (("trial", "objective"), np.reshape([t.user_attrs["error"] for t in trials],
+                                                        (len(trials), -1)))
     data["wall_time_s"] = ("trial", [t.user_attrs["wall_time_s"] for t in trials])
-    data["objective_samples"] = (("trial", "sample"), [t.user_attrs["samples"] for t in trials])
+    data["objective_samples"] = (("trial", "objective", "sample"),
+                                 np.reshape([t.user_attrs["samples"] for t in trials],
+                                            (len(trials), len(options.objectives), -1)))
     ds = xr.Dataset(data, coords=coords)
-    best = int(np.argmin(ds["statistic"].values)) if n else -1
+    ds["published_statistic"] = ("objective", published.statistic)
+    ds["published_error"] = ("objective", published.error)
+    ds["pareto"] = ("trial", _pareto(ds["statistic"].values, options.directions))
+    sign = np.array([1 if d == "minimize" else -1 for d in options.directions])
+    best = int(np.argmin(ds["statistic"].values[:, 0] * sign[0])) if trials else -1
     ds.attrs = {
-        "boringbar_version": __version__, "objective": options.objective,
-        "band": options.band, "statistic": options.statistic, "sampler": options.sampler,
-        "seed": options.seed, "samples": options.samples, "bar": options.bar,
-        "best_trial": best, "wall_time_s": wall_time_s,
-        "published_statistic": published.statistic, "published_error": published.error,
-        "published_values": str(published.values),
+        "boringbar_version": __version__, "objectives": list(options.objectives),
+        "directions": list(options.directions), "band": options.band,
+        "statistic": options.statistic, "sampler": options.sampler, "seed": options.seed,
+        "samples": options.samples, "bar": options.bar, "best_trial": best,
+        "wall_time_s": wall_time_s, "published_values": json.dumps(published.values),
         "options": repr(options),
     }
     return ds
 
 
+def _pareto(stat: np.ndarray, directions: list[str]) -> np.ndarray:
+    """Whether each trial is on the Pareto front (no other trial at least as good in
+    every objective and better in one)."""
+    y = stat * np.array([1.0 if d == "minimize" else -1.0 for d in directions])
+    front = np.ones(len(y), dtype=bool)
+    for i in range(len(y)):
+        dominated = np.all(y <= y[i], axis=1) & np.any(y < y[i], axis=1)
+        front[i] = not dominated.any()
+    return front
+
+
 def summary(ds: xr.Dataset) -> dict:
-    """What ``boringbar design --json`` prints."""
+    """What ``boringbar design --json`` prints: ``best`` (variable -> value; with several
+    objectives, the best in the first), ``objective`` and ``published_objective`` (the
+    first objective's statistic), ``trials``, ``wall_time_s``; ``pareto`` with
+    several objectives."""
     b = int(ds.attrs["best_trial"])
     names = [k for k in ds.data_vars if ds[k].dims == ("trial",) and k not in
-             ("statistic", "error", "wall_time_s")]
-    best = {k: (ds[k].values[b].item() if hasattr(ds[k].values[b], "item")
-                else ds[k].values[b]) for k in names}
-    obj, pub = float(ds["statistic"].values[b]), float(ds.attrs["published_statistic"])
-    return {"best": best, "objective": obj, "objective_error": float(ds["error"].values[b]),
-            "published_objective": pub, "improvement_percent": (1 - obj / pub) * 100,
-            "trials": int(ds.sizes["trial"]), "wall_time_s": float(ds.attrs["wall_time_s"]),
-            "objective_name": ds.attrs["objective"], "statistic_name": ds.attrs["statistic"]}
+             ("wall_time_s", "pareto")]
+
+    def values(i):
+        return {k: (ds[k].values[i].item() if hasattr(ds[k].values[i], "item")
+                    else ds[k].values[i]) for k in names}
+
+    objectives = list(ds.attrs["objectives"])
+    obj = float(ds["statistic"].values[b, 0])
+    pub = float(ds["published_statistic"].values[0])
+    if pub == 0:
+        better = None  # no relative change from zero (a probability of chatter of 0)
+    else:
+        better = 100 * ((1 - obj / pub) if ds.attrs["directions"][0] == "minimize"
+                        else (obj / pub - 1))
+    out = {"best": values(b), "objective": obj, "objective_error": float(ds["error"].values[b, 0]),
+           "published_objective": pub, "improvement_percent": better,
+           "trials": int(ds.sizes["trial"]), "wall_time_s": float(ds.attrs["wall_time_s"]),
+           "objective_name": objectives[0], "statistic_name": ds.attrs["statistic"]}
+    if len(objectives) > 1:
+        out["objectives"] = objectives
+        out["published_objectives"] = ds["published_statistic"].values.tolist()
+        front = [{"values": values(int(i)), "objectives": ds["statistic"].values[int(i)].tolist()}
+                 for i in np.flatnonzero(ds["pareto"].values)]
+        out["pareto"] = [p for k, p in enumerate(front) if p not in front[:k]]  # distinct
+    return out
 
 
 def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21,
                execution: Execution | None = None) -> dict:
     """The best design beside the file's own and the bare bar, at the nominal values:
-    tip RMS (m) over ``n`` ratios across the band at the first force (rms_band), or
-    |G| (m/N) over 0.8-1.2 x f1 (the FRF objectives). Returns x, its label, and
+    tip RMS (m) over ``n`` ratios across the band at the first force (a ball
+    damper), or |G| (m/N) over 0.8-1.2 x f1 (a TMD). Returns x, its label, and
     a curve per bar."""
     bars = {"best design": candidate_system(spec, options, best),
             "file's design": make_system(options.bar, options.preset, spec=spec),
             "bare bar": make_system("solid", options.preset, spec=spec)}
-    if options.objective == "rms_band":
+    if options.bar == "ball":
         lo, hi = min(options.ratios), max(options.ratios)
         x = np.linspace(lo - 0.02, hi + 0.02, n) if lo == hi else np.linspace(lo, hi, n)
         force = options.forces_n[0]
         tasks = [(s, tuple(x), (force,), Initial(), options.duration_s, options.integrator)
                  for s in bars.values()]
-        y = np.array(run_points(_rms_runs, tasks, execution=execution))
+        y = np.array(run_points(rms_runs, tasks, execution=execution))
         return {"x": x, "xlabel": "Omega / omega_n", "ylabel": f"tip RMS (m), F0 = {force:g} N",
                 "curves": dict(zip(bars, y, strict=True))}
     wn = bars["bare bar"].bar.natural_frequency
@@ -491,8 +341,12 @@ def summary_line(s: dict) -> str:
     best = ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
                      for k, v in s["best"].items())
     gain = s["improvement_percent"]
-    verb = f"improves the objective by {gain:.1f} %" if gain >= 0 else \
-        f"is {-gain:.1f} % worse on the objective"
+    if gain is None:
+        verb = "compares with the file's own design as"
+    elif gain >= 0:
+        verb = f"improves the objective by {gain:.1f} %"
+    else:
+        verb = f"is {-gain:.1f} % worse on the objective"
     return (f"best design {best} {verb} ({s['statistic_name']} of {s['objective_name']}) "
             f"against the file's own design ({s['objective']:.4g} +- "
             f"{s['objective_error']:.2g} against {s['published_objective']:.4g}; "

@@ -17,7 +17,7 @@ from dataclasses import fields
 from pathlib import Path
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.design import (
+from boringbar.analysis.design_options import (
     DISTRIBUTIONS,
     UNCERTAIN,
     VARIABLES,
@@ -64,11 +64,13 @@ def design_from_dict(d: dict, source: str = "<dict>") -> tuple[DesignOptions, Sy
         if k not in _OPTION_KEYS:
             fail(f"design.{k}", head[k], "unknown key; allowed: " + ", ".join(_OPTION_KEYS))
     spec = _system(head.pop("system", None), source, fail)
-    for k in ("ratios", "forces_n"):
+    for k in ("ratios", "forces_n", "rpms"):
         if k in head:
             if not isinstance(head[k], list) or not head[k]:
                 fail(f"design.{k}", head[k], "a non-empty list of numbers")
             head[k] = tuple(head[k])
+    if isinstance(head.get("objective"), list):
+        head["objective"] = tuple(head["objective"])
     variables = tuple(_variable(k, v, fail) for k, v in d.get("variables", {}).items())
     uncertain = tuple(_uncertain(k, v, fail) for k, v in d.get("uncertain", {}).items())
     try:
