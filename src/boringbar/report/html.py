@@ -183,6 +183,21 @@ class _Report:
                     "table": _table(head, rows)}
         return self.per_key("sensitivity", body)
 
+    def design(self) -> list[dict]:
+        def body(preset, rec, key):
+            s = rec["summary"]
+            pub = json.loads(_load(s["files"]["netcdf"]).attrs["published_values"])
+            rows = [[k, _fmt(v), _fmt(pub.get(k, "-"))] for k, v in s["best"].items()]
+            rows.append([f"{s['statistic_name']} of {s['objective_name']}",
+                         f"{s['objective']:.4g}", f"{s['published_objective']:.4g}"])
+            if "pareto" in s:
+                rows.append(["designs on the Pareto front", str(len(s["pareto"])), "-"])
+            return {"images": [self.img(s["files"]["png"], f"{key} {preset}"),
+                               self.img(s["files"]["best_png"], f"{key} best {preset}")],
+                    "table": _table(["", "best design", "published design"], rows),
+                    "line": s["summary"]}
+        return self.per_key("design", body)
+
     def corrections(self) -> dict | None:
         rec = next((r for r in self.manifest["steps"] if r["key"] == "corrections"), None)
         if rec is None:
@@ -269,7 +284,8 @@ class _Report:
         return {"header": self.header(), "audit": self.audit(), "sweeps": self.sweeps(),
                 "lobes": self.lobes(),
                 "bifurcation": self.bifurcation(), "basins": self.basins(),
-                "sensitivity": self.sensitivity(), "corrections": self.corrections(),
+                "sensitivity": self.sensitivity(), "design": self.design(),
+                "corrections": self.corrections(),
                 "cannot": self.cannot()}
 
 
@@ -391,6 +407,10 @@ def _ball_at_limit(ds) -> dict | None:
     return {"table": _table(["case", "first chattering depth / analytic limit of the host",
                              "ball's largest excursion / half gap", "impacts"], rows),
             "strikes": strikes_all, "below": below}
+
+
+def _fmt(v) -> str:
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
 def _nearest(values: list, target: float) -> int:

@@ -1,7 +1,8 @@
 """The files of each analysis and its summary: what ``boringbar sweep``, ``lobes``,
 ``bifurcation``, ``basins`` and ``sensitivity`` write into their ``--out``
 directory, shared by those commands and by ``boringbar paper``
-(:mod:`boringbar.report.paper`), so both write the same files the same way.
+(:mod:`boringbar.report.paper`), so both write the same files the same way; and
+what ``boringbar design`` writes.
 
 Each ``*_files(ds, out)`` writes the analysis's NetCDF file and figures into
 ``out`` (atomically) and returns its summary (what ``--json`` prints), with the
@@ -16,14 +17,18 @@ import numpy as np
 
 from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import summary as bifurcation_summary
+from boringbar.analysis.design import summary as design_summary
+from boringbar.analysis.design import summary_line
 from boringbar.analysis.lobes import examples_summary
 from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sensitivity import summary as sensitivity_summary
 from boringbar.analysis.sweep import summary as sweep_summary
-from boringbar.io import save_figure_atomic, write_netcdf_atomic
+from boringbar.io import atomic_path, save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.plot import (
     plot_basins,
     plot_bifurcation,
+    plot_design,
+    plot_design_comparison,
     plot_lobe_examples,
     plot_lobes,
     plot_sensitivity,
@@ -90,3 +95,24 @@ def sensitivity_files(ds, out) -> dict:
     files = {"netcdf": write_netcdf_atomic(ds, out / "sensitivity.nc"),
              "png": save_figure_atomic(plot_sensitivity(ds), out / "sensitivity.png")}
     return {**sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+
+
+def design_files(ds, cmp: dict, out) -> dict:
+    """``out/design.nc``, ``out/trials.csv``, ``out/design.png`` (the trials against
+    each variable, the Pareto front), ``out/best.png`` (the best design beside the
+    file's own and the bare bar: ``cmp`` of
+    :func:`boringbar.analysis.design.comparison`) and ``out/summary.json``; the
+    summary, with its one-line statement under ``"summary"``."""
+    out = Path(out)
+    s = design_summary(ds)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "design.nc"),
+             "csv": out / "trials.csv",
+             "png": save_figure_atomic(plot_design(ds), out / "design.png"),
+             "best_png": save_figure_atomic(plot_design_comparison(cmp), out / "best.png"),
+             "json": out / "summary.json"}
+    table = ds.drop_vars(["objective_samples", "published_statistic", "published_error"])
+    with atomic_path(files["csv"]) as tmp:
+        table.to_dataframe().to_csv(tmp)
+    summary = {**s, "summary": summary_line(s), "files": {k: str(v) for k, v in files.items()}}
+    write_json_atomic(summary, files["json"])
+    return summary

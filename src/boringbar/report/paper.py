@@ -25,12 +25,16 @@ import json
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from importlib import resources
 from pathlib import Path
 
 from boringbar import __version__
 from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.design import comparison, design
+from boringbar.analysis.design import summary as design_summary
+from boringbar.analysis.design_file import load_design
 from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, lobes
 from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity, with_cuts
@@ -45,6 +49,7 @@ from boringbar.report.outputs import (
     HISTORY_ROWS,
     basins_files,
     bifurcation_files,
+    design_files,
     lobes_files,
     sensitivity_files,
     sweep_files,
@@ -170,6 +175,22 @@ def _sensitivity_run(kind: str, force: str, ratios: str, cut_rpm: str | None,
     return run
 
 
+def _design_run(name: str, trials: int):
+    def run(preset: str, out: Path) -> dict:
+        options, spec = load_design(design_file(name))
+        options = replace(options, trials=trials, preset=preset)
+        execution = Execution("threads")
+        ds = design(options, spec=spec, storage=out / "design.db", execution=execution)
+        return design_files(ds, comparison(spec, options, design_summary(ds)["best"],
+                                           execution=execution), out)
+    return run
+
+
+def design_file(name: str) -> str:
+    """The path of a design file of the report (report/designs/NAME.toml)."""
+    return str(resources.files("boringbar.report").joinpath("designs", f"{name}.toml"))
+
+
 def published_steps(quick: bool = False) -> list[Step]:
     """The steps of the published study (docs/model.md, section 6); ``quick``: coarser."""
     duration = 0.5 if quick else 2.0
@@ -221,6 +242,14 @@ def published_steps(quick: bool = False) -> list[Step]:
                            "--force-n", "10", "--ratios", ratios, *extra, *dur),
                           _sensitivity_run(kind, "10", ratios, cut_rpm if cut else None,
                                            depths if cut else None, duration)))
+    for name, trials, title in (("ball", 6 if quick else 16,
+                                 "Better designs: the ball damper's gap and material"),
+                                ("tmd", 60 if quick else 200,
+                                 "Better designs: the absorber's tuning, FRF peak against "
+                                 "chatter")):
+        steps.append(Step(f"design-{name}", "design", title,
+                          ("design", design_file(name), "--trials", str(trials)),
+                          _design_run(name, trials)))
     return steps
 
 
