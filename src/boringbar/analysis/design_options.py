@@ -37,8 +37,8 @@ VARIABLES = {
     "tmd_frequency_ratio": (("tmd",), "", 0.1, 10.0),
     "tmd_damping_ratio": (("tmd",), "", 0.0, 2.0),
 }
-UNCERTAIN = ("friction_force_n", "restitution", "ball_position_mm", "ball_velocity_m_s",
-             "damping_ratio")
+UNCERTAIN = ("friction_force_n", "friction_number", "restitution", "ball_position_mm",
+             "ball_velocity_m_s", "damping_ratio")
 DISTRIBUTIONS = ("uniform", "normal")
 
 
@@ -198,6 +198,11 @@ def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
     for name, v in zip(names, row, strict=True):
         if name == "friction_force_n":
             d = replace(d, friction=Friction("force", max(float(v), 0.0), d.friction.reaction,
+                                             d.friction.static_ratio))
+        elif name == "friction_number":  # the published number, read as the preset reads it
+            kind, value = (("paper-number", max(float(v), 0.0)) if system.preset == "paper"
+                           else ("rolling", max(float(v), 0.0) * 1e-3))
+            d = replace(d, friction=Friction(kind, value, d.friction.reaction,
                                              d.friction.static_ratio))
         elif name == "restitution":
             d = replace(d, restitution=float(np.clip(v, 0.0, 1.0)))

@@ -15,7 +15,7 @@ from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import Outcome, many_cases, resolve_files, wrote
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.measured_frf import read_frf
-from boringbar.plot import plot_analytic_lobes, plot_frf_fit
+from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.stability import (
     GRID_SPAN,

@@ -27,13 +27,12 @@ from boringbar.io import atomic_path, save_figure_atomic, write_json_atomic, wri
 from boringbar.plot import (
     plot_basins,
     plot_bifurcation,
-    plot_design,
-    plot_design_comparison,
     plot_lobe_examples,
     plot_lobes,
     plot_sensitivity,
     plot_sweep,
 )
+from boringbar.plot_design import plot_design, plot_design_comparison
 
 #: Rows of a recorded history (a run's run.nc, the lobe examples): about this many.
 HISTORY_ROWS = 20000

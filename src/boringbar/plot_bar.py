@@ -1,0 +1,118 @@
+"""Figures of your own bar: its geometry and mode shapes, a measured FRF against its
+fit, and the classical lobes of a tip FRF (the edge of the package, as plot.py)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle
+
+
+# --- a bar's geometry and mode shapes -------------------------------------------------
+def plot_modes(spec, cavity: bool, n_modes: int, title: str = "", *, fig=None) -> Figure:
+    """The bar of the system file ``spec`` drawn to scale (sections, coolant bores,
+    the cavity's section and its ball, the absorber) above its first ``n_modes``
+    mode shapes (divided by their tip value), ball and absorber marked."""
+    fig = fig or Figure(figsize=(8.0, 6.0), layout="constrained")
+    geo, shp = fig.subplots(2, 1, sharex=True, height_ratios=(1, 2))
+    bar = spec.stepped_bar(cavity)
+    mm = 1e3
+    for s in bar.sections:
+        x = [s.start * mm, s.end * mm]
+        geo.fill_between(x, -s.diameter / 2 * mm, s.diameter / 2 * mm, color="#b0bec5",
+                         edgecolor="#455a64", lw=0.8)
+        if s.inner_diameter > 0:
+            geo.fill_between(x, -s.inner_diameter / 2 * mm, s.inner_diameter / 2 * mm,
+                             color="white", edgecolor="#455a64", lw=0.5, ls="--")
+    geo.axvline(0.0, color="black", lw=3)
+    if cavity and spec.cavity is not None and spec.ball is not None:
+        c, b = spec.cavity, spec.ball
+        geo.add_patch(_circle((c.position * mm, 0.0), b.diameter / 2 * mm, "#d84315"))
+        geo.annotate(f"ball {b.diameter * mm:g} mm {b.material}", (c.position * mm,
+                     c.depth / 2 * mm), ha="center", va="bottom", fontsize=8)
+    if spec.tmd is not None and not cavity:
+        geo.plot([spec.tmd.position * mm], [0.0], "s", color="#6a1b9a", ms=9,
+                 label="absorber")
+    geo.set_aspect("equal", adjustable="datalim")
+    geo.set_ylabel("mm")
+    geo.set_title(title or f"{spec.name}: geometry and mode shapes")
+    nodes, shapes, freqs = spec.mode_shapes(cavity, n_modes)
+    for i in range(shapes.shape[1]):
+        shp.plot(nodes * mm, shapes[:, i], label=f"mode {i + 1}: {freqs[i]:.1f} Hz")
+    shp.axhline(0.0, color="0.6", lw=0.6)
+    points = [("ball", spec.ball_position, "#d84315")] if cavity and spec.ball else []
+    if spec.tmd is not None:
+        points.append(("absorber", spec.absorber_position, "#6a1b9a"))
+    for name, z, colour in points:
+        shp.axvline(z * mm, color=colour, ls=":", lw=1.0)
+        shp.annotate(name, (z * mm, shp.get_ylim()[1]), color=colour, fontsize=8,
+                     ha="center", va="top")
+    shp.set_xlabel("z from the clamp (mm)")
+    shp.set_ylabel("psi(z) / psi(tip)")
+    shp.legend(fontsize=8, loc="lower left")
+    return fig
+
+
+def _circle(centre, radius, colour):
+    return Circle(centre, radius, facecolor=colour, edgecolor="black", lw=0.6, alpha=0.8)
+
+
+# --- measured FRFs ----------------------------------------------------------------------
+def plot_frf_fit(frequency_hz, measured, fitted, fit, *, fig=None) -> Figure:
+    """A measured tip receptance (points) against the fitted modal model (line):
+    magnitude on a log scale, real and imaginary parts; the fitted modes marked."""
+    fig = fig or Figure(figsize=(8.0, 7.5), layout="constrained")
+    mag, re, im = fig.subplots(3, 1, sharex=True)
+    f = np.asarray(frequency_hz)
+    step = max(1, len(f) // 1500)  # points enough to see the scatter
+    for ax, fn in ((mag, np.abs), (re, np.real), (im, np.imag)):
+        ax.plot(f[::step], fn(measured[::step]), ".", ms=2.5, color="0.55", label="measured")
+        ax.plot(f, fn(fitted), color="#d84315", lw=1.2, label="fitted modes")
+        for fi in fit.frequency_hz:
+            ax.axvline(fi, color="#1565c0", lw=0.6, ls=":")
+    mag.set_yscale("log")
+    mag.set_ylabel("|H| (m/N)")
+    re.set_ylabel("Re H (m/N)")
+    im.set_ylabel("Im H (m/N)")
+    im.set_xlabel("frequency (Hz)")
+    modes = ", ".join(f"{a:.1f} Hz / {z * 100:.2f} % / {k:.3g} N/m" for a, z, k in
+                      zip(fit.frequency_hz, fit.damping_ratio, fit.modal_stiffness_n_m,
+                          strict=True))
+    mag.set_title(f"tip FRF: measured and fitted ({modes}); residual "
+                  f"{fit.quality.get('relative_residual', math.nan):.2g}", fontsize=9)
+    mag.legend(fontsize=8)
+    return fig
+
+
+def plot_analytic_lobes(curves, rpm_range, *, fig=None) -> Figure:
+    """Classical stability lobes, one panel: each case's lower envelope of its lobes
+    (thick; with one case also each lobe, thin), its speed-independent limit dashed.  ``curves``:
+    (label, lobes dict of lobes_of_receptance, envelope rpm, envelope limit m)."""
+    fig = fig or Figure(figsize=(8.0, 4.8), layout="constrained")
+    ax = fig.subplots()
+    lo, hi = rpm_range
+    top = 0.0
+    for n, (label, lobes, rpm, limit) in enumerate(curves):
+        colour = f"C{n}"
+        for j in range(len(lobes["lobe"]) if len(curves) == 1 else 0):  # one FRF: each lobe
+            r, b = lobes["rpm"][j], lobes["b_lim"][j]
+            inside = (r >= lo) & (r <= hi)
+            if inside.any():
+                step = max(1, int(inside.sum()) // 400)  # enough points to draw it
+                ax.plot(np.where(inside, r, np.nan)[::step], (b * 1e3)[::step], color=colour,
+                        lw=0.4, alpha=0.35)
+        finite = np.isfinite(limit)
+        ax.plot(rpm[finite], limit[finite] * 1e3, color=colour, lw=2.0, label=label)
+        low = np.nanmin(lobes["b_lim"])
+        ax.axhline(low * 1e3, color=colour, ls="--", lw=0.8)
+        top = max(top, float(np.nanmax(limit[finite])) if finite.any() else 0.0, low)
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(0, 1.15 * top * 1e3 if top > 0 else 1)
+    ax.set_xlabel("spindle speed (rev/min)")
+    ax.set_ylabel("limiting depth of cut (mm)")
+    ax.set_title("stability lobes from the tip FRF (frequency domain; dashed: the "
+                 "speed-independent limit)", fontsize=9)
+    ax.legend(fontsize=8, loc="upper left")
+    return fig
