@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 import numbers
+import tomllib
+from pathlib import Path
 
 
 class ParameterError(ValueError):
@@ -90,3 +92,16 @@ def check_values(name: str, values, lo: float, hi: float, *, lo_open: bool = Fal
         raise ParameterError(f"{name} is empty: give at least one value")
     return tuple(check_range(f"{name}[{i}]", v, lo, hi, lo_open=lo_open, hi_open=hi_open,
                              unit=unit) for i, v in enumerate(items))
+
+
+def read_toml(path, error: type[ParameterError], what: str) -> dict:
+    """The TOML file ``path`` as a dict; a file that cannot be read or parsed raises
+    ``error`` with one line naming the file and ``what`` it is (e.g. "study file")."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except OSError as exc:
+        raise error(f"{path}: cannot read the {what}: {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{path}: not valid TOML: {exc}") from None

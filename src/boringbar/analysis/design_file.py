@@ -12,11 +12,10 @@ Every error is one line: the file, the key, the value and what is allowed.
 from __future__ import annotations
 
 import json
-import tomllib
 from dataclasses import fields
 from pathlib import Path
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, read_toml
 from boringbar.analysis.design_options import (
     DISTRIBUTIONS,
     UNCERTAIN,
@@ -39,15 +38,7 @@ class DesignFileError(ParameterError):
 
 def load_design(path) -> tuple[DesignOptions, SystemSpec]:
     """Read and check the design file ``path``: (options, the bar's system file)."""
-    path = Path(path)
-    try:
-        with open(path, "rb") as f:
-            d = tomllib.load(f)
-    except OSError as exc:
-        raise DesignFileError(f"{path}: cannot read the design file: {exc.strerror}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignFileError(f"{path}: not valid TOML: {exc}") from None
-    return design_from_dict(d, str(path))
+    return design_from_dict(read_toml(path, DesignFileError, "design file"), str(path))
 
 
 def design_from_dict(d: dict, source: str = "<dict>") -> tuple[DesignOptions, SystemSpec]:

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, read_toml
 from boringbar.model.bar import ModalModel, Section, SteppedBar
 from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
 from boringbar.model.materials import MATERIALS
@@ -164,15 +164,7 @@ class SystemSpec:
 
 def load_system(path) -> SystemSpec:
     """Read and check the TOML system file ``path``."""
-    path = Path(path)
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise SystemFileError(f"{path}: cannot read the system file: {exc.strerror}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SystemFileError(f"{path}: not valid TOML: {exc}") from None
-    return parse_system(data, str(path))
+    return parse_system(read_toml(path, SystemFileError, "system file"), str(path))
 
 
 def published_system() -> SystemSpec:

@@ -6,10 +6,9 @@ from __future__ import annotations
 
 import json
 import math
-import tomllib
 from pathlib import Path
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, read_toml
 from boringbar.model.system_file import SystemSpec, load_system, parse_system
 from boringbar.studies.registry import ANALYSES
 from boringbar.studies.schema import (
@@ -26,15 +25,7 @@ from boringbar.studies.schema import (
 
 def load_study(path) -> Study:
     """Read and validate the TOML study file ``path``."""
-    path = Path(path)
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise StudyError(f"{path}: cannot read the study file: {exc.strerror}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise StudyError(f"{path}: not valid TOML: {exc}") from None
-    return study_from_dict(data, str(path))
+    return study_from_dict(read_toml(path, StudyError, "study file"), str(path))
 
 
 def study_from_dict(d: dict, source: str = "<dict>") -> Study:
