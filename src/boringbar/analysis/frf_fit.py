@@ -1,12 +1,19 @@
-"""Modal parameters from a measured tip FRF, with sdypy-EMA (LSCF poles, LSFD constants).
+"""Modal parameters from a measured tip FRF, with sdypy-EMA (LSCE or LSCF poles, LSFD
+constants).
 
 The fit is sdypy-EMA's, not ours. We add only what a fit without a person at a
 stabilisation chart needs, and the conversion to boringbar's modal model:
 
 1. **Band.** The lines in ``band_hz`` (default: the whole measurement above
    its first line).
-2. **Poles.** LSCF poles for model orders up to ``max_order``
-   (``Model.get_poles``).
+2. **Poles.** sdypy's poles for model orders up to ``max_order`` (default 20;
+   ``Model.get_poles``): LSCE (least-squares complex exponential, in the time
+   domain through the impulse response) when the band starts near 0 Hz (below
+   5 % of its top), else LSCF (least-squares complex frequency domain), which
+   takes any band. LSCE first because LSCF, a linear least-squares estimator, is
+   biased by noise in damping: 1.2-1.4 % on the test bar's second mode at 1 %
+   noise, where LSCE stays within 0.3 %. Both need equally spaced lines; a
+   non-uniform file is interpolated onto as many.
 3. **Which poles.** The stable poles of the stabilisation chart that sit closest
    to the ``n_modes`` most prominent peaks of |H|; "stable" means frequency
    within 0.1 % and damping within 5 % from one order to the next, sdypy's own
@@ -35,13 +42,17 @@ import warnings
 import numpy as np
 import scipy.signal
 from sdypy import EMA
+from sdypy.EMA.EMA import LSFD
 
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.model.measured_frf import MeasuredFrf
 from boringbar.model.modal_fit import ModalFit
 
-#: Highest LSCF model order tried by default.
-MAX_ORDER = 40
+#: Highest model order tried by default.
+MAX_ORDER = 20
+#: The pole estimator is LSCE (time domain, through the impulse response) when the
+#: band starts below this fraction of its top, else LSCF (any band).
+LSCE_START = 0.05
 #: How far a peak of |H| must stand above its surroundings to count as a mode.
 PEAK_FACTOR = 2.0
 #: sdypy's stability tolerances: relative frequency and damping change per order.
@@ -56,18 +67,24 @@ def fit_frf(frf: MeasuredFrf, n_modes: int = 1, *, band_hz: tuple | None = None,
     reconstructed receptance at the band's lines)."""
     n = check_int("n_modes", n_modes, 1, 8)
     check_int("max_order", max_order, 2 * n + 2, 200)
-    data = _band(frf, band_hz)
+    data = _uniform(_band(frf, band_hz))
     peaks = _peaks(data, n)
-    model = EMA.Model(frf=data.receptance[None, :], freq=data.frequency_hz,
-                      lower=float(data.frequency_hz[0]), upper=float(data.frequency_hz[-1]),
+    f = data.frequency_hz
+    method = "lsce" if f[0] <= LSCE_START * f[-1] else "lscf"
+    model = EMA.Model(frf=data.receptance[None, :], freq=f,
+                      lower=0.0 if method == "lsce" else float(f[0]), upper=float(f[-1]),
                       pol_order_high=int(max_order), frf_form="receptance")
     # sdypy's stabilisation chart always draws a tqdm bar on stderr: keep it off ours
     with warnings.catch_warnings(), contextlib.redirect_stderr(io.StringIO()):
         warnings.simplefilter("ignore")
-        model.get_poles(method="lscf", show_progress=False)
+        model.get_poles(method=method, show_progress=False)
         model.select_closest_poles(list(peaks), fn_temp=STABLE_FREQUENCY,
                                    xi_temp=STABLE_DAMPING)
-        _, constants = model.get_constants(method="lsfd")
+        poles = np.array([model.all_poles[i][j] for i, j in np.asarray(model.pole_ind)])
+        # LSFD on the measured lines themselves (the model's grid may start at 0 Hz,
+        # where the lower residual term is singular)
+        constants = LSFD(poles, data.receptance[None, :], f, True, True, 0, len(f),
+                         "receptance")[0]
     f_n = np.asarray(model.nat_freq, dtype=float)
     zeta = np.asarray(model.nat_xi, dtype=float)
     order = np.argsort(f_n)
@@ -85,11 +102,23 @@ def fit_frf(frf: MeasuredFrf, n_modes: int = 1, *, band_hz: tuple | None = None,
     quality = {"relative_residual": residual,
                "complexity": (np.abs(a.real) / np.abs(a)).tolist(),
                "peaks_hz": sorted(float(p) for p in peaks)}
-    source = {**frf.source, "method": "sdypy-EMA LSCF poles + LSFD constants",
+    source = {**frf.source, "method": f"sdypy-EMA {method.upper()} poles + LSFD constants",
               "max_order": int(max_order), "band_hz": [float(data.frequency_hz[0]),
                                                        float(data.frequency_hz[-1])],
               "pole_selection": "stable poles closest to the most prominent peaks of |H|"}
     return ModalFit(tuple(f_n), tuple(zeta), tuple(k), source, quality), h_fit
+
+
+def _uniform(frf: MeasuredFrf) -> MeasuredFrf:
+    """The FRF on a uniform grid (the estimators' discrete-time model): a non-uniform
+    file is interpolated linearly onto as many equally spaced lines."""
+    f = frf.frequency_hz
+    steps = np.diff(f)
+    if np.ptp(steps) <= 1e-6 * steps.mean():
+        return frf
+    grid = np.linspace(f[0], f[-1], len(f))
+    h = np.interp(grid, f, frf.receptance.real) + 1j * np.interp(grid, f, frf.receptance.imag)
+    return MeasuredFrf(grid, h, dict(frf.source, resampled_to_uniform_grid=True))
 
 
 def _band(frf: MeasuredFrf, band_hz) -> MeasuredFrf:
