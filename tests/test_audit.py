@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import json
 
+import numpy as np
 import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
@@ -14,7 +15,7 @@ from cli_output import assert_one_line_error, json_out
 from boringbar.cli.main import main
 from boringbar.model.system import make_system
 from boringbar.report.audit import audit, load_claims
-from boringbar.report.audit_checks import CHECKS, code
+from boringbar.report.audit_checks import CHECKS, basin_threshold, code
 from boringbar.report.audit_data import VERDICTS, Verdict
 
 R = [0.96, 0.98, 1.0, 1.02, 1.04]
@@ -298,6 +299,16 @@ def discussion_cases():
                                                      "steel": [1.1e-4] * 3},
                                           {"carbide": first_chatter(0),
                                            "steel": first_chatter(0)})}, "partly"
+    carb = {"ball_g0_5_off": 0.10, "ball_g0_5_on": 0.10, "ball_g0_1_off": 0.10,
+            "ball_g0_1_on": 0.10}
+    rms = {"carbide": [1e-4] * 3, "steel": [1.1e-4] * 3}
+    for steel_mm, r, want in ((0.09, rms, "reproduced"), (0.05, rms, "partly"),
+                              (0.12, {"carbide": [1e-4] * 3, "steel": [0.9e-4] * 3},
+                               "not reproduced")):
+        steel = lobes(**{k: steel_mm for k in carb})
+        steel["cases"] = [c for c in steel["cases"] if c["case"].startswith("ball")]
+        yield "D4", {"lobes": lobes(**carb), "lobes-steel": steel,
+                     "sensitivity-ball": sens(balls, pp, r)}, want
     mu = [0.2, 0.4, 0.6, 0.8]
     pm = [[NI] * 3] * 4
     yield "D5", {"sensitivity-friction_number": sens(mu, pm, chatter={
@@ -375,3 +386,24 @@ def test_audit_of_what_is_not_a_paper_output(tmp_path, capsys):
     assert_one_line_error(main, ["audit", str(tmp_path)], out, "no boringbar paper output",
                           capsys)
     assert_one_line_error(main, ["audit", str(out)], out, "is not a directory", capsys)
+
+
+def test_the_two_attractor_threshold_of_d1(tmp_path):
+    """D1(b): the smallest |x0| (v0 = 0 row) where the basin changes attractor."""
+    x = np.linspace(-1.5e-3, 1.5e-3, 31)
+    v = np.linspace(-1.5, 1.5, 31)
+    for edge_mm, want in ((1.0, "reproduced"), (0.3, "partly")):
+        a = np.where(np.abs(x)[:, None] < edge_mm * 1e-3 - 1e-9, 0, 1) * np.ones((1, 31), int)
+        path = tmp_path / f"basins{edge_mm}.nc"
+        xr.Dataset({"attractor": (("displacement", "velocity"), a)},
+                   coords={"displacement": x, "velocity": v}).to_netcdf(path)
+        assert basin_threshold(path) == pytest.approx(edge_mm, abs=1e-9)
+        steps = basins([attractor(NU, periodic=False)],
+                       [attractor(NI), attractor(NU, periodic=False)],
+                       [attractor("2 symmetric", 0.9)])
+        steps["basins-10N-r1.01-on"]["files"] = {"netcdf": str(path)}
+        assert judge("D1", steps).verdict == want
+    one = tmp_path / "one.nc"
+    xr.Dataset({"attractor": (("displacement", "velocity"), np.zeros((31, 31), int))},
+               coords={"displacement": x, "velocity": v}).to_netcdf(one)
+    assert basin_threshold(one) is None

@@ -322,10 +322,7 @@ PUBLISHED_DEPTH_MM = {"S1": 0.021, "S2": 0.13, "S3": 0.03, "S4": 0.26, "S5": 0.2
 
 
 def _depths(ev: Evidence, preset: str) -> dict | None:
-    s = ev.summary(preset, "lobes")
-    if s is None:
-        return None
-    return {c["case"]: (c["min_chatter_free_depth_m"] or 0.0) * 1e3 for c in s["cases"]}
+    return _depths_of(ev, preset, "lobes")
 
 
 def _depth_check(claim: str):
@@ -368,6 +365,19 @@ def check_s7(ev: Evidence, preset: str) -> Verdict:
 
 
 # --- discussion ------------------------------------------------------------------------
+def basin_threshold(path) -> float | None:
+    """D1(b)'s threshold (mm): along the initial velocity nearest 0, the smallest
+    |initial displacement| whose attractor differs from the one nearest the
+    origin; None where that row holds one attractor."""
+    with xr.open_dataset(path) as ds:
+        a, x = ds["attractor"].values, ds["displacement"].values
+        j = int(np.argmin(np.abs(ds["velocity"].values)))
+    row = a[:, j]
+    centre = row[int(np.argmin(np.abs(x)))]
+    other = np.abs(x[row != centre])
+    return float(other.min()) * 1e3 if other.size else None
+
+
 def check_d1(ev: Evidence, preset: str) -> Verdict:
     keys = ("basins-10N-r1.01-off", "basins-10N-r1.01-on", "basins-20N-r1.00-off")
     s = [ev.summary(preset, k) for k in keys]
@@ -377,14 +387,22 @@ def check_d1(ev: Evidence, preset: str) -> Verdict:
     b_two = len(s[1]["attractors"]) >= 2
     c = max(s[2]["attractors"], key=lambda a: a["fraction"])
     c_2s = c["periodic"] and code(c["pattern"]) == "2S"
+    nc = s[1].get("files", {}).get("netcdf")
+    threshold = basin_threshold(nc) if nc else None
     m = {"(a) non-periodic attractor": a_chaos, "(b) attractors": len(s[1]["attractors"]),
+         "(b) threshold mm": None if threshold is None else round(threshold, 3),
          "(c) largest basin": f"{c['pattern']} ({c['fraction']:.0%})"}
     hits = a_chaos + b_two + c_2s
+    words = (f"{hits} of 3 parts hold: (a) {'a' if a_chaos else 'no'} non-periodic "
+             f"attractor, (b) {len(s[1]['attractors'])} attractor(s) with friction"
+             + ("" if threshold is None else f", the other from |x0| = {threshold:.2g} mm")
+             + f", (c) the largest basin at 20 N is {c['pattern']}")
+    fig = ev.figure(preset, keys[1])
+    if hits == 3 and threshold is not None and not _near(threshold, 1.0):
+        return Verdict("partly", m, words + f"; the threshold is {_pct(threshold, 1.0)} off "
+                       "the published 1 mm", fig)
     verdict = "reproduced" if hits == 3 else "partly" if hits else "not reproduced"
-    return Verdict(verdict, m, f"{hits} of 3 parts hold: (a) {'a' if a_chaos else 'no'} "
-                   f"non-periodic attractor, (b) {len(s[1]['attractors'])} attractor(s) with "
-                   f"friction, (c) the largest basin at 20 N is {c['pattern']}",
-                   ev.figure(preset, keys[1]))
+    return Verdict(verdict, m, words, fig)
 
 
 def check_d2(ev: Evidence, preset: str) -> Verdict:
@@ -496,6 +514,38 @@ def _chatter_free(res: dict, depths) -> float:
 
 
 def check_d4(ev: Evidence, preset: str) -> Verdict:
+    """From the steel ball's lobes where the output has them, else the 1200 rpm cuts."""
+    steel, carbide = _depths_of(ev, preset, "lobes-steel"), _depths(ev, preset)
+    s = ev.summary(preset, "sensitivity-ball")
+    if steel is None or carbide is None or s is None:
+        return _d4_cuts(ev, preset)
+    h = {r["value"]: r for r in s["harmonic"]}
+    k = _at(h["carbide"], 1.0)
+    higher = h["steel"]["rms_tip_m"][k] > h["carbide"]["rms_tip_m"][k]
+    change = {c: (steel[c] / carbide[c] - 1) * 100 for c in steel
+              if carbide.get(c, 0) > 0}
+    worst = min(change.values())
+    m = {"depth change steel vs carbide %": {c: round(v) for c, v in change.items()},
+         "steel RMS at r = 1 higher": higher}
+    words = ", ".join(f"{c}: {v:+.0f} %" for c, v in change.items())
+    not_deeper = all(v <= 0 for v in change.values())
+    return _judge(not_deeper or higher, not_deeper and higher and -15 * (1 + TOLERANCE)
+                  <= worst, m,
+                  f"the steel ball's limits against the carbide's: {words}; its RMS at "
+                  f"r = 1 is {'higher' if higher else 'not higher'}",
+                  f"steel against carbide: {words} (published: up to -15 %; depth steps of "
+                  f"0.01 mm); RMS {'higher' if higher else 'not higher'}",
+                  ev.figure(preset, "lobes-steel"))
+
+
+def _depths_of(ev: Evidence, preset: str, key: str) -> dict | None:
+    s = ev.summary(preset, key)
+    if s is None:
+        return None
+    return {c["case"]: (c["min_chatter_free_depth_m"] or 0.0) * 1e3 for c in s["cases"]}
+
+
+def _d4_cuts(ev: Evidence, preset: str) -> Verdict:
     s = ev.summary(preset, "sensitivity-ball")
     if s is None:
         return _missing("sensitivity-ball")
