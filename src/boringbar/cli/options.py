@@ -267,7 +267,7 @@ def resolve_files(args, bars: list[str]) -> None:
         if value is not None:
             check_range(opt, value, -10, 10)
     args.frf_modal = ModalFit.read(args.frf).to_modal_model(
-        args.frf_ball_ratio or 1.0, args.frf_absorber_ratio or 1.0)
+        *(1.0 if r is None else r for r in (args.frf_ball_ratio, args.frf_absorber_ratio)))
 
 
 def gap_default_mm(args) -> float:
