@@ -612,7 +612,10 @@ def check_d6(ev: Evidence, preset: str) -> Verdict:
                   for a, b in zip(base["pattern"], h[v]["pattern"], strict=True))
     rms = max(abs(x / y - 1) for v in (0.6, 0.8)
               for x, y in zip(h[v]["rms_tip_m"], base["rms_tip_m"], strict=True))
-    m = {"pattern changes": changed, "largest RMS change %": round(rms * 100, 1)}
+    seen = sorted({code(p) for v in h for p in h[v]["pattern"] if p})
+    # with no impact at all, restitution cannot matter: say which patterns were seen
+    m = {"pattern changes": changed, "largest RMS change %": round(rms * 100, 1),
+         "patterns seen": seen}
     return _judge(changed == 0, rms <= TOLERANCE, m,
                   f"{changed} pattern change{'s' if changed > 1 else ''} between e = 0.6, "
                   "0.7 and 0.8",
