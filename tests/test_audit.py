@@ -10,13 +10,13 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
-from cli_output import assert_one_line_error, json_out
+from cli_output import assert_one_line_error
 
 from boringbar.cli.main import main
 from boringbar.model.system import make_system
-from boringbar.report.audit import audit, load_claims
+from boringbar.report.audit import load_claims
 from boringbar.report.audit_checks import CHECKS, basin_threshold, code
-from boringbar.report.audit_data import VERDICTS, Verdict
+from boringbar.report.audit_data import Verdict
 
 R = [0.96, 0.98, 1.0, 1.02, 1.04]
 SHAPE = [0.3, 0.5, 1.0, 0.5, 0.3]  # a resonance peaking at r = 1
@@ -355,30 +355,6 @@ def test_the_claims_file_lists_every_claim_with_a_check():
     assert len(ids) == 29 and set(ids) == set(CHECKS)
     for c in claims:
         assert c["statement"] and c["source"] and c["conditions"] and c["published"]
-
-
-# --- on a real paper output -------------------------------------------------------------------
-@pytest.fixture(scope="module")
-def paper_out(tmp_path_factory):
-    out = tmp_path_factory.mktemp("paper") / "out"
-    assert main(["paper", "--quick", "--out", str(out), "--quiet"]) == 0
-    return out
-
-
-def test_audit_command_on_a_quick_paper_output(paper_out, capsys):
-    assert main(["audit", str(paper_out), "--json"]) == 0
-    s = json_out(capsys)
-    assert s["quick"] is True and s["presets"] == ["paper", "physical"]
-    assert len(s["claims"]) == 29
-    for c in s["claims"]:
-        assert {"id", "verdict", "published", "measured"} <= c.keys()
-        assert set(c["verdict"]) == {"paper", "physical"}
-        assert all(v in VERDICTS for v in c["verdict"].values())
-    assert sum(s["counts"]["paper"].values()) == 29
-    assert s == json.loads(json.dumps(audit(paper_out)))  # the command is the function
-    html = (paper_out / "report.html").read_text()
-    assert html.index("id='audit'") < html.index("id='cannot'") < html.index("id='sweeps'")
-    assert html.count("class='v-") == 2 * 29
 
 
 def test_audit_of_what_is_not_a_paper_output(tmp_path, capsys):

@@ -22,6 +22,8 @@ import xarray as xr
 from cli_output import assert_one_line_error
 
 from boringbar.cli.main import main
+from boringbar.report.audit import audit
+from boringbar.report.audit_data import VERDICTS
 from boringbar.report.html import _mm, write_report
 from boringbar.report.paper import PRESET_ORDER, published_steps
 
@@ -152,3 +154,22 @@ def _pngs(files: dict) -> list[str]:
         if "png" in key:
             out += value if isinstance(value, list) else [value]
     return out
+
+
+def test_the_audit_judges_every_claim_of_this_output(study, capsys):
+    """boringbar audit on the quick study: 29 claims, a verdict under each preset; the
+    report opens with the same table (tests/test_audit.py tests each check)."""
+    out = study["out"]
+    assert main(["audit", str(out), "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["quick"] is True and s["presets"] == ["paper", "physical"]
+    assert len(s["claims"]) == 29
+    for c in s["claims"]:
+        assert {"id", "verdict", "published", "measured"} <= c.keys()
+        assert set(c["verdict"]) == {"paper", "physical"}
+        assert all(v in VERDICTS for v in c["verdict"].values())
+    assert sum(s["counts"]["paper"].values()) == 29
+    assert s == json.loads(json.dumps(audit(out)))  # the command is the function
+    html = (out / "report.html").read_text()
+    assert html.index("id='audit'") < html.index("id='cannot'") < html.index("id='sweeps'")
+    assert html.count("class='v-") == 2 * 29
