@@ -1,29 +1,19 @@
 """Design search under uncertainty: the damper that works best for a bar, robust to
 what cannot be measured well (docs/design.md).
 
-A design study names:
+A design study (:class:`~boringbar.analysis.design_options.DesignOptions`) names
+variables within the bar's geometry, one objective or several
+(:mod:`boringbar.analysis.design_objectives`: harmonic band RMS, cut amplitude,
+minimum chatter-free depth, FRF peak, most negative real part), uncertain
+parameters whose Monte Carlo samples every candidate shares (common random
+numbers), and a statistic of those samples with its error.
 
-- **variables** (:class:`Variable`): the ball's gap, material, diameter, the
-  cavity's position, the restitution; the absorber's mass, frequency ratio and
-  damping ratio. Each has a range within the bar's geometry;
-- **an objective** (:data:`OBJECTIVES`): the tip RMS over a band of frequency
-  ratios and forces under harmonic forcing (its worst or its mean), the peak of
-  the tip FRF, or its most negative real part (the chatter limit's
-  denominator; linear bars);
-- **uncertain parameters** (:class:`Uncertain`): the friction force, the
-  restitution, the ball's initial position and velocity, the bar's damping
-  ratio, each uniform or normal. Their Monte Carlo samples are drawn once, from
-  the seed, and every candidate sees the same samples (common random numbers),
-  so candidates are compared on the same draws;
-- **a statistic** over the samples: the mean (with its standard error), a
-  quantile (with a bootstrap error) or the worst sample.
-
-Optuna searches (TPE or CMA-ES; the seed fixed). Its SQLite storage beside the
-result makes the search resumable: each trial's sampler is seeded by the
-number of trials finished before it, so a search killed and run again asks
-for the same candidates as an uninterrupted one. A trial still marked running
-after a kill is failed and asked again. The runs of one candidate (samples x
-forces x ratios) fan out on the usual executors.
+Optuna searches: TPE, CMA-ES, or NSGA-II for several objectives (a Pareto
+front), the seed fixed. Its SQLite storage beside the result makes the search
+resumable: each trial's sampler is seeded by the number of trials finished
+before it, so a search killed and run again asks for the same candidates as an
+uninterrupted one. A trial still marked running after a kill is failed and
+asked again. The runs of one candidate fan out on the usual executors.
 """
 
 from __future__ import annotations
