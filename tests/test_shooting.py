@@ -1,0 +1,62 @@
+"""Shooting for periodic orbits (boringbar.shooting): the saltation monodromy against
+central finite differences, the map against the kernel, and the linear bar's truths."""
+
+import numpy as np
+import pytest
+
+from boringbar import shooting as sh
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import make_system
+from boringbar.reference.linear import tip_frf
+from boringbar.simulate import State, simulate
+
+
+def _fd_jacobian(fl, x):
+    sc = np.maximum(np.abs(x), 1e-9)
+    J = np.zeros((fl.N, fl.N))
+    for i in range(fl.N):
+        e = np.zeros(fl.N)
+        e[i] = 1e-6 * sc[i]
+        J[:, i] = (sh.advance(fl, x + e).x - sh.advance(fl, x - e).x) / (2 * e[i])
+    return J, np.diag(sc)
+
+
+@pytest.mark.parametrize("friction", [False, True])
+def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
+    system = make_system("ball", "physical", gap=0.1e-3, friction=friction)
+    forcing = Harmonic(20.0, ratio=1.0)
+    fl = sh.make_flow(system, forcing)
+    run = simulate(system, forcing, duration=100 * fl.period, dt=1e-6, integrator="exact")
+    x, pr = sh.periodic_orbit(fl, run.final.x)
+    kinds = [k for _, k in pr.events]
+    assert "impact+" in kinds and "impact-" in kinds
+    assert ("reversal" in kinds) == friction
+    assert np.max(np.abs(pr.x - x)) <= 1e-12 * np.max(np.abs(x))
+    Jfd, D = _fd_jacobian(fl, x)
+    err = np.max(np.abs((pr.jacobian - Jfd) @ D)) / np.max(np.abs(pr.jacobian @ D))
+    assert err < 1e-6
+    # the map is the exact kernel's: one period of simulate from the same state
+    one = simulate(system, forcing, duration=fl.period, dt=fl.period / 2000,
+                   integrator="exact", initial=State(x, 0.0))
+    assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
+
+
+def test_linear_bar_orbit_is_the_forced_response():
+    system = make_system("solid", "physical")
+    forcing = Harmonic(10.0, ratio=0.93)
+    fl = sh.make_flow(system, forcing)
+    x, pr = sh.periodic_orbit(fl, np.zeros(fl.N))
+    bar = system.bar
+    n = bar.n_modes
+    # tip amplitude from phase-0 displacement and velocity: W(t) = Im(G F0 e^{i Omega t})
+    w0, v0 = bar.psi_tip @ x[:n], bar.psi_tip @ x[n:]
+    amp = np.hypot(w0, v0 / fl.omega)
+    ref = abs(tip_frf(bar, fl.omega)) * forcing.amplitude
+    assert abs(amp - ref) <= 1e-10 * ref
+    wn = np.sqrt(bar.stiffness / bar.mass)
+    z = bar.damping_ratio
+    lam = np.concatenate([-z * wn + 1j * wn * np.sqrt(1 - z**2),
+                          -z * wn - 1j * wn * np.sqrt(1 - z**2)])
+    expected = np.sort_complex(np.exp(lam * fl.period))
+    got = np.sort_complex(sh.multipliers(pr))
+    assert np.max(np.abs(got - expected)) <= 1e-10
