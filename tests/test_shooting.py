@@ -8,6 +8,7 @@ from boringbar import shooting as sh
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
 from boringbar.reference.linear import tip_frf
+from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import State, simulate
 
 
@@ -60,3 +61,31 @@ def test_linear_bar_orbit_is_the_forced_response():
     expected = np.sort_complex(np.exp(lam * fl.period))
     got = np.sort_complex(sh.multipliers(pr))
     assert np.max(np.abs(got - expected)) <= 1e-10
+
+
+def _masri_caughey(force=30.0):
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    forcing = Harmonic(force, ratio=1.0)
+    fl = sh.make_flow(system, forcing)
+    bar, ball = system.bar, system.damper
+    orbit = next(o for o in two_impact_orbit(
+        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass, ball.gap, ball.restitution, force, fl.omega) if o.admissible and o.stable)
+    h = 1e-9
+    dy0 = float(orbit.relative_displacement(h) - orbit.relative_displacement(-h)) / (2 * h)
+    x0 = np.array([float(orbit.modal_displacement(0.0)), float(orbit.modal_velocity(0.0)),
+                   float(orbit.relative_displacement(0.0)), dy0])
+    return fl, orbit, x0
+
+
+def test_newton_converges_to_the_masri_caughey_orbit():
+    fl, orbit, x0 = _masri_caughey()
+    x, pr = sh.periodic_orbit(fl, x0 * (1 + 1e-3 * np.array([1, -1, 1, -1])))
+    t_plus = next(t for t, k in pr.events if k == "impact+")
+    assert abs((fl.omega * t_plus) % (2 * np.pi) - orbit.phase) < 1e-9
+    speed = abs(x[3] + fl.psi_d[0] * x[1])  # the ball's absolute speed in flight
+    assert abs(speed - orbit.ball_speed) < 1e-9 * orbit.ball_speed
+    # P is the half-period impact map applied twice: its multipliers are their squares
+    got = np.sort_complex(sh.multipliers(pr))
+    expected = np.sort_complex(np.asarray(orbit.multipliers) ** 2)
+    assert np.max(np.abs(got - expected)) < 1e-7
