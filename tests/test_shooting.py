@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from boringbar import shooting as sh
+from boringbar.branch import continue_branch
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
 from boringbar.reference.linear import tip_frf
@@ -89,3 +90,31 @@ def test_newton_converges_to_the_masri_caughey_orbit():
     got = np.sort_complex(sh.multipliers(pr))
     expected = np.sort_complex(np.asarray(orbit.multipliers) ** 2)
     assert np.max(np.abs(got - expected)) < 1e-7
+
+
+def _closed_form_crossing(fl, orbit, lo, hi):
+    """The F0 where the closed-form orbit (the root nearest in phase) loses stability."""
+    sysm = orbit.system
+
+    def unstable(force):
+        orbits = two_impact_orbit(sysm.mass, sysm.stiffness, sysm.damping, sysm.psi_tip,
+                                  sysm.psi_ball, sysm.ball_mass, sysm.gap, sysm.restitution,
+                                  force, sysm.omega)
+        o = min(orbits, key=lambda o: abs(o.phase - orbit.phase))
+        return np.max(np.abs(o.multipliers)) > 1.0
+    assert unstable(lo) and not unstable(hi)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if unstable(mid) else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def test_continuation_in_force_finds_the_closed_form_stability_change():
+    fl, orbit, x0 = _masri_caughey()
+    br = continue_branch(fl, "force-n", x0, 27.0, step=0.05, max_points=60)
+    assert br.stop == "end of range"
+    changes = [v for k, v in br.events if k in ("fold", "period-doubling", "neimark-sacker")]
+    assert len(changes) == 1
+    expected = _closed_form_crossing(fl, orbit, 27.0, 30.0)
+    assert abs(changes[0] - expected) < 0.01 * expected
+    assert br.points[0].stable and not br.points[-1].stable

@@ -67,6 +67,7 @@ class Flow:
     s: float
     v_impact: float
     meff: float
+    reference: float
 
     @property
     def period(self) -> float:
@@ -92,7 +93,7 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
                 np.asarray(bar.psi_damper, float), ball, float(p[L.BALL_MASS]),
                 float(p[L.HALF_GAP]), float(p[L.RESTITUTION]), float(p[L.FRICTION]),
                 float(p[L.STATIC_FRICTION]), float(p[L.REACTION]), float(p[L.V_IMPACT]),
-                float(p[L.M_EFF]))
+                float(p[L.M_EFF]), float(system.reference_frequency))
 
 
 def augmented(fl: Flow, sdir: float) -> np.ndarray:
