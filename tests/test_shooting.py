@@ -4,7 +4,9 @@ central finite differences, the map against the kernel, and the linear bar's tru
 import numpy as np
 import pytest
 
+import boringbar as bb
 from boringbar import shooting as sh
+from boringbar.analysis.continuation import summary
 from boringbar.branch import continue_branch
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
@@ -39,8 +41,10 @@ def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
     assert err < 1e-6
     # the map is the exact kernel's: one period of simulate from the same state
     one = simulate(system, forcing, duration=fl.period, dt=fl.period / 2000,
-                   integrator="exact", initial=State(x, 0.0))
+                   integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
     assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
+    # the orbit's RMS (Gauss-Legendre per segment) is the kernel's exact integral
+    assert abs(pr.rms_tip - one.rms_tip) <= 1e-9 * one.rms_tip
 
 
 def test_linear_bar_orbit_is_the_forced_response():
@@ -118,3 +122,16 @@ def test_continuation_in_force_finds_the_closed_form_stability_change():
     expected = _closed_form_crossing(fl, orbit, 27.0, 30.0)
     assert abs(changes[0] - expected) < 0.01 * expected
     assert br.points[0].stable and not br.points[-1].stable
+
+
+def test_continuation_dataset_and_summary_from_a_settled_simulation():
+    system = make_system("ball", "physical", gap=0.1e-3, friction=True)
+    ds = bb.continuation(system, Harmonic(20.0, ratio=1.0), options=bb.ContinuationOptions(
+        parameter="ratio", stop=1.02, step=0.05, max_points=6, settle_periods=100))
+    s = summary(ds)
+    points = s["branches"][0]["points"]
+    assert len(points) >= 2 and points[0]["value"] == pytest.approx(1.0)
+    assert all(p["rms_tip_m"] > abs(p["strobe_tip_m"]) / 10 for p in points)
+    assert all(len(p["multipliers_abs"]) == 6 for p in points)
+    assert [p["stable"] for p in points] == [max(p["multipliers_abs"]) < 1 for p in points]
+    assert ds.attrs["parameter"] == "ratio" and "wall_time_s" in s

@@ -21,6 +21,7 @@ from boringbar import plot  # noqa: E402, F401  (registers Run.plot)
 from boringbar._validate import ParameterError  # noqa: E402
 from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
+from boringbar.analysis.continuation import ContinuationOptions, continuation  # noqa: E402
 from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
 from boringbar.analysis.poincare import poincare_map  # noqa: E402
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity  # noqa: E402
@@ -47,6 +48,7 @@ __all__ = [
     "BasinOptions",
     "BifurcationOptions",
     "Case",
+    "ContinuationOptions",
     "Cuts",
     "Execution",
     "Friction",
@@ -69,6 +71,7 @@ __all__ = [
     "TunedMassDamper",
     "basins",
     "bifurcation",
+    "continuation",
     "den_hartog_parameters",
     "load_study",
     "lobes",
