@@ -1,6 +1,8 @@
 """Shooting for periodic orbits (boringbar.shooting): the saltation monodromy against
 central finite differences, the map against the kernel, and the linear bar's truths."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -8,6 +10,7 @@ import boringbar as bb
 from boringbar import shooting as sh
 from boringbar.analysis.continuation import summary
 from boringbar.branch import continue_branch
+from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
 from boringbar.reference.linear import tip_frf
@@ -135,3 +138,15 @@ def test_continuation_dataset_and_summary_from_a_settled_simulation():
     assert all(len(p["multipliers_abs"]) == 6 for p in points)
     assert [p["stable"] for p in points] == [max(p["multipliers_abs"]) < 1 for p in points]
     assert ds.attrs["parameter"] == "ratio" and "wall_time_s" in s
+
+
+def test_cli_continue_writes_its_files_and_refuses_bad_ranges(tmp_path, capsys):
+    rc = main(["continue", "--gap-mm", "0.5", "--friction", "off", "--modes", "1",
+               "--range", "30:29", "--start-from", "masri-caughey", "--max-points", "4",
+               "--out", str(tmp_path), "--json"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["branches"][0]["points"]) == 4 and "wall_time_s" in out
+    assert (tmp_path / "continuation.png").stat().st_size > 0
+    assert (tmp_path / "continuation.nc").exists()
+    assert main(["continue", "--range", "1:x", "--out", str(tmp_path)]) == 2

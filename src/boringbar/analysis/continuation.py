@@ -127,7 +127,8 @@ def warm(context: dict) -> None:
 
 
 def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.Dataset:
-    """Dims (branch, point, state, multiplier) and (branch, event)."""
+    """Dims (branch, point, state, multiplier) and (branch, event); the multipliers as
+    real and imaginary parts (NetCDF has no complex type)."""
     r = results[0]
     o = plan.context["options"]
     ds = xr.Dataset(
@@ -135,7 +136,10 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "state": (("branch", "point", "state"), [np.asarray(r["state"])]),
          "strobe_tip_m": (("branch", "point"), [r["strobe_tip_m"]]),
          "rms_tip_m": (("branch", "point"), [r["rms_tip_m"]]),
-         "multipliers": (("branch", "point", "multiplier"), [np.asarray(r["multipliers"])]),
+         "multiplier_real": (("branch", "point", "multiplier"),
+                             [np.real(np.asarray(r["multipliers"]))]),
+         "multiplier_imag": (("branch", "point", "multiplier"),
+                             [np.imag(np.asarray(r["multipliers"]))]),
          "stable": (("branch", "point"), [r["stable"]]),
          "event_kind": (("branch", "event"), [[k for k, _ in r["events"]]]),
          "event_value": (("branch", "event"), [[v for _, v in r["events"]]])},
@@ -154,7 +158,8 @@ def summary(ds: xr.Dataset) -> dict:
         d = ds.isel(branch=b)
         points = [{"value": float(d["value"][i]), "strobe_tip_m": float(d["strobe_tip_m"][i]),
                    "rms_tip_m": float(d["rms_tip_m"][i]), "stable": bool(d["stable"][i]),
-                   "multipliers_abs": np.abs(d["multipliers"][i].values).tolist()}
+                   "multipliers_abs": np.hypot(d["multiplier_real"][i].values,
+                                               d["multiplier_imag"][i].values).tolist()}
                   for i in range(d.sizes["point"])]
         events = [{"kind": str(k), "value": float(v)}
                   for k, v in zip(d["event_kind"].values, d["event_value"].values, strict=True)]

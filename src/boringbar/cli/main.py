@@ -20,6 +20,7 @@ import textwrap
 
 from boringbar import __version__
 from boringbar.cli.compile import add_compile
+from boringbar.cli.continuation import add_continue
 from boringbar.cli.nonlinear import add_basins, add_bifurcation, add_sensitivity
 from boringbar.cli.options import PROG, Outcome
 from boringbar.cli.simulate import add_simulate
@@ -60,6 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_bifurcation(sub)
     add_basins(sub)
     add_sensitivity(sub)
+    add_continue(sub)
 
     add_run(sub)
     add_compile(sub)
