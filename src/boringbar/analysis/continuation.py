@@ -174,7 +174,8 @@ def continuation(system: System, forcing: Harmonic | None = None, *,
     """Continue a periodic orbit of ``system`` under ``forcing`` (its F0 and ratio override
     ``options``'): a Dataset of branches with their state, strobe tip displacement, RMS,
     Floquet multipliers, stability and events (kind, value); see
-    :class:`ContinuationOptions` and docs/continuation.md."""
+    :class:`ContinuationOptions` and docs/continuation.md.  ``execution``: the
+    contract's (one point: the branch)."""
     options = options or ContinuationOptions()
     if forcing is not None:
         if forcing.ratio is None:
