@@ -99,20 +99,22 @@ def test_newton_converges_to_the_masri_caughey_orbit():
     assert np.max(np.abs(got - expected)) < 1e-7
 
 
-def _closed_form_crossing(fl, orbit, lo, hi):
-    """The F0 where the closed-form orbit (the root nearest in phase) loses stability."""
+def _closed_form_crossing(fl, orbit, lo, hi, along="force"):
+    """The F0 (or ratio) where the closed-form orbit (the root nearest in phase) loses
+    stability."""
     sysm = orbit.system
 
-    def unstable(force):
+    def unstable(v):
+        force, omega = (v, sysm.omega) if along == "force" else (30.0, v * fl.reference)
         orbits = two_impact_orbit(sysm.mass, sysm.stiffness, sysm.damping, sysm.psi_tip,
                                   sysm.psi_ball, sysm.ball_mass, sysm.gap, sysm.restitution,
-                                  force, sysm.omega)
+                                  force, omega)
         o = min(orbits, key=lambda o: abs(o.phase - orbit.phase))
         return np.max(np.abs(o.multipliers)) > 1.0
-    assert unstable(lo) and not unstable(hi)
+    assert unstable(lo) != unstable(hi)
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if unstable(mid) else (lo, mid)
+        lo, hi = (mid, hi) if unstable(mid) == unstable(lo) else (lo, mid)
     return 0.5 * (lo + hi)
 
 
@@ -150,3 +152,13 @@ def test_cli_continue_writes_its_files_and_refuses_bad_ranges(tmp_path, capsys):
     assert (tmp_path / "continuation.png").stat().st_size > 0
     assert (tmp_path / "continuation.nc").exists()
     assert main(["continue", "--range", "1:x", "--out", str(tmp_path)]) == 2
+
+
+def test_continuation_in_ratio_finds_the_closed_form_stability_change():
+    fl, orbit, x0 = _masri_caughey()
+    br = continue_branch(fl, "ratio", x0, 1.04, step=0.05, max_points=60)
+    changes = [v for k, v in br.events if k in ("fold", "period-doubling", "neimark-sacker")]
+    assert len(changes) == 1, (br.stop, br.events)
+    expected = _closed_form_crossing(fl, orbit, 1.0, 1.04, along="ratio")
+    assert abs(changes[0] - expected) < 0.01 * expected
+    assert br.points[0].stable and not br.points[-1].stable
