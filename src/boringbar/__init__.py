@@ -24,6 +24,7 @@ from boringbar import plot  # noqa: E402, F401  (registers Run.plot)
 from boringbar._validate import ParameterError  # noqa: E402
 from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
+from boringbar.analysis.continuation import ContinuationOptions, continuation  # noqa: E402
 from boringbar.analysis.design import design  # noqa: E402
 from boringbar.analysis.design_file import load_design  # noqa: E402
 from boringbar.analysis.design_options import DesignOptions, Uncertain, Variable  # noqa: E402
@@ -61,6 +62,7 @@ __all__ = [
     "BasinOptions",
     "BifurcationOptions",
     "Case",
+    "ContinuationOptions",
     "Cuts",
     "DesignOptions",
     "Execution",
@@ -88,6 +90,7 @@ __all__ = [
     "Variable",
     "basins",
     "bifurcation",
+    "continuation",
     "den_hartog_parameters",
     "describe_modes",
     "design",

@@ -21,6 +21,7 @@ import textwrap
 from boringbar import __version__
 from boringbar.cli.audit import add_audit
 from boringbar.cli.compile import add_compile
+from boringbar.cli.continuation import add_continue
 from boringbar.cli.design import add_design
 from boringbar.cli.frf import add_fit_frf
 from boringbar.cli.modes import add_modes
@@ -66,6 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_bifurcation(sub)
     add_basins(sub)
     add_sensitivity(sub)
+    add_continue(sub)
 
     add_run(sub)
     add_compile(sub)

@@ -1,0 +1,191 @@
+"""Continuation of periodic orbits with their Floquet stability (docs/continuation.md).
+
+One point of the plan is one branch (sequential by nature): it starts from a
+settled exact simulation at the start value, from the Masri-Caughey closed form
+(one mode, no friction) or from a given :class:`~boringbar.simulate.State` at
+phase 0, finds the orbit by Newton on P^k(x) = x and continues it by
+pseudo-arclength (:func:`boringbar.branch.continue_branch`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import xarray as xr
+
+from boringbar import __version__
+from boringbar._validate import ParameterError, check_choice, check_int, check_range
+from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.branch import PARAMETERS, continue_branch, flow_with, value_of
+from boringbar.execute import Execution
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System
+from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.shooting import OrbitRefused, advance, make_flow
+from boringbar.simulate import simulate
+
+STARTS = ("simulation", "masri-caughey", "state")
+
+
+@dataclass(frozen=True)
+class ContinuationOptions:
+    """``parameter`` (one of :data:`boringbar.branch.PARAMETERS`) continued from its value
+    in the system/forcing to ``stop``; ``force_n`` and ``ratio``: the forcing;
+    ``periods``: k of P^k; ``step``: the first step, relative to the range; ``max_points``;
+    ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
+    rest), "masri-caughey" or "state" (``state``, at phase 0)."""
+
+    parameter: str = "force-n"
+    stop: float = 5.0
+    force_n: float = 30.0
+    ratio: float = 1.0
+    periods: int = 1
+    step: float = 0.02
+    max_points: int = 200
+    start: str = "simulation"
+    settle_periods: int = 200
+    state: tuple | None = None
+
+    def __post_init__(self):
+        check_choice("parameter", self.parameter, PARAMETERS)
+        check_choice("start", self.start, STARTS)
+        check_int("periods", self.periods, 1, 16)
+        check_int("max_points", self.max_points, 2, 100000)
+        check_int("settle_periods", self.settle_periods, 1, 100000)
+        check_range("step", self.step, 0.0, 0.5, lo_open=True)
+        if self.start == "state" and self.state is None:
+            raise ParameterError("start = 'state' needs state = (u..., u'..., y, y')")
+        Harmonic(self.force_n, ratio=self.ratio)  # validates both
+
+
+def plan(system: System, options: ContinuationOptions) -> Plan:
+    """One point: the branch of ``system`` (a solid bar or a ball damper)."""
+    if system.kind not in ("solid", "ball"):
+        raise ParameterError(f"bar = {system.kind!r}: continuation handles the solid bar and "
+                             "the ball damper")
+    return Plan({"system": system, "options": options}, [0])
+
+
+def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
+    """The first guess of the orbit's state at phase 0 (see the module docstring)."""
+    if o.start == "state":
+        return np.asarray(o.state, float)
+    if o.start == "masri-caughey":
+        bar, ball = system.bar, system.damper
+        if system.kind != "ball" or bar.n_modes != 1 or fl.fc > 0:
+            raise ParameterError("start = 'masri-caughey' needs a one-mode ball damper "
+                                 "without friction")
+        orbits = [o_ for o_ in two_impact_orbit(
+            bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0],
+            bar.psi_damper[0], ball.mass, ball.gap, ball.restitution, o.force_n, fl.omega)
+            if o_.admissible]
+        if not orbits:
+            raise ParameterError(f"no admissible symmetric two-impact orbit at force_n = "
+                                 f"{o.force_n} N, ratio = {o.ratio}")
+        orb = orbits[0]
+        h = 1e-9
+        dy0 = float(orb.relative_displacement(h) - orb.relative_displacement(-h)) / (2 * h)
+        return np.array([float(orb.modal_displacement(0.0)), float(orb.modal_velocity(0.0)),
+                         float(orb.relative_displacement(0.0)), dy0])
+    forcing = Harmonic(o.force_n, ratio=o.ratio)
+    dt = fl.period / math.ceil(fl.period / 1e-6)  # whole periods: the end is at phase 0
+    run = simulate(system, forcing, duration=o.settle_periods * fl.period, dt=dt,
+                   integrator="exact")
+    return run.final.x[:fl.N]
+
+
+def compute(context: dict, point: int) -> dict:
+    """The branch: per point its value, state, strobe tip, RMS, multipliers; its events."""
+    system, o = context["system"], context["options"]
+    fl = make_flow(system, Harmonic(o.force_n, ratio=o.ratio))
+    x0 = start_state(system, o, fl)
+    br = continue_branch(fl, o.parameter, x0, o.stop, periods=o.periods, step=o.step,
+                         max_points=o.max_points)
+    rms = []
+    for pt in br.points:
+        try:
+            rms.append(advance(flow_with(fl, o.parameter, pt.value, fl), pt.x, o.periods,
+                               rms=True).rms_tip)
+        except OrbitRefused:
+            rms.append(math.nan)
+    n = fl.n
+    return {"value": [pt.value for pt in br.points],
+            "state": [pt.x for pt in br.points],
+            "strobe_tip_m": [float(fl.psi_tip @ pt.x[:n]) for pt in br.points],
+            "rms_tip_m": rms,
+            "multipliers": [pt.multipliers for pt in br.points],
+            "stable": [pt.stable for pt in br.points],
+            "events": br.events, "stop": br.stop, "start": value_of(fl, o.parameter)}
+
+
+def warm(context: dict) -> None:
+    """Nothing to compile beyond the exact kernel, which a simulation start compiles."""
+
+
+def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.Dataset:
+    """Dims (branch, point, state, multiplier) and (branch, event); the multipliers as
+    real and imaginary parts (NetCDF has no complex type)."""
+    r = results[0]
+    o = plan.context["options"]
+    n_state = 2 * plan.context["system"].bar.n_modes + 2
+    # a branch refused at its start has no points: its arrays keep their shapes
+    states = np.asarray(r["state"], float).reshape(len(r["value"]), -1) if r["value"] \
+        else np.zeros((0, n_state))
+    mults = np.asarray(r["multipliers"], complex).reshape(len(r["value"]), -1) \
+        if r["value"] else np.zeros((0, n_state), complex)
+    ds = xr.Dataset(
+        {"value": (("branch", "point"), [r["value"]]),
+         "state": (("branch", "point", "state"), [states]),
+         "strobe_tip_m": (("branch", "point"), [r["strobe_tip_m"]]),
+         "rms_tip_m": (("branch", "point"), [r["rms_tip_m"]]),
+         "multiplier_real": (("branch", "point", "multiplier"), [mults.real]),
+         "multiplier_imag": (("branch", "point", "multiplier"), [mults.imag]),
+         "stable": (("branch", "point"), [r["stable"]]),
+         "event_kind": (("branch", "event"), [[k for k, _ in r["events"]]]),
+         "event_value": (("branch", "event"), [[v for _, v in r["events"]]])},
+        attrs={"boringbar_version": __version__, "parameter": o.parameter,
+               "config": json.dumps({"system": plan.context["system"].to_dict(),
+                                     "options": asdict(o)}),
+               "stop_reasons": json.dumps([r["stop"]]), **(attrs or {})})
+    return ds
+
+
+def summary(ds: xr.Dataset) -> dict:
+    """The JSON summary: ``branches`` (points, events, stop) and ``wall_time_s``."""
+    branches = []
+    stops = json.loads(ds.attrs["stop_reasons"])
+    for b in range(ds.sizes["branch"]):
+        d = ds.isel(branch=b)
+        points = [{"value": float(d["value"][i]), "strobe_tip_m": float(d["strobe_tip_m"][i]),
+                   "rms_tip_m": float(d["rms_tip_m"][i]), "stable": bool(d["stable"][i]),
+                   "multipliers_abs": np.hypot(d["multiplier_real"][i].values,
+                                               d["multiplier_imag"][i].values).tolist()}
+                  for i in range(d.sizes["point"])]
+        events = [{"kind": str(k), "value": float(v)}
+                  for k, v in zip(d["event_kind"].values, d["event_value"].values, strict=True)]
+        branches.append({"points": points, "events": events, "stop": stops[b]})
+    return {"parameter": ds.attrs["parameter"], "branches": branches,
+            "wall_time_s": float(ds.attrs.get("wall_time_s", math.nan))}
+
+
+def continuation(system: System, forcing: Harmonic | None = None, *,
+                 options: ContinuationOptions | None = None,
+                 execution: Execution | None = None) -> xr.Dataset:
+    """Continue a periodic orbit of ``system`` under ``forcing`` (its F0 and ratio override
+    ``options``'): a Dataset of branches with their state, strobe tip displacement, RMS,
+    Floquet multipliers, stability and events (kind, value); see
+    :class:`ContinuationOptions` and docs/continuation.md.  ``execution``: the
+    contract's (one point: the branch)."""
+    options = options or ContinuationOptions()
+    if forcing is not None:
+        if forcing.ratio is None:
+            raise ParameterError("forcing: give the frequency as ratio for continuation")
+        options = ContinuationOptions(**{**asdict(options), "force_n": forcing.amplitude,
+                                         "ratio": forcing.ratio})
+    p = plan(system, options)
+    results, wall = run_plan(sys.modules[__name__], p, execution)
+    return assemble(p, results, execution_attrs(execution, wall))

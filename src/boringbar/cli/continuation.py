@@ -1,0 +1,105 @@
+"""``boringbar continue``: pseudo-arclength continuation of a periodic orbit."""
+
+from __future__ import annotations
+
+import math
+
+from boringbar._validate import ParameterError
+from boringbar.analysis.continuation import ContinuationOptions, continuation, summary
+from boringbar.branch import PARAMETERS
+from boringbar.cli.options import (
+    Outcome,
+    add_common,
+    check_force,
+    check_gap,
+    check_ratio,
+    one_bar,
+    system_overrides,
+    wrote,
+)
+from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import make_system
+from boringbar.plot_orbits import plot_continuation
+
+
+def add_continue(sub) -> None:
+    """Register ``boringbar continue``."""
+    p = sub.add_parser("continue", help="continue a periodic orbit in one parameter, with "
+                                        "Floquet stability and bifurcations",
+                       description="Shooting on the stroboscopic map with the exact flow and "
+                                   "saltation-matrix monodromy, pseudo-arclength continuation "
+                                   "in --parameter from its value (--force-n, --ratio, ...) to "
+                                   "the end of --range (docs/continuation.md).  Orbits with "
+                                   "stick phases or wall contact end the branch (refused).  "
+                                   "Writes DIR/continuation.nc, .json and .png.")
+    groups = add_common(p, many=False, initial=False)
+    g = groups["run"]
+    g.add_argument("--parameter", choices=PARAMETERS, default="force-n",
+                   help="the continued parameter (default: force-n)")
+    g.add_argument("--range", required=True, metavar="START:STOP",
+                   help="START sets the parameter's first value, STOP the branch's end")
+    g.add_argument("--periods", type=int, default=1, metavar="K", help="period-k orbits")
+    g.add_argument("--max-points", type=int, default=200, metavar="N")
+    g.add_argument("--step", type=float, default=0.02, metavar="S",
+                   help="first step, relative to the range (default: 0.02)")
+    g.add_argument("--start-from", choices=("simulation", "masri-caughey"),
+                   default="simulation", help="first guess (default: a settled exact run)")
+    p.set_defaults(func=_cmd_continue)
+
+
+def _range(text: str) -> tuple[float, float]:
+    parts = (text or "").split(":")
+    try:
+        a, b = (float(x) for x in parts)
+    except ValueError:
+        raise ParameterError(f"--range = {text!r} must be START:STOP (two numbers)") from None
+    if not (math.isfinite(a) and math.isfinite(b)) or a == b:
+        raise ParameterError(f"--range = {text!r}: START and STOP must be finite and differ")
+    return a, b
+
+
+def _cmd_continue(args) -> Outcome:
+    bar, friction_on = one_bar(args, "continue")
+    start, stop = _range(args.range)
+    force = 10.0 if args.force_n is None else args.force_n
+    ratio = 1.0 if args.ratio is None else args.ratio
+    gap = 0.5 if args.gap_mm is None else args.gap_mm
+    kw = system_overrides(args)
+    name = args.parameter
+    force, ratio = (start, ratio) if name == "force-n" else (force, start if name == "ratio"
+                                                            else ratio)
+    gap = start if name == "gap-mm" else gap
+    if name == "restitution":
+        kw["restitution"] = start
+    if name == "friction-force-n":
+        kw["friction_force"] = start
+    if name == "ball-mass-g":
+        raise ParameterError("--parameter ball-mass-g: give it through the Python API "
+                             "(the command line sets the ball by --ball)")
+    check_force(force)
+    check_ratio(ratio)
+    if bar == "ball":
+        kw.update(gap=check_gap(gap), friction=friction_on or name == "friction-force-n")
+    system = make_system(bar, args.preset, **kw)
+    options = ContinuationOptions(parameter=name, stop=stop, force_n=force, ratio=ratio,
+                                  periods=args.periods, step=args.step,
+                                  max_points=args.max_points, start=args.start_from)
+    ds = continuation(system, Harmonic(force, ratio=ratio), options=options)
+    out = summary(ds)
+    files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/continuation.nc")),
+             "figure": str(save_figure_atomic(plot_continuation(ds),
+                                              f"{args.out}/continuation.png", dpi=130))}
+    out["files"] = files
+    write_json_atomic(out, f"{args.out}/continuation.json")
+
+    def text(say) -> None:
+        for b in out["branches"]:
+            pts = b["points"]
+            say(f"branch: {len(pts)} points, {name} {pts[0]['value']:.6g} .. "
+                f"{pts[-1]['value']:.6g}; stop: {b['stop']}")
+            for e in b["events"]:
+                say(f"  {e['kind']} at {name} = {e['value']:.6g}")
+        say(wrote(files))
+
+    return Outcome(out, text)

@@ -1,0 +1,71 @@
+"""Figures of continued periodic orbits: branches, their stability and events, over
+a brute-force bifurcation diagram (the edge of the package, as plot.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+#: Marker of each continuation event kind.
+EVENT_MARKERS = {"fold": "s", "period-doubling": "D", "neimark-sacker": "*", "grazing": "x"}
+
+
+def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
+    """Continued branches of :func:`~boringbar.analysis.continuation.continuation`: the
+    strobe tip displacement W (mm, top) and the tip RMS (mm, bottom) against the
+    parameter, stable stretches solid, unstable dashed, events marked on the curve.
+    ``overlay``: a bifurcation Dataset (:func:`~boringbar.analysis.bifurcation.bifurcation`)
+    of the same case, its Poincare samples drawn as grey dots under the branches."""
+    if fig is None:
+        fig = Figure(figsize=(10, 7), layout="constrained")
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1.5))
+    if overlay is not None:
+        for d in overlay["direction"].values:
+            sel = overlay.sel(direction=d)
+            w = sel["tip_displacement"].values * 1e3
+            xx = np.broadcast_to(sel["value"].values[:, None], w.shape)
+            ok = np.isfinite(w)
+            top.scatter(xx[ok], w[ok], s=5, color="0.6", lw=0, rasterized=True)
+        top.scatter([], [], s=12, color="0.6", label="brute force (strobe samples)")
+    for b in range(ds.sizes["branch"]):
+        d = ds.isel(branch=b)
+        v = d["value"].values
+        ok = np.isfinite(v)
+        stable = d["stable"].values.astype(bool)
+        for ax, name in ((top, "strobe_tip_m"), (bottom, "rms_tip_m")):
+            y = d[name].values * 1e3
+            _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top))
+        for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
+            y = np.interp(value, *_sorted(v[ok], d["strobe_tip_m"].values[ok] * 1e3))
+            top.plot([value], [y], ls="none", marker=EVENT_MARKERS.get(str(kind), "o"),
+                     ms=9, mfc="none", color="crimson", label=str(kind))
+    top.set_ylabel("tip displacement W (mm)\nat $\\Omega t = 0$ mod $2\\pi$")
+    bottom.set_ylabel("tip RMS (mm)")
+    bottom.set_xlabel(PARAMETER_NAMES.get(ds.attrs.get("parameter"), ds.attrs.get("parameter")))
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    top.legend(fontsize="small")
+    return fig
+
+
+#: Axis labels of the continuation parameters.
+PARAMETER_NAMES = {"force-n": "F0 (N)", "ratio": "$\\Omega/\\omega_n$", "gap-mm": "gap (mm)",
+                   "restitution": "restitution e", "friction-force-n": "friction force (N)",
+                   "ball-mass-g": "ball mass (g)"}
+
+
+def _sorted(x, y):
+    order = np.argsort(x)
+    return x[order], y[order]
+
+
+def _stability_lines(ax, x, y, stable, label: bool) -> None:
+    """Consecutive stretches of one stability: solid if stable, dashed if not."""
+    start = 0
+    for i in range(1, len(x) + 1):
+        if i == len(x) or stable[i] != stable[start]:
+            j = min(i + 1, len(x))
+            ax.plot(x[start:j], y[start:j], color="C0", lw=1.6,
+                    ls="-" if stable[start] else "--",
+                    label=("stable" if stable[start] else "unstable") if label else None)
+            start = i

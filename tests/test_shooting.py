@@ -1,0 +1,177 @@
+"""Shooting for periodic orbits (boringbar.shooting): the saltation monodromy against
+central finite differences, the map against the kernel, and the linear bar's truths."""
+
+import json
+
+import numpy as np
+import pytest
+
+import boringbar as bb
+from boringbar import shooting as sh
+from boringbar.analysis.continuation import assemble, plan, summary
+from boringbar.branch import continue_branch
+from boringbar.cli.main import main
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import make_system
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.simulate import State, simulate
+
+
+def _fd_jacobian(fl, x):
+    sc = np.maximum(np.abs(x), 1e-9)
+    J = np.zeros((fl.N, fl.N))
+    for i in range(fl.N):
+        e = np.zeros(fl.N)
+        e[i] = 1e-6 * sc[i]
+        J[:, i] = (sh.advance(fl, x + e).x - sh.advance(fl, x - e).x) / (2 * e[i])
+    return J, np.diag(sc)
+
+
+@pytest.mark.parametrize("friction", [False, True])
+def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
+    system = make_system("ball", "physical", gap=0.1e-3, friction=friction)
+    forcing = Harmonic(20.0, ratio=1.0)
+    fl = sh.make_flow(system, forcing)
+    run = simulate(system, forcing, duration=100 * fl.period, dt=1e-6, integrator="exact")
+    x, pr = sh.periodic_orbit(fl, run.final.x)
+    kinds = [k for _, k in pr.events]
+    assert "impact+" in kinds and "impact-" in kinds
+    assert ("reversal" in kinds) == friction
+    assert np.max(np.abs(pr.x - x)) <= 1e-12 * np.max(np.abs(x))
+    Jfd, D = _fd_jacobian(fl, x)
+    err = np.max(np.abs((pr.jacobian - Jfd) @ D)) / np.max(np.abs(pr.jacobian @ D))
+    assert err < 1e-6
+    # the map is the exact kernel's: one period of simulate from the same state
+    one = simulate(system, forcing, duration=fl.period, dt=fl.period / 2000,
+                   integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
+    assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
+    # the orbit's RMS (Gauss-Legendre per segment) is the kernel's exact integral
+    assert abs(pr.rms_tip - one.rms_tip) <= 1e-9 * one.rms_tip
+
+
+def test_linear_bar_orbit_is_the_forced_response():
+    system = make_system("solid", "physical")
+    forcing = Harmonic(10.0, ratio=0.93)
+    fl = sh.make_flow(system, forcing)
+    x, pr = sh.periodic_orbit(fl, np.zeros(fl.N))
+    bar = system.bar
+    n = bar.n_modes
+    # tip amplitude from phase-0 displacement and velocity: W(t) = Im(G F0 e^{i Omega t})
+    w0, v0 = bar.psi_tip @ x[:n], bar.psi_tip @ x[n:]
+    amp = np.hypot(w0, v0 / fl.omega)
+    ref = abs(tip_frf(bar, fl.omega)) * forcing.amplitude
+    assert abs(amp - ref) <= 1e-10 * ref
+    wn = np.sqrt(bar.stiffness / bar.mass)
+    z = bar.damping_ratio
+    lam = np.concatenate([-z * wn + 1j * wn * np.sqrt(1 - z**2),
+                          -z * wn - 1j * wn * np.sqrt(1 - z**2)])
+    expected = np.sort_complex(np.exp(lam * fl.period))
+    got = np.sort_complex(sh.multipliers(pr))
+    assert np.max(np.abs(got - expected)) <= 1e-10
+
+
+def _masri_caughey(force=30.0):
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    forcing = Harmonic(force, ratio=1.0)
+    fl = sh.make_flow(system, forcing)
+    bar, ball = system.bar, system.damper
+    orbit = next(o for o in two_impact_orbit(
+        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass, ball.gap, ball.restitution, force, fl.omega) if o.admissible and o.stable)
+    h = 1e-9
+    dy0 = float(orbit.relative_displacement(h) - orbit.relative_displacement(-h)) / (2 * h)
+    x0 = np.array([float(orbit.modal_displacement(0.0)), float(orbit.modal_velocity(0.0)),
+                   float(orbit.relative_displacement(0.0)), dy0])
+    return fl, orbit, x0
+
+
+def test_newton_converges_to_the_masri_caughey_orbit():
+    fl, orbit, x0 = _masri_caughey()
+    x, pr = sh.periodic_orbit(fl, x0 * (1 + 1e-3 * np.array([1, -1, 1, -1])))
+    t_plus = next(t for t, k in pr.events if k == "impact+")
+    assert abs((fl.omega * t_plus) % (2 * np.pi) - orbit.phase) < 1e-9
+    speed = abs(x[3] + fl.psi_d[0] * x[1])  # the ball's absolute speed in flight
+    assert abs(speed - orbit.ball_speed) < 1e-9 * orbit.ball_speed
+    # P is the half-period impact map applied twice: its multipliers are their squares
+    got = np.sort_complex(sh.multipliers(pr))
+    expected = np.sort_complex(np.asarray(orbit.multipliers) ** 2)
+    assert np.max(np.abs(got - expected)) < 1e-7
+
+
+def _closed_form_crossing(fl, orbit, lo, hi, along="force"):
+    """The F0 (or ratio) where the closed-form orbit (the root nearest in phase) loses
+    stability."""
+    sysm = orbit.system
+
+    def unstable(v):
+        force, omega = (v, sysm.omega) if along == "force" else (30.0, v * fl.reference)
+        orbits = two_impact_orbit(sysm.mass, sysm.stiffness, sysm.damping, sysm.psi_tip,
+                                  sysm.psi_ball, sysm.ball_mass, sysm.gap, sysm.restitution,
+                                  force, omega)
+        o = min(orbits, key=lambda o: abs(o.phase - orbit.phase))
+        return np.max(np.abs(o.multipliers)) > 1.0
+    assert unstable(lo) != unstable(hi)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if unstable(mid) == unstable(lo) else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def test_continuation_in_force_finds_the_closed_form_stability_change():
+    fl, orbit, x0 = _masri_caughey()
+    br = continue_branch(fl, "force-n", x0, 27.0, step=0.05, max_points=60)
+    assert br.stop == "end of range"
+    changes = [v for k, v in br.events if k in ("fold", "period-doubling", "neimark-sacker")]
+    assert len(changes) == 1
+    expected = _closed_form_crossing(fl, orbit, 27.0, 30.0)
+    assert abs(changes[0] - expected) < 0.01 * expected
+    assert br.points[0].stable and not br.points[-1].stable
+
+
+def test_continuation_dataset_and_summary_from_a_settled_simulation():
+    system = make_system("ball", "physical", gap=0.1e-3, friction=True)
+    ds = bb.continuation(system, Harmonic(20.0, ratio=1.0), options=bb.ContinuationOptions(
+        parameter="ratio", stop=1.02, step=0.05, max_points=6, settle_periods=200))
+    s = summary(ds)
+    points = s["branches"][0]["points"]
+    assert len(points) >= 2 and points[0]["value"] == pytest.approx(1.0)
+    assert all(p["rms_tip_m"] > abs(p["strobe_tip_m"]) / 10 for p in points)
+    assert all(len(p["multipliers_abs"]) == 6 for p in points)
+    assert [p["stable"] for p in points] == [max(p["multipliers_abs"]) < 1 for p in points]
+    assert ds.attrs["parameter"] == "ratio" and "wall_time_s" in s
+
+
+def test_cli_continue_writes_its_files_and_refuses_bad_ranges(tmp_path, capsys):
+    rc = main(["continue", "--gap-mm", "0.5", "--friction", "off", "--modes", "1",
+               "--range", "30:29", "--start-from", "masri-caughey", "--max-points", "4",
+               "--out", str(tmp_path), "--json"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["branches"][0]["points"]) == 4 and "wall_time_s" in out
+    assert (tmp_path / "continuation.png").stat().st_size > 0
+    assert (tmp_path / "continuation.nc").exists()
+    assert main(["continue", "--range", "1:x", "--out", str(tmp_path)]) == 2
+
+
+def test_continuation_in_ratio_finds_the_closed_form_stability_change():
+    fl, orbit, x0 = _masri_caughey()
+    br = continue_branch(fl, "ratio", x0, 1.04, step=0.05, max_points=60)
+    changes = [v for k, v in br.events if k in ("fold", "period-doubling", "neimark-sacker")]
+    assert len(changes) == 1, (br.stop, br.events)
+    expected = _closed_form_crossing(fl, orbit, 1.0, 1.04, along="ratio")
+    assert abs(changes[0] - expected) < 0.01 * expected
+    assert br.points[0].stable and not br.points[-1].stable
+
+
+def test_a_branch_refused_at_its_start_is_an_empty_branch_with_its_reason():
+    system = make_system("ball", "physical", gap=0.1e-3, friction=True)
+    p = plan(system, bb.ContinuationOptions(parameter="ratio", stop=1.02))
+    empty = {"value": [], "state": [], "strobe_tip_m": [], "rms_tip_m": [],
+             "multipliers": [], "stable": [], "events": [],
+             "stop": "refused at the start: Newton did not converge at the start value",
+             "start": 1.0}
+    ds = assemble(p, [empty])
+    assert ds.sizes["point"] == 0 and ds.sizes["state"] == 6
+    assert "refused at the start" in json.loads(ds.attrs["stop_reasons"])[0]
+    assert summary(ds)["branches"][0]["points"] == []
