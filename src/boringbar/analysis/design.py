@@ -37,7 +37,7 @@ from boringbar.execute import Execution, run_points
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system, published_system_spec
 from boringbar.model.system_file import SystemSpec, parse_system
-from boringbar.reference.linear import tip_frf
+from boringbar.reference.stability import system_receptance
 from boringbar.simulate import Initial
 
 
@@ -322,7 +322,7 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
                 "curves": dict(zip(bars, y, strict=True))}
     wn = bars["bare bar"].bar.natural_frequency
     w = np.linspace(0.8 * wn, 1.2 * wn, 801)
-    curves = {k: np.abs(tip_frf(s.bar, w, **({"tmd": s.damper} if s.kind == "tmd" else {})))
+    curves = {k: np.abs(system_receptance(s, w))
               for k, s in bars.items()}
     return {"x": w / wn, "xlabel": "omega / omega_n", "ylabel": "|G| (m/N)", "curves": curves}
 

@@ -18,7 +18,7 @@ from boringbar.analysis.sweep import Case
 from boringbar.execute import Execution, run_points
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
-from boringbar.reference.linear import tip_frf
+from boringbar.reference.stability import system_receptance
 from boringbar.simulate import Initial, Integration, simulate
 
 #: Frequency lines of the FRF objectives, over FRF_SPAN x the host's f1.
@@ -63,8 +63,7 @@ def frf_objective(system: System, objective: str) -> float:
     lines over FRF_SPAN x the host's f1, refined by a parabola at the extreme."""
     wn = system.bar.natural_frequency
     w = np.linspace(FRF_SPAN[0] * wn, FRF_SPAN[1] * wn, FRF_LINES)
-    kw = {"tmd": system.damper} if system.kind == "tmd" else {}
-    g = tip_frf(system.bar, w, **kw)
+    g = system_receptance(system, w)
     y = np.abs(g) if objective == "frf_peak" else -g.real
     i = int(np.clip(np.argmax(y), 1, len(y) - 2))
     a, b, c = y[i - 1], y[i], y[i + 1]

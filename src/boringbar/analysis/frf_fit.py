@@ -38,6 +38,7 @@ import contextlib
 import io
 import math
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import scipy.signal
@@ -63,11 +64,12 @@ STABLE_DAMPING = 5e-2
 def fit_frf(frf: MeasuredFrf, n_modes: int = 1, *, band_hz: tuple | None = None,
             max_order: int = MAX_ORDER) -> tuple[ModalFit, np.ndarray]:
     """Fit ``n_modes`` modes to the measured tip receptance ``frf`` in ``band_hz``
-    (Hz, default the whole measurement): (the :class:`ModalFit`, the
-    reconstructed receptance at the band's lines)."""
+    (Hz, default the whole measurement): (the :class:`ModalFit`, its receptance at
+    the band's measured lines)."""
     n = check_int("n_modes", n_modes, 1, 8)
     check_int("max_order", max_order, 2 * n + 2, 200)
-    data = _uniform(_band(frf, band_hz))
+    band = _band(frf, band_hz)
+    data = _uniform(band)  # what the estimators take; the fit is judged on the band's lines
     peaks = _peaks(data, n)
     f = data.frequency_hz
     method = "lsce" if f[0] <= LSCE_START * f[-1] else "lscf"
@@ -97,8 +99,8 @@ def fit_frf(frf: MeasuredFrf, n_modes: int = 1, *, band_hz: tuple | None = None,
                              "--band-hz around the modes, or fewer --modes")
     k = w_n**2 / (2 * w_d * (-a.imag))
     fit = ModalFit(tuple(f_n), tuple(zeta), tuple(k))
-    h_fit = fit.tip_frf(data.frequency_hz)
-    residual = float(np.linalg.norm(h_fit - data.receptance) / np.linalg.norm(data.receptance))
+    h_fit = fit.tip_frf(band.frequency_hz)
+    residual = float(np.linalg.norm(h_fit - band.receptance) / np.linalg.norm(band.receptance))
     quality = {"relative_residual": residual,
                "complexity": (np.abs(a.real) / np.abs(a)).tolist(),
                "peaks_hz": sorted(float(p) for p in peaks)}
@@ -106,7 +108,7 @@ def fit_frf(frf: MeasuredFrf, n_modes: int = 1, *, band_hz: tuple | None = None,
               "max_order": int(max_order), "band_hz": [float(data.frequency_hz[0]),
                                                        float(data.frequency_hz[-1])],
               "pole_selection": "stable poles closest to the most prominent peaks of |H|"}
-    return ModalFit(tuple(f_n), tuple(zeta), tuple(k), source, quality), h_fit
+    return replace(fit, source=source, quality=quality), h_fit
 
 
 def _uniform(frf: MeasuredFrf) -> MeasuredFrf:

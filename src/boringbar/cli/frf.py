@@ -16,15 +16,16 @@ from boringbar.cli.options import Outcome, many_cases, resolve_files, wrote
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.measured_frf import read_frf
 from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit
-from boringbar.reference.linear import tip_frf
 from boringbar.reference.stability import (
     GRID_SPAN,
     TWO_PI,
     limit_at_speeds,
+    linear_host,
     lobes_of_receptance,
     min_limit,
     natural_frequencies,
     sampled_limits,
+    system_receptance,
 )
 
 #: Speeds at which the figure's lower envelope is evaluated.
@@ -56,12 +57,12 @@ def cmd_fit_frf(args) -> Outcome:
     band = None if args.band_hz is None else _band(args.band_hz)
     measured = read_frf(args.file)
     fit, fitted = fit_frf(measured, n, band_hz=band, max_order=args.max_order)
-    f = measured.frequency_hz if band is None else measured.band(*band).frequency_hz
     data = measured if band is None else measured.band(*band)
     out = Path(args.out)
     files = {"json": out / "modal_fit.json", "png": out / "fit.png"}
     write_json_atomic(fit.to_dict(), files["json"])
-    save_figure_atomic(plot_frf_fit(f, data.receptance, fitted, fit), files["png"])
+    save_figure_atomic(plot_frf_fit(data.frequency_hz, data.receptance, fitted, fit),
+                       files["png"])
     summary = {**fit.to_dict(), "files": {k: str(v) for k, v in files.items()}}
 
     def text(say) -> None:
@@ -135,10 +136,9 @@ def _sources(args, kr, rpm, dense):
         return
     cases, _, _ = many_cases(args)
     for case in cases:
-        kw = _frf_damper(case.system)
-        wn = natural_frequencies(case.system.bar, kw.get("tmd"), kw.get("added_mass", 0.0))
+        wn = natural_frequencies(*linear_host(case.system))
         w = np.geomspace(GRID_SPAN[0] * wn.min(), GRID_SPAN[1] * wn.max(), 20000)
-        g = tip_frf(case.system.bar, w, **kw)
+        g = system_receptance(case.system, w)
         low = min_limit(case.system, kr)
         at = np.argmin(g.real)
         limits = {"min_limit": low, "frequency_hz": float(w[at] / TWO_PI),
@@ -161,13 +161,3 @@ def _distinct(sources):
             labels[same].append(label)
     return [(names[0] + (f" (and {len(names) - 1} more with the same FRF)" if len(names) > 1
                          else ""), *rest) for names, (_, *rest) in zip(labels, out, strict=True)]
-
-
-def _frf_damper(system) -> dict:
-    """tip_frf's damper keywords for a system (a locked ball is an added mass; a free
-    ball does not act on the bar in the linear limit)."""
-    if system.kind == "tmd":
-        return {"tmd": system.damper}
-    if system.kind == "locked":
-        return {"added_mass": system.damper.mass}
-    return {}

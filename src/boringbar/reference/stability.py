@@ -65,8 +65,10 @@ def regeneration_phase(g) -> np.ndarray:
 
 
 # --- inputs ------------------------------------------------------------------------
-def _resolve(system_or_bar, tmd, added_mass):
-    """(ModalModel, TunedMassDamper | None, added mass kg) of a System or a bar."""
+def linear_host(system_or_bar, tmd=None, added_mass: float = 0.0):
+    """(ModalModel, TunedMassDamper | None, added mass kg) of a System or a bar: what the
+    tip FRF sees (a TMD enters it, a locked ball is a rigid mass at z_d, a free ball
+    in its clearance does not act)."""
     if isinstance(system_or_bar, ModalModel):
         if tmd is not None and not isinstance(tmd, TunedMassDamper):
             raise ParameterError(f"tmd = {tmd!r} must be a TunedMassDamper or None")
@@ -85,6 +87,13 @@ def _resolve(system_or_bar, tmd, added_mass):
     if kind == "locked":
         return bar, None, float(system_or_bar.damper.mass)
     return bar, None, 0.0  # solid bar, or a free ball that does not act on the bar
+
+
+def system_receptance(system, w) -> np.ndarray:
+    """The tip receptance (m/N) of ``system`` (or a bar) at ``w`` (rad/s), its damper
+    taken as :func:`linear_host` says."""
+    bar, tmd, added_mass = linear_host(system)
+    return tip_frf(bar, w, tmd=tmd, added_mass=added_mass)
 
 
 def natural_frequencies(
@@ -156,7 +165,7 @@ def analytic_lobes(
     b_lim = -1 / (2 Kr Re G) (module docstring).
     """
     kr = check_positive("kr", kr, "Pa")
-    bar, tmd, added_mass = _resolve(system_or_bar, tmd, added_mass)
+    bar, tmd, added_mass = linear_host(system_or_bar, tmd, added_mass)
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
     return lobes_of_receptance(w, tip_frf(bar, w, tmd=tmd, added_mass=added_mass), kr, lobes)
 
@@ -213,7 +222,7 @@ def limit_at_speeds(
     ``with_frequency`` the pair (b_lim (m), chatter frequency (Hz)).
     """
     kr = check_positive("kr", kr, "Pa")
-    bar, tmd, added_mass = _resolve(system_or_bar, tmd, added_mass)
+    bar, tmd, added_mass = linear_host(system_or_bar, tmd, added_mass)
     speeds = np.asarray(rpm, dtype=float)
     flat = speeds.ravel()
     for s in flat:
@@ -328,7 +337,7 @@ def min_limit(
     2 k zeta (1 + zeta) / Kr, reached at omega = omega_n sqrt(1 + 2 zeta).
     """
     kr = check_positive("kr", kr, "Pa")
-    bar, tmd, added_mass = _resolve(system_or_bar, tmd, added_mass)
+    bar, tmd, added_mass = linear_host(system_or_bar, tmd, added_mass)
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
     re, _ = min_real_part(bar, tmd, w, added_mass=added_mass)
     return math.inf if re >= 0.0 else -0.5 / (kr * re)
