@@ -103,10 +103,17 @@ def _sweep(ev: Evidence, preset: str):
     return s, ev.figure(preset, "sweep", "F10N")
 
 
-def _pattern_check(ev, preset, force, gap, friction, published: set, exact: bool = True,
+def _pair(ev: Evidence, preset: str, force: float, gap: float, friction: str):
+    """(the ball case, the solid bar) of the sweep at ``force``; None without a sweep."""
+    s = ev.summary(preset, "sweep")
+    if s is None:
+        return None
+    return _case(s, "ball", force, gap, friction), _case(s, "solid", force)
+
+
+def _pattern_check(ball: dict, published: set, exact: bool = True,
                    more: int = 0) -> tuple[bool, dict, str]:
-    s, _ = _sweep(ev, preset)
-    found = _codes(_case(s, "ball", force, gap, friction))
+    found = _codes(ball)
     ok = found == published if exact else (published <= found and
                                           len(found) >= len(published) + more)
     words = (f"patterns {', '.join(sorted(found)) or 'none'} where the paper has "
@@ -157,14 +164,12 @@ def check_h2(ev: Evidence, preset: str) -> Verdict:
                   f"is {ratio:.1f}x the TMD's largest (published 8.7x)", fig)
 
 
-def _ball_numbers(ev, preset, force, gap, friction, published_set, numbers, exact=True,
+def _ball_numbers(ev, preset, ball: dict, published_set, numbers, exact=True,
                   more=0) -> Verdict:
-    """A pattern-set claim with published numbers: ``numbers`` is a list of
-    (name, measured, published) checked within the tolerance."""
-    s, fig = _sweep(ev, preset)
-    if s is None:
-        return _missing("sweep")
-    ok, m, words = _pattern_check(ev, preset, force, gap, friction, published_set, exact, more)
+    """A pattern-set claim on the ``ball`` case with published numbers: ``numbers`` is
+    a list of (name, measured, published) checked within the tolerance."""
+    fig = ev.figure(preset, "sweep", "F10N")
+    ok, m, words = _pattern_check(ball, published_set, exact, more)
     off = [(n, v, p) for n, v, p in numbers if not _near(v, p)]
     m.update({n: round(v, 4) for n, v, _ in numbers})
     return _judge(ok, not off, m, words,
@@ -173,19 +178,19 @@ def _ball_numbers(ev, preset, force, gap, friction, published_set, numbers, exac
 
 
 def check_h3(ev: Evidence, preset: str) -> Verdict:
-    s, _ = _sweep(ev, preset)
-    if s is None:
+    pair = _pair(ev, preset, 10.0, 0.5, "off")
+    if pair is None:
         return _missing("sweep")
-    ball, solid = _case(s, "ball", 10.0, 0.5, "off"), _case(s, "solid", 10.0)
+    ball, solid = pair
     nu = [i for i, p in enumerate(ball["pattern"]) if code(p) == "NU"]
     if not nu:
-        v = _ball_numbers(ev, preset, 10.0, 0.5, "off", {"NI", "NU"}, [])
+        v = _ball_numbers(ev, preset, ball, {"NI", "NU"}, [])
         return Verdict("not reproduced", v.measured, v.reason + "; no non-uniform case at "
                        "all: the ball never reaches a wall at 10 N", v.figure)
     i = min(nu, key=lambda k: abs(ball["ratio"][k] - 1))
     rms = _rms(ball)[i] * 1e3
     cut = float(1 - _rms(ball)[i] / _rms(solid)[_at(solid, ball["ratio"][i])]) * 100
-    return _ball_numbers(ev, preset, 10.0, 0.5, "off", {"NI", "NU"},
+    return _ball_numbers(ev, preset, ball, {"NI", "NU"},
                          [("NU RMS mm", rms, 0.057), ("reduction %", cut, 80.0)])
 
 
@@ -200,11 +205,12 @@ def _stuck_f1(ev: Evidence, preset: str) -> float:
 
 
 def check_h4(ev: Evidence, preset: str) -> Verdict:
-    s, fig = _sweep(ev, preset)
-    if s is None:
+    pair = _pair(ev, preset, 10.0, 0.5, "on")
+    if pair is None:
         return _missing("sweep")
-    ball, solid = _case(s, "ball", 10.0, 0.5, "on"), _case(s, "solid", 10.0)
-    ok, m, words = _pattern_check(ev, preset, 10.0, 0.5, "on", {"NI", "NU"})
+    ball, solid = pair
+    fig = ev.figure(preset, "sweep", "F10N")
+    ok, m, words = _pattern_check(ball, {"NI", "NU"})
     shift = _shift(ball, solid)
     stuck = _stuck_f1(ev, preset)
     m.update({"shift": shift, "stuck-ball f1 Hz": round(stuck, 1)})
@@ -216,11 +222,11 @@ def check_h4(ev: Evidence, preset: str) -> Verdict:
 
 
 def check_h5(ev: Evidence, preset: str) -> Verdict:
-    s, _ = _sweep(ev, preset)
-    if s is None:
+    pair = _pair(ev, preset, 10.0, 0.1, "off")
+    if pair is None:
         return _missing("sweep")
-    ball, solid = _case(s, "ball", 10.0, 0.1, "off"), _case(s, "solid", 10.0)
-    v = _ball_numbers(ev, preset, 10.0, 0.1, "off", {"NU", "2A", "3A", "4S", "6S"},
+    ball, solid = pair
+    v = _ball_numbers(ev, preset, ball, {"NU", "2A", "3A", "4S", "6S"},
                       [("RMS at r = 1 mm", _rms(ball)[_at(ball, 1)] * 1e3, 0.11),
                        ("reduction %", _reduction(ball, solid), 63.0)])
     return _with_shift(v, ball, solid, "left")
@@ -240,11 +246,11 @@ def _with_shift(v: Verdict, ball: dict, solid: dict, side: str) -> Verdict:
 
 
 def check_h6(ev: Evidence, preset: str) -> Verdict:
-    s, _ = _sweep(ev, preset)
-    if s is None:
+    pair = _pair(ev, preset, 10.0, 0.1, "on")
+    if pair is None:
         return _missing("sweep")
-    ball, solid = _case(s, "ball", 10.0, 0.1, "on"), _case(s, "solid", 10.0)
-    v = _ball_numbers(ev, preset, 10.0, 0.1, "on", {"NI", "2S", "sticking"}, [])
+    ball, solid = pair
+    v = _ball_numbers(ev, preset, ball, {"NI", "2S", "sticking"}, [])
     return _with_shift(v, ball, solid, "right")
 
 
@@ -279,20 +285,20 @@ def check_h8(ev: Evidence, preset: str) -> Verdict:
 
 
 def check_h9(ev: Evidence, preset: str) -> Verdict:
-    s, _ = _sweep(ev, preset)
-    if s is None:
+    pair = _pair(ev, preset, 20.0, 0.5, "off")
+    if pair is None:
         return _missing("sweep")
-    ball, solid = _case(s, "ball", 20.0, 0.5, "off"), _case(s, "solid", 20.0)
-    return _ball_numbers(ev, preset, 20.0, 0.5, "off", {"2S", "2A", "3A", "NU"},
+    ball, solid = pair
+    return _ball_numbers(ev, preset, ball, {"2S", "2A", "3A", "NU"},
                          [("reduction at r = 1 %", _reduction(ball, solid), 85.0)])
 
 
 def check_h10(ev: Evidence, preset: str) -> Verdict:
-    s, _ = _sweep(ev, preset)
-    if s is None:
+    pair = _pair(ev, preset, 20.0, 0.5, "on")
+    if pair is None:
         return _missing("sweep")
-    ball, solid = _case(s, "ball", 20.0, 0.5, "on"), _case(s, "solid", 20.0)
-    v = _ball_numbers(ev, preset, 20.0, 0.5, "on", {"NI", "NU"}, [])
+    ball, solid = pair
+    v = _ball_numbers(ev, preset, ball, {"NI", "NU"}, [])
     ni = [i for i, p in enumerate(ball["pattern"]) if code(p) == "NI"]
     below = all(_rms(ball)[i] < (1 - BELOW) * _rms(solid)[_at(solid, ball["ratio"][i])]
                 for i in ni)
@@ -304,14 +310,20 @@ def check_h10(ev: Evidence, preset: str) -> Verdict:
     return v
 
 
+def _pattern_claim(ev: Evidence, preset: str, friction: str, published: set) -> Verdict:
+    """H11, H12: the 0.1 mm ball at 20 N shows the published patterns and one more."""
+    pair = _pair(ev, preset, 20.0, 0.1, friction)
+    if pair is None:
+        return _missing("sweep")
+    return _ball_numbers(ev, preset, pair[0], published, [], exact=False, more=1)
+
+
 def check_h11(ev: Evidence, preset: str) -> Verdict:
-    return _ball_numbers(ev, preset, 20.0, 0.1, "off", {"NU", "6S", "7A", "8S", "10S"}, [],
-                         exact=False, more=1)
+    return _pattern_claim(ev, preset, "off", {"NU", "6S", "7A", "8S", "10S"})
 
 
 def check_h12(ev: Evidence, preset: str) -> Verdict:
-    return _ball_numbers(ev, preset, 20.0, 0.1, "on", {"NI", "sticking", "2S"}, [],
-                         exact=False, more=1)
+    return _pattern_claim(ev, preset, "on", {"NI", "sticking", "2S"})
 
 
 # --- machining stability ---------------------------------------------------------------------
