@@ -10,8 +10,7 @@ import numpy as np
 import scipy.special
 
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
-from boringbar.model.bar import ModalModel
-from boringbar.model.dampers import MAX_GAP, Friction
+from boringbar.model.dampers import MAX_GAP
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system import System
 from boringbar.simulate import Initial
@@ -197,21 +196,15 @@ def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
     d, bar, ini = system.damper, system.bar, {}
     for name, v in zip(names, row, strict=True):
         if name == "friction_force_n":
-            d = replace(d, friction=Friction("force", max(float(v), 0.0), d.friction.reaction,
-                                             d.friction.static_ratio))
+            d = replace(d, friction=replace(d.friction, kind="force", value=max(float(v), 0.0)))
         elif name == "friction_number":  # the published number, read as the preset reads it
             kind, value = (("paper-number", max(float(v), 0.0)) if system.preset == "paper"
                            else ("rolling", max(float(v), 0.0) * 1e-3))
-            d = replace(d, friction=Friction(kind, value, d.friction.reaction,
-                                             d.friction.static_ratio))
+            d = replace(d, friction=replace(d.friction, kind=kind, value=value))
         elif name == "restitution":
             d = replace(d, restitution=float(np.clip(v, 0.0, 1.0)))
         elif name == "damping_ratio":
-            bar = ModalModel(mass=bar.mass, stiffness=bar.stiffness,
-                             damping_ratio=np.full(bar.n_modes, float(np.clip(v, 0.0, 0.99))),
-                             psi_tip=bar.psi_tip, psi_damper=bar.psi_damper,
-                             psi_absorber=bar.psi_absorber, z_damper=bar.z_damper,
-                             z_absorber=bar.z_absorber, source=bar.source, info=bar.info)
+            bar = replace(bar, damping_ratio=np.full(bar.n_modes, float(np.clip(v, 0.0, 0.99))))
         elif name == "ball_position_mm":
             half = d.gap / 2
             ini["ball_position"] = float(np.clip(v * 1e-3, -half, half))

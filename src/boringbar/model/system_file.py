@@ -21,7 +21,7 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
@@ -137,11 +137,7 @@ class SystemSpec:
         if len(self.damping) == 1:
             return model
         ratios = [self.damping[min(i, len(self.damping) - 1)] for i in range(n_modes)]
-        return ModalModel(mass=model.mass, stiffness=model.stiffness,
-                          damping_ratio=ratios, psi_tip=model.psi_tip,
-                          psi_damper=model.psi_damper, psi_absorber=model.psi_absorber,
-                          z_damper=model.z_damper, z_absorber=model.z_absorber,
-                          source=model.source, info=model.info)
+        return replace(model, damping_ratio=ratios)
 
     def mode_shapes(self, cavity: bool, n_modes: int):
         """(z m of the FE nodes, deflection shapes (nodes, n) divided by their tip
@@ -169,8 +165,7 @@ def load_system(path) -> SystemSpec:
 
 def published_system() -> SystemSpec:
     """The published bar, from the file shipped with the package."""
-    text = resources.files("boringbar.model").joinpath(PUBLISHED_FILE).read_text()
-    return parse_system(tomllib.loads(text), PUBLISHED_FILE)
+    return parse_system(tomllib.loads(published_file_text()), PUBLISHED_FILE)
 
 
 def published_file_text() -> str:
