@@ -44,9 +44,25 @@ import numpy as np
 from numba import carray, njit
 
 from boringbar.kernels import layout as L
-from boringbar.kernels.interp import hermite, lerp
+from boringbar.kernels.core import (
+    IMPACT,
+    MICRO_IMPACT,
+    ON_WALL,
+    close_stick,
+    load_extremes,
+    load_flows,
+    load_steady,
+    steady_sample,
+    stick_step,
+    store_extremes,
+    store_flows,
+    store_steady,
+    strobe_row,
+    wall_rule,
+)
 from boringbar.kernels.linmap import NZ_MAX, PD_MAX, VR_MAX, WV_MAX, YR_MAX, build_map
 from boringbar.kernels.stack import stack_ptr
+from boringbar.kernels.views import borrow
 
 #: lengths of the stack scratch vectors (numba needs them as literal globals)
 _NMAX = L.NMAX
@@ -75,6 +91,12 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
     N_REV TAU / dt + 3 rows; node g is time t_cut + g dt, counted over every
     call since the cut began, and times before the cut read HIST_W0).
     """
+    # borrowed (kernels/views.py): the shared helpers (kernels/core.py) take them at
+    # every step without reference counting
+    met = borrow(met)
+    imp = borrow(imp)
+    stick = borrow(stick)
+    strobe = borrow(strobe)
     M = p[L.M_:L.M_ + n].copy()
     K = p[L.K_:L.K_ + n].copy()
     C = p[L.C_:L.C_ + n].copy()
@@ -199,34 +221,13 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
     sn = 0.0
     cn = 1.0
 
-    # streamed metrics as locals (written back at the end)
-    sum_w2 = met[L.SUM_W2]
-    sum_w = met[L.SUM_W]
-    n_steady = met[L.N_STEADY]
-    max_abs_w = met[L.MAX_ABS_W]
-    max_w = met[L.STEADY_MAX_W]
-    min_w = met[L.STEADY_MIN_W]
-    max_aux = met[L.MAX_ABS_AUX]
-    max_aux_all = met[L.MAX_ABS_AUX_ALL]
-    sum_aux2 = met[L.SUM_AUX2]
-    sum_f = met[L.SUM_F]
-    n_plus = met[L.N_IMP_PLUS]
-    n_minus = met[L.N_IMP_MINUS]
-    n_all = met[L.N_IMP_ALL]
-    n_micro = met[L.N_MICRO]
-    t_contact = met[L.T_CONTACT]
-    t_stick = met[L.T_STICK]
-    w_force = met[L.W_FORCE]
-    d_visc = met[L.D_VISC]
-    d_imp = met[L.D_IMPACT]
-    d_fric = met[L.D_FRICTION]
-    w_nr = met[L.W_NONRECIP]
-    n_imp = int(met[L.N_IMP_REC])
-    n_stk = int(met[L.N_STICK_REC])
+    # streamed metrics as locals (written back at the end); the events' counts and rows
+    # go to met and the records directly (kernels/core.py)
+    sum_w2, sum_w, n_steady, sum_aux2, sum_f, t_contact = load_steady(met)
+    max_abs_w, max_w, min_w, max_aux, max_aux_all = load_extremes(met)
+    w_force, d_visc, d_fric, w_nr = load_flows(met)
     n_rec = int(met[L.N_REC])
     n_stb = int(met[L.N_STROBE])
-    cap_imp = imp.shape[0]
-    cap_stk = stick.shape[0]
     cap_rec = rec.shape[0]
     cap_stb = strobe.shape[0]
     t_steady = t0 + steady_start * dt
@@ -471,67 +472,31 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
                 for i in range(n):
                     w1 += pL[i] * X[i]
                     wd1 += pL[i] * X[n + i]
-                s = (t_next - t) / dt
-                strobe[n_stb, 0] = t_next
-                # roundings pinned (kernels/interp.py): the batched kernel gives the same
-                strobe[n_stb, 1], strobe[n_stb, 2] = hermite(s, dt, w_prev, wd_prev, w1, wd1)
                 a1 = X[iy]
                 ad1 = X[iyd]
                 if case == L.TMD:  # the absorber's stroke, as in the history
                     for i in range(n):
                         a1 -= pA[i] * X[i]
                         ad1 -= pA[i] * X[n + i]
-                strobe[n_stb, 3] = lerp(s, aux_prev, a1)
-                strobe[n_stb, 4] = lerp(s, auxd_prev, ad1)
+                strobe_row(strobe[n_stb], t_next, t, dt, w_prev, wd_prev, w1, wd1, aux_prev,
+                           auxd_prev, a1, ad1)
                 n_stb += 1
             t_next += tstrobe
 
         # --- walls (docs/model.md, section 2) ----------------------------------------
         contact = False
         if ball:
-            y = X[iy]
-            if abs(y) >= half:
-                wall = 1.0 if y > 0.0 else -1.0
-                X[iy] = wall * half
-                vb = X[iyd]
-                if wall * vb > 0.0:
-                    X[iyd] = -e * vb
-                    g = (1.0 + e) * meff * vb
-                    for i in range(n):
-                        X[n + i] += g * pD[i] * invM[i]
-                    d_imp += 0.5 * (1.0 - e * e) * meff * vb * vb
-                    if abs(vb) > vimp:
-                        n_all += 1
-                        if steady:
-                            if wall > 0:
-                                n_plus += 1
-                            else:
-                                n_minus += 1
-                            if n_imp < cap_imp:
-                                imp[n_imp, 0] = t1
-                                imp[n_imp, 1] = wall
-                                imp[n_imp, 2] = vb
-                            n_imp += 1
-                    else:
-                        n_micro += 1
-                        contact = True
-                else:
-                    contact = True
+            hit, X[iy], X[iyd], g = wall_rule(met, imp, X[iy], X[iyd], t1, steady, half, e,
+                                              meff, vimp)
+            if hit == IMPACT or hit == MICRO_IMPACT:
+                for i in range(n):
+                    X[n + i] += g * pD[i] * invM[i]
+            contact = hit == MICRO_IMPACT or hit == ON_WALL
             # stick: off the walls with |y'| inside the band where the sgn() law
             # chatters (V_STICK = V_IMPACT + 2 F_c dt / m_eff)
             stuck = fc > 0.0 and not contact and abs(X[iyd]) < vstick
-            if stuck and not in_stick:
-                in_stick = True
-                stick_t0 = t
-            elif in_stick and not stuck:
-                in_stick = False
-                s0 = max(stick_t0, t_steady)  # clipped to the steady part
-                if t1 - s0 >= stick_min:
-                    t_stick += t1 - s0
-                    if n_stk < cap_stk:
-                        stick[n_stk, 0] = s0
-                        stick[n_stk, 1] = t1
-                    n_stk += 1
+            in_stick, stick_t0 = stick_step(stuck, in_stick, stick_t0, t, t1, met, stick,
+                                            t_steady, stick_min)
 
         # --- streamed metrics --------------------------------------------------
         w = 0.0
@@ -566,15 +531,9 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
             if cut_zero:
                 n_zero += 1
         if steady:
-            sum_w2 += w * w
-            sum_w += w
-            n_steady += 1.0
-            sum_aux2 += aux * aux
-            sum_f += fst[3]
-            max_abs_w = max(max_abs_w, abs(w))
-            max_w = max(max_w, w)
-            min_w = min(min_w, w)
-            max_aux = max(max_aux, abs(aux))
+            (sum_w2, sum_w, n_steady, sum_aux2, sum_f, max_abs_w, max_w, min_w,
+             max_aux) = steady_sample(w, aux, fst[3], sum_w2, sum_w, n_steady, sum_aux2, sum_f,
+                                      max_abs_w, max_w, min_w, max_aux)
             if contact:
                 t_contact += dt
         if rec_every > 0 and (k + 1) % rec_every == 0 and n_rec < cap_rec:
@@ -593,39 +552,12 @@ def _rk4(n, case, regen, p, x, t0, dt, n_steps, steady_start, rec_every, rec, im
 
     # a stick interval still open at the end is closed there
     if in_stick:
-        t_end = t0 + steps_run * dt
-        s0 = max(stick_t0, t_steady)
-        if t_end - s0 >= stick_min:
-            t_stick += t_end - s0
-            if n_stk < cap_stk:
-                stick[n_stk, 0] = s0
-                stick[n_stk, 1] = t_end
-            n_stk += 1
+        close_stick(met, stick, stick_t0, t0 + steps_run * dt, t_steady, stick_min)
 
     x[:] = X
-    met[L.SUM_W2] = sum_w2
-    met[L.SUM_W] = sum_w
-    met[L.N_STEADY] = n_steady
-    met[L.MAX_ABS_W] = max_abs_w
-    met[L.STEADY_MAX_W] = max_w
-    met[L.STEADY_MIN_W] = min_w
-    met[L.MAX_ABS_AUX] = max_aux
-    met[L.MAX_ABS_AUX_ALL] = max_aux_all
-    met[L.SUM_AUX2] = sum_aux2
-    met[L.SUM_F] = sum_f
-    met[L.N_IMP_PLUS] = n_plus
-    met[L.N_IMP_MINUS] = n_minus
-    met[L.N_IMP_ALL] = n_all
-    met[L.N_MICRO] = n_micro
-    met[L.T_CONTACT] = t_contact
-    met[L.T_STICK] = t_stick
-    met[L.W_FORCE] = w_force
-    met[L.D_VISC] = d_visc
-    met[L.D_IMPACT] = d_imp
-    met[L.D_FRICTION] = d_fric
-    met[L.W_NONRECIP] = w_nr
-    met[L.N_IMP_REC] = n_imp
-    met[L.N_STICK_REC] = n_stk
+    store_steady(met, sum_w2, sum_w, n_steady, sum_aux2, sum_f, t_contact)
+    store_extremes(met, max_abs_w, max_w, min_w, max_aux, max_aux_all)
+    store_flows(met, w_force, d_visc, d_fric, w_nr)
     met[L.N_REC] = n_rec
     met[L.N_STROBE] = n_stb
     met[L.MAX_FORCE] = max_force

@@ -41,9 +41,19 @@ import numpy as np
 from numba import carray, njit
 
 from boringbar.kernels import layout as L
-from boringbar.kernels.interp import hermite, lerp
+from boringbar.kernels.core import (
+    IMPACT,
+    MICRO_IMPACT,
+    ON_WALL,
+    close_stick,
+    steady_sample,
+    stick_step,
+    strobe_row,
+    wall_rule,
+)
 from boringbar.kernels.linmap import NZ_MAX, PD_MAX, VR_MAX, WV_MAX, YR_MAX, build_map
 from boringbar.kernels.stack import stack_ptr
+from boringbar.kernels.views import borrow
 
 #: most runs in one batch
 BMAX = 16
@@ -80,6 +90,11 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
     The step-end events (strobe, walls, stick) are a scalar loop over the runs.
     """
     f8 = np.float64
+    # borrowed (kernels/views.py): a run's rows go to the shared helpers (kernels/core.py)
+    # at every step without reference counting
+    imp = borrow(imp)
+    stick = borrow(stick)
+    strobe = borrow(strobe)
     ball = case == L.BALL
     has_aux = case == L.BALL or case == L.TMD
     nx = 2 * n + 2
@@ -125,10 +140,8 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
     stick_t0 = carray(stack_ptr(_B, f8), nb)
     contact = carray(stack_ptr(_B, f8), nb)  # 1.0: the ball is on a wall this step
     in_stick = carray(stack_ptr(_B, np.int64), nb)
-    n_imp = carray(stack_ptr(_B, np.int64), nb)
-    n_stk = carray(stack_ptr(_B, np.int64), nb)
     n_stb = carray(stack_ptr(_B, np.int64), nb)
-    # streamed metrics: [metric, run]
+    # streamed metrics: [metric, run] (the events' counts and rows too, kernels/core.py)
     ms = carray(stack_ptr(_BM, f8), (L.MET_SIZE, nb))
     # state, stage derivative, weighted sum of the stage derivatives: [component, run]
     X = carray(stack_ptr(_BX, f8), (nx, nb))
@@ -186,8 +199,6 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
             X[iyd, r] = 0.0
         for q in range(L.MET_SIZE):
             ms[q, r] = met[r, q]
-        n_imp[r] = int(met[r, L.N_IMP_REC])
-        n_stk[r] = int(met[r, L.N_STICK_REC])
         n_stb[r] = int(met[r, L.N_STROBE])
         in_stick[r] = 0
         stick_t0[r] = 0.0
@@ -212,8 +223,6 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
             if tn < t0:
                 tn += math.ceil((t0 - tn) / tstrobe[r]) * tstrobe[r]
         t_next[r] = tn
-    cap_imp = imp.shape[1]
-    cap_stk = stick.shape[1]
     cap_stb = strobe.shape[1]
 
     # the step as an affine map where F_b cannot switch (kernels/linmap.py), per
@@ -433,70 +442,32 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
                     for i in range(n):
                         w1 += pL[i, r] * X[i, r]
                         wd1 += pL[i, r] * X[n + i, r]
-                    s = (tn - t) / dt
-                    q = n_stb[r]
-                    strobe[r, q, 0] = tn
-                    strobe[r, q, 1], strobe[r, q, 2] = hermite(s, dt, w_prev[r], wd_prev[r],
-                                                               w1, wd1)
                     a1 = X[iy, r]
                     ad1 = X[iyd, r]
                     if case == L.TMD:
                         for i in range(n):
                             a1 -= pA[i, r] * X[i, r]
                             ad1 -= pA[i, r] * X[n + i, r]
-                    strobe[r, q, 3] = lerp(s, aux_prev[r], a1)
-                    strobe[r, q, 4] = lerp(s, auxd_prev[r], ad1)
+                    strobe_row(strobe[r, n_stb[r]], tn, t, dt, w_prev[r], wd_prev[r], w1, wd1,
+                               aux_prev[r], auxd_prev[r], a1, ad1)
                     n_stb[r] += 1
                 t_next[r] = tn + tstrobe[r]
             if not ball:
                 continue
             # walls (docs/model.md, section 2)
-            hit = False
-            y = X[iy, r]
-            if abs(y) >= half[r]:
-                wall = 1.0 if y > 0.0 else -1.0
-                X[iy, r] = wall * half[r]
-                vb = X[iyd, r]
-                if wall * vb > 0.0:
-                    X[iyd, r] = -e[r] * vb
-                    g = (1.0 + e[r]) * meff[r] * vb
-                    for i in range(n):
-                        X[n + i, r] += g * pD[i, r] * invM[i, r]
-                    ms[L.D_IMPACT, r] += 0.5 * (1.0 - e[r] * e[r]) * meff[r] * vb * vb
-                    if abs(vb) > vimp[r]:
-                        ms[L.N_IMP_ALL, r] += 1
-                        if steady:
-                            if wall > 0:
-                                ms[L.N_IMP_PLUS, r] += 1
-                            else:
-                                ms[L.N_IMP_MINUS, r] += 1
-                            q = n_imp[r]
-                            if q < cap_imp:
-                                imp[r, q, 0] = t1
-                                imp[r, q, 1] = wall
-                                imp[r, q, 2] = vb
-                            n_imp[r] = q + 1
-                    else:
-                        ms[L.N_MICRO, r] += 1
-                        hit = True
-                else:
-                    hit = True
+            mr = ms[:, r]
+            out, X[iy, r], X[iyd, r], g = wall_rule(mr, imp[r], X[iy, r], X[iyd, r], t1, steady,
+                                                    half[r], e[r], meff[r], vimp[r])
+            if out == IMPACT or out == MICRO_IMPACT:
+                for i in range(n):
+                    X[n + i, r] += g * pD[i, r] * invM[i, r]
+            hit = out == MICRO_IMPACT or out == ON_WALL
             contact[r] = 1.0 if hit else 0.0
             # stick: off the walls with |y'| inside the chattering band
             stuck = fc[r] > 0.0 and not hit and abs(X[iyd, r]) < vstick[r]
-            if stuck and in_stick[r] == 0:
-                in_stick[r] = 1
-                stick_t0[r] = t
-            elif in_stick[r] != 0 and not stuck:
-                in_stick[r] = 0
-                s0 = max(stick_t0[r], t_steady)
-                if t1 - s0 >= stick_min[r]:
-                    ms[L.T_STICK, r] += t1 - s0
-                    q = n_stk[r]
-                    if q < cap_stk:
-                        stick[r, q, 0] = s0
-                        stick[r, q, 1] = t1
-                    n_stk[r] = q + 1
+            ins, stick_t0[r] = stick_step(stuck, in_stick[r] != 0, stick_t0[r], t, t1, mr,
+                                          stick[r], t_steady, stick_min[r])
+            in_stick[r] = 1 if ins else 0
 
         # --- streamed metrics: loops over the runs (the steady part's a loop of its
         # own: inside one loop LLVM turned `if steady` into masked loads and
@@ -525,37 +496,23 @@ def _rk4_batch(n, case, nb, P, x, t0, dt, n_steps, steady_start, imp, stick, str
                 ms[L.MAX_ABS_AUX_ALL, r] = max(ms[L.MAX_ABS_AUX_ALL, r], abs(aux_prev[r]))
         if steady:
             for r in range(nb):
-                w = w_prev[r]
-                aux = aux_prev[r]
-                ms[L.SUM_W2, r] += w * w
-                ms[L.SUM_W, r] += w
-                ms[L.N_STEADY, r] += 1.0
-                ms[L.SUM_AUX2, r] += aux * aux
-                ms[L.SUM_F, r] += fst[3, r]
-                ms[L.MAX_ABS_W, r] = max(ms[L.MAX_ABS_W, r], abs(w))
-                ms[L.STEADY_MAX_W, r] = max(ms[L.STEADY_MAX_W, r], w)
-                ms[L.STEADY_MIN_W, r] = min(ms[L.STEADY_MIN_W, r], w)
-                ms[L.MAX_ABS_AUX, r] = max(ms[L.MAX_ABS_AUX, r], abs(aux))
+                (ms[L.SUM_W2, r], ms[L.SUM_W, r], ms[L.N_STEADY, r], ms[L.SUM_AUX2, r],
+                 ms[L.SUM_F, r], ms[L.MAX_ABS_W, r], ms[L.STEADY_MAX_W, r],
+                 ms[L.STEADY_MIN_W, r], ms[L.MAX_ABS_AUX, r]) = steady_sample(
+                    w_prev[r], aux_prev[r], fst[3, r], ms[L.SUM_W2, r], ms[L.SUM_W, r],
+                    ms[L.N_STEADY, r], ms[L.SUM_AUX2, r], ms[L.SUM_F, r], ms[L.MAX_ABS_W, r],
+                    ms[L.STEADY_MAX_W, r], ms[L.STEADY_MIN_W, r], ms[L.MAX_ABS_AUX, r])
                 ms[L.T_CONTACT, r] += contact[r] * dt
 
     t_end = t0 + n_steps * dt
     for r in range(nb):
         # a stick interval still open at the end is closed there
         if in_stick[r] != 0:
-            s0 = max(stick_t0[r], t_steady)
-            if t_end - s0 >= stick_min[r]:
-                ms[L.T_STICK, r] += t_end - s0
-                q = n_stk[r]
-                if q < cap_stk:
-                    stick[r, q, 0] = s0
-                    stick[r, q, 1] = t_end
-                n_stk[r] = q + 1
+            close_stick(ms[:, r], stick[r], stick_t0[r], t_end, t_steady, stick_min[r])
         for j in range(nx):
             x[r, j] = X[j, r]
         for q in range(L.MET_SIZE):
             met[r, q] = ms[q, r]
-        met[r, L.N_IMP_REC] = n_imp[r]
-        met[r, L.N_STICK_REC] = n_stk[r]
         met[r, L.N_STROBE] = n_stb[r]
         met[r, L.STEPS_DONE] += n_steps
 

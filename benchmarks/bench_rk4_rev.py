@@ -1,0 +1,191 @@
+"""The RK4 kernels (single run and lock-step batch) against their own version at a git
+revision, in one process: results bit for bit, and the speed.
+
+    .venv/bin/python benchmarks/bench_rk4_rev.py REV [--repeat 5] [--skip-timing]
+
+Exports ``src/boringbar`` at REV as the package ``boringbar_rev`` (as
+``bench_exact_rev.py`` does; the first run compiles its kernels), then
+
+- runs the same cases through ``run_rk4`` of both versions (solid, TMD, locked, the
+  ball with and without friction in the paper and physical presets with 1, 2 and 3
+  modes, the stage loop forced, a regenerative cut of the solid bar and of the ball
+  bar; strobe and history on) and compares metrics, final state, impact, stick,
+  strobe and history rows bit for bit;
+- does the same for ``run_rk4_batch`` (batches of 4 and 16 runs of each bar);
+- times the single-run kernel (ns per step, the 2 s runs of ``bench_kernel.py``
+  with 1 and 2 modes) and a batch of 16 (ns per run-step), old and new
+  alternately, best of ``--repeat``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from bench_exact_rev import export  # noqa: E402
+
+from boringbar import Harmonic, Initial, make_system  # noqa: E402
+from boringbar.kernels import layout as L  # noqa: E402
+from boringbar.kernels import rk4 as R1  # noqa: E402
+from boringbar.kernels import rk4_batch as B1  # noqa: E402
+from boringbar.model.forcing import Regenerative  # noqa: E402
+from boringbar.simulate import _setup  # noqa: E402
+
+
+def single_cases():
+    ball = "ball"
+    yield "solid paper", make_system("solid", "paper"), Harmonic(10.0, 1.0), {}
+    yield "tmd physical 2 modes", make_system("tmd", "physical"), Harmonic(20.0, 1.0), {}
+    yield "locked paper", make_system(ball, "paper", gap=0.5e-3, locked=True), \
+        Harmonic(10.0, 1.0), {}
+    yield "ball paper 0.1 mm", make_system(ball, "paper", gap=0.1e-3, friction=False), \
+        Harmonic(10.0, 1.0), {}
+    yield "ball paper 0.5 mm friction 20 N", make_system(ball, "paper", gap=0.5e-3,
+                                                         friction=True), Harmonic(20.0, 0.98), {}
+    yield "ball physical 2 modes friction", make_system(ball, "physical", gap=0.5e-3,
+                                                        friction=True), Harmonic(20.0, 1.0), {}
+    yield "ball physical 3 modes friction", make_system(ball, "physical", gap=0.1e-3,
+                                                        friction=True, n_modes=3), \
+        Harmonic(10.0, 1.02), {}
+    yield "ball paper friction, stage loop", make_system(ball, "paper", gap=0.5e-3,
+                                                         friction=True), \
+        Harmonic(10.0, 1.0), {"stage_loop": True}
+    yield "solid cut", make_system("solid", "paper"), Regenerative(depth=1e-3, rpm=1200.0), {}
+    yield "ball physical cut", make_system(ball, "physical", gap=0.1e-3, friction=True), \
+        Regenerative(depth=2e-3, rpm=1200.0, revolutions=2), {}
+
+
+def setup(system, forcing, duration, init=None, record_every=10, strobe=True):
+    return _setup(system, forcing, duration, 1e-6, init, record_every, 0.8, strobe, "rk4")
+
+
+def run_single(mod, su, stage_loop=False):
+    p = su.p.copy()
+    if stage_loop:
+        p[L.STAGE_LOOP] = 1.0
+    out = [su.x.copy(), su.rec.copy(), su.imp.copy(), su.stick.copy(), su.stb.copy(),
+           su.met.copy()]
+    x, rec, imp, stick, stb, met = out
+    buf = None if su.buf is None else su.buf.copy()
+    tic = time.perf_counter()
+    mod.run_rk4(p, x, su.t0, su.dt, su.n_steps, su.steady_steps, su.record_every, rec, imp,
+                stick, stb, met, buf)
+    return time.perf_counter() - tic, out
+
+
+def batch_arrays(jobs, duration):
+    sus = [setup(s, f, duration, i, 0) for s, f, i in jobs]
+    P = np.array([su.p for su in sus])
+    X = np.array([su.x for su in sus])
+    met = np.array([su.met for su in sus])
+    imp = np.zeros((len(sus), max(len(su.imp) for su in sus), 3))
+    stick = np.zeros((len(sus), max(len(su.stick) for su in sus), 2))
+    stb = np.zeros((len(sus), max(len(su.stb) for su in sus), 5))
+    return sus[0], (P, X, imp, stick, stb, met)
+
+
+def run_batch(mod, su, arrays):
+    P, X, imp, stick, stb, met = (a.copy() for a in arrays)
+    tic = time.perf_counter()
+    mod.run_rk4_batch(P, X, su.t0, su.dt, su.n_steps, su.steady_steps, imp, stick, stb, met)
+    return time.perf_counter() - tic, [X, imp, stick, stb, met]
+
+
+def batch_cases():
+    def varied(system, nb):
+        forces, ratios = (10.0, 20.0), (0.97, 1.0, 1.01, 1.04)
+        pairs = [(f, r) for f in forces for r in ratios]
+        return [(system, Harmonic(*pairs[j % 8]), Initial(0.2e-3 * (j % 3 - 1), 0.3 * (j % 2)))
+                for j in range(nb)]
+    for nb in (4, 16):
+        for preset, nm in (("paper", 1), ("physical", 2)):
+            for friction in (False, True):
+                yield (f"ball {preset} friction {friction} B={nb}",
+                       varied(make_system("ball", preset, gap=0.5e-3, friction=friction,
+                                          n_modes=nm), nb))
+            yield f"solid {preset} B={nb}", varied(make_system("solid", preset, n_modes=nm), nb)
+            yield f"tmd {preset} B={nb}", varied(make_system("tmd", preset, n_modes=nm), nb)
+            yield (f"locked {preset} B={nb}",
+                   varied(make_system("ball", preset, gap=0.5e-3, locked=True, n_modes=nm), nb))
+
+
+def compare(label, a, b):
+    names = (("x", "rec", "imp", "stick", "strobe", "met") if len(a) == 6
+             else ("x", "imp", "stick", "strobe", "met"))
+    bad = [n for n, u, v in zip(names, a, b, strict=True)
+           if not np.array_equal(u, v, equal_nan=True)]
+    met = a[-1]
+    info = (f"{int(met[..., L.N_IMP_ALL].sum())} impacts, "
+            f"{int(met[..., L.N_STICK_REC].sum())} sticks, "
+            f"{int(met[..., L.N_STROBE].sum())} strobe rows")
+    print(f"  {label:38s} {'bit-identical' if not bad else 'DIFFERS: ' + ', '.join(bad)}"
+          f"  ({info})")
+    return not bad
+
+
+def timing(R0, B0, repeat):
+    print(f"\nspeed, old and new alternately, best of {repeat}:")
+    for nm, friction in ((1, False), (2, False)):
+        system = make_system("ball", "paper" if nm == 1 else "physical", gap=0.1e-3,
+                             friction=friction, n_modes=nm)
+        su = setup(system, Harmonic(10.0, 1.0), 2.0, record_every=0, strobe=False)
+        best = [np.inf, np.inf]
+        for _ in range(repeat):
+            for i, mod in enumerate((R0, R1)):
+                best[i] = min(best[i], run_single(mod, su)[0])
+        ns = [b / su.n_steps * 1e9 for b in best]
+        print(f"  run_rk4 ball {nm} mode(s), 2 s: old {ns[0]:.1f} ns/step, new {ns[1]:.1f} "
+              f"ns/step (new/old {ns[1] / ns[0]:.3f})")
+    system = make_system("ball", "paper", gap=0.5e-3, friction=True)
+    jobs = [(system, Harmonic(10.0 + j % 2 * 10.0, 0.97 + 0.005 * j), None) for j in range(16)]
+    su, arrays = batch_arrays(jobs, 0.3)
+    best = [np.inf, np.inf]
+    for _ in range(repeat):
+        for i, mod in enumerate((B0, B1)):
+            best[i] = min(best[i], run_batch(mod, su, arrays)[0])
+    ns = [b / (su.n_steps * 16) * 1e9 for b in best]
+    print(f"  run_rk4_batch ball paper friction B=16, 0.3 s: old {ns[0]:.1f} ns/run-step, "
+          f"new {ns[1]:.1f} (new/old {ns[1] / ns[0]:.3f})")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("rev", help="git revision of the kernels to compare against")
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--duration", type=float, default=0.2)
+    ap.add_argument("--skip-timing", action="store_true")
+    args = ap.parse_args()
+    export(args.rev)
+    import boringbar_rev.kernels.rk4 as R0
+    import boringbar_rev.kernels.rk4_batch as B0
+
+    print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; RK4 kernels at "
+          f"{args.rev} (old) against the working tree (new)")
+    ok = True
+    print(f"run_rk4, {args.duration} s at dt = 1e-6:")
+    for label, system, forcing, kw in single_cases():
+        su = setup(system, forcing, args.duration)
+        a = run_single(R0, su, **kw)[1]
+        b = run_single(R1, su, **kw)[1]
+        ok &= compare(label, a, b)
+    print(f"run_rk4_batch, {args.duration / 2} s:")
+    for label, jobs in batch_cases():
+        su, arrays = batch_arrays(jobs, args.duration / 2)
+        a = run_batch(B0, su, arrays)[1]
+        b = run_batch(B1, su, arrays)[1]
+        ok &= compare(label, a, b)
+    print("ALL BIT-IDENTICAL" if ok else "SOME RESULTS DIFFER")
+    if not args.skip_timing:
+        timing(R0, B0, args.repeat)
+
+
+if __name__ == "__main__":
+    main()
