@@ -162,6 +162,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--duration", type=float, default=0.2)
     ap.add_argument("--skip-timing", action="store_true")
+    ap.add_argument("--skip-check", action="store_true")
     args = ap.parse_args()
     export(args.rev)
     import boringbar_rev.kernels.rk4 as R0
@@ -169,22 +170,27 @@ def main() -> None:
 
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; RK4 kernels at "
           f"{args.rev} (old) against the working tree (new)")
+    if not args.skip_check:
+        check(args.duration, R0, B0)
+    if not args.skip_timing:
+        timing(R0, B0, args.repeat)
+
+
+def check(duration, R0, B0):
     ok = True
-    print(f"run_rk4, {args.duration} s at dt = 1e-6:")
+    print(f"run_rk4, {duration} s at dt = 1e-6:")
     for label, system, forcing, kw in single_cases():
-        su = setup(system, forcing, args.duration)
+        su = setup(system, forcing, duration)
         a = run_single(R0, su, **kw)[1]
         b = run_single(R1, su, **kw)[1]
         ok &= compare(label, a, b)
-    print(f"run_rk4_batch, {args.duration / 2} s:")
+    print(f"run_rk4_batch, {duration / 2} s:")
     for label, jobs in batch_cases():
-        su, arrays = batch_arrays(jobs, args.duration / 2)
+        su, arrays = batch_arrays(jobs, duration / 2)
         a = run_batch(B0, su, arrays)[1]
         b = run_batch(B1, su, arrays)[1]
         ok &= compare(label, a, b)
     print("ALL BIT-IDENTICAL" if ok else "SOME RESULTS DIFFER")
-    if not args.skip_timing:
-        timing(R0, B0, args.repeat)
 
 
 if __name__ == "__main__":

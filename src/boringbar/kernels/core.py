@@ -19,12 +19,17 @@ exact event-driven integrator (``exact/``) call these small functions:
 
 Every function does the operations its callers did, in the same order, so the results
 stay bit-identical (no fast-math flag: under plain IEEE arithmetic the same operations
-give the same bits wherever they are compiled).  They are plain ``njit`` functions,
-not numba-inlined: LLVM inlines them into their callers (the machine code of the step
-loop is unchanged in speed, benchmarks/bench_rk4_rev.py) and numba compiles each once
-per signature instead of once per kernel specialisation (docs/performance.md).  The
-array arguments that the kernels pass on every step are borrowed views
+give the same bits wherever they are compiled).  What runs at every step
+(:func:`impact_law` inside :func:`wall_rule`, :func:`stick_step`, :func:`steady_sample`)
+is inlined by numba (``inline="always"``): as plain ``njit`` calls, which LLVM did not
+inline, they made the RK4 kernels 1.6-2.1x slower per step (docs/performance.md).  What
+runs at events only (:func:`count_impact`, :func:`close_stick`, :func:`strobe_row`) and
+the loads and stores stay plain calls, compiled once per signature rather than into
+every kernel specialisation.  The arrays the kernels pass are borrowed views
 (kernels/views.py), so the calls are not reference-counted.
+
+numba's cache checks only the caller's own source file: after a change here, clear the
+cached kernels (``src/boringbar/kernels/**/__pycache__``) or they keep the old code.
 """
 
 from numba import njit
@@ -36,7 +41,7 @@ from boringbar.kernels.interp import hermite, lerp
 OFF_WALL, IMPACT, MICRO_IMPACT, ON_WALL = 0, 1, 2, 3
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def impact_law(vb, e, meff):
     """The impact of a ball arriving with relative velocity ``vb`` (docs/model.md, 2.4):
     (y'+, g, loss) with y'+ = -e y'-, the modes' jumps u_i'+ = u_i'- + g psi_d,i / M_i,
@@ -78,7 +83,7 @@ def close_stick(met, stick, t_start, t, t_steady, stick_min):
         met[L.N_STICK_REC] += 1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def wall_rule(met, imp, y, yd, t1, steady, half, e, meff, vimp):
     """The fixed-step scheme's walls at the end t1 of a step (docs/model.md, 2.5): a ball at
     or past a wall (|y| >= half) is put back on it and, if moving outward (y y' > 0), takes
@@ -100,7 +105,7 @@ def wall_rule(met, imp, y, yd, t1, steady, half, e, meff, vimp):
     return MICRO_IMPACT, wall * half, yd1, g
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def stick_step(stuck, in_stick, stick_t0, t, t1, met, stick, t_steady, stick_min):
     """The fixed-step scheme's stick bookkeeping for the step [t, t1]: an interval opens at
     t when the ball is ``stuck`` (off the walls, |y'| inside the band where the sgn() law
@@ -126,7 +131,7 @@ def strobe_row(row, tn, t, dt, w0, wd0, w1, wd1, a0, ad0, a1, ad1):
     row[4] = lerp(s, ad0, ad1)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def steady_sample(w, aux, f, sum_w2, sum_w, n_steady, sum_aux2, sum_f, max_abs_w, max_w, min_w,
                   max_aux):
     """A step's steady metrics: the sums and extremes with the step end's W, aux and f."""

@@ -11,6 +11,13 @@ import numpy as np
 from numba import carray, njit
 
 from boringbar.kernels import layout as L
+from boringbar.kernels.core import (
+    close_stick,
+    count_impact,
+    impact_law,
+    load_extremes,
+    store_extremes,
+)
 from boringbar.kernels.exact.consts import (
     CONTACT,
     CP_DT_OUT,
@@ -239,24 +246,14 @@ def _apply_event(ev_kind, t, steady, X, f_ev, n, mk, cp, rs, imp, stick, met):
         vb = yd
         if w_ * vb > 0.0:
             ee = cp[CP_E] if abs(vb) > vimp else 0.0  # Zeno: captured on the wall
-            g_ = (1.0 + ee) * cp[CP_MEFF] * vb
+            yd, g_, loss = impact_law(vb, ee, cp[CP_MEFF])
+            # the modes' jumps g psi_d,i / M_i, divided here (the RK4 kernels multiply by
+            # 1 / M_i: the same law, other roundings)
             for i in range(n):
                 X[n + i] += g_ * mk[4, i] / mk[0, i]
-            yd = -ee * vb
-            met[L.D_IMPACT] += 0.5 * (1.0 - ee * ee) * cp[CP_MEFF] * vb * vb
+            met[L.D_IMPACT] += loss
             if abs(vb) > vimp:
-                met[L.N_IMP_ALL] += 1
-                if steady:
-                    if w_ > 0:
-                        met[L.N_IMP_PLUS] += 1
-                    else:
-                        met[L.N_IMP_MINUS] += 1
-                    n_imp = int(met[L.N_IMP_REC])
-                    if n_imp < imp.shape[0]:
-                        imp[n_imp, 0] = t
-                        imp[n_imp, 1] = w_
-                        imp[n_imp, 2] = vb
-                    met[L.N_IMP_REC] += 1
+                count_impact(met, imp, t, w_, vb, steady)
             else:
                 met[L.N_MICRO] += 1
         elif w_ * vb < -vimp:
@@ -305,26 +302,12 @@ def _apply_event(ev_kind, t, steady, X, f_ev, n, mk, cp, rs, imp, stick, met):
     if mode == STICK and not was_stick:
         rs[RS_STICK_T0] = t
     elif was_stick and mode != STICK:
-        _stick_interval(t, cp, rs, stick, met)
+        close_stick(met, stick, rs[RS_STICK_T0], t, cp[CP_T_STEADY], cp[CP_STICK_MIN])
     rs[RS_MODE] = mode
     rs[RS_SDIR] = sdir
     rs[RS_WALL] = wall
     rs[RS_Y] = y
     rs[RS_YD] = yd
-
-
-@njit(cache=True, inline="always")
-def _stick_interval(t, cp, rs, stick, met):
-    """Records the stick interval from rs[RS_STICK_T0] (or the steady window's start) to t
-    if it is long enough."""
-    s0 = max(rs[RS_STICK_T0], cp[CP_T_STEADY])
-    if t - s0 >= cp[CP_STICK_MIN]:
-        met[L.T_STICK] += t - s0
-        n_stk = int(met[L.N_STICK_REC])
-        if n_stk < stick.shape[0]:
-            stick[n_stk, 0] = s0
-            stick[n_stk, 1] = t
-        met[L.N_STICK_REC] += 1
 
 
 #: the driver's arrays, passed whole to its pieces (all borrowed or on the stack): states
@@ -357,11 +340,8 @@ def _cut_consts(p, cq, t0, t_end, hist_step, regen):
 def _outputs_start(ro, met, p, t0, max_force):
     """The running extremes from ``met`` and the first output times into ``ro`` (RO_*)."""
     tstrobe = p[L.STROBE_PERIOD]
-    ro[RO_MAX_ABS_W] = met[L.MAX_ABS_W]
-    ro[RO_MAX_W] = met[L.STEADY_MAX_W]
-    ro[RO_MIN_W] = met[L.STEADY_MIN_W]
-    ro[RO_MAX_AUX] = met[L.MAX_ABS_AUX]
-    ro[RO_MAX_AUX_ALL] = met[L.MAX_ABS_AUX_ALL]
+    (ro[RO_MAX_ABS_W], ro[RO_MAX_W], ro[RO_MIN_W], ro[RO_MAX_AUX],
+     ro[RO_MAX_AUX_ALL]) = load_extremes(met)
     ro[RO_MAX_FORCE] = max_force
     ro[RO_K_REC] = 1.0  # the next history row is at t0 + k_rec rec_dt
     if tstrobe > 0.0:
@@ -380,11 +360,8 @@ def _finish_run(x, X, met, rs, ro, n, ball, regen, n_ev, status):
     if ball:
         x[2 * n] = rs[RS_Y]
         x[2 * n + 1] = rs[RS_YD]
-    met[L.MAX_ABS_W] = ro[RO_MAX_ABS_W]
-    met[L.STEADY_MAX_W] = ro[RO_MAX_W]
-    met[L.STEADY_MIN_W] = ro[RO_MIN_W]
-    met[L.MAX_ABS_AUX] = ro[RO_MAX_AUX]
-    met[L.MAX_ABS_AUX_ALL] = ro[RO_MAX_AUX_ALL]
+    store_extremes(met, ro[RO_MAX_ABS_W], ro[RO_MAX_W], ro[RO_MIN_W], ro[RO_MAX_AUX],
+                   ro[RO_MAX_AUX_ALL])
     met[L.N_EVENTS] = n_ev
     met[L.EXACT_STATUS] = status
     if regen:
@@ -585,7 +562,7 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
             kn, nk = add_knot(kn, nk, ip, t, Xa, X, n, mk, ttol, -1.0)
 
     if rs[RS_MODE] == STICK:
-        _stick_interval(t, cp, rs, stick, met)
+        close_stick(met, stick, rs[RS_STICK_T0], t, cp[CP_T_STEADY], cp[CP_STICK_MIN])
 
     _finish_run(x, X, met, rs, ro, n, ball, regen, n_ev, status)
     return t
