@@ -100,6 +100,9 @@ The package, by concern:
   first event (with the outputs on the way) and its flows, inlined into the driver;
 - :mod:`.driver`: the kernel :func:`_exact` (the run's setup, the loop over segments, the
   events applied between them) and its entry point :func:`run_exact`.
+
+The impact law, the records of impacts and stick intervals and the load and store of the
+running extremes are shared with the RK4 kernels (:mod:`boringbar.kernels.core`).
 """
 
 # the names the rest of the package, the tests and the benchmarks import from here
