@@ -81,7 +81,9 @@ class _Report:
                 cols.append({"preset": preset, "run": False})
                 continue
             cols.append({"preset": preset, "run": True, "command": rec["command"],
-                         "wall_time": f"{rec['wall_time_s']:.1f}", **body(preset, rec)})
+                         "wall_time": f"{rec['wall_time_s']:.1f}",
+                         "integrator": rec["summary"].get("integrator_used", ""),
+                         **body(preset, rec)})
         return cols
 
     def per_key(self, prefix: str, body) -> list[dict]:
@@ -276,7 +278,10 @@ class _Report:
                      for p in result["presets"]]
             rows.append({"id": c["id"], "source": c["source"], "statement": c["statement"],
                          "published": published, "cells": cells})
-        return {"rows": rows, "presets": result["presets"], "quick": result["quick"],
+        variants = {v["name"]: v["description"] for v in result["variants"]}
+        heads = [p if p in variants else f"{p} preset" for p in result["presets"]]
+        return {"rows": rows, "presets": heads, "quick": result["quick"],
+                "variants": [{"name": k, "description": d} for k, d in variants.items()],
                 "counts": [count_line(result, p) for p in result["presets"]],
                 "tolerance": f"{TOLERANCE:.0%}"}
 
