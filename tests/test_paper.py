@@ -81,14 +81,16 @@ def test_every_published_analysis_under_both_presets(study):
     for rec in steps:
         if rec["key"] == "corrections":
             continue
-        column = COLUMNS[rec["preset"]]
+        # a further column's step without friction is its preset's record, shared
+        column = COLUMNS[rec.get("shared_from", rec["preset"])]
         assert rec["command"].startswith("boringbar ") and " ".join(column.flags) in \
             rec["command"]
         with xr.open_dataset(rec["summary"]["files"]["netcdf"]) as ds:
             assert ds.attrs["preset"] == column.preset  # each file says what it is
-            if "shared_from" not in rec and column.overrides and "system" in ds.attrs:
-                # a further column's file carries its changed reading
-                assert "reciprocal" in ds.attrs["system"]
+            if column.overrides and "design" not in rec["key"]:
+                # a further column's file carries its friction: the paper's, reciprocal
+                assert '"kind": "paper-number", "value": 0.6, "reaction": "reciprocal"' in \
+                    str(ds.attrs), rec["key"]
         for png in _pngs(rec["summary"]["files"]):
             assert Path(png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 

@@ -18,7 +18,8 @@ def test_every_step_command_is_a_valid_command_line(quick):
     parser = build_parser()
     for step in published_steps(quick):
         for col in COLUMNS.values() if step.variants else [COLUMNS["paper"]]:
-            args = parser.parse_args([*step.argv, *col.flags, "--out", "x"])
+            argv = step.for_column(col.name).argv
+            args = parser.parse_args([*argv, *col.flags, "--out", "x"])
             assert args.command == step.argv[0]
 
 

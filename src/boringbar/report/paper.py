@@ -130,6 +130,14 @@ class Step:
     friction: bool = True
     #: whether the further columns rerun it at all (the design searches do not)
     variants: bool = True
+    #: what the further columns run instead, if not the same: (argv, run)
+    lean: tuple | None = None
+
+    def for_column(self, column: str) -> "Step":
+        """The step as ``column`` runs it (a further column: its lean version)."""
+        if column in PRESET_ORDER or self.lean is None:
+            return self
+        return replace(self, argv=self.lean[0], run=self.lean[1], lean=None)
 
 
 def _integration(duration_s: float, initial: Initial | None = None) -> Integration:
@@ -262,9 +270,12 @@ def published_steps(quick: bool = False) -> list[Step]:
                            "900:1600:100", "--duration-s", "1.0"),
                           _lobes_run("search", "900:1600:100", 1.0)))
     else:
+        # the further columns take the search (the same limits, in a third of the time)
         steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
                           ("lobes", "--examples", "--method", "scan"),
-                          _lobes_run("scan", None, 2.0)))
+                          _lobes_run("scan", None, 2.0),
+                          lean=(("lobes", "--examples", "--method", "search"),
+                                _lobes_run("search", None, 2.0))))
     # a steel ball's lobes (the claim that it lowers the chatter-free depth), by the
     # bisection search on the published speeds: the same limits as the scan, cheaper
     steel_rpm = "900:1600:100" if quick else "900:1600:50"
@@ -371,6 +382,7 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     total = sum(1 for *_, shared in plan if shared is None) + 1
     records, done = [], {}
     for column, step, shared in plan:
+        step = step.for_column(column)
         if shared is not None and (shared, step.key) in done:
             records.append({**done[(shared, step.key)], "preset": column,
                             "shared_from": shared, "reused": False})
