@@ -270,7 +270,8 @@ def published_steps(quick: bool = False) -> list[Step]:
                            "900:1600:100", "--duration-s", "1.0"),
                           _lobes_run("search", "900:1600:100", 1.0)))
     else:
-        # the further columns take the search (the same limits, in a third of the time)
+        # the further columns take the bisection search: fewer runs than the scan for
+        # the same 0.01 mm limits (docs/paper.md says what was compared)
         steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
                           ("lobes", "--examples", "--method", "scan"),
                           _lobes_run("scan", None, 2.0),
