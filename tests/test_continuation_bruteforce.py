@@ -3,15 +3,21 @@ sweeps (``bb.bifurcation``) settle on the same period-1 orbit, the continued bra
 that orbit to 1e-8 relative; where they disagree, the branch's stability change bounds
 the range of agreement."""
 
+import dataclasses
+
 import numpy as np
 
 import boringbar as bb
 from boringbar import shooting as sh
 from boringbar.analysis.continuation import ContinuationOptions, start_state
-from boringbar.branch import continue_branch, flow_with
+from boringbar.branch import (
+    continue_branch,
+    flow_with,
+    switch_period_doubling,
+)
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.simulate import Integration
+from boringbar.simulate import Integration, State, simulate
 
 
 def _one_mode_case():
@@ -55,3 +61,51 @@ def test_stable_branch_is_the_brute_force_orbit_where_both_sweeps_agree():
             assert np.max(np.abs(samples - w)) <= 1e-8 * abs(w), (v, samples[-1], w)
         agreed += 1
     assert agreed >= 2
+
+
+def _three_impact_orbit(ratio=0.97, phase=np.pi):
+    """The asymmetric three-impact period-1 orbit at F0 = 30 N (one mode, gap 0.5 mm): the
+    exact integrator from the two-impact orbit at ratio 0.98, 500.5 periods, so the state
+    is at forcing phase pi (the impacts stay off that section along the branch)."""
+    system = _one_mode_case()
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=ratio))
+    x98 = start_state(system, ContinuationOptions(force_n=30.0, ratio=0.98,
+                                                  start="masri-caughey"), fl)
+    run = simulate(system, Harmonic(30.0, ratio=ratio),
+                   duration=(500 + phase / (2 * np.pi)) * fl.period, dt=fl.period / 4000,
+                   integrator="exact", initial=State(x98, 0.0))
+    return system, dataclasses.replace(fl, phase=phase), run.final.x
+
+
+def test_branch_switching_at_period_doubling_gives_a_period_two_orbit():
+    system, fl, x0 = _three_impact_orbit()
+    br = continue_branch(fl, "ratio", x0, 0.969, step=0.05, max_points=12)
+    assert [k for k, _ in br.events] == ["period-doubling"], (br.stop, br.events)
+    two = switch_period_doubling(fl, "ratio", br, 0.975, step=0.02, max_points=6)
+    p_pd, x_pd = two.origin.value, two.origin.x
+    assert two.periods == 2 and two.events[0] == ("period-doubling", p_pd)
+    assert np.min(np.abs(two.origin.multipliers + 1.0)) < 1e-8  # located: a -1 multiplier
+    assert len(two.points) == 6
+    gaps = []
+    for pt in two.points:
+        f = flow_with(fl, "ratio", pt.value, fl)
+        once, twice = sh.advance(f, pt.x).x, sh.advance(f, pt.x, 2).x
+        size = np.max(np.abs(pt.x))
+        assert np.max(np.abs(twice - pt.x)) <= 1e-10 * size  # P^2 x = x
+        gaps.append(np.max(np.abs(once - pt.x)) / size)
+        # the exact kernel agrees: back after two periods, elsewhere after one
+        run = simulate(system, Harmonic(30.0, ratio=pt.value), duration=2 * f.period,
+                       dt=f.period / 4000, integrator="exact",
+                       initial=State(pt.x, fl.phase / f.omega), steady_fraction=1.0)
+        assert np.max(np.abs(run.final.x - pt.x)) <= 1e-8 * size
+    assert min(gaps) > 1e-3  # P x != x: a genuine period-2 orbit
+    # it emanates from the doubling (a pitchfork of P^2): with the first step halved the
+    # first orbit's distance from the period-1 orbit halves, its parameter's from the
+    # doubling point is quartered
+    near = [switch_period_doubling(fl, "ratio", br, 0.975, step=s, max_points=1).points[0]
+            for s in (0.004, 0.002)]
+    sep = [np.max(np.abs(sh.advance(flow_with(fl, "ratio", q.value, fl), q.x).x - q.x))
+           for q in near]
+    assert 1.8 < sep[0] / sep[1] < 2.2
+    assert 3.5 < (near[0].value - p_pd) / (near[1].value - p_pd) < 4.5
+    assert near[1].value < p_pd  # a supercritical doubling: towards the unstable side
