@@ -17,6 +17,7 @@ from boringbar.branch import (
 )
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
+from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import Integration, State, simulate
 
 
@@ -109,3 +110,29 @@ def test_branch_switching_at_period_doubling_gives_a_period_two_orbit():
     assert 1.8 < sep[0] / sep[1] < 2.2
     assert 3.5 < (near[0].value - p_pd) / (near[1].value - p_pd) < 4.5
     assert near[1].value < p_pd  # a supercritical doubling: towards the unstable side
+
+
+def _closed_form_phase(system, fl, force):
+    """The + wall impact's forcing phase of the admissible two-impact orbit (closed form)."""
+    bar, ball = system.bar, system.damper
+    return next(o.phase for o in two_impact_orbit(
+        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass, ball.gap, ball.restitution, force, fl.omega) if o.admissible)
+
+
+def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it():
+    # the section at the phase of the closed-form + wall impact at 33 N: continued from
+    # 30 N, the impact crosses the section (the sequence (+, -) becomes (-, +)) at 33 N
+    system = _one_mode_case()
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
+    phase = _closed_form_phase(system, fl, 33.0)
+    x0 = start_state(system, ContinuationOptions(force_n=30.0, start="masri-caughey"), fl)
+    run = simulate(system, Harmonic(30.0, ratio=1.0), duration=fl.period * phase / (2 * np.pi),
+                   dt=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
+                   steady_fraction=1.0)
+    br = continue_branch(dataclasses.replace(fl, phase=phase), "force-n", run.final.x, 36.0,
+                         step=0.1, max_points=40, max_step=0.3)
+    assert [k for k, _ in br.events] == ["section"], (br.stop, br.events)
+    located = br.events[0][1]
+    assert br.points[-1].value == located and located < 33.0
+    assert abs(located - 33.0) < 1e-6 * 33.0, located

@@ -23,7 +23,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from boringbar._validate import ParameterError
-from boringbar.shooting import Flow, OrbitRefused, advance, multipliers, periodic_orbit
+from boringbar.shooting import (
+    Flow,
+    OrbitRefused,
+    advance,
+    multipliers,
+    newton_step,
+    periodic_orbit,
+)
 
 #: The parameters a branch can follow (the CLI's names).
 PARAMETERS = ("force-n", "ratio", "gap-mm", "restitution", "friction-force-n", "ball-mass-g")
@@ -113,7 +120,7 @@ def correct(fl, name, ref, y0, tangent, scale, k, tol=1e-11, max_iter=12):
         Jx = _jacobian(fl, name, ref, y[:-1], y[-1], k, pr, dp)
         A = np.vstack([Jx * scale, tangent])
         rhs = -np.concatenate([r, [tangent @ ((y - y0) / scale)]])
-        dy = np.linalg.solve(A, rhs) * scale
+        dy = newton_step(A, rhs) * scale
         y = y + dy
         if np.max(np.abs(dy / scale)) < tol:
             r, pr = _residual(fl, name, ref, y[:-1], y[-1], k)
@@ -215,7 +222,7 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             if yn is None:
                 br.stop = why
                 return br
-            _grazing(br, locate_boundary(fl, name, ref, y, t, scale, k, h), scale[-1])
+            _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
             return br
         pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events)
         _record_crossing(br, br.points[-1], pt)
@@ -235,7 +242,7 @@ def _first(fl, name, ref, x0, p0, k):
     x = np.asarray(x0, float).copy()
     for _ in range(30):
         r, pr = _residual(fl, name, ref, x, p0, k)
-        dx = np.linalg.solve(pr.jacobian - np.eye(fl.N), -r)
+        dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x = x + dx
         if np.max(np.abs(dx)) < 1e-12 * np.max(np.abs(x)):
             r, pr = _residual(fl, name, ref, x, p0, k)
@@ -243,38 +250,52 @@ def _first(fl, name, ref, x0, p0, k):
     raise OrbitRefused("Newton did not converge at the start value")
 
 
-def locate_boundary(fl, name, ref, y, t, scale, k, h, tol=1e-10):
-    """Bisection in the arclength step between y (step 0, its event sequence) and the
-    step ``h`` whose orbit has another sequence (or is refused), down to ``tol``
-    (scaled arclength): the last orbit with y's sequence, as a :class:`Point`."""
+def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
+    """Bisection in the parameter between y (unknowns (x, p), its event sequence) and
+    ``p_far``, where the orbit has another sequence or is refused, down to ``tol`` of
+    the distance: the last orbit with y's sequence (a :class:`Point`) and the bracket's
+    width.  Each trial is Newton at fixed p from the last good orbit (an arclength
+    corrector's iterates would cross the non-smooth boundary and fail)."""
     kinds = _kinds(advance(flow_with(fl, name, y[-1], ref), y[:-1], k).events)
-    lo, hi, last = 0.0, h, None
-    while hi - lo > tol:
+    lo, hi, x, last = y[-1], p_far, y[:-1], None
+    width = abs(hi - lo)
+    while abs(hi - lo) > tol * width:
         mid = 0.5 * (lo + hi)
         try:
-            ym, pr, _ = correct(fl, name, ref, y + mid * t * scale, t, scale, k)
+            xm, pr = periodic_orbit(flow_with(fl, name, mid, ref), x, k)
             same = _kinds(pr.events) == kinds
         except OrbitRefused:
             same = False
         if same:
-            lo, last = mid, Point(ym[-1], ym[:-1].copy(), multipliers(pr), pr.events)
+            lo, x, last = mid, xm, Point(mid, xm.copy(), multipliers(pr), pr.events)
         else:
             hi = mid
-    return last, (hi - lo) * abs(t[-1]) * scale[-1]
+    return last, abs(hi - lo)
 
 
-def _grazing(br, located, span):
-    """Stop at a change of the event sequence, located by :func:`locate_boundary`: its
-    last orbit ends the branch, its parameter is the grazing event's value."""
-    last, tol = located
+def _at_section(fl: Flow, events, k: int) -> bool:
+    """An event within 1e-6 T of the section (the start or the end of the k periods)."""
+    t0 = fl.phase / fl.omega
+    return any(min(t - t0, t0 + k * fl.period - t) < 1e-6 * fl.period for t, _ in events)
+
+
+def _boundary(br, w: Walk, located):
+    """Stop at a change of the event sequence located by :func:`locate_boundary`: its
+    last orbit ends the branch, its parameter is the event's value: "section" if an
+    event of that orbit is at the Poincare section (the same orbit goes on, but P is not
+    smooth there), else "grazing" (an impact or reversal appears or vanishes)."""
+    last, width = located
     if last is not None:
         _record_crossing(br, br.points[-1], last)
         br.points.append(last)
     p = br.points[-1].value
-    br.events.append(("grazing", float(p)))
+    at = flow_with(w.fl, w.name, p, w.ref)
+    kind = "section" if _at_section(at, br.points[-1].events, w.periods) else "grazing"
+    br.events.append((kind, float(p)))
+    what = ("an impact or reversal crosses the Poincare section's phase (a section at "
+            "another phase would carry on)" if kind == "section" else "grazing")
     br.stop = (f"the impact/reversal sequence changes at {br.parameter} = {p:.10g} "
-               f"(+- {max(tol, 1e-16 * span):.2g}; grazing): the branch is not followed "
-               "across it")
+               f"(bracket {width:.2g}; {what}): the branch is not followed across it")
 
 
 def _record_crossing(br, a, b):

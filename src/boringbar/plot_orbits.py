@@ -7,7 +7,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 #: Marker of each continuation event kind.
-EVENT_MARKERS = {"fold": "s", "period-doubling": "D", "neimark-sacker": "*", "grazing": "x"}
+EVENT_MARKERS = {"fold": "s", "period-doubling": "D", "neimark-sacker": "*", "grazing": "x",
+                 "section": "+"}
 
 
 def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:

@@ -311,12 +311,22 @@ def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-1
     for _ in range(max_iter):
         pr = advance(fl, x, periods)
         r = pr.x - x
-        dx = np.linalg.solve(pr.jacobian - np.eye(fl.N), -r)
+        dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x = x + dx
         if np.max(np.abs(dx) / np.maximum(np.abs(x), scale)) < tol:
             return x, advance(fl, x, periods, rms=True)
     raise OrbitRefused(f"Newton did not converge in {max_iter} iterations "
                        f"(last residual {np.max(np.abs(r)):.3g})")
+
+
+def newton_step(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve A dx = b; a singular A (a neutral direction: e.g. the free ball's position in
+    an orbit without impacts) refuses the orbit."""
+    try:
+        return np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        raise OrbitRefused("the Newton matrix is singular (a neutral direction: the orbit "
+                           "is not isolated, e.g. a ball without impacts)") from None
 
 
 def multipliers(pr: Period) -> np.ndarray:
