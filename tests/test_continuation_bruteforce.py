@@ -4,12 +4,15 @@ that orbit to 1e-8 relative; where they disagree, the branch's stability change 
 the range of agreement."""
 
 import dataclasses
+import json
 
 import numpy as np
+import xarray as xr
 
 import boringbar as bb
 from boringbar import shooting as sh
 from boringbar.analysis.continuation import ContinuationOptions, start_state
+from boringbar.cli.main import main
 from boringbar.branch import (
     continue_branch,
     flow_with,
@@ -136,3 +139,24 @@ def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it
     located = br.events[0][1]
     assert br.points[-1].value == located and located < 33.0
     assert abs(located - 33.0) < 1e-6 * 33.0, located
+
+
+def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, capsys):
+    argv = ["continue", "--preset", "physical", "--gap-mm", "0.5", "--friction", "off",
+            "--modes", "1", "--range", "31:30", "--start-from", "masri-caughey",
+            "--max-points", "3", "--integrator", "exact", "--duration-s", "0.2",
+            "--out", str(tmp_path), "--json"]
+    assert main([*argv, "--overlay", "3"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["files"]["overlay"] == str(tmp_path / "overlay.nc")
+    with xr.open_dataset(tmp_path / "overlay.nc") as bf:
+        assert bf["value"].values.tolist() == [31.0, 30.5, 30.0]
+        assert bf.sizes["direction"] == 2
+        # the sweep's strobe samples at 31 N sit on the branch's first point
+        w = bf["tip_displacement"].sel(direction="forward").isel(value=0).values
+        w = w[np.isfinite(w)]
+    assert abs(w[-1] - out["branches"][0]["points"][0]["strobe_tip_m"]) < 1e-3 * abs(w[-1])
+    assert (tmp_path / "continuation.png").stat().st_size > 0
+    assert main([*argv[:-3], "--parameter", "restitution", "--range", "0.7:0.6",
+                 "--overlay", "--out", str(tmp_path)]) == 2
+    assert main([*argv, "--overlay", "1"]) == 2

@@ -20,15 +20,18 @@ import xarray as xr
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
 from boringbar.branch import PARAMETERS, continue_branch, flow_with, value_of
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.shooting import OrbitRefused, advance, make_flow
-from boringbar.simulate import simulate
+from boringbar.simulate import Integration, simulate
 
 STARTS = ("simulation", "masri-caughey", "state")
+#: The continuation parameters a brute-force diagram sweeps (their bifurcation names).
+BRUTE_FORCE = {"force-n": "force", "ratio": "ratio"}
 
 
 @dataclass(frozen=True)
@@ -189,3 +192,19 @@ def continuation(system: System, forcing: Harmonic | None = None, *,
     p = plan(system, options)
     results, wall = run_plan(sys.modules[__name__], p, execution)
     return assemble(p, results, execution_attrs(execution, wall))
+
+
+def brute_force(system: System, options: ContinuationOptions, start: float, n_values: int = 21,
+                integration: Integration | None = None) -> xr.Dataset:
+    """The brute-force bifurcation diagram of the branch's case (``bb.bifurcation``, from
+    rest, forward and backward) over ``n_values`` values from ``start`` to
+    ``options.stop``, for the overlay of :func:`~boringbar.plot_orbits.plot_continuation`;
+    ``integration``: default exact, 1 s runs, the last half sampled."""
+    if options.parameter not in BRUTE_FORCE:
+        raise ParameterError(f"parameter = {options.parameter!r}: a brute-force overlay sweeps "
+                             f"{' or '.join(BRUTE_FORCE)} only")
+    check_int("n_values", n_values, 2, 1000)
+    values = tuple(np.linspace(start, options.stop, n_values).tolist())
+    name = BRUTE_FORCE[options.parameter]
+    bf = BifurcationOptions(name, values, options.force_n, options.ratio, backward=True)
+    return bifurcation(system, bf, integration=integration or Integration(1.0, 1e-6, "exact", 0.5))
