@@ -302,7 +302,9 @@ def _record_crossing(br, a, b):
     kind, g = _crossing(a.multipliers, b.multipliers)
     if kind is None:
         return
-    s = g[0] / (g[0] - g[1]) if g[0] != g[1] else 0.5
+    # the secant of |mu| - 1, kept between the two points (the crossing multiplier of a
+    # and of b are paired by nearness, which a large step can get wrong)
+    s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
     br.events.append((kind, float(a.value + s * (b.value - a.value))))
 
 

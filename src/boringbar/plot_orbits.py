@@ -37,6 +37,8 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
             y = d[name].values * 1e3
             _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top))
         for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
+            if not str(kind) or not np.isfinite(value):  # padding of a stacked branch
+                continue
             y = np.interp(value, *_sorted(v[ok], d["strobe_tip_m"].values[ok] * 1e3))
             top.plot([value], [y], ls="none", marker=EVENT_MARKERS.get(str(kind), "o"),
                      ms=9, mfc="none", color="crimson", label=str(kind))

@@ -167,9 +167,10 @@ def summary(ds: xr.Dataset) -> dict:
                    "rms_tip_m": float(d["rms_tip_m"][i]), "stable": bool(d["stable"][i]),
                    "multipliers_abs": np.hypot(d["multiplier_real"][i].values,
                                                d["multiplier_imag"][i].values).tolist()}
-                  for i in range(d.sizes["point"])]
+                  for i in range(d.sizes["point"]) if np.isfinite(d["value"][i])]
         events = [{"kind": str(k), "value": float(v)}
-                  for k, v in zip(d["event_kind"].values, d["event_value"].values, strict=True)]
+                  for k, v in zip(d["event_kind"].values, d["event_value"].values, strict=True)
+                  if str(k)]  # "": padding of a shorter branch's events
         branches.append({"points": points, "events": events, "stop": stops[b]})
     return {"parameter": ds.attrs["parameter"], "branches": branches,
             "wall_time_s": float(ds.attrs.get("wall_time_s", math.nan))}
@@ -208,3 +209,24 @@ def brute_force(system: System, options: ContinuationOptions, start: float, n_va
     name = BRUTE_FORCE[options.parameter]
     bf = BifurcationOptions(name, values, options.force_n, options.ratio, backward=True)
     return bifurcation(system, bf, integration=integration or Integration(1.0, 1e-6, "exact", 0.5))
+
+
+def both_ways(system: System, start: float, lo: float, hi: float, *, ratio: float = 1.0,
+              step: float = 0.05, max_points: int = 60) -> xr.Dataset:
+    """The F0 branch through the settled orbit at ``start`` N (exact integrator, 200
+    periods from rest), continued down to ``lo`` and up to ``hi``: two branches."""
+    down, up = (continuation(system, Harmonic(start, ratio=ratio), options=ContinuationOptions(
+        parameter="force-n", stop=stop, step=step, max_points=max_points))
+        for stop in (lo, hi))
+    return concat_branches([down, up])
+
+
+def concat_branches(datasets: list[xr.Dataset]) -> xr.Dataset:
+    """Continuation Datasets stacked along ``branch`` (shorter branches NaN-padded, their
+    missing events of kind ""), with every branch's stop reason."""
+    ds = xr.concat(datasets, dim="branch", join="outer", combine_attrs="override",
+                   fill_value={"event_kind": "", "event_value": np.nan, "stable": False,
+                               "value": np.nan})
+    ds.attrs["stop_reasons"] = json.dumps([r for d in datasets
+                                           for r in json.loads(d.attrs["stop_reasons"])])
+    return ds
