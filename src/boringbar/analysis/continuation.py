@@ -224,9 +224,12 @@ def both_ways(system: System, start: float, lo: float, hi: float, *, ratio: floa
 def concat_branches(datasets: list[xr.Dataset]) -> xr.Dataset:
     """Continuation Datasets stacked along ``branch`` (shorter branches NaN-padded, their
     missing events of kind ""), with every branch's stop reason."""
-    ds = xr.concat(datasets, dim="branch", join="outer", combine_attrs="override",
+    indexed = [d.assign_coords(point=np.arange(d.sizes["point"]),
+                               event=np.arange(d.sizes["event"])) for d in datasets]
+    ds = xr.concat(indexed, dim="branch", join="outer", combine_attrs="override",
                    fill_value={"event_kind": "", "event_value": np.nan, "stable": False,
                                "value": np.nan})
+    ds = ds.drop_vars(["point", "event"]).reset_coords()  # "state" stays a data variable
     ds.attrs["stop_reasons"] = json.dumps([r for d in datasets
                                            for r in json.loads(d.attrs["stop_reasons"])])
     return ds
