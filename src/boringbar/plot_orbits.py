@@ -3,6 +3,9 @@ a brute-force bifurcation diagram (the edge of the package, as plot.py)."""
 
 from __future__ import annotations
 
+import json
+import textwrap
+
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -47,7 +50,14 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     bottom.set_xlabel(PARAMETER_NAMES.get(ds.attrs.get("parameter"), ds.attrs.get("parameter")))
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
-    top.legend(fontsize="small")
+    handles, labels = top.get_legend_handles_labels()
+    if handles:  # one entry a label (each stretch and event labels itself)
+        unique = dict(zip(labels, handles, strict=True))
+        top.legend(unique.values(), unique.keys(), fontsize="small")
+    if not np.isfinite(ds["value"].values).any():  # every branch refused at its start
+        reasons = json.loads(ds.attrs.get("stop_reasons", "[]"))
+        top.text(0.5, 0.5, "\n".join(textwrap.wrap("; ".join(dict.fromkeys(reasons)), 90)),
+                 transform=top.transAxes, ha="center", va="center", fontsize="small")
     return fig
 
 
