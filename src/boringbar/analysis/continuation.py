@@ -40,7 +40,8 @@ class ContinuationOptions:
     in the system/forcing to ``stop``; ``force_n`` and ``ratio``: the forcing;
     ``periods``: k of P^k; ``step``: the first step, relative to the range; ``max_points``;
     ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
-    rest), "masri-caughey" or "state" (``state``, at phase 0)."""
+    rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
+    smallest step the halving goes down to before the branch stops (relative)."""
 
     parameter: str = "force-n"
     stop: float = 5.0
@@ -52,6 +53,7 @@ class ContinuationOptions:
     start: str = "simulation"
     settle_periods: int = 200
     state: tuple | None = None
+    min_step: float = 1e-6
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
@@ -60,6 +62,7 @@ class ContinuationOptions:
         check_int("max_points", self.max_points, 2, 100000)
         check_int("settle_periods", self.settle_periods, 1, 100000)
         check_range("step", self.step, 0.0, 0.5, lo_open=True)
+        check_range("min_step", self.min_step, 0.0, self.step, lo_open=True)
         if self.start == "state" and self.state is None:
             raise ParameterError("start = 'state' needs state = (u..., u'..., y, y')")
         Harmonic(self.force_n, ratio=self.ratio)  # validates both
@@ -107,7 +110,7 @@ def compute(context: dict, point: int) -> dict:
     fl = make_flow(system, Harmonic(o.force_n, ratio=o.ratio))
     x0 = start_state(system, o, fl)
     br = continue_branch(fl, o.parameter, x0, o.stop, periods=o.periods, step=o.step,
-                         max_points=o.max_points)
+                         max_points=o.max_points, min_step=o.min_step)
     rms = []
     for pt in br.points:
         try:
@@ -212,11 +215,11 @@ def brute_force(system: System, options: ContinuationOptions, start: float, n_va
 
 
 def both_ways(system: System, start: float, lo: float, hi: float, *, ratio: float = 1.0,
-              step: float = 0.05, max_points: int = 60) -> xr.Dataset:
+              step: float = 0.05, max_points: int = 60, min_step: float = 1e-4) -> xr.Dataset:
     """The F0 branch through the settled orbit at ``start`` N (exact integrator, 200
     periods from rest), continued down to ``lo`` and up to ``hi``: two branches."""
     down, up = (continuation(system, Harmonic(start, ratio=ratio), options=ContinuationOptions(
-        parameter="force-n", stop=stop, step=step, max_points=max_points))
+        parameter="force-n", stop=stop, step=step, max_points=max_points, min_step=min_step))
         for stop in (lo, hi))
     return concat_branches([down, up])
 
