@@ -440,12 +440,20 @@ def _branch_row(key: str, way: str, b: dict) -> list:
 
 
 def _stop_facts(stops: list[str]) -> dict:
-    """How the branches ended, counted from their stop reasons."""
-    return {"branches": len(stops),
-            "refused_start": sum(s.startswith("refused at the start") for s in stops),
-            "stick": sum("stick" in s for s in stops),
-            "wall": sum("wall contact" in s or "Zeno" in s for s in stops),
-            "end": sum(s == "end of range" for s in stops)}
+    """How the branches ended, counted from their stop reasons (the words of
+    boringbar.branch and boringbar.shooting)."""
+    start = [s for s in stops if s.startswith("refused at the start")]
+    later = [s for s in stops if not s.startswith("refused at the start")]
+    return {"branches": len(stops), "refused_start": len(start),
+            "start_stick": sum("stick" in s for s in start),
+            "start_singular": sum("singular" in s for s in start),
+            "end": sum(s == "end of range" for s in later),
+            "max_points": sum(s.startswith("max_points") for s in later),
+            "stick": sum("stick" in s for s in later),
+            "wall": sum("wall contact" in s for s in later),
+            "grazing": sum("grazing" in s for s in later),
+            "section": sum("Poincare section" in s for s in later),
+            "corrector": sum("corrector did not converge" in s for s in later)}
 
 
 def _fmt(v) -> str:
