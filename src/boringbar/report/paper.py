@@ -259,7 +259,7 @@ def published_steps(quick: bool = False) -> list[Step]:
                 ("bifurcation", "--bar", "ball", "--gap-mm", gap, "--friction", fr,
                  "--force-n", forces, "--ratio", "1.0", *dur),
                 _bifurcation_run(gap, fr == "on", forces, "1.0", duration)))
-    points = 20 if quick else 60
+    points = 20 if quick else 40
     steps.append(Step("continuation", "continuation",
                       "Continued periodic orbits over the bifurcation diagrams",
                       ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
