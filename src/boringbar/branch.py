@@ -1,18 +1,21 @@
 """Pseudo-arclength continuation of a periodic orbit of P^k (docs/continuation.md).
 
-The unknowns are (x, p): the orbit's state at phase 0 and the parameter.  The
-residual G(x, p) = P^k(x; p) - x; G_x = monodromy - I comes from the saltation
-matrices (:mod:`boringbar.shooting`), G_p by a central difference in p.  Each
-step predicts along the unit tangent of the branch (null vector of [G_x, G_p] in
-scaled variables) and corrects by Newton on G = 0 plus the arclength condition,
-so folds are passed.  The step adapts: halved when Newton fails or the event
-sequence changes, grown by 1.3 after quick convergence.
+The unknowns are (x, p): the orbit's state at the section's phase (0 by default)
+and the parameter.  The residual G(x, p) = P^k(x; p) - x; G_x = monodromy - I
+comes from the saltation matrices (:mod:`boringbar.shooting`), G_p by a central
+difference in p.  Each step predicts along the unit tangent of the branch (null
+vector of [G_x, G_p] in scaled variables) and corrects by Newton on G = 0 plus
+the arclength condition, so folds are passed.  The step adapts: halved when
+Newton fails, grown by 1.3 after quick convergence.
 
-The branch stops (with the reason) at the end of the range, at a change of the
-impact/reversal sequence (a grazing: recorded as an event), or where the orbit
-is refused (stick, wall contact).  Multipliers crossing the unit circle between
-two points are events: fold (+1), period doubling (-1), Neimark-Sacker (a complex
-pair), located by the secant of the crossing multiplier's |mu| - 1.
+The branch stops (with the reason) at the end of the range, where the orbit is
+refused (stick, wall contact, a singular Newton matrix), or at a change of the
+impact/reversal sequence, located by bisection in p and recorded as a "grazing"
+or, when an event sits at the section, a "section" event.  Multipliers crossing
+the unit circle between two points are events: fold (+1), period doubling (-1),
+Neimark-Sacker (a complex pair), placed by the secant of the crossing
+multiplier's |mu| - 1.  At a period doubling, :func:`switch_period_doubling`
+starts the period-2k branch.
 """
 
 from __future__ import annotations
