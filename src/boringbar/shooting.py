@@ -68,6 +68,8 @@ class Flow:
     v_impact: float
     meff: float
     reference: float
+    #: The Poincare section's forcing phase Omega t0 (rad): P maps the state there.
+    phase: float = 0.0
 
     @property
     def period(self) -> float:
@@ -160,11 +162,14 @@ def _event_fn(fl: Flow, sdir: float):
 
 
 def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False) -> Period:
-    """Propagate x from phase 0 over ``periods`` forcing periods (exactly, see the module
-    docstring) with the monodromy; the tip's RMS over them too if ``rms`` (Period.rms_tip)."""
+    """Propagate x from the section's phase (``fl.phase``, 0 by default) over ``periods``
+    forcing periods (exactly, see the module docstring) with the monodromy; the tip's RMS
+    over them too if ``rms`` (Period.rms_tip).  Event times are absolute (t0 = phase /
+    Omega at the start)."""
     N = fl.N
-    t, t_end = 0.0, periods * fl.period
-    z = np.concatenate([np.asarray(x, float), [0.0, 1.0, 1.0]])
+    t = fl.phase / fl.omega
+    t_end = t + periods * fl.period
+    z = np.concatenate([np.asarray(x, float), [math.sin(fl.phase), math.cos(fl.phase), 1.0]])
     J = np.eye(N)
     events = []
     h = fl.period / GRID
@@ -187,7 +192,8 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False) -> Per
         if len(events) > 200 * periods:
             raise OrbitRefused("more than 200 events a period: the motion is not a "
                                "regular impacting orbit (Zeno or chatter)")
-    return Period(z[:N].copy(), J, events, math.sqrt(w2 / t_end) if rms else math.nan)
+    return Period(z[:N].copy(), J, events,
+                  math.sqrt(w2 / (periods * fl.period)) if rms else math.nan)
 
 
 #: 8-point Gauss-Legendre nodes and weights on [0, 1].
@@ -305,12 +311,22 @@ def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-1
     for _ in range(max_iter):
         pr = advance(fl, x, periods)
         r = pr.x - x
-        dx = np.linalg.solve(pr.jacobian - np.eye(fl.N), -r)
+        dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x = x + dx
         if np.max(np.abs(dx) / np.maximum(np.abs(x), scale)) < tol:
             return x, advance(fl, x, periods, rms=True)
     raise OrbitRefused(f"Newton did not converge in {max_iter} iterations "
                        f"(last residual {np.max(np.abs(r)):.3g})")
+
+
+def newton_step(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve A dx = b; a singular A (a neutral direction: e.g. the free ball's position in
+    an orbit without impacts) refuses the orbit."""
+    try:
+        return np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        raise OrbitRefused("the Newton matrix is singular (a neutral direction: the orbit "
+                           "is not isolated, e.g. a ball without impacts)") from None
 
 
 def multipliers(pr: Period) -> np.ndarray:

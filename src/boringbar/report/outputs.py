@@ -17,6 +17,7 @@ import numpy as np
 
 from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import summary as bifurcation_summary
+from boringbar.analysis.continuation import summary as continuation_summary
 from boringbar.analysis.design import summary as design_summary
 from boringbar.analysis.design import summary_line
 from boringbar.analysis.lobes import examples_summary
@@ -33,6 +34,7 @@ from boringbar.plot import (
     plot_sweep,
 )
 from boringbar.plot_design import plot_design, plot_design_comparison
+from boringbar.plot_orbits import plot_continuation
 
 #: Rows of a recorded history (a run's run.nc, the lobe examples): about this many.
 HISTORY_ROWS = 20000
@@ -129,3 +131,14 @@ def design_files(ds, cmp: dict, out) -> dict:
     summary = {**s, "summary": summary_line(s), "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic(summary, files["json"])
     return summary
+
+
+def continuation_files(ds, out, name: str, overlay=None) -> dict:
+    """``out/NAME.nc`` and ``out/NAME.png`` (the branches over ``overlay``, a bifurcation
+    Dataset of the same case, if given); the summary, with ``overlay`` True or False."""
+    out = Path(out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / f"{name}.nc"),
+             "png": save_figure_atomic(plot_continuation(ds, overlay=overlay),
+                                       out / f"{name}.png", dpi=110)}
+    return {**continuation_summary(ds), "overlay": overlay is not None,
+            "files": {k: str(v) for k, v in files.items()}}

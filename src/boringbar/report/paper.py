@@ -29,10 +29,13 @@ from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 
+import xarray as xr
+
 from boringbar import __version__
 from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.continuation import both_ways
 from boringbar.analysis.design import comparison, design
 from boringbar.analysis.design import summary as design_summary
 from boringbar.analysis.design_file import load_design
@@ -50,6 +53,7 @@ from boringbar.report.outputs import (
     HISTORY_ROWS,
     basins_files,
     bifurcation_files,
+    continuation_files,
     design_files,
     lobes_files,
     sensitivity_files,
@@ -200,6 +204,32 @@ def _bifurcation_run(gap_mm: str, friction: bool, forces: str, ratio: str, durat
     return run
 
 
+#: The continuation step's branches start from the settled orbit at this F0 (N).
+CONTINUATION_START_N = 30.0
+
+
+def _continuation_run(lo: float, hi: float, max_points: int):
+    """The F0 branches of the four bifurcation cases through the settled orbit at
+    CONTINUATION_START_N, each drawn over its bifurcation step's diagram if on disk."""
+    def run(col: Column, out: Path) -> dict:
+        cases = {}
+        for gap in ("0.1", "0.5"):
+            for fr in ("off", "on"):
+                system = make_system("ball", col.preset, gap=float(gap) * 1e-3,
+                                     friction=fr == "on", **col.kw)
+                ds = both_ways(system, CONTINUATION_START_N, lo, hi, max_points=max_points)
+                ds.attrs.update(preset=col.preset, bar="ball")
+                nc = out.parent / f"bifurcation-gap{gap}-friction{fr}" / "bifurcation.nc"
+                overlay = xr.load_dataset(nc) if nc.exists() else None
+                cases[f"gap{gap}-friction{fr}"] = continuation_files(
+                    ds, out, f"gap{gap}-friction{fr}", overlay)
+        ncs = [c["files"]["netcdf"] for c in cases.values()]
+        return {"start_n": CONTINUATION_START_N, "cases": cases,
+                "files": {"netcdf": ncs[0], "netcdfs": ncs,
+                          "png": [c["files"]["png"] for c in cases.values()]}}
+    return run
+
+
 def _grid(text: str) -> tuple[float, float, int]:
     lo, hi, n = text.split(":")
     return float(lo), float(hi), int(n)
@@ -294,6 +324,12 @@ def published_steps(quick: bool = False) -> list[Step]:
                 ("bifurcation", "--bar", "ball", "--gap-mm", gap, "--friction", fr,
                  "--force-n", forces, "--ratio", "1.0", *dur),
                 _bifurcation_run(gap, fr == "on", forces, "1.0", duration), friction=fr == "on"))
+    points = 20 if quick else 40
+    steps.append(Step("continuation", "continuation",
+                      "Continued periodic orbits over the bifurcation diagrams",
+                      ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
+                       "--range", "30:50", "--step", "0.05", "--max-points", str(points)),
+                      _continuation_run(5.0, 50.0, points), variants=False))
     cells = "-1.5:1.5:" + ("8" if quick else "30")
     grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
     for key, force, ratio, fr, start in (("basins-10N-r1.01-off", "10", "1.01", "off", "0.5,0.5"),
