@@ -32,6 +32,7 @@ from boringbar.shooting import (
     advance,
     multipliers,
     newton_step,
+    one_blas_thread,
     periodic_orbit,
 )
 
@@ -176,6 +177,7 @@ class Walk:
     max_step: float = 0.1
 
 
+@one_blas_thread
 def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods: int = 1,
                     step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
                     max_step: float = 0.1) -> Branch:
@@ -345,6 +347,7 @@ def locate_period_doubling(fl, name, a: Point, b: Point, k: int, tol: float = 1e
     return p, x, v / np.linalg.norm(v)
 
 
+@one_blas_thread
 def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, which: int = 0,
                            step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
                            max_step: float = 0.1) -> Branch:

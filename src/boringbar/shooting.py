@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import brentq
+from threadpoolctl import threadpool_limits
 
 from boringbar._validate import ParameterError
 from boringbar.kernels import layout as L
@@ -75,6 +76,13 @@ class Flow:
     def period(self) -> float:
         """T = 2 pi / Omega (s)."""
         return 2.0 * math.pi / self.omega
+
+
+#: Shooting works on matrices of a few rows (expm, solve, eig of 7x7 to 9x9), where a
+#: multithreaded BLAS only wakes its thread pool to spin against the other work:
+#: 15 continuation points took 18.8 s with OpenBLAS's threads on a loaded machine,
+#: 1.46 s with one (docs/continuation.md). The entry points run under this decorator.
+one_blas_thread = threadpool_limits.wrap(limits=1, user_api="blas")
 
 
 def make_flow(system: System, forcing: Harmonic) -> Flow:
@@ -303,6 +311,7 @@ def _unit(N, i):
     return v
 
 
+@one_blas_thread
 def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-12,
                    max_iter: int = 30) -> tuple[np.ndarray, Period]:
     """Newton on P^k(x) - x = 0 from x0; the fixed point and its :class:`Period`."""

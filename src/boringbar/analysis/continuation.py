@@ -26,7 +26,7 @@ from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.reference.masri_caughey import two_impact_orbit
-from boringbar.shooting import OrbitRefused, advance, make_flow
+from boringbar.shooting import OrbitRefused, advance, make_flow, one_blas_thread
 from boringbar.simulate import Integration, simulate
 
 STARTS = ("simulation", "masri-caughey", "state")
@@ -104,6 +104,7 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
     return run.final.x[:fl.N]
 
 
+@one_blas_thread
 def compute(context: dict, point: int) -> dict:
     """The branch: per point its value, state, strobe tip, RMS, multipliers; its events."""
     system, o = context["system"], context["options"]
