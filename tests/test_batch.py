@@ -47,8 +47,8 @@ def assert_same_run(a, b):
 def check_batch(jobs, duration=DURATION, **kw):
     batch = simulate_batch(jobs, duration=duration, strobe=True, **kw)
     assert len(batch) == len(jobs)
-    singles = [simulate(s, f, initial=i, duration=duration, strobe=True, **kw)
-               for s, f, i in jobs]
+    singles = [simulate(s, f, initial=i, duration=duration, strobe=True, integrator="rk4",
+                        **kw) for s, f, i in jobs]
     for one, many in zip(singles, batch, strict=True):
         assert_same_run(one, many)
     return singles

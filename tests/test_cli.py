@@ -27,7 +27,7 @@ def test_simulate_json_files_and_config(tmp_path, capsys):
     assert rc == 0
     s = json_out(capsys)
     assert SIMULATE_KEYS <= s.keys()
-    assert s["preset"] == "physical" and s["integrator"] == "rk4" and s["bar"] == "ball"
+    assert s["preset"] == "physical" and s["integrator"] == "exact" and s["bar"] == "ball"
     assert s["rms_tip_m"] > 0 and isinstance(s["pattern"], str)
     assert 0 < s["max_abs_rel_disp_m"] <= 0.05e-3 + 1e-12  # never beyond the wall
 

@@ -150,7 +150,7 @@ def test_rk4_converges_to_the_exact_impact_times_at_first_order(orbit_case):
     dts = [period / 500, period / 1000, period / 2000, period / 4000]
     for dt in dts:
         run = simulate(s, Harmonic(30.0, 1.0), duration=dur, dt=dt, initial=start,
-                       steady_fraction=1.0)
+                       steady_fraction=1.0, integrator="rk4")
         m = min(len(run.impacts), len(ref.impacts)) - 1
         errors.append(np.max(np.abs(run.impacts[:m, 0] - ref.impacts[:m, 0])))
     orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
@@ -232,7 +232,7 @@ def test_refusals():
     with pytest.raises(ParameterError, match="static_ratio"):
         Friction(static_ratio=0.5)
     with pytest.raises(ParameterError, match="static_ratio"):
-        simulate(_stick_case(1.5), Harmonic(10.0, 1.0), duration=1e-3)
+        simulate(_stick_case(1.5), Harmonic(10.0, 1.0), duration=1e-3, integrator="rk4")
 
 
 def test_run_records_its_integrator():
@@ -274,8 +274,9 @@ def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
     from boringbar.cli.main import main
 
     out = tmp_path / "x"
-    assert_one_line_error(main, ["simulate", "--static-ratio", "2", "--duration-s",
-                                     "0.01", "--out", str(out)], out, "static_ratio", capsys)
+    assert_one_line_error(main, ["simulate", "--static-ratio", "2", "--integrator", "rk4",
+                                 "--duration-s", "0.01", "--out", str(out)], out,
+                          "static_ratio", capsys)
 
 
 def test_sweep_records_its_integrator():

@@ -25,10 +25,14 @@ from boringbar.cli.main import main
 from boringbar.report.audit import audit
 from boringbar.report.audit_data import VERDICTS
 from boringbar.report.html import _mm, write_report
-from boringbar.report.paper import PRESET_ORDER, published_steps
+from boringbar.report.paper import COLUMN_ORDER, COLUMNS, PRESET_ORDER, VARIANT_ORDER, \
+    published_steps
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-N_STEPS = len(published_steps(quick=True)) * len(PRESET_ORDER) + 1  # + corrections
+STEPS = published_steps(quick=True)
+# each preset runs every step; each further column every step but the design searches
+N_STEPS = (len(STEPS) * len(PRESET_ORDER) + sum(s.variants for s in STEPS) * len(VARIANT_ORDER)
+           + 1)  # + corrections
 
 
 @pytest.fixture(scope="module")
@@ -77,10 +81,16 @@ def test_every_published_analysis_under_both_presets(study):
     for rec in steps:
         if rec["key"] == "corrections":
             continue
-        assert rec["command"].startswith("boringbar ") and f"--preset {rec['preset']}" in \
+        # a further column's step without friction is its preset's record, shared
+        column = COLUMNS[rec.get("shared_from", rec["preset"])]
+        assert rec["command"].startswith("boringbar ") and " ".join(column.flags) in \
             rec["command"]
         with xr.open_dataset(rec["summary"]["files"]["netcdf"]) as ds:
-            assert ds.attrs["preset"] == rec["preset"]  # each file says what it is
+            assert ds.attrs["preset"] == column.preset  # each file says what it is
+            if column.overrides and "design" not in rec["key"]:
+                # a further column's file carries its friction: the paper's, reciprocal
+                assert '"kind": "paper-number", "value": 0.6, "reaction": "reciprocal"' in \
+                    str(ds.attrs), rec["key"]
         for png in _pngs(rec["summary"]["files"]):
             assert Path(png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -162,14 +172,17 @@ def test_the_audit_judges_every_claim_of_this_output(study, capsys):
     out = study["out"]
     assert main(["audit", str(out), "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
-    assert s["quick"] is True and s["presets"] == ["paper", "physical"]
+    assert s["quick"] is True and s["presets"] == list(COLUMN_ORDER)
     assert len(s["claims"]) == 29
     for c in s["claims"]:
         assert {"id", "verdict", "published", "measured"} <= c.keys()
-        assert set(c["verdict"]) == {"paper", "physical"}
+        assert set(c["verdict"]) == set(COLUMN_ORDER)
         assert all(v in VERDICTS for v in c["verdict"].values())
-    assert sum(s["counts"]["paper"].values()) == 29
+        # every claim has a verdict under both presets
+        assert all(c["verdict"][p] != "not available" for p in PRESET_ORDER), c["id"]
+    for column in COLUMN_ORDER:
+        assert sum(s["counts"][column].values()) == 29
     assert s == json.loads(json.dumps(audit(out)))  # the command is the function
     html = (out / "report.html").read_text()
     assert html.index("id='audit'") < html.index("id='cannot'") < html.index("id='sweeps'")
-    assert html.count("class='v-") == 2 * 29
+    assert html.count("class='v-") == len(COLUMN_ORDER) * 29

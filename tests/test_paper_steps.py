@@ -8,7 +8,7 @@ import pytest
 import xarray as xr
 
 from boringbar.cli.main import build_parser, main
-from boringbar.report.paper import published_steps
+from boringbar.report.paper import COLUMNS, published_steps
 
 STEPS = {s.key: s for s in published_steps(quick=True)}
 
@@ -17,16 +17,22 @@ STEPS = {s.key: s for s in published_steps(quick=True)}
 def test_every_step_command_is_a_valid_command_line(quick):
     parser = build_parser()
     for step in published_steps(quick):
-        args = parser.parse_args([*step.argv, "--preset", "paper", "--out", "x"])
-        assert args.command == step.argv[0]
+        for col in COLUMNS.values() if step.variants else [COLUMNS["paper"]]:
+            argv = step.for_column(col.name).argv
+            args = parser.parse_args([*argv, *col.flags, "--out", "x"])
+            assert args.command == step.argv[0]
 
 
-@pytest.mark.parametrize("key", ["sensitivity-restitution", "basins-10N-r1.01-on"])
-def test_library_step_is_its_command_bit_for_bit(key, tmp_path):
-    step = STEPS[key]
+@pytest.mark.parametrize(("key", "column"), [("sensitivity-restitution", "paper"),
+                                           ("basins-10N-r1.01-on", "paper"),
+                                           ("sensitivity-restitution", "paper-reciprocal"),
+                                           ("sensitivity-restitution",
+                                            "physical-paper-friction")])
+def test_library_step_is_its_command_bit_for_bit(key, column, tmp_path):
+    step, col = STEPS[key], COLUMNS[column]
     lib, cli = tmp_path / "library", tmp_path / "cli"
-    summary = step.run("paper", lib)
-    assert main([*step.argv, "--preset", "paper", "--out", str(cli), "--quiet"]) == 0
+    summary = step.run(col, lib)
+    assert main([*step.argv, *col.flags, "--out", str(cli), "--quiet"]) == 0
     ncs = sorted(p.name for p in lib.glob("*.nc"))
     assert ncs and ncs == sorted(p.name for p in cli.glob("*.nc"))
     assert summary["files"]["netcdf"] == str(lib / ncs[0])

@@ -8,11 +8,12 @@ import pytest
 
 import boringbar as bb
 from boringbar import shooting as sh
-from boringbar.analysis.continuation import assemble, plan, summary
+from boringbar.analysis.continuation import assemble, concat_branches, plan, summary
 from boringbar.branch import continue_branch
 from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
+from boringbar.plot_orbits import plot_continuation
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import State, simulate
@@ -175,3 +176,25 @@ def test_a_branch_refused_at_its_start_is_an_empty_branch_with_its_reason():
     assert ds.sizes["point"] == 0 and ds.sizes["state"] == 6
     assert "refused at the start" in json.loads(ds.attrs["stop_reasons"])[0]
     assert summary(ds)["branches"][0]["points"] == []
+
+
+def test_branches_of_different_lengths_stack_with_padding():
+    system = make_system("ball", "physical", gap=0.5e-3, friction=False, n_modes=1)
+    p = plan(system, bb.ContinuationOptions(parameter="force-n", stop=5.0))
+
+    def result(n, events):
+        return {"value": list(30.0 - np.arange(n)), "state": [np.full(4, i) for i in range(n)],
+                "strobe_tip_m": [1e-4] * n, "rms_tip_m": [1e-4] * n,
+                "multipliers": [np.array([0.5, 0.4, 0.3 + 0.1j, 0.3 - 0.1j])] * n,
+                "stable": [True] * n, "events": events, "stop": f"stop {n}", "start": 30.0}
+    parts = [assemble(p, [result(3, [("fold", 29.0)])]),
+             assemble(p, [result(5, [("grazing", 27.0), ("fold", 26.0)])]),
+             assemble(p, [result(0, [])])]
+    ds = concat_branches(parts)
+    assert dict(ds.sizes) == {"branch": 3, "point": 5, "state": 4, "multiplier": 4, "event": 2}
+    assert "state" in ds.data_vars and not ds.coords
+    s = summary(ds)
+    assert [len(b["points"]) for b in s["branches"]] == [3, 5, 0]
+    assert [b["events"] for b in s["branches"]][0] == [{"kind": "fold", "value": 29.0}]
+    assert [b["stop"] for b in s["branches"]] == ["stop 3", "stop 5", "stop 0"]
+    assert plot_continuation(ds) is not None  # the padding is not drawn

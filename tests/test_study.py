@@ -32,7 +32,7 @@ def test_defaults_are_the_published_study():
 
 
 def test_grid_forms_and_case_collapse():
-    s = study_from_dict({"study": {"analysis": "sweep"},
+    s = study_from_dict({"study": {"analysis": "sweep"}, "run": {"integrator": "rk4"},
                          "grid": {"kind": ["solid", "tmd", "ball"], "gap_mm": [0.5, 0.1],
                                   "friction": ["off", "on"],
                                   "ratio": {"start": 0.98, "stop": 1.02, "step": 0.02}}})
@@ -83,8 +83,8 @@ def test_to_dict_round_trips_and_is_json():
      "'euler'", "one of"),
     ('[study]\nanalysis = "sweep"\n[run]\ndt_s = 1e-4\n', "run.dt_s", "0.0001",
      "too coarse"),
-    ('[study]\nanalysis = "sweep"\n[damper]\nstatic_ratio = 1.5\n', "damper.static_ratio",
-     "1.5", "integrator = 'exact'"),
+    ('[study]\nanalysis = "sweep"\n[run]\nintegrator = "rk4"\n[damper]\nstatic_ratio = 1.5\n',
+     "damper.static_ratio", "1.5", "integrator = 'exact'"),
 ])
 def test_invalid_files_name_file_key_value_and_what_is_allowed(tmp_path, text, key, value,
                                                                 allowed):

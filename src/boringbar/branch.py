@@ -1,18 +1,21 @@
 """Pseudo-arclength continuation of a periodic orbit of P^k (docs/continuation.md).
 
-The unknowns are (x, p): the orbit's state at phase 0 and the parameter.  The
-residual G(x, p) = P^k(x; p) - x; G_x = monodromy - I comes from the saltation
-matrices (:mod:`boringbar.shooting`), G_p by a central difference in p.  Each
-step predicts along the unit tangent of the branch (null vector of [G_x, G_p] in
-scaled variables) and corrects by Newton on G = 0 plus the arclength condition,
-so folds are passed.  The step adapts: halved when Newton fails or the event
-sequence changes, grown by 1.3 after quick convergence.
+The unknowns are (x, p): the orbit's state at the section's phase (0 by default)
+and the parameter.  The residual G(x, p) = P^k(x; p) - x; G_x = monodromy - I
+comes from the saltation matrices (:mod:`boringbar.shooting`), G_p by a central
+difference in p.  Each step predicts along the unit tangent of the branch (null
+vector of [G_x, G_p] in scaled variables) and corrects by Newton on G = 0 plus
+the arclength condition, so folds are passed.  The step adapts: halved when
+Newton fails, grown by 1.3 after quick convergence.
 
-The branch stops (with the reason) at the end of the range, at a change of the
-impact/reversal sequence (a grazing: recorded as an event), or where the orbit
-is refused (stick, wall contact).  Multipliers crossing the unit circle between
-two points are events: fold (+1), period doubling (-1), Neimark-Sacker (a complex
-pair), located by the secant of the crossing multiplier's |mu| - 1.
+The branch stops (with the reason) at the end of the range, where the orbit is
+refused (stick, wall contact, a singular Newton matrix), or at a change of the
+impact/reversal sequence, located by bisection in p and recorded as a "grazing"
+or, when an event sits at the section, a "section" event.  Multipliers crossing
+the unit circle between two points are events: fold (+1), period doubling (-1),
+Neimark-Sacker (a complex pair), placed by the secant of the crossing
+multiplier's |mu| - 1.  At a period doubling, :func:`switch_period_doubling`
+starts the period-2k branch.
 """
 
 from __future__ import annotations
@@ -23,7 +26,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from boringbar._validate import ParameterError
-from boringbar.shooting import Flow, OrbitRefused, advance, multipliers
+from boringbar.shooting import (
+    Flow,
+    OrbitRefused,
+    advance,
+    multipliers,
+    newton_step,
+    one_blas_thread,
+    periodic_orbit,
+)
 
 #: The parameters a branch can follow (the CLI's names).
 PARAMETERS = ("force-n", "ratio", "gap-mm", "restitution", "friction-force-n", "ball-mass-g")
@@ -83,6 +94,8 @@ class Branch:
     points: list = field(default_factory=list)
     events: list = field(default_factory=list)
     stop: str = ""
+    #: The orbit it branched from (a period-doubling point), if any.
+    origin: Point | None = None
 
 
 def _residual(fl, name, ref, x, p, k):
@@ -111,7 +124,7 @@ def correct(fl, name, ref, y0, tangent, scale, k, tol=1e-11, max_iter=12):
         Jx = _jacobian(fl, name, ref, y[:-1], y[-1], k, pr, dp)
         A = np.vstack([Jx * scale, tangent])
         rhs = -np.concatenate([r, [tangent @ ((y - y0) / scale)]])
-        dy = np.linalg.solve(A, rhs) * scale
+        dy = newton_step(A, rhs) * scale
         y = y + dy
         if np.max(np.abs(dy / scale)) < tol:
             r, pr = _residual(fl, name, ref, y[:-1], y[-1], k)
@@ -145,52 +158,87 @@ def _crossing(m0, m1):
     return kind, (abs(m0[j]) - 1.0, abs(mu) - 1.0)
 
 
+@dataclass(frozen=True)
+class Walk:
+    """How a branch is followed: the flow and parameter (``ref``: the starting flow), P^k's
+    k, the scales of (x, p), the range [lo, hi] of p, and the step control (scaled
+    arclength, relative to the range)."""
+
+    fl: Flow
+    name: str
+    ref: Flow
+    periods: int
+    scale: np.ndarray
+    lo: float
+    hi: float
+    step: float = 0.01
+    max_points: int = 200
+    min_step: float = 1e-6
+    max_step: float = 0.1
+
+
+@one_blas_thread
 def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods: int = 1,
                     step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
                     max_step: float = 0.1) -> Branch:
     """Continue the orbit through x0 (near a fixed point of P^periods) in parameter ``name``
     from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|."""
-    ref = fl
     p0 = value_of(fl, name)
     span = abs(stop - p0)
     if not span > 0:
         raise ParameterError(f"range end {stop!r} equals the start value {p0!r}")
     br = Branch(name, periods)
     try:
-        y, pr = _first(fl, name, ref, x0, p0, periods)
+        y, pr = _first(fl, name, fl, x0, p0, periods)
     except OrbitRefused as err:
         br.stop = f"refused at the start: {err}"
         return br
-    scale = np.concatenate([np.maximum(np.abs(y[:-1]), 1e-3 * np.max(np.abs(y[:-1]))), [span]])
+    lo, hi = (stop, np.inf) if stop < p0 else (-np.inf, stop)
+    w = Walk(fl, name, fl, periods, _scale(y[:-1], span), lo, hi, step, max_points, min_step,
+             max_step)
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
-    t = tangent_at(fl, name, ref, y, pr, scale, periods, t)
+    t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)
     br.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events))
-    h = step
-    while len(br.points) < max_points:
-        pred = y + h * t * scale
+    return march(w, br, y, t)
+
+
+def _scale(x, span):
+    """The scales of (x, p): |x_i|, at least 1e-3 of the largest, and the range's span."""
+    return np.concatenate([np.maximum(np.abs(x), 1e-3 * np.max(np.abs(x))), [span]])
+
+
+def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
+    """Follow ``br`` from its last point y (unknowns (x, p)) along the unit tangent t
+    (scaled) by predictor-corrector steps until p leaves [w.lo, w.hi], the event
+    sequence changes (located: a grazing), the orbit is refused or w.max_points."""
+    fl, name, ref, k, scale = w.fl, w.name, w.ref, w.periods, w.scale
+    h = w.step
+    while len(br.points) < w.max_points:
         try:
-            yn, prn, its = correct(fl, name, ref, pred, t, scale, periods)
+            yn, prn, its = correct(fl, name, ref, y + h * t * scale, t, scale, k)
             same = _kinds(prn.events) == _kinds(br.points[-1].events)
         except OrbitRefused as err:
             yn, same, why = None, False, str(err)
         if not same:
-            if h / 2 >= min_step:
+            if yn is None and h / 2 >= w.min_step:
                 h /= 2
                 continue
-            br.stop = why if yn is None else _grazing(br, yn)
+            if yn is None:
+                br.stop = why
+                return br
+            _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
             return br
         pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events)
         _record_crossing(br, br.points[-1], pt)
-        if (pt.value - stop) * np.sign(stop - p0) > 0:
-            br.stop = "end of range"
-            br.points.append(pt)
-            return br
         br.points.append(pt)
-        t = tangent_at(fl, name, ref, yn, prn, scale, periods, t)
+        if not w.lo <= pt.value <= w.hi:
+            br.stop = "end of range"
+            return br
+        t = tangent_at(fl, name, ref, yn, prn, scale, k, t)
         y = yn
-        h = min(max_step, h * 1.3) if its <= 4 else h
-    br.stop = f"max_points = {max_points} reached"
+        h = min(w.max_step, h * 1.3) if its <= 4 else h
+    br.stop = f"max_points = {w.max_points} reached"
     return br
 
 
@@ -199,7 +247,7 @@ def _first(fl, name, ref, x0, p0, k):
     x = np.asarray(x0, float).copy()
     for _ in range(30):
         r, pr = _residual(fl, name, ref, x, p0, k)
-        dx = np.linalg.solve(pr.jacobian - np.eye(fl.N), -r)
+        dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x = x + dx
         if np.max(np.abs(dx)) < 1e-12 * np.max(np.abs(x)):
             r, pr = _residual(fl, name, ref, x, p0, k)
@@ -207,17 +255,133 @@ def _first(fl, name, ref, x0, p0, k):
     raise OrbitRefused("Newton did not converge at the start value")
 
 
-def _grazing(br, yn):
-    """Stop at a change of the event sequence; recorded as a grazing event."""
-    p = 0.5 * (br.points[-1].value + yn[-1])
-    br.events.append(("grazing", float(p)))
-    return (f"the impact/reversal sequence changes near {br.parameter} = {p:.6g} "
-            "(grazing): the branch is not followed across it")
+def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
+    """Bisection in the parameter between y (unknowns (x, p), its event sequence) and
+    ``p_far``, where the orbit has another sequence or is refused, down to ``tol`` of
+    the distance: the last orbit with y's sequence (a :class:`Point`) and the bracket's
+    width.  Each trial is Newton at fixed p from the last good orbit (an arclength
+    corrector's iterates would cross the non-smooth boundary and fail)."""
+    kinds = _kinds(advance(flow_with(fl, name, y[-1], ref), y[:-1], k).events)
+    lo, hi, x, last = y[-1], p_far, y[:-1], None
+    width = abs(hi - lo)
+    while abs(hi - lo) > tol * width:
+        mid = 0.5 * (lo + hi)
+        try:
+            xm, pr = periodic_orbit(flow_with(fl, name, mid, ref), x, k)
+            same = _kinds(pr.events) == kinds
+        except OrbitRefused:
+            same = False
+        if same:
+            lo, x, last = mid, xm, Point(mid, xm.copy(), multipliers(pr), pr.events)
+        else:
+            hi = mid
+    return last, abs(hi - lo)
+
+
+def _at_section(fl: Flow, events, k: int) -> bool:
+    """An event within 1e-6 T of the section (the start or the end of the k periods)."""
+    t0 = fl.phase / fl.omega
+    return any(min(t - t0, t0 + k * fl.period - t) < 1e-6 * fl.period for t, _ in events)
+
+
+def _boundary(br, w: Walk, located):
+    """Stop at a change of the event sequence located by :func:`locate_boundary`: its
+    last orbit ends the branch, its parameter is the event's value: "section" if an
+    event of that orbit is at the Poincare section (the same orbit goes on, but P is not
+    smooth there), else "grazing" (an impact or reversal appears or vanishes)."""
+    last, width = located
+    if last is not None:
+        _record_crossing(br, br.points[-1], last)
+        br.points.append(last)
+    p = br.points[-1].value
+    at = flow_with(w.fl, w.name, p, w.ref)
+    kind = "section" if _at_section(at, br.points[-1].events, w.periods) else "grazing"
+    br.events.append((kind, float(p)))
+    what = ("an impact or reversal crosses the Poincare section's phase (a section at "
+            "another phase would carry on)" if kind == "section" else "grazing")
+    br.stop = (f"the impact/reversal sequence changes at {br.parameter} = {p:.10g} "
+               f"(bracket {width:.2g}; {what}): the branch is not followed across it")
 
 
 def _record_crossing(br, a, b):
     kind, g = _crossing(a.multipliers, b.multipliers)
     if kind is None:
         return
-    s = g[0] / (g[0] - g[1]) if g[0] != g[1] else 0.5
+    # the secant of |mu| - 1, kept between the two points (the crossing multiplier of a
+    # and of b are paired by nearness, which a large step can get wrong)
+    s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
     br.events.append((kind, float(a.value + s * (b.value - a.value))))
+
+
+def _minus_one(fl, name, ref, x, p, k):
+    """The period-k orbit at p (Newton from x), its Period and |mu| - 1 of the multiplier
+    nearest -1."""
+    x, pr = periodic_orbit(flow_with(fl, name, p, ref), x, k)
+    mu = multipliers(pr)
+    return x, pr, float(abs(mu[np.argmin(np.abs(mu + 1.0))]) - 1.0)
+
+
+def locate_period_doubling(fl, name, a: Point, b: Point, k: int, tol: float = 1e-13):
+    """The period-doubling point between the branch points a and b (its multiplier nearest
+    -1 crosses the unit circle): (p, x, unit eigenvector of the -1 multiplier), by the
+    Illinois variant of regula falsi on |mu| - 1 of the period-k orbits at fixed p."""
+    pa, xa, ga = a.value, *_minus_one(fl, name, fl, a.x, a.value, k)[::2]
+    pb, xb, gb = b.value, *_minus_one(fl, name, fl, b.x, b.value, k)[::2]
+    if ga * gb > 0:
+        raise OrbitRefused(f"no multiplier crosses -1 between {name} = {pa:.8g} and {pb:.8g}")
+    side, p_old = 0, np.inf
+    for _ in range(60):
+        p = (pa * gb - pb * ga) / (gb - ga)
+        x, pr, g = _minus_one(fl, name, fl, xa + (xb - xa) * (p - pa) / (pb - pa), p, k)
+        if g == 0.0 or abs(p - p_old) <= tol * max(abs(p), 1.0):
+            break
+        p_old = p
+        if g * gb > 0:
+            pb, xb, gb = p, x, g
+            ga, side = (ga / 2 if side == -1 else ga), -1
+        else:
+            pa, xa, ga = p, x, g
+            gb, side = (gb / 2 if side == 1 else gb), 1
+    mu, vecs = np.linalg.eig(pr.jacobian)
+    v = np.real(vecs[:, int(np.argmin(np.abs(mu + 1.0)))])
+    return p, x, v / np.linalg.norm(v)
+
+
+@one_blas_thread
+def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, which: int = 0,
+                           step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
+                           max_step: float = 0.1) -> Branch:
+    """The period-2k branch born at the ``which``-th period-doubling point of ``br`` (period
+    k, continued in ``name`` from ``fl``): located, then started along the eigenvector v
+    of the -1 multiplier (the tangent (v, 0)) and continued as a fixed point of P^2k
+    while p stays between the point and ``stop``, or on the other side within the same
+    distance (a subcritical doubling turns back).  Its first event is the doubling."""
+    k = br.periods
+    pairs = [(a, b) for a, b in zip(br.points, br.points[1:], strict=False)
+             if _crossing(a.multipliers, b.multipliers)[0] == "period-doubling"]
+    if not 0 <= which < len(pairs):
+        raise ParameterError(f"which = {which} is not in [0, {len(pairs) - 1}]: the branch "
+                             f"has {len(pairs)} period-doubling point(s)")
+    p, x, v = locate_period_doubling(fl, name, *pairs[which], k)
+    span = abs(stop - p)
+    if not span > 0:
+        raise ParameterError(f"stop = {stop!r} equals the period-doubling value {p!r}")
+    w = Walk(fl, name, fl, 2 * k, _scale(x, span), p - span, p + span, step, max_points,
+             min_step, max_step)
+    pr = advance(flow_with(fl, name, p, fl), x, k)
+    # (v, 0), orthogonal to the period-k branch: the step's hyperplane meets that branch
+    # only O(sqrt(step)) away, so the corrector lands on the new one (O(step) away)
+    y0 = np.concatenate([x, [p]])
+    along = tangent_at(fl, name, fl, y0, pr, w.scale, k)
+    t = np.concatenate([v / w.scale[:-1], [0.0]])
+    t -= (t @ along) * along
+    t /= np.linalg.norm(t)
+    new = Branch(name, 2 * k, events=[("period-doubling", float(p))],
+                 origin=Point(p, x, multipliers(pr), pr.events))
+    try:
+        y, pr, _ = correct(fl, name, fl, y0 + step * t * w.scale, t, w.scale, 2 * k)
+    except OrbitRefused as err:
+        new.stop = f"refused at the start: {err}"
+        return new
+    new.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events))
+    return march(w, new, y, tangent_at(fl, name, fl, y, pr, w.scale, 2 * k, t))

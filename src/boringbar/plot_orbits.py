@@ -3,11 +3,15 @@ a brute-force bifurcation diagram (the edge of the package, as plot.py)."""
 
 from __future__ import annotations
 
+import json
+import textwrap
+
 import numpy as np
 from matplotlib.figure import Figure
 
 #: Marker of each continuation event kind.
-EVENT_MARKERS = {"fold": "s", "period-doubling": "D", "neimark-sacker": "*", "grazing": "x"}
+EVENT_MARKERS = {"fold": "s", "period-doubling": "D", "neimark-sacker": "*", "grazing": "x",
+                 "section": "+"}
 
 
 def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
@@ -36,6 +40,8 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
             y = d[name].values * 1e3
             _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top))
         for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
+            if not str(kind) or not np.isfinite(value):  # padding of a stacked branch
+                continue
             y = np.interp(value, *_sorted(v[ok], d["strobe_tip_m"].values[ok] * 1e3))
             top.plot([value], [y], ls="none", marker=EVENT_MARKERS.get(str(kind), "o"),
                      ms=9, mfc="none", color="crimson", label=str(kind))
@@ -44,7 +50,14 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     bottom.set_xlabel(PARAMETER_NAMES.get(ds.attrs.get("parameter"), ds.attrs.get("parameter")))
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
-    top.legend(fontsize="small")
+    handles, labels = top.get_legend_handles_labels()
+    if handles:  # one entry a label (each stretch and event labels itself)
+        unique = dict(zip(labels, handles, strict=True))
+        top.legend(unique.values(), unique.keys(), fontsize="small")
+    if not np.isfinite(ds["value"].values).any():  # every branch refused at its start
+        reasons = json.loads(ds.attrs.get("stop_reasons", "[]"))
+        top.text(0.5, 0.5, "\n".join(textwrap.wrap("; ".join(dict.fromkeys(reasons)), 90)),
+                 transform=top.transAxes, ha="center", va="center", fontsize="small")
     return fig
 
 

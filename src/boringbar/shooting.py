@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import brentq
+from threadpoolctl import threadpool_limits
 
 from boringbar._validate import ParameterError
 from boringbar.kernels import layout as L
@@ -68,11 +69,20 @@ class Flow:
     v_impact: float
     meff: float
     reference: float
+    #: The Poincare section's forcing phase Omega t0 (rad): P maps the state there.
+    phase: float = 0.0
 
     @property
     def period(self) -> float:
         """T = 2 pi / Omega (s)."""
         return 2.0 * math.pi / self.omega
+
+
+#: Shooting works on matrices of a few rows (expm, solve, eig of 7x7 to 9x9), where a
+#: multithreaded BLAS only wakes its thread pool to spin against the other work:
+#: 15 continuation points took 18.8 s with OpenBLAS's threads on a loaded machine,
+#: 1.46 s with one (docs/continuation.md). The entry points run under this decorator.
+one_blas_thread = threadpool_limits.wrap(limits=1, user_api="blas")
 
 
 def make_flow(system: System, forcing: Harmonic) -> Flow:
@@ -160,11 +170,14 @@ def _event_fn(fl: Flow, sdir: float):
 
 
 def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False) -> Period:
-    """Propagate x from phase 0 over ``periods`` forcing periods (exactly, see the module
-    docstring) with the monodromy; the tip's RMS over them too if ``rms`` (Period.rms_tip)."""
+    """Propagate x from the section's phase (``fl.phase``, 0 by default) over ``periods``
+    forcing periods (exactly, see the module docstring) with the monodromy; the tip's RMS
+    over them too if ``rms`` (Period.rms_tip).  Event times are absolute (t0 = phase /
+    Omega at the start)."""
     N = fl.N
-    t, t_end = 0.0, periods * fl.period
-    z = np.concatenate([np.asarray(x, float), [0.0, 1.0, 1.0]])
+    t = fl.phase / fl.omega
+    t_end = t + periods * fl.period
+    z = np.concatenate([np.asarray(x, float), [math.sin(fl.phase), math.cos(fl.phase), 1.0]])
     J = np.eye(N)
     events = []
     h = fl.period / GRID
@@ -187,7 +200,8 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False) -> Per
         if len(events) > 200 * periods:
             raise OrbitRefused("more than 200 events a period: the motion is not a "
                                "regular impacting orbit (Zeno or chatter)")
-    return Period(z[:N].copy(), J, events, math.sqrt(w2 / t_end) if rms else math.nan)
+    return Period(z[:N].copy(), J, events,
+                  math.sqrt(w2 / (periods * fl.period)) if rms else math.nan)
 
 
 #: 8-point Gauss-Legendre nodes and weights on [0, 1].
@@ -297,6 +311,7 @@ def _unit(N, i):
     return v
 
 
+@one_blas_thread
 def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-12,
                    max_iter: int = 30) -> tuple[np.ndarray, Period]:
     """Newton on P^k(x) - x = 0 from x0; the fixed point and its :class:`Period`."""
@@ -305,12 +320,22 @@ def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-1
     for _ in range(max_iter):
         pr = advance(fl, x, periods)
         r = pr.x - x
-        dx = np.linalg.solve(pr.jacobian - np.eye(fl.N), -r)
+        dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x = x + dx
         if np.max(np.abs(dx) / np.maximum(np.abs(x), scale)) < tol:
             return x, advance(fl, x, periods, rms=True)
     raise OrbitRefused(f"Newton did not converge in {max_iter} iterations "
                        f"(last residual {np.max(np.abs(r)):.3g})")
+
+
+def newton_step(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve A dx = b; a singular A (a neutral direction: e.g. the free ball's position in
+    an orbit without impacts) refuses the orbit."""
+    try:
+        return np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        raise OrbitRefused("the Newton matrix is singular (a neutral direction: the orbit "
+                           "is not isolated, e.g. a ball without impacts)") from None
 
 
 def multipliers(pr: Period) -> np.ndarray:

@@ -65,7 +65,7 @@ from boringbar.execute import Execution
 from boringbar.kernels.rk4_batch import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.simulate import Initial, Integration, simulate, simulate_batch
+from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
 
 #: Largest period, in forcing periods, looked for in the strobe (as the pattern classifier).
 MAX_K = 8
@@ -318,10 +318,11 @@ def plan(system, options: BasinOptions, integration: Integration) -> Plan:
     if not operating:
         raise ParameterError("basins needs at least one operating point")
     initials = options.initials()
-    batched = integration.integrator == "rk4" and options.batch > 1
-    size = options.batch if batched else 1
+    batched = [options.batch > 1 and resolve_integrator(
+        integration.integrator, op.case.system) == "rk4" for op in operating]
     points = [(i, list(range(a, min(a + size, len(initials)))))
-              for i in range(len(operating)) for a in range(0, len(initials), size)]
+              for i, size in enumerate(options.batch if b else 1 for b in batched)
+              for a in range(0, len(initials), size)]
     context = {"operating": operating, "options": options, "integration": integration,
                "batched": batched, "initials": initials,
                "w0": basin_grid("displacement_m", options.displacement_m),
@@ -334,7 +335,7 @@ def compute(context: dict, point: tuple[int, list[int]]) -> list[_Cell]:
     op = context["operating"][point[0]]
     integ, tol = context["integration"], context["options"].tolerance
     initials = [context["initials"][j] for j in point[1]]
-    if context["batched"]:
+    if context["batched"][point[0]]:
         runs = simulate_batch([(op.case.system, op.forcing, ini) for ini in initials],
                               duration=integ.duration_s, dt=integ.dt_s,
                               steady_fraction=integ.steady_fraction, strobe=True)
@@ -353,12 +354,12 @@ def warm(context: dict) -> None:
     n, batch = len(context["initials"]), context["options"].batch
     sizes = sorted({min(batch, n - a) for a in range(0, n, batch)})
     seen = set()
-    for op in context["operating"]:
+    for op, batched in zip(context["operating"], context["batched"], strict=True):
         system = op.case.system
         simulate(system, op.forcing, duration=short, dt=integ.dt_s, initial=first,
                  integrator=integ.integrator)
         key = (system.kind, system.bar.n_modes)
-        if context["batched"] and key not in seen:
+        if batched and key not in seen:
             seen.add(key)
             for size in sizes:
                 simulate_batch([(system, op.forcing, first)] * size, duration=short,
@@ -466,7 +467,9 @@ def assemble(plan: Plan, results: list[list[_Cell]], attrs: dict | None = None):
               "steady_fraction": integ.steady_fraction, "ball_position_m": o.ball_position_m,
               "ball_velocity_m_s": o.ball_velocity_m_s,
               "tolerances": json.dumps(asdict(o.tolerance)), "integrator": integ.integrator,
-              "batch": o.batch if ctx["batched"] else 1, **(attrs or {})}
+              "integrator_used": ",".join(sorted({resolve_integrator(
+                  integ.integrator, op.case.system) for op in ctx["operating"]})),
+              "batch": o.batch if any(ctx["batched"]) else 1, **(attrs or {})}
     parts = [_dataset(op.case.system, op.forcing, cells[i], ctx, config)
              for i, op in enumerate(ctx["operating"])]
     return parts[0] if len(parts) == 1 else _stack(parts, ctx)

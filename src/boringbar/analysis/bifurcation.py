@@ -187,6 +187,7 @@ def compute(context: dict, i: int) -> dict:
     directions = DIRECTIONS if o.backward else DIRECTIONS[:1]
     records: dict[tuple[int, int], dict] = {}
     systems: dict[int, dict] = {}
+    used: set[str] = set()
     previous, omega_old = None, math.nan
     for d, direction in enumerate(directions):
         order = range(len(v)) if direction == "forward" else range(len(v) - 1, -1, -1)
@@ -199,9 +200,10 @@ def compute(context: dict, i: int) -> dict:
             records[d, j] = {**_record(run, integ.steady_fraction, o.tol, o.max_k),
                              "restarted": restarted}
             systems.setdefault(j, sys_j.to_dict())
+            used.add(run.integrator)
             previous, omega_old = run.final, omega
     return {"records": records, "directions": directions,
-            "systems": [systems[j] for j in range(len(v))]}
+            "systems": [systems[j] for j in range(len(v))], "integrators": sorted(used)}
 
 
 def warm(context: dict) -> None:
@@ -360,6 +362,7 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
         "preset": ",".join(sorted({r["systems"][0]["preset"] for r in results})),
         "dt_s": integ.dt_s, "duration_s": integ.duration_s,
         "steady_fraction": integ.steady_fraction, "integrator": integ.integrator,
+        "integrator_used": ",".join(sorted({i for r in results for i in r["integrators"]})),
         "classification": METHOD, "continuation": CONTINUATION,
         "config": json.dumps(config), **extra, **(attrs or {})})
 

@@ -20,15 +20,18 @@ import xarray as xr
 from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
 from boringbar.branch import PARAMETERS, continue_branch, flow_with, value_of
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.reference.masri_caughey import two_impact_orbit
-from boringbar.shooting import OrbitRefused, advance, make_flow
-from boringbar.simulate import simulate
+from boringbar.shooting import OrbitRefused, advance, make_flow, one_blas_thread
+from boringbar.simulate import Integration, simulate
 
 STARTS = ("simulation", "masri-caughey", "state")
+#: The continuation parameters a brute-force diagram sweeps (their bifurcation names).
+BRUTE_FORCE = {"force-n": "force", "ratio": "ratio"}
 
 
 @dataclass(frozen=True)
@@ -37,7 +40,8 @@ class ContinuationOptions:
     in the system/forcing to ``stop``; ``force_n`` and ``ratio``: the forcing;
     ``periods``: k of P^k; ``step``: the first step, relative to the range; ``max_points``;
     ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
-    rest), "masri-caughey" or "state" (``state``, at phase 0)."""
+    rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
+    smallest step the halving goes down to before the branch stops (relative)."""
 
     parameter: str = "force-n"
     stop: float = 5.0
@@ -49,6 +53,7 @@ class ContinuationOptions:
     start: str = "simulation"
     settle_periods: int = 200
     state: tuple | None = None
+    min_step: float = 1e-6
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
@@ -57,6 +62,7 @@ class ContinuationOptions:
         check_int("max_points", self.max_points, 2, 100000)
         check_int("settle_periods", self.settle_periods, 1, 100000)
         check_range("step", self.step, 0.0, 0.5, lo_open=True)
+        check_range("min_step", self.min_step, 0.0, self.step, lo_open=True)
         if self.start == "state" and self.state is None:
             raise ParameterError("start = 'state' needs state = (u..., u'..., y, y')")
         Harmonic(self.force_n, ratio=self.ratio)  # validates both
@@ -98,13 +104,14 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
     return run.final.x[:fl.N]
 
 
+@one_blas_thread
 def compute(context: dict, point: int) -> dict:
     """The branch: per point its value, state, strobe tip, RMS, multipliers; its events."""
     system, o = context["system"], context["options"]
     fl = make_flow(system, Harmonic(o.force_n, ratio=o.ratio))
     x0 = start_state(system, o, fl)
     br = continue_branch(fl, o.parameter, x0, o.stop, periods=o.periods, step=o.step,
-                         max_points=o.max_points)
+                         max_points=o.max_points, min_step=o.min_step)
     rms = []
     for pt in br.points:
         try:
@@ -164,9 +171,10 @@ def summary(ds: xr.Dataset) -> dict:
                    "rms_tip_m": float(d["rms_tip_m"][i]), "stable": bool(d["stable"][i]),
                    "multipliers_abs": np.hypot(d["multiplier_real"][i].values,
                                                d["multiplier_imag"][i].values).tolist()}
-                  for i in range(d.sizes["point"])]
+                  for i in range(d.sizes["point"]) if np.isfinite(d["value"][i])]
         events = [{"kind": str(k), "value": float(v)}
-                  for k, v in zip(d["event_kind"].values, d["event_value"].values, strict=True)]
+                  for k, v in zip(d["event_kind"].values, d["event_value"].values, strict=True)
+                  if str(k)]  # "": padding of a shorter branch's events
         branches.append({"points": points, "events": events, "stop": stops[b]})
     return {"parameter": ds.attrs["parameter"], "branches": branches,
             "wall_time_s": float(ds.attrs.get("wall_time_s", math.nan))}
@@ -189,3 +197,43 @@ def continuation(system: System, forcing: Harmonic | None = None, *,
     p = plan(system, options)
     results, wall = run_plan(sys.modules[__name__], p, execution)
     return assemble(p, results, execution_attrs(execution, wall))
+
+
+def brute_force(system: System, options: ContinuationOptions, start: float, n_values: int = 21,
+                integration: Integration | None = None) -> xr.Dataset:
+    """The brute-force bifurcation diagram of the branch's case (``bb.bifurcation``, from
+    rest, forward and backward) over ``n_values`` values from ``start`` to
+    ``options.stop``, for the overlay of :func:`~boringbar.plot_orbits.plot_continuation`;
+    ``integration``: default exact, 1 s runs, the last half sampled."""
+    if options.parameter not in BRUTE_FORCE:
+        raise ParameterError(f"parameter = {options.parameter!r}: a brute-force overlay sweeps "
+                             f"{' or '.join(BRUTE_FORCE)} only")
+    check_int("n_values", n_values, 2, 1000)
+    values = tuple(np.linspace(start, options.stop, n_values).tolist())
+    name = BRUTE_FORCE[options.parameter]
+    bf = BifurcationOptions(name, values, options.force_n, options.ratio, backward=True)
+    return bifurcation(system, bf, integration=integration or Integration(1.0, 1e-6, "exact", 0.5))
+
+
+def both_ways(system: System, start: float, lo: float, hi: float, *, ratio: float = 1.0,
+              step: float = 0.05, max_points: int = 60, min_step: float = 1e-4) -> xr.Dataset:
+    """The F0 branch through the settled orbit at ``start`` N (exact integrator, 200
+    periods from rest), continued down to ``lo`` and up to ``hi``: two branches."""
+    down, up = (continuation(system, Harmonic(start, ratio=ratio), options=ContinuationOptions(
+        parameter="force-n", stop=stop, step=step, max_points=max_points, min_step=min_step))
+        for stop in (lo, hi))
+    return concat_branches([down, up])
+
+
+def concat_branches(datasets: list[xr.Dataset]) -> xr.Dataset:
+    """Continuation Datasets stacked along ``branch`` (shorter branches NaN-padded, their
+    missing events of kind ""), with every branch's stop reason."""
+    indexed = [d.assign_coords(point=np.arange(d.sizes["point"]),
+                               event=np.arange(d.sizes["event"])) for d in datasets]
+    ds = xr.concat(indexed, dim="branch", join="outer", combine_attrs="override",
+                   fill_value={"event_kind": "", "event_value": np.nan, "stable": False,
+                               "value": np.nan})
+    ds = ds.drop_vars(["point", "event"]).reset_coords()  # "state" stays a data variable
+    ds.attrs["stop_reasons"] = json.dumps([r for d in datasets
+                                           for r in json.loads(d.attrs["stop_reasons"])])
+    return ds

@@ -28,7 +28,7 @@ from boringbar.execute import Execution
 from boringbar.kernels.rk4_batch import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
-from boringbar.simulate import Initial, Integration, simulate, simulate_batch
+from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
 
 #: Runs per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
 BATCH = 16
@@ -133,26 +133,32 @@ class SweepOptions:
 
 
 def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> Plan:
-    """Every (case, force, ratio) run; a point is a lock-step batch of them (RK4,
-    ``options.batch`` > 1: runs of one bar kind and mode count, in (case, force,
-    ratio) order) or one run."""
+    """Every (case, force, ratio) run; a point is a lock-step batch of them (the runs
+    whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind and mode
+    count, in (case, force, ratio) order) or one run."""
     if not cases:
         raise ParameterError("sweep needs at least one case")
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
-    batched = integration.integrator == "rk4" and options.batch > 1
-    if batched:
-        groups: dict[tuple, list] = {}
-        for ijk in jobs:
-            system = cases[ijk[0]].system
+    rk4 = [_integrator(c, integration) == "rk4" and options.batch > 1 for c in cases]
+    groups: dict[tuple, list] = {}
+    points = []
+    for ijk in jobs:
+        system = cases[ijk[0]].system
+        if rk4[ijk[0]]:
             groups.setdefault((system.kind, system.bar.n_modes), []).append(ijk)
-        points = [g[a:a + options.batch] for g in groups.values()
-                  for a in range(0, len(g), options.batch)]
-    else:
-        points = [[ijk] for ijk in jobs]
+        else:
+            points.append([ijk])
+    points = [g[a:a + options.batch] for g in groups.values()
+              for a in range(0, len(g), options.batch)] + points
     context = {"cases": cases, "options": options, "integration": integration,
-               "batched": batched}
+               "batched": rk4}
     return Plan(context, points, {"shape": shape})
+
+
+def _integrator(case: Case, integration: Integration) -> str:
+    """The integrator of the case's runs (the sweep's, or "auto"'s choice)."""
+    return resolve_integrator(integration.integrator, case.system)
 
 
 def compute(context: dict, point: list) -> list[dict]:
@@ -160,7 +166,7 @@ def compute(context: dict, point: list) -> list[dict]:
     cases, o, integ = context["cases"], context["options"], context["integration"]
     runs = [(cases[i].system, Harmonic(o.forces_n[j], o.ratios[k]),
              cases[i].initial or integ.initial) for i, j, k in point]
-    if context["batched"]:
+    if context["batched"][point[0][0]]:
         results = simulate_batch(runs, duration=integ.duration_s, dt=integ.dt_s,
                                  steady_fraction=integ.steady_fraction)
     else:
@@ -175,12 +181,12 @@ def warm(context: dict) -> None:
     batched, per batch size the points use (the batch kernel is compiled per size)."""
     cases, integ = context["cases"], context["integration"]
     seen = set()
-    for c in cases:
-        key = (c.system.kind if context["batched"] else "", c.system.bar.n_modes)
+    for c, batched in zip(cases, context["batched"], strict=True):
+        key = (c.system.kind if batched else _integrator(c, integ), c.system.bar.n_modes)
         if key in seen:
             continue
         seen.add(key)
-        if context["batched"]:
+        if batched:
             for size in _batch_sizes(context, key):
                 simulate_batch([(c.system, Harmonic(1.0, 1.0), None)] * size,
                                duration=2e-5, dt=1e-6)
@@ -192,7 +198,8 @@ def warm(context: dict) -> None:
 def _batch_sizes(context: dict, key: tuple) -> list[int]:
     """The sizes of the batches of one (bar kind, mode count) group."""
     cases, o = context["cases"], context["options"]
-    group = [c for c in cases if (c.system.kind, c.system.bar.n_modes) == key]
+    group = [c for c, batched in zip(cases, context["batched"], strict=True)
+             if batched and (c.system.kind, c.system.bar.n_modes) == key]
     n = len(group) * len(o.forces_n) * len(o.ratios)
     return sorted({min(o.batch, n - a) for a in range(0, n, o.batch)})
 
@@ -240,6 +247,8 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
             "bar": ("case", [c.bar for c in cases]),
             "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
+            "integrator": ("case", [_integrator(c, integ) for c in cases],
+                           {"long_name": "the integrator of the case's runs"}),
         },
         attrs={
             "title": "boringbar frequency sweep",
@@ -251,7 +260,7 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
             "duration_s": integ.duration_s,
             "steady_fraction": integ.steady_fraction,
             "initial": json.dumps((integ.initial or Initial()).__dict__),
-            "batch": o.batch if ctx["batched"] else 1,
+            "batch": o.batch if any(ctx["batched"]) else 1,
             **(attrs or {}),
         },
     )
@@ -291,6 +300,7 @@ def summary(ds) -> dict:
                 "bar": str(ds["bar"].values[i]),
                 "gap_m": None if np.isnan(ds["gap"].values[i]) else float(ds["gap"].values[i]),
                 "friction": str(ds["friction"].values[i]),
+                "integrator": str(ds["integrator"].values[i]),
                 "force_n": float(force),
                 "natural_frequency_hz": float(ds["natural_frequency_hz"].values[i]),
                 "ratio": [float(r) for r in ds["ratio"].values],

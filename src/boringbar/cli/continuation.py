@@ -5,7 +5,13 @@ from __future__ import annotations
 import math
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.continuation import ContinuationOptions, continuation, summary
+from boringbar.analysis.continuation import (
+    BRUTE_FORCE,
+    ContinuationOptions,
+    brute_force,
+    continuation,
+    summary,
+)
 from boringbar.branch import PARAMETERS
 from boringbar.cli.options import (
     Outcome,
@@ -13,6 +19,7 @@ from boringbar.cli.options import (
     check_force,
     check_gap,
     check_ratio,
+    integration,
     one_bar,
     system_overrides,
     wrote,
@@ -43,6 +50,11 @@ def add_continue(sub) -> None:
     g.add_argument("--max-points", type=int, default=200, metavar="N")
     g.add_argument("--step", type=float, default=0.02, metavar="S",
                    help="first step, relative to the range (default: 0.02)")
+    g.add_argument("--overlay", type=int, nargs="?", const=21, metavar="N",
+                   help="draw the brute-force bifurcation diagram of the same case under the "
+                        "branch: N values over --range (default 21), forward and backward "
+                        "from rest, with --duration-s, --dt-s and --integrator (the last "
+                        "half of each run sampled); force-n or ratio only")
     g.add_argument("--start-from", choices=("simulation", "masri-caughey"),
                    default="simulation", help="first guess (default: a settled exact run)")
     p.set_defaults(func=_cmd_continue)
@@ -79,6 +91,9 @@ def _cmd_continue(args) -> Outcome:
                              "(the command line sets the ball by --ball)")
     check_force(force)
     check_ratio(ratio)
+    if args.overlay is not None and (name not in BRUTE_FORCE or not 2 <= args.overlay <= 1000):
+        raise ParameterError(f"--overlay {args.overlay} with --parameter {name}: the overlay "
+                             f"needs --parameter {' or '.join(BRUTE_FORCE)} and N in [2, 1000]")
     if bar == "ball":
         kw.update(gap=check_gap(gap), friction=friction_on or name == "friction-force-n")
     system = make_system(bar, args.preset, **kw)
@@ -87,9 +102,14 @@ def _cmd_continue(args) -> Outcome:
                                   max_points=args.max_points, start=args.start_from)
     ds = continuation(system, Harmonic(force, ratio=ratio), options=options)
     out = summary(ds)
-    files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/continuation.nc")),
-             "figure": str(save_figure_atomic(plot_continuation(ds),
-                                              f"{args.out}/continuation.png", dpi=130))}
+    files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/continuation.nc"))}
+    bf = None
+    if args.overlay is not None:
+        bf = brute_force(system, options, start, args.overlay,
+                         integration(args, steady_fraction=0.5))
+        files["overlay"] = str(write_netcdf_atomic(bf, f"{args.out}/overlay.nc"))
+    files["figure"] = str(save_figure_atomic(plot_continuation(ds, overlay=bf),
+                                             f"{args.out}/continuation.png", dpi=130))
     out["files"] = files
     write_json_atomic(out, f"{args.out}/continuation.json")
 

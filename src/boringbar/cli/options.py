@@ -27,11 +27,17 @@ from boringbar.model.forcing import (
 )
 from boringbar.model.measured_frf import CSV_SUFFIXES, UFF_SUFFIXES, read_frf
 from boringbar.model.modal_fit import ModalFit
-from boringbar.model.system import BALLS, BAR_KINDS, PRESETS, published_system_spec
+from boringbar.model.system import (
+    BALLS,
+    BAR_KINDS,
+    FRICTION_READINGS,
+    PRESETS,
+    published_system_spec,
+)
 from boringbar.model.system_file import load_system
 from boringbar.progress import ProgressCallback
 from boringbar.simulate import (
-    INTEGRATORS,
+    INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
     MAX_INITIAL_VELOCITY,
     Initial,
@@ -44,9 +50,9 @@ from boringbar.simulate import (
 PROG = "boringbar"
 #: Most worker threads or processes an option may ask for.
 MAX_WORKERS = 4096
-BALL_OPTIONS = ("gap_mm", "friction", "friction_force_n", "friction_number", "ball",
-                "restitution", "locked", "ball_position_mm", "ball_velocity_m_s",
-                "static_ratio")
+BALL_OPTIONS = ("gap_mm", "friction", "friction_force_n", "friction_number",
+                "friction_reading", "friction_reaction", "ball", "restitution", "locked",
+                "ball_position_mm", "ball_velocity_m_s", "static_ratio")
 
 
 def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
@@ -91,6 +97,12 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     g.add_argument("--friction-number", type=float, metavar="X",
                    help="published rolling-resistance number (0.6 nominal), read as the "
                         "preset reads it")
+    g.add_argument("--friction-reading", choices=FRICTION_READINGS,
+                   help="how the published number is read: paper (as the paper computed it, "
+                        "20.4 N) or rolling (a length in mm, 0.0204 N); default: the preset's")
+    g.add_argument("--friction-reaction", choices=("reciprocal", "printed"),
+                   help="the bar's friction reaction: reciprocal (-psi_d F_b) or printed "
+                        "(+psi_d F_b, as published); default: the preset's")
     g.add_argument("--ball", choices=BALLS, help="ball material (default: carbide)")
     g.add_argument("--restitution", type=None if ranges else float,
                    metavar="E|START:STOP:STEP" if ranges else "E",
@@ -122,8 +134,9 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     g.add_argument("--dt-s", type=float, default=1e-6, metavar="S",
                    help="RK4 time step in s; with --integrator exact, the step of the "
                         "recorded history (default: 1e-6)")
-    g.add_argument("--integrator", choices=INTEGRATORS, default="rk4",
-                   help="rk4: the published fixed-step scheme (default); exact: "
+    g.add_argument("--integrator", choices=INTEGRATOR_CHOICES, default="auto",
+                   help="auto (default): exact for harmonic runs, rk4 under the paper "
+                        "preset and in cuts; rk4: the published fixed-step scheme; exact: "
                         "event-driven, exact between events (a cut: the delayed surface "
                         "from a history of step <= dt)")
 
@@ -342,6 +355,8 @@ def system_overrides(args) -> dict:
     """make_system keywords the user set (the preset decides the rest)."""
     kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
           "friction_number": args.friction_number, "friction_force": args.friction_force_n,
+          "friction_reading": args.friction_reading,
+          "friction_reaction": args.friction_reaction,
           "tmd_design": args.tmd_design, "locked": args.locked or None,
           "static_ratio": args.static_ratio, "spec": args.system_spec,
           "modal": args.frf_modal}

@@ -131,6 +131,7 @@ def _cut_text(s: dict) -> str:
         f"  tip                static deflection {c['static_deflection_m'] * 1e3:.4g} mm, "
         f"max |W| {s['max_abs_tip_m'] * 1e3:.4g} mm",
         f"  delay interp.      {c['delay_interpolation']}",
+        f"  integrator         {s['integrator']}",
         f"  elapsed            {s['elapsed_s']:.2f} s",
         "  " + wrote(s["files"]),
     ]
@@ -154,6 +155,7 @@ def _simulate_text(s: dict, run) -> str:
         lines.append(f"  max stroke         {s['max_abs_rel_disp_m'] * 1e3:.4g} mm")
     if s["readings"]:
         lines.append(f"  published readings {', '.join(s['readings'])}")
+    lines.append(f"  integrator         {s['integrator']}")
     lines.append(f"  elapsed            {s['elapsed_s']:.2f} s")
     lines.append("  " + wrote(s["files"]))
     return "\n".join(lines)

@@ -40,6 +40,10 @@ BALLS = tuple(MATERIALS)
 #: absorber in the shipped file); "den-hartog": Den Hartog's optimum for the FRF
 #: magnitude; "sims": Sims' equal-real-trough optimum for chatter
 TMD_DESIGNS = ("given", "published", "den-hartog", "sims")
+#: How the published rolling-resistance number is read (make_system's friction_reading):
+#: "paper", as the paper computed it (nu in metres: 20.4 N for the 26 g ball), or
+#: "rolling", as a rolling-resistance length in mm (0.0204 N)
+FRICTION_READINGS = ("paper", "rolling")
 
 #: The published readings, by name, with the reason each exists.
 READINGS = {
@@ -121,7 +125,8 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
                 friction: bool = True, ball: str | None = None,
                 restitution: float | None = None, n_modes: int | None = None,
                 friction_number: float | None = None, friction_force: float | None = None,
-                friction_reaction: str | None = None, locked: bool = False,
+                friction_reaction: str | None = None, friction_reading: str | None = None,
+                locked: bool = False,
                 tmd_mass: float | None = None, z_absorber: float | None = None,
                 tmd_design: str | None = None, modal: ModalModel | None = None,
                 static_ratio: float | None = None, spec: SystemSpec | None = None) -> System:
@@ -139,6 +144,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
     ``friction_reaction``: "reciprocal" (physical) or "printed" (the published
     sign of the bar's reaction); ``friction_number`` is the published
     rolling-resistance number (0.6 nominal, read as the preset reads it);
+    ``friction_reading``: how the published number is read, "paper" (as the paper
+    computed it: nu in metres, 20.4 N for the 26 g ball; the paper preset's
+    default) or "rolling" (nu in mm, 0.0204 N; the physical preset's default);
     ``friction_force`` (N) overrides the file's friction when friction is on.
     ``n_modes``: retained bending modes (default: the file's, else 1 paper, 2
     physical); ``tmd_mass`` (kg) at ``z_absorber`` (m from the clamp);
@@ -162,8 +170,12 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
     if spec.ball is None:
         raise ParameterError(f"bar = 'ball' needs a [cavity] and a [ball] in the system file "
                              f"{spec.source}")
-    fr = _friction(spec, paper, friction, friction_number, friction_force,
-                   friction_reaction, static_ratio, readings)
+    reading = friction_reading or ("paper" if paper else "rolling")
+    check_choice("friction_reading", reading, FRICTION_READINGS)
+    reaction = (friction_reaction or spec.ball.friction_reaction
+                or ("printed" if paper else "reciprocal"))
+    fr = _friction(spec, reading == "paper", friction, friction_number, friction_force,
+                   reaction, static_ratio, readings)
     b = spec.ball
     gap = b.gap if gap is None else gap
     if spec.max_gap() < gap:
@@ -214,11 +226,11 @@ def _tmd(spec: SystemSpec, modal: ModalModel, paper: bool, mass, design) -> Tune
     return TunedMassDamper.den_hartog(mass, modal)
 
 
-def _friction(spec: SystemSpec, paper: bool, on: bool, number, force, reaction, static_ratio,
-              readings: list) -> Friction:
-    """The ball's friction: the file's, or the overrides; appends the readings."""
+def _friction(spec: SystemSpec, paper_number: bool, on: bool, number, force, reaction,
+              static_ratio, readings: list) -> Friction:
+    """The ball's friction: the file's, or the overrides; appends the readings.
+    ``paper_number``: the published number read as the paper computed it."""
     b = spec.ball
-    reaction = reaction or b.friction_reaction or ("printed" if paper else "reciprocal")
     check_choice("friction_reaction", reaction, ("reciprocal", "printed"))
     ratio = b.static_ratio if static_ratio is None else static_ratio
     if not on or (b.friction_kind == "none" and number is None and force is None):
@@ -228,7 +240,7 @@ def _friction(spec: SystemSpec, paper: bool, on: bool, number, force, reaction, 
     elif number is not None or b.friction_kind == "published-number":
         number = b.friction_value if number is None else number
         check_range("friction_number", number, 0.0, 100.0)
-        if paper:
+        if paper_number:
             fr = Friction("paper-number", number, reaction, ratio)
             readings.append("paper-friction-force")
         else:

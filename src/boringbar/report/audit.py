@@ -57,13 +57,15 @@ def audit(out, checks: dict[str, Callable] | None = None) -> dict:
                      "figure": {p: v.figure for p, v in per.items()}})
     counts = {p: {v: sum(r["verdict"][p] == v for r in rows) for v in VERDICTS}
               for p in ev.presets}
-    return {"out": str(ev.out), "quick": ev.quick, "presets": ev.presets, "claims": rows,
-            "counts": counts}
+    return {"out": str(ev.out), "quick": ev.quick, "presets": ev.presets,
+            "variants": list(ev.variants.values()), "claims": rows, "counts": counts}
 
 
 def count_line(result: dict, preset: str) -> str:
-    """'paper preset: 11 reproduced, 9 partly, 8 not, 1 not available'."""
+    """'paper preset: 11 reproduced, 9 partly, 8 not, 1 not available' (a further
+    column by its name alone)."""
     c = result["counts"][preset]
-    return (f"{preset} preset: {c['reproduced']} reproduced, {c['partly']} partly, "
+    variant = any(v["name"] == preset for v in result.get("variants", ()))
+    return (f"{preset}{'' if variant else ' preset'}: {c['reproduced']} reproduced, {c['partly']} partly, "
             f"{c['not reproduced']} not" + (f", {c['not available']} not available"
                                             if c["not available"] else ""))

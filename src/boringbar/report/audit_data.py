@@ -42,7 +42,9 @@ class Evidence:
                                  f"(no readable {path.name})") from None
         if "steps" not in self.manifest or "presets" not in self.manifest:
             raise ParameterError(f"{path}: not a boringbar paper manifest (no steps)")
-        self.presets = list(self.manifest["presets"])
+        #: the presets, then the further columns (a preset with a reading changed)
+        self.variants = {v["name"]: v for v in self.manifest.get("variants", [])}
+        self.presets = list(self.manifest["presets"]) + list(self.variants)
         self.quick = bool(self.manifest.get("quick"))
         self.records = {(r["preset"], r["key"]): r for r in self.manifest["steps"]}
 

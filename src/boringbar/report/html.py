@@ -81,7 +81,9 @@ class _Report:
                 cols.append({"preset": preset, "run": False})
                 continue
             cols.append({"preset": preset, "run": True, "command": rec["command"],
-                         "wall_time": f"{rec['wall_time_s']:.1f}", **body(preset, rec)})
+                         "wall_time": f"{rec['wall_time_s']:.1f}",
+                         "integrator": rec["summary"].get("integrator_used", ""),
+                         **body(preset, rec)})
         return cols
 
     def per_key(self, prefix: str, body) -> list[dict]:
@@ -151,6 +153,26 @@ class _Report:
             return {"images": [self.img(s["files"]["png"], f"{key} {preset}")],
                     "table": None, "hysteresis": ranges}
         return self.per_key("bifurcation", body)
+
+    def continuation(self) -> dict:
+        if "continuation" not in self.keys:
+            return {"columns": []}
+
+        def body(preset, rec):
+            s = rec["summary"]
+            images, rows, stops = [], [], []
+            for key, c in s["cases"].items():
+                images.append(self.img(c["files"]["png"], f"continuation {key} {preset}"))
+                for way, b in zip(("down", "up"), c["branches"], strict=True):
+                    rows.append(_branch_row(key, way, b))
+                    stops.append(b["stop"])
+            return {"images": images, "table": _table(
+                        ["case", "from 30 N", "points", "F0 covered (N)", "stable points",
+                         "events (N)", "why it stopped"], rows),
+                    "facts": _stop_facts(stops),
+                    "overlaid": sum(c["overlay"] for c in s["cases"].values()),
+                    "cases": len(s["cases"])}
+        return {"columns": self.pair("continuation", body)}
 
     def basins(self) -> list[dict]:
         def body(preset, rec, key):
@@ -276,14 +298,18 @@ class _Report:
                      for p in result["presets"]]
             rows.append({"id": c["id"], "source": c["source"], "statement": c["statement"],
                          "published": published, "cells": cells})
-        return {"rows": rows, "presets": result["presets"], "quick": result["quick"],
+        variants = {v["name"]: v["description"] for v in result["variants"]}
+        heads = [p if p in variants else f"{p} preset" for p in result["presets"]]
+        return {"rows": rows, "presets": heads, "quick": result["quick"],
+                "variants": [{"name": k, "description": d} for k, d in variants.items()],
                 "counts": [count_line(result, p) for p in result["presets"]],
                 "tolerance": f"{TOLERANCE:.0%}"}
 
     def context(self) -> dict:
         return {"header": self.header(), "audit": self.audit(), "sweeps": self.sweeps(),
                 "lobes": self.lobes(),
-                "bifurcation": self.bifurcation(), "basins": self.basins(),
+                "bifurcation": self.bifurcation(), "continuation": self.continuation(),
+                "basins": self.basins(),
                 "sensitivity": self.sensitivity(), "design": self.design(),
                 "corrections": self.corrections(),
                 "cannot": self.cannot()}
@@ -407,6 +433,32 @@ def _ball_at_limit(ds) -> dict | None:
     return {"table": _table(["case", "first chattering depth / analytic limit of the host",
                              "ball's largest excursion / half gap", "impacts"], rows),
             "strikes": strikes_all, "below": below}
+
+
+def _branch_row(key: str, way: str, b: dict) -> list:
+    """A continued branch's table row (its summary from analysis.continuation)."""
+    pts = b["points"]
+    covered = f"{min(p['value'] for p in pts):.4g}-{max(p['value'] for p in pts):.4g}" \
+        if pts else "-"
+    events = ", ".join(f"{e['kind']} {e['value']:.4g}" for e in b["events"]) or "-"
+    return [key, way, len(pts), covered, sum(p["stable"] for p in pts), events, b["stop"]]
+
+
+def _stop_facts(stops: list[str]) -> dict:
+    """How the branches ended, counted from their stop reasons (the words of
+    boringbar.branch and boringbar.shooting)."""
+    start = [s for s in stops if s.startswith("refused at the start")]
+    later = [s for s in stops if not s.startswith("refused at the start")]
+    return {"branches": len(stops), "refused_start": len(start),
+            "start_stick": sum("stick" in s for s in start),
+            "start_singular": sum("singular" in s for s in start),
+            "end": sum(s == "end of range" for s in later),
+            "max_points": sum(s.startswith("max_points") for s in later),
+            "stick": sum("stick" in s for s in later),
+            "wall": sum("wall contact" in s for s in later),
+            "grazing": sum("grazing" in s for s in later),
+            "section": sum("Poincare section" in s for s in later),
+            "corrector": sum("corrector did not converge" in s for s in later)}
 
 
 def _fmt(v) -> str:

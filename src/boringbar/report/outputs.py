@@ -17,6 +17,7 @@ import numpy as np
 
 from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import summary as bifurcation_summary
+from boringbar.analysis.continuation import summary as continuation_summary
 from boringbar.analysis.design import summary as design_summary
 from boringbar.analysis.design import summary_line
 from boringbar.analysis.lobes import examples_summary
@@ -33,9 +34,19 @@ from boringbar.plot import (
     plot_sweep,
 )
 from boringbar.plot_design import plot_design, plot_design_comparison
+from boringbar.plot_orbits import plot_continuation
 
 #: Rows of a recorded history (a run's run.nc, the lobe examples): about this many.
 HISTORY_ROWS = 20000
+
+
+def integrators_used(ds) -> str:
+    """The integrators that produced ``ds`` ("exact", "rk4" or both, comma-joined):
+    per case where the analysis records it, else its ``integrator_used``."""
+    used = {str(v) for v in np.atleast_1d(ds["integrator"].values)} if "integrator" in \
+        ds.coords else set()
+    used.update(w for w in str(ds.attrs.get("integrator_used", "")).split(",") if w)
+    return ",".join(sorted(used))
 
 
 def sweep_pngs(ds, out: Path) -> list[tuple[float, Path]]:
@@ -52,7 +63,8 @@ def sweep_files(ds, out) -> dict:
     out = Path(out)
     nc = write_netcdf_atomic(ds, out / "sweep.nc")
     pngs = [save_figure_atomic(plot_sweep(ds, f), path) for f, path in sweep_pngs(ds, out)]
-    return {**sweep_summary(ds), "files": {"netcdf": str(nc), "png": [str(p) for p in pngs]}}
+    return {**sweep_summary(ds), "integrator_used": integrators_used(ds),
+            "files": {"netcdf": str(nc), "png": [str(p) for p in pngs]}}
 
 
 def lobes_files(ds, out, examples=None) -> dict:
@@ -66,7 +78,8 @@ def lobes_files(ds, out, examples=None) -> dict:
         files["examples_netcdf"] = write_netcdf_atomic(examples, out / "examples.nc")
         files["examples_png"] = save_figure_atomic(plot_lobe_examples(examples),
                                                     out / "examples.png")
-    summary = {**lobes_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    summary = {**lobes_summary(ds), "integrator_used": integrators_used(ds),
+               "files": {k: str(v) for k, v in files.items()}}
     if examples is not None:
         summary["examples"] = examples_summary(examples)
     return summary
@@ -77,7 +90,8 @@ def bifurcation_files(ds, out) -> dict:
     out = Path(out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "bifurcation.nc"),
              "png": save_figure_atomic(plot_bifurcation(ds), out / "bifurcation.png")}
-    return {**bifurcation_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    return {**bifurcation_summary(ds), "integrator_used": integrators_used(ds),
+            "files": {k: str(v) for k, v in files.items()}}
 
 
 def basins_files(ds, out) -> dict:
@@ -85,7 +99,8 @@ def basins_files(ds, out) -> dict:
     out = Path(out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "basins.nc"),
              "png": save_figure_atomic(plot_basins(ds), out / "basins.png")}
-    return {**basins_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    return {**basins_summary(ds), "integrator_used": integrators_used(ds),
+            "files": {k: str(v) for k, v in files.items()}}
 
 
 def sensitivity_files(ds, out) -> dict:
@@ -93,7 +108,8 @@ def sensitivity_files(ds, out) -> dict:
     out = Path(out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "sensitivity.nc"),
              "png": save_figure_atomic(plot_sensitivity(ds), out / "sensitivity.png")}
-    return {**sensitivity_summary(ds), "files": {k: str(v) for k, v in files.items()}}
+    return {**sensitivity_summary(ds), "integrator_used": integrators_used(ds),
+            "files": {k: str(v) for k, v in files.items()}}
 
 
 def design_files(ds, cmp: dict, out) -> dict:
@@ -115,3 +131,14 @@ def design_files(ds, cmp: dict, out) -> dict:
     summary = {**s, "summary": summary_line(s), "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic(summary, files["json"])
     return summary
+
+
+def continuation_files(ds, out, name: str, overlay=None) -> dict:
+    """``out/NAME.nc`` and ``out/NAME.png`` (the branches over ``overlay``, a bifurcation
+    Dataset of the same case, if given); the summary, with ``overlay`` True or False."""
+    out = Path(out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / f"{name}.nc"),
+             "png": save_figure_atomic(plot_continuation(ds, overlay=overlay),
+                                       out / f"{name}.png", dpi=110)}
+    return {**continuation_summary(ds), "overlay": overlay is not None,
+            "files": {k: str(v) for k, v in files.items()}}

@@ -29,9 +29,13 @@ from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
 
+import xarray as xr
+
 from boringbar import __version__
+from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.continuation import both_ways
 from boringbar.analysis.design import comparison, design
 from boringbar.analysis.design import summary as design_summary
 from boringbar.analysis.design_file import load_design
@@ -49,6 +53,7 @@ from boringbar.report.outputs import (
     HISTORY_ROWS,
     basins_files,
     bifurcation_files,
+    continuation_files,
     design_files,
     lobes_files,
     sensitivity_files,
@@ -58,11 +63,54 @@ from boringbar.simulate import Initial, Integration
 
 PRESET_ORDER = ("paper", "physical")
 
+
+@dataclass(frozen=True)
+class Column:
+    """One column of the study: a preset, with some of its published readings
+    changed (``overrides``: :func:`~boringbar.model.system.make_system` keywords of
+    the ball damper, as ``(name, value)`` pairs; none for the two presets)."""
+
+    name: str
+    preset: str
+    overrides: tuple[tuple[str, str], ...] = ()
+    description: str = ""
+
+    @property
+    def kw(self) -> dict:
+        return dict(self.overrides)
+
+    @property
+    def flags(self) -> tuple[str, ...]:
+        """The command-line flags that select this column."""
+        extra = (w for k, v in self.overrides for w in ("--" + k.replace("_", "-"), v))
+        return ("--preset", self.preset, *extra)
+
+
+#: The study's columns: the two presets, and two presets with one friction reading
+#: changed, which separate what the friction's size explains from what the printed
+#: sign of the bar's reaction explains (docs/audit.md, "The two further columns").
+COLUMNS = {
+    "paper": Column("paper", "paper", (), "as published"),
+    "physical": Column("physical", "physical", (), "as physics demands"),
+    "paper-reciprocal": Column(
+        "paper-reciprocal", "paper", (("friction_reaction", "reciprocal"),),
+        "the paper preset with the bar's friction reaction reciprocal (-psi_d F_b): "
+        "the published 20.4 N friction, the printed sign corrected"),
+    "physical-paper-friction": Column(
+        "physical-paper-friction", "physical",
+        (("friction_reading", "paper"), ("friction_reaction", "reciprocal")),
+        "the physical preset with the friction force as the paper computed it (20.4 N "
+        "for the carbide ball) and a reciprocal reaction"),
+}
+#: The two further columns, in order.
+VARIANT_ORDER = ("paper-reciprocal", "physical-paper-friction")
+COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
+
 #: The command line's defaults, as the steps' commands leave them: the time step
 #: (s), the integrator, the sampled part of each run, the ball damper's gap (mm)
 #: and a cut's description (``boringbar lobes`` and ``sensitivity``, SI).
 DT_S = 1e-6
-INTEGRATOR = "rk4"
+INTEGRATOR = "auto"
 STEADY_FRACTION = 0.8
 GAP_MM = 0.5
 CUT = {"kr": 850.0 * 1e6, "feed": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
@@ -80,7 +128,20 @@ class Step:
     section: str
     title: str
     argv: tuple[str, ...]
-    run: Callable[[str, Path], dict]
+    run: Callable[[Column, Path], dict]
+    #: whether a case of the step has friction on: the further columns change only
+    #: the friction, so they rerun only these steps (the rest they share)
+    friction: bool = True
+    #: whether the further columns rerun it at all (the design searches do not)
+    variants: bool = True
+    #: what the further columns run instead, if not the same: (argv, run)
+    lean: tuple | None = None
+
+    def for_column(self, column: str) -> "Step":
+        """The step as ``column`` runs it (a further column: its lean version)."""
+        if column in PRESET_ORDER or self.lean is None:
+            return self
+        return replace(self, argv=self.lean[0], run=self.lean[1], lean=None)
 
 
 def _integration(duration_s: float, initial: Initial | None = None) -> Integration:
@@ -92,26 +153,27 @@ def _at_rest() -> Initial:
     return Initial(0.0 * 1e-3, 0.0, 0.0 * 1e-3, 0.0)
 
 
-def _sweep_cases(preset: str) -> list:
+def _sweep_cases(col: Column) -> list:
     """The cases of sweep and lobes by default: solid, TMD, and the ball damper at
     each gap (0.5, 0.1 mm) x friction (off, on), in the command line's order."""
-    return published_cases(preset=preset, gaps=(0.5 * 1e-3, 0.1 * 1e-3))
+    return published_cases(preset=col.preset, gaps=(0.5 * 1e-3, 0.1 * 1e-3), **col.kw)
 
 
 def _sweep_run(forces: str, ratios: str, duration_s: float):
-    def run(preset: str, out: Path) -> dict:
+    def run(col: Column, out: Path) -> dict:
         options = SweepOptions(tuple(parse_range(ratios, "--ratios")),
                                tuple(float(f) for f in forces.split(",")))
-        ds = sweep(_sweep_cases(preset), options,
+        ds = sweep(_sweep_cases(col), options,
                    integration=_integration(duration_s, _at_rest()), execution=Execution())
         return sweep_files(ds, out)
     return run
 
 
 def _lobes_run(method: str, rpm: str | None, duration_s: float, ball: str | None = None):
-    def run(preset: str, out: Path) -> dict:
-        cases = (_sweep_cases(preset) if ball is None else
-                 published_cases(("ball",), (0.5e-3, 0.1e-3), preset=preset, ball=ball))
+    def run(col: Column, out: Path) -> dict:
+        cases = (_sweep_cases(col) if ball is None else
+                 published_cases(("ball",), (0.5e-3, 0.1e-3), preset=col.preset, ball=ball,
+                                 **col.kw))
         speeds = PUBLISHED_RPM if rpm is None else parse_range(rpm, "--rpm")
         options = LobesOptions(tuple(speeds), method, "zero", 0.01 * 1e-3, 3.0 * 1e-3, 3,
                                kr_pa=CUT["kr"], feed_m=CUT["feed"],
@@ -128,16 +190,43 @@ def _lobes_run(method: str, rpm: str | None, duration_s: float, ball: str | None
 
 
 def _bifurcation_run(gap_mm: str, friction: bool, forces: str, ratio: str, duration_s: float):
-    def run(preset: str, out: Path) -> dict:
+    def run(col: Column, out: Path) -> dict:
         values = parse_range(forces, "--force-n")
-        system = make_system("ball", preset, gap=float(gap_mm) * 1e-3, friction=friction)
+        system = make_system("ball", col.preset, gap=float(gap_mm) * 1e-3, friction=friction,
+                             **col.kw)
         # the command line sets the swept option to its first value
         options = BifurcationOptions("force", tuple(values * 1.0), float(values[0]), float(ratio),
                                      backward=True, units="1")
         ds = with_hysteresis(bifurcation(system, options,
                                          integration=_integration(duration_s, _at_rest())))
-        ds.attrs.update(preset=preset, bar="ball", swept_option="--force-n")
+        ds.attrs.update(preset=col.preset, bar="ball", swept_option="--force-n")
         return bifurcation_files(ds, out)
+    return run
+
+
+#: The continuation step's branches start from the settled orbit at this F0 (N).
+CONTINUATION_START_N = 30.0
+
+
+def _continuation_run(lo: float, hi: float, max_points: int):
+    """The F0 branches of the four bifurcation cases through the settled orbit at
+    CONTINUATION_START_N, each drawn over its bifurcation step's diagram if on disk."""
+    def run(col: Column, out: Path) -> dict:
+        cases = {}
+        for gap in ("0.1", "0.5"):
+            for fr in ("off", "on"):
+                system = make_system("ball", col.preset, gap=float(gap) * 1e-3,
+                                     friction=fr == "on", **col.kw)
+                ds = both_ways(system, CONTINUATION_START_N, lo, hi, max_points=max_points)
+                ds.attrs.update(preset=col.preset, bar="ball")
+                nc = out.parent / f"bifurcation-gap{gap}-friction{fr}" / "bifurcation.nc"
+                overlay = xr.load_dataset(nc) if nc.exists() else None
+                cases[f"gap{gap}-friction{fr}"] = continuation_files(
+                    ds, out, f"gap{gap}-friction{fr}", overlay)
+        ncs = [c["files"]["netcdf"] for c in cases.values()]
+        return {"start_n": CONTINUATION_START_N, "cases": cases,
+                "files": {"netcdf": ncs[0], "netcdfs": ncs,
+                          "png": [c["files"]["png"] for c in cases.values()]}}
     return run
 
 
@@ -148,10 +237,11 @@ def _grid(text: str) -> tuple[float, float, int]:
 
 def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement_mm: str,
                 velocity_m_s: str, duration_s: float):
-    def run(preset: str, out: Path) -> dict:
+    def run(col: Column, out: Path) -> dict:
         lo, hi, n = _grid(displacement_mm)
         w0, v0 = (float(v) for v in start.split(","))
-        system = make_system("ball", preset, gap=GAP_MM * 1e-3, friction=friction)
+        system = make_system("ball", col.preset, gap=GAP_MM * 1e-3, friction=friction,
+                             **col.kw)
         options = BasinOptions((lo * 1e-3, hi * 1e-3, n), _grid(velocity_m_s), 0.0, 0.0,
                                float(force), float(ratio), poincare_from=(w0 * 1e-3, v0))
         ds = basins(system, options, integration=_integration(duration_s),
@@ -163,9 +253,9 @@ def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement
 
 def _sensitivity_run(kind: str, force: str, ratios: str, cut_rpm: str | None,
                      depths_mm: str | None, duration_s: float):
-    def run(preset: str, out: Path) -> dict:
-        common = dict(preset=preset, bar="ball", gap=GAP_MM * 1e-3, friction=True,
-                      overrides={}, integration=_integration(duration_s),
+    def run(col: Column, out: Path) -> dict:
+        common = dict(preset=col.preset, bar="ball", gap=GAP_MM * 1e-3, friction=True,
+                      overrides=col.kw, integration=_integration(duration_s),
                       execution=Execution())
         ds = sensitivity(SensitivityOptions(kind, None, (float(force),),
                                             tuple(parse_range(ratios, "--ratios"))), **common)
@@ -179,9 +269,9 @@ def _sensitivity_run(kind: str, force: str, ratios: str, cut_rpm: str | None,
 
 
 def _design_run(name: str, trials: int):
-    def run(preset: str, out: Path) -> dict:
+    def run(col: Column, out: Path) -> dict:
         options, spec = load_design(design_file(name))
-        options = replace(options, trials=trials, preset=preset)
+        options = replace(options, trials=trials, preset=col.preset)
         execution = Execution("threads")
         ds = design(options, spec=spec, storage=out / "design.db", execution=execution)
         return design_files(ds, comparison(spec, options, design_summary(ds)["best"],
@@ -210,9 +300,13 @@ def published_steps(quick: bool = False) -> list[Step]:
                            "900:1600:100", "--duration-s", "1.0"),
                           _lobes_run("search", "900:1600:100", 1.0)))
     else:
+        # the further columns take the bisection search: fewer runs than the scan for
+        # the same 0.01 mm limits (docs/paper.md says what was compared)
         steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
                           ("lobes", "--examples", "--method", "scan"),
-                          _lobes_run("scan", None, 2.0)))
+                          _lobes_run("scan", None, 2.0),
+                          lean=(("lobes", "--examples", "--method", "search"),
+                                _lobes_run("search", None, 2.0))))
     # a steel ball's lobes (the claim that it lowers the chatter-free depth), by the
     # bisection search on the published speeds: the same limits as the scan, cheaper
     steel_rpm = "900:1600:100" if quick else "900:1600:50"
@@ -229,7 +323,13 @@ def published_steps(quick: bool = False) -> list[Step]:
                 f"Bifurcation diagram over F0, gap {gap} mm, friction {fr}",
                 ("bifurcation", "--bar", "ball", "--gap-mm", gap, "--friction", fr,
                  "--force-n", forces, "--ratio", "1.0", *dur),
-                _bifurcation_run(gap, fr == "on", forces, "1.0", duration)))
+                _bifurcation_run(gap, fr == "on", forces, "1.0", duration), friction=fr == "on"))
+    points = 20 if quick else 40
+    steps.append(Step("continuation", "continuation",
+                      "Continued periodic orbits over the bifurcation diagrams",
+                      ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
+                       "--range", "30:50", "--step", "0.05", "--max-points", str(points)),
+                      _continuation_run(5.0, 50.0, points), variants=False))
     cells = "-1.5:1.5:" + ("8" if quick else "30")
     grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
     for key, force, ratio, fr, start in (("basins-10N-r1.01-off", "10", "1.01", "off", "0.5,0.5"),
@@ -241,7 +341,8 @@ def published_steps(quick: bool = False) -> list[Step]:
                           ("basins", "--bar", "ball", "--gap-mm", "0.5", "--friction", fr,
                            "--force-n", force, "--ratio", ratio, "--poincare-from", start,
                            *grid, *dur),
-                          _basins_run(force, ratio, fr == "on", start, cells, cells, duration)))
+                          _basins_run(force, ratio, fr == "on", start, cells, cells, duration),
+                          friction=fr == "on"))
     ratios = "0.95:1.05:" + ("0.05" if quick else "0.01")
     cut_rpm, depths = "1200", "0.05:0.10:0.01"
     for kind in ("ball", "friction_number", "restitution", "initial"):
@@ -260,13 +361,14 @@ def published_steps(quick: bool = False) -> list[Step]:
                                  "chatter")):
         steps.append(Step(f"design-{name}", "design", title,
                           ("design", design_file(name), "--trials", str(trials)),
-                          _design_run(name, trials)))
+                          _design_run(name, trials), variants=False))
     return steps
 
 
-def command_line(step: Step, preset: str, out: Path) -> str:
-    """The shell command that reruns ``step`` by hand."""
-    return " ".join(["boringbar", *step.argv, "--preset", preset, "--out", str(out)])
+def command_line(step: Step, column: str, out: Path) -> str:
+    """The shell command that reruns ``step`` of ``column`` (a preset, or one of the
+    further columns of :data:`COLUMNS`) by hand."""
+    return " ".join(["boringbar", *step.argv, *COLUMNS[column].flags, "--out", str(out)])
 
 
 class StepFailed(RuntimeError):
@@ -298,12 +400,14 @@ def _step(where: Path, meta: dict, compute, say, label: str) -> dict:
     return {**record, "reused": False}
 
 
-def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = False,
+def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = False,
               log=None) -> dict:
-    """Run every published analysis under each preset into ``out`` and write the
-    report; returns the manifest (also ``out/manifest.json``).  A step that fails
-    (bad input or an I/O error) raises :class:`StepFailed`; the steps finished
-    before it are kept."""
+    """Run every published analysis under each preset (and each further column of
+    :data:`COLUMNS` named in ``presets``) into ``out`` and write the report; returns
+    the manifest (also ``out/manifest.json``).  A further column reruns the steps
+    with friction and shares the others with its preset's records, where that preset
+    ran; it skips the design searches.  A step that fails (bad input or an I/O
+    error) raises :class:`StepFailed`; the steps finished before it are kept."""
     shown = Path(out)  # as the user wrote it, for the commands in the report
     out = shown.resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -311,35 +415,37 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
                                                                       flush=True)))
     tic = time.perf_counter()
     steps = published_steps(quick)
-    total = len(steps) * len(presets) + 1
-    records = []
-    for preset in presets:
-        for step in steps:
-            where = out / preset / step.key
-            meta = {"key": step.key, "section": step.section, "title": step.title,
-                    "preset": preset,
-                    "command": command_line(step, preset, shown / preset / step.key)}
-            records.append(_step(where, meta, _compute(step, preset, where, meta["command"]),
-                                 say,
-                                 f"boringbar paper: [{len(records) + 1}/{total}] "
-                                 f"{preset} {step.key}"))
-    duration = 0.5 if quick else 2.0
-    meta = {"key": "corrections", "section": "corrections",
-            "title": "What the corrections to the published equations change",
-            "preset": "both",
-            "command": (f"boringbar.report.corrections: readings_ladder(duration={duration}), "
-                        f"impact_law_check(), absorber_designs() for {', '.join(presets)}")}
-    where = out / "corrections"
-    records.append(_step(where, meta, lambda: _corrections(where, presets, duration), say,
-                         f"boringbar paper: [{total}/{total}] corrections"))
+    plan = _plan(steps, presets)
+    total = sum(1 for *_, shared in plan if shared is None) + 1
+    records, done = [], {}
+    for column, step, shared in plan:
+        step = step.for_column(column)
+        if shared is not None and (shared, step.key) in done:
+            records.append({**done[(shared, step.key)], "preset": column,
+                            "shared_from": shared, "reused": False})
+            continue
+        where = out / column / step.key
+        meta = {"key": step.key, "section": step.section, "title": step.title,
+                "preset": column,
+                "command": command_line(step, column, shown / column / step.key)}
+        label = f"boringbar paper: [{len(done) + 1}/{total}] {column} {step.key}"
+        rec = _step(where, meta, _compute(step, COLUMNS[column], where, meta["command"]),
+                    say, label)
+        done[(column, step.key)] = rec
+        records.append(rec)
+    base = [p for p in presets if p in PRESET_ORDER]
+    records.append(_corrections_step(out, base, quick, say, total))
     manifest = {
         "title": "boringbar: the published study rerun under the paper and physical presets",
         "boringbar_version": __version__,
         "quick": quick,
-        "presets": list(presets),
+        "presets": base,
+        "variants": [{"name": c, "preset": COLUMNS[c].preset,
+                      "overrides": COLUMNS[c].kw, "description": COLUMNS[c].description}
+                     for c in presets if c in VARIANT_ORDER],
         "command": "boringbar paper --out " + str(shown) + (" --quick" if quick else ""),
         "wall_time_s": time.perf_counter() - tic,
-        "compute_time_s": sum(r["wall_time_s"] for r in records),
+        "compute_time_s": sum(r["wall_time_s"] for r in records if "shared_from" not in r),
         "steps": records,
     }
     write_json_atomic(jsonable(manifest), out / "manifest.json")
@@ -349,12 +455,45 @@ def run_paper(out, *, quick: bool = False, presets=PRESET_ORDER, quiet: bool = F
     return manifest
 
 
-def _compute(step: Step, preset: str, where: Path, command: str):
-    """``step.run(preset, where)`` as a ``compute()`` of :func:`_step`; a bad value
+def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
+    """(column, step, the column whose record it shares or None) in the order they
+    run: every preset's steps, then each further column's: those with friction
+    rerun, those without shared with its preset where that preset runs."""
+    unknown = [p for p in presets if p not in COLUMNS]
+    if unknown:
+        raise ParameterError(f"presets = {unknown[0]!r} must be one of "
+                             f"{', '.join(COLUMN_ORDER)}")
+    plan = []
+    for column in (c for c in COLUMN_ORDER if c in presets):
+        preset = COLUMNS[column].preset
+        for step in steps:
+            if column in PRESET_ORDER:
+                plan.append((column, step, None))
+            elif step.variants:
+                shared = preset if not step.friction and preset in presets else None
+                plan.append((column, step, shared))
+    return plan
+
+
+def _corrections_step(out: Path, presets, quick: bool, say, total: int) -> dict:
+    """The corrections measurements as the study's last step (its record)."""
+    duration = 0.5 if quick else 2.0
+    meta = {"key": "corrections", "section": "corrections",
+            "title": "What the corrections to the published equations change",
+            "preset": "both",
+            "command": (f"boringbar.report.corrections: readings_ladder(duration={duration}), "
+                        f"impact_law_check(), absorber_designs() for {', '.join(presets)}")}
+    where = out / "corrections"
+    return _step(where, meta, lambda: _corrections(where, presets, duration), say,
+                 f"boringbar paper: [{total}/{total}] corrections")
+
+
+def _compute(step: Step, column: Column, where: Path, command: str):
+    """``step.run(column, where)`` as a ``compute()`` of :func:`_step`; a bad value
     or an I/O error becomes :class:`StepFailed` naming the step's command."""
     def compute() -> dict:
         try:
-            return step.run(preset, where)
+            return step.run(column, where)
         except (ValueError, OSError) as exc:
             message = " ".join(str(exc).split()) or type(exc).__name__
             raise StepFailed(f"{command} failed: {message}") from None

@@ -54,7 +54,7 @@ from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
 from boringbar.simulate import (
-    INTEGRATORS,
+    INTEGRATOR_CHOICES,
     Initial,
     Integration,
     check_delay,
@@ -177,7 +177,7 @@ class Analysis:
 
     def integrators(self) -> tuple:
         """The integrators a study of this analysis may choose."""
-        return INTEGRATORS
+        return INTEGRATOR_CHOICES
 
 
 def _check_run(study: Study, system, omega: float, cutting: bool) -> None:

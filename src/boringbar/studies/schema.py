@@ -175,8 +175,8 @@ SETTINGS: dict[str, dict[str, Setting]] = {
     "run": {
         "duration_s": _pos(2.0),
         "dt_s": _f(1e-6, 0.0, 1e-3, lo_open=True),
-        "integrator": Setting("str", "rk4", doc="rk4 (published); others where the "
-                              "analysis's point functions take an integrator"),
+        "integrator": Setting("str", "auto", doc="auto (exact for harmonic runs, rk4 "
+                              "under the paper preset and in cuts), rk4 (published) or exact"),
         "steady_fraction": _f(0.8, 0.0, 1.0, lo_open=True),
         "tip_displacement_mm": _f(0.0, -_D, _D),
         "tip_velocity_m_s": _f(0.0, -_V, _V),

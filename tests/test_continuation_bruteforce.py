@@ -1,0 +1,162 @@
+"""Continuation against brute force: where the exact integrator's forward and backward
+sweeps (``bb.bifurcation``) settle on the same period-1 orbit, the continued branch is
+that orbit to 1e-8 relative; where they disagree, the branch's stability change bounds
+the range of agreement."""
+
+import dataclasses
+import json
+
+import numpy as np
+import xarray as xr
+
+import boringbar as bb
+from boringbar import shooting as sh
+from boringbar.analysis.continuation import ContinuationOptions, start_state
+from boringbar.cli.main import main
+from boringbar.branch import (
+    continue_branch,
+    flow_with,
+    switch_period_doubling,
+)
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import make_system
+from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.simulate import Integration, State, simulate
+
+
+def _one_mode_case():
+    """The one-mode physical bar, frictionless ball, gap 0.5 mm, ratio 1: brute force
+    from rest settles on the symmetric two-impact orbit above ~30 N."""
+    return make_system("ball", "physical", gap=0.5e-3, friction=False, n_modes=1)
+
+
+def _sweep(system, values, duration=1.0):
+    """Forward and backward exact sweeps, the last 20 % of each run sampled."""
+    return bb.bifurcation(system, bb.BifurcationOptions("force", tuple(values), values[0], 1.0),
+                          integration=Integration(duration, 1e-6, "exact", 0.2))
+
+
+def _branch_at(fl, br, value):
+    """The branch's orbit at exactly ``value``: Newton from the nearest branch point."""
+    near = min(br.points, key=lambda p: abs(p.value - value))
+    return sh.periodic_orbit(flow_with(fl, "force-n", value, fl), near.x)
+
+
+def test_stable_branch_is_the_brute_force_orbit_where_both_sweeps_agree():
+    system = _one_mode_case()
+    values = (31.0, 33.0, 35.0)
+    ds = _sweep(system, values)
+    fl = sh.make_flow(system, Harmonic(values[0], ratio=1.0))
+    x0 = start_state(system, ContinuationOptions(force_n=values[0], start="masri-caughey"), fl)
+    br = continue_branch(fl, "force-n", x0, 35.5, step=0.2, max_points=40, max_step=0.3)
+    assert br.stop == "end of range", br.stop
+    agreed = 0
+    for j, v in enumerate(values):
+        sides = [ds.sel(direction=d).isel(value=j) for d in ("forward", "backward")]
+        if not all(int(s["period"]) == 1 for s in sides):
+            continue
+        x, pr = _branch_at(fl, br, v)
+        assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
+        w = fl.psi_tip @ x[:fl.n]
+        for s in sides:
+            samples = s["tip_displacement"].values
+            samples = samples[np.isfinite(samples)]
+            assert len(samples) > 50
+            assert np.max(np.abs(samples - w)) <= 1e-8 * abs(w), (v, samples[-1], w)
+        agreed += 1
+    assert agreed >= 2
+
+
+def _three_impact_orbit(ratio=0.97, phase=np.pi):
+    """The asymmetric three-impact period-1 orbit at F0 = 30 N (one mode, gap 0.5 mm): the
+    exact integrator from the two-impact orbit at ratio 0.98, 500.5 periods, so the state
+    is at forcing phase pi (the impacts stay off that section along the branch)."""
+    system = _one_mode_case()
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=ratio))
+    x98 = start_state(system, ContinuationOptions(force_n=30.0, ratio=0.98,
+                                                  start="masri-caughey"), fl)
+    run = simulate(system, Harmonic(30.0, ratio=ratio),
+                   duration=(500 + phase / (2 * np.pi)) * fl.period, dt=fl.period / 4000,
+                   integrator="exact", initial=State(x98, 0.0))
+    return system, dataclasses.replace(fl, phase=phase), run.final.x
+
+
+def test_branch_switching_at_period_doubling_gives_a_period_two_orbit():
+    system, fl, x0 = _three_impact_orbit()
+    br = continue_branch(fl, "ratio", x0, 0.969, step=0.05, max_points=12)
+    assert [k for k, _ in br.events] == ["period-doubling"], (br.stop, br.events)
+    two = switch_period_doubling(fl, "ratio", br, 0.975, step=0.02, max_points=6)
+    p_pd, x_pd = two.origin.value, two.origin.x
+    assert two.periods == 2 and two.events[0] == ("period-doubling", p_pd)
+    assert np.min(np.abs(two.origin.multipliers + 1.0)) < 1e-8  # located: a -1 multiplier
+    assert len(two.points) == 6
+    gaps = []
+    for pt in two.points:
+        f = flow_with(fl, "ratio", pt.value, fl)
+        once, twice = sh.advance(f, pt.x).x, sh.advance(f, pt.x, 2).x
+        size = np.max(np.abs(pt.x))
+        assert np.max(np.abs(twice - pt.x)) <= 1e-10 * size  # P^2 x = x
+        gaps.append(np.max(np.abs(once - pt.x)) / size)
+        # the exact kernel agrees: back after two periods, elsewhere after one
+        run = simulate(system, Harmonic(30.0, ratio=pt.value), duration=2 * f.period,
+                       dt=f.period / 4000, integrator="exact",
+                       initial=State(pt.x, fl.phase / f.omega), steady_fraction=1.0)
+        assert np.max(np.abs(run.final.x - pt.x)) <= 1e-8 * size
+    assert min(gaps) > 1e-3  # P x != x: a genuine period-2 orbit
+    # it emanates from the doubling (a pitchfork of P^2): with the first step halved the
+    # first orbit's distance from the period-1 orbit halves, its parameter's from the
+    # doubling point is quartered
+    near = [switch_period_doubling(fl, "ratio", br, 0.975, step=s, max_points=1).points[0]
+            for s in (0.004, 0.002)]
+    sep = [np.max(np.abs(sh.advance(flow_with(fl, "ratio", q.value, fl), q.x).x - q.x))
+           for q in near]
+    assert 1.8 < sep[0] / sep[1] < 2.2
+    assert 3.5 < (near[0].value - p_pd) / (near[1].value - p_pd) < 4.5
+    assert near[1].value < p_pd  # a supercritical doubling: towards the unstable side
+
+
+def _closed_form_phase(system, fl, force):
+    """The + wall impact's forcing phase of the admissible two-impact orbit (closed form)."""
+    bar, ball = system.bar, system.damper
+    return next(o.phase for o in two_impact_orbit(
+        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass, ball.gap, ball.restitution, force, fl.omega) if o.admissible)
+
+
+def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it():
+    # the section at the phase of the closed-form + wall impact at 33 N: continued from
+    # 30 N, the impact crosses the section (the sequence (+, -) becomes (-, +)) at 33 N
+    system = _one_mode_case()
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
+    phase = _closed_form_phase(system, fl, 33.0)
+    x0 = start_state(system, ContinuationOptions(force_n=30.0, start="masri-caughey"), fl)
+    run = simulate(system, Harmonic(30.0, ratio=1.0), duration=fl.period * phase / (2 * np.pi),
+                   dt=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
+                   steady_fraction=1.0)
+    br = continue_branch(dataclasses.replace(fl, phase=phase), "force-n", run.final.x, 36.0,
+                         step=0.1, max_points=40, max_step=0.3)
+    assert [k for k, _ in br.events] == ["section"], (br.stop, br.events)
+    located = br.events[0][1]
+    assert br.points[-1].value == located and located < 33.0
+    assert abs(located - 33.0) < 1e-6 * 33.0, located
+
+
+def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, capsys):
+    argv = ["continue", "--preset", "physical", "--gap-mm", "0.5", "--friction", "off",
+            "--modes", "1", "--range", "31:30", "--start-from", "masri-caughey",
+            "--max-points", "3", "--integrator", "exact", "--duration-s", "0.2",
+            "--out", str(tmp_path), "--json"]
+    assert main([*argv, "--overlay", "3"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["files"]["overlay"] == str(tmp_path / "overlay.nc")
+    with xr.open_dataset(tmp_path / "overlay.nc") as bf:
+        assert bf["value"].values.tolist() == [31.0, 30.5, 30.0]
+        assert bf.sizes["direction"] == 2
+        # the sweep's strobe samples at 31 N sit on the branch's first point
+        w = bf["tip_displacement"].sel(direction="forward").isel(value=0).values
+        w = w[np.isfinite(w)]
+    assert abs(w[-1] - out["branches"][0]["points"][0]["strobe_tip_m"]) < 1e-3 * abs(w[-1])
+    assert (tmp_path / "continuation.png").stat().st_size > 0
+    assert main([*argv[:-3], "--parameter", "restitution", "--range", "0.7:0.6",
+                 "--overlay", "--out", str(tmp_path)]) == 2
+    assert main([*argv, "--overlay", "1"]) == 2
