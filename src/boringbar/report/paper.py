@@ -314,7 +314,8 @@ def published_steps(quick: bool = False) -> list[Step]:
     steps.append(Step("lobes-steel", "lobes", "Stability lobes with a steel ball",
                       ("lobes", "--bar", "ball", "--ball", "steel", "--method", "search",
                        "--rpm", steel_rpm, *(("--duration-s", "1.0") if quick else ())),
-                      _lobes_run("search", steel_rpm, steel_s, ball="steel")))
+                      _lobes_run("search", steel_rpm, steel_s, ball="steel"),
+                      variants=False))  # the further columns judge D4 on the 1200 rpm cuts
     forces = "5:50:" + ("5" if quick else "1")
     for gap in ("0.1", "0.5"):
         for fr in ("off", "on"):
