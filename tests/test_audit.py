@@ -334,6 +334,19 @@ def discussion_cases():
                  "sweep": sweep(g0_1_off_10=(scaled(2), [NU] * 5))}, "not reproduced"
 
 
+def test_d4_on_the_cuts_words_a_depth_that_cannot_be_compared():
+    """Carbide chatters from the shallowest cut, steel does not: no 'nan %' in the reason."""
+    sens = next(steps for claim, steps, _ in discussion_cases() if claim == "D4")[
+        "sensitivity-ball"]
+    cuts = {r["value"]: r for r in sens["cuts"]["results"]}
+    n = len(cuts["carbide"]["chatter"])
+    cuts["carbide"]["chatter"] = [True] * n
+    cuts["steel"]["chatter"] = [False] * 3 + [True] * (n - 3)
+    got = judge("D4", {"sensitivity-ball": sens})
+    assert got.verdict == "partly" and "nan" not in got.reason
+    assert "carbide ball chatters from the shallowest cut" in got.reason
+
+
 def test_every_discussion_check_gives_each_of_its_verdicts():
     seen = {}
     for claim, steps, want in discussion_cases():

@@ -584,11 +584,14 @@ def _d4_cuts(ev: Evidence, preset: str) -> Verdict:
          "depth change %": None if math.isnan(change) else round(change, 0)}
     higher = rms_s > rms_c
     drop_ok = math.isfinite(change) and -15 - 1e-9 <= change <= 0
+    moved = (f"{change:+.0f} %" if math.isfinite(change) else
+             f"up from none (the carbide ball chatters from the shallowest cut, "
+             f"{depths[0] * 1e3:g} mm; the steel ball is stable to {d_s:g} mm)")
     return _judge(higher or drop_ok, higher and drop_ok, m,
                   f"the steel ball's RMS is not higher ({rms_s * 1e3:.3g} against "
-                  f"{rms_c * 1e3:.3g} mm) and its depth changes by {change:+.0f} %",
+                  f"{rms_c * 1e3:.3g} mm) and its depth changes by {moved}",
                   f"steel RMS {'higher' if higher else 'not higher'}; chatter-free depth "
-                  f"{change:+.0f} % (published: up to -15 %; one speed, 1200 rpm, in "
+                  f"{moved} (published: up to -15 %; one speed, 1200 rpm, in "
                   f"{(depths[1] - depths[0]) * 1e3:g} mm steps)",
                   ev.figure(preset, "sensitivity-ball"))
 
