@@ -300,7 +300,8 @@ def summary(ds) -> dict:
                 "bar": str(ds["bar"].values[i]),
                 "gap_m": None if np.isnan(ds["gap"].values[i]) else float(ds["gap"].values[i]),
                 "friction": str(ds["friction"].values[i]),
-                "integrator": str(ds["integrator"].values[i]),
+                "integrator": (str(ds["integrator"].values[i]) if "integrator" in ds.coords
+                               else ds.attrs.get("integrator")),  # files before "auto"
                 "force_n": float(force),
                 "natural_frequency_hz": float(ds["natural_frequency_hz"].values[i]),
                 "ratio": [float(r) for r in ds["ratio"].values],
