@@ -721,7 +721,8 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
 
     ``integrator``: ``"auto"`` (the default: :func:`resolve_integrator`, exact for
     harmonic forcing, RK4 under the paper preset and in cuts), ``"rk4"`` (the
-    published scheme, docs/model.md, section 5) or ``"exact"`` (event-driven, exact between events: :mod:`boringbar.kernels.exact`;
+    published scheme, docs/model.md, section 5) or ``"exact"`` (event-driven, exact
+    between events: :mod:`boringbar.kernels.exact`;
     under harmonic forcing ``dt`` is then only the step of the recorded history
     and of the duration and steady-window rounding, and the steady RMS is the
     exact integral over the window; in a cut the delayed surface comes from a

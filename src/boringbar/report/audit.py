@@ -66,6 +66,7 @@ def count_line(result: dict, preset: str) -> str:
     column by its name alone)."""
     c = result["counts"][preset]
     variant = any(v["name"] == preset for v in result.get("variants", ()))
-    return (f"{preset}{'' if variant else ' preset'}: {c['reproduced']} reproduced, {c['partly']} partly, "
+    name = preset if variant else f"{preset} preset"
+    return (f"{name}: {c['reproduced']} reproduced, {c['partly']} partly, "
             f"{c['not reproduced']} not" + (f", {c['not available']} not available"
                                             if c["not available"] else ""))
