@@ -393,34 +393,35 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     return e
 
 
+def stick_slip(system: System) -> bool:
+    """Whether the ball's friction has a static limit above the sliding one (exact only)."""
+    d = system.damper
+    return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force > 0
+
+
 def resolve_integrator(integrator: str, system: System, cutting: bool = False) -> str:
-    """The integrator a run takes: ``integrator`` itself unless it is "auto", which
-    is "exact" for harmonic forcing (exact at every event and about 14x faster,
-    docs/performance.md) and for true stick-slip (a static friction limit, which
-    only the exact integrator has), and "rk4" for the ``paper`` preset (which reruns
-    the published scheme) and for cuts (``cutting``: RK4 stays faster there,
-    docs/exact.md)."""
+    """``integrator``, or for "auto": "rk4" under the ``paper`` preset (the published
+    scheme) and in cuts (``cutting``: RK4 is faster there, docs/exact.md) unless
+    :func:`stick_slip`, else "exact" (exact at events, about 14x faster than RK4)."""
     check_choice("integrator", integrator, INTEGRATOR_CHOICES)
     if integrator != "auto":
         return integrator
-    d = system.damper
-    if (isinstance(d, ImpactDamper) and d.friction.static_ratio != 1.0
-            and d.friction_force > 0.0):
-        return "exact"
-    if system.preset == "paper" or cutting:
-        return "rk4"
-    return "exact"
+    return "rk4" if (system.preset == "paper" or cutting) and not stick_slip(system) \
+        else "exact"
+
+
+def resolved_integrators(integrator: str, systems, cutting: bool = False) -> str:
+    """What :func:`resolve_integrator` gives the runs of ``systems``, sorted and
+    comma-joined ("exact", "rk4" or "exact,rk4"): a result's ``integrator_used``."""
+    return ",".join(sorted({resolve_integrator(integrator, s, cutting) for s in systems}))
 
 
 def check_friction_law(system: System, integrator: str) -> None:
-    """True stick-slip (a static friction above the sliding one) needs the exact
-    integrator: RK4 has only the published sgn() law."""
-    d = system.damper
-    if (integrator == "rk4" and isinstance(d, ImpactDamper)
-            and d.friction.static_ratio != 1.0 and d.friction_force > 0.0):
-        raise ParameterError(f"friction static_ratio = {d.friction.static_ratio!r}: the rk4 "
-                             "integrator has only the sgn() law (static_ratio = 1); use "
-                             "integrator = 'exact' for true stick-slip")
+    """True stick-slip needs the exact integrator: RK4 has only the published sgn() law."""
+    if integrator == "rk4" and stick_slip(system):
+        raise ParameterError(f"friction static_ratio = {system.damper.friction.static_ratio!r}: "
+                             "the rk4 integrator has only the sgn() law (static_ratio = 1); "
+                             "use integrator = 'exact' for true stick-slip")
 
 
 def check_step(system: System, omega: float, dt: float, name: str = "dt") -> None:

@@ -65,7 +65,14 @@ from boringbar.execute import Execution
 from boringbar.kernels.rk4_batch import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
+from boringbar.simulate import (
+    Initial,
+    Integration,
+    resolve_integrator,
+    resolved_integrators,
+    simulate,
+    simulate_batch,
+)
 
 #: Largest period, in forcing periods, looked for in the strobe (as the pattern classifier).
 MAX_K = 8
@@ -467,8 +474,8 @@ def assemble(plan: Plan, results: list[list[_Cell]], attrs: dict | None = None):
               "steady_fraction": integ.steady_fraction, "ball_position_m": o.ball_position_m,
               "ball_velocity_m_s": o.ball_velocity_m_s,
               "tolerances": json.dumps(asdict(o.tolerance)), "integrator": integ.integrator,
-              "integrator_used": ",".join(sorted({resolve_integrator(
-                  integ.integrator, op.case.system) for op in ctx["operating"]})),
+              "integrator_used": resolved_integrators(
+                  integ.integrator, [op.case.system for op in ctx["operating"]]),
               "batch": o.batch if any(ctx["batched"]) else 1, **(attrs or {})}
     parts = [_dataset(op.case.system, op.forcing, cells[i], ctx, config)
              for i, op in enumerate(ctx["operating"])]

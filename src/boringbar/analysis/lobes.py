@@ -63,7 +63,7 @@ from boringbar.execute import Execution
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
 from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds
-from boringbar.simulate import Integration, check_delay, resolve_integrator, simulate
+from boringbar.simulate import Integration, check_delay, resolved_integrators, simulate
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
 PUBLISHED_DEPTH_STEP = 0.01e-3
@@ -355,9 +355,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
             "criterion": o.criterion,
             "successive": o.successive,
             "integrator": integ.integrator,
-            "integrator_used": ",".join(sorted({resolve_integrator(integ.integrator, c.system,
-                                                                   cutting=True)
-                                                for c in cases})),
+            "integrator_used": resolved_integrators(integ.integrator,
+                                                    [c.system for c in cases], cutting=True),
             "delay_interpolation": o.interpolation,
             "start": o.start,
             "kr_pa": o.kr_pa,

@@ -39,7 +39,7 @@ from boringbar.analysis.sweep import Case, SweepOptions
 from boringbar.execute import Execution
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import make_system
-from boringbar.simulate import Initial, Integration, resolve_integrator, simulate
+from boringbar.simulate import Initial, Integration, resolved_integrators, simulate
 
 KINDS = ("ball", "friction_number", "restitution", "initial")
 PUBLISHED_VALUES = {
@@ -248,8 +248,8 @@ def _cuts_dataset(plan: Plan, results: list, attrs: dict | None):
         coords={"depth": ("depth", np.asarray(cuts.depths, dtype=float), {"units": "m"})},
         attrs={"title": "boringbar sensitivity (cuts)", "boringbar_version": __version__,
                "integrator": integ.integrator,
-               "integrator_used": ",".join(sorted({resolve_integrator(
-                   integ.integrator, c.system, cutting=True) for c in cases})),
+               "integrator_used": resolved_integrators(integ.integrator,
+                                                       [c.system for c in cases], cutting=True),
                "rpm": cuts.rpm, "dt_s": integ.dt_s,
                "duration_s": cuts.duration, "forcing_options": json.dumps(cuts.options),
                "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),

@@ -140,7 +140,8 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
         raise ParameterError("sweep needs at least one case")
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
-    rk4 = [_integrator(c, integration) == "rk4" and options.batch > 1 for c in cases]
+    integrators = [resolve_integrator(integration.integrator, c.system) for c in cases]
+    rk4 = [i == "rk4" and options.batch > 1 for i in integrators]
     groups: dict[tuple, list] = {}
     points = []
     for ijk in jobs:
@@ -152,13 +153,8 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
     points = [g[a:a + options.batch] for g in groups.values()
               for a in range(0, len(g), options.batch)] + points
     context = {"cases": cases, "options": options, "integration": integration,
-               "batched": rk4}
+               "integrators": integrators, "batched": rk4}
     return Plan(context, points, {"shape": shape})
-
-
-def _integrator(case: Case, integration: Integration) -> str:
-    """The integrator of the case's runs (the sweep's, or "auto"'s choice)."""
-    return resolve_integrator(integration.integrator, case.system)
 
 
 def compute(context: dict, point: list) -> list[dict]:
@@ -181,8 +177,8 @@ def warm(context: dict) -> None:
     batched, per batch size the points use (the batch kernel is compiled per size)."""
     cases, integ = context["cases"], context["integration"]
     seen = set()
-    for c, batched in zip(cases, context["batched"], strict=True):
-        key = (c.system.kind if batched else _integrator(c, integ), c.system.bar.n_modes)
+    for c, batched, used in zip(cases, context["batched"], context["integrators"], strict=True):
+        key = (c.system.kind if batched else used, c.system.bar.n_modes)
         if key in seen:
             continue
         seen.add(key)
@@ -247,7 +243,7 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
             "bar": ("case", [c.bar for c in cases]),
             "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
-            "integrator": ("case", [_integrator(c, integ) for c in cases],
+            "integrator": ("case", ctx["integrators"],
                            {"long_name": "the integrator of the case's runs"}),
         },
         attrs={

@@ -407,7 +407,8 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     :data:`COLUMNS` named in ``presets``) into ``out`` and write the report; returns
     the manifest (also ``out/manifest.json``).  A further column reruns the steps
     with friction and shares the others with its preset's records, where that preset
-    ran; it skips the design searches.  A step that fails (bad input or an I/O
+    ran; it skips the steps marked ``variants=False`` (the design searches, the
+    continuation, the steel ball's lobes).  A step that fails (bad input or an I/O
     error) raises :class:`StepFailed`; the steps finished before it are kept."""
     shown = Path(out)  # as the user wrote it, for the commands in the report
     out = shown.resolve()
@@ -421,7 +422,7 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     records, done = [], {}
     for column, step, shared in plan:
         step = step.for_column(column)
-        if shared is not None and (shared, step.key) in done:
+        if shared is not None:  # its preset ran it before (_plan's order)
             records.append({**done[(shared, step.key)], "preset": column,
                             "shared_from": shared, "reused": False})
             continue
