@@ -43,8 +43,7 @@ STICK_MIN_PERIODS = 0.01
 MIN_STEPS_PER_PERIOD = 20
 #: The time integrators: the published fixed-step RK4, or exact and event-driven.
 INTEGRATORS = ("rk4", "exact")
-#: What ``integrator`` may say: one of :data:`INTEGRATORS`, or "auto" (the default):
-#: :func:`resolve_integrator` chooses per run.
+#: ``integrator``: "auto" (the default; :func:`resolve_integrator` chooses) or INTEGRATORS.
 INTEGRATOR_CHOICES = ("auto", *INTEGRATORS)
 
 # Resource bounds: far beyond any study (the published runs are 2e6 steps, 922
