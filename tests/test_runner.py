@@ -151,8 +151,11 @@ def test_sigkill_then_resume_equals_uninterrupted_run(tmp_path):
     part = tmp_path / "kill.nc.partial"
     cmd = [sys.executable, "-m", "boringbar", "run", str(study), "--out", str(out),
            "--executor", "processes", "--workers", "2", "--chunk-size", "1", "--quiet"]
+    # chunk 35 stalls, so the run is still going when it is killed, however fast
+    # the other chunks finish
+    env = dict(os.environ, BORINGBAR_FAULT_STALL_CHUNK="35")
     proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+                            stderr=subprocess.PIPE, env=env)
     deadline = time.monotonic() + 120
     while len(list(part.glob("chunk-*.pkl"))) < 4:
         assert proc.poll() is None, proc.communicate()

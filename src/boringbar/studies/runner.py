@@ -22,7 +22,9 @@ tasks of a worker that dies are rerun by the scheduler).
 Fault injection for tests: with ``BORINGBAR_FAULT_KILL_CHUNK=i`` and
 ``BORINGBAR_FAULT_MARKER=PATH`` in the environment, the first worker process
 to start chunk ``i`` creates PATH and kills itself (``os._exit``); the serial
-executor never does.  Nothing happens unless both are set.
+executor never does.  Nothing happens unless both are set.  With
+``BORINGBAR_FAULT_STALL_CHUNK=i`` a worker that starts chunk ``i`` sleeps for ten
+minutes instead, so a test that kills the run can be sure it is still running.
 """
 
 from __future__ import annotations
@@ -112,6 +114,9 @@ def _planned(study: Study, key: str):
 
 
 def _maybe_die(chunk: int) -> None:
+    stall = os.environ.get("BORINGBAR_FAULT_STALL_CHUNK")
+    if stall is not None and int(stall) == chunk:
+        time.sleep(600)
     target, marker = (os.environ.get("BORINGBAR_FAULT_KILL_CHUNK"),
                       os.environ.get("BORINGBAR_FAULT_MARKER"))
     if target is None or marker is None or int(target) != chunk:
