@@ -58,3 +58,67 @@ def test_without_the_lock_concurrent_compiles_lose_entries(tmp_path, monkeypatch
         if bad:
             return
     pytest.fail("five unlocked races lost nothing")
+
+
+_CALLER = '''
+from numba import njit
+from probe_tree.helper import value
+
+@njit(cache=True)
+def f():
+    return value()
+'''
+_HELPER = '''
+from numba import njit
+
+@njit(cache=True, inline="always")
+def value():
+    return {}
+'''
+_RUN = '''
+import sys
+from pathlib import Path
+from boringbar.kernels import cache
+root = Path(sys.argv[1])
+if sys.argv[2] == "stamped":
+    assert cache.stamp_tree(cache.tree_locators(root / "probe_tree"))
+sys.path.insert(0, str(root))
+from probe_tree.caller import f
+print(f(), f.stats.cache_hits and 1 or 0)
+'''
+
+
+def _probe(root, mode):
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", _RUN, str(root), mode], capture_output=True,
+                         text=True, check=True).stdout.split()
+    return int(out[0]), int(out[1])  # the value, whether it came from the cache
+
+
+@pytest.mark.parametrize("mode", ["stamped", "numba"])
+def test_an_edit_to_an_inlined_helper_reaches_its_callers_cache(tmp_path, mode):
+    """numba stamps a cached function with its own file only: after an edit to an inlined
+    helper in another file, the caller loads its old code (``numba``).  The tree's stamp
+    (kernels/cache.py, on for every kernel) compiles it again (``stamped``)."""
+    pkg = tmp_path / "probe_tree"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "caller.py").write_text(_CALLER)
+    (pkg / "helper.py").write_text(_HELPER.format(1))
+    assert _probe(tmp_path, mode) == (1, 0)  # compiled
+    assert _probe(tmp_path, mode) == (1, 1)  # loaded from the cache
+    (pkg / "helper.py").write_text(_HELPER.format(2))
+    assert _probe(tmp_path, mode) == ((2, 0) if mode == "stamped" else (1, 1))
+
+
+def test_every_kernel_is_stamped_with_the_kernel_tree():
+    assert cache.tree_stamped()  # importing boringbar.kernels put the locators first
+    assert [c.__name__ for c in cache.SALTED] == [
+        "TreeUserProvidedCacheLocator", "TreeInTreeCacheLocator", "TreeUserWideCacheLocator"]
+    from boringbar.kernels.core import count_impact
+
+    locator = caching.FunctionCache(count_impact.py_func)._impl.locator
+    assert type(locator) in cache.SALTED
+    assert locator.get_source_stamp()[1] == cache.tree_stamp()

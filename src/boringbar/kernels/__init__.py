@@ -1,12 +1,14 @@
 """The numba kernels and what they need at the numba level.
 
 Importing this package makes numba's on-disk cache safe for several processes
-compiling at once (:mod:`boringbar.kernels.cache`) and its inliner's copies of
+compiling at once and stale after an edit to any kernel file
+(:mod:`boringbar.kernels.cache`), and its inliner's copies of
 the inlined IR linear in its size (:mod:`boringbar.kernels.inline_copy`).
 """
 
 from boringbar.kernels import inline_copy
-from boringbar.kernels.cache import lock_cache_saves
+from boringbar.kernels.cache import lock_cache_saves, stamp_tree
 
 lock_cache_saves()
+stamp_tree()
 inline_copy.apply()

@@ -18,9 +18,20 @@ another process saves.
 when it is imported.  Where there is no ``fcntl`` (Windows) or numba's layout
 differs, saves stay as numba makes them (tests/test_compile_cache.py fails
 loudly on the latter).
+
+numba's cache also checks only the source file of the function it compiled
+(``get_source_stamp``: the file's SHA-256), not the files of the functions it
+calls or inlines: after an edit to ``core.py``, or an upgrade that changes it,
+the kernels that use it would load their old machine code.  The locators of
+:func:`stamp_tree` add one more stamp to every kernel under
+``boringbar/kernels``: the SHA-256 of every source file there, so a change to
+any of them compiles every kernel again.
 """
 
 import functools
+import hashlib
+import os
+from pathlib import Path
 
 try:
     import fcntl
@@ -58,3 +69,83 @@ def lock_cache_saves(enabled: bool = True) -> bool:
 def cache_saves_locked() -> bool:
     """Whether numba's cache saves go through the lock of this module."""
     return fcntl is not None and caching.IndexDataCacheFile.save is _locked_save
+
+
+#: the kernels' source tree, whose every file a kernel's cache entry depends on
+KERNEL_TREE = Path(__file__).resolve().parent
+
+
+def tree_stamp(root: Path = KERNEL_TREE) -> str:
+    """SHA-256 of every ``.py`` file under ``root`` (names and contents, in sorted order)."""
+    stats = tuple((str(f), f.stat().st_mtime_ns, f.stat().st_size)
+                  for f in sorted(root.rglob("*.py")))
+    return _hash_files(stats, str(root))
+
+
+@functools.lru_cache(maxsize=8)
+def _hash_files(stats, root):
+    h = hashlib.sha256()
+    for name, _, _ in stats:
+        h.update(os.path.relpath(name, root).encode() + b"\0")
+        h.update(Path(name).read_bytes())
+    return h.hexdigest()
+
+
+def _in_tree(py_file, root: Path) -> bool:
+    try:
+        return Path(py_file).resolve().is_relative_to(root)
+    except (OSError, TypeError, ValueError):
+        return False
+
+
+def _salted(base, root: Path):
+    """``base`` (a numba locator) for the files under ``root`` only, stamped with the tree's
+    stamp too."""
+
+    class Salted(base):
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if not _in_tree(py_file, root):
+                return None
+            return super().from_function(py_func, py_file)
+
+        def get_source_stamp(self):
+            return (super().get_source_stamp(), tree_stamp(root))
+
+    Salted.__name__ = Salted.__qualname__ = f"Tree{base.__name__}"
+    return Salted
+
+
+#: numba's file-backed locators, in numba's order
+_BASES = tuple(c for c in (getattr(caching, n, None) for n in (
+    "UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator"))
+    if c is not None)
+
+
+def tree_locators(root: Path) -> tuple:
+    """numba's file-backed locators for the functions under ``root``, each stamped with
+    :func:`tree_stamp` of ``root`` besides the function's own file."""
+    return tuple(_salted(c, root) for c in _BASES)
+
+
+#: the kernels' locators
+SALTED = tree_locators(KERNEL_TREE)
+
+
+def stamp_tree(locators: tuple = SALTED) -> bool:
+    """Put ``locators`` first among numba's cache locators (once).  Returns whether they are
+    in place (False where numba's layout differs: tests/test_compile_cache.py fails
+    loudly then)."""
+    impl = getattr(caching, "CacheImpl", None)
+    if impl is None or len(_BASES) != 3 or not isinstance(
+            getattr(impl, "_locator_classes", None), list):
+        return False
+    if not any(c in locators for c in impl._locator_classes):
+        impl._locator_classes[:0] = locators
+    return tree_stamped(locators)
+
+
+def tree_stamped(locators: tuple = SALTED) -> bool:
+    """Whether numba's cache locators include ``locators``, in order."""
+    classes = getattr(getattr(caching, "CacheImpl", None), "_locator_classes", [])
+    return all(c in classes for c in locators) and len(locators) == 3
