@@ -38,6 +38,19 @@ from boringbar.shooting import (
 
 #: The parameters a branch can follow (the CLI's names).
 PARAMETERS = ("force-n", "ratio", "gap-mm", "restitution", "friction-force-n", "ball-mass-g")
+#: Those that exist for each bar (:attr:`System.kind`): the solid and TMD bars have no
+#: ball, the locked ball no gap, impacts or friction.
+PARAMETERS_OF = {"ball": PARAMETERS, "locked": ("force-n", "ratio", "ball-mass-g"),
+                 "solid": ("force-n", "ratio"), "tmd": ("force-n", "ratio")}
+
+
+def check_parameter(kind: str, name: str) -> str:
+    """``name`` if the bar ``kind`` has that parameter, else a ParameterError."""
+    allowed = PARAMETERS_OF[kind]
+    if name not in allowed:
+        raise ParameterError(f"parameter = {name!r} is not one of {', '.join(allowed)} "
+                             f"(the parameters of the {kind} bar)")
+    return name
 
 
 def flow_with(fl: Flow, name: str, value: float, ref: Flow) -> Flow:
@@ -183,7 +196,7 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
                     max_step: float = 0.1) -> Branch:
     """Continue the orbit through x0 (near a fixed point of P^periods) in parameter ``name``
     from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|."""
-    p0 = value_of(fl, name)
+    p0 = value_of(fl, check_parameter(fl.kind, name))
     span = abs(stop - p0)
     if not span > 0:
         raise ParameterError(f"range end {stop!r} equals the start value {p0!r}")
