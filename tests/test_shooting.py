@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
+from scipy.optimize import brentq
 
 import boringbar as bb
 from boringbar import shooting as sh
@@ -225,6 +226,64 @@ def test_continuation_in_force_finds_the_closed_form_stability_change():
     expected = _closed_form_crossing(fl, orbit, 27.0, 30.0)
     assert abs(changes[0] - expected) < 0.01 * expected
     assert br.points[0].stable and not br.points[-1].stable
+
+
+def _flight_margin(orbit):
+    """min over the flight's interior extrema of y of (delta/2 - |y|) / (delta/2), from the
+    closed form alone: after the + wall impact the ball flies at -V, so
+    y' = -V - psi_d u'(t) (u' the closed form's modal velocity); inf without an extremum."""
+    sysm = orbit.system
+    t0, th = orbit.impact_time, sysm.half_period
+
+    def yd(t):
+        return -orbit.ball_speed - sysm.psi_ball * orbit.modal_velocity(t)
+    t = t0 + np.linspace(0.0, th, 4001)[1:-1]
+    v = yd(t)
+    best = np.inf
+    for i in np.flatnonzero(v[:-1] * v[1:] < 0):
+        tz = brentq(yd, t[i], t[i + 1], xtol=1e-16 * th)
+        y = float(orbit.relative_displacement(tz))
+        best = min(best, (0.5 * sysm.gap - abs(y)) / (0.5 * sysm.gap))
+    return best
+
+
+def test_a_grazing_is_located_where_the_closed_form_orbit_touches_a_wall_in_flight():
+    """One mode, frictionless ball, gap 0.5 mm, e = 0.7, ratio 1, the closed form's
+    symmetric two-impact orbit of larger phase (unstable, |mu| ~ 4.3, which shooting
+    follows all the same).  As F0 grows, the bar at z_d overtakes the ball in flight: y
+    has an interior extremum that reaches the wall at F0 = 172.19207 N, where the orbit
+    stops being admissible.  That value comes from the closed form alone (the impact
+    phase equation, the impulse-train response and the straight flight: no integration
+    and no shooting), bisected to 1e-14 on the extremum's distance from the wall.  The
+    continued branch must end with a ``grazing`` there: before the shooting module
+    searched each grid step for an extremum beyond a wall, the incursion was missed until
+    it covered a grid point and the grazing came out 2.8e-5 relative too late."""
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    bar, ball = system.bar, system.damper
+    fl0 = sh.make_flow(system, Harmonic(165.0, ratio=1.0))
+
+    def orbit(force):
+        return max(two_impact_orbit(bar.mass[0], bar.stiffness[0], bar.damping[0],
+                                    bar.psi_tip[0], bar.psi_damper[0], ball.mass, ball.gap,
+                                    ball.restitution, force, fl0.omega),
+                   key=lambda o: o.phase)
+    lo, hi = 165.0, 180.0
+    assert orbit(lo).admissible and _flight_margin(orbit(lo)) > 0.05
+    assert not orbit(hi).admissible and _flight_margin(orbit(hi)) < 0
+    while hi - lo > 1e-14 * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _flight_margin(orbit(mid)) > 0 else (lo, mid)
+    grazing = 0.5 * (lo + hi)
+    o = orbit(165.0)
+    h = 1e-9
+    x0 = np.array([float(o.modal_displacement(0.0)), float(o.modal_velocity(0.0)),
+                   float(o.relative_displacement(0.0)),
+                   float(o.relative_displacement(h) - o.relative_displacement(-h)) / (2 * h)])
+    br = continue_branch(fl0, "force-n", x0, 180.0, step=0.05, max_points=60)
+    assert [k for k, _ in br.events] == ["grazing"], (br.stop, br.events)
+    assert abs(br.events[0][1] - grazing) <= 1e-9 * grazing, (br.events, grazing)
+    assert br.points[-1].value == br.events[0][1] and "grazing" in br.stop
+    assert [k for _, k in br.points[-1].events] == ["impact-", "impact+"]
 
 
 def test_continuation_dataset_and_summary_from_a_settled_simulation():
