@@ -20,7 +20,7 @@ from boringbar.branch import (
 )
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.reference.masri_caughey import ImpactSystem, phase_equation, two_impact_orbit
 from boringbar.simulate import Integration, State, simulate
 
 
@@ -160,3 +160,101 @@ def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, ca
     assert main([*argv[:-3], "--parameter", "restitution", "--range", "0.7:0.6",
                  "--overlay", "--out", str(tmp_path)]) == 2
     assert main([*argv, "--overlay", "1"]) == 2
+
+
+def _small_gap_case():
+    """One mode, frictionless ball, gap 0.1 mm, e = 0.7, F0 = 10 N, swept in the ratio."""
+    return make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+                       restitution=0.7)
+
+
+def _closed_form(system, ratio, force=10.0):
+    """The ImpactSystem of the case and its stable admissible two-impact orbit (or None)."""
+    bar, ball = system.bar, system.damper
+    args = (bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+            ball.mass, ball.gap, ball.restitution, force, ratio * system.reference_frequency)
+    orbits = [o for o in two_impact_orbit(*args) if o.admissible and o.stable]
+    return ImpactSystem(*args), (orbits[0] if orbits else None)
+
+
+def _orbit_state(orbit, phase):
+    """(u, u', y, y') of a closed-form orbit at forcing phase ``phase``."""
+    t, h = phase / orbit.system.omega, 1e-9
+    dy = (orbit.relative_displacement(t + h) - orbit.relative_displacement(t - h)) / (2 * h)
+    return np.array([float(orbit.modal_displacement(t)), float(orbit.modal_velocity(t)),
+                     float(orbit.relative_displacement(t)), float(dy)])
+
+
+def _bisect(f, lo, hi, tol=1e-15):
+    """The sign change of f in [lo, hi]."""
+    flo = f(lo) > 0
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if (f(mid) > 0) == flo else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def test_the_coexistence_range_is_bounded_by_the_fold_and_the_linear_grazing():
+    """Gap 0.1 mm, F0 = 10 N, ratio 0.60 -> 0.98 and back (exact, 0.5 s runs).  Forward
+    from rest the ball never hits: the bar's motion is linear and y = -psi_d u, whose
+    amplitude psi_d psi_L F0 / |K - M Omega^2 + i C Omega| reaches delta/2 at the ratio
+    r_g (closed form).  Backward, the sweep rides the stable symmetric two-impact orbit
+    down to where it dies at a fold: the two roots of the Masri-Caughey phase equation
+    a cos phi + b sin phi = delta merge where sqrt(a^2 + b^2) = delta, at r_f (closed
+    form).  So the two attractors coexist on [r_f, r_g], and the sweeps' jumps must
+    bracket both values; continuation must find a fold at r_f (1e-9 relative) and no
+    other stability change above it, and its stable branch must be the backward sweep's
+    orbit (1e-8 relative).  The other end of the range is not a fold: the orbit without
+    impacts is not isolated (the free ball's position is neutral), so shooting cannot
+    follow it (docs/continuation.md)."""
+    system = _small_gap_case()
+    bar = system.bar
+    r_f = _bisect(lambda r: float(np.hypot(*phase_equation(_closed_form(system, r)[0])[:2])
+                                  - phase_equation(_closed_form(system, r)[0])[2]), 0.5, 0.8)
+
+    def relative_amplitude(r):
+        om = r * system.reference_frequency
+        return abs(bar.psi_damper[0] * bar.psi_tip[0] * 10.0
+                   / complex(bar.stiffness[0] - bar.mass[0] * om**2, bar.damping[0] * om))
+    r_g = _bisect(lambda r: relative_amplitude(r) - 0.05e-3, 0.8, 1.0)
+    values = tuple(np.round(np.arange(0.60, 0.985, 0.01), 2))
+    ds = bb.bifurcation(system, bb.BifurcationOptions("ratio", values, 10.0, 1.0),
+                        integration=Integration(0.5, 1e-6, "exact", 0.2))
+    impacts = {d: ds["impacts_per_cycle"].sel(direction=d).values for d in ("forward", "backward")}
+    period = {d: ds["period"].sel(direction=d).values for d in ("forward", "backward")}
+    v = np.asarray(values)
+    # forward: no impact below r_g, impacts above
+    assert np.all(impacts["forward"][v < r_g] == 0) and np.all(impacts["forward"][v > r_g] > 0)
+    # backward: the period-1 two-impact orbit from 0.92 down to r_f, not below
+    two = (period["backward"] == 1) & (np.round(impacts["backward"]) == 2)
+    assert np.all(two[(v > r_f) & (v <= 0.92)]) and not np.any(two[v < r_f])
+    assert 0.62 < r_f < 0.63 and 0.96 < r_g < 0.97  # where the brute force jumped
+    # continuation from the closed form at 0.8 (section at phase 1.6, off the impacts)
+    fl = sh.make_flow(system, Harmonic(10.0, ratio=0.8))
+    fl = dataclasses.replace(fl, phase=1.6)
+    x0 = _orbit_state(_closed_form(system, 0.8)[1], 1.6)
+    br = continue_branch(fl, "ratio", x0, 0.55, step=0.05, max_points=16)
+    changes = [(k, p) for k, p in br.events if k != "grazing"]
+    assert changes[0][0] == "fold" and abs(changes[0][1] - r_f) <= 1e-9 * r_f, br.events
+    turn = int(np.argmin([p.value for p in br.points]))  # the point nearest the fold
+    assert all(p.stable for p in br.points[:turn]) and not br.points[-1].stable
+    assert br.points[-1].value > br.points[turn].value >= r_f * (1 - 1e-12)
+    # the stable symmetric branch (section at phase 0, 0.88 down to 0.64; it loses its
+    # stability between 0.88 and 0.89, where the sweep goes on on an asymmetric
+    # two-impact orbit) is the backward sweep's orbit
+    fl0 = sh.make_flow(system, Harmonic(10.0, ratio=0.88))
+    x88 = _orbit_state(_closed_form(system, 0.88)[1], 0.0)
+    up = continue_branch(fl0, "ratio", x88, 0.635, step=0.05, max_points=60, max_step=0.05)
+    checked = 0
+    for j, r in enumerate(values):
+        if not 0.64 <= r <= 0.88:
+            continue
+        near = min(up.points, key=lambda p: abs(p.value - r))
+        x, pr = sh.periodic_orbit(flow_with(fl0, "ratio", r, fl0), near.x)
+        assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
+        w = fl0.psi_tip @ x[:fl0.n]
+        s = ds["tip_displacement"].sel(direction="backward").isel(value=j).values
+        s = s[np.isfinite(s)]
+        assert len(s) > 20 and np.max(np.abs(s - w)) <= 1e-8 * abs(w), (r, s[-1], w)
+        checked += 1
+    assert checked == 25

@@ -24,6 +24,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import brentq, linear_sum_assignment
 
 from boringbar._validate import ParameterError
 from boringbar.shooting import (
@@ -155,20 +156,26 @@ def tangent_at(fl, name, ref, y, pr, scale, k, previous=None):
     return t / np.linalg.norm(t)
 
 
-def _crossing(m0, m1):
-    """The bifurcation between two points' multipliers (kind or None): the change in the
-    number outside the unit circle, classified by the crossing multiplier."""
-    out0, out1 = np.sum(np.abs(m0) > 1.0), np.sum(np.abs(m1) > 1.0)
-    if out0 == out1:
-        return None, None
-    i = int(np.argmin(np.abs(np.abs(m1) - 1.0)))
-    mu = m1[i]
-    if abs(mu.imag) > 1e-6 * abs(mu):
-        kind = "neimark-sacker"
-    else:
-        kind = "fold" if mu.real > 0 else "period-doubling"
-    j = int(np.argmin(np.abs(m0 - mu)))
-    return kind, (abs(m0[j]) - 1.0, abs(mu) - 1.0)
+def _crossings(m0, m1):
+    """The bifurcations between two points' multipliers: [(kind, (|mu0| - 1, |mu1| - 1))].
+    The multipliers are paired by least total distance; a pair whose modulus crosses 1 is
+    a fold (real, positive), a period doubling (real, negative) or, once for a conjugate
+    pair, a Neimark-Sacker.  Pairing, not counting, sees two crossings in one step (a
+    complex pair going back inside while a real multiplier leaves at a fold)."""
+    rows, cols = linear_sum_assignment(np.abs(m0[:, None] - m1[None, :]))
+    found = []
+    for i, j in zip(rows, cols, strict=True):
+        g0, g1 = abs(m0[i]) - 1.0, abs(m1[j]) - 1.0
+        if (g0 > 0) == (g1 > 0):
+            continue
+        s = g0 / (g0 - g1)
+        mu = m0[i] + s * (m1[j] - m0[i])
+        if abs(mu.imag) > 1e-6 * abs(mu):
+            if mu.imag > 0:
+                found.append(("neimark-sacker", (g0, g1)))
+        else:
+            found.append(("fold" if mu.real > 0 else "period-doubling", (g0, g1)))
+    return found
 
 
 @dataclass(frozen=True)
@@ -243,7 +250,7 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
             return br
         pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events)
-        _record_crossing(br, br.points[-1], pt)
+        _record_crossing(br, br.points[-1], pt, w)
         br.points.append(pt)
         if not w.lo <= pt.value <= w.hi:
             br.stop = "end of range"
@@ -304,7 +311,7 @@ def _boundary(br, w: Walk, located):
     smooth there), else "grazing" (an impact or reversal appears or vanishes)."""
     last, width = located
     if last is not None:
-        _record_crossing(br, br.points[-1], last)
+        _record_crossing(br, br.points[-1], last, w)
         br.points.append(last)
     p = br.points[-1].value
     at = flow_with(w.fl, w.name, p, w.ref)
@@ -316,14 +323,38 @@ def _boundary(br, w: Walk, located):
                f"(bracket {width:.2g}; {what}): the branch is not followed across it")
 
 
-def _record_crossing(br, a, b):
-    kind, g = _crossing(a.multipliers, b.multipliers)
-    if kind is None:
-        return
-    # the secant of |mu| - 1, kept between the two points (the crossing multiplier of a
-    # and of b are paired by nearness, which a large step can get wrong)
-    s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
-    br.events.append((kind, float(a.value + s * (b.value - a.value))))
+def _record_crossing(br, a, b, w: Walk | None = None):
+    for kind, g in _crossings(a.multipliers, b.multipliers):
+        # the secant of |mu| - 1, kept between the two points
+        s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
+        value = float(a.value + s * (b.value - a.value))
+        if kind == "fold" and w is not None:
+            value = locate_fold(w, a, b, value)
+        br.events.append((kind, value))
+
+
+def locate_fold(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1e-12) -> float:
+    """The parameter of the fold between the branch points a and b: where the p component
+    of the branch's unit tangent vanishes, found by Brent's method on the arclength s of
+    the corrector from a (its hyperplane through a + s t_a; s from 0 to b's).  Both points
+    lie on the same side of a fold, so the secant of |mu| - 1 between them (``fallback``,
+    returned if the refinement fails) is off by O(step^2)."""
+    fl, name, ref, k, scale = w.fl, w.name, w.ref, w.periods, w.scale
+    ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
+    try:
+        pr = advance(flow_with(fl, name, a.value, ref), a.x, k)
+        ta = tangent_at(fl, name, ref, ya, pr, scale, k, (yb - ya) / scale)
+        sb = float(ta @ ((yb - ya) / scale))
+
+        def along(s):
+            y, prs, _ = correct(fl, name, ref, ya + s * ta * scale, ta, scale, k)
+            return y, tangent_at(fl, name, ref, y, prs, scale, k, ta)[-1]
+        if ta[-1] * along(sb)[1] > 0:
+            return fallback
+        s = brentq(lambda s: along(s)[1], 0.0, sb, xtol=tol * sb, rtol=1e-15)
+        return float(along(s)[0][-1])
+    except OrbitRefused:
+        return fallback
 
 
 def _minus_one(fl, name, ref, x, p, k):
@@ -371,7 +402,7 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     distance (a subcritical doubling turns back).  Its first event is the doubling."""
     k = br.periods
     pairs = [(a, b) for a, b in zip(br.points, br.points[1:], strict=False)
-             if _crossing(a.multipliers, b.multipliers)[0] == "period-doubling"]
+             if any(c[0] == "period-doubling" for c in _crossings(a.multipliers, b.multipliers))]
     if not 0 <= which < len(pairs):
         raise ParameterError(f"which = {which} is not in [0, {len(pairs) - 1}]: the branch "
                              f"has {len(pairs)} period-doubling point(s)")
