@@ -258,3 +258,32 @@ def test_the_coexistence_range_is_bounded_by_the_fold_and_the_linear_grazing():
         assert len(s) > 20 and np.max(np.abs(s - w)) <= 1e-8 * abs(w), (r, s[-1], w)
         checked += 1
     assert checked == 25
+
+
+def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
+    """Gap 0.1 mm, e = 0.3, F0 = 30 N: the stable symmetric two-impact orbit loses its
+    stability at ratio 0.8320207 (closed form: the largest |multiplier| of the impact map
+    reaches 1, bisected) to a real multiplier +1 while the branch goes on (a symmetry-
+    breaking pitchfork: the sweeps beyond it sit on the two mirror-image asymmetric
+    orbits).  Continuation must call it a branch point, not a fold, where the closed form
+    puts it (3e-5: the corrector's matrix is singular at a branch point, so Newton stops
+    converging close to it and the bisection ends there)."""
+    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+                         restitution=0.3)
+    orbit = _closed_form(system, 0.7, 30.0)[1]
+    ph = (orbit.phase + np.pi / 2) % np.pi  # the section half-way between the impacts
+    fl = dataclasses.replace(sh.make_flow(system, Harmonic(30.0, ratio=0.7)), phase=ph)
+    br = continue_branch(fl, "ratio", _orbit_state(orbit, ph), 0.9, step=0.05, max_points=22)
+    assert [k for k, _ in br.events] == ["branch-point"], (br.stop, br.events)
+
+    def stable(r):
+        sysm = _closed_form(system, r, 30.0)[0]
+        near = min((o for o in two_impact_orbit(
+            sysm.mass, sysm.stiffness, sysm.damping, sysm.psi_tip, sysm.psi_ball,
+            sysm.ball_mass, sysm.gap, sysm.restitution, sysm.force, sysm.omega)
+            if o.admissible), key=lambda o: abs(o.phase - orbit.phase))
+        return 1.0 if np.max(np.abs(near.multipliers)) < 1.0 else -1.0
+    expected = _bisect(stable, 0.82, 0.84, 1e-12)
+    assert abs(br.events[0][1] - expected) <= 1e-4 * expected, (br.events, expected)
+    values = [p.value for p in br.points]
+    assert values == sorted(values) and values[-1] > expected  # no turn

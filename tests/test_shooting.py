@@ -224,7 +224,7 @@ def test_continuation_in_force_finds_the_closed_form_stability_change():
     changes = [v for k, v in br.events if k in ("fold", "period-doubling", "neimark-sacker")]
     assert len(changes) == 1
     expected = _closed_form_crossing(fl, orbit, 27.0, 30.0)
-    assert abs(changes[0] - expected) < 0.01 * expected
+    assert abs(changes[0] - expected) < 1e-8 * expected
     assert br.points[0].stable and not br.points[-1].stable
 
 
@@ -317,7 +317,7 @@ def test_continuation_in_ratio_finds_the_closed_form_stability_change():
     changes = [v for k, v in br.events if k in ("fold", "period-doubling", "neimark-sacker")]
     assert len(changes) == 1, (br.stop, br.events)
     expected = _closed_form_crossing(fl, orbit, 1.0, 1.04, along="ratio")
-    assert abs(changes[0] - expected) < 0.01 * expected
+    assert abs(changes[0] - expected) < 1e-8 * expected
     assert br.points[0].stable and not br.points[-1].stable
 
 

@@ -324,21 +324,60 @@ def _boundary(br, w: Walk, located):
 
 
 def _record_crossing(br, a, b, w: Walk | None = None):
-    for kind, g in _crossings(a.multipliers, b.multipliers):
+    found = _crossings(a.multipliers, b.multipliers)
+    for kind, g in found:
         # the secant of |mu| - 1, kept between the two points
         s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
         value = float(a.value + s * (b.value - a.value))
-        if kind == "fold" and w is not None:
-            value = locate_fold(w, a, b, value)
+        turned = locate_fold(w, a, b) if kind == "fold" and w is not None else None
+        if kind == "fold" and w is not None and turned is None:
+            # a +1 multiplier where the branch does not turn: a branch point (here the
+            # symmetric orbit's symmetry-breaking pitchfork), not a fold
+            kind = "branch-point"
+        if turned is not None:
+            value = turned
+        elif len(found) == 1 and w is not None:
+            value = locate_crossing(w, a, b, value)
         br.events.append((kind, value))
 
 
-def locate_fold(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1e-12) -> float:
+def _along(w: Walk, ya, ta, s):
+    """The branch point on the corrector's hyperplane through ya + s ta (scaled)."""
+    return correct(w.fl, w.name, w.ref, ya + s * ta * w.scale, ta, w.scale, w.periods)
+
+
+def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1e-10) -> float:
+    """The parameter where the number of multipliers outside the unit circle changes
+    between the branch points a and b (one crossing between them), by bisection on the
+    arclength of the corrector from a to ``tol`` of a's distance to b; ``fallback`` (the
+    secant) if the corrector fails at once.  At a branch point the corrector's matrix is
+    singular (two branches cross there) and Newton fails close to it: the bisection stops
+    there, with the nearest orbit found beyond it."""
+    ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
+    d = (yb - ya) / w.scale
+    ta = d / np.linalg.norm(d)
+    n_out = np.sum(np.abs(a.multipliers) > 1.0)
+    lo, hi, p = 0.0, float(np.linalg.norm(d)), fallback
+    try:
+        while hi - lo > tol * np.linalg.norm(d):
+            mid = 0.5 * (lo + hi)
+            y, pr, _ = _along(w, ya, ta, mid)
+            if np.sum(np.abs(multipliers(pr)) > 1.0) == n_out:
+                lo = mid
+            else:
+                hi, p = mid, float(y[-1])
+    except OrbitRefused:
+        pass
+    return p
+
+
+def locate_fold(w: Walk, a: Point, b: Point, tol: float = 1e-12) -> float | None:
     """The parameter of the fold between the branch points a and b: where the p component
     of the branch's unit tangent vanishes, found by Brent's method on the arclength s of
     the corrector from a (its hyperplane through a + s t_a; s from 0 to b's).  Both points
-    lie on the same side of a fold, so the secant of |mu| - 1 between them (``fallback``,
-    returned if the refinement fails) is off by O(step^2)."""
+    lie on the same side of a fold, so the secant of |mu| - 1 between them is off by
+    O(step^2).  None if the p component keeps its sign (the branch does not turn) or the
+    corrector fails on the way."""
     fl, name, ref, k, scale = w.fl, w.name, w.ref, w.periods, w.scale
     ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
     try:
@@ -350,11 +389,11 @@ def locate_fold(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1e-12
             y, prs, _ = correct(fl, name, ref, ya + s * ta * scale, ta, scale, k)
             return y, tangent_at(fl, name, ref, y, prs, scale, k, ta)[-1]
         if ta[-1] * along(sb)[1] > 0:
-            return fallback
+            return None
         s = brentq(lambda s: along(s)[1], 0.0, sb, xtol=tol * sb, rtol=1e-15)
         return float(along(s)[0][-1])
     except OrbitRefused:
-        return fallback
+        return None
 
 
 def _minus_one(fl, name, ref, x, p, k):
