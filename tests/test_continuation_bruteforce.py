@@ -134,11 +134,32 @@ def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it
                    dt=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
                    steady_fraction=1.0)
     br = continue_branch(dataclasses.replace(fl, phase=phase), "force-n", run.final.x, 36.0,
-                         step=0.1, max_points=40, max_step=0.3)
+                         step=0.1, max_points=40, max_step=0.3, move_section=False)
     assert [k for k, _ in br.events] == ["section"], (br.stop, br.events)
     located = br.events[0][1]
     assert br.points[-1].value == located and located < 33.0
     assert abs(located - 33.0) < 1e-6 * 33.0, located
+
+
+def test_the_section_moves_away_from_an_impact_and_the_branch_goes_on():
+    """The same branch with the section moving (the default): the impact never reaches
+    the section, the branch reaches the end of its range, and every point, carried to
+    phase 0, is the closed-form two-impact orbit at its F0 (1e-8 relative)."""
+    system = _one_mode_case()
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
+    phase = _closed_form_phase(system, fl, 33.0)
+    fl = dataclasses.replace(fl, phase=phase)
+    x0 = _orbit_state(_closed_form(system, 1.0, 30.0)[1], phase)
+    br = continue_branch(fl, "force-n", x0, 36.0, step=0.1, max_points=40, max_step=0.3)
+    assert br.stop == "end of range" and br.events == [], (br.stop, br.events)
+    assert br.section_moves >= 1 and {p.phase for p in br.points} != {phase}
+    for pt in br.points[1:]:
+        at = flow_with(dataclasses.replace(fl, phase=pt.phase), "force-n", pt.value, fl)
+        x = sh.carry(at, pt.x, 0.0)
+        orbit = next(o for o in two_impact_orbit(
+            *dataclasses.astuple(_closed_form(system, 1.0, pt.value)[0])) if o.admissible)
+        ref = _orbit_state(orbit, 0.0)
+        assert np.max(np.abs(x - ref)) <= 1e-8 * np.max(np.abs(ref)), (pt.value, x, ref)
 
 
 def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, capsys):
@@ -239,7 +260,7 @@ def test_the_coexistence_range_is_bounded_by_the_fold_and_the_linear_grazing():
     turn = int(np.argmin([p.value for p in br.points]))  # the point nearest the fold
     assert all(p.stable for p in br.points[:turn]) and not br.points[-1].stable
     assert br.points[-1].value > br.points[turn].value >= r_f * (1 - 1e-12)
-    # the stable symmetric branch (section at phase 0, 0.88 down to 0.64; it loses its
+    # the stable symmetric branch (from phase 0, 0.88 down to 0.64; it loses its
     # stability between 0.88 and 0.89, where the sweep goes on on an asymmetric
     # two-impact orbit) is the backward sweep's orbit
     fl0 = sh.make_flow(system, Harmonic(10.0, ratio=0.88))
@@ -249,10 +270,11 @@ def test_the_coexistence_range_is_bounded_by_the_fold_and_the_linear_grazing():
     for j, r in enumerate(values):
         if not 0.64 <= r <= 0.88:
             continue
-        near = min(up.points, key=lambda p: abs(p.value - r))
-        x, pr = sh.periodic_orbit(flow_with(fl0, "ratio", r, fl0), near.x)
+        near = min(up.points, key=lambda p: abs(p.value - r))  # its section may have moved
+        at = flow_with(dataclasses.replace(fl0, phase=near.phase), "ratio", r, fl0)
+        x, pr = sh.periodic_orbit(at, near.x)
         assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
-        w = fl0.psi_tip @ x[:fl0.n]
+        w = fl0.psi_tip @ sh.carry(at, x, 0.0)[:fl0.n]
         s = ds["tip_displacement"].sel(direction="backward").isel(value=j).values
         s = s[np.isfinite(s)]
         assert len(s) > 20 and np.max(np.abs(s - w)) <= 1e-8 * abs(w), (r, s[-1], w)

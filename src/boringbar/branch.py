@@ -31,6 +31,8 @@ from boringbar.shooting import (
     Flow,
     OrbitRefused,
     advance,
+    carry,
+    free_phase,
     multipliers,
     newton_step,
     one_blas_thread,
@@ -92,6 +94,8 @@ class Point:
     x: np.ndarray
     multipliers: np.ndarray
     events: list
+    #: The forcing phase of the Poincare section x is on (rad).
+    phase: float = 0.0
 
     @property
     def stable(self) -> bool:
@@ -110,6 +114,8 @@ class Branch:
     stop: str = ""
     #: The orbit it branched from (a period-doubling point), if any.
     origin: Point | None = None
+    #: How often the Poincare section was moved away from an event.
+    section_moves: int = 0
 
 
 def _residual(fl, name, ref, x, p, k):
@@ -195,14 +201,24 @@ class Walk:
     max_points: int = 200
     min_step: float = 1e-6
     max_step: float = 0.1
+    #: Move the section away from an event that comes near it (else the branch stops
+    #: where an event crosses it).
+    move_section: bool = True
+
+
+#: An event closer than this (rad of forcing phase) to the section moves the section.
+SECTION_MARGIN = 2.0 * np.pi / 16
+#: At most this many moves of the section a branch.
+MAX_SECTION_MOVES = 100
 
 
 @one_blas_thread
 def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods: int = 1,
                     step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
-                    max_step: float = 0.1) -> Branch:
+                    max_step: float = 0.1, move_section: bool = True) -> Branch:
     """Continue the orbit through x0 (near a fixed point of P^periods) in parameter ``name``
-    from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|."""
+    from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|;
+    ``move_section``: see :class:`Walk`."""
     p0 = value_of(fl, check_parameter(fl.kind, name))
     span = abs(stop - p0)
     if not span > 0:
@@ -215,11 +231,11 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
         return br
     lo, hi = (stop, np.inf) if stop < p0 else (-np.inf, stop)
     w = Walk(fl, name, fl, periods, _scale(y[:-1], span), lo, hi, step, max_points, min_step,
-             max_step)
+             max_step, move_section)
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
     t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)
-    br.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events))
+    br.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events, fl.phase))
     return march(w, br, y, t)
 
 
@@ -247,9 +263,15 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             if yn is None:
                 br.stop = why
                 return br
-            _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
-            return br
-        pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events)
+            kind = _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
+            moved = _move_section(br, w, t) if kind == "section" and w.move_section else None
+            if moved is None:
+                return br
+            br.stop = ""
+            w, y, t = moved
+            fl, ref, scale = w.fl, w.ref, w.scale
+            continue
+        pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events, fl.phase)
         _record_crossing(br, br.points[-1], pt, w)
         br.points.append(pt)
         if not w.lo <= pt.value <= w.hi:
@@ -258,8 +280,44 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
         t = tangent_at(fl, name, ref, yn, prn, scale, k, t)
         y = yn
         h = min(w.max_step, h * 1.3) if its <= 4 else h
+        if w.move_section and _near_section(flow_with(fl, name, pt.value, ref), pt.events):
+            w, y, t = _move_section(br, w, t) or (w, y, t)
+            fl, ref, scale = w.fl, w.ref, w.scale
     br.stop = f"max_points = {w.max_points} reached"
     return br
+
+
+def _near_section(fl: Flow, events) -> bool:
+    """An event within SECTION_MARGIN of the section's phase."""
+    d = [abs((fl.omega * t - fl.phase + np.pi) % (2.0 * np.pi) - np.pi) for t, _ in events]
+    return bool(d) and min(d) < SECTION_MARGIN
+
+
+def _move_section(br: Branch, w: Walk, t: np.ndarray):
+    """Move the Poincare section to the phase farthest from the events of the branch's
+    last point and carry that point there (the multipliers do not change: the monodromies
+    at two sections are similar): (walk, y, tangent), or None when the moves are used up
+    or the orbit is refused at the new section.  The last point is replaced by its
+    image; the tangent is the old one carried by the flow between the two sections."""
+    pt = br.points[-1]
+    at = flow_with(w.fl, w.name, pt.value, w.ref)
+    if br.section_moves >= MAX_SECTION_MOVES:
+        return None
+    phase = free_phase(at, pt.events)
+    try:
+        dt = ((phase - at.phase) % (2.0 * np.pi)) / at.omega
+        part = advance(at, pt.x, duration=dt)
+        fl, ref = (dataclasses.replace(f, phase=phase) for f in (w.fl, w.ref))
+        x, pr = periodic_orbit(flow_with(fl, w.name, pt.value, ref), part.x, w.periods)
+    except OrbitRefused:
+        return None
+    moved = dataclasses.replace(w, fl=fl, ref=ref, scale=_scale(x, w.scale[-1]))
+    br.points[-1] = Point(pt.value, x, multipliers(pr), pr.events, phase)
+    br.section_moves += 1
+    y = np.append(x, pt.value)
+    carried = np.append(part.jacobian @ (t[:-1] * w.scale[:-1]), t[-1] * w.scale[-1])
+    return moved, y, tangent_at(fl, w.name, ref, y, pr, moved.scale, w.periods,
+                                carried / moved.scale)
 
 
 def _first(fl, name, ref, x0, p0, k):
@@ -292,7 +350,7 @@ def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
         except OrbitRefused:
             same = False
         if same:
-            lo, x, last = mid, xm, Point(mid, xm.copy(), multipliers(pr), pr.events)
+            lo, x, last = mid, xm, Point(mid, xm.copy(), multipliers(pr), pr.events, fl.phase)
         else:
             hi = mid
     return last, abs(hi - lo)
@@ -304,7 +362,7 @@ def _at_section(fl: Flow, events, k: int) -> bool:
     return any(min(t - t0, t0 + k * fl.period - t) < 1e-6 * fl.period for t, _ in events)
 
 
-def _boundary(br, w: Walk, located):
+def _boundary(br, w: Walk, located) -> str:
     """Stop at a change of the event sequence located by :func:`locate_boundary`: its
     last orbit ends the branch, its parameter is the event's value: "section" if an
     event of that orbit is at the Poincare section (the same orbit goes on, but P is not
@@ -321,6 +379,7 @@ def _boundary(br, w: Walk, located):
             "another phase would carry on)" if kind == "section" else "grazing")
     br.stop = (f"the impact/reversal sequence changes at {br.parameter} = {p:.10g} "
                f"(bracket {width:.2g}; {what}): the branch is not followed across it")
+    return kind
 
 
 def _record_crossing(br, a, b, w: Walk | None = None):
@@ -430,6 +489,16 @@ def locate_period_doubling(fl, name, a: Point, b: Point, k: int, tol: float = 1e
     return p, x, v / np.linalg.norm(v)
 
 
+def _on_one_section(fl: Flow, name: str, a: Point, b: Point):
+    """(flow, a, b) with the flow's section at b's and a carried there if it was on
+    another (the section moved between them)."""
+    at_b = dataclasses.replace(fl, phase=b.phase)
+    if a.phase != b.phase:
+        at_a = flow_with(dataclasses.replace(fl, phase=a.phase), name, a.value, fl)
+        a = dataclasses.replace(a, x=carry(at_a, a.x, b.phase), phase=b.phase)
+    return at_b, a, b
+
+
 @one_blas_thread
 def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, which: int = 0,
                            step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
@@ -445,7 +514,8 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     if not 0 <= which < len(pairs):
         raise ParameterError(f"which = {which} is not in [0, {len(pairs) - 1}]: the branch "
                              f"has {len(pairs)} period-doubling point(s)")
-    p, x, v = locate_period_doubling(fl, name, *pairs[which], k)
+    fl, a, b = _on_one_section(fl, name, *pairs[which])
+    p, x, v = locate_period_doubling(fl, name, a, b, k)
     span = abs(stop - p)
     if not span > 0:
         raise ParameterError(f"stop = {stop!r} equals the period-doubling value {p!r}")
@@ -460,11 +530,11 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     t -= (t @ along) * along
     t /= np.linalg.norm(t)
     new = Branch(name, 2 * k, events=[("period-doubling", float(p))],
-                 origin=Point(p, x, multipliers(pr), pr.events))
+                 origin=Point(p, x, multipliers(pr), pr.events, fl.phase))
     try:
         y, pr, _ = correct(fl, name, fl, y0 + step * t * w.scale, t, w.scale, 2 * k)
     except OrbitRefused as err:
         new.stop = f"refused at the start: {err}"
         return new
-    new.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events))
+    new.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events, fl.phase))
     return march(w, new, y, tangent_at(fl, name, fl, y, pr, w.scale, 2 * k, t))

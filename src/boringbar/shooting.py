@@ -204,14 +204,16 @@ def _event_fn(fl: Flow, sdir: float):
     return g
 
 
-def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False) -> Period:
+def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False,
+            duration: float | None = None) -> Period:
     """Propagate x from the section's phase (``fl.phase``, 0 by default) over ``periods``
     forcing periods (exactly, see the module docstring) with the monodromy; the tip's RMS
     over them too if ``rms`` (Period.rms_tip).  Event times are absolute (t0 = phase /
-    Omega at the start)."""
+    Omega at the start).  ``duration`` (s), if given, replaces the whole periods."""
     N = fl.N
     t = fl.phase / fl.omega
-    t_end = t + periods * fl.period
+    span = periods * fl.period if duration is None else duration
+    t_end = t + span
     z = np.concatenate([np.asarray(x, float), [math.sin(fl.phase), math.cos(fl.phase), 1.0]])
     J = np.eye(N)
     events = []
@@ -235,8 +237,26 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False) -> Per
         if len(events) > 200 * periods:
             raise OrbitRefused("more than 200 events a period: the motion is not a "
                                "regular impacting orbit (Zeno or chatter)")
-    return Period(z[:N].copy(), J, events,
-                  math.sqrt(w2 / (periods * fl.period)) if rms else math.nan)
+    return Period(z[:N].copy(), J, events, math.sqrt(w2 / span) if rms and span > 0
+                  else math.nan)
+
+
+def carry(fl: Flow, x: np.ndarray, phase: float) -> np.ndarray:
+    """The state at the next forcing phase ``phase`` (rad) of the motion through x at the
+    section's phase (``fl.phase``): x itself if the phases agree."""
+    dt = ((phase - fl.phase) % (2.0 * math.pi)) / fl.omega
+    return advance(fl, x, duration=dt).x if dt > 0.0 else np.asarray(x, float).copy()
+
+
+def free_phase(fl: Flow, events) -> float:
+    """A section's phase as far as can be from every event's (the middle of the widest
+    gap between their phases mod 2 pi; pi from the section's own phase without events)."""
+    if not events:
+        return (fl.phase + math.pi) % (2.0 * math.pi)
+    ph = np.sort(np.array([(fl.omega * t) % (2.0 * math.pi) for t, _ in events]))
+    gaps = np.diff(np.append(ph, ph[0] + 2.0 * math.pi))
+    i = int(np.argmax(gaps))
+    return float((ph[i] + 0.5 * gaps[i]) % (2.0 * math.pi))
 
 
 #: 8-point Gauss-Legendre nodes and weights on [0, 1].

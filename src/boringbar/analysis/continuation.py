@@ -9,6 +9,7 @@ pseudo-arclength (:func:`boringbar.branch.continue_branch`).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import sys
@@ -26,7 +27,14 @@ from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.reference.masri_caughey import two_impact_orbit
-from boringbar.shooting import OrbitRefused, advance, make_flow, one_blas_thread, state_size
+from boringbar.shooting import (
+    OrbitRefused,
+    advance,
+    carry,
+    make_flow,
+    one_blas_thread,
+    state_size,
+)
 from boringbar.simulate import Integration, simulate
 
 STARTS = ("simulation", "masri-caughey", "state")
@@ -114,17 +122,20 @@ def compute(context: dict, point: int) -> dict:
     x0 = start_state(system, o, fl)
     br = continue_branch(fl, o.parameter, x0, o.stop, periods=o.periods, step=o.step,
                          max_points=o.max_points, min_step=o.min_step)
-    rms = []
+    rms, states = [], []
     for pt in br.points:
+        at = flow_with(dataclasses.replace(fl, phase=pt.phase), o.parameter, pt.value, fl)
         try:
-            rms.append(advance(flow_with(fl, o.parameter, pt.value, fl), pt.x, o.periods,
-                               rms=True).rms_tip)
+            rms.append(advance(at, pt.x, o.periods, rms=True).rms_tip)
+            states.append(carry(at, pt.x, 0.0))  # the section may have moved
         except OrbitRefused:
             rms.append(math.nan)
+            states.append(np.full(fl.N, np.nan))
     n = fl.n
     return {"value": [pt.value for pt in br.points],
-            "state": [pt.x for pt in br.points],
-            "strobe_tip_m": [float(fl.psi_tip @ pt.x[:n]) for pt in br.points],
+            "state": states,
+            "strobe_tip_m": [float(fl.psi_tip @ x[:n]) for x in states],
+            "section_phase": [pt.phase for pt in br.points],
             "rms_tip_m": rms,
             "multipliers": [pt.multipliers for pt in br.points],
             "stable": [pt.stable for pt in br.points],
@@ -151,6 +162,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "state": (("branch", "point", "state"), [states]),
          "strobe_tip_m": (("branch", "point"), [r["strobe_tip_m"]]),
          "rms_tip_m": (("branch", "point"), [r["rms_tip_m"]]),
+         "section_phase": (("branch", "point"),
+                           [r.get("section_phase", [0.0] * len(r["value"]))]),
          "multiplier_real": (("branch", "point", "multiplier"), [mults.real]),
          "multiplier_imag": (("branch", "point", "multiplier"), [mults.imag]),
          "stable": (("branch", "point"), [r["stable"]]),
