@@ -10,12 +10,14 @@ Newton fails, grown by 1.3 after quick convergence.
 
 The branch stops (with the reason) at the end of the range, where the orbit is
 refused (stick, wall contact, a singular Newton matrix), or at a change of the
-impact/reversal sequence, located by bisection in p and recorded as a "grazing"
-or, when an event sits at the section, a "section" event.  Multipliers crossing
-the unit circle between two points are events: fold (+1), period doubling (-1),
-Neimark-Sacker (a complex pair), placed by the secant of the crossing
-multiplier's |mu| - 1.  At a period doubling, :func:`switch_period_doubling`
-starts the period-2k branch.
+impact/reversal sequence, located by bisection in p and recorded as a "grazing".
+An event that comes near the Poincare section (or crosses it) moves the section
+instead (:func:`_move_section`; the point is carried to the new phase).  The
+multipliers of two points are paired; a pair crossing the unit circle is an event:
+fold (+1, the branch turns; located where the tangent's p component vanishes),
+branch point (+1, the branch goes on), period doubling (-1), Neimark-Sacker (a
+complex pair), the last three located by bisection along the arclength.  At a
+period doubling, :func:`switch_period_doubling` starts the period-2k branch.
 """
 
 from __future__ import annotations
@@ -166,16 +168,18 @@ def _crossings(m0, m1):
     """The bifurcations between two points' multipliers: [(kind, (|mu0| - 1, |mu1| - 1))].
     The multipliers are paired by least total distance; a pair whose modulus crosses 1 is
     a fold (real, positive), a period doubling (real, negative) or, once for a conjugate
-    pair, a Neimark-Sacker.  Pairing, not counting, sees two crossings in one step (a
-    complex pair going back inside while a real multiplier leaves at a fold)."""
+    pair, a Neimark-Sacker, as the multiplier is outside the circle.  Pairing, not
+    counting, sees two crossings in one step (a complex pair going back inside while a
+    real multiplier leaves at a fold)."""
     rows, cols = linear_sum_assignment(np.abs(m0[:, None] - m1[None, :]))
     found = []
     for i, j in zip(rows, cols, strict=True):
         g0, g1 = abs(m0[i]) - 1.0, abs(m1[j]) - 1.0
         if (g0 > 0) == (g1 > 0):
             continue
-        s = g0 / (g0 - g1)
-        mu = m0[i] + s * (m1[j] - m0[i])
+        # classified by its value outside the circle (inside, a real multiplier may be
+        # one of a complex pair that met on the real axis during the step)
+        mu = m1[j] if g1 > 0 else m0[i]
         if abs(mu.imag) > 1e-6 * abs(mu):
             if mu.imag > 0:
                 found.append(("neimark-sacker", (g0, g1)))

@@ -22,8 +22,13 @@ packs it; docs/model.md, section 3), and the ball damper in free flight (state
 [u, u', y, y'], y the ball's position relative to the cavity), with impacts and
 friction reversals.  The solid, locked and TMD bars are linear: no events, their
 periodic orbit is the steady forced response and their multipliers exp(lambda_i T).
-Refused (:class:`OrbitRefused`): a ball that sticks (|F_req| <= F_s at y' = 0), an
-impact slower than the capture threshold (wall contact, Zeno).
+A wall reached between two grid points (y inside at both, an extremum of y in the
+step beyond the wall) is found too, so an impact born at a grazing is seen at once.
+:func:`carry` moves a state to another forcing phase (the section is moved there
+when an event comes near it, :mod:`boringbar.branch`).  Refused
+(:class:`OrbitRefused`): a ball that sticks (|F_req| <= F_s at y' = 0), an impact
+slower than the capture threshold (wall contact, Zeno), a singular Newton matrix
+(an orbit that is not isolated, e.g. the free ball without impacts).
 """
 
 from __future__ import annotations
