@@ -229,15 +229,7 @@ def test_the_coexistence_range_is_bounded_by_the_fold_and_the_linear_grazing():
     impacts is not isolated (the free ball's position is neutral), so shooting cannot
     follow it (docs/continuation.md)."""
     system = _small_gap_case()
-    bar = system.bar
-    r_f = _bisect(lambda r: float(np.hypot(*phase_equation(_closed_form(system, r)[0])[:2])
-                                  - phase_equation(_closed_form(system, r)[0])[2]), 0.5, 0.8)
-
-    def relative_amplitude(r):
-        om = r * system.reference_frequency
-        return abs(bar.psi_damper[0] * bar.psi_tip[0] * 10.0
-                   / complex(bar.stiffness[0] - bar.mass[0] * om**2, bar.damping[0] * om))
-    r_g = _bisect(lambda r: relative_amplitude(r) - 0.05e-3, 0.8, 1.0)
+    r_f, r_g = _fold_and_linear_grazing(system)
     values = tuple(np.round(np.arange(0.60, 0.985, 0.01), 2))
     ds = bb.bifurcation(system, bb.BifurcationOptions("ratio", values, 10.0, 1.0),
                         integration=Integration(0.5, 1e-6, "exact", 0.2))
@@ -266,20 +258,45 @@ def test_the_coexistence_range_is_bounded_by_the_fold_and_the_linear_grazing():
     fl0 = sh.make_flow(system, Harmonic(10.0, ratio=0.88))
     x88 = _orbit_state(_closed_form(system, 0.88)[1], 0.0)
     up = continue_branch(fl0, "ratio", x88, 0.635, step=0.05, max_points=60, max_step=0.05)
+    assert _strobe_check(fl0, up, ds.sel(direction="backward"), 0.64, 0.88) == 25
+
+
+def _fold_and_linear_grazing(system, force=10.0):
+    """(r_f, r_g) of the small-gap case in closed form: the ratio where the two roots of
+    the phase equation merge (sqrt(a^2 + b^2) = delta), and the ratio where the linear
+    relative amplitude psi_d psi_L F0 / |K - M Omega^2 + i C Omega| reaches delta/2."""
+    bar = system.bar
+
+    def merge(r):
+        a, b, c = phase_equation(_closed_form(system, r, force)[0])
+        return float(np.hypot(a, b) - c)
+
+    def relative_amplitude(r):
+        om = r * system.reference_frequency
+        return abs(bar.psi_damper[0] * bar.psi_tip[0] * force
+                   / complex(bar.stiffness[0] - bar.mass[0] * om**2, bar.damping[0] * om))
+    return (_bisect(merge, 0.5, 0.8),
+            _bisect(lambda r: relative_amplitude(r) - 0.5 * system.damper.gap, 0.8, 1.0))
+
+
+def _strobe_check(fl0, br, sweep, lo, hi):
+    """Assert that at each swept ratio in [lo, hi] the branch's orbit (Newton there from
+    the nearest point, on that point's section, carried to phase 0) is stable and every
+    strobe sample of ``sweep`` is on it within 1e-8; the number of ratios checked."""
     checked = 0
-    for j, r in enumerate(values):
-        if not 0.64 <= r <= 0.88:
+    for j, r in enumerate(sweep["value"].values):
+        if not lo <= r <= hi:
             continue
-        near = min(up.points, key=lambda p: abs(p.value - r))  # its section may have moved
+        near = min(br.points, key=lambda p: abs(p.value - r))  # its section may have moved
         at = flow_with(dataclasses.replace(fl0, phase=near.phase), "ratio", r, fl0)
         x, pr = sh.periodic_orbit(at, near.x)
         assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
         w = fl0.psi_tip @ sh.carry(at, x, 0.0)[:fl0.n]
-        s = ds["tip_displacement"].sel(direction="backward").isel(value=j).values
+        s = sweep["tip_displacement"].isel(value=j).values
         s = s[np.isfinite(s)]
         assert len(s) > 20 and np.max(np.abs(s - w)) <= 1e-8 * abs(w), (r, s[-1], w)
         checked += 1
-    assert checked == 25
+    return checked
 
 
 def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
