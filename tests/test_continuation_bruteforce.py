@@ -326,3 +326,31 @@ def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
     assert abs(br.events[0][1] - expected) <= 1e-4 * expected, (br.events, expected)
     values = [p.value for p in br.points]
     assert values == sorted(values) and values[-1] > expected  # no turn
+
+
+def test_a_turn_the_multipliers_hide_is_still_a_fold():
+    """Physical preset, two modes, frictionless, gap 0.1 mm, ratio 1, down from the
+    settled orbit at 30 N in 20 coarse steps: near 21.94 N the branch turns while three
+    multipliers move at once (a complex pair outside splits, a real one inside joins a
+    pair), so no multiplier pair shows the +1 crossing; the turn of the tangent must
+    still be a fold, at the smallest F0 a fine continuation of the same branch reaches
+    (from the coarse point before the turn, 60 steps over 0.5 N)."""
+    system = make_system("ball", "physical", gap=0.1e-3, friction=False)
+    o = ContinuationOptions(parameter="force-n", stop=5.0, force_n=30.0)
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
+    x0 = start_state(system, o, fl)
+    coarse = continue_branch(fl, "force-n", x0, 5.0, step=0.05, max_points=20, min_step=1e-4)
+    folds = [v for k, v in coarse.events if k == "fold"]
+    assert len(folds) == 1, coarse.events
+    before = next(i for i, p in enumerate(coarse.points) if p.value < folds[0] + 0.1)
+    a = coarse.points[before]
+    fine = continue_branch(flow_with(fl, "force-n", a.value, fl), "force-n", a.x, a.value - 0.5,
+                           step=0.01, max_points=60, max_step=0.01, min_step=1e-5)
+    p = [q.value for q in fine.points]
+    assert p[-1] > min(p)  # it turned back
+    # the fine branch never goes below the fold, and comes within 2e-5 of it (its points
+    # are 0.01 of 0.5 N apart in arclength; at steps of 0.002, 1.4e-7 was seen)
+    assert folds[0] <= min(p) <= folds[0] * (1 + 2e-5), (folds, min(p))
+    # the fine branch locates the same fold from other points
+    assert [k for k, _ in fine.events] == ["fold"]
+    assert abs(fine.events[0][1] - folds[0]) <= 1e-10 * folds[0]

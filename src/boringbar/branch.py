@@ -276,12 +276,13 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             fl, ref, scale = w.fl, w.ref, w.scale
             continue
         pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events, fl.phase)
-        _record_crossing(br, br.points[-1], pt, w)
+        kinds = _record_crossing(br, br.points[-1], pt, w)
         br.points.append(pt)
         if not w.lo <= pt.value <= w.hi:
             br.stop = "end of range"
             return br
-        t = tangent_at(fl, name, ref, yn, prn, scale, k, t)
+        t_old, t = t, tangent_at(fl, name, ref, yn, prn, scale, k, t)
+        _record_turn(br, w, t_old, t, kinds)
         y = yn
         h = min(w.max_step, h * 1.3) if its <= 4 else h
         if w.move_section and _near_section(flow_with(fl, name, pt.value, ref), pt.events):
@@ -386,8 +387,19 @@ def _boundary(br, w: Walk, located) -> str:
     return kind
 
 
-def _record_crossing(br, a, b, w: Walk | None = None):
+def _record_turn(br: Branch, w: Walk, t_old, t_new, kinds) -> None:
+    """A fold the multipliers did not show (the branch turned between its last two points:
+    the tangent's p component changed sign, while several multipliers moved at once)."""
+    if t_old[-1] * t_new[-1] < 0 and "fold" not in kinds:
+        a, b = br.points[-2], br.points[-1]
+        value = locate_fold(w, a, b)
+        br.events.append(("fold", value if value is not None else 0.5 * (a.value + b.value)))
+
+
+def _record_crossing(br, a, b, w: Walk | None = None) -> list:
+    """Record the stability changes between the points a and b; their kinds."""
     found = _crossings(a.multipliers, b.multipliers)
+    kinds = []
     for kind, g in found:
         # the secant of |mu| - 1, kept between the two points
         s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
@@ -402,6 +414,8 @@ def _record_crossing(br, a, b, w: Walk | None = None):
         elif len(found) == 1 and w is not None:
             value = locate_crossing(w, a, b, value)
         br.events.append((kind, value))
+        kinds.append(kind)
+    return kinds
 
 
 def _along(w: Walk, ya, ta, s):
