@@ -423,23 +423,38 @@ def _along(w: Walk, ya, ta, s):
     return correct(w.fl, w.name, w.ref, ya + s * ta * w.scale, ta, w.scale, w.periods)
 
 
-def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1e-10) -> float:
-    """The parameter where the number of multipliers outside the unit circle changes
-    between the branch points a and b (one crossing between them), by bisection on the
-    arclength of the corrector from a to ``tol`` of a's distance to b; ``fallback`` (the
-    secant) if the corrector fails at once.  At a branch point the corrector's matrix is
-    singular (two branches cross there) and Newton fails close to it: the bisection stops
-    there, with the nearest orbit found beyond it."""
+def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1e-12) -> float:
+    """The parameter where a multiplier crosses the unit circle between the branch points
+    a and b (one crossing between them): Brent's method, on the arclength of the corrector
+    from a (its hyperplanes normal to the chord a -> b), on |mu| - 1 of the crossing
+    multiplier (the (n_a + 1)-th largest in modulus going out, the n_a-th going in, n_a
+    the number outside at a).  ``fallback`` (the secant) if the corrector fails, as it
+    does close to a branch point, where its matrix is singular (two branches cross)."""
     ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
     d = (yb - ya) / w.scale
     ta = d / np.linalg.norm(d)
-    n_out = np.sum(np.abs(a.multipliers) > 1.0)
-    lo, hi, p = 0.0, float(np.linalg.norm(d)), fallback
+    n_a = int(np.sum(np.abs(a.multipliers) > 1.0))
+    i = n_a if np.sum(np.abs(b.multipliers) > 1.0) > n_a else n_a - 1
+
+    def g(s):
+        return float(np.sort(np.abs(multipliers(_along(w, ya, ta, s)[1])))[::-1][i] - 1.0)
     try:
-        while hi - lo > tol * np.linalg.norm(d):
+        s = brentq(g, 0.0, float(np.linalg.norm(d)), xtol=tol * np.linalg.norm(d), rtol=1e-15)
+        return float(_along(w, ya, ta, s)[0][-1])
+    except (OrbitRefused, ValueError):
+        return _bisect_crossing(w, ya, ta, float(np.linalg.norm(d)), n_a, fallback)
+
+
+def _bisect_crossing(w: Walk, ya, ta, sb: float, n_a: int, p: float) -> float:
+    """Bisection on the arclength s in [0, sb] on the number of multipliers outside the
+    circle (n_a at s = 0) until the corrector fails (near a branch point): the parameter
+    of the nearest orbit found beyond the crossing, or ``p`` if none was."""
+    lo, hi = 0.0, sb
+    try:
+        while hi - lo > 1e-10 * sb:
             mid = 0.5 * (lo + hi)
             y, pr, _ = _along(w, ya, ta, mid)
-            if np.sum(np.abs(multipliers(pr)) > 1.0) == n_out:
+            if np.sum(np.abs(multipliers(pr)) > 1.0) == n_a:
                 lo = mid
             else:
                 hi, p = mid, float(y[-1])
