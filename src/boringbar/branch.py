@@ -292,10 +292,17 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     return br
 
 
+def _section_distance(fl: Flow, events, phase: float) -> float:
+    """The smallest distance (rad of forcing phase) from ``phase`` to an event's phase."""
+    d = [abs((fl.omega * t - phase + np.pi) % (2.0 * np.pi) - np.pi) for t, _ in events]
+    return min(d) if d else np.pi
+
+
 def _near_section(fl: Flow, events) -> bool:
-    """An event within SECTION_MARGIN of the section's phase."""
-    d = [abs((fl.omega * t - fl.phase + np.pi) % (2.0 * np.pi) - np.pi) for t, _ in events]
-    return bool(d) and min(d) < SECTION_MARGIN
+    """An event within SECTION_MARGIN of the section's phase, and a phase at least twice
+    as far from every event (with events all round the period, moving would not help)."""
+    d0 = _section_distance(fl, events, fl.phase)
+    return d0 < SECTION_MARGIN and _section_distance(fl, events, free_phase(fl, events)) > 2 * d0
 
 
 def _move_section(br: Branch, w: Walk, t: np.ndarray):
