@@ -20,7 +20,7 @@ from boringbar.branch import (
 )
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.reference.masri_caughey import ImpactSystem, phase_equation, two_impact_orbit
 from boringbar.simulate import Integration, State, simulate
 
 
@@ -134,11 +134,32 @@ def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it
                    dt=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
                    steady_fraction=1.0)
     br = continue_branch(dataclasses.replace(fl, phase=phase), "force-n", run.final.x, 36.0,
-                         step=0.1, max_points=40, max_step=0.3)
+                         step=0.1, max_points=40, max_step=0.3, move_section=False)
     assert [k for k, _ in br.events] == ["section"], (br.stop, br.events)
     located = br.events[0][1]
     assert br.points[-1].value == located and located < 33.0
     assert abs(located - 33.0) < 1e-6 * 33.0, located
+
+
+def test_the_section_moves_away_from_an_impact_and_the_branch_goes_on():
+    """The same branch with the section moving (the default): the impact never reaches
+    the section, the branch reaches the end of its range, and every point, carried to
+    phase 0, is the closed-form two-impact orbit at its F0 (1e-8 relative)."""
+    system = _one_mode_case()
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
+    phase = _closed_form_phase(system, fl, 33.0)
+    fl = dataclasses.replace(fl, phase=phase)
+    x0 = _orbit_state(_closed_form(system, 1.0, 30.0)[1], phase)
+    br = continue_branch(fl, "force-n", x0, 36.0, step=0.1, max_points=40, max_step=0.3)
+    assert br.stop == "end of range" and br.events == [], (br.stop, br.events)
+    assert br.section_moves >= 1 and {p.phase for p in br.points} != {phase}
+    for pt in br.points[1:]:
+        at = flow_with(dataclasses.replace(fl, phase=pt.phase), "force-n", pt.value, fl)
+        x = sh.carry(at, pt.x, 0.0)
+        orbit = next(o for o in two_impact_orbit(
+            *dataclasses.astuple(_closed_form(system, 1.0, pt.value)[0])) if o.admissible)
+        ref = _orbit_state(orbit, 0.0)
+        assert np.max(np.abs(x - ref)) <= 1e-8 * np.max(np.abs(ref)), (pt.value, x, ref)
 
 
 def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, capsys):
@@ -160,3 +181,176 @@ def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, ca
     assert main([*argv[:-3], "--parameter", "restitution", "--range", "0.7:0.6",
                  "--overlay", "--out", str(tmp_path)]) == 2
     assert main([*argv, "--overlay", "1"]) == 2
+
+
+def _small_gap_case():
+    """One mode, frictionless ball, gap 0.1 mm, e = 0.7, F0 = 10 N, swept in the ratio."""
+    return make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+                       restitution=0.7)
+
+
+def _closed_form(system, ratio, force=10.0):
+    """The ImpactSystem of the case and its stable admissible two-impact orbit (or None)."""
+    bar, ball = system.bar, system.damper
+    args = (bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+            ball.mass, ball.gap, ball.restitution, force, ratio * system.reference_frequency)
+    orbits = [o for o in two_impact_orbit(*args) if o.admissible and o.stable]
+    return ImpactSystem(*args), (orbits[0] if orbits else None)
+
+
+def _orbit_state(orbit, phase):
+    """(u, u', y, y') of a closed-form orbit at forcing phase ``phase``."""
+    t, h = phase / orbit.system.omega, 1e-9
+    dy = (orbit.relative_displacement(t + h) - orbit.relative_displacement(t - h)) / (2 * h)
+    return np.array([float(orbit.modal_displacement(t)), float(orbit.modal_velocity(t)),
+                     float(orbit.relative_displacement(t)), float(dy)])
+
+
+def _bisect(f, lo, hi, tol=1e-15):
+    """The sign change of f in [lo, hi]."""
+    flo = f(lo) > 0
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if (f(mid) > 0) == flo else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def test_the_coexistence_range_is_bounded_by_the_fold_and_the_linear_grazing():
+    """Gap 0.1 mm, F0 = 10 N, ratio 0.60 -> 0.98 and back (exact, 0.5 s runs).  Forward
+    from rest the ball never hits: the bar's motion is linear and y = -psi_d u, whose
+    amplitude psi_d psi_L F0 / |K - M Omega^2 + i C Omega| reaches delta/2 at the ratio
+    r_g (closed form).  Backward, the sweep rides the stable symmetric two-impact orbit
+    down to where it dies at a fold: the two roots of the Masri-Caughey phase equation
+    a cos phi + b sin phi = delta merge where sqrt(a^2 + b^2) = delta, at r_f (closed
+    form).  So the two attractors coexist on [r_f, r_g], and the sweeps' jumps must
+    bracket both values; continuation must find a fold at r_f (1e-9 relative) and no
+    other stability change above it, and its stable branch must be the backward sweep's
+    orbit (1e-8 relative).  The other end of the range is not a fold: the orbit without
+    impacts is not isolated (the free ball's position is neutral), so shooting cannot
+    follow it (docs/continuation.md)."""
+    system = _small_gap_case()
+    r_f, r_g = _fold_and_linear_grazing(system)
+    values = tuple(np.round(np.arange(0.60, 0.985, 0.01), 2))
+    ds = bb.bifurcation(system, bb.BifurcationOptions("ratio", values, 10.0, 1.0),
+                        integration=Integration(0.5, 1e-6, "exact", 0.2))
+    impacts = {d: ds["impacts_per_cycle"].sel(direction=d).values for d in ("forward", "backward")}
+    period = {d: ds["period"].sel(direction=d).values for d in ("forward", "backward")}
+    v = np.asarray(values)
+    # forward: no impact below r_g, impacts above
+    assert np.all(impacts["forward"][v < r_g] == 0) and np.all(impacts["forward"][v > r_g] > 0)
+    # backward: the period-1 two-impact orbit from 0.92 down to r_f, not below
+    two = (period["backward"] == 1) & (np.round(impacts["backward"]) == 2)
+    assert np.all(two[(v > r_f) & (v <= 0.92)]) and not np.any(two[v < r_f])
+    assert 0.62 < r_f < 0.63 and 0.96 < r_g < 0.97  # where the brute force jumped
+    # continuation from the closed form at 0.8 (section at phase 1.6, off the impacts)
+    fl = sh.make_flow(system, Harmonic(10.0, ratio=0.8))
+    fl = dataclasses.replace(fl, phase=1.6)
+    x0 = _orbit_state(_closed_form(system, 0.8)[1], 1.6)
+    br = continue_branch(fl, "ratio", x0, 0.55, step=0.05, max_points=16)
+    changes = [(k, p) for k, p in br.events if k != "grazing"]
+    assert changes[0][0] == "fold" and abs(changes[0][1] - r_f) <= 1e-9 * r_f, br.events
+    turn = int(np.argmin([p.value for p in br.points]))  # the point nearest the fold
+    assert all(p.stable for p in br.points[:turn]) and not br.points[-1].stable
+    assert br.points[-1].value > br.points[turn].value >= r_f * (1 - 1e-12)
+    # the stable symmetric branch (from phase 0, 0.88 down to 0.64; it loses its
+    # stability between 0.88 and 0.89, where the sweep goes on on an asymmetric
+    # two-impact orbit) is the backward sweep's orbit
+    fl0 = sh.make_flow(system, Harmonic(10.0, ratio=0.88))
+    x88 = _orbit_state(_closed_form(system, 0.88)[1], 0.0)
+    up = continue_branch(fl0, "ratio", x88, 0.635, step=0.05, max_points=60, max_step=0.05)
+    assert _strobe_check(fl0, up, ds.sel(direction="backward"), 0.64, 0.88) == 25
+
+
+def _fold_and_linear_grazing(system, force=10.0):
+    """(r_f, r_g) of the small-gap case in closed form: the ratio where the two roots of
+    the phase equation merge (sqrt(a^2 + b^2) = delta), and the ratio where the linear
+    relative amplitude psi_d psi_L F0 / |K - M Omega^2 + i C Omega| reaches delta/2."""
+    bar = system.bar
+
+    def merge(r):
+        a, b, c = phase_equation(_closed_form(system, r, force)[0])
+        return float(np.hypot(a, b) - c)
+
+    def relative_amplitude(r):
+        om = r * system.reference_frequency
+        return abs(bar.psi_damper[0] * bar.psi_tip[0] * force
+                   / complex(bar.stiffness[0] - bar.mass[0] * om**2, bar.damping[0] * om))
+    return (_bisect(merge, 0.5, 0.8),
+            _bisect(lambda r: relative_amplitude(r) - 0.5 * system.damper.gap, 0.8, 1.0))
+
+
+def _strobe_check(fl0, br, sweep, lo, hi):
+    """Assert that at each swept ratio in [lo, hi] the branch's orbit (Newton there from
+    the nearest point, on that point's section, carried to phase 0) is stable and every
+    strobe sample of ``sweep`` is on it within 1e-8; the number of ratios checked."""
+    checked = 0
+    for j, r in enumerate(sweep["value"].values):
+        if not lo <= r <= hi:
+            continue
+        near = min(br.points, key=lambda p: abs(p.value - r))  # its section may have moved
+        at = flow_with(dataclasses.replace(fl0, phase=near.phase), "ratio", r, fl0)
+        x, pr = sh.periodic_orbit(at, near.x)
+        assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
+        w = fl0.psi_tip @ sh.carry(at, x, 0.0)[:fl0.n]
+        s = sweep["tip_displacement"].isel(value=j).values
+        s = s[np.isfinite(s)]
+        assert len(s) > 20 and np.max(np.abs(s - w)) <= 1e-8 * abs(w), (r, s[-1], w)
+        checked += 1
+    return checked
+
+
+def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
+    """Gap 0.1 mm, e = 0.3, F0 = 30 N: the stable symmetric two-impact orbit loses its
+    stability at ratio 0.8320207 (closed form: the largest |multiplier| of the impact map
+    reaches 1, bisected) to a real multiplier +1 while the branch goes on (a symmetry-
+    breaking pitchfork: the sweeps beyond it sit on the two mirror-image asymmetric
+    orbits).  Continuation must call it a branch point, not a fold, where the closed form
+    puts it (3e-5: the corrector's matrix is singular at a branch point, so Newton stops
+    converging close to it and the bisection ends there)."""
+    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+                         restitution=0.3)
+    orbit = _closed_form(system, 0.7, 30.0)[1]
+    ph = (orbit.phase + np.pi / 2) % np.pi  # the section half-way between the impacts
+    fl = dataclasses.replace(sh.make_flow(system, Harmonic(30.0, ratio=0.7)), phase=ph)
+    br = continue_branch(fl, "ratio", _orbit_state(orbit, ph), 0.9, step=0.05, max_points=22)
+    assert [k for k, _ in br.events] == ["branch-point"], (br.stop, br.events)
+
+    def stable(r):
+        sysm = _closed_form(system, r, 30.0)[0]
+        near = min((o for o in two_impact_orbit(
+            sysm.mass, sysm.stiffness, sysm.damping, sysm.psi_tip, sysm.psi_ball,
+            sysm.ball_mass, sysm.gap, sysm.restitution, sysm.force, sysm.omega)
+            if o.admissible), key=lambda o: abs(o.phase - orbit.phase))
+        return 1.0 if np.max(np.abs(near.multipliers)) < 1.0 else -1.0
+    expected = _bisect(stable, 0.82, 0.84, 1e-12)
+    assert abs(br.events[0][1] - expected) <= 1e-4 * expected, (br.events, expected)
+    values = [p.value for p in br.points]
+    assert values == sorted(values) and values[-1] > expected  # no turn
+
+
+def test_a_turn_the_multipliers_hide_is_still_a_fold():
+    """Physical preset, two modes, frictionless, gap 0.1 mm, ratio 1, down from the
+    settled orbit at 30 N in 20 coarse steps: near 21.94 N the branch turns while three
+    multipliers move at once (a complex pair outside splits, a real one inside joins a
+    pair), so no multiplier pair shows the +1 crossing; the turn of the tangent must
+    still be a fold, at the smallest F0 a fine continuation of the same branch reaches
+    (from the coarse point before the turn, 60 steps over 0.5 N)."""
+    system = make_system("ball", "physical", gap=0.1e-3, friction=False)
+    o = ContinuationOptions(parameter="force-n", stop=5.0, force_n=30.0)
+    fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
+    x0 = start_state(system, o, fl)
+    coarse = continue_branch(fl, "force-n", x0, 5.0, step=0.05, max_points=20, min_step=1e-4)
+    folds = [v for k, v in coarse.events if k == "fold"]
+    assert len(folds) == 1, coarse.events
+    before = next(i for i, p in enumerate(coarse.points) if p.value < folds[0] + 0.1)
+    a = coarse.points[before]
+    fine = continue_branch(flow_with(fl, "force-n", a.value, fl), "force-n", a.x, a.value - 0.5,
+                           step=0.01, max_points=60, max_step=0.01, min_step=1e-5)
+    p = [q.value for q in fine.points]
+    assert p[-1] > min(p)  # it turned back
+    # the fine branch never goes below the fold, and comes within 2e-5 of it (its points
+    # are 0.01 of 0.5 N apart in arclength; at steps of 0.002, 1.4e-7 was seen)
+    assert folds[0] <= min(p) <= folds[0] * (1 + 2e-5), (folds, min(p))
+    # the fine branch locates the same fold from other points
+    assert [k for k, _ in fine.events] == ["fold"]
+    assert abs(fine.events[0][1] - folds[0]) <= 1e-10 * folds[0]

@@ -10,12 +10,14 @@ Newton fails, grown by 1.3 after quick convergence.
 
 The branch stops (with the reason) at the end of the range, where the orbit is
 refused (stick, wall contact, a singular Newton matrix), or at a change of the
-impact/reversal sequence, located by bisection in p and recorded as a "grazing"
-or, when an event sits at the section, a "section" event.  Multipliers crossing
-the unit circle between two points are events: fold (+1), period doubling (-1),
-Neimark-Sacker (a complex pair), placed by the secant of the crossing
-multiplier's |mu| - 1.  At a period doubling, :func:`switch_period_doubling`
-starts the period-2k branch.
+impact/reversal sequence, located by bisection in p and recorded as a "grazing".
+An event that comes near the Poincare section (or crosses it) moves the section
+instead (:func:`_move_section`; the point is carried to the new phase).  The
+multipliers of two points are paired; a pair crossing the unit circle is an event:
+fold (+1, the branch turns; located where the tangent's p component vanishes),
+branch point (+1, the branch goes on), period doubling (-1), Neimark-Sacker (a
+complex pair), the last three located by bisection along the arclength.  At a
+period doubling, :func:`switch_period_doubling` starts the period-2k branch.
 """
 
 from __future__ import annotations
@@ -24,12 +26,15 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import brentq, linear_sum_assignment
 
 from boringbar._validate import ParameterError
 from boringbar.shooting import (
     Flow,
     OrbitRefused,
     advance,
+    carry,
+    free_phase,
     multipliers,
     newton_step,
     one_blas_thread,
@@ -38,6 +43,19 @@ from boringbar.shooting import (
 
 #: The parameters a branch can follow (the CLI's names).
 PARAMETERS = ("force-n", "ratio", "gap-mm", "restitution", "friction-force-n", "ball-mass-g")
+#: Those that exist for each bar (:attr:`System.kind`): the solid and TMD bars have no
+#: ball, the locked ball no gap, impacts or friction.
+PARAMETERS_OF = {"ball": PARAMETERS, "locked": ("force-n", "ratio", "ball-mass-g"),
+                 "solid": ("force-n", "ratio"), "tmd": ("force-n", "ratio")}
+
+
+def check_parameter(kind: str, name: str) -> str:
+    """``name`` if the bar ``kind`` has that parameter, else a ParameterError."""
+    allowed = PARAMETERS_OF[kind]
+    if name not in allowed:
+        raise ParameterError(f"parameter = {name!r} is not one of {', '.join(allowed)} "
+                             f"(the parameters of the {kind} bar)")
+    return name
 
 
 def flow_with(fl: Flow, name: str, value: float, ref: Flow) -> Flow:
@@ -78,6 +96,8 @@ class Point:
     x: np.ndarray
     multipliers: np.ndarray
     events: list
+    #: The forcing phase of the Poincare section x is on (rad).
+    phase: float = 0.0
 
     @property
     def stable(self) -> bool:
@@ -96,6 +116,8 @@ class Branch:
     stop: str = ""
     #: The orbit it branched from (a period-doubling point), if any.
     origin: Point | None = None
+    #: How often the Poincare section was moved away from an event.
+    section_moves: int = 0
 
 
 def _residual(fl, name, ref, x, p, k):
@@ -142,20 +164,28 @@ def tangent_at(fl, name, ref, y, pr, scale, k, previous=None):
     return t / np.linalg.norm(t)
 
 
-def _crossing(m0, m1):
-    """The bifurcation between two points' multipliers (kind or None): the change in the
-    number outside the unit circle, classified by the crossing multiplier."""
-    out0, out1 = np.sum(np.abs(m0) > 1.0), np.sum(np.abs(m1) > 1.0)
-    if out0 == out1:
-        return None, None
-    i = int(np.argmin(np.abs(np.abs(m1) - 1.0)))
-    mu = m1[i]
-    if abs(mu.imag) > 1e-6 * abs(mu):
-        kind = "neimark-sacker"
-    else:
-        kind = "fold" if mu.real > 0 else "period-doubling"
-    j = int(np.argmin(np.abs(m0 - mu)))
-    return kind, (abs(m0[j]) - 1.0, abs(mu) - 1.0)
+def _crossings(m0, m1):
+    """The bifurcations between two points' multipliers: [(kind, (|mu0| - 1, |mu1| - 1))].
+    The multipliers are paired by least total distance; a pair whose modulus crosses 1 is
+    a fold (real, positive), a period doubling (real, negative) or, once for a conjugate
+    pair, a Neimark-Sacker, as the multiplier is outside the circle.  Pairing, not
+    counting, sees two crossings in one step (a complex pair going back inside while a
+    real multiplier leaves at a fold)."""
+    rows, cols = linear_sum_assignment(np.abs(m0[:, None] - m1[None, :]))
+    found = []
+    for i, j in zip(rows, cols, strict=True):
+        g0, g1 = abs(m0[i]) - 1.0, abs(m1[j]) - 1.0
+        if (g0 > 0) == (g1 > 0):
+            continue
+        # classified by its value outside the circle (inside, a real multiplier may be
+        # one of a complex pair that met on the real axis during the step)
+        mu = m1[j] if g1 > 0 else m0[i]
+        if abs(mu.imag) > 1e-6 * abs(mu):
+            if mu.imag > 0:
+                found.append(("neimark-sacker", (g0, g1)))
+        else:
+            found.append(("fold" if mu.real > 0 else "period-doubling", (g0, g1)))
+    return found
 
 
 @dataclass(frozen=True)
@@ -175,15 +205,25 @@ class Walk:
     max_points: int = 200
     min_step: float = 1e-6
     max_step: float = 0.1
+    #: Move the section away from an event that comes near it (else the branch stops
+    #: where an event crosses it).
+    move_section: bool = True
+
+
+#: An event closer than this (rad of forcing phase) to the section moves the section.
+SECTION_MARGIN = 2.0 * np.pi / 16
+#: At most this many moves of the section a branch.
+MAX_SECTION_MOVES = 100
 
 
 @one_blas_thread
 def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods: int = 1,
                     step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
-                    max_step: float = 0.1) -> Branch:
+                    max_step: float = 0.1, move_section: bool = True) -> Branch:
     """Continue the orbit through x0 (near a fixed point of P^periods) in parameter ``name``
-    from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|."""
-    p0 = value_of(fl, name)
+    from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|;
+    ``move_section``: see :class:`Walk`."""
+    p0 = value_of(fl, check_parameter(fl.kind, name))
     span = abs(stop - p0)
     if not span > 0:
         raise ParameterError(f"range end {stop!r} equals the start value {p0!r}")
@@ -195,11 +235,11 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
         return br
     lo, hi = (stop, np.inf) if stop < p0 else (-np.inf, stop)
     w = Walk(fl, name, fl, periods, _scale(y[:-1], span), lo, hi, step, max_points, min_step,
-             max_step)
+             max_step, move_section)
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
     t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)
-    br.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events))
+    br.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events, fl.phase))
     return march(w, br, y, t)
 
 
@@ -227,19 +267,69 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             if yn is None:
                 br.stop = why
                 return br
-            _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
-            return br
-        pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events)
-        _record_crossing(br, br.points[-1], pt)
+            kind = _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
+            moved = _move_section(br, w, t) if kind == "section" and w.move_section else None
+            if moved is None:
+                return br
+            br.stop = ""
+            w, y, t = moved
+            fl, ref, scale = w.fl, w.ref, w.scale
+            continue
+        pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events, fl.phase)
+        kinds = _record_crossing(br, br.points[-1], pt, w)
         br.points.append(pt)
         if not w.lo <= pt.value <= w.hi:
             br.stop = "end of range"
             return br
-        t = tangent_at(fl, name, ref, yn, prn, scale, k, t)
+        t_old, t = t, tangent_at(fl, name, ref, yn, prn, scale, k, t)
+        _record_turn(br, w, t_old, t, kinds)
         y = yn
         h = min(w.max_step, h * 1.3) if its <= 4 else h
+        if w.move_section and _near_section(flow_with(fl, name, pt.value, ref), pt.events):
+            w, y, t = _move_section(br, w, t) or (w, y, t)
+            fl, ref, scale = w.fl, w.ref, w.scale
     br.stop = f"max_points = {w.max_points} reached"
     return br
+
+
+def _section_distance(fl: Flow, events, phase: float) -> float:
+    """The smallest distance (rad of forcing phase) from ``phase`` to an event's phase."""
+    d = [abs((fl.omega * t - phase + np.pi) % (2.0 * np.pi) - np.pi) for t, _ in events]
+    return min(d) if d else np.pi
+
+
+def _near_section(fl: Flow, events) -> bool:
+    """An event within SECTION_MARGIN of the section's phase, and a phase at least twice
+    as far from every event (with events all round the period, moving would not help)."""
+    d0 = _section_distance(fl, events, fl.phase)
+    return d0 < SECTION_MARGIN and _section_distance(fl, events, free_phase(fl, events)) > 2 * d0
+
+
+def _move_section(br: Branch, w: Walk, t: np.ndarray):
+    """Move the Poincare section to the phase farthest from the events of the branch's
+    last point and carry that point there (the multipliers do not change: the monodromies
+    at two sections are similar): (walk, y, tangent), or None when the moves are used up
+    or the orbit is refused at the new section.  The last point is replaced by its
+    image; the tangent is the old one carried by the flow between the two sections."""
+    pt = br.points[-1]
+    at = flow_with(w.fl, w.name, pt.value, w.ref)
+    if br.section_moves >= MAX_SECTION_MOVES:
+        return None
+    phase = free_phase(at, pt.events)
+    try:
+        dt = ((phase - at.phase) % (2.0 * np.pi)) / at.omega
+        part = advance(at, pt.x, duration=dt)
+        fl, ref = (dataclasses.replace(f, phase=phase) for f in (w.fl, w.ref))
+        x, pr = periodic_orbit(flow_with(fl, w.name, pt.value, ref), part.x, w.periods)
+    except OrbitRefused:
+        return None
+    moved = dataclasses.replace(w, fl=fl, ref=ref, scale=_scale(x, w.scale[-1]))
+    br.points[-1] = Point(pt.value, x, multipliers(pr), pr.events, phase)
+    br.section_moves += 1
+    y = np.append(x, pt.value)
+    carried = np.append(part.jacobian @ (t[:-1] * w.scale[:-1]), t[-1] * w.scale[-1])
+    return moved, y, tangent_at(fl, w.name, ref, y, pr, moved.scale, w.periods,
+                                carried / moved.scale)
 
 
 def _first(fl, name, ref, x0, p0, k):
@@ -272,7 +362,7 @@ def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
         except OrbitRefused:
             same = False
         if same:
-            lo, x, last = mid, xm, Point(mid, xm.copy(), multipliers(pr), pr.events)
+            lo, x, last = mid, xm, Point(mid, xm.copy(), multipliers(pr), pr.events, fl.phase)
         else:
             hi = mid
     return last, abs(hi - lo)
@@ -284,14 +374,14 @@ def _at_section(fl: Flow, events, k: int) -> bool:
     return any(min(t - t0, t0 + k * fl.period - t) < 1e-6 * fl.period for t, _ in events)
 
 
-def _boundary(br, w: Walk, located):
+def _boundary(br, w: Walk, located) -> str:
     """Stop at a change of the event sequence located by :func:`locate_boundary`: its
     last orbit ends the branch, its parameter is the event's value: "section" if an
     event of that orbit is at the Poincare section (the same orbit goes on, but P is not
     smooth there), else "grazing" (an impact or reversal appears or vanishes)."""
     last, width = located
     if last is not None:
-        _record_crossing(br, br.points[-1], last)
+        _record_crossing(br, br.points[-1], last, w)
         br.points.append(last)
     p = br.points[-1].value
     at = flow_with(w.fl, w.name, p, w.ref)
@@ -301,16 +391,108 @@ def _boundary(br, w: Walk, located):
             "another phase would carry on)" if kind == "section" else "grazing")
     br.stop = (f"the impact/reversal sequence changes at {br.parameter} = {p:.10g} "
                f"(bracket {width:.2g}; {what}): the branch is not followed across it")
+    return kind
 
 
-def _record_crossing(br, a, b):
-    kind, g = _crossing(a.multipliers, b.multipliers)
-    if kind is None:
-        return
-    # the secant of |mu| - 1, kept between the two points (the crossing multiplier of a
-    # and of b are paired by nearness, which a large step can get wrong)
-    s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
-    br.events.append((kind, float(a.value + s * (b.value - a.value))))
+def _record_turn(br: Branch, w: Walk, t_old, t_new, kinds) -> None:
+    """A fold the multipliers did not show (the branch turned between its last two points:
+    the tangent's p component changed sign, while several multipliers moved at once)."""
+    if t_old[-1] * t_new[-1] < 0 and "fold" not in kinds:
+        a, b = br.points[-2], br.points[-1]
+        value = locate_fold(w, a, b)
+        br.events.append(("fold", value if value is not None else 0.5 * (a.value + b.value)))
+
+
+def _record_crossing(br, a, b, w: Walk | None = None) -> list:
+    """Record the stability changes between the points a and b; their kinds."""
+    found = _crossings(a.multipliers, b.multipliers)
+    kinds = []
+    for kind, g in found:
+        # the secant of |mu| - 1, kept between the two points
+        s = min(max(g[0] / (g[0] - g[1]), 0.0), 1.0) if g[0] != g[1] else 0.5
+        value = float(a.value + s * (b.value - a.value))
+        turned = locate_fold(w, a, b) if kind == "fold" and w is not None else None
+        if kind == "fold" and w is not None and turned is None:
+            # a +1 multiplier where the branch does not turn: a branch point (here the
+            # symmetric orbit's symmetry-breaking pitchfork), not a fold
+            kind = "branch-point"
+        if turned is not None:
+            value = turned
+        elif len(found) == 1 and w is not None:
+            value = locate_crossing(w, a, b, value)
+        br.events.append((kind, value))
+        kinds.append(kind)
+    return kinds
+
+
+def _along(w: Walk, ya, ta, s):
+    """The branch point on the corrector's hyperplane through ya + s ta (scaled)."""
+    return correct(w.fl, w.name, w.ref, ya + s * ta * w.scale, ta, w.scale, w.periods)
+
+
+def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1e-12) -> float:
+    """The parameter where a multiplier crosses the unit circle between the branch points
+    a and b (one crossing between them): Brent's method, on the arclength of the corrector
+    from a (its hyperplanes normal to the chord a -> b), on |mu| - 1 of the crossing
+    multiplier (the (n_a + 1)-th largest in modulus going out, the n_a-th going in, n_a
+    the number outside at a).  ``fallback`` (the secant) if the corrector fails, as it
+    does close to a branch point, where its matrix is singular (two branches cross)."""
+    ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
+    d = (yb - ya) / w.scale
+    ta = d / np.linalg.norm(d)
+    n_a = int(np.sum(np.abs(a.multipliers) > 1.0))
+    i = n_a if np.sum(np.abs(b.multipliers) > 1.0) > n_a else n_a - 1
+
+    def g(s):
+        return float(np.sort(np.abs(multipliers(_along(w, ya, ta, s)[1])))[::-1][i] - 1.0)
+    try:
+        s = brentq(g, 0.0, float(np.linalg.norm(d)), xtol=tol * np.linalg.norm(d), rtol=1e-15)
+        return float(_along(w, ya, ta, s)[0][-1])
+    except (OrbitRefused, ValueError):
+        return _bisect_crossing(w, ya, ta, float(np.linalg.norm(d)), n_a, fallback)
+
+
+def _bisect_crossing(w: Walk, ya, ta, sb: float, n_a: int, p: float) -> float:
+    """Bisection on the arclength s in [0, sb] on the number of multipliers outside the
+    circle (n_a at s = 0) until the corrector fails (near a branch point): the parameter
+    of the nearest orbit found beyond the crossing, or ``p`` if none was."""
+    lo, hi = 0.0, sb
+    try:
+        while hi - lo > 1e-10 * sb:
+            mid = 0.5 * (lo + hi)
+            y, pr, _ = _along(w, ya, ta, mid)
+            if np.sum(np.abs(multipliers(pr)) > 1.0) == n_a:
+                lo = mid
+            else:
+                hi, p = mid, float(y[-1])
+    except OrbitRefused:
+        pass
+    return p
+
+
+def locate_fold(w: Walk, a: Point, b: Point, tol: float = 1e-12) -> float | None:
+    """The parameter of the fold between the branch points a and b: where the p component
+    of the branch's unit tangent vanishes, found by Brent's method on the arclength s of
+    the corrector from a (its hyperplane through a + s t_a; s from 0 to b's).  Both points
+    lie on the same side of a fold, so the secant of |mu| - 1 between them is off by
+    O(step^2).  None if the p component keeps its sign (the branch does not turn) or the
+    corrector fails on the way."""
+    fl, name, ref, k, scale = w.fl, w.name, w.ref, w.periods, w.scale
+    ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
+    try:
+        pr = advance(flow_with(fl, name, a.value, ref), a.x, k)
+        ta = tangent_at(fl, name, ref, ya, pr, scale, k, (yb - ya) / scale)
+        sb = float(ta @ ((yb - ya) / scale))
+
+        def along(s):
+            y, prs, _ = correct(fl, name, ref, ya + s * ta * scale, ta, scale, k)
+            return y, tangent_at(fl, name, ref, y, prs, scale, k, ta)[-1]
+        if ta[-1] * along(sb)[1] > 0:
+            return None
+        s = brentq(lambda s: along(s)[1], 0.0, sb, xtol=tol * sb, rtol=1e-15)
+        return float(along(s)[0][-1])
+    except OrbitRefused:
+        return None
 
 
 def _minus_one(fl, name, ref, x, p, k):
@@ -347,6 +529,16 @@ def locate_period_doubling(fl, name, a: Point, b: Point, k: int, tol: float = 1e
     return p, x, v / np.linalg.norm(v)
 
 
+def _on_one_section(fl: Flow, name: str, a: Point, b: Point):
+    """(flow, a, b) with the flow's section at b's and a carried there if it was on
+    another (the section moved between them)."""
+    at_b = dataclasses.replace(fl, phase=b.phase)
+    if a.phase != b.phase:
+        at_a = flow_with(dataclasses.replace(fl, phase=a.phase), name, a.value, fl)
+        a = dataclasses.replace(a, x=carry(at_a, a.x, b.phase), phase=b.phase)
+    return at_b, a, b
+
+
 @one_blas_thread
 def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, which: int = 0,
                            step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
@@ -358,11 +550,12 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     distance (a subcritical doubling turns back).  Its first event is the doubling."""
     k = br.periods
     pairs = [(a, b) for a, b in zip(br.points, br.points[1:], strict=False)
-             if _crossing(a.multipliers, b.multipliers)[0] == "period-doubling"]
+             if any(c[0] == "period-doubling" for c in _crossings(a.multipliers, b.multipliers))]
     if not 0 <= which < len(pairs):
         raise ParameterError(f"which = {which} is not in [0, {len(pairs) - 1}]: the branch "
                              f"has {len(pairs)} period-doubling point(s)")
-    p, x, v = locate_period_doubling(fl, name, *pairs[which], k)
+    fl, a, b = _on_one_section(fl, name, *pairs[which])
+    p, x, v = locate_period_doubling(fl, name, a, b, k)
     span = abs(stop - p)
     if not span > 0:
         raise ParameterError(f"stop = {stop!r} equals the period-doubling value {p!r}")
@@ -377,11 +570,11 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     t -= (t @ along) * along
     t /= np.linalg.norm(t)
     new = Branch(name, 2 * k, events=[("period-doubling", float(p))],
-                 origin=Point(p, x, multipliers(pr), pr.events))
+                 origin=Point(p, x, multipliers(pr), pr.events, fl.phase))
     try:
         y, pr, _ = correct(fl, name, fl, y0 + step * t * w.scale, t, w.scale, 2 * k)
     except OrbitRefused as err:
         new.stop = f"refused at the start: {err}"
         return new
-    new.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events))
+    new.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events, fl.phase))
     return march(w, new, y, tangent_at(fl, name, fl, y, pr, w.scale, 2 * k, t))

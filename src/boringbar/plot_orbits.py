@@ -10,8 +10,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 #: Marker of each continuation event kind.
-EVENT_MARKERS = {"fold": "s", "period-doubling": "D", "neimark-sacker": "*", "grazing": "x",
-                 "section": "+"}
+EVENT_MARKERS = {"fold": "s", "branch-point": "^", "period-doubling": "D", "neimark-sacker": "*",
+                 "grazing": "x", "section": "+"}
 
 
 def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:

@@ -9,6 +9,7 @@ pseudo-arclength (:func:`boringbar.branch.continue_branch`).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import sys
@@ -21,12 +22,19 @@ from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
-from boringbar.branch import PARAMETERS, continue_branch, flow_with, value_of
+from boringbar.branch import PARAMETERS, check_parameter, continue_branch, flow_with, value_of
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.reference.masri_caughey import two_impact_orbit
-from boringbar.shooting import OrbitRefused, advance, make_flow, one_blas_thread
+from boringbar.shooting import (
+    OrbitRefused,
+    advance,
+    carry,
+    make_flow,
+    one_blas_thread,
+    state_size,
+)
 from boringbar.simulate import Integration, simulate
 
 STARTS = ("simulation", "masri-caughey", "state")
@@ -64,21 +72,23 @@ class ContinuationOptions:
         check_range("step", self.step, 0.0, 0.5, lo_open=True)
         check_range("min_step", self.min_step, 0.0, self.step, lo_open=True)
         if self.start == "state" and self.state is None:
-            raise ParameterError("start = 'state' needs state = (u..., u'..., y, y')")
+            raise ParameterError("start = 'state' needs state = (u..., u'..., y, y') (ball), "
+                                 "(u..., u'..., x_a, x_a') (TMD) or (u..., u'...)")
         Harmonic(self.force_n, ratio=self.ratio)  # validates both
 
 
 def plan(system: System, options: ContinuationOptions) -> Plan:
-    """One point: the branch of ``system`` (a solid bar or a ball damper)."""
-    if system.kind not in ("solid", "ball"):
-        raise ParameterError(f"bar = {system.kind!r}: continuation handles the solid bar and "
-                             "the ball damper")
+    """One point: the branch of ``system`` (any bar; the parameter must be one it has)."""
+    check_parameter(system.kind, options.parameter)
     return Plan({"system": system, "options": options}, [0])
 
 
 def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
     """The first guess of the orbit's state at phase 0 (see the module docstring)."""
     if o.start == "state":
+        if len(o.state) != fl.N:
+            raise ParameterError(f"state has {len(o.state)} entries; the {system.kind} bar's "
+                                 f"orbit has {fl.N} (docs/continuation.md, Shooting)")
         return np.asarray(o.state, float)
     if o.start == "masri-caughey":
         bar, ball = system.bar, system.damper
@@ -112,17 +122,20 @@ def compute(context: dict, point: int) -> dict:
     x0 = start_state(system, o, fl)
     br = continue_branch(fl, o.parameter, x0, o.stop, periods=o.periods, step=o.step,
                          max_points=o.max_points, min_step=o.min_step)
-    rms = []
+    rms, states = [], []
     for pt in br.points:
+        at = flow_with(dataclasses.replace(fl, phase=pt.phase), o.parameter, pt.value, fl)
         try:
-            rms.append(advance(flow_with(fl, o.parameter, pt.value, fl), pt.x, o.periods,
-                               rms=True).rms_tip)
+            rms.append(advance(at, pt.x, o.periods, rms=True).rms_tip)
+            states.append(carry(at, pt.x, 0.0))  # the section may have moved
         except OrbitRefused:
             rms.append(math.nan)
+            states.append(np.full(fl.N, np.nan))
     n = fl.n
     return {"value": [pt.value for pt in br.points],
-            "state": [pt.x for pt in br.points],
-            "strobe_tip_m": [float(fl.psi_tip @ pt.x[:n]) for pt in br.points],
+            "state": states,
+            "strobe_tip_m": [float(fl.psi_tip @ x[:n]) for x in states],
+            "section_phase": [pt.phase for pt in br.points],
             "rms_tip_m": rms,
             "multipliers": [pt.multipliers for pt in br.points],
             "stable": [pt.stable for pt in br.points],
@@ -138,7 +151,7 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
     real and imaginary parts (NetCDF has no complex type)."""
     r = results[0]
     o = plan.context["options"]
-    n_state = 2 * plan.context["system"].bar.n_modes + 2
+    n_state = state_size(plan.context["system"])
     # a branch refused at its start has no points: its arrays keep their shapes
     states = np.asarray(r["state"], float).reshape(len(r["value"]), -1) if r["value"] \
         else np.zeros((0, n_state))
@@ -149,6 +162,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "state": (("branch", "point", "state"), [states]),
          "strobe_tip_m": (("branch", "point"), [r["strobe_tip_m"]]),
          "rms_tip_m": (("branch", "point"), [r["rms_tip_m"]]),
+         "section_phase": (("branch", "point"),
+                           [r.get("section_phase", [0.0] * len(r["value"]))]),
          "multiplier_real": (("branch", "point", "multiplier"), [mults.real]),
          "multiplier_imag": (("branch", "point", "multiplier"), [mults.imag]),
          "stable": (("branch", "point"), [r["stable"]]),
