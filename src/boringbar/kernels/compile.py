@@ -110,8 +110,10 @@ def specs(kinds: Iterable[str] = KINDS) -> list[Spec]:
 #: on the development machine's 2 cores, shared, 2026-11-24, numba 0.68.1, with
 #: kernels/inline_copy.py); wall time is about this on an idle core.  Before
 #: inline_copy.py: exact 129 s, rk4 15-20 s, rk4_batch 10-19 s (836 s in all, now 418 s).
+#: The exact kernel measured again 2026-11-25 on the idle machine: 212 s
+#: (benchmarks/compile_profile.py; docs/performance.md, "First use").
 ESTIMATE_S: dict[str, float] = {
-    "exact": 100.0, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
+    "exact": 210.0, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
     "rk4 n=4-8": 8.8, "rk4 n=2 ball": 6.0, "rk4_batch n=1 ball x16": 6.8,
     "rk4_batch n=1 locked x16": 7.3, "rk4_batch n=1 solid x16": 7.0,
     "rk4_batch n=1 tmd x16": 6.9, "rk4_batch n=1 ball x4": 6.5, "rk4_batch n=1 locked x4": 6.4,
@@ -129,7 +131,7 @@ ESTIMATE_S: dict[str, float] = {
     "rk4_batch n=4-8 x16": 9.8, "rk4_batch n=4-8 x4": 8.6, "rk4_batch n=4-8 x8": 8.5,
 }
 #: estimates of the specialisations not measured one by one, per kind
-_KIND_ESTIMATE_S = {"exact": 100.0, "rk4": 10.0, "rk4_batch": 10.0}
+_KIND_ESTIMATE_S = {"exact": 210.0, "rk4": 10.0, "rk4_batch": 10.0}
 #: compiles estimated under this many seconds get no notice
 NOTICE_MIN_S = 2.0
 _notices = {"on": True}
