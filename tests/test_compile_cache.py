@@ -1,6 +1,8 @@
 """Several processes compiling one cached numba function at once (kernels/cache.py)."""
 
 import multiprocessing as mp
+import subprocess
+import sys
 from concurrent.futures import ProcessPoolExecutor
 
 import pytest
@@ -89,9 +91,6 @@ print(f(), f.stats.cache_hits and 1 or 0)
 
 
 def _probe(root, mode):
-    import subprocess
-    import sys
-
     out = subprocess.run([sys.executable, "-c", _RUN, str(root), mode], capture_output=True,
                          text=True, check=True).stdout.split()
     return int(out[0]), int(out[1])  # the value, whether it came from the cache

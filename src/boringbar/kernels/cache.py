@@ -146,6 +146,6 @@ def stamp_tree(locators: tuple = SALTED) -> bool:
 
 
 def tree_stamped(locators: tuple = SALTED) -> bool:
-    """Whether numba's cache locators include ``locators``, in order."""
+    """Whether numba's cache locators include all three of ``locators``."""
     classes = getattr(getattr(caching, "CacheImpl", None), "_locator_classes", [])
     return all(c in classes for c in locators) and len(locators) == 3
