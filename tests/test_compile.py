@@ -1,6 +1,7 @@
 """kernels/compile.py: the notice before a long compile, and the list compile_all works through."""
 
 import io
+import os
 import subprocess
 import sys
 
@@ -88,3 +89,30 @@ def test_a_cold_compile_announces_and_a_cached_load_does_not(tmp_path):
 
 def test_every_specialisation_has_a_measured_estimate():
     assert set(C.ESTIMATE_S) == {s.name for s in C.specs()}
+
+
+_BACKGROUND = """
+import io, sys, time
+from boringbar.kernels import compile as C
+spec = C.Spec("rk4", 1)
+assert not C.await_background(spec)  # none started
+C.compile_in_background(spec)
+C.compile_in_background(spec)  # once
+out = io.StringIO()
+tic = time.perf_counter()
+ok = C.await_background(spec, stream=out)
+here = C.compile_one(spec)  # compiles if the background did not put it in the cache
+print(ok, here.status, bool(out.getvalue()), round(time.perf_counter() - tic, 1))
+"""
+
+
+def test_a_background_compile_is_awaited_and_the_kernel_then_loads(tmp_path):
+    """On an empty cache, a kernel compiled in another process (as ``boringbar paper``
+    compiles the exact kernel while its first steps run) is waited for, with a line that
+    says so, and then loads from the cache instead of compiling a second time."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    out = subprocess.run([sys.executable, "-c", _BACKGROUND], capture_output=True, text=True,
+                         env=env, timeout=600)
+    assert out.returncode == 0, out.stderr
+    ok, status, said, _ = out.stdout.split()
+    assert (ok, status, said) == ("True", "cached", "True")

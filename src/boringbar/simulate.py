@@ -26,7 +26,7 @@ from boringbar._validate import (
     check_range,
 )
 from boringbar.kernels import layout as L
-from boringbar.kernels.compile import announce
+from boringbar.kernels.compile import announce, await_background
 from boringbar.kernels.exact import run_exact
 from boringbar.kernels.rk4 import run_rk4
 from boringbar.kernels.rk4_batch import BMAX, LANES, run_rk4_batch
@@ -605,6 +605,8 @@ def _run_kernel(su: _Setup) -> float:
     p, x, t0, dt, n_steps, steady_steps = su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps
     record_every, rec, imp, stick, stb, met = (su.record_every, su.rec, su.imp, su.stick, su.stb,
                                                su.met)
+    if su.integrator == "exact":
+        await_background()  # the exact kernel compiling in another process, if any
     tic = time.perf_counter()
     if su.integrator == "exact":
         t_reached = run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt,

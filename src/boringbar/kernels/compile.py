@@ -13,7 +13,11 @@ compiles and about how long it takes (:data:`ESTIMATE_S`, measured cold).
 
 :func:`compile_all` compiles every specialisation the package uses, in
 parallel processes, so that a cluster image can be warmed
-(``boringbar compile``).
+(``boringbar compile``).  :func:`compile_in_background` starts one
+specialisation's compile in another process while this one goes on (the
+published study compiles the exact kernel so while its first steps run on RK4);
+:func:`await_background`, called before that kernel runs, waits for it, so the
+kernel then loads from the cache instead of compiling a second time.
 
 This module imports nothing from the layers above the kernels.
 """
@@ -354,3 +358,38 @@ def compile_all(kinds: Iterable[str] = KINDS, *, workers: int | None = None,
             done(fut.result())
     order = {s.name: i for i, s in enumerate(todo)}
     return sorted(out, key=lambda c: order[c.name])
+
+
+# --- compiling in the background -------------------------------------------------------------
+#: compiles this process started in another: spec name -> (pid, start, process)
+_BACKGROUND: dict[str, tuple[int, float, multiprocessing.process.BaseProcess]] = {}
+
+
+def compile_in_background(spec: Spec = Spec("exact")) -> None:
+    """Start compiling ``spec`` (or loading it from the cache) in a spawned process and
+    return at once; a second call for the same spec does nothing.  The process is a
+    daemon: if this one ends first (an error, Ctrl-C), it ends too."""
+    if spec.name in _BACKGROUND:
+        return
+    proc = multiprocessing.get_context("spawn").Process(
+        target=compile_one, args=(spec,), name=f"boringbar compile {spec.name}", daemon=True)
+    proc.start()
+    _BACKGROUND[spec.name] = (os.getpid(), time.perf_counter(), proc)
+
+
+def await_background(spec: Spec = Spec("exact"), stream=None) -> bool:
+    """Wait for :func:`compile_in_background`'s compile of ``spec`` if this process
+    started one (one line on ``stream``, stderr, if it is still compiling).  Returns
+    whether it finished well; if not, or if there was none, the kernel compiles (or
+    loads) here as without it."""
+    job = _BACKGROUND.get(spec.name)
+    if job is None or job[0] != os.getpid():  # none, or started by the parent of a fork
+        return False
+    _, start, proc = job
+    if proc.is_alive() and _notices["on"]:
+        left = max(0.0, estimate(spec) - (time.perf_counter() - start))
+        print(f"boringbar: waiting for {spec.describe()}, compiling in another process "
+              f"(first use on this machine, about {_duration(left)} more; cached afterwards)",
+              file=stream or sys.stderr, flush=True)
+    proc.join()
+    return proc.exitcode == 0

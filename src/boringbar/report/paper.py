@@ -45,6 +45,7 @@ from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity
 from boringbar.analysis.sweep import SweepOptions, parse_range, published_cases, sweep
 from boringbar.execute import Execution
 from boringbar.io import jsonable, save_figure_atomic, write_json_atomic, write_netcdf_atomic
+from boringbar.kernels.compile import compile_in_background
 from boringbar.model.system import make_system
 from boringbar.plot import plot_ladder
 from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
@@ -419,6 +420,10 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     steps = published_steps(quick)
     plan = _plan(steps, presets)
     total = sum(1 for *_, shared in plan if shared is None) + 1
+    if _pending(plan, out, shown):
+        # the exact kernel (its first use is minutes of compiling) compiles in another
+        # process while the first steps run on RK4; its first step waits for it
+        compile_in_background()
     records, done = [], {}
     for column, step, shared in plan:
         step = step.for_column(column)
@@ -455,6 +460,16 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     say(f"boringbar paper: report {manifest['report']} "
         f"({manifest['wall_time_s']:.0f} s)")
     return manifest
+
+
+def _pending(plan, out: Path, shown: Path) -> bool:
+    """Whether a step of ``plan`` has no finished record under ``out`` yet."""
+    for column, step, shared in plan:
+        step = step.for_column(column)
+        command = command_line(step, column, shown / column / step.key)
+        if shared is None and _done(out / column / step.key / "summary.json", command) is None:
+            return True
+    return False
 
 
 def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
