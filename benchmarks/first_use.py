@@ -23,7 +23,10 @@ import tempfile
 import threading
 import time
 
-os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="numba-first-use-")
+# one new cache for this run, also in the processes it spawns (which import this module
+# again, as __mp_main__: they must not make a cache of their own)
+os.environ.setdefault("BORINGBAR_FIRST_USE_CACHE", tempfile.mkdtemp(prefix="numba-first-use-"))
+os.environ["NUMBA_CACHE_DIR"] = os.environ["BORINGBAR_FIRST_USE_CACHE"]
 
 _T0 = time.perf_counter()  # the command line's import is timed too
 
