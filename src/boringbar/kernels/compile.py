@@ -363,6 +363,8 @@ def compile_all(kinds: Iterable[str] = KINDS, *, workers: int | None = None,
 # --- compiling in the background -------------------------------------------------------------
 #: compiles this process started in another: spec name -> (pid, start, process)
 _BACKGROUND: dict[str, tuple[int, float, multiprocessing.process.BaseProcess]] = {}
+#: one waiting thread at a time (a sweep's threads may all reach their first exact run)
+_AWAIT = threading.Lock()
 
 
 def compile_in_background(spec: Spec = Spec("exact")) -> None:
@@ -386,10 +388,11 @@ def await_background(spec: Spec = Spec("exact"), stream=None) -> bool:
     if job is None or job[0] != os.getpid():  # none, or started by the parent of a fork
         return False
     _, start, proc = job
-    if proc.is_alive() and _notices["on"]:
-        left = max(0.0, estimate(spec) - (time.perf_counter() - start))
-        print(f"boringbar: waiting for {spec.describe()}, compiling in another process "
-              f"(first use on this machine, about {_duration(left)} more; cached afterwards)",
-              file=stream or sys.stderr, flush=True)
-    proc.join()
+    with _AWAIT:
+        if proc.is_alive() and _notices["on"]:
+            left = max(0.0, estimate(spec) - (time.perf_counter() - start))
+            print(f"boringbar: waiting for {spec.describe()}, compiling in another process "
+                  f"(first use on this machine, about {_duration(left)} more; cached "
+                  "afterwards)", file=stream or sys.stderr, flush=True)
+        proc.join()
     return proc.exitcode == 0
