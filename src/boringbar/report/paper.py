@@ -394,6 +394,9 @@ def _step(where: Path, meta: dict, compute, say, label: str) -> dict:
     if record is not None:
         say(f"{label}: done before, kept")
         return {**record, "reused": True}
+    # the exact kernel (minutes of compiling on first use) compiles in another process
+    # while this and the next steps run on RK4; its first run waits for it (started once a process)
+    compile_in_background()
     t0 = time.perf_counter()
     summary = compute()
     record = {**meta, "wall_time_s": time.perf_counter() - t0, "summary": summary}
@@ -420,10 +423,6 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     steps = published_steps(quick)
     plan = _plan(steps, presets)
     total = sum(1 for *_, shared in plan if shared is None) + 1
-    if _pending(plan, out, shown):
-        # the exact kernel (its first use is minutes of compiling) compiles in another
-        # process while the first steps run on RK4; its first step waits for it
-        compile_in_background()
     records, done = [], {}
     for column, step, shared in plan:
         step = step.for_column(column)
@@ -460,16 +459,6 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     say(f"boringbar paper: report {manifest['report']} "
         f"({manifest['wall_time_s']:.0f} s)")
     return manifest
-
-
-def _pending(plan, out: Path, shown: Path) -> bool:
-    """Whether a step of ``plan`` has no finished record under ``out`` yet."""
-    for column, step, shared in plan:
-        step = step.for_column(column)
-        command = command_line(step, column, shown / column / step.key)
-        if shared is None and _done(out / column / step.key / "summary.json", command) is None:
-            return True
-    return False
 
 
 def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
