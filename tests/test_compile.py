@@ -9,6 +9,7 @@ import pytest
 from numba import types
 from numba.core import event
 
+from boringbar.cli.main import main
 from boringbar.kernels import compile as C
 from boringbar.kernels import rk4, rk4_batch
 
@@ -116,3 +117,12 @@ def test_a_background_compile_is_awaited_and_the_kernel_then_loads(tmp_path):
     assert out.returncode == 0, out.stderr
     ok, status, said, _ = out.stdout.split()
     assert (ok, status, said) == ("True", "cached", "True")
+
+
+def test_a_quiet_command_line_leaves_the_notices_as_they_were(tmp_path):
+    """``--quiet`` silences the compile notice for its own command only: main() run in
+    process (the tests, a notebook) must not silence every later announce."""
+    from boringbar.cli.main import main
+
+    assert main(["modes", "--out", str(tmp_path), "--quiet"]) == 0
+    assert C.notices(True) is True  # as before the call

@@ -84,7 +84,8 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 0
-    compile_notices(not getattr(args, "quiet", False))  # --quiet: no compile notice either
+    # --quiet: no compile notice either, for this command only (main may run in process)
+    notices_before = compile_notices(not getattr(args, "quiet", False))
     try:
         outcome = args.func(args)
         if isinstance(outcome, Outcome):
@@ -100,6 +101,8 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        compile_notices(notices_before)
 
 
 def _one_line(exc: BaseException) -> str:

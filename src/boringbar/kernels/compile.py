@@ -141,9 +141,11 @@ NOTICE_MIN_S = 2.0
 _notices = {"on": True}
 
 
-def notices(enabled: bool) -> None:
-    """Whether :func:`announce` prints at all (the command line's ``--quiet``: off)."""
-    _notices["on"] = bool(enabled)
+def notices(enabled: bool) -> bool:
+    """Whether :func:`announce` prints at all (the command line's ``--quiet``: off).
+    Returns the setting before, to restore."""
+    before, _notices["on"] = _notices["on"], bool(enabled)
+    return before
 
 
 def estimate(spec: Spec) -> float:
