@@ -137,3 +137,70 @@ def test_the_inliner_copies_with_one_memo():
         return inner(a, 3) + inner(a, 2)
 
     assert outer(np.arange(4.0)) == (0 + 1 + 4) + (0 + 1)
+
+
+def _ssa_ir(blocks):
+    """A function's IR as text, block by block, with every scope's variable names."""
+    scopes = {id(b.scope): b.scope for b in blocks.values()}
+    return ([(label, [str(s) for s in b.body]) for label, b in blocks.items()],
+            sorted(sorted(s.localvars._con) for s in scopes.values()))
+
+
+def _branchy(a, n):
+    x = 0.0
+    y = 1.0
+    for i in range(n):
+        if a[i] > 0:
+            x = a[i]
+            y = x * 2
+        elif a[i] < -1:
+            x = -a[i]
+        else:
+            y = y + 1
+        while y > 10:
+            y = y / 2
+            x = x + y
+    if n > 3:
+        x = y
+    return x + y
+
+
+@pytest.mark.parametrize("name", ["branchy", "rk4"])
+def test_ssa_on_the_naming_blocks_gives_numbas_ir(name):
+    """kernels/ssa_blocks.py is in use, and its SSA reconstruction gives the IR numba's own
+    gives (same statements, fresh names and phi nodes, in the same blocks and order): on a
+    function with redefinitions in branches and loops, and on the RK4 kernel's driver."""
+    import copy
+
+    from numba.core.compiler import run_frontend
+
+    from boringbar.kernels import rk4, ssa_blocks
+
+    assert ssa_blocks.applied()
+    fn = _branchy if name == "branchy" else rk4._rk4.py_func
+    blocks = run_frontend(fn).blocks
+    theirs = ssa_blocks.ORIGINAL(copy.deepcopy(blocks))
+    ours = ssa_blocks.run_ssa(copy.deepcopy(blocks))
+    assert _ssa_ir(ours) == _ssa_ir(theirs)
+    assert any("phi" in s for _, body in _ssa_ir(ours)[0] for s in body)
+
+
+@pytest.mark.parametrize("name", ["branchy", "rk4"])
+def test_liveness_on_bit_sets_gives_numbas_live_map(name):
+    """kernels/live_bits.py is in use, and its liveness analysis gives numba's own: the
+    same variables live at each block's entry, before and after SSA (phi nodes, loops)."""
+    from numba.core import analysis
+    from numba.core.compiler import run_frontend
+
+    from boringbar.kernels import live_bits, rk4, ssa_blocks
+
+    assert live_bits.applied()
+    fn = _branchy if name == "branchy" else rk4._rk4.py_func
+    blocks = run_frontend(fn).blocks
+    for ir_blocks in (blocks, ssa_blocks.run_ssa(blocks)):
+        cfg = analysis.compute_cfg_from_blocks(ir_blocks)
+        usedefs = analysis.compute_use_defs(ir_blocks)
+        args = (cfg, ir_blocks, usedefs.usemap, usedefs.defmap)
+        theirs = live_bits.ORIGINAL(*args)
+        assert live_bits.compute_live_map(*args) == theirs
+        assert sum(map(len, theirs.values())) > 20
