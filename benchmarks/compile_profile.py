@@ -2,6 +2,7 @@
 change, in one process on an empty numba cache.
 
     .venv/bin/python benchmarks/compile_profile.py [--top 12] [--save F.npz] [--against F.npz]
+                                                   [--asm F.s] [--numba-own]
     NUMBA_OPT=1 .venv/bin/python benchmarks/compile_profile.py ...   # numba's own flags
     NUMBA_SLP_VECTORIZE=0 NUMBA_LOOP_VECTORIZE=0 .venv/bin/python benchmarks/compile_profile.py
 
@@ -12,10 +13,16 @@ function (``pipeline_times``: the passes, summed per pass name, and the seconds 
 numba's compiler and LLVM locks, which include what the function's compile compiled
 of its callees), largest first.
 
-Then the warm time of four 2 s exact runs (best of 5 each), and their final states and
-tip RMS, saved with ``--save`` or compared bit for bit ``--against`` a saved file, so
-that a flag's effect on the warm speed and on the numbers shows beside its effect on
-the compile.
+Then the warm time of four 2 s exact runs (best of 5 each), and their final states
+and tip RMS (and those of one 0.2 s RK4 run), saved with ``--save`` or compared bit
+for bit ``--against`` a saved file, so that a flag's effect on the warm speed and on
+the numbers shows beside its effect on the compile.  ``--asm F.s`` writes the
+driver's assembly, with the names that change from one process to the next (numba's
+unique ids in mangled names, its constant strings' hashes) made constant, so that
+``cmp`` of two runs' files says whether a change to the compiler left the machine
+code as it was.  ``--numba-own`` compiles with numba's own SSA, liveness and inlining
+instead of the package's linear ones (kernels/ssa_blocks.py, live_bits.py,
+inline_copy.py), for the same comparison.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ from __future__ import annotations
 import argparse
 import gc
 import os
+import re
 import sys
 import tempfile
 import time
@@ -64,6 +72,16 @@ def compiled_functions():
     return sorted(rows, key=lambda r: -r[0])
 
 
+def driver_asm() -> str:
+    """The exact driver's assembly, process-specific names made constant."""
+    from boringbar.kernels.exact import driver
+
+    asm = "\n".join(driver._exact.inspect_asm().values())
+    asm = re.sub(r"0x[0-9a-f]+", "ADDR", asm)
+    asm = re.sub(r'"?\.bytes\.-?[0-9]+"?', "BYTES", asm)
+    return re.sub(r"B[0-9]+v[0-9]+B", "BvB", asm)
+
+
 def warm_runs():
     times, out = [], {}
     for k, (preset, gap, friction, force) in enumerate(WARM_CASES):
@@ -77,6 +95,10 @@ def warm_runs():
         times.append(best)
         out[f"x{k}"] = run.final.x
         out[f"rms{k}"] = np.array([run.summary()["rms_tip_m"]])
+    # and one RK4 run (its kernel compiled here), whose numbers the passes must not move
+    run = bb.simulate(bb.make_system(), bb.Harmonic(amplitude=20.0, ratio=1.0), duration=0.2,
+                      integrator="rk4")
+    out["x_rk4"], out["rms_rk4"] = run.final.x, np.array([run.summary()["rms_tip_m"]])
     return times, out
 
 
@@ -85,16 +107,27 @@ def main(argv=None) -> None:
     ap.add_argument("--top", type=int, default=12)
     ap.add_argument("--save")
     ap.add_argument("--against")
+    ap.add_argument("--asm")
+    ap.add_argument("--numba-own", action="store_true")
     args = ap.parse_args(argv)
+    if args.numba_own:
+        from boringbar.kernels import inline_copy, live_bits, ssa_blocks
+
+        for patch in (inline_copy, live_bits, ssa_blocks):
+            patch.apply(False)
     flags = {k: v for k, v in os.environ.items() if k.startswith("NUMBA_") and k !=
              "NUMBA_CACHE_DIR"}
-    print(f"numba flags: {flags or 'none'}; load {os.getloadavg()[0]:.1f}")
+    print(f"numba flags: {flags or 'none'}; numba's own passes: {args.numba_own}; "
+          f"load {os.getloadavg()[0]:.1f}")
     print(f"cold compile of the exact kernel: {cold_compile():.1f} s CPU")
     for total, name, passes, timers in compiled_functions()[:args.top]:
         top = sorted(passes.items(), key=lambda kv: -kv[1])[:4]
         print(f"{total:7.1f} s  {name}  (compiler lock {timers.get('compiler_lock', 0):.1f} s,"
               f" LLVM lock {timers.get('llvm_lock', 0):.1f} s)")
         print("           " + ", ".join(f"{k} {v:.1f}" for k, v in top))
+    if args.asm:
+        with open(args.asm, "w") as f:
+            f.write(driver_asm())
     times, out = warm_runs()
     print("warm, best of 5 (ms): " + ", ".join(
         f"{p} gap {g * 1e3:.1f} mm{' friction' if f else ''} {F:.0f} N {1e3 * t:.2f}"

@@ -115,9 +115,11 @@ def specs(kinds: Iterable[str] = KINDS) -> list[Spec]:
 #: kernels/inline_copy.py); wall time is about this on an idle core.  Before
 #: inline_copy.py: exact 129 s, rk4 15-20 s, rk4_batch 10-19 s (836 s in all, now 418 s).
 #: The exact kernel measured again 2026-11-25 on the idle machine: 212 s
-#: (benchmarks/compile_profile.py; docs/performance.md, "First use").
+#: (benchmarks/compile_profile.py; docs/performance.md, "First use"); 118 s (the first
+#: ``boringbar simulate``'s compiles, benchmarks/first_use.py) once numba's SSA, liveness
+#: and inlining were made linear (kernels/ssa_blocks.py, live_bits.py, inline_copy.py).
 ESTIMATE_S: dict[str, float] = {
-    "exact": 210.0, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
+    "exact": 118.0, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
     "rk4 n=4-8": 8.8, "rk4 n=2 ball": 6.0, "rk4_batch n=1 ball x16": 6.8,
     "rk4_batch n=1 locked x16": 7.3, "rk4_batch n=1 solid x16": 7.0,
     "rk4_batch n=1 tmd x16": 6.9, "rk4_batch n=1 ball x4": 6.5, "rk4_batch n=1 locked x4": 6.4,
@@ -135,7 +137,7 @@ ESTIMATE_S: dict[str, float] = {
     "rk4_batch n=4-8 x16": 9.8, "rk4_batch n=4-8 x4": 8.6, "rk4_batch n=4-8 x8": 8.5,
 }
 #: estimates of the specialisations not measured one by one, per kind
-_KIND_ESTIMATE_S = {"exact": 210.0, "rk4": 10.0, "rk4_batch": 10.0}
+_KIND_ESTIMATE_S = {"exact": 118.0, "rk4": 10.0, "rk4_batch": 10.0}
 #: compiles estimated under this many seconds get no notice
 NOTICE_MIN_S = 2.0
 _notices = {"on": True}
