@@ -5,7 +5,8 @@ kernel (``cache=True``: src/boringbar/kernels/__pycache__) compiles once, in the
 first process that needs it, and every later process loads it from disk.
 Measured cold (CPU seconds, kernels/compile.py ESTIMATE_S, 2026-11-24, with the
 inliner fix of kernels/inline_copy.py): the exact kernel 100 s (212 s measured again on
-2026-11-25, docs/performance.md); the lock-step
+2026-11-25, 112-120 s once numba's SSA, liveness and inlining were made linear:
+docs/performance.md); the lock-step
 batch kernels (one per mode count, case and batch size, kernels/rk4_batch.py)
 6-9 s each; the single-run RK4 kernels 5-10 s each; the runs themselves about
 220 s, of which test_paper's quick study 90 s.
