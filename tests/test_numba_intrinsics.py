@@ -204,3 +204,35 @@ def test_liveness_on_bit_sets_gives_numbas_live_map(name):
         theirs = live_bits.ORIGINAL(*args)
         assert live_bits.compute_live_map(*args) == theirs
         assert sum(map(len, theirs.values())) > 20
+
+
+def test_an_inlined_function_is_built_once_per_compile(monkeypatch):
+    """kernels/inline_copy.py keeps a callee's untyped IR for the compile under way: a
+    function inlined at three sites (one of them inside another inlined function) is
+    built from its bytecode once, not three times, and the result is still right."""
+    from numba.core.inline_closurecall import InlineWorker
+
+    built = []
+    run = InlineWorker.run_untyped_passes
+
+    def counted(self, func, enable_ssa=False):
+        built.append(func.__name__)
+        return run(self, func, enable_ssa)
+
+    monkeypatch.setattr(InlineWorker, "run_untyped_passes", counted)
+
+    @njit(inline="always")
+    def leaf(a, k):
+        return a[k] * 2.0
+
+    @njit(inline="always")
+    def middle(a):
+        return leaf(a, 0) + 1.0
+
+    @njit
+    def top(a):
+        return leaf(a, 1) + leaf(a, 2) + middle(a)
+
+    assert top(np.arange(4.0)) == 2.0 + 4.0 + 1.0
+    assert built.count("leaf") == 1
+    assert built.count("middle") == 1
