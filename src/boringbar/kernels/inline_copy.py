@@ -32,11 +32,12 @@ the kept IR to ``inline_ir``; it repeats the one side effect of
 ``run_untyped_passes`` that outlives it (``flags.enable_ssa = False``).
 """
 
-import hashlib
 import inspect
 import textwrap
 
 from numba.core import inline_closurecall as _icc
+
+from boringbar.kernels.numba_source import source_digest
 
 _OLD = """        for block_label, block in the_ir.blocks.items():
             new_block = copy.deepcopy(the_ir.blocks[block_label])"""
@@ -74,14 +75,6 @@ def inline_function(self, caller_ir, block, i, function, arg_typs=None):
 inline_function.__wrapped__ = _ORIGINAL_INLINE_FUNCTION
 
 
-def _inline_function_is_numbas() -> bool:
-    try:
-        src = inspect.getsource(_ORIGINAL_INLINE_FUNCTION)
-    except (OSError, TypeError):
-        return False
-    return hashlib.sha256(src.encode()).hexdigest() == NUMBA_INLINE_FUNCTION
-
-
 def _build():
     try:
         src = textwrap.dedent(inspect.getsource(_ORIGINAL))
@@ -104,7 +97,7 @@ def apply(enabled: bool = True) -> bool:
         _PATCHED = _build()
     ours = bool(enabled and _PATCHED)
     _icc.InlineWorker.inline_ir = _PATCHED if ours else _ORIGINAL
-    keep = ours and _inline_function_is_numbas()
+    keep = ours and source_digest(_ORIGINAL_INLINE_FUNCTION) == NUMBA_INLINE_FUNCTION
     _icc.InlineWorker.inline_function = inline_function if keep else _ORIGINAL_INLINE_FUNCTION
     _KEPT["compile"], _KEPT["ir"] = None, {}
     return applied()

@@ -19,23 +19,14 @@ numba), nothing is changed and :func:`applied` says so, and that test fails
 loudly.
 """
 
-import hashlib
-import inspect
-
 from numba.core import analysis, ir_utils
+
+from boringbar.kernels.numba_source import source_digest
 
 #: SHA-256 of the source of numba 0.68's ``numba.core.analysis.compute_live_map``
 NUMBA_LIVE_MAP = "713c4c094977e93b7ade48a478eb9b94168786ad9b440906b8e95b7fc0487a2a"
 #: numba's own (unwrapped if this module was loaded before)
 ORIGINAL = getattr(analysis.compute_live_map, "__wrapped__", analysis.compute_live_map)
-
-
-def source_digest(fn=ORIGINAL) -> str:
-    """SHA-256 of a function's source text ('' when it has none)."""
-    try:
-        return hashlib.sha256(inspect.getsource(fn).encode()).hexdigest()
-    except (OSError, TypeError):
-        return ""
 
 
 class _Bits:
@@ -118,7 +109,7 @@ compute_live_map.__wrapped__ = ORIGINAL
 def apply(enabled: bool = True) -> bool:
     """Use :func:`compute_live_map` (``enabled``, and numba's is the one it was written
     against) or numba's own; True if ours is in use afterwards."""
-    fn = compute_live_map if enabled and source_digest() == NUMBA_LIVE_MAP else ORIGINAL
+    fn = compute_live_map if enabled and source_digest(ORIGINAL) == NUMBA_LIVE_MAP else ORIGINAL
     analysis.compute_live_map = fn
     ir_utils.compute_live_map = fn
     return applied()

@@ -20,27 +20,19 @@ against (another numba), nothing is changed and :func:`applied` says so, and tha
 fails loudly.
 """
 
-import hashlib
-import inspect
 from collections import defaultdict
 
 from numba.core import errors, ir
 from numba.core import ssa as _ssa
 from numba.core.analysis import compute_cfg_from_blocks
 
+from boringbar.kernels.numba_source import source_digest
+
 #: SHA-256 of the source of numba 0.68's ``numba.core.ssa``, whose ``_run_ssa`` this module
 #: replaces with one made of that module's own pieces
 NUMBA_SSA = "d20accd92757fef663a43e78d0ee88fe01d9333379eda463c9e15f0e7785e490"
 #: numba's own (unwrapped if this module was loaded before)
 ORIGINAL = getattr(_ssa._run_ssa, "__wrapped__", _ssa._run_ssa)
-
-
-def source_digest(obj=_ssa) -> str:
-    """SHA-256 of a module's or function's source text ('' when it has none)."""
-    try:
-        return hashlib.sha256(inspect.getsource(obj).encode()).hexdigest()
-    except (OSError, TypeError):
-        return ""
 
 
 def naming_blocks(blocks) -> dict:
@@ -76,7 +68,7 @@ def _fix_variable(blocks, labels, varname, scope, cfg, df_plus, list_vars):
         if block is None:
             old = blocks[label]
             block = fixed[label] = ir.Block(scope=old.scope, loc=old.loc)
-            block.body = list(old.body)
+            block.body = old.body  # replaced, not changed, on the next line
         block.body = philist + block.body
     return fixed
 
@@ -107,7 +99,7 @@ run_ssa.__wrapped__ = ORIGINAL
 def apply(enabled: bool = True) -> bool:
     """Use :func:`run_ssa` (``enabled``, and numba's ssa module is the one it was written
     against) or numba's own; True if :func:`run_ssa` is in use afterwards."""
-    ours = enabled and source_digest() == NUMBA_SSA
+    ours = enabled and source_digest(_ssa) == NUMBA_SSA
     _ssa._run_ssa = run_ssa if ours else ORIGINAL
     return applied()
 
