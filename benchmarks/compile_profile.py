@@ -41,6 +41,8 @@ import numpy as np  # noqa: E402
 from numba.core.registry import CPUDispatcher  # noqa: E402
 
 import boringbar as bb  # noqa: E402
+from boringbar.kernels import inline_copy, live_bits, ssa_blocks  # noqa: E402
+from boringbar.kernels.exact import driver  # noqa: E402
 
 WARM_CASES = (("physical", 0.1e-3, True, 20.0), ("physical", 0.5e-3, True, 10.0),
               ("paper", 0.1e-3, False, 10.0), ("physical", 0.1e-3, False, 20.0))
@@ -74,8 +76,6 @@ def compiled_functions():
 
 def driver_asm() -> str:
     """The exact driver's assembly, process-specific names made constant."""
-    from boringbar.kernels.exact import driver
-
     asm = "\n".join(driver._exact.inspect_asm().values())
     asm = re.sub(r"0x[0-9a-f]+", "ADDR", asm)
     asm = re.sub(r'"?\.bytes\.-?[0-9]+"?', "BYTES", asm)
@@ -111,8 +111,6 @@ def main(argv=None) -> None:
     ap.add_argument("--numba-own", action="store_true")
     args = ap.parse_args(argv)
     if args.numba_own:
-        from boringbar.kernels import inline_copy, live_bits, ssa_blocks
-
         for patch in (inline_copy, live_bits, ssa_blocks):
             patch.apply(False)
     flags = {k: v for k, v in os.environ.items() if k.startswith("NUMBA_") and k !=

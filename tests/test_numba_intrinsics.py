@@ -9,11 +9,15 @@ pinned to the range they ran on, pyproject.toml).  Not cached: each compiles in
 well under a second.
 """
 
+import copy
+
 import numpy as np
 import pytest
 from numba import carray, njit
-from numba.core import cgutils, errors
+from numba.core import analysis, cgutils, errors
+from numba.core.compiler import run_frontend
 
+from boringbar.kernels import live_bits, rk4, ssa_blocks
 from boringbar.kernels.interp import fma
 from boringbar.kernels.stack import stack_ptr
 from boringbar.kernels.views import borrow, with_len
@@ -165,20 +169,19 @@ def _branchy(a, n):
     return x + y
 
 
+def _frontend_blocks(name):
+    """The IR blocks numba's front end makes of ``_branchy`` or of the RK4 kernel's driver,
+    before SSA."""
+    return run_frontend(_branchy if name == "branchy" else rk4._rk4.py_func).blocks
+
+
 @pytest.mark.parametrize("name", ["branchy", "rk4"])
 def test_ssa_on_the_naming_blocks_gives_numbas_ir(name):
     """kernels/ssa_blocks.py is in use, and its SSA reconstruction gives the IR numba's own
     gives (same statements, fresh names and phi nodes, in the same blocks and order): on a
     function with redefinitions in branches and loops, and on the RK4 kernel's driver."""
-    import copy
-
-    from numba.core.compiler import run_frontend
-
-    from boringbar.kernels import rk4, ssa_blocks
-
     assert ssa_blocks.applied()
-    fn = _branchy if name == "branchy" else rk4._rk4.py_func
-    blocks = run_frontend(fn).blocks
+    blocks = _frontend_blocks(name)
     theirs = ssa_blocks.ORIGINAL(copy.deepcopy(blocks))
     ours = ssa_blocks.run_ssa(copy.deepcopy(blocks))
     assert _ssa_ir(ours) == _ssa_ir(theirs)
@@ -189,14 +192,8 @@ def test_ssa_on_the_naming_blocks_gives_numbas_ir(name):
 def test_liveness_on_bit_sets_gives_numbas_live_map(name):
     """kernels/live_bits.py is in use, and its liveness analysis gives numba's own: the
     same variables live at each block's entry, before and after SSA (phi nodes, loops)."""
-    from numba.core import analysis
-    from numba.core.compiler import run_frontend
-
-    from boringbar.kernels import live_bits, rk4, ssa_blocks
-
     assert live_bits.applied()
-    fn = _branchy if name == "branchy" else rk4._rk4.py_func
-    blocks = run_frontend(fn).blocks
+    blocks = _frontend_blocks(name)
     for ir_blocks in (blocks, ssa_blocks.run_ssa(blocks)):
         cfg = analysis.compute_cfg_from_blocks(ir_blocks)
         usedefs = analysis.compute_use_defs(ir_blocks)
