@@ -12,11 +12,12 @@ from numba.core import event
 from boringbar.cli.main import main
 from boringbar.kernels import compile as C
 from boringbar.kernels import rk4, rk4_batch
+from boringbar.kernels.exact import driver
 
 
 def test_specs_name_every_specialisation_once():
     names = [s.name for s in C.specs()]
-    assert len(names) == len(set(names)) == 1 + 6 + 13 * len(rk4_batch.LANES)
+    assert len(names) == len(set(names)) == 2 + 6 + 13 * len(rk4_batch.LANES)
     assert [s.kind for s in C.specs(["rk4"])] == ["rk4"] * 6
     with pytest.raises(ValueError):
         C.specs(["rk5"])
@@ -32,6 +33,9 @@ def test_every_dispatched_kernel_maps_to_a_spec():
         for d in [*rk4_batch._SPECIALISED.values(), rk4_batch._b_any]:
             assert C._spec_of(d, lanes) in known
     assert C._spec_of(None, ()) is None
+    # the exact integrator's two kernels, harmonic and cut (kernels/exact/driver.py)
+    assert {C._spec_of(d, ()) for d in (driver._exact, driver._exact_cut)} == set(
+        C.specs(["exact"]))
 
 
 def _fire(dispatcher, args=()):
@@ -69,6 +73,7 @@ def test_announce_is_silenced_by_notices_off():
 
 def test_notice_durations():
     assert C.notice(C.Spec("exact")).endswith(" min; cached afterwards)")
+    assert "the exact integrator for cuts" in C.notice(C.Spec("exact", case="cut"))
     assert C._duration(9.0) == "10 s" and C._duration(1.0) == "5 s"
     assert C._duration(170) == "3 min"
 

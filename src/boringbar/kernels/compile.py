@@ -2,9 +2,10 @@
 
 Every kernel is compiled by numba on its first use on a machine, one
 specialisation per mode count (kernels/rk4.py), per mode count, case and
-batch size (kernels/rk4_batch.py), and once for the exact integrator
-(kernels/exact.py), and cached on disk afterwards (``cache=True``; the lock of
-kernels/cache.py makes the cache safe for several processes).
+batch size (kernels/rk4_batch.py), and twice for the exact integrator
+(kernels/exact/driver.py: harmonic forcing, and regenerative cuts), and cached
+on disk afterwards (``cache=True``; the lock of kernels/cache.py makes the
+cache safe for several processes).
 
 :func:`announce` wraps kernel calls: when numba is about to compile (its
 ``numba:compile`` event, which fires only on a cache miss, never when a
@@ -54,8 +55,9 @@ _ANY = 4
 
 class Spec(NamedTuple):
     """One compiled specialisation: ``kind`` (of :data:`KINDS`), the mode count (4: the
-    kernel shared by 4 to NMAX modes), the case ("" where the kernel takes any) and the
-    batch size (0: a single run)."""
+    kernel shared by 4 to NMAX modes), the case ("" where the kernel takes any; for the
+    exact kernel, "cut": its regenerative cut's kernel) and the batch size (0: a single
+    run)."""
 
     kind: str
     modes: int = 0
@@ -65,7 +67,7 @@ class Spec(NamedTuple):
     @property
     def name(self) -> str:
         if self.kind == "exact":
-            return "exact"
+            return "exact" + (" cut" if self.case == "cut" else "")
         modes = f"{self.modes}-{L.NMAX}" if self.modes == _ANY else str(self.modes)
         parts = [self.kind, f"n={modes}"] + ([self.case] if self.case else [])
         return " ".join(parts + ([f"x{self.size}"] if self.size else []))
@@ -73,7 +75,7 @@ class Spec(NamedTuple):
     def describe(self) -> str:
         """What compiles, in words."""
         if self.kind == "exact":
-            return "the exact integrator"
+            return "the exact integrator" + (" for cuts" if self.case == "cut" else "")
         modes = (f"{self.modes} to {L.NMAX} modes" if self.modes == _ANY else
                  f"{self.modes} mode" + ("s" if self.modes > 1 else ""))
         case = f", {_CASE_WORDS[self.case]}" if self.case else ""
@@ -85,6 +87,7 @@ class Spec(NamedTuple):
 def specs(kinds: Iterable[str] = KINDS) -> list[Spec]:
     """Every specialisation of ``kinds`` that the package's entry points dispatch to.
 
+    ``exact``: the harmonic kernel and the regenerative cut's (kernels/exact/driver.py).
     ``rk4``: one kernel per mode count 1-3 (any case, harmonic or cutting), one for
     4 to NMAX modes, and the harmonic ball damper's of 1 and 2 modes
     (kernels/rk4.py).  ``rk4_batch``: one per mode count 1-3 and case, and one for
@@ -97,7 +100,7 @@ def specs(kinds: Iterable[str] = KINDS) -> list[Spec]:
             raise ValueError(f"kind {k!r} is not one of {KINDS}")
     out = []
     if "exact" in kinds:
-        out.append(Spec("exact"))
+        out += [Spec("exact"), Spec("exact", case="cut")]
     if "rk4" in kinds:
         out += [Spec("rk4", n) for n in (1, 2, 3, _ANY)]
         out += [Spec("rk4", n, "ball") for n in (1, 2)]
@@ -117,9 +120,11 @@ def specs(kinds: Iterable[str] = KINDS) -> list[Spec]:
 #: The exact kernel measured again 2026-11-25 on the idle machine: 212 s
 #: (benchmarks/compile_profile.py; docs/performance.md, "First use"); 118 s (the first
 #: ``boringbar simulate``'s compiles, benchmarks/first_use.py) once numba's SSA, liveness
-#: and inlining were made linear (kernels/ssa_blocks.py, live_bits.py, inline_copy.py).
+#: and inlining were made linear (kernels/ssa_blocks.py, live_bits.py, inline_copy.py);
+#: then split in two kernels, each without the other forcing's code (exact/driver.py),
+#: 91.0 s (harmonic) and 92.3 s (cut) by ``compile_one`` on an empty cache, side by side.
 ESTIMATE_S: dict[str, float] = {
-    "exact": 118.0, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
+    "exact": 91.0, "exact cut": 92.3, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
     "rk4 n=4-8": 8.8, "rk4 n=2 ball": 6.0, "rk4_batch n=1 ball x16": 6.8,
     "rk4_batch n=1 locked x16": 7.3, "rk4_batch n=1 solid x16": 7.0,
     "rk4_batch n=1 tmd x16": 6.9, "rk4_batch n=1 ball x4": 6.5, "rk4_batch n=1 locked x4": 6.4,
@@ -137,7 +142,7 @@ ESTIMATE_S: dict[str, float] = {
     "rk4_batch n=4-8 x16": 9.8, "rk4_batch n=4-8 x4": 8.6, "rk4_batch n=4-8 x8": 8.5,
 }
 #: estimates of the specialisations not measured one by one, per kind
-_KIND_ESTIMATE_S = {"exact": 118.0, "rk4": 10.0, "rk4_batch": 10.0}
+_KIND_ESTIMATE_S = {"exact": 91.0, "rk4": 10.0, "rk4_batch": 10.0}
 #: compiles estimated under this many seconds get no notice
 NOTICE_MIN_S = 2.0
 _notices = {"on": True}
@@ -161,7 +166,7 @@ def _spec_of(dispatcher, args) -> Spec | None:
     func = getattr(dispatcher, "py_func", None)
     module, name = getattr(func, "__module__", ""), getattr(func, "__name__", "")
     if module == "boringbar.kernels.exact" or module.startswith("boringbar.kernels.exact."):
-        return Spec("exact")
+        return Spec("exact", case="cut" if name == "_exact_cut" else "")
     if module == "boringbar.kernels.rk4":
         # _rk4_n1.._rk4_n3, _rk4_any, _rk4_ball1, _rk4_ball2
         if name == "_rk4_any":
@@ -298,13 +303,13 @@ def _run(spec: Spec) -> None:
     """Run ``spec``'s kernel for a few steps through its public entry point, which
     compiles it or loads it from the cache (the types are the ones real runs pass)."""
     dt, steps = 1e-6, 20
-    if spec.kind == "exact":
-        for regenerative in (False, True):  # a cut also compiles its history tables
-            p = _params(1, L.BALL if not regenerative else L.SOLID, regenerative)
-            x = np.zeros(4)
-            imp, stick, strobe, met = _outputs()
-            run_exact(p, x, 0.0, steps * dt, 0.0, dt, np.zeros((steps, 6)), imp, stick,
-                      strobe, met, dt=dt)
+    if spec.kind == "exact":  # harmonic (a ball) or, "cut", a cut and its history tables
+        regenerative = spec.case == "cut"
+        p = _params(1, L.SOLID if regenerative else L.BALL, regenerative)
+        x = np.zeros(4)
+        imp, stick, strobe, met = _outputs()
+        run_exact(p, x, 0.0, steps * dt, 0.0, dt, np.zeros((steps, 6)), imp, stick,
+                  strobe, met, dt=dt)
     elif spec.kind == "rk4":
         case = _CASE_IDS.get(spec.case, L.SOLID)
         p = _params(spec.modes, case)

@@ -114,5 +114,4 @@ SV_ADAPT = 7  # steps longer than h allowed
 SV_YDD = 8  # y'' and W'' wanted at the grid points
 SV_WATCH_V = 9  # a free ball's y' = 0 switch watched
 SV_WATCH_EXT = 10  # a free ball's y extremum watched against grazes
-SV_REGEN = 11  # a regenerative cut
-SV_SIZE = 12
+SV_SIZE = 11

@@ -1,6 +1,7 @@
-"""The exact kernel's driver: :func:`run_exact`, its entry point, and :func:`_exact`, the
+"""The exact kernel's driver: :func:`run_exact`, its entry point, and :func:`_exact_body`, the
 loop over segments (each searched by :mod:`.segment`), with the setup of a run, the
-events applied between segments and the run's end.
+events applied between segments and the run's end, compiled as two kernels: :func:`_exact`
+(harmonic forcing) and :func:`_exact_cut` (a regenerative cut).
 """
 
 import cmath
@@ -92,7 +93,6 @@ from boringbar.kernels.exact.consts import (
     RS_YD,
     SEG_SIZE,
     STICK,
-    SV_REGEN,
     SV_SIZE,
 )
 from boringbar.kernels.exact.cut import add_knot, cut_tables, history_step
@@ -369,19 +369,24 @@ def _finish_run(x, X, met, rs, ro, n, ball, regen, n_ev, status):
         met[L.MAX_FORCE] = ro[RO_MAX_FORCE]
 
 
-@njit(cache=True, nogil=True)
-def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
-           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
-           tabE, tabP, bnd, levmax):
-    # one compilation of this body for every bar, forcing and mode count; its hot parts
-    # (segment integrals, event roots, W extrema, the usual grid point) run compiled or
-    # inlined with the sizes constant where n = 1 or 2, nz = 2 n and ks = 2 (the ball or
-    # solid bar with one or two modes): 1.2-1.4x, the same bits, under a minute more to
-    # compile.  The whole body specialised was as fast but took minutes per mode count
-    # (docs/performance.md)
+@njit(cache=True, inline="always")
+def _exact_body(p, x, span, rec, imp, stick, strobe, met, lam, V, Vi, Z, D, eh, h, lvis, cvis,
+                isum, Vfull, kstep, bq, nreg, dt_out, hist_step, tabE, tabP, bnd, levmax, regen):
+    # ``span``: (t0, t_end, t_steady, rec_dt), one argument so that the call stays under
+    # CPython's 30 positional arguments (beyond them it passes a tuple, which numba does
+    # not inline)
+    # compiled twice, once per forcing: ``regen`` (a cut) is a constant of each kernel
+    # (:func:`_exact`, :func:`_exact_cut`), so numba prunes the other forcing's code before
+    # typing it (its dead-branch pass follows the constant into the inlined pieces), and
+    # a harmonic run's kernel compiles in 16 % less time (docs/performance.md).  Each is
+    # one compilation for every bar and mode count; its hot parts (segment integrals,
+    # event roots, W extrema, the usual grid point) run compiled or inlined with the
+    # sizes constant where n = 1 or 2, nz = 2 n and ks = 2 (the ball or solid bar with
+    # one or two modes): 1.2-1.4x, the same bits, under a minute more to compile.  The
+    # whole body specialised was as fast but took minutes per mode count
+    t0, t_end, t_steady, rec_dt = span
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
-    regen = int(p[L.FORCING]) == L.REGENERATIVE
     # borrowed views of the arguments and scratch on the stack: numba reference-counts
     # every array argument of every call, even inlined (an atomic operation each time:
     # 40 % of the run time), but not arrays without a memory owner (kernels/views.py)
@@ -498,7 +503,6 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
              cb, phj, mk, ddc, cp, rs, ro, lam, V, Vi, Vfull, Z, D, bq, lvis, cvis, isum, kstep,
              bnd, levmax, eh, tabE, tabP, hl, rotl, x, rec, strobe, met)
     sv = _zeros(stack_ptr(SV_SIZE, np.float64), SV_SIZE)
-    sv[SV_REGEN] = 1.0 if regen else 0.0
     ph_next = 1.0 + 0.0j
     ph_next_ok = False
     t = t0
@@ -515,16 +519,17 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
         t_stop = min(t_steady, t_end) if t < t_steady else t_end
         r, ks, t_seg_end, at_node, j_node, pdu = start_segment(
             w, t, t_stop, ph, n, case, nreg, j_node, borrow(kn), nk, borrow(ip), borrow(sc), cq,
-            sv)
+            sv, regen)
         mode = int(rs[RS_MODE])
         steady = t >= t_steady
         sz = const_sizes(ks, n, nz)  # 1, 2: the helpers compiled with constant sizes; 0: generic
-        ev_kind, tau_ev, ph_next, wb, wdb = search_segment(w, t, r, ks, sz, n, case, mode, ph, sv)
+        ev_kind, tau_ev, ph_next, wb, wdb = search_segment(w, t, r, ks, sz, n, case, mode, ph, sv,
+                                                            regen)
 
         # --- close the segment [t, t + T] ----------------------------------------------
         T = tau_ev
         last_zero_step = close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu,
-                                        last_zero_step)
+                                        last_zero_step, regen)
         t_new = t + T if ev_kind >= 0 else t_seg_end
         if ev_kind < 0:
             t = t_new
@@ -568,6 +573,26 @@ def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
     return t
 
 
+@njit(cache=True, nogil=True)
+def _exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
+           lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out, hist_step,
+           tabE, tabP, bnd, levmax):
+    """The kernel of harmonic (and free) runs: :func:`_exact_body` without a cut's code."""
+    return _exact_body(p, x, (t0, t_end, t_steady, rec_dt), rec, imp, stick, strobe, met,
+                       lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg,
+                       dt_out, hist_step, tabE, tabP, bnd, levmax, False)
+
+
+@njit(cache=True, nogil=True)
+def _exact_cut(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met,
+               lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg, dt_out,
+               hist_step, tabE, tabP, bnd, levmax):
+    """The kernel of regenerative cuts: :func:`_exact_body` with the cut's code."""
+    return _exact_body(p, x, (t0, t_end, t_steady, rec_dt), rec, imp, stick, strobe, met,
+                       lam, V, Vi, Z, D, eh, h, lvis, cvis, isum, Vfull, kstep, bq, nreg,
+                       dt_out, hist_step, tabE, tabP, bnd, levmax, True)
+
+
 @njit(cache=True, inline="always")
 def _at_wall(X, f, w_, n, mk, kappa_wall, fs, fc):
     """Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
@@ -592,10 +617,12 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
     H = 0.0
     tabE = np.zeros((1, 5, 1), complex)
     tabP = np.zeros((1, 5, 4, 1), complex)
+    kernel = _exact
     if int(p[L.FORCING]) == L.REGENERATIVE:
         H = history_step(float(p[L.TAU]), float(dt))
         tabE, tabP = cut_tables(prep, p, H)
-    return _exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
+        kernel = _exact_cut
+    return kernel(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec, imp,
                   stick, strobe, met, prep["lam"], prep["Vh"], prep["Vi"], prep["Z"],
                   prep["D"], prep["eh"], float(prep["h"]), prep["lvis"], prep["cvis"],
                   prep["isum"], prep["V"], prep["kstep"], prep["bq"], int(prep["nreg"]),

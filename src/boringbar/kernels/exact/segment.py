@@ -73,7 +73,6 @@ from boringbar.kernels.exact.consts import (
     SV_B3Y,
     SV_B4,
     SV_BW4,
-    SV_REGEN,
     SV_STEADY,
     SV_TLEN,
     SV_WATCH_EXT,
@@ -601,11 +600,12 @@ def _advance(w, t, r, ks, sz, n, mode, lev, b, usual, tab_end, regen, ball, ydd_
 
 
 @njit(cache=True, inline="always")
-def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv):
+def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv, regen):
     """The grid search of the segment from t (regime r, ``mode``, forcing phasor ph at t,
     its description ``sv``, SV_*) for its first event, with the outputs on the way: the
     running extremes and output times in w.ro (RO_*), a cut's flows in w.qsum, history
-    and strobe rows.  Returns (event kind or -1, its time from t or the segment's length,
+    and strobe rows.  ``regen`` (a cut) is a constant of the compiled kernel: the code of
+    the other forcing is pruned before typing (driver.py, :func:`_exact`).  Returns (event kind or -1, its time from t or the segment's length,
     the forcing phasor there, W and W' there)."""
     X = w.X
     Xa = w.Xa
@@ -657,7 +657,6 @@ def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv):
     ydd_on = sv[SV_YDD] != 0.0
     watch_v = sv[SV_WATCH_V] != 0.0
     watch_ext = sv[SV_WATCH_EXT] != 0.0
-    regen = sv[SV_REGEN] != 0.0
     max_abs_w = ro[RO_MAX_ABS_W]
     max_w = ro[RO_MAX_W]
     min_w = ro[RO_MIN_W]
@@ -806,10 +805,10 @@ def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv):
 
 
 @njit(cache=True, inline="always")
-def start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, sv):
+def start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, sv, regen):
     """A segment from t (forcing phasor ph there) in the run's state w.rs: its regime r,
     its eigen-coordinates into w.q0, its record into w.seg, its description into ``sv``
-    (SV_*) and, in a cut, its end and surface.  Returns (r, ks, its end (at most t_stop),
+    (SV_*) and, in a cut (``regen``, constant), its end and surface.  Returns (r, ks, its end (at most t_stop),
     whether that is a cut's node, the last node reached, psi_d . u at t)."""
     X = w.X
     dX = w.dX
@@ -826,7 +825,6 @@ def start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, s
     cp = w.cp
     nz = q0.shape[0]
     ball = case == L.BALL
-    regen = sv[SV_REGEN] != 0.0
     t_steady = cp[CP_T_STEADY]
     fc = cp[CP_FC]
     kappa_stick = cp[CP_KSTICK]
@@ -915,9 +913,9 @@ def start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, s
 
 
 @njit(cache=True, inline="always")
-def close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero_step):
+def close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero_step, regen):
     """The flows of the segment [t, t + T] (regime r, forcing phasor ph at t; a cut's from
-    w.qsum, else closed form) into the metrics, a cut's steps with h = 0 counted, a free
+    w.qsum (``regen``, constant), else closed form) into the metrics, a cut's steps with h = 0 counted, a free
     ball moved to t + T.  Returns the last step of length dt_out counted with h = 0."""
     X = w.X
     q0 = w.q0
@@ -942,7 +940,6 @@ def close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero_
     cb = w.cb
     phj = w.phj
     ball = case == L.BALL
-    regen = seg[SEG_CDIR] != 0.0  # +-1 in a cut, 0 under harmonic forcing
     incut = w.rs[RS_INCUT] != 0.0
     t0 = cp[CP_T0]
     dt_out = cp[CP_DT_OUT]
