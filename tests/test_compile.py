@@ -7,7 +7,9 @@ import sys
 
 import pytest
 from numba import types
-from numba.core import event
+from numba.core import compiler, event, ir
+from numba.core.inline_closurecall import InlineWorker
+from numba.core.registry import cpu_target
 
 from boringbar.cli.main import main
 from boringbar.kernels import compile as C
@@ -36,6 +38,29 @@ def test_every_dispatched_kernel_maps_to_a_spec():
     # the exact integrator's two kernels, harmonic and cut (kernels/exact/driver.py)
     assert {C._spec_of(d, ()) for d in (driver._exact, driver._exact_cut)} == set(
         C.specs(["exact"]))
+
+
+def _untyped_globals(dispatcher) -> set[str]:
+    """The names of the globals in ``dispatcher``'s IR after numba's untyped passes (its
+    inlining and dead-branch pruning among them), as numba runs them to inline it."""
+    tyctx, tgctx = cpu_target.typing_context, cpu_target.target_context
+    flags = compiler.Flags()
+    pipeline = compiler.Compiler(tyctx, tgctx, None, None, None, flags, None)
+    worker = InlineWorker(tyctx, tgctx, {}, pipeline, flags, None)
+    func_ir = worker.run_untyped_passes(dispatcher.py_func, enable_ssa=True)
+    return {getattr(st.value.value, "__name__", "") for blk in func_ir.blocks.values()
+            for st in blk.find_insts(ir.Assign) if isinstance(st.value, (ir.Global, ir.FreeVar))}
+
+
+def test_the_harmonic_exact_kernel_leaves_the_cuts_code_out():
+    """The exact kernel of harmonic runs is the shared body with ``regen`` a constant
+    False, and numba prunes a cut's code before typing it (about 16 % of the cold compile,
+    docs/performance.md): the cut's knots, surface and flows are gone from its IR, while
+    the harmonic segment integrals are there.  A ``regen`` that stops being a constant
+    (read from an argument, say) fails this."""
+    names = _untyped_globals(driver._exact)
+    assert {"segment_integrals", "segment_integrals_1", "wall_step"} <= names
+    assert not names & {"add_knot", "_cut_segment", "_cut_flows", "quad_cut", "surface_piece"}
 
 
 def _fire(dispatcher, args=()):

@@ -533,7 +533,7 @@ def _exact_body(p, x, span, rec, imp, stick, strobe, met, lam, V, Vi, Z, D, eh, 
         t_new = t + T if ev_kind >= 0 else t_seg_end
         if ev_kind < 0:
             t = t_new
-            if at_node:
+            if regen and at_node:  # a cut's node (``regen`` first: pruned in _exact)
                 if nk < kn.shape[0] and t > kn[nk - 1, 0] + ttol:  # written out
                     kn[nk, 0] = t
                     kn[nk, 1] = wb
