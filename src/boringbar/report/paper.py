@@ -137,6 +137,10 @@ class Step:
     variants: bool = True
     #: what the further columns run instead, if not the same: (argv, run)
     lean: tuple | None = None
+    #: whether it runs the exact integrator under every preset (the continuation, and the
+    #: design searches: their default), not only under those whose harmonic runs take it
+    #: (:func:`first_rk4`)
+    exact: bool = False
 
     def for_column(self, column: str) -> "Step":
         """The step as ``column`` runs it (a further column: its lean version)."""
@@ -331,7 +335,7 @@ def published_steps(quick: bool = False) -> list[Step]:
                       "Continued periodic orbits over the bifurcation diagrams",
                       ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
                        "--range", "30:50", "--step", "0.05", "--max-points", str(points)),
-                      _continuation_run(5.0, 50.0, points), variants=False))
+                      _continuation_run(5.0, 50.0, points), variants=False, exact=True))
     cells = "-1.5:1.5:" + ("8" if quick else "30")
     grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
     for key, force, ratio, fr, start in (("basins-10N-r1.01-off", "10", "1.01", "off", "0.5,0.5"),
@@ -363,7 +367,7 @@ def published_steps(quick: bool = False) -> list[Step]:
                                  "chatter")):
         steps.append(Step(f"design-{name}", "design", title,
                           ("design", design_file(name), "--trials", str(trials)),
-                          _design_run(name, trials), variants=False))
+                          _design_run(name, trials), variants=False, exact=True))
     return steps
 
 
@@ -423,22 +427,20 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     steps = published_steps(quick)
     plan = _plan(steps, presets)
     total = sum(1 for *_, shared in plan if shared is None) + 1
-    records, done = [], {}
-    for column, step, shared in plan:
+    done = {}
+    for column, step in first_rk4([(c, s) for c, s, shared in plan if shared is None]):
         step = step.for_column(column)
-        if shared is not None:  # its preset ran it before (_plan's order)
-            records.append({**done[(shared, step.key)], "preset": column,
-                            "shared_from": shared, "reused": False})
-            continue
         where = out / column / step.key
         meta = {"key": step.key, "section": step.section, "title": step.title,
                 "preset": column,
                 "command": command_line(step, column, shown / column / step.key)}
         label = f"boringbar paper: [{len(done) + 1}/{total}] {column} {step.key}"
-        rec = _step(where, meta, _compute(step, COLUMNS[column], where, meta["command"]),
-                    say, label)
-        done[(column, step.key)] = rec
-        records.append(rec)
+        done[(column, step.key)] = _step(
+            where, meta, _compute(step, COLUMNS[column], where, meta["command"]), say, label)
+    # in _plan's order; a step a further column shares is its preset's record
+    records = [done[(column, step.key)] if shared is None else
+               {**done[(shared, step.key)], "preset": column, "shared_from": shared,
+                "reused": False} for column, step, shared in plan]
     base = [p for p in presets if p in PRESET_ORDER]
     records.append(_corrections_step(out, base, quick, say, total))
     manifest = {
@@ -459,6 +461,22 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     say(f"boringbar paper: report {manifest['report']} "
         f"({manifest['wall_time_s']:.0f} s)")
     return manifest
+
+
+def first_rk4(runs: list[tuple[str, Step]]) -> list[tuple[str, Step]]:
+    """The (column, step) pairs to compute in the order they run: first those that run
+    only on RK4 (the ``paper`` preset's columns, but for the steps marked ``exact``: the
+    continuation and the design searches), then
+    the rest, each group in its given order.  The exact kernel compiles in another
+    process from the first step on (:func:`_step`), and on a new machine takes longer
+    than the first steps: the RK4 work goes on meanwhile, and the first exact run comes
+    after all of it (docs/performance.md, "First use").  The steps are independent (a
+    continuation reads only its own column's bifurcation diagrams, which come before it
+    in either group), so the order changes no number."""
+    def uses_exact(run: tuple[str, Step]) -> bool:
+        column, step = run
+        return step.exact or COLUMNS[column].preset != "paper"
+    return sorted(runs, key=uses_exact)
 
 
 def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
