@@ -369,21 +369,20 @@ def _finish_run(x, X, met, rs, ro, n, ball, regen, n_ev, status):
         met[L.MAX_FORCE] = ro[RO_MAX_FORCE]
 
 
+# The body of both exact kernels, compiled once per forcing: ``regen`` (a cut) is a
+# constant of each kernel (:func:`_exact`, :func:`_exact_cut`), so numba prunes the other
+# forcing's code before typing it (its dead-branch pass follows the constant into the
+# inlined pieces), and a harmonic run's kernel compiles in 16 % less time
+# (docs/performance.md).  Each is one compilation for every bar and mode count; its hot
+# parts (segment integrals, event roots, W extrema, the usual grid point) run compiled or
+# inlined with the sizes constant where n = 1 or 2, nz = 2 n and ks = 2 (the ball or solid
+# bar with one or two modes): 1.2-1.4x, the same bits, under a minute more to compile.
+# The whole body specialised was as fast but took minutes per mode count.  ``span``:
+# (t0, t_end, t_steady, rec_dt), one argument so that the call stays under CPython's 30
+# positional arguments (beyond them it passes a tuple, which numba does not inline).
 @njit(cache=True, inline="always")
 def _exact_body(p, x, span, rec, imp, stick, strobe, met, lam, V, Vi, Z, D, eh, h, lvis, cvis,
                 isum, Vfull, kstep, bq, nreg, dt_out, hist_step, tabE, tabP, bnd, levmax, regen):
-    # ``span``: (t0, t_end, t_steady, rec_dt), one argument so that the call stays under
-    # CPython's 30 positional arguments (beyond them it passes a tuple, which numba does
-    # not inline)
-    # compiled twice, once per forcing: ``regen`` (a cut) is a constant of each kernel
-    # (:func:`_exact`, :func:`_exact_cut`), so numba prunes the other forcing's code before
-    # typing it (its dead-branch pass follows the constant into the inlined pieces), and
-    # a harmonic run's kernel compiles in 16 % less time (docs/performance.md).  Each is
-    # one compilation for every bar and mode count; its hot parts (segment integrals,
-    # event roots, W extrema, the usual grid point) run compiled or inlined with the
-    # sizes constant where n = 1 or 2, nz = 2 n and ks = 2 (the ball or solid bar with
-    # one or two modes): 1.2-1.4x, the same bits, under a minute more to compile.  The
-    # whole body specialised was as fast but took minutes per mode count
     t0, t_end, t_steady, rec_dt = span
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
