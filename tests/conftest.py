@@ -6,7 +6,7 @@ first process that needs it, and every later process loads it from disk.
 Measured cold (CPU seconds, kernels/compile.py ESTIMATE_S, 2026-11-24, with the
 inliner fix of kernels/inline_copy.py): the exact kernel 100 s (212 s measured again on
 2026-11-25, 112-120 s once numba's SSA, liveness and inlining were made linear, then
-two kernels, harmonic and cut, of about 85 s each: docs/performance.md); the lock-step
+two kernels, harmonic and cut, of about 90 s each: docs/performance.md); the lock-step
 batch kernels (one per mode count, case and batch size, kernels/rk4_batch.py)
 6-9 s each; the single-run RK4 kernels 5-10 s each; the runs themselves about
 220 s, of which test_paper's quick study 90 s.
@@ -15,7 +15,8 @@ The two workers take work in groups (:func:`kernel_group`), one group at a time
 and in the order of ``ORDER``, so that the tests sharing specialisations compile
 them once, on one worker, while the other worker compiles others: the one-mode
 batch kernels, the two-mode batch kernels and the exact integrator's two kernels
-(harmonic, and cuts) each have a group; test_paper's study, which reuses most batch kernels, comes after them.
+(harmonic, and cuts) each have a group; test_paper's study, which reuses most
+batch kernels, comes after them.
 A test not named here runs with the rest of its module (``--dist loadscope``;
 module fixtures are then built once).  pytest-xdist's own ``xdist_group`` marks
 are not used: with pytest 9.2 they no longer group (pytest-xdist issue 1386).

@@ -58,9 +58,10 @@ def test_library_step_is_its_command_bit_for_bit(key, column, tmp_path):
 
 def test_rk4_work_runs_first_and_each_continuation_after_its_diagrams():
     """``boringbar paper`` computes the steps that run only on RK4 (the paper preset's
-    columns, but for the continuation and the design searches) before the first that takes the exact kernel,
-    which compiles meanwhile in another process on a new machine; within each group the
-    study's order holds, so each continuation still follows its column's diagrams."""
+    columns, but for the continuation and the design searches) before the first that
+    takes the exact kernel, which compiles meanwhile in another process on a new machine;
+    within each group the study's order holds, so each continuation still follows its
+    column's diagrams."""
     steps = published_steps(quick=True)
     runs = [(c, s) for c in COLUMN_ORDER for s in steps if c in PRESET_ORDER or s.variants]
     order = first_rk4(runs)

@@ -124,8 +124,8 @@ def specs(kinds: Iterable[str] = KINDS) -> list[Spec]:
 #: then split in two kernels, each without the other forcing's code (exact/driver.py),
 #: 91.0 s (harmonic) and 92.3 s (cut) by ``compile_one`` on an empty cache, side by side.
 ESTIMATE_S: dict[str, float] = {
-    "exact": 91.0, "exact cut": 92.3, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7, "rk4 n=1 ball": 5.0,
-    "rk4 n=4-8": 8.8, "rk4 n=2 ball": 6.0, "rk4_batch n=1 ball x16": 6.8,
+    "exact": 91.0, "exact cut": 92.3, "rk4 n=1": 9.9, "rk4 n=2": 9.7, "rk4 n=3": 7.7,
+    "rk4 n=1 ball": 5.0, "rk4 n=4-8": 8.8, "rk4 n=2 ball": 6.0, "rk4_batch n=1 ball x16": 6.8,
     "rk4_batch n=1 locked x16": 7.3, "rk4_batch n=1 solid x16": 7.0,
     "rk4_batch n=1 tmd x16": 6.9, "rk4_batch n=1 ball x4": 6.5, "rk4_batch n=1 locked x4": 6.4,
     "rk4_batch n=1 solid x4": 6.7, "rk4_batch n=1 tmd x4": 6.8, "rk4_batch n=1 ball x8": 6.7,

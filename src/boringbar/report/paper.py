@@ -480,9 +480,10 @@ def first_rk4(runs: list[tuple[str, Step]]) -> list[tuple[str, Step]]:
 
 
 def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
-    """(column, step, the column whose record it shares or None) in the order they
-    run: every preset's steps, then each further column's: those with friction
-    rerun, those without shared with its preset where that preset runs."""
+    """(column, step, the column whose record it shares or None) in the study's order
+    (the manifest's and the report's; :func:`first_rk4` orders the computing): every
+    preset's steps, then each further column's: those with friction rerun, those without
+    shared with its preset where that preset runs."""
     unknown = [p for p in presets if p not in COLUMNS]
     if unknown:
         raise ParameterError(f"presets = {unknown[0]!r} must be one of "

@@ -605,8 +605,9 @@ def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv, regen):
     its description ``sv``, SV_*) for its first event, with the outputs on the way: the
     running extremes and output times in w.ro (RO_*), a cut's flows in w.qsum, history
     and strobe rows.  ``regen`` (a cut) is a constant of the compiled kernel: the code of
-    the other forcing is pruned before typing (driver.py, :func:`_exact`).  Returns (event kind or -1, its time from t or the segment's length,
-    the forcing phasor there, W and W' there)."""
+    the other forcing is pruned before typing (driver.py, :func:`_exact`).  Returns (event
+    kind or -1, its time from t or the segment's length, the forcing phasor there, W and W'
+    there)."""
     X = w.X
     Xa = w.Xa
     Xd = w.Xd
@@ -808,8 +809,9 @@ def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv, regen):
 def start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, sv, regen):
     """A segment from t (forcing phasor ph there) in the run's state w.rs: its regime r,
     its eigen-coordinates into w.q0, its record into w.seg, its description into ``sv``
-    (SV_*) and, in a cut (``regen``, constant), its end and surface.  Returns (r, ks, its end (at most t_stop),
-    whether that is a cut's node, the last node reached, psi_d . u at t)."""
+    (SV_*) and, in a cut (``regen``, constant), its end and surface.  Returns (r, ks, its
+    end (at most t_stop), whether that is a cut's node, the last node reached, psi_d . u
+    at t)."""
     X = w.X
     dX = w.dX
     q0 = w.q0
@@ -915,8 +917,9 @@ def start_segment(w, t, t_stop, ph, n, case, nreg, j_node, kn, nk, ip, sc, cq, s
 @njit(cache=True, inline="always")
 def close_segment(w, t, T, r, ks, sz, n, case, mode, ph, steady, pdu, last_zero_step, regen):
     """The flows of the segment [t, t + T] (regime r, forcing phasor ph at t; a cut's from
-    w.qsum (``regen``, constant), else closed form) into the metrics, a cut's steps with h = 0 counted, a free
-    ball moved to t + T.  Returns the last step of length dt_out counted with h = 0."""
+    w.qsum (``regen``, constant), else closed form) into the metrics, a cut's steps with
+    h = 0 counted, a free ball moved to t + T.  Returns the last step of length dt_out
+    counted with h = 0."""
     X = w.X
     q0 = w.q0
     seg = w.seg
