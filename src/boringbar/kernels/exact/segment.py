@@ -604,10 +604,8 @@ def search_segment(w, t, r, ks, sz, n, case, mode, ph, sv, regen):
     """The grid search of the segment from t (regime r, ``mode``, forcing phasor ph at t,
     its description ``sv``, SV_*) for its first event, with the outputs on the way: the
     running extremes and output times in w.ro (RO_*), a cut's flows in w.qsum, history
-    and strobe rows.  ``regen`` (a cut) is a constant of the compiled kernel: the code of
-    the other forcing is pruned before typing (driver.py, :func:`_exact`).  Returns (event
-    kind or -1, its time from t or the segment's length, the forcing phasor there, W and W'
-    there)."""
+    and strobe rows (``regen``: a cut, constant per kernel, driver.py).  Returns (event
+    kind or -1, its time from t or the segment's length, the forcing phasor there, W, W')."""
     X = w.X
     Xa = w.Xa
     Xd = w.Xd
