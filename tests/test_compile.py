@@ -54,7 +54,7 @@ def _untyped_globals(dispatcher) -> set[str]:
 
 def test_the_harmonic_exact_kernel_leaves_the_cuts_code_out():
     """The exact kernel of harmonic runs is the shared body with ``regen`` a constant
-    False, and numba prunes a cut's code before typing it (about 16 % of the cold compile,
+    False, and numba prunes a cut's code before typing it (10-16 % of the cold compile,
     docs/performance.md): the cut's knots, surface and flows are gone from its IR, while
     the harmonic segment integrals are there.  A ``regen`` that stops being a constant
     (read from an argument, say) fails this."""

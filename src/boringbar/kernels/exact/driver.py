@@ -372,7 +372,7 @@ def _finish_run(x, X, met, rs, ro, n, ball, regen, n_ev, status):
 # The body of both exact kernels, compiled once per forcing: ``regen`` (a cut) is a
 # constant of each kernel (:func:`_exact`, :func:`_exact_cut`), so numba prunes the other
 # forcing's code before typing it (its dead-branch pass follows the constant into the
-# inlined pieces), and a harmonic run's kernel compiles in 16 % less time
+# inlined pieces), and a harmonic run's kernel compiles in 10-16 % less time
 # (docs/performance.md).  Each is one compilation for every bar and mode count; its hot
 # parts (segment integrals, event roots, W extrema, the usual grid point) run compiled or
 # inlined with the sizes constant where n = 1 or 2, nz = 2 n and ks = 2 (the ball or solid
