@@ -16,6 +16,7 @@ import pytest
 from numba import carray, njit
 from numba.core import analysis, cgutils, errors
 from numba.core.compiler import run_frontend
+from numba.core.inline_closurecall import InlineWorker
 
 from boringbar.kernels import live_bits, rk4, ssa_blocks
 from boringbar.kernels.interp import fma
@@ -207,8 +208,6 @@ def test_an_inlined_function_is_built_once_per_compile(monkeypatch):
     """kernels/inline_copy.py keeps a callee's untyped IR for the compile under way: a
     function inlined at three sites (one of them inside another inlined function) is
     built from its bytecode once, not three times, and the result is still right."""
-    from numba.core.inline_closurecall import InlineWorker
-
     built = []
     run = InlineWorker.run_untyped_passes
 

@@ -609,15 +609,16 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
     result, computed here if not given.  ``dt``: a regenerative cut's history step
     (H = tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the
     unit of N_ZERO_STEPS.  Returns the time reached."""
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
     if prep is None:
         prep = prepare(p)
-    if int(p[L.FORCING]) == L.REGENERATIVE and not dt > 0.0:
+    if regen and not dt > 0.0:
         raise ValueError("exact integrator: a regenerative cut needs dt > 0")
     H = 0.0
     tabE = np.zeros((1, 5, 1), complex)
     tabP = np.zeros((1, 5, 4, 1), complex)
     kernel = _exact
-    if int(p[L.FORCING]) == L.REGENERATIVE:
+    if regen:
         H = history_step(float(p[L.TAU]), float(dt))
         tabE, tabP = cut_tables(prep, p, H)
         kernel = _exact_cut
