@@ -1,0 +1,55 @@
+// The compiled core's Python module, boringbar._core: the packed layout's names and
+// the integrators' entry points.  Each integrator's bindings live beside it
+// (bind_rk4.cpp, bind_exact.cpp); this file only assembles the module.
+#include <nanobind/nanobind.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/map.h>
+
+#include <map>
+#include <string>
+
+#include "layout.hpp"
+
+namespace nb = nanobind;
+
+namespace bb::bind {
+void bind_rk4(nb::module_& m);
+void bind_exact(nb::module_& m);
+}  // namespace bb::bind
+
+namespace {
+
+std::map<std::string, int> layout_names() {
+    using namespace bb::layout;
+    std::map<std::string, int> out;
+#define BB_NAME(name) out[#name] = name;
+    BB_P_SCALARS(BB_NAME)
+    BB_METRICS(BB_NAME)
+#undef BB_NAME
+    out["NMAX"] = NMAX;
+    out["SOLID"] = SOLID;
+    out["BALL"] = BALL;
+    out["TMD"] = TMD;
+    out["LOCKED"] = LOCKED;
+    out["HARMONIC"] = HARMONIC;
+    out["REGENERATIVE"] = REGENERATIVE;
+    out["M_"] = M_;
+    out["K_"] = K_;
+    out["C_"] = C_;
+    out["PSI_L"] = PSI_L;
+    out["PSI_D"] = PSI_D;
+    out["PSI_A"] = PSI_A;
+    out["P_SIZE"] = P_SIZE;
+    out["MET_SIZE"] = MET_SIZE;
+    return out;
+}
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "boringbar's compiled core: the RK4 and exact event-driven integrators.";
+    m.def("layout", &layout_names,
+          "The packed parameter vector's and the metric vector's slots, by name.");
+    bb::bind::bind_rk4(m);
+    bb::bind::bind_exact(m);
+}
