@@ -9,8 +9,7 @@ import xarray as xr
 
 from boringbar.cli.main import build_parser, main
 from boringbar.model.system import make_system
-from boringbar.report.paper import COLUMN_ORDER, COLUMNS, PRESET_ORDER, first_rk4, \
-    published_steps
+from boringbar.report.paper import COLUMNS, PRESET_ORDER, published_steps
 from boringbar.simulate import resolve_integrator
 
 STEPS = {s.key: s for s in published_steps(quick=True)}
@@ -56,28 +55,9 @@ def test_library_step_is_its_command_bit_for_bit(key, column, tmp_path):
                 {k: str(v) for k, v in b.attrs.items() if k not in skip}
 
 
-def test_rk4_work_runs_first_and_each_continuation_after_its_diagrams():
-    """``boringbar paper`` computes the steps that run only on RK4 (the paper preset's
-    columns, but for the continuation and the design searches) before the first that
-    takes the exact kernel, which compiles meanwhile in another process on a new machine;
-    within each group the study's order holds, so each continuation still follows its
-    column's diagrams."""
-    steps = published_steps(quick=True)
-    runs = [(c, s) for c in COLUMN_ORDER for s in steps if c in PRESET_ORDER or s.variants]
-    order = first_rk4(runs)
-    assert sorted(map(id, order)) == sorted(map(id, runs))
-    exact = [s.exact or COLUMNS[c].preset == "physical" for c, s in order]
-    first = exact.index(True)
-    assert not any(exact[:first]) and all(exact[first:])
-    assert [r for r in runs if r in order[:first]] == order[:first]  # the study's order
-    assert [r for r in runs if r in order[first:]] == order[first:]
-    keys = [(c, s.key) for c, s in order]
-    assert keys[first] == ("paper", "continuation")
-    for column in PRESET_ORDER:
-        diagrams = [i for i, (c, k) in enumerate(keys) if c == column and "bifurcation" in k]
-        assert len(diagrams) == 4 and max(diagrams) < keys.index((column, "continuation"))
-    # what makes the first group RK4 only: the paper preset's published ball dampers take
-    # RK4 under "auto", the physical preset's the exact integrator
+def test_the_published_ball_dampers_take_rk4_under_paper_and_exact_under_physical():
+    """Under "auto" the paper preset's published ball dampers take RK4 and the physical
+    preset's the exact integrator (docs/model.md, 5.3)."""
     for gap in (0.1e-3, 0.5e-3):
         for friction in (False, True):
             assert [resolve_integrator("auto", make_system("ball", p, gap=gap, friction=friction))

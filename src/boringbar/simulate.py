@@ -25,11 +25,8 @@ from boringbar._validate import (
     check_positive,
     check_range,
 )
+from boringbar.kernels import BMAX, LANES, run_exact, run_rk4, run_rk4_batch
 from boringbar.kernels import layout as L
-from boringbar.kernels.compile import announce, await_background
-from boringbar.kernels.exact import run_exact
-from boringbar.kernels.rk4 import run_rk4
-from boringbar.kernels.rk4_batch import BMAX, LANES, run_rk4_batch
 from boringbar.model.dampers import ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
@@ -599,15 +596,13 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
                   stb, rec, met)
 
 
-@announce()
 def _run_kernel(su: _Setup) -> float:
     """Run the kernel of ``su`` in place; the wall time (s)."""
     p, x, t0, dt, n_steps, steady_steps = su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps
     record_every, rec, imp, stick, stb, met = (su.record_every, su.rec, su.imp, su.stick, su.stb,
                                                su.met)
-    tic = time.perf_counter()  # a first run's compile (here or awaited) counts, as always
+    tic = time.perf_counter()
     if su.integrator == "exact":
-        await_background()  # the exact kernel compiling in another process, if any
         t_reached = run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt,
                               record_every * dt, rec, imp, stick, stb, met, dt=dt)
         # a cut stopped at its first zero finishes that step of dt
@@ -810,8 +805,7 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
     stick = np.zeros((nb, max(len(su.stick) for su in sus), 2))
     stb = np.zeros((nb, max(len(su.stb) for su in sus), 5))
     tic = time.perf_counter()
-    with announce():
-        run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
+    run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
     elapsed = time.perf_counter() - tic
     for r, su in enumerate(sus):
         su.x[:] = X[r]

@@ -10,14 +10,12 @@ is one module that owns:
   independent ``points``;
 - ``compute(context, point)``: one point's result, pure and picklable (the same
   point gives the same result, bit for bit, wherever it runs);
-- ``warm(context)``: compile the kernels the points use, once per process, before
-  they fan out (numba compiles a specialisation once; threads would wait on it);
 - ``assemble(plan, results) -> xarray.Dataset``: the results, in point order, with
   the full configuration and the package version in its attributes (wall-clock
   timings only in the attributes, so the data do not depend on where it ran);
 - ``summary(ds) -> dict``: the JSON-able summary (what the CLI prints with --json).
 
-Its public function (``sweep(...)``, ...) is ``plan``, ``warm``, then the points
+Its public function (``sweep(...)``, ...) is ``plan``, then the points
 on an executor (:func:`boringbar.execute.run_points`), then ``assemble``:
 :func:`run_plan`.  The study files (:mod:`boringbar.studies.registry`) and the
 command line build the same plans from their own inputs.
@@ -45,12 +43,8 @@ class Plan:
 
 def run_plan(module: ModuleType, plan: Plan, execution: Execution | None = None,
              progress=None) -> tuple[list, float]:
-    """``module.warm`` then ``module.compute`` of every point of ``plan`` on
-    ``execution``; (results in point order, wall time in s).  Threads and forked
-    processes share what this process compiled; Dask's workers compile their own, so
-    a Dask run is not warmed here (as the study runner)."""
-    if (execution or Execution()).executor != "dask":
-        module.warm(plan.context)
+    """``module.compute`` of every point of ``plan`` on ``execution``; (results in point
+    order, wall time in s)."""
     tic = time.perf_counter()
     results = run_points(functools.partial(module.compute, plan.context), plan.points,
                          execution=execution, progress=progress)

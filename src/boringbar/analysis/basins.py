@@ -62,7 +62,7 @@ from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.poincare import poincare_map
 from boringbar.analysis.sweep import Case
 from boringbar.execute import Execution
-from boringbar.kernels.rk4_batch import BMAX
+from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.simulate import (
@@ -350,27 +350,6 @@ def compute(context: dict, point: tuple[int, list[int]]) -> list[_Cell]:
         runs = [simulate(op.case.system, op.forcing, **{**integ.kwargs(), "initial": ini},
                          strobe=True) for ini in initials]
     return [_cell(run, integ.dt_s, tol) for run in runs]
-
-
-def warm(context: dict) -> None:
-    """Compile the kernels once in this process (and check each operating point's
-    first cell before any work): a short run of each, and batched, the lock-step
-    kernel of each batch size the points use, per bar kind and mode count."""
-    integ, first = context["integration"], context["initials"][0]
-    short = min(integ.duration_s, 50 * integ.dt_s)
-    n, batch = len(context["initials"]), context["options"].batch
-    sizes = sorted({min(batch, n - a) for a in range(0, n, batch)})
-    seen = set()
-    for op, batched in zip(context["operating"], context["batched"], strict=True):
-        system = op.case.system
-        simulate(system, op.forcing, duration=short, dt=integ.dt_s, initial=first,
-                 integrator=integ.integrator)
-        key = (system.kind, system.bar.n_modes)
-        if batched and key not in seen:
-            seen.add(key)
-            for size in sizes:
-                simulate_batch([(system, op.forcing, first)] * size, duration=short,
-                               dt=integ.dt_s)
 
 
 def _padded(arrays: list[np.ndarray], n: int) -> np.ndarray:

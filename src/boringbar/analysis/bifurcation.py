@@ -206,18 +206,6 @@ def compute(context: dict, i: int) -> dict:
             "systems": [systems[j] for j in range(len(v))], "integrators": sorted(used)}
 
 
-def warm(context: dict) -> None:
-    """Compile the kernel once in this process: a short harmonic run per mode count."""
-    o, integ = context["options"], context["integration"]
-    seen = set()
-    for target in context["systems"]:
-        system = _point(target, o.parameter, o.values[0], o.base_forcing)[0]
-        if system.bar.n_modes not in seen:
-            seen.add(system.bar.n_modes)
-            simulate(system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6,
-                     integrator=integ.integrator)
-
-
 def bifurcation(system: System | Callable[[float], System],
                 options: BifurcationOptions | None = None, *,
                 integration: Integration | None = None, execution: Execution | None = None,

@@ -142,10 +142,6 @@ def compute(context: dict, point: int) -> dict:
             "events": br.events, "stop": br.stop, "start": value_of(fl, o.parameter)}
 
 
-def warm(context: dict) -> None:
-    """Nothing to compile beyond the exact kernel, which a simulation start compiles."""
-
-
 def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.Dataset:
     """Dims (branch, point, state, multiplier) and (branch, event); the multipliers as
     real and imaginary parts (NetCDF has no complex type)."""

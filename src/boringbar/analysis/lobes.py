@@ -42,7 +42,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -266,15 +266,6 @@ def compute(context: dict, point: tuple[int, int]) -> dict:
     case, rpm = context["cases"][i], context["options"].rpm[j]
     return column(case, rpm, context["options"], context["integration"],
                   context["seeds"].get((case.label, rpm), 1))
-
-
-def warm(context: dict) -> None:
-    """Compile the kernel once in this process: a short cut per mode count."""
-    cases, options = context["cases"], context["options"]
-    short = replace(context["integration"], duration_s=2e-4)
-    for nm in sorted({c.system.bar.n_modes for c in cases}):
-        c0 = next(c for c in cases if c.system.bar.n_modes == nm)
-        cut(c0, options.rpm[0], options.depth_step_m, options, short)
 
 
 def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:

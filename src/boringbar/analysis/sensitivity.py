@@ -191,16 +191,6 @@ def compute(context: dict, point):
     return sensitivity_cut(context["cases"][i], cuts, cuts.depths[j], integ)
 
 
-def warm(context: dict) -> None:
-    """Compile the kernels once in this process: the sweep's, or one short cut."""
-    if context["mode"] == "harmonic":
-        sweep_mod.warm(context)
-        return
-    cuts, integ = context["cuts"], context["integration"]
-    short = Cuts(cuts.rpm, cuts.depths[:1], 50 * integ.dt_s, cuts.options)
-    sensitivity_cut(context["cases"][0], short, cuts.depths[0], integ)
-
-
 def sensitivity_cut(case: Case, cuts: Cuts, depth: float, integration: Integration) -> dict:
     """One full-length cut of ``case`` at ``depth`` (m): its chatter verdicts."""
     forcing = Regenerative(depth, cuts.rpm, stop_at_zero=False, **cuts.options)

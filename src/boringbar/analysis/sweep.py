@@ -25,7 +25,7 @@ from boringbar import __version__
 from boringbar._validate import ParameterError, check_range, check_values
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.execute import Execution
-from boringbar.kernels.rk4_batch import BMAX
+from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
@@ -170,34 +170,6 @@ def compute(context: dict, point: list) -> list[dict]:
         results = [simulate(system, forcing, **{**kw, "initial": initial})
                    for system, forcing, initial in runs]
     return [_point(run) for run in results]
-
-
-def warm(context: dict) -> None:
-    """Compile, once in this process, the kernel of every point: per mode count, and
-    batched, per batch size the points use (the batch kernel is compiled per size)."""
-    cases, integ = context["cases"], context["integration"]
-    seen = set()
-    for c, batched, used in zip(cases, context["batched"], context["integrators"], strict=True):
-        key = (c.system.kind if batched else used, c.system.bar.n_modes)
-        if key in seen:
-            continue
-        seen.add(key)
-        if batched:
-            for size in _batch_sizes(context, key):
-                simulate_batch([(c.system, Harmonic(1.0, 1.0), None)] * size,
-                               duration=2e-5, dt=1e-6)
-        else:
-            simulate(c.system, Harmonic(1.0, 1.0), duration=2e-5, dt=1e-6,
-                     integrator=integ.integrator)
-
-
-def _batch_sizes(context: dict, key: tuple) -> list[int]:
-    """The sizes of the batches of one (bar kind, mode count) group."""
-    cases, o = context["cases"], context["options"]
-    group = [c for c, batched in zip(cases, context["batched"], strict=True)
-             if batched and (c.system.kind, c.system.bar.n_modes) == key]
-    n = len(group) * len(o.forces_n) * len(o.ratios)
-    return sorted({min(o.batch, n - a) for a in range(0, n, o.batch)})
 
 
 def _point(run) -> dict:

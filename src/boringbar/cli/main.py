@@ -20,7 +20,6 @@ import textwrap
 
 from boringbar import __version__
 from boringbar.cli.audit import add_audit
-from boringbar.cli.compile import add_compile
 from boringbar.cli.continuation import add_continue
 from boringbar.cli.design import add_design
 from boringbar.cli.frf import add_fit_frf
@@ -30,7 +29,6 @@ from boringbar.cli.options import PROG, Outcome
 from boringbar.cli.simulate import add_simulate
 from boringbar.cli.study import add_paper, add_run
 from boringbar.cli.sweeps import add_lobes, add_sweep
-from boringbar.kernels.compile import notices as compile_notices
 from boringbar.model.system import READINGS
 
 
@@ -70,7 +68,6 @@ def build_parser() -> argparse.ArgumentParser:
     add_continue(sub)
 
     add_run(sub)
-    add_compile(sub)
     add_paper(sub)
     add_audit(sub)
     add_design(sub)
@@ -84,8 +81,6 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 0
-    # --quiet: no compile notice either, for this command only (main may run in process)
-    notices_before = compile_notices(not getattr(args, "quiet", False))
     try:
         outcome = args.func(args)
         if isinstance(outcome, Outcome):
@@ -101,8 +96,6 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
-    finally:
-        compile_notices(notices_before)
 
 
 def _one_line(exc: BaseException) -> str:

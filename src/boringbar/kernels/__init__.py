@@ -1,19 +1,79 @@
-"""The numba kernels and what they need at the numba level.
+"""The integrators: thin Python entry points over the compiled core (``boringbar._core``).
 
-Importing this package makes numba's on-disk cache safe for several processes
-compiling at once and stale after an edit to any kernel file
-(:mod:`boringbar.kernels.cache`), and its inliner's copies of
-the inlined IR linear in its size (:mod:`boringbar.kernels.inline_copy`), and its SSA
-reconstruction confined to the blocks that name each variable
-(:mod:`boringbar.kernels.ssa_blocks`) and its liveness analysis on bit sets
-(:mod:`boringbar.kernels.live_bits`).
+The core (C++, ``core/``) holds the integrators: the published RK4 scheme, one run and a
+lock-step batch, and the exact event-driven integrator, harmonic and regenerative.  This
+package packs what the core cannot compute itself and calls it:
+
+- :mod:`.layout`: the packed parameter vector's and the metric vector's slots, read from
+  the core;
+- :mod:`.regimes`: the exact integrator's per-run setup (the regimes' matrices,
+  diagonalised with LAPACK through SciPy) and a cut's tables;
+- :func:`run_rk4`, :func:`run_rk4_batch`, :func:`run_exact`: the three entry points, with
+  the array contract of ``boringbar.simulate`` (their only caller in the package).
+
+The core checks every array it is handed (dtype, shape, contiguity) and every scalar's
+range, and raises ``ValueError`` naming it; it releases the GIL for the whole
+integration, so threads run in parallel.
 """
 
-from boringbar.kernels import inline_copy, live_bits, ssa_blocks
-from boringbar.kernels.cache import lock_cache_saves, stamp_tree
+import numpy as np
 
-lock_cache_saves()
-stamp_tree()
-inline_copy.apply()
-ssa_blocks.apply()
-live_bits.apply()
+from boringbar import _core
+from boringbar.kernels import layout as L
+from boringbar.kernels.regimes import cut_tables, history_step, prepare
+
+#: largest lock-step batch, and the batch sizes whose arithmetic per run is the single
+#: run's, bit for bit (simulate_batch pads a batch to one of them)
+BMAX: int = _core.BMAX
+LANES: tuple[int, ...] = tuple(_core.LANES)
+
+_NO_HISTORY = np.zeros((0, 2))
+_NO_TAB_E = np.zeros((1, 5, 1), complex)
+_NO_TAB_P = np.zeros((1, 5, 4, 1), complex)
+
+
+def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
+            buf=None) -> None:
+    """Advance ``x`` (in place) by ``n_steps`` steps of the published RK4 scheme from ``t0``.
+
+    Steps with index >= ``steady_start`` are the steady part.  Outputs: ``rec`` (t, W, W',
+    aux, aux', f every ``rec_every`` steps; 0 = none), ``imp`` (t, wall, y'- of counted
+    impacts in the steady part), ``stick`` (start, end of stick intervals in the steady
+    part), ``strobe`` (Poincare samples t, W, W', aux, aux' at t = STROBE_T0 + j
+    STROBE_PERIOD), ``met`` (metrics, see :mod:`.layout`; zeros, with STEADY_MAX_W = -inf
+    and STEADY_MIN_W = +inf, for a fresh run), ``buf`` (a regenerative cut's circular
+    history of W, W' at step ends, at least N_REV TAU / dt + 3 rows).
+    """
+    _core.run_rk4(p, x, float(t0), float(dt), int(n_steps), int(steady_start),
+                  int(rec_every), rec, imp, stick, strobe, met,
+                  _NO_HISTORY if buf is None else buf)
+
+
+def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met) -> None:
+    """Advance the rows of ``x`` by ``n_steps`` RK4 steps in lock-step: every row of ``P``
+    a harmonic run of the same mode count and case, at most :data:`BMAX` rows; the outputs
+    as :func:`run_rk4`'s with one leading row per run."""
+    _core.run_rk4_batch(P, x, float(t0), float(dt), int(n_steps), int(steady_start), imp,
+                        stick, strobe, met)
+
+
+def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None,
+              dt=0.0) -> float:
+    """Advance ``x`` exactly from ``t0`` to ``t_end``; the outputs as :func:`run_rk4`'s, but
+    the steady sums are integrals (docs/exact.md).  ``prep``: :func:`.regimes.prepare`'s
+    result, computed here if not given.  ``dt``: a regenerative cut's history step (H =
+    tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the unit
+    of N_ZERO_STEPS.  Returns the time reached."""
+    if prep is None:
+        prep = prepare(p)
+    H, tab_e, tab_p = 0.0, _NO_TAB_E, _NO_TAB_P
+    if int(p[L.FORCING]) == L.REGENERATIVE:
+        if not dt > 0.0:
+            raise ValueError(f"exact integrator: a regenerative cut needs dt > 0, not {dt}")
+        H = history_step(float(p[L.TAU]), float(dt))
+        tab_e, tab_p = cut_tables(prep, p, H)
+    return _core.run_exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec,
+                           imp, stick, strobe, met, prep, float(dt), H, tab_e, tab_p)
+
+
+__all__ = ["BMAX", "LANES", "prepare", "run_exact", "run_rk4", "run_rk4_batch"]

@@ -45,7 +45,6 @@ from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity
 from boringbar.analysis.sweep import SweepOptions, parse_range, published_cases, sweep
 from boringbar.execute import Execution
 from boringbar.io import jsonable, save_figure_atomic, write_json_atomic, write_netcdf_atomic
-from boringbar.kernels.compile import compile_in_background
 from boringbar.model.system import make_system
 from boringbar.plot import plot_ladder
 from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
@@ -137,10 +136,6 @@ class Step:
     variants: bool = True
     #: what the further columns run instead, if not the same: (argv, run)
     lean: tuple | None = None
-    #: whether it runs the exact integrator under every preset (the continuation, and the
-    #: design searches: their default), not only under those whose harmonic runs take it
-    #: (:func:`first_rk4`)
-    exact: bool = False
 
     def for_column(self, column: str) -> "Step":
         """The step as ``column`` runs it (a further column: its lean version)."""
@@ -335,7 +330,7 @@ def published_steps(quick: bool = False) -> list[Step]:
                       "Continued periodic orbits over the bifurcation diagrams",
                       ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
                        "--range", "30:50", "--step", "0.05", "--max-points", str(points)),
-                      _continuation_run(5.0, 50.0, points), variants=False, exact=True))
+                      _continuation_run(5.0, 50.0, points), variants=False))
     cells = "-1.5:1.5:" + ("8" if quick else "30")
     grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
     for key, force, ratio, fr, start in (("basins-10N-r1.01-off", "10", "1.01", "off", "0.5,0.5"),
@@ -367,7 +362,7 @@ def published_steps(quick: bool = False) -> list[Step]:
                                  "chatter")):
         steps.append(Step(f"design-{name}", "design", title,
                           ("design", design_file(name), "--trials", str(trials)),
-                          _design_run(name, trials), variants=False, exact=True))
+                          _design_run(name, trials), variants=False))
     return steps
 
 
@@ -398,9 +393,6 @@ def _step(where: Path, meta: dict, compute, say, label: str) -> dict:
     if record is not None:
         say(f"{label}: done before, kept")
         return {**record, "reused": True}
-    # the exact kernel (minutes of compiling on first use) compiles in another process
-    # while this and the next steps run on RK4; its first run waits for it (started once a process)
-    compile_in_background()
     t0 = time.perf_counter()
     summary = compute()
     record = {**meta, "wall_time_s": time.perf_counter() - t0, "summary": summary}
@@ -428,7 +420,7 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     plan = _plan(steps, presets)
     total = sum(1 for *_, shared in plan if shared is None) + 1
     done = {}
-    for column, step in first_rk4([(c, s) for c, s, shared in plan if shared is None]):
+    for column, step in [(c, s) for c, s, shared in plan if shared is None]:
         step = step.for_column(column)
         where = out / column / step.key
         meta = {"key": step.key, "section": step.section, "title": step.title,
@@ -463,25 +455,9 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     return manifest
 
 
-def first_rk4(runs: list[tuple[str, Step]]) -> list[tuple[str, Step]]:
-    """The (column, step) pairs to compute in the order they run: first those that run
-    only on RK4 (the ``paper`` preset's columns, but for the steps marked ``exact``: the
-    continuation and the design searches), then
-    the rest, each group in its given order.  The exact kernel compiles in another
-    process from the first step on (:func:`_step`), and on a new machine takes longer
-    than the first steps: the RK4 work goes on meanwhile, and the first exact run comes
-    after all of it (docs/performance.md, "First use").  The steps are independent (a
-    continuation reads only its own column's bifurcation diagrams, which come before it
-    in either group), so the order changes no number."""
-    def uses_exact(run: tuple[str, Step]) -> bool:
-        column, step = run
-        return step.exact or COLUMNS[column].preset != "paper"
-    return sorted(runs, key=uses_exact)
-
-
 def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
     """(column, step, the column whose record it shares or None) in the study's order
-    (the manifest's and the report's; :func:`first_rk4` orders the computing): every
+    (the manifest's, the report's and the computing's): every
     preset's steps, then each further column's: those with friction rerun, those without
     shared with its preset where that preset runs."""
     unknown = [p for p in presets if p not in COLUMNS]

@@ -137,7 +137,7 @@ class Values:
 
 class Analysis:
     """The study adapter of an analysis module (module docstring): ``plan`` turns a
-    study into the module's plan; points, warming and assembly are the module's."""
+    study into the module's plan; points and assembly are the module's."""
 
     name = ""
     module: ModuleType  #: the analysis module (boringbar.analysis.*)
@@ -170,10 +170,6 @@ class Analysis:
         coordinates along ``case``."""
         ds = self.module.assemble(plan, results, _provenance(study))
         return ds.assign_coords(_case_coords(plan.extra["values"]))
-
-    def warm(self, context) -> None:
-        """Compile the kernels once in this process."""
-        self.module.warm(context)
 
     def integrators(self) -> tuple:
         """The integrators a study of this analysis may choose."""

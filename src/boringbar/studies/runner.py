@@ -103,11 +103,10 @@ _PLANS: dict[str, tuple] = {}
 
 
 def _planned(study: Study, key: str):
-    """(analysis, plan) of ``study``, made and warmed once per process."""
+    """(analysis, plan) of ``study``, made once per process."""
     if key not in _PLANS:
         analysis = ANALYSES[study.analysis]
         plan = analysis.plan(study)
-        analysis.warm(plan.context)
         _PLANS.clear()
         _PLANS[key] = (analysis, plan)
     return _PLANS[key]
@@ -334,8 +333,7 @@ def _run_missing(study, key, analysis, plan, part, execution, chunk_size, quiet,
     chunks = {c: missing[s:s + chunk_size]
               for c, s in enumerate(range(0, len(missing), chunk_size))}
     if chunks and execution.executor != "dask":
-        # plan and compile once here: forked workers inherit both
-        analysis.warm(plan.context)
+        # plan once here: forked workers inherit it
         _PLANS.clear()
         _PLANS[key] = (analysis, plan)
     bar = progress_bar(n, done=len(done), enabled=not quiet)
