@@ -19,7 +19,7 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.sweep import SweepOptions
 from boringbar.execute import Execution
 from boringbar.kernels import layout as L
-from boringbar.kernels.rk4_batch import BMAX, run_rk4_batch
+from boringbar.kernels import BMAX, run_rk4_batch
 from boringbar.model.forcing import Regenerative
 from boringbar.simulate import Integration, simulate_batch
 

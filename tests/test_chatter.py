@@ -56,7 +56,7 @@ from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, compare_method
 from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sweep import Case
 from boringbar.kernels import layout as L
-from boringbar.kernels.rk4 import run_rk4
+from boringbar.kernels import run_rk4
 from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
 from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds

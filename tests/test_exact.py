@@ -19,9 +19,8 @@ import pytest
 
 from boringbar import Harmonic, Initial, State, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.kernels import exact as E
 from boringbar.kernels import layout as L
-from boringbar.kernels.exact import prepare, run_exact
+from boringbar.kernels import prepare, run_exact
 from boringbar.model.dampers import Friction
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
@@ -403,76 +402,3 @@ def test_longer_steps_of_a_two_mode_ball_change_no_event():
     assert m1[L.N_EVENTS] == m0[L.N_EVENTS]
     for k in (L.SUM_W2, L.SUM_AUX2, L.MAX_ABS_W, L.STEADY_MIN_W, L.MAX_ABS_AUX):
         assert m1[k] == pytest.approx(m0[k], rel=1e-10)  # 8e-13
-
-
-# --- the helpers compiled with the sizes constant (one and two modes) ----------------------
-@pytest.mark.parametrize("preset,n_modes", [("paper", 1), ("physical", 2)])
-def test_specialised_helpers_give_the_generic_bits(preset, n_modes):
-    """_integrals_1/_2, _root_1/_2 and _w_extremum_1/_2 are the generic functions' bodies
-    compiled with n, nz and the pair stride constant: the same operations in the same
-    order, so the same bits, on a free ball's segment (integrals, a wall root, a W
-    extremum) and on a stuck ball's (the stick-friction work)."""
-    s = make_system("ball", preset, gap=0.1e-3, friction=False)
-    su = _setup(s, Harmonic(10.0, 1.0), 0.01, 1e-6, None, 0, 0.5, False, "exact")
-    p, prep = su.p, prepare(su.p)
-    n = int(p[L.N_MODES])
-    assert n == n_modes
-    lam, V, Z, D, bq = prep["lam"], prep["Vh"], prep["Z"], prep["D"], prep["bq"]
-    nz, nb = lam.shape[1], lam.shape[1] + 3
-    assert nz == 2 * n and np.all(prep["kstep"] == 2)
-    mk = np.array([p[k:k + n] for k in (L.M_, L.K_, L.C_, L.PSI_L, L.PSI_D, L.PSI_A)])
-    rng = np.random.default_rng(7)
-    q0 = np.empty(nz, complex)
-    q0[0::2] = (rng.normal(size=n) + 1j * rng.normal(size=n)) * 1e-5
-    q0[1::2] = q0[0::2].conj()
-    seg = np.zeros(E.SEG_SIZE)
-    seg[0], seg[2], seg[3], seg[9] = 3e-3, 1e-5, 0.8, 5e-5  # ts, y, y', half gap
-    om, f0 = p[L.OMEGA], p[L.F0]
-    spec_i = {1: E.segment_integrals_1, 2: E.segment_integrals_2}[n]
-    spec_r = {1: E.find_root_1, 2: E.find_root_2}[n]
-    spec_w = {1: E.w_extremum_1, 2: E.w_extremum_2}[n]
-
-    def scratch():
-        return (np.zeros((2, nb), complex), np.zeros((nb, nb), complex),
-                np.zeros((nz, nb), complex), np.zeros(nb, complex), np.zeros(nb, complex),
-                np.zeros(nb, complex), np.zeros(7))
-
-    for r, kst, level in ((0, 0.0, 2), (1, 1.7, 1), (0, 0.0, 0)):
-        T = 7.3e-4
-        outs = []
-        for generic in (True, False):
-            me, G, Cx, cf, ca, cb, out = scratch()
-            head = (r, q0, np.exp(0.4j), T, 0.3, om, f0, lam, prep["V"], Z, D)
-            tail = (mk, prep["lvis"], prep["cvis"], kst, 0.5, me, G, Cx, cf, ca, cb, out,
-                    prep["isum"], level)
-            if generic:
-                E.segment_integrals(*head, n, *tail, 2, seg, np.zeros(3, complex))
-            else:
-                spec_i(*head, *tail, seg, np.zeros(3, complex))
-            outs.append(out)
-        assert np.array_equal(outs[0], outs[1]) and np.any(outs[0] != 0.0)
-
-    def g(kind, tau):
-        return E.g_value(kind, tau, seg, 0, q0, lam, V, 2, Z, D, bq, np.zeros(nz, complex),
-                    np.zeros(nz), n, mk, f0, om)
-
-    grid = np.linspace(0.0, 2.5e-3, 201)  # the ball reaches the wall; W' changes sign
-    for kind, fn_g, fn_s in ((E.EV_PLUS, E.find_root, spec_r), (E.EV_WEXT, E.w_extremum, spec_w)):
-        v = np.array([g(kind, t) for t in grid])
-        i = int(np.flatnonzero(np.sign(v[:-1]) != np.sign(v[1:]))[0])
-        a, b = grid[i], grid[i + 1]
-        res = []
-        for fn in (fn_g, fn_s):
-            q, X, Xd = np.zeros(nz, complex), np.zeros(nz), np.zeros(nz)
-            if kind == E.EV_PLUS:
-                common = (kind, a, v[i], b, v[i + 1], seg, 0, q0, lam, V)
-                rest = (Z, D, bq, q, X, Xd)
-                res.append(fn(*common, 2, *rest, n, mk, f0, om, -1.0) if fn is fn_g
-                           else fn(*common, *rest, mk, f0, om, -1.0))
-            else:
-                common = (a, v[i], b, v[i + 1], 0.5 * (a + b), 1e-5, seg, 0, q0, lam, V)
-                rest = (Z, D, bq, q, X, Xd)
-                res.append(fn(*common, 2, *rest, n, mk, om) if fn is fn_g
-                           else fn(*common, *rest, mk, om))
-        assert a < res[0] <= b or kind == E.EV_WEXT
-        assert res[0] == res[1]

@@ -20,7 +20,7 @@ from boringbar import Harmonic, Initial, State, System, make_system
 from boringbar import simulate as simulate_any
 from boringbar._validate import ParameterError
 from boringbar.kernels import layout as L
-from boringbar.kernels.rk4 import run_rk4
+from boringbar.kernels import run_rk4
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import initial_state, pack, stored_energy
 
