@@ -2,7 +2,7 @@
 
     .venv/bin/python benchmarks/bench_batch.py [--steps 300000] [--skip-basin] [--skip-sweep]
 
-1. ns per run-step of ``kernels/rk4.py`` (one run) and of ``kernels/rk4_batch.py``
+1. ns per run-step of ``run_rk4`` (one run) and of ``run_rk4_batch``
    at B = 1, 2, 4, 8, 16 runs in lock-step, on realistic ball-damper runs
    (10 N at r = 1.01, gap 0.5 mm, friction on; the paper preset with 1 mode and
    the physical preset with 2), each run of a batch from a different initial
@@ -29,8 +29,7 @@ from boringbar import Initial, make_system
 from boringbar.analysis import basins as basins_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.kernels import layout as L
-from boringbar.kernels.rk4 import run_rk4
-from boringbar.kernels.rk4_batch import run_rk4_batch
+from boringbar.kernels import run_rk4, run_rk4_batch
 from boringbar.simulate import Integration, initial_state, pack
 
 FORCE, RATIO, DT = 10.0, 1.01, 1e-6

@@ -4,7 +4,8 @@
 
 Exports ``src/boringbar`` at REV into a temporary directory as the package
 ``boringbar_rev`` (its imports renamed, so both versions compile side by side;
-the first run compiles it, about 2 minutes), then times ``run_exact`` of both
+a numba revision compiles on its first run, about 2 minutes, and needs numba in the
+environment: ``pip install 'numba==0.68.*'``), then times ``run_exact`` of both
 on the harmonic cases of ``bench_exact.py`` (interleaved, best of
 ``--repeat``, the per-run ``prepare`` excluded and timed apart), with RK4 at
 dt = 1e-6 as the machine's yardstick, and compares the results: metrics, final
@@ -14,6 +15,7 @@ state and impacts, bit for bit or the largest relative difference.
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import re
 import subprocess
@@ -30,10 +32,10 @@ sys.path.insert(0, str(HERE))
 
 from bench_exact import CASES, orbit_start  # noqa: E402
 
+import boringbar.kernels as E  # noqa: E402
 from boringbar import Harmonic, make_system, simulate  # noqa: E402
-from boringbar.kernels import exact as E  # noqa: E402
 from boringbar.kernels import layout as L  # noqa: E402
-from boringbar.kernels.rk4 import run_rk4  # noqa: E402
+from boringbar.kernels import run_rk4  # noqa: E402
 from boringbar.simulate import _setup  # noqa: E402
 
 
@@ -103,7 +105,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
     export(args.rev)
-    import boringbar_rev.kernels.exact as E0
+    E0 = importlib.import_module("boringbar_rev.kernels.exact")
 
     print(f"machine: {os.cpu_count()} cores; exact kernel at {args.rev} (old) against the "
           "working tree (new), best of", args.repeat)

@@ -4,7 +4,8 @@ revision, in one process: results bit for bit, and the speed.
     .venv/bin/python benchmarks/bench_rk4_rev.py REV [--repeat 5] [--skip-timing]
 
 Exports ``src/boringbar`` at REV as the package ``boringbar_rev`` (as
-``bench_exact_rev.py`` does; the first run compiles its kernels), then
+``bench_exact_rev.py`` does; a numba revision compiles its kernels on the first run
+and needs numba in the environment: ``pip install 'numba==0.68.*'``), then
 
 - runs the same cases through ``run_rk4`` of both versions (solid, TMD, locked, the
   ball with and without friction in the paper and physical presets with 1, 2 and 3
@@ -20,6 +21,7 @@ Exports ``src/boringbar`` at REV as the package ``boringbar_rev`` (as
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import sys
 import time
@@ -32,10 +34,10 @@ sys.path.insert(0, str(HERE))
 
 from bench_exact_rev import export  # noqa: E402
 
+import boringbar.kernels as B1  # noqa: E402
+import boringbar.kernels as R1  # noqa: E402
 from boringbar import Harmonic, Initial, make_system  # noqa: E402
 from boringbar.kernels import layout as L  # noqa: E402
-from boringbar.kernels import rk4 as R1  # noqa: E402
-from boringbar.kernels import rk4_batch as B1  # noqa: E402
 from boringbar.model.forcing import Regenerative  # noqa: E402
 from boringbar.simulate import _setup  # noqa: E402
 
@@ -165,8 +167,8 @@ def main() -> None:
     ap.add_argument("--skip-check", action="store_true")
     args = ap.parse_args()
     export(args.rev)
-    import boringbar_rev.kernels.rk4 as R0
-    import boringbar_rev.kernels.rk4_batch as B0
+    R0 = importlib.import_module("boringbar_rev.kernels.rk4")
+    B0 = importlib.import_module("boringbar_rev.kernels.rk4_batch")
 
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; RK4 kernels at "
           f"{args.rev} (old) against the working tree (new)")

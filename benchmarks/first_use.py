@@ -1,78 +1,75 @@
-"""A command's first run on a new machine: its wall time on an empty numba cache, and
-each kernel compile within it.
+"""A fresh clone's first use: the README's install, then the first commands, timed.
 
-    .venv/bin/python benchmarks/first_use.py simulate --out /tmp/first
-    .venv/bin/python benchmarks/first_use.py simulate --integrator rk4 --out /tmp/first
-    .venv/bin/python benchmarks/first_use.py paper --quick --out /tmp/first-paper
+    .venv/bin/python benchmarks/first_use.py [--paper] [--keep DIR]
 
-The arguments are a ``boringbar`` command line, run in this process through the
-command line's own entry point with ``NUMBA_CACHE_DIR`` a new empty directory (what
-a fresh clone has; pip's install is not included).  Every outermost ``numba:compile``
-event of this process prints a line (clock, compiled function, wall and CPU
-seconds; the callees it compiled are inside it), then the totals: the wall time,
-the time spent compiling and its share.  Worker processes' compiles (a sweep's
-process pool) are not seen; the published study warms its kernels in this process
-first.
+Clones this repository's committed HEAD into a new directory, then times, each in a new
+process, as a new user meets them:
+
+1. ``python3 -m venv .venv && .venv/bin/pip install -e .`` (the README's install, the
+   compiled core built by scikit-build-core included; pip's download cache as this
+   machine has it);
+2. ``python -c "import boringbar"``, three times (the first reads the files from disk);
+3. the first ``boringbar simulate`` after the install (the published ball bar, the
+   physical preset: the exact integrator), then the same with ``--integrator rk4``;
+4. with ``--paper``, ``boringbar paper --quick`` twice: the first run after the install
+   and a warm rerun into a new directory.
+
+Every figure is a wall time of the whole command, so process start-up counts.
 """
 
 from __future__ import annotations
 
+import argparse
 import os
+import subprocess
 import sys
 import tempfile
-import threading
 import time
+from pathlib import Path
 
-# one new cache for this run, also in the processes it spawns (which import this module
-# again, as __mp_main__: they must not make a cache of their own)
-os.environ.setdefault("BORINGBAR_FIRST_USE_CACHE", tempfile.mkdtemp(prefix="numba-first-use-"))
-os.environ["NUMBA_CACHE_DIR"] = os.environ["BORINGBAR_FIRST_USE_CACHE"]
-
-_T0 = time.perf_counter()  # the command line's import is timed too
-
-from numba.core import event  # noqa: E402
-
-from boringbar.cli.main import main as cli  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 
-class Compiles(event.Listener):
-    """Prints and sums the outermost compiles of each thread."""
-
-    def __init__(self):
-        self.depth: dict[int, int] = {}
-        self.start: dict[int, tuple] = {}
-        self.total = 0.0
-
-    def on_start(self, ev):
-        k = threading.get_ident()
-        self.depth[k] = self.depth.get(k, 0) + 1
-        if self.depth[k] == 1:
-            func = getattr((ev.data or {}).get("dispatcher"), "py_func", None)
-            name = f"{getattr(func, '__module__', '?')}.{getattr(func, '__name__', '?')}"
-            self.start[k] = (name, time.perf_counter(), time.process_time())
-
-    def on_end(self, ev):
-        k = threading.get_ident()
-        self.depth[k] -= 1
-        if self.depth[k] == 0:
-            name, wall, cpu = self.start.pop(k)
-            wall = time.perf_counter() - wall
-            self.total += wall
-            print(f"first_use: {time.strftime('%H:%M:%S')} compiled {name}: {wall:.1f} s "
-                  f"({time.process_time() - cpu:.1f} s CPU)", file=sys.stderr, flush=True)
+def timed(label: str, cmd: str, cwd: Path) -> float:
+    """Run ``cmd`` in a shell in ``cwd``; print and return its wall time (s)."""
+    tic = time.perf_counter()
+    out = subprocess.run(cmd, shell=True, cwd=cwd, capture_output=True, text=True)
+    wall = time.perf_counter() - tic
+    if out.returncode != 0:
+        sys.exit(f"{label} failed ({out.returncode}):\n{out.stdout[-2000:]}{out.stderr[-2000:]}")
+    print(f"  {label:58s} {wall:7.2f} s", flush=True)
+    return wall
 
 
-def main(argv: list[str]) -> int:
-    compiles = Compiles()
-    event.register("numba:compile", compiles)
-    load = os.getloadavg()[0]
-    rc = cli(argv)
-    wall = time.perf_counter() - _T0
-    print(f"first_use: boringbar {' '.join(argv)}: {wall:.1f} s wall (exit {rc}), "
-          f"{compiles.total:.1f} s compiling ({compiles.total / wall:.0%}); "
-          f"load {load:.1f} at the start", file=sys.stderr)
-    return 0 if rc in (0, None) else 1
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--paper", action="store_true", help="also time boringbar paper --quick")
+    ap.add_argument("--keep", type=Path, help="clone into DIR (kept) instead of a temp dir")
+    args = ap.parse_args()
+    where = args.keep or Path(tempfile.mkdtemp(prefix="boringbar-first-use-"))
+    clone = where / "boringbar"
+    subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=clone,
+                          capture_output=True, text=True, check=True).stdout.strip()
+    print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; fresh clone of "
+          f"{head} in {clone}")
+    bb = ".venv/bin/boringbar"
+    timed("install: python3 -m venv .venv && pip install -e .",
+          "python3 -m venv .venv && .venv/bin/pip install -q -e .", clone)
+    for i in range(3):
+        timed(f"python -c 'import boringbar' ({i + 1})", ".venv/bin/python -c 'import boringbar'",
+              clone)
+    timed("boringbar --help", f"{bb} --help", clone)
+    timed("first boringbar simulate (physical preset: exact)",
+          f"{bb} simulate --force-n 20 --out out/first", clone)
+    timed("boringbar simulate --integrator rk4", f"{bb} simulate --force-n 20 --integrator rk4 "
+          "--out out/first-rk4", clone)
+    if args.paper:
+        timed("boringbar paper --quick (first run)", f"{bb} paper --quick --out out/paper",
+              clone)
+        timed("boringbar paper --quick (warm rerun, new dir)",
+              f"{bb} paper --quick --out out/paper2", clone)
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    main()

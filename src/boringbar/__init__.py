@@ -20,13 +20,12 @@ layers behind them.
 
 __version__ = "0.1.0"
 
-from boringbar import plot  # noqa: E402, F401  (registers Run.plot)
+import importlib  # noqa: E402
+
 from boringbar._validate import ParameterError  # noqa: E402
 from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
 from boringbar.analysis.continuation import ContinuationOptions, continuation  # noqa: E402
-from boringbar.analysis.design import design  # noqa: E402
-from boringbar.analysis.design_file import load_design  # noqa: E402
 from boringbar.analysis.design_options import DesignOptions, Uncertain, Variable  # noqa: E402
 from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
 from boringbar.analysis.poincare import poincare_map  # noqa: E402
@@ -55,6 +54,21 @@ from boringbar.reference.linear import min_real_part, tip_frf  # noqa: E402
 from boringbar.simulate import Initial, Integration, IntegrationError, Run, State, simulate  # noqa: E402
 from boringbar.studies.load import load_study  # noqa: E402
 from boringbar.studies.runner import run_study  # noqa: E402
+
+#: names loaded on first use, with the module that holds them: the design search imports
+#: Optuna, the figures matplotlib, neither of which a simulation needs
+_LAZY = {"design": "boringbar.analysis.design", "load_design": "boringbar.analysis.design_file",
+         "plot": "boringbar.plot"}
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module 'boringbar' has no attribute {name!r}")
+    module = importlib.import_module(_LAZY[name])
+    value = module if name == "plot" else getattr(module, name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "PRESETS",

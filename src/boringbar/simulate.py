@@ -8,6 +8,7 @@ kernel streams its metrics; this module turns them into a labelled
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import time
@@ -251,9 +252,10 @@ class Run:
         """The run's figure (a matplotlib Figure; needs ``record_every``): what
         :func:`boringbar.plot.plot_run` draws, with its ``kwargs`` (``zoom_periods``,
         ``fig``).  The plotting module sits above this one and registers itself
-        (:data:`FIGURES`) when ``boringbar`` is imported."""
+        (:data:`FIGURES`) when it is imported, here on first use: matplotlib is loaded
+        only when a figure is drawn."""
         if "run" not in FIGURES:
-            raise RuntimeError("no figure maker registered: import boringbar.plot")
+            importlib.import_module("boringbar.plot")
         return FIGURES["run"](self, **kwargs)
 
     def to_xarray(self):
