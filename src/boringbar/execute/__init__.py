@@ -7,7 +7,7 @@ the same, bit for bit: every point is computed by the same pure function.
 
 - ``serial``: in this process, in order;
 - ``threads`` (the default of the library's analyses): a thread pool of ``workers``
-  (every core); the numba kernels release the GIL;
+  (every core); the compiled core releases the GIL for a whole integration;
 - ``processes``: a process pool (fork where there is one); a worker that dies
   breaks the pool, which is recreated and the unfinished tasks resubmitted
   (at most :data:`MAX_POOL_RESTARTS` times in a row without progress);

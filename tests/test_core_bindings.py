@@ -1,0 +1,176 @@
+"""The compiled core's boundary: whatever Python hands it, a clear exception, never a crash.
+
+Each entry point of ``boringbar._core`` (``run_rk4``, ``run_rk4_batch``, ``run_exact``)
+gets a valid call (a short published ball-damper run), then hypothesis corrupts one of its
+arguments: a wrong dtype, rank, shape or layout, a read-only output, a NaN or an infinity
+in a parameter, the state or a scalar, an out-of-range count.  The core must either run
+(a corruption it can take, such as a larger output array) or raise ``ValueError`` /
+``TypeError`` naming the argument; a crash of the core would take the test process with
+it, a hang would stall the suite.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from boringbar import Harmonic, Regenerative, make_system
+from boringbar import _core
+from boringbar.kernels import layout as L
+from boringbar.kernels import prepare
+from boringbar.kernels.regimes import cut_tables, history_step
+from boringbar.simulate import _setup
+
+SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
+                    suppress_health_check=[HealthCheck.too_slow])
+
+
+def rk4_args(cut: bool = False) -> dict:
+    s = make_system("ball", "paper", gap=0.1e-3, friction=True)
+    f = Regenerative(depth=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
+    su = _setup(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "rk4")
+    return {"p": su.p, "x": su.x, "t0": su.t0, "dt": su.dt, "n_steps": su.n_steps,
+            "steady_start": su.steady_steps, "rec_every": su.record_every, "rec": su.rec,
+            "imp": su.imp, "stick": su.stick, "strobe": su.stb, "met": su.met,
+            "buf": su.buf if su.buf is not None else np.zeros((0, 2))}
+
+
+def batch_args() -> dict:
+    a = rk4_args()
+    nb = 4
+    rows = lambda v: np.repeat(v[None], nb, axis=0)  # noqa: E731
+    return {"P": rows(a["p"]), "x": rows(a["x"]), "t0": a["t0"], "dt": a["dt"],
+            "n_steps": a["n_steps"], "steady_start": a["steady_start"],
+            "imp": rows(a["imp"]), "stick": rows(a["stick"]), "strobe": rows(a["strobe"]),
+            "met": rows(a["met"])}
+
+
+def exact_args(cut: bool = False) -> dict:
+    s = make_system("ball", "physical", gap=0.1e-3, friction=True)
+    f = Regenerative(depth=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
+    su = _setup(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "exact")
+    prep = prepare(su.p)
+    H = history_step(float(su.p[L.TAU]), su.dt) if cut else 0.0
+    tab_e, tab_p = cut_tables(prep, su.p, H) if cut else (np.zeros((1, 5, 1), complex),
+                                                           np.zeros((1, 5, 4, 1), complex))
+    t_end = su.t0 + su.n_steps * su.dt
+    return {"p": su.p, "x": su.x, "t0": su.t0, "t_end": t_end,
+            "t_steady": su.t0 + su.steady_steps * su.dt, "rec_dt": su.record_every * su.dt,
+            "rec": su.rec, "imp": su.imp, "stick": su.stick, "strobe": su.stb, "met": su.met,
+            "prep": prep, "dt": su.dt, "H": H, "tabE": tab_e, "tabP": tab_p}
+
+
+ENTRIES = {
+    "run_rk4": rk4_args,
+    "run_rk4 cut": lambda: rk4_args(cut=True),
+    "run_rk4_batch": batch_args,
+    "run_exact": exact_args,
+    "run_exact cut": lambda: exact_args(cut=True),
+}
+BASE = {}
+
+
+def call(entry: str, args: dict):
+    fn = getattr(_core, entry.split()[0])
+    return fn(*args.values())
+
+
+def fresh(entry: str) -> dict:
+    if entry not in BASE:
+        BASE[entry] = ENTRIES[entry]()
+    out = {}
+    for k, v in BASE[entry].items():
+        out[k] = {kk: vv.copy() if isinstance(vv, np.ndarray) else vv for kk, vv in v.items()} \
+            if isinstance(v, dict) else (v.copy() if isinstance(v, np.ndarray) else v)
+    return out
+
+
+@pytest.mark.parametrize("entry", list(ENTRIES))
+def test_a_valid_call_runs(entry):
+    args = fresh(entry)
+    call(entry, args)
+    assert args["met"][..., L.STEPS_DONE].min() > 0 or "exact" in entry
+    assert np.all(np.isfinite(args["x"]))
+
+
+BAD_SCALARS = [np.nan, np.inf, -np.inf, -1.0, 0.0, 1e300, -1e300, 2.0 ** 63, -(2 ** 40)]
+
+
+def corrupt_array(draw, a: np.ndarray) -> object:
+    kind = draw(st.sampled_from(["dtype", "rank", "shape", "strided", "readonly", "value",
+                                 "list", "none"]))
+    if kind == "dtype":
+        return a.astype(draw(st.sampled_from([np.int64, np.float32, np.complex128, bool,
+                                              np.int32])))
+    if kind == "rank":
+        return a.reshape(-1) if a.ndim > 1 else a.reshape(1, -1)
+    if kind == "shape":
+        dims = draw(st.lists(st.integers(0, 40), min_size=a.ndim, max_size=a.ndim))
+        return np.zeros(dims, a.dtype)
+    if kind == "strided":
+        big = np.zeros(tuple(2 * n + 1 for n in a.shape), a.dtype)
+        view = big[tuple(slice(None, None, 2) for _ in a.shape)]
+        view[...] = a
+        return view if view.size > 1 else big
+    if kind == "readonly":
+        b = a.copy()
+        b.flags.writeable = False
+        return b
+    if kind == "value":
+        b = a.copy()
+        if b.size:
+            flat = b.reshape(-1)
+            flat[draw(st.integers(0, b.size - 1))] = draw(st.sampled_from(BAD_SCALARS))
+        return b
+    return [] if kind == "list" else None
+
+
+@st.composite
+def corrupted(draw, entry: str):
+    args = fresh(entry)
+    name = draw(st.sampled_from(sorted(args)))
+    v = args[name]
+    if isinstance(v, np.ndarray):
+        args[name] = corrupt_array(draw, v)
+    elif isinstance(v, dict):
+        key = draw(st.sampled_from(sorted(v)))
+        if draw(st.booleans()):
+            del v[key]
+        elif isinstance(v[key], np.ndarray):
+            v[key] = corrupt_array(draw, v[key])
+        else:
+            v[key] = draw(st.sampled_from(BAD_SCALARS + ["x", None]))
+    else:
+        args[name] = draw(st.sampled_from(BAD_SCALARS + [None, "x", 3 if name != "p" else 0]))
+    return name, args
+
+
+@pytest.mark.parametrize("entry", list(ENTRIES))
+@SETTINGS
+@given(data=st.data())
+def test_any_corrupted_argument_is_a_clear_error_or_a_run(entry, data):
+    name, args = data.draw(corrupted(entry))
+    try:
+        call(entry, args)
+    except (ValueError, TypeError) as exc:
+        assert str(exc), f"{entry}: {name}: an exception without a message"
+
+
+SLOTS = ["N_MODES", "CASE", "FORCING", "N_REV", "TAU", "OMEGA", "HALF_GAP", "BALL_MASS",
+         "RESTITUTION", "M_EFF", "STROBE_PERIOD", "INTERP", "FRICTION", "STATIC_FRICTION"]
+
+
+@pytest.mark.parametrize("entry", list(ENTRIES))
+@SETTINGS
+@given(slot=st.sampled_from(SLOTS), value=st.sampled_from(
+    BAD_SCALARS + [9.0, 100.0, 3.5, 1e-300, 4.0, 60.0, 51.0]))
+def test_any_parameter_slot_out_of_range_is_a_clear_error_or_a_run(entry, slot, value):
+    args = fresh(entry)
+    p = args["P"] if "P" in args else args["p"]
+    p[..., getattr(L, slot)] = value
+    try:
+        call(entry, args)
+    except (ValueError, TypeError) as exc:
+        assert str(exc)
