@@ -1,0 +1,502 @@
+"""Reference inputs and outputs of the integrator kernels, for porting them bit for bit.
+
+``tests/data/kernel_reference.npz`` holds, for each case of :func:`case_builders`
+(212 of them: the 80 published harmonic cases with each integrator, regenerative cuts,
+every bar, friction law, record and batch size), the exact arguments one kernel entry
+point was called with and everything the call wrote.  It was captured from the numba
+kernels at commit fb3fab0 (before the C++ port).  For a case named ``NAME`` the file
+has
+
+- ``NAME/entry``: the entry point, "rk4", "rk4_batch" or "exact";
+- the inputs: ``NAME/p`` (``NAME/P`` for a batch, one row a run), ``NAME/x0``, the
+  scalar arguments as 0-d arrays (rk4: t0, dt, n_steps, steady_start, rec_every;
+  rk4_batch: t0, dt, n_steps, steady_start; exact: t0, t_end, t_steady, rec_dt, dt),
+  the shapes of the zeroed output arrays (``NAME/rec_shape``, ``imp_shape``,
+  ``stick_shape``, ``strobe_shape``, and ``buf_shape``, a cut's delay history, for
+  rk4) and the initial metric vector ``NAME/met0``;
+- the outputs, ``NAME/out_x`` (the final state), ``out_met``, ``out_rec``,
+  ``out_imp``, ``out_stick``, ``out_strobe`` and, for exact, ``out_t_reached``;
+- for exact, ``NAME/prep_*``: what ``boringbar.kernels.exact.prepare(p)`` returned (the
+  regimes' matrices, NumPy/LAPACK), for diagnosis only: :func:`replay` passes
+  ``prep=None`` and the kernel prepares the run itself, as simulate's call does;
+  ``replay(case, stored_prep=True)`` passes the stored one instead, which separates a
+  change of the preparation from a change of the kernel.
+
+``_names`` lists the cases in order and ``_met_names`` names the slots of ``met``
+(kernels/layout.py), for the messages of tests/test_kernel_reference.py.
+
+Capture (the inputs as :func:`boringbar.simulate.simulate` packs them, through its
+``_setup``; each single run checked against simulate's own kernel call, each batch of
+a size in ``LANES`` against ``simulate_batch``)::
+
+    PYTHONPATH=src python tests/kernel_reference.py --capture
+
+Replay (:func:`replay`; without ``--capture`` the script replays every case and prints
+the differences) uses only the stored arrays and the three entry points imported in
+the block below, so that the kernels can be repointed to another implementation by
+editing that block alone.  Only capture calls into simulate.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import time
+from pathlib import Path
+
+import numpy as np
+
+import boringbar.reference.stability as stability
+from boringbar import Harmonic, Initial, Regenerative, State, make_system
+from boringbar.kernels import layout as L
+
+# the kernels under test: repoint these three names to swap the implementation
+from boringbar.kernels.exact import run_exact
+from boringbar.kernels.rk4 import run_rk4
+from boringbar.kernels.rk4_batch import run_rk4_batch
+
+# the module (boringbar.simulate is also the name of its function), for capture only
+sim = importlib.import_module("boringbar.simulate")
+
+DATA = Path(__file__).parent / "data" / "kernel_reference.npz"
+#: the zeroed arrays a call fills, by the name of their shape in the file
+RECORDS = ("rec", "imp", "stick", "strobe")
+#: the outputs every entry point writes (exact also returns the time reached)
+OUTPUTS = ("x", "met", *RECORDS)
+
+# the published harmonic grid, in the order of benchmarks/bench_grid.py's cases()
+PRESETS = ("paper", "physical")
+GAPS = (0.1e-3, 0.5e-3)
+FRICTION = (False, True)
+FORCES = (10.0, 20.0)
+RATIOS = (0.95, 0.98, 1.00, 1.02, 1.05)
+GRID_EXACT_S = 0.5  # the exact grid runs (s): the first impacts come at 0.02-0.33 s
+GRID_RK4_S = 0.05  # the RK4 grid runs (s): the first impacts come at 0.02-0.04 s
+FEATURE_RK4_S = 0.05  # the single-feature runs (s)
+FEATURE_EXACT_S = 0.2
+BATCH_S = 0.05
+DT = 1e-6
+RPM_FAST = 20000.0  # tau = 3 ms: 6.7 revolutions in 20 ms (tests/test_chatter.py)
+
+
+# --- capture: the cases as simulate packs them ----------------------------------------
+def _single(system, forcing, *, integrator, duration, dt=DT, initial=None, record_every=0,
+            steady_fraction=0.8, strobe=False, stage_loop=False) -> dict:
+    """The stored inputs of one run of :func:`simulate` (``_setup``'s packing)."""
+    su = sim._setup(system, forcing, duration, dt, initial, record_every, steady_fraction,
+                    strobe, integrator)
+    if stage_loop:
+        su.p[L.STAGE_LOOP] = 1.0  # what simulate_stage_loop does
+    case = {"entry": su.integrator, "p": su.p.copy(), "x0": su.x.copy(), "t0": su.t0,
+            "met0": su.met.copy(), **_shapes(su.rec, su.imp, su.stick, su.stb)}
+    if su.integrator == "exact":  # the arguments as _run_kernel computes them
+        case.update(t_end=su.t0 + su.n_steps * su.dt, t_steady=su.t0 + su.steady_steps * su.dt,
+                    rec_dt=su.record_every * su.dt, dt=su.dt, **_prep_arrays(su.p))
+    else:
+        buf = np.zeros((0, 2)) if su.buf is None else su.buf
+        case.update(dt=su.dt, n_steps=su.n_steps, steady_start=su.steady_steps,
+                    rec_every=su.record_every, buf_shape=np.array(buf.shape))
+    case["_setup"] = su  # for the check against simulate's own call; not stored
+    return case
+
+
+def _prep_arrays(p: np.ndarray) -> dict:
+    """``prepare(p)`` as arrays ``prep_*``, for diagnosis."""
+    # imported here, not at the top: capture only, and the numba package that holds it
+    # may be gone when the test imports this module to replay through another core
+    from boringbar.kernels.exact import prepare
+
+    return {f"prep_{k}": np.asarray(v) for k, v in prepare(p.copy()).items()}
+
+
+def _shapes(rec, imp, stick, strobe) -> dict:
+    return {f"{k}_shape": np.array(a.shape) for k, a in zip(RECORDS, (rec, imp, stick, strobe),
+                                                            strict=True)}
+
+
+def _batch(runs, *, duration, dt=DT, steady_fraction=0.8, strobe=False) -> dict:
+    """The stored inputs of one lock-step batch, packed as simulate_batch packs it but
+    not padded: ``runs`` (system, forcing, initial) are the batch's rows."""
+    sus = [sim._setup(s, f, duration, dt, i, 0, steady_fraction, strobe, "rk4")
+           for s, f, i in runs]
+    nb, first = len(sus), sus[0]
+    kwargs = {"duration": duration, "dt": dt, "steady_fraction": steady_fraction,
+              "strobe": strobe}
+    rows = {k: max(len(getattr(su, a)) for su in sus)
+            for k, a in (("imp", "imp"), ("stick", "stick"), ("strobe", "stb"))}
+    return {"entry": "rk4_batch", "P": np.array([su.p for su in sus]),
+            "x0": np.array([su.x for su in sus]), "met0": np.array([su.met for su in sus]),
+            "t0": first.t0, "dt": dt, "n_steps": first.n_steps,
+            "steady_start": first.steady_steps, "rec_shape": np.array((0, 6)),
+            "imp_shape": np.array((nb, rows["imp"], 3)),
+            "stick_shape": np.array((nb, rows["stick"], 2)),
+            "strobe_shape": np.array((nb, rows["strobe"], 5)),
+            "_batch": (runs, kwargs)}  # for the check against simulate_batch; not stored
+
+
+def _grid():
+    """(label, system, forcing) of the 80 published harmonic cases."""
+    out = []
+    for preset in PRESETS:
+        for gap in GAPS:
+            for friction in FRICTION:
+                s = make_system("ball", preset, gap=gap, friction=friction)
+                for force in FORCES:
+                    for ratio in RATIOS:
+                        label = (f"{preset}-gap{gap * 1e3:.1f}-fric-{'on' if friction else 'off'}"
+                                 f"-{force:.0f}N-r{ratio:.2f}")
+                        out.append((label, s, Harmonic(force, ratio)))
+    return out
+
+
+def _grid_cases() -> dict:
+    cases = {}
+    for label, s, f in _grid():
+        cases[f"grid-exact-{label}"] = lambda s=s, f=f: _single(
+            s, f, integrator="exact", duration=GRID_EXACT_S)
+    for label, s, f in _grid():
+        cases[f"grid-rk4-{label}"] = lambda s=s, f=f: _single(
+            s, f, integrator="rk4", duration=GRID_RK4_S)
+    return cases
+
+
+def _cut(system, depth, integrator, *, duration=0.02, dt=DT, rpm=RPM_FAST, initial=None,
+         record_every=0, steady_fraction=0.8, **forcing):
+    return _single(system, Regenerative(depth=depth, rpm=rpm, **forcing), integrator=integrator,
+                   duration=duration, dt=dt, initial=initial, record_every=record_every,
+                   steady_fraction=steady_fraction)
+
+
+def _ball_cut(integrator):
+    """tests/test_exact_regen.py's ball in a cut: 10 um gap, 3 x the bare bar's limit at
+    1200 rpm, impacts and rolling friction in the first 14 ms."""
+    s = make_system("ball", gap=10e-6)
+    depth = 3.0 * float(stability.limit_at_speeds(s.bar, [1200.0])[0])
+    return _cut(s, depth, integrator, rpm=1200.0, steady_fraction=1.0)
+
+
+def _cut_cases() -> dict:
+    """Regenerative cuts (tests/test_chatter.py's reference cases), RK4 and exact."""
+    solid, tmd = make_system("solid"), make_system("tmd")
+    locked = make_system("ball", locked=True, friction=False)
+    kick = Initial(tip_velocity=0.02)
+    cases = {}
+    for ig in ("rk4", "exact"):
+        cases |= {
+            # first zero at 7.2 ms (third revolution), then h = 0 in many steps
+            f"cut-{ig}-solid-cubic": lambda ig=ig: _cut(solid, 1e-3, ig),
+            f"cut-{ig}-solid-linear": lambda ig=ig: _cut(solid, 1e-3, ig, interpolation="linear"),
+            f"cut-{ig}-solid-stop-at-zero": lambda ig=ig: _cut(solid, 1e-3, ig,
+                                                               stop_at_zero=True),
+            f"cut-{ig}-solid-1rev-record": lambda ig=ig: _cut(solid, 1e-3, ig, revolutions=1,
+                                                              record_every=10),
+            # the surface before the cut is the static deflection; first zero at 16.4 ms
+            f"cut-{ig}-locked-static": lambda ig=ig: _cut(locked, 1e-3, ig, start="static",
+                                                          initial=kick),
+            f"cut-{ig}-tmd-cubic": lambda ig=ig: _cut(tmd, 2e-3, ig),
+            f"cut-{ig}-ball-impacts": lambda ig=ig: _ball_cut(ig),
+        }
+    return cases
+
+
+def _bars() -> dict:
+    """Systems of the single-feature cases, by name."""
+    return {
+        "solid": make_system("solid"),
+        "solid-paper": make_system("solid", "paper"),
+        "tmd": make_system("tmd"),
+        "tmd-paper": make_system("tmd", "paper"),
+        "locked": make_system("ball", locked=True),
+        "ball-3modes": make_system("ball", n_modes=3, gap=0.1e-3),
+        "ball-4modes": make_system("ball", n_modes=4, gap=0.1e-3),
+        "solid-5modes": make_system("solid", n_modes=5),
+        "ball-printed": make_system("ball", gap=0.5e-3, friction_force=2.0,
+                                    friction_reaction="printed"),
+        "ball-nofric": make_system("ball", gap=0.5e-3, friction=False),
+        "paper": make_system("ball", "paper", gap=0.5e-3),
+    }
+
+
+def _feature_cases() -> dict:
+    """One feature a case, RK4 and exact."""
+    b = _bars()
+    h10, h20 = Harmonic(10.0, 1.0), Harmonic(20.0, 0.98)
+    cont = State(np.array([2e-5, -1e-5, 1e-3, 0.02, 1e-4, -0.01]), 0.0123)
+    start = Initial(tip_displacement=1e-4, tip_velocity=-0.01, ball_position=4e-5,
+                    ball_velocity=0.005)
+    common = {
+        "solid": (b["solid"], h10, {}),
+        "solid-paper-1mode": (b["solid-paper"], h10, {}),
+        "tmd": (b["tmd"], h10, {}),
+        "tmd-paper-1mode": (b["tmd-paper"], h20, {}),
+        "locked": (b["locked"], h10, {}),
+        "ball-3modes": (b["ball-3modes"], h20, {}),
+        "ball-4modes": (b["ball-4modes"], h20, {}),
+        "solid-5modes": (b["solid-5modes"], h10, {}),
+        "printed-reaction": (b["ball-printed"], h20, {}),
+        "strobe": (b["ball-printed"], h20, {"strobe": True}),
+        "record": (b["paper"], h10, {"record_every": 50}),
+        "initial-conditions": (b["ball-nofric"], h10, {"initial": start}),
+        "continued-state": (b["ball-nofric"], h20, {"initial": cont}),
+    }
+    cases = {}
+    for name, (s, f, kw) in common.items():
+        cases[f"rk4-{name}"] = lambda s=s, f=f, kw=kw: _single(
+            s, f, integrator="rk4", duration=FEATURE_RK4_S, **kw)
+        cases[f"exact-{name}"] = lambda s=s, f=f, kw=kw: _single(
+            s, f, integrator="exact", duration=FEATURE_EXACT_S, **kw)
+    cases |= _rk4_only_cases(b) | _exact_only_cases()
+    return cases
+
+
+def _rk4_only_cases(b) -> dict:
+    h10, h20 = Harmonic(10.0, 1.0), Harmonic(20.0, 1.0)
+    rk4 = {"integrator": "rk4", "duration": FEATURE_RK4_S}
+    return {
+        "rk4-stage-loop-ball-nofric": lambda: _single(b["ball-nofric"], h20, stage_loop=True,
+                                                      **rk4),
+        "rk4-stage-loop-tmd": lambda: _single(b["tmd"], h10, stage_loop=True, **rk4),
+        # every step recorded (20 ms): the sgn() chatter of the paper's 20.4 N friction
+        "rk4-paper-stick-record-every-step": lambda: _single(b["paper"], h10, integrator="rk4",
+                                                             duration=0.02, record_every=1),
+    }
+
+
+def _exact_only_cases() -> dict:
+    """True stick-slip (static_ratio > 1: impacts, stick intervals and slips) and a Zeno
+    capture (tests/test_exact.py)."""
+    slip = make_system("ball", gap=0.1e-3, friction_force=2.0, static_ratio=3.0)
+    paper2 = make_system("ball", "paper", gap=0.5e-3, static_ratio=2.0)
+    zeno = make_system("ball", gap=0.5e-3, friction=False, restitution=0.3)
+    throw = Initial(tip_displacement=2e-4, ball_position=0.25e-3 - 1e-6)
+    return {
+        "exact-stick-slip-physical": lambda: _single(slip, Harmonic(20.0, 1.0),
+                                                     integrator="exact", duration=0.2),
+        "exact-stick-slip-paper": lambda: _single(paper2, Harmonic(20.0, 1.0),
+                                                  integrator="exact", duration=0.2,
+                                                  steady_fraction=0.5),
+        "exact-zeno-contact": lambda: _single(zeno, Harmonic(0.0, 1.0), integrator="exact",
+                                              duration=5e-3, steady_fraction=1.0,
+                                              initial=throw),
+    }
+
+
+def _batch_cases() -> dict:
+    """Lock-step batches: each size of rk4_batch.LANES and one size outside them."""
+    grid = _grid()
+    paper = [(s, f, None) for _, s, f in grid if s.preset == "paper"]
+    physical = [(s, f, None) for _, s, f in grid if s.preset == "physical"]
+    tmd = make_system("tmd")
+    ball4 = make_system("ball", n_modes=4, gap=0.1e-3)
+    ratios = (0.96, 0.99, 1.0, 1.03)
+    return {
+        # 20 N at resonance, one run each of gap 0.1/0.5 mm x friction off/on
+        "batch-4-paper": lambda: _batch([paper[i] for i in (7, 17, 27, 37)], duration=BATCH_S),
+        "batch-8-physical": lambda: _batch(physical[20:28], duration=BATCH_S, strobe=True),
+        "batch-16-paper": lambda: _batch(paper[::40 // 16][:16], duration=BATCH_S),
+        "batch-5-paper-not-in-lanes": lambda: _batch(paper[30:35], duration=BATCH_S),
+        "batch-4-tmd": lambda: _batch([(tmd, Harmonic(10.0, r), None) for r in ratios],
+                                      duration=BATCH_S),
+        "batch-4-ball-4modes": lambda: _batch([(ball4, Harmonic(20.0, r), None)
+                                               for r in ratios], duration=BATCH_S),
+    }
+
+
+def case_builders() -> dict:
+    """Every case's name and the function that packs its inputs."""
+    return _grid_cases() | _cut_cases() | _feature_cases() | _batch_cases()
+
+
+# --- replay: the stored inputs through the entry points ------------------------------
+def _records(case: dict) -> list[np.ndarray]:
+    return [np.zeros(tuple(int(n) for n in case[f"{k}_shape"])) for k in RECORDS]
+
+
+def _outputs(x, met, records) -> dict:
+    return dict(zip(OUTPUTS, (x, met, *records), strict=True))
+
+
+def _replay_rk4(case: dict) -> dict:
+    x, met = case["x0"].copy(), case["met0"].copy()
+    rec, imp, stick, strobe = records = _records(case)
+    shape = tuple(int(n) for n in case["buf_shape"])
+    buf = np.zeros(shape) if shape[0] else None  # None: simulate's harmonic call
+    run_rk4(case["p"].copy(), x, float(case["t0"]), float(case["dt"]), int(case["n_steps"]),
+            int(case["steady_start"]), int(case["rec_every"]), rec, imp, stick, strobe, met, buf)
+    return _outputs(x, met, records)
+
+
+def _replay_batch(case: dict) -> dict:
+    x, met = case["x0"].copy(), case["met0"].copy()
+    _, imp, stick, strobe = records = _records(case)
+    run_rk4_batch(case["P"].copy(), x, float(case["t0"]), float(case["dt"]),
+                  int(case["n_steps"]), int(case["steady_start"]), imp, stick, strobe, met)
+    return _outputs(x, met, records)
+
+
+def stored_prep_of(case: dict) -> dict:
+    """The stored result of ``prepare(p)`` of an exact case, as ``run_exact`` takes it."""
+    return {k.removeprefix("prep_"): v.item() if v.ndim == 0 else v.copy()
+            for k, v in case.items() if k.startswith("prep_")}
+
+
+def _replay_exact(case: dict, prep: dict | None = None) -> dict:
+    x, met = case["x0"].copy(), case["met0"].copy()
+    rec, imp, stick, strobe = records = _records(case)
+    t = run_exact(case["p"].copy(), x, float(case["t0"]), float(case["t_end"]),
+                  float(case["t_steady"]), float(case["rec_dt"]), rec, imp, stick, strobe, met,
+                  prep=prep, dt=float(case["dt"]))
+    return {**_outputs(x, met, records), "t_reached": np.float64(t)}
+
+
+_REPLAY = {"rk4": _replay_rk4, "rk4_batch": _replay_batch, "exact": _replay_exact}
+
+
+def replay(case: dict, stored_prep: bool = False) -> dict:
+    """The outputs of the case's entry point called with its stored inputs (an exact
+    case with ``stored_prep``: given the stored ``prepare(p)``, not preparing it)."""
+    if stored_prep:
+        return _replay_exact(case, stored_prep_of(case))
+    return _REPLAY[str(case["entry"])](case)
+
+
+# --- the file ----------------------------------------------------------------------------
+def load(path: Path = DATA) -> dict:
+    """{case name: {key: array}} from the reference file."""
+    with np.load(path, allow_pickle=False) as z:
+        cases = {str(n): {} for n in z["_names"]}
+        for key in z.files:
+            name, _, item = key.rpartition("/")
+            if name in cases:
+                cases[name][item] = z[key]
+    return cases
+
+
+def names(path: Path = DATA) -> list[str]:
+    with np.load(path, allow_pickle=False) as z:
+        return [str(n) for n in z["_names"]]
+
+
+def met_names(path: Path = DATA) -> list[str]:
+    with np.load(path, allow_pickle=False) as z:
+        return [str(n) for n in z["_met_names"]]
+
+
+# --- comparison --------------------------------------------------------------------------
+def differences(case_name: str, stored: dict, got: dict, slot_names=()) -> list[str]:
+    """One message per stored output array that ``got`` does not equal bit for bit (two
+    NaNs are equal whatever their payload) or lacks."""
+    out = []
+    for key in sorted(k.removeprefix("out_") for k in stored if k.startswith("out_")):
+        if key not in got:
+            out.append(f"{case_name}: {key}: not returned by the replay")
+            continue
+        msg = _difference(np.asarray(got[key]), stored[f"out_{key}"], slot_names, key)
+        if msg:
+            out.append(f"{case_name}: {key}: {msg}")
+    return out
+
+
+def _difference(a: np.ndarray, b: np.ndarray, slot_names, key: str) -> str:
+    if a.shape != b.shape or a.dtype != b.dtype:
+        return f"shape/dtype {a.shape} {a.dtype}, stored {b.shape} {b.dtype}"
+    if a.dtype.kind != "f":
+        bad = a != b
+    else:
+        bad = (a.view(np.uint64) != b.view(np.uint64)) & ~(np.isnan(a) & np.isnan(b))
+    n = int(np.count_nonzero(bad))
+    if not n:
+        return ""
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        diff = np.abs(a[bad].astype(float) - b[bad].astype(float))
+        rel = diff / np.maximum(np.abs(a[bad]), np.abs(b[bad]))
+    first = tuple(int(i) for i in np.argwhere(bad)[0])
+    slot = f" ({slot_names[first[-1]]})" if key == "met" and len(slot_names) else ""
+    return (f"{n} of {a.size} entries differ; largest |difference| {np.nanmax(diff):.3g}, "
+            f"largest relative {np.nanmax(rel):.3g}; first at {first}{slot}: "
+            f"{a[first].item()!r}, stored {b[first].item()!r}")
+
+
+# --- capture -------------------------------------------------------------------------------
+def _check_against_simulate(name: str, case: dict, out: dict) -> None:
+    """The replayed call equals simulate's own kernel call on the same setup (the exact
+    integrator's STEPS_DONE is simulate's, written after the call)."""
+    su = case["_setup"]
+    sim._run_kernel(su)
+    ref = {"x": su.x, "met": su.met.copy(), "rec": su.rec, "imp": su.imp, "stick": su.stick,
+           "strobe": su.stb}
+    if case["entry"] == "exact":
+        ref["met"][L.STEPS_DONE] = out["met"][L.STEPS_DONE]
+    for key, a in ref.items():
+        if _difference(out[key], a, (), key):
+            raise AssertionError(f"{name}: {key} replayed differs from simulate's call")
+
+
+def _check_batch_against_simulate(name: str, case: dict, out: dict) -> None:
+    """A batch of a size in LANES (simulate_batch pads the others) gives each run's final
+    state and records as simulate_batch does."""
+    runs, kwargs = case["_batch"]
+    if len(runs) not in sim.LANES:
+        return
+    for r, run in enumerate(sim.simulate_batch(runs, **kwargs)):
+        for key, kept in (("x", run.final.x), ("imp", run.impacts), ("stick", run.sticks),
+                          ("strobe", run.strobe)):
+            got = out[key][r][:len(kept)]
+            if _difference(got, kept, (), key):
+                raise AssertionError(f"{name}: run {r}: {key} differs from simulate_batch's")
+
+
+_CHECKS = {"rk4": _check_against_simulate, "exact": _check_against_simulate,
+           "rk4_batch": _check_batch_against_simulate}
+
+
+def capture(path: Path = DATA, check: bool = True) -> None:
+    """Build every case, run it, and write inputs and outputs to ``path``."""
+    arrays = {"_met_names": np.array(L.METRIC_NAMES)}
+    done = []
+    for name, build in case_builders().items():
+        tic = time.perf_counter()
+        case = build()
+        out = replay(case)
+        if check:
+            _CHECKS[case["entry"]](name, case, out)
+        for key, value in case.items():
+            if key.startswith("_"):
+                continue
+            arrays[f"{name}/{key}"] = np.asarray(value)
+        for key, value in out.items():
+            arrays[f"{name}/out_{key}"] = np.asarray(value)
+        done.append(name)
+        print(f"{name:58s} {case['entry']:9s} {time.perf_counter() - tic:7.2f} s", flush=True)
+    arrays["_names"] = np.array(done)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **arrays)
+    print(f"{len(done)} cases -> {path} ({path.stat().st_size / 1e6:.2f} MB)")
+
+
+def replay_all(path: Path = DATA) -> None:
+    """Replay every stored case and report differences and the time taken."""
+    cases, slots = load(path), met_names(path)
+    tic = time.perf_counter()
+    bad = [m for n, c in cases.items() for m in differences(n, c, replay(c), slots)]
+    print(f"{len(cases)} cases replayed in {time.perf_counter() - tic:.2f} s; "
+          f"{len(bad)} differences")
+    for m in bad:
+        print(m)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--capture", action="store_true", help="write the reference file")
+    ap.add_argument("--file", type=Path, default=DATA, help="the reference file")
+    ap.add_argument("--no-check", action="store_true",
+                    help="skip the check of each run against simulate's own call")
+    args = ap.parse_args()
+    if args.capture:
+        capture(args.file, check=not args.no_check)
+    else:
+        replay_all(args.file)
+
+
+if __name__ == "__main__":
+    main()
