@@ -16,7 +16,7 @@ has
   rk4) and the initial metric vector ``NAME/met0``;
 - the outputs, ``NAME/out_x`` (the final state), ``out_met``, ``out_rec``,
   ``out_imp``, ``out_stick``, ``out_strobe`` and, for exact, ``out_t_reached``;
-- for exact, ``NAME/prep_*``: what ``boringbar.kernels.exact.prepare(p)`` returned (the
+- for exact, ``NAME/prep_*``: what ``prepare(p)`` (then ``boringbar.kernels.exact.prepare``, numba) returned (the
   regimes' matrices, NumPy/LAPACK), for diagnosis only: :func:`replay` passes
   ``prep=None`` and the kernel prepares the run itself, as simulate's call does;
   ``replay(case, stored_prep=True)`` passes the stored one instead, which separates a
@@ -50,10 +50,8 @@ import boringbar.reference.stability as stability
 from boringbar import Harmonic, Initial, Regenerative, State, make_system
 from boringbar.kernels import layout as L
 
-# the kernels under test: repoint these three names to swap the implementation
-from boringbar.kernels.exact import run_exact
-from boringbar.kernels.rk4 import run_rk4
-from boringbar.kernels.rk4_batch import run_rk4_batch
+# the kernels under test: repoint these names to swap the implementation
+from boringbar.kernels import prepare, run_exact, run_rk4, run_rk4_batch
 
 # the module (boringbar.simulate is also the name of its function), for capture only
 sim = importlib.import_module("boringbar.simulate")
@@ -104,7 +102,6 @@ def _prep_arrays(p: np.ndarray) -> dict:
     """``prepare(p)`` as arrays ``prep_*``, for diagnosis."""
     # imported here, not at the top: capture only, and the numba package that holds it
     # may be gone when the test imports this module to replay through another core
-    from boringbar.kernels.exact import prepare
 
     return {f"prep_{k}": np.asarray(v) for k, v in prepare(p.copy()).items()}
 
