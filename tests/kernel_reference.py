@@ -16,7 +16,7 @@ has
   rk4) and the initial metric vector ``NAME/met0``;
 - the outputs, ``NAME/out_x`` (the final state), ``out_met``, ``out_rec``,
   ``out_imp``, ``out_stick``, ``out_strobe`` and, for exact, ``out_t_reached``;
-- for exact, ``NAME/prep_*``: what ``prepare(p)`` (then ``boringbar.kernels.exact.prepare``, numba) returned (the
+- for exact, ``NAME/prep_*``: what ``prepare(p)`` (numba's, at capture) returned (the
   regimes' matrices, NumPy/LAPACK), for diagnosis only: :func:`replay` passes
   ``prep=None`` and the kernel prepares the run itself, as simulate's call does;
   ``replay(case, stored_prep=True)`` passes the stored one instead, which separates a
@@ -100,9 +100,6 @@ def _single(system, forcing, *, integrator, duration, dt=DT, initial=None, recor
 
 def _prep_arrays(p: np.ndarray) -> dict:
     """``prepare(p)`` as arrays ``prep_*``, for diagnosis."""
-    # imported here, not at the top: capture only, and the numba package that holds it
-    # may be gone when the test imports this module to replay through another core
-
     return {f"prep_{k}": np.asarray(v) for k, v in prepare(p.copy()).items()}
 
 
