@@ -129,4 +129,88 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
     }
 }
 
+// The tables regrouped for the kernels' step: what one step computes for several rows,
+// stages or velocities at once sits side by side in a vector (GCC/Clang vector
+// extensions: SSE2 on any x86-64, the same on other targets), so one vector operation
+// does what several scalar ones did.  Each lane does the scalar code's operations in
+// its order, so the bits are those of the scalar sums.
+typedef double v2 __attribute__((vector_size(16)));
+
+// Four lanes as two native pairs (a 32-byte vector type without AVX went through memory).
+struct v4 {
+    v2 lo, hi;
+    double operator[](int l) const { return l < 2 ? lo[l] : hi[l - 2]; }
+};
+inline __attribute__((always_inline)) v4 operator*(v4 a, double s) { return {a.lo * s, a.hi * s}; }
+inline __attribute__((always_inline)) v4 operator*(double s, v4 a) { return {s * a.lo, s * a.hi}; }
+inline __attribute__((always_inline)) v4 operator*(v4 a, v4 b) { return {a.lo * b.lo, a.hi * b.hi}; }
+inline __attribute__((always_inline)) v4 operator+(v4 a, v4 b) { return {a.lo + b.lo, a.hi + b.hi}; }
+inline __attribute__((always_inline)) v4 operator+(double s, v4 a) { return {s + a.lo, s + a.hi}; }
+inline __attribute__((always_inline)) v4 operator-(v4 a, double s) { return {a.lo - s, a.hi - s}; }
+inline __attribute__((always_inline)) v4& operator+=(v4& a, v4 b) { return a = a + b; }
+
+struct VecMap {
+    // the increment: row pairs (i, n + i) for mode i < n, and (iy, iyd) as pair n
+    v2 dS[NV_MAX], dC[NV_MAX], dF[NV_MAX], dP[NV_MAX][NX_MAX];
+    // y' at stages 2-4 in lanes 0-2 (lane 3 unused)
+    v4 yS, yC, yF, yP[NX_MAX];
+    // bounds of |y'_s - y'_0| over the stages: max_s |Yr[s][c]| per column c of z, with
+    // Yr[s][iyd] - 1 in column iyd (the step's own y')
+    double yb[NZ_MAX];
+    // the damped velocities at stages 2-4 in lanes 0-2: modes k < n, the absorber k = n
+    v4 vS[NV_MAX], vC[NV_MAX], vF[NV_MAX], vP[NV_MAX][NX_MAX];
+    v4 wv[NV_MAX];      // their weights Wv[1 + lane][k]
+    double w0[NV_MAX];  // the weights of the stage-1 velocities, Wv[0][k]
+    // the force's work: lanes (Fs, Fc)
+    v2 fS, fC, fF, fP[NX_MAX];
+};
+
+inline VecMap pack_map(int n, const StepMap& mp) {
+    VecMap vm = {};
+    const int nx = 2 * n + 2, iS = nx, iC = nx + 1, iF = nx + 2;
+    for (int pr = 0; pr <= n; ++pr) {
+        const int a0 = pr < n ? pr : 2 * n, a1 = pr < n ? n + pr : 2 * n + 1;
+        vm.dS[pr] = v2{mp.Pd[a0][iS], mp.Pd[a1][iS]};
+        vm.dC[pr] = v2{mp.Pd[a0][iC], mp.Pd[a1][iC]};
+        vm.dF[pr] = v2{mp.Pd[a0][iF], mp.Pd[a1][iF]};
+        for (int j = 0; j < nx; ++j) vm.dP[pr][j] = v2{mp.Pd[a0][j], mp.Pd[a1][j]};
+    }
+    auto lanes = [](const double* a, const double* b, const double* c) {
+        return v4{v2{*a, *b}, v2{*c, 0.0}};
+    };
+    vm.yS = lanes(&mp.Yr[0][iS], &mp.Yr[1][iS], &mp.Yr[2][iS]);
+    vm.yC = lanes(&mp.Yr[0][iC], &mp.Yr[1][iC], &mp.Yr[2][iC]);
+    vm.yF = lanes(&mp.Yr[0][iF], &mp.Yr[1][iF], &mp.Yr[2][iF]);
+    for (int j = 0; j < nx; ++j) vm.yP[j] = lanes(&mp.Yr[0][j], &mp.Yr[1][j], &mp.Yr[2][j]);
+    for (int c = 0; c < nx + 3; ++c) {
+        double b = 0.0;
+        for (int s3 = 0; s3 < 3; ++s3) {
+            const double y = c == 2 * n + 1 ? mp.Yr[s3][c] - 1.0 : mp.Yr[s3][c];
+            b = std::fmax(b, std::fabs(y));
+        }
+        vm.yb[c] = b;
+    }
+    for (int k = 0; k <= n; ++k) {
+        vm.vS[k] = lanes(&mp.Vr[0][k][iS], &mp.Vr[1][k][iS], &mp.Vr[2][k][iS]);
+        vm.vC[k] = lanes(&mp.Vr[0][k][iC], &mp.Vr[1][k][iC], &mp.Vr[2][k][iC]);
+        vm.vF[k] = lanes(&mp.Vr[0][k][iF], &mp.Vr[1][k][iF], &mp.Vr[2][k][iF]);
+        for (int j = 0; j < nx; ++j)
+            vm.vP[k][j] = lanes(&mp.Vr[0][k][j], &mp.Vr[1][k][j], &mp.Vr[2][k][j]);
+        vm.wv[k] = lanes(&mp.Wv[1][k], &mp.Wv[2][k], &mp.Wv[3][k]);
+        vm.w0[k] = mp.Wv[0][k];
+    }
+    vm.fS = v2{mp.Fs[iS], mp.Fc[iS]};
+    vm.fC = v2{mp.Fs[iC], mp.Fc[iC]};
+    vm.fF = v2{mp.Fs[iF], mp.Fc[iF]};
+    for (int j = 0; j < nx; ++j) vm.fP[j] = v2{mp.Fs[j], mp.Fc[j]};
+    return vm;
+}
+
+// The map of the step of dt for the first n modes of p, packed for the kernels.
+inline VecMap step_map(int n, const double* p, double dt) {
+    StepMap mp;
+    build_map(n, p, dt, mp);
+    return pack_map(n, mp);
+}
+
 }  // namespace bb::rk4

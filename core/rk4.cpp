@@ -122,7 +122,7 @@ struct Cut {
 };
 
 template <int N, int CASE, int FORCING>
-void run(const RunArgs& a) {
+BB_INLINE void run_body(const RunArgs& a) {
     const Params q = unpack(a.p, a.dt);
     const Shape<N, CASE> sh(q);
     const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.regen;
@@ -155,8 +155,7 @@ void run(const RunArgs& a) {
 
     // the step as an affine map where F_b cannot switch (linmap.hpp)
     const bool linear = !regen && !q.stage_loop;
-    StepMap mp;
-    if (linear) build_map(n, a.p, dt, mp);
+    const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
     double sn = 0.0, cn = 1.0;
 
@@ -272,6 +271,26 @@ void run(const RunArgs& a) {
     met[L::FIRST_ZERO_T] = cut.first_zero;
     met[L::N_ZERO_STEPS] = cut.n_zero;
     met[L::STEPS_DONE] += double(steps_run);
+}
+
+template <int N, int CASE, int FORCING>
+void run_base(const RunArgs& a) {
+    run_body<N, CASE, FORCING>(a);
+}
+
+#ifdef BB_AVX2_CLONE
+template <int N, int CASE, int FORCING>
+BB_TARGET_AVX2 void run_avx2(const RunArgs& a) {
+    run_body<N, CASE, FORCING>(a);
+}
+#endif
+
+template <int N, int CASE, int FORCING>
+void run(const RunArgs& a) {
+#ifdef BB_AVX2_CLONE
+    if (cpu_has_avx2()) return run_avx2<N, CASE, FORCING>(a);
+#endif
+    run_base<N, CASE, FORCING>(a);
 }
 
 }  // namespace

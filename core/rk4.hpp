@@ -29,6 +29,16 @@
 
 #define BB_INLINE inline __attribute__((always_inline))
 
+// On x86-64 the kernels are compiled twice, for the baseline ISA (SSE2) and for AVX2,
+// chosen at run time: the same IEEE operations in the same order, so the same bits on
+// every CPU (FMA, which would round differently, is not enabled; -ffp-contract=off).
+// AVX2 gives the vector arithmetic (VecMap) 4 lanes, 3-operand instructions and more
+// registers.
+#if defined(__x86_64__) && defined(__GNUC__)
+#define BB_AVX2_CLONE 1
+#define BB_TARGET_AVX2 __attribute__((target("avx2")))
+#endif
+
 namespace bb::rk4 {
 
 // most past revolutions in the chip-thickness minimum
@@ -158,11 +168,10 @@ BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double
     double ydd = 0.0;
     if (sh.ball()) {
         const double yds = Xs[iyd];
-        double fb = 0.0;  // F_b = -F_c sgn(y'), sgn(0) = 0
-        if (yds > 0.0)
-            fb = -q.fc;
-        else if (yds < 0.0)
-            fb = q.fc;
+        // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), as selects: y' changes sign from stage
+        // to stage while the ball sticks, where branches would be mispredicted
+        double fb = yds > 0.0 ? -q.fc : 0.0;
+        fb = yds < 0.0 ? q.fc : fb;
         double pdv = 0.0;
         for (int i = 0; i < n; ++i) {
             // the reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
@@ -206,96 +215,131 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
     fl.d_visc += w_s * s.pvisc;
 }
 
+// |v| lane by lane (the sign bit cleared, as fabs)
+BB_INLINE v2 vabs(v2 v) {
+    typedef long long i2 __attribute__((vector_size(16)));
+    const i2 mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL};
+    return (v2)((i2)v & mask);
+}
+BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
+
 // F_b of a mapped step: the sign y' has at the step's start.
 BB_INLINE double map_friction(const Params& q, double yd0) { return yd0 > 0.0 ? -q.fc : q.fc; }
 
-// May a ball with friction take the map this step: y' outside the chattering band and of
-// y0's sign at stages 2-4 by more than their round-off.  The single run and the batch
-// wrote the test with opposite comparisons, which differ only for a NaN state
-// (nan_maps: the single run's, under which a NaN takes the map).
+// A cheap sufficient condition for map_fits' stage test: with
+// E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
+// in exact arithmetic, E <= 0.2 |y'_0| puts every computed y'_s within |y'_0| / 4 of
+// y'_0 (the sums' rounding is below 1e-14 of their terms), so ys y'_0 >= 0.75 y'_0^2,
+// far above 1e-12 (y'_0^2 + |y'_0 (ys - y'_0)|) <= 1.3e-12 y'_0^2: the test passes for
+// every stage, as the full computation would find.  The limits on |y'_0| keep y'_0^2
+// normal and finite; a NaN or infinite state fails the comparison and takes the full
+// test, so the decision is always the full test's.
 template <int N, int CASE>
-BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const StepMap& mp, const double* X,
+BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
+                           double cn, double fz) {
+    const int nx = sh.nx();
+    const double a = std::fabs(X[sh.iyd()]);
+    if (!(a >= 1e-150 && a <= 1e150)) return false;
+    double e = vm.yb[nx] * std::fabs(sn) + vm.yb[nx + 1] * std::fabs(cn) +
+               vm.yb[nx + 2] * std::fabs(fz);
+    for (int j = 0; j < nx; ++j) e += vm.yb[j] * std::fabs(X[j]);
+    return e <= 0.2 * a;
+}
+
+// May a ball with friction take the map this step: y' outside the chattering band and of
+// y0's sign at stages 2-4 (the vector's lanes 0-2) by more than their round-off.  The
+// single run and the batch wrote the test with opposite comparisons, which differ only
+// for a NaN state (nan_maps: the single run's, under which a NaN takes the map).
+template <int N, int CASE>
+BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
                         double sn, double cn, double fz, bool nan_maps) {
-    const int nx = sh.nx(), iS = nx, iC = nx + 1, iF = nx + 2;
+    const int nx = sh.nx();
     const double yd0 = X[sh.iyd()];
-    bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
+    const bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
     if (!ok) return false;
+    if (surely_fits(sh, vm, X, sn, cn, fz)) return true;
+    v4 ys = vm.yS * sn + vm.yC * cn + vm.yF * fz;
+    for (int j = 0; j < nx; ++j) ys += vm.yP[j] * X[j];
+    const v4 lhs = ys * yd0;
+    const v4 rhs = 1e-12 * (yd0 * yd0 + vabs(yd0 * (ys - yd0)));
     for (int s3 = 0; s3 < 3; ++s3) {
-        double ys = mp.Yr[s3][iS] * sn + mp.Yr[s3][iC] * cn + mp.Yr[s3][iF] * fz;
-        for (int j = 0; j < nx; ++j) ys += mp.Yr[s3][j] * X[j];
-        const double lhs = ys * yd0;
-        const double rhs = 1e-12 * (yd0 * yd0 + std::fabs(yd0 * (ys - yd0)));
-        if (nan_maps ? lhs <= rhs : !(lhs > rhs)) return false;
+        if (nan_maps ? lhs[s3] <= rhs[s3] : !(lhs[s3] > rhs[s3])) return false;
     }
     return true;
 }
 
-// The increment dX of a mapped step.
+// The increment dX of a mapped step, two rows at a time: (u_i, u_i') and (aux, aux').
+// In the solid and ball bars a mode's rows involve only its own u, u' (the modes are
+// coupled through F_b alone).
 template <int N, int CASE>
-BB_INLINE void map_increment(Shape<N, CASE> sh, const StepMap& mp, const double* X, double sn,
+BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
                              double cn, double fz, double* dX) {
-    const int n = sh.n, nx = sh.nx(), iS = nx, iC = nx + 1, iF = nx + 2;
-    auto row = [&](int a) { return mp.Pd[a][iS] * sn + mp.Pd[a][iC] * cn + mp.Pd[a][iF] * fz; };
-    auto full = [&](int a) {
-        double dj = row(a);
-        for (int q = 0; q < nx; ++q) dj += mp.Pd[a][q] * X[q];
-        return dj;
+    const int n = sh.n, nx = sh.nx();
+    auto full = [&](int pr) {
+        v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + vm.dF[pr] * fz;
+        for (int j = 0; j < nx; ++j) d += vm.dP[pr][j] * X[j];
+        return d;
     };
-    if (sh.diag()) {
-        for (int i = 0; i < n; ++i) {
-            for (int a : {i, n + i})
-                dX[a] = row(a) + mp.Pd[a][i] * X[i] + mp.Pd[a][n + i] * X[n + i];
+    for (int i = 0; i < n; ++i) {
+        v2 d;
+        if (sh.diag()) {
+            d = vm.dS[i] * sn + vm.dC[i] * cn + vm.dF[i] * fz;
+            d += vm.dP[i][i] * X[i];
+            d += vm.dP[i][n + i] * X[n + i];
+        } else {
+            d = full(i);
         }
+        dX[i] = d[0];
+        dX[n + i] = d[1];
+    }
+    if (sh.diag() && !sh.ball()) {
         dX[sh.iy()] = 0.0;
         dX[sh.iyd()] = 0.0;
-        if (sh.ball()) {
-            for (int a = sh.iy(); a < nx; ++a) dX[a] = full(a);
-        }
     } else {
-        for (int a = 0; a < nx; ++a) dX[a] = full(a);
+        const v2 d = full(n);
+        dX[sh.iy()] = d[0];
+        dX[sh.iyd()] = d[1];
     }
 }
 
 // The energy flows of a mapped step: the dashpots' loss (the RK4 weights on the stage
-// velocities squared), the force's work S (Fs . z) + C (Fc . z), and for the ball
-// sum_s b_s F_b y'_s = F_b dy and sum_s b_s psi_d u'_s = psi_d du.
+// velocities squared, stages 2-4 in lanes), the force's work S (Fs . z) + C (Fc . z)
+// (lanes Fs, Fc), and for the ball sum_s b_s F_b y'_s = F_b dy and
+// sum_s b_s psi_d u'_s = psi_d du.
 template <int N, int CASE>
-BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const StepMap& mp, Flows& fl,
+BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
                          const double* X, const double* dX, double sn, double cn, double fz) {
-    const int n = sh.n, nx = sh.nx(), iS = nx, iC = nx + 1, iF = nx + 2;
+    const int n = sh.n, nx = sh.nx();
     double pv = 0.0;
-    for (int i = 0; i < n; ++i) pv += mp.Wv[0][i] * X[n + i] * X[n + i];
+    for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];
     if (sh.tmd()) {
         double rd = X[sh.iyd()];
         for (int i = 0; i < n; ++i) rd -= q.pA[i] * X[n + i];
-        pv += mp.Wv[0][n] * rd * rd;
+        pv += vm.w0[n] * rd * rd;
     }
+    v4 wvv[NV_MAX];  // Wv v^2 of velocity k at stages 2-4
+    for (int i = 0; i < n; ++i) {
+        v4 v = vm.vS[i] * sn + vm.vC[i] * cn + vm.vF[i] * fz;
+        if (sh.diag()) {
+            v += vm.vP[i][i] * X[i] + vm.vP[i][n + i] * X[n + i];
+        } else {
+            for (int j = 0; j < nx; ++j) v += vm.vP[i][j] * X[j];
+        }
+        wvv[i] = vm.wv[i] * v * v;
+    }
+    if (sh.tmd()) {  // the absorber's stroke rate
+        v4 v = vm.vS[n] * sn + vm.vC[n] * cn;
+        for (int j = 0; j < nx; ++j) v += vm.vP[n][j] * X[j];
+        wvv[n] = vm.wv[n] * v * v;
+    }
+    const int nv = sh.tmd() ? n + 1 : n;
     for (int s3 = 0; s3 < 3; ++s3) {
-        for (int i = 0; i < n; ++i) {
-            const double* V = mp.Vr[s3][i];
-            double v = V[iS] * sn + V[iC] * cn + V[iF] * fz;
-            if (sh.diag()) {
-                v += V[i] * X[i] + V[n + i] * X[n + i];
-            } else {
-                for (int j = 0; j < nx; ++j) v += V[j] * X[j];
-            }
-            pv += mp.Wv[s3 + 1][i] * v * v;
-        }
-        if (sh.tmd()) {  // the absorber's stroke rate
-            const double* V = mp.Vr[s3][n];
-            double v = V[iS] * sn + V[iC] * cn;
-            for (int j = 0; j < nx; ++j) v += V[j] * X[j];
-            pv += mp.Wv[s3 + 1][n] * v * v;
-        }
+        for (int k = 0; k < nv; ++k) pv += wvv[k][s3];
     }
-    double ws = mp.Fs[iS] * sn + mp.Fs[iC] * cn + mp.Fs[iF] * fz;
-    double wc = mp.Fc[iS] * sn + mp.Fc[iC] * cn + mp.Fc[iF] * fz;
-    for (int j = 0; j < nx; ++j) {
-        ws += mp.Fs[j] * X[j];
-        wc += mp.Fc[j] * X[j];
-    }
+    v2 w = vm.fS * sn + vm.fC * cn + vm.fF * fz;
+    for (int j = 0; j < nx; ++j) w += vm.fP[j] * X[j];
     fl.d_visc += pv;
-    fl.w_force += sn * ws + cn * wc;
+    fl.w_force += sn * w[0] + cn * w[1];
     if (sh.ball()) {
         fl.d_fric -= fz * dX[sh.iy()];
         double pdu = 0.0;
@@ -412,6 +456,13 @@ struct BatchArgs {
     Arr3 imp, stick, strobe;  // (nb, cap, 3), (nb, cap, 2), (nb, cap, 5)
     Mat met;                  // (nb, MET_SIZE)
 };
+
+#ifdef BB_AVX2_CLONE
+inline bool cpu_has_avx2() {
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+}
+#endif
 
 void run_single(const RunArgs& a);
 void run_batch(const BatchArgs& a);

@@ -22,7 +22,7 @@ namespace {
 // One run of the batch: its parameters, tables, state and running metrics.
 struct Lane {
     Params q;
-    StepMap mp;
+    VecMap mp;
     double X[NX_MAX], Kd[NX_MAX], acc[NX_MAX], dX[NX_MAX];
     double fst[4];
     double sn, cn;  // the forcing phase at the next step's start
@@ -45,8 +45,7 @@ template <int N, int CASE>
 void init_lane(Lane& ln, const BatchArgs& a, idx r, Shape<N, CASE> sh) {
     const double* p = a.P.row(r);
     const int nx = sh.nx();
-    ln.mp = StepMap();
-    build_map(sh.n, p, a.dt, ln.mp);
+    ln.mp = step_map(sh.n, p, a.dt);
     ln.staged = p[L::STAGE_LOOP] != 0.0;
     for (int j = 0; j < nx; ++j) {
         ln.X[j] = a.x(r, j);
