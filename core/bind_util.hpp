@@ -76,8 +76,9 @@ T* checked(const A& a, const char* name, std::initializer_list<std::int64_t> sha
         if (n >= 0 && std::int64_t(a.shape(i)) != n) fail("got shape " + shape_of(a));
         ++i;
     }
+    // an empty array is contiguous whatever its strides (NumPy gives (0, 0) for (0, n))
     std::int64_t step = 1;
-    for (size_t k = a.ndim(); k-- > 0;) {
+    for (size_t k = a.ndim(); k-- > 0 && a.size() > 0;) {
         if (a.shape(k) > 1 && a.stride(k) != step) fail("got a non-contiguous view");
         step *= std::int64_t(a.shape(k));
     }

@@ -1,0 +1,216 @@
+// One RK4 step of the published scheme as an affine map, for steps without a friction
+// switch (docs/model.md, section 5).
+//
+// Under harmonic forcing the equations between impacts are linear with a constant
+// friction force, except that F_b = -F_c sgn(y') is re-evaluated at every stage.  When y'
+// keeps one sign at all four stages, F_b is the same at every stage and the RK4 step is
+// (in exact arithmetic) an affine function of z = [X (2n + 2 values), S, C, F_b], with
+// S = sin(Omega t), C = cos(Omega t) at the step's start.  build_map() pushes the basis
+// vectors of z through the stage recursion once per run and keeps:
+//
+// - Pd (nx, nz): the step's increment, X_new - X = Pd z;
+// - Yr (3, nz): the ball's y' at stages 2-4, to check that F_b did not switch;
+// - Vr (3, n + 1, nz): the velocities viscous damping acts on at stages 2-4 (modal
+//   u_i', and the absorber's stroke rate in row n), Wv (4, n + 1) their weights b_s c_k;
+// - Fs, Fc (nz): the force's work over the step is S (Fs . z) + C (Fc . z).
+//
+// The operations are those of the stage recursion written in kernels/linmap.py, in the
+// same order, so the tables (and every step taken with them) have the same bits.
+#pragma once
+
+#include <cmath>
+
+#include "layout.hpp"
+
+namespace bb::rk4 {
+
+namespace L = layout;
+
+constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2
+constexpr int NZ_MAX = NX_MAX + 3;       // state, S, C, F_b
+constexpr int NV_MAX = L::NMAX + 1;      // damped velocities: the modes and the absorber
+
+struct StepMap {
+    double Pd[NX_MAX][NZ_MAX];
+    double Yr[3][NZ_MAX];
+    double Vr[3][NV_MAX][NZ_MAX];
+    double Wv[4][NV_MAX];
+    double Fs[NZ_MAX];
+    double Fc[NZ_MAX];
+};
+
+// The tables of the step of dt for the first n modes of the packed parameters p.
+inline void build_map(int n, const double* p, double dt, StepMap& mp) {
+    const int kase = int(p[L::CASE]);
+    const bool ball = kase == L::BALL;
+    const bool tmd = kase == L::TMD;
+    const bool has_aux = ball || tmd;
+    const int nx = 2 * n + 2, nz = nx + 3, iy = 2 * n, iyd = 2 * n + 1;
+    const double f0 = p[L::F0], om = p[L::OMEGA], m = p[L::BALL_MASS], sr = p[L::REACTION];
+    const double meff = p[L::M_EFF], ma = p[L::TMD_MASS], ka = p[L::TMD_K], ca = p[L::TMD_C];
+    const double* M = p + L::M_;
+    const double* K = p + L::K_;
+    const double* C = p + L::C_;
+    const double* pL = p + L::PSI_L;
+    const double* pD = p + L::PSI_D;
+    const double* pA = p + L::PSI_A;
+
+    double kappa = m > 0.0 ? 1.0 / m : 0.0;
+    for (int i = 0; i < n; ++i) kappa += pD[i] * (sr * pD[i] / M[i]);
+    // the forcing at the stage times t + c_s dt is F0 (alpha_s S + beta_s C)
+    const double ch = std::cos(om * 0.5 * dt), sh = std::sin(om * 0.5 * dt);
+    const double c1 = std::cos(om * dt), s1 = std::sin(om * dt);
+    const double alpha[4] = {1.0, ch, ch, c1};
+    const double beta[4] = {0.0, sh, sh, s1};
+    const double cst[4] = {0.0, 0.5 * dt, 0.5 * dt, dt};
+    const double wst[4] = {dt / 6.0, dt / 3.0, dt / 3.0, dt / 6.0};
+    for (int s = 0; s < 4; ++s) {
+        for (int i = 0; i < n; ++i) mp.Wv[s][i] = wst[s] * C[i];
+        mp.Wv[s][n] = tmd ? wst[s] * ca : 0.0;
+    }
+
+    double X[NX_MAX], Xs[NX_MAX], Kd[NX_MAX], acc[NX_MAX];
+    for (int col = 0; col < nz; ++col) {  // the response to the basis vector e_col of z
+        for (int j = 0; j < nx; ++j) {
+            X[j] = j == col ? 1.0 : 0.0;
+            Kd[j] = 0.0;
+            acc[j] = 0.0;
+        }
+        const double S = col == nx ? 1.0 : 0.0;
+        const double Cz = col == nx + 1 ? 1.0 : 0.0;
+        const double fb = col == nx + 2 ? 1.0 : 0.0;
+        double fs = 0.0, fc = 0.0;
+        for (int s = 0; s < 4; ++s) {
+            for (int j = 0; j < nx; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
+            const double f = f0 * (alpha[s] * S + beta[s] * Cz);
+            // the derivative as in the stage loop (F_b given), written as linmap.py has it
+            double sfree = 0.0, wd = 0.0;
+            for (int i = 0; i < n; ++i) {
+                const double vi = Xs[n + i];
+                Kd[i] = vi;
+                const double minv = 1.0 / M[i];
+                const double ai = (pL[i] * minv * f - K[i] * minv * Xs[i]) - C[i] * minv * vi;
+                Kd[n + i] = ai;
+                sfree += pD[i] * ai;
+                wd += pL[i] * vi;
+            }
+            double ydd = 0.0, reld = 0.0;
+            if (ball) {
+                for (int i = 0; i < n; ++i) Kd[n + i] -= sr * pD[i] / M[i] * fb;
+                ydd = kappa * fb - sfree;
+            } else if (tmd) {
+                double rel = Xs[iy];
+                reld = Xs[iyd];
+                for (int i = 0; i < n; ++i) {
+                    rel -= pA[i] * Xs[i];
+                    reld -= pA[i] * Xs[n + i];
+                }
+                const double ft = ka * rel + ca * reld;
+                for (int i = 0; i < n; ++i) Kd[n + i] += pA[i] * ft / M[i];
+                ydd = -ft / ma;
+            } else if (kase == L::LOCKED) {
+                for (int i = 0; i < n; ++i) Kd[n + i] -= meff * pD[i] / M[i] * sfree;
+            }
+            Kd[iy] = has_aux ? Xs[iyd] : 0.0;
+            Kd[iyd] = ydd;
+            if (s > 0) {
+                mp.Yr[s - 1][col] = ball ? Xs[iyd] : 0.0;
+                for (int i = 0; i < n; ++i) mp.Vr[s - 1][i][col] = Xs[n + i];
+                mp.Vr[s - 1][n][col] = reld;
+            }
+            for (int j = 0; j < nx; ++j) acc[j] += wst[s] * Kd[j];
+            fs += wst[s] * f0 * alpha[s] * wd;
+            fc += wst[s] * f0 * beta[s] * wd;
+        }
+        for (int j = 0; j < nx; ++j) mp.Pd[j][col] = acc[j];
+        // sum_s b_s f_s W'_s with f_s = F0 (alpha_s S + beta_s C) is S (Fs . z) + C (Fc . z)
+        mp.Fs[col] = fs;
+        mp.Fc[col] = fc;
+    }
+}
+
+// The tables regrouped for the kernels' step: what one step computes for several rows,
+// stages or velocities at once sits side by side in a vector (GCC/Clang vector
+// extensions: SSE2 on any x86-64, the same on other targets), so one vector operation
+// does what several scalar ones did.  Each lane does the scalar code's operations in
+// its order, so the bits are those of the scalar sums.
+typedef double v2 __attribute__((vector_size(16)));
+
+// Four lanes as two native pairs (a 32-byte vector type without AVX went through memory).
+struct v4 {
+    v2 lo, hi;
+    double operator[](int l) const { return l < 2 ? lo[l] : hi[l - 2]; }
+};
+inline __attribute__((always_inline)) v4 operator*(v4 a, double s) { return {a.lo * s, a.hi * s}; }
+inline __attribute__((always_inline)) v4 operator*(double s, v4 a) { return {s * a.lo, s * a.hi}; }
+inline __attribute__((always_inline)) v4 operator*(v4 a, v4 b) { return {a.lo * b.lo, a.hi * b.hi}; }
+inline __attribute__((always_inline)) v4 operator+(v4 a, v4 b) { return {a.lo + b.lo, a.hi + b.hi}; }
+inline __attribute__((always_inline)) v4 operator+(double s, v4 a) { return {s + a.lo, s + a.hi}; }
+inline __attribute__((always_inline)) v4 operator-(v4 a, double s) { return {a.lo - s, a.hi - s}; }
+inline __attribute__((always_inline)) v4& operator+=(v4& a, v4 b) { return a = a + b; }
+
+struct VecMap {
+    // the increment: row pairs (i, n + i) for mode i < n, and (iy, iyd) as pair n
+    v2 dS[NV_MAX], dC[NV_MAX], dF[NV_MAX], dP[NV_MAX][NX_MAX];
+    // y' at stages 2-4 in lanes 0-2 (lane 3 unused)
+    v4 yS, yC, yF, yP[NX_MAX];
+    // bounds of |y'_s - y'_0| over the stages: max_s |Yr[s][c]| per column c of z, with
+    // Yr[s][iyd] - 1 in column iyd (the step's own y')
+    double yb[NZ_MAX];
+    // the damped velocities at stages 2-4 in lanes 0-2: modes k < n, the absorber k = n
+    v4 vS[NV_MAX], vC[NV_MAX], vF[NV_MAX], vP[NV_MAX][NX_MAX];
+    v4 wv[NV_MAX];      // their weights Wv[1 + lane][k]
+    double w0[NV_MAX];  // the weights of the stage-1 velocities, Wv[0][k]
+    // the force's work: lanes (Fs, Fc)
+    v2 fS, fC, fF, fP[NX_MAX];
+};
+
+inline VecMap pack_map(int n, const StepMap& mp) {
+    VecMap vm = {};
+    const int nx = 2 * n + 2, iS = nx, iC = nx + 1, iF = nx + 2;
+    for (int pr = 0; pr <= n; ++pr) {
+        const int a0 = pr < n ? pr : 2 * n, a1 = pr < n ? n + pr : 2 * n + 1;
+        vm.dS[pr] = v2{mp.Pd[a0][iS], mp.Pd[a1][iS]};
+        vm.dC[pr] = v2{mp.Pd[a0][iC], mp.Pd[a1][iC]};
+        vm.dF[pr] = v2{mp.Pd[a0][iF], mp.Pd[a1][iF]};
+        for (int j = 0; j < nx; ++j) vm.dP[pr][j] = v2{mp.Pd[a0][j], mp.Pd[a1][j]};
+    }
+    auto lanes = [](const double* a, const double* b, const double* c) {
+        return v4{v2{*a, *b}, v2{*c, 0.0}};
+    };
+    vm.yS = lanes(&mp.Yr[0][iS], &mp.Yr[1][iS], &mp.Yr[2][iS]);
+    vm.yC = lanes(&mp.Yr[0][iC], &mp.Yr[1][iC], &mp.Yr[2][iC]);
+    vm.yF = lanes(&mp.Yr[0][iF], &mp.Yr[1][iF], &mp.Yr[2][iF]);
+    for (int j = 0; j < nx; ++j) vm.yP[j] = lanes(&mp.Yr[0][j], &mp.Yr[1][j], &mp.Yr[2][j]);
+    for (int c = 0; c < nx + 3; ++c) {
+        double b = 0.0;
+        for (int s3 = 0; s3 < 3; ++s3) {
+            const double y = c == 2 * n + 1 ? mp.Yr[s3][c] - 1.0 : mp.Yr[s3][c];
+            b = std::fmax(b, std::fabs(y));
+        }
+        vm.yb[c] = b;
+    }
+    for (int k = 0; k <= n; ++k) {
+        vm.vS[k] = lanes(&mp.Vr[0][k][iS], &mp.Vr[1][k][iS], &mp.Vr[2][k][iS]);
+        vm.vC[k] = lanes(&mp.Vr[0][k][iC], &mp.Vr[1][k][iC], &mp.Vr[2][k][iC]);
+        vm.vF[k] = lanes(&mp.Vr[0][k][iF], &mp.Vr[1][k][iF], &mp.Vr[2][k][iF]);
+        for (int j = 0; j < nx; ++j)
+            vm.vP[k][j] = lanes(&mp.Vr[0][k][j], &mp.Vr[1][k][j], &mp.Vr[2][k][j]);
+        vm.wv[k] = lanes(&mp.Wv[1][k], &mp.Wv[2][k], &mp.Wv[3][k]);
+        vm.w0[k] = mp.Wv[0][k];
+    }
+    vm.fS = v2{mp.Fs[iS], mp.Fc[iS]};
+    vm.fC = v2{mp.Fs[iC], mp.Fc[iC]};
+    vm.fF = v2{mp.Fs[iF], mp.Fc[iF]};
+    for (int j = 0; j < nx; ++j) vm.fP[j] = v2{mp.Fs[j], mp.Fc[j]};
+    return vm;
+}
+
+// The map of the step of dt for the first n modes of p, packed for the kernels.
+inline VecMap step_map(int n, const double* p, double dt) {
+    StepMap mp;
+    build_map(n, p, dt, mp);
+    return pack_map(n, mp);
+}
+
+}  // namespace bb::rk4

@@ -1,0 +1,312 @@
+// One run of the published RK4 scheme (rk4.hpp): harmonic forcing or a regenerative cut.
+//
+// The step's state and scratch are local arrays of the kernel function and every helper
+// is inlined into it, so nothing of the step goes through memory that the records might
+// alias and, with the mode count a template constant, the state stays in registers.
+// Specialised like the numba kernels it replaces: one per mode count 1, 2, 3 (any case,
+// any forcing), one for the harmonic ball bar with 1 and 2 modes (the published bar and
+// the physical preset: the other bars' and the cut's branches fold away), and one for a
+// run-time mode count.
+#include "rk4.hpp"
+
+namespace bb::rk4 {
+namespace {
+
+// Python's a % b (the sign of b), for a negative history offset.
+inline idx floor_mod(idx a, idx b) {
+    const idx r = a % b;
+    return (r != 0 && ((r < 0) != (b < 0))) ? r + b : r;
+}
+
+// The delayed surface of a regenerative cut (docs/model.md, section 4): the tool meets
+// min_j [j h_m + W(t_s - j tau)] at the stage times t_s = t + c dt, c = 0, 1/2, 1.
+// Node kg of the history is time t_cut + kg dt, counted over every call since the cut
+// began; buf holds the newest nodes circularly.  t_s - j tau is node kg + off[q][j] plus
+// a fixed fraction, interpolated between two stored nodes with fixed weights (the cubic
+// Hermite from W and W', or linear), so each lookup is four multiply-adds.  ptr[j] is the
+// buffer row of node kg + off[0][j], advanced by one each step (no modulo).
+struct Delay {
+    int nrev = 0;
+    idx nbuf = 0;
+    double feed = 0.0, w_before_cut = 0.0;
+    idx off[3][NREV_MAX];
+    double wts[3][NREV_MAX][4];
+    idx ptr[NREV_MAX];
+
+    void init(const double* p, double dt, idx kg0, idx rows) {
+        nrev = int(p[L::N_REV]);
+        nbuf = rows;
+        feed = p[L::FEED];
+        w_before_cut = p[L::HIST_W0];
+        const bool cubic = p[L::INTERP] > 0.0;
+        for (int q = 0; q < 3; ++q) {
+            for (int j = 0; j < nrev; ++j) {
+                const double d = 0.5 * q - double(j + 1) * p[L::TAU] / dt;
+                const double fl = std::floor(d);
+                off[q][j] = idx(fl);
+                const double fr = d - fl;
+                double* w = wts[q][j];
+                if (cubic) {
+                    const double f2 = fr * fr, f3 = f2 * fr;
+                    w[0] = 2.0 * f3 - 3.0 * f2 + 1.0;
+                    w[1] = (f3 - 2.0 * f2 + fr) * dt;
+                    w[2] = -2.0 * f3 + 3.0 * f2;
+                    w[3] = (f3 - f2) * dt;
+                } else {
+                    w[0] = 1.0 - fr;
+                    w[1] = 0.0;
+                    w[2] = fr;
+                    w[3] = 0.0;
+                }
+            }
+        }
+        for (int j = 0; j < nrev; ++j) ptr[j] = floor_mod(kg0 + off[0][j], nbuf);
+    }
+
+    // W(t_s - j tau) at stage time index q of step kg from the history
+    double delayed(const Mat& buf, idx kg, int q, int j) const {
+        const double* w = wts[q][j];
+        const idx a = kg + off[q][j];
+        if (a >= 0) {
+            idx ia = ptr[j] + (off[q][j] - off[0][j]);
+            if (ia >= nbuf) ia -= nbuf;
+            const idx ib = ia + 1 < nbuf ? ia + 1 : 0;
+            return w[0] * buf(ia, 0) + w[1] * buf(ia, 1) + w[2] * buf(ib, 0) + w[3] * buf(ib, 1);
+        }
+        if (a + 1 >= 0)  // between the surface before the cut and node 0
+            return w[0] * w_before_cut + w[2] * buf(0, 0) + w[3] * buf(0, 1);
+        return w_before_cut;
+    }
+
+    // The surface at stages 0, 1 (and 2, the same time) and 3.  Until h first reaches
+    // zero the j = 1 term is the minimum, so the older revolutions are read only after.
+    void surface(const Mat& buf, idx kg, bool all_revs, double* hsurf) const {
+        const int nr_eff = all_revs ? nrev : 1;
+        for (int q = 0; q < 3; ++q) {
+            double hmin = 1e300;
+            for (int j = 0; j < nr_eff; ++j)
+                hmin = Steady::pymin(hmin, double(j + 1) * feed + delayed(buf, kg, q, j));
+            hsurf[q < 2 ? q : 3] = hmin;
+        }
+        hsurf[2] = hsurf[1];
+    }
+
+    void advance() {
+        for (int j = 0; j < nrev; ++j) {
+            ptr[j] += 1;
+            if (ptr[j] == nbuf) ptr[j] = 0;
+        }
+    }
+};
+
+// The regenerative cut's bookkeeping of a step's stages: the chip thickness
+// h = max(0, surface - W) and the force Kr b h.
+struct Cut {
+    double krb;
+    double max_force, first_zero, n_zero;
+    bool cut_zero;  // h = 0 at some stage of this step
+
+    double force(double hmin, double ws, double t_stage) {
+        double hh = hmin - ws;
+        if (hh <= 0.0) {
+            hh = 0.0;
+            if (!cut_zero) {
+                cut_zero = true;
+                if (first_zero < 0.0) first_zero = t_stage;
+            }
+        }
+        const double f = krb * hh;
+        max_force = Steady::pymax(max_force, f);
+        return f;
+    }
+};
+
+template <int N, int CASE, int FORCING>
+BB_INLINE void run_body(const RunArgs& a) {
+    const Params q = unpack(a.p, a.dt);
+    const Shape<N, CASE> sh(q);
+    const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.regen;
+    const int n = sh.n, nx = sh.nx(), iyd = sh.iyd();
+    const bool ball = sh.ball(), has_aux = sh.has_aux();
+    const double t0 = a.t0, dt = a.dt;
+    double* met = a.met.d;
+    const Mat buf = a.buf;
+    const idx nbuf = buf.n0;
+    const idx kg0 = idx(met[L::STEPS_DONE]);  // steps since the cut began
+
+    Delay delay;
+    if (regen) delay.init(a.p, dt, kg0, nbuf);
+    Cut cut{a.p[L::KR_B], met[L::MAX_FORCE], met[L::FIRST_ZERO_T], met[L::N_ZERO_STEPS], false};
+    const bool stop_at_zero = a.p[L::STOP_AT_ZERO] > 0.0;
+    double hsurf[4] = {0.0, 0.0, 0.0, 0.0};
+    idx steps_run = a.n_steps;
+
+    double X[NX_MAX], Xs[NX_MAX], Kd[NX_MAX], acc[NX_MAX], dX[NX_MAX];
+    for (int j = 0; j < nx; ++j) {
+        X[j] = a.x[j];
+        Kd[j] = 0.0;
+    }
+    if (sh.kase == L::LOCKED) X[iyd] = 0.0;
+    double fst[4], cst[4], wst[4];  // forcing at the stages, c_s dt, b_s dt
+    for (int s = 0; s < 4; ++s) {
+        cst[s] = C_FRAC[s] * dt;
+        wst[s] = B_MULT[s] * (dt / 6.0);
+    }
+
+    // the step as an affine map where F_b cannot switch (linmap.hpp)
+    const bool linear = !regen && !q.stage_loop;
+    const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
+    const bool check_fb = ball && q.fc > 0.0;
+    double sn = 0.0, cn = 1.0;
+
+    // streamed metrics in registers, written back at the end; the events' counts and
+    // rows go to met and the records directly (model.hpp)
+    Steady st = Steady::load(met);
+    Flows fl = Flows::load(met);
+    idx n_rec = idx(met[L::N_REC]);
+    idx n_stb = idx(met[L::N_STROBE]);
+    const double t_steady = t0 + double(a.steady_start) * dt;
+    StickState ss;
+
+    TipAux prev = tip_aux(q, sh, X, true);
+    idx wptr = regen ? kg0 % nbuf : 0;  // the row of the newest node
+    if (regen && kg0 == 0) {
+        buf(0, 0) = prev.w;
+        buf(0, 1) = prev.wd;
+    }
+    double t_next = first_strobe(q, t0);
+
+    for (idx k = 0; k < a.n_steps; ++k) {
+        const double t = t0 + double(k) * dt;
+        const double t1 = t0 + double(k + 1) * dt;  // not t + dt: event times in [t0, t_end]
+        if (k % RESYNC == 0) {
+            sn = std::sin(q.om * t);
+            cn = std::cos(q.om * t);
+        }
+        cut.cut_zero = false;
+        if (regen) delay.surface(buf, kg0 + k, cut.first_zero >= 0.0, hsurf);
+        const Phase ph = rotate(sn, cn, q.chh, q.shh);
+        fst[0] = q.f0 * sn;
+        fst[1] = q.f0 * ph.s_h;
+        fst[2] = fst[1];
+        fst[3] = q.f0 * ph.s_1;
+
+        // the step as an affine map if F_b keeps its sign, else the four stages
+        bool use_map = linear;
+        double fz = 0.0;
+        if (linear && check_fb) {
+            fz = map_friction(q, X[iyd]);
+            use_map = map_fits(q, sh, mp, X, sn, cn, fz, true);
+        }
+        if (use_map) {
+            map_increment(sh, mp, X, sn, cn, fz, dX);
+            map_flows(q, sh, mp, fl, X, dX, sn, cn, fz);
+            for (int j = 0; j < nx; ++j) X[j] += dX[j];
+        } else {
+            for (int j = 0; j < nx; ++j) acc[j] = 0.0;
+            for (int s = 0; s < 4; ++s) {
+                for (int j = 0; j < nx; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
+                double f = fst[s];
+                if (regen) {  // f = Kr b h, h = max(0, surface - W(t_s))
+                    double ws = 0.0;
+                    for (int i = 0; i < n; ++i) ws += q.pL[i] * Xs[i];
+                    f = cut.force(hsurf[s], ws, t + C_FRAC[s] * dt);
+                    fst[s] = f;
+                }
+                const StageTerms terms = derivative(q, sh, Xs, f, Kd);
+                for (int j = 0; j < nx; ++j) acc[j] += wst[s] * Kd[j];
+                stage_flows(q, sh, fl, terms, wst[s], f);
+            }
+            for (int j = 0; j < nx; ++j) X[j] += acc[j];
+        }
+        const bool steady = k >= a.steady_start;
+
+        strobe_step(q, sh, X, prev, t, t1, dt, t_next, n_stb, a.strobe);
+        bool contact = false;
+        if (ball)
+            contact = ball_walls(q, sh, X, met, a.imp, a.stick, ss, t, t1, steady, t_steady);
+
+        // streamed metrics
+        prev = tip_aux(q, sh, X, false);
+        if (has_aux) st.max_aux_all = Steady::pymax(st.max_aux_all, std::fabs(prev.aux));
+        if (regen) {
+            wptr += 1;  // the row of node kg + 1
+            if (wptr == nbuf) wptr = 0;
+            buf(wptr, 0) = prev.w;
+            buf(wptr, 1) = prev.wd;
+            delay.advance();
+            if (cut.cut_zero) cut.n_zero += 1;
+        }
+        if (steady) {
+            st.sample(prev.w, prev.aux, fst[3]);
+            if (contact) st.t_contact += dt;
+        }
+        if (a.rec_every > 0 && (k + 1) % a.rec_every == 0 && n_rec < a.rec.n0) {
+            double* row = a.rec.row(n_rec);
+            row[0] = t1;
+            row[1] = prev.w;
+            row[2] = prev.wd;
+            row[3] = prev.aux;
+            row[4] = prev.auxd;
+            row[5] = fst[3];
+            n_rec += 1;
+        }
+        sn = ph.s_1;
+        cn = ph.c_1;
+        if (cut.cut_zero && stop_at_zero) {
+            steps_run = k + 1;
+            break;
+        }
+    }
+
+    // a stick interval still open at the end is closed there
+    if (ss.in_stick)
+        close_stick(met, a.stick, ss.t0, t0 + double(steps_run) * dt, t_steady, q.stick_min);
+    for (int j = 0; j < nx; ++j) a.x[j] = X[j];
+    st.store(met);
+    fl.store(met);
+    met[L::N_REC] = double(n_rec);
+    met[L::N_STROBE] = double(n_stb);
+    met[L::MAX_FORCE] = cut.max_force;
+    met[L::FIRST_ZERO_T] = cut.first_zero;
+    met[L::N_ZERO_STEPS] = cut.n_zero;
+    met[L::STEPS_DONE] += double(steps_run);
+}
+
+template <int N, int CASE, int FORCING>
+void run_base(const RunArgs& a) {
+    run_body<N, CASE, FORCING>(a);
+}
+
+#ifdef BB_AVX2_CLONE
+template <int N, int CASE, int FORCING>
+BB_TARGET_AVX2 void run_avx2(const RunArgs& a) {
+    run_body<N, CASE, FORCING>(a);
+}
+#endif
+
+template <int N, int CASE, int FORCING>
+void run(const RunArgs& a) {
+#ifdef BB_AVX2_CLONE
+    if (cpu_has_avx2()) return run_avx2<N, CASE, FORCING>(a);
+#endif
+    run_base<N, CASE, FORCING>(a);
+}
+
+}  // namespace
+
+void run_single(const RunArgs& a) {
+    const int n = int(a.p[L::N_MODES]);
+    const bool ball_harmonic =
+        int(a.p[L::CASE]) == L::BALL && int(a.p[L::FORCING]) == L::HARMONIC;
+    if (ball_harmonic && n == 1) return run<1, L::BALL, L::HARMONIC>(a);
+    if (ball_harmonic && n == 2) return run<2, L::BALL, L::HARMONIC>(a);
+    switch (n) {
+        case 1: return run<1, -1, -1>(a);
+        case 2: return run<2, -1, -1>(a);
+        case 3: return run<3, -1, -1>(a);
+        default: return run<0, -1, -1>(a);
+    }
+}
+
+}  // namespace bb::rk4

@@ -1,0 +1,470 @@
+// The published scheme: classical RK4 at a fixed step, impacts at step ends
+// (docs/model.md, sections 2 and 5).  Per step:
+//
+// 1. four RK4 stages of the smooth equations, with F_b = -F_c sgn(y') (sgn(0) = 0) and
+//    the forcing evaluated at every stage; or, under harmonic forcing when y' keeps one
+//    sign at all four stages, the same step as one affine map (linmap.hpp);
+// 2. the wall rule at the step's end (model.hpp);
+// 3. the streamed metrics (RMS, impacts, contact and stick, energy flows).
+//
+// The state is X = [u_1..u_n, u_1'..u_n', aux, aux'], aux the ball's relative
+// displacement y (BALL, LOCKED) or the absorber's displacement x_a (TMD).
+//
+// This header holds what the single run (rk4.cpp) and the lock-step batch
+// (rk4_batch.cpp) share, each rule written once: the parameters unpacked from p, the
+// stage derivative and its energy flows, the map step, the strobe, the walls and the
+// streamed metrics.  Both kernels call these with the same arguments in the same order,
+// so a run of a batch is the single run bit for bit.  The helpers are force-inlined:
+// with the mode count a compile-time constant their loops unroll and the step's state
+// stays in registers.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "arrays.hpp"
+#include "layout.hpp"
+#include "linmap.hpp"
+#include "model.hpp"
+
+#define BB_INLINE inline __attribute__((always_inline))
+
+// On x86-64 the kernels are compiled twice, for the baseline ISA (SSE2) and for AVX2,
+// chosen at run time: the same IEEE operations in the same order, so the same bits on
+// every CPU (FMA, which would round differently, is not enabled; -ffp-contract=off).
+// AVX2 gives the vector arithmetic (VecMap) 4 lanes, 3-operand instructions and more
+// registers.
+#if defined(__x86_64__) && defined(__GNUC__)
+#define BB_AVX2_CLONE 1
+#define BB_TARGET_AVX2 __attribute__((target("avx2")))
+#endif
+
+namespace bb::rk4 {
+
+// most past revolutions in the chip-thickness minimum
+constexpr int NREV_MAX = 50;
+// the forcing phase is rotated step by step and recomputed exactly this often
+constexpr int RESYNC = 256;
+// most runs in one batch, and the batch sizes callers use (simulate_batch pads to one)
+constexpr int BMAX = 16;
+constexpr int LANES[] = {4, 8, 16};
+
+// The stage times and weights of classical RK4 as fractions of dt.
+constexpr double C_FRAC[4] = {0.0, 0.5, 0.5, 1.0};
+constexpr double B_MULT[4] = {1.0, 2.0, 2.0, 1.0};
+
+// Everything a run reads from p, unpacked once, with the premultiplied modal constants
+// of the stage derivative: a_i = fm f - km u - cm v (- dm F_b for the ball).
+struct Params {
+    int n = 0, kase = 0;
+    bool regen = false, stage_loop = false;
+    double C[L::NMAX], pL[L::NMAX], pD[L::NMAX], pA[L::NMAX], invM[L::NMAX];
+    double fm[L::NMAX], km[L::NMAX], cm[L::NMAX], dm[L::NMAX], lm[L::NMAX];
+    double kappa;  // 1/m + sum psi_d dm: y'' = kappa F_b - sum psi_d a_free
+    double f0, om, half, e, fc, sr, meff, vimp, stick_min, vstick, ma, ka, ca;
+    double tstrobe, strobe_t0;
+    double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
+};
+
+inline Params unpack(const double* p, double dt) {
+    Params q;
+    q.n = int(p[L::N_MODES]);
+    q.kase = int(p[L::CASE]);
+    q.regen = int(p[L::FORCING]) == L::REGENERATIVE;
+    q.stage_loop = p[L::STAGE_LOOP] != 0.0;
+    q.f0 = p[L::F0];
+    q.om = p[L::OMEGA];
+    q.half = p[L::HALF_GAP];
+    q.e = p[L::RESTITUTION];
+    q.fc = p[L::FRICTION];
+    q.sr = p[L::REACTION];
+    q.meff = p[L::M_EFF];
+    q.vimp = p[L::V_IMPACT];
+    q.stick_min = p[L::STICK_MIN];
+    q.vstick = p[L::V_STICK];
+    q.ma = p[L::TMD_MASS];
+    q.ka = p[L::TMD_K];
+    q.ca = p[L::TMD_C];
+    q.tstrobe = p[L::STROBE_PERIOD];
+    q.strobe_t0 = p[L::STROBE_T0];
+    const double m = p[L::BALL_MASS];
+    q.kappa = m > 0.0 ? 1.0 / m : 0.0;
+    for (int i = 0; i < q.n; ++i) {
+        q.invM[i] = 1.0 / p[L::M_ + i];
+        q.C[i] = p[L::C_ + i];
+        q.pL[i] = p[L::PSI_L + i];
+        q.pD[i] = p[L::PSI_D + i];
+        q.pA[i] = p[L::PSI_A + i];
+        q.fm[i] = q.pL[i] * q.invM[i];
+        q.km[i] = p[L::K_ + i] * q.invM[i];
+        q.cm[i] = q.C[i] * q.invM[i];
+        q.dm[i] = q.sr * q.pD[i] * q.invM[i];
+        q.lm[i] = q.meff * q.pD[i] * q.invM[i];
+        q.kappa += q.pD[i] * q.dm[i];
+    }
+    q.chh = std::cos(q.om * 0.5 * dt);
+    q.shh = std::sin(q.om * 0.5 * dt);
+    return q;
+}
+
+// The mode count and the case of a kernel: compile-time constants where the kernel is
+// specialised (N > 0, CASE >= 0), else the run's.
+template <int N, int CASE>
+struct Shape {
+    int n, kase;
+    explicit Shape(const Params& q) : n(N > 0 ? N : q.n), kase(CASE >= 0 ? CASE : q.kase) {}
+    int nx() const { return 2 * n + 2; }
+    int iy() const { return 2 * n; }
+    int iyd() const { return 2 * n + 1; }
+    bool ball() const { return kase == L::BALL; }
+    bool tmd() const { return kase == L::TMD; }
+    bool has_aux() const { return kase == L::BALL || kase == L::TMD; }
+    // in the solid and ball bars a mode's rows of the map involve only its own u, u'
+    bool diag() const { return kase == L::SOLID || kase == L::BALL; }
+};
+
+// sin, cos of the forcing phase at the half step and the full step from (sn, cn)
+struct Phase {
+    double s_h, c_h, s_1, c_1;
+};
+
+BB_INLINE Phase rotate(double sn, double cn, double chh, double shh) {
+    Phase r;
+    r.s_h = sn * chh + cn * shh;
+    r.c_h = cn * chh - sn * shh;
+    r.s_1 = r.s_h * chh + r.c_h * shh;
+    r.c_1 = r.c_h * chh - r.s_h * shh;
+    return r;
+}
+
+// What a stage's energy flows need besides the derivative.
+struct StageTerms {
+    double wd;     // W' = sum psi_L u'
+    double pvisc;  // sum c v^2 of the dashpots
+    double fb;     // friction force on the ball
+    double yds;    // ball's y'
+    double pdv;    // sum psi_d u'
+};
+
+// The stage derivative Kd at the stage state Xs under the force f at the tip: the bar
+// M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f with the damper's terms (docs/model.md, 2),
+// written with premultiplied constants and the stage velocity last, so that little of
+// it waits on the previous stage.
+template <int N, int CASE>
+BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
+                                double* Kd) {
+    const int n = sh.n, iy = sh.iy(), iyd = sh.iyd();
+    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0};
+    double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
+    for (int i = 0; i < n; ++i) {
+        const double vi = Xs[n + i];
+        Kd[i] = vi;
+        const double ai = (q.fm[i] * f - q.km[i] * Xs[i]) - q.cm[i] * vi;
+        Kd[n + i] = ai;
+        sfree += q.pD[i] * ai;
+        t.wd += q.pL[i] * vi;
+        t.pvisc += q.C[i] * vi * vi;
+    }
+    double ydd = 0.0;
+    if (sh.ball()) {
+        const double yds = Xs[iyd];
+        // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), as selects: y' changes sign from stage
+        // to stage while the ball sticks, where branches would be mispredicted
+        double fb = yds > 0.0 ? -q.fc : 0.0;
+        fb = yds < 0.0 ? q.fc : fb;
+        double pdv = 0.0;
+        for (int i = 0; i < n; ++i) {
+            // the reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
+            Kd[n + i] -= q.dm[i] * fb;
+            pdv += q.pD[i] * Xs[n + i];
+        }
+        ydd = q.kappa * fb - sfree;
+        t.fb = fb;
+        t.yds = yds;
+        t.pdv = pdv;
+    } else if (sh.tmd()) {
+        double rel = Xs[iy], reld = Xs[iyd];
+        for (int i = 0; i < n; ++i) {
+            rel -= q.pA[i] * Xs[i];
+            reld -= q.pA[i] * Xs[n + i];
+        }
+        const double ft = q.ka * rel + q.ca * reld;
+        for (int i = 0; i < n; ++i) Kd[n + i] += q.pA[i] * ft * q.invM[i];
+        ydd = -ft / q.ma;
+        t.pvisc += q.ca * reld * reld;
+    } else if (sh.kase == L::LOCKED) {
+        // the force that carries the ball with the bar, m_eff sum psi_d a_free, acts on
+        // mode i with psi_d,i
+        for (int i = 0; i < n; ++i) Kd[n + i] -= q.lm[i] * sfree;
+    }
+    Kd[iy] = sh.has_aux() ? Xs[iyd] : 0.0;
+    Kd[iyd] = ydd;
+    return t;
+}
+
+// A stage's energy flows with the RK4 weight w_s: friction, the non-reciprocal reaction's
+// work, the force's work and the dashpots' loss.
+template <int N, int CASE>
+BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const StageTerms& s,
+                           double w_s, double f) {
+    if (sh.ball()) {
+        fl.d_fric -= w_s * s.fb * s.yds;
+        fl.w_nr += w_s * (1.0 - q.sr) * s.fb * s.pdv;
+    }
+    fl.w_force += w_s * f * s.wd;
+    fl.d_visc += w_s * s.pvisc;
+}
+
+// |v| lane by lane (the sign bit cleared, as fabs)
+BB_INLINE v2 vabs(v2 v) {
+    typedef long long i2 __attribute__((vector_size(16)));
+    const i2 mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL};
+    return (v2)((i2)v & mask);
+}
+BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
+
+// F_b of a mapped step: the sign y' has at the step's start.
+BB_INLINE double map_friction(const Params& q, double yd0) { return yd0 > 0.0 ? -q.fc : q.fc; }
+
+// A cheap sufficient condition for map_fits' stage test: with
+// E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
+// in exact arithmetic, E <= 0.2 |y'_0| puts every computed y'_s within |y'_0| / 4 of
+// y'_0 (the sums' rounding is below 1e-14 of their terms), so ys y'_0 >= 0.75 y'_0^2,
+// far above 1e-12 (y'_0^2 + |y'_0 (ys - y'_0)|) <= 1.3e-12 y'_0^2: the test passes for
+// every stage, as the full computation would find.  The limits on |y'_0| keep y'_0^2
+// normal and finite; a NaN or infinite state fails the comparison and takes the full
+// test, so the decision is always the full test's.
+template <int N, int CASE>
+BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
+                           double cn, double fz) {
+    const int nx = sh.nx();
+    const double a = std::fabs(X[sh.iyd()]);
+    if (!(a >= 1e-150 && a <= 1e150)) return false;
+    double e = vm.yb[nx] * std::fabs(sn) + vm.yb[nx + 1] * std::fabs(cn) +
+               vm.yb[nx + 2] * std::fabs(fz);
+    for (int j = 0; j < nx; ++j) e += vm.yb[j] * std::fabs(X[j]);
+    return e <= 0.2 * a;
+}
+
+// May a ball with friction take the map this step: y' outside the chattering band and of
+// y0's sign at stages 2-4 (the vector's lanes 0-2) by more than their round-off.  The
+// single run and the batch wrote the test with opposite comparisons, which differ only
+// for a NaN state (nan_maps: the single run's, under which a NaN takes the map).
+template <int N, int CASE>
+BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
+                        double sn, double cn, double fz, bool nan_maps) {
+    const int nx = sh.nx();
+    const double yd0 = X[sh.iyd()];
+    const bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
+    if (!ok) return false;
+    if (surely_fits(sh, vm, X, sn, cn, fz)) return true;
+    v4 ys = vm.yS * sn + vm.yC * cn + vm.yF * fz;
+    for (int j = 0; j < nx; ++j) ys += vm.yP[j] * X[j];
+    const v4 lhs = ys * yd0;
+    const v4 rhs = 1e-12 * (yd0 * yd0 + vabs(yd0 * (ys - yd0)));
+    for (int s3 = 0; s3 < 3; ++s3) {
+        if (nan_maps ? lhs[s3] <= rhs[s3] : !(lhs[s3] > rhs[s3])) return false;
+    }
+    return true;
+}
+
+// The increment dX of a mapped step, two rows at a time: (u_i, u_i') and (aux, aux').
+// In the solid and ball bars a mode's rows involve only its own u, u' (the modes are
+// coupled through F_b alone).
+template <int N, int CASE>
+BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
+                             double cn, double fz, double* dX) {
+    const int n = sh.n, nx = sh.nx();
+    auto full = [&](int pr) {
+        v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + vm.dF[pr] * fz;
+        for (int j = 0; j < nx; ++j) d += vm.dP[pr][j] * X[j];
+        return d;
+    };
+    for (int i = 0; i < n; ++i) {
+        v2 d;
+        if (sh.diag()) {
+            d = vm.dS[i] * sn + vm.dC[i] * cn + vm.dF[i] * fz;
+            d += vm.dP[i][i] * X[i];
+            d += vm.dP[i][n + i] * X[n + i];
+        } else {
+            d = full(i);
+        }
+        dX[i] = d[0];
+        dX[n + i] = d[1];
+    }
+    if (sh.diag() && !sh.ball()) {
+        dX[sh.iy()] = 0.0;
+        dX[sh.iyd()] = 0.0;
+    } else {
+        const v2 d = full(n);
+        dX[sh.iy()] = d[0];
+        dX[sh.iyd()] = d[1];
+    }
+}
+
+// The energy flows of a mapped step: the dashpots' loss (the RK4 weights on the stage
+// velocities squared, stages 2-4 in lanes), the force's work S (Fs . z) + C (Fc . z)
+// (lanes Fs, Fc), and for the ball sum_s b_s F_b y'_s = F_b dy and
+// sum_s b_s psi_d u'_s = psi_d du.
+template <int N, int CASE>
+BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
+                         const double* X, const double* dX, double sn, double cn, double fz) {
+    const int n = sh.n, nx = sh.nx();
+    double pv = 0.0;
+    for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];
+    if (sh.tmd()) {
+        double rd = X[sh.iyd()];
+        for (int i = 0; i < n; ++i) rd -= q.pA[i] * X[n + i];
+        pv += vm.w0[n] * rd * rd;
+    }
+    v4 wvv[NV_MAX];  // Wv v^2 of velocity k at stages 2-4
+    for (int i = 0; i < n; ++i) {
+        v4 v = vm.vS[i] * sn + vm.vC[i] * cn + vm.vF[i] * fz;
+        if (sh.diag()) {
+            v += vm.vP[i][i] * X[i] + vm.vP[i][n + i] * X[n + i];
+        } else {
+            for (int j = 0; j < nx; ++j) v += vm.vP[i][j] * X[j];
+        }
+        wvv[i] = vm.wv[i] * v * v;
+    }
+    if (sh.tmd()) {  // the absorber's stroke rate
+        v4 v = vm.vS[n] * sn + vm.vC[n] * cn;
+        for (int j = 0; j < nx; ++j) v += vm.vP[n][j] * X[j];
+        wvv[n] = vm.wv[n] * v * v;
+    }
+    const int nv = sh.tmd() ? n + 1 : n;
+    for (int s3 = 0; s3 < 3; ++s3) {
+        for (int k = 0; k < nv; ++k) pv += wvv[k][s3];
+    }
+    v2 w = vm.fS * sn + vm.fC * cn + vm.fF * fz;
+    for (int j = 0; j < nx; ++j) w += vm.fP[j] * X[j];
+    fl.d_visc += pv;
+    fl.w_force += sn * w[0] + cn * w[1];
+    if (sh.ball()) {
+        fl.d_fric -= fz * dX[sh.iy()];
+        double pdu = 0.0;
+        for (int i = 0; i < n; ++i) pdu += q.pD[i] * dX[i];
+        fl.w_nr += (1.0 - q.sr) * fz * pdu;
+    }
+}
+
+// The tip's W, W' and the auxiliary coordinate: the ball's y or the absorber's stroke
+// x_a - psi_a u.  aux_always: the stroke even for the solid and locked bars (X's own aux
+// slot, as the strobe and the run's first values read it); else 0 there.
+struct TipAux {
+    double w, wd, aux, auxd;
+};
+
+template <int N, int CASE>
+BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bool aux_always) {
+    const int n = sh.n;
+    TipAux a{0.0, 0.0, 0.0, 0.0};
+    for (int i = 0; i < n; ++i) {
+        a.w += q.pL[i] * X[i];
+        a.wd += q.pL[i] * X[n + i];
+    }
+    if (aux_always || sh.has_aux()) {
+        a.aux = X[sh.iy()];
+        a.auxd = X[sh.iyd()];
+        if (sh.tmd()) {
+            for (int i = 0; i < n; ++i) {
+                a.aux -= q.pA[i] * X[i];
+                a.auxd -= q.pA[i] * X[n + i];
+            }
+        }
+    }
+    return a;
+}
+
+// numba converts math.ceil's result to int64 before multiplying (x86: out of range or
+// NaN converts to INT64_MIN); here the same value, without undefined behaviour.
+inline double ceil_int64(double v) {
+    const double c = std::ceil(v);
+    const double lim = 9223372036854775808.0;  // 2^63
+    return (c >= -lim && c < lim) ? c : -lim;
+}
+
+// The first strobe time at or after t0.
+inline double first_strobe(const Params& q, double t0) {
+    double t_next = 0.0;
+    if (q.tstrobe > 0.0) {
+        t_next = q.strobe_t0;
+        if (t_next < t0) t_next += ceil_int64((t0 - t_next) / q.tstrobe) * q.tstrobe;
+    }
+    return t_next;
+}
+
+// A Poincare strobe sample due in the step [t, t1]: W, W' by the cubic Hermite, aux, aux'
+// linearly, from the step's start values prev and the end state X (model.hpp).
+template <int N, int CASE>
+BB_INLINE void strobe_step(const Params& q, Shape<N, CASE> sh, const double* X,
+                           const TipAux& prev, double t, double t1, double dt, double& t_next,
+                           idx& n_stb, Mat strobe) {
+    if (q.tstrobe > 0.0 && t_next <= t1) {
+        if (t_next > t && n_stb < strobe.n0) {
+            const TipAux a = tip_aux(q, sh, X, true);
+            strobe_row(strobe.row(n_stb), t_next, t, dt, prev.w, prev.wd, a.w, a.wd, prev.aux,
+                       prev.auxd, a.aux, a.auxd);
+            n_stb += 1;
+        }
+        t_next = t_next + q.tstrobe;
+    }
+}
+
+// The ball's walls at the step's end t1 (model.hpp's wall rule; the modes jump by
+// g psi_d,i / M_i) and the stick bookkeeping.  Returns whether the ball is in contact
+// (on a wall at rest, or a sub-threshold impact).
+template <int N, int CASE>
+BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double* met, Mat imp,
+                          Mat stick, StickState& ss, double t, double t1, bool steady,
+                          double t_steady) {
+    const int n = sh.n, iy = sh.iy(), iyd = sh.iyd();
+    const WallResult w = wall_rule(met, imp, X[iy], X[iyd], t1, steady, q.half, q.e, q.meff,
+                                   q.vimp);
+    X[iy] = w.y;
+    X[iyd] = w.yd;
+    if (w.outcome == IMPACT || w.outcome == MICRO_IMPACT) {
+        for (int i = 0; i < n; ++i) X[n + i] += w.g * q.pD[i] * q.invM[i];
+    }
+    const bool contact = w.outcome == MICRO_IMPACT || w.outcome == ON_WALL;
+    // stuck: off the walls with |y'| inside the band where the sgn() law chatters
+    // (V_STICK = V_IMPACT + 2 F_c dt / m_eff)
+    const bool stuck = q.fc > 0.0 && !contact && std::fabs(X[iyd]) < q.vstick;
+    stick_step(stuck, ss, t, t1, met, stick, t_steady, q.stick_min);
+    return contact;
+}
+
+// ---- the kernels (rk4.cpp, rk4_batch.cpp) ---------------------------------------------
+
+// One run's arguments, as numba's run_rk4 takes them (checked by bind_rk4.cpp).
+struct RunArgs {
+    const double* p;
+    Vec x;
+    double t0, dt;
+    idx n_steps, steady_start, rec_every;
+    Mat rec, imp, stick, strobe;
+    Vec met;
+    Mat buf;  // the regenerative delay history (nbuf, 2); may be empty for harmonic runs
+};
+
+// A batch's arguments, as numba's run_rk4_batch takes them.
+struct BatchArgs {
+    Mat P;  // (nb, P_SIZE)
+    Mat x;  // (nb, 2n + 2)
+    double t0, dt;
+    idx n_steps, steady_start;
+    Arr3 imp, stick, strobe;  // (nb, cap, 3), (nb, cap, 2), (nb, cap, 5)
+    Mat met;                  // (nb, MET_SIZE)
+};
+
+#ifdef BB_AVX2_CLONE
+inline bool cpu_has_avx2() {
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+}
+#endif
+
+void run_single(const RunArgs& a);
+void run_batch(const BatchArgs& a);
+
+}  // namespace bb::rk4
