@@ -1,0 +1,307 @@
+// boringbar._core.run_exact: the exact event-driven integrator's entry point (numba:
+// kernels/exact/driver.py, run_exact and its kernels).  Everything from Python is checked
+// here, before the GIL is released: every array's dtype, shape, contiguity and (outputs)
+// writability, every scalar's finiteness and range, and what the kernel indexes with (the
+// case, the mode count, prepare's regime count and step patterns, the record counters), so
+// that no input can make the core read or write out of bounds; a wrong one is a ValueError
+// that names it.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "bind_util.hpp"
+#include "exact/consts.hpp"
+#include "exact/driver.hpp"
+#include "layout.hpp"
+
+namespace bb::bind {
+
+namespace {
+
+namespace L = bb::layout;
+using exact::GRID_LEVELS;
+
+// Largest counts the checks let through: beyond them a float-to-integer conversion of the
+// kernel (a record counter, a step index) could overflow, or a loop could not progress.
+constexpr double MAX_COUNT = 9007199254740992.0;  // 2^53: integers exact in a double
+constexpr double MAX_STEPS = 1e15;                // steps of dt, H or the strobe in a run
+constexpr double MAX_GRID = 1e13;                 // grid steps of h in a run
+constexpr double MAX_KNOTS = 1e8;                 // knots a cut's history starts with
+constexpr double MAX_REV = 1e6;                   // revolutions in a cut's minimum
+constexpr double MAX_TIME_PER_TAU = 1e12;         // |t0| + |t_end| in delays tau
+
+// The arrays handed to the kernel, held until it returns (a dict's entry could otherwise be
+// dropped by another thread while the GIL is released)
+struct Held {
+    std::vector<In> arrays;
+
+    Held() { arrays.reserve(32); }  // no reallocation: array_of's reference stays valid
+
+    // obj as an array of any dtype (not converted: an output must be the caller's memory)
+    const In& array_of(nb::handle obj, const char* name) {
+        In a;
+        require(nb::try_cast(obj, a, false),
+                "'" + std::string(name) + "' must be a NumPy array (CPU, buffer protocol)");
+        arrays.push_back(a);
+        return arrays.back();
+    }
+
+    // obj as a writable array (an output)
+    const In& output_of(nb::handle obj, const char* name) {
+        Out w;
+        require(nb::try_cast(obj, w, false), "array '" + std::string(name) + "' must be writable");
+        return array_of(obj, name);
+    }
+};
+
+// A record array (rows of ncol floats) that may be empty: NumPy gives a zero-size array the
+// strides (0, 0), which bind_util's contiguity test would refuse; no row of it is ever
+// touched, so its dtype and shape are all that matter.
+Mat record_rows(const In& a, const char* name, idx ncol) {
+    if (a.size() == 0 && a.ndim() == 2 && a.dtype() == nb::dtype<double>() &&
+        idx(a.shape(1)) == ncol) {
+        return {nullptr, 0, ncol};
+    }
+    return span2<double>(a, name, -1, ncol);
+}
+
+// obj as a float (a Python number)
+double scalar(nb::handle obj, const char* name) {
+    double v;
+    require(nb::try_cast(obj, v), "'" + std::string(name) + "' must be a number");
+    return v;
+}
+
+template <class T>
+bool all_finite(const T* d, idx count) {
+    for (idx i = 0; i < count; ++i) {
+        if (!std::isfinite(d[i])) return false;
+    }
+    return true;
+}
+
+template <>
+bool all_finite(const cplx* d, idx count) {
+    for (idx i = 0; i < count; ++i) {
+        if (!std::isfinite(d[i].real()) || !std::isfinite(d[i].imag())) return false;
+    }
+    return true;
+}
+
+void require_finite(bool ok, const std::string& name) {
+    require(ok, "array '" + name + "' must hold finite numbers only");
+}
+
+inline idx count(const Span1<double>& v) { return v.n; }
+template <class T> idx count(const Span2<T>& v) { return v.n0 * v.n1; }
+template <class T> idx count(const Span3<T>& v) { return v.n0 * v.n1 * v.n2; }
+template <class T> idx count(const Span4<T>& v) { return v.n0 * v.n1 * v.n2 * v.n3; }
+
+// a view whose entries must all be finite
+template <class S>
+S finite_view(S v, const char* name) {
+    require_finite(all_finite(v.d, count(v)), name);
+    return v;
+}
+
+bool is_int(double v, double lo, double hi) {
+    return std::isfinite(v) && v == std::floor(v) && v >= lo && v <= hi;
+}
+
+// prepare(p)'s entry ``key``
+nb::handle prep_entry(nb::dict prep, const char* key) {
+    require(prep.contains(key), std::string("prep has no entry '") + key + "'");
+    return prep[key];
+}
+
+// The parameter vector's scalars that decide shapes and loops.
+struct Shape {
+    idx n, kase, nz, nb, nreg, R;
+    bool regen;
+};
+
+Shape check_params(Vec p) {
+    finite_view(p, "p");
+    double nm = p[L::N_MODES];
+    require(is_int(nm, 1, L::NMAX),
+            "p[N_MODES] = " + std::to_string(nm) + " must be an integer in [1, " +
+                std::to_string(L::NMAX) + "]");
+    require(is_int(p[L::CASE], 0, 3), "p[CASE] must be SOLID, BALL, TMD or LOCKED (0-3)");
+    require(is_int(p[L::FORCING], 0, 1), "p[FORCING] must be HARMONIC or REGENERATIVE (0, 1)");
+    Shape s;
+    s.n = idx(nm);
+    s.kase = idx(p[L::CASE]);
+    s.regen = int(p[L::FORCING]) == L::REGENERATIVE;
+    s.nz = s.kase == L::TMD ? 2 * s.n + 2 : 2 * s.n;
+    s.nb = s.nz + 3;
+    s.nreg = s.kase == L::BALL ? 3 : 1;
+    s.R = s.regen ? 2 * s.nreg : s.nreg;
+    for (idx i = 0; i < s.n; ++i) {
+        require(p[L::M_ + i] > 0.0, "p[M_ + " + std::to_string(i) + "] (a modal mass) must be > 0");
+    }
+    if (s.kase == L::BALL) {
+        require(p[L::HALF_GAP] > 0.0, "p[HALF_GAP] must be > 0 for a ball damper");
+        require(p[L::BALL_MASS] >= 0.0, "p[BALL_MASS] must be >= 0");
+    }
+    require(p[L::STROBE_PERIOD] >= 0.0, "p[STROBE_PERIOD] must be >= 0");
+    return s;
+}
+
+// A cut's delay: the revolutions and the history step must give a bounded knot store.
+void check_cut(Vec p, double t0, double t_end, double dt, double H) {
+    require(std::isfinite(dt) && dt > 0.0, "a regenerative cut needs dt > 0 (got " +
+                                               std::to_string(dt) + ")");
+    require(std::isfinite(H) && H > 0.0, "a regenerative cut needs H > 0 (got " +
+                                             std::to_string(H) + ")");
+    double tau = p[L::TAU];
+    require(tau > 0.0, "p[TAU] must be > 0 in a regenerative cut");
+    require(is_int(p[L::N_REV], 1, MAX_REV), "p[N_REV] must be an integer in [1, 1e6]");
+    // at least two nodes a revolution (history_step's H): the surface's knots then always
+    // have a successor in the store
+    double mrev = std::nearbyint(tau / H);
+    require(mrev >= 2.0 && p[L::N_REV] * mrev <= MAX_KNOTS,
+            "p[TAU] / H must round to at least 2 nodes a revolution (H = history_step(tau, "
+            "dt)), and p[N_REV] times it to at most 1e8 knots");
+    // times closer than ttol are one: it must stay far below the delay
+    require(std::fabs(t0) + std::fabs(t_end) <= MAX_TIME_PER_TAU * tau,
+            "the run's times are too large for the delay p[TAU] (over 1e12 revolutions)");
+    require((t_end - t0) / dt <= MAX_STEPS && (t_end - t0) / H <= MAX_STEPS,
+            "the run spans more than 1e15 steps of dt or H");
+}
+
+void check_strobe(Vec p, double t0, double t_end) {
+    double period = p[L::STROBE_PERIOD];
+    if (period <= 0.0) return;
+    double span = std::fabs(t0) + std::fabs(t_end) + std::fabs(p[L::STROBE_T0]);
+    require(span / period <= MAX_STEPS,
+            "p[STROBE_PERIOD] is too short for the run's times (more than 1e15 periods)");
+}
+
+// met's counters become row indices and counts: whole numbers in [0, 2^53]
+void check_met(Vec met) {
+    for (int k : {L::N_REC, L::N_STROBE, L::N_IMP_REC, L::N_STICK_REC, L::N_EVENTS}) {
+        require(is_int(met[k], 0, MAX_COUNT),
+                "met's counters (N_REC, N_STROBE, N_IMP_REC, N_STICK_REC, N_EVENTS) must be "
+                "whole numbers in [0, 2^53]");
+    }
+}
+
+// Integer per-regime arrays: kstep in {1, 2}, levmax in [0, GRID_LEVELS)
+void check_steps(Span1<idx> kstep, Span1<idx> levmax) {
+    for (idx r = 0; r < kstep.n; ++r) {
+        require(kstep[r] == 1 || kstep[r] == 2, "prep['kstep'] entries must be 1 or 2");
+        require(levmax[r] >= 0 && levmax[r] < GRID_LEVELS,
+                "prep['levmax'] entries must be in [0, " + std::to_string(GRID_LEVELS - 1) + "]");
+    }
+}
+
+// prepare's dict as the kernel's views, with the shapes this bar and forcing need
+void attach_prep(exact::ExactRun& a, Held& held, nb::dict prep, const Shape& s, double t0,
+                 double t_end) {
+    const idx R = s.R, nz = s.nz, nb = s.nb;
+    idx nreg = -1;
+    require(nb::try_cast(prep_entry(prep, "nreg"), nreg) && nreg == s.nreg,
+            "prep['nreg'] must be the integer " + std::to_string(s.nreg) + " for this bar");
+    a.nreg = s.nreg;
+    a.h = scalar(prep_entry(prep, "h"), "prep['h']");
+    require(std::isfinite(a.h) && a.h > 0.0, "prep['h'] must be finite and > 0");
+    require((t_end - t0) / a.h <= MAX_GRID, "the run spans more than 1e13 grid steps prep['h']");
+    auto arr = [&](const char* key) -> const In& {
+        return held.array_of(prep_entry(prep, key), key);
+    };
+    a.lam = finite_view(span2<cplx>(arr("lam"), "lam", R, nz), "lam");
+    a.V = finite_view(span3<cplx>(arr("Vh"), "Vh", R, nz, nz), "Vh");
+    a.Vi = finite_view(span3<cplx>(arr("Vi"), "Vi", R, nz, nz), "Vi");
+    a.Vfull = finite_view(span3<cplx>(arr("V"), "V", R, nz, nz), "V");
+    a.Z = finite_view(span2<cplx>(arr("Z"), "Z", R, nz), "Z");
+    a.D = finite_view(span2<double>(arr("D"), "D", R, nz), "D");
+    a.eh = finite_view(span3<cplx>(arr("eh"), "eh", R, GRID_LEVELS, nz), "eh");
+    idx nd = s.kase == L::TMD ? s.n + 1 : s.n;  // the dashpots
+    a.lvis = finite_view(span2<double>(arr("lvis"), "lvis", nd, nz), "lvis");
+    a.cvis = finite_view(span1<double>(arr("cvis"), "cvis", nd), "cvis");
+    a.isum = finite_view(span3<cplx>(arr("isum"), "isum", R, nb, nb), "isum");
+    a.bq = finite_view(span2<cplx>(arr("bq"), "bq", R, nz), "bq");
+    a.bnd = finite_view(span3<double>(arr("bnd"), "bnd", R, 4, nz + 1), "bnd");
+    a.kstep = span1<idx>(arr("kstep"), "kstep", R);
+    a.levmax = span1<idx>(arr("levmax"), "levmax", R);
+    check_steps(a.kstep, a.levmax);
+}
+
+void attach_tables(exact::ExactRun& a, Held& held, nb::handle tabE, nb::handle tabP,
+                   const Shape& s) {
+    if (s.regen) {
+        const In& e = held.array_of(tabE, "tabE");
+        a.tabE = finite_view(span3<cplx>(e, "tabE", s.R, 5, s.nz), "tabE");
+        const In& p = held.array_of(tabP, "tabP");
+        a.tabP = finite_view(span4<cplx>(p, "tabP", s.R, 5, 4, s.nz), "tabP");
+    } else {  // unused: the dummy tables of a harmonic run
+        a.tabE = span3<cplx>(held.array_of(tabE, "tabE"), "tabE", 1, 5, 1);
+        a.tabP = span4<cplx>(held.array_of(tabP, "tabP"), "tabP", 1, 5, 4, 1);
+    }
+}
+
+double run_exact_py(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle t_end_,
+                    nb::handle t_steady_, nb::handle rec_dt_, nb::handle rec_, nb::handle imp_,
+                    nb::handle stick_, nb::handle strobe_, nb::handle met_, nb::handle prep_,
+                    nb::handle dt_, nb::handle H_, nb::handle tabE, nb::handle tabP) {
+    Held held;
+    exact::ExactRun a;
+    a.p = span1<double>(held.array_of(p_, "p"), "p", L::P_SIZE);
+    double t0 = scalar(t0_, "t0");
+    double t_end = scalar(t_end_, "t_end");
+    double t_steady = scalar(t_steady_, "t_steady");
+    double rec_dt = scalar(rec_dt_, "rec_dt");
+    double dt = scalar(dt_, "dt");
+    double H = scalar(H_, "H");
+    require(nb::isinstance<nb::dict>(prep_), "'prep' must be the dict of prepare(p)");
+    nb::dict prep = nb::borrow<nb::dict>(prep_);
+    Shape s = check_params(a.p);
+    require(std::isfinite(t0) && std::isfinite(t_end) && std::isfinite(t_steady),
+            "t0, t_end and t_steady must be finite");
+    require(t_end >= t0, "t_end must be >= t0");
+    require(std::isfinite(rec_dt) && rec_dt >= 0.0, "rec_dt must be finite and >= 0");
+    require(std::isfinite(dt) && dt >= 0.0, "dt must be finite and >= 0");
+    require(std::isfinite(H) && H >= 0.0, "H must be finite and >= 0");
+    if (s.regen) check_cut(a.p, t0, t_end, dt, H);
+    check_strobe(a.p, t0, t_end);
+    a.t0 = t0;
+    a.t_end = t_end;
+    a.t_steady = t_steady;
+    a.rec_dt = rec_dt;
+    a.dt_out = dt;
+    a.hist_step = H;
+
+    a.x = span1<double>(held.output_of(x_, "x"), "x", 2 * s.n + 2);
+    finite_view(a.x, "x");
+    a.rec = record_rows(held.output_of(rec_, "rec"), "rec", L::REC_NCOL);
+    a.imp = record_rows(held.output_of(imp_, "imp"), "imp", L::IMP_NCOL);
+    a.stick = record_rows(held.output_of(stick_, "stick"), "stick", L::STICK_NCOL);
+    a.strobe = record_rows(held.output_of(strobe_, "strobe"), "strobe", L::STROBE_NCOL);
+    a.met = span1<double>(held.output_of(met_, "met"), "met", L::MET_SIZE);
+    check_met(a.met);
+
+    attach_prep(a, held, prep, s, t0, t_end);
+    attach_tables(a, held, tabE, tabP, s);
+
+    nb::gil_scoped_release release;
+    return exact::run_exact(a);
+}
+
+}  // namespace
+
+void bind_exact(nb::module_& m) {
+    m.def("run_exact", &run_exact_py, nb::arg("p"), nb::arg("x"), nb::arg("t0"), nb::arg("t_end"),
+          nb::arg("t_steady"), nb::arg("rec_dt"), nb::arg("rec"), nb::arg("imp"),
+          nb::arg("stick"), nb::arg("strobe"), nb::arg("met"), nb::arg("prep"), nb::arg("dt"),
+          nb::arg("H"), nb::arg("tabE"), nb::arg("tabP"),
+          "Advance x exactly from t0 to t_end (the exact event-driven integrator; numba's "
+          "kernels.exact.run_exact): prep is prepare(p)'s dict, dt a cut's step, H its history "
+          "step (0 for harmonic forcing), tabE and tabP its tables (harmonic: zero arrays of "
+          "shape (1, 5, 1) and (1, 5, 4, 1)).  Writes x, rec, imp, stick, strobe and met in "
+          "place; returns the time reached.");
+}
+
+}  // namespace bb::bind

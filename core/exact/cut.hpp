@@ -1,0 +1,249 @@
+// A regenerative cut's delay history (src/boringbar/kernels/exact/cut.py): the history step,
+// the knots of W, the surface as one cubic per segment and the Gauss-Legendre flows, ported
+// operation for operation.  cut_tables (run once per run, at the Python level) is ported to
+// Python, in boringbar/kernels/regimes.py, with history_step.
+//
+// Signatures (the Python names and parameter order):
+//   double history_step(double tau, double dt);
+//   std::tuple<double, double, double, double> hermite_at(double t0, double p0, double d0,
+//                  double t1, double p1, double d1, double x0, bool cubic);
+//   constexpr double GL_X[4], GL_W[4];
+//   double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, CMat lam,
+//                   CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
+//                   Mat lvis, Vec cvis, bool stick, double kappa, double sr, Vec acc,
+//                   bool steady);
+//   std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double t, Vec Xm,
+//                   Vec Xp, idx n, Mat mk, double ttol, double node);
+//   double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk, Span1<idx> ip,
+//                   Mat sc, idx nrev, idx nr_eff, double feed, double w_before,
+//                   double tau_d, Segment& seg, idx j_now, idx m_rev, bool cubic);
+//
+// The knot store kn grows (numba: add_knot returns a new array twice as long): here it is a
+// Knots, which owns its rows and grows in place; add_knot returns it by reference, so the
+// Python line ``kn, nk = add_knot(kn, nk, ...)`` reads ``std::tie(kn, nk) = add_knot(kn,
+// nk, ...)`` (a self-assignment of kn, harmless) or ``nk = std::get<1>(add_knot(...))``.
+// A Knots converts to a Mat view (kn.n0 rows, 5 columns), valid until it next grows.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+#include <vector>
+
+#include "../arrays.hpp"
+#include "consts.hpp"
+#include "nmath.hpp"
+#include "propagate.hpp"
+
+namespace bb::exact {
+
+// H = tau / ceil(tau / dt), at least two per revolution: a cut's knot spacing.
+inline double history_step(double tau, double dt) {
+    idx m = static_cast<idx>(std::ceil(tau / dt - 1e-9));
+    return tau / static_cast<double>(std::max<idx>(2, m));
+}
+
+// The cubic Hermite interpolant on [t0, t1] of values p0, p1 and slopes d0 (right of t0),
+// d1 (left of t1), as a cubic in x - x0: its 4 coefficients.  ``cubic`` false: the straight
+// line through p0, p1.
+inline std::tuple<double, double, double, double> hermite_at(double t0, double p0, double d0,
+                                                             double t1, double p1, double d1,
+                                                             double x0, bool cubic) {
+    double ln = t1 - t0;
+    double c2, c3;
+    if (cubic) {
+        c2 = (3.0 * (p1 - p0) / ln - 2.0 * d0 - d1) / ln;
+        c3 = (2.0 * (p0 - p1) / ln + d0 + d1) / (ln * ln);
+    } else {
+        d0 = (p1 - p0) / ln;
+        c2 = 0.0;
+        c3 = 0.0;
+    }
+    return {p0 + x0 * (d0 + x0 * (c2 + x0 * c3)), d0 + x0 * (2.0 * c2 + 3.0 * c3 * x0),
+            c2 + 3.0 * c3 * x0, c3};
+}
+
+// Gauss-Legendre nodes and weights on [0, 1], 4 points (the same expressions as cut.py)
+constexpr double GL_X[4] = {0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816,
+                            0.5 + 0.16999052179242816, 0.5 + 0.4305681557970263};
+constexpr double GL_W[4] = {0.17392742256872692, 0.3260725774312731, 0.3260725774312731,
+                            0.17392742256872692};
+
+// Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of segment_integrals'
+// ``out``) by 4-point Gauss-Legendre; returns the largest force at the nodes.
+inline double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, CMat lam,
+                       CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
+                       Mat lvis, Vec cvis, bool stick, double kappa, double sr, Vec acc,
+                       bool steady) {
+    double fmax = 0.0;
+    double hh = b - a;
+    for (int g = 0; g < 4; ++g) {
+        double tau = a + GL_X[g] * hh;
+        double wg = GL_W[g] * hh;
+        state_at(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X);
+        double f = cut_force(seg, tau, X, n, mk, 0.0, 0.0);
+        fmax = pymax(fmax, f);
+        double w = 0.0;
+        double wd = 0.0;
+        for (idx i = 0; i < n; ++i) {
+            w += mk(3, i) * X[i];
+            wd += mk(3, i) * X[n + i];
+        }
+        acc[0] += wg * f * wd;
+        double dv = 0.0;
+        for (idx d = 0; d < lvis.n0; ++d) {
+            double v = 0.0;
+            for (idx j = 0; j < X.n; ++j) v += lvis(d, j) * X[j];
+            dv += cvis[d] * v * v;
+        }
+        acc[1] += wg * dv;
+        if (steady) {
+            acc[2] += wg * w * w;
+            acc[3] += wg * w;
+            acc[4] += wg * f;
+        }
+        if (stick && sr != 1.0) {
+            double pdv = 0.0;
+            for (idx i = 0; i < n; ++i) pdv += mk(4, i) * X[n + i];
+            acc[5] += wg * (1.0 - sr) * freq_rhs(X, f, n, mk, kappa) * pdv;
+        }
+    }
+    return fmax;
+}
+
+// The knot store: rows (t, W, W'-, W'+, node index or -1), owned, growing in place.
+struct Knots {
+    static constexpr idx NCOL = 5;
+    std::vector<double> buf;
+    idx n0 = 0;  // rows (numba: kn.shape[0])
+    idx n1 = NCOL;
+
+    Knots() = default;
+    explicit Knots(idx rows) : buf(static_cast<size_t>(rows * NCOL), 0.0), n0(rows) {}
+
+    double& operator()(idx i, idx j) { return buf[static_cast<size_t>(i * NCOL + j)]; }
+    double operator()(idx i, idx j) const { return buf[static_cast<size_t>(i * NCOL + j)]; }
+    Mat view() { return {buf.data(), n0, NCOL}; }
+    operator Mat() { return view(); }
+
+    // numba: big = np.zeros((2 n0, 5)); big[:nk] = kn[:nk]
+    void grow(idx nk) {
+        std::vector<double> big(static_cast<size_t>(2 * n0 * NCOL), 0.0);
+        std::copy(buf.begin(), buf.begin() + nk * NCOL, big.begin());
+        buf.swap(big);
+        n0 = 2 * n0;
+    }
+};
+
+// Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1); one closer than ttol to
+// the last knot replaces its value and W'+.  Drops knots no revolution needs any more when
+// the store is full, and doubles it if that frees less than half.  Returns (kn, nk).
+inline std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double t, Vec Xm,
+                                        Vec Xp, idx n, Mat mk, double ttol, double node) {
+    double w = 0.0;
+    double wdm = 0.0;
+    double wdp = 0.0;
+    for (idx i = 0; i < n; ++i) {
+        w += mk(3, i) * Xp[i];
+        wdm += mk(3, i) * Xm[n + i];
+        wdp += mk(3, i) * Xp[n + i];
+    }
+    if (nk > 0 && t <= kn(nk - 1, 0) + ttol) {
+        kn(nk - 1, 1) = w;
+        kn(nk - 1, 3) = wdp;
+        kn(nk - 1, 4) = pymax(kn(nk - 1, 4), node);
+        return {kn, nk};
+    }
+    if (nk == kn.n0) {
+        idx lo = nk;
+        for (idx k = 1; k < ip.n; ++k) lo = ip[k] < lo ? ip[k] : lo;
+        if (lo > 0) {
+            for (idx i = lo; i < nk; ++i)
+                for (idx c = 0; c < 5; ++c) kn(i - lo, c) = kn(i, c);
+            nk -= lo;
+            for (idx k = 1; k < ip.n; ++k) ip[k] -= lo;
+        }
+        if (nk > kn.n0 / 2) kn.grow(nk);
+    }
+    kn(nk, 0) = t;
+    kn(nk, 1) = w;
+    kn(nk, 2) = wdm;
+    kn(nk, 3) = wdp;
+    kn(nk, 4) = node;
+    return {kn, nk + 1};
+}
+
+// The surface min_k [k h_m + W(t + tau - k tau_d)] from t as one cubic in tau, into seg.s,
+// and the time (<= t_end) up to which it is one cubic: the next delayed knot of any
+// revolution, or where another revolution becomes the minimum.  Advances the pointers
+// ip[k]; sc[k] receives revolution k's cubic.  j_now: the node t is on (-1: none).
+inline double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk, Span1<idx> ip,
+                            Mat sc, idx nrev, idx nr_eff, double feed, double w_before,
+                            double tau_d, Segment& seg, idx j_now, idx m_rev, bool cubic) {
+    double t_piece = t_end;
+    for (idx k = 1; k < nrev + 1; ++k) {
+        double kt = static_cast<double>(k) * tau_d;
+        idx i = ip[k];
+        while (i + 1 < nk && kn(i + 1, 0) + kt <= t + ttol) i += 1;
+        ip[k] = i;
+        if (k > nr_eff) continue;
+        if (i < 0) {  // before the cut: the surface W = HIST_W0
+            sc(k, 0) = static_cast<double>(k) * feed + w_before;
+            sc(k, 1) = 0.0;
+            sc(k, 2) = 0.0;
+            sc(k, 3) = 0.0;
+        } else {
+            double x0 = (t - kt) - kn(i, 0);
+            if (j_now >= 0 && kn(i, 4) == static_cast<double>(j_now - k * m_rev)) x0 = 0.0;
+            auto [c0, c1, c2, c3] = hermite_at(kn(i, 0), kn(i, 1), kn(i, 3), kn(i + 1, 0),
+                                               kn(i + 1, 1), kn(i + 1, 2), x0, cubic);
+            sc(k, 0) = static_cast<double>(k) * feed + c0;
+            sc(k, 1) = c1;
+            sc(k, 2) = c2;
+            sc(k, 3) = c3;
+        }
+        if (i + 1 < nk) {
+            double tn = kn(i + 1, 0) + kt;
+            if (t + ttol < tn && tn < t_piece - ttol) t_piece = tn;
+        }
+    }
+    // the minimising revolution at t (a tie goes to the one falling faster)
+    idx km = 1;
+    double tie = 1e-12 * feed;
+    for (idx k = 2; k < nr_eff + 1; ++k) {
+        if (sc(k, 0) < sc(km, 0) - tie ||
+            (std::fabs(sc(k, 0) - sc(km, 0)) <= tie && sc(k, 1) < sc(km, 1)))
+            km = k;
+    }
+    // where another revolution drops below it: 16 samples, then bisection on the cubic
+    double T = t_piece - t;
+    for (idx k = 1; k < nr_eff + 1; ++k) {
+        if (k == km) continue;
+        double lo = 0.0;
+        for (int j = 1; j < 17; ++j) {
+            double x = T * static_cast<double>(j) / 16.0;
+            double d = 0.0;
+            for (int c = 3; c >= 0; --c) d = d * x + (sc(k, c) - sc(km, c));
+            if (d < 0.0) {
+                double hi = x;
+                for (int it = 0; it < 60; ++it) {
+                    double mid = 0.5 * (lo + hi);
+                    d = 0.0;
+                    for (int c = 3; c >= 0; --c) d = d * mid + (sc(k, c) - sc(km, c));
+                    if (d < 0.0)
+                        hi = mid;
+                    else
+                        lo = mid;
+                    if (hi - lo <= ttol) break;
+                }
+                if (hi > ttol && hi < T) T = hi;
+                break;
+            }
+            lo = x;
+        }
+    }
+    for (int c = 0; c < 4; ++c) seg.s[c] = sc(km, c);
+    return T < t_piece - t ? t + T : t_piece;
+}
+
+}  // namespace bb::exact

@@ -1,0 +1,475 @@
+// The exact kernel's driver (src/boringbar/kernels/exact/driver.py): see driver.hpp.
+#include "driver.hpp"
+
+#include <cmath>
+#include <tuple>
+#include <vector>
+
+#include "../model.hpp"
+#include "consts.hpp"
+#include "cut.hpp"
+#include "nmath.hpp"
+#include "propagate.hpp"
+#include "segment.hpp"
+
+namespace bb::exact {
+
+namespace {
+
+namespace L = layout;
+
+// The bar's rows mk (M, K, C, psi_L, psi_d, psi_a), a free ball's y'' and W'' coefficients
+// ddc and the run's constants cp from p.
+void bar(Vec p, idx n, Mat mk, Mat ddc, RunConsts& cp, double t0, double t_steady,
+         double dt_out, double h, double rec_dt) {
+    for (idx i = 0; i < n; ++i) {
+        mk(0, i) = p[L::M_ + i];
+        mk(1, i) = p[L::K_ + i];
+        mk(2, i) = p[L::C_ + i];
+        mk(3, i) = p[L::PSI_L + i];
+        mk(4, i) = p[L::PSI_D + i];
+        mk(5, i) = p[L::PSI_A + i];
+    }
+    double m = p[L::BALL_MASS];
+    double fc = p[L::FRICTION];
+    double sr = p[L::REACTION];
+    double spd = 0.0;
+    for (idx i = 0; i < n; ++i) spd += mk(4, i) * mk(4, i) / mk(0, i);
+    // psi . u'' of a free ball's bar from its state, force f and F_b: rows 0 (psi_d) and 1
+    // (psi_L) hold the coefficients of u_i, then of f and F_b; rows 2 and 3 those of u_i'
+    for (idx i = 0; i < n; ++i) {
+        for (idx row = 0; row < 2; ++row) {
+            double pr = mk(4 - row, i) / mk(0, i);  // psi_d,i / M_i, then psi_L,i / M_i
+            ddc(row, i) = -pr * mk(1, i);
+            ddc(row + 2, i) = -pr * mk(2, i);
+            ddc(row, n) += pr * mk(3, i);
+            ddc(row, n + 1) -= pr * sr * mk(4, i);
+        }
+    }
+    cp.half = p[L::HALF_GAP];
+    cp.e = p[L::RESTITUTION];
+    cp.fc = fc;
+    cp.fs = pymax(p[L::STATIC_FRICTION], fc);
+    cp.sr = sr;
+    cp.meff = p[L::M_EFF];
+    cp.vimp = p[L::V_IMPACT];
+    cp.kstick = m > 0.0 ? (1.0 / m + sr * spd) : 1.0;
+    cp.kwall = m > 0.0 ? (1.0 / m + spd) : 1.0;
+    cp.stick_min = p[L::STICK_MIN];
+    cp.t0 = t0;
+    cp.t_steady = t_steady;
+    cp.dt_out = dt_out;
+    cp.stop_at_zero = p[L::STOP_AT_ZERO] > 0.0 ? 1.0 : 0.0;
+    cp.f0 = p[L::F0];
+    cp.om = p[L::OMEGA];
+    cp.h = h;
+    cp.rec_dt = rec_dt;
+    cp.tstrobe = p[L::STROBE_PERIOD];
+    cp.m = m;
+}
+
+// A regenerative cut's constants cq from p, the run's span and the history step H.
+CutConsts cut_consts(Vec p, double t0, double t_end, double hist_step, bool regen) {
+    CutConsts cq;
+    double tau_d = p[L::TAU];
+    cq.t0 = t0;
+    cq.h = hist_step;
+    cq.ttol = pymax(1e-9 * hist_step, 4.0 * 2.2e-16 * (std::fabs(t0) + std::fabs(t_end)));
+    cq.nrev = regen ? double(idx(p[L::N_REV])) : 0.0;
+    cq.tau = tau_d;
+    cq.feed = p[L::FEED];
+    cq.w0 = p[L::HIST_W0];
+    // Python's round: half to even, as rint in the default rounding mode
+    cq.mrev = regen ? double(idx(std::nearbyint(tau_d / hist_step))) : 1.0;
+    cq.cubic = p[L::INTERP] > 0.0 ? 1.0 : 0.0;
+    cq.krb = p[L::KR_B];
+    return cq;
+}
+
+// The first knot of a cut, at t0, and whether the tool starts in it (into rs); returns the
+// largest cutting force so far.
+double cut_start(Mat kn, Vec X, idx n, Mat mk, double t0, double krb, double feed,
+                 double w_before, RunState& rs, double max_force) {
+    double w_ = 0.0;
+    double wd_ = 0.0;
+    for (idx i = 0; i < n; ++i) {
+        w_ += mk(3, i) * X[i];
+        wd_ += mk(3, i) * X[n + i];
+    }
+    kn(0, 0) = t0;
+    kn(0, 1) = w_;
+    kn(0, 2) = wd_;
+    kn(0, 3) = wd_;
+    kn(0, 4) = 0.0;
+    bool incut = feed + w_before - w_ > 0.0;
+    rs.incut = incut ? 1.0 : 0.0;
+    if (!incut && rs.first_zero < 0.0) rs.first_zero = t0;
+    return pymax(max_force, krb * pymax(0.0, feed + w_before - w_));
+}
+
+// A ball's regime at the start (into rs), from y, y' and the tip force f_t0.
+void initial_regime(Vec X, double f_t0, idx n, Mat mk, const RunConsts& cp, RunState& rs) {
+    double half = cp.half;
+    double fc = cp.fc;
+    double fs = cp.fs;
+    double y = rs.y;
+    double yd = rs.yd;
+    int mode = FREE;
+    double sdir = 0.0;
+    double wall = 0.0;
+    if (yd != 0.0) {
+        sdir = yd > 0.0 ? 1.0 : -1.0;
+    } else if (std::fabs(y) >= half) {
+        wall = y > 0.0 ? 1.0 : -1.0;
+        y = wall * half;
+        double F = freq_rhs(X, f_t0, n, mk, cp.kwall);
+        if (wall * F <= fs) {
+            mode = CONTACT;
+        } else if (fc > 0.0) {
+            sdir = -wall;
+        }
+    } else if (fc > 0.0) {
+        double F = freq_rhs(X, f_t0, n, mk, cp.kstick);
+        if (std::fabs(F) <= fs) {
+            mode = STICK;
+        } else {
+            sdir = F > 0.0 ? -1.0 : 1.0;
+        }
+    }
+    rs.mode = mode;
+    rs.sdir = sdir;
+    rs.wall = wall;
+    rs.y = y;
+}
+
+// Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
+// inward (FREE).
+void at_wall(Vec X, double f, double w_, idx n, Mat mk, double kappa_wall, double fs, double fc,
+             int& mode, double& sdir, double& wall) {
+    double F = freq_rhs(X, f, n, mk, kappa_wall);
+    wall = w_;
+    if (w_ * F <= fs) {
+        mode = CONTACT;
+        sdir = 0.0;
+    } else {
+        mode = FREE;
+        sdir = fc > 0.0 ? -w_ : 0.0;
+    }
+}
+
+// An impact or a capture on wall w_ (EV_PLUS / EV_MINUS) at t: X' jumps, the counts.
+void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, idx n, Mat mk,
+              const RunConsts& cp, Mat imp, Vec met, int& mode, double& sdir, double& wall,
+              double& y, double& yd) {
+    y = w_ * cp.half;
+    double vb = yd;
+    if (w_ * vb > 0.0) {
+        double ee = std::fabs(vb) > cp.vimp ? cp.e : 0.0;  // Zeno: captured on the wall
+        ImpactJump j = impact_law(vb, ee, cp.meff);
+        yd = j.yd;
+        // the modes' jumps g psi_d,i / M_i, divided here (the RK4 kernels multiply by 1 / M_i:
+        // the same law, other roundings)
+        for (idx i = 0; i < n; ++i) X[n + i] += j.g * mk(4, i) / mk(0, i);
+        met[L::D_IMPACT] += j.loss;
+        if (std::fabs(vb) > cp.vimp) {
+            count_impact(met.d, imp, t, w_, vb, steady);
+        } else {
+            met[L::N_MICRO] += 1;
+        }
+    } else if (w_ * vb < -cp.vimp) {
+        // moving inward, faster than a capture: not a wall contact but the round-off of a
+        // segment a few ulp long just after an impact; the ball goes on, from the wall
+        yd = vb;
+    } else {
+        yd = 0.0;
+    }
+    if (yd != 0.0) {
+        mode = FREE;
+        sdir = yd > 0.0 ? 1.0 : -1.0;
+    } else {
+        at_wall(X, f_ev, w_, n, mk, cp.kwall, cp.fs, cp.fc, mode, sdir, wall);
+    }
+}
+
+// The event ev_kind at t under the tip force f_ev: an impact, a capture, a stick, a slip or a
+// release of the ball, or the tool leaving or re-entering the cut, into the run's state rs;
+// its counts and the stick interval it closes into met, imp and stick.
+void apply_event(idx ev_kind, double t, bool steady, Vec X, double f_ev, idx n, Mat mk,
+                 const RunConsts& cp, RunState& rs, Mat imp, Mat stick, Vec met) {
+    int mode = int(rs.mode);
+    double sdir = rs.sdir;
+    double wall = rs.wall;
+    double y = rs.y;
+    double yd = rs.yd;
+    double fc = cp.fc;
+    bool was_stick = mode == STICK;
+    if (ev_kind == EV_PLUS || ev_kind == EV_MINUS) {
+        double w_ = ev_kind == EV_PLUS ? 1.0 : -1.0;
+        wall_hit(w_, t, steady, X, f_ev, n, mk, cp, imp, met, mode, sdir, wall, y, yd);
+    } else if (ev_kind == EV_VSTOP) {
+        yd = 0.0;
+        double F = freq_rhs(X, f_ev, n, mk, cp.kstick);
+        if (std::fabs(F) <= cp.fs) {
+            mode = STICK;
+            sdir = 0.0;
+        } else {
+            mode = FREE;
+            sdir = F > 0.0 ? -1.0 : 1.0;
+        }
+    } else if (ev_kind == EV_REL_NEG || ev_kind == EV_REL_POS) {
+        mode = FREE;
+        yd = 0.0;
+        sdir = ev_kind == EV_REL_NEG ? -1.0 : 1.0;
+    } else if (ev_kind == EV_WALL_REL) {
+        mode = FREE;
+        yd = 0.0;
+        sdir = fc > 0.0 ? -wall : 0.0;
+        y = wall * cp.half;
+    } else if (ev_kind == EV_CUT) {
+        bool incut = rs.incut == 0.0;
+        rs.incut = incut ? 1.0 : 0.0;
+        if (!incut && rs.first_zero < 0.0) {
+            rs.first_zero = t;  // the chatter verdict (docs/model.md, section 4)
+            if (cp.stop_at_zero != 0.0) {  // finish the step of length dt_out, as RK4 does
+                double t0 = cp.t0;
+                double dt_out = cp.dt_out;
+                double k = double(idx(std::ceil((t - t0) / dt_out - 1e-9)));
+                rs.t_end = pymin(rs.t_end, t0 + k * dt_out);
+            }
+        }
+    }
+    if (mode == FREE && fc == 0.0 && yd == 0.0) sdir = 0.0;
+    // stick intervals
+    if (mode == STICK && !was_stick) {
+        rs.stick_t0 = t;
+    } else if (was_stick && mode != STICK) {
+        close_stick(met.d, stick, rs.stick_t0, t, cp.t_steady, cp.stick_min);
+    }
+    rs.mode = mode;
+    rs.sdir = sdir;
+    rs.wall = wall;
+    rs.y = y;
+    rs.yd = yd;
+}
+
+// The running extremes from met and the first output times into ro.
+void outputs_start(RunningOut& ro, Vec met, Vec p, double t0, double max_force) {
+    double tstrobe = p[L::STROBE_PERIOD];
+    ro.max_abs_w = met[L::MAX_ABS_W];
+    ro.max_w = met[L::STEADY_MAX_W];
+    ro.min_w = met[L::STEADY_MIN_W];
+    ro.max_aux = met[L::MAX_ABS_AUX];
+    ro.max_aux_all = met[L::MAX_ABS_AUX_ALL];
+    ro.max_force = max_force;
+    ro.k_rec = 1.0;  // the next history row is at t0 + k_rec rec_dt
+    if (tstrobe > 0.0) {
+        double t_next_strobe = p[L::STROBE_T0];
+        if (t_next_strobe <= t0) {
+            // math.floor gives an int: the sum is an integer's, then a float's product
+            idx k = idx(std::floor((t0 - t_next_strobe) / tstrobe)) + 1;
+            t_next_strobe += double(k) * tstrobe;
+        }
+        ro.t_strobe = t_next_strobe;
+    }
+}
+
+// The final state into x and the running outputs into met.
+void finish_run(const Work& w, idx n, bool ball, bool regen, idx n_ev, int status) {
+    Vec x = w.x;
+    Vec met = w.met;
+    for (idx j = 0; j < w.X.size(); ++j) x[j] = w.X[j];
+    if (ball) {
+        x[2 * n] = w.rs.y;
+        x[2 * n + 1] = w.rs.yd;
+    }
+    met[L::MAX_ABS_W] = w.ro.max_abs_w;
+    met[L::STEADY_MAX_W] = w.ro.max_w;
+    met[L::STEADY_MIN_W] = w.ro.min_w;
+    met[L::MAX_ABS_AUX] = w.ro.max_aux;
+    met[L::MAX_ABS_AUX_ALL] = w.ro.max_aux_all;
+    met[L::N_EVENTS] = double(n_ev);
+    met[L::EXACT_STATUS] = status;
+    if (regen) {
+        met[L::FIRST_ZERO_T] = w.rs.first_zero;
+        met[L::MAX_FORCE] = w.ro.max_force;
+    }
+}
+
+// The views of the run's inputs and outputs in the work arrays.
+void attach(Work& w, const ExactRun& a) {
+    w.lam = a.lam;
+    w.V = a.V;
+    w.Vi = a.Vi;
+    w.Vfull = a.Vfull;
+    w.Z = a.Z;
+    w.D = a.D;
+    w.bq = a.bq;
+    w.lvis = a.lvis;
+    w.cvis = a.cvis;
+    w.isum = a.isum;
+    w.kstep = a.kstep;
+    w.bnd = a.bnd;
+    w.levmax = a.levmax;
+    w.eh = a.eh;
+    w.tabE = a.tabE;
+    w.tabP = a.tabP;
+    w.x = a.x;
+    w.rec = a.rec;
+    w.strobe = a.strobe;
+    w.met = a.met;
+}
+
+// The body of both exact kernels: Regen (a cut) is a constant of each.
+template <bool Regen>
+double exact_body(const ExactRun& a) {
+    Vec p = a.p;
+    Vec x = a.x;
+    Vec met = a.met;
+    double t0 = a.t0;
+    double t_end = a.t_end;
+    double t_steady = a.t_steady;
+    double h = a.h;
+    idx n = idx(p[L::N_MODES]);
+    idx kase = idx(p[L::CASE]);
+    idx nz = a.lam.n1;
+    bool ball = kase == L::BALL;
+    Work w(n, nz);
+    attach(w, a);
+    Mat mk = w.mk;
+    bar(p, n, mk, w.ddc, w.cp, t0, t_steady, a.dt_out, h, a.rec_dt);
+    double f0 = p[L::F0];
+    double om = p[L::OMEGA];
+    Vec X = w.X;
+    for (idx j = 0; j < nz; ++j) X[j] = x[j];
+
+    // --- regenerative cut (docs/model.md, section 4): the history of W as knots ----------
+    // Knots (t, W, W'-, W'+) at the nodes t0 + j H and at every event; ip[k]: the knot at
+    // or before t - k tau (-1: before the cut, where W = HIST_W0).
+    CutConsts cq = cut_consts(p, t0, t_end, a.hist_step, Regen);
+    double krb = cq.krb;
+    double feed = cq.feed;
+    double w_before = cq.w0;
+    idx nrev = idx(cq.nrev);
+    double ttol = cq.ttol;
+    Knots kn(Regen ? nrev * idx(cq.mrev) + 64 : 1);  // grows in add_knot (a std::vector)
+    idx nk = 0;
+    std::vector<idx> ip_buf(size_t(nrev + 1), -1);
+    std::vector<double> sc_buf(size_t(nrev + 1) * 4, 0.0);
+    Span1<idx> ip{ip_buf.data(), nrev + 1};
+    Mat sc{sc_buf.data(), nrev + 1, 4};
+    RunState& rs = w.rs;
+    rs.first_zero = met[L::FIRST_ZERO_T];
+    rs.t_end = t_end;
+    double max_force = met[L::MAX_FORCE];
+    idx last_zero_step = -1;
+    idx j_node = 0;  // the last node reached
+    if constexpr (Regen) {
+        max_force = cut_start(kn.view(), X, n, mk, t0, krb, feed, w_before, rs, max_force);
+        nk = 1;
+    }
+    double f_t0 = f0 * std::sin(om * t0);
+    if (rs.incut != 0.0) f_t0 += krb * (feed + w_before - kn(0, 1));
+    rs.y = (ball || kase == L::LOCKED) ? x[2 * n] : 0.0;
+    rs.yd = ball ? x[2 * n + 1] : 0.0;
+
+    // the running extremes and output times (the other metrics add up in met itself)
+    outputs_start(w.ro, met, p, t0, max_force);
+    idx n_ev = idx(met[L::N_EVENTS]);
+    int status = 0;
+
+    // --- the initial regime
+    if (ball) initial_regime(X, f_t0, n, mk, w.cp, rs);
+    rs.stick_t0 = t0;
+    int n_zero = 0;
+
+    // the grid's step lengths (h, 2 h, 4 h, ...) and their phase steps
+    for (int lv = 0; lv < GRID_LEVELS; ++lv) {
+        w.hl[lv] = h * ipow(2.0, lv);
+        w.rotl[lv] = om != 0.0 ? kernel::phasor(om, w.hl[lv]) : ncplx(1.0, 0.0);
+    }
+    SegSearch sv;
+    ncplx ph_next(1.0, 0.0);
+    bool ph_next_ok = false;
+    double t = t0;
+    while (t < t_end) {
+        if (n_ev >= MAX_EVENTS) {
+            status = 1;
+            break;
+        }
+        // eigen-coordinates of the homogeneous part at t
+        ncplx ph = ph_next_ok ? ph_next  // exp(i Omega t), from the event's evaluation
+                              : (om != 0.0 ? kernel::phasor(om, t) : ncplx(1.0, 0.0));
+        ph_next_ok = false;
+        double t_stop = t < t_steady ? pymin(t_steady, t_end) : t_end;
+        SegStart st = start_segment<Regen>(w, t, t_stop, ph, n, kase, a.nreg, j_node, kn.view(),
+                                           nk, ip, sc, cq, sv);
+        j_node = st.j_node;
+        idx mode = idx(rs.mode);
+        bool steady = t >= t_steady;
+        idx sz = const_sizes(st.ks, n, nz);
+        SegEvent ev = search_segment<Regen>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+        ph_next = ev.ph_next;
+
+        // --- close the segment [t, t + T]
+        double T = ev.tau;
+        last_zero_step = close_segment<Regen>(w, t, T, st.r, st.ks, sz, n, kase, mode, ph, steady,
+                                              st.pdu, last_zero_step);
+        double t_new = ev.kind >= 0 ? t + T : st.t_seg_end;
+        if (ev.kind < 0) {
+            t = t_new;
+            if constexpr (Regen) {
+                if (st.at_node) {
+                    if (nk < kn.n0 && t > kn(nk - 1, 0) + ttol) {
+                        kn(nk, 0) = t;
+                        kn(nk, 1) = ev.wb;
+                        kn(nk, 2) = ev.wdb;
+                        kn(nk, 3) = ev.wdb;
+                        kn(nk, 4) = double(j_node + 1);
+                        nk += 1;
+                    } else {
+                        nk = std::get<1>(add_knot(kn, nk, ip, t, X, X, n, mk, ttol,
+                                                  double(j_node + 1)));
+                    }
+                }
+            }
+            continue;
+        }
+        n_ev += 1;
+        // the next segment starts at t + T = seg.ts + T, where the event's evaluation was
+        ph_next_ok = om != 0.0;
+        double f_ev = cut_force(w.seg, T, X, n, mk, f0, om);  // the tip force at the event
+        if (T <= 1e-14 * (std::fabs(t) + h)) {  // no progress: a few ulp of t
+            n_zero += 1;
+            if (n_zero > MAX_ZERO_LENGTH) {
+                status = 2;
+                t = t_new;
+                break;
+            }
+        } else {
+            n_zero = 0;
+        }
+        t = t_new;
+        steady = t >= t_steady;
+        for (idx j = 0; j < nz; ++j) w.Xa[j] = X[j];  // before the event (W'- of a knot)
+        // --- apply the event
+        apply_event(ev.kind, t, steady, X, f_ev, n, mk, w.cp, rs, a.imp, a.stick, met);
+        t_end = rs.t_end;
+        if constexpr (Regen) {
+            nk = std::get<1>(add_knot(kn, nk, ip, t, w.Xa, X, n, mk, ttol, -1.0));
+        }
+    }
+    if (rs.mode == STICK) {
+        close_stick(met.d, a.stick, rs.stick_t0, t, w.cp.t_steady, w.cp.stick_min);
+    }
+    finish_run(w, n, ball, Regen, n_ev, status);
+    return t;
+}
+
+}  // namespace
+
+double run_exact(const ExactRun& a) {
+    if (int(a.p[L::FORCING]) == L::REGENERATIVE) return exact_body<true>(a);
+    return exact_body<false>(a);
+}
+
+}  // namespace bb::exact

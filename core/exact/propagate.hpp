@@ -1,0 +1,421 @@
+// The closed form on a segment (src/boringbar/kernels/exact/propagate.py): the state at any
+// time (state_at), the forces, and the segment's integrals of products of exponentials
+// (segment_integrals), ported operation for operation (complex arithmetic on ncplx: see
+// nmath.hpp), so that they give numba's bits.
+//
+// Signatures (the Python names and parameter order; complex scalars are ncplx):
+//   idx nq(idx nz, idx ks);
+//   std::tuple<ncplx, ncplx, ncplx, ncplx, ncplx> phis(ncplx x);   // e^x, phi_1 .. phi_4
+//   std::tuple<double, double> surface_at(const Segment& seg, double tau);   // S, S'
+//   ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
+//                  CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X);
+//   void from_q(idx r, CVec q, ncplx ph, double fb, CMat Z, Mat D, CArr3 V, idx ks, Vec X);
+//   double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, double f0,
+//                    double om);
+//   double freq_rhs(Vec X, double f, idx n, Mat mk, double kappa);
+//   void state_at2(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
+//                  CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd);
+//   idx const_sizes(idx ks, idx n, idx nz);
+//   void segment_integrals(idx r, CVec q0, ncplx ph, double T, double fb, double om,
+//                          double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
+//                          Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
+//                          CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
+//                          idx level, idx ks, const Segment& seg, CVec phj);
+//   void segment_integrals_1(... the same without n and ks ...);   // n = 1, nz = 2, ks = 2
+//   void segment_integrals_2(... the same without n and ks ...);   // n = 2, nz = 4, ks = 2
+//   void basis_exponents(CMat lam, idx r, double om, idx nz, CVec mu);   // prepare.py's
+// and the helpers _phi1s, _phij, _conj_index, _integrals_body, _psi_dot, _quad_sym, _quad.
+//
+// X, Xd are seen with their own length (numba: X.shape[0]): pass views of length nz.
+#pragma once
+
+#include <cmath>
+#include <tuple>
+
+#include "../arrays.hpp"
+#include "consts.hpp"
+#include "nmath.hpp"
+
+namespace bb::exact {
+
+// How many eigen-coordinates are evaluated: nz, or nz / 2 when ks = 2 (conjugate pairs,
+// the first of each).
+inline idx nq(idx nz, idx ks) { return ks == 1 ? nz : nz >> 1; }
+
+// (e^x, phi_1(x), .., phi_4(x)), phi_k(x) = sum_m x^m / (m + k)!: the Taylor series of phi_4
+// then phi_k = 1/k! + x phi_{k+1} for |x| < 1, the recurrence phi_{k+1} = (phi_k - 1/k!) / x
+// from e^x otherwise.
+inline std::tuple<ncplx, ncplx, ncplx, ncplx, ncplx> phis(ncplx x) {
+    if (x.re * x.re + x.im * x.im < 1.0) {
+        ncplx p4(0.0, 0.0);
+        for (int m = 14; m >= 0; --m) p4 = p4 * x + RFACT[m + 4];
+        ncplx p3 = 1.0 / 6.0 + x * p4;
+        ncplx p2 = 0.5 + x * p3;
+        ncplx p1 = 1.0 + x * p2;
+        return {1.0 + x * p1, p1, p2, p3, p4};
+    }
+    ncplx ex = cexp(x);
+    ncplx p1 = (ex - 1.0) / x;
+    ncplx p2 = (p1 - 1.0) / x;
+    ncplx p3 = (p2 - 0.5) / x;
+    return {ex, p1, p2, p3, (p3 - 1.0 / 6.0) / x};
+}
+
+// S(tau) and S'(tau): the cut surface's cubic on the segment.
+inline std::tuple<double, double> surface_at(const Segment& seg, double tau) {
+    double s1 = seg.s[1];
+    double s2 = seg.s[2];
+    double s3 = seg.s[3];
+    return {seg.s[0] + tau * (s1 + tau * (s2 + tau * s3)),
+            s1 + tau * (2.0 * s2 + 3.0 * tau * s3)};
+}
+
+// X from the eigen-coordinates q and the forcing phasor ph = e^{i Omega t}.
+inline void from_q(idx r, CVec q, ncplx ph, double fb, CMat Z, Mat D, CArr3 V, idx ks, Vec X) {
+    idx nz = X.n;
+    for (idx j = 0; j < nz; ++j) {
+        double s = (ncplx(Z(r, j)) * ph).im + fb * D(r, j);
+        for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+            idx k = kq * ks;
+            s += (ncplx(V(r, j, k)) * ncplx(q[k])).re;
+        }
+        X[j] = s;
+    }
+}
+
+// X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg.ts); returns
+// the forcing phasor e^{i Omega (ts + tau)}.  In a cut the input Kr b S(tau) adds
+// bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to each eigen-coordinate.
+inline ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
+                      CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X) {
+    idx nz = X.n;
+    double ts = seg.ts;
+    double fb = seg.fb;
+    ncplx ph = cexp(ncplx(0.0, 1.0) * om * (ts + tau));
+    double krb = seg.krb;
+    if (krb != 0.0) {
+        double c0 = seg.s[0] * tau;
+        double c1 = seg.s[1] * tau * tau;
+        double c2 = 2.0 * seg.s[2] * ipow(tau, 3);
+        double c3 = 6.0 * seg.s[3] * ipow(tau, 4);
+        for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+            idx k = kq * ks;
+            auto [ex, p1, p2, p3, p4] = phis(ncplx(lam(r, k)) * tau);
+            q[k] = ncplx(q0[k]) * ex +
+                   krb * ncplx(bq(r, k)) * (c0 * p1 + c1 * p2 + c2 * p3 + c3 * p4);
+        }
+    } else {
+        for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+            idx k = kq * ks;
+            q[k] = ncplx(q0[k]) * cexp(ncplx(lam(r, k)) * tau);
+        }
+    }
+    from_q(r, q, ph, fb, Z, D, V, ks, X);
+    return ph;
+}
+
+// The force at the tip at ts + tau: F0 sin(Omega t), or Kr b (S(tau) - W) in a cut.
+inline double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, double f0,
+                        double om) {
+    double f = f0 * std::sin(om * (seg.ts + tau));
+    if (seg.krb != 0.0) {
+        double w = 0.0;
+        for (idx i = 0; i < n; ++i) w += mk(3, i) * X[i];
+        f += seg.krb * (std::get<0>(surface_at(seg, tau)) - w);
+    }
+    return f;
+}
+
+// The force that carries the ball with the bar, psi_d . a_0 / kappa (N), under the tip
+// force f.
+inline double freq_rhs(Vec X, double f, idx n, Mat mk, double kappa) {
+    double s = 0.0;
+    for (idx i = 0; i < n; ++i)
+        s += mk(4, i) * (mk(3, i) * f - mk(1, i) * X[i] - mk(2, i) * X[n + i]) / mk(0, i);
+    return s / kappa;
+}
+
+// X and X' at ts + tau on the segment (see state_at); in a cut q' = lambda q + bq Kr b S.
+inline void state_at2(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
+                      CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd) {
+    idx nz = X.n;
+    ncplx ph = state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X);
+    double sin_ = seg.krb * std::get<0>(surface_at(seg, tau));
+    for (idx j = 0; j < nz; ++j) {
+        double sd = om * (ncplx(Z(r, j)) * ph).re;
+        for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+            idx k = kq * ks;
+            sd += (ncplx(V(r, j, k)) * (ncplx(q[k]) * ncplx(lam(r, k)) + sin_ * ncplx(bq(r, k))))
+                      .re;
+        }
+        Xd[j] = sd;
+    }
+}
+
+// Which compilation with constant sizes fits a regime: 1 (one mode, nz = 2) or 2 (two
+// modes, nz = 4), each in conjugate pairs (ks = 2); 0 for any other.
+inline idx const_sizes(idx ks, idx n, idx nz) {
+    if (ks == 2 && nz == 2 * n && n <= 2) return n;
+    return 0;
+}
+
+// mu = (lambda_r, i Omega, -i Omega, 0): the exponents of a segment's basis functions
+// (prepare.py's basis_exponents; -1j is the constant complex(-0.0, -1.0) in Python).
+inline void basis_exponents(CMat lam, idx r, double om, idx nz, CVec mu) {
+    for (idx k = 0; k < nz; ++k) mu[k] = lam(r, k);
+    mu[nz] = ncplx(0.0, 1.0) * om;
+    mu[nz + 1] = ncplx(-0.0, -1.0) * om;
+    mu[nz + 2] = promote(0.0);
+}
+
+// int_0^T exp(z tau / T) dtau = T (e^z - 1) / z by its series, for |z|^2 = z2 < 1/64.
+inline ncplx _phi1s(ncplx z, double T, double z2) {
+    int top = z2 > 9e-4 ? 11 : (z2 > 2.5e-5 ? 8 : 6);
+    ncplx s(0.0, 0.0);
+    for (int k = top; k > 1; --k) s = (s * z + 1.0) * RECIP[k];
+    s = s * z + 1.0;
+    return T * s;
+}
+
+// phj[j] = phi_j(z) = int_0^1 s^j exp(z s) ds, j = 0, 1, 2, for |z| < 1, by the series
+// sum_m z^m / (m! (m + j + 1)), to the first term below 1e-18.
+inline void _phij(ncplx z, CVec phj) {
+    ncplx term(1.0, 0.0);
+    ncplx f0(0.0, 0.0);
+    ncplx f1(0.0, 0.0);
+    ncplx f2(0.0, 0.0);
+    for (int mm = 0; mm < 20; ++mm) {
+        f0 += term * RECIP[mm + 1];
+        f1 += term * RECIP[mm + 2];
+        f2 += term * RECIP[mm + 3];
+        term = term * z * RECIP[mm + 1];
+        if (term.re * term.re + term.im * term.im < 1e-36) break;
+    }
+    phj[0] = f0;
+    phj[1] = f1;
+    phj[2] = f2;
+}
+
+// The basis function conjugate to exp(mu_k tau) when every eigenvalue has its conjugate
+// beside it (ks = 2); with ks = 1 every function is its own.
+inline idx _conj_index(idx k, idx nz, idx ks) {
+    if (ks != 2) return k;
+    if (k < nz) return k ^ 1;
+    if (k == nz) return nz + 1;
+    if (k == nz + 1) return nz;
+    return k;
+}
+
+// dst[k] = sum_i mk[row, i] Cx[off + i, k]: the basis coefficients of psi . u (off 0) or
+// psi . u' (off n).
+inline void _psi_dot(Mat mk, idx row, CMat Cx, idx off, idx n, idx nb, CVec dst) {
+    for (idx k = 0; k < nb; ++k) {
+        ncplx s(0.0, 0.0);
+        for (idx i = 0; i < n; ++i) s += mk(row, i) * ncplx(Cx(off + i, k));
+        dst[k] = s;
+    }
+}
+
+// Re(a^T G a) for a symmetric G.
+inline double _quad_sym(CVec a, CMat G, idx nb) {
+    double s = 0.0;
+    for (idx i = 0; i < nb; ++i) {
+        ncplx t = 0.5 * ncplx(G(i, i)) * ncplx(a[i]);
+        for (idx j = i + 1; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(a[j]);
+        s += (ncplx(a[i]) * t).re;
+    }
+    return 2.0 * s;
+}
+
+// Re(a^T G b).
+inline double _quad(CVec a, CVec b, CMat G, idx nb) {
+    double s = 0.0;
+    for (idx i = 0; i < nb; ++i) {
+        ncplx t(0.0, 0.0);
+        for (idx j = 0; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(b[j]);
+        s += (ncplx(a[i]) * t).re;
+    }
+    return s;
+}
+
+// Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
+// sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
+// (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  See propagate.py's
+// _integrals_body for the method; me, G, Cx, cf, ca, cb, phj are scratch.
+inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, double om,
+                            double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
+                            Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
+                            CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
+                            idx level, idx ks, const Segment& seg, CVec phj, idx nz) {
+    CVec mu = me[0];  // the basis exponents
+    CVec em = me[1];  // exp(mu T)
+    double p0 = seg.ud0;  // a free ball's absolute position P = p0 + p1 tau + p2 tau^2
+    double p1 = seg.vd0;
+    double p2 = 0.5 * seg.acc;
+    idx nb = nz + 3;
+    basis_exponents(lam, r, om, nz, mu);
+    // exp(conj z) = conj(exp(z)) exactly: a conjugate pair's second exponential and the
+    // forcing's -i Omega are conjugates, exp(0) = 1
+    for (idx k = 0; k < nz; ++k) {
+        if (k > 0 && ncplx(mu[k]) == ncplx(mu[k - 1]).conjugate())
+            em[k] = ncplx(em[k - 1]).conjugate();
+        else
+            em[k] = cexp(ncplx(mu[k]) * T);
+    }
+    em[nz] = cexp(ncplx(mu[nz]) * T);
+    em[nz + 1] = ncplx(em[nz]).conjugate();
+    em[nz + 2] = promote(1.0);
+    double lim = 0.015625 / (T * T);  // |mu_m + mu_l| T < 1/8: the series
+    for (idx a = 0; a < nb; ++a) {
+        idx ja = _conj_index(a, nz, ks);
+        for (idx b = a; b < nb; ++b) {
+            idx jb = _conj_index(b, nz, ks);
+            idx lo = ja < jb ? ja : jb;
+            idx hi = ja < jb ? jb : ja;
+            ncplx g;
+            if (lo < a || (lo == a && hi < b)) {
+                // the conjugate entry, already computed: G is conjugate-symmetric
+                g = ncplx(G(lo, hi)).conjugate();
+            } else {
+                ncplx s = ncplx(mu[a]) + ncplx(mu[b]);
+                if (s.im == 0.0) {
+                    // a conjugate pair, or the forcing's two terms, or 0: real
+                    double x = s.re * T;
+                    g = (x != 0.0 ? T * std::expm1(x) / x : T) + ncplx(0.0, 0.0);
+                } else {
+                    double z2 = s.re * s.re + s.im * s.im;
+                    if (z2 < lim)
+                        g = _phi1s(s * T, T, z2 * T * T);
+                    else
+                        g = (ncplx(em[a]) * ncplx(em[b]) - 1.0) * ncplx(isum(r, a, b));
+                }
+            }
+            G(a, b) = g;
+            G(b, a) = g;
+        }
+    }
+    // a sine's phasors: Im(z e^{i Omega t}) = (z ph2) e^{..} + conj; -0.5j is the constant
+    // complex(-0.0, -0.5) in Python
+    ncplx ph2 = ncplx(-0.0, -0.5) * ph;
+    for (idx j = 0; j < nz; ++j) {
+        for (idx k = 0; k < nz; ++k) Cx(j, k) = ncplx(VF(r, j, k)) * ncplx(q0[k]);
+        ncplx zz = ncplx(Z(r, j)) * ph2;
+        Cx(j, nz) = zz;
+        Cx(j, nz + 1) = zz.conjugate();
+        Cx(j, nz + 2) = promote(fb * D(r, j));
+    }
+    for (idx k = 0; k < nb; ++k) cf[k] = promote(0.0);
+    cf[nz] = f0 * ph2;
+    cf[nz + 1] = ncplx(cf[nz]).conjugate();
+    // work of the force: f psi_L . u' (f has only the terms nz, nz + 1)
+    _psi_dot(mk, 3, Cx, n, n, nb, ca);
+    double w = 0.0;
+    for (idx i = nz; i < nz + 2; ++i) {
+        ncplx t(0.0, 0.0);
+        for (idx j = 0; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(ca[j]);
+        w += (ncplx(cf[i]) * t).re;
+    }
+    out[0] = w;
+    out[4] = (ncplx(cf[nz]) * ncplx(G(nz, nb - 1))).re +
+             (ncplx(cf[nz + 1]) * ncplx(G(nz + 1, nb - 1))).re;
+    out[5] = 0.0;
+    if (stick_k != 0.0 && sr != 1.0) {
+        // F_stick = psi_d . a_0 / kappa, a_0,i = (psi_L,i f - K_i u_i - C_i u_i') / M_i
+        for (idx k = 0; k < nb; ++k) {
+            ncplx s(0.0, 0.0);
+            ncplx pv(0.0, 0.0);
+            for (idx i = 0; i < n; ++i) {
+                s += mk(4, i) *
+                     (mk(3, i) * ncplx(cf[k]) - mk(1, i) * ncplx(Cx(i, k)) -
+                      mk(2, i) * ncplx(Cx(n + i, k))) /
+                     mk(0, i);
+                pv += mk(4, i) * ncplx(Cx(n + i, k));
+            }
+            ca[k] = s / stick_k;
+            cb[k] = pv;
+        }
+        out[5] = (1.0 - sr) * _quad(ca, cb, G, nb);
+    }
+    // viscous loss
+    double dv = 0.0;
+    for (idx d = 0; d < lvis.n0; ++d) {
+        for (idx k = 0; k < nb; ++k) {
+            ncplx s(0.0, 0.0);
+            for (idx j = 0; j < nz; ++j)
+                if (lvis(d, j) != 0.0) s += lvis(d, j) * ncplx(Cx(j, k));
+            ca[k] = s;
+        }
+        dv += cvis[d] * _quad_sym(ca, G, nb);
+    }
+    out[1] = dv;
+    if (level == 0) return;
+    // W = psi_L . u
+    _psi_dot(mk, 3, Cx, 0, n, nb, ca);
+    out[2] = _quad_sym(ca, G, nb);
+    double w1 = 0.0;
+    for (idx k = 0; k < nb; ++k) w1 += (ncplx(ca[k]) * ncplx(G(k, nb - 1))).re;
+    out[3] = w1;
+    if (level == 1) return;
+    // int y^2 = int P^2 - 2 int P psi_d.u + int (psi_d.u)^2, with
+    // int_0^T tau^j exp(mu tau) = T^(j+1) phi_j(mu T), phi_j(z) = int_0^1 s^j e^(z s) ds
+    _psi_dot(mk, 4, Cx, 0, n, nb, cb);  // psi_d . u
+    double uu = _quad_sym(cb, G, nb);
+    // mu = 0 (the last basis function): phi_j = 1 / (j + 1)
+    double cross = (ncplx(cb[nb - 1]) * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))).re;
+    for (idx k = 0; k < nb - 1; ++k) {
+        idx jk = _conj_index(k, nz, ks);
+        if (jk < k) continue;  // the conjugate of an earlier term: counted there
+        ncplx z = ncplx(mu[k]) * T;
+        ncplx acc_;
+        if (z.re * z.re + z.im * z.im >= 1.0) {
+            // upward recurrence phi_j = (e^z - j phi_(j-1)) / z; 1 / mu_k = 2 isum[r, k, k]
+            ncplx iz = 2.0 * ncplx(isum(r, k, k)) / T;
+            ncplx ez = em[k];
+            ncplx f0_ = (ez - 1.0) * iz;
+            ncplx f1_ = (ez - f0_) * iz;
+            acc_ = p0 * f0_ + T * p1 * f1_;
+            if (p2 != 0.0) acc_ += T * T * p2 * ((ez - 2.0 * f1_) * iz);
+        } else {
+            _phij(z, phj);
+            acc_ = p0 * ncplx(phj[0]) + T * (p1 * ncplx(phj[1]) + T * p2 * ncplx(phj[2]));
+        }
+        double v = (ncplx(cb[k]) * acc_).re * T;
+        cross += jk == k ? v : 2.0 * v;
+    }
+    double pp = T * (p0 * p0 +
+                     T * (p0 * p1 + T * ((p1 * p1 + 2.0 * p0 * p2) / 3.0 +
+                                         T * (0.5 * p1 * p2 + 0.2 * T * p2 * p2))));
+    out[6] = pp - 2.0 * cross + uu;
+}
+
+// _integrals_body for any bar, regime and basis (nz = lam's second dimension).
+inline void segment_integrals(idx r, CVec q0, ncplx ph, double T, double fb, double om,
+                              double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
+                              Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
+                              CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
+                              idx level, idx ks, const Segment& seg, CVec phj) {
+    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
+                    me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1);
+}
+
+// One mode and its conjugate pair (n = 1, nz = 2, ks = 2): the same operations.
+inline void segment_integrals_1(idx r, CVec q0, ncplx ph, double T, double fb, double om,
+                                double f0, CMat lam, CArr3 VF, CMat Z, Mat D, Mat mk,
+                                Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
+                                CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
+                                CArr3 isum, idx level, const Segment& seg, CVec phj) {
+    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 1, mk, lvis, cvis, stick_k, sr,
+                    me, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, 2);
+}
+
+// Two modes in conjugate pairs (n = 2, nz = 4, ks = 2): the same operations.
+inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, double om,
+                                double f0, CMat lam, CArr3 VF, CMat Z, Mat D, Mat mk,
+                                Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
+                                CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
+                                CArr3 isum, idx level, const Segment& seg, CVec phj) {
+    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 2, mk, lvis, cvis, stick_k, sr,
+                    me, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, 4);
+}
+
+}  // namespace bb::exact

@@ -1,0 +1,1043 @@
+// One segment of the exact kernel, between two events (src/boringbar/kernels/exact/segment.py):
+// its start (start_segment), the grid search for its first event with the outputs on the way
+// (search_segment) and its flows (close_segment).  numba inlined these into the driver; here
+// they are templates on Regen (a cut), instantiated by the driver's two kernels.
+//
+// Every expression keeps numba's operations in numba's order (complex arithmetic through
+// ncplx, Python's max/min through pymax/pymin), so that the bits are the numba kernel's.
+//
+//   struct Work                         the driver's arrays, passed whole (numba: Work)
+//   start_segment<Regen>(w, t, t_stop, ph, n, kase, nreg, j_node, kn, ip, sc, cq, sv)
+//       -> SegStart {r, ks, t_seg_end, at_node, j_node, pdu}
+//   search_segment<Regen>(w, t, r, ks, sz, n, kase, mode, ph, sv)
+//       -> SegEvent {kind, tau, ph_next, wb, wdb}
+//   close_segment<Regen>(w, t, T, r, ks, sz, n, kase, mode, ph, steady, pdu, last_zero_step)
+//       -> the last step of length dt_out counted with h = 0
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <utility>
+
+#include "../arrays.hpp"
+#include "../layout.hpp"
+#include "consts.hpp"
+#include "cut.hpp"
+#include "events.hpp"
+#include "nmath.hpp"
+#include "propagate.hpp"
+
+namespace bb::exact {
+
+namespace L = layout;
+
+// The driver's arrays (numba's Work namedtuple): the scratch, owned here (numba's stack
+// arrays, zeroed once per run and reused by every segment), and views of the run's inputs
+// and outputs.  The views point into this object: it is never copied or moved.
+struct Work {
+    // --- scratch storage
+    std::array<double, NZ_MAX> X_{}, Xa_{}, Xd_{}, dX_{};
+    std::array<cplx, NZ_MAX> q0_{}, qs_{}, qg_{};
+    std::array<double, N_EV> ev_a_{}, ev_b_{}, ev_s_{}, ev_t_{};
+    std::array<double, 6> qsum_{};
+    std::array<double, 7> out_{};
+    std::array<cplx, NB_MAX_2> me_{};
+    std::array<cplx, NB_MAX2> G_{};
+    std::array<cplx, NZB_MAX> Cx_{};
+    std::array<cplx, NB_MAX> cf_{}, ca_{}, cb_{};
+    std::array<cplx, 3> phj_{};
+    std::array<double, NMAX6> mk_{};
+    std::array<double, DDC> ddc_{};
+
+    // --- views of the scratch, with numba's shapes (nz, nb = nz + 3, n modes)
+    Vec X, Xa, Xd, dX;       // states: at the grid point, the step's start, X', a work vector
+    CVec q0, qs, qg;         // eigen-coordinates: the segment's start, scratch, the grid's
+    Vec ev_a, ev_b, ev_s, ev_t;  // event functions at a step's and a sub-step's ends
+    Vec qsum, out;           // a cut's flow sums; a segment's integrals
+    CMat me, G, Cx;          // segment_integrals' scratch
+    CVec cf, ca, cb, phj;
+    Mat mk;                  // (6, n): M, K, C, psi_L, psi_d, psi_a
+    Mat ddc;                 // (4, n + 2): a free ball's y'' and W'' coefficients
+
+    Segment seg;
+    RunConsts cp;
+    RunState rs;
+    RunningOut ro;
+
+    // --- prepare's matrices and the cut's tables (inputs)
+    CMat lam;
+    CArr3 V, Vi, Vfull;  // V: the halved eigenvectors (prepare's Vh); Vfull: prepare's V
+    CMat Z;
+    Mat D;
+    CMat bq;
+    Mat lvis;
+    Vec cvis;
+    CArr3 isum;
+    Span1<idx> kstep;
+    Arr3 bnd;
+    Span1<idx> levmax;
+    CArr3 eh, tabE;
+    CArr4 tabP;
+
+    // the grid's step lengths h, 2 h, 4 h, ... and their phase steps
+    double hl[GRID_LEVELS] = {};
+    ncplx rotl[GRID_LEVELS] = {};
+
+    // --- the run's outputs
+    Vec x;
+    Mat rec, strobe;
+    Vec met;
+
+    Work(idx n, idx nz) {
+        idx nb = nz + 3;
+        X = {X_.data(), nz};
+        Xa = {Xa_.data(), nz};
+        Xd = {Xd_.data(), nz};
+        dX = {dX_.data(), nz};
+        q0 = {q0_.data(), nz};
+        qs = {qs_.data(), nz};
+        qg = {qg_.data(), nz};
+        ev_a = {ev_a_.data(), N_EV};
+        ev_b = {ev_b_.data(), N_EV};
+        ev_s = {ev_s_.data(), N_EV};
+        ev_t = {ev_t_.data(), N_EV};
+        qsum = {qsum_.data(), 6};
+        out = {out_.data(), 7};
+        me = {me_.data(), 2, nb};
+        G = {G_.data(), nb, nb};
+        Cx = {Cx_.data(), nz, nb};
+        cf = {cf_.data(), nb};
+        ca = {ca_.data(), nb};
+        cb = {cb_.data(), nb};
+        phj = {phj_.data(), 3};
+        mk = {mk_.data(), 6, n};
+        ddc = {ddc_.data(), 4, n + 2};
+    }
+    Work(const Work&) = delete;
+    Work& operator=(const Work&) = delete;
+};
+
+namespace kernel {
+
+// X[i] and X[n + i] weighed by row ``row`` of mk: psi . u and psi . u' (row 3: psi_L, W and
+// W'; row 4: psi_d)
+inline std::pair<double, double> psi_dot(Mat mk, idx row, Vec X, idx n) {
+    double u = 0.0;
+    double v = 0.0;
+    for (idx i = 0; i < n; ++i) {
+        u += mk(row, i) * X[i];
+        v += mk(row, i) * X[n + i];
+    }
+    return {u, v};
+}
+
+// Re(V[r, j, :] q) over the evaluated eigen-coordinates, added to s in numba's order
+inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks) {
+    for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+        idx k = kq * ks;
+        s += (ncplx(V(r, j, k)) * ncplx(q[k])).real();
+    }
+    return s;
+}
+
+// All event functions from the state X at tau (see g_value).
+inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, idx n, Mat mk,
+                   double f0, double om) {
+    auto [pdu, pdv] = psi_dot(mk, 4, X, n);
+    double acc = seg.acc;
+    double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu;
+    double yd = seg.vd0 + acc * tau - pdv;
+    ev[EV_PLUS] = y - seg.half;
+    ev[EV_MINUS] = -seg.half - y;
+    ev[EV_VSTOP] = -seg.sdir * yd;
+    ev[EV_YEXT] = yd;
+    if (seg.cdir != 0.0) {
+        auto [w, wd] = psi_dot(mk, 3, X, n);
+        auto [sv, sd] = surface_at(seg, tau);
+        ev[EV_CUT] = seg.cdir * (w - sv);
+        ev[EV_HEXT] = sd - wd;
+    }
+    if (mode != FREE) {
+        double F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om), n, mk, seg.kappa);
+        ev[EV_REL_NEG] = F - seg.fs;
+        ev[EV_REL_POS] = -F - seg.fs;
+        ev[EV_WALL_REL] = seg.wall * F - seg.fs;
+    }
+}
+
+// (aux, aux'): the ball's y, y' or the absorber's stroke and its rate.
+inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, idx mode, idx kase,
+                                     idx n, Mat mk, Vec x, bool ball) {
+    if (ball) {
+        if (mode != FREE) return {seg.y0, 0.0};
+        auto [pdu, pdv] = psi_dot(mk, 4, X, n);
+        double acc = seg.acc;
+        return {seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu, seg.vd0 + acc * tau - pdv};
+    }
+    if (kase == L::TMD) {
+        double a = X[2 * n];
+        double ad = X[2 * n + 1];
+        for (idx i = 0; i < n; ++i) {
+            a -= mk(5, i) * X[i];
+            ad -= mk(5, i) * X[n + i];
+        }
+        return {a, ad};
+    }
+    if (kase == L::LOCKED) return {x[2 * n], 0.0};
+    return {0.0, 0.0};
+}
+
+// (y'', W'') of a free ball's bar state X under the tip force f and F_b: y'' = acc -
+// psi_d . u'', W'' = psi_L . u'', M u'' = psi_L f - K u - C u' - s psi_d F_b (ddc's rows).
+inline std::pair<double, double> ydd(Vec X, double f, double fb, double acc, Mat ddc, idx n) {
+    double yv = acc - (ddc(0, n) * f + ddc(0, n + 1) * fb);
+    double wv = ddc(1, n) * f + ddc(1, n + 1) * fb;
+    for (idx i = 0; i < n; ++i) {
+        yv -= ddc(0, i) * X[i] + ddc(2, i) * X[n + i];
+        wv += ddc(1, i) * X[i] + ddc(3, i) * X[n + i];
+    }
+    return {yv, wv};
+}
+
+struct GridPoint {
+    ncplx phg;
+    double ydd, wdd;
+};
+
+// A whole grid step of level lev outside a cut: the eigen-coordinates qg and the forcing
+// phasor phg advanced, X from them, the event functions at the step's end b and (if ydd_on)
+// y'' and W'' there (else NaN).  NZ > 0: the sizes as compile-time constants (one and two
+// modes, ks = 2), as numba's specialisations; the same operations.
+template <idx NZ>
+inline GridPoint grid_point(Work& w, idx r, idx lev, ncplx phg, ncplx rot, idx ks, double b,
+                            idx mode, idx n, double f0, double om, bool ydd_on, idx nz) {
+    if constexpr (NZ > 0) {
+        nz = NZ;
+        ks = 2;
+        n = NZ / 2;
+    }
+    CVec qg = w.qg;
+    for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+        idx k = kq * ks;
+        qg[k] = ncplx(qg[k]) * ncplx(w.eh(r, lev, k));
+    }
+    phg = phg * rot;
+    const Segment& seg = w.seg;
+    Vec X{w.X.d, nz};
+    from_q(r, qg, phg, seg.fb, w.Z, w.D, w.V, ks, X);
+    events(w.ev_b, X, b, seg, mode, n, w.mk, f0, om);
+    if (ydd_on) {
+        auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, w.ddc, n);
+        return {phg, yv, wv};
+    }
+    return {phg, NAN, NAN};
+}
+
+// Adds a segment's flows ``out`` (over its length T) to the metrics and moves a free ball to
+// the segment's end (into rs; pdu: psi_d . u at its start).
+inline void close_flows(Work& w, double T, bool steady, idx mode, bool ball, double fb,
+                        double acc, double pdu, idx n) {
+    Vec out = w.out;
+    Vec met = w.met;
+    const Segment& seg = w.seg;
+    met[L::W_FORCE] += out[0];
+    met[L::D_VISC] += out[1];
+    met[L::W_NONRECIP] += out[5];
+    if (steady) {
+        met[L::SUM_W2] += out[2];
+        met[L::SUM_W] += out[3];
+        met[L::SUM_F] += out[4];
+        met[L::N_STEADY] += T;
+        if (mode == CONTACT) met[L::T_CONTACT] += T;
+    }
+    if (ball) {
+        auto [pdu1, pdv1] = psi_dot(w.mk, 4, w.X, n);
+        if (mode == FREE) {
+            double y = w.rs.y;
+            double ynew = seg.ud0 + T * (seg.vd0 + 0.5 * acc * T) - pdu1;
+            w.rs.yd = seg.vd0 + acc * T - pdv1;
+            met[L::D_FRICTION] -= fb * (ynew - y);
+            met[L::W_NONRECIP] += (1.0 - w.cp.sr) * fb * (pdu1 - pdu);
+            w.rs.y = ynew;
+        }
+    }
+}
+
+struct CutSegment {
+    double t_seg_end;
+    bool at_node, from_node;
+    idx j_node;
+};
+
+// Where a segment of a cut that starts at t ends (the next node, delayed knot or change of
+// the minimising revolution, before t_stop) and the surface on it, one cubic (into seg.s).
+inline CutSegment cut_segment(double t, double t_stop, idx j_node, Mat kn, idx nk, Span1<idx> ip,
+                              Mat sc, Segment& seg, const CutConsts& cq, const RunState& rs) {
+    double t0 = cq.t0;
+    double hh_ = cq.h;
+    double ttol = cq.ttol;
+    idx nrev = idx(cq.nrev);
+    double tau_d = cq.tau;
+    double feed = cq.feed;
+    double w_before = cq.w0;
+    idx m_rev = idx(cq.mrev);
+    bool cubic = cq.cubic != 0.0;
+    // this segment ends at the next node, delayed knot or change of the minimising
+    // revolution: the surface is one cubic on it
+    while (t0 + double(j_node + 1) * hh_ <= t + ttol) j_node += 1;
+    double t_seg_end = pymin(t0 + double(j_node + 1) * hh_, t_stop);
+    bool at_node = t_seg_end < t_stop;
+    bool from_node = std::fabs(t - (t0 + double(j_node) * hh_)) <= ttol;
+    if (rs.first_zero < 0.0) {
+        // one revolution (the minimum until the first zero), as surface_piece's k = 1
+        for (idx k = 1; k <= nrev; ++k) {
+            double kt = double(k) * tau_d;
+            idx i = ip[k];
+            while (i + 1 < nk && kn(i + 1, 0) + kt <= t + ttol) i += 1;
+            ip[k] = i;
+        }
+        idx i = ip[1];
+        if (i < 0) {
+            seg.s[0] = feed + w_before;
+            seg.s[1] = 0.0;
+            seg.s[2] = 0.0;
+            seg.s[3] = 0.0;
+        } else {
+            double x0 = (t - tau_d) - kn(i, 0);
+            if (from_node && kn(i, 4) == double(j_node - m_rev)) x0 = 0.0;
+            auto [c0, c1, c2, c3] = hermite_at(kn(i, 0), kn(i, 1), kn(i, 3), kn(i + 1, 0),
+                                               kn(i + 1, 1), kn(i + 1, 2), x0, cubic);
+            seg.s[0] = feed + c0;
+            seg.s[1] = c1;
+            seg.s[2] = c2;
+            seg.s[3] = c3;
+        }
+        if (i + 1 < nk) {
+            double tn = kn(i + 1, 0) + tau_d;
+            if (t + ttol < tn && tn < t_seg_end - ttol) {
+                t_seg_end = tn;
+                at_node = false;
+            }
+        }
+    } else {
+        double t_piece = surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
+                                       w_before, tau_d, seg, from_node ? j_node : idx(-1),
+                                       m_rev, cubic);
+        if (t_piece < t_seg_end) {
+            t_seg_end = t_piece;
+            at_node = false;
+        }
+    }
+    return {t_seg_end, at_node, from_node, j_node};
+}
+
+struct Bounds {
+    double b4, bw4, b3y, b3w;
+};
+
+// Bounds over a segment (regime r, eigen-coordinates q0) from prepare's bnd: |y^(4)| if
+// ball, |W^(4)| if w_steady (else -1), |y^(3)| and |W^(3)| if adapt (else 0).
+inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3 bnd, double krb,
+                     bool ball, bool incut, bool w_steady, bool adapt) {
+    idx nz = q0.size();
+    // a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
+    double b4 = 0.0;
+    if (ball) {
+        b4 = bnd(r, 0, nz);  // Omega^4 |psi_d . Z|
+        for (idx k = 0; k < nz; ++k) {
+            ncplx qk = q0[k];
+            if (incut) {
+                // minus the polynomial particular solution P of q' = lambda q + g(tau)
+                // (P^(4) = 0 for a cubic g); |exp(lambda tau)| <= 1 still
+                ncplx lk = lam(r, k);
+                ncplx gk = krb * ncplx(bq(r, k));
+                ncplx p3 = -gk * seg.s[3] / lk;
+                ncplx p2 = (3.0 * p3 - gk * seg.s[2]) / lk;
+                ncplx p1 = (2.0 * p2 - gk * seg.s[1]) / lk;
+                qk = qk - (p1 - gk * seg.s[0]) / lk;
+            }
+            b4 += bnd(r, 0, k) * abs(qk);  // |lambda_k|^4 |psi_d . V_k| |q_k|
+        }
+    }
+    // the same bound on |W^(4)| in the steady window under harmonic forcing: a W' = 0
+    // extremum is located only where it may beat the running extremes
+    double bw4 = -1.0;
+    if (w_steady) {
+        bw4 = bnd(r, 1, nz);
+        for (idx k = 0; k < nz; ++k) bw4 += bnd(r, 1, k) * abs(ncplx(q0[k]));
+    }
+    // a free ball under harmonic forcing: bounds on |y'''| and |W'''| for its longer steps
+    double b3y = 0.0;
+    double b3w = 0.0;
+    if (adapt) {
+        b3y = bnd(r, 2, nz);
+        b3w = bnd(r, 3, nz);
+        for (idx k = 0; k < nz; ++k) {
+            double aq = abs(ncplx(q0[k]));
+            b3y += bnd(r, 2, k) * aq;
+            b3w += bnd(r, 3, k) * aq;
+        }
+    }
+    return {b4, bw4, b3y, b3w};
+}
+
+// The longest step 2^lev h (lev <= top) from a free ball's grid point a that Taylor's
+// theorem proves free of events and of new extrema of |y| (below ylim) or (steady) of W
+// (docs/exact.md, "Longer steps").
+inline idx level(double ya, double yda, double ydd_a, double wa, double wda, double wdd_a,
+                 double b3y, double b3w, double ylim, double wmar, double max_w, double min_w,
+                 const double* hl, idx top, bool watch_v, bool steady) {
+    idx lev = 0;
+    for (idx lv = 1; lv <= top; ++lv) {
+        double hs = hl[lv];
+        auto [lo, hi] = quad_range(ya, yda, ydd_a, hs);
+        double e3 = b3y * hs * hs * hs / 6.0;
+        if (!(hi + e3 < ylim && lo - e3 > -ylim)) break;
+        if (watch_v) {
+            double e2 = b3y * hs * hs * (0.5 + 1e-9);
+            double v1 = yda + ydd_a * hs;
+            if (!((yda > e2 && v1 > e2) || (yda < -e2 && v1 < -e2))) break;
+        }
+        if (steady) {
+            auto [wlo, whi] = quad_range(wa, wda, wdd_a, hs);
+            double we3 = b3w * hs * hs * hs / 6.0 + wmar;
+            if (!(whi + we3 < max_w && wlo - we3 > min_w)) break;
+        }
+        lev = lv;
+    }
+    return lev;
+}
+
+struct Found {
+    idx kind;
+    double t;
+};
+
+// A ball off FREE: the first of its stick, slip and wall-release events in [a, b].
+inline Found regime_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0,
+                          double om, idx mode) {
+    double best = b;
+    idx kind = -1;
+    for (idx kk : {EV_REL_NEG, EV_REL_POS, EV_WALL_REL}) {
+        if ((mode == STICK) == (kk != EV_WALL_REL)) {
+            if (w.ev_a[kk] <= 0.0 && 0.0 < w.ev_b[kk]) {
+                double tr = find_root_any(kk, a, w.ev_a[kk], b, w.ev_b[kk], w.seg, r, w.q0,
+                                          w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n,
+                                          w.mk, f0, om, -1.0);
+                if (tr < best || kind < 0) {
+                    best = tr;
+                    kind = kk;
+                }
+            }
+        }
+    }
+    return {kind, best};
+}
+
+// A free ball's wall and friction-switch events in [a, b], with the graze guard's
+// sub-steps where the bound on y^(4) allows a crossing and return inside the step.
+inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
+                        idx mode, bool watch_v, bool watch_ext, double b4, idx lev,
+                        double ydd_a, double ydd_b) {
+    Vec ev_a = w.ev_a;
+    Vec ev_b = w.ev_b;
+    double half = w.cp.half;
+    double best = b;
+    idx kind = -1;
+    // call the search only when an end value shows something, or y' changes sign and the
+    // bound on y lets the ball reach a wall (a longer step than h holds no wall event)
+    bool graze = lev == 0 && may_graze(a, b, ev_a, ev_b, half, b4);
+    if ((ev_a[EV_PLUS] <= 0.0 && 0.0 < ev_b[EV_PLUS])
+        || (ev_a[EV_MINUS] <= 0.0 && 0.0 < ev_b[EV_MINUS])
+        || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
+        || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)) {
+        auto [k, tb] = wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, w.seg, r, w.q0,
+                                 w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0,
+                                 om, ydd_a, ydd_b);
+        kind = k;
+        best = tb;
+    }
+    if (kind < 0 && graze) {
+        // look again on NSUB sub-steps (direct evaluations)
+        Vec ev_s = w.ev_s;
+        Vec ev_t = w.ev_t;
+        for (idx kk = 0; kk < N_EV; ++kk) ev_s[kk] = ev_a[kk];
+        double sa = a;
+        for (idx j = 1; j <= NSUB; ++j) {
+            double sb = j < NSUB ? a + (b - a) * double(j) / double(NSUB) : b;
+            if (j < NSUB) {
+                state_at(r, w.q0, w.seg, sb, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX);
+                events(ev_t, w.dX, sb, w.seg, mode, n, w.mk, f0, om);
+            } else {
+                for (idx kk = 0; kk < N_EV; ++kk) ev_t[kk] = ev_b[kk];
+            }
+            auto [k, tb] = wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half, w.seg, r,
+                                     w.q0, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n,
+                                     w.mk, f0, om, NAN, NAN);
+            kind = k;
+            best = tb;
+            if (kind >= 0) break;
+            sa = sb;
+            for (idx kk = 0; kk < N_EV; ++kk) ev_s[kk] = ev_t[kk];
+        }
+    }
+    return {kind, best};
+}
+
+// The tool leaving (in the cut) or re-entering (out of it) in [a, b]: h = 0, or a graze of
+// h = 0 between the step's ends, found at the extremum of h.  -1: none.
+inline double cut_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0,
+                        double om) {
+    Vec ev_a = w.ev_a;
+    Vec ev_b = w.ev_b;
+    double tr = -1.0;
+    if (ev_a[EV_CUT] <= 0.0 && 0.0 < ev_b[EV_CUT]) {
+        tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], w.seg, r, w.q0, w.lam, w.V,
+                           ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0, om, -1.0);
+    } else if (ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0) {
+        double te = find_root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], w.seg, r, w.q0,
+                                  w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0,
+                                  om, -1.0);
+        double ge = g_value(EV_CUT, te, w.seg, r, w.q0, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs,
+                            w.dX, n, w.mk, f0, om);
+        if (ev_a[EV_CUT] <= 0.0 && 0.0 < ge) {
+            tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, w.seg, r, w.q0, w.lam, w.V, ks,
+                               w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0, om, -1.0);
+        }
+    }
+    return tr;
+}
+
+// The first event in the grid step [a, b] of the segment (regime r, mode) from the event
+// functions at its ends (w.ev_a, w.ev_b) and (a free ball) y'' there: kind -1 if none.
+template <bool Regen>
+inline Found find_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
+                        idx mode, bool ball, bool watch_v, bool watch_ext, double b4, idx lev,
+                        double ydd_a, double ydd_b) {
+    Found f{-1, b};
+    if (ball && mode != FREE) {
+        f = regime_event(w, a, b, r, ks, n, f0, om, mode);
+    } else if (ball && mode == FREE) {
+        f = wall_event(w, a, b, r, ks, n, f0, om, mode, watch_v, watch_ext, b4, lev, ydd_a,
+                       ydd_b);
+    }
+    if constexpr (Regen) {
+        double tr = cut_event(w, a, b, r, ks, n, f0, om);
+        if (tr >= 0.0 && (f.kind < 0 || tr < f.t)) f = {EV_CUT, tr};
+    }
+    return f;
+}
+
+// Adds a cut's flows over the grid step [a, b] to w.qsum (the slots of segment_integrals'
+// out); whole: a whole step H from a node, without event, from the tables; wb: W at b.
+// Returns the largest cutting force so far.
+inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool whole,
+                        bool sticking, bool steady, double wb, double max_force) {
+    const Segment& seg = w.seg;
+    CVec q0 = w.q0;
+    CVec qs = w.qs;
+    Vec dX = w.dX;
+    Vec qsum = w.qsum;
+    Mat mk = w.mk;
+    idx nz = q0.size();
+    double fb = seg.fb;
+    double sr = w.cp.sr;
+    double krb_seg = seg.krb;
+    double s_0 = seg.s[0];
+    double s_1 = seg.s[1];
+    double s_2 = seg.s[2];
+    double s_3 = seg.s[3];
+    // Gauss-Legendre (4 points, exact to degree 7) for the flows of the step: the input is
+    // a cubic, no longer a sum of exponentials
+    if (whole && !(sticking && sr != 1.0)) {
+        // a whole step: tabulated values
+        for (idx g = 0; g < 4; ++g) {
+            for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+                idx k = kq * ks;
+                qs[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + s_0 * ncplx(w.tabP(r, g, 0, k))
+                        + s_1 * ncplx(w.tabP(r, g, 1, k)) + s_2 * ncplx(w.tabP(r, g, 2, k))
+                        + s_3 * ncplx(w.tabP(r, g, 3, k));
+            }
+            for (idx j = 0; j < nz; ++j) dX[j] = add_modes(fb * w.D(r, j), w.V, r, j, qs, nz, ks);
+            auto [wq, wdq] = psi_dot(mk, 3, dX, n);
+            double xg = GL_X[g] * b;
+            double fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq);
+            max_force = pymax(max_force, fq);
+            double wg = GL_W[g] * b;
+            qsum[0] += wg * fq * wdq;
+            double dv = 0.0;
+            for (idx d = 0; d < w.lvis.n0; ++d) {
+                double vv = 0.0;
+                for (idx j = 0; j < nz; ++j) vv += w.lvis(d, j) * dX[j];
+                dv += w.cvis[d] * vv * vv;
+            }
+            qsum[1] += wg * dv;
+            if (steady) {
+                qsum[2] += wg * wq * wq;
+                qsum[3] += wg * wq;
+                qsum[4] += wg * fq;
+            }
+        }
+    } else {
+        max_force = pymax(max_force, quad_cut(a, b, seg, r, q0, w.lam, w.V, ks, w.Z, w.D, w.bq,
+                                              qs, dX, n, mk, w.lvis, w.cvis, sticking,
+                                              w.cp.kstick, sr, qsum, steady));
+    }
+    return pymax(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb));
+}
+
+// The state at tau into the work vector dX and row[1:5]: W, W', aux, aux' (a history or
+// strobe row; its time, row[0], is the caller's).
+inline void sample(Work& w, double tau, idx r, idx ks, idx n, double om, idx mode, idx kase,
+                   bool ball, double* row) {
+    state_at(r, w.q0, w.seg, tau, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX);
+    auto [wv, wdv] = psi_dot(w.mk, 3, w.dX, n);
+    auto [av, adv] = aux(w.dX, tau, w.seg, mode, kase, n, w.mk, w.x, ball);
+    row[1] = wv;
+    row[2] = wdv;
+    row[3] = av;
+    row[4] = adv;
+}
+
+// The history rows (every rec_dt from t0) and strobe rows (every tstrobe) that fall in
+// (t + a, t + b] of the segment from t, into rec and strobe while they have room; the next
+// ones' times into w.ro.
+inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, idx n, double f0,
+                    double om, idx mode, idx kase, bool ball) {
+    double t0 = w.cp.t0;
+    double rec_dt = w.cp.rec_dt;
+    double tstrobe = w.cp.tstrobe;
+    Mat rec = w.rec;
+    Mat strobe = w.strobe;
+    Vec met = w.met;
+    double k_rec = w.ro.k_rec;
+    double t_next_strobe = w.ro.t_strobe;
+    idx n_rec = idx(met[L::N_REC]);
+    while (rec_dt > 0.0 && n_rec < rec.n0 && t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt) {
+        double ts_ = t0 + k_rec * rec_dt;
+        if (ts_ > t_end) break;
+        double* row = rec.row(n_rec);
+        row[0] = ts_;
+        sample(w, ts_ - t, r, ks, n, om, mode, kase, ball, row);
+        row[5] = cut_force(w.seg, ts_ - t, w.dX, n, w.mk, f0, om);
+        n_rec += 1;
+        k_rec += 1;
+    }
+    met[L::N_REC] = double(n_rec);
+    idx n_stb = idx(met[L::N_STROBE]);
+    while (tstrobe > 0.0 && t_next_strobe <= t + b && t_next_strobe <= t_end) {
+        if (n_stb < strobe.n0) {
+            double* row = strobe.row(n_stb);
+            row[0] = t_next_strobe;
+            sample(w, t_next_strobe - t, r, ks, n, om, mode, kase, ball, row);
+            n_stb += 1;
+        }
+        t_next_strobe += tstrobe;
+    }
+    met[L::N_STROBE] = double(n_stb);
+    w.ro.k_rec = k_rec;
+    w.ro.t_strobe = t_next_strobe;
+}
+
+// e^{i om t} as numba computes cmath.exp(1j * om * t): the products promoted to complex
+inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t); }
+
+// (q0 tabE + sum_j S_j tabP_j) at the table's column g: a cut's whole step from its tables
+inline void tab_state(Work& w, idx r, idx g, idx ks, CVec q, Vec X) {
+    const Segment& seg = w.seg;
+    CVec q0 = w.q0;
+    idx nz = q0.size();
+    for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+        idx k = kq * ks;
+        q[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + seg.s[0] * ncplx(w.tabP(r, g, 0, k))
+               + seg.s[1] * ncplx(w.tabP(r, g, 1, k)) + seg.s[2] * ncplx(w.tabP(r, g, 2, k))
+               + seg.s[3] * ncplx(w.tabP(r, g, 3, k));
+    }
+    for (idx j = 0; j < nz; ++j) X[j] = add_modes(seg.fb * w.D(r, j), w.V, r, j, q, nz, ks);
+}
+
+// The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
+// usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
+// the tabulated end of a cut's whole step (tab_end), or the closed form.  Returns phg and
+// y'', W'' at b (ydd_b, wdd_b as they were where not evaluated).
+template <bool Regen>
+inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mode, idx lev,
+                         double b, bool usual, bool tab_end, bool ball, bool ydd_on, ncplx phg,
+                         double ydd_b, double wdd_b) {
+    const Segment& seg = w.seg;
+    Vec X = w.X;
+    idx nz = X.size();
+    double f0 = w.cp.f0;
+    double om = w.cp.om;
+    if (usual) {
+        // the usual grid point, with the sizes constant for one and two modes
+        ncplx rot = w.rotl[lev];
+        if (sz == 1) return grid_point<2>(w, r, lev, phg, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+        if (sz == 2) return grid_point<4>(w, r, lev, phg, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+        return grid_point<0>(w, r, lev, phg, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+    }
+    if (tab_end) {
+        tab_state(w, r, 4, ks, w.qg, X);
+    } else {
+        state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X);
+        phg = phasor(om, t + b);
+    }
+    if (ball || !Regen) {
+        events(w.ev_b, X, b, seg, mode, n, w.mk, f0, om);
+        if (ydd_on) {
+            auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, w.ddc, n);
+            ydd_b = yv;
+            wdd_b = wv;
+        }
+    } else {
+        double s_0 = seg.s[0], s_1 = seg.s[1], s_2 = seg.s[2], s_3 = seg.s[3];
+        auto [wq, wdq] = psi_dot(w.mk, 3, X, n);
+        w.ev_b[EV_CUT] = seg.cdir * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))));
+        w.ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq;
+    }
+    return {phg, ydd_b, wdd_b};
+}
+
+// What search_segment returns: the event kind (-1: none), its time from t or the segment's
+// length, the forcing phasor there, W and W' at the end.
+struct SegEvent {
+    idx kind;
+    double tau;
+    ncplx ph_next;
+    double wb, wdb;
+};
+
+// The segment's running extremes, kept in locals during the search (numba: registers)
+struct Extremes {
+    double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
+};
+
+// W's extremes at the end b of a grid step and, where W' changes sign inside the step and
+// the extremum may beat them (w_may_exceed), at the located W' = 0 extremum.
+inline void w_extremes(Work& w, Extremes& e, double a, double b, idx r, idx ks, idx n,
+                       idx kind, idx lev, double bw4, double wa, double wb, double wda,
+                       double wdb, double wdd_a, double wdd_b) {
+    e.max_abs_w = pymax(e.max_abs_w, std::fabs(wb));
+    e.max_w = pymax(e.max_w, wb);
+    e.min_w = pymin(e.min_w, wb);
+    if (lev == 0 && wda * wdb < 0.0
+        && (bw4 < 0.0
+            || w_may_exceed(b - a, wa, wb, wda, wdb, bw4, e.max_w, e.min_w, e.max_abs_w))) {
+        double c0;
+        if (kind < 0 && wdd_a == wdd_a && wdd_b == wdd_b) {  // W'' at both ends
+            c0 = hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1);
+        } else {
+            c0 = hermite(a, b, wa, wb, wda, wdb, 1);
+        }
+        double we = w_extremum_any(a, wda, b, wdb, c0, w.cp.h, w.seg, r, w.q0, w.lam, w.V, ks,
+                                   w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, w.cp.om);
+        e.max_abs_w = pymax(e.max_abs_w, std::fabs(we));
+        e.max_w = pymax(e.max_w, we);
+        e.min_w = pymin(e.min_w, we);
+    }
+}
+
+// The grid search of the segment from t (regime r, mode, forcing phasor ph at t, its
+// description sv) for its first event, with the outputs on the way: the running extremes
+// and output times in w.ro, a cut's flows in w.qsum, history and strobe rows.
+template <bool Regen>
+inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, idx kase,
+                               idx mode, ncplx ph, const SegSearch& sv) {
+    Vec X = w.X;
+    Vec Xa = w.Xa;
+    CVec q0 = w.q0;
+    CVec qg = w.qg;
+    const Segment& seg = w.seg;
+    Vec ev_a = w.ev_a;
+    Vec ev_b = w.ev_b;
+    Mat mk = w.mk;
+    Vec met = w.met;
+    idx nz = q0.size();
+    bool ball = kase == L::BALL;
+    double f0 = w.cp.f0;
+    double om = w.cp.om;
+    double half = w.cp.half;
+    bool outputs = w.cp.rec_dt > 0.0 || w.cp.tstrobe > 0.0;
+    double t_end = w.rs.t_end;
+    double fb = seg.fb;
+    double acc = seg.acc;
+    double s_0 = seg.s[0];
+    double s_1 = seg.s[1];
+    double tlen = sv.tlen;
+    bool steady = sv.steady != 0.0;
+    bool whole = sv.whole != 0.0;
+    bool adapt = sv.adapt != 0.0;
+    bool ydd_on = sv.ydd != 0.0;
+    bool watch_v = sv.watch_v != 0.0;
+    bool watch_ext = sv.watch_ext != 0.0;
+    Extremes e{w.ro.max_abs_w, w.ro.max_w,       w.ro.min_w,
+               w.ro.max_aux,   w.ro.max_aux_all, w.ro.max_force};
+    ncplx ph_next = ph;
+    double wb = 0.0;
+    double wdb = 0.0;
+    // values at tau = 0
+    double a = 0.0;
+    for (idx j = 0; j < nz; ++j) Xa[j] = X[j];
+    for (idx k = 0; k < nz; ++k) qg[k] = q0[k];
+    ncplx phg = ph;
+    idx ev_kind = -1;
+    double tau_ev = tlen;
+    idx istep = 0;
+    // the values at a (carried over from the previous grid point)
+    auto [wa, wda] = psi_dot(mk, 3, Xa, n);
+    if (ball || !Regen) {
+        events(ev_a, Xa, a, seg, mode, n, mk, f0, om);
+    } else {  // only h matters
+        ev_a[EV_CUT] = seg.cdir * (wa - s_0);
+        ev_a[EV_HEXT] = s_1 - wda;
+    }
+    // a segment never starts beyond a wall (events put the ball on it); the closed form's
+    // y(0) may be a few ulp past it, which would hide a return to that wall
+    ev_a[EV_PLUS] = pymin(ev_a[EV_PLUS], 0.0);
+    ev_a[EV_MINUS] = pymin(ev_a[EV_MINUS], 0.0);
+    // nor past h = 0 (an event put it there; the re-evaluated h may be a few ulp off)
+    ev_a[EV_CUT] = pymin(ev_a[EV_CUT], 0.0);
+    for (idx c = 0; c < 6; ++c) w.qsum[c] = 0.0;
+    double auxa = 0.0;
+    double auxda = 0.0;
+    if (kase != L::SOLID) std::tie(auxa, auxda) = aux(Xa, a, seg, mode, kase, n, mk, w.x, ball);
+    double ydd_a = NAN;
+    double wdd_a = NAN;
+    double ydd_b = NAN;
+    double wdd_b = NAN;
+    if (ydd_on) std::tie(ydd_a, wdd_a) = ydd(Xa, f0 * ph.imag(), fb, acc, w.ddc, n);
+    while (true) {
+        // the step: h, or 2^lv h where Taylor's theorem proves that it holds no event and
+        // no new extremum of |y| or (steady) of W
+        idx lev = 0;
+        if (adapt) {
+            double ylim = pymin(half, steady ? e.max_aux : e.max_aux_all) * (1.0 - 1e-9);
+            lev = level(ev_a[EV_PLUS] + half, ev_a[EV_YEXT], ydd_a, wa, wda, wdd_a, sv.b3y,
+                        sv.b3w, ylim, 1e-9 * e.max_abs_w, e.max_w, e.min_w, w.hl, w.levmax[r],
+                        watch_v, steady);
+        }
+        double b = a + w.hl[lev];
+        bool full = true;
+        if (b >= tlen) {
+            b = tlen;
+            full = false;
+        }
+        istep += 1;
+        bool usual = full && istep % 64 != 0 && !Regen;
+        GridPoint gp = advance<Regen>(w, t, r, ks, sz, n, mode, lev, b, usual, whole && !full,
+                                      ball, ydd_on, phg, ydd_b, wdd_b);
+        phg = gp.phg;
+        ydd_b = gp.ydd;
+        wdd_b = gp.wdd;
+        // --- events in [a, b]
+        Found f = find_event<Regen>(w, a, b, r, ks, n, f0, om, mode, ball, watch_v, watch_ext,
+                                    sv.b4, lev, ydd_a, ydd_b);
+        idx kind = f.kind;
+        if (kind >= 0) {
+            b = f.t;
+            ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X);
+            ev_kind = kind;
+            tau_ev = b;
+        }
+        // --- outputs on (a, b]
+        std::tie(wb, wdb) = psi_dot(mk, 3, X, n);
+        if (steady) {
+            w_extremes(w, e, a, b, r, ks, n, kind, lev, sv.bw4, wa, wb, wda, wdb, wdd_a,
+                       wdd_b);
+        }
+        if constexpr (Regen) {
+            e.max_force = cut_flows(w, a, b, r, ks, n, whole && kind < 0, mode == STICK, steady,
+                                    wb, e.max_force);
+        }
+        // aux and aux' at b
+        double auxb = 0.0;
+        double auxdb = 0.0;
+        if (kase != L::SOLID) std::tie(auxb, auxdb) = aux(X, b, seg, mode, kase, n, mk, w.x, ball);
+        if (kind == EV_PLUS || kind == EV_MINUS) {
+            auxb = kind == EV_PLUS ? half : -half;  // on the wall, up to round-off
+        }
+        e.max_aux_all = pymax(e.max_aux_all, std::fabs(auxb));
+        if (steady) {
+            e.max_aux = pymax(e.max_aux, std::fabs(auxb));
+            if (Regen || !ball) {  // a ball's int y^2 is closed form (segment_integrals)
+                double hh = b - a;
+                met[L::SUM_AUX2] += (0.5 * hh * (auxa * auxa + auxb * auxb)
+                                     + hh * hh / 6.0 * (auxa * auxda - auxb * auxdb));
+            }
+        }
+        // history and strobe samples in (t + a, t + b]
+        if (outputs) samples(w, t, b, t_end, r, ks, n, f0, om, mode, kase, ball);
+        if (kind >= 0 || !full) break;
+        a = b;
+        wa = wb;
+        wda = wdb;
+        ydd_a = ydd_b;
+        wdd_a = wdd_b;
+        auxa = auxb;
+        auxda = auxdb;
+        for (idx kk = 0; kk < N_EV; ++kk) ev_a[kk] = ev_b[kk];
+    }
+    w.ro.max_abs_w = e.max_abs_w;
+    w.ro.max_w = e.max_w;
+    w.ro.min_w = e.min_w;
+    w.ro.max_aux = e.max_aux;
+    w.ro.max_aux_all = e.max_aux_all;
+    w.ro.max_force = e.max_force;
+    return {ev_kind, tau_ev, ph_next, wb, wdb};
+}
+
+// What start_segment returns: the regime, its eigen-coordinates' step, the segment's end (at
+// most t_stop), whether that is a cut's node, the last node reached, psi_d . u at t.
+struct SegStart {
+    idx r, ks;
+    double t_seg_end;
+    bool at_node;
+    idx j_node;
+    double pdu;
+};
+
+// A segment from t (forcing phasor ph there) in the run's state w.rs: its regime r, its
+// eigen-coordinates into w.q0, its record into w.seg, its description into sv and, in a
+// cut, its end and surface.
+template <bool Regen>
+inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, idx n, idx kase,
+                              idx nreg, idx j_node, Mat kn, idx nk, Span1<idx> ip, Mat sc,
+                              const CutConsts& cq, SegSearch& sv) {
+    Vec X = w.X;
+    Vec dX = w.dX;
+    CVec q0 = w.q0;
+    Segment& seg = w.seg;
+    const RunConsts& cp = w.cp;
+    const RunState& rs = w.rs;
+    idx nz = q0.size();
+    bool ball = kase == L::BALL;
+    double fc = cp.fc;
+    double m = cp.m;
+    idx mode = idx(rs.mode);
+    double sdir = rs.sdir;
+    bool incut = rs.incut != 0.0;
+    double t_seg_end = t_stop;
+    bool steady = t >= cp.t_steady;
+    idx r = 0;
+    if (ball) r = mode;
+    if (incut) r += nreg;
+    double fb = 0.0;
+    if (mode == FREE && ball) fb = -fc * sdir;
+    double kap = mode == STICK ? cp.kstick : cp.kwall;
+    idx ks = w.kstep[r];
+    for (idx j = 0; j < nz; ++j) {
+        dX[j] = X[j] - ((ncplx(w.Z(r, j)) * ph).imag() + fb * w.D(r, j));
+    }
+    for (idx k = 0; k < nz; ++k) {
+        ncplx s(0.0, 0.0);
+        for (idx j = 0; j < nz; ++j) s += ncplx(w.Vi(r, k, j)) * dX[j];
+        q0[k] = s;
+    }
+    bool at_node = false;
+    bool whole = false;
+    if constexpr (Regen) {
+        CutSegment cs = cut_segment(t, t_stop, j_node, kn, nk, ip, sc, seg, cq, rs);
+        t_seg_end = cs.t_seg_end;
+        at_node = cs.at_node;
+        j_node = cs.j_node;
+        seg.krb = incut ? cq.krb : 0.0;
+        seg.cdir = incut ? 1.0 : -1.0;
+        // a whole step H from node to node, inside one grid step: tabulated values
+        whole = at_node && cs.from_node && cq.h <= cp.h;
+    }
+    auto [pdu, pdv] = psi_dot(w.mk, 4, X, n);
+    // bounds on |y^(4)|, |W^(4)| (steady, harmonic) and |y^(3)|, |W^(3)| (a free ball)
+    bool ydd_on = ball && mode == FREE && !Regen;
+    bool adapt = ydd_on && w.levmax[r] > 0;
+    Bounds bd = bounds(r, q0, seg, w.lam, w.bq, w.bnd, cq.krb, ball, incut, steady && !Regen,
+                       adapt);
+    seg.ts = t;
+    seg.fb = fb;
+    seg.ud0 = rs.y + pdu;  // the ball's absolute position and velocity
+    seg.vd0 = rs.yd + pdv;
+    seg.y0 = rs.y;
+    seg.sdir = sdir;
+    seg.wall = rs.wall;
+    seg.kappa = kap;
+    seg.fs = cp.fs;
+    seg.half = cp.half;
+    seg.m = m > 0.0 ? m : 1.0;
+    seg.acc = fb / seg.m;
+    // which events are watched
+    bool watch_wall = ball && mode == FREE;
+    bool watch_v = watch_wall && fc > 0.0 && sdir != 0.0;
+    bool watch_ext = watch_wall && !watch_v;
+    sv.tlen = t_seg_end - t;
+    sv.b4 = bd.b4;
+    sv.bw4 = bd.bw4;
+    sv.b3y = bd.b3y;
+    sv.b3w = bd.b3w;
+    sv.steady = steady ? 1.0 : 0.0;
+    sv.whole = whole ? 1.0 : 0.0;
+    sv.adapt = adapt ? 1.0 : 0.0;
+    sv.ydd = ydd_on ? 1.0 : 0.0;
+    sv.watch_v = watch_v ? 1.0 : 0.0;
+    sv.watch_ext = watch_ext ? 1.0 : 0.0;
+    return {r, ks, t_seg_end, at_node, j_node, pdu};
+}
+
+// The flows of the segment [t, t + T] (regime r, forcing phasor ph at t; a cut's from
+// w.qsum, else closed form) into the metrics, a cut's steps with h = 0 counted, a free ball
+// moved to t + T.  Returns the last step of length dt_out counted with h = 0.
+template <bool Regen>
+inline idx close_segment(Work& w, double t, double T, idx r, idx ks, idx sz, idx n, idx kase,
+                         idx mode, ncplx ph, bool steady, double pdu, idx last_zero_step) {
+    const Segment& seg = w.seg;
+    const RunConsts& cp = w.cp;
+    Vec out = w.out;
+    Vec met = w.met;
+    bool ball = kase == L::BALL;
+    double fb = seg.fb;
+    if constexpr (Regen) {
+        for (idx c = 0; c < 6; ++c) out[c] = w.qsum[c];
+        if (w.rs.incut == 0.0) {  // the steps of length dt_out touched with h = 0
+            double t0 = cp.t0;
+            double dt_out = cp.dt_out;
+            idx js = std::max(idx(std::floor((t - t0) / dt_out)), last_zero_step + 1);
+            idx je = idx(std::ceil((t + T - t0) / dt_out)) - 1;
+            if (je >= js) {
+                met[L::N_ZERO_STEPS] += double(je - js + 1);
+                last_zero_step = je;
+            }
+        }
+    } else {
+        double kst = (ball && mode == STICK) ? cp.kstick : 0.0;
+        // what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a free
+        // ball's y^2
+        idx lvl = steady ? ((ball && mode == FREE) ? 2 : 1) : 0;
+        if (sz == 1) {
+            segment_integrals_1(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
+                                w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
+                                out, w.isum, lvl, seg, w.phj);
+        } else if (sz == 2) {
+            segment_integrals_2(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
+                                w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
+                                out, w.isum, lvl, seg, w.phj);
+        } else {
+            segment_integrals(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, n, w.mk,
+                              w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb, out,
+                              w.isum, lvl, ks, seg, w.phj);
+        }
+        if (ball && steady) {
+            // the ball's int y^2: closed form when free, y constant otherwise
+            met[L::SUM_AUX2] += mode == FREE ? out[6] : seg.y0 * seg.y0 * T;
+        }
+    }
+    close_flows(w, T, steady, mode, ball, fb, seg.acc, pdu, n);
+    return last_zero_step;
+}
+
+}  // namespace kernel
+
+using kernel::close_segment;
+using kernel::search_segment;
+using kernel::SegEvent;
+using kernel::SegStart;
+using kernel::start_segment;
+
+}  // namespace bb::exact

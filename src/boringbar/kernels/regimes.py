@@ -1,0 +1,391 @@
+"""The exact integrator's per-run setup without numba: :func:`prepare` (the regimes'
+matrices, diagonalised, and their constants), :func:`history_step` and :func:`cut_tables`
+(a regenerative cut's knot spacing and tabulated whole step).
+
+Each gives, bit for bit, what ``boringbar.kernels.exact.prepare.prepare`` and
+``boringbar.kernels.exact.cut.history_step`` / ``cut_tables`` give with numba (the compiled
+core, ``boringbar._core``, then takes these arrays).  Bit for bit means the same floating
+point operations in the same order, so the port keeps to what numba compiled:
+
+- the complex arithmetic is CPython's (which numba copies): a float operand promoted to
+  complex(x, 0.0), then (ac - bd, ad + bc) and CPython's division (``_Py_c_quot``).  Where a
+  loop is vectorised it is vectorised on the real and imaginary parts with exactly these
+  formulas (NumPy's own complex multiply and divide may use other sequences and FMA);
+- ``abs(z)`` is the C library's hypot (``abs(complex)`` in CPython, ``math.hypot`` in numba;
+  *not* CPython's ``math.hypot``, which is its own algorithm) and ``cmath.exp`` is numba's:
+  ``exp(x) (cos y + i sin y)`` from the C library's exp, cos, sin (``math.*`` in CPython;
+  NumPy's ufuncs may use their own SIMD versions, so they are not used for these);
+- the one LAPACK call inside numba's part, ``np.linalg.inv`` of the coupled mass matrix,
+  is dgetrf + dgetri of SciPy's LAPACK, which numba calls through ``cython_lapack``: called
+  here through ``scipy.linalg.lapack``; the eigen-decomposition, inverse and solves of the
+  stacked regimes were NumPy calls in the numba version too and are the same calls here;
+- sums keep their order (a loop over the summed index, vectorised over the others).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.linalg import lapack
+
+from boringbar.kernels import layout as L
+
+#: event-search grid points per shortest period and grid levels (kernels/exact/consts.py)
+GRID_PER_PERIOD = 16.382
+GRID_LEVELS = 4
+
+#: Gauss-Legendre nodes on [0, 1], 4 points (the same expressions as kernels/exact/cut.py)
+GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179242816,
+        0.5 + 0.4305681557970263)
+
+#: 1 / k! (kernels/exact/consts.py's RFACT)
+RFACT = tuple(1.0 / math.factorial(k) for k in range(20))
+
+
+# --- numba's scalar arithmetic -------------------------------------------------------------
+def _cexp(z: complex) -> complex:
+    """cmath.exp as numba compiles it (numba/cpython/cmathimpl.py's exp_impl)."""
+    x, y = z.real, z.imag
+    if math.isfinite(x):
+        if math.isfinite(y):
+            c = math.cos(y)
+            s = math.sin(y)
+            r = math.exp(x)
+            return complex(r * c, r * s)
+        return complex(math.nan, math.nan)
+    if math.isnan(x):
+        return complex(x, x) if y else complex(x, y)
+    if x > 0.0:  # +inf
+        if math.isfinite(y):
+            real = math.cos(y)
+            imag = math.sin(y)
+            return complex(real * x if real != 0 else real, imag * x if imag != 0 else imag)
+        return complex(x, math.nan)
+    if math.isfinite(y):  # -inf
+        r = math.exp(x)
+        return complex(r * math.cos(y), r * math.sin(y))
+    return complex(0.0, 0.0)
+
+
+def _phis(x: complex):
+    """kernels/exact/propagate.py's phis with Python complex numbers: CPython's complex
+    arithmetic is numba's (a float promoted to complex; _Py_c_prod, _Py_c_quot)."""
+    if x.real * x.real + x.imag * x.imag < 1.0:
+        p4 = 0j
+        for m in range(14, -1, -1):
+            p4 = p4 * x + RFACT[m + 4]
+        p3 = 1.0 / 6.0 + x * p4
+        p2 = 0.5 + x * p3
+        p1 = 1.0 + x * p2
+        return 1.0 + x * p1, p1, p2, p3, p4
+    ex = _cexp(x)
+    p1 = (ex - 1.0) / x
+    p2 = (p1 - 1.0) / x
+    p3 = (p2 - 0.5) / x
+    return ex, p1, p2, p3, (p3 - 1.0 / 6.0) / x
+
+
+def _cmul_parts(ar, ai, br, bi):
+    """(ar + i ai)(br + i bi) on arrays: CPython's (ac - bd, ad + bc), elementwise."""
+    return ar * br - ai * bi, ar * bi + ai * br
+
+
+def _inv(a: np.ndarray) -> np.ndarray:
+    """numba's np.linalg.inv: LAPACK dgetrf then dgetri (SciPy's, as numba's cython_lapack)."""
+    if not np.all(np.isfinite(a)):
+        raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+    lu, piv, info = lapack.dgetrf(np.asfortranarray(a))
+    if info > 0:
+        raise np.linalg.LinAlgError("Matrix is singular to machine precision.")
+    inv, info = lapack.dgetri(lu, piv)
+    if info > 0:
+        raise np.linalg.LinAlgError("Matrix is singular to machine precision.")
+    return np.ascontiguousarray(inv)
+
+
+# --- the regimes ----------------------------------------------------------------------------
+def _coupled(p, n, s, A, B):
+    """A bar carrying the ball (share s of its inertia): (M + s m psi_d psi_d^T) u'' =
+    psi_L f - K u - C u', into A and B."""
+    m = float(p[L.BALL_MASS])
+    pd = p[L.PSI_D:L.PSI_D + n]
+    Mm = np.zeros((n, n))
+    Mm[np.arange(n), np.arange(n)] = p[L.M_:L.M_ + n]
+    Mm = Mm + ((s * m) * pd[:, None]) * pd[None, :]  # numba: Mm[i, j] += s m pd_i pd_j
+    Mi = _inv(Mm)
+    A[np.arange(n), n + np.arange(n)] = 1.0
+    A[n:2 * n, 0:n] = -Mi * p[L.K_:L.K_ + n][None, :]
+    A[n:2 * n, n:2 * n] = -Mi * p[L.C_:L.C_ + n][None, :]
+    b = np.zeros(n)
+    for j in range(n):  # the sum over j in numba's order
+        b = b + Mi[:, j] * p[L.PSI_L + j]
+    B[n:2 * n] = b
+
+
+def _regimes(p):
+    """The regimes' X' = A X + B f + c F_b, stacked: (A, B, c, nreg) (prepare.py's)."""
+    n = int(p[L.N_MODES])
+    case = int(p[L.CASE])
+    sr = float(p[L.REACTION])
+    regen = int(p[L.FORCING]) == L.REGENERATIVE
+    nz = 2 * n + 2 if case == L.TMD else 2 * n
+    nreg = 3 if case == L.BALL else 1
+    R = 2 * nreg if regen else nreg
+    A = np.zeros((R, nz, nz))
+    B = np.zeros((R, nz))
+    c = np.zeros((R, nz))
+    Mv = p[L.M_:L.M_ + n]
+    ii = np.arange(n)
+    if case == L.LOCKED:
+        _coupled(p, n, 1.0, A[0], B[0])
+    else:
+        A[0, ii, n + ii] = 1.0
+        A[0, n + ii, ii] = -p[L.K_:L.K_ + n] / Mv
+        A[0, n + ii, n + ii] = -p[L.C_:L.C_ + n] / Mv
+        B[0, n + ii] = p[L.PSI_L:L.PSI_L + n] / Mv
+        if case == L.BALL:
+            c[0, n + ii] = -sr * p[L.PSI_D:L.PSI_D + n] / Mv  # the bar's reaction to F_b
+    if case == L.TMD:
+        ma, ka, ca = float(p[L.TMD_MASS]), float(p[L.TMD_K]), float(p[L.TMD_C])
+        pa = p[L.PSI_A:L.PSI_A + n]
+        A[0, 2 * n, 2 * n + 1] = 1.0
+        # bar: M u'' = psi_L f - K u - C u' + psi_a (k_a rel + c_a rel')
+        A[0, n:2 * n, 0:n] -= (ka * pa[:, None]) * pa[None, :] / Mv[:, None]
+        A[0, n:2 * n, n:2 * n] -= (ca * pa[:, None]) * pa[None, :] / Mv[:, None]
+        A[0, n + ii, 2 * n] = ka * pa / Mv
+        A[0, n + ii, 2 * n + 1] = ca * pa / Mv
+        A[0, 2 * n + 1, ii] = ka * pa / ma
+        A[0, 2 * n + 1, n + ii] = ca * pa / ma
+        A[0, 2 * n + 1, 2 * n] = -ka / ma
+        A[0, 2 * n + 1, 2 * n + 1] = -ca / ma
+    if case == L.BALL:
+        _coupled(p, n, sr, A[1], B[1])  # stick
+        if sr == 1.0:  # contact: s = 1, the stick regime's matrices when sr = 1
+            A[2] = A[1]
+            B[2] = B[1]
+        else:
+            _coupled(p, n, 1.0, A[2], B[2])
+    if regen:
+        # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
+        krb = float(p[L.KR_B])
+        pl = p[L.PSI_L:L.PSI_L + n]
+        for r in range(nreg):
+            A[nreg + r] = A[r]
+            B[nreg + r] = B[r]
+            c[nreg + r] = c[r]
+            A[nreg + r, :, 0:n] -= (krb * B[r][:, None]) * pl[None, :]
+    return A, B, c, nreg
+
+
+def _pair_order(lr):
+    """prepare.py's _pair_order: an ordering [l1, conj l1, l2, conj l2, ...] of ``lr``, or
+    an empty array if its values are not all complex conjugate pairs."""
+    lr = [complex(z) for z in lr]
+    nz = len(lr)
+    none = np.empty(0, np.int64)
+    ok = nz % 2 == 0
+    if ok:
+        for i in range(0, nz, 2):
+            a = lr[i]
+            if not (a.imag > 1e-12 * abs(a)) or lr[i + 1] != a.conjugate():
+                ok = False
+                break
+    if ok:
+        return np.arange(nz)
+    for i in range(nz):
+        if abs(lr[i].imag) <= 1e-12 * abs(lr[i]):
+            return none
+    up = [i for i in range(nz) if lr[i].imag > 0]
+    down = [i for i in range(nz) if lr[i].imag < 0]
+    if len(up) != len(down):
+        return none
+    order = np.empty(nz, np.int64)
+    for u, i in enumerate(up):
+        cj = lr[i].conjugate()
+        j = down[0]
+        for d in down:
+            if abs(lr[d] - cj) < abs(lr[j] - cj):
+                j = d
+        if abs(lr[j] - cj) > 1e-9 * abs(lr[i]):
+            return none
+        order[2 * u] = i
+        order[2 * u + 1] = j
+    return order
+
+
+def _finish(p, lam, V, Vi, Z, B):
+    """prepare.py's _finish: the conjugate-pair ordering (in place in lam, V, Vi), Vh,
+    kstep, bq = Vi B, h, bnd, levmax, eh and isum."""
+    n = int(p[L.N_MODES])
+    om = float(p[L.OMEGA])
+    R, nz = lam.shape
+    kstep = np.ones(R, np.int64)
+    Vh = V.copy()
+    for r in range(R):
+        order = _pair_order(lam[r])
+        if order.shape[0] == 0:
+            continue
+        lam[r] = lam[r][order]
+        V[r] = V[r][:, order]
+        Vi[r] = Vi[r][order, :]
+        # numba's np.conj: imag -> -0.0 - imag, the same bits as the sign flip
+        V[r, :, 1::2] = np.conj(V[r, :, 0::2])
+        Vi[r, 1::2, :] = np.conj(Vi[r, 0::2, :])
+        # numba: 2.0 * V[r, :, k] promotes 2.0 to complex(2.0, 0.0)
+        re, im = _cmul_parts(2.0, 0.0, V[r, :, 0::2].real, V[r, :, 0::2].imag)
+        Vh[r, :, 0::2].real = re
+        Vh[r, :, 0::2].imag = im
+        Vh[r, :, 1::2] = 0.0
+        kstep[r] = 2
+    # bq[r, k] = sum_j Vi[r, k, j] B[r, j], B promoted to complex, in j's order
+    sre = np.zeros((R, nz))
+    sim = np.zeros((R, nz))
+    for j in range(nz):
+        b = B[:, j][:, None]
+        tre, tim = _cmul_parts(Vi[:, :, j].real, Vi[:, :, j].imag, b, 0.0)
+        sre = sre + tre
+        sim = sim + tim
+    bq = np.empty((R, nz), np.complex128)
+    bq.real = sre
+    bq.imag = sim
+    lam_c = [[complex(lam[r, k]) for k in range(nz)] for r in range(R)]
+    alam = [[abs(z) for z in row] for row in lam_c]  # hypot, as numba's abs
+    fastest = om
+    for r in range(R):
+        for k in range(nz):
+            a = alam[r][k]
+            fastest = a if a > fastest else fastest
+    h = 2 * math.pi / fastest / GRID_PER_PERIOD
+    # the bounds on |y^(4)|, |W^(4)|, |y'''|, |W'''| over a segment (see prepare.py):
+    # s = sum_i psi_i (V or Z)_i, psi promoted to complex, in i's order, for all regimes and
+    # both rows (psi_d, psi_L) at once; |s| by np.hypot, the C library's hypot as numba's abs
+    psi = np.stack([p[L.PSI_D:L.PSI_D + n], p[L.PSI_L:L.PSI_L + n]])  # (2, n)
+    cols = np.concatenate([V[:, :n, :], Z[:, :n, None]], axis=2)  # (R, n, nz + 1)
+    sre = np.zeros((R, 2, nz + 1))
+    sim = np.zeros((R, 2, nz + 1))
+    for i in range(n):
+        tre, tim = _cmul_parts(psi[None, :, i, None], 0.0, cols[:, None, i, :].real,
+                               cols[:, None, i, :].imag)
+        sre = sre + tre
+        sim = sim + tim
+    sabs = np.hypot(sre, sim)
+    a = np.empty((R, 1, nz + 1))
+    a[:, 0, :nz] = alam
+    a[:, 0, nz] = om
+    bnd = np.empty((R, 4, nz + 1))
+    bnd[:, 0:2, :] = a * a * a * a * sabs
+    bnd[:, 2:4, :] = a * a * a * sabs
+    # the longest step worth trying per regime: 2^levmax h
+    levmax = np.zeros(R, np.int64)
+    for r in range(R):
+        lo = math.inf
+        hi = 0.0
+        for k in range(nz):
+            a = alam[r][k]
+            hi = a if a > hi else hi
+            if a > 0.0:
+                lo = a if a < lo else lo
+        ratio = hi / (om if om > lo else lo)
+        lv = 0
+        while lv < GRID_LEVELS - 1 and ratio >= 2.0 ** (lv + 1):
+            lv += 1
+        levmax[r] = lv
+    eh = np.empty((R, GRID_LEVELS, nz), np.complex128)
+    for r in range(R):
+        for lv in range(GRID_LEVELS):
+            x = h * 2.0 ** lv
+            for k, z in enumerate(lam_c[r]):
+                w = z * x  # CPython: x promoted to complex(x, 0.0), as numba
+                if math.isfinite(w.real) and math.isfinite(w.imag):
+                    e = math.exp(w.real)  # _cexp, written out (the common case)
+                    eh[r, lv, k] = complex(e * math.cos(w.imag), e * math.sin(w.imag))
+                else:
+                    eh[r, lv, k] = _cexp(w)
+    # isum[r, a, b] = 1 / (mu_a + mu_b) over mu = (lambda_r, i Omega, -i Omega, 0) (0 where
+    # the sum is 0), by CPython's division of complex(1.0, 0.0), elementwise
+    nb = nz + 3
+    extra = [1j * om, -1j * om, 0j]
+    mre = np.array([[z.real for z in row + extra] for row in lam_c]).reshape(R, nb)
+    mim = np.array([[z.imag for z in row + extra] for row in lam_c]).reshape(R, nb)
+    br = mre[:, :, None] + mre[:, None, :]
+    bi = mim[:, :, None] + mim[:, None, :]
+    nonzero = (br != 0.0) | (bi != 0.0)
+    with np.errstate(all="ignore"):
+        first = np.abs(br) >= np.abs(bi)
+        ratio1 = bi / br
+        denom1 = br + bi * ratio1
+        re1 = (1.0 + 0.0 * ratio1) / denom1
+        im1 = (0.0 - 1.0 * ratio1) / denom1
+        ratio2 = br / bi
+        denom2 = br * ratio2 + bi
+        re2 = (1.0 * ratio2 + 0.0) / denom2
+        im2 = (0.0 * ratio2 - 1.0) / denom2
+    isum = np.zeros((R, nb, nb), np.complex128)
+    isum.real = np.where(nonzero, np.where(first, re1, re2), 0.0)
+    isum.imag = np.where(nonzero, np.where(first, im1, im2), 0.0)
+    return Vh, kstep, bq, h, bnd, levmax, eh, isum
+
+
+def prepare(p: np.ndarray) -> dict:
+    """Per-run matrices of the exact kernel from the packed parameter vector ``p``: the
+    same dict, bit for bit, as ``boringbar.kernels.exact.prepare.prepare(p)``."""
+    n = int(p[L.N_MODES])
+    case = int(p[L.CASE])
+    om = p[L.OMEGA]
+    A, B, c, nreg = _regimes(p)
+    R, nz = B.shape
+    # one stacked LAPACK call per kind (NumPy's, as in the numba version)
+    lam, V = np.linalg.eig(A)
+    Vi = np.linalg.inv(V)
+    cond = (np.max(np.sum(np.abs(V), axis=2), axis=1)
+            * np.max(np.sum(np.abs(Vi), axis=2), axis=1))  # infinity-norm condition
+    for r in range(R):
+        if not cond[r] <= 1e10:
+            what = ("free", "stick", "contact")[r % nreg] if case == L.BALL else "linear"
+            raise ValueError(f"exact integrator: the {what} regime is not diagonalisable "
+                             "(critically damped mode?)")
+    Z = np.linalg.solve(1j * om * np.eye(nz) - A, (B * p[L.F0])[:, :, None])[:, :, 0]
+    D = -np.linalg.solve(A, c[:, :, None])[:, :, 0]
+    Vh, kstep, bq, h, bnd, levmax, eh, isum = _finish(p, lam, V, Vi, Z, B)
+    # dashpots: D_visc = sum_d c_d int (l_d . X)^2 dt
+    nd = n + 1 if case == L.TMD else n
+    lv = np.zeros((nd, nz))
+    cv = np.zeros(nd)
+    lv[np.arange(n), n + np.arange(n)] = 1.0
+    cv[:n] = p[L.C_:L.C_ + n]
+    if case == L.TMD:
+        lv[n, 2 * n + 1] = 1.0
+        lv[n, n:2 * n] = -p[L.PSI_A:L.PSI_A + n]
+        cv[n] = p[L.TMD_C]
+    return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "levmax": levmax, "Vi": Vi, "Z": Z,
+            "D": D, "eh": eh, "h": h, "lvis": lv, "cvis": cv, "isum": isum, "bq": bq,
+            "nreg": nreg, "bnd": bnd}
+
+
+# --- a regenerative cut ---------------------------------------------------------------------
+def history_step(tau: float, dt: float) -> float:
+    """H = tau / ceil(tau / dt), at least two per revolution: a cut's knot spacing."""
+    return tau / max(2, int(math.ceil(tau / dt - 1e-9)))
+
+
+def cut_tables(prep: dict, p: np.ndarray, H: float):
+    """exp(lambda tau_p) and Kr b bq j! tau_p^(j+1) phi_(j+1)(lambda tau_p) at the Gauss
+    nodes and the end of a whole step H, per regime (the out-of-cut ones have no input):
+    the same arrays, bit for bit, as kernels/exact/cut.py's cut_tables."""
+    lam = prep["lam"]
+    R, nz = lam.shape
+    taus = [x * H for x in GL_X] + [H]
+    tabE = np.zeros((R, 5, nz), complex)
+    tabP = np.zeros((R, 5, 4, nz), complex)
+    krb = p[L.KR_B]
+    for r in range(R):
+        for i, tau in enumerate(taus):
+            for k in range(nz):
+                ex, *ph = _phis(complex(lam[r, k] * tau))
+                tabE[r, i, k] = ex
+                if r >= prep["nreg"]:
+                    for j in range(4):
+                        tabP[r, i, j, k] = (krb * prep["bq"][r, k] * math.factorial(j)
+                                            * tau ** (j + 1) * ph[j])
+    return tabE, tabP
