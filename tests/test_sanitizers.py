@@ -61,8 +61,12 @@ def _build(where: Path) -> Path:
                     reason="needs CMake and g++")
 def test_kernel_tests_pass_under_address_and_undefined_behavior_sanitizers(tmp_path):
     module = _build(tmp_path)
-    env = dict(os.environ, LD_PRELOAD=_runtime("libasan.so"),
-               ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:verify_asan_link_order=0",
+    # the Python executable links neither runtime: ASan must come first, and libstdc++
+    # before the module, or ASan's interceptor of C++ throws finds no __cxa_throw
+    preload = f"{_runtime('libasan.so')} {_runtime('libstdc++.so')}"
+    env = dict(os.environ, LD_PRELOAD=preload,
+               ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:verify_asan_link_order=0:"
+                            "handle_abort=1",
                UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1")
     out = subprocess.run([sys.executable, "-c", RUNNER, str(module), *KERNEL_TESTS],
                          cwd=ROOT, env=env, capture_output=True, text=True)
