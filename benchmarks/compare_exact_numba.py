@@ -151,7 +151,8 @@ def compare(label, su):
     diffs = {k: rel_diff(on[k], oc[k]) for k in OUTPUTS if not eq[k]}
     met = on["met"]
     info = (f"ev {int(met[L.N_EVENTS]):6d} imp {int(met[L.N_IMP_ALL]):5d} "
-            f"rec {int(met[L.N_REC]):5d} stb {int(met[L.N_STROBE]):4d}")
+            f"stk {int(met[L.N_STICK_REC]):4d} rec {int(met[L.N_REC]):5d} "
+            f"stb {int(met[L.N_STROBE]):4d}")
     return {"label": label, "eq": eq, "diffs": diffs, "prep": prep_same(prep_n, prep_c),
             "info": info, "status": int(met[L.EXACT_STATUS])}
 
@@ -180,6 +181,12 @@ def extra_cases(duration):
     out.append(("stick-slip physical Fs = 1.5 Fc 2 N",
                 setup(make_system("ball", "physical", gap=0.5e-3, friction_force=2.0,
                                   static_ratio=1.5), Harmonic(20.0, 1.0), d)))
+    out.append(("stick-slip physical Fs = 3 Fc 2 N hist",
+                setup(make_system("ball", "physical", gap=0.5e-3, friction_force=2.0,
+                                  static_ratio=3.0), Harmonic(20.0, 0.98), d, record_every=4)))
+    out.append(("stick-slip paper Fs = 1.5 Fc 20 N (printed)",
+                setup(make_system("ball", "paper", gap=0.5e-3, static_ratio=1.5),
+                      Harmonic(20.0, 1.0), d)))
     out.append(("printed reaction physical 2 N",
                 setup(make_system("ball", "physical", gap=0.5e-3, friction_force=2.0,
                                   friction_reaction="printed"), Harmonic(20.0, 1.0), d)))
@@ -223,6 +230,10 @@ def cut_cases():
                         setup(solid, f, dur, record_every=80)))
     f = Regenerative(depth=_cut_depth(solid, 2.0, rpm), rpm=rpm, stop_at_zero=True)
     out.append(("cut solid 2 x limit, stop at zero", setup(solid, f, 2.0, dt=4e-6)))
+    for interp in ("cubic", "linear"):
+        f = Regenerative(depth=_cut_depth(solid, 2.0, rpm), rpm=rpm, interpolation=interp)
+        out.append((f"cut solid {interp} 2 x limit 1.6 s (past the first zero)",
+                    setup(solid, f, 1.6, dt=2e-6, record_every=20, strobe=True)))
     f = Regenerative(depth=_cut_depth(solid, 1.5, 1200.0), rpm=1200.0, revolutions=1,
                      start="static")
     out.append(("cut solid 1 revolution, static start", setup(solid, f, 0.3, dt=2e-6,
@@ -232,11 +243,19 @@ def cut_cases():
              else make_system(bar))
         f = Regenerative(depth=_cut_depth(s, 1.5, 1200.0), rpm=1200.0)
         out.append((f"cut {bar} 1.5 x limit", setup(s, f, 0.3, dt=2e-6, record_every=40)))
+        f = Regenerative(depth=_cut_depth(s, 3.0, 1200.0), rpm=1200.0, revolutions=2)
+        out.append((f"cut {bar} 3 x limit 2 revolutions 1 s", setup(s, f, 1.0, dt=2e-6)))
     ball = make_system("ball", gap=10e-6)
     f = Regenerative(depth=_cut_depth(ball, 3.0, 1200.0, bare=True), rpm=1200.0)
     for dt in (1e-6, 2e-6):
         out.append((f"cut ball gap 10 um 3 x limit dt {dt:g}",
                     setup(ball, f, 0.02, dt=dt, steady_fraction=1.0, record_every=5)))
+    out.append(("cut ball gap 10 um 3 x limit 0.5 s", setup(ball, f, 0.5, dt=2e-6)))
+    ball3 = make_system("ball", gap=50e-6, n_modes=3, static_ratio=2.0)
+    f = Regenerative(depth=_cut_depth(ball3, 2.0, 1100.0, bare=True), rpm=1100.0,
+                     interpolation="linear")
+    out.append(("cut ball 3 modes gap 50 um Fs = 2 Fc, linear", setup(ball3, f, 0.3, dt=2e-6,
+                                                                        record_every=10)))
     paper = make_system("ball", "paper")
     f = Regenerative(depth=_cut_depth(paper, 3.0, 1200.0, bare=True), rpm=1200.0)
     out.append(("cut paper stuck ball (printed) 3 x", setup(paper, f, 0.2)))
@@ -256,6 +275,16 @@ def print_row(row):
     st = f" status {row['status']}" if row["status"] else ""
     print(f"{row['label']:56s} {flags}  {'SAME' if ok else 'DIFF'}  {row['info']}{st}"
           f"{tail}{prep}", flush=True)
+
+
+def summary(rows):
+    n_same = sum(all(r["eq"].values()) for r in rows)
+    print(f"\n{n_same} of {len(rows)} cases bit-identical in every output")
+    for k in OUTPUTS:
+        bad = [r["label"].strip() for r in rows if not r["eq"][k]]
+        print(f"  {k:6s}: {len(rows) - len(bad)}/{len(rows)} identical"
+              + (f"; differ: {', '.join(bad[:5])}{' ...' if len(bad) > 5 else ''}" if bad else ""))
+    print(f"  prep dicts identical: {sum(r['prep'] for r in rows)}/{len(rows)}")
 
 
 def timing(grid, duration, repeat):
@@ -284,7 +313,8 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=0.2, help="grid and extra runs (s)")
     ap.add_argument("--time-duration", type=float, default=2.0, help="timed grid runs (s)")
     ap.add_argument("--repeat", type=int, default=1)
-    ap.add_argument("--only", choices=("grid", "extra"))
+    ap.add_argument("--only", choices=("grid", "extra", "time"),
+                    help="only the grid's or the extra cases' comparison, or only the timing")
     ap.add_argument("--no-time", action="store_true")
     args = ap.parse_args()
     print(f"prep for C++: {PREP_SOURCE}; outputs {' '.join(OUTPUTS)} (= same bits, X differ)")
@@ -296,21 +326,16 @@ def main() -> None:
     for su in warm:
         run_numba(su, numba_prepare(su.p))
     print(f"numba warm-up: {time.perf_counter() - tic:.1f} s")
-    if args.only != "extra":
+    if args.only not in ("extra", "time"):
         for label, s, f in grid:
             rows.append(compare(label, setup(s, f, args.duration)))
             print_row(rows[-1])
-    if args.only != "grid":
+    if args.only not in ("grid", "time"):
         for label, su in extra_cases(args.duration):
             rows.append(compare(label, su))
             print_row(rows[-1])
-    n_same = sum(all(r["eq"].values()) for r in rows)
-    print(f"\n{n_same} of {len(rows)} cases bit-identical in every output")
-    for k in OUTPUTS:
-        bad = [r["label"].strip() for r in rows if not r["eq"][k]]
-        print(f"  {k:6s}: {len(rows) - len(bad)}/{len(rows)} identical"
-              + (f"; differ: {', '.join(bad[:5])}{' ...' if len(bad) > 5 else ''}" if bad else ""))
-    print(f"  prep dicts identical: {sum(r['prep'] for r in rows)}/{len(rows)}")
+    if rows:
+        summary(rows)
     if not args.no_time:
         tn, tc = timing(grid, args.time_duration, args.repeat)
         print(f"\n80-case grid, {args.time_duration:g} s runs, kernel wall time (best of "

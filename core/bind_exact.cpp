@@ -51,9 +51,10 @@ struct Held {
 
     // obj as a writable array (an output)
     const In& output_of(nb::handle obj, const char* name) {
+        const In& a = array_of(obj, name);
         Out w;
         require(nb::try_cast(obj, w, false), "array '" + std::string(name) + "' must be writable");
-        return array_of(obj, name);
+        return a;
     }
 };
 
