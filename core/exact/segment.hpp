@@ -718,8 +718,8 @@ inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mo
     if (usual) {
         // the usual grid point, with the sizes constant for one and two modes
         const ncplx& rot = w.rotl[lev];
-        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
-        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 2);
+        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 4);
         return grid_point<0>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
     }
     ncplx phg = phg_a;
