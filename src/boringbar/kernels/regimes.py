@@ -316,15 +316,21 @@ def _finish(p, lam, V, Vi, Z, B):
     eh = np.array(eh, np.complex128).reshape(R, GRID_LEVELS, nz)
     # isum[r, a, b] = 1 / (mu_a + mu_b) over the basis exponents mu = (lambda_r, i Omega,
     # -i Omega, 0) (prepare.py's basis_exponents), 0 where the sum is 0
+    # (an IEEE sum is commutative: mu_a + mu_b and mu_b + mu_a are the same number, so one
+    # division serves both entries)
     nb = nz + 3
-    isum = []
+    isum = np.zeros((R, nb, nb), np.complex128)
     for r in range(R):
         mu = lam_l[r] + [1j * om, -1j * om, 0j]
-        for ma in mu:
-            for mb in mu:
-                sab = ma + mb
-                isum.append(1.0 / sab if sab != 0.0 else 0j)
-    isum = np.array(isum, np.complex128).reshape(R, nb, nb)
+        rows = [[0j] * nb for _ in range(nb)]
+        for a in range(nb):
+            ma = mu[a]
+            row = rows[a]
+            for b in range(a, nb):
+                sab = ma + mu[b]
+                if sab != 0.0:
+                    row[b] = rows[b][a] = 1.0 / sab
+        isum[r] = rows
     return Vh, kstep, bq, h, bnd, levmax, eh, isum
 
 
