@@ -574,6 +574,20 @@ inline Found find_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
     return f;
 }
 
+// (q0 tabE + sum_j S_j tabP_j) at the table's column g: a cut's whole step from its tables
+inline void tab_state(Work& w, idx r, idx g, idx ks, CVec q, Vec X) {
+    const Segment& seg = w.seg;
+    CVec q0 = w.q0;
+    idx nz = q0.size();
+    for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+        idx k = kq * ks;
+        q[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + seg.s[0] * ncplx(w.tabP(r, g, 0, k))
+               + seg.s[1] * ncplx(w.tabP(r, g, 1, k)) + seg.s[2] * ncplx(w.tabP(r, g, 2, k))
+               + seg.s[3] * ncplx(w.tabP(r, g, 3, k));
+    }
+    for (idx j = 0; j < nz; ++j) X[j] = add_modes(seg.fb * w.D(r, j), w.V, r, j, q, nz, ks);
+}
+
 // Adds a cut's flows over the grid step [a, b] to w.qsum (the slots of segment_integrals'
 // out); whole: a whole step H from a node, without event, from the tables; wb: W at b.
 // Returns the largest cutting force so far.
@@ -586,7 +600,6 @@ inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool 
     Vec qsum = w.qsum;
     Mat mk = w.mk;
     idx nz = q0.size();
-    double fb = seg.fb;
     double sr = w.cp.sr;
     double krb_seg = seg.krb;
     double s_0 = seg.s[0];
@@ -598,13 +611,7 @@ inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool 
     if (whole && !(sticking && sr != 1.0)) {
         // a whole step: tabulated values
         for (idx g = 0; g < 4; ++g) {
-            for (idx kq = 0; kq < nq(nz, ks); ++kq) {
-                idx k = kq * ks;
-                qs[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + s_0 * ncplx(w.tabP(r, g, 0, k))
-                        + s_1 * ncplx(w.tabP(r, g, 1, k)) + s_2 * ncplx(w.tabP(r, g, 2, k))
-                        + s_3 * ncplx(w.tabP(r, g, 3, k));
-            }
-            for (idx j = 0; j < nz; ++j) dX[j] = add_modes(fb * w.D(r, j), w.V, r, j, qs, nz, ks);
+            tab_state(w, r, g, ks, qs, dX);
             auto [wq, wdq] = psi_dot(mk, 3, dX, n);
             double xg = GL_X[g] * b;
             double fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq);
@@ -687,20 +694,6 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
 
 // e^{i om t} as numba computes cmath.exp(1j * om * t): the products promoted to complex
 inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t); }
-
-// (q0 tabE + sum_j S_j tabP_j) at the table's column g: a cut's whole step from its tables
-inline void tab_state(Work& w, idx r, idx g, idx ks, CVec q, Vec X) {
-    const Segment& seg = w.seg;
-    CVec q0 = w.q0;
-    idx nz = q0.size();
-    for (idx kq = 0; kq < nq(nz, ks); ++kq) {
-        idx k = kq * ks;
-        q[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + seg.s[0] * ncplx(w.tabP(r, g, 0, k))
-               + seg.s[1] * ncplx(w.tabP(r, g, 1, k)) + seg.s[2] * ncplx(w.tabP(r, g, 2, k))
-               + seg.s[3] * ncplx(w.tabP(r, g, 3, k));
-    }
-    for (idx j = 0; j < nz; ++j) X[j] = add_modes(seg.fb * w.D(r, j), w.V, r, j, q, nz, ks);
-}
 
 // The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
 // usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
