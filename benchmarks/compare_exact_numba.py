@@ -1,7 +1,7 @@
 """The C++ exact kernel (boringbar._core.run_exact) against numba's, bit for bit.
 
     PYTHONPATH=src .venv/bin/python benchmarks/compare_exact_numba.py [--duration 0.2]
-        [--repeat 1] [--only grid|extra] [--no-time]
+        [--repeat 1] [--only grid|extra|time] [--no-time] [--check-inputs]
 
 Each case is packed by boringbar.simulate's own _setup (as simulate(..., integrator="exact")
 packs it), then run by numba's kernels.exact.run_exact and by _core.run_exact on copies of
@@ -19,7 +19,10 @@ sliding one), the printed friction reaction, strobe and history on, 1 to 4 modes
 regenerative cuts (linear and cubic history, the solid, ball, TMD and locked bars, a stuck
 ball with the printed reaction, one stopping at its first zero).  Then the kernels' wall
 times over the 80-case grid, warm (compiled or loaded before timing), prepare excluded,
-best of ``--repeat``, alternating which runs first.
+best of ``--repeat``, alternating which runs first (wall and CPU time: on a shared machine
+the CPU time is the steadier).  ``--check-inputs``: spoilt arguments (dtypes, shapes,
+strides, read-only outputs, non-finite or out-of-range scalars, prepare's dict) must each be
+a ValueError.
 """
 
 from __future__ import annotations
@@ -265,6 +268,90 @@ def cut_cases():
     return out
 
 
+def _bad_inputs():
+    """(what, how to spoil a valid call's arguments) for --check-inputs."""
+    def p_(k, v):
+        return lambda a: a["p"].__setitem__(k, v)
+
+    def arg(k, v):
+        return lambda a: a.__setitem__(k, v)
+
+    def prep(k, f):
+        return lambda a: a["prep"].__setitem__(k, f(a["prep"][k]))
+
+    harmonic = [
+        ("p float32", lambda a: a.__setitem__("p", a["p"].astype(np.float32))),
+        ("p NaN", p_(L.F0, np.nan)),
+        ("N_MODES 0", p_(L.N_MODES, 0)), ("N_MODES 9", p_(L.N_MODES, 9)),
+        ("N_MODES 1.5", p_(L.N_MODES, 1.5)), ("CASE 7", p_(L.CASE, 7)),
+        ("FORCING 2", p_(L.FORCING, 2)), ("modal mass 0", p_(L.M_, 0.0)),
+        ("half gap 0", p_(L.HALF_GAP, 0.0)), ("strobe period 1e-300", p_(L.STROBE_PERIOD, 1e-300)),
+        ("x too short", arg("x", np.zeros(3))), ("x a list", arg("x", [0.0] * 6)),
+        ("x read-only", lambda a: a["x"].setflags(write=False)),
+        ("x strided", arg("x", np.zeros(12)[::2])), ("rec 5 columns", arg("rec", np.zeros((9, 5)))),
+        ("rec Fortran order", arg("rec", np.asfortranarray(np.zeros((9, 6))))),
+        ("imp int64", arg("imp", np.zeros((9, 3), np.int64))),
+        ("stick read-only", lambda a: a["stick"].setflags(write=False)),
+        ("met N_REC -5", lambda a: a["met"].__setitem__(L.N_REC, -5)),
+        ("met N_IMP_REC NaN", lambda a: a["met"].__setitem__(L.N_IMP_REC, np.nan)),
+        ("t_end < t0", arg("t_end", -1.0)), ("t0 inf", arg("t0", np.inf)),
+        ("rec_dt -1e-6", arg("rec_dt", -1e-6)), ("t0 a string", arg("t0", "zero")),
+        ("prep a list", arg("prep", [])),
+        ("prep without lam", lambda a: a["prep"].pop("lam")),
+        ("prep lam (3, 2)", prep("lam", lambda v: v[:, :2].copy())),
+        ("prep Vh float64", prep("Vh", lambda v: v.real.copy())),
+        ("prep kstep 3", prep("kstep", lambda v: np.full_like(v, 3))),
+        ("prep kstep int32", prep("kstep", lambda v: v.astype(np.int32))),
+        ("prep levmax 9", prep("levmax", lambda v: np.full_like(v, 9))),
+        ("prep nreg 1", prep("nreg", lambda v: 1)), ("prep h 0", prep("h", lambda v: 0.0)),
+        ("prep h 1e-30", prep("h", lambda v: 1e-30)),
+        ("prep eh inf", prep("eh", lambda v: np.where(v == v, np.inf, v))),
+        ("prep bnd (3, 4, 4)", prep("bnd", lambda v: np.zeros((3, 4, 4)))),
+        ("tabE (2, 5, 1)", arg("tabE", np.zeros((2, 5, 1), complex))),
+    ]
+    cut = [
+        ("cut dt 0", arg("dt", 0.0)), ("cut H 0", arg("H", 0.0)),
+        ("cut H = tau", lambda a: a.__setitem__("H", a["p"][L.TAU])),
+        ("cut H 1e-15", arg("H", 1e-15)), ("cut N_REV 0", p_(L.N_REV, 0)),
+        ("cut N_REV 2.5", p_(L.N_REV, 2.5)), ("cut TAU 0", p_(L.TAU, 0.0)),
+        ("cut harmonic tables", arg("tabE", np.zeros((1, 5, 1), complex))),
+        ("cut t0 1e12", lambda a: a.update(t0=1e12, t_end=1e12 + 0.01, t_steady=1e12)),
+    ]
+    return harmonic, cut
+
+
+def check_inputs():
+    """Every spoilt argument must be a ValueError that names it (never a crash)."""
+    def valid(su):
+        prep = cxx_prepare(su.p)
+        H, tabE, tabP = cut_args(su.p, prep, su.dt)
+        t0, t_end, t_steady, rec_dt = _span(su)
+        return dict(p=su.p.copy(), x=su.x.copy(), t0=t0, t_end=t_end, t_steady=t_steady,
+                    rec_dt=rec_dt, rec=np.zeros((9, 6)), imp=np.zeros((9, 3)),
+                    stick=np.zeros((9, 2)), strobe=np.zeros((9, 5)), met=su.met.copy(),
+                    prep=dict(prep), dt=su.dt, H=H, tabE=tabE, tabP=tabP)
+
+    keys = ("p", "x", "t0", "t_end", "t_steady", "rec_dt", "rec", "imp", "stick", "strobe",
+            "met", "prep", "dt", "H", "tabE", "tabP")
+    ball = setup(make_system("ball", gap=0.1e-3), Harmonic(20.0, 1.0), 0.01, record_every=10)
+    cut = setup(make_system("solid"), Regenerative(depth=1e-4, rpm=1210.0), 0.01)
+    harmonic_bad, cut_bad = _bad_inputs()
+    ok = 0
+    for su, bad in ((ball, harmonic_bad), (cut, cut_bad)):
+        _core.run_exact(*(valid(su)[k] for k in keys))  # the valid call runs
+        for what, spoil in bad:
+            a = valid(su)
+            spoil(a)
+            try:
+                _core.run_exact(*(a[k] for k in keys))
+                print(f"  ACCEPTED {what}")
+            except ValueError as e:
+                ok += 1
+                print(f"  ValueError  {what:24s} {str(e)[:90]}")
+    n = len(harmonic_bad) + len(cut_bad)
+    print(f"{ok} of {n} spoilt calls refused with a ValueError")
+
+
 def print_row(row):
     flags = " ".join(("=" if row["eq"][k] else "X") for k in OUTPUTS)
     ok = all(row["eq"].values())
@@ -313,7 +400,12 @@ def main() -> None:
     ap.add_argument("--only", choices=("grid", "extra", "time"),
                     help="only the grid's or the extra cases' comparison, or only the timing")
     ap.add_argument("--no-time", action="store_true")
+    ap.add_argument("--check-inputs", action="store_true",
+                    help="only check that spoilt arguments are refused (ValueError)")
     args = ap.parse_args()
+    if args.check_inputs:
+        check_inputs()
+        return
     print(f"prep for C++: {PREP_SOURCE}; outputs {' '.join(OUTPUTS)} (= same bits, X differ)")
     grid = grid_cases()
     rows = []
