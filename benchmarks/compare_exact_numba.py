@@ -5,13 +5,12 @@
 
 Each case is packed by boringbar.simulate's own _setup (as simulate(..., integrator="exact")
 packs it), then run by numba's kernels.exact.run_exact and by _core.run_exact on copies of
-the same arrays, with prepare(p) computed once (the C++ side gets the prep of
-boringbar.kernels.regimes.prepare when that module exists, else numba's: the dicts are
-meant to be identical, and this script checks that they are) and, in a cut, the history
-step H and the tables as numba's run_exact makes them.  Reported per case: whether the
-final x, met, rec, imp, stick, strobe and the time reached have the same bits (the whole
-arrays, compared as integers, so -0.0 and NaN payloads count), and for a difference the
-largest one relative to the output's scale.
+the same arrays, with prepare(p) computed once per side (the C++ side gets the prep, the
+history step H and a cut's tables of boringbar.kernels.regimes when that module exists,
+else numba's: they are meant to be identical, and this script checks that they are).
+Reported per case: whether the final x, met, rec, imp, stick, strobe and the time reached
+have the same bits (the whole arrays, compared as integers, so -0.0 and NaN payloads
+count), and for a difference the largest one relative to the output's scale.
 
 Cases: the 80 published harmonic cases of benchmarks/bench_grid.py (shortened to
 ``--duration``), then solid, TMD and locked bars, true stick-slip (static friction above the
@@ -51,11 +50,13 @@ from boringbar.reference.stability import limit_at_speeds  # noqa: E402
 from boringbar.simulate import Initial, _setup  # noqa: E402
 
 try:
-    cxx_prepare = importlib.import_module("boringbar.kernels.regimes").prepare
-    PREP_SOURCE = "boringbar.kernels.regimes.prepare"
+    _regimes = importlib.import_module("boringbar.kernels.regimes")
+    cxx_prepare = _regimes.prepare
+    cxx_history_step, cxx_cut_tables = _regimes.history_step, _regimes.cut_tables
+    PREP_SOURCE = "boringbar.kernels.regimes (prepare, history_step, cut_tables)"
 except (ImportError, AttributeError):
-    cxx_prepare = numba_prepare
-    PREP_SOURCE = "numba's prepare (kernels.regimes not there yet)"
+    cxx_prepare, cxx_history_step, cxx_cut_tables = numba_prepare, history_step, cut_tables
+    PREP_SOURCE = "numba's prepare and cut tables (kernels.regimes not there yet)"
 
 OUTPUTS = ("x", "met", "rec", "imp", "stick", "strobe", "t")
 
@@ -88,13 +89,18 @@ def run_numba(su, prep):
     return o, (time.perf_counter() - tic, time.thread_time() - cpu)
 
 
-def cut_args(p, prep, dt):
-    """(H, tabE, tabP) as numba's run_exact makes them."""
+def cut_args(p, prep, dt, step=history_step, tables=cut_tables):
+    """(H, tabE, tabP) as numba's run_exact makes them (by default with numba's functions)."""
     if int(p[L.FORCING]) == L.REGENERATIVE:
-        H = history_step(float(p[L.TAU]), float(dt))
-        tabE, tabP = cut_tables(prep, p, H)
+        H = step(float(p[L.TAU]), float(dt))
+        tabE, tabP = tables(prep, p, H)
         return H, tabE, tabP
     return 0.0, np.zeros((1, 5, 1), complex), np.zeros((1, 5, 4, 1), complex)
+
+
+def cxx_cut_args(p, prep, dt):
+    """(H, tabE, tabP) for the C++ kernel, from kernels.regimes when it exists."""
+    return cut_args(p, prep, dt, cxx_history_step, cxx_cut_tables)
 
 
 def run_cxx(su, prep, tables):
@@ -147,7 +153,9 @@ def compare(label, su):
     """One case, both kernels: a row of the table."""
     prep_n = numba_prepare(su.p)
     prep_c = cxx_prepare(su.p)
-    tables = cut_args(su.p, prep_n, su.dt)
+    tables = cxx_cut_args(su.p, prep_c, su.dt)
+    same_tables = all(same_bits(np.asarray(a).view(float), np.asarray(b).view(float))
+                      for a, b in zip(cut_args(su.p, prep_n, su.dt), tables))
     on, _ = run_numba(su, prep_n)
     oc, _ = run_cxx(su, prep_c, tables)
     eq = {k: same_bits(on[k], oc[k]) for k in OUTPUTS}
@@ -156,7 +164,8 @@ def compare(label, su):
     info = (f"ev {int(met[L.N_EVENTS]):6d} imp {int(met[L.N_IMP_ALL]):5d} "
             f"stk {int(met[L.N_STICK_REC]):4d} rec {int(met[L.N_REC]):5d} "
             f"stb {int(met[L.N_STROBE]):4d}")
-    return {"label": label, "eq": eq, "diffs": diffs, "prep": prep_same(prep_n, prep_c),
+    return {"label": label, "eq": eq, "diffs": diffs,
+            "prep": prep_same(prep_n, prep_c) and same_tables,
             "info": info, "status": int(met[L.EXACT_STATUS])}
 
 
@@ -324,7 +333,7 @@ def check_inputs():
     """Every spoilt argument must be a ValueError that names it (never a crash)."""
     def valid(su):
         prep = cxx_prepare(su.p)
-        H, tabE, tabP = cut_args(su.p, prep, su.dt)
+        H, tabE, tabP = cxx_cut_args(su.p, prep, su.dt)
         t0, t_end, t_steady, rec_dt = _span(su)
         return dict(p=su.p.copy(), x=su.x.copy(), t0=t0, t_end=t_end, t_steady=t_steady,
                     rec_dt=rec_dt, rec=np.zeros((9, 6)), imp=np.zeros((9, 3)),
@@ -358,7 +367,7 @@ def print_row(row):
     tail = ""
     if not ok:
         tail = "  " + ", ".join(f"{k} {v:.1e}" for k, v in row["diffs"].items())
-    prep = "" if row["prep"] else "  [prep differs]"
+    prep = "" if row["prep"] else "  [prep or cut tables differ]"
     st = f" status {row['status']}" if row["status"] else ""
     print(f"{row['label']:56s} {flags}  {'SAME' if ok else 'DIFF'}  {row['info']}{st}"
           f"{tail}{prep}", flush=True)
@@ -371,7 +380,7 @@ def summary(rows):
         bad = [r["label"].strip() for r in rows if not r["eq"][k]]
         print(f"  {k:6s}: {len(rows) - len(bad)}/{len(rows)} identical"
               + (f"; differ: {', '.join(bad[:5])}{' ...' if len(bad) > 5 else ''}" if bad else ""))
-    print(f"  prep dicts identical: {sum(r['prep'] for r in rows)}/{len(rows)}")
+    print(f"  prep dicts and cut tables identical: {sum(r['prep'] for r in rows)}/{len(rows)}")
 
 
 def timing(grid, duration, repeat):
@@ -382,7 +391,7 @@ def timing(grid, duration, repeat):
         su = setup(s, f, duration)
         prep_n = numba_prepare(su.p)
         prep_c = cxx_prepare(su.p)
-        tables = cut_args(su.p, prep_n, su.dt)
+        tables = cxx_cut_args(su.p, prep_c, su.dt)
         best = np.full((2, 2), math.inf)
         for _ in range(repeat):
             for side in ((0, 1) if i % 2 == 0 else (1, 0)):
