@@ -44,7 +44,7 @@ struct Held {
     const In& array_of(nb::handle obj, const char* name) {
         In a;
         require(nb::try_cast(obj, a, false),
-                "'" + std::string(name) + "' must be a NumPy array (CPU, buffer protocol)");
+                "'" + std::string(name) + "' must be a NumPy array (CPU, native byte order)");
         arrays.push_back(a);
         return arrays.back();
     }
