@@ -44,16 +44,17 @@ struct Held {
     const In& array_of(nb::handle obj, const char* name) {
         In a;
         require(nb::try_cast(obj, a, false),
-                "'" + std::string(name) + "' must be a NumPy array (CPU, buffer protocol)");
+                "'" + std::string(name) + "' must be a NumPy array (CPU, native byte order)");
         arrays.push_back(a);
         return arrays.back();
     }
 
     // obj as a writable array (an output)
     const In& output_of(nb::handle obj, const char* name) {
+        const In& a = array_of(obj, name);
         Out w;
         require(nb::try_cast(obj, w, false), "array '" + std::string(name) + "' must be writable");
-        return array_of(obj, name);
+        return a;
     }
 };
 

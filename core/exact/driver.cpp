@@ -107,6 +107,21 @@ double cut_start(Mat kn, Vec X, idx n, Mat mk, double t0, double krb, double fee
     return pymax(max_force, krb * pymax(0.0, feed + w_before - w_));
 }
 
+// The knot of the node j_node + 1, reached at t without an event (W, W' there: wb, wdb);
+// returns the knots' count.
+idx node_knot(Knots& kn, idx nk, Span1<idx> ip, double t, double wb, double wdb, Vec X, idx n,
+              Mat mk, double ttol, idx j_node) {
+    if (nk < kn.n0 && t > kn(nk - 1, 0) + ttol) {  // add_knot's usual case, written out
+        kn(nk, 0) = t;
+        kn(nk, 1) = wb;
+        kn(nk, 2) = wdb;
+        kn(nk, 3) = wdb;
+        kn(nk, 4) = double(j_node + 1);
+        return nk + 1;
+    }
+    return std::get<1>(add_knot(kn, nk, ip, t, X, X, n, mk, ttol, double(j_node + 1)));
+}
+
 // A ball's regime at the start (into rs), from y, y' and the tip force f_t0.
 void initial_regime(Vec X, double f_t0, idx n, Mat mk, const RunConsts& cp, RunState& rs) {
     double half = cp.half;
@@ -419,17 +434,7 @@ double exact_body(const ExactRun& a) {
             t = t_new;
             if constexpr (Regen) {
                 if (st.at_node) {
-                    if (nk < kn.n0 && t > kn(nk - 1, 0) + ttol) {
-                        kn(nk, 0) = t;
-                        kn(nk, 1) = ev.wb;
-                        kn(nk, 2) = ev.wdb;
-                        kn(nk, 3) = ev.wdb;
-                        kn(nk, 4) = double(j_node + 1);
-                        nk += 1;
-                    } else {
-                        nk = std::get<1>(add_knot(kn, nk, ip, t, X, X, n, mk, ttol,
-                                                  double(j_node + 1)));
-                    }
+                    nk = node_knot(kn, nk, ip, t, ev.wb, ev.wdb, X, n, mk, ttol, j_node);
                 }
             }
             continue;

@@ -207,10 +207,13 @@ struct GridPoint {
 // A whole grid step of level lev outside a cut: the eigen-coordinates qg and the forcing
 // phasor phg advanced, X from them, the event functions at the step's end b and (if ydd_on)
 // y'' and W'' there (else NaN).  NZ > 0: the sizes as compile-time constants (one and two
-// modes, ks = 2), as numba's specialisations; the same operations.
+// modes, ks = 2), as numba's specialisations; the same operations.  The phasors come by
+// reference: a complex passed by value reaches the callee as two halves that it stores and
+// reloads as one (a stalled store forwarding, a fifth of the step's time).
 template <idx NZ>
-inline GridPoint grid_point(Work& w, idx r, idx lev, ncplx phg, ncplx rot, idx ks, double b,
-                            idx mode, idx n, double f0, double om, bool ydd_on, idx nz) {
+inline GridPoint grid_point(Work& w, idx r, idx lev, const ncplx& phg_a, const ncplx& rot,
+                            idx ks, double b, idx mode, idx n, double f0, double om, bool ydd_on,
+                            idx nz) {
     if constexpr (NZ > 0) {
         nz = NZ;
         ks = 2;
@@ -221,7 +224,7 @@ inline GridPoint grid_point(Work& w, idx r, idx lev, ncplx phg, ncplx rot, idx k
         idx k = kq * ks;
         qg[k] = ncplx(qg[k]) * ncplx(w.eh(r, lev, k));
     }
-    phg = phg * rot;
+    ncplx phg = phg_a * rot;
     const Segment& seg = w.seg;
     Vec X{w.X.d, nz};
     from_q(r, qg, phg, seg.fb, w.Z, w.D, w.V, ks, X);
@@ -381,26 +384,69 @@ inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3
     return {b4, bw4, b3y, b3w};
 }
 
-// The longest step 2^lev h (lev <= top) from a free ball's grid point a that Taylor's
-// theorem proves free of events and of new extrema of |y| (below ylim) or (steady) of W
-// (docs/exact.md, "Longer steps").
+// quad_range(p, d, dd, s) (events.hpp) for several s: its vertex, which does not depend on
+// s, computed once (the same operations, so the same (lo, hi))
+struct QuadRange {
+    double p, d, dd, x = 0.0, v = 0.0;
+
+    QuadRange(double p_, double d_, double dd_) : p(p_), d(d_), dd(dd_) {
+        if (dd != 0.0) {
+            x = -d / dd;
+            v = p + 0.5 * d * x;
+        }
+    }
+
+    std::pair<double, double> at(double s) const {
+        double p1 = p + s * (d + 0.5 * dd * s);
+        double lo = pymin(p, p1);
+        double hi = pymax(p, p1);
+        if (dd != 0.0 && 0.0 < x && x < s) {
+            lo = pymin(lo, v);
+            hi = pymax(hi, v);
+        }
+        return {lo, hi};
+    }
+};
+
+// The Taylor remainders of the longer steps 2^lv h of a segment (level's e3, e2 and W's e3
+// without its margin), the same per step: computed once per segment.
+struct LevelBounds {
+    double e3y[GRID_LEVELS] = {}, e2y[GRID_LEVELS] = {}, e3w[GRID_LEVELS] = {};
+
+    LevelBounds(double b3y, double b3w, const double* hl, idx top) {
+        for (idx lv = 1; lv <= top; ++lv) {
+            double hs = hl[lv];
+            e3y[lv] = b3y * hs * hs * hs / 6.0;
+            e2y[lv] = b3y * hs * hs * (0.5 + 1e-9);
+            e3w[lv] = b3w * hs * hs * hs / 6.0;
+        }
+    }
+};
+
+// The longest step 2^lev h (lev <= top) from a free ball's grid point a (y + delta/2 = ya,
+// y' = yda, y'' = ydd_a, W, W', W'' = wa, wda, wdd_a) that Taylor's theorem proves free of
+// events and of new extrema of |y| (below ylim) or (steady) of W: on [a, a + s], y lies
+// within b3y s^3 / 6 of its quadratic Taylor polynomial at a, y' within b3y s^2 / 2 of its
+// linear one, W within b3w s^3 / 6 of its quadratic (docs/exact.md, "Longer steps").
 inline idx level(double ya, double yda, double ydd_a, double wa, double wda, double wdd_a,
-                 double b3y, double b3w, double ylim, double wmar, double max_w, double min_w,
+                 const LevelBounds& lb, double ylim, double wmar, double max_w, double min_w,
                  const double* hl, idx top, bool watch_v, bool steady) {
     idx lev = 0;
+    QuadRange qy(ya, yda, ydd_a);
+    QuadRange qw(wa, wda, wdd_a);
     for (idx lv = 1; lv <= top; ++lv) {
         double hs = hl[lv];
-        auto [lo, hi] = quad_range(ya, yda, ydd_a, hs);
-        double e3 = b3y * hs * hs * hs / 6.0;
+        auto [lo, hi] = qy.at(hs);
+        double e3 = lb.e3y[lv];
         if (!(hi + e3 < ylim && lo - e3 > -ylim)) break;
         if (watch_v) {
-            double e2 = b3y * hs * hs * (0.5 + 1e-9);
+            double e2 = lb.e2y[lv];
             double v1 = yda + ydd_a * hs;
             if (!((yda > e2 && v1 > e2) || (yda < -e2 && v1 < -e2))) break;
         }
         if (steady) {
-            auto [wlo, whi] = quad_range(wa, wda, wdd_a, hs);
-            double we3 = b3w * hs * hs * hs / 6.0 + wmar;
+            auto [wlo, whi] = qw.at(hs);
+            double we3 = lb.e3w[lv] + wmar;
             if (!(whi + we3 < max_w && wlo - we3 > min_w)) break;
         }
         lev = lv;
@@ -528,6 +574,20 @@ inline Found find_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
     return f;
 }
 
+// (q0 tabE + sum_j S_j tabP_j) at the table's column g: a cut's whole step from its tables
+inline void tab_state(Work& w, idx r, idx g, idx ks, CVec q, Vec X) {
+    const Segment& seg = w.seg;
+    CVec q0 = w.q0;
+    idx nz = q0.size();
+    for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+        idx k = kq * ks;
+        q[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + seg.s[0] * ncplx(w.tabP(r, g, 0, k))
+               + seg.s[1] * ncplx(w.tabP(r, g, 1, k)) + seg.s[2] * ncplx(w.tabP(r, g, 2, k))
+               + seg.s[3] * ncplx(w.tabP(r, g, 3, k));
+    }
+    for (idx j = 0; j < nz; ++j) X[j] = add_modes(seg.fb * w.D(r, j), w.V, r, j, q, nz, ks);
+}
+
 // Adds a cut's flows over the grid step [a, b] to w.qsum (the slots of segment_integrals'
 // out); whole: a whole step H from a node, without event, from the tables; wb: W at b.
 // Returns the largest cutting force so far.
@@ -540,7 +600,6 @@ inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool 
     Vec qsum = w.qsum;
     Mat mk = w.mk;
     idx nz = q0.size();
-    double fb = seg.fb;
     double sr = w.cp.sr;
     double krb_seg = seg.krb;
     double s_0 = seg.s[0];
@@ -552,13 +611,7 @@ inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool 
     if (whole && !(sticking && sr != 1.0)) {
         // a whole step: tabulated values
         for (idx g = 0; g < 4; ++g) {
-            for (idx kq = 0; kq < nq(nz, ks); ++kq) {
-                idx k = kq * ks;
-                qs[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + s_0 * ncplx(w.tabP(r, g, 0, k))
-                        + s_1 * ncplx(w.tabP(r, g, 1, k)) + s_2 * ncplx(w.tabP(r, g, 2, k))
-                        + s_3 * ncplx(w.tabP(r, g, 3, k));
-            }
-            for (idx j = 0; j < nz; ++j) dX[j] = add_modes(fb * w.D(r, j), w.V, r, j, qs, nz, ks);
+            tab_state(w, r, g, ks, qs, dX);
             auto [wq, wdq] = psi_dot(mk, 3, dX, n);
             double xg = GL_X[g] * b;
             double fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq);
@@ -642,28 +695,14 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
 // e^{i om t} as numba computes cmath.exp(1j * om * t): the products promoted to complex
 inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t); }
 
-// (q0 tabE + sum_j S_j tabP_j) at the table's column g: a cut's whole step from its tables
-inline void tab_state(Work& w, idx r, idx g, idx ks, CVec q, Vec X) {
-    const Segment& seg = w.seg;
-    CVec q0 = w.q0;
-    idx nz = q0.size();
-    for (idx kq = 0; kq < nq(nz, ks); ++kq) {
-        idx k = kq * ks;
-        q[k] = ncplx(q0[k]) * ncplx(w.tabE(r, g, k)) + seg.s[0] * ncplx(w.tabP(r, g, 0, k))
-               + seg.s[1] * ncplx(w.tabP(r, g, 1, k)) + seg.s[2] * ncplx(w.tabP(r, g, 2, k))
-               + seg.s[3] * ncplx(w.tabP(r, g, 3, k));
-    }
-    for (idx j = 0; j < nz; ++j) X[j] = add_modes(seg.fb * w.D(r, j), w.V, r, j, q, nz, ks);
-}
-
 // The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
 // usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
 // the tabulated end of a cut's whole step (tab_end), or the closed form.  Returns phg and
 // y'', W'' at b (ydd_b, wdd_b as they were where not evaluated).
 template <bool Regen>
 inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mode, idx lev,
-                         double b, bool usual, bool tab_end, bool ball, bool ydd_on, ncplx phg,
-                         double ydd_b, double wdd_b) {
+                         double b, bool usual, bool tab_end, bool ball, bool ydd_on,
+                         const ncplx& phg_a, double ydd_b, double wdd_b) {
     const Segment& seg = w.seg;
     Vec X = w.X;
     idx nz = X.size();
@@ -671,11 +710,12 @@ inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mo
     double om = w.cp.om;
     if (usual) {
         // the usual grid point, with the sizes constant for one and two modes
-        ncplx rot = w.rotl[lev];
-        if (sz == 1) return grid_point<2>(w, r, lev, phg, rot, ks, b, mode, n, f0, om, ydd_on, nz);
-        if (sz == 2) return grid_point<4>(w, r, lev, phg, rot, ks, b, mode, n, f0, om, ydd_on, nz);
-        return grid_point<0>(w, r, lev, phg, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+        const ncplx& rot = w.rotl[lev];
+        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 2);
+        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 4);
+        return grid_point<0>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
     }
+    ncplx phg = phg_a;
     if (tab_end) {
         tab_state(w, r, 4, ks, w.qg, X);
     } else {
@@ -806,15 +846,16 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     double ydd_b = NAN;
     double wdd_b = NAN;
     if (ydd_on) std::tie(ydd_a, wdd_a) = ydd(Xa, f0 * ph.imag(), fb, acc, w.ddc, n);
+    idx top = adapt ? w.levmax[r] : 0;
+    LevelBounds lb(sv.b3y, sv.b3w, w.hl, top);
     while (true) {
         // the step: h, or 2^lv h where Taylor's theorem proves that it holds no event and
         // no new extremum of |y| or (steady) of W
         idx lev = 0;
         if (adapt) {
             double ylim = pymin(half, steady ? e.max_aux : e.max_aux_all) * (1.0 - 1e-9);
-            lev = level(ev_a[EV_PLUS] + half, ev_a[EV_YEXT], ydd_a, wa, wda, wdd_a, sv.b3y,
-                        sv.b3w, ylim, 1e-9 * e.max_abs_w, e.max_w, e.min_w, w.hl, w.levmax[r],
-                        watch_v, steady);
+            lev = level(ev_a[EV_PLUS] + half, ev_a[EV_YEXT], ydd_a, wa, wda, wdd_a, lb, ylim,
+                        1e-9 * e.max_abs_w, e.max_w, e.min_w, w.hl, top, watch_v, steady);
         }
         double b = a + w.hl[lev];
         bool full = true;

@@ -91,6 +91,13 @@ def _cmul_parts(ar, ai, br, bi):
     return ar * br - ai * bi, ar * bi + ai * br
 
 
+def _seqsum(t: np.ndarray, axis: int = -1) -> np.ndarray:
+    """0.0 + t_0 + t_1 + ... along ``axis``, in that order (numba's loop ``s = 0.0; s += t``):
+    np.add.accumulate adds sequentially (np.sum may add pairwise)."""
+    zero = np.zeros_like(np.take(t, [0], axis))
+    return np.take(np.add.accumulate(np.concatenate([zero, t], axis), axis), -1, axis)
+
+
 def _inv(a: np.ndarray) -> np.ndarray:
     """numba's np.linalg.inv: LAPACK dgetrf then dgetri (SciPy's, as numba's cython_lapack)."""
     if not np.all(np.isfinite(a)):
@@ -117,10 +124,7 @@ def _coupled(p, n, s, A, B):
     A[np.arange(n), n + np.arange(n)] = 1.0
     A[n:2 * n, 0:n] = -Mi * p[L.K_:L.K_ + n][None, :]
     A[n:2 * n, n:2 * n] = -Mi * p[L.C_:L.C_ + n][None, :]
-    b = np.zeros(n)
-    for j in range(n):  # the sum over j in numba's order
-        b = b + Mi[:, j] * p[L.PSI_L + j]
-    B[n:2 * n] = b
+    B[n:2 * n] = _seqsum(Mi * p[L.PSI_L:L.PSI_L + n][None, :])  # sum over j in order
 
 
 def _regimes(p):
@@ -181,7 +185,6 @@ def _regimes(p):
 def _pair_order(lr):
     """prepare.py's _pair_order: an ordering [l1, conj l1, l2, conj l2, ...] of ``lr``, or
     an empty array if its values are not all complex conjugate pairs."""
-    lr = [complex(z) for z in lr]
     nz = len(lr)
     none = np.empty(0, np.int64)
     ok = nz % 2 == 0
@@ -216,73 +219,80 @@ def _pair_order(lr):
 
 def _finish(p, lam, V, Vi, Z, B):
     """prepare.py's _finish: the conjugate-pair ordering (in place in lam, V, Vi), Vh,
-    kstep, bq = Vi B, h, bnd, levmax, eh and isum."""
+    kstep, bq = Vi B, h, bnd, levmax, eh and isum.  Written as numba's loops on Python
+    floats and complex numbers (CPython's complex arithmetic is numba's): for the small
+    sizes here faster than NumPy's per-call overhead, and evidently the same operations."""
     n = int(p[L.N_MODES])
     om = float(p[L.OMEGA])
     R, nz = lam.shape
     kstep = np.ones(R, np.int64)
     Vh = V.copy()
-    for r in range(R):
-        order = _pair_order(lam[r])
+    paired = []
+    for r, lr in enumerate(lam.tolist()):
+        order = _pair_order(lr)
         if order.shape[0] == 0:
             continue
-        lam[r] = lam[r][order]
-        V[r] = V[r][:, order]
-        Vi[r] = Vi[r][order, :]
-        # numba's np.conj: imag -> -0.0 - imag, the same bits as the sign flip
-        V[r, :, 1::2] = np.conj(V[r, :, 0::2])
-        Vi[r, 1::2, :] = np.conj(Vi[r, 0::2, :])
+        if order.tolist() != list(range(nz)):
+            lam[r] = lam[r][order]
+            V[r] = V[r][:, order]
+            Vi[r] = Vi[r][order, :]
+        paired.append(r)
+    if paired:
+        # all regimes at once (a slice when all are paired: the usual case)
+        pr = slice(None) if len(paired) == R else np.array(paired)
+        kstep[pr] = 2
+        # numba's np.conj: imag -> -0.0 - imag, the same bits as NumPy's sign flip
+        V[pr, :, 1::2] = np.conj(V[pr, :, 0::2])
+        Vi[pr, 1::2, :] = np.conj(Vi[pr, 0::2, :])
         # numba: 2.0 * V[r, :, k] promotes 2.0 to complex(2.0, 0.0)
-        re, im = _cmul_parts(2.0, 0.0, V[r, :, 0::2].real, V[r, :, 0::2].imag)
-        Vh[r, :, 0::2].real = re
-        Vh[r, :, 0::2].imag = im
-        Vh[r, :, 1::2] = 0.0
-        kstep[r] = 2
-    # bq[r, k] = sum_j Vi[r, k, j] B[r, j], B promoted to complex, in j's order
-    sre = np.zeros((R, nz))
-    sim = np.zeros((R, nz))
-    for j in range(nz):
-        b = B[:, j][:, None]
-        tre, tim = _cmul_parts(Vi[:, :, j].real, Vi[:, :, j].imag, b, 0.0)
-        sre = sre + tre
-        sim = sim + tim
-    bq = np.empty((R, nz), np.complex128)
-    bq.real = sre
-    bq.imag = sim
-    lam_c = [[complex(lam[r, k]) for k in range(nz)] for r in range(R)]
-    alam = [[abs(z) for z in row] for row in lam_c]  # hypot, as numba's abs
+        re, im = _cmul_parts(2.0, 0.0, V[pr, :, 0::2].real, V[pr, :, 0::2].imag)
+        vh = np.zeros((len(paired), nz, nz), np.complex128)
+        vh.real[:, :, 0::2] = re
+        vh.imag[:, :, 0::2] = im
+        Vh[pr] = vh
+    lam_l, V_l, Vi_l, Z_l, B_l = lam.tolist(), V.tolist(), Vi.tolist(), Z.tolist(), B.tolist()
+    bq = []
+    for r in range(R):
+        row = []
+        for k in range(nz):
+            s = 0j
+            for j in range(nz):
+                s += Vi_l[r][k][j] * B_l[r][j]
+            row.append(s)
+        bq.append(row)
+    bq = np.array(bq, np.complex128).reshape(R, nz)
+    alam = [[abs(z) for z in row] for row in lam_l]  # hypot, as numba's abs
     fastest = om
     for r in range(R):
-        for k in range(nz):
-            a = alam[r][k]
+        for a in alam[r]:
             fastest = a if a > fastest else fastest
     h = 2 * math.pi / fastest / GRID_PER_PERIOD
-    # the bounds on |y^(4)|, |W^(4)|, |y'''|, |W'''| over a segment (see prepare.py):
-    # s = sum_i psi_i (V or Z)_i, psi promoted to complex, in i's order, for all regimes and
-    # both rows (psi_d, psi_L) at once; |s| by np.hypot, the C library's hypot as numba's abs
-    psi = np.stack([p[L.PSI_D:L.PSI_D + n], p[L.PSI_L:L.PSI_L + n]])  # (2, n)
-    cols = np.concatenate([V[:, :n, :], Z[:, :n, None]], axis=2)  # (R, n, nz + 1)
-    sre = np.zeros((R, 2, nz + 1))
-    sim = np.zeros((R, 2, nz + 1))
-    for i in range(n):
-        tre, tim = _cmul_parts(psi[None, :, i, None], 0.0, cols[:, None, i, :].real,
-                               cols[:, None, i, :].imag)
-        sre = sre + tre
-        sim = sim + tim
-    sabs = np.hypot(sre, sim)
-    a = np.empty((R, 1, nz + 1))
-    a[:, 0, :nz] = alam
-    a[:, 0, nz] = om
+    # the bounds on |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are
+    # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants;
+    # rows 2 and 3 the same with the third powers, for |y'''| and |W'''|
+    psis = (p[L.PSI_D:L.PSI_D + n].tolist(), p[L.PSI_L:L.PSI_L + n].tolist())
     bnd = np.empty((R, 4, nz + 1))
-    bnd[:, 0:2, :] = a * a * a * a * sabs
-    bnd[:, 2:4, :] = a * a * a * sabs
+    for r in range(R):
+        for row in range(2):
+            ps = psis[row]
+            b4 = []
+            b3 = []
+            for k in range(nz + 1):
+                s = 0j
+                for i in range(n):
+                    s += ps[i] * (V_l[r][i][k] if k < nz else Z_l[r][i])
+                a = alam[r][k] if k < nz else om
+                s = abs(s)
+                b4.append(a * a * a * a * s)
+                b3.append(a * a * a * s)
+            bnd[r, row] = b4
+            bnd[r, row + 2] = b3
     # the longest step worth trying per regime: 2^levmax h
     levmax = np.zeros(R, np.int64)
     for r in range(R):
         lo = math.inf
         hi = 0.0
-        for k in range(nz):
-            a = alam[r][k]
+        for a in alam[r]:
             hi = a if a > hi else hi
             if a > 0.0:
                 lo = a if a < lo else lo
@@ -291,39 +301,36 @@ def _finish(p, lam, V, Vi, Z, B):
         while lv < GRID_LEVELS - 1 and ratio >= 2.0 ** (lv + 1):
             lv += 1
         levmax[r] = lv
-    eh = np.empty((R, GRID_LEVELS, nz), np.complex128)
+    exp, cos, sin, isfinite = math.exp, math.cos, math.sin, math.isfinite
+    eh = []
     for r in range(R):
         for lv in range(GRID_LEVELS):
             x = h * 2.0 ** lv
-            for k, z in enumerate(lam_c[r]):
+            for z in lam_l[r]:
                 w = z * x  # CPython: x promoted to complex(x, 0.0), as numba
-                if math.isfinite(w.real) and math.isfinite(w.imag):
-                    e = math.exp(w.real)  # _cexp, written out (the common case)
-                    eh[r, lv, k] = complex(e * math.cos(w.imag), e * math.sin(w.imag))
+                if isfinite(w.real) and isfinite(w.imag):
+                    e = exp(w.real)  # _cexp, written out (the common case)
+                    eh.append(complex(e * cos(w.imag), e * sin(w.imag)))
                 else:
-                    eh[r, lv, k] = _cexp(w)
-    # isum[r, a, b] = 1 / (mu_a + mu_b) over mu = (lambda_r, i Omega, -i Omega, 0) (0 where
-    # the sum is 0), by CPython's division of complex(1.0, 0.0), elementwise
+                    eh.append(_cexp(w))
+    eh = np.array(eh, np.complex128).reshape(R, GRID_LEVELS, nz)
+    # isum[r, a, b] = 1 / (mu_a + mu_b) over the basis exponents mu = (lambda_r, i Omega,
+    # -i Omega, 0) (prepare.py's basis_exponents), 0 where the sum is 0
+    # (an IEEE sum is commutative: mu_a + mu_b and mu_b + mu_a are the same number, so one
+    # division serves both entries)
     nb = nz + 3
-    extra = [1j * om, -1j * om, 0j]
-    mre = np.array([[z.real for z in row + extra] for row in lam_c]).reshape(R, nb)
-    mim = np.array([[z.imag for z in row + extra] for row in lam_c]).reshape(R, nb)
-    br = mre[:, :, None] + mre[:, None, :]
-    bi = mim[:, :, None] + mim[:, None, :]
-    nonzero = (br != 0.0) | (bi != 0.0)
-    with np.errstate(all="ignore"):
-        first = np.abs(br) >= np.abs(bi)
-        ratio1 = bi / br
-        denom1 = br + bi * ratio1
-        re1 = (1.0 + 0.0 * ratio1) / denom1
-        im1 = (0.0 - 1.0 * ratio1) / denom1
-        ratio2 = br / bi
-        denom2 = br * ratio2 + bi
-        re2 = (1.0 * ratio2 + 0.0) / denom2
-        im2 = (0.0 * ratio2 - 1.0) / denom2
     isum = np.zeros((R, nb, nb), np.complex128)
-    isum.real = np.where(nonzero, np.where(first, re1, re2), 0.0)
-    isum.imag = np.where(nonzero, np.where(first, im1, im2), 0.0)
+    for r in range(R):
+        mu = lam_l[r] + [1j * om, -1j * om, 0j]
+        rows = [[0j] * nb for _ in range(nb)]
+        for a in range(nb):
+            ma = mu[a]
+            row = rows[a]
+            for b in range(a, nb):
+                sab = ma + mu[b]
+                if sab != 0.0:
+                    row[b] = rows[b][a] = 1.0 / sab
+        isum[r] = rows
     return Vh, kstep, bq, h, bnd, levmax, eh, isum
 
 
