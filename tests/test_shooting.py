@@ -354,3 +354,10 @@ def test_branches_of_different_lengths_stack_with_padding():
     assert [b["events"] for b in s["branches"]][0] == [{"kind": "fold", "value": 29.0}]
     assert [b["stop"] for b in s["branches"]] == ["stop 3", "stop 5", "stop 0"]
     assert plot_continuation(ds) is not None  # the padding is not drawn
+
+
+def test_a_newton_solution_is_accepted_only_with_a_small_residual():
+    x = np.array([1.0, -2.0, 0.5])
+    sh.check_residual(np.full(3, 1e-12), x)  # 5e-13 of max |x|: accepted
+    with pytest.raises(sh.OrbitRefused, match="residual"):
+        sh.check_residual(np.array([0.0, 0.4, 0.0]), x, "the corrector")

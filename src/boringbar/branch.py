@@ -34,6 +34,7 @@ from boringbar.shooting import (
     OrbitRefused,
     advance,
     carry,
+    check_residual,
     free_phase,
     multipliers,
     newton_step,
@@ -150,6 +151,7 @@ def correct(fl, name, ref, y0, tangent, scale, k, tol=1e-11, max_iter=12):
         y = y + dy
         if np.max(np.abs(dy / scale)) < tol:
             r, pr = _residual(fl, name, ref, y[:-1], y[-1], k)
+            check_residual(r, y[:-1], "the corrector")
             return y, pr, it + 1
     raise OrbitRefused("the corrector did not converge")
 
@@ -341,6 +343,7 @@ def _first(fl, name, ref, x0, p0, k):
         x = x + dx
         if np.max(np.abs(dx)) < 1e-12 * np.max(np.abs(x)):
             r, pr = _residual(fl, name, ref, x, p0, k)
+            check_residual(r, x, "Newton at the start value")
             return np.concatenate([x, [p0]]), pr
     raise OrbitRefused("Newton did not converge at the start value")
 

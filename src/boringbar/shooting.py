@@ -397,6 +397,23 @@ def _unit(N, i):
     return v
 
 
+#: A Newton solution is accepted only if its residual |P^k(x) - x| is at most this
+#: fraction of max |x| (a small step alone does not prove a fixed point: a wrong or
+#: ill-scaled Jacobian can make the steps small while the residual is not).
+RESIDUAL_TOL = 1e-9
+
+
+def check_residual(r: np.ndarray, x: np.ndarray, what: str = "Newton") -> None:
+    """Refuse (:class:`OrbitRefused`) a converged ``what`` whose residual r = P^k(x) - x
+    exceeds RESIDUAL_TOL max |x|."""
+    size = float(np.max(np.abs(x)))
+    res = float(np.max(np.abs(r)))
+    if not res <= RESIDUAL_TOL * size:
+        raise OrbitRefused(f"{what} stopped with a residual |P^k(x) - x| = {res:.3g}, "
+                           f"{res / size if size > 0 else np.inf:.3g} of max |x| "
+                           f"(> {RESIDUAL_TOL:g}): not a periodic orbit (refused)")
+
+
 @one_blas_thread
 def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-12,
                    max_iter: int = 30) -> tuple[np.ndarray, Period]:
@@ -409,7 +426,9 @@ def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-1
         dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x = x + dx
         if np.max(np.abs(dx) / np.maximum(np.abs(x), scale)) < tol:
-            return x, advance(fl, x, periods, rms=True)
+            pr = advance(fl, x, periods, rms=True)
+            check_residual(pr.x - x, x)
+            return x, pr
     raise OrbitRefused(f"Newton did not converge in {max_iter} iterations "
                        f"(last residual {np.max(np.abs(r)):.3g})")
 
