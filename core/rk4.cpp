@@ -141,7 +141,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     double hsurf[4] = {0.0, 0.0, 0.0, 0.0};
     idx steps_run = a.n_steps;
 
-    double X[NX_MAX], Xs[NX_MAX], Kd[NX_MAX], acc[NX_MAX], dX[NX_MAX];
+    double X[NX_MAX], Kd[NX_MAX], acc[NX_MAX], dX[NX_MAX];
     for (int j = 0; j < nx; ++j) {
         X[j] = a.x[j];
         Kd[j] = 0.0;
@@ -203,9 +203,7 @@ BB_INLINE void run_body(const RunArgs& a) {
             map_flows(q, sh, mp, fl, X, dX, sn, cn, fz);
             for (int j = 0; j < nx; ++j) X[j] += dX[j];
         } else {
-            for (int j = 0; j < nx; ++j) acc[j] = 0.0;
-            for (int s = 0; s < 4; ++s) {
-                for (int j = 0; j < nx; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
+            auto force = [&](int s, const double* Xs) {
                 double f = fst[s];
                 if (regen) {  // f = Kr b h, h = max(0, surface - W(t_s))
                     double ws = 0.0;
@@ -213,10 +211,9 @@ BB_INLINE void run_body(const RunArgs& a) {
                     f = cut.force(hsurf[s], ws, t + C_FRAC[s] * dt);
                     fst[s] = f;
                 }
-                const StageTerms terms = derivative(q, sh, Xs, f, Kd);
-                for (int j = 0; j < nx; ++j) acc[j] += wst[s] * Kd[j];
-                stage_flows(q, sh, fl, terms, wst[s], f);
-            }
+                return f;
+            };
+            rk4_stages(q, sh, X, Kd, acc, cst, wst, fl, true, force);
             for (int j = 0; j < nx; ++j) X[j] += acc[j];
         }
         const bool steady = k >= a.steady_start;

@@ -226,6 +226,27 @@ BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
 // F_b of a mapped step: the sign y' has at the step's start.
 BB_INLINE double map_friction(const Params& q, double yd0) { return yd0 > 0.0 ? -q.fc : q.fc; }
 
+// The four RK4 stages of a step from X: the stage derivative Kd (carried over from the
+// previous staged step, where only 0 * Kd enters) updated, the increment into acc, and
+// with flows_on the stages' energy flows.  force(s, Xs) is the tip force of stage s.
+template <int N, int CASE, class Force>
+BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, const double* X, double* Kd,
+                          double* acc, const double* cst, const double* wst, Flows& fl,
+                          bool flows_on, Force&& force) {
+    const int nx = sh.nx();
+    for (int j = 0; j < nx; ++j) acc[j] = 0.0;
+    // unrolled, so that the derivatives stay in registers from stage to stage
+#pragma GCC unroll 4
+    for (int s = 0; s < 4; ++s) {
+        double Xs[NX_MAX];
+        for (int j = 0; j < nx; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
+        const double f = force(s, Xs);
+        const StageTerms terms = derivative(q, sh, Xs, f, Kd);
+        for (int j = 0; j < nx; ++j) acc[j] += wst[s] * Kd[j];
+        if (flows_on) stage_flows(q, sh, fl, terms, wst[s], f);
+    }
+}
+
 // A cheap sufficient condition for map_fits' stage test: with
 // E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
 // in exact arithmetic, E <= 0.2 |y'_0| puts every computed y'_s within |y'_0| / 4 of

@@ -23,7 +23,13 @@ namespace {
 struct Lane {
     Params q;
     VecMap mp;
-    double X[NX_MAX], Kd[NX_MAX], acc[NX_MAX], dX[NX_MAX];
+    // state, stage derivative, stage sum and map increment; read and written in pairs
+    // (v2) where the stages touch them: a pair load of values just stored one by one
+    // stalls on store forwarding
+    alignas(16) double X[NX_MAX];
+    alignas(16) double Kd[NX_MAX];
+    alignas(16) double acc[NX_MAX];
+    alignas(16) double dX[NX_MAX];
     double fst[4];
     double sn, cn;  // the forcing phase at the next step's start
     double S0, C0;  // ... and at this step's start
@@ -42,7 +48,7 @@ struct Lane {
 };
 
 template <int N, int CASE>
-void init_lane(Lane& ln, const BatchArgs& a, idx r, Shape<N, CASE> sh) {
+BB_INLINE void init_lane(Lane& ln, const BatchArgs& a, idx r, Shape<N, CASE> sh) {
     const double* p = a.P.row(r);
     const int nx = sh.nx();
     ln.mp = step_map(sh.n, p, a.dt);
@@ -81,19 +87,32 @@ BB_INLINE void decide(Lane& ln, Shape<N, CASE> sh) {
     ln.um = ok;
 }
 
+BB_INLINE v2 load2(const double* p) { return *reinterpret_cast<const v2*>(p); }
+BB_INLINE void store2(double* p, v2 v) { *reinterpret_cast<v2*>(p) = v; }
+
+// Stage s of one run: rk4_stage's arithmetic, with the lane's pairs loaded and stored as
+// pairs.
 template <int N, int CASE>
 BB_INLINE void stage(Lane& ln, Shape<N, CASE> sh, int s, double cs, double w_s) {
-    const int nx = sh.nx();
-    double Xs[NX_MAX];
-    for (int j = 0; j < nx; ++j) Xs[j] = ln.X[j] + cs * ln.Kd[j];
+    const int np = sh.n + 1;  // pairs of X: nx = 2n + 2
+    double Xs[NX_MAX], K[NX_MAX];
+    for (int p = 0; p < np; ++p) {
+        const v2 xs = load2(ln.X + 2 * p) + cs * load2(ln.Kd + 2 * p);
+        Xs[2 * p] = xs[0];
+        Xs[2 * p + 1] = xs[1];
+    }
     const double f = ln.fst[s];
-    const StageTerms terms = derivative(ln.q, sh, Xs, f, ln.Kd);
-    for (int j = 0; j < nx; ++j) ln.acc[j] += w_s * ln.Kd[j];
+    const StageTerms terms = derivative(ln.q, sh, Xs, f, K);
+    for (int p = 0; p < np; ++p) {
+        const v2 k = {K[2 * p], K[2 * p + 1]};
+        store2(ln.Kd + 2 * p, k);
+        store2(ln.acc + 2 * p, load2(ln.acc + 2 * p) + w_s * k);
+    }
     if (!ln.um) stage_flows(ln.q, sh, ln.fl, terms, w_s, f);
 }
 
 template <int N, int CASE>
-void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
+BB_INLINE void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
     const int nx = sh.nx();
     const double t0 = a.t0, dt = a.dt;
     double cst[4], wst[4];
@@ -124,7 +143,6 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
             ln.fst[3] = ln.q.f0 * ph.s_1;
             ln.sn = ph.s_1;
             ln.cn = ph.c_1;
-            for (int j = 0; j < nx; ++j) ln.acc[j] = 0.0;
         }
 
         // the step as an affine map for the runs whose F_b keeps its sign
@@ -141,8 +159,12 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
                 map_flows(ln.q, sh, ln.mp, ln.fl, ln.X, ln.dX, ln.S0, ln.C0, ln.fz);
             }
         }
-        // the others: the four RK4 stages, each a loop over the runs
+        // the others: the four RK4 stages, each a loop over the runs (the runs that took
+        // the map too, as the numba kernel did: their derivatives are kept, sums dropped)
         if (n_staged > 0) {
+            for (int r = 0; r < nb; ++r) {
+                for (int j = 0; j < nx; j += 2) store2(lanes[r].acc + j, v2{0.0, 0.0});
+            }
             for (int s = 0; s < 4; ++s) {
                 for (int r = 0; r < nb; ++r) stage(lanes[r], sh, s, cst[s], wst[s]);
             }
@@ -150,7 +172,7 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
         for (int r = 0; r < nb; ++r) {
             Lane& ln = lanes[r];
             const double* inc = ln.um ? ln.dX : ln.acc;
-            for (int j = 0; j < nx; ++j) ln.X[j] += inc[j];
+            for (int j = 0; j < nx; j += 2) store2(ln.X + j, load2(ln.X + j) + load2(inc + j));
         }
 
         // step-end events, run by run
@@ -191,12 +213,33 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
 }
 
 template <int N, int CASE>
-void run_shape(const BatchArgs& a, int nb) {
+BB_INLINE void run_lanes(const BatchArgs& a, int nb) {
     std::unique_ptr<Lane[]> lanes(new Lane[nb]);
     for (int r = 0; r < nb; ++r) lanes[r].q = unpack(a.P.row(r), a.dt);
     const Shape<N, CASE> sh(lanes[0].q);
     for (int r = 0; r < nb; ++r) init_lane(lanes[r], a, r, sh);
     run(a, sh, lanes.get(), nb);
+}
+
+template <int N, int CASE>
+void run_base(const BatchArgs& a, int nb) {
+    run_lanes<N, CASE>(a, nb);
+}
+
+#ifdef BB_AVX2_CLONE
+template <int N, int CASE>
+BB_TARGET_AVX2 void run_avx2(const BatchArgs& a, int nb) {
+    run_lanes<N, CASE>(a, nb);
+}
+#endif
+
+// the kernel for the CPU (rk4.hpp: the same bits either way)
+template <int N, int CASE>
+void run_shape(const BatchArgs& a, int nb) {
+#ifdef BB_AVX2_CLONE
+    if (cpu_has_avx2()) return run_avx2<N, CASE>(a, nb);
+#endif
+    run_base<N, CASE>(a, nb);
 }
 
 template <int N>
