@@ -87,26 +87,30 @@ BB_INLINE void decide(Lane& ln, Shape<N, CASE> sh) {
     ln.um = ok;
 }
 
-BB_INLINE v2 load2(const double* p) { return *reinterpret_cast<const v2*>(p); }
-BB_INLINE void store2(double* p, v2 v) { *reinterpret_cast<v2*>(p) = v; }
+// a lane's pair (memcpy: no aliasing of double storage through the vector type)
+BB_INLINE v2 load2(const double* p) {
+    v2 v;
+    __builtin_memcpy(&v, p, sizeof v);
+    return v;
+}
+BB_INLINE void store2(double* p, v2 v) { __builtin_memcpy(p, &v, sizeof v); }
 
-// Stage s of one run: rk4_stage's arithmetic, with the lane's pairs loaded and stored as
-// pairs.
+// Stage s of one run (rk4_stage, rk4.hpp), on the lane's pairs.
 template <int N, int CASE>
 BB_INLINE void stage(Lane& ln, Shape<N, CASE> sh, int s, double cs, double w_s) {
-    const int np = sh.n + 1;  // pairs of X: nx = 2n + 2
-    double Xs[NX_MAX], K[NX_MAX];
+    const int np = sh.n + 1;
+    v2 x2[NX_MAX / 2], k2[NX_MAX / 2], sum[NX_MAX / 2];
     for (int p = 0; p < np; ++p) {
-        const v2 xs = load2(ln.X + 2 * p) + cs * load2(ln.Kd + 2 * p);
-        Xs[2 * p] = xs[0];
-        Xs[2 * p + 1] = xs[1];
+        x2[p] = load2(ln.X + 2 * p);
+        k2[p] = load2(ln.Kd + 2 * p);
+        sum[p] = load2(ln.acc + 2 * p);
     }
-    const double f = ln.fst[s];
-    const StageTerms terms = derivative(ln.q, sh, Xs, f, K);
+    auto force = [&](int st, const double*) { return ln.fst[st]; };
+    double f;
+    const StageTerms terms = rk4_stage(ln.q, sh, s, x2, k2, sum, cs, w_s, force, f);
     for (int p = 0; p < np; ++p) {
-        const v2 k = {K[2 * p], K[2 * p + 1]};
-        store2(ln.Kd + 2 * p, k);
-        store2(ln.acc + 2 * p, load2(ln.acc + 2 * p) + w_s * k);
+        store2(ln.Kd + 2 * p, k2[p]);
+        store2(ln.acc + 2 * p, sum[p]);
     }
     if (!ln.um) stage_flows(ln.q, sh, ln.fl, terms, w_s, f);
 }
