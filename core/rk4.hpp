@@ -34,7 +34,8 @@
 // every CPU (FMA, which would round differently, is not enabled; -ffp-contract=off).
 // AVX2 gives the vector arithmetic (VecMap) 4 lanes, 3-operand instructions and more
 // registers.
-#if defined(__x86_64__) && defined(__GNUC__)
+// (-DBB_NO_AVX2_CLONE builds the baseline kernels alone, to test them on an AVX2 CPU.)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
 #define BB_AVX2_CLONE 1
 #define BB_TARGET_AVX2 __attribute__((target("avx2")))
 #endif
