@@ -4,6 +4,8 @@
 
 Same process, same inputs (packed by boringbar.simulate._setup), warm (numba compiled or
 loaded from its cache by a short first call), best of ``--repeat`` rounds interleaved.
+Times are the calling thread's CPU time (time.thread_time: both kernels run in it), which
+a busy machine disturbs far less than the wall clock.
 Cases: the published ball bar with 1 mode (paper preset, harmonic; with its friction and
 without), the physical preset's 2-mode ball bar, the solid bar, a regenerative cut, and
 the lock-step batch (16 runs of the 1-mode ball bar; ns per run-step).  ``--cpp-only``
@@ -38,13 +40,15 @@ def batch_inputs(sus):
             np.array([su.met for su in sus]))
 
 
-def best_time(fn, make_args, repeat):
-    best = float("inf")
+def best_times(fns, make_args, repeat):
+    """Best CPU time of each of ``fns``, rounds interleaved."""
+    best = [float("inf")] * len(fns)
     for _ in range(repeat):
-        args = make_args()
-        tic = time.perf_counter()
-        fn(*args)
-        best = min(best, time.perf_counter() - tic)
+        for i, fn in enumerate(fns):
+            args = make_args()
+            tic = time.thread_time()
+            fn(*args)
+            best[i] = min(best[i], time.thread_time() - tic)
     return best
 
 
@@ -79,12 +83,10 @@ def main() -> None:
     for label, (system, forcing) in singles.items():
         su = _setup(system, forcing, d, 1e-6, None, 0, 0.8, False, "rk4")
         warm = _setup(system, forcing, 1e-3, 1e-6, None, 0, 0.8, False, "rk4")
-        ns = []
         for n in names:
             kernels[n][0](*single_inputs(warm))
-        for n in names:
-            t = best_time(kernels[n][0], lambda: single_inputs(su), args.repeat)
-            ns.append(t / su.n_steps * 1e9)
+        ts = best_times([kernels[n][0] for n in names], lambda: single_inputs(su), args.repeat)
+        ns = [t / su.n_steps * 1e9 for t in ts]
         row = "".join(f"{v:10.1f}" for v in ns)
         ratio = f"{ns[0] / ns[1]:9.2f}x" if len(ns) == 2 else ""
         print(f"  {label:58s}{row}{ratio}", flush=True)
@@ -95,12 +97,10 @@ def main() -> None:
                 for j in range(nb)]
         sus = [_setup(system, f, d, 1e-6, i, 0, 0.8, False, "rk4") for f, i in jobs]
         warm = [_setup(system, f, 1e-3, 1e-6, i, 0, 0.8, False, "rk4") for f, i in jobs]
-        ns = []
         for n in names:
             kernels[n][1](*batch_inputs(warm))
-        for n in names:
-            t = best_time(kernels[n][1], lambda: batch_inputs(sus), args.repeat)
-            ns.append(t / (sus[0].n_steps * nb) * 1e9)
+        ts = best_times([kernels[n][1] for n in names], lambda: batch_inputs(sus), args.repeat)
+        ns = [t / (sus[0].n_steps * nb) * 1e9 for t in ts]
         row = "".join(f"{v:10.1f}" for v in ns)
         ratio = f"{ns[0] / ns[1]:9.2f}x" if len(ns) == 2 else ""
         label = f"batch of {nb}, ball 1 mode paper (ns per run-step)"

@@ -9,11 +9,20 @@ the same inputs, and prints, per case and output, whether the two are bitwise eq
 (float64 bit patterns, so -0.0 != 0.0 and NaNs compare by payload) or the largest
 difference.  Batches are also compared with the C++ single run of each of their runs.
 Exits 1 if anything differs.
+
+``--bad-input``: the C++ entry points' boundary checks: each bad argument must raise a
+ValueError that names it (no crash, no silent run).
+
+``--fuzz N``: N random single runs (1-4 modes, every case, both forcings, random
+parameters with now and then a 0, -0, 1e+-300, inf or NaN) and N / 4 random batches,
+numba against C++.  Runs that blow up to NaN may differ in the NaN's sign bit (IEEE
+leaves which NaN operand propagates to the compiler); those are counted apart.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
 import numpy as np
@@ -213,11 +222,230 @@ def cases(duration):
         varied(make_system("ball", "physical", gap=0.5e-3, n_modes=4), 4), 4, d)
 
 
+def bad_inputs() -> int:
+    """Call _core.run_rk4 / run_rk4_batch with one bad argument at a time."""
+    def good(n=1):
+        p = np.zeros(L.P_SIZE)
+        p[L.N_MODES], p[L.CASE] = n, L.BALL
+        p[L.M_:L.M_ + n], p[L.K_:L.K_ + n], p[L.PSI_L:L.PSI_L + n] = 1.0, 1e6, 1.0
+        p[L.BALL_MASS], p[L.HALF_GAP], p[L.M_EFF], p[L.REACTION] = 0.02, 1e-4, 0.019, 1.0
+        return dict(p=p, x=np.zeros(2 * n + 2), t0=0.0, dt=1e-6, n_steps=100, steady_start=0,
+                    rec_every=1, rec=np.zeros((5, 6)), imp=np.zeros((1, 3)),
+                    stick=np.zeros((1, 2)), strobe=np.zeros((1, 5)), met=fresh_met(),
+                    buf=np.zeros((0, 2)))
+
+    def p_with(**slots):
+        p = good()["p"]
+        for k, v in slots.items():
+            p[getattr(L, k)] = v
+        return p
+
+    def met_with(slot, v):
+        m = fresh_met()
+        m[slot] = v
+        return m
+
+    def cut(rows, nrev=2, tau=1e-4):
+        p = p_with(FORCING=1, N_REV=nrev, TAU=tau, CASE=L.SOLID)
+        return {"p": p, "buf": np.zeros((rows, 2))}
+
+    read_only = np.zeros((5, 6))
+    read_only.flags.writeable = False
+    single = {
+        "p float32": {"p": good()["p"].astype(np.float32)}, "p short": {"p": np.zeros(5)},
+        "p a list": {"p": list(good()["p"])}, "x length": {"x": np.zeros(6)},
+        "rec read-only": {"rec": read_only}, "rec 5 columns": {"rec": np.zeros((5, 5))},
+        "rec strided": {"rec": np.zeros((10, 6))[::2]},
+        "rec Fortran order": {"rec": np.asfortranarray(np.zeros((5, 6)))},
+        "imp 1-d": {"imp": np.zeros(3)}, "met short": {"met": np.zeros(10)},
+        "N_MODES 0": {"p": p_with(N_MODES=0)}, "N_MODES 9": {"p": p_with(N_MODES=9)},
+        "N_MODES 1.5": {"p": p_with(N_MODES=1.5)}, "N_MODES nan": {"p": p_with(N_MODES=math.nan)},
+        "CASE 4": {"p": p_with(CASE=4)}, "FORCING 2": {"p": p_with(FORCING=2)},
+        "n_steps -1": {"n_steps": -1}, "n_steps 2.5": {"n_steps": 2.5},
+        "n_steps '3'": {"n_steps": "3"}, "dt 0": {"dt": 0.0}, "dt nan": {"dt": math.nan},
+        "dt inf": {"dt": math.inf}, "t0 nan": {"t0": math.nan},
+        "steady_start -1": {"steady_start": -1}, "steady_start > n_steps": {"steady_start": 101},
+        "rec_every -1": {"rec_every": -1},
+        "met N_IMP_REC -1": {"met": met_with(L.N_IMP_REC, -1)},
+        "met N_REC nan": {"met": met_with(L.N_REC, math.nan)},
+        "met STEPS_DONE 1e300": {"met": met_with(L.STEPS_DONE, 1e300)},
+        "cut buf short": cut(150), "cut N_REV 0": cut(10, nrev=0), "cut N_REV 51": cut(10, 51),
+        "cut TAU 0": cut(10, tau=0.0), "cut TAU nan": cut(10, tau=math.nan),
+    }
+    bad = 0
+    for label, over in single.items():
+        a = good()
+        a.update(over)
+        try:
+            _core.run_rk4(**a)
+            print(f"BAD  run_rk4 {label}: no error")
+            bad += 1
+        except ValueError as e:
+            print(f"OK   run_rk4 {label}: {e}")
+
+    def batch(nb=4):
+        g = good()
+        return dict(P=np.tile(g["p"], (nb, 1)), x=np.zeros((nb, 4)), t0=0.0, dt=1e-6,
+                    n_steps=100, steady_start=0, imp=np.zeros((nb, 2, 3)),
+                    stick=np.zeros((nb, 2, 2)), strobe=np.zeros((nb, 0, 5)),
+                    met=fresh_met((nb,)))
+
+    def rows(r, slot, v):
+        P = batch()["P"]
+        P[r, slot] = v
+        return P
+
+    negative = fresh_met((4,))
+    negative[2, L.N_IMP_REC] = -5
+    batches = {
+        "0 runs": batch(0), "17 runs": batch(17),
+        "mixed cases": {"P": rows(2, L.CASE, L.SOLID)},
+        "mixed modes": {"P": rows(1, L.N_MODES, 2)},
+        "a cut": {"P": rows(3, L.FORCING, 1)}, "x rows": {"x": np.zeros((3, 4))},
+        "imp rows": {"imp": np.zeros((3, 2, 3))}, "strobe columns": {"strobe": np.zeros((4, 1, 4))},
+        "met[2] negative count": {"met": negative}, "dt nan": {"dt": math.nan},
+    }
+    for label, over in batches.items():
+        a = batch()
+        a.update(over)
+        try:
+            _core.run_rk4_batch(**a)
+            print(f"BAD  run_rk4_batch {label}: no error")
+            bad += 1
+        except ValueError as e:
+            print(f"OK   run_rk4_batch {label}: {e}")
+    print(f"bad input: {bad} accepted")
+    return bad
+
+
+WEIRD = (0.0, -0.0, 1e-300, 1e300, math.inf, -math.inf, math.nan)
+
+
+def random_params(rng, n, case, forcing, dt):
+    """A random parameter vector and state for ``n`` modes (now and then a weird value)."""
+    p = np.zeros(L.P_SIZE)
+    p[L.N_MODES], p[L.CASE], p[L.FORCING] = n, case, forcing
+    p[L.M_:L.M_ + n] = rng.uniform(0.1, 2, n)
+    p[L.K_:L.K_ + n] = rng.uniform(1e5, 1e8, n)
+    p[L.C_:L.C_ + n] = rng.uniform(0, 50, n)
+    for s in (L.PSI_L, L.PSI_D, L.PSI_A):
+        p[s:s + n] = rng.uniform(-2, 2, n)
+    p[L.F0], p[L.OMEGA] = rng.uniform(0, 50), rng.uniform(0, 5000)
+    p[L.BALL_MASS], p[L.HALF_GAP] = rng.uniform(0.005, 0.1), rng.uniform(1e-6, 1e-3)
+    p[L.RESTITUTION] = rng.uniform(0, 1)
+    p[L.FRICTION] = rng.choice([0.0, rng.uniform(0, 30)])
+    p[L.REACTION] = rng.choice([1.0, -1.0])
+    p[L.M_EFF], p[L.V_IMPACT] = rng.uniform(0.005, 0.1), rng.uniform(0, 0.01)
+    p[L.V_STICK] = p[L.V_IMPACT] + rng.uniform(0, 0.05)
+    p[L.STICK_MIN] = rng.uniform(0, 1e-4)
+    p[L.TMD_MASS], p[L.TMD_K], p[L.TMD_C] = (rng.uniform(0.01, 1), rng.uniform(1e3, 1e6),
+                                             rng.uniform(0, 20))
+    p[L.STROBE_PERIOD] = rng.choice([0.0, rng.uniform(1e-6, 1e-3)])
+    p[L.STROBE_T0] = rng.uniform(-1e-3, 1e-3)
+    p[L.KR_B], p[L.FEED] = rng.uniform(1e5, 1e8), rng.uniform(0, 1e-4)
+    p[L.TAU], p[L.N_REV] = dt * rng.uniform(1.5, 60), int(rng.integers(1, 6))
+    p[L.INTERP], p[L.STOP_AT_ZERO] = rng.integers(0, 2), rng.integers(0, 2)
+    p[L.HIST_W0], p[L.STAGE_LOOP] = rng.uniform(-1e-4, 1e-4), rng.integers(0, 2)
+    if rng.random() < 0.15:  # a weird value in a slot the kernel takes as it comes
+        slot = int(rng.integers(3, L.P_SIZE))
+        if slot not in (L.TAU, L.N_REV):
+            p[slot] = rng.choice(WEIRD)
+    x = rng.normal(size=2 * n + 2) * rng.choice([1e-6, 1e-4, 1e-2])
+    if case in (L.BALL, L.LOCKED):
+        x[2 * n] = rng.uniform(-1, 1) * p[L.HALF_GAP]
+    if rng.random() < 0.1:
+        x[rng.integers(0, 2 * n + 2)] = rng.choice(WEIRD)
+    return p, x
+
+
+def fresh_met(shape=()):
+    met = np.zeros((*shape, L.MET_SIZE))
+    met[..., L.STEADY_MAX_W], met[..., L.STEADY_MIN_W], met[..., L.FIRST_ZERO_T] = (
+        -np.inf, np.inf, -1.0)
+    return met
+
+
+def verdict(a, b, keys):
+    """'=' bitwise equal; 'nan' equal but for NaN bits; else the differing outputs."""
+    diffs = [k for k in keys if not np.array_equal(a[k].view(np.uint64), b[k].view(np.uint64))]
+    if not diffs:
+        return "="
+    if all(np.array_equal(a[k], b[k], equal_nan=True) for k in diffs):
+        return "nan"
+    return ",".join(diffs)
+
+
+def fuzz(n_runs: int, seed: int = 0) -> int:
+    rng = np.random.default_rng(seed)
+    counts = {"=": 0, "nan": 0}
+    bad = 0
+    for it in range(n_runs):
+        n, case, forcing = int(rng.integers(1, 5)), int(rng.integers(0, 4)), int(rng.integers(0, 2))
+        dt = float(rng.choice([1e-6, 2e-6, 5e-7]))
+        p, x = random_params(rng, n, case, forcing, dt)
+        rows = int(math.ceil(p[L.N_REV] * p[L.TAU] / dt)) + 3 + int(rng.integers(0, 3))
+        arrs = {"p": p, "x": x, "rec": np.zeros((int(rng.integers(0, 400)), 6)),
+                "imp": np.zeros((int(rng.integers(0, 30)), 3)),
+                "stick": np.zeros((int(rng.integers(0, 30)), 2)),
+                "strobe": np.zeros((int(rng.integers(0, 30)), 5)), "met": fresh_met(),
+                "buf": np.zeros((rows if forcing else 0, 2))}
+        ns = int(rng.integers(1, 3000))
+        scal = (float(rng.choice([0.0, rng.uniform(-1e-3, 1e-2)])), dt, ns,
+                int(rng.integers(0, ns + 1)), int(rng.integers(0, 5)))
+        outs = []
+        for fn in (numba_run, _core.run_rk4):
+            a = {k: v.copy() for k, v in arrs.items()}
+            fn(a["p"], a["x"], *scal, a["rec"], a["imp"], a["stick"], a["strobe"], a["met"],
+               a["buf"])
+            outs.append(a)
+        v = verdict(*outs, OUTPUTS)
+        if v in counts:
+            counts[v] += 1
+        else:
+            bad += 1
+            print(f"DIFF single run {it} (seed {seed}): {n} modes, case {case}, forcing "
+                  f"{forcing}: {v}", flush=True)
+    # batches of the sizes numba has compiled for the published bars, and others
+    combos = [(1, L.BALL, 4), (1, L.BALL, 8), (1, L.BALL, 16), (1, L.BALL, 3), (2, L.BALL, 8),
+              (1, L.SOLID, 4), (2, L.TMD, 4), (2, L.LOCKED, 4), (2, L.BALL, 4)]
+    for it in range(max(1, n_runs // 4)):
+        n, case, nb = combos[it % len(combos)]
+        dt = float(rng.choice([1e-6, 2e-6, 5e-7]))
+        rows = [random_params(rng, n, case, L.HARMONIC, dt) for _ in range(nb)]
+        ns = int(rng.integers(1, 3000))
+        caps = [int(rng.integers(0, 30)) for _ in range(3)]
+        scal = (float(rng.choice([0.0, 1e-3])), dt, ns, int(rng.integers(0, ns + 1)))
+        outs = []
+        for fn in (numba_batch, _core.run_rk4_batch):
+            a = {"P": np.array([r[0] for r in rows]), "x": np.array([r[1] for r in rows]),
+                 "imp": np.zeros((nb, caps[0], 3)), "stick": np.zeros((nb, caps[1], 2)),
+                 "strobe": np.zeros((nb, caps[2], 5)), "met": fresh_met((nb,))}
+            fn(a["P"], a["x"], *scal, a["imp"], a["stick"], a["strobe"], a["met"])
+            outs.append(a)
+        v = verdict(*outs, ("x", "met", "imp", "stick", "strobe"))
+        if v in counts:
+            counts[v] += 1
+        else:
+            bad += 1
+            print(f"DIFF batch {it} (seed {seed}): {n} modes, case {case}, {nb} runs: {v}",
+                  flush=True)
+    print(f"fuzz: {counts['=']} bit-identical, {counts['nan']} equal but for NaN bits, "
+          f"{bad} differ")
+    return bad
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=0.02, help="s of each run (dt 1e-6)")
     ap.add_argument("--only", default="", help="run the cases whose name contains this")
+    ap.add_argument("--fuzz", type=int, default=0, help="N random runs instead of the cases")
+    ap.add_argument("--seed", type=int, default=0, help="of --fuzz")
+    ap.add_argument("--bad-input", action="store_true", help="check the boundary instead")
     args = ap.parse_args()
+    if args.bad_input:
+        return 1 if bad_inputs() else 0
+    if args.fuzz:
+        return 1 if fuzz(args.fuzz, args.seed) else 0
     bad = 0
     for name, run in cases(args.duration):
         if args.only not in name:

@@ -58,7 +58,7 @@ double real(nb::handle h, const char* name) {
 
 std::int64_t integer(nb::handle h, const char* name) {
     std::int64_t v;
-    if (nb::try_cast(h, v, false)) return v;
+    if (!nb::isinstance<nb::float_>(h) && nb::try_cast(h, v, true)) return v;
     // an integral float (numba's wrapper took int() of these arguments)
     double d;
     if (nb::isinstance<nb::float_>(h) && nb::try_cast(h, d, false) && std::isfinite(d) &&

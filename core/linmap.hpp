@@ -141,13 +141,15 @@ struct v4 {
     v2 lo, hi;
     double operator[](int l) const { return l < 2 ? lo[l] : hi[l - 2]; }
 };
-inline __attribute__((always_inline)) v4 operator*(v4 a, double s) { return {a.lo * s, a.hi * s}; }
-inline __attribute__((always_inline)) v4 operator*(double s, v4 a) { return {s * a.lo, s * a.hi}; }
-inline __attribute__((always_inline)) v4 operator*(v4 a, v4 b) { return {a.lo * b.lo, a.hi * b.hi}; }
-inline __attribute__((always_inline)) v4 operator+(v4 a, v4 b) { return {a.lo + b.lo, a.hi + b.hi}; }
-inline __attribute__((always_inline)) v4 operator+(double s, v4 a) { return {s + a.lo, s + a.hi}; }
-inline __attribute__((always_inline)) v4 operator-(v4 a, double s) { return {a.lo - s, a.hi - s}; }
-inline __attribute__((always_inline)) v4& operator+=(v4& a, v4 b) { return a = a + b; }
+#define BB_V4_OP inline __attribute__((always_inline)) v4
+BB_V4_OP operator*(v4 a, double s) { return {a.lo * s, a.hi * s}; }
+BB_V4_OP operator*(double s, v4 a) { return {s * a.lo, s * a.hi}; }
+BB_V4_OP operator*(v4 a, v4 b) { return {a.lo * b.lo, a.hi * b.hi}; }
+BB_V4_OP operator+(v4 a, v4 b) { return {a.lo + b.lo, a.hi + b.hi}; }
+BB_V4_OP operator+(double s, v4 a) { return {s + a.lo, s + a.hi}; }
+BB_V4_OP operator-(v4 a, double s) { return {a.lo - s, a.hi - s}; }
+BB_V4_OP& operator+=(v4& a, v4 b) { return a = a + b; }
+#undef BB_V4_OP
 
 struct VecMap {
     // the increment: row pairs (i, n + i) for mode i < n, and (iy, iyd) as pair n
@@ -185,8 +187,8 @@ inline VecMap pack_map(int n, const StepMap& mp) {
     for (int c = 0; c < nx + 3; ++c) {
         double b = 0.0;
         for (int s3 = 0; s3 < 3; ++s3) {
-            const double y = c == 2 * n + 1 ? mp.Yr[s3][c] - 1.0 : mp.Yr[s3][c];
-            b = std::fmax(b, std::fabs(y));
+            const double y = std::fabs(c == 2 * n + 1 ? mp.Yr[s3][c] - 1.0 : mp.Yr[s3][c]);
+            b = (y > b || std::isnan(y)) ? y : b;  // a NaN entry makes the bound NaN
         }
         vm.yb[c] = b;
     }

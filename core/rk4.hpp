@@ -34,7 +34,8 @@
 // every CPU (FMA, which would round differently, is not enabled; -ffp-contract=off).
 // AVX2 gives the vector arithmetic (VecMap) 4 lanes, 3-operand instructions and more
 // registers.
-#if defined(__x86_64__) && defined(__GNUC__)
+// (-DBB_NO_AVX2_CLONE builds the baseline kernels alone, to test them on an AVX2 CPU.)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
 #define BB_AVX2_CLONE 1
 #define BB_TARGET_AVX2 __attribute__((target("avx2")))
 #endif
@@ -226,6 +227,56 @@ BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
 // F_b of a mapped step: the sign y' has at the step's start.
 BB_INLINE double map_friction(const Params& q, double yd0) { return yd0 > 0.0 ? -q.fc : q.fc; }
 
+// One RK4 stage on the state in pairs (x2; nx = 2n + 2): Xs = X + c_s dt Kd, the force
+// f = force(s, Xs), the derivative there into k2, and sum += b_s dt Kd.  The pairs are
+// built in registers: left to itself GCC packed the derivatives through memory and the
+// pair loads stalled on store forwarding (2x slower).
+template <int N, int CASE, class Force>
+BB_INLINE StageTerms rk4_stage(const Params& q, Shape<N, CASE> sh, int s, const v2* x2, v2* k2,
+                               v2* sum, double cs, double ws, Force&& force, double& f) {
+    const int np = sh.n + 1;
+    double Xs[NX_MAX], K[NX_MAX];
+    for (int p = 0; p < np; ++p) {
+        const v2 xs = x2[p] + cs * k2[p];
+        Xs[2 * p] = xs[0];
+        Xs[2 * p + 1] = xs[1];
+    }
+    f = force(s, Xs);
+    const StageTerms terms = derivative(q, sh, Xs, f, K);
+    for (int p = 0; p < np; ++p) {
+        k2[p] = v2{K[2 * p], K[2 * p + 1]};
+        sum[p] += ws * k2[p];
+    }
+    return terms;
+}
+
+// The four RK4 stages of a step from X: the stage derivative Kd (carried over from the
+// previous staged step, where only 0 * Kd enters) updated, the increment into acc, and
+// with flows_on the stages' energy flows.  force(s, Xs) is the tip force of stage s.
+template <int N, int CASE, class Force>
+BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, const double* X, double* Kd,
+                          double* acc, const double* cst, const double* wst, Flows& fl,
+                          bool flows_on, Force&& force) {
+    const int np = sh.n + 1;
+    v2 x2[NX_MAX / 2], k2[NX_MAX / 2], sum[NX_MAX / 2];
+    for (int p = 0; p < np; ++p) {
+        x2[p] = v2{X[2 * p], X[2 * p + 1]};
+        k2[p] = v2{Kd[2 * p], Kd[2 * p + 1]};
+        sum[p] = v2{0.0, 0.0};
+    }
+    for (int s = 0; s < 4; ++s) {
+        double f;
+        const StageTerms terms = rk4_stage(q, sh, s, x2, k2, sum, cst[s], wst[s], force, f);
+        if (flows_on) stage_flows(q, sh, fl, terms, wst[s], f);
+    }
+    for (int p = 0; p < np; ++p) {
+        Kd[2 * p] = k2[p][0];
+        Kd[2 * p + 1] = k2[p][1];
+        acc[2 * p] = sum[p][0];
+        acc[2 * p + 1] = sum[p][1];
+    }
+}
+
 // A cheap sufficient condition for map_fits' stage test: with
 // E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
 // in exact arithmetic, E <= 0.2 |y'_0| puts every computed y'_s within |y'_0| / 4 of
@@ -359,9 +410,17 @@ template <int N, int CASE>
 BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bool aux_always) {
     const int n = sh.n;
     TipAux a{0.0, 0.0, 0.0, 0.0};
-    for (int i = 0; i < n; ++i) {
-        a.w += q.pL[i] * X[i];
-        a.wd += q.pL[i] * X[n + i];
+    if (n == 1) {
+        a.w += q.pL[0] * X[0];
+        a.wd += q.pL[0] * X[1];
+    } else {
+        // (W, W') as one pair of (u_i, u_i'): left to itself GCC summed pairs (u_i, u_i+1)
+        // loaded from memory just stored one by one, a store-forwarding stall (1.25x
+        // slower with 2 modes); with 1 mode (u, u') are adjacent and that pair stalled
+        v2 wwd = {0.0, 0.0};
+        for (int i = 0; i < n; ++i) wwd += q.pL[i] * v2{X[i], X[n + i]};
+        a.w = wwd[0];
+        a.wd = wwd[1];
     }
     if (aux_always || sh.has_aux()) {
         a.aux = X[sh.iy()];

@@ -8,10 +8,15 @@
 //
 // A run's arithmetic is the single run's (rk4.cpp), through the same helpers (rk4.hpp)
 // in the same order, so a run of a batch equals the run alone bit for bit.  The one
-// thing a run sees of the others is which path the step takes: when any run needs the
-// stage loop, every run's stage derivatives are evaluated (those that took the map
-// discard them), as the numba kernel did; the derivative left from the last stage enters
-// the next staged step only as 0 * Kd, i.e. not at all for a finite state.
+// thing a run sees of the others: when any run needs the stage loop, every run's stage
+// derivatives are evaluated (those that took the map drop their sums), as the numba
+// kernel did.  The derivative so left enters the run's next staged step only as
+// X + 0 * Kd, which is X unless X holds a -0.0 or Kd overflowed; the numba batch has
+// the same dependence, and this kernel reproduces it.
+//
+// Runs are stored one after the other (Lane) and the loops over the runs are scalar:
+// per run-step this is about twice the single run's time (the numba batch vectorised
+// across runs, four to an AVX2 instruction, with the runs' values interleaved).
 #include <memory>
 
 #include "rk4.hpp"
@@ -23,7 +28,13 @@ namespace {
 struct Lane {
     Params q;
     VecMap mp;
-    double X[NX_MAX], Kd[NX_MAX], acc[NX_MAX], dX[NX_MAX];
+    // state, stage derivative, stage sum and map increment; read and written in pairs
+    // (v2) where the stages touch them: a pair load of values just stored one by one
+    // stalls on store forwarding
+    alignas(16) double X[NX_MAX];
+    alignas(16) double Kd[NX_MAX];
+    alignas(16) double acc[NX_MAX];
+    alignas(16) double dX[NX_MAX];
     double fst[4];
     double sn, cn;  // the forcing phase at the next step's start
     double S0, C0;  // ... and at this step's start
@@ -42,7 +53,7 @@ struct Lane {
 };
 
 template <int N, int CASE>
-void init_lane(Lane& ln, const BatchArgs& a, idx r, Shape<N, CASE> sh) {
+BB_INLINE void init_lane(Lane& ln, const BatchArgs& a, idx r, Shape<N, CASE> sh) {
     const double* p = a.P.row(r);
     const int nx = sh.nx();
     ln.mp = step_map(sh.n, p, a.dt);
@@ -81,19 +92,36 @@ BB_INLINE void decide(Lane& ln, Shape<N, CASE> sh) {
     ln.um = ok;
 }
 
+// a lane's pair (memcpy: no aliasing of double storage through the vector type)
+BB_INLINE v2 load2(const double* p) {
+    v2 v;
+    __builtin_memcpy(&v, p, sizeof v);
+    return v;
+}
+BB_INLINE void store2(double* p, v2 v) { __builtin_memcpy(p, &v, sizeof v); }
+
+// Stage s of one run (rk4_stage, rk4.hpp), on the lane's pairs.
 template <int N, int CASE>
 BB_INLINE void stage(Lane& ln, Shape<N, CASE> sh, int s, double cs, double w_s) {
-    const int nx = sh.nx();
-    double Xs[NX_MAX];
-    for (int j = 0; j < nx; ++j) Xs[j] = ln.X[j] + cs * ln.Kd[j];
-    const double f = ln.fst[s];
-    const StageTerms terms = derivative(ln.q, sh, Xs, f, ln.Kd);
-    for (int j = 0; j < nx; ++j) ln.acc[j] += w_s * ln.Kd[j];
+    const int np = sh.n + 1;
+    v2 x2[NX_MAX / 2], k2[NX_MAX / 2], sum[NX_MAX / 2];
+    for (int p = 0; p < np; ++p) {
+        x2[p] = load2(ln.X + 2 * p);
+        k2[p] = load2(ln.Kd + 2 * p);
+        sum[p] = load2(ln.acc + 2 * p);
+    }
+    auto force = [&](int st, const double*) { return ln.fst[st]; };
+    double f;
+    const StageTerms terms = rk4_stage(ln.q, sh, s, x2, k2, sum, cs, w_s, force, f);
+    for (int p = 0; p < np; ++p) {
+        store2(ln.Kd + 2 * p, k2[p]);
+        store2(ln.acc + 2 * p, sum[p]);
+    }
     if (!ln.um) stage_flows(ln.q, sh, ln.fl, terms, w_s, f);
 }
 
 template <int N, int CASE>
-void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
+BB_INLINE void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
     const int nx = sh.nx();
     const double t0 = a.t0, dt = a.dt;
     double cst[4], wst[4];
@@ -124,7 +152,6 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
             ln.fst[3] = ln.q.f0 * ph.s_1;
             ln.sn = ph.s_1;
             ln.cn = ph.c_1;
-            for (int j = 0; j < nx; ++j) ln.acc[j] = 0.0;
         }
 
         // the step as an affine map for the runs whose F_b keeps its sign
@@ -141,8 +168,12 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
                 map_flows(ln.q, sh, ln.mp, ln.fl, ln.X, ln.dX, ln.S0, ln.C0, ln.fz);
             }
         }
-        // the others: the four RK4 stages, each a loop over the runs
+        // the others: the four RK4 stages, each a loop over the runs (the runs that took
+        // the map too, as the numba kernel did: their derivatives are kept, sums dropped)
         if (n_staged > 0) {
+            for (int r = 0; r < nb; ++r) {
+                for (int j = 0; j < nx; j += 2) store2(lanes[r].acc + j, v2{0.0, 0.0});
+            }
             for (int s = 0; s < 4; ++s) {
                 for (int r = 0; r < nb; ++r) stage(lanes[r], sh, s, cst[s], wst[s]);
             }
@@ -150,7 +181,7 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
         for (int r = 0; r < nb; ++r) {
             Lane& ln = lanes[r];
             const double* inc = ln.um ? ln.dX : ln.acc;
-            for (int j = 0; j < nx; ++j) ln.X[j] += inc[j];
+            for (int j = 0; j < nx; j += 2) store2(ln.X + j, load2(ln.X + j) + load2(inc + j));
         }
 
         // step-end events, run by run
@@ -191,12 +222,33 @@ void run(const BatchArgs& a, Shape<N, CASE> sh, Lane* lanes, int nb) {
 }
 
 template <int N, int CASE>
-void run_shape(const BatchArgs& a, int nb) {
+BB_INLINE void run_lanes(const BatchArgs& a, int nb) {
     std::unique_ptr<Lane[]> lanes(new Lane[nb]);
     for (int r = 0; r < nb; ++r) lanes[r].q = unpack(a.P.row(r), a.dt);
     const Shape<N, CASE> sh(lanes[0].q);
     for (int r = 0; r < nb; ++r) init_lane(lanes[r], a, r, sh);
     run(a, sh, lanes.get(), nb);
+}
+
+template <int N, int CASE>
+void run_base(const BatchArgs& a, int nb) {
+    run_lanes<N, CASE>(a, nb);
+}
+
+#ifdef BB_AVX2_CLONE
+template <int N, int CASE>
+BB_TARGET_AVX2 void run_avx2(const BatchArgs& a, int nb) {
+    run_lanes<N, CASE>(a, nb);
+}
+#endif
+
+// the kernel for the CPU (rk4.hpp: the same bits either way)
+template <int N, int CASE>
+void run_shape(const BatchArgs& a, int nb) {
+#ifdef BB_AVX2_CLONE
+    if (cpu_has_avx2()) return run_avx2<N, CASE>(a, nb);
+#endif
+    run_base<N, CASE>(a, nb);
 }
 
 template <int N>
