@@ -205,7 +205,6 @@ void run_rk4_batch(nb::handle P_, nb::handle x_, nb::handle t0_, nb::handle dt_,
 
 void bind_rk4(nb::module_& m) {
     m.attr("BMAX") = R::BMAX;
-    m.attr("LANES") = nb::make_tuple(R::LANES[0], R::LANES[1], R::LANES[2]);
     m.attr("NREV_MAX") = R::NREV_MAX;
     m.def("run_rk4", &run_rk4, nb::arg("p"), nb::arg("x"), nb::arg("t0"), nb::arg("dt"),
           nb::arg("n_steps"), nb::arg("steady_start"), nb::arg("rec_every"), nb::arg("rec"),

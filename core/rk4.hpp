@@ -10,11 +10,10 @@
 // The state is X = [u_1..u_n, u_1'..u_n', aux, aux'], aux the ball's relative
 // displacement y (BALL, LOCKED) or the absorber's displacement x_a (TMD).
 //
-// This header holds what the single run (rk4.cpp) and the lock-step batch
-// (rk4_batch.cpp) share, each rule written once: the parameters unpacked from p, the
-// stage derivative and its energy flows, the map step, the strobe, the walls and the
-// streamed metrics.  Both kernels call these with the same arguments in the same order,
-// so a run of a batch is the single run bit for bit.  The helpers are force-inlined:
+// This header holds the scheme's rules, each written once: the parameters unpacked from
+// p, the stage derivative and its energy flows, the map step, the strobe, the walls and
+// the streamed metrics; rk4.cpp is the run, and rk4_batch.cpp runs a batch's rows with
+// it.  The helpers are force-inlined:
 // with the mode count a compile-time constant their loops unroll and the step's state
 // stays in registers.
 #pragma once
@@ -46,9 +45,8 @@ namespace bb::rk4 {
 constexpr int NREV_MAX = 50;
 // the forcing phase is rotated step by step and recomputed exactly this often
 constexpr int RESYNC = 256;
-// most runs in one batch, and the batch sizes callers use (simulate_batch pads to one)
+// most runs in one batch (run_rk4_batch)
 constexpr int BMAX = 16;
-constexpr int LANES[] = {4, 8, 16};
 
 // The stage times and weights of classical RK4 as fractions of dt.
 constexpr double C_FRAC[4] = {0.0, 0.5, 0.5, 1.0};

@@ -26,7 +26,7 @@ from boringbar._validate import (
     check_positive,
     check_range,
 )
-from boringbar.kernels import BMAX, LANES, run_exact, run_rk4, run_rk4_batch
+from boringbar.kernels import BMAX, run_exact, run_rk4, run_rk4_batch
 from boringbar.kernels import layout as L
 from boringbar.model.dampers import ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
@@ -753,9 +753,9 @@ def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 
 
 def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
                    steady_fraction: float = 0.8, strobe: bool = False) -> list[Run]:
-    """Several harmonic runs of the published RK4 scheme, advanced together in lock-step.
+    """Several harmonic runs of the published RK4 scheme, in one call of the core.
 
-    ``runs``: up to :data:`~boringbar.kernels.rk4_batch.BMAX` triples (system,
+    ``runs``: up to :data:`~boringbar.kernels.BMAX` triples (system,
     forcing, initial), as :func:`simulate` takes them, whose systems share the
     bar kind and the number of retained modes, whose forcings are
     :class:`Harmonic` (each its own amplitude and frequency) and whose initial
@@ -763,15 +763,11 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
     ``State``: its t).  ``duration``, ``dt``, ``steady_fraction`` and
     ``strobe`` are the batch's, as in :func:`simulate`.
 
-    The runs go through one call of :mod:`boringbar.kernels.rk4_batch`, whose
-    arithmetic per run is the single-run kernel's: each returned :class:`Run`
-    equals ``simulate(system, forcing, initial=initial, ...)`` of its triple,
-    bit for bit, except ``elapsed_s``, the batch's wall time shared equally.
-    A batch is padded to 4, 8 or 16 runs (:data:`~boringbar.kernels.rk4_batch.LANES`)
-    with copies of its last run, whose results are dropped: LLVM vectorises the
-    loops over the runs of these sizes 4 runs to an instruction, which keeps a
-    run's arithmetic that of the single-run kernel (tests/test_batch.py); a batch
-    of one, compiled as straight-line code, contracted some sums differently.
+    The runs go through one call of :func:`boringbar.kernels.run_rk4_batch`, which
+    advances each with the single-run kernel, the GIL released once for all: each
+    returned :class:`Run` equals ``simulate(system, forcing, initial=initial, ...)`` of
+    its triple, bit for bit, except ``elapsed_s``, the batch's wall time shared equally
+    (tests/test_batch.py).
     """
     runs = list(runs)
     if not runs:
@@ -795,12 +791,10 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
         if su.t0 != first.t0:
             raise ParameterError(f"simulate_batch: initial states at t = {su.t0:g} s and "
                                  f"{first.t0:g} s cannot share a batch")
-    # pad with copies of the last run (dropped after) to a compiled batch size
-    nb = next(b for b in LANES if b >= len(sus))
-    lanes = sus + [sus[-1]] * (nb - len(sus))
-    P = np.array([su.p for su in lanes])
-    X = np.array([su.x for su in lanes])
-    met = np.array([su.met for su in lanes])
+    nb = len(sus)
+    P = np.array([su.p for su in sus])
+    X = np.array([su.x for su in sus])
+    met = np.array([su.met for su in sus])
     # each run writes at most its own capacity (the kernel writes a row only while
     # its count is below the array's), so the rows kept are simulate()'s
     imp = np.zeros((nb, max(len(su.imp) for su in sus), 3))

@@ -22,10 +22,8 @@ from boringbar import _core
 from boringbar.kernels import layout as L
 from boringbar.kernels.regimes import cut_tables, history_step, prepare
 
-#: largest lock-step batch, and the batch sizes whose arithmetic per run is the single
-#: run's, bit for bit (simulate_batch pads a batch to one of them)
+#: most runs in one call of run_rk4_batch
 BMAX: int = _core.BMAX
-LANES: tuple[int, ...] = tuple(_core.LANES)
 
 _NO_HISTORY = np.zeros((0, 2))
 _NO_TAB_E = np.zeros((1, 5, 1), complex)
@@ -50,9 +48,10 @@ def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
 
 
 def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met) -> None:
-    """Advance the rows of ``x`` by ``n_steps`` RK4 steps in lock-step: every row of ``P``
-    a harmonic run of the same mode count and case, at most :data:`BMAX` rows; the outputs
-    as :func:`run_rk4`'s with one leading row per run."""
+    """Advance the rows of ``x`` by ``n_steps`` RK4 steps: every row of ``P`` a harmonic run
+    of the same mode count and case, at most :data:`BMAX` rows, each advanced as
+    :func:`run_rk4` would (the same bits); the outputs as :func:`run_rk4`'s with one leading
+    row per run."""
     _core.run_rk4_batch(P, x, float(t0), float(dt), int(n_steps), int(steady_start), imp,
                         stick, strobe, met)
 
@@ -76,4 +75,4 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
                            imp, stick, strobe, met, prep, float(dt), H, tab_e, tab_p)
 
 
-__all__ = ["BMAX", "LANES", "prepare", "run_exact", "run_rk4", "run_rk4_batch"]
+__all__ = ["BMAX", "prepare", "run_exact", "run_rk4", "run_rk4_batch"]
