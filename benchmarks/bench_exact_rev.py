@@ -1,6 +1,7 @@
 """The exact kernel against its own version at a git revision, in one process.
 
     .venv/bin/python benchmarks/bench_exact_rev.py REV [--repeat 7]
+    .venv/bin/python benchmarks/bench_exact_rev.py REV --grid [--repeat 5]
 
 Exports ``src/boringbar`` at REV into a temporary directory as the package
 ``boringbar_rev`` (its imports renamed, so both versions compile side by side;
@@ -10,6 +11,11 @@ on the harmonic cases of ``bench_exact.py`` (interleaved, best of
 ``--repeat``, the per-run ``prepare`` excluded and timed apart), with RK4 at
 dt = 1e-6 as the machine's yardstick, and compares the results: metrics, final
 state and impacts, bit for bit or the largest relative difference.
+
+``--grid``: the 80 published harmonic cases of ``bench_grid.py`` instead (2 s runs from
+rest), old and new alternating case by case, best of ``--repeat``; prints the totals of
+the kernels' CPU times (``prepare`` excluded, as the per-run setup is timed apart) and how
+many cases are bit-identical.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from bench_exact import CASES, orbit_start  # noqa: E402
+from bench_grid import cases as grid_cases  # noqa: E402
 
 import boringbar.kernels as E  # noqa: E402
 from boringbar import Harmonic, make_system, simulate  # noqa: E402
@@ -99,13 +106,48 @@ def rk4(su):
     return time.perf_counter() - tic
 
 
+def cpu_run(mod, su, prep):
+    p, x, rec, imp, stick, stb, met = fresh(su)
+    tic = time.process_time()
+    mod.run_exact(p, x, su.t0, su.t0 + su.n_steps * su.dt, su.t0 + su.steady_steps * su.dt,
+                  0.0, rec, imp, stick, stb, met, prep=prep, dt=su.dt)
+    return time.process_time() - tic, (x, met, imp, stick, stb)
+
+
+def grid(E0, repeat: int) -> None:
+    """The 80-case grid: CPU seconds of each kernel, best of ``repeat``, and bit identity."""
+    total, same = [0.0, 0.0], 0
+    sus = [(label, _setup(s, f, 2.0, 1e-6, None, 0, 0.8, False, "exact"))
+           for label, s, f in grid_cases()]
+    for label, su in sus:
+        preps = (E0.prepare(su.p), E.prepare(su.p))
+        best, outs = [np.inf, np.inf], [None, None]
+        for _ in range(repeat):
+            for i, mod in enumerate((E0, E)):
+                t, outs[i] = cpu_run(mod, su, preps[i])
+                best[i] = min(best[i], t)
+        ok = all(np.array_equal(a, b, equal_nan=True) for a, b in zip(*outs, strict=True))
+        same += ok
+        total = [total[0] + best[0], total[1] + best[1]]
+        print(f"  {label:48s} old {best[0] * 1e3:7.2f} ms  new {best[1] * 1e3:7.2f} ms  "
+              f"{'bit-identical' if ok else 'DIFFERS'}", flush=True)
+    print(f"\n80-case grid, kernel CPU time: old {total[0]:.3f} s, new {total[1]:.3f} s, "
+          f"old/new {total[0] / total[1]:.2f}; {same} of {len(sus)} cases bit-identical")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("rev", help="git revision of the kernel to compare against")
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--grid", action="store_true", help="the 80-case grid of bench_grid.py")
     args = ap.parse_args()
     export(args.rev)
     E0 = importlib.import_module("boringbar_rev.kernels.exact")
+    if args.grid:
+        print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; exact kernel "
+              f"at {args.rev} (old) against the working tree (new), best of {args.repeat}")
+        grid(E0, args.repeat)
+        return
 
     print(f"machine: {os.cpu_count()} cores; exact kernel at {args.rev} (old) against the "
           "working tree (new), best of", args.repeat)
