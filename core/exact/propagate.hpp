@@ -161,7 +161,8 @@ inline idx const_sizes(idx ks, idx n, idx nz) {
 
 // mu = (lambda_r, i Omega, -i Omega, 0): the exponents of a segment's basis functions
 // (prepare.py's basis_exponents; -1j is the constant complex(-0.0, -1.0) in Python).
-inline void basis_exponents(CMat lam, idx r, double om, idx nz, CVec mu) {
+template <class MuV>
+inline void basis_exponents(CMat lam, idx r, double om, idx nz, MuV&& mu) {
     for (idx k = 0; k < nz; ++k) mu[k] = lam(r, k);
     mu[nz] = ncplx(0.0, 1.0) * om;
     mu[nz + 1] = ncplx(-0.0, -1.0) * om;
@@ -179,7 +180,8 @@ inline ncplx _phi1s(ncplx z, double T, double z2) {
 
 // phj[j] = phi_j(z) = int_0^1 s^j exp(z s) ds, j = 0, 1, 2, for |z| < 1, by the series
 // sum_m z^m / (m! (m + j + 1)), to the first term below 1e-18.
-inline void _phij(ncplx z, CVec phj) {
+template <class PV>
+inline void _phij(ncplx z, PV&& phj) {
     ncplx term(1.0, 0.0);
     ncplx f0(0.0, 0.0);
     ncplx f1(0.0, 0.0);
@@ -208,7 +210,8 @@ inline idx _conj_index(idx k, idx nz, idx ks) {
 
 // dst[k] = sum_i mk[row, i] Cx[off + i, k]: the basis coefficients of psi . u (off 0) or
 // psi . u' (off n).
-inline void _psi_dot(Mat mk, idx row, CMat Cx, idx off, idx n, idx nb, CVec dst) {
+template <class CM, class DV>
+inline void _psi_dot(Mat mk, idx row, CM& Cx, idx off, idx n, idx nb, DV& dst) {
     for (idx k = 0; k < nb; ++k) {
         ncplx s(0.0, 0.0);
         for (idx i = 0; i < n; ++i) s += mk(row, i) * ncplx(Cx(off + i, k));
@@ -217,7 +220,8 @@ inline void _psi_dot(Mat mk, idx row, CMat Cx, idx off, idx n, idx nb, CVec dst)
 }
 
 // Re(a^T G a) for a symmetric G.
-inline double _quad_sym(CVec a, CMat G, idx nb) {
+template <class AV, class GM>
+inline double _quad_sym(AV& a, GM& G, idx nb) {
     double s = 0.0;
     for (idx i = 0; i < nb; ++i) {
         ncplx t = 0.5 * ncplx(G(i, i)) * ncplx(a[i]);
@@ -228,7 +232,8 @@ inline double _quad_sym(CVec a, CMat G, idx nb) {
 }
 
 // Re(a^T G b).
-inline double _quad(CVec a, CVec b, CMat G, idx nb) {
+template <class AV, class GM>
+inline double _quad(AV& a, AV& b, GM& G, idx nb) {
     double s = 0.0;
     for (idx i = 0; i < nb; ++i) {
         ncplx t(0.0, 0.0);
@@ -242,13 +247,15 @@ inline double _quad(CVec a, CVec b, CMat G, idx nb) {
 // sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
 // (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  See propagate.py's
 // _integrals_body for the method; me, G, Cx, cf, ca, cb, phj are scratch.
-inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, double om,
-                            double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
-                            Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
-                            CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
-                            idx level, idx ks, const Segment& seg, CVec phj, idx nz) {
-    CVec mu = me[0];  // the basis exponents
-    CVec em = me[1];  // exp(mu T)
+//
+// MuV, GM, CM, V: the scratch's types, CVec / CMat views of the driver's scratch, or (the
+// constant sizes) local arrays (LocalArr) that the compiler knows alias nothing else.
+template <class MuV, class GM, class CM, class V>
+__attribute__((always_inline)) inline void _integrals_impl(
+    idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
+    CMat Z, Mat D, idx n, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, MuV& mu,
+    MuV& em, GM& G, CM& Cx, V& cf, V& ca, V& cb, Vec out, CArr3 isum, idx level, idx ks,
+    const Segment& seg, CVec phj, idx nz) {
     double p0 = seg.ud0;  // a free ball's absolute position P = p0 + p1 tau + p2 tau^2
     double p1 = seg.vd0;
     double p2 = 0.5 * seg.acc;
@@ -388,14 +395,42 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     out[6] = pp - 2.0 * cross + uu;
 }
 
-// _integrals_body for any bar, regime and basis (nz = lam's second dimension).
+// _integrals_impl for any bar, regime and basis (nz = lam's second dimension).
 inline void segment_integrals(idx r, CVec q0, ncplx ph, double T, double fb, double om,
                               double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
                               Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
                               CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
                               idx level, idx ks, const Segment& seg, CVec phj) {
-    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
-                    me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1);
+    CVec mu = me[0];  // the basis exponents
+    CVec em = me[1];  // exp(mu T)
+    _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
+                    mu, em, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1);
+}
+
+// A (rows x cols) scratch array on the stack, left uninitialised (every entry that
+// _integrals_impl reads it has written first in the same call), indexed as the views are.
+template <int R, int C>
+struct LocalArr {
+    union {
+        ncplx d[R * C];
+    };
+    LocalArr() {}
+    ncplx& operator()(idx i, idx j) { return d[i * C + j]; }
+    ncplx& operator[](idx i) { return d[i]; }
+};
+
+// _integrals_impl with the constant sizes NZ (n = NZ / 2, ks = 2) and its scratch local.
+template <int NZ>
+__attribute__((noinline)) void _integrals_fixed(
+    idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
+    CMat Z, Mat D, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, Vec out, CArr3 isum,
+    idx level, const Segment& seg, CVec phj) {
+    constexpr int NB = NZ + 3;
+    LocalArr<1, NB> mu, em, cf, ca, cb;
+    LocalArr<NB, NB> G;
+    LocalArr<NZ, NB> Cx;
+    _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, NZ / 2, mk, lvis, cvis, stick_k,
+                    sr, mu, em, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, NZ);
 }
 
 // One mode and its conjugate pair (n = 1, nz = 2, ks = 2): the same operations.
@@ -404,8 +439,9 @@ inline void segment_integrals_1(idx r, CVec q0, ncplx ph, double T, double fb, d
                                 Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
                                 CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
                                 CArr3 isum, idx level, const Segment& seg, CVec phj) {
-    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 1, mk, lvis, cvis, stick_k, sr,
-                    me, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, 2);
+    (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
+    _integrals_fixed<2>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
+                          out, isum, level, seg, phj);
 }
 
 // Two modes in conjugate pairs (n = 2, nz = 4, ks = 2): the same operations.
@@ -414,8 +450,9 @@ inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, d
                                 Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
                                 CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
                                 CArr3 isum, idx level, const Segment& seg, CVec phj) {
-    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 2, mk, lvis, cvis, stick_k, sr,
-                    me, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, 4);
+    (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
+    _integrals_fixed<4>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
+                          out, isum, level, seg, phj);
 }
 
 }  // namespace bb::exact
