@@ -38,6 +38,9 @@
 
 namespace bb::exact {
 
+// full unrolling of segment_integrals' short loops (the constant sizes): the same operations
+#define BB_UNROLL _Pragma("GCC unroll 8")
+
 // How many eigen-coordinates are evaluated: nz, or nz / 2 when ks = 2 (conjugate pairs,
 // the first of each).
 inline idx nq(idx nz, idx ks) { return ks == 1 ? nz : nz >> 1; }
@@ -212,6 +215,7 @@ inline idx _conj_index(idx k, idx nz, idx ks) {
 // psi . u' (off n).
 template <class CM, class DV>
 inline void _psi_dot(Mat mk, idx row, CM& Cx, idx off, idx n, idx nb, DV& dst) {
+    BB_UNROLL
     for (idx k = 0; k < nb; ++k) {
         ncplx s(0.0, 0.0);
         for (idx i = 0; i < n; ++i) s += mk(row, i) * ncplx(Cx(off + i, k));
@@ -223,8 +227,10 @@ inline void _psi_dot(Mat mk, idx row, CM& Cx, idx off, idx n, idx nb, DV& dst) {
 template <class AV, class GM>
 inline double _quad_sym(AV& a, GM& G, idx nb) {
     double s = 0.0;
+    BB_UNROLL
     for (idx i = 0; i < nb; ++i) {
         ncplx t = 0.5 * ncplx(G(i, i)) * ncplx(a[i]);
+        BB_UNROLL
         for (idx j = i + 1; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(a[j]);
         s += (ncplx(a[i]) * t).re;
     }
@@ -235,8 +241,10 @@ inline double _quad_sym(AV& a, GM& G, idx nb) {
 template <class AV, class GM>
 inline double _quad(AV& a, AV& b, GM& G, idx nb) {
     double s = 0.0;
+    BB_UNROLL
     for (idx i = 0; i < nb; ++i) {
         ncplx t(0.0, 0.0);
+        BB_UNROLL
         for (idx j = 0; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(b[j]);
         s += (ncplx(a[i]) * t).re;
     }
@@ -263,6 +271,7 @@ __attribute__((always_inline)) inline void _integrals_impl(
     basis_exponents(lam, r, om, nz, mu);
     // exp(conj z) = conj(exp(z)) exactly: a conjugate pair's second exponential and the
     // forcing's -i Omega are conjugates, exp(0) = 1
+    BB_UNROLL
     for (idx k = 0; k < nz; ++k) {
         if (k > 0 && ncplx(mu[k]) == ncplx(mu[k - 1]).conjugate())
             em[k] = ncplx(em[k - 1]).conjugate();
@@ -273,8 +282,10 @@ __attribute__((always_inline)) inline void _integrals_impl(
     em[nz + 1] = ncplx(em[nz]).conjugate();
     em[nz + 2] = promote(1.0);
     double lim = 0.015625 / (T * T);  // |mu_m + mu_l| T < 1/8: the series
+    BB_UNROLL
     for (idx a = 0; a < nb; ++a) {
         idx ja = _conj_index(a, nz, ks);
+        BB_UNROLL
         for (idx b = a; b < nb; ++b) {
             idx jb = _conj_index(b, nz, ks);
             idx lo = ja < jb ? ja : jb;
@@ -304,21 +315,26 @@ __attribute__((always_inline)) inline void _integrals_impl(
     // a sine's phasors: Im(z e^{i Omega t}) = (z ph2) e^{..} + conj; -0.5j is the constant
     // complex(-0.0, -0.5) in Python
     ncplx ph2 = ncplx(-0.0, -0.5) * ph;
+    BB_UNROLL
     for (idx j = 0; j < nz; ++j) {
+        BB_UNROLL
         for (idx k = 0; k < nz; ++k) Cx(j, k) = ncplx(VF(r, j, k)) * ncplx(q0[k]);
         ncplx zz = ncplx(Z(r, j)) * ph2;
         Cx(j, nz) = zz;
         Cx(j, nz + 1) = zz.conjugate();
         Cx(j, nz + 2) = promote(fb * D(r, j));
     }
+    BB_UNROLL
     for (idx k = 0; k < nb; ++k) cf[k] = promote(0.0);
     cf[nz] = f0 * ph2;
     cf[nz + 1] = ncplx(cf[nz]).conjugate();
     // work of the force: f psi_L . u' (f has only the terms nz, nz + 1)
     _psi_dot(mk, 3, Cx, n, n, nb, ca);
     double w = 0.0;
+    BB_UNROLL
     for (idx i = nz; i < nz + 2; ++i) {
         ncplx t(0.0, 0.0);
+        BB_UNROLL
         for (idx j = 0; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(ca[j]);
         w += (ncplx(cf[i]) * t).re;
     }
@@ -346,8 +362,10 @@ __attribute__((always_inline)) inline void _integrals_impl(
     // viscous loss
     double dv = 0.0;
     for (idx d = 0; d < lvis.n0; ++d) {
+        BB_UNROLL
         for (idx k = 0; k < nb; ++k) {
             ncplx s(0.0, 0.0);
+            BB_UNROLL
             for (idx j = 0; j < nz; ++j)
                 if (lvis(d, j) != 0.0) s += lvis(d, j) * ncplx(Cx(j, k));
             ca[k] = s;
@@ -360,6 +378,7 @@ __attribute__((always_inline)) inline void _integrals_impl(
     _psi_dot(mk, 3, Cx, 0, n, nb, ca);
     out[2] = _quad_sym(ca, G, nb);
     double w1 = 0.0;
+    BB_UNROLL
     for (idx k = 0; k < nb; ++k) w1 += (ncplx(ca[k]) * ncplx(G(k, nb - 1))).re;
     out[3] = w1;
     if (level == 1) return;
@@ -369,6 +388,7 @@ __attribute__((always_inline)) inline void _integrals_impl(
     double uu = _quad_sym(cb, G, nb);
     // mu = 0 (the last basis function): phi_j = 1 / (j + 1)
     double cross = (ncplx(cb[nb - 1]) * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))).re;
+    BB_UNROLL
     for (idx k = 0; k < nb - 1; ++k) {
         idx jk = _conj_index(k, nz, ks);
         if (jk < k) continue;  // the conjugate of an earlier term: counted there
