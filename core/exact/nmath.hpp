@@ -37,6 +37,8 @@ struct ComplexZeroDivision : std::domain_error {
     ComplexZeroDivision() : std::domain_error("complex division by zero") {}
 };
 
+#define BB_HOT inline __attribute__((always_inline))
+
 struct ncplx {
     double re = 0.0;
     double im = 0.0;
@@ -54,14 +56,14 @@ struct ncplx {
 };
 
 // a float assigned to or combined with a complex: numba's cast, complex(x, 0.0)
-constexpr ncplx promote(double x) { return {x, 0.0}; }
+BB_HOT constexpr ncplx promote(double x) { return {x, 0.0}; }
 
-inline ncplx operator+(ncplx a, ncplx b) { return {a.re + b.re, a.im + b.im}; }
-inline ncplx operator-(ncplx a, ncplx b) { return {a.re - b.re, a.im - b.im}; }
-inline ncplx operator-(ncplx a) { return {-0.0 - a.re, -0.0 - a.im}; }
+BB_HOT ncplx operator+(const ncplx& a, const ncplx& b) { return {a.re + b.re, a.im + b.im}; }
+BB_HOT ncplx operator-(const ncplx& a, const ncplx& b) { return {a.re - b.re, a.im - b.im}; }
+BB_HOT ncplx operator-(const ncplx& a) { return {-0.0 - a.re, -0.0 - a.im}; }
 
 // CPython's _Py_c_prod (numba's complex_mul without the 3.14 infinity recovery)
-inline ncplx operator*(ncplx z, ncplx w) {
+BB_HOT ncplx operator*(const ncplx& z, const ncplx& w) {
     double ac = z.re * w.re;
     double bd = z.im * w.im;
     double ad = z.re * w.im;
@@ -70,7 +72,7 @@ inline ncplx operator*(ncplx z, ncplx w) {
 }
 
 // CPython's _Py_c_quot (numba's complex_div)
-inline ncplx operator/(ncplx a, ncplx b) {
+BB_HOT ncplx operator/(const ncplx& a, const ncplx& b) {
     double abs_breal = std::fabs(b.re);
     double abs_bimag = std::fabs(b.im);
     if (abs_breal >= abs_bimag) {
@@ -90,34 +92,34 @@ inline ncplx operator/(ncplx a, ncplx b) {
 }
 
 // mixed operands: the float promoted first, as numba types them
-inline ncplx operator+(ncplx a, double x) { return a + promote(x); }
-inline ncplx operator+(double x, ncplx a) { return promote(x) + a; }
-inline ncplx operator-(ncplx a, double x) { return a - promote(x); }
-inline ncplx operator-(double x, ncplx a) { return promote(x) - a; }
-inline ncplx operator*(ncplx a, double x) { return a * promote(x); }
-inline ncplx operator*(double x, ncplx a) { return promote(x) * a; }
-inline ncplx operator/(ncplx a, double x) { return a / promote(x); }
-inline ncplx operator/(double x, ncplx a) { return promote(x) / a; }
+BB_HOT ncplx operator+(const ncplx& a, double x) { return a + promote(x); }
+BB_HOT ncplx operator+(double x, const ncplx& a) { return promote(x) + a; }
+BB_HOT ncplx operator-(const ncplx& a, double x) { return a - promote(x); }
+BB_HOT ncplx operator-(double x, const ncplx& a) { return promote(x) - a; }
+BB_HOT ncplx operator*(const ncplx& a, double x) { return a * promote(x); }
+BB_HOT ncplx operator*(double x, const ncplx& a) { return promote(x) * a; }
+BB_HOT ncplx operator/(const ncplx& a, double x) { return a / promote(x); }
+BB_HOT ncplx operator/(double x, const ncplx& a) { return promote(x) / a; }
 
-inline ncplx& operator+=(ncplx& a, ncplx b) { return a = a + b; }
-inline ncplx& operator+=(ncplx& a, double x) { return a = a + x; }
-inline ncplx& operator-=(ncplx& a, ncplx b) { return a = a - b; }
-inline ncplx& operator*=(ncplx& a, ncplx b) { return a = a * b; }
-inline ncplx& operator*=(ncplx& a, double x) { return a = a * x; }
-inline ncplx& operator/=(ncplx& a, ncplx b) { return a = a / b; }
-inline ncplx& operator/=(ncplx& a, double x) { return a = a / x; }
+BB_HOT ncplx& operator+=(ncplx& a, const ncplx& b) { return a = a + b; }
+BB_HOT ncplx& operator+=(ncplx& a, double x) { return a = a + x; }
+BB_HOT ncplx& operator-=(ncplx& a, const ncplx& b) { return a = a - b; }
+BB_HOT ncplx& operator*=(ncplx& a, const ncplx& b) { return a = a * b; }
+BB_HOT ncplx& operator*=(ncplx& a, double x) { return a = a * x; }
+BB_HOT ncplx& operator/=(ncplx& a, const ncplx& b) { return a = a / b; }
+BB_HOT ncplx& operator/=(ncplx& a, double x) { return a = a / x; }
 
 // numba: both parts ordered-equal; != is its negation, unordered
-inline bool operator==(ncplx a, ncplx b) { return a.re == b.re && a.im == b.im; }
-inline bool operator!=(ncplx a, ncplx b) { return !(a.re == b.re) || !(a.im == b.im); }
-inline bool operator==(ncplx a, double x) { return a == promote(x); }
-inline bool operator!=(ncplx a, double x) { return a != promote(x); }
+BB_HOT bool operator==(const ncplx& a, const ncplx& b) { return a.re == b.re && a.im == b.im; }
+BB_HOT bool operator!=(const ncplx& a, const ncplx& b) { return !(a.re == b.re) || !(a.im == b.im); }
+BB_HOT bool operator==(const ncplx& a, double x) { return a == promote(x); }
+BB_HOT bool operator!=(const ncplx& a, double x) { return a != promote(x); }
 
 // abs(z): numba's complex_abs, the C library's hypot
-inline double abs(ncplx z) { return std::hypot(z.re, z.im); }
+BB_HOT double abs(const ncplx& z) { return std::hypot(z.re, z.im); }
 
 // cmath.exp as numba's exp_impl (cmathimpl.py), with its special cases
-inline ncplx cexp(ncplx z) {
+inline ncplx cexp(const ncplx& z) {
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     double x = z.re;
     double y = z.im;

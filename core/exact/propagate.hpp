@@ -38,6 +38,9 @@
 
 namespace bb::exact {
 
+// full unrolling of segment_integrals' short loops (the constant sizes): the same operations
+#define BB_UNROLL _Pragma("GCC unroll 8")
+
 // How many eigen-coordinates are evaluated: nz, or nz / 2 when ks = 2 (conjugate pairs,
 // the first of each).
 inline idx nq(idx nz, idx ks) { return ks == 1 ? nz : nz >> 1; }
@@ -161,7 +164,8 @@ inline idx const_sizes(idx ks, idx n, idx nz) {
 
 // mu = (lambda_r, i Omega, -i Omega, 0): the exponents of a segment's basis functions
 // (prepare.py's basis_exponents; -1j is the constant complex(-0.0, -1.0) in Python).
-inline void basis_exponents(CMat lam, idx r, double om, idx nz, CVec mu) {
+template <class MuV>
+inline void basis_exponents(CMat lam, idx r, double om, idx nz, MuV&& mu) {
     for (idx k = 0; k < nz; ++k) mu[k] = lam(r, k);
     mu[nz] = ncplx(0.0, 1.0) * om;
     mu[nz + 1] = ncplx(-0.0, -1.0) * om;
@@ -179,7 +183,8 @@ inline ncplx _phi1s(ncplx z, double T, double z2) {
 
 // phj[j] = phi_j(z) = int_0^1 s^j exp(z s) ds, j = 0, 1, 2, for |z| < 1, by the series
 // sum_m z^m / (m! (m + j + 1)), to the first term below 1e-18.
-inline void _phij(ncplx z, CVec phj) {
+template <class PV>
+inline void _phij(ncplx z, PV&& phj) {
     ncplx term(1.0, 0.0);
     ncplx f0(0.0, 0.0);
     ncplx f1(0.0, 0.0);
@@ -208,7 +213,9 @@ inline idx _conj_index(idx k, idx nz, idx ks) {
 
 // dst[k] = sum_i mk[row, i] Cx[off + i, k]: the basis coefficients of psi . u (off 0) or
 // psi . u' (off n).
-inline void _psi_dot(Mat mk, idx row, CMat Cx, idx off, idx n, idx nb, CVec dst) {
+template <class CM, class DV>
+inline void _psi_dot(Mat mk, idx row, CM& Cx, idx off, idx n, idx nb, DV& dst) {
+    BB_UNROLL
     for (idx k = 0; k < nb; ++k) {
         ncplx s(0.0, 0.0);
         for (idx i = 0; i < n; ++i) s += mk(row, i) * ncplx(Cx(off + i, k));
@@ -217,10 +224,13 @@ inline void _psi_dot(Mat mk, idx row, CMat Cx, idx off, idx n, idx nb, CVec dst)
 }
 
 // Re(a^T G a) for a symmetric G.
-inline double _quad_sym(CVec a, CMat G, idx nb) {
+template <class AV, class GM>
+inline double _quad_sym(AV& a, GM& G, idx nb) {
     double s = 0.0;
+    BB_UNROLL
     for (idx i = 0; i < nb; ++i) {
         ncplx t = 0.5 * ncplx(G(i, i)) * ncplx(a[i]);
+        BB_UNROLL
         for (idx j = i + 1; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(a[j]);
         s += (ncplx(a[i]) * t).re;
     }
@@ -228,10 +238,13 @@ inline double _quad_sym(CVec a, CMat G, idx nb) {
 }
 
 // Re(a^T G b).
-inline double _quad(CVec a, CVec b, CMat G, idx nb) {
+template <class AV, class GM>
+inline double _quad(AV& a, AV& b, GM& G, idx nb) {
     double s = 0.0;
+    BB_UNROLL
     for (idx i = 0; i < nb; ++i) {
         ncplx t(0.0, 0.0);
+        BB_UNROLL
         for (idx j = 0; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(b[j]);
         s += (ncplx(a[i]) * t).re;
     }
@@ -242,13 +255,15 @@ inline double _quad(CVec a, CVec b, CMat G, idx nb) {
 // sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
 // (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  See propagate.py's
 // _integrals_body for the method; me, G, Cx, cf, ca, cb, phj are scratch.
-inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, double om,
-                            double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
-                            Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
-                            CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
-                            idx level, idx ks, const Segment& seg, CVec phj, idx nz) {
-    CVec mu = me[0];  // the basis exponents
-    CVec em = me[1];  // exp(mu T)
+//
+// MuV, GM, CM, V: the scratch's types, CVec / CMat views of the driver's scratch, or (the
+// constant sizes) local arrays (LocalArr) that the compiler knows alias nothing else.
+template <class MuV, class GM, class CM, class V>
+__attribute__((always_inline)) inline void _integrals_impl(
+    idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
+    CMat Z, Mat D, idx n, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, MuV& mu,
+    MuV& em, GM& G, CM& Cx, V& cf, V& ca, V& cb, Vec out, CArr3 isum, idx level, idx ks,
+    const Segment& seg, CVec phj, idx nz) {
     double p0 = seg.ud0;  // a free ball's absolute position P = p0 + p1 tau + p2 tau^2
     double p1 = seg.vd0;
     double p2 = 0.5 * seg.acc;
@@ -256,6 +271,7 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     basis_exponents(lam, r, om, nz, mu);
     // exp(conj z) = conj(exp(z)) exactly: a conjugate pair's second exponential and the
     // forcing's -i Omega are conjugates, exp(0) = 1
+    BB_UNROLL
     for (idx k = 0; k < nz; ++k) {
         if (k > 0 && ncplx(mu[k]) == ncplx(mu[k - 1]).conjugate())
             em[k] = ncplx(em[k - 1]).conjugate();
@@ -266,8 +282,10 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     em[nz + 1] = ncplx(em[nz]).conjugate();
     em[nz + 2] = promote(1.0);
     double lim = 0.015625 / (T * T);  // |mu_m + mu_l| T < 1/8: the series
+    BB_UNROLL
     for (idx a = 0; a < nb; ++a) {
         idx ja = _conj_index(a, nz, ks);
+        BB_UNROLL
         for (idx b = a; b < nb; ++b) {
             idx jb = _conj_index(b, nz, ks);
             idx lo = ja < jb ? ja : jb;
@@ -297,21 +315,26 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     // a sine's phasors: Im(z e^{i Omega t}) = (z ph2) e^{..} + conj; -0.5j is the constant
     // complex(-0.0, -0.5) in Python
     ncplx ph2 = ncplx(-0.0, -0.5) * ph;
+    BB_UNROLL
     for (idx j = 0; j < nz; ++j) {
+        BB_UNROLL
         for (idx k = 0; k < nz; ++k) Cx(j, k) = ncplx(VF(r, j, k)) * ncplx(q0[k]);
         ncplx zz = ncplx(Z(r, j)) * ph2;
         Cx(j, nz) = zz;
         Cx(j, nz + 1) = zz.conjugate();
         Cx(j, nz + 2) = promote(fb * D(r, j));
     }
+    BB_UNROLL
     for (idx k = 0; k < nb; ++k) cf[k] = promote(0.0);
     cf[nz] = f0 * ph2;
     cf[nz + 1] = ncplx(cf[nz]).conjugate();
     // work of the force: f psi_L . u' (f has only the terms nz, nz + 1)
     _psi_dot(mk, 3, Cx, n, n, nb, ca);
     double w = 0.0;
+    BB_UNROLL
     for (idx i = nz; i < nz + 2; ++i) {
         ncplx t(0.0, 0.0);
+        BB_UNROLL
         for (idx j = 0; j < nb; ++j) t += ncplx(G(i, j)) * ncplx(ca[j]);
         w += (ncplx(cf[i]) * t).re;
     }
@@ -339,8 +362,10 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     // viscous loss
     double dv = 0.0;
     for (idx d = 0; d < lvis.n0; ++d) {
+        BB_UNROLL
         for (idx k = 0; k < nb; ++k) {
             ncplx s(0.0, 0.0);
+            BB_UNROLL
             for (idx j = 0; j < nz; ++j)
                 if (lvis(d, j) != 0.0) s += lvis(d, j) * ncplx(Cx(j, k));
             ca[k] = s;
@@ -353,6 +378,7 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     _psi_dot(mk, 3, Cx, 0, n, nb, ca);
     out[2] = _quad_sym(ca, G, nb);
     double w1 = 0.0;
+    BB_UNROLL
     for (idx k = 0; k < nb; ++k) w1 += (ncplx(ca[k]) * ncplx(G(k, nb - 1))).re;
     out[3] = w1;
     if (level == 1) return;
@@ -362,6 +388,7 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     double uu = _quad_sym(cb, G, nb);
     // mu = 0 (the last basis function): phi_j = 1 / (j + 1)
     double cross = (ncplx(cb[nb - 1]) * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))).re;
+    BB_UNROLL
     for (idx k = 0; k < nb - 1; ++k) {
         idx jk = _conj_index(k, nz, ks);
         if (jk < k) continue;  // the conjugate of an earlier term: counted there
@@ -388,14 +415,42 @@ inline void _integrals_body(idx r, CVec q0, ncplx ph, double T, double fb, doubl
     out[6] = pp - 2.0 * cross + uu;
 }
 
-// _integrals_body for any bar, regime and basis (nz = lam's second dimension).
+// _integrals_impl for any bar, regime and basis (nz = lam's second dimension).
 inline void segment_integrals(idx r, CVec q0, ncplx ph, double T, double fb, double om,
                               double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
                               Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
                               CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
                               idx level, idx ks, const Segment& seg, CVec phj) {
-    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
-                    me, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1);
+    CVec mu = me[0];  // the basis exponents
+    CVec em = me[1];  // exp(mu T)
+    _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
+                    mu, em, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1);
+}
+
+// A (rows x cols) scratch array on the stack, left uninitialised (every entry that
+// _integrals_impl reads it has written first in the same call), indexed as the views are.
+template <int R, int C>
+struct LocalArr {
+    union {
+        ncplx d[R * C];
+    };
+    LocalArr() {}
+    ncplx& operator()(idx i, idx j) { return d[i * C + j]; }
+    ncplx& operator[](idx i) { return d[i]; }
+};
+
+// _integrals_impl with the constant sizes NZ (n = NZ / 2, ks = 2) and its scratch local.
+template <int NZ>
+__attribute__((noinline)) void _integrals_fixed(
+    idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
+    CMat Z, Mat D, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, Vec out, CArr3 isum,
+    idx level, const Segment& seg, CVec phj) {
+    constexpr int NB = NZ + 3;
+    LocalArr<1, NB> mu, em, cf, ca, cb;
+    LocalArr<NB, NB> G;
+    LocalArr<NZ, NB> Cx;
+    _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, NZ / 2, mk, lvis, cvis, stick_k,
+                    sr, mu, em, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, NZ);
 }
 
 // One mode and its conjugate pair (n = 1, nz = 2, ks = 2): the same operations.
@@ -404,8 +459,9 @@ inline void segment_integrals_1(idx r, CVec q0, ncplx ph, double T, double fb, d
                                 Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
                                 CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
                                 CArr3 isum, idx level, const Segment& seg, CVec phj) {
-    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 1, mk, lvis, cvis, stick_k, sr,
-                    me, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, 2);
+    (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
+    _integrals_fixed<2>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
+                          out, isum, level, seg, phj);
 }
 
 // Two modes in conjugate pairs (n = 2, nz = 4, ks = 2): the same operations.
@@ -414,8 +470,9 @@ inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, d
                                 Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
                                 CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
                                 CArr3 isum, idx level, const Segment& seg, CVec phj) {
-    _integrals_body(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, 2, mk, lvis, cvis, stick_k, sr,
-                    me, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, 4);
+    (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
+    _integrals_fixed<4>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
+                          out, isum, level, seg, phj);
 }
 
 }  // namespace bb::exact

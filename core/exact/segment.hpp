@@ -345,7 +345,17 @@ inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3
     idx nz = q0.size();
     // a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
     double b4 = 0.0;
+    // |q0_k| (hypot) once for the three sums below: the same values
+    std::array<double, NZ_MAX> aqs;
+    bool aq_done = false;
+    auto abs_q0 = [&]() {
+        if (!aq_done) {
+            for (idx k = 0; k < nz; ++k) aqs[k] = abs(ncplx(q0[k]));
+            aq_done = true;
+        }
+    };
     if (ball) {
+        if (!incut) abs_q0();
         b4 = bnd(r, 0, nz);  // Omega^4 |psi_d . Z|
         for (idx k = 0; k < nz; ++k) {
             ncplx qk = q0[k];
@@ -359,7 +369,7 @@ inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3
                 ncplx p1 = (2.0 * p2 - gk * seg.s[1]) / lk;
                 qk = qk - (p1 - gk * seg.s[0]) / lk;
             }
-            b4 += bnd(r, 0, k) * abs(qk);  // |lambda_k|^4 |psi_d . V_k| |q_k|
+            b4 += bnd(r, 0, k) * (incut ? abs(qk) : aqs[k]);  // |lambda_k|^4 |psi_d . V_k| |q_k|
         }
     }
     // the same bound on |W^(4)| in the steady window under harmonic forcing: a W' = 0
@@ -367,7 +377,8 @@ inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3
     double bw4 = -1.0;
     if (w_steady) {
         bw4 = bnd(r, 1, nz);
-        for (idx k = 0; k < nz; ++k) bw4 += bnd(r, 1, k) * abs(ncplx(q0[k]));
+        abs_q0();
+        for (idx k = 0; k < nz; ++k) bw4 += bnd(r, 1, k) * aqs[k];
     }
     // a free ball under harmonic forcing: bounds on |y'''| and |W'''| for its longer steps
     double b3y = 0.0;
@@ -375,8 +386,9 @@ inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3
     if (adapt) {
         b3y = bnd(r, 2, nz);
         b3w = bnd(r, 3, nz);
+        abs_q0();
         for (idx k = 0; k < nz; ++k) {
-            double aq = abs(ncplx(q0[k]));
+            double aq = aqs[k];
             b3y += bnd(r, 2, k) * aq;
             b3w += bnd(r, 3, k) * aq;
         }
