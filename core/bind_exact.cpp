@@ -1,4 +1,4 @@
-// boringbar._core.run_exact: the exact event-driven integrator's entry point (numba:
+// boringbar.core.run_exact: the exact event-driven integrator's entry point (numba:
 // kernels/exact/driver.py, run_exact and its kernels).  Everything from Python is checked
 // here, before the GIL is released: every array's dtype, shape, contiguity and (outputs)
 // writability, every scalar's finiteness and range, and what the kernel indexes with (the

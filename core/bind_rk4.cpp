@@ -1,4 +1,4 @@
-// boringbar._core.run_rk4 and run_rk4_batch: the RK4 kernels' boundary.
+// boringbar.core.run_rk4 and run_rk4_batch: the RK4 kernels' boundary.
 //
 // Every argument is checked here, before the integration starts: each array's dtype
 // (float64), shape, C-contiguity and (for outputs) writability, and each scalar's range,

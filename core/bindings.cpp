@@ -1,4 +1,4 @@
-// The compiled core's Python module, boringbar._core: the packed layout's names and
+// The compiled core's Python module, boringbar.core: the packed layout's names and
 // the integrators' entry points.  Each integrator's bindings live beside it
 // (bind_rk4.cpp, bind_exact.cpp); this file only assembles the module.
 #include <nanobind/nanobind.h>
@@ -46,7 +46,7 @@ std::map<std::string, int> layout_names() {
 
 }  // namespace
 
-NB_MODULE(_core, m) {
+NB_MODULE(core, m) {
     m.doc() = "boringbar's compiled core: the RK4 and exact event-driven integrators.";
     m.def("layout", &layout_names,
           "The packed parameter vector's and the metric vector's slots, by name.");

@@ -3,7 +3,7 @@
 // Everything a run needs is packed by simulate.py into one float64 vector p whose
 // slots are named here; everything a run streams out as scalars goes into met at the
 // slots named here.  The Python side reads these names from the compiled module
-// (boringbar._core.layout()), so there is no second copy of the offsets.
+// (boringbar.core.layout()), so there is no second copy of the offsets.
 #pragma once
 
 namespace bb::layout {

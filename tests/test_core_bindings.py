@@ -1,6 +1,6 @@
 """The compiled core's boundary: whatever Python hands it, a clear exception, never a crash.
 
-Each entry point of ``boringbar._core`` (``run_rk4``, ``run_rk4_batch``, ``run_exact``)
+Each entry point of ``boringbar.core`` (``run_rk4``, ``run_rk4_batch``, ``run_exact``)
 gets a valid call (a short published ball-damper run), then hypothesis corrupts one of its
 arguments: a wrong dtype, rank, shape or layout, a read-only output, a NaN or an infinity
 in a parameter, the state or a scalar, an out-of-range count.  The core must either run
@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from boringbar import Harmonic, Regenerative, make_system
-from boringbar import _core
+from boringbar import core
 from boringbar.kernels import layout as L
 from boringbar.kernels import prepare
 from boringbar.kernels.regimes import cut_tables, history_step
@@ -73,7 +73,7 @@ BASE = {}
 
 
 def call(entry: str, args: dict):
-    fn = getattr(_core, entry.split()[0])
+    fn = getattr(core, entry.split()[0])
     return fn(*args.values())
 
 

@@ -23,15 +23,15 @@ ROOT = Path(__file__).resolve().parents[1]
 #: the tests run against the sanitized core
 KERNEL_TESTS = ("tests/test_kernel_reference.py", "tests/test_core_bindings.py")
 
-#: imports the sanitized module as boringbar._core before anything imports the real one
+#: imports the sanitized module as boringbar.core before anything imports the real one
 RUNNER = """
 import importlib.util, sys
-spec = importlib.util.spec_from_file_location("boringbar._core", sys.argv[1])
+spec = importlib.util.spec_from_file_location("boringbar.core", sys.argv[1])
 core = importlib.util.module_from_spec(spec)
-sys.modules["boringbar._core"] = core
+sys.modules["boringbar.core"] = core
 spec.loader.exec_module(core)
 import boringbar
-boringbar._core = core
+boringbar.core = core
 import pytest
 sys.exit(pytest.main(["-q", "-p", "no:xdist", "-p", "no:cacheprovider", "-o", "addopts=",
                       "-m", "not slow", *sys.argv[2:]]))
@@ -54,7 +54,7 @@ def _build(where: Path) -> Path:
                    check=True, capture_output=True, text=True)
     subprocess.run(["cmake", "--build", str(where / "build")], check=True, capture_output=True,
                    text=True)
-    return next((where / "module").glob("_core*.so"))
+    return next((where / "module").glob("core*.so"))
 
 
 @pytest.mark.skipif(shutil.which("cmake") is None or shutil.which("g++") is None,

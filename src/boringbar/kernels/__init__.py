@@ -1,4 +1,4 @@
-"""The integrators: thin Python entry points over the compiled core (``boringbar._core``).
+"""The integrators: thin Python entry points over the compiled core (``boringbar.core``).
 
 The core (C++, ``core/``) holds the integrators: the published RK4 scheme, one run and a
 lock-step batch, and the exact event-driven integrator, harmonic and regenerative.  This
@@ -18,12 +18,12 @@ integration, so threads run in parallel.
 
 import numpy as np
 
-from boringbar import _core
+from boringbar import core
 from boringbar.kernels import layout as L
 from boringbar.kernels.regimes import cut_tables, history_step, prepare
 
 #: most runs in one call of run_rk4_batch
-BMAX: int = _core.BMAX
+BMAX: int = core.BMAX
 
 _NO_HISTORY = np.zeros((0, 2))
 _NO_TAB_E = np.zeros((1, 5, 1), complex)
@@ -42,7 +42,7 @@ def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     and STEADY_MIN_W = +inf, for a fresh run), ``buf`` (a regenerative cut's circular
     history of W, W' at step ends, at least N_REV TAU / dt + 3 rows).
     """
-    _core.run_rk4(p, x, float(t0), float(dt), int(n_steps), int(steady_start),
+    core.run_rk4(p, x, float(t0), float(dt), int(n_steps), int(steady_start),
                   int(rec_every), rec, imp, stick, strobe, met,
                   _NO_HISTORY if buf is None else buf)
 
@@ -52,7 +52,7 @@ def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met) 
     of the same mode count and case, at most :data:`BMAX` rows, each advanced as
     :func:`run_rk4` would (the same bits); the outputs as :func:`run_rk4`'s with one leading
     row per run."""
-    _core.run_rk4_batch(P, x, float(t0), float(dt), int(n_steps), int(steady_start), imp,
+    core.run_rk4_batch(P, x, float(t0), float(dt), int(n_steps), int(steady_start), imp,
                         stick, strobe, met)
 
 
@@ -71,7 +71,7 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
             raise ValueError(f"exact integrator: a regenerative cut needs dt > 0, not {dt}")
         H = history_step(float(p[L.TAU]), float(dt))
         tab_e, tab_p = cut_tables(prep, p, H)
-    return _core.run_exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec,
+    return core.run_exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec,
                            imp, stick, strobe, met, prep, float(dt), H, tab_e, tab_p)
 
 

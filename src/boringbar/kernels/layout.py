@@ -8,9 +8,9 @@ second copy of the offsets.  It imports nothing from the layers above it.
 
 import numpy as np
 
-from boringbar import _core
+from boringbar import core
 
-_SLOTS = _core.layout()
+_SLOTS = core.layout()
 globals().update(_SLOTS)
 
 #: largest number of retained bending modes the core supports

@@ -4,7 +4,7 @@ matrices, diagonalised, and their constants), :func:`history_step` and :func:`cu
 
 Each gives, bit for bit, what ``boringbar.kernels.exact.prepare.prepare`` and
 ``boringbar.kernels.exact.cut.history_step`` / ``cut_tables`` give with numba (the compiled
-core, ``boringbar._core``, then takes these arrays).  Bit for bit means the same floating
+core, ``boringbar.core``, then takes these arrays).  Bit for bit means the same floating
 point operations in the same order, so the port keeps to what numba compiled:
 
 - the complex arithmetic is CPython's (which numba copies): a float operand promoted to
