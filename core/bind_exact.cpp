@@ -298,11 +298,13 @@ void bind_exact(nb::module_& m) {
           nb::arg("t_steady"), nb::arg("rec_dt"), nb::arg("rec"), nb::arg("imp"),
           nb::arg("stick"), nb::arg("strobe"), nb::arg("met"), nb::arg("prep"), nb::arg("dt"),
           nb::arg("H"), nb::arg("tabE"), nb::arg("tabP"),
-          "Advance x exactly from t0 to t_end (the exact event-driven integrator; numba's "
-          "kernels.exact.run_exact): prep is prepare(p)'s dict, dt a cut's step, H its history "
+          "Advance x exactly from t0 to t_end (the exact event-driven integrator): prep is prepare(p)'s dict, dt a cut's step, H its history "
           "step (0 for harmonic forcing), tabE and tabP its tables (harmonic: zero arrays of "
           "shape (1, 5, 1) and (1, 5, 4, 1)).  Writes x, rec, imp, stick, strobe and met in "
           "place; returns the time reached.");
+    // the event-search grid that prepare() sizes its tables for (kernels/regimes.py)
+    m.attr("GRID_PER_PERIOD") = exact::GRID_PER_PERIOD;
+    m.attr("GRID_LEVELS") = exact::GRID_LEVELS;
 }
 
 }  // namespace bb::bind

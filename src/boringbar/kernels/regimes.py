@@ -1,11 +1,11 @@
-"""The exact integrator's per-run setup without numba: :func:`prepare` (the regimes'
-matrices, diagonalised, and their constants), :func:`history_step` and :func:`cut_tables`
-(a regenerative cut's knot spacing and tabulated whole step).
+"""The exact integrator's per-run setup: :func:`prepare` (the regimes' matrices,
+diagonalised, and their constants), :func:`history_step` and :func:`cut_tables` (a
+regenerative cut's knot spacing and tabulated whole step); the compiled core
+(``boringbar.core``) takes these arrays.
 
-Each gives, bit for bit, what ``boringbar.kernels.exact.prepare.prepare`` and
-``boringbar.kernels.exact.cut.history_step`` / ``cut_tables`` give with numba (the compiled
-core, ``boringbar.core``, then takes these arrays).  Bit for bit means the same floating
-point operations in the same order, so the port keeps to what numba compiled:
+They reproduce, bit for bit, the setup the integrators' reference outputs were computed
+with (tests/data/kernel_reference.npz, from the numba kernels the core replaced): the
+same floating point operations in the same order, that is:
 
 - the complex arithmetic is CPython's (which numba copies): a float operand promoted to
   complex(x, 0.0), then (ac - bd, ad + bc) and CPython's division (``_Py_c_quot``).  Where a
@@ -29,17 +29,18 @@ import math
 import numpy as np
 from scipy.linalg import lapack
 
+from boringbar import core
 from boringbar.kernels import layout as L
 
-#: event-search grid points per shortest period and grid levels (kernels/exact/consts.py)
-GRID_PER_PERIOD = 16.382
-GRID_LEVELS = 4
+#: event-search grid points per shortest period and grid levels (core/exact/consts.hpp)
+GRID_PER_PERIOD: float = core.GRID_PER_PERIOD
+GRID_LEVELS: int = core.GRID_LEVELS
 
-#: Gauss-Legendre nodes on [0, 1], 4 points (the same expressions as kernels/exact/cut.py)
+#: Gauss-Legendre nodes on [0, 1], 4 points (the same expressions as core/exact/cut.hpp)
 GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179242816,
         0.5 + 0.4305681557970263)
 
-#: 1 / k! (kernels/exact/consts.py's RFACT)
+#: 1 / k! (core/exact/consts.hpp's RFACT)
 RFACT = tuple(1.0 / math.factorial(k) for k in range(20))
 
 
