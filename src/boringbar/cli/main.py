@@ -14,22 +14,34 @@ builds its subparser and a ``_cmd_<name>(args) -> int`` handler.
 from __future__ import annotations
 
 import argparse
+import importlib
 import re
 import sys
 import textwrap
 
 from boringbar import __version__
-from boringbar.cli.audit import add_audit
-from boringbar.cli.continuation import add_continue
-from boringbar.cli.design import add_design
-from boringbar.cli.frf import add_fit_frf
-from boringbar.cli.modes import add_modes
-from boringbar.cli.nonlinear import add_basins, add_bifurcation, add_sensitivity
 from boringbar.cli.options import PROG, Outcome
-from boringbar.cli.simulate import add_simulate
-from boringbar.cli.study import add_paper, add_run
-from boringbar.cli.sweeps import add_lobes, add_sweep
 from boringbar.model.system import READINGS
+
+#: the subcommands, in the order --help lists them: name -> (module, its add_ function).
+#: A command line imports only its own command's module (the design search's Optuna, the
+#: FRF fit's SciPy signal tools and the figures' matplotlib load only where used); --help
+#: and a mistyped command build them all.
+COMMANDS = {
+    "modes": ("boringbar.cli.modes", "add_modes"),
+    "fit-frf": ("boringbar.cli.frf", "add_fit_frf"),
+    "simulate": ("boringbar.cli.simulate", "add_simulate"),
+    "sweep": ("boringbar.cli.sweeps", "add_sweep"),
+    "lobes": ("boringbar.cli.sweeps", "add_lobes"),
+    "bifurcation": ("boringbar.cli.nonlinear", "add_bifurcation"),
+    "basins": ("boringbar.cli.nonlinear", "add_basins"),
+    "sensitivity": ("boringbar.cli.nonlinear", "add_sensitivity"),
+    "continue": ("boringbar.cli.continuation", "add_continue"),
+    "run": ("boringbar.cli.study", "add_run"),
+    "paper": ("boringbar.cli.study", "add_paper"),
+    "audit": ("boringbar.cli.audit", "add_audit"),
+    "design": ("boringbar.cli.design", "add_design"),
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -46,7 +58,8 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{PROG}: error: {message} (see '{self.prog} --help')\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The command line's parser: with every subcommand, or only ``command``'s."""
     readings = "\n".join(textwrap.fill(f"{k}: {v}", 79, initial_indent="  ",
                                        subsequent_indent="    ")
                          for k, v in READINGS.items())
@@ -57,26 +70,16 @@ def build_parser() -> argparse.ArgumentParser:
                "switches on the published readings:\n" + readings)
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    add_modes(sub)
-    add_fit_frf(sub)
-    add_simulate(sub)
-    add_sweep(sub)
-    add_lobes(sub)
-    add_bifurcation(sub)
-    add_basins(sub)
-    add_sensitivity(sub)
-    add_continue(sub)
-
-    add_run(sub)
-    add_paper(sub)
-    add_audit(sub)
-    add_design(sub)
+    for name, (module, add) in COMMANDS.items():
+        if command in (None, name):
+            getattr(importlib.import_module(module), add)(sub)
     return parser
 
 
 def main(argv=None) -> int:
     """Run the command line; returns the exit code (0 ok, 2 bad input, 1 I/O error)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
