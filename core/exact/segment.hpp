@@ -59,6 +59,12 @@ struct Work {
     Mat mk;                  // (6, n): M, K, C, psi_L, psi_d, psi_a
     Mat ddc;                 // (4, n + 2): a free ball's y'' and W'' coefficients
 
+    // exp(lambda_k tau_end) (k = 0, ks, ...) of regime r_end, kept by the search's last
+    // state_at at tau_end (outside a cut, the constant sizes) for segment_integrals
+    ncplx ex_end[2] = {};
+    double tau_end = NAN;
+    idx r_end = -1;
+
     Segment seg;
     RunConsts cp;
     RunState rs;
@@ -731,7 +737,13 @@ inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mo
     if (tab_end) {
         tab_state(w, r, 4, ks, w.qg, X);
     } else {
-        state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X);
+        if (sz != 0 && seg.krb == 0.0) {  // kept for segment_integrals, if b ends it
+            state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X, w.ex_end);
+            w.tau_end = b;
+            w.r_end = r;
+        } else {
+            state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X);
+        }
         phg = phasor(om, t + b);
     }
     if (ball || !Regen) {
@@ -831,6 +843,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     double a = 0.0;
     for (idx j = 0; j < nz; ++j) Xa[j] = X[j];
     for (idx k = 0; k < nz; ++k) qg[k] = q0[k];
+    w.tau_end = NAN;  // no state_at of this segment yet
     ncplx phg = ph;
     idx ev_kind = -1;
     double tau_ev = tlen;
@@ -888,7 +901,14 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         idx kind = f.kind;
         if (kind >= 0) {
             b = f.t;
-            ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X);
+            if (sz != 0 && seg.krb == 0.0) {  // kept for segment_integrals
+                ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X,
+                                   w.ex_end);
+                w.tau_end = b;
+                w.r_end = r;
+            } else {
+                ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X);
+            }
             ev_kind = kind;
             tau_ev = b;
         }
@@ -1063,14 +1083,18 @@ inline idx close_segment(Work& w, double t, double T, idx r, idx ks, idx sz, idx
         // what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a free
         // ball's y^2
         idx lvl = steady ? ((ball && mode == FREE) ? 2 : 1) : 0;
+        // the search's exp(lambda_k T), if its last state_at was at T (same regime and
+        // segment: tau_end is reset at each search's start)
+        const ncplx* exc =
+            (w.r_end == r && w.tau_end == T && seg.krb == 0.0) ? w.ex_end : nullptr;
         if (sz == 1) {
             segment_integrals_1(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
                                 w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
-                                out, w.isum, lvl, seg, w.phj);
+                                out, w.isum, lvl, seg, w.phj, exc);
         } else if (sz == 2) {
             segment_integrals_2(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
                                 w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
-                                out, w.isum, lvl, seg, w.phj);
+                                out, w.isum, lvl, seg, w.phj, exc);
         } else {
             segment_integrals(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, n, w.mk,
                               w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb, out,
