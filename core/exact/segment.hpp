@@ -713,26 +713,17 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
 // e^{i om t} as numba computes cmath.exp(1j * om * t): the products promoted to complex
 inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t); }
 
-// The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
-// usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
-// the tabulated end of a cut's whole step (tab_end), or the closed form.  Returns phg and
-// y'', W'' at b (ydd_b, wdd_b as they were where not evaluated).
+// What advance does off the usual grid (every 64th step, a segment's end): kept out of the
+// search's loop.
 template <bool Regen>
-inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mode, idx lev,
-                         double b, bool usual, bool tab_end, bool ball, bool ydd_on,
-                         const ncplx& phg_a, double ydd_b, double wdd_b) {
+__attribute__((noinline)) GridPoint advance_other(Work& w, double t, idx r, idx ks, idx sz,
+                                                  idx n, idx mode, double b, bool tab_end,
+                                                  bool ball, bool ydd_on, const ncplx& phg_a,
+                                                  double ydd_b, double wdd_b) {
     const Segment& seg = w.seg;
     Vec X = w.X;
-    idx nz = X.size();
     double f0 = w.cp.f0;
     double om = w.cp.om;
-    if (usual) {
-        // the usual grid point, with the sizes constant for one and two modes
-        const ncplx& rot = w.rotl[lev];
-        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 2);
-        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 4);
-        return grid_point<0>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
-    }
     ncplx phg = phg_a;
     if (tab_end) {
         tab_state(w, r, 4, ks, w.qg, X);
@@ -760,6 +751,29 @@ inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mo
         w.ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq;
     }
     return {phg, ydd_b, wdd_b};
+}
+
+// The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
+// usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
+// the tabulated end of a cut's whole step (tab_end), or the closed form.  Returns phg and
+// y'', W'' at b (ydd_b, wdd_b as they were where not evaluated).
+template <bool Regen>
+inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mode, idx lev,
+                         double b, bool usual, bool tab_end, bool ball, bool ydd_on,
+                         const ncplx& phg_a, double ydd_b, double wdd_b) {
+    Vec X = w.X;
+    idx nz = X.size();
+    double f0 = w.cp.f0;
+    double om = w.cp.om;
+    if (usual) {
+        // the usual grid point, with the sizes constant for one and two modes
+        const ncplx& rot = w.rotl[lev];
+        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 2);
+        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 4);
+        return grid_point<0>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+    }
+    return advance_other<Regen>(w, t, r, ks, sz, n, mode, b, tab_end, ball, ydd_on, phg_a,
+                                ydd_b, wdd_b);
 }
 
 // What search_segment returns: the event kind (-1: none), its time from t or the segment's
