@@ -198,6 +198,9 @@ inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, idx 
 inline std::pair<double, double> ydd(Vec X, double f, double fb, double acc, Mat ddc, idx n) {
     double yv = acc - (ddc(0, n) * f + ddc(0, n + 1) * fb);
     double wv = ddc(1, n) * f + ddc(1, n + 1) * fb;
+    // unrolled where n is constant (grid_point): the loop vectoriser would load X in pairs
+    // just after from_q stored it one by one (a stalled store forwarding)
+#pragma GCC unroll 8
     for (idx i = 0; i < n; ++i) {
         yv -= ddc(0, i) * X[i] + ddc(2, i) * X[n + i];
         wv += ddc(1, i) * X[i] + ddc(3, i) * X[n + i];
