@@ -89,8 +89,11 @@ inline void from_q(idx r, CVec q, ncplx ph, double fb, CMat Z, Mat D, CArr3 V, i
 // X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg.ts); returns
 // the forcing phasor e^{i Omega (ts + tau)}.  In a cut the input Kr b S(tau) adds
 // bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to each eigen-coordinate.
+//
+// keep (if not null, and only outside a cut): receives exp(lambda_k tau), k = kq ks.
 inline ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
-                      CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X) {
+                      CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X,
+                      ncplx* keep = nullptr) {
     idx nz = X.n;
     double ts = seg.ts;
     double fb = seg.fb;
@@ -110,7 +113,9 @@ inline ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om,
     } else {
         for (idx kq = 0; kq < nq(nz, ks); ++kq) {
             idx k = kq * ks;
-            q[k] = ncplx(q0[k]) * cexp(ncplx(lam(r, k)) * tau);
+            ncplx ex = cexp(ncplx(lam(r, k)) * tau);
+            if (keep) keep[kq] = ex;
+            q[k] = ncplx(q0[k]) * ex;
         }
     }
     from_q(r, q, ph, fb, Z, D, V, ks, X);
@@ -263,7 +268,7 @@ __attribute__((always_inline)) inline void _integrals_impl(
     idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
     CMat Z, Mat D, idx n, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, MuV& mu,
     MuV& em, GM& G, CM& Cx, V& cf, V& ca, V& cb, Vec out, CArr3 isum, idx level, idx ks,
-    const Segment& seg, CVec phj, idx nz) {
+    const Segment& seg, CVec phj, idx nz, const ncplx* exc) {
     double p0 = seg.ud0;  // a free ball's absolute position P = p0 + p1 tau + p2 tau^2
     double p1 = seg.vd0;
     double p2 = 0.5 * seg.acc;
@@ -275,6 +280,8 @@ __attribute__((always_inline)) inline void _integrals_impl(
     for (idx k = 0; k < nz; ++k) {
         if (k > 0 && ncplx(mu[k]) == ncplx(mu[k - 1]).conjugate())
             em[k] = ncplx(em[k - 1]).conjugate();
+        else if (exc && k % ks == 0)  // state_at's exp(lambda_k T), the same operations
+            em[k] = exc[k / ks];
         else
             em[k] = cexp(ncplx(mu[k]) * T);
     }
@@ -424,7 +431,7 @@ inline void segment_integrals(idx r, CVec q0, ncplx ph, double T, double fb, dou
     CVec mu = me[0];  // the basis exponents
     CVec em = me[1];  // exp(mu T)
     _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
-                    mu, em, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1);
+                    mu, em, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1, nullptr);
 }
 
 // A (rows x cols) scratch array on the stack, left uninitialised (every entry that
@@ -444,13 +451,13 @@ template <int NZ>
 __attribute__((noinline)) void _integrals_fixed(
     idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
     CMat Z, Mat D, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, Vec out, CArr3 isum,
-    idx level, const Segment& seg, CVec phj) {
+    idx level, const Segment& seg, CVec phj, const ncplx* exc) {
     constexpr int NB = NZ + 3;
     LocalArr<1, NB> mu, em, cf, ca, cb;
     LocalArr<NB, NB> G;
     LocalArr<NZ, NB> Cx;
     _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, NZ / 2, mk, lvis, cvis, stick_k,
-                    sr, mu, em, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, NZ);
+                    sr, mu, em, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, NZ, exc);
 }
 
 // One mode and its conjugate pair (n = 1, nz = 2, ks = 2): the same operations.
@@ -458,10 +465,11 @@ inline void segment_integrals_1(idx r, CVec q0, ncplx ph, double T, double fb, d
                                 double f0, CMat lam, CArr3 VF, CMat Z, Mat D, Mat mk,
                                 Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
                                 CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
-                                CArr3 isum, idx level, const Segment& seg, CVec phj) {
+                                CArr3 isum, idx level, const Segment& seg, CVec phj,
+                                const ncplx* exc = nullptr) {
     (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
     _integrals_fixed<2>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
-                          out, isum, level, seg, phj);
+                          out, isum, level, seg, phj, exc);
 }
 
 // Two modes in conjugate pairs (n = 2, nz = 4, ks = 2): the same operations.
@@ -469,10 +477,11 @@ inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, d
                                 double f0, CMat lam, CArr3 VF, CMat Z, Mat D, Mat mk,
                                 Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
                                 CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
-                                CArr3 isum, idx level, const Segment& seg, CVec phj) {
+                                CArr3 isum, idx level, const Segment& seg, CVec phj,
+                                const ncplx* exc = nullptr) {
     (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
     _integrals_fixed<4>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
-                          out, isum, level, seg, phj);
+                          out, isum, level, seg, phj, exc);
 }
 
 }  // namespace bb::exact

@@ -59,6 +59,12 @@ struct Work {
     Mat mk;                  // (6, n): M, K, C, psi_L, psi_d, psi_a
     Mat ddc;                 // (4, n + 2): a free ball's y'' and W'' coefficients
 
+    // exp(lambda_k tau_end) (k = 0, ks, ...) of regime r_end, kept by the search's last
+    // state_at at tau_end (outside a cut, the constant sizes) for segment_integrals
+    ncplx ex_end[2] = {};
+    double tau_end = NAN;
+    idx r_end = -1;
+
     Segment seg;
     RunConsts cp;
     RunState rs;
@@ -192,6 +198,9 @@ inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, idx 
 inline std::pair<double, double> ydd(Vec X, double f, double fb, double acc, Mat ddc, idx n) {
     double yv = acc - (ddc(0, n) * f + ddc(0, n + 1) * fb);
     double wv = ddc(1, n) * f + ddc(1, n + 1) * fb;
+    // unrolled where n is constant (grid_point): the loop vectoriser would load X in pairs
+    // just after from_q stored it one by one (a stalled store forwarding)
+#pragma GCC unroll 8
     for (idx i = 0; i < n; ++i) {
         yv -= ddc(0, i) * X[i] + ddc(2, i) * X[n + i];
         wv += ddc(1, i) * X[i] + ddc(3, i) * X[n + i];
@@ -707,31 +716,28 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
 // e^{i om t} as numba computes cmath.exp(1j * om * t): the products promoted to complex
 inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t); }
 
-// The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
-// usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
-// the tabulated end of a cut's whole step (tab_end), or the closed form.  Returns phg and
-// y'', W'' at b (ydd_b, wdd_b as they were where not evaluated).
+// What advance does off the usual grid (every 64th step, a segment's end): kept out of the
+// search's loop.
 template <bool Regen>
-inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mode, idx lev,
-                         double b, bool usual, bool tab_end, bool ball, bool ydd_on,
-                         const ncplx& phg_a, double ydd_b, double wdd_b) {
+__attribute__((noinline)) GridPoint advance_other(Work& w, double t, idx r, idx ks, idx sz,
+                                                  idx n, idx mode, double b, bool tab_end,
+                                                  bool ball, bool ydd_on, const ncplx& phg_a,
+                                                  double ydd_b, double wdd_b) {
     const Segment& seg = w.seg;
     Vec X = w.X;
-    idx nz = X.size();
     double f0 = w.cp.f0;
     double om = w.cp.om;
-    if (usual) {
-        // the usual grid point, with the sizes constant for one and two modes
-        const ncplx& rot = w.rotl[lev];
-        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 2);
-        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 4);
-        return grid_point<0>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
-    }
     ncplx phg = phg_a;
     if (tab_end) {
         tab_state(w, r, 4, ks, w.qg, X);
     } else {
-        state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X);
+        if (sz != 0 && seg.krb == 0.0) {  // kept for segment_integrals, if b ends it
+            state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X, w.ex_end);
+            w.tau_end = b;
+            w.r_end = r;
+        } else {
+            state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X);
+        }
         phg = phasor(om, t + b);
     }
     if (ball || !Regen) {
@@ -748,6 +754,29 @@ inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mo
         w.ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq;
     }
     return {phg, ydd_b, wdd_b};
+}
+
+// The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
+// usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
+// the tabulated end of a cut's whole step (tab_end), or the closed form.  Returns phg and
+// y'', W'' at b (ydd_b, wdd_b as they were where not evaluated).
+template <bool Regen>
+inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mode, idx lev,
+                         double b, bool usual, bool tab_end, bool ball, bool ydd_on,
+                         const ncplx& phg_a, double ydd_b, double wdd_b) {
+    Vec X = w.X;
+    idx nz = X.size();
+    double f0 = w.cp.f0;
+    double om = w.cp.om;
+    if (usual) {
+        // the usual grid point, with the sizes constant for one and two modes
+        const ncplx& rot = w.rotl[lev];
+        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 2);
+        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 4);
+        return grid_point<0>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+    }
+    return advance_other<Regen>(w, t, r, ks, sz, n, mode, b, tab_end, ball, ydd_on, phg_a,
+                                ydd_b, wdd_b);
 }
 
 // What search_segment returns: the event kind (-1: none), its time from t or the segment's
@@ -831,6 +860,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     double a = 0.0;
     for (idx j = 0; j < nz; ++j) Xa[j] = X[j];
     for (idx k = 0; k < nz; ++k) qg[k] = q0[k];
+    w.tau_end = NAN;  // no state_at of this segment yet
     ncplx phg = ph;
     idx ev_kind = -1;
     double tau_ev = tlen;
@@ -888,7 +918,14 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         idx kind = f.kind;
         if (kind >= 0) {
             b = f.t;
-            ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X);
+            if (sz != 0 && seg.krb == 0.0) {  // kept for segment_integrals
+                ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X,
+                                   w.ex_end);
+                w.tau_end = b;
+                w.r_end = r;
+            } else {
+                ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X);
+            }
             ev_kind = kind;
             tau_ev = b;
         }
@@ -1063,14 +1100,18 @@ inline idx close_segment(Work& w, double t, double T, idx r, idx ks, idx sz, idx
         // what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a free
         // ball's y^2
         idx lvl = steady ? ((ball && mode == FREE) ? 2 : 1) : 0;
+        // the search's exp(lambda_k T), if its last state_at was at T (same regime and
+        // segment: tau_end is reset at each search's start)
+        const ncplx* exc =
+            (w.r_end == r && w.tau_end == T && seg.krb == 0.0) ? w.ex_end : nullptr;
         if (sz == 1) {
             segment_integrals_1(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
                                 w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
-                                out, w.isum, lvl, seg, w.phj);
+                                out, w.isum, lvl, seg, w.phj, exc);
         } else if (sz == 2) {
             segment_integrals_2(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
                                 w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
-                                out, w.isum, lvl, seg, w.phj);
+                                out, w.isum, lvl, seg, w.phj, exc);
         } else {
             segment_integrals(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, n, w.mk,
                               w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb, out,
