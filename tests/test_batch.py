@@ -1,4 +1,4 @@
-"""The lock-step kernel (boringbar.kernels.rk4_batch) against the single-run kernel.
+"""The batch kernel (boringbar.kernels.run_rk4_batch) against the single-run kernel.
 
 Every run of a batch must give what ``simulate`` gives for it alone: every
 streamed metric, the impact rows, the stick intervals, the strobe samples and
@@ -18,8 +18,8 @@ from boringbar import Harmonic, Initial, make_system, simulate
 from boringbar._validate import ParameterError
 from boringbar.analysis.sweep import SweepOptions
 from boringbar.execute import Execution
-from boringbar.kernels import layout as L
 from boringbar.kernels import BMAX, run_rk4_batch
+from boringbar.kernels import layout as L
 from boringbar.model.forcing import Regenerative
 from boringbar.simulate import Integration, simulate_batch
 

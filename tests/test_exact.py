@@ -1,4 +1,4 @@
-"""The exact event-driven integrator (boringbar.kernels.exact, issue #6).
+"""The exact event-driven integrator (boringbar.kernels.run_exact).
 
 Tiers: linear cases against closed forms (round-off); the Masri-Caughey
 two-impact orbit (round-off); the energy ledger (impact losses from the

@@ -1,4 +1,4 @@
-"""The numba RK4 kernel (boringbar.kernels.rk4) against the slow reference in
+"""The RK4 kernel (boringbar.kernels.run_rk4, the compiled core) against the slow reference in
 ``naive.py``, and the published scheme's conservation, convergence and
 closed-form properties (docs/model.md, sections 1-3, 5).
 
