@@ -719,7 +719,7 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
     ``integrator``: ``"auto"`` (the default: :func:`resolve_integrator`, exact for
     harmonic forcing, RK4 under the paper preset and in cuts), ``"rk4"`` (the
     published scheme, docs/model.md, section 5) or ``"exact"`` (event-driven, exact
-    between events: :mod:`boringbar.kernels.exact`;
+    between events: the compiled core, `core/exact/`;
     under harmonic forcing ``dt`` is then only the step of the recorded history
     and of the duration and steady-window rounding, and the steady RMS is the
     exact integral over the window; in a cut the delayed surface comes from a
@@ -740,7 +740,7 @@ def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 
     """:func:`simulate` (rk4) with every step through the RK4 stage loop.
 
     The kernel normally takes a step with no friction switch as one affine
-    map (:mod:`boringbar.kernels.linmap`); this runs the four stages every
+    map (`core/linmap.hpp`); this runs the four stages every
     step instead: the same scheme, equal to round-off.  It is the reference
     of the map in tests/test_kernel.py and the baseline of
     benchmarks/bench_kernel.py.

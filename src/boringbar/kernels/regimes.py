@@ -337,7 +337,8 @@ def _finish(p, lam, V, Vi, Z, B):
 
 def prepare(p: np.ndarray) -> dict:
     """Per-run matrices of the exact kernel from the packed parameter vector ``p``: the
-    same dict, bit for bit, as ``boringbar.kernels.exact.prepare.prepare(p)``."""
+    same dict, bit for bit, as the setup the reference outputs were computed with
+    (tests/data/kernel_reference.npz, ``prep_*``)."""
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     om = p[L.OMEGA]
