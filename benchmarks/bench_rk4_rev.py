@@ -133,37 +133,38 @@ def compare(label, a, b):
     return not bad
 
 
+def best_ns(run, mods, per_step: int, repeat: int) -> list[float]:
+    """ns per step of ``run(mod)`` (its first result the wall time), old and new
+    alternately, best of ``repeat``."""
+    best = [np.inf, np.inf]
+    for _ in range(repeat):
+        for i, mod in enumerate(mods):
+            best[i] = min(best[i], run(mod)[0])
+    return [b / per_step * 1e9 for b in best]
+
+
+def single_ns(R0, su, repeat: int) -> list[float]:
+    return best_ns(lambda mod: run_single(mod, su), (R0, R1), su.n_steps, repeat)
+
+
 def timing(R0, B0, repeat):
     print(f"\nspeed, old and new alternately, best of {repeat}:")
     for nm, gap, friction in ((1, 0.1e-3, False), (1, 0.5e-3, True), (2, 0.1e-3, False)):
         system = make_system("ball", "paper" if nm == 1 else "physical", gap=gap,
                              friction=friction, n_modes=nm)
-        su = setup(system, Harmonic(10.0, 1.0), 2.0, record_every=0, strobe=False)
-        best = [np.inf, np.inf]
-        for _ in range(repeat):
-            for i, mod in enumerate((R0, R1)):
-                best[i] = min(best[i], run_single(mod, su)[0])
-        ns = [b / su.n_steps * 1e9 for b in best]
+        ns = single_ns(R0, setup(system, Harmonic(10.0, 1.0), 2.0, record_every=0,
+                                 strobe=False), repeat)
         print(f"  run_rk4 ball {nm} mode(s), gap {gap * 1e3:.1f} mm, friction "
               f"{'on ' if friction else 'off'}, 2 s: old {ns[0]:.1f} ns/step, new {ns[1]:.1f} "
               f"ns/step (old/new {ns[0] / ns[1]:.2f}x)")
-    su = setup(make_system("solid", "paper"), Regenerative(depth=1e-3, rpm=1200.0), 1.0,
-               record_every=0, strobe=False)
-    best = [np.inf, np.inf]
-    for _ in range(repeat):
-        for i, mod in enumerate((R0, R1)):
-            best[i] = min(best[i], run_single(mod, su)[0])
-    ns = [b / su.n_steps * 1e9 for b in best]
+    ns = single_ns(R0, setup(make_system("solid", "paper"), Regenerative(depth=1e-3, rpm=1200.0),
+                             1.0, record_every=0, strobe=False), repeat)
     print(f"  run_rk4 solid bar cut, 1 s: old {ns[0]:.1f} ns/step, new {ns[1]:.1f} ns/step "
           f"(old/new {ns[0] / ns[1]:.2f}x)")
     system = make_system("ball", "paper", gap=0.5e-3, friction=True)
     jobs = [(system, Harmonic(10.0 + j % 2 * 10.0, 0.97 + 0.005 * j), None) for j in range(16)]
     su, arrays = batch_arrays(jobs, 0.3)
-    best = [np.inf, np.inf]
-    for _ in range(repeat):
-        for i, mod in enumerate((B0, B1)):
-            best[i] = min(best[i], run_batch(mod, su, arrays)[0])
-    ns = [b / (su.n_steps * 16) * 1e9 for b in best]
+    ns = best_ns(lambda mod: run_batch(mod, su, arrays), (B0, B1), su.n_steps * 16, repeat)
     print(f"  run_rk4_batch ball paper friction B=16, 0.3 s: old {ns[0]:.1f} ns/run-step, "
           f"new {ns[1]:.1f} (old/new {ns[0] / ns[1]:.2f}x)")
 
