@@ -49,6 +49,9 @@ KR_ALUMINIUM = 850e6
 GRID_SPAN = (0.5, 2.0)
 #: Bisection steps refining each lobe crossing (bracket shrinks 2^-60).
 BISECTION_STEPS = 60
+#: A crossing is bisected only if its better bracket end is within this fraction of
+#: the best crossing's worse end (:func:`_contenders`).
+CONTENDER_MARGIN = 0.1
 TWO_PI = 2.0 * math.pi
 
 
@@ -231,17 +234,22 @@ def limit_at_speeds(
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
     g = tip_frf(bar, w, tmd=tmd, added_mass=added_mass)
     eps = regeneration_phase(g)
+    # every speed's crossings bisected together: one FRF solve per step for all
+    brackets = [_contenders(w, g, *_crossings(w, g, eps, 60.0 / speed, allowed))
+                for speed in flat]
+    count = [len(b[2]) for b in brackets]
+    owner = np.repeat(np.arange(len(flat)), count)
     b_out = np.full(flat.shape, np.inf)
     f_out = np.full(flat.shape, np.nan)
-    for k, speed in enumerate(flat):
-        lo, hi, j, tau = _crossings(w, g, eps, 60.0 / speed, allowed)
-        if len(j) == 0:
-            continue
-        root = _bisect(bar, tmd, added_mass, lo, hi, j, tau)
+    if owner.size:
+        lo, hi, j = (np.concatenate([b[k] for b in brackets]) for k in range(3))
+        root = _bisect(bar, tmd, added_mass, lo, hi, j, np.repeat(60.0 / flat, count))
         re = tip_frf(bar, root, tmd=tmd, added_mass=added_mass).real
         b = np.where(re < 0.0, -0.5 / (kr * np.minimum(re, -1e-300)), np.inf)
-        best = int(np.argmin(b))
-        b_out[k], f_out[k] = b[best], root[best] / TWO_PI
+        for k in np.unique(owner):
+            mine = np.flatnonzero(owner == k)
+            best = mine[int(np.argmin(b[mine]))]
+            b_out[k], f_out[k] = b[best], root[best] / TWO_PI
     b_out, f_out = b_out.reshape(speeds.shape), f_out.reshape(speeds.shape)
     return (b_out, f_out) if with_frequency else b_out
 
@@ -269,6 +277,19 @@ def _crossings(w, g, eps, tau, allowed):
     return w[idx], w[idx + 1], j, tau
 
 
+def _contenders(w, g, lo, hi, j, tau):
+    """The crossings of one speed that can hold its smallest limit: Re G at the root
+    lies between its values at the bracket's ends (the bracket is one step of a fine
+    grid, where Re G bends by far less than the margin), so a crossing whose better
+    end is CONTENDER_MARGIN short of the best worse end cannot win."""
+    if len(j) < 2:
+        return lo, hi, j, tau
+    a = np.searchsorted(w, lo)
+    ends = np.stack([g.real[a], g.real[a + 1]])
+    keep = ends.min(axis=0) <= (1.0 - CONTENDER_MARGIN) * ends.max(axis=0).min()
+    return lo[keep], hi[keep], j[keep], tau
+
+
 def _bisect(bar, tmd, added_mass, lo, hi, j, tau):
     """Vectorised bisection of omega tau - eps(omega) - 2 pi j on [lo, hi]."""
     lo, hi = lo.copy(), hi.copy()
@@ -283,6 +304,8 @@ def _bisect(bar, tmd, added_mass, lo, hi, j, tau):
     f_lo = f(lo)
     for _ in range(BISECTION_STEPS):
         mid = 0.5 * (lo + hi)
+        if np.all((mid == lo) | (mid == hi)):
+            break  # adjacent doubles everywhere: the rest would change nothing
         f_mid = f(mid)
         same = np.sign(f_mid) == np.sign(f_lo)
         lo, f_lo = np.where(same, mid, lo), np.where(same, f_mid, f_lo)
