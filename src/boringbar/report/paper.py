@@ -22,9 +22,12 @@ is written last, from the files on disk.
 from __future__ import annotations
 
 import json
+import multiprocessing
+import os
 import sys
 import time
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -62,6 +65,8 @@ from boringbar.report.outputs import (
 from boringbar.simulate import Initial, Integration
 
 PRESET_ORDER = ("paper", "physical")
+#: Steps computed at once (:func:`_run_steps`).
+STEP_WORKERS = min(2, os.cpu_count() or 1)
 
 
 @dataclass(frozen=True)
@@ -137,7 +142,7 @@ class Step:
     #: what the further columns run instead, if not the same: (argv, run)
     lean: tuple | None = None
 
-    def for_column(self, column: str) -> "Step":
+    def for_column(self, column: str) -> Step:
         """The step as ``column`` runs it (a further column: its lean version)."""
         if column in PRESET_ORDER or self.lean is None:
             return self
@@ -419,16 +424,15 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     steps = published_steps(quick)
     plan = _plan(steps, presets)
     total = sum(1 for *_, shared in plan if shared is None) + 1
-    done = {}
+    jobs = []
     for column, step in [(c, s) for c, s, shared in plan if shared is None]:
         step = step.for_column(column)
-        where = out / column / step.key
         meta = {"key": step.key, "section": step.section, "title": step.title,
                 "preset": column,
                 "command": command_line(step, column, shown / column / step.key)}
-        label = f"boringbar paper: [{len(done) + 1}/{total}] {column} {step.key}"
-        done[(column, step.key)] = _step(
-            where, meta, _compute(step, COLUMNS[column], where, meta["command"]), say, label)
+        label = f"boringbar paper: [{len(jobs) + 1}/{total}] {column} {step.key}"
+        jobs.append((column, step.key, out / column / step.key, meta, label))
+    done = _run_steps(jobs, quick, say)
     # in _plan's order; a step a further column shares is its preset's record
     records = [done[(column, step.key)] if shared is None else
                {**done[(shared, step.key)], "preset": column, "shared_from": shared,
@@ -453,6 +457,50 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
     say(f"boringbar paper: report {manifest['report']} "
         f"({manifest['wall_time_s']:.0f} s)")
     return manifest
+
+
+def _run_steps(jobs: list[tuple], quick: bool, say) -> dict:
+    """Each job's record, by (column, step key): those finished before read back,
+    the others computed STEP_WORKERS at a time in worker processes (a step's runs
+    fill the cores, but its searches, figures and files are serial, so a second
+    step keeps the other core busy). The first step that fails cancels those not
+    started and raises; the steps finished are kept on disk."""
+    done, todo = {}, []
+    for column, key, where, meta, label in jobs:
+        record = _done(where / "summary.json", meta["command"])
+        if record is None:
+            todo.append((column, key, where, meta, label))
+        else:
+            say(f"{label}: done before, kept")
+            done[(column, key)] = {**record, "reused": True}
+    if len(todo) < 2 or STEP_WORKERS < 2:
+        for job in todo:
+            done[job[:2]] = _worker_step(quick, *job, say)[0]
+        return done
+    context = multiprocessing.get_context("spawn")  # no fork of a threaded parent
+    with ProcessPoolExecutor(STEP_WORKERS, mp_context=context) as pool:
+        futures = {pool.submit(_worker_step, quick, *job): job[:2] for job in todo}
+        try:
+            for future in as_completed(futures):
+                record, messages = future.result()
+                for message in messages:
+                    say(message)
+                done[futures[future]] = record
+        except BaseException:
+            pool.shutdown(cancel_futures=True)
+            raise
+    return done
+
+
+def _worker_step(quick: bool, column: str, key: str, where: Path, meta: dict, label: str,
+                 say=None) -> tuple[dict, list[str]]:
+    """One step computed (in a worker process): its record, and the lines it said
+    (said at once if ``say`` is given)."""
+    step = next(s for s in published_steps(quick) if s.key == key).for_column(column)
+    messages: list[str] = []
+    record = _step(where, meta, _compute(step, COLUMNS[column], where, meta["command"]),
+                   say or messages.append, label)
+    return record, messages
 
 
 def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
