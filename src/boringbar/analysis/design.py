@@ -21,6 +21,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import sqlite3
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -160,7 +161,20 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
     spec = spec or published_system_spec()
     t0 = time.perf_counter()
     samples = uncertain_samples(options)
-    study = _study(options, storage, _fingerprint(options, spec))
+    rdb = None if storage is None else _sqlite(Path(storage))
+    try:
+        study = _study(options, rdb, storage, _fingerprint(options, spec))
+        done = _search(study, spec, options, samples, execution, progress, stop_after)
+    finally:
+        if rdb is not None:
+            rdb.engine.dispose()  # closes the file: SQLite folds its write-ahead log back
+    published = _published_candidate(spec, options, samples, execution)
+    return assemble(options, done, published, time.perf_counter() - t0)
+
+
+def _search(study, spec, options, samples, execution, progress, stop_after) -> list:
+    """Ask and tell until ``options.trials`` are complete (or ``stop_after`` new
+    ones); returns the complete trials."""
     done = _complete(study)
     new = 0
     while len(done) < options.trials and (stop_after is None or new < stop_after):
@@ -175,8 +189,23 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
         done = _complete(study)
         if progress is not None:
             progress(len(done), options.trials)
-    published = _published_candidate(spec, options, samples, execution)
-    return assemble(options, done, published, time.perf_counter() - t0)
+    return done
+
+
+def _sqlite(path: Path) -> optuna.storages.RDBStorage:
+    """Optuna's storage in the SQLite file ``path``, written ahead to a log and synced
+    at checkpoints rather than at every one of a trial's dozen commits (a crash can
+    lose the last trials, never the file's consistency; a rerun resumes from it)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+
+    def connect() -> sqlite3.Connection:
+        connection = sqlite3.connect(path, check_same_thread=False)
+        connection.execute("PRAGMA journal_mode=WAL")
+        connection.execute("PRAGMA synchronous=NORMAL")
+        return connection
+
+    return optuna.storages.RDBStorage(f"sqlite:///{path.resolve()}",
+                                      engine_kwargs={"creator": connect})
 
 
 def _fingerprint(options: DesignOptions, spec: SystemSpec) -> str:
@@ -186,12 +215,11 @@ def _fingerprint(options: DesignOptions, spec: SystemSpec) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _study(options: DesignOptions, storage, fingerprint: str) -> optuna.Study:
+def _study(options: DesignOptions, rdb, storage, fingerprint: str) -> optuna.Study:
+    """The search's study in ``rdb`` (None: in memory), checked to be this one's
+    (``fingerprint``), its trials killed mid-run failed."""
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    url = None if storage is None else f"sqlite:///{Path(storage).resolve()}"
-    if storage is not None:
-        Path(storage).parent.mkdir(parents=True, exist_ok=True)
-    study = optuna.create_study(storage=url, study_name="boringbar-design",
+    study = optuna.create_study(storage=rdb, study_name="boringbar-design",
                                 directions=options.directions, load_if_exists=True,
                                 sampler=_sampler(options, 0))
     stored = study.user_attrs.get("fingerprint")
