@@ -23,51 +23,61 @@ __version__ = "0.1.0"
 import importlib  # noqa: E402
 
 from boringbar._validate import ParameterError  # noqa: E402
-from boringbar.analysis.basins import BasinOptions, basins  # noqa: E402
-from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation  # noqa: E402
-from boringbar.analysis.continuation import ContinuationOptions, continuation  # noqa: E402
-from boringbar.analysis.design_options import DesignOptions, Uncertain, Variable  # noqa: E402
-from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
-from boringbar.analysis.poincare import poincare_map  # noqa: E402
-from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity  # noqa: E402
-from boringbar.analysis.sweep import Case, SweepOptions, published_cases, sweep  # noqa: E402
-from boringbar.execute import Execution  # noqa: E402
-from boringbar.model.bar import ModalModel, Section, SteppedBar, published_bar  # noqa: E402
-from boringbar.model.dampers import (  # noqa: E402
-    Friction,
-    ImpactDamper,
-    TunedMassDamper,
-    den_hartog_parameters,
-    sims_tuning,
-)
-from boringbar.model.forcing import Harmonic, Regenerative  # noqa: E402
-from boringbar.model.modal_fit import ModalFit  # noqa: E402
-from boringbar.model.system import (  # noqa: E402
-    PRESETS,
-    READINGS,
-    System,
-    describe_modes,
-    make_system,
-)
-from boringbar.model.system_file import SystemSpec, load_system  # noqa: E402
-from boringbar.reference.linear import min_real_part, tip_frf  # noqa: E402
-from boringbar.simulate import Initial, Integration, IntegrationError, Run, State, simulate  # noqa: E402
-from boringbar.studies.load import load_study  # noqa: E402
-from boringbar.studies.runner import run_study  # noqa: E402
 
-#: names loaded on first use, with the module that holds them: the design search imports
-#: Optuna, the figures matplotlib, neither of which a simulation needs
-_LAZY = {"design": "boringbar.analysis.design", "load_design": "boringbar.analysis.design_file",
-         "plot": "boringbar.plot"}
+# eager, since the module of the same name would otherwise shadow the function once
+# anything imported it
+from boringbar.simulate import (  # noqa: E402
+    Initial,
+    Integration,
+    IntegrationError,
+    Run,
+    State,
+    simulate,
+)
+
+#: every public name with the module that holds it, imported on first use: a command
+#: or a script then loads only what it needs (a simulation no optimiser, study runner
+#: or figure library)
+_HOMES = {
+    "boringbar.analysis.basins": ("BasinOptions", "basins"),
+    "boringbar.analysis.bifurcation": ("BifurcationOptions", "bifurcation"),
+    "boringbar.analysis.continuation": ("ContinuationOptions", "continuation"),
+    "boringbar.analysis.design": ("design",),
+    "boringbar.analysis.design_file": ("load_design",),
+    "boringbar.analysis.design_options": ("DesignOptions", "Uncertain", "Variable"),
+    "boringbar.analysis.lobes": ("LobesOptions", "lobes"),
+    "boringbar.analysis.poincare": ("poincare_map",),
+    "boringbar.analysis.sensitivity": ("Cuts", "SensitivityOptions", "sensitivity"),
+    "boringbar.analysis.sweep": ("Case", "SweepOptions", "published_cases", "sweep"),
+    "boringbar.execute": ("Execution",),
+    "boringbar.model.bar": ("ModalModel", "Section", "SteppedBar", "published_bar"),
+    "boringbar.model.dampers": ("Friction", "ImpactDamper", "TunedMassDamper",
+                                "den_hartog_parameters", "sims_tuning"),
+    "boringbar.model.forcing": ("Harmonic", "Regenerative"),
+    "boringbar.model.modal_fit": ("ModalFit",),
+    "boringbar.model.system": ("PRESETS", "READINGS", "System", "describe_modes",
+                               "make_system"),
+    "boringbar.model.system_file": ("SystemSpec", "load_system"),
+    "boringbar.reference.linear": ("min_real_part", "tip_frf"),
+    "boringbar.studies.load": ("load_study",),
+    "boringbar.studies.runner": ("run_study",),
+}
+_LAZY = {name: module for module, names in _HOMES.items() for name in names}
 
 
 def __getattr__(name: str):
-    if name not in _LAZY:
+    if name == "plot":
+        value = importlib.import_module("boringbar.plot")
+    elif name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+    else:
         raise AttributeError(f"module 'boringbar' has no attribute {name!r}")
-    module = importlib.import_module(_LAZY[name])
-    value = module if name == "plot" else getattr(module, name)
     globals()[name] = value
     return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_LAZY, "plot"])
 
 
 __all__ = [

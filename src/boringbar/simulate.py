@@ -15,7 +15,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-import xarray as xr
 
 from boringbar import __version__
 from boringbar._validate import (
@@ -263,6 +262,7 @@ class Run:
         configuration and the summary as JSON in its attributes."""
         if self.history is None:
             raise ValueError("no history was recorded: run simulate(..., record_every=N)")
+        import xarray as xr  # here: a run needs xarray only to be written
         h = self.history
         aux = "y" if self.system.kind in ("ball", "locked") else "absorber_stroke"
         ds = xr.Dataset(
