@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import inspect
 import re
+import subprocess
+import sys
 
 import pytest
 
@@ -86,3 +88,21 @@ def test_a_run_is_frozen():
         run.dt = 2e-6
     ds = run.to_xarray()
     assert ds["tip_displacement"].attrs["units"] == "m"
+
+
+def test_import_loads_no_heavy_library_and_every_name_resolves():
+    """``import boringbar`` leaves the figures, the optimiser, xarray and the analyses
+    to first use; every public name then resolves to what its module holds."""
+    code = ("import sys, boringbar as bb; "
+            "heavy = ('matplotlib', 'optuna', 'xarray', 'numba', 'scipy.optimize', "
+            "'boringbar.analysis.sweep', 'boringbar.studies.runner'); "
+            "print(*[m for m in heavy if m in sys.modules])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.split() == []
+    assert bb.simulate.__module__ == "boringbar.simulate" and callable(bb.simulate)
+    for name, obj in _public_callables():
+        assert obj.__name__ == name, name
+    assert bb.sweep is __import__("boringbar.analysis.sweep", fromlist=["sweep"]).sweep
+    with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
+        bb.nonsense  # noqa: B018
