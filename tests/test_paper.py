@@ -22,11 +22,17 @@ import xarray as xr
 from cli_output import assert_one_line_error
 
 from boringbar.cli.main import main
+from boringbar.io import atomic_path, remove_stale_temporaries
 from boringbar.report.audit import audit
 from boringbar.report.audit_data import VERDICTS
 from boringbar.report.html import _mm, write_report
-from boringbar.report.paper import COLUMN_ORDER, COLUMNS, PRESET_ORDER, VARIANT_ORDER, \
-    published_steps
+from boringbar.report.paper import (
+    COLUMN_ORDER,
+    COLUMNS,
+    PRESET_ORDER,
+    VARIANT_ORDER,
+    published_steps,
+)
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 STEPS = published_steps(quick=True)
@@ -186,3 +192,16 @@ def test_the_audit_judges_every_claim_of_this_output(study, capsys):
     html = (out / "report.html").read_text()
     assert html.index("id='audit'") < html.index("id='cannot'") < html.index("id='sweeps'")
     assert html.count("class='v-") == len(COLUMN_ORDER) * 29
+
+
+def test_a_step_rerun_removes_what_a_kill_mid_write_left(tmp_path):
+    """A temporary of an atomic write interrupted by a kill is removed when its step
+    runs again; finished files and other names stay."""
+    (tmp_path / "lobes.nc").write_text("finished")
+    (tmp_path / "notes.tmp").write_text("not ours: no leading dot")
+    left = tmp_path / ".lobes.png.8h_zunot.tmp"
+    left.write_text("half a figure")
+    with atomic_path(tmp_path / "run.json") as tmp:
+        tmp.write_text("{}")
+    assert remove_stale_temporaries(tmp_path) == [left]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lobes.nc", "notes.tmp", "run.json"]

@@ -41,6 +41,17 @@ def atomic_path(path):
     fsync_dir(path.parent)
 
 
+def remove_stale_temporaries(folder) -> list[Path]:
+    """Delete what :func:`atomic_path` left in ``folder`` when its process was killed
+    mid-write (``.NAME.XXXXXXXX.tmp``); call it only where no other writer is at work.
+    Returns the paths removed."""
+    stale = sorted(Path(folder).glob(".*.tmp"))
+    for p in stale:
+        with contextlib.suppress(FileNotFoundError):
+            p.unlink()
+    return stale
+
+
 def _fsync_file(path) -> None:
     fd = os.open(path, os.O_RDONLY)
     try:

@@ -47,7 +47,13 @@ from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity, with_cuts
 from boringbar.analysis.sweep import SweepOptions, parse_range, published_cases, sweep
 from boringbar.execute import Execution
-from boringbar.io import jsonable, save_figure_atomic, write_json_atomic, write_netcdf_atomic
+from boringbar.io import (
+    jsonable,
+    remove_stale_temporaries,
+    save_figure_atomic,
+    write_json_atomic,
+    write_netcdf_atomic,
+)
 from boringbar.model.system import make_system
 from boringbar.plot import plot_ladder
 from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
@@ -402,6 +408,7 @@ def _step(where: Path, meta: dict, compute, say, label: str) -> dict:
     if record is not None:
         say(f"{label}: done before, kept")
         return {**record, "reused": True}
+    remove_stale_temporaries(where)  # of a run of this step killed mid-write
     t0 = time.perf_counter()
     summary = compute()
     record = {**meta, "wall_time_s": time.perf_counter() - t0, "summary": summary}
