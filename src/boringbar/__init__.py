@@ -18,15 +18,13 @@ layers behind them.
 - Study files: :func:`load_study`, :func:`run_study`.
 """
 
-__version__ = "0.1.0"
+import importlib
 
-import importlib  # noqa: E402
-
-from boringbar._validate import ParameterError  # noqa: E402
+from boringbar._validate import ParameterError
 
 # eager, since the module of the same name would otherwise shadow the function once
 # anything imported it
-from boringbar.simulate import (  # noqa: E402
+from boringbar.simulate import (
     Initial,
     Integration,
     IntegrationError,
@@ -34,6 +32,7 @@ from boringbar.simulate import (  # noqa: E402
     State,
     simulate,
 )
+from boringbar.version import __version__  # noqa: F401 (the package's version)
 
 #: every public name with the module that holds it, imported on first use: a command
 #: or a script then loads only what it needs (a simulation no optimiser, study runner

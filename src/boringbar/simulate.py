@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from boringbar import __version__
 from boringbar._validate import (
     ParameterError,
     check_choice,
@@ -31,6 +30,7 @@ from boringbar.model.dampers import ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.patterns import Pattern, classify
+from boringbar.version import __version__
 
 #: Impacts slower than this fraction of Omega delta/2 are contact, not impacts.
 IMPACT_THRESHOLD = 1e-3

@@ -56,7 +56,6 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError, check_int, check_positive, check_range
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.poincare import poincare_map
@@ -73,6 +72,7 @@ from boringbar.simulate import (
     simulate,
     simulate_batch,
 )
+from boringbar.version import __version__
 
 #: Largest period, in forcing periods, looked for in the strobe (as the pattern classifier).
 MAX_K = 8

@@ -35,7 +35,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError, check_positive, check_range, check_values
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.poincare import METHOD, poincare_map
@@ -44,6 +43,7 @@ from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.simulate import Initial, Integration, State, simulate
+from boringbar.version import __version__
 
 #: Parameters that change only the forcing, with their units.
 FORCING_PARAMETERS = {"force": "N", "ratio": "1"}

@@ -18,7 +18,6 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
@@ -36,6 +35,7 @@ from boringbar.shooting import (
     state_size,
 )
 from boringbar.simulate import Integration, simulate
+from boringbar.version import __version__
 
 STARTS = ("simulation", "masri-caughey", "state")
 #: The continuation parameters a brute-force diagram sweeps (their bifurcation names).

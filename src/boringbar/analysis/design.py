@@ -30,7 +30,6 @@ import numpy as np
 import optuna
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError
 from boringbar.analysis.design_objectives import objective_samples, rms_runs, statistic
 from boringbar.analysis.design_options import DesignOptions, sampled_system, uncertain_samples
@@ -40,6 +39,7 @@ from boringbar.model.system import System, make_system, published_system_spec
 from boringbar.model.system_file import SystemSpec, parse_system
 from boringbar.reference.stability import system_receptance
 from boringbar.simulate import Initial
+from boringbar.version import __version__
 
 
 @dataclass

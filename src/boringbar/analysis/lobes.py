@@ -48,7 +48,6 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import (
     ParameterError,
     check_choice,
@@ -64,6 +63,7 @@ from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regene
 from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import Integration, check_delay, resolved_integrators, simulate
+from boringbar.version import __version__
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
 PUBLISHED_DEPTH_STEP = 0.01e-3

@@ -31,7 +31,6 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
@@ -40,6 +39,7 @@ from boringbar.execute import Execution
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import make_system
 from boringbar.simulate import Initial, Integration, resolved_integrators, simulate
+from boringbar.version import __version__
 
 KINDS = ("ball", "friction_number", "restitution", "initial")
 PUBLISHED_VALUES = {

@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError, check_range, check_values
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.execute import Execution
@@ -29,6 +28,7 @@ from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
+from boringbar.version import __version__
 
 #: Runs per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).
 BATCH = 16

@@ -19,9 +19,9 @@ import re
 import sys
 import textwrap
 
-from boringbar import __version__
 from boringbar.cli.options import PROG, Outcome
 from boringbar.model.system import READINGS
+from boringbar.version import __version__
 
 #: the subcommands, in the order --help lists them: name -> (module, its add_ function).
 #: A command line imports only its own command's module (the design search's Optuna, the

@@ -28,7 +28,6 @@ import math
 
 import numpy as np
 
-from boringbar import __version__
 from boringbar.model.bar import published_bar
 from boringbar.model.dampers import TunedMassDamper, absorber_mass_ratio, sims_tuning
 from boringbar.model.forcing import Harmonic
@@ -36,6 +35,7 @@ from boringbar.model.system import System, make_system
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.stability import KR_ALUMINIUM, min_limit
 from boringbar.simulate import simulate
+from boringbar.version import __version__
 
 #: The rungs of :func:`readings_ladder`, from the paper preset to the physical one.
 LADDER = (

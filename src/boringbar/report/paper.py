@@ -34,7 +34,6 @@ from pathlib import Path
 
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
@@ -69,6 +68,7 @@ from boringbar.report.outputs import (
     sweep_files,
 )
 from boringbar.simulate import Initial, Integration
+from boringbar.version import __version__
 
 PRESET_ORDER = ("paper", "physical")
 #: The quick study's lobe speeds (rev/min): every fourth published speed. Half of the

@@ -45,13 +45,13 @@ from pathlib import Path
 
 import xarray as xr
 
-from boringbar import __version__
 from boringbar._validate import ParameterError
 from boringbar.execute import Execution, stream
 from boringbar.io import atomic_path, fsync_dir, write_json_atomic, write_netcdf_atomic
 from boringbar.progress import progress_bar
 from boringbar.studies.registry import ANALYSES
 from boringbar.studies.schema import Study, StudyError, output_format
+from boringbar.version import __version__
 
 log = logging.getLogger("boringbar.studies.runner")
 
