@@ -5,14 +5,17 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.optimize
+from cli_output import assert_one_line_error
 
 from boringbar import Harmonic, simulate
+from boringbar.cli.main import main
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system import System, describe_modes, make_system
 from boringbar.model.system_file import (
@@ -234,3 +237,36 @@ def test_a_bar_without_a_ball_cannot_run_one():
     spec = load_system(EXAMPLES / "steel_coolant_tmd.toml")
     with pytest.raises(ValueError, match="needs a \\[cavity\\] and a \\[ball\\]"):
         make_system("ball", spec=spec)
+
+
+@pytest.mark.parametrize("depth_mm, ball_mm, gap_mm", [(10.2, 10.0, 0.2), (12.3, 12.0, 0.3),
+                                                         (10.7, 10.0, 0.7)])
+def test_a_gap_that_fills_the_cavity_exactly_is_not_refused_by_round_off(depth_mm, ball_mm,
+                                                                          gap_mm):
+    """depth - ball is 0.19999999999999973 mm for 10.2 - 10: a gap typed as the room the
+    cavity leaves is accepted by the file and by make_system, and a gap above it is
+    refused; on the command line in mm, the unit it was given in."""
+    d = tomllib.loads((EXAMPLES / "carbide_ld10_tungsten.toml").read_text())
+    d["cavity"]["depth_mm"] = depth_mm
+    d["ball"].update(diameter_mm=ball_mm, gap_mm=gap_mm)
+    spec = parse_system(d, "round-off")
+    assert spec.ball.gap == gap_mm / 1000
+    assert make_system("ball", spec=spec, gap=gap_mm / 1000).damper.gap == gap_mm / 1000
+    with pytest.raises(ValueError, match=r"gap = .* m is outside .* \(at most the cavity's"):
+        make_system("ball", spec=spec, gap=gap_mm / 1000 * (1 + 1e-6))
+    d["ball"]["gap_mm"] = gap_mm * (1 + 1e-6)
+    with pytest.raises(SystemFileError, match="ball.gap_mm"):
+        parse_system(d, "round-off")
+
+
+def test_the_command_line_takes_and_refuses_the_gap_in_mm(tmp_path, capsys):
+    text = (EXAMPLES / "carbide_ld10_tungsten.toml").read_text()
+    text = re.sub(r"(?m)^depth_mm = .*$", "depth_mm = 10.2", text)
+    text = re.sub(r"(?m)^diameter_mm = 12.0$", "diameter_mm = 10.0", text)
+    path = tmp_path / "bar.toml"
+    path.write_text(re.sub(r"(?m)^gap_mm = .*$", "gap_mm = 0.2", text))
+    argv = ["simulate", "--system", str(path), "--force-n", "20", "--duration-s", "0.05"]
+    assert main([*argv, "--gap-mm", "0.2", "--out", str(tmp_path / "ok")]) == 0
+    capsys.readouterr()
+    assert_one_line_error(main, [*argv, "--gap-mm", "0.21", "--out", str(tmp_path / "no")],
+                          tmp_path / "no", "(0, 0.2] mm (at most the cavity's depth", capsys)

@@ -18,6 +18,20 @@ class ParameterError(ValueError):
     """A parameter outside its allowed range. The message is one line."""
 
 
+#: Relative slack of a closed bound. A bound computed from other lengths (a cavity's
+#: depth less its ball: 10.2 mm - 10 mm is 0.19999999999999973 mm) carries their
+#: round-off, and a value typed as that bound must pass.
+ROUND_OFF = 1e-9
+
+
+def in_range(v: float, lo: float, hi: float, lo_open: bool = False, hi_open: bool = False) -> bool:
+    """Whether the finite number ``v`` lies in the range (a closed end up to
+    :data:`ROUND_OFF` of itself)."""
+    above = v > lo if lo_open else v >= lo - ROUND_OFF * abs(lo)
+    below = v < hi if hi_open else v <= hi + ROUND_OFF * abs(hi)
+    return above and below
+
+
 def _interval(lo, hi, lo_open: bool, hi_open: bool, unit: str) -> str:
     left = "(" if lo_open else "["
     right = ")" if hi_open else "]"
@@ -25,9 +39,10 @@ def _interval(lo, hi, lo_open: bool, hi_open: bool, unit: str) -> str:
 
 
 def check_range(name: str, value, lo: float, hi: float, *, lo_open: bool = False,
-                hi_open: bool = False, unit: str = "") -> float:
+                hi_open: bool = False, unit: str = "", why: str = "") -> float:
     """Return ``value`` as float if it is finite and lo <= value <= hi (open ends as
-    asked), else raise ParameterError naming ``name``, the value and the range."""
+    asked; a closed end up to :data:`ROUND_OFF` of itself), else raise ParameterError
+    naming ``name``, the value and the range (and ``why``, where the range comes from)."""
     u = f" {unit}" if unit else ""
     if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
         value = value.item()  # a numpy scalar, shown as the number it is
@@ -41,9 +56,10 @@ def check_range(name: str, value, lo: float, hi: float, *, lo_open: bool = False
     if not math.isfinite(v):
         raise ParameterError(f"{name} = {value!r}{u} is not a finite number (allowed range "
                              f"{_interval(lo, hi, lo_open, hi_open, u)})")
-    if not ((v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)):
+    if not in_range(v, lo, hi, lo_open, hi_open):
         raise ParameterError(f"{name} = {value!r}{u} is outside the allowed range "
-                             f"{_interval(lo, hi, lo_open, hi_open, u)}")
+                             f"{_interval(lo, hi, lo_open, hi_open, u)}"
+                             + (f" ({why})" if why else ""))
     return v
 
 

@@ -212,7 +212,7 @@ def _cmd_bifurcation(args) -> Outcome:
     parameter, si = SWEEPABLE[option][:2]
     fixed_gap = gap_default_mm(args) if args.gap_mm is None else args.gap_mm
     gaps = values if option == "--gap-mm" else [fixed_gap]
-    gaps = [check_gap(g) for g in gaps]
+    gaps = [check_gap(g, args) for g in gaps]
     force = 10.0 if args.force_n is None else args.force_n
     ratio = 1.0 if args.ratio is None else args.ratio
 
@@ -298,7 +298,7 @@ def _pair(text: str, name: str) -> tuple[float, float]:
 
 def _cmd_basins(args) -> Outcome:
     bar, friction_on = one_bar(args, "basins")
-    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm)
+    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm, args)
     force = 10.0 if args.force_n is None else args.force_n
     ratio = 1.0 if args.ratio is None else args.ratio
     check_force(force)
@@ -424,7 +424,7 @@ def _cmd_sensitivity(args) -> Outcome:
         given = "--friction-force-n" if args.friction_force_n is not None else "--friction off"
         raise ParameterError(f"{given} conflicts with KIND friction_number (friction on, its "
                              "size from --values)")
-    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm)
+    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm, args)
     values = _sensitivity_values(args, bar, gap)
     forces, ratios = forces_and_ratios(args)
     cuts = None

@@ -15,7 +15,7 @@ from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
 from boringbar.execute import Execution
 from boringbar.io import jsonable
-from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
+from boringbar.model.dampers import MAX_FRICTION_FORCE
 from boringbar.model.forcing import (
     INTERPOLATIONS,
     MAX_DEPTH,
@@ -289,8 +289,12 @@ def gap_default_mm(args) -> float:
     return spec.data["ball"]["gap_mm"] if spec.ball is not None else 0.5
 
 
-def check_gap(gap_mm: float) -> float:
-    return check_range("--gap-mm", gap_mm, 0, MAX_GAP * 1e3, lo_open=True, unit="mm") * 1e-3
+def check_gap(gap_mm: float, args) -> float:
+    """--gap-mm (mm) checked against the room the bar's cavity leaves; returns metres."""
+    spec = system_spec(args) or published_system_spec()
+    why = "at most the cavity's depth less the ball" if spec.ball is not None else ""
+    return check_range("--gap-mm", gap_mm, 0, spec.max_gap() * 1e3, lo_open=True,
+                       unit="mm", why=why) * 1e-3
 
 
 def check_dt(args, systems, ratio: float = 0.0) -> None:
@@ -421,7 +425,7 @@ def many_cases(args) -> tuple[list, list[str], list[float]]:
     bars = parse_words(args.bar, "--bar", BAR_KINDS, default_bars(args, many=True))
     _check_common(args, bars)
     default = "0.5,0.1" if args.system is None else repr(gap_default_mm(args))
-    gaps = [check_gap(g) for g in parse_numbers(args.gap_mm or default, "--gap-mm")]
+    gaps = [check_gap(g, args) for g in parse_numbers(args.gap_mm or default, "--gap-mm")]
     frictions = [w == "on" for w in parse_words(args.friction, "--friction", ("on", "off"),
                                            ["off", "on"])]
     if not any(frictions) and (args.friction_force_n is not None

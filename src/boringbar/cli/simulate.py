@@ -50,7 +50,7 @@ def add_simulate(sub) -> None:
 
 def cmd_simulate(args) -> Outcome:
     bar, friction_on = one_bar(args, "simulate")
-    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm)
+    gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm, args)
     forcing = _simulate_forcing(args)
     n_steps = check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
     record_every = max(1, n_steps // HISTORY_ROWS)

@@ -178,9 +178,8 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
                    reaction, static_ratio, readings)
     b = spec.ball
     gap = b.gap if gap is None else gap
-    if spec.max_gap() < gap:
-        check_range("gap", gap, 0.0, spec.max_gap(), lo_open=True, unit="m (the cavity's "
-                    "depth less the ball)")
+    check_range("gap", gap, 0.0, spec.max_gap(), lo_open=True,
+                unit="m", why="at most the cavity's depth less the ball")
     material = b.material if ball is None else check_choice("ball", ball, BALLS)
     damper = ImpactDamper.ball(material, gap=gap,
                                restitution=b.restitution if restitution is None else restitution,

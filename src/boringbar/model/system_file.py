@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
-from boringbar._validate import ParameterError, read_toml
+from boringbar._validate import ParameterError, in_range, read_toml
 from boringbar.model.bar import ModalModel, Section, SteppedBar
 from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
 from boringbar.model.materials import MATERIALS
@@ -203,8 +203,7 @@ class _Reader:
         ok = isinstance(value, int | float) and not isinstance(value, bool)
         if ok:
             v = float(value)
-            ok = math.isfinite(v) and (v > lo if lo_open else v >= lo) and (
-                v < hi if hi_open else v <= hi)
+            ok = math.isfinite(v) and in_range(v, lo, hi, lo_open, hi_open)
         if not ok:
             left, right = "(" if lo_open else "[", ")" if hi_open or hi == math.inf else "]"
             self.fail(key, value, f"must be a number in {left}{lo:g}, {hi:g}{right}"
