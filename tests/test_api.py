@@ -8,9 +8,11 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 import boringbar as bb
+from boringbar.simulate import HISTORY_ROWS
 
 #: functions that take **kwargs, and where those go (each must refuse unknown names)
 FORWARDED = {"published_cases": "make_system"}
@@ -106,3 +108,19 @@ def test_import_loads_no_heavy_library_and_every_name_resolves():
     assert bb.sweep is __import__("boringbar.analysis.sweep", fromlist=["sweep"]).sweep
     with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
         bb.nonsense  # noqa: B018
+
+
+def test_a_default_run_keeps_a_bounded_history_to_plot_and_write():
+    """simulate records about HISTORY_ROWS rows by default, whatever the duration, the
+    same numbers as without them; record_every=0 keeps none, and says how to get it."""
+    system = bb.make_system("ball", "physical")
+    for duration in (0.1, 2.0):
+        run = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration=duration)
+        rows = run.history.shape[0]
+        assert HISTORY_ROWS <= rows < 2 * HISTORY_ROWS
+        assert run.to_xarray().sizes["time"] == rows
+        assert len(run.plot().axes) == 4
+    bare = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration=2.0, record_every=0)
+    assert bare.history is None and np.array_equal(bare.final.x, run.final.x)
+    with pytest.raises(ValueError, match="record_every=None"):
+        bare.to_xarray()

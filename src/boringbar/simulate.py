@@ -54,6 +54,10 @@ MAX_HISTORY_ROWS = 10_000_000
 #: ``impacts_truncated`` says when the steady part had more impacts than this), and
 #: most Poincare (strobe) samples, one per period (5 floats a row).
 MAX_EVENT_ROWS = 10_000_000
+#: History rows a run keeps by default (``record_every=None``): about this many, every
+#: N-th step with N = steps // HISTORY_ROWS, so that ``.plot()`` and ``.to_xarray()``
+#: work on any run in 1 MB (6 floats a row).
+HISTORY_ROWS = 20000
 #: Largest |initial tip displacement| (m) and |initial velocity| (m/s): a boring bar
 #: 0.2 m long cannot deflect a metre; the bounds keep the arithmetic finite.
 MAX_INITIAL_DISPLACEMENT = 1.0
@@ -112,7 +116,8 @@ class Integration:
     def kwargs(self) -> dict:
         """The keyword arguments of :func:`simulate` these options stand for."""
         return {"duration": self.duration_s, "dt": self.dt_s, "integrator": self.integrator,
-                "steady_fraction": self.steady_fraction, "initial": self.initial}
+                "steady_fraction": self.steady_fraction, "initial": self.initial,
+                "record_every": 0}
 
     def to_dict(self) -> dict:
         return {"duration_s": self.duration_s, "dt_s": self.dt_s,
@@ -261,7 +266,8 @@ class Run:
         """The decimated history as an xarray Dataset (needs ``record_every``), with the
         configuration and the summary as JSON in its attributes."""
         if self.history is None:
-            raise ValueError("no history was recorded: run simulate(..., record_every=N)")
+            raise ValueError("no history was recorded (record_every=0): run simulate(..., "
+                             "record_every=None) for the default history")
         import xarray as xr  # here: a run needs xarray only to be written
         h = self.history
         aux = "y" if self.system.kind in ("ball", "locked") else "absorber_stroke"
@@ -524,12 +530,13 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     cutting = isinstance(forcing, Regenerative)
     check_friction_law(system, integrator)
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
-    record_every = check_int("record_every", record_every, 0, MAX_STEPS)
+    n_steps = check_steps(duration, dt)
+    record_every = (max(1, n_steps // HISTORY_ROWS) if record_every is None
+                    else check_int("record_every", record_every, 0, MAX_STEPS))
     omega = 2 * math.pi / forcing.tau if cutting else forcing.omega(system.reference_frequency)
     check_step(system, omega, dt)
     if cutting:
         check_delay(forcing.rpm, forcing.revolutions, dt)
-    n_steps = check_steps(duration, dt)
     if record_every:
         check_history(n_steps, record_every)
 
@@ -697,7 +704,7 @@ def _result(su: _Setup, elapsed: float) -> Run:
 
 def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: float = 2.0,
              dt: float = 1e-6,
-             initial: Initial | State | None = None, record_every: int = 0,
+             initial: Initial | State | None = None, record_every: int | None = None,
              steady_fraction: float = 0.8, strobe: bool = False,
              integrator: str = "auto") -> Run:
     """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
@@ -706,7 +713,8 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
     RMS and patterns use the last ``steady_fraction`` of the record.
     ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
     to continue it (time, hence forcing phase, runs on).  ``record_every`` N
-    keeps every N-th step's state (0, the default: no history); ``strobe`` keeps
+    keeps every N-th step's state (None, the default: about :data:`HISTORY_ROWS`
+    rows, enough to plot; 0: no history, as the analyses run); ``strobe`` keeps
     Poincare samples at Omega t = 0 mod 2 pi.
 
     Limits (a ParameterError names the parameter, its value and the maximum): every
@@ -735,7 +743,7 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
 
 def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 2.0,
                         dt: float = 1e-6, initial: Initial | State | None = None,
-                        record_every: int = 0, steady_fraction: float = 0.8,
+                        record_every: int | None = None, steady_fraction: float = 0.8,
                         strobe: bool = False) -> Run:
     """:func:`simulate` (rk4) with every step through the RK4 stage loop.
 

@@ -110,7 +110,7 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
     forcing = Harmonic(o.force_n, ratio=o.ratio)
     dt = fl.period / math.ceil(fl.period / 1e-6)  # whole periods: the end is at phase 0
     run = simulate(system, forcing, duration=o.settle_periods * fl.period, dt=dt,
-                   integrator="exact")
+                   integrator="exact", record_every=0)
     return run.final.x[:fl.N]
 
 

@@ -142,7 +142,7 @@ def cut(case: Case, rpm: float, depth: float, options: LobesOptions,
     """One cut, stopped at the first zero of the force: its verdicts and metrics."""
     run = simulate(case.system, options.forcing(depth, rpm), duration=integration.duration_s,
                    dt=integration.dt_s, integrator=integration.integrator,
-                   steady_fraction=integration.steady_fraction)
+                   steady_fraction=integration.steady_fraction, record_every=0)
     c = run.cutting
     ball = case.system.kind == "ball"
     return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],

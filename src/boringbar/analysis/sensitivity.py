@@ -196,7 +196,7 @@ def sensitivity_cut(case: Case, cuts: Cuts, depth: float, integration: Integrati
     forcing = Regenerative(depth, cuts.rpm, stop_at_zero=False, **cuts.options)
     c = simulate(case.system, forcing, duration=cuts.duration, dt=integration.dt_s,
                  initial=case.initial or integration.initial,
-                 integrator=integration.integrator).cutting
+                 integrator=integration.integrator, record_every=0).cutting
     return {"chatter": c["chatter"], "bounded_chatter": c["chatter"] or c["bounded_chatter"],
             "amplitude_m": c["amplitude_m"], "max_force_n": c["max_force_n"],
             "first_zero_time_s": math.nan if c["first_zero_time_s"] is None

@@ -27,8 +27,7 @@ from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_ato
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import make_system
 from boringbar.plot import plot_run
-from boringbar.report.outputs import HISTORY_ROWS
-from boringbar.simulate import check_history, check_steps, simulate
+from boringbar.simulate import HISTORY_ROWS, check_history, check_steps, simulate
 
 
 def add_simulate(sub) -> None:
@@ -53,7 +52,7 @@ def cmd_simulate(args) -> Outcome:
     gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm, args)
     forcing = _simulate_forcing(args)
     n_steps = check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
-    record_every = max(1, n_steps // HISTORY_ROWS)
+    record_every = None  # simulate's default: about HISTORY_ROWS rows
     if args.record_every is not None:  # every N-th step: N = 0 means nothing
         record_every = check_int("--record-every", args.record_every, 1, n_steps)
         check_history(n_steps, record_every, "--record-every")

@@ -30,7 +30,8 @@ from boringbar.cli.options import (
     wrote,
 )
 from boringbar.model.forcing import MAX_DEPTH
-from boringbar.report.outputs import HISTORY_ROWS, lobes_files, sweep_files
+from boringbar.report.outputs import lobes_files, sweep_files
+from boringbar.simulate import HISTORY_ROWS
 
 
 def add_sweep(sub) -> None:

@@ -91,7 +91,8 @@ def readings_ladder(gaps=(0.5e-3, 0.1e-3), force: float = 10.0, ratio: float = 1
     for i, rung in enumerate(rungs):
         for j, gap in enumerate(gaps):
             system = ladder_system(rung, gap)
-            run = simulate(system, Harmonic(force, ratio), duration=duration, dt=dt)
+            run = simulate(system, Harmonic(force, ratio), duration=duration, dt=dt,
+                           record_every=0)
             rms[i, j] = run.rms_tip
             pattern[i, j] = run.pattern.name if run.pattern else ""
             per_cycle[i, j] = (run.pattern.impacts_per_cycle if run.pattern else math.nan)

@@ -36,9 +36,6 @@ from boringbar.plot import (
 from boringbar.plot_design import plot_design, plot_design_comparison
 from boringbar.plot_orbits import plot_continuation
 
-#: Rows of a recorded history (a run's run.nc, the lobe examples): about this many.
-HISTORY_ROWS = 20000
-
 
 def integrators_used(ds) -> str:
     """The integrators that produced ``ds`` ("exact", "rk4" or both, comma-joined):

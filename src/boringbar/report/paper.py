@@ -58,7 +58,6 @@ from boringbar.plot import plot_ladder
 from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
 from boringbar.report.html import write_report
 from boringbar.report.outputs import (
-    HISTORY_ROWS,
     basins_files,
     bifurcation_files,
     continuation_files,
@@ -67,7 +66,7 @@ from boringbar.report.outputs import (
     sensitivity_files,
     sweep_files,
 )
-from boringbar.simulate import Initial, Integration
+from boringbar.simulate import HISTORY_ROWS, Initial, Integration
 from boringbar.version import __version__
 
 PRESET_ORDER = ("paper", "physical")
