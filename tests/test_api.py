@@ -124,3 +124,32 @@ def test_a_default_run_keeps_a_bounded_history_to_plot_and_write():
     assert bare.history is None and np.array_equal(bare.final.x, run.final.x)
     with pytest.raises(ValueError, match="record_every=None"):
         bare.to_xarray()
+
+
+def test_the_analyses_take_a_system_a_list_or_a_mapping():
+    """sweep and lobes take what a user has: one System, a list of them or a mapping
+    of label to System, labelled from the system; anything else is a TypeError that
+    says what is expected, and a Case that mislabels its system is refused."""
+    ball = bb.make_system("ball", "physical", gap=0.2e-3, friction=True)
+    solid = bb.make_system("solid", "physical")
+    quick = bb.Integration(duration_s=0.05)
+    options = bb.SweepOptions(ratios=(1.0,), forces_n=(10.0,))
+    one = bb.sweep(ball, options, integration=quick)
+    assert list(one.case.values) == ["ball gap=0.2mm friction=on"]
+    many = bb.sweep([ball, solid], options, integration=quick)
+    assert list(many.case.values) == ["ball gap=0.2mm friction=on", "solid"]
+    named = bb.sweep({"mine": ball, "plain": solid}, options, integration=quick)
+    assert list(named.case.values) == ["mine", "plain"]
+    assert np.array_equal(named.rms_tip_m.values, many.rms_tip_m.values)
+    lobes = bb.lobes(solid, bb.LobesOptions(rpm=(1200.0,), method="search"),
+                     integration=bb.Integration(duration_s=0.2))
+    assert list(lobes.case.values) == ["solid"] and lobes.limit_depth.values[0, 0] > 0
+    for bad in (3, "ball", {"x": 3}):
+        with pytest.raises(TypeError, match="must be a System"):
+            bb.sweep(bad, options, integration=quick)
+    with pytest.raises(bb.ParameterError, match="given twice"):
+        bb.sweep([ball, ball], options, integration=quick)
+    with pytest.raises(bb.ParameterError, match="gap = 0.0009, but its system has gap"):
+        bb.Case("mine", ball, "ball", gap=0.9e-3, friction="on")
+    with pytest.raises(bb.ParameterError, match="friction = 'off', but its system"):
+        bb.Case("mine", ball, "ball", gap=0.2e-3, friction="off")

@@ -319,7 +319,7 @@ def plan(system, options: BasinOptions, integration: Integration) -> Plan:
     if isinstance(system, list | tuple):
         operating = list(system)
     elif isinstance(system, System):
-        operating = [OperatingPoint("", Case("", system, system.kind), options.forcing)]
+        operating = [OperatingPoint("", Case.of(system), options.forcing)]
     else:
         raise ParameterError(f"system = {system!r} must be a System (see make_system)")
     if not operating:

@@ -52,7 +52,7 @@ def _min_depth(task) -> float:
     lo = LobesOptions(tuple(float(r) for r in options.rpms), "search", options.criterion,
                       options.depth_step_mm * 1e-3, options.max_depth_mm * 1e-3,
                       analytic=False)
-    ds = lobes([Case("design", system, system.kind)], lo,
+    ds = lobes([Case.of(system, "design")], lo,
                integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
                execution=Execution("serial"))
     # no chatter up to max_depth_mm at any speed: the search knows only "at least that"

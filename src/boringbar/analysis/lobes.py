@@ -57,7 +57,7 @@ from boringbar._validate import (
     check_values,
 )
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
-from boringbar.analysis.sweep import Case
+from boringbar.analysis.sweep import Case, as_cases
 from boringbar.execute import Execution
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
 from boringbar.model.system import System
@@ -244,8 +244,7 @@ def _limits(verdicts: np.ndarray, depths: np.ndarray) -> tuple[float, float]:
 def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> Plan:
     """A point per (case, rpm) column; the search's seeds (the analytic limit of each
     case's linear host) in the context."""
-    if not cases:
-        raise ParameterError("lobes needs at least one case")
+    cases = as_cases(cases, "cases")
     if integration.initial is not None:
         raise ParameterError(f"initial = {integration.initial!r}: a cut starts as "
                              "options.start says (rest or static), not from initial "
@@ -372,8 +371,9 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
           progress=None):
     """Stability lobes of every case over ``options.rpm`` by time-domain simulation.
 
-    ``cases``: the bars (:func:`~boringbar.analysis.sweep.published_cases`, or
-    :class:`~boringbar.analysis.sweep.Case` s); ``options``: :class:`LobesOptions`
+    ``cases``: the bars: a System, a sequence of them or a mapping of label to System
+    (:func:`~boringbar.analysis.sweep.as_cases`; the published ones:
+    :func:`~boringbar.analysis.sweep.published_cases`); ``options``: :class:`LobesOptions`
     (default: the published scan); ``integration``: duration, step and integrator
     of each cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed
     surface from a history of step H = tau / ceil(tau / dt), the first zero of the

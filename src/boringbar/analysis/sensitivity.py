@@ -106,8 +106,7 @@ def sensitivity_cases(kind, values, bar, preset, gap, friction, overrides) -> li
         else:
             system = make_system(bar, preset, **kw)
         label = "fixed system" if kind == "initial" else sensitivity_label(kind, v)
-        cases.append(Case(label, system, bar, gap if bar == "ball" else math.nan,
-                          ("on" if fr else "off") if bar == "ball" else "n/a"))
+        cases.append(Case.of(system, label))
     return cases
 
 

@@ -16,7 +16,8 @@ import inspect
 import json
 import math
 import sys
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 import xarray as xr
@@ -47,7 +48,8 @@ class Case:
     """One bar of a sweep: a ``label``, the ``system``, and what distinguishes it:
     ``bar`` kind, ``gap`` (m, NaN without a ball) and ``friction`` ("on", "off",
     "n/a"); ``initial``: this case's initial conditions (default: the
-    integration's)."""
+    integration's).  :meth:`of` makes one from a system alone; the bar, gap and
+    friction given must be the system's (a ParameterError says which is not)."""
 
     label: str
     system: System
@@ -55,6 +57,63 @@ class Case:
     gap: float = math.nan
     friction: str = "n/a"
     initial: Initial | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.system, System):
+            raise TypeError(f"Case system = {self.system!r} must be a System (make_system)")
+        given = (self.bar, self.gap, self.friction)
+        for name, mine, value in zip(("bar", "gap", "friction"), given,
+                                     _describe(self.system), strict=True):
+            if not (mine == value or name == "gap" and math.isnan(mine) and math.isnan(value)):
+                raise ParameterError(f"Case {self.label!r}: {name} = {mine!r}, but its system "
+                                     f"has {name} = {value!r}; Case.of(system) labels it")
+
+    @classmethod
+    def of(cls, system: System, label: str | None = None,
+           initial: Initial | None = None) -> Case:
+        """The case of ``system``: its bar, gap and friction read from it, labelled
+        as :func:`published_cases` labels (or ``label``)."""
+        if not isinstance(system, System):
+            raise TypeError(f"system = {system!r} must be a System (make_system)")
+        bar, gap, friction = _describe(system)
+        auto = (f"{bar} gap={gap * 1e3:g}mm friction={friction}" if bar == "ball" else bar)
+        return cls(label or auto, system, bar, gap, friction, initial)
+
+
+def _describe(system: System) -> tuple[str, float, str]:
+    """(bar kind, gap m or NaN, friction "on"/"off"/"n/a") of ``system``."""
+    if system.kind != "ball":
+        return system.kind, math.nan, "n/a"
+    return "ball", system.damper.gap, "off" if system.damper.friction.kind == "none" else "on"
+
+
+def as_cases(systems, name: str = "systems") -> list[Case]:
+    """The cases of what an analysis was given: a :class:`System` or a :class:`Case`,
+    a sequence of them, or a mapping of label to either. Labels are unique."""
+    if isinstance(systems, System | Case):
+        systems = [systems]
+    if isinstance(systems, Mapping):
+        cases = [Case.of(v, str(k)) if isinstance(v, System) else _relabel(v, str(k))
+                 for k, v in systems.items()]
+    elif isinstance(systems, Sequence) and not isinstance(systems, str):
+        cases = [v if isinstance(v, Case) else Case.of(v) for v in systems]
+    else:
+        raise TypeError(f"{name} = {systems!r} must be a System, a Case, a sequence of "
+                        "them or a mapping of label to System")
+    if not cases:
+        raise ParameterError(f"{name} is empty: give at least one System")
+    labels = [c.label for c in cases]
+    twice = sorted({x for x in labels if labels.count(x) > 1})
+    if twice:
+        raise ParameterError(f"{name}: the label {twice[0]!r} is given twice; give a mapping "
+                             "of label to System to name them")
+    return cases
+
+
+def _relabel(case, label: str) -> Case:
+    if not isinstance(case, Case):
+        raise TypeError(f"systems[{label!r}] = {case!r} must be a System or a Case")
+    return replace(case, label=label)
 
 
 #: what published_cases passes on to make_system
@@ -79,12 +138,12 @@ def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
                 for fr in frictions:
                     s = make_system("ball", preset, gap=gap, friction=fr, **overrides)
                     label = f"ball gap={gap * 1e3:g}mm friction={'on' if fr else 'off'}"
-                    cases.append(Case(label, s, "ball", gap, "on" if fr else "off"))
+                    cases.append(Case.of(s, label))
         else:
             kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber",
                                                                "tmd_mass", "tmd_design",
                                                                "modal", "spec")}
-            cases.append(Case(bar, make_system(bar, preset, **kw), bar))
+            cases.append(Case.of(make_system(bar, preset, **kw)))
     return cases
 
 
@@ -136,8 +195,7 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
     """Every (case, force, ratio) run; a point is a lock-step batch of them (the runs
     whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind and mode
     count, in (case, force, ratio) order) or one run."""
-    if not cases:
-        raise ParameterError("sweep needs at least one case")
+    cases = as_cases(cases, "cases")
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
     integrators = [resolve_integrator(integration.integrator, c.system) for c in cases]
@@ -239,8 +297,9 @@ def sweep(cases: list[Case], options: SweepOptions | None = None, *,
           progress=None):
     """Tip RMS and impact pattern against Omega/omega_n for every case and force.
 
-    ``cases``: the bars (:func:`published_cases`, or :class:`Case` s of your own
-    systems); ``options``: the grid (:class:`SweepOptions`; default the published
+    ``cases``: the bars: a :class:`~boringbar.model.system.System`, a sequence of them
+    or a mapping of label to System (:func:`as_cases`; :func:`published_cases` gives
+    the published ones); ``options``: the grid (:class:`SweepOptions`; default the published
     ratios 0.95-1.05 at 10 N); ``integration``: how each run is integrated
     (:class:`~boringbar.simulate.Integration`); ``execution``: where the points run
     (:class:`~boringbar.execute.Execution`; default a thread per core);

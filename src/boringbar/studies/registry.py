@@ -258,9 +258,7 @@ def study_cases(study: Study) -> tuple[list, dict]:
         extra = [k for k in varied if k not in ("kind", "gap_mm", "friction") and k in relevant]
         label += "".join(f" {k}={_fmt(s[k])}" for k in extra)
         system = make_study_system(study.preset, s, study.system)
-        ball = s["kind"] == "ball"
-        cases.append(Case(label, system, s["kind"], s["gap_mm"] * 1e-3 if ball else math.nan,
-                          ("on" if s["friction"] else "off") if ball else "n/a"))
+        cases.append(Case.of(system, label))
         for k in varied:
             values[k].append(s[k] if k in relevant else None)
     return cases, values
