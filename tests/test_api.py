@@ -10,9 +10,11 @@ import sys
 
 import numpy as np
 import pytest
+from cli_output import assert_one_line_error
 
 import boringbar as bb
-from boringbar.simulate import HISTORY_ROWS
+from boringbar.cli.main import main
+from boringbar.simulate import HISTORY_ROWS, check_steady
 
 #: functions that take **kwargs, and where those go (each must refuse unknown names)
 FORWARDED = {"published_cases": "make_system"}
@@ -85,7 +87,7 @@ def test_options_validate_themselves():
 
 def test_a_run_is_frozen():
     run = bb.simulate(bb.make_system("solid", "paper"), bb.Harmonic(10.0, 1.0),
-                      duration=1e-3, record_every=10)
+                      duration=5e-3, record_every=10)
     with pytest.raises(AttributeError):
         run.dt = 2e-6
     ds = run.to_xarray()
@@ -153,3 +155,23 @@ def test_the_analyses_take_a_system_a_list_or_a_mapping():
         bb.Case("mine", ball, "ball", gap=0.9e-3, friction="on")
     with pytest.raises(bb.ParameterError, match="friction = 'off', but its system"):
         bb.Case("mine", ball, "ball", gap=0.2e-3, friction="off")
+
+
+def test_a_steady_part_shorter_than_one_period_is_refused(tmp_path, capsys):
+    """1 ms of a 525 Hz forcing has no steady RMS: the command line says how long a run
+    must be (simulate itself takes it: a state advanced by part of a period)."""
+    with pytest.raises(bb.ParameterError, match=r"shorter than one forcing period "
+                                                r"\(0.0019 s\): give duration >= 0.00238 s"):
+        check_steady(1e-3, 0.8, 1 / 525.23)
+    check_steady(2.4e-3, 0.8, 1 / 525.23)
+    argv = ["simulate", "--force-n", "20", "--duration-s", "0.001"]
+    assert_one_line_error(main, [*argv, "--out", str(tmp_path / "o")], tmp_path / "o",
+                          "--duration-s = 0.001 s leaves a steady part of 0.0008 s", capsys)
+
+
+def test_lobe_speeds_must_increase_as_on_the_command_line():
+    with pytest.raises(bb.ParameterError, match=r"rpm = \(1600.0, 900.0\) must increase"):
+        bb.LobesOptions(rpm=(1600.0, 900.0))
+    with pytest.raises(bb.ParameterError, match="each speed once"):
+        bb.LobesOptions(rpm=(900.0, 900.0))
+    assert bb.LobesOptions(rpm=(900.0, 1000.0)).rpm == (900.0, 1000.0)

@@ -16,8 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from boringbar import Harmonic, Regenerative, make_system
-from boringbar import core
+from boringbar import Harmonic, Regenerative, core, make_system
 from boringbar.kernels import layout as L
 from boringbar.kernels import prepare
 from boringbar.kernels.regimes import cut_tables, history_step

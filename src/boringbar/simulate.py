@@ -58,6 +58,8 @@ MAX_EVENT_ROWS = 10_000_000
 #: N-th step with N = steps // HISTORY_ROWS, so that ``.plot()`` and ``.to_xarray()``
 #: work on any run in 1 MB (6 floats a row).
 HISTORY_ROWS = 20000
+#: The steady part of a run by default: its last 80 % (RMS, pattern, metrics).
+STEADY_FRACTION = 0.8
 #: Largest |initial tip displacement| (m) and |initial velocity| (m/s): a boring bar
 #: 0.2 m long cannot deflect a metre; the bounds keep the arithmetic finite.
 MAX_INITIAL_DISPLACEMENT = 1.0
@@ -104,7 +106,7 @@ class Integration:
     duration_s: float = 2.0
     dt_s: float = 1e-6
     integrator: str = "auto"
-    steady_fraction: float = 0.8
+    steady_fraction: float = STEADY_FRACTION
     initial: Initial | None = None
 
     def __post_init__(self):
@@ -463,6 +465,20 @@ def check_steps(duration: float, dt: float, names: tuple[str, str] = ("duration"
     return n_steps
 
 
+def check_steady(duration: float, steady_fraction: float, period: float,
+                 name: str = "duration") -> None:
+    """The steady part of a harmonic run, its last ``steady_fraction`` of ``duration``
+    (s), must hold one forcing ``period`` (s) at least: a shorter one has no steady
+    RMS or pattern to report. ``name``: the duration as the caller takes it.
+    :func:`simulate` itself takes shorter runs (a state advanced by part of a period);
+    the command line and the analyses' options check with this."""
+    if steady_fraction * duration < period * (1.0 - 1e-9):
+        raise ParameterError(f"{name} = {duration:g} s leaves a steady part of "
+                             f"{steady_fraction * duration:.3g} s, shorter than one forcing "
+                             f"period ({period:.3g} s): give {name} >= "
+                             f"{period / steady_fraction:.3g} s")
+
+
 def check_history(n_steps: int, record_every: int, name: str = "record_every") -> int:
     """The number of history rows, n_steps // record_every: at most
     :data:`MAX_HISTORY_ROWS`, else ParameterError naming ``name``."""
@@ -705,7 +721,7 @@ def _result(su: _Setup, elapsed: float) -> Run:
 def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: float = 2.0,
              dt: float = 1e-6,
              initial: Initial | State | None = None, record_every: int | None = None,
-             steady_fraction: float = 0.8, strobe: bool = False,
+             steady_fraction: float = STEADY_FRACTION, strobe: bool = False,
              integrator: str = "auto") -> Run:
     """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
 
@@ -743,7 +759,7 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
 
 def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 2.0,
                         dt: float = 1e-6, initial: Initial | State | None = None,
-                        record_every: int | None = None, steady_fraction: float = 0.8,
+                        record_every: int | None = None, steady_fraction: float = STEADY_FRACTION,
                         strobe: bool = False) -> Run:
     """:func:`simulate` (rk4) with every step through the RK4 stage loop.
 
@@ -760,7 +776,7 @@ def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 
 
 
 def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
-                   steady_fraction: float = 0.8, strobe: bool = False) -> list[Run]:
+                   steady_fraction: float = STEADY_FRACTION, strobe: bool = False) -> list[Run]:
     """Several harmonic runs of the published RK4 scheme, in one call of the core.
 
     ``runs``: up to :data:`~boringbar.kernels.BMAX` triples (system,

@@ -110,6 +110,9 @@ class LobesOptions:
         object.__setattr__(self, "rpm", check_values("rpm", np.atleast_1d(self.rpm).tolist(),
                                                      0.0, math.inf, lo_open=True,
                                                      unit="rev/min"))
+        if np.any(np.diff(self.rpm) <= 0):
+            raise ParameterError(f"rpm = {self.rpm} must increase, each speed once (a "
+                                 "lobe diagram runs along the speed axis)")
         check_choice("method", self.method, METHODS)
         check_choice("criterion", self.criterion, CRITERIA)
         check_positive("depth_step_m", self.depth_step_m, "m")

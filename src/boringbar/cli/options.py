@@ -40,6 +40,7 @@ from boringbar.simulate import (
     INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
     MAX_INITIAL_VELOCITY,
+    STEADY_FRACTION,
     Initial,
     Integration,
     check_delay,
@@ -176,7 +177,7 @@ def add_cutting(g) -> None:
 
 
 def add_steady_fraction(group) -> None:
-    group.add_argument("--steady-fraction", type=float, default=0.8, metavar="F",
+    group.add_argument("--steady-fraction", type=float, default=STEADY_FRACTION, metavar="F",
                        help="the last part of each run that is sampled (RMS, patterns, "
                             "Poincare samples), in (0, 1] (default: 0.8: the first 20 %% "
                             "dropped)")
@@ -485,7 +486,7 @@ class Outcome:
             self.text(print)
 
 
-def integration(args, initial=None, steady_fraction: float = 0.8) -> Integration:
+def integration(args, initial=None, steady_fraction: float = STEADY_FRACTION) -> Integration:
     """The integration options of a command (--duration-s, --dt-s, --integrator)."""
     return Integration(args.duration_s, args.dt_s, args.integrator, steady_fraction, initial)
 

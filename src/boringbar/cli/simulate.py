@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from boringbar._validate import ParameterError, check_int
@@ -27,7 +28,14 @@ from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_ato
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import make_system
 from boringbar.plot import plot_run
-from boringbar.simulate import HISTORY_ROWS, check_history, check_steps, simulate
+from boringbar.simulate import (
+    HISTORY_ROWS,
+    STEADY_FRACTION,
+    check_history,
+    check_steady,
+    check_steps,
+    simulate,
+)
 
 
 def add_simulate(sub) -> None:
@@ -62,6 +70,9 @@ def cmd_simulate(args) -> Outcome:
         kw.update(gap=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
     check_dt(args, [system], getattr(forcing, "ratio", 0.0))
+    if isinstance(forcing, Harmonic):
+        check_steady(args.duration_s, getattr(args, "steady_fraction", STEADY_FRACTION),
+                     2 * math.pi / forcing.omega(system.reference_frequency), "--duration-s")
     initial = initial_conditions(args, [gap] if bar == "ball" else [])
     run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s, initial=initial,
                    record_every=record_every, integrator=args.integrator)

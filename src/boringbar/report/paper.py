@@ -66,7 +66,7 @@ from boringbar.report.outputs import (
     sensitivity_files,
     sweep_files,
 )
-from boringbar.simulate import HISTORY_ROWS, Initial, Integration
+from boringbar.simulate import HISTORY_ROWS, STEADY_FRACTION, Initial, Integration
 from boringbar.version import __version__
 
 PRESET_ORDER = ("paper", "physical")
@@ -125,7 +125,6 @@ COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
 #: and a cut's description (``boringbar lobes`` and ``sensitivity``, SI).
 DT_S = 1e-6
 INTEGRATOR = "auto"
-STEADY_FRACTION = 0.8
 GAP_MM = 0.5
 CUT = {"kr": 850.0 * 1e6, "feed": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
        "start": "rest", "bounded_fraction": 0.1}
