@@ -5,6 +5,8 @@ is tested elsewhere, here only what the command promises: its files, its
 JSON, its exit codes and its one-line errors.
 """
 
+import argparse
+import importlib
 import json
 import subprocess
 import sys
@@ -14,7 +16,7 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.cli.main import main
+from boringbar.cli.main import COMMANDS, main
 
 SIMULATE_KEYS = {"natural_frequency_hz", "rms_tip_m", "pattern", "impacts_per_cycle",
                  "max_abs_rel_disp_m", "preset", "integrator", "elapsed_s", "files"}
@@ -131,3 +133,21 @@ def test_console_script_and_module(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert proc.stderr.startswith("boringbar: error: --restitution")
+
+
+def test_the_help_lines_are_the_commands_own_and_help_imports_no_command():
+    """--help lists every command with the line its module gives it, without importing
+    the modules (the design search's Optuna, the FRF fit's SciPy signal tools)."""
+    for name, (module, add, summary) in COMMANDS.items():
+        parser = argparse.ArgumentParser()
+        sub = parser.add_subparsers()
+        getattr(importlib.import_module(module), add)(sub)
+        own = {a.dest: a.help for a in sub._choices_actions}
+        assert own[name] == summary, name
+    code = ("import sys; from boringbar.cli.main import main; main(['--help']); "
+            "print(*sorted(m for m in sys.modules if m.startswith('boringbar.cli.') "
+            "and m not in ('boringbar.cli.main', 'boringbar.cli.options')), "
+            "'optuna' in sys.modules, 'scipy.signal' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.splitlines()[-1]
+    assert out == "False False"

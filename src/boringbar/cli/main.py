@@ -23,24 +23,39 @@ from boringbar.cli.options import PROG, Outcome
 from boringbar.model.system import READINGS
 from boringbar.version import __version__
 
-#: the subcommands, in the order --help lists them: name -> (module, its add_ function).
-#: A command line imports only its own command's module (the design search's Optuna, the
-#: FRF fit's SciPy signal tools and the figures' matplotlib load only where used); --help
-#: and a mistyped command build them all.
+#: the subcommands, in the order --help lists them: name -> (module, its add_ function,
+#: its one line in --help). A command line imports only its own command's module (the
+#: design search's Optuna, the FRF fit's SciPy signal tools and the figures' matplotlib
+#: load only where used); --help and a mistyped command import none of them
+#: (tests/test_cli.py checks that the lines are the commands' own).
 COMMANDS = {
-    "modes": ("boringbar.cli.modes", "add_modes"),
-    "fit-frf": ("boringbar.cli.frf", "add_fit_frf"),
-    "simulate": ("boringbar.cli.simulate", "add_simulate"),
-    "sweep": ("boringbar.cli.sweeps", "add_sweep"),
-    "lobes": ("boringbar.cli.sweeps", "add_lobes"),
-    "bifurcation": ("boringbar.cli.nonlinear", "add_bifurcation"),
-    "basins": ("boringbar.cli.nonlinear", "add_basins"),
-    "sensitivity": ("boringbar.cli.nonlinear", "add_sensitivity"),
-    "continue": ("boringbar.cli.continuation", "add_continue"),
-    "run": ("boringbar.cli.study", "add_run"),
-    "paper": ("boringbar.cli.study", "add_paper"),
-    "audit": ("boringbar.cli.audit", "add_audit"),
-    "design": ("boringbar.cli.design", "add_design"),
+    "modes": ("boringbar.cli.modes", "add_modes",
+              "the modal model of a bar, and its mode shapes"),
+    "fit-frf": ("boringbar.cli.frf", "add_fit_frf",
+                "fit modes to a measured tip FRF (tap test)"),
+    "simulate": ("boringbar.cli.simulate", "add_simulate",
+                 "one time-domain run under harmonic forcing or a cut"),
+    "sweep": ("boringbar.cli.sweeps", "add_sweep",
+              "tip RMS and impact pattern against Omega/omega_n"),
+    "lobes": ("boringbar.cli.sweeps", "add_lobes",
+              "stability lobes by time-domain simulation of cuts"),
+    "bifurcation": ("boringbar.cli.nonlinear", "add_bifurcation",
+                    "Poincare samples of the tip against F0 (or Omega/omega_n, gap, e)"),
+    "basins": ("boringbar.cli.nonlinear", "add_basins",
+               "basins of attraction over initial tip displacement x velocity"),
+    "sensitivity": ("boringbar.cli.nonlinear", "add_sensitivity",
+                    "tip RMS (and chatter of cuts) for several values of one parameter"),
+    "continue": ("boringbar.cli.continuation", "add_continue",
+                 "continue a periodic orbit in one parameter, with Floquet stability and "
+                 "bifurcations"),
+    "run": ("boringbar.cli.study", "add_run",
+            "run a study file (TOML): many runs of one analysis, resumable"),
+    "paper": ("boringbar.cli.study", "add_paper",
+              "rerun the whole published study under both presets, with an HTML report"),
+    "audit": ("boringbar.cli.audit", "add_audit",
+              "judge every published claim against a paper output"),
+    "design": ("boringbar.cli.design", "add_design",
+               "search for the best damper, robust to uncertainty"),
 }
 
 
@@ -59,7 +74,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
-    """The command line's parser: with every subcommand, or only ``command``'s."""
+    """The command line's parser: only ``command``'s subcommand in full, or (None) every
+    subcommand's name and line, for --help and the list of choices."""
     readings = "\n".join(textwrap.fill(f"{k}: {v}", 79, initial_indent="  ",
                                        subsequent_indent="    ")
                          for k, v in READINGS.items())
@@ -70,9 +86,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
                "switches on the published readings:\n" + readings)
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name, (module, add) in COMMANDS.items():
-        if command in (None, name):
+    for name, (module, add, summary) in COMMANDS.items():
+        if command == name:
             getattr(importlib.import_module(module), add)(sub)
+        elif command is None:
+            sub.add_parser(name, help=summary)  # for the list; a command builds its own
     return parser
 
 
