@@ -8,7 +8,7 @@ from pathlib import Path
 from boringbar._validate import check_int
 from boringbar.analysis.design import comparison, design, summary
 from boringbar.analysis.design_file import load_design
-from boringbar.cli.options import Outcome, check_workers, progress_printer, wrote
+from boringbar.cli.options import OUT_HELP, Outcome, check_workers, progress_printer, wrote
 from boringbar.execute import Execution
 from boringbar.model.system import PRESETS
 from boringbar.report.outputs import design_files
@@ -25,7 +25,7 @@ def add_design(sub) -> None:
     p.add_argument("--trials", type=int, metavar="N", help="override the file's trials")
     p.add_argument("--preset", choices=PRESETS, help="override the file's preset")
     p.add_argument("--workers", type=int, metavar="N", help="threads (default: every core)")
-    p.add_argument("--out", default="out", metavar="DIR")
+    p.add_argument("--out", metavar="DIR", help=OUT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_design)

@@ -12,7 +12,7 @@ import numpy as np
 from boringbar._validate import ParameterError, check_int, check_positive
 from boringbar.analysis.frf_fit import MAX_ORDER, fit_frf
 from boringbar.analysis.sweep import parse_range
-from boringbar.cli.options import Outcome, many_cases, resolve_files, wrote
+from boringbar.cli.options import OUT_HELP, Outcome, many_cases, resolve_files, wrote
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.measured_frf import read_frf
 from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit
@@ -46,7 +46,7 @@ def add_fit_frf(sub) -> None:
     p.add_argument("--band-hz", metavar="LO:HI", help="fit within this band (default: all)")
     p.add_argument("--max-order", type=int, default=MAX_ORDER, metavar="N",
                    help=f"highest LSCF model order (default: {MAX_ORDER})")
-    p.add_argument("--out", default="out", metavar="DIR")
+    p.add_argument("--out", metavar="DIR", help=OUT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_fit_frf)

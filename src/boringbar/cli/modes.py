@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from boringbar._validate import check_int
-from boringbar.cli.options import Outcome, default_bars, resolve_files, wrote
+from boringbar.cli.options import OUT_HELP, Outcome, default_bars, resolve_files, wrote
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.system import BAR_KINDS, PRESETS, describe_modes, make_system
 from boringbar.plot_bar import plot_modes
@@ -36,7 +36,7 @@ def add_modes(sub) -> None:
                         "says so")
     p.add_argument("--modes", type=int, default=3, metavar="N",
                    help=f"modes to show, 1 to {MAX_MODES} (default: 3)")
-    p.add_argument("--out", default="out", metavar="DIR")
+    p.add_argument("--out", metavar="DIR", help=OUT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=cmd_modes)

@@ -151,7 +151,7 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                        help="ball velocity relative to the bar")
 
     g = groups["output"] = p.add_argument_group("output")
-    g.add_argument("--out", default="out", metavar="DIR", help="output directory (default: out)")
+    g.add_argument("--out", metavar="DIR", help=OUT_HELP)
     g.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     g.add_argument("--quiet", action="store_true", help="no progress and no human summary")
     return groups
@@ -282,6 +282,19 @@ def resolve_files(args, bars: list[str]) -> None:
             check_range(opt, value, -10, 10)
     args.frf_modal = ModalFit.read(args.frf).to_modal_model(
         *(1.0 if r is None else r for r in (args.frf_ball_ratio, args.frf_absorber_ratio)))
+
+
+#: --out's help: each command and each bar writes to its own folder by default, so that
+#: no run overwrites another's files
+OUT_HELP = "output directory (default: out/COMMAND/NAME: NAME the input file's, or published)"
+
+
+def default_out(args) -> Path:
+    """out/COMMAND/NAME: NAME the stem of the command's input (its positional file, the
+    --system file or the --frf fit), "published" without one."""
+    source = (getattr(args, "file", None) or getattr(args, "system", None)
+              or getattr(args, "frf", None))
+    return Path("out") / args.command / (Path(source).stem if source else "published")
 
 
 def gap_default_mm(args) -> float:
