@@ -56,6 +56,8 @@ MAX_ORDER = 20
 LSCE_START = 0.05
 #: How far a peak of |H| must stand above its surroundings to count as a mode.
 PEAK_FACTOR = 2.0
+#: A fit whose relative residual over the band is above this is said to be poor.
+POOR_FIT = 0.1
 #: sdypy's stability tolerances: relative frequency and damping change per order.
 STABLE_FREQUENCY = 1e-3
 STABLE_DAMPING = 5e-2
@@ -102,12 +104,15 @@ def fit_frf(frf: MeasuredFrf, n_modes: int = 1, *, band_hz: tuple | None = None,
     h_fit = fit.tip_frf(band.frequency_hz)
     residual = float(np.linalg.norm(h_fit - band.receptance) / np.linalg.norm(band.receptance))
     quality = {"relative_residual": residual,
+               **({"warning": f"relative residual {residual:.2g} > {POOR_FIT:g}: the modes "
+                              "do not explain this FRF; try --band-hz or another --modes"}
+                  if residual > POOR_FIT else {}),
                "complexity": (np.abs(a.real) / np.abs(a)).tolist(),
                "peaks_hz": sorted(float(p) for p in peaks)}
     source = {**frf.source, "method": f"sdypy-EMA {method.upper()} poles + LSFD constants",
               "max_order": int(max_order), "band_hz": [float(data.frequency_hz[0]),
                                                        float(data.frequency_hz[-1])],
-              "pole_selection": "stable poles closest to the most prominent peaks of |H|"}
+              "pole_selection": "stable poles closest to the most flexible clear peaks of |H|"}
     return replace(fit, source=source, quality=quality), h_fit
 
 
@@ -132,15 +137,20 @@ def _band(frf: MeasuredFrf, band_hz) -> MeasuredFrf:
     return frf.band(lo, hi)
 
 
+def clear_peaks(frf: MeasuredFrf) -> np.ndarray:
+    """The frequencies (Hz) of the clear peaks of |H|, most flexible (highest |H|)
+    first: a peak counts if it stands a factor PEAK_FACTOR above its surroundings on a
+    log scale (a stiff higher mode as well as the first; noise of a few per cent does
+    not)."""
+    mag = np.abs(frf.receptance)
+    idx, _ = scipy.signal.find_peaks(np.log(mag), prominence=math.log(PEAK_FACTOR))
+    return frf.frequency_hz[idx[np.argsort(mag[idx])[::-1]]]
+
+
 def _peaks(frf: MeasuredFrf, n: int) -> np.ndarray:
-    """The frequencies (Hz) of the ``n`` most prominent peaks of |H|: prominence on a
-    log scale, so a stiff higher mode counts as much as the first, and a peak must
-    stand a factor PEAK_FACTOR above its surroundings (noise of a few per cent
-    does not)."""
-    log_mag = np.log(np.abs(frf.receptance))
-    idx, props = scipy.signal.find_peaks(log_mag, prominence=math.log(PEAK_FACTOR))
-    if len(idx) < n:
-        raise ParameterError(f"{frf.source.get('file', 'FRF')}: {len(idx)} clear peak(s) in "
-                             f"the band, fewer than the {n} modes asked for")
-    best = idx[np.argsort(props["prominences"])[::-1][:n]]
-    return frf.frequency_hz[np.sort(best)]
+    """The ``n`` most flexible clear peaks (Hz, ascending): those that set chatter."""
+    peaks = clear_peaks(frf)
+    if len(peaks) < n:
+        raise ParameterError(f"{frf.source.get('file', 'FRF')}: {len(peaks)} clear peak(s) "
+                             f"in the band, fewer than the {n} modes asked for")
+    return np.sort(peaks[:n])

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_positive
-from boringbar.analysis.frf_fit import MAX_ORDER, fit_frf
+from boringbar.analysis.frf_fit import MAX_ORDER, clear_peaks, fit_frf
 from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import OUT_HELP, Outcome, many_cases, resolve_files, wrote
 from boringbar.io import save_figure_atomic, write_json_atomic
@@ -41,8 +41,9 @@ def add_fit_frf(sub) -> None:
                                    "Writes DIR/modal_fit.json (what --frf reads) and "
                                    "DIR/fit.png (measured against fitted).")
     p.add_argument("file", metavar="FILE", help="the measured FRF (.csv, .txt, .uff, .unv)")
-    p.add_argument("--modes", type=int, default=1, metavar="N",
-                   help="modes to fit, 1 to 8 (default: 1)")
+    p.add_argument("--modes", type=int, metavar="N",
+                   help="modes to fit, 1 to 8 (default: every clear peak of |H| in the "
+                        "band, at most 8; fewer take the most flexible)")
     p.add_argument("--band-hz", metavar="LO:HI", help="fit within this band (default: all)")
     p.add_argument("--max-order", type=int, default=MAX_ORDER, metavar="N",
                    help=f"highest LSCF model order (default: {MAX_ORDER})")
@@ -53,11 +54,12 @@ def add_fit_frf(sub) -> None:
 
 
 def cmd_fit_frf(args) -> Outcome:
-    n = check_int("--modes", args.modes, 1, 8)
     band = None if args.band_hz is None else _band(args.band_hz)
     measured = read_frf(args.file)
-    fit, fitted = fit_frf(measured, n, band_hz=band, max_order=args.max_order)
     data = measured if band is None else measured.band(*band)
+    n = (check_int("--modes", args.modes, 1, 8) if args.modes is not None
+         else min(8, max(1, len(clear_peaks(data)))))
+    fit, fitted = fit_frf(measured, n, band_hz=band, max_order=args.max_order)
     out = Path(args.out)
     files = {"json": out / "modal_fit.json", "png": out / "fit.png"}
     write_json_atomic(fit.to_dict(), files["json"])
@@ -71,7 +73,8 @@ def cmd_fit_frf(args) -> Outcome:
         for i, m in enumerate(summary["modes"]):
             say(f"  {i + 1:<4}  {m['frequency_hz']:<10.2f}  {m['damping_ratio']:<9.4g}  "
                 f"{m['modal_stiffness_n_m']:.4g}")
-        say(f"  relative residual {fit.quality['relative_residual']:.3g} over the band")
+        say(f"  relative residual {fit.quality['relative_residual']:.3g} over the band"
+            + (f" -- warning: {fit.quality['warning']}" if "warning" in fit.quality else ""))
         say("  " + wrote(summary["files"]))
 
     return Outcome(summary, text)
