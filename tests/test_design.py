@@ -11,7 +11,7 @@ import optuna
 import pytest
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.analysis.design import candidate_system, design, evaluate, summary
+from boringbar.analysis.design import candidate_system, design, evaluate, summary, summary_line
 from boringbar.analysis.design_file import DesignFileError, design_from_dict
 from boringbar.analysis.design_options import (
     DesignOptions,
@@ -238,3 +238,16 @@ def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
         assert sampled.damper.friction_force == pytest.approx(force, rel=1e-12)
         assert sampled.damper.friction_force == pytest.approx(system.damper.friction_force,
                                                               rel=1e-12)
+
+
+def test_a_search_that_beat_nothing_says_so():
+    """Fewer trials than a search needs can end worse than the file's own design: the
+    summary then says no better design was found, and does not call the best tried best."""
+    s = dict(best={"gap_mm": 0.3, "ball": "steel"}, statistic_name="mean",
+             objective_name="band RMS", objective=1.2e-4, objective_error=3e-6,
+             published_objective=1.0e-4, trials=6)
+    worse = summary_line({**s, "improvement_percent": -20.0})
+    assert worse.startswith("no design better than the file's own found in 6 trials")
+    assert "20.0 % worse" in worse and "best design" not in worse
+    assert summary_line({**s, "improvement_percent": 12.0}).startswith(
+        "best design gap_mm = 0.3, ball = steel improves the objective by 12.0 %")

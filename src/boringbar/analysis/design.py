@@ -356,17 +356,17 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
 
 
 def summary_line(s: dict) -> str:
-    """'best design X improves the objective by Y % over the published design'."""
+    """'best design X improves the objective by Y % over the file's own design', or, when
+    no trial beat it, 'no design better than the file's own found in N trials'."""
     best = ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
                      for k, v in s["best"].items())
     gain = s["improvement_percent"]
-    if gain is None:
-        verb = "compares with the file's own design as"
-    elif gain >= 0:
-        verb = f"improves the objective by {gain:.1f} %"
-    else:
-        verb = f"is {-gain:.1f} % worse on the objective"
-    return (f"best design {best} {verb} ({s['statistic_name']} of {s['objective_name']}) "
-            f"against the file's own design ({s['objective']:.4g} +- "
-            f"{s['objective_error']:.2g} against {s['published_objective']:.4g}; "
-            f"{s['trials']} trials)")
+    numbers = (f"({s['statistic_name']} of {s['objective_name']}: {s['objective']:.4g} +- "
+               f"{s['objective_error']:.2g} against {s['published_objective']:.4g}; "
+               f"{s['trials']} trials)")
+    if gain is not None and gain < 0:  # the search did not reach the file's own design
+        return (f"no design better than the file's own found in {s['trials']} trials: the "
+                f"best tried, {best}, is {-gain:.1f} % worse on the objective {numbers}")
+    verb = ("compares with the file's own design as" if gain is None
+            else f"improves the objective by {gain:.1f} % over the file's own design")
+    return f"best design {best} {verb} {numbers}"

@@ -216,7 +216,8 @@ class _Report:
                 rows.append(["designs on the Pareto front", str(len(s["pareto"])), "-"])
             return {"images": [self.img(s["files"]["png"], f"{key} {preset}"),
                                self.img(s["files"]["best_png"], f"{key} best {preset}")],
-                    "table": _table(["", "best design", "published design"], rows),
+                    "table": _table(["", "best design tried" if (s["improvement_percent"] or 0) < 0
+                                     else "best design", "published design"], rows),
                     "line": s["summary"]}
         return self.per_key("design", body)
 
