@@ -406,12 +406,14 @@ inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3
 }
 
 // quad_range(p, d, dd, s) (events.hpp) for several s: its vertex, which does not depend on
-// s, computed once (the same operations, so the same (lo, hi))
+// s, computed once (the same operations, so the same (lo, hi)), and only where it may lie
+// at x > 0: -d / dd is positive only if d and dd have opposite signs (a NaN, a zero or equal
+// signs give x <= 0 or NaN, which at() ignores as it ignores the default x = 0)
 struct QuadRange {
     double p, d, dd, x = 0.0, v = 0.0;
 
     QuadRange(double p_, double d_, double dd_) : p(p_), d(d_), dd(dd_) {
-        if (dd != 0.0) {
+        if ((d < 0.0 && dd > 0.0) || (d > 0.0 && dd < 0.0)) {
             x = -d / dd;
             v = p + 0.5 * d * x;
         }
@@ -454,7 +456,8 @@ inline idx level(double ya, double yda, double ydd_a, double wa, double wda, dou
                  const double* hl, idx top, bool watch_v, bool steady) {
     idx lev = 0;
     QuadRange qy(ya, yda, ydd_a);
-    QuadRange qw(wa, wda, wdd_a);
+    QuadRange qw(0.0, 0.0, 0.0);  // W's, built where first needed
+    bool qw_set = false;
     for (idx lv = 1; lv <= top; ++lv) {
         double hs = hl[lv];
         auto [lo, hi] = qy.at(hs);
@@ -466,6 +469,10 @@ inline idx level(double ya, double yda, double ydd_a, double wa, double wda, dou
             if (!((yda > e2 && v1 > e2) || (yda < -e2 && v1 < -e2))) break;
         }
         if (steady) {
+            if (!qw_set) {
+                qw = QuadRange(wa, wda, wdd_a);
+                qw_set = true;
+            }
             auto [wlo, whi] = qw.at(hs);
             double we3 = lb.e3w[lv] + wmar;
             if (!(whi + we3 < max_w && wlo - we3 > min_w)) break;
@@ -501,23 +508,49 @@ inline Found regime_event(Work& w, double a, double b, idx r, idx ks, idx n, dou
     return {kind, best};
 }
 
-// A free ball's wall and friction-switch events in [a, b], with the graze guard's
-// sub-steps where the bound on y^(4) allows a crossing and return inside the step.
-inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
-                        idx mode, bool watch_v, bool watch_ext, double b4, idx lev,
-                        double ydd_a, double ydd_b) {
+// may_graze's margin b4 h^4 / 192 for the step length h, kept while h and b4 repeat (the
+// usual grid step): the same value without its division at every step
+struct GrazeMargin {
+    double h = NAN, b4 = NAN, m = 0.0;
+
+    double at(double h_, double b4_) {
+        if (!(h_ == h && b4_ == b4)) {
+            h = h_;
+            b4 = b4_;
+            m = b4_ * ipow(h_, 4) / 192.0;
+        }
+        return m;
+    }
+};
+
+// may_graze (events.hpp) with its margin from gm: the same test, operation for operation
+inline bool may_graze_m(double a, double b, Vec ev_a, Vec ev_b, double half, double b4,
+                        GrazeMargin& gm) {
+    double h = b - a;
+    double p0 = ev_a[EV_PLUS] + half;
+    double p1 = ev_b[EV_PLUS] + half;
+    double m0 = ev_a[EV_YEXT] * h;
+    double m1 = ev_b[EV_YEXT] * h;
+    double margin = gm.at(h, b4);
+    // |p| <= max(|p0|, |p1|) + 4/27 (|m0| + |m1|) on [0, 1]: far from both walls, done
+    if (pymax(std::fabs(p0), std::fabs(p1)) + 0.15 * (std::fabs(m0) + std::fabs(m1)) +
+            margin < half)
+        return false;
+    auto [lo, hi] = _cubic_range(p0, p1, m0, m1);
+    return hi + margin >= half || lo - margin <= -half;
+}
+
+// What wall_event does when a step shows something (see there): kept out of the loop.
+__attribute__((noinline)) Found wall_event_found(Work& w, double a, double b, idx r, idx ks,
+                                                 idx n, double f0, double om, idx mode,
+                                                 bool watch_v, bool watch_ext, bool graze,
+                                                 bool search, double ydd_a, double ydd_b) {
     Vec ev_a = w.ev_a;
     Vec ev_b = w.ev_b;
     double half = w.cp.half;
     double best = b;
     idx kind = -1;
-    // call the search only when an end value shows something, or y' changes sign and the
-    // bound on y lets the ball reach a wall (a longer step than h holds no wall event)
-    bool graze = lev == 0 && may_graze(a, b, ev_a, ev_b, half, b4);
-    if ((ev_a[EV_PLUS] <= 0.0 && 0.0 < ev_b[EV_PLUS])
-        || (ev_a[EV_MINUS] <= 0.0 && 0.0 < ev_b[EV_MINUS])
-        || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
-        || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)) {
+    if (search) {
         auto [k, tb] = wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, w.seg, r, w.q0,
                                  w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0,
                                  om, ydd_a, ydd_b);
@@ -551,6 +584,27 @@ inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
     return {kind, best};
 }
 
+// A free ball's wall and friction-switch events in [a, b], with the graze guard's
+// sub-steps where the bound on y^(4) allows a crossing and return inside the step.  The
+// tests on the step's ends are here, in the search's loop; the rare search out of it.
+inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
+                        idx mode, bool watch_v, bool watch_ext, double b4, idx lev,
+                        double ydd_a, double ydd_b, GrazeMargin& gm) {
+    Vec ev_a = w.ev_a;
+    Vec ev_b = w.ev_b;
+    double half = w.cp.half;
+    // call the search only when an end value shows something, or y' changes sign and the
+    // bound on y lets the ball reach a wall (a longer step than h holds no wall event)
+    bool graze = lev == 0 && may_graze_m(a, b, ev_a, ev_b, half, b4, gm);
+    bool search = (ev_a[EV_PLUS] <= 0.0 && 0.0 < ev_b[EV_PLUS])
+                  || (ev_a[EV_MINUS] <= 0.0 && 0.0 < ev_b[EV_MINUS])
+                  || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
+                  || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0);
+    if (!search && !graze) return {-1, b};
+    return wall_event_found(w, a, b, r, ks, n, f0, om, mode, watch_v, watch_ext, graze, search,
+                            ydd_a, ydd_b);
+}
+
 // The tool leaving (in the cut) or re-entering (out of it) in [a, b]: h = 0, or a graze of
 // h = 0 between the step's ends, found at the extremum of h.  -1: none.
 inline double cut_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0,
@@ -580,13 +634,13 @@ inline double cut_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
 template <bool Regen>
 inline Found find_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
                         idx mode, bool ball, bool watch_v, bool watch_ext, double b4, idx lev,
-                        double ydd_a, double ydd_b) {
+                        double ydd_a, double ydd_b, GrazeMargin& gm) {
     Found f{-1, b};
     if (ball && mode != FREE) {
         f = regime_event(w, a, b, r, ks, n, f0, om, mode);
     } else if (ball && mode == FREE) {
         f = wall_event(w, a, b, r, ks, n, f0, om, mode, watch_v, watch_ext, b4, lev, ydd_a,
-                       ydd_b);
+                       ydd_b, gm);
     }
     if constexpr (Regen) {
         double tr = cut_event(w, a, b, r, ks, n, f0, om);
@@ -890,6 +944,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     if (ydd_on) std::tie(ydd_a, wdd_a) = ydd(Xa, f0 * ph.imag(), fb, acc, w.ddc, n);
     idx top = adapt ? w.levmax[r] : 0;
     LevelBounds lb(sv.b3y, sv.b3w, w.hl, top);
+    GrazeMargin gm;
     while (true) {
         // the step: h, or 2^lv h where Taylor's theorem proves that it holds no event and
         // no new extremum of |y| or (steady) of W
@@ -914,7 +969,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         wdd_b = gp.wdd;
         // --- events in [a, b]
         Found f = find_event<Regen>(w, a, b, r, ks, n, f0, om, mode, ball, watch_v, watch_ext,
-                                    sv.b4, lev, ydd_a, ydd_b);
+                                    sv.b4, lev, ydd_a, ydd_b, gm);
         idx kind = f.kind;
         if (kind >= 0) {
             b = f.t;
@@ -965,7 +1020,12 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         wdd_a = wdd_b;
         auxa = auxb;
         auxda = auxdb;
-        for (idx kk = 0; kk < N_EV; ++kk) ev_a[kk] = ev_b[kk];
+        // b's event functions become a's: the two views swap instead of a copy (an entry
+        // that this segment's evaluations do not write is never read in it, so the older
+        // value left there serves as well as the copied one)
+        std::swap(w.ev_a, w.ev_b);
+        ev_a = w.ev_a;
+        ev_b = w.ev_b;
     }
     w.ro.max_abs_w = e.max_abs_w;
     w.ro.max_w = e.max_w;
