@@ -847,25 +847,37 @@ struct Extremes {
     double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
 };
 
+// W at its W' = 0 extremum inside the grid step [a, b] (kind: the step's event, -1 if none):
+// a start from the Hermite interpolant of W, then w_extremum_any.  Out of the search's loop.
+__attribute__((noinline)) double w_extremum_in(Work& w, double a, double b, idx r, idx ks,
+                                               idx n, idx kind, double wa, double wb,
+                                               double wda, double wdb, double wdd_a,
+                                               double wdd_b) {
+    double c0;
+    if (kind < 0 && wdd_a == wdd_a && wdd_b == wdd_b) {  // W'' at both ends
+        c0 = hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1);
+    } else {
+        c0 = hermite(a, b, wa, wb, wda, wdb, 1);
+    }
+    return w_extremum_any(a, wda, b, wdb, c0, w.cp.h, w.seg, r, w.q0, w.lam, w.V, ks, w.Z, w.D,
+                          w.bq, w.qs, w.dX, w.Xd, n, w.mk, w.cp.om);
+}
+
 // W's extremes at the end b of a grid step and, where W' changes sign inside the step and
-// the extremum may beat them (w_may_exceed), at the located W' = 0 extremum.
-inline void w_extremes(Work& w, Extremes& e, double a, double b, idx r, idx ks, idx n,
-                       idx kind, idx lev, double bw4, double wa, double wb, double wda,
-                       double wdb, double wdd_a, double wdd_b) {
+// the extremum may beat them (w_may_exceed), at the located W' = 0 extremum.  Inlined in
+// the search's loop (the extremes stay in registers), the rare search out of it.
+__attribute__((always_inline)) inline void w_extremes(Work& w, Extremes& e, double a, double b,
+                                                      idx r, idx ks, idx n, idx kind, idx lev,
+                                                      double bw4, double wa, double wb,
+                                                      double wda, double wdb, double wdd_a,
+                                                      double wdd_b) {
     e.max_abs_w = pymax(e.max_abs_w, std::fabs(wb));
     e.max_w = pymax(e.max_w, wb);
     e.min_w = pymin(e.min_w, wb);
     if (lev == 0 && wda * wdb < 0.0
         && (bw4 < 0.0
             || w_may_exceed(b - a, wa, wb, wda, wdb, bw4, e.max_w, e.min_w, e.max_abs_w))) {
-        double c0;
-        if (kind < 0 && wdd_a == wdd_a && wdd_b == wdd_b) {  // W'' at both ends
-            c0 = hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1);
-        } else {
-            c0 = hermite(a, b, wa, wb, wda, wdb, 1);
-        }
-        double we = w_extremum_any(a, wda, b, wdb, c0, w.cp.h, w.seg, r, w.q0, w.lam, w.V, ks,
-                                   w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, w.cp.om);
+        double we = w_extremum_in(w, a, b, r, ks, n, kind, wa, wb, wda, wdb, wdd_a, wdd_b);
         e.max_abs_w = pymax(e.max_abs_w, std::fabs(we));
         e.max_w = pymax(e.max_w, we);
         e.min_w = pymin(e.min_w, we);
