@@ -56,11 +56,12 @@
 #include <tuple>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 // Event function ``kind`` at tau on the segment described by ``seg``.
 inline double g_value(idx kind, double tau, const Segment& seg, idx r, CVec q0, CMat lam,
@@ -634,4 +635,4 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
     return {kind, best};
 }
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS

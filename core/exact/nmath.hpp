@@ -28,8 +28,9 @@
 #include <stdexcept>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 // numba raises ZeroDivisionError("complex division by zero"); the bindings may map this
 // type to it (it is a std::domain_error, a ValueError to nanobind by default)
@@ -185,4 +186,4 @@ inline double pymax(double a, double b, T... rest) { return pymax(pymax(a, b), r
 template <class... T>
 inline double pymin(double a, double b, T... rest) { return pymin(pymin(a, b), rest...); }
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS

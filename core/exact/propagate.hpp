@@ -33,10 +33,11 @@
 #include <tuple>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 // full unrolling of segment_integrals' short loops (the constant sizes): the same operations
 #define BB_UNROLL _Pragma("GCC unroll 8")
@@ -485,4 +486,4 @@ inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, d
                           out, isum, level, seg, phj, exc);
 }
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS

@@ -20,6 +20,7 @@
 #include <utility>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 #include "../layout.hpp"
 #include "consts.hpp"
 #include "cut.hpp"
@@ -27,7 +28,7 @@
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 namespace L = layout;
 
@@ -545,7 +546,7 @@ inline bool may_graze_m(double a, double b, Vec ev_a, Vec ev_b, double half, dou
 }
 
 // What wall_event does when a step shows something (see there): kept out of the loop.
-__attribute__((noinline)) Found wall_event_found(Work& w, double a, double b, idx r, idx ks,
+__attribute__((noinline)) inline Found wall_event_found(Work& w, double a, double b, idx r, idx ks,
                                                  idx n, double f0, double om, idx mode,
                                                  bool watch_v, bool watch_ext, bool graze,
                                                  bool search, double ydd_a, double ydd_b) {
@@ -853,7 +854,7 @@ struct Extremes {
 
 // W at its W' = 0 extremum inside the grid step [a, b] (kind: the step's event, -1 if none):
 // a start from the Hermite interpolant of W, then w_extremum_any.  Out of the search's loop.
-__attribute__((noinline)) double w_extremum_in(Work& w, double a, double b, idx r, idx ks,
+__attribute__((noinline)) inline double w_extremum_in(Work& w, double a, double b, idx r, idx ks,
                                                idx n, idx kind, double wa, double wb,
                                                double wda, double wdb, double wdd_a,
                                                double wdd_b) {
@@ -1210,4 +1211,4 @@ using kernel::SegEvent;
 using kernel::SegStart;
 using kernel::start_segment;
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS
