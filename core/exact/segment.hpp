@@ -224,10 +224,26 @@ template <idx NZ>
 inline GridPoint grid_point(Work& w, idx r, idx lev, const ncplx& phg_a, const ncplx& rot,
                             idx ks, double b, idx mode, idx n, double f0, double om, bool ydd_on,
                             idx nz) {
+    // the regime's tables seen with their row lengths as constants where the sizes are (the
+    // shapes the bindings checked: eh (R, GRID_LEVELS, nz), Vh (R, nz, nz), Z and D (R, nz),
+    // mk (6, n), ddc (4, n + 2)): an element's offset without multiplications by run-time
+    // strides, re-read from Work at each step
+    CArr3 eh = w.eh;
+    CArr3 V = w.V;
+    CMat Z = w.Z;
+    Mat D = w.D;
+    Mat mk = w.mk;
+    Mat ddc = w.ddc;
     if constexpr (NZ > 0) {
         nz = NZ;
         ks = 2;
         n = NZ / 2;
+        eh = {w.eh.d, w.eh.n0, GRID_LEVELS, NZ};
+        V = {w.V.d, w.V.n0, NZ, NZ};
+        Z = {w.Z.d, w.Z.n0, NZ};
+        D = {w.D.d, w.D.n0, NZ};
+        mk = {w.mk.d, 6, NZ / 2};
+        ddc = {w.ddc.d, 4, NZ / 2 + 2};
     }
     const Segment& seg = w.seg;
     // the tip force's sine for a ball off FREE first: glibc's sin saves MXCSR (stmxcsr),
@@ -237,14 +253,14 @@ inline GridPoint grid_point(Work& w, idx r, idx lev, const ncplx& phg_a, const n
     CVec qg = w.qg;
     for (idx kq = 0; kq < nq(nz, ks); ++kq) {
         idx k = kq * ks;
-        qg[k] = ncplx(qg[k]) * ncplx(w.eh(r, lev, k));
+        qg[k] = ncplx(qg[k]) * ncplx(eh(r, lev, k));
     }
     ncplx phg = phg_a * rot;
     Vec X{w.X.d, nz};
-    from_q(r, qg, phg, seg.fb, w.Z, w.D, w.V, ks, X);
-    events(w.ev_b, X, b, seg, mode, n, w.mk, f0, om, sn);
+    from_q(r, qg, phg, seg.fb, Z, D, V, ks, X);
+    events(w.ev_b, X, b, seg, mode, n, mk, f0, om, sn);
     if (ydd_on) {
-        auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, w.ddc, n);
+        auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, ddc, n);
         return {phg, yv, wv};
     }
     return {phg, NAN, NAN};
