@@ -437,7 +437,14 @@ double exact_body(const ExactRun& a) {
         idx mode = idx(rs.mode);
         bool steady = t >= t_steady;
         idx sz = const_sizes(st.ks, n, nz);
-        SegEvent ev = search_segment<Regen>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+        SegEvent ev;
+        if (!Regen && sz == 1) {  // the constant sizes of one and two modes
+            ev = search_segment<false, 2>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+        } else if (!Regen && sz == 2) {
+            ev = search_segment<false, 4>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+        } else {
+            ev = search_segment<Regen>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+        }
         ph_next = ev.ph_next;
 
         // --- close the segment [t, t + T]

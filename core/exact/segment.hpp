@@ -9,7 +9,7 @@
 //   struct Work                         the driver's arrays, passed whole (numba: Work)
 //   start_segment<Regen>(w, t, t_stop, ph, n, kase, nreg, j_node, kn, ip, sc, cq, sv)
 //       -> SegStart {r, ks, t_seg_end, at_node, j_node, pdu}
-//   search_segment<Regen>(w, t, r, ks, sz, n, kase, mode, ph, sv)
+//   search_segment<Regen, NZ = 0>(w, t, r, ks, sz, n, kase, mode, ph, sv)
 //       -> SegEvent {kind, tau, ph_next, wb, wdb}
 //   close_segment<Regen>(w, t, T, r, ks, sz, n, kase, mode, ph, steady, pdu, last_zero_step)
 //       -> the last step of length dt_out counted with h = 0
@@ -911,8 +911,9 @@ __attribute__((always_inline)) inline void w_extremes(Work& w, Extremes& e, doub
 
 // The grid search of the segment from t (regime r, mode, forcing phasor ph at t, its
 // description sv) for its first event, with the outputs on the way: the running extremes
-// and output times in w.ro, a cut's flows in w.qsum, history and strobe rows.
-template <bool Regen>
+// and output times in w.ro, a cut's flows in w.qsum, history and strobe rows.  NZ > 0 (one
+// or two modes outside a cut, sz = NZ / 2): the sizes and mk's row length as constants.
+template <bool Regen, idx NZ = 0>
 inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, idx kase,
                                idx mode, ncplx ph, const SegSearch& sv) {
     Vec X = w.X;
@@ -925,6 +926,18 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     Mat mk = w.mk;
     Vec met = w.met;
     idx nz = q0.size();
+    if constexpr (NZ > 0) {
+        static_assert(!Regen, "the constant sizes are for harmonic runs");
+        nz = NZ;
+        n = NZ / 2;
+        ks = 2;
+        sz = NZ / 2;
+        X = {w.X.d, NZ};
+        Xa = {w.Xa.d, NZ};
+        q0 = {w.q0.d, NZ};
+        qg = {w.qg.d, NZ};
+        mk = {w.mk.d, 6, NZ / 2};
+    }
     bool ball = kase == L::BALL;
     double f0 = w.cp.f0;
     double om = w.cp.om;
