@@ -3,8 +3,8 @@
 // On x86-64 the kernel is compiled twice, for the baseline ISA (SSE2, here) and for AVX2
 // (driver_avx2.cpp includes this file into bb::exact_avx2), and run_exact picks one at run
 // time: the same IEEE operations in the same order, so the same bits on every CPU (FMA,
-// which would round differently, is not enabled; -ffp-contract=off).  AVX2 gives the
-// 3-operand instructions and more registers (~5% on the grid, as measured).
+// which would round differently, is not enabled; -ffp-contract=off).  AVX2's 3-operand
+// (VEX) instructions spare SSE2's register copies (~5% on event-heavy runs, as measured).
 // (-DBB_NO_AVX2_CLONE builds the baseline kernel alone, as for RK4.)
 #include "driver.hpp"
 
