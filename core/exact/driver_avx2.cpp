@@ -1,6 +1,6 @@
 // The exact kernel compiled for AVX2, in bb::exact_avx2: driver.cpp and its headers again,
 // with every function of theirs under target("avx2"); driver.cpp's run_exact calls this
-// one's where the CPU has AVX2.  The standard and shared headers come first, outside the
+// one's for harmonic runs where the CPU has AVX2.  The standard and shared headers come first, outside the
 // pragma, so that their inline functions (one copy each in the module) stay baseline code.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
 
