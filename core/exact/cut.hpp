@@ -31,11 +31,12 @@
 #include <vector>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 // H = tau / ceil(tau / dt), at least two per revolution: a cut's knot spacing.
 inline double history_step(double tau, double dt) {
@@ -246,4 +247,4 @@ inline double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk,
     return T < t_piece - t ? t + T : t_piece;
 }
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS

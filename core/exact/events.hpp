@@ -56,11 +56,12 @@
 #include <tuple>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 // Event function ``kind`` at tau on the segment described by ``seg``.
 inline double g_value(idx kind, double tau, const Segment& seg, idx r, CVec q0, CMat lam,
@@ -336,8 +337,13 @@ inline double find_root(idx kind, double a, double ga, double b, double gb, cons
                       f0, om, c0, X.n);
 }
 
+// The copies with constant sizes are flattened (everything they call inlined into them, as
+// numba inlined _root_body and state_at): only then does the compiler see the sizes as the
+// constants they are; a call to the shared _root_body kept its loops generic.
+#define BB_FLATTEN __attribute__((flatten, noinline))
+
 // _root_body for one mode and its conjugate pair (n = 1, nz = 2, ks = 2).
-inline double find_root_1(idx kind, double a, double ga, double b, double gb,
+BB_FLATTEN inline double find_root_1(idx kind, double a, double ga, double b, double gb,
                           const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
                           Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double f0, double om,
                           double c0) {
@@ -346,7 +352,7 @@ inline double find_root_1(idx kind, double a, double ga, double b, double gb,
 }
 
 // _root_body for two modes in conjugate pairs (n = 2, nz = 4, ks = 2).
-inline double find_root_2(idx kind, double a, double ga, double b, double gb,
+BB_FLATTEN inline double find_root_2(idx kind, double a, double ga, double b, double gb,
                           const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
                           Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double f0, double om,
                           double c0) {
@@ -418,7 +424,7 @@ inline double w_extremum(double a, double ga, double b, double gb, double c0, do
 }
 
 // _w_extremum_body for n = 1, nz = 2, ks = 2.
-inline double w_extremum_1(double a, double ga, double b, double gb, double c0, double h,
+BB_FLATTEN inline double w_extremum_1(double a, double ga, double b, double gb, double c0, double h,
                            const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
                            Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double om) {
     return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 1,
@@ -426,7 +432,7 @@ inline double w_extremum_1(double a, double ga, double b, double gb, double c0, 
 }
 
 // _w_extremum_body for n = 2, nz = 4, ks = 2.
-inline double w_extremum_2(double a, double ga, double b, double gb, double c0, double h,
+BB_FLATTEN inline double w_extremum_2(double a, double ga, double b, double gb, double c0, double h,
                            const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
                            Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double om) {
     return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 2,
@@ -629,4 +635,4 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
     return {kind, best};
 }
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS

@@ -28,8 +28,9 @@
 #include <stdexcept>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 // numba raises ZeroDivisionError("complex division by zero"); the bindings may map this
 // type to it (it is a std::domain_error, a ValueError to nanobind by default)
@@ -127,8 +128,10 @@ inline ncplx cexp(const ncplx& z) {
     bool y_finite = std::isfinite(y);
     if (x_finite) {
         if (y_finite) {
-            double c = std::cos(y);
-            double s = std::sin(y);
+            // cos and sin in one call: glibc's sincos gives the bits of its cos and sin (GCC
+            // merges the two calls itself, but not where a caller is flattened)
+            double c, s;
+            ::sincos(y, &s, &c);
             double r = std::exp(x);
             return {r * c, r * s};
         }
@@ -183,4 +186,4 @@ inline double pymax(double a, double b, T... rest) { return pymax(pymax(a, b), r
 template <class... T>
 inline double pymin(double a, double b, T... rest) { return pymin(pymin(a, b), rest...); }
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS

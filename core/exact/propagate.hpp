@@ -33,10 +33,11 @@
 #include <tuple>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 // full unrolling of segment_integrals' short loops (the constant sizes): the same operations
 #define BB_UNROLL _Pragma("GCC unroll 8")
@@ -123,9 +124,10 @@ inline ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om,
 }
 
 // The force at the tip at ts + tau: F0 sin(Omega t), or Kr b (S(tau) - W) in a cut.
+// sn: sin(Omega (ts + tau)) if the caller has it (else NaN: computed here).
 inline double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, double f0,
-                        double om) {
-    double f = f0 * std::sin(om * (seg.ts + tau));
+                        double om, double sn = NAN) {
+    double f = f0 * (sn == sn ? sn : std::sin(om * (seg.ts + tau)));
     if (seg.krb != 0.0) {
         double w = 0.0;
         for (idx i = 0; i < n; ++i) w += mk(3, i) * X[i];
@@ -484,4 +486,4 @@ inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, d
                           out, isum, level, seg, phj, exc);
 }
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS

@@ -9,7 +9,7 @@
 //   struct Work                         the driver's arrays, passed whole (numba: Work)
 //   start_segment<Regen>(w, t, t_stop, ph, n, kase, nreg, j_node, kn, ip, sc, cq, sv)
 //       -> SegStart {r, ks, t_seg_end, at_node, j_node, pdu}
-//   search_segment<Regen>(w, t, r, ks, sz, n, kase, mode, ph, sv)
+//   search_segment<Regen, NZ = 0>(w, t, r, ks, sz, n, kase, mode, ph, sv)
 //       -> SegEvent {kind, tau, ph_next, wb, wdb}
 //   close_segment<Regen>(w, t, T, r, ks, sz, n, kase, mode, ph, steady, pdu, last_zero_step)
 //       -> the last step of length dt_out counted with h = 0
@@ -20,6 +20,7 @@
 #include <utility>
 
 #include "../arrays.hpp"
+#include "ns.hpp"
 #include "../layout.hpp"
 #include "consts.hpp"
 #include "cut.hpp"
@@ -27,7 +28,7 @@
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::exact {
+namespace bb::BB_EXACT_NS {
 
 namespace L = layout;
 
@@ -148,7 +149,7 @@ inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks)
 
 // All event functions from the state X at tau (see g_value).
 inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, idx n, Mat mk,
-                   double f0, double om) {
+                   double f0, double om, double sn = NAN) {
     auto [pdu, pdv] = psi_dot(mk, 4, X, n);
     double acc = seg.acc;
     double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu;
@@ -164,7 +165,7 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, idx 
         ev[EV_HEXT] = sd - wd;
     }
     if (mode != FREE) {
-        double F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om), n, mk, seg.kappa);
+        double F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om, sn), n, mk, seg.kappa);
         ev[EV_REL_NEG] = F - seg.fs;
         ev[EV_REL_POS] = -F - seg.fs;
         ev[EV_WALL_REL] = seg.wall * F - seg.fs;
@@ -218,28 +219,52 @@ struct GridPoint {
 // y'' and W'' there (else NaN).  NZ > 0: the sizes as compile-time constants (one and two
 // modes, ks = 2), as numba's specialisations; the same operations.  The phasors come by
 // reference: a complex passed by value reaches the callee as two halves that it stores and
-// reloads as one (a stalled store forwarding, a fifth of the step's time).
+// reloads as one (a stalled store forwarding, a fifth of the step's time).  Inlined in the
+// search's loop (GCC called it: with the rare work out of the loop, inlined it is ~10%
+// faster on zero-event runs).
 template <idx NZ>
-inline GridPoint grid_point(Work& w, idx r, idx lev, const ncplx& phg_a, const ncplx& rot,
-                            idx ks, double b, idx mode, idx n, double f0, double om, bool ydd_on,
-                            idx nz) {
+__attribute__((always_inline)) inline GridPoint grid_point(Work& w, idx r, idx lev,
+                                                           const ncplx& phg_a, const ncplx& rot,
+                                                           idx ks, double b, idx mode, idx n,
+                                                           double f0, double om, bool ydd_on,
+                                                           idx nz) {
+    // the regime's tables seen with their row lengths as constants where the sizes are (the
+    // shapes the bindings checked: eh (R, GRID_LEVELS, nz), Vh (R, nz, nz), Z and D (R, nz),
+    // mk (6, n), ddc (4, n + 2)): an element's offset without multiplications by run-time
+    // strides, re-read from Work at each step
+    CArr3 eh = w.eh;
+    CArr3 V = w.V;
+    CMat Z = w.Z;
+    Mat D = w.D;
+    Mat mk = w.mk;
+    Mat ddc = w.ddc;
     if constexpr (NZ > 0) {
         nz = NZ;
         ks = 2;
         n = NZ / 2;
+        eh = {w.eh.d, w.eh.n0, GRID_LEVELS, NZ};
+        V = {w.V.d, w.V.n0, NZ, NZ};
+        Z = {w.Z.d, w.Z.n0, NZ};
+        D = {w.D.d, w.D.n0, NZ};
+        mk = {w.mk.d, 6, NZ / 2};
+        ddc = {w.ddc.d, 4, NZ / 2 + 2};
     }
+    const Segment& seg = w.seg;
+    // the tip force's sine for a ball off FREE first: glibc's sin saves MXCSR (stmxcsr),
+    // which waits for every floating-point operation in flight; at the step's start, before
+    // from_q's chains, it waits for fewer (a stuck ball's step ~8% faster)
+    double sn = mode != FREE ? std::sin(om * (seg.ts + b)) : NAN;
     CVec qg = w.qg;
     for (idx kq = 0; kq < nq(nz, ks); ++kq) {
         idx k = kq * ks;
-        qg[k] = ncplx(qg[k]) * ncplx(w.eh(r, lev, k));
+        qg[k] = ncplx(qg[k]) * ncplx(eh(r, lev, k));
     }
     ncplx phg = phg_a * rot;
-    const Segment& seg = w.seg;
     Vec X{w.X.d, nz};
-    from_q(r, qg, phg, seg.fb, w.Z, w.D, w.V, ks, X);
-    events(w.ev_b, X, b, seg, mode, n, w.mk, f0, om);
+    from_q(r, qg, phg, seg.fb, Z, D, V, ks, X);
+    events(w.ev_b, X, b, seg, mode, n, mk, f0, om, sn);
     if (ydd_on) {
-        auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, w.ddc, n);
+        auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, ddc, n);
         return {phg, yv, wv};
     }
     return {phg, NAN, NAN};
@@ -406,12 +431,14 @@ inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3
 }
 
 // quad_range(p, d, dd, s) (events.hpp) for several s: its vertex, which does not depend on
-// s, computed once (the same operations, so the same (lo, hi))
+// s, computed once (the same operations, so the same (lo, hi)), and only where it may lie
+// at x > 0: -d / dd is positive only if d and dd have opposite signs (a NaN, a zero or equal
+// signs give x <= 0 or NaN, which at() ignores as it ignores the default x = 0)
 struct QuadRange {
     double p, d, dd, x = 0.0, v = 0.0;
 
     QuadRange(double p_, double d_, double dd_) : p(p_), d(d_), dd(dd_) {
-        if (dd != 0.0) {
+        if ((d < 0.0 && dd > 0.0) || (d > 0.0 && dd < 0.0)) {
             x = -d / dd;
             v = p + 0.5 * d * x;
         }
@@ -449,12 +476,17 @@ struct LevelBounds {
 // events and of new extrema of |y| (below ylim) or (steady) of W: on [a, a + s], y lies
 // within b3y s^3 / 6 of its quadratic Taylor polynomial at a, y' within b3y s^2 / 2 of its
 // linear one, W within b3w s^3 / 6 of its quadratic (docs/exact.md, "Longer steps").
-inline idx level(double ya, double yda, double ydd_a, double wa, double wda, double wdd_a,
-                 const LevelBounds& lb, double ylim, double wmar, double max_w, double min_w,
-                 const double* hl, idx top, bool watch_v, bool steady) {
+// (Inlined: GCC had stopped inlining it in the constant-size searches, ~3% on zero-event
+// runs.)
+__attribute__((always_inline)) inline idx level(double ya, double yda, double ydd_a, double wa,
+                                                double wda, double wdd_a, const LevelBounds& lb,
+                                                double ylim, double wmar, double max_w,
+                                                double min_w, const double* hl, idx top,
+                                                bool watch_v, bool steady) {
     idx lev = 0;
     QuadRange qy(ya, yda, ydd_a);
-    QuadRange qw(wa, wda, wdd_a);
+    QuadRange qw(0.0, 0.0, 0.0);  // W's, built where first needed
+    bool qw_set = false;
     for (idx lv = 1; lv <= top; ++lv) {
         double hs = hl[lv];
         auto [lo, hi] = qy.at(hs);
@@ -466,6 +498,10 @@ inline idx level(double ya, double yda, double ydd_a, double wa, double wda, dou
             if (!((yda > e2 && v1 > e2) || (yda < -e2 && v1 < -e2))) break;
         }
         if (steady) {
+            if (!qw_set) {
+                qw = QuadRange(wa, wda, wdd_a);
+                qw_set = true;
+            }
             auto [wlo, whi] = qw.at(hs);
             double we3 = lb.e3w[lv] + wmar;
             if (!(whi + we3 < max_w && wlo - we3 > min_w)) break;
@@ -501,23 +537,49 @@ inline Found regime_event(Work& w, double a, double b, idx r, idx ks, idx n, dou
     return {kind, best};
 }
 
-// A free ball's wall and friction-switch events in [a, b], with the graze guard's
-// sub-steps where the bound on y^(4) allows a crossing and return inside the step.
-inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
-                        idx mode, bool watch_v, bool watch_ext, double b4, idx lev,
-                        double ydd_a, double ydd_b) {
+// may_graze's margin b4 h^4 / 192 for the step length h, kept while h and b4 repeat (the
+// usual grid step): the same value without its division at every step
+struct GrazeMargin {
+    double h = NAN, b4 = NAN, m = 0.0;
+
+    double at(double h_, double b4_) {
+        if (!(h_ == h && b4_ == b4)) {
+            h = h_;
+            b4 = b4_;
+            m = b4_ * ipow(h_, 4) / 192.0;
+        }
+        return m;
+    }
+};
+
+// may_graze (events.hpp) with its margin from gm: the same test, operation for operation
+inline bool may_graze_m(double a, double b, Vec ev_a, Vec ev_b, double half, double b4,
+                        GrazeMargin& gm) {
+    double h = b - a;
+    double p0 = ev_a[EV_PLUS] + half;
+    double p1 = ev_b[EV_PLUS] + half;
+    double m0 = ev_a[EV_YEXT] * h;
+    double m1 = ev_b[EV_YEXT] * h;
+    double margin = gm.at(h, b4);
+    // |p| <= max(|p0|, |p1|) + 4/27 (|m0| + |m1|) on [0, 1]: far from both walls, done
+    if (pymax(std::fabs(p0), std::fabs(p1)) + 0.15 * (std::fabs(m0) + std::fabs(m1)) +
+            margin < half)
+        return false;
+    auto [lo, hi] = _cubic_range(p0, p1, m0, m1);
+    return hi + margin >= half || lo - margin <= -half;
+}
+
+// What wall_event does when a step shows something (see there): kept out of the loop.
+__attribute__((noinline)) inline Found wall_event_found(Work& w, double a, double b, idx r, idx ks,
+                                                 idx n, double f0, double om, idx mode,
+                                                 bool watch_v, bool watch_ext, bool graze,
+                                                 bool search, double ydd_a, double ydd_b) {
     Vec ev_a = w.ev_a;
     Vec ev_b = w.ev_b;
     double half = w.cp.half;
     double best = b;
     idx kind = -1;
-    // call the search only when an end value shows something, or y' changes sign and the
-    // bound on y lets the ball reach a wall (a longer step than h holds no wall event)
-    bool graze = lev == 0 && may_graze(a, b, ev_a, ev_b, half, b4);
-    if ((ev_a[EV_PLUS] <= 0.0 && 0.0 < ev_b[EV_PLUS])
-        || (ev_a[EV_MINUS] <= 0.0 && 0.0 < ev_b[EV_MINUS])
-        || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
-        || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)) {
+    if (search) {
         auto [k, tb] = wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, w.seg, r, w.q0,
                                  w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0,
                                  om, ydd_a, ydd_b);
@@ -551,6 +613,27 @@ inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
     return {kind, best};
 }
 
+// A free ball's wall and friction-switch events in [a, b], with the graze guard's
+// sub-steps where the bound on y^(4) allows a crossing and return inside the step.  The
+// tests on the step's ends are here, in the search's loop; the rare search out of it.
+inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
+                        idx mode, bool watch_v, bool watch_ext, double b4, idx lev,
+                        double ydd_a, double ydd_b, GrazeMargin& gm) {
+    Vec ev_a = w.ev_a;
+    Vec ev_b = w.ev_b;
+    double half = w.cp.half;
+    // call the search only when an end value shows something, or y' changes sign and the
+    // bound on y lets the ball reach a wall (a longer step than h holds no wall event)
+    bool graze = lev == 0 && may_graze_m(a, b, ev_a, ev_b, half, b4, gm);
+    bool search = (ev_a[EV_PLUS] <= 0.0 && 0.0 < ev_b[EV_PLUS])
+                  || (ev_a[EV_MINUS] <= 0.0 && 0.0 < ev_b[EV_MINUS])
+                  || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
+                  || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0);
+    if (!search && !graze) return {-1, b};
+    return wall_event_found(w, a, b, r, ks, n, f0, om, mode, watch_v, watch_ext, graze, search,
+                            ydd_a, ydd_b);
+}
+
 // The tool leaving (in the cut) or re-entering (out of it) in [a, b]: h = 0, or a graze of
 // h = 0 between the step's ends, found at the extremum of h.  -1: none.
 inline double cut_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0,
@@ -580,13 +663,13 @@ inline double cut_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
 template <bool Regen>
 inline Found find_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
                         idx mode, bool ball, bool watch_v, bool watch_ext, double b4, idx lev,
-                        double ydd_a, double ydd_b) {
+                        double ydd_a, double ydd_b, GrazeMargin& gm) {
     Found f{-1, b};
     if (ball && mode != FREE) {
         f = regime_event(w, a, b, r, ks, n, f0, om, mode);
     } else if (ball && mode == FREE) {
         f = wall_event(w, a, b, r, ks, n, f0, om, mode, watch_v, watch_ext, b4, lev, ydd_a,
-                       ydd_b);
+                       ydd_b, gm);
     }
     if constexpr (Regen) {
         double tr = cut_event(w, a, b, r, ks, n, f0, om);
@@ -793,25 +876,37 @@ struct Extremes {
     double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
 };
 
+// W at its W' = 0 extremum inside the grid step [a, b] (kind: the step's event, -1 if none):
+// a start from the Hermite interpolant of W, then w_extremum_any.  Out of the search's loop.
+__attribute__((noinline)) inline double w_extremum_in(Work& w, double a, double b, idx r, idx ks,
+                                               idx n, idx kind, double wa, double wb,
+                                               double wda, double wdb, double wdd_a,
+                                               double wdd_b) {
+    double c0;
+    if (kind < 0 && wdd_a == wdd_a && wdd_b == wdd_b) {  // W'' at both ends
+        c0 = hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1);
+    } else {
+        c0 = hermite(a, b, wa, wb, wda, wdb, 1);
+    }
+    return w_extremum_any(a, wda, b, wdb, c0, w.cp.h, w.seg, r, w.q0, w.lam, w.V, ks, w.Z, w.D,
+                          w.bq, w.qs, w.dX, w.Xd, n, w.mk, w.cp.om);
+}
+
 // W's extremes at the end b of a grid step and, where W' changes sign inside the step and
-// the extremum may beat them (w_may_exceed), at the located W' = 0 extremum.
-inline void w_extremes(Work& w, Extremes& e, double a, double b, idx r, idx ks, idx n,
-                       idx kind, idx lev, double bw4, double wa, double wb, double wda,
-                       double wdb, double wdd_a, double wdd_b) {
+// the extremum may beat them (w_may_exceed), at the located W' = 0 extremum.  Inlined in
+// the search's loop (the extremes stay in registers), the rare search out of it.
+__attribute__((always_inline)) inline void w_extremes(Work& w, Extremes& e, double a, double b,
+                                                      idx r, idx ks, idx n, idx kind, idx lev,
+                                                      double bw4, double wa, double wb,
+                                                      double wda, double wdb, double wdd_a,
+                                                      double wdd_b) {
     e.max_abs_w = pymax(e.max_abs_w, std::fabs(wb));
     e.max_w = pymax(e.max_w, wb);
     e.min_w = pymin(e.min_w, wb);
     if (lev == 0 && wda * wdb < 0.0
         && (bw4 < 0.0
             || w_may_exceed(b - a, wa, wb, wda, wdb, bw4, e.max_w, e.min_w, e.max_abs_w))) {
-        double c0;
-        if (kind < 0 && wdd_a == wdd_a && wdd_b == wdd_b) {  // W'' at both ends
-            c0 = hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1);
-        } else {
-            c0 = hermite(a, b, wa, wb, wda, wdb, 1);
-        }
-        double we = w_extremum_any(a, wda, b, wdb, c0, w.cp.h, w.seg, r, w.q0, w.lam, w.V, ks,
-                                   w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, w.cp.om);
+        double we = w_extremum_in(w, a, b, r, ks, n, kind, wa, wb, wda, wdb, wdd_a, wdd_b);
         e.max_abs_w = pymax(e.max_abs_w, std::fabs(we));
         e.max_w = pymax(e.max_w, we);
         e.min_w = pymin(e.min_w, we);
@@ -820,8 +915,9 @@ inline void w_extremes(Work& w, Extremes& e, double a, double b, idx r, idx ks, 
 
 // The grid search of the segment from t (regime r, mode, forcing phasor ph at t, its
 // description sv) for its first event, with the outputs on the way: the running extremes
-// and output times in w.ro, a cut's flows in w.qsum, history and strobe rows.
-template <bool Regen>
+// and output times in w.ro, a cut's flows in w.qsum, history and strobe rows.  NZ > 0 (one
+// or two modes outside a cut, sz = NZ / 2): the sizes and mk's row length as constants.
+template <bool Regen, idx NZ = 0>
 inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, idx kase,
                                idx mode, ncplx ph, const SegSearch& sv) {
     Vec X = w.X;
@@ -834,6 +930,18 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     Mat mk = w.mk;
     Vec met = w.met;
     idx nz = q0.size();
+    if constexpr (NZ > 0) {
+        static_assert(!Regen, "the constant sizes are for harmonic runs");
+        nz = NZ;
+        n = NZ / 2;
+        ks = 2;
+        sz = NZ / 2;
+        X = {w.X.d, NZ};
+        Xa = {w.Xa.d, NZ};
+        q0 = {w.q0.d, NZ};
+        qg = {w.qg.d, NZ};
+        mk = {w.mk.d, 6, NZ / 2};
+    }
     bool ball = kase == L::BALL;
     double f0 = w.cp.f0;
     double om = w.cp.om;
@@ -890,6 +998,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     if (ydd_on) std::tie(ydd_a, wdd_a) = ydd(Xa, f0 * ph.imag(), fb, acc, w.ddc, n);
     idx top = adapt ? w.levmax[r] : 0;
     LevelBounds lb(sv.b3y, sv.b3w, w.hl, top);
+    GrazeMargin gm;
     while (true) {
         // the step: h, or 2^lv h where Taylor's theorem proves that it holds no event and
         // no new extremum of |y| or (steady) of W
@@ -914,7 +1023,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         wdd_b = gp.wdd;
         // --- events in [a, b]
         Found f = find_event<Regen>(w, a, b, r, ks, n, f0, om, mode, ball, watch_v, watch_ext,
-                                    sv.b4, lev, ydd_a, ydd_b);
+                                    sv.b4, lev, ydd_a, ydd_b, gm);
         idx kind = f.kind;
         if (kind >= 0) {
             b = f.t;
@@ -965,7 +1074,12 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         wdd_a = wdd_b;
         auxa = auxb;
         auxda = auxdb;
-        for (idx kk = 0; kk < N_EV; ++kk) ev_a[kk] = ev_b[kk];
+        // b's event functions become a's: the two views swap instead of a copy (an entry
+        // that this segment's evaluations do not write is never read in it, so the older
+        // value left there serves as well as the copied one)
+        std::swap(w.ev_a, w.ev_b);
+        ev_a = w.ev_a;
+        ev_b = w.ev_b;
     }
     w.ro.max_abs_w = e.max_abs_w;
     w.ro.max_w = e.max_w;
@@ -1134,4 +1248,4 @@ using kernel::SegEvent;
 using kernel::SegStart;
 using kernel::start_segment;
 
-}  // namespace bb::exact
+}  // namespace bb::BB_EXACT_NS
