@@ -131,7 +131,12 @@ inline ncplx cexp(const ncplx& z) {
             // cos and sin in one call: glibc's sincos gives the bits of its cos and sin (GCC
             // merges the two calls itself, but not where a caller is flattened)
             double c, s;
+#ifdef __GLIBC__
             ::sincos(y, &s, &c);
+#else
+            c = std::cos(y);
+            s = std::sin(y);
+#endif
             double r = std::exp(x);
             return {r * c, r * s};
         }
