@@ -5,7 +5,7 @@
 // alias and, with the mode count a template constant, the state stays in registers.
 // Specialised on the mode count 1, 2, 3, the case and the forcing (the other bars' and
 // the cut's branches fold away), with one kernel for a run-time mode count (4..NMAX);
-// each compiled for the baseline ISA and AVX2 (rk4.hpp).
+// each compiled for the baseline ISA, AVX2 and AVX-512 (rk4.hpp).
 #include "rk4.hpp"
 
 namespace bb::rk4 {
@@ -287,9 +287,18 @@ BB_TARGET_AVX2 void run_avx2(const RunArgs& a) {
     run_body<N, CASE, FORCING>(a);
 }
 #endif
+#ifdef BB_AVX512_CLONE
+template <int N, int CASE, int FORCING>
+BB_TARGET_AVX512 void run_avx512(const RunArgs& a) {
+    run_body<N, CASE, FORCING>(a);
+}
+#endif
 
 template <int N, int CASE, int FORCING>
 void run(const RunArgs& a) {
+#ifdef BB_AVX512_CLONE
+    if (cpu_has_avx512()) return run_avx512<N, CASE, FORCING>(a);
+#endif
 #ifdef BB_AVX2_CLONE
     if (cpu_has_avx2()) return run_avx2<N, CASE, FORCING>(a);
 #endif
