@@ -5,7 +5,7 @@
 // alias and, with the mode count a template constant, the state stays in registers.
 // Specialised on the mode count 1, 2, 3, the case and the forcing (the other bars' and
 // the cut's branches fold away), with one kernel for a run-time mode count (4..NMAX);
-// each compiled for the baseline ISA and AVX2 (rk4.hpp).
+// each compiled for the baseline ISA, AVX2 and AVX-512 (rk4.hpp).
 #include "rk4.hpp"
 
 namespace bb::rk4 {
@@ -125,7 +125,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     const Params q = unpack(a.p, a.dt);
     const Shape<N, CASE> sh(q);
     const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.regen;
-    const int n = sh.n, nx = sh.nx(), iyd = sh.iyd();
+    const int n = sh.n(), nx = sh.nx(), iyd = sh.iyd();
     const bool ball = sh.ball(), has_aux = sh.has_aux();
     const double t0 = a.t0, dt = a.dt;
     double* met = a.met.d;
@@ -140,12 +140,16 @@ BB_INLINE void run_body(const RunArgs& a) {
     double hsurf[4] = {0.0, 0.0, 0.0, 0.0};
     idx steps_run = a.n_steps;
 
-    double X[NX_MAX], Kd[NX_MAX], acc[NX_MAX], dX[NX_MAX];
+    constexpr int NXC = Shape<N, CASE>::NXC;
+    double X[NXC], Kd[NXC], dX[NXC];
+    // (unrolled here, before GCC's scalar replacement of X and Kd, which a loop with a
+    // run-time index would keep in memory)
+#pragma GCC unroll 8
     for (int j = 0; j < nx; ++j) {
         X[j] = a.x[j];
         Kd[j] = 0.0;
     }
-    if (sh.kase == L::LOCKED) X[iyd] = 0.0;
+    if (sh.kase() == L::LOCKED) X[iyd] = 0.0;
     double fst[4], cst[4], wst[4];  // forcing at the stages, c_s dt, b_s dt
     for (int s = 0; s < 4; ++s) {
         cst[s] = C_FRAC[s] * dt;
@@ -212,8 +216,10 @@ BB_INLINE void run_body(const RunArgs& a) {
                 }
                 return f;
             };
-            rk4_stages(q, sh, X, Kd, acc, cst, wst, fl, true, force);
-            for (int j = 0; j < nx; ++j) X[j] += acc[j];
+            if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
+                rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, true, force);
+            else
+                rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, true, force);
         }
         const bool steady = k >= a.steady_start;
 
@@ -258,6 +264,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     // a stick interval still open at the end is closed there
     if (ss.in_stick)
         close_stick(met, a.stick, ss.t0, t0 + double(steps_run) * dt, t_steady, q.stick_min);
+#pragma GCC unroll 8
     for (int j = 0; j < nx; ++j) a.x[j] = X[j];
     st.store(met);
     fl.store(met);
@@ -280,9 +287,18 @@ BB_TARGET_AVX2 void run_avx2(const RunArgs& a) {
     run_body<N, CASE, FORCING>(a);
 }
 #endif
+#ifdef BB_AVX512_CLONE
+template <int N, int CASE, int FORCING>
+BB_TARGET_AVX512 void run_avx512(const RunArgs& a) {
+    run_body<N, CASE, FORCING>(a);
+}
+#endif
 
 template <int N, int CASE, int FORCING>
 void run(const RunArgs& a) {
+#ifdef BB_AVX512_CLONE
+    if (cpu_has_avx512()) return run_avx512<N, CASE, FORCING>(a);
+#endif
 #ifdef BB_AVX2_CLONE
     if (cpu_has_avx2()) return run_avx2<N, CASE, FORCING>(a);
 #endif

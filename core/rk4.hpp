@@ -28,15 +28,22 @@
 
 #define BB_INLINE inline __attribute__((always_inline))
 
-// On x86-64 the kernels are compiled twice, for the baseline ISA (SSE2) and for AVX2,
-// chosen at run time: the same IEEE operations in the same order, so the same bits on
-// every CPU (FMA, which would round differently, is not enabled; -ffp-contract=off).
-// AVX2 gives the vector arithmetic (VecMap) 4 lanes, 3-operand instructions and more
-// registers.
-// (-DBB_NO_AVX2_CLONE builds the baseline kernels alone, to test them on an AVX2 CPU.)
+// On x86-64 the kernels are compiled three times, for the baseline ISA (SSE2), for AVX2
+// and for AVX-512, chosen at run time: the same IEEE operations in the same order, so
+// the same bits on every CPU (FMA, which would round differently, is not enabled;
+// -ffp-contract=off).  AVX2 gives the vector arithmetic (VecMap) 4 lanes and 3-operand
+// instructions; AVX-512 (F, VL, DQ, BW) gives 32 vector registers instead of 16, which
+// hold the step's state, stage values and constants without spills (the staged ball
+// step 1.2x faster, the map step 1.1x).
+// (-DBB_NO_AVX2_CLONE builds the baseline kernels alone and -DBB_NO_AVX512_CLONE the
+// baseline and AVX2 ones, to test each on a CPU that has the larger ISA.)
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
 #define BB_AVX2_CLONE 1
 #define BB_TARGET_AVX2 __attribute__((target("avx2")))
+#if !defined(BB_NO_AVX512_CLONE)
+#define BB_AVX512_CLONE 1
+#define BB_TARGET_AVX512 __attribute__((target("avx2,avx512f,avx512vl,avx512dq,avx512bw")))
+#endif
 #endif
 
 namespace bb::rk4 {
@@ -60,6 +67,13 @@ struct Params {
     double C[L::NMAX], pL[L::NMAX], pD[L::NMAX], pA[L::NMAX], invM[L::NMAX];
     double fm[L::NMAX], km[L::NMAX], cm[L::NMAX], dm[L::NMAX], lm[L::NMAX];
     double kappa;  // 1/m + sum psi_d dm: y'' = kappa F_b - sum psi_d a_free
+    // F_b, dm F_b and kappa F_b for y' > 0, y' = 0, y' < 0 (F_b = -F_c, 0, F_c), each in
+    // both lanes of a pair (sign_pick): the products a stage forms, computed once, so that
+    // a stage picks one instead of multiplying after its sign test
+    v2 fb[3], dmfb[L::NMAX][3], kfb[3];
+    // no kappa F_b is -0: y'' = kappa F_b - sum psi_d a_i then has the same bits whether
+    // the sum starts from 0 or from its first term (they differ only in the sign of a zero)
+    bool ydd_sum_from_first;
     double f0, om, half, e, fc, sr, meff, vimp, stick_min, vstick, ma, ka, ca;
     double tstrobe, strobe_t0;
     double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
@@ -101,25 +115,43 @@ inline Params unpack(const double* p, double dt) {
         q.lm[i] = q.meff * q.pD[i] * q.invM[i];
         q.kappa += q.pD[i] * q.dm[i];
     }
+    const double fbs[3] = {-q.fc, 0.0, q.fc};
+    q.ydd_sum_from_first = true;
+    for (int b = 0; b < 3; ++b) {
+        q.fb[b] = v2{fbs[b], fbs[b]};
+        for (int i = 0; i < q.n; ++i) {
+            const double dmfb = q.dm[i] * fbs[b];
+            q.dmfb[i][b] = v2{dmfb, dmfb};
+        }
+        const double kfb = q.kappa * fbs[b];
+        q.kfb[b] = v2{kfb, kfb};
+        if (kfb == 0.0 && std::signbit(kfb)) q.ydd_sum_from_first = false;
+    }
     q.chh = std::cos(q.om * 0.5 * dt);
     q.shh = std::sin(q.om * 0.5 * dt);
     return q;
 }
 
 // The mode count and the case of a kernel: compile-time constants where the kernel is
-// specialised (N > 0, CASE >= 0), else the run's.
+// specialised (N > 0, CASE >= 0), else the run's.  As constants from the start (not
+// members set to them) they bound the mode loops before GCC's early passes, which unroll
+// those loops and keep the state in registers.
 template <int N, int CASE>
 struct Shape {
-    int n, kase;
-    explicit Shape(const Params& q) : n(N > 0 ? N : q.n), kase(CASE >= 0 ? CASE : q.kase) {}
-    int nx() const { return 2 * n + 2; }
-    int iy() const { return 2 * n; }
-    int iyd() const { return 2 * n + 1; }
-    bool ball() const { return kase == L::BALL; }
-    bool tmd() const { return kase == L::TMD; }
-    bool has_aux() const { return kase == L::BALL || kase == L::TMD; }
+    int run_n, run_kase;
+    explicit Shape(const Params& q) : run_n(q.n), run_kase(q.kase) {}
+    int n() const { return N > 0 ? N : run_n; }
+    int kase() const { return CASE >= 0 ? CASE : run_kase; }
+    int nx() const { return 2 * n() + 2; }
+    int iy() const { return 2 * n(); }
+    int iyd() const { return 2 * n() + 1; }
+    bool ball() const { return kase() == L::BALL; }
+    bool tmd() const { return kase() == L::TMD; }
+    bool has_aux() const { return ball() || tmd(); }
     // in the solid and ball bars a mode's rows of the map involve only its own u, u'
-    bool diag() const { return kase == L::SOLID || kase == L::BALL; }
+    bool diag() const { return kase() == L::SOLID || ball(); }
+    // the length of the state arrays: exact where N is a template constant
+    static constexpr int NXC = N > 0 ? 2 * N + 2 : NX_MAX;
 };
 
 // sin, cos of the forcing phase at the half step and the full step from (sn, cn)
@@ -136,6 +168,27 @@ BB_INLINE Phase rotate(double sn, double cn, double chh, double shh) {
     return r;
 }
 
+// The sign of y' as lane masks (all ones where y' > 0, resp. y' < 0; neither for 0 and
+// NaN) and a pick by it of one of three values (by_sign: for y' > 0, 0, < 0).  In vector
+// registers, as GCC keeps vector selects branch-free: y' changes sign from stage to
+// stage while the ball sticks, where branches are mispredicted (written with ?: on
+// doubles, GCC branched).
+typedef long long i2 __attribute__((vector_size(16)));
+struct SignMask {
+    i2 pos, neg;
+};
+
+BB_INLINE SignMask sign_mask(double y) {
+    const v2 v = {y, y}, zero = {0.0, 0.0};
+    return {v > zero, v < zero};
+}
+
+BB_INLINE double sign_pick(SignMask m, const v2* by_sign) {
+    const i2 p = (i2)by_sign[0], z = (i2)by_sign[1], g = (i2)by_sign[2];
+    const i2 r = (m.neg & g) | (~m.neg & ((m.pos & p) | (~m.pos & z)));
+    return ((v2)r)[0];
+}
+
 // What a stage's energy flows need besides the derivative.
 struct StageTerms {
     double wd;     // W' = sum psi_L u'
@@ -149,10 +202,13 @@ struct StageTerms {
 // M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f with the damper's terms (docs/model.md, 2),
 // written with premultiplied constants and the stage velocity last, so that little of
 // it waits on the previous stage.
-template <int N, int CASE>
+//
+// FAST: the ball's y'' sums psi_d a_i from its first term (q.ydd_sum_from_first), which
+// takes an addition off the stage's longest chain (a_i, y'', y' at the next stage, F_b).
+template <int N, int CASE, bool FAST = false>
 BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
                                 double* Kd) {
-    const int n = sh.n, iy = sh.iy(), iyd = sh.iyd();
+    const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
     StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
     for (int i = 0; i < n; ++i) {
@@ -160,24 +216,24 @@ BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double
         Kd[i] = vi;
         const double ai = (q.fm[i] * f - q.km[i] * Xs[i]) - q.cm[i] * vi;
         Kd[n + i] = ai;
-        sfree += q.pD[i] * ai;
+        sfree = (FAST && sh.ball() && i == 0) ? q.pD[i] * ai : sfree + q.pD[i] * ai;
         t.wd += q.pL[i] * vi;
         t.pvisc += q.C[i] * vi * vi;
     }
     double ydd = 0.0;
     if (sh.ball()) {
         const double yds = Xs[iyd];
-        // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), as selects: y' changes sign from stage
-        // to stage while the ball sticks, where branches would be mispredicted
-        double fb = yds > 0.0 ? -q.fc : 0.0;
-        fb = yds < 0.0 ? q.fc : fb;
+        // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), with dm F_b and kappa F_b picked by
+        // y''s sign (sign_pick)
+        const SignMask sg = sign_mask(yds);
+        const double fb = sign_pick(sg, q.fb);
         double pdv = 0.0;
         for (int i = 0; i < n; ++i) {
             // the reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
-            Kd[n + i] -= q.dm[i] * fb;
+            Kd[n + i] -= sign_pick(sg, q.dmfb[i]);
             pdv += q.pD[i] * Xs[n + i];
         }
-        ydd = q.kappa * fb - sfree;
+        ydd = sign_pick(sg, q.kfb) - sfree;
         t.fb = fb;
         t.yds = yds;
         t.pdv = pdv;
@@ -191,7 +247,7 @@ BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double
         for (int i = 0; i < n; ++i) Kd[n + i] += q.pA[i] * ft * q.invM[i];
         ydd = -ft / q.ma;
         t.pvisc += q.ca * reld * reld;
-    } else if (sh.kase == L::LOCKED) {
+    } else if (sh.kase() == L::LOCKED) {
         // the force that carries the ball with the bar, m_eff sum psi_d a_free, acts on
         // mode i with psi_d,i
         for (int i = 0; i < n; ++i) Kd[n + i] -= q.lm[i] * sfree;
@@ -216,7 +272,6 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
 
 // |v| lane by lane (the sign bit cleared, as fabs)
 BB_INLINE v2 vabs(v2 v) {
-    typedef long long i2 __attribute__((vector_size(16)));
     const i2 mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL};
     return (v2)((i2)v & mask);
 }
@@ -225,54 +280,52 @@ BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
 // F_b of a mapped step: the sign y' has at the step's start.
 BB_INLINE double map_friction(const Params& q, double yd0) { return yd0 > 0.0 ? -q.fc : q.fc; }
 
-// One RK4 stage on the state in pairs (x2; nx = 2n + 2): Xs = X + c_s dt Kd, the force
-// f = force(s, Xs), the derivative there into k2, and sum += b_s dt Kd.  The pairs are
-// built in registers: left to itself GCC packed the derivatives through memory and the
-// pair loads stalled on store forwarding (2x slower).
-template <int N, int CASE, class Force>
-BB_INLINE StageTerms rk4_stage(const Params& q, Shape<N, CASE> sh, int s, const v2* x2, v2* k2,
-                               v2* sum, double cs, double ws, Force&& force, double& f) {
-    const int np = sh.n + 1;
-    double Xs[NX_MAX], K[NX_MAX];
-    for (int p = 0; p < np; ++p) {
-        const v2 xs = x2[p] + cs * k2[p];
-        Xs[2 * p] = xs[0];
-        Xs[2 * p + 1] = xs[1];
+// Whether a step's stages may take their short forms (rk4_stages, FAST): stage 1
+// (c = 0) at X itself and each sum of b_s dt Kd from its first term.  With c0 Kd = +-0
+// and X neither zero nor NaN, X + c0 Kd is X, and sums that differ only in the sign of
+// a zero give X + sum the same bits.  Tested before the stages (a predicted branch), so
+// the test is off their chain, which then starts one addition earlier.
+// (in pairs: GCC tested the values one by one, branch-free but through integer flags)
+template <int N, int CASE>
+BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd, double c0) {
+    const v2 zero = {0.0, 0.0};
+    i2 ok = {-1, -1};
+    for (int p = 0; p < sh.nx() / 2; ++p) {
+        const v2 x = {X[2 * p], X[2 * p + 1]}, k = {Kd[2 * p], Kd[2 * p + 1]};
+        ok &= (c0 * k == zero) & (vabs(x) > zero);
     }
-    f = force(s, Xs);
-    const StageTerms terms = derivative(q, sh, Xs, f, K);
-    for (int p = 0; p < np; ++p) {
-        k2[p] = v2{K[2 * p], K[2 * p + 1]};
-        sum[p] += ws * k2[p];
-    }
-    return terms;
+    return (ok[0] & ok[1]) != 0;
 }
 
-// The four RK4 stages of a step from X: the stage derivative Kd (carried over from the
-// previous staged step, where only 0 * Kd enters) updated, the increment into acc, and
-// with flows_on the stages' energy flows.  force(s, Xs) is the tip force of stage s.
-template <int N, int CASE, class Force>
-BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, const double* X, double* Kd,
-                          double* acc, const double* cst, const double* wst, Flows& fl,
-                          bool flows_on, Force&& force) {
-    const int np = sh.n + 1;
-    v2 x2[NX_MAX / 2], k2[NX_MAX / 2], sum[NX_MAX / 2];
-    for (int p = 0; p < np; ++p) {
-        x2[p] = v2{X[2 * p], X[2 * p + 1]};
-        k2[p] = v2{Kd[2 * p], Kd[2 * p + 1]};
-        sum[p] = v2{0.0, 0.0};
-    }
+// The four RK4 stages of a step, X advanced in place: the stage derivative Kd (carried
+// over from the previous staged step, where only 0 * Kd enters) updated, and with
+// flows_on the stages' energy flows.  force(s, Xs) is the tip force of stage s.
+// FAST: stage 1 at X, the sums from their first terms (stages_fast) and the
+// derivative's FAST form (ydd_sum_from_first).
+// The stage values are scalars sized by the mode count, so with N a template constant
+// they stay in registers (rk4.cpp is built without the auto-vectoriser, which packed
+// them in vectors through memory, where the loads stalled on store forwarding).
+template <int N, int CASE, bool FAST, class Force>
+BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
+                          const double* cst, const double* wst, Flows& fl, bool flows_on,
+                          Force&& force) {
+    const int nx = sh.nx();
+    constexpr int NXC = Shape<N, CASE>::NXC;
+    double sum[NXC], xs[NXC];
+#pragma GCC unroll 4
     for (int s = 0; s < 4; ++s) {
-        double f;
-        const StageTerms terms = rk4_stage(q, sh, s, x2, k2, sum, cst[s], wst[s], force, f);
+        for (int j = 0; j < nx; ++j) xs[j] = (FAST && s == 0) ? X[j] : X[j] + cst[s] * Kd[j];
+        const double f = force(s, xs);
+        const StageTerms terms = derivative<N, CASE, FAST>(q, sh, xs, f, Kd);
+        for (int j = 0; j < nx; ++j) {
+            if (s == 0)
+                sum[j] = FAST ? wst[0] * Kd[j] : 0.0 + wst[0] * Kd[j];
+            else
+                sum[j] += wst[s] * Kd[j];
+        }
         if (flows_on) stage_flows(q, sh, fl, terms, wst[s], f);
     }
-    for (int p = 0; p < np; ++p) {
-        Kd[2 * p] = k2[p][0];
-        Kd[2 * p + 1] = k2[p][1];
-        acc[2 * p] = sum[p][0];
-        acc[2 * p + 1] = sum[p][1];
-    }
+    for (int j = 0; j < nx; ++j) X[j] += sum[j];
 }
 
 // A cheap sufficient condition for map_fits' stage test: with
@@ -323,7 +376,7 @@ BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, co
 template <int N, int CASE>
 BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
                              double cn, double fz, double* dX) {
-    const int n = sh.n, nx = sh.nx();
+    const int n = sh.n(), nx = sh.nx();
     auto full = [&](int pr) {
         v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + vm.dF[pr] * fz;
         for (int j = 0; j < nx; ++j) d += vm.dP[pr][j] * X[j];
@@ -358,7 +411,7 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
 template <int N, int CASE>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
                          const double* X, const double* dX, double sn, double cn, double fz) {
-    const int n = sh.n, nx = sh.nx();
+    const int n = sh.n(), nx = sh.nx();
     double pv = 0.0;
     for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];
     if (sh.tmd()) {
@@ -406,7 +459,7 @@ struct TipAux {
 
 template <int N, int CASE>
 BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bool aux_always) {
-    const int n = sh.n;
+    const int n = sh.n();
     TipAux a{0.0, 0.0, 0.0, 0.0};
     if (n == 1) {
         a.w += q.pL[0] * X[0];
@@ -475,7 +528,7 @@ template <int N, int CASE>
 BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double* met, Mat imp,
                           Mat stick, StickState& ss, double t, double t1, bool steady,
                           double t_steady) {
-    const int n = sh.n, iy = sh.iy(), iyd = sh.iyd();
+    const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
     const WallResult w = wall_rule(met, imp, X[iy], X[iyd], t1, steady, q.half, q.e, q.meff,
                                    q.vimp);
     X[iy] = w.y;
@@ -517,6 +570,16 @@ struct BatchArgs {
 #ifdef BB_AVX2_CLONE
 inline bool cpu_has_avx2() {
     static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+}
+#endif
+#ifdef BB_AVX512_CLONE
+inline bool cpu_has_avx512() {
+    static const bool yes = __builtin_cpu_supports("avx2") &&
+                            __builtin_cpu_supports("avx512f") &&
+                            __builtin_cpu_supports("avx512vl") &&
+                            __builtin_cpu_supports("avx512dq") &&
+                            __builtin_cpu_supports("avx512bw");
     return yes;
 }
 #endif
