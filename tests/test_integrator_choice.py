@@ -1,6 +1,8 @@
 """The default integrator, "auto" (docs/model.md, section 5.3), and the friction readings
 chosen one at a time (make_system's friction_reading and friction_reaction)."""
 
+from dataclasses import replace
+
 import pytest
 
 from boringbar import Harmonic, Regenerative, make_system, simulate
@@ -51,8 +53,8 @@ def test_auto_sweep_is_exact_for_physical_and_batched_rk4_for_paper():
     """Each case of a mixed sweep takes its own integrator and equals the sweep forced
     to that integrator, bit for bit (the batched RK4 path included)."""
     options = SweepOptions(ratios=(0.98, 1.0), forces_n=(10.0,))
-    cases = (published_cases(("solid", "ball"), (0.1e-3,), (True,), preset="paper")
-             + published_cases(("solid", "ball"), (0.1e-3,), (True,), preset="physical"))
+    cases = [replace(c, label=f"{preset} {c.label}") for preset in ("paper", "physical")
+             for c in published_cases(("solid", "ball"), (0.1e-3,), (True,), preset=preset)]
     auto = sweep(cases, options, integration=Integration(duration_s=0.05))
     assert list(auto["integrator"].values) == ["rk4", "rk4", "exact", "exact"]
     assert auto.attrs["integrator"] == "auto"
