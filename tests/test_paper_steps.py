@@ -61,3 +61,14 @@ def test_the_published_ball_dampers_take_rk4_under_paper_and_exact_under_physica
         for friction in (False, True):
             assert [resolve_integrator("auto", make_system("ball", p, gap=gap, friction=friction))
                     for p in PRESET_ORDER] == ["rk4", "exact"]
+
+
+@pytest.mark.parametrize("quick", [True, False])
+def test_the_continuation_starts_after_the_diagrams_it_overlays(quick):
+    """Two steps run at once: the continuation draws each bifurcation step's diagram
+    under its branches, so it names those steps as the ones it comes after."""
+    steps = {s.key: s for s in published_steps(quick)}
+    diagrams = {k for k, s in steps.items() if s.section == "bifurcation"}
+    assert len(diagrams) == 4 and set(steps["continuation"].after) == diagrams
+    for step in steps.values():
+        assert set(step.after) <= set(steps), step.key

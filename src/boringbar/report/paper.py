@@ -27,7 +27,7 @@ import os
 import sys
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed, wait
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -149,6 +149,8 @@ class Step:
     variants: bool = True
     #: what the further columns run instead, if not the same: (argv, run)
     lean: tuple | None = None
+    #: the steps of the same column whose files it reads (it starts after them)
+    after: tuple[str, ...] = ()
 
     def for_column(self, column: str) -> Step:
         """The step as ``column`` runs it (a further column: its lean version)."""
@@ -343,7 +345,8 @@ def published_steps(quick: bool = False) -> list[Step]:
                       "Continued periodic orbits over the bifurcation diagrams",
                       ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
                        "--range", "30:50", "--step", "0.05", "--max-points", str(points)),
-                      _continuation_run(5.0, 50.0, points), variants=False))
+                      _continuation_run(5.0, 50.0, points), variants=False,
+                      after=tuple(s.key for s in steps if s.section == "bifurcation")))
     cells = "-1.5:1.5:" + ("8" if quick else "30")
     grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
     for key, force, ratio, fr, start in (("basins-10N-r1.01-off", "10", "1.01", "off", "0.5,0.5"),
@@ -472,8 +475,9 @@ def _run_steps(jobs: list[tuple], quick: bool, say) -> dict:
     """Each job's record, by (column, step key): those finished before read back,
     the others computed STEP_WORKERS at a time in worker processes (a step's runs
     fill the cores, but its searches, figures and files are serial, so a second
-    step keeps the other core busy). The first step that fails cancels those not
-    started and raises; the steps finished are kept on disk."""
+    step keeps the other core busy), each after the steps it reads (``Step.after``).
+    The first step that fails cancels those not started and raises; the steps
+    finished are kept on disk."""
     done, todo = {}, []
     for column, key, where, meta, label in jobs:
         record = _done(where / "summary.json", meta["command"])
@@ -487,9 +491,14 @@ def _run_steps(jobs: list[tuple], quick: bool, say) -> dict:
             done[job[:2]] = _worker_step(quick, *job, say)[0]
         return done
     context = multiprocessing.get_context("spawn")  # no fork of a threaded parent
+    after = {s.key: s.after for s in published_steps(quick)}
     with ProcessPoolExecutor(STEP_WORKERS, mp_context=context) as pool:
-        futures = {pool.submit(_worker_step, quick, *job): job[:2] for job in todo}
+        futures: dict = {}
         try:
+            for job in todo:
+                for key in after[job[1]]:  # the files it reads are written first
+                    wait([f for f, k in futures.items() if k == (job[0], key)])
+                futures[pool.submit(_worker_step, quick, *job)] = job[:2]
             for future in as_completed(futures):
                 record, messages = future.result()
                 for message in messages:
