@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, check_range
 from boringbar.shooting import (
     Flow,
     OrbitRefused,
@@ -203,13 +203,35 @@ class Walk:
     scale: np.ndarray
     lo: float
     hi: float
-    step: float = 0.01
+    step: float = 0.02
     max_points: int = 200
     min_step: float = 1e-6
-    max_step: float = 0.1
+    max_step: float = 0.025
     #: Move the section away from an event that comes near it (else the branch stops
     #: where an event crosses it).
     move_section: bool = True
+    #: The end of the range the branch walks towards (the other end is where it started).
+    stop: float = np.inf
+
+
+#: The largest step, relative to the range, by default: at least 40 points cross the
+#: range, so a multiplier that leaves the unit circle and comes back is seen.
+MAX_STEP = 0.025
+#: The default point budget allows this many crossings of the range at the largest step
+#: (folds, and the state's own share of the arclength): the budget is a safety net, the
+#: branch stops at the range's ends, a fold leaving it, a closed loop or a failure.
+CROSSINGS = 12
+
+
+#: The weight of the state's relative change in the arclength, against the parameter's
+#: change relative to the range (:func:`_scale`).
+STATE_SHARE = 0.25
+
+
+def point_budget(max_step: float) -> int:
+    """The default number of points of a branch whose steps are capped at ``max_step``
+    (relative to the range)."""
+    return int(np.ceil(CROSSINGS / max_step))
 
 
 #: An event closer than this (rad of forcing phase) to the section moves the section.
@@ -220,24 +242,26 @@ MAX_SECTION_MOVES = 100
 
 @one_blas_thread
 def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods: int = 1,
-                    step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
-                    max_step: float = 0.1, move_section: bool = True) -> Branch:
+                    step: float = 0.02, max_points: int | None = None, min_step: float = 1e-6,
+                    max_step: float = MAX_STEP, move_section: bool = True) -> Branch:
     """Continue the orbit through x0 (near a fixed point of P^periods) in parameter ``name``
-    from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|;
-    ``move_section``: see :class:`Walk`."""
+    from its value in ``fl`` towards ``stop``; ``step`` (the first), ``min_step`` and
+    ``max_step`` relative to |stop - start|; ``max_points`` by default from the largest
+    step (:func:`point_budget`); ``move_section``: see :class:`Walk`."""
     p0 = value_of(fl, check_parameter(fl.kind, name))
     span = abs(stop - p0)
     if not span > 0:
         raise ParameterError(f"range end {stop!r} equals the start value {p0!r}")
+    check_steps(step, min_step, max_step)
     br = Branch(name, periods)
     try:
         y, pr = _first(fl, name, fl, x0, p0, periods)
     except OrbitRefused as err:
         br.stop = f"refused at the start: {err}"
         return br
-    lo, hi = (stop, np.inf) if stop < p0 else (-np.inf, stop)
-    w = Walk(fl, name, fl, periods, _scale(y[:-1], span), lo, hi, step, max_points, min_step,
-             max_step, move_section)
+    w = Walk(fl, name, fl, periods, _scale(fl, y[:-1], span), min(p0, stop), max(p0, stop),
+             step, max_points or point_budget(max_step), min_step, max_step, move_section,
+             stop)
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
     t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)
@@ -245,20 +269,53 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
     return march(w, br, y, t)
 
 
-def _scale(x, span):
-    """The scales of (x, p): |x_i|, at least 1e-3 of the largest, and the range's span."""
-    return np.concatenate([np.maximum(np.abs(x), 1e-3 * np.max(np.abs(x))), [span]])
+def check_steps(step: float, min_step: float, max_step: float) -> None:
+    """The step control's bounds (relative to the range): step and max_step in (0, 0.5],
+    0 < min_step <= both, else a ParameterError naming the one out of range (a first step
+    above max_step is cut to it)."""
+    check_range("max_step", max_step, 0.0, 0.5, lo_open=True)
+    check_range("step", step, 0.0, 0.5, lo_open=True)
+    check_range("min_step", min_step, 0.0, min(step, max_step), lo_open=True)
+
+
+def _scale(fl: Flow, x, span):
+    """The scales of (x, p): one per block of the state (u, u', and each further entry:
+    y, y' or x_a, x_a'), its largest |x_i| (u and u' at least the other's size over
+    Omega, times Omega; the ball's y and y' at least the half gap, times Omega), and the
+    range's span for p.  Rescaled at every point, so the state's share of the arclength
+    is its relative change, counted at STATE_SHARE of the parameter's (so the steps
+    follow the parameter, and a state that doubles over the range does not take ten
+    times the points)."""
+    x = np.asarray(x, float)
+    n, om = fl.n, fl.omega
+    u, v = float(np.max(np.abs(x[:n]))), float(np.max(np.abs(x[n:2 * n])))
+    sc = np.concatenate([np.full(n, max(u, v / om)), np.full(n, max(v, om * u))])
+    rest = np.abs(x[2 * n:])
+    if fl.ball:
+        rest = np.maximum(rest, [fl.half, om * fl.half])
+    sc = np.concatenate([sc, np.maximum(rest, 1e-3 * max(float(np.max(sc)), 1e-300))])
+    return np.append(np.maximum(sc, 1e-300) / STATE_SHARE, span)
+
+
+def _rescaled(w: Walk, x, t):
+    """The walk with the scales of x, and the tangent t carried to them (unit length)."""
+    scale = _scale(w.fl, x, w.scale[-1])
+    t = t * w.scale / scale
+    return dataclasses.replace(w, scale=scale), t / np.linalg.norm(t)
 
 
 def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     """Follow ``br`` from its last point y (unknowns (x, p)) along the unit tangent t
-    (scaled) by predictor-corrector steps until p leaves [w.lo, w.hi], the event
-    sequence changes (located: a grazing), the orbit is refused or w.max_points."""
-    fl, name, ref, k, scale = w.fl, w.name, w.ref, w.periods, w.scale
-    h = w.step
+    (scaled) by predictor-corrector steps until p leaves [w.lo, w.hi] (at the far end,
+    or back at the start after a fold), the branch closes on itself, the event sequence
+    changes (located: a grazing), the orbit is refused or w.max_points.  The step grows
+    by 1.5 after a corrector of at most 3 iterations, shrinks by 0.7 after one of 7 or
+    more, is halved when the corrector fails, and is never more than w.max_step."""
+    fl, name, ref, k = w.fl, w.name, w.ref, w.periods
+    h = min(w.step, w.max_step)
     while len(br.points) < w.max_points:
         try:
-            yn, prn, its = correct(fl, name, ref, y + h * t * scale, t, scale, k)
+            yn, prn, its = correct(fl, name, ref, y + h * t * w.scale, t, w.scale, k)
             same = _kinds(prn.events) == _kinds(br.points[-1].events)
         except OrbitRefused as err:
             yn, same, why = None, False, str(err)
@@ -267,7 +324,8 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
                 h /= 2
                 continue
             if yn is None:
-                br.stop = why
+                br.stop = (f"failure at {name} = {y[-1]:.10g}: {why} (step {h:.2g} of the "
+                           "range)")
                 return br
             kind = _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
             moved = _move_section(br, w, t) if kind == "section" and w.move_section else None
@@ -275,23 +333,54 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
                 return br
             br.stop = ""
             w, y, t = moved
-            fl, ref, scale = w.fl, w.ref, w.scale
+            fl, ref = w.fl, w.ref
             continue
         pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events, fl.phase)
         kinds = _record_crossing(br, br.points[-1], pt, w)
         br.points.append(pt)
-        if not w.lo <= pt.value <= w.hi:
-            br.stop = "end of range"
+        if _left_range(br, w) or _closed(br, w, yn, h):
             return br
-        t_old, t = t, tangent_at(fl, name, ref, yn, prn, scale, k, t)
+        t_old, t = t, tangent_at(fl, name, ref, yn, prn, w.scale, k, t)
         _record_turn(br, w, t_old, t, kinds)
         y = yn
-        h = min(w.max_step, h * 1.3) if its <= 4 else h
+        w, t = _rescaled(w, y[:-1], t)
+        h = min(w.max_step, h * 1.5) if its <= 3 else (h * 0.7 if its >= 7 else h)
+        h = max(h, w.min_step)
         if w.move_section and _near_section(flow_with(fl, name, pt.value, ref), pt.events):
             w, y, t = _move_section(br, w, t) or (w, y, t)
-            fl, ref, scale = w.fl, w.ref, w.scale
-    br.stop = f"max_points = {w.max_points} reached"
+            fl, ref = w.fl, w.ref
+    br.stop = (f"point budget of {w.max_points} reached at {name} = "
+               f"{br.points[-1].value:.10g}")
     return br
+
+
+def _left_range(br: Branch, w: Walk) -> bool:
+    """Whether the last point left [w.lo, w.hi]; the stop reason says at which end (the
+    far one, or the start's after a fold turned the branch back)."""
+    p = br.points[-1].value
+    if w.lo <= p <= w.hi:
+        return False
+    end = w.lo if p < w.lo else w.hi
+    folds = [v for kind, v in br.events if kind == "fold"]
+    if end == w.stop or not folds:
+        br.stop = f"end of range at {br.parameter} = {end:.10g} (last point {p:.10g})"
+    else:
+        br.stop = (f"fold at {br.parameter} = {folds[-1]:.10g}: the branch turned and left "
+                   f"the range at {br.parameter} = {end:.10g} (last point {p:.10g})")
+    return True
+
+
+def _closed(br: Branch, w: Walk, y, h: float) -> bool:
+    """Whether the branch came back to its first point (a closed loop): within the step of
+    it, in scaled variables, after at least four points."""
+    first = br.points[0]
+    if len(br.points) < 5 or first.phase != br.points[-1].phase:
+        return False
+    d = np.linalg.norm((y - np.append(first.x, first.value)) / w.scale)
+    if d > h:
+        return False
+    br.stop = f"closed loop: back at the first point ({br.parameter} = {first.value:.10g})"
+    return True
 
 
 def _section_distance(fl: Flow, events, phase: float) -> float:
@@ -325,7 +414,7 @@ def _move_section(br: Branch, w: Walk, t: np.ndarray):
         x, pr = periodic_orbit(flow_with(fl, w.name, pt.value, ref), part.x, w.periods)
     except OrbitRefused:
         return None
-    moved = dataclasses.replace(w, fl=fl, ref=ref, scale=_scale(x, w.scale[-1]))
+    moved = dataclasses.replace(w, fl=fl, ref=ref, scale=_scale(fl, x, w.scale[-1]))
     br.points[-1] = Point(pt.value, x, multipliers(pr), pr.events, phase)
     br.section_moves += 1
     y = np.append(x, pt.value)
@@ -544,8 +633,8 @@ def _on_one_section(fl: Flow, name: str, a: Point, b: Point):
 
 @one_blas_thread
 def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, which: int = 0,
-                           step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
-                           max_step: float = 0.1) -> Branch:
+                           step: float = 0.01, max_points: int | None = None,
+                           min_step: float = 1e-6, max_step: float = MAX_STEP) -> Branch:
     """The period-2k branch born at the ``which``-th period-doubling point of ``br`` (period
     k, continued in ``name`` from ``fl``): located, then started along the eigenvector v
     of the -1 multiplier (the tangent (v, 0)) and continued as a fixed point of P^2k
@@ -562,8 +651,8 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     span = abs(stop - p)
     if not span > 0:
         raise ParameterError(f"stop = {stop!r} equals the period-doubling value {p!r}")
-    w = Walk(fl, name, fl, 2 * k, _scale(x, span), p - span, p + span, step, max_points,
-             min_step, max_step)
+    w = Walk(fl, name, fl, 2 * k, _scale(fl, x, span), p - span, p + span, step,
+             max_points or point_budget(max_step), min_step, max_step, stop=stop)
     pr = advance(flow_with(fl, name, p, fl), x, k)
     # (v, 0), orthogonal to the period-k branch: the step's hyperplane meets that branch
     # only O(sqrt(step)) away, so the corrector lands on the new one (O(step) away)

@@ -19,10 +19,18 @@ import numpy as np
 import xarray as xr
 
 from boringbar import __version__
-from boringbar._validate import ParameterError, check_choice, check_int, check_range
+from boringbar._validate import ParameterError, check_choice, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
-from boringbar.branch import PARAMETERS, check_parameter, continue_branch, flow_with, value_of
+from boringbar.branch import (
+    MAX_STEP,
+    PARAMETERS,
+    check_parameter,
+    check_steps,
+    continue_branch,
+    flow_with,
+    value_of,
+)
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
@@ -46,7 +54,9 @@ BRUTE_FORCE = {"force-n": "force", "ratio": "ratio"}
 class ContinuationOptions:
     """``parameter`` (one of :data:`boringbar.branch.PARAMETERS`) continued from its value
     in the system/forcing to ``stop``; ``force_n`` and ``ratio``: the forcing;
-    ``periods``: k of P^k; ``step``: the first step, relative to the range; ``max_points``;
+    ``periods``: k of P^k; ``step``: the first step and ``max_step`` the largest, relative
+    to the range; ``max_points``: the point budget (None: from ``max_step``,
+    :func:`boringbar.branch.point_budget`);
     ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
     rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
     smallest step the halving goes down to before the branch stops (relative)."""
@@ -57,20 +67,21 @@ class ContinuationOptions:
     ratio: float = 1.0
     periods: int = 1
     step: float = 0.02
-    max_points: int = 200
+    max_points: int | None = None
     start: str = "simulation"
     settle_periods: int = 200
     state: tuple | None = None
     min_step: float = 1e-6
+    max_step: float = MAX_STEP
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
         check_choice("start", self.start, STARTS)
         check_int("periods", self.periods, 1, 16)
-        check_int("max_points", self.max_points, 2, 100000)
+        if self.max_points is not None:
+            check_int("max_points", self.max_points, 2, 100000)
         check_int("settle_periods", self.settle_periods, 1, 100000)
-        check_range("step", self.step, 0.0, 0.5, lo_open=True)
-        check_range("min_step", self.min_step, 0.0, self.step, lo_open=True)
+        check_steps(self.step, self.min_step, self.max_step)
         if self.start == "state" and self.state is None:
             raise ParameterError("start = 'state' needs state = (u..., u'..., y, y') (ball), "
                                  "(u..., u'..., x_a, x_a') (TMD) or (u..., u'...)")
@@ -121,7 +132,7 @@ def compute(context: dict, point: int) -> dict:
     fl = make_flow(system, Harmonic(o.force_n, ratio=o.ratio))
     x0 = start_state(system, o, fl)
     br = continue_branch(fl, o.parameter, x0, o.stop, periods=o.periods, step=o.step,
-                         max_points=o.max_points, min_step=o.min_step)
+                         max_points=o.max_points, min_step=o.min_step, max_step=o.max_step)
     rms, states = [], []
     for pt in br.points:
         at = flow_with(dataclasses.replace(fl, phase=pt.phase), o.parameter, pt.value, fl)

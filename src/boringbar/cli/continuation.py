@@ -12,7 +12,7 @@ from boringbar.analysis.continuation import (
     continuation,
     summary,
 )
-from boringbar.branch import PARAMETERS
+from boringbar.branch import MAX_STEP, PARAMETERS
 from boringbar.cli.options import (
     Outcome,
     add_common,
@@ -47,9 +47,13 @@ def add_continue(sub) -> None:
     g.add_argument("--range", required=True, metavar="START:STOP",
                    help="START sets the parameter's first value, STOP the branch's end")
     g.add_argument("--periods", type=int, default=1, metavar="K", help="period-k orbits")
-    g.add_argument("--max-points", type=int, default=200, metavar="N")
+    g.add_argument("--max-points", type=int, default=None, metavar="N",
+                   help="point budget of a branch (default: from --max-step, enough to "
+                        "cross the range 12 times at the largest step)")
     g.add_argument("--step", type=float, default=0.02, metavar="S",
                    help="first step, relative to the range (default: 0.02)")
+    g.add_argument("--max-step", type=float, default=MAX_STEP, metavar="S",
+                   help=f"largest step, relative to the range (default: {MAX_STEP})")
     g.add_argument("--overlay", type=int, nargs="?", const=21, metavar="N",
                    help="draw the brute-force bifurcation diagram of the same case under the "
                         "branch: N values over --range (default 21), forward and backward "
@@ -99,7 +103,7 @@ def _cmd_continue(args) -> Outcome:
     system = make_system(bar, args.preset, **kw)
     options = ContinuationOptions(parameter=name, stop=stop, force_n=force, ratio=ratio,
                                   periods=args.periods, step=args.step,
-                                  max_points=args.max_points, start=args.start_from)
+                                  max_step=args.max_step, max_points=args.max_points, start=args.start_from)
     ds = continuation(system, Harmonic(force, ratio=ratio), options=options)
     out = summary(ds)
     files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/continuation.nc"))}
