@@ -310,8 +310,10 @@ def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
     reaches 1, bisected) to a real multiplier +1 while the branch goes on (a symmetry-
     breaking pitchfork: the sweeps beyond it sit on the two mirror-image asymmetric
     orbits).  Continuation must call it a branch point, not a fold, where the closed form
-    puts it (3e-5: the corrector's matrix is singular at a branch point, so Newton stops
-    converging close to it and the bisection ends there)."""
+    puts it (1e-9; 2.5e-11 seen: the bordered test function's zero, sampled where the
+    corrector's matrix is not yet singular), and give the other branch's direction from
+    the algebraic bifurcation equation on the null space of [G_x, G_p]: at this pitchfork
+    the eigenvector of the +1 multiplier, with p fixed."""
     system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
                          restitution=0.3)
     orbit = _closed_form(system, 0.7, 30.0)[1]
@@ -327,8 +329,18 @@ def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
             sysm.ball_mass, sysm.gap, sysm.restitution, sysm.force, sysm.omega)
             if o.admissible), key=lambda o: abs(o.phase - orbit.phase))
         return 1.0 if np.max(np.abs(near.multipliers)) < 1.0 else -1.0
-    expected = _bisect(stable, 0.82, 0.84, 1e-12)
-    assert abs(br.events[0][1] - expected) <= 1e-4 * expected, (br.events, expected)
+    expected = _bisect(stable, 0.82, 0.84, 1e-13)
+    assert abs(br.events[0][1] - expected) <= 1e-9 * expected, (br.events, expected)
+    bp = br.branch_points[0]
+    assert bp.y[-1] == br.events[0][1]
+    at = flow_with(dataclasses.replace(fl, phase=bp.phase), "ratio", bp.y[-1], fl)
+    pr = sh.advance(at, bp.y[:-1])
+    mu, vecs = np.linalg.eig(pr.jacobian)
+    v = np.real(vecs[:, np.argmin(np.abs(mu - 1.0))])
+    other = bp.other[:-1] * bp.scale[:-1]
+    assert np.min(np.abs(mu - 1.0)) < 1e-7
+    assert abs(other @ v) / np.linalg.norm(other) > 1 - 1e-8
+    assert abs(bp.other[-1]) < 1e-6
     values = [p.value for p in br.points]
     assert values == sorted(values) and values[-1] > expected  # no turn
 

@@ -119,6 +119,21 @@ class Branch:
     origin: Point | None = None
     #: How often the Poincare section was moved away from an event.
     section_moves: int = 0
+    #: The located branch points (:class:`BranchPoint`), for branch switching.
+    branch_points: list = field(default_factory=list)
+
+
+@dataclass
+class BranchPoint:
+    """A branch point: the orbit there (unknowns (x, p), on the section ``phase``), the
+    scales of the walk it was found on, the branch's tangent there and the other branch's
+    (the second null vector of [G_x, G_p], both scaled and of unit length)."""
+
+    y: np.ndarray
+    phase: float
+    scale: np.ndarray
+    tangent: np.ndarray
+    other: np.ndarray
 
 
 def _residual(fl, name, ref, x, p, k):
@@ -508,8 +523,12 @@ def _record_crossing(br, a, b, w: Walk | None = None) -> list:
             # a +1 multiplier where the branch does not turn: a branch point (here the
             # symmetric orbit's symmetry-breaking pitchfork), not a fold
             kind = "branch-point"
+        located = locate_branch_point(w, a, b) if kind == "branch-point" else None
         if turned is not None:
             value = turned
+        elif located is not None:
+            value = float(located.y[-1])
+            br.branch_points.append(located)
         elif len(found) == 1 and w is not None:
             value = locate_crossing(w, a, b, value)
         br.events.append((kind, value))
@@ -527,8 +546,9 @@ def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1
     a and b (one crossing between them): Brent's method, on the arclength of the corrector
     from a (its hyperplanes normal to the chord a -> b), on |mu| - 1 of the crossing
     multiplier (the (n_a + 1)-th largest in modulus going out, the n_a-th going in, n_a
-    the number outside at a).  ``fallback`` (the secant) if the corrector fails, as it
-    does close to a branch point, where its matrix is singular (two branches cross)."""
+    the number outside at a).  ``fallback`` (the secant) if the corrector fails.  (A
+    branch point is placed by :func:`locate_branch_point`: there the corrector's matrix
+    is singular.)"""
     ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
     d = (yb - ya) / w.scale
     ta = d / np.linalg.norm(d)
@@ -541,25 +561,111 @@ def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1
         s = brentq(g, 0.0, float(np.linalg.norm(d)), xtol=tol * np.linalg.norm(d), rtol=1e-15)
         return float(_along(w, ya, ta, s)[0][-1])
     except (OrbitRefused, ValueError):
-        return _bisect_crossing(w, ya, ta, float(np.linalg.norm(d)), n_a, fallback)
+        return fallback
 
 
-def _bisect_crossing(w: Walk, ya, ta, sb: float, n_a: int, p: float) -> float:
-    """Bisection on the arclength s in [0, sb] on the number of multipliers outside the
-    circle (n_a at s = 0) until the corrector fails (near a branch point): the parameter
-    of the nearest orbit found beyond the crossing, or ``p`` if none was."""
-    lo, hi = 0.0, sb
-    try:
-        while hi - lo > 1e-10 * sb:
-            mid = 0.5 * (lo + hi)
-            y, pr, _ = _along(w, ya, ta, mid)
-            if np.sum(np.abs(multipliers(pr)) > 1.0) == n_a:
-                lo = mid
-            else:
-                hi, p = mid, float(y[-1])
-    except OrbitRefused:
-        pass
-    return p
+#: Where the bordered test function of a branch point is sampled, as fractions of the
+#: step from the secant's estimate (with the two points themselves): far enough from the
+#: branch point for the corrector to converge (its matrix is singular there).
+BP_NODES = (-0.3, -0.15, 0.15, 0.3)
+
+
+def locate_branch_point(w: Walk, a: Point, b: Point) -> BranchPoint | None:
+    """The branch point between the branch points a and b, or None if the bordered test
+    function keeps its sign.  Along the chord a -> b (hyperplanes normal to it at
+    arclength s, each solved by the corrector from the secant of the two nearest solved
+    ones), the corrector's matrix A(s) = [G_x, G_p; t^T] turns singular at the branch
+    point; g(s), the last entry of the solution of the bordered system
+    [[A, b], [c^T, 0]] z = e (b, c: A's singular vectors of least singular value at a),
+    is smooth and changes sign there.  It is sampled at a, b and BP_NODES around the
+    secant's zero, and the zero of the polynomial through the samples is the branch
+    point; the polynomial through the orbits solved there gives its orbit.  No Newton
+    solve is made close to it, where A is too near singular for the corrector."""
+    ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
+    d = (yb - ya) / w.scale
+    length = float(np.linalg.norm(d))
+    ta = d / length
+    solved = {0.0: ya, length: yb}
+    border = np.linalg.svd(_corrector_matrix(w, ya, ta))
+    g = _test_function(w, ta, solved, border[0][:, -1], border[2][-1])
+    ga, gb = g(0.0), g(length)
+    if ga * gb > 0:
+        return None
+    guess = length * ga / (ga - gb)
+    nodes, values = [0.0, length], [ga, gb]
+    for q in BP_NODES:
+        try:
+            values.append(g(guess + q * length))
+            nodes.append(guess + q * length)
+        except OrbitRefused:
+            continue
+    fit = np.polynomial.Polynomial.fit(nodes, values, len(nodes) - 1)
+    roots = [r.real for r in fit.roots() if abs(r.imag) < 1e-9 * length]
+    if not roots:
+        return None
+    s0 = min(roots, key=lambda r: abs(r - guess))
+    ys = np.array([solved[q] for q in nodes]) / w.scale
+    paths = [np.polynomial.Polynomial.fit(nodes, ys[:, i], len(nodes) - 1)
+             for i in range(ys.shape[1])]
+    y = np.array([f(s0) for f in paths]) * w.scale
+    slope = np.array([f.deriv()(s0) for f in paths])
+    return _branch_point(w, y, slope / np.linalg.norm(slope))
+
+
+def _corrector_matrix(w: Walk, y, normal) -> np.ndarray:
+    """[G_x, G_p; normal^T] at y, in the walk's scaled variables (G_p with a step of 1e-5
+    of p: its truncation error 1e-10, its rounding 1e-11, relative)."""
+    pr = advance(flow_with(w.fl, w.name, y[-1], w.ref), y[:-1], w.periods)
+    dp = 1e-5 * max(abs(y[-1]), 1e-3)
+    J = _jacobian(w.fl, w.name, w.ref, y[:-1], y[-1], w.periods, pr, dp) * w.scale
+    return np.vstack([J, normal])
+
+
+def _test_function(w: Walk, ta, solved: dict, b, c):
+    """g(s) of :func:`locate_branch_point`; ``solved`` collects the orbits it solves."""
+    def g(s):
+        if s not in solved:
+            near = sorted(solved, key=lambda q: abs(q - s))[:2]
+            y0, y1 = solved[near[0]], solved[near[1]]
+            guess = y0 + (s - near[0]) / (near[1] - near[0]) * (y1 - y0)
+            solved[s] = correct(w.fl, w.name, w.ref, guess, ta, w.scale, w.periods)[0]
+        A = _corrector_matrix(w, solved[s], ta)
+        M = np.block([[A, b[:, None]], [c[None, :], np.zeros((1, 1))]])
+        rhs = np.zeros(len(M))
+        rhs[-1] = 1.0
+        return float(np.linalg.solve(M, rhs)[-1])
+    return g
+
+
+def _branch_point(w: Walk, y, tangent) -> BranchPoint:
+    """The :class:`BranchPoint` at y.  The null space of [G_x, G_p] is two-dimensional
+    there: the branch's tangent phi1 and phi2 orthogonal to it.  The other branch's
+    tangent is the second root of the algebraic bifurcation equation
+    psi . G''[a phi1 + b phi2, a phi1 + b phi2] = 0 (psi: the left null vector; the first
+    root is phi1, so psi . G''[phi1, phi1] = 0): (a, b) = (-c11 ... ) with
+    c12 = psi . G''[phi1, phi2], c22 = psi . G''[phi2, phi2], i.e. -c22 phi1 + 2 c12 phi2.
+    (At a symmetry-breaking pitchfork that is the eigenvector of the +1 multiplier with
+    p fixed; phi2 alone mixes in some of the branch's own direction.)"""
+    u, _, vt = np.linalg.svd(_corrector_matrix(w, y, np.zeros(len(y)))[:-1])
+    null, psi = vt[-2:], u[:, -1]
+    q = null @ tangent
+    phi1 = null.T @ (q / np.linalg.norm(q))
+    phi2 = null.T @ np.array([-q[1], q[0]]) / np.linalg.norm(q)
+    c12, c22 = (_second_derivative(w, y, psi, phi1, phi2),
+                _second_derivative(w, y, psi, phi2, phi2))
+    other = -c22 * phi1 + 2.0 * c12 * phi2
+    if not np.linalg.norm(other) > 0:
+        other = phi2
+    return BranchPoint(y, w.fl.phase, w.scale.copy(), phi1, other / np.linalg.norm(other))
+
+
+def _second_derivative(w: Walk, y, psi, d1, d2, h: float = 1e-4) -> float:
+    """psi . G''[d1, d2] at y (d1, d2 scaled), by central differences of step h."""
+    def G(dy):
+        z = y + dy * w.scale
+        return advance(flow_with(w.fl, w.name, z[-1], w.ref), z[:-1], w.periods).x - z[:-1]
+    total = (G(h * (d1 + d2)) - G(h * (d1 - d2)) - G(h * (d2 - d1)) + G(-h * (d1 + d2)))
+    return float(psi @ total) / (4.0 * h * h)
 
 
 def locate_fold(w: Walk, a: Point, b: Point, tol: float = 1e-12) -> float | None:
