@@ -225,7 +225,8 @@ class Walk:
     #: Move the section away from an event that comes near it (else the branch stops
     #: where an event crosses it).
     move_section: bool = True
-    #: The end of the range the branch walks towards (the other end is where it started).
+    #: The end of the range the branch walks towards (the other end is where it started;
+    #: NaN: either end is the range's end, as for a branch switched to).
     stop: float = np.inf
 
 
@@ -258,11 +259,13 @@ MAX_SECTION_MOVES = 100
 @one_blas_thread
 def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods: int = 1,
                     step: float = 0.02, max_points: int | None = None, min_step: float = 1e-6,
-                    max_step: float = MAX_STEP, move_section: bool = True) -> Branch:
+                    max_step: float = MAX_STEP, move_section: bool = True,
+                    bounds: tuple | None = None) -> Branch:
     """Continue the orbit through x0 (near a fixed point of P^periods) in parameter ``name``
     from its value in ``fl`` towards ``stop``; ``step`` (the first), ``min_step`` and
     ``max_step`` relative to |stop - start|; ``max_points`` by default from the largest
-    step (:func:`point_budget`); ``move_section``: see :class:`Walk`."""
+    step (:func:`point_budget`); ``move_section``: see :class:`Walk`; ``bounds``: the
+    range (lo, hi), if not [start, stop] (a branch from inside the range)."""
     p0 = value_of(fl, check_parameter(fl.kind, name))
     span = abs(stop - p0)
     if not span > 0:
@@ -274,8 +277,8 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
     except OrbitRefused as err:
         br.stop = f"refused at the start: {err}"
         return br
-    w = Walk(fl, name, fl, periods, _scale(fl, y[:-1], span), min(p0, stop), max(p0, stop),
-             step, max_points or point_budget(max_step), min_step, max_step, move_section,
+    lo, hi = bounds or (min(p0, stop), max(p0, stop))
+    w = Walk(fl, name, fl, periods, _scale(fl, y[:-1], span), lo, hi, step, max_points or point_budget(max_step), min_step, max_step, move_section,
              stop)
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
@@ -334,15 +337,20 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             same = _kinds(prn.events) == _kinds(br.points[-1].events)
         except OrbitRefused as err:
             yn, same, why = None, False, str(err)
+        if yn is not None and np.linalg.norm((yn - y) / w.scale) > 2.0 * h:
+            # the corrector went to another orbit, far from the prediction: as a failure
+            yn, same, why = None, False, "the corrector left the branch"
         if not same:
             if yn is None and h / 2 >= w.min_step:
                 h /= 2
                 continue
-            if yn is None:
+            located = _beyond(w, y, t, h) if yn is None else \
+                locate_boundary(fl, name, ref, y, yn[-1], k)
+            if located is None:
                 br.stop = (f"failure at {name} = {y[-1]:.10g}: {why} (step {h:.2g} of the "
                            "range)")
                 return br
-            kind = _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
+            kind = _boundary(br, w, located)
             moved = _move_section(br, w, t) if kind == "section" and w.move_section else None
             if moved is None:
                 return br
@@ -369,6 +377,19 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     return br
 
 
+def _beyond(w: Walk, y, t, h: float):
+    """Where the corrector fails at the smallest step: a change of the event sequence
+    within four such steps ahead in p (:func:`locate_boundary`), or None (a real failure:
+    no orbit with the old sequence reaches that far, or it reaches all the way)."""
+    p_far = y[-1] + 4.0 * h * t[-1] * w.scale[-1]
+    if p_far == y[-1]:
+        return None
+    last, width = locate_boundary(w.fl, w.name, w.ref, y, p_far, w.periods)
+    if last is None or abs(last.value - p_far) <= 2 * width:
+        return None
+    return last, width
+
+
 def _left_range(br: Branch, w: Walk) -> bool:
     """Whether the last point left [w.lo, w.hi]; the stop reason says at which end (the
     far one, or the start's after a fold turned the branch back)."""
@@ -377,7 +398,7 @@ def _left_range(br: Branch, w: Walk) -> bool:
         return False
     end = w.lo if p < w.lo else w.hi
     folds = [v for kind, v in br.events if kind == "fold"]
-    if end == w.stop or not folds:
+    if end == w.stop or not folds or not np.isfinite(w.stop):
         br.stop = f"end of range at {br.parameter} = {end:.10g} (last point {p:.10g})"
     else:
         br.stop = (f"fold at {br.parameter} = {folds[-1]:.10g}: the branch turned and left "
@@ -604,6 +625,8 @@ def locate_branch_point(w: Walk, a: Point, b: Point) -> BranchPoint | None:
     if not roots:
         return None
     s0 = min(roots, key=lambda r: abs(r - guess))
+    if not 0.0 <= s0 <= length:
+        return None
     ys = np.array([solved[q] for q in nodes]) / w.scale
     paths = [np.polynomial.Polynomial.fit(nodes, ys[:, i], len(nodes) - 1)
              for i in range(ys.shape[1])]
@@ -740,12 +763,14 @@ def _on_one_section(fl: Flow, name: str, a: Point, b: Point):
 @one_blas_thread
 def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, which: int = 0,
                            step: float = 0.01, max_points: int | None = None,
-                           min_step: float = 1e-6, max_step: float = MAX_STEP) -> Branch:
+                           min_step: float = 1e-6, max_step: float = MAX_STEP,
+                           bounds: tuple | None = None) -> Branch:
     """The period-2k branch born at the ``which``-th period-doubling point of ``br`` (period
     k, continued in ``name`` from ``fl``): located, then started along the eigenvector v
     of the -1 multiplier (the tangent (v, 0)) and continued as a fixed point of P^2k
     while p stays between the point and ``stop``, or on the other side within the same
-    distance (a subcritical doubling turns back).  Its first event is the doubling."""
+    distance (a subcritical doubling turns back), or within ``bounds`` (lo, hi) if
+    given.  Its first event is the doubling."""
     k = br.periods
     pairs = [(a, b) for a, b in zip(br.points, br.points[1:], strict=False)
              if any(c[0] == "period-doubling" for c in _crossings(a.multipliers, b.multipliers))]
@@ -757,7 +782,8 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     span = abs(stop - p)
     if not span > 0:
         raise ParameterError(f"stop = {stop!r} equals the period-doubling value {p!r}")
-    w = Walk(fl, name, fl, 2 * k, _scale(fl, x, span), p - span, p + span, step,
+    lo, hi = bounds or (p - span, p + span)
+    w = Walk(fl, name, fl, 2 * k, _scale(fl, x, span), lo, hi, step,
              max_points or point_budget(max_step), min_step, max_step, stop=stop)
     pr = advance(flow_with(fl, name, p, fl), x, k)
     # (v, 0), orthogonal to the period-k branch: the step's hyperplane meets that branch
