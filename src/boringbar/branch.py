@@ -337,15 +337,15 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             same = _kinds(prn.events) == _kinds(br.points[-1].events)
         except OrbitRefused as err:
             yn, same, why = None, False, str(err)
-        if yn is not None and np.linalg.norm((yn - y) / w.scale) > 2.0 * h:
+        far = yn is not None and np.linalg.norm((yn - y) / w.scale) > 2.0 * h
+        if far and same:
             # the corrector went to another orbit, far from the prediction: as a failure
             yn, same, why = None, False, "the corrector left the branch"
         if not same:
-            if yn is None and h / 2 >= w.min_step:
+            located = _sequence_change(w, y, t, h, yn, far)
+            if located is None and h / 2 >= w.min_step:
                 h /= 2
                 continue
-            located = _beyond(w, y, t, h) if yn is None else \
-                locate_boundary(fl, name, ref, y, yn[-1], k)
             if located is None:
                 br.stop = (f"failure at {name} = {y[-1]:.10g}: {why} (step {h:.2g} of the "
                            "range)")
@@ -377,11 +377,24 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     return br
 
 
-def _beyond(w: Walk, y, t, h: float):
-    """Where the corrector fails at the smallest step: a change of the event sequence
-    within four such steps ahead in p (:func:`locate_boundary`), or None (a real failure:
-    no orbit with the old sequence reaches that far, or it reaches all the way)."""
-    p_far = y[-1] + 4.0 * h * t[-1] * w.scale[-1]
+def _sequence_change(w: Walk, y, t, h: float, yn, far: bool):
+    """The change of the event sequence a failed step points to, located
+    (:func:`locate_boundary`), or None.  The corrector found an orbit with another
+    sequence: the change lies between y and it (between y and the prediction if the
+    orbit is far from it: the state at the section jumps when an event crosses it, but
+    another orbit may also lie there).  The corrector failed: only at the smallest step,
+    within four such steps ahead."""
+    if yn is not None:
+        return _beyond(w, y, yn[-1] if not far else y[-1] + h * t[-1] * w.scale[-1])
+    if h / 2 >= w.min_step:
+        return None
+    return _beyond(w, y, y[-1] + 4.0 * h * t[-1] * w.scale[-1])
+
+
+def _beyond(w: Walk, y, p_far: float):
+    """A change of the event sequence between y and ``p_far`` (:func:`locate_boundary`),
+    or None (no orbit with the old sequence reaches past y, or it reaches all the way:
+    no change there)."""
     if p_far == y[-1]:
         return None
     last, width = locate_boundary(w.fl, w.name, w.ref, y, p_far, w.periods)

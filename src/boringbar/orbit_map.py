@@ -245,8 +245,9 @@ def _doubled(fl: Flow, br: Branch, which: int, om: OrbitMap, o: MapOptions):
     return make
 
 
-#: How far past a grazing (of the range) the orbit with the new impact sequence is sought.
-GRAZING_STEPS = (1e-6, 1e-4, 1e-3)
+#: How far past a grazing (of the range) the orbit with the new impact sequence is sought
+#: (closest first; too close, its new impact can be slower than the capture threshold).
+GRAZING_STEPS = (1e-6, 1e-5, 1e-4, 1e-3)
 
 
 def _grazed(fl: Flow, br: Branch, om: OrbitMap, o: MapOptions):
