@@ -19,7 +19,15 @@ import numpy as np
 
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.shooting import Flow, OrbitRefused, advance, make_flow, multipliers, periodic_orbit
+from boringbar.shooting import (
+    Flow,
+    OrbitRefused,
+    advance,
+    make_flow,
+    multipliers,
+    one_blas_thread,
+    periodic_orbit,
+)
 from boringbar.simulate import State, simulate
 
 #: A settled state repeating after k periods to this fraction of its size is tried as a
@@ -58,6 +66,7 @@ def initial_states(fl: Flow) -> list[np.ndarray]:
     return out
 
 
+@one_blas_thread
 def periodic_attractors(system: System, forcing: Harmonic, *, settle_periods: int = 300,
                         max_period: int = 2) -> list[Attractor]:
     """The distinct stable periodic orbits of period <= ``max_period`` the exact integrator
@@ -86,7 +95,7 @@ def _settled(fl: Flow, x, max_period: int) -> Attractor | None:
             pr = advance(fl, x, k)
             if np.max(np.abs(pr.x - x)) > SETTLED * size:
                 continue
-            xp, pr = periodic_orbit(fl, x, k)
+            xp, pr = periodic_orbit(fl, x, k, rms=False)
         except OrbitRefused:
             continue
         mu = multipliers(pr)

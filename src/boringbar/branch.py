@@ -154,9 +154,13 @@ def _kinds(events):
 
 
 def correct(fl, name, ref, y0, tangent, scale, k, tol=1e-11, max_iter=12):
-    """Newton on G = 0 and tangent . (y - y0) / scale = 0 from y0; (y, Period, iterations)."""
+    """Newton on G = 0 and tangent . (y - y0) / scale = 0 from y0; (y, Period, iterations).
+    Given up as soon as a step from the fourth on is larger than the one before: Newton
+    is not converging there, and each further iteration costs three maps (most of a
+    branch's time went into correctors that failed after all their iterations)."""
     y = y0.copy()
     dp = 1e-7 * max(abs(y0[-1]), 1e-3)
+    last = np.inf
     for it in range(max_iter):
         r, pr = _residual(fl, name, ref, y[:-1], y[-1], k)
         Jx = _jacobian(fl, name, ref, y[:-1], y[-1], k, pr, dp)
@@ -164,10 +168,14 @@ def correct(fl, name, ref, y0, tangent, scale, k, tol=1e-11, max_iter=12):
         rhs = -np.concatenate([r, [tangent @ ((y - y0) / scale)]])
         dy = newton_step(A, rhs) * scale
         y = y + dy
-        if np.max(np.abs(dy / scale)) < tol:
+        size = float(np.max(np.abs(dy / scale)))
+        if size < tol:
             r, pr = _residual(fl, name, ref, y[:-1], y[-1], k)
             check_residual(r, y[:-1], "the corrector")
             return y, pr, it + 1
+        if it >= 3 and size > last:
+            break
+        last = size
     raise OrbitRefused("the corrector did not converge")
 
 
@@ -460,7 +468,8 @@ def _move_section(br: Branch, w: Walk, t: np.ndarray):
         dt = ((phase - at.phase) % (2.0 * np.pi)) / at.omega
         part = advance(at, pt.x, duration=dt)
         fl, ref = (dataclasses.replace(f, phase=phase) for f in (w.fl, w.ref))
-        x, pr = periodic_orbit(flow_with(fl, w.name, pt.value, ref), part.x, w.periods)
+        x, pr = periodic_orbit(flow_with(fl, w.name, pt.value, ref), part.x, w.periods,
+                               rms=False)
     except OrbitRefused:
         return None
     moved = dataclasses.replace(w, fl=fl, ref=ref, scale=_scale(fl, x, w.scale[-1]))
@@ -495,10 +504,11 @@ def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
     kinds = _kinds(advance(flow_with(fl, name, y[-1], ref), y[:-1], k).events)
     lo, hi, x, last = y[-1], p_far, y[:-1], None
     width = abs(hi - lo)
-    while abs(hi - lo) > tol * width:
+    while abs(hi - lo) > max(tol * width, 4 * np.finfo(float).eps * abs(lo)):
         mid = 0.5 * (lo + hi)
         try:
-            xm, pr = periodic_orbit(flow_with(fl, name, mid, ref), x, k)
+            xm, pr = periodic_orbit(flow_with(fl, name, mid, ref), x, k, max_iter=12,
+                                    rms=False)
             same = _kinds(pr.events) == kinds
         except OrbitRefused:
             same = False
@@ -732,7 +742,7 @@ def locate_fold(w: Walk, a: Point, b: Point, tol: float = 1e-12) -> float | None
 def _minus_one(fl, name, ref, x, p, k):
     """The period-k orbit at p (Newton from x), its Period and |mu| - 1 of the multiplier
     nearest -1."""
-    x, pr = periodic_orbit(flow_with(fl, name, p, ref), x, k)
+    x, pr = periodic_orbit(flow_with(fl, name, p, ref), x, k, rms=False)
     mu = multipliers(pr)
     return x, pr, float(abs(mu[np.argmin(np.abs(mu + 1.0))]) - 1.0)
 

@@ -35,7 +35,15 @@ from boringbar.branch import (
     tangent_at,
     value_of,
 )
-from boringbar.shooting import Flow, OrbitRefused, advance, carry, multipliers, periodic_orbit
+from boringbar.shooting import (
+    Flow,
+    OrbitRefused,
+    advance,
+    carry,
+    multipliers,
+    one_blas_thread,
+    periodic_orbit,
+)
 
 #: Events a branch can be born at ("start": the map's first orbit; "seed": an attractor).
 BORN = ("start", "seed", "branch-point", "period-doubling", "grazing")
@@ -67,6 +75,8 @@ class OrbitMap:
     hi: float
     branches: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    #: Pairs of branches that are each other's mirror image (index -> index).
+    mirrors: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -84,11 +94,14 @@ class MapOptions:
     max_points: int | None = None
 
 
+@one_blas_thread
 def orbit_map(fl: Flow, name: str, x0, stop: float, *, seeds=(), periods: int = 1,
               options: MapOptions | None = None) -> OrbitMap:
     """The map of ``name`` from its value in ``fl`` to ``stop``: the orbit through x0 (a
     fixed point of P^periods, near) continued towards ``stop``; every seed (value, x at
-    phase 0, periods) not on it continued both ways; their children (module docstring)."""
+    phase 0, periods) not on it continued both ways; their children (module docstring).
+    A branch whose mirror image is on the map is that image mirrored (:func:`mirrored`),
+    not continued again."""
     o = options or MapOptions()
     p0 = value_of(fl, name)
     om = OrbitMap(name, min(p0, stop), max(p0, stop))
@@ -104,25 +117,91 @@ def orbit_map(fl: Flow, name: str, x0, stop: float, *, seeds=(), periods: int = 
                             "branch(es) not followed")
             break
         parent, born, flow, make = todo.pop(0)
-        if born[0] == "seed" and _known_seed(om, make):
+        if (born[0] == "seed" and _known_seed(om, make)) or _by_symmetry(om, parent, born, make):
             continue
-        try:
-            br = make()
-        except OrbitRefused as err:
-            om.notes.append(f"no branch from the {born[0]} at {born[1]:.10g}: {err}")
+        br = _follow(om, born, make)
+        if br is None or _duplicate(om, br, parent):
             continue
-        if not br.points:
-            om.notes.append(f"no branch from the {born[0]} at {born[1]:.10g}: {br.stop}")
-            continue
-        if _duplicate(om, br, parent):
-            om.notes.append(f"a branch born at {born[0]} {born[1]:.10g} retraces one on the "
-                            "map: dropped")
-            continue
-        om.branches.append(MapBranch(br, parent, born, flow, getattr(make, "seed", (0,) * 5)[4]
-                                     if born[0] == "seed" else None))
+        i = len(om.branches)
+        _add(om, MapBranch(br, parent, born, flow, getattr(make, "seed", (0,) * 5)[4]
+                           if born[0] == "seed" else None))
         if o.switch:
-            todo += _children(om, len(om.branches) - 1, o)
+            todo += _children(om, i, o)
     return om
+
+
+def _follow(om: OrbitMap, born: tuple, make) -> Branch | None:
+    """The branch ``make`` continues, or None (noted) if it has no points."""
+    try:
+        br = make()
+    except OrbitRefused as err:
+        om.notes.append(f"no branch from the {born[0]} at {born[1]:.10g}: {err}")
+        return None
+    if not br.points:
+        om.notes.append(f"no branch from the {born[0]} at {born[1]:.10g}: {br.stop}")
+        return None
+    return br
+
+
+def _add(om: OrbitMap, mb: MapBranch) -> None:
+    """Add mb; if its parent has a mirror image on the map, mb's image too (its parent
+    that image): the children of a mirrored branch are the images of the original's."""
+    om.branches.append(mb)
+    i = len(om.branches) - 1
+    if mb.parent is not None and mb.parent in om.mirrors:
+        _add_mirror(om, i, om.mirrors[mb.parent])
+
+
+def _add_mirror(om: OrbitMap, i: int, parent: int | None) -> bool:
+    """Add the mirror image of branch i (with ``parent``) if the system maps i's first
+    orbit onto an orbit (checked: P^k of the image is the image, 1e-9); whether it did."""
+    mb = om.branches[i]
+    image = mirrored(mb.flow, mb.branch)
+    if image is None:
+        return False
+    om.branches.append(MapBranch(image, parent, mb.born, mb.flow, mb.seed))
+    j = len(om.branches) - 1
+    om.mirrors[i], om.mirrors[j] = j, i
+    return True
+
+
+def _by_symmetry(om: OrbitMap, parent, born: tuple, make) -> bool:
+    """Whether the branch ``make`` would follow is the mirror image of one on the map, and
+    so added as that image: the other direction at a branch point of a symmetric orbit
+    (the pitchfork's two branches), or a seed whose image lies on a branch."""
+    if getattr(make, "sibling", None) is not None:
+        sib = [i for i, mb in enumerate(om.branches)
+               if mb.parent == parent and mb.born == born and i not in om.mirrors]
+        return bool(sib) and make.sibling() and _add_mirror(om, sib[0], parent)
+    if getattr(make, "seed", None) is None:
+        return False
+    value, x, k, at, i = make.seed
+    image = [j for j, mb in enumerate(om.branches) if mb.seed != i and j not in om.mirrors
+             and on_branch(mb, value, -x, k, dataclasses.replace(at, phase=np.pi))]
+    added = [_add_mirror(om, j, None) for j in image]
+    return any(added)
+
+
+def mirrored(fl: Flow, br: Branch) -> Branch | None:
+    """The mirror image of ``br`` under the system's symmetry (y -> -y, u -> -u,
+    t -> t + T/2: the walls, the forcing and the friction law are odd): each point
+    (p, x at phase phi) becomes (p, -x at phase phi + pi), with the same multipliers, its
+    events half a period later and the walls swapped.  None if the image of the first
+    point is not a fixed point of P^k (1e-9 of |x|): the system is not symmetric."""
+    first = br.points[0]
+    at = flow_with(dataclasses.replace(fl, phase=(first.phase + np.pi) % (2 * np.pi)),
+                   br.parameter, first.value, fl)
+    if np.max(np.abs(advance(at, -first.x, br.periods).x + first.x)) > \
+            1e-9 * np.max(np.abs(first.x)):
+        return None
+    swap = {"impact+": "impact-", "impact-": "impact+", "reversal": "reversal"}
+
+    def image(pt: Point) -> Point:
+        half = np.pi / flow_with(fl, br.parameter, pt.value, fl).omega
+        return Point(pt.value, -pt.x, pt.multipliers,
+                     [(t + half, swap[k]) for t, k in pt.events], (pt.phase + np.pi) % (2 * np.pi))
+    return Branch(br.parameter, br.periods, [image(p) for p in br.points], list(br.events),
+                  br.stop, None, br.section_moves)
 
 
 def _steps(o: MapOptions) -> dict:
@@ -134,6 +213,8 @@ def _seeded(at: Flow, name: str, x, end: float, k: int, o: MapOptions, i: int, o
     """A branch from the i-th seed x (at phase 0, of period k) towards ``end`` within the
     map's range; the seed rides on the callable (``seed``) so the map can see whether it
     is already on a branch."""
+    at = dataclasses.replace(at, phase=0.0)
+
     def make():
         return continue_branch(at, name, x, end, periods=k, bounds=(om.lo, om.hi),
                                **_steps(o))
@@ -148,7 +229,7 @@ def _known_seed(om: OrbitMap, make) -> bool:
 
 
 def on_branch(mb: MapBranch, value: float, x, k: int, at: Flow) -> bool:
-    """Whether the orbit through x (at phase 0 of the flow ``at``, of period k, at
+    """Whether the orbit through x (at the phase of the flow ``at``, of period k, at
     ``value``) is on the branch: its state, carried to the section of the branch's points
     around ``value``, within SAME_ORBIT of theirs interpolated linearly (for a branch of
     period 2k, either of the orbit's states there)."""
@@ -161,7 +242,7 @@ def on_branch(mb: MapBranch, value: float, x, k: int, at: Flow) -> bool:
             continue
         s = (value - a.value) / (b.value - a.value) if b.value != a.value else 0.0
         xi = a.x + s * (b.x - a.x)
-        here = carry(dataclasses.replace(at, phase=0.0), x, a.phase)
+        here = carry(at, x, a.phase)
         f = dataclasses.replace(at, phase=a.phase)
         states = [here] + [advance(f, here, j).x for j in range(1, br.periods)]
         size = float(np.max(np.abs(xi)))
@@ -207,12 +288,25 @@ def _children(om: OrbitMap, i: int, o: MapOptions) -> list:
 
 def _switched(fl: Flow, br: Branch, bp: BranchPoint, sign: float, om: OrbitMap,
               o: MapOptions):
-    """The other branch at the branch point bp, started along sign * bp.other."""
+    """The other branch at the branch point bp, started along sign * bp.other; the second
+    direction knows (``sibling``) whether the branch point's orbit is symmetric, so that
+    its branch is the first's mirror image."""
     def make():
         return switch_branch_point(fl, br.parameter, br, bp, sign, (om.lo, om.hi), o)
+    if sign < 0:
+        make.sibling = lambda: symmetric(fl, br.parameter, bp)
     return make
 
 
+def symmetric(fl: Flow, name: str, bp: BranchPoint) -> bool:
+    """Whether the orbit at the branch point is its own mirror image: x(phase + pi) = -x."""
+    at = flow_with(dataclasses.replace(fl, phase=bp.phase), name, bp.y[-1], fl)
+    x = bp.y[:-1]
+    return bool(np.max(np.abs(carry(at, x, (bp.phase + np.pi) % (2 * np.pi)) + x))
+                <= 1e-7 * np.max(np.abs(x)))
+
+
+@one_blas_thread
 def switch_branch_point(fl: Flow, name: str, br: Branch, bp: BranchPoint, sign: float,
                         bounds: tuple, o: MapOptions | None = None) -> Branch:
     """The other branch through the branch point bp of ``br`` (continued from ``fl``),
@@ -258,6 +352,7 @@ def _grazed(fl: Flow, br: Branch, om: OrbitMap, o: MapOptions):
     return make
 
 
+@one_blas_thread
 def cross_grazing(fl: Flow, br: Branch, bounds: tuple, o: MapOptions | None = None) -> Branch:
     """The orbit past the grazing that ends ``br`` (continued from ``fl``), with another
     event sequence, continued on towards the end of ``bounds`` the branch was heading to."""
@@ -273,7 +368,8 @@ def cross_grazing(fl: Flow, br: Branch, bounds: tuple, o: MapOptions | None = No
         if (p - end) * sign >= 0:
             break
         try:
-            x, pr = periodic_orbit(flow_with(at, br.parameter, p, fl), last.x, br.periods)
+            x, pr = periodic_orbit(flow_with(at, br.parameter, p, fl), last.x, br.periods,
+                                   rms=False)
         except OrbitRefused as err:
             why = str(err)
             continue
@@ -319,7 +415,7 @@ def _distance(mb: MapBranch, value: float, x):
     near = min(br.points, key=lambda p: abs(p.value - value))
     at = flow_with(dataclasses.replace(fl, phase=near.phase), br.parameter, value, fl)
     try:
-        xb, pr = periodic_orbit(at, near.x, br.periods)
+        xb, pr = periodic_orbit(at, near.x, br.periods, rms=False)
         z = carry(at, xb, 0.0)
     except OrbitRefused:
         return None

@@ -416,8 +416,9 @@ def check_residual(r: np.ndarray, x: np.ndarray, what: str = "Newton") -> None:
 
 @one_blas_thread
 def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-12,
-                   max_iter: int = 30) -> tuple[np.ndarray, Period]:
-    """Newton on P^k(x) - x = 0 from x0; the fixed point and its :class:`Period`."""
+                   max_iter: int = 30, rms: bool = True) -> tuple[np.ndarray, Period]:
+    """Newton on P^k(x) - x = 0 from x0; the fixed point and its :class:`Period` (with the
+    tip's RMS if ``rms``: 512 matrix exponentials a period, more than the Newton solve)."""
     x = np.asarray(x0, float).copy()
     scale = np.maximum(np.abs(x), 1e-12)
     for _ in range(max_iter):
@@ -426,7 +427,7 @@ def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-1
         dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x = x + dx
         if np.max(np.abs(dx) / np.maximum(np.abs(x), scale)) < tol:
-            pr = advance(fl, x, periods, rms=True)
+            pr = advance(fl, x, periods, rms=rms)
             check_residual(pr.x - x, x)
             return x, pr
     raise OrbitRefused(f"Newton did not converge in {max_iter} iterations "

@@ -81,7 +81,7 @@ class ContinuationOptions:
     #: Parameter values (spread over the range) at which brute force seeds branches
     #: (force-n and ratio only; 0: none).
     seeds: int = 3
-    max_branches: int = 12
+    max_branches: int = 24
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
@@ -144,29 +144,31 @@ def compute(context: dict, point: int) -> dict:
     system, o = context["system"], context["options"]
     fl = make_flow(system, Harmonic(o.force_n, ratio=o.ratio))
     x0 = start_state(system, o, fl)
-    seeds, attractors = _seeds(system, o, fl)
+    seeds = [(v, a.x, a.periods) for v, a in _attractors(system, o, fl, o.seeds)]
     mo = MapOptions(o.switch, 2 * o.periods, o.max_branches, o.step, o.max_step, o.min_step,
                     o.max_points)
     om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods, options=mo)
     branches = [_branch_result(mb, fl, o) for mb in om.branches]
+    # checked where no seed was taken (between the seeds' values), so that an attractor
+    # on the map is not there merely because it started a branch
     check = [attractor_check(om, v, a.x, a.periods) | {"impacts": a.impacts}
-             for v, a in attractors]
+             for v, a in _attractors(system, o, fl, 2 * o.seeds)]
     return {"branches": branches, "notes": om.notes, "check": check,
             "start": value_of(fl, o.parameter)}
 
 
-def _seeds(system: System, o: ContinuationOptions, fl) -> tuple[list, list]:
-    """The brute-force attractors at ``o.seeds`` values spread over the range (force-n
-    and ratio only): (seeds for the map, [(value, Attractor)])."""
-    if o.seeds == 0 or o.parameter not in BRUTE_FORCE or system.kind != "ball":
-        return [], []
+def _attractors(system: System, o: ContinuationOptions, fl, count: int) -> list:
+    """[(value, Attractor)]: brute force's periodic attractors at ``count`` values spread
+    over the range (the middles of equal parts; force-n and ratio of the free ball)."""
+    if count == 0 or o.parameter not in BRUTE_FORCE or system.kind != "ball":
+        return []
     p0 = value_of(fl, o.parameter)
     found = []
-    for v in spread(min(p0, o.stop), max(p0, o.stop), o.seeds):
+    for v in spread(min(p0, o.stop), max(p0, o.stop), count):
         force, ratio = (v, o.ratio) if o.parameter == "force-n" else (o.force_n, v)
         found += [(v, a) for a in periodic_attractors(system, Harmonic(force, ratio=ratio),
                                                       max_period=2 * o.periods)]
-    return [(v, a.x, a.periods) for v, a in found], found
+    return found
 
 
 def _branch_result(mb, fl, o: ContinuationOptions) -> dict:

@@ -65,10 +65,10 @@ def add_continue(sub) -> None:
                         "grazings (default: on)")
     g.add_argument("--seeds", type=int, default=3, metavar="N",
                    help="brute-force attractors at N values spread over --range seed "
-                        "branches and are checked against the map (force-n or ratio of "
-                        "the free ball; default 3, 0: none)")
-    g.add_argument("--max-branches", type=int, default=12, metavar="N",
-                   help="at most N branches in the map (default 12)")
+                        "branches; those at 2N other values are checked against the map "
+                        "(force-n or ratio of the free ball; default 3, 0: none)")
+    g.add_argument("--max-branches", type=int, default=24, metavar="N",
+                   help="at most N branches in the map (default 24)")
     g.add_argument("--start-from", choices=("simulation", "masri-caughey"),
                    default="simulation", help="first guess (default: a settled exact run)")
     p.set_defaults(func=_cmd_continue)
