@@ -17,7 +17,14 @@ from boringbar.branch import continue_branch, flow_with
 from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.orbit_map import MapOptions, cross_grazing, orbit_map, switch_branch_point
+from boringbar.orbit_map import (
+    MapBranch,
+    MapOptions,
+    OrbitMap,
+    attractor_check,
+    cross_grazing,
+    switch_branch_point,
+)
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import simulate
 
@@ -164,3 +171,25 @@ def test_the_issue_case_map_holds_the_settled_orbits():
                     tips.append(d["strobe_tip_m"].values[i] * (1 - s)
                                 + d["strobe_tip_m"].values[i + 1] * s)
         assert any(abs(t - w) <= 0.01 * abs(w) for t in tips), (force, w, tips)
+
+
+def test_the_attractor_check_finds_an_attractor_on_a_folded_branch_and_says_when_not():
+    """The four-impact attractor brute force finds at 17.5 N (no seed there) lies on the
+    stable stretch of the branch continued from the 20 N attractor, which folds at 16.57 N
+    and so passes 17.5 N twice (1e-6; the check tries every stretch through the value).
+    The three-impact attractor at 10 N is on no branch of that map, and the check says
+    so."""
+    system = _issue_case()
+    fl = sh.make_flow(system, Harmonic(5.0, ratio=1.0))
+    seed = periodic_attractors(system, Harmonic(20.0, ratio=1.0))[0]
+    br = continue_branch(flow_with(fl, "force-n", 20.0, fl), "force-n", seed.x, 5.0,
+                         bounds=(5.0, 35.0))
+    assert [k for k, _ in br.events][-2:] == ["fold", "grazing"] or "fold" in br.stop, br.events
+    om = OrbitMap("force-n", 5.0, 35.0, [MapBranch(br, None, ("seed", 20.0), fl)])
+    found = periodic_attractors(system, Harmonic(17.5, ratio=1.0))
+    assert [a.impacts for a in found] == [4.0]
+    c = attractor_check(om, 17.5, found[0].x, 1)
+    assert c["on_stable_branch"] and c["branch"] == 0 and c["distance"] <= 1e-6, c
+    other = periodic_attractors(system, Harmonic(10.0, ratio=1.0))[0]
+    c = attractor_check(om, 10.0, other.x, 1)
+    assert not c["on_stable_branch"] and c["branch"] is None

@@ -286,8 +286,8 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
         br.stop = f"refused at the start: {err}"
         return br
     lo, hi = bounds or (min(p0, stop), max(p0, stop))
-    w = Walk(fl, name, fl, periods, _scale(fl, y[:-1], span), lo, hi, step, max_points or point_budget(max_step), min_step, max_step, move_section,
-             stop)
+    w = Walk(fl, name, fl, periods, _scale(fl, y[:-1], span), lo, hi, step,
+             max_points or point_budget(max_step), min_step, max_step, move_section, stop)
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
     t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)

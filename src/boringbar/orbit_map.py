@@ -398,9 +398,6 @@ def attractor_check(om: OrbitMap, value: float, x, k: int) -> dict:
         br = mb.branch
         if br.periods % k or not br.points:
             continue
-        vals = [p.value for p in br.points]
-        if not min(vals) <= value <= max(vals):
-            continue
         d = _distance(mb, value, x)
         if d is not None and d[0] < best:
             best, where = d[0], (i if d[1] else None)
@@ -410,9 +407,21 @@ def attractor_check(om: OrbitMap, value: float, x, k: int) -> dict:
 
 
 def _distance(mb: MapBranch, value: float, x):
-    """(relative distance, stable) of the branch's orbit at ``value`` from x, or None."""
+    """(relative distance, stable) of the branch's orbit at ``value`` nearest x, or None:
+    Newton there from each point that begins a stretch of the branch through ``value``
+    (a branch that folds passes a value more than once)."""
     br, fl = mb.branch, mb.flow
-    near = min(br.points, key=lambda p: abs(p.value - value))
+    pts = br.points
+    starts = [a for a, b in zip(pts, pts[1:], strict=False)
+              if min(a.value, b.value) <= value <= max(a.value, b.value)]
+    found = [d for d in (_distance_from(br, fl, near, value, x) for near in starts)
+             if d is not None]
+    return min(found) if found else None
+
+
+def _distance_from(br: Branch, fl: Flow, near: Point, value: float, x):
+    """(relative distance from x, stable) of the orbit Newton finds at ``value`` from the
+    branch point ``near``, carried to phase 0 (and its images after whole periods)."""
     at = flow_with(dataclasses.replace(fl, phase=near.phase), br.parameter, value, fl)
     try:
         xb, pr = periodic_orbit(at, near.x, br.periods, rms=False)

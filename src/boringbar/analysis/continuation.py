@@ -24,6 +24,7 @@ from boringbar import __version__
 from boringbar._validate import ParameterError, check_choice, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
+from boringbar.attractors import periodic_attractors, spread
 from boringbar.branch import (
     MAX_STEP,
     PARAMETERS,
@@ -32,7 +33,6 @@ from boringbar.branch import (
     flow_with,
     value_of,
 )
-from boringbar.attractors import periodic_attractors, spread
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
