@@ -62,7 +62,9 @@ class ContinuationOptions:
     :func:`boringbar.branch.point_budget`);
     ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
     rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
-    smallest step the halving goes down to before the branch stops (relative)."""
+    smallest step the halving goes down to before the branch stops (relative);
+    ``switch``, ``seeds``, ``max_branches``: the orbit map's (docs/continuation.md, "The
+    orbit map")."""
 
     parameter: str = "force-n"
     stop: float = 5.0
