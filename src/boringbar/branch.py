@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq, linear_sum_assignment
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, check_range
 from boringbar.shooting import (
     Flow,
     OrbitRefused,
@@ -119,6 +119,21 @@ class Branch:
     origin: Point | None = None
     #: How often the Poincare section was moved away from an event.
     section_moves: int = 0
+    #: The located branch points (:class:`BranchPoint`), for branch switching.
+    branch_points: list = field(default_factory=list)
+
+
+@dataclass
+class BranchPoint:
+    """A branch point: the orbit there (unknowns (x, p), on the section ``phase``), the
+    scales of the walk it was found on, the branch's tangent there and the other branch's
+    (the second null vector of [G_x, G_p], both scaled and of unit length)."""
+
+    y: np.ndarray
+    phase: float
+    scale: np.ndarray
+    tangent: np.ndarray
+    other: np.ndarray
 
 
 def _residual(fl, name, ref, x, p, k):
@@ -139,9 +154,13 @@ def _kinds(events):
 
 
 def correct(fl, name, ref, y0, tangent, scale, k, tol=1e-11, max_iter=12):
-    """Newton on G = 0 and tangent . (y - y0) / scale = 0 from y0; (y, Period, iterations)."""
+    """Newton on G = 0 and tangent . (y - y0) / scale = 0 from y0; (y, Period, iterations).
+    Given up as soon as a step from the fourth on is larger than the one before: Newton
+    is not converging there, and each further iteration costs three maps (most of a
+    branch's time went into correctors that failed after all their iterations)."""
     y = y0.copy()
     dp = 1e-7 * max(abs(y0[-1]), 1e-3)
+    last = np.inf
     for it in range(max_iter):
         r, pr = _residual(fl, name, ref, y[:-1], y[-1], k)
         Jx = _jacobian(fl, name, ref, y[:-1], y[-1], k, pr, dp)
@@ -149,10 +168,14 @@ def correct(fl, name, ref, y0, tangent, scale, k, tol=1e-11, max_iter=12):
         rhs = -np.concatenate([r, [tangent @ ((y - y0) / scale)]])
         dy = newton_step(A, rhs) * scale
         y = y + dy
-        if np.max(np.abs(dy / scale)) < tol:
+        size = float(np.max(np.abs(dy / scale)))
+        if size < tol:
             r, pr = _residual(fl, name, ref, y[:-1], y[-1], k)
             check_residual(r, y[:-1], "the corrector")
             return y, pr, it + 1
+        if it >= 3 and size > last:
+            break
+        last = size
     raise OrbitRefused("the corrector did not converge")
 
 
@@ -203,13 +226,36 @@ class Walk:
     scale: np.ndarray
     lo: float
     hi: float
-    step: float = 0.01
+    step: float = 0.02
     max_points: int = 200
     min_step: float = 1e-6
-    max_step: float = 0.1
+    max_step: float = 0.025
     #: Move the section away from an event that comes near it (else the branch stops
     #: where an event crosses it).
     move_section: bool = True
+    #: The end of the range the branch walks towards (the other end is where it started;
+    #: NaN: either end is the range's end, as for a branch switched to).
+    stop: float = np.inf
+
+
+#: The largest step, relative to the range, by default: at least 40 points cross the
+#: range, so a multiplier that leaves the unit circle and comes back is seen.
+MAX_STEP = 0.025
+#: The default point budget allows this many crossings of the range at the largest step
+#: (folds, and the state's own share of the arclength): the budget is a safety net, the
+#: branch stops at the range's ends, a fold leaving it, a closed loop or a failure.
+CROSSINGS = 12
+
+
+#: The weight of the state's relative change in the arclength, against the parameter's
+#: change relative to the range (:func:`_scale`).
+STATE_SHARE = 0.25
+
+
+def point_budget(max_step: float) -> int:
+    """The default number of points of a branch whose steps are capped at ``max_step``
+    (relative to the range)."""
+    return int(np.ceil(CROSSINGS / max_step))
 
 
 #: An event closer than this (rad of forcing phase) to the section moves the section.
@@ -220,24 +266,28 @@ MAX_SECTION_MOVES = 100
 
 @one_blas_thread
 def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods: int = 1,
-                    step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
-                    max_step: float = 0.1, move_section: bool = True) -> Branch:
+                    step: float = 0.02, max_points: int | None = None, min_step: float = 1e-6,
+                    max_step: float = MAX_STEP, move_section: bool = True,
+                    bounds: tuple | None = None) -> Branch:
     """Continue the orbit through x0 (near a fixed point of P^periods) in parameter ``name``
-    from its value in ``fl`` towards ``stop``; ``step`` etc. relative to |stop - start|;
-    ``move_section``: see :class:`Walk`."""
+    from its value in ``fl`` towards ``stop``; ``step`` (the first), ``min_step`` and
+    ``max_step`` relative to |stop - start|; ``max_points`` by default from the largest
+    step (:func:`point_budget`); ``move_section``: see :class:`Walk`; ``bounds``: the
+    range (lo, hi), if not [start, stop] (a branch from inside the range)."""
     p0 = value_of(fl, check_parameter(fl.kind, name))
     span = abs(stop - p0)
     if not span > 0:
         raise ParameterError(f"range end {stop!r} equals the start value {p0!r}")
+    check_steps(step, min_step, max_step)
     br = Branch(name, periods)
     try:
         y, pr = _first(fl, name, fl, x0, p0, periods)
     except OrbitRefused as err:
         br.stop = f"refused at the start: {err}"
         return br
-    lo, hi = (stop, np.inf) if stop < p0 else (-np.inf, stop)
-    w = Walk(fl, name, fl, periods, _scale(y[:-1], span), lo, hi, step, max_points, min_step,
-             max_step, move_section)
+    lo, hi = bounds or (min(p0, stop), max(p0, stop))
+    w = Walk(fl, name, fl, periods, _scale(fl, y[:-1], span), lo, hi, step,
+             max_points or point_budget(max_step), min_step, max_step, move_section, stop)
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
     t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)
@@ -245,53 +295,149 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
     return march(w, br, y, t)
 
 
-def _scale(x, span):
-    """The scales of (x, p): |x_i|, at least 1e-3 of the largest, and the range's span."""
-    return np.concatenate([np.maximum(np.abs(x), 1e-3 * np.max(np.abs(x))), [span]])
+def check_steps(step: float, min_step: float, max_step: float) -> None:
+    """The step control's bounds (relative to the range): step and max_step in (0, 0.5],
+    0 < min_step <= both, else a ParameterError naming the one out of range (a first step
+    above max_step is cut to it)."""
+    check_range("max_step", max_step, 0.0, 0.5, lo_open=True)
+    check_range("step", step, 0.0, 0.5, lo_open=True)
+    check_range("min_step", min_step, 0.0, min(step, max_step), lo_open=True)
+
+
+def _scale(fl: Flow, x, span):
+    """The scales of (x, p): one per block of the state (u, u', and each further entry:
+    y, y' or x_a, x_a'), its largest |x_i| (u and u' at least the other's size over
+    Omega, times Omega; the ball's y and y' at least the half gap, times Omega), and the
+    range's span for p.  Rescaled at every point, so the state's share of the arclength
+    is its relative change, counted at STATE_SHARE of the parameter's (so the steps
+    follow the parameter, and a state that doubles over the range does not take ten
+    times the points)."""
+    x = np.asarray(x, float)
+    n, om = fl.n, fl.omega
+    u, v = float(np.max(np.abs(x[:n]))), float(np.max(np.abs(x[n:2 * n])))
+    sc = np.concatenate([np.full(n, max(u, v / om)), np.full(n, max(v, om * u))])
+    rest = np.abs(x[2 * n:])
+    if fl.ball:
+        rest = np.maximum(rest, [fl.half, om * fl.half])
+    sc = np.concatenate([sc, np.maximum(rest, 1e-3 * max(float(np.max(sc)), 1e-300))])
+    return np.append(np.maximum(sc, 1e-300) / STATE_SHARE, span)
+
+
+def _rescaled(w: Walk, x, t):
+    """The walk with the scales of x, and the tangent t carried to them (unit length)."""
+    scale = _scale(w.fl, x, w.scale[-1])
+    t = t * w.scale / scale
+    return dataclasses.replace(w, scale=scale), t / np.linalg.norm(t)
 
 
 def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     """Follow ``br`` from its last point y (unknowns (x, p)) along the unit tangent t
-    (scaled) by predictor-corrector steps until p leaves [w.lo, w.hi], the event
-    sequence changes (located: a grazing), the orbit is refused or w.max_points."""
-    fl, name, ref, k, scale = w.fl, w.name, w.ref, w.periods, w.scale
-    h = w.step
+    (scaled) by predictor-corrector steps until p leaves [w.lo, w.hi] (at the far end,
+    or back at the start after a fold), the branch closes on itself, the event sequence
+    changes (located: a grazing), the orbit is refused or w.max_points.  The step grows
+    by 1.5 after a corrector of at most 3 iterations, shrinks by 0.7 after one of 7 or
+    more, is halved when the corrector fails, and is never more than w.max_step."""
+    fl, name, ref, k = w.fl, w.name, w.ref, w.periods
+    h = min(w.step, w.max_step)
     while len(br.points) < w.max_points:
         try:
-            yn, prn, its = correct(fl, name, ref, y + h * t * scale, t, scale, k)
+            yn, prn, its = correct(fl, name, ref, y + h * t * w.scale, t, w.scale, k)
             same = _kinds(prn.events) == _kinds(br.points[-1].events)
         except OrbitRefused as err:
             yn, same, why = None, False, str(err)
+        far = yn is not None and np.linalg.norm((yn - y) / w.scale) > 2.0 * h
+        if far and same:
+            # the corrector went to another orbit, far from the prediction: as a failure
+            yn, same, why = None, False, "the corrector left the branch"
         if not same:
-            if yn is None and h / 2 >= w.min_step:
+            located = _sequence_change(w, y, t, h, yn, far)
+            if located is None and h / 2 >= w.min_step:
                 h /= 2
                 continue
-            if yn is None:
-                br.stop = why
+            if located is None:
+                br.stop = (f"failure at {name} = {y[-1]:.10g}: {why} (step {h:.2g} of the "
+                           "range)")
                 return br
-            kind = _boundary(br, w, locate_boundary(fl, name, ref, y, yn[-1], k))
+            kind = _boundary(br, w, located)
             moved = _move_section(br, w, t) if kind == "section" and w.move_section else None
             if moved is None:
                 return br
             br.stop = ""
             w, y, t = moved
-            fl, ref, scale = w.fl, w.ref, w.scale
+            fl, ref = w.fl, w.ref
             continue
         pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events, fl.phase)
         kinds = _record_crossing(br, br.points[-1], pt, w)
         br.points.append(pt)
-        if not w.lo <= pt.value <= w.hi:
-            br.stop = "end of range"
+        if _left_range(br, w) or _closed(br, w, yn, h):
             return br
-        t_old, t = t, tangent_at(fl, name, ref, yn, prn, scale, k, t)
+        t_old, t = t, tangent_at(fl, name, ref, yn, prn, w.scale, k, t)
         _record_turn(br, w, t_old, t, kinds)
         y = yn
-        h = min(w.max_step, h * 1.3) if its <= 4 else h
+        w, t = _rescaled(w, y[:-1], t)
+        h = min(w.max_step, h * 1.5) if its <= 3 else (h * 0.7 if its >= 7 else h)
+        h = max(h, w.min_step)
         if w.move_section and _near_section(flow_with(fl, name, pt.value, ref), pt.events):
             w, y, t = _move_section(br, w, t) or (w, y, t)
-            fl, ref, scale = w.fl, w.ref, w.scale
-    br.stop = f"max_points = {w.max_points} reached"
+            fl, ref = w.fl, w.ref
+    br.stop = (f"point budget of {w.max_points} reached at {name} = "
+               f"{br.points[-1].value:.10g}")
     return br
+
+
+def _sequence_change(w: Walk, y, t, h: float, yn, far: bool):
+    """The change of the event sequence a failed step points to, located
+    (:func:`locate_boundary`), or None.  The corrector found an orbit with another
+    sequence: the change lies between y and it (between y and the prediction if the
+    orbit is far from it: the state at the section jumps when an event crosses it, but
+    another orbit may also lie there).  The corrector failed: only at the smallest step,
+    within four such steps ahead."""
+    if yn is not None:
+        return _beyond(w, y, yn[-1] if not far else y[-1] + h * t[-1] * w.scale[-1])
+    if h / 2 >= w.min_step:
+        return None
+    return _beyond(w, y, y[-1] + 4.0 * h * t[-1] * w.scale[-1])
+
+
+def _beyond(w: Walk, y, p_far: float):
+    """A change of the event sequence between y and ``p_far`` (:func:`locate_boundary`),
+    or None (no orbit with the old sequence reaches past y, or it reaches all the way:
+    no change there)."""
+    if p_far == y[-1]:
+        return None
+    last, width = locate_boundary(w.fl, w.name, w.ref, y, p_far, w.periods)
+    if last is None or abs(last.value - p_far) <= 2 * width:
+        return None
+    return last, width
+
+
+def _left_range(br: Branch, w: Walk) -> bool:
+    """Whether the last point left [w.lo, w.hi]; the stop reason says at which end (the
+    far one, or the start's after a fold turned the branch back)."""
+    p = br.points[-1].value
+    if w.lo <= p <= w.hi:
+        return False
+    end = w.lo if p < w.lo else w.hi
+    folds = [v for kind, v in br.events if kind == "fold"]
+    if end == w.stop or not folds or not np.isfinite(w.stop):
+        br.stop = f"end of range at {br.parameter} = {end:.10g} (last point {p:.10g})"
+    else:
+        br.stop = (f"fold at {br.parameter} = {folds[-1]:.10g}: the branch turned and left "
+                   f"the range at {br.parameter} = {end:.10g} (last point {p:.10g})")
+    return True
+
+
+def _closed(br: Branch, w: Walk, y, h: float) -> bool:
+    """Whether the branch came back to its first point (a closed loop): within the step of
+    it, in scaled variables, after at least four points."""
+    first = br.points[0]
+    if len(br.points) < 5 or first.phase != br.points[-1].phase:
+        return False
+    d = np.linalg.norm((y - np.append(first.x, first.value)) / w.scale)
+    if d > h:
+        return False
+    br.stop = f"closed loop: back at the first point ({br.parameter} = {first.value:.10g})"
+    return True
 
 
 def _section_distance(fl: Flow, events, phase: float) -> float:
@@ -322,10 +468,11 @@ def _move_section(br: Branch, w: Walk, t: np.ndarray):
         dt = ((phase - at.phase) % (2.0 * np.pi)) / at.omega
         part = advance(at, pt.x, duration=dt)
         fl, ref = (dataclasses.replace(f, phase=phase) for f in (w.fl, w.ref))
-        x, pr = periodic_orbit(flow_with(fl, w.name, pt.value, ref), part.x, w.periods)
+        x, pr = periodic_orbit(flow_with(fl, w.name, pt.value, ref), part.x, w.periods,
+                               rms=False)
     except OrbitRefused:
         return None
-    moved = dataclasses.replace(w, fl=fl, ref=ref, scale=_scale(x, w.scale[-1]))
+    moved = dataclasses.replace(w, fl=fl, ref=ref, scale=_scale(fl, x, w.scale[-1]))
     br.points[-1] = Point(pt.value, x, multipliers(pr), pr.events, phase)
     br.section_moves += 1
     y = np.append(x, pt.value)
@@ -357,10 +504,11 @@ def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
     kinds = _kinds(advance(flow_with(fl, name, y[-1], ref), y[:-1], k).events)
     lo, hi, x, last = y[-1], p_far, y[:-1], None
     width = abs(hi - lo)
-    while abs(hi - lo) > tol * width:
+    while abs(hi - lo) > max(tol * width, 4 * np.finfo(float).eps * abs(lo)):
         mid = 0.5 * (lo + hi)
         try:
-            xm, pr = periodic_orbit(flow_with(fl, name, mid, ref), x, k)
+            xm, pr = periodic_orbit(flow_with(fl, name, mid, ref), x, k, max_iter=12,
+                                    rms=False)
             same = _kinds(pr.events) == kinds
         except OrbitRefused:
             same = False
@@ -419,8 +567,12 @@ def _record_crossing(br, a, b, w: Walk | None = None) -> list:
             # a +1 multiplier where the branch does not turn: a branch point (here the
             # symmetric orbit's symmetry-breaking pitchfork), not a fold
             kind = "branch-point"
+        located = locate_branch_point(w, a, b) if kind == "branch-point" else None
         if turned is not None:
             value = turned
+        elif located is not None:
+            value = float(located.y[-1])
+            br.branch_points.append(located)
         elif len(found) == 1 and w is not None:
             value = locate_crossing(w, a, b, value)
         br.events.append((kind, value))
@@ -438,8 +590,9 @@ def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1
     a and b (one crossing between them): Brent's method, on the arclength of the corrector
     from a (its hyperplanes normal to the chord a -> b), on |mu| - 1 of the crossing
     multiplier (the (n_a + 1)-th largest in modulus going out, the n_a-th going in, n_a
-    the number outside at a).  ``fallback`` (the secant) if the corrector fails, as it
-    does close to a branch point, where its matrix is singular (two branches cross)."""
+    the number outside at a).  ``fallback`` (the secant) if the corrector fails.  (A
+    branch point is placed by :func:`locate_branch_point`: there the corrector's matrix
+    is singular.)"""
     ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
     d = (yb - ya) / w.scale
     ta = d / np.linalg.norm(d)
@@ -452,25 +605,113 @@ def locate_crossing(w: Walk, a: Point, b: Point, fallback: float, tol: float = 1
         s = brentq(g, 0.0, float(np.linalg.norm(d)), xtol=tol * np.linalg.norm(d), rtol=1e-15)
         return float(_along(w, ya, ta, s)[0][-1])
     except (OrbitRefused, ValueError):
-        return _bisect_crossing(w, ya, ta, float(np.linalg.norm(d)), n_a, fallback)
+        return fallback
 
 
-def _bisect_crossing(w: Walk, ya, ta, sb: float, n_a: int, p: float) -> float:
-    """Bisection on the arclength s in [0, sb] on the number of multipliers outside the
-    circle (n_a at s = 0) until the corrector fails (near a branch point): the parameter
-    of the nearest orbit found beyond the crossing, or ``p`` if none was."""
-    lo, hi = 0.0, sb
-    try:
-        while hi - lo > 1e-10 * sb:
-            mid = 0.5 * (lo + hi)
-            y, pr, _ = _along(w, ya, ta, mid)
-            if np.sum(np.abs(multipliers(pr)) > 1.0) == n_a:
-                lo = mid
-            else:
-                hi, p = mid, float(y[-1])
-    except OrbitRefused:
-        pass
-    return p
+#: Where the bordered test function of a branch point is sampled, as fractions of the
+#: step from the secant's estimate (with the two points themselves): far enough from the
+#: branch point for the corrector to converge (its matrix is singular there).
+BP_NODES = (-0.3, -0.15, 0.15, 0.3)
+
+
+def locate_branch_point(w: Walk, a: Point, b: Point) -> BranchPoint | None:
+    """The branch point between the branch points a and b, or None if the bordered test
+    function keeps its sign.  Along the chord a -> b (hyperplanes normal to it at
+    arclength s, each solved by the corrector from the secant of the two nearest solved
+    ones), the corrector's matrix A(s) = [G_x, G_p; t^T] turns singular at the branch
+    point; g(s), the last entry of the solution of the bordered system
+    [[A, b], [c^T, 0]] z = e (b, c: A's singular vectors of least singular value at a),
+    is smooth and changes sign there.  It is sampled at a, b and BP_NODES around the
+    secant's zero, and the zero of the polynomial through the samples is the branch
+    point; the polynomial through the orbits solved there gives its orbit.  No Newton
+    solve is made close to it, where A is too near singular for the corrector."""
+    ya, yb = np.append(a.x, a.value), np.append(b.x, b.value)
+    d = (yb - ya) / w.scale
+    length = float(np.linalg.norm(d))
+    ta = d / length
+    solved = {0.0: ya, length: yb}
+    border = np.linalg.svd(_corrector_matrix(w, ya, ta))
+    g = _test_function(w, ta, solved, border[0][:, -1], border[2][-1])
+    ga, gb = g(0.0), g(length)
+    if ga * gb > 0:
+        return None
+    guess = length * ga / (ga - gb)
+    nodes, values = [0.0, length], [ga, gb]
+    for q in BP_NODES:
+        try:
+            values.append(g(guess + q * length))
+            nodes.append(guess + q * length)
+        except OrbitRefused:
+            continue
+    fit = np.polynomial.Polynomial.fit(nodes, values, len(nodes) - 1)
+    roots = [r.real for r in fit.roots() if abs(r.imag) < 1e-9 * length]
+    if not roots:
+        return None
+    s0 = min(roots, key=lambda r: abs(r - guess))
+    if not 0.0 <= s0 <= length:
+        return None
+    ys = np.array([solved[q] for q in nodes]) / w.scale
+    paths = [np.polynomial.Polynomial.fit(nodes, ys[:, i], len(nodes) - 1)
+             for i in range(ys.shape[1])]
+    y = np.array([f(s0) for f in paths]) * w.scale
+    slope = np.array([f.deriv()(s0) for f in paths])
+    return _branch_point(w, y, slope / np.linalg.norm(slope))
+
+
+def _corrector_matrix(w: Walk, y, normal) -> np.ndarray:
+    """[G_x, G_p; normal^T] at y, in the walk's scaled variables (G_p with a step of 1e-5
+    of p: its truncation error 1e-10, its rounding 1e-11, relative)."""
+    pr = advance(flow_with(w.fl, w.name, y[-1], w.ref), y[:-1], w.periods)
+    dp = 1e-5 * max(abs(y[-1]), 1e-3)
+    J = _jacobian(w.fl, w.name, w.ref, y[:-1], y[-1], w.periods, pr, dp) * w.scale
+    return np.vstack([J, normal])
+
+
+def _test_function(w: Walk, ta, solved: dict, b, c):
+    """g(s) of :func:`locate_branch_point`; ``solved`` collects the orbits it solves."""
+    def g(s):
+        if s not in solved:
+            near = sorted(solved, key=lambda q: abs(q - s))[:2]
+            y0, y1 = solved[near[0]], solved[near[1]]
+            guess = y0 + (s - near[0]) / (near[1] - near[0]) * (y1 - y0)
+            solved[s] = correct(w.fl, w.name, w.ref, guess, ta, w.scale, w.periods)[0]
+        A = _corrector_matrix(w, solved[s], ta)
+        M = np.block([[A, b[:, None]], [c[None, :], np.zeros((1, 1))]])
+        rhs = np.zeros(len(M))
+        rhs[-1] = 1.0
+        return float(np.linalg.solve(M, rhs)[-1])
+    return g
+
+
+def _branch_point(w: Walk, y, tangent) -> BranchPoint:
+    """The :class:`BranchPoint` at y.  The null space of [G_x, G_p] is two-dimensional
+    there: the branch's tangent phi1 and phi2 orthogonal to it.  The other branch's
+    tangent is the second root of the algebraic bifurcation equation
+    psi . G''[a phi1 + b phi2, a phi1 + b phi2] = 0 (psi: the left null vector; the first
+    root is phi1, so psi . G''[phi1, phi1] = 0): (a, b) = (-c11 ... ) with
+    c12 = psi . G''[phi1, phi2], c22 = psi . G''[phi2, phi2], i.e. -c22 phi1 + 2 c12 phi2.
+    (At a symmetry-breaking pitchfork that is the eigenvector of the +1 multiplier with
+    p fixed; phi2 alone mixes in some of the branch's own direction.)"""
+    u, _, vt = np.linalg.svd(_corrector_matrix(w, y, np.zeros(len(y)))[:-1])
+    null, psi = vt[-2:], u[:, -1]
+    q = null @ tangent
+    phi1 = null.T @ (q / np.linalg.norm(q))
+    phi2 = null.T @ np.array([-q[1], q[0]]) / np.linalg.norm(q)
+    c12, c22 = (_second_derivative(w, y, psi, phi1, phi2),
+                _second_derivative(w, y, psi, phi2, phi2))
+    other = -c22 * phi1 + 2.0 * c12 * phi2
+    if not np.linalg.norm(other) > 0:
+        other = phi2
+    return BranchPoint(y, w.fl.phase, w.scale.copy(), phi1, other / np.linalg.norm(other))
+
+
+def _second_derivative(w: Walk, y, psi, d1, d2, h: float = 1e-4) -> float:
+    """psi . G''[d1, d2] at y (d1, d2 scaled), by central differences of step h."""
+    def G(dy):
+        z = y + dy * w.scale
+        return advance(flow_with(w.fl, w.name, z[-1], w.ref), z[:-1], w.periods).x - z[:-1]
+    total = (G(h * (d1 + d2)) - G(h * (d1 - d2)) - G(h * (d2 - d1)) + G(-h * (d1 + d2)))
+    return float(psi @ total) / (4.0 * h * h)
 
 
 def locate_fold(w: Walk, a: Point, b: Point, tol: float = 1e-12) -> float | None:
@@ -501,7 +742,7 @@ def locate_fold(w: Walk, a: Point, b: Point, tol: float = 1e-12) -> float | None
 def _minus_one(fl, name, ref, x, p, k):
     """The period-k orbit at p (Newton from x), its Period and |mu| - 1 of the multiplier
     nearest -1."""
-    x, pr = periodic_orbit(flow_with(fl, name, p, ref), x, k)
+    x, pr = periodic_orbit(flow_with(fl, name, p, ref), x, k, rms=False)
     mu = multipliers(pr)
     return x, pr, float(abs(mu[np.argmin(np.abs(mu + 1.0))]) - 1.0)
 
@@ -544,13 +785,15 @@ def _on_one_section(fl: Flow, name: str, a: Point, b: Point):
 
 @one_blas_thread
 def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, which: int = 0,
-                           step: float = 0.01, max_points: int = 200, min_step: float = 1e-6,
-                           max_step: float = 0.1) -> Branch:
+                           step: float = 0.01, max_points: int | None = None,
+                           min_step: float = 1e-6, max_step: float = MAX_STEP,
+                           bounds: tuple | None = None) -> Branch:
     """The period-2k branch born at the ``which``-th period-doubling point of ``br`` (period
     k, continued in ``name`` from ``fl``): located, then started along the eigenvector v
     of the -1 multiplier (the tangent (v, 0)) and continued as a fixed point of P^2k
     while p stays between the point and ``stop``, or on the other side within the same
-    distance (a subcritical doubling turns back).  Its first event is the doubling."""
+    distance (a subcritical doubling turns back), or within ``bounds`` (lo, hi) if
+    given.  Its first event is the doubling."""
     k = br.periods
     pairs = [(a, b) for a, b in zip(br.points, br.points[1:], strict=False)
              if any(c[0] == "period-doubling" for c in _crossings(a.multipliers, b.multipliers))]
@@ -562,8 +805,9 @@ def switch_period_doubling(fl: Flow, name: str, br: Branch, stop: float, *, whic
     span = abs(stop - p)
     if not span > 0:
         raise ParameterError(f"stop = {stop!r} equals the period-doubling value {p!r}")
-    w = Walk(fl, name, fl, 2 * k, _scale(x, span), p - span, p + span, step, max_points,
-             min_step, max_step)
+    lo, hi = bounds or (p - span, p + span)
+    w = Walk(fl, name, fl, 2 * k, _scale(fl, x, span), lo, hi, step,
+             max_points or point_budget(max_step), min_step, max_step, stop=stop)
     pr = advance(flow_with(fl, name, p, fl), x, k)
     # (v, 0), orthogonal to the period-k branch: the step's hyperplane meets that branch
     # only O(sqrt(step)) away, so the corrector lands on the new one (O(step) away)

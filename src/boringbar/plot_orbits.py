@@ -17,9 +17,10 @@ EVENT_MARKERS = {"fold": "s", "branch-point": "^", "period-doubling": "D", "neim
 def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     """Continued branches of :func:`~boringbar.analysis.continuation.continuation`: the
     strobe tip displacement W (mm, top) and the tip RMS (mm, bottom) against the
-    parameter, stable stretches solid, unstable dashed, events marked on the curve.
-    ``overlay``: a bifurcation Dataset (:func:`~boringbar.analysis.bifurcation.bifurcation`)
-    of the same case, its Poincare samples drawn as grey dots under the branches."""
+    parameter, one colour a branch of the map, stable stretches solid, unstable dashed,
+    events marked on the curve.  ``overlay``: a bifurcation Dataset
+    (:func:`~boringbar.analysis.bifurcation.bifurcation`) of the same case, its Poincare
+    samples drawn as dark dots on top of the branches."""
     if fig is None:
         fig = Figure(figsize=(10, 7), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1.5))
@@ -29,8 +30,8 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
             w = sel["tip_displacement"].values * 1e3
             xx = np.broadcast_to(sel["value"].values[:, None], w.shape)
             ok = np.isfinite(w)
-            top.scatter(xx[ok], w[ok], s=5, color="0.6", lw=0, rasterized=True)
-        top.scatter([], [], s=12, color="0.6", label="brute force (strobe samples)")
+            top.scatter(xx[ok], w[ok], s=6, color="0.25", lw=0, rasterized=True, zorder=5)
+        top.scatter([], [], s=12, color="0.25", label="brute force (strobe samples)")
     for b in range(ds.sizes["branch"]):
         d = ds.isel(branch=b)
         v = d["value"].values
@@ -38,7 +39,8 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
         stable = d["stable"].values.astype(bool)
         for ax, name in ((top, "strobe_tip_m"), (bottom, "rms_tip_m")):
             y = d[name].values * 1e3
-            _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top))
+            _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top),
+                             color=f"C{b % 10}")
         for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
             if not str(kind) or not np.isfinite(value):  # padding of a stacked branch
                 continue
@@ -72,13 +74,14 @@ def _sorted(x, y):
     return x[order], y[order]
 
 
-def _stability_lines(ax, x, y, stable, label: bool) -> None:
-    """Consecutive stretches of one stability: solid if stable, dashed if not."""
+def _stability_lines(ax, x, y, stable, label: bool, color: str = "C0") -> None:
+    """Consecutive stretches of one stability: solid if stable, dashed if not (one colour
+    a branch)."""
     start = 0
     for i in range(1, len(x) + 1):
         if i == len(x) or stable[i] != stable[start]:
             j = min(i + 1, len(x))
-            ax.plot(x[start:j], y[start:j], color="C0", lw=1.6,
+            ax.plot(x[start:j], y[start:j], color=color, lw=1.6,
                     ls="-" if stable[start] else "--",
                     label=("stable" if stable[start] else "unstable") if label else None)
             start = i

@@ -1,10 +1,12 @@
 """Continuation of periodic orbits with their Floquet stability (docs/continuation.md).
 
-One point of the plan is one branch (sequential by nature): it starts from a
-settled exact simulation at the start value, from the Masri-Caughey closed form
-(one mode, no friction) or from a given :class:`~boringbar.simulate.State` at
-phase 0, finds the orbit by Newton on P^k(x) = x and continues it by
-pseudo-arclength (:func:`boringbar.branch.continue_branch`).
+One point of the plan is one orbit map (sequential by nature,
+:func:`boringbar.orbit_map.orbit_map`): its first branch starts from a settled exact
+simulation at the start value, from the Masri-Caughey closed form (one mode, no
+friction) or from a given :class:`~boringbar.simulate.State` at phase 0; brute-force
+attractors at a few values of the parameter seed more
+(:mod:`boringbar.attractors`); the branches born at branch points, period doublings
+and grazings are followed too; each attractor is checked against the map.
 """
 
 from __future__ import annotations
@@ -18,13 +20,22 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from boringbar._validate import ParameterError, check_choice, check_int, check_range
+from boringbar._validate import ParameterError, check_choice, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
-from boringbar.branch import PARAMETERS, check_parameter, continue_branch, flow_with, value_of
+from boringbar.attractors import periodic_attractors, spread
+from boringbar.branch import (
+    MAX_STEP,
+    PARAMETERS,
+    check_parameter,
+    check_steps,
+    flow_with,
+    value_of,
+)
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
+from boringbar.orbit_map import MapOptions, attractor_check, orbit_map
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.shooting import (
     OrbitRefused,
@@ -46,10 +57,14 @@ BRUTE_FORCE = {"force-n": "force", "ratio": "ratio"}
 class ContinuationOptions:
     """``parameter`` (one of :data:`boringbar.branch.PARAMETERS`) continued from its value
     in the system/forcing to ``stop``; ``force_n`` and ``ratio``: the forcing;
-    ``periods``: k of P^k; ``step``: the first step, relative to the range; ``max_points``;
+    ``periods``: k of P^k; ``step``: the first step and ``max_step`` the largest, relative
+    to the range; ``max_points``: the point budget (None: from ``max_step``,
+    :func:`boringbar.branch.point_budget`);
     ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
     rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
-    smallest step the halving goes down to before the branch stops (relative)."""
+    smallest step the halving goes down to before the branch stops (relative);
+    ``switch``, ``seeds``, ``max_branches``: the orbit map's (docs/continuation.md, "The
+    orbit map")."""
 
     parameter: str = "force-n"
     stop: float = 5.0
@@ -57,20 +72,29 @@ class ContinuationOptions:
     ratio: float = 1.0
     periods: int = 1
     step: float = 0.02
-    max_points: int = 200
+    max_points: int | None = None
     start: str = "simulation"
     settle_periods: int = 200
     state: tuple | None = None
     min_step: float = 1e-6
+    max_step: float = MAX_STEP
+    #: Follow the branches born at branch points, period doublings and grazings.
+    switch: bool = True
+    #: Parameter values (spread over the range) at which brute force seeds branches
+    #: (force-n and ratio only; 0: none).
+    seeds: int = 3
+    max_branches: int = 24
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
         check_choice("start", self.start, STARTS)
         check_int("periods", self.periods, 1, 16)
-        check_int("max_points", self.max_points, 2, 100000)
+        if self.max_points is not None:
+            check_int("max_points", self.max_points, 2, 100000)
         check_int("settle_periods", self.settle_periods, 1, 100000)
-        check_range("step", self.step, 0.0, 0.5, lo_open=True)
-        check_range("min_step", self.min_step, 0.0, self.step, lo_open=True)
+        check_steps(self.step, self.min_step, self.max_step)
+        check_int("seeds", self.seeds, 0, 50)
+        check_int("max_branches", self.max_branches, 1, 1000)
         if self.start == "state" and self.state is None:
             raise ParameterError("start = 'state' needs state = (u..., u'..., y, y') (ball), "
                                  "(u..., u'..., x_a, x_a') (TMD) or (u..., u'...)")
@@ -116,17 +140,47 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
 
 @one_blas_thread
 def compute(context: dict, point: int) -> dict:
-    """The branch: per point its value, state, strobe tip, RMS, multipliers; its events."""
+    """The orbit map (:func:`boringbar.orbit_map.orbit_map`): per branch its points'
+    value, state, strobe tip, RMS, multipliers, its events, parent and birth; the seeds'
+    attractor check."""
     system, o = context["system"], context["options"]
     fl = make_flow(system, Harmonic(o.force_n, ratio=o.ratio))
     x0 = start_state(system, o, fl)
-    br = continue_branch(fl, o.parameter, x0, o.stop, periods=o.periods, step=o.step,
-                         max_points=o.max_points, min_step=o.min_step)
+    seeds = [(v, a.x, a.periods) for v, a in _attractors(system, o, fl, o.seeds)]
+    mo = MapOptions(o.switch, 2 * o.periods, o.max_branches, o.step, o.max_step, o.min_step,
+                    o.max_points)
+    om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods, options=mo)
+    branches = [_branch_result(mb, fl, o) for mb in om.branches]
+    # checked where no seed was taken (between the seeds' values), so that an attractor
+    # on the map is not there merely because it started a branch
+    check = [attractor_check(om, v, a.x, a.periods) | {"impacts": a.impacts}
+             for v, a in _attractors(system, o, fl, 2 * o.seeds)]
+    return {"branches": branches, "notes": om.notes, "check": check,
+            "start": value_of(fl, o.parameter)}
+
+
+def _attractors(system: System, o: ContinuationOptions, fl, count: int) -> list:
+    """[(value, Attractor)]: brute force's periodic attractors at ``count`` values spread
+    over the range (the middles of equal parts; force-n and ratio of the free ball)."""
+    if count == 0 or o.parameter not in BRUTE_FORCE or system.kind != "ball":
+        return []
+    p0 = value_of(fl, o.parameter)
+    found = []
+    for v in spread(min(p0, o.stop), max(p0, o.stop), count):
+        force, ratio = (v, o.ratio) if o.parameter == "force-n" else (o.force_n, v)
+        found += [(v, a) for a in periodic_attractors(system, Harmonic(force, ratio=ratio),
+                                                      max_period=2 * o.periods)]
+    return found
+
+
+def _branch_result(mb, fl, o: ContinuationOptions) -> dict:
+    """One branch of the map as :func:`assemble` takes it."""
+    br = mb.branch
     rms, states = [], []
     for pt in br.points:
         at = flow_with(dataclasses.replace(fl, phase=pt.phase), o.parameter, pt.value, fl)
         try:
-            rms.append(advance(at, pt.x, o.periods, rms=True).rms_tip)
+            rms.append(advance(at, pt.x, br.periods, rms=True).rms_tip)
             states.append(carry(at, pt.x, 0.0))  # the section may have moved
         except OrbitRefused:
             rms.append(math.nan)
@@ -139,13 +193,24 @@ def compute(context: dict, point: int) -> dict:
             "rms_tip_m": rms,
             "multipliers": [pt.multipliers for pt in br.points],
             "stable": [pt.stable for pt in br.points],
-            "events": br.events, "stop": br.stop, "start": value_of(fl, o.parameter)}
+            "events": br.events, "stop": br.stop, "periods": br.periods,
+            "parent": -1 if mb.parent is None else mb.parent,
+            "born_kind": mb.born[0], "born_value": float(mb.born[1])}
 
 
 def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.Dataset:
     """Dims (branch, point, state, multiplier) and (branch, event); the multipliers as
-    real and imaginary parts (NetCDF has no complex type)."""
+    real and imaginary parts (NetCDF has no complex type); per branch its period, its
+    parent (-1: a root) and the event it was born at (born_kind, born_value); the map's
+    notes and attractor check in the attributes (JSON)."""
     r = results[0]
+    if "branches" in r:
+        parts = [assemble(plan, [b], attrs) for b in r["branches"]] or \
+            [assemble(plan, [_empty(r)], attrs)]
+        ds = concat_branches(parts)
+        ds.attrs["notes"] = json.dumps(r["notes"])
+        ds.attrs["attractor_check"] = json.dumps(r["check"])
+        return ds
     o = plan.context["options"]
     n_state = state_size(plan.context["system"])
     # a branch refused at its start has no points: its arrays keep their shapes
@@ -164,12 +229,23 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "multiplier_imag": (("branch", "point", "multiplier"), [mults.imag]),
          "stable": (("branch", "point"), [r["stable"]]),
          "event_kind": (("branch", "event"), [[k for k, _ in r["events"]]]),
-         "event_value": (("branch", "event"), [[v for _, v in r["events"]]])},
+         "event_value": (("branch", "event"), [[v for _, v in r["events"]]]),
+         "periods": (("branch",), [r.get("periods", o.periods)]),
+         "parent": (("branch",), [r.get("parent", -1)]),
+         "born_kind": (("branch",), [r.get("born_kind", "start")]),
+         "born_value": (("branch",), [r.get("born_value", r.get("start", math.nan))])},
         attrs={"boringbar_version": __version__, "parameter": o.parameter,
                "config": json.dumps({"system": plan.context["system"].to_dict(),
                                      "options": asdict(o)}),
                "stop_reasons": json.dumps([r["stop"]]), **(attrs or {})})
     return ds
+
+
+def _empty(r: dict) -> dict:
+    """A branch without points (the map's start refused) for a map without branches."""
+    return {"value": [], "state": [], "strobe_tip_m": [], "rms_tip_m": [], "multipliers": [],
+            "stable": [], "events": [], "start": r["start"], "born_value": r["start"],
+            "stop": "; ".join(r["notes"]) or "no branch"}
 
 
 def summary(ds: xr.Dataset) -> dict:
@@ -186,9 +262,21 @@ def summary(ds: xr.Dataset) -> dict:
         events = [{"kind": str(k), "value": float(v)}
                   for k, v in zip(d["event_kind"].values, d["event_value"].values, strict=True)
                   if str(k)]  # "": padding of a shorter branch's events
-        branches.append({"points": points, "events": events, "stop": stops[b]})
+        branches.append({"points": points, "events": events, "stop": stops[b],
+                         **_tree(d)})
     return {"parameter": ds.attrs["parameter"], "branches": branches,
+            "notes": json.loads(ds.attrs.get("notes", "[]")),
+            "attractor_check": json.loads(ds.attrs.get("attractor_check", "[]")),
             "wall_time_s": float(ds.attrs.get("wall_time_s", math.nan))}
+
+
+def _tree(d: xr.Dataset) -> dict:
+    """A branch's place in the map: its period, parent (None: a root) and birth."""
+    if "parent" not in d:
+        return {}
+    parent = int(d["parent"])
+    return {"periods": int(d["periods"]), "parent": None if parent < 0 else parent,
+            "born": {"kind": str(d["born_kind"].values), "value": float(d["born_value"])}}
 
 
 def continuation(system: System, forcing: Harmonic | None = None, *,
@@ -231,8 +319,8 @@ def both_ways(system: System, start: float, lo: float, hi: float, *, ratio: floa
     """The F0 branch through the settled orbit at ``start`` N (exact integrator, 200
     periods from rest), continued down to ``lo`` and up to ``hi``: two branches."""
     down, up = (continuation(system, Harmonic(start, ratio=ratio), options=ContinuationOptions(
-        parameter="force-n", stop=stop, step=step, max_points=max_points, min_step=min_step))
-        for stop in (lo, hi))
+        parameter="force-n", stop=stop, step=step, max_points=max_points, min_step=min_step,
+        switch=False, seeds=0)) for stop in (lo, hi))
     return concat_branches([down, up])
 
 

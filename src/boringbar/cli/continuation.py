@@ -1,7 +1,8 @@
-"""``boringbar continue``: pseudo-arclength continuation of a periodic orbit."""
+"""``boringbar continue``: the orbit map of a problem by pseudo-arclength continuation."""
 
 from __future__ import annotations
 
+import argparse
 import math
 
 from boringbar._validate import ParameterError
@@ -12,7 +13,7 @@ from boringbar.analysis.continuation import (
     continuation,
     summary,
 )
-from boringbar.branch import PARAMETERS
+from boringbar.branch import MAX_STEP, PARAMETERS
 from boringbar.cli.options import (
     Outcome,
     add_common,
@@ -47,14 +48,27 @@ def add_continue(sub) -> None:
     g.add_argument("--range", required=True, metavar="START:STOP",
                    help="START sets the parameter's first value, STOP the branch's end")
     g.add_argument("--periods", type=int, default=1, metavar="K", help="period-k orbits")
-    g.add_argument("--max-points", type=int, default=200, metavar="N")
+    g.add_argument("--max-points", type=int, default=None, metavar="N",
+                   help="point budget of a branch (default: from --max-step, enough to "
+                        "cross the range 12 times at the largest step)")
     g.add_argument("--step", type=float, default=0.02, metavar="S",
                    help="first step, relative to the range (default: 0.02)")
+    g.add_argument("--max-step", type=float, default=MAX_STEP, metavar="S",
+                   help=f"largest step, relative to the range (default: {MAX_STEP})")
     g.add_argument("--overlay", type=int, nargs="?", const=21, metavar="N",
                    help="draw the brute-force bifurcation diagram of the same case under the "
                         "branch: N values over --range (default 21), forward and backward "
                         "from rest, with --duration-s, --dt-s and --integrator (the last "
                         "half of each run sampled); force-n or ratio only")
+    g.add_argument("--switch", action=argparse.BooleanOptionalAction, default=True,
+                   help="follow the branches born at branch points, period doublings and "
+                        "grazings (default: on)")
+    g.add_argument("--seeds", type=int, default=3, metavar="N",
+                   help="brute-force attractors at N values spread over --range seed "
+                        "branches; those at 2N other values are checked against the map "
+                        "(force-n or ratio of the free ball; default 3, 0: none)")
+    g.add_argument("--max-branches", type=int, default=24, metavar="N",
+                   help="at most N branches in the map (default 24)")
     g.add_argument("--start-from", choices=("simulation", "masri-caughey"),
                    default="simulation", help="first guess (default: a settled exact run)")
     p.set_defaults(func=_cmd_continue)
@@ -99,7 +113,9 @@ def _cmd_continue(args) -> Outcome:
     system = make_system(bar, args.preset, **kw)
     options = ContinuationOptions(parameter=name, stop=stop, force_n=force, ratio=ratio,
                                   periods=args.periods, step=args.step,
-                                  max_points=args.max_points, start=args.start_from)
+                                  max_step=args.max_step, max_points=args.max_points,
+                                  switch=args.switch, seeds=args.seeds,
+                                  max_branches=args.max_branches, start=args.start_from)
     ds = continuation(system, Harmonic(force, ratio=ratio), options=options)
     out = summary(ds)
     files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/continuation.nc"))}
@@ -114,12 +130,35 @@ def _cmd_continue(args) -> Outcome:
     write_json_atomic(out, f"{args.out}/continuation.json")
 
     def text(say) -> None:
-        for b in out["branches"]:
-            pts = b["points"]
-            say(f"branch: {len(pts)} points, {name} {pts[0]['value']:.6g} .. "
-                f"{pts[-1]['value']:.6g}; stop: {b['stop']}")
+        for i, b in enumerate(out["branches"]):
+            say(_branch_line(i, b, name))
             for e in b["events"]:
                 say(f"  {e['kind']} at {name} = {e['value']:.6g}")
+        for note in out["notes"]:
+            say(f"note: {note}")
+        for c in out["attractor_check"]:
+            say(_check_line(c, name))
         say(wrote(files))
 
     return Outcome(out, text)
+
+
+def _branch_line(i: int, b: dict, name: str) -> str:
+    """One line of a branch: its points, range, stability, birth and stop."""
+    pts = b["points"]
+    if not pts:
+        return f"branch {i}: no points; stop: {b['stop']}"
+    vals = [p["value"] for p in pts]
+    born = b.get("born", {"kind": "start", "value": vals[0]})
+    parent = "" if b.get("parent") is None else f" on branch {b['parent']}"
+    return (f"branch {i} (period {b.get('periods', 1)}, born at {born['kind']} "
+            f"{born['value']:.6g}{parent}): {len(pts)} points, {name} {min(vals):.6g} .. "
+            f"{max(vals):.6g}, {sum(p['stable'] for p in pts)} stable; stop: {b['stop']}")
+
+
+def _check_line(c: dict, name: str) -> str:
+    """One line of the attractor check."""
+    where = (f"on stable branch {c['branch']}" if c["on_stable_branch"] else
+             f"NOT on a stable branch (nearest {c['distance']:.2g})")
+    return (f"attractor at {name} = {c['value']:.6g} (period {c['periods']}, "
+            f"{c['impacts']:.3g} impacts a period): {where}")

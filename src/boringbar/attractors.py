@@ -1,0 +1,124 @@
+"""Periodic attractors by brute force, the seeds of an orbit map and its check
+(docs/continuation.md, "Seeds and the attractor check").
+
+The exact integrator is run from a spread of initial conditions (the bar at 0, 1/2 and
+1 times its linear forced response without impacts, the ball at rest at -1/2, 0 and
+1/2 of the half gap) for ``settle_periods`` forcing periods, ending at phase 0.  A
+settled state that repeats after k <= ``max_period`` periods (to 1e-4 of its size) is
+polished by Newton on P^k(x) = x (:func:`boringbar.shooting.periodic_orbit`) and kept
+if Newton stays near it and the orbit is stable; attractors that are the same orbit
+(the same state at phase 0 after some whole periods, to 1e-6) are merged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System
+from boringbar.shooting import (
+    Flow,
+    OrbitRefused,
+    advance,
+    make_flow,
+    multipliers,
+    one_blas_thread,
+    periodic_orbit,
+)
+from boringbar.simulate import State, simulate
+
+#: A settled state repeating after k periods to this fraction of its size is tried as a
+#: period-k orbit.
+SETTLED = 1e-4
+#: Two attractors are one orbit if their states at phase 0 (one of them advanced by whole
+#: periods) agree to this fraction of the state's size.
+SAME = 1e-6
+
+
+@dataclass(frozen=True)
+class Attractor:
+    """A stable periodic orbit found by brute force: the state at phase 0, its period k,
+    its impacts a period and its multipliers' largest modulus."""
+
+    x: np.ndarray
+    periods: int
+    impacts: float
+    radius: float
+
+
+def initial_states(fl: Flow) -> list[np.ndarray]:
+    """The spread of initial conditions (module docstring), each a state at phase 0."""
+    n = fl.n
+    h = fl.psi_tip * fl.amplitude / (fl.K - fl.M * fl.omega**2 + 1j * fl.C * fl.omega)
+    lin = np.concatenate([h.imag, fl.omega * h.real])  # u(0), u'(0) of Im(H F e^{i w t})
+    out = []
+    for c in (0.0, 0.5, 1.0):
+        for y in ((-0.5, 0.0, 0.5) if fl.ball else (0.0,)):
+            x = np.zeros(fl.N)
+            x[:2 * n] = c * lin
+            if fl.ball:
+                x[2 * n] = y * fl.half
+                x[2 * n + 1] = -fl.psi_d @ x[n:2 * n]  # the ball at rest in space
+            out.append(x)
+    return out
+
+
+@one_blas_thread
+def periodic_attractors(system: System, forcing: Harmonic, *, settle_periods: int = 300,
+                        max_period: int = 2) -> list[Attractor]:
+    """The distinct stable periodic orbits of period <= ``max_period`` the exact integrator
+    settles on from :func:`initial_states` (module docstring)."""
+    fl = make_flow(system, forcing)
+    dt = fl.period / math.ceil(fl.period / 1e-6)  # whole periods: the end is at phase 0
+    found: list[Attractor] = []
+    for x0 in initial_states(fl):
+        try:
+            run = simulate(system, forcing, duration=settle_periods * fl.period, dt=dt,
+                           integrator="exact", initial=State(x0, 0.0), record_every=0)
+        except (ValueError, RuntimeError):
+            continue
+        att = _settled(fl, run.final.x[:fl.N], max_period)
+        if att is not None and not any(same_orbit(fl, att, a) for a in found):
+            found.append(att)
+    return found
+
+
+def _settled(fl: Flow, x, max_period: int) -> Attractor | None:
+    """The attractor the settled state x is on, or None (not periodic, refused, not
+    stable, or Newton went elsewhere)."""
+    size = float(np.max(np.abs(x)))
+    for k in range(1, max_period + 1):
+        try:
+            pr = advance(fl, x, k)
+            if np.max(np.abs(pr.x - x)) > SETTLED * size:
+                continue
+            xp, pr = periodic_orbit(fl, x, k, rms=False)
+        except OrbitRefused:
+            continue
+        mu = multipliers(pr)
+        if np.max(np.abs(xp - x)) <= 10 * SETTLED * size and np.max(np.abs(mu)) < 1.0:
+            impacts = sum(kind.startswith("impact") for _, kind in pr.events) / k
+            return Attractor(xp, k, impacts, float(np.max(np.abs(mu))))
+    return None
+
+
+def same_orbit(fl: Flow, a: Attractor, b: Attractor) -> bool:
+    """Whether a and b are one orbit: the same period and b's state one of a's at phase 0."""
+    if a.periods != b.periods:
+        return False
+    size = float(np.max(np.abs(a.x)))
+    z = a.x
+    for _ in range(a.periods):
+        if np.max(np.abs(z - b.x)) <= SAME * size:
+            return True
+        z = advance(fl, z).x
+    return False
+
+
+def spread(lo: float, hi: float, count: int) -> list[float]:
+    """``count`` values in the middles of equal parts of [lo, hi]."""
+    return [lo + (hi - lo) * (i + 0.5) / count for i in range(count)]
+

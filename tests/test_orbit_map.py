@@ -1,0 +1,195 @@
+"""The orbit map (boringbar.orbit_map, boringbar.attractors): the range covered, the
+stop reasons, branch switching at a pitchfork against the symmetry, brute-force seeds,
+and the issue's case (paper preset, gap 0.1 mm, frictionless, ratio 1, F0 5-35 N)
+against the exact integrator's settled orbits."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+import boringbar as bb
+from boringbar import shooting as sh
+from boringbar.analysis.continuation import ContinuationOptions, start_state
+from boringbar.attractors import periodic_attractors, same_orbit
+from boringbar.branch import continue_branch, flow_with
+from boringbar.cli.main import main
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import make_system
+from boringbar.orbit_map import (
+    MapBranch,
+    MapOptions,
+    OrbitMap,
+    attractor_check,
+    cross_grazing,
+    switch_branch_point,
+)
+from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.simulate import simulate
+
+
+def _issue_case():
+    return make_system("ball", "paper", gap=0.1e-3, friction=False)
+
+
+def _issue_branch():
+    system = _issue_case()
+    fl = sh.make_flow(system, Harmonic(5.0, ratio=1.0))
+    x0 = start_state(system, ContinuationOptions(force_n=5.0), fl)
+    return system, fl, continue_branch(fl, "force-n", x0, 35.0)
+
+
+def test_the_first_branch_stops_at_a_grazing_and_the_map_goes_on_across_it():
+    """From 5 N the default steps reach the grazing at 26.53 N (the stop names it and its
+    value), not a point budget; across it the orbit with one more impact reaches 35 N."""
+    _, fl, br = _issue_branch()
+    assert br.stop.startswith("the impact/reversal sequence changes at force-n = 26.531"), \
+        br.stop
+    assert [k for k, _ in br.events] == ["branch-point", "grazing"]
+    assert len(br.points) < 100
+    on = cross_grazing(fl, br, (5.0, 35.0))
+    assert on.stop.startswith("end of range at force-n = 35"), on.stop
+    assert on.events[0] == ("grazing", br.points[-1].value)
+    before = sum(k.startswith("impact") for _, k in br.points[-1].events)
+    after = sum(k.startswith("impact") for _, k in on.points[0].events)
+    assert after != before
+
+
+def test_a_fold_that_leaves_the_range_is_the_stop_reason():
+    """Gap 0.1 mm, e = 0.7, 10 N, from the closed-form orbit at ratio 0.8 down: the branch
+    folds at the closed-form fold (0.62685) and goes back up out of the range at 0.8."""
+    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1)
+    fl = dataclasses.replace(sh.make_flow(system, Harmonic(10.0, ratio=0.8)), phase=1.6)
+    bar, ball = system.bar, system.damper
+    orbit = next(o for o in two_impact_orbit(
+        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass, ball.gap, ball.restitution, 10.0, fl.omega) if o.admissible and o.stable)
+    t, h = 1.6 / fl.omega, 1e-9
+    x0 = np.array([float(orbit.modal_displacement(t)), float(orbit.modal_velocity(t)),
+                   float(orbit.relative_displacement(t)),
+                   float(orbit.relative_displacement(t + h)
+                         - orbit.relative_displacement(t - h)) / (2 * h)])
+    br = continue_branch(fl, "ratio", x0, 0.55)
+    assert br.stop.startswith("fold at ratio = 0.626854302"), br.stop
+    assert "left the range at ratio = 0.8" in br.stop
+
+
+def test_switching_at_the_pitchfork_gives_the_two_mirror_image_orbits():
+    """Gap 0.1 mm, e = 0.3, 30 N: past the branch point of the symmetric orbit (ratio
+    0.8320207, the closed form's) the two children are asymmetric period-1 orbits (not
+    symmetric: x(T/2) != -x(0)) and mirror images of each other (the symmetry
+    y -> -y, u -> -u, t -> t + T/2 maps one onto the other), checked at one ratio by
+    the exact map alone."""
+    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+                         restitution=0.3)
+    bar, ball = system.bar, system.damper
+    fl0 = sh.make_flow(system, Harmonic(30.0, ratio=0.7))
+    orbit = next(o for o in two_impact_orbit(
+        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass, ball.gap, ball.restitution, 30.0, fl0.omega) if o.admissible and o.stable)
+    ph = (orbit.phase + np.pi / 2) % np.pi
+    fl = dataclasses.replace(fl0, phase=ph)
+    t, h = ph / fl.omega, 1e-9
+    x0 = np.array([float(orbit.modal_displacement(t)), float(orbit.modal_velocity(t)),
+                   float(orbit.relative_displacement(t)),
+                   float(orbit.relative_displacement(t + h)
+                         - orbit.relative_displacement(t - h)) / (2 * h)])
+    br = continue_branch(fl, "ratio", x0, 0.9, max_points=40)
+    bp = br.branch_points[0]
+    o = MapOptions(max_points=8)
+    kids = [switch_branch_point(fl, "ratio", br, bp, s, (0.7, 0.9), o) for s in (1.0, -1.0)]
+    assert all(len(k.points) == 8 for k in kids), [k.stop for k in kids]
+    r = kids[0].points[-1].value
+    states = []
+    for k in kids:
+        near = min(k.points, key=lambda p: abs(p.value - r))
+        at = flow_with(dataclasses.replace(fl, phase=near.phase), "ratio", r, fl)
+        x, _ = sh.periodic_orbit(at, near.x)
+        x0 = sh.carry(at, x, 0.0)
+        half = sh.carry(dataclasses.replace(at, phase=0.0), x0, np.pi)
+        size = np.max(np.abs(x0))
+        assert np.max(np.abs(half + x0)) > 1e-3 * size  # not symmetric
+        states.append((x0, half))
+    # the mirror image of child 0 at phase 0 is minus its state at phase pi: child 1's
+    assert np.max(np.abs(states[1][0] + states[0][1])) < 1e-8 * np.max(np.abs(states[1][0]))
+
+
+def test_brute_force_attractors_are_distinct_and_merged():
+    """At 10 N the exact integrator settles, from the spread of initial conditions, on
+    the two mirror images of an asymmetric three-impact orbit (the issue's finding); they
+    are kept apart, and each is one orbit with itself advanced a period."""
+    system = _issue_case()
+    forcing = Harmonic(10.0, ratio=1.0)
+    found = periodic_attractors(system, forcing)
+    assert len(found) == 2 and all(a.periods == 1 and a.impacts == 3 for a in found)
+    fl = sh.make_flow(system, forcing)
+    assert not same_orbit(fl, found[0], found[1])
+    assert same_orbit(fl, found[0], dataclasses.replace(found[0], x=sh.advance(fl, found[0].x).x))
+
+
+def test_cli_continue_without_switching_or_seeds_is_one_branch(tmp_path, capsys):
+    argv = ["continue", "--gap-mm", "0.5", "--friction", "off", "--modes", "1",
+            "--range", "30:29", "--start-from", "masri-caughey", "--max-points", "4",
+            "--no-switch", "--seeds", "0", "--out", str(tmp_path), "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["branches"]) == 1
+    b = out["branches"][0]
+    assert b["parent"] is None and b["born"] == {"kind": "start", "value": 30.0}
+    assert b["periods"] == 1 and out["attractor_check"] == []
+    assert main([*argv[:-3], "--seeds", "-1", "--out", str(tmp_path)]) == 2
+    assert main([*argv[:-3], "--max-step", "0.9", "--out", str(tmp_path)]) == 2
+
+
+@pytest.mark.slow
+def test_the_issue_case_map_holds_the_settled_orbits():
+    """The issue's case through `bb.continuation` (switching on, 3 seeds): every
+    brute-force attractor lies on a stable branch (1e-6), and at 10, 20 and 30 N the
+    exact integrator from rest (600 periods) settles on an orbit whose strobe tip
+    displacement is a stable branch's at that F0 to 1 %."""
+    system = _issue_case()
+    ds = bb.continuation(system, Harmonic(5.0, ratio=1.0),
+                         options=ContinuationOptions(parameter="force-n", stop=35.0))
+    checks = json.loads(ds.attrs["attractor_check"])
+    assert len(checks) >= 3 and all(c["on_stable_branch"] for c in checks), checks
+    fl = sh.make_flow(system, Harmonic(5.0, ratio=1.0))
+    for force in (10.0, 20.0, 30.0):
+        f = Harmonic(force, ratio=1.0)
+        per = 2 * np.pi / f.omega(system.reference_frequency)
+        run = simulate(system, f, duration=600 * per, dt=per / np.ceil(per / 1e-6),
+                       integrator="exact", strobe=True)
+        w = run.final.x[: fl.n] @ fl.psi_tip
+        tips = []
+        for b in range(ds.sizes["branch"]):
+            d = ds.isel(branch=b)
+            v, st = d["value"].values, d["stable"].values.astype(bool)
+            ok = np.isfinite(v) & st
+            for i in np.flatnonzero(ok[:-1] & ok[1:]):
+                if min(v[i], v[i + 1]) <= force <= max(v[i], v[i + 1]):
+                    s = (force - v[i]) / (v[i + 1] - v[i])
+                    tips.append(d["strobe_tip_m"].values[i] * (1 - s)
+                                + d["strobe_tip_m"].values[i + 1] * s)
+        assert any(abs(t - w) <= 0.01 * abs(w) for t in tips), (force, w, tips)
+
+
+def test_the_attractor_check_finds_an_attractor_on_a_folded_branch_and_says_when_not():
+    """The four-impact attractor brute force finds at 17.5 N (no seed there) lies on the
+    stable stretch of the branch continued from the 20 N attractor, which folds at 16.57 N
+    and so passes 17.5 N twice (1e-6; the check tries every stretch through the value).
+    The three-impact attractor at 10 N is on no branch of that map, and the check says
+    so."""
+    system = _issue_case()
+    fl = sh.make_flow(system, Harmonic(5.0, ratio=1.0))
+    seed = periodic_attractors(system, Harmonic(20.0, ratio=1.0))[0]
+    br = continue_branch(flow_with(fl, "force-n", 20.0, fl), "force-n", seed.x, 5.0,
+                         bounds=(5.0, 35.0))
+    assert [k for k, _ in br.events][-2:] == ["fold", "grazing"] or "fold" in br.stop, br.events
+    om = OrbitMap("force-n", 5.0, 35.0, [MapBranch(br, None, ("seed", 20.0), fl)])
+    found = periodic_attractors(system, Harmonic(17.5, ratio=1.0))
+    assert [a.impacts for a in found] == [4.0]
+    c = attractor_check(om, 17.5, found[0].x, 1)
+    assert c["on_stable_branch"] and c["branch"] == 0 and c["distance"] <= 1e-6, c
+    other = periodic_attractors(system, Harmonic(10.0, ratio=1.0))[0]
+    c = attractor_check(om, 10.0, other.x, 1)
+    assert not c["on_stable_branch"] and c["branch"] is None
