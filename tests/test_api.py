@@ -175,3 +175,16 @@ def test_lobe_speeds_must_increase_as_on_the_command_line():
     with pytest.raises(bb.ParameterError, match="each speed once"):
         bb.LobesOptions(rpm=(900.0, 900.0))
     assert bb.LobesOptions(rpm=(900.0, 1000.0)).rpm == (900.0, 1000.0)
+
+
+def test_a_run_shows_itself_in_a_notebook():
+    """Run._repr_html_: what was run and its results in mm, escaped HTML."""
+    run = bb.simulate(bb.make_system("ball", "physical"), bb.Harmonic(20.0, 1.0), duration=0.2)
+    page = run._repr_html_()
+    assert page.startswith("<table>") and page.endswith("</table>")
+    assert f"{run.rms_tip * 1e3:.4g} mm" in page and "F0 = 20 N" in page
+    assert "max |tip|" in page and "20000 rows" in page
+    cut = bb.simulate(bb.make_system("solid", "paper"), bb.Regenerative(depth=0.05e-3, rpm=1200),
+                      duration=0.2, record_every=0)
+    assert "cut at 1200 rpm, depth 0.05 mm" in cut._repr_html_()
+    assert "none (record_every=0)" in cut._repr_html_()

@@ -8,6 +8,7 @@ kernel streams its metrics; this module turns them into a labelled
 
 from __future__ import annotations
 
+import html
 import importlib
 import json
 import math
@@ -253,6 +254,27 @@ class Run:
             "delay_interpolation": f.interpolation,
             "start": f.start,
         }
+
+    def _repr_html_(self) -> str:
+        """The run as a notebook shows it: what was run and its main results, in mm."""
+        s = self.summary()
+        rows = [("bar", f"{s['bar']} ({s['preset']} preset)"),
+                ("forcing", f"F0 = {s['force_n']:g} N at Omega/omega_n = {s['ratio']:.4g} "
+                            f"({s['forcing_frequency_hz']:.2f} Hz)" if s["force_n"] is not None
+                 else f"cut at {self.forcing.rpm:g} rpm, depth {self.forcing.depth * 1e3:g} mm"),
+                ("tip RMS (steady part)", f"{s['rms_tip_m'] * 1e3:.4g} mm"),
+                ("max |tip|", f"{s['max_abs_tip_m'] * 1e3:.4g} mm"),
+                ("impact pattern", s["pattern"] or "-"),
+                ("integrator", f"{s['integrator']}, {s['duration_s']:g} s in "
+                               f"{s['elapsed_s']:.3g} s"),
+                ("history", "none (record_every=0)" if self.history is None
+                 else f"{len(self.history)} rows: .plot(), .to_xarray()")]
+        if "cutting" in s:
+            rows.insert(2, ("chatter", "yes" if s["cutting"]["chatter"] else "no"))
+        body = "".join(f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
+                       f"<td style='text-align:left'>{html.escape(str(v))}</td></tr>"
+                       for k, v in rows)
+        return f"<table><caption>boringbar Run</caption>{body}</table>"
 
     def plot(self, **kwargs):
         """The run's figure (a matplotlib Figure; needs ``record_every``): what
