@@ -84,12 +84,7 @@ inline double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, C
         state_at(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X);
         double f = cut_force(seg, tau, X, n, mk, 0.0, 0.0);
         fmax = pymax(fmax, f);
-        double w = 0.0;
-        double wd = 0.0;
-        for (idx i = 0; i < n; ++i) {
-            w += mk(3, i) * X[i];
-            wd += mk(3, i) * X[n + i];
-        }
+        auto [w, wd] = tip_w_wd(mk, X, n);
         acc[0] += wg * f * wd;
         double dv = 0.0;
         for (idx d = 0; d < lvis.n0; ++d) {

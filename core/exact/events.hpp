@@ -74,12 +74,7 @@ inline double g_value(idx kind, double tau, const Segment& seg, idx r, CVec q0, 
         return s;
     }
     if (kind == EV_CUT || kind == EV_HEXT) {
-        double w = 0.0;
-        double wd = 0.0;
-        for (idx i = 0; i < n; ++i) {
-            w += mk(3, i) * X[i];
-            wd += mk(3, i) * X[n + i];
-        }
+        auto [w, wd] = tip_w_wd(mk, X, n);
         auto [sv, sd] = surface_at(seg, tau);
         return kind == EV_CUT ? seg.cdir * (w - sv) : sd - wd;
     }
@@ -159,12 +154,7 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const Segmen
     double f = f0 * std::sin(om * t);
     double fd = f0 * om * std::cos(om * t);
     if (seg.krb != 0.0) {
-        double w = 0.0;
-        double wd = 0.0;
-        for (idx i = 0; i < n; ++i) {
-            w += mk(3, i) * X[i];
-            wd += mk(3, i) * X[n + i];
-        }
+        auto [w, wd] = tip_w_wd(mk, X, n);
         auto [sv, sd] = surface_at(seg, tau);
         f += seg.krb * (sv - w);
         fd += seg.krb * (sd - wd);

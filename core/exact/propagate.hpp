@@ -123,6 +123,18 @@ inline ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om,
     return ph;
 }
 
+// The tip's displacement W and velocity W' of the modal state X (psi_L . u, psi_L . u'):
+// the sums in index order, as every caller had them.
+inline std::tuple<double, double> tip_w_wd(Mat mk, Vec X, idx n) {
+    double w = 0.0;
+    double wd = 0.0;
+    for (idx i = 0; i < n; ++i) {
+        w += mk(3, i) * X[i];
+        wd += mk(3, i) * X[n + i];
+    }
+    return {w, wd};
+}
+
 // The force at the tip at ts + tau: F0 sin(Omega t), or Kr b (S(tau) - W) in a cut.
 // sn: sin(Omega (ts + tau)) if the caller has it (else NaN: computed here).
 inline double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, double f0,
