@@ -36,7 +36,7 @@ from boringbar.analysis.design_options import DesignOptions, sampled_system, unc
 from boringbar.execute import Execution, run_points
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system, published_system_spec
-from boringbar.model.system_file import SystemSpec, parse_system
+from boringbar.model.system_file import SystemSpec, cavity_moved, parse_system
 from boringbar.reference.stability import system_receptance
 from boringbar.simulate import Initial
 from boringbar.version import __version__
@@ -63,7 +63,7 @@ def candidate_system(spec: SystemSpec, options: DesignOptions, values: dict) -> 
         data["ball"]["diameter_mm"] = float(values["ball_diameter_mm"])
         data["ball"].pop("mass_g", None)
     if "cavity_position_mm" in values:
-        data = _cavity_moved(data, float(values["cavity_position_mm"]))
+        data = cavity_moved(data, float(values["cavity_position_mm"]))
     if "ball_diameter_mm" in values or "cavity_position_mm" in values:
         spec = parse_system(data, f"{spec.source} (design)")
     kw = {}
@@ -90,21 +90,6 @@ def _tmd(system: System, values: dict) -> TunedMassDamper:
     zeta = float(values.get("tmd_damping_ratio", d.damping / (2 * d.mass * math.sqrt(
         d.stiffness / d.mass))))
     return TunedMassDamper(m, m * wa**2, 2 * zeta * m * wa, d.position, "design")
-
-
-def _cavity_moved(data: dict, position_mm: float) -> dict:
-    """The system description with the cavity at ``position_mm``; neighbouring sections
-    of one diameter and bore are merged first, so the cavity may move along them."""
-    merged = []
-    for s in data["bar"]["sections"]:
-        if merged and (merged[-1]["diameter_mm"], merged[-1]["bore_mm"]) == (
-                s["diameter_mm"], s["bore_mm"]):
-            merged[-1] = dict(merged[-1], end_mm=s["end_mm"])
-        else:
-            merged.append(dict(s))
-    data["bar"]["sections"] = merged
-    data["cavity"]["position_mm"] = position_mm
-    return data
 
 
 # --- one candidate -------------------------------------------------------------------

@@ -1,0 +1,103 @@
+"""The design page's speed, measured in a real browser (docs/app.md, "How fast").
+
+Starts ``boringbar app`` on a free port, opens the page in Debian's headless Chromium
+with Playwright and times, from the browser's side (each clock starts before the
+action and stops when the view's status line names the new change):
+
+- first load: from starting the command to the single-run view drawn;
+- a gap change: the single-run view and the RMS response of 11 ratios redrawn;
+- a spindle-speed change: the analytic lobes redrawn (the gap leaves them alone).
+
+Prints each figure with its target; ``--repeat N`` changes each control N times
+(median and worst shown).
+
+    .venv/bin/python benchmarks/bench_app.py --repeat 5
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import socket
+import statistics
+import subprocess
+import sys
+import time
+
+from playwright.sync_api import sync_playwright
+
+ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
+        "--disable-component-update", "--disable-sync"]
+TARGETS = {"first load": 5.0, "single run": 0.5, "response (11 ratios)": 3.0,
+           "analytic lobes": 0.5}
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_drawn(page, view: str, change: int, timeout_s: float = 60) -> float:
+    page.wait_for_selector(f".status-{view} >> text=change {change}: drawn in",
+                           timeout=timeout_s * 1000)
+    return time.perf_counter()
+
+
+def change(page, control: str, value: str) -> float:
+    box = page.locator(f".ctl-{control} input")
+    box.fill(value)
+    t0 = time.perf_counter()
+    box.press("Enter")
+    return t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    port = free_port()
+    t_start = time.perf_counter()
+    server = subprocess.Popen([sys.executable, "-m", "boringbar", "app", "--port", str(port)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    times: dict[str, list[float]] = {k: [] for k in TARGETS}
+    try:
+        url = f"http://127.0.0.1:{port}/"
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                time.sleep(0.05)
+        t_http = time.perf_counter()
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=shutil.which("chromium"), args=ARGS)
+            page = browser.new_page(viewport={"width": 1500, "height": 1000})
+            page.goto(url)
+            times["first load"].append(wait_drawn(page, "run", 0) - t_start)
+            for v in ("lobes", "bar", "response"):
+                wait_drawn(page, v, 0)
+            print(f"server answering after {t_http - t_start:.2f} s; every view drawn after "
+                  f"{time.perf_counter() - t_start:.2f} s")
+            n = 0
+            for i in range(args.repeat):
+                n += 1
+                t0 = change(page, "ball-gap_mm", f"{0.2 + 0.05 * (i % 4):.2f}")
+                times["single run"].append(wait_drawn(page, "run", n) - t0)
+                print(f"change {n}: gap, single run {times['single run'][-1]:.2f} s", flush=True)
+                times["response (11 ratios)"].append(wait_drawn(page, "response", n) - t0)
+                n += 1
+                t0 = change(page, "rpm", f"{1000 + 50 * i:g}")
+                times["analytic lobes"].append(wait_drawn(page, "lobes", n) - t0)
+                wait_drawn(page, "response", n)
+            browser.close()
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
+    for what, ts in times.items():
+        print(f"{what:22s} median {statistics.median(ts):6.2f} s  worst {max(ts):6.2f} s  "
+              f"(target {TARGETS[what]:g} s, {len(ts)} times)")
+
+
+if __name__ == "__main__":
+    main()
