@@ -47,17 +47,17 @@ def step_cost(bar: str = "solid", preset: str = "physical", repeats: int = 3):
     """ns/step of a stable 2 s cut and of a 2 s harmonic run, best of ``repeats``."""
     system = make_system(bar, preset)
     b = 0.5 * float(limit_at_speeds(system, [1200.0])[0])
-    cut = Regenerative(depth=b, rpm=1200.0)
+    cut = Regenerative(depth_m=b, rpm=1200.0)
     harmonic = Harmonic(10.0, 1.0)
     for forcing in (cut, harmonic):  # JIT warm-up / cache load
-        simulate(system, forcing, duration=1e-3)
+        simulate(system, forcing, duration_s=1e-3)
     best = {}
     for name, forcing in (("cut", cut), ("harmonic", harmonic)):
         best[name] = math.inf
         for _ in range(repeats):
-            run = simulate(system, forcing, duration=2.0)
+            run = simulate(system, forcing, duration_s=2.0)
             assert not (name == "cut" and run.cutting["chatter"])
-            best[name] = min(best[name], run.elapsed_s / round(run.duration / run.dt) * 1e9)
+            best[name] = min(best[name], run.elapsed_s / round(run.duration_s / run.dt_s) * 1e9)
     return best
 
 

@@ -27,13 +27,13 @@ from boringbar.simulate import Integration, State, simulate
 def _one_mode_case():
     """The one-mode physical bar, frictionless ball, gap 0.5 mm, ratio 1: brute force
     from rest settles on the symmetric two-impact orbit above ~30 N."""
-    return make_system("ball", "physical", gap=0.5e-3, friction=False, n_modes=1)
+    return make_system("ball", "physical", gap_m=0.5e-3, friction=False, n_modes=1)
 
 
-def _sweep(system, values, duration=1.0):
+def _sweep(system, values, duration_s=1.0):
     """Forward and backward exact sweeps, the last 20 % of each run sampled."""
     return bb.bifurcation(system, bb.BifurcationOptions("force", tuple(values), values[0], 1.0),
-                          integration=Integration(duration, 1e-6, "exact", 0.2))
+                          integration=Integration(duration_s, 1e-6, "exact", 0.2))
 
 
 def _branch_at(fl, br, value):
@@ -79,7 +79,7 @@ def _three_impact_orbit(ratio=0.97, phase=np.pi):
     x98 = start_state(system, ContinuationOptions(force_n=30.0, ratio=0.98,
                                                   start="masri-caughey"), fl)
     run = simulate(system, Harmonic(30.0, ratio=ratio),
-                   duration=(500 + phase / (2 * np.pi)) * fl.period, dt=fl.period / 4000,
+                   duration_s=(500 + phase / (2 * np.pi)) * fl.period, dt_s=fl.period / 4000,
                    integrator="exact", initial=State(x98, 0.0))
     return system, dataclasses.replace(fl, phase=phase), run.final.x
 
@@ -102,8 +102,8 @@ def test_branch_switching_at_period_doubling_gives_a_period_two_orbit():
         assert np.max(np.abs(twice - pt.x)) <= 1e-10 * size  # P^2 x = x
         gaps.append(np.max(np.abs(once - pt.x)) / size)
         # the exact kernel agrees: back after two periods, elsewhere after one
-        run = simulate(system, Harmonic(30.0, ratio=pt.value), duration=2 * f.period,
-                       dt=f.period / 4000, integrator="exact",
+        run = simulate(system, Harmonic(30.0, ratio=pt.value), duration_s=2 * f.period,
+                       dt_s=f.period / 4000, integrator="exact",
                        initial=State(pt.x, f.phase / f.omega), steady_fraction=1.0)
         assert np.max(np.abs(run.final.x - pt.x)) <= 1e-8 * size
     assert min(gaps) > 1e-3  # P x != x: a genuine period-2 orbit
@@ -124,8 +124,9 @@ def _closed_form_phase(system, fl, force):
     """The + wall impact's forcing phase of the admissible two-impact orbit (closed form)."""
     bar, ball = system.bar, system.damper
     return next(o.phase for o in two_impact_orbit(
-        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass, ball.gap, ball.restitution, force, fl.omega) if o.admissible)
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+        bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass_kg, ball.gap_m, ball.restitution, force, fl.omega) if o.admissible)
 
 
 def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it():
@@ -135,8 +136,8 @@ def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it
     fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
     phase = _closed_form_phase(system, fl, 33.0)
     x0 = start_state(system, ContinuationOptions(force_n=30.0, start="masri-caughey"), fl)
-    run = simulate(system, Harmonic(30.0, ratio=1.0), duration=fl.period * phase / (2 * np.pi),
-                   dt=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
+    run = simulate(system, Harmonic(30.0, ratio=1.0), duration_s=fl.period * phase / (2 * np.pi),
+                   dt_s=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
                    steady_fraction=1.0)
     br = continue_branch(dataclasses.replace(fl, phase=phase), "force-n", run.final.x, 36.0,
                          step=0.1, max_points=40, max_step=0.3, move_section=False)
@@ -190,15 +191,16 @@ def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, ca
 
 def _small_gap_case():
     """One mode, frictionless ball, gap 0.1 mm, e = 0.7, F0 = 10 N, swept in the ratio."""
-    return make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+    return make_system("ball", "physical", gap_m=0.1e-3, friction=False, n_modes=1,
                        restitution=0.7)
 
 
 def _closed_form(system, ratio, force=10.0):
     """The ImpactSystem of the case and its stable admissible two-impact orbit (or None)."""
     bar, ball = system.bar, system.damper
-    args = (bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-            ball.mass, ball.gap, ball.restitution, force, ratio * system.reference_frequency)
+    args = (bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
+            bar.psi_damper[0],
+            ball.mass_kg, ball.gap_m, ball.restitution, force, ratio * system.reference_frequency)
     orbits = [o for o in two_impact_orbit(*args) if o.admissible and o.stable]
     return ImpactSystem(*args), (orbits[0] if orbits else None)
 
@@ -279,9 +281,10 @@ def _fold_and_linear_grazing(system, force=10.0):
     def relative_amplitude(r):
         om = r * system.reference_frequency
         return abs(bar.psi_damper[0] * bar.psi_tip[0] * force
-                   / complex(bar.stiffness[0] - bar.mass[0] * om**2, bar.damping[0] * om))
+                   / complex(bar.stiffness_n_m[0] - bar.mass_kg[0] * om**2,
+                             bar.damping_n_s_m[0] * om))
     return (_bisect(merge, 0.5, 0.8),
-            _bisect(lambda r: relative_amplitude(r) - 0.5 * system.damper.gap, 0.8, 1.0))
+            _bisect(lambda r: relative_amplitude(r) - 0.5 * system.damper.gap_m, 0.8, 1.0))
 
 
 def _strobe_check(fl0, br, sweep, lo, hi):
@@ -314,7 +317,7 @@ def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
     corrector's matrix is not yet singular), and give the other branch's direction from
     the algebraic bifurcation equation on the null space of [G_x, G_p]: at this pitchfork
     the eigenvector of the +1 multiplier, with p fixed."""
-    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=False, n_modes=1,
                          restitution=0.3)
     orbit = _closed_form(system, 0.7, 30.0)[1]
     ph = (orbit.phase + np.pi / 2) % np.pi  # the section half-way between the impacts
@@ -352,7 +355,7 @@ def test_a_turn_the_multipliers_hide_is_still_a_fold():
     pair), so no multiplier pair shows the +1 crossing; the turn of the tangent must
     still be a fold, at the smallest F0 a fine continuation of the same branch reaches
     (from the coarse point before the turn, 60 steps over 0.5 N)."""
-    system = make_system("ball", "physical", gap=0.1e-3, friction=False)
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=False)
     o = ContinuationOptions(parameter="force-n", stop=5.0, force_n=30.0)
     fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
     x0 = start_state(system, o, fl)

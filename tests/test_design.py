@@ -235,8 +235,8 @@ def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
                           ("paper", 0.6 * 0.026 * 9.81 / 0.0075)):
         system = make_system("ball", preset, spec=spec)
         sampled, _ = sampled_system(system, ("friction_number",), [0.6])
-        assert sampled.damper.friction_force == pytest.approx(force, rel=1e-12)
-        assert sampled.damper.friction_force == pytest.approx(system.damper.friction_force,
+        assert sampled.damper.friction_force_n == pytest.approx(force, rel=1e-12)
+        assert sampled.damper.friction_force_n == pytest.approx(system.damper.friction_force_n,
                                                               rel=1e-12)
 
 

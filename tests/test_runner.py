@@ -214,7 +214,7 @@ def _in_process(name: str):
     if name == "sweep":
         from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
 
-        cases = published_cases(bars=("solid", "ball"), gaps=(0.5e-3,))
+        cases = published_cases(bars=("solid", "ball"), gaps_m=(0.5e-3,))
         return ({"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02},
                  "grid": {"kind": ["solid", "ball"], "friction": ["off", "on"],
                           "ratio": [0.99, 1.01]}},
@@ -307,7 +307,7 @@ def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
     d = {"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02, "integrator": "exact"},
          "damper": {"static_ratio": 1.5}, "grid": {"ratio": [0.99, 1.01]}}
     ds = run_study(study_from_dict(d), tmp_path / "e.nc", executor="processes", workers=2)
-    ref = sweep(published_cases(bars=("ball",), gaps=(0.5e-3,), frictions=(True,),
+    ref = sweep(published_cases(bars=("ball",), gaps_m=(0.5e-3,), frictions=(True,),
                                 static_ratio=1.5),
                 SweepOptions([0.99, 1.01]), execution=Execution(workers=1),
                 integration=Integration(duration_s=0.02, integrator="exact"))

@@ -113,8 +113,8 @@ def test_the_published_file_gives_the_preset_bit_for_bit(bar, preset):
     spec = load_system(EXAMPLES / "published.toml")
     by_file, by_preset = make_system(bar, preset, spec=spec), make_system(bar, preset)
     assert json.dumps(by_file.to_dict()) == json.dumps(by_preset.to_dict())
-    a = simulate(by_file, Harmonic(10.0, 1.0), duration=0.05, dt=1e-6, record_every=10)
-    b = simulate(by_preset, Harmonic(10.0, 1.0), duration=0.05, dt=1e-6, record_every=10)
+    a = simulate(by_file, Harmonic(10.0, 1.0), duration_s=0.05, dt_s=1e-6, record_every=10)
+    b = simulate(by_preset, Harmonic(10.0, 1.0), duration_s=0.05, dt_s=1e-6, record_every=10)
     np.testing.assert_array_equal(a.history, b.history)
     np.testing.assert_array_equal(a.final.x, b.final.x)
 
@@ -126,8 +126,8 @@ def test_a_result_rebuilds_its_system_bit_for_bit():
     again = System.from_dict(json.loads(text))
     assert json.dumps(again.to_dict()) == text
     assert again.spec.to_dict() == spec.to_dict()
-    a = simulate(system, Harmonic(20.0, 1.0), duration=0.05, dt=1e-6, record_every=10)
-    b = simulate(again, Harmonic(20.0, 1.0), duration=0.05, dt=1e-6, record_every=10)
+    a = simulate(system, Harmonic(20.0, 1.0), duration_s=0.05, dt_s=1e-6, record_every=10)
+    b = simulate(again, Harmonic(20.0, 1.0), duration_s=0.05, dt_s=1e-6, record_every=10)
     np.testing.assert_array_equal(a.history, b.history)
     assert "carbide-32mm-LD10-tungsten-ball" in json.dumps(a.to_xarray().attrs)
 
@@ -139,28 +139,28 @@ def test_resolved_description_parses_to_the_same_spec():
         assert again.to_dict() == spec.to_dict()
         for cavity in (False, True):
             a, b = spec.modal(cavity, 2), again.modal(cavity, 2)
-            np.testing.assert_array_equal(a.stiffness, b.stiffness)
+            np.testing.assert_array_equal(a.stiffness_n_m, b.stiffness_n_m)
             np.testing.assert_array_equal(a.psi_damper, b.psi_damper)
 
 
 def test_file_values_are_defaults_and_arguments_override_them():
     spec = load_system(EXAMPLES / "carbide_ld10_tungsten.toml")
     s = make_system("ball", spec=spec)
-    assert s.damper.gap == 0.3e-3 and s.damper.restitution == 0.6
-    assert s.damper.mass == pytest.approx(MATERIALS["tungsten"].density * math.pi / 6 * 0.012**3)
-    assert s.bar.z_damper == 0.3 and s.bar.damping_ratio[0] == 0.005
-    s2 = make_system("ball", spec=spec, gap=0.5e-3, ball="steel", restitution=0.5)
-    assert (s2.damper.gap, s2.damper.material, s2.damper.restitution) == (0.5e-3, "steel", 0.5)
+    assert s.damper.gap_m == 0.3e-3 and s.damper.restitution == 0.6
+    assert s.damper.mass_kg == pytest.approx(MATERIALS["tungsten"].density * math.pi / 6 * 0.012**3)
+    assert s.bar.z_damper_m == 0.3 and s.bar.damping_ratio[0] == 0.005
+    s2 = make_system("ball", spec=spec, gap_m=0.5e-3, ball="steel", restitution=0.5)
+    assert (s2.damper.gap_m, s2.damper.material, s2.damper.restitution) == (0.5e-3, "steel", 0.5)
     tmd = make_system("tmd", spec=load_system(EXAMPLES / "steel_coolant_tmd.toml"), n_modes=3)
-    assert tmd.damper.design == "den-hartog" and tmd.damper.position == 0.17
+    assert tmd.damper.design == "den-hartog" and tmd.damper.position_m == 0.17
     np.testing.assert_array_equal(tmd.bar.damping_ratio, [0.01, 0.015, 0.015])
 
 
 def test_a_cavity_inside_a_section_splits_it_weakens_and_lightens_the_bar():
     spec = load_system(EXAMPLES / "carbide_ld10_tungsten.toml")
     with_cavity = spec.stepped_bar(True)
-    assert [round(s.end * 1e3, 6) for s in with_cavity.sections] == [293.8, 306.2, 320.0]
-    assert with_cavity.sections[1].diameter == 0.027
+    assert [round(s.end_m * 1e3, 6) for s in with_cavity.sections] == [293.8, 306.2, 320.0]
+    assert with_cavity.sections[1].diameter_m == 0.027
     assert with_cavity.static_tip_stiffness() < spec.bar.static_tip_stiffness()
     # the cavity removes mass where the mode moves much and stiffness where it bends
     # little: f1 rises, as in the published bar (461 Hz with the cavity, 456 without)
@@ -228,9 +228,9 @@ def test_an_unknown_top_level_key_and_a_missing_bar_are_refused():
 
 def test_a_gap_override_beyond_the_cavity_is_refused():
     spec = parse_system(mutated("cavity.depth_mm", 16.0), "x.toml")
-    make_system("ball", spec=spec, gap=0.9e-3)
+    make_system("ball", spec=spec, gap_m=0.9e-3)
     with pytest.raises(ValueError, match=r"gap = 0.0012 m.*\(0, 0.001\]"):
-        make_system("ball", spec=spec, gap=1.2e-3)
+        make_system("ball", spec=spec, gap_m=1.2e-3)
 
 
 def test_a_bar_without_a_ball_cannot_run_one():
@@ -251,9 +251,9 @@ def test_a_gap_that_fills_the_cavity_exactly_is_not_refused_by_round_off(depth_m
     d["ball"].update(diameter_mm=ball_mm, gap_mm=gap_mm)
     spec = parse_system(d, "round-off")
     assert spec.ball.gap == gap_mm / 1000
-    assert make_system("ball", spec=spec, gap=gap_mm / 1000).damper.gap == gap_mm / 1000
+    assert make_system("ball", spec=spec, gap_m=gap_mm / 1000).damper.gap_m == gap_mm / 1000
     with pytest.raises(ValueError, match=r"gap = .* m is outside .* \(at most the cavity's"):
-        make_system("ball", spec=spec, gap=gap_mm / 1000 * (1 + 1e-6))
+        make_system("ball", spec=spec, gap_m=gap_mm / 1000 * (1 + 1e-6))
     d["ball"]["gap_mm"] = gap_mm * (1 + 1e-6)
     with pytest.raises(SystemFileError, match="ball.gap_mm"):
         parse_system(d, "round-off")

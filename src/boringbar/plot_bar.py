@@ -20,11 +20,11 @@ def plot_modes(spec, cavity: bool, n_modes: int, title: str = "", *, fig=None) -
     bar = spec.stepped_bar(cavity)
     mm = 1e3
     for s in bar.sections:
-        x = [s.start * mm, s.end * mm]
-        geo.fill_between(x, -s.diameter / 2 * mm, s.diameter / 2 * mm, color="#b0bec5",
+        x = [s.start_m * mm, s.end_m * mm]
+        geo.fill_between(x, -s.diameter_m / 2 * mm, s.diameter_m / 2 * mm, color="#b0bec5",
                          edgecolor="#455a64", lw=0.8)
-        if s.inner_diameter > 0:
-            geo.fill_between(x, -s.inner_diameter / 2 * mm, s.inner_diameter / 2 * mm,
+        if s.inner_diameter_m > 0:
+            geo.fill_between(x, -s.inner_diameter_m / 2 * mm, s.inner_diameter_m / 2 * mm,
                              color="white", edgecolor="#455a64", lw=0.5, ls="--")
     geo.axvline(0.0, color="black", lw=3)
     if cavity and spec.cavity is not None and spec.ball is not None:

@@ -64,7 +64,7 @@ def continued_state(state: State, omega_old: float, omega_new: float) -> State:
     (time runs on), else one at t' = (omega_old t mod 2 pi) / omega_new."""
     if omega_new == omega_old:
         return state
-    phase = math.fmod(omega_old * state.t, 2 * math.pi)
+    phase = math.fmod(omega_old * state.t_s, 2 * math.pi)
     return State(np.array(state.x, dtype=float), phase / omega_new)
 
 
@@ -81,14 +81,14 @@ def _start(
     d = system.damper
     if isinstance(d, ImpactDamper):
         x = np.array(state.x, dtype=float)
-        x[n - 2] = min(max(x[n - 2], -d.gap / 2), d.gap / 2)
-        state = State(x, state.t)
+        x[n - 2] = min(max(x[n - 2], -d.gap_m / 2), d.gap_m / 2)
+        state = State(x, state.t_s)
     return state, False
 
 
 def _point(system, parameter: str, value: float, base: Harmonic) -> tuple[System, Harmonic]:
     if parameter == "force":
-        return system, replace(base, amplitude=value)
+        return system, replace(base, amplitude_n=value)
     if parameter == "ratio":
         return system, replace(base, ratio=value, frequency_hz=None)
     made = system(value)
@@ -114,7 +114,7 @@ class BifurcationOptions:
 
     parameter: str = "force"
     values: tuple[float, ...] = PUBLISHED_FORCES
-    force_n: float = DEFAULT_FORCING.amplitude
+    force_n: float = DEFAULT_FORCING.amplitude_n
     ratio: float = DEFAULT_FORCING.ratio
     backward: bool = True
     tol: float = 1e-3
@@ -215,7 +215,7 @@ def bifurcation(system: System | Callable[[float], System],
 
     ``system``: a System for "force" (F0, N) or "ratio" (Omega/omega_n); for any
     other parameter a factory ``value -> System`` (e.g. ``lambda g:
-    make_system("ball", gap=g)``).  ``options``: :class:`BifurcationOptions`
+    make_system("ball", gap_m=g)``).  ``options``: :class:`BifurcationOptions`
     (default: F0 5..50 N at ratio 1, forward and backward).  ``integration``:
     each run's duration, step, integrator and steady window
     (``steady_fraction``: the Poincare samples, the RMS and the pattern are of the
@@ -274,12 +274,12 @@ def _record(run, steady_fraction: float, tol: float, max_k: int) -> dict:
         "zero_one_K": verdict["K"],
         "zero_one_signal": verdict["signal"] if np.isfinite(verdict["K"]) else "",
         "tolerance": tol + pm.jitter,
-        "rms_tip_m": run.rms_tip,
+        "rms_tip_m": run.rms_tip_m,
         "pattern": "" if run.pattern is None else run.pattern.name,
         "impacts_per_cycle": math.nan if run.pattern is None else run.pattern.impacts_per_cycle,
-        "omega": run.omega,
-        "start_time_s": run.t0,
-        "end_time_s": run.final.t,
+        "omega": run.omega_rad_s,
+        "start_time_s": run.t0_s,
+        "end_time_s": run.final.t_s,
     }
 
 
@@ -340,7 +340,7 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
         extra = {}
     else:
         coords.update({"case": [c.label for c in cases], "bar": ("case", [c.bar for c in cases]),
-                       "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+                       "gap": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
                        "friction": ("case", [c.friction for c in cases])})
         extra = {"systems": json.dumps({c.label: r["systems"]
                                         for c, r in zip(cases, results, strict=True)})}
@@ -359,7 +359,7 @@ def _initial_dict(initial) -> dict | None:
     if initial is None:
         return None
     if isinstance(initial, State):
-        return {"x": np.asarray(initial.x, dtype=float).tolist(), "t": float(initial.t)}
+        return {"x": np.asarray(initial.x, dtype=float).tolist(), "t": float(initial.t_s)}
     return dict(initial.__dict__)
 
 

@@ -68,7 +68,7 @@ def candidate_system(spec: SystemSpec, options: DesignOptions, values: dict) -> 
         spec = parse_system(data, f"{spec.source} (design)")
     kw = {}
     if "gap_mm" in values:
-        kw["gap"] = float(values["gap_mm"]) * 1e-3
+        kw["gap_m"] = float(values["gap_mm"]) * 1e-3
     if "ball_material" in values:
         kw["ball"] = values["ball_material"]
     if "restitution" in values:
@@ -83,13 +83,13 @@ def _tmd(system: System, values: dict) -> TunedMassDamper:
     """The absorber of the TMD variables: mass m, frequency ratio f = omega_a/omega_n,
     damping ratio zeta_a = c / (2 m omega_a) (the absorber's own)."""
     d = system.damper
-    m = float(values.get("tmd_mass_kg", d.mass))
+    m = float(values.get("tmd_mass_kg", d.mass_kg))
     wn = system.bar.natural_frequency
-    f = float(values.get("tmd_frequency_ratio", math.sqrt(d.stiffness / d.mass) / wn))
+    f = float(values.get("tmd_frequency_ratio", math.sqrt(d.stiffness_n_m / d.mass_kg) / wn))
     wa = f * wn
-    zeta = float(values.get("tmd_damping_ratio", d.damping / (2 * d.mass * math.sqrt(
-        d.stiffness / d.mass))))
-    return TunedMassDamper(m, m * wa**2, 2 * zeta * m * wa, d.position, "design")
+    zeta = float(values.get("tmd_damping_ratio", d.damping_n_s_m / (2 * d.mass_kg * math.sqrt(
+        d.stiffness_n_m / d.mass_kg))))
+    return TunedMassDamper(m, m * wa**2, 2 * zeta * m * wa, d.position_m, "design")
 
 
 # --- one candidate -------------------------------------------------------------------
@@ -229,7 +229,7 @@ def _published_candidate(spec, options, samples, execution) -> Candidate:
     values = {}
     for v in options.variables:
         if v.name == "gap_mm":
-            values[v.name] = system.damper.gap * 1e3
+            values[v.name] = system.damper.gap_m * 1e3
         elif v.name == "ball_material":
             values[v.name] = system.damper.material
     return evaluate(spec, options, values, samples, execution)

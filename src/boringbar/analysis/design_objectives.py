@@ -32,15 +32,15 @@ CUT_INTEGRATOR = "rk4"
 def rms_runs(task) -> list[float]:
     """The tip RMS of one system over forces x ratios."""
     system, ratios, forces, initial, duration, integrator = task
-    return [simulate(system, Harmonic(f, r), duration=duration, initial=initial,
-                     integrator=integrator, record_every=0).rms_tip
+    return [simulate(system, Harmonic(f, r), duration_s=duration, initial=initial,
+                     integrator=integrator, record_every=0).rms_tip_m
             for f in forces for r in ratios]
 
 
 def _cut(task) -> tuple[float, bool]:
     """(steady amplitude m, chatter) of one cut."""
     system, rpm, depth, duration = task
-    c = simulate(system, Regenerative(depth=depth, rpm=rpm), duration=duration,
+    c = simulate(system, Regenerative(depth_m=depth, rpm=rpm), duration_s=duration,
                  integrator=CUT_INTEGRATOR, record_every=0).cutting
     return float(c["amplitude_m"]), bool(c["chatter"])
 

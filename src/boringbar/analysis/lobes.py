@@ -132,9 +132,9 @@ class LobesOptions:
         """The deepest grid index tried (depth = index x depth_step_m)."""
         return int(math.floor(self.max_depth_m / self.depth_step_m + 1e-9))
 
-    def forcing(self, depth: float, rpm: float, stop_at_zero: bool = True) -> Regenerative:
-        """The cut at ``depth`` (m) and ``rpm``."""
-        return Regenerative(depth=depth, rpm=rpm, kr=self.kr_pa, feed=self.feed_m,
+    def forcing(self, depth_m: float, rpm: float, stop_at_zero: bool = True) -> Regenerative:
+        """The cut at ``depth_m`` (m) and ``rpm``."""
+        return Regenerative(depth_m=depth_m, rpm=rpm, kr_pa=self.kr_pa, feed_m=self.feed_m,
                             revolutions=self.revolutions, interpolation=self.interpolation,
                             start=self.start, stop_at_zero=stop_at_zero,
                             bounded_fraction=self.bounded_fraction)
@@ -143,8 +143,8 @@ class LobesOptions:
 def cut(case: Case, rpm: float, depth: float, options: LobesOptions,
         integration: Integration) -> dict:
     """One cut, stopped at the first zero of the force: its verdicts and metrics."""
-    run = simulate(case.system, options.forcing(depth, rpm), duration=integration.duration_s,
-                   dt=integration.dt_s, integrator=integration.integrator,
+    run = simulate(case.system, options.forcing(depth, rpm), duration_s=integration.duration_s,
+                   dt_s=integration.dt_s, integrator=integration.integrator,
                    steady_fraction=integration.steady_fraction, record_every=0)
     c = run.cutting
     ball = case.system.kind == "ball"
@@ -338,7 +338,7 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
             "rpm": ("rpm", rpm, {"units": "rev/min"}),
             "depth": ("depth", depths, {"units": "m"}),
             "bar": ("case", [c.bar for c in cases]),
-            "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+            "gap": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
         },
         attrs={
@@ -469,7 +469,7 @@ def _example_run(case: Case, rpm: float, depth: float, options: LobesOptions,
     """One grid point rerun with history (no stop at the first zero) as a Dataset."""
     n_steps = int(round(integration.duration_s / integration.dt_s))
     run = simulate(case.system, options.forcing(depth, rpm, stop_at_zero=False),
-                   duration=integration.duration_s, dt=integration.dt_s,
+                   duration_s=integration.duration_s, dt_s=integration.dt_s,
                    record_every=max(1, n_steps // rows), integrator=integration.integrator,
                    steady_fraction=integration.steady_fraction)
     h = run.to_xarray()
@@ -479,7 +479,7 @@ def _example_run(case: Case, rpm: float, depth: float, options: LobesOptions,
                            bounded_chatter=bool(c["bounded_chatter"]),
                            first_zero_time=math.nan if c["first_zero_time_s"] is None
                            else float(c["first_zero_time_s"]),
-                           mean_force=float(run.forcing.mean_force),
+                           mean_force=float(run.forcing.mean_force_n),
                            static_deflection=float(c["static_deflection_m"]))
 
 
@@ -502,7 +502,7 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     exds["first_zero_time"].attrs["units"] = "s"
     exds["mean_force"].attrs.update(units="N", long_name="Kr b h_m")
     exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
-                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap,
+                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap_m,
                   "friction": case.friction, "preset": case.system.preset,
                   "criterion": ds.attrs["criterion"],
                   "boringbar_version": ds.attrs["boringbar_version"],

@@ -46,7 +46,7 @@ MAX_GRID_VALUES = 100_000
 @dataclass(frozen=True, eq=False)
 class Case:
     """One bar of a sweep: a ``label``, the ``system``, and what distinguishes it:
-    ``bar`` kind, ``gap`` (m, NaN without a ball) and ``friction`` ("on", "off",
+    ``bar`` kind, ``gap_m`` (m, NaN without a ball) and ``friction`` ("on", "off",
     "n/a"); ``initial``: this case's initial conditions (default: the
     integration's).  :meth:`of` makes one from a system alone; the bar, gap and
     friction given must be the system's (a ParameterError says which is not)."""
@@ -54,17 +54,17 @@ class Case:
     label: str
     system: System
     bar: str
-    gap: float = math.nan
+    gap_m: float = math.nan
     friction: str = "n/a"
     initial: Initial | None = None
 
     def __post_init__(self):
         if not isinstance(self.system, System):
             raise TypeError(f"Case system = {self.system!r} must be a System (make_system)")
-        given = (self.bar, self.gap, self.friction)
-        for name, mine, value in zip(("bar", "gap", "friction"), given,
+        given = (self.bar, self.gap_m, self.friction)
+        for name, mine, value in zip(("bar", "gap_m", "friction"), given,
                                      _describe(self.system), strict=True):
-            if not (mine == value or name == "gap" and math.isnan(mine) and math.isnan(value)):
+            if not (mine == value or name == "gap_m" and math.isnan(mine) and math.isnan(value)):
                 raise ParameterError(f"Case {self.label!r}: {name} = {mine!r}, but its system "
                                      f"has {name} = {value!r}; Case.of(system) labels it")
 
@@ -84,7 +84,7 @@ def _describe(system: System) -> tuple[str, float, str]:
     """(bar kind, gap m or NaN, friction "on"/"off"/"n/a") of ``system``."""
     if system.kind != "ball":
         return system.kind, math.nan, "n/a"
-    return "ball", system.damper.gap, "off" if system.damper.friction.kind == "none" else "on"
+    return "ball", system.damper.gap_m, "off" if system.damper.friction.kind == "none" else "on"
 
 
 def as_cases(systems, name: str = "systems") -> list[Case]:
@@ -117,14 +117,16 @@ def _relabel(case, label: str) -> Case:
 
 
 #: what published_cases passes on to make_system
-_OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap",
+_OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap_m",
                                                                  "friction"}
 
 
-def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
-                    frictions=(False, True), preset: str = "physical", **overrides) -> list[Case]:
+def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
+                    gaps_m: tuple[float, ...] = (0.5e-3, 0.1e-3),
+                    frictions: tuple[bool, ...] = (False, True), preset: str = "physical",
+                    **overrides) -> list[Case]:
     """The bars of the published sweeps under ``preset``: those of ``bars`` among solid,
-    TMD, and the ball damper for every gap of ``gaps`` (m) x friction of ``frictions``
+    TMD, and the ball damper for every gap of ``gaps_m`` (m) x friction of ``frictions``
     (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones;
     the bar arguments only to the ball cases)."""
     unknown = sorted(set(overrides) - _OVERRIDABLE)
@@ -134,14 +136,14 @@ def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
     cases = []
     for bar in bars:
         if bar == "ball":
-            for gap in gaps:
+            for gap in gaps_m:
                 for fr in frictions:
-                    s = make_system("ball", preset, gap=gap, friction=fr, **overrides)
+                    s = make_system("ball", preset, gap_m=gap, friction=fr, **overrides)
                     label = f"ball gap={gap * 1e3:g}mm friction={'on' if fr else 'off'}"
                     cases.append(Case.of(s, label))
         else:
-            kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber",
-                                                               "tmd_mass", "tmd_design",
+            kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber_m",
+                                                               "tmd_mass_kg", "tmd_design",
                                                                "modal", "spec")}
             cases.append(Case.of(make_system(bar, preset, **kw)))
     return cases
@@ -221,7 +223,7 @@ def compute(context: dict, point: list) -> list[dict]:
     runs = [(cases[i].system, Harmonic(o.forces_n[j], o.ratios[k]),
              cases[i].initial or integ.initial) for i, j, k in point]
     if context["batched"][point[0][0]]:
-        results = simulate_batch(runs, duration=integ.duration_s, dt=integ.dt_s,
+        results = simulate_batch(runs, duration_s=integ.duration_s, dt_s=integ.dt_s,
                                  steady_fraction=integ.steady_fraction)
     else:
         kw = integ.kwargs()
@@ -271,7 +273,7 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
             "ratio": ("ratio", np.array(o.ratios),
                       {"long_name": "Omega / omega_n of the host bar"}),
             "bar": ("case", [c.bar for c in cases]),
-            "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+            "gap": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
             "integrator": ("case", ctx["integrators"],
                            {"long_name": "the integrator of the case's runs"}),

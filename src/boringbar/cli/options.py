@@ -331,12 +331,12 @@ def initial_conditions(args, gaps_m: list[float]):
     if args.ball_velocity_m_s is not None:
         check_range("--ball-velocity-m-s", args.ball_velocity_m_s, -v, v, unit="m/s")
     return Initial(
-        tip_displacement=check_range("--tip-displacement-mm", args.tip_displacement_mm, -d, d,
+        tip_displacement_m=check_range("--tip-displacement-mm", args.tip_displacement_mm, -d, d,
                                      unit="mm") * 1e-3,
-        tip_velocity=check_range("--tip-velocity-m-s", args.tip_velocity_m_s, -v, v,
+        tip_velocity_m_s=check_range("--tip-velocity-m-s", args.tip_velocity_m_s, -v, v,
                                  unit="m/s"),
-        ball_position=(args.ball_position_mm or 0.0) * 1e-3,
-        ball_velocity=args.ball_velocity_m_s or 0.0,
+        ball_position_m=(args.ball_position_mm or 0.0) * 1e-3,
+        ball_velocity_m_s=args.ball_velocity_m_s or 0.0,
     )
 
 
@@ -350,7 +350,7 @@ def cut_options(args) -> dict:
     check_range("--feed-mm", feed, 0, MAX_FEED * 1e3, lo_open=True, unit="mm")
     check_int("--revolutions", revolutions, 1, 50)
     check_range("--bounded-fraction", fraction, 0, math.inf, lo_open=True, hi_open=True)
-    return {"kr": kr * 1e6, "feed": feed * 1e-3, "revolutions": revolutions,
+    return {"kr_pa": kr * 1e6, "feed_m": feed * 1e-3, "revolutions": revolutions,
             "interpolation": args.delay_interp or "cubic", "start": args.start or "rest",
             "bounded_fraction": fraction}
 
@@ -372,7 +372,7 @@ def check_depth(depth_mm: float, name: str) -> float:
 def system_overrides(args) -> dict:
     """make_system keywords the user set (the preset decides the rest)."""
     kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
-          "friction_number": args.friction_number, "friction_force": args.friction_force_n,
+          "friction_number": args.friction_number, "friction_force_n": args.friction_force_n,
           "friction_reading": args.friction_reading,
           "friction_reaction": args.friction_reaction,
           "tmd_design": args.tmd_design, "locked": args.locked or None,

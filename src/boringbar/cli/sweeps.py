@@ -138,7 +138,7 @@ def _sweep_text(ds) -> str:
 
 def _cmd_lobes(args) -> Outcome:
     if args.analytic:
-        return analytic_lobes_outcome(args, cut_options(args)["kr"])
+        return analytic_lobes_outcome(args, cut_options(args)["kr_pa"])
     cases, _, _ = many_cases(args)
     rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
     for r in rpm:
@@ -153,10 +153,7 @@ def _cmd_lobes(args) -> Outcome:
     check_workers(args.workers)
     cut = cut_options(args)
     options = LobesOptions(tuple(rpm), args.method, args.criterion, step * 1e-3,
-                           args.max_depth_mm * 1e-3, args.successive, kr_pa=cut["kr"],
-                           feed_m=cut["feed"], revolutions=cut["revolutions"],
-                           interpolation=cut["interpolation"], start=cut["start"],
-                           bounded_fraction=cut["bounded_fraction"])
+                           args.max_depth_mm * 1e-3, args.successive, **cut)
     integ = integration(args)
     ds = lobes(cases, options, integration=integ, execution=execution(args),
                progress=progress_printer(args, "lobes", "(case, speed) columns"))

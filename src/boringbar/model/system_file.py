@@ -97,13 +97,13 @@ class TmdSpec:
 class SystemSpec:
     """A resolved system file (SI units).  ``bar`` is the host bar without the
     cavity (the solid and TMD bars); ``cavity``, ``ball``, ``tmd`` may be None;
-    ``damping`` one ratio per mode (a 1-tuple applies to all); ``n_modes`` None:
+    ``damping_ratio`` one ratio per mode (a 1-tuple applies to all); ``n_modes`` None:
     the preset's; ``calibration``: f1 (Hz) by bar ("ball", "solid") that the
     paper preset calibrates to; ``name``: the bar's name; ``data``: the resolved description
     (:meth:`to_dict`); ``source``: the file."""
 
     bar: SteppedBar
-    damping: tuple[float, ...]
+    damping_ratio: tuple[float, ...]
     n_modes: int | None
     cavity: CavitySpec | None
     ball: BallSpec | None
@@ -129,14 +129,15 @@ class SystemSpec:
             return self.bar
         return _with_cavity(self.bar, self.cavity)
 
-    def modal(self, cavity: bool, n_modes: int, z_absorber: float | None = None) -> ModalModel:
+    def modal(self, cavity: bool, n_modes: int,
+              z_absorber_m: float | None = None) -> ModalModel:
         """The modal model of :meth:`stepped_bar`, ``n_modes`` retained, psi at the
-        ball and at the absorber (``z_absorber`` m, default the file's)."""
-        za = self.absorber_position if z_absorber is None else z_absorber
+        ball and at the absorber (``z_absorber_m`` m, default the file's)."""
+        za = self.absorber_position if z_absorber_m is None else z_absorber_m
         model = self.stepped_bar(cavity).modal_model(n_modes, self.ball_position, za)
-        if len(self.damping) == 1:
+        if len(self.damping_ratio) == 1:
             return model
-        ratios = [self.damping[min(i, len(self.damping) - 1)] for i in range(n_modes)]
+        ratios = [self.damping_ratio[min(i, len(self.damping_ratio) - 1)] for i in range(n_modes)]
         return replace(model, damping_ratio=ratios)
 
     def mode_shapes(self, cavity: bool, n_modes: int):
@@ -377,10 +378,10 @@ def _host_section(r: _Reader, bar: SteppedBar, lo: float, hi: float, z: float) -
                f"the cavity spans [{lo * 1e3:g}, {hi * 1e3:g}] mm, outside the bar "
                f"[0, {bar.length * 1e3:g}] mm")
     for s in bar.sections:
-        if s.start - SNAP <= lo and hi <= s.end + SNAP:
+        if s.start_m - SNAP <= lo and hi <= s.end_m + SNAP:
             return s
-        if s.start + SNAP < lo < s.end - SNAP or s.start + SNAP < hi < s.end - SNAP:
-            edge = s.end if lo < s.end - SNAP else s.start
+        if s.start_m + SNAP < lo < s.end_m - SNAP or s.start_m + SNAP < hi < s.end_m - SNAP:
+            edge = s.end_m if lo < s.end_m - SNAP else s.start_m
             r.fail("cavity.position_mm", z * 1e3,
                    f"the cavity [{lo * 1e3:g}, {hi * 1e3:g}] mm crosses the section boundary "
                    f"at {edge * 1e3:g} mm; a cavity must lie within one section (split the "
@@ -398,13 +399,13 @@ def _cavity(r: _Reader, d: dict, bar: SteppedBar):
                            unit="mm")
     z, length = z_mm / 1000, length_mm / 1000
     host = _host_section(r, bar, z - length / 2, z + length / 2, z)
-    dia_mm = r.required(t, "cavity.section_diameter_mm", host.inner_diameter * 1e3,
-                        host.diameter * 1e3, lo_open=True, unit="mm (above the host "
+    dia_mm = r.required(t, "cavity.section_diameter_mm", host.inner_diameter_m * 1e3,
+                        host.diameter_m * 1e3, lo_open=True, unit="mm (above the host "
                         "section's bore, at most its outer diameter)")
     dia = dia_mm / 1000
-    depth = r.number(t, "cavity.depth_mm", 0, host.diameter * 1e3, default=host.diameter * 1e3,
+    depth = r.number(t, "cavity.depth_mm", 0, host.diameter_m * 1e3, default=host.diameter_m * 1e3,
                      lo_open=True, unit="mm (at most the host section's outer diameter)")
-    cavity = CavitySpec(z, length, dia, host.inner_diameter, depth / 1000)
+    cavity = CavitySpec(z, length, dia, host.inner_diameter_m, depth / 1000)
     return cavity, {"cavity": {"position_mm": z_mm, "length_mm": length_mm,
                                "section_diameter_mm": dia_mm, "depth_mm": depth}}
 
@@ -508,16 +509,16 @@ def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
     lo, hi = cavity.position - cavity.length / 2, cavity.position + cavity.length / 2
     out = []
     for s in bar.sections:
-        if not (s.start - SNAP <= lo and hi <= s.end + SNAP):
+        if not (s.start_m - SNAP <= lo and hi <= s.end_m + SNAP):
             out.append(s)
             continue
-        a = s.start if abs(lo - s.start) <= SNAP else lo
-        b = s.end if abs(hi - s.end) <= SNAP else hi
-        if a > s.start:
-            out.append(Section(s.start, a, s.diameter, s.inner_diameter))
+        a = s.start_m if abs(lo - s.start_m) <= SNAP else lo
+        b = s.end_m if abs(hi - s.end_m) <= SNAP else hi
+        if a > s.start_m:
+            out.append(Section(s.start_m, a, s.diameter_m, s.inner_diameter_m))
         out.append(Section(a, b, cavity.section_diameter, cavity.section_bore))
-        if b < s.end:
-            out.append(Section(b, s.end, s.diameter, s.inner_diameter))
-    return SteppedBar(tuple(out), bar.youngs_modulus, bar.density, bar.damping_ratio,
-                      bar.max_element_length, bar.clamp_translational_stiffness,
-                      bar.clamp_rotational_stiffness)
+        if b < s.end_m:
+            out.append(Section(b, s.end_m, s.diameter_m, s.inner_diameter_m))
+    return SteppedBar(tuple(out), bar.youngs_modulus_pa, bar.density_kg_m3, bar.damping_ratio,
+                      bar.max_element_length_m, bar.clamp_translational_stiffness_n_m,
+                      bar.clamp_rotational_stiffness_n_m_per_rad)

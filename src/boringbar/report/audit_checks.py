@@ -201,7 +201,7 @@ def _stuck_f1(ev: Evidence, preset: str) -> float:
         systems = json.loads(ds.attrs["systems"])
     d = next(v for k, v in systems.items() if k.startswith("ball"))
     system = System.from_dict(d)
-    return float(natural_frequencies(system.bar, None, system.damper.mass)[0] / (2 * math.pi))
+    return float(natural_frequencies(system.bar, None, system.damper.mass_kg)[0] / (2 * math.pi))
 
 
 def check_h4(ev: Evidence, preset: str) -> Verdict:

@@ -126,7 +126,7 @@ COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
 DT_S = 1e-6
 INTEGRATOR = "auto"
 GAP_MM = 0.5
-CUT = {"kr": 850.0 * 1e6, "feed": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
+CUT = {"kr_pa": 850.0 * 1e6, "feed_m": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
        "start": "rest", "bounded_fraction": 0.1}
 
 
@@ -171,7 +171,7 @@ def _at_rest() -> Initial:
 def _sweep_cases(col: Column) -> list:
     """The cases of sweep and lobes by default: solid, TMD, and the ball damper at
     each gap (0.5, 0.1 mm) x friction (off, on), in the command line's order."""
-    return published_cases(preset=col.preset, gaps=(0.5 * 1e-3, 0.1 * 1e-3), **col.kw)
+    return published_cases(preset=col.preset, gaps_m=(0.5 * 1e-3, 0.1 * 1e-3), **col.kw)
 
 
 def _sweep_run(forces: str, ratios: str, duration_s: float):
@@ -190,11 +190,7 @@ def _lobes_run(method: str, rpm: str | None, duration_s: float, ball: str | None
                  published_cases(("ball",), (0.5e-3, 0.1e-3), preset=col.preset, ball=ball,
                                  **col.kw))
         speeds = PUBLISHED_RPM if rpm is None else parse_range(rpm, "--rpm")
-        options = LobesOptions(tuple(speeds), method, "zero", 0.01 * 1e-3, 3.0 * 1e-3, 3,
-                               kr_pa=CUT["kr"], feed_m=CUT["feed"],
-                               revolutions=CUT["revolutions"],
-                               interpolation=CUT["interpolation"], start=CUT["start"],
-                               bounded_fraction=CUT["bounded_fraction"])
+        options = LobesOptions(tuple(speeds), method, "zero", 0.01 * 1e-3, 3.0 * 1e-3, 3, **CUT)
         integration = _integration(duration_s)
         ds = lobes(cases, options, integration=integration, execution=Execution())
         exds = None if ball is not None else lobe_examples(ds, cases[0], options,
@@ -207,7 +203,7 @@ def _lobes_run(method: str, rpm: str | None, duration_s: float, ball: str | None
 def _bifurcation_run(gap_mm: str, friction: bool, forces: str, ratio: str, duration_s: float):
     def run(col: Column, out: Path) -> dict:
         values = parse_range(forces, "--force-n")
-        system = make_system("ball", col.preset, gap=float(gap_mm) * 1e-3, friction=friction,
+        system = make_system("ball", col.preset, gap_m=float(gap_mm) * 1e-3, friction=friction,
                              **col.kw)
         # the command line sets the swept option to its first value
         options = BifurcationOptions("force", tuple(values * 1.0), float(values[0]), float(ratio),
@@ -230,7 +226,7 @@ def _continuation_run(lo: float, hi: float, max_points: int):
         cases = {}
         for gap in ("0.1", "0.5"):
             for fr in ("off", "on"):
-                system = make_system("ball", col.preset, gap=float(gap) * 1e-3,
+                system = make_system("ball", col.preset, gap_m=float(gap) * 1e-3,
                                      friction=fr == "on", **col.kw)
                 ds = both_ways(system, CONTINUATION_START_N, lo, hi, max_points=max_points)
                 ds.attrs.update(preset=col.preset, bar="ball")
@@ -255,7 +251,7 @@ def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement
     def run(col: Column, out: Path) -> dict:
         lo, hi, n = _grid(displacement_mm)
         w0, v0 = (float(v) for v in start.split(","))
-        system = make_system("ball", col.preset, gap=GAP_MM * 1e-3, friction=friction,
+        system = make_system("ball", col.preset, gap_m=GAP_MM * 1e-3, friction=friction,
                              **col.kw)
         options = BasinOptions((lo * 1e-3, hi * 1e-3, n), _grid(velocity_m_s), 0.0, 0.0,
                                float(force), float(ratio), poincare_from=(w0 * 1e-3, v0))
@@ -269,7 +265,7 @@ def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement
 def _sensitivity_run(kind: str, force: str, ratios: str, cut_rpm: str | None,
                      depths_mm: str | None, duration_s: float):
     def run(col: Column, out: Path) -> dict:
-        common = dict(preset=col.preset, bar="ball", gap=GAP_MM * 1e-3, friction=True,
+        common = dict(preset=col.preset, bar="ball", gap_m=GAP_MM * 1e-3, friction=True,
                       overrides=col.kw, integration=_integration(duration_s),
                       execution=Execution())
         ds = sensitivity(SensitivityOptions(kind, None, (float(force),),
@@ -573,6 +569,6 @@ def _corrections(where: Path, presets, duration: float) -> dict:
     ladder = readings_ladder(duration=duration)
     nc = write_netcdf_atomic(ladder, where / "ladder.nc")
     png = save_figure_atomic(plot_ladder(ladder), where / "ladder.png")
-    impact = impact_law_check(make_system("ball", "paper", gap=0.1e-3, friction=False))
+    impact = impact_law_check(make_system("ball", "paper", gap_m=0.1e-3, friction=False))
     return {"ladder_netcdf": str(nc), "ladder_png": str(png), "impact_law": impact,
             "absorbers": {p: absorber_designs(p) for p in presets}}
