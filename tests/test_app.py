@@ -80,7 +80,7 @@ def test_a_new_ball_material_takes_its_own_mass(published):
     diameter weighs its density's share: 19300/14700 of the carbide's."""
     d = published.with_value("ball.material", "tungsten")
     assert "mass_g" not in d.data["ball"]
-    m = d.systems["ball"].damper.mass
+    m = d.systems["ball"].damper.mass_kg
     assert m == pytest.approx(19300 * math.pi / 6 * 0.015**3, rel=1e-12)
 
 
@@ -92,9 +92,9 @@ def test_the_closed_form_response_matches_a_simulated_solid_bar(published):
     i = int(np.argmax(r["curves"]["solid"]))
     solid = published.systems["solid"]
     ratio = r["f_hz"][i] / (solid.reference_frequency / (2 * math.pi))
-    run = bb.simulate(solid, bb.Harmonic(amplitude=20.0, ratio=ratio), duration=3.0,
+    run = bb.simulate(solid, bb.Harmonic(amplitude_n=20.0, ratio=ratio), duration_s=3.0,
                       record_every=0)
-    assert run.rms_tip * 1e3 == pytest.approx(r["curves"]["solid"][i], rel=2e-3)
+    assert run.rms_tip_m * 1e3 == pytest.approx(r["curves"]["solid"][i], rel=2e-3)
 
 
 def test_each_views_command_reproduces_it(published, tmp_path):
@@ -191,6 +191,12 @@ def _open(browser, url):
     return page
 
 
+def _reach(values) -> float:
+    """How far the ball went from the cavity's centre (mm): at most half the gap, and
+    close to it while it hits the walls (the history samples between impacts)."""
+    return max(map(abs, values))
+
+
 def _set(page, control: str, value: str) -> None:
     box = page.locator(f".ctl-{control} input")
     box.fill(value)
@@ -200,12 +206,12 @@ def _set(page, control: str, value: str) -> None:
 def test_the_page_redraws_when_the_gap_moves(browser, server):
     page = _open(browser, server)
     before = page.evaluate(BOKEH_DATA, "run-aux")
-    assert max(map(abs, before)) == pytest.approx(0.25, rel=1e-6)  # ball at the 0.5 mm walls
+    assert 0.24 < _reach(before) <= 0.25  # the ball between the 0.5 mm gap's walls
     _set(page, "ball-gap_mm", "0.2")
     page.wait_for_selector(".status-run >> text=change 1: drawn in", timeout=30_000)
     page.wait_for_selector(".status-response >> text=change 1: drawn in", timeout=60_000)
     after = page.evaluate(BOKEH_DATA, "run-aux")
-    assert max(map(abs, after)) == pytest.approx(0.1, rel=1e-6)  # now at the 0.2 mm walls
+    assert 0.09 < _reach(after) <= 0.1  # now between the 0.2 mm gap's walls
     assert page.evaluate(BOKEH_DATA, "response-ball") != []
     page.context.close()
 
@@ -215,7 +221,7 @@ def test_an_out_of_range_value_shows_the_message_and_keeps_the_design(browser, s
     _set(page, "ball-gap_mm", "30")
     msg = page.locator(".control-error >> text=ball.gap_mm").inner_text()
     assert "must be a number in (0, 2] mm" in msg
-    assert max(map(abs, page.evaluate(BOKEH_DATA, "run-aux"))) == pytest.approx(0.25)
+    assert 0.24 < _reach(page.evaluate(BOKEH_DATA, "run-aux")) <= 0.25
     page.context.close()
 
 
@@ -239,8 +245,8 @@ def test_two_sessions_are_independent(browser, server):
     one, two = _open(browser, server), _open(browser, server)
     _set(one, "ball-gap_mm", "0.2")
     one.wait_for_selector(".status-run >> text=change 1: drawn in", timeout=30_000)
-    assert max(map(abs, one.evaluate(BOKEH_DATA, "run-aux"))) == pytest.approx(0.1)
-    assert max(map(abs, two.evaluate(BOKEH_DATA, "run-aux"))) == pytest.approx(0.25)
+    assert _reach(one.evaluate(BOKEH_DATA, "run-aux")) <= 0.1
+    assert _reach(two.evaluate(BOKEH_DATA, "run-aux")) > 0.24
     assert two.locator(".ctl-ball-gap_mm input").input_value() == "0.5"
     assert two.locator(".status-run >> text=change 0: drawn in").count() == 1
     for p in (one, two):

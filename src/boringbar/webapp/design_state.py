@@ -121,8 +121,8 @@ class Design:
     def forcing(self) -> Harmonic | Regenerative:
         s = self.settings
         if s.forcing == "harmonic":
-            return Harmonic(amplitude=s.force_n, ratio=s.ratio)
-        return Regenerative(depth=s.depth_mm * 1e-3, rpm=s.rpm)
+            return Harmonic(amplitude_n=s.force_n, ratio=s.ratio)
+        return Regenerative(depth_m=s.depth_mm * 1e-3, rpm=s.rpm)
 
     def toml(self) -> str:
         """The design as a system file (what Export writes)."""

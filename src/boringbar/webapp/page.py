@@ -136,8 +136,7 @@ class Page:
             return
         self.last[view], self.keys[view] = data, key
         self.seconds[view] = time.perf_counter() - t0
-        self.locked(self.draw, view, data)
-        self.status[view].object = self.describe(view, data, self.seconds[view], change)
+        self.locked(self.draw, view, data, self.describe(view, data, self.seconds[view], change))
 
     def locked(self, fn, *args) -> None:
         """``fn(*args)``, which changes Bokeh models, under the session's document lock:
@@ -149,7 +148,14 @@ class Page:
         else:
             doc.add_next_tick_callback(partial(fn, *args))
 
-    def draw(self, view: str, data: dict) -> None:
+    def draw(self, view: str, data: dict, status: str | None = None) -> None:
+        """Redraw ``view`` from ``data``, then show its ``status`` line (after the data:
+        a status naming a change is the sign that its figures show it)."""
+        self._figures(view, data)
+        if status is not None:
+            self.status[view].object = status
+
+    def _figures(self, view: str, data: dict) -> None:
         pinned = self.pinned_views.get(view)
         if view == "bar":
             self.figures["bar"].show(data)

@@ -85,19 +85,19 @@ def run_view(design: Design) -> dict:
     forcing period against period number), the pattern, the energies (J)."""
     system, forcing = damped(design), design.forcing()
     t0 = time.perf_counter()
-    run = simulate(system, forcing, duration=RUN_S, dt=DT_S,
+    run = simulate(system, forcing, duration_s=RUN_S, dt_s=DT_S,
                    integrator=design.settings.integrator)
     h = run.history
-    period = 2 * math.pi / run.omega
+    period = 2 * math.pi / run.omega_rad_s
     shown = h[:, 0] >= h[-1, 0] - PERIODS_SHOWN * period
-    imp = run.impacts[run.impacts[:, 0] >= run.steady_start] if run.impacts.size else \
+    imp = run.impacts[run.impacts[:, 0] >= run.steady_start_s] if run.impacts.size else \
         np.zeros((0, 3))
     s = run.summary()
     return {
         "t_ms": h[shown, 0] * 1e3, "tip_mm": h[shown, 1] * 1e3,
         "aux_mm": h[shown, 3] * 1e3, "aux": "ball" if system.kind == "ball" else
         ("absorber" if system.kind == "tmd" else None),
-        "half_gap_mm": system.damper.gap / 2 * 1e3 if system.kind == "ball" else None,
+        "half_gap_mm": system.damper.gap_m / 2 * 1e3 if system.kind == "ball" else None,
         "impact_cycle": np.floor(imp[:, 0] / period),
         "impact_phase": (imp[:, 0] / period) % 1.0, "impact_wall": imp[:, 1],
         "pattern": s["pattern"], "rms_tip_mm": s["rms_tip_m"] * 1e3,
