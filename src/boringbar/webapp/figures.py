@@ -151,20 +151,17 @@ class ResponseFigure:
     def __init__(self):
         self.fig = new_figure("tip RMS response", "forcing frequency (Hz)", "tip RMS (mm)",
                            height=300)
-        self.src = {}
-        for kind in ("solid", "tmd"):
+        self.src, self.lines = {}, {}
+        for kind in KINDS:
             for pin in ("", "pin_"):
-                src = self.src[pin + kind] = _empty("f", "y", name=f"response-{pin}{kind}")
-                self.fig.line("f", "y", source=src, color=COLOURS[kind], line_width=2,
-                              line_dash="dashed" if pin else "solid",
-                              legend_label=LABELS[kind] + (" (pinned)" if pin else ""))
-        for pin in ("", "pin_"):
-            src = self.src[pin + "ball"] = _empty("f", "y", "pattern",
-                                                  name=f"response-{pin}ball")
-            self.fig.line("f", "y", source=src, color=COLOURS["ball"], line_width=2,
-                          line_dash="dashed" if pin else "solid",
-                          legend_label=LABELS["ball"] + (" (pinned)" if pin else ""))
-            self.fig.scatter("f", "y", source=src, color=COLOURS["ball"], size=7)
+                cols = ("f", "y", "pattern") if kind == "ball" else ("f", "y")
+                src = self.src[pin + kind] = _empty(*cols, name=f"response-{pin}{kind}")
+                self.lines[pin + kind] = self.fig.line(
+                    "f", "y", source=src, color=COLOURS[kind], line_width=2,
+                    line_dash="dashed" if pin else "solid",
+                    legend_label=LABELS[kind] + (" (pinned)" if pin else ""))
+                if kind == "ball":
+                    self.fig.scatter("f", "y", source=src, color=COLOURS["ball"], size=7)
         self.fig.add_tools(HoverTool(tooltips=[("f", "@f{0.0} Hz"), ("RMS", "@y{0.0000} mm"),
                                                ("pattern", "@pattern")]))
         self.fig.legend.click_policy = "hide"
@@ -174,12 +171,15 @@ class ResponseFigure:
         for pin, v in (("", view), ("pin_", pinned)):
             for kind in ("solid", "tmd"):
                 curve = (v or {}).get("curves", {}).get(kind)
-                self.src[pin + kind].data = {"f": v["f_hz"], "y": curve} if curve is not None \
-                    else {"f": [], "y": []}
+                self._put(pin + kind, None if curve is None else {"f": v["f_hz"], "y": curve})
             has = v is not None and "ball_f_hz" in v
-            self.src[pin + "ball"].data = {
-                "f": v["ball_f_hz"] if has else [], "y": v["ball_rms_mm"] if has else [],
-                "pattern": v["ball_pattern"] if has else []}
+            self._put(pin + "ball", {"f": v["ball_f_hz"], "y": v["ball_rms_mm"],
+                                     "pattern": v["ball_pattern"]} if has else None)
+
+    def _put(self, key: str, data: dict | None) -> None:
+        """A curve's data, or (None) no curve and no legend entry."""
+        self.src[key].data = data or {k: [] for k in self.src[key].data}
+        shown(self.fig, self.lines[key], data is not None)
 
 
 class LobesFigure:
@@ -188,18 +188,21 @@ class LobesFigure:
 
     def __init__(self):
         self.fig = new_figure("stability lobes (chatter-free below the curves)",
-                           "spindle speed (rpm)", "depth of cut (mm)", height=300)
-        self.src = {}
+                              "spindle speed (rpm)", "depth of cut (mm, log scale)",
+                              height=320, y_axis_type="log")
+        self.src, self.lines = {}, {}
         for kind in KINDS:
             for pin in ("", "pin_"):
                 src = self.src[pin + kind] = _empty("rpm", "b", name=f"lobes-{pin}{kind}")
                 label = LABELS[kind] + (" (linear host)" if kind == "ball" else "")
-                self.fig.line("rpm", "b", source=src, color=COLOURS[kind], line_width=2,
-                              line_dash="dashed" if pin else "solid",
-                              legend_label=label + (" (pinned)" if pin else ""))
+                self.lines[pin + kind] = self.fig.line(
+                    "rpm", "b", source=src, color=COLOURS[kind], line_width=2,
+                    line_dash="dashed" if pin else "solid",
+                    legend_label=label + (" (pinned)" if pin else ""))
         self.sim = _empty("rpm", "b", name="lobes-simulated")
-        self.fig.line("rpm", "b", source=self.sim, color=COLOURS["ball"], line_width=3,
-                      line_dash="dotted", legend_label="ball damper, simulated cuts")
+        self.sim_line = self.fig.line("rpm", "b", source=self.sim, color=COLOURS["ball"],
+                                      line_width=3, line_dash="dotted",
+                                      legend_label="ball damper, simulated cuts")
         self.fig.scatter("rpm", "b", source=self.sim, color=COLOURS["ball"], size=8,
                          marker="diamond")
         self.speed = Span(dimension="height", line_color="#444444", line_dash="dotdash")
@@ -211,10 +214,13 @@ class LobesFigure:
         for pin, v in (("", view), ("pin_", pinned)):
             for kind in KINDS:
                 curve = (v or {}).get("curves", {}).get(kind)
-                self.src[pin + kind].data = {"rpm": v["rpm"], "b": curve} \
-                    if curve is not None else {"rpm": [], "b": []}
+                key = pin + kind
+                self.src[key].data = {"rpm": v["rpm"], "b": curve} if curve is not None \
+                    else {"rpm": [], "b": []}
+                shown(self.fig, self.lines[key], curve is not None)
         self.speed.location = view["at_rpm"]
 
     def show_simulated(self, sim: dict | None) -> None:
         self.sim.data = {"rpm": sim["rpm"], "b": sim["limit_mm"]} if sim else \
             {"rpm": [], "b": []}
+        shown(self.fig, self.sim_line, sim is not None)

@@ -103,7 +103,7 @@ class SearchPanel:
         self.page, self.result, self.stop = page, None, threading.Event()
         self.folder = Path(tempfile.mkdtemp(prefix="boringbar-app-"))
         self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="boringbar-search")
-        self.storage, self.seen, self.done = None, 0, (0, 1)
+        self.storage, self.seen, self.done, self.study = None, 0, (0, 1), None
         self.names = pn.widgets.MultiChoice(name="variables", options=list(VARIABLES),
                                             value=["gap_mm", "ball_material"])
         self.trials = pn.widgets.IntInput(name="trials", value=12, start=1, end=500)
@@ -140,7 +140,7 @@ class SearchPanel:
             return
         self.stop.clear()
         self.storage = self.folder / f"search{len(list(self.folder.iterdir()))}.sqlite"
-        self.seen, self.result, self.done = 0, None, (0, opts.trials)
+        self.seen, self.result, self.done, self.study = 0, None, (0, opts.trials), None
         self.page.locked(setattr, self.source, "data", {"trial": [], "rms": []})
         self.go.disabled, self.halt.disabled, self.best.disabled = True, False, True
         self.file.object = ("Reproduce with `boringbar design search.toml`, where "
@@ -155,12 +155,12 @@ class SearchPanel:
         except _Stopped:
             self.text.object = f"stopped after {self.seen} trials"
             return
-        except (ParameterError, ValueError, RuntimeError) as e:
-            self.text.object = f"**search:** {e}"
+        except Exception as e:  # noqa: BLE001 (a failed search is reported; the page lives on)
+            self.text.object = f"**search failed:** {e}"
             return
         finally:
             self.go.disabled, self.halt.disabled = False, True
-        self.poll()
+        self.page.locked(self.poll)  # the last trials (the figure is a Bokeh model)
         self.result = (d, summary(ds))
         self.best.disabled = False
         self.text.object = summary_line(self.result[1])
@@ -175,14 +175,12 @@ class SearchPanel:
         """Show the trials finished since the last poll (read from the storage)."""
         n, total = self.done
         self.progress.max, self.progress.value = max(total, 1), min(n, max(total, 1))
-        if self.storage is None or not self.storage.exists():
-            return
-        try:
-            study = optuna.load_study(study_name=STUDY, storage=f"sqlite:///{self.storage}")
-            done = study.get_trials(deepcopy=False,
-                                    states=(optuna.trial.TrialState.COMPLETE,))
-        except (KeyError, optuna.exceptions.OptunaError, ValueError):
-            return  # the search has not created its study yet
+        if self.storage is None or n == 0:
+            return  # read the storage only once the search made it (it has a trial)
+        if self.study is None:
+            self.study = optuna.load_study(study_name=STUDY,
+                                           storage=f"sqlite:///{self.storage}")
+        done = self.study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
         if len(done) == self.seen:
             return
         new = done[self.seen:]

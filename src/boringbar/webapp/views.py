@@ -22,7 +22,11 @@ from boringbar.analysis.lobes import LobesOptions, lobes
 from boringbar.analysis.sweep import SweepOptions, sweep
 from boringbar.execute import Execution
 from boringbar.model.system import describe_modes, make_system
-from boringbar.reference.stability import limit_at_speeds, system_receptance
+from boringbar.reference.stability import (
+    limit_at_speeds,
+    natural_frequencies,
+    system_receptance,
+)
 from boringbar.simulate import Integration, simulate
 from boringbar.webapp.design_state import DT_S, RUN_S, Design
 
@@ -114,7 +118,7 @@ def response_view(design: Design, progress=None) -> dict:
     systems, force = design.systems, design.settings.force_n
     host = systems.get("ball", systems["solid"])
     f1 = host.reference_frequency / (2 * math.pi)
-    f = np.linspace(RESPONSE_RATIOS[0], RESPONSE_RATIOS[-1], RESPONSE_POINTS) * f1
+    f = np.linspace(*response_band(design, f1), RESPONSE_POINTS)
     out = {"f_hz": f, "curves": {}}
     for kind in ("solid", "tmd"):
         if kind in systems:
@@ -129,6 +133,18 @@ def response_view(design: Design, progress=None) -> dict:
         out["ball_rms_mm"] = ds["rms_tip_m"].values.reshape(-1) * 1e3
         out["ball_pattern"] = [str(p) for p in ds["pattern"].values.reshape(-1)]
     return out
+
+
+def response_band(design: Design, f1: float) -> tuple[float, float]:
+    """The band (Hz) the response is drawn over: the simulated ratios of the ball
+    bar's f1, widened to hold the TMD bar's two peaks (its two lowest coupled natural
+    frequencies, 10 % beyond them), which a band around f1 alone would hide."""
+    lo, hi = RESPONSE_RATIOS[0] * f1, RESPONSE_RATIOS[-1] * f1
+    tmd = design.systems.get("tmd")
+    if tmd is not None:
+        peaks = natural_frequencies(tmd.bar, tmd.damper)[:2] / (2 * math.pi)
+        lo, hi = min(lo, 0.9 * peaks[0]), max(hi, 1.1 * peaks[1])
+    return lo, hi
 
 
 def lobe_speeds(design: Design) -> np.ndarray:
