@@ -80,15 +80,7 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     kind = summary.get("bar", "?")
     t = ds["time"].values
     w = ds["tip_displacement"].values * 1e3
-    if kind == "ball" and "y" in ds:
-        lower, lower_label, colour = ds["y"].values * 1e3, "ball displacement y\nrelative to " \
-            "bar (mm)", bar_colour("ball")
-    elif kind == "tmd" and "absorber_stroke" in ds:
-        lower, lower_label, colour = (ds["absorber_stroke"].values * 1e3,
-                                      "absorber stroke (mm)", bar_colour("tmd"))
-    else:
-        lower, lower_label, colour = ds["force"].values, "tip force f (N)", CUT_COLOURS["force"]
-
+    lower, lower_label, colour = _run_lower(ds, kind)
     if fig is None:
         fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
@@ -105,38 +97,46 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     axes[0, 0].set_ylabel("tip displacement W (mm)")
     axes[1, 0].set_ylabel(lower_label)
     axes[0, 1].set_title(f"last {zoom_periods:g} periods", fontsize="medium")
+    _run_guides(axes, summary.get("rms_tip_m"), damper.get("gap_m") if kind == "ball" else None,
+                config.get("steady_start_s"))
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+    _legend_below(fig, axes[:, 0])
+    what, details = _run_title(summary, damper)
+    set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")}, details)
+    return fig
 
-    rms = summary.get("rms_tip_m")
+
+def _run_lower(ds, kind: str) -> tuple[np.ndarray, str, str]:
+    """The lower row of a run's figure: (values, axis label, colour): the ball's
+    displacement relative to the bar, the absorber's stroke, or the tip force."""
+    if kind == "ball" and "y" in ds:
+        return ds["y"].values * 1e3, "ball displacement y\nrelative to bar (mm)", \
+            bar_colour("ball")
+    if kind == "tmd" and "absorber_stroke" in ds:
+        return ds["absorber_stroke"].values * 1e3, "absorber stroke (mm)", bar_colour("tmd")
+    return ds["force"].values, "tip force f (N)", CUT_COLOURS["force"]
+
+
+def _run_guides(axes, rms, gap, steady) -> None:
+    """The steady RMS on the tip's row, the walls at +-gap/2 on the ball's row (``gap``
+    None: no ball) and the start of the steady part on the whole record."""
     if rms is not None:
         for ax in axes[0]:
             ax.axhline(rms * 1e3, color="#555555", lw=0.9, ls="-.",
                        label=f"steady RMS = {rms * 1e3:.4g} mm" if ax is axes[0, 0] else None)
-    if kind == "ball":
-        half = damper.get("gap_m", math.nan) / 2 * 1e3
+    if gap is not None:
+        half = gap / 2 * 1e3
         for ax in axes[1]:
             for s in (1, -1):
                 ax.axhline(s * half, color="black", ls="--", lw=1.0,
                            label=r"walls at $\pm\delta/2$" if s == 1 and ax is axes[1, 0]
                            else None)
         axes[1, 0].set_ylim(-1.25 * half, 1.25 * half)
-    steady = config.get("steady_start_s")
     if steady is not None:
         for ax in axes[:, 0]:
             ax.axvline(steady, color="#555555", ls=":", lw=1.2,
                        label="start of steady part" if ax is axes[0, 0] else None)
-    for ax in axes.flat:
-        ax.grid(alpha=0.3)
-    handles, labels = [], []
-    for ax in axes[:, 0]:
-        h, lab = ax.get_legend_handles_labels()
-        handles += h
-        labels += lab
-    if handles:
-        fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
-                   fontsize="small", frameon=False)
-    what, details = _run_title(summary, damper)
-    set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")}, details)
-    return fig
 
 
 def _run_title(summary: dict, damper: dict) -> tuple[str, str]:
@@ -581,8 +581,16 @@ def plot_bifurcation(ds, *, fig=None) -> Figure:
     bottom.set_xlim(x.min() - pad, x.max() + pad)
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
+    _bifurcation_legend(fig, top, agree="backward" in directions and not ranges)
+    set_title(fig, *_bifurcation_title(ds, param))
+    return fig
+
+
+def _bifurcation_legend(fig, top, agree: bool) -> None:
+    """The directions (and the hysteresis shading) of ``top``, whether the directions
+    ``agree`` everywhere, and what the verdict codes mean, below the panels."""
     handles, labels = top.get_legend_handles_labels()
-    if "backward" in directions and not ranges:
+    if agree:
         handles.append(top.plot([], [], ls="none")[0])
         labels.append("forward and backward agree at every value")
     handles.append(top.plot([], [], ls="none")[0])
@@ -590,8 +598,6 @@ def plot_bifurcation(ds, *, fig=None) -> Figure:
                   "? undetermined")
     fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize="small",
                frameon=False)
-    set_title(fig, *_bifurcation_title(ds, param))
-    return fig
 
 
 def _dropped_percent(attrs) -> float:
@@ -673,7 +679,7 @@ def plot_basins(ds, *, fig=None) -> Figure:
     for a in range(min(n, MAX_ATTRACTOR_COLOURS)):
         rw = float(ds["representative_tip_displacement_m"].values[a]) * 1e3
         rv = float(ds["representative_tip_velocity_m_s"].values[a])
-        ax.annotate(str(a), (rw, rv), ha="center", va="center", fontsize=8,
+        ax.annotate(str(a), (rw, rv), ha="center", va="center", fontsize=9,
                     fontweight="bold", color="white",
                     bbox=dict(boxstyle="circle,pad=0.15", fc="black", ec="none", alpha=0.6))
     ax.set_xlabel("initial tip displacement $W_0$ (mm)")
@@ -775,41 +781,50 @@ def plot_sensitivity(ds, *, fig=None) -> Figure:
         ax.set_title(f"harmonic forcing, F0 = {force:g} N", fontsize="small")
         ax.grid(alpha=0.3)
     if cuts:
-        ax = axes[n - 1]
-        depth = ds["depth"].values * 1e3
-        for i in range(len(values)):
-            amp = ds["cut_amplitude_m"].values[i] * 1e3
-            chat = ds["cut_chatter"].values[i].astype(bool)
-            ax.plot(depth, amp, lw=1.2, color=colours[i])
-            ax.plot(depth[chat], amp[chat], ls="none", marker="X", ms=8, color=colours[i],
-                    mec="black", mew=0.5)
-            ax.plot(depth[~chat], amp[~chat], ls="none", marker="o", ms=6, mfc="none",
-                    mec=colours[i], mew=1.3)
-        ax.plot([], [], ls="none", marker="X", ms=8, color="grey", mec="black", mew=0.5,
-                label="chatter (force reaches zero)")
-        ax.plot([], [], ls="none", marker="o", ms=6, mfc="none", mec="grey", mew=1.3,
-                label="no chatter")
-        ax.legend(fontsize="small", loc="best")
-        ax.set_xlabel("depth of cut b (mm)")
-        ax.set_ylabel("steady tip amplitude (mm)")
-        _zero_based(ax, ds["cut_amplitude_m"].values * 1e3)
-        ax.set_title(f"cuts at {ds.attrs.get('cut_rpm', math.nan):g} rpm", fontsize="small")
-        ax.grid(alpha=0.3)
+        _sensitivity_cuts(axes[n - 1], ds, colours)
     _legend_below(fig, axes[:len(forces)], ncol=min(len(values), 2))
-    systems = json.loads(ds.attrs.get("systems", "{}"))
-    first = next(iter(systems.values()), {})
-    words = system_words(first)
-    if kind == "restitution":
-        words = re.sub(r", e = .*$", "", words)
-    elif kind == "ball":  # the friction force follows the ball's mass
-        words = re.sub(r" \(\w+\)|, friction [^,]*", "", words)
-    elif kind == "friction_number":
-        words = re.sub(r", friction [^,]*", "", words)
     what = "initial conditions" if kind == "initial" else kind.replace("_", " ")
-    set_title(fig, f"sensitivity to {what}, {words}", ds.attrs,
+    set_title(fig, f"sensitivity to {what}, {_sensitivity_words(ds, kind)}", ds.attrs,
               f"{ds.attrs.get('duration_s', math.nan):g} s runs, "
               f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
     return fig
+
+
+def _sensitivity_cuts(ax, ds, colours) -> None:
+    """The cuts of a sensitivity study: steady tip amplitude against depth, one line a
+    value, chatter as filled crosses, no chatter as open circles."""
+    depth = ds["depth"].values * 1e3
+    for i, colour in enumerate(colours):
+        amp = ds["cut_amplitude_m"].values[i] * 1e3
+        chat = ds["cut_chatter"].values[i].astype(bool)
+        ax.plot(depth, amp, lw=1.2, color=colour)
+        ax.plot(depth[chat], amp[chat], ls="none", marker="X", ms=8, color=colour,
+                mec="black", mew=0.5)
+        ax.plot(depth[~chat], amp[~chat], ls="none", marker="o", ms=6, mfc="none",
+                mec=colour, mew=1.3)
+    ax.plot([], [], ls="none", marker="X", ms=8, color=GREY, mec="black", mew=0.5,
+            label="chatter (force reaches zero)")
+    ax.plot([], [], ls="none", marker="o", ms=6, mfc="none", mec=GREY, mew=1.3,
+            label="no chatter")
+    ax.legend(fontsize="small", loc="best")
+    ax.set_xlabel("depth of cut b (mm)")
+    ax.set_ylabel("steady tip amplitude (mm)")
+    _zero_based(ax, ds["cut_amplitude_m"].values * 1e3)
+    ax.set_title(f"cuts at {ds.attrs.get('cut_rpm', math.nan):g} rpm", fontsize="small")
+    ax.grid(alpha=0.3)
+
+
+def _sensitivity_words(ds, kind: str) -> str:
+    """The system of a sensitivity study in words, less what the study varies."""
+    systems = json.loads(ds.attrs.get("systems", "{}"))
+    words = system_words(next(iter(systems.values()), {}))
+    if kind == "restitution":
+        return re.sub(r", e = .*$", "", words)
+    if kind == "ball":  # the friction force follows the ball's mass
+        return re.sub(r" \(\w+\)|, friction [^,]*", "", words)
+    if kind == "friction_number":
+        return re.sub(r", friction [^,]*", "", words)
+    return words
 
 
 def _zero_based(ax, values) -> None:
