@@ -319,8 +319,9 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
                execution: Execution | None = None) -> dict:
     """The best design beside the file's own and the bare bar, at the nominal values:
     tip RMS (m) over ``n`` ratios across the band at the first force (a ball
-    damper), or |G| (m/N) over 0.8-1.2 x f1 (a TMD). Returns x, its label, and
-    a curve per bar."""
+    damper), or |G| (m/N) over 0.8-1.2 x f1 (a TMD). Returns ``x`` (Omega/omega_n),
+    ``quantity`` ("rms_tip_m" or "receptance_m_n"), ``force_n`` (None for |G|), ``bar``
+    (the damper's kind) and ``curves``, one a bar."""
     bars = {"best design": candidate_system(spec, options, best),
             "file's design": make_system(options.bar, options.preset, spec=spec),
             "bare bar": make_system("solid", options.preset, spec=spec)}
@@ -331,13 +332,14 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
         tasks = [(s, tuple(x), (force,), Initial(), options.duration_s, options.integrator)
                  for s in bars.values()]
         y = np.array(run_points(rms_runs, tasks, execution=execution))
-        return {"x": x, "xlabel": "Omega / omega_n", "ylabel": f"tip RMS (m), F0 = {force:g} N",
+        return {"x": x, "quantity": "rms_tip_m", "force_n": force, "bar": options.bar,
                 "curves": dict(zip(bars, y, strict=True))}
     wn = bars["bare bar"].bar.natural_frequency
     w = np.linspace(0.8 * wn, 1.2 * wn, 801)
     curves = {k: np.abs(system_receptance(s, w))
               for k, s in bars.items()}
-    return {"x": w / wn, "xlabel": "omega / omega_n", "ylabel": "|G| (m/N)", "curves": curves}
+    return {"x": w / wn, "quantity": "receptance_m_n", "force_n": None, "bar": options.bar,
+            "curves": curves}
 
 
 def summary_line(s: dict) -> str:
