@@ -2,8 +2,8 @@
 then redrawn by replacing the sources' data with a view's arrays (the browser
 receives the new columns only, not a new figure).
 
-Colours: the Okabe-Ito palette, colour-blind safe; the pinned design is drawn in the
-same colour as the current one, dashed.
+Colours: the report's (:mod:`boringbar.palette`, Okabe-Ito, colour-blind safe); the
+pinned design is drawn in the same colour as the current one, dashed.
 """
 
 from __future__ import annotations
@@ -11,10 +11,12 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource, HoverTool, Span
 from bokeh.plotting import figure
 
-#: one colour per bar, everywhere on the page
-COLOURS = {"solid": "#0072B2", "ball": "#D55E00", "tmd": "#009E73", "wall": "#777777"}
-LABELS = {"solid": "solid bar", "ball": "ball damper", "tmd": "tuned mass damper"}
-WALLS = {1.0: "#CC79A7", -1.0: "#56B4E9"}
+from boringbar.palette import BAR_STYLE, GREY, OKABE_ITO
+
+#: one colour per bar, the report's (boringbar.palette)
+COLOURS = {**{k: v["color"] for k, v in BAR_STYLE.items()}, "wall": GREY}
+LABELS = {k: v["label"] for k, v in BAR_STYLE.items()}
+WALLS = {1.0: OKABE_ITO["reddish purple"], -1.0: OKABE_ITO["sky blue"]}
 TOOLS = "pan,wheel_zoom,box_zoom,reset,save"
 KINDS = ("solid", "ball", "tmd")
 
@@ -80,7 +82,7 @@ class ModesFigure:
     def __init__(self, n: int = 3):
         self.fig = new_figure("mode shapes", "distance from the clamp (mm)",
                            "deflection / tip deflection", height=200)
-        palette = ("#000000", "#E69F00", "#CC79A7")
+        palette = (OKABE_ITO["black"], OKABE_ITO["orange"], OKABE_ITO["reddish purple"])
         self.sources = [_empty("z", "w") for _ in range(n)]
         self.lines = [self.fig.line("z", "w", source=src, color=palette[i], line_width=2,
                                     legend_label=f"mode {i + 1}")
