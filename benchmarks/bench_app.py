@@ -9,9 +9,12 @@ action and stops when the view's status line names the new change):
 - a spindle-speed change: the analytic lobes redrawn (the gap leaves them alone).
 
 Prints each figure with its target; ``--repeat N`` changes each control N times
-(median and worst shown).
+(median and worst shown). ``--screenshots DIR`` then also saves the page's three tabs
+as DIR/app_design.png, app_lobes.png (after simulating the ball bar's lobes) and
+app_search.png (after a design search), the screenshots of docs/app.md.
 
     .venv/bin/python benchmarks/bench_app.py --repeat 5
+    .venv/bin/python benchmarks/bench_app.py --repeat 1 --screenshots docs/img
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import statistics
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 from playwright.sync_api import sync_playwright
 
@@ -52,9 +56,23 @@ def change(page, control: str, value: str) -> float:
     return t0
 
 
+def screenshots(page, out: Path) -> None:
+    """The page's three tabs, each after its work is done."""
+    page.screenshot(path=out / "app_design.png", full_page=True)
+    page.get_by_text("Response and lobes").click()
+    page.get_by_text("Simulate the ball bar's lobes").click()
+    page.wait_for_selector(".status-simulated >> text=simulated cuts in", timeout=300_000)
+    page.screenshot(path=out / "app_lobes.png", full_page=True)
+    page.get_by_text("Design search", exact=True).click()
+    page.get_by_text("Start search").click()
+    page.wait_for_selector(".search-status >> text=trials)", timeout=600_000)
+    page.screenshot(path=out / "app_search.png", full_page=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--screenshots", metavar="DIR")
     args = ap.parse_args()
     port = free_port()
     t_start = time.perf_counter()
@@ -90,6 +108,8 @@ def main() -> None:
                 t0 = change(page, "rpm", f"{1000 + 50 * i:g}")
                 times["analytic lobes"].append(wait_drawn(page, "lobes", n) - t0)
                 wait_drawn(page, "response", n)
+            if args.screenshots:
+                screenshots(page, Path(args.screenshots))
             browser.close()
     finally:
         server.terminate()

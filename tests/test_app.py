@@ -4,6 +4,7 @@ Debian's headless Chromium by Playwright (no browser download)."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 import os
@@ -12,6 +13,7 @@ import socket
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +27,7 @@ from boringbar.model.system_file import load_system, published_system
 from boringbar.webapp import views
 from boringbar.webapp.commands import commands
 from boringbar.webapp.design_state import Design
+from boringbar.webapp.jobs import Latest, Superseded
 from boringbar.webapp.search import design_file, options
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -267,3 +270,48 @@ def test_a_malformed_upload_gets_the_command_lines_message(browser, server, tmp_
 def test_the_notebook_app_builds_the_same_page():
     layout = bb.app(Path(bb.__file__).parent / "model" / "published.toml")
     assert "published" in repr(layout)
+
+
+def test_a_newer_request_cancels_the_one_before():
+    """The first of two requests on one view is cancelled (a running one is told to
+    stop at its next progress report), the second's result is what comes back."""
+    pool = ThreadPoolExecutor(max_workers=2)
+    job, stops = Latest(pool), []
+
+    def work(tag, progress):
+        for i in range(200):
+            try:
+                progress(i, 200)
+            except Superseded:
+                stops.append(tag)
+                raise
+            time.sleep(0.005)
+        return tag
+
+    async def both():
+        first = asyncio.ensure_future(job.run(work, "first", progress=lambda d, t: None))
+        await asyncio.sleep(0.05)
+        second = await job.run(work, "second", progress=lambda d, t: None)
+        with pytest.raises(asyncio.CancelledError):
+            await first
+        return second
+
+    assert asyncio.run(both()) == "second"
+    pool.shutdown(wait=True)
+    assert stops == ["first"]  # stopped at its next point, not run to its end
+
+
+def test_the_server_binds_this_machine_unless_told(tmp_path):
+    """--host exposes the page with a warning on stderr; the default prints none."""
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "boringbar", "app", "--port", str(port),
+                             "--host", "0.0.0.0"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stderr.readline()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+    assert "warning: serving on 0.0.0.0" in line
+    out = cli("app", "--port", "70000")
+    assert out.returncode == 2 and out.stderr.count("\n") == 1 and "--port" in out.stderr

@@ -19,7 +19,6 @@ from functools import partial
 
 import panel as pn
 
-from boringbar._validate import ParameterError
 from boringbar.webapp import views
 from boringbar.webapp.commands import commands
 from boringbar.webapp.controls import Controls
@@ -127,11 +126,12 @@ class Page:
             return
         self.status[view].object = "computing..."
         try:
-            kw = {"progress": self.report} if view == "response" else {}
+            # the response's sweep is told to stop at its next point once superseded
+            kw = {"progress": _quiet} if view == "response" else {}
             data = await self.jobs[view].run(fn, self.design, **kw)
         except (asyncio.CancelledError, Superseded):
             return
-        except (ParameterError, ValueError, RuntimeError) as e:
+        except Exception as e:  # noqa: BLE001 (any failure is the view's message, not the server's)
             self.status[view].object = f"**{view}:** {e}"
             return
         self.last[view], self.keys[view] = data, key
@@ -244,6 +244,10 @@ class Page:
         """Make ``design`` current, its controls showing it (the search's best)."""
         self.controls.show(design)
         self.changed(design)
+
+
+def _quiet(done: int, total: int) -> None:
+    """A progress callback that shows nothing (the job's own check is what matters)."""
 
 
 def export_name(design: Design) -> str:
