@@ -89,7 +89,7 @@ class Page:
         tabs = pn.Tabs(("Design", pn.Column(bar, run, sizing_mode="stretch_width")),
                        ("Response and lobes", pn.Column(response, lobes,
                                                         sizing_mode="stretch_width")),
-                       ("Design search", self.search.panel), dynamic=False,
+                       ("Design search", self.search.panel), dynamic=True,
                        sizing_mode="stretch_width")
         return pn.Row(side, tabs, sizing_mode="stretch_width")
 
