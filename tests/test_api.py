@@ -7,6 +7,7 @@ import inspect
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -188,3 +189,17 @@ def test_a_run_shows_itself_in_a_notebook():
                       duration_s=0.2, record_every=0)
     assert "cut at 1200 rpm, depth 0.05 mm" in cut._repr_html_()
     assert "none (record_every=0)" in cut._repr_html_()
+
+
+def test_variants_are_the_files_bars_side_by_side():
+    """bb.variants gives the bars a system file describes, keyed by kind, and an
+    analysis labels its cases with those keys."""
+    spec = bb.load_system(Path(__file__).parents[1] / "examples" / "systems" /
+                          "steel_coolant_tmd.toml")
+    v = bb.variants(spec)
+    assert list(v) == ["solid", "tmd"]  # this file has an absorber and no ball
+    assert v["tmd"].kind == "tmd" and v["solid"].damper is None
+    assert list(bb.variants()) == ["solid", "ball", "tmd"]  # the published bar
+    ds = bb.sweep(v, bb.SweepOptions(ratios=(1.0,), forces_n=(10.0,)),
+                  integration=bb.Integration(duration_s=0.05))
+    assert list(ds["case"].values) == ["solid", "tmd"]

@@ -5,7 +5,8 @@ layers behind them.
 
 - Descriptions: :class:`SteppedBar`, :class:`ModalModel`, :class:`ImpactDamper`,
   :class:`Friction`, :class:`TunedMassDamper`, :class:`System` and
-  :func:`make_system` (the two presets); your own bar: :func:`load_system`
+  :func:`make_system` (the two presets), :func:`variants` (the solid, ball and TMD
+  bars of one system file, side by side); your own bar: :func:`load_system`
   (system files) -> :class:`SystemSpec`, :func:`describe_modes`, :class:`ModalFit`
   (a fitted tip FRF); forcing: :class:`Harmonic`,
   :class:`Regenerative`.
@@ -56,7 +57,7 @@ _HOMES = {
     "boringbar.model.forcing": ("Harmonic", "Regenerative"),
     "boringbar.model.modal_fit": ("ModalFit",),
     "boringbar.model.system": ("PRESETS", "READINGS", "System", "describe_modes",
-                               "make_system"),
+                               "make_system", "variants"),
     "boringbar.model.system_file": ("SystemSpec", "load_system"),
     "boringbar.reference.linear": ("min_real_part", "tip_frf"),
     "boringbar.studies.load": ("load_study",),
@@ -135,4 +136,5 @@ __all__ = [
     "sims_tuning",
     "sweep",
     "tip_frf",
+    "variants",
 ]

@@ -252,6 +252,18 @@ def _friction(spec: SystemSpec, paper_number: bool, on: bool, number, force, rea
     return fr
 
 
+def variants(spec: SystemSpec | None = None, preset: str = "physical") -> dict[str, System]:
+    """The bars one system file describes, side by side, under ``preset``: "solid" (the
+    bar without its cavity) always, "ball" (with its cavity and ball) if the file has a
+    ball, "tmd" (with its absorber) if it has one; ``spec`` the file
+    (:func:`~boringbar.model.system_file.load_system`; default the published bar).
+    The mapping is what the analyses take: ``bb.sweep(bb.variants(spec))`` labels
+    its cases solid, ball and tmd."""
+    spec = spec or published_system_spec()
+    kinds = ["solid"] + (["ball"] if spec.ball else []) + (["tmd"] if spec.tmd else [])
+    return {kind: make_system(kind, preset, spec=spec) for kind in kinds}
+
+
 def describe_modes(system: System) -> dict:
     """The modal model of ``system``'s host bar, as ``boringbar modes`` prints it:
     ``modes`` (per mode: frequency_hz, modal_mass_kg and modal_stiffness_n_m

@@ -24,7 +24,7 @@ from boringbar._validate import ParameterError, check_choice, check_range
 from boringbar.cli.options import check_depth, check_force, check_ratio, check_rpm
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.materials import MATERIALS
-from boringbar.model.system import PRESETS, System, make_system
+from boringbar.model.system import PRESETS, System, variants
 from boringbar.model.system_file import FRICTION_FORMS, SystemSpec, cavity_moved, parse_system
 from boringbar.simulate import INTEGRATOR_CHOICES
 
@@ -114,9 +114,7 @@ class Design:
         """The bars this file describes under the preset: solid always, ball with a
         ball, tmd with an absorber (labels are the bar kinds); built once per design
         (the views share them)."""
-        kinds = ["solid"] + (["ball"] if self.spec.ball else []) + \
-            (["tmd"] if self.spec.tmd else [])
-        return {k: make_system(k, self.settings.preset, spec=self.spec) for k in kinds}
+        return variants(self.spec, self.settings.preset)
 
     def forcing(self) -> Harmonic | Regenerative:
         s = self.settings
