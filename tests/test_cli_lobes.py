@@ -125,6 +125,8 @@ def test_simulate_cut_text(tmp_path, capsys):
     (["lobes", "--depth-tolerance", "0"], "--depth-tolerance"),
     (["lobes", "--depth-tolerance", "1e-7"], "--depth-tolerance"),
     (["lobes", "--rpm", "1200,1000"], "--rpm"),
+    (["lobes", "--depth-step-mm", "0.01", "--depth-tolerance", "0.02"],
+     "--depth-step-mm = 0.01 and --depth-tolerance = 0.02: give one"),
     (["lobes", "--max-depth-mm", "0.0005"], "--max-depth-mm"),  # below the 1 um grid
     (["lobes", "--method", "scan", "--max-depth-mm", "0.001"], "--max-depth-mm"),
     (["lobes", "--feed-mm", "-0.1"], "--feed-mm"),

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from scipy.signal import argrelextrema
 
+from boringbar._validate import ParameterError
 from boringbar.analysis.lobes import (
     DEPTH_FLOOR,
     LOBE_NUMBERS,
@@ -137,10 +138,16 @@ def test_the_search_finds_the_limit_to_one_percent_and_agrees_with_a_fine_grid()
     assert rel.attrs["depth_grid"].startswith("depth_tolerance = 0.01")
 
 
-def test_a_scan_keeps_the_published_step():
+def test_a_scan_keeps_the_published_step_and_a_grid_is_one_or_the_other():
     o = LobesOptions(rpm=(1200.0,), method="scan")
     assert o.depth_step_m == PUBLISHED_DEPTH_STEP and o.max_index == 300
-    assert o.depth(7) == 7 * PUBLISHED_DEPTH_STEP
+    assert o.depth(7) == 7 * PUBLISHED_DEPTH_STEP and o.depth_tolerance is None
+    assert LobesOptions(method="scan", depth_tolerance=0.05).depth_step_m is None
+    with pytest.raises(ParameterError, match="depth_step_m = 1e-05 and depth_tolerance = "
+                                             "0.01: give one"):
+        LobesOptions(depth_step_m=1e-5, depth_tolerance=0.01)
+    with pytest.raises(ParameterError, match=r"depth_tolerance = 0.0 is outside"):
+        LobesOptions(depth_tolerance=0.0)
 
 
 # --- sweep windows ----------------------------------------------------------------------

@@ -99,7 +99,19 @@ NOT_RUN, CHATTER, STABLE = -1, 0, 1
 EXAMPLE_ROWS = 20000
 
 
-def grid_index(depth: float, step: float | None, tolerance: float) -> int:
+def depth_grid(method: str, step, tolerance,
+               names: tuple[str, str] = ("depth_step_m", "depth_tolerance")) -> str:
+    """The depth grid a lobe study climbs: "linear" with a ``step`` given, or for a
+    scan given neither (the published step); else "geometric" (the search's default,
+    or a ``tolerance`` given).  Both given: a ParameterError naming ``names``."""
+    if step is not None and tolerance is not None:
+        raise ParameterError(f"{names[0]} = {step!r} and {names[1]} = {tolerance!r}: give "
+                             "one, a linear grid's step or a geometric grid's ratio")
+    linear = step is not None or (method == "scan" and tolerance is None)
+    return "linear" if linear else "geometric"
+
+
+def grid_index(depth: float, step: float | None, tolerance: float | None) -> int:
     """The deepest index of a depth grid (linear of ``step`` m, or geometric of
     relative step ``tolerance`` from DEPTH_FLOOR with ``step`` None) whose depth is at
     most ``depth`` (m; 0: none).  Of ``max_depth_m``: the number of depths."""
@@ -120,8 +132,9 @@ class LobesOptions:
     ``criterion``: "zero" (published: the force reaches zero) or "bounded";
     depths ``depth_step_m``, 2 ``depth_step_m``, ... up to ``max_depth_m`` (m), or,
     with ``depth_step_m`` None (the default), a geometric grid from
-    :data:`DEPTH_FLOOR` in relative steps of ``depth_tolerance`` (a scan takes the
-    published 0.01 mm step instead: it climbs the grid one depth at a time);
+    :data:`DEPTH_FLOOR` in relative steps of ``depth_tolerance`` (default 1 %; a scan
+    given neither takes the published 0.01 mm step: it climbs the grid one depth at
+    a time; :func:`depth_grid`);
     ``successive``: chattering depths in a row that end a scan.  The cut
     (:class:`~boringbar.model.forcing.Regenerative`): ``kr_pa`` (Pa), ``feed_m``
     (m), ``revolutions``, ``interpolation``, ``start``, ``bounded_fraction`` (of
@@ -141,18 +154,20 @@ class LobesOptions:
     start: str = "rest"
     bounded_fraction: float = 0.1
     analytic: bool = True
-    depth_tolerance: float = DEPTH_TOLERANCE
+    depth_tolerance: float | None = None
 
     def __post_init__(self):
         if self.rpm is not None:
             object.__setattr__(self, "rpm", check_speeds("rpm", self.rpm))
         check_choice("method", self.method, METHODS)
         check_choice("criterion", self.criterion, CRITERIA)
-        if self.depth_step_m is None and self.method == "scan":
-            object.__setattr__(self, "depth_step_m", PUBLISHED_DEPTH_STEP)
-        check_range("depth_tolerance", self.depth_tolerance, 0.0, 0.5, lo_open=True)
-        if self.depth_step_m is not None:
-            check_positive("depth_step_m", self.depth_step_m, "m")
+        if depth_grid(self.method, self.depth_step_m, self.depth_tolerance) == "linear":
+            step = PUBLISHED_DEPTH_STEP if self.depth_step_m is None else self.depth_step_m
+            object.__setattr__(self, "depth_step_m", check_positive("depth_step_m", step, "m"))
+        else:
+            tol = DEPTH_TOLERANCE if self.depth_tolerance is None else self.depth_tolerance
+            object.__setattr__(self, "depth_tolerance", check_range(
+                "depth_tolerance", tol, 0.0, 0.5, lo_open=True))
         check_range("max_depth_m", self.max_depth_m, self.depth(1), 1.0, unit="m")
         check_int("successive", self.successive, 1, 100)
         check_choice("interpolation", self.interpolation, INTERPOLATIONS)

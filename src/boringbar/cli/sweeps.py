@@ -15,6 +15,7 @@ from boringbar.analysis.lobes import (
     LobesOptions,
     check_speeds,
     default_speeds,
+    depth_grid,
     grid_index,
     lobes,
 )
@@ -75,9 +76,9 @@ def add_lobes(sub) -> None:
     g.add_argument("--depth-step-mm", type=float, metavar="MM",
                    help="depth-of-cut step in mm (default: --method search: geometric "
                         "steps of --depth-tolerance; scan: 0.01, published)")
-    g.add_argument("--depth-tolerance", type=float, default=DEPTH_TOLERANCE, metavar="X",
-                   help="without --depth-step-mm, each depth X above the one below, so a "
-                        "limit is found to X of itself (default: 0.01)")
+    g.add_argument("--depth-tolerance", type=float, metavar="X",
+                   help="instead of --depth-step-mm, each depth X above the one below, so a "
+                        "limit is found to X of itself (default: 0.01 with --method search)")
     g.add_argument("--max-depth-mm", type=float, default=3.0, metavar="MM",
                    help="deepest cut tried in mm (default: 3)")
     g.add_argument("--method", choices=("scan", "search"), default="search",
@@ -188,12 +189,13 @@ def _lobe_options(args, cases) -> LobesOptions:
            else check_speeds("--rpm", parse_range(args.rpm, "--rpm")))
     for r in rpm:
         check_rpm(r, args)
-    step = args.depth_step_mm
-    if step is None and args.method == "scan":
-        step = PUBLISHED_DEPTH_STEP * 1e3
-    if step is not None:
-        step = check_depth(step, "--depth-step-mm")
-    tol = check_range("--depth-tolerance", args.depth_tolerance, 0.0, 0.5, lo_open=True)
+    step, tol = args.depth_step_mm, args.depth_tolerance
+    if depth_grid(args.method, step, tol, ("--depth-step-mm", "--depth-tolerance")) == "linear":
+        step = check_depth(PUBLISHED_DEPTH_STEP * 1e3 if step is None else step,
+                           "--depth-step-mm")
+    else:
+        tol = check_range("--depth-tolerance", DEPTH_TOLERANCE if tol is None else tol,
+                          0.0, 0.5, lo_open=True)
     check_range("--max-depth-mm", args.max_depth_mm, DEPTH_FLOOR * 1e3 if step is None
                 else step, MAX_DEPTH * 1e3, unit="mm")
     count = grid_index(args.max_depth_mm * 1e-3, None if step is None else step * 1e-3, tol)
