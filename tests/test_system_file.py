@@ -16,7 +16,8 @@ from cli_output import assert_one_line_error
 
 from boringbar import Harmonic, simulate
 from boringbar._validate import ROUND_OFF, in_range, near
-from boringbar.cli.main import main
+from boringbar.cli.main import build_parser, main
+from boringbar.cli.options import many_cases
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system import System, describe_modes, make_system
 from boringbar.model.system_file import (
@@ -353,6 +354,25 @@ def test_the_command_line_takes_and_refuses_the_gap_in_mm(tmp_path, capsys):
     capsys.readouterr()
     assert_one_line_error(main, [*argv, "--gap-mm", "0.21", "--out", str(tmp_path / "no")],
                           tmp_path / "no", "(0, 0.2] mm (at most the cavity's depth", capsys)
+
+
+def test_the_sweep_and_lobes_commands_take_the_gap_that_fills_the_cavity(tmp_path):
+    """--gap-mm as a list (sweep, lobes) goes through the same check as simulate's:
+    0.2 mm fills a 10.2 mm cavity less a 10 mm ball."""
+    text = (EXAMPLES / "carbide_ld10_tungsten.toml").read_text()
+    text = re.sub(r"(?m)^depth_mm = .*$", "depth_mm = 10.2", text)
+    text = re.sub(r"(?m)^diameter_mm = 12.0$", "diameter_mm = 10.0", text)
+    path = tmp_path / "bar.toml"
+    path.write_text(re.sub(r"(?m)^gap_mm = .*$", "gap_mm = 0.2", text))
+    for command in ("sweep", "lobes"):
+        args = build_parser(command).parse_args([command, "--system", str(path), "--gap-mm",
+                                                 "0.2", "--out", "x"])
+        cases, _, gaps = many_cases(args)
+        assert gaps == [0.2e-3] and {c.system.damper.gap for c in cases
+                                     if c.bar == "ball"} == {0.2e-3}
+        args.gap_mm = "0.21"
+        with pytest.raises(ValueError, match=r"--gap-mm = 0.21 mm is outside .* 0.2\] mm"):
+            many_cases(args)
 
 
 def test_lengths_on_a_bound_up_to_round_off_are_on_it():
