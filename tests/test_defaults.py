@@ -164,7 +164,7 @@ def test_the_tmd_window_holds_both_peaks_of_the_frf(mass, design):
     """Den Hartog's tuning gives two peaks; Sims' (tuned for chatter, not for the FRF)
     may merge them into one. Every peak near the first mode lies in the window, with
     room beside it."""
-    system = make_system("tmd", spec=STEEL_TMD, tmd_mass=mass, tmd_design=design)
+    system = make_system("tmd", spec=STEEL_TMD, tmd_mass_kg=mass, tmd_design=design)
     lo, hi = tmd_window(system)
     peaks = _peaks(system)
     near = peaks[(peaks > 0.5) & (peaks < 1.5)]
@@ -179,10 +179,10 @@ def test_the_peaks_lie_near_and_between_the_undamped_coupled_frequencies(mass):
     damping and merges to the locked frequency with much), or, as any damped resonance,
     a little beyond one: measured over 200 dampings, at most 0.25, 0.56, 1.2 and 2.3 %
     for mu = 0.044, 0.18, 0.44 and 0.88 (0.01 to 0.2 kg), inside the window's 5 %."""
-    host = make_system("tmd", spec=STEEL_TMD, tmd_mass=mass)
+    host = make_system("tmd", spec=STEEL_TMD, tmd_mass_kg=mass)
     for damping in np.geomspace(0.1, 3000.0, 12):
-        tmd = TunedMassDamper(host.damper.mass, host.damper.stiffness, damping,
-                              host.damper.position, "given")
+        tmd = TunedMassDamper(host.damper.mass_kg, host.damper.stiffness_n_m, damping,
+                              host.damper.position_m, "given")
         system = System(host.bar, tmd, host.preset, host.readings)
         lo, hi = tmd_window(system)
         w1, w2 = lo / 0.95, hi / 1.05

@@ -313,7 +313,7 @@ def test_an_unknown_top_level_key_and_a_missing_bar_are_refused():
 def test_a_gap_override_beyond_the_cavity_is_refused():
     spec = parse_system(mutated("cavity.depth_mm", 16.0), "x.toml")
     make_system("ball", spec=spec, gap_m=0.9e-3)
-    with pytest.raises(ValueError, match=r"gap = 0.0012 m.*\(0, 0.001\]"):
+    with pytest.raises(ValueError, match=r"gap_m = 0.0012 m.*\(0, 0.001\]"):
         make_system("ball", spec=spec, gap_m=1.2e-3)
 
 
@@ -336,7 +336,7 @@ def test_a_gap_that_fills_the_cavity_exactly_is_not_refused_by_round_off(depth_m
     spec = parse_system(d, "round-off")
     assert spec.ball.gap == gap_mm / 1000
     assert make_system("ball", spec=spec, gap_m=gap_mm / 1000).damper.gap_m == gap_mm / 1000
-    with pytest.raises(ValueError, match=r"gap = .* m is outside .* \(at most the cavity's"):
+    with pytest.raises(ValueError, match=r"gap_m = .* m is outside .* \(at most the cavity's"):
         make_system("ball", spec=spec, gap_m=gap_mm / 1000 * (1 + 1e-6))
     d["ball"]["gap_mm"] = gap_mm * (1 + 1e-6)
     with pytest.raises(SystemFileError, match="ball.gap_mm"):
@@ -368,7 +368,7 @@ def test_the_sweep_and_lobes_commands_take_the_gap_that_fills_the_cavity(tmp_pat
         args = build_parser(command).parse_args([command, "--system", str(path), "--gap-mm",
                                                  "0.2", "--out", "x"])
         cases, _, gaps = many_cases(args)
-        assert gaps == [0.2e-3] and {c.system.damper.gap for c in cases
+        assert gaps == [0.2e-3] and {c.system.damper.gap_m for c in cases
                                      if c.bar == "ball"} == {0.2e-3}
         args.gap_mm = "0.21"
         with pytest.raises(ValueError, match=r"--gap-mm = 0.21 mm is outside .* 0.2\] mm"):
@@ -393,5 +393,5 @@ def test_a_cavity_that_ends_at_the_tip_is_inside_the_bar():
     d["cavity"].update(position_mm=310.1, length_mm=19.8)
     spec = parse_system(d, "tip")
     assert spec.cavity.position + spec.cavity.length / 2 > spec.bar.length
-    ends = [s.end for s in spec.stepped_bar(True).sections]
+    ends = [s.end_m for s in spec.stepped_bar(True).sections]
     assert ends[-1] == spec.bar.length and len(ends) == 2
