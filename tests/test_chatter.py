@@ -52,7 +52,13 @@ import numpy as np
 import pytest
 
 from boringbar import Initial, make_system, simulate
-from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, compare_methods, lobes
+from boringbar.analysis.lobes import (
+    PUBLISHED_DEPTH_STEP,
+    PUBLISHED_RPM,
+    LobesOptions,
+    compare_methods,
+    lobes,
+)
 from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sweep import Case
 from boringbar.kernels import layout as L
@@ -429,7 +435,9 @@ def test_scan_and_search_agree_on_the_solid_bar():
     cases = [Case("solid", make_system("solid"), "solid")]
     speeds = list(DEFAULT_SPEEDS)
     scan = lobes(cases, LobesOptions(speeds, method="scan"))
-    search = lobes(cases, LobesOptions(speeds, method="search"))
+    # on the published 0.01 mm grid (the search's own default is 1 % steps)
+    search = lobes(cases, LobesOptions(speeds, method="search",
+                                       depth_step_m=PUBLISHED_DEPTH_STEP))
     np.testing.assert_array_equal(scan["limit_depth"].values, search["limit_depth"].values)
     np.testing.assert_array_equal(scan["first_unstable_depth"].values,
                                   search["first_unstable_depth"].values)

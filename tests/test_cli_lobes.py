@@ -13,6 +13,8 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
+from boringbar.analysis.lobes import default_speeds
+from boringbar.analysis.sweep import published_cases
 from boringbar.cli.main import main
 
 #: A solid-bar lobe grid that has both stable and chattering points in 0.3 s runs.
@@ -23,7 +25,8 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 def test_lobes_files_json_and_verdicts(tmp_path, capsys):
     out = tmp_path / "lobes"
-    assert main(["lobes", *SMALL, "--workers", "2", "--out", str(out), "--json"]) == 0
+    assert main(["lobes", *SMALL, "--method", "scan", "--workers", "2", "--out", str(out),
+                 "--json"]) == 0
     s = json_out(capsys)
     assert s["method"] == "scan" and s["criterion"] == "zero"
     assert s["files"] == {"netcdf": str(out / "lobes.nc"), "png": str(out / "lobes.png")}
@@ -68,6 +71,23 @@ def test_lobes_search_and_examples(tmp_path, capsys):
         assert {"tip_displacement", "force"} <= set(ex.data_vars)
 
 
+def test_lobes_default_to_the_bars_speeds_and_one_percent_depths(tmp_path, capsys):
+    """Without --rpm and --depth-step-mm: the speeds of the bar's lobes 1 to 5
+    (analysis.lobes.default_speeds) and the search to 1 % of each limit."""
+    out = tmp_path / "lobes"
+    assert main(["lobes", "--bar", "solid", "--duration-s", "0.02", "--max-depth-mm", "0.5",
+                 "--out", str(out), "--json"]) == 0
+    s = json_out(capsys)
+    assert s["method"] == "search"
+    expected = default_speeds(published_cases(("solid",)))
+    assert [v["rpm"] for v in s["cases"][0]["speeds"]] == list(expected)
+    for v in s["cases"][0]["speeds"]:
+        if v["limit_depth_m"]:
+            assert v["first_unstable_depth_m"] / v["limit_depth_m"] == pytest.approx(1.01)
+    with xr.open_dataset(out / "lobes.nc") as ds:
+        assert ds.attrs["depth_grid"].startswith("depth_tolerance = 0.01")
+
+
 def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):
     out = tmp_path / "cut"
     assert main(["simulate", "--bar", "solid", "--rpm", "1200", "--depth-mm", "0.2",
@@ -102,7 +122,13 @@ def test_simulate_cut_text(tmp_path, capsys):
     (["lobes", "--rpm", "0"], "--rpm"),
     (["lobes", "--rpm", "1600:900:50"], "--rpm"),
     (["lobes", "--depth-step-mm", "0"], "--depth-step-mm"),
-    (["lobes", "--max-depth-mm", "0.001"], "--max-depth-mm"),
+    (["lobes", "--depth-tolerance", "0"], "--depth-tolerance"),
+    (["lobes", "--depth-tolerance", "1e-7"], "--depth-tolerance"),
+    (["lobes", "--rpm", "1200,1000"], "--rpm"),
+    (["lobes", "--depth-step-mm", "0.01", "--depth-tolerance", "0.02"],
+     "--depth-step-mm = 0.01 and --depth-tolerance = 0.02: give one"),
+    (["lobes", "--max-depth-mm", "0.0005"], "--max-depth-mm"),  # below the 1 um grid
+    (["lobes", "--method", "scan", "--max-depth-mm", "0.001"], "--max-depth-mm"),
     (["lobes", "--feed-mm", "-0.1"], "--feed-mm"),
     (["lobes", "--method", "guess"], "--method"),
     (["lobes", "--bar", "solid", "--gap-mm", "0.1"], "--gap-mm"),

@@ -28,6 +28,7 @@ from boringbar.execute import Execution
 from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
+from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
 from boringbar.version import __version__
 
@@ -35,6 +36,11 @@ from boringbar.version import __version__
 BATCH = 16
 #: The published sweep's frequency ratios, 0.95 to 1.05 in steps of 0.01.
 PUBLISHED_RATIOS = tuple(round(0.95 + 0.01 * i, 12) for i in range(11))
+#: The default sweep's step in Omega/omega_n (the published one's).
+RATIO_STEP = 0.01
+#: How far (relative) the default window reaches beyond a tuned mass damper's two
+#: coupled natural frequencies, so that both peaks are drawn with their flanks.
+PEAK_MARGIN = 0.05
 #: The numeric results of every run.
 NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
          "energy_balance_relative")
@@ -149,6 +155,34 @@ def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
     return cases
 
 
+def tmd_window(system: System) -> tuple[float, float]:
+    """(lowest, highest) Omega/omega_n of the default window of a bar with a tuned mass
+    damper: its two lowest undamped natural frequencies with the absorber (mode 1
+    split in two; the whole modal host, not Den Hartog's one-mode estimate) over
+    omega_n, PEAK_MARGIN beyond each.  A damped absorber's two peaks lie between those
+    two frequencies: they start there with no damping and move towards each other,
+    to the locked frequency omega_n / sqrt(1 + mu) with infinite damping; as in any
+    damped resonance a peak may also sit a little beyond its undamped frequency (at
+    most 0.6 % at the steel example's mass ratio 0.18, 2.3 % at 0.88:
+    tests/test_defaults.py), inside the margin."""
+    w = natural_frequencies(*linear_host(system))[:2] / system.reference_frequency
+    return float(w[0]) * (1.0 - PEAK_MARGIN), float(w[1]) * (1.0 + PEAK_MARGIN)
+
+
+def default_ratios(cases: list[Case]) -> tuple[float, ...]:
+    """The default sweep's Omega/omega_n: the published window 0.95 to 1.05, widened
+    to :func:`tmd_window` of every case with a tuned mass damper, in steps of
+    RATIO_STEP on the published grid (multiples of 0.01)."""
+    lo, hi = PUBLISHED_RATIOS[0], PUBLISHED_RATIOS[-1]
+    for case in cases:
+        if case.system.kind == "tmd":
+            a, b = tmd_window(case.system)
+            lo, hi = min(lo, a), max(hi, b)
+    first = math.floor(lo / RATIO_STEP + 1e-9)
+    last = math.ceil(hi / RATIO_STEP - 1e-9)
+    return tuple(round(RATIO_STEP * i, 12) for i in range(max(first, 1), last + 1))
+
+
 def parse_range(text: str, name: str = "ratios") -> np.ndarray:
     """'0.95:1.05:0.01' (inclusive) or '0.95,1.0,1.05' -> array."""
     try:
@@ -176,18 +210,21 @@ def parse_range(text: str, name: str = "ratios") -> np.ndarray:
 
 @dataclass(frozen=True)
 class SweepOptions:
-    """A frequency sweep's grid: ``ratios`` Omega/omega_n of each case's host bar (> 0),
-    ``forces_n`` F0 (N, >= 0), and ``batch``: with the RK4 integrator, runs of the same
-    bar kind and mode count advanced together in lock-step (up to 16; 1: one at a
-    time; the results are the same, bit for bit)."""
+    """A frequency sweep's grid: ``ratios`` Omega/omega_n of each case's host bar (> 0;
+    None, the default: :func:`default_ratios` of the cases, the published 0.95 to
+    1.05 widened to show a tuned mass damper's two peaks), ``forces_n`` F0 (N, >= 0),
+    and ``batch``: with the RK4 integrator, runs of the same bar kind and mode count
+    advanced together in lock-step (up to 16; 1: one at a time; the results are the
+    same, bit for bit)."""
 
-    ratios: tuple[float, ...] = PUBLISHED_RATIOS
+    ratios: tuple[float, ...] | None = None
     forces_n: tuple[float, ...] = (10.0,)
     batch: int = BATCH
 
     def __post_init__(self):
-        object.__setattr__(self, "ratios", check_values("ratios", self.ratios, 0.0, math.inf,
-                                                        lo_open=True))
+        if self.ratios is not None:
+            object.__setattr__(self, "ratios", check_values("ratios", self.ratios, 0.0,
+                                                            math.inf, lo_open=True))
         object.__setattr__(self, "forces_n", check_values("forces_n", self.forces_n, 0.0,
                                                           math.inf, unit="N"))
         check_range("batch", self.batch, 1, BMAX)
@@ -196,8 +233,11 @@ class SweepOptions:
 def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> Plan:
     """Every (case, force, ratio) run; a point is a lock-step batch of them (the runs
     whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind and mode
-    count, in (case, force, ratio) order) or one run."""
+    count, in (case, force, ratio) order) or one run; the options in the context carry
+    their ratios (:func:`default_ratios` of the cases if none were given)."""
     cases = as_cases(cases, "cases")
+    if options.ratios is None:
+        options = replace(options, ratios=default_ratios(cases))
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
     integrators = [resolve_integrator(integration.integrator, c.system) for c in cases]
@@ -301,8 +341,9 @@ def sweep(cases: list[Case], options: SweepOptions | None = None, *,
 
     ``cases``: the bars: a :class:`~boringbar.model.system.System`, a sequence of them
     or a mapping of label to System (:func:`as_cases`; :func:`published_cases` gives
-    the published ones); ``options``: the grid (:class:`SweepOptions`; default the published
-    ratios 0.95-1.05 at 10 N); ``integration``: how each run is integrated
+    the published ones); ``options``: the grid (:class:`SweepOptions`; default 10 N over
+    the published ratios 0.95-1.05, widened to both peaks of a tuned mass damper:
+    :func:`default_ratios`); ``integration``: how each run is integrated
     (:class:`~boringbar.simulate.Integration`); ``execution``: where the points run
     (:class:`~boringbar.execute.Execution`; default a thread per core);
     ``progress(done, total)`` is called as points finish.

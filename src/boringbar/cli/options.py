@@ -122,9 +122,10 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     if harmonic and many:
         g.add_argument("--force-n", default="10,20", metavar="N,...",
                        help="harmonic force amplitudes F0 in N (default: 10,20)")
-        g.add_argument("--ratios", default="0.95:1.05:0.01", metavar="START:STOP:STEP",
+        g.add_argument("--ratios", metavar="START:STOP:STEP",
                        help="Omega/omega_n values, START:STOP:STEP (inclusive) or comma list "
-                            "(default: 0.95:1.05:0.01)")
+                            "(default: 0.95:1.05:0.01, published, widened to both peaks of "
+                            "a tuned mass damper)")
     elif harmonic:  # None: not given (a cut refuses them); defaults in cmd_simulate
         g.add_argument("--force-n", type=float, metavar="N",
                        help="harmonic force amplitude F0 in N (default: 10)")
@@ -406,13 +407,14 @@ CUT_ONLY = ("kr_mpa", "feed_mm", "revolutions", "delay_interp", "start", "bounde
 
 
 def forces_and_ratios(args):
-    """--force-n and --ratios lists, checked, and --workers checked."""
+    """--force-n and --ratios lists, checked (ratios None: not given), and --workers
+    checked."""
 
     forces = parse_numbers(args.force_n, "--force-n")
     for f in forces:
         check_force(f)
-    ratios = parse_range(args.ratios, "--ratios")
-    for r in ratios:
+    ratios = None if args.ratios is None else parse_range(args.ratios, "--ratios")
+    for r in () if ratios is None else ratios:
         check_ratio(r, "--ratios")
     check_workers(args.workers)
     return forces, ratios

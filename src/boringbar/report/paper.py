@@ -74,6 +74,10 @@ PRESET_ORDER = ("paper", "physical")
 #: quick study's time went to its lobes at every second one; docs/paper.md says what
 #: the coarser grid changes.
 QUICK_RPM = "1000:1600:200"
+#: The published lobe grid, given on every lobes command of the study (the command's
+#: own defaults follow the bar): its speeds (PUBLISHED_RPM) and 0.01 mm depth steps.
+PUBLISHED_SPEEDS = "900:1600:50"
+PUBLISHED_DEPTHS = ("--depth-step-mm", "0.01")
 #: Steps computed at once (:func:`_run_steps`).
 STEP_WORKERS = min(2, os.cpu_count() or 1)
 
@@ -308,23 +312,26 @@ def published_steps(quick: bool = False) -> list[Step]:
     if quick:
         steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
                           ("lobes", "--examples", "--method", "search", "--rpm",
-                           QUICK_RPM, "--duration-s", "1.0"),
+                           QUICK_RPM, *PUBLISHED_DEPTHS, "--duration-s", "1.0"),
                           _lobes_run("search", QUICK_RPM, 1.0)))
     else:
         # the further columns take the bisection search: fewer runs than the scan for
         # the same 0.01 mm limits (docs/paper.md says what was compared)
         steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
-                          ("lobes", "--examples", "--method", "scan"),
+                          ("lobes", "--examples", "--method", "scan", "--rpm",
+                           PUBLISHED_SPEEDS, *PUBLISHED_DEPTHS),
                           _lobes_run("scan", None, 2.0),
-                          lean=(("lobes", "--examples", "--method", "search"),
+                          lean=(("lobes", "--examples", "--method", "search", "--rpm",
+                                 PUBLISHED_SPEEDS, *PUBLISHED_DEPTHS),
                                 _lobes_run("search", None, 2.0))))
     # a steel ball's lobes (the claim that it lowers the chatter-free depth), by the
     # bisection search on the published speeds: the same limits as the scan, cheaper
-    steel_rpm = QUICK_RPM if quick else "900:1600:50"
+    steel_rpm = QUICK_RPM if quick else PUBLISHED_SPEEDS
     steel_s = 1.0 if quick else 2.0
     steps.append(Step("lobes-steel", "lobes", "Stability lobes with a steel ball",
                       ("lobes", "--bar", "ball", "--ball", "steel", "--method", "search",
-                       "--rpm", steel_rpm, *(("--duration-s", "1.0") if quick else ())),
+                       "--rpm", steel_rpm, *PUBLISHED_DEPTHS,
+                       *(("--duration-s", "1.0") if quick else ())),
                       _lobes_run("search", steel_rpm, steel_s, ball="steel"),
                       variants=False))  # the further columns judge D4 on the 1200 rpm cuts
     forces = "5:50:" + ("5" if quick else "1")
