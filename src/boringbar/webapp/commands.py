@@ -22,7 +22,6 @@ def commands(design: Design, file: str) -> dict[str, str]:
     r = views.RESPONSE_RATIOS
     step = (r[-1] - r[0]) / (len(r) - 1)
     band = views.lobe_speeds(design)
-    rpm_step = (band[-1] - band[0]) / (views.SIMULATED_SPEEDS - 1)
     out = {
         "bar": f"boringbar modes {common}",
         "run": f"boringbar simulate {common} --bar {damped} {forcing} --integrator "
@@ -34,7 +33,7 @@ def commands(design: Design, file: str) -> dict[str, str]:
                  f"{band[0]:.0f}:{band[-1]:.0f}:{np.ptp(band) / 50:.4g}",
     }
     if design.spec.ball is not None:
+        speeds = ",".join(f"{r:g}" for r in views.simulated_speeds(design))
         out["lobes"] += (f"\nboringbar lobes {common} --bar ball --method search --rpm "
-                         f"{band[0]:.0f}:{band[-1]:.0f}:{rpm_step:.4g} --duration-s "
-                         f"{views.SIMULATED_CUT_S:g}")
+                         f"{speeds} --duration-s {views.SIMULATED_CUT_S:g}")
     return out

@@ -190,8 +190,8 @@ class LobesFigure:
 
     def __init__(self):
         self.fig = new_figure("stability lobes (chatter-free below the curves)",
-                              "spindle speed (rpm)", "depth of cut (mm, log scale)",
-                              height=320, y_axis_type="log")
+                              "spindle speed (rpm, log scale)", "depth of cut (mm, log scale)",
+                              height=320, x_axis_type="log", y_axis_type="log")
         self.src, self.lines = {}, {}
         for kind in KINDS:
             for pin in ("", "pin_"):

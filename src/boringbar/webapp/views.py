@@ -19,12 +19,12 @@ import time
 import numpy as np
 
 from boringbar.analysis.lobes import LobesOptions, lobes
-from boringbar.analysis.sweep import SweepOptions, sweep
+from boringbar.analysis.lobes import lobe_speeds as default_lobe_speeds
+from boringbar.analysis.sweep import SweepOptions, sweep, tmd_window
 from boringbar.execute import Execution
 from boringbar.model.system import describe_modes, make_system
 from boringbar.reference.stability import (
     limit_at_speeds,
-    natural_frequencies,
     system_receptance,
 )
 from boringbar.simulate import Integration, simulate
@@ -137,21 +137,26 @@ def response_view(design: Design, progress=None) -> dict:
 
 def response_band(design: Design, f1: float) -> tuple[float, float]:
     """The band (Hz) the response is drawn over: the simulated ratios of the ball
-    bar's f1, widened to hold the TMD bar's two peaks (its two lowest coupled natural
-    frequencies, 10 % beyond them), which a band around f1 alone would hide."""
+    bar's f1, widened to the TMD bar's window (its two peaks: what ``boringbar sweep``
+    takes by default for it), which a band around f1 alone would hide."""
     lo, hi = RESPONSE_RATIOS[0] * f1, RESPONSE_RATIOS[-1] * f1
     tmd = design.systems.get("tmd")
     if tmd is not None:
-        peaks = natural_frequencies(tmd.bar, tmd.damper)[:2] / (2 * math.pi)
-        lo, hi = min(lo, 0.9 * peaks[0]), max(hi, 1.1 * peaks[1])
+        f_tmd = tmd.reference_frequency / (2 * math.pi)
+        w_lo, w_hi = tmd_window(tmd)
+        lo, hi = min(lo, w_lo * f_tmd), max(hi, w_hi * f_tmd)
     return lo, hi
 
 
 def lobe_speeds(design: Design) -> np.ndarray:
-    """The speeds (rpm) the lobes are drawn over: the command line's lobe band
-    (900-1600 rpm, the published one) widened to hold the design's speed."""
-    lo, hi = min(900.0, design.settings.rpm * 0.8), max(1600.0, design.settings.rpm * 1.2)
-    return np.linspace(lo, hi, LOBE_POINTS)
+    """The speeds (rpm) the lobes are drawn over: the command line's default band (the
+    first lobes of every bar, from their first frequencies), widened to hold the
+    design's speed; evenly spaced on a log axis."""
+    f1 = [s.reference_frequency / (2 * math.pi) for s in design.systems.values()]
+    band = default_lobe_speeds(f1)
+    lo = min(band[0], design.settings.rpm / 1.2)
+    hi = max(band[-1], design.settings.rpm * 1.2)
+    return np.geomspace(lo, hi, LOBE_POINTS)
 
 
 def lobes_view(design: Design) -> dict:
@@ -167,14 +172,20 @@ def lobes_view(design: Design) -> dict:
     return out
 
 
+def simulated_speeds(design: Design) -> np.ndarray:
+    """The speeds (whole rpm) the simulated lobes cut at: :data:`SIMULATED_SPEEDS`
+    across the lobe band and the design's speed."""
+    band = lobe_speeds(design)
+    return np.unique(np.append(np.geomspace(band[0], band[-1], SIMULATED_SPEEDS).round(),
+                               design.settings.rpm))
+
+
 def simulated_lobes(design: Design, progress=None, workers: int | None = None) -> dict:
     """The ball bar's chatter-free depth (mm) at :data:`SIMULATED_SPEEDS` speeds over
     the lobe band and at the design's speed, by simulating cuts (bisection,
     ``progress(done, total)`` as speeds finish; raising in it stops the rest)."""
     system = design.systems["ball"]
-    band = lobe_speeds(design)
-    rpm = np.unique(np.append(np.linspace(band[0], band[-1], SIMULATED_SPEEDS),
-                              design.settings.rpm))
+    rpm = simulated_speeds(design)
     ds = lobes([system], LobesOptions(rpm=tuple(rpm), method="search", analytic=False),
                integration=Integration(duration_s=SIMULATED_CUT_S, dt_s=DT_S),
                execution=Execution("threads", workers=workers), progress=progress)
