@@ -35,7 +35,7 @@ from boringbar.reference.stability import limit_at_speeds
 
 CASES = [
     ("Masri-Caughey orbit: 1 mode, gap 0.5 mm, no friction, 30 N, r = 1.00, started on it",
-     "physical", {"n_modes": 1, "gap": 0.5e-3, "friction": False}, 30.0, 1.0, "orbit"),
+     "physical", {"n_modes": 1, "gap_m": 0.5e-3, "friction": False}, 30.0, 1.0, "orbit"),
     ("paper, gap 0.1 mm, no friction, 10 N, r = 1.00", "paper",
      {"gap_m": 0.1e-3, "friction": False}, 10.0, 1.0, True),
     ("physical, gap 0.1 mm, no friction, 20 N, r = 1.00, started on its attractor",

@@ -130,7 +130,7 @@ def test_sensitivity_gives_one_result_per_value(kind, values):
 def test_sensitivity_of_cuts():
     cuts = Cuts(rpm=1200.0, depths_m=(0.05e-3, 0.10e-3), duration_s=0.05)
     ds = sensitivity(SensitivityOptions("restitution", (0.6, 0.8), cuts=cuts), preset="paper")
-    assert ds["chatter"].dims == ("restitution", "depth")
+    assert ds["chatter"].dims == ("restitution", "depth_m")
     assert ds["chatter"].shape == (2, 2) and ds["chatter"].dtype == bool
     assert np.all(ds["amplitude_m"] >= 0)
     with pytest.raises(ParameterError, match="kind"):

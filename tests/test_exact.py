@@ -265,7 +265,7 @@ def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
         config = json.loads(ds.attrs["config"])
         assert config["integrator"] == "exact"
         assert config["system"]["damper"]["friction"]["static_ratio"] == 1.5
-        assert ds.sizes["time"] > 1000
+        assert ds.sizes["time_s"] > 1000
 
 
 def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):

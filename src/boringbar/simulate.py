@@ -296,20 +296,21 @@ class Run:
         import xarray as xr  # here: a run needs xarray only to be written
         h = self.history
         aux = "y" if self.system.kind in ("ball", "locked") else "absorber_stroke"
+        time = ("time_s",)
         ds = xr.Dataset(
             {
-                "tip_displacement": ("time", h[:, 1], {"units": "m"}),
-                "tip_velocity": ("time", h[:, 2], {"units": "m/s"}),
-                aux: ("time", h[:, 3], {"units": "m"}),
-                f"{aux}_velocity": ("time", h[:, 4], {"units": "m/s"}),
-                "force": ("time", h[:, 5], {"units": "N"}),
+                "tip_displacement_m": (time, h[:, 1], {"units": "m"}),
+                "tip_velocity_m_s": (time, h[:, 2], {"units": "m/s"}),
+                f"{aux}_m": (time, h[:, 3], {"units": "m"}),
+                f"{aux}_velocity_m_s": (time, h[:, 4], {"units": "m/s"}),
+                "force_n": (time, h[:, 5], {"units": "N"}),
             },
-            coords={"time": ("time", h[:, 0], {"units": "s"})},
+            coords={"time_s": (time, h[:, 0], {"units": "s"})},
             attrs={"config": json.dumps(self.config(), default=_plain),
                    "summary": json.dumps(self.summary(), default=_plain)},
         )
         if self.impacts.size:
-            ds["impact_time"] = ("impact", self.impacts[:, 0], {"units": "s"})
+            ds["impact_time_s"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
         return ds
 

@@ -56,7 +56,7 @@ def _min_depth(task) -> float:
                integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
                execution=Execution("serial"))
     # no chatter up to max_depth_mm at any speed: the search knows only "at least that"
-    return min(float(ds["min_chatter_free_depth"].values[0]), options.max_depth_mm * 1e-3)
+    return min(float(ds["min_chatter_free_depth_m"].values[0]), options.max_depth_mm * 1e-3)
 
 
 def frf_objective(system: System, objective: str) -> float:

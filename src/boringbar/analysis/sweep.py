@@ -260,7 +260,7 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
             pattern[ijk] = r["pattern"]
     units = {"rms_tip_m": "m", "max_abs_tip_m": "m", "max_abs_rel_disp_m": "m",
              "impacts_per_cycle": "1/period", "energy_balance_relative": "1"}
-    dims = ("case", "force", "ratio")
+    dims = ("case", "force_n", "ratio")
     data = {k: (dims, v, {"units": units[k]}) for k, v in out.items()}
     data["pattern"] = (dims, pattern.astype(str))
     data["natural_frequency_hz"] = (("case",), np.array(
@@ -269,11 +269,11 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
         data,
         coords={
             "case": [c.label for c in cases],
-            "force": ("force", np.array(o.forces_n), {"units": "N"}),
+            "force_n": ("force_n", np.array(o.forces_n), {"units": "N"}),
             "ratio": ("ratio", np.array(o.ratios),
                       {"long_name": "Omega / omega_n of the host bar"}),
             "bar": ("case", [c.bar for c in cases]),
-            "gap": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
+            "gap_m": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
             "integrator": ("case", ctx["integrators"],
                            {"long_name": "the integrator of the case's runs"}),
@@ -323,11 +323,11 @@ def summary(ds) -> dict:
     """JSON-able summary of a sweep (what ``boringbar sweep --json`` prints)."""
     cases = []
     for i, label in enumerate(ds["case"].values):
-        for j, force in enumerate(ds["force"].values):
+        for j, force in enumerate(ds["force_n"].values):
             cases.append({
                 "case": str(label),
                 "bar": str(ds["bar"].values[i]),
-                "gap_m": None if np.isnan(ds["gap"].values[i]) else float(ds["gap"].values[i]),
+                "gap_m": None if np.isnan(ds["gap_m"].values[i]) else float(ds["gap_m"].values[i]),
                 "friction": str(ds["friction"].values[i]),
                 "integrator": (str(ds["integrator"].values[i]) if "integrator" in ds.coords
                                else ds.attrs.get("integrator")),  # files before "auto"
