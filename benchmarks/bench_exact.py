@@ -64,7 +64,7 @@ def orbit_start(s, force):
     bar, d = s.bar, s.damper
     o = [o for o in two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
                                      bar.psi_tip[0], bar.psi_damper[0], d.mass_kg, d.gap_m,
-                                     d.restitution, force, s.reference_frequency)
+                                     d.restitution, force, s.reference_frequency_rad_s)
          if o.admissible][0]
     t0 = o.impact_time
     x = np.array([float(o.modal_displacement(t0)), o.bar_velocity_after / bar.psi_damper[0],

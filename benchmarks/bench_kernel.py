@@ -51,7 +51,7 @@ def scipy_run(duration: float, rtol: float = 1e-8):
     M, K, C = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0]
     pl, pd = bar.psi_tip[0], bar.psi_damper[0]
     m, e, half = ball.mass_kg, ball.restitution, ball.gap_m / 2
-    om = RATIO * s.reference_frequency
+    om = RATIO * s.reference_frequency_rad_s
     meff = 1.0 / (1.0 / m + pd**2 / M)
 
     def rhs(t, x):

@@ -200,7 +200,8 @@ def _closed_form(system, ratio, force=10.0):
     bar, ball = system.bar, system.damper
     args = (bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
             bar.psi_damper[0],
-            ball.mass_kg, ball.gap_m, ball.restitution, force, ratio * system.reference_frequency)
+            ball.mass_kg, ball.gap_m, ball.restitution, force,
+            ratio * system.reference_frequency_rad_s)
     orbits = [o for o in two_impact_orbit(*args) if o.admissible and o.stable]
     return ImpactSystem(*args), (orbits[0] if orbits else None)
 
@@ -279,7 +280,7 @@ def _fold_and_linear_grazing(system, force=10.0):
         return float(np.hypot(a, b) - c)
 
     def relative_amplitude(r):
-        om = r * system.reference_frequency
+        om = r * system.reference_frequency_rad_s
         return abs(bar.psi_damper[0] * bar.psi_tip[0] * force
                    / complex(bar.stiffness_n_m[0] - bar.mass_kg[0] * om**2,
                              bar.damping_n_s_m[0] * om))

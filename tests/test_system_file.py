@@ -49,7 +49,7 @@ def beam_constants(length_mm=300.0, diameter_mm=30.0):
 def test_uniform_cantilever_from_a_file_matches_the_closed_form():
     spec = parse_system(uniform())
     ei, rho_a, L = beam_constants()
-    fe = make_system("solid", spec=spec, n_modes=2).bar.omegas / (2 * math.pi)
+    fe = make_system("solid", spec=spec, n_modes=2).bar.omegas_rad_s / (2 * math.pi)
     for i, beta_l in enumerate((1.875104068711961, 4.694091132974174)):
         closed = beta_l**2 / (2 * math.pi) * math.sqrt(ei / (rho_a * L**4))
         assert fe[i] == pytest.approx(closed, rel=1e-3)
@@ -164,9 +164,11 @@ def test_a_cavity_inside_a_section_splits_it_weakens_and_lightens_the_bar():
     assert with_cavity.static_tip_stiffness() < spec.bar.static_tip_stiffness()
     # the cavity removes mass where the mode moves much and stiffness where it bends
     # little: f1 rises, as in the published bar (461 Hz with the cavity, 456 without)
-    assert spec.modal(True, 1).natural_frequency > spec.modal(False, 1).natural_frequency
+    cavity, solid = spec.modal(True, 1), spec.modal(False, 1)
+    assert cavity.natural_frequency_rad_s > solid.natural_frequency_rad_s
     published = load_system(EXAMPLES / "published.toml")
-    assert published.modal(True, 1).natural_frequency > published.modal(False, 1).natural_frequency
+    cavity, solid = published.modal(True, 1), published.modal(False, 1)
+    assert cavity.natural_frequency_rad_s > solid.natural_frequency_rad_s
 
 
 # --- validation at the boundary ---------------------------------------------------------
@@ -229,7 +231,7 @@ def test_an_unknown_top_level_key_and_a_missing_bar_are_refused():
 def test_a_gap_override_beyond_the_cavity_is_refused():
     spec = parse_system(mutated("cavity.depth_mm", 16.0), "x.toml")
     make_system("ball", spec=spec, gap_m=0.9e-3)
-    with pytest.raises(ValueError, match=r"gap = 0.0012 m.*\(0, 0.001\]"):
+    with pytest.raises(ValueError, match=r"gap_m = 0.0012 m.*\(0, 0.001\]"):
         make_system("ball", spec=spec, gap_m=1.2e-3)
 
 
@@ -252,7 +254,7 @@ def test_a_gap_that_fills_the_cavity_exactly_is_not_refused_by_round_off(depth_m
     spec = parse_system(d, "round-off")
     assert spec.ball.gap == gap_mm / 1000
     assert make_system("ball", spec=spec, gap_m=gap_mm / 1000).damper.gap_m == gap_mm / 1000
-    with pytest.raises(ValueError, match=r"gap = .* m is outside .* \(at most the cavity's"):
+    with pytest.raises(ValueError, match=r"gap_m = .* m is outside .* \(at most the cavity's"):
         make_system("ball", spec=spec, gap_m=gap_mm / 1000 * (1 + 1e-6))
     d["ball"]["gap_mm"] = gap_mm * (1 + 1e-6)
     with pytest.raises(SystemFileError, match="ball.gap_mm"):

@@ -2,7 +2,8 @@
 
 Every public name that holds a number says its unit or is declared dimensionless:
 the arguments of every function and class in ``boringbar.__all__`` (their public
-methods too), the fields of every option and description dataclass, the keys of a
+methods too), the fields of every option and description dataclass and their numeric
+properties, the keys of a
 run's summary, configuration and descriptions, and the variables, coordinates and
 summary keys of every analysis on a tiny case.
 """
@@ -59,6 +60,9 @@ def _api_names() -> list[tuple[str, str]]:
             for name, member in vars(obj).items():
                 if name.startswith("_"):
                     continue
+                if isinstance(member, property) and _quantity(
+                        inspect.signature(member.fget).return_annotation):
+                    found.append((f"{public}.{name}", name))
                 func = getattr(member, "__func__", member)
                 if inspect.isfunction(func):
                     found += _signature_names(f"{public}.{name}", func)

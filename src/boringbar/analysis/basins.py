@@ -364,7 +364,7 @@ def _dataset(system: System, forcing: Harmonic, cells: list[_Cell], context: dic
     """The Dataset of one operating point's cells (grid order), grouped."""
     o = context["options"]
     w0, v0, initials = context["w0"], context["v0"], context["initials"]
-    label, leaders = group(cells, forcing.omega(system.reference_frequency), o.tolerance)
+    label, leaders = group(cells, forcing.omega(system.reference_frequency_rad_s), o.tolerance)
     shape = (len(w0), len(v0))
     grid = ("displacement_m", "velocity_m_s")
     sig = _padded([c.centres for c in cells], MAX_K).reshape(*shape, MAX_K, 2)
@@ -477,7 +477,7 @@ def basins(system: System, options: BasinOptions | None = None, *,
     finish.  The results are the same, bit for bit, whatever the batch, the
     executor and its workers.
 
-    Returns an xarray Dataset with, per cell (dims displacement, velocity):
+    Returns an xarray Dataset with, per cell (dims displacement_m, velocity_m_s):
     ``attractor`` id, ``rms_tip_m``, ``pattern``, ``period`` (0: non-periodic),
     ``impacts_per_cycle`` and the final Poincare signature ``signature_tip_m``,
     ``signature_tip_velocity_m_s`` (dim point: the k centres, NaN beyond k; for a

@@ -193,7 +193,7 @@ def compute(context: dict, i: int) -> dict:
         order = range(len(v)) if direction == "forward" else range(len(v) - 1, -1, -1)
         for j in order:
             sys_j, forcing = _point(system, o.parameter, v[j], o.base_forcing)
-            omega = forcing.omega(sys_j.reference_frequency)
+            omega = forcing.omega(sys_j.reference_frequency_rad_s)
             start, restarted = _start(previous, integ.initial, sys_j, omega, omega_old)
             run = simulate(sys_j, forcing, **{**integ.kwargs(), "initial": start},
                            strobe=True)
@@ -227,12 +227,12 @@ def bifurcation(system: System | Callable[[float], System],
     (one point: the whole continuation).
 
     Returns an xarray Dataset, dims (direction, value, sample): the Poincare
-    samples ``tip_displacement`` W (m) and ``tip_velocity`` W' (m/s), NaN-padded;
+    samples ``tip_displacement_m`` W (m) and ``tip_velocity_m_s`` W' (m/s), NaN-padded;
     per (direction, value): ``verdict``, ``period`` (k, 0 if none), ``distinct``,
     ``zero_one_K`` and ``zero_one_signal`` (the coordinate it ran on),
     ``n_samples``, ``tolerance`` (relative, jitter included), ``rms_tip_m``,
     ``pattern``, ``impacts_per_cycle``, ``restarted``, ``start_time_s``,
-    ``end_time_s``, ``omega`` (rad/s); the configuration (every value's System
+    ``end_time_s``, ``omega_rad_s`` (rad/s); the configuration (every value's System
     included) as JSON in the attributes.
     """
     options = options or BifurcationOptions()

@@ -384,7 +384,7 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     ``execution``: where the (case, rpm) columns run (default a thread per core);
     ``progress(done, total)`` as columns finish.
 
-    Returns an xarray Dataset: per (case, rpm, depth) the verdict of every grid
+    Returns an xarray Dataset: per (case, rpm, depth_m) the verdict of every grid
     point that was run under both criteria (1 stable, 0 chatter, -1 not run),
     the steady amplitude and the time of the first zero of the force; per
     (case, rpm) the limiting (chatter-free) depth and the first unstable depth

@@ -203,7 +203,7 @@ def sensitivity_cut(case: Case, cuts: Cuts, depth_m: float, integration: Integra
 
 
 def assemble(plan: Plan, results: list, attrs: dict | None = None):
-    """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth), with the
+    """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth_m), with the
     varied parameter as the leading dimension, named after its kind."""
     kind, values, labels = plan.extra["kind"], plan.extra["values"], plan.extra["labels"]
     cases = plan.context["cases"]
@@ -263,7 +263,7 @@ def sensitivity(options: SensitivityOptions | None = None, *, preset: str = "phy
     Dataset over forces x ratios with a leading dimension named after the kind
     holding the values (for "initial": their labels, with ``tip_displacement_m``,
     ``tip_velocity_m_s``, ``ball_position_m``, ``ball_velocity_m_s`` coordinates).  Cutting:
-    a Dataset over (kind, depth) with the chatter verdict (the force reached
+    a Dataset over (kind, depth_m) with the chatter verdict (the force reached
     zero), bounded chatter, steady amplitude (m), first zero time (s) and peak
     force (N) of each full-length cut.
     """

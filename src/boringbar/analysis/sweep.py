@@ -246,7 +246,7 @@ def _point(run) -> dict:
 
 
 def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
-    """The sweep Dataset, dims (case, force, ratio), from the points' results in plan
+    """The sweep Dataset, dims (case, force_n, ratio), from the points' results in plan
     order; ``attrs`` go after the configuration's."""
     ctx = plan.context
     cases, o, integ = ctx["cases"], ctx["options"], ctx["integration"]
@@ -264,7 +264,7 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
     data = {k: (dims, v, {"units": units[k]}) for k, v in out.items()}
     data["pattern"] = (dims, pattern.astype(str))
     data["natural_frequency_hz"] = (("case",), np.array(
-        [c.system.reference_frequency / (2 * math.pi) for c in cases]), {"units": "Hz"})
+        [c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases]), {"units": "Hz"})
     return xr.Dataset(
         data,
         coords={
@@ -307,7 +307,7 @@ def sweep(cases: list[Case], options: SweepOptions | None = None, *,
     (:class:`~boringbar.execute.Execution`; default a thread per core);
     ``progress(done, total)`` is called as points finish.
 
-    Returns an xarray Dataset with dims (case, force, ratio): ``rms_tip_m``,
+    Returns an xarray Dataset with dims (case, force_n, ratio): ``rms_tip_m``,
     ``max_abs_tip_m``, ``max_abs_rel_disp_m``, ``impacts_per_cycle``, ``pattern``,
     ``energy_balance_relative``; the configuration in its attributes.  The results
     are the same, bit for bit, whatever the batch size and the executor.
