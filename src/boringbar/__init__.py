@@ -16,6 +16,7 @@ layers behind them.
 - Closed-form references: :func:`tip_frf`, :func:`min_real_part`,
   :func:`sims_tuning`, :func:`den_hartog_parameters`.
 - Study files: :func:`load_study`, :func:`run_study`.
+- The design page in a notebook: :func:`app` (``pip install 'boringbar[app]'``).
 """
 
 import importlib
@@ -60,6 +61,7 @@ _HOMES = {
     "boringbar.reference.linear": ("min_real_part", "tip_frf"),
     "boringbar.studies.load": ("load_study",),
     "boringbar.studies.runner": ("run_study",),
+    "boringbar.webapp.server": ("app",),
 }
 _LAZY = {name: module for module, names in _HOMES.items() for name in names}
 
@@ -111,6 +113,7 @@ __all__ = [
     "TunedMassDamper",
     "Uncertain",
     "Variable",
+    "app",
     "basins",
     "bifurcation",
     "continuation",

@@ -1,5 +1,6 @@
 """Figures of your own bar: its geometry and mode shapes, a measured FRF against its
-fit, and the classical lobes of a tip FRF (the edge of the package, as plot.py)."""
+fit, and the classical lobes of a tip FRF (the edge of the package, as plot.py).
+Receptances are drawn in um/N, lengths in mm."""
 
 from __future__ import annotations
 
@@ -8,6 +9,11 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
+
+from boringbar.plot_style import GREY, OKABE_ITO, bar_colour, series_colour, system_label
+
+#: Receptance in the figures: um/N per m/N.
+UM_PER_M = 1e6
 
 
 # --- a bar's geometry and mode shapes -------------------------------------------------
@@ -29,28 +35,29 @@ def plot_modes(spec, cavity: bool, n_modes: int, title: str = "", *, fig=None) -
     geo.axvline(0.0, color="black", lw=3)
     if cavity and spec.cavity is not None and spec.ball is not None:
         c, b = spec.cavity, spec.ball
-        geo.add_patch(_circle((c.position * mm, 0.0), b.diameter / 2 * mm, "#d84315"))
+        geo.add_patch(_circle((c.position * mm, 0.0), b.diameter / 2 * mm, bar_colour("ball")))
         geo.annotate(f"ball {b.diameter * mm:g} mm {b.material}", (c.position * mm,
                      c.depth / 2 * mm), ha="center", va="bottom", fontsize=8)
     if spec.tmd is not None and not cavity:
-        geo.plot([spec.tmd.position * mm], [0.0], "s", color="#6a1b9a", ms=9,
+        geo.plot([spec.tmd.position * mm], [0.0], "s", color=bar_colour("tmd"), ms=9,
                  label="absorber")
     geo.set_aspect("equal", adjustable="datalim")
-    geo.set_ylabel("mm")
-    geo.set_title(title or f"{spec.name}: geometry and mode shapes")
+    geo.set_ylabel("radius (mm)")
+    geo.set_title(title or f"{system_label(spec.name)}: geometry and mode shapes")
     nodes, shapes, freqs = spec.mode_shapes(cavity, n_modes)
     for i in range(shapes.shape[1]):
-        shp.plot(nodes * mm, shapes[:, i], label=f"mode {i + 1}: {freqs[i]:.1f} Hz")
+        shp.plot(nodes * mm, shapes[:, i], color=series_colour(i),
+                 label=f"mode {i + 1}: {freqs[i]:.1f} Hz")
     shp.axhline(0.0, color="0.6", lw=0.6)
-    points = [("ball", spec.ball_position_m, "#d84315")] if cavity and spec.ball else []
+    points = [("ball", spec.ball_position_m, bar_colour("ball"))] if cavity and spec.ball else []
     if spec.tmd is not None:
-        points.append(("absorber", spec.absorber_position_m, "#6a1b9a"))
+        points.append(("absorber", spec.absorber_position_m, bar_colour("tmd")))
     for name, z, colour in points:
         shp.axvline(z * mm, color=colour, ls=":", lw=1.0)
         shp.annotate(name, (z * mm, shp.get_ylim()[1]), color=colour, fontsize=8,
                      ha="center", va="top")
     shp.set_xlabel("z from the clamp (mm)")
-    shp.set_ylabel("psi(z) / psi(tip)")
+    shp.set_ylabel("mode shape psi(z) / psi(tip)")
     shp.legend(fontsize=8, loc="lower left")
     return fig
 
@@ -61,21 +68,22 @@ def _circle(centre, radius, colour):
 
 # --- measured FRFs ----------------------------------------------------------------------
 def plot_frf_fit(frequency_hz, measured, fitted, fit, *, fig=None) -> Figure:
-    """A measured tip receptance (points) against the fitted modal model (line):
+    """A measured tip receptance (points) against the fitted modal model (line), in um/N:
     magnitude on a log scale, real and imaginary parts; the fitted modes marked."""
     fig = fig or Figure(figsize=(8.0, 7.5), layout="constrained")
     mag, re, im = fig.subplots(3, 1, sharex=True)
     f = np.asarray(frequency_hz)
     step = max(1, len(f) // 1500)  # points enough to see the scatter
+    measured, fitted = np.asarray(measured) * UM_PER_M, np.asarray(fitted) * UM_PER_M
     for ax, fn in ((mag, np.abs), (re, np.real), (im, np.imag)):
-        ax.plot(f[::step], fn(measured[::step]), ".", ms=2.5, color="0.55", label="measured")
-        ax.plot(f, fn(fitted), color="#d84315", lw=1.2, label="fitted modes")
+        ax.plot(f[::step], fn(measured[::step]), ".", ms=2.5, color=GREY, label="measured")
+        ax.plot(f, fn(fitted), color=OKABE_ITO["vermillion"], lw=1.2, label="fitted modes")
         for fi in fit.frequency_hz:
-            ax.axvline(fi, color="#1565c0", lw=0.6, ls=":")
+            ax.axvline(fi, color=OKABE_ITO["blue"], lw=0.6, ls=":")
     mag.set_yscale("log")
-    mag.set_ylabel("|H| (m/N)")
-    re.set_ylabel("Re H (m/N)")
-    im.set_ylabel("Im H (m/N)")
+    mag.set_ylabel(r"|H| ($\mu$m/N)")
+    re.set_ylabel(r"Re H ($\mu$m/N)")
+    im.set_ylabel(r"Im H ($\mu$m/N)")
     im.set_xlabel("frequency (Hz)")
     modes = ", ".join(f"{a:.1f} Hz / {z * 100:.2f} % / {k:.3g} N/m" for a, z, k in
                       zip(fit.frequency_hz, fit.damping_ratio, fit.modal_stiffness_n_m,
@@ -95,7 +103,7 @@ def plot_analytic_lobes(curves, rpm_range, *, fig=None) -> Figure:
     lo, hi = rpm_range
     top = 0.0
     for n, (label, lobes, rpm, limit) in enumerate(curves):
-        colour = f"C{n}"
+        colour = series_colour(n)
         for j in range(len(lobes["lobe"]) if len(curves) == 1 else 0):  # one FRF: each lobe
             r, b = lobes["rpm"][j], lobes["b_lim"][j]
             inside = (r >= lo) & (r <= hi)

@@ -164,6 +164,38 @@ def load_system(path) -> SystemSpec:
     return parse_system(read_toml(path, SystemFileError, "system file"), str(path))
 
 
+def loads_system(text: str, source: str) -> SystemSpec:
+    """A system file's text (``source`` names it in messages), checked as
+    :func:`load_system` checks the file."""
+    try:
+        d = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SystemFileError(f"{source}: not valid TOML: {exc}") from None
+    return parse_system(d, source)
+
+
+def merged_sections(sections: list[dict]) -> list[dict]:
+    """A description's sections (dicts with end_mm, diameter_mm, bore_mm) with
+    neighbours of one diameter and bore merged: the spans a cavity may move along."""
+    merged = []
+    for s in sections:
+        if merged and (merged[-1]["diameter_mm"], merged[-1].get("bore_mm", 0.0)) == (
+                s["diameter_mm"], s.get("bore_mm", 0.0)):
+            merged[-1] = dict(merged[-1], end_mm=s["end_mm"])
+        else:
+            merged.append(dict(s))
+    return merged
+
+
+def cavity_moved(data: dict, position_mm: float) -> dict:
+    """The system description ``data`` (changed in place and returned) with the cavity
+    at ``position_mm``; its sections merged first (:func:`merged_sections`), so the
+    cavity may move along a span of one diameter."""
+    data["bar"]["sections"] = merged_sections(data["bar"]["sections"])
+    data["cavity"]["position_mm"] = position_mm
+    return data
+
+
 def published_system() -> SystemSpec:
     """The published bar, from the file shipped with the package."""
     return parse_system(tomllib.loads(published_file_text()), PUBLISHED_FILE)

@@ -120,7 +120,8 @@ def design_files(ds, cmp: dict, out) -> dict:
     files = {"netcdf": write_netcdf_atomic(ds, out / "design.nc"),
              "csv": out / "trials.csv",
              "png": save_figure_atomic(plot_design(ds), out / "design.png"),
-             "best_png": save_figure_atomic(plot_design_comparison(cmp), out / "best.png"),
+             "best_png": save_figure_atomic(plot_design_comparison(cmp, ds.attrs),
+                                           out / "best.png"),
              "json": out / "summary.json"}
     table = ds.drop_vars(["objective_samples", "published_statistic", "published_error"])
     with atomic_path(files["csv"]) as tmp:
