@@ -45,7 +45,7 @@ def fresh(shape: tuple) -> np.ndarray:
 
 def kernel_figures(preset: str, n_modes: int, steps: int, rounds: int = 3) -> None:
     system = make_system("ball", preset, gap_m=0.5e-3, friction=True, n_modes=n_modes)
-    omega = RATIO * system.reference_frequency
+    omega = RATIO * system.reference_frequency_rad_s
 
     def batch_of(nb: int):
         P = np.array([pack(system, omega, FORCE, DT) for _ in range(nb)])

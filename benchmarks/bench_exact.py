@@ -35,7 +35,7 @@ from boringbar.reference.stability import limit_at_speeds
 
 CASES = [
     ("Masri-Caughey orbit: 1 mode, gap 0.5 mm, no friction, 30 N, r = 1.00, started on it",
-     "physical", {"n_modes": 1, "gap": 0.5e-3, "friction": False}, 30.0, 1.0, "orbit"),
+     "physical", {"n_modes": 1, "gap_m": 0.5e-3, "friction": False}, 30.0, 1.0, "orbit"),
     ("paper, gap 0.1 mm, no friction, 10 N, r = 1.00", "paper",
      {"gap_m": 0.1e-3, "friction": False}, 10.0, 1.0, True),
     ("physical, gap 0.1 mm, no friction, 20 N, r = 1.00, started on its attractor",
@@ -64,7 +64,7 @@ def orbit_start(s, force):
     bar, d = s.bar, s.damper
     o = [o for o in two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
                                      bar.psi_tip[0], bar.psi_damper[0], d.mass_kg, d.gap_m,
-                                     d.restitution, force, s.reference_frequency)
+                                     d.restitution, force, s.reference_frequency_rad_s)
          if o.admissible][0]
     t0 = o.impact_time
     x = np.array([float(o.modal_displacement(t0)), o.bar_velocity_after / bar.psi_damper[0],

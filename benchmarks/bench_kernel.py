@@ -29,7 +29,7 @@ FORCE, RATIO = 10.0, 1.0
 
 def kernel_run(n_modes: int, duration: float = 2.0, dt: float = 1e-6, friction=None):
     """Best of three of the kernel (step map) and of its stage loop, rounds interleaved."""
-    system = make_system(CASE["bar"], CASE["preset"], gap_m=CASE["gap"],
+    system = make_system(CASE["bar"], CASE["preset"], gap_m=CASE["gap_m"],
                          friction=CASE["friction"] if friction is None else friction,
                          n_modes=n_modes)
     forcing = Harmonic(FORCE, RATIO)
@@ -46,12 +46,12 @@ def kernel_run(n_modes: int, duration: float = 2.0, dt: float = 1e-6, friction=N
 
 def scipy_run(duration: float, rtol: float = 1e-8):
     """The same one-mode frictionless ball damper, event-driven with solve_ivp."""
-    s = make_system(CASE["bar"], CASE["preset"], gap_m=CASE["gap"], friction=False, n_modes=1)
+    s = make_system(CASE["bar"], CASE["preset"], gap_m=CASE["gap_m"], friction=False, n_modes=1)
     bar, ball = s.bar, s.damper
     M, K, C = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0]
     pl, pd = bar.psi_tip[0], bar.psi_damper[0]
     m, e, half = ball.mass_kg, ball.restitution, ball.gap_m / 2
-    om = RATIO * s.reference_frequency
+    om = RATIO * s.reference_frequency_rad_s
     meff = 1.0 / (1.0 / m + pd**2 / M)
 
     def rhs(t, x):

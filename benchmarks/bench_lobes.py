@@ -44,7 +44,7 @@ def timed_lobes(cases, rpm, method):
 
 def report(label, ds, wall):
     mins = ", ".join(f"{c}: {v * 1e3:.2f} mm" for c, v in
-                     zip(ds["case"].values, ds["min_chatter_free_depth"].values, strict=True))
+                     zip(ds["case"].values, ds["min_chatter_free_depth_m"].values, strict=True))
     print(f"{label}: {wall:.1f} s wall, {ds.attrs['runs']} runs "
           f"({wall / max(ds.attrs['runs'], 1):.3f} s per run) on {ds.attrs['workers']} "
           f"workers; min chatter-free depth {mins}")

@@ -35,7 +35,7 @@ N_PERIODS = 40
 def masri_caughey_case():
     s = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     bar, d = s.bar, s.damper
-    om = s.reference_frequency
+    om = s.reference_frequency_rad_s
     o = [o for o in two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
                                      bar.psi_tip[0], bar.psi_damper[0], d.mass_kg, d.gap_m,
                                      d.restitution, 30.0, om) if o.admissible][0]
@@ -53,7 +53,7 @@ def settled_case():
 
 
 def errors(label, s, f, start, orbit):
-    period = 2 * math.pi / f.omega(s.reference_frequency)
+    period = 2 * math.pi / f.omega(s.reference_frequency_rad_s)
     dur = N_PERIODS * period
     ex = simulate(s, f, duration_s=dur, dt_s=period / 4000, initial=start, steady_fraction=1.0,
                   integrator="exact")

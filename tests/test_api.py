@@ -92,7 +92,7 @@ def test_a_run_is_frozen():
     with pytest.raises(AttributeError):
         run.dt_s = 2e-6
     ds = run.to_xarray()
-    assert ds["tip_displacement"].attrs["units"] == "m"
+    assert ds["tip_displacement_m"].attrs["units"] == "m"
 
 
 def test_import_loads_no_heavy_library_and_every_name_resolves():
@@ -121,7 +121,7 @@ def test_a_default_run_keeps_a_bounded_history_to_plot_and_write():
         run = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration_s=duration)
         rows = run.history.shape[0]
         assert HISTORY_ROWS <= rows < 2 * HISTORY_ROWS
-        assert run.to_xarray().sizes["time"] == rows
+        assert run.to_xarray().sizes["time_s"] == rows
         assert len(run.plot().axes) == 4
     bare = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration_s=2.0, record_every=0)
     assert bare.history is None and np.array_equal(bare.final.x, run.final.x)
@@ -146,7 +146,7 @@ def test_the_analyses_take_a_system_a_list_or_a_mapping():
     assert np.array_equal(named.rms_tip_m.values, many.rms_tip_m.values)
     lobes = bb.lobes(solid, bb.LobesOptions(rpm=(1200.0,), method="search"),
                      integration=bb.Integration(duration_s=0.2))
-    assert list(lobes.case.values) == ["solid"] and lobes.limit_depth.values[0, 0] > 0
+    assert list(lobes.case.values) == ["solid"] and lobes.limit_depth_m.values[0, 0] > 0
     for bad in (3, "ball", {"x": 3}):
         with pytest.raises(TypeError, match="must be a System"):
             bb.sweep(bad, options, integration=quick)

@@ -94,7 +94,7 @@ def test_the_closed_form_response_matches_a_simulated_solid_bar(published):
     r = views.response_view(published)
     i = int(np.argmax(r["curves"]["solid"]))
     solid = published.systems["solid"]
-    ratio = r["f_hz"][i] / (solid.reference_frequency / (2 * math.pi))
+    ratio = r["f_hz"][i] / (solid.reference_frequency_rad_s / (2 * math.pi))
     run = bb.simulate(solid, bb.Harmonic(amplitude_n=20.0, ratio=ratio), duration_s=3.0,
                       record_every=0)
     assert run.rms_tip_m * 1e3 == pytest.approx(r["curves"]["solid"][i], rel=2e-3)

@@ -65,7 +65,7 @@ def test_two_impact_orbit_attracts_its_neighbourhood():
     orbit = next(o for o in two_impact_orbit(
         bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
         bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass_kg, ball.gap_m, ball.restitution, 30.0, bar.natural_frequency)
+        ball.mass_kg, ball.gap_m, ball.restitution, 30.0, bar.natural_frequency_rad_s)
         if o.admissible and o.stable)
     w0 = float(orbit.tip(0.0))
     v0 = bar.psi_tip[0] * float(orbit.modal_velocity(0.0))
@@ -86,7 +86,7 @@ def test_two_impact_orbit_attracts_its_neighbourhood():
     w = float(ds["signature_tip_m"].values[cell[0], cell[1], 0])
     v = float(ds["signature_tip_velocity_m_s"].values[cell[0], cell[1], 0])
     amp = math.sqrt(2) * orbit.rms_tip()
-    omega = bar.natural_frequency
+    omega = bar.natural_frequency_rad_s
     assert abs(w - w0) < 0.02 * amp and abs(v - v0) < 0.02 * amp * omega
 
 
@@ -130,7 +130,7 @@ def test_sensitivity_gives_one_result_per_value(kind, values):
 def test_sensitivity_of_cuts():
     cuts = Cuts(rpm=1200.0, depths_m=(0.05e-3, 0.10e-3), duration_s=0.05)
     ds = sensitivity(SensitivityOptions("restitution", (0.6, 0.8), cuts=cuts), preset="paper")
-    assert ds["chatter"].dims == ("restitution", "depth")
+    assert ds["chatter"].dims == ("restitution", "depth_m")
     assert ds["chatter"].shape == (2, 2) and ds["chatter"].dtype == bool
     assert np.all(ds["amplitude_m"] >= 0)
     with pytest.raises(ParameterError, match="kind"):

@@ -37,7 +37,7 @@ def _logistic(n, r=3.97, x0=0.3):
 
 def _analytic(system, force, ratio):
     """Steady (W, W') at Omega t = 0 mod 2 pi under F0 sin(Omega t)."""
-    omega = ratio * system.reference_frequency
+    omega = ratio * system.reference_frequency_rad_s
     g = tip_frf(system.bar, np.array([omega]))[0]
     return np.array([force * g.imag, force * omega * g.real])
 
@@ -52,12 +52,13 @@ def _assert_analytic_points(ds, system, forces, ratios):
             exact = _analytic(system, force, ratio)
             n = int(row["n_samples"].values[i])
             last = np.array(
-                [row["tip_displacement"].values[i, n - 1], row["tip_velocity"].values[i, n - 1]]
+                [row["tip_displacement_m"].values[i, n - 1],
+                 row["tip_velocity_m_s"].values[i, n - 1]]
             )
-            scale = np.hypot(*exact / [1.0, ratio * system.reference_frequency])
+            scale = np.hypot(*exact / [1.0, ratio * system.reference_frequency_rad_s])
             assert np.all(
                 np.abs(last - exact)
-                <= 1e-6 * scale * np.array([1.0, ratio * system.reference_frequency])
+                <= 1e-6 * scale * np.array([1.0, ratio * system.reference_frequency_rad_s])
             )
 
 
@@ -95,7 +96,7 @@ def test_linear_force_sweep_is_the_analytic_steady_state_both_ways(linear_force_
 def test_hysteresis_ranges_report_where_the_sweeps_differ(linear_force_sweep):
     _, _, ds = linear_force_sweep
     moved = ds.copy(deep=True)
-    for name in ("tip_displacement", "tip_velocity"):
+    for name in ("tip_displacement_m", "tip_velocity_m_s"):
         moved[name].loc[{"direction": "backward", "value": [10.0, 15.0]}] *= 1.1
     assert hysteresis_ranges(moved) == [(10.0, 15.0)]
     assert hysteresis_ranges(moved, tol=0.2) == []
@@ -106,7 +107,7 @@ def test_hysteresis_ranges_report_where_the_sweeps_differ(linear_force_sweep):
     moved["period"].loc[back] = 0
     assert hysteresis_ranges(moved, tol=0.2) == []
     n = int(moved["n_samples"].loc[back])
-    moved["tip_displacement"].values[1, 3, :n] *= 1 + 0.5 * np.sin(np.arange(n))
+    moved["tip_displacement_m"].values[1, 3, :n] *= 1 + 0.5 * np.sin(np.arange(n))
     assert hysteresis_ranges(moved, tol=0.2) == [(20.0, 20.0)]
 
 
@@ -117,7 +118,7 @@ def test_ratio_sweep_keeps_the_forcing_phase_continuous():
                      integration=Integration(DURATION, steady_fraction=1.0 - DROP))
     _assert_analytic_points(ds, system, [10.0] * 3, ratios)
     assert hysteresis_ranges(ds) == []
-    omega = ds["omega"].sel(direction="forward").values
+    omega = ds["omega_rad_s"].sel(direction="forward").values
     fwd = ds.sel(direction="forward")
     for i in range(1, 3):
         before = math.fmod(omega[i - 1] * fwd["end_time_s"].values[i - 1], 2 * math.pi)
@@ -140,7 +141,7 @@ def test_two_impact_orbit_is_one_poincare_point():
     Omega = omega_n: one stroboscopic point, one impact-map point per wall."""
     system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     b, d = system.bar, system.damper
-    omega = system.reference_frequency
+    omega = system.reference_frequency_rad_s
     orbits = two_impact_orbit(
         b.mass_kg[0],
         b.stiffness_n_m[0],

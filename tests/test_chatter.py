@@ -438,20 +438,20 @@ def test_scan_and_search_agree_on_the_solid_bar():
     # on the published 0.01 mm grid (the search's own default is 1 % steps)
     search = lobes(cases, LobesOptions(speeds, method="search",
                                        depth_step_m=PUBLISHED_DEPTH_STEP))
-    np.testing.assert_array_equal(scan["limit_depth"].values, search["limit_depth"].values)
-    np.testing.assert_array_equal(scan["first_unstable_depth"].values,
-                                  search["first_unstable_depth"].values)
+    np.testing.assert_array_equal(scan["limit_depth_m"].values, search["limit_depth_m"].values)
+    np.testing.assert_array_equal(scan["first_unstable_depth_m"].values,
+                                  search["first_unstable_depth_m"].values)
     assert compare_methods(scan, search) == []
     assert search.attrs["runs"] <= scan.attrs["runs"]  # measured 21 vs 25 runs
     # the 0.01 mm grid brackets the bisected limit; the analytic limit is attached
     fine = {r["rpm"]: r for r in solid_limits(DEFAULT_SPEEDS, 2.0)}
     for j, rpm in enumerate(speeds):
-        lim = float(scan["limit_depth"].values[0, j])
-        first = float(scan["first_unstable_depth"].values[0, j])
+        lim = float(scan["limit_depth_m"].values[0, j])
+        first = float(scan["first_unstable_depth_m"].values[0, j])
         assert first == pytest.approx(lim + 0.01e-3)
         assert lim <= fine[rpm]["lo"] and fine[rpm]["hi"] <= first
-        assert float(scan["analytic_limit"].values[0, j]) == pytest.approx(
+        assert float(scan["analytic_limit_m"].values[0, j]) == pytest.approx(
             fine[rpm]["analytic"], rel=1e-12)
     summary = lobes_summary(scan)
     assert summary["min_chatter_free_depth_m"] == pytest.approx(
-        float(np.min(scan["limit_depth"].values)))
+        float(np.min(scan["limit_depth_m"].values)))

@@ -44,8 +44,8 @@ def test_lobes_files_json_and_verdicts(tmp_path, capsys):
         verdict = ds["verdict"].values
         assert (verdict == 1).any() and (verdict == 0).any()  # stable and chatter points
         assert ds.sizes["rpm"] == 3 and ds.attrs["method"] == "scan"
-        assert np.isfinite(ds["analytic_curve"].values).all()  # the solid bar is linear
-        assert float(ds["min_chatter_free_depth"].values[0]) == pytest.approx(
+        assert np.isfinite(ds["analytic_curve_m"].values).all()  # the solid bar is linear
+        assert float(ds["min_chatter_free_depth_m"].values[0]) == pytest.approx(
             case["min_chatter_free_depth_m"])
 
 
@@ -60,15 +60,15 @@ def test_lobes_search_and_examples(tmp_path, capsys):
     assert (out / "examples.png").read_bytes()[:8] == PNG
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["method"] == "search"
-        limit = ds["limit_depth"].values[0]
-        first = ds["first_unstable_depth"].values[0]
+        limit = ds["limit_depth_m"].values[0]
+        first = ds["first_unstable_depth_m"].values[0]
     with xr.open_dataset(out / "examples.nc") as ex:
         assert list(ex["example"].values) == ["stable", "unstable"]
         assert list(ex["chatter"].values) == [False, True]
         j = int(np.nanargmin(limit))  # the speed of the minimum chatter-free depth
-        assert ex["depth"].values == pytest.approx([limit[j], first[j]])
-        assert ex["time"].values[-1] == pytest.approx(0.3, rel=1e-3)  # not stopped at zero
-        assert {"tip_displacement", "force"} <= set(ex.data_vars)
+        assert ex["depth_m"].values == pytest.approx([limit[j], first[j]])
+        assert ex["time_s"].values[-1] == pytest.approx(0.3, rel=1e-3)  # not stopped at zero
+        assert {"tip_displacement_m", "force_n"} <= set(ex.data_vars)
 
 
 def test_lobes_default_to_the_bars_speeds_and_one_percent_depths(tmp_path, capsys):
@@ -99,7 +99,7 @@ def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):
     assert (out / "run.png").read_bytes()[:8] == PNG
     with xr.open_dataset(out / "run.nc") as ds:
         assert json.loads(ds.attrs["config"])["forcing"]["type"] == "regenerative"
-        assert ds["force"].values.max() > 0
+        assert ds["force_n"].values.max() > 0
 
 
 def test_simulate_cut_text(tmp_path, capsys):

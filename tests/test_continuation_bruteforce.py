@@ -59,7 +59,7 @@ def test_stable_branch_is_the_brute_force_orbit_where_both_sweeps_agree():
         assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
         w = fl.psi_tip @ x[:fl.n]
         for s in sides:
-            samples = s["tip_displacement"].values
+            samples = s["tip_displacement_m"].values
             samples = samples[np.isfinite(samples)]
             assert len(samples) > 50
             assert np.max(np.abs(samples - w)) <= 1e-8 * abs(w), (v, samples[-1], w)
@@ -180,7 +180,7 @@ def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, ca
         assert bf["value"].values.tolist() == [31.0, 30.5, 30.0]
         assert bf.sizes["direction"] == 2
         # the sweep's strobe samples at 31 N sit on the branch's first point
-        w = bf["tip_displacement"].sel(direction="forward").isel(value=0).values
+        w = bf["tip_displacement_m"].sel(direction="forward").isel(value=0).values
         w = w[np.isfinite(w)]
     assert abs(w[-1] - out["branches"][0]["points"][0]["strobe_tip_m"]) < 1e-3 * abs(w[-1])
     assert (tmp_path / "continuation.png").stat().st_size > 0
@@ -200,7 +200,8 @@ def _closed_form(system, ratio, force=10.0):
     bar, ball = system.bar, system.damper
     args = (bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
             bar.psi_damper[0],
-            ball.mass_kg, ball.gap_m, ball.restitution, force, ratio * system.reference_frequency)
+            ball.mass_kg, ball.gap_m, ball.restitution, force,
+            ratio * system.reference_frequency_rad_s)
     orbits = [o for o in two_impact_orbit(*args) if o.admissible and o.stable]
     return ImpactSystem(*args), (orbits[0] if orbits else None)
 
@@ -279,7 +280,7 @@ def _fold_and_linear_grazing(system, force=10.0):
         return float(np.hypot(a, b) - c)
 
     def relative_amplitude(r):
-        om = r * system.reference_frequency
+        om = r * system.reference_frequency_rad_s
         return abs(bar.psi_damper[0] * bar.psi_tip[0] * force
                    / complex(bar.stiffness_n_m[0] - bar.mass_kg[0] * om**2,
                              bar.damping_n_s_m[0] * om))
@@ -300,7 +301,7 @@ def _strobe_check(fl0, br, sweep, lo, hi):
         x, pr = sh.periodic_orbit(at, near.x)
         assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
         w = fl0.psi_tip @ sh.carry(at, x, 0.0)[:fl0.n]
-        s = sweep["tip_displacement"].isel(value=j).values
+        s = sweep["tip_displacement_m"].isel(value=j).values
         s = s[np.isfinite(s)]
         assert len(s) > 20 and np.max(np.abs(s - w)) <= 1e-8 * abs(w), (r, s[-1], w)
         checked += 1

@@ -76,7 +76,7 @@ def test_the_default_speeds_draw_each_analytic_lobe_not_a_straight_line():
     10 % of the lobe's true minimum, and the sampled curve rises from it on both sides
     (a straight line between two speeds would hide the minimum)."""
     system = make_system("solid", spec=CARBIDE)
-    f1 = system.reference_frequency / (2 * math.pi)
+    f1 = system.reference_frequency_rad_s / (2 * math.pi)
     rpm = np.array(default_speeds([Case.of(system)]))
     assert rpm[0] == pytest.approx(60 * f1 / 6.1, abs=1) and len(rpm) > 50
     coarse = limit_at_speeds(system, rpm)
@@ -154,7 +154,7 @@ def test_a_scan_keeps_the_published_step_and_a_grid_is_one_or_the_other():
 def _peaks(system: System) -> np.ndarray:
     """Omega/omega_n of the local maxima of |G|, the tip FRF in closed form."""
     r = np.linspace(0.3, 1.8, 30001)
-    g = np.abs(tip_frf(system.bar, r * system.reference_frequency, tmd=system.damper))
+    g = np.abs(tip_frf(system.bar, r * system.reference_frequency_rad_s, tmd=system.damper))
     return r[argrelextrema(g, np.greater)[0]]
 
 

@@ -33,7 +33,7 @@ def test_solid_bar_transient_from_rest_is_the_closed_form():
     s = make_system("solid", "paper")
     bar = s.bar
     M, K, C, pl = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0]
-    om = 0.93 * bar.natural_frequency
+    om = 0.93 * bar.natural_frequency_rad_s
     run = simulate(s, Harmonic(10.0, 0.93), duration_s=0.02, dt_s=1e-5, record_every=7,
                    integrator="exact")
     t = run.history[:, 0]
@@ -55,7 +55,7 @@ def test_steady_amplitude_is_the_frequency_response(bar, ratio):
     """After the transient (e^-58 at 2 s) max |W| is |G(i Omega)| F0, G from tip_frf."""
     s = make_system("ball", "physical", locked=True) if bar == "locked" else \
         make_system(bar, "physical")
-    om = ratio * s.reference_frequency
+    om = ratio * s.reference_frequency_rad_s
     run = simulate(s, Harmonic(10.0, ratio), duration_s=2.0, steady_fraction=0.1,
                    integrator="exact")
     kw = {"tmd": s.damper} if bar == "tmd" else {}
@@ -80,7 +80,7 @@ def test_overdamped_absorber_mode_is_integrated_without_conjugate_pairs():
     prep = prepare(_setup(s, f, 0.01, 1e-6, None, 0, 0.8, False, "exact").p)
     assert list(prep["kstep"]) == [1] and np.any(prep["lam"][0].imag != 0.0)
     run = simulate(s, f, duration_s=2.0, steady_fraction=0.1, integrator="exact")
-    g = abs(complex(tip_frf(s.bar, s.reference_frequency, tmd=s.damper)))
+    g = abs(complex(tip_frf(s.bar, s.reference_frequency_rad_s, tmd=s.damper)))
     assert run.metrics["max_abs_tip_m"] == pytest.approx(10.0 * g, rel=1e-10)  # 3e-16
     assert run.energy["balance_relative"] == pytest.approx(0.0, abs=1e-12)  # 3.4e-15
 
@@ -91,7 +91,7 @@ def orbit_case():
     """The 30 N stable symmetric orbit (tests/test_masri_caughey.py) of the 1-mode bar."""
     s = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     bar, d = s.bar, s.damper
-    om = s.reference_frequency
+    om = s.reference_frequency_rad_s
     orbits = [o for o in two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0],
                                           bar.damping_n_s_m[0],
                                           bar.psi_tip[0], bar.psi_damper[0], d.mass_kg, d.gap_m,
@@ -265,7 +265,7 @@ def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
         config = json.loads(ds.attrs["config"])
         assert config["integrator"] == "exact"
         assert config["system"]["damper"]["friction"]["static_ratio"] == 1.5
-        assert ds.sizes["time"] > 1000
+        assert ds.sizes["time_s"] > 1000
 
 
 def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):

@@ -261,7 +261,7 @@ def test_lobes_run_exactly_and_agree_with_rk4():
                execution=Execution(workers=1))
     # "auto" (the default) takes RK4 in a cut
     assert ex.attrs["integrator_used"] == "exact" and rk.attrs["integrator_used"] == "rk4"
-    np.testing.assert_array_equal(ex["limit_depth"].values, rk["limit_depth"].values)
+    np.testing.assert_array_equal(ex["limit_depth_m"].values, rk["limit_depth_m"].values)
 
 
 def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
@@ -280,7 +280,7 @@ def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
     assert abs(s["energy"]["balance_relative"]) < 1e-9
     with xr.open_dataset(out / "run.nc") as ds:
         assert json.loads(ds.attrs["config"])["integrator"] == "exact"
-        assert float(ds["force"].max()) > 0
+        assert float(ds["force_n"].max()) > 0
 
 
 def test_cli_lobes_exact(tmp_path, capsys):
@@ -294,7 +294,7 @@ def test_cli_lobes_exact(tmp_path, capsys):
                  "0.5", "--integrator", "exact", "--out", str(out)]) == 0
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["integrator"] == "exact"
-        assert float(ds["limit_depth"].max()) > 0
+        assert float(ds["limit_depth_m"].max()) > 0
     with xr.open_dataset(out / "examples.nc") as ex:
         assert {c["integrator"] for c in json.loads(ex.attrs["configs"])} == {"exact"}
 

@@ -69,7 +69,7 @@ def test_round_trip_a_boringbar_frf_gives_the_bars_own_modes():
     bar = published_bar(True, 2)
     f = np.arange(100.0, 4000.0, 0.5)
     fit, _ = fit_frf(MeasuredFrf(f, tip_frf(bar, 2 * math.pi * f)), 2)
-    assert rel(fit.frequency_hz, bar.omegas / (2 * math.pi)).max() < 1e-4
+    assert rel(fit.frequency_hz, bar.omegas_rad_s / (2 * math.pi)).max() < 1e-4
     assert rel(fit.damping_ratio, bar.damping_ratio).max() < 1e-3
     assert rel(fit.modal_stiffness_n_m, bar.stiffness_n_m / bar.psi_tip**2).max() < 1e-3
 

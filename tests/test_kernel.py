@@ -62,7 +62,7 @@ def kernel_run(p, x0, t0: float, dt: float, n_steps: int, chunk: int = CHUNK):
 
 def one_step(system: System, x, dt: float, force: float = 0.0):
     """One kernel step of ``system`` from state ``x``; returns (new x, met)."""
-    p = pack(system, system.reference_frequency, force, dt)
+    p = pack(system, system.reference_frequency_rad_s, force, dt)
     x = np.array(x, dtype=float)
     met = fresh_metrics()
     run_rk4(p, x, 0.0, dt, 1, 0, 0, np.zeros((0, 6)), np.zeros((4, 3)), np.zeros((4, 2)),
@@ -103,7 +103,7 @@ def compared():
     out = {}
     for name, (build, initial, _) in CASES.items():
         system = build()
-        p = pack(system, system.reference_frequency, 10.0, DT)
+        p = pack(system, system.reference_frequency_rad_s, 10.0, DT)
         x0 = initial_state(system, initial)
         t, X, impacts = naive.run(p, x0, 0.0, DT, N_STEPS)
         out[name] = (system, p, X, impacts, kernel_run(p, x0, 0.0, DT, N_STEPS))

@@ -47,22 +47,22 @@ def local_extrema(values: np.ndarray, kind: str) -> np.ndarray:
 def test_sdof_tip_frf_is_the_closed_form():
     bar = tap_bar().normalised([2.0])  # psi_L = 2: the psi_L^2 factor is exercised
     m, k, c, p = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0]
-    w = np.linspace(0.0, 3.0, 301) * bar.natural_frequency
+    w = np.linspace(0.0, 3.0, 301) * bar.natural_frequency_rad_s
     exact = p**2 / (k - m * w**2 + 1j * c * w)
     np.testing.assert_allclose(tip_frf(bar, w), exact, rtol=1e-12, atol=0)
 
 
 def test_frf_keeps_the_shape_of_omega():
     bar = published_bar(True, 2)
-    w = bar.natural_frequency * np.ones((3, 4))
+    w = bar.natural_frequency_rad_s * np.ones((3, 4))
     assert tip_frf(bar, w).shape == (3, 4)
-    assert np.ndim(tip_frf(bar, bar.natural_frequency)) == 0
+    assert np.ndim(tip_frf(bar, bar.natural_frequency_rad_s)) == 0
 
 
 def test_frf_does_not_depend_on_the_mode_normalisation():
     bar = published_bar(False, 2)
     tmd = TunedMassDamper.den_hartog(0.39, bar)
-    w = np.linspace(0.2, 7.0, 500) * bar.natural_frequency
+    w = np.linspace(0.2, 7.0, 500) * bar.natural_frequency_rad_s
     ref = tip_frf(bar, w, tmd=tmd, added_mass_kg=0.026)
     for scale in ([2.0, 1.0], [2.0, -0.5]):
         other = tip_frf(bar.normalised(scale), w, tmd=tmd, added_mass_kg=0.026)
@@ -84,7 +84,7 @@ def test_locked_mass_on_one_mode_is_the_closed_form():
     m_ball = 0.026
     m, k, c = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0]
     m_tot = m + m_ball * bar.psi_damper[0] ** 2
-    w = np.linspace(0.5, 1.5, 201) * bar.natural_frequency
+    w = np.linspace(0.5, 1.5, 201) * bar.natural_frequency_rad_s
     exact = 1.0 / (k - m_tot * w**2 + 1j * c * w)
     np.testing.assert_allclose(tip_frf(bar, w, added_mass_kg=m_ball), exact, rtol=1e-12)
 
@@ -106,7 +106,7 @@ def test_locked_mass_couples_two_modes():
     m_ball = 0.2
     mass = np.diag(bar.mass_kg) + m_ball * np.outer(bar.psi_damper, bar.psi_damper)
     w_eig = np.sqrt(scipy.linalg.eigh(np.diag(bar.stiffness_n_m), mass, eigvals_only=True))
-    assert not np.allclose(w_eig, bar.omegas, rtol=1e-3)  # the mass does shift both
+    assert not np.allclose(w_eig, bar.omegas_rad_s, rtol=1e-3)  # the mass does shift both
     big = 1e4 * static_tip_compliance(bar)
     for w in w_eig:
         g = tip_frf(bar, w * np.array([1 - 1e-7, 1 + 1e-7]), added_mass_kg=m_ball).real
@@ -119,7 +119,7 @@ def test_tmd_on_one_mode_is_the_closed_form():
     bar = tap_bar().normalised([0.3])
     tmd = TunedMassDamper(mass_kg=0.05, stiffness_n_m=4e5, damping_n_s_m=30.0,
                           position_m=bar.z_absorber_m)
-    w = np.linspace(0.3, 2.0, 400) * bar.natural_frequency
+    w = np.linspace(0.3, 2.0, 400) * bar.natural_frequency_rad_s
     kc = tmd.stiffness_n_m + 1j * w * tmd.damping_n_s_m
     absorber = tmd.mass_kg * w**2 * bar.psi_absorber[0] ** 2 * kc / (kc - tmd.mass_kg * w**2)
     host = bar.stiffness_n_m[0] - bar.mass_kg[0] * w**2 + 1j * w * bar.damping_n_s_m[0]
@@ -155,7 +155,7 @@ def test_den_hartog_gives_equal_peaks_on_an_undamped_host(mu):
     equal to within a fraction of a percent (0.15 % at mu = 0.25)."""
     bar = tap_bar(zeta=0.0)
     tmd = TunedMassDamper.den_hartog(absorber_mass_for(mu, bar), bar)
-    w = np.linspace(0.5, 1.6, 200_001) * bar.natural_frequency
+    w = np.linspace(0.5, 1.6, 200_001) * bar.natural_frequency_rad_s
     mag = np.abs(tip_frf(bar, w, tmd=tmd))
     peaks = mag[local_extrema(mag, "max")]
     assert len(peaks) == 2
@@ -164,7 +164,7 @@ def test_den_hartog_gives_equal_peaks_on_an_undamped_host(mu):
 
 # --- Sims: equal real troughs -----------------------------------------------------
 def real_troughs(bar, tmd) -> np.ndarray:
-    w = np.linspace(0.4, 2.0, 200_001) * bar.natural_frequency
+    w = np.linspace(0.4, 2.0, 200_001) * bar.natural_frequency_rad_s
     re = tip_frf(bar, w, tmd=tmd).real
     return re[local_extrema(re, "min")]
 
@@ -219,7 +219,7 @@ def test_sims_is_within_two_percent_of_the_minimax_on_the_damped_bar():
     re_best, _ = min_real_part(bar, best)
     assert re_best >= re_sims  # the minimax can only improve on its start
     assert re_best / re_sims == pytest.approx(1.0, abs=0.02)
-    assert 1.0 < w_sims / bar.natural_frequency < 1.4  # the upper trough
+    assert 1.0 < w_sims / bar.natural_frequency_rad_s < 1.4  # the upper trough
     assert best.stiffness_n_m == pytest.approx(sims.stiffness_n_m, rel=0.02)
     assert best.damping_n_s_m == pytest.approx(sims.damping_n_s_m, rel=0.02)
 
@@ -241,11 +241,11 @@ def test_second_mode_costs_the_single_mode_closed_form_about_eight_percent():
 
 def test_min_real_part_refines_below_the_grid():
     bar = tap_bar()
-    coarse = bar.natural_frequency * np.linspace(0.5, 1.5, 41)
+    coarse = bar.natural_frequency_rad_s * np.linspace(0.5, 1.5, 41)
     value, w_min = min_real_part(bar, omega_rad_s=coarse)
     # SDOF: Re G = (K - M w^2) / ((K - M w^2)^2 + (C w)^2), minimum near w_n sqrt(1 + 2 zeta)
-    fine = bar.natural_frequency * np.linspace(1.0, 1.04, 400_001)
+    fine = bar.natural_frequency_rad_s * np.linspace(1.0, 1.04, 400_001)
     exact = tip_frf(bar, fine).real.min()
     assert value == pytest.approx(exact, rel=1e-9)
     assert value == pytest.approx(-1.0 / (4 * 0.01 * (1 + 0.01) * K_TIP), rel=1e-3)
-    assert w_min / bar.natural_frequency == pytest.approx(math.sqrt(1.02), rel=1e-3)
+    assert w_min / bar.natural_frequency_rad_s == pytest.approx(math.sqrt(1.02), rel=1e-3)

@@ -42,7 +42,7 @@ def published_args(force: float, ratio: float, bar=None) -> tuple:
         GAP,
         E,
         force,
-        ratio * bar.natural_frequency,
+        ratio * bar.natural_frequency_rad_s,
     )
 
 

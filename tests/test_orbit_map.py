@@ -158,7 +158,7 @@ def test_the_issue_case_map_holds_the_settled_orbits():
     fl = sh.make_flow(system, Harmonic(5.0, ratio=1.0))
     for force in (10.0, 20.0, 30.0):
         f = Harmonic(force, ratio=1.0)
-        per = 2 * np.pi / f.omega(system.reference_frequency)
+        per = 2 * np.pi / f.omega(system.reference_frequency_rad_s)
         run = simulate(system, f, duration_s=600 * per, dt_s=per / np.ceil(per / 1e-6),
                        integrator="exact", strobe=True)
         w = run.final.x[: fl.n] @ fl.psi_tip

@@ -119,7 +119,7 @@ def test_report_numbers_are_the_files_numbers(study):
     html = (out / "report.html").read_text()
     for preset in PRESET_ORDER:
         with xr.open_dataset(out / preset / "lobes" / "lobes.nc") as ds:
-            for case, depth in zip(ds["case"].values, ds["min_chatter_free_depth"].values,
+            for case, depth in zip(ds["case"].values, ds["min_chatter_free_depth_m"].values,
                                    strict=True):
                 assert f"<td>{case}</td><td>{_mm(depth)}</td>" in html
     with xr.open_dataset(out / "corrections" / "ladder.nc") as ladder:

@@ -59,7 +59,7 @@ def test_result_file_is_self_explaining(reference):
     assert cfg["grid"]["gap_mm"] == [0.5, 0.1] and cfg["run"]["duration_s"] == 0.02
     assert study_from_dict(cfg).config_hash() == ds.attrs["study_config_hash"]
     assert ds.attrs["boringbar_version"] and ds.attrs["run_finished_utc"].endswith("Z")
-    assert dict(ds.sizes) == {"case": 4, "force": 2, "ratio": 2}
+    assert dict(ds.sizes) == {"case": 4, "force_n": 2, "ratio": 2}
     assert not out.with_name("small.nc.partial").exists()
     assert not list(out.parent.glob(".*.tmp"))
 
@@ -238,7 +238,7 @@ def _in_process(name: str):
         return ({"study": {"analysis": "bifurcation"}, "run": {"duration_s": 0.02},
                  "analysis": {"values": [5.0, 10.0]}},
                 ref.expand_dims(case=["ball gap=0.5mm friction=on"]).assign_coords(
-                    bar=("case", ["ball"]), gap=("case", [0.5e-3]),
+                    bar=("case", ["ball"]), gap_m=("case", [0.5e-3]),
                     friction=("case", ["on"])))
     if name == "basins":
         from boringbar.analysis.basins import BasinOptions, basins
@@ -269,7 +269,7 @@ def test_study_result_equals_the_in_process_function(name, tmp_path):
     assert set(ds.data_vars) == set(ref.data_vars)
     for k in ref.data_vars:
         x, y = ds[k].values, ref[k].values
-        if k in ("tip_displacement", "tip_velocity"):
+        if k in ("tip_displacement_m", "tip_velocity_m_s"):
             x = x[..., : y.shape[-1]]
         assert x.shape == y.shape, k
         assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), k

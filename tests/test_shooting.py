@@ -81,7 +81,7 @@ def _second_order(system):
     d = system.damper
     tmd = d if system.kind == "tmd" else None
     added = d.mass_kg if system.kind == "locked" else 0.0
-    w1 = system.bar.natural_frequency
+    w1 = system.bar.natural_frequency_rad_s
     z0, zp, zm = dynamic_stiffness(system.bar, np.array([0.0, w1, -w1]), tmd, added)
     K = z0.real
     return (K - 0.5 * (zp + zm).real) / w1**2, ((zp - zm) / 2j).real / w1, K
@@ -162,7 +162,7 @@ def test_cli_continue_tmd_and_locked(tmp_path, capsys):
         assert n_state == sh.state_size(system)
         pts = out["branches"][0]["points"]
         assert len(pts) == 5 and all(p["stable"] for p in pts)
-        om = pts[-1]["value"] * system.reference_frequency
+        om = pts[-1]["value"] * system.reference_frequency_rad_s
         G = (tip_frf(system.bar, om, tmd=system.damper) if extra[1] == "tmd"
              else tip_frf(system.bar, om, added_mass_kg=system.damper.mass_kg))
         assert abs(pts[-1]["strobe_tip_m"] - 10.0 * G.imag) <= 1e-8 * abs(G) * 10.0

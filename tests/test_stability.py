@@ -65,7 +65,7 @@ def test_sdof_minimum_is_2_k_zeta_1_plus_zeta_over_kr(zeta):
     bar = ModalModel.from_tap_test(461.0, zeta, tip_stiffness_n_m=k_tip).normalised([2.0])
     assert min_limit(bar) == pytest.approx(2 * k_tip * zeta * (1 + zeta) / KR, rel=1e-6)
     # the lobe bottoms touch it, at omega = omega_n sqrt(1 + 2 zeta)
-    w_star = bar.natural_frequency * math.sqrt(1 + 2 * zeta)
+    w_star = bar.natural_frequency_rad_s * math.sqrt(1 + 2 * zeta)
     eps = regeneration_phase(tip_frf(bar, w_star))
     rpm = 60 * w_star / (eps + 2 * math.pi * np.array([3, 20, 30]))
     b, f = limit_at_speeds(bar, rpm, with_frequency=True)

@@ -21,7 +21,7 @@ def test_linear_bars_match_analytic_frequency_response(bar, preset):
     worst = 0.0
     for r in RATIOS:
         run = simulate(system, Harmonic(10.0, float(r)), duration_s=1.0)
-        omega = r * system.reference_frequency
+        omega = r * system.reference_frequency_rad_s
         g = tip_frf(system.bar, np.array([omega]), tmd=tmd)[0]
         expected = 10.0 * abs(g) / math.sqrt(2.0)  # RMS of a sinusoid
         worst = max(worst, abs(run.rms_tip_m / expected - 1.0))
@@ -46,7 +46,7 @@ def test_ball_damper_matches_masri_caughey_two_impact_orbit():
     from late impact detection) to the closed-form symmetric orbit."""
     system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     b, d = system.bar, system.damper
-    omega = system.reference_frequency
+    omega = system.reference_frequency_rad_s
     orbits = two_impact_orbit(b.mass_kg[0], b.stiffness_n_m[0], b.damping_n_s_m[0], b.psi_tip[0],
                               b.psi_damper[0], d.mass_kg, d.gap_m, d.restitution, 30.0, omega)
     (orbit,) = [o for o in orbits if o.admissible and o.stable]
@@ -68,7 +68,7 @@ def test_poincare_strobe_of_linear_bar_is_the_analytic_steady_state():
     """At Omega t = 0 mod 2 pi the steady W = F0 Im G and W' = F0 Omega Re G."""
     system = make_system("solid", "physical")
     run = simulate(system, Harmonic(10.0, 1.01), duration_s=0.8, strobe=True)
-    omega = 1.01 * system.reference_frequency
+    omega = 1.01 * system.reference_frequency_rad_s
     g = tip_frf(system.bar, np.array([omega]), tmd=None)[0]
     late = run.strobe[run.strobe[:, 0] > 0.6]  # transient decayed by exp(-19)
     assert len(late) > 50

@@ -78,8 +78,8 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
         return _cut_figure(ds, summary, config, fig=fig)
     damper = (config.get("system") or {}).get("damper") or {}
     kind = summary.get("bar", "?")
-    t = ds["time"].values
-    w = ds["tip_displacement"].values * 1e3
+    t = ds["time_s"].values
+    w = ds["tip_displacement_m"].values * 1e3
     lower, lower_label, colour = _run_lower(ds, kind)
     if fig is None:
         fig = Figure(figsize=(12, 6.5), layout="constrained")
@@ -110,12 +110,12 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
 def _run_lower(ds, kind: str) -> tuple[np.ndarray, str, str]:
     """The lower row of a run's figure: (values, axis label, colour): the ball's
     displacement relative to the bar, the absorber's stroke, or the tip force."""
-    if kind == "ball" and "y" in ds:
-        return ds["y"].values * 1e3, "ball displacement y\nrelative to bar (mm)", \
+    if kind == "ball" and "y_m" in ds:
+        return ds["y_m"].values * 1e3, "ball displacement y\nrelative to bar (mm)", \
             bar_colour("ball")
-    if kind == "tmd" and "absorber_stroke" in ds:
-        return ds["absorber_stroke"].values * 1e3, "absorber stroke (mm)", bar_colour("tmd")
-    return ds["force"].values, "tip force f (N)", CUT_COLOURS["force"]
+    if kind == "tmd" and "absorber_stroke_m" in ds:
+        return ds["absorber_stroke_m"].values * 1e3, "absorber stroke (mm)", bar_colour("tmd")
+    return ds["force_n"].values, "tip force f (N)", CUT_COLOURS["force"]
 
 
 def _run_guides(axes, rms, gap, steady) -> None:
@@ -177,18 +177,18 @@ def plot_sweep(ds, force: float | None = None, *, fig=None) -> Figure:
     beside the n-symmetric and n-asymmetric ones.
     Without ball cases there is one panel.
     """
-    forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
+    forces = [float(f) for f in np.atleast_1d(ds["force_n"].values)]
     if force is None:
         if len(forces) != 1:
             raise ValueError(f"force = None: the sweep holds {len(forces)} forces "
                              f"({', '.join(f'{f:g}' for f in forces)} N); give one")
         force = forces[0]
-    return _sweep_figure(ds.sel(force=float(force)), float(force), ds.attrs, fig)
+    return _sweep_figure(ds.sel(force_n=float(force)), float(force), ds.attrs, fig)
 
 
 def _sweep_figure(ds, force: float, attrs: dict, fig=None) -> Figure:
     bars = [str(b) for b in ds["bar"].values]
-    gaps = ds["gap"].values
+    gaps = ds["gap_m"].values
     fric = [str(v) for v in ds["friction"].values]
     balls = [i for i, b in enumerate(bars) if b == "ball"]
     gap_rows = sorted({float(gaps[i]) for i in balls}, reverse=True) or [math.nan]
@@ -285,9 +285,9 @@ def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
     bar's first mode (about the chatter period)."""
     cut = summary["cutting"]
     forcing = config.get("forcing") or {}
-    t = ds["time"].values
-    rows = ((ds["tip_displacement"].values * 1e3, "tip displacement W (mm)", "tip"),
-            (ds["force"].values, "cutting force f (N)", "force"))
+    t = ds["time_s"].values
+    rows = ((ds["tip_displacement_m"].values * 1e3, "tip displacement W (mm)", "tip"),
+            (ds["force_n"].values, "cutting force f (N)", "force"))
     if fig is None:
         fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
@@ -382,7 +382,7 @@ def plot_lobes(ds, *, fig=None) -> Figure:
     triangle: the force stays above zero but the steady amplitude exceeds the
     bounded threshold); the limit line (limiting chatter-free depth per speed,
     under the dataset's criterion) and, for the linear bars, the analytic
-    limit over ``rpm_fine``.  The minimum chatter-free depth is in each
+    limit over ``fine_rpm``.  The minimum chatter-free depth is in each
     panel's title.
     """
     n = ds.sizes["case"]
@@ -415,7 +415,7 @@ def plot_lobes(ds, *, fig=None) -> Figure:
 
 def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     rpm = ds["rpm"].values
-    depth_mm = ds["depth"].values * 1e3
+    depth_mm = ds["depth_m"].values * 1e3
     v = ds["verdict"].values[i]
     vb = ds["verdict_bounded"].values[i]
     rr, dd = np.meshgrid(rpm, depth_mm, indexing="ij")
@@ -431,23 +431,23 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
         if mask.any():
             h, = ax.plot(rr[mask], dd[mask], ls="none", ms=ms, **LOBE_STYLE[key])
             legend.setdefault(names[key], h)
-    limit = ds["limit_depth"].values[i] * 1e3
+    limit = ds["limit_depth_m"].values[i] * 1e3
     h, = ax.plot(rpm, limit, color="black", lw=1.6, marker=".", ms=4, zorder=1.5)
     legend.setdefault("limit: last stable depth below the first chatter", h)
     ymax = top
-    if "analytic_curve" in ds and np.isfinite(ds["analytic_curve"].values[i]).any():
-        curve = ds["analytic_curve"].values[i] * 1e3
-        h, = ax.plot(ds["rpm_fine"].values, curve, color=OKABE_ITO["blue"], lw=1.0)
+    if "analytic_curve_m" in ds and np.isfinite(ds["analytic_curve_m"].values[i]).any():
+        curve = ds["analytic_curve_m"].values[i] * 1e3
+        h, = ax.plot(ds["fine_rpm"].values, curve, color=OKABE_ITO["blue"], lw=1.0)
         legend.setdefault("analytic limit (linear, frequency domain)", h)
-        on_grid = ds["analytic_limit"].values[i] * 1e3
+        on_grid = ds["analytic_limit_m"].values[i] * 1e3
         ymax = max(ymax, min(float(np.nanmax(on_grid)), 3 * top))
     ax.set_ylim(0, 1.08 * ymax)
     pad = 0.5 * (rpm[1] - rpm[0]) if rpm.size > 1 else 25.0
     ax.set_xlim(rpm.min() - pad, rpm.max() + pad)
     ax.grid(alpha=0.3)
     title = case_title(ds["case"].values[i], str(ds["bar"].values[i]),
-                       float(ds["gap"].values[i]), str(ds["friction"].values[i]))
-    mcf = float(ds["min_chatter_free_depth"].values[i])
+                       float(ds["gap_m"].values[i]), str(ds["friction"].values[i]))
+    mcf = float(ds["min_chatter_free_depth_m"].values[i])
     if np.isfinite(limit).any() and math.isfinite(mcf):
         j = int(np.nanargmin(limit))
         ax.plot([rpm[j]], [limit[j]], ls="none", marker="*", ms=11, color="black",
@@ -462,7 +462,7 @@ def plot_lobe_examples(ds, *, fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for the
     example grid points of a lobe study (dims example x time, as written by
     ``boringbar lobes --examples``), one column per example; as a Figure."""
-    t = ds["time"].values
+    t = ds["time_s"].values
     n = ds.sizes["example"]
     if fig is None:
         fig = Figure(figsize=(COLUMN_WIDTH_IN if n > 1 else 0.6 * COLUMN_WIDTH_IN, 5.6),
@@ -472,19 +472,19 @@ def plot_lobe_examples(ds, *, fig=None) -> Figure:
     duration = float(t[-1]) if t.size else None
     for k, name in enumerate(ds["example"].values):
         ex = ds.isel(example=k)
-        axes[0, k].plot(t, ex["tip_displacement"].values * 1e3, lw=0.5,
+        axes[0, k].plot(t, ex["tip_displacement_m"].values * 1e3, lw=0.5,
                         color=CUT_COLOURS["tip"])
-        axes[1, k].plot(t, ex["force"].values, lw=0.5, color=CUT_COLOURS["force"])
-        fz = float(ex["first_zero_time"].values)
-        _cut_guides(axes[:, k], float(ex["static_deflection"].values),
-                    float(ex["mean_force"].values), fz)
+        axes[1, k].plot(t, ex["force_n"].values, lw=0.5, color=CUT_COLOURS["force"])
+        fz = float(ex["first_zero_time_s"].values)
+        _cut_guides(axes[:, k], float(ex["static_deflection_m"].values),
+                    float(ex["mean_force_n"].values), fz)
         if bool(ex["chatter"].values):
             verdict = f"chatter: the force first reaches zero at t = {fz:.3g} s"
         else:
             verdict = "the force never reaches zero" + (f" in {duration:.2g} s" if duration
                                                         else "")
         axes[0, k].set_title(wrap_title(f"{name} grid point: {float(ex['rpm'].values):g} rpm, "
-                                        f"depth {float(ex['depth'].values) * 1e3:g} mm\n"
+                                        f"depth {float(ex['depth_m'].values) * 1e3:g} mm\n"
                                         f"{verdict}", panel_in, 8.33), fontsize="small",
                              color=CUT_COLOURS["zero"] if bool(ex["chatter"].values)
                              else OKABE_ITO["bluish green"])
@@ -558,7 +558,7 @@ def plot_bifurcation(ds, *, fig=None) -> Figure:
         style = DIRECTION_STYLE.get(d, dict(color="black", s=4, offset=0.0))
         sel = ds.sel(direction=d)
         xd = x + style["offset"] * step
-        w = sel["tip_displacement"].values * 1e3
+        w = sel["tip_displacement_m"].values * 1e3
         xx = np.broadcast_to(xd[:, None], w.shape)
         ok = np.isfinite(w)
         top.scatter(xx[ok], w[ok], s=style["s"], color=style["color"], lw=0, alpha=0.6,
@@ -663,8 +663,8 @@ def plot_basins(ds, *, fig=None) -> Figure:
     map (W, W' once per forcing period) of that run, with every periodic
     attractor's Poincare points as open markers in its colour.
     """
-    w0 = ds["displacement"].values * 1e3
-    v0 = ds["velocity"].values
+    w0 = ds["displacement_m"].values * 1e3
+    v0 = ds["velocity_m_s"].values
     label = ds["attractor"].values  # (displacement, velocity)
     n = ds.sizes["attractor_id"]
     colours = _attractor_colours(n)
@@ -684,7 +684,7 @@ def plot_basins(ds, *, fig=None) -> Figure:
                     bbox=dict(boxstyle="circle,pad=0.15", fc="black", ec="none", alpha=0.6))
     ax.set_xlabel("initial tip displacement $W_0$ (mm)")
     ax.set_ylabel("initial tip velocity $W'_0$ (m/s)")
-    ax.set_title(f"basins: {ds.sizes['displacement']} x {ds.sizes['velocity']} initial "
+    ax.set_title(f"basins: {ds.sizes['displacement_m']} x {ds.sizes['velocity_m_s']} initial "
                  f"conditions,\n{n} attractor{'s' if n != 1 else ''}", fontsize="small")
     handles = [Patch(color=colours[a], label=_attractor_label(ds, a))
                for a in range(min(n, MAX_ATTRACTOR_COLOURS))]
@@ -754,7 +754,7 @@ def plot_sensitivity(ds, *, fig=None) -> Figure:
     """
     kind = ds.attrs.get("sensitivity", "?")
     values = [str(v) for v in ds[kind].values]
-    forces = ds["force"].values
+    forces = ds["force_n"].values
     cuts = "cut_chatter" in ds
     # an ordered parameter in viridis (colour-blind safe, dark to light); else the palette
     ordered = kind in ("friction_number", "restitution")
@@ -793,7 +793,7 @@ def plot_sensitivity(ds, *, fig=None) -> Figure:
 def _sensitivity_cuts(ax, ds, colours) -> None:
     """The cuts of a sensitivity study: steady tip amplitude against depth, one line a
     value, chatter as filled crosses, no chatter as open circles."""
-    depth = ds["depth"].values * 1e3
+    depth = ds["depth_m"].values * 1e3
     for i, colour in enumerate(colours):
         amp = ds["cut_amplitude_m"].values[i] * 1e3
         chat = ds["cut_chatter"].values[i].astype(bool)
@@ -855,7 +855,7 @@ def plot_ladder(ds, *, ax=None) -> Figure:
     physical one, one bar per gap, each labelled with its impact pattern; drawn on
     ``ax`` (a matplotlib Axes) if given, whose figure is returned."""
     rungs = [str(r) for r in ds["rung"].values]
-    gaps = ds["gap"].values
+    gaps = ds["gap_m"].values
     if ax is None:
         fig = Figure(figsize=(10, 5.2), layout="constrained")
         ax = fig.subplots()

@@ -49,9 +49,9 @@ def plot_modes(spec, cavity: bool, n_modes: int, title: str = "", *, fig=None) -
         shp.plot(nodes * mm, shapes[:, i], color=series_colour(i),
                  label=f"mode {i + 1}: {freqs[i]:.1f} Hz")
     shp.axhline(0.0, color="0.6", lw=0.6)
-    points = [("ball", spec.ball_position, bar_colour("ball"))] if cavity and spec.ball else []
+    points = [("ball", spec.ball_position_m, bar_colour("ball"))] if cavity and spec.ball else []
     if spec.tmd is not None:
-        points.append(("absorber", spec.absorber_position, bar_colour("tmd")))
+        points.append(("absorber", spec.absorber_position_m, bar_colour("tmd")))
     for name, z, colour in points:
         shp.axvline(z * mm, color=colour, ls=":", lw=1.0)
         shp.annotate(name, (z * mm, shp.get_ylim()[1]), color=colour, fontsize=8,

@@ -36,7 +36,7 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     if overlay is not None:
         for d in overlay["direction"].values:
             sel = overlay.sel(direction=d)
-            w = sel["tip_displacement"].values * 1e3
+            w = sel["tip_displacement_m"].values * 1e3
             xx = np.broadcast_to(sel["value"].values[:, None], w.shape)
             ok = np.isfinite(w)
             top.scatter(xx[ok], w[ok], s=6, color=DARK_GREY, lw=0, rasterized=True, zorder=5)

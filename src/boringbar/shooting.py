@@ -113,7 +113,7 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
     harmonic forcing."""
     if not isinstance(forcing, Harmonic):
         raise ParameterError(f"forcing = {forcing!r} must be Harmonic for shooting")
-    omega = forcing.omega(system.reference_frequency)
+    omega = forcing.omega(system.reference_frequency_rad_s)
     p = pack(system, omega, forcing.amplitude_n, 1e-6)
     bar = system.bar
     n = bar.n_modes
@@ -123,7 +123,7 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
                 np.asarray(bar.psi_damper, float), system.kind == "ball", system.kind,
                 float(p[L.BALL_MASS]), float(p[L.HALF_GAP]), float(p[L.RESTITUTION]),
                 float(p[L.FRICTION]), float(p[L.STATIC_FRICTION]), float(p[L.REACTION]),
-                float(p[L.V_IMPACT]), float(p[L.M_EFF]), float(system.reference_frequency),
+                float(p[L.V_IMPACT]), float(p[L.M_EFF]), float(system.reference_frequency_rad_s),
                 (float(p[L.TMD_MASS]), float(p[L.TMD_K]), float(p[L.TMD_C])),
                 np.asarray(bar.psi_absorber, float))
 

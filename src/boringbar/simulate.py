@@ -214,9 +214,9 @@ class Run:
             "preset": sys.preset,
             "readings": list(sys.readings),
             "integrator": self.integrator,
-            "natural_frequency_hz": sys.reference_frequency / (2 * math.pi),
+            "natural_frequency_hz": sys.reference_frequency_rad_s / (2 * math.pi),
             "forcing_frequency_hz": self.omega_rad_s / (2 * math.pi),
-            "ratio": self.omega_rad_s / sys.reference_frequency,
+            "ratio": self.omega_rad_s / sys.reference_frequency_rad_s,
             "force_n": getattr(self.forcing, "amplitude_n", None),
             "rms_tip_m": m["rms_tip_m"],
             "max_abs_tip_m": m["max_abs_tip_m"],
@@ -296,20 +296,21 @@ class Run:
         import xarray as xr  # here: a run needs xarray only to be written
         h = self.history
         aux = "y" if self.system.kind in ("ball", "locked") else "absorber_stroke"
+        time = ("time_s",)
         ds = xr.Dataset(
             {
-                "tip_displacement": ("time", h[:, 1], {"units": "m"}),
-                "tip_velocity": ("time", h[:, 2], {"units": "m/s"}),
-                aux: ("time", h[:, 3], {"units": "m"}),
-                f"{aux}_velocity": ("time", h[:, 4], {"units": "m/s"}),
-                "force": ("time", h[:, 5], {"units": "N"}),
+                "tip_displacement_m": (time, h[:, 1], {"units": "m"}),
+                "tip_velocity_m_s": (time, h[:, 2], {"units": "m/s"}),
+                f"{aux}_m": (time, h[:, 3], {"units": "m"}),
+                f"{aux}_velocity_m_s": (time, h[:, 4], {"units": "m/s"}),
+                "force_n": (time, h[:, 5], {"units": "N"}),
             },
-            coords={"time": ("time", h[:, 0], {"units": "s"})},
+            coords={"time_s": (time, h[:, 0], {"units": "s"})},
             attrs={"config": json.dumps(self.config(), default=_plain),
                    "summary": json.dumps(self.summary(), default=_plain)},
         )
         if self.impacts.size:
-            ds["impact_time"] = ("impact", self.impacts[:, 0], {"units": "s"})
+            ds["impact_time_s"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
         return ds
 
@@ -375,7 +376,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
         p[L.STATIC_FRICTION] = d.friction_force_n * d.friction.static_ratio
         p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
         p[L.M_EFF] = meff
-        ref = omega if omega > 0 else bar.natural_frequency
+        ref = omega if omega > 0 else bar.natural_frequency_rad_s
         p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap_m / 2
         # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
         p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force_n * dt / meff
@@ -457,7 +458,7 @@ def check_step(system: System, omega: float, dt: float, name: str = "dt_s") -> N
     """The step must resolve the forcing period and the highest retained mode
     (``name``: how the caller calls dt)."""
     check_positive(name, dt, "s")
-    periods = [2 * math.pi / w for w in system.bar.omegas]
+    periods = [2 * math.pi / w for w in system.bar.omegas_rad_s]
     if omega > 0:
         periods.append(2 * math.pi / omega)
     if isinstance(system.damper, TunedMassDamper):
@@ -572,7 +573,8 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     n_steps = check_steps(duration, dt)
     record_every = (max(1, n_steps // HISTORY_ROWS) if record_every is None
                     else check_int("record_every", record_every, 0, MAX_STEPS))
-    omega = 2 * math.pi / forcing.tau_s if cutting else forcing.omega(system.reference_frequency)
+    omega = (2 * math.pi / forcing.tau_s if cutting
+             else forcing.omega(system.reference_frequency_rad_s))
     check_step(system, omega, dt)
     if cutting:
         check_delay(forcing.rpm, forcing.revolutions, dt)
@@ -614,7 +616,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
         p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
         p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
         buf = np.zeros((check_delay(forcing.rpm, forcing.revolutions, dt), 2))
-        period = 2 * math.pi / system.reference_frequency
+        period = 2 * math.pi / system.reference_frequency_rad_s
     else:
         p = pack(system, omega, forcing.amplitude_n, dt)
         buf = None

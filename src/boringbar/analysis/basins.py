@@ -148,7 +148,7 @@ def basin_grid(name: str, spec) -> np.ndarray:
 
 
 def check_cells(n_displacement: int, n_velocity: int,
-                names: tuple[str, str] = ("displacement", "velocity")) -> int:
+                names: tuple[str, str] = ("displacement_m", "velocity_m_s")) -> int:
     """The cells of a basin grid, n_displacement x n_velocity: at most
     :data:`MAX_BASIN_CELLS`, else ParameterError naming both axes."""
     cells = int(n_displacement) * int(n_velocity)
@@ -364,9 +364,9 @@ def _dataset(system: System, forcing: Harmonic, cells: list[_Cell], context: dic
     """The Dataset of one operating point's cells (grid order), grouped."""
     o = context["options"]
     w0, v0, initials = context["w0"], context["v0"], context["initials"]
-    label, leaders = group(cells, forcing.omega(system.reference_frequency), o.tolerance)
+    label, leaders = group(cells, forcing.omega(system.reference_frequency_rad_s), o.tolerance)
     shape = (len(w0), len(v0))
-    grid = ("displacement", "velocity")
+    grid = ("displacement_m", "velocity_m_s")
     sig = _padded([c.centres for c in cells], MAX_K).reshape(*shape, MAX_K, 2)
     reps = [cells[j] for j in leaders]
     poincare = _padded([c.strobe for c in reps], max(len(c.strobe) for c in reps))
@@ -398,9 +398,10 @@ def _dataset(system: System, forcing: Harmonic, cells: list[_Cell], context: dic
                                       {"units": "m/s"}),
     }
     coords = {
-        "displacement": ("displacement", w0, {"units": "m",
+        "displacement_m": ("displacement_m", w0, {"units": "m",
                                               "long_name": "initial tip displacement"}),
-        "velocity": ("velocity", v0, {"units": "m/s", "long_name": "initial tip velocity"}),
+        "velocity_m_s": ("velocity_m_s", v0, {"units": "m/s",
+                                              "long_name": "initial tip velocity"}),
         "attractor_id": np.arange(len(leaders)),
     }
     return xr.Dataset(data, coords=coords, attrs={
@@ -430,9 +431,9 @@ def _stack(parts: list, context: dict):
     ds = ds.assign_coords({
         "case": [op.label for op in ops],
         "bar": ("case", [op.case.bar for op in ops]),
-        "gap": ("case", np.array([op.case.gap_m for op in ops]), {"units": "m"}),
+        "gap_m": ("case", np.array([op.case.gap_m for op in ops]), {"units": "m"}),
         "friction": ("case", [op.case.friction for op in ops]),
-        "force": ("case", np.array([op.forcing.amplitude_n for op in ops]), {"units": "N"}),
+        "force_n": ("case", np.array([op.forcing.amplitude_n for op in ops]), {"units": "N"}),
         "ratio": ("case", np.array([op.forcing.ratio for op in ops])),
     })
     ds.attrs = {k: v for k, v in parts[0].attrs.items() if k not in ("system", "forcing")}
@@ -476,7 +477,7 @@ def basins(system: System, options: BasinOptions | None = None, *,
     finish.  The results are the same, bit for bit, whatever the batch, the
     executor and its workers.
 
-    Returns an xarray Dataset with, per cell (dims displacement, velocity):
+    Returns an xarray Dataset with, per cell (dims displacement_m, velocity_m_s):
     ``attractor`` id, ``rms_tip_m``, ``pattern``, ``period`` (0: non-periodic),
     ``impacts_per_cycle`` and the final Poincare signature ``signature_tip_m``,
     ``signature_tip_velocity_m_s`` (dim point: the k centres, NaN beyond k; for a
@@ -561,11 +562,12 @@ def summary(ds) -> dict:
     return {
         "preset": ds.attrs.get("preset"),
         "forcing": json.loads(ds.attrs["forcing"]),
-        "grid": {"displacement_m": [float(ds["displacement"].values[0]),
-                                    float(ds["displacement"].values[-1]),
-                                    int(ds.sizes["displacement"])],
-                 "velocity_m_s": [float(ds["velocity"].values[0]),
-                                  float(ds["velocity"].values[-1]), int(ds.sizes["velocity"])]},
+        "grid": {"displacement_m": [float(ds["displacement_m"].values[0]),
+                                    float(ds["displacement_m"].values[-1]),
+                                    int(ds.sizes["displacement_m"])],
+                 "velocity_m_s": [float(ds["velocity_m_s"].values[0]),
+                                  float(ds["velocity_m_s"].values[-1]),
+                                  int(ds.sizes["velocity_m_s"])]},
         "duration_s": ds.attrs.get("duration_s"),
         "workers": ds.attrs.get("workers"),
         "wall_time_s": ds.attrs.get("wall_time_s"),

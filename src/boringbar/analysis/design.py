@@ -84,7 +84,7 @@ def _tmd(system: System, values: dict) -> TunedMassDamper:
     damping ratio zeta_a = c / (2 m omega_a) (the absorber's own)."""
     d = system.damper
     m = float(values.get("tmd_mass_kg", d.mass_kg))
-    wn = system.bar.natural_frequency
+    wn = system.bar.natural_frequency_rad_s
     f = float(values.get("tmd_frequency_ratio", math.sqrt(d.stiffness_n_m / d.mass_kg) / wn))
     wa = f * wn
     zeta = float(values.get("tmd_damping_ratio", d.damping_n_s_m / (2 * d.mass_kg * math.sqrt(
@@ -334,7 +334,7 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
         y = np.array(run_points(rms_runs, tasks, execution=execution))
         return {"x": x, "quantity": "rms_tip_m", "force_n": force, "bar": options.bar,
                 "curves": dict(zip(bars, y, strict=True))}
-    wn = bars["bare bar"].bar.natural_frequency
+    wn = bars["bare bar"].bar.natural_frequency_rad_s
     w = np.linspace(0.8 * wn, 1.2 * wn, 801)
     curves = {k: np.abs(system_receptance(s, w))
               for k, s in bars.items()}

@@ -56,13 +56,13 @@ def _min_depth(task) -> float:
                integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
                execution=Execution("serial"))
     # no chatter up to max_depth_mm at any speed: the search knows only "at least that"
-    return min(float(ds["min_chatter_free_depth"].values[0]), options.max_depth_mm * 1e-3)
+    return min(float(ds["min_chatter_free_depth_m"].values[0]), options.max_depth_mm * 1e-3)
 
 
 def frf_objective(system: System, objective: str) -> float:
     """The FRF peak |G| (m/N), or -min Re G (m/N), of a linear bar, on FRF_LINES
     lines over FRF_SPAN x the host's f1, refined by a parabola at the extreme."""
-    wn = system.bar.natural_frequency
+    wn = system.bar.natural_frequency_rad_s
     w = np.linspace(FRF_SPAN[0] * wn, FRF_SPAN[1] * wn, FRF_LINES)
     g = system_receptance(system, w)
     y = np.abs(g) if objective == "frf_peak" else -g.real

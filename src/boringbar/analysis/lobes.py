@@ -246,7 +246,7 @@ def lobe_speeds(frequencies_hz, numbers: tuple[float, float] = LOBE_NUMBERS,
 
 def default_speeds(cases: list[Case]) -> tuple[float, ...]:
     """:func:`lobe_speeds` of the cases' host bars (f1 of each, without its damper)."""
-    return lobe_speeds([c.system.reference_frequency / (2 * math.pi) for c in cases])
+    return lobe_speeds([c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases])
 
 
 def cut(case: Case, rpm: float, depth: float, options: LobesOptions,
@@ -258,9 +258,9 @@ def cut(case: Case, rpm: float, depth: float, options: LobesOptions,
     c = run.cutting
     ball = case.system.kind == "ball"
     return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
-            "amplitude": c["amplitude_m"],
+            "amplitude_m": c["amplitude_m"],
             "impacts": run.metrics["impacts_total"] if ball else -1,
-            "max_rel_disp": run.metrics["max_abs_aux_all_m"] if ball else math.nan,
+            "max_rel_disp_m": run.metrics["max_abs_aux_all_m"] if ball else math.nan,
             "first_zero": math.nan if c["first_zero_time_s"] is None
             else c["first_zero_time_s"]}
 
@@ -387,9 +387,9 @@ def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:
     shape = (len(plan.context["cases"]), len(plan.context["options"].rpm), top)
     arrays = {"zero": np.full(shape, NOT_RUN, dtype=np.int8),
               "bounded": np.full(shape, NOT_RUN, dtype=np.int8),
-              "amplitude": np.full(shape, np.nan), "first_zero": np.full(shape, np.nan),
+              "amplitude_m": np.full(shape, np.nan), "first_zero": np.full(shape, np.nan),
               "impacts": np.full(shape, -1, dtype=np.int64),
-              "max_rel_disp": np.full(shape, np.nan)}
+              "max_rel_disp_m": np.full(shape, np.nan)}
     n_runs = 0
     for (i, j), done in zip(plan.points, results, strict=True):
         for k, res in done.items():
@@ -406,7 +406,7 @@ def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
                bounded_fraction: float) -> dict:
     """The lobes Dataset's data variables from the per-run arrays ``a`` (:func:`_grid`)
     and the per-column limits."""
-    dims = ("case", "rpm", "depth")
+    dims = ("case", "rpm", "depth_m")
     codes = "1 stable, 0 chatter, -1 not run"
     return {
         "verdict": (dims, a["zero"], {"long_name": "published criterion: force reaches zero",
@@ -414,17 +414,17 @@ def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
         "verdict_bounded": (dims, a["bounded"], {
             "long_name": f"bounded chatter: amplitude > {bounded_fraction:g} h_m, or force "
                          "reaches zero", "codes": codes}),
-        "amplitude": (dims, a["amplitude"], {"units": "m"}),
-        "first_zero_time": (dims, a["first_zero"], {"units": "s"}),
+        "amplitude_m": (dims, a["amplitude_m"], {"units": "m"}),
+        "first_zero_time_s": (dims, a["first_zero"], {"units": "s"}),
         "impacts": (dims, a["impacts"], {
             "long_name": "counted ball impacts over the run (-1: no ball or not run)"}),
-        "max_rel_disp": (dims, a["max_rel_disp"], {
+        "max_rel_disp_m": (dims, a["max_rel_disp_m"], {
             "units": "m", "long_name": "largest |y|, the ball's excursion from the cavity "
                                        "centre, over the run (ball cases)"}),
-        "limit_depth": (("case", "rpm"), limit, {
+        "limit_depth_m": (("case", "rpm"), limit, {
             "units": "m", "long_name": "limiting (chatter-free) depth of cut"}),
-        "first_unstable_depth": (("case", "rpm"), first_unstable, {"units": "m"}),
-        "min_chatter_free_depth": (("case",), np.nanmin(np.where(
+        "first_unstable_depth_m": (("case", "rpm"), first_unstable, {"units": "m"}),
+        "min_chatter_free_depth_m": (("case",), np.nanmin(np.where(
             np.isnan(limit), np.inf, limit), axis=1), {"units": "m"}),
     }
 
@@ -447,9 +447,9 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
         coords={
             "case": [c.label for c in cases],
             "rpm": ("rpm", rpm, {"units": "rev/min"}),
-            "depth": ("depth", depths, {"units": "m"}),
+            "depth_m": ("depth_m", depths, {"units": "m"}),
             "bar": ("case", [c.bar for c in cases]),
-            "gap": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
+            "gap_m": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
         },
         attrs={
@@ -497,7 +497,7 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     ``execution``: where the (case, rpm) columns run (default a thread per core);
     ``progress(done, total)`` as columns finish.
 
-    Returns an xarray Dataset: per (case, rpm, depth) the verdict of every grid
+    Returns an xarray Dataset: per (case, rpm, depth_m) the verdict of every grid
     point that was run under both criteria (1 stable, 0 chatter, -1 not run),
     the steady amplitude and the time of the first zero of the force; per
     (case, rpm) the limiting (chatter-free) depth and the first unstable depth
@@ -527,12 +527,12 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
         if case.system.kind in ("solid", "tmd", "locked"):
             on_grid[i] = host_grid[i]
             curve[i] = limit_at_speeds(case.system, fine, kr)
-    ds["analytic_limit"] = (("case", "rpm"), on_grid, {"units": "m"})
-    ds["host_analytic_limit"] = (("case", "rpm"), host_grid, {
+    ds["analytic_limit_m"] = (("case", "rpm"), on_grid, {"units": "m"})
+    ds["host_analytic_limit_m"] = (("case", "rpm"), host_grid, {
         "units": "m", "long_name": "analytic limit of the linear host (bare cavity bar for "
                                    "the free ball)"})
-    ds.coords["rpm_fine"] = ("rpm_fine", fine, {"units": "rev/min"})
-    ds["analytic_curve"] = (("case", "rpm_fine"), curve, {"units": "m"})
+    ds.coords["fine_rpm"] = ("fine_rpm", fine, {"units": "rev/min"})
+    ds["analytic_curve_m"] = (("case", "fine_rpm"), curve, {"units": "m"})
 
 
 def summary(ds) -> dict:
@@ -541,19 +541,19 @@ def summary(ds) -> dict:
     for i, label in enumerate(ds["case"].values):
         out.append({
             "case": str(label),
-            "min_chatter_free_depth_m": _num(ds["min_chatter_free_depth"].values[i]),
+            "min_chatter_free_depth_m": _num(ds["min_chatter_free_depth_m"].values[i]),
             "speeds": [{"rpm": float(r),
-                        "limit_depth_m": _num(ds["limit_depth"].values[i, j]),
-                        "first_unstable_depth_m": _num(ds["first_unstable_depth"].values[i, j]),
-                        **({"analytic_limit_m": _num(ds["analytic_limit"].values[i, j]),
+                        "limit_depth_m": _num(ds["limit_depth_m"].values[i, j]),
+                        "first_unstable_depth_m": _num(ds["first_unstable_depth_m"].values[i, j]),
+                        **({"analytic_limit_m": _num(ds["analytic_limit_m"].values[i, j]),
                             "host_analytic_limit_m":
-                                _num(ds["host_analytic_limit"].values[i, j])}
-                           if "analytic_limit" in ds else {})}
+                                _num(ds["host_analytic_limit_m"].values[i, j])}
+                           if "analytic_limit_m" in ds else {})}
                        for j, r in enumerate(ds["rpm"].values)],
         })
     return {"method": ds.attrs["method"], "criterion": ds.attrs["criterion"],
             "runs": int(ds.attrs["runs"]), "wall_time_s": float(ds.attrs["wall_time_s"]),
-            "min_chatter_free_depth_m": _num(np.nanmin(ds["min_chatter_free_depth"].values)),
+            "min_chatter_free_depth_m": _num(np.nanmin(ds["min_chatter_free_depth_m"].values)),
             "cases": out}
 
 
@@ -563,12 +563,12 @@ def example_points(ds) -> list[tuple[str, float, float]]:
     chatter-free depth (the stable one at the speed of the largest limit if the
     minimum is 0; only a stable one if nothing chattered)."""
     rpm = ds["rpm"].values
-    limit = ds["limit_depth"].values[0]
-    first = ds["first_unstable_depth"].values[0]
+    limit = ds["limit_depth_m"].values[0]
+    first = ds["first_unstable_depth_m"].values[0]
     if not np.isfinite(limit).any():  # no chatter up to the deepest cut tried
         run = ds["verdict"].values[0] >= 0
         j = len(rpm) // 2
-        return [("stable", float(rpm[j]), float(ds["depth"].values[run[j]].max()))]
+        return [("stable", float(rpm[j]), float(ds["depth_m"].values[run[j]].max()))]
     j = int(np.nanargmin(limit))
     points = [("unstable", float(rpm[j]), float(first[j]))]
     if limit[j] <= 0:
@@ -587,14 +587,14 @@ def _example_run(case: Case, rpm: float, depth: float, options: LobesOptions,
                    record_every=max(1, n_steps // rows), integrator=integration.integrator,
                    steady_fraction=integration.steady_fraction)
     h = run.to_xarray()
-    h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
+    h = h.drop_vars([v for v in ("impact_time_s", "impact_wall") if v in h])
     c = run.cutting
-    return h.assign_coords(rpm=rpm, depth=depth, chatter=bool(c["chatter"]),
+    return h.assign_coords(rpm=rpm, depth_m=depth, chatter=bool(c["chatter"]),
                            bounded_chatter=bool(c["bounded_chatter"]),
-                           first_zero_time=math.nan if c["first_zero_time_s"] is None
+                           first_zero_time_s=math.nan if c["first_zero_time_s"] is None
                            else float(c["first_zero_time_s"]),
-                           mean_force=float(run.forcing.mean_force_n),
-                           static_deflection=float(c["static_deflection_m"]))
+                           mean_force_n=float(run.forcing.mean_force_n),
+                           static_deflection_m=float(c["static_deflection_m"]))
 
 
 def examples(ds, case: Case, options: LobesOptions | None = None, *,
@@ -602,7 +602,7 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     """The :func:`example_points` of the lobes Dataset ``ds`` (of ``case``, its first
     case, cut as ``options`` and ``integration`` say: those of the lobes) rerun with
     history of about ``rows`` rows, not stopped at the first zero of the force:
-    one Dataset with dims (example, time)."""
+    one Dataset with dims (example, time_s)."""
     options = options or LobesOptions()
     integration = integration or Integration()
     points = example_points(ds)
@@ -611,10 +611,10 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     exds = xr.concat(parts, dim=pd.Index([p[0] for p in points], name="example"),
                      coords="all", join="outer", combine_attrs="drop")
     exds["rpm"].attrs["units"] = "rev/min"
-    for name in ("depth", "static_deflection"):
+    for name in ("depth_m", "static_deflection_m"):
         exds[name].attrs["units"] = "m"
-    exds["first_zero_time"].attrs["units"] = "s"
-    exds["mean_force"].attrs.update(units="N", long_name="Kr b h_m")
+    exds["first_zero_time_s"].attrs["units"] = "s"
+    exds["mean_force_n"].attrs.update(units="N", long_name="Kr b h_m")
     exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
                   "case": str(case.label), "bar": case.bar, "gap_m": case.gap_m,
                   "friction": case.friction, "preset": case.system.preset,
@@ -629,10 +629,10 @@ def examples_summary(exds) -> list[dict]:
     """JSON-able list of the examples of :func:`examples`."""
     return [{"example": str(e), "case": exds.attrs["case"],
              "rpm": float(exds["rpm"].values[k]),
-             "depth_m": float(exds["depth"].values[k]),
+             "depth_m": float(exds["depth_m"].values[k]),
              "chatter": bool(exds["chatter"].values[k]),
              "bounded_chatter": bool(exds["bounded_chatter"].values[k]),
-             "first_zero_time_s": float(exds["first_zero_time"].values[k])}
+             "first_zero_time_s": float(exds["first_zero_time_s"].values[k])}
             for k, e in enumerate(exds["example"].values)]
 
 
@@ -648,11 +648,11 @@ def compare_methods(scan, search) -> list[dict]:
     diffs = []
     for i, label in enumerate(scan["case"].values):
         for j, r in enumerate(scan["rpm"].values):
-            a = float(scan["limit_depth"].values[i, j])
-            b = float(search["limit_depth"].values[i, j])
+            a = float(scan["limit_depth_m"].values[i, j])
+            b = float(search["limit_depth_m"].values[i, j])
             if not (a == b or (math.isnan(a) and math.isnan(b))):
                 v = scan["verdict"].values[i, j]
-                d = scan["depth"].values
+                d = scan["depth_m"].values
                 lower = [float(d[k]) for k in range(len(d))
                          if v[k] == CHATTER and (math.isnan(b) or d[k] <= b)]
                 diffs.append({"case": str(label), "rpm": float(r), "scan_limit_m": a,

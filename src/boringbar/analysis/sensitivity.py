@@ -203,7 +203,7 @@ def sensitivity_cut(case: Case, cuts: Cuts, depth_m: float, integration: Integra
 
 
 def assemble(plan: Plan, results: list, attrs: dict | None = None):
-    """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth), with the
+    """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth_m), with the
     varied parameter as the leading dimension, named after its kind."""
     kind, values, labels = plan.extra["kind"], plan.extra["values"], plan.extra["labels"]
     cases = plan.context["cases"]
@@ -230,12 +230,12 @@ def _cuts_dataset(plan: Plan, results: list, attrs: dict | None):
     cases, cuts, integ = ctx["cases"], ctx["cuts"], ctx["integration"]
     shape = (len(cases), len(cuts.depths_m))
     units = {"amplitude_m": "m", "max_force_n": "N", "first_zero_time_s": "s"}
-    data = {k: (("case", "depth"), np.array([r[k] for r in results]).reshape(shape),
+    data = {k: (("case", "depth_m"), np.array([r[k] for r in results]).reshape(shape),
                 {"units": units[k]} if k in units else {})
             for k in results[0]}
     return xr.Dataset(
         data,
-        coords={"depth": ("depth", np.asarray(cuts.depths_m, dtype=float), {"units": "m"})},
+        coords={"depth_m": ("depth_m", np.asarray(cuts.depths_m, dtype=float), {"units": "m"})},
         attrs={"title": "boringbar sensitivity (cuts)", "boringbar_version": __version__,
                "integrator": integ.integrator,
                "integrator_used": resolved_integrators(integ.integrator,
@@ -263,7 +263,7 @@ def sensitivity(options: SensitivityOptions | None = None, *, preset: str = "phy
     Dataset over forces x ratios with a leading dimension named after the kind
     holding the values (for "initial": their labels, with ``tip_displacement_m``,
     ``tip_velocity_m_s``, ``ball_position_m``, ``ball_velocity_m_s`` coordinates).  Cutting:
-    a Dataset over (kind, depth) with the chatter verdict (the force reached
+    a Dataset over (kind, depth_m) with the chatter verdict (the force reached
     zero), bounded chatter, steady amplitude (m), first zero time (s) and peak
     force (N) of each full-length cut.
     """
@@ -295,7 +295,7 @@ def summary(ds) -> dict:
     values = [v.item() if isinstance(v, np.generic) else v for v in ds[kind].values]
     harmonic = []
     for i, value in enumerate(values):
-        for j, force in enumerate(ds["force"].values):
+        for j, force in enumerate(ds["force_n"].values):
             harmonic.append({"value": value, "force_n": float(force),
                              "ratio": ds["ratio"].values.tolist(),
                              "rms_tip_m": ds["rms_tip_m"].values[i, j].tolist(),
@@ -308,7 +308,7 @@ def summary(ds) -> dict:
                                 "ball_velocity_m_s")} for i in range(len(labels))]
     if "cut_chatter" in ds:
         summary["cuts"] = {
-            "rpm": ds.attrs["cut_rpm"], "depth_m": ds["depth"].values.tolist(),
+            "rpm": ds.attrs["cut_rpm"], "depth_m": ds["depth_m"].values.tolist(),
             "results": [{"value": value,
                          **{k: ds[f"cut_{k}"].values[i].tolist()
                             for k in ("chatter", "bounded_chatter", "amplitude_m",

@@ -165,7 +165,7 @@ def tmd_window(system: System) -> tuple[float, float]:
     damped resonance a peak may also sit a little beyond its undamped frequency (at
     most 0.6 % at the steel example's mass ratio 0.18, 2.3 % at 0.88:
     tests/test_defaults.py), inside the margin."""
-    w = natural_frequencies(*linear_host(system))[:2] / system.reference_frequency
+    w = natural_frequencies(*linear_host(system))[:2] / system.reference_frequency_rad_s
     return float(w[0]) * (1.0 - PEAK_MARGIN), float(w[1]) * (1.0 + PEAK_MARGIN)
 
 
@@ -286,7 +286,7 @@ def _point(run) -> dict:
 
 
 def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
-    """The sweep Dataset, dims (case, force, ratio), from the points' results in plan
+    """The sweep Dataset, dims (case, force_n, ratio), from the points' results in plan
     order; ``attrs`` go after the configuration's."""
     ctx = plan.context
     cases, o, integ = ctx["cases"], ctx["options"], ctx["integration"]
@@ -300,20 +300,20 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
             pattern[ijk] = r["pattern"]
     units = {"rms_tip_m": "m", "max_abs_tip_m": "m", "max_abs_rel_disp_m": "m",
              "impacts_per_cycle": "1/period", "energy_balance_relative": "1"}
-    dims = ("case", "force", "ratio")
+    dims = ("case", "force_n", "ratio")
     data = {k: (dims, v, {"units": units[k]}) for k, v in out.items()}
     data["pattern"] = (dims, pattern.astype(str))
     data["natural_frequency_hz"] = (("case",), np.array(
-        [c.system.reference_frequency / (2 * math.pi) for c in cases]), {"units": "Hz"})
+        [c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases]), {"units": "Hz"})
     return xr.Dataset(
         data,
         coords={
             "case": [c.label for c in cases],
-            "force": ("force", np.array(o.forces_n), {"units": "N"}),
+            "force_n": ("force_n", np.array(o.forces_n), {"units": "N"}),
             "ratio": ("ratio", np.array(o.ratios),
                       {"long_name": "Omega / omega_n of the host bar"}),
             "bar": ("case", [c.bar for c in cases]),
-            "gap": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
+            "gap_m": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
             "integrator": ("case", ctx["integrators"],
                            {"long_name": "the integrator of the case's runs"}),
@@ -348,7 +348,7 @@ def sweep(cases: list[Case], options: SweepOptions | None = None, *,
     (:class:`~boringbar.execute.Execution`; default a thread per core);
     ``progress(done, total)`` is called as points finish.
 
-    Returns an xarray Dataset with dims (case, force, ratio): ``rms_tip_m``,
+    Returns an xarray Dataset with dims (case, force_n, ratio): ``rms_tip_m``,
     ``max_abs_tip_m``, ``max_abs_rel_disp_m``, ``impacts_per_cycle``, ``pattern``,
     ``energy_balance_relative``; the configuration in its attributes.  The results
     are the same, bit for bit, whatever the batch size and the executor.
@@ -364,11 +364,11 @@ def summary(ds) -> dict:
     """JSON-able summary of a sweep (what ``boringbar sweep --json`` prints)."""
     cases = []
     for i, label in enumerate(ds["case"].values):
-        for j, force in enumerate(ds["force"].values):
+        for j, force in enumerate(ds["force_n"].values):
             cases.append({
                 "case": str(label),
                 "bar": str(ds["bar"].values[i]),
-                "gap_m": None if np.isnan(ds["gap"].values[i]) else float(ds["gap"].values[i]),
+                "gap_m": None if np.isnan(ds["gap_m"].values[i]) else float(ds["gap_m"].values[i]),
                 "friction": str(ds["friction"].values[i]),
                 "integrator": (str(ds["integrator"].values[i]) if "integrator" in ds.coords
                                else ds.attrs.get("integrator")),  # files before "auto"

@@ -316,7 +316,7 @@ def check_dt(args, systems, ratio: float = 0.0) -> None:
     """--dt-s resolves the highest mode of every system and the forcing at ``ratio``
     (the largest Omega/omega_n; 0: only the modes)."""
     for system in systems:
-        check_step(system, ratio * system.reference_frequency, args.dt_s, "--dt-s")
+        check_step(system, ratio * system.reference_frequency_rad_s, args.dt_s, "--dt-s")
 
 
 def check_workers(workers, name: str = "--workers") -> None:

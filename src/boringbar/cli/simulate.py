@@ -72,7 +72,7 @@ def cmd_simulate(args) -> Outcome:
     check_dt(args, [system], getattr(forcing, "ratio", 0.0))
     if isinstance(forcing, Harmonic):
         check_steady(args.duration_s, getattr(args, "steady_fraction", STEADY_FRACTION),
-                     2 * math.pi / forcing.omega(system.reference_frequency), "--duration-s")
+                     2 * math.pi / forcing.omega(system.reference_frequency_rad_s), "--duration-s")
     initial = initial_conditions(args, [gap] if bar == "ball" else [])
     run = simulate(system, forcing, duration_s=args.duration_s, dt_s=args.dt_s, initial=initial,
                    record_every=record_every, integrator=args.integrator)

@@ -135,12 +135,12 @@ def short_pattern(name: str) -> str:
 
 def _sweep_text(ds) -> str:
     heads = []
-    for label, bar, gap, fr in zip(ds["case"].values, ds["bar"].values, ds["gap"].values,
+    for label, bar, gap, fr in zip(ds["case"].values, ds["bar"].values, ds["gap_m"].values,
                                    ds["friction"].values, strict=True):
         heads.append(f"ball {gap * 1e3:g}/{fr}" if bar == "ball" else str(label))
     width = max(14, *(len(h) + 2 for h in heads))
     lines = []
-    for j, force in enumerate(ds["force"].values):
+    for j, force in enumerate(ds["force_n"].values):
         lines.append(f"F0 = {force:g} N: tip RMS (mm) [pattern]; ball columns: gap mm/friction")
         lines.append("ratio ".rjust(8) + "".join(h.rjust(width) for h in heads))
         for k, ratio in enumerate(ds["ratio"].values):
@@ -214,17 +214,17 @@ def _lobe_options(args, cases) -> LobesOptions:
 
 def _lobes_text(ds) -> str:
     lines = []
-    analytic = ds["analytic_limit"].values if "analytic_limit" in ds else None
-    depths = ds["depth"].values
+    analytic = ds["analytic_limit_m"].values if "analytic_limit_m" in ds else None
+    depths = ds["depth_m"].values
     chosen = ds["verdict" if ds.attrs["criterion"] == "zero" else "verdict_bounded"].values
 
     def mm(v: float) -> str:
         return f"{v * 1e3:.4g}" if math.isfinite(v) else "-"  # 1 % of a 0.03 mm limit
 
     for i, label in enumerate(ds["case"].values):
-        limit = ds["limit_depth"].values[i]
-        first = ds["first_unstable_depth"].values[i]
-        mcf = float(ds["min_chatter_free_depth"].values[i])
+        limit = ds["limit_depth_m"].values[i]
+        first = ds["first_unstable_depth_m"].values[i]
+        mcf = float(ds["min_chatter_free_depth_m"].values[i])
         at = (f" at {ds['rpm'].values[int(np.nanargmin(limit))]:g} rpm"
               if np.isfinite(limit).any() else "")
         lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}")

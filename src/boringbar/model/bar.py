@@ -128,18 +128,18 @@ class ModalModel:
         return len(self.mass_kg)
 
     @property
-    def omegas(self) -> np.ndarray:
+    def omegas_rad_s(self) -> np.ndarray:
         """Natural frequencies of the retained modes (rad/s)."""
         return np.sqrt(self.stiffness_n_m / self.mass_kg)
 
     @property
-    def natural_frequency(self) -> float:
+    def natural_frequency_rad_s(self) -> float:
         """First natural frequency omega_n (rad/s)."""
-        return float(self.omegas[0])
+        return float(self.omegas_rad_s[0])
 
     @property
     def natural_frequency_hz(self) -> float:
-        return self.natural_frequency / (2.0 * math.pi)
+        return self.natural_frequency_rad_s / (2.0 * math.pi)
 
     @property
     def damping_n_s_m(self) -> np.ndarray:
@@ -147,12 +147,12 @@ class ModalModel:
         return 2.0 * self.damping_ratio * np.sqrt(self.stiffness_n_m * self.mass_kg)
 
     @property
-    def tip_stiffness(self) -> float:
+    def tip_stiffness_n_m(self) -> float:
         """Static-like stiffness of the first mode at the tip, K_1 / psi_1(L)^2 (N/m)."""
         return float(self.stiffness_n_m[0] / self.psi_tip[0] ** 2)
 
     @property
-    def tip_mass(self) -> float:
+    def tip_mass_kg(self) -> float:
         """First-mode mass referred to the tip, M_1 / psi_1(L)^2 (kg)."""
         return float(self.mass_kg[0] / self.psi_tip[0] ** 2)
 
@@ -191,7 +191,7 @@ class ModalModel:
         return {
             "source": self.source,
             "n_modes": self.n_modes,
-            "natural_frequencies_hz": (self.omegas / (2 * math.pi)).tolist(),
+            "natural_frequencies_hz": (self.omegas_rad_s / (2 * math.pi)).tolist(),
             "modal_mass_kg": self.mass_kg.tolist(),
             "modal_stiffness_n_m": self.stiffness_n_m.tolist(),
             "damping_ratio": self.damping_ratio.tolist(),
@@ -308,14 +308,14 @@ class SteppedBar:
         return full[0::2, :]
 
     @property
-    def length(self) -> float:
+    def length_m(self) -> float:
         return self.sections[-1].end_m
 
     def mesh(self, points=()) -> np.ndarray:
         """Node positions: every section boundary and every requested point."""
-        brk = {0.0, self.length} | {s.end_m for s in self.sections}
+        brk = {0.0, self.length_m} | {s.end_m for s in self.sections}
         for z in points:
-            check_range("mode-shape point z", z, 0.0, self.length)
+            check_range("mode-shape point z", z, 0.0, self.length_m)
             brk.add(float(z))
         brk = np.array(sorted(brk))
         nodes = [brk[0]]
@@ -330,7 +330,7 @@ class SteppedBar:
         for s in self.sections:
             if s.start_m - 1e-12 <= z <= s.end_m + 1e-12:
                 return s
-        raise ValueError(f"z = {z!r} m lies outside the bar [0, {self.length}] m")
+        raise ValueError(f"z = {z!r} m lies outside the bar [0, {self.length_m}] m")
 
     def matrices(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Global stiffness and consistent mass matrices, the clamp's springs added
@@ -414,7 +414,7 @@ class SteppedBar:
                           psi_absorber=at(z_absorber), z_damper_m=float(z_damper),
                           z_absorber_m=float(z_absorber), source="fe",
                           info={"n_elements": len(nodes) - 1,
-                                "bar_length_m": self.length})
+                                "bar_length_m": self.length_m})
 
 
 def _element_matrices(length: float, ei: float, rho_a: float):

@@ -242,7 +242,7 @@ def den_hartog_parameters(mass_kg: float, bar: ModalModel) -> dict:
     stiffness (N/m) and damping (N s/m)."""
     mass = mass_kg
     mu = mass * bar.psi_absorber[0] ** 2 / bar.mass_kg[0]
-    wn = bar.natural_frequency
+    wn = bar.natural_frequency_rad_s
     f_opt = 1.0 / (1.0 + mu)
     zeta = math.sqrt(3.0 * mu / (8.0 * (1.0 + mu) ** 3))
     return {"mass_ratio": mu, "frequency_ratio": f_opt, "damping_ratio": zeta,
@@ -280,7 +280,7 @@ def sims_parameters(mass: float, bar) -> dict:
     zeta = math.sqrt((8.0 + 9.0 * mu - 4.0 * s) / (16.0 * (1.0 + mu)))
     y = (12.0 + 12.0 * s + 9.0 * s * s + 9.0 * math.sqrt(mu * (3 * s + 2) * (s + 2))) / 72.0
     f = math.sqrt(y) / (1.0 + mu)
-    wa = f * bar.natural_frequency
+    wa = f * bar.natural_frequency_rad_s
     return {
         "mass_ratio": mu,
         "frequency_ratio": f,

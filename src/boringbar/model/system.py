@@ -87,10 +87,10 @@ class System:
         return "locked" if self.damper.locked else "ball"
 
     @property
-    def reference_frequency(self) -> float:
+    def reference_frequency_rad_s(self) -> float:
         """omega_n (rad/s) of the host bar without the damper's mass: what
         Omega/omega_n refers to (docs/model.md, section 6)."""
-        return self.bar.natural_frequency
+        return self.bar.natural_frequency_rad_s
 
     def to_dict(self) -> dict:
         return {
@@ -275,7 +275,7 @@ def describe_modes(system: System) -> dict:
     modes' sum."""
     m = system.bar
     scale = m.psi_tip**2
-    modes = [{"frequency_hz": float(m.omegas[i] / (2 * math.pi)),
+    modes = [{"frequency_hz": float(m.omegas_rad_s[i] / (2 * math.pi)),
               "modal_mass_kg": float(m.mass_kg[i] / scale[i]),
               "modal_stiffness_n_m": float(m.stiffness_n_m[i] / scale[i]),
               "damping_ratio": float(m.damping_ratio[i]),

@@ -114,14 +114,14 @@ class SystemSpec:
     source: str = "<dict>"
 
     @property
-    def ball_position(self) -> float:
+    def ball_position_m(self) -> float:
         """z_d (m): the cavity's centre (the bar's tip if there is no cavity)."""
-        return self.cavity.position if self.cavity else self.bar.length
+        return self.cavity.position if self.cavity else self.bar.length_m
 
     @property
-    def absorber_position(self) -> float:
+    def absorber_position_m(self) -> float:
         """z_a (m): the absorber's position (the bar's tip if there is none)."""
-        return self.tmd.position if self.tmd else self.bar.length
+        return self.tmd.position if self.tmd else self.bar.length_m
 
     def stepped_bar(self, cavity: bool) -> SteppedBar:
         """The FE bar: with the cavity's section (``cavity``) or without."""
@@ -133,8 +133,8 @@ class SystemSpec:
               z_absorber_m: float | None = None) -> ModalModel:
         """The modal model of :meth:`stepped_bar`, ``n_modes`` retained, psi at the
         ball and at the absorber (``z_absorber_m`` m, default the file's)."""
-        za = self.absorber_position if z_absorber_m is None else z_absorber_m
-        model = self.stepped_bar(cavity).modal_model(n_modes, self.ball_position, za)
+        za = self.absorber_position_m if z_absorber_m is None else z_absorber_m
+        model = self.stepped_bar(cavity).modal_model(n_modes, self.ball_position_m, za)
         if len(self.damping_ratio) == 1:
             return model
         ratios = [self.damping_ratio[min(i, len(self.damping_ratio) - 1)] for i in range(n_modes)]
@@ -144,7 +144,7 @@ class SystemSpec:
         """(z m of the FE nodes, deflection shapes (nodes, n) divided by their tip
         value, frequencies Hz) of :meth:`stepped_bar`."""
         omegas, nodes, shapes = self.stepped_bar(cavity).modes(
-            n_modes, (self.ball_position, self.absorber_position))
+            n_modes, (self.ball_position_m, self.absorber_position_m))
         return nodes, shapes / shapes[-1, :], omegas / (2 * math.pi)
 
     def max_gap(self) -> float:
@@ -452,12 +452,12 @@ def _within(lo: float, hi: float, start: float, end: float, length: float) -> bo
 
 def _host_section(r: _Reader, bar: SteppedBar, lo: float, hi: float, z: float) -> Section:
     """The one section holding [lo, hi] (m), or a one-line error."""
-    if not _within(lo, hi, 0.0, bar.length, bar.length):
+    if not _within(lo, hi, 0.0, bar.length_m, bar.length_m):
         r.fail("cavity.position_mm", z * 1e3,
                f"the cavity spans [{lo * 1e3:g}, {hi * 1e3:g}] mm, outside the bar "
-               f"[0, {bar.length * 1e3:g}] mm")
+               f"[0, {bar.length_m * 1e3:g}] mm")
     for s in bar.sections:
-        if _within(lo, hi, s.start_m, s.end_m, bar.length):
+        if _within(lo, hi, s.start_m, s.end_m, bar.length_m):
             return s
     edge = next(s.end_m for s in bar.sections if lo < s.end_m < hi)
     r.fail("cavity.position_mm", z * 1e3,
@@ -470,9 +470,9 @@ def _cavity(r: _Reader, d: dict, bar: SteppedBar):
     if "cavity" not in d:
         return None, {}
     t = r.table(d["cavity"], "cavity", _CAVITY_KEYS)
-    z_mm = r.required(t, "cavity.position_mm", 0, bar.length * 1e3, lo_open=True,
+    z_mm = r.required(t, "cavity.position_mm", 0, bar.length_m * 1e3, lo_open=True,
                       hi_open=True, unit="mm")
-    length_mm = r.required(t, "cavity.length_mm", 0, bar.length * 1e3, lo_open=True,
+    length_mm = r.required(t, "cavity.length_mm", 0, bar.length_m * 1e3, lo_open=True,
                            unit="mm")
     z, length = z_mm / 1000, length_mm / 1000
     host = _host_section(r, bar, z - length / 2, z + length / 2, z)
@@ -561,7 +561,7 @@ def _tmd(r: _Reader, d: dict, bar: SteppedBar):
         return None, {}
     t = r.table(d["tmd"], "tmd", _TMD_KEYS)
     mass = r.required(t, "tmd.mass_kg", 0, 1000, lo_open=True, unit="kg")
-    z_mm = r.required(t, "tmd.position_mm", 0, bar.length * 1e3, lo_open=True, unit="mm")
+    z_mm = r.required(t, "tmd.position_mm", 0, bar.length_m * 1e3, lo_open=True, unit="mm")
     z = z_mm / 1000
     tuning = r.choice(t, "tmd.tuning", TUNINGS, default="den-hartog")
     k = r.number(t, "tmd.stiffness_n_m", 0, 1e12, lo_open=True, unit="N/m")
@@ -595,11 +595,11 @@ def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
     lo, hi = cavity.position - cavity.length / 2, cavity.position + cavity.length / 2
     out = []
     for s in bar.sections:
-        if not _within(lo, hi, s.start_m, s.end_m, bar.length):
+        if not _within(lo, hi, s.start_m, s.end_m, bar.length_m):
             out.append(s)
             continue
-        a = s.start_m if near(lo, s.start_m, bar.length) else lo
-        b = s.end_m if near(hi, s.end_m, bar.length) else hi
+        a = s.start_m if near(lo, s.start_m, bar.length_m) else lo
+        b = s.end_m if near(hi, s.end_m, bar.length_m) else hi
         if a > s.start_m:
             out.append(Section(s.start_m, a, s.diameter_m, s.inner_diameter_m))
         out.append(Section(a, b, cavity.section_diameter, cavity.section_bore))

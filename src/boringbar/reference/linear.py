@@ -119,7 +119,7 @@ def min_real_part(
     proportional to -min Re G (docs/model.md, section 3).
     """
     if omega_rad_s is None:
-        omega_rad_s = bar.natural_frequency * np.linspace(*TROUGH_BAND, TROUGH_POINTS)
+        omega_rad_s = bar.natural_frequency_rad_s * np.linspace(*TROUGH_BAND, TROUGH_POINTS)
     w = np.asarray(omega_rad_s, dtype=float)
     if w.ndim != 1 or len(w) < 3:
         raise ParameterError(f"omega_rad_s must be a 1-D grid of at least 3 points (got shape "
@@ -157,7 +157,7 @@ def minimax_real_tuning(
     host's damping and every retained mode.
     """
     x0 = sims_tuning(mass, bar) if start is None else start
-    scale = bar.tip_stiffness
+    scale = bar.tip_stiffness_n_m
 
     def objective(p):
         tmd = TunedMassDamper(mass_kg=mass, stiffness_n_m=math.exp(p[0]),

@@ -382,8 +382,8 @@ def basin_threshold(path) -> float | None:
     |initial displacement| whose attractor differs from the one nearest the
     origin; None where that row holds one attractor."""
     with xr.open_dataset(path) as ds:
-        a, x = ds["attractor"].values, ds["displacement"].values
-        j = int(np.argmin(np.abs(ds["velocity"].values)))
+        a, x = ds["attractor"].values, ds["displacement_m"].values
+        j = int(np.argmin(np.abs(ds["velocity_m_s"].values)))
     row = a[:, j]
     centre = row[int(np.argmin(np.abs(x)))]
     other = np.abs(x[row != centre])

@@ -100,9 +100,9 @@ def readings_ladder(gaps=(0.5e-3, 0.1e-3), force: float = 10.0, ratio: float = 1
             injected[i, j] = run.energy["work_nonreciprocal_friction_j"] / w if w else 0.0
             friction[i, j] = system.damper.friction_force_n
         host = System(system.bar, None, system.preset, system.readings)
-        f1[i] = system.reference_frequency / (2 * math.pi)
+        f1[i] = system.reference_frequency_rad_s / (2 * math.pi)
         depth[i] = min_limit(host, KR_ALUMINIUM)
-    dims = ("rung", "gap")
+    dims = ("rung", "gap_m")
     return xr.Dataset(
         {
             "rms_tip_m": (dims, rms, {"units": "m"}),
@@ -116,7 +116,7 @@ def readings_ladder(gaps=(0.5e-3, 0.1e-3), force: float = 10.0, ratio: float = 1
                 "units": "m", "long_name": "analytic minimum chatter-free depth of the bare "
                                            "host bar (ball not touching)"}),
         },
-        coords={"rung": rungs, "gap": ("gap", np.asarray(gaps, float), {"units": "m"}),
+        coords={"rung": rungs, "gap_m": ("gap_m", np.asarray(gaps, float), {"units": "m"}),
                 "description": ("rung", [d for _, d in LADDER])},
         attrs={"title": "boringbar: the published readings dropped one at a time",
                "boringbar_version": __version__, "force_n": force, "ratio": ratio,
@@ -184,7 +184,7 @@ def absorber_designs(preset: str = "physical", mass: float = 0.39) -> list[dict]
         "den-hartog": TunedMassDamper.den_hartog(mass, host),
         "sims": sims_tuning(mass, host),
     }
-    wn = host.natural_frequency
+    wn = host.natural_frequency_rad_s
     w = wn * np.linspace(0.5, 1.6, 22001)
     rows = []
     for name, tmd in designs.items():

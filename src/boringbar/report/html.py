@@ -267,7 +267,7 @@ class _Report:
         b_best = best["min_chatter_free_depth_m"] or 0.0
         b_solid = solid["min_chatter_free_depth_m"] or 0.0
         ds = _load(s["files"]["netcdf"])
-        why = (_ball_at_limit(ds) if "max_rel_disp" in ds and "host_analytic_limit" in ds
+        why = (_ball_at_limit(ds) if "max_rel_disp_m" in ds and "host_analytic_limit_m" in ds
                else None)
         return {"claim": "ball_lobes", "preset": preset, "reproduced": b_best > b_solid,
                 "best_case": best["case"], "best_depth": _mm(b_best),
@@ -363,7 +363,7 @@ def _impact_law(imp: dict) -> dict:
 
 def _ladder_table(ladder) -> dict:
     """One row per rung of the readings ladder, one RMS column per gap."""
-    gaps = ladder["gap"].values
+    gaps = ladder["gap_m"].values
     rows = []
     for i, r in enumerate(ladder["rung"].values):
         rows.append([str(r), str(ladder["description"].values[i]),
@@ -384,7 +384,7 @@ def _ladder_findings(ladder) -> dict:
     reaction, calibrated stiffness (paper rung against the later ones)."""
     rungs = [str(r) for r in ladder["rung"].values]
     paper_i, rec_i, roll_i = (rungs.index(r) for r in ("paper", "reciprocal", "rolling"))
-    gaps = ladder["gap"].values
+    gaps = ladder["gap_m"].values
     rms = ladder["rms_tip_m"].values
     pattern = ladder["pattern"].values
     hz = ladder["host_frequency_hz"].values
@@ -430,21 +430,21 @@ def _ball_at_limit(ds) -> dict | None:
     cavity bar, and at each speed's limiting depth how far the ball travelled
     against half the gap and how often it struck a wall. None when no ball
     case has a limiting depth."""
-    depth = ds["depth"].values
+    depth = ds["depth_m"].values
     rows, reach_all, strikes_all, below = [], [], 0, []
     for i in range(ds.sizes["case"]):
         bar = str(ds["bar"].values[i])
         if bar not in ("solid", "ball"):
             continue
-        ratio = ds["first_unstable_depth"].values[i] / ds["host_analytic_limit"].values[i]
+        ratio = ds["first_unstable_depth_m"].values[i] / ds["host_analytic_limit_m"].values[i]
         ratio = ratio[np.isfinite(ratio)]
         reach, strikes = [], 0
         for j in range(ds.sizes["rpm"]):
-            lim = float(ds["limit_depth"].values[i, j])
+            lim = float(ds["limit_depth_m"].values[i, j])
             if bar == "ball" and math.isfinite(lim):
                 k = int(round(lim / depth[0])) - 1
-                reach.append(float(ds["max_rel_disp"].values[i, j, k]) /
-                             (0.5 * float(ds["gap"].values[i])))
+                reach.append(float(ds["max_rel_disp_m"].values[i, j, k]) /
+                             (0.5 * float(ds["gap_m"].values[i])))
                 strikes += max(0, int(ds["impacts"].values[i, j, k]))
         if bar == "ball":
             reach_all += reach

@@ -329,7 +329,7 @@ class Sweep(Analysis):
 
     def runs(self, plan):
         c = plan.context
-        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
+        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency_rad_s, False)
                 for x in c["cases"]]
 
 
@@ -414,7 +414,8 @@ class Bifurcation(Analysis):
     def runs(self, plan):
         o = plan.context["options"]
         r = max(o.values) if o.parameter == "ratio" else o.ratio
-        return [(x.system, r * x.system.reference_frequency, False) for x in plan.extra["cases"]]
+        return [(x.system, r * x.system.reference_frequency_rad_s, False)
+                for x in plan.extra["cases"]]
 
 
 # --- basins -----------------------------------------------------------------------
@@ -466,7 +467,7 @@ class Basins(Analysis):
         return plan
 
     def runs(self, plan):
-        return [(op.case.system, op.forcing.omega(op.case.system.reference_frequency), False)
+        return [(op.case.system, op.forcing.omega(op.case.system.reference_frequency_rad_s), False)
                 for op in plan.context["operating"]]
 
     def assemble(self, study, plan, results):
@@ -523,7 +524,7 @@ class Sensitivity(Analysis):
         c = plan.context
         if c["mode"] == "cuts":
             return [(x.system, 2 * math.pi * c["cuts"].rpm / 60.0, True) for x in c["cases"]]
-        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
+        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency_rad_s, False)
                 for x in c["cases"]]
 
     def assemble(self, study, plan, results):

@@ -117,7 +117,7 @@ def response_view(design: Design, progress=None) -> dict:
     solid and TMD bars in closed form (RMS = |G| F / sqrt 2) over the same band."""
     systems, force = design.systems, design.settings.force_n
     host = systems.get("ball", systems["solid"])
-    f1 = host.reference_frequency / (2 * math.pi)
+    f1 = host.reference_frequency_rad_s / (2 * math.pi)
     f = np.linspace(*response_band(design, f1), RESPONSE_POINTS)
     out = {"f_hz": f, "curves": {}}
     for kind in ("solid", "tmd"):
@@ -142,7 +142,7 @@ def response_band(design: Design, f1: float) -> tuple[float, float]:
     lo, hi = RESPONSE_RATIOS[0] * f1, RESPONSE_RATIOS[-1] * f1
     tmd = design.systems.get("tmd")
     if tmd is not None:
-        f_tmd = tmd.reference_frequency / (2 * math.pi)
+        f_tmd = tmd.reference_frequency_rad_s / (2 * math.pi)
         w_lo, w_hi = tmd_window(tmd)
         lo, hi = min(lo, w_lo * f_tmd), max(hi, w_hi * f_tmd)
     return lo, hi
@@ -152,7 +152,7 @@ def lobe_speeds(design: Design) -> np.ndarray:
     """The speeds (rpm) the lobes are drawn over: the command line's default band (the
     first lobes of every bar, from their first frequencies), widened to hold the
     design's speed; evenly spaced on a log axis."""
-    f1 = [s.reference_frequency / (2 * math.pi) for s in design.systems.values()]
+    f1 = [s.reference_frequency_rad_s / (2 * math.pi) for s in design.systems.values()]
     band = default_lobe_speeds(f1)
     lo = min(band[0], design.settings.rpm / 1.2)
     hi = max(band[-1], design.settings.rpm * 1.2)
@@ -189,7 +189,7 @@ def simulated_lobes(design: Design, progress=None, workers: int | None = None) -
     ds = lobes([system], LobesOptions(rpm=tuple(rpm), method="search", analytic=False),
                integration=Integration(duration_s=SIMULATED_CUT_S, dt_s=DT_S),
                execution=Execution("threads", workers=workers), progress=progress)
-    limit = ds["limit_depth"].values[0] * 1e3
+    limit = ds["limit_depth_m"].values[0] * 1e3
     return {"rpm": rpm, "limit_mm": limit,
             "depth_at_mm": float(limit[np.searchsorted(rpm, design.settings.rpm)])}
 
