@@ -5,10 +5,12 @@ Receptances are drawn in um/N, lengths in mm."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
+from matplotlib.ticker import MaxNLocator
 
 from boringbar.plot_style import GREY, OKABE_ITO, bar_colour, series_colour, system_label
 
@@ -91,6 +93,57 @@ def plot_frf_fit(frequency_hz, measured, fitted, fit, *, fig=None) -> Figure:
     mag.set_title(f"tip FRF: measured and fitted ({modes}); residual "
                   f"{fit.quality.get('relative_residual', math.nan):.2g}", fontsize=9)
     mag.legend(fontsize=8)
+    return fig
+
+
+def plot_stabilisation(diagram, fitted_hz=(), *, fig=None) -> Figure:
+    """The stabilisation diagram of analysis.frf_fit (a ``Stabilisation``): each
+    pole at its frequency and model order, by status (new, stable in frequency,
+    stable), the poles of the columns that are modes filled, the modes' frequencies
+    as vertical lines (solid: among ``fitted_hz``, dashed: not fitted), the measured
+    |H| behind on a log scale."""
+    fig = fig or Figure(figsize=(8.0, 5.2), layout="constrained")
+    ax = fig.subplots()
+    back = ax.twinx()
+    f = diagram.frf.frequency_hz
+    back.plot(f, np.abs(diagram.frf.receptance), color="0.75", lw=0.9, zorder=0)
+    back.set_yscale("log")
+    back.set_ylabel("|H| (m/N)", color="0.45")
+    ax.set_zorder(back.get_zorder() + 1)  # the poles in front of the FRF
+    ax.patch.set_visible(False)
+    status, in_mode = diagram.status, diagram.mode >= 0
+    # Okabe-Ito colours, and a marker shape per status so that colour is not needed
+    for mask, marker, colour, label in (
+            ((status == 0) & ~in_mode, ".", "#999999", "new"),
+            ((status == 1) & ~in_mode, "x", "#56B4E9", "stable in frequency"),
+            ((status == 2) & ~in_mode, "o", "#0072B2", "stable in frequency and damping"),
+            (in_mode, "o", "#D55E00", "a mode's column")):
+        ax.plot(diagram.frequency_hz[mask], diagram.order[mask], marker, ms=4.5,
+                color=colour, mfc=colour if label == "a mode's column" else "none",
+                ls="none", label=label)
+    fitted = np.asarray(fitted_hz, dtype=float)
+    labels = {True: "fitted mode", False: "mode not fitted"}
+    for m in diagram.modes:
+        used = bool(np.any(np.isclose(fitted, m.frequency_hz, rtol=1e-9)))
+        ax.axvline(m.frequency_hz, color="#D55E00", lw=0.7, ls="-" if used else "--",
+                   alpha=0.7, zorder=1, label=labels.pop(used, None))
+        ax.annotate(f"{m.frequency_hz:.1f} Hz\n{m.damping_ratio * 100:.2f} %",
+                    (m.frequency_hz, diagram.max_order + 0.6), fontsize=7, ha="center",
+                    va="bottom", color="#D55E00", annotation_clip=False,
+                    bbox={"fc": "white", "ec": "none", "pad": 0.5})
+    ax.set_xlim(f[0], f[-1])
+    ax.set_ylim(0, diagram.max_order + 2.5)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("model order (pole pairs)")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    name = Path(diagram.frf.source.get("file", "measured FRF")).name
+    s = diagram.summary()
+    ax.set_title(f"{name}: stabilisation diagram of the {s['method']} poles\n"
+                 f"{len(s['modes'])} mode(s): columns stable at {s['min_stable_orders']} or "
+                 f"more of {s['max_order']} orders (frequency within "
+                 f"{s['stable_frequency']:.0%}, damping within {s['stable_damping']:.0%})",
+                 fontsize=9)
+    ax.legend(fontsize=7, loc="lower right", framealpha=0.9)
     return fig
 
 
