@@ -148,6 +148,17 @@ def test_one_mode_is_the_most_flexible_not_the_first():
     assert both.quality["relative_residual"] < 0.02 and "warning" not in both.quality
 
 
+def test_two_of_three_modes_are_the_two_most_flexible():
+    """Peak receptances 1/(2 k zeta): 12.5, 0.83 and 25 um/N, so the first and the
+    third, in that order of frequency."""
+    known = ModalFit((480.0, 1500.0, 3100.0), (0.02, 0.03, 0.005), (2.0e6, 2.0e7, 4.0e6))
+    d = stabilisation(synthetic(known, 0.01))
+    assert len(d.modes) == 3
+    fit, _ = fit_modes(d, 2)
+    assert fit.frequency_hz == pytest.approx((480.0, 3100.0), rel=1e-3)
+    assert fit.modal_stiffness_n_m == pytest.approx((2.0e6, 4.0e6), rel=0.05)
+
+
 def test_more_modes_than_the_diagram_finds_is_refused():
     with pytest.raises(ParameterError, match="2 stable mode.* fewer than the 3 modes"):
         fit_frf(synthetic(KNOWN["two modes"], 0.01), 3)

@@ -16,19 +16,18 @@ person at the chart would otherwise do, is ours:
    order's poles the diagram keeps the physical ones in the band: positive
    frequency and damping, frequency within the band.
 3. **Stability.** A pole is *stable* when a pole of the order below has its
-   frequency within 1 % and its damping within 5 % (relative; the usual
-   criteria of a stabilisation chart, Peeters et al. 2004, PolyMAX); each pole of
-   the order below pairs with one pole at most, closest frequencies first. A pole
-   whose frequency alone repeats is *stable in frequency*; any other is *new*.
+   frequency within 1 % and its damping within 5 % (relative to the pole below);
+   each pole of the order below pairs with one pole at most, closest frequencies
+   first. A pole whose frequency alone repeats is *stable in frequency*; any other
+   is *new* (the classes of a stabilisation chart, e.g. Peeters et al. 2004).
 4. **Columns.** A stable pole continues the column of its partner, so a column is
    one pole followed from order to order. Columns that break for an order and
    resume at the same frequency (within 1 %) are one column. A column is a
    **mode** when it is stable at a third of the model orders or more (7 of 20):
    a physical mode stays stable from the order that resolves it upward, while
-   noise and the model's surplus poles repeat for a few orders at most (measured
-   on the cases of tests/test_frf.py: the surplus poles' longest column is 5
-   stable orders of 20, the modes' shortest 9). A mode's frequency and damping
-   are the medians over its stable poles.
+   noise and the estimator's surplus poles repeat for a few orders at most
+   (benchmarks/stabilisation_margins.py measures both; docs/frf.md). A mode's
+   frequency and damping are the medians over its stable poles.
 5. **Which modes.** Without ``n_modes`` every mode of the diagram (at most
    MAX_MODES, the most flexible); with it, the ``n_modes`` most flexible, the
    modes with the largest peak receptance 1/(2 k zeta): those that set chatter.
@@ -45,7 +44,7 @@ person at the chart would otherwise do, is ours:
 
 Peeters, B., Van der Auweraer, H., Guillaume, P., Leuridan, J. (2004), "The
 PolyMAX frequency-domain method: a new standard for modal parameter estimation?",
-Shock and Vibration 11, 395-409 (the stabilisation chart's criteria, section 4).
+Shock and Vibration 11, 395-409 (stabilisation charts and how they are read).
 """
 
 from __future__ import annotations
@@ -105,10 +104,11 @@ class Stabilisation:
     """The stabilisation diagram of a measured FRF's band.
 
     Every kept pole has one entry in ``order``, ``frequency_hz``, ``damping_ratio``,
-    ``status`` (NEW, FREQUENCY_STABLE, STABLE) and ``mode`` (the index in ``modes``
-    of the column it belongs to, -1 for none). ``modes`` are the columns that are
-    modes, ascending frequency; ``frf`` is the band as measured, ``data`` the same
-    on the estimators' uniform grid; ``method`` is "lsce" or "lscf"."""
+    ``status`` (NEW, FREQUENCY_STABLE, STABLE), ``column`` (the pole it continues
+    shares its column) and ``mode`` (the index in ``modes`` of its column, -1 for
+    none). ``modes`` are the columns that are modes, ascending frequency; ``frf`` is
+    the band as measured, ``data`` the same on the estimators' uniform grid;
+    ``method`` is "lsce" or "lscf"."""
 
     frf: MeasuredFrf
     data: MeasuredFrf
@@ -118,6 +118,7 @@ class Stabilisation:
     frequency_hz: np.ndarray
     damping_ratio: np.ndarray
     status: np.ndarray
+    column: np.ndarray
     mode: np.ndarray
     modes: tuple[StableMode, ...]
 
@@ -161,7 +162,7 @@ def stabilisation(frf: MeasuredFrf, *, band_hz: tuple | None = None,
     zeta = np.concatenate([p[1] for p in per_order])
     modes, mode = _modes(order, fn, zeta, status, column, min_stable_orders(max_order))
     return Stabilisation(band, data, method, int(max_order), order, fn, zeta, status,
-                         mode, modes)
+                         column, mode, modes)
 
 
 def fit_frf(frf: MeasuredFrf, n_modes: int | None = None, *, band_hz: tuple | None = None,
@@ -177,7 +178,8 @@ def fit_modes(diagram: Stabilisation, n_modes: int | None = None
               ) -> tuple[ModalFit, np.ndarray]:
     """Fit the modes of ``diagram`` (all of them, at most MAX_MODES, or the
     ``n_modes`` most flexible): (the :class:`ModalFit`, its receptance at the band's
-    measured lines)."""
+    measured lines). No mode, fewer modes than ``n_modes``, or a fitted mode of
+    negative stiffness is a ParameterError."""
     where = diagram.frf.source.get("file", "FRF")
     found = len(diagram.modes)
     if found == 0:
@@ -194,7 +196,7 @@ def fit_modes(diagram: Stabilisation, n_modes: int | None = None
     if n < found:
         flexibility = [1 / (2 * k * m.damping_ratio) for m, k in
                        zip(modes, _stiffness(modes, diagram.data)[0], strict=True)]
-        modes = sorted(modes[i] for i in np.argsort(flexibility)[::-1][:n])
+        modes = [modes[i] for i in sorted(np.argsort(flexibility)[::-1][:n])]
     k, complexity = _stiffness(modes, diagram.data)
     if np.any(k <= 0):
         raise ParameterError(f"{where}: a fitted mode has a non-physical constant "
