@@ -54,6 +54,7 @@ import io
 import math
 import warnings
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
 from sdypy import EMA
@@ -78,8 +79,9 @@ STABLE_FREQUENCY = 0.01
 STABLE_DAMPING = 0.05
 #: A column is a mode when it is stable at this share of the model orders or more.
 STABLE_SHARE = 1 / 3
-#: A pole's status in the diagram.
+#: A pole's status in the diagram, and its name (indexed by the status).
 NEW, FREQUENCY_STABLE, STABLE = 0, 1, 2
+STATUS_NAMES = ("new", "stable in frequency", "stable in frequency and damping")
 
 
 @dataclass(frozen=True)
@@ -109,6 +111,9 @@ class Stabilisation:
     none). ``modes`` are the columns that are modes, ascending frequency; ``frf`` is
     the band as measured, ``data`` the same on the estimators' uniform grid;
     ``method`` is "lsce" or "lscf"."""
+
+    #: the name of each status, indexed by it (for a figure's legend)
+    STATUS_NAMES: ClassVar[tuple[str, ...]] = STATUS_NAMES
 
     frf: MeasuredFrf
     data: MeasuredFrf
