@@ -5,12 +5,24 @@ Receptances are drawn in um/N, lengths in mm."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
+from matplotlib.ticker import MaxNLocator
 
-from boringbar.plot_style import GREY, OKABE_ITO, bar_colour, series_colour, system_label
+from boringbar.plot_style import (
+    COLUMN_WIDTH_IN,
+    DARK_GREY,
+    GREY,
+    OKABE_ITO,
+    TITLE_PT,
+    bar_colour,
+    series_colour,
+    system_label,
+    wrap_title,
+)
 
 #: Receptance in the figures: um/N per m/N.
 UM_PER_M = 1e6
@@ -92,6 +104,64 @@ def plot_frf_fit(frequency_hz, measured, fitted, fit, *, fig=None) -> Figure:
                   f"{fit.quality.get('relative_residual', math.nan):.2g}", fontsize=9)
     mag.legend(fontsize=8)
     return fig
+
+
+def plot_stabilisation(diagram, fitted_hz=(), *, fig=None) -> Figure:
+    """The stabilisation diagram of analysis.frf_fit (a ``Stabilisation``): each
+    pole at its frequency and model order, by status (new, stable in frequency,
+    stable), the poles of the columns that are modes filled, the modes' frequencies
+    as vertical lines (solid: among ``fitted_hz``, dashed: not fitted), the measured
+    |H| (um/N) behind on a log scale."""
+    fig = fig or Figure(figsize=(COLUMN_WIDTH_IN, 5.0), layout="constrained")
+    ax = fig.subplots()
+    back = ax.twinx()
+    f = diagram.frf.frequency_hz
+    back.plot(f, np.abs(diagram.frf.receptance) * UM_PER_M, color=GREY, lw=0.9, alpha=0.6)
+    back.set_yscale("log")
+    back.set_ylabel(r"|H| ($\mu$m/N)", color=DARK_GREY)
+    ax.set_zorder(back.get_zorder() + 1)  # the poles in front of the FRF
+    ax.patch.set_visible(False)
+    status, in_mode = diagram.status, diagram.mode >= 0
+    mode_colour = OKABE_ITO["vermillion"]
+    # a marker shape per status, so that colour is not needed to tell them apart
+    styles = ((".", GREY), ("x", OKABE_ITO["sky blue"]), ("o", OKABE_ITO["blue"]))
+    groups = [((status == code) & ~in_mode, *style, name) for code, (style, name)
+              in enumerate(zip(styles, diagram.STATUS_NAMES, strict=True))]
+    for mask, marker, colour, label in [*groups, (in_mode, "o", mode_colour,
+                                                  "a mode's column")]:
+        ax.plot(diagram.frequency_hz[mask], diagram.order[mask], marker, ms=4.5,
+                color=colour, mfc=colour if colour == mode_colour else "none",
+                ls="none", label=label)
+    _mark_modes(ax, diagram, fitted_hz, mode_colour)
+    ax.set_xlim(f[0], f[-1])
+    ax.set_ylim(0, diagram.max_order + 3)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel("model order (pole pairs)")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    name = Path(diagram.frf.source.get("file", "measured FRF")).name
+    s = diagram.summary()
+    title = (f"{name}: stabilisation diagram of the {s['method']} poles\n"
+             f"{len(s['modes'])} mode(s): columns stable at {s['min_stable_orders']}+ of "
+             f"{s['max_order']} orders (frequency {s['stable_frequency']:.0%}, damping "
+             f"{s['stable_damping']:.0%})")
+    ax.set_title(wrap_title(title, fig.get_figwidth()), fontsize=TITLE_PT)
+    ax.legend(fontsize="small", loc="lower right", framealpha=0.9)
+    return fig
+
+
+def _mark_modes(ax, diagram, fitted_hz, colour) -> None:
+    """The diagram's modes as vertical lines (solid: fitted, dashed: not), each with
+    its frequency and damping above the top order."""
+    fitted = np.asarray(fitted_hz, dtype=float)
+    labels = {True: "fitted mode", False: "mode not fitted"}
+    for m in diagram.modes:
+        used = bool(np.any(np.isclose(fitted, m.frequency_hz, rtol=1e-9)))
+        ax.axvline(m.frequency_hz, color=colour, lw=0.7, ls="-" if used else "--",
+                   alpha=0.7, zorder=1, label=labels.pop(used, None))
+        ax.annotate(f"{m.frequency_hz:.1f} Hz\n{m.damping_ratio * 100:.2f} %",
+                    (m.frequency_hz, diagram.max_order + 0.6), fontsize="small",
+                    ha="center", va="bottom", color=colour, annotation_clip=False,
+                    bbox={"fc": "white", "ec": "none", "pad": 0.5})
 
 
 def plot_analytic_lobes(curves, rpm_range, *, fig=None) -> Figure:
