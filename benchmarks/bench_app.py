@@ -59,14 +59,18 @@ def change(page, control: str, value: str) -> float:
 def screenshots(page, out: Path) -> None:
     """The page's three tabs, each after its work is done."""
     page.get_by_text("Design", exact=True).click()
+    page.wait_for_selector(".status-run >> text=drawn in")
+    page.wait_for_timeout(1500)  # the canvases paint after their data arrive
     page.screenshot(path=out / "app_design.png", full_page=True)
     page.get_by_text("Response and lobes").click()
     page.get_by_text("Simulate the ball bar's lobes").click()
     page.wait_for_selector(".status-simulated >> text=simulated cuts in", timeout=300_000)
+    page.wait_for_timeout(1500)
     page.screenshot(path=out / "app_lobes.png", full_page=True)
     page.get_by_text("Design search", exact=True).click()
     page.get_by_text("Start search").click()
     page.wait_for_selector(".search-status >> text=trials)", timeout=600_000)
+    page.wait_for_timeout(1500)
     page.screenshot(path=out / "app_search.png", full_page=True)
 
 

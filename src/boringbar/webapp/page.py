@@ -226,6 +226,9 @@ class Page:
                                                    progress=self.report)
         except (asyncio.CancelledError, Superseded):
             return
+        except Exception as e:  # noqa: BLE001 (the view's message, not the server's)
+            self.status["simulated"].object = f"**simulated lobes:** {e}"
+            return
         finally:
             self.progress.visible = False
         self.locked(self.figures["lobes"].show_simulated, sim)
