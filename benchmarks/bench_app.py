@@ -6,7 +6,9 @@ action and stops when the view's status line names the new change):
 
 - first load: from starting the command to the single-run view drawn;
 - a gap change: the single-run view and the RMS response of 11 ratios redrawn;
-- a spindle-speed change: the analytic lobes redrawn (the gap leaves them alone).
+- the analytic lobes redrawn after a change of the spindle speed (each bar's depth at
+  it; the curves are kept), of the TMD's mass (the TMD bar's curve anew) and of the
+  cavity's position (the ball bar's host anew, and the response).
 
 Prints each figure with its target; ``--repeat N`` changes each control N times
 (median and worst shown). ``--screenshots DIR`` then also saves the page's three tabs
@@ -32,8 +34,11 @@ from playwright.sync_api import sync_playwright
 
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--disable-sync"]
+#: the pause before each timed change (ms)
+SETTLE_MS = 1000
 TARGETS = {"first load": 5.0, "single run": 0.5, "response (11 ratios)": 3.0,
-           "analytic lobes": 0.5}
+           "analytic lobes (speed)": 0.5, "analytic lobes (TMD mass)": 0.5,
+           "analytic lobes (cavity)": 0.5}
 
 
 def free_port() -> int:
@@ -49,6 +54,9 @@ def wait_drawn(page, view: str, change: int, timeout_s: float = 60) -> float:
 
 
 def change(page, control: str, value: str) -> float:
+    """Type ``value`` into a control and press Enter on a page at rest (the last
+    redraw's painting done: each change is timed on its own); returns the clock."""
+    page.wait_for_timeout(SETTLE_MS)
     box = page.locator(f".ctl-{control} input")
     box.fill(value)
     t0 = time.perf_counter()
@@ -104,19 +112,27 @@ def main() -> None:
             n = 0
             for i in range(args.repeat):  # the single run, on the first tab
                 n += 1
-                t0 = change(page, "ball-gap_mm", f"{0.2 + 0.05 * (i % 4):.2f}")
+                t0 = change(page, "ball-gap_mm", f"{0.20 + 0.01 * i:.2f}")
                 times["single run"].append(wait_drawn(page, "run", n) - t0)
                 wait_drawn(page, "bar", n)
             page.get_by_text("Response and lobes").click()  # a tab draws when shown
             wait_drawn(page, "lobes", n)
             for i in range(args.repeat):  # the response and the lobes, on the second
                 n += 1
-                t0 = change(page, "ball-gap_mm", f"{0.25 + 0.05 * (i % 4):.2f}")
+                t0 = change(page, "ball-gap_mm", f"{0.40 + 0.01 * i:.2f}")
                 times["response (11 ratios)"].append(wait_drawn(page, "response", n) - t0)
                 wait_drawn(page, "lobes", n)
                 n += 1
                 t0 = change(page, "rpm", f"{1000 + 50 * i:g}")
-                times["analytic lobes"].append(wait_drawn(page, "lobes", n) - t0)
+                times["analytic lobes (speed)"].append(wait_drawn(page, "lobes", n) - t0)
+                wait_drawn(page, "response", n)
+                n += 1  # the TMD's curve is drawn anew, the others are kept
+                t0 = change(page, "tmd-mass_kg", f"{0.30 + 0.01 * i:.2f}")
+                times["analytic lobes (TMD mass)"].append(wait_drawn(page, "lobes", n) - t0)
+                wait_drawn(page, "response", n)
+                n += 1  # every curve anew
+                t0 = change(page, "cavity-position_mm", f"{125.0 - i:g}")
+                times["analytic lobes (cavity)"].append(wait_drawn(page, "lobes", n) - t0)
                 wait_drawn(page, "response", n)
             if args.screenshots:
                 screenshots(page, Path(args.screenshots))
@@ -125,7 +141,7 @@ def main() -> None:
         server.terminate()
         server.wait(timeout=10)
     for what, ts in times.items():
-        print(f"{what:22s} median {statistics.median(ts):6.2f} s  worst {max(ts):6.2f} s  "
+        print(f"{what:27s} median {statistics.median(ts):6.2f} s  worst {max(ts):6.2f} s  "
               f"(target {TARGETS[what]:g} s, {len(ts)} times)")
 
 

@@ -102,7 +102,12 @@ class Design:
         return replace(self, spec=parse_system(data, f"{self.name}.toml"))
 
     def with_settings(self, **changes) -> Design:
-        return replace(self, settings=replace(self.settings, **changes))
+        """The design run another way; its bars are this one's unless the preset
+        changes (they are built once: the views share them)."""
+        new = replace(self, settings=replace(self.settings, **changes))
+        if new.settings.preset == self.settings.preset and "systems" in self.__dict__:
+            new.__dict__["systems"] = self.__dict__["systems"]  # cached_property's slot
+        return new
 
     def value(self, key: str):
         """The description's value at ``key`` (None where the file has no such part)."""

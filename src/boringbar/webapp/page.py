@@ -100,8 +100,7 @@ class Page:
         pn.state.execute(self.refresh_all)
 
     async def refresh_all(self) -> None:
-        self.show_commands()
-        await asyncio.gather(*(self.refresh(v) for v in VIEWS))
+        await asyncio.gather(*(self.refresh(v) for v in VIEWS), self.show_commands())
 
     def changed(self, design: Design) -> None:
         """A control made ``design`` (checked): redraw everything from it."""
@@ -182,8 +181,12 @@ class Page:
             return f"{head}; chatter-free depth at {data['at_rpm']:g} rpm: {depths}"
         return head
 
-    def show_commands(self) -> None:
-        for view, text in commands(self.design, self.export.filename).items():
+    async def show_commands(self) -> None:
+        """Each view's command line (built in the pool: it needs the design's bars)."""
+        loop = asyncio.get_running_loop()
+        lines = await loop.run_in_executor(self.pool, commands, self.design,
+                                           self.export.filename)
+        for view, text in lines.items():
             if view in self.command:
                 self.command[view].object = f"```\n{text}\n```"
 

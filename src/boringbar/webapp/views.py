@@ -14,7 +14,10 @@ from __future__ import annotations
 
 import json
 import math
+import threading
 import time
+from collections import OrderedDict
+from dataclasses import replace
 
 import numpy as np
 
@@ -36,8 +39,14 @@ RESPONSE_RATIOS = tuple(float(r) for r in np.linspace(0.85, 1.15, 11))
 RESPONSE_POINTS = 400
 #: forcing periods the run's time plots show (the end of the run)
 PERIODS_SHOWN = 12
-#: spindle speeds the analytic lobes are drawn at
+#: spindle speeds the analytic lobes are drawn at, from at most LOW_RPM (the published
+#: study's lowest speed) up
 LOBE_POINTS = 300
+LOW_RPM = 900.0
+#: results kept for the next request (:func:`kept`): lobe curves, sweeps, mode tables
+KEPT = 64
+_KEPT: OrderedDict[str, object] = OrderedDict()
+_KEPT_LOCK = threading.Lock()
 #: speeds and cut length of the simulated lobes (a quick diagram: the `lobes` command
 #: gives the full one)
 SIMULATED_SPEEDS = 8
@@ -65,9 +74,13 @@ def bar_view(design: Design, n_modes: int = 3) -> dict:
         out["tmd"] = {"z": data["tmd"]["position_mm"], "mass_kg": data["tmd"]["mass_kg"]}
     # the bar `boringbar modes` describes by default, with as many modes as it shows
     kind = "ball" if spec.ball else ("tmd" if spec.tmd else "solid")
-    table = describe_modes(make_system(kind, design.settings.preset, spec=spec,
-                                       n_modes=n_modes))
-    nodes, shapes, _ = spec.mode_shapes(spec.ball is not None, n_modes)
+    # the modes do not move with the ball or the absorber's mass (only its position)
+    bare = {k: v for k, v in design.data.items() if k not in ("ball", "tmd")}
+    key = [bare, spec.absorber_position_m, kind, design.settings.preset, n_modes]
+    table = kept(["modes", *key], lambda: describe_modes(
+        make_system(kind, design.settings.preset, spec=spec, n_modes=n_modes)))
+    nodes, shapes, _ = kept(["shapes", *key],
+                            lambda: spec.mode_shapes(spec.ball is not None, n_modes))
     out["modes"] = [{"frequency_hz": m["frequency_hz"], "modal_mass_kg": m["modal_mass_kg"],
                      "tip_stiffness_n_m": m["modal_stiffness_n_m"]}
                     for m in table["modes"][:n_modes]]
@@ -125,14 +138,23 @@ def response_view(design: Design, progress=None) -> dict:
             g = system_receptance(systems[kind], 2 * math.pi * f)
             out["curves"][kind] = np.abs(g) * force / math.sqrt(2) * 1e3
     if "ball" in systems:
-        ds = sweep([systems["ball"]], SweepOptions(forces_n=(force,), ratios=RESPONSE_RATIOS),
-                   integration=Integration(duration_s=RUN_S, dt_s=DT_S,
-                                           integrator=design.settings.integrator),
-                   progress=progress)
-        out["ball_f_hz"] = np.array(RESPONSE_RATIOS) * f1
-        out["ball_rms_mm"] = ds["rms_tip_m"].values.reshape(-1) * 1e3
-        out["ball_pattern"] = [str(p) for p in ds["pattern"].values.reshape(-1)]
+        rms, patterns = kept(["sweep", physics(systems["ball"]), force,
+                              design.settings.integrator],
+                             lambda: _ball_sweep(systems["ball"], design, progress))
+        out.update(ball_f_hz=np.array(RESPONSE_RATIOS) * f1, ball_rms_mm=rms,
+                   ball_pattern=patterns)
     return out
+
+
+def _ball_sweep(system, design: Design, progress) -> tuple[np.ndarray, list[str]]:
+    """Tip RMS (mm) and pattern of the ball bar at :data:`RESPONSE_RATIOS`."""
+    ds = sweep([system], SweepOptions(forces_n=(design.settings.force_n,),
+                                      ratios=RESPONSE_RATIOS),
+               integration=Integration(duration_s=RUN_S, dt_s=DT_S,
+                                       integrator=design.settings.integrator),
+               progress=progress)
+    return (ds["rms_tip_m"].values.reshape(-1) * 1e3,
+            [str(p) for p in ds["pattern"].values.reshape(-1)])
 
 
 def response_band(design: Design, f1: float) -> tuple[float, float]:
@@ -149,26 +171,59 @@ def response_band(design: Design, f1: float) -> tuple[float, float]:
 
 
 def lobe_speeds(design: Design) -> np.ndarray:
-    """The speeds (rpm) the lobes are drawn over: the command line's default band (the
-    first lobes of every bar, from their first frequencies), widened to hold the
-    design's speed; evenly spaced on a log axis."""
+    """The speeds (rpm) the lobes are drawn over, evenly in the lobe number: the command
+    line's default band (the first lobes of every bar, from their first frequencies)
+    down to the published study's :data:`LOW_RPM`, widened only if the design's speed
+    falls outside it (so moving the speed within it redraws no curve)."""
     f1 = [s.reference_frequency_rad_s / (2 * math.pi) for s in design.systems.values()]
     band = default_lobe_speeds(f1)
-    lo = min(band[0], design.settings.rpm / 1.2)
-    hi = max(band[-1], design.settings.rpm * 1.2)
-    return np.geomspace(lo, hi, LOBE_POINTS)
+    lo, hi, rpm = min(band[0], LOW_RPM), band[-1], design.settings.rpm
+    lo, hi = (lo if rpm >= lo else rpm / 1.2), (hi if rpm <= hi else rpm * 1.2)
+    # evenly in 1/rpm, the lobe number's axis: every lobe gets as many points
+    return np.sort(1.0 / np.linspace(1.0 / hi, 1.0 / lo, LOBE_POINTS))
+
+
+def kept(key, compute):
+    """``compute()``, or what it gave for the same ``key`` (any JSON-able value) a
+    request before: a change of one bar's description leaves the others' curves,
+    sweeps and modes as they were.  The last :data:`KEPT` results are kept."""
+    text = json.dumps(key, sort_keys=True, default=str)
+    with _KEPT_LOCK:
+        if text in _KEPT:
+            _KEPT.move_to_end(text)
+            return _KEPT[text]
+    value = compute()
+    with _KEPT_LOCK:
+        _KEPT[text] = value
+        while len(_KEPT) > KEPT:
+            _KEPT.popitem(last=False)
+    return value
+
+
+def lobe_curve(system, rpm: np.ndarray) -> np.ndarray:
+    """The analytic chatter-free depth (mm) of ``system`` at ``rpm`` (:func:`kept`;
+    a free ball's is its bare host's, which the ball's gap and friction leave alone)."""
+    if system.kind == "ball":
+        system = replace(system, damper=None)
+    return kept(["lobes", physics(system), rpm.tolist()],
+                lambda: limit_at_speeds(system, rpm) * 1e3)
+
+
+def physics(system) -> dict:
+    """What a system's results depend on: its bar and damper (its description without
+    the system file it came from, whose other parts it does not use)."""
+    return {k: v for k, v in system.to_dict().items() if k != "system_file"}
 
 
 def lobes_view(design: Design) -> dict:
     """The analytic chatter-free depth (mm) against speed of every bar (for the ball
     bar, its linear host: the bare cavity bar, which a cut sees until the ball first
     touches), and each one's depth at the design's speed."""
-    band, at = lobe_speeds(design), design.settings.rpm
-    rpm = np.append(band, at)  # one call per bar: the design's speed rides along
-    out = {"rpm": band, "curves": {}, "at_rpm": at, "depth_at_mm": {}}
+    rpm, at = lobe_speeds(design), design.settings.rpm
+    out = {"rpm": rpm, "curves": {}, "at_rpm": at, "depth_at_mm": {}}
     for kind, system in design.systems.items():
-        limit = limit_at_speeds(system, rpm) * 1e3
-        out["curves"][kind], out["depth_at_mm"][kind] = limit[:-1], float(limit[-1])
+        out["curves"][kind] = lobe_curve(system, rpm)
+        out["depth_at_mm"][kind] = float(limit_at_speeds(system, [at])[0]) * 1e3
     return out
 
 
