@@ -143,9 +143,13 @@ def _residual(fl, name, ref, x, p, k):
 
 
 def _jacobian(fl, name, ref, x, p, k, pr, dp):
-    """[G_x, G_p] at (x, p); G_p by a central difference of step dp."""
-    gp = (_residual(fl, name, ref, x, p + dp, k)[0]
-          - _residual(fl, name, ref, x, p - dp, k)[0]) / (2 * dp)
+    """[G_x, G_p] at (x, p); G_p exact for force-n (:func:`~boringbar.shooting.
+    force_derivative`, with the map), else by a central difference of step dp."""
+    if name == "force-n" and pr.force_derivative is not None:
+        gp = pr.force_derivative
+    else:
+        gp = (_residual(fl, name, ref, x, p + dp, k)[0]
+              - _residual(fl, name, ref, x, p - dp, k)[0]) / (2 * dp)
     return np.column_stack([pr.jacobian - np.eye(fl.N), gp])
 
 

@@ -96,17 +96,19 @@ class MapOptions:
 
 @one_blas_thread
 def orbit_map(fl: Flow, name: str, x0, stop: float, *, seeds=(), periods: int = 1,
-              options: MapOptions | None = None) -> OrbitMap:
+              other_end: float | None = None, options: MapOptions | None = None) -> OrbitMap:
     """The map of ``name`` from its value in ``fl`` to ``stop``: the orbit through x0 (a
-    fixed point of P^periods, near) continued towards ``stop``; every seed (value, x at
-    phase 0, periods) not on it continued both ways; their children (module docstring).
-    A branch whose mirror image is on the map is that image mirrored (:func:`mirrored`),
-    not continued again."""
+    fixed point of P^periods, near) continued towards ``stop`` (and towards ``other_end``
+    too, if given: the map then covers [other_end, stop] from a start inside it); every
+    seed (value, x at phase 0, periods) not on it continued both ways; their children
+    (module docstring).  A branch whose mirror image is on the map is that image mirrored
+    (:func:`mirrored`), not continued again."""
     o = options or MapOptions()
     p0 = value_of(fl, name)
-    om = OrbitMap(name, min(p0, stop), max(p0, stop))
-    todo = [(None, ("start", p0), fl,
-             lambda: continue_branch(fl, name, x0, stop, periods=periods, **_steps(o)))]
+    ends = [stop] + ([other_end] if other_end is not None and other_end != p0 else [])
+    om = OrbitMap(name, min(p0, *ends), max(p0, *ends))
+    todo = [(None, ("start", p0), fl, _started(fl, name, x0, end, periods, o, om))
+            for end in ends]
     for i, (value, x, k) in enumerate(seeds):
         at = flow_with(fl, name, value, fl)
         todo += [(None, ("seed", value), fl, _seeded(at, name, x, end, k, o, i, om))
@@ -207,6 +209,14 @@ def mirrored(fl: Flow, br: Branch) -> Branch | None:
 def _steps(o: MapOptions) -> dict:
     return {"step": o.step, "max_step": o.max_step, "min_step": o.min_step,
             "max_points": o.max_points}
+
+
+def _started(fl: Flow, name: str, x0, end: float, k: int, o: MapOptions, om: OrbitMap):
+    """The start branch from x0 towards ``end`` within the map's range."""
+    def make():
+        return continue_branch(fl, name, x0, end, periods=k, bounds=(om.lo, om.hi),
+                               **_steps(o))
+    return make
 
 
 def _seeded(at: Flow, name: str, x, end: float, k: int, o: MapOptions, i: int, om: OrbitMap):

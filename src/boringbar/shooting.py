@@ -197,6 +197,8 @@ class Period:
     jacobian: np.ndarray
     events: list
     rms_tip: float = math.nan
+    #: d P^k(x) / d F0, exact (:func:`force_derivative`).
+    force_derivative: np.ndarray | None = None
 
 
 def _event_fn(fl: Flow, sdir: float):
@@ -220,30 +222,48 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False,
     span = periods * fl.period if duration is None else duration
     t_end = t + span
     z = np.concatenate([np.asarray(x, float), [math.sin(fl.phase), math.cos(fl.phase), 1.0]])
-    J = np.eye(N)
+    # the whole augmented state's Jacobian: its forcing columns give d/dF0 (force_derivative)
+    J = np.eye(N + 3)
     events = []
     h = fl.period / GRID
     sdir = _slide_dir(fl, z[:N], t) if fl.ball else 0.0
     w2 = 0.0
+    regimes = {}  # sdir -> (A, its grid step's expm, its Relative): two regimes at most
     while t < t_end * (1 - 1e-15):
-        A = augmented(fl, sdir)
-        te, kind = _next_event(fl, A, sdir, z, t, min(t_end, t + fl.period), h)
+        if sdir not in regimes:
+            A = augmented(fl, sdir)
+            regimes[sdir] = (A, expm(A * h) if fl.ball else None, Relative(fl, A))
+        A, Eh, rel = regimes[sdir]
+        te, kind = _next_event(fl, A, Eh, rel, sdir, z, t, min(t_end, t + fl.period), h)
         dt = min(te, t_end) - t
         E = expm(A * dt)
         if rms:
             w2 += _w2_integral(fl, A, z, dt)
         z = E @ z
-        J = E[:N, :N] @ J
+        J = E @ J
         t += dt
         if kind is None or te > t_end:
             continue
-        z, J, sdir = _apply(fl, A, kind, z, J, t, sdir)
+        z, J[:N], sdir = _apply(fl, A, kind, z, J[:N], t, sdir)
         events.append((t, kind))
         if len(events) > 200 * periods:
             raise OrbitRefused("more than 200 events a period: the motion is not a "
                                "regular impacting orbit (Zeno or chatter)")
-    return Period(z[:N].copy(), J, events, math.sqrt(w2 / span) if rms and span > 0
-                  else math.nan)
+    return Period(z[:N].copy(), J[:N, :N].copy(), events,
+                  math.sqrt(w2 / span) if rms and span > 0 else math.nan,
+                  force_derivative(fl, J))
+
+
+def force_derivative(fl: Flow, J: np.ndarray) -> np.ndarray | None:
+    """d x_end / d F0 from the augmented state's Jacobian J (N + 3 square): the forcing
+    F0 sin(Omega t) is F0 times the sin state, which is linear in its start (sin phi,
+    cos phi), so scaling that start by 1 + eps is F0 (1 + eps): d x / d F0 =
+    J[:N, N:N+2] (sin phi, cos phi) / F0.  Exact (the saltation matrices carry the
+    events' shifts), where a central difference costs two more maps; None at F0 = 0."""
+    if not fl.amplitude > 0.0:
+        return None
+    N = fl.N
+    return J[:N, N:N + 2] @ np.array([math.sin(fl.phase), math.cos(fl.phase)]) / fl.amplitude
 
 
 def carry(fl: Flow, x: np.ndarray, phase: float) -> np.ndarray:
@@ -294,12 +314,12 @@ def _slide_dir(fl: Flow, x: np.ndarray, t: float) -> float:
     return -1.0 if F > 0 else 1.0
 
 
-def _next_event(fl, A, sdir, z, t, t_stop, h):
-    """(time, kind) of the first event after t before t_stop, or (t_stop, None)."""
+def _next_event(fl, A, E, rel, sdir, z, t, t_stop, h):
+    """(time, kind) of the first event after t before t_stop, or (t_stop, None); E:
+    expm(A h), the grid step's flow."""
     if not fl.ball:
         return t_stop, None
     g = _event_fn(fl, sdir)
-    E = expm(A * h)
     zk, gk, tk = z, g(z), t
     while tk < t_stop:
         step = min(h, t_stop - tk)
@@ -308,11 +328,9 @@ def _next_event(fl, A, sdir, z, t, t_stop, h):
         hits = []
         for i in range(3):
             if _crossed(i, gk[i], gn[i], sdir) and not (tk == t and abs(gk[i]) < 1e-14):
-                s = brentq(_g_at, 0.0, step, args=(g, A, zk, i), xtol=1e-18, rtol=1e-15,
-                           maxiter=200)
-                hits.append((s, KINDS[i]))
+                hits.append((_root(rel, g, A, zk, i, step), KINDS[i]))
             elif i < 2:
-                s = _through_wall(fl, g, A, zk, zn, step, i)
+                s = _through_wall(fl, rel, g, A, zk, zn, step, i)
                 if s is not None:
                     hits.append((s, KINDS[i]))
         if hits:
@@ -322,7 +340,73 @@ def _next_event(fl, A, sdir, z, t, t_stop, h):
     return t_stop, None
 
 
-def _through_wall(fl: Flow, g, A, zk, zn, step, i):
+class Relative:
+    """The ball's relative position y and velocity y' on one regime in closed form, for
+    locating events.  The bar and the forcing states [u, u', sin, cos, 1] do not feel the
+    ball in flight, and their matrix B is diagonalisable (distinct modal pairs, +-i Omega,
+    0), so psi_d . u(s) = Re sum_j a_j e^{lambda_j s}; y'' = -psi_d . u'' + F_b / m
+    integrates to y'(s) = y'0 - psi_d . (u'(s) - u'0) + F_b s / m and
+    y(s) = y0 + (y'0 + psi_d . u'0) s - psi_d . (u(s) - u0) + F_b s^2 / (2 m), with
+    u(s) - u0 from e^{lambda s} - 1 (exact at s = 0).  An evaluation is one vector of
+    scalar exponentials, where expm(A s) z is a matrix exponential: Brent's method calling
+    it was half of an orbit map's time.  B is decomposed on first use (most segments have
+    no event in them); a B with two eigenvalues within 1e-8 of each other (an undamped mode
+    at the forcing frequency: nearly defective) raises LinAlgError, and the caller falls
+    back on expm."""
+
+    def __init__(self, fl: Flow, A: np.ndarray):
+        self.fl, self.A = fl, A
+        self._modes = None
+
+    def _decomposed(self):
+        if self._modes is None:
+            fl, A = self.fl, self.A
+            n, N = fl.n, fl.N
+            bar = np.r_[0:2 * n, N:N + 3]
+            lam, V = np.linalg.eig(A[np.ix_(bar, bar)])
+            gaps = np.abs(lam[:, None] - lam[None, :])
+            np.fill_diagonal(gaps, np.inf)
+            if np.min(gaps) <= 1e-8 * np.max(np.abs(lam)):
+                raise np.linalg.LinAlgError("B is nearly defective")
+            # A's y'' row is -psi_d . (the bar's rows) + F_b / m on the constant state
+            fb_m = A[2 * n + 1, N + 2] + fl.psi_d @ A[n:2 * n, N + 2]
+            self._modes = (bar, lam, np.linalg.inv(V), fl.psi_d @ V[:n],
+                           fl.psi_d @ V[n:2 * n], fb_m)
+        return self._modes
+
+    def event(self, z: np.ndarray, i: int):
+        """s -> event function i (y - half, y + half, y'; :func:`_event_fn`) after the
+        state z (augmented); i = EXTREMUM: y' too (its zero is an extremum of y)."""
+        bar, lam, Vinv, pu, pv, fb_m = self._decomposed()
+        n = self.fl.n
+        c = Vinv @ z[bar]
+        y0, v0 = z[2 * n], z[2 * n + 1]
+        if i >= 2:
+            cv = pv * c
+            return lambda s: v0 - float((cv @ (np.exp(lam * s) - 1.0)).real) + fb_m * s
+        cu = pu * c
+        y0 = y0 - (self.fl.half if i == 0 else -self.fl.half)
+        v = v0 + float(self.fl.psi_d @ z[n:2 * n])
+        return lambda s: (y0 + v * s - float((cu @ (np.exp(lam * s) - 1.0)).real)
+                          + 0.5 * fb_m * s * s)
+
+
+#: The extremum of y (y' = 0) as an "event" of :func:`_root`.
+EXTREMUM = 3
+
+
+def _root(rel: Relative, g, A, z, i: int, step: float) -> float:
+    """The zero in (0, step) of event function i (or y' for i = EXTREMUM) after the state
+    z, by Brent's method on the closed form (:class:`Relative`); on expm(A s) z where the
+    closed form's rounding puts both ends on one side (an end within rounding of zero)."""
+    try:
+        return brentq(rel.event(z, i), 0.0, step, xtol=1e-18, rtol=1e-15, maxiter=200)
+    except (ValueError, np.linalg.LinAlgError):
+        args = (g, A, z, i) if i < EXTREMUM else (_velocity, A, z, 2 * rel.fl.n + 1)
+        return brentq(_g_at, 0.0, step, args=args, xtol=1e-18, rtol=1e-15, maxiter=200)
+
+
+def _through_wall(fl: Flow, rel: Relative, g, A, zk, zn, step, i):
     """The time in (0, step) at which the ball reaches wall i (0: +, 1: -) though it is
     inside at both ends of the grid step: y has an extremum in the step (y' turns from
     outward to inward) beyond the wall; None if not.  Without this a shallow incursion
@@ -332,11 +416,14 @@ def _through_wall(fl: Flow, g, A, zk, zn, step, i):
     out = 1.0 if i == 0 else -1.0
     if not (out * zk[j + 1] > 0.0 > out * zn[j + 1] and out * g(zk)[i] < 0.0):
         return None
-    s_ext = brentq(_g_at, 0.0, step, args=(_velocity, A, zk, j + 1), xtol=1e-18, rtol=1e-15,
-                   maxiter=200)
-    if g(expm(A * s_ext) @ zk)[i] * out < 0.0:
+    s_ext = _root(rel, g, A, zk, EXTREMUM, step)
+    try:
+        beyond = out * rel.event(zk, i)(s_ext)
+    except np.linalg.LinAlgError:
+        beyond = out * _g_at(s_ext, g, A, zk, i)
+    if beyond < 0.0:
         return None
-    return brentq(_g_at, 0.0, s_ext, args=(g, A, zk, i), xtol=1e-18, rtol=1e-15, maxiter=200)
+    return _root(rel, g, A, zk, i, s_ext)
 
 
 def _velocity(z):
