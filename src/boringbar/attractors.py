@@ -80,10 +80,25 @@ def periodic_attractors(system: System, forcing: Harmonic, *, settle_periods: in
                            integrator="exact", initial=State(x0, 0.0), record_every=0)
         except (ValueError, RuntimeError):
             continue
-        att = _settled(fl, run.final.x[:fl.N], max_period)
+        x = run.final.x[:fl.N]
+        if any(_near(fl, x, a) for a in found):
+            continue  # settled on one already found: no second Newton solve
+        att = _settled(fl, x, max_period)
         if att is not None and not any(same_orbit(fl, att, a) for a in found):
             found.append(att)
     return found
+
+
+def _near(fl: Flow, x, a: Attractor) -> bool:
+    """Whether the settled state x is on the attractor a: within 10 SETTLED of one of its
+    states at phase 0 (Newton from x would stay that near, :func:`_settled`)."""
+    size = float(np.max(np.abs(a.x)))
+    z = a.x
+    for _ in range(a.periods):
+        if np.max(np.abs(z - x)) <= 10 * SETTLED * size:
+            return True
+        z = advance(fl, z).x
+    return False
 
 
 def _settled(fl: Flow, x, max_period: int) -> Attractor | None:

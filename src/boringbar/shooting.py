@@ -33,6 +33,7 @@ slower than the capture threshold (wall contact, Zeno), a singular Newton matrix
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass
 
@@ -229,11 +230,14 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False,
     sdir = _slide_dir(fl, z[:N], t) if fl.ball else 0.0
     w2 = 0.0
     regimes = {}  # sdir -> (A, its grid step's expm, its Relative): two regimes at most
+
+    def regime(sd: float):
+        if sd not in regimes:
+            A = augmented(fl, sd)
+            regimes[sd] = (A, expm(A * h) if fl.ball else None, Relative(fl, A))
+        return regimes[sd]
     while t < t_end * (1 - 1e-15):
-        if sdir not in regimes:
-            A = augmented(fl, sdir)
-            regimes[sdir] = (A, expm(A * h) if fl.ball else None, Relative(fl, A))
-        A, Eh, rel = regimes[sdir]
+        A, Eh, rel = regime(sdir)
         te, kind = _next_event(fl, A, Eh, rel, sdir, z, t, min(t_end, t + fl.period), h)
         dt = min(te, t_end) - t
         E = expm(A * dt)
@@ -244,7 +248,7 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False,
         t += dt
         if kind is None or te > t_end:
             continue
-        z, J[:N], sdir = _apply(fl, A, kind, z, J[:N], t, sdir)
+        z, J[:N], sdir = _apply(fl, A, kind, z, J[:N], t, sdir, regime)
         events.append((t, kind))
         if len(events) > 200 * periods:
             raise OrbitRefused("more than 200 events a period: the motion is not a "
@@ -320,10 +324,20 @@ def _next_event(fl, A, E, rel, sdir, z, t, t_stop, h):
     if not fl.ball:
         return t_stop, None
     g = _event_fn(fl, sdir)
+    j, half = 2 * fl.n, fl.half
+    reversals = fl.fc > 0.0 and sdir != 0.0
     zk, gk, tk = z, g(z), t
     while tk < t_stop:
         step = min(h, t_stop - tk)
         zn = E @ zk if step == h else expm(A * step) @ zk
+        # most grid steps have nothing in them: y inside at the end and y' of one sign
+        yn, vk, vn = zn[j], zk[j + 1], zn[j + 1]
+        if -half < yn < half and (vk > 0.0) == (vn > 0.0) and (vk < 0.0) == (vn < 0.0) \
+                and not (reversals and vk * vn <= 0.0):
+            zk, gk, tk = zn, None, tk + step
+            continue
+        if gk is None:
+            gk = g(zk)
         gn = g(zn)
         hits = []
         for i in range(3):
@@ -342,53 +356,54 @@ def _next_event(fl, A, E, rel, sdir, z, t, t_stop, h):
 
 class Relative:
     """The ball's relative position y and velocity y' on one regime in closed form, for
-    locating events.  The bar and the forcing states [u, u', sin, cos, 1] do not feel the
-    ball in flight, and their matrix B is diagonalisable (distinct modal pairs, +-i Omega,
-    0), so psi_d . u(s) = Re sum_j a_j e^{lambda_j s}; y'' = -psi_d . u'' + F_b / m
-    integrates to y'(s) = y'0 - psi_d . (u'(s) - u'0) + F_b s / m and
+    locating events.  In flight the bar's modes do not feel the ball: mode i obeys
+    u'' + 2 zeta w u' + w^2 u = a_i sin(Omega t) + b_i (a_i, b_i: A's forcing and
+    constant entries), so u_i(s) = Re(C_i e^{lambda_i s}) + Im(a_i G_i E e^{i Omega s})
+    + b_i / w^2, lambda_i = -zeta w + i w_d, G_i = 1 / (w^2 - Omega^2 + 2 i zeta w Omega),
+    E = cos + i sin of the forcing phase at s = 0 and C_i from u_i(0), u_i'(0).  Then
+    y'' = -psi_d . u'' + F_b / m gives y'(s) = y'0 - psi_d . (u'(s) - u'0) + F_b s / m and
     y(s) = y0 + (y'0 + psi_d . u'0) s - psi_d . (u(s) - u0) + F_b s^2 / (2 m), with
-    u(s) - u0 from e^{lambda s} - 1 (exact at s = 0).  An evaluation is one vector of
-    scalar exponentials, where expm(A s) z is a matrix exponential: Brent's method calling
-    it was half of an orbit map's time.  B is decomposed on first use (most segments have
-    no event in them); a B with two eigenvalues within 1e-8 of each other (an undamped mode
-    at the forcing frequency: nearly defective) raises LinAlgError, and the caller falls
-    back on expm."""
+    u(s) - u0 from e^{x} - 1 (exact at s = 0).  An evaluation is n + 1 complex
+    exponentials, where expm(A s) z is a matrix exponential: Brent's method calling it
+    was half of an orbit map's time.  A mode without oscillation (zeta >= 1) raises
+    LinAlgError, and the caller falls back on expm."""
 
     def __init__(self, fl: Flow, A: np.ndarray):
-        self.fl, self.A = fl, A
-        self._modes = None
-
-    def _decomposed(self):
-        if self._modes is None:
-            fl, A = self.fl, self.A
-            n, N = fl.n, fl.N
-            bar = np.r_[0:2 * n, N:N + 3]
-            lam, V = np.linalg.eig(A[np.ix_(bar, bar)])
-            gaps = np.abs(lam[:, None] - lam[None, :])
-            np.fill_diagonal(gaps, np.inf)
-            if np.min(gaps) <= 1e-8 * np.max(np.abs(lam)):
-                raise np.linalg.LinAlgError("B is nearly defective")
-            # A's y'' row is -psi_d . (the bar's rows) + F_b / m on the constant state
-            fb_m = A[2 * n + 1, N + 2] + fl.psi_d @ A[n:2 * n, N + 2]
-            self._modes = (bar, lam, np.linalg.inv(V), fl.psi_d @ V[:n],
-                           fl.psi_d @ V[n:2 * n], fb_m)
-        return self._modes
+        n, N = fl.n, fl.N
+        self.fl = fl
+        w2, c = fl.K / fl.M, fl.C / fl.M
+        alpha, beta2 = -0.5 * c, w2 - 0.25 * c * c
+        self.ok = bool(np.all(beta2 > 0.0))
+        self.lam = alpha + 1j * np.sqrt(np.maximum(beta2, 0.0))
+        om = fl.omega
+        self.pd = fl.psi_d
+        # a_i G_i, a_i the sin state's entry of A (per unit mass), and the constant's share
+        self.q = A[n:2 * n, N] / (w2 - om * om + 1j * c * om)
+        self.const = A[n:2 * n, N + 2] / w2
+        # A's y'' row is -psi_d . (the bar's rows) + F_b / m on the constant state
+        self.fb_m = A[2 * n + 1, N + 2] + fl.psi_d @ A[n:2 * n, N + 2]
 
     def event(self, z: np.ndarray, i: int):
         """s -> event function i (y - half, y + half, y'; :func:`_event_fn`) after the
         state z (augmented); i = EXTREMUM: y' too (its zero is an extremum of y)."""
-        bar, lam, Vinv, pu, pv, fb_m = self._decomposed()
-        n = self.fl.n
-        c = Vinv @ z[bar]
-        y0, v0 = z[2 * n], z[2 * n + 1]
+        if not self.ok:
+            raise np.linalg.LinAlgError("a mode does not oscillate (zeta >= 1)")
+        fl, n, N, lam = self.fl, self.fl.n, self.fl.N, self.lam
+        iom = 1j * fl.omega
+        forced = self.q * (z[N + 1] + 1j * z[N])  # a G E: the modes' forced parts, complex
+        pe = complex(self.pd @ forced)
+        uh = z[:n] - forced.imag - self.const  # the modes' free parts at s = 0
+        vh = z[n:2 * n] - (forced * iom).imag
+        C = uh + 1j * (lam.real * uh - vh) / lam.imag
+        cu, cv = self.pd * C, self.pd * C * lam
+        y0, v0, fb_m = z[2 * n], z[2 * n + 1], self.fb_m
         if i >= 2:
-            cv = pv * c
-            return lambda s: v0 - float((cv @ (np.exp(lam * s) - 1.0)).real) + fb_m * s
-        cu = pu * c
-        y0 = y0 - (self.fl.half if i == 0 else -self.fl.half)
-        v = v0 + float(self.fl.psi_d @ z[n:2 * n])
+            return lambda s: (v0 - float((cv @ (np.exp(lam * s) - 1.0)).real)
+                              - (pe * iom * (cmath.exp(iom * s) - 1.0)).imag + fb_m * s)
+        y0 = y0 - (fl.half if i == 0 else -fl.half)
+        v = v0 + float(self.pd @ z[n:2 * n])
         return lambda s: (y0 + v * s - float((cu @ (np.exp(lam * s) - 1.0)).real)
-                          + 0.5 * fb_m * s * s)
+                          - (pe * (cmath.exp(iom * s) - 1.0)).imag + 0.5 * fb_m * s * s)
 
 
 #: The extremum of y (y' = 0) as an "event" of :func:`_root`.
@@ -445,8 +460,9 @@ def _crossed(i, a, b, sdir) -> bool:
     return a * b <= 0.0 and a != b
 
 
-def _apply(fl, A, kind, z, J, t, sdir):
-    """Apply the event at t to z and its saltation matrix to J."""
+def _apply(fl, A, kind, z, J, t, sdir, regime):
+    """Apply the event at t to z and its saltation matrix to J (``regime``: sdir -> (A,
+    ...) of the sliding direction after it)."""
     N, j = fl.N, 2 * fl.n
     x = z[:N]
     f_minus = field(A, z)
@@ -460,7 +476,7 @@ def _apply(fl, A, kind, z, J, t, sdir):
         xp[j] = wall * fl.half
         sdir_new = 1.0 if xp[j + 1] > 0 else -1.0
         zp = np.concatenate([xp, z[N:]])
-        f_plus = field(augmented(fl, sdir_new), zp)
+        f_plus = field(regime(sdir_new)[0], zp)
         nf = f_minus[j]
         S = R + np.outer(f_plus - R @ f_minus, _unit(N, j)) / nf
         return zp, S @ J, sdir_new
@@ -471,7 +487,7 @@ def _apply(fl, A, kind, z, J, t, sdir):
     sdir_new = -sdir
     zp = z.copy()
     zp[j + 1] = 0.0
-    f_plus = field(augmented(fl, sdir_new), zp)
+    f_plus = field(regime(sdir_new)[0], zp)
     nf = f_minus[j + 1]
     S = np.eye(N) + np.outer(f_plus - f_minus, _unit(N, j + 1)) / nf
     return zp, S @ J, sdir_new

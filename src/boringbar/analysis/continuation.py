@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from boringbar._validate import ParameterError, check_choice, check_int
+from boringbar._validate import ParameterError, check_choice, check_finite, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
 from boringbar.attractors import periodic_attractors, spread
@@ -64,7 +64,8 @@ class ContinuationOptions:
     rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
     smallest step the halving goes down to before the branch stops (relative);
     ``switch``, ``seeds``, ``max_branches``: the orbit map's (docs/continuation.md, "The
-    orbit map")."""
+    orbit map"); ``other_end``: the map covers [other_end, stop] (either order), the
+    first orbit inside it and continued both ways (None: [start value, stop])."""
 
     parameter: str = "force-n"
     stop: float = 5.0
@@ -84,6 +85,7 @@ class ContinuationOptions:
     #: (force-n and ratio only; 0: none).
     seeds: int = 3
     max_branches: int = 24
+    other_end: float | None = None
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
@@ -95,6 +97,8 @@ class ContinuationOptions:
         check_steps(self.step, self.min_step, self.max_step)
         check_int("seeds", self.seeds, 0, 50)
         check_int("max_branches", self.max_branches, 1, 1000)
+        if self.other_end is not None:
+            check_finite("other_end", self.other_end)
         if self.start == "state" and self.state is None:
             raise ParameterError("start = 'state' needs state = (u..., u'..., y, y') (ball), "
                                  "(u..., u'..., x_a, x_a') (TMD) or (u..., u'...)")
@@ -104,6 +108,12 @@ class ContinuationOptions:
 def plan(system: System, options: ContinuationOptions) -> Plan:
     """One point: the branch of ``system`` (any bar; the parameter must be one it has)."""
     check_parameter(system.kind, options.parameter)
+    if options.other_end is not None:
+        p0 = value_of(make_flow(system, Harmonic(options.force_n, ratio=options.ratio)),
+                      options.parameter)
+        if not min(options.other_end, options.stop) < p0 < max(options.other_end, options.stop):
+            raise ParameterError(f"other_end = {options.other_end!r}: the start value {p0!r} "
+                                 f"must lie strictly between it and stop = {options.stop!r}")
     return Plan({"system": system, "options": options}, [0])
 
 
@@ -149,7 +159,8 @@ def compute(context: dict, point: int) -> dict:
     seeds = [(v, a.x, a.periods) for v, a in _attractors(system, o, fl, o.seeds)]
     mo = MapOptions(o.switch, 2 * o.periods, o.max_branches, o.step, o.max_step, o.min_step,
                     o.max_points)
-    om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods, options=mo)
+    om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods,
+                   other_end=o.other_end, options=mo)
     branches = [_branch_result(mb, fl, o) for mb in om.branches]
     # checked where no seed was taken (between the seeds' values), so that an attractor
     # on the map is not there merely because it started a branch
@@ -164,9 +175,9 @@ def _attractors(system: System, o: ContinuationOptions, fl, count: int) -> list:
     over the range (the middles of equal parts; force-n and ratio of the free ball)."""
     if count == 0 or o.parameter not in BRUTE_FORCE or system.kind != "ball":
         return []
-    p0 = value_of(fl, o.parameter)
+    ends = (value_of(fl, o.parameter), o.stop, *(() if o.other_end is None else (o.other_end,)))
     found = []
-    for v in spread(min(p0, o.stop), max(p0, o.stop), count):
+    for v in spread(min(ends), max(ends), count):
         force, ratio = (v, o.ratio) if o.parameter == "force-n" else (o.force_n, v)
         found += [(v, a) for a in periodic_attractors(system, Harmonic(force, ratio=ratio),
                                                       max_period=2 * o.periods)]
@@ -312,16 +323,6 @@ def brute_force(system: System, options: ContinuationOptions, start: float, n_va
     name = BRUTE_FORCE[options.parameter]
     bf = BifurcationOptions(name, values, options.force_n, options.ratio, backward=True)
     return bifurcation(system, bf, integration=integration or Integration(1.0, 1e-6, "exact", 0.5))
-
-
-def both_ways(system: System, start: float, lo: float, hi: float, *, ratio: float = 1.0,
-              step: float = 0.05, max_points: int = 60, min_step: float = 1e-4) -> xr.Dataset:
-    """The F0 branch through the settled orbit at ``start`` N (exact integrator, 200
-    periods from rest), continued down to ``lo`` and up to ``hi``: two branches."""
-    down, up = (continuation(system, Harmonic(start, ratio=ratio), options=ContinuationOptions(
-        parameter="force-n", stop=stop, step=step, max_points=max_points, min_step=min_step,
-        switch=False, seeds=0)) for stop in (lo, hi))
-    return concat_branches([down, up])
 
 
 def concat_branches(datasets: list[xr.Dataset]) -> xr.Dataset:
