@@ -23,7 +23,7 @@ import xarray as xr
 from boringbar._validate import ParameterError, check_choice, check_finite, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
-from boringbar.attractors import periodic_attractors, spread
+from boringbar.attractors import RETURN_TOL, periodic_attractors, return_distance, spread
 from boringbar.branch import (
     MAX_STEP,
     PARAMETERS,
@@ -33,6 +33,7 @@ from boringbar.branch import (
     value_of,
 )
 from boringbar.execute import Execution
+from boringbar.model.dampers import Friction
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.orbit_map import MapOptions, attractor_check, orbit_map
@@ -82,10 +83,13 @@ class ContinuationOptions:
     #: Follow the branches born at branch points, period doublings and grazings.
     switch: bool = True
     #: Parameter values (spread over the range) at which brute force seeds branches
-    #: (force-n and ratio only; 0: none).
+    #: (the free ball; 0: none).
     seeds: int = 3
     max_branches: int = 24
     other_end: float | None = None
+    #: The return check of every stable point: the exact integrator over this many
+    #: periods from it, perturbed (0: none).
+    return_periods: int = 200
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
@@ -99,6 +103,7 @@ class ContinuationOptions:
         check_int("max_branches", self.max_branches, 1, 1000)
         if self.other_end is not None:
             check_finite("other_end", self.other_end)
+        check_int("return_periods", self.return_periods, 0, 100000)
         if self.start == "state" and self.state is None:
             raise ParameterError("start = 'state' needs state = (u..., u'..., y, y') (ball), "
                                  "(u..., u'..., x_a, x_a') (TMD) or (u..., u'...)")
@@ -161,7 +166,8 @@ def compute(context: dict, point: int) -> dict:
                     o.max_points)
     om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods,
                    other_end=o.other_end, options=mo)
-    branches = [_branch_result(mb, fl, o) for mb in om.branches]
+    branches = [_branch_result(mb, fl, o) | {"return_distance": _returns(system, o, mb)}
+                for mb in om.branches]
     # checked where no seed was taken (between the seeds' values), so that an attractor
     # on the map is not there merely because it started a branch
     check = [attractor_check(om, v, a.x, a.periods) | {"impacts": a.impacts}
@@ -170,18 +176,53 @@ def compute(context: dict, point: int) -> dict:
             "start": value_of(fl, o.parameter)}
 
 
+def system_at(system: System, o: ContinuationOptions, value: float) -> tuple:
+    """(system, forcing) of the problem with its parameter at ``value``: on the
+    descriptions what :func:`boringbar.branch.flow_with` does to a flow, for the exact
+    integrator's runs (a ball mass keeps the friction force F_c, as the flow does)."""
+    name, forcing = o.parameter, Harmonic(o.force_n, ratio=o.ratio)
+    if name == "force-n":
+        return system, Harmonic(value, ratio=o.ratio)
+    if name == "ratio":
+        return system, Harmonic(o.force_n, ratio=value)
+    d = system.damper
+    if name == "gap-mm":
+        d = dataclasses.replace(d, gap=value * 1e-3)
+    elif name == "restitution":
+        d = dataclasses.replace(d, restitution=value)
+    elif name == "friction-force-n":
+        f = d.friction
+        ratio = f.static_ratio if f.kind != "none" else 1.0
+        d = dataclasses.replace(d, friction=Friction("force", value, f.reaction, ratio))
+    elif name == "ball-mass-g":
+        f = d.friction
+        d = dataclasses.replace(d, mass=value * 1e-3, friction=Friction(
+            "force", d.friction_force, f.reaction, f.static_ratio) if f.kind != "none" else f)
+    return dataclasses.replace(system, damper=d), forcing
+
+
 def _attractors(system: System, o: ContinuationOptions, fl, count: int) -> list:
     """[(value, Attractor)]: brute force's periodic attractors at ``count`` values spread
-    over the range (the middles of equal parts; force-n and ratio of the free ball)."""
-    if count == 0 or o.parameter not in BRUTE_FORCE or system.kind != "ball":
+    over the range (the middles of equal parts; the free ball, any parameter)."""
+    if count == 0 or system.kind != "ball":
         return []
     ends = (value_of(fl, o.parameter), o.stop, *(() if o.other_end is None else (o.other_end,)))
     found = []
     for v in spread(min(ends), max(ends), count):
-        force, ratio = (v, o.ratio) if o.parameter == "force-n" else (o.force_n, v)
-        found += [(v, a) for a in periodic_attractors(system, Harmonic(force, ratio=ratio),
+        found += [(v, a) for a in periodic_attractors(*system_at(system, o, v),
                                                       max_period=2 * o.periods)]
     return found
+
+
+def _returns(system: System, o: ContinuationOptions, mb) -> list:
+    """The return check of each stable point of a branch (NaN for the others):
+    :func:`boringbar.attractors.return_distance` over ``o.return_periods``."""
+    br = mb.branch
+    if not o.return_periods:
+        return [math.nan] * len(br.points)
+    return [return_distance(*system_at(system, o, pt.value), pt.x, pt.phase, br.periods,
+                            o.return_periods) if pt.stable else math.nan
+            for pt in br.points]
 
 
 def _branch_result(mb, fl, o: ContinuationOptions) -> dict:
@@ -239,6 +280,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "multiplier_real": (("branch", "point", "multiplier"), [mults.real]),
          "multiplier_imag": (("branch", "point", "multiplier"), [mults.imag]),
          "stable": (("branch", "point"), [r["stable"]]),
+         "return_distance": (("branch", "point"),
+                             [r.get("return_distance", [math.nan] * len(r["value"]))]),
          "event_kind": (("branch", "event"), [[k for k, _ in r["events"]]]),
          "event_value": (("branch", "event"), [[v for _, v in r["events"]]]),
          "periods": (("branch",), [r.get("periods", o.periods)]),
@@ -278,7 +321,24 @@ def summary(ds: xr.Dataset) -> dict:
     return {"parameter": ds.attrs["parameter"], "branches": branches,
             "notes": json.loads(ds.attrs.get("notes", "[]")),
             "attractor_check": json.loads(ds.attrs.get("attractor_check", "[]")),
+            "return_check": return_check(ds),
             "wall_time_s": float(ds.attrs.get("wall_time_s", math.nan))}
+
+
+def return_check(ds: xr.Dataset) -> dict:
+    """The return check of the stable points (:func:`boringbar.attractors.return_distance`):
+    how many were checked, the largest distance and those farther than RETURN_TOL (branch,
+    value, distance): stable points that are not attractors of the exact integrator."""
+    if "return_distance" not in ds:
+        return {"checked": 0, "largest": None, "failed": []}
+    d = ds["return_distance"].values
+    checked = np.isfinite(d) | np.isinf(d)
+    failed = [{"branch": int(b), "value": float(ds["value"].values[b, i]),
+               "distance": float(d[b, i])}
+              for b, i in zip(*np.nonzero(checked & ~(d <= RETURN_TOL)), strict=True)]
+    return {"checked": int(checked.sum()),
+            "largest": float(np.max(d[checked])) if checked.any() else None,
+            "failed": failed}
 
 
 def _tree(d: xr.Dataset) -> dict:

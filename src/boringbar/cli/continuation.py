@@ -71,6 +71,10 @@ def add_continue(sub) -> None:
                         "(force-n or ratio of the free ball; default 3, 0: none)")
     g.add_argument("--max-branches", type=int, default=24, metavar="N",
                    help="at most N branches in the map (default 24)")
+    g.add_argument("--return-periods", type=int, default=200, metavar="N",
+                   help="the return check: the exact integrator runs N periods from every "
+                        "stable point, perturbed by 1e-7, and must come back within 1e-6 "
+                        "(default 200, 0: none)")
     g.add_argument("--start-from", choices=("simulation", "masri-caughey"),
                    default="simulation", help="first guess (default: a settled exact run)")
     p.set_defaults(func=_cmd_continue)
@@ -128,7 +132,7 @@ def _cmd_continue(args) -> Outcome:
                                   max_step=args.max_step, max_points=args.max_points,
                                   switch=args.switch, seeds=args.seeds,
                                   max_branches=args.max_branches, start=args.start_from,
-                                  other_end=other_end)
+                                  other_end=other_end, return_periods=args.return_periods)
     ds = continuation(system, Harmonic(force, ratio=ratio), options=options)
     out = summary(ds)
     files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/continuation.nc"))}
@@ -151,6 +155,13 @@ def _cmd_continue(args) -> Outcome:
             say(f"note: {note}")
         for c in out["attractor_check"]:
             say(_check_line(c, name))
+        rc = out["return_check"]
+        if rc["checked"]:
+            say(f"return check: {rc['checked']} stable points, {len(rc['failed'])} not back "
+                f"within 1e-6 after {args.return_periods} periods (largest distance "
+                f"{rc['largest']:.2g})")
+        for f in rc["failed"]:
+            say(f"  branch {f['branch']} at {name} = {f['value']:.6g}: {f['distance']:.2g}")
         say(wrote(files))
 
     return Outcome(out, text)

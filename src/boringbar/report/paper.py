@@ -236,18 +236,20 @@ class MapSettings:
     seeds: int
     max_branches: int
     step: float = 0.05
+    max_step: float = 0.05
 
     def options(self) -> ContinuationOptions:
         return ContinuationOptions(parameter="force-n", stop=self.hi, other_end=self.lo,
                                    force_n=CONTINUATION_START_N, ratio=1.0, step=self.step,
-                                   max_points=self.max_points, seeds=self.seeds,
-                                   max_branches=self.max_branches)
+                                   max_step=self.max_step, max_points=self.max_points,
+                                   seeds=self.seeds, max_branches=self.max_branches)
 
     def argv(self) -> tuple[str, ...]:
         """The ``boringbar continue`` flags of the same map."""
         return ("--ratio", "1.0", "--range", f"{self.lo:g}:{CONTINUATION_START_N:g}:{self.hi:g}",
-                "--step", f"{self.step:g}", "--max-points", str(self.max_points),
-                "--seeds", str(self.seeds), "--max-branches", str(self.max_branches))
+                "--step", f"{self.step:g}", "--max-step", f"{self.max_step:g}",
+                "--max-points", str(self.max_points), "--seeds", str(self.seeds),
+                "--max-branches", str(self.max_branches))
 
 
 def _continuation_run(settings: MapSettings):
@@ -368,7 +370,10 @@ def published_steps(quick: bool = False) -> list[Step]:
                 ("bifurcation", "--bar", "ball", "--gap-mm", gap, "--friction", fr,
                  "--force-n", forces, "--ratio", "1.0", *dur),
                 _bifurcation_run(gap, fr == "on", forces, "1.0", duration), friction=fr == "on"))
-    maps = MapSettings(5.0, 50.0, 20, 2, 12) if quick else MapSettings(5.0, 50.0, 40, 3, 24)
+    # quick: coarser steps and fewer points a branch (its map's step costs about 3 s more
+    # CPU than the single branches it replaced, docs/continuation.md)
+    maps = MapSettings(5.0, 50.0, 15, 3, 12) if quick else \
+        MapSettings(5.0, 50.0, 40, 3, 24, max_step=0.025)
     steps.append(Step("continuation", "continuation",
                       "Orbit maps (continued periodic orbits) over the bifurcation diagrams",
                       ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
