@@ -379,7 +379,7 @@ def cross_grazing(fl: Flow, br: Branch, bounds: tuple, o: MapOptions | None = No
             break
         try:
             x, pr = periodic_orbit(flow_with(at, br.parameter, p, fl), last.x, br.periods,
-                                   rms=False)
+                                   rms=False, damped=True)
         except OrbitRefused as err:
             why = str(err)
             continue
