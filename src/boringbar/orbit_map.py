@@ -115,8 +115,9 @@ def orbit_map(fl: Flow, name: str, x0, stop: float, *, seeds=(), periods: int = 
                  for end in (om.lo, om.hi) if end != value]
     while todo:
         if len(om.branches) >= o.max_branches:
+            left = ", ".join(f"{born[0]} at {born[1]:.6g}" for _, born, _, _ in todo)
             om.notes.append(f"branch limit of {o.max_branches} reached: {len(todo)} "
-                            "branch(es) not followed")
+                            f"branch(es) not followed ({left})")
             break
         parent, born, flow, make = todo.pop(0)
         if (born[0] == "seed" and _known_seed(om, make)) or _by_symmetry(om, parent, born, make):
@@ -262,12 +263,17 @@ def on_branch(mb: MapBranch, value: float, x, k: int, at: Flow) -> bool:
 
 
 def _duplicate(om: OrbitMap, br: Branch, parent: int | None) -> bool:
-    """A branch whose later half lies on a branch of the map other than its parent."""
+    """A branch whose later half lies on a branch of the map other than its parent, with
+    as many events a period (next to a grazing an orbit comes within SAME_ORBIT of the
+    one with an impact fewer: the four-impact branch of the issue's case was dropped as
+    the three-impact one)."""
     pts = br.points[len(br.points) // 2:]
     if len(pts) < 2:
         return False
     mid = pts[len(pts) // 2]
-    others = [mb for i, mb in enumerate(om.branches) if i != parent]
+    rate = len(mid.events) / br.periods
+    others = [mb for i, mb in enumerate(om.branches) if i != parent and mb.branch.points
+              and len(mb.branch.points[0].events) / mb.branch.periods == rate]
     if not others:
         return False
     at = dataclasses.replace(others[0].flow, phase=mid.phase)
