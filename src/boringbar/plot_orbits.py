@@ -7,6 +7,7 @@ import json
 import textwrap
 
 import numpy as np
+from matplotlib import colormaps
 from matplotlib.figure import Figure
 
 #: Marker of each continuation event kind.
@@ -40,7 +41,7 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
         for ax, name in ((top, "strobe_tip_m"), (bottom, "rms_tip_m")):
             y = d[name].values * 1e3
             _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top),
-                             color=f"C{b % 10}")
+                             color=branch_colour(b, ds.sizes["branch"]))
         for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
             if not str(kind) or not np.isfinite(value):  # padding of a stacked branch
                 continue
@@ -61,6 +62,12 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
         top.text(0.5, 0.5, "\n".join(textwrap.wrap("; ".join(dict.fromkeys(reasons)), 90)),
                  transform=top.transAxes, ha="center", va="center", fontsize="small")
     return fig
+
+
+def branch_colour(b: int, count: int):
+    """Branch b's colour among ``count``: the default cycle up to 10, else one of 20
+    (tab20), so that a map's branches do not share colours until 20."""
+    return f"C{b % 10}" if count <= 10 else colormaps["tab20"](b % 20)
 
 
 #: Axis labels of the continuation parameters.
