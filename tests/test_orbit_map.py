@@ -242,3 +242,25 @@ def test_a_boundary_where_newton_jumped_to_another_orbit_is_not_a_grazing():
         br.stop
     on = cross_grazing(at, br, (5.0, 35.0))
     assert on.points and sum(k.startswith("impact") for _, k in on.points[0].events) == 2
+
+
+def test_cli_range_lo_start_hi_maps_both_ways_and_checks_the_return(tmp_path, capsys):
+    """--range LO:START:HI: the start orbit continued down to LO and up to HI (two roots
+    born at START), every stable point returned under the exact integrator; LO:START:HI
+    out of order, or four numbers, is one line and exit 2."""
+    argv = ["continue", "--gap-mm", "0.5", "--friction", "off", "--modes", "1",
+            "--range", "29.5:30:30.5", "--start-from", "masri-caughey", "--max-points", "3",
+            "--no-switch", "--seeds", "0", "--out", str(tmp_path), "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    values = [[p["value"] for p in b["points"]] for b in out["branches"]]
+    assert len(values) == 2 and all(b["born"] == {"kind": "start", "value": 30.0}
+                                    for b in out["branches"])
+    assert min(values[0] + values[1]) < 30.0 < max(values[0] + values[1])
+    rc = out["return_check"]
+    stable = sum(p["stable"] for b in out["branches"] for p in b["points"])
+    assert rc["checked"] == stable > 0 and rc["failed"] == [] and rc["largest"] <= RETURN_TOL
+    for bad in ("30.5:30:29.5", "29:30:31:32"):
+        assert main([*argv[:8], bad, *argv[9:-1]]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--range" in err[0], err

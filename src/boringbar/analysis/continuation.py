@@ -66,7 +66,9 @@ class ContinuationOptions:
     smallest step the halving goes down to before the branch stops (relative);
     ``switch``, ``seeds``, ``max_branches``: the orbit map's (docs/continuation.md, "The
     orbit map"); ``other_end``: the map covers [other_end, stop] (either order), the
-    first orbit inside it and continued both ways (None: [start value, stop])."""
+    first orbit inside it and continued both ways (None: [start value, stop]);
+    ``return_periods``: the return check of every stable point (the exact integrator
+    over that many periods from it, perturbed; 0: none)."""
 
     parameter: str = "force-n"
     stop: float = 5.0
