@@ -11,7 +11,7 @@ import pytest
 
 import boringbar as bb
 from boringbar import shooting as sh
-from boringbar.analysis.continuation import ContinuationOptions, start_state
+from boringbar.analysis.continuation import ContinuationOptions, start_state, system_at
 from boringbar.attractors import RETURN_TOL, periodic_attractors, return_distance, same_orbit
 from boringbar.branch import continue_branch, flow_with
 from boringbar.cli.main import main
@@ -264,3 +264,19 @@ def test_cli_range_lo_start_hi_maps_both_ways_and_checks_the_return(tmp_path, ca
         assert main([*argv[:8], bad, *argv[9:-1]]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "--range" in err[0], err
+
+
+@pytest.mark.parametrize(("name", "value"), [("force-n", 12.0), ("ratio", 0.9),
+                                             ("gap-mm", 0.3), ("restitution", 0.5),
+                                             ("friction-force-n", 0.05),
+                                             ("ball-mass-g", 20.0)])
+def test_the_system_at_a_value_is_the_flow_the_branch_uses(name, value):
+    """Seeds and the return check run the exact integrator on system_at(value); its flow
+    is the branch's (flow_with) in every quantity the parameter moves."""
+    system = make_system("ball", "physical", gap=0.5e-3, friction=True)
+    o = ContinuationOptions(parameter=name, force_n=20.0, ratio=1.0)
+    ref = sh.make_flow(system, Harmonic(20.0, ratio=1.0))
+    want = flow_with(ref, name, value, ref)
+    got = sh.make_flow(*system_at(system, o, value))
+    for field in ("amplitude", "omega", "half", "e", "fc", "fs", "m", "meff", "v_impact"):
+        assert getattr(got, field) == pytest.approx(getattr(want, field), rel=1e-12), field
