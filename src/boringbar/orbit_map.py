@@ -82,7 +82,8 @@ class OrbitMap:
 @dataclass(frozen=True)
 class MapOptions:
     """How a map is grown: ``switch`` at branch points, period doublings and grazings;
-    branches of period at most ``max_period``; at most ``max_branches``; the steps of
+    branches of period at most ``max_period``; at most ``max_branches`` followed (their
+    mirror images not counted); the steps of
     every branch (relative to the range, as :func:`~boringbar.branch.continue_branch`)."""
 
     switch: bool = True
@@ -114,7 +115,9 @@ def orbit_map(fl: Flow, name: str, x0, stop: float, *, seeds=(), periods: int = 
         todo += [(None, ("seed", value), fl, _seeded(at, name, x, end, k, o, i, om))
                  for end in (om.lo, om.hi) if end != value]
     while todo:
-        if len(om.branches) >= o.max_branches:
+        # a mirror image costs nothing (it is not continued), so only followed branches
+        # count: with images counted, 24 branches were 12 orbits
+        if len(om.branches) - len(om.mirrors) // 2 >= o.max_branches:
             left = ", ".join(f"{born[0]} at {born[1]:.6g}" for _, born, _, _ in todo)
             om.notes.append(f"branch limit of {o.max_branches} reached: {len(todo)} "
                             f"branch(es) not followed ({left})")
