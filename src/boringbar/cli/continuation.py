@@ -68,7 +68,7 @@ def add_continue(sub) -> None:
     g.add_argument("--seeds", type=int, default=3, metavar="N",
                    help="brute-force attractors at N values spread over --range seed "
                         "branches; those at 2N other values are checked against the map "
-                        "(force-n or ratio of the free ball; default 3, 0: none)")
+                        "(the free ball; default 3, 0: none)")
     g.add_argument("--max-branches", type=int, default=24, metavar="N",
                    help="at most N branches in the map (default 24)")
     g.add_argument("--return-periods", type=int, default=200, metavar="N",
