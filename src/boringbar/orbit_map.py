@@ -266,24 +266,33 @@ def on_branch(mb: MapBranch, value: float, x, k: int, at: Flow) -> bool:
 
 
 def _duplicate(om: OrbitMap, br: Branch, parent: int | None) -> bool:
-    """A branch whose later half lies on a branch of the map other than its parent, with
-    as many events a period (next to a grazing an orbit comes within SAME_ORBIT of the
-    one with an impact fewer: the four-impact branch of the issue's case was dropped as
-    the three-impact one)."""
-    pts = br.points[len(br.points) // 2:]
-    if len(pts) < 2:
+    """A branch that retraces the map: the middles of its first and later halves both
+    lie on branches other than its parent, with as many events a period (next to a
+    grazing an orbit comes within SAME_ORBIT of the one with an impact fewer: the
+    four-impact branch of the issue's case was dropped as the three-impact one).  A
+    branch that only joins a known one is kept: the period-2 orbits born at 21.63 N in
+    the issue's case, stable at first, join those born at a grazing at 22.37 N, and
+    were dropped whole when the later half alone decided."""
+    if len(br.points) < 4:
         return False
-    mid = pts[len(pts) // 2]
-    rate = len(mid.events) / br.periods
+    half = len(br.points) // 2
+    return all(_on_others(om, br, pts[len(pts) // 2], parent)
+               for pts in (br.points[:half], br.points[half:]))
+
+
+def _on_others(om: OrbitMap, br: Branch, pt: Point, parent: int | None) -> bool:
+    """Whether the orbit pt of ``br`` lies on a branch of the map other than ``parent``
+    with as many events a period."""
+    rate = len(pt.events) / br.periods
     others = [mb for i, mb in enumerate(om.branches) if i != parent and mb.branch.points
               and len(mb.branch.points[0].events) / mb.branch.periods == rate]
     if not others:
         return False
-    at = dataclasses.replace(others[0].flow, phase=mid.phase)
-    at = flow_with(at, br.parameter, mid.value, others[0].flow)
-    x0 = carry(at, mid.x, 0.0)
+    at = dataclasses.replace(others[0].flow, phase=pt.phase)
+    at = flow_with(at, br.parameter, pt.value, others[0].flow)
+    x0 = carry(at, pt.x, 0.0)
     at0 = dataclasses.replace(at, phase=0.0)
-    return any(on_branch(mb, mid.value, x0, br.periods, at0) for mb in others)
+    return any(on_branch(mb, pt.value, x0, br.periods, at0) for mb in others)
 
 
 def _children(om: OrbitMap, i: int, o: MapOptions) -> list:
@@ -360,7 +369,7 @@ def _doubled(fl: Flow, br: Branch, which: int, om: OrbitMap, o: MapOptions):
 
 #: How far past a grazing (of the range) the orbit with the new impact sequence is sought
 #: (closest first; too close, its new impact can be slower than the capture threshold).
-GRAZING_STEPS = (1e-6, 1e-5, 1e-4, 1e-3)
+GRAZING_STEPS = (1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2)
 
 
 def _grazed(fl: Flow, br: Branch, om: OrbitMap, o: MapOptions):
