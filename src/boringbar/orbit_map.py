@@ -126,7 +126,11 @@ def orbit_map(fl: Flow, name: str, x0, stop: float, *, seeds=(), periods: int = 
         if (born[0] == "seed" and _known_seed(om, make)) or _by_symmetry(om, parent, born, make):
             continue
         br = _follow(om, born, make)
-        if br is None or _duplicate(om, br, parent):
+        if br is None:
+            continue
+        if _duplicate(om, br, parent):
+            om.notes.append(f"the branch from the {born[0]} at {born[1]:.10g} retraces the "
+                            "map: not kept")
             continue
         i = len(om.branches)
         _add(om, MapBranch(br, parent, born, flow, getattr(make, "seed", (0,) * 5)[4]
