@@ -376,6 +376,7 @@ def _doubled(fl: Flow, br: Branch, which: int, om: OrbitMap, o: MapOptions):
 GRAZING_STEPS = (1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2)
 
 
+
 def _grazed(fl: Flow, br: Branch, om: OrbitMap, o: MapOptions):
     """The branch on the other side of the grazing that ends ``br``: Newton at fixed p
     just past it from its last orbit; a branch refused at the start if none is found."""

@@ -524,11 +524,17 @@ def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-1
     tip's RMS if ``rms``: 512 matrix exponentials a period, more than the Newton solve).
     ``damped``: a step that does not lower |P^k(x) - x| (scaled by :func:`block_scale`) is
     halved, up to DAMPING times (next to a grazing, where P has a square-root singularity,
-    full steps jump between the two sides and never converge)."""
+    full steps jump between the two sides and never converge), and Newton gives up when
+    the residual stalls (STALL)."""
     x = np.asarray(x0, float).copy()
     pr = advance(fl, x, periods)
+    sizes = []
     for _ in range(max_iter):
         r = pr.x - x
+        sizes.append(float(np.max(np.abs(r) / block_scale(fl, x))))
+        if damped and len(sizes) > STALL and sizes[-1] > 0.5 * sizes[-1 - STALL]:
+            raise OrbitRefused(f"Newton stalls (residual {np.max(np.abs(r)):.3g}, not halved "
+                               f"in {STALL} damped iterations)")
         dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
         x, pr = _stepped(fl, x, dx, r, periods, damped)
         if np.max(np.abs(dx) / block_scale(fl, x)) < tol:
@@ -542,6 +548,10 @@ def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-1
 
 #: At most this many halvings of a damped Newton step.
 DAMPING = 8
+#: A damped Newton whose scaled residual has not halved in this many iterations gives up
+#: (next to a grazing the full steps cycle between two event sequences for ever: 30
+#: iterations at each of six distances were half of a friction map's time).
+STALL = 10
 
 
 def _stepped(fl: Flow, x, dx, r, periods: int, damped: bool):
