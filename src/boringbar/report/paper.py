@@ -236,7 +236,7 @@ class MapSettings:
     seeds: int
     max_branches: int
     step: float = 0.05
-    max_step: float = 0.05
+    max_step: float = 0.025
 
     def options(self) -> ContinuationOptions:
         return ContinuationOptions(parameter="force-n", stop=self.hi, other_end=self.lo,
@@ -370,9 +370,10 @@ def published_steps(quick: bool = False) -> list[Step]:
                 ("bifurcation", "--bar", "ball", "--gap-mm", gap, "--friction", fr,
                  "--force-n", forces, "--ratio", "1.0", *dur),
                 _bifurcation_run(gap, fr == "on", forces, "1.0", duration), friction=fr == "on"))
-    # quick: coarser steps and fewer points a branch (its map's step costs about 3 s more
-    # CPU than the single branches it replaced, docs/continuation.md)
-    maps = MapSettings(5.0, 50.0, 15, 3, 12) if quick else \
+    # quick: steps up to a tenth of the range, 10 points a branch, 8 branches followed,
+    # so that the maps cost a few seconds more than the single branches they replaced
+    # (docs/continuation.md, "In the published study")
+    maps = MapSettings(5.0, 50.0, 10, 3, 8, max_step=0.1) if quick else \
         MapSettings(5.0, 50.0, 40, 3, 24, max_step=0.025)
     steps.append(Step("continuation", "continuation",
                       "Orbit maps (continued periodic orbits) over the bifurcation diagrams",
