@@ -155,16 +155,21 @@ def _cmd_continue(args) -> Outcome:
             say(f"note: {note}")
         for c in out["attractor_check"]:
             say(_check_line(c, name))
-        rc = out["return_check"]
-        if rc["checked"]:
-            say(f"return check: {rc['checked']} stable points, {len(rc['failed'])} not back "
-                f"within 1e-6 after {args.return_periods} periods (largest distance "
-                f"{rc['largest']:.2g})")
-        for f in rc["failed"]:
-            say(f"  branch {f['branch']} at {name} = {f['value']:.6g}: {f['distance']:.2g}")
+        for line in _return_lines(out["return_check"], name, args.return_periods):
+            say(line)
         say(wrote(files))
 
     return Outcome(out, text)
+
+
+def _return_lines(rc: dict, name: str, periods: int) -> list[str]:
+    """The return check: one line, and one a stable point that did not come back."""
+    if not rc["checked"]:
+        return []
+    return [f"return check: {rc['checked']} stable points, {len(rc['failed'])} not back "
+            f"within 1e-6 after {periods} periods (largest distance {rc['largest']:.2g})"] + \
+        [f"  branch {f['branch']} at {name} = {f['value']:.6g}: {f['distance']:.2g}"
+         for f in rc["failed"]]
 
 
 def _branch_line(i: int, b: dict, name: str) -> str:
