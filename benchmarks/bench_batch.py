@@ -44,8 +44,8 @@ def fresh(shape: tuple) -> np.ndarray:
 
 
 def kernel_figures(preset: str, n_modes: int, steps: int, rounds: int = 3) -> None:
-    system = make_system("ball", preset, gap=0.5e-3, friction=True, n_modes=n_modes)
-    omega = RATIO * system.reference_frequency
+    system = make_system("ball", preset, gap_m=0.5e-3, friction=True, n_modes=n_modes)
+    omega = RATIO * system.reference_frequency_rad_s
 
     def batch_of(nb: int):
         P = np.array([pack(system, omega, FORCE, DT) for _ in range(nb)])
@@ -112,7 +112,7 @@ def sweep_figures() -> None:
 
 
 def basin_figures() -> None:
-    system = make_system("ball", "paper", gap=0.5e-3, friction=False)
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=False)
     published = basins_mod.BasinOptions(force_n=FORCE, ratio=RATIO)
     small = basins_mod.BasinOptions((-1.5e-3, 1.5e-3, 4), (-1.5, 1.5, 4), force_n=FORCE,
                                     ratio=RATIO)

@@ -45,11 +45,11 @@ def main() -> None:
 
 
 def points(args) -> None:
-    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     forcing = Harmonic(30.0, ratio=1.0)
     fl = make_flow(system, forcing)
     x0 = start_state(system, ContinuationOptions(start="masri-caughey"), fl)
-    simulate(system, forcing, duration=1e-4, dt=1e-6, integrator="exact")  # compile
+    simulate(system, forcing, duration_s=1e-4, dt_s=1e-6, integrator="exact")  # compile
     tic = time.perf_counter()
     br = continue_branch(fl, "force-n", x0, 5.0, step=0.005, max_step=0.005,
                          max_points=args.points)
@@ -59,8 +59,8 @@ def points(args) -> None:
     state = State(x0, 0.0)
     tic = time.perf_counter()
     for v in values:
-        run = simulate(system, Harmonic(v, ratio=1.0), duration=args.settle_periods * fl.period,
-                       dt=dt, integrator="exact", initial=state)
+        run = simulate(system, Harmonic(v, ratio=1.0), duration_s=args.settle_periods * fl.period,
+                       dt_s=dt, integrator="exact", initial=state)
         state = State(run.final.x, 0.0)
     t_brute = time.perf_counter() - tic
     n = len(values)
@@ -74,7 +74,7 @@ def points(args) -> None:
 
 def issue_map() -> None:
     """The orbit map of the issue's case, timed."""
-    system = make_system("ball", "paper", gap=0.1e-3, friction=False)
+    system = make_system("ball", "paper", gap_m=0.1e-3, friction=False)
     tic = time.perf_counter()
     ds = bb.continuation(system, Harmonic(5.0, ratio=1.0),
                          options=ContinuationOptions(parameter="force-n", stop=35.0))

@@ -35,13 +35,13 @@ from boringbar.reference.stability import limit_at_speeds
 
 CASES = [
     ("Masri-Caughey orbit: 1 mode, gap 0.5 mm, no friction, 30 N, r = 1.00, started on it",
-     "physical", {"n_modes": 1, "gap": 0.5e-3, "friction": False}, 30.0, 1.0, "orbit"),
+     "physical", {"n_modes": 1, "gap_m": 0.5e-3, "friction": False}, 30.0, 1.0, "orbit"),
     ("paper, gap 0.1 mm, no friction, 10 N, r = 1.00", "paper",
-     {"gap": 0.1e-3, "friction": False}, 10.0, 1.0, True),
+     {"gap_m": 0.1e-3, "friction": False}, 10.0, 1.0, True),
     ("physical, gap 0.1 mm, no friction, 20 N, r = 1.00, started on its attractor",
-     "physical", {"gap": 0.1e-3, "friction": False}, 20.0, 1.0, "settled"),
+     "physical", {"gap_m": 0.1e-3, "friction": False}, 20.0, 1.0, "settled"),
     ("physical, gap 0.5 mm, friction on, 10 N, r = 1.00", "physical",
-     {"gap": 0.5e-3}, 10.0, 1.0, False),
+     {"gap_m": 0.5e-3}, 10.0, 1.0, False),
 ]
 
 
@@ -49,7 +49,7 @@ def timed_pair(system, forcing, repeat: int, kw_rk4: dict, kw_exact: dict):
     """RK4 and exact, best of ``repeat`` each, the runs alternating: a burst of load on a
     shared machine then slows both sides, not one."""
     for kw in (kw_rk4, kw_exact):
-        simulate(system, forcing, **{**kw, "duration": 1e-3})  # JIT warm-up / cache load
+        simulate(system, forcing, **{**kw, "duration_s": 1e-3})  # JIT warm-up / cache load
     best = [math.inf, math.inf]
     runs = [None, None]
     for _ in range(repeat):
@@ -62,13 +62,13 @@ def timed_pair(system, forcing, repeat: int, kw_rk4: dict, kw_exact: dict):
 def orbit_start(s, force):
     """The closed-form orbit and the state just after its + wall impact."""
     bar, d = s.bar, s.damper
-    o = [o for o in two_impact_orbit(bar.mass[0], bar.stiffness[0], bar.damping[0],
-                                     bar.psi_tip[0], bar.psi_damper[0], d.mass, d.gap,
-                                     d.restitution, force, s.reference_frequency)
+    o = [o for o in two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+                                     bar.psi_tip[0], bar.psi_damper[0], d.mass_kg, d.gap_m,
+                                     d.restitution, force, s.reference_frequency_rad_s)
          if o.admissible][0]
     t0 = o.impact_time
     x = np.array([float(o.modal_displacement(t0)), o.bar_velocity_after / bar.psi_damper[0],
-                  d.gap / 2, -o.ball_speed - o.bar_velocity_after])
+                  d.gap_m / 2, -o.ball_speed - o.bar_velocity_after])
     return o, State(x, t0)
 
 
@@ -86,14 +86,14 @@ def cut_case(repeat: int) -> None:
     """The regenerative cut of the module docstring."""
     s = make_system("solid")
     rpm = 1210.0
-    f = Regenerative(depth=2.0 * float(limit_at_speeds(s, [rpm])[0]), rpm=rpm,
+    f = Regenerative(depth_m=2.0 * float(limit_at_speeds(s, [rpm])[0]), rpm=rpm,
                      stop_at_zero=True)
 
     def run(integrator, dt, n=repeat):
-        simulate(s, f, duration=1e-3, dt=dt, integrator=integrator)  # JIT warm-up
+        simulate(s, f, duration_s=1e-3, dt_s=dt, integrator=integrator)  # JIT warm-up
         best, r = math.inf, None
         for _ in range(n):
-            r = simulate(s, f, duration=2.0, dt=dt, integrator=integrator,
+            r = simulate(s, f, duration_s=2.0, dt_s=dt, integrator=integrator,
                          record_every=round(8e-5 / dt))
             best = min(best, r.elapsed_s)
         return r, best
@@ -102,7 +102,7 @@ def cut_case(repeat: int) -> None:
     w_ref = ref.history[:, 1]
     print(f"\nregenerative cut: solid bar (2 modes), {rpm:g} rpm, 2 x the analytic limit, "
           "from rest to the first zero of the force")
-    print(f"  reference: rk4 dt=1.25e-7, first zero {ref.cutting['first_zero_time_s']:.10f} s")
+    print(f"  reference: rk4 dt_s=1.25e-7, first zero {ref.cutting['first_zero_time_s']:.10f} s")
     ex1, _ = run("exact", 1e-6, 1)
     t_ex = ex1.cutting["first_zero_time_s"]
     times = {}
@@ -116,7 +116,7 @@ def cut_case(repeat: int) -> None:
               f"({r.cutting['first_zero_time_s'] - t_ex:+.1e} s from exact)   "
               f"balance {r.energy['balance_relative']:.1e}")
     print(f"  exact at H=1e-6 takes {times['exact', 1e-6] / times['rk4', 1e-6]:.1f}x RK4's "
-          f"time at dt=1e-6; at H=8e-6 {times['exact', 8e-6] / times['rk4', 1e-6]:.1f}x")
+          f"time at dt_s=1e-6; at H=8e-6 {times['exact', 8e-6] / times['rk4', 1e-6]:.1f}x")
 
 
 def main() -> None:
@@ -137,20 +137,20 @@ def main() -> None:
             # about 2 s, a whole number of periods in the steady window (last 80 %)
             orbit, start = orbit_start(s, force)
             period = 2 * orbit.system.half_period
-            extra = {"initial": start, "duration": 5 * round(2.0 / period / 5) * period}
+            extra = {"initial": start, "duration_s": 5 * round(2.0 / period / 5) * period}
         elif periodic == "settled":
             # the state after 2 s from rest: RK4 and exact then follow the same orbit
             extra = {"initial": simulate(s, f, integrator="exact").final}
         # exact: dt only sets the steady window's rounding; a divisor of the period
         # makes the orbit's window a whole number of periods
         rk4, t_rk4, ex, t_ex = timed_pair(
-            s, f, args.repeat, {"duration": 2.0, "dt": 1e-6, **extra},
-            {"duration": 2.0, "integrator": "exact",
-             "dt": period / 2000 if periodic == "orbit" else 1e-6, **extra})
+            s, f, args.repeat, {"duration_s": 2.0, "dt_s": 1e-6, **extra},
+            {"duration_s": 2.0, "integrator": "exact",
+             "dt_s": period / 2000 if periodic == "orbit" else 1e-6, **extra})
         print(f"\n{label} ({s.bar.n_modes} mode(s))")
-        print(f"  rk4 dt=1e-6 : {t_rk4:8.4f} s   rms {rk4.rms_tip:.10e} m   "
+        print(f"  rk4 dt_s=1e-6 : {t_rk4:8.4f} s   rms {rk4.rms_tip_m:.10e} m   "
               f"{rk4.metrics['impacts_total']} impacts   {rk4.pattern.name}")
-        print(f"  exact       : {t_ex:8.4f} s   rms {ex.rms_tip:.10e} m   "
+        print(f"  exact       : {t_ex:8.4f} s   rms {ex.rms_tip_m:.10e} m   "
               f"{ex.metrics['impacts_total']} impacts   {ex.pattern.name}   "
               f"({ex.metrics['events']} events)")
         print(f"  exact is {t_rk4 / t_ex:.1f}x faster; energy balance rk4 "
@@ -162,19 +162,19 @@ def main() -> None:
         if periodic == "orbit":
             ref = orbit.rms_tip()
             print(f"  reference: the closed-form orbit's RMS {ref:.12e} m")
-            print(f"  rms error vs reference: rk4 dt=1e-6 {abs(rk4.rms_tip - ref) / ref:.2e}, "
-                  f"exact {abs(ex.rms_tip - ref) / ref:.2e}")
+            print(f"  rms error vs reference: rk4 dt_s=1e-6 {abs(rk4.rms_tip_m - ref) / ref:.2e}, "
+                  f"exact {abs(ex.rms_tip_m - ref) / ref:.2e}")
             continue
         if args.skip_reference:
             continue
         ini = extra.get("initial")
-        r1 = simulate(s, f, dt=2.5e-7, initial=ini).rms_tip
-        r2 = simulate(s, f, dt=1.25e-7, initial=ini).rms_tip
+        r1 = simulate(s, f, dt_s=2.5e-7, initial=ini).rms_tip_m
+        r2 = simulate(s, f, dt_s=1.25e-7, initial=ini).rms_tip_m
         ref = 2 * r2 - r1
         print(f"  reference (rk4 2.5e-7 / 1.25e-7, Richardson): rms {ref:.10e} m "
               f"(rk4 1.25e-7 alone differs by {abs(r2 - ref) / ref:.1e})")
-        print(f"  rms error vs reference: rk4 dt=1e-6 {abs(rk4.rms_tip - ref) / ref:.2e}, "
-              f"exact {abs(ex.rms_tip - ref) / ref:.2e}")
+        print(f"  rms error vs reference: rk4 dt_s=1e-6 {abs(rk4.rms_tip_m - ref) / ref:.2e}, "
+              f"exact {abs(ex.rms_tip_m - ref) / ref:.2e}")
     cut_case(args.repeat)
 
 

@@ -38,7 +38,7 @@ def cases():
     for preset in PRESETS:
         for gap in GAPS:
             for friction in FRICTION:
-                s = make_system("ball", preset, gap=gap, friction=friction)
+                s = make_system("ball", preset, gap_m=gap, friction=friction)
                 for force in FORCES:
                     for ratio in RATIOS:
                         label = (f"{preset:8s} gap {gap * 1e3:.1f} mm friction "
@@ -58,7 +58,7 @@ def main() -> None:
     tic = time.perf_counter()
     for _, s, f in {(c[1].preset, c[1].bar.n_modes): c for c in grid}.values():
         for integrator in ("rk4", "exact"):  # compile or load from the cache
-            simulate(s, f, duration=1e-3, dt=1e-6, integrator=integrator)
+            simulate(s, f, duration_s=1e-3, dt_s=1e-6, integrator=integrator)
     print(f"warm-up (compile or cache load): {time.perf_counter() - tic:.1f} s")
     rows = []
     print(f"{'case':48s} {'rk4 s':>8s} {'exact s':>8s} {'ratio':>6s}  patterns rk4 / exact")
@@ -68,7 +68,7 @@ def main() -> None:
         order = ("rk4", "exact") if i % 2 == 0 else ("exact", "rk4")
         for _ in range(args.repeat):
             for integrator in order:
-                run = simulate(s, f, duration=args.duration, dt=1e-6, integrator=integrator)
+                run = simulate(s, f, duration_s=args.duration, dt_s=1e-6, integrator=integrator)
                 runs[integrator] = run
                 best[integrator] = min(best[integrator], run.elapsed_s)
         ratio = best["rk4"] / best["exact"]

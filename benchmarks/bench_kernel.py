@@ -23,35 +23,35 @@ from boringbar import Harmonic, make_system, simulate
 from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
 from boringbar.simulate import Integration, simulate_stage_loop
 
-CASE = {"bar": "ball", "preset": "paper", "gap": 0.1e-3, "friction": False}
+CASE = {"bar": "ball", "preset": "paper", "gap_m": 0.1e-3, "friction": False}
 FORCE, RATIO = 10.0, 1.0
 
 
 def kernel_run(n_modes: int, duration: float = 2.0, dt: float = 1e-6, friction=None):
     """Best of three of the kernel (step map) and of its stage loop, rounds interleaved."""
-    system = make_system(CASE["bar"], CASE["preset"], gap=CASE["gap"],
+    system = make_system(CASE["bar"], CASE["preset"], gap_m=CASE["gap_m"],
                          friction=CASE["friction"] if friction is None else friction,
                          n_modes=n_modes)
     forcing = Harmonic(FORCE, RATIO)
     for f in (simulate, simulate_stage_loop):  # JIT warm-up / cache load
-        f(system, forcing, duration=1e-4, dt=dt)
+        f(system, forcing, duration_s=1e-4, dt_s=dt)
     best = [math.inf, math.inf]
     runs = [None, None]
     for _ in range(3):
         for i, f in enumerate((simulate, simulate_stage_loop)):
-            runs[i] = f(system, forcing, duration=duration, dt=dt)
+            runs[i] = f(system, forcing, duration_s=duration, dt_s=dt)
             best[i] = min(best[i], runs[i].elapsed_s)
     return runs[0], best[0], runs[1], best[1]
 
 
 def scipy_run(duration: float, rtol: float = 1e-8):
     """The same one-mode frictionless ball damper, event-driven with solve_ivp."""
-    s = make_system(CASE["bar"], CASE["preset"], gap=CASE["gap"], friction=False, n_modes=1)
+    s = make_system(CASE["bar"], CASE["preset"], gap_m=CASE["gap_m"], friction=False, n_modes=1)
     bar, ball = s.bar, s.damper
-    M, K, C = bar.mass[0], bar.stiffness[0], bar.damping[0]
+    M, K, C = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0]
     pl, pd = bar.psi_tip[0], bar.psi_damper[0]
-    m, e, half = ball.mass, ball.restitution, ball.gap / 2
-    om = RATIO * s.reference_frequency
+    m, e, half = ball.mass_kg, ball.restitution, ball.gap_m / 2
+    om = RATIO * s.reference_frequency_rad_s
     meff = 1.0 / (1.0 / m + pd**2 / M)
 
     def rhs(t, x):
@@ -89,19 +89,19 @@ def main() -> None:
     base = None
     for n in (1, 2, 3):
         run, wall, run_s, wall_s = kernel_run(n)
-        steps = round(run.duration / run.dt)
+        steps = round(run.duration_s / run.dt_s)
         if n == 1:
             base = wall
         print(f"kernel rk4, {n} mode(s): {wall:.4f} s per 2 s run, "
               f"{wall / steps * 1e9:.1f} ns/step, "
-              f"{run.duration / wall:.1f} simulated s per wall s, "
+              f"{run.duration_s / wall:.1f} simulated s per wall s, "
               f"{run.metrics['impacts_total']} impacts, pattern {run.pattern.name}; "
               f"stage loop every step: {wall_s / steps * 1e9:.1f} ns/step "
               f"({wall_s / wall:.2f}x), {run_s.metrics['impacts_total']} impacts")
     for n in (1, 2):
         run, wall, run_s, wall_s = kernel_run(n, friction=True)
-        steps = round(run.duration / run.dt)
-        print(f"kernel rk4, {n} mode(s), friction on ({run.system.damper.friction_force:.3g} N):"
+        steps = round(run.duration_s / run.dt_s)
+        print(f"kernel rk4, {n} mode(s), friction on ({run.system.damper.friction_force_n:.3g} N):"
               f" {wall / steps * 1e9:.1f} ns/step, "
               f"{run.metrics['impacts_total']} impacts, pattern {run.pattern.name}; "
               f"stage loop every step: {wall_s / steps * 1e9:.1f} ns/step ({wall_s / wall:.2f}x)")

@@ -23,7 +23,13 @@ import os
 import time
 
 from boringbar import Harmonic, make_system, simulate
-from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, compare_methods, lobes
+from boringbar.analysis.lobes import (
+    PUBLISHED_DEPTH_STEP,
+    PUBLISHED_RPM,
+    LobesOptions,
+    compare_methods,
+    lobes,
+)
 from boringbar.analysis.sweep import Case, published_cases
 from boringbar.model.forcing import Regenerative
 from boringbar.reference.stability import limit_at_speeds
@@ -31,13 +37,14 @@ from boringbar.reference.stability import limit_at_speeds
 
 def timed_lobes(cases, rpm, method):
     tic = time.perf_counter()
-    ds = lobes(cases, LobesOptions(rpm, method=method))
+    # the published 0.01 mm grid for both methods, so the two compare
+    ds = lobes(cases, LobesOptions(rpm, method=method, depth_step_m=PUBLISHED_DEPTH_STEP))
     return ds, time.perf_counter() - tic
 
 
 def report(label, ds, wall):
     mins = ", ".join(f"{c}: {v * 1e3:.2f} mm" for c, v in
-                     zip(ds["case"].values, ds["min_chatter_free_depth"].values, strict=True))
+                     zip(ds["case"].values, ds["min_chatter_free_depth_m"].values, strict=True))
     print(f"{label}: {wall:.1f} s wall, {ds.attrs['runs']} runs "
           f"({wall / max(ds.attrs['runs'], 1):.3f} s per run) on {ds.attrs['workers']} "
           f"workers; min chatter-free depth {mins}")
@@ -47,17 +54,17 @@ def step_cost(bar: str = "solid", preset: str = "physical", repeats: int = 3):
     """ns/step of a stable 2 s cut and of a 2 s harmonic run, best of ``repeats``."""
     system = make_system(bar, preset)
     b = 0.5 * float(limit_at_speeds(system, [1200.0])[0])
-    cut = Regenerative(depth=b, rpm=1200.0)
+    cut = Regenerative(depth_m=b, rpm=1200.0)
     harmonic = Harmonic(10.0, 1.0)
     for forcing in (cut, harmonic):  # JIT warm-up / cache load
-        simulate(system, forcing, duration=1e-3)
+        simulate(system, forcing, duration_s=1e-3)
     best = {}
     for name, forcing in (("cut", cut), ("harmonic", harmonic)):
         best[name] = math.inf
         for _ in range(repeats):
-            run = simulate(system, forcing, duration=2.0)
+            run = simulate(system, forcing, duration_s=2.0)
             assert not (name == "cut" and run.cutting["chatter"])
-            best[name] = min(best[name], run.elapsed_s / round(run.duration / run.dt) * 1e9)
+            best[name] = min(best[name], run.elapsed_s / round(run.duration_s / run.dt_s) * 1e9)
     return best
 
 

@@ -48,23 +48,23 @@ def single_cases():
     ball = "ball"
     yield "solid paper", make_system("solid", "paper"), Harmonic(10.0, 1.0), {}
     yield "tmd physical 2 modes", make_system("tmd", "physical"), Harmonic(20.0, 1.0), {}
-    yield "locked paper", make_system(ball, "paper", gap=0.5e-3, locked=True), \
+    yield "locked paper", make_system(ball, "paper", gap_m=0.5e-3, locked=True), \
         Harmonic(10.0, 1.0), {}
-    yield "ball paper 0.1 mm", make_system(ball, "paper", gap=0.1e-3, friction=False), \
+    yield "ball paper 0.1 mm", make_system(ball, "paper", gap_m=0.1e-3, friction=False), \
         Harmonic(10.0, 1.0), {}
-    yield "ball paper 0.5 mm friction 20 N", make_system(ball, "paper", gap=0.5e-3,
+    yield "ball paper 0.5 mm friction 20 N", make_system(ball, "paper", gap_m=0.5e-3,
                                                          friction=True), Harmonic(20.0, 0.98), {}
-    yield "ball physical 2 modes friction", make_system(ball, "physical", gap=0.5e-3,
+    yield "ball physical 2 modes friction", make_system(ball, "physical", gap_m=0.5e-3,
                                                         friction=True), Harmonic(20.0, 1.0), {}
-    yield "ball physical 3 modes friction", make_system(ball, "physical", gap=0.1e-3,
+    yield "ball physical 3 modes friction", make_system(ball, "physical", gap_m=0.1e-3,
                                                         friction=True, n_modes=3), \
         Harmonic(10.0, 1.02), {}
-    yield "ball paper friction, stage loop", make_system(ball, "paper", gap=0.5e-3,
+    yield "ball paper friction, stage loop", make_system(ball, "paper", gap_m=0.5e-3,
                                                          friction=True), \
         Harmonic(10.0, 1.0), {"stage_loop": True}
-    yield "solid cut", make_system("solid", "paper"), Regenerative(depth=1e-3, rpm=1200.0), {}
-    yield "ball physical cut", make_system(ball, "physical", gap=0.1e-3, friction=True), \
-        Regenerative(depth=2e-3, rpm=1200.0, revolutions=2), {}
+    yield "solid cut", make_system("solid", "paper"), Regenerative(depth_m=1e-3, rpm=1200.0), {}
+    yield "ball physical cut", make_system(ball, "physical", gap_m=0.1e-3, friction=True), \
+        Regenerative(depth_m=2e-3, rpm=1200.0, revolutions=2), {}
 
 
 def setup(system, forcing, duration, init=None, record_every=10, strobe=True):
@@ -117,12 +117,12 @@ def batch_cases():
         for preset, nm in (("paper", 1), ("physical", 2)):
             for friction in (False, True):
                 yield (f"ball {preset} friction {friction} B={nb}",
-                       varied(make_system("ball", preset, gap=0.5e-3, friction=friction,
+                       varied(make_system("ball", preset, gap_m=0.5e-3, friction=friction,
                                           n_modes=nm), nb))
             yield f"solid {preset} B={nb}", varied(make_system("solid", preset, n_modes=nm), nb)
             yield f"tmd {preset} B={nb}", varied(make_system("tmd", preset, n_modes=nm), nb)
             yield (f"locked {preset} B={nb}",
-                   varied(make_system("ball", preset, gap=0.5e-3, locked=True, n_modes=nm), nb))
+                   varied(make_system("ball", preset, gap_m=0.5e-3, locked=True, n_modes=nm), nb))
 
 
 def compare(label, a, b):
@@ -156,18 +156,18 @@ def single_ns(R0, su, repeat: int) -> list[float]:
 def timing(R0, B0, repeat):
     print(f"\nspeed, old and new alternately, best of {repeat}:")
     for nm, gap, friction in ((1, 0.1e-3, False), (1, 0.5e-3, True), (2, 0.1e-3, False)):
-        system = make_system("ball", "paper" if nm == 1 else "physical", gap=gap,
+        system = make_system("ball", "paper" if nm == 1 else "physical", gap_m=gap,
                              friction=friction, n_modes=nm)
         ns = single_ns(R0, setup(system, Harmonic(10.0, 1.0), 2.0, record_every=0,
                                  strobe=False), repeat)
         print(f"  run_rk4 ball {nm} mode(s), gap {gap * 1e3:.1f} mm, friction "
               f"{'on ' if friction else 'off'}, 2 s: old {ns[0]:.1f} ns/step, new {ns[1]:.1f} "
               f"ns/step (old/new {ns[0] / ns[1]:.2f}x)")
-    ns = single_ns(R0, setup(make_system("solid", "paper"), Regenerative(depth=1e-3, rpm=1200.0),
+    ns = single_ns(R0, setup(make_system("solid", "paper"), Regenerative(depth_m=1e-3, rpm=1200.0),
                              1.0, record_every=0, strobe=False), repeat)
     print(f"  run_rk4 solid bar cut, 1 s: old {ns[0]:.1f} ns/step, new {ns[1]:.1f} ns/step "
           f"(old/new {ns[0] / ns[1]:.2f}x)")
-    system = make_system("ball", "paper", gap=0.5e-3, friction=True)
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=True)
     jobs = [(system, Harmonic(10.0 + j % 2 * 10.0, 0.97 + 0.005 * j), None) for j in range(16)]
     su, arrays = batch_arrays(jobs, 0.3)
     ns = best_ns(lambda mod: run_batch(mod, su, arrays), (B0, B1), su.n_steps * 16, repeat)

@@ -39,9 +39,9 @@ CASES = [("stable, 0.5 x limit, 0.3 s", 0.5, 0.3), ("chattering, 2 x limit, 0.9 
 
 
 def history(system, depth, duration, integrator, dt):
-    f = Regenerative(depth=depth, rpm=RPM)
+    f = Regenerative(depth_m=depth, rpm=RPM)
     tic = time.perf_counter()
-    run = simulate(system, f, duration=duration, dt=dt, integrator=integrator,
+    run = simulate(system, f, duration_s=duration, dt_s=dt, integrator=integrator,
                    record_every=round(SAMPLE / dt))
     return run.history[:, 1], time.perf_counter() - tic
 

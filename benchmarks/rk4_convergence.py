@@ -33,38 +33,38 @@ N_PERIODS = 40
 
 
 def masri_caughey_case():
-    s = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    s = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     bar, d = s.bar, s.damper
-    om = s.reference_frequency
-    o = [o for o in two_impact_orbit(bar.mass[0], bar.stiffness[0], bar.damping[0],
-                                     bar.psi_tip[0], bar.psi_damper[0], d.mass, d.gap,
+    om = s.reference_frequency_rad_s
+    o = [o for o in two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+                                     bar.psi_tip[0], bar.psi_damper[0], d.mass_kg, d.gap_m,
                                      d.restitution, 30.0, om) if o.admissible][0]
     t0 = o.impact_time
     x = np.array([float(o.modal_displacement(t0)), o.bar_velocity_after / bar.psi_damper[0],
-                  d.gap / 2, -o.ball_speed - o.bar_velocity_after])
+                  d.gap_m / 2, -o.ball_speed - o.bar_velocity_after])
     return "Masri-Caughey orbit, 1 mode, 30 N", s, Harmonic(30.0, 1.0), State(x, t0), o
 
 
 def settled_case():
-    s = make_system("ball", "physical", gap=0.1e-3, friction=False)
+    s = make_system("ball", "physical", gap_m=0.1e-3, friction=False)
     f = Harmonic(20.0, 1.0)
-    settled = simulate(s, f, duration=2.0, integrator="exact")
+    settled = simulate(s, f, duration_s=2.0, integrator="exact")
     return "physical, 2 modes, gap 0.1 mm, 20 N", s, f, settled.final, None
 
 
 def errors(label, s, f, start, orbit):
-    period = 2 * math.pi / f.omega(s.reference_frequency)
+    period = 2 * math.pi / f.omega(s.reference_frequency_rad_s)
     dur = N_PERIODS * period
-    ex = simulate(s, f, duration=dur, dt=period / 4000, initial=start, steady_fraction=1.0,
+    ex = simulate(s, f, duration_s=dur, dt_s=period / 4000, initial=start, steady_fraction=1.0,
                   integrator="exact")
     if orbit is not None:
-        print(f"{label}: exact rms {ex.rms_tip:.12e}, closed form {orbit.rms_tip():.12e} "
-              f"(rel. diff {abs(ex.rms_tip / orbit.rms_tip() - 1):.1e})")
+        print(f"{label}: exact rms {ex.rms_tip_m:.12e}, closed form {orbit.rms_tip():.12e} "
+              f"(rel. diff {abs(ex.rms_tip_m / orbit.rms_tip() - 1):.1e})")
     rms_err, t_err = [], []
     for dt in DTS:
-        run = simulate(s, f, duration=dur, dt=dt, initial=start, steady_fraction=1.0)
+        run = simulate(s, f, duration_s=dur, dt_s=dt, initial=start, steady_fraction=1.0)
         m = min(len(run.impacts), len(ex.impacts)) - 1
-        rms_err.append(abs(run.rms_tip - ex.rms_tip) / ex.rms_tip)
+        rms_err.append(abs(run.rms_tip_m - ex.rms_tip_m) / ex.rms_tip_m)
         t_err.append(float(np.max(np.abs(run.impacts[:m, 0] - ex.impacts[:m, 0]))))
         print(f"  dt {dt:.2e}: rms error {rms_err[-1]:.3e}, impact-time error "
               f"{t_err[-1]:.3e} s ({len(run.impacts)} vs {len(ex.impacts)} impacts)")

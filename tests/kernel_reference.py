@@ -78,10 +78,10 @@ RPM_FAST = 20000.0  # tau = 3 ms: 6.7 revolutions in 20 ms (tests/test_chatter.p
 
 
 # --- capture: the cases as simulate packs them ----------------------------------------
-def _single(system, forcing, *, integrator, duration, dt=DT, initial=None, record_every=0,
+def _single(system, forcing, *, integrator, duration_s, dt_s=DT, initial=None, record_every=0,
             steady_fraction=0.8, strobe=False, stage_loop=False) -> dict:
     """The stored inputs of one run of :func:`simulate` (``_setup``'s packing)."""
-    su = sim._setup(system, forcing, duration, dt, initial, record_every, steady_fraction,
+    su = sim._setup(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction,
                     strobe, integrator)
     if stage_loop:
         su.p[L.STAGE_LOOP] = 1.0  # what simulate_stage_loop does
@@ -108,19 +108,19 @@ def _shapes(rec, imp, stick, strobe) -> dict:
                                                             strict=True)}
 
 
-def _batch(runs, *, duration, dt=DT, steady_fraction=0.8, strobe=False) -> dict:
+def _batch(runs, *, duration_s, dt_s=DT, steady_fraction=0.8, strobe=False) -> dict:
     """The stored inputs of one lock-step batch, packed as simulate_batch packs it but
     not padded: ``runs`` (system, forcing, initial) are the batch's rows."""
-    sus = [sim._setup(s, f, duration, dt, i, 0, steady_fraction, strobe, "rk4")
+    sus = [sim._setup(s, f, duration_s, dt_s, i, 0, steady_fraction, strobe, "rk4")
            for s, f, i in runs]
     nb, first = len(sus), sus[0]
-    kwargs = {"duration": duration, "dt": dt, "steady_fraction": steady_fraction,
+    kwargs = {"duration_s": duration_s, "dt_s": dt_s, "steady_fraction": steady_fraction,
               "strobe": strobe}
     rows = {k: max(len(getattr(su, a)) for su in sus)
             for k, a in (("imp", "imp"), ("stick", "stick"), ("strobe", "stb"))}
     return {"entry": "rk4_batch", "P": np.array([su.p for su in sus]),
             "x0": np.array([su.x for su in sus]), "met0": np.array([su.met for su in sus]),
-            "t0": first.t0, "dt": dt, "n_steps": first.n_steps,
+            "t0": first.t0, "dt": dt_s, "n_steps": first.n_steps,
             "steady_start": first.steady_steps, "rec_shape": np.array((0, 6)),
             "imp_shape": np.array((nb, rows["imp"], 3)),
             "stick_shape": np.array((nb, rows["stick"], 2)),
@@ -134,7 +134,7 @@ def _grid():
     for preset in PRESETS:
         for gap in GAPS:
             for friction in FRICTION:
-                s = make_system("ball", preset, gap=gap, friction=friction)
+                s = make_system("ball", preset, gap_m=gap, friction=friction)
                 for force in FORCES:
                     for ratio in RATIOS:
                         label = (f"{preset}-gap{gap * 1e3:.1f}-fric-{'on' if friction else 'off'}"
@@ -147,24 +147,24 @@ def _grid_cases() -> dict:
     cases = {}
     for label, s, f in _grid():
         cases[f"grid-exact-{label}"] = lambda s=s, f=f: _single(
-            s, f, integrator="exact", duration=GRID_EXACT_S)
+            s, f, integrator="exact", duration_s=GRID_EXACT_S)
     for label, s, f in _grid():
         cases[f"grid-rk4-{label}"] = lambda s=s, f=f: _single(
-            s, f, integrator="rk4", duration=GRID_RK4_S)
+            s, f, integrator="rk4", duration_s=GRID_RK4_S)
     return cases
 
 
-def _cut(system, depth, integrator, *, duration=0.02, dt=DT, rpm=RPM_FAST, initial=None,
+def _cut(system, depth, integrator, *, duration_s=0.02, dt_s=DT, rpm=RPM_FAST, initial=None,
          record_every=0, steady_fraction=0.8, **forcing):
-    return _single(system, Regenerative(depth=depth, rpm=rpm, **forcing), integrator=integrator,
-                   duration=duration, dt=dt, initial=initial, record_every=record_every,
+    return _single(system, Regenerative(depth_m=depth, rpm=rpm, **forcing), integrator=integrator,
+                   duration_s=duration_s, dt_s=dt_s, initial=initial, record_every=record_every,
                    steady_fraction=steady_fraction)
 
 
 def _ball_cut(integrator):
     """tests/test_exact_regen.py's ball in a cut: 10 um gap, 3 x the bare bar's limit at
     1200 rpm, impacts and rolling friction in the first 14 ms."""
-    s = make_system("ball", gap=10e-6)
+    s = make_system("ball", gap_m=10e-6)
     depth = 3.0 * float(stability.limit_at_speeds(s.bar, [1200.0])[0])
     return _cut(s, depth, integrator, rpm=1200.0, steady_fraction=1.0)
 
@@ -173,7 +173,7 @@ def _cut_cases() -> dict:
     """Regenerative cuts (tests/test_chatter.py's reference cases), RK4 and exact."""
     solid, tmd = make_system("solid"), make_system("tmd")
     locked = make_system("ball", locked=True, friction=False)
-    kick = Initial(tip_velocity=0.02)
+    kick = Initial(tip_velocity_m_s=0.02)
     cases = {}
     for ig in ("rk4", "exact"):
         cases |= {
@@ -201,13 +201,13 @@ def _bars() -> dict:
         "tmd": make_system("tmd"),
         "tmd-paper": make_system("tmd", "paper"),
         "locked": make_system("ball", locked=True),
-        "ball-3modes": make_system("ball", n_modes=3, gap=0.1e-3),
-        "ball-4modes": make_system("ball", n_modes=4, gap=0.1e-3),
+        "ball-3modes": make_system("ball", n_modes=3, gap_m=0.1e-3),
+        "ball-4modes": make_system("ball", n_modes=4, gap_m=0.1e-3),
         "solid-5modes": make_system("solid", n_modes=5),
-        "ball-printed": make_system("ball", gap=0.5e-3, friction_force=2.0,
+        "ball-printed": make_system("ball", gap_m=0.5e-3, friction_force_n=2.0,
                                     friction_reaction="printed"),
-        "ball-nofric": make_system("ball", gap=0.5e-3, friction=False),
-        "paper": make_system("ball", "paper", gap=0.5e-3),
+        "ball-nofric": make_system("ball", gap_m=0.5e-3, friction=False),
+        "paper": make_system("ball", "paper", gap_m=0.5e-3),
     }
 
 
@@ -216,8 +216,8 @@ def _feature_cases() -> dict:
     b = _bars()
     h10, h20 = Harmonic(10.0, 1.0), Harmonic(20.0, 0.98)
     cont = State(np.array([2e-5, -1e-5, 1e-3, 0.02, 1e-4, -0.01]), 0.0123)
-    start = Initial(tip_displacement=1e-4, tip_velocity=-0.01, ball_position=4e-5,
-                    ball_velocity=0.005)
+    start = Initial(tip_displacement_m=1e-4, tip_velocity_m_s=-0.01, ball_position_m=4e-5,
+                    ball_velocity_m_s=0.005)
     common = {
         "solid": (b["solid"], h10, {}),
         "solid-paper-1mode": (b["solid-paper"], h10, {}),
@@ -236,41 +236,41 @@ def _feature_cases() -> dict:
     cases = {}
     for name, (s, f, kw) in common.items():
         cases[f"rk4-{name}"] = lambda s=s, f=f, kw=kw: _single(
-            s, f, integrator="rk4", duration=FEATURE_RK4_S, **kw)
+            s, f, integrator="rk4", duration_s=FEATURE_RK4_S, **kw)
         cases[f"exact-{name}"] = lambda s=s, f=f, kw=kw: _single(
-            s, f, integrator="exact", duration=FEATURE_EXACT_S, **kw)
+            s, f, integrator="exact", duration_s=FEATURE_EXACT_S, **kw)
     cases |= _rk4_only_cases(b) | _exact_only_cases()
     return cases
 
 
 def _rk4_only_cases(b) -> dict:
     h10, h20 = Harmonic(10.0, 1.0), Harmonic(20.0, 1.0)
-    rk4 = {"integrator": "rk4", "duration": FEATURE_RK4_S}
+    rk4 = {"integrator": "rk4", "duration_s": FEATURE_RK4_S}
     return {
         "rk4-stage-loop-ball-nofric": lambda: _single(b["ball-nofric"], h20, stage_loop=True,
                                                       **rk4),
         "rk4-stage-loop-tmd": lambda: _single(b["tmd"], h10, stage_loop=True, **rk4),
         # every step recorded (20 ms): the sgn() chatter of the paper's 20.4 N friction
         "rk4-paper-stick-record-every-step": lambda: _single(b["paper"], h10, integrator="rk4",
-                                                             duration=0.02, record_every=1),
+                                                             duration_s=0.02, record_every=1),
     }
 
 
 def _exact_only_cases() -> dict:
     """True stick-slip (static_ratio > 1: impacts, stick intervals and slips) and a Zeno
     capture (tests/test_exact.py)."""
-    slip = make_system("ball", gap=0.1e-3, friction_force=2.0, static_ratio=3.0)
-    paper2 = make_system("ball", "paper", gap=0.5e-3, static_ratio=2.0)
-    zeno = make_system("ball", gap=0.5e-3, friction=False, restitution=0.3)
-    throw = Initial(tip_displacement=2e-4, ball_position=0.25e-3 - 1e-6)
+    slip = make_system("ball", gap_m=0.1e-3, friction_force_n=2.0, static_ratio=3.0)
+    paper2 = make_system("ball", "paper", gap_m=0.5e-3, static_ratio=2.0)
+    zeno = make_system("ball", gap_m=0.5e-3, friction=False, restitution=0.3)
+    throw = Initial(tip_displacement_m=2e-4, ball_position_m=0.25e-3 - 1e-6)
     return {
         "exact-stick-slip-physical": lambda: _single(slip, Harmonic(20.0, 1.0),
-                                                     integrator="exact", duration=0.2),
+                                                     integrator="exact", duration_s=0.2),
         "exact-stick-slip-paper": lambda: _single(paper2, Harmonic(20.0, 1.0),
-                                                  integrator="exact", duration=0.2,
+                                                  integrator="exact", duration_s=0.2,
                                                   steady_fraction=0.5),
         "exact-zeno-contact": lambda: _single(zeno, Harmonic(0.0, 1.0), integrator="exact",
-                                              duration=5e-3, steady_fraction=1.0,
+                                              duration_s=5e-3, steady_fraction=1.0,
                                               initial=throw),
     }
 
@@ -282,18 +282,18 @@ def _batch_cases() -> dict:
     paper = [(s, f, None) for _, s, f in grid if s.preset == "paper"]
     physical = [(s, f, None) for _, s, f in grid if s.preset == "physical"]
     tmd = make_system("tmd")
-    ball4 = make_system("ball", n_modes=4, gap=0.1e-3)
+    ball4 = make_system("ball", n_modes=4, gap_m=0.1e-3)
     ratios = (0.96, 0.99, 1.0, 1.03)
     return {
         # 20 N at resonance, one run each of gap 0.1/0.5 mm x friction off/on
-        "batch-4-paper": lambda: _batch([paper[i] for i in (7, 17, 27, 37)], duration=BATCH_S),
-        "batch-8-physical": lambda: _batch(physical[20:28], duration=BATCH_S, strobe=True),
-        "batch-16-paper": lambda: _batch(paper[::40 // 16][:16], duration=BATCH_S),
-        "batch-5-paper-not-in-lanes": lambda: _batch(paper[30:35], duration=BATCH_S),
+        "batch-4-paper": lambda: _batch([paper[i] for i in (7, 17, 27, 37)], duration_s=BATCH_S),
+        "batch-8-physical": lambda: _batch(physical[20:28], duration_s=BATCH_S, strobe=True),
+        "batch-16-paper": lambda: _batch(paper[::40 // 16][:16], duration_s=BATCH_S),
+        "batch-5-paper-not-in-lanes": lambda: _batch(paper[30:35], duration_s=BATCH_S),
         "batch-4-tmd": lambda: _batch([(tmd, Harmonic(10.0, r), None) for r in ratios],
-                                      duration=BATCH_S),
+                                      duration_s=BATCH_S),
         "batch-4-ball-4modes": lambda: _batch([(ball4, Harmonic(20.0, r), None)
-                                               for r in ratios], duration=BATCH_S),
+                                               for r in ratios], duration_s=BATCH_S),
     }
 
 

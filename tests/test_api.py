@@ -7,6 +7,7 @@ import inspect
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -87,11 +88,11 @@ def test_options_validate_themselves():
 
 def test_a_run_is_frozen():
     run = bb.simulate(bb.make_system("solid", "paper"), bb.Harmonic(10.0, 1.0),
-                      duration=5e-3, record_every=10)
+                      duration_s=5e-3, record_every=10)
     with pytest.raises(AttributeError):
-        run.dt = 2e-6
+        run.dt_s = 2e-6
     ds = run.to_xarray()
-    assert ds["tip_displacement"].attrs["units"] == "m"
+    assert ds["tip_displacement_m"].attrs["units"] == "m"
 
 
 def test_import_loads_no_heavy_library_and_every_name_resolves():
@@ -117,12 +118,12 @@ def test_a_default_run_keeps_a_bounded_history_to_plot_and_write():
     same numbers as without them; record_every=0 keeps none, and says how to get it."""
     system = bb.make_system("ball", "physical")
     for duration in (0.1, 2.0):
-        run = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration=duration)
+        run = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration_s=duration)
         rows = run.history.shape[0]
         assert HISTORY_ROWS <= rows < 2 * HISTORY_ROWS
-        assert run.to_xarray().sizes["time"] == rows
+        assert run.to_xarray().sizes["time_s"] == rows
         assert len(run.plot().axes) == 4
-    bare = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration=2.0, record_every=0)
+    bare = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration_s=2.0, record_every=0)
     assert bare.history is None and np.array_equal(bare.final.x, run.final.x)
     with pytest.raises(ValueError, match="record_every=None"):
         bare.to_xarray()
@@ -132,7 +133,7 @@ def test_the_analyses_take_a_system_a_list_or_a_mapping():
     """sweep and lobes take what a user has: one System, a list of them or a mapping
     of label to System, labelled from the system; anything else is a TypeError that
     says what is expected, and a Case that mislabels its system is refused."""
-    ball = bb.make_system("ball", "physical", gap=0.2e-3, friction=True)
+    ball = bb.make_system("ball", "physical", gap_m=0.2e-3, friction=True)
     solid = bb.make_system("solid", "physical")
     quick = bb.Integration(duration_s=0.05)
     options = bb.SweepOptions(ratios=(1.0,), forces_n=(10.0,))
@@ -145,23 +146,23 @@ def test_the_analyses_take_a_system_a_list_or_a_mapping():
     assert np.array_equal(named.rms_tip_m.values, many.rms_tip_m.values)
     lobes = bb.lobes(solid, bb.LobesOptions(rpm=(1200.0,), method="search"),
                      integration=bb.Integration(duration_s=0.2))
-    assert list(lobes.case.values) == ["solid"] and lobes.limit_depth.values[0, 0] > 0
+    assert list(lobes.case.values) == ["solid"] and lobes.limit_depth_m.values[0, 0] > 0
     for bad in (3, "ball", {"x": 3}):
         with pytest.raises(TypeError, match="must be a System"):
             bb.sweep(bad, options, integration=quick)
     with pytest.raises(bb.ParameterError, match="given twice"):
         bb.sweep([ball, ball], options, integration=quick)
-    with pytest.raises(bb.ParameterError, match="gap = 0.0009, but its system has gap"):
-        bb.Case("mine", ball, "ball", gap=0.9e-3, friction="on")
+    with pytest.raises(bb.ParameterError, match="gap_m = 0.0009, but its system has gap_m"):
+        bb.Case("mine", ball, "ball", gap_m=0.9e-3, friction="on")
     with pytest.raises(bb.ParameterError, match="friction = 'off', but its system"):
-        bb.Case("mine", ball, "ball", gap=0.2e-3, friction="off")
+        bb.Case("mine", ball, "ball", gap_m=0.2e-3, friction="off")
 
 
 def test_a_steady_part_shorter_than_one_period_is_refused(tmp_path, capsys):
     """1 ms of a 525 Hz forcing has no steady RMS: the command line says how long a run
     must be (simulate itself takes it: a state advanced by part of a period)."""
     with pytest.raises(bb.ParameterError, match=r"shorter than one forcing period "
-                                                r"\(0.0019 s\): give duration >= 0.00238 s"):
+                                                r"\(0.0019 s\): give duration_s >= 0.00238 s"):
         check_steady(1e-3, 0.8, 1 / 525.23)
     check_steady(2.4e-3, 0.8, 1 / 525.23)
     argv = ["simulate", "--force-n", "20", "--duration-s", "0.001"]
@@ -179,12 +180,26 @@ def test_lobe_speeds_must_increase_as_on_the_command_line():
 
 def test_a_run_shows_itself_in_a_notebook():
     """Run._repr_html_: what was run and its results in mm, escaped HTML."""
-    run = bb.simulate(bb.make_system("ball", "physical"), bb.Harmonic(20.0, 1.0), duration=0.2)
+    run = bb.simulate(bb.make_system("ball", "physical"), bb.Harmonic(20.0, 1.0), duration_s=0.2)
     page = run._repr_html_()
     assert page.startswith("<table>") and page.endswith("</table>")
-    assert f"{run.rms_tip * 1e3:.4g} mm" in page and "F0 = 20 N" in page
+    assert f"{run.rms_tip_m * 1e3:.4g} mm" in page and "F0 = 20 N" in page
     assert "max |tip|" in page and "20000 rows" in page
-    cut = bb.simulate(bb.make_system("solid", "paper"), bb.Regenerative(depth=0.05e-3, rpm=1200),
-                      duration=0.2, record_every=0)
+    cut = bb.simulate(bb.make_system("solid", "paper"), bb.Regenerative(depth_m=0.05e-3, rpm=1200),
+                      duration_s=0.2, record_every=0)
     assert "cut at 1200 rpm, depth 0.05 mm" in cut._repr_html_()
     assert "none (record_every=0)" in cut._repr_html_()
+
+
+def test_variants_are_the_files_bars_side_by_side():
+    """bb.variants gives the bars a system file describes, keyed by kind, and an
+    analysis labels its cases with those keys."""
+    spec = bb.load_system(Path(__file__).parents[1] / "examples" / "systems" /
+                          "steel_coolant_tmd.toml")
+    v = bb.variants(spec)
+    assert list(v) == ["solid", "tmd"]  # this file has an absorber and no ball
+    assert v["tmd"].kind == "tmd" and v["solid"].damper is None
+    assert list(bb.variants()) == ["solid", "ball", "tmd"]  # the published bar
+    ds = bb.sweep(v, bb.SweepOptions(ratios=(1.0,), forces_n=(10.0,)),
+                  integration=bb.Integration(duration_s=0.05))
+    assert list(ds["case"].values) == ["solid", "tmd"]

@@ -385,8 +385,8 @@ def test_the_two_attractor_threshold_of_d1(tmp_path):
     for edge_mm, want in ((1.0, "reproduced"), (0.3, "partly")):
         a = np.where(np.abs(x)[:, None] < edge_mm * 1e-3 - 1e-9, 0, 1) * np.ones((1, 31), int)
         path = tmp_path / f"basins{edge_mm}.nc"
-        xr.Dataset({"attractor": (("displacement", "velocity"), a)},
-                   coords={"displacement": x, "velocity": v}).to_netcdf(path)
+        xr.Dataset({"attractor": (("displacement_m", "velocity_m_s"), a)},
+                   coords={"displacement_m": x, "velocity_m_s": v}).to_netcdf(path)
         assert basin_threshold(path) == pytest.approx(edge_mm, abs=1e-9)
         steps = basins([attractor(NU, periodic=False)],
                        [attractor(NI), attractor(NU, periodic=False)],
@@ -394,6 +394,6 @@ def test_the_two_attractor_threshold_of_d1(tmp_path):
         steps["basins-10N-r1.01-on"]["files"] = {"netcdf": str(path)}
         assert judge("D1", steps).verdict == want
     one = tmp_path / "one.nc"
-    xr.Dataset({"attractor": (("displacement", "velocity"), np.zeros((31, 31), int))},
-               coords={"displacement": x, "velocity": v}).to_netcdf(one)
+    xr.Dataset({"attractor": (("displacement_m", "velocity_m_s"), np.zeros((31, 31), int))},
+               coords={"displacement_m": x, "velocity_m_s": v}).to_netcdf(one)
     assert basin_threshold(one) is None

@@ -23,7 +23,7 @@ def test_uniform_cantilever_matches_closed_form_and_converges():
     exact = uniform_cantilever_f1()
     errors = []
     for h in (0.1, 0.05, 0.025, 0.0125):
-        bar = SteppedBar(sections=(Section(0.0, LEN, D),), max_element_length=h)
+        bar = SteppedBar(sections=(Section(0.0, LEN, D),), max_element_length_m=h)
         f1 = bar.modes(1)[0][0] / (2 * math.pi)
         errors.append(abs(f1 / exact - 1))
     assert errors[-1] < 1e-6
@@ -43,8 +43,8 @@ def test_second_mode_of_uniform_cantilever():
 
 
 def test_published_bar_converged_in_mesh_and_shapes():
-    coarse = published_bar(True, 1, max_element_length=0.005)
-    fine = published_bar(True, 1, max_element_length=0.00125)
+    coarse = published_bar(True, 1, max_element_length_m=0.005)
+    fine = published_bar(True, 1, max_element_length_m=0.00125)
     assert coarse.natural_frequency_hz == pytest.approx(fine.natural_frequency_hz, rel=1e-4)
     assert coarse.psi_tip[0] == 1.0
     assert 0.0 < coarse.psi_damper[0] < 1.0  # ball between clamp and tip
@@ -57,25 +57,25 @@ def test_published_bar_converged_in_mesh_and_shapes():
 def test_modal_quantities_do_not_depend_on_normalisation():
     m = published_bar(True, 2)
     s = m.normalised([2.5, -0.3])
-    assert np.allclose(s.omegas, m.omegas, rtol=1e-13)
-    assert s.tip_stiffness == pytest.approx(m.tip_stiffness, rel=1e-13)
+    assert np.allclose(s.omegas_rad_s, m.omegas_rad_s, rtol=1e-13)
+    assert s.tip_stiffness_n_m == pytest.approx(m.tip_stiffness_n_m, rel=1e-13)
     assert np.allclose(s.psi_damper / s.psi_tip, m.psi_damper / m.psi_tip, rtol=1e-13)
 
 
 def test_tap_test_model():
-    m = ModalModel.from_tap_test(461.0, 0.01, tip_stiffness=1.0e6, damper_ratio=0.5)
+    m = ModalModel.from_tap_test(461.0, 0.01, tip_stiffness_n_m=1.0e6, damper_ratio=0.5)
     assert m.natural_frequency_hz == pytest.approx(461.0, rel=1e-14)
-    assert m.tip_stiffness == pytest.approx(1.0e6, rel=1e-14)
-    assert m.tip_mass == pytest.approx(1.0e6 / (2 * math.pi * 461.0) ** 2, rel=1e-14)
+    assert m.tip_stiffness_n_m == pytest.approx(1.0e6, rel=1e-14)
+    assert m.tip_mass_kg == pytest.approx(1.0e6 / (2 * math.pi * 461.0) ** 2, rel=1e-14)
     with pytest.raises(ParameterError, match="frequency_hz"):
-        ModalModel.from_tap_test(-1.0, tip_stiffness=1e6)
+        ModalModel.from_tap_test(-1.0, tip_stiffness_n_m=1e6)
 
 
 def test_calibration_keeps_mass_and_shape():
     m = published_bar(True, 1)
     c = m.with_first_frequency(461.0)
     assert c.natural_frequency_hz == pytest.approx(461.0, rel=1e-12)
-    assert c.mass[0] == m.mass[0] and c.psi_damper[0] == m.psi_damper[0]
+    assert c.mass_kg[0] == m.mass_kg[0] and c.psi_damper[0] == m.psi_damper[0]
 
 
 def test_bad_geometry_is_named():

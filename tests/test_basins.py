@@ -28,7 +28,7 @@ SHORT = Integration(duration_s=0.3)
 
 
 def published_point():
-    return make_system("ball", "paper", gap=0.5e-3, friction=False), Harmonic(10.0, 1.01)
+    return make_system("ball", "paper", gap_m=0.5e-3, friction=False), Harmonic(10.0, 1.01)
 
 
 def test_fractions_sum_to_one_and_serial_equals_parallel():
@@ -60,11 +60,12 @@ def test_linear_bar_has_one_attractor():
 
 
 def test_two_impact_orbit_attracts_its_neighbourhood():
-    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     bar, ball = system.bar, system.damper
     orbit = next(o for o in two_impact_orbit(
-        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass, ball.gap, ball.restitution, 30.0, bar.natural_frequency)
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+        bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass_kg, ball.gap_m, ball.restitution, 30.0, bar.natural_frequency_rad_s)
         if o.admissible and o.stable)
     w0 = float(orbit.tip(0.0))
     v0 = bar.psi_tip[0] * float(orbit.modal_velocity(0.0))
@@ -85,7 +86,7 @@ def test_two_impact_orbit_attracts_its_neighbourhood():
     w = float(ds["signature_tip_m"].values[cell[0], cell[1], 0])
     v = float(ds["signature_tip_velocity_m_s"].values[cell[0], cell[1], 0])
     amp = math.sqrt(2) * orbit.rms_tip()
-    omega = bar.natural_frequency
+    omega = bar.natural_frequency_rad_s
     assert abs(w - w0) < 0.02 * amp and abs(v - v0) < 0.02 * amp * omega
 
 
@@ -127,9 +128,9 @@ def test_sensitivity_gives_one_result_per_value(kind, values):
 
 
 def test_sensitivity_of_cuts():
-    cuts = Cuts(rpm=1200.0, depths=(0.05e-3, 0.10e-3), duration=0.05)
+    cuts = Cuts(rpm=1200.0, depths_m=(0.05e-3, 0.10e-3), duration_s=0.05)
     ds = sensitivity(SensitivityOptions("restitution", (0.6, 0.8), cuts=cuts), preset="paper")
-    assert ds["chatter"].dims == ("restitution", "depth")
+    assert ds["chatter"].dims == ("restitution", "depth_m")
     assert ds["chatter"].shape == (2, 2) and ds["chatter"].dtype == bool
     assert np.all(ds["amplitude_m"] >= 0)
     with pytest.raises(ParameterError, match="kind"):
@@ -140,7 +141,7 @@ def test_sensitivity_of_cuts():
 def test_published_basin_30_by_30():
     """The published grid at 10 N, r = 1.01, gap 0.5 mm, no friction (900 runs of 2 s)."""
     system, forcing = published_point()
-    ds = basins(system, BasinOptions(force_n=forcing.amplitude, ratio=forcing.ratio))
+    ds = basins(system, BasinOptions(force_n=forcing.amplitude_n, ratio=forcing.ratio))
     assert ds["attractor"].shape == (30, 30)
     assert float(ds["fraction"].sum()) == pytest.approx(1.0, abs=1e-12)
     json.dumps(basin_summary(ds))

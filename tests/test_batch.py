@@ -38,16 +38,16 @@ def assert_same_run(a, b):
     np.testing.assert_array_equal(a.sticks, b.sticks)
     np.testing.assert_array_equal(a.strobe, b.strobe)
     np.testing.assert_array_equal(a.final.x, b.final.x)
-    assert a.final.t == b.final.t
+    assert a.final.t_s == b.final.t_s
     assert (a.pattern is None) == (b.pattern is None)
     if a.pattern is not None:
         assert a.pattern.name == b.pattern.name
 
 
-def check_batch(jobs, duration=DURATION, **kw):
-    batch = simulate_batch(jobs, duration=duration, strobe=True, **kw)
+def check_batch(jobs, duration_s=DURATION, **kw):
+    batch = simulate_batch(jobs, duration_s=duration_s, strobe=True, **kw)
     assert len(batch) == len(jobs)
-    singles = [simulate(s, f, initial=i, duration=duration, strobe=True, integrator="rk4",
+    singles = [simulate(s, f, initial=i, duration_s=duration_s, strobe=True, integrator="rk4",
                         **kw) for s, f, i in jobs]
     for one, many in zip(singles, batch, strict=True):
         assert_same_run(one, many)
@@ -65,7 +65,7 @@ def varied(system, forces=(10.0, 20.0), ratios=(0.97, 1.0, 1.01, 1.04)):
 @pytest.mark.parametrize("preset, n_modes", [("paper", 1), ("physical", 2)])
 @pytest.mark.parametrize("friction", [False, True])
 def test_ball_batches_equal_single_runs(preset, n_modes, friction):
-    system = make_system("ball", preset, gap=0.5e-3, friction=friction, n_modes=n_modes)
+    system = make_system("ball", preset, gap_m=0.5e-3, friction=friction, n_modes=n_modes)
     runs = check_batch(varied(system))
     assert sum(r.metrics["impacts_total"] for r in runs) > 50
     if friction:
@@ -76,7 +76,7 @@ def test_ball_batches_equal_single_runs(preset, n_modes, friction):
 @pytest.mark.parametrize("preset, n_modes", [("paper", 1), ("physical", 2)])
 def test_solid_tmd_and_locked_batches_equal_single_runs(bar, preset, n_modes):
     if bar == "locked":
-        system = make_system("ball", preset, gap=0.5e-3, locked=True, n_modes=n_modes)
+        system = make_system("ball", preset, gap_m=0.5e-3, locked=True, n_modes=n_modes)
     else:
         system = make_system(bar, preset, n_modes=n_modes)
     assert system.kind == bar
@@ -90,9 +90,9 @@ def test_runs_that_impact_at_different_steps_and_differ_in_the_damper():
     jobs = []
     for j, (gap, e) in enumerate([(0.1e-3, 0.7), (0.1e-3, 0.6), (0.5e-3, 0.8), (0.2e-3, 0.7),
                                   (0.1e-3, 0.7)]):
-        s = make_system("ball", "paper", gap=gap, friction=j % 2 == 0, restitution=e)
+        s = make_system("ball", "paper", gap_m=gap, friction=j % 2 == 0, restitution=e)
         jobs.append((s, Harmonic(10.0 + 5 * j, 1.0 + 0.01 * j),
-                     Initial(0.3e-3 * j, -0.2 * j, ball_position=gap / 2 * (j - 2) / 3)))
+                     Initial(0.3e-3 * j, -0.2 * j, ball_position_m=gap / 2 * (j - 2) / 3)))
     runs = check_batch(jobs)
     first = [r.impacts[0, 0] for r in runs if len(r.impacts)]
     assert len(set(first)) >= 4, "the runs should hit the walls at different times"
@@ -101,29 +101,29 @@ def test_runs_that_impact_at_different_steps_and_differ_in_the_damper():
 
 
 def test_a_batch_continues_from_states_and_any_batch_size_gives_the_same_run():
-    system = make_system("ball", "paper", gap=0.5e-3, friction=True)
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=True)
     jobs = varied(system, forces=(10.0,), ratios=(0.99, 1.01, 1.03))
-    first = simulate_batch(jobs, duration=0.02, strobe=True)
+    first = simulate_batch(jobs, duration_s=0.02, strobe=True)
     # continued from the end states (t0 = 0.02 s, forcing phase carried on)
     again = [(s, f, run.final) for (s, f, _), run in zip(jobs, first, strict=True)]
-    check_batch(again, duration=0.03)
+    check_batch(again, duration_s=0.03)
     # a run's results do not depend on its batch's size or companions
-    alone = simulate_batch(jobs[1:2], duration=0.02, strobe=True)[0]
+    alone = simulate_batch(jobs[1:2], duration_s=0.02, strobe=True)[0]
     assert_same_run(alone, first[1])
 
 
 def test_full_batch_and_kernel_arguments():
-    system = make_system("ball", "paper", gap=0.5e-3, friction=True)
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=True)
     jobs = varied(system, forces=(10.0, 15.0, 20.0, 25.0), ratios=(0.98, 1.0, 1.02, 1.04))
     assert len(jobs) == BMAX
-    check_batch(jobs, duration=0.02)
+    check_batch(jobs, duration_s=0.02)
     with pytest.raises(ParameterError, match="at most"):
-        simulate_batch(jobs + jobs[:1], duration=0.01)
+        simulate_batch(jobs + jobs[:1], duration_s=0.01)
     with pytest.raises(ParameterError, match="cannot share a batch"):
         simulate_batch([jobs[0], (make_system("solid", "paper"), Harmonic(10.0, 1.0), None)],
-                       duration=0.01)
+                       duration_s=0.01)
     with pytest.raises(ParameterError, match="harmonic"):
-        simulate_batch([(system, Regenerative(depth=1e-4, rpm=1000.0), None)], duration=0.01)
+        simulate_batch([(system, Regenerative(depth_m=1e-4, rpm=1000.0), None)], duration_s=0.01)
     P = np.zeros((2, L.P_SIZE))
     P[:, L.N_MODES] = 1
     P[1, L.CASE] = L.BALL
@@ -138,7 +138,7 @@ def test_basins_and_sweep_are_the_same_batched_or_not():
     from boringbar.analysis.basins import BasinOptions, basins
     from boringbar.analysis.sweep import published_cases, sweep
 
-    system = make_system("ball", "paper", gap=0.5e-3, friction=True)
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=True)
     grid = {"displacement_m": (-1e-3, 1e-3, 3), "velocity_m_s": (-1.0, 1.0, 5),
             "force_n": 10.0, "ratio": 1.01}
     short = Integration(duration_s=0.03)

@@ -37,7 +37,7 @@ def _logistic(n, r=3.97, x0=0.3):
 
 def _analytic(system, force, ratio):
     """Steady (W, W') at Omega t = 0 mod 2 pi under F0 sin(Omega t)."""
-    omega = ratio * system.reference_frequency
+    omega = ratio * system.reference_frequency_rad_s
     g = tip_frf(system.bar, np.array([omega]))[0]
     return np.array([force * g.imag, force * omega * g.real])
 
@@ -52,12 +52,13 @@ def _assert_analytic_points(ds, system, forces, ratios):
             exact = _analytic(system, force, ratio)
             n = int(row["n_samples"].values[i])
             last = np.array(
-                [row["tip_displacement"].values[i, n - 1], row["tip_velocity"].values[i, n - 1]]
+                [row["tip_displacement_m"].values[i, n - 1],
+                 row["tip_velocity_m_s"].values[i, n - 1]]
             )
-            scale = np.hypot(*exact / [1.0, ratio * system.reference_frequency])
+            scale = np.hypot(*exact / [1.0, ratio * system.reference_frequency_rad_s])
             assert np.all(
                 np.abs(last - exact)
-                <= 1e-6 * scale * np.array([1.0, ratio * system.reference_frequency])
+                <= 1e-6 * scale * np.array([1.0, ratio * system.reference_frequency_rad_s])
             )
 
 
@@ -95,7 +96,7 @@ def test_linear_force_sweep_is_the_analytic_steady_state_both_ways(linear_force_
 def test_hysteresis_ranges_report_where_the_sweeps_differ(linear_force_sweep):
     _, _, ds = linear_force_sweep
     moved = ds.copy(deep=True)
-    for name in ("tip_displacement", "tip_velocity"):
+    for name in ("tip_displacement_m", "tip_velocity_m_s"):
         moved[name].loc[{"direction": "backward", "value": [10.0, 15.0]}] *= 1.1
     assert hysteresis_ranges(moved) == [(10.0, 15.0)]
     assert hysteresis_ranges(moved, tol=0.2) == []
@@ -106,7 +107,7 @@ def test_hysteresis_ranges_report_where_the_sweeps_differ(linear_force_sweep):
     moved["period"].loc[back] = 0
     assert hysteresis_ranges(moved, tol=0.2) == []
     n = int(moved["n_samples"].loc[back])
-    moved["tip_displacement"].values[1, 3, :n] *= 1 + 0.5 * np.sin(np.arange(n))
+    moved["tip_displacement_m"].values[1, 3, :n] *= 1 + 0.5 * np.sin(np.arange(n))
     assert hysteresis_ranges(moved, tol=0.2) == [(20.0, 20.0)]
 
 
@@ -117,7 +118,7 @@ def test_ratio_sweep_keeps_the_forcing_phase_continuous():
                      integration=Integration(DURATION, steady_fraction=1.0 - DROP))
     _assert_analytic_points(ds, system, [10.0] * 3, ratios)
     assert hysteresis_ranges(ds) == []
-    omega = ds["omega"].sel(direction="forward").values
+    omega = ds["omega_rad_s"].sel(direction="forward").values
     fwd = ds.sel(direction="forward")
     for i in range(1, 3):
         before = math.fmod(omega[i - 1] * fwd["end_time_s"].values[i - 1], 2 * math.pi)
@@ -129,8 +130,8 @@ def test_continued_state_maps_time_to_the_same_phase():
     s = State(np.zeros(4), 1.2345)
     assert continued_state(s, 3000.0, 3000.0) is s
     c = continued_state(s, 3000.0, 3100.0)
-    assert 0 <= c.t < 2 * math.pi / 3100.0
-    assert math.fmod(3100.0 * c.t, 2 * math.pi) == pytest.approx(
+    assert 0 <= c.t_s < 2 * math.pi / 3100.0
+    assert math.fmod(3100.0 * c.t_s, 2 * math.pi) == pytest.approx(
         math.fmod(3000.0 * 1.2345, 2 * math.pi), abs=1e-9
     )
 
@@ -138,17 +139,17 @@ def test_continued_state_maps_time_to_the_same_phase():
 def test_two_impact_orbit_is_one_poincare_point():
     """The closed-form symmetric two-impact orbit (Masri-Caughey) at 30 N,
     Omega = omega_n: one stroboscopic point, one impact-map point per wall."""
-    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     b, d = system.bar, system.damper
-    omega = system.reference_frequency
+    omega = system.reference_frequency_rad_s
     orbits = two_impact_orbit(
-        b.mass[0],
-        b.stiffness[0],
-        b.damping[0],
+        b.mass_kg[0],
+        b.stiffness_n_m[0],
+        b.damping_n_s_m[0],
         b.psi_tip[0],
         b.psi_damper[0],
-        d.mass,
-        d.gap,
+        d.mass_kg,
+        d.gap_m,
         d.restitution,
         30.0,
         omega,
@@ -164,7 +165,7 @@ def test_two_impact_orbit_is_one_poincare_point():
             -float(sign) * orbit.ball_speed - b.psi_damper[0] * v,
         ]
     )
-    run = simulate(system, Harmonic(30.0, 1.0), duration=0.3, initial=State(x0, 0.0), strobe=True)
+    run = simulate(system, Harmonic(30.0, 1.0), duration_s=0.3, initial=State(x0, 0.0), strobe=True)
     assert run.pattern.name == "2 symmetric"
     verdict = poincare_map(run).classify()
     assert (verdict["verdict"], verdict["distinct"]) == ("period-1", 1)
@@ -227,7 +228,7 @@ def test_system_parameter_sweep_through_a_factory():
     """A gap sweep of the one-mode ball damper: the state carries over."""
 
     def factory(gap):
-        return make_system("ball", "physical", n_modes=1, friction=False, gap=gap)
+        return make_system("ball", "physical", n_modes=1, friction=False, gap_m=gap)
 
     ds = bifurcation(factory,
                      BifurcationOptions("gap", [0.4e-3, 0.5e-3], 30.0, 1.0, backward=False,
@@ -244,7 +245,7 @@ def test_published_bifurcation_gap_01mm():
     2 s runs (docs/model.md, section 6): about 15 s; forward and backward agree on the
     periodic windows (2 symmetric at 5-7 N, 4 symmetric at 18-20 N, 6 symmetric
     at 35-37 N: one Poincare point each)."""
-    system = make_system("ball", "paper", gap=0.1e-3, friction=False)
+    system = make_system("ball", "paper", gap_m=0.1e-3, friction=False)
     ds = bifurcation(system, BifurcationOptions("force", np.arange(5.0, 51.0), 5.0, 1.0))
     assert ds.sizes["value"] == 46
     assert np.all(ds["n_samples"].values > 700)
@@ -259,7 +260,7 @@ def test_ratio_sweep_shows_the_no_impact_impact_hysteresis():
     """20 N, gap 0.5 mm, no friction (paper): sweeping Omega up, the ball stays
     off the walls up to r = 0.98; sweeping down from the impacting branch it
     keeps hitting them (2 symmetric impacts at r = 0.90-0.93)."""
-    system = make_system("ball", "paper", gap=0.5e-3, friction=False)
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=False)
     ratios = np.round(np.arange(0.90, 1.0001, 0.01), 3)
     ds = bifurcation(system, BifurcationOptions("ratio", ratios, 20.0, 1.0))
     ranges = hysteresis_ranges(ds)

@@ -52,7 +52,13 @@ import numpy as np
 import pytest
 
 from boringbar import Initial, make_system, simulate
-from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, compare_methods, lobes
+from boringbar.analysis.lobes import (
+    PUBLISHED_DEPTH_STEP,
+    PUBLISHED_RPM,
+    LobesOptions,
+    compare_methods,
+    lobes,
+)
 from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sweep import Case
 from boringbar.kernels import layout as L
@@ -75,7 +81,7 @@ def receptance(bar, s, added_mass: float = 0.0) -> np.ndarray:
     """Tip receptance G(s) of the modal bar with a rigid mass at z_d (a locked ball):
     psi_L^T (diag(M s^2 + C s + K) + m s^2 psi_d psi_d^T)^-1 psi_L (Sherman-Morrison)."""
     s = np.asarray(s, dtype=complex)[..., None]
-    d = bar.mass * s**2 + bar.damping * s + bar.stiffness
+    d = bar.mass_kg * s**2 + bar.damping_n_s_m * s + bar.stiffness_n_m
     a = np.sum(bar.psi_tip**2 / d, axis=-1)
     c = np.sum(bar.psi_tip * bar.psi_damper / d, axis=-1)
     e = np.sum(bar.psi_damper**2 / d, axis=-1)
@@ -88,7 +94,7 @@ def growth_rate(bar, rpm: float, depth: float, added_mass: float = 0.0) -> float
     near the first mode: Newton from i omega every quarter lobe spacing over
     0.7 .. 1.6 omega_1 (every lobe's root there is found)."""
     tau = 60.0 / rpm
-    w1 = math.sqrt(bar.stiffness[0] / (bar.mass[0] + added_mass * bar.psi_damper[0] ** 2))
+    w1 = math.sqrt(bar.stiffness_n_m[0] / (bar.mass_kg[0] + added_mass * bar.psi_damper[0] ** 2))
     s = 1j * np.arange(0.7 * w1, 1.6 * w1, 0.25 * 2 * math.pi / tau)
 
     def char(z):
@@ -105,8 +111,8 @@ def growth_rate(bar, rpm: float, depth: float, added_mass: float = 0.0) -> float
 def start_decrement(bar, rpm: float, depth: float, added_mass: float = 0.0) -> float:
     """ln(h_m / 2 A0): the growth a run from rest needs before the force reaches zero
     (module docstring)."""
-    w_static = KR * depth * FEED * float(np.sum(bar.psi_tip**2 / bar.stiffness))
-    decay = bar.damping[0] / (2 * (bar.mass[0] + added_mass * bar.psi_damper[0] ** 2))
+    w_static = KR * depth * FEED * float(np.sum(bar.psi_tip**2 / bar.stiffness_n_m))
+    decay = bar.damping_n_s_m[0] / (2 * (bar.mass_kg[0] + added_mass * bar.psi_damper[0] ** 2))
     return math.log(FEED / (2 * w_static)) + decay * 60.0 / rpm
 
 
@@ -127,8 +133,8 @@ def predicted_limit(bar, rpm: float, b_lim: float, duration: float,
 # --- time-domain limit ---------------------------------------------------------------
 def chatters(system: System, rpm: float, depth: float, duration: float) -> bool:
     """The published verdict: the force reaches zero within ``duration``."""
-    forcing = Regenerative(depth=depth, rpm=rpm, stop_at_zero=True)
-    return simulate(system, forcing, duration=duration).cutting["chatter"]
+    forcing = Regenerative(depth_m=depth, rpm=rpm, stop_at_zero=True)
+    return simulate(system, forcing, duration_s=duration).cutting["chatter"]
 
 
 def simulated_limit(system: System, rpm: float, lo: float, hi: float, duration: float) -> dict:
@@ -151,7 +157,7 @@ def simulated_limit(system: System, rpm: float, lo: float, hi: float, duration: 
 def limits_on(system: System, speeds, duration: float) -> list[dict]:
     """Analytic, predicted and simulated limits at each speed (thread pool: the
     kernel releases the GIL)."""
-    added = system.damper.mass if system.kind == "locked" else 0.0
+    added = system.damper.mass_kg if system.kind == "locked" else 0.0
     b_lim = limit_at_speeds(system, np.asarray(speeds, dtype=float))
 
     def one(k):
@@ -198,7 +204,7 @@ REFERENCE_CASES = {
     "solid-linear": (lambda: make_system("solid"), 1e-3, "linear", "rest", Initial()),
     # the surface before the cut is the static deflection; first zero at 16.4 ms
     "locked-static": (lambda: make_system("ball", locked=True, friction=False), 1e-3, "cubic",
-                      "static", Initial(tip_velocity=0.02)),
+                      "static", Initial(tip_velocity_m_s=0.02)),
 }
 SLOW_REFERENCE_CASES = {
     "tmd-cubic": (lambda: make_system("tmd"), 2e-3, "cubic", "rest", Initial()),  # 13.3 ms
@@ -209,14 +215,14 @@ def cut_params(system: System, forcing: Regenerative, dt: float) -> np.ndarray:
     """The kernel's parameter vector written from the description (not by simulate)."""
     p = pack(system, 0.0, 0.0, dt)
     p[L.FORCING] = L.REGENERATIVE
-    p[L.KR_B] = forcing.kr * forcing.depth
-    p[L.FEED] = forcing.feed
+    p[L.KR_B] = forcing.kr_pa * forcing.depth_m
+    p[L.FEED] = forcing.feed_m
     p[L.TAU] = 60.0 / forcing.rpm
     p[L.N_REV] = forcing.revolutions
     p[L.INTERP] = {"cubic": 1.0, "linear": 0.0}[forcing.interpolation]
     if forcing.start == "static":
-        p[L.HIST_W0] = forcing.mean_force * float(np.sum(system.bar.psi_tip**2
-                                                         / system.bar.stiffness))
+        p[L.HIST_W0] = forcing.mean_force_n * float(np.sum(system.bar.psi_tip**2
+                                                         / system.bar.stiffness_n_m))
     return p
 
 
@@ -238,8 +244,8 @@ def kernel_in_chunks(p, x0, dt: float, n_steps: int, chunk: int) -> np.ndarray:
 def compare_with_reference(name, cases):
     build, depth, interp, start, initial = cases[name]
     system = build()
-    forcing = Regenerative(depth=depth, rpm=RPM_FAST, interpolation=interp, start=start)
-    run = simulate(system, forcing, duration=N_STEPS * DT, dt=DT, initial=initial,
+    forcing = Regenerative(depth_m=depth, rpm=RPM_FAST, interpolation=interp, start=start)
+    run = simulate(system, forcing, duration_s=N_STEPS * DT, dt_s=DT, initial=initial,
                    record_every=1)
     p = cut_params(system, forcing, DT)
     t, X, force, first_zero, zero_steps = naive.regenerative_run(p, run.initial.x, DT, N_STEPS)
@@ -259,10 +265,10 @@ def compare_with_reference(name, cases):
     assert c["steps_with_zero_force"] == zero_steps
     # the case exercises what it should: regeneration for two revolutions, then the tool
     # leaving the cut again and again, where the older revolutions enter the minimum
-    assert first_zero > 2 * forcing.tau and zero_steps > 500
-    single = simulate(system, Regenerative(depth=depth, rpm=RPM_FAST, interpolation=interp,
+    assert first_zero > 2 * forcing.tau_s and zero_steps > 500
+    single = simulate(system, Regenerative(depth_m=depth, rpm=RPM_FAST, interpolation=interp,
                                            start=start, revolutions=1),
-                      duration=N_STEPS * DT, dt=DT, initial=initial)
+                      duration_s=N_STEPS * DT, dt_s=DT, initial=initial)
     assert single.cutting["steps_with_zero_force"] != zero_steps
     # a cut continued over several kernel calls is the same cut (one history buffer)
     x, met = kernel_in_chunks(p, run.initial.x, DT, N_STEPS, chunk=7001)
@@ -286,8 +292,8 @@ def test_below_the_limit_the_cut_settles_to_the_static_deflection():
     system = make_system("solid")
     bar = system.bar
     b = 0.5 * float(limit_at_speeds(system, [1200.0])[0])
-    run = simulate(system, Regenerative(depth=b, rpm=1200.0), duration=2.0, record_every=10)
-    w_static = KR * b * FEED * float(np.sum(bar.psi_tip**2 / bar.stiffness))
+    run = simulate(system, Regenerative(depth_m=b, rpm=1200.0), duration_s=2.0, record_every=10)
+    w_static = KR * b * FEED * float(np.sum(bar.psi_tip**2 / bar.stiffness_n_m))
     c = run.cutting
     assert c["static_deflection_m"] == pytest.approx(w_static, rel=1e-12)
     assert not c["chatter"] and c["steps_with_zero_force"] == 0
@@ -307,7 +313,7 @@ def test_below_the_limit_the_cut_settles_to_the_static_deflection():
 def test_above_the_limit_the_force_reaches_zero():
     system = make_system("solid")
     b = 2.0 * float(limit_at_speeds(system, [1200.0])[0])
-    run = simulate(system, Regenerative(depth=b, rpm=1200.0), duration=2.0)
+    run = simulate(system, Regenerative(depth_m=b, rpm=1200.0), duration_s=2.0)
     c = run.cutting
     # measured: first zero at 0.2516 s, then h = 0 in 791293 of the 2e6 steps
     assert c["chatter"] and 0.05 < c["first_zero_time_s"] < 1.0
@@ -385,8 +391,8 @@ def test_cubic_delay_interpolation_beats_linear():
     b = 2.0 * float(limit_at_speeds(system, [rpm])[0])
 
     def run(interp, dt):
-        forcing = Regenerative(depth=b, rpm=rpm, interpolation=interp, stop_at_zero=True)
-        r = simulate(system, forcing, duration=2.0, dt=dt, record_every=round(1e-4 / dt))
+        forcing = Regenerative(depth_m=b, rpm=rpm, interpolation=interp, stop_at_zero=True)
+        r = simulate(system, forcing, duration_s=2.0, dt_s=dt, record_every=round(1e-4 / dt))
         return r.cutting["first_zero_time_s"], r.history[:, 1] - r.metrics["static_deflection_m"]
 
     steps = (2e-6, 1e-6, 5e-7)
@@ -418,7 +424,7 @@ def test_energy_balance_with_cutting(factor):
     kink at h = 0 is inside steps but the balance still closes)."""
     system = make_system("solid")
     b = factor * float(limit_at_speeds(system, [1200.0])[0])
-    run = simulate(system, Regenerative(depth=b, rpm=1200.0), duration=2.0)
+    run = simulate(system, Regenerative(depth_m=b, rpm=1200.0), duration_s=2.0)
     assert run.cutting["chatter"] == (factor > 1)
     assert abs(run.energy["balance_relative"]) < 1e-9
     assert run.energy["work_force_j"] > 0
@@ -429,21 +435,23 @@ def test_scan_and_search_agree_on_the_solid_bar():
     cases = [Case("solid", make_system("solid"), "solid")]
     speeds = list(DEFAULT_SPEEDS)
     scan = lobes(cases, LobesOptions(speeds, method="scan"))
-    search = lobes(cases, LobesOptions(speeds, method="search"))
-    np.testing.assert_array_equal(scan["limit_depth"].values, search["limit_depth"].values)
-    np.testing.assert_array_equal(scan["first_unstable_depth"].values,
-                                  search["first_unstable_depth"].values)
+    # on the published 0.01 mm grid (the search's own default is 1 % steps)
+    search = lobes(cases, LobesOptions(speeds, method="search",
+                                       depth_step_m=PUBLISHED_DEPTH_STEP))
+    np.testing.assert_array_equal(scan["limit_depth_m"].values, search["limit_depth_m"].values)
+    np.testing.assert_array_equal(scan["first_unstable_depth_m"].values,
+                                  search["first_unstable_depth_m"].values)
     assert compare_methods(scan, search) == []
     assert search.attrs["runs"] <= scan.attrs["runs"]  # measured 21 vs 25 runs
     # the 0.01 mm grid brackets the bisected limit; the analytic limit is attached
     fine = {r["rpm"]: r for r in solid_limits(DEFAULT_SPEEDS, 2.0)}
     for j, rpm in enumerate(speeds):
-        lim = float(scan["limit_depth"].values[0, j])
-        first = float(scan["first_unstable_depth"].values[0, j])
+        lim = float(scan["limit_depth_m"].values[0, j])
+        first = float(scan["first_unstable_depth_m"].values[0, j])
         assert first == pytest.approx(lim + 0.01e-3)
         assert lim <= fine[rpm]["lo"] and fine[rpm]["hi"] <= first
-        assert float(scan["analytic_limit"].values[0, j]) == pytest.approx(
+        assert float(scan["analytic_limit_m"].values[0, j]) == pytest.approx(
             fine[rpm]["analytic"], rel=1e-12)
     summary = lobes_summary(scan)
     assert summary["min_chatter_free_depth_m"] == pytest.approx(
-        float(np.min(scan["limit_depth"].values)))
+        float(np.min(scan["limit_depth_m"].values)))

@@ -43,8 +43,8 @@ def test_simulate_json_files_and_config(tmp_path, capsys):
         config = json.loads(ds.attrs["config"])
         assert config["system"]["damper"]["gap_m"] == pytest.approx(0.1e-3)
         assert config["forcing"]["amplitude_n"] == 20
-        assert {"tip_displacement", "y", "force"} <= set(ds.data_vars)
-        assert 20000 <= ds.sizes["time"] <= 40000  # default record_every: ~20000 rows
+        assert {"tip_displacement_m", "y_m", "force_n"} <= set(ds.data_vars)
+        assert 20000 <= ds.sizes["time_s"] <= 40000  # default record_every: ~20000 rows
     saved = json.loads((out / "summary.json").read_text())
     assert saved["rms_tip_m"] == s["rms_tip_m"] and "config" in saved
 
@@ -57,7 +57,7 @@ def test_simulate_text_summary(tmp_path, capsys, bar):
     text = capsys.readouterr().out
     assert f"{bar} bar" in text and "natural frequency" in text and "tip RMS" in text
     with xr.open_dataset(tmp_path / "run.nc") as ds:
-        assert ds.sizes["time"] == 2000
+        assert ds.sizes["time_s"] == 2000
 
 
 def test_simulate_quiet_prints_nothing(tmp_path, capsys):
@@ -83,7 +83,7 @@ def test_sweep_files_and_json(tmp_path, capsys):
         assert len(case["rms_tip_m"]) == len(case["pattern"]) == 3
     assert {c["bar"] for c in s["cases"]} == {"solid", "ball"}
     with xr.open_dataset(out / "sweep.nc") as ds:
-        assert dict(ds.sizes) == {"case": 2, "force": 2, "ratio": 3}
+        assert dict(ds.sizes) == {"case": 2, "force_n": 2, "ratio": 3}
         assert "systems" in ds.attrs
     pngs = sorted(p.name for p in out.glob("*.png"))
     assert pngs == ["sweep_F10N.png", "sweep_F20N.png"]  # one figure per force

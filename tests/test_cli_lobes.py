@@ -13,6 +13,8 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
+from boringbar.analysis.lobes import default_speeds
+from boringbar.analysis.sweep import published_cases
 from boringbar.cli.main import main
 
 #: A solid-bar lobe grid that has both stable and chattering points in 0.3 s runs.
@@ -23,7 +25,8 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 def test_lobes_files_json_and_verdicts(tmp_path, capsys):
     out = tmp_path / "lobes"
-    assert main(["lobes", *SMALL, "--workers", "2", "--out", str(out), "--json"]) == 0
+    assert main(["lobes", *SMALL, "--method", "scan", "--workers", "2", "--out", str(out),
+                 "--json"]) == 0
     s = json_out(capsys)
     assert s["method"] == "scan" and s["criterion"] == "zero"
     assert s["files"] == {"netcdf": str(out / "lobes.nc"), "png": str(out / "lobes.png")}
@@ -41,8 +44,8 @@ def test_lobes_files_json_and_verdicts(tmp_path, capsys):
         verdict = ds["verdict"].values
         assert (verdict == 1).any() and (verdict == 0).any()  # stable and chatter points
         assert ds.sizes["rpm"] == 3 and ds.attrs["method"] == "scan"
-        assert np.isfinite(ds["analytic_curve"].values).all()  # the solid bar is linear
-        assert float(ds["min_chatter_free_depth"].values[0]) == pytest.approx(
+        assert np.isfinite(ds["analytic_curve_m"].values).all()  # the solid bar is linear
+        assert float(ds["min_chatter_free_depth_m"].values[0]) == pytest.approx(
             case["min_chatter_free_depth_m"])
 
 
@@ -57,15 +60,32 @@ def test_lobes_search_and_examples(tmp_path, capsys):
     assert (out / "examples.png").read_bytes()[:8] == PNG
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["method"] == "search"
-        limit = ds["limit_depth"].values[0]
-        first = ds["first_unstable_depth"].values[0]
+        limit = ds["limit_depth_m"].values[0]
+        first = ds["first_unstable_depth_m"].values[0]
     with xr.open_dataset(out / "examples.nc") as ex:
         assert list(ex["example"].values) == ["stable", "unstable"]
         assert list(ex["chatter"].values) == [False, True]
         j = int(np.nanargmin(limit))  # the speed of the minimum chatter-free depth
-        assert ex["depth"].values == pytest.approx([limit[j], first[j]])
-        assert ex["time"].values[-1] == pytest.approx(0.3, rel=1e-3)  # not stopped at zero
-        assert {"tip_displacement", "force"} <= set(ex.data_vars)
+        assert ex["depth_m"].values == pytest.approx([limit[j], first[j]])
+        assert ex["time_s"].values[-1] == pytest.approx(0.3, rel=1e-3)  # not stopped at zero
+        assert {"tip_displacement_m", "force_n"} <= set(ex.data_vars)
+
+
+def test_lobes_default_to_the_bars_speeds_and_one_percent_depths(tmp_path, capsys):
+    """Without --rpm and --depth-step-mm: the speeds of the bar's lobes 1 to 5
+    (analysis.lobes.default_speeds) and the search to 1 % of each limit."""
+    out = tmp_path / "lobes"
+    assert main(["lobes", "--bar", "solid", "--duration-s", "0.02", "--max-depth-mm", "0.5",
+                 "--out", str(out), "--json"]) == 0
+    s = json_out(capsys)
+    assert s["method"] == "search"
+    expected = default_speeds(published_cases(("solid",)))
+    assert [v["rpm"] for v in s["cases"][0]["speeds"]] == list(expected)
+    for v in s["cases"][0]["speeds"]:
+        if v["limit_depth_m"]:
+            assert v["first_unstable_depth_m"] / v["limit_depth_m"] == pytest.approx(1.01)
+    with xr.open_dataset(out / "lobes.nc") as ds:
+        assert ds.attrs["depth_grid"].startswith("depth_tolerance = 0.01")
 
 
 def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):
@@ -79,7 +99,7 @@ def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):
     assert (out / "run.png").read_bytes()[:8] == PNG
     with xr.open_dataset(out / "run.nc") as ds:
         assert json.loads(ds.attrs["config"])["forcing"]["type"] == "regenerative"
-        assert ds["force"].values.max() > 0
+        assert ds["force_n"].values.max() > 0
 
 
 def test_simulate_cut_text(tmp_path, capsys):
@@ -102,7 +122,13 @@ def test_simulate_cut_text(tmp_path, capsys):
     (["lobes", "--rpm", "0"], "--rpm"),
     (["lobes", "--rpm", "1600:900:50"], "--rpm"),
     (["lobes", "--depth-step-mm", "0"], "--depth-step-mm"),
-    (["lobes", "--max-depth-mm", "0.001"], "--max-depth-mm"),
+    (["lobes", "--depth-tolerance", "0"], "--depth-tolerance"),
+    (["lobes", "--depth-tolerance", "1e-7"], "--depth-tolerance"),
+    (["lobes", "--rpm", "1200,1000"], "--rpm"),
+    (["lobes", "--depth-step-mm", "0.01", "--depth-tolerance", "0.02"],
+     "--depth-step-mm = 0.01 and --depth-tolerance = 0.02: give one"),
+    (["lobes", "--max-depth-mm", "0.0005"], "--max-depth-mm"),  # below the 1 um grid
+    (["lobes", "--method", "scan", "--max-depth-mm", "0.001"], "--max-depth-mm"),
     (["lobes", "--feed-mm", "-0.1"], "--feed-mm"),
     (["lobes", "--method", "guess"], "--method"),
     (["lobes", "--bar", "solid", "--gap-mm", "0.1"], "--gap-mm"),

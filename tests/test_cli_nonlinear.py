@@ -43,7 +43,7 @@ def test_bifurcation_force_json_and_files(tmp_path, capsys):
     _files_ok(s["files"], out)
     with xr.open_dataset(out / "bifurcation.nc") as ds:
         assert list(ds["direction"].values) == ["forward", "backward"]
-        assert ds.sizes["value"] == 3 and ds["tip_displacement"].attrs["units"] == "m"
+        assert ds.sizes["value"] == 3 and ds["tip_displacement_m"].attrs["units"] == "m"
         assert json.loads(ds.attrs["hysteresis_ranges"]) == s["hysteresis_ranges"]
 
 

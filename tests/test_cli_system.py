@@ -60,7 +60,7 @@ def test_simulate_runs_your_own_bar_and_the_result_rebuilds_it(tmp_path, capsys,
     assert rebuilt.spec.to_dict() == load_system(system).to_dict()
     assert rebuilt.bar.natural_frequency_hz == pytest.approx(s["natural_frequency_hz"])
     if bar == "ball":
-        assert rebuilt.damper.gap == 0.3e-3 and rebuilt.damper.material == "tungsten"
+        assert rebuilt.damper.gap_m == 0.3e-3 and rebuilt.damper.material == "tungsten"
 
 
 def test_sweep_defaults_to_the_bars_the_file_has(tmp_path, capsys):
@@ -124,7 +124,7 @@ def test_frf_fit_replaces_the_fe_bar(tmp_path, capsys):
         bar = json.loads(ds.attrs["config"])["system"]["bar"]
     assert bar["source"] == "frf-fit"
     np.testing.assert_allclose(bar["psi_damper"], [0.6, 0.6])
-    k = np.array(bar["modal_stiffness"]) / np.array(bar["psi_tip"]) ** 2
+    k = np.array(bar["modal_stiffness_n_m"]) / np.array(bar["psi_tip"]) ** 2
     np.testing.assert_allclose(k, [2.0e6, 4.0e7])
     assert math.isclose(bar["damping_ratio"][1], 0.03)
 

@@ -27,13 +27,13 @@ from boringbar.simulate import Integration, State, simulate
 def _one_mode_case():
     """The one-mode physical bar, frictionless ball, gap 0.5 mm, ratio 1: brute force
     from rest settles on the symmetric two-impact orbit above ~30 N."""
-    return make_system("ball", "physical", gap=0.5e-3, friction=False, n_modes=1)
+    return make_system("ball", "physical", gap_m=0.5e-3, friction=False, n_modes=1)
 
 
-def _sweep(system, values, duration=1.0):
+def _sweep(system, values, duration_s=1.0):
     """Forward and backward exact sweeps, the last 20 % of each run sampled."""
     return bb.bifurcation(system, bb.BifurcationOptions("force", tuple(values), values[0], 1.0),
-                          integration=Integration(duration, 1e-6, "exact", 0.2))
+                          integration=Integration(duration_s, 1e-6, "exact", 0.2))
 
 
 def _branch_at(fl, br, value):
@@ -59,7 +59,7 @@ def test_stable_branch_is_the_brute_force_orbit_where_both_sweeps_agree():
         assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
         w = fl.psi_tip @ x[:fl.n]
         for s in sides:
-            samples = s["tip_displacement"].values
+            samples = s["tip_displacement_m"].values
             samples = samples[np.isfinite(samples)]
             assert len(samples) > 50
             assert np.max(np.abs(samples - w)) <= 1e-8 * abs(w), (v, samples[-1], w)
@@ -79,7 +79,7 @@ def _three_impact_orbit(ratio=0.97, phase=np.pi):
     x98 = start_state(system, ContinuationOptions(force_n=30.0, ratio=0.98,
                                                   start="masri-caughey"), fl)
     run = simulate(system, Harmonic(30.0, ratio=ratio),
-                   duration=(500 + phase / (2 * np.pi)) * fl.period, dt=fl.period / 4000,
+                   duration_s=(500 + phase / (2 * np.pi)) * fl.period, dt_s=fl.period / 4000,
                    integrator="exact", initial=State(x98, 0.0))
     return system, dataclasses.replace(fl, phase=phase), run.final.x
 
@@ -102,8 +102,8 @@ def test_branch_switching_at_period_doubling_gives_a_period_two_orbit():
         assert np.max(np.abs(twice - pt.x)) <= 1e-10 * size  # P^2 x = x
         gaps.append(np.max(np.abs(once - pt.x)) / size)
         # the exact kernel agrees: back after two periods, elsewhere after one
-        run = simulate(system, Harmonic(30.0, ratio=pt.value), duration=2 * f.period,
-                       dt=f.period / 4000, integrator="exact",
+        run = simulate(system, Harmonic(30.0, ratio=pt.value), duration_s=2 * f.period,
+                       dt_s=f.period / 4000, integrator="exact",
                        initial=State(pt.x, f.phase / f.omega), steady_fraction=1.0)
         assert np.max(np.abs(run.final.x - pt.x)) <= 1e-8 * size
     assert min(gaps) > 1e-3  # P x != x: a genuine period-2 orbit
@@ -124,8 +124,9 @@ def _closed_form_phase(system, fl, force):
     """The + wall impact's forcing phase of the admissible two-impact orbit (closed form)."""
     bar, ball = system.bar, system.damper
     return next(o.phase for o in two_impact_orbit(
-        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass, ball.gap, ball.restitution, force, fl.omega) if o.admissible)
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+        bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass_kg, ball.gap_m, ball.restitution, force, fl.omega) if o.admissible)
 
 
 def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it():
@@ -135,8 +136,8 @@ def test_a_change_of_the_event_sequence_is_located_where_the_closed_form_puts_it
     fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
     phase = _closed_form_phase(system, fl, 33.0)
     x0 = start_state(system, ContinuationOptions(force_n=30.0, start="masri-caughey"), fl)
-    run = simulate(system, Harmonic(30.0, ratio=1.0), duration=fl.period * phase / (2 * np.pi),
-                   dt=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
+    run = simulate(system, Harmonic(30.0, ratio=1.0), duration_s=fl.period * phase / (2 * np.pi),
+                   dt_s=fl.period / 20000, integrator="exact", initial=State(x0, 0.0),
                    steady_fraction=1.0)
     br = continue_branch(dataclasses.replace(fl, phase=phase), "force-n", run.final.x, 36.0,
                          step=0.1, max_points=40, max_step=0.3, move_section=False)
@@ -179,7 +180,7 @@ def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, ca
         assert bf["value"].values.tolist() == [31.0, 30.5, 30.0]
         assert bf.sizes["direction"] == 2
         # the sweep's strobe samples at 31 N sit on the branch's first point
-        w = bf["tip_displacement"].sel(direction="forward").isel(value=0).values
+        w = bf["tip_displacement_m"].sel(direction="forward").isel(value=0).values
         w = w[np.isfinite(w)]
     assert abs(w[-1] - out["branches"][0]["points"][0]["strobe_tip_m"]) < 1e-3 * abs(w[-1])
     assert (tmp_path / "continuation.png").stat().st_size > 0
@@ -190,15 +191,17 @@ def test_cli_overlay_draws_the_brute_force_diagram_of_the_same_case(tmp_path, ca
 
 def _small_gap_case():
     """One mode, frictionless ball, gap 0.1 mm, e = 0.7, F0 = 10 N, swept in the ratio."""
-    return make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+    return make_system("ball", "physical", gap_m=0.1e-3, friction=False, n_modes=1,
                        restitution=0.7)
 
 
 def _closed_form(system, ratio, force=10.0):
     """The ImpactSystem of the case and its stable admissible two-impact orbit (or None)."""
     bar, ball = system.bar, system.damper
-    args = (bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-            ball.mass, ball.gap, ball.restitution, force, ratio * system.reference_frequency)
+    args = (bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
+            bar.psi_damper[0],
+            ball.mass_kg, ball.gap_m, ball.restitution, force,
+            ratio * system.reference_frequency_rad_s)
     orbits = [o for o in two_impact_orbit(*args) if o.admissible and o.stable]
     return ImpactSystem(*args), (orbits[0] if orbits else None)
 
@@ -277,11 +280,12 @@ def _fold_and_linear_grazing(system, force=10.0):
         return float(np.hypot(a, b) - c)
 
     def relative_amplitude(r):
-        om = r * system.reference_frequency
+        om = r * system.reference_frequency_rad_s
         return abs(bar.psi_damper[0] * bar.psi_tip[0] * force
-                   / complex(bar.stiffness[0] - bar.mass[0] * om**2, bar.damping[0] * om))
+                   / complex(bar.stiffness_n_m[0] - bar.mass_kg[0] * om**2,
+                             bar.damping_n_s_m[0] * om))
     return (_bisect(merge, 0.5, 0.8),
-            _bisect(lambda r: relative_amplitude(r) - 0.5 * system.damper.gap, 0.8, 1.0))
+            _bisect(lambda r: relative_amplitude(r) - 0.5 * system.damper.gap_m, 0.8, 1.0))
 
 
 def _strobe_check(fl0, br, sweep, lo, hi):
@@ -297,7 +301,7 @@ def _strobe_check(fl0, br, sweep, lo, hi):
         x, pr = sh.periodic_orbit(at, near.x)
         assert np.all(np.abs(sh.multipliers(pr)) < 1.0)
         w = fl0.psi_tip @ sh.carry(at, x, 0.0)[:fl0.n]
-        s = sweep["tip_displacement"].isel(value=j).values
+        s = sweep["tip_displacement_m"].isel(value=j).values
         s = s[np.isfinite(s)]
         assert len(s) > 20 and np.max(np.abs(s - w)) <= 1e-8 * abs(w), (r, s[-1], w)
         checked += 1
@@ -314,7 +318,7 @@ def test_a_plus_one_multiplier_without_a_turn_is_a_branch_point_not_a_fold():
     corrector's matrix is not yet singular), and give the other branch's direction from
     the algebraic bifurcation equation on the null space of [G_x, G_p]: at this pitchfork
     the eigenvector of the +1 multiplier, with p fixed."""
-    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=False, n_modes=1,
                          restitution=0.3)
     orbit = _closed_form(system, 0.7, 30.0)[1]
     ph = (orbit.phase + np.pi / 2) % np.pi  # the section half-way between the impacts
@@ -352,7 +356,7 @@ def test_a_turn_the_multipliers_hide_is_still_a_fold():
     pair), so no multiplier pair shows the +1 crossing; the turn of the tangent must
     still be a fold, at the smallest F0 a fine continuation of the same branch reaches
     (from the coarse point before the turn, 60 steps over 0.5 N)."""
-    system = make_system("ball", "physical", gap=0.1e-3, friction=False)
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=False)
     o = ContinuationOptions(parameter="force-n", stop=5.0, force_n=30.0)
     fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
     x0 = start_state(system, o, fl)

@@ -27,8 +27,8 @@ SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
 
 
 def rk4_args(cut: bool = False) -> dict:
-    s = make_system("ball", "paper", gap=0.1e-3, friction=True)
-    f = Regenerative(depth=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
+    s = make_system("ball", "paper", gap_m=0.1e-3, friction=True)
+    f = Regenerative(depth_m=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
     su = _setup(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "rk4")
     return {"p": su.p, "x": su.x, "t0": su.t0, "dt": su.dt, "n_steps": su.n_steps,
             "steady_start": su.steady_steps, "rec_every": su.record_every, "rec": su.rec,
@@ -47,8 +47,8 @@ def batch_args() -> dict:
 
 
 def exact_args(cut: bool = False) -> dict:
-    s = make_system("ball", "physical", gap=0.1e-3, friction=True)
-    f = Regenerative(depth=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
+    s = make_system("ball", "physical", gap_m=0.1e-3, friction=True)
+    f = Regenerative(depth_m=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
     su = _setup(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "exact")
     prep = prepare(su.p)
     H = history_step(float(su.p[L.TAU]), su.dt) if cut else 0.0

@@ -226,7 +226,7 @@ def test_min_depth_is_the_lobes_search_of_the_candidate():
     ds = lobes([Case("tmd", system, "tmd")],
                LobesOptions((1000.0, 1400.0), "search", "zero", 2e-5, 4e-4, analytic=False),
                integration=Integration(0.3, 1e-6, "rk4"))
-    assert c.statistic[0] == min(float(ds["min_chatter_free_depth"].values[0]), 4e-4)
+    assert c.statistic[0] == min(float(ds["min_chatter_free_depth_m"].values[0]), 4e-4)
 
 
 def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
@@ -235,8 +235,8 @@ def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
                           ("paper", 0.6 * 0.026 * 9.81 / 0.0075)):
         system = make_system("ball", preset, spec=spec)
         sampled, _ = sampled_system(system, ("friction_number",), [0.6])
-        assert sampled.damper.friction_force == pytest.approx(force, rel=1e-12)
-        assert sampled.damper.friction_force == pytest.approx(system.damper.friction_force,
+        assert sampled.damper.friction_force_n == pytest.approx(force, rel=1e-12)
+        assert sampled.damper.friction_force_n == pytest.approx(system.damper.friction_force_n,
                                                               rel=1e-12)
 
 

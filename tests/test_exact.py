@@ -32,9 +32,9 @@ def test_solid_bar_transient_from_rest_is_the_closed_form():
     """One mode from rest under F0 sin(Omega t): particular + damped free solution."""
     s = make_system("solid", "paper")
     bar = s.bar
-    M, K, C, pl = bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0]
-    om = 0.93 * bar.natural_frequency
-    run = simulate(s, Harmonic(10.0, 0.93), duration=0.02, dt=1e-5, record_every=7,
+    M, K, C, pl = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0]
+    om = 0.93 * bar.natural_frequency_rad_s
+    run = simulate(s, Harmonic(10.0, 0.93), duration_s=0.02, dt_s=1e-5, record_every=7,
                    integrator="exact")
     t = run.history[:, 0]
     H = 1.0 / complex(K - M * om**2, C * om)
@@ -55,12 +55,12 @@ def test_steady_amplitude_is_the_frequency_response(bar, ratio):
     """After the transient (e^-58 at 2 s) max |W| is |G(i Omega)| F0, G from tip_frf."""
     s = make_system("ball", "physical", locked=True) if bar == "locked" else \
         make_system(bar, "physical")
-    om = ratio * s.reference_frequency
-    run = simulate(s, Harmonic(10.0, ratio), duration=2.0, steady_fraction=0.1,
+    om = ratio * s.reference_frequency_rad_s
+    run = simulate(s, Harmonic(10.0, ratio), duration_s=2.0, steady_fraction=0.1,
                    integrator="exact")
     kw = {"tmd": s.damper} if bar == "tmd" else {}
     if bar == "locked":
-        kw = {"added_mass": s.damper.mass}
+        kw = {"added_mass_kg": s.damper.mass_kg}
     g = abs(complex(tip_frf(s.bar, om, **kw)))
     assert run.metrics["max_abs_tip_m"] == pytest.approx(10.0 * g, rel=1e-10)  # 1e-13
     assert run.energy["balance_relative"] == pytest.approx(0.0, abs=1e-12)
@@ -75,12 +75,12 @@ def test_overdamped_absorber_mode_is_integrated_without_conjugate_pairs():
     s = make_system("tmd", "physical")
     d = s.damper
     s = dataclasses.replace(s, damper=dataclasses.replace(
-        d, damping=3.0 * 2.0 * math.sqrt(d.stiffness * d.mass)))
+        d, damping_n_s_m=3.0 * 2.0 * math.sqrt(d.stiffness_n_m * d.mass_kg)))
     f = Harmonic(10.0, 1.0)
     prep = prepare(_setup(s, f, 0.01, 1e-6, None, 0, 0.8, False, "exact").p)
     assert list(prep["kstep"]) == [1] and np.any(prep["lam"][0].imag != 0.0)
-    run = simulate(s, f, duration=2.0, steady_fraction=0.1, integrator="exact")
-    g = abs(complex(tip_frf(s.bar, s.reference_frequency, tmd=s.damper)))
+    run = simulate(s, f, duration_s=2.0, steady_fraction=0.1, integrator="exact")
+    g = abs(complex(tip_frf(s.bar, s.reference_frequency_rad_s, tmd=s.damper)))
     assert run.metrics["max_abs_tip_m"] == pytest.approx(10.0 * g, rel=1e-10)  # 3e-16
     assert run.energy["balance_relative"] == pytest.approx(0.0, abs=1e-12)  # 3.4e-15
 
@@ -89,11 +89,12 @@ def test_overdamped_absorber_mode_is_integrated_without_conjugate_pairs():
 @pytest.fixture(scope="module")
 def orbit_case():
     """The 30 N stable symmetric orbit (tests/test_masri_caughey.py) of the 1-mode bar."""
-    s = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    s = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     bar, d = s.bar, s.damper
-    om = s.reference_frequency
-    orbits = [o for o in two_impact_orbit(bar.mass[0], bar.stiffness[0], bar.damping[0],
-                                          bar.psi_tip[0], bar.psi_damper[0], d.mass, d.gap,
+    om = s.reference_frequency_rad_s
+    orbits = [o for o in two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0],
+                                          bar.damping_n_s_m[0],
+                                          bar.psi_tip[0], bar.psi_damper[0], d.mass_kg, d.gap_m,
                                           d.restitution, 30.0, om) if o.admissible]
     assert len(orbits) == 1
     o = orbits[0]
@@ -101,7 +102,7 @@ def orbit_case():
     u0 = float(o.modal_displacement(t0))
     v0 = o.bar_velocity_after / bar.psi_damper[0]
     y_dot = -o.ball_speed - o.bar_velocity_after  # relative velocity just after the + impact
-    x = np.array([u0, v0, d.gap / 2, y_dot])
+    x = np.array([u0, v0, d.gap_m / 2, y_dot])
     return s, o, State(x, t0)
 
 
@@ -109,7 +110,7 @@ def test_exact_integrator_follows_the_masri_caughey_orbit(orbit_case):
     s, o, start = orbit_case
     period = 2 * o.system.half_period
     n_per = 20
-    run = simulate(s, Harmonic(30.0, 1.0), duration=n_per * period, dt=period / 2000,
+    run = simulate(s, Harmonic(30.0, 1.0), duration_s=n_per * period, dt_s=period / 2000,
                    initial=start, steady_fraction=1.0, integrator="exact")
     imp = run.impacts
     # one + and one - impact per period; the last falls on t_end (in or out by round-off)
@@ -117,9 +118,9 @@ def test_exact_integrator_follows_the_masri_caughey_orbit(orbit_case):
     walls = imp[:, 1]
     assert np.all(walls[1:] == -walls[:-1]) and walls[0] == -1
     k = np.arange(1, len(imp) + 1)
-    t_ref = start.t + k * o.system.half_period
+    t_ref = start.t_s + k * o.system.half_period
     assert np.max(np.abs(imp[:, 0] - t_ref)) < 1e-13  # achieved: 2e-17 s
-    assert run.rms_tip == pytest.approx(o.rms_tip(), rel=1e-11)  # achieved: 5e-14
+    assert run.rms_tip_m == pytest.approx(o.rms_tip(), rel=1e-11)  # achieved: 5e-14
     approach = o.ball_speed - o.bar_velocity_before
     np.testing.assert_allclose(np.abs(imp[:, 2]), approach, rtol=1e-10)  # 1.4e-14
 
@@ -132,9 +133,9 @@ def test_orbit_stays_when_the_steady_window_starts_at_an_impact(orbit_case):
     3.3e-4; 10-200 periods were not affected)."""
     s, o, start = orbit_case
     period = 2 * o.system.half_period
-    run = simulate(s, Harmonic(30.0, 1.0), duration=1050 * period, dt=period / 2000,
+    run = simulate(s, Harmonic(30.0, 1.0), duration_s=1050 * period, dt_s=period / 2000,
                    initial=start, integrator="exact")
-    assert run.rms_tip == pytest.approx(o.rms_tip(), rel=1e-11)  # measured: 3e-13
+    assert run.rms_tip_m == pytest.approx(o.rms_tip(), rel=1e-11)  # measured: 3e-13
     assert abs(run.energy["balance_relative"]) < 1e-12  # measured: 1.2e-15
 
 
@@ -143,12 +144,12 @@ def test_rk4_converges_to_the_exact_impact_times_at_first_order(orbit_case):
     s, o, start = orbit_case
     period = 2 * o.system.half_period
     dur = 10 * period
-    ref = simulate(s, Harmonic(30.0, 1.0), duration=dur, dt=period / 2000, initial=start,
+    ref = simulate(s, Harmonic(30.0, 1.0), duration_s=dur, dt_s=period / 2000, initial=start,
                    steady_fraction=1.0, integrator="exact")
     errors = []
     dts = [period / 500, period / 1000, period / 2000, period / 4000]
     for dt in dts:
-        run = simulate(s, Harmonic(30.0, 1.0), duration=dur, dt=dt, initial=start,
+        run = simulate(s, Harmonic(30.0, 1.0), duration_s=dur, dt_s=dt, initial=start,
                        steady_fraction=1.0, integrator="rk4")
         m = min(len(run.impacts), len(ref.impacts)) - 1
         errors.append(np.max(np.abs(run.impacts[:m, 0] - ref.impacts[:m, 0])))
@@ -159,14 +160,14 @@ def test_rk4_converges_to_the_exact_impact_times_at_first_order(orbit_case):
 
 # --- the energy ledger -----------------------------------------------------------------------
 @pytest.mark.parametrize("preset,kw,force", [
-    ("physical", {"gap": 0.5e-3}, 10.0),  # 0.02 N friction, reciprocal
-    ("paper", {"gap": 0.5e-3}, 10.0),  # 20.4 N friction with the printed reaction
-    ("physical", {"gap": 0.1e-3, "friction": False}, 20.0),
-    ("physical", {"gap": 0.5e-3, "friction_force": 2.0, "static_ratio": 1.5}, 20.0),
+    ("physical", {"gap_m": 0.5e-3}, 10.0),  # 0.02 N friction, reciprocal
+    ("paper", {"gap_m": 0.5e-3}, 10.0),  # 20.4 N friction with the printed reaction
+    ("physical", {"gap_m": 0.1e-3, "friction": False}, 20.0),
+    ("physical", {"gap_m": 0.5e-3, "friction_force_n": 2.0, "static_ratio": 1.5}, 20.0),
 ])
 def test_energy_balance_closes_to_1e9(preset, kw, force):
     s = make_system("ball", preset, **kw)
-    run = simulate(s, Harmonic(force, 1.0), duration=0.3, steady_fraction=1.0,
+    run = simulate(s, Harmonic(force, 1.0), duration_s=0.3, steady_fraction=1.0,
                    integrator="exact")
     assert abs(run.energy["balance_relative"]) < 1e-9  # achieved: 1e-13
     m = run.metrics
@@ -174,7 +175,7 @@ def test_energy_balance_closes_to_1e9(preset, kw, force):
         # every impact is recorded: the ledger's impact loss is the sum of the drops
         e, d = s.damper.restitution, s.damper
         bar = s.bar
-        meff = 1 / (1 / d.mass + np.sum(bar.psi_damper**2 / bar.mass))
+        meff = 1 / (1 / d.mass_kg + np.sum(bar.psi_damper**2 / bar.mass_kg))
         drop = 0.5 * (1 - e * e) * meff * np.sum(run.impacts[:, 2] ** 2)
         assert run.energy["dissipated_impacts_j"] == pytest.approx(drop, rel=1e-12)
     if s.damper.friction.reaction == "printed":
@@ -185,36 +186,36 @@ def test_energy_balance_closes_to_1e9(preset, kw, force):
 def _stick_case(static_ratio=1.0):
     """The paper preset's 20.4 N friction (printed reaction), gap 0.5 mm: at 10 N the ball
     sticks for about 3/4 of the time and slips for the rest."""
-    return make_system("ball", "paper", gap=0.5e-3, static_ratio=static_ratio)
+    return make_system("ball", "paper", gap_m=0.5e-3, static_ratio=static_ratio)
 
 
 def test_static_limit_equal_to_coulomb_is_the_limit_of_the_sgn_law():
     """F_s = F_c: the exact stick-slip is what RK4's sgn() chatter converges to."""
     s = _stick_case()
     args = (s, Harmonic(10.0, 1.0))
-    kw = {"duration": 0.1, "steady_fraction": 0.5}
+    kw = {"duration_s": 0.1, "steady_fraction": 0.5}
     exact = simulate(*args, integrator="exact", **kw)
     assert 0.01 < exact.metrics["stick_time_s"] < 0.049  # stick and slip: 0.038 of 0.05 s
     errors = []
     for dt in (4e-6, 2e-6, 1e-6):
-        run = simulate(*args, dt=dt, **kw)
-        errors.append(abs(run.rms_tip - exact.rms_tip) / exact.rms_tip)
+        run = simulate(*args, dt_s=dt, **kw)
+        errors.append(abs(run.rms_tip_m - exact.rms_tip_m) / exact.rms_tip_m)
     assert errors[2] < errors[1] < errors[0]  # achieved: 2.6e-2, 1.2e-2, 6.8e-3
     assert errors[2] < 1e-2
     # a higher static limit sticks longer and moves the answer by more than that
     higher = simulate(_stick_case(2.0), Harmonic(10.0, 1.0), integrator="exact", **kw)
     assert higher.metrics["stick_time_s"] > exact.metrics["stick_time_s"]
-    assert abs(higher.rms_tip - exact.rms_tip) / exact.rms_tip > 5 * errors[2]
+    assert abs(higher.rms_tip_m - exact.rms_tip_m) / exact.rms_tip_m > 5 * errors[2]
 
 
 def test_zeno_sequence_ends_in_contact_without_stalling():
     """Ball 1 um from the + wall, bar released from +0.2 mm: the bar's acceleration
     throws the ball onto the wall; with e = 0.3 the rebounds shrink geometrically and
     end in contact (a capture below the impact threshold), then the ball is released."""
-    s = make_system("ball", "physical", gap=0.5e-3, friction=False, restitution=0.3)
-    half = s.damper.gap / 2
-    run = simulate(s, Harmonic(0.0, 1.0), duration=5e-3, steady_fraction=1.0,
-                   initial=Initial(tip_displacement=2e-4, ball_position=half - 1e-6),
+    s = make_system("ball", "physical", gap_m=0.5e-3, friction=False, restitution=0.3)
+    half = s.damper.gap_m / 2
+    run = simulate(s, Harmonic(0.0, 1.0), duration_s=5e-3, steady_fraction=1.0,
+                   initial=Initial(tip_displacement_m=2e-4, ball_position_m=half - 1e-6),
                    record_every=10, integrator="exact")
     m = run.metrics
     assert m["micro_impacts"] >= 1  # the captures
@@ -227,19 +228,19 @@ def test_zeno_sequence_ends_in_contact_without_stalling():
 def test_refusals():
     s = make_system("ball", "physical")
     with pytest.raises(ParameterError, match="integrator"):
-        simulate(s, Harmonic(10.0, 1.0), duration=1e-3, integrator="euler")
+        simulate(s, Harmonic(10.0, 1.0), duration_s=1e-3, integrator="euler")
     with pytest.raises(ParameterError, match="static_ratio"):
         Friction(static_ratio=0.5)
     with pytest.raises(ParameterError, match="static_ratio"):
-        simulate(_stick_case(1.5), Harmonic(10.0, 1.0), duration=1e-3, integrator="rk4")
+        simulate(_stick_case(1.5), Harmonic(10.0, 1.0), duration_s=1e-3, integrator="rk4")
 
 
 def test_run_records_its_integrator():
     s = make_system("ball", "paper")
-    run = simulate(s, Harmonic(10.0, 1.0), duration=1e-2, integrator="exact")
+    run = simulate(s, Harmonic(10.0, 1.0), duration_s=1e-2, integrator="exact")
     assert run.config()["integrator"] == "exact"
     assert run.summary()["integrator"] == "exact"
-    assert simulate(s, Harmonic(10.0, 1.0), duration=5e-3).summary()["integrator"] == "rk4"
+    assert simulate(s, Harmonic(10.0, 1.0), duration_s=5e-3).summary()["integrator"] == "rk4"
 
 
 # --- the command line ----------------------------------------------------------------------------
@@ -264,7 +265,7 @@ def test_cli_simulate_exact_end_to_end(tmp_path, capsys):
         config = json.loads(ds.attrs["config"])
         assert config["integrator"] == "exact"
         assert config["system"]["damper"]["friction"]["static_ratio"] == 1.5
-        assert ds.sizes["time"] > 1000
+        assert ds.sizes["time_s"] > 1000
 
 
 def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
@@ -283,7 +284,7 @@ def test_sweep_records_its_integrator():
     from boringbar.execute import Execution
     from boringbar.simulate import Integration
 
-    cases = published_cases(("ball",), gaps=(0.1e-3,), frictions=(False,))
+    cases = published_cases(("ball",), gaps_m=(0.1e-3,), frictions=(False,))
     ds = sweep(cases, SweepOptions([1.0], [20.0]), execution=Execution(workers=1),
                integration=Integration(duration_s=0.05, integrator="exact"))
     assert ds.attrs["integrator"] == "exact"
@@ -320,18 +321,18 @@ def test_random_cases_keep_the_ball_inside_and_balance_energy():
     for _ in range(40):
         preset = str(rng.choice(["paper", "physical"]))
         gap = float(rng.choice([0.1e-3, 0.5e-3]))
-        kw = {"gap": gap, "restitution": float(rng.choice([0.0, 0.3, 0.7, 1.0]))}
+        kw = {"gap_m": gap, "restitution": float(rng.choice([0.0, 0.3, 0.7, 1.0]))}
         friction = rng.choice(["off", "preset", "force"])
         if friction == "off":
             kw["friction"] = False
         elif friction == "force":
-            kw["friction_force"] = float(rng.uniform(0.5, 30.0))
+            kw["friction_force_n"] = float(rng.uniform(0.5, 30.0))
         kw["static_ratio"] = float(rng.choice([1.0, 1.0, 1.5, 3.0]))
         s = make_system("ball", preset, **kw)
         ini = Initial(float(rng.uniform(-1e-3, 1e-3)), float(rng.uniform(-1, 1)),
                       float(rng.uniform(-gap / 2, gap / 2)), float(rng.uniform(-0.5, 0.5)))
         run = simulate(s, Harmonic(float(rng.uniform(0, 40)), float(rng.uniform(0.8, 1.2))),
-                       duration=0.1, initial=ini, record_every=1, integrator="exact")
+                       duration_s=0.1, initial=ini, record_every=1, integrator="exact")
         assert np.max(np.abs(run.history[:, 3])) <= gap / 2 * (1 + 1e-9), (kw, ini)
         assert abs(run.energy["balance_relative"]) < 1e-9  # achieved: 5e-13
         assert run.metrics["events"] < 20_000
@@ -343,19 +344,19 @@ def test_a_graze_inside_one_grid_step_is_found():
     inside again at the end of the 25 us grid step.  Missed, the ball passed the wall
     by 5 nm.  (The path is chaotic, so round-off decides whether a run meets this graze;
     it did in the run where it was found, before the y^(4) bound.)"""
-    s = make_system("ball", "physical", gap=1e-4, restitution=0.3, friction=False)
-    ini = Initial(tip_displacement=0.0009977593537743258, tip_velocity=-0.4006448667760163,
-                  ball_position=-3.1476997076005373e-06, ball_velocity=0.1274508828630837)
-    run = simulate(s, Harmonic(27.334895166275178, 0.8848664733799202), duration=0.2,
+    s = make_system("ball", "physical", gap_m=1e-4, restitution=0.3, friction=False)
+    ini = Initial(tip_displacement_m=0.0009977593537743258, tip_velocity_m_s=-0.4006448667760163,
+                  ball_position_m=-3.1476997076005373e-06, ball_velocity_m_s=0.1274508828630837)
+    run = simulate(s, Harmonic(27.334895166275178, 0.8848664733799202), duration_s=0.2,
                    initial=ini, record_every=1, integrator="exact")
     assert np.max(np.abs(run.history[:, 3])) <= 0.5e-4 * (1 + 1e-9)
 
 
 # --- a free ball: longer grid steps where they are proven safe; int y^2 in closed form ------
 @pytest.mark.parametrize("preset,kw,force", [
-    ("paper", {"gap": 0.1e-3, "friction": False}, 10.0),
-    ("physical", {"gap": 0.1e-3, "friction": False}, 20.0),
-    ("physical", {"gap": 0.5e-3}, 30.0),  # friction on: sliding segments (F_b constant)
+    ("paper", {"gap_m": 0.1e-3, "friction": False}, 10.0),
+    ("physical", {"gap_m": 0.1e-3, "friction": False}, 20.0),
+    ("physical", {"gap_m": 0.5e-3}, 30.0),  # friction on: sliding segments (F_b constant)
 ])
 def test_ball_mean_square_is_the_integral_of_its_path(preset, kw, force):
     """The ball's steady mean square (rms_aux^2) is int y^2 dt in closed form per segment;
@@ -364,7 +365,7 @@ def test_ball_mean_square_is_the_integral_of_its_path(preset, kw, force):
     was 8.5e-4 off on the paper case.)"""
     s = make_system("ball", preset, **kw)
     dt, dur = 5e-8, 0.05
-    run = simulate(s, Harmonic(force, 1.0), duration=dur, dt=dt, record_every=1,
+    run = simulate(s, Harmonic(force, 1.0), duration_s=dur, dt_s=dt, record_every=1,
                    steady_fraction=0.5, integrator="exact")
     h = run.history
     keep = h[:, 0] >= 0.5 * dur - 0.5 * dt
@@ -382,9 +383,9 @@ def test_longer_steps_of_a_two_mode_ball_change_no_event():
     extremum can fall in the step (prepare's levmax = 2: mode 2 is 4.8x faster than mode 1).
     On its periodic attractor (the chaotic transient would amplify round-off) the run
     with h alone gives the same impacts, max |W| and integrals to round-off."""
-    s = make_system("ball", "physical", gap=0.1e-3, friction=False)
+    s = make_system("ball", "physical", gap_m=0.1e-3, friction=False)
     f = Harmonic(20.0, 1.0)
-    init = simulate(s, f, duration=1.0, integrator="exact").final
+    init = simulate(s, f, duration_s=1.0, integrator="exact").final
     out = []
     for levels in ("prepared", "h only"):
         su = _setup(s, f, 0.2, 1e-6, init, 0, 1.0, False, "exact")

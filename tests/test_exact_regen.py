@@ -34,10 +34,10 @@ def _limit(system, rpm: float) -> float:
 
 
 def _cut(system, factor: float, rpm: float = RPM, integrator: str = "exact",
-         dt: float = 1e-6, duration: float = 2.0, **kw):
-    forcing = Regenerative(depth=factor * _limit(system, rpm), rpm=rpm, **kw)
-    return simulate(system, forcing, duration=duration, dt=dt, integrator=integrator,
-                    record_every=round(SAMPLE / dt))
+         dt_s: float = 1e-6, duration_s: float = 2.0, **kw):
+    forcing = Regenerative(depth_m=factor * _limit(system, rpm), rpm=rpm, **kw)
+    return simulate(system, forcing, duration_s=duration_s, dt_s=dt_s, integrator=integrator,
+                    record_every=round(SAMPLE / dt_s))
 
 
 def _w_error(run, ref) -> float:
@@ -63,8 +63,8 @@ def test_the_cut_is_fourth_order_in_the_history_step(factor, duration):
     (stable) and 1e-10 (chattering): the round-off of the one-step propagator,
     eps per step over 1e5 .. 1e6 steps, amplified by the growth."""
     system = make_system("solid")
-    ref = _cut(system, factor, dt=1e-6, duration=duration, stop_at_zero=True)
-    errs = [_w_error(_cut(system, factor, dt=dt, duration=duration, stop_at_zero=True), ref)
+    ref = _cut(system, factor, dt_s=1e-6, duration_s=duration, stop_at_zero=True)
+    errs = [_w_error(_cut(system, factor, dt_s=dt, duration_s=duration, stop_at_zero=True), ref)
             for dt in ORDER_STEPS]
     orders = [math.log2(a / b) for a, b in zip(errs, errs[1:], strict=False)]
     assert all(3.5 < q < 4.6 for q in orders), (errs, orders)
@@ -76,8 +76,8 @@ def test_linear_delay_interpolation_is_second_order():
     (against cubic at H = 1 us) 8.0e-4, 2.0e-4, 5.0e-5 at H = 8, 4, 2 us (orders 2.00,
     2.00; RK4 with linear interpolation at dt = 2 us: 4.3e-5)."""
     system = make_system("solid")
-    ref = _cut(system, 2.0, dt=1e-6, duration=0.9)
-    runs = [_cut(system, 2.0, dt=dt, duration=0.9, interpolation="linear")
+    ref = _cut(system, 2.0, dt_s=1e-6, duration_s=0.9)
+    runs = [_cut(system, 2.0, dt_s=dt, duration_s=0.9, interpolation="linear")
             for dt in (8e-6, 4e-6, 2e-6)]
     errs = [_w_error(r, ref) for r in runs]
     assert all(1.8 < math.log2(a / b) < 2.2 for a, b in zip(errs, errs[1:], strict=False))
@@ -96,7 +96,7 @@ def test_rk4_converges_to_the_exact_cut():
     assert t_ex == pytest.approx(0.961, abs=0.01)
     errs, dts = [], []
     for dt in (2e-6, 1e-6, 5e-7):
-        rk = _cut(system, 2.0, integrator="rk4", dt=dt, stop_at_zero=True)
+        rk = _cut(system, 2.0, integrator="rk4", dt_s=dt, stop_at_zero=True)
         errs.append(_w_error(rk, ex))
         dts.append(abs(rk.cutting["first_zero_time_s"] - t_ex))
         assert dts[-1] <= dt
@@ -109,9 +109,9 @@ def test_exact_history_step_beats_rk4_at_the_same_step():
     """At dt = H = 8 us the exact cut is 1e-8 from the reference, RK4 3e-6: RK4's own
     truncation error of the fast second mode dominates its interpolation's."""
     system = make_system("solid")
-    ref = _cut(system, 2.0, dt=1e-6, duration=0.9)
-    e_ex = _w_error(_cut(system, 2.0, dt=8e-6, duration=0.9), ref)
-    e_rk = _w_error(_cut(system, 2.0, integrator="rk4", dt=8e-6, duration=0.9), ref)
+    ref = _cut(system, 2.0, dt_s=1e-6, duration_s=0.9)
+    e_ex = _w_error(_cut(system, 2.0, dt_s=8e-6, duration_s=0.9), ref)
+    e_rk = _w_error(_cut(system, 2.0, integrator="rk4", dt_s=8e-6, duration_s=0.9), ref)
     assert e_ex < 1e-7 and e_rk > 100 * e_ex  # measured 9.1e-9, 3.3e-6
 
 
@@ -119,9 +119,9 @@ def test_exact_history_step_beats_rk4_at_the_same_step():
 def test_below_the_limit_the_cut_settles_to_the_static_deflection():
     system = make_system("solid")
     bar = system.bar
-    run = _cut(system, 0.5, rpm=1200.0, dt=4e-6)
+    run = _cut(system, 0.5, rpm=1200.0, dt_s=4e-6)
     b = 0.5 * _limit(system, 1200.0)
-    w_static = KR * b * FEED * float(np.sum(bar.psi_tip**2 / bar.stiffness))
+    w_static = KR * b * FEED * float(np.sum(bar.psi_tip**2 / bar.stiffness_n_m))
     c = run.cutting
     assert c["static_deflection_m"] == pytest.approx(w_static, rel=1e-12)
     assert not c["chatter"] and c["steps_with_zero_force"] == 0
@@ -139,8 +139,8 @@ def test_above_the_limit_the_force_reaches_zero_as_with_rk4():
     peak force to 9.8e-5 (RK4 samples it at its stages), balance -1.6e-12 (RK4
     -2.9e-12)."""
     system = make_system("solid")
-    ex = _cut(system, 2.0, rpm=1200.0, duration=0.5)
-    rk = _cut(system, 2.0, rpm=1200.0, duration=0.5, integrator="rk4")
+    ex = _cut(system, 2.0, rpm=1200.0, duration_s=0.5)
+    rk = _cut(system, 2.0, rpm=1200.0, duration_s=0.5, integrator="rk4")
     c, d = ex.cutting, rk.cutting
     assert c["chatter"] and c["first_zero_time_s"] == pytest.approx(0.2516, abs=1e-3)
     assert abs(c["first_zero_time_s"] - d["first_zero_time_s"]) < 1e-6
@@ -157,7 +157,7 @@ def test_verdicts_equal_rk4_away_from_the_boundary(rpm):
     1.07 .. 1.51 x above the analytic one, tests/test_chatter.py), for both."""
     system = make_system("solid")
     for factor in (0.8, 2.0):
-        verdicts = {integ: _cut(system, factor, rpm=rpm, integrator=integ, dt=dt,
+        verdicts = {integ: _cut(system, factor, rpm=rpm, integrator=integ, dt_s=dt,
                                 stop_at_zero=True).cutting["chatter"]
                     for integ, dt in (("exact", 4e-6), ("rk4", 1e-6))}
         assert verdicts == {"exact": factor > 1, "rk4": factor > 1}
@@ -170,8 +170,8 @@ def test_other_linear_bars_match_rk4(bar):
     (locked); balance -5.9e-12, -5.3e-12."""
     system = (make_system("ball", locked=True, friction=False) if bar == "locked"
               else make_system(bar))
-    ex = _cut(system, 1.5, rpm=1200.0, duration=0.3, dt=2e-6)
-    rk = _cut(system, 1.5, rpm=1200.0, duration=0.3, dt=2.5e-7, integrator="rk4")
+    ex = _cut(system, 1.5, rpm=1200.0, duration_s=0.3, dt_s=2e-6)
+    rk = _cut(system, 1.5, rpm=1200.0, duration_s=0.3, dt_s=2.5e-7, integrator="rk4")
     assert _w_error(ex, rk) < 1e-8
     assert abs(ex.energy["balance_relative"]) < 1e-9
 
@@ -182,11 +182,11 @@ def ball_cuts():
     """The physical preset with a 10 um gap at 3 x the bare bar's limit (1200 rpm): the
     start's transient throws the ball at the walls 13 times in the first 14 ms, with
     rolling friction between impacts."""
-    system = make_system("ball", gap=10e-6)
+    system = make_system("ball", gap_m=10e-6)
     depth = 3.0 * float(limit_at_speeds(system.bar, [1200.0])[0])
 
     def run(integrator, dt):
-        return simulate(system, Regenerative(depth=depth, rpm=1200.0), duration=0.02, dt=dt,
+        return simulate(system, Regenerative(depth_m=depth, rpm=1200.0), duration_s=0.02, dt_s=dt,
                         integrator=integrator, steady_fraction=1.0)
 
     return {key: run(*key) for key in (("exact", 1e-6), ("exact", 2e-6), ("rk4", 2.5e-7),
@@ -233,7 +233,7 @@ def test_stuck_ball_with_the_printed_reaction_in_a_cut():
     depth = 3.0 * float(limit_at_speeds(system.bar, [1200.0])[0])
 
     def run(integrator, dt):
-        return simulate(system, Regenerative(depth=depth, rpm=1200.0), duration=0.2, dt=dt,
+        return simulate(system, Regenerative(depth_m=depth, rpm=1200.0), duration_s=0.2, dt_s=dt,
                         integrator=integrator)
 
     ex = run("exact", 1e-6)
@@ -261,7 +261,7 @@ def test_lobes_run_exactly_and_agree_with_rk4():
                execution=Execution(workers=1))
     # "auto" (the default) takes RK4 in a cut
     assert ex.attrs["integrator_used"] == "exact" and rk.attrs["integrator_used"] == "rk4"
-    np.testing.assert_array_equal(ex["limit_depth"].values, rk["limit_depth"].values)
+    np.testing.assert_array_equal(ex["limit_depth_m"].values, rk["limit_depth_m"].values)
 
 
 def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
@@ -280,7 +280,7 @@ def test_cli_simulate_a_cut_exactly(tmp_path, capsys):
     assert abs(s["energy"]["balance_relative"]) < 1e-9
     with xr.open_dataset(out / "run.nc") as ds:
         assert json.loads(ds.attrs["config"])["integrator"] == "exact"
-        assert float(ds["force"].max()) > 0
+        assert float(ds["force_n"].max()) > 0
 
 
 def test_cli_lobes_exact(tmp_path, capsys):
@@ -294,7 +294,7 @@ def test_cli_lobes_exact(tmp_path, capsys):
                  "0.5", "--integrator", "exact", "--out", str(out)]) == 0
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["integrator"] == "exact"
-        assert float(ds["limit_depth"].max()) > 0
+        assert float(ds["limit_depth_m"].max()) > 0
     with xr.open_dataset(out / "examples.nc") as ex:
         assert {c["integrator"] for c in json.loads(ex.attrs["configs"])} == {"exact"}
 
@@ -328,8 +328,8 @@ def test_exact_time_domain_limit_equals_rk4s_on_the_published_grid():
     rk = tc.solid_limits(speeds, 2.0)
 
     def chatters(depth, rpm):
-        f = Regenerative(depth=depth, rpm=rpm, stop_at_zero=True)
-        return simulate(system, f, duration=2.0, dt=2e-6, integrator="exact").cutting["chatter"]
+        f = Regenerative(depth_m=depth, rpm=rpm, stop_at_zero=True)
+        return simulate(system, f, duration_s=2.0, dt_s=2e-6, integrator="exact").cutting["chatter"]
 
     def one(r):
         lo, hi = r["analytic"] * (1 - tc.SMALL), r["predicted"] * (1 + tc.PRED_TOL)

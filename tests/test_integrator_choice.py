@@ -31,7 +31,7 @@ def test_auto_takes_exact_for_true_stick_slip_even_under_paper():
     system = make_system("ball", "paper", static_ratio=1.5)
     assert resolve_integrator("auto", system) == "exact"
     with pytest.raises(ParameterError, match="static_ratio"):
-        simulate(system, Harmonic(10.0, 1.0), duration=0.01, integrator="rk4")
+        simulate(system, Harmonic(10.0, 1.0), duration_s=0.01, integrator="rk4")
 
 
 def test_bad_integrator_names_the_choices():
@@ -43,10 +43,10 @@ def test_bad_integrator_names_the_choices():
 
 def test_a_run_records_the_integrator_that_ran():
     physical, paper = make_system("solid", "physical"), make_system("solid", "paper")
-    assert simulate(physical, Harmonic(10.0, 1.0), duration=0.01).integrator == "exact"
-    assert simulate(paper, Harmonic(10.0, 1.0), duration=0.01).integrator == "rk4"
-    cut = Regenerative(rpm=1200.0, depth=0.01e-3)
-    assert simulate(physical, cut, duration=0.01).integrator == "rk4"
+    assert simulate(physical, Harmonic(10.0, 1.0), duration_s=0.01).integrator == "exact"
+    assert simulate(paper, Harmonic(10.0, 1.0), duration_s=0.01).integrator == "rk4"
+    cut = Regenerative(rpm=1200.0, depth_m=0.01e-3)
+    assert simulate(physical, cut, duration_s=0.01).integrator == "rk4"
 
 
 def test_auto_sweep_is_exact_for_physical_and_batched_rk4_for_paper():
@@ -75,17 +75,17 @@ def test_friction_readings_one_at_a_time():
     corrected = make_system("ball", "paper", friction_reaction="reciprocal")
     assert corrected.damper.friction.reaction == "reciprocal"
     assert "printed-bar-reaction" not in corrected.readings
-    assert corrected.damper.friction_force == paper.damper.friction_force
+    assert corrected.damper.friction_force_n == paper.damper.friction_force_n
     heavy = make_system("ball", "physical", friction_reading="paper",
                         friction_reaction="reciprocal")
-    m = heavy.damper.mass
-    assert heavy.damper.friction_force == pytest.approx(0.6 * m * 9.81 / 0.0075, rel=1e-3)
-    assert heavy.damper.friction_force == pytest.approx(20.4, rel=0.01)
+    m = heavy.damper.mass_kg
+    assert heavy.damper.friction_force_n == pytest.approx(0.6 * m * 9.81 / 0.0075, rel=1e-3)
+    assert heavy.damper.friction_force_n == pytest.approx(20.4, rel=0.01)
     assert heavy.readings == ("paper-friction-force",)
     light = make_system("ball", "paper", friction_reading="rolling")
-    assert light.damper.friction_force == pytest.approx(heavy.damper.friction_force * 1e-3)
+    assert light.damper.friction_force_n == pytest.approx(heavy.damper.friction_force_n * 1e-3)
     steel = make_system("ball", "physical", ball="steel", friction_reading="paper")
-    assert steel.damper.friction_force == pytest.approx(
-        0.6 * steel.damper.mass * 9.81 / 0.0075, rel=1e-3)
+    assert steel.damper.friction_force_n == pytest.approx(
+        0.6 * steel.damper.mass_kg * 9.81 / 0.0075, rel=1e-3)
     with pytest.raises(ParameterError, match="friction_reading"):
         make_system("ball", friction_reading="metres")

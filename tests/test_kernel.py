@@ -62,7 +62,7 @@ def kernel_run(p, x0, t0: float, dt: float, n_steps: int, chunk: int = CHUNK):
 
 def one_step(system: System, x, dt: float, force: float = 0.0):
     """One kernel step of ``system`` from state ``x``; returns (new x, met)."""
-    p = pack(system, system.reference_frequency, force, dt)
+    p = pack(system, system.reference_frequency_rad_s, force, dt)
     x = np.array(x, dtype=float)
     met = fresh_metrics()
     run_rk4(p, x, 0.0, dt, 1, 0, 0, np.zeros((0, 6)), np.zeros((4, 3)), np.zeros((4, 2)),
@@ -77,23 +77,23 @@ def scaled_max_diff(a: np.ndarray, b: np.ndarray, scale: np.ndarray) -> float:
 
 
 # --- kernel vs naive ----------------------------------------------------------------------
-RATTLE = Initial(tip_velocity=0.1, ball_velocity=0.5)
+RATTLE = Initial(tip_velocity_m_s=0.1, ball_velocity_m_s=0.5)
 # (system, initial conditions, must impact)
 CASES = {
-    "solid-1": (lambda: make_system("solid", n_modes=1), Initial(tip_velocity=0.05), False),
-    "solid-2": (lambda: make_system("solid", n_modes=2), Initial(tip_velocity=0.05), False),
-    "tmd-2": (lambda: make_system("tmd", n_modes=2), Initial(tip_velocity=0.05), False),
+    "solid-1": (lambda: make_system("solid", n_modes=1), Initial(tip_velocity_m_s=0.05), False),
+    "solid-2": (lambda: make_system("solid", n_modes=2), Initial(tip_velocity_m_s=0.05), False),
+    "tmd-2": (lambda: make_system("tmd", n_modes=2), Initial(tip_velocity_m_s=0.05), False),
     # a small gap and a thrown ball: 10, 13 and 43 counted impacts in the 3000 steps
     # (and 11 sub-threshold ones in the printed case)
     "ball-1-no-friction": (
-        lambda: make_system("ball", n_modes=1, gap=0.02e-3, friction=False), RATTLE, True),
+        lambda: make_system("ball", n_modes=1, gap_m=0.02e-3, friction=False), RATTLE, True),
     "ball-2-reciprocal": (
-        lambda: make_system("ball", n_modes=2, gap=0.02e-3, friction_force=2.0), RATTLE, True),
+        lambda: make_system("ball", n_modes=2, gap_m=0.02e-3, friction_force_n=2.0), RATTLE, True),
     "ball-2-printed": (
-        lambda: make_system("ball", n_modes=2, gap=0.02e-3, friction_force=2.0,
+        lambda: make_system("ball", n_modes=2, gap_m=0.02e-3, friction_force_n=2.0,
                             friction_reaction="printed"), RATTLE, True),
     "locked-2": (lambda: make_system("ball", n_modes=2, locked=True),
-                 Initial(tip_velocity=0.05), False),
+                 Initial(tip_velocity_m_s=0.05), False),
 }
 
 
@@ -103,7 +103,7 @@ def compared():
     out = {}
     for name, (build, initial, _) in CASES.items():
         system = build()
-        p = pack(system, system.reference_frequency, 10.0, DT)
+        p = pack(system, system.reference_frequency_rad_s, 10.0, DT)
         x0 = initial_state(system, initial)
         t, X, impacts = naive.run(p, x0, 0.0, DT, N_STEPS)
         out[name] = (system, p, X, impacts, kernel_run(p, x0, 0.0, DT, N_STEPS))
@@ -161,9 +161,9 @@ def test_printed_and_reciprocal_reactions_differ_in_these_runs(compared):
 def test_impact_conserves_momentum_and_loses_the_stated_energy(n_modes, wall):
     """One step of 1e-17 s into a wall (the step's own damping impulse is then below
     round-off), bar undeflected, no forcing, no friction."""
-    system = make_system("ball", n_modes=n_modes, gap=0.5e-3, friction=False)
+    system = make_system("ball", n_modes=n_modes, gap_m=0.5e-3, friction=False)
     bar, ball = system.bar, system.damper
-    n, half, e = n_modes, ball.gap / 2, ball.restitution
+    n, half, e = n_modes, ball.gap_m / 2, ball.restitution
     v_in = 0.3 * wall
     x = np.zeros(2 * n + 2)
     x[n:2 * n] = [0.1, -0.02][:n]
@@ -177,11 +177,11 @@ def test_impact_conserves_momentum_and_loses_the_stated_energy(n_modes, wall):
     assert y[2 * n + 1] == pytest.approx(-e * v_in, rel=1e-14)
     # (M_i / psi_d,i) u_i' + m u_d' is conserved, mode by mode
     for i in range(n):
-        before = bar.mass[i] / bar.psi_damper[i] * x[n + i] + ball.mass * ball_velocity(x)
-        after = bar.mass[i] / bar.psi_damper[i] * y[n + i] + ball.mass * ball_velocity(y)
-        change = abs(after - before) / (ball.mass * abs(ball_velocity(x)))
+        before = bar.mass_kg[i] / bar.psi_damper[i] * x[n + i] + ball.mass_kg * ball_velocity(x)
+        after = bar.mass_kg[i] / bar.psi_damper[i] * y[n + i] + ball.mass_kg * ball_velocity(y)
+        change = abs(after - before) / (ball.mass_kg * abs(ball_velocity(x)))
         assert change < 1e-13  # measured: <= 3e-15
-    m_eff = 1.0 / (1.0 / ball.mass + np.sum(bar.psi_damper**2 / bar.mass))
+    m_eff = 1.0 / (1.0 / ball.mass_kg + np.sum(bar.psi_damper**2 / bar.mass_kg))
     loss = 0.5 * (1 - e**2) * m_eff * v_in**2
     # measured: 2.4e-15 and 4.4e-16
     assert stored_energy(system, x) - stored_energy(system, y) == pytest.approx(loss, rel=1e-13)
@@ -190,8 +190,8 @@ def test_impact_conserves_momentum_and_loses_the_stated_energy(n_modes, wall):
 
 
 def test_wall_rule_without_outward_motion_applies_no_impact():
-    system = make_system("ball", n_modes=2, gap=0.5e-3, friction=False)
-    half = system.damper.gap / 2
+    system = make_system("ball", n_modes=2, gap_m=0.5e-3, friction=False)
+    half = system.damper.gap_m / 2
     # on the wall moving inward: the step just moves it
     x = np.array([0.0, 0.0, 0.0, 0.0, half, -0.3])
     y, met = one_step(system, x, 1e-9)
@@ -209,23 +209,23 @@ def test_wall_rule_without_outward_motion_applies_no_impact():
 
 
 # --- energy balance -----------------------------------------------------------------------
-BALL_THROWN = Initial(ball_velocity=0.5)
+BALL_THROWN = Initial(ball_velocity_m_s=0.5)
 
 
-def balance(system, duration=0.1, dt=DT, initial=BALL_THROWN):
-    run = simulate(system, Harmonic(10.0, 1.0), duration=duration, dt=dt, initial=initial)
+def balance(system, duration_s=0.1, dt_s=DT, initial=BALL_THROWN):
+    run = simulate(system, Harmonic(10.0, 1.0), duration_s=duration_s, dt_s=dt_s, initial=initial)
     return run, run.energy
 
 
 @pytest.mark.parametrize("kind", ["solid", "tmd"])
 def test_energy_balance_closes_for_the_linear_bars(kind):
-    _, e = balance(make_system(kind, n_modes=2), initial=Initial(tip_velocity=0.05))
+    _, e = balance(make_system(kind, n_modes=2), initial=Initial(tip_velocity_m_s=0.05))
     assert abs(e["balance_relative"]) < 1e-8  # measured: 2e-12
     assert e["work_force_j"] > 0 and e["dissipated_viscous_j"] > 0
 
 
 def test_energy_balance_closes_with_impacts_and_reciprocal_friction():
-    run, e = balance(make_system("ball", n_modes=2, gap=0.1e-3))
+    run, e = balance(make_system("ball", n_modes=2, gap_m=0.1e-3))
     assert run.metrics["impacts_total"] > 50  # measured: 120
     assert e["dissipated_impacts_j"] > 0 and e["dissipated_friction_j"] > 0
     assert e["work_nonreciprocal_friction_j"] == 0.0
@@ -233,7 +233,7 @@ def test_energy_balance_closes_with_impacts_and_reciprocal_friction():
 
 
 def test_printed_reaction_balance_closes_only_with_its_reported_work():
-    _, e = balance(make_system("ball", n_modes=2, gap=0.1e-3, friction_reaction="printed"))
+    _, e = balance(make_system("ball", n_modes=2, gap_m=0.1e-3, friction_reaction="printed"))
     assert abs(e["balance_relative"]) < 1e-8  # measured: 5e-11
     w_nr = e["work_nonreciprocal_friction_j"]
     assert abs(w_nr) > 1e-5  # measured: -1.4e-4 J
@@ -246,10 +246,10 @@ def test_paper_friction_balance_error_is_first_order_sgn_chatter():
     RK4-weighted friction work then differs from the step's energy change by
     O(F_c^2 dt^2 / m) per chattering step, so the residual is first order in dt
     (a property of the published scheme, docs/model.md, section 5, not a bookkeeping slip)."""
-    system = make_system("ball", "paper", gap=0.1e-3)
+    system = make_system("ball", "paper", gap_m=0.1e-3)
     res = []
     for dt in (1e-6, 5e-7):
-        run, e = balance(system, dt=dt)
+        run, e = balance(system, dt_s=dt)
         res.append(e["balance_residual_j"])
         assert run.metrics["stick_time_s"] > 0.03  # measured: 0.061 s of 0.08 s
         assert abs(e["work_nonreciprocal_friction_j"]) > 1e-2  # measured: 2.0e-2 J
@@ -260,12 +260,12 @@ def test_paper_friction_balance_error_is_first_order_sgn_chatter():
 # --- invariance under the mode normalisation -------------------------------------------
 @pytest.mark.parametrize("kind", ["ball", "tmd"])
 def test_results_do_not_depend_on_the_mode_normalisation(kind):
-    base = make_system(kind, n_modes=2, gap=0.1e-3)
+    base = make_system(kind, n_modes=2, gap_m=0.1e-3)
     scaled = System(base.bar.normalised([3.0, -0.5]), base.damper)
-    initial = Initial(tip_velocity=0.02, ball_velocity=0.5 if kind == "ball" else 0.0)
-    runs = [simulate(s, Harmonic(10.0, 1.0), duration=0.05, initial=initial)
+    initial = Initial(tip_velocity_m_s=0.02, ball_velocity_m_s=0.5 if kind == "ball" else 0.0)
+    runs = [simulate(s, Harmonic(10.0, 1.0), duration_s=0.05, initial=initial)
             for s in (base, scaled)]
-    assert runs[1].rms_tip == pytest.approx(runs[0].rms_tip, rel=1e-9)  # measured: 3e-13
+    assert runs[1].rms_tip_m == pytest.approx(runs[0].rms_tip_m, rel=1e-9)  # measured: 3e-13
     if kind == "ball":
         assert len(runs[0].impacts) > 20  # measured: 59 in the steady part
         assert len(runs[1].impacts) == len(runs[0].impacts)
@@ -279,9 +279,10 @@ def steady_response(system, frequency_hz: float, force: float, added_mass: float
     """One mode: tip receptance G = psi_L^2 / (K - (M + m psi_d^2) w^2 + i C w), the
     closed-form RMS F0 |G| / sqrt 2, and the initial conditions of that steady state."""
     bar, w = system.bar, 2 * math.pi * frequency_hz
-    m_total = bar.mass[0] + added_mass * bar.psi_damper[0] ** 2
-    g = bar.psi_tip[0] ** 2 / (bar.stiffness[0] - m_total * w**2 + 1j * bar.damping[0] * w)
-    initial = Initial(tip_displacement=force * g.imag, tip_velocity=force * w * g.real)
+    m_total = bar.mass_kg[0] + added_mass * bar.psi_damper[0] ** 2
+    g = bar.psi_tip[0] ** 2 / (bar.stiffness_n_m[0] - m_total * w**2
+                               + 1j * bar.damping_n_s_m[0] * w)
+    initial = Initial(tip_displacement_m=force * g.imag, tip_velocity_m_s=force * w * g.real)
     return force * abs(g) / math.sqrt(2), initial
 
 
@@ -292,13 +293,13 @@ F_HZ = 520.0
 
 def test_locked_ball_is_a_bar_with_the_ball_mass_added():
     system = make_system("ball", n_modes=1, locked=True)
-    m = system.damper.mass
+    m = system.damper.mass_kg
     exact, initial = steady_response(system, F_HZ, 10.0, added_mass=m)
-    run = simulate(system, Harmonic(10.0, ratio=None, frequency_hz=F_HZ), duration=0.5,
+    run = simulate(system, Harmonic(10.0, ratio=None, frequency_hz=F_HZ), duration_s=0.5,
                    initial=initial)
-    assert run.rms_tip == pytest.approx(exact, rel=1e-6)  # measured: 4e-11
+    assert run.rms_tip_m == pytest.approx(exact, rel=1e-6)  # measured: 4e-11
     without_ball, _ = steady_response(system, F_HZ, 10.0)
-    assert abs(run.rms_tip / without_ball - 1) > 0.05  # the ball's mass matters (10 %)
+    assert abs(run.rms_tip_m / without_ball - 1) > 0.05  # the ball's mass matters (10 %)
 
 
 def test_solid_bar_rms_converges_at_fourth_order_to_the_closed_form():
@@ -306,9 +307,9 @@ def test_solid_bar_rms_converges_at_fourth_order_to_the_closed_form():
     exact, initial = steady_response(system, F_HZ, 10.0)
     errors = []
     for dt in (4e-6, 2e-6, 1e-6):
-        run = simulate(system, Harmonic(10.0, ratio=None, frequency_hz=F_HZ), duration=0.2,
-                       dt=dt, steady_fraction=0.5, initial=initial)
-        errors.append(run.rms_tip / exact - 1)
+        run = simulate(system, Harmonic(10.0, ratio=None, frequency_hz=F_HZ), duration_s=0.2,
+                       dt_s=dt, steady_fraction=0.5, initial=initial)
+        errors.append(run.rms_tip_m / exact - 1)
     assert abs(errors[-1]) < 1e-9  # measured: 3.8e-11
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
     assert np.all((ratios > 12) & (ratios < 20))  # measured: 16.2, 16.1 (RK4)
@@ -324,21 +325,22 @@ def test_impacting_ball_rms_converges_at_first_order():
     scatter about 2 (measured: errors vs the orbit -1.48e-2, -8.5e-3, -4.1e-3 of
     the RMS; successive-difference ratio 1.45).
     """
-    system = make_system("ball", n_modes=1, gap=0.5e-3, friction=False)
+    system = make_system("ball", n_modes=1, gap_m=0.5e-3, friction=False)
     bar, ball = system.bar, system.damper
-    orbits = two_impact_orbit(bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0],
-                              bar.psi_damper[0], ball.mass, ball.gap, ball.restitution, 30.0,
+    orbits = two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+                              bar.psi_tip[0],
+                              bar.psi_damper[0], ball.mass_kg, ball.gap_m, ball.restitution, 30.0,
                               2 * math.pi * F_HZ)
     orbit = [o for o in orbits if o.admissible and o.stable][0]
     t0 = orbit.impact_time
     x0 = np.array([float(orbit.modal_displacement(t0)),
-                   orbit.bar_velocity_after / bar.psi_damper[0], ball.gap / 2, -orbit.ball_speed])
+                   orbit.bar_velocity_after / bar.psi_damper[0], ball.gap_m / 2, -orbit.ball_speed])
     rms = []
     for dt in (4e-6, 2e-6, 1e-6):
-        run = simulate(system, Harmonic(30.0, ratio=None, frequency_hz=F_HZ), duration=0.2,
-                       dt=dt, steady_fraction=0.5, initial=State(x0, t0))
+        run = simulate(system, Harmonic(30.0, ratio=None, frequency_hz=F_HZ), duration_s=0.2,
+                       dt_s=dt, steady_fraction=0.5, initial=State(x0, t0))
         assert run.pattern.name == "2 symmetric"
-        rms.append(run.rms_tip)
+        rms.append(run.rms_tip_m)
     errors = np.array(rms) / orbit.rms_tip() - 1
     assert abs(errors[-1]) < 1e-2
     assert np.all(np.abs(errors[1:]) < np.abs(errors[:-1]))
@@ -352,11 +354,11 @@ def test_impacting_ball_rms_converges_at_first_order():
 def test_too_coarse_a_step_is_refused_naming_dt():
     system = make_system("ball", n_modes=2)
     for dt in (1e-4, 0.0, -1e-6):
-        with pytest.raises(ParameterError, match=r"^dt = "):
-            simulate(system, Harmonic(10.0, 1.0), duration=0.01, dt=dt)
+        with pytest.raises(ParameterError, match=r"^dt_s = "):
+            simulate(system, Harmonic(10.0, 1.0), duration_s=0.01, dt_s=dt)
 
 
-@pytest.mark.parametrize("kwargs, name", [({"gap": -1e-3}, "gap"),
+@pytest.mark.parametrize("kwargs, name", [({"gap_m": -1e-3}, "gap_m"),
                                           ({"restitution": 1.5}, "restitution")])
 def test_bad_damper_parameters_are_refused_by_name(kwargs, name):
     with pytest.raises(ParameterError, match=rf"^{name} = .* outside the allowed range"):
@@ -367,12 +369,12 @@ def test_bad_damper_parameters_are_refused_by_name(kwargs, name):
 def test_an_impact_on_the_last_step_lies_inside_the_run():
     dt = 1e-6
     t0 = next(t for t in np.arange(0.0, 1.0, 0.01) if (t + dt) + dt > t + 2 * dt)
-    system = make_system("ball", n_modes=1, gap=0.5e-3, friction=False)
+    system = make_system("ball", n_modes=1, gap_m=0.5e-3, friction=False)
     v = 0.1  # the ball reaches the + wall during the second (last) step
-    x = np.array([0.0, 0.0, system.damper.gap / 2 - 1.5 * v * dt, v])
-    run = simulate(system, Harmonic(0.0, 1.0), duration=2 * dt, dt=dt, steady_fraction=1.0,
+    x = np.array([0.0, 0.0, system.damper.gap_m / 2 - 1.5 * v * dt, v])
+    run = simulate(system, Harmonic(0.0, 1.0), duration_s=2 * dt, dt_s=dt, steady_fraction=1.0,
                    initial=State(x, float(t0)))
-    assert len(run.impacts) == 1 and run.impacts[0, 0] <= run.final.t
+    assert len(run.impacts) == 1 and run.impacts[0, 0] <= run.final.t_s
 
 
 # --- the step map (kernels/linmap.py) against the stage loop ---------------------------
@@ -380,9 +382,9 @@ MAP_CASES = {
     "solid, 2 modes": lambda: make_system("solid", n_modes=2),
     "tmd, 2 modes": lambda: make_system("tmd", n_modes=2),
     "locked, 2 modes": lambda: make_system("ball", n_modes=2, locked=True),
-    "ball, paper, frictionless": lambda: make_system("ball", "paper", gap=0.5e-3, friction=False),
-    "ball, physical, friction": lambda: make_system("ball", gap=0.5e-3),
-    "ball, printed reaction, friction": lambda: make_system("ball", gap=0.5e-3, n_modes=3,
+    "ball, paper, frictionless": lambda: make_system("ball", "paper", gap_m=0.5e-3, friction=False),
+    "ball, physical, friction": lambda: make_system("ball", gap_m=0.5e-3),
+    "ball, printed reaction, friction": lambda: make_system("ball", gap_m=0.5e-3, n_modes=3,
                                                             friction_reaction="printed"),
 }
 
@@ -395,7 +397,8 @@ def test_step_map_equals_the_stage_loop_to_round_off(name):
     every energy flow, and they are two computations (they differ in the last bits)."""
     from boringbar.simulate import simulate_stage_loop
     system = MAP_CASES[name]()
-    kw = dict(duration=0.02, dt=DT, initial=Initial(tip_velocity=0.05, ball_velocity=0.3))
+    kw = dict(duration_s=0.02, dt_s=DT,
+              initial=Initial(tip_velocity_m_s=0.05, ball_velocity_m_s=0.3))
     a = simulate(system, Harmonic(20.0, 1.0), **kw)
     b = simulate_stage_loop(system, Harmonic(20.0, 1.0), **kw)
     x, y = a.final.x, b.final.x

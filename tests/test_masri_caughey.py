@@ -33,16 +33,16 @@ BALL, GAP, E = 0.026, 0.5e-3, 0.7
 def published_args(force: float, ratio: float, bar=None) -> tuple:
     bar = published_bar(True, 1) if bar is None else bar
     return (
-        bar.mass[0],
-        bar.stiffness[0],
-        bar.damping[0],
+        bar.mass_kg[0],
+        bar.stiffness_n_m[0],
+        bar.damping_n_s_m[0],
         bar.psi_tip[0],
         bar.psi_damper[0],
         BALL,
         GAP,
         E,
         force,
-        ratio * bar.natural_frequency,
+        ratio * bar.natural_frequency_rad_s,
     )
 
 

@@ -17,9 +17,10 @@ def test_modal_model_has_the_fits_receptance():
     # closed form: sum of single-mode receptances, written out independently
     w = 2 * math.pi * f
     direct = sum(1.0 / (k - m * w**2 + 1j * c * w)
-                 for k, m, c in zip(model.stiffness, model.mass, model.damping, strict=True))
+                 for k, m, c in zip(model.stiffness_n_m, model.mass_kg, model.damping_n_s_m,
+                                    strict=True))
     np.testing.assert_allclose(fit.tip_frf(f), direct, rtol=1e-12)
-    np.testing.assert_allclose(model.omegas / (2 * math.pi), (450.0, 2900.0), rtol=1e-12)
+    np.testing.assert_allclose(model.omegas_rad_s / (2 * math.pi), (450.0, 2900.0), rtol=1e-12)
     assert model.psi_damper.tolist() == [0.9, 0.4]
 
 

@@ -30,7 +30,7 @@ from boringbar.simulate import simulate
 
 
 def _issue_case():
-    return make_system("ball", "paper", gap=0.1e-3, friction=False)
+    return make_system("ball", "paper", gap_m=0.1e-3, friction=False)
 
 
 def _issue_branch():
@@ -59,12 +59,13 @@ def test_the_first_branch_stops_at_a_grazing_and_the_map_goes_on_across_it():
 def test_a_fold_that_leaves_the_range_is_the_stop_reason():
     """Gap 0.1 mm, e = 0.7, 10 N, from the closed-form orbit at ratio 0.8 down: the branch
     folds at the closed-form fold (0.62685) and goes back up out of the range at 0.8."""
-    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1)
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=False, n_modes=1)
     fl = dataclasses.replace(sh.make_flow(system, Harmonic(10.0, ratio=0.8)), phase=1.6)
     bar, ball = system.bar, system.damper
     orbit = next(o for o in two_impact_orbit(
-        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass, ball.gap, ball.restitution, 10.0, fl.omega) if o.admissible and o.stable)
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+        bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass_kg, ball.gap_m, ball.restitution, 10.0, fl.omega) if o.admissible and o.stable)
     t, h = 1.6 / fl.omega, 1e-9
     x0 = np.array([float(orbit.modal_displacement(t)), float(orbit.modal_velocity(t)),
                    float(orbit.relative_displacement(t)),
@@ -81,13 +82,14 @@ def test_switching_at_the_pitchfork_gives_the_two_mirror_image_orbits():
     symmetric: x(T/2) != -x(0)) and mirror images of each other (the symmetry
     y -> -y, u -> -u, t -> t + T/2 maps one onto the other), checked at one ratio by
     the exact map alone."""
-    system = make_system("ball", "physical", gap=0.1e-3, friction=False, n_modes=1,
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=False, n_modes=1,
                          restitution=0.3)
     bar, ball = system.bar, system.damper
     fl0 = sh.make_flow(system, Harmonic(30.0, ratio=0.7))
     orbit = next(o for o in two_impact_orbit(
-        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass, ball.gap, ball.restitution, 30.0, fl0.omega) if o.admissible and o.stable)
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+        bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass_kg, ball.gap_m, ball.restitution, 30.0, fl0.omega) if o.admissible and o.stable)
     ph = (orbit.phase + np.pi / 2) % np.pi
     fl = dataclasses.replace(fl0, phase=ph)
     t, h = ph / fl.omega, 1e-9
@@ -156,8 +158,8 @@ def test_the_issue_case_map_holds_the_settled_orbits():
     fl = sh.make_flow(system, Harmonic(5.0, ratio=1.0))
     for force in (10.0, 20.0, 30.0):
         f = Harmonic(force, ratio=1.0)
-        per = 2 * np.pi / f.omega(system.reference_frequency)
-        run = simulate(system, f, duration=600 * per, dt=per / np.ceil(per / 1e-6),
+        per = 2 * np.pi / f.omega(system.reference_frequency_rad_s)
+        run = simulate(system, f, duration_s=600 * per, dt_s=per / np.ceil(per / 1e-6),
                        integrator="exact", strobe=True)
         w = run.final.x[: fl.n] @ fl.psi_tip
         tips = []
@@ -198,10 +200,11 @@ def test_the_attractor_check_finds_an_attractor_on_a_folded_branch_and_says_when
 def _closed_form_state(system, force):
     """The Masri-Caughey symmetric two-impact orbit at phase 0 (one mode, no friction)."""
     bar, ball = system.bar, system.damper
-    omega = Harmonic(force, ratio=1.0).omega(system.reference_frequency)
+    omega = Harmonic(force, ratio=1.0).omega(system.reference_frequency_rad_s)
     orbit = next(o for o in two_impact_orbit(
-        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass, ball.gap, ball.restitution, force, omega) if o.admissible)
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
+        bar.psi_damper[0], ball.mass_kg, ball.gap_m, ball.restitution, force, omega)
+        if o.admissible)
     h = 1e-9
     return np.array([float(orbit.modal_displacement(0.0)), float(orbit.modal_velocity(0.0)),
                      float(orbit.relative_displacement(0.0)),
@@ -214,7 +217,7 @@ def test_the_return_check_passes_a_stable_closed_form_orbit_and_fails_an_unstabl
     its Neimark-Sacker point at 28.345 N, docs/continuation.md "Worked example"), polished
     by Newton: at 30 N (stable) the exact integrator comes back from a 1e-7 perturbation
     within 1e-6 after 200 periods; at 27 N (unstable) it does not."""
-    system = make_system("ball", "physical", gap=0.5e-3, friction=False, n_modes=1)
+    system = make_system("ball", "physical", gap_m=0.5e-3, friction=False, n_modes=1)
     for force, stable in ((30.0, True), (27.0, False)):
         x0, _ = _closed_form_state(system, force)
         forcing = Harmonic(force, ratio=1.0)
@@ -273,7 +276,7 @@ def test_cli_range_lo_start_hi_maps_both_ways_and_checks_the_return(tmp_path, ca
 def test_the_system_at_a_value_is_the_flow_the_branch_uses(name, value):
     """Seeds and the return check run the exact integrator on system_at(value); its flow
     is the branch's (flow_with) in every quantity the parameter moves."""
-    system = make_system("ball", "physical", gap=0.5e-3, friction=True)
+    system = make_system("ball", "physical", gap_m=0.5e-3, friction=True)
     o = ContinuationOptions(parameter=name, force_n=20.0, ratio=1.0)
     ref = sh.make_flow(system, Harmonic(20.0, ratio=1.0))
     want = flow_with(ref, name, value, ref)

@@ -17,12 +17,25 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import xarray as xr
 from cli_output import assert_one_line_error
 
 from boringbar.cli.main import main
 from boringbar.io import atomic_path, remove_stale_temporaries
+from boringbar.plot import (
+    plot_basins,
+    plot_bifurcation,
+    plot_ladder,
+    plot_lobe_examples,
+    plot_lobes,
+    plot_sensitivity,
+    plot_sweep,
+)
+from boringbar.plot_design import plot_design, plot_design_comparison
+from boringbar.plot_orbits import plot_continuation
+from boringbar.plot_style import smallest_text_px
 from boringbar.report.audit import audit
 from boringbar.report.audit_data import VERDICTS
 from boringbar.report.html import _mm, write_report
@@ -106,7 +119,7 @@ def test_report_numbers_are_the_files_numbers(study):
     html = (out / "report.html").read_text()
     for preset in PRESET_ORDER:
         with xr.open_dataset(out / preset / "lobes" / "lobes.nc") as ds:
-            for case, depth in zip(ds["case"].values, ds["min_chatter_free_depth"].values,
+            for case, depth in zip(ds["case"].values, ds["min_chatter_free_depth_m"].values,
                                    strict=True):
                 assert f"<td>{case}</td><td>{_mm(depth)}</td>" in html
     with xr.open_dataset(out / "corrections" / "ladder.nc") as ladder:
@@ -142,20 +155,95 @@ def test_report_renders_every_figure_in_headless_chromium(study, tmp_path):
     assert len(srcs) >= 2 * 12
     for src in srcs:  # relative links, so the folder can be moved or served
         assert not Path(src).is_absolute() and (report.parent / src).is_file()
-    flags = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-             "--no-first-run", "--disable-background-networking", "--disable-component-update",
-             "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}",
-             "--virtual-time-budget=10000"]
-    dom = subprocess.run([*flags, "--dump-dom", report.as_uri()], capture_output=True,
-                         text=True, timeout=120)
+    dom = _chromium(tmp_path, "--dump-dom", report.as_uri())
     # the page's script counts the images that loaded with a width
     loaded = re.search(r'data-figures="(\d+)/(\d+)"', dom.stdout)
     assert loaded, dom.stderr[-2000:]
     assert int(loaded.group(1)) == int(loaded.group(2)) == len(srcs)
     shot = tmp_path / "report.png"
-    subprocess.run([*flags, "--window-size=1400,3000", f"--screenshot={shot}",
-                    report.as_uri()], capture_output=True, timeout=120)
+    _chromium(tmp_path, f"--screenshot={shot}", report.as_uri())
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 100_000
+
+
+def _chromium(tmp_path, *args):
+    """Headless Chromium at the window of a desktop browser (1400 px: the presets side by
+    side); raises when it is not installed."""
+    if CHROMIUM is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI must install Debian's chromium (.ci/run does)")
+        pytest.skip("no chromium on this machine (apt-get install chromium)")
+    flags = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+             "--no-first-run", "--disable-background-networking", "--disable-component-update",
+             "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}",
+             "--virtual-time-budget=10000", "--window-size=1400,3000"]
+    return subprocess.run([*flags, *args], capture_output=True, text=True, timeout=120)
+
+
+def test_report_shows_the_figures_first_each_linked_to_its_png(study):
+    html = (study["out"] / "report.html").read_text()
+    audit_at = html.index("id='audit'")
+    figures = [m.start() for m in re.finditer("<img ", html)]
+    assert figures and max(figures) < audit_at  # every figure before the audit
+    for anchor in ("sweeps", "lobes", "bifurcation", "basins", "sensitivity", "design"):
+        assert html.index(f"id='{anchor}'") < audit_at
+    linked = re.findall(r"<a class='fig' id='([^']+)' href=\"([^\"]+)\"[^>]*><img src=\"([^\"]+)\"",
+                        html)
+    assert len(linked) == len(figures)  # every figure, linked to its own full-size PNG
+    assert all(href == src for _, href, src in linked)
+    ids = {i for i, _, _ in linked}
+    assert len(ids) == len(linked)
+    # a verdict links to the figure it is judged on, in the page where it is shown
+    targets = re.findall(r"<td class='v-\w+'><a href='#([^']+)'>", html)
+    assert targets and set(targets) <= ids
+    assert "white-space: pre-wrap" in html  # command boxes wrap instead of being cut
+
+
+def test_report_text_is_readable_at_the_width_the_page_draws_each_figure(study, tmp_path):
+    """Every figure rebuilt from its files: its smallest text, at the width Chromium draws
+    the figure in a 1400 px window, is at least 10 px (the page's body text is 16 px)."""
+    report = study["out"] / "report.html"
+    dom = _chromium(tmp_path, "--dump-dom", report.as_uri()).stdout
+    shown = {src: int(w) for src, w in re.findall(
+        r'<img src="([^"]+)"[^>]*data-shown-width="(\d+)"', dom)}
+    assert len(shown) == len(re.findall("<img ", report.read_text()))
+    checked = {}
+    for src, width in shown.items():
+        fig = _figure_of(report.parent / src)
+        checked[src] = smallest_text_px(fig, width)
+    small = {src: round(px, 1) for src, px in checked.items() if px < 10}
+    assert not small, small
+    assert 500 < min(shown.values())  # side by side, not squeezed
+
+
+def _figure_of(png: Path):
+    """The figure of ``png`` drawn again from the files beside it (a design's best.png
+    from a comparison of the same kind: its numbers are not stored)."""
+    name, here = png.name, png.parent
+    if name.startswith("sweep"):
+        ds = _open(here / "sweep.nc")
+        force = re.search(r"_F([\d.]+)N", name)
+        return plot_sweep(ds, float(force.group(1)) if force else None)
+    if name == "best.png":
+        ds = _open(here / "design.nc")
+        x = np.linspace(0.8, 1.2, 5)
+        return plot_design_comparison({"x": x, "quantity": "rms_tip_m", "force_n": 10.0,
+                                       "bar": ds.attrs["bar"],
+                                       "curves": {"best design": 1e-4 + 0 * x}}, ds.attrs)
+    if here.name == "continuation":
+        return plot_continuation(_open(png.with_suffix(".nc")))
+    draw = {"lobes.png": (plot_lobes, "lobes.nc"), "examples.png": (plot_lobe_examples,
+                                                                    "examples.nc"),
+            "bifurcation.png": (plot_bifurcation, "bifurcation.nc"),
+            "basins.png": (plot_basins, "basins.nc"),
+            "sensitivity.png": (plot_sensitivity, "sensitivity.nc"),
+            "design.png": (plot_design, "design.nc"), "ladder.png": (plot_ladder, "ladder.nc")}
+    function, nc = draw[name]
+    return function(_open(here / nc))
+
+
+def _open(path):
+    with xr.open_dataset(path) as ds:
+        return ds.load()
 
 
 def test_bad_presets_is_one_line_error(tmp_path, capsys):
@@ -190,8 +278,21 @@ def test_the_audit_judges_every_claim_of_this_output(study, capsys):
         assert sum(s["counts"][column].values()) == 29
     assert s == json.loads(json.dumps(audit(out)))  # the command is the function
     html = (out / "report.html").read_text()
-    assert html.index("id='audit'") < html.index("id='cannot'") < html.index("id='sweeps'")
-    assert html.count("class='v-") == len(COLUMN_ORDER) * 29
+    assert html.index("id='sweeps'") < html.index("id='audit'") < html.index("id='cannot'")
+    # the audit opens with the verdicts counted, one row a column, one cell a verdict
+    counts = html[html.index("<table class='counts'>"):]
+    counts = counts[:counts.index("</table>")]
+    variants = {v["name"] for v in s["variants"]}
+    for column in COLUMN_ORDER:
+        head = column if column in variants else f"{column} preset"
+        row = re.search(rf"<tr><td>{re.escape(head)}</td>(.*?)</tr>", counts)
+        assert row, head
+        assert [int(n) for n in re.findall(r">(\d+)</td>", row.group(1))] == \
+            [s["counts"][column][v] for v in VERDICTS]
+    # and the full table folded below it
+    table = html[html.index("<details class='audit'>"):]
+    table = table[:table.index("</details>")]
+    assert table.count("class='v-") == len(COLUMN_ORDER) * 29
 
 
 def test_a_step_rerun_removes_what_a_kill_mid_write_left(tmp_path):

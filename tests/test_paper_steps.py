@@ -59,7 +59,7 @@ def test_the_published_ball_dampers_take_rk4_under_paper_and_exact_under_physica
     preset's the exact integrator (docs/model.md, 5.3)."""
     for gap in (0.1e-3, 0.5e-3):
         for friction in (False, True):
-            assert [resolve_integrator("auto", make_system("ball", p, gap=gap, friction=friction))
+            assert [resolve_integrator("auto", make_system("ball", p, gap_m=gap, friction=friction))
                     for p in PRESET_ORDER] == ["rk4", "exact"]
 
 

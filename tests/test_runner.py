@@ -59,7 +59,7 @@ def test_result_file_is_self_explaining(reference):
     assert cfg["grid"]["gap_mm"] == [0.5, 0.1] and cfg["run"]["duration_s"] == 0.02
     assert study_from_dict(cfg).config_hash() == ds.attrs["study_config_hash"]
     assert ds.attrs["boringbar_version"] and ds.attrs["run_finished_utc"].endswith("Z")
-    assert dict(ds.sizes) == {"case": 4, "force": 2, "ratio": 2}
+    assert dict(ds.sizes) == {"case": 4, "force_n": 2, "ratio": 2}
     assert not out.with_name("small.nc.partial").exists()
     assert not list(out.parent.glob(".*.tmp"))
 
@@ -214,7 +214,7 @@ def _in_process(name: str):
     if name == "sweep":
         from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
 
-        cases = published_cases(bars=("solid", "ball"), gaps=(0.5e-3,))
+        cases = published_cases(bars=("solid", "ball"), gaps_m=(0.5e-3,))
         return ({"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02},
                  "grid": {"kind": ["solid", "ball"], "friction": ["off", "on"],
                           "ratio": [0.99, 1.01]}},
@@ -227,7 +227,8 @@ def _in_process(name: str):
                  "run": {"duration_s": 0.05}, "grid": {"rpm": [1000.0, 1200.0]},
                  "analysis": {"depth_step_mm": 0.05, "max_depth_mm": 0.5}},
                 lobes([Case("solid", make_system("solid"), "solid")],
-                      LobesOptions([1000.0, 1200.0], depth_step_m=0.05e-3, max_depth_m=0.5e-3),
+                      LobesOptions([1000.0, 1200.0], "scan", depth_step_m=0.05e-3,
+                                   max_depth_m=0.5e-3),  # a study's method: the scan
                       integration=Integration(duration_s=0.05), execution=Execution(workers=1)))
     if name == "bifurcation":
         from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
@@ -237,7 +238,7 @@ def _in_process(name: str):
         return ({"study": {"analysis": "bifurcation"}, "run": {"duration_s": 0.02},
                  "analysis": {"values": [5.0, 10.0]}},
                 ref.expand_dims(case=["ball gap=0.5mm friction=on"]).assign_coords(
-                    bar=("case", ["ball"]), gap=("case", [0.5e-3]),
+                    bar=("case", ["ball"]), gap_m=("case", [0.5e-3]),
                     friction=("case", ["on"])))
     if name == "basins":
         from boringbar.analysis.basins import BasinOptions, basins
@@ -268,7 +269,7 @@ def test_study_result_equals_the_in_process_function(name, tmp_path):
     assert set(ds.data_vars) == set(ref.data_vars)
     for k in ref.data_vars:
         x, y = ds[k].values, ref[k].values
-        if k in ("tip_displacement", "tip_velocity"):
+        if k in ("tip_displacement_m", "tip_velocity_m_s"):
             x = x[..., : y.shape[-1]]
         assert x.shape == y.shape, k
         assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), k
@@ -307,7 +308,7 @@ def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
     d = {"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02, "integrator": "exact"},
          "damper": {"static_ratio": 1.5}, "grid": {"ratio": [0.99, 1.01]}}
     ds = run_study(study_from_dict(d), tmp_path / "e.nc", executor="processes", workers=2)
-    ref = sweep(published_cases(bars=("ball",), gaps=(0.5e-3,), frictions=(True,),
+    ref = sweep(published_cases(bars=("ball",), gaps_m=(0.5e-3,), frictions=(True,),
                                 static_ratio=1.5),
                 SweepOptions([0.99, 1.01]), execution=Execution(workers=1),
                 integration=Integration(duration_s=0.02, integrator="exact"))

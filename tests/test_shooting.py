@@ -42,10 +42,10 @@ def _fd_jacobian(fl, x):
 
 @pytest.mark.parametrize("friction", [False, True])
 def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
-    system = make_system("ball", "physical", gap=0.1e-3, friction=friction)
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=friction)
     forcing = Harmonic(20.0, ratio=1.0)
     fl = sh.make_flow(system, forcing)
-    run = simulate(system, forcing, duration=100 * fl.period, dt=1e-6, integrator="exact")
+    run = simulate(system, forcing, duration_s=100 * fl.period, dt_s=1e-6, integrator="exact")
     x, pr = sh.periodic_orbit(fl, run.final.x)
     kinds = [k for _, k in pr.events]
     assert "impact+" in kinds and "impact-" in kinds
@@ -55,11 +55,11 @@ def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
     err = np.max(np.abs((pr.jacobian - Jfd) @ D)) / np.max(np.abs(pr.jacobian @ D))
     assert err < 1e-6
     # the map is the exact kernel's: one period of simulate from the same state
-    one = simulate(system, forcing, duration=fl.period, dt=fl.period / 2000,
+    one = simulate(system, forcing, duration_s=fl.period, dt_s=fl.period / 2000,
                    integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
     assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
     # the orbit's RMS (Gauss-Legendre per segment) is the kernel's exact integral
-    assert abs(pr.rms_tip - one.rms_tip) <= 1e-9 * one.rms_tip
+    assert abs(pr.rms_tip - one.rms_tip_m) <= 1e-9 * one.rms_tip_m
 
 
 def test_linear_bar_orbit_is_the_forced_response():
@@ -72,9 +72,9 @@ def test_linear_bar_orbit_is_the_forced_response():
     # tip amplitude from phase-0 displacement and velocity: W(t) = Im(G F0 e^{i Omega t})
     w0, v0 = bar.psi_tip @ x[:n], bar.psi_tip @ x[n:]
     amp = np.hypot(w0, v0 / fl.omega)
-    ref = abs(tip_frf(bar, fl.omega)) * forcing.amplitude
+    ref = abs(tip_frf(bar, fl.omega)) * forcing.amplitude_n
     assert abs(amp - ref) <= 1e-10 * ref
-    wn = np.sqrt(bar.stiffness / bar.mass)
+    wn = np.sqrt(bar.stiffness_n_m / bar.mass_kg)
     z = bar.damping_ratio
     lam = np.concatenate([-z * wn + 1j * wn * np.sqrt(1 - z**2),
                           -z * wn - 1j * wn * np.sqrt(1 - z**2)])
@@ -89,8 +89,8 @@ def _second_order(system):
     w1 the first natural frequency (so K - w1^2 M loses no digits)."""
     d = system.damper
     tmd = d if system.kind == "tmd" else None
-    added = d.mass if system.kind == "locked" else 0.0
-    w1 = system.bar.natural_frequency
+    added = d.mass_kg if system.kind == "locked" else 0.0
+    w1 = system.bar.natural_frequency_rad_s
     z0, zp, zm = dynamic_stiffness(system.bar, np.array([0.0, w1, -w1]), tmd, added)
     K = z0.real
     return (K - 0.5 * (zp + zm).real) / w1**2, ((zp - zm) / 2j).real / w1, K
@@ -123,7 +123,7 @@ def test_tmd_and_locked_orbits_are_the_closed_form_forced_response(bar, ratio):
     w0, v0 = b.psi_tip @ x[:n], b.psi_tip @ x[n:2 * n]
     amp = np.hypot(w0, v0 / fl.omega)
     G = (tip_frf(b, fl.omega, tmd=system.damper) if bar == "tmd"
-         else tip_frf(b, fl.omega, added_mass=system.damper.mass))
+         else tip_frf(b, fl.omega, added_mass_kg=system.damper.mass_kg))
     assert abs(amp - abs(G) * 10.0) <= 1e-10 * abs(G) * 10.0
     # the phase too: W(t) = Im(G F0 e^{i Omega t}), so W(0) = F0 Im G
     assert abs(w0 - 10.0 * G.imag) <= 1e-10 * abs(G) * 10.0
@@ -171,22 +171,23 @@ def test_cli_continue_tmd_and_locked(tmp_path, capsys):
         assert n_state == sh.state_size(system)
         pts = out["branches"][0]["points"]
         assert len(pts) == 5 and all(p["stable"] for p in pts)
-        om = pts[-1]["value"] * system.reference_frequency
+        om = pts[-1]["value"] * system.reference_frequency_rad_s
         G = (tip_frf(system.bar, om, tmd=system.damper) if extra[1] == "tmd"
-             else tip_frf(system.bar, om, added_mass=system.damper.mass))
+             else tip_frf(system.bar, om, added_mass_kg=system.damper.mass_kg))
         assert abs(pts[-1]["strobe_tip_m"] - 10.0 * G.imag) <= 1e-8 * abs(G) * 10.0
     assert main(["continue", "--bar", "tmd", "--parameter", "gap-mm", "--range", "0.5:0.4",
                  "--out", str(tmp_path)]) == 2
 
 
 def _masri_caughey(force=30.0):
-    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     forcing = Harmonic(force, ratio=1.0)
     fl = sh.make_flow(system, forcing)
     bar, ball = system.bar, system.damper
     orbit = next(o for o in two_impact_orbit(
-        bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0], bar.psi_damper[0],
-        ball.mass, ball.gap, ball.restitution, force, fl.omega) if o.admissible and o.stable)
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+        bar.psi_tip[0], bar.psi_damper[0],
+        ball.mass_kg, ball.gap_m, ball.restitution, force, fl.omega) if o.admissible and o.stable)
     h = 1e-9
     dy0 = float(orbit.relative_displacement(h) - orbit.relative_displacement(-h)) / (2 * h)
     x0 = np.array([float(orbit.modal_displacement(0.0)), float(orbit.modal_velocity(0.0)),
@@ -267,13 +268,13 @@ def test_a_grazing_is_located_where_the_closed_form_orbit_touches_a_wall_in_flig
     continued branch must end with a ``grazing`` there: before the shooting module
     searched each grid step for an extremum beyond a wall, the incursion was missed until
     it covered a grid point and the grazing came out 2.8e-5 relative too late."""
-    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     bar, ball = system.bar, system.damper
     fl0 = sh.make_flow(system, Harmonic(165.0, ratio=1.0))
 
     def orbit(force):
-        return max(two_impact_orbit(bar.mass[0], bar.stiffness[0], bar.damping[0],
-                                    bar.psi_tip[0], bar.psi_damper[0], ball.mass, ball.gap,
+        return max(two_impact_orbit(bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+                                    bar.psi_tip[0], bar.psi_damper[0], ball.mass_kg, ball.gap_m,
                                     ball.restitution, force, fl0.omega),
                    key=lambda o: o.phase)
     lo, hi = 165.0, 180.0
@@ -296,7 +297,7 @@ def test_a_grazing_is_located_where_the_closed_form_orbit_touches_a_wall_in_flig
 
 
 def test_continuation_dataset_and_summary_from_a_settled_simulation():
-    system = make_system("ball", "physical", gap=0.1e-3, friction=True)
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=True)
     ds = bb.continuation(system, Harmonic(20.0, ratio=1.0), options=bb.ContinuationOptions(
         parameter="ratio", stop=1.02, step=0.05, max_points=6, settle_periods=200))
     s = summary(ds)
@@ -331,7 +332,7 @@ def test_continuation_in_ratio_finds_the_closed_form_stability_change():
 
 
 def test_a_branch_refused_at_its_start_is_an_empty_branch_with_its_reason():
-    system = make_system("ball", "physical", gap=0.1e-3, friction=True)
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=True)
     p = plan(system, bb.ContinuationOptions(parameter="ratio", stop=1.02))
     empty = {"value": [], "state": [], "strobe_tip_m": [], "rms_tip_m": [],
              "multipliers": [], "stable": [], "events": [],
@@ -344,7 +345,7 @@ def test_a_branch_refused_at_its_start_is_an_empty_branch_with_its_reason():
 
 
 def test_branches_of_different_lengths_stack_with_padding():
-    system = make_system("ball", "physical", gap=0.5e-3, friction=False, n_modes=1)
+    system = make_system("ball", "physical", gap_m=0.5e-3, friction=False, n_modes=1)
     p = plan(system, bb.ContinuationOptions(parameter="force-n", stop=5.0))
 
     def result(n, events):
@@ -373,7 +374,7 @@ def test_a_newton_solution_is_accepted_only_with_a_small_residual():
 
 
 def _settled_orbit(friction: bool, force: float = 20.0):
-    system = make_system("ball", "physical", gap=0.1e-3, friction=friction)
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=friction)
     fl = sh.make_flow(system, Harmonic(force, ratio=1.0))
     x, _ = sh.periodic_orbit(fl, start_state(system, ContinuationOptions(force_n=force), fl),
                              rms=False)

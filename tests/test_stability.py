@@ -62,10 +62,10 @@ def test_sdof_minimum_is_2_k_zeta_1_plus_zeta_over_kr(zeta):
     # is largest at x = 2 zeta, where it is 1 / (4 zeta (1 + zeta)); so
     # min Re G = -1 / (4 k zeta (1 + zeta)) and b_min = 2 k zeta (1 + zeta) / Kr.
     k_tip = 1.5e6
-    bar = ModalModel.from_tap_test(461.0, zeta, tip_stiffness=k_tip).normalised([2.0])
+    bar = ModalModel.from_tap_test(461.0, zeta, tip_stiffness_n_m=k_tip).normalised([2.0])
     assert min_limit(bar) == pytest.approx(2 * k_tip * zeta * (1 + zeta) / KR, rel=1e-6)
     # the lobe bottoms touch it, at omega = omega_n sqrt(1 + 2 zeta)
-    w_star = bar.natural_frequency * math.sqrt(1 + 2 * zeta)
+    w_star = bar.natural_frequency_rad_s * math.sqrt(1 + 2 * zeta)
     eps = regeneration_phase(tip_frf(bar, w_star))
     rpm = 60 * w_star / (eps + 2 * math.pi * np.array([3, 20, 30]))
     b, f = limit_at_speeds(bar, rpm, with_frequency=True)
@@ -125,7 +125,7 @@ def test_solid_bar_limit_on_the_published_grid(preset, expected_mm):
     # its best point is within 1 % of the floor (measured: 0.9 % physical, 0.08 % paper)
     assert b.min() <= 1.01 * floor
     # every lobe bottom inside 900..1600 rpm touches the floor exactly
-    _, w_star = min_real_part(system.bar, omega=2 * math.pi * np.linspace(400, 700, 3001))
+    _, w_star = min_real_part(system.bar, omega_rad_s=2 * math.pi * np.linspace(400, 700, 3001))
     eps = regeneration_phase(tip_frf(system.bar, w_star))
     rpm_bottoms = 60 * w_star / (eps + 2 * math.pi * np.arange(0, 60))
     rpm_bottoms = rpm_bottoms[(rpm_bottoms >= 900) & (rpm_bottoms <= 1600)]
@@ -159,12 +159,12 @@ def test_sims_tuning_beats_den_hartog_for_chatter():
 def test_locked_ball_lowers_the_chatter_frequency(preset, rtol):
     locked, free = make_system("ball", preset, locked=True), make_system("ball", preset)
     assert locked.kind == "locked"
-    bar, m = locked.bar, locked.damper.mass
+    bar, m = locked.bar, locked.damper.mass_kg
     # first mode with the ball's mass: omega' = sqrt(K / (M + m psi_d^2)); the lobes'
     # bottoms sit at omega' sqrt(1 + 2 zeta') (test 1), exact for one mode
-    mass = bar.mass[0] + m * bar.psi_damper[0] ** 2
-    w1 = math.sqrt(bar.stiffness[0] / mass)
-    zeta = bar.damping[0] / (2 * math.sqrt(bar.stiffness[0] * mass))
+    mass = bar.mass_kg[0] + m * bar.psi_damper[0] ** 2
+    w1 = math.sqrt(bar.stiffness_n_m[0] / mass)
+    zeta = bar.damping_n_s_m[0] / (2 * math.sqrt(bar.stiffness_n_m[0] * mass))
     expected_hz = w1 * math.sqrt(1 + 2 * zeta) / (2 * math.pi)
 
     def bottom_hz(system):

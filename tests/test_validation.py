@@ -20,11 +20,11 @@ def test_linear_bars_match_analytic_frequency_response(bar, preset):
     tmd = system.damper
     worst = 0.0
     for r in RATIOS:
-        run = simulate(system, Harmonic(10.0, float(r)), duration=1.0)
-        omega = r * system.reference_frequency
+        run = simulate(system, Harmonic(10.0, float(r)), duration_s=1.0)
+        omega = r * system.reference_frequency_rad_s
         g = tip_frf(system.bar, np.array([omega]), tmd=tmd)[0]
         expected = 10.0 * abs(g) / math.sqrt(2.0)  # RMS of a sinusoid
-        worst = max(worst, abs(run.rms_tip / expected - 1.0))
+        worst = max(worst, abs(run.rms_tip_m / expected - 1.0))
     # 1 % is the issue's bar; the sampled RMS over a non-integer number of
     # periods and the 0.2 s of decayed transient leave far less than that
     assert worst < 1e-3, worst
@@ -44,22 +44,22 @@ def _orbit_state(orbit, t):
 def test_ball_damper_matches_masri_caughey_two_impact_orbit():
     """One mode, no friction: the published scheme converges (first order in dt,
     from late impact detection) to the closed-form symmetric orbit."""
-    system = make_system("ball", "physical", n_modes=1, friction=False, gap=0.5e-3)
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
     b, d = system.bar, system.damper
-    omega = system.reference_frequency
-    orbits = two_impact_orbit(b.mass[0], b.stiffness[0], b.damping[0], b.psi_tip[0],
-                              b.psi_damper[0], d.mass, d.gap, d.restitution, 30.0, omega)
+    omega = system.reference_frequency_rad_s
+    orbits = two_impact_orbit(b.mass_kg[0], b.stiffness_n_m[0], b.damping_n_s_m[0], b.psi_tip[0],
+                              b.psi_damper[0], d.mass_kg, d.gap_m, d.restitution, 30.0, omega)
     (orbit,) = [o for o in orbits if o.admissible and o.stable]
     x0 = _orbit_state(orbit, 0.0)
     errors = []
     for dt in (2e-6, 1e-6, 5e-7):
-        run = simulate(system, Harmonic(30.0, 1.0), duration=0.1, dt=dt,
+        run = simulate(system, Harmonic(30.0, 1.0), duration_s=0.1, dt_s=dt,
                        initial=State(x0, 0.0), integrator="rk4")
         assert run.pattern.name == "2 symmetric"
         plus = run.impacts[run.impacts[:, 1] > 0, 0]
         phase = np.mod(omega * plus, 2 * np.pi)
         assert np.all(np.abs(phase - orbit.phase) < 4 * omega * dt + 1e-9)
-        errors.append(abs(run.rms_tip / orbit.rms_tip() - 1.0))
+        errors.append(abs(run.rms_tip_m / orbit.rms_tip() - 1.0))
     assert errors[1] < 2e-3
     assert errors[2] < errors[0]
 
@@ -67,8 +67,8 @@ def test_ball_damper_matches_masri_caughey_two_impact_orbit():
 def test_poincare_strobe_of_linear_bar_is_the_analytic_steady_state():
     """At Omega t = 0 mod 2 pi the steady W = F0 Im G and W' = F0 Omega Re G."""
     system = make_system("solid", "physical")
-    run = simulate(system, Harmonic(10.0, 1.01), duration=0.8, strobe=True)
-    omega = 1.01 * system.reference_frequency
+    run = simulate(system, Harmonic(10.0, 1.01), duration_s=0.8, strobe=True)
+    omega = 1.01 * system.reference_frequency_rad_s
     g = tip_frf(system.bar, np.array([omega]), tmd=None)[0]
     late = run.strobe[run.strobe[:, 0] > 0.6]  # transient decayed by exp(-19)
     assert len(late) > 50

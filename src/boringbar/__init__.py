@@ -5,7 +5,8 @@ layers behind them.
 
 - Descriptions: :class:`SteppedBar`, :class:`ModalModel`, :class:`ImpactDamper`,
   :class:`Friction`, :class:`TunedMassDamper`, :class:`System` and
-  :func:`make_system` (the two presets); your own bar: :func:`load_system`
+  :func:`make_system` (the two presets), :func:`variants` (the solid, ball and TMD
+  bars of one system file, side by side); your own bar: :func:`load_system`
   (system files) -> :class:`SystemSpec`, :func:`describe_modes`, :class:`ModalFit`
   (a fitted tip FRF); forcing: :class:`Harmonic`,
   :class:`Regenerative`.
@@ -16,6 +17,7 @@ layers behind them.
 - Closed-form references: :func:`tip_frf`, :func:`min_real_part`,
   :func:`sims_tuning`, :func:`den_hartog_parameters`.
 - Study files: :func:`load_study`, :func:`run_study`.
+- The design page in a notebook: :func:`app` (``pip install 'boringbar[app]'``).
 """
 
 import importlib
@@ -55,11 +57,12 @@ _HOMES = {
     "boringbar.model.forcing": ("Harmonic", "Regenerative"),
     "boringbar.model.modal_fit": ("ModalFit",),
     "boringbar.model.system": ("PRESETS", "READINGS", "System", "describe_modes",
-                               "make_system"),
+                               "make_system", "variants"),
     "boringbar.model.system_file": ("SystemSpec", "load_system"),
     "boringbar.reference.linear": ("min_real_part", "tip_frf"),
     "boringbar.studies.load": ("load_study",),
     "boringbar.studies.runner": ("run_study",),
+    "boringbar.webapp.server": ("app",),
 }
 _LAZY = {name: module for module, names in _HOMES.items() for name in names}
 
@@ -111,6 +114,7 @@ __all__ = [
     "TunedMassDamper",
     "Uncertain",
     "Variable",
+    "app",
     "basins",
     "bifurcation",
     "continuation",
@@ -132,4 +136,5 @@ __all__ = [
     "sims_tuning",
     "sweep",
     "tip_frf",
+    "variants",
 ]

@@ -24,11 +24,19 @@ class ParameterError(ValueError):
 ROUND_OFF = 1e-9
 
 
-def in_range(v: float, lo: float, hi: float, lo_open: bool = False, hi_open: bool = False) -> bool:
-    """Whether the finite number ``v`` lies in the range (a closed end up to
-    :data:`ROUND_OFF` of itself)."""
-    above = v > lo if lo_open else v >= lo - ROUND_OFF * abs(lo)
-    below = v < hi if hi_open else v <= hi + ROUND_OFF * abs(hi)
+def near(v: float, bound: float, scale: float = 0.0) -> bool:
+    """Whether ``v`` equals ``bound`` up to :data:`ROUND_OFF` of the larger of |bound|
+    and ``scale`` (the size of the lengths the two were computed from: a position 0
+    on a bar 0.2 m long is 0 up to 0.2 ROUND_OFF m)."""
+    return abs(v - bound) <= ROUND_OFF * max(abs(bound), scale)
+
+
+def in_range(v: float, lo: float, hi: float, lo_open: bool = False, hi_open: bool = False,
+             *, scale: float = 0.0) -> bool:
+    """Whether the finite number ``v`` lies in the range, a closed end up to
+    :data:`ROUND_OFF` beyond it (:func:`near`, with ``scale``); an open end is strict."""
+    above = v > lo if lo_open else v >= lo or near(v, lo, scale)
+    below = v < hi if hi_open else v <= hi or near(v, hi, scale)
     return above and below
 
 

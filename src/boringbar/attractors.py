@@ -76,7 +76,7 @@ def periodic_attractors(system: System, forcing: Harmonic, *, settle_periods: in
     found: list[Attractor] = []
     for x0 in initial_states(fl):
         try:
-            run = simulate(system, forcing, duration=settle_periods * fl.period, dt=dt,
+            run = simulate(system, forcing, duration_s=settle_periods * fl.period, dt_s=dt,
                            integrator="exact", initial=State(x0, 0.0), record_every=0)
         except (ValueError, RuntimeError):
             continue

@@ -16,19 +16,36 @@ import math
 import re
 
 import numpy as np
+from matplotlib import colormaps
+from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
+from matplotlib.patches import Patch
 
+from boringbar.plot_style import (
+    BAR_STYLE,
+    COLUMN_WIDTH_IN,
+    GREY,
+    OKABE_ITO,
+    TITLE_PT,
+    bar_colour,
+    bar_name,
+    series_colour,
+    set_title,
+    system_words,
+    wrap_title,
+)
 from boringbar.simulate import FIGURES
 
-#: Marker and colour per impact-pattern class (patterns.PATTERN_LABELS).
+#: Marker and colour per impact-pattern class (patterns.PATTERN_LABELS): the shapes
+#: tell the classes apart without colour, the colours (Okabe-Ito) without shape.
 PATTERN_STYLE = {
-    "no impact": ("o", "#9e9e9e"),
-    "symmetric": ("s", "#1f77b4"),
-    "asymmetric": ("^", "#ff7f0e"),
-    "sticking": ("D", "#2ca02c"),
-    "no impact with sticking": ("v", "#8c564b"),
-    "non-uniform": ("X", "#d62728"),
-    "": ("o", "black"),  # no pattern (locked ball)
+    "no impact": ("o", GREY),
+    "symmetric": ("s", OKABE_ITO["sky blue"]),
+    "asymmetric": ("^", OKABE_ITO["orange"]),
+    "sticking": ("D", OKABE_ITO["yellow"]),
+    "no impact with sticking": ("v", OKABE_ITO["reddish purple"]),
+    "non-uniform": ("X", OKABE_ITO["black"]),
+    "": ("o", "white"),  # no pattern (locked ball)
 }
 
 
@@ -61,17 +78,9 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
         return _cut_figure(ds, summary, config, fig=fig)
     damper = (config.get("system") or {}).get("damper") or {}
     kind = summary.get("bar", "?")
-    t = ds["time"].values
-    w = ds["tip_displacement"].values * 1e3
-    if kind == "ball" and "y" in ds:
-        lower, lower_label, colour = ds["y"].values * 1e3, "ball displacement y\nrelative to " \
-            "bar (mm)", "#2ca02c"
-    elif kind == "tmd" and "absorber_stroke" in ds:
-        lower, lower_label, colour = (ds["absorber_stroke"].values * 1e3,
-                                      "absorber stroke (mm)", "#9467bd")
-    else:
-        lower, lower_label, colour = ds["force"].values, "tip force f (N)", "#8c564b"
-
+    t = ds["time_s"].values
+    w = ds["tip_displacement_m"].values * 1e3
+    lower, lower_label, colour = _run_lower(ds, kind)
     if fig is None:
         fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
@@ -79,7 +88,8 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     t_zoom = t[-1] - zoom_periods / freq if freq > 0 and t.size else -np.inf
     zoom = t >= t_zoom
     for col, sel in enumerate((slice(None), zoom)):
-        axes[0, col].plot(t[sel], w[sel], lw=0.6 if col == 0 else 1.0, color="#1f77b4")
+        axes[0, col].plot(t[sel], w[sel], lw=0.6 if col == 0 else 1.0,
+                          color=CUT_COLOURS["tip"])
         axes[1, col].plot(t[sel], lower[sel], lw=0.6 if col == 0 else 1.0, color=colour)
         axes[1, col].set_xlabel("time t (s)")
         if t[sel].size:
@@ -87,44 +97,53 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     axes[0, 0].set_ylabel("tip displacement W (mm)")
     axes[1, 0].set_ylabel(lower_label)
     axes[0, 1].set_title(f"last {zoom_periods:g} periods", fontsize="medium")
+    _run_guides(axes, summary.get("rms_tip_m"), damper.get("gap_m") if kind == "ball" else None,
+                config.get("steady_start_s"))
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+    _legend_below(fig, axes[:, 0])
+    what, details = _run_title(summary, damper)
+    set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")}, details)
+    return fig
 
-    rms = summary.get("rms_tip_m")
+
+def _run_lower(ds, kind: str) -> tuple[np.ndarray, str, str]:
+    """The lower row of a run's figure: (values, axis label, colour): the ball's
+    displacement relative to the bar, the absorber's stroke, or the tip force."""
+    if kind == "ball" and "y_m" in ds:
+        return ds["y_m"].values * 1e3, "ball displacement y\nrelative to bar (mm)", \
+            bar_colour("ball")
+    if kind == "tmd" and "absorber_stroke_m" in ds:
+        return ds["absorber_stroke_m"].values * 1e3, "absorber stroke (mm)", bar_colour("tmd")
+    return ds["force_n"].values, "tip force f (N)", CUT_COLOURS["force"]
+
+
+def _run_guides(axes, rms, gap, steady) -> None:
+    """The steady RMS on the tip's row, the walls at +-gap/2 on the ball's row (``gap``
+    None: no ball) and the start of the steady part on the whole record."""
     if rms is not None:
         for ax in axes[0]:
             ax.axhline(rms * 1e3, color="#555555", lw=0.9, ls="-.",
                        label=f"steady RMS = {rms * 1e3:.4g} mm" if ax is axes[0, 0] else None)
-    if kind == "ball":
-        half = damper.get("gap_m", math.nan) / 2 * 1e3
+    if gap is not None:
+        half = gap / 2 * 1e3
         for ax in axes[1]:
             for s in (1, -1):
                 ax.axhline(s * half, color="black", ls="--", lw=1.0,
                            label=r"walls at $\pm\delta/2$" if s == 1 and ax is axes[1, 0]
                            else None)
         axes[1, 0].set_ylim(-1.25 * half, 1.25 * half)
-    steady = config.get("steady_start_s")
     if steady is not None:
         for ax in axes[:, 0]:
             ax.axvline(steady, color="#555555", ls=":", lw=1.2,
                        label="start of steady part" if ax is axes[0, 0] else None)
-    for ax in axes.flat:
-        ax.grid(alpha=0.3)
-    handles, labels = [], []
-    for ax in axes[:, 0]:
-        h, lab = ax.get_legend_handles_labels()
-        handles += h
-        labels += lab
-    if handles:
-        fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
-                   fontsize="small", frameon=False)
-    fig.suptitle(_run_title(summary, damper))
-    return fig
 
 
-def _run_title(summary: dict, damper: dict) -> str:
+def _run_title(summary: dict, damper: dict) -> tuple[str, str]:
+    """(what, details) of a run's title."""
     kind = summary.get("bar", "?")
     name = "ball bar (ball locked)" if kind == "locked" else f"{kind} bar"
-    line1 = (f"{name}, {summary.get('preset', '?')} preset: "
-             f"F0 = {summary.get('force_n', math.nan):g} N, "
+    line1 = (f"{name}, F0 = {summary.get('force_n', math.nan):g} N, "
              f"$\\Omega/\\omega_n$ = {summary.get('ratio', math.nan):.4g} "
              f"({summary.get('forcing_frequency_hz', math.nan):.1f} Hz)")
     parts = []
@@ -138,10 +157,10 @@ def _run_title(summary: dict, damper: dict) -> str:
                      + (f" ({ipc:.3g} impacts/period)" if ipc is not None else ""))
     if kind == "tmd":
         parts.append(f"absorber: {damper.get('design', '?')} design")
-    lines = [line1, ", ".join(parts)]
+    lines = [", ".join(parts)]
     if summary.get("readings"):
         lines.append("published readings: " + ", ".join(summary["readings"]))
-    return "\n".join(x for x in lines if x)
+    return line1, "\n".join(x for x in lines if x)
 
 
 # --- a sweep ---------------------------------------------------------------------
@@ -158,58 +177,36 @@ def plot_sweep(ds, force: float | None = None, *, fig=None) -> Figure:
     beside the n-symmetric and n-asymmetric ones.
     Without ball cases there is one panel.
     """
-    forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
+    forces = [float(f) for f in np.atleast_1d(ds["force_n"].values)]
     if force is None:
         if len(forces) != 1:
             raise ValueError(f"force = None: the sweep holds {len(forces)} forces "
                              f"({', '.join(f'{f:g}' for f in forces)} N); give one")
         force = forces[0]
-    return _sweep_figure(ds.sel(force=float(force)), float(force), ds.attrs, fig)
+    return _sweep_figure(ds.sel(force_n=float(force)), float(force), ds.attrs, fig)
 
 
 def _sweep_figure(ds, force: float, attrs: dict, fig=None) -> Figure:
     bars = [str(b) for b in ds["bar"].values]
-    gaps = ds["gap"].values
+    gaps = ds["gap_m"].values
     fric = [str(v) for v in ds["friction"].values]
     balls = [i for i, b in enumerate(bars) if b == "ball"]
     gap_rows = sorted({float(gaps[i]) for i in balls}, reverse=True) or [math.nan]
     fric_cols = [v for v in ("off", "on") if any(fric[i] == v for i in balls)] or ["n/a"]
-    refs = [i for i, b in enumerate(bars) if b in ("solid", "tmd")]
-    ratio = ds["ratio"].values
     rms = ds["rms_tip_m"].values * 1e3
-    pattern = ds["pattern"].values
-
     nr, nc = len(gap_rows), len(fric_cols)
     if fig is None:
-        fig = Figure(figsize=(5.2 * nc + 0.6, 3.8 * nr + 1.3), layout="constrained")
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.5 * nr + 1.9), layout="constrained")
     axes = np.atleast_2d(fig.subplots(nr, nc, sharex=True, sharey=True, squeeze=False))
-    seen_patterns = set()
+    seen: set[str] = set()
     for r, gap in enumerate(gap_rows):
         for c, fr in enumerate(fric_cols):
             ax = axes[r, c]
-            for i in refs:
-                style = {"solid": dict(color="#555555", ls="-", marker="."),
-                         "tmd": dict(color="#9467bd", ls="--", marker=".")}[bars[i]]
-                ax.plot(ratio, rms[i], lw=1.2, label=f"{bars[i]} bar" if bars[i] == "solid"
-                        else "TMD bar", **style)
-            for i in balls:
-                if float(gaps[i]) != gap or fric[i] != fr:
-                    continue
-                ax.plot(ratio, rms[i], color="black", lw=0.8, label="ball-damped bar")
-                for x, y, name in zip(ratio, rms[i], pattern[i], strict=True):
-                    cls = pattern_class(name)
-                    marker, colour = PATTERN_STYLE.get(cls, ("o", "black"))
-                    seen_patterns.add(cls)
-                    ax.plot([x], [y], ls="none", marker=marker, color=colour, ms=7,
-                            markeredgecolor="black", markeredgewidth=0.5)
-                    if cls in ("symmetric", "asymmetric"):  # n (per k periods) beside it
-                        n = re.sub(r"^(\d+)\D*(?:period (\d+)\))?$", r"\1/\2",
-                                   str(name)).rstrip("/")
-                        ax.annotate(n, (x, y), xytext=(5, 5), textcoords="offset points",
-                                    fontsize=7, color=colour)
+            mine = [i for i in balls if float(gaps[i]) == gap and fric[i] == fr]
+            _sweep_panel(ax, ds, [i for i, b in enumerate(bars) if b in ("solid", "tmd")]
+                         + mine, seen)
             if balls:
                 ax.set_title(f"gap {gap * 1e3:g} mm, friction {fr}", fontsize="medium")
-            ax.grid(alpha=0.3)
             if r == nr - 1:
                 ax.set_xlabel(r"frequency ratio $\Omega/\omega_n$")
             if c == 0:
@@ -217,21 +214,50 @@ def _sweep_figure(ds, force: float, attrs: dict, fig=None) -> Figure:
     # once, after every panel is drawn: the panels share y, and a limit set while
     # drawing would freeze it before the later panels' larger values
     _zero_based(axes[0, 0], rms)
+    _sweep_legend(fig, axes[0, 0], seen)
+    set_title(fig, f"tip RMS against frequency ratio, F0 = {force:g} N", attrs,
+              f"{attrs.get('duration_s', math.nan):g} s runs, "
+              f"dt = {attrs.get('dt_s', math.nan):g} s")
+    return fig
 
-    handles, labels = axes[0, 0].get_legend_handles_labels()
-    for cls in (k for k in PATTERN_STYLE if k in seen_patterns):
+
+def _sweep_panel(ax, ds, cases: list[int], seen: set[str]) -> None:
+    """The solid, TMD and ball cases ``cases`` of one sweep panel, each bar in its own
+    colour and line; every ball point marked by its pattern class (added to ``seen``)
+    and its impacts per period written beside the n-symmetric and n-asymmetric ones."""
+    ratio = ds["ratio"].values
+    for i in cases:
+        kind = str(ds["bar"].values[i])
+        style = BAR_STYLE[kind]
+        y = ds["rms_tip_m"].values[i] * 1e3
+        ax.plot(ratio, y, color=style["color"], ls=style["ls"], lw=1.4,
+                marker="." if kind != "ball" else None, label=style["label"])
+        if kind != "ball":
+            continue
+        for x, v, name in zip(ratio, y, ds["pattern"].values[i], strict=True):
+            cls = pattern_class(name)
+            marker, colour = PATTERN_STYLE.get(cls, ("o", "black"))
+            seen.add(cls)
+            ax.plot([x], [v], ls="none", marker=marker, color=colour, ms=7,
+                    markeredgecolor="black", markeredgewidth=0.6)
+            if cls in ("symmetric", "asymmetric"):  # n (per k periods) beside it
+                n = re.sub(r"^(\d+)\D*(?:period (\d+)\))?$", r"\1/\2", str(name)).rstrip("/")
+                ax.annotate(n, (x, v), xytext=(5, 4), textcoords="offset points",
+                            fontsize="small")
+    ax.grid(alpha=0.3)
+
+
+def _sweep_legend(fig, ax, seen: set[str]) -> None:
+    """The bars' lines, then the pattern markers seen, below the panels."""
+    handles, labels = ax.get_legend_handles_labels()
+    for cls in (k for k in PATTERN_STYLE if k in seen):
         marker, colour = PATTERN_STYLE[cls]
-        handles.append(axes[0, 0].plot([], [], ls="none", marker=marker, color=colour, ms=7,
-                                       markeredgecolor="black", markeredgewidth=0.5)[0])
+        handles.append(ax.plot([], [], ls="none", marker=marker, color=colour, ms=7,
+                               markeredgecolor="black", markeredgewidth=0.6)[0])
         labels.append(f"pattern: n {cls}" if cls in ("symmetric", "asymmetric")
                       else f"pattern: {cls or 'none (locked ball)'}")
-    ncol = len(labels) if len(labels) <= 6 else math.ceil(len(labels) / 2)
-    fig.legend(handles, labels, loc="outside lower center", ncol=ncol,
+    fig.legend(handles, labels, loc="outside lower center", ncol=2 if len(labels) > 3 else 3,
                fontsize="small", frameon=False)
-    fig.suptitle(f"Tip RMS against frequency ratio, F0 = {force:g} N "
-                 f"({attrs.get('preset', '?')} preset; {attrs.get('duration_s', math.nan):g} s "
-                 f"runs, dt = {attrs.get('dt_s', math.nan):g} s)")
-    return fig
 
 
 # --- a cut -----------------------------------------------------------------------
@@ -248,7 +274,8 @@ def _legend_below(fig, axes, ncol: int | None = None) -> None:
 
 
 #: Colours of the cut figures: tip, force, the first zero of the force.
-CUT_COLOURS = {"tip": "#1f77b4", "force": "#8c564b", "zero": "#d62728"}
+CUT_COLOURS = {"tip": OKABE_ITO["blue"], "force": OKABE_ITO["orange"],
+               "zero": OKABE_ITO["vermillion"]}
 
 
 def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
@@ -258,9 +285,9 @@ def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
     bar's first mode (about the chatter period)."""
     cut = summary["cutting"]
     forcing = config.get("forcing") or {}
-    t = ds["time"].values
-    rows = ((ds["tip_displacement"].values * 1e3, "tip displacement W (mm)", "tip"),
-            (ds["force"].values, "cutting force f (N)", "force"))
+    t = ds["time_s"].values
+    rows = ((ds["tip_displacement_m"].values * 1e3, "tip displacement W (mm)", "tip"),
+            (ds["force_n"].values, "cutting force f (N)", "force"))
     if fig is None:
         fig = Figure(figsize=(12, 6.5), layout="constrained")
     axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
@@ -287,12 +314,12 @@ def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
     for ax in axes.flat:
         ax.grid(alpha=0.3)
     _legend_below(fig, axes)
-    name = f"{summary.get('bar', '?')} bar"
-    line1 = (f"{name}, {summary.get('preset', '?')} preset: cut at {cut['rpm']:g} rpm, "
-             f"depth {cut['depth_m'] * 1e3:g} mm (Kr {forcing.get('kr_pa', math.nan) / 1e6:g} "
-             f"MPa, feed {forcing.get('feed_m', math.nan) * 1e3:g} mm/rev, "
-             f"{'static start' if cut['start'] == 'static' else 'from rest'})")
-    fig.suptitle(line1 + "\n" + _cut_verdict(cut, summary.get("duration_s")))
+    what = (f"{summary.get('bar', '?')} bar, cut at {cut['rpm']:g} rpm, "
+            f"depth {cut['depth_m'] * 1e3:g} mm (Kr {forcing.get('kr_pa', math.nan) / 1e6:g} "
+            f"MPa, feed {forcing.get('feed_m', math.nan) * 1e3:g} mm/rev, "
+            f"{'static start' if cut['start'] == 'static' else 'from rest'})")
+    set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")},
+              _cut_verdict(cut, summary.get("duration_s")))
     return fig
 
 
@@ -331,9 +358,11 @@ def _cut_guides(axes, static_m: float, mean_force: float, first_zero, labels: bo
 
 #: Marker styles of the lobe grid points.
 LOBE_STYLE = {
-    "stable": dict(marker="o", mfc="none", mec="#2ca02c", color="#2ca02c", mew=1.0),
-    "bounded": dict(marker="^", mfc="none", mec="#ff7f0e", color="#ff7f0e", mew=1.0),
-    "chatter": dict(marker="x", color="#d62728", mew=1.2),
+    "stable": dict(marker="o", mfc="none", mec=OKABE_ITO["bluish green"],
+                   color=OKABE_ITO["bluish green"], mew=1.2),
+    "bounded": dict(marker="^", mfc="none", mec=OKABE_ITO["orange"], color=OKABE_ITO["orange"],
+                    mew=1.2),
+    "chatter": dict(marker="x", color=OKABE_ITO["vermillion"], mew=1.4),
 }
 
 
@@ -353,15 +382,14 @@ def plot_lobes(ds, *, fig=None) -> Figure:
     triangle: the force stays above zero but the steady amplitude exceeds the
     bounded threshold); the limit line (limiting chatter-free depth per speed,
     under the dataset's criterion) and, for the linear bars, the analytic
-    limit over ``rpm_fine``.  The minimum chatter-free depth is in each
+    limit over ``fine_rpm``.  The minimum chatter-free depth is in each
     panel's title.
     """
     n = ds.sizes["case"]
-    ncol = 1 if n == 1 else 2 if n in (2, 4) else 3
+    ncol = 1 if n == 1 else 2
     nrow = math.ceil(n / ncol)
-    width = max(5.4 * ncol + 0.4, 8.0)  # room for the legend and title under one panel
     if fig is None:
-        fig = Figure(figsize=(width, 3.9 * nrow + 1.5), layout="constrained")
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.6 * nrow + 2.0), layout="constrained")
     axes = np.atleast_1d(fig.subplots(nrow, ncol, sharex=True, squeeze=False).ravel())
     legend: dict[str, object] = {}
     for i in range(n):
@@ -374,23 +402,20 @@ def plot_lobes(ds, *, fig=None) -> Figure:
     for ax in axes[n:]:
         ax.set_visible(False)
     fig.legend(list(legend.values()), list(legend), loc="outside lower center",
-               ncol=min(len(legend), 2 if ncol == 1 else 3), fontsize="small",
-               frameon=False)
+               ncol=min(len(legend), 2), fontsize="small", frameon=False)
     a = ds.attrs
     crit = ("force reaches zero" if a.get("criterion") == "zero"
             else "bounded chatter")
-    fig.suptitle(f"Stability lobes by time-domain simulation ({a.get('preset', '?')} preset, "
-                 f"{a.get('method', '?')})\nchatter criterion: {crit}; Kr "
-                 f"{a.get('kr_pa', math.nan) / 1e6:g} MPa, feed "
-                 f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev; "
-                 f"{a.get('duration_s', math.nan):g} s runs, dt = {a.get('dt_s', math.nan):g} s",
-                 fontsize="medium")
+    set_title(fig, f"stability lobes by time-domain simulation ({a.get('method', '?')})", a,
+              f"chatter criterion: {crit}; Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa, feed "
+              f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev; {a.get('duration_s', math.nan):g} "
+              f"s runs, dt = {a.get('dt_s', math.nan):g} s")
     return fig
 
 
 def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     rpm = ds["rpm"].values
-    depth_mm = ds["depth"].values * 1e3
+    depth_mm = ds["depth_m"].values * 1e3
     v = ds["verdict"].values[i]
     vb = ds["verdict_bounded"].values[i]
     rr, dd = np.meshgrid(rpm, depth_mm, indexing="ij")
@@ -406,23 +431,23 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
         if mask.any():
             h, = ax.plot(rr[mask], dd[mask], ls="none", ms=ms, **LOBE_STYLE[key])
             legend.setdefault(names[key], h)
-    limit = ds["limit_depth"].values[i] * 1e3
+    limit = ds["limit_depth_m"].values[i] * 1e3
     h, = ax.plot(rpm, limit, color="black", lw=1.6, marker=".", ms=4, zorder=1.5)
     legend.setdefault("limit: last stable depth below the first chatter", h)
     ymax = top
-    if "analytic_curve" in ds and np.isfinite(ds["analytic_curve"].values[i]).any():
-        curve = ds["analytic_curve"].values[i] * 1e3
-        h, = ax.plot(ds["rpm_fine"].values, curve, color="#1f77b4", lw=0.9)
+    if "analytic_curve_m" in ds and np.isfinite(ds["analytic_curve_m"].values[i]).any():
+        curve = ds["analytic_curve_m"].values[i] * 1e3
+        h, = ax.plot(ds["fine_rpm"].values, curve, color=OKABE_ITO["blue"], lw=1.0)
         legend.setdefault("analytic limit (linear, frequency domain)", h)
-        on_grid = ds["analytic_limit"].values[i] * 1e3
+        on_grid = ds["analytic_limit_m"].values[i] * 1e3
         ymax = max(ymax, min(float(np.nanmax(on_grid)), 3 * top))
     ax.set_ylim(0, 1.08 * ymax)
     pad = 0.5 * (rpm[1] - rpm[0]) if rpm.size > 1 else 25.0
     ax.set_xlim(rpm.min() - pad, rpm.max() + pad)
     ax.grid(alpha=0.3)
     title = case_title(ds["case"].values[i], str(ds["bar"].values[i]),
-                       float(ds["gap"].values[i]), str(ds["friction"].values[i]))
-    mcf = float(ds["min_chatter_free_depth"].values[i])
+                       float(ds["gap_m"].values[i]), str(ds["friction"].values[i]))
+    mcf = float(ds["min_chatter_free_depth_m"].values[i])
     if np.isfinite(limit).any() and math.isfinite(mcf):
         j = int(np.nanargmin(limit))
         ax.plot([rpm[j]], [limit[j]], ls="none", marker="*", ms=11, color="black",
@@ -430,37 +455,39 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
         sub = f"min chatter-free depth {mcf * 1e3:.3g} mm at {rpm[j]:g} rpm"
     else:
         sub = f"no chatter up to {top:.3g} mm"
-    ax.set_title(f"{title}\n{sub}", fontsize="medium")
+    ax.set_title(f"{title}\n{sub}", fontsize="small")
 
 
 def plot_lobe_examples(ds, *, fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for the
     example grid points of a lobe study (dims example x time, as written by
     ``boringbar lobes --examples``), one column per example; as a Figure."""
-    t = ds["time"].values
+    t = ds["time_s"].values
     n = ds.sizes["example"]
     if fig is None:
-        fig = Figure(figsize=(6.0 * n + 0.4, 6.5), layout="constrained")
+        fig = Figure(figsize=(COLUMN_WIDTH_IN if n > 1 else 0.6 * COLUMN_WIDTH_IN, 5.6),
+                     layout="constrained")
     axes = np.asarray(fig.subplots(2, n, sharex=True, squeeze=False))
+    panel_in = fig.get_figwidth() / n
     duration = float(t[-1]) if t.size else None
     for k, name in enumerate(ds["example"].values):
         ex = ds.isel(example=k)
-        axes[0, k].plot(t, ex["tip_displacement"].values * 1e3, lw=0.5,
+        axes[0, k].plot(t, ex["tip_displacement_m"].values * 1e3, lw=0.5,
                         color=CUT_COLOURS["tip"])
-        axes[1, k].plot(t, ex["force"].values, lw=0.5, color=CUT_COLOURS["force"])
-        fz = float(ex["first_zero_time"].values)
-        _cut_guides(axes[:, k], float(ex["static_deflection"].values),
-                    float(ex["mean_force"].values), fz)
+        axes[1, k].plot(t, ex["force_n"].values, lw=0.5, color=CUT_COLOURS["force"])
+        fz = float(ex["first_zero_time_s"].values)
+        _cut_guides(axes[:, k], float(ex["static_deflection_m"].values),
+                    float(ex["mean_force_n"].values), fz)
         if bool(ex["chatter"].values):
             verdict = f"chatter: the force first reaches zero at t = {fz:.3g} s"
         else:
             verdict = "the force never reaches zero" + (f" in {duration:.2g} s" if duration
                                                         else "")
-        axes[0, k].set_title(f"{name} grid point: {float(ex['rpm'].values):g} rpm, depth "
-                             f"{float(ex['depth'].values) * 1e3:g} mm\n{verdict}",
-                             fontsize="medium",
+        axes[0, k].set_title(wrap_title(f"{name} grid point: {float(ex['rpm'].values):g} rpm, "
+                                        f"depth {float(ex['depth_m'].values) * 1e3:g} mm\n"
+                                        f"{verdict}", panel_in, 8.33), fontsize="small",
                              color=CUT_COLOURS["zero"] if bool(ex["chatter"].values)
-                             else "#2ca02c")
+                             else OKABE_ITO["bluish green"])
         axes[1, k].set_xlabel("time t (s)")
         if t.size > 1:
             axes[0, k].set_xlim(t[0], t[-1])
@@ -468,12 +495,12 @@ def plot_lobe_examples(ds, *, fig=None) -> Figure:
     axes[1, 0].set_ylabel("cutting force f (N)")
     for ax in axes.flat:
         ax.grid(alpha=0.3)
-    _legend_below(fig, axes)
+    _legend_below(fig, axes, ncol=2)
     a = ds.attrs
     case = case_title(a.get("case", "?"), a.get("bar", "?"), a.get("gap_m", math.nan),
                       a.get("friction", "?"))
-    fig.suptitle(f"Lobe examples: {case} ({a.get('preset', '?')} preset), rerun with "
-                 "history, not stopped at the first zero of the force", fontsize="medium")
+    set_title(fig, f"lobe examples, {case}", a,
+              "rerun with history, not stopped at the first zero of the force")
     return fig
 
 
@@ -482,10 +509,10 @@ def plot_lobe_examples(ds, *, fig=None) -> Figure:
 #: Marker styles of the continuation directions: backward drawn smaller and a
 #: little to the right, so points where both agree show both colours.
 DIRECTION_STYLE = {
-    "forward": dict(color="#1f77b4", s=9, offset=0.0),
-    "backward": dict(color="#d62728", s=3, offset=0.25),
+    "forward": dict(color=OKABE_ITO["blue"], s=9, offset=0.0),
+    "backward": dict(color=OKABE_ITO["orange"], s=3, offset=0.25),
 }
-HYSTERESIS_COLOUR = "#ffe082"
+HYSTERESIS_COLOUR = "#F9F3B0"  # Okabe-Ito's yellow, lightened behind the samples
 #: Axis label and display scale (per SI unit) of the bifurcation parameters.
 PARAMETER_AXES = {
     "force": ("force amplitude F0 (N)", 1.0),
@@ -519,19 +546,19 @@ def plot_bifurcation(ds, *, fig=None) -> Figure:
     step = float(np.min(np.abs(np.diff(x)))) if x.size > 1 else 1.0
     directions = [str(d) for d in ds["direction"].values]
     if fig is None:
-        fig = Figure(figsize=(12, 8), layout="constrained")
-    top, mid, bottom = fig.subplots(3, 1, sharex=True, height_ratios=(4, 0.55, 1.4))
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 5.9), layout="constrained")
+    top, mid, bottom = fig.subplots(3, 1, sharex=True, height_ratios=(3.4, 0.7, 1.5))
     ranges = json.loads(ds.attrs.get("hysteresis_ranges", "null") or "null") or []
-    for a, b in ranges:
+    for n, (a, b) in enumerate(ranges):
         for ax in (top, mid, bottom):
             ax.axvspan(a * k - 0.5 * step, b * k + 0.5 * step, color=HYSTERESIS_COLOUR,
-                       lw=0, zorder=0,
-                       label="forward and backward differ" if ax is top else None)
+                       lw=0, zorder=0,  # one legend entry for every range
+                       label="forward and backward differ" if ax is top and not n else None)
     for row, d in enumerate(directions):
         style = DIRECTION_STYLE.get(d, dict(color="black", s=4, offset=0.0))
         sel = ds.sel(direction=d)
         xd = x + style["offset"] * step
-        w = sel["tip_displacement"].values * 1e3
+        w = sel["tip_displacement_m"].values * 1e3
         xx = np.broadcast_to(xd[:, None], w.shape)
         ok = np.isfinite(w)
         top.scatter(xx[ok], w[ok], s=style["s"], color=style["color"], lw=0, alpha=0.6,
@@ -541,7 +568,7 @@ def plot_bifurcation(ds, *, fig=None) -> Figure:
                     color=style["color"], label=d)
         for xi, verdict in zip(x, sel["verdict"].values, strict=True):
             mid.text(xi, 1 - row, _verdict_code(str(verdict)), ha="center", va="center",
-                     fontsize=7 if x.size <= 50 else 5, color=style["color"])
+                     fontsize="small", color=style["color"])
     top.set_ylabel("tip displacement W (mm)\nat $\\Omega t = 0$ mod $2\\pi$")
     mid.set_ylim(-0.7, 1.7)
     mid.set_yticks([1, 0][:len(directions)], directions)
@@ -554,30 +581,23 @@ def plot_bifurcation(ds, *, fig=None) -> Figure:
     bottom.set_xlim(x.min() - pad, x.max() + pad)
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
-    handles, labels = top.get_legend_handles_labels()
-    if "backward" in directions and not ranges:
-        handles.append(top.plot([], [], ls="none")[0])
-        labels.append("forward and backward agree at every value")
-    handles.append(top.plot([], [], ls="none")[0])
-    labels.append("verdicts: k = period k, t transient, q quasi-periodic, c chaotic-like, "
-                  "? undetermined")
-    fig.legend(handles, labels, loc="outside lower center", ncol=len(labels),
-               fontsize="small", frameon=False)
-    fig.suptitle(_bifurcation_title(ds, param), fontsize="medium")
+    _bifurcation_legend(fig, top, agree="backward" in directions and not ranges)
+    set_title(fig, *_bifurcation_title(ds, param))
     return fig
 
 
-def _system_words(system: dict) -> str:
-    """'ball damper, gap 0.1 mm, friction off, e = 0.7' from System.to_dict()."""
-    kind = system.get("kind", "?")
-    damper = system.get("damper") or {}
-    if kind in ("ball", "locked"):
-        fr = damper.get("friction_force_n", 0.0)
-        return (f"{'locked ball' if kind == 'locked' else 'ball damper'} "
-                f"({damper.get('material', '?')}), gap {damper.get('gap_m', math.nan) * 1e3:g} "
-                f"mm, friction {f'{fr:.3g} N' if fr else 'off'}, "
-                f"e = {damper.get('restitution', math.nan):g}")
-    return {"solid": "solid bar", "tmd": "TMD bar"}.get(kind, str(kind))
+def _bifurcation_legend(fig, top, agree: bool) -> None:
+    """The directions (and the hysteresis shading) of ``top``, whether the directions
+    ``agree`` everywhere, and what the verdict codes mean, below the panels."""
+    handles, labels = top.get_legend_handles_labels()
+    if agree:
+        handles.append(top.plot([], [], ls="none")[0])
+        labels.append("forward and backward agree at every value")
+    handles.append(top.plot([], [], ls="none")[0])
+    labels.append("verdicts: k = period k, t transient,\nq quasi-periodic, c chaotic-like, "
+                  "? undetermined")
+    fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize="small",
+               frameon=False)
 
 
 def _dropped_percent(attrs) -> float:
@@ -588,10 +608,11 @@ def _dropped_percent(attrs) -> float:
     return 100 * attrs.get("drop", math.nan)
 
 
-def _bifurcation_title(ds, param: str) -> str:
+def _bifurcation_title(ds, param: str) -> tuple[str, dict, str]:
+    """(what, attributes, details) of a bifurcation diagram's title."""
     config = json.loads(ds.attrs.get("config", "{}"))
     systems = config.get("systems") or [{}]
-    words = _system_words(systems[0])
+    words = system_words(systems[0])
     if param == "gap":
         words = re.sub(r", gap [^,]*", "", words)
     elif param == "restitution":
@@ -602,8 +623,8 @@ def _bifurcation_title(ds, param: str) -> str:
         fixed.append(f"F0 = {base.get('amplitude_n', math.nan):g} N")
     if param != "ratio":
         fixed.append(f"$\\Omega/\\omega_n$ = {base.get('ratio', math.nan):g}")
-    preset = systems[0].get("preset", "?")
-    return (f"Bifurcation diagram: {words}, {', '.join(fixed)} ({preset} preset)\n"
+    attrs = {**ds.attrs, "preset": systems[0].get("preset", ds.attrs.get("preset", "?"))}
+    return (f"bifurcation diagram, {words}, {', '.join(fixed)}", attrs,
             f"continuation forward then backward; {ds.attrs.get('duration_s', math.nan):g} s "
             f"runs, first {_dropped_percent(ds.attrs):g} % dropped, "
             f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
@@ -611,16 +632,13 @@ def _bifurcation_title(ds, param: str) -> str:
 
 # --- basins of attraction --------------------------------------------------------
 
-#: Attractors beyond this many are drawn together in grey.
-MAX_ATTRACTOR_COLOURS = 20
-OTHER_COLOUR = "#bdbdbd"
+#: Attractors beyond this many (the palette's distinct colours) are drawn together in grey.
+MAX_ATTRACTOR_COLOURS = 8
+OTHER_COLOUR = GREY
 
 
 def _attractor_colours(n: int) -> list:
-    from matplotlib import colormaps
-
-    cmap = colormaps["tab10" if n <= 10 else "tab20"]
-    return [cmap(i) for i in range(min(n, MAX_ATTRACTOR_COLOURS))] + \
+    return [series_colour(i) for i in range(min(n, MAX_ATTRACTOR_COLOURS))] + \
         [OTHER_COLOUR] * max(0, n - MAX_ATTRACTOR_COLOURS)
 
 
@@ -645,17 +663,14 @@ def plot_basins(ds, *, fig=None) -> Figure:
     map (W, W' once per forcing period) of that run, with every periodic
     attractor's Poincare points as open markers in its colour.
     """
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.patches import Patch
-
-    w0 = ds["displacement"].values * 1e3
-    v0 = ds["velocity"].values
+    w0 = ds["displacement_m"].values * 1e3
+    v0 = ds["velocity_m_s"].values
     label = ds["attractor"].values  # (displacement, velocity)
     n = ds.sizes["attractor_id"]
     colours = _attractor_colours(n)
     has_map = "poincare_from_tip_m" in ds
     if fig is None:
-        fig = Figure(figsize=(13.5 if has_map else 8, 6.8), layout="constrained")
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 5.4 if has_map else 6.4), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, 2 if has_map else 1,
                                       width_ratios=(1, 1) if has_map else None))
     ax = axes[0]
@@ -664,13 +679,13 @@ def plot_basins(ds, *, fig=None) -> Figure:
     for a in range(min(n, MAX_ATTRACTOR_COLOURS)):
         rw = float(ds["representative_tip_displacement_m"].values[a]) * 1e3
         rv = float(ds["representative_tip_velocity_m_s"].values[a])
-        ax.annotate(str(a), (rw, rv), ha="center", va="center", fontsize=8,
+        ax.annotate(str(a), (rw, rv), ha="center", va="center", fontsize=9,
                     fontweight="bold", color="white",
                     bbox=dict(boxstyle="circle,pad=0.15", fc="black", ec="none", alpha=0.6))
     ax.set_xlabel("initial tip displacement $W_0$ (mm)")
     ax.set_ylabel("initial tip velocity $W'_0$ (m/s)")
-    ax.set_title(f"basins: {ds.sizes['displacement']} x {ds.sizes['velocity']} initial "
-                 f"conditions, {n} attractor{'s' if n != 1 else ''}", fontsize="medium")
+    ax.set_title(f"basins: {ds.sizes['displacement_m']} x {ds.sizes['velocity_m_s']} initial "
+                 f"conditions,\n{n} attractor{'s' if n != 1 else ''}", fontsize="small")
     handles = [Patch(color=colours[a], label=_attractor_label(ds, a))
                for a in range(min(n, MAX_ATTRACTOR_COLOURS))]
     if n > MAX_ATTRACTOR_COLOURS:
@@ -685,12 +700,11 @@ def plot_basins(ds, *, fig=None) -> Figure:
                title_fontsize="small")
     forcing = json.loads(ds.attrs.get("forcing", "{}"))
     system = json.loads(ds.attrs.get("system", "{}"))
-    fig.suptitle(f"Basins of attraction: {_system_words(system)} "
-                 f"({ds.attrs.get('preset', '?')} preset)\nF0 = "
-                 f"{forcing.get('amplitude_n', math.nan):g} N, $\\Omega/\\omega_n$ = "
-                 f"{forcing.get('ratio', math.nan):g}; {ds.attrs.get('duration_s', math.nan):g}"
-                 f" s runs, first {_dropped_percent(ds.attrs):g} % dropped, "
-                 f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
+    set_title(fig, f"basins of attraction, {system_words(system)}", ds.attrs,
+              f"F0 = {forcing.get('amplitude_n', math.nan):g} N, $\\Omega/\\omega_n$ = "
+              f"{forcing.get('ratio', math.nan):g}; {ds.attrs.get('duration_s', math.nan):g} s "
+              f"runs, first {_dropped_percent(ds.attrs):g} % dropped, "
+              f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
     return fig
 
 
@@ -723,9 +737,9 @@ def _poincare_panel(ax, ds, colours, basin_ax) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small", loc="best")
     verdict = info.get("verdict", "?")
-    ax.set_title(f"Poincare map at $\\Omega t = 0$ mod $2\\pi$ from the star: {verdict}, "
-                 f"{int(ok.sum())} samples\npattern {info.get('pattern') or '-'}, tip RMS "
-                 f"{info.get('rms_tip_m', math.nan) * 1e3:.3g} mm", fontsize="medium")
+    ax.set_title(f"Poincare map ($\\Omega t = 0$ mod $2\\pi$) from the star:\n{verdict}, "
+                 f"{int(ok.sum())} samples,\npattern {info.get('pattern') or '-'}, tip RMS "
+                 f"{info.get('rms_tip_m', math.nan) * 1e3:.3g} mm", fontsize="small")
 
 
 # --- sensitivity -----------------------------------------------------------------
@@ -738,20 +752,22 @@ def plot_sensitivity(ds, *, fig=None) -> Figure:
     amplitude (mm) against depth of cut (mm), chatter (the force reaches zero)
     marked by filled crosses, no chatter by open circles.
     """
-    from matplotlib import colormaps
-
     kind = ds.attrs.get("sensitivity", "?")
     values = [str(v) for v in ds[kind].values]
-    forces = ds["force"].values
+    forces = ds["force_n"].values
     cuts = "cut_chatter" in ds
-    cmap = colormaps["viridis" if kind in ("friction_number", "restitution") else "tab10"]
-    colours = ([cmap(0.9 * i / max(len(values) - 1, 1)) for i in range(len(values))]
-               if cmap.name == "viridis" else [cmap(i % 10) for i in range(len(values))])
+    # an ordered parameter in viridis (colour-blind safe, dark to light); else the palette
+    ordered = kind in ("friction_number", "restitution")
+    colours = [colormaps["viridis"](0.9 * i / max(len(values) - 1, 1)) if ordered
+               else series_colour(i) for i in range(len(values))]
     n = len(forces) + cuts
-    width = max(5.4 * n + 0.6, 9.5)  # room for the title and the legend under one panel
+    ncol = min(n, 2)
     if fig is None:
-        fig = Figure(figsize=(width, 5.4), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, n, squeeze=False).ravel())
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 3.1 * math.ceil(n / ncol) + 2.0),
+                     layout="constrained")
+    axes = np.atleast_1d(fig.subplots(math.ceil(n / ncol), ncol, squeeze=False).ravel())
+    for ax in axes[n:]:
+        ax.set_visible(False)
     ratio = ds["ratio"].values
     for j, force in enumerate(forces):
         ax = axes[j]
@@ -762,45 +778,53 @@ def plot_sensitivity(ds, *, fig=None) -> Figure:
         ax.set_xlabel(r"frequency ratio $\Omega/\omega_n$")
         ax.set_ylabel("tip RMS (mm)")
         _zero_based(ax, ds["rms_tip_m"].values[:, j] * 1e3)
-        ax.set_title(f"harmonic forcing, F0 = {force:g} N", fontsize="medium")
+        ax.set_title(f"harmonic forcing, F0 = {force:g} N", fontsize="small")
         ax.grid(alpha=0.3)
     if cuts:
-        ax = axes[-1]
-        depth = ds["depth"].values * 1e3
-        for i in range(len(values)):
-            amp = ds["cut_amplitude_m"].values[i] * 1e3
-            chat = ds["cut_chatter"].values[i].astype(bool)
-            ax.plot(depth, amp, lw=1.2, color=colours[i])
-            ax.plot(depth[chat], amp[chat], ls="none", marker="X", ms=8, color=colours[i],
-                    mec="black", mew=0.5)
-            ax.plot(depth[~chat], amp[~chat], ls="none", marker="o", ms=6, mfc="none",
-                    mec=colours[i], mew=1.3)
-        ax.plot([], [], ls="none", marker="X", ms=8, color="grey", mec="black", mew=0.5,
-                label="chatter (force reaches zero)")
-        ax.plot([], [], ls="none", marker="o", ms=6, mfc="none", mec="grey", mew=1.3,
-                label="no chatter")
-        ax.legend(fontsize="small", loc="best")
-        ax.set_xlabel("depth of cut b (mm)")
-        ax.set_ylabel("steady tip amplitude (mm)")
-        _zero_based(ax, ds["cut_amplitude_m"].values * 1e3)
-        ax.set_title(f"cuts at {ds.attrs.get('cut_rpm', math.nan):g} rpm", fontsize="medium")
-        ax.grid(alpha=0.3)
-    _legend_below(fig, axes[:len(forces)], ncol=min(len(values), max(1, int(width // 4.5))))
-    systems = json.loads(ds.attrs.get("systems", "{}"))
-    first = next(iter(systems.values()), {})
-    words = _system_words(first)
-    if kind == "restitution":
-        words = re.sub(r", e = .*$", "", words)
-    elif kind == "ball":  # the friction force follows the ball's mass
-        words = re.sub(r" \(\w+\)|, friction [^,]*", "", words)
-    elif kind == "friction_number":
-        words = re.sub(r", friction [^,]*", "", words)
+        _sensitivity_cuts(axes[n - 1], ds, colours)
+    _legend_below(fig, axes[:len(forces)], ncol=min(len(values), 2))
     what = "initial conditions" if kind == "initial" else kind.replace("_", " ")
-    fig.suptitle(f"Sensitivity to {what}: {words} "
-                 f"({ds.attrs.get('preset', '?')} preset)\n"
-                 f"{ds.attrs.get('duration_s', math.nan):g} s runs, "
-                 f"dt = {ds.attrs.get('dt_s', math.nan):g} s", fontsize="medium")
+    set_title(fig, f"sensitivity to {what}, {_sensitivity_words(ds, kind)}", ds.attrs,
+              f"{ds.attrs.get('duration_s', math.nan):g} s runs, "
+              f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
     return fig
+
+
+def _sensitivity_cuts(ax, ds, colours) -> None:
+    """The cuts of a sensitivity study: steady tip amplitude against depth, one line a
+    value, chatter as filled crosses, no chatter as open circles."""
+    depth = ds["depth_m"].values * 1e3
+    for i, colour in enumerate(colours):
+        amp = ds["cut_amplitude_m"].values[i] * 1e3
+        chat = ds["cut_chatter"].values[i].astype(bool)
+        ax.plot(depth, amp, lw=1.2, color=colour)
+        ax.plot(depth[chat], amp[chat], ls="none", marker="X", ms=8, color=colour,
+                mec="black", mew=0.5)
+        ax.plot(depth[~chat], amp[~chat], ls="none", marker="o", ms=6, mfc="none",
+                mec=colour, mew=1.3)
+    ax.plot([], [], ls="none", marker="X", ms=8, color=GREY, mec="black", mew=0.5,
+            label="chatter (force reaches zero)")
+    ax.plot([], [], ls="none", marker="o", ms=6, mfc="none", mec=GREY, mew=1.3,
+            label="no chatter")
+    ax.legend(fontsize="small", loc="best")
+    ax.set_xlabel("depth of cut b (mm)")
+    ax.set_ylabel("steady tip amplitude (mm)")
+    _zero_based(ax, ds["cut_amplitude_m"].values * 1e3)
+    ax.set_title(f"cuts at {ds.attrs.get('cut_rpm', math.nan):g} rpm", fontsize="small")
+    ax.grid(alpha=0.3)
+
+
+def _sensitivity_words(ds, kind: str) -> str:
+    """The system of a sensitivity study in words, less what the study varies."""
+    systems = json.loads(ds.attrs.get("systems", "{}"))
+    words = system_words(next(iter(systems.values()), {}))
+    if kind == "restitution":
+        return re.sub(r", e = .*$", "", words)
+    if kind == "ball":  # the friction force follows the ball's mass
+        return re.sub(r" \(\w+\)|, friction [^,]*", "", words)
+    if kind == "friction_number":
+        return re.sub(r", friction [^,]*", "", words)
+    return words
 
 
 def _zero_based(ax, values) -> None:
@@ -831,7 +855,7 @@ def plot_ladder(ds, *, ax=None) -> Figure:
     physical one, one bar per gap, each labelled with its impact pattern; drawn on
     ``ax`` (a matplotlib Axes) if given, whose figure is returned."""
     rungs = [str(r) for r in ds["rung"].values]
-    gaps = ds["gap"].values
+    gaps = ds["gap_m"].values
     if ax is None:
         fig = Figure(figsize=(10, 5.2), layout="constrained")
         ax = fig.subplots()
@@ -841,11 +865,10 @@ def plot_ladder(ds, *, ax=None) -> Figure:
     for j, gap in enumerate(gaps):
         rms = ds["rms_tip_m"].values[:, j] * 1e3
         pos = x + (j - (len(gaps) - 1) / 2) * width
-        ax.bar(pos, rms, width * 0.95, label=f"gap {gap * 1e3:g} mm",
-               color=("#1f77b4", "#ff7f0e", "#2ca02c")[j % 3])
+        ax.bar(pos, rms, width * 0.95, label=f"gap {gap * 1e3:g} mm", color=series_colour(j))
         for xi, r, pat in zip(pos, rms, ds["pattern"].values[:, j], strict=True):
             ax.text(xi, r, " " + str(pat), rotation=90, ha="center", va="bottom",
-                    fontsize="x-small")
+                    fontsize="small")
     ax.set_xticks(x, [f"{r}\n{ds['friction_force_n'].values[i, 0]:.3g} N, "
                       f"{ds['host_frequency_hz'].values[i]:.0f} Hz"
                       for i, r in enumerate(rungs)], fontsize="small")
@@ -853,11 +876,12 @@ def plot_ladder(ds, *, ax=None) -> Figure:
     _zero_based(ax, ds["rms_tip_m"].values * 1e3 * 1.6)
     ax.grid(axis="y", alpha=0.3)
     ax.legend(loc="upper left", fontsize="small")
-    ax.set_title("Ball damper, friction on, F0 = "
-                 f"{ds.attrs.get('force_n', math.nan):g} N, r = "
-                 f"{ds.attrs.get('ratio', math.nan):g}: the published readings dropped one "
-                 f"at a time\n(each rung keeps the changes to its left; "
-                 f"{ds.attrs.get('duration_s', math.nan):g} s runs)", fontsize="medium")
+    ax.set_title(wrap_title(f"{bar_name(ds.attrs)}: the published readings dropped one at a "
+                            f"time; ball damper, friction on, F0 = "
+                            f"{ds.attrs.get('force_n', math.nan):g} N, r = "
+                            f"{ds.attrs.get('ratio', math.nan):g}\n(each rung keeps the changes "
+                            f"to its left; {ds.attrs.get('duration_s', math.nan):g} s runs)",
+                            fig.get_figwidth()), fontsize=TITLE_PT)
     return fig
 
 

@@ -10,6 +10,16 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from boringbar.plot_style import (
+    COLUMN_WIDTH_IN,
+    CYCLE,
+    DARK_GREY,
+    OKABE_ITO,
+    series_colour,
+    set_title,
+    system_words,
+)
+
 #: Marker of each continuation event kind.
 EVENT_MARKERS = {"fold": "s", "branch-point": "^", "period-doubling": "D", "neimark-sacker": "*",
                  "grazing": "x", "section": "+"}
@@ -19,20 +29,20 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     """Continued branches of :func:`~boringbar.analysis.continuation.continuation`: the
     strobe tip displacement W (mm, top) and the tip RMS (mm, bottom) against the
     parameter, one colour a branch of the map, stable stretches solid, unstable dashed,
-    events marked on the curve.  ``overlay``: a bifurcation Dataset
-    (:func:`~boringbar.analysis.bifurcation.bifurcation`) of the same case, its Poincare
-    samples drawn as dark dots on top of the branches."""
+    events marked on the curve, titled by the bar, its preset and the case.  ``overlay``: a
+    bifurcation Dataset (:func:`~boringbar.analysis.bifurcation.bifurcation`) of the same
+    case, its Poincare samples drawn as dark dots on top of the branches."""
     if fig is None:
-        fig = Figure(figsize=(10, 7), layout="constrained")
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 5.3), layout="constrained")
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1.5))
     if overlay is not None:
         for d in overlay["direction"].values:
             sel = overlay.sel(direction=d)
-            w = sel["tip_displacement"].values * 1e3
+            w = sel["tip_displacement_m"].values * 1e3
             xx = np.broadcast_to(sel["value"].values[:, None], w.shape)
             ok = np.isfinite(w)
-            top.scatter(xx[ok], w[ok], s=6, color="0.25", lw=0, rasterized=True, zorder=5)
-        top.scatter([], [], s=12, color="0.25", label="brute force (strobe samples)")
+            top.scatter(xx[ok], w[ok], s=6, color=DARK_GREY, lw=0, rasterized=True, zorder=5)
+        top.scatter([], [], s=12, color=DARK_GREY, label="brute force (strobe samples)")
     for b in range(ds.sizes["branch"]):
         d = ds.isel(branch=b)
         v = d["value"].values
@@ -47,7 +57,7 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
                 continue
             y = np.interp(value, *_sorted(v[ok], d["strobe_tip_m"].values[ok] * 1e3))
             top.plot([value], [y], ls="none", marker=EVENT_MARKERS.get(str(kind), "o"),
-                     ms=9, mfc="none", color="crimson", label=str(kind))
+                     ms=9, mfc="none", color=OKABE_ITO["black"], mew=1.4, label=str(kind))
     top.set_ylabel("tip displacement W (mm)\nat $\\Omega t = 0$ mod $2\\pi$")
     bottom.set_ylabel("tip RMS (mm)")
     bottom.set_xlabel(PARAMETER_NAMES.get(ds.attrs.get("parameter"), ds.attrs.get("parameter")))
@@ -60,14 +70,20 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     if not np.isfinite(ds["value"].values).any():  # every branch refused at its start
         reasons = json.loads(ds.attrs.get("stop_reasons", "[]"))
         top.text(0.5, 0.5, "\n".join(textwrap.wrap("; ".join(dict.fromkeys(reasons)), 90)),
-                 transform=top.transAxes, ha="center", va="center", fontsize="small")
+                 transform=top.transAxes, ha="center", va="center", fontsize="small",
+                 bbox={"fc": "white", "ec": "none", "alpha": 0.85}, zorder=6)
+    system = json.loads(ds.attrs.get("config", "{}")).get("system") or {}
+    parameter = PARAMETER_NAMES.get(ds.attrs.get("parameter"), str(ds.attrs.get("parameter")))
+    set_title(fig, "periodic orbits continued in " + parameter.split(" (")[0], ds.attrs,
+              system_words(system))
     return fig
 
 
 def branch_colour(b: int, count: int):
-    """Branch b's colour among ``count``: the default cycle up to 10, else one of 20
-    (tab20), so that a map's branches do not share colours until 20."""
-    return f"C{b % 10}" if count <= 10 else colormaps["tab20"](b % 20)
+    """Branch b's colour among ``count``: the colour-blind cycle (plot_style) while it
+    suffices, else one of twenty (tab20), so that a map's branches do not share colours
+    until twenty (the cycle repeats after eight)."""
+    return series_colour(b) if count <= len(CYCLE) else colormaps["tab20"](b % 20)
 
 
 #: Axis labels of the continuation parameters.

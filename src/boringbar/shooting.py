@@ -114,17 +114,17 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
     harmonic forcing."""
     if not isinstance(forcing, Harmonic):
         raise ParameterError(f"forcing = {forcing!r} must be Harmonic for shooting")
-    omega = forcing.omega(system.reference_frequency)
-    p = pack(system, omega, forcing.amplitude, 1e-6)
+    omega = forcing.omega(system.reference_frequency_rad_s)
+    p = pack(system, omega, forcing.amplitude_n, 1e-6)
     bar = system.bar
     n = bar.n_modes
-    return Flow(n, state_size(system), omega, forcing.amplitude,
-                np.asarray(bar.mass, float), np.asarray(bar.damping, float),
-                np.asarray(bar.stiffness, float), np.asarray(bar.psi_tip, float),
+    return Flow(n, state_size(system), omega, forcing.amplitude_n,
+                np.asarray(bar.mass_kg, float), np.asarray(bar.damping_n_s_m, float),
+                np.asarray(bar.stiffness_n_m, float), np.asarray(bar.psi_tip, float),
                 np.asarray(bar.psi_damper, float), system.kind == "ball", system.kind,
                 float(p[L.BALL_MASS]), float(p[L.HALF_GAP]), float(p[L.RESTITUTION]),
                 float(p[L.FRICTION]), float(p[L.STATIC_FRICTION]), float(p[L.REACTION]),
-                float(p[L.V_IMPACT]), float(p[L.M_EFF]), float(system.reference_frequency),
+                float(p[L.V_IMPACT]), float(p[L.M_EFF]), float(system.reference_frequency_rad_s),
                 (float(p[L.TMD_MASS]), float(p[L.TMD_K]), float(p[L.TMD_C])),
                 np.asarray(bar.psi_absorber, float))
 

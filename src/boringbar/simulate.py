@@ -72,24 +72,24 @@ class Initial:
     """Initial conditions (docs/model.md, section 1), SI.
 
     The bar starts with tip displacement/velocity W0, W0' carried by the first
-    mode (u_1 = W0/psi_1(L), higher modes at rest); the ball at ``ball_position``
+    mode (u_1 = W0/psi_1(L), higher modes at rest); the ball at ``ball_position_m``
     y0 in [-delta/2, delta/2] with relative velocity y0'; the absorber at rest
     relative to the bar.  Default: everything at rest, ball centred.
-    ``tip_displacement`` (m), ``tip_velocity`` (m/s), ``ball_position`` (m),
-    ``ball_velocity`` (m/s).
+    ``tip_displacement_m`` (m), ``tip_velocity_m_s`` (m/s), ``ball_position_m`` (m),
+    ``ball_velocity_m_s`` (m/s).
     """
 
-    tip_displacement: float = 0.0
-    tip_velocity: float = 0.0
-    ball_position: float = 0.0
-    ball_velocity: float = 0.0
+    tip_displacement_m: float = 0.0
+    tip_velocity_m_s: float = 0.0
+    ball_position_m: float = 0.0
+    ball_velocity_m_s: float = 0.0
 
     def __post_init__(self):
         d, v = MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY
-        check_range("initial tip_displacement", self.tip_displacement, -d, d, unit="m")
-        check_range("initial tip_velocity", self.tip_velocity, -v, v, unit="m/s")
-        check_range("initial ball_position", self.ball_position, -d, d, unit="m")
-        check_range("initial ball_velocity", self.ball_velocity, -v, v, unit="m/s")
+        check_range("initial tip_displacement_m", self.tip_displacement_m, -d, d, unit="m")
+        check_range("initial tip_velocity_m_s", self.tip_velocity_m_s, -v, v, unit="m/s")
+        check_range("initial ball_position_m", self.ball_position_m, -d, d, unit="m")
+        check_range("initial ball_velocity_m_s", self.ball_velocity_m_s, -v, v, unit="m/s")
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,7 @@ class Integration:
 
     def kwargs(self) -> dict:
         """The keyword arguments of :func:`simulate` these options stand for."""
-        return {"duration": self.duration_s, "dt": self.dt_s, "integrator": self.integrator,
+        return {"duration_s": self.duration_s, "dt_s": self.dt_s, "integrator": self.integrator,
                 "steady_fraction": self.steady_fraction, "initial": self.initial,
                 "record_every": 0}
 
@@ -130,17 +130,18 @@ class Integration:
 
 @dataclass(frozen=True, eq=False)
 class State:
-    """A run's final state, to continue from: x = [u, u', aux, aux'] at time t."""
+    """A run's final state, to continue from: x = [u, u', aux, aux'] (the modal
+    coordinates and the damper's, SI) at time ``t_s`` (s)."""
 
     x: np.ndarray
-    t: float
+    t_s: float
 
     def __post_init__(self):
         x = np.asarray(self.x, dtype=float)
         if x.ndim != 1 or not np.all(np.isfinite(x)):
             raise ParameterError(f"initial state x = {self.x!r} must be a 1-d array of finite "
                                  "numbers")
-        check_finite("initial state t", self.t, "s")
+        check_finite("initial state t_s", self.t_s, "s")
 
 
 #: Figure makers by what they draw ("run" -> plot_run), registered by boringbar.plot so
@@ -154,9 +155,9 @@ class Run:
     history; :meth:`summary` and :meth:`config` as JSON-able dicts, :meth:`to_xarray`
     as a labelled Dataset.
 
-    ``system`` and ``forcing`` as run; ``omega``: forcing (or spindle) frequency
-    (rad/s); ``dt``, ``t0``, ``duration`` (s) and ``steady_start`` (s), where RMS and
-    patterns begin; ``metrics``: the streamed metrics; ``impacts`` (time, wall,
+    ``system`` and ``forcing`` as run; ``omega_rad_s``: forcing (or spindle) frequency
+    (rad/s); ``dt_s``, ``t0_s``, ``duration_s`` (s) and ``steady_start_s`` (s), where RMS
+    and patterns begin; ``metrics``: the streamed metrics; ``impacts`` (time, wall,
     relative velocity), ``sticks`` (start, end), ``strobe`` (Poincare samples) and
     ``history`` (t, W, W', aux, aux', force; None unless recorded); ``initial`` and
     ``final``: the states it started from and ended at; ``pattern``: the impact
@@ -166,11 +167,11 @@ class Run:
 
     system: System
     forcing: Harmonic | Regenerative
-    omega: float  #: forcing frequency, or spindle frequency for cutting (rad/s)
-    dt: float
-    t0: float
-    duration: float
-    steady_start: float  #: start of the steady part (s)
+    omega_rad_s: float  #: forcing frequency, or spindle frequency for cutting (rad/s)
+    dt_s: float
+    t0_s: float
+    duration_s: float
+    steady_start_s: float  #: start of the steady part (s)
     metrics: dict
     impacts: np.ndarray  #: (n, 3): time, wall (+1/-1), relative velocity before
     sticks: np.ndarray  #: (n, 2): start, end of stick intervals in the steady part
@@ -185,7 +186,7 @@ class Run:
     integrator: str = "rk4"
 
     @property
-    def rms_tip(self) -> float:
+    def rms_tip_m(self) -> float:
         """RMS of the sampled tip displacement W over the steady part (m)."""
         return self.metrics["rms_tip_m"]
 
@@ -194,13 +195,13 @@ class Run:
             "boringbar_version": __version__,
             "system": self.system.to_dict(),
             "forcing": self.forcing.to_dict(),
-            "omega_rad_s": self.omega,
+            "omega_rad_s": self.omega_rad_s,
             "integrator": self.integrator,
             "delay_interpolation": getattr(self.forcing, "interpolation", None),
-            "dt_s": self.dt,
-            "t0_s": self.t0,
-            "duration_s": self.duration,
-            "steady_start_s": self.steady_start,
+            "dt_s": self.dt_s,
+            "t0_s": self.t0_s,
+            "duration_s": self.duration_s,
+            "steady_start_s": self.steady_start_s,
             "thresholds": self.thresholds,
         }
 
@@ -213,10 +214,10 @@ class Run:
             "preset": sys.preset,
             "readings": list(sys.readings),
             "integrator": self.integrator,
-            "natural_frequency_hz": sys.reference_frequency / (2 * math.pi),
-            "forcing_frequency_hz": self.omega / (2 * math.pi),
-            "ratio": self.omega / sys.reference_frequency,
-            "force_n": getattr(self.forcing, "amplitude", None),
+            "natural_frequency_hz": sys.reference_frequency_rad_s / (2 * math.pi),
+            "forcing_frequency_hz": self.omega_rad_s / (2 * math.pi),
+            "ratio": self.omega_rad_s / sys.reference_frequency_rad_s,
+            "force_n": getattr(self.forcing, "amplitude_n", None),
             "rms_tip_m": m["rms_tip_m"],
             "max_abs_tip_m": m["max_abs_tip_m"],
             "pattern": None if self.pattern is None else self.pattern.name,
@@ -226,11 +227,11 @@ class Run:
             "contact_time_s": m["contact_time_s"],
             "stick_time_s": m["stick_time_s"],
             "energy": self.energy,
-            "dt_s": self.dt,
-            "duration_s": self.duration,
+            "dt_s": self.dt_s,
+            "duration_s": self.duration_s,
             "elapsed_s": self.elapsed_s,
-            "final_time_s": self.final.t,
-            "final_phase_rad": (self.omega * self.final.t) % (2 * math.pi),
+            "final_time_s": self.final.t_s,
+            "final_phase_rad": (self.omega_rad_s * self.final.t_s) % (2 * math.pi),
             **({"cutting": self.cutting} if isinstance(self.forcing, Regenerative) else {}),
         }
 
@@ -240,7 +241,7 @@ class Run:
         m = self.metrics
         f = self.forcing
         return {
-            "depth_m": f.depth,
+            "depth_m": f.depth_m,
             "rpm": f.rpm,
             "chatter": m["first_zero_time_s"] is not None,
             "first_zero_time_s": m["first_zero_time_s"],
@@ -248,8 +249,8 @@ class Run:
             "max_force_n": m["max_force_n"],
             "mean_force_n": m["mean_force_n"],
             "amplitude_m": m["amplitude_m"],
-            "bounded_chatter": bool(m["amplitude_m"] > f.bounded_fraction * f.feed),
-            "bounded_threshold_m": f.bounded_fraction * f.feed,
+            "bounded_chatter": bool(m["amplitude_m"] > f.bounded_fraction * f.feed_m),
+            "bounded_threshold_m": f.bounded_fraction * f.feed_m,
             "static_deflection_m": m["static_deflection_m"],
             "delay_interpolation": f.interpolation,
             "start": f.start,
@@ -261,7 +262,7 @@ class Run:
         rows = [("bar", f"{s['bar']} ({s['preset']} preset)"),
                 ("forcing", f"F0 = {s['force_n']:g} N at Omega/omega_n = {s['ratio']:.4g} "
                             f"({s['forcing_frequency_hz']:.2f} Hz)" if s["force_n"] is not None
-                 else f"cut at {self.forcing.rpm:g} rpm, depth {self.forcing.depth * 1e3:g} mm"),
+                 else f"cut at {self.forcing.rpm:g} rpm, depth {self.forcing.depth_m * 1e3:g} mm"),
                 ("tip RMS (steady part)", f"{s['rms_tip_m'] * 1e3:.4g} mm"),
                 ("max |tip|", f"{s['max_abs_tip_m'] * 1e3:.4g} mm"),
                 ("impact pattern", s["pattern"] or "-"),
@@ -295,20 +296,21 @@ class Run:
         import xarray as xr  # here: a run needs xarray only to be written
         h = self.history
         aux = "y" if self.system.kind in ("ball", "locked") else "absorber_stroke"
+        time = ("time_s",)
         ds = xr.Dataset(
             {
-                "tip_displacement": ("time", h[:, 1], {"units": "m"}),
-                "tip_velocity": ("time", h[:, 2], {"units": "m/s"}),
-                aux: ("time", h[:, 3], {"units": "m"}),
-                f"{aux}_velocity": ("time", h[:, 4], {"units": "m/s"}),
-                "force": ("time", h[:, 5], {"units": "N"}),
+                "tip_displacement_m": (time, h[:, 1], {"units": "m"}),
+                "tip_velocity_m_s": (time, h[:, 2], {"units": "m/s"}),
+                f"{aux}_m": (time, h[:, 3], {"units": "m"}),
+                f"{aux}_velocity_m_s": (time, h[:, 4], {"units": "m/s"}),
+                "force_n": (time, h[:, 5], {"units": "N"}),
             },
-            coords={"time": ("time", h[:, 0], {"units": "s"})},
+            coords={"time_s": (time, h[:, 0], {"units": "s"})},
             attrs={"config": json.dumps(self.config(), default=_plain),
                    "summary": json.dumps(self.summary(), default=_plain)},
         )
         if self.impacts.size:
-            ds["impact_time"] = ("impact", self.impacts[:, 0], {"units": "s"})
+            ds["impact_time_s"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
         return ds
 
@@ -354,9 +356,9 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
     p[L.FORCING] = L.HARMONIC
     p[L.F0] = amplitude
     p[L.OMEGA] = omega
-    p[L.M_:L.M_ + n] = bar.mass
-    p[L.K_:L.K_ + n] = bar.stiffness
-    p[L.C_:L.C_ + n] = bar.damping
+    p[L.M_:L.M_ + n] = bar.mass_kg
+    p[L.K_:L.K_ + n] = bar.stiffness_n_m
+    p[L.C_:L.C_ + n] = bar.damping_n_s_m
     p[L.PSI_L:L.PSI_L + n] = bar.psi_tip
     p[L.PSI_D:L.PSI_D + n] = bar.psi_damper
     p[L.PSI_A:L.PSI_A + n] = bar.psi_absorber
@@ -365,24 +367,24 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
     kind = system.kind
     p[L.CASE] = {"solid": L.SOLID, "ball": L.BALL, "tmd": L.TMD, "locked": L.LOCKED}[kind]
     if isinstance(d, ImpactDamper):
-        m = d.mass
-        meff = 1.0 / (1.0 / m + float(np.sum(bar.psi_damper**2 / bar.mass)))
+        m = d.mass_kg
+        meff = 1.0 / (1.0 / m + float(np.sum(bar.psi_damper**2 / bar.mass_kg)))
         p[L.BALL_MASS] = m
-        p[L.HALF_GAP] = d.gap / 2
+        p[L.HALF_GAP] = d.gap_m / 2
         p[L.RESTITUTION] = d.restitution
-        p[L.FRICTION] = d.friction_force
-        p[L.STATIC_FRICTION] = d.friction_force * d.friction.static_ratio
+        p[L.FRICTION] = d.friction_force_n
+        p[L.STATIC_FRICTION] = d.friction_force_n * d.friction.static_ratio
         p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
         p[L.M_EFF] = meff
-        ref = omega if omega > 0 else bar.natural_frequency
-        p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap / 2
+        ref = omega if omega > 0 else bar.natural_frequency_rad_s
+        p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap_m / 2
         # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
-        p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force * dt / meff
+        p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force_n * dt / meff
         p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
     elif isinstance(d, TunedMassDamper):
-        p[L.TMD_MASS] = d.mass
-        p[L.TMD_K] = d.stiffness
-        p[L.TMD_C] = d.damping
+        p[L.TMD_MASS] = d.mass_kg
+        p[L.TMD_K] = d.stiffness_n_m
+        p[L.TMD_C] = d.damping_n_s_m
     return p
 
 
@@ -391,14 +393,14 @@ def initial_state(system: System, initial: Initial) -> np.ndarray:
     bar = system.bar
     n = bar.n_modes
     x = np.zeros(2 * n + 2)
-    x[0] = initial.tip_displacement / bar.psi_tip[0]
-    x[n] = initial.tip_velocity / bar.psi_tip[0]
+    x[0] = initial.tip_displacement_m / bar.psi_tip[0]
+    x[n] = initial.tip_velocity_m_s / bar.psi_tip[0]
     d = system.damper
     if isinstance(d, ImpactDamper):
-        check_range("initial ball position", initial.ball_position, -d.gap / 2, d.gap / 2,
+        check_range("initial ball_position_m", initial.ball_position_m, -d.gap_m / 2, d.gap_m / 2,
                     unit="m")
-        x[2 * n] = initial.ball_position
-        x[2 * n + 1] = 0.0 if d.locked else initial.ball_velocity
+        x[2 * n] = initial.ball_position_m
+        x[2 * n + 1] = 0.0 if d.locked else initial.ball_velocity_m_s
     elif isinstance(d, TunedMassDamper):
         x[2 * n] = float(bar.psi_absorber @ x[:n])
         x[2 * n + 1] = float(bar.psi_absorber @ x[n:2 * n])
@@ -410,21 +412,21 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     bar = system.bar
     n = bar.n_modes
     u, v = x[:n], x[n:2 * n]
-    e = 0.5 * float(np.sum(bar.mass * v**2) + np.sum(bar.stiffness * u**2))
+    e = 0.5 * float(np.sum(bar.mass_kg * v**2) + np.sum(bar.stiffness_n_m * u**2))
     d = system.damper
     if isinstance(d, ImpactDamper):
         ud = x[2 * n + 1] + float(bar.psi_damper @ v)
-        e += 0.5 * d.mass * ud**2
+        e += 0.5 * d.mass_kg * ud**2
     elif isinstance(d, TunedMassDamper):
         rel = x[2 * n] - float(bar.psi_absorber @ u)
-        e += 0.5 * d.mass * x[2 * n + 1] ** 2 + 0.5 * d.stiffness * rel**2
+        e += 0.5 * d.mass_kg * x[2 * n + 1] ** 2 + 0.5 * d.stiffness_n_m * rel**2
     return e
 
 
 def stick_slip(system: System) -> bool:
     """Whether the ball's friction has a static limit above the sliding one (exact only)."""
     d = system.damper
-    return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force > 0
+    return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force_n > 0
 
 
 def resolve_integrator(integrator: str, system: System, cutting: bool = False) -> str:
@@ -452,15 +454,15 @@ def check_friction_law(system: System, integrator: str) -> None:
                              "use integrator = 'exact' for true stick-slip")
 
 
-def check_step(system: System, omega: float, dt: float, name: str = "dt") -> None:
+def check_step(system: System, omega: float, dt: float, name: str = "dt_s") -> None:
     """The step must resolve the forcing period and the highest retained mode
     (``name``: how the caller calls dt)."""
     check_positive(name, dt, "s")
-    periods = [2 * math.pi / w for w in system.bar.omegas]
+    periods = [2 * math.pi / w for w in system.bar.omegas_rad_s]
     if omega > 0:
         periods.append(2 * math.pi / omega)
     if isinstance(system.damper, TunedMassDamper):
-        periods.append(2 * math.pi * math.sqrt(system.damper.mass / system.damper.stiffness))
+        periods.append(2 * math.pi * math.sqrt(system.damper.mass_kg / system.damper.stiffness_n_m))
     limit = min(periods) / MIN_STEPS_PER_PERIOD
     if dt > limit:
         raise ParameterError(f"{name} = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "
@@ -468,7 +470,7 @@ def check_step(system: System, omega: float, dt: float, name: str = "dt") -> Non
                              "of the highest retained mode)")
 
 
-def check_steps(duration: float, dt: float, names: tuple[str, str] = ("duration", "dt")) -> int:
+def check_steps(duration: float, dt: float, names: tuple[str, str] = ("duration_s", "dt_s")) -> int:
     """round(duration / dt), the run's number of steps: at least 1 and at most
     :data:`MAX_STEPS`, else ParameterError naming both (``names``: how the caller
     calls them, e.g. the CLI's options)."""
@@ -488,7 +490,7 @@ def check_steps(duration: float, dt: float, names: tuple[str, str] = ("duration"
 
 
 def check_steady(duration: float, steady_fraction: float, period: float,
-                 name: str = "duration") -> None:
+                 name: str = "duration_s") -> None:
     """The steady part of a harmonic run, its last ``steady_fraction`` of ``duration``
     (s), must hold one forcing ``period`` (s) at least: a shorter one has no steady
     RMS or pattern to report. ``name``: the duration as the caller takes it.
@@ -513,7 +515,7 @@ def check_history(n_steps: int, record_every: int, name: str = "record_every") -
 
 
 def check_delay(rpm: float, revolutions: int, dt: float, name: str = "rpm") -> int:
-    """The rows of a cut's delay history, ceil(revolutions 60 / rpm / dt) + 3: the
+    """The rows of a cut's delay history, ceil(revolutions 60 / rpm / dt_s) + 3: the
     spindle period must hold 4 steps, and the rows be at most
     :data:`MAX_HISTORY_ROWS`, else ParameterError naming ``name`` (the speed)."""
     tau = 60.0 / check_positive(name, rpm, "rpm")
@@ -571,7 +573,8 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     n_steps = check_steps(duration, dt)
     record_every = (max(1, n_steps // HISTORY_ROWS) if record_every is None
                     else check_int("record_every", record_every, 0, MAX_STEPS))
-    omega = 2 * math.pi / forcing.tau if cutting else forcing.omega(system.reference_frequency)
+    omega = (2 * math.pi / forcing.tau_s if cutting
+             else forcing.omega(system.reference_frequency_rad_s))
     check_step(system, omega, dt)
     if cutting:
         check_delay(forcing.rpm, forcing.revolutions, dt)
@@ -583,7 +586,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
         if x.shape != (2 * system.bar.n_modes + 2,):
             raise ParameterError(f"initial state has {x.size} entries; this system needs "
                                  f"{2 * system.bar.n_modes + 2}")
-        t0 = float(initial.t)
+        t0 = float(initial.t_s)
     else:
         x = initial_state(system, initial or Initial())
         t0 = 0.0
@@ -591,7 +594,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     if cutting:
         # static deflection under the mean force, mode by mode (absorber relaxed)
         bar = system.bar
-        u_static = bar.psi_tip * forcing.mean_force / bar.stiffness
+        u_static = bar.psi_tip * forcing.mean_force_n / bar.stiffness_n_m
         w_static = float(bar.psi_tip @ u_static)
         if forcing.start == "static" and not isinstance(initial, State):
             # the static deflection plus whatever initial motion was asked for
@@ -605,17 +608,17 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     if cutting:
         p = pack(system, 0.0, 0.0, dt)
         p[L.FORCING] = L.REGENERATIVE
-        p[L.KR_B] = forcing.kr * forcing.depth
-        p[L.FEED] = forcing.feed
-        p[L.TAU] = forcing.tau
+        p[L.KR_B] = forcing.kr_pa * forcing.depth_m
+        p[L.FEED] = forcing.feed_m
+        p[L.TAU] = forcing.tau_s
         p[L.N_REV] = forcing.revolutions
         p[L.INTERP] = 1.0 if forcing.interpolation == "cubic" else 0.0
         p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
         p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
         buf = np.zeros((check_delay(forcing.rpm, forcing.revolutions, dt), 2))
-        period = 2 * math.pi / system.reference_frequency
+        period = 2 * math.pi / system.reference_frequency_rad_s
     else:
-        p = pack(system, omega, forcing.amplitude, dt)
+        p = pack(system, omega, forcing.amplitude_n, dt)
         buf = None
         period = 2 * math.pi / omega if omega > 0 else duration
     n_periods = duration / period
@@ -624,7 +627,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
         p[L.STROBE_PERIOD] = period
         p[L.STROBE_T0] = 0.0
     if strobe and n_periods + 2 > MAX_EVENT_ROWS:
-        raise ParameterError(f"duration = {duration:g} s is {n_periods:.3g} periods of "
+        raise ParameterError(f"duration_s = {duration:g} s is {n_periods:.3g} periods of "
                              f"{period:g} s: at most {MAX_EVENT_ROWS:.0e} Poincare samples "
                              "(one a period) are kept; shorten the run")
     cap_imp = int(min(MAX_EVENT_ROWS, max(1000, 40 * n_periods)))
@@ -730,8 +733,9 @@ def _result(su: _Setup, elapsed: float) -> Run:
         "stick_min_duration_s": float(p[L.STICK_MIN]),
     }
     return Run(
-        system=system, forcing=forcing, omega=omega, dt=dt, t0=t0, duration=n_steps * dt,
-        steady_start=t_steady, metrics=metrics, impacts=imp[:min(n_imp, cap_imp)].copy(),
+        system=system, forcing=forcing, omega_rad_s=omega, dt_s=dt, t0_s=t0,
+        duration_s=n_steps * dt, steady_start_s=t_steady, metrics=metrics,
+        impacts=imp[:min(n_imp, cap_imp)].copy(),
         sticks=stick[:min(n_stk, cap_imp)].copy(),
         strobe=stb[:int(met[L.N_STROBE])].copy(),
         history=rec[:int(met[L.N_REC])].copy() if record_every else None,
@@ -740,14 +744,14 @@ def _result(su: _Setup, elapsed: float) -> Run:
     )
 
 
-def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: float = 2.0,
-             dt: float = 1e-6,
+def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: float = 2.0,
+             dt_s: float = 1e-6,
              initial: Initial | State | None = None, record_every: int | None = None,
              steady_fraction: float = STEADY_FRACTION, strobe: bool = False,
              integrator: str = "auto") -> Run:
     """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
 
-    ``duration`` (s) and ``dt`` (s) as published by default (2 s, 1e-6 s);
+    ``duration_s`` (s) and ``dt_s`` (s) as published by default (2 s, 1e-6 s);
     RMS and patterns use the last ``steady_fraction`` of the record.
     ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
     to continue it (time, hence forcing phase, runs on).  ``record_every`` N
@@ -756,9 +760,9 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
     Poincare samples at Omega t = 0 mod 2 pi.
 
     Limits (a ParameterError names the parameter, its value and the maximum): every
-    number finite; at most :data:`MAX_STEPS` (1e10) steps duration / dt; at most
+    number finite; at most :data:`MAX_STEPS` (1e10) steps duration_s / dt_s; at most
     :data:`MAX_HISTORY_ROWS` (1e7) history rows (steps // record_every) and as many
-    rows of a cut's delay history (revolutions 60 / rpm / dt); at most
+    rows of a cut's delay history (revolutions 60 / rpm / dt_s); at most
     :data:`MAX_EVENT_ROWS` (1e7) Poincare samples.  Impacts and stick intervals beyond
     1e7 rows are counted in the metrics but not kept (``impacts_truncated``).
 
@@ -766,21 +770,21 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration: floa
     harmonic forcing, RK4 under the paper preset and in cuts), ``"rk4"`` (the
     published scheme, docs/model.md, section 5) or ``"exact"`` (event-driven, exact
     between events: the compiled core, `core/exact/`;
-    under harmonic forcing ``dt`` is then only the step of the recorded history
+    under harmonic forcing ``dt_s`` is then only the step of the recorded history
     and of the duration and steady-window rounding, and the steady RMS is the
     exact integral over the window; in a cut the delayed surface comes from a
-    history of step H = tau / ceil(tau / dt), interpolated as
+    history of step H = tau / ceil(tau / dt_s), interpolated as
     ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
     the first zero of the force is located in time).  True stick-slip (a static friction limit,
     ``Friction(static_ratio > 1)``) needs ``"exact"``.
     """
-    su = _setup(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
+    su = _setup(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction, strobe,
                 integrator)
     return _result(su, _run_kernel(su))
 
 
-def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 2.0,
-                        dt: float = 1e-6, initial: Initial | State | None = None,
+def simulate_stage_loop(system: System, forcing: Harmonic, *, duration_s: float = 2.0,
+                        dt_s: float = 1e-6, initial: Initial | State | None = None,
                         record_every: int | None = None, steady_fraction: float = STEADY_FRACTION,
                         strobe: bool = False) -> Run:
     """:func:`simulate` (rk4) with every step through the RK4 stage loop.
@@ -791,13 +795,13 @@ def simulate_stage_loop(system: System, forcing: Harmonic, *, duration: float = 
     of the map in tests/test_kernel.py and the baseline of
     benchmarks/bench_kernel.py.
     """
-    su = _setup(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
+    su = _setup(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction, strobe,
                 "rk4")
     su.p[L.STAGE_LOOP] = 1.0
     return _result(su, _run_kernel(su))
 
 
-def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
+def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
                    steady_fraction: float = STEADY_FRACTION, strobe: bool = False) -> list[Run]:
     """Several harmonic runs of the published RK4 scheme, in one call of the core.
 
@@ -806,7 +810,7 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
     bar kind and the number of retained modes, whose forcings are
     :class:`Harmonic` (each its own amplitude and frequency) and whose initial
     conditions start at the same time (``Initial`` or ``None``: t = 0; a
-    ``State``: its t).  ``duration``, ``dt``, ``steady_fraction`` and
+    ``State``: its t_s).  ``duration_s``, ``dt_s``, ``steady_fraction`` and
     ``strobe`` are the batch's, as in :func:`simulate`.
 
     The runs go through one call of :func:`boringbar.kernels.run_rk4_batch`, which
@@ -825,7 +829,7 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
         if not isinstance(forcing, Harmonic):
             raise ParameterError(f"forcing = {forcing!r}: simulate_batch takes harmonic forcing "
                                  "only (regenerative cuts: simulate)")
-        sus.append(_setup(system, forcing, duration, dt, initial, 0, steady_fraction, strobe,
+        sus.append(_setup(system, forcing, duration_s, dt_s, initial, 0, steady_fraction, strobe,
                           "rk4"))
     first = sus[0]
     for su in sus[1:]:
@@ -847,7 +851,8 @@ def simulate_batch(runs, *, duration: float = 2.0, dt: float = 1e-6,
     stick = np.zeros((nb, max(len(su.stick) for su in sus), 2))
     stb = np.zeros((nb, max(len(su.stb) for su in sus), 5))
     tic = time.perf_counter()
-    run_rk4_batch(P, X, first.t0, dt, first.n_steps, first.steady_steps, imp, stick, stb, met)
+    run_rk4_batch(P, X, first.t0, first.dt, first.n_steps, first.steady_steps, imp, stick, stb,
+                  met)
     elapsed = time.perf_counter() - tic
     for r, su in enumerate(sus):
         su.x[:] = X[r]

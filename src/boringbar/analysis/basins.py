@@ -1,8 +1,8 @@
 """Basins of attraction over a grid of initial conditions (docs/model.md, section 6).
 
 Every cell of an initial tip displacement x initial tip velocity grid is an
-independent run of the kernel (the ball starts at ``ball_position`` with
-relative velocity ``ball_velocity``, by default at rest and centred, as
+independent run of the kernel (the ball starts at ``ball_position_m`` with
+relative velocity ``ball_velocity_m_s``, by default at rest and centred, as
 published).  With the published RK4 scheme the cells advance in lock-step
 batches of ``BATCH`` consecutive cells in grid order
 (:func:`~boringbar.simulate.simulate_batch`, whose runs equal single runs bit
@@ -148,7 +148,7 @@ def basin_grid(name: str, spec) -> np.ndarray:
 
 
 def check_cells(n_displacement: int, n_velocity: int,
-                names: tuple[str, str] = ("displacement", "velocity")) -> int:
+                names: tuple[str, str] = ("displacement_m", "velocity_m_s")) -> int:
     """The cells of a basin grid, n_displacement x n_velocity: at most
     :data:`MAX_BASIN_CELLS`, else ParameterError naming both axes."""
     cells = int(n_displacement) * int(n_velocity)
@@ -251,10 +251,10 @@ def signature(strobe: np.ndarray, scale: float, omega: float,
 
 
 def _cell(run, dt: float, tol: BasinTolerance) -> _Cell:
-    keep = run.strobe[run.strobe[:, 0] >= run.steady_start - 0.5 * dt, 1:3]
-    rms = run.rms_tip
+    keep = run.strobe[run.strobe[:, 0] >= run.steady_start_s - 0.5 * dt, 1:3]
+    rms = run.rms_tip_m
     scale = max(math.sqrt(2.0) * rms, tol.floor) if math.isfinite(rms) else tol.floor
-    k, centres = signature(keep, scale, run.omega, tol.period)
+    k, centres = signature(keep, scale, run.omega_rad_s, tol.period)
     p = run.pattern
     return _Cell(rms=rms, scale=scale, pattern="" if p is None else p.name,
                  impacts_per_cycle=math.nan if p is None else p.impacts_per_cycle,
@@ -344,7 +344,7 @@ def compute(context: dict, point: tuple[int, list[int]]) -> list[_Cell]:
     initials = [context["initials"][j] for j in point[1]]
     if context["batched"][point[0]]:
         runs = simulate_batch([(op.case.system, op.forcing, ini) for ini in initials],
-                              duration=integ.duration_s, dt=integ.dt_s,
+                              duration_s=integ.duration_s, dt_s=integ.dt_s,
                               steady_fraction=integ.steady_fraction, strobe=True)
     else:
         runs = [simulate(op.case.system, op.forcing, **{**integ.kwargs(), "initial": ini},
@@ -364,9 +364,9 @@ def _dataset(system: System, forcing: Harmonic, cells: list[_Cell], context: dic
     """The Dataset of one operating point's cells (grid order), grouped."""
     o = context["options"]
     w0, v0, initials = context["w0"], context["v0"], context["initials"]
-    label, leaders = group(cells, forcing.omega(system.reference_frequency), o.tolerance)
+    label, leaders = group(cells, forcing.omega(system.reference_frequency_rad_s), o.tolerance)
     shape = (len(w0), len(v0))
-    grid = ("displacement", "velocity")
+    grid = ("displacement_m", "velocity_m_s")
     sig = _padded([c.centres for c in cells], MAX_K).reshape(*shape, MAX_K, 2)
     reps = [cells[j] for j in leaders]
     poincare = _padded([c.strobe for c in reps], max(len(c.strobe) for c in reps))
@@ -388,19 +388,20 @@ def _dataset(system: System, forcing: Harmonic, cells: list[_Cell], context: dic
         "attractor_rms_tip_m": ("attractor_id", np.array([c.rms for c in reps]),
                                 {"units": "m"}),
         "representative_tip_displacement_m": (
-            "attractor_id", np.array([initials[j].tip_displacement for j in leaders]),
+            "attractor_id", np.array([initials[j].tip_displacement_m for j in leaders]),
             {"units": "m"}),
         "representative_tip_velocity_m_s": (
-            "attractor_id", np.array([initials[j].tip_velocity for j in leaders]),
+            "attractor_id", np.array([initials[j].tip_velocity_m_s for j in leaders]),
             {"units": "m/s"}),
         "poincare_tip_m": (("attractor_id", "sample"), poincare[..., 0], {"units": "m"}),
         "poincare_tip_velocity_m_s": (("attractor_id", "sample"), poincare[..., 1],
                                       {"units": "m/s"}),
     }
     coords = {
-        "displacement": ("displacement", w0, {"units": "m",
+        "displacement_m": ("displacement_m", w0, {"units": "m",
                                               "long_name": "initial tip displacement"}),
-        "velocity": ("velocity", v0, {"units": "m/s", "long_name": "initial tip velocity"}),
+        "velocity_m_s": ("velocity_m_s", v0, {"units": "m/s",
+                                              "long_name": "initial tip velocity"}),
         "attractor_id": np.arange(len(leaders)),
     }
     return xr.Dataset(data, coords=coords, attrs={
@@ -430,9 +431,9 @@ def _stack(parts: list, context: dict):
     ds = ds.assign_coords({
         "case": [op.label for op in ops],
         "bar": ("case", [op.case.bar for op in ops]),
-        "gap": ("case", np.array([op.case.gap for op in ops]), {"units": "m"}),
+        "gap_m": ("case", np.array([op.case.gap_m for op in ops]), {"units": "m"}),
         "friction": ("case", [op.case.friction for op in ops]),
-        "force": ("case", np.array([op.forcing.amplitude for op in ops]), {"units": "N"}),
+        "force_n": ("case", np.array([op.forcing.amplitude_n for op in ops]), {"units": "N"}),
         "ratio": ("case", np.array([op.forcing.ratio for op in ops])),
     })
     ds.attrs = {k: v for k, v in parts[0].attrs.items() if k not in ("system", "forcing")}
@@ -476,7 +477,7 @@ def basins(system: System, options: BasinOptions | None = None, *,
     finish.  The results are the same, bit for bit, whatever the batch, the
     executor and its workers.
 
-    Returns an xarray Dataset with, per cell (dims displacement, velocity):
+    Returns an xarray Dataset with, per cell (dims displacement_m, velocity_m_s):
     ``attractor`` id, ``rms_tip_m``, ``pattern``, ``period`` (0: non-periodic),
     ``impacts_per_cycle`` and the final Poincare signature ``signature_tip_m``,
     ``signature_tip_velocity_m_s`` (dim point: the k centres, NaN beyond k; for a
@@ -520,13 +521,13 @@ def with_poincare(ds, system: System, forcing: Harmonic, initial: Initial,
                                         {"units": "m/s", "long_name": "W' at Omega t = 0 mod "
                                                                       "2 pi, from "
                                                                       "poincare_from"}))
-    poincare = {"tip_displacement_m": float(initial.tip_displacement),
-                "tip_velocity_m_s": float(initial.tip_velocity),
-                "ball_position_m": float(initial.ball_position),
-                "ball_velocity_m_s": float(initial.ball_velocity),
+    poincare = {"tip_displacement_m": float(initial.tip_displacement_m),
+                "tip_velocity_m_s": float(initial.tip_velocity_m_s),
+                "ball_position_m": float(initial.ball_position_m),
+                "ball_velocity_m_s": float(initial.ball_velocity_m_s),
                 "verdict": verdict["verdict"], "period": int(verdict["k"]),
                 "distinct": int(verdict["distinct"]), "n_samples": len(pm.time),
-                "rms_tip_m": float(run.rms_tip),
+                "rms_tip_m": float(run.rms_tip_m),
                 "pattern": "" if run.pattern is None else run.pattern.name}
     ds.attrs["poincare_from"] = json.dumps(poincare)
     return ds
@@ -561,11 +562,12 @@ def summary(ds) -> dict:
     return {
         "preset": ds.attrs.get("preset"),
         "forcing": json.loads(ds.attrs["forcing"]),
-        "grid": {"displacement_m": [float(ds["displacement"].values[0]),
-                                    float(ds["displacement"].values[-1]),
-                                    int(ds.sizes["displacement"])],
-                 "velocity_m_s": [float(ds["velocity"].values[0]),
-                                  float(ds["velocity"].values[-1]), int(ds.sizes["velocity"])]},
+        "grid": {"displacement_m": [float(ds["displacement_m"].values[0]),
+                                    float(ds["displacement_m"].values[-1]),
+                                    int(ds.sizes["displacement_m"])],
+                 "velocity_m_s": [float(ds["velocity_m_s"].values[0]),
+                                  float(ds["velocity_m_s"].values[-1]),
+                                  int(ds.sizes["velocity_m_s"])]},
         "duration_s": ds.attrs.get("duration_s"),
         "workers": ds.attrs.get("workers"),
         "wall_time_s": ds.attrs.get("wall_time_s"),

@@ -64,7 +64,7 @@ def continued_state(state: State, omega_old: float, omega_new: float) -> State:
     (time runs on), else one at t' = (omega_old t mod 2 pi) / omega_new."""
     if omega_new == omega_old:
         return state
-    phase = math.fmod(omega_old * state.t, 2 * math.pi)
+    phase = math.fmod(omega_old * state.t_s, 2 * math.pi)
     return State(np.array(state.x, dtype=float), phase / omega_new)
 
 
@@ -81,14 +81,14 @@ def _start(
     d = system.damper
     if isinstance(d, ImpactDamper):
         x = np.array(state.x, dtype=float)
-        x[n - 2] = min(max(x[n - 2], -d.gap / 2), d.gap / 2)
-        state = State(x, state.t)
+        x[n - 2] = min(max(x[n - 2], -d.gap_m / 2), d.gap_m / 2)
+        state = State(x, state.t_s)
     return state, False
 
 
 def _point(system, parameter: str, value: float, base: Harmonic) -> tuple[System, Harmonic]:
     if parameter == "force":
-        return system, replace(base, amplitude=value)
+        return system, replace(base, amplitude_n=value)
     if parameter == "ratio":
         return system, replace(base, ratio=value, frequency_hz=None)
     made = system(value)
@@ -114,7 +114,7 @@ class BifurcationOptions:
 
     parameter: str = "force"
     values: tuple[float, ...] = PUBLISHED_FORCES
-    force_n: float = DEFAULT_FORCING.amplitude
+    force_n: float = DEFAULT_FORCING.amplitude_n
     ratio: float = DEFAULT_FORCING.ratio
     backward: bool = True
     tol: float = 1e-3
@@ -193,7 +193,7 @@ def compute(context: dict, i: int) -> dict:
         order = range(len(v)) if direction == "forward" else range(len(v) - 1, -1, -1)
         for j in order:
             sys_j, forcing = _point(system, o.parameter, v[j], o.base_forcing)
-            omega = forcing.omega(sys_j.reference_frequency)
+            omega = forcing.omega(sys_j.reference_frequency_rad_s)
             start, restarted = _start(previous, integ.initial, sys_j, omega, omega_old)
             run = simulate(sys_j, forcing, **{**integ.kwargs(), "initial": start},
                            strobe=True)
@@ -215,7 +215,7 @@ def bifurcation(system: System | Callable[[float], System],
 
     ``system``: a System for "force" (F0, N) or "ratio" (Omega/omega_n); for any
     other parameter a factory ``value -> System`` (e.g. ``lambda g:
-    make_system("ball", gap=g)``).  ``options``: :class:`BifurcationOptions`
+    make_system("ball", gap_m=g)``).  ``options``: :class:`BifurcationOptions`
     (default: F0 5..50 N at ratio 1, forward and backward).  ``integration``:
     each run's duration, step, integrator and steady window
     (``steady_fraction``: the Poincare samples, the RMS and the pattern are of the
@@ -227,12 +227,12 @@ def bifurcation(system: System | Callable[[float], System],
     (one point: the whole continuation).
 
     Returns an xarray Dataset, dims (direction, value, sample): the Poincare
-    samples ``tip_displacement`` W (m) and ``tip_velocity`` W' (m/s), NaN-padded;
+    samples ``tip_displacement_m`` W (m) and ``tip_velocity_m_s`` W' (m/s), NaN-padded;
     per (direction, value): ``verdict``, ``period`` (k, 0 if none), ``distinct``,
     ``zero_one_K`` and ``zero_one_signal`` (the coordinate it ran on),
     ``n_samples``, ``tolerance`` (relative, jitter included), ``rms_tip_m``,
     ``pattern``, ``impacts_per_cycle``, ``restarted``, ``start_time_s``,
-    ``end_time_s``, ``omega`` (rad/s); the configuration (every value's System
+    ``end_time_s``, ``omega_rad_s`` (rad/s); the configuration (every value's System
     included) as JSON in the attributes.
     """
     options = options or BifurcationOptions()
@@ -255,7 +255,7 @@ _FIELDS = {
     "pattern": (str, None),
     "impacts_per_cycle": (float, "1/period"),
     "restarted": (bool, None),
-    "omega": (float, "rad/s"),
+    "omega_rad_s": (float, "rad/s"),
     "start_time_s": (float, "s"),
     "end_time_s": (float, "s"),
 }
@@ -274,12 +274,12 @@ def _record(run, steady_fraction: float, tol: float, max_k: int) -> dict:
         "zero_one_K": verdict["K"],
         "zero_one_signal": verdict["signal"] if np.isfinite(verdict["K"]) else "",
         "tolerance": tol + pm.jitter,
-        "rms_tip_m": run.rms_tip,
+        "rms_tip_m": run.rms_tip_m,
         "pattern": "" if run.pattern is None else run.pattern.name,
         "impacts_per_cycle": math.nan if run.pattern is None else run.pattern.impacts_per_cycle,
-        "omega": run.omega,
-        "start_time_s": run.t0,
-        "end_time_s": run.final.t,
+        "omega_rad_s": run.omega_rad_s,
+        "start_time_s": run.t0_s,
+        "end_time_s": run.final.t_s,
     }
 
 
@@ -306,9 +306,9 @@ def _data(arrays: list[dict], lead: tuple) -> dict:
     dims2 = lead + ("direction", "value")
     dims3 = dims2 + ("sample",)
     data = {
-        "tip_displacement": (dims3, samples[..., 0],
+        "tip_displacement_m": (dims3, samples[..., 0],
                              {"units": "m", "long_name": "W at Omega t = 0 mod 2 pi"}),
-        "tip_velocity": (dims3, samples[..., 1],
+        "tip_velocity_m_s": (dims3, samples[..., 1],
                          {"units": "m/s", "long_name": "W' at Omega t = 0 mod 2 pi"}),
     }
     for k, (_, u) in _FIELDS.items():
@@ -340,7 +340,7 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
         extra = {}
     else:
         coords.update({"case": [c.label for c in cases], "bar": ("case", [c.bar for c in cases]),
-                       "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+                       "gap_m": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
                        "friction": ("case", [c.friction for c in cases])})
         extra = {"systems": json.dumps({c.label: r["systems"]
                                         for c, r in zip(cases, results, strict=True)})}
@@ -359,7 +359,7 @@ def _initial_dict(initial) -> dict | None:
     if initial is None:
         return None
     if isinstance(initial, State):
-        return {"x": np.asarray(initial.x, dtype=float).tolist(), "t": float(initial.t)}
+        return {"x": np.asarray(initial.x, dtype=float).tolist(), "t": float(initial.t_s)}
     return dict(initial.__dict__)
 
 
@@ -375,7 +375,8 @@ def _side(ds, direction: str, i: int, scale: np.ndarray) -> dict:
     row = ds.sel(direction=direction).isel(value=i)
     n = int(row["n_samples"])
     k = int(row["period"])
-    pts = np.column_stack([row["tip_displacement"].values[:n], row["tip_velocity"].values[:n]])
+    pts = np.column_stack([row["tip_displacement_m"].values[:n],
+                           row["tip_velocity_m_s"].values[:n]])
     periodic = k > 0 and (
         str(row["verdict"].values).startswith("period-")
         or str(row["verdict"].values) == "transient"
@@ -420,7 +421,7 @@ def point_differs(ds, i: int, tol: float = 0.02) -> bool:
     """
     rms = ds["rms_tip_m"].isel(value=i).values
     amp = math.sqrt(2) * max(float(np.nanmax(rms)), 1e-300)
-    omega = float(ds["omega"].sel(direction="forward").values[i])
+    omega = float(ds["omega_rad_s"].sel(direction="forward").values[i])
     scale = np.array([amp, omega * amp])
     f, b = (_side(ds, d, i, scale) for d in DIRECTIONS)
     thr = max(tol, 2 * f["tolerance"], 2 * b["tolerance"])
@@ -491,7 +492,7 @@ def summary(ds, ranges=None) -> dict:
 
     def samples(direction: str) -> list[list[float]]:
         row = ds.sel(direction=direction)
-        return [w[:n].tolist() for w, n in zip(row["tip_displacement"].values,
+        return [w[:n].tolist() for w, n in zip(row["tip_displacement_m"].values,
                                                row["n_samples"].values, strict=True)]
 
     return {

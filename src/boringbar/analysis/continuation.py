@@ -137,8 +137,8 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
             raise ParameterError("start = 'masri-caughey' needs a one-mode ball damper "
                                  "without friction")
         orbits = [o_ for o_ in two_impact_orbit(
-            bar.mass[0], bar.stiffness[0], bar.damping[0], bar.psi_tip[0],
-            bar.psi_damper[0], ball.mass, ball.gap, ball.restitution, o.force_n, fl.omega)
+            bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
+            bar.psi_damper[0], ball.mass_kg, ball.gap_m, ball.restitution, o.force_n, fl.omega)
             if o_.admissible]
         if not orbits:
             raise ParameterError(f"no admissible symmetric two-impact orbit at force_n = "
@@ -150,7 +150,7 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
                          float(orb.relative_displacement(0.0)), dy0])
     forcing = Harmonic(o.force_n, ratio=o.ratio)
     dt = fl.period / math.ceil(fl.period / 1e-6)  # whole periods: the end is at phase 0
-    run = simulate(system, forcing, duration=o.settle_periods * fl.period, dt=dt,
+    run = simulate(system, forcing, duration_s=o.settle_periods * fl.period, dt_s=dt,
                    integrator="exact", record_every=0)
     return run.final.x[:fl.N]
 
@@ -189,7 +189,7 @@ def system_at(system: System, o: ContinuationOptions, value: float) -> tuple:
         return system, Harmonic(o.force_n, ratio=value)
     d = system.damper
     if name == "gap-mm":
-        d = dataclasses.replace(d, gap=value * 1e-3)
+        d = dataclasses.replace(d, gap_m=value * 1e-3)
     elif name == "restitution":
         d = dataclasses.replace(d, restitution=value)
     elif name == "friction-force-n":
@@ -198,8 +198,8 @@ def system_at(system: System, o: ContinuationOptions, value: float) -> tuple:
         d = dataclasses.replace(d, friction=Friction("force", value, f.reaction, ratio))
     elif name == "ball-mass-g":
         f = d.friction
-        d = dataclasses.replace(d, mass=value * 1e-3, friction=Friction(
-            "force", d.friction_force, f.reaction, f.static_ratio) if f.kind != "none" else f)
+        d = dataclasses.replace(d, mass_kg=value * 1e-3, friction=Friction(
+            "force", d.friction_force_n, f.reaction, f.static_ratio) if f.kind != "none" else f)
     return dataclasses.replace(system, damper=d), forcing
 
 
@@ -364,7 +364,7 @@ def continuation(system: System, forcing: Harmonic | None = None, *,
     if forcing is not None:
         if forcing.ratio is None:
             raise ParameterError("forcing: give the frequency as ratio for continuation")
-        options = ContinuationOptions(**{**asdict(options), "force_n": forcing.amplitude,
+        options = ContinuationOptions(**{**asdict(options), "force_n": forcing.amplitude_n,
                                          "ratio": forcing.ratio})
     p = plan(system, options)
     results, wall = run_plan(sys.modules[__name__], p, execution)

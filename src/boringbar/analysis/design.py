@@ -36,7 +36,7 @@ from boringbar.analysis.design_options import DesignOptions, sampled_system, unc
 from boringbar.execute import Execution, run_points
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system, published_system_spec
-from boringbar.model.system_file import SystemSpec, parse_system
+from boringbar.model.system_file import SystemSpec, cavity_moved, parse_system
 from boringbar.reference.stability import system_receptance
 from boringbar.simulate import Initial
 from boringbar.version import __version__
@@ -63,12 +63,12 @@ def candidate_system(spec: SystemSpec, options: DesignOptions, values: dict) -> 
         data["ball"]["diameter_mm"] = float(values["ball_diameter_mm"])
         data["ball"].pop("mass_g", None)
     if "cavity_position_mm" in values:
-        data = _cavity_moved(data, float(values["cavity_position_mm"]))
+        data = cavity_moved(data, float(values["cavity_position_mm"]))
     if "ball_diameter_mm" in values or "cavity_position_mm" in values:
         spec = parse_system(data, f"{spec.source} (design)")
     kw = {}
     if "gap_mm" in values:
-        kw["gap"] = float(values["gap_mm"]) * 1e-3
+        kw["gap_m"] = float(values["gap_mm"]) * 1e-3
     if "ball_material" in values:
         kw["ball"] = values["ball_material"]
     if "restitution" in values:
@@ -83,28 +83,13 @@ def _tmd(system: System, values: dict) -> TunedMassDamper:
     """The absorber of the TMD variables: mass m, frequency ratio f = omega_a/omega_n,
     damping ratio zeta_a = c / (2 m omega_a) (the absorber's own)."""
     d = system.damper
-    m = float(values.get("tmd_mass_kg", d.mass))
-    wn = system.bar.natural_frequency
-    f = float(values.get("tmd_frequency_ratio", math.sqrt(d.stiffness / d.mass) / wn))
+    m = float(values.get("tmd_mass_kg", d.mass_kg))
+    wn = system.bar.natural_frequency_rad_s
+    f = float(values.get("tmd_frequency_ratio", math.sqrt(d.stiffness_n_m / d.mass_kg) / wn))
     wa = f * wn
-    zeta = float(values.get("tmd_damping_ratio", d.damping / (2 * d.mass * math.sqrt(
-        d.stiffness / d.mass))))
-    return TunedMassDamper(m, m * wa**2, 2 * zeta * m * wa, d.position, "design")
-
-
-def _cavity_moved(data: dict, position_mm: float) -> dict:
-    """The system description with the cavity at ``position_mm``; neighbouring sections
-    of one diameter and bore are merged first, so the cavity may move along them."""
-    merged = []
-    for s in data["bar"]["sections"]:
-        if merged and (merged[-1]["diameter_mm"], merged[-1]["bore_mm"]) == (
-                s["diameter_mm"], s["bore_mm"]):
-            merged[-1] = dict(merged[-1], end_mm=s["end_mm"])
-        else:
-            merged.append(dict(s))
-    data["bar"]["sections"] = merged
-    data["cavity"]["position_mm"] = position_mm
-    return data
+    zeta = float(values.get("tmd_damping_ratio", d.damping_n_s_m / (2 * d.mass_kg * math.sqrt(
+        d.stiffness_n_m / d.mass_kg))))
+    return TunedMassDamper(m, m * wa**2, 2 * zeta * m * wa, d.position_m, "design")
 
 
 # --- one candidate -------------------------------------------------------------------
@@ -244,7 +229,7 @@ def _published_candidate(spec, options, samples, execution) -> Candidate:
     values = {}
     for v in options.variables:
         if v.name == "gap_mm":
-            values[v.name] = system.damper.gap * 1e3
+            values[v.name] = system.damper.gap_m * 1e3
         elif v.name == "ball_material":
             values[v.name] = system.damper.material
     return evaluate(spec, options, values, samples, execution)
@@ -334,8 +319,9 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
                execution: Execution | None = None) -> dict:
     """The best design beside the file's own and the bare bar, at the nominal values:
     tip RMS (m) over ``n`` ratios across the band at the first force (a ball
-    damper), or |G| (m/N) over 0.8-1.2 x f1 (a TMD). Returns x, its label, and
-    a curve per bar."""
+    damper), or |G| (m/N) over 0.8-1.2 x f1 (a TMD). Returns ``x`` (Omega/omega_n),
+    ``quantity`` ("rms_tip_m" or "receptance_m_n"), ``force_n`` (None for |G|), ``bar``
+    (the damper's kind) and ``curves``, one a bar."""
     bars = {"best design": candidate_system(spec, options, best),
             "file's design": make_system(options.bar, options.preset, spec=spec),
             "bare bar": make_system("solid", options.preset, spec=spec)}
@@ -346,13 +332,14 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
         tasks = [(s, tuple(x), (force,), Initial(), options.duration_s, options.integrator)
                  for s in bars.values()]
         y = np.array(run_points(rms_runs, tasks, execution=execution))
-        return {"x": x, "xlabel": "Omega / omega_n", "ylabel": f"tip RMS (m), F0 = {force:g} N",
+        return {"x": x, "quantity": "rms_tip_m", "force_n": force, "bar": options.bar,
                 "curves": dict(zip(bars, y, strict=True))}
-    wn = bars["bare bar"].bar.natural_frequency
+    wn = bars["bare bar"].bar.natural_frequency_rad_s
     w = np.linspace(0.8 * wn, 1.2 * wn, 801)
     curves = {k: np.abs(system_receptance(s, w))
               for k, s in bars.items()}
-    return {"x": w / wn, "xlabel": "omega / omega_n", "ylabel": "|G| (m/N)", "curves": curves}
+    return {"x": w / wn, "quantity": "receptance_m_n", "force_n": None, "bar": options.bar,
+            "curves": curves}
 
 
 def summary_line(s: dict) -> str:

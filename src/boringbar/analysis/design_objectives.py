@@ -32,15 +32,15 @@ CUT_INTEGRATOR = "rk4"
 def rms_runs(task) -> list[float]:
     """The tip RMS of one system over forces x ratios."""
     system, ratios, forces, initial, duration, integrator = task
-    return [simulate(system, Harmonic(f, r), duration=duration, initial=initial,
-                     integrator=integrator, record_every=0).rms_tip
+    return [simulate(system, Harmonic(f, r), duration_s=duration, initial=initial,
+                     integrator=integrator, record_every=0).rms_tip_m
             for f in forces for r in ratios]
 
 
 def _cut(task) -> tuple[float, bool]:
     """(steady amplitude m, chatter) of one cut."""
     system, rpm, depth, duration = task
-    c = simulate(system, Regenerative(depth=depth, rpm=rpm), duration=duration,
+    c = simulate(system, Regenerative(depth_m=depth, rpm=rpm), duration_s=duration,
                  integrator=CUT_INTEGRATOR, record_every=0).cutting
     return float(c["amplitude_m"]), bool(c["chatter"])
 
@@ -56,13 +56,13 @@ def _min_depth(task) -> float:
                integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
                execution=Execution("serial"))
     # no chatter up to max_depth_mm at any speed: the search knows only "at least that"
-    return min(float(ds["min_chatter_free_depth"].values[0]), options.max_depth_mm * 1e-3)
+    return min(float(ds["min_chatter_free_depth_m"].values[0]), options.max_depth_mm * 1e-3)
 
 
 def frf_objective(system: System, objective: str) -> float:
     """The FRF peak |G| (m/N), or -min Re G (m/N), of a linear bar, on FRF_LINES
     lines over FRF_SPAN x the host's f1, refined by a parabola at the extreme."""
-    wn = system.bar.natural_frequency
+    wn = system.bar.natural_frequency_rad_s
     w = np.linspace(FRF_SPAN[0] * wn, FRF_SPAN[1] * wn, FRF_LINES)
     g = system_receptance(system, w)
     y = np.abs(g) if objective == "frf_peak" else -g.real

@@ -206,8 +206,8 @@ def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
         elif name == "damping_ratio":
             bar = replace(bar, damping_ratio=np.full(bar.n_modes, float(np.clip(v, 0.0, 0.99))))
         elif name == "ball_position_mm":
-            half = d.gap / 2
-            ini["ball_position"] = float(np.clip(v * 1e-3, -half, half))
+            half = d.gap_m / 2
+            ini["ball_position_m"] = float(np.clip(v * 1e-3, -half, half))
         elif name == "ball_velocity_m_s":
-            ini["ball_velocity"] = float(v)
+            ini["ball_velocity_m_s"] = float(v)
     return replace(system, bar=bar, damper=d), Initial(**ini)

@@ -1,13 +1,23 @@
 """Stability lobes by time-domain simulation (docs/model.md, sections 4 and 6).
 
 Every grid point (spindle speed x depth of cut) is a regenerative-cutting run
-of the kernel.  Two ways to find, at each speed, the depth where chatter
-starts:
+of the kernel.
+
+The grid follows the bar unless it is given.  The speeds (:func:`lobe_speeds`)
+span the lobes of the bars' first natural frequency f1: a one-tooth boring
+bar's lobe pockets sit near 60 f1 / k rpm, k = 1, 2, ..., and the default
+speeds run from k = 0.9 to 6.1, evenly spaced in k (10 speeds per lobe).
+The depths are either a linear grid (``depth_step_m``, the published 0.01
+mm) or, by default, a geometric one: each depth ``depth_tolerance`` (1 %)
+above the one below, from 1 micrometre, so a limit is found to 1 % of itself
+whatever its size.
+
+Two ways to find, at each speed, the depth where chatter starts:
 
 - ``scan`` (published): depths step, 2 step, 3 step ... until ``successive``
   (3) depths in a row chatter.  The first unstable depth and the limiting
   (chatter-free) depth, the last stable depth below it, are reported.
-- ``search`` (faster): from a seed depth, steps of 1, 2, 4 ... grid depths
+- ``search`` (the default): from a seed depth, steps of 1, 2, 4 ... grid depths
   up (or down) until a bracket [stable, chatter] is found, then bisection on
   the depth grid, then the ``successive - 1`` depths above the first
   unstable one are run to confirm the published rule; if one of them is
@@ -42,7 +52,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -67,8 +77,19 @@ from boringbar.version import __version__
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
 PUBLISHED_DEPTH_STEP = 0.01e-3
-#: Most depths on one speed's grid, max_depth / depth_step (published: 300); each
-#: (case, speed, depth) holds a few numbers in the Dataset.
+#: The default speeds span these lobe numbers k = 60 f1 / rpm: past the pocket of
+#: lobe 1 at 60 f1 rpm on the fast side, to the pocket of lobe 6 on the slow side, so
+#: lobes 1 to 5 are drawn whole.
+LOBE_NUMBERS = (0.9, 6.1)
+#: Default speeds per lobe (per unit of k): each lobe drawn with its falling and
+#: its rising flank, not as one straight line between two speeds.
+SPEEDS_PER_LOBE = 10
+#: The default depth grid's relative step: a limit found to 1 % of itself.
+DEPTH_TOLERANCE = 0.01
+#: The shallowest depth of the geometric grid (m): far below any insert's edge radius.
+DEPTH_FLOOR = 1e-6
+#: Most depths on one speed's grid (published: 300; the default geometric grid up
+#: to 3 mm: 805); each (case, speed, depth) holds a few numbers in the Dataset.
 MAX_DEPTHS = 100_000
 METHODS = ("scan", "search")
 CRITERIA = ("zero", "bounded")
@@ -78,24 +99,52 @@ NOT_RUN, CHATTER, STABLE = -1, 0, 1
 EXAMPLE_ROWS = 20000
 
 
+def depth_grid(method: str, step, tolerance,
+               names: tuple[str, str] = ("depth_step_m", "depth_tolerance")) -> str:
+    """The depth grid a lobe study climbs: "linear" with a ``step`` given, or for a
+    scan given neither (the published step); else "geometric" (the search's default,
+    or a ``tolerance`` given).  Both given: a ParameterError naming ``names``."""
+    if step is not None and tolerance is not None:
+        raise ParameterError(f"{names[0]} = {step!r} and {names[1]} = {tolerance!r}: give "
+                             "one, a linear grid's step or a geometric grid's ratio")
+    linear = step is not None or (method == "scan" and tolerance is None)
+    return "linear" if linear else "geometric"
+
+
+def grid_index(depth: float, step: float | None, tolerance: float | None) -> int:
+    """The deepest index of a depth grid (linear of ``step`` m, or geometric of
+    relative step ``tolerance`` from DEPTH_FLOOR with ``step`` None) whose depth is at
+    most ``depth`` (m; 0: none).  Of ``max_depth_m``: the number of depths."""
+    if step is not None:
+        return int(math.floor(depth / step + 1e-9))
+    if depth < DEPTH_FLOOR:
+        return 0
+    return int(math.floor(math.log(depth / DEPTH_FLOOR) / math.log1p(tolerance) + 1e-9)) + 1
+
+
 @dataclass(frozen=True)
 class LobesOptions:
     """A lobe study's grid, rule and cut.
 
-    ``rpm``: spindle speeds (rev/min, > 0; default the published 900..1600 step
-    50); ``method``: "scan" (published) or "search" (module doc); ``criterion``:
-    "zero" (published: the force reaches zero) or "bounded"; depths
-    ``depth_step_m``, 2 ``depth_step_m``, ... up to ``max_depth_m`` (m);
+    ``rpm``: spindle speeds (rev/min, > 0, increasing; None, the default: the
+    bars' lobes, :func:`lobe_speeds`; the published ones are :data:`PUBLISHED_RPM`);
+    ``method``: "search" (default) or "scan" (published; module doc);
+    ``criterion``: "zero" (published: the force reaches zero) or "bounded";
+    depths ``depth_step_m``, 2 ``depth_step_m``, ... up to ``max_depth_m`` (m), or,
+    with ``depth_step_m`` None (the default), a geometric grid from
+    :data:`DEPTH_FLOOR` in relative steps of ``depth_tolerance`` (default 1 %; a scan
+    given neither takes the published 0.01 mm step: it climbs the grid one depth at
+    a time; :func:`depth_grid`);
     ``successive``: chattering depths in a row that end a scan.  The cut
     (:class:`~boringbar.model.forcing.Regenerative`): ``kr_pa`` (Pa), ``feed_m``
     (m), ``revolutions``, ``interpolation``, ``start``, ``bounded_fraction`` (of
     the feed).  ``analytic``: add the frequency-domain limits of the linear hosts.
     """
 
-    rpm: tuple[float, ...] = tuple(float(r) for r in PUBLISHED_RPM)
-    method: str = "scan"
+    rpm: tuple[float, ...] | None = None
+    method: str = "search"
     criterion: str = "zero"
-    depth_step_m: float = PUBLISHED_DEPTH_STEP
+    depth_step_m: float | None = None
     max_depth_m: float = 3e-3
     successive: int = 3
     kr_pa: float = KR_ALUMINIUM
@@ -105,53 +154,113 @@ class LobesOptions:
     start: str = "rest"
     bounded_fraction: float = 0.1
     analytic: bool = True
+    depth_tolerance: float | None = None
 
     def __post_init__(self):
-        object.__setattr__(self, "rpm", check_values("rpm", np.atleast_1d(self.rpm).tolist(),
-                                                     0.0, math.inf, lo_open=True,
-                                                     unit="rev/min"))
-        if np.any(np.diff(self.rpm) <= 0):
-            raise ParameterError(f"rpm = {self.rpm} must increase, each speed once (a "
-                                 "lobe diagram runs along the speed axis)")
+        if self.rpm is not None:
+            object.__setattr__(self, "rpm", check_speeds("rpm", self.rpm))
         check_choice("method", self.method, METHODS)
         check_choice("criterion", self.criterion, CRITERIA)
-        check_positive("depth_step_m", self.depth_step_m, "m")
-        check_range("max_depth_m", self.max_depth_m, self.depth_step_m, 1.0, unit="m")
+        if depth_grid(self.method, self.depth_step_m, self.depth_tolerance) == "linear":
+            step = PUBLISHED_DEPTH_STEP if self.depth_step_m is None else self.depth_step_m
+            object.__setattr__(self, "depth_step_m", check_positive("depth_step_m", step, "m"))
+        else:
+            tol = DEPTH_TOLERANCE if self.depth_tolerance is None else self.depth_tolerance
+            object.__setattr__(self, "depth_tolerance", check_range(
+                "depth_tolerance", tol, 0.0, 0.5, lo_open=True))
+        check_range("max_depth_m", self.max_depth_m, self.depth(1), 1.0, unit="m")
         check_int("successive", self.successive, 1, 100)
         check_choice("interpolation", self.interpolation, INTERPOLATIONS)
         check_choice("start", self.start, STARTS)
         if self.max_index > MAX_DEPTHS:
-            raise ParameterError(f"depth_step_m = {self.depth_step_m:g} m gives "
-                                 f"{self.max_index} depths up to max_depth_m = "
-                                 f"{self.max_depth_m:g} m; the allowed maximum is "
-                                 f"{MAX_DEPTHS} depths")
-        self.forcing(self.depth_step_m, self.rpm[0])  # validates the cut
+            raise ParameterError(f"{self.grid_text()} gives {self.max_index} depths up to "
+                                 f"max_depth_m = {self.max_depth_m:g} m; the allowed "
+                                 f"maximum is {MAX_DEPTHS} depths")
+        # the cut's own fields (each speed is checked above)
+        self.forcing(self.depth(1), self.rpm[0] if self.rpm else 1000.0)
 
     @property
     def max_index(self) -> int:
-        """The deepest grid index tried (depth = index x depth_step_m)."""
-        return int(math.floor(self.max_depth_m / self.depth_step_m + 1e-9))
+        """The deepest grid index tried (depth :meth:`depths` of it)."""
+        return self.index_below(self.max_depth_m)
 
-    def forcing(self, depth: float, rpm: float, stop_at_zero: bool = True) -> Regenerative:
-        """The cut at ``depth`` (m) and ``rpm``."""
-        return Regenerative(depth=depth, rpm=rpm, kr=self.kr_pa, feed=self.feed_m,
+    def depths(self, index) -> np.ndarray:
+        """The depths (m) of grid indices ``index`` (1, 2, ...): index x depth_step_m,
+        or DEPTH_FLOOR (1 + depth_tolerance)^(index - 1)."""
+        i = np.asarray(index, dtype=float)
+        if self.depth_step_m is not None:
+            return self.depth_step_m * i
+        return DEPTH_FLOOR * np.exp(math.log1p(self.depth_tolerance) * (i - 1.0))
+
+    def depth(self, index: int) -> float:
+        """The depth (m) of one grid index, as :meth:`depths` gives it."""
+        return float(self.depths(index))
+
+    def index_below(self, depth: float) -> int:
+        """The deepest grid index whose depth is at most ``depth`` (m; 0: none)."""
+        return grid_index(depth, self.depth_step_m, self.depth_tolerance)
+
+    def grid_text(self) -> str:
+        """The depth grid in words (the Dataset's ``depth_grid`` attribute)."""
+        if self.depth_step_m is not None:
+            return f"depth_step_m = {self.depth_step_m:g} m"
+        return (f"depth_tolerance = {self.depth_tolerance:g} (geometric from "
+                f"{DEPTH_FLOOR:g} m)")
+
+    def forcing(self, depth_m: float, rpm: float, stop_at_zero: bool = True) -> Regenerative:
+        """The cut at ``depth_m`` (m) and ``rpm``."""
+        return Regenerative(depth_m=depth_m, rpm=rpm, kr_pa=self.kr_pa, feed_m=self.feed_m,
                             revolutions=self.revolutions, interpolation=self.interpolation,
                             start=self.start, stop_at_zero=stop_at_zero,
                             bounded_fraction=self.bounded_fraction)
 
 
+def check_speeds(name: str, rpm) -> tuple[float, ...]:
+    """Spindle speeds (rev/min): positive and increasing, each once."""
+    speeds = check_values(name, np.atleast_1d(rpm).tolist(), 0.0, math.inf, lo_open=True,
+                          unit="rev/min")
+    if np.any(np.diff(speeds) <= 0):
+        raise ParameterError(f"{name} = {speeds} must increase, each speed once (a "
+                             "lobe diagram runs along the speed axis)")
+    return speeds
+
+
+def lobe_speeds(frequencies_hz, numbers: tuple[float, float] = LOBE_NUMBERS,
+                per_lobe: int = SPEEDS_PER_LOBE) -> tuple[float, ...]:
+    """Spindle speeds (rev/min, whole, increasing) that draw the lobes of bars whose
+    first natural frequencies are ``frequencies_hz``.
+
+    A one-tooth cut regenerates once a revolution, so lobe k's pocket sits near
+    60 f1 / k rpm (the chatter frequency is a little above f1).  The speeds run
+    from 60 f1 / numbers[1] (the lowest f1) to 60 f1 / numbers[0] (the highest),
+    evenly spaced in k = 60 f1 / rpm, ``per_lobe`` of them per unit of k for the
+    highest f1: a lobe is as wide in k as every other, so each gets as many speeds.
+    """
+    f = np.asarray(check_values("frequencies_hz", frequencies_hz, 0.0, math.inf,
+                                lo_open=True, unit="Hz"))
+    lo, hi = 60.0 * f.min() / numbers[1], 60.0 * f.max() / numbers[0]
+    n = math.ceil((1.0 / lo - 1.0 / hi) * 60.0 * f.max() * per_lobe) + 1
+    speeds = np.unique(np.round(1.0 / np.linspace(1.0 / hi, 1.0 / lo, n)))
+    return tuple(float(r) for r in speeds)
+
+
+def default_speeds(cases: list[Case]) -> tuple[float, ...]:
+    """:func:`lobe_speeds` of the cases' host bars (f1 of each, without its damper)."""
+    return lobe_speeds([c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases])
+
+
 def cut(case: Case, rpm: float, depth: float, options: LobesOptions,
         integration: Integration) -> dict:
     """One cut, stopped at the first zero of the force: its verdicts and metrics."""
-    run = simulate(case.system, options.forcing(depth, rpm), duration=integration.duration_s,
-                   dt=integration.dt_s, integrator=integration.integrator,
+    run = simulate(case.system, options.forcing(depth, rpm), duration_s=integration.duration_s,
+                   dt_s=integration.dt_s, integrator=integration.integrator,
                    steady_fraction=integration.steady_fraction, record_every=0)
     c = run.cutting
     ball = case.system.kind == "ball"
     return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
-            "amplitude": c["amplitude_m"],
+            "amplitude_m": c["amplitude_m"],
             "impacts": run.metrics["impacts_total"] if ball else -1,
-            "max_rel_disp": run.metrics["max_abs_aux_all_m"] if ball else math.nan,
+            "max_rel_disp_m": run.metrics["max_abs_aux_all_m"] if ball else math.nan,
             "first_zero": math.nan if c["first_zero_time_s"] is None
             else c["first_zero_time_s"]}
 
@@ -165,7 +274,7 @@ def column(case: Case, rpm: float, options: LobesOptions, integration: Integrati
 
     def chatter(i: int) -> bool:
         if i not in done:
-            done[i] = cut(case, rpm, i * options.depth_step_m, options, integration)
+            done[i] = cut(case, rpm, options.depth(i), options, integration)
         return done[i][key]
 
     def scan_from(i: int) -> None:
@@ -210,15 +319,15 @@ def _bracket(chatter, seed: int, n_max: int) -> tuple[int, int]:
     return lo, hi
 
 
-def _seeds(cases: list[Case], rpm, kr: float, step: float) -> dict:
+def _seeds(cases: list[Case], options: LobesOptions) -> dict:
     """Grid index of the analytic limit of each case's linear host at each speed."""
 
     seeds = {}
     for case in cases:
-        lim = limit_at_speeds(_linear_host(case.system), rpm, kr)
-        for r, b in zip(rpm, lim, strict=True):
+        lim = limit_at_speeds(_linear_host(case.system), options.rpm, options.kr_pa)
+        for r, b in zip(options.rpm, lim, strict=True):
             if math.isfinite(b):
-                seeds[(case.label, float(r))] = int(math.floor(b / step + 1e-9))
+                seeds[(case.label, float(r))] = options.index_below(b)
     return seeds
 
 
@@ -246,18 +355,20 @@ def _limits(verdicts: np.ndarray, depths: np.ndarray) -> tuple[float, float]:
 
 def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> Plan:
     """A point per (case, rpm) column; the search's seeds (the analytic limit of each
-    case's linear host) in the context."""
+    case's linear host) in the context, and the options with their speeds (the
+    cases' lobes, :func:`default_speeds`, if none were given)."""
     cases = as_cases(cases, "cases")
     if integration.initial is not None:
         raise ParameterError(f"initial = {integration.initial!r}: a cut starts as "
                              "options.start says (rest or static), not from initial "
                              "conditions")
+    if options.rpm is None:
+        options = replace(options, rpm=default_speeds(cases))
     rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
         check_delay(r, options.revolutions, integration.dt_s)
     context = {"cases": cases, "options": options, "integration": integration,
-               "seeds": _seeds(cases, rpm, options.kr_pa, options.depth_step_m)
-               if options.method == "search" else {}}
+               "seeds": _seeds(cases, options) if options.method == "search" else {}}
     points = [(i, j) for i in range(len(cases)) for j in range(len(rpm))]
     return Plan(context, points)
 
@@ -276,9 +387,9 @@ def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:
     shape = (len(plan.context["cases"]), len(plan.context["options"].rpm), top)
     arrays = {"zero": np.full(shape, NOT_RUN, dtype=np.int8),
               "bounded": np.full(shape, NOT_RUN, dtype=np.int8),
-              "amplitude": np.full(shape, np.nan), "first_zero": np.full(shape, np.nan),
+              "amplitude_m": np.full(shape, np.nan), "first_zero": np.full(shape, np.nan),
               "impacts": np.full(shape, -1, dtype=np.int64),
-              "max_rel_disp": np.full(shape, np.nan)}
+              "max_rel_disp_m": np.full(shape, np.nan)}
     n_runs = 0
     for (i, j), done in zip(plan.points, results, strict=True):
         for k, res in done.items():
@@ -288,14 +399,14 @@ def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:
                     v = CHATTER if v else STABLE
                 a[i, j, k - 1] = v
             n_runs += 1
-    return plan.context["options"].depth_step_m * np.arange(1, top + 1), arrays, n_runs
+    return plan.context["options"].depths(np.arange(1, top + 1)), arrays, n_runs
 
 
 def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
                bounded_fraction: float) -> dict:
     """The lobes Dataset's data variables from the per-run arrays ``a`` (:func:`_grid`)
     and the per-column limits."""
-    dims = ("case", "rpm", "depth")
+    dims = ("case", "rpm", "depth_m")
     codes = "1 stable, 0 chatter, -1 not run"
     return {
         "verdict": (dims, a["zero"], {"long_name": "published criterion: force reaches zero",
@@ -303,17 +414,17 @@ def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
         "verdict_bounded": (dims, a["bounded"], {
             "long_name": f"bounded chatter: amplitude > {bounded_fraction:g} h_m, or force "
                          "reaches zero", "codes": codes}),
-        "amplitude": (dims, a["amplitude"], {"units": "m"}),
-        "first_zero_time": (dims, a["first_zero"], {"units": "s"}),
+        "amplitude_m": (dims, a["amplitude_m"], {"units": "m"}),
+        "first_zero_time_s": (dims, a["first_zero"], {"units": "s"}),
         "impacts": (dims, a["impacts"], {
             "long_name": "counted ball impacts over the run (-1: no ball or not run)"}),
-        "max_rel_disp": (dims, a["max_rel_disp"], {
+        "max_rel_disp_m": (dims, a["max_rel_disp_m"], {
             "units": "m", "long_name": "largest |y|, the ball's excursion from the cavity "
                                        "centre, over the run (ball cases)"}),
-        "limit_depth": (("case", "rpm"), limit, {
+        "limit_depth_m": (("case", "rpm"), limit, {
             "units": "m", "long_name": "limiting (chatter-free) depth of cut"}),
-        "first_unstable_depth": (("case", "rpm"), first_unstable, {"units": "m"}),
-        "min_chatter_free_depth": (("case",), np.nanmin(np.where(
+        "first_unstable_depth_m": (("case", "rpm"), first_unstable, {"units": "m"}),
+        "min_chatter_free_depth_m": (("case",), np.nanmin(np.where(
             np.isnan(limit), np.inf, limit), axis=1), {"units": "m"}),
     }
 
@@ -336,15 +447,16 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
         coords={
             "case": [c.label for c in cases],
             "rpm": ("rpm", rpm, {"units": "rev/min"}),
-            "depth": ("depth", depths, {"units": "m"}),
+            "depth_m": ("depth_m", depths, {"units": "m"}),
             "bar": ("case", [c.bar for c in cases]),
-            "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+            "gap_m": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
         },
         attrs={
             "title": "boringbar stability lobes (time domain)",
             "boringbar_version": __version__,
             "method": o.method,
+            "depth_grid": o.grid_text(),
             "criterion": o.criterion,
             "successive": o.successive,
             "integrator": integ.integrator,
@@ -377,14 +489,15 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     ``cases``: the bars: a System, a sequence of them or a mapping of label to System
     (:func:`~boringbar.analysis.sweep.as_cases`; the published ones:
     :func:`~boringbar.analysis.sweep.published_cases`); ``options``: :class:`LobesOptions`
-    (default: the published scan); ``integration``: duration, step and integrator
+    (default: the search to 1 % over the bars' first lobes; the published scan is
+    ``LobesOptions(PUBLISHED_RPM, "scan")``); ``integration``: duration, step and integrator
     of each cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed
     surface from a history of step H = tau / ceil(tau / dt), the first zero of the
     force located; no initial conditions: a cut starts as ``options.start`` says);
     ``execution``: where the (case, rpm) columns run (default a thread per core);
     ``progress(done, total)`` as columns finish.
 
-    Returns an xarray Dataset: per (case, rpm, depth) the verdict of every grid
+    Returns an xarray Dataset: per (case, rpm, depth_m) the verdict of every grid
     point that was run under both criteria (1 stable, 0 chatter, -1 not run),
     the steady amplitude and the time of the first zero of the force; per
     (case, rpm) the limiting (chatter-free) depth and the first unstable depth
@@ -404,7 +517,8 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
     every case's linear host (the bare cavity bar for the free ball, which is the
     bar the cut sees while the ball does not touch a wall)."""
 
-    fine = np.linspace(rpm.min(), rpm.max(), max(200, 20 * len(rpm)))
+    # evenly spaced in 1/rpm, the lobe number's axis: every lobe drawn as finely
+    fine = 1.0 / np.linspace(1.0 / rpm.max(), 1.0 / rpm.min(), max(200, 20 * len(rpm)))[::-1]
     on_grid = np.full((len(cases), len(rpm)), np.nan)
     curve = np.full((len(cases), len(fine)), np.nan)
     host_grid = np.full((len(cases), len(rpm)), np.nan)
@@ -413,12 +527,12 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
         if case.system.kind in ("solid", "tmd", "locked"):
             on_grid[i] = host_grid[i]
             curve[i] = limit_at_speeds(case.system, fine, kr)
-    ds["analytic_limit"] = (("case", "rpm"), on_grid, {"units": "m"})
-    ds["host_analytic_limit"] = (("case", "rpm"), host_grid, {
+    ds["analytic_limit_m"] = (("case", "rpm"), on_grid, {"units": "m"})
+    ds["host_analytic_limit_m"] = (("case", "rpm"), host_grid, {
         "units": "m", "long_name": "analytic limit of the linear host (bare cavity bar for "
                                    "the free ball)"})
-    ds.coords["rpm_fine"] = ("rpm_fine", fine, {"units": "rev/min"})
-    ds["analytic_curve"] = (("case", "rpm_fine"), curve, {"units": "m"})
+    ds.coords["fine_rpm"] = ("fine_rpm", fine, {"units": "rev/min"})
+    ds["analytic_curve_m"] = (("case", "fine_rpm"), curve, {"units": "m"})
 
 
 def summary(ds) -> dict:
@@ -427,19 +541,19 @@ def summary(ds) -> dict:
     for i, label in enumerate(ds["case"].values):
         out.append({
             "case": str(label),
-            "min_chatter_free_depth_m": _num(ds["min_chatter_free_depth"].values[i]),
+            "min_chatter_free_depth_m": _num(ds["min_chatter_free_depth_m"].values[i]),
             "speeds": [{"rpm": float(r),
-                        "limit_depth_m": _num(ds["limit_depth"].values[i, j]),
-                        "first_unstable_depth_m": _num(ds["first_unstable_depth"].values[i, j]),
-                        **({"analytic_limit_m": _num(ds["analytic_limit"].values[i, j]),
+                        "limit_depth_m": _num(ds["limit_depth_m"].values[i, j]),
+                        "first_unstable_depth_m": _num(ds["first_unstable_depth_m"].values[i, j]),
+                        **({"analytic_limit_m": _num(ds["analytic_limit_m"].values[i, j]),
                             "host_analytic_limit_m":
-                                _num(ds["host_analytic_limit"].values[i, j])}
-                           if "analytic_limit" in ds else {})}
+                                _num(ds["host_analytic_limit_m"].values[i, j])}
+                           if "analytic_limit_m" in ds else {})}
                        for j, r in enumerate(ds["rpm"].values)],
         })
     return {"method": ds.attrs["method"], "criterion": ds.attrs["criterion"],
             "runs": int(ds.attrs["runs"]), "wall_time_s": float(ds.attrs["wall_time_s"]),
-            "min_chatter_free_depth_m": _num(np.nanmin(ds["min_chatter_free_depth"].values)),
+            "min_chatter_free_depth_m": _num(np.nanmin(ds["min_chatter_free_depth_m"].values)),
             "cases": out}
 
 
@@ -449,12 +563,12 @@ def example_points(ds) -> list[tuple[str, float, float]]:
     chatter-free depth (the stable one at the speed of the largest limit if the
     minimum is 0; only a stable one if nothing chattered)."""
     rpm = ds["rpm"].values
-    limit = ds["limit_depth"].values[0]
-    first = ds["first_unstable_depth"].values[0]
+    limit = ds["limit_depth_m"].values[0]
+    first = ds["first_unstable_depth_m"].values[0]
     if not np.isfinite(limit).any():  # no chatter up to the deepest cut tried
         run = ds["verdict"].values[0] >= 0
         j = len(rpm) // 2
-        return [("stable", float(rpm[j]), float(ds["depth"].values[run[j]].max()))]
+        return [("stable", float(rpm[j]), float(ds["depth_m"].values[run[j]].max()))]
     j = int(np.nanargmin(limit))
     points = [("unstable", float(rpm[j]), float(first[j]))]
     if limit[j] <= 0:
@@ -469,18 +583,18 @@ def _example_run(case: Case, rpm: float, depth: float, options: LobesOptions,
     """One grid point rerun with history (no stop at the first zero) as a Dataset."""
     n_steps = int(round(integration.duration_s / integration.dt_s))
     run = simulate(case.system, options.forcing(depth, rpm, stop_at_zero=False),
-                   duration=integration.duration_s, dt=integration.dt_s,
+                   duration_s=integration.duration_s, dt_s=integration.dt_s,
                    record_every=max(1, n_steps // rows), integrator=integration.integrator,
                    steady_fraction=integration.steady_fraction)
     h = run.to_xarray()
-    h = h.drop_vars([v for v in ("impact_time", "impact_wall") if v in h])
+    h = h.drop_vars([v for v in ("impact_time_s", "impact_wall") if v in h])
     c = run.cutting
-    return h.assign_coords(rpm=rpm, depth=depth, chatter=bool(c["chatter"]),
+    return h.assign_coords(rpm=rpm, depth_m=depth, chatter=bool(c["chatter"]),
                            bounded_chatter=bool(c["bounded_chatter"]),
-                           first_zero_time=math.nan if c["first_zero_time_s"] is None
+                           first_zero_time_s=math.nan if c["first_zero_time_s"] is None
                            else float(c["first_zero_time_s"]),
-                           mean_force=float(run.forcing.mean_force),
-                           static_deflection=float(c["static_deflection_m"]))
+                           mean_force_n=float(run.forcing.mean_force_n),
+                           static_deflection_m=float(c["static_deflection_m"]))
 
 
 def examples(ds, case: Case, options: LobesOptions | None = None, *,
@@ -488,7 +602,7 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     """The :func:`example_points` of the lobes Dataset ``ds`` (of ``case``, its first
     case, cut as ``options`` and ``integration`` say: those of the lobes) rerun with
     history of about ``rows`` rows, not stopped at the first zero of the force:
-    one Dataset with dims (example, time)."""
+    one Dataset with dims (example, time_s)."""
     options = options or LobesOptions()
     integration = integration or Integration()
     points = example_points(ds)
@@ -497,12 +611,12 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     exds = xr.concat(parts, dim=pd.Index([p[0] for p in points], name="example"),
                      coords="all", join="outer", combine_attrs="drop")
     exds["rpm"].attrs["units"] = "rev/min"
-    for name in ("depth", "static_deflection"):
+    for name in ("depth_m", "static_deflection_m"):
         exds[name].attrs["units"] = "m"
-    exds["first_zero_time"].attrs["units"] = "s"
-    exds["mean_force"].attrs.update(units="N", long_name="Kr b h_m")
+    exds["first_zero_time_s"].attrs["units"] = "s"
+    exds["mean_force_n"].attrs.update(units="N", long_name="Kr b h_m")
     exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
-                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap,
+                  "case": str(case.label), "bar": case.bar, "gap_m": case.gap_m,
                   "friction": case.friction, "preset": case.system.preset,
                   "criterion": ds.attrs["criterion"],
                   "boringbar_version": ds.attrs["boringbar_version"],
@@ -515,10 +629,10 @@ def examples_summary(exds) -> list[dict]:
     """JSON-able list of the examples of :func:`examples`."""
     return [{"example": str(e), "case": exds.attrs["case"],
              "rpm": float(exds["rpm"].values[k]),
-             "depth_m": float(exds["depth"].values[k]),
+             "depth_m": float(exds["depth_m"].values[k]),
              "chatter": bool(exds["chatter"].values[k]),
              "bounded_chatter": bool(exds["bounded_chatter"].values[k]),
-             "first_zero_time_s": float(exds["first_zero_time"].values[k])}
+             "first_zero_time_s": float(exds["first_zero_time_s"].values[k])}
             for k, e in enumerate(exds["example"].values)]
 
 
@@ -534,11 +648,11 @@ def compare_methods(scan, search) -> list[dict]:
     diffs = []
     for i, label in enumerate(scan["case"].values):
         for j, r in enumerate(scan["rpm"].values):
-            a = float(scan["limit_depth"].values[i, j])
-            b = float(search["limit_depth"].values[i, j])
+            a = float(scan["limit_depth_m"].values[i, j])
+            b = float(search["limit_depth_m"].values[i, j])
             if not (a == b or (math.isnan(a) and math.isnan(b))):
                 v = scan["verdict"].values[i, j]
-                d = scan["depth"].values
+                d = scan["depth_m"].values
                 lower = [float(d[k]) for k in range(len(d))
                          if v[k] == CHATTER and (math.isnan(b) or d[k] <= b)]
                 diffs.append({"case": str(label), "rpm": float(r), "scan_limit_m": a,

@@ -225,7 +225,7 @@ def classify_cloud(
 # --- the two sections of a run --------------------------------------------------
 def jitter_tolerance(run) -> float:
     """Extra relative tolerance for the step-grid jitter of a run with impacts."""
-    return JITTER_STEPS * run.omega * run.dt if run.system.kind == "ball" else 0.0
+    return JITTER_STEPS * run.omega_rad_s * run.dt_s if run.system.kind == "ball" else 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -288,16 +288,16 @@ def _scales(run, samples: np.ndarray) -> np.ndarray:
     if not (math.isfinite(amp) and amp > 0):
         amp = float(np.max(np.abs(samples[:, 1]))) if len(samples) else 0.0
     amp = max(amp, 1e-300)
-    scale = [amp, run.omega * amp]
+    scale = [amp, run.omega_rad_s * amp]
     kind = run.system.kind
     if kind == "ball":
-        half = run.system.damper.gap / 2
+        half = run.system.damper.gap_m / 2
         vmax = float(np.max(np.abs(run.impacts[:, 2]))) if len(run.impacts) else 0.0
-        scale += [half, max(vmax, run.omega * half)]
+        scale += [half, max(vmax, run.omega_rad_s * half)]
     elif kind == "tmd":
         stroke = run.metrics.get("max_abs_aux_m", math.nan)
         stroke = stroke if math.isfinite(stroke) and stroke > 0 else 1e-300
-        scale += [stroke, run.omega * stroke]
+        scale += [stroke, run.omega_rad_s * stroke]
     return np.array(scale)
 
 
@@ -305,15 +305,15 @@ def poincare_map(run, steady_fraction: float = 0.8) -> PoincareMap:
     """Stroboscopic Poincare map of ``run`` (simulated with ``strobe=True``): the
     samples in the last ``steady_fraction`` of the run's time."""
     drop = 1.0 - check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
-    if run.strobe.size == 0 and run.duration * run.omega > 4 * math.pi:
+    if run.strobe.size == 0 and run.duration_s * run.omega_rad_s > 4 * math.pi:
         raise ParameterError("the run has no stroboscopic samples: simulate it with strobe=True")
-    s = run.strobe[run.strobe[:, 0] >= run.t0 + drop * run.duration]
+    s = run.strobe[run.strobe[:, 0] >= run.t0_s + drop * run.duration_s]
     return PoincareMap(
         time=s[:, 0],
         tip_displacement=s[:, 1],
         tip_velocity=s[:, 2],
         aux=s[:, 3:5],
-        omega=run.omega,
+        omega=run.omega_rad_s,
         scale=_scales(run, s),
         jitter=jitter_tolerance(run),
     )
@@ -361,15 +361,15 @@ def impact_map(run, wall: int | None = 1, steady_fraction: float = 1.0) -> Impac
         raise ParameterError(f"wall = {wall!r} is not one of 1, -1, None")
     drop = 1.0 - check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     imp = run.impacts
-    keep = imp[:, 0] >= run.t0 + drop * run.duration
+    keep = imp[:, 0] >= run.t0_s + drop * run.duration_s
     if wall is not None:
         keep &= imp[:, 1] == wall
     imp = imp[keep]
     return ImpactMap(
         time=imp[:, 0],
-        phase=np.mod(run.omega * imp[:, 0], 2 * math.pi),
+        phase=np.mod(run.omega_rad_s * imp[:, 0], 2 * math.pi),
         velocity=imp[:, 2],
         wall=imp[:, 1].astype(int),
-        omega=run.omega,
+        omega=run.omega_rad_s,
         jitter=jitter_tolerance(run),
     )

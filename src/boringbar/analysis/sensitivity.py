@@ -53,22 +53,22 @@ PUBLISHED_VALUES = {
 @dataclass(frozen=True)
 class Cuts:
     """Cuts at one spindle speed over a few depths of cut (published: 1200 rpm,
-    0.05..0.10 mm).  ``rpm`` (rev/min), ``depths`` (m), ``duration`` (s) of each
+    0.05..0.10 mm).  ``rpm`` (rev/min), ``depths_m`` (m), ``duration_s`` (s) of each
     full-length run; ``options``: further :class:`~boringbar.model.forcing.Regenerative`
-    fields (kr, feed, start, ...)."""
+    fields (kr_pa, feed_m, start, ...)."""
 
     rpm: float = 1200.0
-    depths: tuple = tuple(round((5 + i) * 1e-5, 12) for i in range(6))
-    duration: float = 2.0
+    depths_m: tuple[float, ...] = tuple(round((5 + i) * 1e-5, 12) for i in range(6))
+    duration_s: float = 2.0
     options: dict = field(default_factory=dict)
 
     def __post_init__(self):
         check_positive("cuts rpm", self.rpm)
-        if not len(self.depths):
-            raise ParameterError("cuts depths = () must hold at least one depth of cut")
-        for d in self.depths:
-            check_positive("cuts depth", d, "m")
-        check_positive("cuts duration", self.duration, "s")
+        if not len(self.depths_m):
+            raise ParameterError("cuts depths_m = () must hold at least one depth of cut")
+        for d in self.depths_m:
+            check_positive("cuts depths_m", d, "m")
+        check_positive("cuts duration_s", self.duration_s, "s")
 
 
 def sensitivity_initial(value) -> Initial:
@@ -84,8 +84,8 @@ def sensitivity_initial(value) -> Initial:
 def sensitivity_label(kind: str, value) -> str:
     if kind == "initial":
         i = sensitivity_initial(value)
-        return (f"W0={i.tip_displacement:g}m W0'={i.tip_velocity:g}m/s "
-                f"y0={i.ball_position:g}m y0'={i.ball_velocity:g}m/s")
+        return (f"W0={i.tip_displacement_m:g}m W0'={i.tip_velocity_m_s:g}m/s "
+                f"y0={i.ball_position_m:g}m y0'={i.ball_velocity_m_s:g}m/s")
     return f"{kind}={value}"
 
 
@@ -102,7 +102,7 @@ def sensitivity_cases(kind, values, bar, preset, gap, friction, overrides) -> li
         elif kind == "restitution":
             kw["restitution"] = check_range("restitution", v, 0.0, 1.0)
         if bar == "ball":
-            system = make_system(bar, preset, gap=gap, friction=fr, **kw)
+            system = make_system(bar, preset, gap_m=gap, friction=fr, **kw)
         else:
             system = make_system(bar, preset, **kw)
         label = "fixed system" if kind == "initial" else sensitivity_label(kind, v)
@@ -147,9 +147,9 @@ class SensitivityOptions:
 
 
 def plan(options: SensitivityOptions, integration: Integration, *, preset: str = "physical",
-         bar: str = "ball", gap: float = 0.5e-3, friction: bool = True,
+         bar: str = "ball", gap_m: float = 0.5e-3, friction: bool = True,
          overrides: dict | None = None) -> Plan:
-    """One case per value (the system of ``preset``, ``bar``, ``gap``, ``friction`` and
+    """One case per value (the system of ``preset``, ``bar``, ``gap_m``, ``friction`` and
     ``overrides`` for :func:`~boringbar.model.system.make_system`, with the value set);
     harmonic: the :func:`~boringbar.analysis.sweep.plan` of those cases; cuts: a point
     per (value, depth)."""
@@ -164,18 +164,18 @@ def plan(options: SensitivityOptions, integration: Integration, *, preset: str =
         raise ParameterError(f"{varied} = {overrides[varied]!r} cannot be fixed while "
                              f"kind = {kind!r} varies it")
     if kind == "initial":
-        fixed = sensitivity_cases(kind, [None], bar, preset, gap, friction, overrides)[0]
+        fixed = sensitivity_cases(kind, [None], bar, preset, gap_m, friction, overrides)[0]
         cases = [replace(fixed, label=label, initial=sensitivity_initial(v))
                  for label, v in zip(options.labels(), options.values, strict=True)]
     else:
-        cases = sensitivity_cases(kind, options.values, bar, preset, gap, friction, overrides)
+        cases = sensitivity_cases(kind, options.values, bar, preset, gap_m, friction, overrides)
     extra = {"kind": kind, "values": list(options.values), "labels": options.labels()}
     if options.cuts is None:
         p = sweep_mod.plan(cases, SweepOptions(options.ratios, options.forces_n), integration)
         p.context["mode"] = "harmonic"
         p.extra.update(extra)
         return p
-    points = [(i, j) for i in range(len(cases)) for j in range(len(options.cuts.depths))]
+    points = [(i, j) for i in range(len(cases)) for j in range(len(options.cuts.depths_m))]
     context = {"mode": "cuts", "cases": cases, "cuts": options.cuts,
                "integration": integration}
     return Plan(context, points, extra)
@@ -187,13 +187,13 @@ def compute(context: dict, point):
         return sweep_mod.compute(context, point)
     i, j = point
     cuts, integ = context["cuts"], context["integration"]
-    return sensitivity_cut(context["cases"][i], cuts, cuts.depths[j], integ)
+    return sensitivity_cut(context["cases"][i], cuts, cuts.depths_m[j], integ)
 
 
-def sensitivity_cut(case: Case, cuts: Cuts, depth: float, integration: Integration) -> dict:
-    """One full-length cut of ``case`` at ``depth`` (m): its chatter verdicts."""
-    forcing = Regenerative(depth, cuts.rpm, stop_at_zero=False, **cuts.options)
-    c = simulate(case.system, forcing, duration=cuts.duration, dt=integration.dt_s,
+def sensitivity_cut(case: Case, cuts: Cuts, depth_m: float, integration: Integration) -> dict:
+    """One full-length cut of ``case`` at ``depth_m`` (m): its chatter verdicts."""
+    forcing = Regenerative(depth_m, cuts.rpm, stop_at_zero=False, **cuts.options)
+    c = simulate(case.system, forcing, duration_s=cuts.duration_s, dt_s=integration.dt_s,
                  initial=case.initial or integration.initial,
                  integrator=integration.integrator, record_every=0).cutting
     return {"chatter": c["chatter"], "bounded_chatter": c["chatter"] or c["bounded_chatter"],
@@ -203,7 +203,7 @@ def sensitivity_cut(case: Case, cuts: Cuts, depth: float, integration: Integrati
 
 
 def assemble(plan: Plan, results: list, attrs: dict | None = None):
-    """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth), with the
+    """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth_m), with the
     varied parameter as the leading dimension, named after its kind."""
     kind, values, labels = plan.extra["kind"], plan.extra["values"], plan.extra["labels"]
     cases = plan.context["cases"]
@@ -215,7 +215,8 @@ def assemble(plan: Plan, results: list, attrs: dict | None = None):
     ds = ds.assign_coords({kind: ("case", coord), "case": ("case", labels)})
     if kind == "initial":
         ds.attrs.pop("initial", None)
-        for name in ("tip_displacement", "tip_velocity", "ball_position", "ball_velocity"):
+        for name in ("tip_displacement_m", "tip_velocity_m_s", "ball_position_m",
+                     "ball_velocity_m_s"):
             ds = ds.assign_coords({name: ("case", [getattr(c.initial, name) for c in cases])})
     ds = ds.swap_dims({"case": kind})
     if kind == "initial":
@@ -227,32 +228,32 @@ def assemble(plan: Plan, results: list, attrs: dict | None = None):
 def _cuts_dataset(plan: Plan, results: list, attrs: dict | None):
     ctx = plan.context
     cases, cuts, integ = ctx["cases"], ctx["cuts"], ctx["integration"]
-    shape = (len(cases), len(cuts.depths))
+    shape = (len(cases), len(cuts.depths_m))
     units = {"amplitude_m": "m", "max_force_n": "N", "first_zero_time_s": "s"}
-    data = {k: (("case", "depth"), np.array([r[k] for r in results]).reshape(shape),
+    data = {k: (("case", "depth_m"), np.array([r[k] for r in results]).reshape(shape),
                 {"units": units[k]} if k in units else {})
             for k in results[0]}
     return xr.Dataset(
         data,
-        coords={"depth": ("depth", np.asarray(cuts.depths, dtype=float), {"units": "m"})},
+        coords={"depth_m": ("depth_m", np.asarray(cuts.depths_m, dtype=float), {"units": "m"})},
         attrs={"title": "boringbar sensitivity (cuts)", "boringbar_version": __version__,
                "integrator": integ.integrator,
                "integrator_used": resolved_integrators(integ.integrator,
                                                        [c.system for c in cases], cutting=True),
                "rpm": cuts.rpm, "dt_s": integ.dt_s,
-               "duration_s": cuts.duration, "forcing_options": json.dumps(cuts.options),
+               "duration_s": cuts.duration_s, "forcing_options": json.dumps(cuts.options),
                "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
                **(attrs or {})},
     )
 
 
 def sensitivity(options: SensitivityOptions | None = None, *, preset: str = "physical",
-                bar: str = "ball", gap: float = 0.5e-3, friction: bool = True,
+                bar: str = "ball", gap_m: float = 0.5e-3, friction: bool = True,
                 overrides: dict | None = None, integration: Integration | None = None,
                 execution: Execution | None = None, progress=None):
     """Vary one parameter (``options.kind``, see the module doc) over its values.
 
-    ``preset``, ``bar``, ``gap`` (m), ``friction`` and ``overrides`` (further
+    ``preset``, ``bar``, ``gap_m`` (m), ``friction`` and ``overrides`` (further
     :func:`~boringbar.model.system.make_system` arguments) describe the fixed
     system; ``integration`` and ``execution`` as for
     :func:`~boringbar.analysis.sweep.sweep`; ``progress(done, total)`` as points
@@ -260,15 +261,15 @@ def sensitivity(options: SensitivityOptions | None = None, *, preset: str = "phy
 
     Harmonic (``options.cuts`` None): the :func:`~boringbar.analysis.sweep.sweep`
     Dataset over forces x ratios with a leading dimension named after the kind
-    holding the values (for "initial": their labels, with ``tip_displacement``,
-    ``tip_velocity``, ``ball_position``, ``ball_velocity`` coordinates).  Cutting:
-    a Dataset over (kind, depth) with the chatter verdict (the force reached
+    holding the values (for "initial": their labels, with ``tip_displacement_m``,
+    ``tip_velocity_m_s``, ``ball_position_m``, ``ball_velocity_m_s`` coordinates).  Cutting:
+    a Dataset over (kind, depth_m) with the chatter verdict (the force reached
     zero), bounded chatter, steady amplitude (m), first zero time (s) and peak
     force (N) of each full-length cut.
     """
     options = options or SensitivityOptions()
     integration = integration or Integration()
-    p = plan(options, integration, preset=preset, bar=bar, gap=gap, friction=friction,
+    p = plan(options, integration, preset=preset, bar=bar, gap_m=gap_m, friction=friction,
              overrides=overrides)
     results, wall = run_plan(sys.modules[__name__], p, execution, progress)
     return assemble(p, results, execution_attrs(execution, wall))
@@ -294,7 +295,7 @@ def summary(ds) -> dict:
     values = [v.item() if isinstance(v, np.generic) else v for v in ds[kind].values]
     harmonic = []
     for i, value in enumerate(values):
-        for j, force in enumerate(ds["force"].values):
+        for j, force in enumerate(ds["force_n"].values):
             harmonic.append({"value": value, "force_n": float(force),
                              "ratio": ds["ratio"].values.tolist(),
                              "rms_tip_m": ds["rms_tip_m"].values[i, j].tolist(),
@@ -303,11 +304,11 @@ def summary(ds) -> dict:
                "harmonic": harmonic, "cuts": None, "wall_time_s": ds.attrs.get("wall_time_s")}
     if kind == "initial":
         summary["initial"] = [{name: float(ds[name].values[i]) for name in
-                               ("tip_displacement", "tip_velocity", "ball_position",
-                                "ball_velocity")} for i in range(len(labels))]
+                               ("tip_displacement_m", "tip_velocity_m_s", "ball_position_m",
+                                "ball_velocity_m_s")} for i in range(len(labels))]
     if "cut_chatter" in ds:
         summary["cuts"] = {
-            "rpm": ds.attrs["cut_rpm"], "depth_m": ds["depth"].values.tolist(),
+            "rpm": ds.attrs["cut_rpm"], "depth_m": ds["depth_m"].values.tolist(),
             "results": [{"value": value,
                          **{k: ds[f"cut_{k}"].values[i].tolist()
                             for k in ("chatter", "bounded_chatter", "amplitude_m",

@@ -28,6 +28,7 @@ from boringbar.execute import Execution
 from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
+from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
 from boringbar.version import __version__
 
@@ -35,6 +36,11 @@ from boringbar.version import __version__
 BATCH = 16
 #: The published sweep's frequency ratios, 0.95 to 1.05 in steps of 0.01.
 PUBLISHED_RATIOS = tuple(round(0.95 + 0.01 * i, 12) for i in range(11))
+#: The default sweep's step in Omega/omega_n (the published one's).
+RATIO_STEP = 0.01
+#: How far (relative) the default window reaches beyond a tuned mass damper's two
+#: coupled natural frequencies, so that both peaks are drawn with their flanks.
+PEAK_MARGIN = 0.05
 #: The numeric results of every run.
 NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
          "energy_balance_relative")
@@ -46,7 +52,7 @@ MAX_GRID_VALUES = 100_000
 @dataclass(frozen=True, eq=False)
 class Case:
     """One bar of a sweep: a ``label``, the ``system``, and what distinguishes it:
-    ``bar`` kind, ``gap`` (m, NaN without a ball) and ``friction`` ("on", "off",
+    ``bar`` kind, ``gap_m`` (m, NaN without a ball) and ``friction`` ("on", "off",
     "n/a"); ``initial``: this case's initial conditions (default: the
     integration's).  :meth:`of` makes one from a system alone; the bar, gap and
     friction given must be the system's (a ParameterError says which is not)."""
@@ -54,17 +60,17 @@ class Case:
     label: str
     system: System
     bar: str
-    gap: float = math.nan
+    gap_m: float = math.nan
     friction: str = "n/a"
     initial: Initial | None = None
 
     def __post_init__(self):
         if not isinstance(self.system, System):
             raise TypeError(f"Case system = {self.system!r} must be a System (make_system)")
-        given = (self.bar, self.gap, self.friction)
-        for name, mine, value in zip(("bar", "gap", "friction"), given,
+        given = (self.bar, self.gap_m, self.friction)
+        for name, mine, value in zip(("bar", "gap_m", "friction"), given,
                                      _describe(self.system), strict=True):
-            if not (mine == value or name == "gap" and math.isnan(mine) and math.isnan(value)):
+            if not (mine == value or name == "gap_m" and math.isnan(mine) and math.isnan(value)):
                 raise ParameterError(f"Case {self.label!r}: {name} = {mine!r}, but its system "
                                      f"has {name} = {value!r}; Case.of(system) labels it")
 
@@ -84,7 +90,7 @@ def _describe(system: System) -> tuple[str, float, str]:
     """(bar kind, gap m or NaN, friction "on"/"off"/"n/a") of ``system``."""
     if system.kind != "ball":
         return system.kind, math.nan, "n/a"
-    return "ball", system.damper.gap, "off" if system.damper.friction.kind == "none" else "on"
+    return "ball", system.damper.gap_m, "off" if system.damper.friction.kind == "none" else "on"
 
 
 def as_cases(systems, name: str = "systems") -> list[Case]:
@@ -117,14 +123,16 @@ def _relabel(case, label: str) -> Case:
 
 
 #: what published_cases passes on to make_system
-_OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap",
+_OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap_m",
                                                                  "friction"}
 
 
-def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
-                    frictions=(False, True), preset: str = "physical", **overrides) -> list[Case]:
+def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
+                    gaps_m: tuple[float, ...] = (0.5e-3, 0.1e-3),
+                    frictions: tuple[bool, ...] = (False, True), preset: str = "physical",
+                    **overrides) -> list[Case]:
     """The bars of the published sweeps under ``preset``: those of ``bars`` among solid,
-    TMD, and the ball damper for every gap of ``gaps`` (m) x friction of ``frictions``
+    TMD, and the ball damper for every gap of ``gaps_m`` (m) x friction of ``frictions``
     (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones;
     the bar arguments only to the ball cases)."""
     unknown = sorted(set(overrides) - _OVERRIDABLE)
@@ -134,17 +142,45 @@ def published_cases(bars=("solid", "tmd", "ball"), gaps=(0.5e-3, 0.1e-3),
     cases = []
     for bar in bars:
         if bar == "ball":
-            for gap in gaps:
+            for gap in gaps_m:
                 for fr in frictions:
-                    s = make_system("ball", preset, gap=gap, friction=fr, **overrides)
+                    s = make_system("ball", preset, gap_m=gap, friction=fr, **overrides)
                     label = f"ball gap={gap * 1e3:g}mm friction={'on' if fr else 'off'}"
                     cases.append(Case.of(s, label))
         else:
-            kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber",
-                                                               "tmd_mass", "tmd_design",
+            kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber_m",
+                                                               "tmd_mass_kg", "tmd_design",
                                                                "modal", "spec")}
             cases.append(Case.of(make_system(bar, preset, **kw)))
     return cases
+
+
+def tmd_window(system: System) -> tuple[float, float]:
+    """(lowest, highest) Omega/omega_n of the default window of a bar with a tuned mass
+    damper: its two lowest undamped natural frequencies with the absorber (mode 1
+    split in two; the whole modal host, not Den Hartog's one-mode estimate) over
+    omega_n, PEAK_MARGIN beyond each.  A damped absorber's two peaks lie between those
+    two frequencies: they start there with no damping and move towards each other,
+    to the locked frequency omega_n / sqrt(1 + mu) with infinite damping; as in any
+    damped resonance a peak may also sit a little beyond its undamped frequency (at
+    most 0.6 % at the steel example's mass ratio 0.18, 2.3 % at 0.88:
+    tests/test_defaults.py), inside the margin."""
+    w = natural_frequencies(*linear_host(system))[:2] / system.reference_frequency_rad_s
+    return float(w[0]) * (1.0 - PEAK_MARGIN), float(w[1]) * (1.0 + PEAK_MARGIN)
+
+
+def default_ratios(cases: list[Case]) -> tuple[float, ...]:
+    """The default sweep's Omega/omega_n: the published window 0.95 to 1.05, widened
+    to :func:`tmd_window` of every case with a tuned mass damper, in steps of
+    RATIO_STEP on the published grid (multiples of 0.01)."""
+    lo, hi = PUBLISHED_RATIOS[0], PUBLISHED_RATIOS[-1]
+    for case in cases:
+        if case.system.kind == "tmd":
+            a, b = tmd_window(case.system)
+            lo, hi = min(lo, a), max(hi, b)
+    first = math.floor(lo / RATIO_STEP + 1e-9)
+    last = math.ceil(hi / RATIO_STEP - 1e-9)
+    return tuple(round(RATIO_STEP * i, 12) for i in range(max(first, 1), last + 1))
 
 
 def parse_range(text: str, name: str = "ratios") -> np.ndarray:
@@ -174,18 +210,21 @@ def parse_range(text: str, name: str = "ratios") -> np.ndarray:
 
 @dataclass(frozen=True)
 class SweepOptions:
-    """A frequency sweep's grid: ``ratios`` Omega/omega_n of each case's host bar (> 0),
-    ``forces_n`` F0 (N, >= 0), and ``batch``: with the RK4 integrator, runs of the same
-    bar kind and mode count advanced together in lock-step (up to 16; 1: one at a
-    time; the results are the same, bit for bit)."""
+    """A frequency sweep's grid: ``ratios`` Omega/omega_n of each case's host bar (> 0;
+    None, the default: :func:`default_ratios` of the cases, the published 0.95 to
+    1.05 widened to show a tuned mass damper's two peaks), ``forces_n`` F0 (N, >= 0),
+    and ``batch``: with the RK4 integrator, runs of the same bar kind and mode count
+    advanced together in lock-step (up to 16; 1: one at a time; the results are the
+    same, bit for bit)."""
 
-    ratios: tuple[float, ...] = PUBLISHED_RATIOS
+    ratios: tuple[float, ...] | None = None
     forces_n: tuple[float, ...] = (10.0,)
     batch: int = BATCH
 
     def __post_init__(self):
-        object.__setattr__(self, "ratios", check_values("ratios", self.ratios, 0.0, math.inf,
-                                                        lo_open=True))
+        if self.ratios is not None:
+            object.__setattr__(self, "ratios", check_values("ratios", self.ratios, 0.0,
+                                                            math.inf, lo_open=True))
         object.__setattr__(self, "forces_n", check_values("forces_n", self.forces_n, 0.0,
                                                           math.inf, unit="N"))
         check_range("batch", self.batch, 1, BMAX)
@@ -194,8 +233,11 @@ class SweepOptions:
 def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> Plan:
     """Every (case, force, ratio) run; a point is a lock-step batch of them (the runs
     whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind and mode
-    count, in (case, force, ratio) order) or one run."""
+    count, in (case, force, ratio) order) or one run; the options in the context carry
+    their ratios (:func:`default_ratios` of the cases if none were given)."""
     cases = as_cases(cases, "cases")
+    if options.ratios is None:
+        options = replace(options, ratios=default_ratios(cases))
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
     integrators = [resolve_integrator(integration.integrator, c.system) for c in cases]
@@ -221,7 +263,7 @@ def compute(context: dict, point: list) -> list[dict]:
     runs = [(cases[i].system, Harmonic(o.forces_n[j], o.ratios[k]),
              cases[i].initial or integ.initial) for i, j, k in point]
     if context["batched"][point[0][0]]:
-        results = simulate_batch(runs, duration=integ.duration_s, dt=integ.dt_s,
+        results = simulate_batch(runs, duration_s=integ.duration_s, dt_s=integ.dt_s,
                                  steady_fraction=integ.steady_fraction)
     else:
         kw = integ.kwargs()
@@ -244,7 +286,7 @@ def _point(run) -> dict:
 
 
 def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
-    """The sweep Dataset, dims (case, force, ratio), from the points' results in plan
+    """The sweep Dataset, dims (case, force_n, ratio), from the points' results in plan
     order; ``attrs`` go after the configuration's."""
     ctx = plan.context
     cases, o, integ = ctx["cases"], ctx["options"], ctx["integration"]
@@ -258,20 +300,20 @@ def assemble(plan: Plan, results: list[list[dict]], attrs: dict | None = None):
             pattern[ijk] = r["pattern"]
     units = {"rms_tip_m": "m", "max_abs_tip_m": "m", "max_abs_rel_disp_m": "m",
              "impacts_per_cycle": "1/period", "energy_balance_relative": "1"}
-    dims = ("case", "force", "ratio")
+    dims = ("case", "force_n", "ratio")
     data = {k: (dims, v, {"units": units[k]}) for k, v in out.items()}
     data["pattern"] = (dims, pattern.astype(str))
     data["natural_frequency_hz"] = (("case",), np.array(
-        [c.system.reference_frequency / (2 * math.pi) for c in cases]), {"units": "Hz"})
+        [c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases]), {"units": "Hz"})
     return xr.Dataset(
         data,
         coords={
             "case": [c.label for c in cases],
-            "force": ("force", np.array(o.forces_n), {"units": "N"}),
+            "force_n": ("force_n", np.array(o.forces_n), {"units": "N"}),
             "ratio": ("ratio", np.array(o.ratios),
                       {"long_name": "Omega / omega_n of the host bar"}),
             "bar": ("case", [c.bar for c in cases]),
-            "gap": ("case", np.array([c.gap for c in cases]), {"units": "m"}),
+            "gap_m": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
             "integrator": ("case", ctx["integrators"],
                            {"long_name": "the integrator of the case's runs"}),
@@ -299,13 +341,14 @@ def sweep(cases: list[Case], options: SweepOptions | None = None, *,
 
     ``cases``: the bars: a :class:`~boringbar.model.system.System`, a sequence of them
     or a mapping of label to System (:func:`as_cases`; :func:`published_cases` gives
-    the published ones); ``options``: the grid (:class:`SweepOptions`; default the published
-    ratios 0.95-1.05 at 10 N); ``integration``: how each run is integrated
+    the published ones); ``options``: the grid (:class:`SweepOptions`; default 10 N over
+    the published ratios 0.95-1.05, widened to both peaks of a tuned mass damper:
+    :func:`default_ratios`); ``integration``: how each run is integrated
     (:class:`~boringbar.simulate.Integration`); ``execution``: where the points run
     (:class:`~boringbar.execute.Execution`; default a thread per core);
     ``progress(done, total)`` is called as points finish.
 
-    Returns an xarray Dataset with dims (case, force, ratio): ``rms_tip_m``,
+    Returns an xarray Dataset with dims (case, force_n, ratio): ``rms_tip_m``,
     ``max_abs_tip_m``, ``max_abs_rel_disp_m``, ``impacts_per_cycle``, ``pattern``,
     ``energy_balance_relative``; the configuration in its attributes.  The results
     are the same, bit for bit, whatever the batch size and the executor.
@@ -321,11 +364,11 @@ def summary(ds) -> dict:
     """JSON-able summary of a sweep (what ``boringbar sweep --json`` prints)."""
     cases = []
     for i, label in enumerate(ds["case"].values):
-        for j, force in enumerate(ds["force"].values):
+        for j, force in enumerate(ds["force_n"].values):
             cases.append({
                 "case": str(label),
                 "bar": str(ds["bar"].values[i]),
-                "gap_m": None if np.isnan(ds["gap"].values[i]) else float(ds["gap"].values[i]),
+                "gap_m": None if np.isnan(ds["gap_m"].values[i]) else float(ds["gap_m"].values[i]),
                 "friction": str(ds["friction"].values[i]),
                 "integrator": (str(ds["integrator"].values[i]) if "integrator" in ds.coords
                                else ds.attrs.get("integrator")),  # files before "auto"

@@ -115,7 +115,7 @@ def _cmd_continue(args) -> Outcome:
     if name == "restitution":
         kw["restitution"] = start
     if name == "friction-force-n":
-        kw["friction_force"] = start
+        kw["friction_force_n"] = start
     if name == "ball-mass-g":
         raise ParameterError("--parameter ball-mass-g: give it through the Python API "
                              "(the command line sets the ball by --ball)")
@@ -125,7 +125,7 @@ def _cmd_continue(args) -> Outcome:
         raise ParameterError(f"--overlay {args.overlay} with --parameter {name}: the overlay "
                              f"needs --parameter {' or '.join(BRUTE_FORCE)} and N in [2, 1000]")
     if bar == "ball":
-        kw.update(gap=check_gap(gap, args), friction=friction_on or name == "friction-force-n")
+        kw.update(gap_m=check_gap(gap, args), friction=friction_on or name == "friction-force-n")
     system = make_system(bar, args.preset, **kw)
     options = ContinuationOptions(parameter=name, stop=stop, force_n=force, ratio=ratio,
                                   periods=args.periods, step=args.step,

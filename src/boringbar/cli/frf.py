@@ -10,12 +10,18 @@ from pathlib import Path
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_positive
-from boringbar.analysis.frf_fit import MAX_ORDER, clear_peaks, fit_frf
+from boringbar.analysis.frf_fit import (
+    MAX_MODES,
+    MAX_ORDER,
+    MIN_ORDER,
+    fit_modes,
+    stabilisation,
+)
 from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import OUT_HELP, Outcome, many_cases, resolve_files, wrote
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.measured_frf import read_frf
-from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit
+from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
 from boringbar.reference.stability import (
     GRID_SPAN,
     TWO_PI,
@@ -34,19 +40,24 @@ ENVELOPE_SPEEDS = 600
 
 def add_fit_frf(sub) -> None:
     p = sub.add_parser("fit-frf", help="fit modes to a measured tip FRF (tap test)",
-                       description="Fit modal parameters (frequency, damping ratio, tip "
-                                   "stiffness) to a measured tip receptance with sdypy-EMA "
-                                   "(LSCF poles, LSFD constants; docs/frf.md). FILE: CSV "
-                                   "(frequency Hz, real, imaginary m/N) or UFF dataset 58. "
-                                   "Writes DIR/modal_fit.json (what --frf reads) and "
-                                   "DIR/fit.png (measured against fitted).")
+                       description="Find the modes of a measured tip receptance with a "
+                                   "stabilisation diagram and fit their modal parameters "
+                                   "(frequency, damping ratio, tip stiffness) with "
+                                   "sdypy-EMA (LSCE or LSCF poles, LSFD constants; "
+                                   "docs/frf.md). FILE: CSV (frequency Hz, real, "
+                                   "imaginary m/N) or UFF dataset 58. Writes "
+                                   "DIR/modal_fit.json (what --frf reads), DIR/fit.png "
+                                   "(measured against fitted) and DIR/stabilisation.png "
+                                   "(the diagram).")
     p.add_argument("file", metavar="FILE", help="the measured FRF (.csv, .txt, .uff, .unv)")
     p.add_argument("--modes", type=int, metavar="N",
-                   help="modes to fit, 1 to 8 (default: every clear peak of |H| in the "
-                        "band, at most 8; fewer take the most flexible)")
+                   help=f"modes to fit, 1 to {MAX_MODES} (default: every mode of the "
+                        f"stabilisation diagram, at most {MAX_MODES}); fewer than the "
+                        "diagram finds take the most flexible")
     p.add_argument("--band-hz", metavar="LO:HI", help="fit within this band (default: all)")
     p.add_argument("--max-order", type=int, default=MAX_ORDER, metavar="N",
-                   help=f"highest LSCF model order (default: {MAX_ORDER})")
+                   help=f"highest model order of the stabilisation diagram, {MIN_ORDER} "
+                        f"to 200 (default: {MAX_ORDER})")
     p.add_argument("--out", metavar="DIR", help=OUT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--quiet", action="store_true")
@@ -55,20 +66,25 @@ def add_fit_frf(sub) -> None:
 
 def cmd_fit_frf(args) -> Outcome:
     band = None if args.band_hz is None else _band(args.band_hz)
-    measured = read_frf(args.file)
-    data = measured if band is None else measured.band(*band)
-    n = (check_int("--modes", args.modes, 1, 8) if args.modes is not None
-         else min(8, max(1, len(clear_peaks(data)))))
-    fit, fitted = fit_frf(measured, n, band_hz=band, max_order=args.max_order)
+    n = None if args.modes is None else check_int("--modes", args.modes, 1, MAX_MODES)
+    max_order = check_int("--max-order", args.max_order, MIN_ORDER, 200)
+    diagram = stabilisation(read_frf(args.file), band_hz=band, max_order=max_order)
+    fit, fitted = fit_modes(diagram, n)
     out = Path(args.out)
-    files = {"json": out / "modal_fit.json", "png": out / "fit.png"}
+    files = {"json": out / "modal_fit.json", "png": out / "fit.png",
+             "stabilisation": out / "stabilisation.png"}
     write_json_atomic(fit.to_dict(), files["json"])
+    data = diagram.frf
     save_figure_atomic(plot_frf_fit(data.frequency_hz, data.receptance, fitted, fit),
                        files["png"])
+    save_figure_atomic(plot_stabilisation(diagram, fit.frequency_hz), files["stabilisation"])
     summary = {**fit.to_dict(), "files": {k: str(v) for k, v in files.items()}}
 
     def text(say) -> None:
-        say(f"{args.file}: {n} mode(s) fitted by {fit.source['method']}")
+        found = len(diagram.modes)
+        say(f"{args.file}: {fit.n_modes} mode(s) fitted by {fit.source['method']}; the "
+            f"stabilisation diagram finds {found} in the band"
+            + ("" if fit.n_modes == found else " (the most flexible taken)"))
         say("  mode  f (Hz)      zeta       k_tip (N/m)")
         for i, m in enumerate(summary["modes"]):
             say(f"  {i + 1:<4}  {m['frequency_hz']:<10.2f}  {m['damping_ratio']:<9.4g}  "

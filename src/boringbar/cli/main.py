@@ -56,6 +56,8 @@ COMMANDS = {
               "judge every published claim against a paper output"),
     "design": ("boringbar.cli.design", "add_design",
                "search for the best damper, robust to uncertainty"),
+    "app": ("boringbar.cli.app", "add_app",
+            "the design page: explore a damped bar live in the browser"),
 }
 
 

@@ -218,11 +218,13 @@ def _cmd_bifurcation(args) -> Outcome:
 
     kw = system_overrides(args)
     if bar == "ball":
-        kw.update(gap=gaps[0], friction=friction_on)
+        kw.update(gap_m=gaps[0], friction=friction_on)
     target = make_system(bar, args.preset, **kw)
     if parameter in ("gap", "restitution"):
+        keyword = {"gap": "gap_m"}.get(parameter, parameter)  # make_system's name for it
+
         def target(value):  # the factory: one System per value
-            return make_system(bar, args.preset, **{**kw, parameter: value})
+            return make_system(bar, args.preset, **{**kw, keyword: value})
     options = BifurcationOptions(parameter, tuple(values * si), force, ratio,
                                  backward=not args.no_backward,
                                  units="m" if parameter == "gap" else "1")
@@ -325,7 +327,7 @@ def _cmd_basins(args) -> Outcome:
 
     kw = system_overrides(args)
     if bar == "ball":
-        kw.update(gap=gap, friction=friction_on)
+        kw.update(gap_m=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
     check_dt(args, [system], ratio)
     options = BasinOptions(displacement, velocity, y0, yv0, force, ratio,
@@ -441,7 +443,7 @@ def _cmd_sensitivity(args) -> Outcome:
             raise ParameterError(f"--{given[0].replace('_', '-')} applies only to cuts "
                                  "(--cut-rpm or --depths-mm)")
 
-    common = dict(preset=args.preset, bar=bar, gap=gap, friction=friction_on,
+    common = dict(preset=args.preset, bar=bar, gap_m=gap, friction=friction_on,
                   overrides=system_overrides(args), integration=integration(args),
                   execution=execution(args))
     ds = sensitivity(SensitivityOptions(kind, values, tuple(forces), tuple(ratios)),

@@ -122,9 +122,10 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     if harmonic and many:
         g.add_argument("--force-n", default="10,20", metavar="N,...",
                        help="harmonic force amplitudes F0 in N (default: 10,20)")
-        g.add_argument("--ratios", default="0.95:1.05:0.01", metavar="START:STOP:STEP",
+        g.add_argument("--ratios", metavar="START:STOP:STEP",
                        help="Omega/omega_n values, START:STOP:STEP (inclusive) or comma list "
-                            "(default: 0.95:1.05:0.01)")
+                            "(default: 0.95:1.05:0.01, published, widened to both peaks of "
+                            "a tuned mass damper)")
     elif harmonic:  # None: not given (a cut refuses them); defaults in cmd_simulate
         g.add_argument("--force-n", type=float, metavar="N",
                        help="harmonic force amplitude F0 in N (default: 10)")
@@ -315,7 +316,7 @@ def check_dt(args, systems, ratio: float = 0.0) -> None:
     """--dt-s resolves the highest mode of every system and the forcing at ``ratio``
     (the largest Omega/omega_n; 0: only the modes)."""
     for system in systems:
-        check_step(system, ratio * system.reference_frequency, args.dt_s, "--dt-s")
+        check_step(system, ratio * system.reference_frequency_rad_s, args.dt_s, "--dt-s")
 
 
 def check_workers(workers, name: str = "--workers") -> None:
@@ -331,12 +332,12 @@ def initial_conditions(args, gaps_m: list[float]):
     if args.ball_velocity_m_s is not None:
         check_range("--ball-velocity-m-s", args.ball_velocity_m_s, -v, v, unit="m/s")
     return Initial(
-        tip_displacement=check_range("--tip-displacement-mm", args.tip_displacement_mm, -d, d,
+        tip_displacement_m=check_range("--tip-displacement-mm", args.tip_displacement_mm, -d, d,
                                      unit="mm") * 1e-3,
-        tip_velocity=check_range("--tip-velocity-m-s", args.tip_velocity_m_s, -v, v,
+        tip_velocity_m_s=check_range("--tip-velocity-m-s", args.tip_velocity_m_s, -v, v,
                                  unit="m/s"),
-        ball_position=(args.ball_position_mm or 0.0) * 1e-3,
-        ball_velocity=args.ball_velocity_m_s or 0.0,
+        ball_position_m=(args.ball_position_mm or 0.0) * 1e-3,
+        ball_velocity_m_s=args.ball_velocity_m_s or 0.0,
     )
 
 
@@ -350,7 +351,7 @@ def cut_options(args) -> dict:
     check_range("--feed-mm", feed, 0, MAX_FEED * 1e3, lo_open=True, unit="mm")
     check_int("--revolutions", revolutions, 1, 50)
     check_range("--bounded-fraction", fraction, 0, math.inf, lo_open=True, hi_open=True)
-    return {"kr": kr * 1e6, "feed": feed * 1e-3, "revolutions": revolutions,
+    return {"kr_pa": kr * 1e6, "feed_m": feed * 1e-3, "revolutions": revolutions,
             "interpolation": args.delay_interp or "cubic", "start": args.start or "rest",
             "bounded_fraction": fraction}
 
@@ -372,7 +373,7 @@ def check_depth(depth_mm: float, name: str) -> float:
 def system_overrides(args) -> dict:
     """make_system keywords the user set (the preset decides the rest)."""
     kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
-          "friction_number": args.friction_number, "friction_force": args.friction_force_n,
+          "friction_number": args.friction_number, "friction_force_n": args.friction_force_n,
           "friction_reading": args.friction_reading,
           "friction_reaction": args.friction_reaction,
           "tmd_design": args.tmd_design, "locked": args.locked or None,
@@ -406,13 +407,14 @@ CUT_ONLY = ("kr_mpa", "feed_mm", "revolutions", "delay_interp", "start", "bounde
 
 
 def forces_and_ratios(args):
-    """--force-n and --ratios lists, checked, and --workers checked."""
+    """--force-n and --ratios lists, checked (ratios None: not given), and --workers
+    checked."""
 
     forces = parse_numbers(args.force_n, "--force-n")
     for f in forces:
         check_force(f)
-    ratios = parse_range(args.ratios, "--ratios")
-    for r in ratios:
+    ratios = None if args.ratios is None else parse_range(args.ratios, "--ratios")
+    for r in () if ratios is None else ratios:
         check_ratio(r, "--ratios")
     check_workers(args.workers)
     return forces, ratios

@@ -67,14 +67,14 @@ def cmd_simulate(args) -> Outcome:
 
     kw = system_overrides(args)
     if bar == "ball":
-        kw.update(gap=gap, friction=friction_on)
+        kw.update(gap_m=gap, friction=friction_on)
     system = make_system(bar, args.preset, **kw)
     check_dt(args, [system], getattr(forcing, "ratio", 0.0))
     if isinstance(forcing, Harmonic):
         check_steady(args.duration_s, getattr(args, "steady_fraction", STEADY_FRACTION),
-                     2 * math.pi / forcing.omega(system.reference_frequency), "--duration-s")
+                     2 * math.pi / forcing.omega(system.reference_frequency_rad_s), "--duration-s")
     initial = initial_conditions(args, [gap] if bar == "ball" else [])
-    run = simulate(system, forcing, duration=args.duration_s, dt=args.dt_s, initial=initial,
+    run = simulate(system, forcing, duration_s=args.duration_s, dt_s=args.dt_s, initial=initial,
                    record_every=record_every, integrator=args.integrator)
 
 
@@ -115,7 +115,7 @@ def _simulate_forcing(args):
         if value is not None:
             raise ParameterError(f"{name} = {value:g} is harmonic forcing and cannot be mixed "
                                  "with a cut (--rpm, --depth-mm): give one or the other")
-    return Regenerative(depth=args.depth_mm * 1e-3, rpm=args.rpm,
+    return Regenerative(depth_m=args.depth_mm * 1e-3, rpm=args.rpm,
                         stop_at_zero=args.stop_at_zero, **cut_options(args))
 
 
@@ -160,7 +160,7 @@ def _simulate_text(s: dict, run) -> str:
         lines.append(f"  pattern            {s['pattern']} "
                      f"({s['impacts_per_cycle']:.3g} impacts per cycle)")
         lines.append(f"  max |y|            {s['max_abs_rel_disp_m'] * 1e3:.4g} mm "
-                     f"(walls at +-{run.system.damper.gap / 2 * 1e3:g} mm)")
+                     f"(walls at +-{run.system.damper.gap_m / 2 * 1e3:g} mm)")
     elif s["bar"] == "tmd":
         lines.append(f"  max stroke         {s['max_abs_rel_disp_m'] * 1e3:.4g} mm")
     if s["readings"]:

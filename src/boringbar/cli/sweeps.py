@@ -7,9 +7,20 @@ import math
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_range
-from boringbar.analysis.lobes import MAX_DEPTHS, PUBLISHED_RPM, LobesOptions, lobes
+from boringbar.analysis.lobes import (
+    DEPTH_FLOOR,
+    DEPTH_TOLERANCE,
+    MAX_DEPTHS,
+    PUBLISHED_DEPTH_STEP,
+    LobesOptions,
+    check_speeds,
+    default_speeds,
+    depth_grid,
+    grid_index,
+    lobes,
+)
 from boringbar.analysis.lobes import examples as lobe_examples
-from boringbar.analysis.sweep import SweepOptions, parse_range, sweep
+from boringbar.analysis.sweep import SweepOptions, default_ratios, parse_range, sweep
 from boringbar.cli.frf import analytic_lobes_outcome
 from boringbar.cli.options import (
     PATTERN_KEY,
@@ -56,18 +67,24 @@ def add_lobes(sub) -> None:
     g = p.add_argument_group("lobe grid")
     g.add_argument("--rpm", metavar="START:STOP:STEP",
                    help="spindle speeds in rev/min, START:STOP:STEP (inclusive) or comma list "
-                        "(default: 900:1600:50, published)")
+                        "(default: the bars' lobes 1 to 5, from 60 f1 / 6.1 to 60 f1 / 0.9, "
+                        "10 speeds per lobe; published: 900:1600:50)")
     g.add_argument("--analytic", action="store_true",
                    help="the classical frequency-domain lobes of the tip FRF instead of "
                         "simulated cuts (with --frf: of a measured FRF as it is); writes "
                         "DIR/lobes_analytic.json and .png (default --rpm: 500:5000:50)")
-    g.add_argument("--depth-step-mm", type=float, default=0.01, metavar="MM",
-                   help="depth-of-cut step in mm (default: 0.01)")
+    g.add_argument("--depth-step-mm", type=float, metavar="MM",
+                   help="depth-of-cut step in mm (default: --method search: geometric "
+                        "steps of --depth-tolerance; scan: 0.01, published)")
+    g.add_argument("--depth-tolerance", type=float, metavar="X",
+                   help="instead of --depth-step-mm, each depth X above the one below, so a "
+                        "limit is found to X of itself (default: 0.01 with --method search)")
     g.add_argument("--max-depth-mm", type=float, default=3.0, metavar="MM",
                    help="deepest cut tried in mm (default: 3)")
-    g.add_argument("--method", choices=("scan", "search"), default="scan",
-                   help="scan: every depth upwards (default, published); search: doubling "
-                        "and bisection (faster; assumes stability monotone below the bracket)")
+    g.add_argument("--method", choices=("scan", "search"), default="search",
+                   help="search (default): doubling and bisection from the analytic limit "
+                        "(assumes stability monotone below the bracket); scan: every depth "
+                        "upwards (published)")
     g.add_argument("--successive", type=int, default=3, metavar="N",
                    help="a speed's scan ends after N successive chattering depths (default: 3)")
     g.add_argument("--criterion", choices=("zero", "bounded"), default="zero",
@@ -87,6 +104,8 @@ def add_lobes(sub) -> None:
 def _cmd_sweep(args) -> Outcome:
     cases, bars, gaps = many_cases(args)
     forces, ratios = forces_and_ratios(args)
+    if ratios is None:  # the library's default, resolved here to check the step against it
+        ratios = default_ratios(cases)
     check_dt(args, [c.system for c in cases], max(ratios))
 
     initial = initial_conditions(args, gaps if "ball" in bars else [])
@@ -116,12 +135,12 @@ def short_pattern(name: str) -> str:
 
 def _sweep_text(ds) -> str:
     heads = []
-    for label, bar, gap, fr in zip(ds["case"].values, ds["bar"].values, ds["gap"].values,
+    for label, bar, gap, fr in zip(ds["case"].values, ds["bar"].values, ds["gap_m"].values,
                                    ds["friction"].values, strict=True):
         heads.append(f"ball {gap * 1e3:g}/{fr}" if bar == "ball" else str(label))
     width = max(14, *(len(h) + 2 for h in heads))
     lines = []
-    for j, force in enumerate(ds["force"].values):
+    for j, force in enumerate(ds["force_n"].values):
         lines.append(f"F0 = {force:g} N: tip RMS (mm) [pattern]; ball columns: gap mm/friction")
         lines.append("ratio ".rjust(8) + "".join(h.rjust(width) for h in heads))
         for k, ratio in enumerate(ds["ratio"].values):
@@ -138,25 +157,9 @@ def _sweep_text(ds) -> str:
 
 def _cmd_lobes(args) -> Outcome:
     if args.analytic:
-        return analytic_lobes_outcome(args, cut_options(args)["kr"])
+        return analytic_lobes_outcome(args, cut_options(args)["kr_pa"])
     cases, _, _ = many_cases(args)
-    rpm = PUBLISHED_RPM if args.rpm is None else parse_range(args.rpm, "--rpm")
-    for r in rpm:
-        check_rpm(r, args)
-    step = check_depth(args.depth_step_mm, "--depth-step-mm")
-    check_range("--max-depth-mm", args.max_depth_mm, step, MAX_DEPTH * 1e3, unit="mm")
-    if args.max_depth_mm / step > MAX_DEPTHS + 1e-6:
-        raise ParameterError(f"--depth-step-mm = {step:g} mm gives "
-                             f"{args.max_depth_mm / step:.3g} depths up to --max-depth-mm = "
-                             f"{args.max_depth_mm:g} mm; the allowed maximum is {MAX_DEPTHS}")
-    check_int("--successive", args.successive, 1, 100)
-    check_workers(args.workers)
-    cut = cut_options(args)
-    options = LobesOptions(tuple(rpm), args.method, args.criterion, step * 1e-3,
-                           args.max_depth_mm * 1e-3, args.successive, kr_pa=cut["kr"],
-                           feed_m=cut["feed"], revolutions=cut["revolutions"],
-                           interpolation=cut["interpolation"], start=cut["start"],
-                           bounded_fraction=cut["bounded_fraction"])
+    options = _lobe_options(args, cases)
     integ = integration(args)
     ds = lobes(cases, options, integration=integ, execution=execution(args),
                progress=progress_printer(args, "lobes", "(case, speed) columns"))
@@ -179,19 +182,49 @@ def _cmd_lobes(args) -> Outcome:
     return Outcome(summary, text)
 
 
+def _lobe_options(args, cases) -> LobesOptions:
+    """The lobe grid and cut of the command line, checked under the options' names;
+    the speeds, when --rpm is not given, are the cases' lobes (the library's rule)."""
+    rpm = (default_speeds(cases) if args.rpm is None
+           else check_speeds("--rpm", parse_range(args.rpm, "--rpm")))
+    for r in rpm:
+        check_rpm(r, args)
+    step, tol = args.depth_step_mm, args.depth_tolerance
+    if depth_grid(args.method, step, tol, ("--depth-step-mm", "--depth-tolerance")) == "linear":
+        step = check_depth(PUBLISHED_DEPTH_STEP * 1e3 if step is None else step,
+                           "--depth-step-mm")
+    else:
+        tol = check_range("--depth-tolerance", DEPTH_TOLERANCE if tol is None else tol,
+                          0.0, 0.5, lo_open=True)
+    check_range("--max-depth-mm", args.max_depth_mm, DEPTH_FLOOR * 1e3 if step is None
+                else step, MAX_DEPTH * 1e3, unit="mm")
+    count = grid_index(args.max_depth_mm * 1e-3, None if step is None else step * 1e-3, tol)
+    if count > MAX_DEPTHS:
+        given = (f"--depth-step-mm = {step:g} mm" if step is not None
+                 else f"--depth-tolerance = {tol:g}")
+        raise ParameterError(f"{given} gives {count} depths up to --max-depth-mm = "
+                             f"{args.max_depth_mm:g} mm; the allowed maximum is {MAX_DEPTHS}")
+    check_int("--successive", args.successive, 1, 100)
+    check_workers(args.workers)
+    cut = cut_options(args)
+    return LobesOptions(tuple(rpm), args.method, args.criterion,
+                        None if step is None else step * 1e-3, args.max_depth_mm * 1e-3,
+                        args.successive, **cut, depth_tolerance=tol)
+
+
 def _lobes_text(ds) -> str:
     lines = []
-    analytic = ds["analytic_limit"].values if "analytic_limit" in ds else None
-    depths = ds["depth"].values
+    analytic = ds["analytic_limit_m"].values if "analytic_limit_m" in ds else None
+    depths = ds["depth_m"].values
     chosen = ds["verdict" if ds.attrs["criterion"] == "zero" else "verdict_bounded"].values
 
     def mm(v: float) -> str:
-        return f"{v * 1e3:.3f}" if math.isfinite(v) else "-"
+        return f"{v * 1e3:.4g}" if math.isfinite(v) else "-"  # 1 % of a 0.03 mm limit
 
     for i, label in enumerate(ds["case"].values):
-        limit = ds["limit_depth"].values[i]
-        first = ds["first_unstable_depth"].values[i]
-        mcf = float(ds["min_chatter_free_depth"].values[i])
+        limit = ds["limit_depth_m"].values[i]
+        first = ds["first_unstable_depth_m"].values[i]
+        mcf = float(ds["min_chatter_free_depth_m"].values[i])
         at = (f" at {ds['rpm'].values[int(np.nanargmin(limit))]:g} rpm"
               if np.isfinite(limit).any() else "")
         lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}")

@@ -102,8 +102,14 @@ def stream(fn: Callable, tasks: dict[Hashable, object], on_done: Callable,
 def _threads(fn, tasks, on_done, workers):
     with ThreadPoolExecutor(max_workers=min(workers, len(tasks))) as pool:
         futs = {pool.submit(fn, task): k for k, task in tasks.items()}
-        for fut in as_completed(futs):
-            on_done(futs[fut], fut.result())
+        try:
+            for fut in as_completed(futs):
+                on_done(futs[fut], fut.result())
+        except BaseException:
+            # a failed point or a caller that stops (on_done raising) ends the work: the
+            # points not started are dropped rather than run for nobody
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
 
 
 def _mp_context():

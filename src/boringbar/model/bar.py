@@ -33,34 +33,35 @@ DAMPING_RATIO = 0.01
 
 @dataclass(frozen=True)
 class Section:
-    """One prismatic piece of the bar, from ``start`` to ``end`` (m, from the clamp).
+    """One prismatic piece of the bar, from ``start_m`` to ``end_m`` (m, from the clamp).
 
-    ``diameter`` is the outer (model) diameter in m; ``inner_diameter`` > 0
+    ``diameter_m`` is the outer (model) diameter in m; ``inner_diameter_m`` > 0
     makes it a tube.
     """
 
-    start: float
-    end: float
-    diameter: float
-    inner_diameter: float = 0.0
+    start_m: float
+    end_m: float
+    diameter_m: float
+    inner_diameter_m: float = 0.0
 
     def __post_init__(self):
-        check_range("section start", self.start, 0.0, math.inf)
-        if not self.end > self.start:
+        check_range("section start_m", self.start_m, 0.0, math.inf)
+        if not self.end_m > self.start_m:
             raise ValueError(
-                f"section end = {self.end!r} m must be greater than its start = {self.start!r} m"
+                f"section end_m = {self.end_m!r} m must be greater than its start_m = "
+                f"{self.start_m!r} m"
             )
-        check_positive("section diameter", self.diameter)
-        check_range("section inner_diameter", self.inner_diameter, 0.0, self.diameter,
+        check_positive("section diameter_m", self.diameter_m, "m")
+        check_range("section inner_diameter_m", self.inner_diameter_m, 0.0, self.diameter_m,
                     hi_open=True)
 
     @property
-    def area(self) -> float:
-        return math.pi / 4.0 * (self.diameter**2 - self.inner_diameter**2)
+    def area_m2(self) -> float:
+        return math.pi / 4.0 * (self.diameter_m**2 - self.inner_diameter_m**2)
 
     @property
-    def second_moment(self) -> float:
-        return math.pi / 64.0 * (self.diameter**4 - self.inner_diameter**4)
+    def second_moment_m4(self) -> float:
+        return math.pi / 64.0 * (self.diameter_m**4 - self.inner_diameter_m**4)
 
 
 def published_sections(cavity: bool = True) -> tuple[Section, ...]:
@@ -84,27 +85,27 @@ class ModalModel:
     absorber (psi_absorber).  Any normalisation of a mode is allowed; the
     physical outputs (tip displacement W = psi_tip . u) do not depend on it.
 
-    ``mass``, ``stiffness``, ``damping_ratio``: M_i, K_i, zeta_i per mode;
-    ``psi_tip``, ``psi_damper``, ``psi_absorber``: the mode shapes at the tip, at
-    the ball ``z_damper`` and at the absorber ``z_absorber`` (m from the clamp);
+    ``mass_kg``, ``stiffness_n_m``, ``damping_ratio``: M_i (kg), K_i (N/m), zeta_i per
+    mode; ``psi_tip``, ``psi_damper``, ``psi_absorber``: the mode shapes at the tip, at
+    the ball ``z_damper_m`` and at the absorber ``z_absorber_m`` (m from the clamp);
     ``source``: where the model came from ("fe", "tap-test", with a calibration
     note appended); ``info``: free-form provenance.
     """
 
-    mass: np.ndarray  #: modal masses M_i (kg, in the units the mode is normalised)
-    stiffness: np.ndarray  #: modal stiffnesses K_i
+    mass_kg: np.ndarray  #: modal masses M_i (kg, in the units the mode is normalised)
+    stiffness_n_m: np.ndarray  #: modal stiffnesses K_i (N/m, likewise)
     damping_ratio: np.ndarray  #: zeta_i
     psi_tip: np.ndarray  #: psi_i(L)
     psi_damper: np.ndarray  #: psi_i(z_d)
     psi_absorber: np.ndarray  #: psi_i(z_a)
-    z_damper: float = BALL_POSITION
-    z_absorber: float = ABSORBER_POSITION
+    z_damper_m: float = BALL_POSITION
+    z_absorber_m: float = ABSORBER_POSITION
     source: str = "fe"  #: "fe", "tap-test", or with a calibration note appended
     info: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        n = len(np.atleast_1d(self.mass))
-        for name in ("mass", "stiffness", "damping_ratio", "psi_tip", "psi_damper",
+        n = len(np.atleast_1d(self.mass_kg))
+        for name in ("mass_kg", "stiffness_n_m", "damping_ratio", "psi_tip", "psi_damper",
                      "psi_absorber"):
             arr = np.atleast_1d(np.asarray(getattr(self, name), dtype=float)).copy()
             if arr.shape != (n,):
@@ -114,8 +115,8 @@ class ModalModel:
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         for i in range(n):
-            check_positive(f"modal mass of mode {i + 1}", self.mass[i])
-            check_positive(f"modal stiffness of mode {i + 1}", self.stiffness[i])
+            check_positive(f"modal mass of mode {i + 1}", self.mass_kg[i])
+            check_positive(f"modal stiffness of mode {i + 1}", self.stiffness_n_m[i])
             check_range(f"damping ratio of mode {i + 1}", self.damping_ratio[i], 0.0, 1.0,
                         hi_open=True)
         if n < 1 or np.any(self.psi_tip == 0.0):
@@ -124,43 +125,43 @@ class ModalModel:
     # --- derived quantities -------------------------------------------------
     @property
     def n_modes(self) -> int:
-        return len(self.mass)
+        return len(self.mass_kg)
 
     @property
-    def omegas(self) -> np.ndarray:
+    def omegas_rad_s(self) -> np.ndarray:
         """Natural frequencies of the retained modes (rad/s)."""
-        return np.sqrt(self.stiffness / self.mass)
+        return np.sqrt(self.stiffness_n_m / self.mass_kg)
 
     @property
-    def natural_frequency(self) -> float:
+    def natural_frequency_rad_s(self) -> float:
         """First natural frequency omega_n (rad/s)."""
-        return float(self.omegas[0])
+        return float(self.omegas_rad_s[0])
 
     @property
     def natural_frequency_hz(self) -> float:
-        return self.natural_frequency / (2.0 * math.pi)
+        return self.natural_frequency_rad_s / (2.0 * math.pi)
 
     @property
-    def damping(self) -> np.ndarray:
-        """Modal viscous coefficients C_i = 2 zeta_i sqrt(K_i M_i)."""
-        return 2.0 * self.damping_ratio * np.sqrt(self.stiffness * self.mass)
+    def damping_n_s_m(self) -> np.ndarray:
+        """Modal viscous coefficients C_i = 2 zeta_i sqrt(K_i M_i) (N s/m)."""
+        return 2.0 * self.damping_ratio * np.sqrt(self.stiffness_n_m * self.mass_kg)
 
     @property
-    def tip_stiffness(self) -> float:
+    def tip_stiffness_n_m(self) -> float:
         """Static-like stiffness of the first mode at the tip, K_1 / psi_1(L)^2 (N/m)."""
-        return float(self.stiffness[0] / self.psi_tip[0] ** 2)
+        return float(self.stiffness_n_m[0] / self.psi_tip[0] ** 2)
 
     @property
-    def tip_mass(self) -> float:
+    def tip_mass_kg(self) -> float:
         """First-mode mass referred to the tip, M_1 / psi_1(L)^2 (kg)."""
-        return float(self.mass[0] / self.psi_tip[0] ** 2)
+        return float(self.mass_kg[0] / self.psi_tip[0] ** 2)
 
     # --- transformations ----------------------------------------------------
     def truncated(self, n_modes: int) -> ModalModel:
         """The first ``n_modes`` modes."""
         check_range("n_modes", n_modes, 1, self.n_modes)
         n = int(n_modes)
-        return replace(self, mass=self.mass[:n], stiffness=self.stiffness[:n],
+        return replace(self, mass_kg=self.mass_kg[:n], stiffness_n_m=self.stiffness_n_m[:n],
                        damping_ratio=self.damping_ratio[:n], psi_tip=self.psi_tip[:n],
                        psi_damper=self.psi_damper[:n], psi_absorber=self.psi_absorber[:n])
 
@@ -173,7 +174,7 @@ class ModalModel:
         check_positive("calibration frequency_hz", frequency_hz)
         factor = (frequency_hz / self.natural_frequency_hz) ** 2
         info = dict(self.info, stiffness_scale=factor, calibrated_f1_hz=frequency_hz)
-        return replace(self, stiffness=self.stiffness * factor,
+        return replace(self, stiffness_n_m=self.stiffness_n_m * factor,
                        source=f"{self.source}+calibrated-to-{frequency_hz:g}Hz", info=info)
 
     def normalised(self, scale) -> ModalModel:
@@ -182,7 +183,7 @@ class ModalModel:
         M and K scale by scale^2; physical results are unchanged (a test).
         """
         s = np.broadcast_to(np.asarray(scale, dtype=float), (self.n_modes,))
-        return replace(self, mass=self.mass * s**2, stiffness=self.stiffness * s**2,
+        return replace(self, mass_kg=self.mass_kg * s**2, stiffness_n_m=self.stiffness_n_m * s**2,
                        psi_tip=self.psi_tip * s, psi_damper=self.psi_damper * s,
                        psi_absorber=self.psi_absorber * s)
 
@@ -190,51 +191,53 @@ class ModalModel:
         return {
             "source": self.source,
             "n_modes": self.n_modes,
-            "natural_frequencies_hz": (self.omegas / (2 * math.pi)).tolist(),
-            "modal_mass": self.mass.tolist(),
-            "modal_stiffness": self.stiffness.tolist(),
+            "natural_frequencies_hz": (self.omegas_rad_s / (2 * math.pi)).tolist(),
+            "modal_mass_kg": self.mass_kg.tolist(),
+            "modal_stiffness_n_m": self.stiffness_n_m.tolist(),
             "damping_ratio": self.damping_ratio.tolist(),
             "psi_tip": self.psi_tip.tolist(),
             "psi_damper": self.psi_damper.tolist(),
             "psi_absorber": self.psi_absorber.tolist(),
-            "z_damper_m": self.z_damper,
-            "z_absorber_m": self.z_absorber,
+            "z_damper_m": self.z_damper_m,
+            "z_absorber_m": self.z_absorber_m,
             **{k: v for k, v in self.info.items()},
         }
 
     @classmethod
     def from_dict(cls, d: dict) -> ModalModel:
         """The model :meth:`to_dict` describes (its other keys become ``info``)."""
-        known = {"source", "n_modes", "natural_frequencies_hz", "modal_mass", "modal_stiffness",
+        known = {"source", "n_modes", "natural_frequencies_hz", "modal_mass_kg",
+                 "modal_stiffness_n_m",
                  "damping_ratio", "psi_tip", "psi_damper", "psi_absorber", "z_damper_m",
                  "z_absorber_m"}
-        return cls(mass=d["modal_mass"], stiffness=d["modal_stiffness"],
+        return cls(mass_kg=d["modal_mass_kg"], stiffness_n_m=d["modal_stiffness_n_m"],
                    damping_ratio=d["damping_ratio"], psi_tip=d["psi_tip"],
                    psi_damper=d["psi_damper"], psi_absorber=d["psi_absorber"],
-                   z_damper=d["z_damper_m"], z_absorber=d["z_absorber_m"], source=d["source"],
+                   z_damper_m=d["z_damper_m"], z_absorber_m=d["z_absorber_m"],
+                   source=d["source"],
                    info={k: v for k, v in d.items() if k not in known})
 
     @classmethod
     def from_tap_test(cls, frequency_hz: float, damping_ratio: float = DAMPING_RATIO, *,
-                      tip_stiffness: float | None = None, tip_mass: float | None = None,
+                      tip_stiffness_n_m: float | None = None, tip_mass_kg: float | None = None,
                       damper_ratio: float = 1.0, absorber_ratio: float = 1.0) -> ModalModel:
         """One mode from measured data, normalised to psi(L) = 1.
 
-        Give ``tip_stiffness`` k_tip (N/m) or ``tip_mass`` (kg, = k_tip/omega_n^2);
+        Give ``tip_stiffness_n_m`` k_tip (N/m) or ``tip_mass_kg`` (kg, = k_tip/omega_n^2);
         ``damper_ratio`` = psi_d/psi_L and ``absorber_ratio`` = psi_a/psi_L.
         """
         check_positive("frequency_hz", frequency_hz)
         omega = 2 * math.pi * frequency_hz
-        if (tip_stiffness is None) == (tip_mass is None):
-            raise ValueError("from_tap_test: give exactly one of tip_stiffness (N/m) or "
-                             "tip_mass (kg)")
-        if tip_stiffness is not None:
-            check_positive("tip_stiffness", tip_stiffness)
-            mass = tip_stiffness / omega**2
+        if (tip_stiffness_n_m is None) == (tip_mass_kg is None):
+            raise ValueError("from_tap_test: give exactly one of tip_stiffness_n_m (N/m) or "
+                             "tip_mass_kg (kg)")
+        if tip_stiffness_n_m is not None:
+            check_positive("tip_stiffness_n_m", tip_stiffness_n_m, "N/m")
+            mass = tip_stiffness_n_m / omega**2
         else:
-            check_positive("tip_mass", tip_mass)
-            mass = float(tip_mass)
-        return cls(mass=np.array([mass]), stiffness=np.array([mass * omega**2]),
+            check_positive("tip_mass_kg", tip_mass_kg, "kg")
+            mass = float(tip_mass_kg)
+        return cls(mass_kg=np.array([mass]), stiffness_n_m=np.array([mass * omega**2]),
                    damping_ratio=np.array([damping_ratio]), psi_tip=np.array([1.0]),
                    psi_damper=np.array([float(damper_ratio)]),
                    psi_absorber=np.array([float(absorber_ratio)]), source="tap-test")
@@ -244,88 +247,90 @@ class ModalModel:
 class SteppedBar:
     """A stepped cantilever: clamped at z = 0, free at the end of the last section.
 
-    ``sections``: contiguous :class:`Section` s from the clamp; ``youngs_modulus``
-    (Pa) and ``density`` (kg/m^3) of the material; ``damping_ratio``: modal damping
-    of every mode; ``max_element_length`` (m): the finite-element mesh size
+    ``sections``: contiguous :class:`Section` s from the clamp; ``youngs_modulus_pa``
+    (Pa) and ``density_kg_m3`` (kg/m^3) of the material; ``damping_ratio``: modal
+    damping of every mode; ``max_element_length_m`` (m): the finite-element mesh size
     (nodes also at every section boundary and at the points asked for).
-    ``clamp_translational_stiffness`` (N/m) and ``clamp_rotational_stiffness``
-    (N m/rad) support the bar's root on springs; ``math.inf`` (the default) is
-    a rigid clamp, whose degree of freedom is removed.
+    ``clamp_translational_stiffness_n_m`` (N/m) and
+    ``clamp_rotational_stiffness_n_m_per_rad`` (N m/rad) support the bar's root on springs;
+    ``math.inf`` (the default) is a rigid clamp, whose degree of freedom is removed.
     """
 
     sections: tuple[Section, ...] = published_sections(cavity=True)
-    youngs_modulus: float = STEEL_E
-    density: float = STEEL_RHO
+    youngs_modulus_pa: float = STEEL_E
+    density_kg_m3: float = STEEL_RHO
     damping_ratio: float = DAMPING_RATIO
-    max_element_length: float = 0.005
-    clamp_translational_stiffness: float = math.inf
-    clamp_rotational_stiffness: float = math.inf
+    max_element_length_m: float = 0.005
+    clamp_translational_stiffness_n_m: float = math.inf
+    clamp_rotational_stiffness_n_m_per_rad: float = math.inf
 
     def __post_init__(self):
         object.__setattr__(self, "sections", tuple(self.sections))
         if not self.sections:
             raise ValueError("a SteppedBar needs at least one section")
-        if abs(self.sections[0].start) > 1e-12:
+        if abs(self.sections[0].start_m) > 1e-12:
             raise ValueError(f"the first section must start at the clamp, z = 0 "
-                             f"(got {self.sections[0].start!r} m)")
+                             f"(got {self.sections[0].start_m!r} m)")
         for a, b in itertools.pairwise(self.sections):
-            if abs(a.end - b.start) > 1e-12:
-                raise ValueError(f"sections must be contiguous: one ends at {a.end!r} m, the "
-                                 f"next starts at {b.start!r} m")
-        check_positive("youngs_modulus", self.youngs_modulus)
-        check_positive("density", self.density)
+            if abs(a.end_m - b.start_m) > 1e-12:
+                raise ValueError(f"sections must be contiguous: one ends at {a.end_m!r} m, the "
+                                 f"next starts at {b.start_m!r} m")
+        check_positive("youngs_modulus_pa", self.youngs_modulus_pa, "Pa")
+        check_positive("density_kg_m3", self.density_kg_m3, "kg/m^3")
         check_range("damping_ratio", self.damping_ratio, 0.0, 1.0, hi_open=True)
-        check_positive("max_element_length", self.max_element_length)
+        check_positive("max_element_length_m", self.max_element_length_m, "m")
         for name, value, unit in (
-                ("clamp translational stiffness", self.clamp_translational_stiffness, "N/m"),
-                ("clamp rotational stiffness", self.clamp_rotational_stiffness, "N m/rad")):
+                ("clamp_translational_stiffness_n_m", self.clamp_translational_stiffness_n_m,
+                 "N/m"),
+                ("clamp_rotational_stiffness_n_m_per_rad",
+                 self.clamp_rotational_stiffness_n_m_per_rad, "N m/rad")):
             if value != math.inf:  # inf: rigid
                 check_positive(name, value, unit)
 
     @property
     def rigid_clamp(self) -> bool:
-        return math.isinf(self.clamp_translational_stiffness) and math.isinf(
-            self.clamp_rotational_stiffness)
+        return math.isinf(self.clamp_translational_stiffness_n_m) and math.isinf(
+            self.clamp_rotational_stiffness_n_m_per_rad)
 
     def _kept_dofs(self, n_dof: int) -> np.ndarray:
         """The degrees of freedom left after the clamp: a rigid direction is removed."""
         keep = np.ones(n_dof, dtype=bool)
-        keep[0] = not math.isinf(self.clamp_translational_stiffness)
-        keep[1] = not math.isinf(self.clamp_rotational_stiffness)
+        keep[0] = not math.isinf(self.clamp_translational_stiffness_n_m)
+        keep[1] = not math.isinf(self.clamp_rotational_stiffness_n_m_per_rad)
         return keep
 
     def _deflections(self, vec: np.ndarray) -> np.ndarray:
         """Deflection w at every node (rows) of the reduced eigenvectors ``vec``."""
-        removed = int(math.isinf(self.clamp_translational_stiffness)) + int(
-            math.isinf(self.clamp_rotational_stiffness))
+        removed = int(math.isinf(self.clamp_translational_stiffness_n_m)) + int(
+            math.isinf(self.clamp_rotational_stiffness_n_m_per_rad))
         full = np.zeros((vec.shape[0] + removed, vec.shape[1]))
         full[self._kept_dofs(full.shape[0])] = vec
         return full[0::2, :]
 
     @property
-    def length(self) -> float:
-        return self.sections[-1].end
+    def length_m(self) -> float:
+        return self.sections[-1].end_m
 
     def mesh(self, points=()) -> np.ndarray:
         """Node positions: every section boundary and every requested point."""
-        brk = {0.0, self.length} | {s.end for s in self.sections}
+        brk = {0.0, self.length_m} | {s.end_m for s in self.sections}
         for z in points:
-            check_range("mode-shape point z", z, 0.0, self.length)
+            check_range("mode-shape point z", z, 0.0, self.length_m)
             brk.add(float(z))
         brk = np.array(sorted(brk))
         nodes = [brk[0]]
         for a, b in itertools.pairwise(brk):
             if b - a < 1e-12:
                 continue
-            n_el = max(1, math.ceil((b - a) / self.max_element_length - 1e-9))
+            n_el = max(1, math.ceil((b - a) / self.max_element_length_m - 1e-9))
             nodes.extend(np.linspace(a, b, n_el + 1)[1:])
         return np.array(nodes)
 
     def _section_at(self, z: float) -> Section:
         for s in self.sections:
-            if s.start - 1e-12 <= z <= s.end + 1e-12:
+            if s.start_m - 1e-12 <= z <= s.end_m + 1e-12:
                 return s
-        raise ValueError(f"z = {z!r} m lies outside the bar [0, {self.length}] m")
+        raise ValueError(f"z = {z!r} m lies outside the bar [0, {self.length_m}] m")
 
     def matrices(self, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Global stiffness and consistent mass matrices, the clamp's springs added
@@ -338,8 +343,8 @@ class SteppedBar:
         M = np.zeros((n_dof, n_dof))
         for e, (a, b) in enumerate(itertools.pairwise(nodes)):
             sec = self._section_at(0.5 * (a + b))
-            ei = self.youngs_modulus * sec.second_moment
-            ra = self.density * sec.area
+            ei = self.youngs_modulus_pa * sec.second_moment_m4
+            ra = self.density_kg_m3 * sec.area_m2
             ke, me = _element_matrices(b - a, ei, ra)
             idx = slice(2 * e, 2 * e + 4)
             K[idx, idx] += ke
@@ -348,9 +353,9 @@ class SteppedBar:
             return K[2:, 2:], M[2:, 2:]
         keep = self._kept_dofs(n_dof)
         if keep[0]:
-            K[0, 0] += self.clamp_translational_stiffness
+            K[0, 0] += self.clamp_translational_stiffness_n_m
         if keep[1]:
-            K[1, 1] += self.clamp_rotational_stiffness
+            K[1, 1] += self.clamp_rotational_stiffness_n_m_per_rad
         return K[np.ix_(keep, keep)], M[np.ix_(keep, keep)]
 
     @staticmethod
@@ -384,9 +389,11 @@ class SteppedBar:
         w2, vec = self._eig(K, M, n)
         return np.sqrt(w2), nodes, self._deflections(vec)
 
-    def modal_model(self, n_modes: int = 1, z_damper: float = BALL_POSITION,
-                    z_absorber: float = ABSORBER_POSITION) -> ModalModel:
-        """Reduce to ``n_modes`` modes, normalised to psi_i(L) = 1."""
+    def modal_model(self, n_modes: int = 1, z_damper_m: float = BALL_POSITION,
+                    z_absorber_m: float = ABSORBER_POSITION) -> ModalModel:
+        """Reduce to ``n_modes`` modes, normalised to psi_i(L) = 1, with the mode shapes
+        at the ball ``z_damper_m`` and the absorber ``z_absorber_m`` (m from the clamp)."""
+        z_damper, z_absorber = z_damper_m, z_absorber_m
         nodes = self.mesh((z_damper, z_absorber))
         K, M = self.matrices(nodes)
         n = int(n_modes)
@@ -401,13 +408,13 @@ class SteppedBar:
             i = int(np.argmin(np.abs(nodes - z)))
             return w[i, :]
 
-        return ModalModel(mass=masses, stiffness=stiff,
+        return ModalModel(mass_kg=masses, stiffness_n_m=stiff,
                           damping_ratio=np.full(len(masses), self.damping_ratio),
                           psi_tip=np.ones(len(masses)), psi_damper=at(z_damper),
-                          psi_absorber=at(z_absorber), z_damper=float(z_damper),
-                          z_absorber=float(z_absorber), source="fe",
+                          psi_absorber=at(z_absorber), z_damper_m=float(z_damper),
+                          z_absorber_m=float(z_absorber), source="fe",
                           info={"n_elements": len(nodes) - 1,
-                                "bar_length_m": self.length})
+                                "bar_length_m": self.length_m})
 
 
 def _element_matrices(length: float, ei: float, rho_a: float):
@@ -428,11 +435,12 @@ def _element_matrices(length: float, ei: float, rho_a: float):
     return ke, me
 
 
-def published_bar(cavity: bool = True, n_modes: int = 1, z_absorber: float = ABSORBER_POSITION,
-                  max_element_length: float = 0.005) -> ModalModel:
+def published_bar(cavity: bool = True, n_modes: int = 1,
+                  z_absorber_m: float = ABSORBER_POSITION,
+                  max_element_length_m: float = 0.005) -> ModalModel:
     """The published boring bar's modal model: the ball-cavity bar (``cavity``) or the
-    solid one, ``n_modes`` retained, the absorber's mode shape at ``z_absorber`` (m),
-    meshed at ``max_element_length`` (m)."""
+    solid one, ``n_modes`` retained, the absorber's mode shape at ``z_absorber_m`` (m),
+    meshed at ``max_element_length_m`` (m)."""
     bar = SteppedBar(sections=published_sections(cavity),
-                     max_element_length=max_element_length)
-    return bar.modal_model(n_modes=n_modes, z_damper=BALL_POSITION, z_absorber=z_absorber)
+                     max_element_length_m=max_element_length_m)
+    return bar.modal_model(n_modes=n_modes, z_damper_m=BALL_POSITION, z_absorber_m=z_absorber_m)

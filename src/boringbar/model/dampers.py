@@ -16,6 +16,7 @@ from boringbar._validate import (
     check_positive,
     check_range,
 )
+from boringbar.model.bar import ModalModel
 from boringbar.model.materials import MATERIALS
 
 GRAVITY = 9.81
@@ -38,7 +39,7 @@ PUBLISHED_CARBIDE_MASS = 0.026
 #: The published rolling-resistance number, "0.6" (mm).
 PUBLISHED_FRICTION_NUMBER = 0.6
 #: The published absorber (docs/model.md, section 3).
-PUBLISHED_TMD = {"mass": 0.39, "stiffness": 1.05e6, "damping": 505.0}
+PUBLISHED_TMD = {"mass_kg": 0.39, "stiffness_n_m": 1.05e6, "damping_n_s_m": 505.0}
 FRICTION_KINDS = ("none", "rolling", "coulomb", "force", "paper-number")
 REACTIONS = ("reciprocal", "printed")
 
@@ -87,8 +88,9 @@ class Friction:
         check_range("friction static_ratio (F_s / F_c)", self.static_ratio, 1.0, math.inf,
                     hi_open=True)
 
-    def force(self, mass: float, radius: float) -> float:
-        """F_c (N) for a ball of ``mass`` (kg) and ``radius`` (m)."""
+    def force(self, mass_kg: float, radius_m: float) -> float:
+        """F_c (N) for a ball of ``mass_kg`` (kg) and ``radius_m`` (m)."""
+        mass, radius = mass_kg, radius_m
         if self.kind == "none":
             return 0.0
         if self.kind == "rolling":
@@ -115,9 +117,9 @@ NO_FRICTION = Friction("none", 0.0)
 
 @dataclass(frozen=True)
 class ImpactDamper:
-    """A free ball in a cavity at z_d with total clearance ``gap`` (delta, m).
+    """A free ball in a cavity at z_d with total clearance ``gap_m`` (delta, m).
 
-    The ball (``mass`` kg, ``radius`` m, ``material`` a name for the record)
+    The ball (``mass_kg`` kg, ``radius_m`` m, ``material`` a name for the record)
     travels delta/2 each way from the cavity centre; ``restitution`` is the
     coefficient of restitution of its impacts (0-1); ``friction`` (a
     :class:`Friction`) acts while it rolls or slides along the cavity.  ``locked``
@@ -125,124 +127,132 @@ class ImpactDamper:
     :meth:`ball` builds one from a material and a diameter.
     """
 
-    mass: float = PUBLISHED_CARBIDE_MASS
-    gap: float = 0.5e-3
+    mass_kg: float = PUBLISHED_CARBIDE_MASS
+    gap_m: float = 0.5e-3
     restitution: float = 0.7
     friction: Friction = Friction()
-    radius: float = BALL_DIAMETER / 2
+    radius_m: float = BALL_DIAMETER / 2
     locked: bool = False
     material: str = "carbide"
 
     def __post_init__(self):
-        check_positive("ball mass", self.mass, "kg")
-        check_range("gap", self.gap, 0.0, MAX_GAP, lo_open=True, unit="m")
+        check_positive("ball mass_kg", self.mass_kg, "kg")
+        check_range("gap_m", self.gap_m, 0.0, MAX_GAP, lo_open=True, unit="m")
         check_range("restitution", self.restitution, 0.0, 1.0)
-        check_positive("ball radius", self.radius, "m")
+        check_positive("ball radius_m", self.radius_m, "m")
         if not isinstance(self.friction, Friction):
             raise ParameterError(f"friction = {self.friction!r} must be a Friction")
 
     @classmethod
-    def ball(cls, material: str = "carbide", *, gap: float = 0.5e-3, restitution: float = 0.7,
-             friction: Friction = Friction(), diameter: float = BALL_DIAMETER,
-             mass: float | None = None, locked: bool = False) -> ImpactDamper:
-        """A ball of ``material`` (carbide: 26 g as published; steel: from density)."""
+    def ball(cls, material: str = "carbide", *, gap_m: float = 0.5e-3,
+             restitution: float = 0.7, friction: Friction = Friction(),
+             diameter_m: float = BALL_DIAMETER, mass_kg: float | None = None,
+             locked: bool = False) -> ImpactDamper:
+        """A ball of ``material`` (carbide: 26 g as published; steel: from density) and
+        ``diameter_m`` (m); ``mass_kg`` (kg) overrides the material's mass."""
         check_choice("ball material", material, tuple(BALL_DENSITY) + ("custom",))
-        check_positive("ball diameter", diameter, "m")
+        check_positive("ball diameter_m", diameter_m, "m")
+        diameter, mass = diameter_m, mass_kg
         if mass is None:
             if material == "custom":
-                raise ParameterError("ball material = 'custom' needs a mass")
+                raise ParameterError("ball material = 'custom' needs a mass_kg")
             if material == "carbide" and diameter == BALL_DIAMETER:
                 mass = PUBLISHED_CARBIDE_MASS
             else:
                 mass = BALL_DENSITY[material] * math.pi / 6 * diameter**3
-        return cls(mass=mass, gap=gap, restitution=restitution, friction=friction,
-                   radius=diameter / 2, locked=locked, material=material)
+        return cls(mass_kg=mass, gap_m=gap_m, restitution=restitution, friction=friction,
+                   radius_m=diameter / 2, locked=locked, material=material)
 
     @property
-    def friction_force(self) -> float:
+    def friction_force_n(self) -> float:
         """F_c (N)."""
-        return self.friction.force(self.mass, self.radius)
+        return self.friction.force(self.mass_kg, self.radius_m)
 
     def to_dict(self) -> dict:
-        return {"type": "ball", "material": self.material, "mass_kg": self.mass,
-                "gap_m": self.gap, "restitution": self.restitution, "radius_m": self.radius,
+        return {"type": "ball", "material": self.material, "mass_kg": self.mass_kg,
+                "gap_m": self.gap_m, "restitution": self.restitution, "radius_m": self.radius_m,
                 "locked": self.locked, "friction": self.friction.to_dict(),
-                "friction_force_n": self.friction_force}
+                "friction_force_n": self.friction_force_n}
 
     @classmethod
     def from_dict(cls, d: dict) -> ImpactDamper:
         """The ball :meth:`to_dict` describes."""
-        return cls(mass=d["mass_kg"], gap=d["gap_m"], restitution=d["restitution"],
-                   friction=Friction.from_dict(d["friction"]), radius=d["radius_m"],
+        return cls(mass_kg=d["mass_kg"], gap_m=d["gap_m"], restitution=d["restitution"],
+                   friction=Friction.from_dict(d["friction"]), radius_m=d["radius_m"],
                    locked=d["locked"], material=d["material"])
 
 
 @dataclass(frozen=True)
 class TunedMassDamper:
-    """An absorber of ``mass`` (kg) on spring ``stiffness`` (N/m) and dashpot ``damping``
-    (N s/m) at ``position`` z_a (m from the clamp); ``design`` names where the values
-    came from ("given", "published", "den-hartog", "sims")."""
+    """An absorber of ``mass_kg`` (kg) on spring ``stiffness_n_m`` (N/m) and dashpot
+    ``damping_n_s_m`` (N s/m) at ``position_m`` z_a (m from the clamp); ``design`` names
+    where the values came from ("given", "published", "den-hartog", "sims")."""
 
-    mass: float
-    stiffness: float
-    damping: float
-    position: float = 0.096
+    mass_kg: float
+    stiffness_n_m: float
+    damping_n_s_m: float
+    position_m: float = 0.096
     design: str = "given"
 
     def __post_init__(self):
-        check_positive("absorber mass", self.mass, "kg")
-        check_positive("absorber stiffness", self.stiffness, "N/m")
-        check_nonnegative("absorber damping", self.damping, "N s/m")
-        check_range("absorber position", self.position, 0.0, math.inf, lo_open=True,
+        check_positive("absorber mass_kg", self.mass_kg, "kg")
+        check_positive("absorber stiffness_n_m", self.stiffness_n_m, "N/m")
+        check_nonnegative("absorber damping_n_s_m", self.damping_n_s_m, "N s/m")
+        check_range("absorber position_m", self.position_m, 0.0, math.inf, lo_open=True,
                     hi_open=True, unit="m")
 
     @classmethod
-    def published(cls, position: float = 0.096) -> TunedMassDamper:
-        """The published design (m_a = 0.39 kg, k_a = 1.05 MN/m, c_a = 505 N s/m)."""
-        return cls(**PUBLISHED_TMD, position=position, design="published")
+    def published(cls, position_m: float = 0.096) -> TunedMassDamper:
+        """The published design (m_a = 0.39 kg, k_a = 1.05 MN/m, c_a = 505 N s/m) at
+        ``position_m`` (m from the clamp)."""
+        return cls(**PUBLISHED_TMD, position_m=position_m, design="published")
 
     @classmethod
-    def den_hartog(cls, mass: float, bar, position: float | None = None) -> TunedMassDamper:
-        """Den Hartog's optimum for the first mode of ``bar`` (a ModalModel).
+    def den_hartog(cls, mass_kg: float, bar: ModalModel,
+                   position_m: float | None = None) -> TunedMassDamper:
+        """Den Hartog's optimum of ``mass_kg`` (kg) for the first mode of ``bar`` (a
+        ModalModel), at ``position_m`` (m; default: ``bar.z_absorber_m``).
 
         mu_a = m_a psi_a^2 / M, f_opt = 1/(1 + mu_a),
         zeta_opt = sqrt(3 mu_a / (8 (1 + mu_a)^3)), k_a = m_a (f_opt omega_n)^2,
         c_a = 2 zeta_opt m_a omega_n.  ``bar.psi_absorber`` must be psi(z_a).
         """
-        check_positive("absorber mass", mass, "kg")
-        p = den_hartog_parameters(mass, bar)
-        return cls(mass=mass, stiffness=p["stiffness"], damping=p["damping"],
-                   position=bar.z_absorber if position is None else position,
+        check_positive("absorber mass_kg", mass_kg, "kg")
+        p = den_hartog_parameters(mass_kg, bar)
+        return cls(mass_kg=mass_kg, stiffness_n_m=p["stiffness_n_m"],
+                   damping_n_s_m=p["damping_n_s_m"],
+                   position_m=bar.z_absorber_m if position_m is None else position_m,
                    design="den-hartog")
 
     def to_dict(self) -> dict:
-        return {"type": "tmd", "mass_kg": self.mass, "stiffness_n_per_m": self.stiffness,
-                "damping_n_s_per_m": self.damping, "position_m": self.position,
+        return {"type": "tmd", "mass_kg": self.mass_kg, "stiffness_n_m": self.stiffness_n_m,
+                "damping_n_s_m": self.damping_n_s_m, "position_m": self.position_m,
                 "design": self.design}
 
     @classmethod
     def from_dict(cls, d: dict) -> TunedMassDamper:
         """The absorber :meth:`to_dict` describes."""
-        return cls(d["mass_kg"], d["stiffness_n_per_m"], d["damping_n_s_per_m"],
+        return cls(d["mass_kg"], d["stiffness_n_m"], d["damping_n_s_m"],
                    d["position_m"], d["design"])
 
 
-def den_hartog_parameters(mass: float, bar) -> dict:
-    """Den Hartog's formulas (docs/model.md, section 3) for an absorber of ``mass`` (kg)
-    on mode 1 of ``bar`` (a ModalModel): mass ratio, frequency and damping ratios,
+def den_hartog_parameters(mass_kg: float, bar: ModalModel) -> dict:
+    """Den Hartog's formulas (docs/model.md, section 3) for an absorber of ``mass_kg``
+    (kg) on mode 1 of ``bar`` (a ModalModel): mass ratio, frequency and damping ratios,
     stiffness (N/m) and damping (N s/m)."""
-    mu = mass * bar.psi_absorber[0] ** 2 / bar.mass[0]
-    wn = bar.natural_frequency
+    mass = mass_kg
+    mu = mass * bar.psi_absorber[0] ** 2 / bar.mass_kg[0]
+    wn = bar.natural_frequency_rad_s
     f_opt = 1.0 / (1.0 + mu)
     zeta = math.sqrt(3.0 * mu / (8.0 * (1.0 + mu) ** 3))
     return {"mass_ratio": mu, "frequency_ratio": f_opt, "damping_ratio": zeta,
-            "stiffness": mass * (f_opt * wn) ** 2, "damping": 2.0 * zeta * mass * wn}
+            "stiffness_n_m": mass * (f_opt * wn) ** 2, "damping_n_s_m": 2.0 * zeta * mass * wn}
 
 
 def absorber_mass_ratio(mass: float, bar) -> float:
     """mu = m_a psi_a,1^2 / M_1 (mode 1; independent of the mode's normalisation)."""
     check_positive("absorber mass", mass, "kg")
-    return float(mass * bar.psi_absorber[0] ** 2 / bar.mass[0])
+    return float(mass * bar.psi_absorber[0] ** 2 / bar.mass_kg[0])
 
 
 # --- Sims' equal-real-trough tuning ---------------------------------------------
@@ -270,23 +280,24 @@ def sims_parameters(mass: float, bar) -> dict:
     zeta = math.sqrt((8.0 + 9.0 * mu - 4.0 * s) / (16.0 * (1.0 + mu)))
     y = (12.0 + 12.0 * s + 9.0 * s * s + 9.0 * math.sqrt(mu * (3 * s + 2) * (s + 2))) / 72.0
     f = math.sqrt(y) / (1.0 + mu)
-    wa = f * bar.natural_frequency
+    wa = f * bar.natural_frequency_rad_s
     return {
         "mass_ratio": mu,
         "frequency_ratio": f,
         "damping_ratio": zeta,
-        "stiffness": mass * wa**2,
-        "damping": 2.0 * zeta * mass * wa,
+        "stiffness_n_m": mass * wa**2,
+        "damping_n_s_m": 2.0 * zeta * mass * wa,
     }
 
 
-def sims_tuning(mass: float, bar) -> TunedMassDamper:
-    """A :class:`TunedMassDamper` of ``mass`` (kg) at ``bar.z_absorber``, Sims-tuned."""
-    p = sims_parameters(mass, bar)
+def sims_tuning(mass_kg: float, bar: ModalModel) -> TunedMassDamper:
+    """A :class:`TunedMassDamper` of ``mass_kg`` (kg) at ``bar.z_absorber_m``, Sims-tuned
+    (the ModalModel ``bar``'s mode 1)."""
+    p = sims_parameters(mass_kg, bar)
     return TunedMassDamper(
-        mass=mass,
-        stiffness=p["stiffness"],
-        damping=p["damping"],
-        position=bar.z_absorber,
+        mass_kg=mass_kg,
+        stiffness_n_m=p["stiffness_n_m"],
+        damping_n_s_m=p["damping_n_s_m"],
+        position_m=bar.z_absorber_m,
         design="sims",
     )

@@ -83,12 +83,13 @@ class ModalFit:
         return h
 
     def to_modal_model(self, damper_ratio=1.0, absorber_ratio=1.0, *,
-                       z_damper: float | None = None,
-                       z_absorber: float | None = None) -> ModalModel:
+                       z_damper_m: float | None = None,
+                       z_absorber_m: float | None = None) -> ModalModel:
         """The fit as a ModalModel with psi_i(L) = 1.
 
-        ``damper_ratio`` and ``absorber_ratio``: psi_i(z)/psi_i(L) at the ball and
-        at the absorber, one number for every mode or one per mode.
+        ``damper_ratio`` and ``absorber_ratio``: psi_i(z)/psi_i(L) at the ball
+        (``z_damper_m``, m from the clamp) and at the absorber (``z_absorber_m``), one
+        number for every mode or one per mode.
         """
         n = self.n_modes
         ratios = {}
@@ -100,11 +101,11 @@ class ModalFit:
         k = np.array(self.modal_stiffness_n_m)
         omega = 2.0 * math.pi * np.array(self.frequency_hz)
         extra = {}
-        if z_damper is not None:
-            extra["z_damper"] = float(z_damper)
-        if z_absorber is not None:
-            extra["z_absorber"] = float(z_absorber)
-        return ModalModel(mass=k / omega**2, stiffness=k,
+        if z_damper_m is not None:
+            extra["z_damper_m"] = float(z_damper_m)
+        if z_absorber_m is not None:
+            extra["z_absorber_m"] = float(z_absorber_m)
+        return ModalModel(mass_kg=k / omega**2, stiffness_n_m=k,
                           damping_ratio=np.array(self.damping_ratio), psi_tip=np.ones(n),
                           psi_damper=ratios["damper_ratio"],
                           psi_absorber=ratios["absorber_ratio"], source="frf-fit",

@@ -87,10 +87,10 @@ class System:
         return "locked" if self.damper.locked else "ball"
 
     @property
-    def reference_frequency(self) -> float:
+    def reference_frequency_rad_s(self) -> float:
         """omega_n (rad/s) of the host bar without the damper's mass: what
         Omega/omega_n refers to (docs/model.md, section 6)."""
-        return self.bar.natural_frequency
+        return self.bar.natural_frequency_rad_s
 
     def to_dict(self) -> dict:
         return {
@@ -121,13 +121,13 @@ def published_system_spec() -> SystemSpec:
     return published_system()
 
 
-def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | None = None,
+def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | None = None,
                 friction: bool = True, ball: str | None = None,
                 restitution: float | None = None, n_modes: int | None = None,
-                friction_number: float | None = None, friction_force: float | None = None,
+                friction_number: float | None = None, friction_force_n: float | None = None,
                 friction_reaction: str | None = None, friction_reading: str | None = None,
                 locked: bool = False,
-                tmd_mass: float | None = None, z_absorber: float | None = None,
+                tmd_mass_kg: float | None = None, z_absorber_m: float | None = None,
                 tmd_design: str | None = None, modal: ModalModel | None = None,
                 static_ratio: float | None = None, spec: SystemSpec | None = None) -> System:
     """Build one of the three bars of a system file under a preset, with explicit
@@ -138,7 +138,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
     file's bar without its cavity), "ball" (with the cavity and its ball;
     ``locked`` fixes the ball) or "tmd" (without the cavity, with the file's
     absorber); ``preset``: "physical" or "paper" (:data:`READINGS`).  Every
-    other argument left None takes the file's value.  Ball: ``gap`` (m), ``ball``
+    other argument left None takes the file's value.  Ball: ``gap_m`` (m), ``ball``
     (a material of :data:`BALLS`; its mass then follows from its density and the
     file's diameter), ``restitution``; ``friction`` on/off;
     ``friction_reaction``: "reciprocal" (physical) or "printed" (the published
@@ -147,9 +147,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
     ``friction_reading``: how the published number is read, "paper" (as the paper
     computed it: nu in metres, 20.4 N for the 26 g ball; the paper preset's
     default) or "rolling" (nu in mm, 0.0204 N; the physical preset's default);
-    ``friction_force`` (N) overrides the file's friction when friction is on.
+    ``friction_force_n`` (N) overrides the file's friction when friction is on.
     ``n_modes``: retained bending modes (default: the file's, else 1 paper, 2
-    physical); ``tmd_mass`` (kg) at ``z_absorber`` (m from the clamp);
+    physical); ``tmd_mass_kg`` (kg) at ``z_absorber_m`` (m from the clamp);
     ``tmd_design``: the file's tuning (physical default), "given" (paper
     default where the file gives the absorber's stiffness and damping;
     "published" is the same) or "den-hartog", "sims" (Sims' equal-real-trough
@@ -161,11 +161,11 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
     check_choice("preset", preset, PRESETS)
     spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
-    modal, readings = _modal(spec, bar, paper, n_modes, z_absorber, modal)
+    modal, readings = _modal(spec, bar, paper, n_modes, z_absorber_m, modal)
     if bar == "solid":
         return System(modal, None, preset, tuple(readings), spec)
     if bar == "tmd":
-        tmd = _tmd(spec, modal, paper, tmd_mass, tmd_design)
+        tmd = _tmd(spec, modal, paper, tmd_mass_kg, tmd_design)
         return System(modal, tmd, preset, tuple(readings), spec)
     if spec.ball is None:
         raise ParameterError(f"bar = 'ball' needs a [cavity] and a [ball] in the system file "
@@ -174,17 +174,17 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap: float | Non
     check_choice("friction_reading", reading, FRICTION_READINGS)
     reaction = (friction_reaction or spec.ball.friction_reaction
                 or ("printed" if paper else "reciprocal"))
-    fr = _friction(spec, reading == "paper", friction, friction_number, friction_force,
+    fr = _friction(spec, reading == "paper", friction, friction_number, friction_force_n,
                    reaction, static_ratio, readings)
     b = spec.ball
-    gap = b.gap if gap is None else gap
-    check_range("gap", gap, 0.0, spec.max_gap(), lo_open=True,
+    gap = b.gap if gap_m is None else gap_m
+    check_range("gap_m", gap, 0.0, spec.max_gap(), lo_open=True,
                 unit="m", why="at most the cavity's depth less the ball")
     material = b.material if ball is None else check_choice("ball", ball, BALLS)
-    damper = ImpactDamper.ball(material, gap=gap,
+    damper = ImpactDamper.ball(material, gap_m=gap,
                                restitution=b.restitution if restitution is None else restitution,
-                               friction=fr, diameter=b.diameter,
-                               mass=b.mass if material == b.material else None, locked=locked)
+                               friction=fr, diameter_m=b.diameter,
+                               mass_kg=b.mass if material == b.material else None, locked=locked)
     return System(modal, damper, preset, tuple(readings), spec)
 
 
@@ -210,7 +210,7 @@ def _tmd(spec: SystemSpec, modal: ModalModel, paper: bool, mass, design) -> Tune
     t = spec.tmd
     if t is None and mass is None:
         raise ParameterError(f"bar = 'tmd' needs a [tmd] in the system file {spec.source} "
-                             "(or a tmd_mass)")
+                             "(or a tmd_mass_kg)")
     given = t is not None and t.stiffness is not None
     default = "den-hartog" if t is None else ("given" if paper and given else t.tuning)
     design = check_choice("tmd_design", design or default, TMD_DESIGNS)
@@ -219,7 +219,7 @@ def _tmd(spec: SystemSpec, modal: ModalModel, paper: bool, mass, design) -> Tune
         if not given:
             raise ParameterError(f"tmd_design = {design!r} needs the absorber's stiffness_n_m "
                                  f"and damping_n_s_m in the system file {spec.source}")
-        return TunedMassDamper(t.mass, t.stiffness, t.damping, modal.z_absorber, t.label)
+        return TunedMassDamper(t.mass, t.stiffness, t.damping, modal.z_absorber_m, t.label)
     if design == "sims":
         return sims_tuning(mass, modal)
     return TunedMassDamper.den_hartog(mass, modal)
@@ -252,6 +252,18 @@ def _friction(spec: SystemSpec, paper_number: bool, on: bool, number, force, rea
     return fr
 
 
+def variants(spec: SystemSpec | None = None, preset: str = "physical") -> dict[str, System]:
+    """The bars one system file describes, side by side, under ``preset``: "solid" (the
+    bar without its cavity) always, "ball" (with its cavity and ball) if the file has a
+    ball, "tmd" (with its absorber) if it has one; ``spec`` the file
+    (:func:`~boringbar.model.system_file.load_system`; default the published bar).
+    The mapping is what the analyses take: ``bb.sweep(bb.variants(spec))`` labels
+    its cases solid, ball and tmd."""
+    spec = spec or published_system_spec()
+    kinds = ["solid"] + (["ball"] if spec.ball else []) + (["tmd"] if spec.tmd else [])
+    return {kind: make_system(kind, preset, spec=spec) for kind in kinds}
+
+
 def describe_modes(system: System) -> dict:
     """The modal model of ``system``'s host bar, as ``boringbar modes`` prints it:
     ``modes`` (per mode: frequency_hz, modal_mass_kg and modal_stiffness_n_m
@@ -263,9 +275,9 @@ def describe_modes(system: System) -> dict:
     modes' sum."""
     m = system.bar
     scale = m.psi_tip**2
-    modes = [{"frequency_hz": float(m.omegas[i] / (2 * math.pi)),
-              "modal_mass_kg": float(m.mass[i] / scale[i]),
-              "modal_stiffness_n_m": float(m.stiffness[i] / scale[i]),
+    modes = [{"frequency_hz": float(m.omegas_rad_s[i] / (2 * math.pi)),
+              "modal_mass_kg": float(m.mass_kg[i] / scale[i]),
+              "modal_stiffness_n_m": float(m.stiffness_n_m[i] / scale[i]),
               "damping_ratio": float(m.damping_ratio[i]),
               "psi_tip": 1.0, "psi_ball": float(m.psi_damper[i] / m.psi_tip[i]),
               "psi_absorber": float(m.psi_absorber[i] / m.psi_tip[i])}
@@ -281,8 +293,8 @@ def describe_modes(system: System) -> dict:
         static = fe.static_tip_stiffness() * m.info.get("stiffness_scale", 1.0)
         static_from = "finite-element model"
     else:
-        static = 1.0 / float(np.sum(scale / m.stiffness))
+        static = 1.0 / float(np.sum(scale / m.stiffness_n_m))
         static_from = "retained modes"
     return {"modes": modes, "tip_static_stiffness_n_m": static,
             "tip_static_stiffness_from": static_from, "source": m.source,
-            "z_ball_m": m.z_damper, "z_absorber_m": m.z_absorber}
+            "z_ball_m": m.z_damper_m, "z_absorber_m": m.z_absorber_m}

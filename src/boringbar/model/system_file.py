@@ -25,7 +25,9 @@ from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
-from boringbar._validate import ParameterError, in_range, read_toml
+import numpy as np
+
+from boringbar._validate import ParameterError, in_range, near, read_toml
 from boringbar.model.bar import ModalModel, Section, SteppedBar
 from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
 from boringbar.model.materials import MATERIALS
@@ -37,8 +39,6 @@ TUNINGS = ("den-hartog", "sims", "given")
 FRICTION_FORMS = {"published_number": "published-number", "rolling_mm": "rolling",
                   "coulomb": "coulomb", "force_n": "force", "none": "none"}
 REACTIONS = ("reciprocal", "printed")
-#: Snap tolerance (m): a cavity end this close to a section boundary is on it.
-SNAP = 1e-9
 _TOP_KEYS = ("name", "description", "bar", "clamp", "cavity", "ball", "tmd", "paper")
 
 
@@ -97,13 +97,13 @@ class TmdSpec:
 class SystemSpec:
     """A resolved system file (SI units).  ``bar`` is the host bar without the
     cavity (the solid and TMD bars); ``cavity``, ``ball``, ``tmd`` may be None;
-    ``damping`` one ratio per mode (a 1-tuple applies to all); ``n_modes`` None:
+    ``damping_ratio`` one ratio per mode (a 1-tuple applies to all); ``n_modes`` None:
     the preset's; ``calibration``: f1 (Hz) by bar ("ball", "solid") that the
     paper preset calibrates to; ``name``: the bar's name; ``data``: the resolved description
     (:meth:`to_dict`); ``source``: the file."""
 
     bar: SteppedBar
-    damping: tuple[float, ...]
+    damping_ratio: tuple[float, ...]
     n_modes: int | None
     cavity: CavitySpec | None
     ball: BallSpec | None
@@ -114,14 +114,14 @@ class SystemSpec:
     source: str = "<dict>"
 
     @property
-    def ball_position(self) -> float:
+    def ball_position_m(self) -> float:
         """z_d (m): the cavity's centre (the bar's tip if there is no cavity)."""
-        return self.cavity.position if self.cavity else self.bar.length
+        return self.cavity.position if self.cavity else self.bar.length_m
 
     @property
-    def absorber_position(self) -> float:
+    def absorber_position_m(self) -> float:
         """z_a (m): the absorber's position (the bar's tip if there is none)."""
-        return self.tmd.position if self.tmd else self.bar.length
+        return self.tmd.position if self.tmd else self.bar.length_m
 
     def stepped_bar(self, cavity: bool) -> SteppedBar:
         """The FE bar: with the cavity's section (``cavity``) or without."""
@@ -129,21 +129,22 @@ class SystemSpec:
             return self.bar
         return _with_cavity(self.bar, self.cavity)
 
-    def modal(self, cavity: bool, n_modes: int, z_absorber: float | None = None) -> ModalModel:
+    def modal(self, cavity: bool, n_modes: int,
+              z_absorber_m: float | None = None) -> ModalModel:
         """The modal model of :meth:`stepped_bar`, ``n_modes`` retained, psi at the
-        ball and at the absorber (``z_absorber`` m, default the file's)."""
-        za = self.absorber_position if z_absorber is None else z_absorber
-        model = self.stepped_bar(cavity).modal_model(n_modes, self.ball_position, za)
-        if len(self.damping) == 1:
+        ball and at the absorber (``z_absorber_m`` m, default the file's)."""
+        za = self.absorber_position_m if z_absorber_m is None else z_absorber_m
+        model = self.stepped_bar(cavity).modal_model(n_modes, self.ball_position_m, za)
+        if len(self.damping_ratio) == 1:
             return model
-        ratios = [self.damping[min(i, len(self.damping) - 1)] for i in range(n_modes)]
+        ratios = [self.damping_ratio[min(i, len(self.damping_ratio) - 1)] for i in range(n_modes)]
         return replace(model, damping_ratio=ratios)
 
     def mode_shapes(self, cavity: bool, n_modes: int):
         """(z m of the FE nodes, deflection shapes (nodes, n) divided by their tip
         value, frequencies Hz) of :meth:`stepped_bar`."""
         omegas, nodes, shapes = self.stepped_bar(cavity).modes(
-            n_modes, (self.ball_position, self.absorber_position))
+            n_modes, (self.ball_position_m, self.absorber_position_m))
         return nodes, shapes / shapes[-1, :], omegas / (2 * math.pi)
 
     def max_gap(self) -> float:
@@ -161,6 +162,38 @@ class SystemSpec:
 def load_system(path) -> SystemSpec:
     """Read and check the TOML system file ``path``."""
     return parse_system(read_toml(path, SystemFileError, "system file"), str(path))
+
+
+def loads_system(text: str, source: str) -> SystemSpec:
+    """A system file's text (``source`` names it in messages), checked as
+    :func:`load_system` checks the file."""
+    try:
+        d = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SystemFileError(f"{source}: not valid TOML: {exc}") from None
+    return parse_system(d, source)
+
+
+def merged_sections(sections: list[dict]) -> list[dict]:
+    """A description's sections (dicts with end_mm, diameter_mm, bore_mm) with
+    neighbours of one diameter and bore merged: the spans a cavity may move along."""
+    merged = []
+    for s in sections:
+        if merged and (merged[-1]["diameter_mm"], merged[-1].get("bore_mm", 0.0)) == (
+                s["diameter_mm"], s.get("bore_mm", 0.0)):
+            merged[-1] = dict(merged[-1], end_mm=s["end_mm"])
+        else:
+            merged.append(dict(s))
+    return merged
+
+
+def cavity_moved(data: dict, position_mm: float) -> dict:
+    """The system description ``data`` (changed in place and returned) with the cavity
+    at ``position_mm``; its sections merged first (:func:`merged_sections`), so the
+    cavity may move along a span of one diameter."""
+    data["bar"]["sections"] = merged_sections(data["bar"]["sections"])
+    data["cavity"]["position_mm"] = position_mm
+    return data
 
 
 def published_system() -> SystemSpec:
@@ -336,43 +369,129 @@ def _bar(r: _Reader, d: dict):
 
 
 _CAVITY_KEYS = ("position_mm", "length_mm", "section_diameter_mm", "depth_mm")
+#: Gauss-Legendre nodes on each smooth piece of the integral along the cavity.
+_GAUSS_NODES = 24
+
+
+def _column_integral(radius: float, x: float) -> float:
+    """The closed form of int_0^x (radius^2 - t^2)^(3/2) dt, 0 <= x <= radius."""
+    x = min(x, radius)
+    q = math.sqrt(max(radius * radius - x * x, 0.0))
+    return (x * q**3 / 4 + 3 * radius**2 * x * q / 8
+            + 3 * radius**4 / 8 * math.asin(x / radius))
+
+
+def cut_section_moment(diameter: float, bore: float, half_width: float,
+                       half_depth: float) -> float:
+    """The second moment of area (m^4), about the bending axis, of a round section of
+    ``diameter`` with a concentric ``bore`` (m), less the rectangle |x| < half_width,
+    |y| < half_depth that a cavity cuts from it (y: the bending direction; docs/systems.md).
+
+    I = int (2/3) (Y^3 - m^3) dx over the section's width, Y = sqrt(R^2 - x^2) the
+    solid half-height and m(x) = min(Y, max(half_depth if |x| < half_width, the bore's
+    half-chord)) the removed one, in closed form between the points where m changes
+    branch."""
+    big, small, h, c = diameter / 2, bore / 2, half_depth, half_width
+    breaks = {0.0, big, min(c, big), min(small, big)}
+    breaks |= {math.sqrt(r * r - h * h) for r in (small, big) if r > h}
+    points = sorted(b for b in breaks if b <= big)
+    removed = 0.0
+    for x0, x1 in zip(points, points[1:], strict=False):
+        xm = 0.5 * (x0 + x1)
+        cut = h if xm < c else 0.0
+        chord = math.sqrt(small * small - xm * xm) if xm < small else 0.0
+        if cut >= math.sqrt(big * big - xm * xm):
+            removed += _column_integral(big, x1) - _column_integral(big, x0)
+        elif cut >= chord:
+            removed += cut**3 * (x1 - x0)
+        else:
+            removed += _column_integral(small, x1) - _column_integral(small, x0)
+    return 4.0 / 3.0 * (_column_integral(big, big) - removed)
+
+
+def cavity_section_diameter(diameter: float, bore: float, length: float,
+                            depth: float) -> float:
+    """The outer diameter (m) of the equivalent section, with the host's ``bore``, that
+    has the bending stiffness of the host section (``diameter``, ``bore``, m) through a
+    cavity: a round hole of diameter ``length`` (its length along the bar) across
+    the bar in the ball's direction of travel, ``depth`` (m) deep, centred on the bar's
+    axis (docs/systems.md).
+
+    At a distance s from the cavity's centre the hole cuts a strip of half-width
+    c(s) = sqrt(a^2 - s^2), a = length / 2 (:func:`cut_section_moment` gives I(s)); a
+    segment under a bending moment that changes little along it bends as one of
+    constant I_eq = L / int ds / I(s) (its flexibility), here integrated with
+    s = a sin(theta) by Gauss-Legendre on the pieces where I(s) is smooth.  Then
+    pi (D^4 - bore^4) / 64 = I_eq."""
+    a = length / 2
+    if a >= diameter / 2:
+        raise ParameterError(f"length = {length:g} m must be less than the section's "
+                             f"diameter {diameter:g} m: a round cavity this wide cuts "
+                             "the section in two")
+    r, h = diameter / 2, depth / 2
+    kinks = [b for b in (bore / 2, math.sqrt(max((bore / 2) ** 2 - h * h, 0.0)),
+                         math.sqrt(max(r * r - h * h, 0.0))) if 0.0 < b < a]
+    edges = sorted({0.0, math.pi / 2, *(math.acos(b / a) for b in kinks)})
+    nodes, weights = np.polynomial.legendre.leggauss(_GAUSS_NODES)
+    flexibility = 0.0  # int_0^(pi/2) cos(theta) / I(a cos(theta)) d theta = 1 / I_eq
+    for t0, t1 in zip(edges, edges[1:], strict=False):
+        for x, w in zip(nodes, weights, strict=True):
+            t = 0.5 * (t1 - t0) * x + 0.5 * (t0 + t1)
+            moment = cut_section_moment(diameter, bore, a * math.cos(t), h)
+            flexibility += 0.5 * (t1 - t0) * w * math.cos(t) / moment
+    # never above the host's own diameter, which a hole inside the bore leaves
+    return min(float((64.0 / math.pi / flexibility + bore**4) ** 0.25), diameter)
+
+
+def _within(lo: float, hi: float, start: float, end: float, length: float) -> bool:
+    """Whether [lo, hi] lies in [start, end] (m, on a bar ``length`` long; the ends
+    computed from mm are equal up to round-off: :func:`~boringbar._validate.in_range`)."""
+    return (in_range(lo, start, end, scale=length)
+            and in_range(hi, start, end, scale=length))
 
 
 def _host_section(r: _Reader, bar: SteppedBar, lo: float, hi: float, z: float) -> Section:
     """The one section holding [lo, hi] (m), or a one-line error."""
-    if lo < -SNAP or hi > bar.length + SNAP:
+    if not _within(lo, hi, 0.0, bar.length_m, bar.length_m):
         r.fail("cavity.position_mm", z * 1e3,
                f"the cavity spans [{lo * 1e3:g}, {hi * 1e3:g}] mm, outside the bar "
-               f"[0, {bar.length * 1e3:g}] mm")
+               f"[0, {bar.length_m * 1e3:g}] mm")
     for s in bar.sections:
-        if s.start - SNAP <= lo and hi <= s.end + SNAP:
+        if _within(lo, hi, s.start_m, s.end_m, bar.length_m):
             return s
-        if s.start + SNAP < lo < s.end - SNAP or s.start + SNAP < hi < s.end - SNAP:
-            edge = s.end if lo < s.end - SNAP else s.start
-            r.fail("cavity.position_mm", z * 1e3,
-                   f"the cavity [{lo * 1e3:g}, {hi * 1e3:g}] mm crosses the section boundary "
-                   f"at {edge * 1e3:g} mm; a cavity must lie within one section (split the "
-                   "sections at the cavity's ends)")
-    raise AssertionError("unreachable")
+    edge = next(s.end_m for s in bar.sections if lo < s.end_m < hi)
+    r.fail("cavity.position_mm", z * 1e3,
+           f"the cavity [{lo * 1e3:g}, {hi * 1e3:g}] mm crosses the section boundary at "
+           f"{edge * 1e3:g} mm; a cavity must lie within one section (split the sections "
+           "at the cavity's ends)")
 
 
 def _cavity(r: _Reader, d: dict, bar: SteppedBar):
     if "cavity" not in d:
         return None, {}
     t = r.table(d["cavity"], "cavity", _CAVITY_KEYS)
-    z_mm = r.required(t, "cavity.position_mm", 0, bar.length * 1e3, lo_open=True,
+    z_mm = r.required(t, "cavity.position_mm", 0, bar.length_m * 1e3, lo_open=True,
                       hi_open=True, unit="mm")
-    length_mm = r.required(t, "cavity.length_mm", 0, bar.length * 1e3, lo_open=True,
+    length_mm = r.required(t, "cavity.length_mm", 0, bar.length_m * 1e3, lo_open=True,
                            unit="mm")
     z, length = z_mm / 1000, length_mm / 1000
     host = _host_section(r, bar, z - length / 2, z + length / 2, z)
-    dia_mm = r.required(t, "cavity.section_diameter_mm", host.inner_diameter * 1e3,
-                        host.diameter * 1e3, lo_open=True, unit="mm (above the host "
-                        "section's bore, at most its outer diameter)")
-    dia = dia_mm / 1000
-    depth = r.number(t, "cavity.depth_mm", 0, host.diameter * 1e3, default=host.diameter * 1e3,
+    depth = r.number(t, "cavity.depth_mm", 0, host.diameter_m * 1e3, default=host.diameter_m * 1e3,
                      lo_open=True, unit="mm (at most the host section's outer diameter)")
-    cavity = CavitySpec(z, length, dia, host.inner_diameter, depth / 1000)
+    dia_mm = r.number(t, "cavity.section_diameter_mm", host.inner_diameter_m * 1e3,
+                      host.diameter_m * 1e3, lo_open=True, unit="mm (above the host "
+                      "section's bore, at most its outer diameter)")
+    if dia_mm is None:
+        try:
+            dia_mm = 1e3 * cavity_section_diameter(host.diameter_m, host.inner_diameter_m,
+                                                   length, depth / 1000)
+        except ParameterError:
+            r.fail("cavity.length_mm", length_mm, f"without section_diameter_mm, must be "
+                   f"less than the host section's diameter {host.diameter_m * 1e3:g} mm (a "
+                   "round cavity this long cuts the section in two); give "
+                   "section_diameter_mm")
+    dia = dia_mm / 1000
+    cavity = CavitySpec(z, length, dia, host.inner_diameter_m, depth / 1000)
     return cavity, {"cavity": {"position_mm": z_mm, "length_mm": length_mm,
                                "section_diameter_mm": dia_mm, "depth_mm": depth}}
 
@@ -442,7 +561,7 @@ def _tmd(r: _Reader, d: dict, bar: SteppedBar):
         return None, {}
     t = r.table(d["tmd"], "tmd", _TMD_KEYS)
     mass = r.required(t, "tmd.mass_kg", 0, 1000, lo_open=True, unit="kg")
-    z_mm = r.required(t, "tmd.position_mm", 0, bar.length * 1e3, lo_open=True, unit="mm")
+    z_mm = r.required(t, "tmd.position_mm", 0, bar.length_m * 1e3, lo_open=True, unit="mm")
     z = z_mm / 1000
     tuning = r.choice(t, "tmd.tuning", TUNINGS, default="den-hartog")
     k = r.number(t, "tmd.stiffness_n_m", 0, 1e12, lo_open=True, unit="N/m")
@@ -476,16 +595,16 @@ def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
     lo, hi = cavity.position - cavity.length / 2, cavity.position + cavity.length / 2
     out = []
     for s in bar.sections:
-        if not (s.start - SNAP <= lo and hi <= s.end + SNAP):
+        if not _within(lo, hi, s.start_m, s.end_m, bar.length_m):
             out.append(s)
             continue
-        a = s.start if abs(lo - s.start) <= SNAP else lo
-        b = s.end if abs(hi - s.end) <= SNAP else hi
-        if a > s.start:
-            out.append(Section(s.start, a, s.diameter, s.inner_diameter))
+        a = s.start_m if near(lo, s.start_m, bar.length_m) else lo
+        b = s.end_m if near(hi, s.end_m, bar.length_m) else hi
+        if a > s.start_m:
+            out.append(Section(s.start_m, a, s.diameter_m, s.inner_diameter_m))
         out.append(Section(a, b, cavity.section_diameter, cavity.section_bore))
-        if b < s.end:
-            out.append(Section(b, s.end, s.diameter, s.inner_diameter))
-    return SteppedBar(tuple(out), bar.youngs_modulus, bar.density, bar.damping_ratio,
-                      bar.max_element_length, bar.clamp_translational_stiffness,
-                      bar.clamp_rotational_stiffness)
+        if b < s.end_m:
+            out.append(Section(b, s.end_m, s.diameter_m, s.inner_diameter_m))
+    return SteppedBar(tuple(out), bar.youngs_modulus_pa, bar.density_kg_m3, bar.damping_ratio,
+                      bar.max_element_length_m, bar.clamp_translational_stiffness_n_m,
+                      bar.clamp_rotational_stiffness_n_m_per_rad)

@@ -33,6 +33,7 @@ import numpy as np
 import scipy.optimize
 
 from boringbar._validate import ParameterError, check_nonnegative
+from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import TunedMassDamper, sims_tuning
 
 #: Default search band for the real-part trough, in units of omega_1.
@@ -42,11 +43,12 @@ TROUGH_POINTS = 3601
 
 # --- frequency responses ------------------------------------------------------
 def tip_frf(
-    bar, omega, *, tmd: TunedMassDamper | None = None, added_mass: float = 0.0
+    bar: ModalModel, omega_rad_s, *, tmd: TunedMassDamper | None = None,
+    added_mass_kg: float = 0.0
 ) -> np.ndarray:
     """Tip receptance G(i omega) = W / F (m/N) for a harmonic force F at the tip.
 
-    ``bar`` is a :class:`~boringbar.model.bar.ModalModel`; ``omega`` (rad/s) is
+    ``bar`` is a :class:`~boringbar.model.bar.ModalModel`; ``omega_rad_s`` (rad/s) is
     array-like and the result has its shape (complex).  The dynamic
     stiffness solved at each frequency is, with kc = k_a + i omega c_a,
 
@@ -54,13 +56,13 @@ def tip_frf(
         [ -kc psi_a^T,                                                  kc - omega^2 m_a ]
 
     (the absorber row only if ``tmd`` is given), acting on (u, x_a) with the
-    load (psi_L F, 0); then W = psi_L . u.  ``added_mass`` (kg) is a mass
+    load (psi_L F, 0); then W = psi_L . u.  ``added_mass_kg`` (kg) is a mass
     rigidly attached at z_d (``bar.psi_damper``).  The TMD acts at
-    ``bar.psi_absorber``, so ``tmd.position`` must equal ``bar.z_absorber``.
+    ``bar.psi_absorber``, so ``tmd.position_m`` must equal ``bar.z_absorber_m``.
     """
-    w = np.asarray(omega, dtype=float)
-    check_nonnegative("added_mass", added_mass, "kg")
-    z = dynamic_stiffness(bar, w.ravel(), tmd, float(added_mass))
+    w = np.asarray(omega_rad_s, dtype=float)
+    check_nonnegative("added_mass_kg", added_mass_kg, "kg")
+    z = dynamic_stiffness(bar, w.ravel(), tmd, float(added_mass_kg))
     rhs = np.zeros(z.shape[:2] + (1,), dtype=complex)
     rhs[:, : bar.n_modes, 0] = bar.psi_tip
     u = np.linalg.solve(z, rhs)[:, : bar.n_modes, 0]
@@ -72,60 +74,62 @@ def dynamic_stiffness(bar, w: np.ndarray, tmd, added_mass: float) -> np.ndarray:
     n = bar.n_modes
     size = n + (tmd is not None)
     z = np.zeros((len(w), size, size), dtype=complex)
-    diag = bar.stiffness - np.outer(w**2, bar.mass) + 1j * np.outer(w, bar.damping)
+    diag = bar.stiffness_n_m - np.outer(w**2, bar.mass_kg) + 1j * np.outer(w, bar.damping_n_s_m)
     z[:, np.arange(n), np.arange(n)] = diag
     psi_d = bar.psi_damper
     z[:, :n, :n] -= (w**2 * added_mass)[:, None, None] * np.outer(psi_d, psi_d)
     if tmd is not None:
         _check_position(bar, tmd)
-        kc = tmd.stiffness + 1j * w * tmd.damping
+        kc = tmd.stiffness_n_m + 1j * w * tmd.damping_n_s_m
         psi_a = bar.psi_absorber
         z[:, :n, :n] += kc[:, None, None] * np.outer(psi_a, psi_a)
         z[:, :n, n] = -kc[:, None] * psi_a
         z[:, n, :n] = -kc[:, None] * psi_a
-        z[:, n, n] = kc - w**2 * tmd.mass
+        z[:, n, n] = kc - w**2 * tmd.mass_kg
     return z
 
 
 def _check_position(bar, tmd) -> None:
-    if abs(tmd.position - bar.z_absorber) > 1e-9:
+    if abs(tmd.position_m - bar.z_absorber_m) > 1e-9:
         raise ParameterError(
-            f"absorber position = {tmd.position!r} m differs from the modal model's "
-            f"z_absorber = {bar.z_absorber!r} m; rebuild the bar with z_absorber there"
+            f"absorber position = {tmd.position_m!r} m differs from the modal model's "
+            f"z_absorber = {bar.z_absorber_m!r} m; rebuild the bar with z_absorber there"
         )
 
 
 def static_tip_compliance(bar) -> float:
     """Static tip compliance of the retained modes, sum_i psi_L,i^2 / K_i (m/N)."""
-    return float(np.sum(bar.psi_tip**2 / bar.stiffness))
+    return float(np.sum(bar.psi_tip**2 / bar.stiffness_n_m))
 
 
 # --- the most negative real part ------------------------------------------------
 def min_real_part(
-    bar, tmd: TunedMassDamper | None = None, omega=None, *, added_mass: float = 0.0
+    bar: ModalModel, tmd: TunedMassDamper | None = None, omega_rad_s=None, *,
+    added_mass_kg: float = 0.0
 ) -> tuple[float, float]:
     """(min Re G (m/N), omega at the minimum (rad/s)) of the tip receptance of ``bar``
-    (a ModalModel) with the absorber ``tmd`` (or none) and a rigid ``added_mass`` (kg)
+    (a ModalModel) with the absorber ``tmd`` (or none) and a rigid ``added_mass_kg`` (kg)
     at the ball's position.
 
-    Searched on ``omega`` (default: omega_1 times ``TROUGH_BAND``,
+    Searched on ``omega_rad_s`` (rad/s; default: omega_1 times ``TROUGH_BAND``,
     ``TROUGH_POINTS`` points); every local minimum of the grid is then
     refined by a bounded scalar minimisation between its neighbours, so the
     value is accurate to the solver tolerance, not to the grid spacing.
     The limiting depth of cut of a regenerative cut is inversely
     proportional to -min Re G (docs/model.md, section 3).
     """
-    if omega is None:
-        omega = bar.natural_frequency * np.linspace(*TROUGH_BAND, TROUGH_POINTS)
-    w = np.asarray(omega, dtype=float)
+    if omega_rad_s is None:
+        omega_rad_s = bar.natural_frequency_rad_s * np.linspace(*TROUGH_BAND, TROUGH_POINTS)
+    w = np.asarray(omega_rad_s, dtype=float)
     if w.ndim != 1 or len(w) < 3:
-        raise ParameterError(f"omega must be a 1-D grid of at least 3 points (got shape {w.shape})")
-    re = tip_frf(bar, w, tmd=tmd, added_mass=added_mass).real
+        raise ParameterError(f"omega_rad_s must be a 1-D grid of at least 3 points (got shape "
+                             f"{w.shape})")
+    re = tip_frf(bar, w, tmd=tmd, added_mass_kg=added_mass_kg).real
     best = (float(re.min()), float(w[np.argmin(re)]))
     for i in _local_minima(re):
         lo, hi = w[max(i - 1, 0)], w[min(i + 1, len(w) - 1)]
         res = scipy.optimize.minimize_scalar(
-            lambda x: tip_frf(bar, x, tmd=tmd, added_mass=added_mass).real,
+            lambda x: tip_frf(bar, x, tmd=tmd, added_mass_kg=added_mass_kg).real,
             bounds=(lo, hi),
             method="bounded",
             options={"xatol": 1e-9 * hi},
@@ -153,24 +157,23 @@ def minimax_real_tuning(
     host's damping and every retained mode.
     """
     x0 = sims_tuning(mass, bar) if start is None else start
-    scale = bar.tip_stiffness
+    scale = bar.tip_stiffness_n_m
 
     def objective(p):
-        tmd = TunedMassDamper(
-            mass=mass, stiffness=math.exp(p[0]), damping=math.exp(p[1]), position=bar.z_absorber
-        )
+        tmd = TunedMassDamper(mass_kg=mass, stiffness_n_m=math.exp(p[0]),
+                              damping_n_s_m=math.exp(p[1]), position_m=bar.z_absorber_m)
         return -min_real_part(bar, tmd, omega)[0] * scale
 
     res = scipy.optimize.minimize(
         objective,
-        [math.log(x0.stiffness), math.log(x0.damping)],
+        [math.log(x0.stiffness_n_m), math.log(x0.damping_n_s_m)],
         method="Nelder-Mead",
         options={"xatol": xatol, "fatol": 1e-12, "maxiter": 2000},
     )
     return TunedMassDamper(
-        mass=mass,
-        stiffness=math.exp(res.x[0]),
-        damping=math.exp(res.x[1]),
-        position=bar.z_absorber,
+        mass_kg=mass,
+        stiffness_n_m=math.exp(res.x[0]),
+        damping_n_s_m=math.exp(res.x[1]),
+        position_m=bar.z_absorber_m,
         design="minimax-real",
     )

@@ -88,7 +88,7 @@ def linear_host(system_or_bar, tmd=None, added_mass: float = 0.0):
     if kind == "tmd":
         return bar, system_or_bar.damper, 0.0
     if kind == "locked":
-        return bar, None, float(system_or_bar.damper.mass)
+        return bar, None, float(system_or_bar.damper.mass_kg)
     return bar, None, 0.0  # solid bar, or a free ball that does not act on the bar
 
 
@@ -96,7 +96,7 @@ def system_receptance(system, w) -> np.ndarray:
     """The tip receptance (m/N) of ``system`` (or a bar) at ``w`` (rad/s), its damper
     taken as :func:`linear_host` says."""
     bar, tmd, added_mass = linear_host(system)
-    return tip_frf(bar, w, tmd=tmd, added_mass=added_mass)
+    return tip_frf(bar, w, tmd=tmd, added_mass_kg=added_mass)
 
 
 def natural_frequencies(
@@ -170,7 +170,7 @@ def analytic_lobes(
     kr = check_positive("kr", kr, "Pa")
     bar, tmd, added_mass = linear_host(system_or_bar, tmd, added_mass)
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
-    return lobes_of_receptance(w, tip_frf(bar, w, tmd=tmd, added_mass=added_mass), kr, lobes)
+    return lobes_of_receptance(w, tip_frf(bar, w, tmd=tmd, added_mass_kg=added_mass), kr, lobes)
 
 
 def lobes_of_receptance(w, g, kr: float = KR_ALUMINIUM,
@@ -232,7 +232,7 @@ def limit_at_speeds(
         check_positive("rpm", s, "rev/min")
     allowed = None if lobes is None else _lobe_numbers(lobes)
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
-    g = tip_frf(bar, w, tmd=tmd, added_mass=added_mass)
+    g = tip_frf(bar, w, tmd=tmd, added_mass_kg=added_mass)
     eps = regeneration_phase(g)
     # every speed's crossings bisected together: one FRF solve per step for all
     brackets = [_contenders(w, g, *_crossings(w, g, eps, 60.0 / speed, allowed))
@@ -244,7 +244,7 @@ def limit_at_speeds(
     if owner.size:
         lo, hi, j = (np.concatenate([b[k] for b in brackets]) for k in range(3))
         root = _bisect(bar, tmd, added_mass, lo, hi, j, np.repeat(60.0 / flat, count))
-        re = tip_frf(bar, root, tmd=tmd, added_mass=added_mass).real
+        re = tip_frf(bar, root, tmd=tmd, added_mass_kg=added_mass).real
         b = np.where(re < 0.0, -0.5 / (kr * np.minimum(re, -1e-300)), np.inf)
         for k in np.unique(owner):
             mine = np.flatnonzero(owner == k)
@@ -297,7 +297,7 @@ def _bisect(bar, tmd, added_mass, lo, hi, j, tau):
     def f(x):
         return (
             x * tau
-            - regeneration_phase(tip_frf(bar, x, tmd=tmd, added_mass=added_mass))
+            - regeneration_phase(tip_frf(bar, x, tmd=tmd, added_mass_kg=added_mass))
             - TWO_PI * j
         )
 
@@ -362,5 +362,5 @@ def min_limit(
     kr = check_positive("kr", kr, "Pa")
     bar, tmd, added_mass = linear_host(system_or_bar, tmd, added_mass)
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
-    re, _ = min_real_part(bar, tmd, w, added_mass=added_mass)
+    re, _ = min_real_part(bar, tmd, w, added_mass_kg=added_mass)
     return math.inf if re >= 0.0 else -0.5 / (kr * re)

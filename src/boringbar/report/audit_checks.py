@@ -201,7 +201,7 @@ def _stuck_f1(ev: Evidence, preset: str) -> float:
         systems = json.loads(ds.attrs["systems"])
     d = next(v for k, v in systems.items() if k.startswith("ball"))
     system = System.from_dict(d)
-    return float(natural_frequencies(system.bar, None, system.damper.mass)[0] / (2 * math.pi))
+    return float(natural_frequencies(system.bar, None, system.damper.mass_kg)[0] / (2 * math.pi))
 
 
 def check_h4(ev: Evidence, preset: str) -> Verdict:
@@ -382,8 +382,8 @@ def basin_threshold(path) -> float | None:
     |initial displacement| whose attractor differs from the one nearest the
     origin; None where that row holds one attractor."""
     with xr.open_dataset(path) as ds:
-        a, x = ds["attractor"].values, ds["displacement"].values
-        j = int(np.argmin(np.abs(ds["velocity"].values)))
+        a, x = ds["attractor"].values, ds["displacement_m"].values
+        j = int(np.argmin(np.abs(ds["velocity_m_s"].values)))
     row = a[:, j]
     centre = row[int(np.argmin(np.abs(x)))]
     other = np.abs(x[row != centre])

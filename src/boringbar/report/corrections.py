@@ -49,18 +49,18 @@ LADDER = (
 
 def ladder_system(rung: str, gap: float, restitution: float = 0.7) -> System:
     """The ball-damper System of one rung of :data:`LADDER` (friction on)."""
-    physical_friction = make_system("ball", "physical", gap=gap).damper.friction_force
-    common = dict(gap=gap, friction=True, restitution=restitution)
+    physical_friction = make_system("ball", "physical", gap_m=gap).damper.friction_force_n
+    common = dict(gap_m=gap, friction=True, restitution=restitution)
     if rung == "paper":
         return make_system("ball", "paper", **common)
     if rung == "reciprocal":
         return make_system("ball", "paper", friction_reaction="reciprocal", **common)
     if rung == "rolling":
         return make_system("ball", "paper", friction_reaction="reciprocal",
-                           friction_force=physical_friction, **common)
+                           friction_force_n=physical_friction, **common)
     if rung == "fe-stiffness":
         return make_system("ball", "paper", friction_reaction="reciprocal",
-                           friction_force=physical_friction,
+                           friction_force_n=physical_friction,
                            modal=published_bar(cavity=True, n_modes=1), **common)
     if rung == "physical":
         return make_system("ball", "physical", **common)
@@ -91,18 +91,18 @@ def readings_ladder(gaps=(0.5e-3, 0.1e-3), force: float = 10.0, ratio: float = 1
     for i, rung in enumerate(rungs):
         for j, gap in enumerate(gaps):
             system = ladder_system(rung, gap)
-            run = simulate(system, Harmonic(force, ratio), duration=duration, dt=dt,
+            run = simulate(system, Harmonic(force, ratio), duration_s=duration, dt_s=dt,
                            record_every=0)
-            rms[i, j] = run.rms_tip
+            rms[i, j] = run.rms_tip_m
             pattern[i, j] = run.pattern.name if run.pattern else ""
             per_cycle[i, j] = (run.pattern.impacts_per_cycle if run.pattern else math.nan)
             w = run.energy["work_force_j"]
             injected[i, j] = run.energy["work_nonreciprocal_friction_j"] / w if w else 0.0
-            friction[i, j] = system.damper.friction_force
+            friction[i, j] = system.damper.friction_force_n
         host = System(system.bar, None, system.preset, system.readings)
-        f1[i] = system.reference_frequency / (2 * math.pi)
+        f1[i] = system.reference_frequency_rad_s / (2 * math.pi)
         depth[i] = min_limit(host, KR_ALUMINIUM)
-    dims = ("rung", "gap")
+    dims = ("rung", "gap_m")
     return xr.Dataset(
         {
             "rms_tip_m": (dims, rms, {"units": "m"}),
@@ -116,7 +116,7 @@ def readings_ladder(gaps=(0.5e-3, 0.1e-3), force: float = 10.0, ratio: float = 1
                 "units": "m", "long_name": "analytic minimum chatter-free depth of the bare "
                                            "host bar (ball not touching)"}),
         },
-        coords={"rung": rungs, "gap": ("gap", np.asarray(gaps, float), {"units": "m"}),
+        coords={"rung": rungs, "gap_m": ("gap_m", np.asarray(gaps, float), {"units": "m"}),
                 "description": ("rung", [d for _, d in LADDER])},
         attrs={"title": "boringbar: the published readings dropped one at a time",
                "boringbar_version": __version__, "force_n": force, "ratio": ratio,
@@ -143,18 +143,18 @@ def impact_law_check(system: System, force: float = 10.0, ratio: float = 1.0, *,
     if bar.n_modes != 1:
         raise ValueError("impact_law_check needs a one-mode system (as published)")
     d = system.damper
-    run = simulate(system, Harmonic(force, ratio), duration=duration, dt=dt, record_every=1,
+    run = simulate(system, Harmonic(force, ratio), duration_s=duration, dt_s=dt, record_every=1,
                    steady_fraction=1.0)
     h = run.history
-    big_m, psi_d, psi_l = bar.mass[0], bar.psi_damper[0], bar.psi_tip[0]
-    m, e = d.mass, d.restitution
+    big_m, psi_d, psi_l = bar.mass_kg[0], bar.psi_damper[0], bar.psi_tip[0]
+    m, e = d.mass_kg, d.restitution
     mu = m / big_m
     n_imp = len(run.impacts)
     momentum = {"corrected": 0.0, "printed": 0.0}
     gains = {"corrected": 0, "printed": 0}
     largest_gain = {"corrected": 0.0, "printed": 0.0}
     for t, _wall, v_minus in run.impacts:
-        k = int(round((t - run.t0) / dt)) - 1  # the recorded row before the impact step
+        k = int(round((t - run.t0_s) / dt)) - 1  # the recorded row before the impact step
         k = min(max(k, 0), len(h) - 1)
         du = h[k, 2] / psi_l  # modal velocity u'
         ball = v_minus + psi_d * du  # absolute ball velocity u_d'
@@ -180,22 +180,22 @@ def absorber_designs(preset: str = "physical", mass: float = 0.39) -> list[dict]
     (one mode for ``paper``, two for ``physical``), at z_a = 96 mm."""
     host = make_system("solid", preset).bar
     designs = {
-        "published": TunedMassDamper.published(position=host.z_absorber),
+        "published": TunedMassDamper.published(position_m=host.z_absorber_m),
         "den-hartog": TunedMassDamper.den_hartog(mass, host),
         "sims": sims_tuning(mass, host),
     }
-    wn = host.natural_frequency
+    wn = host.natural_frequency_rad_s
     w = wn * np.linspace(0.5, 1.6, 22001)
     rows = []
     for name, tmd in designs.items():
         g = tip_frf(host, w, tmd=tmd)
         rows.append({
             "design": name,
-            "mass_kg": tmd.mass,
-            "stiffness_n_m": tmd.stiffness,
-            "damping_n_s_m": tmd.damping,
-            "mass_ratio": absorber_mass_ratio(tmd.mass, host),
-            "tuning_ratio": math.sqrt(tmd.stiffness / tmd.mass) / wn,
+            "mass_kg": tmd.mass_kg,
+            "stiffness_n_m": tmd.stiffness_n_m,
+            "damping_n_s_m": tmd.damping_n_s_m,
+            "mass_ratio": absorber_mass_ratio(tmd.mass_kg, host),
+            "tuning_ratio": math.sqrt(tmd.stiffness_n_m / tmd.mass_kg) / wn,
             "peak_receptance_m_n": float(np.max(np.abs(g))),
             "min_depth_m": min_limit(System(host, tmd, preset, ()), KR_ALUMINIUM),
         })

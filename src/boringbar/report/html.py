@@ -6,12 +6,16 @@ figures), so it can be rebuilt without rerunning anything
 ``templates/report.html.j2`` (package data); this module only reads the files
 and hands the template plain data: table rows of formatted numbers, figure
 paths, and the facts each finding is worded from (counts, numbers, which way a
-comparison went). Every number in the page is read from those files; every
-statement that compares the presets or answers a published claim is worded by
-the template from those facts, not written in advance. Figures are linked by
-relative paths, so the output folder can be moved or served as it is. A small
-script at the end of the page counts the figures that loaded and writes the
-count into ``<body data-figures>`` (the headless-browser test reads it).
+comparison went). The figures come first, each linked to its full-size PNG; the
+audit follows, its verdicts counted and its full table folded, each verdict
+linked to the figure of the page it is judged on. Every number in the page is
+read from those files; every statement that compares the presets or answers a
+published claim is worded by the template from those facts, not written in
+advance. Figures are linked by relative paths, so the output folder can be
+moved or served as it is. A small script at the end of the page counts the
+figures that loaded and writes the count into ``<body data-figures>``, and each
+figure's width as drawn into its ``data-shown-width`` (the headless-browser test
+reads them).
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +31,8 @@ import xarray as xr
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
 from boringbar.io import atomic_path
-from boringbar.report.audit import audit, count_line
-from boringbar.report.audit_data import TOLERANCE
+from boringbar.report.audit import audit
+from boringbar.report.audit_data import TOLERANCE, VERDICTS
 
 _ENV = Environment(
     loader=PackageLoader("boringbar.report", "templates"),
@@ -62,10 +67,16 @@ class _Report:
             self.steps[(rec["preset"], rec["key"])] = rec
         self.keys = list(dict.fromkeys(r["key"] for r in manifest["steps"]
                                        if r["key"] != "corrections"))
+        #: figure path (relative to the report) -> its anchor in the page
+        self.shown: dict[str, str] = {}
 
     # --- helpers -------------------------------------------------------------
     def img(self, path, alt: str) -> dict:
-        return {"src": os.path.relpath(Path(path), self.out).replace(os.sep, "/"), "alt": alt}
+        """A figure of the page: its path relative to the report, its alt text and its
+        anchor (``fig-`` and the path's letters and digits)."""
+        src = os.path.relpath(Path(path), self.out).replace(os.sep, "/")
+        self.shown[src] = "fig-" + re.sub(r"[^A-Za-z0-9]+", "-", src).strip("-")
+        return {"src": src, "alt": alt, "id": self.shown[src]}
 
     def summary(self, preset: str, key: str) -> dict | None:
         rec = self.steps.get((preset, key))
@@ -259,7 +270,7 @@ class _Report:
         b_best = best["min_chatter_free_depth_m"] or 0.0
         b_solid = solid["min_chatter_free_depth_m"] or 0.0
         ds = _load(s["files"]["netcdf"])
-        why = (_ball_at_limit(ds) if "max_rel_disp" in ds and "host_analytic_limit" in ds
+        why = (_ball_at_limit(ds) if "max_rel_disp_m" in ds and "host_analytic_limit_m" in ds
                else None)
         return {"claim": "ball_lobes", "preset": preset, "reproduced": b_best > b_solid,
                 "best_case": best["case"], "best_depth": _mm(b_best),
@@ -283,40 +294,56 @@ class _Report:
         m = self.manifest
         return {"title": m["title"], "version": m["boringbar_version"],
                 "command": m["command"], "quick": bool(m["quick"]),
-                "reused": m.get("compute_time_s", 0) > m["wall_time_s"] + 1,
+                "reused": any(r.get("reused") for r in m["steps"]),
+                # steps run side by side: their times add up to more than the wall time
+                "overlapped": m.get("compute_time_s", 0) > m["wall_time_s"] + 1,
                 "compute_time": f"{m.get('compute_time_s', 0):.0f}",
                 "wall_time": f"{m['wall_time_s']:.0f}"}
 
     def audit(self) -> dict:
-        """The audit table (report/audit.py) for the template."""
+        """The audit (report/audit.py) for the template: the verdicts counted per column,
+        and the table, each verdict linked to its figure in the page (where the page
+        shows it: call after the sections that show figures), else to the PNG."""
         result = audit(self.out)
-        css = {"reproduced": "reproduced", "partly": "partly", "not reproduced": "not",
-               "not available": "na"}
         rows = []
         for c in result["claims"]:
             published = "; ".join(f"{p['name']} {p['value']}{' ' + p['unit'] if p['unit'] else ''}"
                                   for p in c["published"])
-            cells = [{"verdict": c["verdict"][p], "css": css[c["verdict"][p]],
-                      "reason": c["reason"][p], "figure": c["figure"][p],
+            cells = [{"verdict": c["verdict"][p], "css": _VERDICT_CSS[c["verdict"][p]],
+                      "reason": c["reason"][p], "figure": self._figure_link(c["figure"][p]),
                       "measured": "; ".join(f"{k} {v}" for k, v in c["measured"][p].items())}
                      for p in result["presets"]]
             rows.append({"id": c["id"], "source": c["source"], "statement": c["statement"],
                          "published": published, "cells": cells})
         variants = {v["name"]: v["description"] for v in result["variants"]}
         heads = [p if p in variants else f"{p} preset" for p in result["presets"]]
+        counts = [{"column": head, "cells": [{"count": result["counts"][p][v],
+                                              "css": _VERDICT_CSS[v]} for v in VERDICTS]}
+                  for p, head in zip(result["presets"], heads, strict=True)]
         return {"rows": rows, "presets": heads, "quick": result["quick"],
                 "variants": [{"name": k, "description": d} for k, d in variants.items()],
-                "counts": [count_line(result, p) for p in result["presets"]],
-                "tolerance": f"{TOLERANCE:.0%}"}
+                "verdicts": [{"name": v, "css": _VERDICT_CSS[v]} for v in VERDICTS],
+                "counts": counts, "tolerance": f"{TOLERANCE:.0%}"}
+
+    def _figure_link(self, figure: str | None) -> str | None:
+        """The anchor of ``figure`` (a path relative to the report) where the page shows
+        it, else the path itself."""
+        if figure is None:
+            return None
+        return "#" + self.shown[figure] if figure in self.shown else figure
 
     def context(self) -> dict:
-        return {"header": self.header(), "audit": self.audit(), "sweeps": self.sweeps(),
-                "lobes": self.lobes(),
-                "bifurcation": self.bifurcation(), "continuation": self.continuation(),
-                "basins": self.basins(),
-                "sensitivity": self.sensitivity(), "design": self.design(),
-                "corrections": self.corrections(),
-                "cannot": self.cannot()}
+        sections = {"header": self.header(), "sweeps": self.sweeps(), "lobes": self.lobes(),
+                    "bifurcation": self.bifurcation(), "continuation": self.continuation(),
+                    "basins": self.basins(), "sensitivity": self.sensitivity(),
+                    "design": self.design(), "corrections": self.corrections(),
+                    "cannot": self.cannot()}
+        return {**sections, "audit": self.audit()}  # last: it links to the figures shown
+
+
+#: The CSS class of each verdict's colour.
+_VERDICT_CSS = {"reproduced": "reproduced", "partly": "partly", "not reproduced": "not",
+                "not available": "na"}
 
 
 def _load(path):
@@ -339,7 +366,7 @@ def _impact_law(imp: dict) -> dict:
 
 def _ladder_table(ladder) -> dict:
     """One row per rung of the readings ladder, one RMS column per gap."""
-    gaps = ladder["gap"].values
+    gaps = ladder["gap_m"].values
     rows = []
     for i, r in enumerate(ladder["rung"].values):
         rows.append([str(r), str(ladder["description"].values[i]),
@@ -360,7 +387,7 @@ def _ladder_findings(ladder) -> dict:
     reaction, calibrated stiffness (paper rung against the later ones)."""
     rungs = [str(r) for r in ladder["rung"].values]
     paper_i, rec_i, roll_i = (rungs.index(r) for r in ("paper", "reciprocal", "rolling"))
-    gaps = ladder["gap"].values
+    gaps = ladder["gap_m"].values
     rms = ladder["rms_tip_m"].values
     pattern = ladder["pattern"].values
     hz = ladder["host_frequency_hz"].values
@@ -406,21 +433,21 @@ def _ball_at_limit(ds) -> dict | None:
     cavity bar, and at each speed's limiting depth how far the ball travelled
     against half the gap and how often it struck a wall. None when no ball
     case has a limiting depth."""
-    depth = ds["depth"].values
+    depth = ds["depth_m"].values
     rows, reach_all, strikes_all, below = [], [], 0, []
     for i in range(ds.sizes["case"]):
         bar = str(ds["bar"].values[i])
         if bar not in ("solid", "ball"):
             continue
-        ratio = ds["first_unstable_depth"].values[i] / ds["host_analytic_limit"].values[i]
+        ratio = ds["first_unstable_depth_m"].values[i] / ds["host_analytic_limit_m"].values[i]
         ratio = ratio[np.isfinite(ratio)]
         reach, strikes = [], 0
         for j in range(ds.sizes["rpm"]):
-            lim = float(ds["limit_depth"].values[i, j])
+            lim = float(ds["limit_depth_m"].values[i, j])
             if bar == "ball" and math.isfinite(lim):
                 k = int(round(lim / depth[0])) - 1
-                reach.append(float(ds["max_rel_disp"].values[i, j, k]) /
-                             (0.5 * float(ds["gap"].values[i])))
+                reach.append(float(ds["max_rel_disp_m"].values[i, j, k]) /
+                             (0.5 * float(ds["gap_m"].values[i])))
                 strikes += max(0, int(ds["impacts"].values[i, j, k]))
         if bar == "ball":
             reach_all += reach

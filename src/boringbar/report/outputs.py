@@ -49,7 +49,7 @@ def integrators_used(ds) -> str:
 def sweep_pngs(ds, out: Path) -> list[tuple[float, Path]]:
     """(force, file) of each sweep figure: ``out/sweep.png`` for one force, else one
     ``out/sweep_F<force>N.png`` per force."""
-    forces = [float(f) for f in np.atleast_1d(ds["force"].values)]
+    forces = [float(f) for f in np.atleast_1d(ds["force_n"].values)]
     if len(forces) == 1:
         return [(forces[0], out / "sweep.png")]
     return [(f, out / f"sweep_F{f:g}N.png") for f in forces]
@@ -120,7 +120,8 @@ def design_files(ds, cmp: dict, out) -> dict:
     files = {"netcdf": write_netcdf_atomic(ds, out / "design.nc"),
              "csv": out / "trials.csv",
              "png": save_figure_atomic(plot_design(ds), out / "design.png"),
-             "best_png": save_figure_atomic(plot_design_comparison(cmp), out / "best.png"),
+             "best_png": save_figure_atomic(plot_design_comparison(cmp, ds.attrs),
+                                           out / "best.png"),
              "json": out / "summary.json"}
     table = ds.drop_vars(["objective_samples", "published_statistic", "published_error"])
     with atomic_path(files["csv"]) as tmp:

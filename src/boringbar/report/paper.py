@@ -74,6 +74,10 @@ PRESET_ORDER = ("paper", "physical")
 #: quick study's time went to its lobes at every second one; docs/paper.md says what
 #: the coarser grid changes.
 QUICK_RPM = "1000:1600:200"
+#: The published lobe grid, given on every lobes command of the study (the command's
+#: own defaults follow the bar): its speeds (PUBLISHED_RPM) and 0.01 mm depth steps.
+PUBLISHED_SPEEDS = "900:1600:50"
+PUBLISHED_DEPTHS = ("--depth-step-mm", "0.01")
 #: Steps computed at once (:func:`_run_steps`).
 STEP_WORKERS = min(2, os.cpu_count() or 1)
 
@@ -126,7 +130,7 @@ COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
 DT_S = 1e-6
 INTEGRATOR = "auto"
 GAP_MM = 0.5
-CUT = {"kr": 850.0 * 1e6, "feed": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
+CUT = {"kr_pa": 850.0 * 1e6, "feed_m": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
        "start": "rest", "bounded_fraction": 0.1}
 
 
@@ -171,7 +175,7 @@ def _at_rest() -> Initial:
 def _sweep_cases(col: Column) -> list:
     """The cases of sweep and lobes by default: solid, TMD, and the ball damper at
     each gap (0.5, 0.1 mm) x friction (off, on), in the command line's order."""
-    return published_cases(preset=col.preset, gaps=(0.5 * 1e-3, 0.1 * 1e-3), **col.kw)
+    return published_cases(preset=col.preset, gaps_m=(0.5 * 1e-3, 0.1 * 1e-3), **col.kw)
 
 
 def _sweep_run(forces: str, ratios: str, duration_s: float):
@@ -190,11 +194,7 @@ def _lobes_run(method: str, rpm: str | None, duration_s: float, ball: str | None
                  published_cases(("ball",), (0.5e-3, 0.1e-3), preset=col.preset, ball=ball,
                                  **col.kw))
         speeds = PUBLISHED_RPM if rpm is None else parse_range(rpm, "--rpm")
-        options = LobesOptions(tuple(speeds), method, "zero", 0.01 * 1e-3, 3.0 * 1e-3, 3,
-                               kr_pa=CUT["kr"], feed_m=CUT["feed"],
-                               revolutions=CUT["revolutions"],
-                               interpolation=CUT["interpolation"], start=CUT["start"],
-                               bounded_fraction=CUT["bounded_fraction"])
+        options = LobesOptions(tuple(speeds), method, "zero", 0.01 * 1e-3, 3.0 * 1e-3, 3, **CUT)
         integration = _integration(duration_s)
         ds = lobes(cases, options, integration=integration, execution=Execution())
         exds = None if ball is not None else lobe_examples(ds, cases[0], options,
@@ -207,7 +207,7 @@ def _lobes_run(method: str, rpm: str | None, duration_s: float, ball: str | None
 def _bifurcation_run(gap_mm: str, friction: bool, forces: str, ratio: str, duration_s: float):
     def run(col: Column, out: Path) -> dict:
         values = parse_range(forces, "--force-n")
-        system = make_system("ball", col.preset, gap=float(gap_mm) * 1e-3, friction=friction,
+        system = make_system("ball", col.preset, gap_m=float(gap_mm) * 1e-3, friction=friction,
                              **col.kw)
         # the command line sets the swept option to its first value
         options = BifurcationOptions("force", tuple(values * 1.0), float(values[0]), float(ratio),
@@ -260,7 +260,7 @@ def _continuation_run(settings: MapSettings):
         cases = {}
         for gap in ("0.1", "0.5"):
             for fr in ("off", "on"):
-                system = make_system("ball", col.preset, gap=float(gap) * 1e-3,
+                system = make_system("ball", col.preset, gap_m=float(gap) * 1e-3,
                                      friction=fr == "on", **col.kw)
                 ds = continuation(system, options=settings.options())
                 ds.attrs.update(preset=col.preset, bar="ball")
@@ -285,7 +285,7 @@ def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement
     def run(col: Column, out: Path) -> dict:
         lo, hi, n = _grid(displacement_mm)
         w0, v0 = (float(v) for v in start.split(","))
-        system = make_system("ball", col.preset, gap=GAP_MM * 1e-3, friction=friction,
+        system = make_system("ball", col.preset, gap_m=GAP_MM * 1e-3, friction=friction,
                              **col.kw)
         options = BasinOptions((lo * 1e-3, hi * 1e-3, n), _grid(velocity_m_s), 0.0, 0.0,
                                float(force), float(ratio), poincare_from=(w0 * 1e-3, v0))
@@ -299,7 +299,7 @@ def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement
 def _sensitivity_run(kind: str, force: str, ratios: str, cut_rpm: str | None,
                      depths_mm: str | None, duration_s: float):
     def run(col: Column, out: Path) -> dict:
-        common = dict(preset=col.preset, bar="ball", gap=GAP_MM * 1e-3, friction=True,
+        common = dict(preset=col.preset, bar="ball", gap_m=GAP_MM * 1e-3, friction=True,
                       overrides=col.kw, integration=_integration(duration_s),
                       execution=Execution())
         ds = sensitivity(SensitivityOptions(kind, None, (float(force),),
@@ -342,23 +342,26 @@ def published_steps(quick: bool = False) -> list[Step]:
     if quick:
         steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
                           ("lobes", "--examples", "--method", "search", "--rpm",
-                           QUICK_RPM, "--duration-s", "1.0"),
+                           QUICK_RPM, *PUBLISHED_DEPTHS, "--duration-s", "1.0"),
                           _lobes_run("search", QUICK_RPM, 1.0)))
     else:
         # the further columns take the bisection search: fewer runs than the scan for
         # the same 0.01 mm limits (docs/paper.md says what was compared)
         steps.append(Step("lobes", "lobes", "Stability lobes by time-domain simulation",
-                          ("lobes", "--examples", "--method", "scan"),
+                          ("lobes", "--examples", "--method", "scan", "--rpm",
+                           PUBLISHED_SPEEDS, *PUBLISHED_DEPTHS),
                           _lobes_run("scan", None, 2.0),
-                          lean=(("lobes", "--examples", "--method", "search"),
+                          lean=(("lobes", "--examples", "--method", "search", "--rpm",
+                                 PUBLISHED_SPEEDS, *PUBLISHED_DEPTHS),
                                 _lobes_run("search", None, 2.0))))
     # a steel ball's lobes (the claim that it lowers the chatter-free depth), by the
     # bisection search on the published speeds: the same limits as the scan, cheaper
-    steel_rpm = QUICK_RPM if quick else "900:1600:50"
+    steel_rpm = QUICK_RPM if quick else PUBLISHED_SPEEDS
     steel_s = 1.0 if quick else 2.0
     steps.append(Step("lobes-steel", "lobes", "Stability lobes with a steel ball",
                       ("lobes", "--bar", "ball", "--ball", "steel", "--method", "search",
-                       "--rpm", steel_rpm, *(("--duration-s", "1.0") if quick else ())),
+                       "--rpm", steel_rpm, *PUBLISHED_DEPTHS,
+                       *(("--duration-s", "1.0") if quick else ())),
                       _lobes_run("search", steel_rpm, steel_s, ball="steel"),
                       variants=False))  # the further columns judge D4 on the 1200 rpm cuts
     forces = "5:50:" + ("5" if quick else "1")
@@ -607,6 +610,6 @@ def _corrections(where: Path, presets, duration: float) -> dict:
     ladder = readings_ladder(duration=duration)
     nc = write_netcdf_atomic(ladder, where / "ladder.nc")
     png = save_figure_atomic(plot_ladder(ladder), where / "ladder.png")
-    impact = impact_law_check(make_system("ball", "paper", gap=0.1e-3, friction=False))
+    impact = impact_law_check(make_system("ball", "paper", gap_m=0.1e-3, friction=False))
     return {"ladder_netcdf": str(nc), "ladder_png": str(png), "impact_law": impact,
             "absorbers": {p: absorber_designs(p) for p in presets}}

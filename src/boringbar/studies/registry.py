@@ -192,8 +192,8 @@ def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
     check_steps(study.value("duration_s"), study.value("dt_s"),
                 ("key 'run.duration_s'", "key 'run.dt_s'"))
     if isinstance(d, ImpactDamper):
-        half = d.gap / 2 * 1e3
-        check_range(f"key 'run.ball_position_mm' (within +-gap/2 of a {d.gap * 1e3:g} mm gap)",
+        half = d.gap_m / 2 * 1e3
+        check_range(f"key 'run.ball_position_mm' (within +-gap/2 of a {d.gap_m * 1e3:g} mm gap)",
                     study.value("ball_position_mm"), -half, half, unit="mm")
     if cutting:
         check_delay(60.0 * omega / (2 * math.pi), study.value("revolutions"),
@@ -216,13 +216,13 @@ def make_study_system(preset: str, s: dict, spec=None):
     """The System of the flat bar + damper settings ``s`` (units as in the keys) of
     the system file ``spec`` (None: the published bar)."""
 
-    kw = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3, "spec": spec}
+    kw = {"n_modes": s["n_modes"], "z_absorber_m": s["z_absorber_mm"] * 1e-3, "spec": spec}
     if s["kind"] == "tmd":
-        kw.update(tmd_mass=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
+        kw.update(tmd_mass_kg=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
     if s["kind"] == "ball":
-        kw.update(gap=s["gap_mm"] * 1e-3, friction=s["friction"], ball=s["ball"],
+        kw.update(gap_m=s["gap_mm"] * 1e-3, friction=s["friction"], ball=s["ball"],
                   restitution=s["restitution"], friction_number=s["friction_number"],
-                  friction_force=s["friction_force_n"],
+                  friction_force_n=s["friction_force_n"],
                   friction_reaction=s["friction_reaction"], locked=s["locked"])
         if s["static_ratio"] != 1.0:  # only where the system takes it
             kw["static_ratio"] = s["static_ratio"]
@@ -329,7 +329,7 @@ class Sweep(Analysis):
 
     def runs(self, plan):
         c = plan.context
-        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
+        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency_rad_s, False)
                 for x in c["cases"]]
 
 
@@ -414,7 +414,8 @@ class Bifurcation(Analysis):
     def runs(self, plan):
         o = plan.context["options"]
         r = max(o.values) if o.parameter == "ratio" else o.ratio
-        return [(x.system, r * x.system.reference_frequency, False) for x in plan.extra["cases"]]
+        return [(x.system, r * x.system.reference_frequency_rad_s, False)
+                for x in plan.extra["cases"]]
 
 
 # --- basins -----------------------------------------------------------------------
@@ -466,7 +467,7 @@ class Basins(Analysis):
         return plan
 
     def runs(self, plan):
-        return [(op.case.system, op.forcing.omega(op.case.system.reference_frequency), False)
+        return [(op.case.system, op.forcing.omega(op.case.system.reference_frequency_rad_s), False)
                 for op in plan.context["operating"]]
 
     def assemble(self, study, plan, results):
@@ -508,13 +509,13 @@ class Sensitivity(Analysis):
         cuts = None
         if o["cuts"]:
             cuts = Cuts(study.value("rpm"), tuple(round(d * 1e-3, 15) for d in o["depths_mm"]),
-                        study.value("duration_s"), _regenerative_options(study))
+                        study.value("duration_s"), _cut_options(study))
         try:
             options = SensitivityOptions(kind, o["values"], tuple(_axis(study, "force_n")),
                                          tuple(_axis(study, "ratio")), cuts)
             return sensitivity_mod.plan(
                 options, _integration(study, initial=_initial_or_none(study)),
-                preset=study.preset, bar=s["kind"], gap=s["gap_mm"] * 1e-3,
+                preset=study.preset, bar=s["kind"], gap_m=s["gap_mm"] * 1e-3,
                 friction=s["friction"], overrides=_overrides(s, varied, study.system))
         except ParameterError as exc:
             raise StudyError(f"{study.source}: [analysis] {exc}") from None
@@ -523,7 +524,7 @@ class Sensitivity(Analysis):
         c = plan.context
         if c["mode"] == "cuts":
             return [(x.system, 2 * math.pi * c["cuts"].rpm / 60.0, True) for x in c["cases"]]
-        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency, False)
+        return [(x.system, max(c["options"].ratios) * x.system.reference_frequency_rad_s, False)
                 for x in c["cases"]]
 
     def assemble(self, study, plan, results):
@@ -533,31 +534,27 @@ class Sensitivity(Analysis):
 def _overrides(s: dict, varied: str | None, spec=None) -> dict:
     """make_system arguments of the flat settings ``s`` beyond kind, gap and friction
     (without the ``varied`` one), of the system file ``spec``."""
-    overrides = {"n_modes": s["n_modes"], "z_absorber": s["z_absorber_mm"] * 1e-3,
+    overrides = {"n_modes": s["n_modes"], "z_absorber_m": s["z_absorber_mm"] * 1e-3,
                  "spec": spec}
     if s["kind"] == "ball":
         overrides.update(ball=s["ball"], restitution=s["restitution"],
                          friction_number=s["friction_number"],
-                         friction_force=s["friction_force_n"],
+                         friction_force_n=s["friction_force_n"],
                          friction_reaction=s["friction_reaction"], locked=s["locked"])
     if s["kind"] == "tmd":
-        overrides.update(tmd_mass=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
+        overrides.update(tmd_mass_kg=s["tmd_mass_kg"], tmd_design=s["tmd_design"])
     overrides.pop(varied, None)
     return overrides
 
 
 def _cut_options(study: Study) -> dict:
-    """The cut of the study's ``[forcing]`` (SI), as :class:`LobesOptions` fields."""
+    """The cut of the study's ``[forcing]`` (SI), as :class:`LobesOptions` and
+    :class:`~boringbar.model.forcing.Regenerative` fields."""
     return {"kr_pa": study.value("kr_mpa") * 1e6, "feed_m": study.value("feed_mm") * 1e-3,
             "revolutions": study.value("revolutions"),
             "interpolation": study.value("interpolation"), "start": study.value("start"),
             "bounded_fraction": study.value("bounded_fraction")}
 
-
-def _regenerative_options(study: Study) -> dict:
-    """The Regenerative options of the study's ``[forcing]`` (SI)."""
-    c = _cut_options(study)
-    return {"kr": c.pop("kr_pa"), "feed": c.pop("feed_m"), **c}
 
 
 def _initial_or_none(study: Study):

@@ -1,0 +1,326 @@
+"""The design page (docs/app.md): its design state and views against the command line
+and closed forms, and the page itself served by ``boringbar app`` and driven in
+Debian's headless Chromium by Playwright (no browser download)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import boringbar as bb
+from boringbar._validate import ParameterError
+from boringbar.analysis.design_file import load_design
+from boringbar.execute import Execution, run_points
+from boringbar.model.system_file import load_system, published_system
+from boringbar.reference.stability import limit_at_speeds
+from boringbar.webapp import views
+from boringbar.webapp.commands import commands
+from boringbar.webapp.design_state import Design
+from boringbar.webapp.jobs import Latest, Superseded
+from boringbar.webapp.search import design_file, options
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+BOKEH_DATA = "n => Array.from(Bokeh.documents[0].get_model_by_name(n).data.y)"
+
+
+def cli(*args: str, cwd=None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "boringbar", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def published():
+    return Design.of(published_system())
+
+
+# --- the design state: checked as the command line checks ----------------------------
+def test_a_bad_value_gets_the_command_lines_message(published, tmp_path):
+    """The page's message for gap 30 mm is the line `boringbar modes --system FILE`
+    prints for a file holding that gap (the file's name aside)."""
+    with pytest.raises(ParameterError) as page:
+        published.with_value("ball.gap_mm", 30.0)
+    text = published.toml().replace("gap_mm = 0.5", "gap_mm = 30.0")
+    assert "gap_mm = 30.0" in text
+    (tmp_path / "published.toml").write_text(text)
+    out = cli("modes", "--system", "published.toml", cwd=tmp_path)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert out.stderr.strip() == f"boringbar: error: {page.value}"
+
+
+def test_a_bad_setting_gets_the_command_lines_message(published):
+    with pytest.raises(ParameterError) as page:
+        published.with_settings(force_n=-3.0)
+    out = cli("simulate", "--force-n", "-3")
+    assert out.returncode == 2
+    assert str(page.value) in out.stderr
+
+
+def test_export_round_trips_through_the_system_file_reader(published, tmp_path):
+    d = published.with_value("ball.gap_mm", 0.2).with_value("ball.material", "tungsten") \
+        .with_value("cavity.position_mm", 110.0).with_value("ball.friction", ("force_n", 0.3))
+    path = tmp_path / "mine.toml"
+    path.write_text(d.toml())
+    assert load_system(path).to_dict() == d.data
+    out = cli("modes", "--system", str(path), "--json", "--out", str(tmp_path / "m"))
+    assert out.returncode == 0, out.stderr
+    f1 = json.loads(out.stdout)["modes"][0]["frequency_hz"]
+    assert f1 == pytest.approx(views.bar_view(d)["modes"][0]["frequency_hz"], rel=1e-12)
+
+
+def test_a_new_ball_material_takes_its_own_mass(published):
+    """The published file gives the ball's mass (26 g); a tungsten ball of the same
+    diameter weighs its density's share: 19300/14700 of the carbide's."""
+    d = published.with_value("ball.material", "tungsten")
+    assert "mass_g" not in d.data["ball"]
+    m = d.systems["ball"].damper.mass_kg
+    assert m == pytest.approx(19300 * math.pi / 6 * 0.015**3, rel=1e-12)
+
+
+# --- the views -------------------------------------------------------------------------
+def test_the_closed_form_response_matches_a_simulated_solid_bar(published):
+    """The solid bar's curve (RMS = |G| F / sqrt 2) against a long time-domain run of
+    the same bar at the curve's peak."""
+    r = views.response_view(published)
+    i = int(np.argmax(r["curves"]["solid"]))
+    solid = published.systems["solid"]
+    ratio = r["f_hz"][i] / (solid.reference_frequency_rad_s / (2 * math.pi))
+    run = bb.simulate(solid, bb.Harmonic(amplitude_n=20.0, ratio=ratio), duration_s=3.0,
+                      record_every=0)
+    assert run.rms_tip_m * 1e3 == pytest.approx(r["curves"]["solid"][i], rel=2e-3)
+
+
+def test_each_views_command_reproduces_it(published, tmp_path):
+    """The run view's command line, on the exported file, gives the view's RMS."""
+    d = published.with_value("ball.gap_mm", 0.3)
+    name = "mine_design.toml"
+    (tmp_path / name).write_text(d.toml())
+    line = commands(d, name)["run"]
+    out = cli(*line.split()[1:], "--json", "--out", "run", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["rms_tip_m"] * 1e3 == pytest.approx(
+        views.run_view(d)["rms_tip_mm"], rel=1e-12)
+
+
+def test_the_lobes_view_gives_each_bars_analytic_limit(published):
+    """The depth at the design's speed is the frequency-domain limit of each bar (its
+    agreement with simulated cuts is tests/test_chatter.py's); the curve spans the
+    command line's default lobes and the design's speed; the TMD bar cuts deeper."""
+    d = published.with_settings(rpm=1000.0)
+    lv = views.lobes_view(d)
+    for kind, system in d.systems.items():
+        assert lv["depth_at_mm"][kind] == limit_at_speeds(system, [1000.0])[0] * 1e3
+        assert lv["curves"][kind].shape == lv["rpm"].shape
+    assert lv["rpm"][0] <= 1000.0 / 1.2 + 1e-9  # the design speed with room
+    assert lv["rpm"][-1] >= 60 * 525.2  # lobe 1 of the ball bar (f1 525.2 Hz)
+    assert lv["depth_at_mm"]["tmd"] > lv["depth_at_mm"]["solid"]
+
+
+def test_the_search_is_a_design_file_the_command_reads(published, tmp_path):
+    opts = options(published, ["gap_mm", "ball_material", "cavity_position_mm"], 5, 2)
+    (tmp_path / "mine_design.toml").write_text(published.toml())
+    (tmp_path / "search.toml").write_text(design_file(opts, "mine_design.toml"))
+    read, spec = load_design(tmp_path / "search.toml")
+    assert read == opts
+    assert spec.to_dict() == published.data
+
+
+def test_superseded_work_is_dropped_not_queued():
+    """A progress callback that stops the work leaves the points not started unrun."""
+    started = []
+
+    def slow(x):
+        started.append(x)
+        time.sleep(0.05)
+        return x
+
+    def stop(done, total):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_points(slow, list(range(40)), execution=Execution("threads", workers=2),
+                   progress=stop)
+    assert len(started) < 10
+
+
+# --- in the browser ----------------------------------------------------------------------
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    if CHROMIUM is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI must install Debian's chromium (.ci/run does)")
+        pytest.skip("no chromium on this machine (apt-get install chromium)")
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "boringbar", "app", "--port", str(port)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    url = f"http://127.0.0.1:{port}/"
+    for _ in range(300):
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+            break
+        except OSError:
+            time.sleep(0.1)
+    yield url
+    proc.terminate()
+    proc.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def browser(server):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=[
+            "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+            "--disable-component-update", "--disable-sync"])
+        yield b
+        b.close()
+
+
+def _open(browser, url):
+    page = browser.new_context(accept_downloads=True).new_page()
+    page.goto(url)
+    page.wait_for_selector(".status-run >> text=change 0: drawn in", timeout=60_000)
+    return page
+
+
+def _reach(values) -> float:
+    """How far the ball went from the cavity's centre (mm): at most half the gap, and
+    close to it while it hits the walls (the history samples between impacts)."""
+    return max(map(abs, values))
+
+
+def _set(page, control: str, value: str) -> None:
+    box = page.locator(f".ctl-{control} input")
+    box.fill(value)
+    box.press("Enter")
+
+
+def test_the_page_redraws_when_the_gap_moves(browser, server):
+    page = _open(browser, server)
+    before = page.evaluate(BOKEH_DATA, "run-aux")
+    assert 0.24 < _reach(before) <= 0.25  # the ball between the 0.5 mm gap's walls
+    _set(page, "ball-gap_mm", "0.2")
+    page.wait_for_selector(".status-run >> text=change 1: drawn in", timeout=30_000)
+    after = page.evaluate(BOKEH_DATA, "run-aux")
+    assert 0.09 < _reach(after) <= 0.1  # now between the 0.2 mm gap's walls
+    page.get_by_text("Response and lobes").click()  # a tab's figures are drawn when shown
+    page.wait_for_selector(".status-response >> text=change 1: drawn in", timeout=60_000)
+    rms = page.evaluate(BOKEH_DATA, "response-ball")
+    assert len(rms) == len(views.RESPONSE_RATIOS) and all(0 < y < 1 for y in rms)
+    page.context.close()
+
+
+def test_an_out_of_range_value_shows_the_message_and_keeps_the_design(browser, server):
+    page = _open(browser, server)
+    _set(page, "ball-gap_mm", "30")
+    msg = page.locator(".control-error >> text=ball.gap_mm").inner_text()
+    assert "must be a number in (0, 2] mm" in msg
+    assert 0.24 < _reach(page.evaluate(BOKEH_DATA, "run-aux")) <= 0.25
+    page.context.close()
+
+
+def test_an_exported_design_runs_through_boringbar_modes(browser, server, tmp_path):
+    page = _open(browser, server)
+    _set(page, "ball-gap_mm", "0.35")
+    page.wait_for_selector(".status-run >> text=change 1: drawn in", timeout=30_000)
+    with page.expect_download() as download:
+        page.get_by_text("Export system file").click()
+    path = tmp_path / download.value.suggested_filename
+    download.value.save_as(path)
+    assert path.name == "published_design.toml"
+    assert load_system(path).to_dict()["ball"]["gap_mm"] == 0.35
+    out = cli("modes", "--system", str(path), "--out", str(tmp_path / "modes"))
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "modes" / "modes.png").exists()
+    page.context.close()
+
+
+def test_two_sessions_are_independent(browser, server):
+    one, two = _open(browser, server), _open(browser, server)
+    _set(one, "ball-gap_mm", "0.2")
+    one.wait_for_selector(".status-run >> text=change 1: drawn in", timeout=30_000)
+    assert _reach(one.evaluate(BOKEH_DATA, "run-aux")) <= 0.1
+    assert _reach(two.evaluate(BOKEH_DATA, "run-aux")) > 0.24
+    assert two.locator(".ctl-ball-gap_mm input").input_value() == "0.5"
+    assert two.locator(".status-run >> text=change 0: drawn in").count() == 1
+    for p in (one, two):
+        p.context.close()
+
+
+def test_a_malformed_upload_gets_the_command_lines_message(browser, server, tmp_path):
+    bad = tmp_path / "broken.toml"
+    bad.write_text("[bar\nmaterial = 'steel'\n")
+    out = cli("modes", "--system", str(bad))
+    page = _open(browser, server)
+    page.locator("input[type=file]").set_input_files(str(bad))
+    msg = page.locator(".control-error >> text=not valid TOML").inner_text()
+    assert out.stderr.strip().endswith(msg.split("broken.toml", 1)[1].strip())
+    page.context.close()
+
+
+def test_the_notebook_app_builds_the_same_page():
+    layout = bb.app(Path(bb.__file__).parent / "model" / "published.toml")
+    assert "published" in repr(layout)
+
+
+def test_a_newer_request_cancels_the_one_before():
+    """The first of two requests on one view is cancelled (a running one is told to
+    stop at its next progress report), the second's result is what comes back."""
+    pool = ThreadPoolExecutor(max_workers=2)
+    job, stops = Latest(pool), []
+
+    def work(tag, progress):
+        for i in range(200):
+            try:
+                progress(i, 200)
+            except Superseded:
+                stops.append(tag)
+                raise
+            time.sleep(0.005)
+        return tag
+
+    async def both():
+        first = asyncio.ensure_future(job.run(work, "first", progress=lambda d, t: None))
+        await asyncio.sleep(0.05)
+        second = await job.run(work, "second", progress=lambda d, t: None)
+        with pytest.raises(asyncio.CancelledError):
+            await first
+        return second
+
+    assert asyncio.run(both()) == "second"
+    pool.shutdown(wait=True)
+    assert stops == ["first"]  # stopped at its next point, not run to its end
+
+
+def test_the_server_binds_this_machine_unless_told(tmp_path):
+    """--host exposes the page with a warning on stderr; the default prints none."""
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "boringbar", "app", "--port", str(port),
+                             "--host", "0.0.0.0"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stderr.readline()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+    assert "warning: serving on 0.0.0.0" in line
+    out = cli("app", "--port", "70000")
+    assert out.returncode == 2 and out.stderr.count("\n") == 1 and "--port" in out.stderr
