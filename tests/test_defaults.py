@@ -127,13 +127,13 @@ def test_the_search_finds_the_limit_to_one_percent_and_agrees_with_a_fine_grid()
     integ = Integration(duration_s=0.5)
     rel = lobes(cases, LobesOptions(rpm=(1200.0,), max_depth_m=0.5e-3), integration=integ,
                 execution=Execution("serial"))
-    lim, first = float(rel["limit_depth"][0, 0]), float(rel["first_unstable_depth"][0, 0])
+    lim, first = float(rel["limit_depth_m"][0, 0]), float(rel["first_unstable_depth_m"][0, 0])
     assert first / lim == pytest.approx(1.01, rel=1e-9)
-    assert lim >= 0.99 * float(rel["analytic_limit"][0, 0])
+    assert lim >= 0.99 * float(rel["analytic_limit_m"][0, 0])
     fine = lobes(cases, LobesOptions(rpm=(1200.0,), depth_step_m=1e-7, max_depth_m=0.5e-3),
                  integration=integ, execution=Execution("serial"))
-    f_lim = float(fine["limit_depth"][0, 0])
-    f_first = float(fine["first_unstable_depth"][0, 0])
+    f_lim = float(fine["limit_depth_m"][0, 0])
+    f_first = float(fine["first_unstable_depth_m"][0, 0])
     assert lim <= f_first and f_lim <= first  # the two brackets overlap
     assert rel.attrs["depth_grid"].startswith("depth_tolerance = 0.01")
 

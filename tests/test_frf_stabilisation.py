@@ -90,7 +90,7 @@ def test_a_boringbar_frf_gives_the_bars_own_modes_in_the_band():
     bar = published_bar(True, 3)
     f = np.arange(100.0, 4000.0, 1.0)
     diagram = stabilisation(MeasuredFrf(f, tip_frf(bar, 2 * math.pi * f)))
-    in_band = bar.omegas[bar.omegas / (2 * math.pi) < 4000.0] / (2 * math.pi)
+    in_band = bar.omegas_rad_s[bar.omegas_rad_s / (2 * math.pi) < 4000.0] / (2 * math.pi)
     assert len(in_band) == 2
     np.testing.assert_allclose([m.frequency_hz for m in diagram.modes], in_band, rtol=1e-5)
 

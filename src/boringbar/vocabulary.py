@@ -53,6 +53,7 @@ DIMENSIONLESS = frozenset({
     "stable",
     # fractions and tolerances relative to something named beside them
     "steady_fraction", "bounded_fraction", "fraction", "tolerance", "tol", "step",
+    "depth_tolerance",
     "min_step", "max_step", "quantile", "u",
     # counts, indices and sizes
     "revolutions", "periods", "period", "settle_periods", "max_points", "max_branches",

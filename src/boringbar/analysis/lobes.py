@@ -196,9 +196,9 @@ class LobesOptions:
         """The depth (m) of one grid index, as :meth:`depths` gives it."""
         return float(self.depths(index))
 
-    def index_below(self, depth: float) -> int:
-        """The deepest grid index whose depth is at most ``depth`` (m; 0: none)."""
-        return grid_index(depth, self.depth_step_m, self.depth_tolerance)
+    def index_below(self, depth_m: float) -> int:
+        """The deepest grid index whose depth is at most ``depth_m`` (m; 0: none)."""
+        return grid_index(depth_m, self.depth_step_m, self.depth_tolerance)
 
     def grid_text(self) -> str:
         """The depth grid in words (the Dataset's ``depth_grid`` attribute)."""
