@@ -162,7 +162,7 @@ def return_distance(system: System, forcing: Harmonic, x, phase: float, k: int,
     n = -(-periods // k) * k
     dt = fl.period / math.ceil(fl.period / 1e-6)  # whole periods: the end is at the phase
     try:
-        run = simulate(system, forcing, duration=n * fl.period, dt=dt, integrator="exact",
+        run = simulate(system, forcing, duration_s=n * fl.period, dt_s=dt, integrator="exact",
                        initial=State(start, phase / fl.omega), record_every=0)
     except (ValueError, RuntimeError):
         return math.inf

@@ -168,7 +168,7 @@ def compute(context: dict, point: int) -> dict:
                     o.max_points)
     om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods,
                    other_end=o.other_end, options=mo)
-    branches = [_branch_result(mb, fl, o) | {"return_distance": _returns(system, o, mb)}
+    branches = [_branch_result(mb, fl, o) | {"return_distance_relative": _returns(system, o, mb)}
                 for mb in om.branches]
     # checked where no seed was taken (between the seeds' values), so that an attractor
     # on the map is not there merely because it started a branch
@@ -282,8 +282,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "multiplier_real": (("branch", "point", "multiplier"), [mults.real]),
          "multiplier_imag": (("branch", "point", "multiplier"), [mults.imag]),
          "stable": (("branch", "point"), [r["stable"]]),
-         "return_distance": (("branch", "point"),
-                             [r.get("return_distance", [math.nan] * len(r["value"]))]),
+         "return_distance_relative": (("branch", "point"), [r.get(
+             "return_distance_relative", [math.nan] * len(r["value"]))]),
          "event_kind": (("branch", "event"), [[k for k, _ in r["events"]]]),
          "event_value": (("branch", "event"), [[v for _, v in r["events"]]]),
          "periods": (("branch",), [r.get("periods", o.periods)]),
@@ -331,15 +331,15 @@ def return_check(ds: xr.Dataset) -> dict:
     """The return check of the stable points (:func:`boringbar.attractors.return_distance`):
     how many were checked, the largest distance and those farther than RETURN_TOL (branch,
     value, distance): stable points that are not attractors of the exact integrator."""
-    if "return_distance" not in ds:
-        return {"checked": 0, "largest": None, "failed": []}
-    d = ds["return_distance"].values
+    if "return_distance_relative" not in ds:
+        return {"checked_count": 0, "largest_relative": None, "failed": []}
+    d = ds["return_distance_relative"].values
     checked = np.isfinite(d) | np.isinf(d)
     failed = [{"branch": int(b), "value": float(ds["value"].values[b, i]),
-               "distance": float(d[b, i])}
+               "distance_relative": float(d[b, i])}
               for b, i in zip(*np.nonzero(checked & ~(d <= RETURN_TOL)), strict=True)]
-    return {"checked": int(checked.sum()),
-            "largest": float(np.max(d[checked])) if checked.any() else None,
+    return {"checked_count": int(checked.sum()),
+            "largest_relative": float(np.max(d[checked])) if checked.any() else None,
             "failed": failed}
 
 

@@ -164,12 +164,13 @@ def _cmd_continue(args) -> Outcome:
 
 def _return_lines(rc: dict, name: str, periods: int) -> list[str]:
     """The return check: one line, and one a stable point that did not come back."""
-    if not rc["checked"]:
+    if not rc["checked_count"]:
         return []
-    return [f"return check: {rc['checked']} stable points, {len(rc['failed'])} not back "
-            f"within 1e-6 after {periods} periods (largest distance {rc['largest']:.2g})"] + \
-        [f"  branch {f['branch']} at {name} = {f['value']:.6g}: {f['distance']:.2g}"
-         for f in rc["failed"]]
+    head = (f"return check: {rc['checked_count']} stable points, {len(rc['failed'])} not "
+            f"back within 1e-6 after {periods} periods (largest distance "
+            f"{rc['largest_relative']:.2g})")
+    return [head] + [f"  branch {f['branch']} at {name} = {f['value']:.6g}: "
+                     f"{f['distance_relative']:.2g}" for f in rc["failed"]]
 
 
 def _branch_line(i: int, b: dict, name: str) -> str:
