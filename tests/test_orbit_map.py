@@ -11,8 +11,8 @@ import pytest
 
 import boringbar as bb
 from boringbar import shooting as sh
-from boringbar.analysis.continuation import ContinuationOptions, start_state
-from boringbar.attractors import periodic_attractors, same_orbit
+from boringbar.analysis.continuation import ContinuationOptions, start_state, system_at
+from boringbar.attractors import RETURN_TOL, periodic_attractors, return_distance, same_orbit
 from boringbar.branch import continue_branch, flow_with
 from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
@@ -195,3 +195,92 @@ def test_the_attractor_check_finds_an_attractor_on_a_folded_branch_and_says_when
     other = periodic_attractors(system, Harmonic(10.0, ratio=1.0))[0]
     c = attractor_check(om, 10.0, other.x, 1)
     assert not c["on_stable_branch"] and c["branch"] is None
+
+
+def _closed_form_state(system, force):
+    """The Masri-Caughey symmetric two-impact orbit at phase 0 (one mode, no friction)."""
+    bar, ball = system.bar, system.damper
+    omega = Harmonic(force, ratio=1.0).omega(system.reference_frequency_rad_s)
+    orbit = next(o for o in two_impact_orbit(
+        bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
+        bar.psi_damper[0], ball.mass_kg, ball.gap_m, ball.restitution, force, omega)
+        if o.admissible)
+    h = 1e-9
+    return np.array([float(orbit.modal_displacement(0.0)), float(orbit.modal_velocity(0.0)),
+                     float(orbit.relative_displacement(0.0)),
+                     float(orbit.relative_displacement(h) - orbit.relative_displacement(-h))
+                     / (2 * h)]), orbit
+
+
+def test_the_return_check_passes_a_stable_closed_form_orbit_and_fails_an_unstable_one():
+    """The closed-form two-impact orbit (physical bar, one mode, gap 0.5 mm, frictionless;
+    its Neimark-Sacker point at 28.345 N, docs/continuation.md "Worked example"), polished
+    by Newton: at 30 N (stable) the exact integrator comes back from a 1e-7 perturbation
+    within 1e-6 after 200 periods; at 27 N (unstable) it does not."""
+    system = make_system("ball", "physical", gap_m=0.5e-3, friction=False, n_modes=1)
+    for force, stable in ((30.0, True), (27.0, False)):
+        x0, _ = _closed_form_state(system, force)
+        forcing = Harmonic(force, ratio=1.0)
+        fl = sh.make_flow(system, forcing)
+        x, pr = sh.periodic_orbit(fl, x0, rms=False)
+        assert np.max(np.abs(x - x0)) <= 1e-6 * np.max(np.abs(x0))  # the closed form's orbit
+        assert (np.max(np.abs(sh.multipliers(pr))) < 1.0) == stable
+        d = return_distance(system, forcing, x, 0.0, 1)
+        assert (d <= RETURN_TOL) == stable, (force, d)
+
+
+def test_a_boundary_where_newton_jumped_to_another_orbit_is_not_a_grazing():
+    """The three-impact branch from the 10 N attractor downwards, past its fold (7.6455 N)
+    and up again, unstable: near 8.02 N the two-impact orbit born at 8.04 N coexists close
+    by and Newton from a far start lands on it; that is not where the three-impact
+    sequence ends (it went on, |mu| 404, at the value the branch used to stop at, 8.0158
+    N).  The branch reaches the grazing where its third impact vanishes, 8.04234 N, and
+    across it the orbit has two impacts."""
+    system = _issue_case()
+    fl = sh.make_flow(system, Harmonic(5.0, ratio=1.0))
+    seed = periodic_attractors(system, Harmonic(10.0, ratio=1.0))[0]
+    at = flow_with(fl, "force-n", 10.0, fl)
+    br = continue_branch(at, "force-n", seed.x, 5.0, bounds=(5.0, 35.0))
+    assert br.stop.startswith("the impact/reversal sequence changes at force-n = 8.04234"), \
+        br.stop
+    on = cross_grazing(at, br, (5.0, 35.0))
+    assert on.points and sum(k.startswith("impact") for _, k in on.points[0].events) == 2
+
+
+def test_cli_range_lo_start_hi_maps_both_ways_and_checks_the_return(tmp_path, capsys):
+    """--range LO:START:HI: the start orbit continued down to LO and up to HI (two roots
+    born at START), every stable point returned under the exact integrator; LO:START:HI
+    out of order, or four numbers, is one line and exit 2."""
+    argv = ["continue", "--gap-mm", "0.5", "--friction", "off", "--modes", "1",
+            "--range", "29.5:30:30.5", "--start-from", "masri-caughey", "--max-points", "3",
+            "--no-switch", "--seeds", "0", "--out", str(tmp_path), "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    values = [[p["value"] for p in b["points"]] for b in out["branches"]]
+    assert len(values) == 2 and all(b["born"] == {"kind": "start", "value": 30.0}
+                                    for b in out["branches"])
+    assert min(values[0] + values[1]) < 30.0 < max(values[0] + values[1])
+    rc = out["return_check"]
+    stable = sum(p["stable"] for b in out["branches"] for p in b["points"])
+    assert rc["checked_count"] == stable > 0 and rc["failed"] == []
+    assert rc["largest_relative"] <= RETURN_TOL
+    for bad in ("30.5:30:29.5", "29:30:31:32"):
+        assert main([*argv[:8], bad, *argv[9:-1]]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--range" in err[0], err
+
+
+@pytest.mark.parametrize(("name", "value"), [("force-n", 12.0), ("ratio", 0.9),
+                                             ("gap-mm", 0.3), ("restitution", 0.5),
+                                             ("friction-force-n", 0.05),
+                                             ("ball-mass-g", 20.0)])
+def test_the_system_at_a_value_is_the_flow_the_branch_uses(name, value):
+    """Seeds and the return check run the exact integrator on system_at(value); its flow
+    is the branch's (flow_with) in every quantity the parameter moves."""
+    system = make_system("ball", "physical", gap_m=0.5e-3, friction=True)
+    o = ContinuationOptions(parameter=name, force_n=20.0, ratio=1.0)
+    ref = sh.make_flow(system, Harmonic(20.0, ratio=1.0))
+    want = flow_with(ref, name, value, ref)
+    got = sh.make_flow(*system_at(system, o, value))
+    for field in ("amplitude", "omega", "half", "e", "fc", "fs", "m", "meff", "v_impact"):
+        assert getattr(got, field) == pytest.approx(getattr(want, field), rel=1e-12), field

@@ -1,5 +1,5 @@
-"""Periodic attractors by brute force, the seeds of an orbit map and its check
-(docs/continuation.md, "Seeds and the attractor check").
+"""Periodic attractors by brute force, the seeds of an orbit map and its checks
+(docs/continuation.md, "The orbit map").
 
 The exact integrator is run from a spread of initial conditions (the bar at 0, 1/2 and
 1 times its linear forced response without impacts, the ball at rest at -1/2, 0 and
@@ -80,10 +80,25 @@ def periodic_attractors(system: System, forcing: Harmonic, *, settle_periods: in
                            integrator="exact", initial=State(x0, 0.0), record_every=0)
         except (ValueError, RuntimeError):
             continue
-        att = _settled(fl, run.final.x[:fl.N], max_period)
+        x = run.final.x[:fl.N]
+        if any(_near(fl, x, a) for a in found):
+            continue  # settled on one already found: no second Newton solve
+        att = _settled(fl, x, max_period)
         if att is not None and not any(same_orbit(fl, att, a) for a in found):
             found.append(att)
     return found
+
+
+def _near(fl: Flow, x, a: Attractor) -> bool:
+    """Whether the settled state x is on the attractor a: within 10 SETTLED of one of its
+    states at phase 0 (Newton from x would stay that near, :func:`_settled`)."""
+    size = float(np.max(np.abs(a.x)))
+    z = a.x
+    for _ in range(a.periods):
+        if np.max(np.abs(z - x)) <= 10 * SETTLED * size:
+            return True
+        z = advance(fl, z).x
+    return False
 
 
 def _settled(fl: Flow, x, max_period: int) -> Attractor | None:
@@ -122,3 +137,33 @@ def spread(lo: float, hi: float, count: int) -> list[float]:
     """``count`` values in the middles of equal parts of [lo, hi]."""
     return [lo + (hi - lo) * (i + 0.5) / count for i in range(count)]
 
+
+
+#: The return check: the orbit's state perturbed by this fraction of each component...
+RETURN_PERTURBATION = 1e-7
+#: ... must be within this fraction of the state's size of it after the periods (the
+#: attractor check's tolerance, :data:`boringbar.orbit_map.ON_BRANCH`).
+RETURN_TOL = 1e-6
+
+
+@one_blas_thread
+def return_distance(system: System, forcing: Harmonic, x, phase: float, k: int,
+                    periods: int = 200) -> float:
+    """How far the exact integrator, started from the period-k orbit's state x at the
+    forcing phase ``phase`` perturbed by RETURN_PERTURBATION of each component (signs
+    alternating), ends from x after ``periods`` forcing periods (rounded up to whole
+    multiples of k), relative to max |x|; inf if the run fails.  A stable orbit is an
+    attractor if this is at most RETURN_TOL: its perturbation decays (as |mu|^periods)
+    and the integrator's own orbit is the shooting map's to 1e-9 a period."""
+    fl = make_flow(system, forcing)
+    x = np.asarray(x, float)
+    signs = np.where(np.arange(len(x)) % 2 == 0, 1.0, -1.0)
+    start = x * (1.0 + RETURN_PERTURBATION * signs)
+    n = -(-periods // k) * k
+    dt = fl.period / math.ceil(fl.period / 1e-6)  # whole periods: the end is at the phase
+    try:
+        run = simulate(system, forcing, duration_s=n * fl.period, dt_s=dt, integrator="exact",
+                       initial=State(start, phase / fl.omega), record_every=0)
+    except (ValueError, RuntimeError):
+        return math.inf
+    return float(np.max(np.abs(run.final.x[:fl.N] - x)) / np.max(np.abs(x)))

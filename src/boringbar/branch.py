@@ -143,9 +143,13 @@ def _residual(fl, name, ref, x, p, k):
 
 
 def _jacobian(fl, name, ref, x, p, k, pr, dp):
-    """[G_x, G_p] at (x, p); G_p by a central difference of step dp."""
-    gp = (_residual(fl, name, ref, x, p + dp, k)[0]
-          - _residual(fl, name, ref, x, p - dp, k)[0]) / (2 * dp)
+    """[G_x, G_p] at (x, p); G_p exact for force-n (:func:`~boringbar.shooting.
+    force_derivative`, with the map), else by a central difference of step dp."""
+    if name == "force-n" and pr.force_derivative is not None:
+        gp = pr.force_derivative
+    else:
+        gp = (_residual(fl, name, ref, x, p + dp, k)[0]
+              - _residual(fl, name, ref, x, p - dp, k)[0]) / (2 * dp)
     return np.column_stack([pr.jacobian - np.eye(fl.N), gp])
 
 
@@ -405,9 +409,12 @@ def _beyond(w: Walk, y, p_far: float):
     no change there)."""
     if p_far == y[-1]:
         return None
-    last, width = locate_boundary(w.fl, w.name, w.ref, y, p_far, w.periods)
+    last, width, boundary = locate_boundary(w.fl, w.name, w.ref, y, p_far, w.periods)
     if last is None or abs(last.value - p_far) <= 2 * width:
         return None
+    if not boundary and not _at_section(flow_with(w.fl, w.name, last.value, w.ref),
+                                        last.events, w.periods):
+        return None  # Newton jumped to a coexisting orbit: no boundary (smaller steps)
     return last, width
 
 
@@ -498,25 +505,37 @@ def _first(fl, name, ref, x0, p0, k):
 def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
     """Bisection in the parameter between y (unknowns (x, p), its event sequence) and
     ``p_far``, where the orbit has another sequence or is refused, down to ``tol`` of
-    the distance: the last orbit with y's sequence (a :class:`Point`) and the bracket's
-    width.  Each trial is Newton at fixed p from the last good orbit (an arclength
-    corrector's iterates would cross the non-smooth boundary and fail)."""
+    the distance: the last orbit with y's sequence (a :class:`Point`), the bracket's
+    width, and whether the bracket's far end is a boundary.  Each trial is Newton at
+    fixed p from the last good orbit (an arclength corrector's iterates would cross the
+    non-smooth boundary and fail).  A trial far from the last good orbit can land on
+    another orbit that coexists there (near a grazing the orbits born there are close by);
+    so a far end set by an orbit with another sequence (not by a refusal) is tried once
+    more from the last good orbit, a bracket's width beyond it: if the old sequence goes
+    on there, it is no boundary."""
     kinds = _kinds(advance(flow_with(fl, name, y[-1], ref), y[:-1], k).events)
     lo, hi, x, last = y[-1], p_far, y[:-1], None
     width = abs(hi - lo)
+
+    def trial(p):
+        """(x, Period) of the orbit Newton finds at p from x, or None if refused."""
+        try:
+            return periodic_orbit(flow_with(fl, name, p, ref), x, k, max_iter=12, rms=False)
+        except OrbitRefused:
+            return None
+    jumped = False
     while abs(hi - lo) > max(tol * width, 4 * np.finfo(float).eps * abs(lo)):
         mid = 0.5 * (lo + hi)
-        try:
-            xm, pr = periodic_orbit(flow_with(fl, name, mid, ref), x, k, max_iter=12,
-                                    rms=False)
-            same = _kinds(pr.events) == kinds
-        except OrbitRefused:
-            same = False
-        if same:
-            lo, x, last = mid, xm, Point(mid, xm.copy(), multipliers(pr), pr.events, fl.phase)
+        found = trial(mid)
+        if found is not None and _kinds(found[1].events) == kinds:
+            lo, x, last = mid, found[0], Point(mid, found[0].copy(), multipliers(found[1]),
+                                               found[1].events, fl.phase)
         else:
-            hi = mid
-    return last, abs(hi - lo)
+            hi, jumped = mid, found is not None
+    if last is None or not jumped:
+        return last, abs(hi - lo), True
+    again = trial(lo + 2.0 * (hi - lo))
+    return last, abs(hi - lo), again is None or _kinds(again[1].events) != kinds
 
 
 def _at_section(fl: Flow, events, k: int) -> bool:

@@ -82,7 +82,8 @@ class OrbitMap:
 @dataclass(frozen=True)
 class MapOptions:
     """How a map is grown: ``switch`` at branch points, period doublings and grazings;
-    branches of period at most ``max_period``; at most ``max_branches``; the steps of
+    branches of period at most ``max_period``; at most ``max_branches`` followed (their
+    mirror images not counted); the steps of
     every branch (relative to the range, as :func:`~boringbar.branch.continue_branch`)."""
 
     switch: bool = True
@@ -96,31 +97,40 @@ class MapOptions:
 
 @one_blas_thread
 def orbit_map(fl: Flow, name: str, x0, stop: float, *, seeds=(), periods: int = 1,
-              options: MapOptions | None = None) -> OrbitMap:
+              other_end: float | None = None, options: MapOptions | None = None) -> OrbitMap:
     """The map of ``name`` from its value in ``fl`` to ``stop``: the orbit through x0 (a
-    fixed point of P^periods, near) continued towards ``stop``; every seed (value, x at
-    phase 0, periods) not on it continued both ways; their children (module docstring).
-    A branch whose mirror image is on the map is that image mirrored (:func:`mirrored`),
-    not continued again."""
+    fixed point of P^periods, near) continued towards ``stop`` (and towards ``other_end``
+    too, if given: the map then covers [other_end, stop] from a start inside it); every
+    seed (value, x at phase 0, periods) not on it continued both ways; their children
+    (module docstring).  A branch whose mirror image is on the map is that image mirrored
+    (:func:`mirrored`), not continued again."""
     o = options or MapOptions()
     p0 = value_of(fl, name)
-    om = OrbitMap(name, min(p0, stop), max(p0, stop))
-    todo = [(None, ("start", p0), fl,
-             lambda: continue_branch(fl, name, x0, stop, periods=periods, **_steps(o)))]
+    ends = [stop] + ([other_end] if other_end is not None and other_end != p0 else [])
+    om = OrbitMap(name, min(p0, *ends), max(p0, *ends))
+    todo = [(None, ("start", p0), fl, _started(fl, name, x0, end, periods, o, om))
+            for end in ends]
     for i, (value, x, k) in enumerate(seeds):
         at = flow_with(fl, name, value, fl)
         todo += [(None, ("seed", value), fl, _seeded(at, name, x, end, k, o, i, om))
                  for end in (om.lo, om.hi) if end != value]
     while todo:
-        if len(om.branches) >= o.max_branches:
+        # a mirror image costs nothing (it is not continued), so only followed branches
+        # count: with images counted, 24 branches were 12 orbits
+        if len(om.branches) - len(om.mirrors) // 2 >= o.max_branches:
+            left = ", ".join(f"{born[0]} at {born[1]:.6g}" for _, born, _, _ in todo)
             om.notes.append(f"branch limit of {o.max_branches} reached: {len(todo)} "
-                            "branch(es) not followed")
+                            f"branch(es) not followed ({left})")
             break
         parent, born, flow, make = todo.pop(0)
         if (born[0] == "seed" and _known_seed(om, make)) or _by_symmetry(om, parent, born, make):
             continue
         br = _follow(om, born, make)
-        if br is None or _duplicate(om, br, parent):
+        if br is None:
+            continue
+        if _duplicate(om, br, parent):
+            om.notes.append(f"the branch from the {born[0]} at {born[1]:.10g} retraces the "
+                            "map: not kept")
             continue
         i = len(om.branches)
         _add(om, MapBranch(br, parent, born, flow, getattr(make, "seed", (0,) * 5)[4]
@@ -209,6 +219,14 @@ def _steps(o: MapOptions) -> dict:
             "max_points": o.max_points}
 
 
+def _started(fl: Flow, name: str, x0, end: float, k: int, o: MapOptions, om: OrbitMap):
+    """The start branch from x0 towards ``end`` within the map's range."""
+    def make():
+        return continue_branch(fl, name, x0, end, periods=k, bounds=(om.lo, om.hi),
+                               **_steps(o))
+    return make
+
+
 def _seeded(at: Flow, name: str, x, end: float, k: int, o: MapOptions, i: int, om: OrbitMap):
     """A branch from the i-th seed x (at phase 0, of period k) towards ``end`` within the
     map's range; the seed rides on the callable (``seed``) so the map can see whether it
@@ -252,19 +270,33 @@ def on_branch(mb: MapBranch, value: float, x, k: int, at: Flow) -> bool:
 
 
 def _duplicate(om: OrbitMap, br: Branch, parent: int | None) -> bool:
-    """A branch whose later half lies on a branch of the map other than its parent."""
-    pts = br.points[len(br.points) // 2:]
-    if len(pts) < 2:
+    """A branch that retraces the map: the middles of its first and later halves both
+    lie on branches other than its parent, with as many events a period (next to a
+    grazing an orbit comes within SAME_ORBIT of the one with an impact fewer: the
+    four-impact branch of the issue's case was dropped as the three-impact one).  A
+    branch that only joins a known one is kept: the period-2 orbits born at 21.63 N in
+    the issue's case, stable at first, join those born at a grazing at 22.37 N, and
+    were dropped whole when the later half alone decided."""
+    if len(br.points) < 4:
         return False
-    mid = pts[len(pts) // 2]
-    others = [mb for i, mb in enumerate(om.branches) if i != parent]
+    half = len(br.points) // 2
+    return all(_on_others(om, br, pts[len(pts) // 2], parent)
+               for pts in (br.points[:half], br.points[half:]))
+
+
+def _on_others(om: OrbitMap, br: Branch, pt: Point, parent: int | None) -> bool:
+    """Whether the orbit pt of ``br`` lies on a branch of the map other than ``parent``
+    with as many events a period."""
+    rate = len(pt.events) / br.periods
+    others = [mb for i, mb in enumerate(om.branches) if i != parent and mb.branch.points
+              and len(mb.branch.points[0].events) / mb.branch.periods == rate]
     if not others:
         return False
-    at = dataclasses.replace(others[0].flow, phase=mid.phase)
-    at = flow_with(at, br.parameter, mid.value, others[0].flow)
-    x0 = carry(at, mid.x, 0.0)
+    at = dataclasses.replace(others[0].flow, phase=pt.phase)
+    at = flow_with(at, br.parameter, pt.value, others[0].flow)
+    x0 = carry(at, pt.x, 0.0)
     at0 = dataclasses.replace(at, phase=0.0)
-    return any(on_branch(mb, mid.value, x0, br.periods, at0) for mb in others)
+    return any(on_branch(mb, pt.value, x0, br.periods, at0) for mb in others)
 
 
 def _children(om: OrbitMap, i: int, o: MapOptions) -> list:
@@ -341,7 +373,8 @@ def _doubled(fl: Flow, br: Branch, which: int, om: OrbitMap, o: MapOptions):
 
 #: How far past a grazing (of the range) the orbit with the new impact sequence is sought
 #: (closest first; too close, its new impact can be slower than the capture threshold).
-GRAZING_STEPS = (1e-6, 1e-5, 1e-4, 1e-3)
+GRAZING_STEPS = (1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2)
+
 
 
 def _grazed(fl: Flow, br: Branch, om: OrbitMap, o: MapOptions):
@@ -369,7 +402,7 @@ def cross_grazing(fl: Flow, br: Branch, bounds: tuple, o: MapOptions | None = No
             break
         try:
             x, pr = periodic_orbit(flow_with(at, br.parameter, p, fl), last.x, br.periods,
-                                   rms=False)
+                                   rms=False, damped=True)
         except OrbitRefused as err:
             why = str(err)
             continue

@@ -7,10 +7,12 @@ import json
 import textwrap
 
 import numpy as np
+from matplotlib import colormaps
 from matplotlib.figure import Figure
 
 from boringbar.plot_style import (
     COLUMN_WIDTH_IN,
+    CYCLE,
     DARK_GREY,
     OKABE_ITO,
     series_colour,
@@ -49,7 +51,7 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
         for ax, name in ((top, "strobe_tip_m"), (bottom, "rms_tip_m")):
             y = d[name].values * 1e3
             _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top),
-                             color=series_colour(b))
+                             color=branch_colour(b, ds.sizes["branch"]))
         for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
             if not str(kind) or not np.isfinite(value):  # padding of a stacked branch
                 continue
@@ -75,6 +77,13 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     set_title(fig, "periodic orbits continued in " + parameter.split(" (")[0], ds.attrs,
               system_words(system))
     return fig
+
+
+def branch_colour(b: int, count: int):
+    """Branch b's colour among ``count``: the colour-blind cycle (plot_style) while it
+    suffices, else one of twenty (tab20), so that a map's branches do not share colours
+    until twenty (the cycle repeats after eight)."""
+    return series_colour(b) if count <= len(CYCLE) else colormaps["tab20"](b % 20)
 
 
 #: Axis labels of the continuation parameters.

@@ -33,6 +33,7 @@ slower than the capture threshold (wall contact, Zeno), a singular Newton matrix
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass
 
@@ -197,6 +198,8 @@ class Period:
     jacobian: np.ndarray
     events: list
     rms_tip: float = math.nan
+    #: d P^k(x) / d F0, exact (:func:`force_derivative`).
+    force_derivative: np.ndarray | None = None
 
 
 def _event_fn(fl: Flow, sdir: float):
@@ -220,30 +223,51 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False,
     span = periods * fl.period if duration is None else duration
     t_end = t + span
     z = np.concatenate([np.asarray(x, float), [math.sin(fl.phase), math.cos(fl.phase), 1.0]])
-    J = np.eye(N)
+    # the whole augmented state's Jacobian: its forcing columns give d/dF0 (force_derivative)
+    J = np.eye(N + 3)
     events = []
     h = fl.period / GRID
     sdir = _slide_dir(fl, z[:N], t) if fl.ball else 0.0
     w2 = 0.0
+    regimes = {}  # sdir -> (A, its grid step's expm, its Relative): two regimes at most
+
+    def regime(sd: float):
+        if sd not in regimes:
+            A = augmented(fl, sd)
+            regimes[sd] = (A, expm(A * h) if fl.ball else None, Relative(fl, A))
+        return regimes[sd]
     while t < t_end * (1 - 1e-15):
-        A = augmented(fl, sdir)
-        te, kind = _next_event(fl, A, sdir, z, t, min(t_end, t + fl.period), h)
+        A, Eh, rel = regime(sdir)
+        te, kind = _next_event(fl, A, Eh, rel, sdir, z, t, min(t_end, t + fl.period), h)
         dt = min(te, t_end) - t
         E = expm(A * dt)
         if rms:
             w2 += _w2_integral(fl, A, z, dt)
         z = E @ z
-        J = E[:N, :N] @ J
+        J = E @ J
         t += dt
         if kind is None or te > t_end:
             continue
-        z, J, sdir = _apply(fl, A, kind, z, J, t, sdir)
+        z, J[:N], sdir = _apply(fl, A, kind, z, J[:N], t, sdir, regime)
         events.append((t, kind))
         if len(events) > 200 * periods:
             raise OrbitRefused("more than 200 events a period: the motion is not a "
                                "regular impacting orbit (Zeno or chatter)")
-    return Period(z[:N].copy(), J, events, math.sqrt(w2 / span) if rms and span > 0
-                  else math.nan)
+    return Period(z[:N].copy(), J[:N, :N].copy(), events,
+                  math.sqrt(w2 / span) if rms and span > 0 else math.nan,
+                  force_derivative(fl, J))
+
+
+def force_derivative(fl: Flow, J: np.ndarray) -> np.ndarray | None:
+    """d x_end / d F0 from the augmented state's Jacobian J (N + 3 square): the forcing
+    F0 sin(Omega t) is F0 times the sin state, which is linear in its start (sin phi,
+    cos phi), so scaling that start by 1 + eps is F0 (1 + eps): d x / d F0 =
+    J[:N, N:N+2] (sin phi, cos phi) / F0.  Exact (the saltation matrices carry the
+    events' shifts), where a central difference costs two more maps; None at F0 = 0."""
+    if not fl.amplitude > 0.0:
+        return None
+    N = fl.N
+    return J[:N, N:N + 2] @ np.array([math.sin(fl.phase), math.cos(fl.phase)]) / fl.amplitude
 
 
 def carry(fl: Flow, x: np.ndarray, phase: float) -> np.ndarray:
@@ -294,25 +318,33 @@ def _slide_dir(fl: Flow, x: np.ndarray, t: float) -> float:
     return -1.0 if F > 0 else 1.0
 
 
-def _next_event(fl, A, sdir, z, t, t_stop, h):
-    """(time, kind) of the first event after t before t_stop, or (t_stop, None)."""
+def _next_event(fl, A, E, rel, sdir, z, t, t_stop, h):
+    """(time, kind) of the first event after t before t_stop, or (t_stop, None); E:
+    expm(A h), the grid step's flow."""
     if not fl.ball:
         return t_stop, None
     g = _event_fn(fl, sdir)
-    E = expm(A * h)
+    j, half = 2 * fl.n, fl.half
+    reversals = fl.fc > 0.0 and sdir != 0.0
     zk, gk, tk = z, g(z), t
     while tk < t_stop:
         step = min(h, t_stop - tk)
         zn = E @ zk if step == h else expm(A * step) @ zk
+        # most grid steps have nothing in them: y inside at the end and y' of one sign
+        yn, vk, vn = zn[j], zk[j + 1], zn[j + 1]
+        if -half < yn < half and (vk > 0.0) == (vn > 0.0) and (vk < 0.0) == (vn < 0.0) \
+                and not (reversals and vk * vn <= 0.0):
+            zk, gk, tk = zn, None, tk + step
+            continue
+        if gk is None:
+            gk = g(zk)
         gn = g(zn)
         hits = []
         for i in range(3):
             if _crossed(i, gk[i], gn[i], sdir) and not (tk == t and abs(gk[i]) < 1e-14):
-                s = brentq(_g_at, 0.0, step, args=(g, A, zk, i), xtol=1e-18, rtol=1e-15,
-                           maxiter=200)
-                hits.append((s, KINDS[i]))
+                hits.append((_root(rel, g, A, zk, i, step), KINDS[i]))
             elif i < 2:
-                s = _through_wall(fl, g, A, zk, zn, step, i)
+                s = _through_wall(fl, rel, g, A, zk, zn, step, i)
                 if s is not None:
                     hits.append((s, KINDS[i]))
         if hits:
@@ -322,7 +354,74 @@ def _next_event(fl, A, sdir, z, t, t_stop, h):
     return t_stop, None
 
 
-def _through_wall(fl: Flow, g, A, zk, zn, step, i):
+class Relative:
+    """The ball's relative position y and velocity y' on one regime in closed form, for
+    locating events.  In flight the bar's modes do not feel the ball: mode i obeys
+    u'' + 2 zeta w u' + w^2 u = a_i sin(Omega t) + b_i (a_i, b_i: A's forcing and
+    constant entries), so u_i(s) = Re(C_i e^{lambda_i s}) + Im(a_i G_i E e^{i Omega s})
+    + b_i / w^2, lambda_i = -zeta w + i w_d, G_i = 1 / (w^2 - Omega^2 + 2 i zeta w Omega),
+    E = cos + i sin of the forcing phase at s = 0 and C_i from u_i(0), u_i'(0).  Then
+    y'' = -psi_d . u'' + F_b / m gives y'(s) = y'0 - psi_d . (u'(s) - u'0) + F_b s / m and
+    y(s) = y0 + (y'0 + psi_d . u'0) s - psi_d . (u(s) - u0) + F_b s^2 / (2 m), with
+    u(s) - u0 from e^{x} - 1 (exact at s = 0).  An evaluation is n + 1 complex
+    exponentials, where expm(A s) z is a matrix exponential: Brent's method calling it
+    was half of an orbit map's time.  A mode without oscillation (zeta >= 1) raises
+    LinAlgError, and the caller falls back on expm."""
+
+    def __init__(self, fl: Flow, A: np.ndarray):
+        n, N = fl.n, fl.N
+        self.fl = fl
+        w2, c = fl.K / fl.M, fl.C / fl.M
+        alpha, beta2 = -0.5 * c, w2 - 0.25 * c * c
+        self.ok = bool(np.all(beta2 > 0.0))
+        self.lam = alpha + 1j * np.sqrt(np.maximum(beta2, 0.0))
+        om = fl.omega
+        self.pd = fl.psi_d
+        # a_i G_i, a_i the sin state's entry of A (per unit mass), and the constant's share
+        self.q = A[n:2 * n, N] / (w2 - om * om + 1j * c * om)
+        self.const = A[n:2 * n, N + 2] / w2
+        # A's y'' row is -psi_d . (the bar's rows) + F_b / m on the constant state
+        self.fb_m = A[2 * n + 1, N + 2] + fl.psi_d @ A[n:2 * n, N + 2]
+
+    def event(self, z: np.ndarray, i: int):
+        """s -> event function i (y - half, y + half, y'; :func:`_event_fn`) after the
+        state z (augmented); i = EXTREMUM: y' too (its zero is an extremum of y)."""
+        if not self.ok:
+            raise np.linalg.LinAlgError("a mode does not oscillate (zeta >= 1)")
+        fl, n, N, lam = self.fl, self.fl.n, self.fl.N, self.lam
+        iom = 1j * fl.omega
+        forced = self.q * (z[N + 1] + 1j * z[N])  # a G E: the modes' forced parts, complex
+        pe = complex(self.pd @ forced)
+        uh = z[:n] - forced.imag - self.const  # the modes' free parts at s = 0
+        vh = z[n:2 * n] - (forced * iom).imag
+        C = uh + 1j * (lam.real * uh - vh) / lam.imag
+        cu, cv = self.pd * C, self.pd * C * lam
+        y0, v0, fb_m = z[2 * n], z[2 * n + 1], self.fb_m
+        if i >= 2:
+            return lambda s: (v0 - float((cv @ (np.exp(lam * s) - 1.0)).real)
+                              - (pe * iom * (cmath.exp(iom * s) - 1.0)).imag + fb_m * s)
+        y0 = y0 - (fl.half if i == 0 else -fl.half)
+        v = v0 + float(self.pd @ z[n:2 * n])
+        return lambda s: (y0 + v * s - float((cu @ (np.exp(lam * s) - 1.0)).real)
+                          - (pe * (cmath.exp(iom * s) - 1.0)).imag + 0.5 * fb_m * s * s)
+
+
+#: The extremum of y (y' = 0) as an "event" of :func:`_root`.
+EXTREMUM = 3
+
+
+def _root(rel: Relative, g, A, z, i: int, step: float) -> float:
+    """The zero in (0, step) of event function i (or y' for i = EXTREMUM) after the state
+    z, by Brent's method on the closed form (:class:`Relative`); on expm(A s) z where the
+    closed form's rounding puts both ends on one side (an end within rounding of zero)."""
+    try:
+        return brentq(rel.event(z, i), 0.0, step, xtol=1e-18, rtol=1e-15, maxiter=200)
+    except (ValueError, np.linalg.LinAlgError):
+        args = (g, A, z, i) if i < EXTREMUM else (_velocity, A, z, 2 * rel.fl.n + 1)
+        return brentq(_g_at, 0.0, step, args=args, xtol=1e-18, rtol=1e-15, maxiter=200)
+
+
+def _through_wall(fl: Flow, rel: Relative, g, A, zk, zn, step, i):
     """The time in (0, step) at which the ball reaches wall i (0: +, 1: -) though it is
     inside at both ends of the grid step: y has an extremum in the step (y' turns from
     outward to inward) beyond the wall; None if not.  Without this a shallow incursion
@@ -332,11 +431,14 @@ def _through_wall(fl: Flow, g, A, zk, zn, step, i):
     out = 1.0 if i == 0 else -1.0
     if not (out * zk[j + 1] > 0.0 > out * zn[j + 1] and out * g(zk)[i] < 0.0):
         return None
-    s_ext = brentq(_g_at, 0.0, step, args=(_velocity, A, zk, j + 1), xtol=1e-18, rtol=1e-15,
-                   maxiter=200)
-    if g(expm(A * s_ext) @ zk)[i] * out < 0.0:
+    s_ext = _root(rel, g, A, zk, EXTREMUM, step)
+    try:
+        beyond = out * rel.event(zk, i)(s_ext)
+    except np.linalg.LinAlgError:
+        beyond = out * _g_at(s_ext, g, A, zk, i)
+    if beyond < 0.0:
         return None
-    return brentq(_g_at, 0.0, s_ext, args=(g, A, zk, i), xtol=1e-18, rtol=1e-15, maxiter=200)
+    return _root(rel, g, A, zk, i, s_ext)
 
 
 def _velocity(z):
@@ -358,8 +460,9 @@ def _crossed(i, a, b, sdir) -> bool:
     return a * b <= 0.0 and a != b
 
 
-def _apply(fl, A, kind, z, J, t, sdir):
-    """Apply the event at t to z and its saltation matrix to J."""
+def _apply(fl, A, kind, z, J, t, sdir, regime):
+    """Apply the event at t to z and its saltation matrix to J (``regime``: sdir -> (A,
+    ...) of the sliding direction after it)."""
     N, j = fl.N, 2 * fl.n
     x = z[:N]
     f_minus = field(A, z)
@@ -373,7 +476,7 @@ def _apply(fl, A, kind, z, J, t, sdir):
         xp[j] = wall * fl.half
         sdir_new = 1.0 if xp[j + 1] > 0 else -1.0
         zp = np.concatenate([xp, z[N:]])
-        f_plus = field(augmented(fl, sdir_new), zp)
+        f_plus = field(regime(sdir_new)[0], zp)
         nf = f_minus[j]
         S = R + np.outer(f_plus - R @ f_minus, _unit(N, j)) / nf
         return zp, S @ J, sdir_new
@@ -384,7 +487,7 @@ def _apply(fl, A, kind, z, J, t, sdir):
     sdir_new = -sdir
     zp = z.copy()
     zp[j + 1] = 0.0
-    f_plus = field(augmented(fl, sdir_new), zp)
+    f_plus = field(regime(sdir_new)[0], zp)
     nf = f_minus[j + 1]
     S = np.eye(N) + np.outer(f_plus - f_minus, _unit(N, j + 1)) / nf
     return zp, S @ J, sdir_new
@@ -415,22 +518,70 @@ def check_residual(r: np.ndarray, x: np.ndarray, what: str = "Newton") -> None:
 
 @one_blas_thread
 def periodic_orbit(fl: Flow, x0: np.ndarray, periods: int = 1, tol: float = 1e-12,
-                   max_iter: int = 30, rms: bool = True) -> tuple[np.ndarray, Period]:
+                   max_iter: int = 30, rms: bool = True,
+                   damped: bool = False) -> tuple[np.ndarray, Period]:
     """Newton on P^k(x) - x = 0 from x0; the fixed point and its :class:`Period` (with the
-    tip's RMS if ``rms``: 512 matrix exponentials a period, more than the Newton solve)."""
+    tip's RMS if ``rms``: 512 matrix exponentials a period, more than the Newton solve).
+    ``damped``: a step that does not lower |P^k(x) - x| (scaled by :func:`block_scale`) is
+    halved, up to DAMPING times (next to a grazing, where P has a square-root singularity,
+    full steps jump between the two sides and never converge), and Newton gives up when
+    the residual stalls (STALL)."""
     x = np.asarray(x0, float).copy()
-    scale = np.maximum(np.abs(x), 1e-12)
+    pr = advance(fl, x, periods)
+    sizes = []
     for _ in range(max_iter):
-        pr = advance(fl, x, periods)
         r = pr.x - x
+        sizes.append(float(np.max(np.abs(r) / block_scale(fl, x))))
+        if damped and len(sizes) > STALL and sizes[-1] > 0.5 * sizes[-1 - STALL]:
+            raise OrbitRefused(f"Newton stalls (residual {np.max(np.abs(r)):.3g}, not halved "
+                               f"in {STALL} damped iterations)")
         dx = newton_step(pr.jacobian - np.eye(fl.N), -r)
-        x = x + dx
-        if np.max(np.abs(dx) / np.maximum(np.abs(x), scale)) < tol:
-            pr = advance(fl, x, periods, rms=rms)
+        x, pr = _stepped(fl, x, dx, r, periods, damped)
+        if np.max(np.abs(dx) / block_scale(fl, x)) < tol:
+            if rms:
+                pr = advance(fl, x, periods, rms=True)
             check_residual(pr.x - x, x)
             return x, pr
     raise OrbitRefused(f"Newton did not converge in {max_iter} iterations "
                        f"(last residual {np.max(np.abs(r)):.3g})")
+
+
+#: At most this many halvings of a damped Newton step.
+DAMPING = 8
+#: A damped Newton whose scaled residual has not halved in this many iterations gives up
+#: (next to a grazing the full steps cycle between two event sequences for ever: 30
+#: iterations at each of six distances were half of a friction map's time).
+STALL = 10
+
+
+def _stepped(fl: Flow, x, dx, r, periods: int, damped: bool):
+    """(x + s dx, its Period) with s = 1 or, if ``damped``, the first of 1, 1/2, ...
+    (DAMPING halvings) whose scaled residual is below r's (else the last tried).  dx is
+    scaled in place, so the caller's convergence test sees the step taken."""
+    size = np.max(np.abs(r) / block_scale(fl, x))
+    for _ in range(DAMPING if damped else 0):
+        try:
+            pr = advance(fl, x + dx, periods)
+            if np.max(np.abs(pr.x - x - dx) / block_scale(fl, x + dx)) < size:
+                return x + dx, pr
+        except OrbitRefused:
+            pass
+        dx *= 0.5
+    return x + dx, advance(fl, x + dx, periods)
+
+
+def block_scale(fl: Flow, x: np.ndarray) -> np.ndarray:
+    """Each entry's scale for Newton's step: the largest |x_i| of its block (u, u', and
+    each further entry alone, y at least the half gap and y' at least Omega times it).
+    A step measured against each entry's own size never converges on an entry near zero
+    (the ball's y' at a section where it turns: steps of 1e-16 m/s against y' of 1e-6 left
+    a period doubling unlocated after 30 iterations at residual 3e-16)."""
+    n = fl.n
+    u, v = float(np.max(np.abs(x[:n]))), float(np.max(np.abs(x[n:2 * n])))
+    rest = np.abs(x[2 * n:])
+    if fl.ball:
+        rest = np.maximum(rest, [fl.half, fl.omega * fl.half])
+    return np.maximum(np.concatenate([np.full(n, u), np.full(n, v), rest]), 1e-300)
 
 
 def newton_step(A: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -79,7 +79,8 @@ DIMENSIONLESS_ENDINGS = ("_ratio", "_ratios", "_fraction", "_count", "_index", "
 #: continuation's ``stop`` and its events' values (``parameter``), a design variable's
 #: bounds and an uncertain input's draws (``name``), a state vector (its modes).
 UNIT_ELSEWHERE = frozenset({
-    "values", "value", "stop", "event_value", "born_value", "choices", "x", "state",
+    "values", "value", "stop", "other_end", "event_value", "born_value", "choices", "x",
+    "state",
     "low", "high", "a", "b",
     # a direction's entry under a quantity's key ({"rms_tip_m": {"forward": [...]}})
     "forward", "backward",

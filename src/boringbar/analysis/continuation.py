@@ -20,10 +20,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import xarray as xr
 
-from boringbar._validate import ParameterError, check_choice, check_int
+from boringbar._validate import ParameterError, check_choice, check_finite, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
-from boringbar.attractors import periodic_attractors, spread
+from boringbar.attractors import RETURN_TOL, periodic_attractors, return_distance, spread
 from boringbar.branch import (
     MAX_STEP,
     PARAMETERS,
@@ -33,6 +33,7 @@ from boringbar.branch import (
     value_of,
 )
 from boringbar.execute import Execution
+from boringbar.model.dampers import Friction
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.orbit_map import MapOptions, attractor_check, orbit_map
@@ -64,7 +65,10 @@ class ContinuationOptions:
     rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
     smallest step the halving goes down to before the branch stops (relative);
     ``switch``, ``seeds``, ``max_branches``: the orbit map's (docs/continuation.md, "The
-    orbit map")."""
+    orbit map"); ``other_end``: the map covers [other_end, stop] (either order), the
+    first orbit inside it and continued both ways (None: [start value, stop]);
+    ``return_periods``: the return check of every stable point (the exact integrator
+    over that many periods from it, perturbed; 0: none)."""
 
     parameter: str = "force-n"
     stop: float = 5.0
@@ -81,9 +85,13 @@ class ContinuationOptions:
     #: Follow the branches born at branch points, period doublings and grazings.
     switch: bool = True
     #: Parameter values (spread over the range) at which brute force seeds branches
-    #: (force-n and ratio only; 0: none).
+    #: (the free ball; 0: none).
     seeds: int = 3
     max_branches: int = 24
+    other_end: float | None = None
+    #: The return check of every stable point: the exact integrator over this many
+    #: periods from it, perturbed (0: none).
+    return_periods: int = 200
 
     def __post_init__(self):
         check_choice("parameter", self.parameter, PARAMETERS)
@@ -95,6 +103,9 @@ class ContinuationOptions:
         check_steps(self.step, self.min_step, self.max_step)
         check_int("seeds", self.seeds, 0, 50)
         check_int("max_branches", self.max_branches, 1, 1000)
+        if self.other_end is not None:
+            check_finite("other_end", self.other_end)
+        check_int("return_periods", self.return_periods, 0, 100000)
         if self.start == "state" and self.state is None:
             raise ParameterError("start = 'state' needs state = (u..., u'..., y, y') (ball), "
                                  "(u..., u'..., x_a, x_a') (TMD) or (u..., u'...)")
@@ -104,6 +115,12 @@ class ContinuationOptions:
 def plan(system: System, options: ContinuationOptions) -> Plan:
     """One point: the branch of ``system`` (any bar; the parameter must be one it has)."""
     check_parameter(system.kind, options.parameter)
+    if options.other_end is not None:
+        p0 = value_of(make_flow(system, Harmonic(options.force_n, ratio=options.ratio)),
+                      options.parameter)
+        if not min(options.other_end, options.stop) < p0 < max(options.other_end, options.stop):
+            raise ParameterError(f"other_end = {options.other_end!r}: the start value {p0!r} "
+                                 f"must lie strictly between it and stop = {options.stop!r}")
     return Plan({"system": system, "options": options}, [0])
 
 
@@ -149,8 +166,10 @@ def compute(context: dict, point: int) -> dict:
     seeds = [(v, a.x, a.periods) for v, a in _attractors(system, o, fl, o.seeds)]
     mo = MapOptions(o.switch, 2 * o.periods, o.max_branches, o.step, o.max_step, o.min_step,
                     o.max_points)
-    om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods, options=mo)
-    branches = [_branch_result(mb, fl, o) for mb in om.branches]
+    om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods,
+                   other_end=o.other_end, options=mo)
+    branches = [_branch_result(mb, fl, o) | {"return_distance_relative": _returns(system, o, mb)}
+                for mb in om.branches]
     # checked where no seed was taken (between the seeds' values), so that an attractor
     # on the map is not there merely because it started a branch
     check = [attractor_check(om, v, a.x, a.periods) | {"impacts": a.impacts}
@@ -159,18 +178,53 @@ def compute(context: dict, point: int) -> dict:
             "start": value_of(fl, o.parameter)}
 
 
+def system_at(system: System, o: ContinuationOptions, value: float) -> tuple:
+    """(system, forcing) of the problem with its parameter at ``value``: on the
+    descriptions what :func:`boringbar.branch.flow_with` does to a flow, for the exact
+    integrator's runs (a ball mass keeps the friction force F_c, as the flow does)."""
+    name, forcing = o.parameter, Harmonic(o.force_n, ratio=o.ratio)
+    if name == "force-n":
+        return system, Harmonic(value, ratio=o.ratio)
+    if name == "ratio":
+        return system, Harmonic(o.force_n, ratio=value)
+    d = system.damper
+    if name == "gap-mm":
+        d = dataclasses.replace(d, gap_m=value * 1e-3)
+    elif name == "restitution":
+        d = dataclasses.replace(d, restitution=value)
+    elif name == "friction-force-n":
+        f = d.friction
+        ratio = f.static_ratio if f.kind != "none" else 1.0
+        d = dataclasses.replace(d, friction=Friction("force", value, f.reaction, ratio))
+    elif name == "ball-mass-g":
+        f = d.friction
+        d = dataclasses.replace(d, mass_kg=value * 1e-3, friction=Friction(
+            "force", d.friction_force_n, f.reaction, f.static_ratio) if f.kind != "none" else f)
+    return dataclasses.replace(system, damper=d), forcing
+
+
 def _attractors(system: System, o: ContinuationOptions, fl, count: int) -> list:
     """[(value, Attractor)]: brute force's periodic attractors at ``count`` values spread
-    over the range (the middles of equal parts; force-n and ratio of the free ball)."""
-    if count == 0 or o.parameter not in BRUTE_FORCE or system.kind != "ball":
+    over the range (the middles of equal parts; the free ball, any parameter)."""
+    if count == 0 or system.kind != "ball":
         return []
-    p0 = value_of(fl, o.parameter)
+    ends = (value_of(fl, o.parameter), o.stop, *(() if o.other_end is None else (o.other_end,)))
     found = []
-    for v in spread(min(p0, o.stop), max(p0, o.stop), count):
-        force, ratio = (v, o.ratio) if o.parameter == "force-n" else (o.force_n, v)
-        found += [(v, a) for a in periodic_attractors(system, Harmonic(force, ratio=ratio),
+    for v in spread(min(ends), max(ends), count):
+        found += [(v, a) for a in periodic_attractors(*system_at(system, o, v),
                                                       max_period=2 * o.periods)]
     return found
+
+
+def _returns(system: System, o: ContinuationOptions, mb) -> list:
+    """The return check of each stable point of a branch (NaN for the others):
+    :func:`boringbar.attractors.return_distance` over ``o.return_periods``."""
+    br = mb.branch
+    if not o.return_periods:
+        return [math.nan] * len(br.points)
+    return [return_distance(*system_at(system, o, pt.value), pt.x, pt.phase, br.periods,
+                            o.return_periods) if pt.stable else math.nan
+            for pt in br.points]
 
 
 def _branch_result(mb, fl, o: ContinuationOptions) -> dict:
@@ -228,6 +282,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "multiplier_real": (("branch", "point", "multiplier"), [mults.real]),
          "multiplier_imag": (("branch", "point", "multiplier"), [mults.imag]),
          "stable": (("branch", "point"), [r["stable"]]),
+         "return_distance_relative": (("branch", "point"), [r.get(
+             "return_distance_relative", [math.nan] * len(r["value"]))]),
          "event_kind": (("branch", "event"), [[k for k, _ in r["events"]]]),
          "event_value": (("branch", "event"), [[v for _, v in r["events"]]]),
          "periods": (("branch",), [r.get("periods", o.periods)]),
@@ -267,7 +323,24 @@ def summary(ds: xr.Dataset) -> dict:
     return {"parameter": ds.attrs["parameter"], "branches": branches,
             "notes": json.loads(ds.attrs.get("notes", "[]")),
             "attractor_check": json.loads(ds.attrs.get("attractor_check", "[]")),
+            "return_check": return_check(ds),
             "wall_time_s": float(ds.attrs.get("wall_time_s", math.nan))}
+
+
+def return_check(ds: xr.Dataset) -> dict:
+    """The return check of the stable points (:func:`boringbar.attractors.return_distance`):
+    how many were checked, the largest distance and those farther than RETURN_TOL (branch,
+    value, distance): stable points that are not attractors of the exact integrator."""
+    if "return_distance_relative" not in ds:
+        return {"checked_count": 0, "largest_relative": None, "failed": []}
+    d = ds["return_distance_relative"].values
+    checked = np.isfinite(d) | np.isinf(d)
+    failed = [{"branch": int(b), "value": float(ds["value"].values[b, i]),
+               "distance_relative": float(d[b, i])}
+              for b, i in zip(*np.nonzero(checked & ~(d <= RETURN_TOL)), strict=True)]
+    return {"checked_count": int(checked.sum()),
+            "largest_relative": float(np.max(d[checked])) if checked.any() else None,
+            "failed": failed}
 
 
 def _tree(d: xr.Dataset) -> dict:
@@ -312,16 +385,6 @@ def brute_force(system: System, options: ContinuationOptions, start: float, n_va
     name = BRUTE_FORCE[options.parameter]
     bf = BifurcationOptions(name, values, options.force_n, options.ratio, backward=True)
     return bifurcation(system, bf, integration=integration or Integration(1.0, 1e-6, "exact", 0.5))
-
-
-def both_ways(system: System, start: float, lo: float, hi: float, *, ratio: float = 1.0,
-              step: float = 0.05, max_points: int = 60, min_step: float = 1e-4) -> xr.Dataset:
-    """The F0 branch through the settled orbit at ``start`` N (exact integrator, 200
-    periods from rest), continued down to ``lo`` and up to ``hi``: two branches."""
-    down, up = (continuation(system, Harmonic(start, ratio=ratio), options=ContinuationOptions(
-        parameter="force-n", stop=stop, step=step, max_points=max_points, min_step=min_step,
-        switch=False, seeds=0)) for stop in (lo, hi))
-    return concat_branches([down, up])
 
 
 def concat_branches(datasets: list[xr.Dataset]) -> xr.Dataset:

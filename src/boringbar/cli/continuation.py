@@ -46,7 +46,9 @@ def add_continue(sub) -> None:
     g.add_argument("--parameter", choices=PARAMETERS, default="force-n",
                    help="the continued parameter (default: force-n)")
     g.add_argument("--range", required=True, metavar="START:STOP",
-                   help="START sets the parameter's first value, STOP the branch's end")
+                   help="START sets the parameter's first value, STOP the branch's end; "
+                        "LO:START:HI maps [LO, HI] from an orbit at START inside it "
+                        "(continued both ways)")
     g.add_argument("--periods", type=int, default=1, metavar="K", help="period-k orbits")
     g.add_argument("--max-points", type=int, default=None, metavar="N",
                    help="point budget of a branch (default: from --max-step, enough to "
@@ -66,28 +68,42 @@ def add_continue(sub) -> None:
     g.add_argument("--seeds", type=int, default=3, metavar="N",
                    help="brute-force attractors at N values spread over --range seed "
                         "branches; those at 2N other values are checked against the map "
-                        "(force-n or ratio of the free ball; default 3, 0: none)")
+                        "(the free ball; default 3, 0: none)")
     g.add_argument("--max-branches", type=int, default=24, metavar="N",
                    help="at most N branches in the map (default 24)")
+    g.add_argument("--return-periods", type=int, default=200, metavar="N",
+                   help="the return check: the exact integrator runs N periods from every "
+                        "stable point, perturbed by 1e-7, and must come back within 1e-6 "
+                        "(default 200, 0: none)")
     g.add_argument("--start-from", choices=("simulation", "masri-caughey"),
                    default="simulation", help="first guess (default: a settled exact run)")
     p.set_defaults(func=_cmd_continue)
 
 
-def _range(text: str) -> tuple[float, float]:
+def _range(text: str) -> tuple[float, float, float | None]:
+    """(start, stop, other end or None) of --range START:STOP or LO:START:HI."""
     parts = (text or "").split(":")
     try:
-        a, b = (float(x) for x in parts)
+        values = [float(x) for x in parts]
     except ValueError:
-        raise ParameterError(f"--range = {text!r} must be START:STOP (two numbers)") from None
-    if not (math.isfinite(a) and math.isfinite(b)) or a == b:
-        raise ParameterError(f"--range = {text!r}: START and STOP must be finite and differ")
-    return a, b
+        values = []
+    if len(values) not in (2, 3):
+        raise ParameterError(f"--range = {text!r} must be START:STOP or LO:START:HI "
+                             "(two or three numbers)")
+    if not all(math.isfinite(v) for v in values) or values[0] == values[1]:
+        raise ParameterError(f"--range = {text!r}: the numbers must be finite and START must "
+                             "differ from STOP")
+    if len(values) == 2:
+        return values[0], values[1], None
+    lo, start, hi = values
+    if not lo < start < hi:
+        raise ParameterError(f"--range = {text!r}: LO:START:HI needs LO < START < HI")
+    return start, hi, lo
 
 
 def _cmd_continue(args) -> Outcome:
     bar, friction_on = one_bar(args, "continue")
-    start, stop = _range(args.range)
+    start, stop, other_end = _range(args.range)
     force = 10.0 if args.force_n is None else args.force_n
     ratio = 1.0 if args.ratio is None else args.ratio
     gap = 0.5 if args.gap_mm is None else args.gap_mm
@@ -115,14 +131,15 @@ def _cmd_continue(args) -> Outcome:
                                   periods=args.periods, step=args.step,
                                   max_step=args.max_step, max_points=args.max_points,
                                   switch=args.switch, seeds=args.seeds,
-                                  max_branches=args.max_branches, start=args.start_from)
+                                  max_branches=args.max_branches, start=args.start_from,
+                                  other_end=other_end, return_periods=args.return_periods)
     ds = continuation(system, Harmonic(force, ratio=ratio), options=options)
     out = summary(ds)
     files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/continuation.nc"))}
     bf = None
     if args.overlay is not None:
-        bf = brute_force(system, options, start, args.overlay,
-                         integration(args, steady_fraction=0.5))
+        bf = brute_force(system, options, start if other_end is None else other_end,
+                         args.overlay, integration(args, steady_fraction=0.5))
         files["overlay"] = str(write_netcdf_atomic(bf, f"{args.out}/overlay.nc"))
     files["figure"] = str(save_figure_atomic(plot_continuation(ds, overlay=bf),
                                              f"{args.out}/continuation.png", dpi=130))
@@ -138,9 +155,22 @@ def _cmd_continue(args) -> Outcome:
             say(f"note: {note}")
         for c in out["attractor_check"]:
             say(_check_line(c, name))
+        for line in _return_lines(out["return_check"], name, args.return_periods):
+            say(line)
         say(wrote(files))
 
     return Outcome(out, text)
+
+
+def _return_lines(rc: dict, name: str, periods: int) -> list[str]:
+    """The return check: one line, and one a stable point that did not come back."""
+    if not rc["checked_count"]:
+        return []
+    head = (f"return check: {rc['checked_count']} stable points, {len(rc['failed'])} not "
+            f"back within 1e-6 after {periods} periods (largest distance "
+            f"{rc['largest_relative']:.2g})")
+    return [head] + [f"  branch {f['branch']} at {name} = {f['value']:.6g}: "
+                     f"{f['distance_relative']:.2g}" for f in rc["failed"]]
 
 
 def _branch_line(i: int, b: dict, name: str) -> str:

@@ -171,16 +171,19 @@ class _Report:
 
         def body(preset, rec):
             s = rec["summary"]
-            images, rows, stops = [], [], []
+            images, rows, stops, checks = [], [], [], []
             for key, c in s["cases"].items():
                 images.append(self.img(c["files"]["png"], f"continuation {key} {preset}"))
-                for way, b in zip(("down", "up"), c["branches"], strict=True):
-                    rows.append(_branch_row(key, way, b))
+                for i, b in enumerate(c["branches"]):
+                    rows.append(_branch_row(key, i, b))
                     stops.append(b["stop"])
+                checks += c.get("attractor_check", [])
             return {"images": images, "table": _table(
-                        ["case", "from 30 N", "points", "F0 covered (N)", "stable points",
-                         "events (N)", "why it stopped"], rows),
+                        ["case", "branch (period, born at, N)", "points", "F0 covered (N)",
+                         "stable (N)", "events (N)", "why it stopped"], rows),
                     "facts": _stop_facts(stops),
+                    "attractors": len(checks),
+                    "on_stable": sum(c["on_stable_branch"] for c in checks),
                     "overlaid": sum(c["overlay"] for c in s["cases"].values()),
                     "cases": len(s["cases"])}
         return {"columns": self.pair("continuation", body)}
@@ -463,20 +466,36 @@ def _ball_at_limit(ds) -> dict | None:
             "strikes": strikes_all, "below": below}
 
 
-def _branch_row(key: str, way: str, b: dict) -> list:
-    """A continued branch's table row (its summary from analysis.continuation)."""
+def _branch_row(key: str, i: int, b: dict) -> list:
+    """A branch of an orbit map as a table row (its summary from analysis.continuation):
+    its birth, the F0 it covers and its stable stretches."""
     pts = b["points"]
     covered = f"{min(p['value'] for p in pts):.4g}-{max(p['value'] for p in pts):.4g}" \
         if pts else "-"
     events = ", ".join(f"{e['kind']} {e['value']:.4g}" for e in b["events"]) or "-"
-    return [key, way, len(pts), covered, sum(p["stable"] for p in pts), events, b["stop"]]
+    born = b.get("born", {"kind": "start", "value": math.nan})
+    parent = "" if b.get("parent") is None else f" of {b['parent']}"
+    name = f"{i} ({b.get('periods', 1)}, {born['kind']}{parent} {born['value']:.4g})"
+    return [key, name, len(pts), covered, _stable_stretches(pts), events, b["stop"]]
+
+
+def _stable_stretches(pts: list) -> str:
+    """The F0 ranges of a branch's consecutive stable points ("-" if none)."""
+    out, run = [], []
+    for p in [*pts, {"stable": False}]:
+        if p["stable"]:
+            run.append(p["value"])
+        elif run:
+            out.append(f"{min(run):.4g}-{max(run):.4g}" if len(run) > 1 else f"{run[0]:.4g}")
+            run = []
+    return ", ".join(out) or "-"
 
 
 def _stop_facts(stops: list[str]) -> dict:
     """How the branches ended, counted from their stop reasons (the words of
     boringbar.branch and boringbar.shooting)."""
-    start = [s for s in stops if s.startswith("refused at the start")]
-    later = [s for s in stops if not s.startswith("refused at the start")]
+    start = [s for s in stops if "refused at the start" in s]  # a map without branches
+    later = [s for s in stops if "refused at the start" not in s]
     return {"branches": len(stops), "refused_start": len(start),
             "start_stick": sum("stick" in s for s in start),
             "start_singular": sum("singular" in s for s in start),

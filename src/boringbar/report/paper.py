@@ -37,7 +37,7 @@ import xarray as xr
 from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
-from boringbar.analysis.continuation import both_ways
+from boringbar.analysis.continuation import ContinuationOptions, continuation
 from boringbar.analysis.design import comparison, design
 from boringbar.analysis.design import summary as design_summary
 from boringbar.analysis.design_file import load_design
@@ -219,20 +219,50 @@ def _bifurcation_run(gap_mm: str, friction: bool, forces: str, ratio: str, durat
     return run
 
 
-#: The continuation step's branches start from the settled orbit at this F0 (N).
+#: The continuation step's maps start from the settled orbit at this F0 (N).
 CONTINUATION_START_N = 30.0
 
 
-def _continuation_run(lo: float, hi: float, max_points: int):
-    """The F0 branches of the four bifurcation cases through the settled orbit at
-    CONTINUATION_START_N, each drawn over its bifurcation step's diagram if on disk."""
+@dataclass(frozen=True)
+class MapSettings:
+    """The continuation step's orbit maps over [lo, hi] N: per branch at most
+    ``max_points`` points (first step ``step`` of the range), brute force's attractors at
+    ``seeds`` values seed branches (and at twice as many are checked), at most
+    ``max_branches`` branches."""
+
+    lo: float
+    hi: float
+    max_points: int
+    seeds: int
+    max_branches: int
+    step: float = 0.05
+    max_step: float = 0.025
+
+    def options(self) -> ContinuationOptions:
+        return ContinuationOptions(parameter="force-n", stop=self.hi, other_end=self.lo,
+                                   force_n=CONTINUATION_START_N, ratio=1.0, step=self.step,
+                                   max_step=self.max_step, max_points=self.max_points,
+                                   seeds=self.seeds, max_branches=self.max_branches)
+
+    def argv(self) -> tuple[str, ...]:
+        """The ``boringbar continue`` flags of the same map."""
+        return ("--ratio", "1.0", "--range", f"{self.lo:g}:{CONTINUATION_START_N:g}:{self.hi:g}",
+                "--step", f"{self.step:g}", "--max-step", f"{self.max_step:g}",
+                "--max-points", str(self.max_points), "--seeds", str(self.seeds),
+                "--max-branches", str(self.max_branches))
+
+
+def _continuation_run(settings: MapSettings):
+    """The orbit maps in F0 of the four bifurcation cases (``settings``: from the settled
+    orbit at CONTINUATION_START_N, with switching and seeds), each drawn over its
+    bifurcation step's diagram if on disk."""
     def run(col: Column, out: Path) -> dict:
         cases = {}
         for gap in ("0.1", "0.5"):
             for fr in ("off", "on"):
                 system = make_system("ball", col.preset, gap_m=float(gap) * 1e-3,
                                      friction=fr == "on", **col.kw)
-                ds = both_ways(system, CONTINUATION_START_N, lo, hi, max_points=max_points)
+                ds = continuation(system, options=settings.options())
                 ds.attrs.update(preset=col.preset, bar="ball")
                 nc = out.parent / f"bifurcation-gap{gap}-friction{fr}" / "bifurcation.nc"
                 overlay = xr.load_dataset(nc) if nc.exists() else None
@@ -343,12 +373,16 @@ def published_steps(quick: bool = False) -> list[Step]:
                 ("bifurcation", "--bar", "ball", "--gap-mm", gap, "--friction", fr,
                  "--force-n", forces, "--ratio", "1.0", *dur),
                 _bifurcation_run(gap, fr == "on", forces, "1.0", duration), friction=fr == "on"))
-    points = 20 if quick else 40
+    # quick: steps up to a tenth of the range, 10 points a branch, 8 branches followed,
+    # so that the maps cost a few seconds more than the single branches they replaced
+    # (docs/continuation.md, "In the published study")
+    maps = MapSettings(5.0, 50.0, 10, 3, 8, max_step=0.1) if quick else \
+        MapSettings(5.0, 50.0, 40, 3, 24, max_step=0.025)
     steps.append(Step("continuation", "continuation",
-                      "Continued periodic orbits over the bifurcation diagrams",
+                      "Orbit maps (continued periodic orbits) over the bifurcation diagrams",
                       ("continue", "--bar", "ball", "--gap-mm", "0.5", "--friction", "off",
-                       "--range", "30:50", "--step", "0.05", "--max-points", str(points)),
-                      _continuation_run(5.0, 50.0, points), variants=False,
+                       *maps.argv()),
+                      _continuation_run(maps), variants=False,
                       after=tuple(s.key for s in steps if s.section == "bifurcation")))
     cells = "-1.5:1.5:" + ("8" if quick else "30")
     grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
