@@ -12,12 +12,12 @@ import xarray as xr
 import boringbar as bb
 from boringbar import shooting as sh
 from boringbar.analysis.continuation import ContinuationOptions, start_state
-from boringbar.cli.main import main
 from boringbar.branch import (
     continue_branch,
     flow_with,
     switch_period_doubling,
 )
+from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
 from boringbar.reference.masri_caughey import ImpactSystem, phase_equation, two_impact_orbit
@@ -89,7 +89,7 @@ def test_branch_switching_at_period_doubling_gives_a_period_two_orbit():
     br = continue_branch(fl, "ratio", x0, 0.969, step=0.05, max_points=12, max_step=0.1)
     assert [k for k, _ in br.events] == ["period-doubling"], (br.stop, br.events)
     two = switch_period_doubling(fl, "ratio", br, 0.975, step=0.002, max_points=6)
-    p_pd, x_pd = two.origin.value, two.origin.x
+    p_pd = two.origin.value
     assert two.periods == 2 and two.events[0] == ("period-doubling", p_pd)
     assert np.min(np.abs(two.origin.multipliers + 1.0)) < 1e-8  # located: a -1 multiplier
     assert len(two.points) == 6

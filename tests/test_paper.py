@@ -27,15 +27,14 @@ from boringbar.io import atomic_path, remove_stale_temporaries
 from boringbar.plot import (
     plot_basins,
     plot_bifurcation,
-    plot_ladder,
     plot_lobe_examples,
     plot_lobes,
-    plot_sensitivity,
     plot_sweep,
 )
 from boringbar.plot_design import plot_design, plot_design_comparison
 from boringbar.plot_orbits import plot_continuation
 from boringbar.plot_style import smallest_text_px
+from boringbar.plot_variations import plot_ladder, plot_sensitivity
 from boringbar.report.audit import audit
 from boringbar.report.audit_data import VERDICTS
 from boringbar.report.html import _mm, write_report

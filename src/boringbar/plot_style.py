@@ -17,6 +17,7 @@ import math
 import re
 import textwrap
 
+import numpy as np
 from matplotlib.text import Text
 
 from boringbar.palette import BAR_STYLE, CYCLE, DARK_GREY, GREY, OKABE_ITO  # noqa: F401 (shared)
@@ -116,3 +117,20 @@ def system_words(system: dict) -> str:
                 f"mm, friction {f'{fr:.3g} N' if fr else 'off'}, "
                 f"e = {damper.get('restitution', math.nan):g}")
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(kind, str(kind))
+
+
+def legend_below(fig, axes, ncol: int | None = None) -> None:
+    """One legend below the panels, each label once, from every axis in ``axes``."""
+    entries: dict[str, object] = {}
+    for ax in np.ravel(axes):
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries.setdefault(lab, h)
+    if entries:
+        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
+                   ncol=ncol or len(entries), fontsize="small", frameon=False)
+
+
+def zero_based(ax, values) -> None:
+    """y from 0 to a little above the largest finite value."""
+    top = np.nanmax(values) if np.isfinite(values).any() else 0.0
+    ax.set_ylim(0, 1.1 * top if top > 0 else 1.0)

@@ -30,11 +30,11 @@ from boringbar.plot import (
     plot_bifurcation,
     plot_lobe_examples,
     plot_lobes,
-    plot_sensitivity,
     plot_sweep,
 )
 from boringbar.plot_design import plot_design, plot_design_comparison
 from boringbar.plot_orbits import plot_continuation
+from boringbar.plot_variations import plot_sensitivity
 
 
 def integrators_used(ds) -> str:
