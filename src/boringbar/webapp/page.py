@@ -49,8 +49,7 @@ class Page:
                         "response": ResponseFigure(), "lobes": LobesFigure()}
         self.status = {v: pn.pane.Markdown("", css_classes=[f"status-{v}"], margin=(0, 10))
                        for v in (*VIEWS, "simulated")}
-        self.command = {v: pn.pane.Markdown("", css_classes=[f"command-{v}"])
-                        for v in (*VIEWS, "design")}
+        self.command = {v: pn.pane.Markdown("", css_classes=[f"command-{v}"]) for v in VIEWS}
         self.modes_table = pn.pane.Markdown("")
         self.progress = pn.indicators.Progress(value=0, max=1, visible=False,
                                                sizing_mode="stretch_width")
