@@ -202,8 +202,12 @@ class SearchPanel:
             return
         _, s = self.result
         d = self.page.design
-        for name, value in s["best"].items():
-            d = d.with_value(KEYS[name], value)
+        try:  # the ball and the cavity before the gap, whose room they set
+            for name in sorted(s["best"], key=lambda n: n == "gap_mm"):
+                d = d.with_value(KEYS[name], s["best"][name])
+        except ParameterError as e:
+            self.text.object = f"**cannot apply the best design:** {e}"
+            return
         self.page.apply(d)
         self.text.object = f"applied to the page: {summary_line(s)}"
 
