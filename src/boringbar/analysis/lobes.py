@@ -70,7 +70,6 @@ from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.sweep import Case, as_cases
 from boringbar.execute import Execution
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
-from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import Integration, check_delay, resolved_integrators, simulate
 from boringbar.version import __version__
@@ -324,20 +323,11 @@ def _seeds(cases: list[Case], options: LobesOptions) -> dict:
 
     seeds = {}
     for case in cases:
-        lim = limit_at_speeds(_linear_host(case.system), options.rpm, options.kr_pa)
+        lim = limit_at_speeds(case.system.linear_host(), options.rpm, options.kr_pa)
         for r, b in zip(options.rpm, lim, strict=True):
             if math.isfinite(b):
                 seeds[(case.label, float(r))] = options.index_below(b)
     return seeds
-
-
-def _linear_host(system):
-    """The linear bar a cut sees at the onset of chatter: for the free ball the
-    bare cavity bar (the ball is not touching yet), else the system itself."""
-
-    if system.kind == "ball":
-        return System(system.bar, None, system.preset, system.readings)
-    return system
 
 
 def _limits(verdicts: np.ndarray, depths: np.ndarray) -> tuple[float, float]:
@@ -523,7 +513,7 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
     curve = np.full((len(cases), len(fine)), np.nan)
     host_grid = np.full((len(cases), len(rpm)), np.nan)
     for i, case in enumerate(cases):
-        host_grid[i] = limit_at_speeds(_linear_host(case.system), rpm, kr)
+        host_grid[i] = limit_at_speeds(case.system.linear_host(), rpm, kr)
         if case.system.kind in ("solid", "tmd", "locked"):
             on_grid[i] = host_grid[i]
             curve[i] = limit_at_speeds(case.system, fine, kr)

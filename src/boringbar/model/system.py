@@ -86,6 +86,13 @@ class System:
             return "tmd"
         return "locked" if self.damper.locked else "ball"
 
+    def linear_host(self) -> System:
+        """The linear bar a cut sees at the onset of chatter: for a free ball the bare
+        cavity bar (the ball is not touching yet), else the system itself."""
+        if self.kind == "ball":
+            return System(self.bar, None, self.preset, self.readings)
+        return self
+
     @property
     def reference_frequency_rad_s(self) -> float:
         """omega_n (rad/s) of the host bar without the damper's mass: what

@@ -99,9 +99,8 @@ def readings_ladder(gaps=(0.5e-3, 0.1e-3), force: float = 10.0, ratio: float = 1
             w = run.energy["work_force_j"]
             injected[i, j] = run.energy["work_nonreciprocal_friction_j"] / w if w else 0.0
             friction[i, j] = system.damper.friction_force_n
-        host = System(system.bar, None, system.preset, system.readings)
         f1[i] = system.reference_frequency_rad_s / (2 * math.pi)
-        depth[i] = min_limit(host, KR_ALUMINIUM)
+        depth[i] = min_limit(system.linear_host(), KR_ALUMINIUM)
     dims = ("rung", "gap_m")
     return xr.Dataset(
         {

@@ -37,6 +37,12 @@ def shown(fig, renderer, visible: bool) -> None:
             item.visible = visible
 
 
+def show_progress(bar, done: int, total: int) -> None:
+    """A progress indicator at ``done`` of ``total`` (a total of 0 shows an empty bar)."""
+    bar.max = max(total, 1)
+    bar.value = min(done, bar.max)
+
+
 def _empty(*names, name: str | None = None) -> ColumnDataSource:
     """An empty source of columns ``names`` (``name``: how a browser test finds it)."""
     return ColumnDataSource({n: [] for n in names}, name=name)

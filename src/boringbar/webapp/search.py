@@ -28,7 +28,7 @@ from boringbar.execute import Execution
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system_file import merged_sections
 from boringbar.webapp.design_state import Design
-from boringbar.webapp.figures import COLOURS, new_figure
+from boringbar.webapp.figures import COLOURS, new_figure, show_progress
 
 #: the page's search variables (those of a ball damper the page can apply)
 VARIABLES = ("gap_mm", "ball_material", "ball_diameter_mm", "cavity_position_mm")
@@ -173,9 +173,8 @@ class SearchPanel:
 
     def poll(self) -> None:
         """Show the trials finished since the last poll (read from the storage)."""
-        n, total = self.done
-        self.progress.max, self.progress.value = max(total, 1), min(n, max(total, 1))
-        if self.storage is None or n == 0:
+        show_progress(self.progress, *self.done)
+        if self.storage is None or self.done[0] == 0:
             return  # read the storage only once the search made it (it has a trial)
         if self.study is None:
             self.study = optuna.load_study(study_name=STUDY,

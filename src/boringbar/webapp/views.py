@@ -17,7 +17,6 @@ import math
 import threading
 import time
 from collections import OrderedDict
-from dataclasses import replace
 
 import numpy as np
 
@@ -72,10 +71,11 @@ def bar_view(design: Design, n_modes: int = 3) -> dict:
                        "gap": data["ball"]["gap_mm"]}
     if spec.tmd is not None:
         out["tmd"] = {"z": data["tmd"]["position_mm"], "mass_kg": data["tmd"]["mass_kg"]}
-    # the bar `boringbar modes` describes by default, with as many modes as it shows
-    kind = "ball" if spec.ball else ("tmd" if spec.tmd else "solid")
-    # the modes do not move with the ball or the absorber's mass (only its position)
-    bare = {k: v for k, v in design.data.items() if k not in ("ball", "tmd")}
+    # the bar `boringbar modes` describes by default (the damped one), with as many
+    # modes as it shows; they do not move with the ball or the absorber's mass (only
+    # with its position)
+    kind = damped(design).kind
+    bare = {k: v for k, v in data.items() if k not in ("ball", "tmd")}
     key = [bare, spec.absorber_position_m, kind, design.settings.preset, n_modes]
     table = kept(["modes", *key], lambda: describe_modes(
         make_system(kind, design.settings.preset, spec=spec, n_modes=n_modes)))
@@ -203,10 +203,9 @@ def kept(key, compute):
 def lobe_curve(system, rpm: np.ndarray) -> np.ndarray:
     """The analytic chatter-free depth (mm) of ``system`` at ``rpm`` (:func:`kept`;
     a free ball's is its bare host's, which the ball's gap and friction leave alone)."""
-    if system.kind == "ball":
-        system = replace(system, damper=None)
-    return kept(["lobes", physics(system), rpm.tolist()],
-                lambda: limit_at_speeds(system, rpm) * 1e3)
+    host = system.linear_host()
+    return kept(["lobes", physics(host), rpm.tolist()],
+                lambda: limit_at_speeds(host, rpm) * 1e3)
 
 
 def physics(system) -> dict:
