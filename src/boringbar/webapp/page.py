@@ -23,7 +23,14 @@ from boringbar.webapp import views
 from boringbar.webapp.commands import commands
 from boringbar.webapp.controls import Controls
 from boringbar.webapp.design_state import Design
-from boringbar.webapp.figures import BarFigure, LobesFigure, ModesFigure, ResponseFigure, RunFigures
+from boringbar.webapp.figures import (
+    BarFigure,
+    LobesFigure,
+    ModesFigure,
+    ResponseFigure,
+    RunFigures,
+    show_progress,
+)
 from boringbar.webapp.jobs import Latest, Superseded
 from boringbar.webapp.search import SearchPanel
 
@@ -38,7 +45,7 @@ class Page:
     """The page of one session, for ``design``."""
 
     def __init__(self, design: Design):
-        self.design, self.pinned, self.pinned_views = design, None, {}
+        self.design, self.pinned_views = design, {}  #: views of the pinned design
         self.changes = 0  #: designs made since the page opened (the status lines show it)
         self.pool = ThreadPoolExecutor(max_workers=2, thread_name_prefix="boringbar-app")
         self.jobs = {v: Latest(self.pool) for v in (*VIEWS, "simulated")}
@@ -147,11 +154,12 @@ class Page:
             doc.add_next_tick_callback(partial(fn, *args))
 
     def draw(self, view: str, data: dict, status: str | None = None) -> None:
-        """Redraw ``view`` from ``data``, then show its ``status`` line (after the data:
-        a status naming a change is the sign that its figures show it)."""
+        """Redraw ``view`` from ``data``, then show its ``status`` line on the tick after
+        (a tick's changes go to the browser together, in no promised order, so the
+        status naming a change follows the data it stands for)."""
         self._figures(view, data)
         if status is not None:
-            self.status[view].object = status
+            self.locked(setattr, self.status[view], "object", status)
 
     def _figures(self, view: str, data: dict) -> None:
         pinned = self.pinned_views.get(view)
@@ -195,19 +203,19 @@ class Page:
         self.progress_seen = (done, total)
 
     def poll(self) -> None:
-        done, total = self.progress_seen
-        self.progress.max, self.progress.value = max(total, 1), min(done, max(total, 1))
+        show_progress(self.progress, *self.progress_seen)
         self.search.poll()
 
     def pin(self, _event=None) -> None:
         """Keep the current design's views, drawn dashed beside the next ones."""
-        self.pinned, self.pinned_views = self.design, dict(self.last)
-        for view in ("run", "response", "lobes"):
-            if view in self.last:
-                self.draw(view, self.last[view])
+        self._pinned(dict(self.last))
 
     def unpin(self, _event=None) -> None:
-        self.pinned, self.pinned_views = None, {}
+        self._pinned({})
+
+    def _pinned(self, kept_views: dict) -> None:
+        """Pin ``kept_views`` (none: unpin) and redraw the views that show them."""
+        self.pinned_views = kept_views
         for view in ("run", "response", "lobes"):
             if view in self.last:
                 self.draw(view, self.last[view])
