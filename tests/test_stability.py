@@ -113,6 +113,56 @@ def test_limit_is_the_lower_envelope_of_the_lobes(kind, preset):
     np.testing.assert_allclose(fast, slow, rtol=5e-4)  # linear interpolation in slow
 
 
+def every_crossing_limit(system, rpm, n_freq=20000):
+    """Slow reference for one speed: every lobe crossing on the frequency grid that
+    :func:`limit_at_speeds` uses, each bisected on its own in scalars, the smallest
+    limit of them all (no crossing left out as a non-contender)."""
+    bar = system.bar
+    wn = np.sqrt(bar.stiffness_n_m / bar.mass_kg)
+    w = np.geomspace(0.5 * wn.min(), 2.0 * wn.max(), n_freq)
+    g = tip_frf(bar, w)
+    tau = 60.0 / rpm
+    h = (w * tau - regeneration_phase(g)) / (2 * math.pi)
+    i = np.flatnonzero((g.real[:-1] < 0) & (g.real[1:] < 0))
+    pairs = [(k, j) for k in i for j in range(int(np.floor(min(h[k], h[k + 1]))) + 1,
+                                                int(np.floor(max(h[k], h[k + 1]))) + 1)
+             if j >= 0]
+    k, j = (np.array(x) for x in zip(*pairs, strict=True))
+    lo, hi = w[k], w[k + 1]
+
+    def f(x):
+        return x * tau - regeneration_phase(tip_frf(bar, x)) - 2 * math.pi * j
+
+    f_lo = f(lo)
+    for _ in range(60):  # every crossing bisected to the end, none dropped
+        mid = 0.5 * (lo + hi)
+        f_mid = f(mid)
+        same = np.sign(f_mid) == np.sign(f_lo)
+        lo, f_lo, hi = np.where(same, mid, lo), np.where(same, f_mid, f_lo), np.where(same, hi, mid)
+    root = 0.5 * (lo + hi)
+    re = tip_frf(bar, root).real
+    b = np.where(re < 0, -0.5 / (KR * np.minimum(re, -1e-300)), np.inf)
+    best = (b.min(), root[np.argmin(b)] / (2 * math.pi))
+    return best
+
+
+@pytest.mark.parametrize("preset,n_modes", [("paper", 1), ("physical", 2),
+                                            pytest.param("physical", 3, marks=pytest.mark.slow)])
+def test_limit_is_the_smallest_of_every_crossing(preset, n_modes):
+    """The crossing search keeps only the crossings that can win, and drops a speed
+    once the grid steps left cannot hold one; at the high speeds of the first lobes it
+    gives the smallest limit of every crossing, at its frequency."""
+    system = make_system("solid", preset, n_modes=n_modes)
+    f1 = system.reference_frequency_rad_s / (2 * math.pi)
+    # high speeds (few lobes, far apart) hold pockets where the limit is set far from
+    # the deepest Re G: the speeds the search must follow to the end
+    rpm = np.sort(1.0 / np.linspace(1.0 / (90.0 * f1), 1.0 / 900.0, 80))[-40:]
+    fast, freq = limit_at_speeds(system, rpm, with_frequency=True)
+    slow = np.array([every_crossing_limit(system, r) for r in rpm])
+    np.testing.assert_allclose(fast, slow[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(freq, slow[:, 1], rtol=1e-12)
+
+
 # --- (3) the published solid bar ------------------------------------------------------
 @pytest.mark.parametrize("preset,expected_mm", [("physical", 0.035216), ("paper", 0.027337)])
 def test_solid_bar_limit_on_the_published_grid(preset, expected_mm):

@@ -52,6 +52,10 @@ BISECTION_STEPS = 60
 #: A crossing is bisected only if its better bracket end is within this fraction of
 #: the best crossing's worse end (:func:`_contenders`).
 CONTENDER_MARGIN = 0.1
+#: grid steps times speeds looked at in one block by the crossing search (memory), and
+#: the steps of its first round (each round doubles them)
+CROSSING_BLOCK = 2_000_000
+CROSSING_FIRST = 512
 TWO_PI = 2.0 * math.pi
 
 
@@ -235,59 +239,90 @@ def limit_at_speeds(
     g = tip_frf(bar, w, tmd=tmd, added_mass_kg=added_mass)
     eps = regeneration_phase(g)
     # every speed's crossings bisected together: one FRF solve per step for all
-    brackets = [_contenders(w, g, *_crossings(w, g, eps, 60.0 / speed, allowed))
-                for speed in flat]
-    count = [len(b[2]) for b in brackets]
-    owner = np.repeat(np.arange(len(flat)), count)
+    owner, at, j = _contenders(g, *_crossings(w, g, eps, 60.0 / flat, allowed, prune=True))
+    lo, hi = w[at], w[at + 1]
     b_out = np.full(flat.shape, np.inf)
     f_out = np.full(flat.shape, np.nan)
     if owner.size:
-        lo, hi, j = (np.concatenate([b[k] for b in brackets]) for k in range(3))
-        root = _bisect(bar, tmd, added_mass, lo, hi, j, np.repeat(60.0 / flat, count))
+        root = _bisect(bar, tmd, added_mass, lo, hi, j, 60.0 / flat[owner])
         re = tip_frf(bar, root, tmd=tmd, added_mass_kg=added_mass).real
         b = np.where(re < 0.0, -0.5 / (kr * np.minimum(re, -1e-300)), np.inf)
-        for k in np.unique(owner):
-            mine = np.flatnonzero(owner == k)
-            best = mine[int(np.argmin(b[mine]))]
-            b_out[k], f_out[k] = b[best], root[best] / TWO_PI
+        # each speed's smallest limit, the first of equals as argmin takes it
+        order = np.lexsort((np.arange(b.size), b, owner))
+        first = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]
+        b_out[owner[first]], f_out[owner[first]] = b[first], root[first] / TWO_PI
     b_out, f_out = b_out.reshape(speeds.shape), f_out.reshape(speeds.shape)
     return (b_out, f_out) if with_frequency else b_out
 
 
-def _crossings(w, g, eps, tau, allowed):
-    """Brackets [lo, hi] (rad/s) and lobe numbers j of every crossing at ``tau``.
+def _crossings(w, g, eps, tau, allowed, prune: bool = False):
+    """Every crossing at every delay ``tau`` (s): the index of its speed in ``tau``,
+    of its grid step [w[i], w[i + 1]] and its lobe number j, by speed, step and j.
 
     h(omega) = (omega tau - eps) / 2 pi is continuous inside a region where
     Re G < 0; each integer j >= 0 it passes between two grid points is one
-    lobe crossing.
+    lobe crossing.  The steps inside such regions are looked at from the most
+    negative Re G up, in rounds; with ``prune``, a speed leaves once the steps left
+    cannot hold a contender (:func:`_contenders`): their better end is above
+    (1 - CONTENDER_MARGIN) times its best worse end so far, so they could neither
+    be kept nor lower that end.
     """
-    h = (w * tau - eps) / TWO_PI
-    inside = (g.real[:-1] < 0.0) & (g.real[1:] < 0.0)
-    top = np.floor(np.maximum(h[:-1], h[1:]))
-    bottom = np.floor(np.minimum(h[:-1], h[1:]))
-    count = np.where(inside, top - bottom, 0).astype(int)
-    idx = np.repeat(np.arange(len(count)), count)
-    # the integers crossed in interval i are bottom_i + 1 .. top_i
-    offset = np.arange(len(idx)) - np.repeat(np.cumsum(count) - count, count)
-    j = bottom[idx] + 1 + offset
+    step = np.flatnonzero((g.real[:-1] < 0.0) & (g.real[1:] < 0.0))
+    better = np.minimum(g.real[step], g.real[step + 1])
+    order = np.argsort(better, kind="stable")
+    step, better = step[order], better[order]
+    best = np.full(tau.shape, np.inf)
+    speeds, found, start, size = np.arange(tau.size), [], 0, CROSSING_FIRST
+    while speeds.size and start < step.size:
+        rows = max(1, CROSSING_BLOCK // max(size, 1))
+        part = step[start:start + size]
+        for k in range(0, speeds.size, rows):
+            f = _crossed(w, eps, part, tau, speeds[k:k + rows], allowed)
+            np.minimum.at(best, f[0], np.maximum(g.real[f[1]], g.real[f[1] + 1]))
+            found.append(f)
+        start, size = start + size, 2 * size
+        if prune and start < step.size:
+            speeds = speeds[~(better[start - 1] > (1.0 - CONTENDER_MARGIN) * best[speeds])]
+    if not found:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int), np.zeros(0)
+    speed, at, j = (np.concatenate([f[i] for f in found]) for i in range(3))
+    order = np.lexsort((j, at, speed))
+    return speed[order], at[order], j[order]
+
+
+def _crossed(w, eps, step, tau, speeds, allowed):
+    """The crossings in the grid steps ``step`` at the delays ``tau[speeds]``:
+    (index of the speed, index of the step, lobe number j)."""
+    h_lo = (w[step] * tau[speeds, None] - eps[step]) / TWO_PI
+    h_hi = (w[step + 1] * tau[speeds, None] - eps[step + 1]) / TWO_PI
+    bottom = np.floor(np.minimum(h_lo, h_hi))
+    count = (np.floor(np.maximum(h_lo, h_hi)) - bottom).astype(int)
+    row, col = np.nonzero(count)
+    n = count[row, col]
+    # the integers crossed in step i are bottom_i + 1 .. top_i
+    offset = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
+    speed, at = np.repeat(speeds[row], n), np.repeat(step[col], n)
+    j = np.repeat(bottom[row, col], n) + 1 + offset
     keep = j >= 0
     if allowed is not None:
         keep &= np.isin(j, allowed)
-    idx, j = idx[keep], j[keep]
-    return w[idx], w[idx + 1], j, tau
+    return speed[keep], at[keep], j[keep]
 
 
-def _contenders(w, g, lo, hi, j, tau):
-    """The crossings of one speed that can hold its smallest limit: Re G at the root
+def _contenders(g, speed, at, j):
+    """The crossings that can hold their speed's smallest limit: Re G at the root
     lies between its values at the bracket's ends (the bracket is one step of a fine
     grid, where Re G bends by far less than the margin), so a crossing whose better
-    end is CONTENDER_MARGIN short of the best worse end cannot win."""
-    if len(j) < 2:
-        return lo, hi, j, tau
-    a = np.searchsorted(w, lo)
-    ends = np.stack([g.real[a], g.real[a + 1]])
-    keep = ends.min(axis=0) <= (1.0 - CONTENDER_MARGIN) * ends.max(axis=0).min()
-    return lo[keep], hi[keep], j[keep], tau
+    end is CONTENDER_MARGIN short of the best worse end of its speed cannot win (a
+    speed's only crossing is kept)."""
+    better = np.minimum(g.real[at], g.real[at + 1])
+    worse = np.maximum(g.real[at], g.real[at + 1])
+    starts = np.flatnonzero(np.r_[True, speed[1:] != speed[:-1]]) if speed.size else \
+        np.zeros(0, dtype=int)
+    count = np.diff(np.r_[starts, speed.size])
+    best = np.repeat(np.minimum.reduceat(worse, starts), count) if speed.size else worse
+    keep = np.repeat(count < 2, count) | (better <= (1.0 - CONTENDER_MARGIN) * best)
+    return speed[keep], at[keep], j[keep]
 
 
 def _bisect(bar, tmd, added_mass, lo, hi, j, tau):
@@ -325,21 +360,18 @@ def sampled_limits(w, g, rpm, kr: float = KR_ALUMINIUM) -> dict:
     i = int(np.argmin(g.real))
     low = -0.5 / (kr * g.real[i]) if g.real[i] < 0.0 else math.inf
     speeds = np.atleast_1d(np.asarray(rpm, dtype=float))
-    limits = np.full(speeds.shape, np.inf)
-    for k, speed in enumerate(speeds):
-        tau = 60.0 / check_positive("rpm", speed, "rev/min")
-        lo, hi, j, _ = _crossings(w, g, eps, tau, None)
-        if len(j) == 0:
-            continue
-        a = np.searchsorted(w, lo)
-        h_lo = (w[a] * tau - eps[a]) / TWO_PI - j
-        h_hi = (w[a + 1] * tau - eps[a + 1]) / TWO_PI - j
-        t = h_lo / (h_lo - h_hi)
-        re = (1 - t) * g.real[a] + t * g.real[a + 1]
-        b = np.where(re < 0.0, -0.5 / (kr * np.minimum(re, -1e-300)), np.inf)
-        limits[k] = b.min()
+    for speed in speeds.ravel():
+        check_positive("rpm", speed, "rev/min")
+    tau, limits = 60.0 / speeds.ravel(), np.full(speeds.size, np.inf)
+    speed, a, j = _crossings(w, g, eps, tau, None)
+    h_lo = (w[a] * tau[speed] - eps[a]) / TWO_PI - j
+    h_hi = (w[a + 1] * tau[speed] - eps[a + 1]) / TWO_PI - j
+    t = h_lo / (h_lo - h_hi)
+    re = (1 - t) * g.real[a] + t * g.real[a + 1]
+    b = np.where(re < 0.0, -0.5 / (kr * np.minimum(re, -1e-300)), np.inf)
+    np.minimum.at(limits, speed, b)
     return {"min_limit": low, "frequency_hz": w[i] / TWO_PI, "rpm": speeds,
-            "limit": limits}
+            "limit": limits.reshape(speeds.shape)}
 
 
 def min_limit(

@@ -187,25 +187,43 @@ def kept(key, compute):
     """``compute()``, or what it gave for the same ``key`` (any JSON-able value) a
     request before: a change of one bar's description leaves the others' curves,
     sweeps and modes as they were.  The last :data:`KEPT` results are kept."""
-    text = json.dumps(key, sort_keys=True, default=str)
-    with _KEPT_LOCK:
-        if text in _KEPT:
-            _KEPT.move_to_end(text)
-            return _KEPT[text]
+    found = known(key)
+    if found is not None:
+        return found
     value = compute()
     with _KEPT_LOCK:
-        _KEPT[text] = value
+        _KEPT[_key_text(key)] = value
         while len(_KEPT) > KEPT:
             _KEPT.popitem(last=False)
     return value
 
 
-def lobe_curve(system, rpm: np.ndarray) -> np.ndarray:
+def known(key):
+    """What :func:`kept` holds for ``key``, or None."""
+    text = _key_text(key)
+    with _KEPT_LOCK:
+        if text in _KEPT:
+            _KEPT.move_to_end(text)
+            return _KEPT[text]
+    return None
+
+
+def _key_text(key) -> str:
+    return json.dumps(key, sort_keys=True, default=str)
+
+
+def lobe_curve(system, rpm: np.ndarray, at: float) -> tuple[np.ndarray, float]:
     """The analytic chatter-free depth (mm) of ``system`` at ``rpm`` (:func:`kept`;
-    a free ball's is its bare host's, which the ball's gap and friction leave alone)."""
+    a free ball's is its bare host's, which the ball's gap and friction leave alone)
+    and at the speed ``at``, found with the curve when the curve is new (one
+    frequency grid and one bisection for both)."""
     host = system.linear_host()
-    return kept(["lobes", physics(host), rpm.tolist()],
-                lambda: limit_at_speeds(host, rpm) * 1e3)
+    key = ["lobes", physics(host), rpm.tolist()]
+    curve = known(key)
+    if curve is None:
+        both = limit_at_speeds(host, np.append(rpm, at)) * 1e3
+        return kept(key, lambda: both[:-1]), float(both[-1])
+    return curve, float(limit_at_speeds(host, [at])[0]) * 1e3
 
 
 def physics(system) -> dict:
@@ -221,8 +239,7 @@ def lobes_view(design: Design) -> dict:
     rpm, at = lobe_speeds(design), design.settings.rpm
     out = {"rpm": rpm, "curves": {}, "at_rpm": at, "depth_at_mm": {}}
     for kind, system in design.systems.items():
-        out["curves"][kind] = lobe_curve(system, rpm)
-        out["depth_at_mm"][kind] = float(limit_at_speeds(system, [at])[0]) * 1e3
+        out["curves"][kind], out["depth_at_mm"][kind] = lobe_curve(system, rpm, at)
     return out
 
 
