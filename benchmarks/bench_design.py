@@ -34,12 +34,12 @@ TARGET_CANDIDATES, TARGET_SAMPLES, TARGET_RATIOS = 200, 32, 11
 
 def options(candidates: int, samples: int) -> DesignOptions:
     ratios = tuple(round(0.95 + 0.01 * i, 2) for i in range(TARGET_RATIOS))
-    return DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),
+    return DesignOptions("ball", (Variable("gap_m", 0.05e-3, 1e-3),
                                   Variable("restitution", 0.5, 0.9)),
                          ratios=ratios, forces_n=(20.0,), duration_s=2.0, integrator="exact",
                          samples=samples, trials=candidates, seed=1,
                          uncertain=(Uncertain("friction_force_n", "uniform", 0.0, 0.5),
-                                    Uncertain("ball_position_mm", "uniform", -0.05, 0.05)))
+                                    Uncertain("ball_position_m", "uniform", -0.05e-3, 0.05e-3)))
 
 
 def timed(opts, execution) -> tuple[float, object]:

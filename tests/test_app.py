@@ -21,7 +21,7 @@ import pytest
 
 import boringbar as bb
 from boringbar._validate import ParameterError
-from boringbar.analysis.design_file import load_design
+from boringbar.analysis.design_file import load_design, options_from_dict
 from boringbar.execute import Execution, run_points
 from boringbar.model.system_file import load_system, published_system
 from boringbar.reference.stability import limit_at_speeds
@@ -29,7 +29,7 @@ from boringbar.webapp import views
 from boringbar.webapp.commands import commands
 from boringbar.webapp.design_state import Design
 from boringbar.webapp.jobs import Latest, Superseded
-from boringbar.webapp.search import design_file, options
+from boringbar.webapp.search import design_file, search_file
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 BOKEH_DATA = "n => Array.from(Bokeh.documents[0].get_model_by_name(n).data.y)"
@@ -128,9 +128,12 @@ def test_the_lobes_view_gives_each_bars_analytic_limit(published):
 
 
 def test_the_search_is_a_design_file_the_command_reads(published, tmp_path):
-    opts = options(published, ["gap_mm", "ball_material", "cavity_position_mm"], 5, 2)
+    search = search_file(published, ["gap_mm", "ball_material", "cavity_position_mm"], 5, 2)
+    opts = options_from_dict(search)
+    assert search["variables"]["gap_mm"][0] == 0.05  # the file in mm, the options in m
+    assert opts.variables[0].name == "gap_m" and opts.variables[0].low == 0.05 * 1e-3
     (tmp_path / "mine_design.toml").write_text(published.toml())
-    (tmp_path / "search.toml").write_text(design_file(opts, "mine_design.toml"))
+    (tmp_path / "search.toml").write_text(design_file(search, "mine_design.toml"))
     read, spec = load_design(tmp_path / "search.toml")
     assert read == opts
     assert spec.to_dict() == published.data

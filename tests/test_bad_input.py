@@ -227,6 +227,9 @@ ANALYSIS_CASES = [
     ("basins", "velocity_m_s", {"start": -1.5, "stop": 1.5, "count": 10**9}),
     ("lobes", "depth_step_mm", math.nan),
     ("lobes", "max_depth_mm", math.inf),
+    ("lobes", "max_depth_mm", 0.0005),  # below the geometric grid's first depth, 1 um
+    ("lobes", "depth_tolerance", math.nan),
+    ("lobes", "depth_tolerance", 0.9),
     ("lobes", "successive", 0),
     ("sensitivity", "depths_mm", [0.05, math.inf]),
     ("sensitivity", "kind", "colour"),

@@ -11,6 +11,7 @@ import optuna
 import pytest
 from cli_output import assert_one_line_error, json_out
 
+from boringbar import ParameterError
 from boringbar.analysis.design import candidate_system, design, evaluate, summary, summary_line
 from boringbar.analysis.design_file import DesignFileError, design_from_dict
 from boringbar.analysis.design_options import (
@@ -20,7 +21,7 @@ from boringbar.analysis.design_options import (
     sampled_system,
     uncertain_samples,
 )
-from boringbar.analysis.lobes import LobesOptions, lobes
+from boringbar.analysis.lobes import DEPTH_TOLERANCE, LobesOptions, lobes
 from boringbar.analysis.sweep import Case
 from boringbar.cli.main import main
 from boringbar.execute import Execution
@@ -75,26 +76,26 @@ def test_sims_is_recovered(host):
 
 def test_a_gap_search_finds_the_brute_force_best():
     spec = published_system_spec()
-    options = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), ratios=(0.98, 1.0, 1.02),
+    options = DesignOptions("ball", (Variable("gap_m", 0.05e-3, 1e-3),), ratios=(0.98, 1.0, 1.02),
                             forces_n=(20.0,), duration_s=0.5, trials=20, seed=2)
-    grid = np.linspace(0.05, 1.0, 20)
+    grid = np.linspace(0.05e-3, 1e-3, 20)
     samples = uncertain_samples(options)
-    values = [evaluate(spec, options, {"gap_mm": g}, samples).statistic[0] for g in grid]
+    values = [evaluate(spec, options, {"gap_m": g}, samples).statistic[0] for g in grid]
     s = summary(design(options, spec=spec))
     step = grid[1] - grid[0]
-    assert abs(s["best"]["gap_mm"] - grid[int(np.argmin(values))]) <= step
+    assert abs(s["best"]["gap_m"] - grid[int(np.argmin(values))]) <= step
     assert s["objective"] <= min(values) * 1.05
 
 
 def test_zero_spread_equals_the_deterministic_objective():
     spec = published_system_spec()
-    base = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), ratios=(1.0,),
+    base = DesignOptions("ball", (Variable("gap_m", 0.05e-3, 1e-3),), ratios=(1.0,),
                          duration_s=0.3)
     fixed = DesignOptions("ball", base.variables, ratios=(1.0,), duration_s=0.3, samples=4,
                           uncertain=(Uncertain("restitution", "normal", 0.7, 0.0),
                                      Uncertain("damping_ratio", "uniform", 0.01, 0.01)))
-    a = evaluate(spec, base, {"gap_mm": 0.3}, uncertain_samples(base))
-    b = evaluate(spec, fixed, {"gap_mm": 0.3}, uncertain_samples(fixed))
+    a = evaluate(spec, base, {"gap_m": 0.3e-3}, uncertain_samples(base))
+    b = evaluate(spec, fixed, {"gap_m": 0.3e-3}, uncertain_samples(fixed))
     assert np.all(b.samples == a.statistic[0]) and b.statistic[0] == a.statistic[0]
     assert b.error[0] == 0.0
 
@@ -132,7 +133,7 @@ def test_a_killed_search_resumes_to_the_same_trial_table(host, tmp_path):
 
 def test_candidates_run_on_a_dask_cluster_as_on_threads():
     spec = published_system_spec()
-    options = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), ratios=(0.99, 1.01),
+    options = DesignOptions("ball", (Variable("gap_m", 0.05e-3, 1e-3),), ratios=(0.99, 1.01),
                             duration_s=0.2, trials=3, seed=4)
     a = design(options, spec=spec, execution=Execution("threads", 2))
     b = design(options, spec=spec, execution=Execution("dask", dask_local=1))
@@ -142,6 +143,7 @@ def test_candidates_run_on_a_dask_cluster_as_on_threads():
 # --- files and the command line -----------------------------------------------------------
 @pytest.mark.parametrize(("patch", "words"), [
     ({"variables": {"gap_mm": [0.05, 3.0]}}, "variables.gap_mm"),
+    ({"variables": {"gap_mm": [0.05]}}, "[low, high]"),
     ({"variables": {"colour": [1, 2]}}, "unknown variable"),
     ({"uncertain": {"restitution": {"triangular": [0.6, 0.8]}}}, "uncertain.restitution"),
     ({"design": {"bar": "ball", "objective": "frf_peak"}}, "linear bar"),
@@ -208,25 +210,83 @@ def test_chatter_probability_of_a_cut():
     common = dict(objective="cut_amplitude", statistic="chatter_probability", samples=4,
                   duration_s=0.3, uncertain=(Uncertain("friction_force_n", "uniform",
                                                        0.0, 0.5),))
-    shallow = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), depth_mm=0.005, **common)
-    deep = DesignOptions("ball", (Variable("gap_mm", 0.05, 1.0),), depth_mm=0.5, **common)
+    gap = (Variable("gap_m", 0.05e-3, 1e-3),)
+    shallow = DesignOptions("ball", gap, depth_m=0.005e-3, **common)
+    deep = DesignOptions("ball", gap, depth_m=0.5e-3, **common)
     for options, p in ((shallow, 0.0), (deep, 1.0)):
-        c = evaluate(spec, options, {"gap_mm": 0.5}, uncertain_samples(options))
+        c = evaluate(spec, options, {"gap_m": 0.5e-3}, uncertain_samples(options))
         assert c.statistic[0] == p and c.error[0] == 0.0
 
 
-def test_min_depth_is_the_lobes_search_of_the_candidate():
+def test_min_depth_is_the_lobes_search_of_the_candidate_to_one_percent():
+    """min_depth runs the lobes' search on its geometric grid (each depth 1 % above the
+    one below), so each speed's limit is bracketed to 1 % of itself, not to a step."""
     spec = published_system_spec()
     options = DesignOptions("tmd", (Variable("tmd_damping_ratio", 0.05, 0.3),),
-                            objective="min_depth", rpms=(1000.0, 1400.0), max_depth_mm=0.4,
-                            depth_step_mm=0.02, duration_s=0.3)
+                            objective="min_depth", rpms=(1000.0, 1400.0), max_depth_m=0.4e-3,
+                            duration_s=0.3)
+    assert options.depth_tolerance == DEPTH_TOLERANCE == 0.01
     values = {"tmd_damping_ratio": 0.02 + 0.03}
     c = evaluate(spec, options, values, uncertain_samples(options))
     system = candidate_system(spec, options, values)
     ds = lobes([Case("tmd", system, "tmd")],
-               LobesOptions((1000.0, 1400.0), "search", "zero", 2e-5, 4e-4, analytic=False),
+               LobesOptions((1000.0, 1400.0), "search", "zero", None, 4e-4, analytic=False,
+                            depth_tolerance=0.01),
                integration=Integration(0.3, 1e-6, "rk4"))
+    assert ds.attrs["depth_grid"].startswith("depth_tolerance = 0.01")
     assert c.statistic[0] == min(float(ds["min_chatter_free_depth_m"].values[0]), 4e-4)
+    limit, first = ds["limit_depth_m"].values[0], ds["first_unstable_depth_m"].values[0]
+    found = np.isfinite(limit)  # a speed may not chatter up to max_depth_m
+    assert found.any() and np.all(first[found] / limit[found] == pytest.approx(1.01, rel=1e-12))
+
+
+def test_the_python_api_is_si_and_its_errors_say_so():
+    """Lengths in m, no mm names; an error names the parameter, value and range in m."""
+    with pytest.raises(ParameterError, match=r"gap_m high = 0.003 m is outside the allowed "
+                                             r"range \(0.0001, 0.002\] m"):
+        Variable("gap_m", 0.1e-3, 3e-3)
+    with pytest.raises(ParameterError, match=r"depth_m = 2.0 m is outside the allowed range "
+                                             r"\(0, 1\] m"):
+        DesignOptions("ball", (Variable("gap_m", 0.1e-3, 0.5e-3),), depth_m=2.0)
+    with pytest.raises(ParameterError, match="depth_tolerance = 0.9"):
+        DesignOptions("ball", (Variable("gap_m", 0.1e-3, 0.5e-3),), depth_tolerance=0.9)
+    with pytest.raises(ParameterError, match="'gap_mm' is not one of gap_m, "):
+        Variable("gap_mm", 0.1, 0.5)
+    with pytest.raises(ParameterError, match="'ball_position_mm' is not one of"):
+        Uncertain("ball_position_mm", "uniform", -0.05, 0.05)
+    with pytest.raises(TypeError, match="depth_mm"):
+        DesignOptions("ball", (Variable("gap_m", 0.1e-3, 0.5e-3),), depth_mm=0.05)
+    with pytest.raises(TypeError, match="depth_step_mm"):
+        DesignOptions("ball", (Variable("gap_m", 0.1e-3, 0.5e-3),), depth_step_mm=0.01)
+
+
+def test_a_design_file_is_in_mm_and_the_options_in_m():
+    """The file's lengths (mm) are converted once, as every input file's; an error about
+    a file's key is in the file's unit."""
+    options, _ = design_from_dict({
+        "design": {"bar": "ball", "depth_mm": 0.02, "max_depth_mm": 0.4,
+                   "depth_tolerance": 0.02},
+        "variables": {"gap_mm": [0.05, 1.0], "ball_diameter_mm": [8.0, 10.0]},
+        "uncertain": {"ball_position_mm": {"normal": [0.0, 0.05]}}})
+    assert options.variables == (Variable("gap_m", 0.05 * 1e-3, 1.0 * 1e-3),
+                                 Variable("ball_diameter_m", 8.0 * 1e-3, 10.0 * 1e-3))
+    assert options.uncertain == (Uncertain("ball_position_m", "normal", 0.0, 0.05 * 1e-3),)
+    assert (options.depth_m, options.max_depth_m, options.depth_tolerance) == (
+        0.02 * 1e-3, 0.4 * 1e-3, 0.02)
+    for patch, words in (
+            ({"variables": {"gap_mm": [0.05, 3.0]}},
+             "key 'variables.gap_mm' = [0.05, 3.0]: gap_mm high = 3.0 mm is outside the "
+             "allowed range (0.05, 2] mm"),
+            ({"design": {"bar": "ball", "depth_mm": 2000.0}},
+             "key 'design.depth_mm' = 2000.0 mm is outside the allowed range (0, 1000] mm"),
+            ({"uncertain": {"ball_position_mm": {"uniform": [0.05, -0.05]}}},
+             "ball_position_mm b = -0.05 is outside the allowed range [0.05, inf)"),
+            ({"variables": {"gap_m": [0.05e-3, 1e-3]}}, "unknown variable; allowed: gap_mm"),
+            ({"design": {"bar": "ball", "depth_step_mm": 0.01}}, "unknown key")):
+        d = {"design": {"bar": "ball"}, "variables": {"gap_mm": [0.05, 1.0]}, **patch}
+        with pytest.raises(DesignFileError) as err:
+            design_from_dict(d, "d.toml")
+        assert words in str(err.value) and "\n" not in str(err.value)
 
 
 def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
@@ -243,11 +303,11 @@ def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
 def test_a_search_that_beat_nothing_says_so():
     """Fewer trials than a search needs can end worse than the file's own design: the
     summary then says no better design was found, and does not call the best tried best."""
-    s = dict(best={"gap_mm": 0.3, "ball": "steel"}, statistic_name="mean",
+    s = dict(best={"gap_m": 0.3e-3, "ball_material": "steel"}, statistic_name="mean",
              objective_name="band RMS", objective=1.2e-4, objective_error=3e-6,
              published_objective=1.0e-4, trials=6)
     worse = summary_line({**s, "improvement_percent": -20.0})
     assert worse.startswith("no design better than the file's own found in 6 trials")
     assert "20.0 % worse" in worse and "best design" not in worse
     assert summary_line({**s, "improvement_percent": 12.0}).startswith(
-        "best design gap_mm = 0.3, ball = steel improves the objective by 12.0 %")
+        "best design gap = 0.3 mm, ball material = steel improves the objective by 12.0 %")

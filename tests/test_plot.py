@@ -92,7 +92,7 @@ def _design_dataset(objectives="rms_band") -> xr.Dataset:
     stat = rng.uniform(2e-4, 4e-4, (5, 1))
     system = {"kind": "ball", "system_file": {"name": "published"}}
     return xr.Dataset(
-        {"gap_mm": ("trial", np.linspace(0.1, 0.9, 5)),
+        {"gap_m": ("trial", np.linspace(0.1e-3, 0.9e-3, 5)),
          "ball_material": ("trial", np.array(["carbide", "steel", "tungsten", "steel",
                                               "carbide"])),
          "statistic": (("trial", "objective"), stat),
@@ -114,6 +114,7 @@ def test_design_figures_are_in_mm():
     assert visible[0].get_ylabel() == "mean of worst tip RMS over the band (mm)"
     best = next(ln for ln in visible[0].get_lines() if ln.get_label() == "best")
     assert best.get_ydata()[0] == pytest.approx(ds["statistic"].values[1, 0] * 1e3)
+    assert best.get_xdata()[0] == pytest.approx(ds["gap_m"].values[1] * 1e3)  # SI data, mm axis
     assert fig._suptitle.get_text().startswith("published bar, paper preset: design search")
     cmp = {"x": np.linspace(0.98, 1.02, 3), "quantity": "rms_tip_m", "force_n": 10.0,
            "bar": "ball", "curves": {"best design": np.array([1e-4, 2e-4, 1e-4]),

@@ -227,8 +227,8 @@ def _in_process(name: str):
                  "run": {"duration_s": 0.05}, "grid": {"rpm": [1000.0, 1200.0]},
                  "analysis": {"depth_step_mm": 0.05, "max_depth_mm": 0.5}},
                 lobes([Case("solid", make_system("solid"), "solid")],
-                      LobesOptions([1000.0, 1200.0], "scan", depth_step_m=0.05e-3,
-                                   max_depth_m=0.5e-3),  # a study's method: the scan
+                      LobesOptions([1000.0, 1200.0], depth_step_m=0.05e-3,
+                                   max_depth_m=0.5e-3),  # the library's method: the search
                       integration=Integration(duration_s=0.05), execution=Execution(workers=1)))
     if name == "bifurcation":
         from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pytest
 
+from boringbar.analysis.lobes import DEPTH_TOLERANCE, PUBLISHED_DEPTH_STEP, default_speeds
 from boringbar.cli.main import main
 from boringbar.studies.load import load_study, study_from_dict
 from boringbar.studies.registry import ANALYSES
@@ -25,10 +26,39 @@ def test_defaults_are_the_published_study():
     assert s.value("force_n") == 10.0 and s.value("dt_s") == 1e-6 and s.value("duration_s") == 2
     assert s.axes["ratio"][0] == 0.95 and s.axes["ratio"][-1] == 1.05 and len(s.axes["ratio"]) == 11
     lobes = study_from_dict({"study": {"analysis": "lobes"}})
-    assert lobes.axes["rpm"] == tuple(900.0 + 50 * i for i in range(15))
-    assert lobes.options["depth_step_mm"] == 0.01 and lobes.options["successive"] == 3
+    assert lobes.options["successive"] == 3  # the published rule; grid and speeds below
     bif = study_from_dict({"study": {"analysis": "bifurcation"}})
     assert bif.options["values"] == tuple(float(v) for v in range(5, 51))
+
+
+def test_lobe_defaults_follow_the_studys_bars_as_the_library_does(tmp_path):
+    """No rpm: the speeds of the study's bars' lobes, as ``lobes`` takes them (not the
+    published bar's 900..1600); no depth step: the search to 1 % on the geometric grid.
+    A depth step given keeps the linear grid; a scan given no step, the published one."""
+    text = (EXAMPLES[0].parent.parent / "systems" / "published.toml").read_text()
+    assert "end_mm = 200.0" in text
+    (tmp_path / "short.toml").write_text(text.replace("end_mm = 200.0", "end_mm = 180.0"))
+    speeds = {}
+    for name, system in (("published", {}), ("short", {"system": str(tmp_path / "short.toml")})):
+        s = study_from_dict({"study": {"analysis": "lobes", **system},
+                             "grid": {"kind": ["solid", "ball"]}})
+        plan = ANALYSES["lobes"].plan(s)
+        o = plan.context["options"]
+        assert s.axes["rpm"] == default_speeds(plan.context["cases"]) == o.rpm
+        assert (o.method, o.depth_step_m, o.depth_tolerance) == ("search", None, DEPTH_TOLERANCE)
+        assert study_from_dict(json.loads(json.dumps(s.to_dict()))).axes == s.axes
+        speeds[name] = s.axes["rpm"]
+    assert speeds["short"][0] > speeds["published"][0]  # a stiffer bar: faster lobes
+    assert speeds["published"] != tuple(900.0 + 50 * i for i in range(15))
+    linear = ANALYSES["lobes"].plan(study_from_dict({"study": {"analysis": "lobes"},
+                                                     "analysis": {"depth_step_mm": 0.02}}))
+    assert linear.context["options"].depth_step_m == 0.02 * 1e-3
+    scan = ANALYSES["lobes"].plan(study_from_dict({"study": {"analysis": "lobes"},
+                                                   "analysis": {"method": "scan"}}))
+    assert scan.context["options"].depth_step_m == PUBLISHED_DEPTH_STEP
+    rpm = [900.0 + 50 * i for i in range(15)]
+    assert study_from_dict({"study": {"analysis": "lobes"},
+                            "grid": {"rpm": rpm}}).axes["rpm"] == tuple(rpm)
 
 
 def test_grid_forms_and_case_collapse():

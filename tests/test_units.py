@@ -18,8 +18,9 @@ import numpy as np
 import xarray as xr
 
 import boringbar as bb
-from boringbar.analysis import basins, bifurcation, continuation, lobes, sensitivity, sweep
-from boringbar.vocabulary import unit_of
+from boringbar.analysis import basins, bifurcation, continuation, design, lobes, sensitivity, sweep
+from boringbar.analysis.design_options import UNCERTAIN, VARIABLES
+from boringbar.vocabulary import FILE_UNITS, unit_of
 
 #: An annotation that says "a number" (or numbers): such a name must carry a unit.
 NUMERIC = re.compile(r"\b(float|int|complex|ndarray|ArrayLike)\b")
@@ -107,15 +108,36 @@ def _dataset_names(where: str, ds) -> list[tuple[str, str]]:
             if var.dtype.kind in "iufcm"]
 
 
+def _design_names() -> list[tuple[str, str]]:
+    """(where, name) of the design search's variables and uncertain parameters: names
+    the Python API takes as strings (``Variable("gap_m", ...)``)."""
+    return ([(f"VARIABLES[{n!r}]", n) for n, (_, unit, _, _) in VARIABLES.items() if unit]
+            + [(f"UNCERTAIN[{n!r}]", n) for n in UNCERTAIN])
+
+
 def _missing(found: list[tuple[str, str]]) -> list[str]:
     return sorted({where for where, name in found if unit_of(name) is None})
 
 
+def _not_si(found: list[tuple[str, str]]) -> list[str]:
+    """Where a name carries a unit of the input files and the command line (mm, MPa,
+    g): the Python API is SI."""
+    return sorted({where for where, name in found if unit_of(name) in FILE_UNITS})
+
+
 def test_every_public_argument_and_field_says_its_unit():
-    found = _api_names()
+    found = _api_names() + _design_names()
     assert len(found) > 150  # the walk reaches the API
+    assert ("DesignOptions.depth_m", "depth_m") in found
     missing = _missing(found)
     assert not missing, f"numbers without a unit in their name: {missing}"
+
+
+def test_the_python_api_is_si():
+    """mm, MPa and g are for the files a user writes and the command line; every name
+    of the Python API, the design search's variables included, is SI."""
+    not_si = _not_si(_api_names() + _design_names())
+    assert not not_si, f"names in a file's unit, not SI: {not_si}"
 
 
 def test_a_run_says_the_unit_of_every_number_it_reports():
@@ -152,14 +174,23 @@ def _tiny_analyses():
         solid, bb.Harmonic(10.0, 0.9),
         options=bb.ContinuationOptions(parameter="ratio", stop=0.95, max_points=4, seeds=0,
                                        switch=False))
+    yield "design", design, bb.design(bb.DesignOptions(
+        "ball", (bb.Variable("gap_m", 0.1e-3, 0.5e-3), bb.Variable("ball_diameter_m", 8e-3, 10e-3),
+                 bb.Variable("ball_material", choices=("carbide", "steel"))),
+        ratios=(1.0,), duration_s=0.02, trials=2, samples=2,
+        uncertain=(bb.Uncertain("ball_position_m", "uniform", -0.05e-3, 0.05e-3),)))
 
 
 def test_every_analysis_says_the_unit_of_its_variables_and_summary():
     found = []
     for name, module, ds in _tiny_analyses():
         found += _dataset_names(name, ds) + _keys(f"{name} summary", module.summary(ds))
+    assert ("design.gap_m", "gap_m") in found and ("design.ball_diameter_m",
+                                                   "ball_diameter_m") in found
     missing = _missing(found)
     assert not missing, f"numbers without a unit in their name: {missing}"
+    not_si = _not_si(found)
+    assert not not_si, f"names in a file's unit, not SI: {not_si}"
 
 
 def test_the_walk_fails_on_a_quantity_without_a_unit():
@@ -170,6 +201,10 @@ def test_the_walk_fails_on_a_quantity_without_a_unit():
         "lobes.limit_depth", "make_system(gap)", "simulate(duration)"]
     assert _missing([("a", "gap_m"), ("b", "ratio"), ("c", "n_modes"), ("d", "rpm"),
                      ("e", "stiffness_n_m"), ("f", "values")]) == []
+    # mm (and MPa, g) name a file's key or a flag, never a name of the Python API
+    assert _not_si([("DesignOptions.depth_mm", "depth_mm"), ("Variable", "gap_m"),
+                    ("LobesOptions.kr_mpa", "kr_mpa"), ("design.gap_mm", "gap_mm")]) == [
+        "DesignOptions.depth_mm", "LobesOptions.kr_mpa", "design.gap_mm"]
 
     @dataclasses.dataclass(frozen=True)
     class OldOptions:

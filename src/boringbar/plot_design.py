@@ -2,7 +2,7 @@
 the best design beside the published one (the edge of the package, as plot.py).
 
 Lengths are drawn in mm and receptances in um/N, like every other figure, though the
-design files keep SI units."""
+design Dataset holds SI units."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter
 
-from boringbar.analysis.design_options import VARIABLES
+from boringbar.analysis.design_options import reading
 from boringbar.plot_style import (
     BAR_STYLE,
     COLUMN_WIDTH_IN,
@@ -45,13 +45,13 @@ def objective_axis(attrs: dict, objective: str) -> tuple[str, float]:
     return f"{statistic} of {words} ({unit})", k
 
 
-def variable_label(name: str) -> str:
-    """'gap_mm' -> 'gap (mm)', 'tmd_frequency_ratio' -> 'TMD frequency ratio', from the
-    unit :data:`~boringbar.analysis.design_options.VARIABLES` gives it."""
-    unit = VARIABLES.get(name, ((), ""))[1]
-    words = name.removesuffix(f"_{unit}") if unit else name
-    words = words.replace("_", " ").replace("tmd", "TMD")
-    return f"{words} ({unit})" if unit else words
+def variable_axis(name: str) -> tuple[str, float]:
+    """The axis label of a design variable and its factor from SI: 'gap_m' -> ('gap
+    (mm)', 1e3), 'tmd_frequency_ratio' -> ('TMD frequency ratio', 1.0)
+    (:func:`~boringbar.analysis.design_options.reading`)."""
+    words, unit, factor = reading(name)
+    words = words.replace("tmd", "TMD")
+    return (f"{words} ({unit})" if unit else words), factor
 
 
 # --- design search -------------------------------------------------------------------------
@@ -77,7 +77,8 @@ def plot_design(ds, *, fig=None) -> Figure:
     for ax, name in zip(axes, names, strict=False):
         x = ds[name].values
         numeric = np.issubdtype(x.dtype, np.number)
-        xs = x if numeric else np.searchsorted(np.unique(x), x)
+        xlabel, kx = variable_axis(name)
+        xs = x * kx if numeric else np.searchsorted(np.unique(x), x)
         ax.errorbar(xs, stat, yerr=ds["error"].values[:, 0] * k, fmt="o", ms=3.5, alpha=0.7,
                     lw=0.8, color=GREY, label="trials")
         ax.plot([xs[best]], [stat[best]], "*", color=colour, mec="black", mew=0.6, ms=15,
@@ -86,7 +87,7 @@ def plot_design(ds, *, fig=None) -> Figure:
                    ls="--", lw=1, label="file's design")
         if not numeric:
             ax.set_xticks(range(len(np.unique(x))), np.unique(x))
-        ax.set_xlabel(variable_label(name))
+        ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize="small")

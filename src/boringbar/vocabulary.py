@@ -2,13 +2,13 @@
 
 One vocabulary for arguments, options and description fields, Dataset variables and
 coordinates, and JSON keys: SI throughout (``duration_s``, ``gap_m``, ``force_n``,
-``limit_depth_m``), the command line alone taking mm and MPa for input
-(``--gap-mm``).  A name is a quantity with its unit when it ends in one of
-:data:`UNIT_SUFFIXES`; a name for which no unit makes sense is listed in
-:data:`DIMENSIONLESS` (or has one of the forms of :data:`DIMENSIONLESS_PREFIXES` and
-:data:`DIMENSIONLESS_ENDINGS`); a number whose unit is named by a sibling field is in
-:data:`UNIT_ELSEWHERE`.  tests/test_units.py walks the public API and each analysis's
-Dataset and summary against these lists.
+``limit_depth_m``), the command line and the files a user writes alone taking mm and
+MPa (:data:`FILE_UNITS`: ``--gap-mm``, a design file's ``gap_mm``).  A name is a
+quantity with its unit when it ends in one of :data:`UNIT_SUFFIXES`; a name for which
+no unit makes sense is listed in :data:`DIMENSIONLESS` (or has one of the forms of
+:data:`DIMENSIONLESS_PREFIXES` and :data:`DIMENSIONLESS_ENDINGS`); a number whose unit
+is named by a sibling field is in :data:`UNIT_ELSEWHERE`.  tests/test_units.py walks
+the public API and each analysis's Dataset and summary against these lists.
 """
 
 from __future__ import annotations
@@ -38,6 +38,10 @@ UNIT_SUFFIXES = {
     "_j": "J",
     "_w": "W",
 }
+
+#: The units of the files a user writes and of the command line's flags (``gap_mm``,
+#: ``--kr-mpa``, a ball's ``mass_g``), never of a name of the Python API.
+FILE_UNITS = frozenset({"mm", "MPa", "g"})
 
 #: Bare unit names that are quantities themselves (a speed given as ``rpm``).
 UNIT_NAMES = {"rpm": "rev/min", "rpms": "rev/min"}
@@ -72,7 +76,7 @@ DIMENSIONLESS = frozenset({
 DIMENSIONLESS_PREFIXES = ("n_", "is_", "max_index")
 #: Endings of dimensionless names (``mass_ratio``, ``steady_fraction``, ``k_count``).
 DIMENSIONLESS_ENDINGS = ("_ratio", "_ratios", "_fraction", "_count", "_index", "_number",
-                         "_id", "_periods", "_relative")
+                         "_id", "_periods", "_relative", "_percent")
 
 #: Numbers whose unit a sibling names: a sweep's ``values`` (``parameter``, and
 #: ``units`` for a factory), a friction law's ``value`` (its ``kind``: m, 1 or N), a
@@ -86,6 +90,8 @@ UNIT_ELSEWHERE = frozenset({
     "forward", "backward",
     # records whose columns the docstring names (time s, W m, ...)
     "impacts", "sticks", "strobe", "history",
+    # a design search's statistic, in its objective's unit (``objective_name``: m, m/N, 1)
+    "objective_error", "published_objective", "objectives", "published_objectives",
 })
 
 

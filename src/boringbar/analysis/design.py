@@ -32,7 +32,12 @@ import xarray as xr
 
 from boringbar._validate import ParameterError
 from boringbar.analysis.design_objectives import objective_samples, rms_runs, statistic
-from boringbar.analysis.design_options import DesignOptions, sampled_system, uncertain_samples
+from boringbar.analysis.design_options import (
+    DesignOptions,
+    sampled_system,
+    shown,
+    uncertain_samples,
+)
 from boringbar.execute import Execution, run_points
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system, published_system_spec
@@ -58,17 +63,17 @@ class Candidate:
 # --- building a candidate's system ---------------------------------------------------
 def candidate_system(spec: SystemSpec, options: DesignOptions, values: dict) -> System:
     """The system of the design ``values`` on the bar of ``spec``."""
-    data = spec.to_dict()
-    if "ball_diameter_mm" in values:
-        data["ball"]["diameter_mm"] = float(values["ball_diameter_mm"])
+    data = spec.to_dict()  # a system file's description: lengths in mm
+    if "ball_diameter_m" in values:
+        data["ball"]["diameter_mm"] = float(values["ball_diameter_m"]) * 1e3
         data["ball"].pop("mass_g", None)
-    if "cavity_position_mm" in values:
-        data = cavity_moved(data, float(values["cavity_position_mm"]))
-    if "ball_diameter_mm" in values or "cavity_position_mm" in values:
+    if "cavity_position_m" in values:
+        data = cavity_moved(data, float(values["cavity_position_m"]) * 1e3)
+    if "ball_diameter_m" in values or "cavity_position_m" in values:
         spec = parse_system(data, f"{spec.source} (design)")
     kw = {}
-    if "gap_mm" in values:
-        kw["gap_m"] = float(values["gap_mm"]) * 1e-3
+    if "gap_m" in values:
+        kw["gap_m"] = float(values["gap_m"])
     if "ball_material" in values:
         kw["ball"] = values["ball_material"]
     if "restitution" in values:
@@ -228,8 +233,8 @@ def _published_candidate(spec, options, samples, execution) -> Candidate:
     system = make_system(options.bar, options.preset, spec=spec)
     values = {}
     for v in options.variables:
-        if v.name == "gap_mm":
-            values[v.name] = system.damper.gap_m * 1e3
+        if v.name == "gap_m":
+            values[v.name] = system.damper.gap_m
         elif v.name == "ball_material":
             values[v.name] = system.damper.material
     return evaluate(spec, options, values, samples, execution)
@@ -345,8 +350,7 @@ def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21
 def summary_line(s: dict) -> str:
     """'best design X improves the objective by Y % over the file's own design', or, when
     no trial beat it, 'no design better than the file's own found in N trials'."""
-    best = ", ".join(f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
-                     for k, v in s["best"].items())
+    best = ", ".join(shown(k, v) for k, v in s["best"].items())
     gain = s["improvement_percent"]
     numbers = (f"({s['statistic_name']} of {s['objective_name']}: {s['objective']:.4g} +- "
                f"{s['objective_error']:.2g} against {s['published_objective']:.4g}; "

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from boringbar.analysis.design_options import DesignOptions
-from boringbar.analysis.lobes import LobesOptions, lobes
+from boringbar.analysis.lobes import lobes
 from boringbar.analysis.sweep import Case
 from boringbar.execute import Execution, run_points
 from boringbar.model.forcing import Harmonic, Regenerative
@@ -46,17 +46,14 @@ def _cut(task) -> tuple[float, bool]:
 
 
 def _min_depth(task) -> float:
-    """The minimum chatter-free depth (m) over the speeds, by bisection per speed, at
-    most ``max_depth_mm``."""
+    """The minimum chatter-free depth (m) over the speeds, each speed's limit found by
+    the lobes' search (:meth:`DesignOptions.lobes_options`), at most ``max_depth_m``."""
     system, options = task
-    lo = LobesOptions(tuple(float(r) for r in options.rpms), "search", options.criterion,
-                      options.depth_step_mm * 1e-3, options.max_depth_mm * 1e-3,
-                      analytic=False)
-    ds = lobes([Case.of(system, "design")], lo,
+    ds = lobes([Case.of(system, "design")], options.lobes_options(),
                integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
                execution=Execution("serial"))
-    # no chatter up to max_depth_mm at any speed: the search knows only "at least that"
-    return min(float(ds["min_chatter_free_depth_m"].values[0]), options.max_depth_mm * 1e-3)
+    # no chatter up to max_depth_m at any speed: the search knows only "at least that"
+    return min(float(ds["min_chatter_free_depth_m"].values[0]), options.max_depth_m)
 
 
 def frf_objective(system: System, objective: str) -> float:
@@ -82,7 +79,7 @@ def objective_samples(options: DesignOptions, objective: str,
         rms = np.array(run_points(rms_runs, tasks, execution=execution))
         return (rms.max(axis=1) if options.band == "worst" else rms.mean(axis=1)), None
     if objective == "cut_amplitude":
-        tasks = [(s, options.rpm, options.depth_mm * 1e-3, options.duration_s)
+        tasks = [(s, options.rpm, options.depth_m, options.duration_s)
                  for s, _ in sampled]
         out = run_points(_cut, tasks, execution=execution)
         return np.array([a for a, _ in out]), np.array([c for _, c in out])

@@ -10,7 +10,9 @@ import numpy as np
 import scipy.special
 
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
+from boringbar.analysis.lobes import DEPTH_FLOOR, DEPTH_TOLERANCE, LobesOptions, check_speeds
 from boringbar.model.dampers import MAX_GAP
+from boringbar.model.forcing import MAX_DEPTH
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system import System
 from boringbar.simulate import Initial
@@ -25,26 +27,83 @@ BAND_REDUCTIONS = ("worst", "mean")
 STATISTICS = ("mean", "quantile", "max", "chatter_probability")
 SAMPLERS = ("tpe", "cmaes", "nsga2")
 CRITERIA = ("zero", "bounded")
-#: variable -> (bars it applies to, unit, lowest allowed, highest allowed)
+#: variable -> (bars it applies to, unit, lowest allowed, highest allowed), SI
 VARIABLES = {
-    "gap_mm": (("ball",), "mm", 0.0, MAX_GAP * 1e3),
+    "gap_m": (("ball",), "m", 0.0, MAX_GAP),
     "ball_material": (("ball",), "", None, None),
-    "ball_diameter_mm": (("ball",), "mm", 1.0, 100.0),
-    "cavity_position_mm": (("ball",), "mm", 0.0, math.inf),
+    "ball_diameter_m": (("ball",), "m", 1e-3, 0.1),
+    "cavity_position_m": (("ball",), "m", 0.0, math.inf),
     "restitution": (("ball",), "", 0.0, 1.0),
     "tmd_mass_kg": (("tmd",), "kg", 0.0, 100.0),
     "tmd_frequency_ratio": (("tmd",), "", 0.1, 10.0),
     "tmd_damping_ratio": (("tmd",), "", 0.0, 2.0),
 }
-UNCERTAIN = ("friction_force_n", "friction_number", "restitution", "ball_position_mm",
+UNCERTAIN = ("friction_force_n", "friction_number", "restitution", "ball_position_m",
              "ball_velocity_m_s", "damping_ratio")
 DISTRIBUTIONS = ("uniform", "normal")
+#: The unit a person reads a quantity of an SI unit in (figures, summary lines, the
+#: report): lengths in mm, as the design files give them; factor from SI.
+READ_AS = {"m": ("mm", 1e3)}
+
+
+def reading(name: str) -> tuple[str, str, float]:
+    """A design variable as a person reads it: (words, unit, factor from SI), e.g.
+    "gap_m" -> ("gap", "mm", 1e3), "tmd_mass_kg" -> ("tmd mass", "kg", 1.0),
+    "ball_material" -> ("ball material", "", 1.0)."""
+    unit = VARIABLES[name][1] if name in VARIABLES else ""
+    words = (name.removesuffix(f"_{unit}") if unit else name).replace("_", " ")
+    shown, factor = READ_AS.get(unit, (unit, 1.0))
+    return words, shown, factor
+
+
+def shown(name: str, value) -> str:
+    """'gap = 0.381 mm', 'ball material = tungsten': a variable's value as a person
+    reads it (:func:`reading`)."""
+    words, unit, factor = reading(name)
+    if isinstance(value, str):
+        return f"{words} = {value}"
+    return f"{words} = {value * factor:.4g}" + (f" {unit}" if unit else "")
+
+
+#: The options' lengths (m): name -> (lowest, highest, lowest excluded).  min_depth's
+#: lobe search checks max_depth_m against its depth grid besides (LobesOptions).
+LENGTHS = {"depth_m": (0.0, MAX_DEPTH, True), "max_depth_m": (DEPTH_FLOOR, MAX_DEPTH, False)}
+
+
+def check_length(label: str, name: str, value, scale: float = 1.0, unit: str = "m") -> float:
+    """The option length ``name`` (:data:`LENGTHS`) within its range; ``label``, ``value``
+    and ``unit`` as the user gave it, ``scale`` times its SI value (a file's mm: 1e3)."""
+    lo, hi, lo_open = LENGTHS[name]
+    return check_range(label, value, lo * scale, hi * scale, lo_open=lo_open, unit=unit)
+
+
+def check_bounds(label: str, name: str, low, high, scale: float = 1.0,
+                 unit: str | None = None) -> None:
+    """The range ``low``-``high`` of the variable ``name`` within its allowed one
+    (:data:`VARIABLES`); ``label``, the bounds and ``unit`` (default: the variable's) as
+    the user gave them, ``scale`` times SI (a file's mm: 1e3)."""
+    _, si_unit, lo, hi = VARIABLES[name]
+    unit = si_unit if unit is None else unit
+    check_range(f"{label} low", low, lo * scale, hi * scale, unit=unit)
+    check_range(f"{label} high", high, low, hi * scale, lo_open=True, unit=unit)
+
+
+def check_distribution(label: str, distribution: str, a, b) -> None:
+    """``distribution`` one of :data:`DISTRIBUTIONS`, with finite ``a`` and ``b`` >= a
+    (uniform) or a standard deviation ``b`` >= 0 (normal), in any one unit."""
+    check_choice(f"{label} distribution", distribution, DISTRIBUTIONS)
+    check_range(f"{label} a", a, -math.inf, math.inf, lo_open=True, hi_open=True)
+    if distribution == "uniform":
+        check_range(f"{label} b", b, a, math.inf, hi_open=True)
+    else:
+        check_range(f"{label} standard deviation", b, 0.0, math.inf, hi_open=True)
 
 
 @dataclass(frozen=True)
 class Variable:
     """A design variable: ``name`` (one of :data:`VARIABLES`), its range
-    ``low``-``high`` (units as in the name), or ``choices`` (ball_material)."""
+    ``low``-``high`` (SI, units as in the name: ``Variable("gap_m", 0.1e-3, 0.5e-3)``),
+    or ``choices`` (ball_material)."""
 
     name: str
     low: float | None = None
@@ -53,20 +112,18 @@ class Variable:
 
     def __post_init__(self):
         check_choice("design variable", self.name, tuple(VARIABLES))
-        _, unit, lo, hi = VARIABLES[self.name]
         if self.name == "ball_material":
             if not self.choices:
                 raise ParameterError("ball_material needs choices, e.g. ['carbide', 'steel']")
             for c in self.choices:
                 check_choice("ball_material choice", c, tuple(MATERIALS))
             return
-        check_range(f"{self.name} low", self.low, lo, hi, unit=unit)
-        check_range(f"{self.name} high", self.high, self.low, hi, lo_open=True, unit=unit)
+        check_bounds(self.name, self.name, self.low, self.high)
 
 
 @dataclass(frozen=True)
 class Uncertain:
-    """An uncertain parameter ``name`` (one of :data:`UNCERTAIN`) and its
+    """An uncertain parameter ``name`` (one of :data:`UNCERTAIN`, SI) and its
     ``distribution``: ``uniform`` on [a, b], or ``normal`` with mean a and standard
     deviation b (0: fixed at a)."""
 
@@ -77,13 +134,7 @@ class Uncertain:
 
     def __post_init__(self):
         check_choice("uncertain parameter", self.name, UNCERTAIN)
-        check_choice(f"{self.name} distribution", self.distribution, DISTRIBUTIONS)
-        check_range(f"{self.name} a", self.a, -math.inf, math.inf, lo_open=True, hi_open=True)
-        if self.distribution == "uniform":
-            check_range(f"{self.name} b", self.b, self.a, math.inf, hi_open=True)
-        else:
-            check_range(f"{self.name} standard deviation", self.b, 0.0, math.inf,
-                        hi_open=True)
+        check_distribution(self.name, self.distribution, self.a, self.b)
 
     def draw(self, u: np.ndarray) -> np.ndarray:
         """Values for the standard samples ``u`` (uniform on (0, 1))."""
@@ -101,11 +152,12 @@ class DesignOptions:
     (:data:`SAMPLERS`; several objectives take nsga2) with ``seed``.
 
     rms_band: the tip RMS over ``ratios`` x ``forces_n``, its ``band`` worst or
-    mean. cut_amplitude: the steady amplitude of a cut at ``rpm`` and
-    ``depth_mm``. min_depth: the minimum chatter-free depth over ``rpms`` (a
-    bisection of each speed's limit up to ``max_depth_mm`` in ``depth_step_mm``,
-    by ``criterion``: "zero", the force reaches zero, or "bounded"). Runs last
-    ``duration_s`` with ``integrator`` (a cut takes rk4); ``preset``."""
+    mean. cut_amplitude: the steady amplitude of a cut at ``rpm`` and ``depth_m``
+    (m). min_depth: the minimum chatter-free depth over ``rpms``, each speed's limit
+    found by the lobes' search up to ``max_depth_m`` (m) to ``depth_tolerance`` of
+    itself (:meth:`lobes_options`), by ``criterion``: "zero", the force reaches zero,
+    or "bounded". Runs last ``duration_s`` with ``integrator`` (a cut takes rk4);
+    ``preset``. Every quantity is SI (design files take mm: docs/design.md)."""
 
     bar: str
     variables: tuple[Variable, ...]
@@ -114,10 +166,10 @@ class DesignOptions:
     ratios: tuple[float, ...] = (0.95, 1.0, 1.05)
     forces_n: tuple[float, ...] = (10.0,)
     rpm: float = 1200.0
-    depth_mm: float = 0.05
+    depth_m: float = 0.05e-3
     rpms: tuple[float, ...] = (900.0, 1200.0, 1500.0)
-    max_depth_mm: float = 1.0
-    depth_step_mm: float = 0.01
+    max_depth_m: float = 1e-3
+    depth_tolerance: float = DEPTH_TOLERANCE
     criterion: str = "zero"
     uncertain: tuple[Uncertain, ...] = ()
     samples: int = 1
@@ -150,7 +202,7 @@ class DesignOptions:
         check_choice("criterion", self.criterion, CRITERIA)
         if self.statistic == "chatter_probability" and objectives != ("cut_amplitude",):
             raise ParameterError("statistic = 'chatter_probability' goes with objective "
-                                 "'cut_amplitude' (the cut at rpm, depth_mm) alone")
+                                 "'cut_amplitude' (the cut at rpm, depth_m) alone")
         if len(objectives) > 1 and self.sampler != "nsga2":
             raise ParameterError(f"{len(objectives)} objectives are a Pareto search: "
                                  "sampler = 'nsga2'")
@@ -159,19 +211,26 @@ class DesignOptions:
         check_int("seed", self.seed, 0, 2**31 - 1)
         check_range("quantile", self.quantile, 0.0, 1.0, lo_open=True, hi_open=True)
         check_range("rpm", self.rpm, 0.0, 1e5, lo_open=True, unit="rev/min")
-        check_range("depth_mm", self.depth_mm, 0.0, 100.0, lo_open=True, unit="mm")
-        check_range("max_depth_mm", self.max_depth_mm, 0.0, 100.0, lo_open=True, unit="mm")
-        check_range("depth_step_mm", self.depth_step_mm, 0.0, self.max_depth_mm, lo_open=True,
-                    unit="mm")
+        check_length("depth_m", "depth_m", self.depth_m)
+        check_length("max_depth_m", "max_depth_m", self.max_depth_m)
         check_range("duration_s", self.duration_s, 0.0, 100.0, lo_open=True, unit="s")
-        for r in self.rpms:
-            check_range("rpms", r, 0.0, 1e5, lo_open=True, unit="rev/min")
+        check_speeds("rpms", self.rpms)
+        self.lobes_options()  # the search's grid: depth_tolerance, and depths up to max_depth_m
         if not self.variables:
             raise ParameterError("a design study needs at least one variable")
         for v in self.variables:
             if self.bar not in VARIABLES[v.name][0]:
                 raise ParameterError(f"variable {v.name!r} applies to a "
                                      f"{VARIABLES[v.name][0][0]} bar, not bar = {self.bar!r}")
+
+    def lobes_options(self) -> LobesOptions:
+        """min_depth's lobe search: at each of ``rpms``, bisection on the lobes' geometric
+        depth grid (each depth ``depth_tolerance`` above the one below, from
+        :data:`~boringbar.analysis.lobes.DEPTH_FLOOR`) up to ``max_depth_m``, seeded at the
+        analytic limit, by ``criterion``, with the published cut."""
+        return LobesOptions(tuple(float(r) for r in self.rpms), "search", self.criterion,
+                            None, self.max_depth_m, analytic=False,
+                            depth_tolerance=self.depth_tolerance)
 
     @property
     def objectives(self) -> tuple[str, ...]:
@@ -205,9 +264,9 @@ def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
             d = replace(d, restitution=float(np.clip(v, 0.0, 1.0)))
         elif name == "damping_ratio":
             bar = replace(bar, damping_ratio=np.full(bar.n_modes, float(np.clip(v, 0.0, 0.99))))
-        elif name == "ball_position_mm":
+        elif name == "ball_position_m":
             half = d.gap_m / 2
-            ini["ball_position_m"] = float(np.clip(v * 1e-3, -half, half))
+            ini["ball_position_m"] = float(np.clip(v, -half, half))
         elif name == "ball_velocity_m_s":
             ini["ball_velocity_m_s"] = float(v)
     return replace(system, bar=bar, damper=d), Initial(**ini)

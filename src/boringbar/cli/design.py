@@ -21,7 +21,8 @@ def add_design(sub) -> None:
                                    "statistic. Writes DIR/design.nc, DIR/trials.csv, "
                                    "DIR/design.png, DIR/best.png and DIR/design.db (the "
                                    "trials: a rerun resumes).")
-    p.add_argument("file", metavar="FILE.toml", help="the design file")
+    p.add_argument("file", metavar="FILE.toml",
+                   help="the design file (lengths in mm: gap_mm, depth_mm, ...)")
     p.add_argument("--trials", type=int, metavar="N", help="override the file's trials")
     p.add_argument("--preset", choices=PRESETS, help="override the file's preset")
     p.add_argument("--workers", type=int, metavar="N", help="threads (default: every core)")

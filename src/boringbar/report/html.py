@@ -30,6 +30,7 @@ import numpy as np
 import xarray as xr
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
+from boringbar.analysis.design_options import reading
 from boringbar.io import atomic_path
 from boringbar.report.audit import audit
 from boringbar.report.audit_data import TOLERANCE, VERDICTS
@@ -223,7 +224,7 @@ class _Report:
         def body(preset, rec, key):
             s = rec["summary"]
             pub = json.loads(_load(s["files"]["netcdf"]).attrs["published_values"])
-            rows = [[k, _fmt(v), _fmt(pub.get(k, "-"))] for k, v in s["best"].items()]
+            rows = [_design_row(k, v, pub.get(k, "-")) for k, v in s["best"].items()]
             rows.append([f"{s['statistic_name']} of {s['objective_name']}",
                          f"{s['objective']:.4g}", f"{s['published_objective']:.4g}"])
             if "pareto" in s:
@@ -510,6 +511,14 @@ def _stop_facts(stops: list[str]) -> dict:
 
 def _fmt(v) -> str:
     return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _design_row(name: str, best, published) -> list[str]:
+    """A design variable's row: its name and unit as a person reads them (lengths in
+    mm), the best design's value and the published one's."""
+    words, unit, factor = reading(name)
+    return [f"{words} ({unit})" if unit else words,
+            *(_fmt(v * factor if isinstance(v, float) else v) for v in (best, published))]
 
 
 def _nearest(values: list, target: float) -> int:

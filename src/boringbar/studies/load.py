@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 from boringbar._validate import ParameterError, read_toml
@@ -49,13 +50,14 @@ def study_from_dict(d: dict, source: str = "<dict>") -> Study:
         _system_defaults(resolved, system, given)
     analysis = _analysis(study, resolved, source, fail)
     options = _options(d.get("analysis", {}), analysis, fail)
-    axes = _axes(d, analysis, resolved, options, given, fail)
+    axes = _axes(d, analysis, given, fail)
     name = study["name"] or (Path(source).stem if source not in ("<dict>", "") else "study")
     result = Study(analysis=analysis.name, name=name, preset=study["preset"],
                    settings=resolved, options=options, axes=axes, source=source,
                    out=study["out"], format=study["format"], given=frozenset(given),
                    system=system)
     try:
+        result = _with_default_axes(result, analysis, fail)
         analysis.check(result)
     except StudyError:
         raise
@@ -146,7 +148,7 @@ def _options(table: dict, analysis, fail) -> dict:
             fail(f"analysis.{k}", v, f"unknown key for a {analysis.name} study; allowed: "
                  f"{allowed}")
     for k, spec in analysis.options.items():
-        if k in table:
+        if table.get(k) is not None:  # None (JSON null): unset, as a configuration keeps it
             try:
                 options[k] = spec.check(table[k])
             except ValueError as exc:
@@ -156,9 +158,8 @@ def _options(table: dict, analysis, fail) -> dict:
     return options
 
 
-def _axes(d: dict, analysis, resolved: dict, options: dict, given: set, fail) -> dict:
-    """The ``[grid]`` axes, checked, then the analysis's default axes for keys not given;
-    at most :data:`MAX_POINTS` points in all."""
+def _axes(d: dict, analysis, given: set, fail) -> dict:
+    """The ``[grid]`` axes, checked (their keys go into ``given``)."""
     axes = {}
     for k, v in d.get("grid", {}).items():
         if k not in SECTION_OF:
@@ -171,14 +172,22 @@ def _axes(d: dict, analysis, resolved: dict, options: dict, given: set, fail) ->
             fail(f"grid.{k}", v, f"also set in [{SECTION_OF[k]}]; give it in one place")
         axes[k] = tuple(_axis_values(v, SETTINGS[SECTION_OF[k]][k], f"grid.{k}", fail))
         given.add(k)
-    for k, values in analysis.default_axes(resolved, options).items():
-        if k not in given:
+    return axes
+
+
+def _with_default_axes(study: Study, analysis, fail) -> Study:
+    """``study`` with the analysis's default axes (of the study's bars: the lobes'
+    speeds) for the keys it set neither in a section nor in ``[grid]``; at most
+    :data:`MAX_POINTS` points in all."""
+    axes = dict(study.axes)
+    for k, values in analysis.default_axes(study).items():
+        if k not in study.given:
             axes[k] = tuple(values)
     points = math.prod(len(v) for v in axes.values())
     if points > MAX_POINTS:
         fail("grid", {k: f"{len(v)} values" for k, v in axes.items()},
              f"{points} grid points; the allowed maximum is {MAX_POINTS}")
-    return axes
+    return replace(study, axes=axes)
 
 
 def _axis_values(v, spec: Setting, key: str, fail) -> list:

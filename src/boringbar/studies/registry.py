@@ -51,7 +51,7 @@ from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
 from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
-from boringbar.model.forcing import Harmonic
+from boringbar.model.forcing import MAX_DEPTH, Harmonic
 from boringbar.model.system import make_system
 from boringbar.simulate import (
     INTEGRATOR_CHOICES,
@@ -144,8 +144,9 @@ class Analysis:
     options: dict = {}
     grid_keys: tuple = ()
 
-    def default_axes(self, settings: dict, options: dict) -> dict:
-        """Axes (key -> values) used when the study sets neither the key nor its axis."""
+    def default_axes(self, study: Study) -> dict:
+        """Axes (key -> values) used when the study sets neither the key nor its axis;
+        ``study`` is the file's, with its own axes only."""
         return {}
 
     def check(self, study: Study) -> None:
@@ -316,7 +317,7 @@ class Sweep(Analysis):
     options = {"batch": Setting("int", sweep_mod.BATCH, 1, sweep_mod.BATCH)}
     grid_keys = SYSTEM_KEYS + ("force_n", "ratio")
 
-    def default_axes(self, settings, options):
+    def default_axes(self, study):
         return {"ratio": [round(0.95 + 0.01 * i, 12) for i in range(11)]}
 
     def plan(self, study):
@@ -336,45 +337,62 @@ class Sweep(Analysis):
 # --- lobes ------------------------------------------------------------------------
 
 class Lobes(Analysis):
-    """Stability lobes: every verdict of every (case, rpm) column."""
+    """Stability lobes: every verdict of every (case, rpm) column.  The defaults are the
+    library's (:class:`~boringbar.analysis.lobes.LobesOptions`): the speeds of the study's
+    bars' lobes, the search to 1 % on the geometric depth grid (a scan, or a given
+    ``depth_step_mm``: the linear grid)."""
 
     name = "lobes"
     module = lobes_mod
     options = {
-        "method": Setting("str", "scan", choices=("scan", "search")),
-        "criterion": Setting("str", "zero", choices=("zero", "bounded")),
-        "depth_step_mm": Setting("float", 0.01, 0.0, 1.0, True),
-        "max_depth_mm": Setting("float", 3.0, 0.0, 1000.0, True),
+        "method": Setting("str", "search", choices=lobes_mod.METHODS),
+        "criterion": Setting("str", "zero", choices=lobes_mod.CRITERIA),
+        "depth_step_mm": Setting("float", None, 0.0, 1.0, True,
+                                 doc="a linear grid; default: none (the search's geometric "
+                                     "grid, a scan's 0.01)"),
+        "depth_tolerance": Setting("float", None, 0.0, 0.5, True,
+                                   doc="the geometric grid's ratio; default 0.01"),
+        "max_depth_mm": Setting("float", 3.0, 0.0, MAX_DEPTH * 1e3, True),
         "successive": Setting("int", 3, 1, 100),
         "analytic": Setting("bool", True),
     }
     grid_keys = SYSTEM_KEYS + ("rpm",)
 
-    def default_axes(self, settings, options):
-        return {"rpm": [900.0 + 50.0 * i for i in range(15)]}
+    def default_axes(self, study):
+        """The speeds of the study's bars' lobes (:func:`~boringbar.analysis.lobes.
+        default_speeds`, as ``lobes`` takes them)."""
+        return {"rpm": lobes_mod.default_speeds(study_cases(study)[0])}
 
     def plan(self, study):
         cases, values = study_cases(study)
-        o = study.options
-        if o["max_depth_mm"] < o["depth_step_mm"]:
-            raise StudyError(f"{study.source}: key 'analysis.max_depth_mm' = "
-                             f"{o['max_depth_mm']!r} must be >= analysis.depth_step_mm = "
-                             f"{o['depth_step_mm']!r}")
-        try:
-            options = LobesOptions(
-                tuple(_axis(study, "rpm")), o["method"], o["criterion"],
-                o["depth_step_mm"] * 1e-3, o["max_depth_mm"] * 1e-3, o["successive"],
-                **_cut_options(study), analytic=o["analytic"])
-        except ParameterError as exc:
-            raise StudyError(f"{study.source}: [analysis] {exc}") from None
+        options = _lobe_options(study)
         plan = lobes_mod.plan(cases, options, _integration(study, initial=None))
         plan.extra["values"] = values
         return plan
-
     def runs(self, plan):
         c = plan.context
         return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True)
                 for x in c["cases"]]
+
+
+def _lobe_options(study: Study) -> LobesOptions:
+    """The lobes options of the study's ``[analysis]`` (mm converted, checked under the
+    file's keys) and ``[forcing]`` cut, at its speeds."""
+    o = study.options
+    step, tol = o["depth_step_mm"], o["depth_tolerance"]
+    try:
+        grid = lobes_mod.depth_grid(o["method"], step, tol, ("key 'analysis.depth_step_mm'",
+                                                             "key 'analysis.depth_tolerance'"))
+        first = lobes_mod.DEPTH_FLOOR * 1e3 if grid == "geometric" else \
+            lobes_mod.PUBLISHED_DEPTH_STEP * 1e3 if step is None else step
+        check_range("key 'analysis.max_depth_mm'", o["max_depth_mm"], first, MAX_DEPTH * 1e3,
+                    unit="mm", why=f"from the {grid} depth grid's first depth")
+        return LobesOptions(tuple(_axis(study, "rpm")), o["method"], o["criterion"],
+                            None if step is None else step * 1e-3, o["max_depth_mm"] * 1e-3,
+                            o["successive"], **_cut_options(study), analytic=o["analytic"],
+                            depth_tolerance=tol)
+    except ParameterError as exc:
+        raise StudyError(f"{study.source}: [analysis] {exc}") from None
 
 
 # --- bifurcation ------------------------------------------------------------------

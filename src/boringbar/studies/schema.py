@@ -10,9 +10,10 @@ output, and the system file it runs: ``system = "bar.toml"``, or an inline
 options of the chosen analysis) and ``[grid]``: any gridable setting given
 as a list or as ``{start, stop, step}`` becomes an axis, and the study is
 the cartesian product of its axes.  Defaults are the published study
-(docs/model.md, section 6).  Every key is checked before any work starts: an
-unknown key, a wrong type or a value out of range raises :class:`StudyError`
-with the file, the key, the value and what is allowed.
+(docs/model.md, section 6), but for what belongs to the bar: a lobes study's speeds
+and depth grid are the library's, of the study's own bars.  Every key is checked
+before any work starts: an unknown key, a wrong type or a value out of range raises
+:class:`StudyError` with the file, the key, the value and what is allowed.
 
 The schema (``SETTINGS`` and each analysis's ``OPTIONS``) is the single
 source of truth; docs/studies.md describes it for users.

@@ -1,9 +1,12 @@
 """The design page's search: ``boringbar design`` on the page's current system, its
 trials shown as they finish, the best design applied to the page on request.
 
-The search runs :func:`boringbar.design` in a thread of its own with an SQLite
-storage in a folder of the session's; the page reads the finished trials from that
-storage as they come (Optuna's own records, the same the command keeps).
+The search is a design file (lengths in mm, as the page's controls and every input
+file give them), read by :func:`~boringbar.analysis.design_file.options_from_dict`, so
+the file the page shows reruns the same search.  It runs :func:`boringbar.design` in
+a thread of its own with an SQLite storage in a folder of the session's; the page
+reads the finished trials from that storage as they come (Optuna's own records, the
+same the command keeps).
 """
 
 from __future__ import annotations
@@ -23,40 +26,41 @@ from bokeh.models import ColumnDataSource
 
 from boringbar._validate import ParameterError
 from boringbar.analysis.design import design, summary, summary_line
-from boringbar.analysis.design_options import DesignOptions, Uncertain, Variable
+from boringbar.analysis.design_file import MM_PER_M, options_from_dict, to_file
+from boringbar.analysis.design_options import shown
 from boringbar.execute import Execution
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system_file import merged_sections
 from boringbar.webapp.design_state import Design
 from boringbar.webapp.figures import COLOURS, new_figure, show_progress
 
-#: the page's search variables (those of a ball damper the page can apply)
+#: the page's search variables (those of a ball damper the page can apply), as the
+#: design file names them
 VARIABLES = ("gap_mm", "ball_material", "ball_diameter_mm", "cavity_position_mm")
-#: variable -> the description's key it sets
-KEYS = {"gap_mm": "ball.gap_mm", "ball_material": "ball.material",
-        "ball_diameter_mm": "ball.diameter_mm", "cavity_position_mm": "cavity.position_mm"}
+#: variable (the Python API's name, SI) -> the description's key it sets (mm)
+KEYS = {"gap_m": "ball.gap_mm", "ball_material": "ball.material",
+        "ball_diameter_m": "ball.diameter_mm", "cavity_position_m": "cavity.position_mm"}
 #: the forcing ratios of the search's objective (worst tip RMS over them)
 BAND = (0.96, 1.0, 1.04)
 STUDY = "boringbar-design"
 
 
-def variable(design: Design, name: str) -> Variable:
-    """The search range of ``name`` around the current design: the gap up to the
-    cavity's room, the ball down to 60 % of its diameter, the cavity 30 mm either way
-    within the section it sits in."""
+def variable(design: Design, name: str) -> list:
+    """The design file's search range of ``name`` (one of :data:`VARIABLES`, mm) around
+    the current design: the gap up to the cavity's room, the ball down to 60 % of its
+    diameter, the cavity 30 mm either way within the section it sits in."""
     data = design.data
     if name == "ball_material":
-        return Variable(name, choices=tuple(MATERIALS))
+        return list(MATERIALS)
     if name == "gap_mm":
-        return Variable(name, 0.05, design.spec.max_gap() * 1e3)
+        return [0.05, design.spec.max_gap() * MM_PER_M]
     if name == "ball_diameter_mm":
         d = data["ball"]["diameter_mm"]
-        return Variable(name, max(1.0, 0.6 * d), d)
+        return [max(1.0, 0.6 * d), d]
     c = data["cavity"]
     lo, hi = _host_span(data["bar"]["sections"], c["position_mm"])
     half = c["length_mm"] / 2
-    return Variable(name, max(lo + half, c["position_mm"] - 30), min(hi - half,
-                                                                     c["position_mm"] + 30))
+    return [max(lo + half, c["position_mm"] - 30), min(hi - half, c["position_mm"] + 30)]
 
 
 def _host_span(sections: list, z: float) -> tuple[float, float]:
@@ -69,31 +73,27 @@ def _host_span(sections: list, z: float) -> tuple[float, float]:
     raise ParameterError(f"cavity position {z:g} mm is outside the bar")
 
 
-def options(design: Design, names, trials: int, samples: int) -> DesignOptions:
-    """The search: the worst tip RMS over :data:`BAND` at the page's force, averaged
-    over ``samples`` draws of friction (0-0.5 N) and restitution (the design's,
-    +- 0.05)."""
-    e = design.data["ball"]["restitution"]
-    return DesignOptions(
-        bar="ball", variables=tuple(variable(design, n) for n in names), objective="rms_band",
-        ratios=BAND, forces_n=(design.settings.force_n,), duration_s=1.0,
-        integrator="exact" if design.settings.preset == "physical" else "rk4",
-        uncertain=(Uncertain("friction_force_n", "uniform", 0.0, 0.5),
-                   Uncertain("restitution", "normal", e, 0.05)),
-        samples=samples, trials=trials, preset=design.settings.preset)
+def search_file(design: Design, names, trials: int, samples: int) -> dict:
+    """The search as a design file (without its system): the worst tip RMS over
+    :data:`BAND` at the page's force, averaged over ``samples`` draws of friction
+    (0-0.5 N) and restitution (the design's, +- 0.05)."""
+    preset = design.settings.preset
+    return {"design": {"bar": "ball", "preset": preset, "objective": "rms_band",
+                       "band": "worst", "ratios": list(BAND),
+                       "forces_n": [design.settings.force_n], "duration_s": 1.0,
+                       "integrator": "exact" if preset == "physical" else "rk4",
+                       "samples": samples, "statistic": "mean", "trials": trials,
+                       "sampler": "tpe", "seed": 1},
+            "variables": {n: variable(design, n) for n in names},
+            "uncertain": {"friction_force_n": {"uniform": [0.0, 0.5]},
+                          "restitution": {"normal": [design.data["ball"]["restitution"],
+                                                     0.05]}}}
 
 
-def design_file(opts: DesignOptions, system_file: str) -> str:
-    """``opts`` as a design file (``boringbar design FILE`` runs the same search)."""
-    variables = {v.name: list(v.choices) if v.choices else [v.low, v.high]
-                 for v in opts.variables}
-    uncertain = {u.name: {u.distribution: [u.a, u.b]} for u in opts.uncertain}
-    head = {k: getattr(opts, k) for k in ("bar", "preset", "objective", "band", "duration_s",
-                                          "integrator", "samples", "statistic", "trials",
-                                          "sampler", "seed")}
-    return tomli_w.dumps({"design": {**head, "system": system_file, "ratios": list(opts.ratios),
-                                     "forces_n": list(opts.forces_n)},
-                          "variables": variables, "uncertain": uncertain})
+def design_file(search: dict, system_file: str) -> str:
+    """The design file ``search`` (:func:`search_file`) that names the system file
+    ``system_file``: ``boringbar design FILE`` runs the same search."""
+    return tomli_w.dumps({**search, "design": {**search["design"], "system": system_file}})
 
 
 class SearchPanel:
@@ -134,7 +134,8 @@ class SearchPanel:
             self.text.object = "the search varies a ball damper; this system has none"
             return
         try:
-            opts = options(d, self.names.value, self.trials.value, self.samples.value)
+            search = search_file(d, self.names.value, self.trials.value, self.samples.value)
+            opts = options_from_dict(search, "the search")
         except ParameterError as e:
             self.text.object = f"**search:** {e}"
             return
@@ -145,7 +146,7 @@ class SearchPanel:
         self.go.disabled, self.halt.disabled, self.best.disabled = True, False, True
         self.file.object = ("Reproduce with `boringbar design search.toml`, where "
                             "search.toml is:\n```toml\n"
-                            f"{design_file(opts, self.page.export.filename)}```")
+                            f"{design_file(search, self.page.export.filename)}```")
         self.text.object = f"searching {len(opts.variables)} variables in {opts.trials} trials"
         loop = asyncio.get_running_loop()
         try:
@@ -187,9 +188,8 @@ class SearchPanel:
         self.source.stream({"trial": [t.number for t in new],
                             "rms": [t.values[0] * 1e3 for t in new]})
         best = min(done, key=lambda t: t.values[0])
-        self.table.object = ("best so far: trial " f"{best.number}, " + ", ".join(
-            f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
-            for k, v in best.params.items()) + f": {best.values[0] * 1e3:.4g} mm")
+        self.table.object = (f"best so far: trial {best.number}, " + ", ".join(
+            shown(k, v) for k, v in best.params.items()) + f": {best.values[0] * 1e3:.4g} mm")
 
     def close(self) -> None:
         self.stop.set()
@@ -202,8 +202,8 @@ class SearchPanel:
         _, s = self.result
         d = self.page.design
         try:  # the ball and the cavity before the gap, whose room they set
-            for name in sorted(s["best"], key=lambda n: n == "gap_mm"):
-                d = d.with_value(KEYS[name], s["best"][name])
+            for name in sorted(s["best"], key=lambda n: n == "gap_m"):
+                d = d.with_value(KEYS[name], to_file(name, s["best"][name]))
         except ParameterError as e:
             self.text.object = f"**cannot apply the best design:** {e}"
             return
