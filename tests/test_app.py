@@ -31,6 +31,11 @@ from boringbar.webapp.design_state import Design
 from boringbar.webapp.jobs import Latest, Superseded
 from boringbar.webapp.search import design_file, search_file
 
+# a deprecation warned of in the page's own code fails these tests (the page built in this
+# process has every widget; tests/test_app_notebook.py sets the same filter in its kernel)
+pytestmark = [pytest.mark.filterwarnings(f"error::{w}:boringbar[.]webapp")
+              for w in ("DeprecationWarning", "PendingDeprecationWarning")]
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 BOKEH_DATA = "n => Array.from(Bokeh.documents[0].get_model_by_name(n).data.y)"
 

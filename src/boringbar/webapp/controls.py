@@ -44,7 +44,7 @@ class Controls:
                                                      tuple(FRICTION_FORMS))
         self.widgets["friction_value"] = self._widget("friction_value", "friction value",
                                                       "number", None)
-        self.upload = pn.widgets.FileInput(accept=".toml", name="system file")
+        self.upload = pn.widgets.FileInput(accept=".toml", label="system file")
         self.upload.param.watch(self._upload, "value")
         self.title = pn.pane.Markdown("")
         self.show(design)
@@ -53,9 +53,9 @@ class Controls:
     def _widget(self, key, label, kind, choices):
         css = [f"ctl-{key.replace('.', '-')}"]  # how a browser test finds it
         if kind == "select":
-            w = pn.widgets.Select(name=label, options=list(choices), css_classes=css)
+            w = pn.widgets.Select(label=label, options=list(choices), css_classes=css)
         else:
-            w = pn.widgets.FloatInput(name=label, value=0.0, css_classes=css)
+            w = pn.widgets.FloatInput(label=label, value=0.0, css_classes=css)
         w.param.watch(lambda event, key=key: self._changed(key, event.new), "value")
         return w
 

@@ -70,15 +70,15 @@ class Page:
     # --- layout ---------------------------------------------------------------------
     def _layout(self):
         f = self.figures
-        simulate = pn.widgets.Button(name="Simulate the ball bar's lobes", button_type="primary")
+        simulate = pn.widgets.Button(label="Simulate the ball bar's lobes", color="primary")
         simulate.on_click(self.simulate_lobes)
-        pin = pn.widgets.Button(name="Pin this design", button_type="success")
+        pin = pn.widgets.Button(label="Pin this design", color="success")
         pin.on_click(self.pin)
-        unpin = pn.widgets.Button(name="Unpin")
+        unpin = pn.widgets.Button(label="Unpin")
         unpin.on_click(self.unpin)
         export = pn.widgets.FileDownload(callback=self.export_file,
                                          filename=export_name(self.design),
-                                         label="Export system file", button_type="warning")
+                                         label="Export system file", color="warning")
         self.export = export
         bar = pn.Column("## The bar", f["bar"].fig, pn.Row(self.modes_table, f["modes"].fig),
                         self.status["bar"], self.command["bar"], sizing_mode="stretch_width")

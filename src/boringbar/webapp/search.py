@@ -104,14 +104,14 @@ class SearchPanel:
         self.folder = Path(tempfile.mkdtemp(prefix="boringbar-app-"))
         self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="boringbar-search")
         self.storage, self.seen, self.done, self.study = None, 0, (0, 1), None
-        self.names = pn.widgets.MultiChoice(name="variables", options=list(VARIABLES),
+        self.names = pn.widgets.MultiChoice(label="variables", options=list(VARIABLES),
                                             value=["gap_mm", "ball_material"])
-        self.trials = pn.widgets.IntInput(name="trials", value=12, start=1, end=500)
-        self.samples = pn.widgets.IntInput(name="Monte Carlo samples", value=4, start=1, end=64)
-        self.go = pn.widgets.Button(name="Start search", button_type="primary")
-        self.halt = pn.widgets.Button(name="Stop", disabled=True)
-        self.best = pn.widgets.Button(name="Apply the best design", disabled=True,
-                                      button_type="success")
+        self.trials = pn.widgets.IntInput(label="trials", value=12, start=1, end=500)
+        self.samples = pn.widgets.IntInput(label="Monte Carlo samples", value=4, start=1, end=64)
+        self.go = pn.widgets.Button(label="Start search", color="primary")
+        self.halt = pn.widgets.Button(label="Stop", disabled=True)
+        self.best = pn.widgets.Button(label="Apply the best design", disabled=True,
+                                      color="success")
         self.go.on_click(self.start)
         self.halt.on_click(lambda _e: self.stop.set())
         self.best.on_click(self.apply_best)
