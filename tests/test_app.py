@@ -176,8 +176,10 @@ def server(tmp_path_factory):
             pytest.fail("CI must install Debian's chromium (.ci/run does)")
         pytest.skip("no chromium on this machine (apt-get install chromium)")
     port = _free_port()
+    # the server's output goes to a file (a pipe nobody reads could fill and stall it)
+    log = open(tmp_path_factory.mktemp("server") / "server.log", "w")  # noqa: SIM115
     proc = subprocess.Popen([sys.executable, "-m", "boringbar", "app", "--port", str(port)],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+                            stdout=log, stderr=subprocess.STDOUT, text=True)
     url = f"http://127.0.0.1:{port}/"
     for _ in range(300):
         try:
@@ -188,6 +190,7 @@ def server(tmp_path_factory):
     yield url
     proc.terminate()
     proc.wait(timeout=10)
+    log.close()
 
 
 @pytest.fixture(scope="module")

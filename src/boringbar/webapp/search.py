@@ -15,6 +15,7 @@ import asyncio
 import shutil
 import tempfile
 import threading
+import weakref
 from concurrent.futures import ThreadPoolExecutor
 from functools import partial
 from pathlib import Path
@@ -101,7 +102,7 @@ class SearchPanel:
 
     def __init__(self, page):
         self.page, self.result, self.stop = page, None, threading.Event()
-        self.folder = Path(tempfile.mkdtemp(prefix="boringbar-app-"))
+        self.folder: Path | None = None  # made by the first search (:meth:`storage_path`)
         self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="boringbar-search")
         self.storage, self.seen, self.done, self.study = None, 0, (0, 1), None
         self.names = pn.widgets.MultiChoice(label="variables", options=list(VARIABLES),
@@ -140,7 +141,7 @@ class SearchPanel:
             self.text.object = f"**search:** {e}"
             return
         self.stop.clear()
-        self.storage = self.folder / f"search{len(list(self.folder.iterdir()))}.sqlite"
+        self.storage = self.storage_path()
         self.seen, self.result, self.done, self.study = 0, None, (0, opts.trials), None
         self.page.locked(setattr, self.source, "data", {"trial": [], "rms": []})
         self.go.disabled, self.halt.disabled, self.best.disabled = True, False, True
@@ -191,10 +192,20 @@ class SearchPanel:
         self.table.object = (f"best so far: trial {best.number}, " + ", ".join(
             shown(k, v) for k, v in best.params.items()) + f": {best.values[0] * 1e3:.4g} mm")
 
+    def storage_path(self) -> Path:
+        """A new SQLite file for a search, in the session's folder: made at the first
+        search (a page that never searches leaves nothing on disk) and removed when the
+        session closes or, at the latest, when the interpreter exits."""
+        if self.folder is None:
+            self.folder = Path(tempfile.mkdtemp(prefix="boringbar-app-"))
+            weakref.finalize(self, shutil.rmtree, self.folder, True)
+        return self.folder / f"search{len(list(self.folder.iterdir()))}.sqlite"
+
     def close(self) -> None:
         self.stop.set()
         self.pool.shutdown(wait=False, cancel_futures=True)
-        shutil.rmtree(self.folder, ignore_errors=True)
+        if self.folder is not None:
+            shutil.rmtree(self.folder, ignore_errors=True)
 
     def apply_best(self, _event=None) -> None:
         if self.result is None:
