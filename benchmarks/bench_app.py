@@ -47,9 +47,30 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+#: True once the status line of class ``cls`` (the host of a Panel pane, whose text is in
+#: its shadow root) holds ``text``; the host is found once through every shadow root
+STATUS_JS = """([cls, text]) => {
+  const cache = window.__statusHosts || (window.__statusHosts = {});
+  const find = (root) => {
+    for (const el of root.querySelectorAll('*')) {
+      if (el.classList && el.classList.contains(cls)) return el;
+      const inner = el.shadowRoot && find(el.shadowRoot);
+      if (inner) return inner;
+    }
+    return null;
+  };
+  let host = cache[cls];
+  if (!host || !host.isConnected) host = cache[cls] = find(document);
+  return !!host && (host.shadowRoot || host).textContent.includes(text);
+}"""
+#: how often (ms) the browser looks at a status line (Playwright's wait_for_selector
+#: backs off to every 500 ms after 270 ms, too coarse for the redraws timed here)
+POLL_MS = 5
+
+
 def wait_drawn(page, view: str, change: int, timeout_s: float = 60) -> float:
-    page.wait_for_selector(f".status-{view} >> text=change {change}: drawn in",
-                           timeout=timeout_s * 1000)
+    page.wait_for_function(STATUS_JS, arg=[f"status-{view}", f"change {change}: drawn in"],
+                           polling=POLL_MS, timeout=timeout_s * 1000)
     return time.perf_counter()
 
 
