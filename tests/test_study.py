@@ -6,6 +6,7 @@ from pathlib import Path
 import pytest
 
 from boringbar.analysis.lobes import DEPTH_TOLERANCE, PUBLISHED_DEPTH_STEP, default_speeds
+from boringbar.analysis.sweep import default_ratios, tmd_window
 from boringbar.cli.main import main
 from boringbar.studies.load import load_study, study_from_dict
 from boringbar.studies.registry import ANALYSES
@@ -59,6 +60,18 @@ def test_lobe_defaults_follow_the_studys_bars_as_the_library_does(tmp_path):
     rpm = [900.0 + 50 * i for i in range(15)]
     assert study_from_dict({"study": {"analysis": "lobes"},
                             "grid": {"rpm": rpm}}).axes["rpm"] == tuple(rpm)
+
+
+def test_sweep_defaults_follow_the_studys_bars_as_the_library_does():
+    """No ratio axis: the ratios ``sweep`` takes for the study's bars, the published
+    window for a ball bar and one holding both peaks of a tuned mass damper."""
+    ball = study_from_dict({"study": {"analysis": "sweep"}})
+    assert ball.axes["ratio"] == tuple(round(0.95 + 0.01 * i, 12) for i in range(11))
+    tmd = study_from_dict({"study": {"analysis": "sweep"}, "grid": {"kind": ["tmd"]}})
+    cases = ANALYSES["sweep"].plan(tmd).context["cases"]
+    assert tmd.axes["ratio"] == default_ratios(cases)
+    lo, hi = tmd_window(cases[0].system)
+    assert tmd.axes["ratio"][0] <= lo < hi <= tmd.axes["ratio"][-1] and hi - lo > 0.2
 
 
 def test_grid_forms_and_case_collapse():

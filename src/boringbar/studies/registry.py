@@ -318,7 +318,10 @@ class Sweep(Analysis):
     grid_keys = SYSTEM_KEYS + ("force_n", "ratio")
 
     def default_axes(self, study):
-        return {"ratio": [round(0.95 + 0.01 * i, 12) for i in range(11)]}
+        """The ratios ``sweep`` takes by default for the study's bars
+        (:func:`~boringbar.analysis.sweep.default_ratios`: the published 0.95-1.05,
+        widened to both peaks of a tuned mass damper)."""
+        return {"ratio": list(sweep_mod.default_ratios(study_cases(study)[0]))}
 
     def plan(self, study):
         cases, values = study_cases(study)
