@@ -21,15 +21,18 @@ import pytest
 
 import boringbar as bb
 from boringbar._validate import ParameterError
+from boringbar.analysis.design import candidate_system, design, summary
 from boringbar.analysis.design_file import load_design, options_from_dict
+from boringbar.analysis.design_objectives import frf_objective
 from boringbar.execute import Execution, run_points
-from boringbar.model.system_file import load_system, published_system
+from boringbar.model.system_file import load_system, parse_system, published_system
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.webapp import views
 from boringbar.webapp.commands import commands
 from boringbar.webapp.design_state import Design
 from boringbar.webapp.jobs import Latest, Superseded
-from boringbar.webapp.search import design_file, search_file
+from boringbar.webapp.search import JUDGED, best_changes, design_file, search_file
+from boringbar.webapp.server import page
 
 # a deprecation warned of in the page's own code fails these tests (the page built in this
 # process has every widget; tests/test_app_notebook.py sets the same filter in its kernel)
@@ -142,6 +145,47 @@ def test_the_search_is_a_design_file_the_command_reads(published, tmp_path):
     read, spec = load_design(tmp_path / "search.toml")
     assert read == opts
     assert spec.to_dict() == published.data
+
+
+def test_a_tmd_search_applies_the_absorber_it_found(published):
+    """The page's TMD search (Den Hartog's criterion: the tip FRF's peak) and its best
+    design put on the page: the page's TMD bar is the search's best candidate, so its
+    FRF peak is the search's objective to the bit; a search mixing dampers is refused."""
+    with pytest.raises(ParameterError, match="a search varies one damper"):
+        search_file(published, ["gap_mm", "tmd_mass_kg"], 4, 1)
+    no_tmd = Design.of(parse_system({k: v for k, v in published.data.items() if k != "tmd"},
+                                    "no_tmd.toml"))
+    with pytest.raises(ParameterError, match="this system has none"):
+        search_file(no_tmd, ["tmd_damping_ratio"], 4, 1)
+    search = search_file(published, ["tmd_frequency_ratio", "tmd_damping_ratio"], 6, 4)
+    opts = options_from_dict(search)
+    assert (opts.bar, opts.objective, opts.samples) == ("tmd", "frf_peak", 1)
+    best = summary(design(opts, spec=published.spec, execution=Execution("serial")))
+    page = published.with_values(best_changes(published, opts, best["best"]))
+    assert page.data["tmd"]["tuning"] == "given"
+    assert frf_objective(page.systems["tmd"], "frf_peak") == best["objective"]
+    # the page's bar is the candidate's: the same absorber, the same host
+    found = candidate_system(published.spec, opts, best["best"])
+    assert page.systems["tmd"].damper.stiffness_n_m == found.damper.stiffness_n_m
+    assert page.systems["tmd"].damper.damping_n_s_m == found.damper.damping_n_s_m
+
+
+def test_the_pages_search_panel_runs_a_tmd_search_and_applies_it():
+    """The search panel of a page (built as a notebook builds it): a TMD search fills
+    the trials figure in the FRF peak's unit, and applying it puts the absorber found
+    on the page with tuning "given"."""
+    p = page(None)
+    p.search.names.value = ["tmd_frequency_ratio", "tmd_damping_ratio"]
+    p.search.trials.value = 4
+    asyncio.run(p.search.start())
+    assert p.search.fig.yaxis.axis_label == JUDGED["tmd"][1]
+    values = p.search.source.data["value"]
+    assert len(values) == 4 and all(1.0 < v < 100.0 for v in values)  # um/N
+    opts, s = p.search.result
+    p.search.apply_best()
+    assert p.design.data["tmd"]["tuning"] == "given"
+    assert frf_objective(p.design.systems["tmd"], "frf_peak") * 1e6 == min(values)
+    assert s["objective"] * 1e6 == min(values)
 
 
 def test_superseded_work_is_dropped_not_queued():

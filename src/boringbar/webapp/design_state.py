@@ -97,8 +97,15 @@ class Design:
     def with_value(self, key: str, value) -> Design:
         """The design with the description's ``key`` (one of :data:`FIELDS`) set to
         ``value``; a ParameterError (the system file's message) if it cannot be."""
-        check_choice("control", key, tuple(FIELDS))
-        data = edited(self.data, key, value)
+        return self.with_values({key: value})
+
+    def with_values(self, changes: dict) -> Design:
+        """The design with every ``key: value`` of ``changes`` set (:meth:`with_value`),
+        checked together: the file is read once, after all of them."""
+        data = self.data
+        for key, value in changes.items():
+            check_choice("control", key, tuple(FIELDS))
+            data = edited(data, key, value)
         return replace(self, spec=parse_system(data, f"{self.name}.toml"))
 
     def with_settings(self, **changes) -> Design:

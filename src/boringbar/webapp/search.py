@@ -26,7 +26,7 @@ import tomli_w
 from bokeh.models import ColumnDataSource
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.design import design, summary, summary_line
+from boringbar.analysis.design import candidate_system, design, summary, summary_line
 from boringbar.analysis.design_file import MM_PER_M, options_from_dict, to_file
 from boringbar.analysis.design_options import shown
 from boringbar.execute import Execution
@@ -35,22 +35,45 @@ from boringbar.model.system_file import merged_sections
 from boringbar.webapp.design_state import Design
 from boringbar.webapp.figures import COLOURS, new_figure, show_progress
 
-#: the page's search variables (those of a ball damper the page can apply), as the
-#: design file names them
-VARIABLES = ("gap_mm", "ball_material", "ball_diameter_mm", "cavity_position_mm")
+#: the page's search variables, as the design file names them: a ball damper's and a
+#: tuned mass damper's (one search varies one damper)
+BALL_VARIABLES = ("gap_mm", "ball_material", "ball_diameter_mm", "cavity_position_mm")
+TMD_VARIABLES = ("tmd_mass_kg", "tmd_frequency_ratio", "tmd_damping_ratio")
+VARIABLES = BALL_VARIABLES + TMD_VARIABLES
 #: variable (the Python API's name, SI) -> the description's key it sets (mm)
 KEYS = {"gap_m": "ball.gap_mm", "ball_material": "ball.material",
         "ball_diameter_m": "ball.diameter_mm", "cavity_position_m": "cavity.position_mm"}
-#: the forcing ratios of the search's objective (worst tip RMS over them)
+#: the forcing ratios of the ball search's objective (worst tip RMS over them)
 BAND = (0.96, 1.0, 1.04)
+#: damper -> its search's objective, how the trials figure reads it, factor from SI
+JUDGED = {"ball": ("rms_band", "mean worst tip RMS (mm)", "mm", 1e3),
+          "tmd": ("frf_peak", "peak of the tip FRF (um/N)", "um/N", 1e6)}
+#: the TMD search's ranges: mass (times the design's), frequency and damping ratio
+TMD_RANGES = {"tmd_mass_kg": (0.5, 2.0), "tmd_frequency_ratio": (0.7, 1.1),
+              "tmd_damping_ratio": (0.02, 0.4)}
 STUDY = "boringbar-design"
+
+
+def damper_of(names) -> str:
+    """The damper a search of the variables ``names`` varies: "ball" or "tmd"."""
+    for damper, own in (("ball", BALL_VARIABLES), ("tmd", TMD_VARIABLES)):
+        if names and set(names) <= set(own):
+            return damper
+    raise ParameterError(f"variables = {list(names)}: choose a ball damper's "
+                         f"({', '.join(BALL_VARIABLES)}) or a tuned mass damper's "
+                         f"({', '.join(TMD_VARIABLES)}); a search varies one damper")
 
 
 def variable(design: Design, name: str) -> list:
     """The design file's search range of ``name`` (one of :data:`VARIABLES`, mm) around
     the current design: the gap up to the cavity's room, the ball down to 60 % of its
-    diameter, the cavity 30 mm either way within the section it sits in."""
+    diameter, the cavity 30 mm either way within the section it sits in; the TMD's
+    mass from half to twice the design's, its tuning over :data:`TMD_RANGES`."""
     data = design.data
+    if name in TMD_RANGES:
+        lo, hi = TMD_RANGES[name]
+        scale = data["tmd"]["mass_kg"] if name == "tmd_mass_kg" else 1.0
+        return [lo * scale, hi * scale]
     if name == "ball_material":
         return list(MATERIALS)
     if name == "gap_mm":
@@ -75,10 +98,20 @@ def _host_span(sections: list, z: float) -> tuple[float, float]:
 
 
 def search_file(design: Design, names, trials: int, samples: int) -> dict:
-    """The search as a design file (without its system): the worst tip RMS over
-    :data:`BAND` at the page's force, averaged over ``samples`` draws of friction
-    (0-0.5 N) and restitution (the design's, +- 0.05)."""
-    preset = design.settings.preset
+    """The search as a design file (without its system). A ball damper's: the worst
+    tip RMS over :data:`BAND` at the page's force, averaged over ``samples`` draws of
+    friction (0-0.5 N) and restitution (the design's, +- 0.05). A tuned mass damper's:
+    the peak of the tip FRF (Den Hartog's criterion; linear, so one sample)."""
+    preset, damper = design.settings.preset, damper_of(names)
+    part = {"ball": design.spec.ball, "tmd": design.spec.tmd}[damper]
+    if part is None:
+        raise ParameterError(f"variables {', '.join(names)} belong to a "
+                             f"{'ball damper' if damper == 'ball' else 'tuned mass damper'};"
+                             " this system has none")
+    if damper == "tmd":
+        return {"design": {"bar": "tmd", "preset": preset, "objective": "frf_peak",
+                           "samples": 1, "trials": trials, "sampler": "tpe", "seed": 1},
+                "variables": {n: variable(design, n) for n in names}}
     return {"design": {"bar": "ball", "preset": preset, "objective": "rms_band",
                        "band": "worst", "ratios": list(BAND),
                        "forces_n": [design.settings.force_n], "duration_s": 1.0,
@@ -105,8 +138,11 @@ class SearchPanel:
         self.folder: Path | None = None  # made by the first search (:meth:`storage_path`)
         self.pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="boringbar-search")
         self.storage, self.seen, self.done, self.study = None, 0, (0, 1), None
-        self.names = pn.widgets.MultiChoice(label="variables", options=list(VARIABLES),
-                                            value=["gap_mm", "ball_material"])
+        self.judged = JUDGED["ball"]
+        self.names = pn.widgets.MultiChoice(
+            label="variables (one damper's)", options=list(VARIABLES),
+            value=["gap_mm", "ball_material"] if page.design.spec.ball is not None or
+            page.design.spec.tmd is None else ["tmd_frequency_ratio", "tmd_damping_ratio"])
         self.trials = pn.widgets.IntInput(label="trials", value=12, start=1, end=500)
         self.samples = pn.widgets.IntInput(label="Monte Carlo samples", value=4, start=1, end=64)
         self.go = pn.widgets.Button(label="Start search", color="primary")
@@ -119,10 +155,11 @@ class SearchPanel:
         self.progress = pn.indicators.Progress(value=0, max=1, sizing_mode="stretch_width")
         self.text = pn.pane.Markdown("", css_classes=["search-status"])
         self.table = pn.pane.Markdown("")
-        self.source = ColumnDataSource({"trial": [], "rms": []})
+        self.source = ColumnDataSource({"trial": [], "value": []})
         self.fig = new_figure("trials: the objective as they finish", "trial",
-                           "mean worst tip RMS (mm)")
-        self.fig.scatter("trial", "rms", source=self.source, size=8, color=COLOURS["ball"])
+                              self.judged[1])
+        self.dots = self.fig.scatter("trial", "value", source=self.source, size=8,
+                                     color=COLOURS["ball"])
         self.file = pn.pane.Markdown("")
         self.panel = pn.Column(
             "## Design search", pn.Row(self.names, self.trials, self.samples),
@@ -131,19 +168,18 @@ class SearchPanel:
 
     async def start(self, _event=None) -> None:
         d = self.page.design
-        if d.spec.ball is None:
-            self.text.object = "the search varies a ball damper; this system has none"
-            return
         try:
             search = search_file(d, self.names.value, self.trials.value, self.samples.value)
             opts = options_from_dict(search, "the search")
         except ParameterError as e:
             self.text.object = f"**search:** {e}"
             return
+        self.judged = JUDGED[opts.bar]
+        self.page.locked(self.label_figure, opts.bar)
         self.stop.clear()
         self.storage = self.storage_path()
         self.seen, self.result, self.done, self.study = 0, None, (0, opts.trials), None
-        self.page.locked(setattr, self.source, "data", {"trial": [], "rms": []})
+        self.page.locked(setattr, self.source, "data", {"trial": [], "value": []})
         self.go.disabled, self.halt.disabled, self.best.disabled = True, False, True
         self.file.object = ("Reproduce with `boringbar design search.toml`, where "
                             "search.toml is:\n```toml\n"
@@ -163,9 +199,14 @@ class SearchPanel:
         finally:
             self.go.disabled, self.halt.disabled = False, True
         self.page.locked(self.poll)  # the last trials (the figure is a Bokeh model)
-        self.result = (d, summary(ds))
+        self.result = (opts, summary(ds))
         self.best.disabled = False
         self.text.object = summary_line(self.result[1])
+
+    def label_figure(self, damper: str) -> None:
+        """The trials figure for a search of ``damper`` (a Bokeh model: under the lock)."""
+        self.fig.yaxis.axis_label = JUDGED[damper][1]
+        self.dots.glyph.fill_color = self.dots.glyph.line_color = COLOURS[damper]
 
     def _progress(self, done: int, total: int) -> None:
         """From the search's thread: kept for :meth:`poll`, which draws it."""
@@ -186,11 +227,13 @@ class SearchPanel:
             return
         new = done[self.seen:]
         self.seen = len(done)
+        _, _, unit, factor = self.judged
         self.source.stream({"trial": [t.number for t in new],
-                            "rms": [t.values[0] * 1e3 for t in new]})
+                            "value": [t.values[0] * factor for t in new]})
         best = min(done, key=lambda t: t.values[0])
         self.table.object = (f"best so far: trial {best.number}, " + ", ".join(
-            shown(k, v) for k, v in best.params.items()) + f": {best.values[0] * 1e3:.4g} mm")
+            shown(k, v) for k, v in best.params.items())
+            + f": {best.values[0] * factor:.4g} {unit}")
 
     def storage_path(self) -> Path:
         """A new SQLite file for a search, in the session's folder: made at the first
@@ -210,16 +253,26 @@ class SearchPanel:
     def apply_best(self, _event=None) -> None:
         if self.result is None:
             return
-        _, s = self.result
+        opts, s = self.result
         d = self.page.design
-        try:  # the ball and the cavity before the gap, whose room they set
-            for name in sorted(s["best"], key=lambda n: n == "gap_m"):
-                d = d.with_value(KEYS[name], to_file(name, s["best"][name]))
+        try:
+            d = d.with_values(best_changes(d, opts, s["best"]))
         except ParameterError as e:
             self.text.object = f"**cannot apply the best design:** {e}"
             return
         self.page.apply(d)
         self.text.object = f"applied to the page: {summary_line(s)}"
+
+
+def best_changes(design: Design, opts, best: dict) -> dict:
+    """The description's changes (key -> value, the file's units) that make ``design``
+    the search's ``best``: a ball damper's variables as they are; a tuned mass
+    damper's as the search built its absorber (mass, stiffness and damping, given)."""
+    if opts.bar == "tmd":
+        t = candidate_system(design.spec, opts, best).damper
+        return {"tmd.mass_kg": t.mass_kg, "tmd.stiffness_n_m": t.stiffness_n_m,
+                "tmd.damping_n_s_m": t.damping_n_s_m, "tmd.tuning": "given"}
+    return {KEYS[name]: to_file(name, value) for name, value in best.items()}
 
 
 class _Stopped(Exception):
