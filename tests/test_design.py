@@ -304,10 +304,11 @@ def test_a_search_that_beat_nothing_says_so():
     """Fewer trials than a search needs can end worse than the file's own design: the
     summary then says no better design was found, and does not call the best tried best."""
     s = dict(best={"gap_m": 0.3e-3, "ball_material": "steel"}, statistic_name="mean",
-             objective_name="band RMS", objective=1.2e-4, objective_error=3e-6,
+             objective_name="rms_band", objective=1.2e-4, objective_error=3e-6,
              published_objective=1.0e-4, trials=6)
     worse = summary_line({**s, "improvement_percent": -20.0})
     assert worse.startswith("no design better than the file's own found in 6 trials")
     assert "20.0 % worse" in worse and "best design" not in worse
+    assert "0.12 +- 0.003 mm against 0.1 mm" in worse  # read in mm, as the figures
     assert summary_line({**s, "improvement_percent": 12.0}).startswith(
         "best design gap = 0.3 mm, ball material = steel improves the objective by 12.0 %")

@@ -34,6 +34,7 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.design_objectives import objective_samples, rms_runs, statistic
 from boringbar.analysis.design_options import (
     DesignOptions,
+    objective_reading,
     sampled_system,
     shown,
     uncertain_samples,
@@ -352,9 +353,11 @@ def summary_line(s: dict) -> str:
     no trial beat it, 'no design better than the file's own found in N trials'."""
     best = ", ".join(shown(k, v) for k, v in s["best"].items())
     gain = s["improvement_percent"]
-    numbers = (f"({s['statistic_name']} of {s['objective_name']}: {s['objective']:.4g} +- "
-               f"{s['objective_error']:.2g} against {s['published_objective']:.4g}; "
-               f"{s['trials']} trials)")
+    unit, k = objective_reading(s["objective_name"], s["statistic_name"])
+    unit = f" {unit}" if unit else ""
+    numbers = (f"({s['statistic_name']} of {s['objective_name']}: {s['objective'] * k:.4g} "
+               f"+- {s['objective_error'] * k:.2g}{unit} against "
+               f"{s['published_objective'] * k:.4g}{unit}; {s['trials']} trials)")
     if gain is not None and gain < 0:  # the search did not reach the file's own design
         return (f"no design better than the file's own found in {s['trials']} trials: the "
                 f"best tried, {best}, is {-gain:.1f} % worse on the objective {numbers}")

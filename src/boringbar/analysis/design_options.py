@@ -56,6 +56,21 @@ def reading(name: str) -> tuple[str, str, float]:
     return words, shown, factor
 
 
+#: how a person reads an objective's value: objective -> (unit, factor from SI); a
+#: probability of chatter is read as it is
+OBJECTIVE_READ = {"rms_band": ("mm", 1e3), "cut_amplitude": ("mm", 1e3),
+                  "min_depth": ("mm", 1e3), "frf_peak": ("um/N", 1e6),
+                  "min_real": ("um/N", 1e6)}
+
+
+def objective_reading(objective: str, statistic: str) -> tuple[str, float]:
+    """(unit, factor from SI) of the ``statistic`` of ``objective`` as a person reads
+    it (:data:`OBJECTIVE_READ`)."""
+    if statistic == "chatter_probability":
+        return "", 1.0
+    return OBJECTIVE_READ[objective]
+
+
 def shown(name: str, value) -> str:
     """'gap = 0.381 mm', 'ball material = tungsten': a variable's value as a person
     reads it (:func:`reading`)."""

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 
-from boringbar.analysis.design_options import reading
+from boringbar.analysis.design_options import objective_reading, reading
 from boringbar.io import atomic_path
 from boringbar.report.audit import audit
 from boringbar.report.audit_data import TOLERANCE, VERDICTS
@@ -225,8 +225,10 @@ class _Report:
             s = rec["summary"]
             pub = json.loads(_load(s["files"]["netcdf"]).attrs["published_values"])
             rows = [_design_row(k, v, pub.get(k, "-")) for k, v in s["best"].items()]
-            rows.append([f"{s['statistic_name']} of {s['objective_name']}",
-                         f"{s['objective']:.4g}", f"{s['published_objective']:.4g}"])
+            unit, k = objective_reading(s["objective_name"], s["statistic_name"])
+            rows.append([f"{s['statistic_name']} of {s['objective_name']}"
+                         + (f" ({unit})" if unit else ""),
+                         f"{s['objective'] * k:.4g}", f"{s['published_objective'] * k:.4g}"])
             if "pareto" in s:
                 rows.append(["designs on the Pareto front", str(len(s["pareto"])), "-"])
             return {"images": [self.img(s["files"]["png"], f"{key} {preset}"),

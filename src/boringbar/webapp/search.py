@@ -28,7 +28,7 @@ from bokeh.models import ColumnDataSource
 from boringbar._validate import ParameterError
 from boringbar.analysis.design import candidate_system, design, summary, summary_line
 from boringbar.analysis.design_file import MM_PER_M, options_from_dict, to_file
-from boringbar.analysis.design_options import shown
+from boringbar.analysis.design_options import objective_reading, shown
 from boringbar.execute import Execution
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system_file import merged_sections
@@ -45,9 +45,9 @@ KEYS = {"gap_m": "ball.gap_mm", "ball_material": "ball.material",
         "ball_diameter_m": "ball.diameter_mm", "cavity_position_m": "cavity.position_mm"}
 #: the forcing ratios of the ball search's objective (worst tip RMS over them)
 BAND = (0.96, 1.0, 1.04)
-#: damper -> its search's objective, how the trials figure reads it, factor from SI
-JUDGED = {"ball": ("rms_band", "mean worst tip RMS (mm)", "mm", 1e3),
-          "tmd": ("frf_peak", "peak of the tip FRF (um/N)", "um/N", 1e6)}
+#: damper -> its search's objective and the trials figure's axis label
+JUDGED = {"ball": ("rms_band", "mean worst tip RMS (mm)"),
+          "tmd": ("frf_peak", "peak of the tip FRF (um/N)")}
 #: the TMD search's ranges: mass (times the design's), frequency and damping ratio
 TMD_RANGES = {"tmd_mass_kg": (0.5, 2.0), "tmd_frequency_ratio": (0.7, 1.1),
               "tmd_damping_ratio": (0.02, 0.4)}
@@ -227,7 +227,7 @@ class SearchPanel:
             return
         new = done[self.seen:]
         self.seen = len(done)
-        _, _, unit, factor = self.judged
+        unit, factor = objective_reading(self.judged[0], "mean")
         self.source.stream({"trial": [t.number for t in new],
                             "value": [t.values[0] * factor for t in new]})
         best = min(done, key=lambda t: t.values[0])
