@@ -170,6 +170,21 @@ def test_a_steady_part_shorter_than_one_period_is_refused(tmp_path, capsys):
                           "--duration-s = 0.001 s leaves a steady part of 0.0008 s", capsys)
 
 
+def test_a_run_too_short_to_be_steady_reports_no_steady_values():
+    """simulate takes 1 ms of a 525 Hz forcing (a state advanced by part of a period),
+    but its summary gives no steady RMS, peak or pattern, and warns why; its notebook
+    table says so; two periods' worth report them."""
+    bar, forcing = bb.make_system("ball"), bb.Harmonic(amplitude_n=20.0, ratio=1.0)
+    short = bb.simulate(bar, forcing, duration_s=1e-3)
+    with pytest.warns(RuntimeWarning, match=r"holds 0.42 of a forcing period"):
+        s = short.summary()
+    assert s["steady_periods"] == pytest.approx(0.8e-3 * 525.225, rel=1e-3)
+    assert s["rms_tip_m"] is None and s["max_abs_tip_m"] is None and s["pattern"] is None
+    assert "shorter than one period" in short._repr_html_()
+    long = bb.simulate(bar, forcing, duration_s=2.5 / 525.225 / 0.8)
+    assert long.summary()["steady_periods"] >= 1.0 and long.summary()["rms_tip_m"] > 0
+
+
 def test_lobe_speeds_must_increase_as_on_the_command_line():
     with pytest.raises(bb.ParameterError, match=r"rpm = \(1600.0, 900.0\) must increase"):
         bb.LobesOptions(rpm=(1600.0, 900.0))

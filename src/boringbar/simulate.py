@@ -13,6 +13,7 @@ import importlib
 import json
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -205,10 +206,26 @@ class Run:
             "thresholds": self.thresholds,
         }
 
+    @property
+    def steady_periods(self) -> float | None:
+        """Forcing periods in the steady part of a harmonic run (None for a cut)."""
+        if not isinstance(self.forcing, Harmonic):
+            return None
+        return (self.final.t_s - self.steady_start_s) * self.omega_rad_s / (2 * math.pi)
+
     def summary(self) -> dict:
-        """JSON-able summary (what ``boringbar simulate --json`` prints)."""
+        """JSON-able summary (what ``boringbar simulate --json`` prints).  A harmonic
+        run whose steady part holds less than one forcing period has no steady RMS,
+        peak or pattern: those are None, with a warning saying why."""
         m = self.metrics
         sys = self.system
+        periods = self.steady_periods
+        steady = periods is None or periods >= 1.0 - 1e-9
+        if not steady:
+            warnings.warn(f"the steady part of this run ({self.final.t_s - self.steady_start_s:.3g}"
+                          f" s) holds {periods:.2f} of a forcing period: no steady RMS, peak "
+                          "or pattern (give duration_s >= one period / steady_fraction)",
+                          RuntimeWarning, stacklevel=2)
         return {
             "bar": sys.kind,
             "preset": sys.preset,
@@ -218,10 +235,11 @@ class Run:
             "forcing_frequency_hz": self.omega_rad_s / (2 * math.pi),
             "ratio": self.omega_rad_s / sys.reference_frequency_rad_s,
             "force_n": getattr(self.forcing, "amplitude_n", None),
-            "rms_tip_m": m["rms_tip_m"],
-            "max_abs_tip_m": m["max_abs_tip_m"],
-            "pattern": None if self.pattern is None else self.pattern.name,
-            "impacts_per_cycle": None if self.pattern is None else
+            "steady_periods": periods,
+            "rms_tip_m": m["rms_tip_m"] if steady else None,
+            "max_abs_tip_m": m["max_abs_tip_m"] if steady else None,
+            "pattern": None if self.pattern is None or not steady else self.pattern.name,
+            "impacts_per_cycle": None if self.pattern is None or not steady else
             self.pattern.impacts_per_cycle,
             "max_abs_rel_disp_m": m["max_abs_aux_m"],
             "contact_time_s": m["contact_time_s"],
@@ -258,13 +276,15 @@ class Run:
 
     def _repr_html_(self) -> str:
         """The run as a notebook shows it: what was run and its main results, in mm."""
-        s = self.summary()
+        with warnings.catch_warnings():  # the table says it itself
+            warnings.simplefilter("ignore", RuntimeWarning)
+            s = self.summary()
         rows = [("bar", f"{s['bar']} ({s['preset']} preset)"),
                 ("forcing", f"F0 = {s['force_n']:g} N at Omega/omega_n = {s['ratio']:.4g} "
                             f"({s['forcing_frequency_hz']:.2f} Hz)" if s["force_n"] is not None
                  else f"cut at {self.forcing.rpm:g} rpm, depth {self.forcing.depth_m * 1e3:g} mm"),
-                ("tip RMS (steady part)", f"{s['rms_tip_m'] * 1e3:.4g} mm"),
-                ("max |tip|", f"{s['max_abs_tip_m'] * 1e3:.4g} mm"),
+                ("tip RMS (steady part)", _mm(s["rms_tip_m"])),
+                ("max |tip|", _mm(s["max_abs_tip_m"])),
                 ("impact pattern", s["pattern"] or "-"),
                 ("integrator", f"{s['integrator']}, {s['duration_s']:g} s in "
                                f"{s['elapsed_s']:.3g} s"),
@@ -313,6 +333,12 @@ class Run:
             ds["impact_time_s"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
         return ds
+
+
+def _mm(value_m: float | None) -> str:
+    """A length (m) as the notebook shows it: mm, or why there is none."""
+    return "none: the steady part is shorter than one period" if value_m is None \
+        else f"{value_m * 1e3:.4g} mm"
 
 
 def _plain(value):

@@ -275,8 +275,8 @@ def compute(context: dict, point: list) -> list[dict]:
 def _point(run) -> dict:
     s = run.summary()
     return {
-        "rms_tip_m": s["rms_tip_m"],
-        "max_abs_tip_m": s["max_abs_tip_m"],
+        "rms_tip_m": math.nan if s["rms_tip_m"] is None else s["rms_tip_m"],
+        "max_abs_tip_m": math.nan if s["max_abs_tip_m"] is None else s["max_abs_tip_m"],
         "max_abs_rel_disp_m": s["max_abs_rel_disp_m"],
         "impacts_per_cycle": math.nan if s["impacts_per_cycle"] is None
         else s["impacts_per_cycle"],
