@@ -283,6 +283,24 @@ def test_the_page_redraws_when_the_gap_moves(browser, server):
     page.context.close()
 
 
+def test_a_change_stops_the_simulated_lobes_and_the_page_answers(browser, server):
+    """While the ball bar's lobes are simulated, the page answers a change: the views
+    redraw, and the simulation, superseded, stops instead of finishing and drawing."""
+    page = _open(browser, server)
+    page.get_by_text("Response and lobes").click()
+    page.wait_for_selector(".status-lobes >> text=change 0: drawn in", timeout=60_000)
+    page.get_by_text("Simulate the ball bar's lobes").click()
+    page.wait_for_selector(".status-simulated >> text=simulating cuts", timeout=30_000)
+    _set(page, "ball-gap_mm", "0.3")
+    page.wait_for_selector(".status-response >> text=change 1: drawn in", timeout=60_000)
+    page.wait_for_selector(".status-lobes >> text=change 1: drawn in", timeout=30_000)
+    page.wait_for_timeout(3000)  # had it gone on, its next points would be done by now
+    simulated = page.locator(".status-simulated").evaluate(
+        "e => (e.shadowRoot || e).textContent")
+    assert "simulating" not in simulated and "simulated cuts in" not in simulated
+    page.context.close()
+
+
 def test_an_out_of_range_value_shows_the_message_and_keeps_the_design(browser, server):
     page = _open(browser, server)
     _set(page, "ball-gap_mm", "30")
