@@ -15,7 +15,8 @@ from cli_output import assert_one_line_error
 
 import boringbar as bb
 from boringbar.cli.main import main
-from boringbar.simulate import HISTORY_ROWS, check_steady
+from boringbar.run_limits import check_steady
+from boringbar.simulate import HISTORY_ROWS
 
 #: functions that take **kwargs, and where those go (each must refuse unknown names)
 FORWARDED = {"published_cases": "make_system"}

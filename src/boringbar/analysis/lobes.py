@@ -71,7 +71,8 @@ from boringbar.analysis.sweep import Case, as_cases
 from boringbar.execute import Execution
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
 from boringbar.reference.stability import limit_at_speeds
-from boringbar.simulate import Integration, check_delay, resolved_integrators, simulate
+from boringbar.run_limits import check_delay
+from boringbar.simulate import Integration, resolved_integrators, simulate
 from boringbar.version import __version__
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)

@@ -36,6 +36,7 @@ from boringbar.model.system import (
 )
 from boringbar.model.system_file import load_system
 from boringbar.progress import ProgressCallback
+from boringbar.run_limits import check_delay, check_step, check_steps
 from boringbar.simulate import (
     INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
@@ -43,9 +44,6 @@ from boringbar.simulate import (
     STEADY_FRACTION,
     Initial,
     Integration,
-    check_delay,
-    check_step,
-    check_steps,
 )
 
 PROG = "boringbar"

@@ -28,14 +28,8 @@ from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_ato
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import make_system
 from boringbar.plot import plot_run
-from boringbar.simulate import (
-    HISTORY_ROWS,
-    STEADY_FRACTION,
-    check_history,
-    check_steady,
-    check_steps,
-    simulate,
-)
+from boringbar.run_limits import check_history, check_steady, check_steps
+from boringbar.simulate import HISTORY_ROWS, STEADY_FRACTION, simulate
 
 
 def add_simulate(sub) -> None:

@@ -53,15 +53,8 @@ from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import MAX_DEPTH, Harmonic
 from boringbar.model.system import make_system
-from boringbar.simulate import (
-    INTEGRATOR_CHOICES,
-    Initial,
-    Integration,
-    check_delay,
-    check_friction_law,
-    check_step,
-    check_steps,
-)
+from boringbar.run_limits import check_delay, check_step, check_steps
+from boringbar.simulate import INTEGRATOR_CHOICES, Initial, Integration, check_friction_law
 from boringbar.studies.schema import SYSTEM_KEYS, Setting, Study, StudyError
 
 
