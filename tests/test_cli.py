@@ -154,15 +154,19 @@ def test_the_help_lines_are_the_commands_own_and_help_imports_no_command():
 
 
 def test_commands_without_out_write_to_their_own_folders(tmp_path, monkeypatch, capsys):
-    """No --out: out/COMMAND/NAME (NAME the input file's, or published), so that one
-    command's summary.json never replaces another's."""
+    """No --out: out/COMMAND/NAME (NAME the input file's, or published, and the bars
+    given), so that one command's summary.json never replaces another's, nor one bar's
+    another bar's."""
     monkeypatch.chdir(tmp_path)
     system = Path(__file__).resolve().parents[1] / "examples/systems/steel_coolant_tmd.toml"
     assert main(["simulate", "--force-n", "10", "--duration-s", "0.02", "--quiet"]) == 0
     assert main(["simulate", "--system", str(system), "--bar", "tmd", "--force-n", "10",
                  "--duration-s", "0.02", "--quiet"]) == 0
+    assert main(["simulate", "--system", str(system), "--bar", "solid", "--force-n", "10",
+                 "--duration-s", "0.02", "--quiet"]) == 0
     assert main(["modes", "--quiet"]) == 0
     written = sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*.json"))
     assert written == ["out/modes/published/modes.json",
                        "out/simulate/published/summary.json",
-                       "out/simulate/steel_coolant_tmd/summary.json"]
+                       "out/simulate/steel_coolant_tmd-solid/summary.json",
+                       "out/simulate/steel_coolant_tmd-tmd/summary.json"]

@@ -7,6 +7,7 @@ promise: their files, their JSON, their exit codes and their one-line errors.
 """
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from cli_output import assert_one_line_error, json_out
 from boringbar.analysis.lobes import default_speeds
 from boringbar.analysis.sweep import published_cases
 from boringbar.cli.main import main
+from boringbar.model.system_file import load_system
 
 #: A solid-bar lobe grid that has both stable and chattering points in 0.3 s runs.
 SMALL = ["--bar", "solid", "--rpm", "1000:1100:50", "--duration-s", "0.3",
@@ -86,6 +88,21 @@ def test_lobes_default_to_the_bars_speeds_and_one_percent_depths(tmp_path, capsy
             assert v["first_unstable_depth_m"] / v["limit_depth_m"] == pytest.approx(1.01)
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["depth_grid"].startswith("depth_tolerance = 0.01")
+
+
+def test_analytic_lobes_default_to_the_bars_speeds(tmp_path, capsys):
+    """--analytic without --rpm: the same speeds as the simulated lobes (the bar's lobes
+    1 to 5), for the published bar and for a bar of one's own, not a fixed band."""
+    mine = Path(__file__).resolve().parents[1] / "examples/systems/carbide_ld10_tungsten.toml"
+    speeds = {}
+    for name, extra in (("published", []), ("mine", ["--system", str(mine)])):
+        assert main(["lobes", "--analytic", "--bar", "solid", *extra,
+                     "--out", str(tmp_path / name), "--json"]) == 0
+        speeds[name] = [v["rpm"] for v in json_out(capsys)["cases"][0]["speeds"]]
+    assert speeds["published"] == list(default_speeds(published_cases(("solid",))))
+    spec = load_system(mine)
+    assert speeds["mine"] == list(default_speeds(published_cases(("solid",), spec=spec)))
+    assert speeds["mine"][0] < speeds["published"][0]  # a longer, softer bar: slower lobes
 
 
 def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):

@@ -164,7 +164,8 @@ def _mark_modes(ax, diagram, fitted_hz, colour) -> None:
                     bbox={"fc": "white", "ec": "none", "pad": 0.5})
 
 
-def plot_analytic_lobes(curves, rpm_range, *, fig=None) -> Figure:
+def plot_analytic_lobes(curves, rpm_range, *, name: str = "published bar",
+                        fig=None) -> Figure:
     """Classical stability lobes, one panel: each case's lower envelope of its lobes
     (thick; with one case also each lobe, thin), its speed-independent limit dashed.  ``curves``:
     (label, lobes dict of lobes_of_receptance, envelope rpm, envelope limit m)."""
@@ -190,7 +191,7 @@ def plot_analytic_lobes(curves, rpm_range, *, fig=None) -> Figure:
     ax.set_ylim(0, 1.15 * top * 1e3 if top > 0 else 1)
     ax.set_xlabel("spindle speed (rev/min)")
     ax.set_ylabel("limiting depth of cut (mm)")
-    ax.set_title("stability lobes from the tip FRF (frequency domain; dashed: the "
-                 "speed-independent limit)", fontsize=9)
+    ax.set_title(f"{name}: stability lobes from the tip FRF (frequency domain; dashed: "
+                 "the speed-independent limit)", fontsize=9)
     ax.legend(fontsize=8, loc="upper left")
     return fig

@@ -17,11 +17,20 @@ from boringbar.analysis.frf_fit import (
     fit_modes,
     stabilisation,
 )
+from boringbar.analysis.lobes import default_speeds, lobe_speeds
 from boringbar.analysis.sweep import parse_range
-from boringbar.cli.options import OUT_HELP, Outcome, many_cases, resolve_files, wrote
+from boringbar.cli.options import (
+    OUT_HELP,
+    Outcome,
+    many_cases,
+    resolve_files,
+    system_spec,
+    wrote,
+)
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.measured_frf import read_frf
 from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
+from boringbar.plot_style import system_label
 from boringbar.reference.stability import (
     GRID_SPAN,
     TWO_PI,
@@ -111,7 +120,8 @@ def analytic_lobes_outcome(args, kr: float) -> Outcome:
     measured FRF of --frf as it is; no time-domain cut is simulated."""
     check_positive("--kr-mpa", kr * 1e-6, "MPa")
     resolve_files(args, [])
-    rpm = np.asarray(parse_range(args.rpm or "500:5000:50", "--rpm"), dtype=float)
+    rpm = np.asarray(parse_range(args.rpm, "--rpm") if args.rpm else
+                     analytic_speeds(args), dtype=float)
     for r in rpm:
         check_positive("--rpm", r, "rev/min")
     lo, hi = (rpm.min(), rpm.max()) if len(rpm) > 1 else (0.8 * rpm[0], 1.2 * rpm[0])
@@ -128,7 +138,12 @@ def analytic_lobes_outcome(args, kr: float) -> Outcome:
     files = {"json": out / "lobes_analytic.json", "png": out / "lobes_analytic.png"}
     summary = {"method": "analytic", "kr_pa": kr, "cases": rows,
                "files": {k: str(v) for k, v in files.items()}}
-    save_figure_atomic(plot_analytic_lobes(curves, (float(lo), float(hi))), files["png"])
+    measured, spec = getattr(args, "frf_measured", None), system_spec(args)
+    name = (f"measured FRF {Path(args.frf).name}" if measured is not None
+            else f"modal fit {Path(args.frf).name}" if getattr(args, "frf", None)
+            else system_label(spec.name) if spec is not None else "published bar")
+    save_figure_atomic(plot_analytic_lobes(curves, (float(lo), float(hi)), name=name),
+                       files["png"])
     write_json_atomic(summary, files["json"])
 
     def text(say) -> None:
@@ -142,6 +157,17 @@ def analytic_lobes_outcome(args, kr: float) -> Outcome:
         say(wrote(summary["files"]))
 
     return Outcome(summary, text)
+
+
+def analytic_speeds(args) -> tuple[float, ...]:
+    """``lobes --analytic``'s speeds without --rpm: the first lobes of each case's bar
+    (:func:`~boringbar.analysis.lobes.default_speeds`, as the simulated lobes take
+    them), or of a measured FRF's most flexible mode (its peak |G|)."""
+    measured = getattr(args, "frf_measured", None)
+    if measured is not None:
+        peak = int(np.argmax(np.abs(measured.receptance)))
+        return lobe_speeds([measured.omega[peak] / (2 * math.pi)])
+    return default_speeds(many_cases(args)[0])
 
 
 def _sources(args, kr, rpm, dense):

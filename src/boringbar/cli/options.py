@@ -285,15 +285,24 @@ def resolve_files(args, bars: list[str]) -> None:
 
 #: --out's help: each command and each bar writes to its own folder by default, so that
 #: no run overwrites another's files
-OUT_HELP = "output directory (default: out/COMMAND/NAME: NAME the input file's, or published)"
+OUT_HELP = ("output directory (default: out/COMMAND/NAME: NAME the input file's, or "
+            "published, and the bars given with --bar; a rerun with other options writes "
+            "over it)")
 
 
 def default_out(args) -> Path:
     """out/COMMAND/NAME: NAME the stem of the command's input (its positional file, the
-    --system file or the --frf fit), "published" without one."""
+    --system file or the --frf fit), "published" without one, followed by the bars
+    given with --bar ("published-tmd"), so that each bar's run keeps its own files."""
     source = (getattr(args, "file", None) or getattr(args, "system", None)
               or getattr(args, "frf", None))
-    return Path("out") / args.command / (Path(source).stem if source else "published")
+    name = Path(source).stem if source else "published"
+    bars = getattr(args, "bar", None)
+    if isinstance(bars, list) and bars:
+        name += "".join(f"-{w.strip()}" for b in bars for w in b.split(",") if w.strip())
+    elif isinstance(bars, str):
+        name += f"-{bars}"
+    return Path("out") / args.command / name
 
 
 def gap_default_mm(args) -> float:

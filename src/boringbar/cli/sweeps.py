@@ -72,7 +72,8 @@ def add_lobes(sub) -> None:
     g.add_argument("--analytic", action="store_true",
                    help="the classical frequency-domain lobes of the tip FRF instead of "
                         "simulated cuts (with --frf: of a measured FRF as it is); writes "
-                        "DIR/lobes_analytic.json and .png (default --rpm: 500:5000:50)")
+                        "DIR/lobes_analytic.json and .png (default --rpm: the bars' lobes 1 "
+                        "to 5 as above; of a measured FRF, those of its most flexible mode)")
     g.add_argument("--depth-step-mm", type=float, metavar="MM",
                    help="depth-of-cut step in mm (default: --method search: geometric "
                         "steps of --depth-tolerance; scan: 0.01, published)")
