@@ -182,6 +182,7 @@ def test_a_run_too_short_to_be_steady_reports_no_steady_values():
     assert s["steady_periods"] == pytest.approx(0.8e-3 * 525.225, rel=1e-3)
     assert s["rms_tip_m"] is None and s["max_abs_tip_m"] is None and s["pattern"] is None
     assert "shorter than one period" in short._repr_html_()
+    assert short.rms_tip_m is None and short.pattern is None and not short.steady
     long = bb.simulate(bar, forcing, duration_s=2.5 / 525.225 / 0.8)
     assert long.summary()["steady_periods"] >= 1.0 and long.summary()["rms_tip_m"] > 0
 

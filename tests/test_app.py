@@ -385,6 +385,20 @@ def test_a_newer_request_cancels_the_one_before():
     assert stops == ["first"]  # stopped at its next point, not run to its end
 
 
+def test_the_command_loads_panel_only_to_serve():
+    """`boringbar app --help` answers without loading Panel; without the extra, the
+    command says in one line what to install (exit 2)."""
+    code = ("import sys\nfrom boringbar.cli.main import main\ntry:\n    main(['app', '--help'])\n"
+            "except SystemExit:\n    pass\nprint('panel' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.splitlines()[-1] == "False"
+    code = ("import sys\nsys.modules['panel'] = None  # as if the extra were not installed\n"
+            "from boringbar.cli.main import main\nsys.exit(main(['app']))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 2 and out.stderr.count("\n") == 1
+    assert "panel is missing): pip install 'boringbar[app]'" in out.stderr
+
+
 def test_the_server_binds_this_machine_unless_told(tmp_path):
     """--host exposes the page with a warning on stderr; the default prints none."""
     port = _free_port()

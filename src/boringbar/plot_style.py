@@ -20,6 +20,7 @@ import textwrap
 import numpy as np
 from matplotlib.text import Text
 
+from boringbar.model.system_file import PUBLISHED_NAME
 from boringbar.palette import BAR_STYLE, CYCLE, DARK_GREY, GREY, OKABE_ITO  # noqa: F401 (shared)
 
 #: Width (in) of a figure shown in one of the report's two columns.
@@ -58,7 +59,7 @@ def bar_name(attrs: dict) -> str:
 
 def system_label(name: str) -> str:
     """A system file's name as a figure names it: "published bar" for the published one."""
-    return "published bar" if name == "published" else name
+    return "published bar" if name == PUBLISHED_NAME else name
 
 
 def _system_file_names(obj, names: list[str]) -> None:

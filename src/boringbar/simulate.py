@@ -187,9 +187,16 @@ class Run:
     integrator: str = "rk4"
 
     @property
-    def rms_tip_m(self) -> float:
-        """RMS of the sampled tip displacement W over the steady part (m)."""
-        return self.metrics["rms_tip_m"]
+    def rms_tip_m(self) -> float | None:
+        """RMS of the sampled tip displacement W over the steady part (m); None for a
+        harmonic run whose steady part holds less than one forcing period."""
+        return self.metrics["rms_tip_m"] if self.steady else None
+
+    @property
+    def steady(self) -> bool:
+        """The steady part holds one forcing period at least (a cut: always)."""
+        periods = self.steady_periods
+        return periods is None or periods >= 1.0 - 1e-9
 
     def config(self) -> dict:
         return {
@@ -219,8 +226,7 @@ class Run:
         peak or pattern: those are None, with a warning saying why."""
         m = self.metrics
         sys = self.system
-        periods = self.steady_periods
-        steady = periods is None or periods >= 1.0 - 1e-9
+        periods, steady = self.steady_periods, self.steady
         if not steady:
             warnings.warn(f"the steady part of this run ({self.final.t_s - self.steady_start_s:.3g}"
                           f" s) holds {periods:.2f} of a forcing period: no steady RMS, peak "
@@ -671,8 +677,8 @@ def _result(su: _Setup, elapsed: float) -> Run:
         "balance_residual_j": float(w_in - (e1 - e0) - dissipated),
         "balance_relative": float((w_in - (e1 - e0) - dissipated) / scale),
     }
-    pattern = None
-    if system.kind == "ball" and not cutting:
+    pattern = None  # none without a whole forcing period to classify
+    if system.kind == "ball" and not cutting and (t_end - t_steady) >= period * (1 - 1e-9):
         pattern = classify(imp[:min(n_imp, cap_imp), 0], imp[:min(n_imp, cap_imp), 1],
                            stick[:min(n_stk, cap_imp)], (t_steady, t_end), period, dt=dt,
                            contact_time=met[L.T_CONTACT])

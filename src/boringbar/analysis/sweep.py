@@ -28,6 +28,7 @@ from boringbar.execute import Execution
 from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
+from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
 from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
 from boringbar.version import __version__
@@ -66,7 +67,7 @@ class Case:
 
     def __post_init__(self):
         if not isinstance(self.system, System):
-            raise TypeError(f"Case system = {self.system!r} must be a System (make_system)")
+            raise TypeError(_not_a_system("Case system", self.system))
         given = (self.bar, self.gap_m, self.friction)
         for name, mine, value in zip(("bar", "gap_m", "friction"), given,
                                      _describe(self.system), strict=True):
@@ -80,10 +81,13 @@ class Case:
         """The case of ``system``: its bar, gap and friction read from it, labelled
         as :func:`published_cases` labels (or ``label``)."""
         if not isinstance(system, System):
-            raise TypeError(f"system = {system!r} must be a System (make_system)")
+            raise TypeError(_not_a_system("system", system))
         bar, gap, friction = _describe(system)
         auto = (f"{bar} gap={gap * 1e3:g}mm friction={friction}" if bar == "ball" else bar)
-        return cls(label or auto, system, bar, gap, friction, initial)
+        # a bar of one's own is named by its file (the published one's labels stay short)
+        own = system.spec is not None and system.spec.name != PUBLISHED_NAME
+        return cls(label or (f"{system.spec.name} {auto}" if own else auto), system, bar,
+                   gap, friction, initial)
 
 
 def _describe(system: System) -> tuple[str, float, str]:
@@ -104,8 +108,8 @@ def as_cases(systems, name: str = "systems") -> list[Case]:
     elif isinstance(systems, Sequence) and not isinstance(systems, str):
         cases = [v if isinstance(v, Case) else Case.of(v) for v in systems]
     else:
-        raise TypeError(f"{name} = {systems!r} must be a System, a Case, a sequence of "
-                        "them or a mapping of label to System")
+        raise TypeError(_not_a_system(name, systems, "a System, a Case, a sequence of them or "
+                                                    "a mapping of label to System"))
     if not cases:
         raise ParameterError(f"{name} is empty: give at least one System")
     labels = [c.label for c in cases]
@@ -116,9 +120,20 @@ def as_cases(systems, name: str = "systems") -> list[Case]:
     return cases
 
 
+def _not_a_system(name: str, value, expected: str = "a System (make_system)") -> str:
+    """The TypeError's message for ``value`` given where a System is expected: a system
+    file's description (what load_system returns) is told how to get its bars."""
+    if isinstance(value, SystemSpec):
+        return (f"{name} = the system file {value.name!r} (a SystemSpec, what load_system "
+                f"returns) must be {expected}: bb.variants(spec) gives its solid, ball and "
+                "TMD bars, bb.make_system(kind, spec=spec) one of them")
+    shown = repr(value) if len(repr(value)) <= 80 else f"a {type(value).__name__}"
+    return f"{name} = {shown} must be {expected}"
+
+
 def _relabel(case, label: str) -> Case:
     if not isinstance(case, Case):
-        raise TypeError(f"systems[{label!r}] = {case!r} must be a System or a Case")
+        raise TypeError(_not_a_system(f"systems[{label!r}]", case, "a System or a Case"))
     return replace(case, label=label)
 
 
@@ -151,7 +166,7 @@ def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
             kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber_m",
                                                                "tmd_mass_kg", "tmd_design",
                                                                "modal", "spec")}
-            cases.append(Case.of(make_system(bar, preset, **kw)))
+            cases.append(Case.of(make_system(bar, preset, **kw), bar))
     return cases
 
 

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
+import importlib
+
 from boringbar._validate import ParameterError, check_int
 from boringbar.cli.options import Outcome
 from boringbar.model.system_file import load_system
-
-try:  # the page's libraries are an extra: boringbar[app]
-    from boringbar.webapp import serve
-except ImportError as exc:
-    serve, MISSING = None, exc.name
 
 
 def add_app(sub) -> None:
@@ -30,10 +27,14 @@ def add_app(sub) -> None:
 
 
 def cmd_app(args) -> Outcome:
-    if serve is None:
-        raise ParameterError(f"boringbar app needs the design page's libraries ({MISSING} is "
-                             "missing): pip install 'boringbar[app]'")
     check_int("--port", args.port, 1, 65535)
     spec = load_system(args.system) if args.system else None
-    serve(spec, port=args.port, host=args.host, show=args.show)
+    # the page's libraries (Panel, Bokeh: an extra, boringbar[app]) are loaded only to
+    # serve it, so that `boringbar app --help` and a bad option answer at once
+    try:
+        webapp = importlib.import_module("boringbar.webapp")
+    except ImportError as exc:
+        raise ParameterError(f"boringbar app needs the design page's libraries ({exc.name} "
+                             "is missing): pip install 'boringbar[app]'") from None
+    webapp.serve(spec, port=args.port, host=args.host, show=args.show)
     return Outcome({"served": True}, lambda say: None)

@@ -29,10 +29,19 @@ def cmd_audit(args) -> Outcome:
         for preset in result["presets"]:
             say(count_line(result, preset))
         say("")
-        width = max(len(p) for p in result["presets"])
+        width = max(max(len(p) for p in result["presets"]), 14)
+        say(f"{'':<4} " + "  ".join(f"{p:<{width}}" for p in result["presets"]) + "  claim")
         for c in result["claims"]:
-            cells = "  ".join(f"{c['verdict'][p]:<{max(width, 14)}}" for p in result["presets"])
-            say(f"{c['id']:<4} {cells}")
-        say(f"\n(columns: {', '.join(result['presets'])}; --json for the numbers and reasons)")
+            cells = "  ".join(f"{c['verdict'][p]:<{width}}" for p in result["presets"])
+            say(f"{c['id']:<4} {cells}  {_short(c['statement'])}")
+        say("\n(--json, or the report's folded table, for each claim's numbers and the reason "
+            "for its verdict)")
 
     return Outcome(result, text)
+
+
+def _short(statement: str, width: int = 60) -> str:
+    """A claim's statement cut to ``width`` characters at a word."""
+    if len(statement) <= width:
+        return statement
+    return statement[:width].rsplit(" ", 1)[0] + " ..."

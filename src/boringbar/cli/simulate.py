@@ -27,7 +27,9 @@ from boringbar.cli.options import (
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import make_system
+from boringbar.model.system_file import PUBLISHED_NAME
 from boringbar.plot import plot_run
+from boringbar.plot_style import system_label
 from boringbar.run_limits import check_history, check_steady, check_steps
 from boringbar.simulate import HISTORY_ROWS, STEADY_FRACTION, simulate
 
@@ -77,7 +79,10 @@ def cmd_simulate(args) -> Outcome:
     ds = run.to_xarray()
     write_netcdf_atomic(ds, files["netcdf"])
     save_figure_atomic(plot_run(ds), files["png"])
-    summary = {**run.summary(), "files": {k: str(v) for k, v in files.items()}}
+    spec = run.system.spec
+    summary = {**run.summary(), "system_name": spec.name if spec is not None else
+               Path(args.frf).stem if getattr(args, "frf", None) else PUBLISHED_NAME,
+               "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic({**summary, "config": run.config()}, files["summary"])
 
     def text(say) -> None:
@@ -113,11 +118,16 @@ def _simulate_forcing(args):
                         stop_at_zero=args.stop_at_zero, **cut_options(args))
 
 
+def _named(s: dict) -> str:
+    """'ball bar of published bar', 'tmd bar of mybar': which bar of which file."""
+    return f"{s['bar']} bar of {system_label(s['system_name'])}"
+
+
 def _cut_text(s: dict) -> str:
     c = s["cutting"]
     cfg = "static start" if c["start"] == "static" else "from rest"
     lines = [
-        f"{s['bar']} bar, {s['preset']} preset: cut at {c['rpm']:g} rpm "
+        f"{_named(s)}, {s['preset']} preset: cut at {c['rpm']:g} rpm "
         f"({s['forcing_frequency_hz']:.2f} Hz), depth {c['depth_m'] * 1e3:g} mm, {cfg}",
         f"  natural frequency  {s['natural_frequency_hz']:.2f} Hz",
     ]
@@ -144,7 +154,7 @@ def _cut_text(s: dict) -> str:
 
 def _simulate_text(s: dict, run) -> str:
     lines = [
-        f"{s['bar']} bar, {s['preset']} preset: F0 = {s['force_n']:g} N, "
+        f"{_named(s)}, {s['preset']} preset: F0 = {s['force_n']:g} N, "
         f"Omega/omega_n = {s['ratio']:.4g} ({s['forcing_frequency_hz']:.2f} Hz)",
         f"  natural frequency  {s['natural_frequency_hz']:.2f} Hz",
         f"  tip RMS            {s['rms_tip_m'] * 1e3:.4g} mm (steady part)",

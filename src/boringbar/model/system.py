@@ -164,6 +164,10 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     :meth:`ModalModel.from_tap_test`).  ``static_ratio``: F_s / F_c of true
     stick-slip (exact integrator only; see :class:`Friction`).
     """
+    if isinstance(bar, SystemSpec):
+        raise TypeError(f"bar = the system file {bar.name!r}: make_system's first argument "
+                        "is the bar's kind ('solid', 'ball' or 'tmd'); give the file as "
+                        "spec=, e.g. make_system('ball', spec=spec)")
     check_choice("bar", bar, BAR_KINDS)
     check_choice("preset", preset, PRESETS)
     spec = published_system_spec() if spec is None else spec

@@ -34,6 +34,8 @@ from boringbar.model.materials import MATERIALS
 
 #: The file the presets build from.
 PUBLISHED_FILE = "published.toml"
+#: the name the published bar's file gives itself
+PUBLISHED_NAME = "published"
 TUNINGS = ("den-hartog", "sims", "given")
 #: The forms a ball's friction may take (one per file): key -> Friction kind.
 FRICTION_FORMS = {"published_number": "published-number", "rolling_mm": "rolling",

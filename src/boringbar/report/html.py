@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
+from markupsafe import Markup, escape
 
 from boringbar.analysis.design_options import objective_reading, reading
 from boringbar.io import atomic_path
@@ -43,6 +44,15 @@ _ENV = Environment(
     lstrip_blocks=True,
     keep_trailing_newline=False,
 )
+
+
+def _words(command: str) -> Markup:
+    """A command line whose words do not break: it wraps only between them (a flag
+    split at its hyphen reads as two), and copies as it is."""
+    return Markup(" ".join(f"<span class='w'>{escape(w)}</span>" for w in command.split(" ")))
+
+
+_ENV.filters["words"] = _words
 
 
 def _mm(value_m, digits: int = 3) -> str:
