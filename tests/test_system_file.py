@@ -215,7 +215,7 @@ def test_a_round_cavity_inside_the_section_matches_the_closed_form():
     text = uniform(200.0, 40.0)
     text["cavity"] = {"position_mm": 150.0, "length_mm": 10.0, "depth_mm": 12.0}
     spec = parse_system(text, "round.toml")
-    assert spec.cavity.section_diameter == pytest.approx(closed, rel=1e-12)
+    assert spec.cavity.section_diameter_m == pytest.approx(closed, rel=1e-12)
     assert spec.to_dict()["cavity"]["section_diameter_mm"] == pytest.approx(closed * 1e3)
     assert parse_system(spec.to_dict()).cavity == spec.cavity
 
@@ -230,7 +230,7 @@ def test_the_published_cavity_computed_is_near_the_published_equivalent():
     centre = (64 / math.pi * cut_section_moment(0.025, 0.0, 0.0151 / 2, 0.0125)) ** 0.25
     assert centre < 0.017 < d < 0.025
     d = mutated("cavity.section_diameter_mm", None)
-    assert parse_system(d, "x.toml").cavity.section_diameter == pytest.approx(0.017406, rel=1e-4)
+    assert parse_system(d, "x.toml").cavity.section_diameter_m == pytest.approx(0.017406, rel=1e-4)
 
 
 def test_a_coolant_bore_stays_in_the_equivalent_section():
@@ -336,7 +336,7 @@ def test_a_gap_that_fills_the_cavity_exactly_is_not_refused_by_round_off(depth_m
     d["cavity"]["depth_mm"] = depth_mm
     d["ball"].update(diameter_mm=ball_mm, gap_mm=gap_mm)
     spec = parse_system(d, "round-off")
-    assert spec.ball.gap == gap_mm / 1000
+    assert spec.ball.gap_m == gap_mm / 1000
     assert make_system("ball", spec=spec, gap_m=gap_mm / 1000).damper.gap_m == gap_mm / 1000
     with pytest.raises(ValueError, match=r"gap_m = .* m is outside .* \(at most the cavity's"):
         make_system("ball", spec=spec, gap_m=gap_mm / 1000 * (1 + 1e-6))
@@ -394,6 +394,6 @@ def test_a_cavity_that_ends_at_the_tip_is_inside_the_bar():
     d = tomllib.loads((EXAMPLES / "carbide_ld10_tungsten.toml").read_text())
     d["cavity"].update(position_mm=310.1, length_mm=19.8)
     spec = parse_system(d, "tip")
-    assert spec.cavity.position + spec.cavity.length / 2 > spec.bar.length_m
+    assert spec.cavity.position_m + spec.cavity.length_m / 2 > spec.bar.length_m
     ends = [s.end_m for s in spec.stepped_bar(True).sections]
     assert ends[-1] == spec.bar.length_m and len(ends) == 2

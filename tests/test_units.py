@@ -20,6 +20,7 @@ import xarray as xr
 import boringbar as bb
 from boringbar.analysis import basins, bifurcation, continuation, design, lobes, sensitivity, sweep
 from boringbar.analysis.design_options import UNCERTAIN, VARIABLES
+from boringbar.model.system_file import BallSpec, CavitySpec, TmdSpec
 from boringbar.vocabulary import FILE_UNITS, unit_of
 
 #: An annotation that says "a number" (or numbers): such a name must carry a unit.
@@ -46,11 +47,15 @@ def _signature_names(where: str, func) -> list[tuple[str, str]]:
             and _quantity(p.annotation, p.default)]
 
 
+#: Public objects reached through another's fields, not exported on their own: the
+#: parts of a system file's description (``load_system(...).cavity``, ...).
+PARTS = {"CavitySpec": CavitySpec, "BallSpec": BallSpec, "TmdSpec": TmdSpec}
+
+
 def _api_names() -> list[tuple[str, str]]:
     """(where, name) of every numeric name of the public API."""
     found = []
-    for public in bb.__all__:
-        obj = getattr(bb, public)
+    for public, obj in [(p, getattr(bb, p)) for p in bb.__all__] + list(PARTS.items()):
         if inspect.isclass(obj):
             if dataclasses.is_dataclass(obj):
                 found += [(f"{public}.{f.name}", f.name) for f in dataclasses.fields(obj)

@@ -47,11 +47,12 @@ def plot_modes(spec, cavity: bool, n_modes: int, title: str = "", *, fig=None) -
     geo.axvline(0.0, color="black", lw=3)
     if cavity and spec.cavity is not None and spec.ball is not None:
         c, b = spec.cavity, spec.ball
-        geo.add_patch(_circle((c.position * mm, 0.0), b.diameter / 2 * mm, bar_colour("ball")))
-        geo.annotate(f"ball {b.diameter * mm:g} mm {b.material}", (c.position * mm,
-                     c.depth / 2 * mm), ha="center", va="bottom", fontsize=8)
+        geo.add_patch(_circle((c.position_m * mm, 0.0), b.diameter_m / 2 * mm,
+                              bar_colour("ball")))
+        geo.annotate(f"ball {b.diameter_m * mm:g} mm {b.material}", (c.position_m * mm,
+                     c.depth_m / 2 * mm), ha="center", va="bottom", fontsize=8)
     if spec.tmd is not None and not cavity:
-        geo.plot([spec.tmd.position * mm], [0.0], "s", color=bar_colour("tmd"), ms=9,
+        geo.plot([spec.tmd.position_m * mm], [0.0], "s", color=bar_colour("tmd"), ms=9,
                  label="absorber")
     geo.set_aspect("equal", adjustable="datalim")
     geo.set_ylabel("radius (mm)")

@@ -79,12 +79,13 @@ DIMENSIONLESS_ENDINGS = ("_ratio", "_ratios", "_fraction", "_count", "_index", "
                          "_id", "_periods", "_relative", "_percent")
 
 #: Numbers whose unit a sibling names: a sweep's ``values`` (``parameter``, and
-#: ``units`` for a factory), a friction law's ``value`` (its ``kind``: m, 1 or N), a
+#: ``units`` for a factory), a friction law's ``value`` and a system file ball's
+#: ``friction_value`` (their ``kind``: m, 1 or N; the file's: mm, 1 or N), a
 #: continuation's ``stop`` and its events' values (``parameter``), a design variable's
 #: bounds and an uncertain input's draws (``name``), a state vector (its modes).
 UNIT_ELSEWHERE = frozenset({
     "values", "value", "stop", "other_end", "event_value", "born_value", "choices", "x",
-    "state",
+    "state", "friction_value",
     "low", "high", "a", "b",
     # a direction's entry under a quantity's key ({"rms_tip_m": {"forward": [...]}})
     "forward", "backward",

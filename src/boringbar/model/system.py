@@ -188,14 +188,14 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     fr = _friction(spec, reading == "paper", friction, friction_number, friction_force_n,
                    reaction, static_ratio, readings)
     b = spec.ball
-    gap = b.gap if gap_m is None else gap_m
+    gap = b.gap_m if gap_m is None else gap_m
     check_range("gap_m", gap, 0.0, spec.max_gap(), lo_open=True,
                 unit="m", why="at most the cavity's depth less the ball")
     material = b.material if ball is None else check_choice("ball", ball, BALLS)
     damper = ImpactDamper.ball(material, gap_m=gap,
                                restitution=b.restitution if restitution is None else restitution,
-                               friction=fr, diameter_m=b.diameter,
-                               mass_kg=b.mass if material == b.material else None, locked=locked)
+                               friction=fr, diameter_m=b.diameter_m,
+                               mass_kg=b.mass_kg if material == b.material else None, locked=locked)
     return System(modal, damper, preset, tuple(readings), spec)
 
 
@@ -222,15 +222,16 @@ def _tmd(spec: SystemSpec, modal: ModalModel, paper: bool, mass, design) -> Tune
     if t is None and mass is None:
         raise ParameterError(f"bar = 'tmd' needs a [tmd] in the system file {spec.source} "
                              "(or a tmd_mass_kg)")
-    given = t is not None and t.stiffness is not None
+    given = t is not None and t.stiffness_n_m is not None
     default = "den-hartog" if t is None else ("given" if paper and given else t.tuning)
     design = check_choice("tmd_design", design or default, TMD_DESIGNS)
-    mass = t.mass if mass is None else mass
+    mass = t.mass_kg if mass is None else mass
     if design in ("given", "published"):
         if not given:
             raise ParameterError(f"tmd_design = {design!r} needs the absorber's stiffness_n_m "
                                  f"and damping_n_s_m in the system file {spec.source}")
-        return TunedMassDamper(t.mass, t.stiffness, t.damping, modal.z_absorber_m, t.label)
+        return TunedMassDamper(t.mass_kg, t.stiffness_n_m, t.damping_n_s_m, modal.z_absorber_m,
+                               t.label)
     if design == "sims":
         return sims_tuning(mass, modal)
     return TunedMassDamper.den_hartog(mass, modal)

@@ -51,29 +51,29 @@ class SystemFileError(ParameterError):
 
 @dataclass(frozen=True)
 class CavitySpec:
-    """The ball's cavity: its centre ``position`` (m from the clamp), its ``length``
-    along the bar (m), the ``section_diameter`` (m) of the solid round section
-    with the bar's stiffness through it (its ``section_bore``, m, kept from the
-    host section), and its ``depth`` (m) in the direction the ball travels."""
+    """The ball's cavity: its centre ``position_m`` (from the clamp), its
+    ``length_m`` along the bar, the ``section_diameter_m`` of the solid round
+    section with the bar's stiffness through it (its ``section_bore_m`` kept from
+    the host section), and its ``depth_m`` in the direction the ball travels."""
 
-    position: float
-    length: float
-    section_diameter: float
-    section_bore: float
-    depth: float
+    position_m: float
+    length_m: float
+    section_diameter_m: float
+    section_bore_m: float
+    depth_m: float
 
 
 @dataclass(frozen=True)
 class BallSpec:
-    """The ball (``material``, ``diameter`` m, ``mass`` kg or None: from the
-    density) and its behaviour: ``gap`` (m), ``restitution``, friction
+    """The ball (``material``, ``diameter_m``, ``mass_kg`` or None: from the
+    density) and its behaviour: ``gap_m``, ``restitution``, friction
     (``friction_kind`` one of FRICTION_FORMS's values, ``friction_value`` in
     its unit, ``friction_reaction`` or None: the preset's, ``static_ratio``)."""
 
     material: str
-    diameter: float
-    mass: float | None
-    gap: float
+    diameter_m: float
+    mass_kg: float | None
+    gap_m: float
     restitution: float
     friction_kind: str
     friction_value: float
@@ -83,15 +83,15 @@ class BallSpec:
 
 @dataclass(frozen=True)
 class TmdSpec:
-    """A tuned mass damper: ``mass`` (kg) at ``position`` (m from the clamp),
-    ``tuning`` (den-hartog, sims, given) and the given ``stiffness`` (N/m) and
-    ``damping`` (N s/m), or None; ``label`` names the given design in results."""
+    """A tuned mass damper: ``mass_kg`` at ``position_m`` (from the clamp),
+    ``tuning`` (den-hartog, sims, given) and the given ``stiffness_n_m`` and
+    ``damping_n_s_m``, or None; ``label`` names the given design in results."""
 
-    mass: float
-    position: float
+    mass_kg: float
+    position_m: float
     tuning: str
-    stiffness: float | None
-    damping: float | None
+    stiffness_n_m: float | None
+    damping_n_s_m: float | None
     label: str
 
 
@@ -118,12 +118,12 @@ class SystemSpec:
     @property
     def ball_position_m(self) -> float:
         """z_d (m): the cavity's centre (the bar's tip if there is no cavity)."""
-        return self.cavity.position if self.cavity else self.bar.length_m
+        return self.cavity.position_m if self.cavity else self.bar.length_m
 
     @property
     def absorber_position_m(self) -> float:
         """z_a (m): the absorber's position (the bar's tip if there is none)."""
-        return self.tmd.position if self.tmd else self.bar.length_m
+        return self.tmd.position_m if self.tmd else self.bar.length_m
 
     def stepped_bar(self, cavity: bool) -> SteppedBar:
         """The FE bar: with the cavity's section (``cavity``) or without."""
@@ -154,7 +154,7 @@ class SystemSpec:
         diameter, and at most the model's MAX_GAP."""
         if self.cavity is None or self.ball is None:
             return MAX_GAP
-        return min(MAX_GAP, self.cavity.depth - self.ball.diameter)
+        return min(MAX_GAP, self.cavity.depth_m - self.ball.diameter_m)
 
     def to_dict(self) -> dict:
         """The resolved description (JSON-able; every default filled in)."""
@@ -530,15 +530,15 @@ def _ball(r: _Reader, d: dict, bar: SteppedBar, cavity: CavitySpec | None):
         r.fail("ball", d["ball"], "a ball needs a [cavity] (its position and size)")
     t = r.table(d["ball"], "ball", _BALL_KEYS)
     material = r.choice(t, "ball.material", tuple(MATERIALS), default="carbide")
-    dia = r.number(t, "ball.diameter_mm", 0, cavity.length * 1e3, default=15.0,
-                   lo_open=True, unit=f"mm (the cavity is {cavity.length * 1e3:g} mm long)")
-    if dia / 1000 >= cavity.depth:
+    dia = r.number(t, "ball.diameter_mm", 0, cavity.length_m * 1e3, default=15.0,
+                   lo_open=True, unit=f"mm (the cavity is {cavity.length_m * 1e3:g} mm long)")
+    if dia / 1000 >= cavity.depth_m:
         r.fail("ball.diameter_mm", dia, f"must be less than the cavity's depth "
-                                        f"{cavity.depth * 1e3:g} mm")
+                                        f"{cavity.depth_m * 1e3:g} mm")
     mass = r.number(t, "ball.mass_g", 0, 100_000, lo_open=True, unit="g")
-    room = min(MAX_GAP, cavity.depth - dia / 1000) * 1e3
+    room = min(MAX_GAP, cavity.depth_m - dia / 1000) * 1e3
     gap = r.number(t, "ball.gap_mm", 0, room, default=min(0.5, room), lo_open=True,
-                   unit=f"mm (cavity depth {cavity.depth * 1e3:g} mm less the ball, at most "
+                   unit=f"mm (cavity depth {cavity.depth_m * 1e3:g} mm less the ball, at most "
                         f"{MAX_GAP * 1e3:g} mm)")
     e = r.number(t, "ball.restitution", 0, 1, default=0.7)
     kind, value, reaction, ratio = _friction(r, t)
@@ -594,7 +594,7 @@ def _paper(r: _Reader, d: dict) -> dict:
 def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
     """``bar`` with the cavity's span given the cavity's equivalent section; the
     host section is split at the cavity's ends unless they sit on its own."""
-    lo, hi = cavity.position - cavity.length / 2, cavity.position + cavity.length / 2
+    lo, hi = cavity.position_m - cavity.length_m / 2, cavity.position_m + cavity.length_m / 2
     out = []
     for s in bar.sections:
         if not _within(lo, hi, s.start_m, s.end_m, bar.length_m):
@@ -604,7 +604,7 @@ def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
         b = s.end_m if near(hi, s.end_m, bar.length_m) else hi
         if a > s.start_m:
             out.append(Section(s.start_m, a, s.diameter_m, s.inner_diameter_m))
-        out.append(Section(a, b, cavity.section_diameter, cavity.section_bore))
+        out.append(Section(a, b, cavity.section_diameter_m, cavity.section_bore_m))
         if b < s.end_m:
             out.append(Section(b, s.end_m, s.diameter_m, s.inner_diameter_m))
     return SteppedBar(tuple(out), bar.youngs_modulus_pa, bar.density_kg_m3, bar.damping_ratio,

@@ -90,7 +90,7 @@ def _system_defaults(resolved: dict, system: SystemSpec, given: set) -> None:
         defaults.update(gap_mm=data["ball"]["gap_mm"], ball=system.ball.material,
                         restitution=system.ball.restitution)
     if system.tmd is not None:
-        defaults.update(tmd_mass_kg=system.tmd.mass, z_absorber_mm=data["tmd"]["position_mm"])
+        defaults.update(tmd_mass_kg=system.tmd.mass_kg, z_absorber_mm=data["tmd"]["position_mm"])
     for k, v in defaults.items():
         if k not in given:
             resolved[SECTION_OF[k]][k] = v
