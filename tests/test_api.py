@@ -185,6 +185,14 @@ def test_a_run_too_short_to_be_steady_reports_no_steady_values():
     assert short.rms_tip_m is None and short.pattern is None and not short.steady
     long = bb.simulate(bar, forcing, duration_s=2.5 / 525.225 / 0.8)
     assert long.summary()["steady_periods"] >= 1.0 and long.summary()["rms_tip_m"] > 0
+    # the analyses refuse such runs before starting, as the command line does
+    with pytest.raises(bb.ParameterError, match=r"Integration.duration_s = 0.001 s leaves a "
+                                                r"steady part of 0.0008 s"):
+        bb.sweep(bar, bb.SweepOptions(ratios=(1.0,), forces_n=(10.0,)),
+                 integration=bb.Integration(duration_s=1e-3))
+    with pytest.raises(bb.ParameterError, match=r"DesignOptions.duration_s = 0.001 s"):
+        bb.design(bb.DesignOptions(bar="ball", variables=(bb.Variable("gap_m", 1e-4, 5e-4),),
+                                   duration_s=1e-3, trials=2))
 
 
 def test_lobe_speeds_must_increase_as_on_the_command_line():

@@ -69,6 +69,14 @@ def check_steady(duration: float, steady_fraction: float, period: float,
                              f"{period / steady_fraction:.3g} s")
 
 
+def check_steady_ratios(system: System, ratios, duration: float, steady_fraction: float,
+                        name: str = "duration_s") -> None:
+    """:func:`check_steady` for the longest forcing period of ``ratios`` (Omega over the
+    natural frequency of ``system``'s host): what an analysis checks before its runs."""
+    period = 2 * math.pi / (min(ratios) * system.reference_frequency_rad_s)
+    check_steady(duration, steady_fraction, period, name)
+
+
 def check_history(n_steps: int, record_every: int, name: str = "record_every") -> int:
     """The number of history rows, n_steps // record_every: at most
     :data:`MAX_HISTORY_ROWS`, else ParameterError naming ``name``."""

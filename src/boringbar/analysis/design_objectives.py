@@ -19,7 +19,8 @@ from boringbar.execute import Execution, run_points
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.reference.stability import system_receptance
-from boringbar.simulate import Initial, Integration, simulate
+from boringbar.run_limits import check_steady_ratios
+from boringbar.simulate import STEADY_FRACTION, Initial, Integration, simulate
 
 #: Frequency lines of the FRF objectives, over FRF_SPAN x the host's f1.
 FRF_LINES = 6001
@@ -74,6 +75,8 @@ def objective_samples(options: DesignOptions, objective: str,
                       execution: Execution | None) -> tuple[np.ndarray, np.ndarray | None]:
     """The objective at each sample, and whether each chattered (cut_amplitude)."""
     if objective == "rms_band":
+        check_steady_ratios(sampled[0][0], options.ratios, options.duration_s,
+                            STEADY_FRACTION, "DesignOptions.duration_s")
         tasks = [(s, options.ratios, options.forces_n, ini, options.duration_s,
                   options.integrator) for s, ini in sampled]
         rms = np.array(run_points(rms_runs, tasks, execution=execution))

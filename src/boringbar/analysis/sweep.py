@@ -30,6 +30,7 @@ from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
 from boringbar.reference.stability import linear_host, natural_frequencies
+from boringbar.run_limits import check_steady_ratios
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
 from boringbar.version import __version__
 
@@ -253,6 +254,9 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
     cases = as_cases(cases, "cases")
     if options.ratios is None:
         options = replace(options, ratios=default_ratios(cases))
+    for case in cases:  # every run has a steady part of one forcing period at least
+        check_steady_ratios(case.system, options.ratios, integration.duration_s,
+                            integration.steady_fraction, "Integration.duration_s")
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
     integrators = [resolve_integrator(integration.integrator, c.system) for c in cases]
