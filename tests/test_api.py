@@ -190,6 +190,11 @@ def test_a_run_too_short_to_be_steady_reports_no_steady_values():
                                                 r"steady part of 0.0008 s"):
         bb.sweep(bar, bb.SweepOptions(ratios=(1.0,), forces_n=(10.0,)),
                  integration=bb.Integration(duration_s=1e-3))
+    short_runs = bb.Integration(duration_s=1e-3)
+    for refused in (lambda: bb.basins(bar, bb.BasinOptions(), integration=short_runs),
+                    lambda: bb.bifurcation(bar, bb.BifurcationOptions(), integration=short_runs)):
+        with pytest.raises(bb.ParameterError, match=r"shorter than one forcing period"):
+            refused()
     with pytest.raises(bb.ParameterError, match=r"DesignOptions.duration_s = 0.001 s"):
         bb.design(bb.DesignOptions(bar="ball", variables=(bb.Variable("gap_m", 1e-4, 5e-4),),
                                    duration_s=1e-3, trials=2))

@@ -64,6 +64,7 @@ from boringbar.execute import Execution
 from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
+from boringbar.run_limits import check_steady_ratios
 from boringbar.simulate import (
     Initial,
     Integration,
@@ -324,6 +325,9 @@ def plan(system, options: BasinOptions, integration: Integration) -> Plan:
         raise ParameterError(f"system = {system!r} must be a System (see make_system)")
     if not operating:
         raise ParameterError("basins needs at least one operating point")
+    for op in operating:  # a steady part of one forcing period at least
+        check_steady_ratios(op.case.system, (op.forcing.ratio,), integration.duration_s,
+                            integration.steady_fraction, "Integration.duration_s")
     initials = options.initials()
     batched = [options.batch > 1 and resolve_integrator(
         integration.integrator, op.case.system) == "rk4" for op in operating]

@@ -42,6 +42,7 @@ from boringbar.execute import Execution
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
+from boringbar.run_limits import check_steady_ratios
 from boringbar.simulate import Initial, Integration, State, simulate
 from boringbar.version import __version__
 
@@ -175,6 +176,10 @@ def plan(systems, options: BifurcationOptions, integration: Integration) -> Plan
         raise ParameterError("bifurcation needs at least one system")
     for target in targets:
         _check_system(target, options.parameter)
+        if isinstance(target, System):  # a steady part of one forcing period at least
+            ratios = options.values if options.parameter == "ratio" else (options.ratio,)
+            check_steady_ratios(target, ratios, integration.duration_s,
+                                integration.steady_fraction, "Integration.duration_s")
     context = {"systems": targets, "options": options, "integration": integration}
     return Plan(context, list(range(len(targets))), {"cases": cases})
 
