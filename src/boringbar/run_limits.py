@@ -55,6 +55,12 @@ def check_steps(duration: float, dt: float, names: tuple[str, str] = ("duration_
     return n_steps
 
 
+def holds_a_period(span: float, period: float) -> bool:
+    """A steady part ``span`` (s) long holds one forcing ``period`` (s), up to round-off:
+    the one rule the checks before a run and a finished run's summary share."""
+    return span >= period * (1.0 - 1e-9)
+
+
 def check_steady(duration: float, steady_fraction: float, period: float,
                  name: str = "duration_s") -> None:
     """The steady part of a harmonic run, its last ``steady_fraction`` of ``duration``
@@ -62,7 +68,7 @@ def check_steady(duration: float, steady_fraction: float, period: float,
     RMS or pattern to report. ``name``: the duration as the caller takes it.
     :func:`simulate` itself takes shorter runs (a state advanced by part of a period);
     the command line and the analyses' options check with this."""
-    if steady_fraction * duration < period * (1.0 - 1e-9):
+    if not holds_a_period(steady_fraction * duration, period):
         raise ParameterError(f"{name} = {duration:g} s leaves a steady part of "
                              f"{steady_fraction * duration:.3g} s, shorter than one forcing "
                              f"period ({period:.3g} s): give {name} >= "

@@ -38,6 +38,7 @@ from boringbar.run_limits import (
     check_history,
     check_step,
     check_steps,
+    holds_a_period,
 )
 from boringbar.version import __version__
 
@@ -195,8 +196,8 @@ class Run:
     @property
     def steady(self) -> bool:
         """The steady part holds one forcing period at least (a cut: always)."""
-        periods = self.steady_periods
-        return periods is None or periods >= 1.0 - 1e-9
+        return not isinstance(self.forcing, Harmonic) or holds_a_period(
+            self.final.t_s - self.steady_start_s, 2 * math.pi / self.omega_rad_s)
 
     def config(self) -> dict:
         return {
@@ -242,10 +243,10 @@ class Run:
             "ratio": self.omega_rad_s / sys.reference_frequency_rad_s,
             "force_n": getattr(self.forcing, "amplitude_n", None),
             "steady_periods": periods,
-            "rms_tip_m": m["rms_tip_m"] if steady else None,
+            "rms_tip_m": self.rms_tip_m,
             "max_abs_tip_m": m["max_abs_tip_m"] if steady else None,
-            "pattern": None if self.pattern is None or not steady else self.pattern.name,
-            "impacts_per_cycle": None if self.pattern is None or not steady else
+            "pattern": None if self.pattern is None else self.pattern.name,
+            "impacts_per_cycle": None if self.pattern is None else
             self.pattern.impacts_per_cycle,
             "max_abs_rel_disp_m": m["max_abs_aux_m"],
             "contact_time_s": m["contact_time_s"],
@@ -678,7 +679,7 @@ def _result(su: _Setup, elapsed: float) -> Run:
         "balance_relative": float((w_in - (e1 - e0) - dissipated) / scale),
     }
     pattern = None  # none without a whole forcing period to classify
-    if system.kind == "ball" and not cutting and (t_end - t_steady) >= period * (1 - 1e-9):
+    if system.kind == "ball" and not cutting and holds_a_period(t_end - t_steady, period):
         pattern = classify(imp[:min(n_imp, cap_imp), 0], imp[:min(n_imp, cap_imp), 1],
                            stick[:min(n_stk, cap_imp)], (t_steady, t_end), period, dt=dt,
                            contact_time=met[L.T_CONTACT])
