@@ -128,7 +128,7 @@ void check_cut(const double* p, double dt, std::int64_t nbuf) {
 void run_rk4(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle dt_,
              nb::handle n_steps_, nb::handle steady_start_, nb::handle rec_every_,
              nb::handle rec_, nb::handle imp_, nb::handle stick_, nb::handle strobe_,
-             nb::handle met_, nb::handle buf_) {
+             nb::handle met_, nb::handle buf_, nb::handle modes_) {
     In p_arr = input(p_, "p");
     Out x_arr = output(x_, "x"), rec_arr = output(rec_, "rec"), imp_arr = output(imp_, "imp");
     Out stick_arr = output(stick_, "stick"), strobe_arr = output(strobe_, "strobe");
@@ -152,6 +152,11 @@ void run_rk4(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle dt_,
     a.strobe = span2<double>(strobe_arr, "strobe", -1, L::STROBE_NCOL);
     a.met = span1<double>(met_arr, "met", L::MET_SIZE);
     a.buf = span2<double>(buf_arr, "buf", -1, 2);
+    Out modes_arr;  // held for the run, like the other arrays
+    if (!modes_.is_none()) {
+        modes_arr = output(modes_, "modes");
+        a.modes = span2<double>(modes_arr, "modes", k.n, 2);
+    }
     check_counts(a.met.d, "met");
     if (k.forcing == L::REGENERATIVE) check_cut(a.p, a.dt, a.buf.n0);
 
@@ -209,10 +214,13 @@ void bind_rk4(nb::module_& m) {
     m.def("run_rk4", &run_rk4, nb::arg("p"), nb::arg("x"), nb::arg("t0"), nb::arg("dt"),
           nb::arg("n_steps"), nb::arg("steady_start"), nb::arg("rec_every"), nb::arg("rec"),
           nb::arg("imp"), nb::arg("stick"), nb::arg("strobe"), nb::arg("met"), nb::arg("buf"),
+          nb::arg("modes").none() = nb::none(),
           "Advance x (updated in place) by n_steps RK4 steps of the published scheme from t0 "
           "(docs/model.md, section 5): the records rec (t, W, W', aux, aux', f every "
-          "rec_every steps), imp, stick, strobe and the metrics met as kernels/rk4.py "
-          "describes; buf the regenerative delay history ((0, 2) when unused).");
+          "rec_every steps), imp, stick, strobe and the metrics met as boringbar.kernels "
+          "describes; buf the regenerative delay history ((0, 2) when unused); modes (a "
+          "cut's, optional: (n_modes, 2)) each mode's max and min over the steady steps, "
+          "updated in place.");
     m.def("run_rk4_batch", &run_rk4_batch, nb::arg("P"), nb::arg("x"), nb::arg("t0"),
           nb::arg("dt"), nb::arg("n_steps"), nb::arg("steady_start"), nb::arg("imp"),
           nb::arg("stick"), nb::arg("strobe"), nb::arg("met"),

@@ -242,6 +242,12 @@ BB_INLINE void run_body(const RunArgs& a) {
         if (steady) {
             st.sample(prev.w, prev.aux, fst[3]);
             if (contact) st.t_contact += dt;
+            if (regen && a.modes.n0 > 0) {
+                for (int i = 0; i < n; ++i) {
+                    a.modes(i, 0) = Steady::pymax(a.modes(i, 0), X[i]);
+                    a.modes(i, 1) = Steady::pymin(a.modes(i, 1), X[i]);
+                }
+            }
         }
         if (a.rec_every > 0 && (k + 1) % a.rec_every == 0 && n_rec < a.rec.n0) {
             double* row = a.rec.row(n_rec);

@@ -555,6 +555,10 @@ struct RunArgs {
     Mat rec, imp, stick, strobe;
     Vec met;
     Mat buf;  // the regenerative delay history (nbuf, 2); may be empty for harmonic runs
+    // a cut's per-mode extremes: row i holds the max and min of u_i over the steady steps
+    // (updated in place, so a caller resets them to -inf, +inf for a window of its own);
+    // empty (0 rows): not kept
+    Mat modes;
 };
 
 // A batch's arguments, as numba's run_rk4_batch takes them.

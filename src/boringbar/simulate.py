@@ -739,6 +739,106 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: fl
     return _result(su, _run_kernel(su))
 
 
+def knocked_cut(system: System, forcing: Regenerative, knock_m: float) -> State:
+    """The state of a cut in progress (every mode at its static deflection under the
+    mean force, the absorber relaxed) just after a knock at the tip: an impulse J on
+    the bar at the tip, every mode taking psi_tip,i J / M_i, with J such that the bar's
+    first mode alone would vibrate at the tip with amplitude ``knock_m`` (m).  A free
+    ball and an absorber keep their absolute velocity (at rest): the ball's relative
+    velocity is minus the bar's at the cavity.  Use it with ``forcing.start ==
+    "static"``, whose surface before the cut is the same static deflection."""
+    check_range("knock_m", knock_m, 0.0, MAX_INITIAL_DISPLACEMENT, unit="m")
+    bar, n = system.bar, system.bar.n_modes
+    x = initial_state(system, Initial())
+    x[:n] += bar.psi_tip * forcing.mean_force_n / bar.stiffness_n_m
+    impulse = knock_m * bar.natural_frequency_rad_s / float(np.sum(bar.psi_tip**2 / bar.mass_kg))
+    x[n:2 * n] = bar.psi_tip * impulse / bar.mass_kg
+    if system.kind == "tmd":
+        x[2 * n] = float(bar.psi_absorber @ x[:n])
+    elif system.kind == "ball":
+        x[2 * n + 1] = -float(bar.psi_damper @ x[n:2 * n])
+    return State(x, 0.0)
+
+
+@dataclass(frozen=True)
+class Window:
+    """What one window of a cut advanced by :class:`CutStepper` did: ``t_end_s`` (s);
+    the tip's extremes ``max_tip_m``, ``min_tip_m`` and its RMS about the window's mean
+    ``rms_tip_m`` (m); ``left_cut``: the chip thickness reached zero in the window;
+    ``impacts``: counted ball impacts; ``max_rel_m``: the ball's largest |y| (m), or the
+    absorber's largest |stroke|; ``mode_half_pp``: half the peak-to-peak of each modal
+    coordinate."""
+
+    t_end_s: float
+    max_tip_m: float
+    min_tip_m: float
+    rms_tip_m: float
+    left_cut: bool
+    impacts: int
+    max_rel_m: float
+    mode_half_pp: np.ndarray  #: half the peak-to-peak of each modal coordinate u_i
+
+    @property
+    def half_pp_m(self) -> float:
+        """Half the peak-to-peak tip displacement (m): the window's amplitude."""
+        return 0.5 * (self.max_tip_m - self.min_tip_m)
+
+
+class CutStepper:
+    """A regenerative cut advanced window by window with the RK4 scheme, for a verdict
+    that decides as the run goes (:mod:`boringbar.analysis.verdict`).
+
+    One kernel call per window of ``window_steps`` steps of ``dt_s``; the kernel keeps
+    the delay history between calls, so the windows together are one run, bit for bit
+    (the core's continuation contract).  ``initial``: as :func:`simulate` takes it;
+    the forcing must not stop at the first zero of the force.
+    """
+
+    def __init__(self, system: System, forcing: Regenerative, *, dt_s: float, window_steps: int,
+                 initial: Initial | State | None = None):
+        if forcing.stop_at_zero:
+            raise ParameterError("a cut advanced window by window runs on after the force "
+                                 "reaches zero: give stop_at_zero = False")
+        check_int("window_steps", window_steps, 1, MAX_STEPS)
+        self.su = _setup(system, forcing, window_steps * dt_s, dt_s, initial, 0, 1.0, False,
+                         "rk4")
+        self.window_steps = window_steps
+        self.t_s = self.su.t0
+        self.modes = np.zeros((system.bar.n_modes, 2))
+
+    def advance(self) -> Window:
+        """Run one more window; what it did."""
+        su, met = self.su, self.su.met
+        for slot in (L.SUM_W2, L.SUM_W, L.N_STEADY, L.MAX_ABS_AUX):
+            met[slot] = 0.0
+        met[L.STEADY_MAX_W], met[L.STEADY_MIN_W] = -np.inf, np.inf
+        self.modes[:, 0], self.modes[:, 1] = -np.inf, np.inf
+        zeros, impacts = met[L.N_ZERO_STEPS], met[L.N_IMP_ALL]
+        run_rk4(su.p, su.x, self.t_s, su.dt, self.window_steps, 0, 0, su.rec, su.imp, su.stick,
+                su.stb, met, su.buf, self.modes)
+        self.t_s = su.t0 + met[L.STEPS_DONE] * su.dt
+        n = met[L.N_STEADY]
+        mean = met[L.SUM_W] / n
+        return Window(self.t_s, float(met[L.STEADY_MAX_W]), float(met[L.STEADY_MIN_W]),
+                      math.sqrt(max(met[L.SUM_W2] / n - mean * mean, 0.0)),
+                      bool(met[L.N_ZERO_STEPS] > zeros), int(met[L.N_IMP_ALL] - impacts),
+                      float(met[L.MAX_ABS_AUX]), 0.5 * (self.modes[:, 0] - self.modes[:, 1]))
+
+    @property
+    def state(self) -> State:
+        """The state reached (x and time)."""
+        return State(self.su.x.copy(), self.t_s)
+
+    @property
+    def system(self) -> System:
+        return self.su.system
+
+    @property
+    def x_start(self) -> np.ndarray:
+        """The state the cut started from (a copy)."""
+        return self.su.x_start.copy()
+
+
 def simulate_stage_loop(system: System, forcing: Harmonic, *, duration_s: float = 2.0,
                         dt_s: float = 1e-6, initial: Initial | State | None = None,
                         record_every: int | None = None, steady_fraction: float = STEADY_FRACTION,

@@ -1,4 +1,5 @@
-"""Stability lobes by time-domain simulation (docs/model.md, sections 4 and 6).
+"""Stability lobes by time-domain simulation (docs/chatter.md; docs/model.md, sections 4
+and 6).
 
 Every grid point (spindle speed x depth of cut) is a regenerative-cutting run
 of the kernel.
@@ -11,6 +12,24 @@ The depths are either a linear grid (``depth_step_m``, the published 0.01
 mm) or, by default, a geometric one: each depth ``depth_tolerance`` (1 %)
 above the one below, from 1 micrometre, so a limit is found to 1 % of itself
 whatever its size.
+
+How a cut is judged (``criterion``):
+
+- ``growth`` (the default for every bar not built by the ``paper`` preset): the
+  converged verdict of :mod:`boringbar.analysis.verdict`.  The onset is where the
+  growth rate of a small knock changes sign; the chatter-free depth is the largest
+  depth whose settled vibration keeps the tool in the cut and its peak-to-peak within
+  the tolerance, from every start tried.  For a bar without a free ball the two are
+  one: it is linear until the tool leaves the cut.  The limit is the onset's depth
+  interpolated in the growth rate between the two adjacent grid depths whose onsets
+  differ, or, for a free ball that bounds the vibration within the tolerance above
+  its onset, the last chatter-free grid depth.
+- ``zero`` (published; the default when every bar is built by the ``paper`` preset):
+  a run of the integration's duration (2 s) from ``start`` chatters if the cutting
+  force reaches zero (the tool leaves the cut).  A finite run places this limit
+  above the true one where the vibration grows slowly (docs/chatter.md).
+- ``bounded``: as ``zero``, or the steady amplitude exceeds ``bounded_fraction`` of
+  the feed.
 
 Two ways to find, at each speed, the depth where chatter starts:
 
@@ -25,26 +44,19 @@ Two ways to find, at each speed, the depth where chatter starts:
   The seed is the analytic (frequency-domain) limit of the linear host at
   that speed: the solid, TMD or locked-ball bar itself, and for the free
   ball the bare cavity bar (at the onset of chatter the vibration is far
-  smaller than the gap, so the ball does not yet touch a wall).  A finite
-  run can only place the simulated limit at or above the analytic one, so
-  the seed sits just below the answer and few stable (full-length) runs
-  are needed.
+  smaller than the gap, so the ball does not yet touch a wall).  It only
+  sets where the search starts: the runs decide.
   It assumes that everything below the bracket it found is stable; where
   stability is not monotone in depth (a ball damper may chatter in a band
   and be stable above it) the scan can find a lower first unstable depth.
-  :func:`compare_methods` lists where the two differ.
+  :func:`compare_methods` lists where the two differ.  (``growth`` searches the
+  onset without the confirmation: its growth rate is continuous in depth.)
 
 Each (case, speed) column is one point of the plan (the contract:
 :mod:`boringbar.analysis.base`), run on an executor (default: a thread per
 core; the kernel releases the GIL).  Every verdict of every grid point that
 was run is kept.  :func:`examples` reruns a stable and an unstable grid point
 with history.
-
-Verdicts: the published criterion (the cutting force reaches zero: the tool
-leaves the cut) and, beside it, bounded chatter (the steady vibration
-amplitude exceeds ``bounded_fraction`` of the feed h_m, or the force reached
-zero).  Lobe runs stop at the first zero of the force, so a chattering run
-costs only the time to its first zero.
 """
 
 from __future__ import annotations
@@ -67,12 +79,23 @@ from boringbar._validate import (
     check_values,
 )
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.lobe_search import (
+    CHATTER,
+    NOT_RUN,
+    STABLE,
+    UNDECIDED,
+    column,
+    fixed_cut,
+    growth_column,
+    onset_depth,
+)
 from boringbar.analysis.sweep import Case, as_cases
+from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.run_limits import check_delay
-from boringbar.simulate import Integration, resolved_integrators, simulate
+from boringbar.simulate import Integration, resolved_integrators, simulate, stick_slip
 from boringbar.version import __version__
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
@@ -92,9 +115,7 @@ DEPTH_FLOOR = 1e-6
 #: to 3 mm: 805); each (case, speed, depth) holds a few numbers in the Dataset.
 MAX_DEPTHS = 100_000
 METHODS = ("scan", "search")
-CRITERIA = ("zero", "bounded")
-#: codes of the verdict arrays
-NOT_RUN, CHATTER, STABLE = -1, 0, 1
+CRITERIA = ("growth", "zero", "bounded")
 #: History rows of an example rerun (about; every n-th step is kept).
 EXAMPLE_ROWS = 20000
 
@@ -129,7 +150,11 @@ class LobesOptions:
     ``rpm``: spindle speeds (rev/min, > 0, increasing; None, the default: the
     bars' lobes, :func:`lobe_speeds`; the published ones are :data:`PUBLISHED_RPM`);
     ``method``: "search" (default) or "scan" (published; module doc);
-    ``criterion``: "zero" (published: the force reaches zero) or "bounded";
+    ``criterion``: "growth" (the converged verdict), "zero" (published: a fixed run's
+    force reaches zero) or "bounded"; None (the default): "zero" where every bar is
+    built by the ``paper`` preset, else "growth" (:func:`criterion_for`);
+    ``verdict``: how "growth" judges a cut (:class:`~boringbar.analysis.verdict.
+    VerdictOptions`: confidence, cap, small knock, tolerance, larger knocks);
     depths ``depth_step_m``, 2 ``depth_step_m``, ... up to ``max_depth_m`` (m), or,
     with ``depth_step_m`` None (the default), a geometric grid from
     :data:`DEPTH_FLOOR` in relative steps of ``depth_tolerance`` (default 1 %; a scan
@@ -137,13 +162,14 @@ class LobesOptions:
     a time; :func:`depth_grid`);
     ``successive``: chattering depths in a row that end a scan.  The cut
     (:class:`~boringbar.model.forcing.Regenerative`): ``kr_pa`` (Pa), ``feed_m``
-    (m), ``revolutions``, ``interpolation``, ``start``, ``bounded_fraction`` (of
+    (m), ``revolutions``, ``interpolation``, ``start`` (of the fixed-length criteria;
+    "growth" starts every cut in progress and knocked), ``bounded_fraction`` (of
     the feed).  ``analytic``: add the frequency-domain limits of the linear hosts.
     """
 
     rpm: tuple[float, ...] | None = None
     method: str = "search"
-    criterion: str = "zero"
+    criterion: str | None = None
     depth_step_m: float | None = None
     max_depth_m: float = 3e-3
     successive: int = 3
@@ -155,12 +181,16 @@ class LobesOptions:
     bounded_fraction: float = 0.1
     analytic: bool = True
     depth_tolerance: float | None = None
+    verdict: VerdictOptions = VerdictOptions()
 
     def __post_init__(self):
         if self.rpm is not None:
             object.__setattr__(self, "rpm", check_speeds("rpm", self.rpm))
         check_choice("method", self.method, METHODS)
-        check_choice("criterion", self.criterion, CRITERIA)
+        if self.criterion is not None:
+            check_choice("criterion", self.criterion, CRITERIA)
+        if not isinstance(self.verdict, VerdictOptions):
+            raise ParameterError(f"verdict = {self.verdict!r} must be a VerdictOptions")
         if depth_grid(self.method, self.depth_step_m, self.depth_tolerance) == "linear":
             step = PUBLISHED_DEPTH_STEP if self.depth_step_m is None else self.depth_step_m
             object.__setattr__(self, "depth_step_m", check_positive("depth_step_m", step, "m"))
@@ -215,6 +245,36 @@ class LobesOptions:
                             bounded_fraction=self.bounded_fraction)
 
 
+def criterion_for(systems) -> str:
+    """The default criterion of a study of ``systems``: "zero" (published) when every one
+    is built by the ``paper`` preset, so the published study reruns as published, else
+    "growth" (the converged verdict)."""
+    return "zero" if all(s.preset == "paper" for s in systems) else "growth"
+
+
+def run_length_text(ds) -> str:
+    """How long each cut of a lobes Dataset ran, in words (summaries and figures)."""
+    a = ds.attrs
+    if a["criterion"] == "growth":
+        mean = float(a.get("mean_run_s", math.nan))
+        return (f"each cut until its verdict is {a['confidence']:g}-certain (at most "
+                f"{a['max_duration_s']:g} s; {mean:.2g} s on average)")
+    return f"each cut {a['duration_s']:g} s from {a['start']}"
+
+
+def method_text(ds) -> str:
+    """The method of a lobes Dataset in one line: criterion, search, integrator, run
+    length (every summary line and figure names it)."""
+    a = ds.attrs
+    crit = {"growth": "converged verdict (growth rate of a knock; settled vibration "
+                      f"within {a.get('tolerance_m', math.nan) * 1e6:g} um p-p)",
+            "zero": "published criterion (the force reaches zero)",
+            "bounded": f"bounded chatter (amplitude > {a.get('bounded_fraction', 0.1):g} "
+                       "h_m, or the force reaches zero)"}[a["criterion"]]
+    return (f"{crit}; {a['method']} on {a['depth_grid']}; {a['integrator_used']} at dt = "
+            f"{a['dt_s']:g} s; {run_length_text(ds)}")
+
+
 def check_speeds(name: str, rpm) -> tuple[float, ...]:
     """Spindle speeds (rev/min): positive and increasing, each once."""
     speeds = check_values(name, np.atleast_1d(rpm).tolist(), 0.0, math.inf, lo_open=True,
@@ -249,76 +309,6 @@ def default_speeds(cases: list[Case]) -> tuple[float, ...]:
     return lobe_speeds([c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases])
 
 
-def cut(case: Case, rpm: float, depth: float, options: LobesOptions,
-        integration: Integration) -> dict:
-    """One cut, stopped at the first zero of the force: its verdicts and metrics."""
-    run = simulate(case.system, options.forcing(depth, rpm), duration_s=integration.duration_s,
-                   dt_s=integration.dt_s, integrator=integration.integrator,
-                   steady_fraction=integration.steady_fraction, record_every=0)
-    c = run.cutting
-    ball = case.system.kind == "ball"
-    return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
-            "amplitude_m": c["amplitude_m"],
-            "impacts": run.metrics["impacts_total"] if ball else -1,
-            "max_rel_disp_m": run.metrics["max_abs_aux_all_m"] if ball else math.nan,
-            "first_zero": math.nan if c["first_zero_time_s"] is None
-            else c["first_zero_time_s"]}
-
-
-def column(case: Case, rpm: float, options: LobesOptions, integration: Integration,
-           seed: int = 1) -> dict:
-    """All the runs at one speed, by ``options.method`` (``seed``: the search's first
-    grid index); returns {depth index: :func:`cut` result}."""
-    n_max, key, need = options.max_index, options.criterion, options.successive
-    done: dict[int, dict] = {}
-
-    def chatter(i: int) -> bool:
-        if i not in done:
-            done[i] = cut(case, rpm, options.depth(i), options, integration)
-        return done[i][key]
-
-    def scan_from(i: int) -> None:
-        run_of = 0
-        while i <= n_max and run_of < need:
-            run_of = run_of + 1 if chatter(i) else 0
-            i += 1
-
-    if options.method == "scan":
-        scan_from(1)
-        return done
-    lo, hi = _bracket(chatter, min(max(1, seed), n_max), n_max)
-    if hi > n_max:
-        return done
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if chatter(mid):
-            hi = mid
-        else:
-            lo = mid
-    for i in range(hi + 1, min(hi + need, n_max + 1)):
-        if not chatter(i):
-            scan_from(i + 1)
-            break
-    return done
-
-
-def _bracket(chatter, seed: int, n_max: int) -> tuple[int, int]:
-    """[lo stable, hi chatter] grid indices, growing away from ``seed`` in doubling
-    steps (hi = n_max + 1: nothing chattered up to the deepest cut)."""
-    width = 1
-    if chatter(seed):
-        lo, hi = seed, seed
-        while lo > 0 and chatter(lo):
-            hi, lo = lo, max(0, lo - width)
-            width *= 2
-        return lo, hi
-    lo, hi = seed, seed + 1
-    while hi <= n_max and not chatter(hi):
-        lo, hi = hi, min(hi + width, n_max) if hi < n_max else n_max + 1
-        width *= 2
-    return lo, hi
-
-
 def _seeds(cases: list[Case], options: LobesOptions) -> dict:
     """Grid index of the analytic limit of each case's linear host at each speed."""
 
@@ -347,7 +337,8 @@ def _limits(verdicts: np.ndarray, depths: np.ndarray) -> tuple[float, float]:
 def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> Plan:
     """A point per (case, rpm) column; the search's seeds (the analytic limit of each
     case's linear host) in the context, and the options with their speeds (the
-    cases' lobes, :func:`default_speeds`, if none were given)."""
+    cases' lobes, :func:`default_speeds`, if none were given) and their criterion
+    (:func:`criterion_for`, if none was given)."""
     cases = as_cases(cases, "cases")
     if integration.initial is not None:
         raise ParameterError(f"initial = {integration.initial!r}: a cut starts as "
@@ -355,6 +346,10 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
                              "conditions")
     if options.rpm is None:
         options = replace(options, rpm=default_speeds(cases))
+    if options.criterion is None:
+        options = replace(options, criterion=criterion_for([c.system for c in cases]))
+    if options.criterion == "growth":
+        _check_growth(cases, integration)
     rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
         check_delay(r, options.revolutions, integration.dt_s)
@@ -364,23 +359,56 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     return Plan(context, points)
 
 
+def _check_growth(cases: list[Case], integration: Integration) -> None:
+    """The converged verdict advances a cut window by window with the RK4 scheme."""
+    if integration.integrator == "exact":
+        raise ParameterError("integrator = 'exact' with criterion 'growth': the converged "
+                             "verdict advances each cut window by window with the RK4 "
+                             "scheme; use integrator 'rk4' or 'auto', or a fixed-length "
+                             "criterion ('zero', 'bounded') with 'exact'")
+    for c in cases:
+        if stick_slip(c.system):
+            raise ParameterError(f"case {c.label!r}: true stick-slip (static_ratio > 1) needs "
+                                 "the exact integrator, which the converged verdict does "
+                                 "not run; use a fixed-length criterion ('zero', 'bounded')")
+
+
 def compute(context: dict, point: tuple[int, int]) -> dict:
     """The column of one (case index, rpm index): {depth index: result}."""
     i, j = point
-    case, rpm = context["cases"][i], context["options"].rpm[j]
-    return column(case, rpm, context["options"], context["integration"],
-                  context["seeds"].get((case.label, rpm), 1))
+    o, integration = context["options"], context["integration"]
+    case, rpm = context["cases"][i], o.rpm[j]
+    seed = context["seeds"].get((case.label, rpm), 1)
+    if o.criterion == "growth":
+        return growth_column(case, rpm, o, integration, seed)
+    done: dict[int, dict] = {}
+
+    def chatter(k: int) -> bool:
+        if k not in done:
+            done[k] = fixed_cut(case, rpm, o.depth(k), o, integration)
+        return done[k][o.criterion]
+
+    column(chatter, seed, o.max_index, o.method, o.successive)
+    return done
+
+
+#: The per-run arrays of each criterion family: name -> (fill, dtype).
+FIXED_ARRAYS = {"zero": (NOT_RUN, np.int8), "bounded": (NOT_RUN, np.int8),
+                "amplitude_m": (np.nan, float), "first_zero": (np.nan, float),
+                "impacts": (-1, np.int64), "max_rel_disp_m": (np.nan, float)}
+GROWTH_ARRAYS = {"verdict": (NOT_RUN, np.int8), "onset": (NOT_RUN, np.int8),
+                 "growth_rate_per_s": (np.nan, float), "growth_rate_se_per_s": (np.nan, float),
+                 "run_duration_s": (np.nan, float), "settled_pp_m": (np.nan, float),
+                 "settled_rms_m": (np.nan, float)}
 
 
 def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:
     """(depths, per-run arrays over (case, rpm, depth), number of runs) of the columns."""
+    o = plan.context["options"]
     top = max((max(d) for d in results if d), default=1)
-    shape = (len(plan.context["cases"]), len(plan.context["options"].rpm), top)
-    arrays = {"zero": np.full(shape, NOT_RUN, dtype=np.int8),
-              "bounded": np.full(shape, NOT_RUN, dtype=np.int8),
-              "amplitude_m": np.full(shape, np.nan), "first_zero": np.full(shape, np.nan),
-              "impacts": np.full(shape, -1, dtype=np.int64),
-              "max_rel_disp_m": np.full(shape, np.nan)}
+    shape = (len(plan.context["cases"]), len(o.rpm), top)
+    kinds = GROWTH_ARRAYS if o.criterion == "growth" else FIXED_ARRAYS
+    arrays = {name: np.full(shape, fill, dtype=dtype) for name, (fill, dtype) in kinds.items()}
     n_runs = 0
     for (i, j), done in zip(plan.points, results, strict=True):
         for k, res in done.items():
@@ -390,21 +418,22 @@ def _grid(plan: Plan, results: list[dict]) -> tuple[np.ndarray, dict, int]:
                     v = CHATTER if v else STABLE
                 a[i, j, k - 1] = v
             n_runs += 1
-    return plan.context["options"].depths(np.arange(1, top + 1)), arrays, n_runs
+    return o.depths(np.arange(1, top + 1)), arrays, n_runs
 
 
-def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
-               bounded_fraction: float) -> dict:
-    """The lobes Dataset's data variables from the per-run arrays ``a`` (:func:`_grid`)
-    and the per-column limits."""
+CODES = "1 stable, 0 chatter, -1 not run"
+GROWTH_CODES = "1 stable, 0 chatter, 2 undecided (the cap came first), -1 not run"
+
+
+def _fixed_variables(a: dict, bounded_fraction: float) -> dict:
+    """The per-run data variables of a fixed-length criterion."""
     dims = ("case", "rpm", "depth_m")
-    codes = "1 stable, 0 chatter, -1 not run"
     return {
         "verdict": (dims, a["zero"], {"long_name": "published criterion: force reaches zero",
-                                      "codes": codes}),
+                                      "codes": CODES}),
         "verdict_bounded": (dims, a["bounded"], {
             "long_name": f"bounded chatter: amplitude > {bounded_fraction:g} h_m, or force "
-                         "reaches zero", "codes": codes}),
+                         "reaches zero", "codes": CODES}),
         "amplitude_m": (dims, a["amplitude_m"], {"units": "m"}),
         "first_zero_time_s": (dims, a["first_zero"], {"units": "s"}),
         "impacts": (dims, a["impacts"], {
@@ -412,64 +441,127 @@ def _variables(a: dict, limit: np.ndarray, first_unstable: np.ndarray,
         "max_rel_disp_m": (dims, a["max_rel_disp_m"], {
             "units": "m", "long_name": "largest |y|, the ball's excursion from the cavity "
                                        "centre, over the run (ball cases)"}),
+    }
+
+
+def _growth_variables(a: dict) -> dict:
+    """The per-run data variables of the converged verdict."""
+    dims = ("case", "rpm", "depth_m")
+    return {
+        "verdict": (dims, a["verdict"], {
+            "long_name": "chatter-free: the settled vibration keeps the tool in the cut and "
+                         "within the tolerance from every start", "codes": GROWTH_CODES}),
+        "onset": (dims, a["onset"], {
+            "long_name": "onset: a small knock dies out (1) or grows (0)",
+            "codes": GROWTH_CODES}),
+        "growth_rate_per_s": (dims, a["growth_rate_per_s"], {
+            "units": "1/s", "long_name": "growth rate of the knock's amplitude"}),
+        "growth_rate_se_per_s": (dims, a["growth_rate_se_per_s"], {"units": "1/s"}),
+        "run_duration_s": (dims, a["run_duration_s"], {
+            "units": "s", "long_name": "simulated time the verdict took"}),
+        "settled_pp_m": (dims, a["settled_pp_m"], {
+            "units": "m", "long_name": "settled tip peak-to-peak (0: the knock dies out)"}),
+        "settled_rms_m": (dims, a["settled_rms_m"], {"units": "m"}),
+    }
+
+
+def _column_limits(plan: Plan, results: list[dict], depths: np.ndarray, a: dict):
+    """(limit, first unstable, onset) depths per (case, rpm)."""
+    o = plan.context["options"]
+    shape = (len(plan.context["cases"]), len(o.rpm))
+    limit, first, onset = (np.full(shape, np.nan) for _ in range(3))
+    for (i, j), done in zip(plan.points, results, strict=True):
+        if o.criterion != "growth":
+            chosen = a["zero" if o.criterion == "zero" else "bounded"][i, j]
+            limit[i, j], first[i, j] = _limits(chosen, depths)
+            continue
+        onset[i, j] = onset_depth(done, o.depths)
+        free = np.where(a["verdict"][i, j] == UNDECIDED, a["onset"][i, j], a["verdict"][i, j])
+        limit[i, j], first[i, j] = _limits(free, depths)
+        if first[i, j] == _first_onset(a["onset"][i, j], depths):
+            limit[i, j] = onset[i, j]  # the chatter-free depth is the onset itself
+    return limit, first, onset
+
+
+def _first_onset(codes: np.ndarray, depths: np.ndarray) -> float:
+    idx = np.flatnonzero((codes == CHATTER) | (codes == UNDECIDED))
+    return float(depths[idx[0]]) if idx.size else math.nan
+
+
+def _limit_variables(limit, first, onset, growth: bool) -> dict:
+    """The per-column and per-case data variables."""
+    out = {
         "limit_depth_m": (("case", "rpm"), limit, {
             "units": "m", "long_name": "limiting (chatter-free) depth of cut"}),
-        "first_unstable_depth_m": (("case", "rpm"), first_unstable, {"units": "m"}),
+        "first_unstable_depth_m": (("case", "rpm"), first, {"units": "m"}),
         "min_chatter_free_depth_m": (("case",), np.nanmin(np.where(
             np.isnan(limit), np.inf, limit), axis=1), {"units": "m"}),
     }
+    if growth:
+        out["onset_depth_m"] = (("case", "rpm"), onset, {
+            "units": "m", "long_name": "onset: depth where a small knock's growth rate "
+                                       "crosses zero"})
+    return out
 
 
 def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
     """The lobes Dataset from the columns (:func:`compute` results in plan order);
     ``attrs`` go after the configuration's."""
     ctx = plan.context
-    cases, o, integ = ctx["cases"], ctx["options"], ctx["integration"]
-    rpm = np.asarray(o.rpm, dtype=float)
+    cases, o = ctx["cases"], ctx["options"]
+    growth = o.criterion == "growth"
     depths, a, n_runs = _grid(plan, results)
-    chosen = a["zero"] if o.criterion == "zero" else a["bounded"]
-    limit = np.full(chosen.shape[:2], np.nan)
-    first_unstable = np.full(chosen.shape[:2], np.nan)
-    for i in range(chosen.shape[0]):
-        for j in range(chosen.shape[1]):
-            limit[i, j], first_unstable[i, j] = _limits(chosen[i, j], depths)
+    limit, first, onset = _column_limits(plan, results, depths, a)
+    variables = _growth_variables(a) if growth else _fixed_variables(a, o.bounded_fraction)
     ds = xr.Dataset(
-        _variables(a, limit, first_unstable, o.bounded_fraction),
+        {**variables, **_limit_variables(limit, first, onset, growth)},
         coords={
             "case": [c.label for c in cases],
-            "rpm": ("rpm", rpm, {"units": "rev/min"}),
+            "rpm": ("rpm", np.asarray(o.rpm, dtype=float), {"units": "rev/min"}),
             "depth_m": ("depth_m", depths, {"units": "m"}),
             "bar": ("case", [c.bar for c in cases]),
             "gap_m": ("case", np.array([c.gap_m for c in cases]), {"units": "m"}),
             "friction": ("case", [c.friction for c in cases]),
         },
-        attrs={
-            "title": "boringbar stability lobes (time domain)",
-            "boringbar_version": __version__,
-            "method": o.method,
-            "depth_grid": o.grid_text(),
-            "criterion": o.criterion,
-            "successive": o.successive,
-            "integrator": integ.integrator,
-            "integrator_used": resolved_integrators(integ.integrator,
-                                                    [c.system for c in cases], cutting=True),
-            "delay_interpolation": o.interpolation,
-            "start": o.start,
-            "kr_pa": o.kr_pa,
-            "feed_m": o.feed_m,
-            "revolutions": o.revolutions,
-            "duration_s": integ.duration_s,
-            "dt_s": integ.dt_s,
-            "steady_fraction": integ.steady_fraction,
-            "runs": n_runs,
-            "preset": ",".join(sorted({c.system.preset for c in cases})),
-            "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
-            **(attrs or {}),
-        },
+        attrs={**_attrs(plan, n_runs), **(attrs or {})},
     )
+    if growth:
+        ds.attrs["mean_run_s"] = float(np.nanmean(a["run_duration_s"])) if n_runs else 0.0
+    ds.attrs["method_text"] = method_text(ds)
     if o.analytic:
-        _add_analytic(ds, cases, rpm, o.kr_pa)
+        _add_analytic(ds, cases, np.asarray(o.rpm, dtype=float), o.kr_pa)
     return ds
+
+
+def _attrs(plan: Plan, n_runs: int) -> dict:
+    """The configuration a lobes Dataset carries."""
+    cases, o, integ = (plan.context[k] for k in ("cases", "options", "integration"))
+    growth = {f"{k}": (json.dumps(v) if isinstance(v, list) else v)
+              for k, v in o.verdict.to_dict().items()} if o.criterion == "growth" else {}
+    return {
+        "title": "boringbar stability lobes (time domain)",
+        "boringbar_version": __version__,
+        "method": o.method,
+        "depth_grid": o.grid_text(),
+        "criterion": o.criterion,
+        "successive": o.successive,
+        "integrator": integ.integrator,
+        "integrator_used": resolved_integrators(integ.integrator, [c.system for c in cases],
+                                                cutting=True),
+        "delay_interpolation": o.interpolation,
+        "start": o.start if o.criterion != "growth" else "in progress, knocked",
+        "kr_pa": o.kr_pa,
+        "feed_m": o.feed_m,
+        "revolutions": o.revolutions,
+        "bounded_fraction": o.bounded_fraction,
+        "duration_s": integ.duration_s,
+        "dt_s": integ.dt_s,
+        "steady_fraction": integ.steady_fraction,
+        "runs": n_runs,
+        "preset": ",".join(sorted({c.system.preset for c in cases})),
+        "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
+        **growth,
+    }
 
 
 def lobes(cases: list[Case], options: LobesOptions | None = None, *,
@@ -527,8 +619,11 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
 
 
 def summary(ds) -> dict:
-    """JSON-able summary (what ``boringbar lobes --json`` prints)."""
+    """JSON-able summary (what ``boringbar lobes --json`` prints): the method in words
+    and its settings, and per case and speed the chatter-free depth (with the onset's,
+    under the converged verdict, and the analytic limits where known)."""
     out = []
+    onset = "onset_depth_m" in ds
     for i, label in enumerate(ds["case"].values):
         out.append({
             "case": str(label),
@@ -536,14 +631,23 @@ def summary(ds) -> dict:
             "speeds": [{"rpm": float(r),
                         "limit_depth_m": _num(ds["limit_depth_m"].values[i, j]),
                         "first_unstable_depth_m": _num(ds["first_unstable_depth_m"].values[i, j]),
+                        **({"onset_depth_m": _num(ds["onset_depth_m"].values[i, j])}
+                           if onset else {}),
                         **({"analytic_limit_m": _num(ds["analytic_limit_m"].values[i, j]),
                             "host_analytic_limit_m":
                                 _num(ds["host_analytic_limit_m"].values[i, j])}
                            if "analytic_limit_m" in ds else {})}
                        for j, r in enumerate(ds["rpm"].values)],
         })
-    return {"method": ds.attrs["method"], "criterion": ds.attrs["criterion"],
-            "runs": int(ds.attrs["runs"]), "wall_time_s": float(ds.attrs["wall_time_s"]),
+    a = ds.attrs
+    return {"method": a["method"], "criterion": a["criterion"],
+            "method_text": a["method_text"], "integrator": a["integrator_used"],
+            "dt_s": float(a["dt_s"]), "run_length": run_length_text(ds),
+            **({"verdict": {k: a[k] for k in ("confidence", "max_duration_s", "knock_m",
+                                              "tolerance_m", "settle_tolerance")},
+                "undecided_runs": int((ds["verdict"].values == UNDECIDED).sum())}
+               if a["criterion"] == "growth" else {"duration_s": float(a["duration_s"])}),
+            "runs": int(a["runs"]), "wall_time_s": float(a["wall_time_s"]),
             "min_chatter_free_depth_m": _num(np.nanmin(ds["min_chatter_free_depth_m"].values)),
             "cases": out}
 

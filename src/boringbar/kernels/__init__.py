@@ -31,7 +31,7 @@ _NO_TAB_P = np.zeros((1, 5, 4, 1), complex)
 
 
 def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
-            buf=None) -> None:
+            buf=None, modes=None) -> None:
     """Advance ``x`` (in place) by ``n_steps`` steps of the published RK4 scheme from ``t0``.
 
     Steps with index >= ``steady_start`` are the steady part.  Outputs: ``rec`` (t, W, W',
@@ -40,11 +40,13 @@ def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     part), ``strobe`` (Poincare samples t, W, W', aux, aux' at t = STROBE_T0 + j
     STROBE_PERIOD), ``met`` (metrics, see :mod:`.layout`; zeros, with STEADY_MAX_W = -inf
     and STEADY_MIN_W = +inf, for a fresh run), ``buf`` (a regenerative cut's circular
-    history of W, W' at step ends, at least N_REV TAU / dt + 3 rows).
+    history of W, W' at step ends, at least N_REV TAU / dt + 3 rows), ``modes`` (a cut's,
+    optional: (n_modes, 2), each mode's max and min of u_i over the steady steps, updated
+    in place).
     """
     core.run_rk4(p, x, float(t0), float(dt), int(n_steps), int(steady_start),
                   int(rec_every), rec, imp, stick, strobe, met,
-                  _NO_HISTORY if buf is None else buf)
+                  _NO_HISTORY if buf is None else buf, modes)
 
 
 def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met) -> None:

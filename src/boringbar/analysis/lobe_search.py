@@ -1,0 +1,162 @@
+"""The runs of one (bar, speed) column of a lobe study and the search over its depth
+grid (:mod:`boringbar.analysis.lobes` states the methods and criteria).
+
+A column is a dict {depth index: the run's result}; ``options`` is the study's
+:class:`~boringbar.analysis.lobes.LobesOptions` and ``integration`` its
+:class:`~boringbar.simulate.Integration`.
+
+- Fixed-length criteria ("zero", published, and "bounded"): :func:`fixed_cut` runs a cut
+  from ``options.start`` for the integration's duration, stopped at the first zero of
+  the force; :func:`column` scans or searches the grid with it.
+- The converged criterion ("growth"): :func:`growth_cut` judges a cut
+  (:func:`boringbar.analysis.verdict.judge`); :func:`growth_column` finds the onset
+  (the small-knock growth rate changes sign) by bracketing and bisection to adjacent
+  grid depths, and, for a free ball, whose settled vibration may stay within the
+  tolerance above the onset, the chatter-free depth by the same search as the
+  fixed criteria.  An undecided run counts by the sign of its last growth rate.
+"""
+
+from __future__ import annotations
+
+import math
+
+from boringbar.analysis.sweep import Case
+from boringbar.analysis.verdict import CHATTER as ONSET_CHATTER
+from boringbar.analysis.verdict import STABLE as ONSET_STABLE
+from boringbar.analysis.verdict import judge
+from boringbar.simulate import Integration, simulate
+
+#: codes of the verdict arrays
+NOT_RUN, CHATTER, STABLE, UNDECIDED = -1, 0, 1, 2
+
+
+def fixed_cut(case: Case, rpm: float, depth: float, options, integration: Integration) -> dict:
+    """One cut of fixed length, stopped at the first zero of the force: its verdicts
+    under both fixed criteria and its metrics."""
+    run = simulate(case.system, options.forcing(depth, rpm), duration_s=integration.duration_s,
+                   dt_s=integration.dt_s, integrator=integration.integrator,
+                   steady_fraction=integration.steady_fraction, record_every=0)
+    c = run.cutting
+    ball = case.system.kind == "ball"
+    return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
+            "amplitude_m": c["amplitude_m"],
+            "impacts": run.metrics["impacts_total"] if ball else -1,
+            "max_rel_disp_m": run.metrics["max_abs_aux_all_m"] if ball else math.nan,
+            "first_zero": math.nan if c["first_zero_time_s"] is None
+            else c["first_zero_time_s"]}
+
+
+def growth_cut(case: Case, rpm: float, depth: float, options, integration: Integration) -> dict:
+    """One cut judged by the converged verdict: its onset and chatter-free codes, growth
+    rate, settled vibration and the simulated time it took."""
+    v = judge(case.system, options.forcing(depth, rpm, stop_at_zero=False), options.verdict,
+              dt_s=integration.dt_s)
+    onset = {ONSET_STABLE: STABLE, ONSET_CHATTER: CHATTER}.get(v.onset, UNDECIDED)
+    free = UNDECIDED if v.chatter_free is None else (STABLE if v.chatter_free else CHATTER)
+    return {"onset": onset, "verdict": free, "growth_rate_per_s": v.growth_rate_per_s,
+            "growth_rate_se_per_s": v.growth_rate_se, "run_duration_s": v.duration_s,
+            "settled_pp_m": v.settled_pp_m, "settled_rms_m": v.settled_rms_m}
+
+
+def onset_chatters(res: dict) -> bool:
+    """The onset chatters, or, undecided, its last growth rate is positive."""
+    if res["onset"] == UNDECIDED:
+        return res["growth_rate_per_s"] > 0
+    return res["onset"] == CHATTER
+
+
+def not_free(res: dict) -> bool:
+    """The cut is not chatter-free, or, undecided, its onset chatters."""
+    if res["verdict"] == UNDECIDED:
+        return onset_chatters(res)
+    return res["verdict"] == CHATTER
+
+
+def column(chatter, seed: int, n_max: int, method: str, need: int) -> None:
+    """Run grid indices through ``chatter(i) -> bool`` by ``method`` ("scan": upwards from
+    1 until ``need`` chatter in a row; "search": bracket from ``seed``, bisect, then
+    confirm the ``need - 1`` indices above the first chattering one, scanning on where
+    one is stable)."""
+
+    def scan_from(i: int) -> None:
+        run_of = 0
+        while i <= n_max and run_of < need:
+            run_of = run_of + 1 if chatter(i) else 0
+            i += 1
+
+    if method == "scan":
+        scan_from(1)
+        return
+    lo, hi = bisect(chatter, *bracket(chatter, min(max(1, seed), n_max), n_max))
+    if hi > n_max:
+        return
+    for i in range(hi + 1, min(hi + need, n_max + 1)):
+        if not chatter(i):
+            scan_from(i + 1)
+            break
+
+
+def bracket(chatter, seed: int, n_max: int) -> tuple[int, int]:
+    """[lo stable, hi chatter] grid indices, growing away from ``seed`` in doubling
+    steps (hi = n_max + 1: nothing chattered up to the deepest cut)."""
+    width = 1
+    if chatter(seed):
+        lo, hi = seed, seed
+        while lo > 0 and chatter(lo):
+            hi, lo = lo, max(0, lo - width)
+            width *= 2
+        return lo, hi
+    lo, hi = seed, seed + 1
+    while hi <= n_max and not chatter(hi):
+        lo, hi = hi, min(hi + width, n_max) if hi < n_max else n_max + 1
+        width *= 2
+    return lo, hi
+
+
+def bisect(chatter, lo: int, hi: int) -> tuple[int, int]:
+    """Adjacent [lo stable, hi chatter] indices inside a bracket."""
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if chatter(mid):
+            hi = mid
+        else:
+            lo = mid
+    return lo, hi
+
+
+def growth_column(case: Case, rpm: float, options, integration: Integration,
+                  seed: int = 1) -> dict:
+    """The converged criterion's runs at one speed (module doc): {depth index: result}."""
+    done: dict[int, dict] = {}
+
+    def result(i: int) -> dict:
+        if i not in done:
+            done[i] = growth_cut(case, rpm, options.depth(i), options, integration)
+        return done[i]
+
+    n_max = options.max_index
+    lo, hi = bisect(lambda i: onset_chatters(result(i)),
+                    *bracket(lambda i: onset_chatters(result(i)), min(max(1, seed), n_max),
+                             n_max))
+    if case.system.kind == "ball" and hi <= n_max:
+        column(lambda i: not_free(result(i)), hi, n_max, options.method, options.successive)
+    return done
+
+
+def onset_depth(done: dict, depth) -> float:
+    """The depth (m) where the onset's growth rate crosses zero: linear interpolation of
+    the rate between the deepest index whose onset is stable and the next one, which
+    chatters (within that 1-step bracket; NaN: no chatter up to the deepest cut; 0: the
+    shallowest cut chatters)."""
+    chatters = sorted(i for i, r in done.items() if onset_chatters(r))
+    if not chatters:
+        return math.nan
+    hi = chatters[0]
+    lo = max((i for i in done if i < hi and not onset_chatters(done[i])), default=0)
+    if lo == 0:
+        return 0.0
+    a, b = done[lo]["growth_rate_per_s"], done[hi]["growth_rate_per_s"]
+    d_lo, d_hi = float(depth(lo)), float(depth(hi))
+    if not (math.isfinite(a) and math.isfinite(b)) or b <= a or hi - lo > 1:
+        return d_lo
+    return d_lo + (d_hi - d_lo) * min(1.0, max(0.0, -a / (b - a)))

@@ -1,0 +1,301 @@
+"""The converged verdict of a simulated cut (docs/chatter.md).
+
+A cut is judged by what its vibration does, not by whether a run of fixed length
+happened to reach a threshold:
+
+- **Onset** (small disturbances).  The cut starts in progress (the bar at its static
+  deflection under the mean force, the surface cut at it) and is knocked at the tip
+  (:func:`~boringbar.simulate.knocked_cut`, ``knock_m``, 1 um by default).  It runs
+  window by window (whole revolutions, at least :data:`WINDOW_PERIODS` periods of the
+  host bar's first mode); each window gives the tip's amplitude A_k (half its
+  peak-to-peak).  The growth rate is the slope of ln A_k against time, fitted by least
+  squares over the last quarter of the windows (at least 4) and over the quarter before
+  it.  The log-envelope of a sum of decaying and growing modes is convex, so a slope
+  only rises as the faster modes die out: a last-quarter slope above zero at the
+  stated ``confidence`` (Student's t on the fit) is chatter at once; a slope below zero
+  is stable only once it has stopped rising (the last slope plus three times its rise
+  over the quarter before still below zero, at that confidence).  The tool leaving the
+  cut (h = 0) after a small knock is chatter.  A run that reaches ``max_duration_s``
+  undecided is ``undecided``, its last slope the best estimate.
+- **The settled vibration**: an onset that chatters is run on until the tip's
+  peak-to-peak over the last quarter of the windows and over the quarter before agree
+  within ``settle_tolerance`` (5 %), or it decays below the tolerance, or the tool
+  leaves the cut in the last quarter.  A bar without a ball (solid, tuned mass damper,
+  locked ball) is linear until the tool leaves the cut, so its vibration grows until it
+  does: its onset decides.
+- **Large disturbances**: each ``knocks_m`` starts the same cut knocked that hard and
+  runs it until it settles.
+
+The cut is **chatter-free** when, from every start tried, the settled vibration keeps
+the tool in the cut and its peak-to-peak within ``tolerance_m``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy import stats
+
+from boringbar._validate import ParameterError, check_int, check_range, check_values
+from boringbar.model.forcing import Regenerative
+from boringbar.model.system import System
+from boringbar.simulate import CutStepper, Window, knocked_cut
+
+#: A window holds whole revolutions and at least this many periods of the host bar's
+#: first mode (a chatter near an absorber's lower peak, down to 2/3 f1, still shows
+#: two cycles a window).
+WINDOW_PERIODS = 3.0
+#: The verdict's defaults: confidence of the growth rate's sign, the cap on a run, the
+#: small knock, the surface-finish budget (tip peak-to-peak), the settling tolerance.
+CONFIDENCE = 0.99
+MAX_DURATION_S = 10.0
+KNOCK_M = 1e-6
+TOLERANCE_M = 10e-6
+SETTLE_TOLERANCE = 0.05
+MIN_SEGMENT = 6
+#: A slope still rising is extrapolated only once each rise is at most this fraction of
+#: the one before (a geometric tail that has set in).
+MAX_RISE_RATIO = 0.0
+#: Verdicts.
+STABLE, CHATTER, UNDECIDED = "stable", "chatter", "undecided"
+
+
+@dataclass(frozen=True)
+class VerdictOptions:
+    """How a simulated cut is judged (module doc).
+
+    ``confidence``: of the growth rate's sign (0.5-0.999999); ``max_duration_s`` (s):
+    the cap on one run; ``knock_m`` (m): the small disturbance of the onset (a tip
+    amplitude); ``tolerance_m`` (m): the largest settled tip peak-to-peak that is
+    chatter-free (a surface-finish budget); ``knocks_m`` (m): larger disturbances tried
+    too; ``settle_tolerance``: the settled peak-to-peak converged to this fraction;
+    ``min_segment``: windows in each of the three segments whose slopes are compared (at
+    least 4; a verdict needs three of them).
+    """
+
+    confidence: float = CONFIDENCE
+    max_duration_s: float = MAX_DURATION_S
+    knock_m: float = KNOCK_M
+    tolerance_m: float = TOLERANCE_M
+    knocks_m: tuple[float, ...] = ()
+    settle_tolerance: float = SETTLE_TOLERANCE
+    min_segment: int = MIN_SEGMENT
+
+    def __post_init__(self):
+        check_range("confidence", self.confidence, 0.5, 0.999999, lo_open=True)
+        check_range("max_duration_s", self.max_duration_s, 0.0, 1000.0, lo_open=True, unit="s")
+        check_range("knock_m", self.knock_m, 0.0, 1e-3, lo_open=True, unit="m")
+        check_range("tolerance_m", self.tolerance_m, 0.0, 1.0, lo_open=True, unit="m")
+        if self.knocks_m:
+            object.__setattr__(self, "knocks_m", check_values(
+                "knocks_m", self.knocks_m, 0.0, 1e-2, lo_open=True, unit="m"))
+        check_range("settle_tolerance", self.settle_tolerance, 0.0, 0.5, lo_open=True)
+        check_int("min_segment", self.min_segment, 4, 10_000)
+
+    def to_dict(self) -> dict:
+        return {"confidence": self.confidence, "max_duration_s": self.max_duration_s,
+                "knock_m": self.knock_m, "tolerance_m": self.tolerance_m,
+                "knocks_m": list(self.knocks_m), "settle_tolerance": self.settle_tolerance,
+                "min_segment": self.min_segment}
+
+
+@dataclass(frozen=True)
+class Settled:
+    """The settled vibration of one start: ``pp_m`` and ``rms_m`` (m) of the tip over the
+    last quarter of the windows, ``left_cut`` (the tool left the cut there), ``status``
+    ("settled", "decaying": below the tolerance and still falling, "left the cut",
+    "undecided": the cap came first), ``duration_s`` (s) run."""
+
+    pp_m: float
+    rms_m: float
+    left_cut: bool
+    status: str
+    duration_s: float
+
+
+@dataclass(frozen=True)
+class CutVerdict:
+    """A cut judged (module doc).
+
+    ``onset``: STABLE, CHATTER or UNDECIDED for a small knock; ``growth_rate_per_s``
+    and its standard error ``growth_rate_se`` (1/s: the last quarter's slope of ln A);
+    ``onset_duration_s`` (s): the run length that decided it; ``settled``: the settled
+    vibration of each start (the small knock first, then ``knocks_m``; empty where the
+    onset decides alone); ``chatter_free``: True, False or None (undecided)."""
+
+    onset: str
+    growth_rate_per_s: float
+    growth_rate_se: float
+    onset_duration_s: float
+    chatter_free: bool | None
+    settled: tuple[Settled, ...] = field(default_factory=tuple)
+
+    @property
+    def settled_pp_m(self) -> float:
+        """The largest settled peak-to-peak over the starts (m; 0 for a stable onset)."""
+        return max((s.pp_m for s in self.settled), default=0.0)
+
+    @property
+    def settled_rms_m(self) -> float:
+        """The largest settled RMS over the starts (m; 0 for a stable onset)."""
+        return max((s.rms_m for s in self.settled), default=0.0)
+
+    @property
+    def duration_s(self) -> float:
+        """Simulated time spent on this verdict (s)."""
+        return self.onset_duration_s + sum(s.duration_s for s in self.settled)
+
+
+def window_steps(system: System, cut: Regenerative, dt_s: float) -> int:
+    """Steps of one window: whole revolutions, at least WINDOW_PERIODS periods of the host
+    bar's first mode."""
+    period = 2 * math.pi / system.reference_frequency_rad_s
+    revs = max(1, math.ceil(WINDOW_PERIODS * period / cut.tau_s - 1e-9))
+    return max(1, int(round(revs * cut.tau_s / dt_s)))
+
+
+def slope(t: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Least-squares slope of y against t and its standard error."""
+    tm = t - t.mean()
+    sxx = float(tm @ tm)
+    b = float(tm @ (y - y.mean())) / sxx
+    r = y - y.mean() - b * tm
+    return b, math.sqrt(float(r @ r) / (len(t) - 2) / sxx)
+
+
+def segment(n: int, min_segment: int) -> int:
+    """The length of each of the last three segments compared out of ``n`` windows: a
+    sixth, so that they cover the latter half (at least ``min_segment``)."""
+    return max(min_segment, n // 6)
+
+
+def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions) -> tuple[str, float, float]:
+    """(verdict so far, growth rate, its standard error) from window ends ``t`` and the
+    amplitudes ``amp`` (windows x observables, :func:`observables`): CHATTER as soon as
+    one observable grows at the confidence, STABLE once every one decays and has
+    stopped rising, else UNDECIDED (not yet; module doc).  The rate is the largest
+    observable's last slope."""
+    n, m = len(t), segment(len(t), options.min_segment)
+    if n < 3 * m:
+        return UNDECIDED, math.nan, math.nan
+    y = np.log(np.maximum(amp, 1e-300))
+    q = float(stats.t.ppf(0.5 + options.confidence / 2, m - 2))
+    rates, stable = [], True
+    for col in y.T:
+        fits = [slope(t[n - k * m:n - (k - 1) * m], col[n - k * m:n - (k - 1) * m])
+                for k in (3, 2, 1)]
+        (b0, s0), (b1, s1), (b2, s2) = fits
+        rates.append((b2, s2))
+        if b2 - q * s2 > 0:
+            return CHATTER, b2, s2
+        noise = (q * math.hypot(s0, s1), q * math.hypot(s1, s2))
+        stable = stable and b2 + rise_left(b0, b1, b2, noise) + q * s2 < 0
+    b, se = max(rates)
+    return (STABLE if stable else UNDECIDED), b, se
+
+
+def observables(system: System, window: Window) -> np.ndarray:
+    """What one window's growth is measured on: the tip's amplitude (half its
+    peak-to-peak), each bending mode's and an absorber's stroke (its largest |x_a -
+    psi_a u|; the absorber's static stroke is zero), so that a mode whose chatter grows
+    under a larger one's decay shows at once."""
+    amp = np.append(window.half_pp_m, window.mode_half_pp)
+    return np.append(amp, window.max_rel_m) if system.kind == "tmd" else amp
+
+
+def rise_left(b0: float, b1: float, b2: float, noise: tuple[float, float]) -> float:
+    """How much further the slope may still rise, from three successive segments' slopes
+    and the noise of each rise: the last rise where both rises are within their noise
+    (the slope has levelled); else, while the rises shrink geometrically (each
+    positive, the last at most MAX_RISE_RATIO of the one before), the tail of that
+    series (Aitken's extrapolation); else infinity (not yet known: a slope that rose
+    and fell again is a beat, not a trend)."""
+    r1, r2 = b1 - b0, b2 - b1
+    if abs(r1) <= noise[0] and r2 <= noise[1]:
+        return max(r2, 0.0)
+    if r1 > noise[0] and 0.0 < r2 <= MAX_RISE_RATIO * r1:
+        return r2 * r2 / (r1 - r2)
+    return math.inf
+
+
+def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, float, list]:
+    """Advance ``stepper`` (a knocked cut) until the growth rate's sign is decided or the
+    cap: (verdict, rate, its error, the windows)."""
+    windows: list[Window] = []
+    amps: list[np.ndarray] = []
+    system = stepper.system
+    verdict, rate, se = UNDECIDED, math.nan, math.nan
+    while stepper.t_s < options.max_duration_s:
+        windows.append(stepper.advance())
+        if windows[-1].left_cut:
+            return CHATTER, rate, se, windows
+        amps.append(observables(system, windows[-1]))
+        verdict, rate, se = growth(np.array([w.t_end_s for w in windows]), np.array(amps),
+                                   options)
+        if verdict != UNDECIDED:
+            break
+    return verdict, rate, se, windows
+
+
+def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: float) -> Settled:
+    """Run ``stepper`` on until its vibration settles (module doc); ``windows`` so far."""
+    while True:
+        n = len(windows)
+        if n >= 2 * options.min_segment:
+            m = max(options.min_segment, n // 4)
+            last, before = windows[n - m:], windows[n - 2 * m:n - m]
+            pp, pp0 = _pp(last), _pp(before)
+            rms = math.sqrt(sum(w.rms_tip_m**2 for w in last) / m)
+            duration = stepper.t_s - t0_s
+            if any(w.left_cut for w in last):
+                return Settled(pp, rms, True, "left the cut", duration)
+            if abs(pp - pp0) <= options.settle_tolerance * max(pp, pp0):
+                return Settled(pp, rms, False, "settled", duration)
+            if pp < options.tolerance_m and pp < pp0 * (1 - options.settle_tolerance):
+                return Settled(pp, rms, False, "decaying", duration)
+            if stepper.t_s >= options.max_duration_s:
+                return Settled(pp, rms, False, UNDECIDED, duration)
+        windows.append(stepper.advance())
+
+
+def _pp(windows) -> float:
+    return max(w.max_tip_m for w in windows) - min(w.min_tip_m for w in windows)
+
+
+def _stepper(system: System, cut: Regenerative, dt_s: float, knock_m: float) -> CutStepper:
+    cut = replace(cut, start="static", stop_at_zero=False)
+    return CutStepper(system, cut, dt_s=dt_s, window_steps=window_steps(system, cut, dt_s),
+                      initial=knocked_cut(system, cut, knock_m))
+
+
+def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
+    """Whether a settled vibration is chatter-free (None: undecided)."""
+    if s.left_cut:
+        return False
+    if s.status == UNDECIDED:
+        return False if s.pp_m > options.tolerance_m else None
+    return s.pp_m <= options.tolerance_m
+
+
+def judge(system: System, cut: Regenerative, options: VerdictOptions | None = None, *,
+          dt_s: float = 1e-6) -> CutVerdict:
+    """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``."""
+    options = options or VerdictOptions()
+    stepper = _stepper(system, cut, dt_s, options.knock_m)
+    verdict, rate, se, windows = onset(stepper, options)
+    onset_s = stepper.t_s
+    settled: list[Settled] = []
+    if system.kind != "ball":  # linear until the tool leaves the cut: the onset decides
+        ok = [{STABLE: True, CHATTER: False}.get(verdict)]
+    elif verdict == STABLE:
+        ok = [True]
+    else:
+        settled.append(settle(stepper, windows, options, onset_s))
+        ok = [acceptable(settled[0], options)]
+    for knock in options.knocks_m:
+        settled.append(settle(_stepper(system, cut, dt_s, knock), [], options, 0.0))
+        ok.append(acceptable(settled[-1], options))
+    free = False if False in ok else (None if None in ok else True)
+    return CutVerdict(verdict, rate, se, onset_s, free, tuple(settled))

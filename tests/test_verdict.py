@@ -1,0 +1,190 @@
+"""The converged verdict of a simulated cut (analysis/verdict.py) and the lobes it gives.
+
+Truths not from the simulation: the frequency-domain limit of a linear bar (Tobias,
+Tlusty: b_lim = -1 / (2 Kr min Re G) on each lobe) and the rightmost root of the delay
+equation's characteristic function, found by Newton's method on
+1 + Kr b (1 - exp(-s tau)) G(s) = 0.
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import boringbar as bb
+from boringbar.analysis.frf_fit import fit_frf
+from boringbar.analysis.lobes import LobesOptions, compute, default_speeds, lobes, plan
+from boringbar.analysis.sweep import Case
+from boringbar.analysis.verdict import CHATTER, STABLE, VerdictOptions, judge, window_steps
+from boringbar.execute import Execution
+from boringbar.model.measured_frf import read_frf
+from boringbar.reference.stability import KR_ALUMINIUM, limit_at_speeds
+from boringbar.simulate import CutStepper, Integration, knocked_cut, simulate
+
+SYSTEMS = Path(__file__).resolve().parents[1] / "examples" / "systems"
+
+
+def linear_bars() -> dict[str, bb.System]:
+    """Linear bars of 1, 2 and 3 modes, the example systems' and a measured FRF's, and a
+    ball that a small knock cannot bring to a wall (no friction)."""
+    carbide = bb.load_system(SYSTEMS / "carbide_ld10_tungsten.toml")
+    steel = bb.load_system(SYSTEMS / "steel_coolant_tmd.toml")
+    fit, _ = fit_frf(read_frf(SYSTEMS / "measured_tip_frf.csv"))
+    return {
+        "published solid, 1 mode": bb.make_system("solid", n_modes=1),
+        "published solid, 2 modes": bb.make_system("solid", n_modes=2),
+        "published solid, 3 modes": bb.make_system("solid", n_modes=3),
+        "published tmd": bb.make_system("tmd"),
+        "published free ball, no friction": bb.make_system("ball", friction=False),
+        "carbide example solid": bb.variants(carbide)["solid"],
+        "steel example tmd": bb.variants(steel)["tmd"],
+        "measured FRF": bb.make_system("solid", modal=fit.to_modal_model()),
+    }
+
+
+def worst_error(system: bb.System, speeds, **options) -> tuple[float, float]:
+    """(largest relative error of the simulated limit against the frequency-domain
+    limit of the bar's linear host over ``speeds``, the speed where it is)."""
+    ds = lobes({"bar": system}, LobesOptions(rpm=tuple(speeds), **options))
+    sim = ds["limit_depth_m"].values[0]
+    exact = ds["host_analytic_limit_m"].values[0]
+    err = np.abs(sim / exact - 1)
+    return float(err.max()), float(ds["rpm"].values[int(np.argmax(err))])
+
+
+# --- the linear bar's limit, at the default settings --------------------------------------
+@pytest.mark.parametrize("name", list(linear_bars()))
+def test_a_linear_bar_s_simulated_limit_is_its_frequency_domain_limit(name):
+    """Every third speed of the bar's first five lobes (the default speeds); -m slow
+    takes every speed."""
+    system = linear_bars()[name]
+    speeds = default_speeds([Case.of(system, "bar")])[::3]
+    err, rpm = worst_error(system, speeds)
+    assert err <= 0.01, f"{name}: {err:.2%} at {rpm:g} rpm"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(linear_bars()))
+def test_a_linear_bar_s_limit_holds_at_every_speed_of_its_first_five_lobes(name):
+    system = linear_bars()[name]
+    err, rpm = worst_error(system, default_speeds([Case.of(system, "bar")]))
+    assert err <= 0.01, f"{name}: {err:.2%} at {rpm:g} rpm"
+
+
+def test_the_fixed_two_second_criterion_fails_the_same_check():
+    """The published criterion (the force reaches zero within a 2 s run from rest) places
+    the carbide bar's limit a third too high at 1200 rpm: the check above would fail."""
+    system = linear_bars()["carbide example solid"]
+    err, _ = worst_error(system, [1200.0, 2603.0], criterion="zero")
+    assert err > 0.2
+    err, _ = worst_error(system, [1200.0, 2603.0])
+    assert err <= 0.01
+
+
+def test_the_search_finds_the_limit_without_the_analytic_seed():
+    """The analytic limit only tells the search where to start: from the shallowest
+    depth the doubling and bisection find the same limit."""
+    system = bb.make_system("solid", n_modes=1)
+    p = plan({"bar": system}, LobesOptions(rpm=(1200.0,)), Integration())
+    seeded = compute(p.context, (0, 0))
+    cold = compute({**p.context, "seeds": {}}, (0, 0))
+    assert len(cold) > len(seeded)
+    exact = float(limit_at_speeds(system, [1200.0])[0])
+    for done in (seeded, cold):
+        ds = lobes({"bar": system}, LobesOptions(rpm=(1200.0,)))
+        assert float(ds["limit_depth_m"][0, 0]) == pytest.approx(exact, rel=0.01)
+        assert max(i for i, r in done.items() if r["onset"] == 1) < min(
+            i for i, r in done.items() if r["onset"] == 0)
+
+
+# --- the verdict itself -------------------------------------------------------------------
+def rightmost_root(system: bb.System, depth: float, rpm: float) -> complex:
+    """The characteristic root of a one-mode bar's cut nearest the chatter frequency."""
+    bar = system.bar
+    m, c, k = bar.mass_kg[0], bar.damping_n_s_m[0], bar.stiffness_n_m[0]
+    psi2 = bar.psi_tip[0] ** 2
+    tau = 60.0 / rpm
+    kb = KR_ALUMINIUM * depth
+
+    def f(s):
+        return m * s * s + c * s + k + psi2 * kb * (1 - cmath.exp(-s * tau))
+
+    def df(s):
+        return 2 * m * s + c + psi2 * kb * tau * cmath.exp(-s * tau)
+
+    s = complex(0.0, bar.natural_frequency_rad_s * 1.01)
+    for _ in range(100):
+        s -= f(s) / df(s)
+    assert abs(f(s)) < 1e-6 * k
+    return s
+
+
+@pytest.mark.parametrize("factor", [1.03, 1.1])
+def test_the_growth_rate_is_the_characteristic_root_s_real_part(factor):
+    """Above the limit the last slope of ln A is the rightmost root's real part (the
+    faster roots have died out by the time the sign is certain)."""
+    system = bb.make_system("solid", n_modes=1)
+    b = factor * float(limit_at_speeds(system, [1200.0])[0])
+    v = judge(system, bb.Regenerative(depth_m=b, rpm=1200.0))
+    root = rightmost_root(system, b, 1200.0)
+    assert v.onset == CHATTER and v.chatter_free is False
+    assert v.growth_rate_per_s == pytest.approx(root.real, rel=0.05)
+
+
+@pytest.mark.parametrize("factor", [0.99, 1.01])
+def test_one_percent_either_side_of_the_limit_is_decided_in_a_second(factor):
+    system = linear_bars()["carbide example solid"]
+    b = factor * float(limit_at_speeds(system, [1200.0])[0])
+    v = judge(system, bb.Regenerative(depth_m=b, rpm=1200.0))
+    assert v.onset == (STABLE if factor < 1 else CHATTER)
+    assert v.onset_duration_s < 1.0
+    assert np.sign(v.growth_rate_per_s) == np.sign(factor - 1)
+
+
+def test_a_capped_run_is_undecided():
+    system = linear_bars()["carbide example solid"]
+    b = float(limit_at_speeds(system, [1200.0])[0])
+    v = judge(system, bb.Regenerative(depth_m=b, rpm=1200.0),
+              VerdictOptions(max_duration_s=0.2))
+    assert v.onset == "undecided" and v.chatter_free is None
+    assert v.onset_duration_s == pytest.approx(0.2, abs=0.06)
+
+
+def test_a_cut_in_windows_is_one_run_bit_for_bit():
+    system = bb.make_system("ball", friction=True, gap_m=0.1e-3)
+    cut = bb.Regenerative(depth_m=0.05e-3, rpm=1200.0, start="static")
+    initial = knocked_cut(system, cut, 20e-6)
+    steps = window_steps(system, cut, 1e-6)
+    stepper = CutStepper(system, cut, dt_s=1e-6, window_steps=steps, initial=initial)
+    windows = [stepper.advance() for _ in range(6)]
+    run = simulate(system, cut, duration_s=6 * steps * 1e-6, initial=initial, integrator="rk4",
+                   record_every=0)
+    assert np.array_equal(stepper.state.x, run.final.x)
+    assert sum(w.impacts for w in windows) == run.metrics["impacts_total"]
+
+
+def test_the_knock_sets_the_first_mode_vibrating_at_its_amplitude():
+    system = bb.make_system("solid", n_modes=1)
+    cut = bb.Regenerative(depth_m=0.01e-3, rpm=1200.0, start="static")
+    x = knocked_cut(system, cut, 2e-6).x
+    bar = system.bar
+    assert bar.psi_tip[0] * x[1] == pytest.approx(2e-6 * bar.natural_frequency_rad_s)
+    assert bar.psi_tip[0] * x[0] == pytest.approx(cut.mean_force_n / (
+        bar.stiffness_n_m[0] / bar.psi_tip[0] ** 2))
+
+
+def test_a_lobes_dataset_names_its_method():
+    ds = lobes({"bar": bb.make_system("solid", n_modes=1)}, LobesOptions(rpm=(1200.0,)),
+               execution=Execution("serial"))
+    text = ds.attrs["method_text"]
+    assert "converged verdict" in text and "rk4" in text and "0.99" in text
+    assert ds.attrs["criterion"] == "growth"
+    paper = lobes({"bar": bb.make_system("solid", "paper")}, LobesOptions(rpm=(1200.0,)),
+                  execution=Execution("serial"))
+    assert paper.attrs["criterion"] == "zero"
+    assert "2 s from rest" in paper.attrs["method_text"]
+    assert math.isfinite(float(ds["onset_depth_m"][0, 0]))
