@@ -144,7 +144,8 @@ def test_uff58_accelerance_is_turned_into_receptance(tmp_path):
 
 @pytest.mark.parametrize(("text", "words"), [
     ("1,2,3\n" * 30 + "4,5\n", "line 31 has 2 columns"),
-    ("f,re,im\n" + "".join(f"{i},1,x\n" for i in range(30)), "line 2 = '0,1,x'"),
+    ("f [Hz],re [m/N],im [m/N]\n" + "".join(f"{i},1,x\n" for i in range(30)),
+     "line 2 = '0,1,x'"),
     ("".join(f"{30 - i},1,1\n" for i in range(30)), "strictly increasing"),
     ("".join(f"{i},1,1\n" for i in range(5)), "5 frequency lines"),
 ])
@@ -216,7 +217,7 @@ def test_the_command_finds_the_modes_and_one_mode_is_the_most_flexible(tmp_path,
     h = ModalFit((612.0, 1879.0), (0.02, 0.02), (1e6, 5e6)).tip_frf(f)
     path = tmp_path / "two.csv"
     np.savetxt(path, np.c_[f, h.real, h.imag], delimiter=",",
-               header="frequency_hz,real,imaginary", comments="")
+               header="frequency_hz,real_m_per_n,imag_m_per_n", comments="")
     assert main(["fit-frf", str(path), "--out", str(tmp_path / "a"), "--json"]) == 0
     both = json_out(capsys)
     assert rel([m["frequency_hz"] for m in both["modes"]], [612.0, 1879.0]).max() < 1e-3

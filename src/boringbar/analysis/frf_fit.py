@@ -41,6 +41,10 @@ person at the chart would otherwise do, is ours:
    k = w_n^2 / (2 w_d (-Im A)). The part of A that is not imaginary (a complex
    mode, or noise) is dropped, and its size goes into the quality figures
    (``complexity``) beside the fit's relative residual over the band.
+8. **Plausibility.** A static tip stiffness 1 / sum(1/k_i) or a natural frequency
+   that no boring bar has (model/frf_units.py: 1e5 to 1e9 N/m, 20 Hz to 20 kHz) is
+   most often an FRF read in the wrong units: a warning, kept in the quality figures
+   (``implausible``).
 
 Peeters, B., Van der Auweraer, H., Guillaume, P., Leuridan, J. (2004), "The
 PolyMAX frequency-domain method: a new standard for modal parameter estimation?",
@@ -61,6 +65,7 @@ from sdypy import EMA
 from sdypy.EMA.EMA import LSFD
 
 from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.model.frf_units import ImplausibleFrfWarning, plausibility_warning
 from boringbar.model.measured_frf import MeasuredFrf
 from boringbar.model.modal_fit import ModalFit
 
@@ -184,7 +189,10 @@ def fit_modes(diagram: Stabilisation, n_modes: int | None = None
     """Fit the modes of ``diagram`` (all of them, at most MAX_MODES, or the
     ``n_modes`` most flexible): (the :class:`ModalFit`, its receptance at the band's
     measured lines). No mode, fewer modes than ``n_modes``, or a fitted mode of
-    negative stiffness is a ParameterError."""
+    negative stiffness is a ParameterError. A static tip stiffness or a natural
+    frequency that no boring bar has (:meth:`ModalFit.implausible`, most often an FRF
+    read in the wrong units) is an :class:`ImplausibleFrfWarning`, kept in the fit's
+    ``quality["implausible"]``."""
     where = diagram.frf.source.get("file", "FRF")
     found = len(diagram.modes)
     if found == 0:
@@ -210,8 +218,12 @@ def fit_modes(diagram: Stabilisation, n_modes: int | None = None
     fit = ModalFit(tuple(m.frequency_hz for m in modes),
                    tuple(m.damping_ratio for m in modes), tuple(k))
     h_fit = fit.tip_frf(diagram.frf.frequency_hz)
-    return replace(fit, source=_source(diagram),
-                   quality=_quality(diagram, h_fit, complexity)), h_fit
+    quality = _quality(diagram, h_fit, complexity)
+    implausible = fit.implausible()
+    if implausible:
+        quality["implausible"] = plausibility_warning(where, implausible, diagram.frf.source)
+        warnings.warn(quality["implausible"], ImplausibleFrfWarning, stacklevel=2)
+    return replace(fit, source=_source(diagram), quality=quality), h_fit
 
 
 def _stiffness(modes, data: MeasuredFrf) -> tuple[np.ndarray, np.ndarray]:

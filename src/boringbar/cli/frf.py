@@ -5,6 +5,7 @@ frequency-domain lobes, from a measured FRF as it is, or from a bar's model)."""
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -25,9 +26,15 @@ from boringbar.cli.options import (
     many_cases,
     resolve_files,
     system_spec,
+    warn_line,
     wrote,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic
+from boringbar.model.frf_units import (
+    ImplausibleFrfWarning,
+    implausible_frf,
+    plausibility_warning,
+)
 from boringbar.model.measured_frf import read_frf
 from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
 from boringbar.plot_style import system_label
@@ -53,8 +60,11 @@ def add_fit_frf(sub) -> None:
                                    "stabilisation diagram and fit their modal parameters "
                                    "(frequency, damping ratio, tip stiffness) with "
                                    "sdypy-EMA (LSCE or LSCF poles, LSFD constants; "
-                                   "docs/frf.md). FILE: CSV (frequency Hz, real, "
-                                   "imaginary m/N) or UFF dataset 58. Writes "
+                                   "docs/frf.md). FILE: CSV (frequency, and real "
+                                   "and imaginary parts or magnitude and phase, each "
+                                   "column's unit in the header: 'f [kHz]', "
+                                   "'Re [um/N]'...; without a header Hz and m/N) or "
+                                   "UFF dataset 58. Writes "
                                    "DIR/modal_fit.json (what --frf reads), DIR/fit.png "
                                    "(measured against fitted) and DIR/stabilisation.png "
                                    "(the diagram).")
@@ -78,7 +88,11 @@ def cmd_fit_frf(args) -> Outcome:
     n = None if args.modes is None else check_int("--modes", args.modes, 1, MAX_MODES)
     max_order = check_int("--max-order", args.max_order, MIN_ORDER, 200)
     diagram = stabilisation(read_frf(args.file), band_hz=band, max_order=max_order)
-    fit, fitted = fit_modes(diagram, n)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ImplausibleFrfWarning)  # said in one line below
+        fit, fitted = fit_modes(diagram, n)
+    if "implausible" in fit.quality:
+        warn_line(fit.quality["implausible"])
     out = Path(args.out)
     files = {"json": out / "modal_fit.json", "png": out / "fit.png",
              "stabilisation": out / "stabilisation.png"}
@@ -94,6 +108,8 @@ def cmd_fit_frf(args) -> Outcome:
         say(f"{args.file}: {fit.n_modes} mode(s) fitted by {fit.source['method']}; the "
             f"stabilisation diagram finds {found} in the band"
             + ("" if fit.n_modes == found else " (the most flexible taken)"))
+        if "units" in fit.source:
+            say(f"  read as {fit.source['units']}; conversion: {fit.source['conversion']}")
         say("  mode  f (Hz)      zeta       k_tip (N/m)")
         for i, m in enumerate(summary["modes"]):
             say(f"  {i + 1:<4}  {m['frequency_hz']:<10.2f}  {m['damping_ratio']:<9.4g}  "
@@ -139,6 +155,8 @@ def analytic_lobes_outcome(args, kr: float) -> Outcome:
     summary = {"method": "analytic", "kr_pa": kr, "cases": rows,
                "files": {k: str(v) for k, v in files.items()}}
     measured, spec = getattr(args, "frf_measured", None), system_spec(args)
+    if measured is not None:
+        summary["measured_frf"] = _plausible_source(measured)
     name = (f"measured FRF {Path(args.frf).name}" if measured is not None
             else f"modal fit {Path(args.frf).name}" if getattr(args, "frf", None)
             else system_label(spec.name) if spec is not None else "published bar")
@@ -157,6 +175,17 @@ def analytic_lobes_outcome(args, kr: float) -> Outcome:
         say(wrote(summary["files"]))
 
     return Outcome(summary, text)
+
+
+def _plausible_source(measured) -> dict:
+    """The measured FRF's ``source``, with (and said on stderr) what in it no boring bar
+    has, if anything."""
+    found = implausible_frf(measured.frequency_hz, measured.receptance)
+    if not found:
+        return dict(measured.source)
+    message = plausibility_warning(measured.source.get("file", "FRF"), found, measured.source)
+    warn_line(message)
+    return {**measured.source, "implausible": message}
 
 
 def analytic_speeds(args) -> tuple[float, ...]:

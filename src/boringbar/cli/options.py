@@ -508,6 +508,12 @@ class Outcome:
             self.text(print)
 
 
+def warn_line(message: str) -> None:
+    """Say ``message`` as one warning line on stderr: the command goes on, its results
+    are written, but they look wrong."""
+    print(f"{PROG}: warning: {' '.join(message.split())}", file=sys.stderr)
+
+
 def integration(args, initial=None, steady_fraction: float = STEADY_FRACTION) -> Integration:
     """The integration options of a command (--duration-s, --dt-s, --integrator)."""
     return Integration(args.duration_s, args.dt_s, args.integrator, steady_fraction, initial)

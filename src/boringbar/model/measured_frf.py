@@ -2,10 +2,14 @@
 
 Two formats are read:
 
-- **CSV**: three columns, frequency (Hz), real and imaginary part of the tip
-  receptance W/F (m/N), one row per frequency.  Lines starting with ``#`` are
-  comments; the first other line may be a header (names, not numbers).  Frequencies must
-  increase strictly.
+- **CSV**: three columns, one row per frequency: the frequency, and the real and
+  imaginary parts (or the magnitude and phase) of the tip receptance, mobility or
+  accelerance.  Lines starting with ``#`` are comments.  The first other line, if it
+  holds names rather than numbers, is a header that names each column and its unit
+  (the grammar: :mod:`boringbar.model.frf_units`; docs/frf.md); a header whose units
+  cannot be read is refused.  A file without a header is read as frequency (Hz), real
+  and imaginary part of the receptance (m/N), and its ``source`` says so.
+  Frequencies must increase strictly.
 - **UFF dataset 58** (``.uff``, ``.unv``), read with pyuff: a frequency
   response function (function type 4) of displacement, velocity or
   acceleration over force (receptance, mobility or accelerance; the latter two
@@ -26,6 +30,13 @@ import numpy as np
 import pyuff
 
 from boringbar._validate import ParameterError
+from boringbar.model.frf_units import (
+    NO_HEADER,
+    ORDINATES,
+    CsvUnits,
+    read_header,
+    to_receptance,
+)
 
 #: Fewest frequency lines a measured FRF may have.
 MIN_LINES = 20
@@ -43,7 +54,8 @@ class FrfFileError(ParameterError):
 @dataclass(frozen=True, eq=False)
 class MeasuredFrf:
     """A tip receptance H(f) (m/N) at ``frequency_hz`` (increasing); ``source``
-    says where it came from (file, format)."""
+    says where it came from (file, format) and, for a CSV file, the units it was read
+    in (``units``) and what was done to turn them into Hz and m/N (``conversion``)."""
 
     frequency_hz: np.ndarray
     receptance: np.ndarray
@@ -90,27 +102,54 @@ def read_frf(path) -> MeasuredFrf:
 
 
 def _read_csv(path: Path) -> MeasuredFrf:
-    rows, header = [], False
-    with open(path, newline="") as f:
-        for n, row in enumerate(csv.reader(f), start=1):
-            if not row or row[0].lstrip().startswith("#"):
-                continue
-            try:
-                values = [float(v) for v in row]
-            except ValueError:
-                if not rows and not header:
-                    header = True  # the first line that is not a comment may name columns
-                    continue
-                raise FrfFileError(f"{path}: line {n} = {','.join(row)!r}: three numbers "
-                                   "expected (frequency Hz, real, imaginary m/N)") from None
-            if len(values) != 3:
-                raise FrfFileError(f"{path}: line {n} has {len(values)} columns; three "
-                                   "expected (frequency Hz, real, imaginary m/N)")
-            rows.append(values)
+    units, rows = None, []
+    for n, row in enumerate(csv.reader(_csv_text(path).splitlines()), start=1):
+        if not any(cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
+            continue  # blank (a spreadsheet writes ",," for an empty row), or a comment
+        values = _numbers(row)
+        if values is None and units is None and not rows:
+            units = _header(path, n, row)  # the first line that is not a comment
+            continue
+        expected = (units or NO_HEADER).columns_text()
+        if values is None:
+            raise FrfFileError(f"{path}: line {n} = {','.join(row)!r}: three numbers "
+                               f"expected ({expected})")
+        if len(values) != 3:
+            raise FrfFileError(f"{path}: line {n} has {len(values)} columns; three "
+                               f"expected ({expected})")
+        rows.append(values)
+    units = units or NO_HEADER
     if not rows:
-        raise FrfFileError(f"{path}: no data rows (frequency Hz, real, imaginary m/N)")
-    a = np.array(rows)
-    return MeasuredFrf(a[:, 0], a[:, 1] + 1j * a[:, 2], {"file": str(path), "format": "csv"})
+        raise FrfFileError(f"{path}: no data rows ({units.columns_text()})")
+    try:
+        f, h, how = units.receptance(np.array(rows))
+    except ParameterError as exc:
+        raise FrfFileError(f"{path}: {exc}") from None
+    return MeasuredFrf(f, h, {"file": str(path), "format": "csv", **how})
+
+
+def _csv_text(path: Path) -> str:
+    """The file's text: UTF-8 (a spreadsheet's byte-order mark dropped), else Latin-1,
+    in which an older export writes "µm/N"."""
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        return path.read_text(encoding="latin-1")
+
+
+def _numbers(row: list[str]) -> list[float] | None:
+    """The row's numbers, or None if it holds a cell that is not one."""
+    try:
+        return [float(v) for v in row]
+    except ValueError:
+        return None
+
+
+def _header(path: Path, n: int, row: list[str]) -> CsvUnits:
+    try:
+        return read_header(row)
+    except ParameterError as exc:
+        raise FrfFileError(f"{path}: line {n} (header): {exc}") from None
 
 
 def _read_uff(path: Path) -> MeasuredFrf:
@@ -130,17 +169,11 @@ def _read_uff(path: Path) -> MeasuredFrf:
     if kind not in UFF_ORDINATES:
         raise FrfFileError(f"{path}: dataset 58 ordinate type {kind}; allowed: 8 "
                            "(displacement), 11 (velocity), 12 (acceleration) over force")
-    f = np.asarray(d["x"], dtype=float)
-    h = np.asarray(d["data"], dtype=complex)
     power = UFF_ORDINATES[kind]
-    if power:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            h = h / (1j * 2.0 * math.pi * f) ** power
-        keep = f > 0
-        f, h = f[keep], h[keep]
+    f, h, _ = to_receptance(np.asarray(d["x"], dtype=float),
+                            np.asarray(d["data"], dtype=complex), power)
     return MeasuredFrf(f, h, {"file": str(path), "format": "uff58",
-                              "ordinate": {0: "receptance", 1: "mobility",
-                                           2: "accelerance"}[power]})
+                              "ordinate": ORDINATES[power]})
 
 
 def frf_csv_text(frf: MeasuredFrf, header: str = "") -> str:

@@ -32,6 +32,7 @@ import numpy as np
 
 from boringbar._validate import ParameterError, check_positive, check_range
 from boringbar.model.bar import ModalModel
+from boringbar.model.frf_units import implausible_modes
 
 FORMAT = "boringbar-modal-fit"
 VERSION = 1
@@ -71,6 +72,17 @@ class ModalFit:
     @property
     def n_modes(self) -> int:
         return len(self.frequency_hz)
+
+    @property
+    def static_stiffness_n_m(self) -> float:
+        """The tip's static stiffness 1 / H(0) = 1 / sum_i 1/k_i (N/m)."""
+        return 1.0 / sum(1.0 / k for k in self.modal_stiffness_n_m)
+
+    def implausible(self) -> list[str]:
+        """What in the static stiffness and the natural frequencies no boring bar has
+        (:data:`~boringbar.model.frf_units.PLAUSIBLE_STIFFNESS_N_M`,
+        :data:`~boringbar.model.frf_units.PLAUSIBLE_FREQUENCY_HZ`); empty: nothing."""
+        return implausible_modes(self.static_stiffness_n_m, self.frequency_hz)
 
     def tip_frf(self, frequency_hz) -> np.ndarray:
         """The fitted receptance H (m/N, complex) at ``frequency_hz``."""
