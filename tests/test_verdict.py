@@ -103,7 +103,8 @@ def test_the_search_finds_the_limit_without_the_analytic_seed():
 
 # --- the verdict itself -------------------------------------------------------------------
 def rightmost_root(system: bb.System, depth: float, rpm: float) -> complex:
-    """The characteristic root of a one-mode bar's cut nearest the chatter frequency."""
+    """The rightmost characteristic root of a one-mode bar's cut: Newton's method from
+    starts along the imaginary axis about the natural frequency."""
     bar = system.bar
     m, c, k = bar.mass_kg[0], bar.damping_n_s_m[0], bar.stiffness_n_m[0]
     psi2 = bar.psi_tip[0] ** 2
@@ -116,32 +117,45 @@ def rightmost_root(system: bb.System, depth: float, rpm: float) -> complex:
     def df(s):
         return 2 * m * s + c + psi2 * kb * tau * cmath.exp(-s * tau)
 
-    s = complex(0.0, bar.natural_frequency_rad_s * 1.01)
-    for _ in range(100):
-        s -= f(s) / df(s)
-    assert abs(f(s)) < 1e-6 * k
-    return s
+    roots = []
+    for w in np.linspace(0.8, 1.3, 26) * bar.natural_frequency_rad_s:
+        s = complex(0.0, w)
+        for _ in range(100):
+            s -= f(s) / df(s)
+        if abs(f(s)) < 1e-8 * k:
+            roots.append(s)
+    return max(roots, key=lambda r: r.real)
 
 
-@pytest.mark.parametrize("factor", [1.03, 1.1])
-def test_the_growth_rate_is_the_characteristic_root_s_real_part(factor):
-    """Above the limit the last slope of ln A is the rightmost root's real part (the
-    faster roots have died out by the time the sign is certain)."""
+@pytest.mark.parametrize(("factor", "first", "last"), [(1.03, 60, 80), (1.1, 22, 38)])
+def test_the_growth_rate_is_the_characteristic_root_s_real_part(factor, first, last):
+    """The verdict's rate, a lower bound while the slower-decaying roots die out (the
+    log-envelope is convex), and, once they have (3 s at 1.03 of the limit), the slope
+    of ln A, which is the rightmost root's real part: windows ``first`` to ``last``,
+    before the tool leaves the cut."""
     system = bb.make_system("solid", n_modes=1)
     b = factor * float(limit_at_speeds(system, [1200.0])[0])
-    v = judge(system, bb.Regenerative(depth_m=b, rpm=1200.0))
+    cut = bb.Regenerative(depth_m=b, rpm=1200.0, start="static")
     root = rightmost_root(system, b, 1200.0)
+    v = judge(system, cut)
     assert v.onset == CHATTER and v.chatter_free is False
-    assert v.growth_rate_per_s == pytest.approx(root.real, rel=0.05)
+    assert 0 < v.growth_rate_per_s < root.real * 1.001
+    stepper = CutStepper(system, cut, dt_s=1e-6, window_steps=window_steps(system, cut, 1e-6),
+                         initial=knocked_cut(system, cut, 1e-6))
+    windows = [stepper.advance() for _ in range(last)][first:]
+    assert not any(w.left_cut for w in windows)
+    t = np.array([w.t_end_s for w in windows])
+    rate = np.polyfit(t, np.log([w.half_pp_m for w in windows]), 1)[0]
+    assert rate == pytest.approx(root.real, rel=0.01)
 
 
 @pytest.mark.parametrize("factor", [0.99, 1.01])
-def test_one_percent_either_side_of_the_limit_is_decided_in_a_second(factor):
+def test_one_percent_either_side_of_the_limit_is_decided_in_24_revolutions(factor):
     system = linear_bars()["carbide example solid"]
     b = factor * float(limit_at_speeds(system, [1200.0])[0])
     v = judge(system, bb.Regenerative(depth_m=b, rpm=1200.0))
     assert v.onset == (STABLE if factor < 1 else CHATTER)
-    assert v.onset_duration_s < 1.0
+    assert v.onset_duration_s <= 24 * 60.0 / 1200.0 + 1e-9
     assert np.sign(v.growth_rate_per_s) == np.sign(factor - 1)
 
 

@@ -351,6 +351,7 @@ LOBE_STYLE = {
     "bounded": dict(marker="^", mfc="none", mec=OKABE_ITO["orange"], color=OKABE_ITO["orange"],
                     mew=1.2),
     "chatter": dict(marker="x", color=OKABE_ITO["vermillion"], mew=1.4),
+    "undecided": dict(marker="s", mfc="none", mec="0.45", color="0.45", mew=1.0),
 }
 
 
@@ -392,36 +393,52 @@ def plot_lobes(ds, *, fig=None) -> Figure:
     fig.legend(list(legend.values()), list(legend), loc="outside lower center",
                ncol=min(len(legend), 2), fontsize="small", frameon=False)
     a = ds.attrs
-    crit = ("force reaches zero" if a.get("criterion") == "zero"
-            else "bounded chatter")
     set_title(fig, f"stability lobes by time-domain simulation ({a.get('method', '?')})", a,
-              f"chatter criterion: {crit}; Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa, feed "
-              f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev; {a.get('duration_s', math.nan):g} "
-              f"s runs, dt = {a.get('dt_s', math.nan):g} s")
+              f"{a.get('method_text', '')}; Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa, feed "
+              f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev")
     return fig
+
+
+def _verdict_masks(ds, i: int) -> tuple[dict, dict]:
+    """The grid points of case ``i`` by verdict, and their legend entries."""
+    v = ds["verdict"].values[i]
+    if ds.attrs.get("criterion") == "growth":
+        onset = ds["onset"].values[i]
+        return ({"stable": (v == 1) & (onset == 1), "bounded": (v == 1) & (onset != 1),
+                 "chatter": v == 0, "undecided": v == 2},
+                {"stable": "chatter-free: a small knock dies out",
+                 "bounded": "chatter-free: the knock grows, the ball bounds it within the "
+                            "tolerance",
+                 "chatter": "chatter: the vibration grows past the tolerance or the tool "
+                            "leaves the cut",
+                 "undecided": "undecided: the longest run allowed came first"})
+    vb = ds["verdict_bounded"].values[i]
+    return ({"stable": (v == 1) & (vb == 1), "bounded": (v == 1) & (vb == 0), "chatter": v == 0},
+            {"stable": "stable", "bounded": "bounded chatter only (force stays > 0)",
+             "chatter": "chatter (force reaches zero)"})
 
 
 def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     rpm = ds["rpm"].values
     depth_mm = ds["depth_m"].values * 1e3
     v = ds["verdict"].values[i]
-    vb = ds["verdict_bounded"].values[i]
     rr, dd = np.meshgrid(rpm, depth_mm, indexing="ij")
     run = v >= 0
     levels = np.flatnonzero(run.any(axis=0))
     top = depth_mm[levels[-1]] if levels.size else depth_mm[-1]
     ms = float(np.clip(150.0 / max(levels.size, 1), 2.0, 6.5))
-    masks = {"stable": (v == 1) & (vb == 1), "bounded": (v == 1) & (vb == 0),
-             "chatter": v == 0}
-    names = {"stable": "stable", "bounded": "bounded chatter only (force stays > 0)",
-             "chatter": "chatter (force reaches zero)"}
+    masks, names = _verdict_masks(ds, i)
     for key, mask in masks.items():
         if mask.any():
             h, = ax.plot(rr[mask], dd[mask], ls="none", ms=ms, **LOBE_STYLE[key])
             legend.setdefault(names[key], h)
     limit = ds["limit_depth_m"].values[i] * 1e3
     h, = ax.plot(rpm, limit, color="black", lw=1.6, marker=".", ms=4, zorder=1.5)
-    legend.setdefault("limit: last stable depth below the first chatter", h)
+    legend.setdefault("chatter-free depth" if ds.attrs.get("criterion") == "growth"
+                      else "limit: last stable depth below the first chatter", h)
+    if "onset_depth_m" in ds and str(ds["bar"].values[i]) == "ball":
+        h, = ax.plot(rpm, ds["onset_depth_m"].values[i] * 1e3, color="black", lw=1.0, ls="--")
+        legend.setdefault("onset: a small knock starts to grow (the ball not yet at a wall)", h)
     ymax = top
     if "analytic_curve_m" in ds and np.isfinite(ds["analytic_curve_m"].values[i]).any():
         curve = ds["analytic_curve_m"].values[i] * 1e3

@@ -174,8 +174,9 @@ def segment(n: int, min_segment: int) -> int:
 def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions) -> tuple[str, float, float]:
     """(verdict so far, growth rate, its standard error) from window ends ``t`` and the
     amplitudes ``amp`` (windows x observables, :func:`observables`): CHATTER as soon as
-    one observable grows at the confidence, STABLE once every one decays and has
-    stopped rising, else UNDECIDED (not yet; module doc).  The rate is the largest
+    one observable grows at the confidence over the last two segments (one alone may be
+    a beat over a floor of persistent small vibration), STABLE once every one decays and
+    has stopped rising, else UNDECIDED (not yet; module doc).  The rate is the largest
     observable's last slope."""
     n, m = len(t), segment(len(t), options.min_segment)
     if n < 3 * m:
@@ -186,11 +187,13 @@ def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions) -> tuple[str
     for col in y.T:
         fits = [slope(t[n - k * m:n - (k - 1) * m], col[n - k * m:n - (k - 1) * m])
                 for k in (3, 2, 1)]
-        (b0, s0), (b1, s1), (b2, s2) = fits
+        (b0, _), (b1, s1), (b2, s2) = fits
         rates.append((b2, s2))
-        if b2 - q * s2 > 0:
+        if b2 - q * s2 > 0 and b1 - q * s1 > 0:
             return CHATTER, b2, s2
-        noise = (q * math.hypot(s0, s1), q * math.hypot(s1, s2))
+        # the first segment's scatter holds the curvature of a transient, which is
+        # evidence of change, not noise: the rises are measured against the later two
+        noise = (q * math.sqrt(2.0) * s1, q * math.hypot(s1, s2))
         stable = stable and b2 + rise_left(b0, b1, b2, noise) + q * s2 < 0
     b, se = max(rates)
     return (STABLE if stable else UNDECIDED), b, se
@@ -239,8 +242,20 @@ def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, flo
     return verdict, rate, se, windows
 
 
-def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: float) -> Settled:
-    """Run ``stepper`` on until its vibration settles (module doc); ``windows`` so far."""
+def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: float,
+           onset_rate: float = math.nan) -> Settled:
+    """Run ``stepper`` on until its vibration settles (module doc); ``windows`` so far,
+    ``onset_rate`` (1/s) the growth rate of its onset where it chattered.
+
+    Settled: the tool stayed in the cut over the last quarter of the windows, the
+    peak-to-peak over it and over the quarter before agree within
+    ``settle_tolerance``, and the amplitude's trend over the two changes it by less
+    than that (every observable's, :func:`observables`); after a chattering onset also the
+    fastest growth has fallen below half the onset's (a vibration still growing as it
+    began has met nothing that bounds it).  Decaying: below the tolerance and every
+    observable falling at the confidence."""
+    tol = options.settle_tolerance
+    system = stepper.system
     while True:
         n = len(windows)
         if n >= 2 * options.min_segment:
@@ -251,9 +266,17 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
             duration = stepper.t_s - t0_s
             if any(w.left_cut for w in last):
                 return Settled(pp, rms, True, "left the cut", duration)
-            if abs(pp - pp0) <= options.settle_tolerance * max(pp, pp0):
+            t = np.array([w.t_end_s for w in windows[n - 2 * m:]])
+            amp = np.log(np.maximum([observables(system, w) for w in windows[n - 2 * m:]],
+                                    1e-300))
+            fits = [slope(t, col) for col in amp.T]
+            q = float(stats.t.ppf(0.5 + options.confidence / 2, 2 * m - 2))
+            top = max(b for b, _ in fits)
+            trend = max(abs(b) for b, _ in fits) * (t[-1] - t[0])
+            levelled = not top >= 0.5 * onset_rate
+            if levelled and abs(pp - pp0) <= tol * max(pp, pp0) and trend <= tol:
                 return Settled(pp, rms, False, "settled", duration)
-            if pp < options.tolerance_m and pp < pp0 * (1 - options.settle_tolerance):
+            if pp < options.tolerance_m and all(b + q * se < 0 for b, se in fits):
                 return Settled(pp, rms, False, "decaying", duration)
             if stepper.t_s >= options.max_duration_s:
                 return Settled(pp, rms, False, UNDECIDED, duration)
@@ -292,7 +315,7 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     elif verdict == STABLE:
         ok = [True]
     else:
-        settled.append(settle(stepper, windows, options, onset_s))
+        settled.append(settle(stepper, windows, options, onset_s, rate))
         ok = [acceptable(settled[0], options)]
     for knock in options.knocks_m:
         settled.append(settle(_stepper(system, cut, dt_s, knock), [], options, 0.0))

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
+from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
 from boringbar.io import jsonable
 from boringbar.model.dampers import MAX_FRICTION_FORCE
@@ -173,6 +174,38 @@ def add_cutting(g) -> None:
                         "static (from the static deflection under the mean force)")
     g.add_argument("--bounded-fraction", type=float, metavar="X",
                    help="bounded chatter: steady amplitude above X h_m (default: 0.1)")
+
+
+def add_verdict(g) -> None:
+    """How the converged verdict judges a cut (analysis/verdict.py; docs/chatter.md)."""
+    g.add_argument("--tolerance-um", type=float, metavar="UM",
+                   help="largest settled tip peak-to-peak that is chatter-free, in um (a "
+                        "surface-finish budget; default: 10)")
+    g.add_argument("--knock-um", action="append", metavar="UM[,UM...]",
+                   help="also start each cut from a knock of this tip amplitude in um (a "
+                        "large disturbance; repeatable); the chatter-free depth must hold "
+                        "from every start (default: only the small 1 um knock)")
+    g.add_argument("--confidence", type=float, metavar="X",
+                   help="confidence of a growth rate's sign, in (0.5, 1) (default: 0.99)")
+    g.add_argument("--max-run-s", type=float, metavar="S",
+                   help="the longest a cut runs before it is called undecided, in s "
+                        "(default: 10)")
+
+
+def verdict_options(args) -> VerdictOptions:
+    """The converged verdict's options of the command line, checked under its names."""
+    d = VerdictOptions()
+    tol = d.tolerance_m * 1e6 if args.tolerance_um is None else args.tolerance_um
+    check_range("--tolerance-um", tol, 0.0, 1e6, lo_open=True, unit="um")
+    knocks = [float(v) for k in args.knock_um or [] for v in str(k).split(",") if v.strip()]
+    for k in knocks:
+        check_range("--knock-um", k, 0.0, 1e4, lo_open=True, unit="um")
+    conf = d.confidence if args.confidence is None else args.confidence
+    check_range("--confidence", conf, 0.5, 0.999999, lo_open=True)
+    cap = d.max_duration_s if args.max_run_s is None else args.max_run_s
+    check_range("--max-run-s", cap, 0.0, 1000.0, lo_open=True, unit="s")
+    return VerdictOptions(confidence=conf, max_duration_s=cap, tolerance_m=tol * 1e-6,
+                          knocks_m=tuple(k * 1e-6 for k in knocks))
 
 
 def add_steady_fraction(group) -> None:

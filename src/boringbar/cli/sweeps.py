@@ -27,6 +27,7 @@ from boringbar.cli.options import (
     Outcome,
     add_common,
     add_cutting,
+    add_verdict,
     check_depth,
     check_dt,
     check_rpm,
@@ -38,6 +39,7 @@ from boringbar.cli.options import (
     integration,
     many_cases,
     progress_printer,
+    verdict_options,
     wrote,
 )
 from boringbar.model.forcing import MAX_DEPTH
@@ -88,9 +90,14 @@ def add_lobes(sub) -> None:
                         "upwards (published)")
     g.add_argument("--successive", type=int, default=3, metavar="N",
                    help="a speed's scan ends after N successive chattering depths (default: 3)")
-    g.add_argument("--criterion", choices=("zero", "bounded"), default="zero",
-                   help="chatter: the force reaches zero (default, published) or bounded "
-                        "(also a steady amplitude above --bounded-fraction of the feed)")
+    g.add_argument("--criterion", choices=("growth", "zero", "bounded"),
+                   help="how a cut is judged: growth (the converged verdict: a knock's growth "
+                        "rate, run until certain, and the settled vibration within "
+                        "--tolerance-um; the default), zero (published: the force reaches "
+                        "zero within --duration-s; the default under --preset paper) or "
+                        "bounded (also a steady amplitude above --bounded-fraction of the "
+                        "feed); docs/chatter.md")
+    add_verdict(p.add_argument_group("converged verdict (--criterion growth)"))
     g = p.add_argument_group("regenerative cutting")
     add_cutting(g)
     groups["run"].add_argument("--workers", type=int, metavar="N",
@@ -210,14 +217,16 @@ def _lobe_options(args, cases) -> LobesOptions:
     cut = cut_options(args)
     return LobesOptions(tuple(rpm), args.method, args.criterion,
                         None if step is None else step * 1e-3, args.max_depth_mm * 1e-3,
-                        args.successive, **cut, depth_tolerance=tol)
+                        args.successive, **cut, depth_tolerance=tol,
+                        verdict=verdict_options(args))
 
 
 def _lobes_text(ds) -> str:
     lines = []
     analytic = ds["analytic_limit_m"].values if "analytic_limit_m" in ds else None
     depths = ds["depth_m"].values
-    chosen = ds["verdict" if ds.attrs["criterion"] == "zero" else "verdict_bounded"].values
+    chosen = ds["verdict_bounded" if ds.attrs["criterion"] == "bounded" else "verdict"].values
+    onset = ds["onset_depth_m"].values if "onset_depth_m" in ds else None
 
     def mm(v: float) -> str:
         return f"{v * 1e3:.4g}" if math.isfinite(v) else "-"  # 1 % of a 0.03 mm limit
@@ -230,11 +239,13 @@ def _lobes_text(ds) -> str:
               if np.isfinite(limit).any() else "")
         lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}")
         lines.append(f"{'rpm':>8} {'limit (mm)':>12} {'first unstable (mm)':>20} "
-                     f"{'analytic (mm)':>14}")
+                     f"{'analytic (mm)':>14}" + (f" {'onset (mm)':>12}" if onset is not None
+                                                else ""))
         islands = []
         for j, r in enumerate(ds["rpm"].values):
             a = math.nan if analytic is None else float(analytic[i, j])
-            lines.append(f"{r:8g} {mm(limit[j]):>12} {mm(first[j]):>20} {mm(a):>14}")
+            lines.append(f"{r:8g} {mm(limit[j]):>12} {mm(first[j]):>20} {mm(a):>14}"
+                         + (f" {mm(onset[i, j]):>12}" if onset is not None else ""))
             above = (depths > first[j]) & (chosen[i, j] == 1)
             if math.isfinite(first[j]) and above.any():
                 islands.append(f"{r:g}")
@@ -242,7 +253,7 @@ def _lobes_text(ds) -> str:
             lines.append(f"  stable islands above the first unstable depth at "
                          f"{', '.join(islands)} rpm")
         lines.append("")
-    lines.append(f"'-': no chatter up to the deepest cut tried (or no analytic limit); "
-                 f"method {ds.attrs['method']}, criterion {ds.attrs['criterion']}, "
-                 f"{ds.attrs['runs']} runs in {ds.attrs['wall_time_s']:.1f} s")
+    lines.append("'-': no chatter up to the deepest cut tried (or no analytic limit)")
+    lines.append(f"method: {ds.attrs['method_text']}; {ds.attrs['runs']} runs in "
+                 f"{ds.attrs['wall_time_s']:.1f} s")
     return "\n".join(lines)
