@@ -157,6 +157,10 @@ void check_cut(Vec p, double t0, double t_end, double dt, double H) {
                                                std::to_string(dt) + ")");
     require(std::isfinite(H) && H > 0.0, "a regenerative cut needs H > 0 (got " +
                                              std::to_string(H) + ")");
+    // the cut's events and propagators assume a force linear in the state (Kr b h)
+    require(p[L::CUT_MC] == 0.0 && p[L::NOISE_STD] == 0.0,
+            "the exact integrator takes the linear cutting law without noise (p[CUT_MC] = "
+            "p[NOISE_STD] = 0); Kienzle's law and force noise: run_rk4");
     double tau = p[L::TAU];
     require(tau > 0.0, "p[TAU] must be > 0 in a regenerative cut");
     require(is_int(p[L::N_REV], 1, MAX_REV), "p[N_REV] must be an integer in [1, 1e6]");

@@ -112,9 +112,27 @@ void check_time(double t0, double dt, std::int64_t n_steps, std::int64_t steady_
                 std::to_string(n_steps) + "]");
 }
 
+// A regenerative cut's law and noise: m_c and the noise's relative std in [0, 1), and
+// with noise an interval > 0 and a seed that converts to an unsigned integer exactly.
+void check_law(const double* p) {
+    const double mc = p[L::CUT_MC], sd = p[L::NOISE_STD];
+    require(std::isfinite(mc) && mc >= 0.0 && mc < 1.0,
+            "p[CUT_MC] = " + num(mc) + " must be in [0, 1)");
+    require(std::isfinite(sd) && sd >= 0.0 && sd < 1.0,
+            "p[NOISE_STD] = " + num(sd) + " must be in [0, 1)");
+    if (sd == 0.0) return;
+    const double iv = p[L::NOISE_INTERVAL], seed = p[L::NOISE_SEED];
+    require(std::isfinite(iv) && iv > 0.0,
+            "p[NOISE_INTERVAL] = " + num(iv) + " must be finite and > 0 with noise");
+    require(std::isfinite(seed) && seed == std::floor(seed) && seed >= 0.0 &&
+                seed <= 9007199254740992.0,
+            "p[NOISE_SEED] = " + num(seed) + " must be an integer in [0, 2^53]");
+}
+
 // A regenerative cut's delay: N_REV revolutions of TAU, and a history buffer that holds
 // them (N_REV TAU / dt + 3 rows; the kernel's ring-buffer indices rely on it).
 void check_cut(const double* p, double dt, std::int64_t nbuf) {
+    check_law(p);
     const int nrev = int_slot(p, L::N_REV, "N_REV", 1, R::NREV_MAX, "p");
     const double tau = p[L::TAU];
     require(std::isfinite(tau) && tau > 0.0,

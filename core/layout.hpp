@@ -36,7 +36,7 @@ enum Forcing : int { HARMONIC = 0, REGENERATIVE = 1 };
     X(TMD_C)                                                                               \
     X(STROBE_PERIOD)    /* Poincare sampling period (s); 0 = off */                        \
     X(STROBE_T0)        /* first strobe time (s) */                                        \
-    X(KR_B)             /* Kr * b (N/m) */                                                 \
+    X(KR_B)             /* Kr b (N/m); Kienzle: K b (1 mm)^m_c (N/m^(1-m_c)) */            \
     X(FEED)             /* h_m (m) */                                                      \
     X(TAU)              /* delay, one spindle revolution (s) */                            \
     X(N_REV)            /* past revolutions in the chip-thickness minimum */               \
@@ -44,7 +44,11 @@ enum Forcing : int { HARMONIC = 0, REGENERATIVE = 1 };
     X(STOP_AT_ZERO)     /* 1: stop the run at the first h = 0 */                           \
     X(HIST_W0)          /* W of the surface before the cut began */                        \
     X(STATIC_FRICTION)  /* F_s >= F_c, static limit of stick-slip (exact) (N) */           \
-    X(STAGE_LOOP)       /* 1: every RK4 step by the stage loop (tests, benchmarks) */
+    X(STAGE_LOOP)       /* 1: every RK4 step by the stage loop (tests, benchmarks) */      \
+    X(CUT_MC)           /* Kienzle's m_c: f = KR_B h^(1 - m_c); 0 the linear law */        \
+    X(NOISE_STD)        /* relative std of the cut's force noise eps; 0 = off */           \
+    X(NOISE_INTERVAL)   /* eps is constant over this long (s), in whole steps */           \
+    X(NOISE_SEED)       /* the noise's seed, an integer in [0, 2^53] */
 
 #define BB_ENUM_ENTRY(name) name,
 enum PSlot : int { BB_P_SCALARS(BB_ENUM_ENTRY) P_SCALARS_END };

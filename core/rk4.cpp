@@ -6,6 +6,7 @@
 // Specialised on the mode count 1, 2, 3, the case and the forcing (the other bars' and
 // the cut's branches fold away), with one kernel for a run-time mode count (4..NMAX);
 // each compiled for the baseline ISA, AVX2 and AVX-512 (rk4.hpp).
+#include "noise.hpp"
 #include "rk4.hpp"
 
 namespace bb::rk4 {
@@ -99,11 +100,52 @@ struct Delay {
 };
 
 // The regenerative cut's bookkeeping of a step's stages: the chip thickness
-// h = max(0, surface - W) and the force Kr b h.
+// h = max(0, surface - W) and the force of the cutting law, Kr b h (m_c = 0) or Kienzle's
+// K b h^(1 - m_c) (h > 0), times the noise's gain max(0, 1 + eps_j) where the cut has
+// noise.  The linear law without noise computes the product krb * h alone, so that a
+// linear cut's bits do not depend on the other law or on the noise.
 struct Cut {
     double krb;
     double max_force, first_zero, n_zero;
-    bool cut_zero;  // h = 0 at some stage of this step
+    bool cut_zero = false;  // h = 0 at some stage of this step
+    bool power = false;     // Kienzle's law: h^expo, expo = 1 - m_c
+    double expo = 1.0;
+    // the noise: eps_j = noise_std N_j(seed) over steps [j steps_per, (j + 1) steps_per)
+    // of the cut (steps counted from its start, so a continued run draws the same eps)
+    bool noisy = false;
+    double noise_std = 0.0, gain = 1.0;
+    std::uint64_t seed = 0;
+    idx steps_per = 1, j_now = -1;
+
+    static Cut of(const double* p, const double* met, double dt) {
+        Cut c;
+        c.krb = p[L::KR_B];
+        c.max_force = met[L::MAX_FORCE];
+        c.first_zero = met[L::FIRST_ZERO_T];
+        c.n_zero = met[L::N_ZERO_STEPS];
+        c.power = p[L::CUT_MC] != 0.0;
+        c.expo = 1.0 - p[L::CUT_MC];
+        c.noisy = p[L::NOISE_STD] > 0.0;
+        if (c.noisy) {
+            c.noise_std = p[L::NOISE_STD];
+            c.seed = std::uint64_t(p[L::NOISE_SEED]);
+            // the interval in whole steps, at least one (capped where the count would
+            // leave an int64: one interval for any run the core can take)
+            const double r = std::nearbyint(p[L::NOISE_INTERVAL] / dt);
+            c.steps_per = r >= 1.0 ? (r < 4.0e18 ? idx(r) : idx(4.0e18)) : 1;
+        }
+        return c;
+    }
+
+    // the gain of step kg of the cut (kg >= 0)
+    void noise_at(idx kg) {
+        const idx j = kg / steps_per;
+        if (j != j_now) {
+            j_now = j;
+            const double g = 1.0 + noise_std * noise::normal_at(seed, std::uint64_t(j));
+            gain = g > 0.0 ? g : 0.0;
+        }
+    }
 
     double force(double hmin, double ws, double t_stage) {
         double hh = hmin - ws;
@@ -114,7 +156,8 @@ struct Cut {
                 if (first_zero < 0.0) first_zero = t_stage;
             }
         }
-        const double f = krb * hh;
+        double f = power ? krb * std::pow(hh, expo) : krb * hh;
+        if (noisy) f *= gain;
         max_force = Steady::pymax(max_force, f);
         return f;
     }
@@ -135,7 +178,7 @@ BB_INLINE void run_body(const RunArgs& a) {
 
     Delay delay;
     if (regen) delay.init(a.p, dt, kg0, nbuf);
-    Cut cut{a.p[L::KR_B], met[L::MAX_FORCE], met[L::FIRST_ZERO_T], met[L::N_ZERO_STEPS], false};
+    Cut cut = Cut::of(a.p, met, dt);
     const bool stop_at_zero = a.p[L::STOP_AT_ZERO] > 0.0;
     double hsurf[4] = {0.0, 0.0, 0.0, 0.0};
     idx steps_run = a.n_steps;
@@ -188,6 +231,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         }
         cut.cut_zero = false;
         if (regen) delay.surface(buf, kg0 + k, cut.first_zero >= 0.0, hsurf);
+        if (regen && cut.noisy) cut.noise_at(kg0 + k);
         const Phase ph = rotate(sn, cn, q.chh, q.shh);
         fst[0] = q.f0 * sn;
         fst[1] = q.f0 * ph.s_h;
@@ -208,7 +252,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         } else {
             auto force = [&](int s, const double* Xs) {
                 double f = fst[s];
-                if (regen) {  // f = Kr b h, h = max(0, surface - W(t_s))
+                if (regen) {  // the cutting law at h = max(0, surface - W(t_s))
                     double ws = 0.0;
                     for (int i = 0; i < n; ++i) ws += q.pL[i] * Xs[i];
                     f = cut.force(hsurf[s], ws, t + C_FRAC[s] * dt);

@@ -32,7 +32,9 @@ against ``simulate_batch``)::
     PYTHONPATH=src python tests/kernel_reference.py --capture
 
 Replay (:func:`replay`; without ``--capture`` the script replays every case and prints
-the differences) uses only the stored arrays and the three entry points imported in
+the differences) moves each stored ``p`` into the core's layout of today by slot name
+(:func:`current_params`; slots added since capture are 0, as the captured runs had them)
+and otherwise uses only the stored arrays and the three entry points imported in
 the block below, so that the kernels can be repointed to another implementation by
 editing that block alone.  Only capture calls into simulate.py.
 """
@@ -303,6 +305,34 @@ def case_builders() -> dict:
 
 
 # --- replay: the stored inputs through the entry points ------------------------------
+#: The scalar slots of ``p`` when the file was captured, in order (core/layout.hpp's
+#: BB_P_SCALARS then), and the per-mode blocks of NMAX entries that follow them: the
+#: layout of every stored ``p`` and row of ``P``.
+CAPTURED_SCALARS = ("CASE", "N_MODES", "FORCING", "F0", "OMEGA", "BALL_MASS", "HALF_GAP",
+                    "RESTITUTION", "FRICTION", "REACTION", "M_EFF", "V_IMPACT", "V_STICK",
+                    "STICK_MIN", "TMD_MASS", "TMD_K", "TMD_C", "STROBE_PERIOD", "STROBE_T0",
+                    "KR_B", "FEED", "TAU", "N_REV", "INTERP", "STOP_AT_ZERO", "HIST_W0",
+                    "STATIC_FRICTION", "STAGE_LOOP")
+CAPTURED_BLOCKS = ("M_", "K_", "C_", "PSI_L", "PSI_D", "PSI_A")
+
+
+def current_params(stored: np.ndarray) -> np.ndarray:
+    """A stored parameter vector (or the rows of a batch's P) in the core's layout today:
+    each captured slot where its name is now; slots added since stay 0, which is what
+    the captured runs did (the linear cutting law, no force noise)."""
+    stored = np.asarray(stored, dtype=float)
+    nmax, ns = L.NMAX, len(CAPTURED_SCALARS)
+    if stored.shape[-1] != ns + nmax * len(CAPTURED_BLOCKS):
+        raise ValueError(f"a stored p of {stored.shape[-1]} slots is not the captured layout")
+    out = np.zeros(stored.shape[:-1] + (L.P_SIZE,))
+    for i, name in enumerate(CAPTURED_SCALARS):
+        out[..., getattr(L, name)] = stored[..., i]
+    for k, name in enumerate(CAPTURED_BLOCKS):
+        at = getattr(L, name)
+        out[..., at:at + nmax] = stored[..., ns + k * nmax:ns + (k + 1) * nmax]
+    return out
+
+
 def _records(case: dict) -> list[np.ndarray]:
     return [np.zeros(tuple(int(n) for n in case[f"{k}_shape"])) for k in RECORDS]
 
@@ -316,15 +346,16 @@ def _replay_rk4(case: dict) -> dict:
     rec, imp, stick, strobe = records = _records(case)
     shape = tuple(int(n) for n in case["buf_shape"])
     buf = np.zeros(shape) if shape[0] else None  # None: simulate's harmonic call
-    run_rk4(case["p"].copy(), x, float(case["t0"]), float(case["dt"]), int(case["n_steps"]),
-            int(case["steady_start"]), int(case["rec_every"]), rec, imp, stick, strobe, met, buf)
+    run_rk4(current_params(case["p"]), x, float(case["t0"]), float(case["dt"]),
+            int(case["n_steps"]), int(case["steady_start"]), int(case["rec_every"]), rec, imp,
+            stick, strobe, met, buf)
     return _outputs(x, met, records)
 
 
 def _replay_batch(case: dict) -> dict:
     x, met = case["x0"].copy(), case["met0"].copy()
     _, imp, stick, strobe = records = _records(case)
-    run_rk4_batch(case["P"].copy(), x, float(case["t0"]), float(case["dt"]),
+    run_rk4_batch(current_params(case["P"]), x, float(case["t0"]), float(case["dt"]),
                   int(case["n_steps"]), int(case["steady_start"]), imp, stick, strobe, met)
     return _outputs(x, met, records)
 
@@ -338,7 +369,7 @@ def stored_prep_of(case: dict) -> dict:
 def _replay_exact(case: dict, prep: dict | None = None) -> dict:
     x, met = case["x0"].copy(), case["met0"].copy()
     rec, imp, stick, strobe = records = _records(case)
-    t = run_exact(case["p"].copy(), x, float(case["t0"]), float(case["t_end"]),
+    t = run_exact(current_params(case["p"]), x, float(case["t0"]), float(case["t_end"]),
                   float(case["t_steady"]), float(case["rec_dt"]), rec, imp, stick, strobe, met,
                   prep=prep, dt=float(case["dt"]))
     return {**_outputs(x, met, records), "t_reached": np.float64(t)}

@@ -14,6 +14,7 @@ absolute displacement x_a (TMD).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -206,20 +207,61 @@ def delayed_tip(W: list, Wd: list, s: float, dt: float, w_before: float, cubic: 
     return h00 * wa + h10 * dt * wda + h01 * wb + h11 * dt * wdb
 
 
+MASK64 = 2**64 - 1
+
+
+def mix64(z: int) -> int:
+    """splitmix64's output function on a 64-bit word (Steele, Lea and Flood 2014)."""
+    z = (z + 0x9E3779B97F4A7C15) & MASK64
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & MASK64
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & MASK64
+    return z ^ (z >> 31)
+
+
+def normal_at(seed: int, j: int) -> float:
+    """The j-th standard normal deviate of stream ``seed`` (docs/model.md, section 4.4):
+    Box-Muller of u1 = (top 53 bits of mix(mix(seed) ^ mix(2j)) + 1) 2^-53 in (0, 1]
+    and u2 = (top 53 bits of mix(mix(seed) ^ mix(2j + 1))) 2^-53 in [0, 1)."""
+    key = mix64(seed)
+    a = mix64(key ^ mix64((2 * j) & MASK64))
+    b = mix64(key ^ mix64((2 * j + 1) & MASK64))
+    u1 = ((a >> 11) + 1) * 2.0**-53
+    u2 = (b >> 11) * 2.0**-53
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+def noise_gain(p: np.ndarray, dt: float, step: int) -> float:
+    """The force's factor max(0, 1 + eps_j) in step ``step`` of a cut: eps_j of the
+    interval j = step // n, n = round(NOISE_INTERVAL / dt) steps (at least 1)."""
+    std = p[L.NOISE_STD]
+    if std == 0.0:
+        return 1.0
+    n = max(1, round(p[L.NOISE_INTERVAL] / dt))
+    return max(0.0, 1.0 + std * normal_at(int(p[L.NOISE_SEED]), step // n))
+
+
+def cutting_force(p: np.ndarray, h: float) -> float:
+    """The cutting law at chip thickness h >= 0: KR_B h (linear, CUT_MC = 0) or
+    KR_B h^(1 - m_c) (Kienzle's, KR_B = K b (1 mm)^m_c)."""
+    mc = p[L.CUT_MC]
+    return p[L.KR_B] * h if mc == 0.0 else p[L.KR_B] * h ** (1.0 - mc)
+
+
 def regenerative_run(p: np.ndarray, x0: np.ndarray, dt: float, n_steps: int):
     """Integrate a regenerative cut for ``n_steps`` RK4 steps from ``x0`` at t = 0.
 
-    At every stage the cutting force is f = Kr b h with
+    At every stage the cutting force is f = F(h) (1 + eps) with
     h = max(0, min_{k=1..N} [k h_m + W(t - k tau)] - W(t)), the delayed W read
     from the full stored history (:func:`delayed_tip`), W(t) = psi_L . u of the
-    stage state.  Returns (t, X, force, first_zero, zero_steps): times and states
-    at every step end, the force at each step's last stage (what the kernel
-    records), the first stage time with h = 0 (None if never) and the number of
-    steps with h = 0 at some stage.
+    stage state, F the cutting law (:func:`cutting_force`) and 1 + eps the step's
+    noise factor (:func:`noise_gain`).  Returns (t, X, force, first_zero, zero_steps):
+    times and states at every step end, the force at each step's last stage (what the
+    kernel records), the first stage time with h = 0 (None if never) and the number
+    of steps with h = 0 at some stage.
     """
     model = CutModel.from_packed(p)
     n = model.n
-    krb, feed, tau = p[L.KR_B], p[L.FEED], p[L.TAU]
+    feed, tau = p[L.FEED], p[L.TAU]
     revs, cubic, w_before = int(p[L.N_REV]), p[L.INTERP] > 0.0, p[L.HIST_W0]
     x = np.array(x0, dtype=float)
     if model.case == L.LOCKED:
@@ -238,6 +280,7 @@ def regenerative_run(p: np.ndarray, x0: np.ndarray, dt: float, n_steps: int):
 
     for step in range(n_steps):
         t = step * dt
+        gain = noise_gain(p, dt, step)
         ks, zero = [], False
         xs = x
         for c, a in ((0.0, 0.0), (0.5, 0.5), (0.5, 0.5), (1.0, 1.0)):
@@ -248,7 +291,7 @@ def regenerative_run(p: np.ndarray, x0: np.ndarray, dt: float, n_steps: int):
                 zero = True
                 if first_zero is None:
                     first_zero = t + c * dt
-            f = krb * h
+            f = cutting_force(p, h) * gain
             ks.append(rhs(replace(model, tip_force=f), t + c * dt, xs))
         x = x + dt / 6 * (ks[0] + 2 * ks[1] + 2 * ks[2] + ks[3])
         if model.case == L.BALL:

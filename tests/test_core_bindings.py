@@ -26,9 +26,15 @@ SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow])
 
 
-def rk4_args(cut: bool = False) -> dict:
+#: a cut through Kienzle's law with noise at its extremes: the largest seed, an interval
+#: of 3 steps, a std at which the gain is often clamped at 0
+KIENZLE_NOISE = {"workpiece": "steel", "force_noise": 0.9, "noise_interval_s": 3e-6,
+                 "noise_seed": 2**53}
+
+
+def rk4_args(cut: bool = False, law: dict | None = None) -> dict:
     s = make_system("ball", "paper", gap_m=0.1e-3, friction=True)
-    f = Regenerative(depth_m=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
+    f = Regenerative(depth_m=1e-3, rpm=1200.0, **(law or {})) if cut else Harmonic(10.0, 1.0)
     su = _setup(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "rk4")
     return {"p": su.p, "x": su.x, "t0": su.t0, "dt": su.dt, "n_steps": su.n_steps,
             "steady_start": su.steady_steps, "rec_every": su.record_every, "rec": su.rec,
@@ -64,6 +70,7 @@ def exact_args(cut: bool = False) -> dict:
 ENTRIES = {
     "run_rk4": rk4_args,
     "run_rk4 cut": lambda: rk4_args(cut=True),
+    "run_rk4 cut kienzle noise": lambda: rk4_args(cut=True, law=KIENZLE_NOISE),
     "run_rk4_batch": batch_args,
     "run_exact": exact_args,
     "run_exact cut": lambda: exact_args(cut=True),
@@ -159,7 +166,8 @@ def test_any_corrupted_argument_is_a_clear_error_or_a_run(entry, data):
 
 
 SLOTS = ["N_MODES", "CASE", "FORCING", "N_REV", "TAU", "OMEGA", "HALF_GAP", "BALL_MASS",
-         "RESTITUTION", "M_EFF", "STROBE_PERIOD", "INTERP", "FRICTION", "STATIC_FRICTION"]
+         "RESTITUTION", "M_EFF", "STROBE_PERIOD", "INTERP", "FRICTION", "STATIC_FRICTION",
+         "CUT_MC", "NOISE_STD", "NOISE_INTERVAL", "NOISE_SEED"]
 
 
 @pytest.mark.parametrize("entry", list(ENTRIES))

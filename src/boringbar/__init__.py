@@ -9,9 +9,10 @@ layers behind them.
   bars of one system file, side by side); your own bar: :func:`load_system`
   (system files) -> :class:`SystemSpec`, :func:`describe_modes`, :class:`ModalFit`
   (a fitted tip FRF); forcing: :class:`Harmonic`,
-  :class:`Regenerative`.
+  :class:`Regenerative` and its :class:`CuttingLaw`.
 - One run: :func:`simulate` -> :class:`Run`.
-- Analyses: :func:`sweep`, :func:`lobes`, :func:`bifurcation`, :func:`basins`,
+- Analyses: :func:`sweep`, :func:`lobes` (a boring job's speeds:
+  :func:`boring_speeds`), :func:`bifurcation`, :func:`basins`,
   :func:`sensitivity`, :func:`poincare_map`; design search: :func:`design`
   (:class:`DesignOptions`, :class:`Variable`, :class:`Uncertain`, :func:`load_design`).
 - Closed-form references: :func:`tip_frf`, :func:`min_real_part`,
@@ -46,7 +47,7 @@ _HOMES = {
     "boringbar.analysis.design": ("design",),
     "boringbar.analysis.design_file": ("load_design",),
     "boringbar.analysis.design_options": ("DesignOptions", "Uncertain", "Variable"),
-    "boringbar.analysis.lobes": ("LobesOptions", "lobes"),
+    "boringbar.analysis.lobes": ("LobesOptions", "boring_speeds", "lobes"),
     "boringbar.analysis.poincare": ("poincare_map",),
     "boringbar.analysis.sensitivity": ("Cuts", "SensitivityOptions", "sensitivity"),
     "boringbar.analysis.sweep": ("Case", "SweepOptions", "published_cases", "sweep"),
@@ -54,6 +55,7 @@ _HOMES = {
     "boringbar.model.bar": ("ModalModel", "Section", "SteppedBar", "published_bar"),
     "boringbar.model.dampers": ("Friction", "ImpactDamper", "TunedMassDamper",
                                 "den_hartog_parameters", "sims_tuning"),
+    "boringbar.model.cutting": ("CuttingLaw",),
     "boringbar.model.forcing": ("Harmonic", "Regenerative"),
     "boringbar.model.modal_fit": ("ModalFit",),
     "boringbar.model.system": ("PRESETS", "READINGS", "System", "describe_modes",
@@ -89,6 +91,7 @@ __all__ = [
     "BifurcationOptions",
     "Case",
     "ContinuationOptions",
+    "CuttingLaw",
     "Cuts",
     "DesignOptions",
     "Execution",
@@ -117,6 +120,7 @@ __all__ = [
     "app",
     "basins",
     "bifurcation",
+    "boring_speeds",
     "continuation",
     "den_hartog_parameters",
     "describe_modes",

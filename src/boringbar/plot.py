@@ -294,8 +294,11 @@ def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
     if math.isfinite(span):
         axes[0, 1].set_title(f"last {span * 1e3:.0f} ms ({zoom_cycles:g} periods of "
                              f"{fn:.0f} Hz)", fontsize="medium")
-    mean_force = forcing.get("kr_pa", math.nan) * cut["depth_m"] * forcing.get("feed_m",
-                                                                                math.nan)
+    # files written before the cut named its law: the linear law, Kr b h_m
+    kr = forcing.get("kr_pa") or math.nan
+    mean_force = cut.get("force_at_feed_n",
+                         kr * cut["depth_m"] * forcing.get("feed_m", math.nan))
+    law = cut.get("cutting_law") or f"Kr {kr / 1e6:g} MPa"
     for col in (0, 1):
         _cut_guides(axes[:, col], cut["static_deflection_m"], mean_force,
                     cut["first_zero_time_s"], labels=col == 0, values=True)
@@ -303,8 +306,8 @@ def _cut_figure(ds, summary: dict, config: dict, zoom_cycles: float = 30, *,
         ax.grid(alpha=0.3)
     legend_below(fig, axes)
     what = (f"{summary.get('bar', '?')} bar, cut at {cut['rpm']:g} rpm, "
-            f"depth {cut['depth_m'] * 1e3:g} mm (Kr {forcing.get('kr_pa', math.nan) / 1e6:g} "
-            f"MPa, feed {forcing.get('feed_m', math.nan) * 1e3:g} mm/rev, "
+            f"depth {cut['depth_m'] * 1e3:g} mm ({law}, "
+            f"feed {forcing.get('feed_m', math.nan) * 1e3:g} mm/rev, "
             f"{'static start' if cut['start'] == 'static' else 'from rest'})")
     set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")},
               _cut_verdict(cut, summary.get("duration_s")))
@@ -393,9 +396,11 @@ def plot_lobes(ds, *, fig=None) -> Figure:
     fig.legend(list(legend.values()), list(legend), loc="outside lower center",
                ncol=min(len(legend), 2), fontsize="small", frameon=False)
     a = ds.attrs
+    # files written before the lobes named their law: the linear law's Kr
+    law = a.get("cutting_law") or f"Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa"
     set_title(fig, f"stability lobes by time-domain simulation ({a.get('method', '?')})", a,
-              f"{a.get('method_text', '')}; Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa, feed "
-              f"{a.get('feed_m', math.nan) * 1e3:g} mm/rev")
+              f"{a.get('method_text', '')}; {law}, feed {a.get('feed_m', math.nan) * 1e3:g} "
+              "mm/rev")
     return fig
 
 

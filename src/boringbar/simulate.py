@@ -277,6 +277,9 @@ class Run:
             "bounded_chatter": bool(m["amplitude_m"] > f.bounded_fraction * f.feed_m),
             "bounded_threshold_m": f.bounded_fraction * f.feed_m,
             "static_deflection_m": m["static_deflection_m"],
+            "cutting_law": f.law.describe(),
+            "force_at_feed_n": f.mean_force_n,
+            "force_noise": f.force_noise,
             "delay_interpolation": f.interpolation,
             "start": f.start,
         }
@@ -421,6 +424,26 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
     return p
 
 
+def pack_cut(system: System, forcing: Regenerative, dt: float, w_static: float) -> np.ndarray:
+    """The kernel's parameter vector for ``system`` in the cut ``forcing``: its law, noise
+    and delay; ``w_static`` (m) the surface before the cut of a static start."""
+    p = pack(system, 0.0, 0.0, dt)
+    p[L.FORCING] = L.REGENERATIVE
+    law = forcing.law
+    p[L.KR_B] = law.kernel_coefficient(forcing.depth_m)
+    p[L.CUT_MC] = law.exponent
+    p[L.NOISE_STD] = forcing.force_noise
+    p[L.NOISE_INTERVAL] = forcing.noise_interval_s
+    p[L.NOISE_SEED] = forcing.noise_seed
+    p[L.FEED] = forcing.feed_m
+    p[L.TAU] = forcing.tau_s
+    p[L.N_REV] = forcing.revolutions
+    p[L.INTERP] = 1.0 if forcing.interpolation == "cubic" else 0.0
+    p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
+    p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
+    return p
+
+
 def initial_state(system: System, initial: Initial) -> np.ndarray:
     """x = [u, u', aux, aux'] from tip and ball initial conditions."""
     bar = system.bar
@@ -479,6 +502,19 @@ def resolved_integrators(integrator: str, systems, cutting: bool = False) -> str
     return ",".join(sorted({resolve_integrator(integrator, s, cutting) for s in systems}))
 
 
+def check_cut_law(forcing, integrator: str) -> None:
+    """The exact integrator's cut is linear in the state: Kr b h without noise."""
+    if integrator != "exact" or not isinstance(forcing, Regenerative):
+        return
+    law = forcing.law
+    if not law.linear_law or forcing.force_noise > 0.0:
+        what = law.describe() + (f" with force_noise = {forcing.force_noise:g}"
+                                 if forcing.force_noise > 0.0 else "")
+        raise ParameterError(f"integrator = 'exact' integrates a cut whose force is linear in "
+                             f"the state (Kr b h, no force noise); this cut has {what}: use "
+                             "integrator = 'rk4'")
+
+
 def check_friction_law(system: System, integrator: str) -> None:
     """True stick-slip needs the exact integrator: RK4 has only the published sgn() law."""
     if integrator == "rk4" and stick_slip(system):
@@ -525,6 +561,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     integrator = resolve_integrator(integrator, system, isinstance(forcing, Regenerative))
     cutting = isinstance(forcing, Regenerative)
     check_friction_law(system, integrator)
+    check_cut_law(forcing, integrator)
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     n_steps = check_steps(duration, dt)
     record_every = (max(1, n_steps // HISTORY_ROWS) if record_every is None
@@ -562,15 +599,7 @@ def _setup(system, forcing, duration, dt, initial, record_every, steady_fraction
     x_start = x.copy()
 
     if cutting:
-        p = pack(system, 0.0, 0.0, dt)
-        p[L.FORCING] = L.REGENERATIVE
-        p[L.KR_B] = forcing.kr_pa * forcing.depth_m
-        p[L.FEED] = forcing.feed_m
-        p[L.TAU] = forcing.tau_s
-        p[L.N_REV] = forcing.revolutions
-        p[L.INTERP] = 1.0 if forcing.interpolation == "cubic" else 0.0
-        p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
-        p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
+        p = pack_cut(system, forcing, dt, w_static)
         buf = np.zeros((check_delay(forcing.rpm, forcing.revolutions, dt), 2))
         period = 2 * math.pi / system.reference_frequency_rad_s
     else:
@@ -732,7 +761,8 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: fl
     history of step H = tau / ceil(tau / dt_s), interpolated as
     ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
     the first zero of the force is located in time).  True stick-slip (a static friction limit,
-    ``Friction(static_ratio > 1)``) needs ``"exact"``.
+    ``Friction(static_ratio > 1)``) needs ``"exact"``; a cut with Kienzle's law or with
+    force noise needs ``"rk4"`` (the exact integrator's cut is linear in the state).
     """
     su = _setup(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction, strobe,
                 integrator)

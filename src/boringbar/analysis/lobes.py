@@ -92,10 +92,20 @@ from boringbar.analysis.lobe_search import (
 from boringbar.analysis.sweep import Case, as_cases
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
+from boringbar.model.cutting import CuttingLaw, cutting_law, cutting_speed_range_m_s
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
+from boringbar.model.system import System
+from boringbar.model.system_file import SystemSpec
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.run_limits import check_delay
-from boringbar.simulate import Integration, resolved_integrators, simulate, stick_slip
+from boringbar.simulate import (
+    Integration,
+    check_cut_law,
+    resolve_integrator,
+    resolved_integrators,
+    simulate,
+    stick_slip,
+)
 from boringbar.version import __version__
 
 PUBLISHED_RPM = np.arange(900.0, 1600.0 + 1e-9, 50.0)
@@ -164,7 +174,9 @@ class LobesOptions:
     (:class:`~boringbar.model.forcing.Regenerative`): ``kr_pa`` (Pa), ``feed_m``
     (m), ``revolutions``, ``interpolation``, ``start`` (of the fixed-length criteria;
     "growth" starts every cut in progress and knocked), ``bounded_fraction`` (of
-    the feed).  ``analytic``: add the frequency-domain limits of the linear hosts.
+    the feed), ``workpiece`` (Kienzle's law of a material, or a CuttingLaw, in place of
+    ``kr_pa``'s linear law).  ``analytic``: add the frequency-domain limits of the
+    linear hosts (with the law's slope at the feed for Kr, :attr:`analytic_kr_pa`).
     """
 
     rpm: tuple[float, ...] | None = None
@@ -182,6 +194,7 @@ class LobesOptions:
     analytic: bool = True
     depth_tolerance: float | None = None
     verdict: VerdictOptions = VerdictOptions()
+    workpiece: str | CuttingLaw | None = None
 
     def __post_init__(self):
         if self.rpm is not None:
@@ -208,6 +221,16 @@ class LobesOptions:
                                  f"maximum is {MAX_DEPTHS} depths")
         # the cut's own fields (each speed is checked above)
         self.forcing(self.depth(1), self.rpm[0] if self.rpm else 1000.0)
+
+    @property
+    def law(self) -> CuttingLaw:
+        """The cut's law (linear with ``kr_pa``, or the ``workpiece``'s)."""
+        return cutting_law(self.kr_pa, self.workpiece)
+
+    @property
+    def analytic_kr_pa(self) -> float:
+        """The Kr of the analytic limits: the law's dF/dh / b at the feed (Pa)."""
+        return self.law.linear_coefficient_pa(self.feed_m)
 
     @property
     def max_index(self) -> int:
@@ -242,7 +265,7 @@ class LobesOptions:
         return Regenerative(depth_m=depth_m, rpm=rpm, kr_pa=self.kr_pa, feed_m=self.feed_m,
                             revolutions=self.revolutions, interpolation=self.interpolation,
                             start=self.start, stop_at_zero=stop_at_zero,
-                            bounded_fraction=self.bounded_fraction)
+                            bounded_fraction=self.bounded_fraction, workpiece=self.workpiece)
 
 
 def criterion_for(systems) -> str:
@@ -304,6 +327,64 @@ def lobe_speeds(frequencies_hz, numbers: tuple[float, float] = LOBE_NUMBERS,
     return tuple(float(r) for r in speeds)
 
 
+#: The bore a boring bar works in: its largest diameter times this.  A bar of diameter d
+#: enters bores from about 1.25 d with its insert (manufacturers' minimum bore
+#: diameters, e.g. 32 mm for a 25 mm bar).
+BORE_RATIO = 1.25
+#: Speeds :func:`boring_speeds` gives by default.
+BORING_SPEEDS = 60
+
+
+@dataclass(frozen=True)
+class BoringSpeeds:
+    """Spindle speeds of a boring job: ``rpm`` (rev/min, whole, increasing), the cutting
+    speed of each at the bore, ``cutting_speed_m_s`` (m/s; x 60 for the catalogues'
+    m/min), the bore's diameter ``bore_diameter_m`` (m) and the cutting speeds
+    ``cutting_speed_range_m_s`` (low, high; m/s) the speeds span."""
+
+    rpm: tuple[float, ...]
+    cutting_speed_m_s: tuple[float, ...]
+    bore_diameter_m: float
+    cutting_speed_range_m_s: tuple[float, float]
+
+
+def boring_speeds(system_or_spec, workpiece: str | CuttingLaw | None = None,
+                  n: int = BORING_SPEEDS) -> BoringSpeeds:
+    """Spindle speeds at which a carbide insert bores ``workpiece`` (a material of
+    :data:`~boringbar.model.cutting.WORKPIECES`, a CuttingLaw naming one, or None: the
+    default range) with the bar of ``system_or_spec`` (a System or a SystemSpec).
+
+    The bore is :data:`BORE_RATIO` times the bar's largest diameter, D; the material's
+    cutting speeds v_c (docs/model.md, section 4.5) give rpm = 60 v_c / (pi D) (v_c in
+    m/s; the catalogues' 1000 v_c / (pi D) with v_c in m/min, D in mm), ``n`` speeds
+    evenly spaced in 1/rpm (the lobe number's axis).  A bar known only by its modes (a
+    modal fit of a measured FRF, a tap test) has no diameter: a ParameterError says
+    so (:func:`lobe_speeds` serves it).
+    """
+    check_int("n", n, 2, 100_000)
+    bore = BORE_RATIO * _largest_diameter_m(system_or_spec)
+    low, high = cutting_speed_range_m_s(workpiece)
+    per_m_s = 60.0 / (math.pi * bore)  # rpm per m/s of cutting speed
+    inverse = np.linspace(1.0 / (low * per_m_s), 1.0 / (high * per_m_s), n)
+    rpm = np.unique(np.round(1.0 / inverse))
+    return BoringSpeeds(tuple(float(r) for r in rpm), tuple(float(r / per_m_s) for r in rpm),
+                        bore, (low, high))
+
+
+def _largest_diameter_m(system_or_spec) -> float:
+    """The largest outer diameter (m) of the bar a System or SystemSpec describes."""
+    if isinstance(system_or_spec, System):
+        if not system_or_spec.bar.source.startswith("fe") or system_or_spec.spec is None:
+            raise ParameterError(f"this bar's modal model comes from "
+                                 f"{system_or_spec.bar.source!r}, without a diameter: give "
+                                 "speeds, or lobe_speeds of its first frequency")
+        system_or_spec = system_or_spec.spec
+    if not isinstance(system_or_spec, SystemSpec):
+        raise ParameterError(f"system_or_spec = {system_or_spec!r} must be a System or a "
+                             "SystemSpec (a system file)")
+    return max(s.diameter_m for s in system_or_spec.bar.sections)
+
+
 def default_speeds(cases: list[Case]) -> tuple[float, ...]:
     """:func:`lobe_speeds` of the cases' host bars (f1 of each, without its damper)."""
     return lobe_speeds([c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases])
@@ -314,7 +395,7 @@ def _seeds(cases: list[Case], options: LobesOptions) -> dict:
 
     seeds = {}
     for case in cases:
-        lim = limit_at_speeds(case.system.linear_host(), options.rpm, options.kr_pa)
+        lim = limit_at_speeds(case.system.linear_host(), options.rpm, options.analytic_kr_pa)
         for r, b in zip(options.rpm, lim, strict=True):
             if math.isfinite(b):
                 seeds[(case.label, float(r))] = options.index_below(b)
@@ -353,6 +434,9 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
         check_delay(r, options.revolutions, integration.dt_s)
+    for case in cases:  # a law the integrator cannot take, refused before any run
+        check_cut_law(options.forcing(options.depth(1), float(rpm[0])),
+                      resolve_integrator(integration.integrator, case.system, cutting=True))
     context = {"cases": cases, "options": options, "integration": integration,
                "seeds": _seeds(cases, options) if options.method == "search" else {}}
     points = [(i, j) for i in range(len(cases)) for j in range(len(rpm))]
@@ -529,7 +613,7 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
         ds.attrs["mean_run_s"] = float(np.nanmean(a["run_duration_s"])) if n_runs else 0.0
     ds.attrs["method_text"] = method_text(ds)
     if o.analytic:
-        _add_analytic(ds, cases, np.asarray(o.rpm, dtype=float), o.kr_pa)
+        _add_analytic(ds, cases, np.asarray(o.rpm, dtype=float), o.analytic_kr_pa)
     return ds
 
 
@@ -550,7 +634,11 @@ def _attrs(plan: Plan, n_runs: int) -> dict:
                                                 cutting=True),
         "delay_interpolation": o.interpolation,
         "start": o.start if o.criterion != "growth" else "in progress, knocked",
-        "kr_pa": o.kr_pa,
+        **({"kr_pa": o.kr_pa} if o.law.linear_law else
+           {"workpiece": o.law.workpiece or "given", "kc11_pa": o.law.kc11_pa,
+            "mc": o.law.mc, "radial_ratio": o.law.radial_ratio}),
+        "cutting_law": o.law.describe(),
+        "analytic_kr_pa": o.analytic_kr_pa,
         "feed_m": o.feed_m,
         "revolutions": o.revolutions,
         "bounded_fraction": o.bounded_fraction,
@@ -709,7 +797,7 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     for name in ("depth_m", "static_deflection_m"):
         exds[name].attrs["units"] = "m"
     exds["first_zero_time_s"].attrs["units"] = "s"
-    exds["mean_force_n"].attrs.update(units="N", long_name="Kr b h_m")
+    exds["mean_force_n"].attrs.update(units="N", long_name="the cutting law at the feed, F(h_m)")
     exds.attrs = {"title": "boringbar lobe examples: grid points rerun with history",
                   "case": str(case.label), "bar": case.bar, "gap_m": case.gap_m,
                   "friction": case.friction, "preset": case.system.preset,

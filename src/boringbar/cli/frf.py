@@ -35,6 +35,7 @@ from boringbar.model.frf_units import (
     implausible_frf,
     plausibility_warning,
 )
+from boringbar.model.cutting import CuttingLaw
 from boringbar.model.measured_frf import read_frf
 from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
 from boringbar.plot_style import system_label
@@ -131,9 +132,11 @@ def _band(text: str) -> tuple[float, float]:
     return lo, hi
 
 
-def analytic_lobes_outcome(args, kr: float) -> Outcome:
+def analytic_lobes_outcome(args, law: CuttingLaw, feed_m: float) -> Outcome:
     """``lobes --analytic``: the classical lobes of each case's tip FRF, or of the
-    measured FRF of --frf as it is; no time-domain cut is simulated."""
+    measured FRF of --frf as it is, with the slope of the cutting ``law`` at the feed
+    ``feed_m`` (m) for Kr; no time-domain cut is simulated."""
+    kr = law.linear_coefficient_pa(feed_m)
     check_positive("--kr-mpa", kr * 1e-6, "MPa")
     resolve_files(args, [])
     rpm = np.asarray(parse_range(args.rpm, "--rpm") if args.rpm else
@@ -152,7 +155,7 @@ def analytic_lobes_outcome(args, kr: float) -> Outcome:
         curves.append((label, lobes, dense, limits["envelope"]))
     out = Path(args.out)
     files = {"json": out / "lobes_analytic.json", "png": out / "lobes_analytic.png"}
-    summary = {"method": "analytic", "kr_pa": kr, "cases": rows,
+    summary = {"method": "analytic", "kr_pa": kr, "cutting_law": law.describe(), "cases": rows,
                "files": {k: str(v) for k, v in files.items()}}
     measured, spec = getattr(args, "frf_measured", None), system_spec(args)
     if measured is not None:

@@ -16,6 +16,7 @@ from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cas
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
 from boringbar.io import jsonable
+from boringbar.model.cutting import KR_ALUMINIUM, WORKPIECES, CuttingLaw, cutting_law
 from boringbar.model.dampers import MAX_FRICTION_FORCE
 from boringbar.model.forcing import (
     INTERPOLATIONS,
@@ -162,7 +163,11 @@ def add_cutting(g) -> None:
     Defaults are None here (so simulate can refuse them without a cut) and
     applied in :func:`cut_options`."""
     g.add_argument("--kr-mpa", type=float, metavar="MPA",
-                   help="specific radial cutting force Kr in MPa (default: 850, aluminium)")
+                   help="the linear law's specific radial cutting force Kr in MPa (default: "
+                        "850, aluminium, as published)")
+    g.add_argument("--workpiece", metavar="NAME",
+                   help="Kienzle's cutting law of a workpiece material, instead of --kr-mpa: "
+                        f"{', '.join(WORKPIECES)} (docs/model.md, section 4.3)")
     g.add_argument("--feed-mm", type=float, metavar="MM",
                    help="feed per revolution h_m in mm (default: 0.1)")
     g.add_argument("--revolutions", type=int, metavar="N",
@@ -382,7 +387,18 @@ def initial_conditions(args, gaps_m: list[float]):
 
 
 def cut_options(args) -> dict:
-    """The cut options as Regenerative keywords (SI), checked, defaults applied."""
+    """The cut options as Regenerative keywords (SI), checked, defaults applied: the law
+    is ``workpiece`` (--workpiece, Kienzle's) or ``kr_pa`` (--kr-mpa, linear), not both."""
+    workpiece = getattr(args, "workpiece", None)
+    if workpiece is not None and args.kr_mpa is not None:
+        raise ParameterError(f"--kr-mpa = {args.kr_mpa:g} (the linear law) and --workpiece = "
+                             f"{workpiece!r} (Kienzle's law): give one")
+    if workpiece is not None and workpiece not in WORKPIECES:
+        raise ParameterError(f"--workpiece = {workpiece!r} is not a known material; the known "
+                             f"ones are {', '.join(WORKPIECES)}")
+    if workpiece is not None and getattr(args, "integrator", None) == "exact":
+        raise ParameterError(f"--workpiece = {workpiece!r} (Kienzle's law) needs --integrator "
+                             "rk4 or auto: the exact integrator's cut is linear in the state")
     kr = 850.0 if args.kr_mpa is None else args.kr_mpa
     feed = 0.1 if args.feed_mm is None else args.feed_mm
     revolutions = 3 if args.revolutions is None else args.revolutions
@@ -391,9 +407,15 @@ def cut_options(args) -> dict:
     check_range("--feed-mm", feed, 0, MAX_FEED * 1e3, lo_open=True, unit="mm")
     check_int("--revolutions", revolutions, 1, 50)
     check_range("--bounded-fraction", fraction, 0, math.inf, lo_open=True, hi_open=True)
-    return {"kr_pa": kr * 1e6, "feed_m": feed * 1e-3, "revolutions": revolutions,
+    law = {"workpiece": workpiece} if workpiece is not None else {"kr_pa": kr * 1e6}
+    return {**law, "feed_m": feed * 1e-3, "revolutions": revolutions,
             "interpolation": args.delay_interp or "cubic", "start": args.start or "rest",
             "bounded_fraction": fraction}
+
+
+def cut_law(cut: dict) -> CuttingLaw:
+    """The cutting law of :func:`cut_options`' keywords."""
+    return cutting_law(cut.get("kr_pa", KR_ALUMINIUM), cut.get("workpiece"))
 
 
 def check_rpm(rpm: float, args, name: str = "--rpm") -> float:
@@ -442,8 +464,8 @@ def one_bar(args, command: str) -> tuple[str, bool]:
 
 
 #: simulate options that describe a cut (dest names); refused with harmonic forcing
-CUT_ONLY = ("kr_mpa", "feed_mm", "revolutions", "delay_interp", "start", "bounded_fraction",
-            "stop_at_zero")
+CUT_ONLY = ("kr_mpa", "workpiece", "feed_mm", "revolutions", "delay_interp", "start",
+            "bounded_fraction", "stop_at_zero")
 
 
 def forces_and_ratios(args):

@@ -140,6 +140,8 @@ def _cut_text(s: dict) -> str:
     lines += [
         f"  bounded chatter    {'yes' if c['bounded_chatter'] else 'no'} (steady amplitude "
         f"{c['amplitude_m'] * 1e3:.4g} mm, threshold {c['bounded_threshold_m'] * 1e3:.4g} mm)",
+        f"  cutting law        {c['cutting_law']}"
+        + (f", force noise {c['force_noise']:g}" if c["force_noise"] else ""),
         f"  cutting force      mean {c['mean_force_n']:.4g} N, max {c['max_force_n']:.4g} N "
         f"({c['steps_with_zero_force']} steps at zero)",
         f"  tip                static deflection {c['static_deflection_m'] * 1e3:.4g} mm, "

@@ -32,6 +32,7 @@ from boringbar.cli.options import (
     check_dt,
     check_rpm,
     check_workers,
+    cut_law,
     cut_options,
     execution,
     forces_and_ratios,
@@ -165,7 +166,8 @@ def _sweep_text(ds) -> str:
 
 def _cmd_lobes(args) -> Outcome:
     if args.analytic:
-        return analytic_lobes_outcome(args, cut_options(args)["kr_pa"])
+        cut = cut_options(args)
+        return analytic_lobes_outcome(args, cut_law(cut), cut["feed_m"])
     cases, _, _ = many_cases(args)
     options = _lobe_options(args, cases)
     integ = integration(args)
@@ -254,6 +256,7 @@ def _lobes_text(ds) -> str:
                          f"{', '.join(islands)} rpm")
         lines.append("")
     lines.append("'-': no chatter up to the deepest cut tried (or no analytic limit)")
-    lines.append(f"method: {ds.attrs['method_text']}; {ds.attrs['runs']} runs in "
+    lines.append(f"{ds.attrs.get('cutting_law', 'linear law')}; method: "
+                 f"{ds.attrs['method_text']}; {ds.attrs['runs']} runs in "
                  f"{ds.attrs['wall_time_s']:.1f} s")
     return "\n".join(lines)

@@ -6,6 +6,12 @@ import math
 from dataclasses import dataclass
 
 from boringbar._validate import ParameterError, check_int, check_positive, check_range
+from boringbar.model.cutting import (
+    KR_ALUMINIUM,
+    MAX_SPECIFIC_FORCE,
+    CuttingLaw,
+    cutting_law,
+)
 
 #: Upper bounds that no machining needs but that keep the kernels' arithmetic
 #: finite (a force of 1e300 N overflows the energy sums): force amplitude (N),
@@ -13,7 +19,16 @@ from boringbar._validate import ParameterError, check_int, check_positive, check
 MAX_FORCE = 1e6
 MAX_DEPTH = 1.0
 MAX_FEED = 0.1
-MAX_KR = 1e12
+MAX_KR = MAX_SPECIFIC_FORCE
+#: The cut's force noise: its relative standard deviation is below 1 (a force that
+#: changes sign is no cut), its seed an integer a float64 slot of the core holds exactly.
+MAX_NOISE_STD = 1.0
+MAX_NOISE_SEED = 2**53
+#: The noise's default interval (s): shorter than the period of every mode a boring bar's
+#: model keeps (the published bar's third mode: 0.2 ms), so the noise excites them all,
+#: and 100 steps of the default 1 us, over which the force is constant.
+NOISE_INTERVAL_S = 1e-4
+MAX_NOISE_INTERVAL_S = 1e3
 #: Largest Omega / omega_n and forcing frequency (Hz) of harmonic forcing (the
 #: published sweeps: 0.95 to 1.05); above, no step resolves the forcing anyway.
 MAX_RATIO = 100.0
@@ -57,16 +72,18 @@ class Harmonic:
 
 INTERPOLATIONS = ("cubic", "linear")
 STARTS = ("rest", "static")
-#: Aluminium, docs/model.md, section 4.
-KR_ALUMINIUM = 850e6
 
 
 @dataclass(frozen=True)
 class Regenerative:
     """Regenerative turning/boring, radial direction (docs/model.md, section 4).
 
-    f(t) = Kr b h(t), h(t) = max(0, min_{k=1..N} [k h_m + W(t - k tau)] - W(t)),
-    tau = 60 / rpm; the surface before the cut started is W = 0 (``start =
+    f(t) = F(h(t)) (1 + eps(t)), h(t) = max(0, min_{k=1..N} [k h_m + W(t - k tau)] - W(t)),
+    tau = 60 / rpm, F the cutting law: Kr b h (linear, ``kr_pa`` = Kr, the default) or,
+    with a ``workpiece``, Kienzle's K b h (h / 1 mm)^(-m_c) (section 4.3; ``workpiece``: a
+    material of :data:`~boringbar.model.cutting.WORKPIECES`, or a
+    :class:`~boringbar.model.cutting.CuttingLaw` with your own constants; ``kr_pa`` then
+    stays at its default).  The surface before the cut started is W = 0 (``start =
     "rest"``, as published: the mean force arrives as a step) or the static
     deflection under the mean force (``start = "static"``, a steady cut).
     The delayed W at RK4 stages is interpolated from the stored history
@@ -76,18 +93,24 @@ class Regenerative:
     ``interpolation``: "cubic" or "linear".
     ``stop_at_zero`` ends the run at the first h = 0 (a lobe search needs no
     more); ``bounded_fraction``: the amplitude criterion's threshold, as a
-    fraction of h_m.
+    fraction of h_m.  ``force_noise``: the relative standard deviation of eps, in
+    [0, 1) (0, the default: none); eps is drawn anew every ``noise_interval_s`` (s,
+    rounded to whole steps) from the stream ``noise_seed`` (section 4.4; rk4 only).
     """
 
     depth_m: float  #: b, depth of cut (m)
     rpm: float  #: spindle speed (rev/min)
-    kr_pa: float = KR_ALUMINIUM  #: specific radial cutting force (Pa)
+    kr_pa: float = KR_ALUMINIUM  #: specific radial cutting force of the linear law (Pa)
     feed_m: float = 0.1e-3  #: h_m, feed per revolution (m)
     revolutions: int = 3  #: N, past revolutions in the chip-thickness minimum
     interpolation: str = "cubic"
     start: str = "rest"
     stop_at_zero: bool = False
     bounded_fraction: float = 0.1
+    workpiece: str | CuttingLaw | None = None  #: Kienzle's law of this material (or law)
+    force_noise: float = 0.0  #: relative std of the force noise eps
+    noise_interval_s: float = NOISE_INTERVAL_S  #: eps is constant this long (s)
+    noise_seed: int = 0  #: the noise's stream
 
     def __post_init__(self):
         check_range("depth_m (depth of cut)", self.depth_m, 0.0, MAX_DEPTH, unit="m")
@@ -104,6 +127,14 @@ class Regenerative:
         if self.start not in STARTS:
             raise ParameterError(f"start = {self.start!r} is not one of {', '.join(STARTS)}")
         check_positive("bounded_fraction", self.bounded_fraction)
+        cutting_law(self.kr_pa, self.workpiece)
+        check_range("force_noise", self.force_noise, 0.0, MAX_NOISE_STD, hi_open=True)
+        check_range("noise_interval_s", self.noise_interval_s, 0.0, MAX_NOISE_INTERVAL_S,
+                    lo_open=True, unit="s")
+        if isinstance(self.noise_seed, float):  # a stream's number, not a quantity
+            raise ParameterError(f"noise_seed = {self.noise_seed!r} is not a whole number "
+                                 f"(allowed range [0, {MAX_NOISE_SEED}])")
+        check_int("noise_seed", self.noise_seed, 0, MAX_NOISE_SEED)
 
     @property
     def tau_s(self) -> float:
@@ -111,12 +142,26 @@ class Regenerative:
         return 60.0 / self.rpm
 
     @property
+    def law(self) -> CuttingLaw:
+        """The cutting law: linear with ``kr_pa``, or the ``workpiece``'s."""
+        return cutting_law(self.kr_pa, self.workpiece)
+
+    @property
     def mean_force_n(self) -> float:
-        """Kr b h_m (N)."""
-        return self.kr_pa * self.depth_m * self.feed_m
+        """F(h_m) (N): the law at the feed (linear: Kr b h_m)."""
+        return self.law.force_n(self.depth_m, self.feed_m)
+
+    @property
+    def linear_coefficient_pa(self) -> float:
+        """The law's dF/dh / b at h_m (Pa): the Kr of the analytic lobes (section 4.3)."""
+        return self.law.linear_coefficient_pa(self.feed_m)
 
     def to_dict(self) -> dict:
+        linear = self.law.linear_law
         return {"type": "regenerative", "depth_m": self.depth_m, "rpm": self.rpm,
-                "kr_pa": self.kr_pa, "feed_m": self.feed_m, "revolutions": self.revolutions,
-                "interpolation": self.interpolation, "start": self.start,
-                "stop_at_zero": self.stop_at_zero, "bounded_fraction": self.bounded_fraction}
+                "kr_pa": self.kr_pa if linear else None, "feed_m": self.feed_m,
+                "revolutions": self.revolutions, "interpolation": self.interpolation,
+                "start": self.start, "stop_at_zero": self.stop_at_zero,
+                "bounded_fraction": self.bounded_fraction, "cutting_law": self.law.to_dict(),
+                "force_noise": self.force_noise, "noise_interval_s": self.noise_interval_s,
+                "noise_seed": self.noise_seed}

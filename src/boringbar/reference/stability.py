@@ -39,11 +39,10 @@ import scipy.linalg
 
 from boringbar._validate import ParameterError, check_nonnegative, check_positive, check_range
 from boringbar.model.bar import ModalModel
+from boringbar.model.cutting import KR_ALUMINIUM
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.reference.linear import dynamic_stiffness, min_real_part, tip_frf
 
-#: Radial cutting-force coefficient of the published study (aluminium), Pa.
-KR_ALUMINIUM = 850e6
 #: Default frequency grid spans these multiples of the lowest / highest
 #: undamped natural frequency of the coupled system.
 GRID_SPAN = (0.5, 2.0)

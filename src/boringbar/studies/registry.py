@@ -376,6 +376,7 @@ def _lobe_options(study: Study) -> LobesOptions:
     file's keys) and ``[forcing]`` cut, at its speeds."""
     o = study.options
     step, tol = o["depth_step_mm"], o["depth_tolerance"]
+    cut = _cut_options(study)
     try:
         grid = lobes_mod.depth_grid(o["method"], step, tol, ("key 'analysis.depth_step_mm'",
                                                              "key 'analysis.depth_tolerance'"))
@@ -385,7 +386,7 @@ def _lobe_options(study: Study) -> LobesOptions:
                     unit="mm", why=f"from the {grid} depth grid's first depth")
         return LobesOptions(tuple(_axis(study, "rpm")), o["method"], o["criterion"],
                             None if step is None else step * 1e-3, o["max_depth_mm"] * 1e-3,
-                            o["successive"], **_cut_options(study), analytic=o["analytic"],
+                            o["successive"], **cut, analytic=o["analytic"],
                             depth_tolerance=tol)
     except ParameterError as exc:
         raise StudyError(f"{study.source}: [analysis] {exc}") from None
@@ -563,8 +564,20 @@ def _overrides(s: dict, varied: str | None, spec=None) -> dict:
 
 def _cut_options(study: Study) -> dict:
     """The cut of the study's ``[forcing]`` (SI), as :class:`LobesOptions` and
-    :class:`~boringbar.model.forcing.Regenerative` fields."""
-    return {"kr_pa": study.value("kr_mpa") * 1e6, "feed_m": study.value("feed_mm") * 1e-3,
+    :class:`~boringbar.model.forcing.Regenerative` fields: its law ``workpiece``
+    (Kienzle's) or ``kr_mpa`` (linear), not both."""
+    workpiece = study.value("workpiece")
+    if workpiece is not None and "kr_mpa" in study.given:
+        raise StudyError(f"{study.source}: keys 'forcing.kr_mpa' = {study.value('kr_mpa')!r} "
+                         f"(the linear law) and 'forcing.workpiece' = {workpiece!r} (Kienzle's "
+                         "law): give one")
+    if workpiece is not None and study.value("integrator") == "exact":
+        raise StudyError(f"{study.source}: key 'forcing.workpiece' = {workpiece!r}: Kienzle's "
+                         "law needs run.integrator = 'rk4' or 'auto' (the exact integrator's "
+                         "cut is linear in the state)")
+    law = {"workpiece": workpiece} if workpiece is not None else \
+        {"kr_pa": study.value("kr_mpa") * 1e6}
+    return {**law, "feed_m": study.value("feed_mm") * 1e-3,
             "revolutions": study.value("revolutions"),
             "interpolation": study.value("interpolation"), "start": study.value("start"),
             "bounded_fraction": study.value("bounded_fraction")}

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from boringbar._validate import ParameterError
+from boringbar.model.cutting import WORKPIECES
 from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
 from boringbar.model.forcing import MAX_DEPTH, MAX_FEED, MAX_FORCE, MAX_KR, MAX_RATIO
 from boringbar.model.materials import MATERIALS
@@ -166,7 +167,9 @@ SETTINGS: dict[str, dict[str, Setting]] = {
         "ratio": _pos(1.0, MAX_RATIO, doc="Omega / omega_n of the host bar"),
         "rpm": _pos(1200.0),
         "depth_mm": _f(0.05, 0.0, MAX_DEPTH * 1e3),
-        "kr_mpa": _pos(850.0, MAX_KR * 1e-6),
+        "kr_mpa": _pos(850.0, MAX_KR * 1e-6, doc="the linear law's Kr"),
+        "workpiece": Setting("str", None, choices=tuple(WORKPIECES),
+                             doc="Kienzle's law of this material, instead of kr_mpa"),
         "feed_mm": _pos(0.1, MAX_FEED * 1e3),
         "revolutions": Setting("int", 3, 1, 50),
         "interpolation": Setting("str", "cubic", choices=("cubic", "linear")),

@@ -132,6 +132,11 @@ class Design:
         s = self.settings
         if s.forcing == "harmonic":
             return Harmonic(amplitude_n=s.force_n, ratio=s.ratio)
+        return self.cut()
+
+    def cut(self) -> Regenerative:
+        """The design's cut (its lobes' too, whichever forcing the run takes)."""
+        s = self.settings
         return Regenerative(depth_m=s.depth_mm * 1e-3, rpm=s.rpm)
 
     def toml(self) -> str:

@@ -24,6 +24,7 @@ from boringbar.analysis.lobes import LobesOptions, lobes
 from boringbar.analysis.lobes import lobe_speeds as default_lobe_speeds
 from boringbar.analysis.sweep import SweepOptions, sweep, tmd_window
 from boringbar.execute import Execution
+from boringbar.model.cutting import KR_ALUMINIUM
 from boringbar.model.system import describe_modes, make_system
 from boringbar.reference.stability import (
     limit_at_speeds,
@@ -212,18 +213,20 @@ def _key_text(key) -> str:
     return json.dumps(key, sort_keys=True, default=str)
 
 
-def lobe_curve(system, rpm: np.ndarray, at: float) -> tuple[np.ndarray, float]:
+def lobe_curve(system, rpm: np.ndarray, at: float,
+               kr_pa: float = KR_ALUMINIUM) -> tuple[np.ndarray, float]:
     """The analytic chatter-free depth (mm) of ``system`` at ``rpm`` (:func:`kept`;
     a free ball's is its bare host's, which the ball's gap and friction leave alone)
     and at the speed ``at``, found with the curve when the curve is new (one
-    frequency grid and one bisection for both)."""
+    frequency grid and one bisection for both); ``kr_pa``: the cut's law linearised at
+    its feed (Pa, :attr:`~boringbar.model.forcing.Regenerative.linear_coefficient_pa`)."""
     host = system.linear_host()
-    key = ["lobes", physics(host), rpm.tolist()]
+    key = ["lobes", physics(host), rpm.tolist(), kr_pa]
     curve = known(key)
     if curve is None:
-        both = limit_at_speeds(host, np.append(rpm, at)) * 1e3
+        both = limit_at_speeds(host, np.append(rpm, at), kr_pa) * 1e3
         return kept(key, lambda: both[:-1]), float(both[-1])
-    return curve, float(limit_at_speeds(host, [at])[0]) * 1e3
+    return curve, float(limit_at_speeds(host, [at], kr_pa)[0]) * 1e3
 
 
 def physics(system) -> dict:
@@ -238,8 +241,9 @@ def lobes_view(design: Design) -> dict:
     touches), and each one's depth at the design's speed."""
     rpm, at = lobe_speeds(design), design.settings.rpm
     out = {"rpm": rpm, "curves": {}, "at_rpm": at, "depth_at_mm": {}}
+    kr = design.cut().linear_coefficient_pa
     for kind, system in design.systems.items():
-        out["curves"][kind], out["depth_at_mm"][kind] = lobe_curve(system, rpm, at)
+        out["curves"][kind], out["depth_at_mm"][kind] = lobe_curve(system, rpm, at, kr)
     return out
 
 
