@@ -31,7 +31,14 @@ from boringbar.webapp import views
 from boringbar.webapp.commands import commands
 from boringbar.webapp.design_state import Design
 from boringbar.webapp.jobs import Latest, Superseded
-from boringbar.webapp.search import JUDGED, best_changes, design_file, search_file
+from boringbar.webapp.search import (
+    CHATTER_SAMPLES,
+    CHATTER_TRIALS,
+    JUDGED,
+    best_changes,
+    design_file,
+    search_file,
+)
 from boringbar.webapp.server import page
 
 # a deprecation warned of in the page's own code fails these tests (the page built in this
@@ -178,7 +185,8 @@ def test_the_pages_search_panel_runs_a_tmd_search_and_applies_it():
     p.search.names.value = ["tmd_frequency_ratio", "tmd_damping_ratio"]
     p.search.trials.value = 4
     asyncio.run(p.search.start())
-    assert p.search.fig.yaxis.axis_label == JUDGED["tmd"][1]
+    assert p.search.objective.value == "frf_peak"  # the TMD's variables take its objective
+    assert p.search.fig.yaxis.axis_label == JUDGED["frf_peak"]
     values = p.search.source.data["value"]
     assert len(values) == 4 and all(1.0 < v < 100.0 for v in values)  # um/N
     opts, s = p.search.result
@@ -186,6 +194,41 @@ def test_the_pages_search_panel_runs_a_tmd_search_and_applies_it():
     assert p.design.data["tmd"]["tuning"] == "given"
     assert frf_objective(p.design.systems["tmd"], "frf_peak") * 1e6 == min(values)
     assert s["objective"] * 1e6 == min(values)
+
+
+def test_the_pages_search_takes_a_chatter_objective(published, tmp_path):
+    """The page's ball search can judge the chatter-free depth at the page's speed, or the
+    page's cut; its file is one `boringbar design` reads, at the page's speed and depth;
+    a TMD search refuses a ball's objective."""
+    d = published.with_settings(rpm=1350.0, depth_mm=0.07)
+    depth = options_from_dict(search_file(d, ["gap_mm"], 3, 2, "min_depth"))
+    assert (depth.objective, depth.rpms, depth.samples) == ("min_depth", (1350.0,), 2)
+    assert depth.lobes_options().rpm == (1350.0,)
+    cut = options_from_dict(search_file(d, ["gap_mm"], 3, 2, "cut_amplitude"))
+    assert (cut.objective, cut.rpm, cut.depth_m) == ("cut_amplitude", 1350.0, 0.07 * 1e-3)
+    (tmp_path / "mine_design.toml").write_text(d.toml())
+    (tmp_path / "search.toml").write_text(design_file(search_file(d, ["gap_mm"], 3, 2,
+                                                                  "min_depth"), "mine_design.toml"))
+    assert load_design(tmp_path / "search.toml")[0] == depth
+    with pytest.raises(ParameterError, match="objective = 'min_depth': a tmd damper's search"):
+        search_file(d, ["tmd_damping_ratio"], 3, 1, "min_depth")
+
+
+def test_the_pages_chatter_search_keeps_the_deepest_and_few_runs():
+    """Choosing min_depth brings the trials and samples down (a trial runs cuts), labels
+    the trials figure, and the best so far is the deepest (min_depth is maximised)."""
+    p = page(None)
+    p.search.objective.value = "min_depth"
+    assert (p.search.trials.value, p.search.samples.value) == (CHATTER_TRIALS, CHATTER_SAMPLES)
+    p.search.trials.value, p.search.samples.value = 3, 1
+    asyncio.run(p.search.start())
+    assert p.search.fig.yaxis.axis_label == JUDGED["min_depth"]
+    values = p.search.source.data["value"]
+    assert len(values) == 3 and all(0.001 < v < 1.0 for v in values)  # mm
+    opts, s = p.search.result
+    assert opts.objective == "min_depth" and s["objective"] * 1e3 == max(values)
+    assert f"{max(values):.4g} mm" in p.search.table.object
+    assert "one sample: no interval" in p.search.text.object
 
 
 def test_superseded_work_is_dropped_not_queued():
@@ -346,6 +389,33 @@ def test_a_malformed_upload_gets_the_command_lines_message(browser, server, tmp_
     page.locator("input[type=file]").set_input_files(str(bad))
     msg = page.locator(".control-error >> text=not valid TOML").inner_text()
     assert out.stderr.strip().endswith(msg.split("broken.toml", 1)[1].strip())
+    page.context.close()
+
+
+def test_a_search_for_the_chatter_free_depth_shows_its_result(browser, server):
+    """In the browser: choose the chatter objective, run a tiny search (2 trials of 2
+    samples), and see its trials drawn and its result line, with the interval."""
+    page = _open(browser, server)
+    page.get_by_text("Design search", exact=True).click()
+    page.locator(".search-objective select").select_option(
+        label="chatter-free depth at the page's speed (ball)")
+    trials = page.locator(".search-trials input")
+    for _ in range(100):  # the page brings the trials down to 6 for a chatter objective
+        if trials.input_value() == str(CHATTER_TRIALS):
+            break
+        page.wait_for_timeout(100)
+    for control, value in (("trials", "2"), ("samples", "2")):
+        box = page.locator(f".search-{control} input")
+        box.fill(value)
+        box.press("Enter")
+    page.get_by_text("Start search").click()
+    page.wait_for_selector(".search-status >> text=trials)", timeout=180_000)
+    line = page.locator(".search-status").evaluate("e => (e.shadowRoot || e).textContent")
+    assert "of min_depth over 2 samples" in line and "; 2 trials)" in line
+    assert "95 % CI" in line
+    values = page.evaluate("n => Array.from(Bokeh.documents[0].get_model_by_name(n)"
+                           ".data.value)", "search-trials")
+    assert len(values) == 2 and all(0.001 < v < 1.0 for v in values)  # depths in mm
     page.context.close()
 
 

@@ -8,12 +8,30 @@ from pathlib import Path
 
 import numpy as np
 import optuna
+import pandas as pd
 import pytest
+import scipy.stats
+import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
 from boringbar import ParameterError
-from boringbar.analysis.design import candidate_system, design, evaluate, summary, summary_line
+from boringbar.analysis.design import (
+    candidate_system,
+    comparison,
+    design,
+    evaluate,
+    sample_table,
+    summary,
+    summary_line,
+    trial_table,
+)
 from boringbar.analysis.design_file import DesignFileError, design_from_dict
+from boringbar.analysis.design_interval import (
+    improvement,
+    newcombe_paired,
+    sample_statistic,
+    wilson,
+)
 from boringbar.analysis.design_options import (
     DesignOptions,
     Uncertain,
@@ -28,6 +46,9 @@ from boringbar.execute import Execution
 from boringbar.model.dampers import den_hartog_parameters, sims_parameters
 from boringbar.model.system import make_system, published_system_spec
 from boringbar.model.system_file import parse_system
+from boringbar.plot_design import plot_best
+from boringbar.reference.stability import system_receptance
+from boringbar.report.html import improvement_cell
 from boringbar.simulate import Integration
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -124,6 +145,10 @@ def test_a_killed_search_resumes_to_the_same_trial_table(host, tmp_path):
     resumed = design(options, spec=host, storage=tmp_path / "b.db")
     for name in ("tmd_frequency_ratio", "tmd_damping_ratio", "statistic"):
         np.testing.assert_array_equal(resumed[name].values, whole[name].values)
+    # trials.csv numbers the trials as Optuna does, the one killed mid-run failed
+    table = trial_table(resumed)
+    assert list(table["trial"]) == list(range(15)) and len(resumed["trial"]) == 14
+    assert list(table["state"]).count("FAIL") == 1 and table["state"][6] == "FAIL"
     np.testing.assert_array_equal(resumed["objective_samples"].values,
                                   whole["objective_samples"].values)
     other = DesignOptions("tmd", TUNING, objective="min_real", trials=14, seed=7)
@@ -170,8 +195,16 @@ def test_design_command_on_the_tmd_example(tmp_path, capsys):
     assert {"best", "objective", "published_objective", "trials", "wall_time_s"} <= s.keys()
     assert s["trials"] == 12 and s["objective"] > 0
     assert "best design" in s["summary"]
-    for f in ("design.nc", "trials.csv", "design.png", "best.png", "design.db"):
+    for f in ("design.nc", "trials.csv", "samples.csv", "design.png", "best.png", "design.db",
+              "summary.json"):
         assert (out / f).stat().st_size > 0
+    assert not list(out.glob(".*.tmp"))  # each written atomically
+    trials = pd.read_csv(out / "trials.csv")
+    assert len(trials) == 12 and list(trials["trial"]) == list(range(12))
+    assert "max_min_real_m_n" in trials and "max_min_real_error_m_n" in trials
+    samples = pd.read_csv(out / "samples.csv")
+    assert len(samples) == (12 + 1) * 32 and "damping_ratio" in samples
+    assert {"improvement_interval", "significant", "confidence"} <= s.keys()
     assert main(argv) == 0  # rerun: resumes, nothing new to do
     assert json_out(capsys)["objective"] == s["objective"]
 
@@ -300,15 +333,277 @@ def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
                                                               rel=1e-12)
 
 
+def _line(**kw) -> dict:
+    """A summary as :func:`summary` gives it, for :func:`summary_line`."""
+    s = dict(best={"gap_m": 0.3e-3, "ball_material": "steel"}, statistic_name="mean",
+             objective_name="rms_band", objective=1.2e-4, objective_error=3e-6,
+             published_objective=1.0e-4, trials=6, samples=8, confidence=0.95,
+             interval_method="paired t", interval_note=None)
+    return {**s, **kw}
+
+
 def test_a_search_that_beat_nothing_says_so():
     """Fewer trials than a search needs can end worse than the file's own design: the
     summary then says no better design was found, and does not call the best tried best."""
-    s = dict(best={"gap_m": 0.3e-3, "ball_material": "steel"}, statistic_name="mean",
-             objective_name="rms_band", objective=1.2e-4, objective_error=3e-6,
-             published_objective=1.0e-4, trials=6)
-    worse = summary_line({**s, "improvement_percent": -20.0})
+    worse = summary_line(_line(improvement=-2e-5, improvement_percent=-20.0,
+                               improvement_interval=[-3e-5, -1e-5], significant=True))
     assert worse.startswith("no design better than the file's own found in 6 trials")
     assert "20.0 % worse" in worse and "best design" not in worse
-    assert "0.12 +- 0.003 mm against 0.1 mm" in worse  # read in mm, as the figures
-    assert summary_line({**s, "improvement_percent": 12.0}).startswith(
-        "best design gap = 0.3 mm, ball material = steel improves the objective by 12.0 %")
+    assert "0.12 against 0.1 mm, improvement -0.02 mm, 95 % CI -0.03 to -0.01 mm" in worse
+    better = summary_line(_line(objective=0.88e-4, improvement=1.2e-5, improvement_percent=12.0,
+                                improvement_interval=[0.5e-5, 2e-5], significant=True))
+    assert better.startswith("best design gap = 0.3 mm, ball material = steel improves the "
+                             "objective by 12.0 % over the file's own design: 0.088 against "
+                             "0.1 mm, improvement +0.012 mm, 95 % CI +0.005 to +0.02 mm")
+    assert better.endswith("(mean of rms_band over 8 samples, paired t; 6 trials)")
+
+
+def test_a_gain_smaller_than_its_spread_is_within_noise():
+    """The summary line of a gain whose interval holds 0 says so, in the objective's
+    units and in %, and claims no improvement."""
+    line = summary_line(_line(objective_name="min_depth", objective=0.463e-3,
+                              published_objective=0.456e-3, improvement=0.007e-3,
+                              improvement_percent=1.535, improvement_interval=[-0.004e-3,
+                                                                               0.018e-3],
+                              significant=False))
+    assert line.startswith("best design gap = 0.3 mm, ball material = steel: 0.463 against "
+                           "0.456 mm, improvement +0.007 mm (+1.5 %), 95 % CI -0.004 to "
+                           "+0.018 mm: within noise")
+    assert "improves" not in line
+    tried = summary_line(_line(improvement=-0.2e-5, improvement_percent=-2.0,
+                               improvement_interval=[-0.5e-5, 0.1e-5], significant=False))
+    assert tried.startswith("best design tried gap = 0.3 mm") and "within noise" in tried
+    none = summary_line(_line(objective=0.88e-4, improvement=1.2e-5, improvement_percent=12.0,
+                              improvement_interval=None, significant=None, samples=1,
+                              interval_method=None, interval_note="one sample: no interval"))
+    assert "improvement +0.012 mm; one sample: no interval (mean of rms_band over 1 sample;" \
+        in none and "CI" not in none
+
+
+# --- the improvement's interval -------------------------------------------------------------
+def _two_designs(best, published, statistic="mean", direction="minimize",
+                 objective="rms_band", chatter=None, quantile=0.9) -> xr.Dataset:
+    """A design Dataset of two trials (the first the best) and the file's design, with the
+    samples given: what :func:`summary` reads."""
+    best, published = np.asarray(best, dtype=float), np.asarray(published, dtype=float)
+    flags = {} if chatter is None else {
+        "chatter": (("trial", "sample"), np.vstack([chatter[0], chatter[1]]).astype(float)),
+        "published_chatter": ("sample", np.asarray(chatter[1], dtype=float))}
+
+    def stat(x, flags_=None):
+        return (float(np.mean(flags_)) if statistic == "chatter_probability"
+                else float(sample_statistic(x, statistic, quantile)))
+
+    worse = published * 1.5
+    b = stat(best, None if chatter is None else chatter[0])
+    p = stat(published, None if chatter is None else chatter[1])
+    return xr.Dataset(
+        {"gap_m": ("trial", [0.3e-3, 0.6e-3]),
+         "statistic": (("trial", "objective"), [[b], [stat(worse, None if chatter is None
+                                                           else chatter[1])]]),
+         "error": (("trial", "objective"), [[0.0], [0.0]]),
+         "wall_time_s": ("trial", [0.1, 0.1]),
+         "objective_samples": (("trial", "objective", "sample"), [[best], [worse]]),
+         "published_samples": (("objective", "sample"), [published]),
+         "published_statistic": ("objective", [p]), "published_error": ("objective", [0.0]),
+         "pareto": ("trial", [True, False]), **flags},
+        coords={"trial": [0, 1], "objective": [objective], "sample": np.arange(len(best))},
+        attrs={"objectives": [objective], "directions": [direction], "statistic": statistic,
+               "quantile": quantile, "seed": 1, "best_trial": 0, "wall_time_s": 1.0,
+               "samples": len(best)})
+
+
+def test_the_improvement_uses_the_paired_samples():
+    """The draws move both designs alike (common random numbers): the best is better on
+    every draw by 2-4 %, while the draws spread the objective by 40 %. The paired
+    interval sees the gain; Welch's, which ignores the pairs, cannot tell it from noise."""
+    rng = np.random.default_rng(3)
+    published = 1e-4 * (1 + 0.4 * rng.random(16))
+    best = published * (0.97 + 0.01 * rng.standard_normal(16))
+    s = summary(_two_designs(best, published))
+    gain = np.mean(published - best)
+    assert s["improvement"] == pytest.approx(gain, rel=1e-12)
+    assert s["improvement_percent"] == pytest.approx(100 * gain / np.mean(published), rel=1e-12)
+    lo, hi = s["improvement_interval"]
+    assert 0 < lo < gain < hi and s["significant"] is True and s["confidence"] == 0.95
+    assert s["improvement_interval_percent"] == pytest.approx(
+        [100 * lo / np.mean(published), 100 * hi / np.mean(published)], rel=1e-12)
+    ref = scipy.stats.ttest_rel(published, best).confidence_interval(0.95)
+    assert (lo, hi) == pytest.approx((ref.low, ref.high), rel=1e-12)
+    unpaired = improvement(best, published, "mean", paired=False)
+    ref = scipy.stats.ttest_ind(published, best, equal_var=False).confidence_interval(0.95)
+    assert unpaired["interval"] == pytest.approx((ref.low, ref.high), rel=1e-12)
+    assert unpaired["significant"] is False and unpaired["method"] == "Welch t"
+
+
+def test_a_gain_inside_the_noise_is_not_significant():
+    """The case a new user met: a gain of 0.007 mm in a spread of +-0.011 mm. The JSON
+    summary gives the interval (which holds 0) and significant = False; a maximised
+    objective's improvement is the best's statistic less the file's."""
+    published = 0.456e-3 + np.array([-11, -6, -2, 0, 3, 5, 9, 2]) * 1e-6
+    best = published + 0.007e-3 + np.array([-14, 12, -9, 10, -13, 11, 8, -5]) * 1e-6
+    s = summary(_two_designs(best, published, direction="maximize", objective="min_depth"))
+    assert s["improvement"] == pytest.approx(np.mean(best - published), rel=1e-12)
+    lo, hi = s["improvement_interval"]
+    assert lo < 0 < hi and s["significant"] is False
+    assert "within noise" in summary_line(s)
+
+
+def test_quantiles_and_the_worst_sample_take_a_paired_bootstrap():
+    """Quantile and max: the percentile bootstrap of the pairs resampled together; its
+    interval covers the true difference of 90 % quantiles in about 95 % of searches."""
+    rng = np.random.default_rng(11)
+    true = 0.1 + 1.2815515655446004 * (np.hypot(1.0, 0.3) - 1.0)  # q90 of N(0.1, 1.044)
+    hits, widths = 0, []
+    for _ in range(200):
+        published = rng.standard_normal(60)
+        best = published + 0.1 + 0.3 * rng.standard_normal(60)
+        r = improvement(best, published, "quantile", maximize=True, quantile=0.9, seed=1)
+        hits += r["interval"][0] <= true <= r["interval"][1]
+        widths.append(r["interval"][1] - r["interval"][0])
+    assert hits / 200 >= 0.9
+    assert r["method"].startswith("paired bootstrap")
+    # the pairs resampled apart, as if the draws were not shared: a far wider interval
+    i, j = rng.integers(0, 60, (2, 2000, 60))
+    apart = np.quantile(best[i], 0.9, axis=1) - np.quantile(published[j], 0.9, axis=1)
+    assert np.median(widths) < 0.5 * np.diff(np.quantile(apart, [0.025, 0.975]))[0]
+    s = summary(_two_designs(best, published, statistic="max", direction="maximize"))
+    assert s["improvement"] == pytest.approx(best.max() - published.max(), rel=1e-12)
+    assert s["interval_method"].startswith("paired bootstrap") and s["improvement_interval"]
+
+
+def test_a_chatter_probability_takes_wilson_and_newcombe():
+    """Wilson's interval is scipy's; Newcombe's paired interval covers the difference of
+    two paired probabilities in about 95 % of cases, and narrows as the pairs agree."""
+    for k, n in ((0, 4), (3, 8), (8, 8), (17, 40)):
+        ref = scipy.stats.binomtest(k, n).proportion_ci(0.95, method="wilson")
+        assert wilson(k, n) == pytest.approx((ref.low, ref.high), abs=1e-12)
+    rng = np.random.default_rng(5)
+    hits = 0
+    for _ in range(400):  # P(a) = 0.5, P(b) = 0.3, correlated through a shared draw
+        u, v = rng.random(30), rng.random(30)
+        shared = rng.random(30) < 0.6
+        a, b = np.where(shared, u, v) < 0.5, u < 0.3
+        lo, hi = newcombe_paired(a, b)
+        hits += lo <= 0.2 <= hi
+    assert 0.92 <= hits / 400 <= 0.99
+    same = rng.random(20) < 0.5
+    paired = np.diff(newcombe_paired(same, same))[0]
+    unpaired = np.diff(newcombe_paired(same, rng.permutation(same)))[0]
+    assert paired < unpaired
+    chatter = (np.array([0, 0, 1, 0, 0, 0, 0, 0]), np.array([1, 1, 1, 0, 1, 1, 0, 1]))
+    s = summary(_two_designs(np.zeros(8), np.zeros(8), statistic="chatter_probability",
+                             objective="cut_amplitude", chatter=chatter))
+    assert s["improvement"] == pytest.approx(6 / 8 - 1 / 8)
+    assert s["improvement_interval"] == pytest.approx(
+        [-v for v in newcombe_paired(chatter[0], chatter[1])[::-1]])
+    assert s["significant"] is True and s["interval_method"] == "Newcombe's paired interval"
+
+
+def test_one_sample_or_no_spread_gives_no_interval():
+    """With one sample, or samples whose differences do not vary, there is no interval,
+    and the summary says why rather than give one of width 0."""
+    one = summary(_two_designs([1e-4], [2e-4]))
+    assert one["improvement_interval"] is None and one["significant"] is None
+    assert one["interval_note"] == "one sample: no interval"
+    assert "one sample: no interval" in summary_line(one)
+    flat = summary(_two_designs(np.full(4, 1e-4), np.full(4, 2e-4), statistic="quantile"))
+    assert flat["improvement_interval"] is None
+    assert flat["interval_note"] == "the 4 samples' differences do not vary: no interval"
+    assert flat["improvement"] == pytest.approx(1e-4)
+
+
+def test_the_report_table_says_within_noise():
+    s = _line(improvement=0.007e-3, improvement_percent=1.5, objective_name="min_depth",
+              improvement_interval=[-0.004e-3, 0.018e-3], significant=False)
+    assert improvement_cell(s, 1e3) == "+0.007 (-0.004 to +0.018): within noise"
+    s.update(improvement_interval=None, significant=None, interval_note="one sample: no interval")
+    assert improvement_cell(s, 1e3) == "+0.007 (one sample: no interval)"
+
+
+# --- best.png: the objective's own figure --------------------------------------------------
+def test_min_depth_draws_the_lobes_of_both_designs():
+    """min_depth's best.png: the chatter-free depth of the best and the file's design at
+    the design's speeds, by the objective's own lobes search (with no uncertain parameter,
+    the nominal sample is the one the search judged: the same numbers)."""
+    spec = published_system_spec()
+    options = DesignOptions("tmd", (Variable("tmd_damping_ratio", 0.05, 0.3),),
+                            objective="min_depth", rpms=(1000.0, 1400.0), max_depth_m=0.4e-3,
+                            duration_s=0.3, trials=2)
+    ds = design(options, spec=spec)
+    cmp = comparison(spec, options, ds)
+    assert cmp["kind"] == "lobes" and list(cmp["rpm"]) == [1000.0, 1400.0]
+    assert cmp["min_depth_m"]["best design"] == summary(ds)["objective"]
+    assert cmp["min_depth_m"]["file's design"] == summary(ds)["published_objective"]
+    ax = plot_best(cmp, ds.attrs).axes[0]
+    assert ax.get_ylabel() == "chatter-free depth of cut (mm)"
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["1000", "1400"]
+    assert "sweep" not in ax.get_xlabel() and "frequency" not in ax.get_xlabel()
+
+
+def test_a_chatter_probability_draws_wilson_intervals(tmp_path):
+    """cut_amplitude with chatter_probability: P(chatter) of both designs with Wilson's
+    interval, beside each sample's amplitude; the samples' table flags each cut."""
+    spec = published_system_spec()
+    options = DesignOptions("ball", (Variable("gap_m", 0.05e-3, 1e-3),),
+                            objective="cut_amplitude", statistic="chatter_probability",
+                            samples=4, depth_m=0.1e-3, duration_s=0.3, trials=2,
+                            uncertain=(Uncertain("friction_force_n", "uniform", 0.0, 0.5),))
+    ds = design(options, spec=spec)
+    cmp = comparison(spec, options, ds)
+    b = int(ds.attrs["best_trial"])
+    assert cmp["kind"] == "cut"
+    k = int(ds["chatter"].values[b].sum())
+    assert cmp["wilson"]["best design"] == wilson(k, 4)
+    assert ds["statistic"].values[b, 0] == k / 4
+    fig = plot_best(cmp, ds.attrs)
+    assert fig.axes[0].get_ylabel() == "P(chatter), Wilson 95 % interval"
+    assert fig.axes[1].get_ylabel() == "steady cut amplitude (mm)"
+    samples = sample_table(ds)
+    assert samples["chatter"].dtype == "boolean" and len(samples) == (2 + 1) * 4
+    search = samples[samples["design"] == "search"]
+    assert list(search["chatter"].astype(bool)) == list(ds["chatter"].values.ravel() == 1)
+
+
+@pytest.mark.parametrize(("objective", "quantity"), [("frf_peak", "receptance_m_n"),
+                                                     ("min_real", "real_m_n")])
+def test_frf_objectives_draw_the_frf_of_both(host, objective, quantity):
+    options = DesignOptions("tmd", TUNING, objective=objective, trials=3)
+    ds = design(options, spec=host)
+    cmp = comparison(host, options, ds)
+    assert cmp["kind"] == "response" and cmp["quantity"] == quantity
+    best = candidate_system(host, options, summary(ds)["best"])
+    g = system_receptance(best, cmp["x"] * best.bar.natural_frequency_rad_s)
+    np.testing.assert_allclose(cmp["curves"]["best design"],
+                               g.real if objective == "min_real" else np.abs(g), rtol=1e-12)
+    label = plot_best(cmp, ds.attrs).axes[0].get_ylabel()
+    assert ("Re G" in label) == (objective == "min_real")
+
+
+# --- trials.csv and samples.csv -------------------------------------------------------------
+def test_the_tables_have_a_row_per_trial_and_per_sample(host, tmp_path):
+    """trials.csv: one row per trial with its number, the variables and the statistic with
+    its error, units in the names, and its state; samples.csv: one row per trial and
+    sample with the drawn uncertain parameters and the objective, then the file's."""
+    options = DesignOptions("tmd", TUNING, objective="frf_peak", trials=5, seed=7, samples=3,
+                            uncertain=(Uncertain("damping_ratio", "uniform", 0.0, 0.02),))
+    ds = design(options, spec=host)
+    trials = trial_table(ds)
+    assert list(trials.columns) == ["trial", "tmd_frequency_ratio", "tmd_damping_ratio",
+                                    "mean_frf_peak_m_n", "mean_frf_peak_error_m_n",
+                                    "wall_time_s", "best", "state"]
+    assert list(trials["trial"]) == [0, 1, 2, 3, 4] and set(trials["state"]) == {"COMPLETE"}
+    assert trials["best"].sum() == 1
+    samples = sample_table(ds)
+    assert len(samples) == (5 + 1) * 3
+    assert list(samples.columns) == ["design", "trial", "sample", "damping_ratio",
+                                     "frf_peak_m_n"]
+    drawn = uncertain_samples(options)[:, 0]
+    for t, rows in samples[samples["design"] == "search"].groupby("trial"):
+        assert list(rows["sample"]) == [0, 1, 2]
+        np.testing.assert_array_equal(rows["damping_ratio"], drawn)
+        np.testing.assert_array_equal(rows["frf_peak_m_n"],
+                                      ds["objective_samples"].sel(trial=t).values[0])
+    file_rows = samples[samples["design"] == "file"]
+    assert file_rows["trial"].isna().all()
+    np.testing.assert_array_equal(file_rows["frf_peak_m_n"], ds["published_samples"].values[0])

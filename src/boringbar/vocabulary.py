@@ -70,7 +70,9 @@ DIMENSIONLESS = frozenset({
     "dask_local", "scale", "steps_with_zero_force", "runs", "id", "zero_one_K",
     "multipliers_abs", "noise_seed", "n",
     # labels and verdict codes (stored as numbers where a Dataset has none of them)
-    "event_kind", "verdict", "verdict_bounded",
+    "event_kind", "verdict", "verdict_bounded", "chatter", "published_chatter",
+    # a confidence level
+    "confidence",
 })
 #: Beginnings of dimensionless names (``n_modes``, ``n_samples``, ``is_bounded``).
 DIMENSIONLESS_PREFIXES = ("n_", "is_", "max_index")
@@ -93,6 +95,9 @@ UNIT_ELSEWHERE = frozenset({
     "impacts", "sticks", "strobe", "history",
     # a design search's statistic, in its objective's unit (``objective_name``: m, m/N, 1)
     "objective_error", "published_objective", "objectives", "published_objectives",
+    "published_samples", "improvement", "improvement_interval",
+    # the uncertain parameters' draws, each in the unit its name (``uncertain``) ends in
+    "uncertain_value",
 })
 
 

@@ -28,17 +28,30 @@ from pathlib import Path
 
 import numpy as np
 import optuna
+import pandas as pd
 import xarray as xr
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.design_objectives import objective_samples, rms_runs, statistic
+from boringbar.analysis.design_interval import CONFIDENCE, improvement, wilson
+from boringbar.analysis.design_objectives import (
+    FRF_LINES,
+    FRF_SPAN,
+    depth_lobes,
+    objective_samples,
+    rms_runs,
+    statistic,
+)
 from boringbar.analysis.design_options import (
+    OBJECTIVE_SI,
     DesignOptions,
+    nominal_sample,
+    nominal_words,
     objective_reading,
     sampled_system,
     shown,
     uncertain_samples,
 )
+from boringbar.analysis.sweep import Case
 from boringbar.execute import Execution, run_points
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system, published_system_spec
@@ -51,7 +64,8 @@ from boringbar.version import __version__
 @dataclass
 class Candidate:
     """One evaluated design: ``values`` (variable -> value), per objective its
-    ``samples`` (objective, sample), ``statistic`` and ``error``; ``wall_time_s``."""
+    ``samples`` (objective, sample), ``statistic`` and ``error``; ``wall_time_s``;
+    ``chatter``, whether each sample's cut chattered (cut_amplitude; else None)."""
 
     values: dict
     samples: np.ndarray
@@ -59,6 +73,7 @@ class Candidate:
     error: np.ndarray
     wall_time_s: float = 0.0
     system: dict = field(default_factory=dict)
+    chatter: np.ndarray | None = None
 
 
 # --- building a candidate's system ---------------------------------------------------
@@ -106,15 +121,16 @@ def evaluate(spec: SystemSpec, options: DesignOptions, values: dict, samples: np
     system = candidate_system(spec, options, values)
     names = tuple(p.name for p in options.uncertain)
     sampled = [sampled_system(system, names, row) for row in samples]
-    per, stats, errors = [], [], []
+    per, stats, errors, flags = [], [], [], None
     for objective in options.objectives:
         x, chatter = objective_samples(options, objective, sampled, execution)
         stat, err = statistic(x, options, chatter)
         per.append(x)
         stats.append(stat)
         errors.append(err)
+        flags = chatter if chatter is not None else flags
     return Candidate(dict(values), np.array(per), np.array(stats), np.array(errors),
-                     time.perf_counter() - t0, system.to_dict())
+                     time.perf_counter() - t0, system.to_dict(), flags)
 
 
 def _sampler(options: DesignOptions, k: int):
@@ -156,11 +172,14 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
     try:
         study = _study(options, rdb, storage, _fingerprint(options, spec))
         done = _search(study, spec, options, samples, execution, progress, stop_after)
+        # trials a killed run left failed: trials.csv lists them, so no number is missing
+        failed = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.FAIL,))
     finally:
         if rdb is not None:
             rdb.engine.dispose()  # closes the file: SQLite folds its write-ahead log back
     published = _published_candidate(spec, options, samples, execution)
-    return assemble(options, done, published, time.perf_counter() - t0)
+    return assemble(options, done, published, time.perf_counter() - t0, samples=samples,
+                    failed=failed)
 
 
 def _search(study, spec, options, samples, execution, progress, stop_after) -> list:
@@ -175,6 +194,8 @@ def _search(study, spec, options, samples, execution, progress, stop_after) -> l
         trial.set_user_attr("samples", cand.samples.tolist())
         trial.set_user_attr("error", cand.error.tolist())
         trial.set_user_attr("wall_time_s", cand.wall_time_s)
+        if cand.chatter is not None:
+            trial.set_user_attr("chatter", cand.chatter.tolist())
         study.tell(trial, cand.statistic.tolist())
         new += 1
         done = _complete(study)
@@ -242,13 +263,17 @@ def _published_candidate(spec, options, samples, execution) -> Candidate:
 
 
 def assemble(options: DesignOptions, trials: list, published: Candidate,
-             wall_time_s: float) -> xr.Dataset:
-    """The trial table (trial x variable values; per objective the samples, statistic,
-    error; wall time), the best trial (one objective) or the Pareto set (several),
-    and the file's own design under the same objectives, as a Dataset."""
+             wall_time_s: float, *, samples: np.ndarray | None = None,
+             failed: list = ()) -> xr.Dataset:
+    """The trial table (trial, numbered as Optuna numbers it, x variable values; per
+    objective the samples, statistic, error; wall time; whether each sample's cut
+    chattered, for cut_amplitude), the best trial (one objective) or the Pareto set
+    (several), the file's own design under the same objectives with its samples, and
+    the uncertain parameters' ``samples`` as drawn, as a Dataset. ``failed``: trials a
+    killed run left failed (listed in the attributes)."""
     names = [v.name for v in options.variables]
-    coords = {"trial": np.arange(len(trials)), "objective": list(options.objectives),
-              "sample": np.arange(options.samples)}
+    coords = {"trial": np.array([t.number for t in trials], dtype=int),
+              "objective": list(options.objectives), "sample": np.arange(options.samples)}
     data = {name: ("trial", [t.params[name] for t in trials]) for name in names}
     data["statistic"] = (("trial", "objective"), np.reshape([t.values for t in trials],
                                                             (len(trials), -1)))
@@ -258,6 +283,17 @@ def assemble(options: DesignOptions, trials: list, published: Candidate,
     data["objective_samples"] = (("trial", "objective", "sample"),
                                  np.reshape([t.user_attrs["samples"] for t in trials],
                                             (len(trials), len(options.objectives), -1)))
+    data["published_samples"] = (("objective", "sample"), published.samples)
+    if published.chatter is not None:
+        unknown = [math.nan] * options.samples  # a trial an older storage kept without flags
+        data["chatter"] = (("trial", "sample"), np.reshape(
+            [t.user_attrs.get("chatter", unknown) for t in trials],
+            (len(trials), options.samples)).astype(float), {"codes": "1 chatter, 0 none"})
+        data["published_chatter"] = ("sample", published.chatter.astype(float))
+    if samples is not None and options.uncertain:
+        coords["uncertain"] = [p.name for p in options.uncertain]
+        data["uncertain_value"] = (("sample", "uncertain"), samples, {
+            "long_name": "the uncertain parameters as drawn (SI, the unit in the name)"})
     ds = xr.Dataset(data, coords=coords)
     ds["published_statistic"] = ("objective", published.statistic)
     ds["published_error"] = ("objective", published.error)
@@ -267,11 +303,13 @@ def assemble(options: DesignOptions, trials: list, published: Candidate,
     ds.attrs = {
         "boringbar_version": __version__, "objectives": list(options.objectives),
         "directions": list(options.directions), "band": options.band,
-        "statistic": options.statistic, "sampler": options.sampler, "seed": options.seed,
+        "statistic": options.statistic, "quantile": options.quantile,
+        "sampler": options.sampler, "seed": options.seed,
         "samples": options.samples, "bar": options.bar, "preset": options.preset,
         "published_system": json.dumps(published.system), "best_trial": best,
         "wall_time_s": wall_time_s, "published_values": json.dumps(published.values),
-        "options": repr(options),
+        "failed_trials": json.dumps([{"number": t.number, "values": t.params} for t in failed]),
+        "confidence": CONFIDENCE, "options": repr(options),
     }
     return ds
 
@@ -287,31 +325,65 @@ def _pareto(stat: np.ndarray, directions: list[str]) -> np.ndarray:
     return front
 
 
+def variable_names(ds: xr.Dataset) -> list[str]:
+    """The design variables of the trial table ``ds``."""
+    return [k for k in ds.data_vars if ds[k].dims == ("trial",) and k not in
+            ("wall_time_s", "pareto")]
+
+
+def improvement_of(ds: xr.Dataset) -> dict:
+    """The best trial's improvement on the file's own design in the first objective,
+    on the same draws, with its interval
+    (:func:`~boringbar.analysis.design_interval.improvement`)."""
+    b = int(ds.attrs["best_trial"])
+    statistic = str(ds.attrs["statistic"])
+    chatter = {}
+    if statistic == "chatter_probability":
+        chatter = {"best_chatter": ds["chatter"].values[b],
+                   "published_chatter": ds["published_chatter"].values}
+    return improvement(ds["objective_samples"].values[b, 0], ds["published_samples"].values[0],
+                       statistic, maximize=np.atleast_1d(ds.attrs["directions"])[0] == "maximize",
+                       quantile=float(ds.attrs.get("quantile", 0.9)),
+                       seed=int(ds.attrs["seed"]) + 2, **chatter)
+
+
 def summary(ds: xr.Dataset) -> dict:
     """What ``boringbar design --json`` prints: ``best`` (variable -> value; with several
     objectives, the best in the first), ``objective`` and ``published_objective`` (the
-    first objective's statistic), ``trials``, ``wall_time_s``; ``pareto`` with
-    several objectives."""
+    first objective's statistic), the ``improvement`` on the file's own design (SI;
+    positive: better), its ``improvement_percent``, its ``improvement_interval`` and
+    ``improvement_interval_percent`` at ``confidence`` (None without one: then
+    ``interval_note`` says why), ``interval_method`` and ``significant`` (the interval
+    excludes 0; None without an interval), ``trials``, ``samples``, ``wall_time_s``;
+    ``pareto`` with several objectives."""
     b = int(ds.attrs["best_trial"])
-    names = [k for k in ds.data_vars if ds[k].dims == ("trial",) and k not in
-             ("wall_time_s", "pareto")]
+    names = variable_names(ds)
 
     def values(i):
         return {k: (ds[k].values[i].item() if hasattr(ds[k].values[i], "item")
                     else ds[k].values[i]) for k in names}
 
-    objectives = list(ds.attrs["objectives"])
+    objectives = [str(o) for o in np.atleast_1d(ds.attrs["objectives"])]
     obj = float(ds["statistic"].values[b, 0])
     pub = float(ds["published_statistic"].values[0])
-    if pub == 0:
-        better = None  # no relative change from zero (a probability of chatter of 0)
-    else:
-        better = 100 * ((1 - obj / pub) if ds.attrs["directions"][0] == "minimize"
-                        else (obj / pub - 1))
+    imp = improvement_of(ds)
+    interval = imp["interval"]
+
+    def percent(v):  # no relative change from zero (a probability of chatter of 0)
+        return None if pub == 0 else 100 * v / abs(pub)
+
     out = {"best": values(b), "objective": obj, "objective_error": float(ds["error"].values[b, 0]),
-           "published_objective": pub, "improvement_percent": better,
-           "trials": int(ds.sizes["trial"]), "wall_time_s": float(ds.attrs["wall_time_s"]),
-           "objective_name": objectives[0], "statistic_name": ds.attrs["statistic"]}
+           "published_objective": pub, "improvement": imp["improvement"],
+           "improvement_percent": percent(imp["improvement"]),
+           "improvement_interval": None if interval is None else list(interval),
+           "improvement_interval_percent": (None if interval is None or pub == 0
+                                            else [percent(v) for v in interval]),
+           "confidence": imp["level"], "interval_method": imp["method"],
+           "significant": imp["significant"], "interval_note": imp["note"],
+           "trials": int(ds.sizes["trial"]), "samples": int(ds.sizes["sample"]),
+           "best_trial_number": int(ds["trial"].values[b]),
+           "wall_time_s": float(ds.attrs["wall_time_s"]),
+           "objective_name": objectives[0], "statistic_name": str(ds.attrs["statistic"])}
     if len(objectives) > 1:
         out["objectives"] = objectives
         out["published_objectives"] = ds["published_statistic"].values.tolist()
@@ -321,46 +393,236 @@ def summary(ds: xr.Dataset) -> dict:
     return out
 
 
-def comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21,
+# --- the tables of trials.csv and samples.csv ------------------------------------------
+def statistic_column(ds: xr.Dataset, objective: str, error: bool = False) -> str:
+    """The trial table's column of an objective's statistic (or of its ``error``), its SI
+    unit last: "mean_rms_band_m", "quantile0.9_min_depth_error_m", "chatter_probability"."""
+    stat = str(ds.attrs["statistic"])
+    if stat == "chatter_probability":
+        return "chatter_probability_error" if error else stat
+    if stat == "quantile":
+        stat = f"quantile{float(ds.attrs.get('quantile', 0.9)):g}"
+    return f"{stat}_{objective}{'_error' if error else ''}_{OBJECTIVE_SI[objective]}"
+
+
+def trial_table(ds: xr.Dataset) -> pd.DataFrame:
+    """One row per trial (trials.csv): its number, the variables (SI, the unit in the
+    name), each objective's statistic and error, wall time, whether it is the best (and,
+    with several objectives, on the Pareto front) and its state: COMPLETE, or FAIL for a
+    trial a killed run left unfinished (its variables only)."""
+    objectives = [str(o) for o in np.atleast_1d(ds.attrs["objectives"])]
+    rows = {"trial": ds["trial"].values}
+    rows.update({name: ds[name].values for name in variable_names(ds)})
+    for j, o in enumerate(objectives):
+        rows[statistic_column(ds, o)] = ds["statistic"].values[:, j]
+        rows[statistic_column(ds, o, error=True)] = ds["error"].values[:, j]
+    rows["wall_time_s"] = ds["wall_time_s"].values
+    rows["best"] = np.arange(ds.sizes["trial"]) == int(ds.attrs["best_trial"])
+    if len(objectives) > 1:
+        rows["pareto"] = ds["pareto"].values
+    rows["state"] = "COMPLETE"
+    table = pd.DataFrame(rows)
+    failed = json.loads(ds.attrs.get("failed_trials", "[]"))
+    if failed:
+        lost = pd.DataFrame([{"trial": f["number"], **f["values"], "best": False,
+                              "state": "FAIL"} for f in failed])
+        table = pd.concat([table, lost], ignore_index=True).sort_values("trial")
+    return table.reset_index(drop=True)
+
+
+def sample_table(ds: xr.Dataset) -> pd.DataFrame:
+    """One row per trial and sample (samples.csv), then the file's own design's samples
+    (``design`` "file", no trial): the sample's index, the uncertain parameters as drawn
+    (SI, the unit in the name), each objective's value (``rms_band_m``, ...) and, for
+    cut_amplitude, whether the cut chattered."""
+    objectives = [str(o) for o in np.atleast_1d(ds.attrs["objectives"])]
+    n = ds.sizes["sample"]
+    drawn = ({str(u): ds["uncertain_value"].values[:, k]
+              for k, u in enumerate(ds["uncertain"].values)} if "uncertain_value" in ds else {})
+
+    def block(design_, trial, values, chatter) -> pd.DataFrame:
+        rows = {"design": design_, "trial": trial, "sample": np.arange(n), **drawn}
+        rows.update({f"{o}_{OBJECTIVE_SI[o]}": values[j] for j, o in enumerate(objectives)})
+        if chatter is not None:
+            rows["chatter"] = chatter
+        return pd.DataFrame(rows)
+
+    has = "chatter" in ds
+    blocks = [block("search", t, ds["objective_samples"].values[i],
+                    ds["chatter"].values[i] if has else None)
+              for i, t in enumerate(ds["trial"].values)]
+    blocks.append(block("file", pd.NA, ds["published_samples"].values,
+                        ds["published_chatter"].values if has else None))
+    table = pd.concat(blocks, ignore_index=True)
+    table["trial"] = table["trial"].astype("Int64")
+    if has:
+        table["chatter"] = table["chatter"].astype("boolean")
+    return table
+
+
+# --- the best design beside the file's own (best.png) ----------------------------------
+def nominal(system: System, options: DesignOptions) -> tuple[System, Initial]:
+    """``system`` and its initial state at the nominal sample (each uncertain parameter at
+    its centre: :func:`~boringbar.analysis.design_options.nominal_sample`); a bar without
+    a damper takes the bar's damping ratio alone."""
+    names = tuple(p.name for p in options.uncertain)
+    row = nominal_sample(options)
+    if system.damper is None:
+        keep = [i for i, name in enumerate(names) if name == "damping_ratio"]
+        names, row = tuple(names[i] for i in keep), row[keep]
+    return sampled_system(system, names, row)
+
+
+def comparison(spec: SystemSpec, options: DesignOptions, ds: xr.Dataset, n: int = 21,
                execution: Execution | None = None) -> dict:
-    """The best design beside the file's own and the bare bar, at the nominal values:
-    tip RMS (m) over ``n`` ratios across the band at the first force (a ball
-    damper), or |G| (m/N) over 0.8-1.2 x f1 (a TMD). Returns ``x`` (Omega/omega_n),
-    ``quantity`` ("rms_tip_m" or "receptance_m_n"), ``force_n`` (None for |G|), ``bar``
-    (the damper's kind) and ``curves``, one a bar."""
-    bars = {"best design": candidate_system(spec, options, best),
-            "file's design": make_system(options.bar, options.preset, spec=spec),
-            "bare bar": make_system("solid", options.preset, spec=spec)}
+    """The best trial of ``ds`` beside the file's own design, as the first objective
+    reads it (``kind``; :func:`boringbar.plot_design.plot_best` draws each):
+
+    - ``"lobes"`` (min_depth): each design's chatter-free depth at the design's speeds,
+      by the lobes' search the objective runs (:meth:`DesignOptions.lobes_options`),
+      at the nominal sample;
+    - ``"cut"`` (cut_amplitude): each design's cut amplitude and chatter per sample,
+      and its probability of chatter with its Wilson interval;
+    - ``"response"`` (rms_band, frf_peak, min_real): :func:`response_comparison`."""
+    best = summary(ds)["best"]
+    objective = options.objectives[0]
+    if objective == "min_depth":
+        return depth_comparison(spec, options, best, execution)
+    if objective == "cut_amplitude":
+        return cut_comparison(ds, options)
+    return response_comparison(spec, options, best, n, execution)
+
+
+def response_comparison(spec: SystemSpec, options: DesignOptions, best: dict, n: int = 21,
+                        execution: Execution | None = None) -> dict:
+    """The best design beside the file's own and the bare bar, at the nominal sample
+    (:func:`nominal`):
+    tip RMS (m) over ``n`` ratios across the band at the first force (a ball damper),
+    else the tip FRF over 0.8-1.2 x f1, widened to hold each curve's extreme: |G| (m/N),
+    or Re G (m/N) for min_real. Returns ``kind`` "response", ``x`` (Omega/omega_n),
+    ``quantity`` ("rms_tip_m", "receptance_m_n" or "real_m_n"), ``force_n`` (None for
+    the FRF), ``bar`` (the damper's kind), ``curves``, one a bar, and ``nominal`` (the
+    nominal sample in words: :func:`nominal`)."""
+    bars = {"best design": nominal(candidate_system(spec, options, best), options),
+            "file's design": nominal(make_system(options.bar, options.preset, spec=spec),
+                                     options),
+            "bare bar": nominal(make_system("solid", options.preset, spec=spec), options)}
+    initial = {k: ini for k, (_, ini) in bars.items()}
+    bars = {k: s for k, (s, _) in bars.items()}
     if options.bar == "ball":
         lo, hi = min(options.ratios), max(options.ratios)
         x = np.linspace(lo - 0.02, hi + 0.02, n) if lo == hi else np.linspace(lo, hi, n)
         force = options.forces_n[0]
-        tasks = [(s, tuple(x), (force,), Initial(), options.duration_s, options.integrator)
-                 for s in bars.values()]
+        tasks = [(s, tuple(x), (force,), initial[k], options.duration_s, options.integrator)
+                 for k, s in bars.items()]
         y = np.array(run_points(rms_runs, tasks, execution=execution))
-        return {"x": x, "quantity": "rms_tip_m", "force_n": force, "bar": options.bar,
-                "curves": dict(zip(bars, y, strict=True))}
+        return {"kind": "response", "x": x, "quantity": "rms_tip_m", "force_n": force,
+                "bar": options.bar, "curves": dict(zip(bars, y, strict=True)),
+                "nominal": nominal_words(options)}
+    real = options.objectives[0] == "min_real"
     wn = bars["bare bar"].bar.natural_frequency_rad_s
-    w = np.linspace(0.8 * wn, 1.2 * wn, 801)
-    curves = {k: np.abs(system_receptance(s, w))
+    wide = np.linspace(FRF_SPAN[0] * wn, FRF_SPAN[1] * wn, FRF_LINES)
+    extremes = [wide[np.argmin(g.real) if real else np.argmax(np.abs(g))] / wn
+                for g in (system_receptance(s, wide) for s in bars.values())]
+    lo, hi = min(0.8, 0.9 * min(extremes)), max(1.2, 1.1 * max(extremes))
+    w = np.linspace(max(lo, FRF_SPAN[0]) * wn, min(hi, FRF_SPAN[1]) * wn, 801)
+    curves = {k: (system_receptance(s, w).real if real else np.abs(system_receptance(s, w)))
               for k, s in bars.items()}
-    return {"x": w / wn, "quantity": "receptance_m_n", "force_n": None, "bar": options.bar,
-            "curves": curves}
+    return {"kind": "response", "x": w / wn, "quantity": "real_m_n" if real else
+            "receptance_m_n", "force_n": None, "bar": options.bar, "curves": curves,
+            "nominal": nominal_words(options)}
 
 
+def depth_comparison(spec: SystemSpec, options: DesignOptions, best: dict,
+                     execution: Execution | None = None) -> dict:
+    """min_depth's own figure: the best design's and the file's chatter-free depth (m) at
+    each of ``options.rpms``, by the objective's lobes search, at the nominal sample
+    (:func:`nominal`).
+    Returns ``kind`` "lobes", ``rpm``, per design ``limit_m`` (NaN: no chatter up to
+    ``max_depth_m``), ``first_unstable_m`` and ``min_depth_m`` (the objective at the
+    nominal sample), ``max_depth_m``, ``criterion``, ``duration_s``,
+    ``depth_tolerance``, ``nominal`` and ``bar``."""
+    cases = [Case.of(nominal(candidate_system(spec, options, best), options)[0], "best design"),
+             Case.of(nominal(make_system(options.bar, options.preset, spec=spec), options)[0],
+                     "file's design")]
+    lb = depth_lobes(cases, options, execution)
+    labels = [c.label for c in cases]
+    return {"kind": "lobes", "rpm": lb["rpm"].values, "bar": options.bar,
+            "limit_m": dict(zip(labels, lb["limit_depth_m"].values, strict=True)),
+            "first_unstable_m": dict(zip(labels, lb["first_unstable_depth_m"].values,
+                                         strict=True)),
+            "min_depth_m": {k: min(float(v), options.max_depth_m) for k, v in
+                            zip(labels, lb["min_chatter_free_depth_m"].values, strict=True)},
+            "max_depth_m": options.max_depth_m, "criterion": options.criterion,
+            "duration_s": options.duration_s, "depth_tolerance": options.depth_tolerance,
+            "nominal": nominal_words(options)}
+
+
+def cut_comparison(ds: xr.Dataset, options: DesignOptions) -> dict:
+    """cut_amplitude's own figure, from the samples of ``ds``: per design (the best
+    trial, the file's) the cut's amplitude (m) and chatter at each sample, the
+    statistic, and the probability of chatter with its Wilson interval at
+    :data:`~boringbar.analysis.design_interval.CONFIDENCE`; the cut's ``rpm`` and
+    ``depth_m`` (``options``). Returns ``kind`` "cut"."""
+    b = int(ds.attrs["best_trial"])
+    amplitude = {"best design": ds["objective_samples"].values[b, 0],
+                 "file's design": ds["published_samples"].values[0]}
+    chatter = {"best design": ds["chatter"].values[b],
+               "file's design": ds["published_chatter"].values}
+    wilson_ = {k: (wilson(int(np.nansum(v)), len(v)) if np.isfinite(v).all() else None)
+               for k, v in chatter.items()}
+    return {"kind": "cut", "amplitude_m": amplitude, "chatter": chatter, "wilson": wilson_,
+            "statistic": str(ds.attrs["statistic"]),
+            "value": {"best design": float(ds["statistic"].values[b, 0]),
+                      "file's design": float(ds["published_statistic"].values[0])},
+            "confidence": CONFIDENCE, "bar": str(ds.attrs["bar"]), "rpm": options.rpm,
+            "depth_m": options.depth_m}
+
+
+# --- the summary line ------------------------------------------------------------------
 def summary_line(s: dict) -> str:
-    """'best design X improves the objective by Y % over the file's own design', or, when
-    no trial beat it, 'no design better than the file's own found in N trials'."""
+    """What the search found, as far as its samples can tell: 'best design X improves the
+    objective by Y % over the file's own design', 'no design better than the file's own
+    found in N trials', or, when the improvement's interval holds 0, 'best design X: a
+    against b, improvement g (95 % CI lo to hi): within noise'; without an interval (one
+    sample, or no spread) it says so."""
     best = ", ".join(shown(k, v) for k, v in s["best"].items())
-    gain = s["improvement_percent"]
     unit, k = objective_reading(s["objective_name"], s["statistic_name"])
-    unit = f" {unit}" if unit else ""
-    numbers = (f"({s['statistic_name']} of {s['objective_name']}: {s['objective'] * k:.4g} "
-               f"+- {s['objective_error'] * k:.2g}{unit} against "
-               f"{s['published_objective'] * k:.4g}{unit}; {s['trials']} trials)")
-    if gain is not None and gain < 0:  # the search did not reach the file's own design
+    u = f" {unit}" if unit else ""
+    gain, pct, interval = s["improvement"], s["improvement_percent"], s["improvement_interval"]
+    n = s["samples"]
+    noise = interval is not None and not s["significant"]
+    numbers = (f"{s['objective'] * k:.4g} against {s['published_objective'] * k:.4g}{u}, "
+               f"improvement {gain * k:+.3g}{u}"
+               + ("" if pct is None or not noise else f" ({pct:+.1f} %)"))
+    if interval is None:
+        sure = f"; {s['interval_note']}"
+    else:
+        level = round(100 * s["confidence"])
+        lo, hi = interval_ends(interval[0] * k, interval[1] * k)
+        sure = (f", {level} % CI {lo} to {hi}{u}"
+                + (": within noise" if not s["significant"] else ""))
+    tail = (f" ({s['statistic_name']} of {s['objective_name']} over {n} sample"
+            f"{'s' if n != 1 else ''}{', ' + s['interval_method'] if interval else ''}; "
+            f"{s['trials']} trials)")
+    if noise:
+        tried = "best design" if gain >= 0 else "best design tried"
+        return f"{tried} {best}: {numbers}{sure}{tail}"
+    if gain < 0:  # the search did not reach the file's own design
+        worse = "" if pct is None else f" {-pct:.1f} %"
         return (f"no design better than the file's own found in {s['trials']} trials: the "
-                f"best tried, {best}, is {-gain:.1f} % worse on the objective {numbers}")
-    verb = ("compares with the file's own design as" if gain is None
-            else f"improves the objective by {gain:.1f} % over the file's own design")
-    return f"best design {best} {verb} {numbers}"
+                f"best tried, {best}, is{worse} worse: {numbers}{sure}{tail}")
+    verb = ("equals the file's own design" if gain == 0
+            else "compares with the file's own design as" if pct is None
+            else f"improves the objective by {pct:.1f} % over the file's own design")
+    return f"best design {best} {verb}: {numbers}{sure}{tail}"
+
+
+def interval_ends(lo: float, hi: float) -> tuple[str, str]:
+    """An interval's ends, signed, to two significant digits or as many more (up to
+    five) as it takes to tell them apart."""
+    for digits in range(2, 6):
+        a, b = f"{lo:+.{digits}g}", f"{hi:+.{digits}g}"
+        if a != b:
+            break
+    return a, b

@@ -46,13 +46,21 @@ def _cut(task) -> tuple[float, bool]:
     return float(c["amplitude_m"]), bool(c["chatter"])
 
 
+def depth_lobes(cases: list[Case], options: DesignOptions,
+                execution: Execution | None = None):
+    """min_depth's lobes: each case's limit at ``options.rpms`` by the lobes' search
+    (:meth:`DesignOptions.lobes_options`), cuts of ``options.duration_s`` by
+    :data:`CUT_INTEGRATOR` (the lobes Dataset)."""
+    return lobes(cases, options.lobes_options(),
+                 integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
+                 execution=execution)
+
+
 def _min_depth(task) -> float:
     """The minimum chatter-free depth (m) over the speeds, each speed's limit found by
     the lobes' search (:meth:`DesignOptions.lobes_options`), at most ``max_depth_m``."""
     system, options = task
-    ds = lobes([Case.of(system, "design")], options.lobes_options(),
-               integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
-               execution=Execution("serial"))
+    ds = depth_lobes([Case.of(system, "design")], options, Execution("serial"))
     # no chatter up to max_depth_m at any speed: the search knows only "at least that"
     return min(float(ds["min_chatter_free_depth_m"].values[0]), options.max_depth_m)
 

@@ -41,6 +41,13 @@ VARIABLES = {
 UNCERTAIN = ("friction_force_n", "friction_number", "restitution", "ball_position_m",
              "ball_velocity_m_s", "damping_ratio")
 DISTRIBUTIONS = ("uniform", "normal")
+#: an uncertain parameter as a person reads it: (words, unit, factor from SI)
+UNCERTAIN_READ = {"friction_force_n": ("friction force", "N", 1.0),
+                  "friction_number": ("friction number", "", 1.0),
+                  "restitution": ("restitution", "", 1.0),
+                  "ball_position_m": ("ball position", "mm", 1e3),
+                  "ball_velocity_m_s": ("ball velocity", "m/s", 1.0),
+                  "damping_ratio": ("damping ratio", "", 1.0)}
 #: The unit a person reads a quantity of an SI unit in (figures, summary lines, the
 #: report): lengths in mm, as the design files give them; factor from SI.
 READ_AS = {"m": ("mm", 1e3)}
@@ -61,6 +68,11 @@ def reading(name: str) -> tuple[str, str, float]:
 OBJECTIVE_READ = {"rms_band": ("mm", 1e3), "cut_amplitude": ("mm", 1e3),
                   "min_depth": ("mm", 1e3), "frf_peak": ("um/N", 1e6),
                   "min_real": ("um/N", 1e6)}
+
+
+#: each objective's SI unit, as the trial table's column names end: m, or m/N written m_n
+OBJECTIVE_SI = {"rms_band": "m", "cut_amplitude": "m", "min_depth": "m", "frf_peak": "m_n",
+                "min_real": "m_n"}
 
 
 def objective_reading(objective: str, statistic: str) -> tuple[str, float]:
@@ -263,6 +275,23 @@ def uncertain_samples(options: DesignOptions) -> np.ndarray:
     u = np.clip(u, 1e-12, 1 - 1e-12)
     return np.column_stack([p.draw(u[:, j]) for j, p in enumerate(options.uncertain)]) \
         if options.uncertain else np.zeros((options.samples, 0))
+
+
+def nominal_sample(options: DesignOptions) -> np.ndarray:
+    """The uncertain parameters at their centre: a uniform one's midpoint, a normal one's
+    mean (the nominal sample the figures of the best design are drawn at)."""
+    return np.array([(p.a + p.b) / 2 if p.distribution == "uniform" else p.a
+                     for p in options.uncertain], dtype=float)
+
+
+def nominal_words(options: DesignOptions) -> str:
+    """The nominal sample in words, as a person reads it: "friction force = 0.25 N,
+    restitution = 0.7"; "nominal values" without uncertain parameters."""
+    words = []
+    for p, v in zip(options.uncertain, nominal_sample(options), strict=True):
+        name, unit, factor = UNCERTAIN_READ[p.name]
+        words.append(f"{name} = {v * factor:.3g}" + (f" {unit}" if unit else ""))
+    return ", ".join(words) or "nominal values"
 
 
 def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:

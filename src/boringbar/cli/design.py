@@ -6,7 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from boringbar._validate import check_int
-from boringbar.analysis.design import comparison, design, summary
+from boringbar.analysis.design import comparison, design
 from boringbar.analysis.design_file import load_design
 from boringbar.cli.options import OUT_HELP, Outcome, check_workers, progress_printer, wrote
 from boringbar.execute import Execution
@@ -18,9 +18,16 @@ def add_design(sub) -> None:
     p = sub.add_parser("design", help="search for the best damper, robust to uncertainty",
                        description="Search a design study (docs/design.md) with Optuna: "
                                    "variables, an objective, uncertain parameters and a "
-                                   "statistic. Writes DIR/design.nc, DIR/trials.csv, "
-                                   "DIR/design.png, DIR/best.png and DIR/design.db (the "
-                                   "trials: a rerun resumes).")
+                                   "statistic. Writes DIR/design.nc, DIR/trials.csv (one "
+                                   "row per trial), DIR/samples.csv (one row per trial "
+                                   "and Monte Carlo sample, and the file's own design's), "
+                                   "DIR/design.png, DIR/best.png (the best design beside "
+                                   "the file's in the objective's own figure), "
+                                   "DIR/summary.json and DIR/design.db (the trials: a "
+                                   "rerun resumes). The summary gives the improvement on "
+                                   "the file's own design with its 95 %% confidence "
+                                   "interval over the paired samples, and says 'within "
+                                   "noise' when the interval holds 0.")
     p.add_argument("file", metavar="FILE.toml",
                    help="the design file (lengths in mm: gap_mm, depth_mm, ...)")
     p.add_argument("--trials", type=int, metavar="N", help="override the file's trials")
@@ -43,8 +50,7 @@ def cmd_design(args) -> Outcome:
     out = Path(args.out)
     ds = design(options, spec=spec, storage=out / "design.db", execution=execution,
                 progress=progress_printer(args, "design", "trials"))
-    s = design_files(ds, comparison(spec, options, summary(ds)["best"], execution=execution),
-                     out)
+    s = design_files(ds, comparison(spec, options, ds, execution=execution), out)
 
     def text(say) -> None:
         say(s["summary"])

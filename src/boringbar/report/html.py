@@ -31,6 +31,7 @@ import xarray as xr
 from jinja2 import Environment, PackageLoader, StrictUndefined, select_autoescape
 from markupsafe import Markup, escape
 
+from boringbar.analysis.design import interval_ends
 from boringbar.analysis.design_options import objective_reading, reading
 from boringbar.io import atomic_path
 from boringbar.report.audit import audit
@@ -239,12 +240,15 @@ class _Report:
             rows.append([f"{s['statistic_name']} of {s['objective_name']}"
                          + (f" ({unit})" if unit else ""),
                          f"{s['objective'] * k:.4g}", f"{s['published_objective'] * k:.4g}"])
+            rows.append(["improvement" + (f" ({unit})" if unit else "")
+                         + f", {round(100 * s['confidence'])} % CI", improvement_cell(s, k), "-"])
             if "pareto" in s:
                 rows.append(["designs on the Pareto front", str(len(s["pareto"])), "-"])
+            found = s["improvement"] > 0 and s["significant"] is not False
             return {"images": [self.img(s["files"]["png"], f"{key} {preset}"),
                                self.img(s["files"]["best_png"], f"{key} best {preset}")],
-                    "table": _table(["", "best design tried" if (s["improvement_percent"] or 0) < 0
-                                     else "best design", "published design"], rows),
+                    "table": _table(["", "best design" if found else "best design tried",
+                                     "published design"], rows),
                     "line": s["summary"]}
         return self.per_key("design", body)
 
@@ -531,6 +535,17 @@ def _design_row(name: str, best, published) -> list[str]:
     words, unit, factor = reading(name)
     return [f"{words} ({unit})" if unit else words,
             *(_fmt(v * factor if isinstance(v, float) else v) for v in (best, published))]
+
+
+def improvement_cell(s: dict, k: float) -> str:
+    """The design table's improvement: '+0.007 (-0.004 to +0.018): within noise', or
+    with the reason there is no interval (one sample)."""
+    text = f"{s['improvement'] * k:+.3g}"
+    interval = s["improvement_interval"]
+    if interval is None:
+        return f"{text} ({s['interval_note']})"
+    text += " ({} to {})".format(*interval_ends(interval[0] * k, interval[1] * k))
+    return text + ("" if s["significant"] else ": within noise")
 
 
 def _nearest(values: list, target: float) -> int:

@@ -18,8 +18,8 @@ import numpy as np
 from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import summary as bifurcation_summary
 from boringbar.analysis.continuation import summary as continuation_summary
+from boringbar.analysis.design import sample_table, summary_line, trial_table
 from boringbar.analysis.design import summary as design_summary
-from boringbar.analysis.design import summary_line
 from boringbar.analysis.lobes import examples_summary
 from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sensitivity import summary as sensitivity_summary
@@ -32,7 +32,7 @@ from boringbar.plot import (
     plot_lobes,
     plot_sweep,
 )
-from boringbar.plot_design import plot_design, plot_design_comparison
+from boringbar.plot_design import plot_best, plot_design
 from boringbar.plot_orbits import plot_continuation
 from boringbar.plot_variations import plot_sensitivity
 
@@ -110,22 +110,24 @@ def sensitivity_files(ds, out) -> dict:
 
 
 def design_files(ds, cmp: dict, out) -> dict:
-    """``out/design.nc``, ``out/trials.csv``, ``out/design.png`` (the trials against
-    each variable, the Pareto front), ``out/best.png`` (the best design beside the
-    file's own and the bare bar: ``cmp`` of
-    :func:`boringbar.analysis.design.comparison`) and ``out/summary.json``; the
-    summary, with its one-line statement under ``"summary"``."""
+    """``out/design.nc``, ``out/trials.csv`` (one row per trial:
+    :func:`~boringbar.analysis.design.trial_table`), ``out/samples.csv`` (one row per
+    trial and sample, then the file's design's: :func:`~boringbar.analysis.design.
+    sample_table`), ``out/design.png`` (the trials against each variable, the Pareto
+    front), ``out/best.png`` (the best design beside the file's own in the objective's
+    terms: ``cmp`` of :func:`boringbar.analysis.design.comparison`, drawn by
+    :func:`~boringbar.plot_design.plot_best`) and ``out/summary.json``; the summary,
+    with its one-line statement under ``"summary"``."""
     out = Path(out)
     s = design_summary(ds)
     files = {"netcdf": write_netcdf_atomic(ds, out / "design.nc"),
-             "csv": out / "trials.csv",
+             "csv": out / "trials.csv", "samples_csv": out / "samples.csv",
              "png": save_figure_atomic(plot_design(ds), out / "design.png"),
-             "best_png": save_figure_atomic(plot_design_comparison(cmp, ds.attrs),
-                                           out / "best.png"),
+             "best_png": save_figure_atomic(plot_best(cmp, ds.attrs), out / "best.png"),
              "json": out / "summary.json"}
-    table = ds.drop_vars(["objective_samples", "published_statistic", "published_error"])
-    with atomic_path(files["csv"]) as tmp:
-        table.to_dataframe().to_csv(tmp)
+    for key, table in (("csv", trial_table(ds)), ("samples_csv", sample_table(ds))):
+        with atomic_path(files[key]) as tmp:
+            table.to_csv(tmp, index=False)
     summary = {**s, "summary": summary_line(s), "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic(summary, files["json"])
     return summary

@@ -39,7 +39,6 @@ from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
 from boringbar.analysis.continuation import ContinuationOptions, continuation
 from boringbar.analysis.design import comparison, design
-from boringbar.analysis.design import summary as design_summary
 from boringbar.analysis.design_file import load_design
 from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, lobes
 from boringbar.analysis.lobes import examples as lobe_examples
@@ -319,8 +318,7 @@ def _design_run(name: str, trials: int):
         options = replace(options, trials=trials, preset=col.preset)
         execution = Execution("threads")
         ds = design(options, spec=spec, storage=out / "design.db", execution=execution)
-        return design_files(ds, comparison(spec, options, design_summary(ds)["best"],
-                                           execution=execution), out)
+        return design_files(ds, comparison(spec, options, ds, execution=execution), out)
     return run
 
 
