@@ -307,6 +307,8 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``."""
     options = options or VerdictOptions()
     stepper = _stepper(system, cut, dt_s, options.knock_m)
+    if cut.force_noise > 0:
+        return _noisy(system, cut, options, dt_s, stepper)
     verdict, rate, se, windows = onset(stepper, options)
     onset_s = stepper.t_s
     settled: list[Settled] = []
@@ -320,5 +322,22 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     for knock in options.knocks_m:
         settled.append(settle(_stepper(system, cut, dt_s, knock), [], options, 0.0))
         ok.append(acceptable(settled[-1], options))
-    free = False if False in ok else (None if None in ok else True)
-    return CutVerdict(verdict, rate, se, onset_s, free, tuple(settled))
+    return CutVerdict(verdict, rate, se, onset_s, _all_of(ok), tuple(settled))
+
+
+def _all_of(ok: list) -> bool | None:
+    """True if every start is chatter-free, False if one is not, else None."""
+    return False if False in ok else (None if None in ok else True)
+
+
+def _noisy(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float,
+           stepper: CutStepper) -> CutVerdict:
+    """A cut whose force is noisy never falls silent: the noise keeps every mode
+    vibrating, so a small knock's growth rate has no sign to find.  Every start is run
+    until its vibration settles, and judged by it alone (onset UNDECIDED, its rate the
+    settled run's)."""
+    settled = [settle(stepper, [], options, 0.0)]
+    for knock in options.knocks_m:
+        settled.append(settle(_stepper(system, cut, dt_s, knock), [], options, 0.0))
+    return CutVerdict(UNDECIDED, math.nan, math.nan, 0.0,
+                      _all_of([acceptable(x, options) for x in settled]), tuple(settled))
