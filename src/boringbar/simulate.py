@@ -769,17 +769,19 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: fl
     return _result(su, _run_kernel(su))
 
 
-def knocked_cut(system: System, forcing: Regenerative, knock_m: float) -> State:
+def knocked_cut(system: System, forcing: Regenerative, knock_m: float,
+                ball_position_m: float = 0.0) -> State:
     """The state of a cut in progress (every mode at its static deflection under the
     mean force, the absorber relaxed) just after a knock at the tip: an impulse J on
     the bar at the tip, every mode taking psi_tip,i J / M_i, with J such that the bar's
     first mode alone would vibrate at the tip with amplitude ``knock_m`` (m).  A free
     ball and an absorber keep their absolute velocity (at rest): the ball's relative
-    velocity is minus the bar's at the cavity.  Use it with ``forcing.start ==
-    "static"``, whose surface before the cut is the same static deflection."""
+    velocity is minus the bar's at the cavity; it starts ``ball_position_m`` (m) from the
+    cavity's centre.  Use it with ``forcing.start == "static"``, whose surface before
+    the cut is the same static deflection."""
     check_range("knock_m", knock_m, 0.0, MAX_INITIAL_DISPLACEMENT, unit="m")
     bar, n = system.bar, system.bar.n_modes
-    x = initial_state(system, Initial())
+    x = initial_state(system, Initial(ball_position_m=ball_position_m))
     x[:n] += bar.psi_tip * forcing.mean_force_n / bar.stiffness_n_m
     impulse = knock_m * bar.natural_frequency_rad_s / float(np.sum(bar.psi_tip**2 / bar.mass_kg))
     x[n:2 * n] = bar.psi_tip * impulse / bar.mass_kg

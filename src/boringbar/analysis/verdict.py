@@ -72,7 +72,8 @@ class VerdictOptions:
     chatter-free (a surface-finish budget); ``knocks_m`` (m): larger disturbances tried
     too; ``settle_tolerance``: the settled peak-to-peak converged to this fraction;
     ``min_segment``: windows in each of the three segments whose slopes are compared (at
-    least 4; a verdict needs three of them).
+    least 4; a verdict needs three of them); ``ball_start``: where a free ball starts
+    across its gap, a fraction of the half gap from the centre (-1 and 1: on a wall).
     """
 
     confidence: float = CONFIDENCE
@@ -82,6 +83,7 @@ class VerdictOptions:
     knocks_m: tuple[float, ...] = ()
     settle_tolerance: float = SETTLE_TOLERANCE
     min_segment: int = MIN_SEGMENT
+    ball_start: float = 0.0
 
     def __post_init__(self):
         check_range("confidence", self.confidence, 0.5, 0.999999, lo_open=True)
@@ -93,12 +95,13 @@ class VerdictOptions:
                 "knocks_m", self.knocks_m, 0.0, 1e-2, lo_open=True, unit="m"))
         check_range("settle_tolerance", self.settle_tolerance, 0.0, 0.5, lo_open=True)
         check_int("min_segment", self.min_segment, 4, 10_000)
+        check_range("ball_start", self.ball_start, -1.0, 1.0)
 
     def to_dict(self) -> dict:
         return {"confidence": self.confidence, "max_duration_s": self.max_duration_s,
                 "knock_m": self.knock_m, "tolerance_m": self.tolerance_m,
                 "knocks_m": list(self.knocks_m), "settle_tolerance": self.settle_tolerance,
-                "min_segment": self.min_segment}
+                "min_segment": self.min_segment, "ball_start": self.ball_start}
 
 
 @dataclass(frozen=True)
@@ -287,10 +290,12 @@ def _pp(windows) -> float:
     return max(w.max_tip_m for w in windows) - min(w.min_tip_m for w in windows)
 
 
-def _stepper(system: System, cut: Regenerative, dt_s: float, knock_m: float) -> CutStepper:
+def _stepper(system: System, cut: Regenerative, dt_s: float, knock_m: float,
+             ball_start: float = 0.0) -> CutStepper:
     cut = replace(cut, start="static", stop_at_zero=False)
+    half = system.damper.gap_m / 2 if system.kind == "ball" else 0.0
     return CutStepper(system, cut, dt_s=dt_s, window_steps=window_steps(system, cut, dt_s),
-                      initial=knocked_cut(system, cut, knock_m))
+                      initial=knocked_cut(system, cut, knock_m, ball_start * half))
 
 
 def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
@@ -306,7 +311,7 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
           dt_s: float = 1e-6) -> CutVerdict:
     """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``."""
     options = options or VerdictOptions()
-    stepper = _stepper(system, cut, dt_s, options.knock_m)
+    stepper = _stepper(system, cut, dt_s, options.knock_m, options.ball_start)
     if cut.force_noise > 0:
         return _noisy(system, cut, options, dt_s, stepper)
     verdict, rate, se, windows = onset(stepper, options)
@@ -320,7 +325,7 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
         settled.append(settle(stepper, windows, options, onset_s, rate))
         ok = [acceptable(settled[0], options)]
     for knock in options.knocks_m:
-        settled.append(settle(_stepper(system, cut, dt_s, knock), [], options, 0.0))
+        settled.append(settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0))
         ok.append(acceptable(settled[-1], options))
     return CutVerdict(verdict, rate, se, onset_s, _all_of(ok), tuple(settled))
 
@@ -338,6 +343,6 @@ def _noisy(system: System, cut: Regenerative, options: VerdictOptions, dt_s: flo
     settled run's)."""
     settled = [settle(stepper, [], options, 0.0)]
     for knock in options.knocks_m:
-        settled.append(settle(_stepper(system, cut, dt_s, knock), [], options, 0.0))
+        settled.append(settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0))
     return CutVerdict(UNDECIDED, math.nan, math.nan, 0.0,
                       _all_of([acceptable(x, options) for x in settled]), tuple(settled))
