@@ -866,9 +866,30 @@ class CutStepper:
         return self.su.system
 
     @property
+    def forcing(self) -> Regenerative:
+        return self.su.forcing
+
+    @property
     def x_start(self) -> np.ndarray:
         """The state the cut started from (a copy)."""
         return self.su.x_start.copy()
+
+    def scale(self, factor: float) -> None:
+        """Scale the run's departure from its steady cut by ``factor``: the modal state
+        about the static deflection (u about u_s, u' about 0), an absorber's about the
+        bar, a ball's relative position about where it started, and the delay history
+        about the static tip deflection.  Where the run is linear (the tool in the cut, a
+        frictionless ball off the walls) the scaled state is the same run further on: a
+        mode growing at rate s is ln(factor) / s seconds ahead."""
+        su, n = self.su, self.su.system.bar.n_modes
+        ref = su.x_start.copy()
+        ref[n:2 * n] = 0.0
+        ref[2 * n + 1] = 0.0
+        if su.system.kind == "tmd":
+            ref[2 * n] = float(su.system.bar.psi_absorber @ ref[:n])
+        su.x[:] = ref + factor * (su.x - ref)
+        su.buf[:, 0] = su.w_static + factor * (su.buf[:, 0] - su.w_static)
+        su.buf[:, 1] *= factor
 
 
 def simulate_stage_loop(system: System, forcing: Harmonic, *, duration_s: float = 2.0,

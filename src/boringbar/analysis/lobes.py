@@ -333,6 +333,9 @@ def lobe_speeds(frequencies_hz, numbers: tuple[float, float] = LOBE_NUMBERS,
 BORE_RATIO = 1.25
 #: Speeds :func:`boring_speeds` gives by default.
 BORING_SPEEDS = 60
+#: A boring job's default lobe grid: speeds a lobe at least, and at most this many.
+JOB_SPEEDS_PER_LOBE = 4
+MAX_DEFAULT_SPEEDS = 200
 
 
 @dataclass(frozen=True)
@@ -385,9 +388,32 @@ def _largest_diameter_m(system_or_spec) -> float:
     return max(s.diameter_m for s in system_or_spec.bar.sections)
 
 
-def default_speeds(cases: list[Case]) -> tuple[float, ...]:
-    """:func:`lobe_speeds` of the cases' host bars (f1 of each, without its damper)."""
-    return lobe_speeds([c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases])
+def has_diameter(system: System) -> bool:
+    """Whether the bar of ``system`` comes from a system file's sections (so its bore, and
+    a boring job's speeds, are known)."""
+    return system.bar.source.startswith("fe") and system.spec is not None
+
+
+def default_speeds(cases: list[Case], workpiece: str | CuttingLaw | None = None
+                   ) -> tuple[float, ...]:
+    """The speeds a lobe study of ``cases`` takes by default.
+
+    Bars of system files: a boring job's (:func:`boring_speeds` of each bar and
+    ``workpiece``, spanning all their bores), evenly spaced in 1/rpm, at least
+    :data:`JOB_SPEEDS_PER_LOBE` a lobe of the highest first frequency (at a boring job's
+    speeds the lobes crowd: lobe numbers 10-30 are usual), at least
+    :data:`BORING_SPEEDS` and at most :data:`MAX_DEFAULT_SPEEDS`.  A bar known only by
+    its modes (a measured FRF, a tap test): :func:`lobe_speeds`, its lobes 1 to 5."""
+    f1 = [c.system.reference_frequency_rad_s / (2 * math.pi) for c in cases]
+    if not all(has_diameter(c.system) for c in cases):
+        return lobe_speeds(f1)
+    jobs = [boring_speeds(c.system, workpiece, 2) for c in cases]
+    lo, hi = min(j.rpm[0] for j in jobs), max(j.rpm[-1] for j in jobs)
+    spanned = 60.0 * max(f1) * (1.0 / lo - 1.0 / hi)
+    n = int(np.clip(math.ceil(JOB_SPEEDS_PER_LOBE * spanned), BORING_SPEEDS,
+                    MAX_DEFAULT_SPEEDS))
+    speeds = np.unique(np.round(1.0 / np.linspace(1.0 / lo, 1.0 / hi, n)))
+    return tuple(float(r) for r in speeds)
 
 
 def _seeds(cases: list[Case], options: LobesOptions) -> dict:
@@ -426,7 +452,7 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
                              "options.start says (rest or static), not from initial "
                              "conditions")
     if options.rpm is None:
-        options = replace(options, rpm=default_speeds(cases))
+        options = replace(options, rpm=default_speeds(cases, options.workpiece))
     if options.criterion is None:
         options = replace(options, criterion=criterion_for([c.system for c in cases]))
     if options.criterion == "growth":

@@ -58,8 +58,12 @@ MIN_SEGMENT = 6
 #: A slope still rising is extrapolated only once each rise is at most this fraction of
 #: the one before (a geometric tail that has set in).
 MAX_RISE_RATIO = 0.0
-#: Verdicts.
-STABLE, CHATTER, UNDECIDED = "stable", "chatter", "undecided"
+#: A knock whose every amplitude has fallen to this fraction of its first window's has
+#: died out (a heavily damped bar reaches the arithmetic's round-off in a few windows,
+#: where slopes are noise).
+DECAYED = 1e-6
+#: Verdicts (LEVELLED: a vibration neither growing nor decaying, for the settling to judge).
+STABLE, CHATTER, UNDECIDED, LEVELLED = "stable", "chatter", "undecided", "levelled"
 
 
 @dataclass(frozen=True)
@@ -174,19 +178,23 @@ def segment(n: int, min_segment: int) -> int:
     return max(min_segment, n // 6)
 
 
-def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions) -> tuple[str, float, float]:
+def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions,
+           settles: bool = False) -> tuple[str, float, float]:
     """(verdict so far, growth rate, its standard error) from window ends ``t`` and the
     amplitudes ``amp`` (windows x observables, :func:`observables`): CHATTER as soon as
     one observable grows at the confidence over the last two segments (one alone may be
     a beat over a floor of persistent small vibration), STABLE once every one decays and
-    has stopped rising, else UNDECIDED (not yet; module doc).  The rate is the largest
-    observable's last slope."""
+    has stopped rising, LEVELLED (with ``settles``: a bar that can bound its vibration)
+    once every one changes by less than ``settle_tolerance`` over the three segments,
+    else UNDECIDED (not yet; module doc).  The rate is the largest observable's last
+    slope."""
     n, m = len(t), segment(len(t), options.min_segment)
     if n < 3 * m:
         return UNDECIDED, math.nan, math.nan
     y = np.log(np.maximum(amp, 1e-300))
     q = float(stats.t.ppf(0.5 + options.confidence / 2, m - 2))
-    rates, stable = [], True
+    span = t[-1] - t[n - 3 * m]
+    rates, stable, level = [], True, settles
     for col in y.T:
         fits = [slope(t[n - k * m:n - (k - 1) * m], col[n - k * m:n - (k - 1) * m])
                 for k in (3, 2, 1)]
@@ -198,8 +206,9 @@ def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions) -> tuple[str
         # evidence of change, not noise: the rises are measured against the later two
         noise = (q * math.sqrt(2.0) * s1, q * math.hypot(s1, s2))
         stable = stable and b2 + rise_left(b0, b1, b2, noise) + q * s2 < 0
+        level = level and max(abs(b0), abs(b1), abs(b2)) * span < options.settle_tolerance
     b, se = max(rates)
-    return (STABLE if stable else UNDECIDED), b, se
+    return (STABLE if stable else LEVELLED if level else UNDECIDED), b, se
 
 
 def observables(system: System, window: Window) -> np.ndarray:
@@ -239,9 +248,13 @@ def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, flo
             return CHATTER, rate, se, windows
         amps.append(observables(system, windows[-1]))
         verdict, rate, se = growth(np.array([w.t_end_s for w in windows]), np.array(amps),
-                                   options)
+                                   options, settles=system.kind == "ball")
+        if verdict == LEVELLED:
+            return UNDECIDED, rate, se, windows
         if verdict != UNDECIDED:
             break
+        if np.all(amps[-1] < DECAYED * amps[0]):
+            return STABLE, rate, se, windows  # below what a slope can be measured on
     return verdict, rate, se, windows
 
 
@@ -283,7 +296,39 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
                 return Settled(pp, rms, False, "decaying", duration)
             if stepper.t_s >= options.max_duration_s:
                 return Settled(pp, rms, False, UNDECIDED, duration)
+            if onset_rate > 0 and fast_forward(stepper, windows, options):
+                windows = []
         windows.append(stepper.advance())
+
+
+#: A growth that is linear is scaled up, not waited for, while its departure is below
+#: this fraction of the room it has (the tool's to leave the cut, the ball's to its walls).
+LINEAR_ROOM = 0.25
+
+
+def fast_forward(stepper: CutStepper, windows: list, options: VerdictOptions) -> bool:
+    """Jump a linear growth ahead: while a knock grows (the onset chatters), the tool has
+    never left the cut and a frictionless ball has never touched a wall, the run is
+    linear, so its departure from the steady cut is scaled up (CutStepper.scale) until it
+    fills LINEAR_ROOM of the room left; the run is the same, reached sooner.  Whether it
+    jumped."""
+    system = stepper.system
+    d = system.damper
+    if system.kind != "ball" or d.friction_force_n > 0:
+        return False
+    if any(w.left_cut or w.impacts for w in windows):
+        return False
+    half_gap = d.gap_m / 2
+    y0 = abs(stepper.x_start[2 * system.bar.n_modes])
+    last = windows[-1]
+    feed = stepper.forcing.feed_m
+    room = min((half_gap - y0) / max(last.max_rel_m - y0, 1e-300),
+               0.5 * feed / max(last.half_pp_m, 1e-300))
+    factor = LINEAR_ROOM * room
+    if factor < 2.0:
+        return False
+    stepper.scale(factor)
+    return True
 
 
 def _pp(windows) -> float:

@@ -199,7 +199,7 @@ def analytic_speeds(args) -> tuple[float, ...]:
     if measured is not None:
         peak = int(np.argmax(np.abs(measured.receptance)))
         return lobe_speeds([measured.omega[peak] / (2 * math.pi)])
-    return default_speeds(many_cases(args)[0])
+    return default_speeds(many_cases(args)[0], getattr(args, "workpiece", None))
 
 
 def _sources(args, kr, rpm, dense):

@@ -195,7 +195,7 @@ def _cmd_lobes(args) -> Outcome:
 def _lobe_options(args, cases) -> LobesOptions:
     """The lobe grid and cut of the command line, checked under the options' names;
     the speeds, when --rpm is not given, are the cases' lobes (the library's rule)."""
-    rpm = (default_speeds(cases) if args.rpm is None
+    rpm = (default_speeds(cases, args.workpiece) if args.rpm is None
            else check_speeds("--rpm", parse_range(args.rpm, "--rpm")))
     for r in rpm:
         check_rpm(r, args)

@@ -342,7 +342,9 @@ class Lobes(Analysis):
     module = lobes_mod
     options = {
         "method": Setting("str", "search", choices=lobes_mod.METHODS),
-        "criterion": Setting("str", "zero", choices=lobes_mod.CRITERIA),
+        "criterion": Setting("str", None, choices=lobes_mod.CRITERIA,
+                             doc="default: growth (the converged verdict), zero (published) "
+                                 "where every bar is the paper preset's"),
         "depth_step_mm": Setting("float", None, 0.0, 1.0, True,
                                  doc="a linear grid; default: none (the search's geometric "
                                      "grid, a scan's 0.01)"),
@@ -357,7 +359,8 @@ class Lobes(Analysis):
     def default_axes(self, study):
         """The speeds of the study's bars' lobes (:func:`~boringbar.analysis.lobes.
         default_speeds`, as ``lobes`` takes them)."""
-        return {"rpm": lobes_mod.default_speeds(study_cases(study)[0])}
+        return {"rpm": lobes_mod.default_speeds(study_cases(study)[0],
+                                                study.value("workpiece"))}
 
     def plan(self, study):
         cases, values = study_cases(study)
