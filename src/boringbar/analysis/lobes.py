@@ -87,6 +87,8 @@ from boringbar.analysis.lobe_search import (
     column,
     fixed_cut,
     growth_column,
+    not_free,
+    onset_chatters,
     onset_depth,
 )
 from boringbar.analysis.sweep import Case, as_cases
@@ -586,16 +588,14 @@ def _column_limits(plan: Plan, results: list[dict], depths: np.ndarray, a: dict)
             limit[i, j], first[i, j] = _limits(chosen, depths)
             continue
         onset[i, j] = onset_depth(done, o.depths)
-        free = np.where(a["verdict"][i, j] == UNDECIDED, a["onset"][i, j], a["verdict"][i, j])
+        free, grows = (np.full(len(depths), NOT_RUN, dtype=np.int8) for _ in range(2))
+        for k, res in done.items():  # an undecided run counts as the search counted it
+            free[k - 1] = CHATTER if not_free(res) else STABLE
+            grows[k - 1] = CHATTER if onset_chatters(res) else STABLE
         limit[i, j], first[i, j] = _limits(free, depths)
-        if first[i, j] == _first_onset(a["onset"][i, j], depths):
+        if first[i, j] == _limits(grows, depths)[1]:
             limit[i, j] = onset[i, j]  # the chatter-free depth is the onset itself
     return limit, first, onset
-
-
-def _first_onset(codes: np.ndarray, depths: np.ndarray) -> float:
-    idx = np.flatnonzero((codes == CHATTER) | (codes == UNDECIDED))
-    return float(depths[idx[0]]) if idx.size else math.nan
 
 
 def _limit_variables(limit, first, onset, growth: bool) -> dict:

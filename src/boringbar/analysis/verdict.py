@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import stats
 
-from boringbar._validate import ParameterError, check_int, check_range, check_values
+from boringbar._validate import check_int, check_range, check_values
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
 from boringbar.simulate import CutStepper, Window, knocked_cut
@@ -369,10 +369,16 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     else:
         settled.append(settle(stepper, windows, options, onset_s, rate))
         ok = [acceptable(settled[0], options)]
-    for knock in options.knocks_m:
-        settled.append(settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0))
-        ok.append(acceptable(settled[-1], options))
+    big = knocked(system, cut, options, dt_s)
+    settled += big
+    ok += [acceptable(x, options) for x in big]
     return CutVerdict(verdict, rate, se, onset_s, _all_of(ok), tuple(settled))
+
+
+def knocked(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float) -> list:
+    """The settled vibration from each large knock of ``options.knocks_m``."""
+    return [settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0)
+            for knock in options.knocks_m]
 
 
 def _all_of(ok: list) -> bool | None:
@@ -386,8 +392,6 @@ def _noisy(system: System, cut: Regenerative, options: VerdictOptions, dt_s: flo
     vibrating, so a small knock's growth rate has no sign to find.  Every start is run
     until its vibration settles, and judged by it alone (onset UNDECIDED, its rate the
     settled run's)."""
-    settled = [settle(stepper, [], options, 0.0)]
-    for knock in options.knocks_m:
-        settled.append(settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0))
+    settled = [settle(stepper, [], options, 0.0), *knocked(system, cut, options, dt_s)]
     return CutVerdict(UNDECIDED, math.nan, math.nan, 0.0,
                       _all_of([acceptable(x, options) for x in settled]), tuple(settled))

@@ -30,12 +30,12 @@ from boringbar.cli.options import (
     wrote,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic
+from boringbar.model.cutting import CuttingLaw
 from boringbar.model.frf_units import (
     ImplausibleFrfWarning,
     implausible_frf,
     plausibility_warning,
 )
-from boringbar.model.cutting import CuttingLaw
 from boringbar.model.measured_frf import read_frf
 from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
 from boringbar.plot_style import system_label
