@@ -15,6 +15,7 @@ import numpy as np
 from boringbar.analysis.design_options import DesignOptions
 from boringbar.analysis.lobes import lobes
 from boringbar.analysis.sweep import Case
+from boringbar.analysis.verdict import judge
 from boringbar.execute import Execution, run_points
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
@@ -39,10 +40,16 @@ def rms_runs(task) -> list[float]:
 
 
 def _cut(task) -> tuple[float, bool]:
-    """(steady amplitude m, chatter) of one cut."""
-    system, rpm, depth, duration = task
-    c = simulate(system, Regenerative(depth_m=depth, rpm=rpm), duration_s=duration,
-                 integrator=CUT_INTEGRATOR, record_every=0).cutting
+    """(amplitude m, chatter) of one cut: under the converged verdict half the settled
+    tip peak-to-peak and not chatter-free (undecided counts as chatter); under a fixed
+    criterion the steady amplitude of a run of ``duration`` and the force reaching zero."""
+    system, rpm, depth, duration, criterion = task
+    cut = Regenerative(depth_m=depth, rpm=rpm)
+    if criterion == "growth":
+        v = judge(system, cut)
+        return 0.5 * v.settled_pp_m, v.chatter_free is not True
+    c = simulate(system, cut, duration_s=duration, integrator=CUT_INTEGRATOR,
+                 record_every=0).cutting
     return float(c["amplitude_m"]), bool(c["chatter"])
 
 
@@ -90,7 +97,7 @@ def objective_samples(options: DesignOptions, objective: str,
         rms = np.array(run_points(rms_runs, tasks, execution=execution))
         return (rms.max(axis=1) if options.band == "worst" else rms.mean(axis=1)), None
     if objective == "cut_amplitude":
-        tasks = [(s, options.rpm, options.depth_m, options.duration_s)
+        tasks = [(s, options.rpm, options.depth_m, options.duration_s, options.criterion)
                  for s, _ in sampled]
         out = run_points(_cut, tasks, execution=execution)
         return np.array([a for a, _ in out]), np.array([c for _, c in out])

@@ -26,7 +26,7 @@ OBJECTIVES = {"rms_band": ("harmonic runs", "minimize"),
 BAND_REDUCTIONS = ("worst", "mean")
 STATISTICS = ("mean", "quantile", "max", "chatter_probability")
 SAMPLERS = ("tpe", "cmaes", "nsga2")
-CRITERIA = ("zero", "bounded")
+CRITERIA = ("growth", "zero", "bounded")
 #: variable -> (bars it applies to, unit, lowest allowed, highest allowed), SI
 VARIABLES = {
     "gap_m": (("ball",), "m", 0.0, MAX_GAP),
@@ -182,9 +182,12 @@ class DesignOptions:
     mean. cut_amplitude: the steady amplitude of a cut at ``rpm`` and ``depth_m``
     (m). min_depth: the minimum chatter-free depth over ``rpms``, each speed's limit
     found by the lobes' search up to ``max_depth_m`` (m) to ``depth_tolerance`` of
-    itself (:meth:`lobes_options`), by ``criterion``: "zero", the force reaches zero,
-    or "bounded". Runs last ``duration_s`` with ``integrator`` (a cut takes rk4);
-    ``preset``. Every quantity is SI (design files take mm: docs/design.md)."""
+    itself (:meth:`lobes_options`), by ``criterion`` as the lobes judge a cut: "growth"
+    (the converged verdict; the default, "zero" under the paper preset: the force
+    reaches zero) or "bounded"; under "growth" cut_amplitude is half the settled tip
+    peak-to-peak of a knocked cut (0 where the knock dies out). Fixed runs last
+    ``duration_s`` with ``integrator`` (a cut takes rk4); ``preset``. Every quantity is
+    SI (design files take mm: docs/design.md)."""
 
     bar: str
     variables: tuple[Variable, ...]
@@ -197,7 +200,7 @@ class DesignOptions:
     rpms: tuple[float, ...] = (900.0, 1200.0, 1500.0)
     max_depth_m: float = 1e-3
     depth_tolerance: float = DEPTH_TOLERANCE
-    criterion: str = "zero"
+    criterion: str | None = None
     uncertain: tuple[Uncertain, ...] = ()
     samples: int = 1
     statistic: str = "mean"
@@ -226,6 +229,9 @@ class DesignOptions:
         check_choice("band", self.band, BAND_REDUCTIONS)
         check_choice("statistic", self.statistic, STATISTICS)
         check_choice("sampler", self.sampler, SAMPLERS)
+        if self.criterion is None:  # the lobes' default (lobes.criterion_for)
+            object.__setattr__(self, "criterion", "zero" if self.preset == "paper"
+                               else "growth")
         check_choice("criterion", self.criterion, CRITERIA)
         if self.statistic == "chatter_probability" and objectives != ("cut_amplitude",):
             raise ParameterError("statistic = 'chatter_probability' goes with objective "
