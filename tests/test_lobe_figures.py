@@ -147,8 +147,8 @@ def test_simulated_lobes_mark_the_users_speed_with_each_limit_there(simulated):
     for ax, text, limit in zip(axes, readouts, simulated["limit_depth_m"].values[:, j],
                                strict=True):
         assert len(_speed_lines(ax, AT)) == 1
-        assert text == "your speed 1200 rpm: " + (f"{limit * 1e3:.3g} mm" if limit > 0 else
-                                                  "no chatter up to 1 mm")
+        assert text == "your speed 1200 rpm: " + ("no chatter up to 1 mm" if np.isnan(limit)
+                                                  else f"{limit * 1e3:.3g} mm")
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert "your speed 1200 rpm" in labels
     # at_rpm given overrides the file's; a speed off the grid is refused, not interpolated

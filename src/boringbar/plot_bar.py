@@ -5,6 +5,7 @@ plot.py). Receptances are drawn in um/N, lengths in mm."""
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -235,8 +236,10 @@ def plot_lobes(ds, at_rpm: float | None = None, *, fig=None) -> Figure:
         ax.set_visible(False)
     handles, labels = axes[0].get_legend_handles_labels()  # the user's speed
     legend.update(zip(labels, handles, strict=True))
-    fig.legend(list(legend.values()), list(legend), loc="outside lower center",
-               ncol=min(len(legend), 2), fontsize="small", frameon=False)
+    # two columns of labels at most 48 characters wide fit the report's column
+    fig.legend(list(legend.values()), [textwrap.fill(k, 48) for k in legend],
+               loc="outside lower center", ncol=min(len(legend), 2), fontsize="small",
+               frameon=False)
     a = ds.attrs
     # files written before the lobes named their law: the linear law's Kr
     law = a.get("cutting_law") or f"Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa"
