@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from bokeh.models import Legend, LinearScale
 
 import boringbar as bb
 from boringbar._validate import ParameterError
@@ -30,6 +31,7 @@ from boringbar.reference.stability import limit_at_speeds
 from boringbar.webapp import views
 from boringbar.webapp.commands import commands
 from boringbar.webapp.design_state import Design
+from boringbar.webapp.figures import READOUT, LobesFigure
 from boringbar.webapp.jobs import Latest, Superseded
 from boringbar.webapp.search import (
     CHATTER_SAMPLES,
@@ -140,6 +142,31 @@ def test_the_lobes_view_gives_each_bars_analytic_limit(published):
     assert lv["rpm"][0] <= 1000.0  # the design speed inside the band
     assert lv["rpm"][-1] >= 60 * 525.2  # lobe 1 of the ball bar (f1 525.2 Hz)
     assert lv["depth_at_mm"]["tmd"] > lv["depth_at_mm"]["solid"]
+
+
+def test_the_lobes_figure_reads_the_design_speed_on_a_linear_depth_axis(published):
+    """The page's lobes: depth on a linear axis from 0 whose top fits the curves (lobe 1's
+    peak cut, and said so), speed ticks labelled across the band, the legend below the
+    plot, the design's speed a line with each bar's depth there marked and read out; the
+    view's command marks it too."""
+    lv = views.lobes_view(published)
+    f = LobesFigure()
+    f.show(lv, None)
+    assert isinstance(f.fig.y_scale, LinearScale) and f.fig.y_range.start == 0
+    floors = [float(np.min(c)) for c in lv["curves"].values()]
+    peak = max(float(np.max(c)) for c in lv["curves"].values())
+    assert 1.99 * max(floors) <= f.fig.y_range.end < peak  # the pockets in view, a peak cut
+    assert f"peaks up to {peak:.3g} mm" in f.fig.title.text
+    ticks = [t for t in f.fig.xaxis.ticker.ticks if f.fig.x_range.start <= t <= f.fig.x_range.end]
+    assert min(ticks) <= 1.25 * lv["rpm"][0] and max(ticks) >= lv["rpm"][-1] / 1.25
+    assert any(isinstance(m, Legend) for m in f.fig.below)  # off the curves
+    assert not any(isinstance(m, Legend) for m in f.fig.center)
+    assert f.speed.location == published.settings.rpm == 1200.0
+    assert f.at.data["b"] == list(lv["depth_at_mm"].values())
+    for kind, depth in lv["depth_at_mm"].items():
+        assert f"{READOUT[kind]} {depth:.3g} mm" in f.readout.text
+    assert f.readout.text.startswith("your speed 1200 rpm")
+    assert "--at-rpm 1200" in commands(published, "p.toml")["lobes"]
 
 
 def test_the_search_is_a_design_file_the_command_reads(published, tmp_path):
@@ -341,6 +368,22 @@ def test_a_change_stops_the_simulated_lobes_and_the_page_answers(browser, server
     simulated = page.locator(".status-simulated").evaluate(
         "e => (e.shadowRoot || e).textContent")
     assert "simulating" not in simulated and "simulated cuts in" not in simulated
+    page.context.close()
+
+
+def test_the_lobes_view_reads_out_the_design_speed(browser, server):
+    """The design's speed on the page's lobes: its depths read out above the plot, and
+    read again at a new speed."""
+    page = _open(browser, server)
+    page.get_by_text("Response and lobes").click()
+    page.wait_for_selector(".status-lobes >> text=change 0: drawn in", timeout=60_000)
+    text = "() => Bokeh.documents[0].get_model_by_name('lobes-readout').text"
+    assert page.evaluate(text).startswith("your speed 1200 rpm (dash-dot line): solid ")
+    _set(page, "rpm", "2000")
+    page.wait_for_selector(".status-lobes >> text=change 1: drawn in", timeout=60_000)
+    assert page.evaluate(text).startswith("your speed 2000 rpm (dash-dot line): solid ")
+    assert page.evaluate("n => Array.from(Bokeh.documents[0].get_model_by_name(n).data.rpm)",
+                         "lobes-at-rpm") == [2000, 2000, 2000]
     page.context.close()
 
 

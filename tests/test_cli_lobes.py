@@ -18,6 +18,8 @@ from boringbar.analysis.lobes import default_speeds
 from boringbar.analysis.sweep import published_cases
 from boringbar.cli.main import main
 from boringbar.model.system_file import load_system
+from boringbar.plot import plot_lobes
+from boringbar.reference.stability import limit_at_speeds
 
 #: A solid-bar lobe grid that has both stable and chattering points in 0.3 s runs of the
 #: published criterion.
@@ -109,6 +111,54 @@ def test_analytic_lobes_default_to_the_bars_speeds(tmp_path, capsys):
     assert speeds["mine"][0] < speeds["published"][0]  # a longer, softer bar: slower lobes
 
 
+def test_lobes_at_rpm_outside_the_grid_joins_it_and_is_read_out(tmp_path, capsys):
+    """--at-rpm beyond --rpm: the speed is cut too (its limit computed, not interpolated),
+    the JSON reads it out, and lobes.nc keeps it for the figure drawn again."""
+    out = tmp_path / "lobes"
+    assert main(["lobes", *SMALL, "--method", "scan", "--at-rpm", "1150", "--out", str(out),
+                 "--json"]) == 0
+    s = json_out(capsys)
+    assert s["at_rpm"] == 1150
+    (case,) = s["cases"]
+    assert [v["rpm"] for v in case["speeds"]] == [1000, 1050, 1100, 1150]
+    assert case["depth_at_rpm_m"] == case["speeds"][3]["limit_depth_m"]
+    assert 0 < case["depth_at_rpm_m"] < 0.2e-3
+    with xr.open_dataset(out / "lobes.nc") as ds:
+        assert ds.attrs["at_rpm"] == 1150
+        readout = plot_lobes(ds.load()).axes[0].texts[0].get_text()
+    assert readout == f"your speed 1150 rpm: {case['depth_at_rpm_m'] * 1e3:.3g} mm"
+
+
+def test_lobes_at_rpm_in_the_summary_line(tmp_path, capsys):
+    assert main(["lobes", *SMALL[:2], "--rpm", "1100", "--at-rpm", "1100", *SMALL[4:],
+                 "--out", str(tmp_path)]) == 0
+    line = capsys.readouterr().out.splitlines()[0]
+    assert line.startswith("solid: minimum chatter-free depth ")
+    assert line.endswith(" at 1100 rpm; at your speed 1100 rpm: " + line.split()[4] + " mm")
+
+
+def test_analytic_lobes_at_rpm_below_the_default_speeds_joins_them(tmp_path, capsys):
+    """A speed below the bars' default speeds joins them, exactly, and each bar's
+    frequency-domain limit there is read out."""
+    cases = published_cases(("solid", "tmd"))
+    expected = default_speeds(cases)
+    at = float(round(0.6 * expected[0]))
+    assert main(["lobes", "--analytic", "--bar", "solid,tmd", "--at-rpm", f"{at:g}",
+                 "--out", str(tmp_path), "--json"]) == 0
+    s = json_out(capsys)
+    assert s["at_rpm"] == at
+    for case, system in zip(s["cases"], cases, strict=True):
+        assert [v["rpm"] for v in case["speeds"]] == [at, *expected]
+        assert case["depth_at_rpm_m"] == case["speeds"][0]["limit_m"]
+        assert case["depth_at_rpm_m"] == pytest.approx(
+            limit_at_speeds(system.system, [at])[0], rel=1e-9)
+    main(["lobes", "--analytic", "--bar", "solid", "--at-rpm", f"{at:g}", "--out",
+          str(tmp_path)])
+    first = capsys.readouterr().out.splitlines()[0]
+    depth = s["cases"][0]["depth_at_rpm_m"] * 1e3
+    assert first.endswith(f"; at your speed {at:g} rpm: {depth:.4g} mm")
+
+
 def test_simulate_cut_stop_at_zero_reports_chatter(tmp_path, capsys):
     out = tmp_path / "cut"
     assert main(["simulate", "--bar", "solid", "--rpm", "1200", "--depth-mm", "0.2",
@@ -153,6 +203,12 @@ def test_simulate_cut_text(tmp_path, capsys):
     (["lobes", "--feed-mm", "-0.1"], "--feed-mm"),
     (["lobes", "--method", "guess"], "--method"),
     (["lobes", "--bar", "solid", "--gap-mm", "0.1"], "--gap-mm"),
+    (["lobes", "--at-rpm", "0"], "--at-rpm = 0"),
+    (["lobes", "--at-rpm", "-1200"], "--at-rpm"),
+    (["lobes", "--at-rpm", "nan"], "--at-rpm"),
+    (["lobes", "--at-rpm", "fast"], "--at-rpm"),
+    (["lobes", "--at-rpm", "0.01"], "--at-rpm"),  # a delay history past the allowed rows
+    (["lobes", "--analytic", "--at-rpm", "0"], "--at-rpm = 0"),
 ])
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, name):
     out = tmp_path / "out"

@@ -1,4 +1,6 @@
-"""Figures of runs, sweeps and stability lobes (matplotlib; the edge of the package).
+"""Figures of runs, sweeps, lobe examples, bifurcation diagrams and basins (matplotlib;
+the edge of the package); the lobes themselves are drawn by :mod:`boringbar.plot_bar`
+(:func:`plot_lobes` is imported here too).
 
 Only the command line and users import this module; the core never imports
 matplotlib.  Figures are built as ``matplotlib.figure.Figure`` objects and
@@ -20,12 +22,14 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
+from boringbar.plot_bar import plot_lobes  # noqa: F401 (boringbar.plot.plot_lobes)
 from boringbar.plot_style import (
     BAR_STYLE,
     COLUMN_WIDTH_IN,
     GREY,
     OKABE_ITO,
     bar_colour,
+    case_title,
     legend_below,
     series_colour,
     set_title,
@@ -345,128 +349,7 @@ def _cut_guides(axes, static_m: float, mean_force: float, first_zero, labels: bo
                        label=lab("first zero of the force") if k == 0 else None)
 
 
-# --- stability lobes -------------------------------------------------------------
-
-#: Marker styles of the lobe grid points.
-LOBE_STYLE = {
-    "stable": dict(marker="o", mfc="none", mec=OKABE_ITO["bluish green"],
-                   color=OKABE_ITO["bluish green"], mew=1.2),
-    "bounded": dict(marker="^", mfc="none", mec=OKABE_ITO["orange"], color=OKABE_ITO["orange"],
-                    mew=1.2),
-    "chatter": dict(marker="x", color=OKABE_ITO["vermillion"], mew=1.4),
-    "undecided": dict(marker="s", mfc="none", mec="0.45", color="0.45", mew=1.0),
-}
-
-
-def case_title(label: str, bar: str, gap: float, friction: str) -> str:
-    """'ball gap=0.5mm friction=on' -> 'ball damper, gap 0.5 mm, friction on'."""
-    if bar == "ball":
-        return f"ball damper, gap {gap * 1e3:g} mm, friction {friction}"
-    return {"solid": "solid bar", "tmd": "TMD bar"}.get(bar, str(label))
-
-
-def plot_lobes(ds, *, fig=None) -> Figure:
-    """Stability lobes in the layout of the published panels, as a Figure.
-
-    One panel per case: depth of cut (mm) against spindle speed (rpm); every
-    grid point that was run marked stable (open green circle), chatter under
-    the published criterion (red cross) or bounded chatter only (open orange
-    triangle: the force stays above zero but the steady amplitude exceeds the
-    bounded threshold); the limit line (limiting chatter-free depth per speed,
-    under the dataset's criterion) and, for the linear bars, the analytic
-    limit over ``fine_rpm``.  The minimum chatter-free depth is in each
-    panel's title.
-    """
-    n = ds.sizes["case"]
-    ncol = 1 if n == 1 else 2
-    nrow = math.ceil(n / ncol)
-    if fig is None:
-        fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.6 * nrow + 2.0), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(nrow, ncol, sharex=True, squeeze=False).ravel())
-    legend: dict[str, object] = {}
-    for i in range(n):
-        _lobe_panel(axes[i], ds, i, legend)
-        if i // ncol == nrow - 1 or i + ncol >= n:
-            axes[i].set_xlabel("spindle speed (rpm)")
-            axes[i].tick_params(labelbottom=True)
-        if i % ncol == 0:
-            axes[i].set_ylabel("depth of cut b (mm)")
-    for ax in axes[n:]:
-        ax.set_visible(False)
-    fig.legend(list(legend.values()), list(legend), loc="outside lower center",
-               ncol=min(len(legend), 2), fontsize="small", frameon=False)
-    a = ds.attrs
-    # files written before the lobes named their law: the linear law's Kr
-    law = a.get("cutting_law") or f"Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa"
-    set_title(fig, f"stability lobes by time-domain simulation ({a.get('method', '?')})", a,
-              f"{a.get('method_text', '')}; {law}, feed {a.get('feed_m', math.nan) * 1e3:g} "
-              "mm/rev")
-    return fig
-
-
-def _verdict_masks(ds, i: int) -> tuple[dict, dict]:
-    """The grid points of case ``i`` by verdict, and their legend entries."""
-    v = ds["verdict"].values[i]
-    if ds.attrs.get("criterion") == "growth":
-        onset = ds["onset"].values[i]
-        return ({"stable": (v == 1) & (onset == 1), "bounded": (v == 1) & (onset != 1),
-                 "chatter": v == 0, "undecided": v == 2},
-                {"stable": "chatter-free: a small knock dies out",
-                 "bounded": "chatter-free: the knock grows, the ball bounds it within the "
-                            "tolerance",
-                 "chatter": "chatter: the vibration grows past the tolerance or the tool "
-                            "leaves the cut",
-                 "undecided": "undecided: the longest run allowed came first"})
-    vb = ds["verdict_bounded"].values[i]
-    return ({"stable": (v == 1) & (vb == 1), "bounded": (v == 1) & (vb == 0), "chatter": v == 0},
-            {"stable": "stable", "bounded": "bounded chatter only (force stays > 0)",
-             "chatter": "chatter (force reaches zero)"})
-
-
-def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
-    rpm = ds["rpm"].values
-    depth_mm = ds["depth_m"].values * 1e3
-    v = ds["verdict"].values[i]
-    rr, dd = np.meshgrid(rpm, depth_mm, indexing="ij")
-    run = v >= 0
-    levels = np.flatnonzero(run.any(axis=0))
-    top = depth_mm[levels[-1]] if levels.size else depth_mm[-1]
-    ms = float(np.clip(150.0 / max(levels.size, 1), 2.0, 6.5))
-    masks, names = _verdict_masks(ds, i)
-    for key, mask in masks.items():
-        if mask.any():
-            h, = ax.plot(rr[mask], dd[mask], ls="none", ms=ms, **LOBE_STYLE[key])
-            legend.setdefault(names[key], h)
-    limit = ds["limit_depth_m"].values[i] * 1e3
-    h, = ax.plot(rpm, limit, color="black", lw=1.6, marker=".", ms=4, zorder=1.5)
-    legend.setdefault("chatter-free depth" if ds.attrs.get("criterion") == "growth"
-                      else "limit: last stable depth below the first chatter", h)
-    if "onset_depth_m" in ds and str(ds["bar"].values[i]) == "ball":
-        h, = ax.plot(rpm, ds["onset_depth_m"].values[i] * 1e3, color="black", lw=1.0, ls="--")
-        legend.setdefault("onset: a small knock starts to grow (the ball not yet at a wall)", h)
-    ymax = top
-    if "analytic_curve_m" in ds and np.isfinite(ds["analytic_curve_m"].values[i]).any():
-        curve = ds["analytic_curve_m"].values[i] * 1e3
-        h, = ax.plot(ds["fine_rpm"].values, curve, color=OKABE_ITO["blue"], lw=1.0)
-        legend.setdefault("analytic limit (linear, frequency domain)", h)
-        on_grid = ds["analytic_limit_m"].values[i] * 1e3
-        ymax = max(ymax, min(float(np.nanmax(on_grid)), 3 * top))
-    ax.set_ylim(0, 1.08 * ymax)
-    pad = 0.5 * (rpm[1] - rpm[0]) if rpm.size > 1 else 25.0
-    ax.set_xlim(rpm.min() - pad, rpm.max() + pad)
-    ax.grid(alpha=0.3)
-    title = case_title(ds["case"].values[i], str(ds["bar"].values[i]),
-                       float(ds["gap_m"].values[i]), str(ds["friction"].values[i]))
-    mcf = float(ds["min_chatter_free_depth_m"].values[i])
-    if np.isfinite(limit).any() and math.isfinite(mcf):
-        j = int(np.nanargmin(limit))
-        ax.plot([rpm[j]], [limit[j]], ls="none", marker="*", ms=11, color="black",
-                mfc="gold", zorder=5)
-        sub = f"min chatter-free depth {mcf * 1e3:.3g} mm at {rpm[j]:g} rpm"
-    else:
-        sub = f"no chatter up to {top:.3g} mm"
-    ax.set_title(f"{title}\n{sub}", fontsize="small")
-
+# --- lobe examples (the lobes themselves: plot_bar.plot_lobes) ----------------------
 
 def plot_lobe_examples(ds, *, fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for the

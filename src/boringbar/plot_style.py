@@ -120,6 +120,13 @@ def system_words(system: dict) -> str:
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(kind, str(kind))
 
 
+def case_title(label: str, bar: str, gap: float, friction: str) -> str:
+    """'ball gap=0.5mm friction=on' -> 'ball damper, gap 0.5 mm, friction on'."""
+    if bar == "ball":
+        return f"ball damper, gap {gap * 1e3:g} mm, friction {friction}"
+    return {"solid": "solid bar", "tmd": "TMD bar"}.get(bar, str(label))
+
+
 def legend_below(fig, axes, ncol: int | None = None) -> None:
     """One legend below the panels, each label once, from every axis in ``axes``."""
     entries: dict[str, object] = {}

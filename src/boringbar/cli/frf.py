@@ -27,6 +27,7 @@ from boringbar.cli.options import (
     resolve_files,
     system_spec,
     warn_line,
+    with_speed,
     wrote,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic
@@ -52,7 +53,7 @@ from boringbar.reference.stability import (
 )
 
 #: Speeds at which the figure's lower envelope is evaluated.
-ENVELOPE_SPEEDS = 600
+ENVELOPE_SPEEDS = 1000
 
 
 def add_fit_frf(sub) -> None:
@@ -135,27 +136,37 @@ def _band(text: str) -> tuple[float, float]:
 def analytic_lobes_outcome(args, law: CuttingLaw, feed_m: float) -> Outcome:
     """``lobes --analytic``: the classical lobes of each case's tip FRF, or of the
     measured FRF of --frf as it is, with the slope of the cutting ``law`` at the feed
-    ``feed_m`` (m) for Kr; no time-domain cut is simulated."""
+    ``feed_m`` (m) for Kr; no time-domain cut is simulated.  With --at-rpm, that speed
+    is among the speeds (and the figure's), each case's depth there read out."""
     kr = law.linear_coefficient_pa(feed_m)
     check_positive("--kr-mpa", kr * 1e-6, "MPa")
+    at = None if args.at_rpm is None else check_positive("--at-rpm", args.at_rpm, "rev/min")
     resolve_files(args, [])
-    rpm = np.asarray(parse_range(args.rpm, "--rpm") if args.rpm else
-                     analytic_speeds(args), dtype=float)
+    rpm = parse_range(args.rpm, "--rpm") if args.rpm else analytic_speeds(args)
     for r in rpm:
         check_positive("--rpm", r, "rev/min")
+    rpm = np.asarray(with_speed(rpm, at), dtype=float)
     lo, hi = (rpm.min(), rpm.max()) if len(rpm) > 1 else (0.8 * rpm[0], 1.2 * rpm[0])
-    dense = np.linspace(lo, hi, ENVELOPE_SPEEDS)
+    # evenly in log rpm, as the figure's speed axis (linear over a narrow range, where
+    # the two hardly differ): every part of the axis drawn as finely
+    dense = np.asarray(with_speed(np.geomspace(lo, hi, ENVELOPE_SPEEDS), at), dtype=float)
+    j = None if at is None else int(np.flatnonzero(rpm == at)[0])
     rows, curves = [], []
-    for label, w, g, limits in _distinct(_sources(args, kr, rpm, dense)):
-        lobes = lobes_of_receptance(w, g, kr)
-        rows.append({"case": label, "min_limit_m": limits["min_limit"],
-                     "frequency_hz": limits["frequency_hz"],
-                     "speeds": [{"rpm": float(r), "limit_m": float(b)}
-                                for r, b in zip(rpm, limits["limit"], strict=True)]})
-        curves.append((label, lobes, dense, limits["envelope"]))
+    for names, w, g, limits in _distinct(_sources(args, kr, rpm, dense)):
+        row = {"case": names[1], "min_limit_m": limits["min_limit"],
+               "frequency_hz": limits["frequency_hz"],
+               "speeds": [{"rpm": float(r), "limit_m": float(b)}
+                          for r, b in zip(rpm, limits["limit"], strict=True)]}
+        curves.append({"label": names[1], "name": names[0], "kind": names[2],
+                       "lobes": lobes_of_receptance(w, g, kr), "rpm": dense,
+                       "limit_m": limits["envelope"]})
+        if j is not None:
+            row["depth_at_rpm_m"] = curves[-1]["depth_at_rpm_m"] = float(limits["limit"][j])
+        rows.append(row)
     out = Path(args.out)
     files = {"json": out / "lobes_analytic.json", "png": out / "lobes_analytic.png"}
-    summary = {"method": "analytic", "kr_pa": kr, "cutting_law": law.describe(), "cases": rows,
+    summary = {"method": "analytic", "kr_pa": kr, "cutting_law": law.describe(),
+               **({"at_rpm": at} if at is not None else {}), "cases": rows,
                "files": {k: str(v) for k, v in files.items()}}
     measured, spec = getattr(args, "frf_measured", None), system_spec(args)
     if measured is not None:
@@ -163,14 +174,16 @@ def analytic_lobes_outcome(args, law: CuttingLaw, feed_m: float) -> Outcome:
     name = (f"measured FRF {Path(args.frf).name}" if measured is not None
             else f"modal fit {Path(args.frf).name}" if getattr(args, "frf", None)
             else system_label(spec.name) if spec is not None else "published bar")
-    save_figure_atomic(plot_analytic_lobes(curves, (float(lo), float(hi)), name=name),
-                       files["png"])
+    save_figure_atomic(plot_analytic_lobes(curves, (float(lo), float(hi)), name=name,
+                                           at_rpm=at), files["png"])
     write_json_atomic(summary, files["json"])
 
     def text(say) -> None:
         for row in rows:
+            mine = ("" if at is None else
+                    f"; at your speed {at:g} rpm: {row['depth_at_rpm_m'] * 1e3:.4g} mm")
             say(f"{row['case']}: speed-independent limit {row['min_limit_m'] * 1e3:.4g} mm "
-                f"(chatter at {row['frequency_hz']:.1f} Hz)")
+                f"(chatter at {row['frequency_hz']:.1f} Hz){mine}")
             for s in row["speeds"][:12]:
                 say(f"  {s['rpm']:8g} rpm  {s['limit_m'] * 1e3:.4g} mm")
             if len(row["speeds"]) > 12:
@@ -203,13 +216,14 @@ def analytic_speeds(args) -> tuple[float, ...]:
 
 
 def _sources(args, kr, rpm, dense):
-    """(label, w rad/s, tip receptance, limits) of the measured FRF or of each case."""
+    """(label, bar kind or None, w rad/s, tip receptance, limits) of the measured FRF or
+    of each case."""
     measured = getattr(args, "frf_measured", None)
     if measured is not None:
         w, g = measured.omega, measured.receptance
         limits = sampled_limits(w, g, rpm, kr)
         limits["envelope"] = sampled_limits(w, g, dense, kr)["limit"]
-        yield f"measured FRF {Path(args.frf).name}", w, g, limits
+        yield f"measured FRF {Path(args.frf).name}", None, w, g, limits
         return
     cases, _, _ = many_cases(args)
     for case in cases:
@@ -221,20 +235,22 @@ def _sources(args, kr, rpm, dense):
         limits = {"min_limit": low, "frequency_hz": float(w[at] / TWO_PI),
                   "limit": limit_at_speeds(case.system, rpm, kr),
                   "envelope": sampled_limits(w, g, dense, kr)["limit"]}
-        yield case.label, w, g, limits
+        yield case.label, case.system.kind, w, g, limits
 
 
 def _distinct(sources):
-    """The sources with distinct FRFs, labels joined: the free-ball cases share one
-    (in the linear limit the ball does not touch the bar)."""
+    """The sources with distinct FRFs, each as ((its first label, the labels joined, its
+    bar kind), w, g, limits): the free-ball cases share one (in the linear limit the
+    ball does not touch the bar)."""
     out, labels = [], []
-    for label, w, g, limits in sources:
+    for label, kind, w, g, limits in sources:
         same = next((i for i, o in enumerate(out) if o[2].shape == g.shape
                      and np.array_equal(o[2], g)), None)
         if same is None:
-            out.append((label, w, g, limits))
+            out.append((kind, w, g, limits))
             labels.append([label])
         else:
             labels[same].append(label)
-    return [(names[0] + (f" (and {len(names) - 1} more with the same FRF)" if len(names) > 1
-                         else ""), *rest) for names, (_, *rest) in zip(labels, out, strict=True)]
+    return [((names[0], names[0] + (f" (and {len(names) - 1} more with the same FRF)"
+                                    if len(names) > 1 else ""), kind), *rest)
+            for names, (kind, *rest) in zip(labels, out, strict=True)]

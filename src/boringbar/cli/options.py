@@ -427,6 +427,24 @@ def check_rpm(rpm: float, args, name: str = "--rpm") -> float:
     return float(rpm)
 
 
+AT_RPM_HELP = ("your spindle speed in rev/min (> 0): added to the speeds exactly (the grid "
+               "reaches it if it lies outside), marked on the figure with each bar's "
+               "chatter-free depth there, which the summary reads out (JSON: at_rpm, and "
+               "depth_at_rpm_m per case)")
+
+
+def with_speed(rpm, at_rpm: float | None) -> tuple[float, ...]:
+    """The speeds ``rpm`` with the user's speed ``at_rpm`` (``--at-rpm``; None: none)
+    among them exactly: in place of a speed within round-off of it, else inserted in
+    order, so the grid reaches it when it lies outside and its depth is computed, not
+    interpolated between two speeds."""
+    rpm = [float(r) for r in rpm]
+    if at_rpm is None:
+        return tuple(rpm)
+    return tuple(sorted([r for r in rpm if not math.isclose(r, at_rpm, rel_tol=1e-9)]
+                        + [float(at_rpm)]))
+
+
 def check_depth(depth_mm: float, name: str) -> float:
     """A depth of cut in mm, (0, MAX_DEPTH]."""
     return check_range(name, depth_mm, 0, MAX_DEPTH * 1e3, lo_open=True, unit="mm")

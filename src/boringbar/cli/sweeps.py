@@ -23,6 +23,7 @@ from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sweep import SweepOptions, default_ratios, parse_range, sweep
 from boringbar.cli.frf import analytic_lobes_outcome
 from boringbar.cli.options import (
+    AT_RPM_HELP,
     PATTERN_KEY,
     Outcome,
     add_common,
@@ -41,6 +42,7 @@ from boringbar.cli.options import (
     many_cases,
     progress_printer,
     verdict_options,
+    with_speed,
     wrote,
 )
 from boringbar.model.forcing import MAX_DEPTH
@@ -72,6 +74,7 @@ def add_lobes(sub) -> None:
                    help="spindle speeds in rev/min, START:STOP:STEP (inclusive) or comma list "
                         "(default: the bars' lobes 1 to 5, from 60 f1 / 6.1 to 60 f1 / 0.9, "
                         "10 speeds per lobe; published: 900:1600:50)")
+    g.add_argument("--at-rpm", type=float, metavar="N", help=AT_RPM_HELP)
     g.add_argument("--analytic", action="store_true",
                    help="the classical frequency-domain lobes of the tip FRF instead of "
                         "simulated cuts (with --frf: of a measured FRF as it is); writes "
@@ -174,14 +177,16 @@ def _cmd_lobes(args) -> Outcome:
     ds = lobes(cases, options, integration=integ, execution=execution(args),
                progress=progress_printer(args, "lobes", "(case, speed) columns"))
 
+    if args.at_rpm is not None:  # the figure drawn again from lobes.nc marks it too
+        ds.attrs["at_rpm"] = float(args.at_rpm)
     exds = None
     if args.examples:
         exds = lobe_examples(ds, cases[0], options, integration=integ, rows=HISTORY_ROWS)
-    summary = lobes_files(ds, args.out, exds)
+    summary = _at_rpm_summary(ds, lobes_files(ds, args.out, exds))
     examples = summary.get("examples", [])
 
     def text(say) -> None:
-        say(_lobes_text(ds))
+        say(_lobes_text(ds, summary))
         for e in examples:
             verdict = (f"chatter (force first zero at {e['first_zero_time_s']:.3g} s)"
                        if e["chatter"] else "stable (force never zero)")
@@ -199,6 +204,8 @@ def _lobe_options(args, cases) -> LobesOptions:
            else check_speeds("--rpm", parse_range(args.rpm, "--rpm")))
     for r in rpm:
         check_rpm(r, args)
+    if args.at_rpm is not None:
+        rpm = with_speed(rpm, check_rpm(args.at_rpm, args, "--at-rpm"))
     step, tol = args.depth_step_mm, args.depth_tolerance
     if depth_grid(args.method, step, tol, ("--depth-step-mm", "--depth-tolerance")) == "linear":
         step = check_depth(PUBLISHED_DEPTH_STEP * 1e3 if step is None else step,
@@ -223,7 +230,19 @@ def _lobe_options(args, cases) -> LobesOptions:
                         verdict=verdict_options(args))
 
 
-def _lobes_text(ds) -> str:
+def _at_rpm_summary(ds, summary: dict) -> dict:
+    """The summary with the user's speed (``ds.attrs["at_rpm"]``, on the grid) and each
+    case's limiting depth there (None: no chatter up to the deepest cut)."""
+    if "at_rpm" not in ds.attrs:
+        return summary
+    at = float(ds.attrs["at_rpm"])
+    j = int(np.flatnonzero(ds["rpm"].values == at)[0])
+    for case in summary["cases"]:
+        case["depth_at_rpm_m"] = case["speeds"][j]["limit_depth_m"]
+    return {**summary, "at_rpm": at}
+
+
+def _lobes_text(ds, summary: dict) -> str:
     lines = []
     analytic = ds["analytic_limit_m"].values if "analytic_limit_m" in ds else None
     depths = ds["depth_m"].values
@@ -239,7 +258,12 @@ def _lobes_text(ds) -> str:
         mcf = float(ds["min_chatter_free_depth_m"].values[i])
         at = (f" at {ds['rpm'].values[int(np.nanargmin(limit))]:g} rpm"
               if np.isfinite(limit).any() else "")
-        lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}")
+        mine = ""
+        if "at_rpm" in summary:
+            d = summary["cases"][i]["depth_at_rpm_m"]
+            mine = (f"; at your speed {summary['at_rpm']:g} rpm: "
+                    + (f"{mm(d)} mm" if d is not None else "no chatter up to the deepest cut"))
+        lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}{mine}")
         lines.append(f"{'rpm':>8} {'limit (mm)':>12} {'first unstable (mm)':>20} "
                      f"{'analytic (mm)':>14}" + (f" {'onset (mm)':>12}" if onset is not None
                                                 else ""))

@@ -29,9 +29,9 @@ from boringbar.plot import (
     plot_basins,
     plot_bifurcation,
     plot_lobe_examples,
-    plot_lobes,
     plot_sweep,
 )
+from boringbar.plot_bar import plot_lobes
 from boringbar.plot_design import plot_best, plot_design
 from boringbar.plot_orbits import plot_continuation
 from boringbar.plot_variations import plot_sensitivity

@@ -30,10 +30,10 @@ def commands(design: Design, file: str) -> dict[str, str]:
                     f"--ratios {r[0]:.4g}:{r[-1]:.4g}:{step:.4g} --duration-s {RUN_S:g} "
                     f"--integrator {s.integrator}",
         "lobes": f"boringbar lobes {common} --analytic --rpm "
-                 f"{band[0]:.0f}:{band[-1]:.0f}:{np.ptp(band) / 50:.4g}",
+                 f"{band[0]:.0f}:{band[-1]:.0f}:{np.ptp(band) / 50:.4g} --at-rpm {s.rpm:g}",
     }
     if design.spec.ball is not None:
         speeds = ",".join(f"{r:g}" for r in views.simulated_speeds(design))
         out["lobes"] += (f"\nboringbar lobes {common} --bar ball --method search --rpm "
-                         f"{speeds} --duration-s {views.SIMULATED_CUT_S:g}")
+                         f"{speeds} --duration-s {views.SIMULATED_CUT_S:g} --at-rpm {s.rpm:g}")
     return out

@@ -8,10 +8,29 @@ pinned design is drawn in the same colour as the current one, dashed.
 
 from __future__ import annotations
 
-from bokeh.models import ColumnDataSource, HoverTool, Span
+import numpy as np
+from bokeh.models import (
+    BasicTicker,
+    ColumnDataSource,
+    FixedTicker,
+    HoverTool,
+    Legend,
+    LegendItem,
+    NumeralTickFormatter,
+    Range1d,
+    Span,
+    Title,
+)
 from bokeh.plotting import figure
 
-from boringbar.palette import BAR_STYLE, GREY, OKABE_ITO
+from boringbar.palette import (
+    BAR_STYLE,
+    DARK_GREY,
+    GREY,
+    OKABE_ITO,
+    lobe_depth_top,
+    speed_axis,
+)
 
 #: one colour per bar, the report's (boringbar.palette)
 COLOURS = {**{k: v["color"] for k, v in BAR_STYLE.items()}, "wall": GREY}
@@ -19,6 +38,8 @@ LABELS = {k: v["label"] for k, v in BAR_STYLE.items()}
 WALLS = {1.0: OKABE_ITO["reddish purple"], -1.0: OKABE_ITO["sky blue"]}
 TOOLS = "pan,wheel_zoom,box_zoom,reset,save"
 KINDS = ("solid", "ball", "tmd")
+#: each bar in the lobes' readout (the ball bar's analytic curve is its linear host's)
+READOUT = {"solid": "solid", "ball": "ball (linear host)", "tmd": "TMD"}
 
 
 def new_figure(title: str, x: str, y: str, **kw):
@@ -191,34 +212,58 @@ class ResponseFigure:
 
 
 class LobesFigure:
-    """Chatter-free depth against spindle speed: analytic per bar (the ball bar's
-    linear host), the ball bar's simulated points, the design's speed."""
+    """Chatter-free depth against spindle speed: analytic per bar (the ball bar's linear
+    host), the ball bar's simulated points, and the design's speed: a vertical line, each
+    bar's depth there marked on its curve and read out in a line above the plot (Bokeh
+    draws no label outside the plot's frame, and inside it one would cover curves).
+    Depth on a linear axis from 0 whose top follows the curves
+    (:func:`~boringbar.palette.lobe_depth_top`, the title saying where peaks are cut);
+    speed on :func:`~boringbar.palette.speed_axis`'s axis (log, labelled at 1, 1.5, 2,
+    3, 5 and 7 of each decade); the legend below the plot, off the curves."""
+
+    TITLE = "stability lobes (chatter-free below the curves)"
 
     def __init__(self):
-        self.fig = new_figure("stability lobes (chatter-free below the curves)",
-                              "spindle speed (rpm, log scale)", "depth of cut (mm, log scale)",
-                              height=320, x_axis_type="log", y_axis_type="log")
-        self.src, self.lines = {}, {}
+        self.fig = new_figure(self.TITLE, "spindle speed (rpm, log scale)", "depth of cut (mm)",
+                              height=400, x_axis_type="log", x_range=Range1d(900, 40000),
+                              y_range=Range1d(0, 1))
+        self.fig.xaxis.formatter = NumeralTickFormatter(format="0")
+        self.src, self.lines, items = {}, {}, []
         for kind in KINDS:
             for pin in ("", "pin_"):
                 src = self.src[pin + kind] = _empty("rpm", "b", name=f"lobes-{pin}{kind}")
                 label = LABELS[kind] + (" (linear host)" if kind == "ball" else "")
                 self.lines[pin + kind] = self.fig.line(
                     "rpm", "b", source=src, color=COLOURS[kind], line_width=2,
-                    line_dash="dashed" if pin else "solid",
-                    legend_label=label + (" (pinned)" if pin else ""))
+                    line_dash="dashed" if pin else "solid")
+                items.append(LegendItem(label=label + (" (pinned)" if pin else ""),
+                                        renderers=[self.lines[pin + kind]]))
         self.sim = _empty("rpm", "b", name="lobes-simulated")
         self.sim_line = self.fig.line("rpm", "b", source=self.sim, color=COLOURS["ball"],
-                                      line_width=3, line_dash="dotted",
-                                      legend_label="ball damper, simulated cuts")
+                                      line_width=3, line_dash="dotted")
         self.fig.scatter("rpm", "b", source=self.sim, color=COLOURS["ball"], size=8,
                          marker="diamond")
-        self.speed = Span(dimension="height", line_color="#444444", line_dash="dotdash")
+        items.append(LegendItem(label="ball damper, simulated cuts", renderers=[self.sim_line]))
+        self.speed = Span(dimension="height", line_color=DARK_GREY, line_dash="dashdot",
+                          line_width=1.5)
         self.fig.add_layout(self.speed)
-        self.fig.legend.click_policy = "hide"
-        self.fig.legend.location = "top_left"
+        self.at = _empty("rpm", "b", "colour", name="lobes-at-rpm")
+        at_dot = self.fig.scatter("rpm", "b", source=self.at, color="colour", size=9,
+                                  line_color="black")
+        items.append(LegendItem(label="your speed: depth there", renderers=[at_dot]))
+        self.readout = Title(text="", text_font_size="13px", text_font_style="normal",
+                             text_color=DARK_GREY, name="lobes-readout")
+        self.fig.add_layout(self.readout, "above")
+        self.fig.add_layout(Legend(items=items, orientation="horizontal", ncols=3,
+                                   location="center", click_policy="hide",
+                                   label_text_font_size="12px"), "below")
+        shown(self.fig, self.sim_line, False)  # until the ball bar's cuts are simulated
+        self.curves: list = []  #: (rpm, depth mm) of every analytic curve drawn
+        self.depths: dict[str, float] = {}  #: the analytic depths at the design's speed (mm)
+        self.simulated: float | None = None  #: the simulated ball bar's depth there (mm)
 
     def show(self, view: dict, pinned: dict | None) -> None:
+        self.curves = []
         for pin, v in (("", view), ("pin_", pinned)):
             for kind in KINDS:
                 curve = (v or {}).get("curves", {}).get(kind)
@@ -226,9 +271,44 @@ class LobesFigure:
                 self.src[key].data = {"rpm": v["rpm"], "b": curve} if curve is not None \
                     else {"rpm": [], "b": []}
                 shown(self.fig, self.lines[key], curve is not None)
-        self.speed.location = view["at_rpm"]
+                if curve is not None:
+                    self.curves.append((v["rpm"], curve))
+        at = self.speed.location = view["at_rpm"]
+        self.depths = view["depth_at_mm"]
+        self.at.data = {"rpm": [at] * len(self.depths), "b": list(self.depths.values()),
+                        "colour": [COLOURS[k] for k in self.depths]}
+        self._axes()
 
     def show_simulated(self, sim: dict | None) -> None:
         self.sim.data = {"rpm": sim["rpm"], "b": sim["limit_mm"]} if sim else \
             {"rpm": [], "b": []}
         shown(self.fig, self.sim_line, sim is not None)
+        self.simulated = sim["depth_at_mm"] if sim else None
+        if self.curves:
+            self._axes()
+
+    def _axes(self) -> None:
+        """Both axes' ranges and ticks for the curves and simulated points drawn, the
+        title's note of peaks cut, and the readout."""
+        drawn = [*self.curves, *([(self.sim.data["rpm"], self.sim.data["b"])]
+                                 if len(self.sim.data["rpm"]) else [])]
+        log, ticks, (left, right) = speed_axis(min(float(np.min(r)) for r, _ in drawn),
+                                               max(float(np.max(r)) for r, _ in drawn))
+        self.fig.xaxis.ticker = FixedTicker(ticks=list(ticks)) if log else BasicTicker()
+        self.fig.x_range.update(start=left, end=right, reset_start=left, reset_end=right)
+        top, peak = lobe_depth_top([b for _, b in drawn], [np.min(b) for _, b in self.curves])
+        self.fig.y_range.update(start=0, end=top, reset_start=0, reset_end=top)
+        self.fig.title.text = self.TITLE + ("" if peak is None else
+                                            f"; depth axis cut at {top:.3g} mm, near the "
+                                            f"pockets (peaks up to {peak:.3g} mm above it)")
+        self._read_out()
+
+    def _read_out(self) -> None:
+        """The depths at the design's speed, in the line above the plot."""
+        parts = [f"{READOUT[k]} {d:.3g} mm" for k, d in self.depths.items()]
+        if self.simulated is not None:
+            parts.append("ball, simulated cuts " + (f"{self.simulated:.3g} mm"
+                                                    if np.isfinite(self.simulated) else
+                                                    "no chatter up to the deepest cut"))
+        self.readout.text = (f"your speed {self.speed.location:g} rpm (dash-dot line): "
+                             + ", ".join(parts) if self.depths else "")
