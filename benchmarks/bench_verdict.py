@@ -66,9 +66,9 @@ def main() -> None:
         for c, r in rows.items():
             print(f"{name:28} {c:9} {r['runs']:5d} {r['sim_per_run_s']:10.3f} "
                   f"{r['wall_s']:8.1f} {r['worst_error']:10.2%}")
-        print(f"{'':28} growth / zero wall time: "
-              f"{rows['growth']['wall_s'] / rows['zero']['wall_s']:.2f}; per run: "
-              f"{(rows['growth']['wall_s'] / rows['growth']['runs']) / (rows['zero']['wall_s'] / rows['zero']['runs']):.2f}")
+        g, z = rows["growth"], rows["zero"]
+        print(f"{'':28} growth / zero wall time: {g['wall_s'] / z['wall_s']:.2f}; per run: "
+              f"{(g['wall_s'] / g['runs']) / (z['wall_s'] / z['runs']):.2f}")
 
 
 if __name__ == "__main__":
