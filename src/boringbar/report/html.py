@@ -164,6 +164,7 @@ class _Report:
                 rows.append([c["case"], _mm(c["min_chatter_free_depth_m"]),
                              _mm(min(analytic)) if analytic else "-"])
             return {"images": images,
+                    "line": "method: " + s.get("method_text", s["criterion"]),
                     "table": _table(["case", "min chatter-free depth, simulated (mm)",
                                      "analytic min over these speeds (mm)"], rows)}
         return {"columns": self.pair("lobes", body)}
@@ -449,7 +450,10 @@ def _ball_at_limit(ds) -> dict | None:
     case, the first chattering depth against the analytic limit of the bare
     cavity bar, and at each speed's limiting depth how far the ball travelled
     against half the gap and how often it struck a wall. None when no ball
-    case has a limiting depth."""
+    case has a limiting depth, or the lobes are judged by the converged verdict (its
+    runs keep no fixed-run excursion; the growth rates and settled vibrations say it)."""
+    if "max_rel_disp_m" not in ds:
+        return None
     depth = ds["depth_m"].values
     rows, reach_all, strikes_all, below = [], [], 0, []
     for i in range(ds.sizes["case"]):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import io
+import math
 import time
 from concurrent.futures import ThreadPoolExecutor
 from functools import partial
@@ -242,9 +243,11 @@ class Page:
         finally:
             self.progress.visible = False
         self.locked(self.figures["lobes"].show_simulated, sim)
+        depth = (f"{sim['depth_at_mm']:.3g} mm" if math.isfinite(sim["depth_at_mm"])
+                 else f"above {sim['max_depth_mm']:g} mm (no chatter up to the deepest cut)")
         self.status["simulated"].object = (
             f"simulated cuts in {time.perf_counter() - t0:.1f} s: the ball bar's chatter-free "
-            f"depth at {self.design.settings.rpm:g} rpm is {sim['depth_at_mm']:.3g} mm")
+            f"depth at {self.design.settings.rpm:g} rpm is {depth}; method: {sim['method']}")
 
     def close(self) -> None:
         """The session ended: stop its work and drop its files."""

@@ -265,7 +265,8 @@ def simulated_lobes(design: Design, progress=None, workers: int | None = None) -
                integration=Integration(duration_s=SIMULATED_CUT_S, dt_s=DT_S),
                execution=Execution("threads", workers=workers), progress=progress)
     limit = ds["limit_depth_m"].values[0] * 1e3
-    return {"rpm": rpm, "limit_mm": limit,
+    return {"rpm": rpm, "limit_mm": limit, "method": ds.attrs["method_text"],
+            "max_depth_mm": LobesOptions().max_depth_m * 1e3,
             "depth_at_mm": float(limit[np.searchsorted(rpm, design.settings.rpm)])}
 
 
