@@ -799,7 +799,7 @@ class Window:
     ``rms_tip_m`` (m); ``left_cut``: the chip thickness reached zero in the window;
     ``impacts``: counted ball impacts; ``max_rel_m``: the ball's largest |y| (m), or the
     absorber's largest |stroke|; ``mode_half_pp``: half the peak-to-peak of each modal
-    coordinate."""
+    coordinate; ``max_force_n``: the largest cutting force (N)."""
 
     t_end_s: float
     max_tip_m: float
@@ -809,6 +809,7 @@ class Window:
     impacts: int
     max_rel_m: float
     mode_half_pp: np.ndarray  #: half the peak-to-peak of each modal coordinate u_i
+    max_force_n: float = math.nan  #: the largest cutting force (N)
 
     @property
     def half_pp_m(self) -> float:
@@ -841,7 +842,7 @@ class CutStepper:
     def advance(self) -> Window:
         """Run one more window; what it did."""
         su, met = self.su, self.su.met
-        for slot in (L.SUM_W2, L.SUM_W, L.N_STEADY, L.MAX_ABS_AUX):
+        for slot in (L.SUM_W2, L.SUM_W, L.N_STEADY, L.MAX_ABS_AUX, L.MAX_FORCE):
             met[slot] = 0.0
         met[L.STEADY_MAX_W], met[L.STEADY_MIN_W] = -np.inf, np.inf
         self.modes[:, 0], self.modes[:, 1] = -np.inf, np.inf
@@ -854,7 +855,8 @@ class CutStepper:
         return Window(self.t_s, float(met[L.STEADY_MAX_W]), float(met[L.STEADY_MIN_W]),
                       math.sqrt(max(met[L.SUM_W2] / n - mean * mean, 0.0)),
                       bool(met[L.N_ZERO_STEPS] > zeros), int(met[L.N_IMP_ALL] - impacts),
-                      float(met[L.MAX_ABS_AUX]), 0.5 * (self.modes[:, 0] - self.modes[:, 1]))
+                      float(met[L.MAX_ABS_AUX]), 0.5 * (self.modes[:, 0] - self.modes[:, 1]),
+                      float(met[L.MAX_FORCE]))
 
     @property
     def state(self) -> State:

@@ -62,6 +62,8 @@ MAX_RISE_RATIO = 0.0
 #: died out (a heavily damped bar reaches the arithmetic's round-off in a few windows,
 #: where slopes are noise).
 DECAYED = 1e-6
+#: A settled status: above the tolerance and not falling (a verdict that needs no more).
+ABOVE = "above the tolerance"
 #: Verdicts (LEVELLED: a vibration neither growing nor decaying, for the settling to judge).
 STABLE, CHATTER, UNDECIDED, LEVELLED = "stable", "chatter", "undecided", "levelled"
 
@@ -248,7 +250,7 @@ def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, flo
             return CHATTER, rate, se, windows
         amps.append(observables(system, windows[-1]))
         verdict, rate, se = growth(np.array([w.t_end_s for w in windows]), np.array(amps),
-                                   options, settles=system.kind == "ball")
+                                   options, settles=bounds_small(system))
         if verdict == LEVELLED:
             return UNDECIDED, rate, se, windows
         if verdict != UNDECIDED:
@@ -258,8 +260,14 @@ def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, flo
     return verdict, rate, se, windows
 
 
+def bounds_small(system: System) -> bool:
+    """Whether a small vibration of ``system`` can settle without growing or dying out:
+    a ball's friction bounds it (a frictionless ball off its walls leaves the bar linear)."""
+    return system.kind == "ball" and system.damper.friction_force_n > 0
+
+
 def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: float,
-           onset_rate: float = math.nan) -> Settled:
+           onset_rate: float = math.nan, values: bool = True) -> Settled:
     """Run ``stepper`` on until its vibration settles (module doc); ``windows`` so far,
     ``onset_rate`` (1/s) the growth rate of its onset where it chattered.
 
@@ -269,7 +277,10 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
     than that (every observable's, :func:`observables`); after a chattering onset also the
     fastest growth has fallen below half the onset's (a vibration still growing as it
     began has met nothing that bounds it).  Decaying: below the tolerance and every
-    observable falling at the confidence."""
+    observable falling at the confidence.  Without ``values`` (a verdict that needs only
+    which side of the tolerance the vibration settles on) a vibration above the
+    tolerance over both quarters, its growth levelled and not falling is "above the
+    tolerance" at once."""
     tol = options.settle_tolerance
     system = stepper.system
     while True:
@@ -287,13 +298,22 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
                                     1e-300))
             fits = [slope(t, col) for col in amp.T]
             q = float(stats.t.ppf(0.5 + options.confidence / 2, 2 * m - 2))
-            top = max(b for b, _ in fits)
-            trend = max(abs(b) for b, _ in fits) * (t[-1] - t[0])
-            levelled = not top >= 0.5 * onset_rate
+            # still growing: before the ball strikes, some amplitude certainly grows at half
+            # the onset's rate (the linear growth goes on); once it strikes, by more than
+            # the settling tolerance over the span (the impacts' scatter is not growth)
+            span = t[-1] - t[0]
+            struck = any(w.impacts for w in windows[n - 2 * m:])
+            floor = tol / span if struck else 0.5 * onset_rate
+            growing = any(b - q * se >= floor for b, se in fits)
+            trend = max(abs(b) for b, _ in fits) * span
+            levelled = not growing
             if levelled and abs(pp - pp0) <= tol * max(pp, pp0) and trend <= tol:
                 return Settled(pp, rms, False, "settled", duration)
             if pp < options.tolerance_m and all(b + q * se < 0 for b, se in fits):
                 return Settled(pp, rms, False, "decaying", duration)
+            if (not values and levelled and min(pp, pp0) > options.tolerance_m
+                    and -tol < fits[0][0] * span):
+                return Settled(pp, rms, False, ABOVE, duration)
             if stepper.t_s >= options.max_duration_s:
                 return Settled(pp, rms, False, UNDECIDED, duration)
             if onset_rate > 0 and fast_forward(stepper, windows, options):
@@ -303,29 +323,31 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
 
 #: A growth that is linear is scaled up, not waited for, while its departure is below
 #: this fraction of the room it has (the tool's to leave the cut, the ball's to its walls).
-LINEAR_ROOM = 0.25
+LINEAR_ROOM = 0.98
 
 
 def fast_forward(stepper: CutStepper, windows: list, options: VerdictOptions) -> bool:
     """Jump a linear growth ahead: while a knock grows (the onset chatters), the tool has
     never left the cut and a frictionless ball has never touched a wall, the run is
     linear, so its departure from the steady cut is scaled up (CutStepper.scale) until it
-    fills LINEAR_ROOM of the room left; the run is the same, reached sooner.  Whether it
-    jumped."""
-    system = stepper.system
+    fills LINEAR_ROOM of the room left: the ball's to its wall, and the chip thickness's
+    to zero (its largest departure from the feed, read off the largest force, against
+    the feed); the run is the same, reached sooner.  Whether it jumped."""
+    system, cut = stepper.system, stepper.forcing
     d = system.damper
-    if system.kind != "ball" or d.friction_force_n > 0:
+    if system.kind != "ball" or d.friction_force_n > 0 or cut.force_noise > 0:
         return False
     if any(w.left_cut or w.impacts for w in windows):
         return False
-    half_gap = d.gap_m / 2
     y0 = abs(stepper.x_start[2 * system.bar.n_modes])
     last = windows[-1]
-    feed = stepper.forcing.feed_m
-    room = min((half_gap - y0) / max(last.max_rel_m - y0, 1e-300),
-               0.5 * feed / max(last.half_pp_m, 1e-300))
+    law = cut.law
+    h_max = (last.max_force_n / law.kernel_coefficient(cut.depth_m)) ** (
+        1.0 / (1.0 - law.exponent))
+    room = min((d.gap_m / 2 - y0) / max(last.max_rel_m - y0, 1e-300),
+               cut.feed_m / max(h_max - cut.feed_m, 1e-300))
     factor = LINEAR_ROOM * room
-    if factor < 2.0:
+    if factor < 1.05:
         return False
     stepper.scale(factor)
     return True
@@ -347,18 +369,21 @@ def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
     """Whether a settled vibration is chatter-free (None: undecided)."""
     if s.left_cut:
         return False
-    if s.status == UNDECIDED:
+    if s.status in (UNDECIDED, ABOVE):
         return False if s.pp_m > options.tolerance_m else None
     return s.pp_m <= options.tolerance_m
 
 
 def judge(system: System, cut: Regenerative, options: VerdictOptions | None = None, *,
-          dt_s: float = 1e-6) -> CutVerdict:
-    """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``."""
+          dt_s: float = 1e-6, values: bool = False) -> CutVerdict:
+    """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``.
+    ``values``: run every start until its vibration settles, even where it is already
+    above the tolerance (the settled values themselves wanted, as by the chatter map);
+    without it a vibration above the tolerance and not falling ends its run."""
     options = options or VerdictOptions()
     stepper = _stepper(system, cut, dt_s, options.knock_m, options.ball_start)
     if cut.force_noise > 0:
-        return _noisy(system, cut, options, dt_s, stepper)
+        return _noisy(system, cut, options, dt_s, stepper, values)
     verdict, rate, se, windows = onset(stepper, options)
     onset_s = stepper.t_s
     settled: list[Settled] = []
@@ -367,18 +392,19 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     elif verdict == STABLE:
         ok = [True]
     else:
-        settled.append(settle(stepper, windows, options, onset_s, rate))
+        settled.append(settle(stepper, windows, options, onset_s, rate, values))
         ok = [acceptable(settled[0], options)]
-    big = knocked(system, cut, options, dt_s)
+    big = knocked(system, cut, options, dt_s, values)
     settled += big
     ok += [acceptable(x, options) for x in big]
     return CutVerdict(verdict, rate, se, onset_s, _all_of(ok), tuple(settled))
 
 
-def knocked(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float) -> list:
+def knocked(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float,
+            values: bool) -> list:
     """The settled vibration from each large knock of ``options.knocks_m``."""
-    return [settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0)
-            for knock in options.knocks_m]
+    return [settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0,
+                   values=values) for knock in options.knocks_m]
 
 
 def _all_of(ok: list) -> bool | None:
@@ -387,11 +413,12 @@ def _all_of(ok: list) -> bool | None:
 
 
 def _noisy(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float,
-           stepper: CutStepper) -> CutVerdict:
+           stepper: CutStepper, values: bool) -> CutVerdict:
     """A cut whose force is noisy never falls silent: the noise keeps every mode
     vibrating, so a small knock's growth rate has no sign to find.  Every start is run
     until its vibration settles, and judged by it alone (onset UNDECIDED, its rate the
     settled run's)."""
-    settled = [settle(stepper, [], options, 0.0), *knocked(system, cut, options, dt_s)]
+    settled = [settle(stepper, [], options, 0.0, values=values),
+               *knocked(system, cut, options, dt_s, values)]
     return CutVerdict(UNDECIDED, math.nan, math.nan, 0.0,
                       _all_of([acceptable(x, options) for x in settled]), tuple(settled))
