@@ -455,6 +455,8 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     pad = 0.5 * (rpm[1] - rpm[0]) if rpm.size > 1 else 25.0
     ax.set_xlim(rpm.min() - pad, rpm.max() + pad)
     ax.grid(alpha=0.3)
+    if "limit_depth_quantile_m" in ds:
+        _probability_contours(ax, ds, i, legend)
     title = case_title(ds["case"].values[i], str(ds["bar"].values[i]),
                        float(ds["gap_m"].values[i]), str(ds["friction"].values[i]))
     mcf = float(ds["min_chatter_free_depth_m"].values[i])
@@ -466,6 +468,24 @@ def _lobe_panel(ax, ds, i: int, legend: dict) -> None:
     else:
         sub = f"no chatter up to {top:.3g} mm"
     ax.set_title(f"{title}\n{sub}", fontsize="small")
+
+
+def _probability_contours(ax, ds, i: int, legend: dict) -> None:
+    """The chance of chatter of case ``i`` over its deterministic lobes: the depths where
+    P(chatter) reaches 5 %, 50 % and 95 % over the draws, the band between the outer two
+    shaded (docs/chatter_probability.md); the depth axis raised to show the 95 % one."""
+    rpm = ds["rpm"].values
+    q = ds["limit_depth_quantile_m"].values[i] * 1e3
+    colour = OKABE_ITO["reddish purple"]
+    n = int(ds.attrs.get("draws", ds.sizes.get("draw", 0)))
+    ax.fill_between(rpm, q[:, 0], q[:, -1], color=colour, alpha=0.15, lw=0, zorder=1)
+    h, = ax.plot(rpm, q[:, 1], color=colour, lw=1.4, zorder=1.6)
+    legend.setdefault(f"P(chatter) = 50 % over {n} draws", h)
+    for k in (0, -1):
+        h, = ax.plot(rpm, q[:, k], color=colour, lw=0.9, ls="--", zorder=1.6)
+    legend.setdefault("P(chatter) = 5 % (lower) and 95 % (upper)", h)
+    if np.isfinite(q[:, -1]).any():
+        ax.set_ylim(0, max(ax.get_ylim()[1], 1.08 * float(np.nanmax(q[:, -1]))))
 
 
 def plot_lobe_examples(ds, *, fig=None) -> Figure:

@@ -136,8 +136,8 @@ class Uncertainty:
     probability: float = PROBABILITY
 
     def __post_init__(self):
-        check_int("draws", self.draws, 1, MAX_DRAWS)
-        check_int("seed", self.seed, 0, 2**63 - 1)
+        object.__setattr__(self, "draws", check_int("draws", self.draws, 1, MAX_DRAWS))
+        object.__setattr__(self, "seed", check_int("seed", self.seed, 0, 2**63 - 1))
         check_range("stiffness_cov", self.stiffness_cov, 0.0, 1.0)
         check_range("damping_cov", self.damping_cov, 0.0, 10.0)
         object.__setattr__(self, "friction_spread", _spread(
@@ -360,7 +360,9 @@ def wilson_interval(count, n: int, z: float = WILSON_Z) -> tuple[np.ndarray, np.
     denom = 1.0 + z * z / n
     centre = (p + z * z / (2 * n)) / denom
     half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
-    return np.clip(centre - half, 0.0, 1.0), np.clip(centre + half, 0.0, 1.0)
+    # exactly 0 (1) where no (every) draw chatters, as the interval is, not round-off
+    low = np.where(p == 0.0, 0.0, np.clip(centre - half, 0.0, 1.0))
+    return low, np.where(p == 1.0, 1.0, np.clip(centre + half, 0.0, 1.0))
 
 
 def limit_quantiles(limits: np.ndarray, quantiles) -> np.ndarray:
