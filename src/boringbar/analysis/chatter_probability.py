@@ -41,9 +41,9 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-import scipy.stats
 
 from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.design_interval import wilson
 from boringbar.analysis.lobe_search import (
     CHATTER,
     STABLE,
@@ -84,8 +84,8 @@ FORCE_NOISE = 0.0
 PROBABILITY = 0.05
 #: The contours P(chatter) = 5, 50 and 95 %.
 QUANTILES = (0.05, 0.5, 0.95)
-#: Wilson's interval at 95 %: the standard normal's 97.5 % point.
-WILSON_Z = float(scipy.stats.norm.ppf(0.975))
+#: The confidence of P(chatter)'s Wilson interval.
+WILSON_LEVEL = 0.95
 #: The stream of each drawn quantity (:meth:`Uncertainty.draw`).
 STREAMS = {"stiffness": 0, "damping": 1, "friction": 2, "restitution": 3, "ball_start": 4,
            "noise_seed": 5}
@@ -353,16 +353,15 @@ def chatter_probability(limits: np.ndarray, depths: np.ndarray) -> tuple[np.ndar
     return count / limits.shape[-1], count
 
 
-def wilson_interval(count, n: int, z: float = WILSON_Z) -> tuple[np.ndarray, np.ndarray]:
-    """Wilson's score interval (low, high) of a binomial proportion: ``count`` successes
-    out of ``n``, at the confidence of the normal quantile ``z`` (default 95 %)."""
-    p = np.asarray(count, dtype=float) / n
-    denom = 1.0 + z * z / n
-    centre = (p + z * z / (2 * n)) / denom
-    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+def wilson_interval(count, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Wilson's 95 % score interval (low, high) of a binomial proportion at each of
+    ``count`` (successes out of ``n``): the design search's
+    (:func:`~boringbar.analysis.design_interval.wilson`), tabulated for 0 .. n."""
+    table = np.array([wilson(k, n, WILSON_LEVEL) for k in range(n + 1)])
     # exactly 0 (1) where no (every) draw chatters, as the interval is, not round-off
-    low = np.where(p == 0.0, 0.0, np.clip(centre - half, 0.0, 1.0))
-    return low, np.where(p == 1.0, 1.0, np.clip(centre + half, 0.0, 1.0))
+    table[0, 0], table[n, 1] = 0.0, 1.0
+    count = np.asarray(count)
+    return table[count, 0], table[count, 1]
 
 
 def limit_quantiles(limits: np.ndarray, quantiles) -> np.ndarray:
