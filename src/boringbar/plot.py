@@ -480,10 +480,10 @@ def _probability_contours(ax, ds, i: int, legend: dict) -> None:
     n = int(ds.attrs.get("draws", ds.sizes.get("draw", 0)))
     ax.fill_between(rpm, q[:, 0], q[:, -1], color=colour, alpha=0.15, lw=0, zorder=1)
     h, = ax.plot(rpm, q[:, 1], color=colour, lw=1.4, zorder=1.6)
-    legend.setdefault(f"P(chatter) = 50 % over {n} draws", h)
+    legend.setdefault(f"P(chatter) 50 % ({n} draws)", h)
     for k in (0, -1):
         h, = ax.plot(rpm, q[:, k], color=colour, lw=0.9, ls="--", zorder=1.6)
-    legend.setdefault("P(chatter) = 5 % (lower) and 95 % (upper)", h)
+    legend.setdefault("P(chatter) 5 % and 95 %", h)
     if np.isfinite(q[:, -1]).any():
         ax.set_ylim(0, max(ax.get_ylim()[1], 1.08 * float(np.nanmax(q[:, -1]))))
 
