@@ -77,8 +77,9 @@ FRICTION_SPREAD = 0.5
 RESTITUTION_SPREAD = 0.1
 #: Relative standard deviation of the cutting force's noise: none by default (a noisy
 #: cut is judged by its settled vibration, which costs some fifty times a quiet cut's
-#: verdict); 0.04-0.09 is what Fodor, Sykora and Bachrathy (Int J Adv Manuf Technol
-#: 2020, doi:10.1007/s00170-020-05877-8) measured in orthogonal turning.
+#: verdict and can pass a slow growth for settled: docs/chatter_probability.md);
+#: 0.04-0.09 is what Fodor, Sykora and Bachrathy (Int J Adv Manuf Technol 2020,
+#: doi:10.1007/s00170-020-05877-8) measured in orthogonal turning.
 FORCE_NOISE = 0.0
 #: The chance of chatter a robust depth allows.
 PROBABILITY = 0.05
