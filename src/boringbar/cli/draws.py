@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.chatter_probability import (
     DAMPING_COV,
@@ -81,3 +83,21 @@ def uncertainty_options(args) -> Uncertainty | None:
 
 def _attr(flag: str) -> str:
     return flag.removeprefix("--").replace("-", "_")
+
+
+def draws_text(ds) -> str:
+    """The chance of chatter of a lobes Dataset in a few lines (empty without draws)."""
+    if "robust_depth_m" not in ds:
+        return ""
+    p, n = float(ds.attrs["probability"]), int(ds.attrs["draws"])
+    lines = []
+    for i, label in enumerate(ds["case"].values):
+        robust = ds["robust_depth_m"].values[i]
+        if not np.isfinite(robust).any():
+            lines.append(f"{label}: no draw chatters up to the deepest cut tried")
+            continue
+        j = int(np.nanargmin(robust))
+        lines.append(f"{label}: robust depth (P(chatter) <= {p:g} over {n} draws) "
+                     f"{robust[j] * 1e3:.4g} mm at {ds['rpm'].values[j]:g} rpm; the 5/50/95 % "
+                     "contours are in lobes.nc (limit_depth_quantile_m) and on lobes.png")
+    return "\n".join(lines)

@@ -21,7 +21,7 @@ from boringbar.analysis.lobes import (
 )
 from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sweep import SweepOptions, default_ratios, parse_range, sweep
-from boringbar.cli.draws import add_draws, uncertainty_options
+from boringbar.cli.draws import add_draws, draws_text, uncertainty_options
 from boringbar.cli.frf import analytic_lobes_outcome
 from boringbar.cli.options import (
     PATTERN_KEY,
@@ -187,6 +187,8 @@ def _cmd_lobes(args) -> Outcome:
 
     def text(say) -> None:
         say(_lobes_text(ds))
+        if draws_text(ds):
+            say(draws_text(ds))
         for e in examples:
             verdict = (f"chatter (force first zero at {e['first_zero_time_s']:.3g} s)"
                        if e["chatter"] else "stable (force never zero)")
