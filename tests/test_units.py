@@ -168,6 +168,8 @@ def _tiny_analyses():
     yield "lobes", lobes, bb.lobes(solid, bb.LobesOptions([1000.0, 1200.0], depth_step_m=0.05e-3,
                                                            max_depth_m=0.2e-3),
                                    integration=bb.Integration(duration_s=0.05))
+    yield "lobes with draws", lobes, bb.lobes(solid, bb.LobesOptions(
+        [20000.0], uncertainty=bb.Uncertainty(draws=2), analytic=False))
     yield "bifurcation", bifurcation, bb.bifurcation(ball, bb.BifurcationOptions(
         "force", [5.0, 10.0]), integration=quick)
     yield "basins", basins, bb.basins(ball, bb.BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2),

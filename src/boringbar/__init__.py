@@ -12,9 +12,10 @@ layers behind them.
   :class:`Regenerative` and its :class:`CuttingLaw`.
 - One run: :func:`simulate` -> :class:`Run`.
 - Analyses: :func:`sweep`, :func:`lobes` (a boring job's speeds:
-  :func:`boring_speeds`), :func:`bifurcation`, :func:`basins`,
-  :func:`sensitivity`, :func:`poincare_map`; design search: :func:`design`
-  (:class:`DesignOptions`, :class:`Variable`, :class:`Uncertain`, :func:`load_design`).
+  :func:`boring_speeds`; the chance of chatter: :class:`Uncertainty`),
+  :func:`bifurcation`, :func:`basins`, :func:`sensitivity`, :func:`poincare_map`; design
+  search: :func:`design` (:class:`DesignOptions`, :class:`Variable`, :class:`Uncertain`,
+  :func:`load_design`).
 - Closed-form references: :func:`tip_frf`, :func:`min_real_part`,
   :func:`sims_tuning`, :func:`den_hartog_parameters`.
 - Study files: :func:`load_study`, :func:`run_study`.
@@ -43,6 +44,7 @@ from boringbar.version import __version__  # noqa: F401 (the package's version)
 _HOMES = {
     "boringbar.analysis.basins": ("BasinOptions", "basins"),
     "boringbar.analysis.bifurcation": ("BifurcationOptions", "bifurcation"),
+    "boringbar.analysis.chatter_probability": ("Uncertainty",),
     "boringbar.analysis.continuation": ("ContinuationOptions", "continuation"),
     "boringbar.analysis.design": ("design",),
     "boringbar.analysis.design_file": ("load_design",),
@@ -116,6 +118,7 @@ __all__ = [
     "SystemSpec",
     "TunedMassDamper",
     "Uncertain",
+    "Uncertainty",
     "Variable",
     "app",
     "basins",

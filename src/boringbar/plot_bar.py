@@ -258,7 +258,7 @@ def _lobe_depth_top(ds) -> tuple[float, float | None]:
     deepest cut it ran."""
     stable = np.where(ds["verdict"].values == 1, ds["depth_m"].values * 1e3, np.nan)
     shown = [stable, ds["limit_depth_m"].values * 1e3, ds["first_unstable_depth_m"].values * 1e3]
-    for name in ("onset_depth_m", "analytic_curve_m"):
+    for name in ("onset_depth_m", "analytic_curve_m", "limit_depth_quantile_m"):
         if name in ds:
             shown.append(ds[name].values * 1e3)
     deepest = np.nanmax(stable.reshape(stable.shape[0], -1), axis=1, initial=0.0)
@@ -299,6 +299,8 @@ def _lobe_panel(ax, ds, i: int, legend: dict, at: int | None, top: float) -> Non
         h, = ax.plot(ds["fine_rpm"].values, ds["analytic_curve_m"].values[i] * 1e3,
                      color=OKABE_ITO["blue"], lw=1.0)
         legend.setdefault("analytic limit (linear, frequency domain)", h)
+    if "limit_depth_quantile_m" in ds:
+        _probability_contours(ax, ds, i, legend)
     ax.grid(alpha=0.3)
     title = case_title(ds["case"].values[i], str(ds["bar"].values[i]),
                        float(ds["gap_m"].values[i]), str(ds["friction"].values[i]))
@@ -318,6 +320,22 @@ def _lobe_panel(ax, ds, i: int, legend: dict, at: int | None, top: float) -> Non
         depth = (f"{limit[at]:.3g} mm" if math.isfinite(limit[at]) else
                  f"no chatter up to {depth_mm[ran[-1]] if ran.size else 0.0:.3g} mm")
         _mark_speed(ax, rpm[at], f"{_speed_words(rpm[at])}: {depth}", label=i == 0)
+
+
+def _probability_contours(ax, ds, i: int, legend: dict) -> None:
+    """The chance of chatter of case ``i`` over its deterministic lobes: the depths where
+    P(chatter) reaches 5 %, 50 % and 95 % over the draws, the band between the outer two
+    shaded (docs/chatter_probability.md)."""
+    rpm = ds["rpm"].values
+    q = ds["limit_depth_quantile_m"].values[i] * 1e3
+    colour = OKABE_ITO["reddish purple"]
+    n = int(ds.attrs.get("draws", ds.sizes.get("draw", 0)))
+    ax.fill_between(rpm, q[:, 0], q[:, -1], color=colour, alpha=0.15, lw=0, zorder=1)
+    h, = ax.plot(rpm, q[:, 1], color=colour, lw=1.4, zorder=1.6)
+    legend.setdefault(f"P(chatter) 50 % ({n} draws)", h)
+    for k in (0, -1):
+        h, = ax.plot(rpm, q[:, k], color=colour, lw=0.9, ls="--", zorder=1.6)
+    legend.setdefault("P(chatter) 5 % and 95 %", h)
 
 
 def _verdict_masks(ds, i: int) -> tuple[dict, dict]:

@@ -70,9 +70,19 @@ DIMENSIONLESS = frozenset({
     "dask_local", "scale", "steps_with_zero_force", "runs", "id", "zero_one_K",
     "multipliers_abs", "noise_seed", "n",
     # labels and verdict codes (stored as numbers where a Dataset has none of them)
-    "event_kind", "verdict", "verdict_bounded", "chatter", "published_chatter",
+    "event_kind", "verdict", "verdict_bounded", "chatter", "published_chatter", "onset",
+    "undecided_runs", "settle_tolerance",
     # a confidence level
     "confidence",
+    # the chance of chatter: draws, their spreads and factors, probabilities
+    "draw", "draws", "draw_seed", "stiffness_cov", "damping_cov", "friction_spread",
+    "restitution_spread", "ball_start", "draw_ball_start", "ball_start_drawn",
+    "stiffness_scale", "damping_scale", "friction_scale", "draw_stiffness_scale",
+    "draw_damping_scale", "draw_restitution", "draw_noise_seed", "draw_runs",
+    "draw_runs_total", "probability", "chatter_probability", "chatter_probability_low",
+    "chatter_probability_high", "chatter_probability_at_limit",
+    "chatter_probability_at_limit_low", "chatter_probability_at_limit_high",
+    "friction_u", "restitution_u",
 })
 #: Beginnings of dimensionless names (``n_modes``, ``n_samples``, ``is_bounded``).
 DIMENSIONLESS_PREFIXES = ("n_", "is_", "max_index")

@@ -14,6 +14,7 @@ from boringbar.analysis.lobes import DEPTH_FLOOR, DEPTH_TOLERANCE, LobesOptions,
 from boringbar.model.dampers import MAX_GAP
 from boringbar.model.forcing import MAX_DEPTH
 from boringbar.model.materials import MATERIALS
+from boringbar.model.perturb import perturbed
 from boringbar.model.system import System
 from boringbar.simulate import Initial
 
@@ -302,21 +303,19 @@ def nominal_words(options: DesignOptions) -> str:
 
 def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
     """``system`` and the initial state with one sample of the uncertain parameters."""
-    d, bar, ini = system.damper, system.bar, {}
+    ini = {}
     for name, v in zip(names, row, strict=True):
-        if name == "friction_force_n":
-            d = replace(d, friction=replace(d.friction, kind="force", value=max(float(v), 0.0)))
+        if name in ("friction_force_n", "restitution", "damping_ratio"):
+            system = perturbed(system, **{name: float(v)})
         elif name == "friction_number":  # the published number, read as the preset reads it
             kind, value = (("paper-number", max(float(v), 0.0)) if system.preset == "paper"
                            else ("rolling", max(float(v), 0.0) * 1e-3))
-            d = replace(d, friction=replace(d.friction, kind=kind, value=value))
-        elif name == "restitution":
-            d = replace(d, restitution=float(np.clip(v, 0.0, 1.0)))
-        elif name == "damping_ratio":
-            bar = replace(bar, damping_ratio=np.full(bar.n_modes, float(np.clip(v, 0.0, 0.99))))
+            d = system.damper
+            system = replace(system, damper=replace(d, friction=replace(d.friction, kind=kind,
+                                                                        value=value)))
         elif name == "ball_position_m":
-            half = d.gap_m / 2
+            half = system.damper.gap_m / 2
             ini["ball_position_m"] = float(np.clip(v, -half, half))
         elif name == "ball_velocity_m_s":
             ini["ball_velocity_m_s"] = float(v)
-    return replace(system, bar=bar, damper=d), Initial(**ini)
+    return system, Initial(**ini)

@@ -78,7 +78,9 @@ from boringbar._validate import (
     check_range,
     check_values,
 )
+from boringbar.analysis import chatter_probability
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.chatter_probability import Uncertainty
 from boringbar.analysis.lobe_search import (
     CHATTER,
     NOT_RUN,
@@ -179,6 +181,9 @@ class LobesOptions:
     the feed), ``workpiece`` (Kienzle's law of a material, or a CuttingLaw, in place of
     ``kr_pa``'s linear law).  ``analytic``: add the frequency-domain limits of the
     linear hosts (with the law's slope at the feed for Kr, :attr:`analytic_kr_pa`).
+    ``uncertainty``: also the lobes of draws of the bars and cuts, and the chance of
+    chatter they give (:class:`~boringbar.analysis.chatter_probability.Uncertainty`;
+    criterion "growth" only; docs/chatter_probability.md).
     """
 
     rpm: tuple[float, ...] | None = None
@@ -197,6 +202,7 @@ class LobesOptions:
     depth_tolerance: float | None = None
     verdict: VerdictOptions = VerdictOptions()
     workpiece: str | CuttingLaw | None = None
+    uncertainty: Uncertainty | None = None
 
     def __post_init__(self):
         if self.rpm is not None:
@@ -223,6 +229,7 @@ class LobesOptions:
                                  f"maximum is {MAX_DEPTHS} depths")
         # the cut's own fields (each speed is checked above)
         self.forcing(self.depth(1), self.rpm[0] if self.rpm else 1000.0)
+        chatter_probability.check(self.uncertainty, self.criterion)
 
     @property
     def law(self) -> CuttingLaw:
@@ -457,6 +464,7 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
         options = replace(options, rpm=default_speeds(cases, options.workpiece))
     if options.criterion is None:
         options = replace(options, criterion=criterion_for([c.system for c in cases]))
+    chatter_probability.check(options.uncertainty, options.criterion)
     if options.criterion == "growth":
         _check_growth(cases, integration)
     rpm = np.asarray(options.rpm, dtype=float)
@@ -468,6 +476,7 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     context = {"cases": cases, "options": options, "integration": integration,
                "seeds": _seeds(cases, options) if options.method == "search" else {}}
     points = [(i, j) for i in range(len(cases)) for j in range(len(rpm))]
+    points += chatter_probability.points(len(cases), len(rpm), options.uncertainty)
     return Plan(context, points)
 
 
@@ -486,7 +495,10 @@ def _check_growth(cases: list[Case], integration: Integration) -> None:
 
 
 def compute(context: dict, point: tuple[int, int]) -> dict:
-    """The column of one (case index, rpm index): {depth index: result}."""
+    """The column of one (case index, rpm index): {depth index: result}; of a drawn
+    point (case index, rpm index, draw): :func:`.chatter_probability.compute`."""
+    if len(point) == 3:
+        return chatter_probability.compute(context, point)
     i, j = point
     o, integration = context["options"], context["integration"]
     case, rpm = context["cases"][i], o.rpm[j]
@@ -620,6 +632,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
     ctx = plan.context
     cases, o = ctx["cases"], ctx["options"]
     growth = o.criterion == "growth"
+    points, results, drawn_points, drawn = chatter_probability.split(plan.points, results)
+    plan = Plan(ctx, points, plan.extra)
     depths, a, n_runs = _grid(plan, results)
     limit, first, onset = _column_limits(plan, results, depths, a)
     variables = _growth_variables(a) if growth else _fixed_variables(a, o.bounded_fraction)
@@ -640,6 +654,9 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
     ds.attrs["method_text"] = method_text(ds)
     if o.analytic:
         _add_analytic(ds, cases, np.asarray(o.rpm, dtype=float), o.analytic_kr_pa)
+    if o.uncertainty is not None:
+        fills = {name: fill for name, (fill, _) in GROWTH_ARRAYS.items()}
+        ds = chatter_probability.add_draws(ds, ctx, drawn_points, drawn, fills)
     return ds
 
 
@@ -763,7 +780,9 @@ def summary(ds) -> dict:
                if a["criterion"] == "growth" else {"duration_s": float(a["duration_s"])}),
             "runs": int(a["runs"]), "wall_time_s": float(a["wall_time_s"]),
             "min_chatter_free_depth_m": _num(np.nanmin(ds["min_chatter_free_depth_m"].values)),
-            "cases": out}
+            "cases": out,
+            **({"chatter_probability": chatter_probability.summary(ds)}
+               if "chatter_probability" in ds else {})}
 
 
 def example_points(ds) -> list[tuple[str, float, float]]:

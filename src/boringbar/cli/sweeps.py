@@ -21,6 +21,7 @@ from boringbar.analysis.lobes import (
 )
 from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sweep import SweepOptions, default_ratios, parse_range, sweep
+from boringbar.cli.draws import add_draws, draws_text, uncertainty_options
 from boringbar.cli.frf import analytic_lobes_outcome
 from boringbar.cli.options import (
     AT_RPM_HELP,
@@ -102,6 +103,7 @@ def add_lobes(sub) -> None:
                         "bounded (also a steady amplitude above --bounded-fraction of the "
                         "feed); docs/chatter.md")
     add_verdict(p.add_argument_group("converged verdict (--criterion growth)"))
+    add_draws(p.add_argument_group("chance of chatter (--draws)"))
     g = p.add_argument_group("regenerative cutting")
     add_cutting(g)
     groups["run"].add_argument("--workers", type=int, metavar="N",
@@ -169,6 +171,9 @@ def _sweep_text(ds) -> str:
 
 def _cmd_lobes(args) -> Outcome:
     if args.analytic:
+        if args.draws is not None:
+            raise ParameterError(f"--draws = {args.draws!r} with --analytic: the chance of "
+                                 "chatter is of simulated cuts; leave out --analytic")
         cut = cut_options(args)
         return analytic_lobes_outcome(args, cut_law(cut), cut["feed_m"])
     cases, _, _ = many_cases(args)
@@ -187,6 +192,8 @@ def _cmd_lobes(args) -> Outcome:
 
     def text(say) -> None:
         say(_lobes_text(ds, summary))
+        if draws_text(ds):
+            say(draws_text(ds))
         for e in examples:
             verdict = (f"chatter (force first zero at {e['first_zero_time_s']:.3g} s)"
                        if e["chatter"] else "stable (force never zero)")
@@ -224,10 +231,18 @@ def _lobe_options(args, cases) -> LobesOptions:
     check_int("--successive", args.successive, 1, 100)
     check_workers(args.workers)
     cut = cut_options(args)
-    return LobesOptions(tuple(rpm), args.method, args.criterion,
+    uncertainty = uncertainty_options(args)
+    criterion = args.criterion
+    if uncertainty is not None:  # draws are judged by the converged verdict alone
+        if criterion not in (None, "growth"):
+            raise ParameterError(f"--criterion = {criterion!r} with --draws: the chance of "
+                                 "chatter is found by the converged verdict; use --criterion "
+                                 "growth")
+        criterion = "growth"
+    return LobesOptions(tuple(rpm), args.method, criterion,
                         None if step is None else step * 1e-3, args.max_depth_mm * 1e-3,
                         args.successive, **cut, depth_tolerance=tol,
-                        verdict=verdict_options(args))
+                        verdict=verdict_options(args), uncertainty=uncertainty)
 
 
 def _at_rpm_summary(ds, summary: dict) -> dict:

@@ -47,6 +47,7 @@ from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
 from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, OperatingPoint, check_cells
 from boringbar.analysis.bifurcation import BifurcationOptions
+from boringbar.analysis.chatter_probability import MAX_DRAWS, Uncertainty
 from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
 from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
@@ -332,6 +333,18 @@ class Sweep(Analysis):
 
 # --- lobes ------------------------------------------------------------------------
 
+#: The draws' keys of a lobes study, as Setting's (kind, default, lo, hi, lo_open): None,
+#: the library's default (:class:`~boringbar.analysis.chatter_probability.Uncertainty`);
+#: no draws without ``draws``.
+DRAW_KEYS = {"draws": ("int", None, 1, MAX_DRAWS), "seed": ("int", None, 0, 2**63 - 1),
+             "stiffness_cov": ("float", None, 0.0, 1.0), "damping_cov": ("float", None, 0.0, 10.0),
+             "friction_spread": ("float", None, 0.0, 1.0),
+             "restitution_spread": ("float", None, 0.0, 1.0),
+             "force_noise": ("float", None, 0.0, 1.0), "ball_start": ("bool", None),
+             "probability": ("float", None, 0.0, 1.0, True)}
+
+
+
 class Lobes(Analysis):
     """Stability lobes: every verdict of every (case, rpm) column.  The defaults are the
     library's (:class:`~boringbar.analysis.lobes.LobesOptions`): the speeds of the study's
@@ -353,6 +366,9 @@ class Lobes(Analysis):
         "max_depth_mm": Setting("float", 3.0, 0.0, MAX_DEPTH * 1e3, True),
         "successive": Setting("int", 3, 1, 100),
         "analytic": Setting("bool", True),
+        **{k: Setting(*v, doc="the chance of chatter (criterion 'growth'; "
+                                 "docs/chatter_probability.md); default: the library's")
+           for k, v in DRAW_KEYS.items()},
     }
     grid_keys = SYSTEM_KEYS + ("rpm",)
 
@@ -374,6 +390,18 @@ class Lobes(Analysis):
                 for x in c["cases"]]
 
 
+def _uncertainty(study: Study) -> Uncertainty | None:
+    """The draws of a lobes study's ``[analysis]`` (None without ``draws``)."""
+    given = {k: study.options[k] for k in DRAW_KEYS if study.options[k] is not None}
+    if "draws" not in given:
+        if given:
+            raise StudyError(f"{study.source}: key 'analysis.{next(iter(given))}' = "
+                             f"{next(iter(given.values()))!r} needs analysis.draws (the "
+                             "number of draws)")
+        return None
+    return Uncertainty(**given)
+
+
 def _lobe_options(study: Study) -> LobesOptions:
     """The lobes options of the study's ``[analysis]`` (mm converted, checked under the
     file's keys) and ``[forcing]`` cut, at its speeds."""
@@ -390,7 +418,7 @@ def _lobe_options(study: Study) -> LobesOptions:
         return LobesOptions(tuple(_axis(study, "rpm")), o["method"], o["criterion"],
                             None if step is None else step * 1e-3, o["max_depth_mm"] * 1e-3,
                             o["successive"], **cut, analytic=o["analytic"],
-                            depth_tolerance=tol)
+                            depth_tolerance=tol, uncertainty=_uncertainty(study))
     except ParameterError as exc:
         raise StudyError(f"{study.source}: [analysis] {exc}") from None
 
