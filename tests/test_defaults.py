@@ -19,6 +19,7 @@ from boringbar.analysis.lobes import (
     PUBLISHED_RPM,
     SPEEDS_PER_LOBE,
     LobesOptions,
+    boring_speeds,
     default_speeds,
     lobe_speeds,
     lobes,
@@ -36,6 +37,7 @@ from boringbar.analysis.sweep import (
 from boringbar.analysis.sweep import plan as sweep_plan
 from boringbar.cli.main import build_parser
 from boringbar.execute import Execution
+from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import load_system
@@ -70,14 +72,15 @@ def test_two_bars_share_one_axis_dense_enough_for_the_stiffer():
     assert np.max(np.diff(60 * 500.0 / rpm[::-1])) <= 1.05 / SPEEDS_PER_LOBE
 
 
-def test_the_default_speeds_draw_each_analytic_lobe_not_a_straight_line():
-    """On the default speeds the carbide bar's analytic lobes (the frequency-domain
-    truth) keep their shape: in each of lobes 1 to 5 the lowest sampled limit is within
-    10 % of the lobe's true minimum, and the sampled curve rises from it on both sides
-    (a straight line between two speeds would hide the minimum)."""
+def test_the_lobe_speeds_draw_each_analytic_lobe_not_a_straight_line():
+    """On the speeds of lobes 1 to 5 (lobe_speeds, the default of a bar known by its modes
+    alone) the carbide bar's analytic lobes (the frequency-domain truth) keep their
+    shape: in each lobe the lowest sampled limit is within 10 % of the lobe's true
+    minimum, and the sampled curve rises from it on both sides (a straight line between
+    two speeds would hide the minimum)."""
     system = make_system("solid", spec=CARBIDE)
     f1 = system.reference_frequency_rad_s / (2 * math.pi)
-    rpm = np.array(default_speeds([Case.of(system)]))
+    rpm = np.array(lobe_speeds([f1]))
     assert rpm[0] == pytest.approx(60 * f1 / 6.1, abs=1) and len(rpm) > 50
     coarse = limit_at_speeds(system, rpm)
     fine_rpm = 60 * f1 / np.linspace(1.0, 6.0, 20001)
@@ -90,6 +93,21 @@ def test_the_default_speeds_draw_each_analytic_lobe_not_a_straight_line():
         j = int(np.nanargmin(coarse[on]))
         assert 0 < j < on.sum() - 1  # the minimum has a speed on either side, higher
     assert len(argrelextrema(coarse, np.less)[0]) >= 5
+
+
+def test_a_system_file_bar_s_default_speeds_are_a_boring_job_s():
+    """A bar with a diameter takes a boring job's speeds: the cutting speeds of carbide
+    inserts over its bore (boring_speeds), at least four a lobe where the lobes crowd."""
+    system = make_system("solid", spec=CARBIDE)
+    rpm = np.array(default_speeds([Case.of(system)]))
+    job = boring_speeds(system)
+    assert rpm[0] == job.rpm[0] and rpm[-1] == job.rpm[-1]
+    f1 = system.reference_frequency_rad_s / (2 * math.pi)
+    lobes_spanned = 60 * f1 * (1 / rpm[0] - 1 / rpm[-1])
+    assert len(rpm) >= min(4 * lobes_spanned, 200)
+    tap = make_system("solid", modal=ModalModel.from_tap_test(
+        f1, tip_stiffness_n_m=2e6))  # a bar known by its modes alone
+    assert default_speeds([Case.of(tap)]) == lobe_speeds([f1])
 
 
 def test_lobes_without_speeds_take_the_bars_and_the_published_grid_stays_explicit():
