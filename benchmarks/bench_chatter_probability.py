@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 import boringbar as bb
-from boringbar.analysis.lobes import lobe_speeds
+from boringbar.analysis.speeds import lobe_speeds
 
 #: the first three lobes drawn whole: from past lobe 1's pocket at 60 f1 rpm (k = 0.9) to
 #: lobe 4's pocket (k = 4), k = 60 f1 / rpm

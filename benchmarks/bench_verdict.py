@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 import boringbar as bb
-from boringbar.analysis.lobes import LobesOptions, lobe_speeds
+from boringbar.analysis.lobes import LobesOptions
+from boringbar.analysis.speeds import lobe_speeds
 
 SYSTEMS = Path(__file__).resolve().parents[1] / "examples" / "systems"
 

@@ -21,7 +21,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import boringbar as bb
-from boringbar.analysis.lobes import LobesOptions, lobe_speeds
+from boringbar.analysis.lobes import LobesOptions
+from boringbar.analysis.speeds import lobe_speeds
 from boringbar.analysis.verdict import window_steps
 from boringbar.palette import OKABE_ITO
 from boringbar.plot_style import COLUMN_WIDTH_IN

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import boringbar as bb
-from boringbar.analysis.lobes import lobe_speeds
+from boringbar.analysis.speeds import lobe_speeds
 from boringbar.analysis.verdict import judge
 from boringbar.reference.stability import limit_at_speeds
 

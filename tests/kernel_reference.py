@@ -26,7 +26,7 @@ has
 (kernels/layout.py), for the messages of tests/test_kernel_reference.py.
 
 Capture (the inputs as :func:`boringbar.simulate.simulate` packs them, through its
-``_setup``; each single run checked against simulate's own kernel call, each batch
+``setup_run``; each single run checked against simulate's own kernel call, each batch
 against ``simulate_batch``)::
 
     PYTHONPATH=src python tests/kernel_reference.py --capture
@@ -82,8 +82,8 @@ RPM_FAST = 20000.0  # tau = 3 ms: 6.7 revolutions in 20 ms (tests/test_chatter.p
 # --- capture: the cases as simulate packs them ----------------------------------------
 def _single(system, forcing, *, integrator, duration_s, dt_s=DT, initial=None, record_every=0,
             steady_fraction=0.8, strobe=False, stage_loop=False) -> dict:
-    """The stored inputs of one run of :func:`simulate` (``_setup``'s packing)."""
-    su = sim._setup(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction,
+    """The stored inputs of one run of :func:`simulate` (``setup_run``'s packing)."""
+    su = sim.setup_run(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction,
                     strobe, integrator)
     if stage_loop:
         su.p[L.STAGE_LOOP] = 1.0  # what simulate_stage_loop does
@@ -113,7 +113,7 @@ def _shapes(rec, imp, stick, strobe) -> dict:
 def _batch(runs, *, duration_s, dt_s=DT, steady_fraction=0.8, strobe=False) -> dict:
     """The stored inputs of one lock-step batch, packed as simulate_batch packs it but
     not padded: ``runs`` (system, forcing, initial) are the batch's rows."""
-    sus = [sim._setup(s, f, duration_s, dt_s, i, 0, steady_fraction, strobe, "rk4")
+    sus = [sim.setup_run(s, f, duration_s, dt_s, i, 0, steady_fraction, strobe, "rk4")
            for s, f, i in runs]
     nb, first = len(sus), sus[0]
     kwargs = {"duration_s": duration_s, "dt_s": dt_s, "steady_fraction": steady_fraction,
@@ -448,7 +448,7 @@ def _check_against_simulate(name: str, case: dict, out: dict) -> None:
     """The replayed call equals simulate's own kernel call on the same setup (the exact
     integrator's STEPS_DONE is simulate's, written after the call)."""
     su = case["_setup"]
-    sim._run_kernel(su)
+    sim.run_kernel(su)
     ref = {"x": su.x, "met": su.met.copy(), "rec": su.rec, "imp": su.imp, "stick": su.stick,
            "strobe": su.stb}
     if case["entry"] == "exact":

@@ -15,8 +15,8 @@ from cli_output import assert_one_line_error
 
 import boringbar as bb
 from boringbar.cli.main import main
-from boringbar.run_limits import check_steady
 from boringbar.simulate import HISTORY_ROWS
+from boringbar.simulate.run_limits import check_steady
 
 #: functions that take **kwargs, and where those go (each must refuse unknown names)
 FORWARDED = {"published_cases": "make_system"}
@@ -106,7 +106,7 @@ def test_import_loads_no_heavy_library_and_every_name_resolves():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.split() == []
-    assert bb.simulate.__module__ == "boringbar.simulate" and callable(bb.simulate)
+    assert bb.simulate.__module__ == "boringbar.simulate.engine" and callable(bb.simulate)
     for name, obj in _public_callables():
         assert obj.__name__ == name, name
     assert bb.sweep is __import__("boringbar.analysis.sweep", fromlist=["sweep"]).sweep

@@ -20,7 +20,7 @@ from boringbar import Harmonic, Regenerative, core, make_system
 from boringbar.kernels import layout as L
 from boringbar.kernels import prepare
 from boringbar.kernels.regimes import cut_tables, history_step
-from boringbar.simulate import _setup
+from boringbar.simulate import setup_run
 
 SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow])
@@ -35,7 +35,7 @@ KIENZLE_NOISE = {"workpiece": "steel", "force_noise": 0.9, "noise_interval_s": 3
 def rk4_args(cut: bool = False, law: dict | None = None) -> dict:
     s = make_system("ball", "paper", gap_m=0.1e-3, friction=True)
     f = Regenerative(depth_m=1e-3, rpm=1200.0, **(law or {})) if cut else Harmonic(10.0, 1.0)
-    su = _setup(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "rk4")
+    su = setup_run(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "rk4")
     return {"p": su.p, "x": su.x, "t0": su.t0, "dt": su.dt, "n_steps": su.n_steps,
             "steady_start": su.steady_steps, "rec_every": su.record_every, "rec": su.rec,
             "imp": su.imp, "stick": su.stick, "strobe": su.stb, "met": su.met,
@@ -55,7 +55,7 @@ def batch_args() -> dict:
 def exact_args(cut: bool = False) -> dict:
     s = make_system("ball", "physical", gap_m=0.1e-3, friction=True)
     f = Regenerative(depth_m=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
-    su = _setup(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "exact")
+    su = setup_run(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "exact")
     prep = prepare(su.p)
     H = history_step(float(su.p[L.TAU]), su.dt) if cut else 0.0
     tab_e, tab_p = cut_tables(prep, su.p, H) if cut else (np.zeros((1, 5, 1), complex),

@@ -19,7 +19,8 @@ from cli_output import assert_one_line_error, json_out
 
 import boringbar as bb
 from boringbar import Initial, make_system, simulate
-from boringbar.analysis.lobes import BORE_RATIO, LobesOptions, boring_speeds, lobes
+from boringbar.analysis.lobes import LobesOptions, lobes
+from boringbar.analysis.speeds import BORE_RATIO, boring_speeds
 from boringbar.cli.main import main
 from boringbar.kernels import layout as L
 from boringbar.kernels import run_exact, run_rk4

@@ -14,16 +14,18 @@ from scipy.signal import argrelextrema
 from boringbar._validate import ParameterError
 from boringbar.analysis.lobes import (
     DEPTH_FLOOR,
-    LOBE_NUMBERS,
     PUBLISHED_DEPTH_STEP,
     PUBLISHED_RPM,
-    SPEEDS_PER_LOBE,
     LobesOptions,
+    lobes,
+    plan,
+)
+from boringbar.analysis.speeds import (
+    LOBE_NUMBERS,
+    SPEEDS_PER_LOBE,
     boring_speeds,
     default_speeds,
     lobe_speeds,
-    lobes,
-    plan,
 )
 from boringbar.analysis.sweep import (
     PUBLISHED_RATIOS,

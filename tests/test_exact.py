@@ -24,7 +24,7 @@ from boringbar.kernels import prepare, run_exact
 from boringbar.model.dampers import Friction
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
-from boringbar.simulate import _setup
+from boringbar.simulate import setup_run
 
 
 # --- linear cases: closed forms ----------------------------------------------------------
@@ -77,7 +77,7 @@ def test_overdamped_absorber_mode_is_integrated_without_conjugate_pairs():
     s = dataclasses.replace(s, damper=dataclasses.replace(
         d, damping_n_s_m=3.0 * 2.0 * math.sqrt(d.stiffness_n_m * d.mass_kg)))
     f = Harmonic(10.0, 1.0)
-    prep = prepare(_setup(s, f, 0.01, 1e-6, None, 0, 0.8, False, "exact").p)
+    prep = prepare(setup_run(s, f, 0.01, 1e-6, None, 0, 0.8, False, "exact").p)
     assert list(prep["kstep"]) == [1] and np.any(prep["lam"][0].imag != 0.0)
     run = simulate(s, f, duration_s=2.0, steady_fraction=0.1, integrator="exact")
     g = abs(complex(tip_frf(s.bar, s.reference_frequency_rad_s, tmd=s.damper)))
@@ -388,7 +388,7 @@ def test_longer_steps_of_a_two_mode_ball_change_no_event():
     init = simulate(s, f, duration_s=1.0, integrator="exact").final
     out = []
     for levels in ("prepared", "h only"):
-        su = _setup(s, f, 0.2, 1e-6, init, 0, 1.0, False, "exact")
+        su = setup_run(s, f, 0.2, 1e-6, init, 0, 1.0, False, "exact")
         prep = prepare(su.p)
         if levels == "h only":
             prep = dict(prep, levmax=np.zeros_like(prep["levmax"]))

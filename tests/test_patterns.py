@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from boringbar._validate import ParameterError
-from boringbar.patterns import PATTERN_LABELS, Pattern, classify
+from boringbar.simulate.patterns import PATTERN_LABELS, Pattern, classify
 
 T = 1.0 / 461.0  # forcing period near the bar's first mode (s)
 DT = 1e-6  # published step (s)

@@ -5,7 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from boringbar.analysis.lobes import DEPTH_TOLERANCE, PUBLISHED_DEPTH_STEP, default_speeds
+from boringbar.analysis.lobes import DEPTH_TOLERANCE, PUBLISHED_DEPTH_STEP
+from boringbar.analysis.speeds import default_speeds
 from boringbar.analysis.sweep import default_ratios, tmd_window
 from boringbar.cli.main import main
 from boringbar.studies.load import load_study, study_from_dict

@@ -17,7 +17,8 @@ import pytest
 
 import boringbar as bb
 from boringbar.analysis.frf_fit import fit_frf
-from boringbar.analysis.lobes import LobesOptions, compute, lobe_speeds, lobes, plan
+from boringbar.analysis.lobes import LobesOptions, compute, lobes, plan
+from boringbar.analysis.speeds import lobe_speeds
 from boringbar.analysis.verdict import CHATTER, STABLE, VerdictOptions, judge, window_steps
 from boringbar.execute import Execution
 from boringbar.model.measured_frf import read_frf

@@ -64,7 +64,6 @@ from boringbar.execute import Execution
 from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.run_limits import check_steady_ratios
 from boringbar.simulate import (
     Initial,
     Integration,
@@ -73,6 +72,7 @@ from boringbar.simulate import (
     simulate,
     simulate_batch,
 )
+from boringbar.simulate.run_limits import check_steady_ratios
 from boringbar.version import __version__
 
 #: Largest period, in forcing periods, looked for in the strobe (as the pattern classifier).

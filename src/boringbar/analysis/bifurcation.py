@@ -42,8 +42,8 @@ from boringbar.execute import Execution
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.run_limits import check_steady_ratios
 from boringbar.simulate import Initial, Integration, State, simulate
+from boringbar.simulate.run_limits import check_steady_ratios
 from boringbar.version import __version__
 
 #: Parameters that change only the forcing, with their units.

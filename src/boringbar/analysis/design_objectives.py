@@ -20,8 +20,8 @@ from boringbar.execute import Execution, run_points
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.reference.stability import system_receptance
-from boringbar.run_limits import check_steady_ratios
 from boringbar.simulate import STEADY_FRACTION, Initial, Integration, simulate
+from boringbar.simulate.run_limits import check_steady_ratios
 
 #: Frequency lines of the FRF objectives, over FRF_SPAN x the host's f1.
 FRF_LINES = 6001

@@ -10,7 +10,8 @@ import numpy as np
 import scipy.special
 
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
-from boringbar.analysis.lobes import DEPTH_FLOOR, DEPTH_TOLERANCE, LobesOptions, check_speeds
+from boringbar.analysis.lobes import DEPTH_FLOOR, DEPTH_TOLERANCE, LobesOptions
+from boringbar.analysis.speeds import check_speeds
 from boringbar.model.dampers import MAX_GAP
 from boringbar.model.forcing import MAX_DEPTH
 from boringbar.model.materials import MATERIALS

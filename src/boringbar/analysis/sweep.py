@@ -30,8 +30,8 @@ from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
 from boringbar.reference.stability import linear_host, natural_frequencies
-from boringbar.run_limits import check_steady_ratios
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
+from boringbar.simulate.run_limits import check_steady_ratios
 from boringbar.version import __version__
 
 #: Runs per lock-step batch of the RK4 kernel (benchmarks/bench_batch.py).

@@ -18,7 +18,7 @@ from boringbar.analysis.frf_fit import (
     fit_modes,
     stabilisation,
 )
-from boringbar.analysis.lobes import default_speeds, lobe_speeds
+from boringbar.analysis.speeds import default_speeds, lobe_speeds
 from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import (
     OUT_HELP,

@@ -38,7 +38,6 @@ from boringbar.model.system import (
 )
 from boringbar.model.system_file import load_system
 from boringbar.progress import ProgressCallback
-from boringbar.run_limits import check_delay, check_step, check_steps
 from boringbar.simulate import (
     INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
@@ -47,6 +46,7 @@ from boringbar.simulate import (
     Initial,
     Integration,
 )
+from boringbar.simulate.run_limits import check_delay, check_step, check_steps
 
 PROG = "boringbar"
 #: Most worker threads or processes an option may ask for.

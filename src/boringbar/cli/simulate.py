@@ -30,8 +30,8 @@ from boringbar.model.system import make_system
 from boringbar.model.system_file import PUBLISHED_NAME
 from boringbar.plot import plot_run
 from boringbar.plot_style import system_label
-from boringbar.run_limits import check_history, check_steady, check_steps
 from boringbar.simulate import HISTORY_ROWS, STEADY_FRACTION, simulate
+from boringbar.simulate.run_limits import check_history, check_steady, check_steps
 
 
 def add_simulate(sub) -> None:

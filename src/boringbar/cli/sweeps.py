@@ -13,13 +13,12 @@ from boringbar.analysis.lobes import (
     MAX_DEPTHS,
     PUBLISHED_DEPTH_STEP,
     LobesOptions,
-    check_speeds,
-    default_speeds,
     depth_grid,
     grid_index,
     lobes,
 )
 from boringbar.analysis.lobes import examples as lobe_examples
+from boringbar.analysis.speeds import check_speeds, default_speeds
 from boringbar.analysis.sweep import SweepOptions, default_ratios, parse_range, sweep
 from boringbar.cli.draws import add_draws, draws_text, uncertainty_options
 from boringbar.cli.frf import analytic_lobes_outcome

@@ -50,12 +50,13 @@ from boringbar.analysis.bifurcation import BifurcationOptions
 from boringbar.analysis.chatter_probability import MAX_DRAWS, Uncertainty
 from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
+from boringbar.analysis.speeds import default_speeds
 from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import MAX_DEPTH, Harmonic
 from boringbar.model.system import make_system
-from boringbar.run_limits import check_delay, check_step, check_steps
 from boringbar.simulate import INTEGRATOR_CHOICES, Initial, Integration, check_friction_law
+from boringbar.simulate.run_limits import check_delay, check_step, check_steps
 from boringbar.studies.schema import SYSTEM_KEYS, Setting, Study, StudyError
 
 
@@ -375,7 +376,7 @@ class Lobes(Analysis):
     def default_axes(self, study):
         """The speeds of the study's bars' lobes (:func:`~boringbar.analysis.lobes.
         default_speeds`, as ``lobes`` takes them)."""
-        return {"rpm": lobes_mod.default_speeds(study_cases(study)[0],
+        return {"rpm": default_speeds(study_cases(study)[0],
                                                 study.value("workpiece"))}
 
     def plan(self, study):

@@ -21,7 +21,7 @@ from collections import OrderedDict
 import numpy as np
 
 from boringbar.analysis.lobes import LobesOptions, lobes
-from boringbar.analysis.lobes import lobe_speeds as default_lobe_speeds
+from boringbar.analysis.speeds import lobe_speeds as default_lobe_speeds
 from boringbar.analysis.sweep import SweepOptions, sweep, tmd_window
 from boringbar.execute import Execution
 from boringbar.model.cutting import KR_ALUMINIUM

@@ -1,0 +1,150 @@
+"""A regenerative cut advanced window by window (:class:`CutStepper`), started in
+progress and knocked at the tip (:func:`knocked_cut`): what the converged verdict of
+:mod:`boringbar.analysis.verdict` runs."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from boringbar._validate import (
+    ParameterError,
+    check_int,
+    check_range,
+)
+from boringbar.kernels import layout as L
+from boringbar.kernels import run_rk4
+from boringbar.model.forcing import Regenerative
+from boringbar.model.system import System
+from boringbar.simulate.engine import initial_state, setup_run
+from boringbar.simulate.run import MAX_INITIAL_DISPLACEMENT, Initial, State
+from boringbar.simulate.run_limits import (
+    MAX_STEPS,
+)
+
+
+def knocked_cut(system: System, forcing: Regenerative, knock_m: float,
+                ball_position_m: float = 0.0) -> State:
+    """The state of a cut in progress (every mode at its static deflection under the
+    mean force, the absorber relaxed) just after a knock at the tip: an impulse J on
+    the bar at the tip, every mode taking psi_tip,i J / M_i, with J such that the bar's
+    first mode alone would vibrate at the tip with amplitude ``knock_m`` (m).  A free
+    ball and an absorber keep their absolute velocity (at rest): the ball's relative
+    velocity is minus the bar's at the cavity; it starts ``ball_position_m`` (m) from the
+    cavity's centre.  Use it with ``forcing.start == "static"``, whose surface before
+    the cut is the same static deflection."""
+    check_range("knock_m", knock_m, 0.0, MAX_INITIAL_DISPLACEMENT, unit="m")
+    bar, n = system.bar, system.bar.n_modes
+    x = initial_state(system, Initial(ball_position_m=ball_position_m))
+    x[:n] += bar.psi_tip * forcing.mean_force_n / bar.stiffness_n_m
+    impulse = knock_m * bar.natural_frequency_rad_s / float(np.sum(bar.psi_tip**2 / bar.mass_kg))
+    x[n:2 * n] = bar.psi_tip * impulse / bar.mass_kg
+    if system.kind == "tmd":
+        x[2 * n] = float(bar.psi_absorber @ x[:n])
+    elif system.kind == "ball":
+        x[2 * n + 1] = -float(bar.psi_damper @ x[n:2 * n])
+    return State(x, 0.0)
+
+
+@dataclass(frozen=True)
+class Window:
+    """What one window of a cut advanced by :class:`CutStepper` did: ``t_end_s`` (s);
+    the tip's extremes ``max_tip_m``, ``min_tip_m`` and its RMS about the window's mean
+    ``rms_tip_m`` (m); ``left_cut``: the chip thickness reached zero in the window;
+    ``impacts``: counted ball impacts; ``max_rel_m``: the ball's largest |y| (m), or the
+    absorber's largest |stroke|; ``mode_half_pp``: half the peak-to-peak of each modal
+    coordinate; ``max_force_n``: the largest cutting force (N)."""
+
+    t_end_s: float
+    max_tip_m: float
+    min_tip_m: float
+    rms_tip_m: float
+    left_cut: bool
+    impacts: int
+    max_rel_m: float
+    mode_half_pp: np.ndarray  #: half the peak-to-peak of each modal coordinate u_i
+    max_force_n: float = math.nan  #: the largest cutting force (N)
+
+    @property
+    def half_pp_m(self) -> float:
+        """Half the peak-to-peak tip displacement (m): the window's amplitude."""
+        return 0.5 * (self.max_tip_m - self.min_tip_m)
+
+
+class CutStepper:
+    """A regenerative cut advanced window by window with the RK4 scheme, for a verdict
+    that decides as the run goes (:mod:`boringbar.analysis.verdict`).
+
+    One kernel call per window of ``window_steps`` steps of ``dt_s``; the kernel keeps
+    the delay history between calls, so the windows together are one run, bit for bit
+    (the core's continuation contract).  ``initial``: as :func:`simulate` takes it;
+    the forcing must not stop at the first zero of the force.
+    """
+
+    def __init__(self, system: System, forcing: Regenerative, *, dt_s: float, window_steps: int,
+                 initial: Initial | State | None = None):
+        if forcing.stop_at_zero:
+            raise ParameterError("a cut advanced window by window runs on after the force "
+                                 "reaches zero: give stop_at_zero = False")
+        check_int("window_steps", window_steps, 1, MAX_STEPS)
+        self.su = setup_run(system, forcing, window_steps * dt_s, dt_s, initial, 0, 1.0, False,
+                         "rk4")
+        self.window_steps = window_steps
+        self.t_s = self.su.t0
+        self.modes = np.zeros((system.bar.n_modes, 2))
+
+    def advance(self) -> Window:
+        """Run one more window; what it did."""
+        su, met = self.su, self.su.met
+        for slot in (L.SUM_W2, L.SUM_W, L.N_STEADY, L.MAX_ABS_AUX, L.MAX_FORCE):
+            met[slot] = 0.0
+        met[L.STEADY_MAX_W], met[L.STEADY_MIN_W] = -np.inf, np.inf
+        self.modes[:, 0], self.modes[:, 1] = -np.inf, np.inf
+        zeros, impacts = met[L.N_ZERO_STEPS], met[L.N_IMP_ALL]
+        run_rk4(su.p, su.x, self.t_s, su.dt, self.window_steps, 0, 0, su.rec, su.imp, su.stick,
+                su.stb, met, su.buf, self.modes)
+        self.t_s = su.t0 + met[L.STEPS_DONE] * su.dt
+        n = met[L.N_STEADY]
+        mean = met[L.SUM_W] / n
+        return Window(self.t_s, float(met[L.STEADY_MAX_W]), float(met[L.STEADY_MIN_W]),
+                      math.sqrt(max(met[L.SUM_W2] / n - mean * mean, 0.0)),
+                      bool(met[L.N_ZERO_STEPS] > zeros), int(met[L.N_IMP_ALL] - impacts),
+                      float(met[L.MAX_ABS_AUX]), 0.5 * (self.modes[:, 0] - self.modes[:, 1]),
+                      float(met[L.MAX_FORCE]))
+
+    @property
+    def state(self) -> State:
+        """The state reached (x and time)."""
+        return State(self.su.x.copy(), self.t_s)
+
+    @property
+    def system(self) -> System:
+        return self.su.system
+
+    @property
+    def forcing(self) -> Regenerative:
+        return self.su.forcing
+
+    @property
+    def x_start(self) -> np.ndarray:
+        """The state the cut started from (a copy)."""
+        return self.su.x_start.copy()
+
+    def scale(self, factor: float) -> None:
+        """Scale the run's departure from its steady cut by ``factor``: the modal state
+        about the static deflection (u about u_s, u' about 0), an absorber's about the
+        bar, a ball's relative position about where it started, and the delay history
+        about the static tip deflection.  Where the run is linear (the tool in the cut, a
+        frictionless ball off the walls) the scaled state is the same run further on: a
+        mode growing at rate s is ln(factor) / s seconds ahead."""
+        su, n = self.su, self.su.system.bar.n_modes
+        ref = su.x_start.copy()
+        ref[n:2 * n] = 0.0
+        ref[2 * n + 1] = 0.0
+        if su.system.kind == "tmd":
+            ref[2 * n] = float(su.system.bar.psi_absorber @ ref[:n])
+        su.x[:] = ref + factor * (su.x - ref)
+        su.buf[:, 0] = su.w_static + factor * (su.buf[:, 0] - su.w_static)
+        su.buf[:, 1] *= factor

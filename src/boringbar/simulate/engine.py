@@ -1,0 +1,518 @@
+"""``simulate``: one time-domain run of a bar under harmonic or cutting forces.
+
+The description objects (System, Harmonic, Regenerative) are packed into the kernel's
+parameter vector here (layout in :mod:`boringbar.kernels.layout`); the kernel streams
+its metrics; this module turns them into a labelled :class:`~boringbar.simulate.run.Run`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from boringbar._validate import (
+    ParameterError,
+    check_choice,
+    check_int,
+    check_range,
+)
+from boringbar.kernels import BMAX, run_exact, run_rk4, run_rk4_batch
+from boringbar.kernels import layout as L
+from boringbar.model.dampers import ImpactDamper, TunedMassDamper
+from boringbar.model.forcing import Harmonic, Regenerative
+from boringbar.model.system import System
+from boringbar.simulate.patterns import classify
+from boringbar.simulate.run import (
+    HISTORY_ROWS,
+    IMPACT_THRESHOLD,
+    INTEGRATOR_CHOICES,
+    MAX_EVENT_ROWS,
+    STEADY_FRACTION,
+    STICK_MIN_PERIODS,
+    Initial,
+    IntegrationError,
+    Run,
+    State,
+)
+from boringbar.simulate.run_limits import (
+    MAX_STEPS,
+    check_delay,
+    check_history,
+    check_step,
+    check_steps,
+    holds_a_period,
+)
+
+
+def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarray:
+    """The kernel's parameter vector for ``system`` under F0 sin(omega t).
+
+    ``omega`` = 0 (no harmonic force) refers the impact threshold to omega_n.
+    """
+    bar = system.bar
+    n = bar.n_modes
+    if n > L.NMAX:
+        raise ParameterError(f"n_modes = {n} is outside the allowed range [1, {L.NMAX}]")
+    p = L.empty_params()
+    p[L.N_MODES] = n
+    p[L.FORCING] = L.HARMONIC
+    p[L.F0] = amplitude
+    p[L.OMEGA] = omega
+    p[L.M_:L.M_ + n] = bar.mass_kg
+    p[L.K_:L.K_ + n] = bar.stiffness_n_m
+    p[L.C_:L.C_ + n] = bar.damping_n_s_m
+    p[L.PSI_L:L.PSI_L + n] = bar.psi_tip
+    p[L.PSI_D:L.PSI_D + n] = bar.psi_damper
+    p[L.PSI_A:L.PSI_A + n] = bar.psi_absorber
+    p[L.REACTION] = 1.0
+    d = system.damper
+    kind = system.kind
+    p[L.CASE] = {"solid": L.SOLID, "ball": L.BALL, "tmd": L.TMD, "locked": L.LOCKED}[kind]
+    if isinstance(d, ImpactDamper):
+        m = d.mass_kg
+        meff = 1.0 / (1.0 / m + float(np.sum(bar.psi_damper**2 / bar.mass_kg)))
+        p[L.BALL_MASS] = m
+        p[L.HALF_GAP] = d.gap_m / 2
+        p[L.RESTITUTION] = d.restitution
+        p[L.FRICTION] = d.friction_force_n
+        p[L.STATIC_FRICTION] = d.friction_force_n * d.friction.static_ratio
+        p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
+        p[L.M_EFF] = meff
+        ref = omega if omega > 0 else bar.natural_frequency_rad_s
+        p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap_m / 2
+        # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
+        p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force_n * dt / meff
+        p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
+    elif isinstance(d, TunedMassDamper):
+        p[L.TMD_MASS] = d.mass_kg
+        p[L.TMD_K] = d.stiffness_n_m
+        p[L.TMD_C] = d.damping_n_s_m
+    return p
+
+
+def pack_cut(system: System, forcing: Regenerative, dt: float, w_static: float) -> np.ndarray:
+    """The kernel's parameter vector for ``system`` in the cut ``forcing``: its law, noise
+    and delay; ``w_static`` (m) the surface before the cut of a static start."""
+    p = pack(system, 0.0, 0.0, dt)
+    p[L.FORCING] = L.REGENERATIVE
+    law = forcing.law
+    p[L.KR_B] = law.kernel_coefficient(forcing.depth_m)
+    p[L.CUT_MC] = law.exponent
+    p[L.NOISE_STD] = forcing.force_noise
+    p[L.NOISE_INTERVAL] = forcing.noise_interval_s
+    p[L.NOISE_SEED] = forcing.noise_seed
+    p[L.FEED] = forcing.feed_m
+    p[L.TAU] = forcing.tau_s
+    p[L.N_REV] = forcing.revolutions
+    p[L.INTERP] = 1.0 if forcing.interpolation == "cubic" else 0.0
+    p[L.STOP_AT_ZERO] = 1.0 if forcing.stop_at_zero else 0.0
+    p[L.HIST_W0] = w_static if forcing.start == "static" else 0.0
+    return p
+
+
+def initial_state(system: System, initial: Initial) -> np.ndarray:
+    """x = [u, u', aux, aux'] from tip and ball initial conditions."""
+    bar = system.bar
+    n = bar.n_modes
+    x = np.zeros(2 * n + 2)
+    x[0] = initial.tip_displacement_m / bar.psi_tip[0]
+    x[n] = initial.tip_velocity_m_s / bar.psi_tip[0]
+    d = system.damper
+    if isinstance(d, ImpactDamper):
+        check_range("initial ball_position_m", initial.ball_position_m, -d.gap_m / 2, d.gap_m / 2,
+                    unit="m")
+        x[2 * n] = initial.ball_position_m
+        x[2 * n + 1] = 0.0 if d.locked else initial.ball_velocity_m_s
+    elif isinstance(d, TunedMassDamper):
+        x[2 * n] = float(bar.psi_absorber @ x[:n])
+        x[2 * n + 1] = float(bar.psi_absorber @ x[n:2 * n])
+    return x
+
+
+def stored_energy(system: System, x: np.ndarray) -> float:
+    """Kinetic + potential energy of state x (J)."""
+    bar = system.bar
+    n = bar.n_modes
+    u, v = x[:n], x[n:2 * n]
+    e = 0.5 * float(np.sum(bar.mass_kg * v**2) + np.sum(bar.stiffness_n_m * u**2))
+    d = system.damper
+    if isinstance(d, ImpactDamper):
+        ud = x[2 * n + 1] + float(bar.psi_damper @ v)
+        e += 0.5 * d.mass_kg * ud**2
+    elif isinstance(d, TunedMassDamper):
+        rel = x[2 * n] - float(bar.psi_absorber @ u)
+        e += 0.5 * d.mass_kg * x[2 * n + 1] ** 2 + 0.5 * d.stiffness_n_m * rel**2
+    return e
+
+
+def stick_slip(system: System) -> bool:
+    """Whether the ball's friction has a static limit above the sliding one (exact only)."""
+    d = system.damper
+    return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force_n > 0
+
+
+def resolve_integrator(integrator: str, system: System, cutting: bool = False) -> str:
+    """``integrator``, or for "auto": "rk4" under the ``paper`` preset (the published
+    scheme) and in cuts (``cutting``: RK4 is faster there, docs/exact.md) unless
+    :func:`stick_slip`, else "exact" (exact at events, about 14x faster than RK4)."""
+    check_choice("integrator", integrator, INTEGRATOR_CHOICES)
+    if integrator != "auto":
+        return integrator
+    return "rk4" if (system.preset == "paper" or cutting) and not stick_slip(system) \
+        else "exact"
+
+
+def resolved_integrators(integrator: str, systems, cutting: bool = False) -> str:
+    """What :func:`resolve_integrator` gives the runs of ``systems``, sorted and
+    comma-joined ("exact", "rk4" or "exact,rk4"): a result's ``integrator_used``."""
+    return ",".join(sorted({resolve_integrator(integrator, s, cutting) for s in systems}))
+
+
+def check_cut_law(forcing, integrator: str) -> None:
+    """The exact integrator's cut is linear in the state: Kr b h without noise."""
+    if integrator != "exact" or not isinstance(forcing, Regenerative):
+        return
+    law = forcing.law
+    if not law.linear_law or forcing.force_noise > 0.0:
+        what = law.describe() + (f" with force_noise = {forcing.force_noise:g}"
+                                 if forcing.force_noise > 0.0 else "")
+        raise ParameterError(f"integrator = 'exact' integrates a cut whose force is linear in "
+                             f"the state (Kr b h, no force noise); this cut has {what}: use "
+                             "integrator = 'rk4'")
+
+
+def check_friction_law(system: System, integrator: str) -> None:
+    """True stick-slip needs the exact integrator: RK4 has only the published sgn() law."""
+    if integrator == "rk4" and stick_slip(system):
+        raise ParameterError(f"friction static_ratio = {system.damper.friction.static_ratio!r}: "
+                             "the rk4 integrator has only the sgn() law (static_ratio = 1); "
+                             "use integrator = 'exact' for true stick-slip")
+
+
+@dataclass(eq=False)
+class RunSetup:
+    """One run, checked and packed for a kernel, and the arrays it fills."""
+
+    system: System
+    forcing: Harmonic | Regenerative
+    integrator: str
+    omega: float
+    dt: float
+    t0: float
+    n_steps: int
+    steady_steps: int
+    record_every: int
+    cutting: bool
+    period: float
+    w_static: float
+    p: np.ndarray
+    x: np.ndarray
+    x_start: np.ndarray
+    buf: np.ndarray | None
+    imp: np.ndarray
+    stick: np.ndarray
+    stb: np.ndarray
+    rec: np.ndarray
+    met: np.ndarray
+
+
+def setup_run(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
+           integrator) -> RunSetup:
+    """Check the arguments of :func:`simulate` and pack the run."""
+    check_choice("integrator", integrator, INTEGRATOR_CHOICES)
+    if not isinstance(system, System):
+        raise ParameterError(f"system = {system!r} must be a System (see make_system)")
+    if not isinstance(forcing, Harmonic | Regenerative):
+        raise ParameterError(f"forcing = {forcing!r} must be a Harmonic or a Regenerative")
+    integrator = resolve_integrator(integrator, system, isinstance(forcing, Regenerative))
+    cutting = isinstance(forcing, Regenerative)
+    check_friction_law(system, integrator)
+    check_cut_law(forcing, integrator)
+    check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
+    n_steps = check_steps(duration, dt)
+    record_every = (max(1, n_steps // HISTORY_ROWS) if record_every is None
+                    else check_int("record_every", record_every, 0, MAX_STEPS))
+    omega = (2 * math.pi / forcing.tau_s if cutting
+             else forcing.omega(system.reference_frequency_rad_s))
+    check_step(system, omega, dt)
+    if cutting:
+        check_delay(forcing.rpm, forcing.revolutions, dt)
+    if record_every:
+        check_history(n_steps, record_every)
+
+    if isinstance(initial, State):
+        x = np.array(initial.x, dtype=float)
+        if x.shape != (2 * system.bar.n_modes + 2,):
+            raise ParameterError(f"initial state has {x.size} entries; this system needs "
+                                 f"{2 * system.bar.n_modes + 2}")
+        t0 = float(initial.t_s)
+    else:
+        x = initial_state(system, initial or Initial())
+        t0 = 0.0
+    w_static = 0.0
+    if cutting:
+        # static deflection under the mean force, mode by mode (absorber relaxed)
+        bar = system.bar
+        u_static = bar.psi_tip * forcing.mean_force_n / bar.stiffness_n_m
+        w_static = float(bar.psi_tip @ u_static)
+        if forcing.start == "static" and not isinstance(initial, State):
+            # the static deflection plus whatever initial motion was asked for
+            # (a perfect static start has nothing to grow from)
+            n = bar.n_modes
+            x[:n] += u_static
+            if system.kind == "tmd":
+                x[2 * n] += float(bar.psi_absorber @ u_static)
+    x_start = x.copy()
+
+    if cutting:
+        p = pack_cut(system, forcing, dt, w_static)
+        buf = np.zeros((check_delay(forcing.rpm, forcing.revolutions, dt), 2))
+        period = 2 * math.pi / system.reference_frequency_rad_s
+    else:
+        p = pack(system, omega, forcing.amplitude_n, dt)
+        buf = None
+        period = 2 * math.pi / omega if omega > 0 else duration
+    n_periods = duration / period
+    steady_steps = int(round((1.0 - steady_fraction) * n_steps))
+    if strobe:
+        p[L.STROBE_PERIOD] = period
+        p[L.STROBE_T0] = 0.0
+    if strobe and n_periods + 2 > MAX_EVENT_ROWS:
+        raise ParameterError(f"duration_s = {duration:g} s is {n_periods:.3g} periods of "
+                             f"{period:g} s: at most {MAX_EVENT_ROWS:.0e} Poincare samples "
+                             "(one a period) are kept; shorten the run")
+    cap_imp = int(min(MAX_EVENT_ROWS, max(1000, 40 * n_periods)))
+    imp = np.zeros((cap_imp, 3))
+    stick = np.zeros((cap_imp, 2))
+    stb = np.zeros((int(n_periods) + 2 if strobe else 0, 5))
+    n_rec = n_steps // record_every if record_every else 0
+    rec = np.zeros((n_rec, 6))
+    met = np.zeros(L.MET_SIZE)
+    met[L.STEADY_MAX_W] = -np.inf
+    met[L.STEADY_MIN_W] = np.inf
+    met[L.FIRST_ZERO_T] = -1.0
+
+    return RunSetup(system, forcing, integrator, omega, dt, t0, n_steps, steady_steps,
+                  int(record_every), cutting, period, w_static, p, x, x_start, buf, imp, stick,
+                  stb, rec, met)
+
+
+def run_kernel(su: RunSetup) -> float:
+    """Run the kernel of ``su`` in place; the wall time (s)."""
+    p, x, t0, dt, n_steps, steady_steps = su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps
+    record_every, rec, imp, stick, stb, met = (su.record_every, su.rec, su.imp, su.stick, su.stb,
+                                               su.met)
+    tic = time.perf_counter()
+    if su.integrator == "exact":
+        t_reached = run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt,
+                              record_every * dt, rec, imp, stick, stb, met, dt=dt)
+        # a cut stopped at its first zero finishes that step of dt
+        met[L.STEPS_DONE] = min(n_steps, int(round((t_reached - t0) / dt)))
+        if met[L.EXACT_STATUS] != 0:
+            raise IntegrationError(int(met[L.EXACT_STATUS]), int(met[L.N_EVENTS]), t_reached)
+    else:
+        run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb,
+                met, su.buf)
+    return time.perf_counter() - tic
+
+
+def run_result(su: RunSetup, elapsed: float) -> Run:
+    """The labelled :class:`Run` from a finished kernel run."""
+    system, forcing, integrator, omega, dt, t0 = (su.system, su.forcing, su.integrator, su.omega,
+                                                  su.dt, su.t0)
+    steady_steps, record_every, cutting, period, w_static = (su.steady_steps, su.record_every,
+                                                             su.cutting, su.period, su.w_static)
+    p, x, x_start, imp, stick, stb, rec, met = (su.p, su.x, su.x_start, su.imp, su.stick, su.stb,
+                                                su.rec, su.met)
+    cap_imp = imp.shape[0]
+    n_steps = int(met[L.STEPS_DONE])  # fewer if a cut stopped at its first h = 0
+    n_imp = int(met[L.N_IMP_REC])
+    n_stk = int(met[L.N_STICK_REC])
+    t_end = t0 + n_steps * dt
+    t_steady = t0 + steady_steps * dt
+    n_st = met[L.N_STEADY]
+    nan = math.nan
+    # a cut stopped at its first zero may end before the steady part begins:
+    # its steady statistics are then undefined (NaN), not zero
+    metrics = {
+        "rms_tip_m": math.sqrt(met[L.SUM_W2] / n_st) if n_st else nan,
+        "mean_tip_m": float(met[L.SUM_W] / n_st) if n_st else nan,
+        "max_abs_tip_m": float(met[L.MAX_ABS_W]) if n_st else nan,
+        "max_abs_aux_m": float(met[L.MAX_ABS_AUX]) if n_st else nan,
+        "max_abs_aux_all_m": float(met[L.MAX_ABS_AUX_ALL]),
+        "rms_aux_m": math.sqrt(met[L.SUM_AUX2] / n_st) if n_st else nan,
+        "impacts_plus": int(met[L.N_IMP_PLUS]),
+        "impacts_minus": int(met[L.N_IMP_MINUS]),
+        "impacts_total": int(met[L.N_IMP_ALL]),
+        "micro_impacts": int(met[L.N_MICRO]),
+        "contact_time_s": float(met[L.T_CONTACT]),
+        "stick_time_s": float(met[L.T_STICK]),
+        "impacts_truncated": bool(n_imp > cap_imp),
+        "first_zero_time_s": float(met[L.FIRST_ZERO_T]) if met[L.FIRST_ZERO_T] >= 0 else None,
+        "steps_with_zero_force": int(met[L.N_ZERO_STEPS]),
+        "max_force_n": float(met[L.MAX_FORCE]),
+        "mean_force_n": float(met[L.SUM_F] / n_st) if n_st else nan,
+        "amplitude_m": float(max(0.0, (met[L.STEADY_MAX_W] - met[L.STEADY_MIN_W]) / 2))
+        if n_st else nan,
+        "static_deflection_m": w_static,
+        "events": int(met[L.N_EVENTS]),
+    }
+    e0 = stored_energy(system, x_start)
+    e1 = stored_energy(system, x)
+    w_in = met[L.W_FORCE] + met[L.W_NONRECIP]
+    dissipated = met[L.D_VISC] + met[L.D_IMPACT] + met[L.D_FRICTION]
+    scale = max(abs(w_in), dissipated, abs(e1 - e0), e0, e1, 1e-300)
+    energy = {
+        "work_force_j": float(met[L.W_FORCE]),
+        "work_nonreciprocal_friction_j": float(met[L.W_NONRECIP]),
+        "dissipated_viscous_j": float(met[L.D_VISC]),
+        "dissipated_impacts_j": float(met[L.D_IMPACT]),
+        "dissipated_friction_j": float(met[L.D_FRICTION]),
+        "stored_initial_j": e0,
+        "stored_final_j": e1,
+        "balance_residual_j": float(w_in - (e1 - e0) - dissipated),
+        "balance_relative": float((w_in - (e1 - e0) - dissipated) / scale),
+    }
+    pattern = None  # none without a whole forcing period to classify
+    if system.kind == "ball" and not cutting and holds_a_period(t_end - t_steady, period):
+        pattern = classify(imp[:min(n_imp, cap_imp), 0], imp[:min(n_imp, cap_imp), 1],
+                           stick[:min(n_stk, cap_imp)], (t_steady, t_end), period, dt=dt,
+                           contact_time=met[L.T_CONTACT])
+    thresholds = {
+        "impact_velocity_m_s": float(p[L.V_IMPACT]),
+        "stick_velocity_m_s": float(p[L.V_STICK]),
+        "stick_min_duration_s": float(p[L.STICK_MIN]),
+    }
+    return Run(
+        system=system, forcing=forcing, omega_rad_s=omega, dt_s=dt, t0_s=t0,
+        duration_s=n_steps * dt, steady_start_s=t_steady, metrics=metrics,
+        impacts=imp[:min(n_imp, cap_imp)].copy(),
+        sticks=stick[:min(n_stk, cap_imp)].copy(),
+        strobe=stb[:int(met[L.N_STROBE])].copy(),
+        history=rec[:int(met[L.N_REC])].copy() if record_every else None,
+        initial=State(x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
+        elapsed_s=elapsed, energy=energy, thresholds=thresholds, integrator=integrator,
+    )
+
+
+def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: float = 2.0,
+             dt_s: float = 1e-6,
+             initial: Initial | State | None = None, record_every: int | None = None,
+             steady_fraction: float = STEADY_FRACTION, strobe: bool = False,
+             integrator: str = "auto") -> Run:
+    """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
+
+    ``duration_s`` (s) and ``dt_s`` (s) as published by default (2 s, 1e-6 s);
+    RMS and patterns use the last ``steady_fraction`` of the record.
+    ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
+    to continue it (time, hence forcing phase, runs on).  ``record_every`` N
+    keeps every N-th step's state (None, the default: about :data:`HISTORY_ROWS`
+    rows, enough to plot; 0: no history, as the analyses run); ``strobe`` keeps
+    Poincare samples at Omega t = 0 mod 2 pi.
+
+    Limits (a ParameterError names the parameter, its value and the maximum): every
+    number finite (:mod:`boringbar.simulate.run_limits`); at most 1e10 steps duration_s / dt_s;
+    at most 1e7 history rows (steps // record_every) and as many
+    rows of a cut's delay history (revolutions 60 / rpm / dt_s); at most
+    :data:`MAX_EVENT_ROWS` (1e7) Poincare samples.  Impacts and stick intervals beyond
+    1e7 rows are counted in the metrics but not kept (``impacts_truncated``).
+
+    ``integrator``: ``"auto"`` (the default: :func:`resolve_integrator`, exact for
+    harmonic forcing, RK4 under the paper preset and in cuts), ``"rk4"`` (the
+    published scheme, docs/model.md, section 5) or ``"exact"`` (event-driven, exact
+    between events: the compiled core, `core/exact/`;
+    under harmonic forcing ``dt_s`` is then only the step of the recorded history
+    and of the duration and steady-window rounding, and the steady RMS is the
+    exact integral over the window; in a cut the delayed surface comes from a
+    history of step H = tau / ceil(tau / dt_s), interpolated as
+    ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
+    the first zero of the force is located in time).  True stick-slip (a static friction limit,
+    ``Friction(static_ratio > 1)``) needs ``"exact"``; a cut with Kienzle's law or with
+    force noise needs ``"rk4"`` (the exact integrator's cut is linear in the state).
+    """
+    su = setup_run(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction,
+                   strobe, integrator)
+    return run_result(su, run_kernel(su))
+
+
+def simulate_stage_loop(system: System, forcing: Harmonic, *, duration_s: float = 2.0,
+                        dt_s: float = 1e-6, initial: Initial | State | None = None,
+                        record_every: int | None = None, steady_fraction: float = STEADY_FRACTION,
+                        strobe: bool = False) -> Run:
+    """:func:`simulate` (rk4) with every step through the RK4 stage loop.
+
+    The kernel normally takes a step with no friction switch as one affine
+    map (`core/linmap.hpp`); this runs the four stages every
+    step instead: the same scheme, equal to round-off.  It is the reference
+    of the map in tests/test_kernel.py and the baseline of
+    benchmarks/bench_kernel.py.
+    """
+    su = setup_run(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction,
+                   strobe, "rk4")
+    su.p[L.STAGE_LOOP] = 1.0
+    return run_result(su, run_kernel(su))
+
+
+def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
+                   steady_fraction: float = STEADY_FRACTION, strobe: bool = False) -> list[Run]:
+    """Several harmonic runs of the published RK4 scheme, in one call of the core.
+
+    ``runs``: up to :data:`~boringbar.kernels.BMAX` triples (system,
+    forcing, initial), as :func:`simulate` takes them, whose systems share the
+    bar kind and the number of retained modes, whose forcings are
+    :class:`Harmonic` (each its own amplitude and frequency) and whose initial
+    conditions start at the same time (``Initial`` or ``None``: t = 0; a
+    ``State``: its t_s).  ``duration_s``, ``dt_s``, ``steady_fraction`` and
+    ``strobe`` are the batch's, as in :func:`simulate`.
+
+    The runs go through one call of :func:`boringbar.kernels.run_rk4_batch`, which
+    advances each with the single-run kernel, the GIL released once for all: each
+    returned :class:`Run` equals ``simulate(system, forcing, initial=initial, ...)`` of
+    its triple, bit for bit, except ``elapsed_s``, the batch's wall time shared equally
+    (tests/test_batch.py).
+    """
+    runs = list(runs)
+    if not runs:
+        return []
+    if len(runs) > BMAX:
+        raise ParameterError(f"simulate_batch takes at most {BMAX} runs, not {len(runs)}")
+    sus = []
+    for system, forcing, initial in runs:
+        if not isinstance(forcing, Harmonic):
+            raise ParameterError(f"forcing = {forcing!r}: simulate_batch takes harmonic forcing "
+                                 "only (regenerative cuts: simulate)")
+        sus.append(setup_run(system, forcing, duration_s, dt_s, initial, 0, steady_fraction, strobe,
+                          "rk4"))
+    first = sus[0]
+    for su in sus[1:]:
+        if (su.system.kind, su.system.bar.n_modes) != (first.system.kind,
+                                                       first.system.bar.n_modes):
+            raise ParameterError(f"simulate_batch: a {su.system.kind} bar with "
+                                 f"{su.system.bar.n_modes} modes cannot share a batch with a "
+                                 f"{first.system.kind} bar with {first.system.bar.n_modes}")
+        if su.t0 != first.t0:
+            raise ParameterError(f"simulate_batch: initial states at t = {su.t0:g} s and "
+                                 f"{first.t0:g} s cannot share a batch")
+    nb = len(sus)
+    P = np.array([su.p for su in sus])
+    X = np.array([su.x for su in sus])
+    met = np.array([su.met for su in sus])
+    # each run writes at most its own capacity (the kernel writes a row only while
+    # its count is below the array's), so the rows kept are simulate()'s
+    imp = np.zeros((nb, max(len(su.imp) for su in sus), 3))
+    stick = np.zeros((nb, max(len(su.stick) for su in sus), 2))
+    stb = np.zeros((nb, max(len(su.stb) for su in sus), 5))
+    tic = time.perf_counter()
+    run_rk4_batch(P, X, first.t0, first.dt, first.n_steps, first.steady_steps, imp, stick, stb,
+                  met)
+    elapsed = time.perf_counter() - tic
+    for r, su in enumerate(sus):
+        su.x[:] = X[r]
+        su.met[:] = met[r]
+        su.imp[:] = imp[r, :len(su.imp)]
+        su.stick[:] = stick[r, :len(su.stick)]
+        su.stb[:] = stb[r, :len(su.stb)]
+    return [run_result(su, elapsed / len(sus)) for su in sus]
