@@ -292,13 +292,23 @@ def method_text(ds) -> str:
     """The method of a lobes Dataset in one line: criterion, search, integrator, run
     length (every summary line and figure names it)."""
     a = ds.attrs
-    crit = {"growth": "converged verdict (growth rate of a knock; settled vibration "
-                      f"within {a.get('tolerance_m', math.nan) * 1e6:g} um p-p)",
+    crit = {"growth": "converged verdict: chatter-free depth = the largest depth whose "
+                      "settled vibration keeps the tool in the cut and within "
+                      f"{a.get('tolerance_m', math.nan) * 1e6:g} um p-p from every start "
+                      f"tried ({starts_text(a)})",
             "zero": "published criterion (the force reaches zero)",
             "bounded": f"bounded chatter (amplitude > {a.get('bounded_fraction', 0.1):g} "
                        "h_m, or the force reaches zero)"}[a["criterion"]]
     return (f"{crit}; {a['method']} on {a['depth_grid']}; {a['integrator_used']} at dt = "
             f"{a['dt_s']:g} s; {run_length_text(ds)}")
+
+
+def starts_text(attrs: dict) -> str:
+    """The starts a converged verdict tried, in words: the small knock, and the large
+    ones (``knocks_m``, a JSON list in the attributes)."""
+    knocks = json.loads(attrs.get("knocks_m", "[]"))
+    big = "".join(f", a {k * 1e6:g} um knock" for k in knocks)
+    return f"a {attrs.get('knock_m', math.nan) * 1e6:g} um knock{big}"
 
 
 def _seeds(cases: list[Case], options: LobesOptions) -> dict:
