@@ -28,6 +28,8 @@ from boringbar.simulate import Integration, simulate
 
 #: codes of the verdict arrays
 NOT_RUN, CHATTER, STABLE, UNDECIDED = -1, 0, 1, 2
+#: The first step (grid depths) of a ball's chatter-free search up from its onset.
+BALL_STEP = 8
 
 
 def fixed_cut(case: Case, rpm: float, depth: float, options, integration: Integration) -> dict:
@@ -72,11 +74,11 @@ def not_free(res: dict) -> bool:
     return res["verdict"] == CHATTER
 
 
-def column(chatter, seed: int, n_max: int, method: str, need: int) -> None:
+def column(chatter, seed: int, n_max: int, method: str, need: int, up_step: int = 1) -> None:
     """Run grid indices through ``chatter(i) -> bool`` by ``method`` ("scan": upwards from
-    1 until ``need`` chatter in a row; "search": bracket from ``seed``, bisect, then
-    confirm the ``need - 1`` indices above the first chattering one, scanning on where
-    one is stable)."""
+    1 until ``need`` chatter in a row; "search": bracket from ``seed`` (upwards in steps
+    from ``up_step``, doubling), bisect, then confirm the ``need - 1`` indices above the
+    first chattering one, scanning on where one is stable)."""
 
     def scan_from(i: int) -> None:
         run_of = 0
@@ -87,7 +89,7 @@ def column(chatter, seed: int, n_max: int, method: str, need: int) -> None:
     if method == "scan":
         scan_from(1)
         return
-    lo, hi = bisect(chatter, *bracket(chatter, min(max(1, seed), n_max), n_max))
+    lo, hi = bisect(chatter, *bracket(chatter, min(max(1, seed), n_max), n_max, up_step))
     if hi > n_max:
         return
     for i in range(hi + 1, min(hi + need, n_max + 1)):
@@ -96,9 +98,10 @@ def column(chatter, seed: int, n_max: int, method: str, need: int) -> None:
             break
 
 
-def bracket(chatter, seed: int, n_max: int) -> tuple[int, int]:
+def bracket(chatter, seed: int, n_max: int, up_step: int = 1) -> tuple[int, int]:
     """[lo stable, hi chatter] grid indices, growing away from ``seed`` in doubling
-    steps (hi = n_max + 1: nothing chattered up to the deepest cut)."""
+    steps, the first one up ``up_step`` (hi = n_max + 1: nothing chattered up to the
+    deepest cut)."""
     width = 1
     if chatter(seed):
         lo, hi = seed, seed
@@ -106,7 +109,8 @@ def bracket(chatter, seed: int, n_max: int) -> tuple[int, int]:
             hi, lo = lo, max(0, lo - width)
             width *= 2
         return lo, hi
-    lo, hi = seed, seed + 1
+    lo, hi = seed, min(seed + up_step, n_max) if seed < n_max else n_max + 1
+    width = up_step
     while hi <= n_max and not chatter(hi):
         lo, hi = hi, min(hi + width, n_max) if hi < n_max else n_max + 1
         width *= 2
@@ -139,7 +143,10 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
                     *bracket(lambda i: onset_chatters(result(i)), min(max(1, seed), n_max),
                              n_max))
     if case.system.kind == "ball" and hi <= n_max:
-        column(lambda i: not_free(result(i)), hi, n_max, options.method, options.successive)
+        # a ball that bounds its vibration within the tolerance often does so well above
+        # its onset: the search up from it starts with a step of BALL_STEP grid depths
+        column(lambda i: not_free(result(i)), hi, n_max, options.method, options.successive,
+               BALL_STEP)
     return done
 
 
