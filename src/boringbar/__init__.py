@@ -12,7 +12,8 @@ layers behind them.
   :class:`Regenerative` and its :class:`CuttingLaw`.
 - One run: :func:`simulate` -> :class:`Run`.
 - Analyses: :func:`sweep`, :func:`lobes` (a boring job's speeds:
-  :func:`boring_speeds`), :func:`bifurcation`, :func:`basins`,
+  :func:`boring_speeds`), :func:`chatter_map` (the settled vibration at every speed and
+  depth, :class:`ChatterMapOptions`), :func:`bifurcation`, :func:`basins`,
   :func:`sensitivity`, :func:`poincare_map`; design search: :func:`design`
   (:class:`DesignOptions`, :class:`Variable`, :class:`Uncertain`, :func:`load_design`).
 - Closed-form references: :func:`tip_frf`, :func:`min_real_part`,
@@ -43,6 +44,7 @@ from boringbar.version import __version__  # noqa: F401 (the package's version)
 _HOMES = {
     "boringbar.analysis.basins": ("BasinOptions", "basins"),
     "boringbar.analysis.bifurcation": ("BifurcationOptions", "bifurcation"),
+    "boringbar.analysis.chatter_map": ("ChatterMapOptions", "chatter_map"),
     "boringbar.analysis.continuation": ("ContinuationOptions", "continuation"),
     "boringbar.analysis.design": ("design",),
     "boringbar.analysis.design_file": ("load_design",),
@@ -90,6 +92,7 @@ __all__ = [
     "BasinOptions",
     "BifurcationOptions",
     "Case",
+    "ChatterMapOptions",
     "ContinuationOptions",
     "CuttingLaw",
     "Cuts",
@@ -121,6 +124,7 @@ __all__ = [
     "basins",
     "bifurcation",
     "boring_speeds",
+    "chatter_map",
     "continuation",
     "den_hartog_parameters",
     "describe_modes",
