@@ -123,9 +123,11 @@ def map_verdict(args) -> VerdictOptions:
     if args.small_knock_only and args.knock_um:
         raise ParameterError("--small-knock-only and --knock-um: give one (no large knock, "
                              "or these)")
-    if args.knock_um is None and not args.small_knock_only:
-        verdict = replace(verdict, knocks_m=(LARGE_KNOCK_M,))
-    return verdict
+    knocks = (LARGE_KNOCK_M,) if args.knock_um is None and not args.small_knock_only \
+        else verdict.knocks_m
+    # rounded so that --knock-um 20 is the library's 20e-6 m, not a neighbour of it
+    return replace(verdict, knocks_m=tuple(round(k, 15) for k in knocks),
+                   tolerance_m=round(verdict.tolerance_m, 15))
 
 
 def _cmd_chatter_map(args) -> Outcome:

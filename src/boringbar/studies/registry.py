@@ -461,9 +461,10 @@ def _map_options(study: Study) -> ChatterMapOptions:
     o = study.options
     cut = {k: v for k, v in _cut_options(study).items() if k not in ("start", "bounded_fraction")}
     try:
+        # rounded so that 20 um is the library's 20e-6 m, not a neighbour of it
         verdict = VerdictOptions(confidence=o["confidence"], max_duration_s=o["max_run_s"],
-                                 tolerance_m=o["tolerance_um"] * 1e-6,
-                                 knocks_m=tuple(k * 1e-6 for k in o["knocks_um"]))
+                                 tolerance_m=round(o["tolerance_um"] * 1e-6, 15),
+                                 knocks_m=tuple(round(k * 1e-6, 15) for k in o["knocks_um"]))
         depths = None if o["depths_mm"] is None else tuple(round(d * 1e-3, 15)
                                                             for d in o["depths_mm"])
         return ChatterMapOptions(tuple(_axis(study, "rpm")), depths, **cut, verdict=verdict)
