@@ -208,9 +208,10 @@ def _n_starts(ds) -> str:
 
 def _legend(fig, ds) -> None:
     """What the lines, marks and grey cells mean, below the panels."""
-    ball = any(str(b) == "ball" for b in ds["bar"].values)
+    balls = [str(b) == "ball" for b in ds["bar"].values]
     tol_um = ds.attrs["tolerance_m"] * 1e6
-    host = ("bare-bar limit (analytic): the bar without its ball" if ball
+    host = ("bare-bar limit (analytic): the bar without its ball" if all(balls)
+            else "analytic limit; for a ball, the bar without it" if any(balls)
             else "analytic limit of the linear bar")
     entries = [
         (Line2D([], [], **LINES["free"]), "chatter-free depth (and every depth below)"),
