@@ -18,8 +18,18 @@ import numpy as np
 import xarray as xr
 
 import boringbar as bb
-from boringbar.analysis import basins, bifurcation, continuation, design, lobes, sensitivity, sweep
+from boringbar.analysis import (
+    basins,
+    bifurcation,
+    chatter_map,
+    continuation,
+    design,
+    lobes,
+    sensitivity,
+    sweep,
+)
 from boringbar.analysis.design_options import UNCERTAIN, VARIABLES
+from boringbar.analysis.verdict import VerdictOptions
 from boringbar.model.system_file import BallSpec, CavitySpec, TmdSpec
 from boringbar.vocabulary import FILE_UNITS, unit_of
 
@@ -170,6 +180,8 @@ def _tiny_analyses():
                                    integration=bb.Integration(duration_s=0.05))
     yield "lobes with draws", lobes, bb.lobes(solid, bb.LobesOptions(
         [20000.0], uncertainty=bb.Uncertainty(draws=2), analytic=False))
+    yield "chatter_map", chatter_map, bb.chatter_map(solid, bb.ChatterMapOptions(
+        [1200.0], [0.02e-3, 0.1e-3], verdict=VerdictOptions(knocks_m=(20e-6,))))
     yield "bifurcation", bifurcation, bb.bifurcation(ball, bb.BifurcationOptions(
         "force", [5.0, 10.0]), integration=quick)
     yield "basins", basins, bb.basins(ball, bb.BasinOptions((-1e-3, 1e-3, 2), (-1.0, 1.0, 2),

@@ -13,9 +13,10 @@ layers behind them.
 - One run: :func:`simulate` -> :class:`Run`.
 - Analyses: :func:`sweep`, :func:`lobes` (a boring job's speeds:
   :func:`boring_speeds`; the chance of chatter: :class:`Uncertainty`),
-  :func:`bifurcation`, :func:`basins`, :func:`sensitivity`, :func:`poincare_map`; design
-  search: :func:`design` (:class:`DesignOptions`, :class:`Variable`, :class:`Uncertain`,
-  :func:`load_design`).
+  :func:`chatter_map` (the settled vibration at every speed and depth,
+  :class:`ChatterMapOptions`), :func:`bifurcation`, :func:`basins`, :func:`sensitivity`,
+  :func:`poincare_map`; design search: :func:`design` (:class:`DesignOptions`,
+  :class:`Variable`, :class:`Uncertain`, :func:`load_design`).
 - Closed-form references: :func:`tip_frf`, :func:`min_real_part`,
   :func:`sims_tuning`, :func:`den_hartog_parameters`.
 - Study files: :func:`load_study`, :func:`run_study`.
@@ -45,6 +46,7 @@ _HOMES = {
     "boringbar.analysis.basins": ("BasinOptions", "basins"),
     "boringbar.analysis.bifurcation": ("BifurcationOptions", "bifurcation"),
     "boringbar.analysis.chatter_probability": ("Uncertainty",),
+    "boringbar.analysis.chatter_map": ("ChatterMapOptions", "chatter_map"),
     "boringbar.analysis.continuation": ("ContinuationOptions", "continuation"),
     "boringbar.analysis.design": ("design",),
     "boringbar.analysis.design_file": ("load_design",),
@@ -93,6 +95,7 @@ __all__ = [
     "BasinOptions",
     "BifurcationOptions",
     "Case",
+    "ChatterMapOptions",
     "ContinuationOptions",
     "CuttingLaw",
     "Cuts",
@@ -125,6 +128,7 @@ __all__ = [
     "basins",
     "bifurcation",
     "boring_speeds",
+    "chatter_map",
     "continuation",
     "den_hartog_parameters",
     "describe_modes",

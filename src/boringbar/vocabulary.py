@@ -57,7 +57,7 @@ DIMENSIONLESS = frozenset({
     "stable",
     # fractions and tolerances relative to something named beside them
     "steady_fraction", "bounded_fraction", "fraction", "tolerance", "tol", "step",
-    "depth_tolerance", "force_noise", "mc", "exponent",
+    "depth_tolerance", "settle_tolerance", "force_noise", "mc", "exponent",
     "min_step", "max_step", "quantile", "u",
     # counts, indices and sizes
     "revolutions", "periods", "period", "settle_periods", "max_points", "max_branches",
@@ -68,10 +68,10 @@ DIMENSIONLESS = frozenset({
     "periodicity", "pareto", "successive", "poincare_from",
     "stop_after", "poincare_sample", "status", "events", "impact_wall", "direction",
     "dask_local", "scale", "steps_with_zero_force", "runs", "id", "zero_one_K",
-    "multipliers_abs", "noise_seed", "n",
+    "multipliers_abs", "noise_seed", "n", "undecided_runs",
     # labels and verdict codes (stored as numbers where a Dataset has none of them)
     "event_kind", "verdict", "verdict_bounded", "chatter", "published_chatter", "onset",
-    "undecided_runs", "settle_tolerance",
+    "chatter_free", "chatter_free_by_start",
     # a confidence level
     "confidence",
     # the chance of chatter: draws, their spreads and factors, probabilities

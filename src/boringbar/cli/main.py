@@ -1,6 +1,6 @@
-"""The ``boringbar`` command: ``simulate``, ``sweep``, ``lobes``, ``bifurcation``,
-``basins`` and ``sensitivity``; ``run`` (study files) and ``paper`` (the whole
-published study) are in :mod:`boringbar.cli.study`.
+"""The ``boringbar`` command: ``simulate``, ``sweep``, ``lobes``, ``chatter-map``,
+``bifurcation``, ``basins`` and ``sensitivity``; ``run`` (study files) and ``paper`` (the
+whole published study) are in :mod:`boringbar.cli.study`.
 
 Units are in the option names (docs/model.md, section 7): ``--gap-mm``,
 ``--force-n``, ``--duration-s``...; everything is converted to SI here and
@@ -39,6 +39,8 @@ COMMANDS = {
               "tip RMS and impact pattern against Omega/omega_n"),
     "lobes": ("boringbar.cli.sweeps", "add_lobes",
               "stability lobes by time-domain simulation of cuts"),
+    "chatter-map": ("boringbar.cli.chatter_map", "add_chatter_map",
+                    "the settled vibration of every cut of a speed x depth grid"),
     "bifurcation": ("boringbar.cli.nonlinear", "add_bifurcation",
                     "Poincare samples of the tip against F0 (or Omega/omega_n, gap, e)"),
     "basins": ("boringbar.cli.nonlinear", "add_basins",

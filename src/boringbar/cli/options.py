@@ -181,15 +181,16 @@ def add_cutting(g) -> None:
                    help="bounded chatter: steady amplitude above X h_m (default: 0.1)")
 
 
-def add_verdict(g) -> None:
-    """How the converged verdict judges a cut (analysis/verdict.py; docs/chatter.md)."""
+def add_verdict(g, knocks: str = "only the small 1 um knock") -> None:
+    """How the converged verdict judges a cut (analysis/verdict.py; docs/chatter.md);
+    ``knocks``: the starts a command takes without --knock-um, in words."""
     g.add_argument("--tolerance-um", type=float, metavar="UM",
                    help="largest settled tip peak-to-peak that is chatter-free, in um (a "
                         "surface-finish budget; default: 10)")
     g.add_argument("--knock-um", action="append", metavar="UM[,UM...]",
                    help="also start each cut from a knock of this tip amplitude in um (a "
                         "large disturbance; repeatable); the chatter-free depth must hold "
-                        "from every start (default: only the small 1 um knock)")
+                        f"from every start (default: {knocks})")
     g.add_argument("--confidence", type=float, metavar="X",
                    help="confidence of a growth rate's sign, in (0.5, 1) (default: 0.99)")
     g.add_argument("--max-run-s", type=float, metavar="S",

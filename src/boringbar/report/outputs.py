@@ -1,5 +1,5 @@
 """The files of each analysis and its summary: what ``boringbar sweep``, ``lobes``,
-``bifurcation``, ``basins`` and ``sensitivity`` write into their ``--out``
+``chatter-map``, ``bifurcation``, ``basins`` and ``sensitivity`` write into their ``--out``
 directory, shared by those commands and by ``boringbar paper``
 (:mod:`boringbar.report.paper`), so both write the same files the same way; and
 what ``boringbar design`` writes.
@@ -17,6 +17,7 @@ import numpy as np
 
 from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import summary as bifurcation_summary
+from boringbar.analysis.chatter_map import summary as chatter_map_summary
 from boringbar.analysis.continuation import summary as continuation_summary
 from boringbar.analysis.design import sample_table, summary_line, trial_table
 from boringbar.analysis.design import summary as design_summary
@@ -32,6 +33,7 @@ from boringbar.plot import (
     plot_sweep,
 )
 from boringbar.plot_bar import plot_lobes
+from boringbar.plot_chatter import plot_chatter_map
 from boringbar.plot_design import plot_best, plot_design
 from boringbar.plot_orbits import plot_continuation
 from boringbar.plot_variations import plot_sensitivity
@@ -80,6 +82,14 @@ def lobes_files(ds, out, examples=None) -> dict:
     if examples is not None:
         summary["examples"] = examples_summary(examples)
     return summary
+
+
+def chatter_map_files(ds, out) -> dict:
+    """``out/chatter_map.nc`` and ``out/chatter_map.png``; the summary."""
+    out = Path(out)
+    files = {"netcdf": write_netcdf_atomic(ds, out / "chatter_map.nc"),
+             "png": save_figure_atomic(plot_chatter_map(ds), out / "chatter_map.png")}
+    return {**chatter_map_summary(ds), "files": {k: str(v) for k, v in files.items()}}
 
 
 def bifurcation_files(ds, out) -> dict:

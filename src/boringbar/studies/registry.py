@@ -21,6 +21,8 @@ resumable stores, progress.
 The analyses reuse the per-point code of the in-process functions:
 ``sweep``: :func:`boringbar.analysis.sweep.compute` per lock-step batch of runs;
 ``lobes``: :func:`boringbar.analysis.lobes.compute` per (case, rpm) column;
+``chatter_map``: :func:`boringbar.analysis.chatter_map.compute` per (case, rpm, depth)
+cell;
 ``bifurcation``: :func:`boringbar.analysis.bifurcation.compute`, one case's whole
 forward + backward continuation;
 ``basins``: :func:`boringbar.analysis.basins.compute`, a lock-step batch of grid
@@ -41,34 +43,39 @@ import numpy as np
 from boringbar._validate import ParameterError, check_range
 from boringbar.analysis import basins as basins_mod
 from boringbar.analysis import bifurcation as bifurcation_mod
+from boringbar.analysis import chatter_map as chatter_map_mod
 from boringbar.analysis import lobes as lobes_mod
 from boringbar.analysis import sensitivity as sensitivity_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
 from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, OperatingPoint, check_cells
 from boringbar.analysis.bifurcation import BifurcationOptions
+from boringbar.analysis.chatter_map import ChatterMapOptions
 from boringbar.analysis.chatter_probability import MAX_DRAWS, Uncertainty
 from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
 from boringbar.analysis.speeds import default_speeds
 from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
+from boringbar.analysis.verdict import VerdictOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import MAX_DEPTH, Harmonic
 from boringbar.model.system import make_system
 from boringbar.simulate import INTEGRATOR_CHOICES, Initial, Integration, check_friction_law
 from boringbar.simulate.run_limits import check_delay, check_step, check_steps
-from boringbar.studies.schema import SYSTEM_KEYS, Setting, Study, StudyError
+from boringbar.studies.schema import SECTION_OF, SYSTEM_KEYS, Setting, Study, StudyError
 
 
 @dataclass(frozen=True)
 class Range:
     """An option given as a list of numbers or {start, stop, step} (or, with
-    ``count``, {start, stop, count}: count values, both ends included)."""
+    ``count``, {start, stop, count}: count values, both ends included); ``empty``: an
+    empty list is allowed too."""
 
     default: tuple
     count: bool = False
     lo: float | None = None
     lo_open: bool = False
+    empty: bool = False
 
     def allowed(self) -> str:
         spec = "{start, stop, count}" if self.count else "a list of numbers or {start, stop, step}"
@@ -100,7 +107,7 @@ class Range:
             if n > MAX_GRID_VALUES:
                 raise ValueError(f"{n:.3g} values; the allowed maximum is {MAX_GRID_VALUES}")
             v = [round(a + i * s, 12) for i in range(n)]
-        if (not isinstance(v, list) or not v or len(v) > MAX_GRID_VALUES
+        if (not isinstance(v, list) or (not v and not self.empty) or len(v) > MAX_GRID_VALUES
                 or not all(_finite(x) for x in v)):
             raise ValueError(self.allowed() + ", finite")
         v = [float(x) for x in v]
@@ -424,6 +431,79 @@ def _lobe_options(study: Study) -> LobesOptions:
         raise StudyError(f"{study.source}: [analysis] {exc}") from None
 
 
+# --- chatter map ------------------------------------------------------------------
+
+class ChatterMap(Analysis):
+    """The chatter amplitude map: one point per (case, rpm, depth) cell, each judged by the
+    converged verdict.  The defaults are the library's
+    (:class:`~boringbar.analysis.chatter_map.ChatterMapOptions`): the boring speeds of the
+    study's bars (``[forcing] workpiece``'s), 20 depths around their bare-bar limit, a
+    small and a 20 um knock, a 10 um peak-to-peak tolerance.  Every cut starts in
+    progress, knocked, and runs until its verdict: ``[forcing] start`` and ``depth_mm``
+    and ``[run] duration_s`` do not apply (``max_run_s`` caps a run)."""
+
+    name = "chatter_map"
+    module = chatter_map_mod
+    options = {
+        "depths_mm": Range(None, lo=0.0, lo_open=True),
+        "tolerance_um": Setting("float", VerdictOptions.tolerance_m * 1e6, 0.0, 1e6, True,
+                                doc="the largest settled tip peak-to-peak that is chatter-free"),
+        "knocks_um": Range((chatter_map_mod.LARGE_KNOCK_M * 1e6,), lo=0.0, lo_open=True,
+                           empty=True),
+        "confidence": Setting("float", VerdictOptions.confidence, 0.5, 0.999999, True),
+        "max_run_s": Setting("float", VerdictOptions.max_duration_s, 0.0, 1000.0, True),
+    }
+    grid_keys = SYSTEM_KEYS + ("rpm",)
+
+    def default_axes(self, study):
+        """The speeds of the study's bars (:func:`~boringbar.analysis.chatter_map.
+        map_speeds`, as ``chatter_map`` takes them)."""
+        return {"rpm": chatter_map_mod.map_speeds(study_cases(study)[0],
+                                                  study.value("workpiece"))}
+
+    def plan(self, study):
+        cases, values = study_cases(study)
+        plan = chatter_map_mod.plan(cases, _map_options(study), _integration(study, initial=None))
+        plan.extra["values"] = values
+        return plan
+
+    def runs(self, plan):
+        c = plan.context
+        return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True)
+                for x in c["cases"]]
+
+    def integrators(self) -> tuple:
+        """The converged verdict runs RK4."""
+        return ("auto", "rk4")
+
+
+#: Keys a chatter map does not take: its cuts start in progress and run until their verdict.
+_NOT_FOR_A_MAP = ("start", "bounded_fraction", "depth_mm", "duration_s")
+
+
+def _map_options(study: Study) -> ChatterMapOptions:
+    """The chatter map's options of the study's ``[analysis]`` (um and mm converted, checked
+    under the file's keys) and ``[forcing]`` cut, at its speeds."""
+    given = [k for k in _NOT_FOR_A_MAP if k in study.given]
+    if given:
+        raise StudyError(f"{study.source}: key '{SECTION_OF[given[0]]}.{given[0]}' = "
+                         f"{study.value(given[0])!r}: a chatter map's cuts start in progress, "
+                         "knocked, and run until their verdict (analysis.depths_mm gives the "
+                         "depths, analysis.max_run_s caps a run)")
+    o = study.options
+    cut = {k: v for k, v in _cut_options(study).items() if k not in ("start", "bounded_fraction")}
+    try:
+        # rounded so that 20 um is the library's 20e-6 m, not a neighbour of it
+        verdict = VerdictOptions(confidence=o["confidence"], max_duration_s=o["max_run_s"],
+                                 tolerance_m=round(o["tolerance_um"] * 1e-6, 15),
+                                 knocks_m=tuple(round(k * 1e-6, 15) for k in o["knocks_um"]))
+        depths = None if o["depths_mm"] is None else tuple(round(d * 1e-3, 15)
+                                                            for d in o["depths_mm"])
+        return ChatterMapOptions(tuple(_axis(study, "rpm")), depths, **cut, verdict=verdict)
+    except ParameterError as exc:
+        raise StudyError(f"{study.source}: [analysis] {exc}") from None
+
+
 # --- bifurcation ------------------------------------------------------------------
 
 class Bifurcation(Analysis):
@@ -621,5 +701,5 @@ def _initial_or_none(study: Study):
     return None if all(v == 0.0 for v in ini.__dict__.values()) else ini
 
 
-ANALYSES: dict[str, Analysis] = {a.name: a for a in (Sweep(), Lobes(), Bifurcation(),
-                                                      Basins(), Sensitivity())}
+ANALYSES: dict[str, Analysis] = {a.name: a for a in (Sweep(), Lobes(), ChatterMap(),
+                                                      Bifurcation(), Basins(), Sensitivity())}
