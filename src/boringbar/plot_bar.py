@@ -289,7 +289,7 @@ def _lobe_panel(ax, ds, i: int, legend: dict, at: int | None, top: float) -> Non
     if "onset_depth_m" in ds and str(ds["bar"].values[i]) == "ball":
         h, = ax.plot(*_broken(rpm, ds["onset_depth_m"].values[i] * 1e3), color="black",
                      lw=1.0, ls="--")
-        legend.setdefault("onset: a small knock starts to grow (the ball not yet at a wall)", h)
+        legend.setdefault("onset: a small knock starts to grow (the ball off its walls)", h)
     above = ~(limit <= top)  # NaN: no chatter up to the deepest cut
     if above.any():
         h, = ax.plot(rpm[above], np.full(int(above.sum()), top), ls="none", marker=6, ms=8,

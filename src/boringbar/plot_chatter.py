@@ -210,9 +210,10 @@ def _legend(fig, ds) -> None:
     """What the lines, marks and grey cells mean, below the panels."""
     balls = [str(b) == "ball" for b in ds["bar"].values]
     tol_um = ds.attrs["tolerance_m"] * 1e6
-    host = ("bare-bar limit (analytic): the bar without its ball" if all(balls)
-            else "analytic limit; for a ball, the bar without it" if any(balls)
-            else "analytic limit of the linear bar")
+    host = ("analytic limit of small vibrations: the ball held by its friction, or "
+            "without friction not acting" if all(balls)
+            else "analytic limit; for a ball, of small vibrations (System.linear_host)"
+            if any(balls) else "analytic limit of the linear bar")
     entries = [
         (Line2D([], [], **LINES["free"]), "chatter-free depth (and every depth below)"),
         *([(Line2D([], [], **LINES["small_alone"]), "the same from the small knock alone")]

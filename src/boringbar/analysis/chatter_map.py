@@ -170,7 +170,8 @@ def map_speeds(cases: list[Case], workpiece: str | CuttingLaw | None = None,
 
 def host_limits(cases: list[Case], rpm, kr_pa: float) -> np.ndarray:
     """The analytic limit (m) of each case's linear host at each speed (case x rpm): the
-    bar itself, or for a free ball the bare cavity bar (the ball not yet at a wall)."""
+    bar itself, or for a free ball the bar a small vibration sees (System.linear_host:
+    the ball held by its friction, or without friction not acting)."""
     return np.array([limit_at_speeds(c.system.linear_host(), np.asarray(rpm, dtype=float),
                                      kr_pa) for c in cases])
 
@@ -251,7 +252,7 @@ def compute(context: dict, point: tuple[int, int, int]) -> dict:
     o = context["options"]
     case = context["cases"][i]
     v = judge(case.system, o.forcing(o.depths_m[k], o.rpm[j]), o.verdict,
-              dt_s=context["integration"].dt_s)
+              dt_s=context["integration"].dt_s, values=True)
     return cell(v, o.verdict)
 
 
@@ -392,8 +393,8 @@ def _column_variables(d: dict, limits: np.ndarray) -> dict:
             "units": "m", "long_name": "onset: depth where a small knock's growth rate "
                                        "crosses zero (0: at or below the shallowest)"}),
         "host_analytic_limit_m": (cols, limits, {
-            "units": "m", "long_name": "analytic limit of the linear host (the bare cavity "
-                                       "bar for the free ball: the ball not yet at a wall)"}),
+            "units": "m", "long_name": "analytic limit of the linear host (for the free "
+                                       "ball: held by its friction, or without it if none)"}),
         "min_chatter_free_depth_m": (("case",), np.nanmin(d["free"], axis=1), {
             "units": "m"}),
     }

@@ -43,8 +43,9 @@ Two ways to find, at each speed, the depth where chatter starts:
   stable (non-monotone stability) the search continues as a scan from there.
   The seed is the analytic (frequency-domain) limit of the linear host at
   that speed: the solid, TMD or locked-ball bar itself, and for the free
-  ball the bare cavity bar (at the onset of chatter the vibration is far
-  smaller than the gap, so the ball does not yet touch a wall).  It only
+  ball (at the onset of chatter the vibration is far smaller than the gap, so
+  the ball does not yet touch a wall) the bar carrying it where friction holds
+  it, the bare cavity bar without friction (System.linear_host).  It only
   sets where the search starts: the runs decide.
   It assumes that everything below the bracket it found is stable; where
   stability is not monotone in depth (a ball damper may chatter in a band
@@ -614,8 +615,8 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
 
 def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
     """The frequency-domain limit of the linear bars (NaN for the free ball), and of
-    every case's linear host (the bare cavity bar for the free ball, which is the
-    bar the cut sees while the ball does not touch a wall)."""
+    every case's linear host (System.linear_host: for the free ball the bar a small
+    vibration sees, the ball held by its friction or, without friction, not acting)."""
 
     # evenly spaced in 1/rpm, the lobe number's axis: every lobe drawn as finely
     fine = 1.0 / np.linspace(1.0 / rpm.max(), 1.0 / rpm.min(), max(200, 20 * len(rpm)))[::-1]
@@ -629,8 +630,8 @@ def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
             curve[i] = limit_at_speeds(case.system, fine, kr)
     ds["analytic_limit_m"] = (("case", "rpm"), on_grid, {"units": "m"})
     ds["host_analytic_limit_m"] = (("case", "rpm"), host_grid, {
-        "units": "m", "long_name": "analytic limit of the linear host (bare cavity bar for "
-                                   "the free ball)"})
+        "units": "m", "long_name": "analytic limit of the linear host (for the free ball: the "
+                                   "bar carrying it by friction, or without it if none)"})
     ds.coords["fine_rpm"] = ("fine_rpm", fine, {"units": "rev/min"})
     ds["analytic_curve_m"] = (("case", "fine_rpm"), curve, {"units": "m"})
 

@@ -59,9 +59,9 @@ MIN_SEGMENT = 6
 #: the one before (a geometric tail that has set in).
 MAX_RISE_RATIO = 0.0
 #: A knock whose every amplitude has fallen to this fraction of its first window's has
-#: died out (a heavily damped bar reaches the arithmetic's round-off in a few windows,
-#: where slopes are noise).
-DECAYED = 1e-6
+#: died out: what is left is a floor where slopes are noise (the arithmetic's round-off
+#: on a heavily damped bar, a ball stuck by its friction chattering in the sgn() law).
+DECAYED = 1e-3
 #: A settled status: above the tolerance and not falling (a verdict that needs no more).
 ABOVE = "above the tolerance"
 #: Verdicts (LEVELLED: a vibration neither growing nor decaying, for the settling to judge).

@@ -210,8 +210,9 @@ def verdict_options(args) -> VerdictOptions:
     check_range("--confidence", conf, 0.5, 0.999999, lo_open=True)
     cap = d.max_duration_s if args.max_run_s is None else args.max_run_s
     check_range("--max-run-s", cap, 0.0, 1000.0, lo_open=True, unit="s")
-    return VerdictOptions(confidence=conf, max_duration_s=cap, tolerance_m=tol * 1e-6,
-                          knocks_m=tuple(k * 1e-6 for k in knocks))
+    # divided, not multiplied: 10 um is then 1e-05 m to the bit
+    return VerdictOptions(confidence=conf, max_duration_s=cap, tolerance_m=tol / 1e6,
+                          knocks_m=tuple(k / 1e6 for k in knocks))
 
 
 def add_steady_fraction(group) -> None:

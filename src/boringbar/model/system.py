@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -87,11 +87,17 @@ class System:
         return "locked" if self.damper.locked else "ball"
 
     def linear_host(self) -> System:
-        """The linear bar a cut sees at the onset of chatter: for a free ball the bare
-        cavity bar (the ball is not touching yet), else the system itself."""
-        if self.kind == "ball":
-            return System(self.bar, None, self.preset, self.readings)
-        return self
+        """The linear bar a small vibration sees (the onset of chatter): for a free ball
+        off its walls, the bar carrying it where friction holds it (a vibration so small
+        that the bar's acceleration at the cavity is below what the friction can give
+        the ball moves the ball with the bar: the locked ball), the bare cavity bar where
+        there is no friction (the ball does not act); else the system itself."""
+        if self.kind != "ball":
+            return self
+        if self.damper.friction_force_n > 0:
+            return System(self.bar, replace(self.damper, locked=True), self.preset,
+                          self.readings)
+        return System(self.bar, None, self.preset, self.readings)
 
     @property
     def reference_frequency_rad_s(self) -> float:

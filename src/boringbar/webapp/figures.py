@@ -39,7 +39,7 @@ WALLS = {1.0: OKABE_ITO["reddish purple"], -1.0: OKABE_ITO["sky blue"]}
 TOOLS = "pan,wheel_zoom,box_zoom,reset,save"
 KINDS = ("solid", "ball", "tmd")
 #: each bar in the lobes' readout (the ball bar's analytic curve is its linear host's)
-READOUT = {"solid": "solid", "ball": "ball bar's onset (the ball not yet at a wall)",
+READOUT = {"solid": "solid", "ball": "ball bar's onset (small vibrations, the ball off its walls)",
            "tmd": "TMD"}
 
 
@@ -233,7 +233,7 @@ class LobesFigure:
         for kind in KINDS:
             for pin in ("", "pin_"):
                 src = self.src[pin + kind] = _empty("rpm", "b", name=f"lobes-{pin}{kind}")
-                label = LABELS[kind] + (": onset, the ball not yet at a wall" if kind == "ball"
+                label = LABELS[kind] + (": onset, the ball off its walls" if kind == "ball"
                                         else "")
                 self.lines[pin + kind] = self.fig.line(
                     "rpm", "b", source=src, color=COLOURS[kind], line_width=2,

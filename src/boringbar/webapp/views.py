@@ -237,8 +237,8 @@ def physics(system) -> dict:
 
 def lobes_view(design: Design) -> dict:
     """The analytic chatter-free depth (mm) against speed of every bar (for the ball
-    bar, its linear host: the bare cavity bar, which a cut sees until the ball first
-    touches), and each one's depth at the design's speed."""
+    bar, its linear host: the bar a small vibration sees, the ball held by its friction
+    or, without friction, not acting), and each one's depth at the design's speed."""
     rpm, at = lobe_speeds(design), design.settings.rpm
     out = {"rpm": rpm, "curves": {}, "at_rpm": at, "depth_at_mm": {}}
     kr = design.cut().linear_coefficient_pa
@@ -273,7 +273,7 @@ def simulated_lobes(design: Design, progress=None, workers: int | None = None) -
 def inputs(view: str, design: Design) -> str:
     """What ``view`` depends on, as text: a change that leaves it alone needs no
     recomputation (the lobes and the bar do not move with the gap; the analytic lobes
-    see the ball bar's linear host, without its ball)."""
+    see the ball bar's linear host, which the gap does not change)."""
     data, s = design.data, design.settings
     if view == "lobes":
         data.pop("ball", None)
