@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 
 import boringbar as bb
 from boringbar.analysis.lobes import LobesOptions
@@ -71,6 +72,8 @@ def figure(env: dict, speeds, rat: dict) -> Figure:
               color="0.4")
     left.set(xlabel="time (s)", ylabel="tip amplitude (um)",
              title=f"a 1 um knock at {RPM:g} rpm")
+    left.yaxis.set_major_formatter(ScalarFormatter())
+    left.yaxis.set_minor_formatter(ScalarFormatter())
     left.legend(fontsize="x-small", frameon=False)
     styles = {"published, 2 s runs": dict(color=OKABE_ITO["vermillion"], marker="x"),
               "published, 8 s runs": dict(color=OKABE_ITO["orange"], marker="+"),
@@ -78,6 +81,11 @@ def figure(env: dict, speeds, rat: dict) -> Figure:
     for label, r in rat.items():
         right.plot(speeds, r, ls="-", lw=0.8, ms=4, label=label, **styles[label])
     right.axhline(1.0, color="black", lw=0.8)
+    right.set_xscale("log")
+    ticks = [t for t in (3000, 5000, 7000, 10000, 15000)
+             if min(speeds) <= t <= max(speeds)]
+    right.set_xticks(ticks, [f"{t:g}" for t in ticks])
+    right.xaxis.set_minor_formatter(NullFormatter())
     right.set(xlabel="spindle speed (rpm)", ylabel="simulated / frequency-domain limit",
               title="first five lobes")
     right.legend(fontsize="x-small", frameon=False)

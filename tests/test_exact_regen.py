@@ -254,7 +254,7 @@ def test_lobes_run_exactly_and_agree_with_rk4():
     from boringbar.simulate import Integration
 
     cases = [Case("solid", make_system("solid"), "solid")]
-    options = LobesOptions([1250.0], method="search", max_depth_m=0.5e-3)
+    options = LobesOptions([1250.0], method="search", criterion="zero", max_depth_m=0.5e-3)
     ex = lobes(cases, options, integration=Integration(0.5, 2e-6, "exact"),
                execution=Execution(workers=1))
     rk = lobes(cases, options, integration=Integration(0.5, 2e-6),
@@ -291,7 +291,7 @@ def test_cli_lobes_exact(tmp_path, capsys):
     out = tmp_path / "lobes"
     assert main(["lobes", "--bar", "solid", "--rpm", "1250", "--method", "search",
                  "--examples", "--duration-s", "0.2", "--dt-s", "4e-6", "--max-depth-mm",
-                 "0.5", "--integrator", "exact", "--out", str(out)]) == 0
+                 "0.5", "--integrator", "exact", "--criterion", "zero", "--out", str(out)]) == 0
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["integrator"] == "exact"
         assert float(ds["limit_depth_m"].max()) > 0
@@ -304,7 +304,8 @@ def test_study_file_with_an_exact_cut_loads(tmp_path):
     from boringbar.studies.registry import ANALYSES
 
     path = tmp_path / "s.toml"
-    path.write_text('[study]\nanalysis = "lobes"\n[run]\nintegrator = "exact"\n')
+    path.write_text('[study]\nanalysis = "lobes"\n[run]\nintegrator = "exact"\n'
+                    '[analysis]\ncriterion = "zero"\n')
     study = load_study(path)
     assert ANALYSES["lobes"].plan(study).context["integration"].integrator == "exact"
     path.write_text('[study]\nanalysis = "sensitivity"\n[run]\nintegrator = "exact"\n'
