@@ -247,11 +247,11 @@ def test_the_pages_chatter_search_keeps_the_deepest_and_few_runs():
     p = page(None)
     p.search.objective.value = "min_depth"
     assert (p.search.trials.value, p.search.samples.value) == (CHATTER_TRIALS, CHATTER_SAMPLES)
-    p.search.trials.value, p.search.samples.value = 3, 1
+    p.search.trials.value, p.search.samples.value = 2, 1
     asyncio.run(p.search.start())
     assert p.search.fig.yaxis.axis_label == JUDGED["min_depth"]
     values = p.search.source.data["value"]
-    assert len(values) == 3 and all(0.001 < v < 1.0 for v in values)  # mm
+    assert len(values) == 2 and all(0.001 < v < 1.0 for v in values)  # mm
     opts, s = p.search.result
     assert opts.objective == "min_depth" and s["objective"] * 1e3 == max(values)
     assert f"{max(values):.4g} mm" in p.search.table.object
@@ -436,8 +436,8 @@ def test_a_malformed_upload_gets_the_command_lines_message(browser, server, tmp_
 
 
 def test_a_search_for_the_chatter_free_depth_shows_its_result(browser, server):
-    """In the browser: choose the chatter objective, run a tiny search (2 trials of 2
-    samples), and see its trials drawn and its result line, with the interval."""
+    """In the browser: choose the chatter objective, run a tiny search (1 trial of 2
+    samples), and see its trial drawn and its result line, with the interval."""
     page = _open(browser, server)
     page.get_by_text("Design search", exact=True).click()
     page.locator(".search-objective select").select_option(
@@ -447,18 +447,18 @@ def test_a_search_for_the_chatter_free_depth_shows_its_result(browser, server):
         if trials.input_value() == str(CHATTER_TRIALS):
             break
         page.wait_for_timeout(100)
-    for control, value in (("trials", "2"), ("samples", "2")):
+    for control, value in (("trials", "1"), ("samples", "2")):
         box = page.locator(f".search-{control} input")
         box.fill(value)
         box.press("Enter")
     page.get_by_text("Start search").click()
-    page.wait_for_selector(".search-status >> text=trials)", timeout=180_000)
+    page.wait_for_selector(".search-status >> text=trial)", timeout=180_000)
     line = page.locator(".search-status").evaluate("e => (e.shadowRoot || e).textContent")
-    assert "of min_depth over 2 samples" in line and "; 2 trials)" in line
+    assert "of min_depth over 2 samples" in line and "; 1 trial)" in line
     assert "95 % CI" in line
     values = page.evaluate("n => Array.from(Bokeh.documents[0].get_model_by_name(n)"
                            ".data.value)", "search-trials")
-    assert len(values) == 2 and all(0.001 < v < 1.0 for v in values)  # depths in mm
+    assert len(values) == 1 and all(0.001 < v < 1.0 for v in values)  # depths in mm
     page.context.close()
 
 

@@ -604,7 +604,7 @@ def summary_line(s: dict) -> str:
                 + (": within noise" if not s["significant"] else ""))
     tail = (f" ({s['statistic_name']} of {s['objective_name']} over {n} sample"
             f"{'s' if n != 1 else ''}{', ' + s['interval_method'] if interval else ''}; "
-            f"{s['trials']} trials)")
+            f"{s['trials']} trial{'s' if s['trials'] != 1 else ''})")
     if noise:
         tried = "best design" if gain >= 0 else "best design tried"
         return f"{tried} {best}: {numbers}{sure}{tail}"

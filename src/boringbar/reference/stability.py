@@ -25,8 +25,9 @@ region where Re G < 0; the speed-independent minimum of all lobes is
 
 A :class:`~boringbar.model.system.System` brings its own damper: a tuned mass
 damper enters G, a locked ball is a rigid mass at z_d, and a free ball (which
-in its clearance does not touch the bar under small vibration) leaves the
-bare host bar.
+in its clearance does not touch a wall under small vibration) is carried by its
+friction as a locked ball, and without friction leaves the bare host bar
+(System.linear_host).
 """
 
 from __future__ import annotations
@@ -73,8 +74,9 @@ def regeneration_phase(g) -> np.ndarray:
 # --- inputs ------------------------------------------------------------------------
 def linear_host(system_or_bar, tmd=None, added_mass: float = 0.0):
     """(ModalModel, TunedMassDamper | None, added mass kg) of a System or a bar: what the
-    tip FRF sees (a TMD enters it, a locked ball is a rigid mass at z_d, a free ball
-    in its clearance does not act)."""
+    tip FRF of a small vibration sees (System.linear_host: a TMD enters it, a locked
+    ball is a rigid mass at z_d, a free ball in its clearance is carried by its friction
+    as a locked one, and without friction does not act)."""
     if isinstance(system_or_bar, ModalModel):
         if tmd is not None and not isinstance(tmd, TunedMassDamper):
             raise ParameterError(f"tmd = {tmd!r} must be a TunedMassDamper or None")
@@ -87,12 +89,12 @@ def linear_host(system_or_bar, tmd=None, added_mass: float = 0.0):
             "tmd and added_mass are taken from the System; give them only with a ModalModel "
             f"(got tmd = {tmd!r}, added_mass = {added_mass!r})"
         )
-    kind = system_or_bar.kind
-    if kind == "tmd":
-        return bar, system_or_bar.damper, 0.0
-    if kind == "locked":
-        return bar, None, float(system_or_bar.damper.mass_kg)
-    return bar, None, 0.0  # solid bar, or a free ball that does not act on the bar
+    host = system_or_bar.linear_host()  # a free ball: carried by friction, or not acting
+    if host.kind == "tmd":
+        return bar, host.damper, 0.0
+    if host.kind == "locked":
+        return bar, None, float(host.damper.mass_kg)
+    return bar, None, 0.0
 
 
 def system_receptance(system, w) -> np.ndarray:
