@@ -10,6 +10,7 @@ cells where the tool leaves the cut crossed, the undecided ones marked.
 from __future__ import annotations
 
 import json
+import textwrap
 import math
 
 import numpy as np
@@ -228,5 +229,6 @@ def _legend(fig, ds) -> None:
          f"dies out, or p-p <= {FLOOR_FRACTION * tol_um:g} um"),
         (Patch(facecolor=UNKNOWN_COLOUR), "not known (?: undecided)"),
     ]
-    fig.legend([h for h, _ in entries], [t for _, t in entries], loc="outside lower center",
-               ncol=2, fontsize="small", frameon=False)
+    # labels wrapped to half the report's column, so two columns of them fit its width
+    fig.legend([h for h, _ in entries], [textwrap.fill(t, 44) for _, t in entries],
+               loc="outside lower center", ncol=2, fontsize="small", frameon=False)
