@@ -10,8 +10,8 @@ cells where the tool leaves the cut crossed, the undecided ones marked.
 from __future__ import annotations
 
 import json
-import textwrap
 import math
+import textwrap
 
 import numpy as np
 from matplotlib import colormaps
