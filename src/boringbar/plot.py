@@ -351,24 +351,6 @@ def _cut_guides(axes, static_m: float, mean_force: float, first_zero, labels: bo
 
 # --- lobe examples (the lobes themselves: plot_bar.plot_lobes) ----------------------
 
-def _probability_contours(ax, ds, i: int, legend: dict) -> None:
-    """The chance of chatter of case ``i`` over its deterministic lobes: the depths where
-    P(chatter) reaches 5 %, 50 % and 95 % over the draws, the band between the outer two
-    shaded (docs/chatter_probability.md); the depth axis raised to show the 95 % one."""
-    rpm = ds["rpm"].values
-    q = ds["limit_depth_quantile_m"].values[i] * 1e3
-    colour = OKABE_ITO["reddish purple"]
-    n = int(ds.attrs.get("draws", ds.sizes.get("draw", 0)))
-    ax.fill_between(rpm, q[:, 0], q[:, -1], color=colour, alpha=0.15, lw=0, zorder=1)
-    h, = ax.plot(rpm, q[:, 1], color=colour, lw=1.4, zorder=1.6)
-    legend.setdefault(f"P(chatter) 50 % ({n} draws)", h)
-    for k in (0, -1):
-        h, = ax.plot(rpm, q[:, k], color=colour, lw=0.9, ls="--", zorder=1.6)
-    legend.setdefault("P(chatter) 5 % and 95 %", h)
-    if np.isfinite(q[:, -1]).any():
-        ax.set_ylim(0, max(ax.get_ylim()[1], 1.08 * float(np.nanmax(q[:, -1]))))
-
-
 def plot_lobe_examples(ds, *, fig=None) -> Figure:
     """Tip displacement W (mm) and cutting force f (N) against time for the
     example grid points of a lobe study (dims example x time, as written by

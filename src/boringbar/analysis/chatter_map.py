@@ -49,7 +49,7 @@ from boringbar.analysis.verdict import CHATTER as ONSET_CHATTER
 from boringbar.analysis.verdict import STABLE as ONSET_STABLE
 from boringbar.analysis.verdict import CutVerdict, Settled, VerdictOptions, acceptable, judge
 from boringbar.execute import Execution
-from boringbar.model.cutting import KR_ALUMINIUM, CuttingLaw, cutting_law
+from boringbar.model.cutting import KR_ALUMINIUM, CutLawFields, CuttingLaw
 from boringbar.model.forcing import MAX_DEPTH, Regenerative
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import Integration, stick_slip
@@ -81,7 +81,7 @@ CODES = "1 chatter-free (stable), 0 not (chatter), 2 undecided (the cap came fir
 
 
 @dataclass(frozen=True)
-class ChatterMapOptions:
+class ChatterMapOptions(CutLawFields):
     """A chatter map's grid, cut and verdict.
 
     ``rpm``: spindle speeds (rev/min, increasing; None, the default: :func:`map_speeds`,
@@ -116,16 +116,6 @@ class ChatterMapOptions:
         # the cut's own fields, checked by the cut
         self.forcing(self.depths_m[0] if self.depths_m else 1e-4,
                      self.rpm[0] if self.rpm else 1000.0)
-
-    @property
-    def law(self) -> CuttingLaw:
-        """The cut's law (linear with ``kr_pa``, or the ``workpiece``'s)."""
-        return cutting_law(self.kr_pa, self.workpiece)
-
-    @property
-    def analytic_kr_pa(self) -> float:
-        """The Kr of the analytic limits: the law's dF/dh / b at the feed (Pa)."""
-        return self.law.linear_coefficient_pa(self.feed_m)
 
     @property
     def starts(self) -> tuple[str, ...]:

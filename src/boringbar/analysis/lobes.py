@@ -100,7 +100,7 @@ from boringbar.analysis.speeds import (
 from boringbar.analysis.sweep import Case, as_cases
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
-from boringbar.model.cutting import CuttingLaw, cutting_law
+from boringbar.model.cutting import CutLawFields, CuttingLaw
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import (
@@ -153,7 +153,7 @@ def grid_index(depth: float, step: float | None, tolerance: float | None) -> int
 
 
 @dataclass(frozen=True)
-class LobesOptions:
+class LobesOptions(CutLawFields):
     """A lobe study's grid, rule and cut.
 
     ``rpm``: spindle speeds (rev/min, > 0, increasing; None, the default: the
@@ -225,16 +225,6 @@ class LobesOptions:
         # the cut's own fields (each speed is checked above)
         self.forcing(self.depth(1), self.rpm[0] if self.rpm else 1000.0)
         chatter_probability.check(self.uncertainty, self.criterion)
-
-    @property
-    def law(self) -> CuttingLaw:
-        """The cut's law (linear with ``kr_pa``, or the ``workpiece``'s)."""
-        return cutting_law(self.kr_pa, self.workpiece)
-
-    @property
-    def analytic_kr_pa(self) -> float:
-        """The Kr of the analytic limits: the law's dF/dh / b at the feed (Pa)."""
-        return self.law.linear_coefficient_pa(self.feed_m)
 
     @property
     def max_index(self) -> int:

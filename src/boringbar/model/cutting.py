@@ -227,6 +227,21 @@ def cutting_law(kr_pa: float = KR_ALUMINIUM,
     return CuttingLaw.kienzle(workpiece_or_law)
 
 
+class CutLawFields:
+    """The law of an options class with ``kr_pa``, ``workpiece`` and ``feed_m`` fields
+    (lobes, chatter maps): one reading of those three fields everywhere."""
+
+    @property
+    def law(self) -> CuttingLaw:
+        """The cut's law (linear with ``kr_pa``, or the ``workpiece``'s)."""
+        return cutting_law(self.kr_pa, self.workpiece)
+
+    @property
+    def analytic_kr_pa(self) -> float:
+        """The Kr of the analytic limits: the law's dF/dh / b at the feed (Pa)."""
+        return self.law.linear_coefficient_pa(self.feed_m)
+
+
 def _name(workpiece_or_law) -> str:
     if isinstance(workpiece_or_law, CuttingLaw):
         return workpiece_or_law.describe()
