@@ -351,6 +351,20 @@ DRAW_KEYS = {"draws": ("int", None, 1, MAX_DRAWS), "seed": ("int", None, 0, 2**6
              "force_noise": ("float", None, 0.0, 1.0), "ball_start": ("bool", None),
              "probability": ("float", None, 0.0, 1.0, True)}
 
+def _cases_plan(study: Study, build) -> Plan:
+    """``build(cases)``'s plan over the study's cases, with their values kept for the
+    grid's coordinates."""
+    cases, values = study_cases(study)
+    plan = build(cases)
+    plan.extra["values"] = values
+    return plan
+
+
+def _runs_at_top_speed(plan: Plan) -> list:
+    """Each case's system at the plan's fastest speed (rad/s), as a cut
+    (:meth:`Analysis.runs`)."""
+    c = plan.context
+    return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True) for x in c["cases"]]
 
 
 class Lobes(Analysis):
@@ -387,15 +401,11 @@ class Lobes(Analysis):
                                                 study.value("workpiece"))}
 
     def plan(self, study):
-        cases, values = study_cases(study)
-        options = _lobe_options(study)
-        plan = lobes_mod.plan(cases, options, _integration(study, initial=None))
-        plan.extra["values"] = values
-        return plan
+        return _cases_plan(study, lambda cases: lobes_mod.plan(
+            cases, _lobe_options(study), _integration(study, initial=None)))
+
     def runs(self, plan):
-        c = plan.context
-        return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True)
-                for x in c["cases"]]
+        return _runs_at_top_speed(plan)
 
 
 def _uncertainty(study: Study) -> Uncertainty | None:
@@ -462,15 +472,11 @@ class ChatterMap(Analysis):
                                                   study.value("workpiece"))}
 
     def plan(self, study):
-        cases, values = study_cases(study)
-        plan = chatter_map_mod.plan(cases, _map_options(study), _integration(study, initial=None))
-        plan.extra["values"] = values
-        return plan
+        return _cases_plan(study, lambda cases: chatter_map_mod.plan(
+            cases, _map_options(study), _integration(study, initial=None)))
 
     def runs(self, plan):
-        c = plan.context
-        return [(x.system, 2 * math.pi * max(c["options"].rpm) / 60.0, True)
-                for x in c["cases"]]
+        return _runs_at_top_speed(plan)
 
     def integrators(self) -> tuple:
         """The converged verdict runs RK4."""
