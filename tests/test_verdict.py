@@ -207,3 +207,40 @@ def test_a_lobes_dataset_names_its_method():
     assert paper.attrs["criterion"] == "zero"
     assert "2 s from rest" in paper.attrs["method_text"]
     assert math.isfinite(float(ds["onset_depth_m"][0, 0]))
+
+
+def test_an_undecided_run_that_sets_a_ball_s_chatter_free_depth_is_run_longer(monkeypatch):
+    """The search's rule on a made-up column (each run's result is given, so the rule is
+    checked alone): onset at index 10; 11 and 12 settle within the tolerance only with a
+    cap four times the verdict's (undecided with it); 13-40 are bounded; 41 and above
+    chatter.  The first depth that is not chatter-free must be index 41's, and index
+    11's result the longer run's; without the longer runs it is 11's (the onset)."""
+    from boringbar.analysis import lobe_search as ls
+    from boringbar.analysis.sweep import Case
+
+    options = LobesOptions(rpm=(1000.0,))
+    index = {options.depth(i): i for i in range(1, options.max_index + 1)}
+    caps = []
+
+    def made_up(case, rpm, depth, options, integration):
+        i, cap = index[depth], options.verdict.max_duration_s
+        caps.append((i, cap))
+        if i <= 10:
+            verdict = ls.STABLE
+        elif i <= 12:
+            verdict = ls.STABLE if cap >= 4 * VerdictOptions().max_duration_s else ls.UNDECIDED
+        else:
+            verdict = ls.STABLE if i <= 40 else ls.CHATTER
+        return {"onset": ls.STABLE if i <= 10 else ls.CHATTER, "verdict": verdict,
+                "growth_rate_per_s": 1.0 if i > 10 else -1.0, "growth_rate_se_per_s": 0.1,
+                "run_duration_s": cap, "settled_pp_m": 1e-6, "settled_rms_m": 3e-7}
+
+    monkeypatch.setattr(ls, "growth_cut", made_up)
+    case = Case.of(bb.make_system("ball"))
+    done = ls.growth_column(case, 1000.0, options, Integration(), seed=5)
+    assert min(k for k in done if ls.not_free(done[k])) == 41
+    assert done[11]["verdict"] == ls.STABLE
+    assert (11, ls.RESOLVE_CAP * VerdictOptions().max_duration_s) in caps
+    monkeypatch.setattr(ls, "RESOLVE_CAP", 1.0)
+    done = ls.growth_column(case, 1000.0, options, Integration(), seed=5)
+    assert min(k for k in done if ls.not_free(done[k])) == 11
