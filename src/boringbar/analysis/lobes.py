@@ -78,7 +78,7 @@ from boringbar._validate import (
     check_positive,
     check_range,
 )
-from boringbar.analysis import chatter_probability
+from boringbar.analysis import chatter_probability, lobe_search
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.chatter_probability import Uncertainty
 from boringbar.analysis.lobe_search import (
@@ -274,8 +274,12 @@ def run_length_text(ds) -> str:
     a = ds.attrs
     if a["criterion"] == "growth":
         mean = float(a.get("mean_run_s", math.nan))
+        ball = ("bar" in ds.coords and "ball" in ds["bar"].values
+                and lobe_search.RESOLVE_CAP > 1)
+        longer = (f", {lobe_search.RESOLVE_CAP * a['max_duration_s']:g} s for a ball's run "
+                  "left undecided above its onset" if ball else "")
         return (f"each cut until its verdict is {a['confidence']:g}-certain (at most "
-                f"{a['max_duration_s']:g} s; {mean:.2g} s on average)")
+                f"{a['max_duration_s']:g} s{longer}; {mean:.2g} s on average)")
     return f"each cut {a['duration_s']:g} s from {a['start']}"
 
 
