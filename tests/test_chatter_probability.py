@@ -18,6 +18,7 @@ import pytest
 import scipy.stats
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
+from same_data import assert_same_data
 
 import boringbar as bb
 from boringbar._validate import ParameterError
@@ -52,18 +53,6 @@ def small(solid):
     """Three draws of the default Uncertainty at two speeds, on one thread."""
     options = bb.LobesOptions(RPM, uncertainty=Uncertainty(draws=3, seed=7))
     return bb.lobes(solid, options, execution=bb.Execution("serial"))
-
-
-def assert_same_data(a: xr.Dataset, b: xr.Dataset) -> None:
-    """Every data variable and coordinate bit for bit (NaN where NaN)."""
-    assert set(a.data_vars) == set(b.data_vars) and set(a.coords) == set(b.coords)
-    for k in list(a.data_vars) + list(a.coords):
-        x, y = a[k].values, b[k].values
-        assert x.dtype == y.dtype and x.shape == y.shape, k
-        if x.dtype.kind == "f":
-            assert np.array_equal(x.view(np.uint64), y.view(np.uint64)), k
-        else:
-            assert np.array_equal(x, y), k
 
 
 # --- draws ---------------------------------------------------------------------------
