@@ -173,9 +173,14 @@ def run_longer(case: Case, rpm: float, depth: float, options,
                integration: Integration) -> dict:
     """:func:`growth_cut` with a cap :data:`RESOLVE_CAP` times the verdict's (at most
     1000 s): a run that had not settled by the cap, judged again."""
-    cap = min(RESOLVE_CAP * options.verdict.max_duration_s, 1000.0)
-    longer = replace(options, verdict=replace(options.verdict, max_duration_s=cap))
+    longer = replace(options, verdict=replace(
+        options.verdict, max_duration_s=longer_cap_s(options.verdict.max_duration_s)))
     return growth_cut(case, rpm, depth, longer, integration)
+
+
+def longer_cap_s(max_duration_s: float) -> float:
+    """The cap (s) of :func:`run_longer` for a verdict capped at ``max_duration_s``."""
+    return min(RESOLVE_CAP * max_duration_s, 1000.0)
 
 
 def onset_depth(done: dict, depth) -> float:

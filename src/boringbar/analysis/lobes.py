@@ -276,7 +276,7 @@ def run_length_text(ds) -> str:
         mean = float(a.get("mean_run_s", math.nan))
         ball = ("bar" in ds.coords and "ball" in ds["bar"].values
                 and lobe_search.RESOLVE_CAP > 1)
-        longer = (f", {lobe_search.RESOLVE_CAP * a['max_duration_s']:g} s for a ball's run "
+        longer = (f", {lobe_search.longer_cap_s(a['max_duration_s']):g} s for a ball's run "
                   "left undecided above its onset" if ball else "")
         return (f"each cut until its verdict is {a['confidence']:g}-certain (at most "
                 f"{a['max_duration_s']:g} s{longer}; {mean:.2g} s on average)")
