@@ -351,6 +351,7 @@ DRAW_KEYS = {"draws": ("int", None, 1, MAX_DRAWS), "seed": ("int", None, 0, 2**6
              "force_noise": ("float", None, 0.0, 1.0), "ball_start": ("bool", None),
              "probability": ("float", None, 0.0, 1.0, True)}
 
+
 def _cases_plan(study: Study, build) -> Plan:
     """``build(cases)``'s plan over the study's cases, with their values kept for the
     grid's coordinates."""
