@@ -526,3 +526,16 @@ def test_the_server_binds_this_machine_unless_told(tmp_path):
     assert "warning: serving on 0.0.0.0" in line
     out = cli("app", "--port", "70000")
     assert out.returncode == 2 and out.stderr.count("\n") == 1 and "--port" in out.stderr
+
+
+def test_the_lobes_are_redrawn_when_the_ball_s_host_changes_and_not_with_the_gap():
+    """The ball bar's analytic lobes are its linear host's: with friction the bar with
+    its ball locked, so a heavier ball moves them and a gap does not."""
+    base = Design.of(published_system())
+    assert base.systems["ball"].linear_host().kind == "locked"
+    heavier = base.with_value("ball.material", "tungsten")
+    wider = base.with_value("ball.gap_mm", 0.3)
+    assert views.inputs("lobes", wider) == views.inputs("lobes", base)
+    assert views.inputs("lobes", heavier) != views.inputs("lobes", base)
+    ball = lambda d: views.lobes_view(d)["curves"]["ball"]  # noqa: E731
+    assert not np.array_equal(ball(heavier), ball(base))

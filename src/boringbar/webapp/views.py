@@ -273,11 +273,13 @@ def simulated_lobes(design: Design, progress=None, workers: int | None = None) -
 def inputs(view: str, design: Design) -> str:
     """What ``view`` depends on, as text: a change that leaves it alone needs no
     recomputation (the lobes and the bar do not move with the gap; the analytic lobes
-    see the ball bar's linear host, which the gap does not change)."""
+    see the ball bar's linear host, which the gap does not change: its kind and the
+    mass it adds stand for the ball)."""
     data, s = design.data, design.settings
     if view == "lobes":
-        data.pop("ball", None)
-        used = [s.preset, s.rpm]
+        host = design.systems["ball"].linear_host() if data.pop("ball", None) else None
+        used = [s.preset, s.rpm, None if host is None or host.damper is None
+                else (host.kind, host.damper.mass_kg)]
     elif view == "bar":
         used = [s.preset]
     elif view == "response":
