@@ -28,9 +28,9 @@ import numpy as np
 from boringbar import Initial, make_system
 from boringbar.analysis import basins as basins_mod
 from boringbar.analysis import sweep as sweep_mod
-from boringbar.kernels import layout as L
-from boringbar.kernels import run_rk4, run_rk4_batch
 from boringbar.simulate import Integration, initial_state, pack
+from boringbar.simulate import layout as L
+from boringbar.simulate.kernels import run_rk4, run_rk4_batch
 
 FORCE, RATIO, DT = 10.0, 1.01, 1e-6
 

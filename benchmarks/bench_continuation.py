@@ -2,7 +2,7 @@
 orbit map of the issue's case.
 
 Branch: the one-mode physical bar with a frictionless ball (gap 0.5 mm, ratio 1),
-from the Masri-Caughey orbit at 30 N down in F0 (boringbar.branch), its steps capped
+from the Masri-Caughey orbit at 30 N down in F0 (boringbar.orbits.branch), its steps capped
 at 0.005 of the range so that the N points do not reach its end.  Baseline, in the
 same process: brute-force exact simulation of the same F0 values, each from the
 previous final state, 100 forcing periods a value (what a bifurcation sweep spends
@@ -26,10 +26,10 @@ import numpy as np
 
 import boringbar as bb
 from boringbar.analysis.continuation import ContinuationOptions, start_state, summary
-from boringbar.branch import continue_branch
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.shooting import make_flow
+from boringbar.orbits.continuation import continue_branch
+from boringbar.orbits.shooting import make_flow
 from boringbar.simulate import State, simulate
 
 

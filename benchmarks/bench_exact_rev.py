@@ -39,11 +39,11 @@ sys.path.insert(0, str(HERE))
 from bench_exact import CASES, orbit_start  # noqa: E402
 from bench_grid import cases as grid_cases  # noqa: E402
 
-import boringbar.kernels as E  # noqa: E402
+import boringbar.simulate.kernels as E  # noqa: E402
 from boringbar import Harmonic, make_system, simulate  # noqa: E402
-from boringbar.kernels import layout as L  # noqa: E402
-from boringbar.kernels import run_rk4  # noqa: E402
 from boringbar.simulate import _setup  # noqa: E402
+from boringbar.simulate import layout as L  # noqa: E402
+from boringbar.simulate.kernels import run_rk4  # noqa: E402
 
 
 def export(rev: str) -> Path:

@@ -19,11 +19,11 @@ import time
 import numpy as np
 
 from boringbar.analysis.lobes import PUBLISHED_RPM
+from boringbar.app.design_state import Design
+from boringbar.app.views import lobe_speeds
 from boringbar.model.system import make_system
 from boringbar.reference import stability as S
 from boringbar.reference.linear import tip_frf
-from boringbar.webapp.design_state import Design
-from boringbar.webapp.views import lobe_speeds
 
 
 def one_speed_at_a_time(system, rpm, kr=S.KR_ALUMINIUM, n_freq=20000):

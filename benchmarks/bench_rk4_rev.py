@@ -36,12 +36,12 @@ sys.path.insert(0, str(HERE))
 
 from bench_exact_rev import export  # noqa: E402
 
-import boringbar.kernels as B1  # noqa: E402
-import boringbar.kernels as R1  # noqa: E402
+import boringbar.simulate.kernels as B1  # noqa: E402
+import boringbar.simulate.kernels as R1  # noqa: E402
 from boringbar import Harmonic, Initial, make_system  # noqa: E402
-from boringbar.kernels import layout as L  # noqa: E402
 from boringbar.model.forcing import Regenerative  # noqa: E402
 from boringbar.simulate import _setup  # noqa: E402
+from boringbar.simulate import layout as L  # noqa: E402
 
 
 def single_cases():

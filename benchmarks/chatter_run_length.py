@@ -25,8 +25,8 @@ import boringbar as bb
 from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.speeds import lobe_speeds
 from boringbar.analysis.verdict import window_steps
-from boringbar.palette import OKABE_ITO
-from boringbar.plot_style import COLUMN_WIDTH_IN
+from boringbar.plot.palette import OKABE_ITO
+from boringbar.plot.style import COLUMN_WIDTH_IN
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import CutStepper, knocked_cut
 

@@ -306,7 +306,7 @@ void bind_exact(nb::module_& m) {
           "step (0 for harmonic forcing), tabE and tabP its tables (harmonic: zero arrays of "
           "shape (1, 5, 1) and (1, 5, 4, 1)).  Writes x, rec, imp, stick, strobe and met in "
           "place; returns the time reached.");
-    // the event-search grid that prepare() sizes its tables for (kernels/regimes.py)
+    // the event-search grid that prepare() sizes its tables for (simulate/regimes.py)
     m.attr("GRID_PER_PERIOD") = exact::GRID_PER_PERIOD;
     m.attr("GRID_LEVELS") = exact::GRID_LEVELS;
 }

@@ -235,7 +235,7 @@ void bind_rk4(nb::module_& m) {
           nb::arg("modes").none() = nb::none(),
           "Advance x (updated in place) by n_steps RK4 steps of the published scheme from t0 "
           "(docs/model.md, section 5): the records rec (t, W, W', aux, aux', f every "
-          "rec_every steps), imp, stick, strobe and the metrics met as boringbar.kernels "
+          "rec_every steps), imp, stick, strobe and the metrics met as boringbar.simulate.kernels "
           "describes; buf the regenerative delay history ((0, 2) when unused); modes (a "
           "cut's, optional: (n_modes, 2)) each mode's max and min over the steady steps, "
           "updated in place.");

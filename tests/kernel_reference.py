@@ -23,7 +23,7 @@ has
   change of the preparation from a change of the kernel.
 
 ``_names`` lists the cases in order and ``_met_names`` names the slots of ``met``
-(kernels/layout.py), for the messages of tests/test_kernel_reference.py.
+(simulate/layout.py), for the messages of tests/test_kernel_reference.py.
 
 Capture (the inputs as :func:`boringbar.simulate.simulate` packs them, through its
 ``setup_run``; each single run checked against simulate's own kernel call, each batch
@@ -50,10 +50,10 @@ import numpy as np
 
 import boringbar.reference.stability as stability
 from boringbar import Harmonic, Initial, Regenerative, State, make_system
-from boringbar.kernels import layout as L
+from boringbar.simulate import layout as L
 
 # the kernels under test: repoint these names to swap the implementation
-from boringbar.kernels import prepare, run_exact, run_rk4, run_rk4_batch
+from boringbar.simulate.kernels import prepare, run_exact, run_rk4, run_rk4_batch
 
 # the module (boringbar.simulate is also the name of its function), for capture only
 sim = importlib.import_module("boringbar.simulate")

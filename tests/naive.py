@@ -4,7 +4,7 @@ Written from docs/model.md, not from the kernel: the right-hand side is a plain
 function f(t, x), the RK4 step is written out with k1..k4, and the wall rule
 and impact law of docs/model.md, section 2 are applied after every step.  It reads
 the same packed parameter vector ``p`` as the kernel (slots named in
-:mod:`boringbar.kernels.layout`), so both run the same configuration; of the
+:mod:`boringbar.simulate.layout`), so both run the same configuration; of the
 derived slots it uses none (the effective impact mass is recomputed here).
 
 State x = [u_1..u_n, u_1'..u_n', aux, aux'] with aux the ball's relative
@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from boringbar.kernels import layout as L
+from boringbar.simulate import layout as L
 
 
 @dataclass(frozen=True)

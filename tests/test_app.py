@@ -25,15 +25,12 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.design import candidate_system, design, summary
 from boringbar.analysis.design_file import load_design, options_from_dict
 from boringbar.analysis.design_objectives import frf_objective
-from boringbar.execute import Execution, run_points
-from boringbar.model.system_file import load_system, parse_system, published_system
-from boringbar.reference.stability import limit_at_speeds
-from boringbar.webapp import views
-from boringbar.webapp.commands import commands
-from boringbar.webapp.design_state import Design
-from boringbar.webapp.figures import READOUT, LobesFigure
-from boringbar.webapp.jobs import Latest, Superseded
-from boringbar.webapp.search import (
+from boringbar.app import views
+from boringbar.app.commands import commands
+from boringbar.app.design_state import Design
+from boringbar.app.figures import READOUT, LobesFigure
+from boringbar.app.jobs import Latest, Superseded
+from boringbar.app.search import (
     CHATTER_SAMPLES,
     CHATTER_TRIALS,
     JUDGED,
@@ -41,11 +38,14 @@ from boringbar.webapp.search import (
     design_file,
     search_file,
 )
-from boringbar.webapp.server import page
+from boringbar.app.server import page
+from boringbar.execute import Execution, run_points
+from boringbar.model.system_file import load_system, parse_system, published_system
+from boringbar.reference.stability import limit_at_speeds
 
 # a deprecation warned of in the page's own code fails these tests (the page built in this
 # process has every widget; tests/test_app_notebook.py sets the same filter in its kernel)
-pytestmark = [pytest.mark.filterwarnings(f"error::{w}:boringbar[.]webapp")
+pytestmark = [pytest.mark.filterwarnings(f"error::{w}:boringbar[.]app")
               for w in ("DeprecationWarning", "PendingDeprecationWarning")]
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -463,7 +463,7 @@ def test_a_search_for_the_chatter_free_depth_shows_its_result(browser, server):
 
 
 def test_the_notebook_app_builds_the_same_page():
-    layout = bb.app(Path(bb.__file__).parent / "model" / "published.toml")
+    layout = bb.design_page(Path(bb.__file__).parent / "model" / "published.toml")
     assert "published" in repr(layout)
 
 

@@ -38,11 +38,11 @@ import panel as pn
 import boringbar as bb
 
 for category in (DeprecationWarning, PendingDeprecationWarning):
-    warnings.filterwarnings("error", category=category, module="boringbar.webapp")
+    warnings.filterwarnings("error", category=category, module="boringbar.app")
 print(sys.executable)
 print(bb.__file__)"""
 
-SHOW = "page = bb.app()\npage"
+SHOW = "page = bb.design_page()\npage"
 
 FIND = '''\
 def part(css):

@@ -1,9 +1,9 @@
-"""The batch kernel (boringbar.kernels.run_rk4_batch) against the single-run kernel.
+"""The batch kernel (boringbar.simulate.kernels.run_rk4_batch) against the single-run kernel.
 
 Every run of a batch must give what ``simulate`` gives for it alone: every
 streamed metric, the impact rows, the stick intervals, the strobe samples and
 the final state.  Both kernels do the same operations in the same order and
-the strobe interpolation's roundings are pinned (kernels/interp.py), so the
+the strobe interpolation's roundings are pinned (core/rk4.hpp), so the
 comparison is bit for bit.
 """
 
@@ -18,10 +18,10 @@ from boringbar import Harmonic, Initial, make_system, simulate
 from boringbar._validate import ParameterError
 from boringbar.analysis.sweep import SweepOptions
 from boringbar.execute import Execution
-from boringbar.kernels import BMAX, run_rk4_batch
-from boringbar.kernels import layout as L
 from boringbar.model.forcing import Regenerative
 from boringbar.simulate import Integration, simulate_batch
+from boringbar.simulate import layout as L
+from boringbar.simulate.kernels import BMAX, run_rk4_batch
 
 DURATION = 0.06  # 60,000 steps: several hundred impacts, stick, 25+ strobe periods
 

@@ -61,12 +61,12 @@ from boringbar.analysis.lobes import (
 )
 from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sweep import Case
-from boringbar.kernels import layout as L
-from boringbar.kernels import run_rk4
 from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
 from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds
+from boringbar.simulate import layout as L
 from boringbar.simulate import pack
+from boringbar.simulate.kernels import run_rk4
 
 KR = KR_ALUMINIUM
 FEED = 0.1e-3

@@ -10,16 +10,13 @@ import numpy as np
 import xarray as xr
 
 import boringbar as bb
-from boringbar import shooting as sh
 from boringbar.analysis.continuation import ContinuationOptions, start_state
-from boringbar.branch import (
-    continue_branch,
-    flow_with,
-    switch_period_doubling,
-)
 from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
+from boringbar.orbits import shooting as sh
+from boringbar.orbits.branch import flow_with
+from boringbar.orbits.continuation import continue_branch, switch_period_doubling
 from boringbar.reference.masri_caughey import ImpactSystem, phase_equation, two_impact_orbit
 from boringbar.simulate import Integration, State, simulate
 

@@ -17,10 +17,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from boringbar import Harmonic, Regenerative, core, make_system
-from boringbar.kernels import layout as L
-from boringbar.kernels import prepare
-from boringbar.kernels.regimes import cut_tables, history_step
+from boringbar.simulate import layout as L
 from boringbar.simulate import setup_run
+from boringbar.simulate.kernels import prepare
+from boringbar.simulate.regimes import cut_tables, history_step
 
 SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow])

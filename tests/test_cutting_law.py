@@ -22,8 +22,6 @@ from boringbar import Initial, make_system, simulate
 from boringbar.analysis.lobes import LobesOptions, lobes
 from boringbar.analysis.speeds import BORE_RATIO, boring_speeds
 from boringbar.cli.main import main
-from boringbar.kernels import layout as L
-from boringbar.kernels import run_exact, run_rk4
 from boringbar.model.bar import ModalModel
 from boringbar.model.cutting import (
     DEFAULT_CUTTING_SPEED_M_S,
@@ -37,6 +35,8 @@ from boringbar.model.cutting import (
 from boringbar.model.forcing import Regenerative
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import Integration, pack_cut
+from boringbar.simulate import layout as L
+from boringbar.simulate.kernels import run_exact, run_rk4
 from boringbar.studies.load import study_from_dict
 from boringbar.studies.schema import StudyError
 

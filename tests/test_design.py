@@ -46,7 +46,7 @@ from boringbar.execute import Execution
 from boringbar.model.dampers import den_hartog_parameters, sims_parameters
 from boringbar.model.system import make_system, published_system_spec
 from boringbar.model.system_file import parse_system
-from boringbar.plot_design import plot_best
+from boringbar.plot.design import plot_best
 from boringbar.reference.stability import system_receptance
 from boringbar.report.html import improvement_cell
 from boringbar.simulate import Integration

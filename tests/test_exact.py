@@ -1,4 +1,4 @@
-"""The exact event-driven integrator (boringbar.kernels.run_exact).
+"""The exact event-driven integrator (boringbar.simulate.kernels.run_exact).
 
 Tiers: linear cases against closed forms (round-off); the Masri-Caughey
 two-impact orbit (round-off); the energy ledger (impact losses from the
@@ -19,12 +19,12 @@ import pytest
 
 from boringbar import Harmonic, Initial, State, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.kernels import layout as L
-from boringbar.kernels import prepare, run_exact
 from boringbar.model.dampers import Friction
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.simulate import layout as L
 from boringbar.simulate import setup_run
+from boringbar.simulate.kernels import prepare, run_exact
 
 
 # --- linear cases: closed forms ----------------------------------------------------------

@@ -1,4 +1,4 @@
-"""The exact integrator in a regenerative cut (boringbar.kernels.run_exact).
+"""The exact integrator in a regenerative cut (boringbar.simulate.kernels.run_exact).
 
 In the cut, -Kr b W(t) joins the regime matrix and Kr b min_k [k h_m + W(t - k tau)]
 is a known input: one cubic per step H = tau / ceil(tau / dt) (cubic Hermite of the

@@ -1,5 +1,5 @@
-"""The RK4 kernel (boringbar.kernels.run_rk4, the compiled core) against the slow reference in
-``naive.py``, and the published scheme's conservation, convergence and
+"""The RK4 kernel (boringbar.simulate.kernels.run_rk4, the compiled core) against the slow
+reference in ``naive.py``, and the published scheme's conservation, convergence and
 closed-form properties (docs/model.md, sections 1-3, 5).
 
 Configurations come from ``make_system`` (physical preset, FE bar normalised to
@@ -19,10 +19,10 @@ import pytest
 from boringbar import Harmonic, Initial, State, System, make_system
 from boringbar import simulate as simulate_any
 from boringbar._validate import ParameterError
-from boringbar.kernels import layout as L
-from boringbar.kernels import run_rk4
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import initial_state, pack, stored_energy
+from boringbar.simulate import layout as L
+from boringbar.simulate.kernels import run_rk4
 
 #: every run here is the RK4 kernel's (the default, "auto", takes the exact
 #: integrator for the physical preset's harmonic runs)
@@ -377,7 +377,7 @@ def test_an_impact_on_the_last_step_lies_inside_the_run():
     assert len(run.impacts) == 1 and run.impacts[0, 0] <= run.final.t_s
 
 
-# --- the step map (kernels/linmap.py) against the stage loop ---------------------------
+# --- the step map (core/linmap.hpp) against the stage loop -----------------------------
 MAP_CASES = {
     "solid, 2 modes": lambda: make_system("solid", n_modes=2),
     "tmd, 2 modes": lambda: make_system("tmd", n_modes=2),

@@ -14,9 +14,9 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.lobes import LobesOptions, lobes
 from boringbar.analysis.sweep import published_cases
 from boringbar.execute import Execution
-from boringbar.palette import LOBE_CAP, lobe_depth_top, speed_axis
 from boringbar.plot import plot_lobes as plot_lobes_of_plot
-from boringbar.plot_bar import plot_analytic_lobes, plot_lobes
+from boringbar.plot.bar import plot_analytic_lobes, plot_lobes
+from boringbar.plot.palette import LOBE_CAP, lobe_depth_top, speed_axis
 from boringbar.reference.stability import (
     GRID_SPAN,
     limit_at_speeds,

@@ -18,11 +18,11 @@ import boringbar as bb
 from boringbar.analysis.design_objectives import objective_samples
 from boringbar.analysis.design_options import DesignOptions, Variable
 from boringbar.analysis.lobes import LobesOptions
+from boringbar.app import views
+from boringbar.app.design_state import Design
 from boringbar.cli.main import main
 from boringbar.execute import Execution
 from boringbar.simulate import Initial
-from boringbar.webapp import views
-from boringbar.webapp.design_state import Design
 
 DESIGN = Path(__file__).resolve().parents[1] / "examples" / "systems" / "steel_ld7_tungsten.toml"
 RPM = 1200.0

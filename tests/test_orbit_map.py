@@ -1,4 +1,4 @@
-"""The orbit map (boringbar.orbit_map, boringbar.attractors): the range covered, the
+"""The orbit map (boringbar.orbits.orbit_map, boringbar.orbits.attractors): the range covered, the
 stop reasons, branch switching at a pitchfork against the symmetry, brute-force seeds,
 and the issue's case (paper preset, gap 0.1 mm, frictionless, ratio 1, F0 5-35 N)
 against the exact integrator's settled orbits."""
@@ -10,14 +10,15 @@ import numpy as np
 import pytest
 
 import boringbar as bb
-from boringbar import shooting as sh
 from boringbar.analysis.continuation import ContinuationOptions, start_state, system_at
-from boringbar.attractors import RETURN_TOL, periodic_attractors, return_distance, same_orbit
-from boringbar.branch import continue_branch, flow_with
 from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.orbit_map import (
+from boringbar.orbits import shooting as sh
+from boringbar.orbits.attractors import RETURN_TOL, periodic_attractors, return_distance, same_orbit
+from boringbar.orbits.branch import flow_with
+from boringbar.orbits.continuation import continue_branch
+from boringbar.orbits.orbit_map import (
     MapBranch,
     MapOptions,
     OrbitMap,

@@ -31,10 +31,10 @@ from boringbar.plot import (
     plot_lobes,
     plot_sweep,
 )
-from boringbar.plot_design import plot_design, plot_design_comparison
-from boringbar.plot_orbits import plot_continuation
-from boringbar.plot_style import smallest_text_px
-from boringbar.plot_variations import plot_ladder, plot_sensitivity
+from boringbar.plot.design import plot_design, plot_design_comparison
+from boringbar.plot.orbits import plot_continuation
+from boringbar.plot.style import smallest_text_px
+from boringbar.plot.variations import plot_ladder, plot_sensitivity
 from boringbar.report.audit import audit
 from boringbar.report.audit_data import VERDICTS
 from boringbar.report.html import _mm, write_report

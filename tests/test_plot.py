@@ -1,4 +1,4 @@
-"""The figures' shared style (boringbar.plot_style): the palette that tells the bars
+"""The figures' shared style (boringbar.plot.style): the palette that tells the bars
 apart, titles that name the bar and fit the figure, lengths in mm.
 
 The report's own figures are checked against what the page shows in
@@ -17,8 +17,8 @@ from boringbar.execute import Execution
 from boringbar.model.system import make_system
 from boringbar.model.system_file import load_system
 from boringbar.plot import plot_sweep
-from boringbar.plot_design import plot_design, plot_design_comparison
-from boringbar.plot_style import (
+from boringbar.plot.design import plot_design, plot_design_comparison
+from boringbar.plot.style import (
     BAR_STYLE,
     OKABE_ITO,
     bar_name,

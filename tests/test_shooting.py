@@ -1,4 +1,4 @@
-"""Shooting for periodic orbits (boringbar.shooting): the saltation monodromy against
+"""Shooting for periodic orbits (boringbar.orbits.shooting): the saltation monodromy against
 central finite differences, the map against the kernel, and the linear bar's truths."""
 
 import dataclasses
@@ -11,7 +11,6 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 import boringbar as bb
-from boringbar import shooting as sh
 from boringbar.analysis.continuation import (
     ContinuationOptions,
     assemble,
@@ -20,11 +19,12 @@ from boringbar.analysis.continuation import (
     start_state,
     summary,
 )
-from boringbar.branch import continue_branch
 from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
-from boringbar.plot_orbits import plot_continuation
+from boringbar.orbits import shooting as sh
+from boringbar.orbits.continuation import continue_branch
+from boringbar.plot.orbits import plot_continuation
 from boringbar.reference.linear import dynamic_stiffness, tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import State, simulate

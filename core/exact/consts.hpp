@@ -1,4 +1,4 @@
-// The exact kernel's constants (src/boringbar/kernels/exact/consts.py): the grid, the limits,
+// The exact kernel's constants: the grid, the limits,
 // the regimes, the event kinds, the stack scratch's sizes, and the records the numba kernel
 // packed into float arrays (cp, rs, cq, ro, sv, seg), here as named structs: a field's name
 // is its slot's suffix in lower case (CP_T_STEADY -> cp.t_steady).  The fields stay double,

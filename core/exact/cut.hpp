@@ -1,7 +1,7 @@
-// A regenerative cut's delay history (src/boringbar/kernels/exact/cut.py): the history step,
+// A regenerative cut's delay history: the history step,
 // the knots of W, the surface as one cubic per segment and the Gauss-Legendre flows, ported
 // operation for operation.  cut_tables (run once per run, at the Python level) is ported to
-// Python, in boringbar/kernels/regimes.py, with history_step.
+// Python, in boringbar/simulate/regimes.py, with history_step.
 //
 // Signatures (the Python names and parameter order):
 //   double history_step(double tau, double dt);

@@ -1,4 +1,4 @@
-// The exact kernel's driver (src/boringbar/kernels/exact/driver.py): see driver.hpp.
+// The exact kernel's driver: see driver.hpp.
 //
 // On x86-64 the kernel is compiled twice, for the baseline ISA (SSE2, here) and for AVX2
 // (driver_avx2.cpp includes this file into bb::exact_avx2), and run_exact picks one at run

@@ -1,4 +1,4 @@
-// The exact kernel's driver (src/boringbar/kernels/exact/driver.py): the run's setup, the
+// The exact kernel's driver: the run's setup, the
 // loop over segments (each searched by segment.hpp), the events applied between them and the
 // run's end.  numba compiled one body twice with ``regen`` a constant (_exact, _exact_cut);
 // here exact_body<Regen> is instantiated twice in driver.cpp.

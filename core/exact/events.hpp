@@ -1,4 +1,4 @@
-// The exact kernel's event functions and their roots (src/boringbar/kernels/exact/events.py):
+// The exact kernel's event functions and their roots:
 // Hermite starts, the safeguarded Newton search (find_root), W extrema, the ranges that rule
 // steps out and a free ball's wall step (wall_step), ported operation for operation.
 //

@@ -1,4 +1,4 @@
-// The closed form on a segment (src/boringbar/kernels/exact/propagate.py): the state at any
+// The closed form on a segment: the state at any
 // time (state_at), the forces, and the segment's integrals of products of exponentials
 // (segment_integrals), ported operation for operation (complex arithmetic on ncplx: see
 // nmath.hpp), so that they give numba's bits.

@@ -1,4 +1,4 @@
-// One segment of the exact kernel, between two events (src/boringbar/kernels/exact/segment.py):
+// One segment of the exact kernel, between two events:
 // its start (start_segment), the grid search for its first event with the outputs on the way
 // (search_segment) and its flows (close_segment).  numba inlined these into the driver; here
 // they are templates on Regen (a cut), instantiated by the driver's two kernels.

@@ -69,7 +69,7 @@ _HOMES = {
     "boringbar.reference.linear": ("min_real_part", "tip_frf"),
     "boringbar.studies.load": ("load_study",),
     "boringbar.studies.runner": ("run_study",),
-    "boringbar.webapp.server": ("app",),
+    "boringbar.app.server": ("design_page", "serve"),
 }
 _LAZY = {name: module for module, names in _HOMES.items() for name in names}
 
@@ -124,7 +124,6 @@ __all__ = [
     "Uncertain",
     "Uncertainty",
     "Variable",
-    "app",
     "basins",
     "bifurcation",
     "boring_speeds",
@@ -133,6 +132,7 @@ __all__ = [
     "den_hartog_parameters",
     "describe_modes",
     "design",
+    "design_page",
     "load_design",
     "load_study",
     "load_system",
@@ -144,6 +144,7 @@ __all__ = [
     "published_cases",
     "run_study",
     "sensitivity",
+    "serve",
     "simulate",
     "sims_tuning",
     "sweep",

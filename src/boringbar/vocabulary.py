@@ -83,6 +83,8 @@ DIMENSIONLESS = frozenset({
     "chatter_probability_high", "chatter_probability_at_limit",
     "chatter_probability_at_limit_low", "chatter_probability_at_limit_high",
     "friction_u", "restitution_u",
+    # the design page's server: a TCP port number
+    "port",
 })
 #: Beginnings of dimensionless names (``n_modes``, ``n_samples``, ``is_bounded``).
 DIMENSIONLESS_PREFIXES = ("n_", "is_", "max_index")

@@ -61,7 +61,6 @@ from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.poincare import poincare_map
 from boringbar.analysis.sweep import Case
 from boringbar.execute import Execution
-from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.simulate import (
@@ -72,6 +71,7 @@ from boringbar.simulate import (
     simulate,
     simulate_batch,
 )
+from boringbar.simulate.kernels import BMAX
 from boringbar.simulate.run_limits import check_steady_ratios
 from boringbar.version import __version__
 

@@ -1,11 +1,11 @@
 """Continuation of periodic orbits with their Floquet stability (docs/continuation.md).
 
 One point of the plan is one orbit map (sequential by nature,
-:func:`boringbar.orbit_map.orbit_map`): its first branch starts from a settled exact
+:func:`boringbar.orbits.orbit_map.orbit_map`): its first branch starts from a settled exact
 simulation at the start value, from the Masri-Caughey closed form (one mode, no
 friction) or from a given :class:`~boringbar.simulate.State` at phase 0; brute-force
 attractors at a few values of the parameter seed more
-(:mod:`boringbar.attractors`); the branches born at branch points, period doublings
+(:mod:`boringbar.orbits.attractors`); the branches born at branch points, period doublings
 and grazings are followed too; each attractor is checked against the map.
 """
 
@@ -23,8 +23,12 @@ import xarray as xr
 from boringbar._validate import ParameterError, check_choice, check_finite, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
-from boringbar.attractors import RETURN_TOL, periodic_attractors, return_distance, spread
-from boringbar.branch import (
+from boringbar.execute import Execution
+from boringbar.model.dampers import Friction
+from boringbar.model.forcing import Harmonic
+from boringbar.model.system import System
+from boringbar.orbits.attractors import RETURN_TOL, periodic_attractors, return_distance, spread
+from boringbar.orbits.branch import (
     MAX_STEP,
     PARAMETERS,
     check_parameter,
@@ -32,13 +36,8 @@ from boringbar.branch import (
     flow_with,
     value_of,
 )
-from boringbar.execute import Execution
-from boringbar.model.dampers import Friction
-from boringbar.model.forcing import Harmonic
-from boringbar.model.system import System
-from boringbar.orbit_map import MapOptions, attractor_check, orbit_map
-from boringbar.reference.masri_caughey import two_impact_orbit
-from boringbar.shooting import (
+from boringbar.orbits.orbit_map import MapOptions, attractor_check, orbit_map
+from boringbar.orbits.shooting import (
     OrbitRefused,
     advance,
     carry,
@@ -46,6 +45,7 @@ from boringbar.shooting import (
     one_blas_thread,
     state_size,
 )
+from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import Integration, simulate
 from boringbar.version import __version__
 
@@ -56,11 +56,11 @@ BRUTE_FORCE = {"force-n": "force", "ratio": "ratio"}
 
 @dataclass(frozen=True)
 class ContinuationOptions:
-    """``parameter`` (one of :data:`boringbar.branch.PARAMETERS`) continued from its value
+    """``parameter`` (one of :data:`boringbar.orbits.branch.PARAMETERS`) continued from its value
     in the system/forcing to ``stop``; ``force_n`` and ``ratio``: the forcing;
     ``periods``: k of P^k; ``step``: the first step and ``max_step`` the largest, relative
     to the range; ``max_points``: the point budget (None: from ``max_step``,
-    :func:`boringbar.branch.point_budget`);
+    :func:`boringbar.orbits.branch.point_budget`);
     ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
     rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
     smallest step the halving goes down to before the branch stops (relative);
@@ -157,7 +157,7 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
 
 @one_blas_thread
 def compute(context: dict, point: int) -> dict:
-    """The orbit map (:func:`boringbar.orbit_map.orbit_map`): per branch its points'
+    """The orbit map (:func:`boringbar.orbits.orbit_map.orbit_map`): per branch its points'
     value, state, strobe tip, RMS, multipliers, its events, parent and birth; the seeds'
     attractor check."""
     system, o = context["system"], context["options"]
@@ -180,7 +180,7 @@ def compute(context: dict, point: int) -> dict:
 
 def system_at(system: System, o: ContinuationOptions, value: float) -> tuple:
     """(system, forcing) of the problem with its parameter at ``value``: on the
-    descriptions what :func:`boringbar.branch.flow_with` does to a flow, for the exact
+    descriptions what :func:`boringbar.orbits.branch.flow_with` does to a flow, for the exact
     integrator's runs (a ball mass keeps the friction force F_c, as the flow does)."""
     name, forcing = o.parameter, Harmonic(o.force_n, ratio=o.ratio)
     if name == "force-n":
@@ -218,7 +218,7 @@ def _attractors(system: System, o: ContinuationOptions, fl, count: int) -> list:
 
 def _returns(system: System, o: ContinuationOptions, mb) -> list:
     """The return check of each stable point of a branch (NaN for the others):
-    :func:`boringbar.attractors.return_distance` over ``o.return_periods``."""
+    :func:`boringbar.orbits.attractors.return_distance` over ``o.return_periods``."""
     br = mb.branch
     if not o.return_periods:
         return [math.nan] * len(br.points)
@@ -328,7 +328,7 @@ def summary(ds: xr.Dataset) -> dict:
 
 
 def return_check(ds: xr.Dataset) -> dict:
-    """The return check of the stable points (:func:`boringbar.attractors.return_distance`):
+    """The return check of the stable points (:func:`boringbar.orbits.attractors.return_distance`):
     how many were checked, the largest distance and those farther than RETURN_TOL (branch,
     value, distance): stable points that are not attractors of the exact integrator."""
     if "return_distance_relative" not in ds:
@@ -375,7 +375,7 @@ def brute_force(system: System, options: ContinuationOptions, start: float, n_va
                 integration: Integration | None = None) -> xr.Dataset:
     """The brute-force bifurcation diagram of the branch's case (``bb.bifurcation``, from
     rest, forward and backward) over ``n_values`` values from ``start`` to
-    ``options.stop``, for the overlay of :func:`~boringbar.plot_orbits.plot_continuation`;
+    ``options.stop``, for the overlay of :func:`~boringbar.plot.orbits.plot_continuation`;
     ``integration``: default exact, 1 s runs, the last half sampled."""
     if options.parameter not in BRUTE_FORCE:
         raise ParameterError(f"parameter = {options.parameter!r}: a brute-force overlay sweeps "

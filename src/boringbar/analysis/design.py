@@ -476,7 +476,7 @@ def nominal(system: System, options: DesignOptions) -> tuple[System, Initial]:
 def comparison(spec: SystemSpec, options: DesignOptions, ds: xr.Dataset, n: int = 21,
                execution: Execution | None = None) -> dict:
     """The best trial of ``ds`` beside the file's own design, as the first objective
-    reads it (``kind``; :func:`boringbar.plot_design.plot_best` draws each):
+    reads it (``kind``; :func:`boringbar.plot.design.plot_best` draws each):
 
     - ``"lobes"`` (min_depth): each design's chatter-free depth at the design's speeds,
       by the lobes' search the objective runs (:meth:`DesignOptions.lobes_options`),

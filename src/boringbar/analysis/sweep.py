@@ -25,12 +25,12 @@ import xarray as xr
 from boringbar._validate import ParameterError, check_range, check_values
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.execute import Execution
-from boringbar.kernels import BMAX
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
 from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
+from boringbar.simulate.kernels import BMAX
 from boringbar.simulate.run_limits import check_steady_ratios
 from boringbar.version import __version__
 

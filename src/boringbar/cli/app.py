@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import importlib
-
+import boringbar as bb
 from boringbar._validate import ParameterError, check_int
 from boringbar.cli.options import Outcome
 from boringbar.model.system_file import load_system
@@ -32,9 +31,9 @@ def cmd_app(args) -> Outcome:
     # the page's libraries (Panel, Bokeh: an extra, boringbar[app]) are loaded only to
     # serve it, so that `boringbar app --help` and a bad option answer at once
     try:
-        webapp = importlib.import_module("boringbar.webapp")
+        serve = bb.serve
     except ImportError as exc:
         raise ParameterError(f"boringbar app needs the design page's libraries ({exc.name} "
                              "is missing): pip install 'boringbar[app]'") from None
-    webapp.serve(spec, port=args.port, host=args.host, show=args.show)
+    serve(spec, port=args.port, host=args.host, show=args.show)
     return Outcome({"served": True}, lambda say: None)

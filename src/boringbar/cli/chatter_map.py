@@ -18,7 +18,6 @@ from boringbar.cli.options import (
     add_common,
     add_cutting,
     add_verdict,
-    check_depth,
     check_rpm,
     check_workers,
     cut_options,
@@ -29,6 +28,7 @@ from boringbar.cli.options import (
     verdict_options,
     wrote,
 )
+from boringbar.model.forcing import check_depth
 from boringbar.report.outputs import chatter_map_files
 from boringbar.simulate.run_limits import check_steps
 

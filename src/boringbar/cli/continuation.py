@@ -13,22 +13,20 @@ from boringbar.analysis.continuation import (
     continuation,
     summary,
 )
-from boringbar.branch import MAX_STEP, PARAMETERS
 from boringbar.cli.options import (
     Outcome,
     add_common,
-    check_force,
     check_gap,
-    check_ratio,
     integration,
     one_bar,
     system_overrides,
     wrote,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
-from boringbar.model.forcing import Harmonic
+from boringbar.model.forcing import Harmonic, check_force, check_ratio
 from boringbar.model.system import make_system
-from boringbar.plot_orbits import plot_continuation
+from boringbar.orbits.branch import MAX_STEP, PARAMETERS
+from boringbar.plot.orbits import plot_continuation
 
 
 def add_continue(sub) -> None:

@@ -38,8 +38,8 @@ from boringbar.model.frf_units import (
     plausibility_warning,
 )
 from boringbar.model.measured_frf import read_frf
-from boringbar.plot_bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
-from boringbar.plot_style import system_label
+from boringbar.plot.bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
+from boringbar.plot.style import system_label
 from boringbar.reference.stability import (
     GRID_SPAN,
     TWO_PI,

@@ -9,7 +9,7 @@ from boringbar._validate import check_int
 from boringbar.cli.options import OUT_HELP, Outcome, default_bars, resolve_files, wrote
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.system import BAR_KINDS, PRESETS, describe_modes, make_system
-from boringbar.plot_bar import plot_modes
+from boringbar.plot.bar import plot_modes
 
 #: Most modes ``modes`` prints and draws.
 MAX_MODES = 8

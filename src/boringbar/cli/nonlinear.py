@@ -19,11 +19,8 @@ from boringbar.cli.options import (
     add_common,
     add_cutting,
     add_steady_fraction,
-    check_depth,
     check_dt,
-    check_force,
     check_gap,
-    check_ratio,
     check_rpm,
     check_workers,
     cut_options,
@@ -41,7 +38,7 @@ from boringbar.cli.options import (
 )
 from boringbar.cli.sweeps import short_pattern
 from boringbar.model.dampers import MAX_GAP
-from boringbar.model.forcing import MAX_FORCE, MAX_RATIO
+from boringbar.model.forcing import MAX_FORCE, MAX_RATIO, check_depth, check_force, check_ratio
 from boringbar.model.system import BALLS, make_system
 from boringbar.report.outputs import basins_files, bifurcation_files, sensitivity_files
 from boringbar.simulate import MAX_INITIAL_DISPLACEMENT, MAX_INITIAL_VELOCITY

@@ -20,12 +20,11 @@ from boringbar.model.cutting import KR_ALUMINIUM, WORKPIECES, CuttingLaw, cuttin
 from boringbar.model.dampers import MAX_FRICTION_FORCE
 from boringbar.model.forcing import (
     INTERPOLATIONS,
-    MAX_DEPTH,
     MAX_FEED,
-    MAX_FORCE,
     MAX_KR,
-    MAX_RATIO,
     STARTS,
+    check_force,
+    check_ratio,
 )
 from boringbar.model.measured_frf import CSV_SUFFIXES, UFF_SUFFIXES, read_frf
 from boringbar.model.modal_fit import ModalFit
@@ -447,11 +446,6 @@ def with_speed(rpm, at_rpm: float | None) -> tuple[float, ...]:
                         + [float(at_rpm)]))
 
 
-def check_depth(depth_mm: float, name: str) -> float:
-    """A depth of cut in mm, (0, MAX_DEPTH]."""
-    return check_range(name, depth_mm, 0, MAX_DEPTH * 1e3, lo_open=True, unit="mm")
-
-
 def system_overrides(args) -> dict:
     """make_system keywords the user set (the preset decides the rest)."""
     kw = {"ball": args.ball, "restitution": args.restitution, "n_modes": args.modes,
@@ -500,14 +494,6 @@ def forces_and_ratios(args):
         check_ratio(r, "--ratios")
     check_workers(args.workers)
     return forces, ratios
-
-
-def check_force(force: float, name: str = "--force-n") -> float:
-    return check_range(name, force, 0, MAX_FORCE, unit="N")
-
-
-def check_ratio(ratio: float, name: str = "--ratio") -> float:
-    return check_range(name, ratio, 0, MAX_RATIO, lo_open=True)
 
 
 def progress_printer(args, command: str, what: str):

@@ -11,11 +11,8 @@ from boringbar.cli.options import (
     Outcome,
     add_common,
     add_cutting,
-    check_depth,
     check_dt,
-    check_force,
     check_gap,
-    check_ratio,
     check_rpm,
     cut_options,
     gap_default_mm,
@@ -25,11 +22,11 @@ from boringbar.cli.options import (
     wrote,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
-from boringbar.model.forcing import Harmonic, Regenerative
+from boringbar.model.forcing import Harmonic, Regenerative, check_depth, check_force, check_ratio
 from boringbar.model.system import make_system
 from boringbar.model.system_file import PUBLISHED_NAME
 from boringbar.plot import plot_run
-from boringbar.plot_style import system_label
+from boringbar.plot.style import system_label
 from boringbar.simulate import HISTORY_ROWS, STEADY_FRACTION, simulate
 from boringbar.simulate.run_limits import check_history, check_steady, check_steps
 

@@ -29,7 +29,6 @@ from boringbar.cli.options import (
     add_common,
     add_cutting,
     add_verdict,
-    check_depth,
     check_dt,
     check_rpm,
     check_workers,
@@ -45,7 +44,7 @@ from boringbar.cli.options import (
     with_speed,
     wrote,
 )
-from boringbar.model.forcing import MAX_DEPTH
+from boringbar.model.forcing import MAX_DEPTH, check_depth
 from boringbar.report.outputs import lobes_files, sweep_files
 from boringbar.simulate import HISTORY_ROWS
 

@@ -35,6 +35,22 @@ MAX_RATIO = 100.0
 MAX_FREQUENCY_HZ = 1e6
 
 
+def check_force(force: float, name: str = "--force-n") -> float:
+    """A harmonic force amplitude in N, [0, MAX_FORCE] (``name``: how the caller calls it;
+    the command line and the design page share these checks)."""
+    return check_range(name, force, 0, MAX_FORCE, unit="N")
+
+
+def check_ratio(ratio: float, name: str = "--ratio") -> float:
+    """A forcing frequency ratio, (0, MAX_RATIO]."""
+    return check_range(name, ratio, 0, MAX_RATIO, lo_open=True)
+
+
+def check_depth(depth_mm: float, name: str) -> float:
+    """A depth of cut in mm, (0, MAX_DEPTH]."""
+    return check_range(name, depth_mm, 0, MAX_DEPTH * 1e3, lo_open=True, unit="mm")
+
+
 @dataclass(frozen=True)
 class Harmonic:
     """f(t) = F0 sin(Omega t) at the tip, F0 = ``amplitude_n`` (N).

@@ -1,4 +1,4 @@
-"""The HTML report of ``boringbar paper`` (the edge of the package, like plot.py).
+"""The HTML report of ``boringbar paper`` (the edge of the package, like plot/).
 
 Written from the files on disk (each step's ``summary.json``, NetCDF files and
 figures), so it can be rebuilt without rerunning anything
@@ -514,7 +514,7 @@ def _stable_stretches(pts: list) -> str:
 
 def _stop_facts(stops: list[str]) -> dict:
     """How the branches ended, counted from their stop reasons (the words of
-    boringbar.branch and boringbar.shooting)."""
+    boringbar.orbits)."""
     start = [s for s in stops if "refused at the start" in s]  # a map without branches
     later = [s for s in stops if "refused at the start" not in s]
     return {"branches": len(stops), "refused_start": len(start),

@@ -32,11 +32,11 @@ from boringbar.plot import (
     plot_lobe_examples,
     plot_sweep,
 )
-from boringbar.plot_bar import plot_lobes
-from boringbar.plot_chatter import plot_chatter_map
-from boringbar.plot_design import plot_best, plot_design
-from boringbar.plot_orbits import plot_continuation
-from boringbar.plot_variations import plot_sensitivity
+from boringbar.plot.bar import plot_lobes
+from boringbar.plot.chatter import plot_chatter_map
+from boringbar.plot.design import plot_best, plot_design
+from boringbar.plot.orbits import plot_continuation
+from boringbar.plot.variations import plot_sensitivity
 
 
 def integrators_used(ds) -> str:
@@ -126,7 +126,7 @@ def design_files(ds, cmp: dict, out) -> dict:
     sample_table`), ``out/design.png`` (the trials against each variable, the Pareto
     front), ``out/best.png`` (the best design beside the file's own in the objective's
     terms: ``cmp`` of :func:`boringbar.analysis.design.comparison`, drawn by
-    :func:`~boringbar.plot_design.plot_best`) and ``out/summary.json``; the summary,
+    :func:`~boringbar.plot.design.plot_best`) and ``out/summary.json``; the summary,
     with its one-line statement under ``"summary"``."""
     out = Path(out)
     s = design_summary(ds)

@@ -53,7 +53,7 @@ from boringbar.io import (
     write_netcdf_atomic,
 )
 from boringbar.model.system import make_system
-from boringbar.plot_variations import plot_ladder
+from boringbar.plot.variations import plot_ladder
 from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
 from boringbar.report.html import write_report
 from boringbar.report.outputs import (

@@ -29,7 +29,6 @@ from boringbar.simulate.engine import (
 )
 from boringbar.simulate.run import (
     EXACT_STATUS_MESSAGES,
-    FIGURES,
     HISTORY_ROWS,
     IMPACT_THRESHOLD,
     INTEGRATOR_CHOICES,
@@ -47,7 +46,7 @@ from boringbar.simulate.run import (
 )
 
 __all__ = [
-    "EXACT_STATUS_MESSAGES", "FIGURES", "HISTORY_ROWS", "IMPACT_THRESHOLD", "INTEGRATORS",
+    "EXACT_STATUS_MESSAGES", "HISTORY_ROWS", "IMPACT_THRESHOLD", "INTEGRATORS",
     "INTEGRATOR_CHOICES", "MAX_EVENT_ROWS", "MAX_INITIAL_DISPLACEMENT", "MAX_INITIAL_VELOCITY",
     "STEADY_FRACTION", "STICK_MIN_PERIODS", "CutStepper", "Initial", "Integration",
     "IntegrationError", "Run", "RunSetup", "State", "Window", "check_cut_law",

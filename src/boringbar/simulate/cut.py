@@ -14,11 +14,11 @@ from boringbar._validate import (
     check_int,
     check_range,
 )
-from boringbar.kernels import layout as L
-from boringbar.kernels import run_rk4
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
+from boringbar.simulate import layout as L
 from boringbar.simulate.engine import initial_state, setup_run
+from boringbar.simulate.kernels import run_rk4
 from boringbar.simulate.run import MAX_INITIAL_DISPLACEMENT, Initial, State
 from boringbar.simulate.run_limits import (
     MAX_STEPS,

@@ -1,7 +1,7 @@
 """``simulate``: one time-domain run of a bar under harmonic or cutting forces.
 
 The description objects (System, Harmonic, Regenerative) are packed into the kernel's
-parameter vector here (layout in :mod:`boringbar.kernels.layout`); the kernel streams
+parameter vector here (layout in :mod:`boringbar.simulate.layout`); the kernel streams
 its metrics; this module turns them into a labelled :class:`~boringbar.simulate.run.Run`.
 """
 
@@ -19,11 +19,11 @@ from boringbar._validate import (
     check_int,
     check_range,
 )
-from boringbar.kernels import BMAX, run_exact, run_rk4, run_rk4_batch
-from boringbar.kernels import layout as L
 from boringbar.model.dampers import ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
+from boringbar.simulate import layout as L
+from boringbar.simulate.kernels import BMAX, run_exact, run_rk4, run_rk4_batch
 from boringbar.simulate.patterns import classify
 from boringbar.simulate.run import (
     HISTORY_ROWS,
@@ -460,7 +460,7 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
                    steady_fraction: float = STEADY_FRACTION, strobe: bool = False) -> list[Run]:
     """Several harmonic runs of the published RK4 scheme, in one call of the core.
 
-    ``runs``: up to :data:`~boringbar.kernels.BMAX` triples (system,
+    ``runs``: up to :data:`~boringbar.simulate.kernels.BMAX` triples (system,
     forcing, initial), as :func:`simulate` takes them, whose systems share the
     bar kind and the number of retained modes, whose forcings are
     :class:`Harmonic` (each its own amplitude and frequency) and whose initial
@@ -468,7 +468,7 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
     ``State``: its t_s).  ``duration_s``, ``dt_s``, ``steady_fraction`` and
     ``strobe`` are the batch's, as in :func:`simulate`.
 
-    The runs go through one call of :func:`boringbar.kernels.run_rk4_batch`, which
+    The runs go through one call of :func:`boringbar.simulate.kernels.run_rk4_batch`, which
     advances each with the single-run kernel, the GIL released once for all: each
     returned :class:`Run` equals ``simulate(system, forcing, initial=initial, ...)`` of
     its triple, bit for bit, except ``elapsed_s``, the batch's wall time shared equally

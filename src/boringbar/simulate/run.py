@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import html
-import importlib
 import json
 import math
 import warnings
@@ -13,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import boringbar
 from boringbar._validate import (
     ParameterError,
     check_choice,
@@ -132,9 +132,6 @@ class State:
         check_finite("initial state t_s", self.t_s, "s")
 
 
-#: Figure makers by what they draw ("run" -> plot_run), registered by boringbar.plot so
-#: that Run.plot works without this layer importing matplotlib.
-FIGURES: dict = {}
 
 
 @dataclass(frozen=True, eq=False)
@@ -296,12 +293,9 @@ class Run:
     def plot(self, **kwargs):
         """The run's figure (a matplotlib Figure; needs ``record_every``): what
         :func:`boringbar.plot.plot_run` draws, with its ``kwargs`` (``zoom_periods``,
-        ``fig``).  The plotting module sits above this one and registers itself
-        (:data:`FIGURES`) when it is imported, here on first use: matplotlib is loaded
-        only when a figure is drawn."""
-        if "run" not in FIGURES:
-            importlib.import_module("boringbar.plot")
-        return FIGURES["run"](self, **kwargs)
+        ``fig``).  The plotting package sits above this one and is reached through the
+        package's lazy ``boringbar.plot``: matplotlib is loaded only when a figure is drawn."""
+        return boringbar.plot.plot_run(self, **kwargs)
 
     def to_xarray(self):
         """The decimated history as an xarray Dataset (needs ``record_every``), with the
@@ -355,7 +349,7 @@ class IntegrationError(RuntimeError):
                          f"(status {status}, after {events} events, at t = {t_reached:.6g} s)")
 
 
-#: What the exact integrator's status codes mean (kernels/layout.py, EXACT_STATUS).
+#: What the exact integrator's status codes mean (simulate/layout.py, EXACT_STATUS).
 EXACT_STATUS_MESSAGES = {
     1: "the event cap was reached (too many impacts or switches for one run; shorten "
        "the run or continue it from its final state)",

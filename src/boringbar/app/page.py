@@ -5,7 +5,7 @@ A :class:`Page` belongs to one browser session (or one notebook cell): it owns i
 design, its pinned design, its thread pool and its figures, so two sessions share
 nothing.  A control change makes a new :class:`Design` (checked as the command line
 checks it; a bad value leaves the design as it was and shows the message), then every
-view recomputes off the event loop, newest request first (:mod:`boringbar.webapp.jobs`),
+view recomputes off the event loop, newest request first (:mod:`boringbar.app.jobs`),
 and its figure's sources are replaced under the document lock.
 """
 
@@ -20,11 +20,11 @@ from functools import partial
 
 import panel as pn
 
-from boringbar.webapp import views
-from boringbar.webapp.commands import commands
-from boringbar.webapp.controls import Controls
-from boringbar.webapp.design_state import Design
-from boringbar.webapp.figures import (
+from boringbar.app import views
+from boringbar.app.commands import commands
+from boringbar.app.controls import Controls
+from boringbar.app.design_state import Design
+from boringbar.app.figures import (
     BarFigure,
     LobesFigure,
     ModesFigure,
@@ -32,8 +32,8 @@ from boringbar.webapp.figures import (
     RunFigures,
     show_progress,
 )
-from boringbar.webapp.jobs import Latest, Superseded
-from boringbar.webapp.search import SearchPanel
+from boringbar.app.jobs import Latest, Superseded
+from boringbar.app.search import SearchPanel
 
 #: how often (ms) the page copies a running job's progress to its bar
 POLL_MS = 250

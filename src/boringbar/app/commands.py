@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from boringbar.webapp import views
-from boringbar.webapp.design_state import DT_S, RUN_S, Design
+from boringbar.app import views
+from boringbar.app.design_state import DT_S, RUN_S, Design
 
 
 def commands(design: Design, file: str) -> dict[str, str]:

@@ -19,8 +19,8 @@ integration, so threads run in parallel.
 import numpy as np
 
 from boringbar import core
-from boringbar.kernels import layout as L
-from boringbar.kernels.regimes import cut_tables, history_step, prepare
+from boringbar.simulate import layout as L
+from boringbar.simulate.regimes import cut_tables, history_step, prepare
 
 #: most runs in one call of run_rk4_batch
 BMAX: int = core.BMAX

@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from boringbar.plot_style import (
+from boringbar.plot.style import (
     COLUMN_WIDTH_IN,
     GREY,
     TITLE_PT,

@@ -1,5 +1,5 @@
 """Figures of continued periodic orbits: branches, their stability and events, over
-a brute-force bifurcation diagram (the edge of the package, as plot.py)."""
+a brute-force bifurcation diagram (the edge of the package)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from boringbar.plot_style import (
+from boringbar.plot.style import (
     COLUMN_WIDTH_IN,
     CYCLE,
     DARK_GREY,

@@ -2,12 +2,12 @@
 tree (docs/continuation.md, "The orbit map").
 
 A map starts from one orbit and from seeds (periodic attractors found by the exact
-integrator, :mod:`boringbar.attractors`), each continued both ways across the range
-(:func:`boringbar.branch.continue_branch`).  With switching on, every branch point of
+integrator, :mod:`boringbar.orbits.attractors`), each continued both ways across the range
+(:func:`boringbar.orbits.branch.continue_branch`).  With switching on, every branch point of
 a branch starts two children (the other branch, both ways from the point along the
 direction the algebraic bifurcation equation gives), every period doubling of a
 branch of period below ``max_period`` a child of twice its period
-(:func:`boringbar.branch.switch_period_doubling`), and every grazing that ends a
+(:func:`boringbar.orbits.branch.switch_period_doubling`), and every grazing that ends a
 branch a child on the other side (the orbit with the new impact sequence, if Newton
 finds one there).  A branch, or a child, whose orbit is already on the map is not
 followed again.
@@ -20,22 +20,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from boringbar.branch import (
+from boringbar.orbits.branch import (
     MAX_STEP,
     Branch,
     BranchPoint,
     Point,
     Walk,
-    continue_branch,
     correct,
     flow_with,
-    march,
     point_budget,
-    switch_period_doubling,
     tangent_at,
     value_of,
 )
-from boringbar.shooting import (
+from boringbar.orbits.continuation import (
+    continue_branch,
+    march,
+    switch_period_doubling,
+)
+from boringbar.orbits.shooting import (
     Flow,
     OrbitRefused,
     advance,
@@ -84,7 +86,7 @@ class MapOptions:
     """How a map is grown: ``switch`` at branch points, period doublings and grazings;
     branches of period at most ``max_period``; at most ``max_branches`` followed (their
     mirror images not counted); the steps of
-    every branch (relative to the range, as :func:`~boringbar.branch.continue_branch`)."""
+    every branch (relative to the range, as :func:`~boringbar.orbits.branch.continue_branch`)."""
 
     switch: bool = True
     max_period: int = 2

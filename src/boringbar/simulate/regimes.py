@@ -30,7 +30,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from boringbar import core
-from boringbar.kernels import layout as L
+from boringbar.simulate import layout as L
 
 #: event-search grid points per shortest period and grid levels (core/exact/consts.hpp)
 GRID_PER_PERIOD: float = core.GRID_PER_PERIOD
@@ -70,8 +70,8 @@ def _cexp(z: complex) -> complex:
 
 
 def _phis(x: complex):
-    """kernels/exact/propagate.py's phis with Python complex numbers: CPython's complex
-    arithmetic is numba's (a float promoted to complex; _Py_c_prod, _Py_c_quot)."""
+    """The core's phis (core/exact/propagate.hpp) with Python complex numbers: CPython's
+    complex arithmetic (a float promoted to complex; _Py_c_prod, _Py_c_quot)."""
     if x.real * x.real + x.imag * x.imag < 1.0:
         p4 = 0j
         for m in range(14, -1, -1):
@@ -381,7 +381,7 @@ def history_step(tau: float, dt: float) -> float:
 def cut_tables(prep: dict, p: np.ndarray, H: float):
     """exp(lambda tau_p) and Kr b bq j! tau_p^(j+1) phi_(j+1)(lambda tau_p) at the Gauss
     nodes and the end of a whole step H, per regime (the out-of-cut ones have no input):
-    the same arrays, bit for bit, as kernels/exact/cut.py's cut_tables."""
+    the same arrays, bit for bit, as the core's (core/exact/cut.hpp)."""
     lam = prep["lam"]
     R, nz = lam.shape
     taus = [x * H for x in GL_X] + [H]

@@ -1,6 +1,6 @@
 """Figures of your own bar: its geometry and mode shapes, a measured FRF against its
-fit, and its stability lobes, simulated and classical (the edge of the package, as
-plot.py). Receptances are drawn in um/N, lengths in mm."""
+fit, and its stability lobes, simulated and classical (the edge of the package).
+Receptances are drawn in um/N, lengths in mm."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ from matplotlib.patches import Circle
 from matplotlib.ticker import FixedLocator, MaxNLocator, NullFormatter, StrMethodFormatter
 
 from boringbar._validate import ParameterError
-from boringbar.palette import lobe_depth_top, speed_axis
-from boringbar.plot_style import (
+from boringbar.plot.palette import lobe_depth_top, speed_axis
+from boringbar.plot.style import (
     BAR_STYLE,
     COLUMN_WIDTH_IN,
     DARK_GREY,
@@ -205,9 +205,9 @@ def plot_lobes(ds, at_rpm: float | None = None, *, fig=None) -> Figure:
     ``fine_rpm``, the minimum chatter-free depth starred and in the title; a caret on
     the top edge where the limit is above the axis.  The depth axis ends above the
     deepest stable point, limit or curve, or lower, near the cases' minimum chatter-free
-    depths (:func:`~boringbar.palette.lobe_depth_top`; the title then says where).
+    depths (:func:`~boringbar.plot.palette.lobe_depth_top`; the title then says where).
     Speeds spanning a wide range are on a log axis
-    (:func:`~boringbar.palette.speed_axis`).  The legend is below the panels.
+    (:func:`~boringbar.plot.palette.speed_axis`).  The legend is below the panels.
 
     ``at_rpm`` (rev/min; default ``ds.attrs["at_rpm"]``, which ``boringbar lobes
     --at-rpm`` records): the user's speed, one of the grid's speeds: a vertical line
@@ -251,7 +251,7 @@ def plot_lobes(ds, at_rpm: float | None = None, *, fig=None) -> Figure:
 
 
 def _lobe_depth_top(ds) -> tuple[float, float | None]:
-    """:func:`~boringbar.palette.lobe_depth_top` (mm) of the limits, first unstable and
+    """:func:`~boringbar.plot.palette.lobe_depth_top` (mm) of the limits, first unstable and
     onset depths, chatter-free points and analytic curves (the chatter points above the
     first unstable depth, a search's overshoot, may stay above the axis); a case's
     smallest limit is its minimum chatter-free depth, or, if it never chattered, the
@@ -368,9 +368,9 @@ def plot_analytic_lobes(curves, rpm_range, *, name: str = "published bar",
     series' colours when kinds repeat or are not bars' kinds, as a measured FRF's), with
     one case also each lobe (thin), and its speed-independent limit (thin, dashed).  The
     depth axis ends above the highest envelope, or lower, near the speed-independent
-    limits (:func:`~boringbar.palette.lobe_depth_top`; the title then says where).
+    limits (:func:`~boringbar.plot.palette.lobe_depth_top`; the title then says where).
     Speeds spanning a wide range are on a log axis
-    (:func:`~boringbar.palette.speed_axis`).  The legend is below the axes.
+    (:func:`~boringbar.plot.palette.speed_axis`).  The legend is below the axes.
 
     ``curves``: dicts with "label" (the legend's), "name" (the readout's, shorter),
     "kind" (a :data:`BAR_STYLE` key or None), "lobes" (``lobes_of_receptance``),
@@ -429,7 +429,7 @@ def _each_lobe(ax, lobes, rpm_range, colour) -> None:
 
 
 def _speed_axes(ax, rpm, top: float) -> None:
-    """x over the speeds ``rpm`` (:func:`~boringbar.palette.speed_axis`: a log axis when
+    """x over the speeds ``rpm`` (:func:`~boringbar.plot.palette.speed_axis`: a log axis when
     they span a wide range), depth from 0 to ``top`` (mm)."""
     log, ticks, ends = speed_axis(float(np.min(rpm)), float(np.max(rpm)))
     if log:

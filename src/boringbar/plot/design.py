@@ -1,6 +1,6 @@
 """Figures of a design search: the trials against each variable, the Pareto front, and
 the best design beside the published one in the first objective's own terms (the edge
-of the package, as plot.py): :func:`plot_best` picks the figure.
+of the package, as the rest of plot/): :func:`plot_best` picks the figure.
 
 Lengths are drawn in mm and receptances in um/N, like every other figure, though the
 design Dataset holds SI units."""
@@ -15,7 +15,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter
 
 from boringbar.analysis.design_options import reading
-from boringbar.plot_style import (
+from boringbar.plot.style import (
     BAR_STYLE,
     COLUMN_WIDTH_IN,
     GREY,

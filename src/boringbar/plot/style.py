@@ -1,4 +1,4 @@
-"""What every figure shares (plot.py, plot_bar.py, plot_design.py, plot_orbits.py): the
+"""What every figure shares (every module of plot/): the
 colour-blind-safe palette, the colour and line of each bar, the size of a figure meant for
 one column of the report, the bar a figure is about, and its wrapped title.
 
@@ -21,7 +21,7 @@ import numpy as np
 from matplotlib.text import Text
 
 from boringbar.model.system_file import PUBLISHED_NAME
-from boringbar.palette import BAR_STYLE, CYCLE, DARK_GREY, GREY, OKABE_ITO  # noqa: F401 (shared)
+from boringbar.plot.palette import BAR_STYLE, CYCLE, DARK_GREY, GREY, OKABE_ITO  # noqa: F401 (shared)
 
 #: Width (in) of a figure shown in one of the report's two columns.
 COLUMN_WIDTH_IN = 7.2
@@ -142,3 +142,31 @@ def zero_based(ax, values) -> None:
     """y from 0 to a little above the largest finite value."""
     top = np.nanmax(values) if np.isfinite(values).any() else 0.0
     ax.set_ylim(0, 1.1 * top if top > 0 else 1.0)
+
+
+#: Marker and colour per impact-pattern class (patterns.PATTERN_LABELS): the shapes
+#: tell the classes apart without colour, the colours (Okabe-Ito) without shape.
+PATTERN_STYLE = {
+    "no impact": ("o", GREY),
+    "symmetric": ("s", OKABE_ITO["sky blue"]),
+    "asymmetric": ("^", OKABE_ITO["orange"]),
+    "sticking": ("D", OKABE_ITO["yellow"]),
+    "no impact with sticking": ("v", OKABE_ITO["reddish purple"]),
+    "non-uniform": ("X", OKABE_ITO["black"]),
+    "": ("o", "white"),  # no pattern (locked ball)
+}
+
+
+def pattern_class(name: str) -> str:
+    """'2 symmetric' -> 'symmetric', '3 asymmetric (period 2)' -> 'asymmetric'."""
+    return re.sub(r"^\d+\s+|\s*\(period \d+\)$", "", str(name)).strip()
+
+
+
+def dropped_percent(attrs) -> float:
+    """The dropped first part of each run, in %: 1 - steady_fraction (files written
+    before steady_fraction: their ``drop``)."""
+    if "steady_fraction" in attrs:
+        return 100 * (1.0 - attrs["steady_fraction"])
+    return 100 * attrs.get("drop", math.nan)
+

@@ -1,6 +1,6 @@
-"""Serve the design page (``boringbar app``) or show it in a notebook (``bb.app``).
+"""Serve the design page (``boringbar app``) or show it in a notebook (``bb.design_page``).
 
-Each browser session gets a page of its own (:class:`~boringbar.webapp.page.Page`: its
+Each browser session gets a page of its own (:class:`~boringbar.app.page.Page`: its
 design, its pinned design, its threads), so two sessions never share state.  The
 server binds 127.0.0.1 unless told otherwise: the page runs simulations on request,
 and is not meant to be reachable from other machines without a decision to expose it.
@@ -13,9 +13,9 @@ from pathlib import Path
 
 import panel as pn
 
+from boringbar.app.design_state import Design
+from boringbar.app.page import Page
 from boringbar.model.system_file import SystemSpec, load_system, published_system
-from boringbar.webapp.design_state import Design
-from boringbar.webapp.page import Page
 
 LOCAL = "127.0.0.1"
 TITLE = "boringbar design page"
@@ -44,8 +44,8 @@ def page(system=None) -> Page:
     return p
 
 
-def app(system=None):
-    """The design page in a notebook: ``bb.app(system)`` as a cell's last line shows it
+def design_page(system=None):
+    """The design page in a notebook: ``bb.design_page(system)`` as a cell's last line shows it
     (``system`` as for :func:`serve`)."""
     pn.extension()
     return page(system).layout
@@ -53,9 +53,11 @@ def app(system=None):
 
 def serve(system=None, *, port: int = 5006, host: str = LOCAL, show: bool = False,
           say=print) -> None:
-    """Serve the page at http://HOST:PORT/ until interrupted (``system``: None for the
-    published bar, a system file's path, a SystemSpec or a System; checked before
-    the server starts)."""
+    """Serve the page at http://``host``:``port``/ until interrupted (``system``: None
+    for the published bar, a system file's path, a SystemSpec or a System; checked
+    before the server starts).  A ``host`` other than 127.0.0.1 exposes the page to the
+    network, with a warning; ``show`` opens it in a browser; ``say`` prints the address
+    (``boringbar app`` passes print)."""
     spec = _spec(system)
     if host != LOCAL:
         print(f"boringbar app: warning: serving on {host}: anyone who can reach this "

@@ -16,17 +16,16 @@ import copy
 import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from types import SimpleNamespace
 
 import tomli_w
 
 from boringbar._validate import ParameterError, check_choice, check_range
-from boringbar.cli.options import check_depth, check_force, check_ratio, check_rpm
-from boringbar.model.forcing import Harmonic, Regenerative
+from boringbar.model.forcing import Harmonic, Regenerative, check_depth, check_force, check_ratio
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system import PRESETS, System, variants
 from boringbar.model.system_file import FRICTION_FORMS, SystemSpec, cavity_moved, parse_system
 from boringbar.simulate import INTEGRATOR_CHOICES
+from boringbar.simulate.run_limits import check_delay
 
 #: the run's step (s): the command line's default --dt-s
 DT_S = 1e-6
@@ -70,7 +69,7 @@ class Settings:
         check_choice("forcing", self.forcing, FORCINGS)
         check_force(self.force_n)
         check_ratio(self.ratio)
-        check_rpm(self.rpm, SimpleNamespace(revolutions=None, dt_s=DT_S))
+        check_delay(self.rpm, 3, DT_S, "--rpm")
         check_depth(self.depth_mm, "--depth-mm")
 
 

@@ -2,7 +2,7 @@
 then redrawn by replacing the sources' data with a view's arrays (the browser
 receives the new columns only, not a new figure).
 
-Colours: the report's (:mod:`boringbar.palette`, Okabe-Ito, colour-blind safe); the
+Colours: the report's (:mod:`boringbar.plot.palette`, Okabe-Ito, colour-blind safe); the
 pinned design is drawn in the same colour as the current one, dashed.
 """
 
@@ -23,7 +23,7 @@ from bokeh.models import (
 )
 from bokeh.plotting import figure
 
-from boringbar.palette import (
+from boringbar.plot.palette import (
     BAR_STYLE,
     DARK_GREY,
     GREY,
@@ -32,7 +32,7 @@ from boringbar.palette import (
     speed_axis,
 )
 
-#: one colour per bar, the report's (boringbar.palette)
+#: one colour per bar, the report's (boringbar.plot.palette)
 COLOURS = {**{k: v["color"] for k, v in BAR_STYLE.items()}, "wall": GREY}
 LABELS = {k: v["label"] for k, v in BAR_STYLE.items()}
 WALLS = {1.0: OKABE_ITO["reddish purple"], -1.0: OKABE_ITO["sky blue"]}
@@ -218,8 +218,8 @@ class LobesFigure:
     bar's depth there marked on its curve and read out in a line above the plot (Bokeh
     draws no label outside the plot's frame, and inside it one would cover curves).
     Depth on a linear axis from 0 whose top follows the curves
-    (:func:`~boringbar.palette.lobe_depth_top`, the title saying where peaks are cut);
-    speed on :func:`~boringbar.palette.speed_axis`'s axis (log, labelled at 1, 1.5, 2,
+    (:func:`~boringbar.plot.palette.lobe_depth_top`, the title saying where peaks are cut);
+    speed on :func:`~boringbar.plot.palette.speed_axis`'s axis (log, labelled at 1, 1.5, 2,
     3, 5 and 7 of each decade); the legend below the plot, off the curves."""
 
     TITLE = "stability lobes (chatter-free below the curves)"

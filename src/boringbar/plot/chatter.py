@@ -23,8 +23,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from boringbar.analysis.chatter_map import DECAYING, UNDECIDED
-from boringbar.plot import case_title
-from boringbar.plot_style import COLUMN_WIDTH_IN, DARK_GREY, GREY, OKABE_ITO, set_title
+from boringbar.plot.style import COLUMN_WIDTH_IN, DARK_GREY, GREY, OKABE_ITO, case_title, set_title
 
 #: The colour scale's sequence (light: small vibration, dark: large) and the fill of a
 #: cell whose vibration is not known (undecided, or a linear bar not run on).

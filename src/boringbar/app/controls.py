@@ -7,11 +7,11 @@ from __future__ import annotations
 import panel as pn
 
 from boringbar._validate import ParameterError
+from boringbar.app.design_state import FIELDS, FORCINGS, TUNINGS, Design
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system import PRESETS
 from boringbar.model.system_file import FRICTION_FORMS, loads_system
 from boringbar.simulate import INTEGRATOR_CHOICES
-from boringbar.webapp.design_state import FIELDS, FORCINGS, TUNINGS, Design
 
 #: run settings -> (label, widget kind, choices)
 SETTINGS = {

@@ -25,7 +25,7 @@ periodic orbit is the steady forced response and their multipliers exp(lambda_i 
 A wall reached between two grid points (y inside at both, an extremum of y in the
 step beyond the wall) is found too, so an impact born at a grazing is seen at once.
 :func:`carry` moves a state to another forcing phase (the section is moved there
-when an event comes near it, :mod:`boringbar.branch`).  Refused
+when an event comes near it, :mod:`boringbar.orbits.branch`).  Refused
 (:class:`OrbitRefused`): a ball that sticks (|F_req| <= F_s at y' = 0), an impact
 slower than the capture threshold (wall contact, Zeno), a singular Newton matrix
 (an orbit that is not isolated, e.g. the free ball without impacts).
@@ -43,9 +43,9 @@ from scipy.optimize import brentq
 from threadpoolctl import threadpool_limits
 
 from boringbar._validate import ParameterError
-from boringbar.kernels import layout as L
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
+from boringbar.simulate import layout as L
 from boringbar.simulate import pack
 
 #: Event-search grid steps per forcing period.

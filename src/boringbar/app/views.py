@@ -23,6 +23,7 @@ import numpy as np
 from boringbar.analysis.lobes import LobesOptions, lobes
 from boringbar.analysis.speeds import lobe_speeds as default_lobe_speeds
 from boringbar.analysis.sweep import SweepOptions, sweep, tmd_window
+from boringbar.app.design_state import DT_S, RUN_S, Design
 from boringbar.execute import Execution
 from boringbar.model.cutting import KR_ALUMINIUM
 from boringbar.model.system import describe_modes, make_system
@@ -31,7 +32,6 @@ from boringbar.reference.stability import (
     system_receptance,
 )
 from boringbar.simulate import Integration, simulate
-from boringbar.webapp.design_state import DT_S, RUN_S, Design
 
 #: forcing ratios (Omega / omega_n of the ball bar) the response simulates
 RESPONSE_RATIOS = tuple(float(r) for r in np.linspace(0.85, 1.15, 11))

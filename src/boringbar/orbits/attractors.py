@@ -5,7 +5,7 @@ The exact integrator is run from a spread of initial conditions (the bar at 0, 1
 1 times its linear forced response without impacts, the ball at rest at -1/2, 0 and
 1/2 of the half gap) for ``settle_periods`` forcing periods, ending at phase 0.  A
 settled state that repeats after k <= ``max_period`` periods (to 1e-4 of its size) is
-polished by Newton on P^k(x) = x (:func:`boringbar.shooting.periodic_orbit`) and kept
+polished by Newton on P^k(x) = x (:func:`boringbar.orbits.shooting.periodic_orbit`) and kept
 if Newton stays near it and the orbit is stable; attractors that are the same orbit
 (the same state at phase 0 after some whole periods, to 1e-6) are merged.
 """
@@ -19,7 +19,7 @@ import numpy as np
 
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.shooting import (
+from boringbar.orbits.shooting import (
     Flow,
     OrbitRefused,
     advance,
@@ -142,7 +142,7 @@ def spread(lo: float, hi: float, count: int) -> list[float]:
 #: The return check: the orbit's state perturbed by this fraction of each component...
 RETURN_PERTURBATION = 1e-7
 #: ... must be within this fraction of the state's size of it after the periods (the
-#: attractor check's tolerance, :data:`boringbar.orbit_map.ON_BRANCH`).
+#: attractor check's tolerance, :data:`boringbar.orbits.orbit_map.ON_BRANCH`).
 RETURN_TOL = 1e-6
 
 

@@ -30,12 +30,12 @@ from boringbar.analysis.design import candidate_system, design, summary, summary
 from boringbar.analysis.design_file import MM_PER_M, options_from_dict, to_file
 from boringbar.analysis.design_options import OBJECTIVES as DESIGN_OBJECTIVES
 from boringbar.analysis.design_options import objective_reading, shown
+from boringbar.app.design_state import Design
+from boringbar.app.figures import COLOURS, new_figure, show_progress
+from boringbar.app.views import SIMULATED_CUT_S
 from boringbar.execute import Execution
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system_file import merged_sections
-from boringbar.webapp.design_state import Design
-from boringbar.webapp.figures import COLOURS, new_figure, show_progress
-from boringbar.webapp.views import SIMULATED_CUT_S
 
 #: the page's search variables, as the design file names them: a ball damper's and a
 #: tuned mass damper's (one search varies one damper)
