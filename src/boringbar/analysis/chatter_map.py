@@ -71,6 +71,9 @@ DEPTH_SPAN = (0.5, 3.0)
 #: knock that dies out passes through vibration the finish would not accept, as a hard
 #: spot in the workpiece or the entry into a cut gives.
 LARGE_KNOCK_M = 20e-6
+#: The cut settings (simulate's keywords) a map does not take: every cut starts in
+#: progress, knocked, and runs until its verdict (at most max_run_s).
+NOT_FOR_A_MAP = ("duration_s", "start", "bounded_fraction")
 #: The name of the first start.
 SMALL_KNOCK = "small knock"
 #: The settled statuses: a small knock's that dies out, then the verdict's own

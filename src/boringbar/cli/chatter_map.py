@@ -9,7 +9,12 @@ from dataclasses import replace
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int
-from boringbar.analysis.chatter_map import LARGE_KNOCK_M, ChatterMapOptions, chatter_map
+from boringbar.analysis.chatter_map import (
+    LARGE_KNOCK_M,
+    NOT_FOR_A_MAP,
+    ChatterMapOptions,
+    chatter_map,
+)
 from boringbar.analysis.speeds import check_speeds
 from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range
 from boringbar.analysis.verdict import VerdictOptions
@@ -31,11 +36,6 @@ from boringbar.cli.options import (
 from boringbar.model.forcing import check_depth
 from boringbar.report.outputs import chatter_map_files
 from boringbar.simulate.run_limits import check_steps
-
-#: Options of the shared groups that a map does not take: every cut starts in progress,
-#: knocked, and runs until its verdict (at most --max-run-s).
-NOT_FOR_A_MAP = {"duration_s": "--duration-s", "start": "--start",
-                 "bounded_fraction": "--bounded-fraction"}
 
 
 def add_chatter_map(sub) -> None:
@@ -90,8 +90,9 @@ def parse_depths_mm(text: str, name: str = "--depth-mm") -> list[float]:
 
 
 def _check_not_for_a_map(args) -> None:
-    for dest, flag in NOT_FOR_A_MAP.items():
+    for dest in NOT_FOR_A_MAP:
         if getattr(args, dest) is not None:
+            flag = "--" + dest.replace("_", "-")
             raise ParameterError(f"{flag} does not apply to a chatter map: every cut starts in "
                                  "progress, knocked, and runs until its verdict (at most "
                                  "--max-run-s)")

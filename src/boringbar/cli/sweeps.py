@@ -289,7 +289,7 @@ def _lobes_text(ds, summary: dict) -> str:
             if math.isfinite(first[j]) and above.any():
                 islands.append(f"{r:g}")
         if islands:
-            lines.append(f"  stable islands above the first unstable depth at "
+            lines.append(f"  chatter-free again above the first depth that chatters, at "
                          f"{', '.join(islands)} rpm")
         lines.append("")
     lines.append("'-': no chatter up to the deepest cut tried (or no analytic limit)")

@@ -484,8 +484,9 @@ class ChatterMap(Analysis):
         return ("auto", "rk4")
 
 
-#: Keys a chatter map does not take: its cuts start in progress and run until their verdict.
-_NOT_FOR_A_MAP = ("start", "bounded_fraction", "depth_mm", "duration_s")
+#: Keys a chatter map's study does not take: the cut settings a map does not take, and
+#: one depth (analysis.depths_mm gives the grid's).
+_NOT_FOR_A_MAP = (*chatter_map_mod.NOT_FOR_A_MAP, "depth_mm")
 
 
 def _map_options(study: Study) -> ChatterMapOptions:
