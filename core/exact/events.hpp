@@ -1,53 +1,35 @@
-// The exact kernel's event functions and their roots:
-// Hermite starts, the safeguarded Newton search (find_root), W extrema, the ranges that rule
-// steps out and a free ball's wall step (wall_step), ported operation for operation.
+// The exact kernel's event functions and their roots: Hermite starts, the safeguarded
+// Newton search (find_root), W extrema, the ranges that rule steps out and a free ball's
+// wall step (wall_step).
 //
-// Signatures (the Python names and parameter order):
-//   double g_value(idx kind, double tau, const Segment& seg, idx r, CVec q0, CMat lam,
-//                  CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
-//                  double f0, double om);
-//   std::tuple<double, double, double> _gd(idx kind, double tau, const Segment& seg, idx r,
-//                  CVec q0, CMat lam, CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q,
-//                  Vec X, Vec Xd, idx n, Mat mk, double f0, double om);
+// Each event function reads the segment's closed form through a SegView (the segment, its
+// regime and start, the run's eigen-data, the model's rows, the forcing and the scratch it
+// evaluates into):
+//   double g_value(idx kind, double tau, const SegView& s);          // g
+//   std::tuple<double, double, double> _gd(idx kind, double tau, const SegView& s);
+//                                                                    // g, g', g'' (or NaN)
 //   double hermite(double a, double b, double p0, double p1, double d0, double d1,
 //                  idx order);
 //   double hermite5(double a, double b, double p0, double p1, double d0, double d1,
 //                   double e0, double e1, idx order);
-//   double _root_body(idx kind, double a, double ga, double b, double gb,
-//                     const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks,
-//                     CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk,
-//                     double f0, double om, double c0, idx nz);
-//   double find_root(idx kind, double a, double ga, double b, double gb, const Segment& seg,
-//                    idx r, CVec q0, CMat lam, CArr3 V, idx ks, CMat Z, Mat D, CMat bq,
-//                    CVec q, Vec X, Vec Xd, idx n, Mat mk, double f0, double om, double c0);
-//   double find_root_1(... find_root's without ks and n ...);     // n = 1, nz = 2, ks = 2
-//   double find_root_2(... find_root's without ks and n ...);     // n = 2, nz = 4, ks = 2
-//   double find_root_any(... find_root's ...);
-//   double _w_extremum_body(double a, double ga, double b, double gb, double c0, double h,
-//                           const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks,
-//                           CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk,
-//                           double om, idx nz);
+//   double find_root(idx kind, double a, double ga, double b, double gb, const SegView& s,
+//                    double c0);
+//   double find_root_1 / find_root_2 (the same, n = 1 or 2 modes in conjugate pairs);
+//   double find_root_any(the same: the copy with constant sizes where they fit);
 //   double w_extremum(double a, double ga, double b, double gb, double c0, double h,
-//                     const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks, CMat Z,
-//                     Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk, double om);
-//   double w_extremum_1(... w_extremum's without ks and n ...);
-//   double w_extremum_2(... w_extremum's without ks and n ...);
-//   double w_extremum_any(... w_extremum's ...);
+//                     const SegView& s);   // and w_extremum_1, _2, _any as find_root's
 //   std::tuple<double, double> quad_range(double p, double d, double dd, double s);
 //   constexpr int NSUB = 16;
-//   std::tuple<double, double> _cubic_range(double p0, double p1, double m0, double m1);
 //   bool may_graze(double a, double b, Vec ev_a, Vec ev_b, double half, double b4);
 //   bool w_may_exceed(double h, double wa, double wb, double wda, double wdb, double bw4,
 //                     double max_w, double min_w, double max_abs_w);
 //   std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b, bool watch_v,
-//                     bool watch_ext, double half, const Segment& seg, idx r, CVec q0,
-//                     CMat lam, CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec qs, Vec dX,
-//                     Vec Xd, idx n, Mat mk, double f0, double om, double ydd_a,
+//                     bool watch_ext, double half, const SegView& s, double ydd_a,
 //                     double ydd_b);
 //
-// X, Xd (and dX) are seen with their own length by g_value, _gd and state_at: pass views of
-// length nz.  The _1 / _2 copies are numba's compilations with constant sizes; here they
-// are the same operations with the sizes as constants (the compiler may specialise them).
+// X, Xd are seen with their own length by g_value, _gd and state_at: give views of length
+// nz.  The _1 / _2 copies are the same operations with the sizes as constants, which the
+// compiler specialises.
 #pragma once
 
 #include <cmath>
@@ -63,10 +45,38 @@
 
 namespace bb::BB_EXACT_NS {
 
+// A segment's closed form as the event functions read it: the segment, its regime r and
+// its start q0 in eigen-coordinates; the run's eigen-data (lam, V, Z, D, bq); the sizes
+// (n modes; ks = 2 where only the first of each conjugate pair is evaluated); the model's
+// rows mk (M, K, C, psi_L, psi_d, psi_a); the harmonic forcing (f0, om); and the scratch
+// the state is evaluated into (q, X and X', each seen with its own length).
+struct SegView {
+    const Segment& seg;
+    idx r;
+    CVec q0;
+    CMat lam;
+    CArr3 V;
+    idx ks;
+    CMat Z;
+    Mat D;
+    CMat bq;
+    CVec q;
+    Vec X;
+    Vec Xd;
+    idx n;
+    Mat mk;
+    double f0;
+    double om;
+
+    // the same view with ks and n given (the copies with constant sizes)
+    SegView with_sizes(idx ks_, idx n_) const {
+        return {seg, r, q0, lam, V, ks_, Z, D, bq, q, X, Xd, n_, mk, f0, om};
+    }
+};
+
 // Event function ``kind`` at tau on the segment described by ``seg``.
-inline double g_value(idx kind, double tau, const Segment& seg, idx r, CVec q0, CMat lam,
-                      CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
-                      double f0, double om) {
+inline double g_value(idx kind, double tau, const SegView& s) {
+    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
     state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X);
     if (kind == EV_WEXT) {
         double s = 0.0;
@@ -101,10 +111,8 @@ inline double g_value(idx kind, double tau, const Segment& seg, idx r, CVec q0, 
 
 // Event function ``kind``, its time derivative and its second derivative at tau: the
 // second only where it comes free (the walls and the cut's h), NaN elsewhere.
-inline std::tuple<double, double, double> _gd(idx kind, double tau, const Segment& seg, idx r,
-                                              CVec q0, CMat lam, CArr3 V, idx ks, CMat Z,
-                                              Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n,
-                                              Mat mk, double f0, double om) {
+inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegView& s) {
+    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     double ts = seg.ts;
     state_at2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd);
@@ -271,12 +279,11 @@ inline double hermite5(double a, double b, double p0, double p1, double d0, doub
 // (events.py's _root_body).  Returns the end on gb's side.  X and Xd are seen with length
 // nz.
 inline double _root_body(idx kind, double a, double ga, double b, double gb,
-                         const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks,
-                         CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk,
-                         double f0, double om, double c0, idx nz) {
-    Vec Xn{X.d, nz};
-    Vec Xdn{Xd.d, nz};
-    double ts = seg.ts;
+                         const SegView& s, double c0, idx nz) {
+    SegView sn = s;
+    sn.X = Vec{s.X.d, nz};
+    sn.Xd = Vec{s.Xd.d, nz};
+    double ts = s.seg.ts;
     bool pos = gb > 0.0;
     double c = c0;
     if (!(a < c && c < b)) c = gb != ga ? (a * gb - b * ga) / (gb - ga) : 0.5 * (a + b);
@@ -290,8 +297,7 @@ inline double _root_body(idx kind, double a, double ga, double b, double gb,
             slow = 0;
             if (!(a < c && c < b)) break;
         }
-        auto [g, dg, ddg] = _gd(kind, c, seg, r, q0, lam, V, ks, Z, D, bq, q, Xn, Xdn, n, mk,
-                                f0, om);
+        auto [g, dg, ddg] = _gd(kind, c, sn);
         if (g == 0.0) return c;
         if ((g > 0.0) == pos)
             b = c;
@@ -319,12 +325,9 @@ inline double _root_body(idx kind, double a, double ga, double b, double gb,
 }
 
 // _root_body for any bar.
-inline double find_root(idx kind, double a, double ga, double b, double gb, const Segment& seg,
-                        idx r, CVec q0, CMat lam, CArr3 V, idx ks, CMat Z, Mat D, CMat bq,
-                        CVec q, Vec X, Vec Xd, idx n, Mat mk, double f0, double om,
+inline double find_root(idx kind, double a, double ga, double b, double gb, const SegView& s,
                         double c0) {
-    return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
-                      f0, om, c0, X.n);
+    return _root_body(kind, a, ga, b, gb, s, c0, s.X.n);
 }
 
 // The copies with constant sizes are flattened (everything they call inlined into them, as
@@ -334,46 +337,32 @@ inline double find_root(idx kind, double a, double ga, double b, double gb, cons
 
 // _root_body for one mode and its conjugate pair (n = 1, nz = 2, ks = 2).
 BB_FLATTEN inline double find_root_1(idx kind, double a, double ga, double b, double gb,
-                          const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
-                          Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double f0, double om,
-                          double c0) {
-    return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 1, mk, f0,
-                      om, c0, 2);
+                                     const SegView& s, double c0) {
+    return _root_body(kind, a, ga, b, gb, s.with_sizes(2, 1), c0, 2);
 }
 
 // _root_body for two modes in conjugate pairs (n = 2, nz = 4, ks = 2).
 BB_FLATTEN inline double find_root_2(idx kind, double a, double ga, double b, double gb,
-                          const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
-                          Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double f0, double om,
-                          double c0) {
-    return _root_body(kind, a, ga, b, gb, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 2, mk, f0,
-                      om, c0, 4);
+                                     const SegView& s, double c0) {
+    return _root_body(kind, a, ga, b, gb, s.with_sizes(2, 2), c0, 4);
 }
 
 // find_root, or its copy with the sizes constant where they fit (see const_sizes).
 inline double find_root_any(idx kind, double a, double ga, double b, double gb,
-                            const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks,
-                            CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk,
-                            double f0, double om, double c0) {
-    idx sz = const_sizes(ks, n, X.n);
-    if (sz == 1)
-        return find_root_1(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0,
-                           om, c0);
-    if (sz == 2)
-        return find_root_2(kind, a, ga, b, gb, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk, f0,
-                           om, c0);
-    return find_root(kind, a, ga, b, gb, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0,
-                     om, c0);
+                            const SegView& s, double c0) {
+    idx sz = const_sizes(s.ks, s.n, s.X.n);
+    if (sz == 1) return find_root_1(kind, a, ga, b, gb, s, c0);
+    if (sz == 2) return find_root_2(kind, a, ga, b, gb, s, c0);
+    return find_root(kind, a, ga, b, gb, s, c0);
 }
 
 // W at its extremum in [a, b], where W' changes sign (ga, gb: W' at a, b): Newton on W'
 // from c0 inside the shrinking bracket until the step is below 2e-5 h, then W plus the
 // step's quadratic correction (events.py's _w_extremum_body).
 inline double _w_extremum_body(double a, double ga, double b, double gb, double c0, double h,
-                               const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks,
-                               CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk,
-                               double om, idx nz) {
+                               const SegView& s, idx nz) {
     (void)ga;
+    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
     Vec Xn{X.d, nz};
     Vec Xdn{Xd.d, nz};
     bool pos = gb > 0.0;
@@ -406,43 +395,29 @@ inline double _w_extremum_body(double a, double ga, double b, double gb, double 
 
 // _w_extremum_body for any bar.
 inline double w_extremum(double a, double ga, double b, double gb, double c0, double h,
-                         const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks,
-                         CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk,
-                         double om) {
-    return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n,
-                            mk, om, X.n);
+                         const SegView& s) {
+    return _w_extremum_body(a, ga, b, gb, c0, h, s, s.X.n);
 }
 
 // _w_extremum_body for n = 1, nz = 2, ks = 2.
-BB_FLATTEN inline double w_extremum_1(double a, double ga, double b, double gb, double c0, double h,
-                           const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
-                           Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double om) {
-    return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 1,
-                            mk, om, 2);
+BB_FLATTEN inline double w_extremum_1(double a, double ga, double b, double gb, double c0,
+                                      double h, const SegView& s) {
+    return _w_extremum_body(a, ga, b, gb, c0, h, s.with_sizes(2, 1), 2);
 }
 
 // _w_extremum_body for n = 2, nz = 4, ks = 2.
-BB_FLATTEN inline double w_extremum_2(double a, double ga, double b, double gb, double c0, double h,
-                           const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, CMat Z,
-                           Mat D, CMat bq, CVec q, Vec X, Vec Xd, Mat mk, double om) {
-    return _w_extremum_body(a, ga, b, gb, c0, h, seg, r, q0, lam, V, 2, Z, D, bq, q, X, Xd, 2,
-                            mk, om, 4);
+BB_FLATTEN inline double w_extremum_2(double a, double ga, double b, double gb, double c0,
+                                      double h, const SegView& s) {
+    return _w_extremum_body(a, ga, b, gb, c0, h, s.with_sizes(2, 2), 4);
 }
 
 // w_extremum, or its copy with the sizes constant (see find_root_any).
 inline double w_extremum_any(double a, double ga, double b, double gb, double c0, double h,
-                             const Segment& seg, idx r, CVec q0, CMat lam, CArr3 V, idx ks,
-                             CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd, idx n, Mat mk,
-                             double om) {
-    idx sz = const_sizes(ks, n, X.n);
-    if (sz == 1)
-        return w_extremum_1(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk,
-                            om);
-    if (sz == 2)
-        return w_extremum_2(a, ga, b, gb, c0, h, seg, r, q0, lam, V, Z, D, bq, q, X, Xd, mk,
-                            om);
-    return w_extremum(a, ga, b, gb, c0, h, seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk,
-                      om);
+                             const SegView& s) {
+    idx sz = const_sizes(s.ks, s.n, s.X.n);
+    if (sz == 1) return w_extremum_1(a, ga, b, gb, c0, h, s);
+    if (sz == 2) return w_extremum_2(a, ga, b, gb, c0, h, s);
+    return w_extremum(a, ga, b, gb, c0, h, s);
 }
 
 // (lowest, highest) value of p + d x + dd x^2 / 2 on [0, s].
@@ -528,11 +503,8 @@ inline bool w_may_exceed(double h, double wa, double wb, double wda, double wdb,
 // The first wall or friction-switch event of a FREE ball in [a, b], from the event
 // functions at the ends and y'' there (NaN: not known): (kind, time), kind -1 if none.
 inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b, bool watch_v,
-                                         bool watch_ext, double half, const Segment& seg,
-                                         idx r, CVec q0, CMat lam, CArr3 V, idx ks, CMat Z,
-                                         Mat D, CMat bq, CVec qs, Vec dX, Vec Xd, idx n,
-                                         Mat mk, double f0, double om, double ydd_a,
-                                         double ydd_b) {
+                                         bool watch_ext, double half, const SegView& s,
+                                         double ydd_a, double ydd_b) {
     double best = b;
     idx kind = -1;
     double lo = a;
@@ -547,19 +519,16 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
         near = dmin <= reach;
     }
     if (near) {
-        double te = find_root_any(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], seg, r, q0, lam,
-                                  V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om,
+        double te = find_root_any(EV_YEXT, a, ev_a[EV_YEXT], b, ev_b[EV_YEXT], s,
                                   hermite(a, b, ev_a[EV_PLUS], ev_b[EV_PLUS], ev_a[EV_YEXT],
                                           ev_b[EV_YEXT], 1));
-        double gp = g_value(EV_PLUS, te, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0,
-                            om);
+        double gp = g_value(EV_PLUS, te, s);
         double gm = -2.0 * half - gp;
         for (idx kk : walls) {
             double ge = kk == EV_PLUS ? gp : gm;
             if (ev_a[kk] <= 0.0 && 0.0 < ge) {
                 double sg = kk == EV_PLUS ? 1.0 : -1.0;
-                double tr = find_root_any(kk, a, ev_a[kk], te, ge, seg, r, q0, lam, V, ks, Z,
-                                          D, bq, qs, dX, Xd, n, mk, f0, om,
+                double tr = find_root_any(kk, a, ev_a[kk], te, ge, s,
                                           hermite(a, te, ev_a[kk], ge, sg * ev_a[EV_YEXT],
                                                   0.0, 0));
                 if (kind < 0 || tr < best) {
@@ -573,8 +542,7 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
                 double ge = kk == EV_PLUS ? gp : gm;
                 if (ge <= 0.0 && 0.0 < ev_b[kk]) {
                     double sg = kk == EV_PLUS ? 1.0 : -1.0;
-                    double tr = find_root_any(kk, te, ge, b, ev_b[kk], seg, r, q0, lam, V, ks,
-                                              Z, D, bq, qs, dX, Xd, n, mk, f0, om,
+                    double tr = find_root_any(kk, te, ge, b, ev_b[kk], s,
                                               hermite(te, b, ge, ev_b[kk], 0.0,
                                                       sg * ev_b[EV_YEXT], 0));
                     if (kind < 0 || tr < best) {
@@ -594,12 +562,10 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
         double gme = ev_b[EV_MINUS];
         double yde = ev_b[EV_YEXT];
         if (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP]) {
-            best = find_root_any(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], seg, r, q0,
-                                 lam, V, ks, Z, D, bq, qs, dX, Xd, n, mk, f0, om, -1.0);
+            best = find_root_any(EV_VSTOP, a, ev_a[EV_VSTOP], b, ev_b[EV_VSTOP], s, -1.0);
             kind = EV_VSTOP;
             bend = best;
-            gpe = g_value(EV_PLUS, bend, seg, r, q0, lam, V, ks, Z, D, bq, qs, dX, n, mk, f0,
-                          om);
+            gpe = g_value(EV_PLUS, bend, s);
             gme = -2.0 * half - gpe;
             yde = 0.0;
         }
@@ -613,8 +579,7 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
                                   sg * ydd_b, 0);
                 else
                     c0 = hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde, 0);
-                double tr = find_root_any(kk, a, ev_a[kk], bend, ge, seg, r, q0, lam, V, ks, Z,
-                                          D, bq, qs, dX, Xd, n, mk, f0, om, c0);
+                double tr = find_root_any(kk, a, ev_a[kk], bend, ge, s, c0);
                 if (kind < 0 || tr <= best) {
                     best = tr;
                     kind = kk;

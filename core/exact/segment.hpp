@@ -124,6 +124,12 @@ struct Work {
     Work& operator=(const Work&) = delete;
 };
 
+// The segment's closed form in regime r (ks, n: its sizes) as the event functions read it,
+// evaluated into the work vectors qs, dX and Xd.
+inline SegView view(Work& w, idx r, idx ks, idx n, double f0, double om) {
+    return {w.seg, r, w.q0, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0, om};
+}
+
 namespace kernel {
 
 // X[i] and X[n + i] weighed by row ``row`` of mk: psi . u and psi . u' (row 3: psi_L, W and
@@ -524,9 +530,8 @@ inline Found regime_event(Work& w, double a, double b, idx r, idx ks, idx n, dou
     for (idx kk : {EV_REL_NEG, EV_REL_POS, EV_WALL_REL}) {
         if ((mode == STICK) == (kk != EV_WALL_REL)) {
             if (w.ev_a[kk] <= 0.0 && 0.0 < w.ev_b[kk]) {
-                double tr = find_root_any(kk, a, w.ev_a[kk], b, w.ev_b[kk], w.seg, r, w.q0,
-                                          w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n,
-                                          w.mk, f0, om, -1.0);
+                double tr = find_root_any(kk, a, w.ev_a[kk], b, w.ev_b[kk],
+                                          view(w, r, ks, n, f0, om), -1.0);
                 if (tr < best || kind < 0) {
                     best = tr;
                     kind = kk;
@@ -580,9 +585,8 @@ __attribute__((noinline)) inline Found wall_event_found(Work& w, double a, doubl
     double best = b;
     idx kind = -1;
     if (search) {
-        auto [k, tb] = wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half, w.seg, r, w.q0,
-                                 w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0,
-                                 om, ydd_a, ydd_b);
+        auto [k, tb] = wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half,
+                                 view(w, r, ks, n, f0, om), ydd_a, ydd_b);
         kind = k;
         best = tb;
     }
@@ -600,9 +604,8 @@ __attribute__((noinline)) inline Found wall_event_found(Work& w, double a, doubl
             } else {
                 for (idx kk = 0; kk < N_EV; ++kk) ev_t[kk] = ev_b[kk];
             }
-            auto [k, tb] = wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half, w.seg, r,
-                                     w.q0, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n,
-                                     w.mk, f0, om, NAN, NAN);
+            auto [k, tb] = wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
+                                     view(w, r, ks, n, f0, om), NAN, NAN);
             kind = k;
             best = tb;
             if (kind >= 0) break;
@@ -642,17 +645,14 @@ inline double cut_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
     Vec ev_b = w.ev_b;
     double tr = -1.0;
     if (ev_a[EV_CUT] <= 0.0 && 0.0 < ev_b[EV_CUT]) {
-        tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], w.seg, r, w.q0, w.lam, w.V,
-                           ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0, om, -1.0);
+        tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], view(w, r, ks, n, f0, om),
+                           -1.0);
     } else if (ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0) {
-        double te = find_root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], w.seg, r, w.q0,
-                                  w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0,
-                                  om, -1.0);
-        double ge = g_value(EV_CUT, te, w.seg, r, w.q0, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs,
-                            w.dX, n, w.mk, f0, om);
+        double te = find_root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT],
+                                  view(w, r, ks, n, f0, om), -1.0);
+        double ge = g_value(EV_CUT, te, view(w, r, ks, n, f0, om));
         if (ev_a[EV_CUT] <= 0.0 && 0.0 < ge) {
-            tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, w.seg, r, w.q0, w.lam, w.V, ks,
-                               w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0, om, -1.0);
+            tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, view(w, r, ks, n, f0, om), -1.0);
         }
     }
     return tr;
@@ -888,8 +888,7 @@ __attribute__((noinline)) inline double w_extremum_in(Work& w, double a, double 
     } else {
         c0 = hermite(a, b, wa, wb, wda, wdb, 1);
     }
-    return w_extremum_any(a, wda, b, wdb, c0, w.cp.h, w.seg, r, w.q0, w.lam, w.V, ks, w.Z, w.D,
-                          w.bq, w.qs, w.dX, w.Xd, n, w.mk, w.cp.om);
+    return w_extremum_any(a, wda, b, wdb, c0, w.cp.h, view(w, r, ks, n, w.cp.f0, w.cp.om));
 }
 
 // W's extremes at the end b of a grid step and, where W' changes sign inside the step and
