@@ -1,6 +1,7 @@
 // The compiled core's Python module, boringbar.core: the packed layout's names and
-// the integrators' entry points.  Each integrator's bindings live beside it
-// (bind_rk4.cpp, bind_exact.cpp); this file only assembles the module.
+// the integrators' entry points and the equations of motion as matrices.  Each part's
+// bindings live beside it (bind_rk4.cpp, bind_exact.cpp, dynamics.cpp); this file only
+// assembles the module.
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/map.h>
@@ -15,6 +16,7 @@ namespace nb = nanobind;
 namespace bb::bind {
 void bind_rk4(nb::module_& m);
 void bind_exact(nb::module_& m);
+void bind_dynamics(nb::module_& m);
 }  // namespace bb::bind
 
 namespace {
@@ -52,4 +54,5 @@ NB_MODULE(core, m) {
           "The packed parameter vector's and the metric vector's slots, by name.");
     bb::bind::bind_rk4(m);
     bb::bind::bind_exact(m);
+    bb::bind::bind_dynamics(m);
 }

@@ -205,9 +205,15 @@ struct StageTerms {
 //
 // FAST: the ball's y'' sums psi_d a_i from its first term (q.ydd_sum_from_first), which
 // takes an addition off the stage's longest chain (a_i, y'', y' at the next stage, F_b).
+//
+// sg: the sign of y' that picks the friction force F_b = -F_c sgn(y') (sign_mask); the
+// stages take it from the stage state (derivative), the regime matrices (dynamics.cpp) a
+// sliding direction of their own.  RK4's stages and the matrices that shooting
+// linearises are both built from this definition of the equations of motion (the step
+// map's tables, linmap.hpp, push basis vectors through a copy of the stage recursion).
 template <int N, int CASE, bool FAST = false>
-BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
-                                double* Kd) {
+BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
+                                     double f, double* Kd, SignMask sg) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
     StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
@@ -225,7 +231,6 @@ BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double
         const double yds = Xs[iyd];
         // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), with dm F_b and kappa F_b picked by
         // y''s sign (sign_pick)
-        const SignMask sg = sign_mask(yds);
         const double fb = sign_pick(sg, q.fb);
         double pdv = 0.0;
         for (int i = 0; i < n; ++i) {
@@ -255,6 +260,13 @@ BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double
     Kd[iy] = sh.has_aux() ? Xs[iyd] : 0.0;
     Kd[iyd] = ydd;
     return t;
+}
+
+// The stage derivative at Xs, F_b picked by the sign of the stage's own y'.
+template <int N, int CASE, bool FAST = false>
+BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
+                                double* Kd) {
+    return derivative_with<N, CASE, FAST>(q, sh, Xs, f, Kd, sign_mask(Xs[sh.iyd()]));
 }
 
 // A stage's energy flows with the RK4 weight w_s: friction, the non-reciprocal reaction's
@@ -521,6 +533,12 @@ BB_INLINE void strobe_step(const Params& q, Shape<N, CASE> sh, const double* X,
     }
 }
 
+// The modes' velocity jumps of an impact with impulse factor g (model.hpp's impact_law):
+// u_i' += g psi_d,i / M_i.
+BB_INLINE void jump_modes(const Params& q, int n, double* X, double g) {
+    for (int i = 0; i < n; ++i) X[n + i] += g * q.pD[i] * q.invM[i];
+}
+
 // The ball's walls at the step's end t1 (model.hpp's wall rule; the modes jump by
 // g psi_d,i / M_i) and the stick bookkeeping.  Returns whether the ball is in contact
 // (on a wall at rest, or a sub-threshold impact).
@@ -533,9 +551,7 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double*
                                    q.vimp);
     X[iy] = w.y;
     X[iyd] = w.yd;
-    if (w.outcome == IMPACT || w.outcome == MICRO_IMPACT) {
-        for (int i = 0; i < n; ++i) X[n + i] += w.g * q.pD[i] * q.invM[i];
-    }
+    if (w.outcome == IMPACT || w.outcome == MICRO_IMPACT) jump_modes(q, n, X, w.g);
     const bool contact = w.outcome == MICRO_IMPACT || w.outcome == ON_WALL;
     // stuck: off the walls with |y'| inside the band where the sgn() law chatters
     // (V_STICK = V_IMPACT + 2 F_c dt / m_eff)

@@ -13,6 +13,10 @@ product of the segments' expm(A_r dt) and the events' saltation matrices:
 - impact (x+ = R x-, n = e_y, n . f- = y'-): S = R + (f+ - R f-) n^T / (n . f-);
 - friction reversal (x continuous, n = e_y', n . f- = y''-): S = I + (f+ - f-) n^T / (n . f-).
 
+The regimes' matrices A_r and the impact's R are not written here: they come from the
+compiled core, built from the stage derivative RK4 steps with and from the wall's impact
+law (:func:`augmented`, :func:`impact_matrix`).
+
 Supported: the solid bar (state [u, u']), the locked ball (state [u, u']: the ball
 is a rigid mass m at z_d, (diag(M) + m psi_d psi_d^T) u'' = ..., so by Sherman-Morrison
 u'' = a - M^-1 psi_d m_eff (psi_d . a), a the bare bar's acceleration; the kernel's
@@ -47,6 +51,7 @@ from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.simulate import layout as L
 from boringbar.simulate import pack
+from boringbar.simulate.kernels import impact_matrix_of, regime_matrix
 
 #: Event-search grid steps per forcing period.
 GRID = 64
@@ -129,42 +134,48 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
                 np.asarray(bar.psi_absorber, float))
 
 
+#: The core's case of each bar (System.kind).
+CASES = {"solid": L.SOLID, "ball": L.BALL, "tmd": L.TMD, "locked": L.LOCKED}
+
+
+def packed(fl: Flow) -> np.ndarray:
+    """The core's parameter vector of ``fl``'s equations: the slots its stage derivative
+    and impact law read, from the flow's own values (so a flow a continuation changed,
+    :func:`boringbar.orbits.branch.flow_with`, is the one the matrices describe)."""
+    n = fl.n
+    p = L.empty_params()
+    p[L.N_MODES] = n
+    p[L.CASE] = CASES[fl.kind]
+    p[L.FORCING] = L.HARMONIC
+    p[L.F0] = fl.amplitude
+    p[L.OMEGA] = fl.omega
+    for slot, values in ((L.M_, fl.M), (L.K_, fl.K), (L.C_, fl.C), (L.PSI_L, fl.psi_tip),
+                         (L.PSI_D, fl.psi_d), (L.PSI_A, fl.psi_a)):
+        if values is not None:
+            p[slot:slot + n] = values
+    p[L.BALL_MASS] = fl.m
+    p[L.HALF_GAP] = fl.half
+    p[L.RESTITUTION] = fl.e
+    p[L.FRICTION] = fl.fc
+    p[L.REACTION] = fl.s
+    p[L.M_EFF] = fl.meff
+    p[L.TMD_MASS], p[L.TMD_K], p[L.TMD_C] = fl.tmd
+    return p
+
+
+def _kept(fl: Flow) -> np.ndarray:
+    """The rows of the core's state [u, u', aux, aux'] that are shooting's state: all of
+    them for the ball and TMD bars, [u, u'] for the solid and locked bars."""
+    return np.arange(fl.N) if fl.N == 2 * fl.n + 2 else np.arange(2 * fl.n)
+
+
 def augmented(fl: Flow, sdir: float) -> np.ndarray:
     """The (N + 3) matrix of z = [x, sin Omega t, cos Omega t, 1] in FREE with the
-    ball sliding in direction ``sdir`` (F_b = -F_c sdir)."""
-    n, N = fl.n, fl.N
-    A = np.zeros((N + 3, N + 3))
-    A[:n, n:2 * n] = np.eye(n)
-    A[n:2 * n, :n] = np.diag(-fl.K / fl.M)
-    A[n:2 * n, n:2 * n] = np.diag(-fl.C / fl.M)
-    A[n:2 * n, N] = fl.amplitude * fl.psi_tip / fl.M
-    if fl.ball:
-        fb = -fl.fc * sdir
-        A[n:2 * n, N + 2] = -fl.s * fl.psi_d * fb / fl.M
-        A[2 * n, 2 * n + 1] = 1.0
-        A[2 * n + 1, :] = -fl.psi_d @ A[n:2 * n, :]
-        A[2 * n + 1, N + 2] += fb / fl.m
-    elif fl.kind == "locked":
-        # (diag(M) + m psi_d psi_d^T) u'' = M a: u'' = a - M^-1 psi_d m_eff (psi_d . a)
-        A[n:2 * n, :] -= np.outer(fl.meff * fl.psi_d / fl.M, fl.psi_d @ A[n:2 * n, :])
-    elif fl.kind == "tmd":
-        _absorber(fl, A)
-    A[N, N + 1] = fl.omega
-    A[N + 1, N] = -fl.omega
-    return A
-
-
-def _absorber(fl: Flow, A: np.ndarray) -> None:
-    """Add the absorber's rows and its force on the bar to A (docs/model.md, section 3):
-    f_t = k_a (x_a - psi_a . u) + c_a (x_a' - psi_a . u') pulls the bar by psi_a f_t and
-    the absorber by -f_t."""
-    n = fl.n
-    ma, ka, ca = fl.tmd
-    # f_t as a row over the state [u, u', x_a, x_a']
-    ft = np.concatenate([-ka * fl.psi_a, -ca * fl.psi_a, [ka, ca]])
-    A[n:2 * n, :2 * n + 2] += np.outer(fl.psi_a / fl.M, ft)
-    A[2 * n, 2 * n + 1] = 1.0
-    A[2 * n + 1, :2 * n + 2] = -ft / ma
+    ball sliding in direction ``sdir`` (F_b = -F_c sdir): the core's, built from the
+    stage derivative RK4 steps with (``boringbar.core.regime_matrix``)."""
+    A = regime_matrix(packed(fl), float(sdir))
+    rows = np.concatenate([_kept(fl), 2 * fl.n + 2 + np.arange(3)])
+    return A[np.ix_(rows, rows)]
 
 
 def field(A: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -174,12 +185,10 @@ def field(A: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 def impact_matrix(fl: Flow) -> np.ndarray:
     """R, the impact law's Jacobian (docs/model.md, section 2.4): y' -> -e y',
-    u_i' -> u_i' + (1 + e) m_eff psi_d,i y' / M_i."""
-    n = fl.n
-    R = np.eye(fl.N)
-    R[2 * n + 1, 2 * n + 1] = -fl.e
-    R[n:2 * n, 2 * n + 1] = (1.0 + fl.e) * fl.meff * fl.psi_d / fl.M
-    return R
+    u_i' -> u_i' + (1 + e) m_eff psi_d,i y' / M_i; the core's, from the wall's impact law
+    (``boringbar.core.impact_matrix``)."""
+    keep = _kept(fl)
+    return impact_matrix_of(packed(fl))[np.ix_(keep, keep)]
 
 
 def carrying_force(fl: Flow, x: np.ndarray, t: float) -> float:

@@ -9,7 +9,10 @@ package packs what the core cannot compute itself and calls it:
 - :mod:`.regimes`: the exact integrator's per-run setup (the regimes' matrices,
   diagonalised with LAPACK through SciPy) and a cut's tables;
 - :func:`run_rk4`, :func:`run_rk4_batch`, :func:`run_exact`: the three entry points, with
-  the array contract of ``boringbar.simulate`` (their only caller in the package).
+  the array contract of ``boringbar.simulate`` (their only caller in the package);
+- :func:`regime_matrix`, :func:`impact_matrix_of`: the equations of motion as matrices,
+  built from the definitions the integrators step with (for shooting, in
+  :mod:`boringbar.orbits`).
 
 The core checks every array it is handed (dtype, shape, contiguity) and every scalar's
 range, and raises ``ValueError`` naming it; it releases the GIL for the whole
@@ -77,4 +80,19 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
                            imp, stick, strobe, met, prep, float(dt), H, tab_e, tab_p)
 
 
-__all__ = ["BMAX", "prepare", "run_exact", "run_rk4", "run_rk4_batch"]
+def regime_matrix(p: np.ndarray, sdir: float) -> np.ndarray:
+    """A of z' = A z between impacts, z = [X (2n + 2 entries, as the integrators keep the
+    state), sin Omega t, cos Omega t, 1], for the packed parameters ``p``, the ball sliding
+    in direction ``sdir`` (-1, 0 or 1: F_b = -F_c sdir held); built from RK4's stage
+    derivative at the unit vectors."""
+    return core.regime_matrix(np.ascontiguousarray(p, float), float(sdir))
+
+
+def impact_matrix_of(p: np.ndarray) -> np.ndarray:
+    """R with X+ = R X- at an impact of the ball bar of ``p`` (the identity for the other
+    bars), from the wall's impact law."""
+    return core.impact_matrix(np.ascontiguousarray(p, float))
+
+
+__all__ = ["BMAX", "impact_matrix_of", "prepare", "regime_matrix", "run_exact", "run_rk4",
+           "run_rk4_batch"]

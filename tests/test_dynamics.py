@@ -1,0 +1,125 @@
+"""The equations of motion as matrices (``boringbar.core.regime_matrix`` and
+``impact_matrix``, which shooting linearises) against the slow reference written from
+docs/model.md (tests/naive.py): A z is the right-hand side at any state of a regime
+(the friction force held by the ball's sliding direction), R x the impact law.  Both
+matrices are built from the definitions the RK4 kernel steps with, so this also checks
+that those definitions are the model's."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import naive
+import numpy as np
+import pytest
+
+from boringbar import Harmonic, make_system
+from boringbar.orbits import shooting as sh
+from boringbar.simulate import layout as L
+from boringbar.simulate import pack
+from boringbar.simulate.kernels import impact_matrix_of, regime_matrix
+
+SYSTEMS = {
+    "solid, 1 mode": lambda: make_system("solid", "paper", n_modes=1),
+    "solid, 3 modes": lambda: make_system("solid", "physical", n_modes=3),
+    "TMD, 2 modes": lambda: make_system("tmd", "physical"),
+    "locked ball, 2 modes": lambda: make_system("ball", "physical", locked=True),
+    "ball with friction, 1 mode": lambda: make_system("ball", "paper", gap_m=0.5e-3,
+                                                      friction=True),
+    "ball with friction, 3 modes": lambda: make_system("ball", "physical", gap_m=0.1e-3,
+                                                       friction=True, n_modes=3),
+    "ball, printed reaction": lambda: make_system("ball", "paper", friction=True,
+                                                  friction_reaction="printed"),
+}
+
+
+def _states(n: int, sdir: float, rng, count: int = 5):
+    """States of a realistic size (um, mm/s) with the ball's y' of sign sdir."""
+    for _ in range(count):
+        x = np.concatenate([rng.normal(0, 1e-5, n), rng.normal(0, 1e-2, n),
+                            rng.normal(0, 1e-4, 1), rng.normal(0, 1e-2, 1)])
+        x[2 * n + 1] = sdir * abs(x[2 * n + 1])
+        yield x
+
+
+@pytest.mark.parametrize("name", SYSTEMS)
+def test_the_regime_matrix_is_the_models_right_hand_side(name):
+    system = SYSTEMS[name]()
+    omega = 0.97 * system.reference_frequency_rad_s
+    p = pack(system, omega, 12.5, 1e-6)
+    model = naive.Model.from_packed(p)
+    n = model.n
+    rng = np.random.default_rng(7)
+    for sdir in (-1.0, 0.0, 1.0) if system.kind == "ball" else (0.0,):
+        A = regime_matrix(p, sdir)
+        assert A.shape == (2 * n + 5, 2 * n + 5)
+        for x in _states(n, sdir, rng):
+            t = rng.uniform(0, 1e-2)
+            z = np.concatenate([x, [math.sin(omega * t), math.cos(omega * t), 1.0]])
+            want = naive.rhs(model, t, x)
+            got = (A @ z)[:2 * n + 2]
+            scale = np.max(np.abs(want))
+            assert np.max(np.abs(got - want)) <= 1e-12 * scale, (name, sdir)
+            # the forcing's own rows: (sin, cos)' = Omega (cos, -sin), the constant's 0
+            assert np.allclose((A @ z)[2 * n + 2:], [omega * z[-2], -omega * z[-3], 0.0],
+                               rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("name", [k for k in SYSTEMS if "ball with" in k or "printed" in k])
+def test_the_impact_matrix_is_the_impact_law(name):
+    system = SYSTEMS[name]()
+    p = pack(system, system.reference_frequency_rad_s, 10.0, 1e-6)
+    model = naive.Model.from_packed(p)
+    n = model.n
+    R = impact_matrix_of(p)
+    rng = np.random.default_rng(3)
+    for x in _states(n, 1.0, rng):
+        x[2 * n] = model.half_gap
+        want = naive.impact(model, x)
+        assert np.max(np.abs(R @ x - want)) <= 1e-14 * np.max(np.abs(want))
+
+
+def test_the_other_bars_have_no_impact():
+    p = pack(make_system("tmd", "physical"), 1000.0, 10.0, 1e-6)
+    assert np.array_equal(impact_matrix_of(p), np.eye(2 * int(p[L.N_MODES]) + 2))
+
+
+def test_shooting_reads_the_cores_matrices_for_a_changed_flow():
+    """A flow a continuation changed (flow_with: the restitution, the friction) is the one
+    the matrices describe: shooting packs the flow's own values."""
+    system = SYSTEMS["ball with friction, 1 mode"]()
+    fl = sh.make_flow(system, Harmonic(10.0, 1.0))
+    changed = dataclasses.replace(fl, e=0.3, fc=2 * fl.fc)
+    R = sh.impact_matrix(changed)
+    assert R[2 * fl.n + 1, 2 * fl.n + 1] == -0.3
+    A0, A1 = sh.augmented(fl, 1.0), sh.augmented(changed, 1.0)
+    col = fl.N + 2  # the held friction force's column
+    assert np.allclose(A1[:, col], 2 * A0[:, col], rtol=1e-14, atol=0)
+
+
+@pytest.mark.parametrize("bad, match", [
+    (np.zeros(3), "entries"),
+    ("n0", r"N_MODES"),
+    ("n99", r"N_MODES"),
+    ("case9", r"CASE"),
+])
+def test_a_bad_parameter_vector_is_a_value_error(bad, match):
+    p = pack(make_system("solid", "paper"), 1000.0, 10.0, 1e-6)
+    if isinstance(bad, str):
+        p = p.copy()
+        slot, value = {"n0": (L.N_MODES, 0), "n99": (L.N_MODES, 99),
+                       "case9": (L.CASE, 9)}[bad]
+        p[slot] = value
+    else:
+        p = bad
+    with pytest.raises(ValueError, match=match):
+        regime_matrix(p, 0.0)
+    with pytest.raises(ValueError, match=match):
+        impact_matrix_of(p)
+
+
+def test_a_sliding_direction_other_than_minus_one_zero_or_one_is_refused():
+    p = pack(make_system("ball", "paper", friction=True), 1000.0, 10.0, 1e-6)
+    with pytest.raises(ValueError, match="sdir"):
+        regime_matrix(p, 0.5)
