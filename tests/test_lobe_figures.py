@@ -15,7 +15,7 @@ from boringbar.analysis.lobes import LobesOptions, lobes
 from boringbar.analysis.sweep import published_cases
 from boringbar.execute import Execution
 from boringbar.plot import plot_lobes as plot_lobes_of_plot
-from boringbar.plot.bar import plot_analytic_lobes, plot_lobes
+from boringbar.plot.lobes import plot_analytic_lobes, plot_lobes
 from boringbar.plot.palette import LOBE_CAP, lobe_depth_top, speed_axis
 from boringbar.reference.stability import (
     GRID_SPAN,

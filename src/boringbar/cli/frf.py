@@ -38,7 +38,8 @@ from boringbar.model.frf_units import (
     plausibility_warning,
 )
 from boringbar.model.measured_frf import read_frf
-from boringbar.plot.bar import plot_analytic_lobes, plot_frf_fit, plot_stabilisation
+from boringbar.plot.bar import plot_frf_fit, plot_stabilisation
+from boringbar.plot.lobes import plot_analytic_lobes
 from boringbar.plot.style import system_label
 from boringbar.reference.stability import (
     GRID_SPAN,

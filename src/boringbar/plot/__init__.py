@@ -9,13 +9,7 @@ place it beside others).  The core never imports matplotlib: ``import boringbar`
 this package only when ``bb.plot`` or a ``Run.plot()`` is first used.
 """
 
-from boringbar.plot.bar import (
-    plot_analytic_lobes,
-    plot_frf_fit,
-    plot_lobes,
-    plot_modes,
-    plot_stabilisation,
-)
+from boringbar.plot.bar import plot_frf_fit, plot_modes, plot_stabilisation
 from boringbar.plot.basins import plot_basins
 from boringbar.plot.bifurcation import plot_bifurcation
 from boringbar.plot.chatter import plot_chatter_map
@@ -26,6 +20,7 @@ from boringbar.plot.design import (
     plot_design,
     plot_design_comparison,
 )
+from boringbar.plot.lobes import plot_analytic_lobes, plot_lobes
 from boringbar.plot.orbits import plot_continuation
 from boringbar.plot.run import plot_lobe_examples, plot_run
 from boringbar.plot.sweep import plot_sweep

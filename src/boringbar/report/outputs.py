@@ -32,9 +32,9 @@ from boringbar.plot import (
     plot_lobe_examples,
     plot_sweep,
 )
-from boringbar.plot.bar import plot_lobes
 from boringbar.plot.chatter import plot_chatter_map
 from boringbar.plot.design import plot_best, plot_design
+from boringbar.plot.lobes import plot_lobes
 from boringbar.plot.orbits import plot_continuation
 from boringbar.plot.variations import plot_sensitivity
 
