@@ -138,8 +138,7 @@ def classify(
 
     duration = t_end - t_start
     cycles = duration / period
-    overlap = np.minimum(intervals[:, 1], t_end) - np.maximum(intervals[:, 0], t_start)
-    stick_fraction = float(np.clip(overlap, 0.0, None).sum() / duration)
+    stick_fraction = _stick_fraction(intervals, t_start, t_end) if len(intervals) else 0.0
     contact_fraction = contact_time / duration
     sticks = (stick_fraction + contact_fraction) > CONTACT_FRACTION_THRESHOLD
 
@@ -169,11 +168,17 @@ def classify(
         n=n,
         k=k,
         impacts_per_cycle=float(times.size / cycles),
-        plus_per_cycle=float(np.count_nonzero(walls == 1) / cycles),
-        minus_per_cycle=float(np.count_nonzero(walls == -1) / cycles),
+        plus_per_cycle=float(np.count_nonzero(walls == 1) / cycles) if times.size else 0.0,
+        minus_per_cycle=float(np.count_nonzero(walls == -1) / cycles) if times.size else 0.0,
         stick_fraction=stick_fraction,
         contact_fraction=float(contact_fraction),
     )
+
+
+def _stick_fraction(intervals, t_start, t_end) -> float:
+    """The share of the window (t_start, t_end) in the stick ``intervals``."""
+    overlap = np.minimum(intervals[:, 1], t_end) - np.maximum(intervals[:, 0], t_start)
+    return float(np.clip(overlap, 0.0, None).sum() / (t_end - t_start))
 
 
 def _period_count(times, walls, span, tail, tol) -> int:
@@ -238,7 +243,7 @@ def _check_impacts(times, walls, t_start, t_end) -> None:
             f"impact_times (shape {times.shape}) and impact_walls "
             f"(shape {walls.shape}) must be 1-D of equal length"
         )
-    if not np.all(np.isin(walls, (1, -1))):
+    if walls.size and not np.all((walls == 1) | (walls == -1)):  # np.isin's, unsorted
         raise ParameterError(f"impact_walls = {np.unique(walls)!r} must hold only +1 and -1")
     if times.size and (np.any(np.diff(times) < 0) or times[0] < t_start or times[-1] > t_end):
         raise ParameterError(
