@@ -145,15 +145,8 @@ def classify(
     n, k, symmetric = 0, 0, False
     if times.size:
         tail_start = t_end - min(duration, TAIL_PERIODS * period)
-        in_tail = times >= tail_start
-        for kk in range(1, max_k + 1):
-            if t_end - tail_start < min_periods * kk * period:
-                break
-            n = _period_count(times[in_tail], walls[in_tail], kk * period, (tail_start, t_end), tol)
-            if n:
-                k = kk
-                symmetric = _is_symmetric(times[in_tail][:n], walls[in_tail][:n], period, k, tol)
-                break
+        n, k, symmetric = _periodicity(times, walls, (tail_start, t_end), period, tol, max_k,
+                                       min_periods)
 
     if not times.size:
         label = "no impact with sticking" if sticks else "no impact"
@@ -181,6 +174,21 @@ def _stick_fraction(intervals, t_start, t_end) -> float:
     return float(np.clip(overlap, 0.0, None).sum() / (t_end - t_start))
 
 
+def _periodicity(times, walls, tail, period, tol, max_k, min_periods):
+    """(n, k, symmetric) of the impacts in the ``tail``: the smallest period k T (k <=
+    ``max_k``, repeating ``min_periods`` times in the tail) with its n impacts; (0, 0,
+    False) if none."""
+    in_tail = times >= tail[0]
+    times, walls = times[in_tail], walls[in_tail]
+    for k in range(1, max_k + 1):
+        if tail[1] - tail[0] < min_periods * k * period:
+            break
+        n = _period_count(times, walls, k * period, tail, tol)
+        if n:
+            return n, k, _is_symmetric(times[:n], walls[:n], period, k, tol)
+    return 0, 0, False
+
+
 def _period_count(times, walls, span, tail, tol) -> int:
     """Impacts per ``span`` if the sequence repeats with that span over the tail, else 0.
 
@@ -194,10 +202,11 @@ def _period_count(times, walls, span, tail, tol) -> int:
     n = int(np.searchsorted(times, times[0] + span - tol))
     if n >= times.size:
         return 0
-    covers = times[0] <= tail[0] + span + tol and times[-1] >= tail[1] - span - tol
-    same_walls = np.array_equal(walls[n:], walls[:-n])
-    on_time = np.all(np.abs(times[n:] - times[:-n] - span) <= tol)
-    return n if covers and same_walls and on_time else 0
+    if not (times[0] <= tail[0] + span + tol and times[-1] >= tail[1] - span - tol):
+        return 0  # the sequence does not cover the tail
+    if not np.array_equal(walls[n:], walls[:-n]):
+        return 0
+    return n if np.all(np.abs(times[n:] - times[:-n] - span) <= tol) else 0
 
 
 def _is_symmetric(times, walls, period, k, tol) -> bool:
