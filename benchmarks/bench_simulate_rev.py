@@ -1,0 +1,292 @@
+"""``simulate`` of the working tree against a git revision's, through the public call.
+
+    .venv/bin/python benchmarks/bench_simulate_rev.py REV [--repeat 5] [--grid-repeat 3]
+                                                      [--skip-grid] [--history]
+
+Exports ``src/boringbar`` at REV as the package ``boringbar_rev`` (``bench_exact_rev.export``;
+a numba revision such as fb3fab0 needs numba in the environment, ``pip install
+'numba==0.68.*'``, and compiles its kernels on the first run) and times each version's own
+``simulate(system, forcing, duration 2 s, integrator=...)`` with its own ``make_system`` and
+``Harmonic``: the thread's CPU time (``time.thread_time``: on a shared machine the wall
+clock counts the time the process waits for a core), each timed call right after an untimed
+one of the same version (a warm call, as in a sweep), REV and the working tree alternating,
+best of ``--repeat``, the garbage collector off while they run (as ``timeit`` does: numba
+fills the process's heap, whose collections would land on either version's calls).  Both
+get ``record_every = 0`` (no history: REV's default and what the analyses ask for);
+``--history`` gives each its own default instead (the working tree's records about 20000
+history rows).
+
+Beside each call, the kernel alone: ``run_exact`` (its ``prepare`` done beforehand) or
+``run_rk4`` on the version's own packing of the same run, so that the overhead of a call
+(call - kernel: checks, packing, the exact integrator's setup, the result) shows.
+
+- named published cases with a known impact pattern (no impact, sticking, symmetric,
+  asymmetric, non-uniform), both integrators (the exact integrator's runs repeated
+  :data:`EXACT_REPEAT` times as often); each run's pattern from both versions,
+  and whether their final states and metrics are the same bits;
+- the 48 published harmonic cases (presets paper and physical, gaps 0.1 and 0.5 mm,
+  friction off and on, 10 and 20 N, Omega/omega_n 0.95, 1.00 and 1.05; the ball damper
+  from rest) as totals per integrator (best of ``--grid-repeat`` each), and the RK4/exact
+  ratio of each version's calls over them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import importlib
+import inspect
+import itertools
+import math
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from bench_exact_rev import export  # noqa: E402
+
+import boringbar  # noqa: E402
+from boringbar.simulate import kernels  # noqa: E402
+from boringbar.simulate.engine import setup_run  # noqa: E402
+
+DURATION_S = 2.0
+DT_S = 1e-6
+STEADY_FRACTION = 0.8
+INTEGRATORS = ("exact", "rk4")
+#: the exact integrator's runs, 10-40 times shorter than RK4's, are repeated this many
+#: times as often: the overhead of a call is a few percent of them, and noise is not
+EXACT_REPEAT = 8
+
+#: (label, preset, gap (m), friction, force (N), Omega/omega_n): published cases whose runs
+#: take each pattern with both integrators (benchmarks/bench_grid.py's grid)
+NAMED = (
+    ("no impact", "physical", 0.5e-3, False, 10.0, 1.00),
+    ("sticking", "paper", 0.5e-3, True, 20.0, 1.00),
+    ("symmetric", "paper", 0.1e-3, False, 10.0, 1.02),
+    ("symmetric, 2 modes", "physical", 0.1e-3, False, 20.0, 1.00),
+    ("asymmetric", "paper", 0.1e-3, False, 20.0, 1.05),
+    ("non-uniform", "physical", 0.1e-3, False, 10.0, 1.00),
+)
+
+#: the 48 published harmonic cases
+GRID = tuple(
+    (f"{preset} gap {gap * 1e3:.1f} mm friction {'on' if fr else 'off'} {force:g} N r {r:.2f}",
+     preset, gap, fr, force, r)
+    for preset, gap, fr, force, r in itertools.product(
+        ("paper", "physical"), (0.1e-3, 0.5e-3), (False, True), (10.0, 20.0),
+        (0.95, 1.00, 1.05)))
+
+clock = time.thread_time
+
+
+def _named(fn, name: str, old_name: str) -> str:
+    """``name`` if ``fn`` takes it, else the name an older version gave it."""
+    return name if name in inspect.signature(fn).parameters else old_name
+
+
+@dataclass
+class Version:
+    """One version's public calls, and its own setup and kernels for the kernel alone."""
+
+    name: str
+    make_system: object
+    harmonic: type
+    simulate: object
+    setup: object  # (system, forcing, duration, dt, initial, record_every, steady, strobe,
+    #               integrator) -> the run packed, as its simulate packs it
+    prepare: object
+    run_exact: object
+    run_rk4: object
+    record_every: int | None = 0
+
+    def __post_init__(self):
+        # the keywords' names, looked up once (inspect is slow beside a call)
+        self.gap_kw = _named(self.make_system, "gap_m", "gap")
+        self.duration_kw = _named(self.simulate, "duration_s", "duration")
+
+    def case(self, preset, gap, friction, force, ratio):
+        """(system, forcing) of a ball damper case, by this version's own names."""
+        return (self.make_system("ball", preset, **{self.gap_kw: gap, "friction": friction}),
+                self.harmonic(force, ratio))
+
+    def call(self, system, forcing, integrator, duration_s=DURATION_S):
+        kw = {} if self.record_every is None else {"record_every": self.record_every}
+        return self.simulate(system, forcing, **{self.duration_kw: duration_s}, **kw,
+                             integrator=integrator)
+
+    def kernel(self, system, forcing, integrator) -> float:
+        """CPU seconds of the kernel alone on this version's packing of the run."""
+        su = self.setup(system, forcing, DURATION_S, DT_S, None, self.record_every,
+                        STEADY_FRACTION, False, integrator)
+        args = (su.rec, su.imp, su.stick, su.stb, su.met)
+        if integrator == "exact":
+            prep = self.prepare(su.p)
+            t0, dt = su.t0, su.dt
+            tic = clock()
+            self.run_exact(su.p, su.x, t0, t0 + su.n_steps * dt, t0 + su.steady_steps * dt,
+                           su.record_every * dt, *args, prep=prep, dt=dt)
+            return clock() - tic
+        tic = clock()
+        self.run_rk4(su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps, su.record_every,
+                     *args, su.buf)
+        return clock() - tic
+
+
+def tree_version(history: bool) -> Version:
+    return Version("tree", boringbar.make_system, boringbar.Harmonic, boringbar.simulate,
+                   setup_run, kernels.prepare, kernels.run_exact, kernels.run_rk4,
+                   None if history else 0)
+
+
+def rev_version(rev: str) -> Version:
+    """REV's package (a numba revision: its kernels under boringbar_rev.kernels)."""
+    export(rev)
+    pkg = importlib.import_module("boringbar_rev")
+    sim = importlib.import_module("boringbar_rev.simulate")
+    exact = importlib.import_module("boringbar_rev.kernels.exact")
+    rk4 = importlib.import_module("boringbar_rev.kernels.rk4")
+    # the revision has no public setup: its simulate packs a run with _setup
+    return Version(rev, pkg.make_system, pkg.Harmonic, pkg.simulate, sim._setup, exact.prepare,
+                   exact.run_exact, rk4.run_rk4, 0)
+
+
+@dataclass
+class Timed:
+    """Best CPU times of one case and integrator, per version, and the runs."""
+
+    call: list
+    kernel: list
+    runs: list
+
+
+def time_case(versions, spec, integrator, repeat) -> Timed:
+    """Each version's call and kernel alone, alternating, best of ``repeat`` (RK4; the
+    exact integrator :data:`EXACT_REPEAT` times as many); each timed call right after an
+    untimed one of the same version."""
+    repeat *= EXACT_REPEAT if integrator == "exact" else 1
+    cases = [v.case(*spec) for v in versions]
+    t = Timed([np.inf] * len(versions), [np.inf] * len(versions), [None] * len(versions))
+    gc.collect()
+    gc.disable()  # as timeit does: a collection's cost is the whole process's heap (numba's)
+    try:
+        for _ in range(repeat):
+            for i, (v, (system, forcing)) in enumerate(zip(versions, cases, strict=True)):
+                v.call(system, forcing, integrator)
+                tic = clock()
+                t.runs[i] = v.call(system, forcing, integrator)
+                t.call[i] = min(t.call[i], clock() - tic)
+                t.kernel[i] = min(t.kernel[i], v.kernel(system, forcing, integrator))
+    finally:
+        gc.enable()
+    return t
+
+
+def same_value(a, b) -> bool:
+    return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a)
+                      and math.isnan(b))
+
+
+def same_bits(a, b) -> bool:
+    """The two runs' final states and the metrics both have are the same bits."""
+    return (np.array_equal(a.final.x, b.final.x)
+            and all(same_value(a.metrics[k], b.metrics[k]) for k in a.metrics if k in b.metrics))
+
+
+def pattern_name(run) -> str:
+    return run.pattern.name if run.pattern is not None else "-"
+
+
+def warm_up(versions) -> None:
+    """A short run of each version, integrator and mode count (numba compiles here)."""
+    tic = time.perf_counter()
+    for v in versions:
+        for preset in ("paper", "physical"):
+            system, forcing = v.case(preset, 0.5e-3, True, 10.0, 1.0)
+            for integrator in INTEGRATORS:
+                v.call(system, forcing, integrator, duration_s=1e-3)
+    print(f"warm-up (numba's compile or cache load): {time.perf_counter() - tic:.1f} s")
+
+
+def named_table(versions, repeat) -> bool:
+    old, new = versions
+    print(f"\nnamed cases, 2 s runs, ms of CPU time, best of {repeat} (exact: "
+          f"{EXACT_REPEAT * repeat}); overhead = call - kernel alone")
+    print(f"{'case':20s} {'integ':5s} {'pattern ' + old.name + ' / tree':36s} "
+          f"{'old call':>8s} {'kernel':>7s} {'new call':>8s} {'kernel':>7s} {'ovh new':>7s} "
+          f"{'ovh old':>7s} {'old/new call':>12s} {'kernel':>6s}  bits")
+    agree = True
+    for label, *spec in NAMED:
+        for integrator in INTEGRATORS:
+            t = time_case(versions, spec, integrator, repeat)
+            pats = [pattern_name(r) for r in t.runs]
+            agree &= pats[0] == pats[1]
+            c, k = [x * 1e3 for x in t.call], [x * 1e3 for x in t.kernel]
+            print(f"{label:20s} {integrator:5s} {' / '.join(pats):36s} {c[0]:8.2f} {k[0]:7.2f} "
+                  f"{c[1]:8.2f} {k[1]:7.2f} {c[1] - k[1]:7.3f} {c[0] - k[0]:7.3f} "
+                  f"{c[0] / c[1]:11.2f}x {k[0] / k[1]:5.2f}x  "
+                  f"{'same' if same_bits(*t.runs) else 'DIFFER'}", flush=True)
+    print("patterns: " + ("the two versions agree on every case" if agree else "SOME DIFFER"))
+    return agree
+
+
+def grid_totals(versions, repeat) -> dict:
+    """{integrator: (call totals, kernel totals)} over the 48 cases, in seconds."""
+    out = {}
+    for integrator in INTEGRATORS:
+        calls, kerns, same, agree = np.zeros(2), np.zeros(2), 0, 0
+        for _, *spec in GRID:
+            t = time_case(versions, spec, integrator, repeat)
+            calls += t.call
+            kerns += t.kernel
+            same += same_bits(*t.runs)
+            agree += pattern_name(t.runs[0]) == pattern_name(t.runs[1])
+        out[integrator] = (calls, kerns)
+        print(f"  {integrator:5s} calls: {versions[0].name} {calls[0]:.3f} s, tree "
+              f"{calls[1]:.3f} s ({calls[0] / calls[1]:.2f}x); kernels alone: "
+              f"{kerns[0]:.3f} s, {kerns[1]:.3f} s ({kerns[0] / kerns[1]:.2f}x); overhead per "
+              f"call {(calls[0] - kerns[0]) / len(GRID) * 1e3:.3f} ms and "
+              f"{(calls[1] - kerns[1]) / len(GRID) * 1e3:.3f} ms; {same} of {len(GRID)} "
+              f"same bits, patterns agree on {agree}", flush=True)
+    return out
+
+
+def grid_ratios(versions, totals) -> None:
+    (rc, rk), (ec, ek) = totals["rk4"], totals["exact"]
+    for i, v in enumerate(versions):
+        print(f"  RK4/exact over the grid, {v.name:8s}: through simulate {rc[i] / ec[i]:5.2f}x, "
+              f"kernels alone {rk[i] / ek[i]:5.2f}x")
+
+
+def uptime() -> str:
+    return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("rev", help="git revision to compare against (a numba one: fb3fab0)")
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--grid-repeat", type=int, default=3)
+    ap.add_argument("--skip-grid", action="store_true")
+    ap.add_argument("--history", action="store_true",
+                    help="each version's default record_every (the tree's: ~20000 rows)")
+    args = ap.parse_args()
+    versions = [rev_version(args.rev), tree_version(args.history)]
+    print(f"REV {args.rev} (old) against the working tree (new); thread CPU time; "
+          f"{uptime()}")
+    warm_up(versions)
+    named_table(versions, args.repeat)
+    if not args.skip_grid:
+        print(f"\nthe 48 published harmonic cases, best of {args.grid_repeat} each (exact: "
+              f"{EXACT_REPEAT * args.grid_repeat}):")
+        grid_ratios(versions, grid_totals(versions, args.grid_repeat))
+    print(uptime())
+
+
+if __name__ == "__main__":
+    main()
