@@ -16,9 +16,12 @@ get ``record_every = 0`` (no history: REV's default and what the analyses ask fo
 ``--history`` gives each its own default instead (the working tree's records about 20000
 history rows).
 
-Beside each call, the kernel alone: ``run_exact`` (its ``prepare`` done beforehand) or
-``run_rk4`` on the version's own packing of the same run, so that the overhead of a call
-(call - kernel: checks, packing, the exact integrator's setup, the result) shows.
+Inside each call, the kernel alone is timed too: the version's ``run_exact`` (its
+``prepare`` done first, off that clock) or ``run_rk4``, as its simulate calls them (wrapped
+by :meth:`Version.time_the_kernels`), so that each call's overhead (the call less its
+kernel: the checks, the packing, the exact integrator's setup, the result) is measured in
+that very call, whatever the load did to the calls before and after; the table gives the
+least (the machine at its quietest) and the median over the calls.
 
 - named published cases with a known impact pattern (no impact, sticking, symmetric,
   asymmetric, non-uniform), both integrators (the exact integrator's runs repeated
@@ -52,8 +55,7 @@ sys.path.insert(0, str(HERE))
 from bench_exact_rev import export  # noqa: E402
 
 import boringbar  # noqa: E402
-from boringbar.simulate import kernels  # noqa: E402
-from boringbar.simulate.engine import setup_run  # noqa: E402
+from boringbar.simulate import engine, kernels  # noqa: E402
 
 DURATION_S = 2.0
 DT_S = 1e-6
@@ -92,23 +94,42 @@ def _named(fn, name: str, old_name: str) -> str:
 
 @dataclass
 class Version:
-    """One version's public calls, and its own setup and kernels for the kernel alone."""
+    """One version's public calls, with the kernel timed inside each of them."""
 
     name: str
     make_system: object
     harmonic: type
     simulate: object
-    setup: object  # (system, forcing, duration, dt, initial, record_every, steady, strobe,
-    #               integrator) -> the run packed, as its simulate packs it
+    module: object  # the module whose simulate calls run_exact and run_rk4 by these names
     prepare: object
-    run_exact: object
-    run_rk4: object
     record_every: int | None = 0
+    inner: float = 0.0  # CPU seconds of the last call's kernel
 
     def __post_init__(self):
         # the keywords' names, looked up once (inspect is slow beside a call)
         self.gap_kw = _named(self.make_system, "gap_m", "gap")
         self.duration_kw = _named(self.simulate, "duration_s", "duration")
+        self.time_the_kernels()
+
+    def time_the_kernels(self) -> None:
+        """The module's run_exact and run_rk4, as its simulate calls them, timed: the kernel
+        alone (for the exact integrator its ``prepare`` done first, off the clock) inside
+        the very call, so that call - kernel is that call's overhead."""
+        run_exact, run_rk4, prepare = self.module.run_exact, self.module.run_rk4, self.prepare
+
+        def timed_exact(p, *args, prep=None, dt=0.0):
+            prep = prepare(p) if prep is None else prep
+            tic = clock()
+            out = run_exact(p, *args, prep=prep, dt=dt)
+            self.inner = clock() - tic
+            return out
+
+        def timed_rk4(*args):
+            tic = clock()
+            run_rk4(*args)
+            self.inner = clock() - tic
+
+        self.module.run_exact, self.module.run_rk4 = timed_exact, timed_rk4
 
     def case(self, preset, gap, friction, force, ratio):
         """(system, forcing) of a ball damper case, by this version's own names."""
@@ -120,58 +141,44 @@ class Version:
         return self.simulate(system, forcing, **{self.duration_kw: duration_s}, **kw,
                              integrator=integrator)
 
-    def kernel(self, system, forcing, integrator) -> float:
-        """CPU seconds of the kernel alone on this version's packing of the run."""
-        su = self.setup(system, forcing, DURATION_S, DT_S, None, self.record_every,
-                        STEADY_FRACTION, False, integrator)
-        args = (su.rec, su.imp, su.stick, su.stb, su.met)
-        if integrator == "exact":
-            prep = self.prepare(su.p)
-            t0, dt = su.t0, su.dt
-            tic = clock()
-            self.run_exact(su.p, su.x, t0, t0 + su.n_steps * dt, t0 + su.steady_steps * dt,
-                           su.record_every * dt, *args, prep=prep, dt=dt)
-            return clock() - tic
-        tic = clock()
-        self.run_rk4(su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps, su.record_every,
-                     *args, su.buf)
-        return clock() - tic
-
 
 def tree_version(history: bool) -> Version:
     return Version("tree", boringbar.make_system, boringbar.Harmonic, boringbar.simulate,
-                   setup_run, kernels.prepare, kernels.run_exact, kernels.run_rk4,
-                   None if history else 0)
+                   engine, kernels.prepare, None if history else 0)
 
 
 def rev_version(rev: str) -> Version:
-    """REV's package (a numba revision: its kernels under boringbar_rev.kernels)."""
+    """REV's package (a numba revision: its simulate in boringbar_rev/simulate.py, its
+    kernels under boringbar_rev.kernels)."""
     export(rev)
     pkg = importlib.import_module("boringbar_rev")
     sim = importlib.import_module("boringbar_rev.simulate")
     exact = importlib.import_module("boringbar_rev.kernels.exact")
-    rk4 = importlib.import_module("boringbar_rev.kernels.rk4")
-    # the revision has no public setup: its simulate packs a run with _setup
-    return Version(rev, pkg.make_system, pkg.Harmonic, pkg.simulate, sim._setup, exact.prepare,
-                   exact.run_exact, rk4.run_rk4, 0)
+    return Version(rev, pkg.make_system, pkg.Harmonic, pkg.simulate, sim, exact.prepare, 0)
 
 
 @dataclass
 class Timed:
-    """Best CPU times of one case and integrator, per version, and the runs."""
+    """One case and integrator, per version: the best call and kernel (CPU s), each call's
+    overhead (call - its kernel), and the last run."""
 
     call: list
     kernel: list
+    overhead: list
     runs: list
+
+    def overhead_ms(self, i: int, q: float) -> float:
+        return float(np.percentile(self.overhead[i], q)) * 1e3
 
 
 def time_case(versions, spec, integrator, repeat) -> Timed:
-    """Each version's call and kernel alone, alternating, best of ``repeat`` (RK4; the
-    exact integrator :data:`EXACT_REPEAT` times as many); each timed call right after an
-    untimed one of the same version."""
+    """Each version's call, alternating, best of ``repeat`` (RK4; the exact integrator
+    :data:`EXACT_REPEAT` times as many); each timed call right after an untimed one of the
+    same version."""
     repeat *= EXACT_REPEAT if integrator == "exact" else 1
     cases = [v.case(*spec) for v in versions]
-    t = Timed([np.inf] * len(versions), [np.inf] * len(versions), [None] * len(versions))
+    nv = len(versions)
+    t = Timed([np.inf] * nv, [np.inf] * nv, [[] for _ in range(nv)], [None] * nv)
     gc.collect()
     gc.disable()  # as timeit does: a collection's cost is the whole process's heap (numba's)
     try:
@@ -180,8 +187,9 @@ def time_case(versions, spec, integrator, repeat) -> Timed:
                 v.call(system, forcing, integrator)
                 tic = clock()
                 t.runs[i] = v.call(system, forcing, integrator)
-                t.call[i] = min(t.call[i], clock() - tic)
-                t.kernel[i] = min(t.kernel[i], v.kernel(system, forcing, integrator))
+                call = clock() - tic
+                t.call[i], t.kernel[i] = min(t.call[i], call), min(t.kernel[i], v.inner)
+                t.overhead[i].append(call - v.inner)
     finally:
         gc.enable()
     return t
@@ -216,43 +224,48 @@ def warm_up(versions) -> None:
 def named_table(versions, repeat) -> bool:
     old, new = versions
     print(f"\nnamed cases, 2 s runs, ms of CPU time, best of {repeat} (exact: "
-          f"{EXACT_REPEAT * repeat}); overhead = call - kernel alone")
-    print(f"{'case':20s} {'integ':5s} {'pattern ' + old.name + ' / tree':36s} "
-          f"{'old call':>8s} {'kernel':>7s} {'new call':>8s} {'kernel':>7s} {'ovh new':>7s} "
-          f"{'ovh old':>7s} {'old/new call':>12s} {'kernel':>6s}  bits")
+          f"{EXACT_REPEAT * repeat}); kernel: timed inside the call; overhead: each call "
+          "less its kernel, the least and the median over the calls")
+    print(f"{'':20s} {'':5s} {'':36s} {old.name + ' (old)':^32s} {'tree (new)':^32s}")
+    print(f"{'case':20s} {'integ':5s} {'pattern old / new':36s}"
+          + f" {'call':>7s} {'kernel':>7s} {'ovh min':>8s} {'ovh med':>8s}" * 2
+          + f" {'old/new: call':>13s} {'kernel':>6s}  bits")
     agree = True
     for label, *spec in NAMED:
         for integrator in INTEGRATORS:
             t = time_case(versions, spec, integrator, repeat)
             pats = [pattern_name(r) for r in t.runs]
             agree &= pats[0] == pats[1]
-            c, k = [x * 1e3 for x in t.call], [x * 1e3 for x in t.kernel]
-            print(f"{label:20s} {integrator:5s} {' / '.join(pats):36s} {c[0]:8.2f} {k[0]:7.2f} "
-                  f"{c[1]:8.2f} {k[1]:7.2f} {c[1] - k[1]:7.3f} {c[0] - k[0]:7.3f} "
-                  f"{c[0] / c[1]:11.2f}x {k[0] / k[1]:5.2f}x  "
+            cols = "".join(f" {t.call[i] * 1e3:7.2f} {t.kernel[i] * 1e3:7.2f} "
+                           f"{t.overhead_ms(i, 0):8.3f} {t.overhead_ms(i, 50):8.3f}"
+                           for i in range(2))
+            print(f"{label:20s} {integrator:5s} {' / '.join(pats):36s}{cols} "
+                  f"{t.call[0] / t.call[1]:12.2f}x {t.kernel[0] / t.kernel[1]:5.2f}x  "
                   f"{'same' if same_bits(*t.runs) else 'DIFFER'}", flush=True)
     print("patterns: " + ("the two versions agree on every case" if agree else "SOME DIFFER"))
     return agree
 
 
 def grid_totals(versions, repeat) -> dict:
-    """{integrator: (call totals, kernel totals)} over the 48 cases, in seconds."""
+    """{integrator: (call totals, kernel totals)} over the 48 cases, in seconds; prints
+    them with the overhead per call (each case's least and median, averaged)."""
     out = {}
     for integrator in INTEGRATORS:
-        calls, kerns, same, agree = np.zeros(2), np.zeros(2), 0, 0
+        calls, kerns, ovh, same, agree = np.zeros(2), np.zeros(2), np.zeros((2, 2)), 0, 0
         for _, *spec in GRID:
             t = time_case(versions, spec, integrator, repeat)
             calls += t.call
             kerns += t.kernel
+            ovh += [[t.overhead_ms(i, q) / len(GRID) for q in (0, 50)] for i in range(2)]
             same += same_bits(*t.runs)
             agree += pattern_name(t.runs[0]) == pattern_name(t.runs[1])
         out[integrator] = (calls, kerns)
         print(f"  {integrator:5s} calls: {versions[0].name} {calls[0]:.3f} s, tree "
-              f"{calls[1]:.3f} s ({calls[0] / calls[1]:.2f}x); kernels alone: "
-              f"{kerns[0]:.3f} s, {kerns[1]:.3f} s ({kerns[0] / kerns[1]:.2f}x); overhead per "
-              f"call {(calls[0] - kerns[0]) / len(GRID) * 1e3:.3f} ms and "
-              f"{(calls[1] - kerns[1]) / len(GRID) * 1e3:.3f} ms; {same} of {len(GRID)} "
-              f"same bits, patterns agree on {agree}", flush=True)
+              f"{calls[1]:.3f} s ({calls[0] / calls[1]:.2f}x); kernels: {kerns[0]:.3f} s, "
+              f"{kerns[1]:.3f} s ({kerns[0] / kerns[1]:.2f}x); overhead per call (least, "
+              f"median): {ovh[0, 0]:.3f}, {ovh[0, 1]:.3f} ms and {ovh[1, 0]:.3f}, "
+              f"{ovh[1, 1]:.3f} ms; {same} of {len(GRID)} same bits, patterns agree on "
+              f"{agree}", flush=True)
     return out
 
 
@@ -260,7 +273,7 @@ def grid_ratios(versions, totals) -> None:
     (rc, rk), (ec, ek) = totals["rk4"], totals["exact"]
     for i, v in enumerate(versions):
         print(f"  RK4/exact over the grid, {v.name:8s}: through simulate {rc[i] / ec[i]:5.2f}x, "
-              f"kernels alone {rk[i] / ek[i]:5.2f}x")
+              f"the kernels {rk[i] / ek[i]:5.2f}x")
 
 
 def uptime() -> str:
