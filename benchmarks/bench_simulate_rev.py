@@ -23,6 +23,7 @@ kernel: the checks, the packing, the exact integrator's setup, the result) is me
 that very call, whatever the load did to the calls before and after; the table gives the
 least (the machine at its quietest) and the median over the calls.
 
+- first, the working tree's exact calls on the named cases alone, before REV is loaded;
 - named published cases with a known impact pattern (no impact, sticking, symmetric,
   asymmetric, non-uniform), both integrators (the exact integrator's runs repeated
   :data:`EXACT_REPEAT` times as often); each run's pattern from both versions,
@@ -276,6 +277,18 @@ def grid_ratios(versions, totals) -> None:
               f"the kernels {rk[i] / ek[i]:5.2f}x")
 
 
+def tree_alone(tree: Version, repeat: int) -> None:
+    """The working tree's exact calls on the named cases before REV is loaded (numba's
+    kernels and heap beside it make the tree's calls' overhead 0.1-0.2 ms larger)."""
+    print(f"\nthe working tree alone (REV not loaded yet), exact, best of "
+          f"{EXACT_REPEAT * repeat}: call, kernel, overhead least and median, ms")
+    for label, *spec in NAMED:
+        t = time_case([tree], spec, "exact", repeat)
+        print(f"  {label:20s} {pattern_name(t.runs[0]):22s} {t.call[0] * 1e3:6.2f} "
+              f"{t.kernel[0] * 1e3:6.2f} {t.overhead_ms(0, 0):6.3f} {t.overhead_ms(0, 50):6.3f}",
+              flush=True)
+
+
 def uptime() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
 
@@ -289,9 +302,12 @@ def main() -> None:
     ap.add_argument("--history", action="store_true",
                     help="each version's default record_every (the tree's: ~20000 rows)")
     args = ap.parse_args()
-    versions = [rev_version(args.rev), tree_version(args.history)]
     print(f"REV {args.rev} (old) against the working tree (new); thread CPU time; "
           f"{uptime()}")
+    tree = tree_version(args.history)
+    warm_up([tree])
+    tree_alone(tree, args.repeat)
+    versions = [rev_version(args.rev), tree]
     warm_up(versions)
     named_table(versions, args.repeat)
     if not args.skip_grid:
