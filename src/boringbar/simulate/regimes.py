@@ -270,26 +270,25 @@ def _modal_inputs(Vi_l, B_l):
     return np.array(bq, np.complex128)
 
 
-def _bound_column(ps, vectors, a):
-    """(a^4 |ps . v|, a^3 |ps . v|), the sum in order from 0j and |.| the C library's hypot."""
-    s = 0j
-    for p_i, v_i in zip(ps, vectors, strict=False):  # the first n (the modes') of vectors
-        s += p_i * v_i
-    s = abs(s)
-    return a * a * a * a * s, a * a * a * s
-
-
 def _mode_bounds(psis, V_l, alam, nz):
     """bnd without its last column (the forcing's, :func:`_forcing_bounds`): the bounds on
     |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are sum_k |lambda_k|^4
     |psi . V_k| |q_k| + Omega^4 |psi . Z|, rows 2 and 3 the same with the third powers, for
-    |y'''| and |W'''|."""
+    |y'''| and |W'''|; each sum in order from 0j, |.| the C library's hypot."""
     bnd = np.zeros((len(V_l), 4, nz + 1))
     for r, Vr in enumerate(V_l):
-        for row in range(2):
+        for row, ps in enumerate(psis):
+            b4, b3 = [], []
             for k in range(nz):
-                bnd[r, row, k], bnd[r, row + 2, k] = _bound_column(
-                    psis[row], [Vrow[k] for Vrow in Vr], alam[r][k])
+                s = 0j
+                for i, p_i in enumerate(ps):
+                    s += p_i * Vr[i][k]
+                a = alam[r][k]
+                s = abs(s)
+                b4.append(a * a * a * a * s)
+                b3.append(a * a * a * s)
+            bnd[r, row, :nz] = b4
+            bnd[r, row + 2, :nz] = b3
     return bnd
 
 
@@ -298,8 +297,13 @@ def _forcing_bounds(bnd, psis, Z_l, om):
     Omega^3 |psi . Z|."""
     bnd = bnd.copy()
     for r, Zr in enumerate(Z_l):
-        for row in range(2):
-            bnd[r, row, -1], bnd[r, row + 2, -1] = _bound_column(psis[row], Zr, om)
+        for row, ps in enumerate(psis):
+            s = 0j
+            for i, p_i in enumerate(ps):
+                s += p_i * Zr[i]
+            s = abs(s)
+            bnd[r, row, -1] = om * om * om * om * s
+            bnd[r, row + 2, -1] = om * om * om * s
     return bnd
 
 
