@@ -321,7 +321,7 @@ def _levels(hi, lo, om):
 
 
 def _grid_exponentials(lam_l, h):
-    """eh[r, lv, k] = exp(lambda_k h 2^lv) as numba's cmath.exp."""
+    """eh[r, lv, k] = exp(lambda_k h 2^lv), each as :func:`_cexp` computes it."""
     exp, cos, sin, isfinite = math.exp, math.cos, math.sin, math.isfinite
     eh = []
     for lr in lam_l:
@@ -444,7 +444,7 @@ def _dashpots(p, n, case, nz):
 @functools.lru_cache(maxsize=SYSTEM_CACHE_SIZE)
 def system_regimes(key: bytes) -> SystemRegimes:
     """The regimes of the system whose :data:`SYSTEM_SLOTS` of p have the bytes ``key``,
-    diagonalised (one stacked LAPACK call per kind, NumPy's, as in the numba version).
+    diagonalised (one stacked LAPACK call per kind, NumPy's, as the reference's setup).
     Kept per system, bounded; the other slots are NaN here, so nothing else can enter."""
     p = np.full(L.P_SIZE, np.nan)
     p[SYSTEM_SLOTS] = np.frombuffer(key)
@@ -484,7 +484,7 @@ def prepare(p: np.ndarray) -> dict:
     Z = np.linalg.solve(1j * p[L.OMEGA] * np.eye(nz) - s.A,
                         (s.B * p[L.F0])[:, :, None])[:, :, 0]
     om = float(p[L.OMEGA])
-    # numba's running maximum from Omega up: Omega unless some |lambda| exceeds it
+    # the reference's running maximum from Omega up: Omega unless some |lambda| exceeds it
     fastest = s.fastest if s.fastest > om else om
     h = 2 * math.pi / fastest / GRID_PER_PERIOD
     eh = s.eh if fastest == s.fastest else _grid_exponentials(s.lam_l, h)
