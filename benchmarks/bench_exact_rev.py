@@ -6,7 +6,9 @@
 Exports ``src/boringbar`` at REV into a temporary directory as the package
 ``boringbar_rev`` (its imports renamed, so both versions compile side by side;
 a numba revision compiles on its first run, about 2 minutes, and needs numba in the
-environment: ``pip install 'numba==0.68.*'``), then times ``run_exact`` of both
+environment: ``pip install 'numba==0.68.*'``), then times ``run_exact`` of both (the run
+packed by the working tree's ``setup_run``, its parameter vector moved into the revision's
+layout for the revision's kernel: :func:`rev_params`)
 on the harmonic cases of ``bench_exact.py`` (interleaved, best of
 ``--repeat``, the per-run ``prepare`` excluded and timed apart), with RK4 at
 dt = 1e-6 as the machine's yardstick, and compares the results: metrics, final
@@ -39,11 +41,14 @@ sys.path.insert(0, str(HERE))
 from bench_exact import CASES, orbit_start  # noqa: E402
 from bench_grid import cases as grid_cases  # noqa: E402
 
-import boringbar.simulate.kernels as E  # noqa: E402
 from boringbar import Harmonic, make_system, simulate  # noqa: E402
-from boringbar.simulate import _setup  # noqa: E402
+from boringbar.simulate import kernels as E  # noqa: E402
 from boringbar.simulate import layout as L  # noqa: E402
+from boringbar.simulate.engine import setup_run  # noqa: E402
 from boringbar.simulate.kernels import run_rk4  # noqa: E402
+
+#: the revision's parameter layout (its kernels/layout.py), set by main
+REV_LAYOUT = {}
 
 
 def export(rev: str) -> Path:
@@ -70,6 +75,25 @@ def export(rev: str) -> Path:
     return root
 
 
+def rev_params(p: np.ndarray, L0) -> np.ndarray:
+    """``p`` (rows of ``p``) packed by the working tree, in the layout ``L0`` of a
+    revision's kernels: a numba revision's lacks the cut law's and the force noise's slots
+    (CUT_MC, NOISE_STD, NOISE_INTERVAL, NOISE_SEED) before the mode blocks, so the run must
+    have the linear law and no noise (CUT_MC and NOISE_STD 0)."""
+    if L0.P_SIZE == L.P_SIZE:
+        return p
+    plain = np.all(p[..., L.CUT_MC] == 0.0) and np.all(p[..., L.NOISE_STD] == 0.0)
+    if L0.M_ != L.CUT_MC or L0.P_SIZE != L0.M_ + L.P_SIZE - L.M_ or not plain:
+        raise ValueError("the revision's parameter layout is not the working tree's without "
+                         "the cut law's and noise's slots")
+    return np.ascontiguousarray(np.concatenate([p[..., :L.CUT_MC], p[..., L.M_:]], axis=-1))
+
+
+def params(mod, p: np.ndarray) -> np.ndarray:
+    """``p`` as the kernel module ``mod`` takes it (the revision's in its layout)."""
+    return p if mod is E else rev_params(p, REV_LAYOUT["L"])
+
+
 def cases():
     for label, preset, kw, force, ratio, periodic in CASES:
         s = make_system("ball", preset, **kw)
@@ -81,16 +105,17 @@ def cases():
             init, dur, dt = start, 5 * round(2.0 / period / 5) * period, period / 2000
         elif periodic == "settled":
             init = simulate(s, f, integrator="exact").final
-        yield label, _setup(s, f, dur, dt, init, 0, 0.8, False, "exact")
+        yield label, setup_run(s, f, dur, dt, init, 0, 0.8, False, "exact")
 
 
-def fresh(su):
-    return (su.p, su.x.copy(), su.rec.copy(), su.imp.copy(), su.stick.copy(), su.stb.copy(),
-            su.met.copy())
+def fresh(su, mod=E):
+    """The run's inputs for ``mod``'s kernel, with zeroed records (setup_run's are not)."""
+    return (params(mod, su.p), su.x.copy(), np.zeros_like(su.rec), np.zeros_like(su.imp),
+            np.zeros_like(su.stick), np.zeros_like(su.stb), su.met.copy())
 
 
 def run(mod, su, prep):
-    p, x, rec, imp, stick, stb, met = fresh(su)
+    p, x, rec, imp, stick, stb, met = fresh(su, mod)
     tic = time.perf_counter()
     mod.run_exact(p, x, su.t0, su.t0 + su.n_steps * su.dt, su.t0 + su.steady_steps * su.dt,
                   su.record_every * su.dt, rec, imp, stick, stb, met, prep=prep, dt=su.dt)
@@ -98,7 +123,7 @@ def run(mod, su, prep):
 
 
 def rk4(su):
-    s2 = _setup(su.system, su.forcing, 2.0, 1e-6, None, 0, 0.8, False, "rk4")
+    s2 = setup_run(su.system, su.forcing, 2.0, 1e-6, None, 0, 0.8, False, "rk4")
     p, x, rec, imp, stick, stb, met = fresh(s2)
     tic = time.perf_counter()
     run_rk4(p, x, s2.t0, s2.dt, s2.n_steps, s2.steady_steps, 0, rec, imp, stick, stb, met,
@@ -107,7 +132,7 @@ def rk4(su):
 
 
 def cpu_run(mod, su, prep):
-    p, x, rec, imp, stick, stb, met = fresh(su)
+    p, x, rec, imp, stick, stb, met = fresh(su, mod)
     tic = time.process_time()
     mod.run_exact(p, x, su.t0, su.t0 + su.n_steps * su.dt, su.t0 + su.steady_steps * su.dt,
                   0.0, rec, imp, stick, stb, met, prep=prep, dt=su.dt)
@@ -117,10 +142,10 @@ def cpu_run(mod, su, prep):
 def grid(E0, repeat: int) -> None:
     """The 80-case grid: CPU seconds of each kernel, best of ``repeat``, and bit identity."""
     total, same = [0.0, 0.0], 0
-    sus = [(label, _setup(s, f, 2.0, 1e-6, None, 0, 0.8, False, "exact"))
+    sus = [(label, setup_run(s, f, 2.0, 1e-6, None, 0, 0.8, False, "exact"))
            for label, s, f in grid_cases()]
     for label, su in sus:
-        preps = (E0.prepare(su.p), E.prepare(su.p))
+        preps = (E0.prepare(params(E0, su.p)), E.prepare(su.p))
         best, outs = [np.inf, np.inf], [None, None]
         for _ in range(repeat):
             for i, mod in enumerate((E0, E)):
@@ -143,6 +168,7 @@ def main() -> None:
     args = ap.parse_args()
     export(args.rev)
     E0 = importlib.import_module("boringbar_rev.kernels.exact")
+    REV_LAYOUT["L"] = importlib.import_module("boringbar_rev.kernels.layout")
     if args.grid:
         print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; exact kernel "
               f"at {args.rev} (old) against the working tree (new), best of {args.repeat}")
@@ -153,7 +179,7 @@ def main() -> None:
           "working tree (new), best of", args.repeat)
     for label, su in cases():
         tic = time.perf_counter()
-        prep0 = E0.prepare(su.p)
+        prep0 = E0.prepare(params(E0, su.p))
         tp0 = time.perf_counter() - tic
         tic = time.perf_counter()
         prep1 = E.prepare(su.p)

@@ -5,7 +5,9 @@ revision, in one process: results bit for bit, and the speed.
 
 Exports ``src/boringbar`` at REV as the package ``boringbar_rev`` (as
 ``bench_exact_rev.py`` does; a numba revision compiles its kernels on the first run
-and needs numba in the environment: ``pip install 'numba==0.68.*'``), then
+and needs numba in the environment: ``pip install 'numba==0.68.*'``), packs every run with
+the working tree's ``setup_run`` (the parameter vector moved into the revision's layout for
+the revision's kernels: ``bench_exact_rev.rev_params``), then
 
 - runs the same cases through ``run_rk4`` of both versions (solid, TMD, locked, the
   ball with and without friction in the paper and physical presets with 1, 2 and 3
@@ -34,14 +36,18 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from bench_exact_rev import export  # noqa: E402
+from bench_exact_rev import export, rev_params  # noqa: E402
 
-import boringbar.simulate.kernels as B1  # noqa: E402
-import boringbar.simulate.kernels as R1  # noqa: E402
 from boringbar import Harmonic, Initial, make_system  # noqa: E402
 from boringbar.model.forcing import Regenerative  # noqa: E402
-from boringbar.simulate import _setup  # noqa: E402
+from boringbar.simulate import kernels as R1  # noqa: E402
 from boringbar.simulate import layout as L  # noqa: E402
+from boringbar.simulate.engine import setup_run  # noqa: E402
+
+#: the working tree's batch entry point is in the same module as the single run's
+B1 = R1
+#: the revision's parameter layout (its kernels/layout.py), set by main
+REV_LAYOUT = {}
 
 
 def single_cases():
@@ -68,7 +74,18 @@ def single_cases():
 
 
 def setup(system, forcing, duration, init=None, record_every=10, strobe=True):
-    return _setup(system, forcing, duration, 1e-6, init, record_every, 0.8, strobe, "rk4")
+    return setup_run(system, forcing, duration, 1e-6, init, record_every, 0.8, strobe, "rk4")
+
+
+def params(mod, p):
+    """``p`` (or rows of it) as the kernel module ``mod`` takes it (the revision's in its
+    layout)."""
+    return p.copy() if mod is R1 else rev_params(p, REV_LAYOUT["L"])
+
+
+def records(su):
+    """Zeroed copies of the run's records (setup_run's are not zeroed)."""
+    return [np.zeros_like(a) for a in (su.rec, su.imp, su.stick, su.stb)]
 
 
 #: the timer of the kernel calls (--cpu-time: time.thread_time)
@@ -79,8 +96,8 @@ def run_single(mod, su, stage_loop=False):
     p = su.p.copy()
     if stage_loop:
         p[L.STAGE_LOOP] = 1.0
-    out = [su.x.copy(), su.rec.copy(), su.imp.copy(), su.stick.copy(), su.stb.copy(),
-           su.met.copy()]
+    p = params(mod, p)
+    out = [su.x.copy(), *records(su), su.met.copy()]
     x, rec, imp, stick, stb, met = out
     buf = None if su.buf is None else su.buf.copy()
     tic = clock()
@@ -102,6 +119,7 @@ def batch_arrays(jobs, duration):
 
 def run_batch(mod, su, arrays):
     P, X, imp, stick, stb, met = (a.copy() for a in arrays)
+    P = params(mod, P)
     tic = clock()
     mod.run_rk4_batch(P, X, su.t0, su.dt, su.n_steps, su.steady_steps, imp, stick, stb, met)
     return clock() - tic, [X, imp, stick, stb, met]
@@ -190,6 +208,7 @@ def main() -> None:
         clock = time.thread_time
     export(args.rev)
     R0 = importlib.import_module("boringbar_rev.kernels.rk4")
+    REV_LAYOUT["L"] = importlib.import_module("boringbar_rev.kernels.layout")
     B0 = importlib.import_module("boringbar_rev.kernels.rk4_batch")
 
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; RK4 kernels at "

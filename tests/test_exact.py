@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -25,6 +26,7 @@ from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import layout as L
 from boringbar.simulate import setup_run
 from boringbar.simulate.kernels import prepare, run_exact
+from boringbar.simulate.regimes import SYSTEM_CACHE_SIZE, system_regimes
 
 
 # --- linear cases: closed forms ----------------------------------------------------------
@@ -403,3 +405,44 @@ def test_longer_steps_of_a_two_mode_ball_change_no_event():
     assert m1[L.N_EVENTS] == m0[L.N_EVENTS]
     for k in (L.SUM_W2, L.SUM_AUX2, L.MAX_ABS_W, L.STEADY_MIN_W, L.MAX_ABS_AUX):
         assert m1[k] == pytest.approx(m0[k], rel=1e-10)  # 8e-13
+
+
+# --- the per-system part of prepare, kept ------------------------------------------------
+def _same_bits(a, b) -> bool:
+    a, b = np.asarray(a), np.asarray(b)
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+def test_prepare_keeps_one_read_only_part_per_system_and_computes_the_forcing_part():
+    """Two forcings of one system share the system's arrays (read-only: every run of the
+    system gets them) and each gets its own Z; a third forcing above every |lambda| (the
+    paper preset's one mode at 1.05 omega_n) its own grid exponentials.  The memo is
+    bounded, and a result equals the one computed with the memo emptied, bit for bit."""
+    s = make_system("ball", "paper", gap_m=0.5e-3, friction=True)
+    ps = [setup_run(s, Harmonic(force, ratio), 0.01, 1e-6, None, 0, 0.8, False, "exact").p
+          for force, ratio in ((10.0, 0.95), (20.0, 1.0), (10.0, 1.05))]
+    system_regimes.cache_clear()
+    a, b, c = (prepare(p) for p in ps)
+    assert system_regimes.cache_info().currsize == 1
+    assert system_regimes.cache_info().maxsize == SYSTEM_CACHE_SIZE
+    for key in ("lam", "V", "Vi", "Vh", "kstep", "D", "bq", "lvis", "cvis"):
+        assert a[key] is b[key] is c[key] and not a[key].flags.writeable
+    assert a["eh"] is b["eh"] and c["eh"] is not a["eh"] and c["h"] < a["h"]
+    assert not _same_bits(a["Z"], b["Z"]) and not _same_bits(a["isum"], b["isum"])
+    system_regimes.cache_clear()
+    fresh = prepare(ps[1])
+    assert all(_same_bits(fresh[k], b[k]) for k in b)
+
+
+def test_prepare_from_threads_gives_the_same_bits():
+    """The analyses run simulate on a thread pool: prepare from 4 threads at once, the
+    memo emptied first, gives each forcing's result of one thread, bit for bit."""
+    s = make_system("ball", "physical", gap_m=0.1e-3, friction=True)
+    ps = [setup_run(s, Harmonic(10.0, r), 0.01, 1e-6, None, 0, 0.8, False, "exact").p
+          for r in (0.95, 1.0, 1.05)]
+    ref = [prepare(p) for p in ps]
+    system_regimes.cache_clear()
+    with ThreadPoolExecutor(4) as pool:
+        got = list(pool.map(prepare, ps * 8))
+    for i, out in enumerate(got):
+        assert all(_same_bits(out[k], ref[i % 3][k]) for k in out)

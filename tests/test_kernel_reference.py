@@ -13,7 +13,11 @@ relative difference.
 from __future__ import annotations
 
 import kernel_reference as kr
+import numpy as np
 import pytest
+
+from boringbar.simulate.kernels import prepare
+from boringbar.simulate.regimes import system_regimes
 
 NAMES = kr.names()
 
@@ -46,3 +50,21 @@ def _with_stored_prep(name: str, case: dict, slots) -> str:
     rest = kr.differences(name, case, kr.replay(case, stored_prep=True), slots)
     verdict = "reproduces the reference" if not rest else f"still differs ({len(rest)} arrays)"
     return f"{name}: given the stored prepare(p), the kernel {verdict}"
+
+
+def test_prepare_reproduces_the_stored_preparation(reference):
+    """prepare(p) of every exact case equals the stored prep_* bit for bit, with its
+    system's part computed (the memo emptied first) and kept (the second call)."""
+    cases, _ = reference
+    system_regimes.cache_clear()
+    bad = []
+    for name, case in cases.items():
+        if str(case["entry"]) != "exact":
+            continue
+        stored = kr.stored_prep_of(case)
+        for call in ("first", "second"):
+            got = prepare(kr.current_params(case["p"]))
+            bad += [f"{name} ({call} call): {k}" for k, v in stored.items()
+                    if np.asarray(got[k]).dtype != np.asarray(v).dtype
+                    or np.asarray(got[k]).tobytes() != np.asarray(v).tobytes()]
+    assert not bad, "\n".join(bad)

@@ -73,7 +73,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
     p[L.CASE] = {"solid": L.SOLID, "ball": L.BALL, "tmd": L.TMD, "locked": L.LOCKED}[kind]
     if isinstance(d, ImpactDamper):
         m = d.mass_kg
-        meff = 1.0 / (1.0 / m + float(np.sum(bar.psi_damper**2 / bar.mass_kg)))
+        meff = 1.0 / (1.0 / m + float((bar.psi_damper**2 / bar.mass_kg).sum()))
         p[L.BALL_MASS] = m
         p[L.HALF_GAP] = d.gap_m / 2
         p[L.RESTITUTION] = d.restitution
@@ -137,7 +137,7 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     bar = system.bar
     n = bar.n_modes
     u, v = x[:n], x[n:2 * n]
-    e = 0.5 * float(np.sum(bar.mass_kg * v**2) + np.sum(bar.stiffness_n_m * u**2))
+    e = 0.5 * float((bar.mass_kg * v**2).sum() + (bar.stiffness_n_m * u**2).sum())
     d = system.damper
     if isinstance(d, ImpactDamper):
         ud = x[2 * n + 1] + float(bar.psi_damper @ v)
@@ -194,7 +194,8 @@ def check_friction_law(system: System, integrator: str) -> None:
 
 @dataclass(eq=False)
 class RunSetup:
-    """One run, checked and packed for a kernel, and the arrays it fills."""
+    """One run, checked and packed for a kernel, and the arrays it fills (the record
+    arrays imp, stick, stb and rec hold rows only as far as met counts them)."""
 
     system: System
     forcing: Harmonic | Regenerative
@@ -285,11 +286,13 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
                              f"{period:g} s: at most {MAX_EVENT_ROWS:.0e} Poincare samples "
                              "(one a period) are kept; shorten the run")
     cap_imp = int(min(MAX_EVENT_ROWS, max(1000, 40 * n_periods)))
-    imp = np.zeros((cap_imp, 3))
-    stick = np.zeros((cap_imp, 2))
-    stb = np.zeros((int(n_periods) + 2 if strobe else 0, 5))
+    # not zeroed (zeroing the 2 s run's 1.5 MB cost more than the rest of the setup): a
+    # kernel writes a row before it counts it in met, and only counted rows are read
+    imp = np.empty((cap_imp, 3))
+    stick = np.empty((cap_imp, 2))
+    stb = np.empty((int(n_periods) + 2 if strobe else 0, 5))
     n_rec = n_steps // record_every if record_every else 0
-    rec = np.zeros((n_rec, 6))
+    rec = np.empty((n_rec, 6))
     met = np.zeros(L.MET_SIZE)
     met[L.STEADY_MAX_W] = -np.inf
     met[L.STEADY_MIN_W] = np.inf
@@ -319,82 +322,87 @@ def run_kernel(su: RunSetup) -> float:
     return time.perf_counter() - tic
 
 
-def run_result(su: RunSetup, elapsed: float) -> Run:
-    """The labelled :class:`Run` from a finished kernel run."""
-    system, forcing, integrator, omega, dt, t0 = (su.system, su.forcing, su.integrator, su.omega,
-                                                  su.dt, su.t0)
-    steady_steps, record_every, cutting, period, w_static = (su.steady_steps, su.record_every,
-                                                             su.cutting, su.period, su.w_static)
-    p, x, x_start, imp, stick, stb, rec, met = (su.p, su.x, su.x_start, su.imp, su.stick, su.stb,
-                                                su.rec, su.met)
-    cap_imp = imp.shape[0]
-    n_steps = int(met[L.STEPS_DONE])  # fewer if a cut stopped at its first h = 0
-    n_imp = int(met[L.N_IMP_REC])
-    n_stk = int(met[L.N_STICK_REC])
-    t_end = t0 + n_steps * dt
-    t_steady = t0 + steady_steps * dt
-    n_st = met[L.N_STEADY]
+def run_metrics(m: list, n_imp: int, cap_imp: int, w_static: float) -> dict:
+    """The streamed metrics by name, from ``m``, the metric vector as a list of floats
+    (one conversion instead of one per slot)."""
+    n_st = m[L.N_STEADY]
     nan = math.nan
     # a cut stopped at its first zero may end before the steady part begins:
     # its steady statistics are then undefined (NaN), not zero
-    metrics = {
-        "rms_tip_m": math.sqrt(met[L.SUM_W2] / n_st) if n_st else nan,
-        "mean_tip_m": float(met[L.SUM_W] / n_st) if n_st else nan,
-        "max_abs_tip_m": float(met[L.MAX_ABS_W]) if n_st else nan,
-        "max_abs_aux_m": float(met[L.MAX_ABS_AUX]) if n_st else nan,
-        "max_abs_aux_all_m": float(met[L.MAX_ABS_AUX_ALL]),
-        "rms_aux_m": math.sqrt(met[L.SUM_AUX2] / n_st) if n_st else nan,
-        "impacts_plus": int(met[L.N_IMP_PLUS]),
-        "impacts_minus": int(met[L.N_IMP_MINUS]),
-        "impacts_total": int(met[L.N_IMP_ALL]),
-        "micro_impacts": int(met[L.N_MICRO]),
-        "contact_time_s": float(met[L.T_CONTACT]),
-        "stick_time_s": float(met[L.T_STICK]),
-        "impacts_truncated": bool(n_imp > cap_imp),
-        "first_zero_time_s": float(met[L.FIRST_ZERO_T]) if met[L.FIRST_ZERO_T] >= 0 else None,
-        "steps_with_zero_force": int(met[L.N_ZERO_STEPS]),
-        "max_force_n": float(met[L.MAX_FORCE]),
-        "mean_force_n": float(met[L.SUM_F] / n_st) if n_st else nan,
-        "amplitude_m": float(max(0.0, (met[L.STEADY_MAX_W] - met[L.STEADY_MIN_W]) / 2))
-        if n_st else nan,
+    return {
+        "rms_tip_m": math.sqrt(m[L.SUM_W2] / n_st) if n_st else nan,
+        "mean_tip_m": m[L.SUM_W] / n_st if n_st else nan,
+        "max_abs_tip_m": m[L.MAX_ABS_W] if n_st else nan,
+        "max_abs_aux_m": m[L.MAX_ABS_AUX] if n_st else nan,
+        "max_abs_aux_all_m": m[L.MAX_ABS_AUX_ALL],
+        "rms_aux_m": math.sqrt(m[L.SUM_AUX2] / n_st) if n_st else nan,
+        "impacts_plus": int(m[L.N_IMP_PLUS]),
+        "impacts_minus": int(m[L.N_IMP_MINUS]),
+        "impacts_total": int(m[L.N_IMP_ALL]),
+        "micro_impacts": int(m[L.N_MICRO]),
+        "contact_time_s": m[L.T_CONTACT],
+        "stick_time_s": m[L.T_STICK],
+        "impacts_truncated": n_imp > cap_imp,
+        "first_zero_time_s": m[L.FIRST_ZERO_T] if m[L.FIRST_ZERO_T] >= 0 else None,
+        "steps_with_zero_force": int(m[L.N_ZERO_STEPS]),
+        "max_force_n": m[L.MAX_FORCE],
+        "mean_force_n": m[L.SUM_F] / n_st if n_st else nan,
+        "amplitude_m": max(0.0, (m[L.STEADY_MAX_W] - m[L.STEADY_MIN_W]) / 2) if n_st else nan,
         "static_deflection_m": w_static,
-        "events": int(met[L.N_EVENTS]),
+        "events": int(m[L.N_EVENTS]),
     }
-    e0 = stored_energy(system, x_start)
-    e1 = stored_energy(system, x)
-    w_in = met[L.W_FORCE] + met[L.W_NONRECIP]
-    dissipated = met[L.D_VISC] + met[L.D_IMPACT] + met[L.D_FRICTION]
+
+
+def run_energy(m: list, e0: float, e1: float) -> dict:
+    """The energy flows of ``m`` (the metric vector as a list) and their balance between
+    the stored energies ``e0`` at the start and ``e1`` at the end (J)."""
+    w_in = m[L.W_FORCE] + m[L.W_NONRECIP]
+    dissipated = m[L.D_VISC] + m[L.D_IMPACT] + m[L.D_FRICTION]
     scale = max(abs(w_in), dissipated, abs(e1 - e0), e0, e1, 1e-300)
-    energy = {
-        "work_force_j": float(met[L.W_FORCE]),
-        "work_nonreciprocal_friction_j": float(met[L.W_NONRECIP]),
-        "dissipated_viscous_j": float(met[L.D_VISC]),
-        "dissipated_impacts_j": float(met[L.D_IMPACT]),
-        "dissipated_friction_j": float(met[L.D_FRICTION]),
+    return {
+        "work_force_j": m[L.W_FORCE],
+        "work_nonreciprocal_friction_j": m[L.W_NONRECIP],
+        "dissipated_viscous_j": m[L.D_VISC],
+        "dissipated_impacts_j": m[L.D_IMPACT],
+        "dissipated_friction_j": m[L.D_FRICTION],
         "stored_initial_j": e0,
         "stored_final_j": e1,
         "balance_residual_j": float(w_in - (e1 - e0) - dissipated),
         "balance_relative": float((w_in - (e1 - e0) - dissipated) / scale),
     }
+
+
+def run_result(su: RunSetup, elapsed: float) -> Run:
+    """The labelled :class:`Run` from a finished kernel run."""
+    system, dt, t0, x, imp, stick, m = su.system, su.dt, su.t0, su.x, su.imp, su.stick, \
+        su.met.tolist()
+    cap_imp = imp.shape[0]
+    n_steps = int(m[L.STEPS_DONE])  # fewer if a cut stopped at its first h = 0
+    n_imp = min(int(m[L.N_IMP_REC]), cap_imp)
+    n_stk = min(int(m[L.N_STICK_REC]), cap_imp)
+    t_end = t0 + n_steps * dt
+    t_steady = t0 + su.steady_steps * dt
     pattern = None  # none without a whole forcing period to classify
-    if system.kind == "ball" and not cutting and holds_a_period(t_end - t_steady, period):
-        pattern = classify(imp[:min(n_imp, cap_imp), 0], imp[:min(n_imp, cap_imp), 1],
-                           stick[:min(n_stk, cap_imp)], (t_steady, t_end), period, dt=dt,
-                           contact_time=met[L.T_CONTACT])
+    if system.kind == "ball" and not su.cutting and holds_a_period(t_end - t_steady, su.period):
+        pattern = classify(imp[:n_imp, 0], imp[:n_imp, 1], stick[:n_stk], (t_steady, t_end),
+                           su.period, dt=dt, contact_time=m[L.T_CONTACT])
+    p = su.p
     thresholds = {
         "impact_velocity_m_s": float(p[L.V_IMPACT]),
         "stick_velocity_m_s": float(p[L.V_STICK]),
         "stick_min_duration_s": float(p[L.STICK_MIN]),
     }
     return Run(
-        system=system, forcing=forcing, omega_rad_s=omega, dt_s=dt, t0_s=t0,
-        duration_s=n_steps * dt, steady_start_s=t_steady, metrics=metrics,
-        impacts=imp[:min(n_imp, cap_imp)].copy(),
-        sticks=stick[:min(n_stk, cap_imp)].copy(),
-        strobe=stb[:int(met[L.N_STROBE])].copy(),
-        history=rec[:int(met[L.N_REC])].copy() if record_every else None,
-        initial=State(x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
-        elapsed_s=elapsed, energy=energy, thresholds=thresholds, integrator=integrator,
+        system=system, forcing=su.forcing, omega_rad_s=su.omega, dt_s=dt, t0_s=t0,
+        duration_s=n_steps * dt, steady_start_s=t_steady,
+        metrics=run_metrics(m, int(m[L.N_IMP_REC]), cap_imp, su.w_static),
+        impacts=imp[:n_imp].copy(), sticks=stick[:n_stk].copy(),
+        strobe=su.stb[:int(m[L.N_STROBE])].copy(),
+        history=su.rec[:int(m[L.N_REC])].copy() if su.record_every else None,
+        initial=State(su.x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
+        elapsed_s=elapsed,
+        energy=run_energy(m, stored_energy(system, su.x_start), stored_energy(system, x)),
+        thresholds=thresholds, integrator=su.integrator,
     )
 
 

@@ -138,23 +138,15 @@ def classify(
 
     duration = t_end - t_start
     cycles = duration / period
-    overlap = np.minimum(intervals[:, 1], t_end) - np.maximum(intervals[:, 0], t_start)
-    stick_fraction = float(np.clip(overlap, 0.0, None).sum() / duration)
+    stick_fraction = _stick_fraction(intervals, t_start, t_end) if len(intervals) else 0.0
     contact_fraction = contact_time / duration
     sticks = (stick_fraction + contact_fraction) > CONTACT_FRACTION_THRESHOLD
 
     n, k, symmetric = 0, 0, False
     if times.size:
         tail_start = t_end - min(duration, TAIL_PERIODS * period)
-        in_tail = times >= tail_start
-        for kk in range(1, max_k + 1):
-            if t_end - tail_start < min_periods * kk * period:
-                break
-            n = _period_count(times[in_tail], walls[in_tail], kk * period, (tail_start, t_end), tol)
-            if n:
-                k = kk
-                symmetric = _is_symmetric(times[in_tail][:n], walls[in_tail][:n], period, k, tol)
-                break
+        n, k, symmetric = _periodicity(times, walls, (tail_start, t_end), period, tol, max_k,
+                                       min_periods)
 
     if not times.size:
         label = "no impact with sticking" if sticks else "no impact"
@@ -169,11 +161,32 @@ def classify(
         n=n,
         k=k,
         impacts_per_cycle=float(times.size / cycles),
-        plus_per_cycle=float(np.count_nonzero(walls == 1) / cycles),
-        minus_per_cycle=float(np.count_nonzero(walls == -1) / cycles),
+        plus_per_cycle=float(np.count_nonzero(walls == 1) / cycles) if times.size else 0.0,
+        minus_per_cycle=float(np.count_nonzero(walls == -1) / cycles) if times.size else 0.0,
         stick_fraction=stick_fraction,
         contact_fraction=float(contact_fraction),
     )
+
+
+def _stick_fraction(intervals, t_start, t_end) -> float:
+    """The share of the window (t_start, t_end) in the stick ``intervals``."""
+    overlap = np.minimum(intervals[:, 1], t_end) - np.maximum(intervals[:, 0], t_start)
+    return float(np.clip(overlap, 0.0, None).sum() / (t_end - t_start))
+
+
+def _periodicity(times, walls, tail, period, tol, max_k, min_periods):
+    """(n, k, symmetric) of the impacts in the ``tail``: the smallest period k T (k <=
+    ``max_k``, repeating ``min_periods`` times in the tail) with its n impacts; (0, 0,
+    False) if none."""
+    in_tail = times >= tail[0]
+    times, walls = times[in_tail], walls[in_tail]
+    for k in range(1, max_k + 1):
+        if tail[1] - tail[0] < min_periods * k * period:
+            break
+        n = _period_count(times, walls, k * period, tail, tol)
+        if n:
+            return n, k, _is_symmetric(times[:n], walls[:n], period, k, tol)
+    return 0, 0, False
 
 
 def _period_count(times, walls, span, tail, tol) -> int:
@@ -189,10 +202,11 @@ def _period_count(times, walls, span, tail, tol) -> int:
     n = int(np.searchsorted(times, times[0] + span - tol))
     if n >= times.size:
         return 0
-    covers = times[0] <= tail[0] + span + tol and times[-1] >= tail[1] - span - tol
-    same_walls = np.array_equal(walls[n:], walls[:-n])
-    on_time = np.all(np.abs(times[n:] - times[:-n] - span) <= tol)
-    return n if covers and same_walls and on_time else 0
+    if not (times[0] <= tail[0] + span + tol and times[-1] >= tail[1] - span - tol):
+        return 0  # the sequence does not cover the tail
+    if not np.array_equal(walls[n:], walls[:-n]):
+        return 0
+    return n if np.all(np.abs(times[n:] - times[:-n] - span) <= tol) else 0
 
 
 def _is_symmetric(times, walls, period, k, tol) -> bool:
@@ -238,7 +252,7 @@ def _check_impacts(times, walls, t_start, t_end) -> None:
             f"impact_times (shape {times.shape}) and impact_walls "
             f"(shape {walls.shape}) must be 1-D of equal length"
         )
-    if not np.all(np.isin(walls, (1, -1))):
+    if walls.size and not np.all((walls == 1) | (walls == -1)):  # np.isin's, unsorted
         raise ParameterError(f"impact_walls = {np.unique(walls)!r} must hold only +1 and -1")
     if times.size and (np.any(np.diff(times) < 0) or times[0] < t_start or times[-1] > t_end):
         raise ParameterError(

@@ -1,7 +1,8 @@
 """The exact integrator's per-run setup: :func:`prepare` (the regimes' matrices,
-diagonalised, and their constants), :func:`history_step` and :func:`cut_tables` (a
-regenerative cut's knot spacing and tabulated whole step); the compiled core
-(``boringbar.core``) takes these arrays.
+diagonalised, and their constants; the part that depends on the system alone is kept per
+system, :func:`system_regimes`, and the forcing's part computed for each run),
+:func:`history_step` and :func:`cut_tables` (a regenerative cut's knot spacing and
+tabulated whole step); the compiled core (``boringbar.core``) takes these arrays.
 
 They reproduce, bit for bit, the setup the integrators' reference outputs were computed
 with (tests/data/kernel_reference.npz, from the numba kernels the core replaced): the
@@ -24,7 +25,9 @@ same floating point operations in the same order, that is:
 
 from __future__ import annotations
 
+import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import lapack
@@ -218,13 +221,9 @@ def _pair_order(lr):
     return order
 
 
-def _finish(p, lam, V, Vi, Z, B):
-    """prepare.py's _finish: the conjugate-pair ordering (in place in lam, V, Vi), Vh,
-    kstep, bq = Vi B, h, bnd, levmax, eh and isum.  Written as numba's loops on Python
-    floats and complex numbers (CPython's complex arithmetic is numba's): for the small
-    sizes here faster than NumPy's per-call overhead, and evidently the same operations."""
-    n = int(p[L.N_MODES])
-    om = float(p[L.OMEGA])
+def _pairing(lam, V, Vi):
+    """prepare.py's _finish, its first part: the conjugate-pair ordering (in place in lam,
+    V, Vi), Vh and kstep."""
     R, nz = lam.shape
     kstep = np.ones(R, np.int64)
     Vh = V.copy()
@@ -251,113 +250,185 @@ def _finish(p, lam, V, Vi, Z, B):
         vh.real[:, :, 0::2] = re
         vh.imag[:, :, 0::2] = im
         Vh[pr] = vh
-    lam_l, V_l, Vi_l, Z_l, B_l = lam.tolist(), V.tolist(), Vi.tolist(), Z.tolist(), B.tolist()
+    return Vh, kstep
+
+
+# The rest of prepare.py's _finish is written as numba's loops on Python floats and complex
+# numbers (CPython's complex arithmetic is numba's): for the small sizes here faster than
+# NumPy's per-call overhead, and evidently the same operations.
+def _modal_inputs(Vi_l, B_l):
+    """bq = Vi B per regime, each sum in order from 0j."""
     bq = []
-    for r in range(R):
+    for Vr, Br in zip(Vi_l, B_l, strict=True):
         row = []
-        for k in range(nz):
+        for Vk in Vr:
             s = 0j
-            for j in range(nz):
-                s += Vi_l[r][k][j] * B_l[r][j]
+            for v, b in zip(Vk, Br, strict=True):
+                s += v * b
             row.append(s)
         bq.append(row)
-    bq = np.array(bq, np.complex128).reshape(R, nz)
-    alam = [[abs(z) for z in row] for row in lam_l]  # hypot, as numba's abs
-    fastest = om
-    for r in range(R):
-        for a in alam[r]:
-            fastest = a if a > fastest else fastest
-    h = 2 * math.pi / fastest / GRID_PER_PERIOD
-    # the bounds on |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are
-    # sum_k |lambda_k|^4 |psi . V_k| |q_k| + Omega^4 |psi . Z|: the regime's constants;
-    # rows 2 and 3 the same with the third powers, for |y'''| and |W'''|
-    psis = (p[L.PSI_D:L.PSI_D + n].tolist(), p[L.PSI_L:L.PSI_L + n].tolist())
-    bnd = np.empty((R, 4, nz + 1))
-    for r in range(R):
-        for row in range(2):
-            ps = psis[row]
-            b4 = []
-            b3 = []
-            for k in range(nz + 1):
+    return np.array(bq, np.complex128)
+
+
+def _mode_bounds(psis, V_l, alam, nz):
+    """bnd without its last column (the forcing's, :func:`_forcing_bounds`): the bounds on
+    |y^(4)| (row 0: psi_d) and |W^(4)| (row 1: psi_L) over a segment are sum_k |lambda_k|^4
+    |psi . V_k| |q_k| + Omega^4 |psi . Z|, rows 2 and 3 the same with the third powers, for
+    |y'''| and |W'''|; each sum in order from 0j, |.| the C library's hypot."""
+    bnd = np.zeros((len(V_l), 4, nz + 1))
+    for r, Vr in enumerate(V_l):
+        for row, ps in enumerate(psis):
+            b4, b3 = [], []
+            for k in range(nz):
                 s = 0j
-                for i in range(n):
-                    s += ps[i] * (V_l[r][i][k] if k < nz else Z_l[r][i])
-                a = alam[r][k] if k < nz else om
+                for i, p_i in enumerate(ps):
+                    s += p_i * Vr[i][k]
+                a = alam[r][k]
                 s = abs(s)
                 b4.append(a * a * a * a * s)
                 b3.append(a * a * a * s)
-            bnd[r, row] = b4
-            bnd[r, row + 2] = b3
-    # the longest step worth trying per regime: 2^levmax h
-    levmax = np.zeros(R, np.int64)
-    for r in range(R):
-        lo = math.inf
-        hi = 0.0
-        for a in alam[r]:
-            hi = a if a > hi else hi
-            if a > 0.0:
-                lo = a if a < lo else lo
-        ratio = hi / (om if om > lo else lo)
+            bnd[r, row, :nz] = b4
+            bnd[r, row + 2, :nz] = b3
+    return bnd
+
+
+def _forcing_bounds(bnd, psis, Z_l, om):
+    """``bnd`` (the mode bounds, a copy) with its last column, Omega^4 |psi . Z| and
+    Omega^3 |psi . Z|."""
+    bnd = bnd.copy()
+    for r, Zr in enumerate(Z_l):
+        for row, ps in enumerate(psis):
+            s = 0j
+            for i, p_i in enumerate(ps):
+                s += p_i * Zr[i]
+            s = abs(s)
+            bnd[r, row, -1] = om * om * om * om * s
+            bnd[r, row + 2, -1] = om * om * om * s
+    return bnd
+
+
+def _levels(hi, lo, om):
+    """The longest step worth trying per regime, 2^levmax h: ``hi`` and ``lo`` the regime's
+    largest and smallest nonzero |lambda|."""
+    levmax = np.zeros(len(hi), np.int64)
+    for r, (h_r, l_r) in enumerate(zip(hi, lo, strict=True)):
+        ratio = h_r / (om if om > l_r else l_r)
         lv = 0
         while lv < GRID_LEVELS - 1 and ratio >= 2.0 ** (lv + 1):
             lv += 1
         levmax[r] = lv
+    return levmax
+
+
+def _grid_exponentials(lam_l, h):
+    """eh[r, lv, k] = exp(lambda_k h 2^lv), each as :func:`_cexp` computes it."""
     exp, cos, sin, isfinite = math.exp, math.cos, math.sin, math.isfinite
     eh = []
-    for r in range(R):
+    for lr in lam_l:
         for lv in range(GRID_LEVELS):
             x = h * 2.0 ** lv
-            for z in lam_l[r]:
+            for z in lr:
                 w = z * x  # CPython: x promoted to complex(x, 0.0), as numba
                 if isfinite(w.real) and isfinite(w.imag):
                     e = exp(w.real)  # _cexp, written out (the common case)
                     eh.append(complex(e * cos(w.imag), e * sin(w.imag)))
                 else:
                     eh.append(_cexp(w))
-    eh = np.array(eh, np.complex128).reshape(R, GRID_LEVELS, nz)
-    # isum[r, a, b] = 1 / (mu_a + mu_b) over the basis exponents mu = (lambda_r, i Omega,
-    # -i Omega, 0) (prepare.py's basis_exponents), 0 where the sum is 0
-    # (an IEEE sum is commutative: mu_a + mu_b and mu_b + mu_a are the same number, so one
-    # division serves both entries)
+    return np.array(eh, np.complex128).reshape(len(lam_l), GRID_LEVELS, -1)
+
+
+def _mode_sums(lam_l):
+    """isum's entries that do not depend on the forcing, 1 / (mu_a + mu_b) for mu_a, mu_b
+    among the modes' lambda and the basis exponent 0 (the last), 0 where the sum is 0, as
+    nested lists per regime of isum's full size (the rest 0).  An IEEE sum is commutative:
+    mu_a + mu_b and mu_b + mu_a are the same number, so one division serves both
+    entries."""
+    nz = len(lam_l[0])
     nb = nz + 3
-    isum = np.zeros((R, nb, nb), np.complex128)
-    for r in range(R):
-        mu = lam_l[r] + [1j * om, -1j * om, 0j]
+    out = []
+    for lr in lam_l:
+        mu = [*lr, 0j]
+        idx = [*range(nz), nb - 1]
         rows = [[0j] * nb for _ in range(nb)]
-        for a in range(nb):
-            ma = mu[a]
-            row = rows[a]
-            for b in range(a, nb):
-                sab = ma + mu[b]
+        for i, (a, ma) in enumerate(zip(idx, mu, strict=True)):
+            for b, mb in zip(idx[i:], mu[i:], strict=True):
+                sab = ma + mb
                 if sab != 0.0:
-                    row[b] = rows[b][a] = 1.0 / sab
-        isum[r] = rows
-    return Vh, kstep, bq, h, bnd, levmax, eh, isum
+                    rows[a][b] = rows[b][a] = 1.0 / sab
+        out.append(rows)
+    return out
 
 
-def prepare(p: np.ndarray) -> dict:
-    """Per-run matrices of the exact kernel from the packed parameter vector ``p``: the
-    same dict, bit for bit, as the setup the reference outputs were computed with
-    (tests/data/kernel_reference.npz, ``prep_*``)."""
-    n = int(p[L.N_MODES])
-    case = int(p[L.CASE])
-    om = p[L.OMEGA]
-    A, B, c, nreg = _regimes(p)
-    R, nz = B.shape
-    # one stacked LAPACK call per kind (NumPy's, as in the numba version)
-    lam, V = np.linalg.eig(A)
-    Vi = np.linalg.inv(V)
+def _inverse_sums(mode_sums, lam_l, om):
+    """isum[r, a, b] = 1 / (mu_a + mu_b) over the basis exponents mu = (lambda_r, i Omega,
+    -i Omega, 0) (prepare.py's basis_exponents), 0 where the sum is 0: the entries
+    without +-i Omega from ``mode_sums`` (:func:`_mode_sums`), the rest computed here."""
+    nz = len(lam_l[0])
+    forced = [1j * om, -1j * om, 0j]
+    pairs = [(a, b) for b in (nz, nz + 1) for a in range(b + 1)] + [(nz, nz + 2),
+                                                                    (nz + 1, nz + 2)]
+    out = []
+    for lr, block in zip(lam_l, mode_sums, strict=True):
+        mu = lr + forced
+        rows = [row[:] for row in block]
+        for a, b in pairs:
+            sab = mu[a] + mu[b]
+            if sab != 0.0:
+                rows[a][b] = rows[b][a] = 1.0 / sab
+        out.append(rows)
+    return np.array(out, np.complex128)
+
+
+# --- the per-system part, kept -------------------------------------------------------------
+#: the slots of p the regimes read: the bar, the damper and a cut's Kr b; the forcing's
+#: frequency and amplitude (OMEGA, F0) enter only the per-forcing part
+SYSTEM_SLOTS = np.array([L.CASE, L.N_MODES, L.FORCING, L.REACTION, L.BALL_MASS, L.TMD_MASS,
+                         L.TMD_K, L.TMD_C, L.KR_B, *range(L.M_, L.P_SIZE)])
+
+#: systems whose regimes are kept: a sweep runs one system at many forcings, and an
+#: analysis over designs or gaps meets a new system with most runs
+SYSTEM_CACHE_SIZE = 64
+
+
+@dataclass(frozen=True)
+class SystemRegimes:
+    """What :func:`prepare` computes from the system slots alone, shared by every run of
+    the system: its arrays are read-only and its lists are never modified."""
+
+    A: np.ndarray
+    B: np.ndarray
+    nreg: int
+    lam: np.ndarray
+    V: np.ndarray
+    Vi: np.ndarray
+    Vh: np.ndarray
+    kstep: np.ndarray
+    D: np.ndarray
+    bq: np.ndarray
+    lvis: np.ndarray
+    cvis: np.ndarray
+    psis: tuple  # (psi_d, psi_L) as lists
+    lam_l: list
+    mode_sums: list  # isum's entries without +-i Omega (_mode_sums)
+    mode_bounds: np.ndarray  # bnd without the forcing's column
+    hi: list  # largest |lambda| of each regime
+    lo: list  # smallest nonzero |lambda| of each regime
+    fastest: float  # largest |lambda| of all
+    eh: np.ndarray | None  # the grid exponentials at h of ``fastest``
+
+
+def _check_diagonalisable(V, Vi, case, nreg):
     cond = (np.max(np.sum(np.abs(V), axis=2), axis=1)
             * np.max(np.sum(np.abs(Vi), axis=2), axis=1))  # infinity-norm condition
-    for r in range(R):
-        if not cond[r] <= 1e10:
+    for r, c in enumerate(cond):
+        if not c <= 1e10:
             what = ("free", "stick", "contact")[r % nreg] if case == L.BALL else "linear"
             raise ValueError(f"exact integrator: the {what} regime is not diagonalisable "
                              "(critically damped mode?)")
-    Z = np.linalg.solve(1j * om * np.eye(nz) - A, (B * p[L.F0])[:, :, None])[:, :, 0]
-    D = -np.linalg.solve(A, c[:, :, None])[:, :, 0]
-    Vh, kstep, bq, h, bnd, levmax, eh, isum = _finish(p, lam, V, Vi, Z, B)
-    # dashpots: D_visc = sum_d c_d int (l_d . X)^2 dt
+
+
+def _dashpots(p, n, case, nz):
+    """D_visc = sum_d c_d int (l_d . X)^2 dt: the rows l_d and the c_d."""
     nd = n + 1 if case == L.TMD else n
     lv = np.zeros((nd, nz))
     cv = np.zeros(nd)
@@ -367,9 +438,62 @@ def prepare(p: np.ndarray) -> dict:
         lv[n, 2 * n + 1] = 1.0
         lv[n, n:2 * n] = -p[L.PSI_A:L.PSI_A + n]
         cv[n] = p[L.TMD_C]
-    return {"lam": lam, "V": V, "Vh": Vh, "kstep": kstep, "levmax": levmax, "Vi": Vi, "Z": Z,
-            "D": D, "eh": eh, "h": h, "lvis": lv, "cvis": cv, "isum": isum, "bq": bq,
-            "nreg": nreg, "bnd": bnd}
+    return lv, cv
+
+
+@functools.lru_cache(maxsize=SYSTEM_CACHE_SIZE)
+def system_regimes(key: bytes) -> SystemRegimes:
+    """The regimes of the system whose :data:`SYSTEM_SLOTS` of p have the bytes ``key``,
+    diagonalised (one stacked LAPACK call per kind, NumPy's, as the reference's setup).
+    Kept per system, bounded; the other slots are NaN here, so nothing else can enter."""
+    p = np.full(L.P_SIZE, np.nan)
+    p[SYSTEM_SLOTS] = np.frombuffer(key)
+    n, case = int(p[L.N_MODES]), int(p[L.CASE])
+    A, B, c, nreg = _regimes(p)
+    lam, V = np.linalg.eig(A)
+    Vi = np.linalg.inv(V)
+    _check_diagonalisable(V, Vi, case, nreg)
+    D = -np.linalg.solve(A, c[:, :, None])[:, :, 0]
+    Vh, kstep = _pairing(lam, V, Vi)
+    lam_l = lam.tolist()
+    alam = [[abs(z) for z in row] for row in lam_l]  # hypot, as numba's abs
+    psis = (p[L.PSI_D:L.PSI_D + n].tolist(), p[L.PSI_L:L.PSI_L + n].tolist())
+    hi = [max([0.0, *row]) for row in alam]
+    lo = [min([math.inf, *(a for a in row if a > 0.0)]) for row in alam]
+    fastest = max([0.0, *hi])
+    eh = (_grid_exponentials(lam_l, 2 * math.pi / fastest / GRID_PER_PERIOD)
+          if fastest > 0.0 else None)
+    bq = _modal_inputs(Vi.tolist(), B.tolist())
+    lvis, cvis = _dashpots(p, n, case, B.shape[1])
+    bounds = _mode_bounds(psis, V.tolist(), alam, B.shape[1])
+    for a in (A, B, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, bounds, eh):
+        if a is not None:
+            a.flags.writeable = False
+    return SystemRegimes(A, B, nreg, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, psis, lam_l,
+                         _mode_sums(lam_l), bounds, hi, lo, fastest, eh)
+
+
+def prepare(p: np.ndarray) -> dict:
+    """Per-run matrices of the exact kernel from the packed parameter vector ``p``: the
+    same dict, bit for bit, as the setup the reference outputs were computed with
+    (tests/data/kernel_reference.npz, ``prep_*``).  The system's part is kept
+    (:func:`system_regimes`); the forcing's (Z, the step h and what depends on Omega) is
+    computed here.  The arrays the runs of a system share are read-only."""
+    s = system_regimes(p[SYSTEM_SLOTS].tobytes())
+    nz = s.B.shape[1]
+    Z = np.linalg.solve(1j * p[L.OMEGA] * np.eye(nz) - s.A,
+                        (s.B * p[L.F0])[:, :, None])[:, :, 0]
+    om = float(p[L.OMEGA])
+    # the reference's running maximum from Omega up: Omega unless some |lambda| exceeds it
+    fastest = s.fastest if s.fastest > om else om
+    h = 2 * math.pi / fastest / GRID_PER_PERIOD
+    eh = s.eh if fastest == s.fastest else _grid_exponentials(s.lam_l, h)
+    isum = _inverse_sums(s.mode_sums, s.lam_l, om)
+    bnd = _forcing_bounds(s.mode_bounds, s.psis, Z.tolist(), om)
+    return {"lam": s.lam, "V": s.V, "Vh": s.Vh, "kstep": s.kstep,
+            "levmax": _levels(s.hi, s.lo, om), "Vi": s.Vi, "Z": Z, "D": s.D, "eh": eh, "h": h,
+            "lvis": s.lvis, "cvis": s.cvis, "isum": isum, "bq": s.bq, "nreg": s.nreg,
+            "bnd": bnd}
 
 
 # --- a regenerative cut ---------------------------------------------------------------------

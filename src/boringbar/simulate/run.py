@@ -126,7 +126,7 @@ class State:
 
     def __post_init__(self):
         x = np.asarray(self.x, dtype=float)
-        if x.ndim != 1 or not np.all(np.isfinite(x)):
+        if x.ndim != 1 or not np.isfinite(x).all():
             raise ParameterError(f"initial state x = {self.x!r} must be a 1-d array of finite "
                                  "numbers")
         check_finite("initial state t_s", self.t_s, "s")
