@@ -56,12 +56,11 @@
 #include <tuple>
 
 #include "../arrays.hpp"
-#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 // Event function ``kind`` at tau on the segment described by ``seg``.
 inline double g_value(idx kind, double tau, const Segment& seg, idx r, CVec q0, CMat lam,
@@ -329,8 +328,8 @@ inline double find_root(idx kind, double a, double ga, double b, double gb, cons
 
 // The copies with constant sizes are flattened (everything they call inlined into them, as
 // numba inlined _root_body and state_at): only then does the compiler see the sizes as the
-// constants they are; a call to the shared _root_body kept its loops generic.
-#define BB_FLATTEN __attribute__((flatten, noinline))
+// constants they are; a call to the shared _root_body kept its loops generic
+// (BB_FLATTEN, compiler.hpp).
 
 // _root_body for one mode and its conjugate pair (n = 1, nz = 2, ks = 2).
 BB_FLATTEN inline double find_root_1(idx kind, double a, double ga, double b, double gb,
@@ -625,4 +624,4 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
     return {kind, best};
 }
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact
