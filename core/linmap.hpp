@@ -20,6 +20,7 @@
 
 #include <cmath>
 
+#include "compiler.hpp"
 #include "layout.hpp"
 
 namespace bb::rk4 {
@@ -130,18 +131,17 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
 }
 
 // The tables regrouped for the kernels' step: what one step computes for several rows,
-// stages or velocities at once sits side by side in a vector (GCC/Clang vector
-// extensions: SSE2 on any x86-64, the same on other targets), so one vector operation
-// does what several scalar ones did.  Each lane does the scalar code's operations in
-// its order, so the bits are those of the scalar sums.
-typedef double v2 __attribute__((vector_size(16)));
+// stages or velocities at once sits side by side in a vector (v2, compiler.hpp: GCC/Clang
+// vector extensions, SSE2 on any x86-64, the same on other targets), so one vector
+// operation does what several scalar ones did.  Each lane does the scalar code's
+// operations in its order, so the bits are those of the scalar sums.
 
 // Four lanes as two native pairs (a 32-byte vector type without AVX went through memory).
 struct v4 {
     v2 lo, hi;
     double operator[](int l) const { return l < 2 ? lo[l] : hi[l - 2]; }
 };
-#define BB_V4_OP inline __attribute__((always_inline)) v4
+#define BB_V4_OP BB_ALWAYS_INLINE v4
 BB_V4_OP operator*(v4 a, double s) { return {a.lo * s, a.hi * s}; }
 BB_V4_OP operator*(double s, v4 a) { return {s * a.lo, s * a.hi}; }
 BB_V4_OP operator*(v4 a, v4 b) { return {a.lo * b.lo, a.hi * b.hi}; }

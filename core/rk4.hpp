@@ -12,38 +12,37 @@
 //
 // This header holds the scheme's rules, each written once: the parameters unpacked from
 // p, the stage derivative and its energy flows, the map step, the strobe, the walls and
-// the streamed metrics; rk4.cpp is the run, and rk4_batch.cpp runs a batch's rows with
-// it.  The helpers are force-inlined:
-// with the mode count a compile-time constant their loops unroll and the step's state
-// stays in registers.
+// the streamed metrics; rk4_run.hpp is the run (compiled once per instruction set, in
+// rk4.cpp and rk4_avx2.cpp), and rk4_batch.cpp runs a batch's rows with it.  The helpers
+// are force-inlined: with the mode count a compile-time constant their loops unroll and
+// the step's state stays in registers.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 
 #include "arrays.hpp"
+#include "compiler.hpp"
 #include "layout.hpp"
 #include "linmap.hpp"
 #include "model.hpp"
 
-#define BB_INLINE inline __attribute__((always_inline))
+#define BB_INLINE BB_ALWAYS_INLINE
 
-// On x86-64 the kernels are compiled three times, for the baseline ISA (SSE2), for AVX2
-// and for AVX-512, chosen at run time: the same IEEE operations in the same order, so
-// the same bits on every CPU (FMA, which would round differently, is not enabled;
-// -ffp-contract=off).  AVX2 gives the vector arithmetic (VecMap) 4 lanes and 3-operand
-// instructions; AVX-512 (F, VL, DQ, BW) gives 32 vector registers instead of 16, which
-// hold the step's state, stage values and constants without spills (the staged ball
-// step 1.2x faster, the map step 1.1x).
-// (-DBB_NO_AVX2_CLONE builds the baseline kernels alone and -DBB_NO_AVX512_CLONE the
-// baseline and AVX2 ones, to test each on a CPU that has the larger ISA.)
+// On x86-64 (GCC, Clang) the kernels are compiled twice, for the baseline ISA (SSE2, in
+// rk4.cpp) and for AVX2 (rk4_avx2.cpp), chosen at run time: the same IEEE operations in
+// the same order, so the same bits on every CPU (FMA, which would round differently, is
+// not enabled; -ffp-contract=off).  AVX2 gives the vector arithmetic (VecMap) 4 lanes and
+// 3-operand instructions: 1.15x on a ball bar's lobes, 1.2x on the map step through
+// bb.simulate (benchmarks/bench_isa.py).  An AVX-512 copy (32 vector registers, which
+// hold the staged step without spills) gave 1.0-1.1x over AVX2 through the same calls
+// (1.12x on a sticking ball, 1.0x on the map step and the lobes) and was the dearest of
+// the copies to compile, so it is not built.  Other targets (aarch64, MSVC) build the
+// baseline kernels alone.
+// (-DBB_NO_AVX2_CLONE builds the baseline kernels alone, to test them on an AVX2 CPU.)
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
 #define BB_AVX2_CLONE 1
 #define BB_TARGET_AVX2 __attribute__((target("avx2")))
-#if !defined(BB_NO_AVX512_CLONE)
-#define BB_AVX512_CLONE 1
-#define BB_TARGET_AVX512 __attribute__((target("avx2,avx512f,avx512vl,avx512dq,avx512bw")))
-#endif
 #endif
 
 namespace bb::rk4 {
@@ -173,7 +172,6 @@ BB_INLINE Phase rotate(double sn, double cn, double chh, double shh) {
 // registers, as GCC keeps vector selects branch-free: y' changes sign from stage to
 // stage while the ball sticks, where branches are mispredicted (written with ?: on
 // doubles, GCC branched).
-typedef long long i2 __attribute__((vector_size(16)));
 struct SignMask {
     i2 pos, neg;
 };
@@ -184,9 +182,9 @@ BB_INLINE SignMask sign_mask(double y) {
 }
 
 BB_INLINE double sign_pick(SignMask m, const v2* by_sign) {
-    const i2 p = (i2)by_sign[0], z = (i2)by_sign[1], g = (i2)by_sign[2];
+    const i2 p = as_bits(by_sign[0]), z = as_bits(by_sign[1]), g = as_bits(by_sign[2]);
     const i2 r = (m.neg & g) | (~m.neg & ((m.pos & p) | (~m.pos & z)));
-    return ((v2)r)[0];
+    return as_v2(r)[0];
 }
 
 // What a stage's energy flows need besides the derivative.
@@ -285,7 +283,7 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
 // |v| lane by lane (the sign bit cleared, as fabs)
 BB_INLINE v2 vabs(v2 v) {
     const i2 mask = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL};
-    return (v2)((i2)v & mask);
+    return as_v2(as_bits(v) & mask);
 }
 BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
 
@@ -315,8 +313,9 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 // FAST: stage 1 at X, the sums from their first terms (stages_fast) and the
 // derivative's FAST form (ydd_sum_from_first).
 // The stage values are scalars sized by the mode count, so with N a template constant
-// they stay in registers (rk4.cpp is built without the auto-vectoriser, which packed
-// them in vectors through memory, where the loads stalled on store forwarding).
+// they stay in registers (the kernel files are built without GCC's auto-vectoriser,
+// which packed them in vectors through memory, where the loads stalled on store
+// forwarding).
 template <int N, int CASE, bool FAST, class Force>
 BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
                           const double* cst, const double* wst, Flows& fl, bool flows_on,
@@ -560,7 +559,7 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double*
     return contact;
 }
 
-// ---- the kernels (rk4.cpp, rk4_batch.cpp) ---------------------------------------------
+// ---- the kernels (rk4_run.hpp, rk4_batch.cpp) -----------------------------------------
 
 // One run's arguments, as numba's run_rk4 takes them (checked by bind_rk4.cpp).
 struct RunArgs {
@@ -593,18 +592,11 @@ inline bool cpu_has_avx2() {
     return yes;
 }
 #endif
-#ifdef BB_AVX512_CLONE
-inline bool cpu_has_avx512() {
-    static const bool yes = __builtin_cpu_supports("avx2") &&
-                            __builtin_cpu_supports("avx512f") &&
-                            __builtin_cpu_supports("avx512vl") &&
-                            __builtin_cpu_supports("avx512dq") &&
-                            __builtin_cpu_supports("avx512bw");
-    return yes;
-}
-#endif
 
 void run_single(const RunArgs& a);
 void run_batch(const BatchArgs& a);
+#ifdef BB_AVX2_CLONE
+void run_single_avx2(const RunArgs& a);  // rk4_avx2.cpp
+#endif
 
 }  // namespace bb::rk4

@@ -7,10 +7,9 @@
 #pragma once
 
 #include "../arrays.hpp"
-#include "ns.hpp"
 #include "../layout.hpp"
 
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 // event-search grid points per shortest period: about 16, but not a whole number, so that
 // events half a forcing period apart do not fall on grid points (consts.py)
@@ -186,4 +185,4 @@ struct SegSearch {
     double watch_ext = 0.0;  // a free ball's y extremum watched against grazes
 };
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact

@@ -31,12 +31,11 @@
 #include <vector>
 
 #include "../arrays.hpp"
-#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 // H = tau / ceil(tau / dt), at least two per revolution: a cut's knot spacing.
 inline double history_step(double tau, double dt) {
@@ -242,4 +241,4 @@ inline double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk,
     return T < t_piece - t ? t + T : t_piece;
 }
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact

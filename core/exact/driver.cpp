@@ -1,12 +1,9 @@
 // The exact kernel's driver: see driver.hpp.
 //
-// On x86-64 the kernel is compiled twice, for the baseline ISA (SSE2, here) and for AVX2
-// (driver_avx2.cpp includes this file into bb::exact_avx2), and run_exact picks one at run
-// time: the same IEEE operations in the same order, so the same bits on every CPU (FMA,
-// which would round differently, is not enabled; -ffp-contract=off).  AVX2's 3-operand
-// (VEX) instructions spare SSE2's register copies (~5% on event-heavy runs, as measured);
-// the harmonic kernel only (the cut's was slower in AVX2).
-// (-DBB_NO_AVX2_CLONE builds the baseline kernel alone, as for RK4.)
+// The kernel is compiled once, for the baseline ISA (SSE2 on x86-64).  A second copy for
+// AVX2, picked at run time for harmonic runs, gave 1.09x on an event-heavy harmonic run
+// (benchmarks/bench_isa.py) for 13 s more compile in every build from source; the exact
+// integrator's runs take fractions of a second, so it did not pay for its build.
 #include "driver.hpp"
 
 #include <cmath>
@@ -20,15 +17,7 @@
 #include "propagate.hpp"
 #include "segment.hpp"
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE) \
-    && !defined(BB_EXACT_AVX2_BUILD)
-#define BB_EXACT_AVX2_CLONE 1
-namespace bb::exact_avx2 {
-double run_exact(const exact::ExactRun& a);  // driver_avx2.cpp
-}  // namespace bb::exact_avx2
-#endif
-
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 namespace {
 
@@ -496,19 +485,9 @@ double exact_body(const ExactRun& a) {
 }  // namespace
 
 double run_exact(const ExactRun& a) {
-    bool regen = int(a.p[L::FORCING]) == L::REGENERATIVE;
-#ifdef BB_EXACT_AVX2_CLONE
-    // harmonic runs only: the cut's kernel measured 1-5% slower in its AVX2 copy
-    static const bool avx2 = __builtin_cpu_supports("avx2");
-    if (avx2 && !regen) return exact_avx2::run_exact(a);
-#endif
-#ifdef BB_EXACT_AVX2_BUILD
-    (void)regen;  // only harmonic runs come here
-    return exact_body<false>(a);
-#else
+    const bool regen = int(a.p[L::FORCING]) == L::REGENERATIVE;
     if (regen) return exact_body<true>(a);
     return exact_body<false>(a);
-#endif
 }
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact

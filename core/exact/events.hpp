@@ -38,12 +38,11 @@
 #include <tuple>
 
 #include "../arrays.hpp"
-#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 // A segment's closed form as the event functions read it: the segment, its regime r and
 // its start q0 in eigen-coordinates; the run's eigen-data (lam, V, Z, D, bq); the sizes
@@ -332,8 +331,8 @@ inline double find_root(idx kind, double a, double ga, double b, double gb, cons
 
 // The copies with constant sizes are flattened (everything they call inlined into them, as
 // numba inlined _root_body and state_at): only then does the compiler see the sizes as the
-// constants they are; a call to the shared _root_body kept its loops generic.
-#define BB_FLATTEN __attribute__((flatten, noinline))
+// constants they are; a call to the shared _root_body kept its loops generic
+// (BB_FLATTEN, compiler.hpp).
 
 // _root_body for one mode and its conjugate pair (n = 1, nz = 2, ks = 2).
 BB_FLATTEN inline double find_root_1(idx kind, double a, double ga, double b, double gb,
@@ -590,4 +589,4 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
     return {kind, best};
 }
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact

@@ -28,9 +28,9 @@
 #include <stdexcept>
 
 #include "../arrays.hpp"
-#include "ns.hpp"
+#include "../compiler.hpp"
 
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 // numba raises ZeroDivisionError("complex division by zero"); the bindings may map this
 // type to it (it is a std::domain_error, a ValueError to nanobind by default)
@@ -38,7 +38,7 @@ struct ComplexZeroDivision : std::domain_error {
     ComplexZeroDivision() : std::domain_error("complex division by zero") {}
 };
 
-#define BB_HOT inline __attribute__((always_inline))
+#define BB_HOT BB_ALWAYS_INLINE
 
 struct ncplx {
     double re = 0.0;
@@ -191,4 +191,4 @@ inline double pymax(double a, double b, T... rest) { return pymax(pymax(a, b), r
 template <class... T>
 inline double pymin(double a, double b, T... rest) { return pymin(pymin(a, b), rest...); }
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact

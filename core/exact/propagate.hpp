@@ -33,11 +33,10 @@
 #include <tuple>
 
 #include "../arrays.hpp"
-#include "ns.hpp"
 #include "consts.hpp"
 #include "nmath.hpp"
 
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 // full unrolling of segment_integrals' short loops (the constant sizes): the same operations
 #define BB_UNROLL _Pragma("GCC unroll 8")
@@ -278,7 +277,7 @@ inline double _quad(AV& a, AV& b, GM& G, idx nb) {
 // MuV, GM, CM, V: the scratch's types, CVec / CMat views of the driver's scratch, or (the
 // constant sizes) local arrays (LocalArr) that the compiler knows alias nothing else.
 template <class MuV, class GM, class CM, class V>
-__attribute__((always_inline)) inline void _integrals_impl(
+BB_ALWAYS_INLINE void _integrals_impl(
     idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
     CMat Z, Mat D, idx n, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, MuV& mu,
     MuV& em, GM& G, CM& Cx, V& cf, V& ca, V& cb, Vec out, CArr3 isum, idx level, idx ks,
@@ -462,7 +461,7 @@ struct LocalArr {
 
 // _integrals_impl with the constant sizes NZ (n = NZ / 2, ks = 2) and its scratch local.
 template <int NZ>
-__attribute__((noinline)) void _integrals_fixed(
+BB_NOINLINE void _integrals_fixed(
     idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
     CMat Z, Mat D, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, Vec out, CArr3 isum,
     idx level, const Segment& seg, CVec phj, const ncplx* exc) {
@@ -498,4 +497,4 @@ inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, d
                           out, isum, level, seg, phj, exc);
 }
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact

@@ -20,7 +20,6 @@
 #include <utility>
 
 #include "../arrays.hpp"
-#include "ns.hpp"
 #include "../layout.hpp"
 #include "consts.hpp"
 #include "cut.hpp"
@@ -28,7 +27,7 @@
 #include "nmath.hpp"
 #include "propagate.hpp"
 
-namespace bb::BB_EXACT_NS {
+namespace bb::exact {
 
 namespace L = layout;
 
@@ -229,7 +228,7 @@ struct GridPoint {
 // search's loop (GCC called it: with the rare work out of the loop, inlined it is ~10%
 // faster on zero-event runs).
 template <idx NZ>
-__attribute__((always_inline)) inline GridPoint grid_point(Work& w, idx r, idx lev,
+BB_ALWAYS_INLINE GridPoint grid_point(Work& w, idx r, idx lev,
                                                            const ncplx& phg_a, const ncplx& rot,
                                                            idx ks, double b, idx mode, idx n,
                                                            double f0, double om, bool ydd_on,
@@ -484,7 +483,7 @@ struct LevelBounds {
 // linear one, W within b3w s^3 / 6 of its quadratic (docs/exact.md, "Longer steps").
 // (Inlined: GCC had stopped inlining it in the constant-size searches, ~3% on zero-event
 // runs.)
-__attribute__((always_inline)) inline idx level(double ya, double yda, double ydd_a, double wa,
+BB_ALWAYS_INLINE idx level(double ya, double yda, double ydd_a, double wa,
                                                 double wda, double wdd_a, const LevelBounds& lb,
                                                 double ylim, double wmar, double max_w,
                                                 double min_w, const double* hl, idx top,
@@ -575,7 +574,7 @@ inline bool may_graze_m(double a, double b, Vec ev_a, Vec ev_b, double half, dou
 }
 
 // What wall_event does when a step shows something (see there): kept out of the loop.
-__attribute__((noinline)) inline Found wall_event_found(Work& w, double a, double b, idx r, idx ks,
+BB_NOINLINE inline Found wall_event_found(Work& w, double a, double b, idx r, idx ks,
                                                  idx n, double f0, double om, idx mode,
                                                  bool watch_v, bool watch_ext, bool graze,
                                                  bool search, double ydd_a, double ydd_b) {
@@ -802,7 +801,7 @@ inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t)
 // What advance does off the usual grid (every 64th step, a segment's end): kept out of the
 // search's loop.
 template <bool Regen>
-__attribute__((noinline)) GridPoint advance_other(Work& w, double t, idx r, idx ks, idx sz,
+BB_NOINLINE GridPoint advance_other(Work& w, double t, idx r, idx ks, idx sz,
                                                   idx n, idx mode, double b, bool tab_end,
                                                   bool ball, bool ydd_on, const ncplx& phg_a,
                                                   double ydd_b, double wdd_b) {
@@ -878,7 +877,7 @@ struct Extremes {
 
 // W at its W' = 0 extremum inside the grid step [a, b] (kind: the step's event, -1 if none):
 // a start from the Hermite interpolant of W, then w_extremum_any.  Out of the search's loop.
-__attribute__((noinline)) inline double w_extremum_in(Work& w, double a, double b, idx r, idx ks,
+BB_NOINLINE inline double w_extremum_in(Work& w, double a, double b, idx r, idx ks,
                                                idx n, idx kind, double wa, double wb,
                                                double wda, double wdb, double wdd_a,
                                                double wdd_b) {
@@ -894,7 +893,7 @@ __attribute__((noinline)) inline double w_extremum_in(Work& w, double a, double 
 // W's extremes at the end b of a grid step and, where W' changes sign inside the step and
 // the extremum may beat them (w_may_exceed), at the located W' = 0 extremum.  Inlined in
 // the search's loop (the extremes stay in registers), the rare search out of it.
-__attribute__((always_inline)) inline void w_extremes(Work& w, Extremes& e, double a, double b,
+BB_ALWAYS_INLINE void w_extremes(Work& w, Extremes& e, double a, double b,
                                                       idx r, idx ks, idx n, idx kind, idx lev,
                                                       double bw4, double wa, double wb,
                                                       double wda, double wdb, double wdd_a,
@@ -1247,4 +1246,4 @@ using kernel::SegEvent;
 using kernel::SegStart;
 using kernel::start_segment;
 
-}  // namespace bb::BB_EXACT_NS
+}  // namespace bb::exact

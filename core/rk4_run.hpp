@@ -1,0 +1,369 @@
+// The RK4 run's body and its dispatch on the run's shape, for the kernel files that
+// compile it, one per instruction set: rk4.cpp (the baseline ISA, and run_single, which
+// picks a copy at run time) and rk4_avx2.cpp (rk4.hpp says what the copy gains).  Each
+// copy is a translation unit of its own, so that a parallel build compiles them side by
+// side.
+//
+// The step's state and scratch are local arrays of the kernel function and every helper
+// is inlined into it, so nothing of the step goes through memory that the records might
+// alias and, with the mode count a template constant, the state stays in registers.
+// Specialised on the mode count 1, 2, 3, the case and the forcing (the other bars' and
+// the cut's branches fold away), with one kernel for a run-time mode count (4..NMAX).
+// (Everything here has internal linkage: each kernel file has its own copy, and only the
+// functions it marks for its ISA are compiled for it; the rest stays baseline code.)
+#pragma once
+
+#include "noise.hpp"
+#include "rk4.hpp"
+
+namespace bb::rk4 {
+namespace {
+
+// Python's a % b (the sign of b), for a negative history offset.
+inline idx floor_mod(idx a, idx b) {
+    const idx r = a % b;
+    return (r != 0 && ((r < 0) != (b < 0))) ? r + b : r;
+}
+
+// The delayed surface of a regenerative cut (docs/model.md, section 4): the tool meets
+// min_j [j h_m + W(t_s - j tau)] at the stage times t_s = t + c dt, c = 0, 1/2, 1.
+// Node kg of the history is time t_cut + kg dt, counted over every call since the cut
+// began; buf holds the newest nodes circularly.  t_s - j tau is node kg + off[q][j] plus
+// a fixed fraction, interpolated between two stored nodes with fixed weights (the cubic
+// Hermite from W and W', or linear), so each lookup is four multiply-adds.  ptr[j] is the
+// buffer row of node kg + off[0][j], advanced by one each step (no modulo).
+struct Delay {
+    int nrev = 0;
+    idx nbuf = 0;
+    double feed = 0.0, w_before_cut = 0.0;
+    idx off[3][NREV_MAX];
+    double wts[3][NREV_MAX][4];
+    idx ptr[NREV_MAX];
+
+    void init(const double* p, double dt, idx kg0, idx rows) {
+        nrev = int(p[L::N_REV]);
+        nbuf = rows;
+        feed = p[L::FEED];
+        w_before_cut = p[L::HIST_W0];
+        const bool cubic = p[L::INTERP] > 0.0;
+        for (int q = 0; q < 3; ++q) {
+            for (int j = 0; j < nrev; ++j) {
+                const double d = 0.5 * q - double(j + 1) * p[L::TAU] / dt;
+                const double fl = std::floor(d);
+                off[q][j] = idx(fl);
+                const double fr = d - fl;
+                double* w = wts[q][j];
+                if (cubic) {
+                    const double f2 = fr * fr, f3 = f2 * fr;
+                    w[0] = 2.0 * f3 - 3.0 * f2 + 1.0;
+                    w[1] = (f3 - 2.0 * f2 + fr) * dt;
+                    w[2] = -2.0 * f3 + 3.0 * f2;
+                    w[3] = (f3 - f2) * dt;
+                } else {
+                    w[0] = 1.0 - fr;
+                    w[1] = 0.0;
+                    w[2] = fr;
+                    w[3] = 0.0;
+                }
+            }
+        }
+        for (int j = 0; j < nrev; ++j) ptr[j] = floor_mod(kg0 + off[0][j], nbuf);
+    }
+
+    // W(t_s - j tau) at stage time index q of step kg from the history
+    double delayed(const Mat& buf, idx kg, int q, int j) const {
+        const double* w = wts[q][j];
+        const idx a = kg + off[q][j];
+        if (a >= 0) {
+            idx ia = ptr[j] + (off[q][j] - off[0][j]);
+            if (ia >= nbuf) ia -= nbuf;
+            const idx ib = ia + 1 < nbuf ? ia + 1 : 0;
+            return w[0] * buf(ia, 0) + w[1] * buf(ia, 1) + w[2] * buf(ib, 0) + w[3] * buf(ib, 1);
+        }
+        if (a + 1 >= 0)  // between the surface before the cut and node 0
+            return w[0] * w_before_cut + w[2] * buf(0, 0) + w[3] * buf(0, 1);
+        return w_before_cut;
+    }
+
+    // The surface at stages 0, 1 (and 2, the same time) and 3.  Until h first reaches
+    // zero the j = 1 term is the minimum, so the older revolutions are read only after.
+    void surface(const Mat& buf, idx kg, bool all_revs, double* hsurf) const {
+        const int nr_eff = all_revs ? nrev : 1;
+        for (int q = 0; q < 3; ++q) {
+            double hmin = 1e300;
+            for (int j = 0; j < nr_eff; ++j)
+                hmin = Steady::pymin(hmin, double(j + 1) * feed + delayed(buf, kg, q, j));
+            hsurf[q < 2 ? q : 3] = hmin;
+        }
+        hsurf[2] = hsurf[1];
+    }
+
+    void advance() {
+        for (int j = 0; j < nrev; ++j) {
+            ptr[j] += 1;
+            if (ptr[j] == nbuf) ptr[j] = 0;
+        }
+    }
+};
+
+// The regenerative cut's bookkeeping of a step's stages: the chip thickness
+// h = max(0, surface - W) and the force of the cutting law, Kr b h (m_c = 0) or Kienzle's
+// K b h^(1 - m_c) (h > 0), times the noise's gain max(0, 1 + eps_j) where the cut has
+// noise.  The linear law without noise computes the product krb * h alone, so that a
+// linear cut's bits do not depend on the other law or on the noise.
+struct Cut {
+    double krb;
+    double max_force, first_zero, n_zero;
+    bool cut_zero = false;  // h = 0 at some stage of this step
+    bool power = false;     // Kienzle's law: h^expo, expo = 1 - m_c
+    double expo = 1.0;
+    // the noise: eps_j = noise_std N_j(seed) over steps [j steps_per, (j + 1) steps_per)
+    // of the cut (steps counted from its start, so a continued run draws the same eps)
+    bool noisy = false;
+    double noise_std = 0.0, gain = 1.0;
+    std::uint64_t seed = 0;
+    idx steps_per = 1, j_now = -1;
+
+    static Cut of(const double* p, const double* met, double dt) {
+        Cut c;
+        c.krb = p[L::KR_B];
+        c.max_force = met[L::MAX_FORCE];
+        c.first_zero = met[L::FIRST_ZERO_T];
+        c.n_zero = met[L::N_ZERO_STEPS];
+        c.power = p[L::CUT_MC] != 0.0;
+        c.expo = 1.0 - p[L::CUT_MC];
+        c.noisy = p[L::NOISE_STD] > 0.0;
+        if (c.noisy) {
+            c.noise_std = p[L::NOISE_STD];
+            c.seed = std::uint64_t(p[L::NOISE_SEED]);
+            // the interval in whole steps, at least one (capped where the count would
+            // leave an int64: one interval for any run the core can take)
+            const double r = std::nearbyint(p[L::NOISE_INTERVAL] / dt);
+            c.steps_per = r >= 1.0 ? (r < 4.0e18 ? idx(r) : idx(4.0e18)) : 1;
+        }
+        return c;
+    }
+
+    // the gain of step kg of the cut (kg >= 0)
+    void noise_at(idx kg) {
+        const idx j = kg / steps_per;
+        if (j != j_now) {
+            j_now = j;
+            const double g = 1.0 + noise_std * noise::normal_at(seed, std::uint64_t(j));
+            gain = g > 0.0 ? g : 0.0;
+        }
+    }
+
+    double force(double hmin, double ws, double t_stage) {
+        double hh = hmin - ws;
+        if (hh <= 0.0) {
+            hh = 0.0;
+            if (!cut_zero) {
+                cut_zero = true;
+                if (first_zero < 0.0) first_zero = t_stage;
+            }
+        }
+        double f = power ? krb * std::pow(hh, expo) : krb * hh;
+        if (noisy) f *= gain;
+        max_force = Steady::pymax(max_force, f);
+        return f;
+    }
+};
+
+template <int N, int CASE, int FORCING>
+BB_INLINE void run_body(const RunArgs& a) {
+    const Params q = unpack(a.p, a.dt);
+    const Shape<N, CASE> sh(q);
+    const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.regen;
+    const int n = sh.n(), nx = sh.nx(), iyd = sh.iyd();
+    const bool ball = sh.ball(), has_aux = sh.has_aux();
+    const double t0 = a.t0, dt = a.dt;
+    double* met = a.met.d;
+    const Mat buf = a.buf;
+    const idx nbuf = buf.n0;
+    const idx kg0 = idx(met[L::STEPS_DONE]);  // steps since the cut began
+
+    Delay delay;
+    if (regen) delay.init(a.p, dt, kg0, nbuf);
+    Cut cut = Cut::of(a.p, met, dt);
+    const bool stop_at_zero = a.p[L::STOP_AT_ZERO] > 0.0;
+    double hsurf[4] = {0.0, 0.0, 0.0, 0.0};
+    idx steps_run = a.n_steps;
+
+    constexpr int NXC = Shape<N, CASE>::NXC;
+    double X[NXC], Kd[NXC], dX[NXC];
+    // (unrolled here, before GCC's scalar replacement of X and Kd, which a loop with a
+    // run-time index would keep in memory)
+#pragma GCC unroll 8
+    for (int j = 0; j < nx; ++j) {
+        X[j] = a.x[j];
+        Kd[j] = 0.0;
+    }
+    if (sh.kase() == L::LOCKED) X[iyd] = 0.0;
+    double fst[4], cst[4], wst[4];  // forcing at the stages, c_s dt, b_s dt
+    for (int s = 0; s < 4; ++s) {
+        cst[s] = C_FRAC[s] * dt;
+        wst[s] = B_MULT[s] * (dt / 6.0);
+    }
+
+    // the step as an affine map where F_b cannot switch (linmap.hpp)
+    const bool linear = !regen && !q.stage_loop;
+    const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
+    const bool check_fb = ball && q.fc > 0.0;
+    double sn = 0.0, cn = 1.0;
+
+    // streamed metrics in registers, written back at the end; the events' counts and
+    // rows go to met and the records directly (model.hpp)
+    Steady st = Steady::load(met);
+    Flows fl = Flows::load(met);
+    idx n_rec = idx(met[L::N_REC]);
+    idx n_stb = idx(met[L::N_STROBE]);
+    const double t_steady = t0 + double(a.steady_start) * dt;
+    StickState ss;
+
+    TipAux prev = tip_aux(q, sh, X, true);
+    idx wptr = regen ? kg0 % nbuf : 0;  // the row of the newest node
+    if (regen && kg0 == 0) {
+        buf(0, 0) = prev.w;
+        buf(0, 1) = prev.wd;
+    }
+    double t_next = first_strobe(q, t0);
+
+    for (idx k = 0; k < a.n_steps; ++k) {
+        const double t = t0 + double(k) * dt;
+        const double t1 = t0 + double(k + 1) * dt;  // not t + dt: event times in [t0, t_end]
+        if (k % RESYNC == 0) {
+            sn = std::sin(q.om * t);
+            cn = std::cos(q.om * t);
+        }
+        cut.cut_zero = false;
+        if (regen) delay.surface(buf, kg0 + k, cut.first_zero >= 0.0, hsurf);
+        if (regen && cut.noisy) cut.noise_at(kg0 + k);
+        const Phase ph = rotate(sn, cn, q.chh, q.shh);
+        fst[0] = q.f0 * sn;
+        fst[1] = q.f0 * ph.s_h;
+        fst[2] = fst[1];
+        fst[3] = q.f0 * ph.s_1;
+
+        // the step as an affine map if F_b keeps its sign, else the four stages
+        bool use_map = linear;
+        double fz = 0.0;
+        if (linear && check_fb) {
+            fz = map_friction(q, X[iyd]);
+            use_map = map_fits(q, sh, mp, X, sn, cn, fz, true);
+        }
+        if (use_map) {
+            map_increment(sh, mp, X, sn, cn, fz, dX);
+            map_flows(q, sh, mp, fl, X, dX, sn, cn, fz);
+            for (int j = 0; j < nx; ++j) X[j] += dX[j];
+        } else {
+            auto force = [&](int s, const double* Xs) {
+                double f = fst[s];
+                if (regen) {  // the cutting law at h = max(0, surface - W(t_s))
+                    double ws = 0.0;
+                    for (int i = 0; i < n; ++i) ws += q.pL[i] * Xs[i];
+                    f = cut.force(hsurf[s], ws, t + C_FRAC[s] * dt);
+                    fst[s] = f;
+                }
+                return f;
+            };
+            if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
+                rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, true, force);
+            else
+                rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, true, force);
+        }
+        const bool steady = k >= a.steady_start;
+
+        strobe_step(q, sh, X, prev, t, t1, dt, t_next, n_stb, a.strobe);
+        bool contact = false;
+        if (ball)
+            contact = ball_walls(q, sh, X, met, a.imp, a.stick, ss, t, t1, steady, t_steady);
+
+        // streamed metrics
+        prev = tip_aux(q, sh, X, false);
+        if (has_aux) st.max_aux_all = Steady::pymax(st.max_aux_all, std::fabs(prev.aux));
+        if (regen) {
+            wptr += 1;  // the row of node kg + 1
+            if (wptr == nbuf) wptr = 0;
+            buf(wptr, 0) = prev.w;
+            buf(wptr, 1) = prev.wd;
+            delay.advance();
+            if (cut.cut_zero) cut.n_zero += 1;
+        }
+        if (steady) {
+            st.sample(prev.w, prev.aux, fst[3]);
+            if (contact) st.t_contact += dt;
+            if (regen && a.modes.n0 > 0) {
+                for (int i = 0; i < n; ++i) {
+                    a.modes(i, 0) = Steady::pymax(a.modes(i, 0), X[i]);
+                    a.modes(i, 1) = Steady::pymin(a.modes(i, 1), X[i]);
+                }
+            }
+        }
+        if (a.rec_every > 0 && (k + 1) % a.rec_every == 0 && n_rec < a.rec.n0) {
+            double* row = a.rec.row(n_rec);
+            row[0] = t1;
+            row[1] = prev.w;
+            row[2] = prev.wd;
+            row[3] = prev.aux;
+            row[4] = prev.auxd;
+            row[5] = fst[3];
+            n_rec += 1;
+        }
+        sn = ph.s_1;
+        cn = ph.c_1;
+        if (cut.cut_zero && stop_at_zero) {
+            steps_run = k + 1;
+            break;
+        }
+    }
+
+    // a stick interval still open at the end is closed there
+    if (ss.in_stick)
+        close_stick(met, a.stick, ss.t0, t0 + double(steps_run) * dt, t_steady, q.stick_min);
+#pragma GCC unroll 8
+    for (int j = 0; j < nx; ++j) a.x[j] = X[j];
+    st.store(met);
+    fl.store(met);
+    met[L::N_REC] = double(n_rec);
+    met[L::N_STROBE] = double(n_stb);
+    met[L::MAX_FORCE] = cut.max_force;
+    met[L::FIRST_ZERO_T] = cut.first_zero;
+    met[L::N_ZERO_STEPS] = cut.n_zero;
+    met[L::STEPS_DONE] += double(steps_run);
+}
+
+// The case and the forcing as template constants for 1-3 modes (the other cases' and the
+// cut's branches fold away: 1.3-1.5x per step over run-time ones, as measured).  Copy is
+// a kernel file's struct whose run<N, CASE, FORCING> is run_body compiled for its ISA.
+template <class Copy, int N, int CASE>
+void run_case(const RunArgs& a, int forcing) {
+    if (forcing == L::REGENERATIVE) return Copy::template run<N, CASE, L::REGENERATIVE>(a);
+    Copy::template run<N, CASE, L::HARMONIC>(a);
+}
+
+template <class Copy, int N>
+void run_modes(const RunArgs& a, int kase, int forcing) {
+    switch (kase) {
+        case L::SOLID: return run_case<Copy, N, L::SOLID>(a, forcing);
+        case L::BALL: return run_case<Copy, N, L::BALL>(a, forcing);
+        case L::TMD: return run_case<Copy, N, L::TMD>(a, forcing);
+        default: return run_case<Copy, N, L::LOCKED>(a, forcing);
+    }
+}
+
+template <class Copy>
+void run_shape(const RunArgs& a) {
+    const int n = int(a.p[L::N_MODES]);
+    const int kase = int(a.p[L::CASE]);
+    const int forcing = int(a.p[L::FORCING]);
+    switch (n) {
+        case 1: return run_modes<Copy, 1>(a, kase, forcing);
+        case 2: return run_modes<Copy, 2>(a, kase, forcing);
+        case 3: return run_modes<Copy, 3>(a, kase, forcing);
+        default: return Copy::template run<0, -1, -1>(a);
+    }
+}
+
+}  // namespace
+}  // namespace bb::rk4
