@@ -57,19 +57,18 @@ Matrix regime_matrix(const P& p, double sdir) {
     const int nx = sh.nx(), nz = nx + 3;
     Matrix A = zeros(size_t(nz), size_t(nz));
     auto a = A.view();
-    const R::SignMask held = R::sign_mask(0.0);  // no friction force: the linear part
     double X[R::NX_MAX], Kd[R::NX_MAX];
-    auto column = [&](int j, double f, R::SignMask sg) {
-        R::derivative_with<0, -1>(q, sh, X, f, Kd, sg);
+    auto column = [&](int j, double f, double ysign) {
+        R::derivative_with<0, -1>(q, sh, X, f, Kd, ysign);
         for (int i = 0; i < nx; ++i) a(i, j) = Kd[i];
     };
     for (int j = 0; j < nx; ++j) {
         for (int i = 0; i < nx; ++i) X[i] = i == j ? 1.0 : 0.0;
-        column(j, 0.0, held);
+        column(j, 0.0, 0.0);  // no friction force: the linear part
     }
     for (int i = 0; i < nx; ++i) X[i] = 0.0;
-    column(nx, q.f0, held);               // the force F0 sin(Omega t) at the tip
-    column(nx + 2, 0.0, R::sign_mask(sdir));  // F_b = -F_c sdir, held
+    column(nx, q.f0, 0.0);     // the force F0 sin(Omega t) at the tip
+    column(nx + 2, 0.0, sdir);  // F_b = -F_c sdir, held
     a(nx, nx + 1) = q.om;                 // (sin Omega t)' = Omega cos Omega t
     a(nx + 1, nx) = -q.om;
     return A;

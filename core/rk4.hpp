@@ -204,14 +204,14 @@ struct StageTerms {
 // FAST: the ball's y'' sums psi_d a_i from its first term (q.ydd_sum_from_first), which
 // takes an addition off the stage's longest chain (a_i, y'', y' at the next stage, F_b).
 //
-// sg: the sign of y' that picks the friction force F_b = -F_c sgn(y') (sign_mask); the
-// stages take it from the stage state (derivative), the regime matrices (dynamics.cpp) a
+// ysign: the value whose sign picks the friction force F_b = -F_c sgn(ysign) (sign_mask);
+// the stages give the stage's own y' (derivative), the regime matrices (dynamics.cpp) a
 // sliding direction of their own.  RK4's stages and the matrices that shooting
 // linearises are both built from this definition of the equations of motion (the step
 // map's tables, linmap.hpp, push basis vectors through a copy of the stage recursion).
 template <int N, int CASE, bool FAST = false>
 BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
-                                     double f, double* Kd, SignMask sg) {
+                                     double f, double* Kd, double ysign) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
     StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
@@ -229,6 +229,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         const double yds = Xs[iyd];
         // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), with dm F_b and kappa F_b picked by
         // y''s sign (sign_pick)
+        const SignMask sg = sign_mask(ysign);
         const double fb = sign_pick(sg, q.fb);
         double pdv = 0.0;
         for (int i = 0; i < n; ++i) {
@@ -264,7 +265,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
 template <int N, int CASE, bool FAST = false>
 BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
                                 double* Kd) {
-    return derivative_with<N, CASE, FAST>(q, sh, Xs, f, Kd, sign_mask(Xs[sh.iyd()]));
+    return derivative_with<N, CASE, FAST>(q, sh, Xs, f, Kd, Xs[sh.iyd()]);
 }
 
 // A stage's energy flows with the RK4 weight w_s: friction, the non-reciprocal reaction's
