@@ -134,10 +134,6 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
                 np.asarray(bar.psi_absorber, float))
 
 
-#: The core's case of each bar (System.kind).
-CASES = {"solid": L.SOLID, "ball": L.BALL, "tmd": L.TMD, "locked": L.LOCKED}
-
-
 def packed(fl: Flow) -> np.ndarray:
     """The core's parameter vector of ``fl``'s equations: the slots its stage derivative
     and impact law read, from the flow's own values (so a flow a continuation changed,
@@ -145,7 +141,7 @@ def packed(fl: Flow) -> np.ndarray:
     n = fl.n
     p = L.empty_params()
     p[L.N_MODES] = n
-    p[L.CASE] = CASES[fl.kind]
+    p[L.CASE] = L.CASE_OF_KIND[fl.kind]
     p[L.FORCING] = L.HARMONIC
     p[L.F0] = fl.amplitude
     p[L.OMEGA] = fl.omega

@@ -70,7 +70,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
     p[L.REACTION] = 1.0
     d = system.damper
     kind = system.kind
-    p[L.CASE] = {"solid": L.SOLID, "ball": L.BALL, "tmd": L.TMD, "locked": L.LOCKED}[kind]
+    p[L.CASE] = L.CASE_OF_KIND[kind]
     if isinstance(d, ImpactDamper):
         m = d.mass_kg
         meff = 1.0 / (1.0 / m + float((bar.psi_damper**2 / bar.mass_kg).sum()))

@@ -17,6 +17,9 @@ globals().update(_SLOTS)
 NMAX: int = _SLOTS["NMAX"]
 P_SIZE: int = _SLOTS["P_SIZE"]
 MET_SIZE: int = _SLOTS["MET_SIZE"]
+#: the core's case (slot CASE) of each bar, by System.kind
+CASE_OF_KIND: dict = {"solid": _SLOTS["SOLID"], "ball": _SLOTS["BALL"], "tmd": _SLOTS["TMD"],
+                      "locked": _SLOTS["LOCKED"]}
 
 
 def empty_params() -> np.ndarray:
