@@ -1,10 +1,10 @@
 // boringbar.core.regime_matrix and impact_matrix: the equations of motion as matrices, for
 // the periodic orbits' shooting (src/boringbar/orbits/shooting.py).  Each is built from the
-// definitions RK4 steps with, so the dynamics are written once: the regime matrix from the
-// stage derivative (rk4.hpp's derivative_with) at the unit vectors of the augmented
-// state, which is exact because the equations are linear in it between impacts and with
-// the friction force held; the impact matrix from the wall's impact law (model.hpp's
-// impact_law and rk4.hpp's jump_modes) applied to a unit relative velocity.
+// definitions RK4 steps with, so shooting does not write the dynamics again: the regime
+// matrix from the stage derivative (rk4.hpp's derivative_with) at the unit vectors of the
+// augmented state, which is exact because the equations are linear in it between impacts
+// and with the friction force held; the impact matrix from the wall's impact law
+// (model.hpp's impact_law and rk4.hpp's jump_modes) applied to a unit relative velocity.
 //
 // The augmented state is z = [X, sin Omega t, cos Omega t, 1], X = [u_1..u_n, u_1'..u_n',
 // aux, aux'] as the integrators keep it (aux: the ball's y or the absorber's x_a; zero
@@ -67,9 +67,9 @@ Matrix regime_matrix(const P& p, double sdir) {
         column(j, 0.0, 0.0);  // no friction force: the linear part
     }
     for (int i = 0; i < nx; ++i) X[i] = 0.0;
-    column(nx, q.f0, 0.0);     // the force F0 sin(Omega t) at the tip
+    column(nx, q.f0, 0.0);      // the force F0 sin(Omega t) at the tip
     column(nx + 2, 0.0, sdir);  // F_b = -F_c sdir, held
-    a(nx, nx + 1) = q.om;                 // (sin Omega t)' = Omega cos Omega t
+    a(nx, nx + 1) = q.om;       // (sin Omega t)' = Omega cos Omega t
     a(nx + 1, nx) = -q.om;
     return A;
 }
