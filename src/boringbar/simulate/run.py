@@ -132,8 +132,6 @@ class State:
         check_finite("initial state t_s", self.t_s, "s")
 
 
-
-
 @dataclass(frozen=True, eq=False)
 class Run:
     """The result of :func:`simulate` (frozen): streamed metrics, events and (if asked)
