@@ -23,9 +23,10 @@ import xarray as xr
 from boringbar._validate import ParameterError, check_choice, check_finite, check_int
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation
+from boringbar.analysis.cut_continuation import CutContinuationOptions, cut_continuation
 from boringbar.execute import Execution
 from boringbar.model.dampers import Friction
-from boringbar.model.forcing import Harmonic
+from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.orbits.attractors import RETURN_TOL, periodic_attractors, return_distance, spread
 from boringbar.orbits.branch import (
@@ -352,14 +353,23 @@ def _tree(d: xr.Dataset) -> dict:
             "born": {"kind": str(d["born_kind"].values), "value": float(d["born_value"])}}
 
 
-def continuation(system: System, forcing: Harmonic | None = None, *,
-                 options: ContinuationOptions | None = None,
+def continuation(system: System, forcing: Harmonic | Regenerative | None = None, *,
+                 options: ContinuationOptions | CutContinuationOptions | None = None,
                  execution: Execution | None = None) -> xr.Dataset:
     """Continue a periodic orbit of ``system`` under ``forcing`` (its F0 and ratio override
     ``options``'): a Dataset of branches with their state, strobe tip displacement, RMS,
     Floquet multipliers, stability and events (kind, value); see
     :class:`ContinuationOptions` and docs/continuation.md.  ``execution``: the
-    contract's (one point: the branch)."""
+    contract's (one point: the branch).
+
+    Under a :class:`~boringbar.model.forcing.Regenerative` cut, the branch of chatter orbits
+    in depth from the Hopf point at its speed
+    (:func:`boringbar.analysis.cut_continuation.cut_continuation`, options
+    :class:`~boringbar.analysis.cut_continuation.CutContinuationOptions`)."""
+    if isinstance(forcing, Regenerative):
+        if options is not None and not isinstance(options, CutContinuationOptions):
+            raise ParameterError("a cut's continuation takes CutContinuationOptions")
+        return cut_continuation(system, forcing, options)
     options = options or ContinuationOptions()
     if forcing is not None:
         if forcing.ratio is None:

@@ -13,9 +13,11 @@ from boringbar.analysis.continuation import (
     continuation,
     summary,
 )
+from boringbar.cli.cut_orbits import cut_outcome
 from boringbar.cli.options import (
     Outcome,
     add_common,
+    add_cutting,
     check_gap,
     integration,
     one_bar,
@@ -41,8 +43,18 @@ def add_continue(sub) -> None:
                                    "Writes DIR/continuation.nc, .json and .png.")
     groups = add_common(p, many=False, initial=False)
     g = groups["run"]
-    g.add_argument("--parameter", choices=PARAMETERS, default="force-n",
-                   help="the continued parameter (default: force-n)")
+    g.add_argument("--parameter", choices=(*PARAMETERS, "depth-mm"), default=None,
+                   help="the continued parameter (default: force-n; with --cut, depth-mm)")
+    g.add_argument("--cut", action="store_true",
+                   help="the chatter orbits of a regenerative cut at --rpm instead: each "
+                        "bar's branch from its Hopf point in depth over --range A:B (mm), "
+                        "with folds, the tool leaving the cut, the ball's grazing, period "
+                        "doublings and tori; writes DIR/chatter_orbits.nc, .json and .png")
+    g.add_argument("--rpm", type=float, metavar="RPM", help="with --cut: the spindle speed")
+    g.add_argument("--lobe", type=int, metavar="J",
+                   help="with --cut: start from lobe J's Hopf point (default: the lowest "
+                        "at --rpm)")
+    add_cutting(p.add_argument_group("cut (with --cut)"))
     g.add_argument("--range", required=True, metavar="START:STOP",
                    help="START sets the parameter's first value, STOP the branch's end; "
                         "LO:START:HI maps [LO, HI] from an orbit at START inside it "
@@ -100,6 +112,14 @@ def _range(text: str) -> tuple[float, float, float | None]:
 
 
 def _cmd_continue(args) -> Outcome:
+    if args.cut:
+        return cut_outcome(args)
+    if args.parameter == "depth-mm":
+        raise ParameterError("--parameter depth-mm continues a cut's orbits: add --cut and "
+                             "--rpm N")
+    if args.rpm is not None or args.lobe is not None:
+        raise ParameterError("--rpm and --lobe describe a cut: add --cut")
+    args.parameter = args.parameter or "force-n"
     bar, friction_on = one_bar(args, "continue")
     start, stop, other_end = _range(args.range)
     force = 10.0 if args.force_n is None else args.force_n

@@ -249,7 +249,7 @@ def parse_numbers(text: str, name: str) -> list[float]:
     return values
 
 
-def _check_common(args, bars: list[str]) -> None:
+def check_common(args, bars: list[str]) -> None:
     resolve_files(args, bars)
     has_ball = "ball" in bars
     if not has_ball:
@@ -465,7 +465,7 @@ def one_bar(args, command: str) -> tuple[str, bool]:
     if len(bars) != 1:
         raise ParameterError(f"--bar = {','.join(bars)!r}: {command} runs one bar "
                              f"(one of {', '.join(BAR_KINDS)})")
-    _check_common(args, bars)
+    check_common(args, bars)
     friction = parse_words(args.friction, "--friction", ("on", "off"), ["on"])
     if len(friction) != 1:
         raise ParameterError(f"--friction = {args.friction!r} must be one of on, off")
@@ -507,7 +507,7 @@ def many_cases(args) -> tuple[list, list[str], list[float]]:
     """The cases of sweep and lobes from --bar, --gap-mm, --friction and the
     overrides: (cases, bars, gaps in m)."""
     bars = parse_words(args.bar, "--bar", BAR_KINDS, default_bars(args, many=True))
-    _check_common(args, bars)
+    check_common(args, bars)
     default = "0.5,0.1" if args.system is None else repr(gap_default_mm(args))
     gaps = [check_gap(g, args) for g in parse_numbers(args.gap_mm or default, "--gap-mm")]
     frictions = [w == "on" for w in parse_words(args.friction, "--friction", ("on", "off"),

@@ -1,0 +1,391 @@
+"""The branch of chatter orbits born at a Hopf point of the cut (docs/continuation.md).
+
+It starts where the steady cut loses stability: the Hopf point of the discretised
+delay equation (:mod:`boringbar.orbits.cut_orbits`), found from the frequency-domain
+limit of lobe j as a guess and solved at a vanishing amplitude on the cut linearised
+about h_m.  It is followed by pseudo-arclength continuation in the unknowns (nodes,
+T, depth), each scaled to its size, with the Floquet multipliers at every point.
+Along it are located, each by secant iterations on the arclength to 1e-10:
+
+- ``fold``: the depth turns back (the tangent's depth component changes sign);
+- ``grazing``: the tool first leaves the cut (the thinnest chip reaches 0), or, on a
+  ball bar, the ball first reaches a wall (no friction: the bar's excursion at the
+  cavity reaches half the clearance) or first slips (friction: the bar's acceleration
+  there reaches what friction can give the ball); a ball bar's branch stops there;
+- ``period-doubling`` and ``neimark-sacker``: a multiplier leaves the unit circle
+  through -1 or as a complex pair (located by linear interpolation of its modulus).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from boringbar.model.cutting import CuttingLaw
+from boringbar.model.forcing import Regenerative
+from boringbar.model.system import System
+from boringbar.orbits.cut_orbits import (
+    STEPS,
+    CutModel,
+    CutOrbitError,
+    Orbit,
+    amplitude,
+    cut_model,
+    jacobian,
+    min_chip,
+    multipliers,
+    newton,
+    node_forces,
+    static_state,
+)
+from boringbar.reference.linear import dynamic_stiffness
+from boringbar.reference.stability import limit_at_speeds, linear_host
+
+#: Arclength steps (scaled units: a tip amplitude of h_m is about one unit).
+FIRST_STEP, MIN_STEP, MAX_STEP = 0.02, 1e-5, 0.25
+#: The step grows by half after a corrector of at most this many (chord) iterations.
+GROW_ITERATIONS = 5
+#: The tangent's depth component must exceed this on both sides of a fold (a linear
+#: bar's branch stands vertical, its component round-off about 0).
+FOLD_NOISE = 1e-7
+#: Multipliers this close to the unit circle count as on it (the phase shift's, and a
+#: linear bar's neutral amplitude).
+NEUTRAL = 1e-6
+#: A branch ends at this many points, or this many h_m of tip amplitude.
+MAX_POINTS, MAX_AMPLITUDE = 200, 20.0
+#: Secant iterations locating an event, and their tolerance on the arclength.
+LOCATE_ITER, LOCATE_TOL = 30, 1e-10
+G = 9.80665
+
+
+@dataclass
+class CutPoint:
+    orbit: Orbit
+    amplitude: float  #: half the tip's peak-to-peak (m)
+    min_chip: float  #: thinnest chip before max(0, .) (m)
+    multipliers: np.ndarray
+    unstable: int  #: multipliers outside the unit circle (the neutral ones aside)
+    ball_margin: float  #: > 0 while the ball keeps off its walls (or sticks); nan: no ball
+
+
+@dataclass
+class CutEvent:
+    kind: str  #: hopf, fold, grazing, period-doubling, neimark-sacker
+    depth: float  #: m
+    amplitude: float  #: m
+    frequency_hz: float
+    detail: str = ""  #: for grazing: tool-leaves-cut, ball-wall or ball-slips
+    orbit: Orbit | None = field(default=None, repr=False)  #: the located orbit
+
+
+@dataclass
+class CutBranch:
+    lobe: int
+    points: list[CutPoint] = field(default_factory=list)
+    events: list[CutEvent] = field(default_factory=list)
+    stop: str = ""
+
+
+# --- the ball's boundary on a linear host ----------------------------------------------
+def ball_margin(system: System, model: CutModel, o: Orbit) -> float:
+    """How far the orbit is from the ball's leaving the linear host (nan without a ball):
+    no friction, half the clearance less the bar's excursion at the cavity (the ball
+    rests, centred); friction, mu g less the bar's acceleration there (the ball is
+    carried); each relative to its limit."""
+    if system.kind != "ball":
+        return math.nan
+    bar = system.bar
+    n = bar.n_modes
+    ball = system.damper
+    u = o.x[:, :n] @ bar.psi_damper
+    if ball.friction_force_n > 0:
+        acc = (o.x @ model.a.T + np.outer(node_forces(model, o), model.g))[:, len(model.g) // 2:]
+        peak = float(np.max(np.abs(acc[:, :n] @ bar.psi_damper)))
+        limit = ball.friction_force_n / ball.mass_kg
+    else:
+        peak = 0.5 * float(u.max() - u.min())
+        limit = 0.5 * ball.gap_m
+    return (limit - peak) / limit
+
+
+# --- the start: the Hopf point ----------------------------------------------------------
+def hopf_orbit(system: System, forcing: Regenerative, model: CutModel, lobe: int | None,
+               steps: int = STEPS) -> Orbit:
+    """The discretised Hopf point of lobe ``lobe`` (None: the lowest at this speed): an
+    orbit of the cut linearised about h_m at a vanishing amplitude, its depth and period
+    the Hopf point's; the frequency-domain limit is only the guess."""
+    kr = model.law.linear_coefficient_pa(model.feed)
+    lin = CutModel(**{**model.__dict__, "law": CuttingLaw.linear(kr)})
+    lobes = None if lobe is None else [lobe]
+    b, f = limit_at_speeds(system, forcing.rpm, kr, lobes=lobes, with_frequency=True)
+    if not np.isfinite(b):
+        raise CutOrbitError(f"no lobe {'' if lobe is None else lobe} reaches {forcing.rpm} rpm")
+    guess = _eigen_orbit(system, lin, float(b), float(f), steps, 1e-3 * model.feed)
+    return fixed_amplitude(lin, guess, 1e-3 * model.feed)[0]
+
+
+def _eigen_orbit(system, model: CutModel, b: float, f: float, m: int, amp: float) -> Orbit:
+    """The steady cut plus ``amp`` times the tip-normalised response at f (Hz)."""
+    bar, tmd, added = linear_host(system)
+    w = 2.0 * math.pi * f
+    z = dynamic_stiffness(bar, np.array([w]), tmd, float(added))[0]
+    p = np.zeros(len(z))
+    p[: bar.n_modes] = bar.psi_tip
+    u = np.linalg.solve(z, p)
+    u = u / (p @ u)
+    phi = np.concatenate([u, 1j * w * u])
+    t = np.arange(m) / (m * f)
+    x = static_state(model, b) + amp * np.real(phi[None, :] * np.exp(1j * w * t)[:, None])
+    return Orbit(x, 1.0 / f, b)
+
+
+def fixed_amplitude(model: CutModel, o: Orbit, amp: float) -> tuple[Orbit, int]:
+    """The orbit whose tip starts ``amp`` above its mean (W_0 - mean W = amp)."""
+    m, s = o.x.shape
+    row = np.zeros(m * s + 2)
+    row[: m * s] = np.tile(-model.c / m, m)
+    row[:s] += model.c
+
+    def extra(y):
+        w = y[: m * s].reshape(m, s) @ model.c
+        return w[0] - w.mean() - amp, row
+
+    return newton(model, o, extra)[:2]
+
+
+# --- pseudo-arclength --------------------------------------------------------------------
+@dataclass
+class Walk:
+    """What the walk along one branch carries."""
+
+    system: System
+    model: CutModel
+    scale: np.ndarray  #: the size of every unknown: a step of 1 moves the tip about h_m
+    shape: tuple
+    depth_range: tuple[float, float]
+
+
+def _scale(model: CutModel, hopf: Orbit) -> np.ndarray:
+    spread = np.max(np.abs(hopf.x - hopf.x.mean(axis=0)), axis=0)
+    spread = np.where(spread > 0, spread, np.max(spread)) / (1e-3 * model.feed) * model.feed
+    m = hopf.steps
+    return np.concatenate([np.tile(spread * math.sqrt(m), m), [hopf.period, hopf.depth]])
+
+
+def tangent(w: Walk, o: Orbit, previous: np.ndarray) -> np.ndarray:
+    """The unit tangent (scaled unknowns) at ``o``, on ``previous``'s side."""
+    jac = jacobian(w.model, o)
+    last = sp.csr_matrix((previous / w.scale)[None, :])
+    rhs = np.zeros(jac.shape[0] + 1)
+    rhs[-1] = 1.0
+    t = spla.spsolve(sp.vstack([jac, last], format="csc"), rhs) / w.scale
+    t /= np.linalg.norm(t)
+    return t if t @ previous >= 0 else -t
+
+
+def _unit(w: Walk, lu, previous: np.ndarray) -> np.ndarray:
+    """The tangent from the corrector's last matrix: [J; t] tau = (0, 1), with J taken
+    at the corrector's last refactorised iterate (the predictor, mostly): close enough
+    to predict the next point and to tell the side of a fold, which is then located with
+    the exact :func:`tangent`."""
+    rhs = np.zeros(lu.shape[0])
+    rhs[-1] = 1.0
+    t = lu.solve(rhs) / w.scale
+    t /= np.linalg.norm(t)
+    return t if t @ previous >= 0 else -t
+
+
+def corrected(w: Walk, y: np.ndarray, t: np.ndarray, ds: float):
+    """The orbit on the plane normal to ``t`` at ``ds`` from ``y`` (scaled units), the
+    corrector's iterations and its last factorisation (:func:`newton`)."""
+    pred = y + ds * w.scale * t
+    row = t / w.scale
+
+    def extra(yy):
+        return row @ (yy - pred), row
+
+    return newton(w.model, Orbit.of(pred, w.shape), extra, max_iter=8)
+
+
+def point(w: Walk, o: Orbit) -> CutPoint:
+    mu = multipliers(w.model, o)
+    unstable = int(np.sum(np.abs(nontrivial(mu)) > 1.0 + NEUTRAL))
+    return CutPoint(orbit=o, amplitude=amplitude(w.model, o), min_chip=min_chip(w.model, o),
+                    multipliers=mu, unstable=unstable,
+                    ball_margin=ball_margin(w.system, w.model, o))
+
+
+def nontrivial(mu: np.ndarray) -> np.ndarray:
+    """The multipliers less the phase shift's, the one nearest 1."""
+    return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+
+
+def trace(system: System, forcing: Regenerative, depth_range: tuple[float, float], *,
+          lobe: int | None = None, steps: int = STEPS,
+          max_points: int = MAX_POINTS) -> CutBranch:
+    """The branch of chatter orbits of ``system`` at ``forcing``'s speed born at the Hopf
+    point of ``lobe`` (None: the lowest), within ``depth_range`` (m)."""
+    model = cut_model(system, forcing)
+    hopf = hopf_orbit(system, forcing, model, lobe, steps)
+    br = CutBranch(lobe=-1 if lobe is None else lobe)
+    br.events.append(CutEvent("hopf", hopf.depth, 0.0, 1.0 / hopf.period))
+    if not depth_range[0] <= hopf.depth <= depth_range[1]:
+        br.stop = (f"the Hopf point, {hopf.depth * 1e3:.6g} mm, is outside the depth range "
+                   f"{depth_range[0] * 1e3:.6g}-{depth_range[1] * 1e3:.6g} mm")
+        return br
+    w = Walk(system, model, _scale(model, hopf), hopf.x.shape, depth_range)
+    base = Orbit(hopf.x - static_state(CutModel(**{**model.__dict__, "law": CuttingLaw.linear(
+        model.law.linear_coefficient_pa(model.feed))}), hopf.depth) + static_state(
+        model, hopf.depth), hopf.period, hopf.depth)
+    a, _ = fixed_amplitude(model, base, 1e-2 * model.feed)
+    b, _ = fixed_amplitude(model, a, 2e-2 * model.feed)
+    t = (b.unknowns() - a.unknowns()) / w.scale
+    t = tangent(w, a, t / np.linalg.norm(t))
+    first = point(w, a)
+    br.points.append(first)
+    if first.ball_margin < 0:  # the ball leaves its host between the Hopf point and here
+        br.events.append(_ball_from_hopf(w, a, first))
+        br.stop = _ball_stop(system)
+        return br
+    _walk(w, br, a, t, max_points)
+    return br
+
+
+def _ball_stop(system: System) -> str:
+    what = "slips" if system.damper.friction_force_n > 0 else "reaches a wall"
+    return (f"the ball {what} here and leaves the linear host; the branch beyond, with the "
+            "ball moving, is not followed")
+
+
+def _ball_from_hopf(w: Walk, a: Orbit, first: CutPoint) -> CutEvent:
+    """The ball's boundary between the Hopf point (margin 1 at amplitude 0) and the first
+    orbit: secant iterations in the amplitude, each orbit solved at a fixed amplitude."""
+    amp0, m0 = 0.0, 1.0
+    amp1, m1 = _start_amplitude(w, a), first.ball_margin
+    o = a
+    for _ in range(LOCATE_ITER):
+        amp = amp1 - m1 * (amp1 - amp0) / (m1 - m0)
+        o, _ = fixed_amplitude(w.model, o, amp)
+        m = ball_margin(w.system, w.model, o)
+        amp0, m0, amp1, m1 = amp1, m1, amp, m
+        if abs(amp1 - amp0) < LOCATE_TOL * abs(amp1) or m == 0.0:
+            break
+    detail = "ball-slips" if w.system.damper.friction_force_n > 0 else "ball-wall"
+    return CutEvent("grazing", o.depth, amplitude(w.model, o), 1.0 / o.period, detail)
+
+
+def _start_amplitude(w: Walk, o: Orbit) -> float:
+    """W_0 - mean W: the amplitude fixed_amplitude holds."""
+    tipw = o.x @ w.model.c
+    return float(tipw[0] - tipw.mean())
+
+
+def _walk(w: Walk, br: CutBranch, o: Orbit, t: np.ndarray, max_points: int) -> None:
+    ds = FIRST_STEP
+    while len(br.points) < max_points:
+        try:
+            nxt, its, lu = corrected(w, o.unknowns(), t, ds)
+        except CutOrbitError:
+            ds *= 0.5
+            if ds < MIN_STEP:
+                br.stop = "the step fell below its minimum (no orbit found ahead)"
+                return
+            continue
+        tn = _unit(w, lu, t)
+        pa, pb = br.points[-1], point(w, nxt)
+        known = len(br.events)
+        stop = _events(w, br, (o, t, pa), (nxt, tn, pb), ds)
+        # the located orbits join the branch, so that its curve passes through them
+        br.points.extend(point(w, e.orbit) for e in br.events[known:] if e.orbit is not None)
+        br.points.append(pb)
+        if stop:
+            br.stop = stop
+            return
+        stop = _outside(w, pb)
+        if stop:
+            br.stop = stop
+            return
+        o, t = nxt, tn
+        ds = min(ds * 1.5, MAX_STEP) if its <= GROW_ITERATIONS else ds
+    br.stop = f"{max_points} points"
+
+
+def _outside(w: Walk, p: CutPoint) -> str:
+    lo, hi = w.depth_range
+    if not lo <= p.orbit.depth <= hi:
+        return "the depth left its range"
+    if p.amplitude > MAX_AMPLITUDE * w.model.feed:
+        return f"the tip amplitude passed {MAX_AMPLITUDE:g} h_m"
+    return ""
+
+
+# --- events ----------------------------------------------------------------------------------
+def _events(w: Walk, br: CutBranch, a: tuple, b: tuple, ds: float) -> str:
+    """Locate what happened between points ``a`` and ``b`` (orbit, tangent, CutPoint);
+    a ball's leaving its linear host ends the branch: the stop's reason."""
+    (oa, ta, pa), (_, tb, pb) = a, b
+    col = -1  # depth
+    if ta[col] * tb[col] < 0 and min(abs(ta[col]), abs(tb[col])) > FOLD_NOISE:
+        br.events.append(_located(w, oa, ta, ds, "fold", "",
+                                  lambda o, t: t[col], ta[col], tb[col]))
+    if pa.min_chip * pb.min_chip < 0:
+        br.events.append(_located(w, oa, ta, ds, "grazing", "tool-leaves-cut",
+                                  lambda o, t: min_chip(w.model, o), pa.min_chip, pb.min_chip))
+    for ev in _crossings(pa, pb):
+        br.events.append(ev)
+    if pa.ball_margin * pb.ball_margin < 0:
+        ball = w.system.damper
+        detail = "ball-slips" if ball.friction_force_n > 0 else "ball-wall"
+        br.events.append(_located(w, oa, ta, ds, "grazing", detail,
+                                  lambda o, t: ball_margin(w.system, w.model, o),
+                                  pa.ball_margin, pb.ball_margin))
+        return _ball_stop(w.system)
+    return ""
+
+
+def _located(w: Walk, oa: Orbit, ta, ds: float, kind: str, detail: str, fn, fa: float,
+             fb: float) -> CutEvent:
+    """Illinois regula falsi on the arclength s in (0, ds) for fn(orbit, tangent) = 0."""
+    lo, hi = 0.0, ds
+    y = oa.unknowns()
+    o = oa
+    for _ in range(LOCATE_ITER):
+        s = hi - fb * (hi - lo) / (fb - fa)
+        o = corrected(w, y, ta, s)[0]
+        f = fn(o, tangent(w, o, ta))
+        if f * fb < 0:
+            lo, fa = hi, fb
+        else:
+            fa *= 0.5
+        hi, fb = s, f
+        if abs(hi - lo) < LOCATE_TOL * ds or f == 0.0:
+            break
+    return CutEvent(kind, o.depth, amplitude(w.model, o), 1.0 / o.period, detail, o)
+
+
+def _crossings(pa: CutPoint, pb: CutPoint) -> list[CutEvent]:
+    """Period doublings and Neimark-Sacker points between two points: a multiplier through
+    -1 or a complex pair through the unit circle (located by its modulus, linearly)."""
+    if pa.unstable == pb.unstable:
+        return []
+    more = pa if pa.unstable > pb.unstable else pb
+    mus = nontrivial(more.multipliers)
+    out = mus[np.abs(mus) > 1.0 + NEUTRAL]
+    mu = out[np.argmin(np.abs(out))]
+    if abs(mu.imag) > 1e-6 * abs(mu):
+        kind = "neimark-sacker"
+    elif mu.real < 0:
+        kind = "period-doubling"
+    else:
+        return []  # through +1: a fold, located from the tangent
+    ra = np.min(np.abs(np.abs(nontrivial(pa.multipliers)) - 1.0))
+    rb = np.min(np.abs(np.abs(nontrivial(pb.multipliers)) - 1.0))
+    f = ra / (ra + rb) if ra + rb > 0 else 0.5
+    at = [float(x + f * (y - x)) for x, y in ((pa.orbit.depth, pb.orbit.depth),
+                                               (pa.amplitude, pb.amplitude),
+                                               (1 / pa.orbit.period, 1 / pb.orbit.period))]
+    return [CutEvent(kind, *at)]

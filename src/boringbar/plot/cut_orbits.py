@@ -1,0 +1,87 @@
+"""The chatter orbit map: amplitude against depth of cut at one speed, each bar's branch
+from its Hopf point (the edge of the package)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from boringbar.plot.style import (
+    BAR_STYLE,
+    COLUMN_WIDTH_IN,
+    OKABE_ITO,
+    legend_below,
+    set_title,
+)
+
+#: Marker of each event on the map.
+CUT_EVENT_MARKERS = {"hopf": ("o", "Hopf point"), "fold": ("s", "fold"),
+                     "tool-leaves-cut": ("v", "tool leaves the cut"),
+                     "ball-wall": ("*", "ball reaches a wall"),
+                     "ball-slips": ("P", "ball starts to slip"),
+                     "period-doubling": ("D", "period doubling"),
+                     "neimark-sacker": ("X", "Neimark-Sacker (torus)")}
+
+
+def plot_cut_orbits(ds, *, fig=None) -> Figure:
+    """The map of :func:`~boringbar.analysis.cut_continuation.cut_continuation`: half the
+    tip's peak-to-peak (um) against depth (mm), a bar a colour, stable orbits solid and
+    unstable dashed, the steady cut along the axis (stable below its Hopf point), events
+    marked; where a branch folds back below its Hopf point the band between is shaded:
+    there a knock can start chatter below the linear limit."""
+    if fig is None:
+        fig = Figure(figsize=(COLUMN_WIDTH_IN, 4.6), layout="constrained")
+    ax = fig.subplots()
+    for i, name in enumerate(ds["case"].values):
+        d = ds.isel(case=i)
+        style = BAR_STYLE.get(str(d["kind"].values), BAR_STYLE["solid"])
+        _branch(ax, d, style["color"], f"{name}")
+    ax.set_xlabel("depth of cut b (mm)")
+    ax.set_ylabel("chatter amplitude, half the tip's peak-to-peak (\u00b5m)")
+    ax.set_ylim(bottom=0.0)
+    ax.grid(alpha=0.3)
+    ax.plot([], [], color="0.3", ls="-", label="stable")
+    ax.plot([], [], color="0.3", ls="--", label="unstable")
+    legend_below(fig, [ax], ncol=4)
+    config = json.loads(ds.attrs.get("config", "{}"))
+    law = config.get("forcing", {}).get("law", {})
+    set_title(fig, f"chatter orbits at {float(ds.attrs['rpm']):g} rpm", ds.attrs,
+              f"{law.get('kind', 'linear')} cutting law; orbits continued in depth from each "
+              "bar's Hopf point")
+    return fig
+
+
+def _branch(ax, d, color: str, label: str) -> None:
+    b, a = d["depth_m"].values * 1e3, d["amplitude_m"].values * 1e6
+    ok = np.isfinite(b)
+    stable = d["stable"].values.astype(bool)
+    hopf = [float(v) * 1e3 for k, v in zip(d["event_kind"].values, d["event_depth_m"].values,
+                                            strict=True) if str(k) == "hopf"]
+    if hopf:  # from the Hopf point: the steady cut's amplitude 0, then the branch
+        b, a = np.concatenate([[hopf[0]], b[ok]]), np.concatenate([[0.0], a[ok]])
+        stable = np.concatenate([[stable[ok][0] if ok.any() else False], stable[ok]])
+        ax.plot([0.0, hopf[0]], [0.0, 0.0], color=color, lw=3, alpha=0.5, solid_capstyle="butt")
+    else:
+        b, a, stable = b[ok], a[ok], stable[ok]
+    first = True
+    for lo in range(len(b) - 1):
+        ls = "-" if stable[lo + 1] else "--"
+        ax.plot(b[lo:lo + 2], a[lo:lo + 2], color=color, ls=ls, lw=1.8,
+                label=label if first else None)
+        first = False
+    folds = [float(v) * 1e3 for k, v in zip(d["event_kind"].values, d["event_depth_m"].values,
+                                             strict=True) if str(k) == "fold"]
+    if hopf and folds and min(folds) < hopf[0]:
+        ax.axvspan(min(folds), hopf[0], color=color, alpha=0.12, lw=0,
+                   label="a knock can start chatter (fold to Hopf)")
+    for k, t, v, amp in zip(d["event_kind"].values, d["event_detail"].values,
+                            d["event_depth_m"].values, d["event_amplitude_m"].values,
+                            strict=True):
+        key = str(t) or str(k)
+        if key not in CUT_EVENT_MARKERS or not np.isfinite(v):
+            continue
+        marker, name = CUT_EVENT_MARKERS[key]
+        ax.plot([v * 1e3], [amp * 1e6], ls="none", marker=marker, ms=8, mfc="none", mew=1.4,
+                color=OKABE_ITO["black"], label=name, zorder=5)

@@ -1,0 +1,157 @@
+"""Chatter orbits of the regenerative cut (boringbar.orbits.cut_orbits, cut_branch):
+checked against truths that are not the code's own.
+
+- The Hopf point and its frequency against the frequency-domain characteristic equation
+  (reference.stability), to 1e-6, at several speeds, for the solid and the TMD bar;
+  the discretisation's error falls at fourth order.
+- A linear cutting law's branch stands vertical at the Hopf depth until the tool leaves
+  the cut, at the closed-form amplitude h_m / (2 |sin(w tau / 2)|).
+- With one revolution of memory, the branch beyond follows the describing function of
+  the clipped chip: b(A) = b_lim / N(a), a = 2 A |sin(w tau / 2)|,
+  N(a) = (pi / 2 + beta + sin(beta) cos(beta)) / pi, beta = asin(h_m / a).
+- The Jacobian against central differences; a stable orbit's amplitude against a
+  simulated cut (the compiled RK4 integrator) that settles on it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import boringbar as bb
+from boringbar.orbits import cut_branch as cb
+from boringbar.orbits import cut_orbits as co
+from boringbar.reference.stability import limit_at_speeds
+
+CARBIDE = "examples/systems/carbide_ld10_tungsten.toml"
+
+
+@pytest.fixture(scope="module")
+def bars():
+    v = bb.variants(bb.load_system(CARBIDE))
+    return {"solid": v["solid"], "ball": v["ball"], "tmd": bb.make_system("tmd", "physical"),
+            "ball-free": bb.make_system("ball", "physical", gap_m=0.1e-3, friction=False)}
+
+
+def _hopf(system, rpm, steps=co.STEPS, **cut):
+    forcing = bb.Regenerative(depth_m=1e-5, rpm=rpm, **cut)
+    model = co.cut_model(system, forcing)
+    return model, cb.hopf_orbit(system, forcing, model, None, steps)
+
+
+@pytest.mark.parametrize("bar, rpm", [("solid", 700.0), ("solid", 1200.0), ("solid", 4321.0),
+                                      ("tmd", 900.0), ("tmd", 2600.0)])
+def test_the_hopf_point_meets_the_characteristic_equation(bars, bar, rpm):
+    system = bars[bar]
+    model, o = _hopf(system, rpm)
+    b, f = limit_at_speeds(system, rpm, model.law.kr_pa, with_frequency=True)
+    assert o.depth == pytest.approx(float(b), rel=1e-6)
+    assert 1.0 / o.period == pytest.approx(float(f), rel=1e-6)
+
+
+def test_the_hopf_point_converges_at_fourth_order(bars):
+    system, rpm = bars["solid"], 1200.0
+    b, _ = limit_at_speeds(system, rpm, 850e6, with_frequency=True)
+    err = [abs(_hopf(system, rpm, m)[1].depth / float(b) - 1.0) for m in (80, 160, 320)]
+    orders = np.log2(np.array(err[:-1]) / np.array(err[1:]))
+    assert np.all((orders > 3.7) & (orders < 4.5)), (err, orders)
+
+
+def test_the_jacobian_matches_central_differences(bars):
+    model, o = _hopf(bars["tmd"], 1500.0, steps=60)
+    o = co.Orbit(o.x + 1e-7 * np.sin(np.arange(o.x.size)).reshape(o.x.shape), o.period, o.depth)
+    jac = co.jacobian(model, o).toarray()
+    y = o.unknowns()
+    for col in (0, 3, 7, y.size // 2 + 1, y.size - 3, y.size - 2, y.size - 1):
+        h = 1e-6 * max(abs(y[col]), 1e-9)
+        up, down = y.copy(), y.copy()
+        up[col] += h
+        down[col] -= h
+        fd = (co.residual(model, co.Orbit.of(up, o.x.shape))
+              - co.residual(model, co.Orbit.of(down, o.x.shape))) / (2 * h)
+        # the nodes' columns are exact (forward mode); T's and b's are differences too
+        tol = 1e-6 if col < y.size - 2 else 1e-4
+        assert np.max(np.abs(fd - jac[:, col])) <= tol * np.max(np.abs(fd)), col
+
+
+@pytest.fixture(scope="module")
+def linear_branch(bars):
+    forcing = bb.Regenerative(depth_m=1e-5, rpm=1200.0)
+    return cb.trace(bars["solid"], forcing, (0.0, 1e-3), max_points=16)
+
+
+def test_a_linear_law_branch_stands_vertical_until_the_tool_leaves_the_cut(linear_branch):
+    hopf = linear_branch.events[0]
+    leave = [e for e in linear_branch.events if e.detail == "tool-leaves-cut"]
+    assert hopf.kind == "hopf" and len(leave) == 1
+    in_cut = [p for p in linear_branch.points if p.min_chip > 1e-9]  # the grazing one aside
+    assert len(in_cut) >= 5
+    for p in in_cut:
+        assert p.orbit.depth == pytest.approx(hopf.depth, rel=1e-9)
+        assert np.abs(cb.nontrivial(p.multipliers)).max() == pytest.approx(1.0, abs=1e-6)
+    w = 2.0 * math.pi * leave[0].frequency_hz
+    closed = 0.1e-3 / (2.0 * abs(math.sin(w * 60.0 / 1200.0 / 2.0)))
+    assert leave[0].amplitude == pytest.approx(closed, rel=1e-6)
+    assert leave[0].depth == pytest.approx(hopf.depth, rel=1e-9)
+    assert not [e for e in linear_branch.events if e.kind == "fold"]
+
+
+def test_beyond_leaving_the_branch_follows_the_clipped_chip_describing_function(bars):
+    forcing = bb.Regenerative(depth_m=1e-5, rpm=1200.0, revolutions=1)
+    br = cb.trace(bars["solid"], forcing, (0.0, 1e-3), max_points=30)
+    hopf = br.events[0].depth
+    leave = next(e for e in br.events if e.detail == "tool-leaves-cut")
+    half_sin = 0.1e-3 / (2.0 * leave.amplitude)
+    out = [p for p in br.points if p.min_chip < 0]
+    assert len(out) >= 10 and out[-1].amplitude > 2 * leave.amplitude
+    for p in out:
+        beta = math.asin(0.1e-3 / (2.0 * p.amplitude * half_sin))
+        gain = (math.pi / 2 + beta + math.sin(beta) * math.cos(beta)) / math.pi
+        assert p.orbit.depth == pytest.approx(hopf / gain, rel=1e-3)
+        assert p.unstable == 0  # the clipped chip bounds the chatter: stable orbits
+
+
+def test_a_stable_orbit_is_where_a_simulated_cut_settles(bars):
+    """The compiled RK4 cut, knocked from the steady cut to about the orbit's amplitude,
+    settles on the branch's amplitude at that depth."""
+    forcing = bb.Regenerative(depth_m=1e-5, rpm=1200.0, revolutions=1)
+    br = cb.trace(bars["solid"], forcing, (0.0, 1e-3), max_points=30)
+    p = br.points[-8]
+    assert p.unstable == 0 and p.min_chip < 0
+    cut = bb.Regenerative(depth_m=p.orbit.depth, rpm=1200.0, revolutions=1, start="static")
+    # the orbit's slowest multiplier is about 0.995 a period: 8 s (2000 periods) settle it
+    run = bb.simulate(bars["solid"], cut, duration_s=8.0, dt_s=2e-6,
+                      initial=bb.Initial(tip_displacement_m=p.amplitude), record_every=5)
+    w = run.to_xarray()["tip_displacement_m"].values
+    tail = w[-len(w) // 16:]
+    assert 0.5 * (tail.max() - tail.min()) == pytest.approx(p.amplitude, rel=2e-3)
+
+
+def test_a_friction_ball_leaves_its_host_where_it_first_slips(bars):
+    forcing = bb.Regenerative(depth_m=1e-5, rpm=1200.0)
+    br = cb.trace(bars["ball"], forcing, (0.0, 1e-3), max_points=10)
+    slip = [e for e in br.events if e.detail == "ball-slips"]
+    assert len(slip) == 1 and "slips" in br.stop
+    ball, bar = bars["ball"].damper, bars["ball"].bar
+    # in the cut the orbit is a harmonic: the cavity's acceleration peaks at w^2 times its
+    # amplitude, which is the tip's times |psi_d . u| / |psi_tip . u| of the mode shape
+    model = co.cut_model(bars["ball"], forcing)
+    o, _ = cb.fixed_amplitude(model, cb.hopf_orbit(bars["ball"], forcing, model, None),
+                              slip[0].amplitude)
+    w = 2 * math.pi * slip[0].frequency_hz
+    n = bar.n_modes
+    u = o.x[:, :n] @ bar.psi_damper
+    assert 0.5 * (u.max() - u.min()) * w**2 == pytest.approx(
+        ball.friction_force_n / ball.mass_kg, rel=1e-3)
+
+
+def test_a_frictionless_ball_branch_ends_where_the_ball_reaches_a_wall(bars):
+    system = bars["ball-free"]
+    br = cb.trace(system, bb.Regenerative(depth_m=1e-5, rpm=1500.0), (0.0, 1e-3),
+                  max_points=40)
+    wall = [e for e in br.events if e.detail == "ball-wall"]
+    assert len(wall) == 1 and "wall" in br.stop
+    last = br.points[-1]
+    assert abs(last.ball_margin) < 0.2  # the last point is the step past the wall
