@@ -63,6 +63,17 @@ BAD_OPTIONS = {
         "--start": ("moving",),
         "--duration-s": (*NOT_FINITE, "0", "1e12"),
     }),
+    "continue-cut": (["continue", "--cut", "--bar", "solid", "--rpm", "1200",
+                      "--parameter", "depth-mm", "--range", "0:0.1"], {
+        "--rpm": (*NOT_FINITE, "0", "-1", "1e-3", "1e9", "abc"),
+        "--range": ("nan:1", "1:0", "0.1:0.1", "-1:1", "0:inf", "0:2000", "a", "1", "0:1:2"),
+        "--lobe": ("-1", "201", "abc", "1.5"),
+        "--max-points": ("0", "1", "-1", "abc", "100000"),
+        "--kr-mpa": (*NOT_FINITE, "0", "-1", "1e300"),
+        "--feed-mm": (*NOT_FINITE, "0", "-1", "1e300"),
+        "--revolutions": ("0", "-1", "51", "1.5", "abc"),
+        "--parameter": ("force-n", "ratio"),
+    }),
     "sweep": (["sweep"], {
         "--ratios": (*NOT_FINITE, "0", "-1", "1e300", "0:inf:1", "0:1:1e-300", "1:0:0.1",
                      "nan:1:0.1", "a,b", "1:2"),

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, check_int
 from boringbar.analysis.cut_continuation import (
     CutContinuationOptions,
     cut_continuation,
@@ -23,6 +23,7 @@ from boringbar.cli.options import (
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import BAR_KINDS, make_system
+from boringbar.orbits.cut_branch import MAX_POINTS
 from boringbar.plot.cut_orbits import plot_cut_orbits
 
 
@@ -65,12 +66,16 @@ def cut_outcome(args) -> Outcome:
         raise ParameterError("--cut needs --rpm N, the spindle speed (rev/min, > 0)")
     rpm = check_rpm(args.rpm, args)
     depth_range = cut_range(args.range)
+    if args.lobe is not None:
+        check_int("--lobe", args.lobe, 0, 200)
+    if args.max_points is not None:
+        check_int("--max-points", args.max_points, 2, 10_000)
     cut = cut_options(args)
     forcing = Regenerative(depth_m=depth_range[1], rpm=rpm, kr_pa=cut.get("kr_pa", 850e6),
                            workpiece=cut.get("workpiece"), feed_m=cut["feed_m"],
                            revolutions=cut["revolutions"])
     options = CutContinuationOptions(depth_range_m=depth_range, lobe=args.lobe,
-                                     max_points=args.max_points or 200)
+                                     max_points=args.max_points or MAX_POINTS)
     ds = cut_continuation(cut_systems(args), forcing, options)
     out = cut_summary(ds)
     files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/chatter_orbits.nc")),

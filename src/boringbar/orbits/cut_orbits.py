@@ -389,16 +389,10 @@ def multipliers(model: CutModel, o: Orbit, count: int = MULTIPLIERS) -> np.ndarr
     _, d = step(model, o.depth, o.x, delayed_w(model, o.x, dl), o.period / m, tangent=True)
     used = _used_delays(d, s, model.revolutions)
     depth = int(-dl.base[:, :, used].min()) + 1  # history nodes before node 0
-    op = _monodromy(model, d, dl, m, s, depth, used)
+    op = _monodromy(model, d, dl, s, depth, used)
     q = max(1, -(-depth // m))
-
-    def periods(v):
-        for _ in range(q):
-            v = op.matvec(v)
-        return v
-
+    opq = _monodromy(model, d, dl, s, depth, used, q) if q > 1 else op
     k = min(count, op.shape[0] - 2)
-    opq = spla.LinearOperator(op.shape, matvec=periods, dtype=np.float64)
     nu, vec = spla.eigs(opq, k=k, which="LM", tol=EIG_TOL, ncv=min(max(2 * k + 1, 30),
                         op.shape[0] - 1), v0=np.ones(op.shape[0]))
     phase = np.array([np.vdot(v, op.matvec(v.real) + 1j * op.matvec(v.imag)) / np.vdot(v, v)
@@ -413,12 +407,19 @@ def _used_delays(d: np.ndarray, s: int, n: int) -> np.ndarray:
     return np.flatnonzero(moves) if moves.any() else np.array([0])
 
 
-def _monodromy(model, d, dl: Delays, m: int, s: int, depth: int, used):
-    """One period of the linearised discretised map on the history.
+def _monodromy(model, d, dl: Delays, s: int, depth: int, used, periods: int = 1):
+    """``periods`` periods of the linearised discretised map on the history.
 
     The history is node 0's state and, for the older nodes -depth..-1, only their W and
     W' (all that a delay reads of them): the map's nonzero spectrum is the full one's.
-    The m new nodes solve a sparse lower-triangular system driven by the history."""
+    The new nodes solve one sparse unit lower-triangular system driven by the history
+    (factorised without pivoting: no fill); the orbit is periodic, so period p's steps
+    are period 0's, their delays p m nodes later."""
+    m = len(d) * periods
+    d = np.tile(d, (periods, 1, 1))
+    shift = (np.arange(m) // len(dl.base) * len(dl.base))[:, None, None]
+    dl = Delays(j=dl.j, weights=np.tile(dl.weights, (periods, 1, 1, 1)),
+                base=np.tile(dl.base, (periods, 1, 1)) + shift)
     old = 2 * depth  # (W, W') of nodes -depth..-1, then node 0's state, then new nodes
     size = old + s
     rows, cols, vals = [], [], []
@@ -455,7 +456,8 @@ def _monodromy(model, d, dl: Delays, m: int, s: int, depth: int, used):
     rows, cols, vals = (np.concatenate(a) for a in (rows, cols, vals))
     frame = sp.csc_matrix((vals, (rows, cols)), shape=(m * s, size + m * s))
     hist = frame[:, :size]
-    lu = spla.splu((sp.eye(m * s, format="csc") - frame[:, size:]).tocsc())
+    lu = spla.splu((sp.eye(m * s, format="csc") - frame[:, size:]).tocsc(),
+                   permc_spec="NATURAL", diag_pivot_thresh=0.0)
     wv = np.stack([model.c, model.cv])
 
     def apply(v):
