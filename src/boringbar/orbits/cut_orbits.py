@@ -381,7 +381,8 @@ def multipliers(model: CutModel, o: Orbit, count: int = MULTIPLIERS) -> np.ndarr
     A delay equation's multipliers over one short period crowd near the unit circle
     (every characteristic root with a small negative real part), which ARPACK separates
     slowly; over the q periods that renew the whole history they spread to their q-th
-    powers.  So the eigenvalues nu of the q-period map are found, each multiplier is
+    powers.  So the eigenvalues nu of the q-period map (the one-period map applied q
+    times) are found, each multiplier is
     |nu|^(1/q) in modulus, and its phase comes from the one-period map's Rayleigh
     quotient on nu's eigenvector."""
     m, s = o.x.shape
@@ -391,7 +392,13 @@ def multipliers(model: CutModel, o: Orbit, count: int = MULTIPLIERS) -> np.ndarr
     depth = int(-dl.base[:, :, used].min()) + 1  # history nodes before node 0
     op = _monodromy(model, d, dl, s, depth, used)
     q = max(1, -(-depth // m))
-    opq = _monodromy(model, d, dl, s, depth, used, q) if q > 1 else op
+
+    def periods(v):
+        for _ in range(q):
+            v = op.matvec(v)
+        return v
+
+    opq = spla.LinearOperator(op.shape, matvec=periods, dtype=np.float64)
     k = min(count, op.shape[0] - 2)
     nu, vec = spla.eigs(opq, k=k, which="LM", tol=EIG_TOL, ncv=min(max(2 * k + 1, 30),
                         op.shape[0] - 1), v0=np.ones(op.shape[0]))
@@ -407,19 +414,14 @@ def _used_delays(d: np.ndarray, s: int, n: int) -> np.ndarray:
     return np.flatnonzero(moves) if moves.any() else np.array([0])
 
 
-def _monodromy(model, d, dl: Delays, s: int, depth: int, used, periods: int = 1):
-    """``periods`` periods of the linearised discretised map on the history.
+def _monodromy(model, d, dl: Delays, s: int, depth: int, used):
+    """One period of the linearised discretised map on the history.
 
     The history is node 0's state and, for the older nodes -depth..-1, only their W and
     W' (all that a delay reads of them): the map's nonzero spectrum is the full one's.
-    The new nodes solve one sparse unit lower-triangular system driven by the history
-    (factorised without pivoting: no fill); the orbit is periodic, so period p's steps
-    are period 0's, their delays p m nodes later."""
-    m = len(d) * periods
-    d = np.tile(d, (periods, 1, 1))
-    shift = (np.arange(m) // len(dl.base) * len(dl.base))[:, None, None]
-    dl = Delays(j=dl.j, weights=np.tile(dl.weights, (periods, 1, 1, 1)),
-                base=np.tile(dl.base, (periods, 1, 1)) + shift)
+    The m new nodes solve a sparse unit lower-triangular system driven by the history
+    (factorised without pivoting: no fill)."""
+    m = len(d)
     old = 2 * depth  # (W, W') of nodes -depth..-1, then node 0's state, then new nodes
     size = old + s
     rows, cols, vals = [], [], []
