@@ -15,12 +15,14 @@ checked against truths that are not the code's own.
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 
 import boringbar as bb
+from boringbar.cli.main import main
 from boringbar.orbits import cut_branch as cb
 from boringbar.orbits import cut_orbits as co
 from boringbar.reference.stability import limit_at_speeds
@@ -155,3 +157,23 @@ def test_a_frictionless_ball_branch_ends_where_the_ball_reaches_a_wall(bars):
     assert len(wall) == 1 and "wall" in br.stop
     last = br.points[-1]
     assert abs(last.ball_margin) < 0.2  # the last point is the step past the wall
+
+
+def test_continue_cut_writes_the_map_of_each_bar(tmp_path, capsys):
+    """The command line end to end on the published bar: the files, and each bar's Hopf
+    point in the JSON (mm) at its frequency-domain limit."""
+    out = tmp_path / "map"
+    rc = main(["continue", "--cut", "--rpm", "1500", "--parameter", "depth-mm", "--range",
+               "0:1", "--bar", "solid", "--bar", "tmd", "--max-points", "6", "--json",
+               "--out", str(out)])
+    assert rc == 0
+    summary = json.loads(capsys.readouterr().out)
+    for name in ("chatter_orbits.nc", "chatter_orbits.json", "chatter_orbits.png"):
+        assert (out / name).stat().st_size > 0
+    assert [c["case"] for c in summary["cases"]] == ["solid", "tmd"]
+    for c in summary["cases"]:
+        hopf = c["events"][0]
+        assert hopf["kind"] == "hopf" and c["points"] >= 6
+        b = limit_at_speeds(bb.make_system(c["case"], "physical"), 1500.0, 850e6)
+        assert hopf["depth_mm"] == pytest.approx(float(b) * 1e3, rel=1e-6)
+    assert "RK4" in summary["method"]
