@@ -1,5 +1,5 @@
-// boringbar.core.run_exact: the exact event-driven integrator's entry point (numba:
-// kernels/exact/driver.py, run_exact and its kernels).  Everything from Python is checked
+// boringbar.core.run_exact: the exact event-driven integrator's entry point (the harmonic
+// and the cut kernel, exact/driver.hpp).  Everything from Python is checked
 // here, before the GIL is released: every array's dtype, shape, contiguity and (outputs)
 // writability, every scalar's finiteness and range, and what the kernel indexes with (the
 // case, the mode count, prepare's regime count and step patterns, the record counters), so

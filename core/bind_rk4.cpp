@@ -4,8 +4,8 @@
 // (float64), shape, C-contiguity and (for outputs) writability, and each scalar's range,
 // including the slots of p and met the kernel uses to index or to choose its path.
 // A bad one is a ValueError that names it and says what is allowed; past these checks
-// every write of the kernel stays inside its array (the record counts are tested against
-// the arrays' lengths, as in the numba kernels).  The integration runs without the GIL.
+// every write of the kernel stays inside its array (the kernel tests the record counts
+// against the arrays' lengths before writing a row).  The integration runs without the GIL.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
@@ -59,7 +59,7 @@ double real(nb::handle h, const char* name) {
 std::int64_t integer(nb::handle h, const char* name) {
     std::int64_t v;
     if (!nb::isinstance<nb::float_>(h) && nb::try_cast(h, v, true)) return v;
-    // an integral float (numba's wrapper took int() of these arguments)
+    // an integral float: a count computed in floating point (2e4, n / 2.0) is accepted
     double d;
     if (nb::isinstance<nb::float_>(h) && nb::try_cast(h, d, false) && std::isfinite(d) &&
         d == std::floor(d) && std::fabs(d) < 9.0e18)

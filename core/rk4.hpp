@@ -498,8 +498,8 @@ BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bo
     return a;
 }
 
-// numba converts math.ceil's result to int64 before multiplying (x86: out of range or
-// NaN converts to INT64_MIN); here the same value, without undefined behaviour.
+// ceil(v) as a whole number of periods in int64's range: out of range or NaN gives -2^63
+// (what x86's conversion gives), a defined value where a cast would be undefined.
 inline double ceil_int64(double v) {
     const double c = std::ceil(v);
     const double lim = 9223372036854775808.0;  // 2^63
@@ -562,7 +562,7 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double*
 
 // ---- the kernels (rk4_run.hpp, rk4_batch.cpp) -----------------------------------------
 
-// One run's arguments, as numba's run_rk4 takes them (checked by bind_rk4.cpp).
+// One run's arguments (checked by bind_rk4.cpp).
 struct RunArgs {
     const double* p;
     Vec x;
@@ -577,7 +577,7 @@ struct RunArgs {
     Mat modes;
 };
 
-// A batch's arguments, as numba's run_rk4_batch takes them.
+// A batch's arguments (checked by bind_rk4.cpp).
 struct BatchArgs {
     Mat P;  // (nb, P_SIZE)
     Mat x;  // (nb, 2n + 2)

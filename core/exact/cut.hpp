@@ -1,9 +1,9 @@
-// A regenerative cut's delay history: the history step,
-// the knots of W, the surface as one cubic per segment and the Gauss-Legendre flows, ported
-// operation for operation.  cut_tables (run once per run, at the Python level) is ported to
-// Python, in boringbar/simulate/regimes.py, with history_step.
+// A regenerative cut's delay history: the history step, the knots of W, the surface as one
+// cubic per segment and the Gauss-Legendre flows.  cut_tables (run once per run) is
+// computed in Python, in boringbar/simulate/regimes.py, with history_step (the same
+// operations as history_step here, so both sides take the same H).
 //
-// Signatures (the Python names and parameter order):
+// Signatures:
 //   double history_step(double tau, double dt);
 //   std::tuple<double, double, double, double> hermite_at(double t0, double p0, double d0,
 //                  double t1, double p1, double d1, double x0, bool cubic);
@@ -18,10 +18,10 @@
 //                   Mat sc, idx nrev, idx nr_eff, double feed, double w_before,
 //                   double tau_d, Segment& seg, idx j_now, idx m_rev, bool cubic);
 //
-// The knot store kn grows (numba: add_knot returns a new array twice as long): here it is a
-// Knots, which owns its rows and grows in place; add_knot returns it by reference, so the
-// Python line ``kn, nk = add_knot(kn, nk, ...)`` reads ``std::tie(kn, nk) = add_knot(kn,
-// nk, ...)`` (a self-assignment of kn, harmless) or ``nk = std::get<1>(add_knot(...))``.
+// The knot store kn grows: it is a Knots, which owns its rows and doubles them in place
+// when full; add_knot returns it by reference with the new count, read as
+// ``std::tie(kn, nk) = add_knot(kn, nk, ...)`` (a self-assignment of kn, harmless) or
+// ``nk = std::get<1>(add_knot(...))``.
 // A Knots converts to a Mat view (kn.n0 rows, 5 columns), valid until it next grows.
 #pragma once
 
@@ -63,7 +63,8 @@ inline std::tuple<double, double, double, double> hermite_at(double t0, double p
             c2 + 3.0 * c3 * x0, c3};
 }
 
-// Gauss-Legendre nodes and weights on [0, 1], 4 points (the same expressions as cut.py)
+// Gauss-Legendre nodes and weights on [0, 1], 4 points (the nodes as 0.5 -+ the nodes on
+// [-1, 1] halved, each one rounding)
 constexpr double GL_X[4] = {0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816,
                             0.5 + 0.16999052179242816, 0.5 + 0.4305681557970263};
 constexpr double GL_W[4] = {0.17392742256872692, 0.3260725774312731, 0.3260725774312731,
@@ -110,7 +111,7 @@ inline double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, C
 struct Knots {
     static constexpr idx NCOL = 5;
     std::vector<double> buf;
-    idx n0 = 0;  // rows (numba: kn.shape[0])
+    idx n0 = 0;  // rows allocated
     idx n1 = NCOL;
 
     Knots() = default;
@@ -121,7 +122,7 @@ struct Knots {
     Mat view() { return {buf.data(), n0, NCOL}; }
     operator Mat() { return view(); }
 
-    // numba: big = np.zeros((2 n0, 5)); big[:nk] = kn[:nk]
+    // twice the rows, the first nk kept, the rest zero
     void grow(idx nk) {
         std::vector<double> big(static_cast<size_t>(2 * n0 * NCOL), 0.0);
         std::copy(buf.begin(), buf.begin() + nk * NCOL, big.begin());

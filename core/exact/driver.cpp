@@ -84,7 +84,8 @@ CutConsts cut_consts(Vec p, double t0, double t_end, double hist_step, bool rege
     cq.tau = tau_d;
     cq.feed = p[L::FEED];
     cq.w0 = p[L::HIST_W0];
-    // Python's round: half to even, as rint in the default rounding mode
+    // nodes a revolution: tau / H to the nearest whole number, ties to even (nearbyint in the
+    // default rounding mode)
     cq.mrev = regen ? double(idx(std::nearbyint(tau_d / hist_step))) : 1.0;
     cq.cubic = p[L::INTERP] > 0.0 ? 1.0 : 0.0;
     cq.krb = p[L::KR_B];

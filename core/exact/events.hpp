@@ -275,7 +275,7 @@ inline double hermite5(double a, double b, double p0, double p1, double d0, doub
 
 // The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0): Newton
 // with the exact derivative, kept inside the shrinking bracket, to a bracket of 4 ulp of t
-// (events.py's _root_body).  Returns the end on gb's side.  X and Xd are seen with length
+// Returns the end on gb's side.  X and Xd are seen with length
 // nz.
 inline double _root_body(idx kind, double a, double ga, double b, double gb,
                          const SegView& s, double c0, idx nz) {
@@ -329,8 +329,8 @@ inline double find_root(idx kind, double a, double ga, double b, double gb, cons
     return _root_body(kind, a, ga, b, gb, s, c0, s.X.n);
 }
 
-// The copies with constant sizes are flattened (everything they call inlined into them, as
-// numba inlined _root_body and state_at): only then does the compiler see the sizes as the
+// The copies with constant sizes are flattened (everything they call inlined into them,
+// _root_body and state_at among them): only then does the compiler see the sizes as the
 // constants they are; a call to the shared _root_body kept its loops generic
 // (BB_FLATTEN, compiler.hpp).
 
@@ -357,7 +357,7 @@ inline double find_root_any(idx kind, double a, double ga, double b, double gb,
 
 // W at its extremum in [a, b], where W' changes sign (ga, gb: W' at a, b): Newton on W'
 // from c0 inside the shrinking bracket until the step is below 2e-5 h, then W plus the
-// step's quadratic correction (events.py's _w_extremum_body).
+// step's quadratic correction.
 inline double _w_extremum_body(double a, double ga, double b, double gb, double c0, double h,
                                const SegView& s, idx nz) {
     (void)ga;

@@ -1,9 +1,9 @@
 // The closed form on a segment: the state at any
 // time (state_at), the forces, and the segment's integrals of products of exponentials
-// (segment_integrals), ported operation for operation (complex arithmetic on ncplx: see
-// nmath.hpp), so that they give numba's bits.
+// (segment_integrals), with complex arithmetic on ncplx (nmath.hpp) so that the rounding
+// is this file's and not the compiler's.
 //
-// Signatures (the Python names and parameter order; complex scalars are ncplx):
+// Signatures (complex scalars are ncplx):
 //   idx nq(idx nz, idx ks);
 //   std::tuple<ncplx, ncplx, ncplx, ncplx, ncplx> phis(ncplx x);   // e^x, phi_1 .. phi_4
 //   std::tuple<double, double> surface_at(const Segment& seg, double tau);   // S, S'
@@ -23,10 +23,10 @@
 //                          idx level, idx ks, const Segment& seg, CVec phj);
 //   void segment_integrals_1(... the same without n and ks ...);   // n = 1, nz = 2, ks = 2
 //   void segment_integrals_2(... the same without n and ks ...);   // n = 2, nz = 4, ks = 2
-//   void basis_exponents(CMat lam, idx r, double om, idx nz, CVec mu);   // prepare.py's
+//   void basis_exponents(CMat lam, idx r, double om, idx nz, CVec mu);
 // and the helpers _phi1s, _phij, _conj_index, _integrals_body, _psi_dot, _quad_sym, _quad.
 //
-// X, Xd are seen with their own length (numba: X.shape[0]): pass views of length nz.
+// X, Xd are seen with their own length (X.n): pass views of length nz.
 #pragma once
 
 #include <cmath>
@@ -181,7 +181,7 @@ inline idx const_sizes(idx ks, idx n, idx nz) {
 }
 
 // mu = (lambda_r, i Omega, -i Omega, 0): the exponents of a segment's basis functions
-// (prepare.py's basis_exponents; -1j is the constant complex(-0.0, -1.0) in Python).
+// (-i is the constant complex(-0.0, -1.0), the negation of i).
 template <class MuV>
 inline void basis_exponents(CMat lam, idx r, double om, idx nz, MuV&& mu) {
     for (idx k = 0; k < nz; ++k) mu[k] = lam(r, k);
@@ -271,8 +271,8 @@ inline double _quad(AV& a, AV& b, GM& G, idx nb) {
 
 // Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
 // sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
-// (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  See propagate.py's
-// _integrals_body for the method; me, G, Cx, cf, ca, cb, phj are scratch.
+// (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  See _integrals_body
+// for the method; me, G, Cx, cf, ca, cb, phj are scratch.
 //
 // MuV, GM, CM, V: the scratch's types, CVec / CMat views of the driver's scratch, or (the
 // constant sizes) local arrays (LocalArr) that the compiler knows alias nothing else.

@@ -1,12 +1,12 @@
 // One segment of the exact kernel, between two events:
 // its start (start_segment), the grid search for its first event with the outputs on the way
-// (search_segment) and its flows (close_segment).  numba inlined these into the driver; here
-// they are templates on Regen (a cut), instantiated by the driver's two kernels.
+// (search_segment) and its flows (close_segment): templates on Regen (a cut), instantiated
+// by the driver's two kernels and inlined into them.
 //
-// Every expression keeps numba's operations in numba's order (complex arithmetic through
-// ncplx, Python's max/min through pymax/pymin), so that the bits are the numba kernel's.
+// Complex arithmetic goes through ncplx and max/min through pymax/pymin (nmath.hpp), so
+// that the rounding and the handling of NaN are this code's, whatever the compiler.
 //
-//   struct Work                         the driver's arrays, passed whole (numba: Work)
+//   struct Work                         the driver's arrays, passed whole
 //   start_segment<Regen>(w, t, t_stop, ph, n, kase, nreg, j_node, kn, ip, sc, cq, sv)
 //       -> SegStart {r, ks, t_seg_end, at_node, j_node, pdu}
 //   search_segment<Regen, NZ = 0>(w, t, r, ks, sz, n, kase, mode, ph, sv)
@@ -31,9 +31,8 @@ namespace bb::exact {
 
 namespace L = layout;
 
-// The driver's arrays (numba's Work namedtuple): the scratch, owned here (numba's stack
-// arrays, zeroed once per run and reused by every segment), and views of the run's inputs
-// and outputs.  The views point into this object: it is never copied or moved.
+// The driver's arrays: the scratch, owned here (zeroed once per run and reused by every
+// segment, so a segment allocates nothing), and views of the run's inputs and outputs.  The views point into this object: it is never copied or moved.
 struct Work {
     // --- scratch storage
     std::array<double, NZ_MAX> X_{}, Xa_{}, Xd_{}, dX_{};
@@ -49,7 +48,7 @@ struct Work {
     std::array<double, NMAX6> mk_{};
     std::array<double, DDC> ddc_{};
 
-    // --- views of the scratch, with numba's shapes (nz, nb = nz + 3, n modes)
+    // --- views of the scratch, with the run's shapes (nz, nb = nz + 3, n modes)
     Vec X, Xa, Xd, dX;       // states: at the grid point, the step's start, X', a work vector
     CVec q0, qs, qg;         // eigen-coordinates: the segment's start, scratch, the grid's
     Vec ev_a, ev_b, ev_s, ev_t;  // event functions at a step's and a sub-step's ends
@@ -143,7 +142,8 @@ inline std::pair<double, double> psi_dot(Mat mk, idx row, Vec X, idx n) {
     return {u, v};
 }
 
-// Re(V[r, j, :] q) over the evaluated eigen-coordinates, added to s in numba's order
+// Re(V[r, j, :] q) over the evaluated eigen-coordinates, added to s one at a time in k's
+// order (a conjugate pair's second member is not evaluated: ks = 2)
 inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks) {
     for (idx kq = 0; kq < nq(nz, ks); ++kq) {
         idx k = kq * ks;
@@ -222,7 +222,7 @@ struct GridPoint {
 // A whole grid step of level lev outside a cut: the eigen-coordinates qg and the forcing
 // phasor phg advanced, X from them, the event functions at the step's end b and (if ydd_on)
 // y'' and W'' there (else NaN).  NZ > 0: the sizes as compile-time constants (one and two
-// modes, ks = 2), as numba's specialisations; the same operations.  The phasors come by
+// modes, ks = 2), so the compiler unrolls them; the same operations.  The phasors come by
 // reference: a complex passed by value reaches the callee as two halves that it stores and
 // reloads as one (a stalled store forwarding, a fifth of the step's time).  Inlined in the
 // search's loop (GCC called it: with the rare work out of the loop, inlined it is ~10%
@@ -795,7 +795,7 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
     w.ro.t_strobe = t_next_strobe;
 }
 
-// e^{i om t} as numba computes cmath.exp(1j * om * t): the products promoted to complex
+// e^{i om t} as cexp((i om) t): the products taken in complex arithmetic (ncplx)
 inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t); }
 
 // What advance does off the usual grid (every 64th step, a segment's end): kept out of the
@@ -870,7 +870,7 @@ struct SegEvent {
     double wb, wdb;
 };
 
-// The segment's running extremes, kept in locals during the search (numba: registers)
+// The segment's running extremes, kept in locals (registers) during the search
 struct Extremes {
     double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
 };
