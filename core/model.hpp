@@ -17,6 +17,25 @@ namespace bb {
 
 namespace L = layout;
 
+// The ball of an impact damper and its walls: half the diametral gap, the restitution, the
+// effective mass of an impact, the capture threshold (impacts slower than vimp are contact)
+// and the ball's mass (0: no ball).
+struct Ball {
+    double half = 0.0;  // delta / 2
+    double e = 0.0;     // restitution
+    double meff = 0.0;  // effective mass of an impact
+    double vimp = 0.0;  // capture threshold
+    double m = 0.0;     // the ball's mass
+};
+
+// Where a run's events go: the metric vector (the counts and sums), the impact and stick
+// records, and the start of the steady part (counts and rows are kept from there on).
+struct EventLog {
+    double* met;
+    Mat imp, stick;
+    double t_steady;
+};
+
 // outcome of wall_rule at a step's end
 enum WallOutcome : int { OFF_WALL = 0, IMPACT = 1, MICRO_IMPACT = 2, ON_WALL = 3 };
 
@@ -80,7 +99,8 @@ struct WallResult {
 };
 
 inline WallResult wall_rule(double* met, Mat imp, double y, double yd, double t1, bool steady,
-                            double half, double e, double meff, double vimp) {
+                            const Ball& ball) {
+    const double half = ball.half, e = ball.e, meff = ball.meff, vimp = ball.vimp;
     if (!(std::fabs(y) >= half)) return {OFF_WALL, y, yd, 0.0};
     double wall = y > 0.0 ? 1.0 : -1.0;
     if (!(wall * yd > 0.0)) return {ON_WALL, wall * half, yd, 0.0};

@@ -73,7 +73,8 @@ struct Params {
     // no kappa F_b is -0: y'' = kappa F_b - sum psi_d a_i then has the same bits whether
     // the sum starts from 0 or from its first term (they differ only in the sign of a zero)
     bool ydd_sum_from_first;
-    double f0, om, half, e, fc, sr, meff, vimp, stick_min, vstick, ma, ka, ca;
+    Ball ball;  // the ball and its walls (model.hpp)
+    double f0, om, fc, sr, stick_min, vstick, ma, ka, ca;
     double tstrobe, strobe_t0;
     double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
 };
@@ -86,12 +87,12 @@ inline Params unpack(const double* p, double dt) {
     q.stage_loop = p[L::STAGE_LOOP] != 0.0;
     q.f0 = p[L::F0];
     q.om = p[L::OMEGA];
-    q.half = p[L::HALF_GAP];
-    q.e = p[L::RESTITUTION];
+    q.ball.half = p[L::HALF_GAP];
+    q.ball.e = p[L::RESTITUTION];
     q.fc = p[L::FRICTION];
     q.sr = p[L::REACTION];
-    q.meff = p[L::M_EFF];
-    q.vimp = p[L::V_IMPACT];
+    q.ball.meff = p[L::M_EFF];
+    q.ball.vimp = p[L::V_IMPACT];
     q.stick_min = p[L::STICK_MIN];
     q.vstick = p[L::V_STICK];
     q.ma = p[L::TMD_MASS];
@@ -100,6 +101,7 @@ inline Params unpack(const double* p, double dt) {
     q.tstrobe = p[L::STROBE_PERIOD];
     q.strobe_t0 = p[L::STROBE_T0];
     const double m = p[L::BALL_MASS];
+    q.ball.m = m;
     q.kappa = m > 0.0 ? 1.0 / m : 0.0;
     for (int i = 0; i < q.n; ++i) {
         q.invM[i] = 1.0 / p[L::M_ + i];
@@ -111,7 +113,7 @@ inline Params unpack(const double* p, double dt) {
         q.km[i] = p[L::K_ + i] * q.invM[i];
         q.cm[i] = q.C[i] * q.invM[i];
         q.dm[i] = q.sr * q.pD[i] * q.invM[i];
-        q.lm[i] = q.meff * q.pD[i] * q.invM[i];
+        q.lm[i] = q.ball.meff * q.pD[i] * q.invM[i];
         q.kappa += q.pD[i] * q.dm[i];
     }
     const double fbs[3] = {-q.fc, 0.0, q.fc};
@@ -547,8 +549,7 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double*
                           Mat stick, StickState& ss, double t, double t1, bool steady,
                           double t_steady) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    const WallResult w = wall_rule(met, imp, X[iy], X[iyd], t1, steady, q.half, q.e, q.meff,
-                                   q.vimp);
+    const WallResult w = wall_rule(met, imp, X[iy], X[iyd], t1, steady, q.ball);
     X[iy] = w.y;
     X[iyd] = w.yd;
     if (w.outcome == IMPACT || w.outcome == MICRO_IMPACT) jump_modes(q, n, X, w.g);

@@ -6,6 +6,7 @@
 
 #include "../arrays.hpp"
 #include "../layout.hpp"
+#include "../model.hpp"
 
 namespace bb::exact {
 
@@ -28,8 +29,9 @@ constexpr int NB_MAX_2 = 2 * NB_MAX;
 constexpr int NMAX6 = 6 * layout::NMAX;
 constexpr int DDC = 4 * (layout::NMAX + 2);
 
-// regimes (rs.mode holds them as 0.0, 1.0, 2.0)
-constexpr int FREE = 0, STICK = 1, CONTACT = 2;
+// A ball's regime: free (flying or sliding), stuck to the bore, or resting on a wall.  The
+// regime's index r in prepare's matrices is the regime (ball bars), plus nreg in a cut.
+enum Regime : int { FREE = 0, STICK = 1, CONTACT = 2 };
 
 namespace detail {
 constexpr double factorial(int k) {
@@ -84,38 +86,69 @@ struct Segment {
     double acc = 0.0;    // fb / m, the ball's acceleration
 };
 
-// The driver's run constants.
-struct RunConsts {
-    double half = 0.0;       // delta / 2
-    double e = 0.0;          // restitution
+// Coulomb friction of the ball on the bore and what it acts against: F_c, F_s, the share s
+// of the reaction on the bar, the ball's kappa (the force that carries it with the bar,
+// per unit of acceleration) when stuck and on a wall, and the shortest stick recorded.
+struct Friction {
     double fc = 0.0;         // kinetic friction F_c
     double fs = 0.0;         // static friction max(F_s, F_c)
-    double sr = 0.0;         // reaction share s
-    double meff = 0.0;       // effective mass of an impact
-    double vimp = 0.0;       // capture threshold
+    double sr = 0.0;         // reaction share s (+1 reciprocal, -1 the printed reaction)
     double kstick = 0.0;     // kappa of a stuck ball
     double kwall = 0.0;      // kappa on a wall
     double stick_min = 0.0;  // shortest stick interval recorded
-    double t0 = 0.0;         // the run's start
-    double t_steady = 0.0;   // the steady window's start
-    double dt_out = 0.0;     // a cut's step (the unit of N_ZERO_STEPS)
-    double stop_at_zero = 0.0;  // 1: a cut stops at its first zero
-    double f0 = 0.0;         // the harmonic force's amplitude and circular frequency
-    double om = 0.0;
-    double h = 0.0;          // the event-search grid step h
-    double rec_dt = 0.0;     // the history's sampling step (0: none)
-    double tstrobe = 0.0;    // the strobe's period (0: none)
-    double m = 0.0;          // the ball's mass
 };
 
-// The run's state between segments.
-struct RunState {
-    double mode = 0.0;        // FREE, STICK, CONTACT
-    double sdir = 0.0;        // the direction a free ball slides, 0 if it does not
-    double wall = 0.0;        // the wall a ball in CONTACT is on
-    double y = 0.0;           // the ball's y and y'
+// The harmonic force at the tip, F0 sin(Omega t).
+struct Forcing {
+    double f0 = 0.0;  // amplitude F0
+    double om = 0.0;  // circular frequency Omega
+};
+
+// The system a run integrates, unpacked from p once: the modes (the bar's rows), the case,
+// a free ball's y'' and W'' coefficients, the ball, friction and the forcing.  A tuned
+// absorber enters through the regimes' matrices and its row psi_a; a cut through
+// CutConsts.
+struct System {
+    idx n = 0;                        // retained modes
+    layout::Case kase = layout::SOLID;
+    idx nreg = 1;                     // regimes outside a cut (3 for the ball bar)
+    Mat mk;   // (6, n): modal mass M, stiffness K, damping C, psi_L (tip), psi_d (damper),
+              // psi_a (absorber)
+    Mat ddc;  // (4, n + 2): a free ball's y'' and W'' from u, f and F_b (rows 0, 1), and
+              // from u' (rows 2, 3)
+    Ball ball;
+    Friction fric;
+    Forcing force;
+
+    bool has_ball() const { return kase == layout::BALL; }
+};
+
+// The run's span and outputs: its start, the steady window's start, a cut's step, the
+// event-search grid step, the history's and the strobe's sampling.
+struct RunConsts {
+    double t0 = 0.0;             // the run's start
+    double t_steady = 0.0;       // the steady window's start
+    double dt_out = 0.0;         // a cut's step (the unit of N_ZERO_STEPS)
+    bool stop_at_zero = false;   // a cut stops at its first zero
+    double h = 0.0;              // the event-search grid step h
+    double rec_dt = 0.0;         // the history's sampling step (0: none)
+    double tstrobe = 0.0;        // the strobe's period (0: none)
+};
+
+// A ball's state between segments: its regime, the direction it slides (0 if it does
+// not), the wall it rests on (CONTACT), its y and y'.
+struct BallState {
+    Regime mode = FREE;
+    double sdir = 0.0;
+    double wall = 0.0;
+    double y = 0.0;
     double yd = 0.0;
-    double incut = 0.0;       // 1.0 while the tool cuts
+};
+
+// The run's state between segments (the bar's own state is the work vector X).
+struct RunState {
+    BallState ball;
+    bool incut = false;       // the tool cuts
     double first_zero = 0.0;  // the chatter verdict: the first exit from the cut (-1: none)
     double t_end = 0.0;       // the run's end (a cut stopped at its first zero ends early)
     double stick_t0 = 0.0;    // when the current stick interval began
@@ -126,12 +159,12 @@ struct CutConsts {
     double t0 = 0.0;     // the run's start, the first node
     double h = 0.0;      // the history step H
     double ttol = 0.0;   // times closer than this are one
-    double nrev = 0.0;   // revolutions in the surface's minimum
+    idx nrev = 0;        // revolutions in the surface's minimum
     double tau = 0.0;    // the delay tau
     double feed = 0.0;   // h_m
     double w0 = 0.0;     // W before the cut
-    double mrev = 0.0;   // nodes per revolution
-    double cubic = 0.0;  // 1: cubic Hermite history, 0: linear
+    idx mrev = 1;        // nodes per revolution
+    bool cubic = false;  // cubic Hermite history (else linear)
     double krb = 0.0;    // Kr b
 };
 
@@ -148,19 +181,19 @@ struct RunningOut {
 };
 
 // What a segment's search needs beyond the segment: its length, derivative bounds and
-// what to watch (flags 0.0 or 1.0).
+// what to watch.
 struct SegSearch {
     double tlen = 0.0;       // its length
     double b4 = 0.0;         // bounds over it on |y^(4)|, |W^(4)| (-1: not needed),
     double bw4 = 0.0;        // |y'''| and |W'''|
     double b3y = 0.0;
     double b3w = 0.0;
-    double steady = 0.0;     // in the steady window
-    double whole = 0.0;      // a cut's whole step H from a node
-    double adapt = 0.0;      // steps longer than h allowed
-    double ydd = 0.0;        // y'' and W'' wanted at the grid points
-    double watch_v = 0.0;    // a free ball's y' = 0 switch watched
-    double watch_ext = 0.0;  // a free ball's y extremum watched against grazes
+    bool steady = false;     // in the steady window
+    bool whole = false;      // a cut's whole step H from a node
+    bool adapt = false;      // steps longer than h allowed
+    bool ydd = false;        // y'' and W'' wanted at the grid points
+    bool watch_v = false;    // a free ball's y' = 0 switch watched
+    bool watch_ext = false;  // a free ball's y extremum watched against grazes
 };
 
 }  // namespace bb::exact

@@ -8,21 +8,16 @@
 //   std::tuple<double, double, double, double> hermite_at(double t0, double p0, double d0,
 //                  double t1, double p1, double d1, double x0, bool cubic);
 //   constexpr double GL_X[4], GL_W[4];
-//   double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, CMat lam,
-//                   CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
-//                   Mat lvis, Vec cvis, bool stick, double kappa, double sr, Vec acc,
-//                   bool steady);
-//   std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double t, Vec Xm,
-//                   Vec Xp, idx n, Mat mk, double ttol, double node);
-//   double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk, Span1<idx> ip,
-//                   Mat sc, idx nrev, idx nr_eff, double feed, double w_before,
-//                   double tau_d, Segment& seg, idx j_now, idx m_rev, bool cubic);
+//   double quad_cut(double a, double b, const SegView& s, const Dashpots& dp, bool stick,
+//                   const Friction& fr, Vec acc, bool steady);
+//   struct Knots, struct History
+//   void add_knot(History& hs, double t, Vec Xm, Vec Xp, Mat mk, double ttol, double node);
+//   double surface_piece(double t, double t_end, History& hs, const CutConsts& cq,
+//                   idx nr_eff, Segment& seg, idx j_now);
 //
-// The knot store kn grows: it is a Knots, which owns its rows and doubles them in place
-// when full; add_knot returns it by reference with the new count, read as
-// ``std::tie(kn, nk) = add_knot(kn, nk, ...)`` (a self-assignment of kn, harmless) or
-// ``nk = std::get<1>(add_knot(...))``.
-// A Knots converts to a Mat view (kn.n0 rows, 5 columns), valid until it next grows.
+// The knot store grows: a Knots owns its rows and doubles them in place when full (in
+// add_knot).  A Knots converts to a Mat view (kn.n0 rows, 5 columns), valid until it next
+// grows.
 #pragma once
 
 #include <algorithm>
@@ -70,19 +65,25 @@ constexpr double GL_X[4] = {0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816,
 constexpr double GL_W[4] = {0.17392742256872692, 0.3260725774312731, 0.3260725774312731,
                             0.17392742256872692};
 
-// Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of segment_integrals'
-// ``out``) by 4-point Gauss-Legendre; returns the largest force at the nodes.
-inline double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, CMat lam,
-                       CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
-                       Mat lvis, Vec cvis, bool stick, double kappa, double sr, Vec acc,
-                       bool steady) {
+// Adds the flows over [a, b] of the cut segment of s (evaluated into s.q and s.X) to ``acc``
+// (the slots of segment_integrals' ``out``) by 4-point Gauss-Legendre; returns the largest
+// force at the nodes.  stick: the ball is stuck (its friction's work on the bar counted).
+inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp, bool stick,
+                       const Friction& fr, Vec acc, bool steady) {
+    const Segment& seg = s.seg;
+    const CVec q = s.q;
+    const Vec X = s.X;
+    const idx n = s.n;
+    const Mat mk = s.mk, lvis = dp.l;
+    const Vec cvis = dp.c;
+    const double kappa = fr.kstick, sr = fr.sr;
     double fmax = 0.0;
     double hh = b - a;
     for (int g = 0; g < 4; ++g) {
         double tau = a + GL_X[g] * hh;
         double wg = GL_W[g] * hh;
-        state_at(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X);
-        double f = cut_force(seg, tau, X, n, mk, 0.0, 0.0);
+        state_at(s, tau, q, X);
+        double f = cut_force(seg, tau, X, n, mk, s.f0, s.om);
         fmax = pymax(fmax, f);
         auto [w, wd] = tip_w_wd(mk, X, n);
         acc[0] += wg * f * wd;
@@ -131,11 +132,37 @@ struct Knots {
     }
 };
 
-// Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1); one closer than ttol to
-// the last knot replaces its value and W'+.  Drops knots no revolution needs any more when
-// the store is full, and doubles it if that frees less than half.  Returns (kn, nk).
-inline std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double t, Vec Xm,
-                                        Vec Xp, idx n, Mat mk, double ttol, double node) {
+// A cut's delay history as the run keeps it: the knot store kn and the knots in use nk;
+// for each past revolution k = 1 .. nrev, ip[k], the knot at or before t - k tau (-1:
+// before the cut, where W = HIST_W0), and sc[k], its surface's cubic (surface_piece's
+// scratch).
+struct History {
+    Knots kn;
+    idx nk = 0;
+    std::vector<idx> ip_buf;
+    std::vector<double> sc_buf;
+    Span1<idx> ip;
+    Mat sc;
+
+    History(idx rows, idx nrev)
+        : kn(rows),
+          ip_buf(static_cast<size_t>(nrev + 1), -1),
+          sc_buf(static_cast<size_t>(nrev + 1) * 4, 0.0),
+          ip{ip_buf.data(), nrev + 1},
+          sc{sc_buf.data(), nrev + 1, 4} {}
+    History(const History&) = delete;
+    History& operator=(const History&) = delete;
+};
+
+// Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1) in hs (mk: the bar's
+// rows); one closer than ttol to the last knot replaces its value and W'+.  Drops knots no
+// revolution needs any more when the store is full, and doubles it if that frees less than
+// half.
+inline void add_knot(History& hs, double t, Vec Xm, Vec Xp, Mat mk, double ttol, double node) {
+    Knots& kn = hs.kn;
+    idx nk = hs.nk;
+    const Span1<idx> ip = hs.ip;
+    const idx n = mk.n1;
     double w = 0.0;
     double wdm = 0.0;
     double wdp = 0.0;
@@ -148,7 +175,7 @@ inline std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double
         kn(nk - 1, 1) = w;
         kn(nk - 1, 3) = wdp;
         kn(nk - 1, 4) = pymax(kn(nk - 1, 4), node);
-        return {kn, nk};
+        return;
     }
     if (nk == kn.n0) {
         idx lo = nk;
@@ -166,16 +193,22 @@ inline std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double
     kn(nk, 2) = wdm;
     kn(nk, 3) = wdp;
     kn(nk, 4) = node;
-    return {kn, nk + 1};
+    hs.nk = nk + 1;
 }
 
 // The surface min_k [k h_m + W(t + tau - k tau_d)] from t as one cubic in tau, into seg.s,
 // and the time (<= t_end) up to which it is one cubic: the next delayed knot of any
 // revolution, or where another revolution becomes the minimum.  Advances the pointers
-// ip[k]; sc[k] receives revolution k's cubic.  j_now: the node t is on (-1: none).
-inline double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk, Span1<idx> ip,
-                            Mat sc, idx nrev, idx nr_eff, double feed, double w_before,
-                            double tau_d, Segment& seg, idx j_now, idx m_rev, bool cubic) {
+// hs.ip[k]; hs.sc[k] receives revolution k's cubic.  Revolutions beyond nr_eff are followed
+// but not compared.  j_now: the node t is on (-1: none).
+inline double surface_piece(double t, double t_end, History& hs, const CutConsts& cq,
+                            idx nr_eff, Segment& seg, idx j_now) {
+    const Mat kn = hs.kn.view(), sc = hs.sc;
+    const idx nk = hs.nk;
+    const Span1<idx> ip = hs.ip;
+    const double ttol = cq.ttol, feed = cq.feed, w_before = cq.w0, tau_d = cq.tau;
+    const idx nrev = cq.nrev, m_rev = cq.mrev;
+    const bool cubic = cq.cubic;
     double t_piece = t_end;
     for (idx k = 1; k < nrev + 1; ++k) {
         double kt = static_cast<double>(k) * tau_d;

@@ -23,9 +23,10 @@
 //   bool may_graze(double a, double b, Vec ev_a, Vec ev_b, double half, double b4);
 //   bool w_may_exceed(double h, double wa, double wb, double wda, double wdb, double bw4,
 //                     double max_w, double min_w, double max_abs_w);
-//   std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b, bool watch_v,
-//                     bool watch_ext, double half, const SegView& s, double ydd_a,
-//                     double ydd_b);
+//   struct StepEnds                 a step [a, b], its level, the event functions and y''
+//                                   at its ends
+//   std::tuple<idx, double> wall_step(StepEnds st, bool watch_v, bool watch_ext,
+//                     const SegView& s);
 //
 // X, Xd are seen with their own length by g_value, _gd and state_at: give views of length
 // nz.  The _1 / _2 copies are the same operations with the sizes as constants, which the
@@ -44,39 +45,10 @@
 
 namespace bb::exact {
 
-// A segment's closed form as the event functions read it: the segment, its regime r and
-// its start q0 in eigen-coordinates; the run's eigen-data (lam, V, Z, D, bq); the sizes
-// (n modes; ks = 2 where only the first of each conjugate pair is evaluated); the model's
-// rows mk (M, K, C, psi_L, psi_d, psi_a); the harmonic forcing (f0, om); and the scratch
-// the state is evaluated into (q, X and X', each seen with its own length).
-struct SegView {
-    const Segment& seg;
-    idx r;
-    CVec q0;
-    CMat lam;
-    CArr3 V;
-    idx ks;
-    CMat Z;
-    Mat D;
-    CMat bq;
-    CVec q;
-    Vec X;
-    Vec Xd;
-    idx n;
-    Mat mk;
-    double f0;
-    double om;
-
-    // the same view with ks and n given (the copies with constant sizes)
-    SegView with_sizes(idx ks_, idx n_) const {
-        return {seg, r, q0, lam, V, ks_, Z, D, bq, q, X, Xd, n_, mk, f0, om};
-    }
-};
-
 // Event function ``kind`` at tau on the segment described by ``seg``.
 inline double g_value(idx kind, double tau, const SegView& s) {
-    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
-    state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X);
+    [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
+    state_at(s, tau, q, X);
     if (kind == EV_WEXT) {
         double s = 0.0;
         for (idx i = 0; i < n; ++i) s += mk(3, i) * X[n + i];
@@ -111,10 +83,10 @@ inline double g_value(idx kind, double tau, const SegView& s) {
 // Event function ``kind``, its time derivative and its second derivative at tau: the
 // second only where it comes free (the walls and the cut's h), NaN elsewhere.
 inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegView& s) {
-    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
+    [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     double ts = seg.ts;
-    state_at2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd);
+    state_at2(s, tau);
     if (kind == EV_WEXT) {
         double g = 0.0;
         double dg = 0.0;
@@ -361,15 +333,18 @@ inline double find_root_any(idx kind, double a, double ga, double b, double gb,
 inline double _w_extremum_body(double a, double ga, double b, double gb, double c0, double h,
                                const SegView& s, idx nz) {
     (void)ga;
-    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
+    [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
     Vec Xn{X.d, nz};
     Vec Xdn{Xd.d, nz};
+    SegView sn = s;
+    sn.X = Xn;
+    sn.Xd = Xdn;
     bool pos = gb > 0.0;
     double c = (a < c0 && c0 < b) ? c0 : 0.5 * (a + b);
     double tol = 2e-5 * h;
     double w = 0.0;
     for (int it = 0; it < 100; ++it) {
-        state_at2(r, q0, seg, c, om, lam, V, ks, Z, D, bq, q, Xn, Xdn);
+        state_at2(sn, c);
         w = 0.0;
         double wd = 0.0;
         double wdd = 0.0;
@@ -499,11 +474,24 @@ inline bool w_may_exceed(double h, double wa, double wb, double wda, double wdb,
     return hi >= max_w || lo <= min_w || pymax(hi, -lo) >= max_abs_w;
 }
 
-// The first wall or friction-switch event of a FREE ball in [a, b], from the event
-// functions at the ends and y'' there (NaN: not known): (kind, time), kind -1 if none.
-inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b, bool watch_v,
-                                         bool watch_ext, double half, const SegView& s,
-                                         double ydd_a, double ydd_b) {
+// A step [a, b] of a segment (times from its start, length h 2^lev) and what is known at
+// its ends: the event functions and a free ball's y'' (NaN: not known).  Passed by value.
+struct StepEnds {
+    double a, b;
+    idx lev;
+    Vec ev_a, ev_b;
+    double ydd_a, ydd_b;
+};
+
+// The first wall or friction-switch event of a FREE ball in the step st, from the event
+// functions at its ends and y'' there: (kind, time), kind -1 if none.  watch_v: the y' = 0
+// switch of a sliding ball is an event; watch_ext: an extremum of y that may reach a wall
+// is looked for.
+inline std::tuple<idx, double> wall_step(StepEnds st, bool watch_v, bool watch_ext,
+                                         const SegView& s) {
+    const double a = st.a, b = st.b, ydd_a = st.ydd_a, ydd_b = st.ydd_b;
+    const Vec ev_a = st.ev_a, ev_b = st.ev_b;
+    const double half = s.seg.half;
     double best = b;
     idx kind = -1;
     double lo = a;
