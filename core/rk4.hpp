@@ -464,12 +464,9 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     }
 }
 
-// The tip's W, W' and the auxiliary coordinate: the ball's y or the absorber's stroke
-// x_a - psi_a u.  aux_always: the stroke even for the solid and locked bars (X's own aux
-// slot, as the strobe and the run's first values read it); else 0 there.
-struct TipAux {
-    double w, wd, aux, auxd;
-};
+// The tip's W, W' and the auxiliary coordinate (model.hpp's TipAux): the ball's y or the
+// absorber's stroke x_a - psi_a u.  aux_always: the stroke even for the solid and locked
+// bars (X's own aux slot, as the strobe and the run's first values read it); else 0 there.
 
 template <int N, int CASE>
 BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bool aux_always) {
@@ -518,20 +515,26 @@ inline double first_strobe(const Params& q, double t0) {
     return t_next;
 }
 
+// The Poincare strobe's progress in a run: the next sample's time, the rows written and
+// the record they go to.
+struct StrobeOut {
+    double t_next;
+    idx n;
+    Mat rows;
+};
+
 // A Poincare strobe sample due in the step [t, t1]: W, W' by the cubic Hermite, aux, aux'
 // linearly, from the step's start values prev and the end state X (model.hpp).
 template <int N, int CASE>
 BB_INLINE void strobe_step(const Params& q, Shape<N, CASE> sh, const double* X,
-                           const TipAux& prev, double t, double t1, double dt, double& t_next,
-                           idx& n_stb, Mat strobe) {
-    if (q.tstrobe > 0.0 && t_next <= t1) {
-        if (t_next > t && n_stb < strobe.n0) {
+                           const TipAux& prev, double t, double t1, double dt, StrobeOut& so) {
+    if (q.tstrobe > 0.0 && so.t_next <= t1) {
+        if (so.t_next > t && so.n < so.rows.n0) {
             const TipAux a = tip_aux(q, sh, X, true);
-            strobe_row(strobe.row(n_stb), t_next, t, dt, prev.w, prev.wd, a.w, a.wd, prev.aux,
-                       prev.auxd, a.aux, a.auxd);
-            n_stb += 1;
+            strobe_row(so.rows.row(so.n), so.t_next, t, dt, prev, a);
+            so.n += 1;
         }
-        t_next = t_next + q.tstrobe;
+        so.t_next = so.t_next + q.tstrobe;
     }
 }
 
@@ -545,11 +548,10 @@ BB_INLINE void jump_modes(const Params& q, int n, double* X, double g) {
 // g psi_d,i / M_i) and the stick bookkeeping.  Returns whether the ball is in contact
 // (on a wall at rest, or a sub-threshold impact).
 template <int N, int CASE>
-BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double* met, Mat imp,
-                          Mat stick, StickState& ss, double t, double t1, bool steady,
-                          double t_steady) {
+BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, const EventLog& log,
+                          StickState& ss, double t, double t1, bool steady) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    const WallResult w = wall_rule(met, imp, X[iy], X[iyd], t1, steady, q.ball);
+    const WallResult w = wall_rule(log.met, log.imp, X[iy], X[iyd], t1, steady, q.ball);
     X[iy] = w.y;
     X[iyd] = w.yd;
     if (w.outcome == IMPACT || w.outcome == MICRO_IMPACT) jump_modes(q, n, X, w.g);
@@ -557,7 +559,7 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double*
     // stuck: off the walls with |y'| inside the band where the sgn() law chatters
     // (V_STICK = V_IMPACT + 2 F_c dt / m_eff)
     const bool stuck = q.fc > 0.0 && !contact && std::fabs(X[iyd]) < q.vstick;
-    stick_step(stuck, ss, t, t1, met, stick, t_steady, q.stick_min);
+    stick_step(stuck, ss, t, t1, log, q.stick_min);
     return contact;
 }
 
