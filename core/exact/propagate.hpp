@@ -312,11 +312,6 @@ inline double _quad(AV& a, AV& b, GM& G, idx nb) {
     return s;
 }
 
-// Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
-// sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
-// (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  See _integrals_body
-// for the method; me, G, Cx, cf, ca, cb, phj are scratch.
-//
 // What segment_integrals integrates: the segment [ts, ts + T] (seg, its friction force
 // seg.fb) from its start q0 in regime r, with the forcing phasor ph at ts; the regimes'
 // matrices (VF: the full eigenvectors, prepare's V; isum: 1 / (mu_a + mu_b) of the basis
@@ -366,8 +361,12 @@ struct FlowsScratch {
     CVec cf, ca, cb, phj;
 };
 
-// The integrals with the sizes n, ks, nz given (constants in the copies for one and two
-// modes).
+// Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
+// sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
+// (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball): the state and the
+// forces are sums of exponentials exp(mu_a tau), so each integral is a quadratic form in
+// their coefficients with the Gram matrix G_ab = int exp((mu_a + mu_b) tau).  The sizes n,
+// ks, nz are given (constants in the copies for one and two modes).
 template <class MuV, class GM, class CM, class V>
 BB_ALWAYS_INLINE void _integrals_impl(const FlowsIn& in, const FlowsScratchOf<MuV, GM, CM, V>& sc,
                                       Vec out, idx n, idx ks, idx nz) {
