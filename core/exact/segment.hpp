@@ -785,9 +785,9 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
 }
 
 // The state at tau into the work vector dX and row[1:5]: W, W', aux, aux' (a history or
-// strobe row; its time, row[0], is the caller's).
-inline void sample(Work& w, SegCtx c, double tau, double* row) {
-    state_at(view(w, c), tau, w.qs, w.dX);
+// strobe row; its time, row[0], is the caller's); s: view(w, c), built once a segment.
+inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row) {
+    state_at(s, tau, w.qs, w.dX);
     auto [wv, wdv] = psi_dot(w.sys.mk, 3, w.dX, c.n);
     auto [av, adv] = aux(w.dX, tau, w.seg, c, w.sys.mk, w.x);
     row[1] = wv;
@@ -797,9 +797,9 @@ inline void sample(Work& w, SegCtx c, double tau, double* row) {
 }
 
 // The history rows (every rec_dt from t0) and strobe rows (every tstrobe) that fall in
-// (t + a, t + b] of the segment from t (context c), before t_end, into rec and strobe while
-// they have room; the next ones' times into w.ro.
-inline void samples(Work& w, SegCtx c, double t, double b, double t_end) {
+// (t + a, t + b] of the segment from t (context c, its view s), before t_end, into rec and
+// strobe while they have room; the next ones' times into w.ro.
+inline void samples(Work& w, const SegView& s, SegCtx c, double t, double b, double t_end) {
     const idx n = c.n;
     double t0 = w.cp.t0;
     double rec_dt = w.cp.rec_dt;
@@ -815,7 +815,7 @@ inline void samples(Work& w, SegCtx c, double t, double b, double t_end) {
         if (ts_ > t_end) break;
         double* row = rec.row(n_rec);
         row[0] = ts_;
-        sample(w, c, ts_ - t, row);
+        sample(w, s, c, ts_ - t, row);
         row[5] = cut_force(w.seg, ts_ - t, w.dX, n, w.sys.mk, w.sys.force.f0, w.sys.force.om);
         n_rec += 1;
         k_rec += 1;
@@ -826,7 +826,7 @@ inline void samples(Work& w, SegCtx c, double t, double b, double t_end) {
         if (n_stb < strobe.n0) {
             double* row = strobe.row(n_stb);
             row[0] = t_next_strobe;
-            sample(w, c, t_next_strobe - t, row);
+            sample(w, s, c, t_next_strobe - t, row);
             n_stb += 1;
         }
         t_next_strobe += tstrobe;
@@ -984,6 +984,7 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     bool ball = kase == L::BALL;
     // the context with the sizes as the search has them (constants in the copies)
     const SegCtx c{r, ks, sz, n, kase, Regime(mode), ball};
+    const SegView out_view = view(w, c);  // the history's and the strobe's samples
     double f0 = w.sys.force.f0;
     double om = w.sys.force.om;
     double half = w.sys.ball.half;
@@ -1099,7 +1100,7 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
             }
         }
         // history and strobe samples in (t + a, t + b]
-        if (outputs) samples(w, c, t, b, t_end);
+        if (outputs) samples(w, out_view, c, t, b, t_end);
         if (kind >= 0 || !full) break;
         a = b;
         wa = wb;
