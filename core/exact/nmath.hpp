@@ -5,14 +5,13 @@
 // - complex / complex: GCC calls __divdc3 (scaled Smith's algorithm), MSVC and Clang their
 //   own; ncplx divides as CPython does (_Py_c_quot: one ratio, one denominator), which is
 //   also what the exact integrator's setup in Python (simulate/regimes.py) does.
-// - a float operand is promoted to complex(x, 0.0) and the complex operation done, so
-//   (a + bi) * x = (a x - b 0.0) + (a 0.0 + b x) i and (a + bi) + x = (a + x) + (b + 0.0) i;
-//   std::complex computes (a x, b x) and (a + x, b).  The values agree except for signed
-//   zeros, infinities and NaNs (b 0.0 is NaN for an infinite b; -0.0 + 0.0 is +0.0); one
-//   formula everywhere keeps the reference outputs' bits.
 // - complex * complex: the plain formula (ac - bd, ad + bc); GCC adds a NaN recovery
 //   through __muldc3 (a library call on every product), which ncplx has not: the kernel's
 //   operands are finite (the bindings check them).
+// - a float operand acts on each part: (a + bi) x = a x + b x i, (a + bi) / x = a / x +
+//   (b / x) i, (a + bi) + x = (a + x) + b i (two operations where promoting x to
+//   complex(x, 0.0) took six, or a complex division); a float divided by a complex is the
+//   complex division of complex(x, 0.0).
 //
 // So the exact kernel does every complex operation on ncplx.  The arrays (CVec, CMat, ...)
 // store std::complex<double> (the same layout as NumPy's complex128); read an element into
@@ -54,8 +53,7 @@ struct ncplx {
 
     double real() const { return re; }
     double imag() const { return im; }
-    // imag negated as -0.0 - imag: the sign flip of every finite value and of +-0
-    ncplx conjugate() const { return {re, -0.0 - im}; }
+    ncplx conjugate() const { return {re, -im}; }
 };
 
 // a float assigned to or combined with a complex: complex(x, 0.0)
@@ -63,7 +61,7 @@ BB_HOT constexpr ncplx promote(double x) { return {x, 0.0}; }
 
 BB_HOT ncplx operator+(const ncplx& a, const ncplx& b) { return {a.re + b.re, a.im + b.im}; }
 BB_HOT ncplx operator-(const ncplx& a, const ncplx& b) { return {a.re - b.re, a.im - b.im}; }
-BB_HOT ncplx operator-(const ncplx& a) { return {-0.0 - a.re, -0.0 - a.im}; }
+BB_HOT ncplx operator-(const ncplx& a) { return {-a.re, -a.im}; }
 
 // (ac - bd, ad + bc), CPython's _Py_c_prod before 3.14 (no infinity recovery)
 BB_HOT ncplx operator*(const ncplx& z, const ncplx& w) {
@@ -94,14 +92,17 @@ BB_HOT ncplx operator/(const ncplx& a, const ncplx& b) {
     return {nan, nan};
 }
 
-// mixed operands: the float promoted first
-BB_HOT ncplx operator+(const ncplx& a, double x) { return a + promote(x); }
-BB_HOT ncplx operator+(double x, const ncplx& a) { return promote(x) + a; }
-BB_HOT ncplx operator-(const ncplx& a, double x) { return a - promote(x); }
-BB_HOT ncplx operator-(double x, const ncplx& a) { return promote(x) - a; }
-BB_HOT ncplx operator*(const ncplx& a, double x) { return a * promote(x); }
-BB_HOT ncplx operator*(double x, const ncplx& a) { return promote(x) * a; }
-BB_HOT ncplx operator/(const ncplx& a, double x) { return a / promote(x); }
+// mixed operands: the float acts on each part (a float over a complex: complex division)
+BB_HOT ncplx operator+(const ncplx& a, double x) { return {a.re + x, a.im}; }
+BB_HOT ncplx operator+(double x, const ncplx& a) { return {x + a.re, a.im}; }
+BB_HOT ncplx operator-(const ncplx& a, double x) { return {a.re - x, a.im}; }
+BB_HOT ncplx operator-(double x, const ncplx& a) { return {x - a.re, -a.im}; }
+BB_HOT ncplx operator*(const ncplx& a, double x) { return {a.re * x, a.im * x}; }
+BB_HOT ncplx operator*(double x, const ncplx& a) { return {x * a.re, x * a.im}; }
+BB_HOT ncplx operator/(const ncplx& a, double x) {
+    if (x == 0.0) throw ComplexZeroDivision();
+    return {a.re / x, a.im / x};
+}
 BB_HOT ncplx operator/(double x, const ncplx& a) { return promote(x) / a; }
 
 BB_HOT ncplx& operator+=(ncplx& a, const ncplx& b) { return a = a + b; }
@@ -115,8 +116,8 @@ BB_HOT ncplx& operator/=(ncplx& a, double x) { return a = a / x; }
 // equal: both parts ordered-equal; != is its negation, true when a part is NaN
 BB_HOT bool operator==(const ncplx& a, const ncplx& b) { return a.re == b.re && a.im == b.im; }
 BB_HOT bool operator!=(const ncplx& a, const ncplx& b) { return !(a.re == b.re) || !(a.im == b.im); }
-BB_HOT bool operator==(const ncplx& a, double x) { return a == promote(x); }
-BB_HOT bool operator!=(const ncplx& a, double x) { return a != promote(x); }
+BB_HOT bool operator==(const ncplx& a, double x) { return a.re == x && a.im == 0.0; }
+BB_HOT bool operator!=(const ncplx& a, double x) { return !(a == x); }
 
 // abs(z): the C library's hypot (no overflow for large parts)
 BB_HOT double abs(const ncplx& z) { return std::hypot(z.re, z.im); }

@@ -8,11 +8,12 @@ They give, bit for bit, the setup the integrators' reference outputs were comput
 (tests/data/kernel_reference.npz, ``prep_*``): every operation is spelled out so that its
 rounding does not depend on how NumPy vectorises it, that is:
 
-- the complex arithmetic is CPython's, the same as the core's (core/exact/nmath.hpp): a
-  float operand promoted to complex(x, 0.0), then (ac - bd, ad + bc) and CPython's
-  division (``_Py_c_quot``).  Where a loop is vectorised it is vectorised on the real and
-  imaginary parts with exactly these formulas (NumPy's own complex multiply and divide may
-  use other sequences and FMA);
+- the complex arithmetic is CPython's: a float operand promoted to complex(x, 0.0), then
+  (ac - bd, ad + bc) and CPython's division (``_Py_c_quot``), as the core's complex
+  arithmetic (core/exact/nmath.hpp; where the core lets a float act on each part of a
+  complex, the values are the same but for the sign of a zero).  Where a loop is
+  vectorised it is vectorised on the real and imaginary parts with exactly these formulas
+  (NumPy's own complex multiply and divide may use other sequences and FMA);
 - ``abs(z)`` is the C library's hypot (``abs(complex)`` in CPython; *not* CPython's
   ``math.hypot``, which is its own algorithm) and the complex exponential is
   ``exp(x) (cos y + i sin y)`` from the C library's exp, cos, sin (``math.*`` in CPython;
@@ -257,7 +258,7 @@ def _pairing(lam, V, Vi):
 
 
 # The rest of the setup is written as loops on Python floats and complex numbers (CPython's
-# complex arithmetic is the core's): for the small sizes here faster than NumPy's per-call
+# complex arithmetic, as above): for the small sizes here faster than NumPy's per-call
 # overhead, and evidently the same operations.
 def _modal_inputs(Vi_l, B_l):
     """bq = Vi B per regime, each sum in order from 0j."""
@@ -331,7 +332,7 @@ def _grid_exponentials(lam_l, h):
         for lv in range(GRID_LEVELS):
             x = h * 2.0 ** lv
             for z in lr:
-                w = z * x  # CPython: x promoted to complex(x, 0.0), as the core
+                w = z * x  # CPython: x promoted to complex(x, 0.0); the core's values
                 if isfinite(w.real) and isfinite(w.imag):
                     e = exp(w.real)  # _cexp, written out (the common case)
                     eh.append(complex(e * cos(w.imag), e * sin(w.imag)))
@@ -508,7 +509,8 @@ def history_step(tau: float, dt: float) -> float:
 def cut_tables(prep: dict, p: np.ndarray, H: float):
     """exp(lambda tau_p) and Kr b bq j! tau_p^(j+1) phi_(j+1)(lambda tau_p) at the Gauss
     nodes and the end of a whole step H, per regime (the out-of-cut ones have no input):
-    the same arrays, bit for bit, as the core's (core/exact/cut.hpp)."""
+    the tables a cut's whole step reads instead of the closed form (the core's tab_state,
+    core/exact/segment.hpp)."""
     lam = prep["lam"]
     R, nz = lam.shape
     taus = [x * H for x in GL_X] + [H]
