@@ -311,8 +311,8 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 }
 
 // The four RK4 stages of a step, X advanced in place: the stage derivative Kd (carried
-// over from the previous staged step, where only 0 * Kd enters) updated, and with
-// flows_on the stages' energy flows.  force(s, Xs) is the tip force of stage s.
+// over from the previous staged step, where only 0 * Kd enters) updated, and the stages'
+// energy flows.  force(s, Xs) is the tip force of stage s.
 // FAST: stage 1 at X, the sums from their first terms (stages_fast) and the
 // derivative's FAST form (ydd_sum_from_first).
 // The stage values are scalars sized by the mode count, so with N a template constant
@@ -321,7 +321,7 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 // forwarding).
 template <int N, int CASE, bool FAST, class Force>
 BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
-                          const double* cst, const double* wst, Flows& fl, bool flows_on,
+                          const double* cst, const double* wst, Flows& fl,
                           Force&& force) {
     const int nx = sh.nx();
     constexpr int NXC = Shape<N, CASE>::NXC;
@@ -337,10 +337,16 @@ BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
             else
                 sum[j] += wst[s] * Kd[j];
         }
-        if (flows_on) stage_flows(q, sh, fl, terms, wst[s], f);
+        stage_flows(q, sh, fl, terms, wst[s], f);
     }
     for (int j = 0; j < nx; ++j) X[j] += sum[j];
 }
+
+// The affine step map's inputs beyond the state X (linmap.hpp's z): the forcing phase's
+// sine and cosine at the step's start and the ball's friction force F_b.
+struct MapIn {
+    double sn, cn, fz;
+};
 
 // A cheap sufficient condition for map_fits' stage test: with
 // E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
@@ -351,8 +357,8 @@ BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
 // normal and finite; a NaN or infinite state fails the comparison and takes the full
 // test, so the decision is always the full test's.
 template <int N, int CASE>
-BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
-                           double cn, double fz) {
+BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int nx = sh.nx();
     const double a = std::fabs(X[sh.iyd()]);
     if (!(a >= 1e-150 && a <= 1e150)) return false;
@@ -368,12 +374,13 @@ BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X,
 // for a NaN state (nan_maps: the single run's, under which a NaN takes the map).
 template <int N, int CASE>
 BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
-                        double sn, double cn, double fz, bool nan_maps) {
+                        MapIn z, bool nan_maps) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int nx = sh.nx();
     const double yd0 = X[sh.iyd()];
     const bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
     if (!ok) return false;
-    if (surely_fits(sh, vm, X, sn, cn, fz)) return true;
+    if (surely_fits(sh, vm, X, z)) return true;
     v4 ys = vm.yS * sn + vm.yC * cn + vm.yF * fz;
     for (int j = 0; j < nx; ++j) ys += vm.yP[j] * X[j];
     const v4 lhs = ys * yd0;
@@ -388,8 +395,9 @@ BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, co
 // In the solid and ball bars a mode's rows involve only its own u, u' (the modes are
 // coupled through F_b alone).
 template <int N, int CASE>
-BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
-                             double cn, double fz, double* dX) {
+BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z,
+                             double* dX) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int n = sh.n(), nx = sh.nx();
     auto full = [&](int pr) {
         v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + vm.dF[pr] * fz;
@@ -424,7 +432,8 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
 // sum_s b_s psi_d u'_s = psi_d du.
 template <int N, int CASE>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
-                         const double* X, const double* dX, double sn, double cn, double fz) {
+                         const double* X, const double* dX, MapIn z) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int n = sh.n(), nx = sh.nx();
     double pv = 0.0;
     for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];

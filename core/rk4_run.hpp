@@ -251,11 +251,11 @@ BB_INLINE void run_body(const RunArgs& a) {
         double fz = 0.0;
         if (linear && check_fb) {
             fz = map_friction(q, X[iyd]);
-            use_map = map_fits(q, sh, mp, X, sn, cn, fz, true);
+            use_map = map_fits(q, sh, mp, X, MapIn{sn, cn, fz}, true);
         }
         if (use_map) {
-            map_increment(sh, mp, X, sn, cn, fz, dX);
-            map_flows(q, sh, mp, fl, X, dX, sn, cn, fz);
+            map_increment(sh, mp, X, MapIn{sn, cn, fz}, dX);
+            map_flows(q, sh, mp, fl, X, dX, MapIn{sn, cn, fz});
             for (int j = 0; j < nx; ++j) X[j] += dX[j];
         } else {
             auto force = [&](int s, const double* Xs) {
@@ -269,9 +269,9 @@ BB_INLINE void run_body(const RunArgs& a) {
                 return f;
             };
             if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
-                rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, true, force);
+                rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, force);
             else
-                rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, true, force);
+                rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, force);
         }
         const bool steady = k >= a.steady_start;
 

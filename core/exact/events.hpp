@@ -10,8 +10,7 @@
 //                                                                    // g, g', g'' (or NaN)
 //   double hermite(double a, double b, double p0, double p1, double d0, double d1,
 //                  idx order);
-//   double hermite5(double a, double b, double p0, double p1, double d0, double d1,
-//                   double e0, double e1, idx order);
+//   double hermite5(double a, double b, Jet f0, Jet f1, idx order);
 //   double find_root(idx kind, double a, double ga, double b, double gb, const SegView& s,
 //                    double c0);
 //   double find_root_1 / find_root_2 (the same, n = 1 or 2 modes in conjugate pairs);
@@ -21,8 +20,8 @@
 //   std::tuple<double, double> quad_range(double p, double d, double dd, double s);
 //   constexpr int NSUB = 16;
 //   bool may_graze(double a, double b, Vec ev_a, Vec ev_b, double half, double b4);
-//   bool w_may_exceed(double h, double wa, double wb, double wda, double wdb, double bw4,
-//                     double max_w, double min_w, double max_abs_w);
+//   bool w_may_exceed(double h, TipW wa, TipW wb, double bw4, double max_w, double min_w,
+//                     double max_abs_w);
 //   struct StepEnds                 a step [a, b], its level, the event functions and y''
 //                                   at its ends
 //   std::tuple<idx, double> wall_step(StepEnds st, bool watch_v, bool watch_ext,
@@ -200,11 +199,16 @@ inline double hermite(double a, double b, double p0, double p1, double d0, doubl
     return a + x * h;
 }
 
-// Where the quintic Hermite interpolant of values, slopes and second derivatives on [a, b]
-// (order 0), or its derivative (order 1), changes sign: the cubic's start refined by
-// safeguarded Newton on the quintic.
-inline double hermite5(double a, double b, double p0, double p1, double d0, double d1,
-                       double e0, double e1, idx order) {
+// A function's value and its first two derivatives at a point.
+struct Jet {
+    double v, d, dd;
+};
+
+// Where the quintic Hermite interpolant on [a, b] of the values, slopes and second
+// derivatives f0 (at a) and f1 (at b) (order 0), or its derivative (order 1), changes sign:
+// the cubic's start refined by safeguarded Newton on the quintic.
+inline double hermite5(double a, double b, Jet f0, Jet f1, idx order) {
+    const double p0 = f0.v, p1 = f1.v, d0 = f0.d, d1 = f1.d, e0 = f0.dd, e1 = f1.dd;
     double x0 = hermite(a, b, p0, p1, d0, d1, order);
     double h = b - a;
     double m0 = d0 * h;
@@ -463,12 +467,24 @@ inline bool may_graze(double a, double b, Vec ev_a, Vec ev_b, double half, doubl
     return hi + margin >= half || lo - margin <= -half;
 }
 
+// The segment's running extremes, kept in locals (registers) during the search
+struct Extremes {
+    double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
+};
+
+// W, W' and W'' at a grid point (W'' NaN where not evaluated).
+struct TipW {
+    double w, wd, wdd;
+};
+
 // Whether W may go above max_w, below min_w or beyond max_abs_w in magnitude inside a step
-// of length h (the cubic Hermite of W, W' widened by twice its error bound).
-inline bool w_may_exceed(double h, double wa, double wb, double wda, double wdb, double bw4,
-                         double max_w, double min_w, double max_abs_w) {
+// of length h from wa to wb (the cubic Hermite of W, W' widened by twice its error bound,
+// bw4 bounding |W^(4)|).  The extremes come as values: the search keeps its own in
+// registers.
+inline bool w_may_exceed(double h, TipW wa, TipW wb, double bw4, double max_w, double min_w,
+                         double max_abs_w) {
     double margin = bw4 * ipow(h, 4) / 192.0;
-    auto [lo, hi] = _cubic_range(wa, wb, wda * h, wdb * h);
+    auto [lo, hi] = _cubic_range(wa.w, wb.w, wa.wd * h, wb.wd * h);
     hi += margin;
     lo -= margin;
     return hi >= max_w || lo <= min_w || pymax(hi, -lo) >= max_abs_w;
@@ -562,8 +578,8 @@ inline std::tuple<idx, double> wall_step(StepEnds st, bool watch_v, bool watch_e
                 double sg = kk == EV_PLUS ? 1.0 : -1.0;
                 double c0;
                 if (bend == b && ydd_a == ydd_a && ydd_b == ydd_b)  // y'' known at both ends
-                    c0 = hermite5(a, b, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde, sg * ydd_a,
-                                  sg * ydd_b, 0);
+                    c0 = hermite5(a, b, Jet{ev_a[kk], sg * ev_a[EV_YEXT], sg * ydd_a},
+                                  Jet{ge, sg * yde, sg * ydd_b}, 0);
                 else
                     c0 = hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde, 0);
                 double tr = find_root_any(kk, a, ev_a[kk], bend, ge, s, c0);

@@ -508,16 +508,6 @@ struct LevelBounds {
     }
 };
 
-// The segment's running extremes, kept in locals (registers) during the search
-struct Extremes {
-    double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
-};
-
-// W, W' and W'' at a grid point (W'' NaN where not evaluated).
-struct TipW {
-    double w, wd, wdd;
-};
-
 // The longest step 2^lev h (lev <= lb.top) from a free ball's grid point a (its event
 // functions ev_a, y'' = ydd_a, W, W', W'' = wa) that Taylor's theorem proves free of events
 // and of new extrema of |y| (beyond the running extremes e, below the walls at half) or, in
@@ -922,7 +912,7 @@ BB_NOINLINE inline double w_extremum_in(Work& w, SegCtx c, double a, double b, i
                                         TipW wa, TipW wb) {
     double c0;
     if (kind < 0 && wa.wdd == wa.wdd && wb.wdd == wb.wdd) {  // W'' at both ends
-        c0 = hermite5(a, b, wa.w, wb.w, wa.wd, wb.wd, wa.wdd, wb.wdd, 1);
+        c0 = hermite5(a, b, Jet{wa.w, wa.wd, wa.wdd}, Jet{wb.w, wb.wd, wb.wdd}, 1);
     } else {
         c0 = hermite(a, b, wa.w, wb.w, wa.wd, wb.wd, 1);
     }
@@ -943,7 +933,7 @@ BB_ALWAYS_INLINE void w_extremes(Work& w, Extremes& e, SegCtx c, const SegSearch
     e.min_w = pymin(e.min_w, wb.w);
     if (lev == 0 && wda * wdb < 0.0
         && (bw4 < 0.0
-            || w_may_exceed(b - a, wa.w, wb.w, wda, wdb, bw4, e.max_w, e.min_w, e.max_abs_w))) {
+            || w_may_exceed(b - a, wa, wb, bw4, e.max_w, e.min_w, e.max_abs_w))) {
         double we = w_extremum_in(w, c, a, b, kind, wa, wb);
         e.max_abs_w = pymax(e.max_abs_w, std::fabs(we));
         e.max_w = pymax(e.max_w, we);
