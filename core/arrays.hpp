@@ -1,8 +1,7 @@
 // Non-owning views of the NumPy arrays the bindings hand to the integrators.
 //
-// The integrators index arrays as the numba kernels did (a[i], a(i, j), ...);
-// a view knows its shape, so a kernel can test "is there room for another row"
-// exactly as before.  Views never own memory: the bindings check dtype, shape
+// The integrators index arrays as NumPy does (a[i], a(i, j), ..., row-major); a view
+// knows its shape, so a kernel can test "is there room for another row" itself.  Views never own memory: the bindings check dtype, shape
 // and contiguity once, at the boundary (bind_util.hpp), and the views are then
 // trusted inside the core.
 #pragma once

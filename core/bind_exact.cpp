@@ -1,5 +1,6 @@
-// boringbar.core.run_exact: the exact event-driven integrator's entry point (numba:
-// kernels/exact/driver.py, run_exact and its kernels).  Everything from Python is checked
+// boringbar.core.run_exact: the exact event-driven integrator's entry point (the harmonic
+// and the cut kernel, exact/driver.hpp), which takes one run description (ExactRun, its
+// fields set from Python; bind_util.hpp's Fields).  Everything from Python is checked
 // here, before the GIL is released: every array's dtype, shape, contiguity and (outputs)
 // writability, every scalar's finiteness and range, and what the kernel indexes with (the
 // case, the mode count, prepare's regime count and step patterns, the record counters), so
@@ -33,14 +34,14 @@ constexpr double MAX_KNOTS = 1e8;                 // knots a cut's history start
 constexpr double MAX_REV = 1e6;                   // revolutions in a cut's minimum
 constexpr double MAX_TIME_PER_TAU = 1e12;         // |t0| + |t_end| in delays tau
 
-// The arrays handed to the kernel, held until it returns (a dict's entry could otherwise be
-// dropped by another thread while the GIL is released)
+// The arrays of prepare's dict handed to the kernel, held until it returns (a dict's entry
+// could otherwise be dropped by another thread while the GIL is released)
 struct Held {
     std::vector<In> arrays;
 
     Held() { arrays.reserve(32); }  // no reallocation: array_of's reference stays valid
 
-    // obj as an array of any dtype (not converted: an output must be the caller's memory)
+    // obj as an array of any dtype (not converted)
     const In& array_of(nb::handle obj, const char* name) {
         In a;
         require(nb::try_cast(obj, a, false),
@@ -48,20 +49,13 @@ struct Held {
         arrays.push_back(a);
         return arrays.back();
     }
-
-    // obj as a writable array (an output)
-    const In& output_of(nb::handle obj, const char* name) {
-        const In& a = array_of(obj, name);
-        Out w;
-        require(nb::try_cast(obj, w, false), "array '" + std::string(name) + "' must be writable");
-        return a;
-    }
 };
 
 // A record array (rows of ncol floats) that may be empty: NumPy gives a zero-size array the
 // strides (0, 0), which bind_util's contiguity test would refuse; no row of it is ever
 // touched, so its dtype and shape are all that matter.
-Mat record_rows(const In& a, const char* name, idx ncol) {
+template <class A>
+Mat record_rows(const A& a, const char* name, idx ncol) {
     if (a.size() == 0 && a.ndim() == 2 && a.dtype() == nb::dtype<double>() &&
         idx(a.shape(1)) == ncol) {
         return {nullptr, 0, ncol};
@@ -69,7 +63,7 @@ Mat record_rows(const In& a, const char* name, idx ncol) {
     return span2<double>(a, name, -1, ncol);
 }
 
-// obj as a float (a Python number)
+// obj as a float (a Python number; prep's step h)
 double scalar(nb::handle obj, const char* name) {
     double v;
     require(nb::try_cast(obj, v), "'" + std::string(name) + "' must be a number");
@@ -235,34 +229,42 @@ void attach_prep(exact::ExactRun& a, Held& held, nb::dict prep, const Shape& s, 
     check_steps(a.kstep, a.levmax);
 }
 
-void attach_tables(exact::ExactRun& a, Held& held, nb::handle tabE, nb::handle tabP,
-                   const Shape& s) {
+void attach_tables(exact::ExactRun& a, const In& tabE, const In& tabP, const Shape& s) {
     if (s.regen) {
-        const In& e = held.array_of(tabE, "tabE");
-        a.tabE = finite_view(span3<cplx>(e, "tabE", s.R, 5, s.nz), "tabE");
-        const In& p = held.array_of(tabP, "tabP");
-        a.tabP = finite_view(span4<cplx>(p, "tabP", s.R, 5, 4, s.nz), "tabP");
-    } else {  // unused: the dummy tables of a harmonic run
-        a.tabE = span3<cplx>(held.array_of(tabE, "tabE"), "tabE", 1, 5, 1);
-        a.tabP = span4<cplx>(held.array_of(tabP, "tabP"), "tabP", 1, 5, 4, 1);
+        a.tabE = finite_view(span3<cplx>(given(tabE, "tabE"), "tabE", s.R, 5, s.nz), "tabE");
+        a.tabP = finite_view(span4<cplx>(given(tabP, "tabP"), "tabP", s.R, 5, 4, s.nz), "tabP");
+    } else if (tabE.is_valid() || tabP.is_valid()) {  // unused: the dummy tables, if given
+        a.tabE = span3<cplx>(given(tabE, "tabE"), "tabE", 1, 5, 1);
+        a.tabP = span4<cplx>(given(tabP, "tabP"), "tabP", 1, 5, 4, 1);
     }
 }
 
-double run_exact_py(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle t_end_,
-                    nb::handle t_steady_, nb::handle rec_dt_, nb::handle rec_, nb::handle imp_,
-                    nb::handle stick_, nb::handle strobe_, nb::handle met_, nb::handle prep_,
-                    nb::handle dt_, nb::handle H_, nb::handle tabE, nb::handle tabP) {
+}  // namespace
+
+// One exact run as Python describes it (boringbar.core.ExactRun): the packed parameters p,
+// the state x (advanced in place), the span, the history's sampling, the records and
+// metrics (written in place), prepare(p)'s dict and a cut's step, history step and tables.
+struct ExactRunPy {
+    In p;
+    Out x;
+    double t0 = 0.0, t_end = 0.0, t_steady = 0.0, rec_dt = 0.0;
+    Out rec, imp, stick, strobe, met;
+    nb::dict prep;
+    double dt = 0.0, H = 0.0;
+    In tabE, tabP;  // a cut's tables; not set (or zeros of shape (1, 5, 1), (1, 5, 4, 1)):
+                    // a harmonic run
+};
+
+namespace {
+
+double run_exact_py(const ExactRunPy& run) {
+    const ExactRunPy r = run;  // the arrays and prep held for the run
     Held held;
     exact::ExactRun a;
-    a.p = span1<double>(held.array_of(p_, "p"), "p", L::P_SIZE);
-    double t0 = scalar(t0_, "t0");
-    double t_end = scalar(t_end_, "t_end");
-    double t_steady = scalar(t_steady_, "t_steady");
-    double rec_dt = scalar(rec_dt_, "rec_dt");
-    double dt = scalar(dt_, "dt");
-    double H = scalar(H_, "H");
-    require(nb::isinstance<nb::dict>(prep_), "'prep' must be the dict of prepare(p)");
-    nb::dict prep = nb::borrow<nb::dict>(prep_);
+    a.p = span1<double>(given(r.p, "p"), "p", L::P_SIZE);
+    const double t0 = r.t0, t_end = r.t_end, t_steady = r.t_steady, rec_dt = r.rec_dt;
+    const double dt = r.dt, H = r.H;
+    const nb::dict prep = r.prep;
     Shape s = check_params(a.p);
     require(std::isfinite(t0) && std::isfinite(t_end) && std::isfinite(t_steady),
             "t0, t_end and t_steady must be finite");
@@ -279,17 +281,17 @@ double run_exact_py(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle t_e
     a.dt_out = dt;
     a.hist_step = H;
 
-    a.x = span1<double>(held.output_of(x_, "x"), "x", 2 * s.n + 2);
+    a.x = span1<double>(given(r.x, "x"), "x", 2 * s.n + 2);
     finite_view(a.x, "x");
-    a.rec = record_rows(held.output_of(rec_, "rec"), "rec", L::REC_NCOL);
-    a.imp = record_rows(held.output_of(imp_, "imp"), "imp", L::IMP_NCOL);
-    a.stick = record_rows(held.output_of(stick_, "stick"), "stick", L::STICK_NCOL);
-    a.strobe = record_rows(held.output_of(strobe_, "strobe"), "strobe", L::STROBE_NCOL);
-    a.met = span1<double>(held.output_of(met_, "met"), "met", L::MET_SIZE);
+    a.rec = record_rows(given(r.rec, "rec"), "rec", L::REC_NCOL);
+    a.imp = record_rows(given(r.imp, "imp"), "imp", L::IMP_NCOL);
+    a.stick = record_rows(given(r.stick, "stick"), "stick", L::STICK_NCOL);
+    a.strobe = record_rows(given(r.strobe, "strobe"), "strobe", L::STROBE_NCOL);
+    a.met = span1<double>(given(r.met, "met"), "met", L::MET_SIZE);
     check_met(a.met);
 
     attach_prep(a, held, prep, s, t0, t_end);
-    attach_tables(a, held, tabE, tabP, s);
+    attach_tables(a, r.tabE, r.tabP, s);
 
     nb::gil_scoped_release release;
     return exact::run_exact(a);
@@ -298,14 +300,37 @@ double run_exact_py(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle t_e
 }  // namespace
 
 void bind_exact(nb::module_& m) {
-    m.def("run_exact", &run_exact_py, nb::arg("p"), nb::arg("x"), nb::arg("t0"), nb::arg("t_end"),
-          nb::arg("t_steady"), nb::arg("rec_dt"), nb::arg("rec"), nb::arg("imp"),
-          nb::arg("stick"), nb::arg("strobe"), nb::arg("met"), nb::arg("prep"), nb::arg("dt"),
-          nb::arg("H"), nb::arg("tabE"), nb::arg("tabP"),
-          "Advance x exactly from t0 to t_end (the exact event-driven integrator): prep is prepare(p)'s dict, dt a cut's step, H its history "
-          "step (0 for harmonic forcing), tabE and tabP its tables (harmonic: zero arrays of "
-          "shape (1, 5, 1) and (1, 5, 4, 1)).  Writes x, rec, imp, stick, strobe and met in "
-          "place; returns the time reached.");
+    auto run = nb::class_<ExactRunPy>(m, "ExactRun",
+                                      "One exact run for run_exact: set its fields, then call "
+                                      "run_exact (tabE, tabP only for a cut).");
+    run.def(nb::init<>());
+    Fields<ExactRunPy>{run}
+        .in("p", &ExactRunPy::p, "the packed parameter vector (P_SIZE float64)")
+        .out("x", &ExactRunPy::x, "the state (2 n + 2 float64), advanced in place")
+        .real("t0", &ExactRunPy::t0, "the start time (s)")
+        .real("t_end", &ExactRunPy::t_end, "the end time (s), >= t0")
+        .real("t_steady", &ExactRunPy::t_steady, "the steady window's start (s)")
+        .real("rec_dt", &ExactRunPy::rec_dt, "the history's sampling step (s); 0: none")
+        .out("rec", &ExactRunPy::rec, "the history rows (t, W, W', aux, aux', f), (n, 6)")
+        .out("imp", &ExactRunPy::imp, "the impact rows (t, wall, y'-), (n, 3)")
+        .out("stick", &ExactRunPy::stick, "the stick intervals (start, end), (n, 2)")
+        .out("strobe", &ExactRunPy::strobe, "the Poincare rows (t, W, W', aux, aux'), (n, 5)")
+        .out("met", &ExactRunPy::met, "the metrics (MET_SIZE float64), updated in place")
+        .real("dt", &ExactRunPy::dt, "a cut's step (s): the unit of N_ZERO_STEPS")
+        .real("H", &ExactRunPy::H, "a cut's history step (s); 0 for harmonic forcing")
+        .in("tabE", &ExactRunPy::tabE, "a cut's tables exp(lambda tau_p), (R, 5, nz) complex")
+        .in("tabP", &ExactRunPy::tabP, "a cut's input tables, (R, 5, 4, nz) complex");
+    run.def_prop_rw(
+        "prep", [](const ExactRunPy& r) { return r.prep; },
+        [](ExactRunPy& r, nb::handle h) {
+            require(nb::isinstance<nb::dict>(h), "'prep' must be the dict of prepare(p)");
+            r.prep = nb::borrow<nb::dict>(h);
+        },
+        nb::arg("value").none(), "prepare(p)'s dict: the regimes' matrices");
+    m.def("run_exact", &run_exact_py, nb::arg("run"),
+          "Advance run.x exactly from run.t0 to run.t_end (the exact event-driven integrator), "
+          "writing the records and metrics in place; returns the time reached.  The GIL is "
+          "released while it runs.");
     // the event-search grid that prepare() sizes its tables for (simulate/regimes.py)
     m.attr("GRID_PER_PERIOD") = exact::GRID_PER_PERIOD;
     m.attr("GRID_LEVELS") = exact::GRID_LEVELS;

@@ -1,11 +1,13 @@
 // boringbar.core.run_rk4 and run_rk4_batch: the RK4 kernels' boundary.
 //
-// Every argument is checked here, before the integration starts: each array's dtype
-// (float64), shape, C-contiguity and (for outputs) writability, and each scalar's range,
-// including the slots of p and met the kernel uses to index or to choose its path.
+// Each takes one run description (RK4Run, RK4Batch: its fields set from Python, each
+// setter checking that it is given an array, a writable one for an output, a number or an
+// integer).  Everything is checked here, before the integration starts: each array's
+// dtype (float64), shape and C-contiguity, and each scalar's range, including the slots of
+// p and met the kernel uses to index or to choose its path.
 // A bad one is a ValueError that names it and says what is allowed; past these checks
-// every write of the kernel stays inside its array (the record counts are tested against
-// the arrays' lengths, as in the numba kernels).  The integration runs without the GIL.
+// every write of the kernel stays inside its array (the kernel tests the record counts
+// against the arrays' lengths before writing a row).  The integration runs without the GIL.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
@@ -26,45 +28,6 @@ std::string num(double v) {
     char s[32];
     std::snprintf(s, sizeof s, "%.17g", v);
     return s;
-}
-
-// An input array (read-only allowed).
-In input(nb::handle h, const char* name) {
-    In a;
-    if (!nb::try_cast(h, a, false))
-        throw nb::value_error(("core: '" + std::string(name) + "' must be a NumPy array").c_str());
-    return a;
-}
-
-// An output array: the kernel writes into it, so it must be writable.
-Out output(nb::handle h, const char* name) {
-    Out a;
-    if (!nb::try_cast(h, a, false)) {
-        In ro;
-        const bool is_array = nb::try_cast(h, ro, false);
-        throw nb::value_error(("core: '" + std::string(name) + "' must be a " +
-                               (is_array ? "writable" : "NumPy") + " array")
-                                  .c_str());
-    }
-    return a;
-}
-
-double real(nb::handle h, const char* name) {
-    double v;
-    if (!nb::try_cast(h, v, true))
-        throw nb::value_error(("core: '" + std::string(name) + "' must be a number").c_str());
-    return v;
-}
-
-std::int64_t integer(nb::handle h, const char* name) {
-    std::int64_t v;
-    if (!nb::isinstance<nb::float_>(h) && nb::try_cast(h, v, true)) return v;
-    // an integral float (numba's wrapper took int() of these arguments)
-    double d;
-    if (nb::isinstance<nb::float_>(h) && nb::try_cast(h, d, false) && std::isfinite(d) &&
-        d == std::floor(d) && std::fabs(d) < 9.0e18)
-        return std::int64_t(d);
-    throw nb::value_error(("core: '" + std::string(name) + "' must be an integer").c_str());
 }
 
 // An integer-valued slot of a parameter vector in [lo, hi].
@@ -143,38 +106,54 @@ void check_cut(const double* p, double dt, std::int64_t nbuf) {
                                       "+ 3 = " + num(need));
 }
 
-void run_rk4(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle dt_,
-             nb::handle n_steps_, nb::handle steady_start_, nb::handle rec_every_,
-             nb::handle rec_, nb::handle imp_, nb::handle stick_, nb::handle strobe_,
-             nb::handle met_, nb::handle buf_, nb::handle modes_) {
-    In p_arr = input(p_, "p");
-    Out x_arr = output(x_, "x"), rec_arr = output(rec_, "rec"), imp_arr = output(imp_, "imp");
-    Out stick_arr = output(stick_, "stick"), strobe_arr = output(strobe_, "strobe");
-    Out met_arr = output(met_, "met"), buf_arr = output(buf_, "buf");
+}  // namespace
 
+// One RK4 run as Python describes it (boringbar.core.RK4Run): the packed parameters p, the
+// state x (advanced in place), the time grid, the history's sampling, the records and
+// metrics (written in place), a cut's delay history and, optionally, its modes' extremes.
+struct RK4Run {
+    In p;
+    Out x;
+    double t0 = 0.0, dt = 0.0;
+    std::int64_t n_steps = 0, steady_start = 0, rec_every = 0;
+    Out rec, imp, stick, strobe, met;
+    Out buf;    // a cut's delay history; (0, 2) for a harmonic run
+    Out modes;  // not set: not kept
+};
+
+// A lock-step batch of harmonic RK4 runs (boringbar.core.RK4Batch): one row of P, x, met
+// and one block of imp, stick, strobe per run, the time grid shared.
+struct RK4Batch {
+    In P;
+    Out x;
+    double t0 = 0.0, dt = 0.0;
+    std::int64_t n_steps = 0, steady_start = 0;
+    Out imp, stick, strobe, met;
+};
+
+namespace {
+
+void run_rk4(const RK4Run& run) {
+    const RK4Run r = run;  // the arrays held for the run, whatever Python does meanwhile
     R::RunArgs a;
-    const Span1<double> p = span1<double>(p_arr, "p", L::P_SIZE);
+    const Span1<double> p = span1<double>(given(r.p, "p"), "p", L::P_SIZE);
     a.p = p.d;
     const Kind k = kind_of(a.p, "p");
-    a.x = span1<double>(x_arr, "x", 2 * k.n + 2);
-    a.t0 = real(t0_, "t0");
-    a.dt = real(dt_, "dt");
-    a.n_steps = integer(n_steps_, "n_steps");
-    a.steady_start = integer(steady_start_, "steady_start");
-    a.rec_every = integer(rec_every_, "rec_every");
+    a.x = span1<double>(given(r.x, "x"), "x", 2 * k.n + 2);
+    a.t0 = r.t0;
+    a.dt = r.dt;
+    a.n_steps = r.n_steps;
+    a.steady_start = r.steady_start;
+    a.rec_every = r.rec_every;
     check_time(a.t0, a.dt, a.n_steps, a.steady_start);
     require(a.rec_every >= 0, "rec_every = " + std::to_string(a.rec_every) + " must be >= 0");
-    a.rec = span2<double>(rec_arr, "rec", -1, L::REC_NCOL);
-    a.imp = span2<double>(imp_arr, "imp", -1, L::IMP_NCOL);
-    a.stick = span2<double>(stick_arr, "stick", -1, L::STICK_NCOL);
-    a.strobe = span2<double>(strobe_arr, "strobe", -1, L::STROBE_NCOL);
-    a.met = span1<double>(met_arr, "met", L::MET_SIZE);
-    a.buf = span2<double>(buf_arr, "buf", -1, 2);
-    Out modes_arr;  // held for the run, like the other arrays
-    if (!modes_.is_none()) {
-        modes_arr = output(modes_, "modes");
-        a.modes = span2<double>(modes_arr, "modes", k.n, 2);
-    }
+    a.rec = span2<double>(given(r.rec, "rec"), "rec", -1, L::REC_NCOL);
+    a.imp = span2<double>(given(r.imp, "imp"), "imp", -1, L::IMP_NCOL);
+    a.stick = span2<double>(given(r.stick, "stick"), "stick", -1, L::STICK_NCOL);
+    a.strobe = span2<double>(given(r.strobe, "strobe"), "strobe", -1, L::STROBE_NCOL);
+    a.met = span1<double>(given(r.met, "met"), "met", L::MET_SIZE);
+    a.buf = span2<double>(given(r.buf, "buf"), "buf", -1, 2);
+    if (r.modes.is_valid()) a.modes = span2<double>(r.modes, "modes", k.n, 2);
     check_counts(a.met.d, "met");
     if (k.forcing == L::REGENERATIVE) check_cut(a.p, a.dt, a.buf.n0);
 
@@ -182,16 +161,10 @@ void run_rk4(nb::handle p_, nb::handle x_, nb::handle t0_, nb::handle dt_,
     R::run_single(a);
 }
 
-void run_rk4_batch(nb::handle P_, nb::handle x_, nb::handle t0_, nb::handle dt_,
-                   nb::handle n_steps_, nb::handle steady_start_, nb::handle imp_,
-                   nb::handle stick_, nb::handle strobe_, nb::handle met_) {
-    In P_arr = input(P_, "P");
-    Out x_arr = output(x_, "x"), imp_arr = output(imp_, "imp");
-    Out stick_arr = output(stick_, "stick"), strobe_arr = output(strobe_, "strobe");
-    Out met_arr = output(met_, "met");
-
+void run_rk4_batch(const RK4Batch& run) {
+    const RK4Batch r = run;  // the arrays held for the run
     R::BatchArgs a;
-    const Span2<double> P = span2<double>(P_arr, "P", -1, L::P_SIZE);
+    const Span2<double> P = span2<double>(given(r.P, "P"), "P", -1, L::P_SIZE);
     a.P = {P.d, P.n0, P.n1};
     const std::int64_t n_runs = P.n0;
     require(n_runs >= 1 && n_runs <= R::BMAX, "a batch of " + std::to_string(n_runs) +
@@ -207,16 +180,16 @@ void run_rk4_batch(nb::handle P_, nb::handle x_, nb::handle t0_, nb::handle dt_,
         require(kr.forcing == L::HARMONIC,
                 row + ": batches take harmonic forcing only (cuts: run_rk4)");
     }
-    a.x = span2<double>(x_arr, "x", n_runs, 2 * k.n + 2);
-    a.t0 = real(t0_, "t0");
-    a.dt = real(dt_, "dt");
-    a.n_steps = integer(n_steps_, "n_steps");
-    a.steady_start = integer(steady_start_, "steady_start");
+    a.x = span2<double>(given(r.x, "x"), "x", n_runs, 2 * k.n + 2);
+    a.t0 = r.t0;
+    a.dt = r.dt;
+    a.n_steps = r.n_steps;
+    a.steady_start = r.steady_start;
     check_time(a.t0, a.dt, a.n_steps, a.steady_start);
-    a.imp = span3<double>(imp_arr, "imp", n_runs, -1, L::IMP_NCOL);
-    a.stick = span3<double>(stick_arr, "stick", n_runs, -1, L::STICK_NCOL);
-    a.strobe = span3<double>(strobe_arr, "strobe", n_runs, -1, L::STROBE_NCOL);
-    a.met = span2<double>(met_arr, "met", n_runs, L::MET_SIZE);
+    a.imp = span3<double>(given(r.imp, "imp"), "imp", n_runs, -1, L::IMP_NCOL);
+    a.stick = span3<double>(given(r.stick, "stick"), "stick", n_runs, -1, L::STICK_NCOL);
+    a.strobe = span3<double>(given(r.strobe, "strobe"), "strobe", n_runs, -1, L::STROBE_NCOL);
+    a.met = span2<double>(given(r.met, "met"), "met", n_runs, L::MET_SIZE);
     for (std::int64_t r = 0; r < n_runs; ++r)
         check_counts(a.met.row(r), "met[" + std::to_string(r) + "]");
 
@@ -229,19 +202,48 @@ void run_rk4_batch(nb::handle P_, nb::handle x_, nb::handle t0_, nb::handle dt_,
 void bind_rk4(nb::module_& m) {
     m.attr("BMAX") = R::BMAX;
     m.attr("NREV_MAX") = R::NREV_MAX;
-    m.def("run_rk4", &run_rk4, nb::arg("p"), nb::arg("x"), nb::arg("t0"), nb::arg("dt"),
-          nb::arg("n_steps"), nb::arg("steady_start"), nb::arg("rec_every"), nb::arg("rec"),
-          nb::arg("imp"), nb::arg("stick"), nb::arg("strobe"), nb::arg("met"), nb::arg("buf"),
-          nb::arg("modes").none() = nb::none(),
-          "Advance x (updated in place) by n_steps RK4 steps of the published scheme from t0 "
-          "(docs/model.md, section 5): the records rec (t, W, W', aux, aux', f every "
-          "rec_every steps), imp, stick, strobe and the metrics met as boringbar.simulate.kernels "
-          "describes; buf the regenerative delay history ((0, 2) when unused); modes (a "
-          "cut's, optional: (n_modes, 2)) each mode's max and min over the steady steps, "
-          "updated in place.");
-    m.def("run_rk4_batch", &run_rk4_batch, nb::arg("P"), nb::arg("x"), nb::arg("t0"),
-          nb::arg("dt"), nb::arg("n_steps"), nb::arg("steady_start"), nb::arg("imp"),
-          nb::arg("stick"), nb::arg("strobe"), nb::arg("met"),
+    auto run = nb::class_<RK4Run>(m, "RK4Run",
+                                  "One RK4 run for run_rk4: set every field, then call run_rk4.");
+    run.def(nb::init<>());
+    Fields<RK4Run>{run}
+        .in("p", &RK4Run::p, "the packed parameter vector (P_SIZE float64)")
+        .out("x", &RK4Run::x, "the state (2 n + 2 float64), advanced in place")
+        .real("t0", &RK4Run::t0, "the start time (s)")
+        .real("dt", &RK4Run::dt, "the step (s), > 0")
+        .integer("n_steps", &RK4Run::n_steps, "the steps to take, >= 0")
+        .integer("steady_start", &RK4Run::steady_start,
+                 "the first step of the steady part, in [0, n_steps]")
+        .integer("rec_every", &RK4Run::rec_every, "a history row every this many steps; 0: none")
+        .out("rec", &RK4Run::rec, "the history rows (t, W, W', aux, aux', f), (n, 6)")
+        .out("imp", &RK4Run::imp, "the impact rows (t, wall, y'-), (n, 3)")
+        .out("stick", &RK4Run::stick, "the stick intervals (start, end), (n, 2)")
+        .out("strobe", &RK4Run::strobe, "the Poincare rows (t, W, W', aux, aux'), (n, 5)")
+        .out("met", &RK4Run::met, "the metrics (MET_SIZE float64), updated in place")
+        .out("buf", &RK4Run::buf,
+             "a cut's delay history of W, W' ((rows, 2); (0, 2) for a harmonic run)")
+        .out_or_none("modes", &RK4Run::modes,
+                     "a cut's per-mode max and min of u_i over the steady steps, (n, 2), "
+                     "updated in place; None: not kept");
+    auto batch = nb::class_<RK4Batch>(
+        m, "RK4Batch", "A lock-step batch for run_rk4_batch: set every field, then call it.");
+    batch.def(nb::init<>());
+    Fields<RK4Batch>{batch}
+        .in("P", &RK4Batch::P, "the runs' packed parameters, one row a run (1..BMAX rows)")
+        .out("x", &RK4Batch::x, "the runs' states, one row a run, advanced in place")
+        .real("t0", &RK4Batch::t0, "the start time (s)")
+        .real("dt", &RK4Batch::dt, "the step (s), > 0")
+        .integer("n_steps", &RK4Batch::n_steps, "the steps to take, >= 0")
+        .integer("steady_start", &RK4Batch::steady_start,
+                 "the first step of the steady part, in [0, n_steps]")
+        .out("imp", &RK4Batch::imp, "the impact rows, (runs, n, 3)")
+        .out("stick", &RK4Batch::stick, "the stick intervals, (runs, n, 2)")
+        .out("strobe", &RK4Batch::strobe, "the Poincare rows, (runs, n, 5)")
+        .out("met", &RK4Batch::met, "the metrics, one row a run, updated in place");
+    m.def("run_rk4", &run_rk4, nb::arg("run"),
+          "Advance run.x (in place) by run.n_steps RK4 steps of the published scheme from "
+          "run.t0 (docs/model.md, section 5), writing the records and metrics in place as "
+          "boringbar.simulate.kernels describes.  The GIL is released while it runs.");
+    m.def("run_rk4_batch", &run_rk4_batch, nb::arg("run"),
           "Advance a batch of harmonic runs (rows of P, x, met; imp, stick, strobe per run) "
           "in lock-step; each run's results are run_rk4's bit for bit.");
 }

@@ -119,4 +119,108 @@ inline void require(bool ok, const std::string& what) {
 
 inline bool finite(double v) { return std::isfinite(v); }
 
+// ---- the run descriptions' fields --------------------------------------------------------
+//
+// A run description (RK4Run, RK4Batch, ExactRun) is a small class whose fields Python sets
+// one by one; each field's setter checks what it is given and names the field when it
+// refuses it (a NumPy array; writable for an output; a number; an integer).  The arrays'
+// dtype, shape and contiguity are checked when the run starts, against each other.
+
+// h as a NumPy array (read-only allowed), or a ValueError naming it
+inline In input_array(nb::handle h, const char* name) {
+    In a;
+    if (!nb::try_cast(h, a, false))
+        throw nb::value_error(("core: '" + std::string(name) + "' must be a NumPy array").c_str());
+    return a;
+}
+
+// h as a writable NumPy array (the run writes into it), or a ValueError naming it
+inline Out output_array(nb::handle h, const char* name) {
+    Out a;
+    if (!nb::try_cast(h, a, false)) {
+        In ro;
+        const bool is_array = nb::try_cast(h, ro, false);
+        throw nb::value_error(("core: '" + std::string(name) + "' must be a " +
+                               (is_array ? "writable" : "NumPy") + " array")
+                                  .c_str());
+    }
+    return a;
+}
+
+// h as a float (a Python number), or a ValueError naming it
+inline double real_value(nb::handle h, const char* name) {
+    double v;
+    if (!nb::try_cast(h, v, true))
+        throw nb::value_error(("core: '" + std::string(name) + "' must be a number").c_str());
+    return v;
+}
+
+// h as an integer (an integral float too: a count computed in floating point, 2e4 or
+// n / 2.0, is accepted), or a ValueError naming it
+inline std::int64_t int_value(nb::handle h, const char* name) {
+    std::int64_t v;
+    if (!nb::isinstance<nb::float_>(h) && nb::try_cast(h, v, true)) return v;
+    double d;
+    if (nb::isinstance<nb::float_>(h) && nb::try_cast(h, d, false) && std::isfinite(d) &&
+        d == std::floor(d) && std::fabs(d) < 9.0e18)
+        return std::int64_t(d);
+    throw nb::value_error(("core: '" + std::string(name) + "' must be an integer").c_str());
+}
+
+// The fields of a run description C, each a property whose setter checks its value.
+template <class C>
+struct Fields {
+    nb::class_<C>& cls;
+
+    // an input array (read-only allowed)
+    Fields& in(const char* name, In C::*m, const char* doc) {
+        cls.def_prop_rw(
+            name, [m](const C& c) { return c.*m; },
+            [m, name](C& c, nb::handle h) { c.*m = input_array(h, name); }, nb::arg("value").none(),
+            doc);
+        return *this;
+    }
+    // an output array (written in place: writable)
+    Fields& out(const char* name, Out C::*m, const char* doc) {
+        cls.def_prop_rw(
+            name, [m](const C& c) { return c.*m; },
+            [m, name](C& c, nb::handle h) { c.*m = output_array(h, name); },
+            nb::arg("value").none(), doc);
+        return *this;
+    }
+    // an optional output array (None: not kept)
+    Fields& out_or_none(const char* name, Out C::*m, const char* doc) {
+        cls.def_prop_rw(
+            name, [m](const C& c) -> nb::object {
+                if (!(c.*m).is_valid()) return nb::none();
+                return nb::cast(c.*m);
+            },
+            [m, name](C& c, nb::handle h) { c.*m = h.is_none() ? Out() : output_array(h, name); },
+            nb::arg("value").none(), doc);
+        return *this;
+    }
+    Fields& real(const char* name, double C::*m, const char* doc) {
+        cls.def_prop_rw(
+            name, [m](const C& c) { return c.*m; },
+            [m, name](C& c, nb::handle h) { c.*m = real_value(h, name); }, nb::arg("value").none(),
+            doc);
+        return *this;
+    }
+    Fields& integer(const char* name, std::int64_t C::*m, const char* doc) {
+        cls.def_prop_rw(
+            name, [m](const C& c) { return c.*m; },
+            [m, name](C& c, nb::handle h) { c.*m = int_value(h, name); }, nb::arg("value").none(),
+            doc);
+        return *this;
+    }
+};
+
+// An array field that was never set, when the run starts: a ValueError naming it.
+template <class A>
+const A& given(const A& a, const char* name) {
+    if (!a.is_valid())
+        throw nb::value_error(("core: '" + std::string(name) + "' was not set").c_str());
+    return a;
+}
+
 }  // namespace bb::bind

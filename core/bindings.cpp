@@ -5,9 +5,11 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/map.h>
+#include <nanobind/stl/vector.h>
 
 #include <map>
 #include <string>
+#include <vector>
 
 #include "layout.hpp"
 
@@ -46,12 +48,34 @@ std::map<std::string, int> layout_names() {
     return out;
 }
 
+// The scalar slots of p, in order (the per-mode blocks M_ .. PSI_A follow them).
+std::vector<std::string> param_names() {
+    std::vector<std::string> out;
+#define BB_NAME(name) out.push_back(#name);
+    BB_P_SCALARS(BB_NAME)
+#undef BB_NAME
+    return out;
+}
+
+// The slots of met, in order.
+std::vector<std::string> metric_names() {
+    std::vector<std::string> out;
+#define BB_NAME(name) out.push_back(#name);
+    BB_METRICS(BB_NAME)
+#undef BB_NAME
+    return out;
+}
+
 }  // namespace
 
 NB_MODULE(core, m) {
     m.doc() = "boringbar's compiled core: the RK4 and exact event-driven integrators.";
     m.def("layout", &layout_names,
           "The packed parameter vector's and the metric vector's slots, by name.");
+    m.def("param_names", &param_names,
+          "The scalar slots of the packed parameter vector, in order; the per-mode blocks "
+          "M_, K_, C_, PSI_L, PSI_D, PSI_A of NMAX entries each follow them.");
+    m.def("metric_names", &metric_names, "The metric vector's slots, in order.");
     bb::bind::bind_rk4(m);
     bb::bind::bind_exact(m);
     bb::bind::bind_dynamics(m);

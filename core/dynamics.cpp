@@ -84,7 +84,7 @@ Matrix impact_matrix(const P& p) {
     for (int j = 0; j < nx; ++j) {
         for (int i = 0; i < nx; ++i) X[i] = i == j ? 1.0 : 0.0;
         if (j == iyd && sh.ball()) {  // the law is linear in the arriving velocity
-            const ImpactJump jump = impact_law(X[iyd], q.e, q.meff);
+            const ImpactJump jump = impact_law(X[iyd], q.ball.e, q.ball.meff);
             X[iyd] = jump.yd;
             R::jump_modes(q, sh.n(), X, jump.g);
         }

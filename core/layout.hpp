@@ -1,6 +1,6 @@
 // The packed parameter vector p and the metric vector met: their layout, in one place.
 //
-// Everything a run needs is packed by simulate.py into one float64 vector p whose
+// Everything a run needs is packed by simulate/engine.py into one float64 vector p whose
 // slots are named here; everything a run streams out as scalars goes into met at the
 // slots named here.  The Python side reads these names from the compiled module
 // (boringbar.core.layout()), so there is no second copy of the offsets.

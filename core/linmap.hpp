@@ -14,8 +14,9 @@
 //   u_i', and the absorber's stroke rate in row n), Wv (4, n + 1) their weights b_s c_k;
 // - Fs, Fc (nz): the force's work over the step is S (Fs . z) + C (Fc . z).
 //
-// The operations are those of the stage recursion written in kernels/linmap.py, in the
-// same order, so the tables (and every step taken with them) have the same bits.
+// The tables are built by the stage recursion applied to the basis vectors, the same
+// operations in the same order at every build, so the tables (and every step taken with
+// them) have the same bits in every run, batch lane and instruction-set copy.
 #pragma once
 
 #include <cmath>
@@ -84,7 +85,7 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
         for (int s = 0; s < 4; ++s) {
             for (int j = 0; j < nx; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
             const double f = f0 * (alpha[s] * S + beta[s] * Cz);
-            // the derivative as in the stage loop (F_b given), written as linmap.py has it
+            // the stage derivative with F_b given (rk4.hpp's derivative), term by term
             double sfree = 0.0, wd = 0.0;
             for (int i = 0; i < n; ++i) {
                 const double vi = Xs[n + i];

@@ -17,6 +17,25 @@ namespace bb {
 
 namespace L = layout;
 
+// The ball of an impact damper and its walls: half the diametral gap, the restitution, the
+// effective mass of an impact, the capture threshold (impacts slower than vimp are contact)
+// and the ball's mass (0: no ball).
+struct Ball {
+    double half = 0.0;  // delta / 2
+    double e = 0.0;     // restitution
+    double meff = 0.0;  // effective mass of an impact
+    double vimp = 0.0;  // capture threshold
+    double m = 0.0;     // the ball's mass
+};
+
+// Where a run's events go: the metric vector (the counts and sums), the impact and stick
+// records, and the start of the steady part (counts and rows are kept from there on).
+struct EventLog {
+    double* met;
+    Mat imp, stick;
+    double t_steady;
+};
+
 // outcome of wall_rule at a step's end
 enum WallOutcome : int { OFF_WALL = 0, IMPACT = 1, MICRO_IMPACT = 2, ON_WALL = 3 };
 
@@ -80,7 +99,8 @@ struct WallResult {
 };
 
 inline WallResult wall_rule(double* met, Mat imp, double y, double yd, double t1, bool steady,
-                            double half, double e, double meff, double vimp) {
+                            const Ball& ball) {
+    const double half = ball.half, e = ball.e, meff = ball.meff, vimp = ball.vimp;
     if (!(std::fabs(y) >= half)) return {OFF_WALL, y, yd, 0.0};
     double wall = y > 0.0 ? 1.0 : -1.0;
     if (!(wall * yd > 0.0)) return {ON_WALL, wall * half, yd, 0.0};
@@ -102,13 +122,13 @@ struct StickState {
     double t0 = 0.0;
 };
 
-inline void stick_step(bool stuck, StickState& s, double t, double t1, double* met, Mat stick,
-                       double t_steady, double stick_min) {
+inline void stick_step(bool stuck, StickState& s, double t, double t1, const EventLog& log,
+                       double stick_min) {
     if (stuck && !s.in_stick) {
         s.in_stick = true;
         s.t0 = t;
     } else if (s.in_stick && !stuck) {
-        close_stick(met, stick, s.t0, t1, t_steady, stick_min);
+        close_stick(log.met, log.stick, s.t0, t1, log.t_steady, stick_min);
         s.in_stick = false;
     }
 }
@@ -137,17 +157,23 @@ inline WAndRate hermite(double s, double dt, double w0, double wd0, double w1, d
 // (1 - s) a0 + s a1
 inline double lerp(double s, double a0, double a1) { return std::fma(1.0 - s, a0, s * a1); }
 
+// The tip's W, W' and the auxiliary coordinate and its rate: the ball's y or the absorber's
+// stroke x_a - psi_a u (what a history or strobe row holds besides its time).
+struct TipAux {
+    double w, wd, aux, auxd;
+};
+
 // A Poincare strobe row (tn, W, W', aux, aux') at tn inside the step [t, t + dt] from its
-// end values: W, W' by the cubic Hermite, aux, aux' linearly.
-inline void strobe_row(double* row, double tn, double t, double dt, double w0, double wd0,
-                       double w1, double wd1, double a0, double ad0, double a1, double ad1) {
+// end values s0 and s1: W, W' by the cubic Hermite, aux, aux' linearly.
+inline void strobe_row(double* row, double tn, double t, double dt, const TipAux& s0,
+                       const TipAux& s1) {
     double s = (tn - t) / dt;
     row[0] = tn;
-    WAndRate h = hermite(s, dt, w0, wd0, w1, wd1);
+    WAndRate h = hermite(s, dt, s0.w, s0.wd, s1.w, s1.wd);
     row[1] = h.w;
     row[2] = h.wd;
-    row[3] = lerp(s, a0, a1);
-    row[4] = lerp(s, ad0, ad1);
+    row[3] = lerp(s, s0.aux, s1.aux);
+    row[4] = lerp(s, s0.auxd, s1.auxd);
 }
 
 // The steady part's running sums and extremes, kept in registers by the RK4 kernels and

@@ -73,7 +73,8 @@ struct Params {
     // no kappa F_b is -0: y'' = kappa F_b - sum psi_d a_i then has the same bits whether
     // the sum starts from 0 or from its first term (they differ only in the sign of a zero)
     bool ydd_sum_from_first;
-    double f0, om, half, e, fc, sr, meff, vimp, stick_min, vstick, ma, ka, ca;
+    Ball ball;  // the ball and its walls (model.hpp)
+    double f0, om, fc, sr, stick_min, vstick, ma, ka, ca;
     double tstrobe, strobe_t0;
     double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
 };
@@ -86,12 +87,12 @@ inline Params unpack(const double* p, double dt) {
     q.stage_loop = p[L::STAGE_LOOP] != 0.0;
     q.f0 = p[L::F0];
     q.om = p[L::OMEGA];
-    q.half = p[L::HALF_GAP];
-    q.e = p[L::RESTITUTION];
+    q.ball.half = p[L::HALF_GAP];
+    q.ball.e = p[L::RESTITUTION];
     q.fc = p[L::FRICTION];
     q.sr = p[L::REACTION];
-    q.meff = p[L::M_EFF];
-    q.vimp = p[L::V_IMPACT];
+    q.ball.meff = p[L::M_EFF];
+    q.ball.vimp = p[L::V_IMPACT];
     q.stick_min = p[L::STICK_MIN];
     q.vstick = p[L::V_STICK];
     q.ma = p[L::TMD_MASS];
@@ -100,6 +101,7 @@ inline Params unpack(const double* p, double dt) {
     q.tstrobe = p[L::STROBE_PERIOD];
     q.strobe_t0 = p[L::STROBE_T0];
     const double m = p[L::BALL_MASS];
+    q.ball.m = m;
     q.kappa = m > 0.0 ? 1.0 / m : 0.0;
     for (int i = 0; i < q.n; ++i) {
         q.invM[i] = 1.0 / p[L::M_ + i];
@@ -111,7 +113,7 @@ inline Params unpack(const double* p, double dt) {
         q.km[i] = p[L::K_ + i] * q.invM[i];
         q.cm[i] = q.C[i] * q.invM[i];
         q.dm[i] = q.sr * q.pD[i] * q.invM[i];
-        q.lm[i] = q.meff * q.pD[i] * q.invM[i];
+        q.lm[i] = q.ball.meff * q.pD[i] * q.invM[i];
         q.kappa += q.pD[i] * q.dm[i];
     }
     const double fbs[3] = {-q.fc, 0.0, q.fc};
@@ -309,8 +311,8 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 }
 
 // The four RK4 stages of a step, X advanced in place: the stage derivative Kd (carried
-// over from the previous staged step, where only 0 * Kd enters) updated, and with
-// flows_on the stages' energy flows.  force(s, Xs) is the tip force of stage s.
+// over from the previous staged step, where only 0 * Kd enters) updated, and the stages'
+// energy flows.  force(s, Xs) is the tip force of stage s.
 // FAST: stage 1 at X, the sums from their first terms (stages_fast) and the
 // derivative's FAST form (ydd_sum_from_first).
 // The stage values are scalars sized by the mode count, so with N a template constant
@@ -319,7 +321,7 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 // forwarding).
 template <int N, int CASE, bool FAST, class Force>
 BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
-                          const double* cst, const double* wst, Flows& fl, bool flows_on,
+                          const double* cst, const double* wst, Flows& fl,
                           Force&& force) {
     const int nx = sh.nx();
     constexpr int NXC = Shape<N, CASE>::NXC;
@@ -335,10 +337,16 @@ BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
             else
                 sum[j] += wst[s] * Kd[j];
         }
-        if (flows_on) stage_flows(q, sh, fl, terms, wst[s], f);
+        stage_flows(q, sh, fl, terms, wst[s], f);
     }
     for (int j = 0; j < nx; ++j) X[j] += sum[j];
 }
+
+// The affine step map's inputs beyond the state X (linmap.hpp's z): the forcing phase's
+// sine and cosine at the step's start and the ball's friction force F_b.
+struct MapIn {
+    double sn, cn, fz;
+};
 
 // A cheap sufficient condition for map_fits' stage test: with
 // E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
@@ -349,8 +357,8 @@ BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
 // normal and finite; a NaN or infinite state fails the comparison and takes the full
 // test, so the decision is always the full test's.
 template <int N, int CASE>
-BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
-                           double cn, double fz) {
+BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int nx = sh.nx();
     const double a = std::fabs(X[sh.iyd()]);
     if (!(a >= 1e-150 && a <= 1e150)) return false;
@@ -366,12 +374,13 @@ BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X,
 // for a NaN state (nan_maps: the single run's, under which a NaN takes the map).
 template <int N, int CASE>
 BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
-                        double sn, double cn, double fz, bool nan_maps) {
+                        MapIn z, bool nan_maps) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int nx = sh.nx();
     const double yd0 = X[sh.iyd()];
     const bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
     if (!ok) return false;
-    if (surely_fits(sh, vm, X, sn, cn, fz)) return true;
+    if (surely_fits(sh, vm, X, z)) return true;
     v4 ys = vm.yS * sn + vm.yC * cn + vm.yF * fz;
     for (int j = 0; j < nx; ++j) ys += vm.yP[j] * X[j];
     const v4 lhs = ys * yd0;
@@ -386,8 +395,9 @@ BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, co
 // In the solid and ball bars a mode's rows involve only its own u, u' (the modes are
 // coupled through F_b alone).
 template <int N, int CASE>
-BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, double sn,
-                             double cn, double fz, double* dX) {
+BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z,
+                             double* dX) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int n = sh.n(), nx = sh.nx();
     auto full = [&](int pr) {
         v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + vm.dF[pr] * fz;
@@ -422,7 +432,8 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
 // sum_s b_s psi_d u'_s = psi_d du.
 template <int N, int CASE>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
-                         const double* X, const double* dX, double sn, double cn, double fz) {
+                         const double* X, const double* dX, MapIn z) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int n = sh.n(), nx = sh.nx();
     double pv = 0.0;
     for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];
@@ -462,12 +473,9 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     }
 }
 
-// The tip's W, W' and the auxiliary coordinate: the ball's y or the absorber's stroke
-// x_a - psi_a u.  aux_always: the stroke even for the solid and locked bars (X's own aux
-// slot, as the strobe and the run's first values read it); else 0 there.
-struct TipAux {
-    double w, wd, aux, auxd;
-};
+// The tip's W, W' and the auxiliary coordinate (model.hpp's TipAux): the ball's y or the
+// absorber's stroke x_a - psi_a u.  aux_always: the stroke even for the solid and locked
+// bars (X's own aux slot, as the strobe and the run's first values read it); else 0 there.
 
 template <int N, int CASE>
 BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bool aux_always) {
@@ -498,8 +506,8 @@ BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bo
     return a;
 }
 
-// numba converts math.ceil's result to int64 before multiplying (x86: out of range or
-// NaN converts to INT64_MIN); here the same value, without undefined behaviour.
+// ceil(v) as a whole number of periods in int64's range: out of range or NaN gives -2^63
+// (what x86's conversion gives), a defined value where a cast would be undefined.
 inline double ceil_int64(double v) {
     const double c = std::ceil(v);
     const double lim = 9223372036854775808.0;  // 2^63
@@ -516,20 +524,26 @@ inline double first_strobe(const Params& q, double t0) {
     return t_next;
 }
 
+// The Poincare strobe's progress in a run: the next sample's time, the rows written and
+// the record they go to.
+struct StrobeOut {
+    double t_next;
+    idx n;
+    Mat rows;
+};
+
 // A Poincare strobe sample due in the step [t, t1]: W, W' by the cubic Hermite, aux, aux'
 // linearly, from the step's start values prev and the end state X (model.hpp).
 template <int N, int CASE>
 BB_INLINE void strobe_step(const Params& q, Shape<N, CASE> sh, const double* X,
-                           const TipAux& prev, double t, double t1, double dt, double& t_next,
-                           idx& n_stb, Mat strobe) {
-    if (q.tstrobe > 0.0 && t_next <= t1) {
-        if (t_next > t && n_stb < strobe.n0) {
+                           const TipAux& prev, double t, double t1, double dt, StrobeOut& so) {
+    if (q.tstrobe > 0.0 && so.t_next <= t1) {
+        if (so.t_next > t && so.n < so.rows.n0) {
             const TipAux a = tip_aux(q, sh, X, true);
-            strobe_row(strobe.row(n_stb), t_next, t, dt, prev.w, prev.wd, a.w, a.wd, prev.aux,
-                       prev.auxd, a.aux, a.auxd);
-            n_stb += 1;
+            strobe_row(so.rows.row(so.n), so.t_next, t, dt, prev, a);
+            so.n += 1;
         }
-        t_next = t_next + q.tstrobe;
+        so.t_next = so.t_next + q.tstrobe;
     }
 }
 
@@ -543,12 +557,10 @@ BB_INLINE void jump_modes(const Params& q, int n, double* X, double g) {
 // g psi_d,i / M_i) and the stick bookkeeping.  Returns whether the ball is in contact
 // (on a wall at rest, or a sub-threshold impact).
 template <int N, int CASE>
-BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double* met, Mat imp,
-                          Mat stick, StickState& ss, double t, double t1, bool steady,
-                          double t_steady) {
+BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, const EventLog& log,
+                          StickState& ss, double t, double t1, bool steady) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    const WallResult w = wall_rule(met, imp, X[iy], X[iyd], t1, steady, q.half, q.e, q.meff,
-                                   q.vimp);
+    const WallResult w = wall_rule(log.met, log.imp, X[iy], X[iyd], t1, steady, q.ball);
     X[iy] = w.y;
     X[iyd] = w.yd;
     if (w.outcome == IMPACT || w.outcome == MICRO_IMPACT) jump_modes(q, n, X, w.g);
@@ -556,13 +568,13 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, double*
     // stuck: off the walls with |y'| inside the band where the sgn() law chatters
     // (V_STICK = V_IMPACT + 2 F_c dt / m_eff)
     const bool stuck = q.fc > 0.0 && !contact && std::fabs(X[iyd]) < q.vstick;
-    stick_step(stuck, ss, t, t1, met, stick, t_steady, q.stick_min);
+    stick_step(stuck, ss, t, t1, log, q.stick_min);
     return contact;
 }
 
 // ---- the kernels (rk4_run.hpp, rk4_batch.cpp) -----------------------------------------
 
-// One run's arguments, as numba's run_rk4 takes them (checked by bind_rk4.cpp).
+// One run's arguments (checked by bind_rk4.cpp).
 struct RunArgs {
     const double* p;
     Vec x;
@@ -577,7 +589,7 @@ struct RunArgs {
     Mat modes;
 };
 
-// A batch's arguments, as numba's run_rk4_batch takes them.
+// A batch's arguments (checked by bind_rk4.cpp).
 struct BatchArgs {
     Mat P;  // (nb, P_SIZE)
     Mat x;  // (nb, 2n + 2)

@@ -217,8 +217,9 @@ BB_INLINE void run_body(const RunArgs& a) {
     Steady st = Steady::load(met);
     Flows fl = Flows::load(met);
     idx n_rec = idx(met[L::N_REC]);
-    idx n_stb = idx(met[L::N_STROBE]);
+    StrobeOut so{0.0, idx(met[L::N_STROBE]), a.strobe};
     const double t_steady = t0 + double(a.steady_start) * dt;
+    const EventLog log{met, a.imp, a.stick, t_steady};
     StickState ss;
 
     TipAux prev = tip_aux(q, sh, X, true);
@@ -227,7 +228,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         buf(0, 0) = prev.w;
         buf(0, 1) = prev.wd;
     }
-    double t_next = first_strobe(q, t0);
+    so.t_next = first_strobe(q, t0);
 
     for (idx k = 0; k < a.n_steps; ++k) {
         const double t = t0 + double(k) * dt;
@@ -250,11 +251,11 @@ BB_INLINE void run_body(const RunArgs& a) {
         double fz = 0.0;
         if (linear && check_fb) {
             fz = map_friction(q, X[iyd]);
-            use_map = map_fits(q, sh, mp, X, sn, cn, fz, true);
+            use_map = map_fits(q, sh, mp, X, MapIn{sn, cn, fz}, true);
         }
         if (use_map) {
-            map_increment(sh, mp, X, sn, cn, fz, dX);
-            map_flows(q, sh, mp, fl, X, dX, sn, cn, fz);
+            map_increment(sh, mp, X, MapIn{sn, cn, fz}, dX);
+            map_flows(q, sh, mp, fl, X, dX, MapIn{sn, cn, fz});
             for (int j = 0; j < nx; ++j) X[j] += dX[j];
         } else {
             auto force = [&](int s, const double* Xs) {
@@ -268,16 +269,16 @@ BB_INLINE void run_body(const RunArgs& a) {
                 return f;
             };
             if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
-                rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, true, force);
+                rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, force);
             else
-                rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, true, force);
+                rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, force);
         }
         const bool steady = k >= a.steady_start;
 
-        strobe_step(q, sh, X, prev, t, t1, dt, t_next, n_stb, a.strobe);
+        strobe_step(q, sh, X, prev, t, t1, dt, so);
         bool contact = false;
         if (ball)
-            contact = ball_walls(q, sh, X, met, a.imp, a.stick, ss, t, t1, steady, t_steady);
+            contact = ball_walls(q, sh, X, log, ss, t, t1, steady);
 
         // streamed metrics
         prev = tip_aux(q, sh, X, false);
@@ -326,7 +327,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     st.store(met);
     fl.store(met);
     met[L::N_REC] = double(n_rec);
-    met[L::N_STROBE] = double(n_stb);
+    met[L::N_STROBE] = double(so.n);
     met[L::MAX_FORCE] = cut.max_force;
     met[L::FIRST_ZERO_T] = cut.first_zero;
     met[L::N_ZERO_STEPS] = cut.n_zero;

@@ -1,11 +1,12 @@
-"""Reference inputs and outputs of the integrator kernels, for porting them bit for bit.
+"""Reference inputs and outputs of the integrator kernels: the core's bits, kept.
 
 ``tests/data/kernel_reference.npz`` holds, for each case of :func:`case_builders`
 (212 of them: the 80 published harmonic cases with each integrator, regenerative cuts,
 every bar, friction law, record and batch size), the exact arguments one kernel entry
-point was called with and everything the call wrote.  It was captured from the numba
-kernels at commit fb3fab0 (before the C++ port).  For a case named ``NAME`` the file
-has
+point was called with and everything the call wrote.  It is the compiled core's output;
+before it was first written from the core, the core was confirmed to reproduce the
+previous reference (captured at commit fb3fab0, before the C++ port) bit for bit.  For a
+case named ``NAME`` the file has
 
 - ``NAME/entry``: the entry point, "rk4", "rk4_batch" or "exact";
 - the inputs: ``NAME/p`` (``NAME/P`` for a batch, one row a run), ``NAME/x0``, the
@@ -16,22 +17,27 @@ has
   rk4) and the initial metric vector ``NAME/met0``;
 - the outputs, ``NAME/out_x`` (the final state), ``out_met``, ``out_rec``,
   ``out_imp``, ``out_stick``, ``out_strobe`` and, for exact, ``out_t_reached``;
-- for exact, ``NAME/prep_*``: what ``prepare(p)`` (numba's, at capture) returned (the
-  regimes' matrices, NumPy/LAPACK), for diagnosis only: :func:`replay` passes
-  ``prep=None`` and the kernel prepares the run itself, as simulate's call does;
+- for exact, ``NAME/prep_*``: what ``prepare(p)`` returned at capture (the regimes'
+  matrices, NumPy/LAPACK), for diagnosis only: :func:`replay` passes ``prep=None`` and
+  the kernel prepares the run itself, as simulate's call does;
   ``replay(case, stored_prep=True)`` passes the stored one instead, which separates a
   change of the preparation from a change of the kernel.
 
-``_names`` lists the cases in order and ``_met_names`` names the slots of ``met``
-(simulate/layout.py), for the messages of tests/test_kernel_reference.py.
+``_names`` lists the cases in order, ``_met_names`` names the slots of ``met`` and
+``_param_names`` the scalar slots of the stored ``p`` in order (simulate/layout.py),
+for the messages of tests/test_kernel_reference.py and for :func:`current_params`.
 
-Capture (the inputs as :func:`boringbar.simulate.simulate` packs them, through its
-``setup_run``; each single run checked against simulate's own kernel call, each batch
-against ``simulate_batch``)::
+Write (regenerate) the file from the core -- the inputs as
+:func:`boringbar.simulate.simulate` packs them, through its ``setup_run``; each single
+run checked against simulate's own kernel call, each batch against ``simulate_batch``::
 
-    PYTHONPATH=src python tests/kernel_reference.py --capture
+    PYTHONPATH=src python tests/kernel_reference.py --write
 
-Replay (:func:`replay`; without ``--capture`` the script replays every case and prints
+Do so only when a change of the core is meant to change its bits, and say in the commit
+by how much the runs changed (tests/test_kernel_reference.py otherwise holds the core to
+these bits).
+
+Replay (:func:`replay`; without ``--write`` the script replays every case and prints
 the differences) moves each stored ``p`` into the core's layout of today by slot name
 (:func:`current_params`; slots added since capture are 0, as the captured runs had them)
 and otherwise uses only the stored arrays and the three entry points imported in
@@ -278,8 +284,7 @@ def _exact_only_cases() -> dict:
 
 
 def _batch_cases() -> dict:
-    """Batches of 4, 8 and 16 runs (the sizes the numba kernel compiled lock-step) and
-    one of 5."""
+    """Batches of 4, 8 and 16 runs (the lock-step widths) and one of 5."""
     grid = _grid()
     paper = [(s, f, None) for _, s, f in grid if s.preset == "paper"]
     physical = [(s, f, None) for _, s, f in grid if s.preset == "physical"]
@@ -305,32 +310,27 @@ def case_builders() -> dict:
 
 
 # --- replay: the stored inputs through the entry points ------------------------------
-#: The scalar slots of ``p`` when the file was captured, in order (core/layout.hpp's
-#: BB_P_SCALARS then), and the per-mode blocks of NMAX entries that follow them: the
-#: layout of every stored ``p`` and row of ``P``.
-CAPTURED_SCALARS = ("CASE", "N_MODES", "FORCING", "F0", "OMEGA", "BALL_MASS", "HALF_GAP",
-                    "RESTITUTION", "FRICTION", "REACTION", "M_EFF", "V_IMPACT", "V_STICK",
-                    "STICK_MIN", "TMD_MASS", "TMD_K", "TMD_C", "STROBE_PERIOD", "STROBE_T0",
-                    "KR_B", "FEED", "TAU", "N_REV", "INTERP", "STOP_AT_ZERO", "HIST_W0",
-                    "STATIC_FRICTION", "STAGE_LOOP")
-CAPTURED_BLOCKS = ("M_", "K_", "C_", "PSI_L", "PSI_D", "PSI_A")
-
-
-def current_params(stored: np.ndarray) -> np.ndarray:
+def current_params(stored: np.ndarray, param_names) -> np.ndarray:
     """A stored parameter vector (or the rows of a batch's P) in the core's layout today:
-    each captured slot where its name is now; slots added since stay 0, which is what
-    the captured runs did (the linear cutting law, no force noise)."""
+    ``param_names`` are the scalar slots of the stored layout, in order (the file's
+    ``_param_names``), followed by the per-mode blocks; each stored slot goes where its
+    name is now, and slots added since stay 0 (the linear cutting law, no force noise)."""
     stored = np.asarray(stored, dtype=float)
-    nmax, ns = L.NMAX, len(CAPTURED_SCALARS)
-    if stored.shape[-1] != ns + nmax * len(CAPTURED_BLOCKS):
-        raise ValueError(f"a stored p of {stored.shape[-1]} slots is not the captured layout")
+    nmax, ns = L.NMAX, len(param_names)
+    if stored.shape[-1] != ns + nmax * len(L.PARAM_BLOCKS):
+        raise ValueError(f"a stored p of {stored.shape[-1]} slots is not the stored layout")
     out = np.zeros(stored.shape[:-1] + (L.P_SIZE,))
-    for i, name in enumerate(CAPTURED_SCALARS):
-        out[..., getattr(L, name)] = stored[..., i]
-    for k, name in enumerate(CAPTURED_BLOCKS):
+    for i, name in enumerate(param_names):
+        out[..., getattr(L, str(name))] = stored[..., i]
+    for k, name in enumerate(L.PARAM_BLOCKS):
         at = getattr(L, name)
         out[..., at:at + nmax] = stored[..., ns + k * nmax:ns + (k + 1) * nmax]
     return out
+
+
+def _params(case: dict, key: str) -> np.ndarray:
+    """The case's stored ``p`` (or ``P``) in the core's layout today."""
+    return current_params(case[key], case["_param_names"])
 
 
 def _records(case: dict) -> list[np.ndarray]:
@@ -346,7 +346,7 @@ def _replay_rk4(case: dict) -> dict:
     rec, imp, stick, strobe = records = _records(case)
     shape = tuple(int(n) for n in case["buf_shape"])
     buf = np.zeros(shape) if shape[0] else None  # None: simulate's harmonic call
-    run_rk4(current_params(case["p"]), x, float(case["t0"]), float(case["dt"]),
+    run_rk4(_params(case, "p"), x, float(case["t0"]), float(case["dt"]),
             int(case["n_steps"]), int(case["steady_start"]), int(case["rec_every"]), rec, imp,
             stick, strobe, met, buf)
     return _outputs(x, met, records)
@@ -355,7 +355,7 @@ def _replay_rk4(case: dict) -> dict:
 def _replay_batch(case: dict) -> dict:
     x, met = case["x0"].copy(), case["met0"].copy()
     _, imp, stick, strobe = records = _records(case)
-    run_rk4_batch(current_params(case["P"]), x, float(case["t0"]), float(case["dt"]),
+    run_rk4_batch(_params(case, "P"), x, float(case["t0"]), float(case["dt"]),
                   int(case["n_steps"]), int(case["steady_start"]), imp, stick, strobe, met)
     return _outputs(x, met, records)
 
@@ -369,7 +369,7 @@ def stored_prep_of(case: dict) -> dict:
 def _replay_exact(case: dict, prep: dict | None = None) -> dict:
     x, met = case["x0"].copy(), case["met0"].copy()
     rec, imp, stick, strobe = records = _records(case)
-    t = run_exact(current_params(case["p"]), x, float(case["t0"]), float(case["t_end"]),
+    t = run_exact(_params(case, "p"), x, float(case["t0"]), float(case["t_end"]),
                   float(case["t_steady"]), float(case["rec_dt"]), rec, imp, stick, strobe, met,
                   prep=prep, dt=float(case["dt"]))
     return {**_outputs(x, met, records), "t_reached": np.float64(t)}
@@ -390,7 +390,8 @@ def replay(case: dict, stored_prep: bool = False) -> dict:
 def load(path: Path = DATA) -> dict:
     """{case name: {key: array}} from the reference file."""
     with np.load(path, allow_pickle=False) as z:
-        cases = {str(n): {} for n in z["_names"]}
+        param_names = tuple(str(n) for n in z["_param_names"])
+        cases = {str(n): {"_param_names": param_names} for n in z["_names"]}
         for key in z.files:
             name, _, item = key.rpartition("/")
             if name in cases:
@@ -481,11 +482,11 @@ _CHECKS = {"rk4": _check_against_simulate, "exact": _check_against_simulate,
 
 def capture(path: Path = DATA, check: bool = True) -> None:
     """Build every case, run it, and write inputs and outputs to ``path``."""
-    arrays = {"_met_names": np.array(L.METRIC_NAMES)}
+    arrays = {"_met_names": np.array(L.METRIC_NAMES), "_param_names": np.array(L.PARAM_NAMES)}
     done = []
     for name, build in case_builders().items():
         tic = time.perf_counter()
-        case = build()
+        case = build() | {"_param_names": L.PARAM_NAMES}
         out = replay(case)
         if check:
             _CHECKS[case["entry"]](name, case, out)
@@ -516,12 +517,13 @@ def replay_all(path: Path = DATA) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--capture", action="store_true", help="write the reference file")
+    ap.add_argument("--write", "--capture", dest="write", action="store_true",
+                    help="regenerate the reference file from the core")
     ap.add_argument("--file", type=Path, default=DATA, help="the reference file")
     ap.add_argument("--no-check", action="store_true",
                     help="skip the check of each run against simulate's own call")
     args = ap.parse_args()
-    if args.capture:
+    if args.write:
         capture(args.file, check=not args.no_check)
     else:
         replay_all(args.file)

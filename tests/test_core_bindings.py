@@ -1,12 +1,13 @@
 """The compiled core's boundary: whatever Python hands it, a clear exception, never a crash.
 
 Each entry point of ``boringbar.core`` (``run_rk4``, ``run_rk4_batch``, ``run_exact``)
-gets a valid call (a short published ball-damper run), then hypothesis corrupts one of its
-arguments: a wrong dtype, rank, shape or layout, a read-only output, a NaN or an infinity
-in a parameter, the state or a scalar, an out-of-range count.  The core must either run
-(a corruption it can take, such as a larger output array) or raise ``ValueError`` /
-``TypeError`` naming the argument; a crash of the core would take the test process with
-it, a hang would stall the suite.
+takes one run description (``RK4Run``, ``RK4Batch``, ``ExactRun``) and gets a valid one (a
+short published ball-damper run), then hypothesis corrupts one of its fields: a wrong
+dtype, rank, shape or layout, a read-only output, a NaN or an infinity in a parameter, the
+state or a scalar, an out-of-range count.  Setting the field or running must either work
+(a corruption the core can take, such as a larger output array) or raise ``ValueError`` /
+``TypeError`` naming the field; a crash of the core would take the test process with it, a
+hang would stall the suite.
 """
 
 from __future__ import annotations
@@ -67,6 +68,10 @@ def exact_args(cut: bool = False) -> dict:
             "prep": prep, "dt": su.dt, "H": H, "tabE": tab_e, "tabP": tab_p}
 
 
+#: each entry point's run description
+DESCRIPTIONS = {"run_rk4": core.RK4Run, "run_rk4_batch": core.RK4Batch,
+                "run_exact": core.ExactRun}
+
 ENTRIES = {
     "run_rk4": rk4_args,
     "run_rk4 cut": lambda: rk4_args(cut=True),
@@ -79,8 +84,12 @@ BASE = {}
 
 
 def call(entry: str, args: dict):
-    fn = getattr(core, entry.split()[0])
-    return fn(*args.values())
+    """The entry point run with a description whose fields are ``args``."""
+    name = entry.split()[0]
+    run = DESCRIPTIONS[name]()
+    for field, value in args.items():
+        setattr(run, field, value)
+    return getattr(core, name)(run)
 
 
 def fresh(entry: str) -> dict:
@@ -182,3 +191,24 @@ def test_any_parameter_slot_out_of_range_is_a_clear_error_or_a_run(entry, slot, 
         call(entry, args)
     except (ValueError, TypeError) as exc:
         assert str(exc)
+
+
+@pytest.mark.parametrize("entry", ["run_rk4", "run_rk4_batch", "run_exact"])
+def test_a_refused_field_is_named(entry):
+    run = DESCRIPTIONS[entry]()
+    readonly = np.zeros(3)
+    readonly.flags.writeable = False
+    with pytest.raises(ValueError, match="'x' must be a writable array"):
+        run.x = readonly
+    with pytest.raises(ValueError, match="'t0' must be a number"):
+        run.t0 = "x"
+    with pytest.raises(ValueError, match="'p' was not set" if entry != "run_rk4_batch"
+                       else "'P' was not set"):
+        getattr(core, entry)(run)
+
+
+def test_a_scalar_out_of_range_names_its_value_and_range():
+    args = fresh("run_rk4")
+    args["dt"] = -1.0
+    with pytest.raises(ValueError, match=r"dt = -1 must be finite and > 0"):
+        call("run_rk4", args)

@@ -1,18 +1,17 @@
-// The exact kernel's constants: the grid, the limits,
-// the regimes, the event kinds, the stack scratch's sizes, and the records the numba kernel
-// packed into float arrays (cp, rs, cq, ro, sv, seg), here as named structs: a field's name
-// is its slot's suffix in lower case (CP_T_STEADY -> cp.t_steady).  The fields stay double,
-// as the numba kernel stored them (a regime 0.0 / 1.0 / 2.0, a count as a float), so that
-// every comparison and conversion happens as it did there.
+// The exact kernel's constants: the grid, the limits, the regimes, the event kinds, the
+// scratch's sizes, and the records the driver keeps between segments (the run's constants,
+// its state, a cut's constants, the running outputs, a segment's description and its
+// search's settings) as named structs.
 #pragma once
 
 #include "../arrays.hpp"
 #include "../layout.hpp"
+#include "../model.hpp"
 
 namespace bb::exact {
 
 // event-search grid points per shortest period: about 16, but not a whole number, so that
-// events half a forcing period apart do not fall on grid points (consts.py)
+// events half a forcing period apart do not fall on grid points
 constexpr double GRID_PER_PERIOD = 16.382;
 // step lengths of a free ball's grid: h, 2 h, 4 h, 8 h
 constexpr int GRID_LEVELS = 4;
@@ -21,7 +20,7 @@ constexpr idx MAX_EVENTS = 50'000'000;
 // consecutive zero-length events before a run stops with EXACT_STATUS = 2
 constexpr int MAX_ZERO_LENGTH = 64;
 
-// lengths of the scratch (the numba kernel's stack arrays; local arrays here)
+// lengths of the scratch (local arrays, sized for NMAX modes)
 constexpr int NZ_MAX = 2 * layout::NMAX + 2;
 constexpr int NB_MAX = NZ_MAX + 3;
 constexpr int NB_MAX2 = NB_MAX * NB_MAX;
@@ -30,8 +29,9 @@ constexpr int NB_MAX_2 = 2 * NB_MAX;
 constexpr int NMAX6 = 6 * layout::NMAX;
 constexpr int DDC = 4 * (layout::NMAX + 2);
 
-// regimes (rs.mode holds them as 0.0, 1.0, 2.0)
-constexpr int FREE = 0, STICK = 1, CONTACT = 2;
+// A ball's regime: free (flying or sliding), stuck to the bore, or resting on a wall.  The
+// regime's index r in prepare's matrices is the regime (ball bars), plus nreg in a cut.
+enum Regime : int { FREE = 0, STICK = 1, CONTACT = 2 };
 
 namespace detail {
 constexpr double factorial(int k) {
@@ -43,8 +43,8 @@ constexpr double factorial(int k) {
 }
 }  // namespace detail
 
-// RECIP[k] = 1 / k (RECIP[0] = 0), RFACT[k] = 1 / k!: the same doubles as consts.py
-// (one correctly rounded division each; tests/test_exact_lower.py compares the bits)
+// RECIP[k] = 1 / k (RECIP[0] = 0), RFACT[k] = 1 / k!: one correctly rounded division each,
+// so the series' coefficients are the nearest doubles to 1 / k and 1 / k!
 constexpr double RECIP[24] = {
     0.0,       1.0 / 1,  1.0 / 2,  1.0 / 3,  1.0 / 4,  1.0 / 5,  1.0 / 6,  1.0 / 7,
     1.0 / 8,   1.0 / 9,  1.0 / 10, 1.0 / 11, 1.0 / 12, 1.0 / 13, 1.0 / 14, 1.0 / 15,
@@ -66,99 +66,109 @@ constexpr idx EV_PLUS = 0, EV_MINUS = 1, EV_VSTOP = 2, EV_YEXT = 3, EV_REL_NEG =
 constexpr idx EV_CUT = 8, EV_HEXT = 9;
 constexpr int N_EV = 10;
 
-// The segment's description (numba: seg, SEG_SIZE = 18 floats; see g_value).
+// A segment's description: what the closed form on it holds constant (the regime's
+// forces, the ball's start, a cut's surface polynomial); see g_value.
 struct Segment {
-    double ts = 0.0;     // slot 0: the segment's start time
-    double fb = 0.0;     // slot 1: the ball's friction force F_b on it (constant)
-    double ud0 = 0.0;    // slot 2: the ball's absolute position y + psi_d . u at ts
-    double vd0 = 0.0;    // slot 3: ... and its absolute velocity y' + psi_d . u'
-    double y0 = 0.0;     // slot 4: the ball's y at ts (relative)
-    double sdir = 0.0;   // slot 5: the direction a free ball slides (0: none)
-    double wall = 0.0;   // slot 6: the wall a ball in CONTACT is on (+1 / -1)
-    double kappa = 0.0;  // slot 7: kappa of the regime (the force that carries the ball)
-    double fs = 0.0;     // slot 8: static friction F_s
-    double half = 0.0;   // slot 9: delta / 2
-    double m = 0.0;      // slot 10: the ball's mass (1 without a ball)
-    double krb = 0.0;    // slot 11 (SEG_KRB): Kr b in the cut, 0 out of it and harmonic
-    double s[4] = {0.0, 0.0, 0.0, 0.0};  // slots 12-15 (SEG_S): S(tau) = s0 + s1 tau + ...
-    double cdir = 0.0;   // slot 16 (SEG_CDIR): +1 in the cut, -1 out of it, 0 harmonic
-    double acc = 0.0;    // slot 17 (SEG_ACC): fb / m, the ball's acceleration
-
-    // slot i as numba indexed it (tests, bindings)
-    double& at(int i) {
-        switch (i) {
-            case 0: return ts;
-            case 1: return fb;
-            case 2: return ud0;
-            case 3: return vd0;
-            case 4: return y0;
-            case 5: return sdir;
-            case 6: return wall;
-            case 7: return kappa;
-            case 8: return fs;
-            case 9: return half;
-            case 10: return m;
-            case 11: return krb;
-            case 16: return cdir;
-            case 17: return acc;
-            default: return s[i - 12];  // 12..15
-        }
-    }
+    double ts = 0.0;     // the segment's start time
+    double fb = 0.0;     // the ball's friction force F_b on it (constant)
+    double ud0 = 0.0;    // the ball's absolute position y + psi_d . u at ts
+    double vd0 = 0.0;    // ... and its absolute velocity y' + psi_d . u'
+    double y0 = 0.0;     // the ball's y at ts (relative)
+    double sdir = 0.0;   // the direction a free ball slides (0: none)
+    double wall = 0.0;   // the wall a ball in CONTACT is on (+1 / -1)
+    double kappa = 0.0;  // kappa of the regime (the force that carries the ball)
+    double fs = 0.0;     // static friction F_s
+    double half = 0.0;   // delta / 2
+    double m = 0.0;      // the ball's mass (1 without a ball)
+    double krb = 0.0;    // Kr b in the cut, 0 out of it and harmonic
+    double s[4] = {0.0, 0.0, 0.0, 0.0};  // the surface S(tau) = s0 + s1 tau + s2 tau^2 + s3 tau^3
+    double cdir = 0.0;   // +1 in the cut, -1 out of it, 0 harmonic
+    double acc = 0.0;    // fb / m, the ball's acceleration
 };
-constexpr int SEG_SIZE = 18;
 
-// The driver's run constants (numba: cp, CP_*).
-struct RunConsts {
-    double half = 0.0;       // delta / 2
-    double e = 0.0;          // restitution
+// Coulomb friction of the ball on the bore and what it acts against: F_c, F_s, the share s
+// of the reaction on the bar, the ball's kappa (the force that carries it with the bar,
+// per unit of acceleration) when stuck and on a wall, and the shortest stick recorded.
+struct Friction {
     double fc = 0.0;         // kinetic friction F_c
     double fs = 0.0;         // static friction max(F_s, F_c)
-    double sr = 0.0;         // reaction share s
-    double meff = 0.0;       // effective mass of an impact
-    double vimp = 0.0;       // capture threshold
+    double sr = 0.0;         // reaction share s (+1 reciprocal, -1 the printed reaction)
     double kstick = 0.0;     // kappa of a stuck ball
     double kwall = 0.0;      // kappa on a wall
     double stick_min = 0.0;  // shortest stick interval recorded
-    double t0 = 0.0;         // the run's start
-    double t_steady = 0.0;   // the steady window's start
-    double dt_out = 0.0;     // a cut's step (the unit of N_ZERO_STEPS)
-    double stop_at_zero = 0.0;  // 1: a cut stops at its first zero
-    double f0 = 0.0;         // the harmonic force's amplitude and circular frequency
-    double om = 0.0;
-    double h = 0.0;          // the event-search grid step h
-    double rec_dt = 0.0;     // the history's sampling step (0: none)
-    double tstrobe = 0.0;    // the strobe's period (0: none)
-    double m = 0.0;          // the ball's mass
 };
 
-// The run's state between segments (numba: rs, RS_*; floats as there).
-struct RunState {
-    double mode = 0.0;        // FREE, STICK, CONTACT
-    double sdir = 0.0;        // the direction a free ball slides, 0 if it does not
-    double wall = 0.0;        // the wall a ball in CONTACT is on
-    double y = 0.0;           // the ball's y and y'
+// The harmonic force at the tip, F0 sin(Omega t).
+struct Forcing {
+    double f0 = 0.0;  // amplitude F0
+    double om = 0.0;  // circular frequency Omega
+};
+
+// The system a run integrates, unpacked from p once: the modes (the bar's rows), the case,
+// a free ball's y'' and W'' coefficients, the ball, friction and the forcing.  A tuned
+// absorber enters through the regimes' matrices and its row psi_a; a cut through
+// CutConsts.
+struct System {
+    idx n = 0;                        // retained modes
+    layout::Case kase = layout::SOLID;
+    idx nreg = 1;                     // regimes outside a cut (3 for the ball bar)
+    Mat mk;   // (6, n): modal mass M, stiffness K, damping C, psi_L (tip), psi_d (damper),
+              // psi_a (absorber)
+    Mat ddc;  // (4, n + 2): a free ball's y'' and W'' from u, f and F_b (rows 0, 1), and
+              // from u' (rows 2, 3)
+    Ball ball;
+    Friction fric;
+    Forcing force;
+
+    bool has_ball() const { return kase == layout::BALL; }
+};
+
+// The run's span and outputs: its start, the steady window's start, a cut's step, the
+// event-search grid step, the history's and the strobe's sampling.
+struct RunConsts {
+    double t0 = 0.0;             // the run's start
+    double t_steady = 0.0;       // the steady window's start
+    double dt_out = 0.0;         // a cut's step (the unit of N_ZERO_STEPS)
+    bool stop_at_zero = false;   // a cut stops at its first zero
+    double h = 0.0;              // the event-search grid step h
+    double rec_dt = 0.0;         // the history's sampling step (0: none)
+    double tstrobe = 0.0;        // the strobe's period (0: none)
+};
+
+// A ball's state between segments: its regime, the direction it slides (0 if it does
+// not), the wall it rests on (CONTACT), its y and y'.
+struct BallState {
+    Regime mode = FREE;
+    double sdir = 0.0;
+    double wall = 0.0;
+    double y = 0.0;
     double yd = 0.0;
-    double incut = 0.0;       // 1.0 while the tool cuts
+};
+
+// The run's state between segments (the bar's own state is the work vector X).
+struct RunState {
+    BallState ball;
+    bool incut = false;       // the tool cuts
     double first_zero = 0.0;  // the chatter verdict: the first exit from the cut (-1: none)
     double t_end = 0.0;       // the run's end (a cut stopped at its first zero ends early)
     double stick_t0 = 0.0;    // when the current stick interval began
 };
 
-// A regenerative cut's constants (numba: cq, CQ_*; the counts as floats).
+// A regenerative cut's constants.
 struct CutConsts {
     double t0 = 0.0;     // the run's start, the first node
     double h = 0.0;      // the history step H
     double ttol = 0.0;   // times closer than this are one
-    double nrev = 0.0;   // revolutions in the surface's minimum
+    idx nrev = 0;        // revolutions in the surface's minimum
     double tau = 0.0;    // the delay tau
     double feed = 0.0;   // h_m
     double w0 = 0.0;     // W before the cut
-    double mrev = 0.0;   // nodes per revolution
-    double cubic = 0.0;  // 1: cubic Hermite history, 0: linear
+    idx mrev = 1;        // nodes per revolution
+    bool cubic = false;  // cubic Hermite history (else linear)
     double krb = 0.0;    // Kr b
 };
 
-// The driver's running outputs (numba: ro, RO_*).
+// The driver's running outputs.
 struct RunningOut {
     double max_abs_w = 0.0;    // the largest |W| (steady)
     double max_w = 0.0;        // the steady extremes of W
@@ -170,19 +180,20 @@ struct RunningOut {
     double t_strobe = 0.0;     // the next strobe time
 };
 
-// A segment's description for its search (numba: sv, SV_*; flags 0.0 or 1.0).
+// What a segment's search needs beyond the segment: its length, derivative bounds and
+// what to watch.
 struct SegSearch {
     double tlen = 0.0;       // its length
     double b4 = 0.0;         // bounds over it on |y^(4)|, |W^(4)| (-1: not needed),
     double bw4 = 0.0;        // |y'''| and |W'''|
     double b3y = 0.0;
     double b3w = 0.0;
-    double steady = 0.0;     // in the steady window
-    double whole = 0.0;      // a cut's whole step H from a node
-    double adapt = 0.0;      // steps longer than h allowed
-    double ydd = 0.0;        // y'' and W'' wanted at the grid points
-    double watch_v = 0.0;    // a free ball's y' = 0 switch watched
-    double watch_ext = 0.0;  // a free ball's y extremum watched against grazes
+    bool steady = false;     // in the steady window
+    bool whole = false;      // a cut's whole step H from a node
+    bool adapt = false;      // steps longer than h allowed
+    bool ydd = false;        // y'' and W'' wanted at the grid points
+    bool watch_v = false;    // a free ball's y' = 0 switch watched
+    bool watch_ext = false;  // a free ball's y extremum watched against grazes
 };
 
 }  // namespace bb::exact

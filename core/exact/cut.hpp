@@ -1,28 +1,23 @@
-// A regenerative cut's delay history: the history step,
-// the knots of W, the surface as one cubic per segment and the Gauss-Legendre flows, ported
-// operation for operation.  cut_tables (run once per run, at the Python level) is ported to
-// Python, in boringbar/simulate/regimes.py, with history_step.
+// A regenerative cut's delay history: the history step, the knots of W, the surface as one
+// cubic per segment and the Gauss-Legendre flows.  cut_tables (run once per run) is
+// computed in Python, in boringbar/simulate/regimes.py, with history_step (the same
+// operations as history_step here, so both sides take the same H).
 //
-// Signatures (the Python names and parameter order):
+// Signatures:
 //   double history_step(double tau, double dt);
 //   std::tuple<double, double, double, double> hermite_at(double t0, double p0, double d0,
 //                  double t1, double p1, double d1, double x0, bool cubic);
 //   constexpr double GL_X[4], GL_W[4];
-//   double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, CMat lam,
-//                   CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
-//                   Mat lvis, Vec cvis, bool stick, double kappa, double sr, Vec acc,
-//                   bool steady);
-//   std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double t, Vec Xm,
-//                   Vec Xp, idx n, Mat mk, double ttol, double node);
-//   double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk, Span1<idx> ip,
-//                   Mat sc, idx nrev, idx nr_eff, double feed, double w_before,
-//                   double tau_d, Segment& seg, idx j_now, idx m_rev, bool cubic);
+//   double quad_cut(double a, double b, const SegView& s, const Dashpots& dp, bool stick,
+//                   const Friction& fr, Vec acc, bool steady);
+//   struct Knots, struct History
+//   void add_knot(History& hs, double t, Vec Xm, Vec Xp, Mat mk, double ttol, double node);
+//   double surface_piece(double t, double t_end, History& hs, const CutConsts& cq,
+//                   idx nr_eff, Segment& seg, idx j_now);
 //
-// The knot store kn grows (numba: add_knot returns a new array twice as long): here it is a
-// Knots, which owns its rows and grows in place; add_knot returns it by reference, so the
-// Python line ``kn, nk = add_knot(kn, nk, ...)`` reads ``std::tie(kn, nk) = add_knot(kn,
-// nk, ...)`` (a self-assignment of kn, harmless) or ``nk = std::get<1>(add_knot(...))``.
-// A Knots converts to a Mat view (kn.n0 rows, 5 columns), valid until it next grows.
+// The knot store grows: a Knots owns its rows and doubles them in place when full (in
+// add_knot).  A Knots converts to a Mat view (kn.n0 rows, 5 columns), valid until it next
+// grows.
 #pragma once
 
 #include <algorithm>
@@ -63,25 +58,32 @@ inline std::tuple<double, double, double, double> hermite_at(double t0, double p
             c2 + 3.0 * c3 * x0, c3};
 }
 
-// Gauss-Legendre nodes and weights on [0, 1], 4 points (the same expressions as cut.py)
+// Gauss-Legendre nodes and weights on [0, 1], 4 points (the nodes as 0.5 -+ the nodes on
+// [-1, 1] halved, each one rounding)
 constexpr double GL_X[4] = {0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816,
                             0.5 + 0.16999052179242816, 0.5 + 0.4305681557970263};
 constexpr double GL_W[4] = {0.17392742256872692, 0.3260725774312731, 0.3260725774312731,
                             0.17392742256872692};
 
-// Adds the flows over [a, b] of a cut segment to ``acc`` (the slots of segment_integrals'
-// ``out``) by 4-point Gauss-Legendre; returns the largest force at the nodes.
-inline double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, CMat lam,
-                       CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, idx n, Mat mk,
-                       Mat lvis, Vec cvis, bool stick, double kappa, double sr, Vec acc,
-                       bool steady) {
+// Adds the flows over [a, b] of the cut segment of s (evaluated into s.q and s.X) to ``acc``
+// (the slots of segment_integrals' ``out``) by 4-point Gauss-Legendre; returns the largest
+// force at the nodes.  stick: the ball is stuck (its friction's work on the bar counted).
+inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp, bool stick,
+                       const Friction& fr, Vec acc, bool steady) {
+    const Segment& seg = s.seg;
+    const CVec q = s.q;
+    const Vec X = s.X;
+    const idx n = s.n;
+    const Mat mk = s.mk, lvis = dp.l;
+    const Vec cvis = dp.c;
+    const double kappa = fr.kstick, sr = fr.sr;
     double fmax = 0.0;
     double hh = b - a;
     for (int g = 0; g < 4; ++g) {
         double tau = a + GL_X[g] * hh;
         double wg = GL_W[g] * hh;
-        state_at(r, q0, seg, tau, 0.0, lam, V, ks, Z, D, bq, q, X);
-        double f = cut_force(seg, tau, X, n, mk, 0.0, 0.0);
+        state_at(s, tau, q, X);
+        double f = cut_force(seg, tau, X, n, mk, s.f0, s.om);
         fmax = pymax(fmax, f);
         auto [w, wd] = tip_w_wd(mk, X, n);
         acc[0] += wg * f * wd;
@@ -110,7 +112,7 @@ inline double quad_cut(double a, double b, const Segment& seg, idx r, CVec q0, C
 struct Knots {
     static constexpr idx NCOL = 5;
     std::vector<double> buf;
-    idx n0 = 0;  // rows (numba: kn.shape[0])
+    idx n0 = 0;  // rows allocated
     idx n1 = NCOL;
 
     Knots() = default;
@@ -121,7 +123,7 @@ struct Knots {
     Mat view() { return {buf.data(), n0, NCOL}; }
     operator Mat() { return view(); }
 
-    // numba: big = np.zeros((2 n0, 5)); big[:nk] = kn[:nk]
+    // twice the rows, the first nk kept, the rest zero
     void grow(idx nk) {
         std::vector<double> big(static_cast<size_t>(2 * n0 * NCOL), 0.0);
         std::copy(buf.begin(), buf.begin() + nk * NCOL, big.begin());
@@ -130,11 +132,37 @@ struct Knots {
     }
 };
 
-// Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1); one closer than ttol to
-// the last knot replaces its value and W'+.  Drops knots no revolution needs any more when
-// the store is full, and doubles it if that frees less than half.  Returns (kn, nk).
-inline std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double t, Vec Xm,
-                                        Vec Xp, idx n, Mat mk, double ttol, double node) {
+// A cut's delay history as the run keeps it: the knot store kn and the knots in use nk;
+// for each past revolution k = 1 .. nrev, ip[k], the knot at or before t - k tau (-1:
+// before the cut, where W = HIST_W0), and sc[k], its surface's cubic (surface_piece's
+// scratch).
+struct History {
+    Knots kn;
+    idx nk = 0;
+    std::vector<idx> ip_buf;
+    std::vector<double> sc_buf;
+    Span1<idx> ip;
+    Mat sc;
+
+    History(idx rows, idx nrev)
+        : kn(rows),
+          ip_buf(static_cast<size_t>(nrev + 1), -1),
+          sc_buf(static_cast<size_t>(nrev + 1) * 4, 0.0),
+          ip{ip_buf.data(), nrev + 1},
+          sc{sc_buf.data(), nrev + 1, 4} {}
+    History(const History&) = delete;
+    History& operator=(const History&) = delete;
+};
+
+// Store the knot (t, W, W'- from Xm, W'+ from Xp, node index or -1) in hs (mk: the bar's
+// rows); one closer than ttol to the last knot replaces its value and W'+.  Drops knots no
+// revolution needs any more when the store is full, and doubles it if that frees less than
+// half.
+inline void add_knot(History& hs, double t, Vec Xm, Vec Xp, Mat mk, double ttol, double node) {
+    Knots& kn = hs.kn;
+    idx nk = hs.nk;
+    const Span1<idx> ip = hs.ip;
+    const idx n = mk.n1;
     double w = 0.0;
     double wdm = 0.0;
     double wdp = 0.0;
@@ -147,7 +175,7 @@ inline std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double
         kn(nk - 1, 1) = w;
         kn(nk - 1, 3) = wdp;
         kn(nk - 1, 4) = pymax(kn(nk - 1, 4), node);
-        return {kn, nk};
+        return;
     }
     if (nk == kn.n0) {
         idx lo = nk;
@@ -165,16 +193,22 @@ inline std::tuple<Knots&, idx> add_knot(Knots& kn, idx nk, Span1<idx> ip, double
     kn(nk, 2) = wdm;
     kn(nk, 3) = wdp;
     kn(nk, 4) = node;
-    return {kn, nk + 1};
+    hs.nk = nk + 1;
 }
 
 // The surface min_k [k h_m + W(t + tau - k tau_d)] from t as one cubic in tau, into seg.s,
 // and the time (<= t_end) up to which it is one cubic: the next delayed knot of any
 // revolution, or where another revolution becomes the minimum.  Advances the pointers
-// ip[k]; sc[k] receives revolution k's cubic.  j_now: the node t is on (-1: none).
-inline double surface_piece(double t, double t_end, double ttol, Mat kn, idx nk, Span1<idx> ip,
-                            Mat sc, idx nrev, idx nr_eff, double feed, double w_before,
-                            double tau_d, Segment& seg, idx j_now, idx m_rev, bool cubic) {
+// hs.ip[k]; hs.sc[k] receives revolution k's cubic.  Revolutions beyond nr_eff are followed
+// but not compared.  j_now: the node t is on (-1: none).
+inline double surface_piece(double t, double t_end, History& hs, const CutConsts& cq,
+                            idx nr_eff, Segment& seg, idx j_now) {
+    const Mat kn = hs.kn.view(), sc = hs.sc;
+    const idx nk = hs.nk;
+    const Span1<idx> ip = hs.ip;
+    const double ttol = cq.ttol, feed = cq.feed, w_before = cq.w0, tau_d = cq.tau;
+    const idx nrev = cq.nrev, m_rev = cq.mrev;
+    const bool cubic = cq.cubic;
     double t_piece = t_end;
     for (idx k = 1; k < nrev + 1; ++k) {
         double kt = static_cast<double>(k) * tau_d;

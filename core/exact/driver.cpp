@@ -23,10 +23,14 @@ namespace {
 
 namespace L = layout;
 
-// The bar's rows mk (M, K, C, psi_L, psi_d, psi_a), a free ball's y'' and W'' coefficients
-// ddc and the run's constants cp from p.
-void bar(Vec p, idx n, Mat mk, Mat ddc, RunConsts& cp, double t0, double t_steady,
-         double dt_out, double h, double rec_dt) {
+// The system from p into sys (whose rows mk and ddc are views of the work arrays, zeroed):
+// the bar's rows mk (M, K, C, psi_L, psi_d, psi_a), a free ball's y'' and W'' coefficients
+// ddc, the ball, friction and the forcing; nreg: the regimes outside a cut.
+void unpack_system(Vec p, idx nreg, System& sys) {
+    const idx n = sys.n;
+    const Mat mk = sys.mk, ddc = sys.ddc;
+    sys.kase = layout::Case(int(p[L::CASE]));
+    sys.nreg = nreg;
     for (idx i = 0; i < n; ++i) {
         mk(0, i) = p[L::M_ + i];
         mk(1, i) = p[L::K_ + i];
@@ -51,26 +55,32 @@ void bar(Vec p, idx n, Mat mk, Mat ddc, RunConsts& cp, double t0, double t_stead
             ddc(row, n + 1) -= pr * sr * mk(4, i);
         }
     }
-    cp.half = p[L::HALF_GAP];
-    cp.e = p[L::RESTITUTION];
-    cp.fc = fc;
-    cp.fs = pymax(p[L::STATIC_FRICTION], fc);
-    cp.sr = sr;
-    cp.meff = p[L::M_EFF];
-    cp.vimp = p[L::V_IMPACT];
-    cp.kstick = m > 0.0 ? (1.0 / m + sr * spd) : 1.0;
-    cp.kwall = m > 0.0 ? (1.0 / m + spd) : 1.0;
-    cp.stick_min = p[L::STICK_MIN];
-    cp.t0 = t0;
-    cp.t_steady = t_steady;
-    cp.dt_out = dt_out;
-    cp.stop_at_zero = p[L::STOP_AT_ZERO] > 0.0 ? 1.0 : 0.0;
-    cp.f0 = p[L::F0];
-    cp.om = p[L::OMEGA];
-    cp.h = h;
-    cp.rec_dt = rec_dt;
-    cp.tstrobe = p[L::STROBE_PERIOD];
-    cp.m = m;
+    sys.ball.half = p[L::HALF_GAP];
+    sys.ball.e = p[L::RESTITUTION];
+    sys.ball.meff = p[L::M_EFF];
+    sys.ball.vimp = p[L::V_IMPACT];
+    sys.ball.m = m;
+    sys.fric.fc = fc;
+    sys.fric.fs = pymax(p[L::STATIC_FRICTION], fc);
+    sys.fric.sr = sr;
+    sys.fric.kstick = m > 0.0 ? (1.0 / m + sr * spd) : 1.0;
+    sys.fric.kwall = m > 0.0 ? (1.0 / m + spd) : 1.0;
+    sys.fric.stick_min = p[L::STICK_MIN];
+    sys.force.f0 = p[L::F0];
+    sys.force.om = p[L::OMEGA];
+}
+
+// The run's span and outputs from its arguments.
+RunConsts run_consts(const ExactRun& a) {
+    RunConsts cp;
+    cp.t0 = a.t0;
+    cp.t_steady = a.t_steady;
+    cp.dt_out = a.dt_out;
+    cp.stop_at_zero = a.p[L::STOP_AT_ZERO] > 0.0;
+    cp.h = a.h;
+    cp.rec_dt = a.rec_dt;
+    cp.tstrobe = a.p[L::STROBE_PERIOD];
+    return cp;
 }
 
 // A regenerative cut's constants cq from p, the run's span and the history step H.
@@ -80,21 +90,26 @@ CutConsts cut_consts(Vec p, double t0, double t_end, double hist_step, bool rege
     cq.t0 = t0;
     cq.h = hist_step;
     cq.ttol = pymax(1e-9 * hist_step, 4.0 * 2.2e-16 * (std::fabs(t0) + std::fabs(t_end)));
-    cq.nrev = regen ? double(idx(p[L::N_REV])) : 0.0;
+    cq.nrev = regen ? idx(p[L::N_REV]) : 0;
     cq.tau = tau_d;
     cq.feed = p[L::FEED];
     cq.w0 = p[L::HIST_W0];
-    // Python's round: half to even, as rint in the default rounding mode
-    cq.mrev = regen ? double(idx(std::nearbyint(tau_d / hist_step))) : 1.0;
-    cq.cubic = p[L::INTERP] > 0.0 ? 1.0 : 0.0;
+    // nodes a revolution: tau / H to the nearest whole number, ties to even (nearbyint in the
+    // default rounding mode)
+    cq.mrev = regen ? idx(std::nearbyint(tau_d / hist_step)) : 1;
+    cq.cubic = p[L::INTERP] > 0.0;
     cq.krb = p[L::KR_B];
     return cq;
 }
 
-// The first knot of a cut, at t0, and whether the tool starts in it (into rs); returns the
-// largest cutting force so far.
-double cut_start(Mat kn, Vec X, idx n, Mat mk, double t0, double krb, double feed,
-                 double w_before, RunState& rs, double max_force) {
+// The first knot of a cut (constants cq), at its start, from the state X (mk: the bar's
+// rows), and whether the tool starts in it (into rs); returns the largest cutting force so
+// far.
+double cut_start(History& hs, Vec X, Mat mk, const CutConsts& cq, RunState& rs,
+                 double max_force) {
+    const idx n = mk.n1;
+    const double t0 = cq.t0, krb = cq.krb, feed = cq.feed, w_before = cq.w0;
+    Knots& kn = hs.kn;
     double w_ = 0.0;
     double wd_ = 0.0;
     for (idx i = 0; i < n; ++i) {
@@ -106,35 +121,41 @@ double cut_start(Mat kn, Vec X, idx n, Mat mk, double t0, double krb, double fee
     kn(0, 2) = wd_;
     kn(0, 3) = wd_;
     kn(0, 4) = 0.0;
+    hs.nk = 1;
     bool incut = feed + w_before - w_ > 0.0;
-    rs.incut = incut ? 1.0 : 0.0;
+    rs.incut = incut;
     if (!incut && rs.first_zero < 0.0) rs.first_zero = t0;
     return pymax(max_force, krb * pymax(0.0, feed + w_before - w_));
 }
 
-// The knot of the node j_node + 1, reached at t without an event (W, W' there: wb, wdb);
-// returns the knots' count.
-idx node_knot(Knots& kn, idx nk, Span1<idx> ip, double t, double wb, double wdb, Vec X, idx n,
-              Mat mk, double ttol, idx j_node) {
+// The knot of the node j_node + 1, reached at t without an event (W, W' there: wb, wdb;
+// the state X), into hs.
+void node_knot(History& hs, double t, double wb, double wdb, Vec X, Mat mk, double ttol,
+               idx j_node) {
+    Knots& kn = hs.kn;
+    const idx nk = hs.nk;
     if (nk < kn.n0 && t > kn(nk - 1, 0) + ttol) {  // add_knot's usual case, written out
         kn(nk, 0) = t;
         kn(nk, 1) = wb;
         kn(nk, 2) = wdb;
         kn(nk, 3) = wdb;
         kn(nk, 4) = double(j_node + 1);
-        return nk + 1;
+        hs.nk = nk + 1;
+        return;
     }
-    return std::get<1>(add_knot(kn, nk, ip, t, X, X, n, mk, ttol, double(j_node + 1)));
+    add_knot(hs, t, X, X, mk, ttol, double(j_node + 1));
 }
 
-// A ball's regime at the start (into rs), from y, y' and the tip force f_t0.
-void initial_regime(Vec X, double f_t0, idx n, Mat mk, const RunConsts& cp, RunState& rs) {
-    double half = cp.half;
-    double fc = cp.fc;
-    double fs = cp.fs;
-    double y = rs.y;
-    double yd = rs.yd;
-    int mode = FREE;
+// A ball's regime at the start (into b), from its y, y' and the tip force f_t0.
+void initial_regime(Vec X, double f_t0, const System& sys, BallState& b) {
+    const idx n = sys.n;
+    const Mat mk = sys.mk;
+    double half = sys.ball.half;
+    double fc = sys.fric.fc;
+    double fs = sys.fric.fs;
+    double y = b.y;
+    double yd = b.yd;
+    Regime mode = FREE;
     double sdir = 0.0;
     double wall = 0.0;
     if (yd != 0.0) {
@@ -142,61 +163,65 @@ void initial_regime(Vec X, double f_t0, idx n, Mat mk, const RunConsts& cp, RunS
     } else if (std::fabs(y) >= half) {
         wall = y > 0.0 ? 1.0 : -1.0;
         y = wall * half;
-        double F = freq_rhs(X, f_t0, n, mk, cp.kwall);
+        double F = freq_rhs(X, f_t0, n, mk, sys.fric.kwall);
         if (wall * F <= fs) {
             mode = CONTACT;
         } else if (fc > 0.0) {
             sdir = -wall;
         }
     } else if (fc > 0.0) {
-        double F = freq_rhs(X, f_t0, n, mk, cp.kstick);
+        double F = freq_rhs(X, f_t0, n, mk, sys.fric.kstick);
         if (std::fabs(F) <= fs) {
             mode = STICK;
         } else {
             sdir = F > 0.0 ? -1.0 : 1.0;
         }
     }
-    rs.mode = mode;
-    rs.sdir = sdir;
-    rs.wall = wall;
-    rs.y = y;
+    b.mode = mode;
+    b.sdir = sdir;
+    b.wall = wall;
+    b.y = y;
 }
 
-// Regime of a ball at rest on wall w_ under the tip force f: held (CONTACT) or leaving
-// inward (FREE).
-void at_wall(Vec X, double f, double w_, idx n, Mat mk, double kappa_wall, double fs, double fc,
-             int& mode, double& sdir, double& wall) {
-    double F = freq_rhs(X, f, n, mk, kappa_wall);
-    wall = w_;
-    if (w_ * F <= fs) {
-        mode = CONTACT;
-        sdir = 0.0;
+// Regime of a ball at rest on wall w_ under the tip force f (the bar's state X): held
+// (CONTACT) or leaving inward (FREE), into b.
+void at_wall(Vec X, double f, double w_, const System& sys, BallState& b) {
+    double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kwall);
+    b.wall = w_;
+    if (w_ * F <= sys.fric.fs) {
+        b.mode = CONTACT;
+        b.sdir = 0.0;
     } else {
-        mode = FREE;
-        sdir = fc > 0.0 ? -w_ : 0.0;
+        b.mode = FREE;
+        b.sdir = sys.fric.fc > 0.0 ? -w_ : 0.0;
     }
 }
 
-// An impact or a capture on wall w_ (EV_PLUS / EV_MINUS) at t: X' jumps, the counts.
-void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, idx n, Mat mk,
-              const RunConsts& cp, Mat imp, Vec met, int& mode, double& sdir, double& wall,
-              double& y, double& yd) {
-    y = w_ * cp.half;
-    double vb = yd;
+// An impact or a capture of the ball b on wall w_ (EV_PLUS / EV_MINUS) at t under the tip
+// force f_ev: X' jumps, the counts into log (steady: t in the steady part).
+void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, const System& sys,
+              const EventLog& log, BallState& b) {
+    const idx n = sys.n;
+    const Mat mk = sys.mk;
+    const Ball& ball = sys.ball;
+    double* met = log.met;
+    b.y = w_ * ball.half;
+    double vb = b.yd;
+    double& yd = b.yd;
     if (w_ * vb > 0.0) {
-        double ee = std::fabs(vb) > cp.vimp ? cp.e : 0.0;  // Zeno: captured on the wall
-        ImpactJump j = impact_law(vb, ee, cp.meff);
+        double ee = std::fabs(vb) > ball.vimp ? ball.e : 0.0;  // Zeno: captured on the wall
+        ImpactJump j = impact_law(vb, ee, ball.meff);
         yd = j.yd;
         // the modes' jumps g psi_d,i / M_i, divided here (the RK4 kernels multiply by 1 / M_i:
         // the same law, other roundings)
         for (idx i = 0; i < n; ++i) X[n + i] += j.g * mk(4, i) / mk(0, i);
         met[L::D_IMPACT] += j.loss;
-        if (std::fabs(vb) > cp.vimp) {
-            count_impact(met.d, imp, t, w_, vb, steady);
+        if (std::fabs(vb) > ball.vimp) {
+            count_impact(met, log.imp, t, w_, vb, steady);
         } else {
             met[L::N_MICRO] += 1;
         }
-    } else if (w_ * vb < -cp.vimp) {
+    } else if (w_ * vb < -ball.vimp) {
         // moving inward, faster than a capture: not a wall contact but the round-off of a
         // segment a few ulp long just after an impact; the ball goes on, from the wall
         yd = vb;
@@ -204,32 +229,34 @@ void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, idx n, Mat m
         yd = 0.0;
     }
     if (yd != 0.0) {
-        mode = FREE;
-        sdir = yd > 0.0 ? 1.0 : -1.0;
+        b.mode = FREE;
+        b.sdir = yd > 0.0 ? 1.0 : -1.0;
     } else {
-        at_wall(X, f_ev, w_, n, mk, cp.kwall, cp.fs, cp.fc, mode, sdir, wall);
+        at_wall(X, f_ev, w_, sys, b);
     }
 }
 
-// The event ev_kind at t under the tip force f_ev: an impact, a capture, a stick, a slip or a
-// release of the ball, or the tool leaving or re-entering the cut, into the run's state rs;
-// its counts and the stick interval it closes into met, imp and stick.
-void apply_event(idx ev_kind, double t, bool steady, Vec X, double f_ev, idx n, Mat mk,
-                 const RunConsts& cp, RunState& rs, Mat imp, Mat stick, Vec met) {
-    int mode = int(rs.mode);
-    double sdir = rs.sdir;
-    double wall = rs.wall;
-    double y = rs.y;
-    double yd = rs.yd;
-    double fc = cp.fc;
+// The event ev_kind at t under the tip force f_ev (the bar's state X): an impact, a
+// capture, a stick, a slip or a release of the ball, or the tool leaving or re-entering the
+// cut, into the run's state rs; its counts and the stick interval it closes into log.
+void apply_event(idx ev_kind, double t, double f_ev, Vec X, const System& sys,
+                 const RunConsts& cp, RunState& rs, const EventLog& log) {
+    const bool steady = t >= cp.t_steady;
+    BallState b = rs.ball;
+    Regime& mode = b.mode;
+    double& sdir = b.sdir;
+    double& wall = b.wall;
+    double& y = b.y;
+    double& yd = b.yd;
+    double fc = sys.fric.fc;
     bool was_stick = mode == STICK;
     if (ev_kind == EV_PLUS || ev_kind == EV_MINUS) {
         double w_ = ev_kind == EV_PLUS ? 1.0 : -1.0;
-        wall_hit(w_, t, steady, X, f_ev, n, mk, cp, imp, met, mode, sdir, wall, y, yd);
+        wall_hit(w_, t, steady, X, f_ev, sys, log, b);
     } else if (ev_kind == EV_VSTOP) {
         yd = 0.0;
-        double F = freq_rhs(X, f_ev, n, mk, cp.kstick);
-        if (std::fabs(F) <= cp.fs) {
+        double F = freq_rhs(X, f_ev, sys.n, sys.mk, sys.fric.kstick);
+        if (std::fabs(F) <= sys.fric.fs) {
             mode = STICK;
             sdir = 0.0;
         } else {
@@ -244,13 +271,13 @@ void apply_event(idx ev_kind, double t, bool steady, Vec X, double f_ev, idx n, 
         mode = FREE;
         yd = 0.0;
         sdir = fc > 0.0 ? -wall : 0.0;
-        y = wall * cp.half;
+        y = wall * sys.ball.half;
     } else if (ev_kind == EV_CUT) {
-        bool incut = rs.incut == 0.0;
-        rs.incut = incut ? 1.0 : 0.0;
+        bool incut = !rs.incut;
+        rs.incut = incut;
         if (!incut && rs.first_zero < 0.0) {
             rs.first_zero = t;  // the chatter verdict (docs/model.md, section 4)
-            if (cp.stop_at_zero != 0.0) {  // finish the step of length dt_out, as RK4 does
+            if (cp.stop_at_zero) {  // finish the step of length dt_out, as RK4 does
                 double t0 = cp.t0;
                 double dt_out = cp.dt_out;
                 double k = double(idx(std::ceil((t - t0) / dt_out - 1e-9)));
@@ -263,13 +290,9 @@ void apply_event(idx ev_kind, double t, bool steady, Vec X, double f_ev, idx n, 
     if (mode == STICK && !was_stick) {
         rs.stick_t0 = t;
     } else if (was_stick && mode != STICK) {
-        close_stick(met.d, stick, rs.stick_t0, t, cp.t_steady, cp.stick_min);
+        close_stick(log.met, log.stick, rs.stick_t0, t, log.t_steady, sys.fric.stick_min);
     }
-    rs.mode = mode;
-    rs.sdir = sdir;
-    rs.wall = wall;
-    rs.y = y;
-    rs.yd = yd;
+    rs.ball = b;
 }
 
 // The running extremes from met and the first output times into ro.
@@ -294,13 +317,14 @@ void outputs_start(RunningOut& ro, Vec met, Vec p, double t0, double max_force) 
 }
 
 // The final state into x and the running outputs into met.
-void finish_run(const Work& w, idx n, bool ball, bool regen, idx n_ev, int status) {
+void finish_run(const Work& w, bool regen, idx n_ev, int status) {
     Vec x = w.x;
     Vec met = w.met;
+    const idx n = w.sys.n;
     for (idx j = 0; j < w.X.size(); ++j) x[j] = w.X[j];
-    if (ball) {
-        x[2 * n] = w.rs.y;
-        x[2 * n + 1] = w.rs.yd;
+    if (w.sys.has_ball()) {
+        x[2 * n] = w.rs.ball.y;
+        x[2 * n + 1] = w.rs.ball.yd;
     }
     met[L::MAX_ABS_W] = w.ro.max_abs_w;
     met[L::STEADY_MAX_W] = w.ro.max_w;
@@ -317,15 +341,10 @@ void finish_run(const Work& w, idx n, bool ball, bool regen, idx n_ev, int statu
 
 // The views of the run's inputs and outputs in the work arrays.
 void attach(Work& w, const ExactRun& a) {
-    w.lam = a.lam;
-    w.V = a.V;
+    w.cf = {a.lam, a.V, a.Z, a.D, a.bq};
     w.Vi = a.Vi;
     w.Vfull = a.Vfull;
-    w.Z = a.Z;
-    w.D = a.D;
-    w.bq = a.bq;
-    w.lvis = a.lvis;
-    w.cvis = a.cvis;
+    w.dp = {a.lvis, a.cvis};
     w.isum = a.isum;
     w.kstep = a.kstep;
     w.bnd = a.bnd;
@@ -350,15 +369,18 @@ double exact_body(const ExactRun& a) {
     double t_steady = a.t_steady;
     double h = a.h;
     idx n = idx(p[L::N_MODES]);
-    idx kase = idx(p[L::CASE]);
     idx nz = a.lam.n1;
-    bool ball = kase == L::BALL;
     Work w(n, nz);
     attach(w, a);
-    Mat mk = w.mk;
-    bar(p, n, mk, w.ddc, w.cp, t0, t_steady, a.dt_out, h, a.rec_dt);
-    double f0 = p[L::F0];
-    double om = p[L::OMEGA];
+    System& sys = w.sys;
+    unpack_system(p, a.nreg, sys);
+    w.cp = run_consts(a);
+    const idx kase = sys.kase;
+    const bool ball = sys.has_ball();
+    Mat mk = sys.mk;
+    double f0 = sys.force.f0;
+    double om = sys.force.om;
+    const EventLog log{met.d, a.imp, a.stick, t_steady};
     Vec X = w.X;
     for (idx j = 0; j < nz; ++j) X[j] = x[j];
 
@@ -369,28 +391,20 @@ double exact_body(const ExactRun& a) {
     double krb = cq.krb;
     double feed = cq.feed;
     double w_before = cq.w0;
-    idx nrev = idx(cq.nrev);
+    idx nrev = cq.nrev;
     double ttol = cq.ttol;
-    Knots kn(Regen ? nrev * idx(cq.mrev) + 64 : 1);  // grows in add_knot (a std::vector)
-    idx nk = 0;
-    std::vector<idx> ip_buf(size_t(nrev + 1), -1);
-    std::vector<double> sc_buf(size_t(nrev + 1) * 4, 0.0);
-    Span1<idx> ip{ip_buf.data(), nrev + 1};
-    Mat sc{sc_buf.data(), nrev + 1, 4};
+    History hs(Regen ? nrev * cq.mrev + 64 : 1, nrev);  // the knots grow in add_knot
     RunState& rs = w.rs;
     rs.first_zero = met[L::FIRST_ZERO_T];
     rs.t_end = t_end;
     double max_force = met[L::MAX_FORCE];
     idx last_zero_step = -1;
     idx j_node = 0;  // the last node reached
-    if constexpr (Regen) {
-        max_force = cut_start(kn.view(), X, n, mk, t0, krb, feed, w_before, rs, max_force);
-        nk = 1;
-    }
+    if constexpr (Regen) max_force = cut_start(hs, X, mk, cq, rs, max_force);
     double f_t0 = f0 * std::sin(om * t0);
-    if (rs.incut != 0.0) f_t0 += krb * (feed + w_before - kn(0, 1));
-    rs.y = (ball || kase == L::LOCKED) ? x[2 * n] : 0.0;
-    rs.yd = ball ? x[2 * n + 1] : 0.0;
+    if (rs.incut) f_t0 += krb * (feed + w_before - hs.kn(0, 1));
+    rs.ball.y = (ball || kase == L::LOCKED) ? x[2 * n] : 0.0;
+    rs.ball.yd = ball ? x[2 * n + 1] : 0.0;
 
     // the running extremes and output times (the other metrics add up in met itself)
     outputs_start(w.ro, met, p, t0, max_force);
@@ -398,7 +412,7 @@ double exact_body(const ExactRun& a) {
     int status = 0;
 
     // --- the initial regime
-    if (ball) initial_regime(X, f_t0, n, mk, w.cp, rs);
+    if (ball) initial_regime(X, f_t0, sys, rs.ball);
     rs.stick_t0 = t0;
     int n_zero = 0;
 
@@ -421,33 +435,29 @@ double exact_body(const ExactRun& a) {
                               : (om != 0.0 ? kernel::phasor(om, t) : ncplx(1.0, 0.0));
         ph_next_ok = false;
         double t_stop = t < t_steady ? pymin(t_steady, t_end) : t_end;
-        SegStart st = start_segment<Regen>(w, t, t_stop, ph, n, kase, a.nreg, j_node, kn.view(),
-                                           nk, ip, sc, cq, sv);
+        SegStart st = start_segment<Regen>(w, t, t_stop, ph, hs, j_node, cq, sv);
         j_node = st.j_node;
-        idx mode = idx(rs.mode);
         bool steady = t >= t_steady;
         idx sz = const_sizes(st.ks, n, nz);
+        const SegCtx c{st.r, st.ks, sz, n, kase, rs.ball.mode, ball};
         SegEvent ev;
         if (!Regen && sz == 1) {  // the constant sizes of one and two modes
-            ev = search_segment<false, 2>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+            ev = search_segment<false, 2>(w, t, c, ph, sv);
         } else if (!Regen && sz == 2) {
-            ev = search_segment<false, 4>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+            ev = search_segment<false, 4>(w, t, c, ph, sv);
         } else {
-            ev = search_segment<Regen>(w, t, st.r, st.ks, sz, n, kase, mode, ph, sv);
+            ev = search_segment<Regen>(w, t, c, ph, sv);
         }
         ph_next = ev.ph_next;
 
         // --- close the segment [t, t + T]
         double T = ev.tau;
-        last_zero_step = close_segment<Regen>(w, t, T, st.r, st.ks, sz, n, kase, mode, ph, steady,
-                                              st.pdu, last_zero_step);
+        last_zero_step = close_segment<Regen>(w, c, t, T, ph, steady, st.pdu, last_zero_step);
         double t_new = ev.kind >= 0 ? t + T : st.t_seg_end;
         if (ev.kind < 0) {
             t = t_new;
             if constexpr (Regen) {
-                if (st.at_node) {
-                    nk = node_knot(kn, nk, ip, t, ev.wb, ev.wdb, X, n, mk, ttol, j_node);
-                }
+                if (st.at_node) node_knot(hs, t, ev.wb, ev.wdb, X, mk, ttol, j_node);
             }
             continue;
         }
@@ -466,19 +476,16 @@ double exact_body(const ExactRun& a) {
             n_zero = 0;
         }
         t = t_new;
-        steady = t >= t_steady;
         for (idx j = 0; j < nz; ++j) w.Xa[j] = X[j];  // before the event (W'- of a knot)
         // --- apply the event
-        apply_event(ev.kind, t, steady, X, f_ev, n, mk, w.cp, rs, a.imp, a.stick, met);
+        apply_event(ev.kind, t, f_ev, X, sys, w.cp, rs, log);
         t_end = rs.t_end;
-        if constexpr (Regen) {
-            nk = std::get<1>(add_knot(kn, nk, ip, t, w.Xa, X, n, mk, ttol, -1.0));
-        }
+        if constexpr (Regen) add_knot(hs, t, w.Xa, X, mk, ttol, -1.0);
     }
-    if (rs.mode == STICK) {
-        close_stick(met.d, a.stick, rs.stick_t0, t, w.cp.t_steady, w.cp.stick_min);
+    if (rs.ball.mode == STICK) {
+        close_stick(met.d, a.stick, rs.stick_t0, t, w.cp.t_steady, sys.fric.stick_min);
     }
-    finish_run(w, n, ball, Regen, n_ev, status);
+    finish_run(w, Regen, n_ev, status);
     return t;
 }
 

@@ -1,9 +1,9 @@
 // The exact kernel's driver: the run's setup, the
 // loop over segments (each searched by segment.hpp), the events applied between them and the
-// run's end.  numba compiled one body twice with ``regen`` a constant (_exact, _exact_cut);
-// here exact_body<Regen> is instantiated twice in driver.cpp.
+// run's end.  One body, exact_body<Regen>, instantiated twice in driver.cpp: a harmonic run
+// and a cut (Regen a constant, so neither pays for the other's tests).
 //
-//   struct ExactRun                  the arguments of numba's _exact, as views
+//   struct ExactRun                  the run's arrays and matrices, as views
 //   run_exact(const ExactRun&)       the harmonic or the cut kernel; the time reached
 #pragma once
 
@@ -11,9 +11,9 @@
 
 namespace bb::exact {
 
-// The arguments of numba's kernel (_exact / _exact_cut), in its order: the run's arrays, its
-// span, prepare's matrices (V is prepare's Vh, the halved eigenvectors; Vfull its V) and a
-// cut's history step and tables.  The bindings check every shape before building one.
+// One run: its arrays, its span, prepare's matrices (V is prepare's Vh, the halved
+// eigenvectors; Vfull its V) and a cut's history step and tables.  The bindings check every
+// shape before building one.
 struct ExactRun {
     Vec p;
     Vec x;

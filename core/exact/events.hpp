@@ -10,8 +10,7 @@
 //                                                                    // g, g', g'' (or NaN)
 //   double hermite(double a, double b, double p0, double p1, double d0, double d1,
 //                  idx order);
-//   double hermite5(double a, double b, double p0, double p1, double d0, double d1,
-//                   double e0, double e1, idx order);
+//   double hermite5(double a, double b, Jet f0, Jet f1, idx order);
 //   double find_root(idx kind, double a, double ga, double b, double gb, const SegView& s,
 //                    double c0);
 //   double find_root_1 / find_root_2 (the same, n = 1 or 2 modes in conjugate pairs);
@@ -21,11 +20,12 @@
 //   std::tuple<double, double> quad_range(double p, double d, double dd, double s);
 //   constexpr int NSUB = 16;
 //   bool may_graze(double a, double b, Vec ev_a, Vec ev_b, double half, double b4);
-//   bool w_may_exceed(double h, double wa, double wb, double wda, double wdb, double bw4,
-//                     double max_w, double min_w, double max_abs_w);
-//   std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b, bool watch_v,
-//                     bool watch_ext, double half, const SegView& s, double ydd_a,
-//                     double ydd_b);
+//   bool w_may_exceed(double h, TipW wa, TipW wb, double bw4, double max_w, double min_w,
+//                     double max_abs_w);
+//   struct StepEnds                 a step [a, b], its level, the event functions and y''
+//                                   at its ends
+//   std::tuple<idx, double> wall_step(StepEnds st, bool watch_v, bool watch_ext,
+//                     const SegView& s);
 //
 // X, Xd are seen with their own length by g_value, _gd and state_at: give views of length
 // nz.  The _1 / _2 copies are the same operations with the sizes as constants, which the
@@ -44,39 +44,10 @@
 
 namespace bb::exact {
 
-// A segment's closed form as the event functions read it: the segment, its regime r and
-// its start q0 in eigen-coordinates; the run's eigen-data (lam, V, Z, D, bq); the sizes
-// (n modes; ks = 2 where only the first of each conjugate pair is evaluated); the model's
-// rows mk (M, K, C, psi_L, psi_d, psi_a); the harmonic forcing (f0, om); and the scratch
-// the state is evaluated into (q, X and X', each seen with its own length).
-struct SegView {
-    const Segment& seg;
-    idx r;
-    CVec q0;
-    CMat lam;
-    CArr3 V;
-    idx ks;
-    CMat Z;
-    Mat D;
-    CMat bq;
-    CVec q;
-    Vec X;
-    Vec Xd;
-    idx n;
-    Mat mk;
-    double f0;
-    double om;
-
-    // the same view with ks and n given (the copies with constant sizes)
-    SegView with_sizes(idx ks_, idx n_) const {
-        return {seg, r, q0, lam, V, ks_, Z, D, bq, q, X, Xd, n_, mk, f0, om};
-    }
-};
-
 // Event function ``kind`` at tau on the segment described by ``seg``.
 inline double g_value(idx kind, double tau, const SegView& s) {
-    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
-    state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X);
+    [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
+    state_at(s, tau, q, X);
     if (kind == EV_WEXT) {
         double s = 0.0;
         for (idx i = 0; i < n; ++i) s += mk(3, i) * X[n + i];
@@ -111,10 +82,10 @@ inline double g_value(idx kind, double tau, const SegView& s) {
 // Event function ``kind``, its time derivative and its second derivative at tau: the
 // second only where it comes free (the walls and the cut's h), NaN elsewhere.
 inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegView& s) {
-    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
+    [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     double ts = seg.ts;
-    state_at2(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X, Xd);
+    state_at2(s, tau);
     if (kind == EV_WEXT) {
         double g = 0.0;
         double dg = 0.0;
@@ -228,11 +199,16 @@ inline double hermite(double a, double b, double p0, double p1, double d0, doubl
     return a + x * h;
 }
 
-// Where the quintic Hermite interpolant of values, slopes and second derivatives on [a, b]
-// (order 0), or its derivative (order 1), changes sign: the cubic's start refined by
-// safeguarded Newton on the quintic.
-inline double hermite5(double a, double b, double p0, double p1, double d0, double d1,
-                       double e0, double e1, idx order) {
+// A function's value and its first two derivatives at a point.
+struct Jet {
+    double v, d, dd;
+};
+
+// Where the quintic Hermite interpolant on [a, b] of the values, slopes and second
+// derivatives f0 (at a) and f1 (at b) (order 0), or its derivative (order 1), changes sign:
+// the cubic's start refined by safeguarded Newton on the quintic.
+inline double hermite5(double a, double b, Jet f0, Jet f1, idx order) {
+    const double p0 = f0.v, p1 = f1.v, d0 = f0.d, d1 = f1.d, e0 = f0.dd, e1 = f1.dd;
     double x0 = hermite(a, b, p0, p1, d0, d1, order);
     double h = b - a;
     double m0 = d0 * h;
@@ -275,7 +251,7 @@ inline double hermite5(double a, double b, double p0, double p1, double d0, doub
 
 // The root of event function ``kind`` in [a, b], where it changes sign (or ga = 0): Newton
 // with the exact derivative, kept inside the shrinking bracket, to a bracket of 4 ulp of t
-// (events.py's _root_body).  Returns the end on gb's side.  X and Xd are seen with length
+// Returns the end on gb's side.  X and Xd are seen with length
 // nz.
 inline double _root_body(idx kind, double a, double ga, double b, double gb,
                          const SegView& s, double c0, idx nz) {
@@ -329,8 +305,8 @@ inline double find_root(idx kind, double a, double ga, double b, double gb, cons
     return _root_body(kind, a, ga, b, gb, s, c0, s.X.n);
 }
 
-// The copies with constant sizes are flattened (everything they call inlined into them, as
-// numba inlined _root_body and state_at): only then does the compiler see the sizes as the
+// The copies with constant sizes are flattened (everything they call inlined into them,
+// _root_body and state_at among them): only then does the compiler see the sizes as the
 // constants they are; a call to the shared _root_body kept its loops generic
 // (BB_FLATTEN, compiler.hpp).
 
@@ -357,19 +333,22 @@ inline double find_root_any(idx kind, double a, double ga, double b, double gb,
 
 // W at its extremum in [a, b], where W' changes sign (ga, gb: W' at a, b): Newton on W'
 // from c0 inside the shrinking bracket until the step is below 2e-5 h, then W plus the
-// step's quadratic correction (events.py's _w_extremum_body).
+// step's quadratic correction.
 inline double _w_extremum_body(double a, double ga, double b, double gb, double c0, double h,
                                const SegView& s, idx nz) {
     (void)ga;
-    [[maybe_unused]] const auto& [seg, r, q0, lam, V, ks, Z, D, bq, q, X, Xd, n, mk, f0, om] = s;
+    [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
     Vec Xn{X.d, nz};
     Vec Xdn{Xd.d, nz};
+    SegView sn = s;
+    sn.X = Xn;
+    sn.Xd = Xdn;
     bool pos = gb > 0.0;
     double c = (a < c0 && c0 < b) ? c0 : 0.5 * (a + b);
     double tol = 2e-5 * h;
     double w = 0.0;
     for (int it = 0; it < 100; ++it) {
-        state_at2(r, q0, seg, c, om, lam, V, ks, Z, D, bq, q, Xn, Xdn);
+        state_at2(sn, c);
         w = 0.0;
         double wd = 0.0;
         double wdd = 0.0;
@@ -488,22 +467,47 @@ inline bool may_graze(double a, double b, Vec ev_a, Vec ev_b, double half, doubl
     return hi + margin >= half || lo - margin <= -half;
 }
 
+// The segment's running extremes, kept in locals (registers) during the search
+struct Extremes {
+    double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
+};
+
+// W, W' and W'' at a grid point (W'' NaN where not evaluated).
+struct TipW {
+    double w, wd, wdd;
+};
+
 // Whether W may go above max_w, below min_w or beyond max_abs_w in magnitude inside a step
-// of length h (the cubic Hermite of W, W' widened by twice its error bound).
-inline bool w_may_exceed(double h, double wa, double wb, double wda, double wdb, double bw4,
-                         double max_w, double min_w, double max_abs_w) {
+// of length h from wa to wb (the cubic Hermite of W, W' widened by twice its error bound,
+// bw4 bounding |W^(4)|).  The extremes come as values: the search keeps its own in
+// registers.
+inline bool w_may_exceed(double h, TipW wa, TipW wb, double bw4, double max_w, double min_w,
+                         double max_abs_w) {
     double margin = bw4 * ipow(h, 4) / 192.0;
-    auto [lo, hi] = _cubic_range(wa, wb, wda * h, wdb * h);
+    auto [lo, hi] = _cubic_range(wa.w, wb.w, wa.wd * h, wb.wd * h);
     hi += margin;
     lo -= margin;
     return hi >= max_w || lo <= min_w || pymax(hi, -lo) >= max_abs_w;
 }
 
-// The first wall or friction-switch event of a FREE ball in [a, b], from the event
-// functions at the ends and y'' there (NaN: not known): (kind, time), kind -1 if none.
-inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b, bool watch_v,
-                                         bool watch_ext, double half, const SegView& s,
-                                         double ydd_a, double ydd_b) {
+// A step [a, b] of a segment (times from its start, length h 2^lev) and what is known at
+// its ends: the event functions and a free ball's y'' (NaN: not known).  Passed by value.
+struct StepEnds {
+    double a, b;
+    idx lev;
+    Vec ev_a, ev_b;
+    double ydd_a, ydd_b;
+};
+
+// The first wall or friction-switch event of a FREE ball in the step st, from the event
+// functions at its ends and y'' there: (kind, time), kind -1 if none.  watch_v: the y' = 0
+// switch of a sliding ball is an event; watch_ext: an extremum of y that may reach a wall
+// is looked for.
+inline std::tuple<idx, double> wall_step(StepEnds st, bool watch_v, bool watch_ext,
+                                         const SegView& s) {
+    const double a = st.a, b = st.b, ydd_a = st.ydd_a, ydd_b = st.ydd_b;
+    const Vec ev_a = st.ev_a, ev_b = st.ev_b;
+    const double half = s.seg.half;
     double best = b;
     idx kind = -1;
     double lo = a;
@@ -574,8 +578,8 @@ inline std::tuple<idx, double> wall_step(double a, double b, Vec ev_a, Vec ev_b,
                 double sg = kk == EV_PLUS ? 1.0 : -1.0;
                 double c0;
                 if (bend == b && ydd_a == ydd_a && ydd_b == ydd_b)  // y'' known at both ends
-                    c0 = hermite5(a, b, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde, sg * ydd_a,
-                                  sg * ydd_b, 0);
+                    c0 = hermite5(a, b, Jet{ev_a[kk], sg * ev_a[EV_YEXT], sg * ydd_a},
+                                  Jet{ge, sg * yde, sg * ydd_b}, 0);
                 else
                     c0 = hermite(a, bend, ev_a[kk], ge, sg * ev_a[EV_YEXT], sg * yde, 0);
                 double tr = find_root_any(kk, a, ev_a[kk], bend, ge, s, c0);

@@ -1,25 +1,26 @@
-// Complex and power arithmetic as numba compiles it, for bit-identical ports of the exact
-// kernel (numba 0.68 on CPython 3.11; numba/cpython/numbers.py and cmathimpl.py).
+// Complex and power arithmetic of the exact kernel, written out operation by operation so
+// that its rounding is fixed by this file and not by the compiler or its runtime library.
 //
 // Why not std::complex's operators:
-// - complex / complex: GCC calls __divdc3 (scaled Smith's algorithm); numba does CPython's
-//   _Py_c_quot (one ratio, one denominator): different roundings.
-// - a float operand: numba promotes it to complex(x, 0.0) and does the complex operation, so
-//   (a + bi) * x = (a x - b 0.0) + (a 0.0 + b x) i and (a + bi) + x = (a + x) + (b + 0.0) i;
-//   std::complex computes (a x, b x) and (a + x, b).  The values agree except for signed
-//   zeros, infinities and NaNs (b 0.0 is NaN for an infinite b; -0.0 + 0.0 is +0.0), which
-//   we keep as numba has them: the same formula, operation for operation.
-// - complex * complex: the same formula (ac - bd, ad + bc) as numba on CPython < 3.14, but
-//   GCC adds a NaN recovery through __muldc3; ncplx has none, like numba.
+// - complex / complex: GCC calls __divdc3 (scaled Smith's algorithm), MSVC and Clang their
+//   own; ncplx divides as CPython does (_Py_c_quot: one ratio, one denominator), which is
+//   also what the exact integrator's setup in Python (simulate/regimes.py) does.
+// - complex * complex: the plain formula (ac - bd, ad + bc); GCC adds a NaN recovery
+//   through __muldc3 (a library call on every product), which ncplx has not: the kernel's
+//   operands are finite (the bindings check them).
+// - a float operand acts on each part: (a + bi) x = a x + b x i, (a + bi) / x = a / x +
+//   (b / x) i, (a + bi) + x = (a + x) + b i (two operations where promoting x to
+//   complex(x, 0.0) took six, or a complex division); a float divided by a complex is the
+//   complex division of complex(x, 0.0).
 //
-// So the exact kernel does every complex operation on ncplx, whose operators are numba's.
-// The arrays (CVec, CMat, ...) store std::complex<double> (the same layout as NumPy's
-// complex128); read an element into an ncplx (ncplx(q[k])) before any arithmetic: an
-// expression whose operands are all std::complex (or std::complex and double) would take
-// std's operators.  No -ffast-math, no FMA contraction (CMakeLists: -ffp-contract=off), as
-// numba's LLVM, which contracts nothing without fastmath.
+// So the exact kernel does every complex operation on ncplx.  The arrays (CVec, CMat, ...)
+// store std::complex<double> (the same layout as NumPy's complex128); read an element into
+// an ncplx (ncplx(q[k])) before any arithmetic: an expression whose operands are all
+// std::complex (or std::complex and double) would take std's operators.  No -ffast-math,
+// no FMA contraction (CMakeLists: -ffp-contract=off): a run gives the same bits on every
+// x86-64 CPU.
 //
-// exp, expm1, sin, cos, sqrt, hypot: the C library's (std::), as numba calls them.
+// exp, expm1, sin, cos, sqrt, hypot: the C library's (std::).
 #pragma once
 
 #include <cmath>
@@ -32,8 +33,8 @@
 
 namespace bb::exact {
 
-// numba raises ZeroDivisionError("complex division by zero"); the bindings may map this
-// type to it (it is a std::domain_error, a ValueError to nanobind by default)
+// A complex division by zero: Python's ZeroDivisionError message; a std::domain_error,
+// so a ValueError to nanobind should one ever reach the bindings
 struct ComplexZeroDivision : std::domain_error {
     ComplexZeroDivision() : std::domain_error("complex division by zero") {}
 };
@@ -52,18 +53,17 @@ struct ncplx {
 
     double real() const { return re; }
     double imag() const { return im; }
-    // numba: imag negated as -0.0 - imag (mathimpl.negate_real)
-    ncplx conjugate() const { return {re, -0.0 - im}; }
+    ncplx conjugate() const { return {re, -im}; }
 };
 
-// a float assigned to or combined with a complex: numba's cast, complex(x, 0.0)
+// a float assigned to or combined with a complex: complex(x, 0.0)
 BB_HOT constexpr ncplx promote(double x) { return {x, 0.0}; }
 
 BB_HOT ncplx operator+(const ncplx& a, const ncplx& b) { return {a.re + b.re, a.im + b.im}; }
 BB_HOT ncplx operator-(const ncplx& a, const ncplx& b) { return {a.re - b.re, a.im - b.im}; }
-BB_HOT ncplx operator-(const ncplx& a) { return {-0.0 - a.re, -0.0 - a.im}; }
+BB_HOT ncplx operator-(const ncplx& a) { return {-a.re, -a.im}; }
 
-// CPython's _Py_c_prod (numba's complex_mul without the 3.14 infinity recovery)
+// (ac - bd, ad + bc), CPython's _Py_c_prod before 3.14 (no infinity recovery)
 BB_HOT ncplx operator*(const ncplx& z, const ncplx& w) {
     double ac = z.re * w.re;
     double bd = z.im * w.im;
@@ -72,7 +72,7 @@ BB_HOT ncplx operator*(const ncplx& z, const ncplx& w) {
     return {ac - bd, ad + bc};
 }
 
-// CPython's _Py_c_quot (numba's complex_div)
+// CPython's _Py_c_quot: Smith's division without scaling
 BB_HOT ncplx operator/(const ncplx& a, const ncplx& b) {
     double abs_breal = std::fabs(b.re);
     double abs_bimag = std::fabs(b.im);
@@ -92,14 +92,17 @@ BB_HOT ncplx operator/(const ncplx& a, const ncplx& b) {
     return {nan, nan};
 }
 
-// mixed operands: the float promoted first, as numba types them
-BB_HOT ncplx operator+(const ncplx& a, double x) { return a + promote(x); }
-BB_HOT ncplx operator+(double x, const ncplx& a) { return promote(x) + a; }
-BB_HOT ncplx operator-(const ncplx& a, double x) { return a - promote(x); }
-BB_HOT ncplx operator-(double x, const ncplx& a) { return promote(x) - a; }
-BB_HOT ncplx operator*(const ncplx& a, double x) { return a * promote(x); }
-BB_HOT ncplx operator*(double x, const ncplx& a) { return promote(x) * a; }
-BB_HOT ncplx operator/(const ncplx& a, double x) { return a / promote(x); }
+// mixed operands: the float acts on each part (a float over a complex: complex division)
+BB_HOT ncplx operator+(const ncplx& a, double x) { return {a.re + x, a.im}; }
+BB_HOT ncplx operator+(double x, const ncplx& a) { return {x + a.re, a.im}; }
+BB_HOT ncplx operator-(const ncplx& a, double x) { return {a.re - x, a.im}; }
+BB_HOT ncplx operator-(double x, const ncplx& a) { return {x - a.re, -a.im}; }
+BB_HOT ncplx operator*(const ncplx& a, double x) { return {a.re * x, a.im * x}; }
+BB_HOT ncplx operator*(double x, const ncplx& a) { return {x * a.re, x * a.im}; }
+BB_HOT ncplx operator/(const ncplx& a, double x) {
+    if (x == 0.0) throw ComplexZeroDivision();
+    return {a.re / x, a.im / x};
+}
 BB_HOT ncplx operator/(double x, const ncplx& a) { return promote(x) / a; }
 
 BB_HOT ncplx& operator+=(ncplx& a, const ncplx& b) { return a = a + b; }
@@ -110,16 +113,17 @@ BB_HOT ncplx& operator*=(ncplx& a, double x) { return a = a * x; }
 BB_HOT ncplx& operator/=(ncplx& a, const ncplx& b) { return a = a / b; }
 BB_HOT ncplx& operator/=(ncplx& a, double x) { return a = a / x; }
 
-// numba: both parts ordered-equal; != is its negation, unordered
+// equal: both parts ordered-equal; != is its negation, true when a part is NaN
 BB_HOT bool operator==(const ncplx& a, const ncplx& b) { return a.re == b.re && a.im == b.im; }
 BB_HOT bool operator!=(const ncplx& a, const ncplx& b) { return !(a.re == b.re) || !(a.im == b.im); }
-BB_HOT bool operator==(const ncplx& a, double x) { return a == promote(x); }
-BB_HOT bool operator!=(const ncplx& a, double x) { return a != promote(x); }
+BB_HOT bool operator==(const ncplx& a, double x) { return a.re == x && a.im == 0.0; }
+BB_HOT bool operator!=(const ncplx& a, double x) { return !(a == x); }
 
-// abs(z): numba's complex_abs, the C library's hypot
+// abs(z): the C library's hypot (no overflow for large parts)
 BB_HOT double abs(const ncplx& z) { return std::hypot(z.re, z.im); }
 
-// cmath.exp as numba's exp_impl (cmathimpl.py), with its special cases
+// e^z = e^x (cos y + i sin y) from the C library's exp, cos and sin, with C99's special
+// cases for infinite and NaN parts (Python's cmath.exp gives the same values)
 inline ncplx cexp(const ncplx& z) {
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     double x = z.re;
@@ -166,9 +170,9 @@ inline ncplx cexp(const ncplx& z) {
     return {0.0, 0.0};
 }
 
-// x ** k for an integer literal k, as numba's static_power_impl unrolls it: repeated
-// squaring, res = 1 * x^(bits of k) from the lowest bit up (tau ** 3 = tau * (tau * tau),
-// h ** 4 = (h * h) * (h * h)); a negative k inverts at the end
+// x^k for a small integer k by repeated squaring, res = 1 * x^(bits of k) from the lowest
+// bit up (tau^3 = tau * (tau * tau), h^4 = (h * h) * (h * h)): exact for the small powers
+// the kernel takes and cheaper than std::pow; a negative k inverts at the end
 inline double ipow(double x, int k) {
     bool invert = k < 0;
     int e = invert ? -k : k;
@@ -182,8 +186,8 @@ inline double ipow(double x, int k) {
     return invert ? 1.0 / res : res;
 }
 
-// Python's max(a, b) and min(a, b) as numba compiles them: b if b > a (b < a) else a, so
-// the first argument wins ties and NaN comparisons
+// max(a, b) and min(a, b) as b if b > a (b < a) else a (Python's max and min): the first
+// argument wins ties and NaN comparisons, so a NaN never replaces a number held in a
 inline double pymax(double a, double b) { return b > a ? b : a; }
 inline double pymin(double a, double b) { return b < a ? b : a; }
 template <class... T>

@@ -1,32 +1,24 @@
 // The closed form on a segment: the state at any
 // time (state_at), the forces, and the segment's integrals of products of exponentials
-// (segment_integrals), ported operation for operation (complex arithmetic on ncplx: see
-// nmath.hpp), so that they give numba's bits.
+// (segment_integrals), with complex arithmetic on ncplx (nmath.hpp) so that the rounding
+// is this file's and not the compiler's.
 //
-// Signatures (the Python names and parameter order; complex scalars are ncplx):
-//   idx nq(idx nz, idx ks);
-//   std::tuple<ncplx, ncplx, ncplx, ncplx, ncplx> phis(ncplx x);   // e^x, phi_1 .. phi_4
-//   std::tuple<double, double> surface_at(const Segment& seg, double tau);   // S, S'
-//   ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
-//                  CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X);
-//   void from_q(idx r, CVec q, ncplx ph, double fb, CMat Z, Mat D, CArr3 V, idx ks, Vec X);
+// The closed form reads the segment through a SegView (the segment, its regime and start,
+// the regimes' matrices, the sizes, the bar's rows, the forcing and the scratch):
+//   ncplx state_at(const SegView& s, double tau, CVec q, Vec X);   // returns e^{i Omega t}
+//   void state_at2(const SegView& s, double tau);                   // s.X and s.Xd
+//   void from_q(const ClosedForm& cf, idx r, idx ks, CVec q, ncplx ph, double fb, Vec X);
 //   double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, double f0,
 //                    double om);
 //   double freq_rhs(Vec X, double f, idx n, Mat mk, double kappa);
-//   void state_at2(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
-//                  CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd);
-//   idx const_sizes(idx ks, idx n, idx nz);
-//   void segment_integrals(idx r, CVec q0, ncplx ph, double T, double fb, double om,
-//                          double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
-//                          Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
-//                          CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
-//                          idx level, idx ks, const Segment& seg, CVec phj);
-//   void segment_integrals_1(... the same without n and ks ...);   // n = 1, nz = 2, ks = 2
-//   void segment_integrals_2(... the same without n and ks ...);   // n = 2, nz = 4, ks = 2
-//   void basis_exponents(CMat lam, idx r, double om, idx nz, CVec mu);   // prepare.py's
-// and the helpers _phi1s, _phij, _conj_index, _integrals_body, _psi_dot, _quad_sym, _quad.
+//   void segment_integrals(const FlowsIn& in, idx n, idx ks, const FlowsScratch& sc,
+//                          Vec out);
+//   void segment_integrals_1(const FlowsIn& in, CVec phj, Vec out);   // n = 1, nz = 2, ks = 2
+//   void segment_integrals_2(const FlowsIn& in, CVec phj, Vec out);   // n = 2, nz = 4, ks = 2
+// and the helpers nq, phis, surface_at, const_sizes, basis_exponents, _phi1s, _phij,
+// _conj_index, _integrals_impl, _psi_dot, _quad_sym, _quad.
 //
-// X, Xd are seen with their own length (numba: X.shape[0]): pass views of length nz.
+// X, Xd are seen with their own length (X.n): pass views of length nz.
 #pragma once
 
 #include <cmath>
@@ -73,27 +65,73 @@ inline std::tuple<double, double> surface_at(const Segment& seg, double tau) {
             s1 + tau * (2.0 * s2 + 3.0 * tau * s3)};
 }
 
-// X from the eigen-coordinates q and the forcing phasor ph = e^{i Omega t}.
-inline void from_q(idx r, CVec q, ncplx ph, double fb, CMat Z, Mat D, CArr3 V, idx ks, Vec X) {
+// The regimes' closed form: prepare's matrices, each indexed by the regime r first.
+struct ClosedForm {
+    CMat lam;  // (R, nz) the eigenvalues
+    CArr3 V;   // (R, nz, nz) the eigenvectors, halved where a conjugate pair is evaluated once
+               // (prepare's Vh)
+    CMat Z;    // (R, nz) the forced response to F0 e^{i Omega t}: X_p = Im(Z e^{i Omega t})
+    Mat D;     // (R, nz) the response to a unit friction force on the ball
+    CMat bq;   // (R, nz) a cut's input Kr b S(t) in eigen-coordinates (per unit of Kr b S)
+};
+
+// The bar's dashpots: row d of l gives the velocity dashpot d acts on (l_d . X), c[d] its
+// constant; the power they dissipate is sum_d c_d (l_d . X)^2.
+struct Dashpots {
+    Mat l;
+    Vec c;
+};
+
+// A segment's closed form as the event functions read it: the segment, its regime r and
+// its start q0 in eigen-coordinates; the regimes' matrices; the sizes (n modes; ks = 2
+// where only the first of each conjugate pair is evaluated); the bar's rows mk (M, K, C,
+// psi_L, psi_d, psi_a); the harmonic forcing (f0, om); and the scratch the state is
+// evaluated into (q, X and X', each seen with its own length).
+struct SegView {
+    const Segment& seg;
+    idx r;
+    CVec q0;
+    ClosedForm cf;
+    idx ks;
+    CVec q;
+    Vec X;
+    Vec Xd;
+    idx n;
+    Mat mk;
+    double f0;
+    double om;
+
+    // the same view with ks and n given (the copies with constant sizes)
+    SegView with_sizes(idx ks_, idx n_) const {
+        return {seg, r, q0, cf, ks_, q, X, Xd, n_, mk, f0, om};
+    }
+};
+
+// X from the eigen-coordinates q of regime r and the forcing phasor ph = e^{i Omega t}.
+inline void from_q(const ClosedForm& cf, idx r, idx ks, CVec q, ncplx ph, double fb, Vec X) {
     idx nz = X.n;
     for (idx j = 0; j < nz; ++j) {
-        double s = (ncplx(Z(r, j)) * ph).im + fb * D(r, j);
+        double s = (ncplx(cf.Z(r, j)) * ph).im + fb * cf.D(r, j);
         for (idx kq = 0; kq < nq(nz, ks); ++kq) {
             idx k = kq * ks;
-            s += (ncplx(V(r, j, k)) * ncplx(q[k])).re;
+            s += (ncplx(cf.V(r, j, k)) * ncplx(q[k])).re;
         }
         X[j] = s;
     }
 }
 
-// X = X(ts + tau) on the segment (regime r, eigen-coordinates q0 at ts = seg.ts); returns
-// the forcing phasor e^{i Omega (ts + tau)}.  In a cut the input Kr b S(tau) adds
-// bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to each eigen-coordinate.
+// X = X(ts + tau) on the segment of s (regime s.r, eigen-coordinates s.q0 at ts = seg.ts),
+// with its eigen-coordinates into q; returns the forcing phasor e^{i Omega (ts + tau)}.  In
+// a cut the input Kr b S(tau) adds bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to
+// each eigen-coordinate.
 //
 // keep (if not null, and only outside a cut): receives exp(lambda_k tau), k = kq ks.
-inline ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
-                      CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X,
-                      ncplx* keep = nullptr) {
+inline ncplx state_at(const SegView& s, double tau, CVec q, Vec X, ncplx* keep = nullptr) {
+    const Segment& seg = s.seg;
+    const idx r = s.r, ks = s.ks;
+    const CVec q0 = s.q0;
+    const CMat lam = s.cf.lam, bq = s.cf.bq;
+    const double om = s.om;
     idx nz = X.n;
     double ts = seg.ts;
     double fb = seg.fb;
@@ -118,7 +156,7 @@ inline ncplx state_at(idx r, CVec q0, const Segment& seg, double tau, double om,
             q[k] = ncplx(q0[k]) * ex;
         }
     }
-    from_q(r, q, ph, fb, Z, D, V, ks, X);
+    from_q(s.cf, r, ks, q, ph, fb, X);
     return ph;
 }
 
@@ -156,17 +194,22 @@ inline double freq_rhs(Vec X, double f, idx n, Mat mk, double kappa) {
     return s / kappa;
 }
 
-// X and X' at ts + tau on the segment (see state_at); in a cut q' = lambda q + bq Kr b S.
-inline void state_at2(idx r, CVec q0, const Segment& seg, double tau, double om, CMat lam,
-                      CArr3 V, idx ks, CMat Z, Mat D, CMat bq, CVec q, Vec X, Vec Xd) {
-    idx nz = X.n;
-    ncplx ph = state_at(r, q0, seg, tau, om, lam, V, ks, Z, D, bq, q, X);
-    double sin_ = seg.krb * std::get<0>(surface_at(seg, tau));
+// X and X' at ts + tau on the segment of s (see state_at), into s.X and s.Xd (and the
+// eigen-coordinates into s.q); in a cut q' = lambda q + bq Kr b S.
+inline void state_at2(const SegView& s, double tau) {
+    const idx r = s.r, ks = s.ks;
+    const CVec q = s.q;
+    const Vec Xd = s.Xd;
+    const ClosedForm& cf = s.cf;
+    idx nz = s.X.n;
+    ncplx ph = state_at(s, tau, q, s.X);
+    double sin_ = s.seg.krb * std::get<0>(surface_at(s.seg, tau));
     for (idx j = 0; j < nz; ++j) {
-        double sd = om * (ncplx(Z(r, j)) * ph).re;
+        double sd = s.om * (ncplx(cf.Z(r, j)) * ph).re;
         for (idx kq = 0; kq < nq(nz, ks); ++kq) {
             idx k = kq * ks;
-            sd += (ncplx(V(r, j, k)) * (ncplx(q[k]) * ncplx(lam(r, k)) + sin_ * ncplx(bq(r, k))))
+            sd += (ncplx(cf.V(r, j, k)) *
+                   (ncplx(q[k]) * ncplx(cf.lam(r, k)) + sin_ * ncplx(cf.bq(r, k))))
                       .re;
         }
         Xd[j] = sd;
@@ -181,7 +224,7 @@ inline idx const_sizes(idx ks, idx n, idx nz) {
 }
 
 // mu = (lambda_r, i Omega, -i Omega, 0): the exponents of a segment's basis functions
-// (prepare.py's basis_exponents; -1j is the constant complex(-0.0, -1.0) in Python).
+// (-i is the constant complex(-0.0, -1.0), the negation of i).
 template <class MuV>
 inline void basis_exponents(CMat lam, idx r, double om, idx nz, MuV&& mu) {
     for (idx k = 0; k < nz; ++k) mu[k] = lam(r, k);
@@ -269,19 +312,83 @@ inline double _quad(AV& a, AV& b, GM& G, idx nb) {
     return s;
 }
 
+// What segment_integrals integrates: the segment [ts, ts + T] (seg, its friction force
+// seg.fb) from its start q0 in regime r, with the forcing phasor ph at ts; the regimes'
+// matrices (VF: the full eigenvectors, prepare's V; isum: 1 / (mu_a + mu_b) of the basis
+// exponents); the bar's rows and its dashpots; the forcing; a
+// stuck ball's kappa (stick_k, 0 when not stuck) and the reaction's share sr; how much to
+// integrate (level: 0 the energy flows, 1 also the steady W sums, 2 also a free ball's
+// y^2); and exp(lambda_k T) (k = 0, ks, ...) if the search kept it, else null.
+struct FlowsIn {
+    const Segment& seg;
+    idx r;
+    CVec q0;
+    ncplx ph;
+    double T;
+    CMat lam;
+    CArr3 VF;
+    CMat Z;
+    Mat D;
+    CArr3 isum;
+    Mat mk;
+    Dashpots dp;
+    double f0, om;
+    double stick_k, sr;
+    idx level;
+    const ncplx* exc;
+};
+
+// segment_integrals' scratch: the basis exponents mu and exp(mu T), the Gram matrix G of
+// the basis functions, the state's coefficients Cx, three coefficient vectors and phj.
+// Their types are CVec / CMat views of the driver's scratch or (the constant sizes) local
+// arrays (LocalArr) that the compiler knows alias nothing else.
+template <class MuV, class GM, class CM, class V>
+struct FlowsScratchOf {
+    MuV& mu;
+    MuV& em;
+    GM& G;
+    CM& Cx;
+    V& cf;
+    V& ca;
+    V& cb;
+    CVec phj;
+};
+
+// The driver's scratch views for segment_integrals (any size).
+struct FlowsScratch {
+    CMat me;  // (2, nb): the basis exponents and exp(mu T)
+    CMat G, Cx;
+    CVec cf, ca, cb, phj;
+};
+
 // Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
 // sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
-// (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  See propagate.py's
-// _integrals_body for the method; me, G, Cx, cf, ca, cb, phj are scratch.
-//
-// MuV, GM, CM, V: the scratch's types, CVec / CMat views of the driver's scratch, or (the
-// constant sizes) local arrays (LocalArr) that the compiler knows alias nothing else.
+// (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball): the state and the
+// forces are sums of exponentials exp(mu_a tau), so each integral is a quadratic form in
+// their coefficients with the Gram matrix G_ab = int exp((mu_a + mu_b) tau).  The sizes n,
+// ks, nz are given (constants in the copies for one and two modes).
 template <class MuV, class GM, class CM, class V>
-BB_ALWAYS_INLINE void _integrals_impl(
-    idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
-    CMat Z, Mat D, idx n, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, MuV& mu,
-    MuV& em, GM& G, CM& Cx, V& cf, V& ca, V& cb, Vec out, CArr3 isum, idx level, idx ks,
-    const Segment& seg, CVec phj, idx nz, const ncplx* exc) {
+BB_ALWAYS_INLINE void _integrals_impl(const FlowsIn& in, const FlowsScratchOf<MuV, GM, CM, V>& sc,
+                                      Vec out, idx n, idx ks, idx nz) {
+    const Segment& seg = in.seg;
+    const idx r = in.r, level = in.level;
+    const CVec q0 = in.q0;
+    const ncplx ph = in.ph;
+    const double T = in.T, fb = seg.fb, om = in.om, f0 = in.f0;
+    const double stick_k = in.stick_k, sr = in.sr;
+    const CMat lam = in.lam, Z = in.Z;
+    const CArr3 VF = in.VF, isum = in.isum;
+    const Mat D = in.D, mk = in.mk, lvis = in.dp.l;
+    const Vec cvis = in.dp.c;
+    const ncplx* exc = in.exc;
+    MuV& mu = sc.mu;
+    MuV& em = sc.em;
+    GM& G = sc.G;
+    CM& Cx = sc.Cx;
+    V& cf = sc.cf;
+    V& ca = sc.ca;
+    V& cb = sc.cb;
+    const CVec phj = sc.phj;
     double p0 = seg.ud0;  // a free ball's absolute position P = p0 + p1 tau + p2 tau^2
     double p1 = seg.vd0;
     double p2 = 0.5 * seg.acc;
@@ -435,16 +542,18 @@ BB_ALWAYS_INLINE void _integrals_impl(
     out[6] = pp - 2.0 * cross + uu;
 }
 
-// _integrals_impl for any bar, regime and basis (nz = lam's second dimension).
-inline void segment_integrals(idx r, CVec q0, ncplx ph, double T, double fb, double om,
-                              double f0, CMat lam, CArr3 VF, CMat Z, Mat D, idx n, Mat mk,
-                              Mat lvis, Vec cvis, double stick_k, double sr, CMat me, CMat G,
-                              CMat Cx, CVec cf, CVec ca, CVec cb, Vec out, CArr3 isum,
-                              idx level, idx ks, const Segment& seg, CVec phj) {
-    CVec mu = me[0];  // the basis exponents
-    CVec em = me[1];  // exp(mu T)
-    _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, n, mk, lvis, cvis, stick_k, sr,
-                    mu, em, G, Cx, cf, ca, cb, out, isum, level, ks, seg, phj, lam.n1, nullptr);
+// _integrals_impl for any bar, regime and basis (nz = lam's second dimension; in.exc is
+// not used).
+inline void segment_integrals(const FlowsIn& in, idx n, idx ks, const FlowsScratch& s,
+                              Vec out) {
+    CVec mu = s.me[0];  // the basis exponents
+    CVec em = s.me[1];  // exp(mu T)
+    CMat G = s.G, Cx = s.Cx;
+    CVec cf = s.cf, ca = s.ca, cb = s.cb;
+    FlowsIn all = in;
+    all.exc = nullptr;
+    _integrals_impl(all, FlowsScratchOf<CVec, CMat, CMat, CVec>{mu, em, G, Cx, cf, ca, cb, s.phj},
+                    out, n, ks, in.lam.n1);
 }
 
 // A (rows x cols) scratch array on the stack, left uninitialised (every entry that
@@ -461,40 +570,26 @@ struct LocalArr {
 
 // _integrals_impl with the constant sizes NZ (n = NZ / 2, ks = 2) and its scratch local.
 template <int NZ>
-BB_NOINLINE void _integrals_fixed(
-    idx r, CVec q0, ncplx ph, double T, double fb, double om, double f0, CMat lam, CArr3 VF,
-    CMat Z, Mat D, Mat mk, Mat lvis, Vec cvis, double stick_k, double sr, Vec out, CArr3 isum,
-    idx level, const Segment& seg, CVec phj, const ncplx* exc) {
+BB_NOINLINE void _integrals_fixed(const FlowsIn& in, CVec phj, Vec out) {
     constexpr int NB = NZ + 3;
     LocalArr<1, NB> mu, em, cf, ca, cb;
     LocalArr<NB, NB> G;
     LocalArr<NZ, NB> Cx;
-    _integrals_impl(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, NZ / 2, mk, lvis, cvis, stick_k,
-                    sr, mu, em, G, Cx, cf, ca, cb, out, isum, level, 2, seg, phj, NZ, exc);
+    using L1 = LocalArr<1, NB>;
+    _integrals_impl(in,
+                    FlowsScratchOf<L1, LocalArr<NB, NB>, LocalArr<NZ, NB>, L1>{
+                        mu, em, G, Cx, cf, ca, cb, phj},
+                    out, NZ / 2, 2, NZ);
 }
 
 // One mode and its conjugate pair (n = 1, nz = 2, ks = 2): the same operations.
-inline void segment_integrals_1(idx r, CVec q0, ncplx ph, double T, double fb, double om,
-                                double f0, CMat lam, CArr3 VF, CMat Z, Mat D, Mat mk,
-                                Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
-                                CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
-                                CArr3 isum, idx level, const Segment& seg, CVec phj,
-                                const ncplx* exc = nullptr) {
-    (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
-    _integrals_fixed<2>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
-                          out, isum, level, seg, phj, exc);
+inline void segment_integrals_1(const FlowsIn& in, CVec phj, Vec out) {
+    _integrals_fixed<2>(in, phj, out);
 }
 
 // Two modes in conjugate pairs (n = 2, nz = 4, ks = 2): the same operations.
-inline void segment_integrals_2(idx r, CVec q0, ncplx ph, double T, double fb, double om,
-                                double f0, CMat lam, CArr3 VF, CMat Z, Mat D, Mat mk,
-                                Mat lvis, Vec cvis, double stick_k, double sr, CMat me,
-                                CMat G, CMat Cx, CVec cf, CVec ca, CVec cb, Vec out,
-                                CArr3 isum, idx level, const Segment& seg, CVec phj,
-                                const ncplx* exc = nullptr) {
-    (void)me, (void)G, (void)Cx, (void)cf, (void)ca, (void)cb;
-    _integrals_fixed<4>(r, q0, ph, T, fb, om, f0, lam, VF, Z, D, mk, lvis, cvis, stick_k, sr,
-                          out, isum, level, seg, phj, exc);
+inline void segment_integrals_2(const FlowsIn& in, CVec phj, Vec out) {
+    _integrals_fixed<4>(in, phj, out);
 }
 
 }  // namespace bb::exact

@@ -1,17 +1,18 @@
 // One segment of the exact kernel, between two events:
 // its start (start_segment), the grid search for its first event with the outputs on the way
-// (search_segment) and its flows (close_segment).  numba inlined these into the driver; here
-// they are templates on Regen (a cut), instantiated by the driver's two kernels.
+// (search_segment) and its flows (close_segment): templates on Regen (a cut), instantiated
+// by the driver's two kernels and inlined into them.
 //
-// Every expression keeps numba's operations in numba's order (complex arithmetic through
-// ncplx, Python's max/min through pymax/pymin), so that the bits are the numba kernel's.
+// Complex arithmetic goes through ncplx and max/min through pymax/pymin (nmath.hpp), so
+// that the rounding and the handling of NaN are this code's, whatever the compiler.
 //
-//   struct Work                         the driver's arrays, passed whole (numba: Work)
-//   start_segment<Regen>(w, t, t_stop, ph, n, kase, nreg, j_node, kn, ip, sc, cq, sv)
+//   struct Work                         the driver's arrays and the system, passed whole
+//   struct SegCtx                       a segment's regime, sizes, bar and ball regime
+//   start_segment<Regen>(w, t, t_stop, ph, hs, j_node, cq, sv)
 //       -> SegStart {r, ks, t_seg_end, at_node, j_node, pdu}
-//   search_segment<Regen, NZ = 0>(w, t, r, ks, sz, n, kase, mode, ph, sv)
+//   search_segment<Regen, NZ = 0>(w, t, c, ph, sv)
 //       -> SegEvent {kind, tau, ph_next, wb, wdb}
-//   close_segment<Regen>(w, t, T, r, ks, sz, n, kase, mode, ph, steady, pdu, last_zero_step)
+//   close_segment<Regen>(w, c, t, T, ph, steady, pdu, last_zero_step)
 //       -> the last step of length dt_out counted with h = 0
 #pragma once
 
@@ -31,9 +32,8 @@ namespace bb::exact {
 
 namespace L = layout;
 
-// The driver's arrays (numba's Work namedtuple): the scratch, owned here (numba's stack
-// arrays, zeroed once per run and reused by every segment), and views of the run's inputs
-// and outputs.  The views point into this object: it is never copied or moved.
+// The driver's arrays: the scratch, owned here (zeroed once per run and reused by every
+// segment, so a segment allocates nothing), and views of the run's inputs and outputs.  The views point into this object: it is never copied or moved.
 struct Work {
     // --- scratch storage
     std::array<double, NZ_MAX> X_{}, Xa_{}, Xd_{}, dX_{};
@@ -49,15 +49,16 @@ struct Work {
     std::array<double, NMAX6> mk_{};
     std::array<double, DDC> ddc_{};
 
-    // --- views of the scratch, with numba's shapes (nz, nb = nz + 3, n modes)
+    // --- the system (its rows mk and ddc in the scratch above) and the run's constants
+    System sys;
+    RunConsts cp;
+
+    // --- views of the scratch, with the run's shapes (nz, nb = nz + 3, n modes)
     Vec X, Xa, Xd, dX;       // states: at the grid point, the step's start, X', a work vector
     CVec q0, qs, qg;         // eigen-coordinates: the segment's start, scratch, the grid's
     Vec ev_a, ev_b, ev_s, ev_t;  // event functions at a step's and a sub-step's ends
     Vec qsum, out;           // a cut's flow sums; a segment's integrals
-    CMat me, G, Cx;          // segment_integrals' scratch
-    CVec cf, ca, cb, phj;
-    Mat mk;                  // (6, n): M, K, C, psi_L, psi_d, psi_a
-    Mat ddc;                 // (4, n + 2): a free ball's y'' and W'' coefficients
+    FlowsScratch isc;        // segment_integrals' scratch
 
     // exp(lambda_k tau_end) (k = 0, ks, ...) of regime r_end, kept by the search's last
     // state_at at tau_end (outside a cut, the constant sizes) for segment_integrals
@@ -66,18 +67,13 @@ struct Work {
     idx r_end = -1;
 
     Segment seg;
-    RunConsts cp;
     RunState rs;
     RunningOut ro;
 
     // --- prepare's matrices and the cut's tables (inputs)
-    CMat lam;
-    CArr3 V, Vi, Vfull;  // V: the halved eigenvectors (prepare's Vh); Vfull: prepare's V
-    CMat Z;
-    Mat D;
-    CMat bq;
-    Mat lvis;
-    Vec cvis;
+    ClosedForm cf;       // lam, V (the halved eigenvectors, prepare's Vh), Z, D, bq
+    CArr3 Vi, Vfull;     // the inverse eigenvectors; Vfull: prepare's V
+    Dashpots dp;         // prepare's lvis, cvis
     CArr3 isum;
     Span1<idx> kstep;
     Arr3 bnd;
@@ -109,24 +105,38 @@ struct Work {
         ev_t = {ev_t_.data(), N_EV};
         qsum = {qsum_.data(), 6};
         out = {out_.data(), 7};
-        me = {me_.data(), 2, nb};
-        G = {G_.data(), nb, nb};
-        Cx = {Cx_.data(), nz, nb};
-        cf = {cf_.data(), nb};
-        ca = {ca_.data(), nb};
-        cb = {cb_.data(), nb};
-        phj = {phj_.data(), 3};
-        mk = {mk_.data(), 6, n};
-        ddc = {ddc_.data(), 4, n + 2};
+        isc.me = {me_.data(), 2, nb};
+        isc.G = {G_.data(), nb, nb};
+        isc.Cx = {Cx_.data(), nz, nb};
+        isc.cf = {cf_.data(), nb};
+        isc.ca = {ca_.data(), nb};
+        isc.cb = {cb_.data(), nb};
+        isc.phj = {phj_.data(), 3};
+        sys.n = n;
+        sys.mk = {mk_.data(), 6, n};
+        sys.ddc = {ddc_.data(), 4, n + 2};
     }
     Work(const Work&) = delete;
     Work& operator=(const Work&) = delete;
 };
 
-// The segment's closed form in regime r (ks, n: its sizes) as the event functions read it,
-// evaluated into the work vectors qs, dX and Xd.
-inline SegView view(Work& w, idx r, idx ks, idx n, double f0, double om) {
-    return {w.seg, r, w.q0, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX, w.Xd, n, w.mk, f0, om};
+// A segment's context: its regime r in prepare's matrices and the step ks of the evaluated
+// eigen-coordinates (2: conjugate pairs, the first of each); the bar's mode count n and the
+// copy with constant sizes that fits it (sz: 1 or 2 modes, else 0; const_sizes); the bar's
+// case and whether it carries a ball; the ball's regime.  Passed by value: a copy's fields
+// stay constants where the search has them so.
+struct SegCtx {
+    idx r, ks, sz, n;
+    idx kase;
+    Regime mode;
+    bool ball;
+};
+
+// The segment's closed form in the context c as the event functions read it, evaluated
+// into the work vectors qs, dX and Xd.
+inline SegView view(Work& w, SegCtx c) {
+    return {w.seg, c.r, w.q0, w.cf, c.ks, w.qs, w.dX, w.Xd, c.n, w.sys.mk, w.sys.force.f0,
+            w.sys.force.om};
 }
 
 namespace kernel {
@@ -143,7 +153,8 @@ inline std::pair<double, double> psi_dot(Mat mk, idx row, Vec X, idx n) {
     return {u, v};
 }
 
-// Re(V[r, j, :] q) over the evaluated eigen-coordinates, added to s in numba's order
+// Re(V[r, j, :] q) over the evaluated eigen-coordinates, added to s one at a time in k's
+// order (a conjugate pair's second member is not evaluated: ks = 2)
 inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks) {
     for (idx kq = 0; kq < nq(nz, ks); ++kq) {
         idx k = kq * ks;
@@ -152,9 +163,12 @@ inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks)
     return s;
 }
 
-// All event functions from the state X at tau (see g_value).
-inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, idx n, Mat mk,
-                   double f0, double om, double sn = NAN) {
+// All event functions from the state X at tau (see g_value): the ball's regime mode, the
+// bar's rows mk (n = mk.n1 modes), the forcing fo; sn: sin(Omega (ts + tau)) if known.
+inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat mk,
+                   const Forcing& fo, double sn = NAN) {
+    const idx n = mk.n1;
+    const double f0 = fo.f0, om = fo.om;
     auto [pdu, pdv] = psi_dot(mk, 4, X, n);
     double acc = seg.acc;
     double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu;
@@ -177,11 +191,13 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, idx 
     }
 }
 
-// (aux, aux'): the ball's y, y' or the absorber's stroke and its rate.
-inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, idx mode, idx kase,
-                                     idx n, Mat mk, Vec x, bool ball) {
-    if (ball) {
-        if (mode != FREE) return {seg.y0, 0.0};
+// (aux, aux'): the ball's y, y' or the absorber's stroke and its rate (a locked ball: its
+// y, from the run's state x); mk: the bar's rows (n = mk.n1 modes).
+inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, SegCtx c, Mat mk,
+                                     Vec x) {
+    const idx n = mk.n1, kase = c.kase;
+    if (c.ball) {
+        if (c.mode != FREE) return {seg.y0, 0.0};
         auto [pdu, pdv] = psi_dot(mk, 4, X, n);
         double acc = seg.acc;
         return {seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu, seg.vd0 + acc * tau - pdv};
@@ -222,43 +238,40 @@ struct GridPoint {
 // A whole grid step of level lev outside a cut: the eigen-coordinates qg and the forcing
 // phasor phg advanced, X from them, the event functions at the step's end b and (if ydd_on)
 // y'' and W'' there (else NaN).  NZ > 0: the sizes as compile-time constants (one and two
-// modes, ks = 2), as numba's specialisations; the same operations.  The phasors come by
+// modes, ks = 2), so the compiler unrolls them; the same operations.  The phasors come by
 // reference: a complex passed by value reaches the callee as two halves that it stores and
 // reloads as one (a stalled store forwarding, a fifth of the step's time).  Inlined in the
 // search's loop (GCC called it: with the rare work out of the loop, inlined it is ~10%
 // faster on zero-event runs).
 template <idx NZ>
-BB_ALWAYS_INLINE GridPoint grid_point(Work& w, idx r, idx lev,
-                                                           const ncplx& phg_a, const ncplx& rot,
-                                                           idx ks, double b, idx mode, idx n,
-                                                           double f0, double om, bool ydd_on,
-                                                           idx nz) {
+BB_ALWAYS_INLINE GridPoint grid_point(Work& w, SegCtx c, double b, idx lev, const ncplx& phg_a,
+                                      const ncplx& rot, bool ydd_on, idx nz) {
+    idx r = c.r, ks = c.ks, n = c.n;
+    const double f0 = w.sys.force.f0, om = w.sys.force.om;
     // the regime's tables seen with their row lengths as constants where the sizes are (the
     // shapes the bindings checked: eh (R, GRID_LEVELS, nz), Vh (R, nz, nz), Z and D (R, nz),
     // mk (6, n), ddc (4, n + 2)): an element's offset without multiplications by run-time
     // strides, re-read from Work at each step
     CArr3 eh = w.eh;
-    CArr3 V = w.V;
-    CMat Z = w.Z;
-    Mat D = w.D;
-    Mat mk = w.mk;
-    Mat ddc = w.ddc;
+    ClosedForm cf = w.cf;
+    Mat mk = w.sys.mk;
+    Mat ddc = w.sys.ddc;
     if constexpr (NZ > 0) {
         nz = NZ;
         ks = 2;
         n = NZ / 2;
         eh = {w.eh.d, w.eh.n0, GRID_LEVELS, NZ};
-        V = {w.V.d, w.V.n0, NZ, NZ};
-        Z = {w.Z.d, w.Z.n0, NZ};
-        D = {w.D.d, w.D.n0, NZ};
-        mk = {w.mk.d, 6, NZ / 2};
-        ddc = {w.ddc.d, 4, NZ / 2 + 2};
+        cf.V = {w.cf.V.d, w.cf.V.n0, NZ, NZ};
+        cf.Z = {w.cf.Z.d, w.cf.Z.n0, NZ};
+        cf.D = {w.cf.D.d, w.cf.D.n0, NZ};
+        mk = {w.sys.mk.d, 6, NZ / 2};
+        ddc = {w.sys.ddc.d, 4, NZ / 2 + 2};
     }
     const Segment& seg = w.seg;
     // the tip force's sine for a ball off FREE first: glibc's sin saves MXCSR (stmxcsr),
     // which waits for every floating-point operation in flight; at the step's start, before
     // from_q's chains, it waits for fewer (a stuck ball's step ~8% faster)
-    double sn = mode != FREE ? std::sin(om * (seg.ts + b)) : NAN;
+    double sn = c.mode != FREE ? std::sin(om * (seg.ts + b)) : NAN;
     CVec qg = w.qg;
     for (idx kq = 0; kq < nq(nz, ks); ++kq) {
         idx k = kq * ks;
@@ -266,8 +279,8 @@ BB_ALWAYS_INLINE GridPoint grid_point(Work& w, idx r, idx lev,
     }
     ncplx phg = phg_a * rot;
     Vec X{w.X.d, nz};
-    from_q(r, qg, phg, seg.fb, Z, D, V, ks, X);
-    events(w.ev_b, X, b, seg, mode, n, mk, f0, om, sn);
+    from_q(cf, r, ks, qg, phg, seg.fb, X);
+    events(w.ev_b, X, b, seg, c.mode, mk, w.sys.force, sn);
     if (ydd_on) {
         auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, ddc, n);
         return {phg, yv, wv};
@@ -277,11 +290,12 @@ BB_ALWAYS_INLINE GridPoint grid_point(Work& w, idx r, idx lev,
 
 // Adds a segment's flows ``out`` (over its length T) to the metrics and moves a free ball to
 // the segment's end (into rs; pdu: psi_d . u at its start).
-inline void close_flows(Work& w, double T, bool steady, idx mode, bool ball, double fb,
-                        double acc, double pdu, idx n) {
+inline void close_flows(Work& w, SegCtx c, double T, bool steady, double pdu) {
     Vec out = w.out;
     Vec met = w.met;
     const Segment& seg = w.seg;
+    const idx mode = c.mode, n = c.n;
+    const double fb = seg.fb, acc = seg.acc;
     met[L::W_FORCE] += out[0];
     met[L::D_VISC] += out[1];
     met[L::W_NONRECIP] += out[5];
@@ -292,15 +306,15 @@ inline void close_flows(Work& w, double T, bool steady, idx mode, bool ball, dou
         met[L::N_STEADY] += T;
         if (mode == CONTACT) met[L::T_CONTACT] += T;
     }
-    if (ball) {
-        auto [pdu1, pdv1] = psi_dot(w.mk, 4, w.X, n);
+    if (c.ball) {
+        auto [pdu1, pdv1] = psi_dot(w.sys.mk, 4, w.X, n);
         if (mode == FREE) {
-            double y = w.rs.y;
+            double y = w.rs.ball.y;
             double ynew = seg.ud0 + T * (seg.vd0 + 0.5 * acc * T) - pdu1;
-            w.rs.yd = seg.vd0 + acc * T - pdv1;
+            w.rs.ball.yd = seg.vd0 + acc * T - pdv1;
             met[L::D_FRICTION] -= fb * (ynew - y);
-            met[L::W_NONRECIP] += (1.0 - w.cp.sr) * fb * (pdu1 - pdu);
-            w.rs.y = ynew;
+            met[L::W_NONRECIP] += (1.0 - w.sys.fric.sr) * fb * (pdu1 - pdu);
+            w.rs.ball.y = ynew;
         }
     }
 }
@@ -312,18 +326,22 @@ struct CutSegment {
 };
 
 // Where a segment of a cut that starts at t ends (the next node, delayed knot or change of
-// the minimising revolution, before t_stop) and the surface on it, one cubic (into seg.s).
-inline CutSegment cut_segment(double t, double t_stop, idx j_node, Mat kn, idx nk, Span1<idx> ip,
-                              Mat sc, Segment& seg, const CutConsts& cq, const RunState& rs) {
+// the minimising revolution, before t_stop) and the surface on it, one cubic (into seg.s);
+// j_node: the last node reached.
+inline CutSegment cut_segment(double t, double t_stop, idx j_node, History& hs, Segment& seg,
+                              const CutConsts& cq, const RunState& rs) {
+    const Mat kn = hs.kn.view();
+    const idx nk = hs.nk;
+    const Span1<idx> ip = hs.ip;
     double t0 = cq.t0;
     double hh_ = cq.h;
     double ttol = cq.ttol;
-    idx nrev = idx(cq.nrev);
+    idx nrev = cq.nrev;
     double tau_d = cq.tau;
     double feed = cq.feed;
     double w_before = cq.w0;
-    idx m_rev = idx(cq.mrev);
-    bool cubic = cq.cubic != 0.0;
+    idx m_rev = cq.mrev;
+    bool cubic = cq.cubic;
     // this segment ends at the next node, delayed knot or change of the minimising
     // revolution: the surface is one cubic on it
     while (t0 + double(j_node + 1) * hh_ <= t + ttol) j_node += 1;
@@ -362,9 +380,8 @@ inline CutSegment cut_segment(double t, double t_stop, idx j_node, Mat kn, idx n
             }
         }
     } else {
-        double t_piece = surface_piece(t, t_seg_end, ttol, kn, nk, ip, sc, nrev, nrev, feed,
-                                       w_before, tau_d, seg, from_node ? j_node : idx(-1),
-                                       m_rev, cubic);
+        double t_piece =
+            surface_piece(t, t_seg_end, hs, cq, nrev, seg, from_node ? j_node : idx(-1));
         if (t_piece < t_seg_end) {
             t_seg_end = t_piece;
             at_node = false;
@@ -377,10 +394,22 @@ struct Bounds {
     double b4, bw4, b3y, b3w;
 };
 
-// Bounds over a segment (regime r, eigen-coordinates q0) from prepare's bnd: |y^(4)| if
-// ball, |W^(4)| if w_steady (else -1), |y^(3)| and |W^(3)| if adapt (else 0).
-inline Bounds bounds(idx r, CVec q0, const Segment& seg, CMat lam, CMat bq, Arr3 bnd, double krb,
-                     bool ball, bool incut, bool w_steady, bool adapt) {
+// Which bounds a segment's search needs: |y^(4)| (a ball; incut: in a cut, whose input
+// the bound must take off), |W^(4)| (w_steady) and |y^(3)|, |W^(3)| (adapt).
+struct BoundsWanted {
+    bool ball, incut, w_steady, adapt;
+};
+
+// Bounds over the segment of w (regime r, eigen-coordinates w.q0, surface w.seg.s; Kr b
+// krb) from prepare's bnd: |y^(4)| if ball, |W^(4)| if w_steady (else -1), |y^(3)| and
+// |W^(3)| if adapt (else 0).
+inline Bounds bounds(const Work& w, idx r, double krb, BoundsWanted want) {
+    const CVec q0 = w.q0;
+    const Segment& seg = w.seg;
+    const CMat lam = w.cf.lam, bq = w.cf.bq;
+    const Arr3 bnd = w.bnd;
+    const bool ball = want.ball, incut = want.incut, w_steady = want.w_steady;
+    const bool adapt = want.adapt;
     idx nz = q0.size();
     // a bound on |y^(4)| = |psi_d . u^(4)| over the segment (|exp(lambda tau)| <= 1)
     double b4 = 0.0;
@@ -462,11 +491,14 @@ struct QuadRange {
 };
 
 // The Taylor remainders of the longer steps 2^lv h of a segment (level's e3, e2 and W's e3
-// without its margin), the same per step: computed once per segment.
+// without its margin), the same per step: computed once per segment; hl: the step lengths,
+// top: the highest level allowed.
 struct LevelBounds {
     double e3y[GRID_LEVELS] = {}, e2y[GRID_LEVELS] = {}, e3w[GRID_LEVELS] = {};
+    const double* hl;
+    idx top;
 
-    LevelBounds(double b3y, double b3w, const double* hl, idx top) {
+    LevelBounds(double b3y, double b3w, const double* hl_, idx top_) : hl(hl_), top(top_) {
         for (idx lv = 1; lv <= top; ++lv) {
             double hs = hl[lv];
             e3y[lv] = b3y * hs * hs * hs / 6.0;
@@ -476,18 +508,21 @@ struct LevelBounds {
     }
 };
 
-// The longest step 2^lev h (lev <= top) from a free ball's grid point a (y + delta/2 = ya,
-// y' = yda, y'' = ydd_a, W, W', W'' = wa, wda, wdd_a) that Taylor's theorem proves free of
-// events and of new extrema of |y| (below ylim) or (steady) of W: on [a, a + s], y lies
-// within b3y s^3 / 6 of its quadratic Taylor polynomial at a, y' within b3y s^2 / 2 of its
-// linear one, W within b3w s^3 / 6 of its quadratic (docs/exact.md, "Longer steps").
-// (Inlined: GCC had stopped inlining it in the constant-size searches, ~3% on zero-event
-// runs.)
-BB_ALWAYS_INLINE idx level(double ya, double yda, double ydd_a, double wa,
-                                                double wda, double wdd_a, const LevelBounds& lb,
-                                                double ylim, double wmar, double max_w,
-                                                double min_w, const double* hl, idx top,
-                                                bool watch_v, bool steady) {
+// The longest step 2^lev h (lev <= lb.top) from a free ball's grid point a (its event
+// functions ev_a, y'' = ydd_a, W, W', W'' = wa) that Taylor's theorem proves free of events
+// and of new extrema of |y| (beyond the running extremes e, below the walls at half) or, in
+// the steady window, of W: on [a, a + s], y lies within b3y s^3 / 6 of its quadratic Taylor
+// polynomial at a, y' within b3y s^2 / 2 of its linear one, W within b3w s^3 / 6 of its
+// quadratic (docs/exact.md, "Longer steps").  (Inlined: GCC had stopped inlining it in the
+// constant-size searches, ~3% on zero-event runs.)
+BB_ALWAYS_INLINE idx level(Vec ev_a, double ydd_a, TipW wa, const LevelBounds& lb,
+                           const Extremes& e, double half, const SegSearch& sv) {
+    const bool steady = sv.steady, watch_v = sv.watch_v;
+    const double ylim = pymin(half, steady ? e.max_aux : e.max_aux_all) * (1.0 - 1e-9);
+    const double wmar = 1e-9 * e.max_abs_w, max_w = e.max_w, min_w = e.min_w;
+    const double ya = ev_a[EV_PLUS] + half, yda = ev_a[EV_YEXT];
+    const double* hl = lb.hl;
+    const idx top = lb.top;
     idx lev = 0;
     QuadRange qy(ya, yda, ydd_a);
     QuadRange qw(0.0, 0.0, 0.0);  // W's, built where first needed
@@ -504,7 +539,7 @@ BB_ALWAYS_INLINE idx level(double ya, double yda, double ydd_a, double wa,
         }
         if (steady) {
             if (!qw_set) {
-                qw = QuadRange(wa, wda, wdd_a);
+                qw = QuadRange(wa.w, wa.wd, wa.wdd);
                 qw_set = true;
             }
             auto [wlo, whi] = qw.at(hs);
@@ -522,15 +557,14 @@ struct Found {
 };
 
 // A ball off FREE: the first of its stick, slip and wall-release events in [a, b].
-inline Found regime_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0,
-                          double om, idx mode) {
+inline Found regime_event(Work& w, SegCtx c, double a, double b) {
+    const idx mode = c.mode;
     double best = b;
     idx kind = -1;
     for (idx kk : {EV_REL_NEG, EV_REL_POS, EV_WALL_REL}) {
         if ((mode == STICK) == (kk != EV_WALL_REL)) {
             if (w.ev_a[kk] <= 0.0 && 0.0 < w.ev_b[kk]) {
-                double tr = find_root_any(kk, a, w.ev_a[kk], b, w.ev_b[kk],
-                                          view(w, r, ks, n, f0, om), -1.0);
+                double tr = find_root_any(kk, a, w.ev_a[kk], b, w.ev_b[kk], view(w, c), -1.0);
                 if (tr < best || kind < 0) {
                     best = tr;
                     kind = kk;
@@ -574,18 +608,16 @@ inline bool may_graze_m(double a, double b, Vec ev_a, Vec ev_b, double half, dou
 }
 
 // What wall_event does when a step shows something (see there): kept out of the loop.
-BB_NOINLINE inline Found wall_event_found(Work& w, double a, double b, idx r, idx ks,
-                                                 idx n, double f0, double om, idx mode,
-                                                 bool watch_v, bool watch_ext, bool graze,
-                                                 bool search, double ydd_a, double ydd_b) {
+BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
+                                          bool graze, bool search) {
+    const double a = st.a, b = st.b;
+    const bool watch_v = sv.watch_v, watch_ext = sv.watch_ext;
     Vec ev_a = w.ev_a;
     Vec ev_b = w.ev_b;
-    double half = w.cp.half;
     double best = b;
     idx kind = -1;
     if (search) {
-        auto [k, tb] = wall_step(a, b, ev_a, ev_b, watch_v, watch_ext, half,
-                                 view(w, r, ks, n, f0, om), ydd_a, ydd_b);
+        auto [k, tb] = wall_step(st, watch_v, watch_ext, view(w, c));
         kind = k;
         best = tb;
     }
@@ -598,13 +630,13 @@ BB_NOINLINE inline Found wall_event_found(Work& w, double a, double b, idx r, id
         for (idx j = 1; j <= NSUB; ++j) {
             double sb = j < NSUB ? a + (b - a) * double(j) / double(NSUB) : b;
             if (j < NSUB) {
-                state_at(r, w.q0, w.seg, sb, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX);
-                events(ev_t, w.dX, sb, w.seg, mode, n, w.mk, f0, om);
+                state_at(view(w, c), sb, w.qs, w.dX);
+                events(ev_t, w.dX, sb, w.seg, c.mode, w.sys.mk, w.sys.force);
             } else {
                 for (idx kk = 0; kk < N_EV; ++kk) ev_t[kk] = ev_b[kk];
             }
-            auto [k, tb] = wall_step(sa, sb, ev_s, ev_t, watch_v, watch_ext, half,
-                                     view(w, r, ks, n, f0, om), NAN, NAN);
+            auto [k, tb] = wall_step(StepEnds{sa, sb, 0, ev_s, ev_t, NAN, NAN}, watch_v,
+                                     watch_ext, view(w, c));
             kind = k;
             best = tb;
             if (kind >= 0) break;
@@ -615,15 +647,17 @@ BB_NOINLINE inline Found wall_event_found(Work& w, double a, double b, idx r, id
     return {kind, best};
 }
 
-// A free ball's wall and friction-switch events in [a, b], with the graze guard's
+// A free ball's wall and friction-switch events in the step st, with the graze guard's
 // sub-steps where the bound on y^(4) allows a crossing and return inside the step.  The
 // tests on the step's ends are here, in the search's loop; the rare search out of it.
-inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
-                        idx mode, bool watch_v, bool watch_ext, double b4, idx lev,
-                        double ydd_a, double ydd_b, GrazeMargin& gm) {
+inline Found wall_event(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, GrazeMargin& gm) {
+    const double a = st.a, b = st.b;
+    const bool watch_v = sv.watch_v, watch_ext = sv.watch_ext;
+    const idx lev = st.lev;
+    const double b4 = sv.b4;
     Vec ev_a = w.ev_a;
     Vec ev_b = w.ev_b;
-    double half = w.cp.half;
+    double half = w.sys.ball.half;
     // call the search only when an end value shows something, or y' changes sign and the
     // bound on y lets the ball reach a wall (a longer step than h holds no wall event)
     bool graze = lev == 0 && may_graze_m(a, b, ev_a, ev_b, half, b4, gm);
@@ -632,46 +666,40 @@ inline Found wall_event(Work& w, double a, double b, idx r, idx ks, idx n, doubl
                   || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
                   || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0);
     if (!search && !graze) return {-1, b};
-    return wall_event_found(w, a, b, r, ks, n, f0, om, mode, watch_v, watch_ext, graze, search,
-                            ydd_a, ydd_b);
+    return wall_event_found(w, c, sv, st, graze, search);
 }
 
 // The tool leaving (in the cut) or re-entering (out of it) in [a, b]: h = 0, or a graze of
 // h = 0 between the step's ends, found at the extremum of h.  -1: none.
-inline double cut_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0,
-                        double om) {
+inline double cut_event(Work& w, SegCtx c, double a, double b) {
     Vec ev_a = w.ev_a;
     Vec ev_b = w.ev_b;
     double tr = -1.0;
     if (ev_a[EV_CUT] <= 0.0 && 0.0 < ev_b[EV_CUT]) {
-        tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], view(w, r, ks, n, f0, om),
-                           -1.0);
+        tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], b, ev_b[EV_CUT], view(w, c), -1.0);
     } else if (ev_a[EV_HEXT] * ev_b[EV_HEXT] < 0.0) {
-        double te = find_root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT],
-                                  view(w, r, ks, n, f0, om), -1.0);
-        double ge = g_value(EV_CUT, te, view(w, r, ks, n, f0, om));
+        double te = find_root_any(EV_HEXT, a, ev_a[EV_HEXT], b, ev_b[EV_HEXT], view(w, c), -1.0);
+        double ge = g_value(EV_CUT, te, view(w, c));
         if (ev_a[EV_CUT] <= 0.0 && 0.0 < ge) {
-            tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, view(w, r, ks, n, f0, om), -1.0);
+            tr = find_root_any(EV_CUT, a, ev_a[EV_CUT], te, ge, view(w, c), -1.0);
         }
     }
     return tr;
 }
 
-// The first event in the grid step [a, b] of the segment (regime r, mode) from the event
-// functions at its ends (w.ev_a, w.ev_b) and (a free ball) y'' there: kind -1 if none.
+// The first event in the grid step st of the segment (context c) from the event functions
+// at its ends (w.ev_a, w.ev_b) and (a free ball) y'' there: kind -1 if none.
 template <bool Regen>
-inline Found find_event(Work& w, double a, double b, idx r, idx ks, idx n, double f0, double om,
-                        idx mode, bool ball, bool watch_v, bool watch_ext, double b4, idx lev,
-                        double ydd_a, double ydd_b, GrazeMargin& gm) {
+inline Found find_event(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, GrazeMargin& gm) {
+    const double a = st.a, b = st.b;
     Found f{-1, b};
-    if (ball && mode != FREE) {
-        f = regime_event(w, a, b, r, ks, n, f0, om, mode);
-    } else if (ball && mode == FREE) {
-        f = wall_event(w, a, b, r, ks, n, f0, om, mode, watch_v, watch_ext, b4, lev, ydd_a,
-                       ydd_b, gm);
+    if (c.ball && c.mode != FREE) {
+        f = regime_event(w, c, a, b);
+    } else if (c.ball && c.mode == FREE) {
+        f = wall_event(w, c, sv, st, gm);
     }
     if constexpr (Regen) {
-        double tr = cut_event(w, a, b, r, ks, n, f0, om);
+        double tr = cut_event(w, c, a, b);
         if (tr >= 0.0 && (f.kind < 0 || tr < f.t)) f = {EV_CUT, tr};
     }
     return f;
@@ -688,22 +716,24 @@ inline void tab_state(Work& w, idx r, idx g, idx ks, CVec q, Vec X) {
                + seg.s[1] * ncplx(w.tabP(r, g, 1, k)) + seg.s[2] * ncplx(w.tabP(r, g, 2, k))
                + seg.s[3] * ncplx(w.tabP(r, g, 3, k));
     }
-    for (idx j = 0; j < nz; ++j) X[j] = add_modes(seg.fb * w.D(r, j), w.V, r, j, q, nz, ks);
+    for (idx j = 0; j < nz; ++j) X[j] = add_modes(seg.fb * w.cf.D(r, j), w.cf.V, r, j, q, nz, ks);
 }
 
 // Adds a cut's flows over the grid step [a, b] to w.qsum (the slots of segment_integrals'
 // out); whole: a whole step H from a node, without event, from the tables; wb: W at b.
 // Returns the largest cutting force so far.
-inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool whole,
-                        bool sticking, bool steady, double wb, double max_force) {
+inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool steady,
+                        double wb, double max_force) {
+    const idx r = c.r, ks = c.ks, n = c.n;
+    const bool sticking = c.mode == STICK;
     const Segment& seg = w.seg;
     CVec q0 = w.q0;
     CVec qs = w.qs;
     Vec dX = w.dX;
     Vec qsum = w.qsum;
-    Mat mk = w.mk;
+    Mat mk = w.sys.mk;
     idx nz = q0.size();
-    double sr = w.cp.sr;
+    double sr = w.sys.fric.sr;
     double krb_seg = seg.krb;
     double s_0 = seg.s[0];
     double s_1 = seg.s[1];
@@ -722,10 +752,10 @@ inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool 
             double wg = GL_W[g] * b;
             qsum[0] += wg * fq * wdq;
             double dv = 0.0;
-            for (idx d = 0; d < w.lvis.n0; ++d) {
+            for (idx d = 0; d < w.dp.l.n0; ++d) {
                 double vv = 0.0;
-                for (idx j = 0; j < nz; ++j) vv += w.lvis(d, j) * dX[j];
-                dv += w.cvis[d] * vv * vv;
+                for (idx j = 0; j < nz; ++j) vv += w.dp.l(d, j) * dX[j];
+                dv += w.dp.c[d] * vv * vv;
             }
             qsum[1] += wg * dv;
             if (steady) {
@@ -735,20 +765,21 @@ inline double cut_flows(Work& w, double a, double b, idx r, idx ks, idx n, bool 
             }
         }
     } else {
-        max_force = pymax(max_force, quad_cut(a, b, seg, r, q0, w.lam, w.V, ks, w.Z, w.D, w.bq,
-                                              qs, dX, n, mk, w.lvis, w.cvis, sticking,
-                                              w.cp.kstick, sr, qsum, steady));
+        // the flows of a cut: the input is Kr b S, the harmonic force is off
+        SegView s = view(w, c);
+        s.f0 = 0.0;
+        s.om = 0.0;
+        max_force = pymax(max_force, quad_cut(a, b, s, w.dp, sticking, w.sys.fric, qsum, steady));
     }
     return pymax(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb));
 }
 
 // The state at tau into the work vector dX and row[1:5]: W, W', aux, aux' (a history or
-// strobe row; its time, row[0], is the caller's).
-inline void sample(Work& w, double tau, idx r, idx ks, idx n, double om, idx mode, idx kase,
-                   bool ball, double* row) {
-    state_at(r, w.q0, w.seg, tau, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, w.dX);
-    auto [wv, wdv] = psi_dot(w.mk, 3, w.dX, n);
-    auto [av, adv] = aux(w.dX, tau, w.seg, mode, kase, n, w.mk, w.x, ball);
+// strobe row; its time, row[0], is the caller's); s: view(w, c), built once a segment.
+inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row) {
+    state_at(s, tau, w.qs, w.dX);
+    auto [wv, wdv] = psi_dot(w.sys.mk, 3, w.dX, c.n);
+    auto [av, adv] = aux(w.dX, tau, w.seg, c, w.sys.mk, w.x);
     row[1] = wv;
     row[2] = wdv;
     row[3] = av;
@@ -756,10 +787,10 @@ inline void sample(Work& w, double tau, idx r, idx ks, idx n, double om, idx mod
 }
 
 // The history rows (every rec_dt from t0) and strobe rows (every tstrobe) that fall in
-// (t + a, t + b] of the segment from t, into rec and strobe while they have room; the next
-// ones' times into w.ro.
-inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, idx n, double f0,
-                    double om, idx mode, idx kase, bool ball) {
+// (t + a, t + b] of the segment from t (context c, its view s), before t_end, into rec and
+// strobe while they have room; the next ones' times into w.ro.
+inline void samples(Work& w, const SegView& s, SegCtx c, double t, double b, double t_end) {
+    const idx n = c.n;
     double t0 = w.cp.t0;
     double rec_dt = w.cp.rec_dt;
     double tstrobe = w.cp.tstrobe;
@@ -774,8 +805,8 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
         if (ts_ > t_end) break;
         double* row = rec.row(n_rec);
         row[0] = ts_;
-        sample(w, ts_ - t, r, ks, n, om, mode, kase, ball, row);
-        row[5] = cut_force(w.seg, ts_ - t, w.dX, n, w.mk, f0, om);
+        sample(w, s, c, ts_ - t, row);
+        row[5] = cut_force(w.seg, ts_ - t, w.dX, n, w.sys.mk, w.sys.force.f0, w.sys.force.om);
         n_rec += 1;
         k_rec += 1;
     }
@@ -785,7 +816,7 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
         if (n_stb < strobe.n0) {
             double* row = strobe.row(n_stb);
             row[0] = t_next_strobe;
-            sample(w, t_next_strobe - t, r, ks, n, om, mode, kase, ball, row);
+            sample(w, s, c, t_next_strobe - t, row);
             n_stb += 1;
         }
         t_next_strobe += tstrobe;
@@ -795,70 +826,74 @@ inline void samples(Work& w, double t, double b, double t_end, idx r, idx ks, id
     w.ro.t_strobe = t_next_strobe;
 }
 
-// e^{i om t} as numba computes cmath.exp(1j * om * t): the products promoted to complex
+// e^{i om t} as cexp((i om) t): the products taken in complex arithmetic (ncplx)
 inline ncplx phasor(double om, double t) { return cexp(ncplx(0.0, 1.0) * om * t); }
+
+// The grid point b a step reaches (the step h 2^lev) and how its state is had: usual, by
+// the grid's tables (a whole step outside a cut); tab_end, the tabulated end of a cut's
+// whole step; else the closed form.
+struct GridAt {
+    double b;
+    idx lev;
+    bool usual, tab_end;
+};
 
 // What advance does off the usual grid (every 64th step, a segment's end): kept out of the
 // search's loop.
 template <bool Regen>
-BB_NOINLINE GridPoint advance_other(Work& w, double t, idx r, idx ks, idx sz,
-                                                  idx n, idx mode, double b, bool tab_end,
-                                                  bool ball, bool ydd_on, const ncplx& phg_a,
-                                                  double ydd_b, double wdd_b) {
+BB_NOINLINE GridPoint advance_other(Work& w, double t, SegCtx c, bool ydd_on, GridAt g,
+                                    const ncplx& phg_a, double ydd_b, double wdd_b) {
+    const idx r = c.r, ks = c.ks, n = c.n;
+    const double b = g.b;
     const Segment& seg = w.seg;
     Vec X = w.X;
-    double f0 = w.cp.f0;
-    double om = w.cp.om;
+    double f0 = w.sys.force.f0;
+    double om = w.sys.force.om;
     ncplx phg = phg_a;
-    if (tab_end) {
+    if (g.tab_end) {
         tab_state(w, r, 4, ks, w.qg, X);
     } else {
-        if (sz != 0 && seg.krb == 0.0) {  // kept for segment_integrals, if b ends it
-            state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X, w.ex_end);
+        if (c.sz != 0 && seg.krb == 0.0) {  // kept for segment_integrals, if b ends it
+            state_at(view(w, c), b, w.qg, X, w.ex_end);
             w.tau_end = b;
             w.r_end = r;
         } else {
-            state_at(r, w.q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qg, X);
+            state_at(view(w, c), b, w.qg, X);
         }
         phg = phasor(om, t + b);
     }
-    if (ball || !Regen) {
-        events(w.ev_b, X, b, seg, mode, n, w.mk, f0, om);
+    if (c.ball || !Regen) {
+        events(w.ev_b, X, b, seg, c.mode, w.sys.mk, w.sys.force);
         if (ydd_on) {
-            auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, w.ddc, n);
+            auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, w.sys.ddc, n);
             ydd_b = yv;
             wdd_b = wv;
         }
     } else {
         double s_0 = seg.s[0], s_1 = seg.s[1], s_2 = seg.s[2], s_3 = seg.s[3];
-        auto [wq, wdq] = psi_dot(w.mk, 3, X, n);
+        auto [wq, wdq] = psi_dot(w.sys.mk, 3, X, n);
         w.ev_b[EV_CUT] = seg.cdir * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))));
         w.ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq;
     }
     return {phg, ydd_b, wdd_b};
 }
 
-// The state at the grid point b of the segment from t into w.X (and w.qg and phg on the
-// usual grid) and the event functions there into w.ev_b: a usual grid step of level lev,
-// the tabulated end of a cut's whole step (tab_end), or the closed form.  Returns phg and
-// y'', W'' at b (ydd_b, wdd_b as they were where not evaluated).
+// The state at the grid point g.b of the segment from t into w.X (and w.qg and phg on the
+// usual grid) and the event functions there into w.ev_b.  Returns phg and y'', W'' at b
+// (ydd_b, wdd_b as they were where not evaluated).
 template <bool Regen>
-inline GridPoint advance(Work& w, double t, idx r, idx ks, idx sz, idx n, idx mode, idx lev,
-                         double b, bool usual, bool tab_end, bool ball, bool ydd_on,
-                         const ncplx& phg_a, double ydd_b, double wdd_b) {
+inline GridPoint advance(Work& w, double t, SegCtx c, bool ydd_on, GridAt g, const ncplx& phg_a,
+                         double ydd_b, double wdd_b) {
     Vec X = w.X;
     idx nz = X.size();
-    double f0 = w.cp.f0;
-    double om = w.cp.om;
-    if (usual) {
+    if (g.usual) {
         // the usual grid point, with the sizes constant for one and two modes
-        const ncplx& rot = w.rotl[lev];
-        if (sz == 1) return grid_point<2>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 2);
-        if (sz == 2) return grid_point<4>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, 4);
-        return grid_point<0>(w, r, lev, phg_a, rot, ks, b, mode, n, f0, om, ydd_on, nz);
+        const ncplx& rot = w.rotl[g.lev];
+        if (c.sz == 1) return grid_point<2>(w, c, g.b, g.lev, phg_a, rot, ydd_on, 2);
+        if (c.sz == 2) return grid_point<4>(w, c, g.b, g.lev, phg_a, rot, ydd_on, 4);
+        return grid_point<0>(w, c, g.b, g.lev, phg_a, rot, ydd_on, nz);
     }
-    return advance_other<Regen>(w, t, r, ks, sz, n, mode, b, tab_end, ball, ydd_on, phg_a,
-                                ydd_b, wdd_b);
+    return advance_other<Regen>(w, t, c, ydd_on, g, phg_a, ydd_b, wdd_b);
 }
 
 // What search_segment returns: the event kind (-1: none), its time from t or the segment's
@@ -870,54 +905,50 @@ struct SegEvent {
     double wb, wdb;
 };
 
-// The segment's running extremes, kept in locals during the search (numba: registers)
-struct Extremes {
-    double max_abs_w, max_w, min_w, max_aux, max_aux_all, max_force;
-};
-
-// W at its W' = 0 extremum inside the grid step [a, b] (kind: the step's event, -1 if none):
-// a start from the Hermite interpolant of W, then w_extremum_any.  Out of the search's loop.
-BB_NOINLINE inline double w_extremum_in(Work& w, double a, double b, idx r, idx ks,
-                                               idx n, idx kind, double wa, double wb,
-                                               double wda, double wdb, double wdd_a,
-                                               double wdd_b) {
+// W at its W' = 0 extremum inside the grid step [a, b] (kind: the step's event, -1 if none;
+// wa, wb: W, W', W'' at its ends): a start from the Hermite interpolant of W, then
+// w_extremum_any.  Out of the search's loop.
+BB_NOINLINE inline double w_extremum_in(Work& w, SegCtx c, double a, double b, idx kind,
+                                        TipW wa, TipW wb) {
     double c0;
-    if (kind < 0 && wdd_a == wdd_a && wdd_b == wdd_b) {  // W'' at both ends
-        c0 = hermite5(a, b, wa, wb, wda, wdb, wdd_a, wdd_b, 1);
+    if (kind < 0 && wa.wdd == wa.wdd && wb.wdd == wb.wdd) {  // W'' at both ends
+        c0 = hermite5(a, b, Jet{wa.w, wa.wd, wa.wdd}, Jet{wb.w, wb.wd, wb.wdd}, 1);
     } else {
-        c0 = hermite(a, b, wa, wb, wda, wdb, 1);
+        c0 = hermite(a, b, wa.w, wb.w, wa.wd, wb.wd, 1);
     }
-    return w_extremum_any(a, wda, b, wdb, c0, w.cp.h, view(w, r, ks, n, w.cp.f0, w.cp.om));
+    return w_extremum_any(a, wa.wd, b, wb.wd, c0, w.cp.h, view(w, c));
 }
 
-// W's extremes at the end b of a grid step and, where W' changes sign inside the step and
-// the extremum may beat them (w_may_exceed), at the located W' = 0 extremum.  Inlined in
-// the search's loop (the extremes stay in registers), the rare search out of it.
-BB_ALWAYS_INLINE void w_extremes(Work& w, Extremes& e, double a, double b,
-                                                      idx r, idx ks, idx n, idx kind, idx lev,
-                                                      double bw4, double wa, double wb,
-                                                      double wda, double wdb, double wdd_a,
-                                                      double wdd_b) {
-    e.max_abs_w = pymax(e.max_abs_w, std::fabs(wb));
-    e.max_w = pymax(e.max_w, wb);
-    e.min_w = pymin(e.min_w, wb);
+// W's extremes at the end b of the grid step st and, where W' changes sign inside the step
+// and the extremum may beat them (w_may_exceed, with the bound sv.bw4), at the located
+// W' = 0 extremum.  Inlined in the search's loop (the extremes stay in registers), the rare
+// search out of it.
+BB_ALWAYS_INLINE void w_extremes(Work& w, Extremes& e, SegCtx c, const SegSearch& sv,
+                                 StepEnds st, idx kind, TipW wa, TipW wb) {
+    const double a = st.a, b = st.b, bw4 = sv.bw4;
+    const idx lev = st.lev;
+    const double wda = wa.wd, wdb = wb.wd;
+    e.max_abs_w = pymax(e.max_abs_w, std::fabs(wb.w));
+    e.max_w = pymax(e.max_w, wb.w);
+    e.min_w = pymin(e.min_w, wb.w);
     if (lev == 0 && wda * wdb < 0.0
         && (bw4 < 0.0
-            || w_may_exceed(b - a, wa, wb, wda, wdb, bw4, e.max_w, e.min_w, e.max_abs_w))) {
-        double we = w_extremum_in(w, a, b, r, ks, n, kind, wa, wb, wda, wdb, wdd_a, wdd_b);
+            || w_may_exceed(b - a, wa, wb, bw4, e.max_w, e.min_w, e.max_abs_w))) {
+        double we = w_extremum_in(w, c, a, b, kind, wa, wb);
         e.max_abs_w = pymax(e.max_abs_w, std::fabs(we));
         e.max_w = pymax(e.max_w, we);
         e.min_w = pymin(e.min_w, we);
     }
 }
 
-// The grid search of the segment from t (regime r, mode, forcing phasor ph at t, its
+// The grid search of the segment from t (context c_in, forcing phasor ph at t, its
 // description sv) for its first event, with the outputs on the way: the running extremes
 // and output times in w.ro, a cut's flows in w.qsum, history and strobe rows.  NZ > 0 (one
 // or two modes outside a cut, sz = NZ / 2): the sizes and mk's row length as constants.
 template <bool Regen, idx NZ = 0>
-inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, idx kase,
-                               idx mode, ncplx ph, const SegSearch& sv) {
+inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const SegSearch& sv) {
+    idx r = c_in.r, ks = c_in.ks, sz = c_in.sz, n = c_in.n;
+    const idx kase = c_in.kase, mode = c_in.mode;
     Vec X = w.X;
     Vec Xa = w.Xa;
     CVec q0 = w.q0;
@@ -925,7 +956,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     const Segment& seg = w.seg;
     Vec ev_a = w.ev_a;
     Vec ev_b = w.ev_b;
-    Mat mk = w.mk;
+    Mat mk = w.sys.mk;
     Vec met = w.met;
     idx nz = q0.size();
     if constexpr (NZ > 0) {
@@ -938,12 +969,15 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         Xa = {w.Xa.d, NZ};
         q0 = {w.q0.d, NZ};
         qg = {w.qg.d, NZ};
-        mk = {w.mk.d, 6, NZ / 2};
+        mk = {w.sys.mk.d, 6, NZ / 2};
     }
     bool ball = kase == L::BALL;
-    double f0 = w.cp.f0;
-    double om = w.cp.om;
-    double half = w.cp.half;
+    // the context with the sizes as the search has them (constants in the copies)
+    const SegCtx c{r, ks, sz, n, kase, Regime(mode), ball};
+    const SegView out_view = view(w, c);  // the history's and the strobe's samples
+    double f0 = w.sys.force.f0;
+    double om = w.sys.force.om;
+    double half = w.sys.ball.half;
     bool outputs = w.cp.rec_dt > 0.0 || w.cp.tstrobe > 0.0;
     double t_end = w.rs.t_end;
     double fb = seg.fb;
@@ -951,12 +985,10 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     double s_0 = seg.s[0];
     double s_1 = seg.s[1];
     double tlen = sv.tlen;
-    bool steady = sv.steady != 0.0;
-    bool whole = sv.whole != 0.0;
-    bool adapt = sv.adapt != 0.0;
-    bool ydd_on = sv.ydd != 0.0;
-    bool watch_v = sv.watch_v != 0.0;
-    bool watch_ext = sv.watch_ext != 0.0;
+    bool steady = sv.steady;
+    bool whole = sv.whole;
+    bool adapt = sv.adapt;
+    bool ydd_on = sv.ydd;
     Extremes e{w.ro.max_abs_w, w.ro.max_w,       w.ro.min_w,
                w.ro.max_aux,   w.ro.max_aux_all, w.ro.max_force};
     ncplx ph_next = ph;
@@ -974,7 +1006,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     // the values at a (carried over from the previous grid point)
     auto [wa, wda] = psi_dot(mk, 3, Xa, n);
     if (ball || !Regen) {
-        events(ev_a, Xa, a, seg, mode, n, mk, f0, om);
+        events(ev_a, Xa, a, seg, mode, mk, w.sys.force);
     } else {  // only h matters
         ev_a[EV_CUT] = seg.cdir * (wa - s_0);
         ev_a[EV_HEXT] = s_1 - wda;
@@ -988,12 +1020,12 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
     for (idx c = 0; c < 6; ++c) w.qsum[c] = 0.0;
     double auxa = 0.0;
     double auxda = 0.0;
-    if (kase != L::SOLID) std::tie(auxa, auxda) = aux(Xa, a, seg, mode, kase, n, mk, w.x, ball);
+    if (kase != L::SOLID) std::tie(auxa, auxda) = aux(Xa, a, seg, c, mk, w.x);
     double ydd_a = NAN;
     double wdd_a = NAN;
     double ydd_b = NAN;
     double wdd_b = NAN;
-    if (ydd_on) std::tie(ydd_a, wdd_a) = ydd(Xa, f0 * ph.imag(), fb, acc, w.ddc, n);
+    if (ydd_on) std::tie(ydd_a, wdd_a) = ydd(Xa, f0 * ph.imag(), fb, acc, w.sys.ddc, n);
     idx top = adapt ? w.levmax[r] : 0;
     LevelBounds lb(sv.b3y, sv.b3w, w.hl, top);
     GrazeMargin gm;
@@ -1001,11 +1033,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         // the step: h, or 2^lv h where Taylor's theorem proves that it holds no event and
         // no new extremum of |y| or (steady) of W
         idx lev = 0;
-        if (adapt) {
-            double ylim = pymin(half, steady ? e.max_aux : e.max_aux_all) * (1.0 - 1e-9);
-            lev = level(ev_a[EV_PLUS] + half, ev_a[EV_YEXT], ydd_a, wa, wda, wdd_a, lb, ylim,
-                        1e-9 * e.max_abs_w, e.max_w, e.min_w, w.hl, top, watch_v, steady);
-        }
+        if (adapt) lev = level(ev_a, ydd_a, TipW{wa, wda, wdd_a}, lb, e, half, sv);
         double b = a + w.hl[lev];
         bool full = true;
         if (b >= tlen) {
@@ -1014,24 +1042,24 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         }
         istep += 1;
         bool usual = full && istep % 64 != 0 && !Regen;
-        GridPoint gp = advance<Regen>(w, t, r, ks, sz, n, mode, lev, b, usual, whole && !full,
-                                      ball, ydd_on, phg, ydd_b, wdd_b);
+        GridPoint gp = advance<Regen>(w, t, c, ydd_on, GridAt{b, lev, usual, whole && !full}, phg,
+                                      ydd_b, wdd_b);
         phg = gp.phg;
         ydd_b = gp.ydd;
         wdd_b = gp.wdd;
         // --- events in [a, b]
-        Found f = find_event<Regen>(w, a, b, r, ks, n, f0, om, mode, ball, watch_v, watch_ext,
-                                    sv.b4, lev, ydd_a, ydd_b, gm);
+        Found f = find_event<Regen>(w, c, sv, StepEnds{a, b, lev, ev_a, ev_b, ydd_a, ydd_b}, gm);
         idx kind = f.kind;
         if (kind >= 0) {
             b = f.t;
+            // the closed form with the search's sizes
+            const SegView s{seg, r, q0, w.cf, ks, w.qs, X, w.Xd, n, mk, f0, om};
             if (sz != 0 && seg.krb == 0.0) {  // kept for segment_integrals
-                ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X,
-                                   w.ex_end);
+                ph_next = state_at(s, b, w.qs, X, w.ex_end);
                 w.tau_end = b;
                 w.r_end = r;
             } else {
-                ph_next = state_at(r, q0, seg, b, om, w.lam, w.V, ks, w.Z, w.D, w.bq, w.qs, X);
+                ph_next = state_at(s, b, w.qs, X);
             }
             ev_kind = kind;
             tau_ev = b;
@@ -1039,17 +1067,16 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
         // --- outputs on (a, b]
         std::tie(wb, wdb) = psi_dot(mk, 3, X, n);
         if (steady) {
-            w_extremes(w, e, a, b, r, ks, n, kind, lev, sv.bw4, wa, wb, wda, wdb, wdd_a,
-                       wdd_b);
+            w_extremes(w, e, c, sv, StepEnds{a, b, lev, ev_a, ev_b, ydd_a, ydd_b}, kind,
+                       TipW{wa, wda, wdd_a}, TipW{wb, wdb, wdd_b});
         }
         if constexpr (Regen) {
-            e.max_force = cut_flows(w, a, b, r, ks, n, whole && kind < 0, mode == STICK, steady,
-                                    wb, e.max_force);
+            e.max_force = cut_flows(w, c, a, b, whole && kind < 0, steady, wb, e.max_force);
         }
         // aux and aux' at b
         double auxb = 0.0;
         double auxdb = 0.0;
-        if (kase != L::SOLID) std::tie(auxb, auxdb) = aux(X, b, seg, mode, kase, n, mk, w.x, ball);
+        if (kase != L::SOLID) std::tie(auxb, auxdb) = aux(X, b, seg, c, mk, w.x);
         if (kind == EV_PLUS || kind == EV_MINUS) {
             auxb = kind == EV_PLUS ? half : -half;  // on the wall, up to round-off
         }
@@ -1063,7 +1090,7 @@ inline SegEvent search_segment(Work& w, double t, idx r, idx ks, idx sz, idx n, 
             }
         }
         // history and strobe samples in (t + a, t + b]
-        if (outputs) samples(w, t, b, t_end, r, ks, n, f0, om, mode, kase, ball);
+        if (outputs) samples(w, out_view, c, t, b, t_end);
         if (kind >= 0 || !full) break;
         a = b;
         wa = wb;
@@ -1098,37 +1125,39 @@ struct SegStart {
     double pdu;
 };
 
-// A segment from t (forcing phasor ph there) in the run's state w.rs: its regime r, its
-// eigen-coordinates into w.q0, its record into w.seg, its description into sv and, in a
-// cut, its end and surface.
+// A segment from t (forcing phasor ph there, at most to t_stop) in the run's state w.rs:
+// its regime r, its eigen-coordinates into w.q0, its record into w.seg, its description
+// into sv and, in a cut (history hs, constants cq, j_node the last node reached), its end
+// and surface.
 template <bool Regen>
-inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, idx n, idx kase,
-                              idx nreg, idx j_node, Mat kn, idx nk, Span1<idx> ip, Mat sc,
-                              const CutConsts& cq, SegSearch& sv) {
+inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, History& hs,
+                              idx j_node, const CutConsts& cq, SegSearch& sv) {
     Vec X = w.X;
     Vec dX = w.dX;
     CVec q0 = w.q0;
     Segment& seg = w.seg;
     const RunConsts& cp = w.cp;
+    const System& sys = w.sys;
     const RunState& rs = w.rs;
+    const idx n = sys.n;
     idx nz = q0.size();
-    bool ball = kase == L::BALL;
-    double fc = cp.fc;
-    double m = cp.m;
-    idx mode = idx(rs.mode);
-    double sdir = rs.sdir;
-    bool incut = rs.incut != 0.0;
+    bool ball = sys.has_ball();
+    double fc = sys.fric.fc;
+    double m = sys.ball.m;
+    idx mode = rs.ball.mode;
+    double sdir = rs.ball.sdir;
+    bool incut = rs.incut;
     double t_seg_end = t_stop;
     bool steady = t >= cp.t_steady;
     idx r = 0;
     if (ball) r = mode;
-    if (incut) r += nreg;
+    if (incut) r += sys.nreg;
     double fb = 0.0;
     if (mode == FREE && ball) fb = -fc * sdir;
-    double kap = mode == STICK ? cp.kstick : cp.kwall;
+    double kap = mode == STICK ? sys.fric.kstick : sys.fric.kwall;
     idx ks = w.kstep[r];
     for (idx j = 0; j < nz; ++j) {
-        dX[j] = X[j] - ((ncplx(w.Z(r, j)) * ph).imag() + fb * w.D(r, j));
+        dX[j] = X[j] - ((ncplx(w.cf.Z(r, j)) * ph).imag() + fb * w.cf.D(r, j));
     }
     for (idx k = 0; k < nz; ++k) {
         ncplx s(0.0, 0.0);
@@ -1138,7 +1167,7 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, idx n,
     bool at_node = false;
     bool whole = false;
     if constexpr (Regen) {
-        CutSegment cs = cut_segment(t, t_stop, j_node, kn, nk, ip, sc, seg, cq, rs);
+        CutSegment cs = cut_segment(t, t_stop, j_node, hs, seg, cq, rs);
         t_seg_end = cs.t_seg_end;
         at_node = cs.at_node;
         j_node = cs.j_node;
@@ -1147,22 +1176,21 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, idx n,
         // a whole step H from node to node, inside one grid step: tabulated values
         whole = at_node && cs.from_node && cq.h <= cp.h;
     }
-    auto [pdu, pdv] = psi_dot(w.mk, 4, X, n);
+    auto [pdu, pdv] = psi_dot(sys.mk, 4, X, n);
     // bounds on |y^(4)|, |W^(4)| (steady, harmonic) and |y^(3)|, |W^(3)| (a free ball)
     bool ydd_on = ball && mode == FREE && !Regen;
     bool adapt = ydd_on && w.levmax[r] > 0;
-    Bounds bd = bounds(r, q0, seg, w.lam, w.bq, w.bnd, cq.krb, ball, incut, steady && !Regen,
-                       adapt);
+    Bounds bd = bounds(w, r, cq.krb, BoundsWanted{ball, incut, steady && !Regen, adapt});
     seg.ts = t;
     seg.fb = fb;
-    seg.ud0 = rs.y + pdu;  // the ball's absolute position and velocity
-    seg.vd0 = rs.yd + pdv;
-    seg.y0 = rs.y;
+    seg.ud0 = rs.ball.y + pdu;  // the ball's absolute position and velocity
+    seg.vd0 = rs.ball.yd + pdv;
+    seg.y0 = rs.ball.y;
     seg.sdir = sdir;
-    seg.wall = rs.wall;
+    seg.wall = rs.ball.wall;
     seg.kappa = kap;
-    seg.fs = cp.fs;
-    seg.half = cp.half;
+    seg.fs = sys.fric.fs;
+    seg.half = sys.ball.half;
     seg.m = m > 0.0 ? m : 1.0;
     seg.acc = fb / seg.m;
     // which events are watched
@@ -1174,30 +1202,32 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, idx n,
     sv.bw4 = bd.bw4;
     sv.b3y = bd.b3y;
     sv.b3w = bd.b3w;
-    sv.steady = steady ? 1.0 : 0.0;
-    sv.whole = whole ? 1.0 : 0.0;
-    sv.adapt = adapt ? 1.0 : 0.0;
-    sv.ydd = ydd_on ? 1.0 : 0.0;
-    sv.watch_v = watch_v ? 1.0 : 0.0;
-    sv.watch_ext = watch_ext ? 1.0 : 0.0;
+    sv.steady = steady;
+    sv.whole = whole;
+    sv.adapt = adapt;
+    sv.ydd = ydd_on;
+    sv.watch_v = watch_v;
+    sv.watch_ext = watch_ext;
     return {r, ks, t_seg_end, at_node, j_node, pdu};
 }
 
-// The flows of the segment [t, t + T] (regime r, forcing phasor ph at t; a cut's from
+// The flows of the segment [t, t + T] (context c, forcing phasor ph at t; a cut's from
 // w.qsum, else closed form) into the metrics, a cut's steps with h = 0 counted, a free ball
-// moved to t + T.  Returns the last step of length dt_out counted with h = 0.
+// moved to t + T (pdu: psi_d . u at t).  Returns the last step of length dt_out counted
+// with h = 0 (last_zero_step: the last one so far).
 template <bool Regen>
-inline idx close_segment(Work& w, double t, double T, idx r, idx ks, idx sz, idx n, idx kase,
-                         idx mode, ncplx ph, bool steady, double pdu, idx last_zero_step) {
+inline idx close_segment(Work& w, SegCtx c, double t, double T, ncplx ph, bool steady,
+                         double pdu, idx last_zero_step) {
     const Segment& seg = w.seg;
     const RunConsts& cp = w.cp;
+    const System& sys = w.sys;
+    const idx r = c.r, mode = c.mode;
     Vec out = w.out;
     Vec met = w.met;
-    bool ball = kase == L::BALL;
-    double fb = seg.fb;
+    bool ball = c.ball;
     if constexpr (Regen) {
-        for (idx c = 0; c < 6; ++c) out[c] = w.qsum[c];
-        if (w.rs.incut == 0.0) {  // the steps of length dt_out touched with h = 0
+        for (idx k = 0; k < 6; ++k) out[k] = w.qsum[k];
+        if (!w.rs.incut) {  // the steps of length dt_out touched with h = 0
             double t0 = cp.t0;
             double dt_out = cp.dt_out;
             idx js = std::max(idx(std::floor((t - t0) / dt_out)), last_zero_step + 1);
@@ -1208,7 +1238,7 @@ inline idx close_segment(Work& w, double t, double T, idx r, idx ks, idx sz, idx
             }
         }
     } else {
-        double kst = (ball && mode == STICK) ? cp.kstick : 0.0;
+        double kst = (ball && mode == STICK) ? sys.fric.kstick : 0.0;
         // what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a free
         // ball's y^2
         idx lvl = steady ? ((ball && mode == FREE) ? 2 : 1) : 0;
@@ -1216,25 +1246,23 @@ inline idx close_segment(Work& w, double t, double T, idx r, idx ks, idx sz, idx
         // segment: tau_end is reset at each search's start)
         const ncplx* exc =
             (w.r_end == r && w.tau_end == T && seg.krb == 0.0) ? w.ex_end : nullptr;
-        if (sz == 1) {
-            segment_integrals_1(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
-                                w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
-                                out, w.isum, lvl, seg, w.phj, exc);
-        } else if (sz == 2) {
-            segment_integrals_2(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, w.mk,
-                                w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb,
-                                out, w.isum, lvl, seg, w.phj, exc);
+        const FlowsIn in{seg,       r,    w.q0,         ph,           T,
+                         w.cf.lam,  w.Vfull, w.cf.Z,     w.cf.D,       w.isum,
+                         sys.mk,    w.dp, sys.force.f0, sys.force.om, kst,
+                         sys.fric.sr, lvl, exc};
+        if (c.sz == 1) {
+            segment_integrals_1(in, w.isc.phj, out);
+        } else if (c.sz == 2) {
+            segment_integrals_2(in, w.isc.phj, out);
         } else {
-            segment_integrals(r, w.q0, ph, T, fb, cp.om, cp.f0, w.lam, w.Vfull, w.Z, w.D, n, w.mk,
-                              w.lvis, w.cvis, kst, cp.sr, w.me, w.G, w.Cx, w.cf, w.ca, w.cb, out,
-                              w.isum, lvl, ks, seg, w.phj);
+            segment_integrals(in, c.n, c.ks, w.isc, out);
         }
         if (ball && steady) {
             // the ball's int y^2: closed form when free, y constant otherwise
             met[L::SUM_AUX2] += mode == FREE ? out[6] : seg.y0 * seg.y0 * T;
         }
     }
-    close_flows(w, T, steady, mode, ball, fb, seg.acc, pdu, n);
+    close_flows(w, c, T, steady, pdu);
     return last_zero_step;
 }
 

@@ -14,9 +14,11 @@ package packs what the core cannot compute itself and calls it:
   built from the definitions the integrators step with (for shooting, in
   :mod:`boringbar.orbits`).
 
-The core checks every array it is handed (dtype, shape, contiguity) and every scalar's
-range, and raises ``ValueError`` naming it; it releases the GIL for the whole
-integration, so threads run in parallel.
+Each entry point of the core takes one run description (``core.RK4Run``, ``core.RK4Batch``,
+``core.ExactRun``), whose fields the functions here set.  The core checks every array it is
+handed (dtype, shape, contiguity; writable for an output) and every scalar's range, and
+raises ``ValueError`` naming it; it releases the GIL for the whole integration, so threads
+run in parallel.
 """
 
 import numpy as np
@@ -29,8 +31,6 @@ from boringbar.simulate.regimes import cut_tables, history_step, prepare
 BMAX: int = core.BMAX
 
 _NO_HISTORY = np.zeros((0, 2))
-_NO_TAB_E = np.zeros((1, 5, 1), complex)
-_NO_TAB_P = np.zeros((1, 5, 4, 1), complex)
 
 
 def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
@@ -47,9 +47,13 @@ def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     optional: (n_modes, 2), each mode's max and min of u_i over the steady steps, updated
     in place).
     """
-    core.run_rk4(p, x, float(t0), float(dt), int(n_steps), int(steady_start),
-                  int(rec_every), rec, imp, stick, strobe, met,
-                  _NO_HISTORY if buf is None else buf, modes)
+    run = core.RK4Run()
+    run.p, run.x, run.t0, run.dt = p, x, t0, dt
+    run.n_steps, run.steady_start, run.rec_every = n_steps, steady_start, rec_every
+    run.rec, run.imp, run.stick, run.strobe, run.met = rec, imp, stick, strobe, met
+    run.buf = _NO_HISTORY if buf is None else buf
+    run.modes = modes
+    core.run_rk4(run)
 
 
 def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met) -> None:
@@ -57,8 +61,11 @@ def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met) 
     of the same mode count and case, at most :data:`BMAX` rows, each advanced as
     :func:`run_rk4` would (the same bits); the outputs as :func:`run_rk4`'s with one leading
     row per run."""
-    core.run_rk4_batch(P, x, float(t0), float(dt), int(n_steps), int(steady_start), imp,
-                        stick, strobe, met)
+    run = core.RK4Batch()
+    run.P, run.x, run.t0, run.dt = P, x, t0, dt
+    run.n_steps, run.steady_start = n_steps, steady_start
+    run.imp, run.stick, run.strobe, run.met = imp, stick, strobe, met
+    core.run_rk4_batch(run)
 
 
 def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None,
@@ -68,16 +75,17 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
     result, computed here if not given.  ``dt``: a regenerative cut's history step (H =
     tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the unit
     of N_ZERO_STEPS.  Returns the time reached."""
-    if prep is None:
-        prep = prepare(p)
-    H, tab_e, tab_p = 0.0, _NO_TAB_E, _NO_TAB_P
+    run = core.ExactRun()
+    run.prep = prepare(p) if prep is None else prep
     if int(p[L.FORCING]) == L.REGENERATIVE:
         if not dt > 0.0:
             raise ValueError(f"exact integrator: a regenerative cut needs dt > 0, not {dt}")
-        H = history_step(float(p[L.TAU]), float(dt))
-        tab_e, tab_p = cut_tables(prep, p, H)
-    return core.run_exact(p, x, float(t0), float(t_end), float(t_steady), float(rec_dt), rec,
-                           imp, stick, strobe, met, prep, float(dt), H, tab_e, tab_p)
+        run.H = history_step(float(p[L.TAU]), float(dt))
+        run.tabE, run.tabP = cut_tables(run.prep, p, run.H)
+    run.p, run.x, run.t0, run.t_end, run.t_steady, run.rec_dt = p, x, t0, t_end, t_steady, rec_dt
+    run.rec, run.imp, run.stick, run.strobe, run.met = rec, imp, stick, strobe, met
+    run.dt = dt
+    return core.run_exact(run)
 
 
 def regime_matrix(p: np.ndarray, sdir: float) -> np.ndarray:

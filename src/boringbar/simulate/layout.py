@@ -17,6 +17,12 @@ globals().update(_SLOTS)
 NMAX: int = _SLOTS["NMAX"]
 P_SIZE: int = _SLOTS["P_SIZE"]
 MET_SIZE: int = _SLOTS["MET_SIZE"]
+#: the scalar slots of ``p`` in order (the per-mode blocks of NMAX entries follow them)
+PARAM_NAMES: tuple = tuple(core.param_names())
+#: the per-mode blocks of ``p``, in order
+PARAM_BLOCKS: tuple = ("M_", "K_", "C_", "PSI_L", "PSI_D", "PSI_A")
+#: the slots of ``met``, in order
+METRIC_NAMES: tuple = tuple(core.metric_names())
 #: the core's case (slot CASE) of each bar, by System.kind
 CASE_OF_KIND: dict = {"solid": _SLOTS["SOLID"], "ball": _SLOTS["BALL"], "tmd": _SLOTS["TMD"],
                       "locked": _SLOTS["LOCKED"]}

@@ -4,22 +4,24 @@ system, :func:`system_regimes`, and the forcing's part computed for each run),
 :func:`history_step` and :func:`cut_tables` (a regenerative cut's knot spacing and
 tabulated whole step); the compiled core (``boringbar.core``) takes these arrays.
 
-They reproduce, bit for bit, the setup the integrators' reference outputs were computed
-with (tests/data/kernel_reference.npz, from the numba kernels the core replaced): the
-same floating point operations in the same order, that is:
+They give, bit for bit, the setup the integrators' reference outputs were computed with
+(tests/data/kernel_reference.npz, ``prep_*``): every operation is spelled out so that its
+rounding does not depend on how NumPy vectorises it, that is:
 
-- the complex arithmetic is CPython's (which numba copies): a float operand promoted to
-  complex(x, 0.0), then (ac - bd, ad + bc) and CPython's division (``_Py_c_quot``).  Where a
-  loop is vectorised it is vectorised on the real and imaginary parts with exactly these
-  formulas (NumPy's own complex multiply and divide may use other sequences and FMA);
-- ``abs(z)`` is the C library's hypot (``abs(complex)`` in CPython, ``math.hypot`` in numba;
-  *not* CPython's ``math.hypot``, which is its own algorithm) and ``cmath.exp`` is numba's:
+- the complex arithmetic is CPython's: a float operand promoted to complex(x, 0.0), then
+  (ac - bd, ad + bc) and CPython's division (``_Py_c_quot``), as the core's complex
+  arithmetic (core/exact/nmath.hpp; where the core lets a float act on each part of a
+  complex, the values are the same but for the sign of a zero).  Where a loop is
+  vectorised it is vectorised on the real and imaginary parts with exactly these formulas
+  (NumPy's own complex multiply and divide may use other sequences and FMA);
+- ``abs(z)`` is the C library's hypot (``abs(complex)`` in CPython; *not* CPython's
+  ``math.hypot``, which is its own algorithm) and the complex exponential is
   ``exp(x) (cos y + i sin y)`` from the C library's exp, cos, sin (``math.*`` in CPython;
-  NumPy's ufuncs may use their own SIMD versions, so they are not used for these);
-- the one LAPACK call inside numba's part, ``np.linalg.inv`` of the coupled mass matrix,
-  is dgetrf + dgetri of SciPy's LAPACK, which numba calls through ``cython_lapack``: called
-  here through ``scipy.linalg.lapack``; the eigen-decomposition, inverse and solves of the
-  stacked regimes were NumPy calls in the numba version too and are the same calls here;
+  NumPy's ufuncs may use their own SIMD versions, so they are not used for these), as the
+  core's ``cexp``;
+- the inverse of the coupled mass matrix is LAPACK's dgetrf + dgetri, called through
+  ``scipy.linalg.lapack`` (``np.linalg.inv`` solves instead, another rounding); the
+  eigen-decomposition, inverse and solves of the stacked regimes are NumPy's;
 - sums keep their order (a loop over the summed index, vectorised over the others).
 """
 
@@ -47,9 +49,10 @@ GL_X = (0.5 - 0.4305681557970263, 0.5 - 0.16999052179242816, 0.5 + 0.16999052179
 RFACT = tuple(1.0 / math.factorial(k) for k in range(20))
 
 
-# --- numba's scalar arithmetic -------------------------------------------------------------
+# --- scalar arithmetic, as the core does it ------------------------------------------------
 def _cexp(z: complex) -> complex:
-    """cmath.exp as numba compiles it (numba/cpython/cmathimpl.py's exp_impl)."""
+    """e^z as the core's ``cexp`` (core/exact/nmath.hpp): exp(x) (cos y + i sin y) from the
+    C library's functions, with C99's special cases."""
     x, y = z.real, z.imag
     if math.isfinite(x):
         if math.isfinite(y):
@@ -96,14 +99,15 @@ def _cmul_parts(ar, ai, br, bi):
 
 
 def _seqsum(t: np.ndarray, axis: int = -1) -> np.ndarray:
-    """0.0 + t_0 + t_1 + ... along ``axis``, in that order (numba's loop ``s = 0.0; s += t``):
+    """0.0 + t_0 + t_1 + ... along ``axis``, in that order (the loop ``s = 0.0; s += t``):
     np.add.accumulate adds sequentially (np.sum may add pairwise)."""
     zero = np.zeros_like(np.take(t, [0], axis))
     return np.take(np.add.accumulate(np.concatenate([zero, t], axis), axis), -1, axis)
 
 
 def _inv(a: np.ndarray) -> np.ndarray:
-    """numba's np.linalg.inv: LAPACK dgetrf then dgetri (SciPy's, as numba's cython_lapack)."""
+    """The inverse of ``a`` by LAPACK's dgetrf then dgetri (SciPy's), with np.linalg.inv's
+    errors."""
     if not np.all(np.isfinite(a)):
         raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
     lu, piv, info = lapack.dgetrf(np.asfortranarray(a))
@@ -123,7 +127,7 @@ def _coupled(p, n, s, A, B):
     pd = p[L.PSI_D:L.PSI_D + n]
     Mm = np.zeros((n, n))
     Mm[np.arange(n), np.arange(n)] = p[L.M_:L.M_ + n]
-    Mm = Mm + ((s * m) * pd[:, None]) * pd[None, :]  # numba: Mm[i, j] += s m pd_i pd_j
+    Mm = Mm + ((s * m) * pd[:, None]) * pd[None, :]  # Mm[i, j] += s m pd_i pd_j
     Mi = _inv(Mm)
     A[np.arange(n), n + np.arange(n)] = 1.0
     A[n:2 * n, 0:n] = -Mi * p[L.K_:L.K_ + n][None, :]
@@ -132,7 +136,7 @@ def _coupled(p, n, s, A, B):
 
 
 def _regimes(p):
-    """The regimes' X' = A X + B f + c F_b, stacked: (A, B, c, nreg) (prepare.py's)."""
+    """The regimes' X' = A X + B f + c F_b, stacked: (A, B, c, nreg)."""
     n = int(p[L.N_MODES])
     case = int(p[L.CASE])
     sr = float(p[L.REACTION])
@@ -187,7 +191,7 @@ def _regimes(p):
 
 
 def _pair_order(lr):
-    """prepare.py's _pair_order: an ordering [l1, conj l1, l2, conj l2, ...] of ``lr``, or
+    """An ordering [l1, conj l1, l2, conj l2, ...] of ``lr``, or
     an empty array if its values are not all complex conjugate pairs."""
     nz = len(lr)
     none = np.empty(0, np.int64)
@@ -222,7 +226,7 @@ def _pair_order(lr):
 
 
 def _pairing(lam, V, Vi):
-    """prepare.py's _finish, its first part: the conjugate-pair ordering (in place in lam,
+    """The conjugate-pair ordering (in place in lam,
     V, Vi), Vh and kstep."""
     R, nz = lam.shape
     kstep = np.ones(R, np.int64)
@@ -241,10 +245,10 @@ def _pairing(lam, V, Vi):
         # all regimes at once (a slice when all are paired: the usual case)
         pr = slice(None) if len(paired) == R else np.array(paired)
         kstep[pr] = 2
-        # numba's np.conj: imag -> -0.0 - imag, the same bits as NumPy's sign flip
+        # the conjugate: imag -> -0.0 - imag, the same bits as NumPy's sign flip
         V[pr, :, 1::2] = np.conj(V[pr, :, 0::2])
         Vi[pr, 1::2, :] = np.conj(Vi[pr, 0::2, :])
-        # numba: 2.0 * V[r, :, k] promotes 2.0 to complex(2.0, 0.0)
+        # 2.0 * V[r, :, k] with 2.0 promoted to complex(2.0, 0.0)
         re, im = _cmul_parts(2.0, 0.0, V[pr, :, 0::2].real, V[pr, :, 0::2].imag)
         vh = np.zeros((len(paired), nz, nz), np.complex128)
         vh.real[:, :, 0::2] = re
@@ -253,9 +257,9 @@ def _pairing(lam, V, Vi):
     return Vh, kstep
 
 
-# The rest of prepare.py's _finish is written as numba's loops on Python floats and complex
-# numbers (CPython's complex arithmetic is numba's): for the small sizes here faster than
-# NumPy's per-call overhead, and evidently the same operations.
+# The rest of the setup is written as loops on Python floats and complex numbers (CPython's
+# complex arithmetic, as above): for the small sizes here faster than NumPy's per-call
+# overhead, and evidently the same operations.
 def _modal_inputs(Vi_l, B_l):
     """bq = Vi B per regime, each sum in order from 0j."""
     bq = []
@@ -328,7 +332,7 @@ def _grid_exponentials(lam_l, h):
         for lv in range(GRID_LEVELS):
             x = h * 2.0 ** lv
             for z in lr:
-                w = z * x  # CPython: x promoted to complex(x, 0.0), as numba
+                w = z * x  # CPython: x promoted to complex(x, 0.0); the core's values
                 if isfinite(w.real) and isfinite(w.imag):
                     e = exp(w.real)  # _cexp, written out (the common case)
                     eh.append(complex(e * cos(w.imag), e * sin(w.imag)))
@@ -361,7 +365,7 @@ def _mode_sums(lam_l):
 
 def _inverse_sums(mode_sums, lam_l, om):
     """isum[r, a, b] = 1 / (mu_a + mu_b) over the basis exponents mu = (lambda_r, i Omega,
-    -i Omega, 0) (prepare.py's basis_exponents), 0 where the sum is 0: the entries
+    -i Omega, 0) (the core's basis_exponents), 0 where the sum is 0: the entries
     without +-i Omega from ``mode_sums`` (:func:`_mode_sums`), the rest computed here."""
     nz = len(lam_l[0])
     forced = [1j * om, -1j * om, 0j]
@@ -456,7 +460,7 @@ def system_regimes(key: bytes) -> SystemRegimes:
     D = -np.linalg.solve(A, c[:, :, None])[:, :, 0]
     Vh, kstep = _pairing(lam, V, Vi)
     lam_l = lam.tolist()
-    alam = [[abs(z) for z in row] for row in lam_l]  # hypot, as numba's abs
+    alam = [[abs(z) for z in row] for row in lam_l]  # hypot, as the core's abs
     psis = (p[L.PSI_D:L.PSI_D + n].tolist(), p[L.PSI_L:L.PSI_L + n].tolist())
     hi = [max([0.0, *row]) for row in alam]
     lo = [min([math.inf, *(a for a in row if a > 0.0)]) for row in alam]
@@ -505,7 +509,8 @@ def history_step(tau: float, dt: float) -> float:
 def cut_tables(prep: dict, p: np.ndarray, H: float):
     """exp(lambda tau_p) and Kr b bq j! tau_p^(j+1) phi_(j+1)(lambda tau_p) at the Gauss
     nodes and the end of a whole step H, per regime (the out-of-cut ones have no input):
-    the same arrays, bit for bit, as the core's (core/exact/cut.hpp)."""
+    the tables a cut's whole step reads instead of the closed form (the core's tab_state,
+    core/exact/segment.hpp)."""
     lam = prep["lam"]
     R, nz = lam.shape
     taus = [x * H for x in GL_X] + [H]
