@@ -65,12 +65,12 @@ def _branch(ax, d, color: str, label: str) -> None:
         ax.plot([0.0, hopf[0]], [0.0, 0.0], color=color, lw=3, alpha=0.5, solid_capstyle="butt")
     else:
         b, a, stable = b[ok], a[ok], stable[ok]
-    first = True
-    for lo in range(len(b) - 1):
-        ls = "-" if stable[lo + 1] else "--"
-        ax.plot(b[lo:lo + 2], a[lo:lo + 2], color=color, ls=ls, lw=1.8,
-                label=label if first else None)
-        first = False
+    # one line a stretch of equal stability (a segment's stability is its far end's), so
+    # that the dashes of an unstable stretch show however short its steps
+    ends = [0, *(np.flatnonzero(stable[2:] != stable[1:-1]) + 1), len(b) - 1]
+    for k, (lo, hi) in enumerate(zip(ends[:-1], ends[1:], strict=True)):
+        ax.plot(b[lo:hi + 1], a[lo:hi + 1], color=color, ls="-" if stable[hi] else "--",
+                lw=1.8, label=label if k == 0 else None)
     folds = [float(v) * 1e3 for k, v in zip(d["event_kind"].values, d["event_depth_m"].values,
                                              strict=True) if str(k) == "fold"]
     if hopf and folds and min(folds) < hopf[0]:
