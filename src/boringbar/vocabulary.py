@@ -68,7 +68,7 @@ DIMENSIONLESS = frozenset({
     "periodicity", "pareto", "successive", "poincare_from",
     "stop_after", "poincare_sample", "status", "events", "impact_wall", "direction",
     "dask_local", "scale", "steps_with_zero_force", "runs", "id", "zero_one_K",
-    "multipliers_abs", "noise_seed", "n", "undecided_runs",
+    "multipliers_abs", "noise_seed", "n", "undecided_runs", "lobe", "steps",
     # labels and verdict codes (stored as numbers where a Dataset has none of them)
     "event_kind", "verdict", "verdict_bounded", "chatter", "published_chatter", "onset",
     "chatter_free", "chatter_free_by_start",

@@ -58,9 +58,10 @@ class CutContinuationOptions:
 
 def cut_continuation(systems: System | dict[str, System], forcing: Regenerative,
                      options: CutContinuationOptions | None = None) -> xr.Dataset:
-    """The chatter orbit branch of each system (a dict: name -> System; one System: named
-    by its kind) at ``forcing``'s speed and law (its depth is ignored: the branch
-    starts at the Hopf point)."""
+    """The chatter orbit branch of each of ``systems`` (a dict: name -> System; one System:
+    named by its kind) at ``forcing``'s speed and law (its depth is ignored: the branch
+    starts at the Hopf point); ``options``: :class:`CutContinuationOptions` (None: its
+    defaults)."""
     if not isinstance(forcing, Regenerative):
         raise ParameterError(f"forcing = {forcing!r} must be a Regenerative cut")
     o = options or CutContinuationOptions()
