@@ -26,9 +26,11 @@ map is applied as one sparse solve and its largest eigenvalues found by ARPACK.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -47,7 +49,9 @@ RK4_COEF, RK4_WEIGHTS, RK4_DELAY = (0.0, 0.5, 0.5, 1.0), (1.0, 2.0, 2.0, 1.0), (
 #: equation to about 1e-9 at this count; docs/continuation.md shows the order).
 STEPS = 200
 #: Multipliers computed at each orbit (the largest in modulus), and ARPACK's tolerance.
-MULTIPLIERS, EIG_TOL = 6, 1e-10
+MULTIPLIERS, EIG_TOL = 4, 1e-10
+#: Unknowns up to which the Newton matrix is factorised densely.
+DENSE_LU = 1700
 #: Relative step of the finite differences in T and b.
 FD_STEP = 1e-7
 
@@ -330,7 +334,7 @@ def amplitude(model: CutModel, o: Orbit) -> float:
 
 # --- Newton ---------------------------------------------------------------------------
 def newton(model: CutModel, o: Orbit, extra, tol: float = 1e-10,
-           max_iter: int = 12) -> tuple[Orbit, int, spla.SuperLU]:
+           max_iter: int = 12) -> tuple[Orbit, int, object]:
     """Solve residual = 0 with one more equation ``extra(y) -> (value, gradient row)``
     (a fixed amplitude, or the arclength): the orbit, the iterations it took and the
     last factorised matrix.  A chord method: the matrix is factorised again only when a
@@ -359,8 +363,32 @@ def newton(model: CutModel, o: Orbit, extra, tol: float = 1e-10,
                         f"(last relative step {last:.2e})")
 
 
-def _factor(model: CutModel, o: Orbit, row: np.ndarray) -> spla.SuperLU:
+@dataclass(frozen=True)
+class DenseLU:
+    """A dense LU factorisation with SuperLU's ``shape`` and ``solve``."""
+
+    factors: tuple
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.factors[0].shape
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return scipy.linalg.lu_solve(self.factors, b, check_finite=False)
+
+
+def _factor(model: CutModel, o: Orbit, row: np.ndarray):
+    """The bordered Jacobian factorised: densely up to DENSE_LU unknowns (the delays'
+    couplings fill a sparse LU in as much as a dense one, and LAPACK is faster there),
+    sparsely beyond."""
     jac = sp.vstack([jacobian(model, o), sp.csr_matrix(row[None, :])], format="csc")
+    if jac.shape[0] <= DENSE_LU:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
+            try:
+                return DenseLU(scipy.linalg.lu_factor(jac.toarray(), check_finite=False))
+            except scipy.linalg.LinAlgWarning as err:
+                raise CutOrbitError(f"the orbit's Jacobian is singular ({err})") from None
     try:
         return spla.splu(jac)
     except RuntimeError as err:  # "Factor is exactly singular"
