@@ -52,6 +52,8 @@ GROW_ITERATIONS = 5
 #: The tangent's depth component must exceed this on both sides of a fold (a linear
 #: bar's branch stands vertical, its component round-off about 0).
 FOLD_NOISE = 1e-7
+#: The Hopf point's orbit has a tip amplitude of this fraction of h_m.
+HOPF_AMPLITUDE = 1e-3
 #: Multipliers this close to the unit circle count as on it (the phase shift's, and a
 #: linear bar's neutral amplitude).
 NEUTRAL = 1e-6
@@ -118,14 +120,21 @@ def hopf_orbit(system: System, forcing: Regenerative, model: CutModel, lobe: int
     """The discretised Hopf point of lobe ``lobe`` (None: the lowest at this speed): an
     orbit of the cut linearised about h_m at a vanishing amplitude, its depth and period
     the Hopf point's; the frequency-domain limit is only the guess."""
-    kr = model.law.linear_coefficient_pa(model.feed)
-    lin = CutModel(**{**model.__dict__, "law": CuttingLaw.linear(kr)})
+    lin = linearised(model)
     lobes = None if lobe is None else [lobe]
-    b, f = limit_at_speeds(system, forcing.rpm, kr, lobes=lobes, with_frequency=True)
+    b, f = limit_at_speeds(system, forcing.rpm, lin.law.kr_pa, lobes=lobes,
+                           with_frequency=True)
     if not np.isfinite(b):
         raise CutOrbitError(f"no lobe {'' if lobe is None else lobe} reaches {forcing.rpm} rpm")
-    guess = _eigen_orbit(system, lin, float(b), float(f), steps, 1e-3 * model.feed)
-    return fixed_amplitude(lin, guess, 1e-3 * model.feed)[0]
+    guess = _eigen_orbit(system, lin, float(b), float(f), steps, HOPF_AMPLITUDE * model.feed)
+    return fixed_amplitude(lin, guess, HOPF_AMPLITUDE * model.feed)[0]
+
+
+def linearised(model: CutModel) -> CutModel:
+    """The cut with its law linearised about h_m (dF/dh there, as the lobes take it): the
+    same Hopf point, another mean force."""
+    return CutModel(**{**model.__dict__,
+                       "law": CuttingLaw.linear(model.law.linear_coefficient_pa(model.feed))})
 
 
 def _eigen_orbit(system, model: CutModel, b: float, f: float, m: int, amp: float) -> Orbit:
@@ -169,9 +178,12 @@ class Walk:
     depth_range: tuple[float, float]
 
 
-def _scale(model: CutModel, hopf: Orbit) -> np.ndarray:
-    spread = np.max(np.abs(hopf.x - hopf.x.mean(axis=0)), axis=0)
-    spread = np.where(spread > 0, spread, np.max(spread)) / (1e-3 * model.feed) * model.feed
+def _scale(hopf: Orbit) -> np.ndarray:
+    """Each unknown's size: a node's components by their spread on the Hopf orbit scaled
+    to a tip amplitude of h_m (over the root of the node count, so that the nodes together
+    weigh as one), T and b by their values."""
+    spread = np.max(np.abs(hopf.x - hopf.x.mean(axis=0)), axis=0) / HOPF_AMPLITUDE
+    spread = np.where(spread > 0, spread, np.max(spread))
     m = hopf.steps
     return np.concatenate([np.tile(spread * math.sqrt(m), m), [hopf.period, hopf.depth]])
 
@@ -237,10 +249,9 @@ def trace(system: System, forcing: Regenerative, depth_range: tuple[float, float
         br.stop = (f"the Hopf point, {hopf.depth * 1e3:.6g} mm, is outside the depth range "
                    f"{depth_range[0] * 1e3:.6g}-{depth_range[1] * 1e3:.6g} mm")
         return br
-    w = Walk(system, model, _scale(model, hopf), hopf.x.shape, depth_range)
-    base = Orbit(hopf.x - static_state(CutModel(**{**model.__dict__, "law": CuttingLaw.linear(
-        model.law.linear_coefficient_pa(model.feed))}), hopf.depth) + static_state(
-        model, hopf.depth), hopf.period, hopf.depth)
+    w = Walk(system, model, _scale(hopf), hopf.x.shape, depth_range)
+    shift = static_state(model, hopf.depth) - static_state(linearised(model), hopf.depth)
+    base = Orbit(hopf.x + shift, hopf.period, hopf.depth)
     a, _ = fixed_amplitude(model, base, 1e-2 * model.feed)
     b, _ = fixed_amplitude(model, a, 2e-2 * model.feed)
     t = (b.unknowns() - a.unknowns()) / w.scale
