@@ -61,7 +61,6 @@ NEUTRAL = 1e-6
 MAX_POINTS, MAX_AMPLITUDE = 200, 20.0
 #: Secant iterations locating an event, and their tolerance on the arclength.
 LOCATE_ITER, LOCATE_TOL = 30, 1e-10
-G = 9.80665
 
 
 @dataclass
