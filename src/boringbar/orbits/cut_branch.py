@@ -193,9 +193,7 @@ def tangent(w: Walk, o: Orbit, previous: np.ndarray) -> np.ndarray:
     last = sp.csr_matrix((previous / w.scale)[None, :])
     rhs = np.zeros(jac.shape[0] + 1)
     rhs[-1] = 1.0
-    t = spla.spsolve(sp.vstack([jac, last], format="csc"), rhs) / w.scale
-    t /= np.linalg.norm(t)
-    return t if t @ previous >= 0 else -t
+    return _oriented(w, spla.spsolve(sp.vstack([jac, last], format="csc"), rhs), previous)
 
 
 def _unit(w: Walk, lu, previous: np.ndarray) -> np.ndarray:
@@ -205,7 +203,13 @@ def _unit(w: Walk, lu, previous: np.ndarray) -> np.ndarray:
     the exact :func:`tangent`."""
     rhs = np.zeros(lu.shape[0])
     rhs[-1] = 1.0
-    t = lu.solve(rhs) / w.scale
+    return _oriented(w, lu.solve(rhs), previous)
+
+
+def _oriented(w: Walk, dy: np.ndarray, previous: np.ndarray) -> np.ndarray:
+    """The solution ``dy`` of [J; t] tau = (0, 1) as a unit tangent in scaled unknowns, on
+    ``previous``'s side."""
+    t = dy / w.scale
     t /= np.linalg.norm(t)
     return t if t @ previous >= 0 else -t
 

@@ -142,11 +142,16 @@ def delays(model: CutModel, period: float, m: int) -> Delays:
 
 def delayed_w(model: CutModel, x: np.ndarray, dl: Delays) -> np.ndarray:
     """W(t_i + c dt - k tau) of the periodic orbit ``x`` (m, s): (m, 3, N)."""
-    m = len(x)
+    return interpolated(model, x, dl.j, dl.weights)
+
+
+def interpolated(model: CutModel, x: np.ndarray, j: np.ndarray, weights: np.ndarray):
+    """W between nodes j and j + 1 (periodic) of the orbit ``x`` (m, s), from the Hermite
+    ``weights`` of (W_j, W'_j, W_j+1, W'_j+1), the derivatives' already times the step."""
     w, v = x @ model.c, x @ model.cv
-    j1 = np.mod(dl.j + 1, m)
-    parts = np.stack([w[dl.j], v[dl.j], w[j1], v[j1]], axis=-1)
-    return np.sum(dl.weights * parts, axis=-1)
+    j1 = np.mod(j + 1, len(x))
+    parts = np.stack([w[j], v[j], w[j1], v[j1]], axis=-1)
+    return np.sum(weights * parts, axis=-1)
 
 
 # --- one RK4 step, with its derivatives ----------------------------------------------
@@ -267,11 +272,6 @@ def _central(model: CutModel, o: Orbit, which: int) -> np.ndarray:
 
 
 # --- measures of an orbit ------------------------------------------------------------
-def tip(model: CutModel, o: Orbit) -> tuple[np.ndarray, np.ndarray]:
-    """W and W' at the nodes."""
-    return o.x @ model.c, o.x @ model.cv
-
-
 def w_at(model: CutModel, o: Orbit, t: np.ndarray) -> np.ndarray:
     """W at times ``t`` (s, any), from the nodes' cubic Hermite, periodic in T."""
     m = o.steps
@@ -279,11 +279,8 @@ def w_at(model: CutModel, o: Orbit, t: np.ndarray) -> np.ndarray:
     pos = np.asarray(t, dtype=float) / dt
     base = np.floor(pos)
     wts = hermite(pos - base)
-    j = np.mod(base.astype(np.int64), m)
-    w, v = tip(model, o)
-    j1 = np.mod(j + 1, m)
-    return (wts[..., 0] * w[j] + wts[..., 1] * dt * v[j]
-            + wts[..., 2] * w[j1] + wts[..., 3] * dt * v[j1])
+    wts[..., 1::2] *= dt
+    return interpolated(model, o.x, np.mod(base.astype(np.int64), m), wts)
 
 
 def chip(model: CutModel, o: Orbit, t: np.ndarray) -> np.ndarray:
