@@ -19,6 +19,7 @@ namespace bb::bind {
 void bind_rk4(nb::module_& m);
 void bind_exact(nb::module_& m);
 void bind_dynamics(nb::module_& m);
+void bind_history_map(nb::module_& m);
 }  // namespace bb::bind
 
 namespace {
@@ -79,4 +80,5 @@ NB_MODULE(core, m) {
     bb::bind::bind_rk4(m);
     bb::bind::bind_exact(m);
     bb::bind::bind_dynamics(m);
+    bb::bind::bind_history_map(m);
 }

@@ -212,3 +212,60 @@ def test_a_scalar_out_of_range_names_its_value_and_range():
     args["dt"] = -1.0
     with pytest.raises(ValueError, match=r"dt = -1 must be finite and > 0"):
         call("run_rk4", args)
+
+
+# --- the cut orbit's history map ------------------------------------------------------
+def history_map_args(m: int = 7, s: int = 3, k: int = 2, depth: int = 5) -> dict:
+    rng = np.random.default_rng(3)
+    base = rng.integers(-depth, 0, size=(m, k)) + np.arange(m)[:, None] // 2
+    return {"d": rng.standard_normal((m, s, s)), "cols": rng.standard_normal((m, k, s)),
+            "base": np.minimum(base, np.arange(m)[:, None] - 1).astype(np.int64),
+            "weights": rng.standard_normal((m, k, 4)), "c": rng.standard_normal(s),
+            "cv": rng.standard_normal(s), "v": rng.standard_normal(2 * depth + s),
+            "periods": 3}
+
+
+def history_map_by_hand(a: dict) -> np.ndarray:
+    """The recursion of core.cut_history_map written out over whole states: every node's
+    full state kept, W and W' formed where a delay reads them."""
+    m, s, _ = a["d"].shape
+    depth = (a["v"].size - s) // 2
+    pairs = {j - depth: a["v"][2 * j:2 * j + 2] for j in range(depth)}
+    nodes = {0: a["v"][2 * depth:]}
+
+    def wwd(j):
+        return pairs[j] if j < 0 else np.array([a["c"] @ nodes[j], a["cv"] @ nodes[j]])
+
+    for p in range(a["periods"]):
+        for i in range(m):
+            x = a["d"][i] @ nodes[p * m + i]
+            for t in range(a["cols"].shape[1]):
+                j = p * m + int(a["base"][i, t])
+                w = a["weights"][i, t]
+                x = x + a["cols"][i, t] * (w[:2] @ wwd(j) + w[2:] @ wwd(j + 1))
+            nodes[p * m + i + 1] = x
+    end = a["periods"] * m
+    return np.concatenate([*(wwd(j) for j in range(end - depth, end)), nodes[end]])
+
+
+def test_the_history_map_is_its_recursion():
+    a = history_map_args()
+    got = core.cut_history_map(**a)
+    assert np.allclose(got, history_map_by_hand(a), rtol=1e-13, atol=1e-13 * np.abs(got).max())
+
+
+@pytest.mark.parametrize(("field", "value", "message"), [
+    ("base", lambda a: a["base"] - 10, "outside"),
+    ("base", lambda a: a["base"] + np.arange(7)[:, None] + 1, "outside"),
+    ("d", lambda a: a["d"][:, :2], "shape"),
+    ("cols", lambda a: a["cols"][:5], "shape"),
+    ("weights", lambda a: a["weights"][:, :, :3], "shape"),
+    ("c", lambda a: a["c"][:2], "entries"),
+    ("v", lambda a: a["v"][:-1], "pairs"),
+    ("periods", lambda a: 0, "periods"),
+])
+def test_a_bad_history_map_argument_is_a_clear_error(field, value, message):
+    a = history_map_args()
+    a[field] = value(a)
+    with pytest.raises(ValueError, match=message):
+        core.cut_history_map(**a)

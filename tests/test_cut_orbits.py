@@ -9,12 +9,15 @@ checked against truths that are not the code's own.
 - With one revolution of memory, the branch beyond follows the describing function of
   the clipped chip: b(A) = b_lim / N(a), a = 2 A |sin(w tau / 2)|,
   N(a) = (pi / 2 + beta + sin(beta) cos(beta)) / pi, beta = asin(h_m / a).
+- In the cut, a linear law's Floquet multipliers against exp(lambda T) of the delay
+  equation's characteristic roots.
 - The Jacobian against central differences; a stable orbit's amplitude against a
   simulated cut (the compiled RK4 integrator) that settles on it.
 """
 
 from __future__ import annotations
 
+import cmath
 import json
 import math
 
@@ -98,6 +101,51 @@ def test_a_linear_law_branch_stands_vertical_until_the_tool_leaves_the_cut(linea
     assert leave[0].amplitude == pytest.approx(closed, rel=1e-6)
     assert leave[0].depth == pytest.approx(hopf.depth, rel=1e-9)
     assert not [e for e in linear_branch.events if e.kind == "fold"]
+
+
+def characteristic_roots(system, depth: float, rpm: float, kr: float) -> list:
+    """Roots (upper half-plane) of a one-mode bar's cut in the cut, m s^2 + c s + k +
+    psi^2 Kr b (1 - exp(-s tau)) = 0: Newton's method from starts over 0.2-3 times the
+    natural frequency, on the imaginary axis and left of it."""
+    bar = system.bar
+    m, c, k = bar.mass_kg[0], bar.damping_n_s_m[0], bar.stiffness_n_m[0]
+    kb, tau = bar.psi_tip[0] ** 2 * kr * depth, 60.0 / rpm
+
+    def f(s):
+        return m * s * s + c * s + k + kb * (1 - cmath.exp(-s * tau))
+
+    def df(s):
+        return 2 * m * s + c + kb * tau * cmath.exp(-s * tau)
+
+    roots = []
+    for w in np.linspace(0.2, 3.0, 300) * bar.natural_frequency_rad_s:
+        for sr in (0.0, -50.0):
+            s = complex(sr, w)
+            try:
+                for _ in range(100):
+                    s -= f(s) / df(s)
+            except (OverflowError, ZeroDivisionError):
+                continue
+            if abs(f(s)) < 1e-9 * k and s.imag > 0 and all(abs(s - r) > 1e-6 * abs(s)
+                                                           for r in roots):
+                roots.append(s)
+    return roots
+
+
+def test_in_the_cut_the_multipliers_are_the_characteristic_roots_over_a_period():
+    """In the cut a linear law's orbit is a solution of a linear delay equation, whose
+    monodromy over the orbit's period T has the multipliers exp(lambda T) of the
+    characteristic roots lambda (the Hopf pair's two at 1)."""
+    system = bb.make_system("solid", n_modes=1)
+    forcing = bb.Regenerative(depth_m=1e-5, rpm=1200.0)
+    p = cb.trace(system, forcing, (0.0, 1e-2), max_points=3).points[1]
+    assert p.min_chip > 0
+    mu = co.multipliers(co.cut_model(system, forcing), p.orbit, count=8)
+    lam = characteristic_roots(system, p.orbit.depth, 1200.0, forcing.kr_pa)
+    ref = np.array([cmath.exp(r * p.orbit.period) for r in lam])
+    ref = np.concatenate([ref, ref.conj()])
+    ref = ref[np.argsort(-np.abs(ref))][:8]
+    assert np.sort_complex(mu) == pytest.approx(np.sort_complex(ref), abs=1e-6)
 
 
 def test_beyond_leaving_the_branch_follows_the_clipped_chip_describing_function(bars):

@@ -20,7 +20,8 @@ characteristic equation to O(dt^4).
 
 Floquet multipliers come from the discretised map: a perturbation of the history (the
 nodes over the longest delay in use) carried one period by the linearised steps.  The
-map is applied as one sparse solve and its largest eigenvalues found by ARPACK.
+map is applied by the compiled core (a forward recursion over the nodes) and its
+largest eigenvalues found by ARPACK.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
 from boringbar.reference.linear import dynamic_stiffness
 from boringbar.reference.stability import linear_host
+from boringbar.simulate.kernels import cut_history_map
 
 #: RK4 stages' times within a step; stages 2 and 3 share the middle one.
 STAGE_TIMES = np.array([0.0, 0.5, 1.0])
@@ -410,87 +412,68 @@ def multipliers(model: CutModel, o: Orbit, count: int = MULTIPLIERS) -> np.ndarr
     times) are found, each multiplier is
     |nu|^(1/q) in modulus, and its phase comes from the one-period map's Rayleigh
     quotient on nu's eigenvector."""
-    m, s = o.x.shape
-    dl = delays(model, o.period, m)
-    _, d = step(model, o.depth, o.x, delayed_w(model, o.x, dl), o.period / m, tangent=True)
-    used = _used_delays(d, s, model.revolutions)
-    depth = int(-dl.base[:, :, used].min()) + 1  # history nodes before node 0
-    op = _monodromy(model, d, dl, s, depth, used)
-    q = max(1, -(-depth // m))
-
-    def periods(v):
-        for _ in range(q):
-            v = op.matvec(v)
-        return v
-
-    opq = spla.LinearOperator(op.shape, matvec=periods, dtype=np.float64)
-    k = min(count, op.shape[0] - 2)
+    hm = HistoryMap.of(model, o)
+    size = hm.size
+    q = max(1, -(-hm.depth // len(o.x)))
+    opq = spla.LinearOperator((size, size), matvec=lambda v: hm.apply(v, q), dtype=np.float64)
+    k = min(count, size - 2)
     nu, vec = spla.eigs(opq, k=k, which="LM", tol=EIG_TOL, ncv=min(max(2 * k + 1, 30),
-                        op.shape[0] - 1), v0=np.ones(op.shape[0]))
-    phase = np.array([np.vdot(v, op.matvec(v.real) + 1j * op.matvec(v.imag)) / np.vdot(v, v)
-                      for v in vec.T])
+                        size - 1), v0=np.ones(size))
+    phase = np.array([np.vdot(v, hm.apply(v.real, 1) + 1j * hm.apply(v.imag, 1))
+                      / np.vdot(v, v) for v in vec.T])
     mu = np.abs(nu) ** (1.0 / q) * np.exp(1j * np.angle(phase))
     return mu[np.argsort(-np.abs(mu))]
+
+
+@dataclass(frozen=True)
+class HistoryMap:
+    """The orbit's linearised discretised map on its history, in the core
+    (``core.cut_history_map``).
+
+    The history is node 0's state and, for the ``depth`` older nodes, only their W and
+    W' (all that a delay reads of them): the map's nonzero spectrum is the full one's.
+    Each step carries its node's perturbation by the step's derivative ``d`` and adds, for
+    each delayed W the step reads (``cols``), the Hermite interpolation between nodes
+    ``base`` and ``base + 1`` (``weights``)."""
+
+    d: np.ndarray
+    cols: np.ndarray
+    base: np.ndarray
+    weights: np.ndarray
+    c: np.ndarray
+    cv: np.ndarray
+    depth: int
+
+    @classmethod
+    def of(cls, model: CutModel, o: Orbit) -> HistoryMap:
+        m, s = o.x.shape
+        dl = delays(model, o.period, m)
+        _, d = step(model, o.depth, o.x, delayed_w(model, o.x, dl), o.period / m, tangent=True)
+        n = model.revolutions
+        terms = [(stage, k) for stage in range(3) for k in _used_delays(d, s, n)]
+
+        def stacked(a):
+            return np.ascontiguousarray(np.stack(a, axis=1))
+
+        base = stacked([dl.base[:, stage, k] for stage, k in terms]).astype(np.int64)
+        return cls(np.ascontiguousarray(d[:, :, :s]),
+                   stacked([d[:, :, s + stage * n + k] for stage, k in terms]), base,
+                   stacked([dl.weights[:, stage, k] for stage, k in terms]),
+                   np.ascontiguousarray(model.c, dtype=float),
+                   np.ascontiguousarray(model.cv, dtype=float), int(-base.min()) + 1)
+
+    @property
+    def size(self) -> int:
+        """The map's dimension: the history's (W, W') pairs and node 0's state."""
+        return 2 * self.depth + self.d.shape[1]
+
+    def apply(self, v: np.ndarray, periods: int) -> np.ndarray:
+        """v carried ``periods`` periods (v: the pairs, oldest first, then node 0)."""
+        return cut_history_map(self.d, self.cols, self.base, self.weights, self.c, self.cv,
+                               v, periods)
 
 
 def _used_delays(d: np.ndarray, s: int, n: int) -> np.ndarray:
     """The revolutions k whose delayed W moves some stage (the chip's active term)."""
     moves = np.abs(d[:, :, s:]).reshape(len(d), s, 3, n).max(axis=(0, 1, 2)) > 0
     return np.flatnonzero(moves) if moves.any() else np.array([0])
-
-
-def _monodromy(model, d, dl: Delays, s: int, depth: int, used):
-    """One period of the linearised discretised map on the history.
-
-    The history is node 0's state and, for the older nodes -depth..-1, only their W and
-    W' (all that a delay reads of them): the map's nonzero spectrum is the full one's.
-    The m new nodes solve a sparse unit lower-triangular system driven by the history
-    (factorised without pivoting: no fill)."""
-    m = len(d)
-    old = 2 * depth  # (W, W') of nodes -depth..-1, then node 0's state, then new nodes
-    size = old + s
-    rows, cols, vals = [], [], []
-    r = np.arange(m)[:, None] * s + np.arange(s)[None, :]  # new node i + 1's rows
-    rr = np.repeat(r[:, :, None], s, axis=2)
-
-    def full(node, block):  # node >= 0 (unwrapped index), block (m, s, s)
-        cn = old + node[:, None] * s + np.arange(s)[None, :]
-        rows.append(rr.ravel())
-        cols.append(np.repeat(cn[:, None, :], s, axis=1).ravel())
-        vals.append(block.ravel())
-
-    def reduced(node, col, wa, wb):  # node < 0: the (W, W') columns, weights wa, wb
-        base = 2 * (node + depth)
-        for off, wt in ((0, wa), (1, wb)):
-            rows.append(r.ravel())
-            cols.append(np.repeat((base + off)[:, None], s, axis=1).ravel())
-            vals.append((col * wt[:, None]).ravel())
-
-    full(np.arange(m), d[:, :, :s])
-    n = model.revolutions
-    for stage in range(3):
-        for k in used:
-            col = d[:, :, s + stage * n + k]
-            w = dl.weights[:, stage, k]
-            for off, (wa, wb) in ((0, (0, 1)), (1, (2, 3))):
-                node = dl.base[:, stage, k] + off
-                past = node < 0
-                lin = w[:, wa, None] * model.c[None, :] + w[:, wb, None] * model.cv[None, :]
-                block = col[:, :, None] * lin[:, None, :]
-                full(np.where(past, 0, node), np.where(past[:, None, None], 0.0, block))
-                reduced(np.where(past, node, -1), np.where(past[:, None], col, 0.0),
-                        w[:, wa], w[:, wb])
-    rows, cols, vals = (np.concatenate(a) for a in (rows, cols, vals))
-    frame = sp.csc_matrix((vals, (rows, cols)), shape=(m * s, size + m * s))
-    hist = frame[:, :size]
-    lu = spla.splu((sp.eye(m * s, format="csc") - frame[:, size:]).tocsc(),
-                   permc_spec="NATURAL", diag_pivot_thresh=0.0)
-    wv = np.stack([model.c, model.cv])
-
-    def apply(v):
-        y = lu.solve(np.asarray(hist @ v)).reshape(m, s)
-        nodes = np.concatenate([v[old:][None, :], y[:-1]])  # nodes 0..m-1, full
-        pairs = np.concatenate([v[:old], (nodes @ wv.T).ravel()])
-        return np.concatenate([pairs[-old:] if old else pairs[:0], y[-1]])
-
-    return spla.LinearOperator((size, size), matvec=apply, dtype=np.float64)

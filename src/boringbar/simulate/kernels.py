@@ -12,7 +12,9 @@ package packs what the core cannot compute itself and calls it:
   the array contract of ``boringbar.simulate`` (their only caller in the package);
 - :func:`regime_matrix`, :func:`impact_matrix_of`: the equations of motion as matrices,
   built from the definitions the integrators step with (for shooting, in
-  :mod:`boringbar.orbits`).
+  :mod:`boringbar.orbits`);
+- :func:`cut_history_map`: a periodic cut orbit's linearised map on its delay history
+  (its Floquet multipliers, in :mod:`boringbar.orbits.cut_orbits`).
 
 Each entry point of the core takes one run description (``core.RK4Run``, ``core.RK4Batch``,
 ``core.ExactRun``), whose fields the functions here set.  The core checks every array it is
@@ -102,5 +104,16 @@ def impact_matrix_of(p: np.ndarray) -> np.ndarray:
     return core.impact_matrix(np.ascontiguousarray(p, float))
 
 
-__all__ = ["BMAX", "impact_matrix_of", "prepare", "regime_matrix", "run_exact", "run_rk4",
-           "run_rk4_batch"]
+def cut_history_map(d, cols, base, weights, c, cv, v, periods: int) -> np.ndarray:
+    """A periodic cut orbit's linearised map on its delay history, ``periods`` periods:
+    ``v`` = [the (W, W') pairs of the history's nodes, oldest first; node 0's state].
+    ``d`` (m, s, s): each step's derivative in its node; ``cols`` (m, K, s): in each
+    delayed W it reads, at the period's nodes ``base`` (m, K) and base + 1 (negative: the
+    history) with the Hermite ``weights`` (m, K, 4) on (W_j, W'_j, W_j+1, W'_j+1);
+    W = ``c`` . x, W' = ``cv`` . x.  Every delay must reach back at least one step."""
+    return core.cut_history_map(d, cols, base, weights, c, cv,
+                                np.ascontiguousarray(v, dtype=float), int(periods))
+
+
+__all__ = ["BMAX", "cut_history_map", "impact_matrix_of", "prepare", "regime_matrix",
+           "run_exact", "run_rk4", "run_rk4_batch"]
