@@ -12,7 +12,9 @@ checked against truths that are not the code's own.
 - In the cut, a linear law's Floquet multipliers against exp(lambda T) of the delay
   equation's characteristic roots.
 - The Jacobian against central differences; a stable orbit's amplitude against a
-  simulated cut (the compiled RK4 integrator) that settles on it.
+  simulated cut (the compiled RK4 integrator) that settles on it; the compiled cut
+  started on a stable orbit with its own history stays on it, and knocked off it comes
+  back at the rate of the orbit's largest nontrivial Floquet multiplier.
 """
 
 from __future__ import annotations
@@ -28,7 +30,9 @@ import boringbar as bb
 from boringbar.cli.main import main
 from boringbar.orbits import cut_branch as cb
 from boringbar.orbits import cut_orbits as co
+from boringbar.orbits.cut_return import follow
 from boringbar.reference.stability import limit_at_speeds
+from boringbar.simulate import CutStepper
 
 CARBIDE = "examples/systems/carbide_ld10_tungsten.toml"
 
@@ -148,9 +152,16 @@ def test_in_the_cut_the_multipliers_are_the_characteristic_roots_over_a_period()
     assert np.sort_complex(mu) == pytest.approx(np.sort_complex(ref), abs=1e-6)
 
 
-def test_beyond_leaving_the_branch_follows_the_clipped_chip_describing_function(bars):
+@pytest.fixture(scope="module")
+def one_revolution(bars):
+    """The solid bar's branch with one revolution of memory (30 points, through the
+    tool's leaving the cut) and its cut."""
     forcing = bb.Regenerative(depth_m=1e-5, rpm=1200.0, revolutions=1)
-    br = cb.trace(bars["solid"], forcing, (0.0, 1e-3), max_points=30)
+    return cb.trace(bars["solid"], forcing, (0.0, 1e-3), max_points=30), forcing
+
+
+def test_beyond_leaving_the_branch_follows_the_clipped_chip_describing_function(one_revolution):
+    br, _ = one_revolution
     hopf = br.events[0].depth
     leave = next(e for e in br.events if e.detail == "tool-leaves-cut")
     half_sin = 0.1e-3 / (2.0 * leave.amplitude)
@@ -161,6 +172,28 @@ def test_beyond_leaving_the_branch_follows_the_clipped_chip_describing_function(
         gain = (math.pi / 2 + beta + math.sin(beta) * math.cos(beta)) / math.pi
         assert p.orbit.depth == pytest.approx(hopf / gain, rel=1e-3)
         assert p.unstable == 0  # the clipped chip bounds the chatter: stable orbits
+
+
+@pytest.mark.parametrize("index", [-8, -20])
+def test_a_stable_orbit_draws_a_knocked_cut_back_at_its_multiplier_s_rate(bars, one_revolution,
+                                                                          index):
+    """The return check: the compiled RK4 cut started on a stable orbit with the orbit's
+    own history stays on it (within the two discretisations' difference), and knocked 1 %
+    off it comes back, its departure shrinking each period by the orbit's largest
+    nontrivial multiplier."""
+    br, forcing = one_revolution
+    p = br.points[index]
+    assert p.unstable == 0 and p.min_chip < 0
+    on = follow(bars["solid"], forcing, p.orbit, 1200)
+    assert np.max(np.abs(on - p.amplitude)) < 1e-4 * p.amplitude
+    off = follow(bars["solid"], forcing, p.orbit, 1200, knock=0.01)
+    dev = np.abs(off - on) / p.amplitude
+    assert dev[0] > 5e-3 and dev[-1] < 1e-5
+    k = 4 * np.arange(1, len(dev) + 1)  # periods, four a window
+    keep = (k > 100) & (dev > 1e-7)
+    rate = np.polyfit(k[keep], np.log(dev[keep]), 1)[0]
+    mu = np.abs(cb.nontrivial(p.multipliers)).max()
+    assert rate == pytest.approx(math.log(mu), rel=0.03)
 
 
 def test_a_stable_orbit_is_where_a_simulated_cut_settles(bars):
@@ -225,3 +258,19 @@ def test_continue_cut_writes_the_map_of_each_bar(tmp_path, capsys):
         b = limit_at_speeds(bb.make_system(c["case"], "physical"), 1500.0, 850e6)
         assert hopf["depth_mm"] == pytest.approx(float(b) * 1e3, rel=1e-6)
     assert "RK4" in summary["method"]
+
+
+def test_the_return_check_refuses_what_it_cannot_start(bars, one_revolution):
+    br, forcing = one_revolution
+    o = br.points[-8].orbit
+    with pytest.raises(bb.ParameterError, match="solid"):
+        follow(bars["tmd"], forcing, o, 10)
+    with pytest.raises(bb.ParameterError, match="periods"):
+        follow(bars["solid"], forcing, o, 0)
+    cut = bb.Regenerative(depth_m=o.depth, rpm=1200.0, revolutions=1, start="static")
+    stepper = CutStepper(bars["solid"], cut, dt_s=1e-6, window_steps=100)
+    with pytest.raises(bb.ParameterError, match="x must be"):
+        stepper.start_from(np.zeros(3), lambda t: (0 * t, 0 * t))
+    stepper.advance()
+    with pytest.raises(bb.ParameterError, match="already run"):
+        stepper.start_from(np.zeros(6), lambda t: (0 * t, 0 * t))

@@ -32,6 +32,7 @@ the tool in the cut and its peak-to-peak within ``tolerance_m``.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 
@@ -175,13 +176,22 @@ def window_steps(system: System, cut: Regenerative, dt_s: float) -> int:
     return max(1, int(round(revs * cut.tau_s / dt_s)))
 
 
-def slope(t: np.ndarray, y: np.ndarray) -> tuple[float, float]:
-    """Least-squares slope of y against t and its standard error."""
+def slopes(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares slopes of the columns of y (windows x observables) against t, and
+    their standard errors."""
     tm = t - t.mean()
     sxx = float(tm @ tm)
-    b = float(tm @ (y - y.mean())) / sxx
-    r = y - y.mean() - b * tm
-    return b, math.sqrt(float(r @ r) / (len(t) - 2) / sxx)
+    yc = y - y.mean(axis=0)
+    b = (tm @ yc) / sxx
+    r = yc - tm[:, None] * b
+    return b, np.sqrt(np.sum(r * r, axis=0) / (len(t) - 2) / sxx)
+
+
+@functools.lru_cache(maxsize=256)
+def t_quantile(confidence: float, dof: int) -> float:
+    """Student's t quantile of a two-sided ``confidence`` with ``dof`` degrees of freedom
+    (kept: every window of every cut asks for one of a few)."""
+    return float(stats.t.ppf(0.5 + confidence / 2, dof))
 
 
 def segment(n: int, min_segment: int) -> int:
@@ -203,14 +213,15 @@ def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions,
     n, m = len(t), segment(len(t), options.min_segment)
     if n < 3 * m:
         return UNDECIDED, math.nan, math.nan
-    y = np.log(np.maximum(amp, 1e-300))
-    q = float(stats.t.ppf(0.5 + options.confidence / 2, m - 2))
+    y = np.log(np.maximum(amp[n - 3 * m:], 1e-300))
+    q = t_quantile(options.confidence, m - 2)
     span = t[-1] - t[n - 3 * m]
+    t3 = t[n - 3 * m:]
+    (b0s, _), (b1s, s1s), (b2s, s2s) = (slopes(t3[k * m:(k + 1) * m], y[k * m:(k + 1) * m])
+                                        for k in (0, 1, 2))
     rates, stable, level = [], True, settles
-    for col in y.T:
-        fits = [slope(t[n - k * m:n - (k - 1) * m], col[n - k * m:n - (k - 1) * m])
-                for k in (3, 2, 1)]
-        (b0, _), (b1, s1), (b2, s2) = fits
+    for b0, b1, s1, b2, s2 in zip(b0s.tolist(), b1s.tolist(), s1s.tolist(), b2s.tolist(),
+                                  s2s.tolist(), strict=True):
         rates.append((b2, s2))
         if b2 - q * s2 > 0 and b1 - q * s1 > 0:
             return CHATTER, b2, s2
@@ -228,8 +239,8 @@ def observables(system: System, window: Window) -> np.ndarray:
     peak-to-peak), each bending mode's and an absorber's stroke (its largest |x_a -
     psi_a u|; the absorber's static stroke is zero), so that a mode whose chatter grows
     under a larger one's decay shows at once."""
-    amp = np.append(window.half_pp_m, window.mode_half_pp)
-    return np.append(amp, window.max_rel_m) if system.kind == "tmd" else amp
+    tmd = [window.max_rel_m] if system.kind == "tmd" else []
+    return np.concatenate(([window.half_pp_m], window.mode_half_pp, tmd))
 
 
 def rise_left(b0: float, b1: float, b2: float, noise: tuple[float, float]) -> float:
@@ -252,15 +263,17 @@ def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, flo
     cap: (verdict, rate, its error, the windows)."""
     windows: list[Window] = []
     amps: list[np.ndarray] = []
+    ends: list[float] = []
     system = stepper.system
+    settles = bounds_small(system)
     verdict, rate, se = UNDECIDED, math.nan, math.nan
     while stepper.t_s < options.max_duration_s:
         windows.append(stepper.advance())
         if windows[-1].left_cut:
             return CHATTER, rate, se, windows
         amps.append(observables(system, windows[-1]))
-        verdict, rate, se = growth(np.array([w.t_end_s for w in windows]), np.array(amps),
-                                   options, settles=bounds_small(system))
+        ends.append(windows[-1].t_end_s)
+        verdict, rate, se = growth(np.array(ends), np.array(amps), options, settles=settles)
         if verdict == LEVELLED:
             return UNDECIDED, rate, se, windows
         if verdict != UNDECIDED:
@@ -293,6 +306,9 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
     tolerance" at once."""
     tol = options.settle_tolerance
     system = stepper.system
+    # each window's time and log amplitudes, formed once as it comes
+    ends = [w.t_end_s for w in windows]
+    logs = [np.log(np.maximum(observables(system, w), 1e-300)) for w in windows]
     while True:
         n = len(windows)
         if n >= 2 * options.min_segment:
@@ -303,11 +319,10 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
             duration = stepper.t_s - t0_s
             if any(w.left_cut for w in last):
                 return Settled(pp, rms, True, "left the cut", duration)
-            t = np.array([w.t_end_s for w in windows[n - 2 * m:]])
-            amp = np.log(np.maximum([observables(system, w) for w in windows[n - 2 * m:]],
-                                    1e-300))
-            fits = [slope(t, col) for col in amp.T]
-            q = float(stats.t.ppf(0.5 + options.confidence / 2, 2 * m - 2))
+            t = np.array(ends[n - 2 * m:])
+            b, se = slopes(t, np.array(logs[n - 2 * m:]))
+            fits = list(zip(b.tolist(), se.tolist(), strict=True))
+            q = t_quantile(options.confidence, 2 * m - 2)
             # still growing: before the ball strikes, some amplitude certainly grows at half
             # the onset's rate (the linear growth goes on); once it strikes, by more than
             # the settling tolerance over the span (the impacts' scatter is not growth)
@@ -327,8 +342,10 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
             if stepper.t_s >= options.max_duration_s:
                 return Settled(pp, rms, False, UNDECIDED, duration)
             if onset_rate > 0 and fast_forward(stepper, windows, options):
-                windows = []
+                windows, ends, logs = [], [], []
         windows.append(stepper.advance())
+        ends.append(windows[-1].t_end_s)
+        logs.append(np.log(np.maximum(observables(system, windows[-1]), 1e-300)))
 
 
 #: A growth that is linear is scaled up, not waited for, while its departure is below

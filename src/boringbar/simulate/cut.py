@@ -94,6 +94,7 @@ class CutStepper:
         self.window_steps = window_steps
         self.t_s = self.su.t0
         self.modes = np.zeros((system.bar.n_modes, 2))
+        self._before = 0  # steps of a given history before the run's start
 
     def advance(self) -> Window:
         """Run one more window; what it did."""
@@ -105,7 +106,7 @@ class CutStepper:
         zeros, impacts = met[L.N_ZERO_STEPS], met[L.N_IMP_ALL]
         run_rk4(su.p, su.x, self.t_s, su.dt, self.window_steps, 0, 0, su.rec, su.imp, su.stick,
                 su.stb, met, su.buf, self.modes)
-        self.t_s = su.t0 + met[L.STEPS_DONE] * su.dt
+        self.t_s = su.t0 + (met[L.STEPS_DONE] - self._before) * su.dt
         n = met[L.N_STEADY]
         mean = met[L.SUM_W] / n
         return Window(self.t_s, float(met[L.STEADY_MAX_W]), float(met[L.STEADY_MIN_W]),
@@ -113,6 +114,28 @@ class CutStepper:
                       bool(met[L.N_ZERO_STEPS] > zeros), int(met[L.N_IMP_ALL] - impacts),
                       float(met[L.MAX_ABS_AUX]), 0.5 * (self.modes[:, 0] - self.modes[:, 1]),
                       float(met[L.MAX_FORCE]))
+
+    def start_from(self, x: np.ndarray, history, left_cut: bool = False) -> None:
+        """Start the cut (before any window) from the state ``x`` with its past:
+        ``history(t)`` -> (W, W') (m, m/s) of the tip at the times t <= 0 (s) before it, as
+        the surface the tool meets (a periodic orbit's own, say).  ``left_cut``: the tool
+        has left the cut before, so the surface is the lowest over every revolution of
+        memory from the start."""
+        su = self.su
+        if self.t_s != su.t0 or su.met[L.STEPS_DONE] != 0:
+            raise ParameterError("start_from: the cut has already run")
+        x = np.asarray(x, dtype=float)
+        if x.shape != su.x.shape or not np.all(np.isfinite(x)):
+            raise ParameterError(f"x must be {su.x.size} finite values, got {x.shape}")
+        rows = len(su.buf)
+        w, wd = history(-np.arange(rows)[::-1] * su.dt)
+        # node k of the cut sits in row k % rows: the newest, node rows - 1, is now
+        su.buf[:, 0], su.buf[:, 1] = w, wd
+        su.x[:] = x
+        su.met[L.STEPS_DONE] = rows - 1
+        self._before = rows - 1
+        if left_cut:
+            su.met[L.FIRST_ZERO_T] = su.t0
 
     @property
     def state(self) -> State:
