@@ -31,6 +31,7 @@ from boringbar.plot import (
     plot_lobes,
     plot_sweep,
 )
+from boringbar.plot.cut_orbits import plot_cut_orbits
 from boringbar.plot.design import plot_design, plot_design_comparison
 from boringbar.plot.orbits import plot_continuation
 from boringbar.plot.style import smallest_text_px
@@ -235,7 +236,8 @@ def _figure_of(png: Path):
             "bifurcation.png": (plot_bifurcation, "bifurcation.nc"),
             "basins.png": (plot_basins, "basins.nc"),
             "sensitivity.png": (plot_sensitivity, "sensitivity.nc"),
-            "design.png": (plot_design, "design.nc"), "ladder.png": (plot_ladder, "ladder.nc")}
+            "design.png": (plot_design, "design.nc"), "ladder.png": (plot_ladder, "ladder.nc"),
+            "chatter_orbits.png": (plot_cut_orbits, "chatter_orbits.nc")}
     function, nc = draw[name]
     return function(_open(here / nc))
 

@@ -3,11 +3,7 @@
 from __future__ import annotations
 
 from boringbar._validate import ParameterError, check_int
-from boringbar.analysis.cut_continuation import (
-    CutContinuationOptions,
-    cut_continuation,
-    cut_summary,
-)
+from boringbar.analysis.cut_continuation import CutContinuationOptions, cut_continuation
 from boringbar.cli.options import (
     Outcome,
     check_common,
@@ -20,11 +16,10 @@ from boringbar.cli.options import (
     system_overrides,
     wrote,
 )
-from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import BAR_KINDS, make_system
 from boringbar.orbits.cut_branch import MAX_POINTS
-from boringbar.plot.cut_orbits import plot_cut_orbits
+from boringbar.report.outputs import chatter_orbit_files
 
 
 def cut_systems(args) -> dict:
@@ -76,13 +71,8 @@ def cut_outcome(args) -> Outcome:
                            revolutions=cut["revolutions"])
     options = CutContinuationOptions(depth_range_m=depth_range, lobe=args.lobe,
                                      max_points=args.max_points or MAX_POINTS)
-    ds = cut_continuation(cut_systems(args), forcing, options)
-    out = cut_summary(ds)
-    files = {"netcdf": str(write_netcdf_atomic(ds, f"{args.out}/chatter_orbits.nc")),
-             "figure": str(save_figure_atomic(plot_cut_orbits(ds),
-                                              f"{args.out}/chatter_orbits.png", dpi=130))}
-    out["files"] = files
-    write_json_atomic(out, f"{args.out}/chatter_orbits.json")
+    out = chatter_orbit_files(cut_continuation(cut_systems(args), forcing, options), args.out)
+    files = out["files"]
 
     def text(say) -> None:
         say(f"chatter orbits at {rpm:g} rpm ({out['method']})")

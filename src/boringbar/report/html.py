@@ -201,6 +201,22 @@ class _Report:
                     "cases": len(s["cases"])}
         return {"columns": self.pair("continuation", body)}
 
+    def chatter_orbits(self) -> dict:
+        if "chatter-orbits" not in self.keys:
+            return {"columns": []}
+
+        def body(preset, rec):
+            s = rec["summary"]
+            rows = [[c["case"], e["kind"] + (f" ({e['detail']})" if e["detail"] else ""),
+                     f"{e['depth_mm']:.5g}", f"{e['amplitude_mm'] * 1e3:.4g}",
+                     f"{e['frequency_hz']:.5g}"] for c in s["cases"] for e in c["events"]]
+            stops = [f"{c['case']}: {c['points']} orbits, {c['stop']}" for c in s["cases"]]
+            return {"images": [self.img(s["files"]["png"], f"chatter orbits {preset}")],
+                    "table": _table(["bar", "event", "depth (mm)", "amplitude (um)",
+                                     "frequency (Hz)"], rows),
+                    "line": "; ".join(stops) + "."}
+        return {"columns": self.pair("chatter-orbits", body)}
+
     def basins(self) -> list[dict]:
         def body(preset, rec, key):
             s = rec["summary"]
@@ -353,6 +369,7 @@ class _Report:
     def context(self) -> dict:
         sections = {"header": self.header(), "sweeps": self.sweeps(), "lobes": self.lobes(),
                     "bifurcation": self.bifurcation(), "continuation": self.continuation(),
+                    "chatter_orbits": self.chatter_orbits(),
                     "basins": self.basins(), "sensitivity": self.sensitivity(),
                     "design": self.design(), "corrections": self.corrections(),
                     "cannot": self.cannot()}

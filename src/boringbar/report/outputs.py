@@ -19,6 +19,7 @@ from boringbar.analysis.basins import summary as basins_summary
 from boringbar.analysis.bifurcation import summary as bifurcation_summary
 from boringbar.analysis.chatter_map import summary as chatter_map_summary
 from boringbar.analysis.continuation import summary as continuation_summary
+from boringbar.analysis.cut_continuation import cut_summary
 from boringbar.analysis.design import sample_table, summary_line, trial_table
 from boringbar.analysis.design import summary as design_summary
 from boringbar.analysis.lobes import examples_summary
@@ -33,6 +34,7 @@ from boringbar.plot import (
     plot_sweep,
 )
 from boringbar.plot.chatter import plot_chatter_map
+from boringbar.plot.cut_orbits import plot_cut_orbits
 from boringbar.plot.design import plot_best, plot_design
 from boringbar.plot.lobes import plot_lobes
 from boringbar.plot.orbits import plot_continuation
@@ -140,6 +142,19 @@ def design_files(ds, cmp: dict, out) -> dict:
             table.to_csv(tmp, index=False)
     summary = {**s, "summary": summary_line(s), "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic(summary, files["json"])
+    return summary
+
+
+def chatter_orbit_files(ds, out) -> dict:
+    """``out/chatter_orbits.nc``, ``.png`` (the chatter orbit map) and ``.json`` (the
+    summary, with the files): what ``boringbar continue --cut`` and the report write."""
+    out = Path(out)
+    summary = cut_summary(ds)
+    summary["files"] = {
+        "netcdf": str(write_netcdf_atomic(ds, out / "chatter_orbits.nc")),
+        "png": str(save_figure_atomic(plot_cut_orbits(ds), out / "chatter_orbits.png",
+                                      dpi=130))}
+    write_json_atomic(summary, out / "chatter_orbits.json")
     return summary
 
 

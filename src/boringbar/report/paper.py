@@ -38,6 +38,7 @@ from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
 from boringbar.analysis.continuation import ContinuationOptions, continuation
+from boringbar.analysis.cut_continuation import CutContinuationOptions, cut_continuation
 from boringbar.analysis.design import comparison, design
 from boringbar.analysis.design_file import load_design
 from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, lobes
@@ -52,6 +53,7 @@ from boringbar.io import (
     write_json_atomic,
     write_netcdf_atomic,
 )
+from boringbar.model.forcing import Regenerative
 from boringbar.model.system import make_system
 from boringbar.plot.variations import plot_ladder
 from boringbar.report.corrections import absorber_designs, impact_law_check, readings_ladder
@@ -59,6 +61,7 @@ from boringbar.report.html import write_report
 from boringbar.report.outputs import (
     basins_files,
     bifurcation_files,
+    chatter_orbit_files,
     continuation_files,
     design_files,
     lobes_files,
@@ -276,6 +279,26 @@ def _continuation_run(settings: MapSettings):
     return run
 
 
+#: The chatter orbits' speed (rev/min), the published cut's, and their depth range (mm).
+CUT_ORBIT_RPM, CUT_ORBIT_RANGE_MM = "1200", "0:1"
+
+
+def _cut_orbits_run(max_points: int):
+    """The chatter orbit map of the published solid, absorber and ball bars (gap 0.5 mm,
+    friction on) at CUT_ORBIT_RPM, as ``boringbar continue --cut`` makes it."""
+    def run(col: Column, out: Path) -> dict:
+        systems = {bar: make_system(bar, col.preset, **col.kw) for bar in ("solid", "tmd")}
+        systems["ball"] = make_system("ball", col.preset, gap_m=GAP_MM * 1e-3, friction=True,
+                                      **col.kw)
+        lo, hi = (float(v) * 1e-3 for v in CUT_ORBIT_RANGE_MM.split(":"))
+        forcing = Regenerative(depth_m=hi, rpm=float(CUT_ORBIT_RPM), kr_pa=CUT["kr_pa"],
+                               feed_m=CUT["feed_m"], revolutions=CUT["revolutions"])
+        ds = cut_continuation(systems, forcing, CutContinuationOptions(
+            depth_range_m=(lo, hi), max_points=max_points))
+        return chatter_orbit_files(ds, out)
+    return run
+
+
 def _grid(text: str) -> tuple[float, float, int]:
     lo, hi, n = text.split(":")
     return float(lo), float(hi), int(n)
@@ -384,6 +407,12 @@ def published_steps(quick: bool = False) -> list[Step]:
                        *maps.argv()),
                       _continuation_run(maps), variants=False,
                       after=tuple(s.key for s in steps if s.section == "bifurcation")))
+    orbits = 24 if quick else 200
+    steps.append(Step("chatter-orbits", "chatter-orbits",
+                      f"Chatter orbits of the cut at {CUT_ORBIT_RPM} rpm",
+                      ("continue", "--cut", "--rpm", CUT_ORBIT_RPM, "--parameter", "depth-mm",
+                       "--range", CUT_ORBIT_RANGE_MM, "--max-points", str(orbits)),
+                      _cut_orbits_run(orbits), variants=False))
     cells = "-1.5:1.5:" + ("8" if quick else "30")
     grid = ("--displacement-mm", cells, "--velocity-m-s", cells) if quick else ()
     for key, force, ratio, fr, start in (("basins-10N-r1.01-off", "10", "1.01", "off", "0.5,0.5"),
