@@ -134,10 +134,9 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                        help="Omega/omega_n of the host bar (default: 1.0)")
     g.add_argument("--duration-s", type=float, default=2.0, metavar="S",
                    help="simulated time in s (default: 2.0)")
-    g.add_argument("--dt-s", type=float, metavar="S",
-                   help="RK4 time step in s; with --integrator exact, the step of the "
-                        f"recorded history (default: {PUBLISHED_DT_S:g}, as published; a cut "
-                        f"judged by the converged verdict: {VERDICT_DT_S:g})")
+    g.add_argument("--dt-s", type=float, metavar="S", help=f"RK4 time step in s (default: "
+                   f"{PUBLISHED_DT_S:g}, published; a converged verdict's cuts: {VERDICT_DT_S:g});"
+                   " with --integrator exact, the step of the recorded history")
     g.add_argument("--integrator", choices=INTEGRATOR_CHOICES, default="auto",
                    help="auto (default): exact for harmonic runs, rk4 under the paper "
                         "preset and in cuts; rk4: the published fixed-step scheme; exact: "
