@@ -424,3 +424,21 @@ def test_events_on_the_closed_form_are_where_expm_puts_them():
                 checked += 1
         z = zn
     assert checked >= 2
+
+
+@pytest.mark.parametrize(("preset", "modes"), [("physical", 1), ("paper", 2), ("physical", 3)])
+def test_the_carrying_force_is_docs_formula(preset, modes):
+    """F_req, read off the core's regime matrices, against docs/model.md's closed form:
+    psi_d . a_free / (1 / m + s sum psi_d^2 / M), a_free the bar's modal accelerations
+    without the ball (s: the reaction's sign, -1 as printed under the paper preset)."""
+    system = make_system("ball", preset, n_modes=modes, gap_m=0.5e-3, friction=True)
+    fl = sh.make_flow(system, Harmonic(10.0, 1.0))
+    rng = np.random.default_rng(modes)
+    for _ in range(5):
+        x = rng.standard_normal(fl.N) * np.concatenate([np.full(2 * fl.n, 1e-5), [1e-4, 1e-2]])
+        t = float(rng.uniform(0, 1e-2))
+        n = fl.n
+        a_free = (-fl.K * x[:n] - fl.C * x[n:2 * n]
+                  + fl.psi_tip * fl.amplitude * np.sin(fl.omega * t)) / fl.M
+        want = fl.psi_d @ a_free / (1.0 / fl.m + fl.s * np.sum(fl.psi_d**2 / fl.M))
+        assert sh.carrying_force(fl, x, t) == pytest.approx(want, rel=1e-12, abs=1e-15)

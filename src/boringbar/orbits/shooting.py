@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import cmath
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.linalg import expm
@@ -188,11 +188,14 @@ def impact_matrix(fl: Flow) -> np.ndarray:
 
 
 def carrying_force(fl: Flow, x: np.ndarray, t: float) -> float:
-    """F_req, the friction force that would carry the ball with the bar (s = reaction)."""
-    n = fl.n
-    a0 = (-fl.K * x[:n] - fl.C * x[n:2 * n] + fl.psi_tip * fl.amplitude
-          * math.sin(fl.omega * t)) / fl.M
-    return float(fl.psi_d @ a0 / (1.0 / fl.m + fl.s * np.sum(fl.psi_d**2 / fl.M)))
+    """F_req, the friction force that would carry the ball with the bar: the F_b at which
+    y'' = 0.  y'' is affine in F_b (y'' = kappa F_b - sum psi_d a_free), so it is read off
+    the core's regime matrices: at F_b = 0 and at F_b = -1 (a unit friction force)."""
+    z = np.concatenate([x, [math.sin(fl.omega * t), math.cos(fl.omega * t), 1.0]])
+    row = 2 * fl.n + 1  # y'' in the ball's rows
+    free = float(augmented(fl, 0.0)[row] @ z)
+    kappa = free - float(augmented(replace(fl, fc=1.0), 1.0)[row] @ z)
+    return -free / kappa
 
 
 @dataclass
