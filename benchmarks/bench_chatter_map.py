@@ -20,8 +20,7 @@ the simulated time of every start of every cell:
 - what the order of the cells does: a list schedule of the cells' simulated times on
   1 to 64 workers, in grid order and longest first (an oracle), against the ideal.
 
-``--dt-s`` another RK4 step (default: the verdict's); ``--knock-um`` other large knocks
-(none: ``--knock-um 0``).
+``--dt-s`` another RK4 step; ``--knock-um`` other large knocks (none: ``--knock-um 0``).
 Numbers only, nothing is asserted.
 """
 
@@ -127,7 +126,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--speeds", type=int, default=cm.MAP_SPEEDS)
     ap.add_argument("--depths", type=int, default=cm.DEPTHS)
-    ap.add_argument("--dt-s", type=float, default=VerdictOptions().dt_s)
+    ap.add_argument("--dt-s", type=float, default=1e-6)
     ap.add_argument("--knock-um", type=float, nargs="*", default=[cm.LARGE_KNOCK_M * 1e6])
     ap.add_argument("--save", metavar="FILE.nc", help="write the map's Dataset here")
     args = ap.parse_args()
@@ -138,14 +137,15 @@ def main() -> None:
                            n=args.depths)
     knocks = tuple(k * 1e-6 for k in args.knock_um if k > 0)
     options = cm.ChatterMapOptions(rpm=rpm, depths_m=depths,
-                                   verdict=VerdictOptions(knocks_m=knocks, dt_s=args.dt_s))
+                                   verdict=VerdictOptions(knocks_m=knocks))
     execution = Execution("threads", args.workers)
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; {ball.kind} bar "
           f"of {CARBIDE.name}; {len(rpm)} speeds {rpm[0]:g}..{rpm[-1]:g} rpm x {len(depths)} "
           f"depths {depths[0] * 1e3:.4g}..{depths[-1] * 1e3:.4g} mm; knocks "
           f"{args.knock_um} um; dt = {args.dt_s:g} s; {args.workers} threads", flush=True)
     cpu, tic = time.process_time(), time.perf_counter()
-    ds = bb.chatter_map(ball, options, execution=execution)
+    ds = bb.chatter_map(ball, options, integration=bb.Integration(dt_s=args.dt_s),
+                        execution=execution)
     wall, cpu = time.perf_counter() - tic, time.process_time() - cpu
     sim = cell_seconds(ds).sum()
     print(f"wall {wall:.1f} s for {ds.attrs['cells']} cells ({wall / ds.attrs['cells']:.3f} s "

@@ -35,9 +35,10 @@ CARBIDE = Path(__file__).resolve().parents[1] / "examples" / "systems" / \
 
 def one_map(ball, rpm, depths, dt: float, workers: int):
     options = cm.ChatterMapOptions(rpm=rpm, depths_m=depths,
-                                   verdict=VerdictOptions(knocks_m=(cm.LARGE_KNOCK_M,), dt_s=dt))
+                                   verdict=VerdictOptions(knocks_m=(cm.LARGE_KNOCK_M,)))
     tic = time.perf_counter()
-    ds = bb.chatter_map(ball, options, execution=Execution("threads", workers))
+    ds = bb.chatter_map(ball, options, integration=bb.Integration(dt_s=dt),
+                        execution=Execution("threads", workers))
     return ds, time.perf_counter() - tic
 
 

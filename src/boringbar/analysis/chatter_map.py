@@ -231,7 +231,7 @@ def plan(cases, options: ChatterMapOptions, integration: Integration) -> Plan:
     _check_integration(cases, integration)
     options, source = resolved(cases, options)
     for r in options.rpm:
-        check_delay(r, options.revolutions, options.verdict.dt_s)
+        check_delay(r, options.revolutions, integration.dt_s)
     limits = host_limits(cases, options.rpm, options.analytic_kr_pa)
     points = [(i, j, k) for i in range(len(cases)) for j in range(len(options.rpm))
               for k in range(len(options.depths_m))]
@@ -244,7 +244,8 @@ def compute(context: dict, point: tuple[int, int, int]) -> dict:
     i, j, k = point
     o = context["options"]
     case = context["cases"][i]
-    v = judge(case.system, o.forcing(o.depths_m[k], o.rpm[j]), o.verdict, values=True)
+    v = judge(case.system, o.forcing(o.depths_m[k], o.rpm[j]), o.verdict,
+              dt_s=context["integration"].dt_s, values=True)
     return cell(v, o.verdict)
 
 
@@ -431,7 +432,7 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
 
 def _attrs(plan: Plan, per_start: dict) -> dict:
     """The configuration a chatter map carries."""
-    cases, o = plan.context["cases"], plan.context["options"]
+    cases, o, integ = (plan.context[k] for k in ("cases", "options", "integration"))
     law = o.law
     run = per_start["duration_s"]
     return {
@@ -439,6 +440,7 @@ def _attrs(plan: Plan, per_start: dict) -> dict:
         "boringbar_version": __version__,
         "criterion": "growth",
         "integrator_used": "rk4",
+        "dt_s": integ.dt_s,
         **{k: (json.dumps(v) if isinstance(v, list) else v)
            for k, v in o.verdict.to_dict().items()},
         "starts": json.dumps(list(o.starts)),
@@ -517,10 +519,10 @@ def chatter_map(cases, options: ChatterMapOptions | None = None, *,
     (:func:`~boringbar.analysis.sweep.as_cases`); ``options``:
     :class:`ChatterMapOptions` (default: the boring speeds of the bars and 20 depths
     around their bare-bar limit, a small and a 20 um knock, 10 um p-p tolerance);
-    ``integration``: integrator "rk4" or "auto", no initial conditions (each cut steps at
-    ``verdict.dt_s`` and runs until its verdict, at most ``verdict.max_duration_s``);
-    ``execution``: where the cells run (default a thread per core); ``progress(done,
-    total)`` as cells finish.
+    ``integration``: its ``dt_s`` is the RK4 step of every cut (its duration is not used:
+    each cut runs until its verdict, at most ``verdict.max_duration_s``; integrator "rk4"
+    or "auto", no initial conditions); ``execution``: where the cells run (default a
+    thread per core); ``progress(done, total)`` as cells finish.
 
     Returns an xarray Dataset: per (case, rpm, depth_m) the onset and chatter-free codes
     (1 yes, 0 no, 2 undecided) and the growth rate; per start as well the settled tip

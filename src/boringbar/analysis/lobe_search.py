@@ -60,7 +60,8 @@ def fixed_cut(case: Case, rpm: float, depth: float, options, integration: Integr
 def growth_cut(case: Case, rpm: float, depth: float, options, integration: Integration) -> dict:
     """One cut judged by the converged verdict: its onset and chatter-free codes, growth
     rate, settled vibration and the simulated time it took."""
-    v = judge(case.system, options.forcing(depth, rpm, stop_at_zero=False), options.verdict)
+    v = judge(case.system, options.forcing(depth, rpm, stop_at_zero=False), options.verdict,
+              dt_s=integration.dt_s)
     onset = {ONSET_STABLE: STABLE, ONSET_CHATTER: CHATTER}.get(v.onset, UNDECIDED)
     free = UNDECIDED if v.chatter_free is None else (STABLE if v.chatter_free else CHATTER)
     return {"onset": onset, "verdict": free, "growth_rate_per_s": v.growth_rate_per_s,

@@ -349,9 +349,8 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     if options.criterion == "growth":
         _check_growth(cases, integration)
     rpm = np.asarray(options.rpm, dtype=float)
-    step = options.verdict.dt_s if options.criterion == "growth" else integration.dt_s
     for r in rpm:
-        check_delay(r, options.revolutions, step)
+        check_delay(r, options.revolutions, integration.dt_s)
     for case in cases:  # a law the integrator cannot take, refused before any run
         check_cut_law(options.forcing(options.depth(1), float(rpm[0])),
                       resolve_integrator(integration.integrator, case.system, cutting=True))
@@ -567,7 +566,8 @@ def _attrs(plan: Plan, n_runs: int) -> dict:
         "feed_m": o.feed_m,
         "revolutions": o.revolutions,
         "bounded_fraction": o.bounded_fraction,
-        "duration_s": integ.duration_s, "dt_s": integ.dt_s,  # growth: the verdict's dt_s
+        "duration_s": integ.duration_s,
+        "dt_s": integ.dt_s,
         "steady_fraction": integ.steady_fraction,
         "runs": n_runs,
         "preset": ",".join(sorted({c.system.preset for c in cases})),
@@ -586,7 +586,7 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     :func:`~boringbar.analysis.sweep.published_cases`); ``options``: :class:`LobesOptions`
     (default: the search to 1 % over the bars' first lobes; the published scan is
     ``LobesOptions(PUBLISHED_RPM, "scan")``); ``integration``: duration, step and integrator
-    of each fixed-length cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed
+    of each cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed
     surface from a history of step H = tau / ceil(tau / dt), the first zero of the
     force located; no initial conditions: a cut starts as ``options.start`` says);
     ``execution``: where the (case, rpm) columns run (default a thread per core);

@@ -65,12 +65,6 @@ MAX_RISE_RATIO = 0.0
 DECAYED = 1e-3
 #: A settled status: above the tolerance and not falling (a verdict that needs no more).
 ABOVE = "above the tolerance"
-#: The RK4 step of a judged cut (s): twice the published 1e-6 s.  Over the carbide
-#: ball bar's 600-cell chatter map every chatter-free verdict is the same at 5e-7, 1e-6
-#: and 2e-6 s, and the settled amplitudes agree within 0.5 % in nine cells of ten; at
-#: 5e-6 s a verdict changes and the friction-held amplitudes move by up to 18 %
-#: (docs/chatter.md, "The step of a judged cut").
-DT_S = 2e-6
 #: Verdicts (LEVELLED: a vibration neither growing nor decaying, for the settling to judge).
 STABLE, CHATTER, UNDECIDED, LEVELLED = "stable", "chatter", "undecided", "levelled"
 
@@ -86,8 +80,7 @@ class VerdictOptions:
     too; ``settle_tolerance``: the settled peak-to-peak converged to this fraction;
     ``min_segment``: windows in each of the three segments whose slopes are compared (at
     least 4; a verdict needs three of them); ``ball_start``: where a free ball starts
-    across its gap, a fraction of the half gap from the centre (-1 and 1: on a wall);
-    ``dt_s`` (s): the RK4 step of every judged cut (:data:`DT_S`).
+    across its gap, a fraction of the half gap from the centre (-1 and 1: on a wall).
     """
 
     confidence: float = CONFIDENCE
@@ -98,7 +91,6 @@ class VerdictOptions:
     settle_tolerance: float = SETTLE_TOLERANCE
     min_segment: int = MIN_SEGMENT
     ball_start: float = 0.0
-    dt_s: float = DT_S
 
     def __post_init__(self):
         check_range("confidence", self.confidence, 0.5, 0.999999, lo_open=True)
@@ -111,14 +103,12 @@ class VerdictOptions:
         check_range("settle_tolerance", self.settle_tolerance, 0.0, 0.5, lo_open=True)
         check_int("min_segment", self.min_segment, 4, 10_000)
         check_range("ball_start", self.ball_start, -1.0, 1.0)
-        check_range("dt_s", self.dt_s, 1e-9, 1e-4, unit="s")
 
     def to_dict(self) -> dict:
         return {"confidence": self.confidence, "max_duration_s": self.max_duration_s,
                 "knock_m": self.knock_m, "tolerance_m": self.tolerance_m,
                 "knocks_m": list(self.knocks_m), "settle_tolerance": self.settle_tolerance,
-                "min_segment": self.min_segment, "ball_start": self.ball_start,
-                "dt_s": self.dt_s}
+                "min_segment": self.min_segment, "ball_start": self.ball_start}
 
 
 @dataclass(frozen=True)
@@ -402,15 +392,15 @@ def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
 
 
 def judge(system: System, cut: Regenerative, options: VerdictOptions | None = None, *,
-          values: bool = False) -> CutVerdict:
-    """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``options.dt_s``.
+          dt_s: float = 1e-6, values: bool = False) -> CutVerdict:
+    """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``.
     ``values``: run every start until its vibration settles, even where it is already
     above the tolerance (the settled values themselves wanted, as by the chatter map);
     without it a vibration above the tolerance and not falling ends its run."""
     options = options or VerdictOptions()
-    stepper = _stepper(system, cut, options.dt_s, options.knock_m, options.ball_start)
+    stepper = _stepper(system, cut, dt_s, options.knock_m, options.ball_start)
     if cut.force_noise > 0:
-        return _noisy(system, cut, options, stepper, values)
+        return _noisy(system, cut, options, dt_s, stepper, values)
     verdict, rate, se, windows = onset(stepper, options)
     onset_s = stepper.t_s
     settled: list[Settled] = []
@@ -421,16 +411,17 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     else:
         settled.append(settle(stepper, windows, options, onset_s, rate, values))
         ok = [acceptable(settled[0], options)]
-    big = knocked(system, cut, options, values)
+    big = knocked(system, cut, options, dt_s, values)
     settled += big
     ok += [acceptable(x, options) for x in big]
     return CutVerdict(verdict, rate, se, onset_s, _all_of(ok), tuple(settled))
 
 
-def knocked(system: System, cut: Regenerative, options: VerdictOptions, values: bool) -> list:
+def knocked(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float,
+            values: bool) -> list:
     """The settled vibration from each large knock of ``options.knocks_m``."""
-    return [settle(_stepper(system, cut, options.dt_s, knock, options.ball_start), [], options,
-                   0.0, values=values) for knock in options.knocks_m]
+    return [settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0,
+                   values=values) for knock in options.knocks_m]
 
 
 def _all_of(ok: list) -> bool | None:
@@ -438,13 +429,13 @@ def _all_of(ok: list) -> bool | None:
     return False if False in ok else (None if None in ok else True)
 
 
-def _noisy(system: System, cut: Regenerative, options: VerdictOptions, stepper: CutStepper,
-           values: bool) -> CutVerdict:
+def _noisy(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float,
+           stepper: CutStepper, values: bool) -> CutVerdict:
     """A cut whose force is noisy never falls silent: the noise keeps every mode
     vibrating, so a small knock's growth rate has no sign to find.  Every start is run
     until its vibration settles, and judged by it alone (onset UNDECIDED, its rate the
     settled run's)."""
     settled = [settle(stepper, [], options, 0.0, values=values),
-               *knocked(system, cut, options, values)]
+               *knocked(system, cut, options, dt_s, values)]
     return CutVerdict(UNDECIDED, math.nan, math.nan, 0.0,
                       _all_of([acceptable(x, options) for x in settled]), tuple(settled))

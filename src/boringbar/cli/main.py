@@ -19,7 +19,7 @@ import re
 import sys
 import textwrap
 
-from boringbar.cli.options import PROG, Outcome, default_out, resolve_dt
+from boringbar.cli.options import PROG, Outcome, default_out
 from boringbar.model.system import READINGS
 from boringbar.version import __version__
 
@@ -106,7 +106,6 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 0
-    resolve_dt(args)
     if getattr(args, "out", "") is None and args.command != "run":  # run: the study's own
         args.out = default_out(args)
     try:

@@ -13,7 +13,6 @@ from pathlib import Path
 
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
-from boringbar.analysis.verdict import DT_S as VERDICT_DT_S
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
 from boringbar.io import jsonable
@@ -42,7 +41,6 @@ from boringbar.simulate import (
     INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
     MAX_INITIAL_VELOCITY,
-    PUBLISHED_DT_S,
     STEADY_FRACTION,
     Initial,
     Integration,
@@ -134,9 +132,9 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                        help="Omega/omega_n of the host bar (default: 1.0)")
     g.add_argument("--duration-s", type=float, default=2.0, metavar="S",
                    help="simulated time in s (default: 2.0)")
-    g.add_argument("--dt-s", type=float, metavar="S", help=f"RK4 time step in s (default: "
-                   f"{PUBLISHED_DT_S:g}, published; a converged verdict's cuts: {VERDICT_DT_S:g});"
-                   " with --integrator exact, the step of the recorded history")
+    g.add_argument("--dt-s", type=float, default=1e-6, metavar="S",
+                   help="RK4 time step in s; with --integrator exact, the step of the "
+                        "recorded history (default: 1e-6)")
     g.add_argument("--integrator", choices=INTEGRATOR_CHOICES, default="auto",
                    help="auto (default): exact for harmonic runs, rk4 under the paper "
                         "preset and in cuts; rk4: the published fixed-step scheme; exact: "
@@ -199,19 +197,9 @@ def add_verdict(g, knocks: str = "only the small 1 um knock") -> None:
                         "(default: 10)")
 
 
-def resolve_dt(args) -> None:
-    """--dt-s as given, else the published step; ``args.dt_given`` says which (a converged
-    verdict steps at its own default unless --dt-s is given)."""
-    args.dt_given = getattr(args, "dt_s", None) is not None
-    if hasattr(args, "dt_s") and not args.dt_given:
-        args.dt_s = PUBLISHED_DT_S
-
-
 def verdict_options(args) -> VerdictOptions:
     """The converged verdict's options of the command line, checked under its names."""
     d = VerdictOptions()
-    dt = args.dt_s if getattr(args, "dt_given", False) else d.dt_s
-    check_range("--dt-s", dt, 1e-9, 1e-4, unit="s")
     tol = d.tolerance_m * 1e6 if args.tolerance_um is None else args.tolerance_um
     check_range("--tolerance-um", tol, 0.0, 1e6, lo_open=True, unit="um")
     knocks = [float(v) for k in args.knock_um or [] for v in str(k).split(",") if v.strip()]
@@ -223,7 +211,7 @@ def verdict_options(args) -> VerdictOptions:
     check_range("--max-run-s", cap, 0.0, 1000.0, lo_open=True, unit="s")
     # divided, not multiplied: 10 um is then 1e-05 m to the bit
     return VerdictOptions(confidence=conf, max_duration_s=cap, tolerance_m=tol / 1e6,
-                          knocks_m=tuple(k / 1e6 for k in knocks), dt_s=dt)
+                          knocks_m=tuple(k / 1e6 for k in knocks))
 
 
 def add_steady_fraction(group) -> None:

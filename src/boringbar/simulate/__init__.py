@@ -36,7 +36,6 @@ from boringbar.simulate.run import (
     MAX_EVENT_ROWS,
     MAX_INITIAL_DISPLACEMENT,
     MAX_INITIAL_VELOCITY,
-    PUBLISHED_DT_S,
     STEADY_FRACTION,
     STICK_MIN_PERIODS,
     Initial,
@@ -49,8 +48,8 @@ from boringbar.simulate.run import (
 __all__ = [
     "EXACT_STATUS_MESSAGES", "HISTORY_ROWS", "IMPACT_THRESHOLD", "INTEGRATORS",
     "INTEGRATOR_CHOICES", "MAX_EVENT_ROWS", "MAX_INITIAL_DISPLACEMENT", "MAX_INITIAL_VELOCITY",
-    "PUBLISHED_DT_S", "STEADY_FRACTION", "STICK_MIN_PERIODS", "CutStepper", "Initial",
-    "Integration", "IntegrationError", "Run", "RunSetup", "State", "Window", "check_cut_law",
+    "STEADY_FRACTION", "STICK_MIN_PERIODS", "CutStepper", "Initial", "Integration",
+    "IntegrationError", "Run", "RunSetup", "State", "Window", "check_cut_law",
     "check_friction_law", "initial_state", "knocked_cut", "pack", "pack_cut",
     "resolve_integrator", "resolved_integrators", "run_kernel", "run_result", "setup_run",
     "simulate", "simulate_batch", "simulate_stage_loop", "stick_slip", "stored_energy",

@@ -80,11 +80,6 @@ class Initial:
         check_range("initial ball_velocity_m_s", self.ball_velocity_m_s, -v, v, unit="m/s")
 
 
-#: The published RK4 step (s): every run's by default (a cut judged by the converged
-#: verdict steps at its own, analysis.verdict.DT_S).
-PUBLISHED_DT_S = 1e-6
-
-
 @dataclass(frozen=True)
 class Integration:
     """How every run of an analysis is integrated (the options of :func:`simulate`).
@@ -98,7 +93,7 @@ class Integration:
     """
 
     duration_s: float = 2.0
-    dt_s: float = PUBLISHED_DT_S
+    dt_s: float = 1e-6
     integrator: str = "auto"
     steady_fraction: float = STEADY_FRACTION
     initial: Initial | None = None

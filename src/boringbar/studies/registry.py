@@ -421,12 +421,6 @@ def _uncertainty(study: Study) -> Uncertainty | None:
     return Uncertainty(**given)
 
 
-def _verdict_step(study: Study) -> dict:
-    """A converged verdict's step: ``run.dt_s`` where the file gives it, else the
-    verdict's own default."""
-    return {"dt_s": study.value("dt_s")} if "dt_s" in study.given else {}
-
-
 def _lobe_options(study: Study) -> LobesOptions:
     """The lobes options of the study's ``[analysis]`` (mm converted, checked under the
     file's keys) and ``[forcing]`` cut, at its speeds."""
@@ -443,8 +437,7 @@ def _lobe_options(study: Study) -> LobesOptions:
         return LobesOptions(tuple(_axis(study, "rpm")), o["method"], o["criterion"],
                             None if step is None else step * 1e-3, o["max_depth_mm"] * 1e-3,
                             o["successive"], **cut, analytic=o["analytic"],
-                            depth_tolerance=tol, uncertainty=_uncertainty(study),
-                            verdict=VerdictOptions(**_verdict_step(study)))
+                            depth_tolerance=tol, uncertainty=_uncertainty(study))
     except ParameterError as exc:
         raise StudyError(f"{study.source}: [analysis] {exc}") from None
 
@@ -511,8 +504,7 @@ def _map_options(study: Study) -> ChatterMapOptions:
         # rounded so that 20 um is the library's 20e-6 m, not a neighbour of it
         verdict = VerdictOptions(confidence=o["confidence"], max_duration_s=o["max_run_s"],
                                  tolerance_m=round(o["tolerance_um"] * 1e-6, 15),
-                                 knocks_m=tuple(round(k * 1e-6, 15) for k in o["knocks_um"]),
-                                 **_verdict_step(study))
+                                 knocks_m=tuple(round(k * 1e-6, 15) for k in o["knocks_um"]))
         depths = None if o["depths_mm"] is None else tuple(round(d * 1e-3, 15)
                                                             for d in o["depths_mm"])
         return ChatterMapOptions(tuple(_axis(study, "rpm")), depths, **cut, verdict=verdict)
