@@ -190,12 +190,12 @@ def impact_matrix(fl: Flow) -> np.ndarray:
 def carrying_force(fl: Flow, x: np.ndarray, t: float) -> float:
     """F_req, the friction force that would carry the ball with the bar: the F_b at which
     y'' = 0.  y'' is affine in F_b (y'' = kappa F_b - sum psi_d a_free), so it is read off
-    the core's regime matrices: at F_b = 0 and at F_b = -1 (a unit friction force)."""
+    the core's regime matrices: y'' at F_b = 0, and kappa from the constant column of a
+    unit friction force sliding forwards (F_b = -1), which holds -kappa alone."""
     z = np.concatenate([x, [math.sin(fl.omega * t), math.cos(fl.omega * t), 1.0]])
     row = 2 * fl.n + 1  # y'' in the ball's rows
-    free = float(augmented(fl, 0.0)[row] @ z)
-    kappa = free - float(augmented(replace(fl, fc=1.0), 1.0)[row] @ z)
-    return -free / kappa
+    kappa = -float(augmented(replace(fl, fc=1.0), 1.0)[row, -1])
+    return -float(augmented(fl, 0.0)[row] @ z) / kappa
 
 
 @dataclass
