@@ -25,6 +25,7 @@ import math
 
 import numpy as np
 import pytest
+import xarray as xr
 
 import boringbar as bb
 from boringbar.cli.main import main
@@ -258,6 +259,8 @@ def test_continue_cut_writes_the_map_of_each_bar(tmp_path, capsys):
         b = limit_at_speeds(bb.make_system(c["case"], "physical"), 1500.0, 850e6)
         assert hopf["depth_mm"] == pytest.approx(float(b) * 1e3, rel=1e-6)
     assert "RK4" in summary["method"]
+    with xr.open_dataset(out / "chatter_orbits.nc") as ds:
+        assert ds.attrs["preset"] == "physical"  # each file says what it is
 
 
 def test_the_return_check_refuses_what_it_cannot_start(bars, one_revolution):

@@ -115,6 +115,7 @@ def _assemble(cases: dict, branches: dict, forcing: Regenerative, o: CutContinua
               "options": asdict(o), "systems": {n: s.to_dict() for n, s in cases.items()}}
     return xr.Dataset(data, coords={"case": names}, attrs={
         "boringbar_version": __version__, "rpm": float(forcing.rpm),
+        "preset": ",".join(sorted({s.preset for s in cases.values()})),
         "method": METHOD.format(steps=o.steps), "wall_time_s": wall,
         "stop_reasons": json.dumps([branches[n].stop for n in names]),
         "config": json.dumps(config)})
