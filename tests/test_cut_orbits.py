@@ -274,6 +274,8 @@ def test_the_return_check_refuses_what_it_cannot_start(bars, one_revolution):
     stepper = CutStepper(bars["solid"], cut, dt_s=1e-6, window_steps=100)
     with pytest.raises(bb.ParameterError, match="x must be"):
         stepper.start_from(np.zeros(3), lambda t: (0 * t, 0 * t))
+    with pytest.raises(bb.ParameterError, match="finite"):
+        stepper.start_from(np.zeros(6), lambda t: (0 * t, np.nan))
     stepper.advance()
     with pytest.raises(bb.ParameterError, match="already run"):
         stepper.start_from(np.zeros(6), lambda t: (0 * t, 0 * t))

@@ -120,7 +120,7 @@ class CutStepper:
         ``history(t)`` -> (W, W') (m, m/s) of the tip at the times t <= 0 (s) before it, as
         the surface the tool meets (a periodic orbit's own, say).  ``left_cut``: the tool
         has left the cut before, so the surface is the lowest over every revolution of
-        memory from the start."""
+        memory from the start (the run's first zero of the chip is then its start)."""
         su = self.su
         if self.t_s != su.t0 or su.met[L.STEPS_DONE] != 0:
             raise ParameterError("start_from: the cut has already run")
@@ -128,9 +128,12 @@ class CutStepper:
         if x.shape != su.x.shape or not np.all(np.isfinite(x)):
             raise ParameterError(f"x must be {su.x.size} finite values, got {x.shape}")
         rows = len(su.buf)
-        w, wd = history(-np.arange(rows)[::-1] * su.dt)
+        past = [np.broadcast_to(np.asarray(v, dtype=float), (rows,))
+                for v in history(-np.arange(rows)[::-1] * su.dt)]
+        if not all(np.all(np.isfinite(v)) for v in past):
+            raise ParameterError("history(t) must give finite W and W' at every time asked")
         # node k of the cut sits in row k % rows: the newest, node rows - 1, is now
-        su.buf[:, 0], su.buf[:, 1] = w, wd
+        su.buf[:, 0], su.buf[:, 1] = past
         su.x[:] = x
         su.met[L.STEPS_DONE] = rows - 1
         self._before = rows - 1
