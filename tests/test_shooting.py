@@ -444,3 +444,7 @@ def test_the_carrying_force_is_docs_formula(preset, modes):
                   + fl.psi_tip * fl.amplitude * np.sin(fl.omega * t)) / fl.M
         want = fl.psi_d @ a_free / (1.0 / fl.m + fl.s * np.sum(fl.psi_d**2 / fl.M))
         assert sh.carrying_force(fl, x, t) == pytest.approx(want, rel=1e-12, abs=1e-15)
+        z = np.concatenate([x, [np.sin(fl.omega * t), np.cos(fl.omega * t), 1.0]])
+        for sdir in (-1.0, 1.0):  # from the regime a friction switch leaves
+            got = sh.carrying_force_in(sh.augmented(fl, sdir), z, -fl.fc * sdir, fl.n)
+            assert got == pytest.approx(want, rel=1e-12, abs=1e-15)

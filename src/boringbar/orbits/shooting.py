@@ -189,13 +189,20 @@ def impact_matrix(fl: Flow) -> np.ndarray:
 
 def carrying_force(fl: Flow, x: np.ndarray, t: float) -> float:
     """F_req, the friction force that would carry the ball with the bar: the F_b at which
-    y'' = 0.  y'' is affine in F_b (y'' = kappa F_b - sum psi_d a_free), so it is read off
-    the core's regime matrices: y'' at F_b = 0, and kappa from the constant column of a
-    unit friction force sliding forwards (F_b = -1), which holds -kappa alone."""
+    y'' = 0, read off the core's regime matrix of a unit friction force sliding forwards
+    (F_b = -1; :func:`carrying_force_in`)."""
     z = np.concatenate([x, [math.sin(fl.omega * t), math.cos(fl.omega * t), 1.0]])
-    row = 2 * fl.n + 1  # y'' in the ball's rows
-    kappa = -float(augmented(replace(fl, fc=1.0), 1.0)[row, -1])
-    return -float(augmented(fl, 0.0)[row] @ z) / kappa
+    return carrying_force_in(augmented(replace(fl, fc=1.0), 1.0), z, -1.0, fl.n)
+
+
+def carrying_force_in(A: np.ndarray, z: np.ndarray, fb: float, n: int) -> float:
+    """F_req at the augmented state ``z`` from a ball bar's regime matrix ``A`` (n modes)
+    whose friction force ``fb`` (not 0) is held.  y'' is affine in F_b, y'' = free +
+    kappa F_b, and A holds kappa F_b alone in its constant column, so free is the rest of
+    the row and F_req = -free / kappa (no difference at the state, which a huge state
+    would cancel)."""
+    row = 2 * n + 1  # y'' in the ball's rows
+    return -float(A[row, :-1] @ z[:-1]) * fb / float(A[row, -1])
 
 
 @dataclass
@@ -488,7 +495,7 @@ def _apply(fl, A, kind, z, J, t, sdir, regime):
         nf = f_minus[j]
         S = R + np.outer(f_plus - R @ f_minus, _unit(N, j)) / nf
         return zp, S @ J, sdir_new
-    F = carrying_force(fl, x, t)
+    F = carrying_force_in(A, z, -fl.fc * sdir, fl.n)  # a switch: friction, sliding
     if abs(F) <= fl.fs:
         raise OrbitRefused(f"the ball sticks at t = {t:.6g} s (|F_req| = {abs(F):.3g} N <= "
                            f"F_s = {fl.fs:.3g} N): stick phases are not linearised (refused)")
