@@ -1,7 +1,8 @@
 """The chatter map's cost: the carbide example's ball bar, 30 speeds x 20 depths.
 
     .venv/bin/python benchmarks/bench_chatter_map.py [--workers N] [--speeds N]
-        [--depths N] [--dt-s S] [--knock-um UM ...] [--save FILE.nc]
+        [--depths N] [--dt-s S] [--stick-law hold|sgn] [--baseline] [--knock-um UM ...]
+        [--save FILE.nc]
 
 Runs ``bb.chatter_map`` on the ball bar of examples/systems/carbide_ld10_tungsten.toml at
 its default grid (the boring speeds of the bar, 20 depths from 0.5 to 3 times its
@@ -20,7 +21,10 @@ the simulated time of every start of every cell:
 - what the order of the cells does: a list schedule of the cells' simulated times on
   1 to 64 workers, in grid order and longest first (an oracle), against the ideal.
 
-``--dt-s`` another RK4 step; ``--knock-um`` other large knocks (none: ``--knock-um 0``).
+``--dt-s`` another RK4 step (default: the verdict's, ``verdict.judged_step``);
+``--stick-law`` the friction's law (default: the verdict's, hold); ``--baseline`` runs the
+map again in the same process by the verdict's former method (the published sgn() law at
+1e-6 s) and prints the ratios; ``--knock-um`` other large knocks (none: ``--knock-um 0``).
 Numbers only, nothing is asserted.
 """
 
@@ -32,6 +36,7 @@ import math
 import os
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -121,12 +126,34 @@ def costliest(ds, n: int = 10) -> None:
               f"onset {int(ds['onset'].values[0, j, k])}  {statuses}")
 
 
+def run_map(ball, options, dt, law, workers):
+    """The map at step ``dt`` (None: the verdict's) with friction by ``law``: (Dataset,
+    wall s, CPU s)."""
+    options = replace(options, verdict=replace(options.verdict, stick_law=law))
+    cpu, tic = time.process_time(), time.perf_counter()
+    ds = bb.chatter_map(ball, options, integration=bb.Integration(dt_s=dt),
+                        execution=Execution("threads", workers))
+    return ds, time.perf_counter() - tic, time.process_time() - cpu
+
+
+def report(ds, wall, cpu, workers) -> None:
+    sim = cell_seconds(ds).sum()
+    dt = ds.attrs["dt_s"]
+    print(f"wall {wall:.1f} s for {ds.attrs['cells']} cells ({wall / ds.attrs['cells']:.3f} s "
+          f"a cell); CPU {cpu:.1f} s ({cpu / workers:.1f} s a worker); simulated "
+          f"{sim:.0f} s ({sim / ds.attrs['cells']:.2f} s a cell): {sim / wall:.2f} simulated "
+          f"s per wall s, {sim / cpu:.2f} per CPU s, {cpu / (sim / dt) * 1e9:.0f} ns "
+          f"of CPU a step; load now {os.getloadavg()[0]:.1f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--speeds", type=int, default=cm.MAP_SPEEDS)
     ap.add_argument("--depths", type=int, default=cm.DEPTHS)
-    ap.add_argument("--dt-s", type=float, default=1e-6)
+    ap.add_argument("--dt-s", type=float, default=None)
+    ap.add_argument("--stick-law", default="hold", choices=("hold", "sgn"))
+    ap.add_argument("--baseline", action="store_true")
     ap.add_argument("--knock-um", type=float, nargs="*", default=[cm.LARGE_KNOCK_M * 1e6])
     ap.add_argument("--save", metavar="FILE.nc", help="write the map's Dataset here")
     args = ap.parse_args()
@@ -138,21 +165,13 @@ def main() -> None:
     knocks = tuple(k * 1e-6 for k in args.knock_um if k > 0)
     options = cm.ChatterMapOptions(rpm=rpm, depths_m=depths,
                                    verdict=VerdictOptions(knocks_m=knocks))
-    execution = Execution("threads", args.workers)
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; {ball.kind} bar "
           f"of {CARBIDE.name}; {len(rpm)} speeds {rpm[0]:g}..{rpm[-1]:g} rpm x {len(depths)} "
           f"depths {depths[0] * 1e3:.4g}..{depths[-1] * 1e3:.4g} mm; knocks "
-          f"{args.knock_um} um; dt = {args.dt_s:g} s; {args.workers} threads", flush=True)
-    cpu, tic = time.process_time(), time.perf_counter()
-    ds = bb.chatter_map(ball, options, integration=bb.Integration(dt_s=args.dt_s),
-                        execution=execution)
-    wall, cpu = time.perf_counter() - tic, time.process_time() - cpu
-    sim = cell_seconds(ds).sum()
-    print(f"wall {wall:.1f} s for {ds.attrs['cells']} cells ({wall / ds.attrs['cells']:.3f} s "
-          f"a cell); CPU {cpu:.1f} s ({cpu / args.workers:.1f} s a worker); simulated "
-          f"{sim:.0f} s ({sim / ds.attrs['cells']:.2f} s a cell): {sim / wall:.2f} simulated "
-          f"s per wall s, {sim / cpu:.2f} per CPU s, {cpu / (sim / args.dt_s) * 1e9:.0f} ns "
-          f"of CPU a step; load now {os.getloadavg()[0]:.1f}")
+          f"{args.knock_um} um; dt = {args.dt_s or 'the verdict step'} s, the {args.stick_law} "
+          f"law; {args.workers} threads", flush=True)
+    ds, wall, cpu = run_map(ball, options, args.dt_s, args.stick_law, args.workers)
+    report(ds, wall, cpu, args.workers)
     by_category(ds)
     onset_floor(ds, ball)
     costliest(ds)
@@ -161,6 +180,14 @@ def main() -> None:
     print(f"chatter-free cells {int((free == 1).sum())}, not {int((free == 0).sum())}, "
           f"undecided {int((free == 2).sum())}; min chatter-free depth "
           f"{float(ds['min_chatter_free_depth_m'].values[0]) * 1e3:.4g} mm")
+    if args.baseline:
+        print("baseline: the published sgn() law at 1e-6 s (the verdict's former method)",
+              flush=True)
+        base, bwall, bcpu = run_map(ball, options, 1e-6, "sgn", args.workers)
+        report(base, bwall, bcpu, args.workers)
+        same = int((base["chatter_free"].values == ds["chatter_free"].values).sum())
+        print(f"baseline / this: wall {bwall / wall:.2f}x, CPU {bcpu / cpu:.2f}x; "
+              f"chatter-free verdicts equal in {same} of {ds.attrs['cells']} cells")
     if args.save:
         ds.to_netcdf(args.save)
         print(f"wrote {args.save}")

@@ -1,9 +1,10 @@
 """The converged verdict's RK4 step: the carbide example's ball-bar chatter map (30 speeds
 x 20 depths, a small and a 20 um knock) judged at several steps, each against the
-finest.
+finest, with the friction rendered by ``--stick-law`` (the verdict's "hold" by default,
+or the published "sgn").
 
     .venv/bin/python benchmarks/verdict_step.py [--steps 5e-7,1e-6,2e-6,5e-6]
-        [--workers 2] [--keep DIR]
+        [--stick-law hold|sgn] [--workers 2] [--keep DIR]
 
 For each step it prints the wall time and, against the finest step's map: the cells
 whose onset and whose chatter-free verdict differ, the speeds whose chatter-free depth
@@ -33,9 +34,10 @@ CARBIDE = Path(__file__).resolve().parents[1] / "examples" / "systems" / \
     "carbide_ld10_tungsten.toml"
 
 
-def one_map(ball, rpm, depths, dt: float, workers: int):
+def one_map(ball, rpm, depths, dt: float, workers: int, stick_law: str):
     options = cm.ChatterMapOptions(rpm=rpm, depths_m=depths,
-                                   verdict=VerdictOptions(knocks_m=(cm.LARGE_KNOCK_M,)))
+                                   verdict=VerdictOptions(knocks_m=(cm.LARGE_KNOCK_M,),
+                                                          stick_law=stick_law))
     tic = time.perf_counter()
     ds = bb.chatter_map(ball, options, integration=bb.Integration(dt_s=dt),
                         execution=Execution("threads", workers))
@@ -63,6 +65,7 @@ def compare(ref, ds) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", default="5e-7,1e-6,2e-6,5e-6")
+    ap.add_argument("--stick-law", default="hold", choices=("hold", "sgn"))
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--keep", type=Path)
     args = ap.parse_args()
@@ -73,7 +76,7 @@ def main() -> None:
     depths = cm.map_depths(cm.host_limits(case, rpm, bb.LobesOptions().analytic_kr_pa))
     maps = {}
     for dt in steps:
-        maps[dt], wall = one_map(ball, rpm, depths, dt, args.workers)
+        maps[dt], wall = one_map(ball, rpm, depths, dt, args.workers, args.stick_law)
         print(f"dt = {dt:g} s: {wall:.1f} s wall", flush=True)
         if args.keep:
             args.keep.mkdir(parents=True, exist_ok=True)

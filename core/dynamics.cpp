@@ -40,6 +40,8 @@ R::Params params_of(const P& p) {
     require(std::isfinite(kase) && kase == std::floor(kase) && kase >= L::SOLID &&
                 kase <= L::LOCKED,
             "p[CASE] must be one of SOLID, BALL, TMD, LOCKED");
+    // a regime's matrix is the sliding law's of its direction (sdir), not the stick law's
+    require(d[L::STICK_BAND] == 0.0, "p[STICK_BAND] must be 0 for a regime's matrix");
     return R::unpack(d, 1e-6);  // the step only sets the forcing's rotation, unused here
 }
 

@@ -48,7 +48,8 @@ enum Forcing : int { HARMONIC = 0, REGENERATIVE = 1 };
     X(CUT_MC)           /* Kienzle's m_c: f = KR_B h^(1 - m_c); 0 the linear law */        \
     X(NOISE_STD)        /* relative std of the cut's force noise eps; 0 = off */           \
     X(NOISE_INTERVAL)   /* eps is constant over this long (s), in whole steps */           \
-    X(NOISE_SEED)       /* the noise's seed, an integer in [0, 2^53] */
+    X(NOISE_SEED)       /* the noise's seed, an integer in [0, 2^53] */                    \
+    X(STICK_BAND)       /* RK4's stick law: |y'| below this holds the ball; 0 = sgn() (m/s) */
 
 #define BB_ENUM_ENTRY(name) name,
 enum PSlot : int { BB_P_SCALARS(BB_ENUM_ENTRY) P_SCALARS_END };

@@ -75,6 +75,10 @@ struct Params {
     bool ydd_sum_from_first;
     Ball ball;  // the ball and its walls (model.hpp)
     double f0, om, fc, sr, stick_min, vstick, ma, ka, ca;
+    // the stick law (hold): inside |y'| < band the ball is held while the force that
+    // carries it with the bar is at most F_s; 0: the published F_b = -F_c sgn(y')
+    bool hold = false;
+    double band = 0.0, fs = 0.0, inv_kappa = 0.0;
     double tstrobe, strobe_t0;
     double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
 };
@@ -95,6 +99,9 @@ inline Params unpack(const double* p, double dt) {
     q.ball.vimp = p[L::V_IMPACT];
     q.stick_min = p[L::STICK_MIN];
     q.vstick = p[L::V_STICK];
+    q.band = p[L::STICK_BAND];
+    q.fs = p[L::STATIC_FRICTION];
+    q.hold = q.band > 0.0 && q.fc > 0.0 && q.kase == L::BALL;
     q.ma = p[L::TMD_MASS];
     q.ka = p[L::TMD_K];
     q.ca = p[L::TMD_C];
@@ -116,6 +123,7 @@ inline Params unpack(const double* p, double dt) {
         q.lm[i] = q.ball.meff * q.pD[i] * q.invM[i];
         q.kappa += q.pD[i] * q.dm[i];
     }
+    q.inv_kappa = q.kappa != 0.0 ? 1.0 / q.kappa : 0.0;
     const double fbs[3] = {-q.fc, 0.0, q.fc};
     q.ydd_sum_from_first = true;
     for (int b = 0; b < 3; ++b) {
@@ -196,7 +204,26 @@ struct StageTerms {
     double fb;     // friction force on the ball
     double yds;    // ball's y'
     double pdv;    // sum psi_d u'
+    bool held;     // the stick law held the ball (y'' = 0)
 };
+
+// The ball's stage under the stick law (Params::hold) inside the band |y'| < band: the
+// force that carries the ball with the bar (y'' = 0) is F = sum psi_d a_free / kappa;
+// the ball is held while |F| <= F_s, else it slides with F_c the way the bar drags it
+// (Karnopp's law; after a held step y' is zeroed, stop_slide).  The modes' accelerations
+// are written again with this F_b in place of the sgn() law's; returns y''.
+template <int N, int CASE>
+BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
+                            double* Kd, double sfree, StageTerms& t) {
+    const int n = sh.n();
+    const double carry = sfree * q.inv_kappa;
+    t.held = std::fabs(carry) <= q.fs;
+    const double fb = t.held ? carry : (carry > 0.0 ? q.fc : -q.fc);
+    for (int i = 0; i < n; ++i)
+        Kd[n + i] = ((q.fm[i] * f - q.km[i] * Xs[i]) - q.cm[i] * Xs[n + i]) - q.dm[i] * fb;
+    t.fb = fb;
+    return t.held ? 0.0 : q.kappa * fb - sfree;
+}
 
 // The stage derivative Kd at the stage state Xs under the force f at the tip: the bar
 // M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f with the damper's terms (docs/model.md, 2),
@@ -215,7 +242,7 @@ template <int N, int CASE, bool FAST = false>
 BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
                                      double f, double* Kd, double ysign) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0};
+    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
     for (int i = 0; i < n; ++i) {
         const double vi = Xs[n + i];
@@ -243,6 +270,8 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         t.fb = fb;
         t.yds = yds;
         t.pdv = pdv;
+        // the stick law's band: its own F_b in place of the sgn() law's
+        if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, t);
     } else if (sh.tmd()) {
         double rel = Xs[iy], reld = Xs[iyd];
         for (int i = 0; i < n; ++i) {
@@ -320,12 +349,13 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 // which packed them in vectors through memory, where the loads stalled on store
 // forwarding).
 template <int N, int CASE, bool FAST, class Force>
-BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
+BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
                           const double* cst, const double* wst, Flows& fl,
                           Force&& force) {
     const int nx = sh.nx();
     constexpr int NXC = Shape<N, CASE>::NXC;
     double sum[NXC], xs[NXC];
+    bool held = true;
 #pragma GCC unroll 4
     for (int s = 0; s < 4; ++s) {
         for (int j = 0; j < nx; ++j) xs[j] = (FAST && s == 0) ? X[j] : X[j] + cst[s] * Kd[j];
@@ -338,8 +368,10 @@ BB_INLINE void rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
                 sum[j] += wst[s] * Kd[j];
         }
         stage_flows(q, sh, fl, terms, wst[s], f);
+        held = held && terms.held;
     }
     for (int j = 0; j < nx; ++j) X[j] += sum[j];
+    return held;
 }
 
 // The affine step map's inputs beyond the state X (linmap.hpp's z): the forcing phase's
@@ -551,6 +583,18 @@ BB_INLINE void strobe_step(const Params& q, Shape<N, CASE> sh, const double* X,
 // u_i' += g psi_d,i / M_i.
 BB_INLINE void jump_modes(const Params& q, int n, double* X, double g) {
     for (int i = 0; i < n; ++i) X[n + i] += g * q.pD[i] * q.invM[i];
+}
+
+// After a step whose four stages held the ball (the stick law): the relative slide left
+// from the step it stuck in is stopped by a friction impulse, as a plastic impact
+// (model.hpp's impact_law with e = 0; the modes jump by g psi_d,i / M_i), its energy
+// dissipated by friction.  Held, y' then stays 0 and y does not drift.
+template <int N, int CASE>
+BB_INLINE void stop_slide(const Params& q, Shape<N, CASE> sh, double* X, Flows& fl) {
+    const ImpactJump j = impact_law(X[sh.iyd()], 0.0, q.ball.meff);
+    X[sh.iyd()] = j.yd;
+    jump_modes(q, sh.n(), X, j.g);
+    fl.d_fric += j.loss;
 }
 
 // The ball's walls at the step's end t1 (model.hpp's wall rule; the modes jump by

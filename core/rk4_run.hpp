@@ -268,10 +268,13 @@ BB_INLINE void run_body(const RunArgs& a) {
                 }
                 return f;
             };
+            bool held;
             if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
-                rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, force);
+                held = rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, force);
             else
-                rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, force);
+                held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, force);
+            // (a step held from y' = 0 keeps y' = 0 exactly: nothing to stop)
+            if (ball && held && X[iyd] != 0.0) stop_slide(q, sh, X, fl);
         }
         const bool steady = k >= a.steady_start;
 

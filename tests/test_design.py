@@ -266,7 +266,7 @@ def test_min_depth_is_the_lobes_search_of_the_candidate_to_one_percent():
     ds = lobes([Case("tmd", system, "tmd")],
                LobesOptions((1000.0, 1400.0), "search", None, None, 4e-4, analytic=False,
                             depth_tolerance=0.01),
-               integration=Integration(0.3, 1e-6, "rk4"))
+               integration=Integration(0.3, None, "rk4"))
     assert ds.attrs["depth_grid"].startswith("depth_tolerance = 0.01")
     assert c.statistic[0] == min(float(ds["min_chatter_free_depth_m"].values[0]), 4e-4)
     limit, first = ds["limit_depth_m"].values[0], ds["first_unstable_depth_m"].values[0]

@@ -25,7 +25,9 @@ def _write(tmp_path, text: str) -> Path:
 def test_defaults_are_the_published_study():
     s = study_from_dict({"study": {"analysis": "sweep"}})
     assert s.preset == "physical" and s.value("gap_mm") == 0.5 and s.value("friction") is True
-    assert s.value("force_n") == 10.0 and s.value("dt_s") == 1e-6 and s.value("duration_s") == 2
+    assert s.value("force_n") == 10.0 and s.value("duration_s") == 2
+    # the step unset: each analysis's own (the published 1e-6 s for a sweep's runs)
+    assert s.value("dt_s") is None
     assert s.axes["ratio"][0] == 0.95 and s.axes["ratio"][-1] == 1.05 and len(s.axes["ratio"]) == 11
     lobes = study_from_dict({"study": {"analysis": "lobes"}})
     assert lobes.options["successive"] == 3  # the published rule; grid and speeds below

@@ -209,12 +209,13 @@ def test_a_lobes_dataset_names_its_method():
     assert math.isfinite(float(ds["onset_depth_m"][0, 0]))
 
 
-def test_an_undecided_run_that_sets_a_ball_s_chatter_free_depth_is_run_longer(monkeypatch):
+def test_a_ball_s_settling_run_is_given_the_longer_cap(monkeypatch):
     """The search's rule on a made-up column (each run's result is given, so the rule is
     checked alone): onset at index 10; 11 and 12 settle within the tolerance only with a
     cap four times the verdict's (undecided with it); 13-40 are bounded; 41 and above
     chatter.  The first depth that is not chatter-free must be index 41's, and index
-    11's result the longer run's; without the longer runs it is 11's (the onset)."""
+    11's run the longer one (run again, or at once where the onset's search had not
+    run it); without the longer cap it is 11's (the onset)."""
     from boringbar.analysis import lobe_search as ls
     from boringbar.analysis.sweep import Case
 
@@ -223,7 +224,7 @@ def test_an_undecided_run_that_sets_a_ball_s_chatter_free_depth_is_run_longer(mo
     caps = []
 
     def made_up(case, rpm, depth, options, integration):
-        i, cap = index[depth], options.verdict.max_duration_s
+        i, cap = index[depth], max(options.verdict.settle_cap, options.verdict.max_duration_s)
         caps.append((i, cap))
         if i <= 10:
             verdict = ls.STABLE

@@ -64,6 +64,7 @@ from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.simulate import (
+    PUBLISHED_DT_S,
     Initial,
     Integration,
     resolve_integrator,
@@ -317,6 +318,7 @@ def plan(system, options: BasinOptions, integration: Integration) -> Plan:
     ``options.forcing``, or a list of :class:`OperatingPoint`); a point is
     (operating point index, [cell indices]): a lock-step batch of ``options.batch``
     consecutive cells in grid order (RK4) or one cell."""
+    integration = integration.with_step(PUBLISHED_DT_S)
     if isinstance(system, list | tuple):
         operating = list(system)
     elif isinstance(system, System):
@@ -349,7 +351,8 @@ def compute(context: dict, point: tuple[int, list[int]]) -> list[_Cell]:
     if context["batched"][point[0]]:
         runs = simulate_batch([(op.case.system, op.forcing, ini) for ini in initials],
                               duration_s=integ.duration_s, dt_s=integ.dt_s,
-                              steady_fraction=integ.steady_fraction, strobe=True)
+                              steady_fraction=integ.steady_fraction, strobe=True,
+                              stick_law=integ.stick_law)
     else:
         runs = [simulate(op.case.system, op.forcing, **{**integ.kwargs(), "initial": ini},
                          strobe=True) for ini in initials]

@@ -47,12 +47,21 @@ from boringbar.analysis.speeds import boring_speeds, check_speeds, lobe_speeds
 from boringbar.analysis.sweep import Case, as_cases
 from boringbar.analysis.verdict import CHATTER as ONSET_CHATTER
 from boringbar.analysis.verdict import STABLE as ONSET_STABLE
-from boringbar.analysis.verdict import CutVerdict, Settled, VerdictOptions, acceptable, judge
+from boringbar.analysis.verdict import (
+    CutVerdict,
+    Settled,
+    VerdictOptions,
+    acceptable,
+    judge,
+    judged_step,
+    stick_law_text,
+    verdict_attrs,
+)
 from boringbar.execute import Execution
 from boringbar.model.cutting import KR_ALUMINIUM, CutLawFields, CuttingLaw
 from boringbar.model.forcing import MAX_DEPTH, Regenerative
 from boringbar.reference.stability import limit_at_speeds
-from boringbar.simulate import Integration, stick_slip
+from boringbar.simulate import Integration, check_friction_law
 from boringbar.simulate.run_limits import check_delay
 from boringbar.version import __version__
 
@@ -182,7 +191,7 @@ def map_depths(limits_m: np.ndarray, n: int = DEPTHS,
     return tuple(float(d) for d in np.round(np.linspace(span[0] * b, span[1] * b, n), 7))
 
 
-def _check_integration(cases: list[Case], integration: Integration) -> None:
+def _check_integration(cases: list[Case], integration: Integration, stick_law: str) -> None:
     """The converged verdict advances each cut window by window with the RK4 scheme."""
     if integration.integrator == "exact":
         raise ParameterError("integrator = 'exact': the chatter map judges each cut by the "
@@ -191,11 +200,8 @@ def _check_integration(cases: list[Case], integration: Integration) -> None:
     if integration.initial is not None:
         raise ParameterError(f"initial = {integration.initial!r}: every cut of a chatter map "
                              "starts in progress and knocked, not from initial conditions")
-    for c in cases:
-        if stick_slip(c.system):
-            raise ParameterError(f"case {c.label!r}: true stick-slip (static_ratio > 1) needs "
-                                 "the exact integrator, which the converged verdict does not "
-                                 "run")
+    for c in cases:  # true stick-slip needs the stick law
+        check_friction_law(c.system, "rk4", stick_law)
 
 
 def resolved(cases: list[Case], options: ChatterMapOptions) -> tuple[ChatterMapOptions, dict]:
@@ -228,7 +234,8 @@ def plan(cases, options: ChatterMapOptions, integration: Integration) -> Plan:
     resolved (:func:`resolved`) in the context, the linear hosts' analytic limits at the
     speeds in ``extra``."""
     cases = as_cases(cases, "cases")
-    _check_integration(cases, integration)
+    integration = integration.with_step(judged_step([c.system for c in cases]))
+    _check_integration(cases, integration, options.verdict.stick_law)
     options, source = resolved(cases, options)
     for r in options.rpm:
         check_delay(r, options.revolutions, integration.dt_s)
@@ -441,8 +448,7 @@ def _attrs(plan: Plan, per_start: dict) -> dict:
         "criterion": "growth",
         "integrator_used": "rk4",
         "dt_s": integ.dt_s,
-        **{k: (json.dumps(v) if isinstance(v, list) else v)
-           for k, v in o.verdict.to_dict().items()},
+        **verdict_attrs(o.verdict, [c.system for c in cases]),
         "starts": json.dumps(list(o.starts)),
         "rpm_source": plan.extra["rpm_source"],
         "depth_source": plan.extra["depth_source"],
@@ -472,7 +478,7 @@ def method_text(ds) -> str:
             f"{a['confidence']:g}-certain; every start, {', '.join(starts)}, run until its tip "
             f"p-p settles to {a['settle_tolerance'] * 100:g} %); chatter-free: in the cut and "
             f"within {a['tolerance_m'] * 1e6:g} um p-p from every start; RK4, dt = "
-            f"{a['dt_s']:g} s, at most {a['max_duration_s']:g} s a run "
+            f"{a['dt_s']:g} s{stick_law_text(a)}, at most {a['max_duration_s']:g} s a run "
             f"({a['mean_run_s']:.2g} s a cell on average)")
 
 
@@ -519,7 +525,8 @@ def chatter_map(cases, options: ChatterMapOptions | None = None, *,
     (:func:`~boringbar.analysis.sweep.as_cases`); ``options``:
     :class:`ChatterMapOptions` (default: the boring speeds of the bars and 20 depths
     around their bare-bar limit, a small and a 20 um knock, 10 um p-p tolerance);
-    ``integration``: its ``dt_s`` is the RK4 step of every cut (its duration is not used:
+    ``integration``: its ``dt_s`` is the RK4 step of every cut (None, the default: the
+    verdict's, :func:`~boringbar.analysis.verdict.judged_step`; its duration is not used:
     each cut runs until its verdict, at most ``verdict.max_duration_s``; integrator "rk4"
     or "auto", no initial conditions); ``execution``: where the cells run (default a
     thread per core); ``progress(done, total)`` as cells finish.

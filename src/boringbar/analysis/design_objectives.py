@@ -59,7 +59,7 @@ def depth_lobes(cases: list[Case], options: DesignOptions,
     (:meth:`DesignOptions.lobes_options`), cuts of ``options.duration_s`` by
     :data:`CUT_INTEGRATOR` (the lobes Dataset)."""
     return lobes(cases, options.lobes_options(),
-                 integration=Integration(options.duration_s, 1e-6, CUT_INTEGRATOR),
+                 integration=Integration(options.duration_s, None, CUT_INTEGRATOR),
                  execution=execution)
 
 

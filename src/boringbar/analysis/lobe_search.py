@@ -33,11 +33,13 @@ from boringbar.simulate import Integration, simulate
 NOT_RUN, CHATTER, STABLE, UNDECIDED = -1, 0, 1, 2
 #: The first step (grid depths) of a ball's chatter-free search up from its onset.
 BALL_STEP = 8
-#: The longer cap (times the verdict's ``max_duration_s``) an undecided run of a ball's
-#: search above its onset is judged with again: just above a friction ball's onset the
-#: vibration grows slowest and may take far longer than the cap to settle at its bounded
-#: level (the carbide example at 1100 rpm: 70 s for 0.85 um p-p).  A run ends where it
-#: settles, so one long cap costs no more than a ladder of caps.
+#: The longer cap (times the verdict's ``max_duration_s``) of a ball's search above its
+#: onset: a new cut there whose onset grows settles to it at once
+#: (``VerdictOptions.settle_cap_s``), and an undecided run of the onset's search is judged
+#: again with it.  Just above a friction ball's onset the vibration grows slowest and may
+#: take far longer than the cap to settle at its bounded level (the carbide example at
+#: 1100 rpm: 70 s for 0.85 um p-p).  A run ends where it settles, so one long cap costs
+#: no more than a ladder of caps.
 RESOLVE_CAP = 16.0
 
 
@@ -46,7 +48,8 @@ def fixed_cut(case: Case, rpm: float, depth: float, options, integration: Integr
     under both fixed criteria and its metrics."""
     run = simulate(case.system, options.forcing(depth, rpm), duration_s=integration.duration_s,
                    dt_s=integration.dt_s, integrator=integration.integrator,
-                   steady_fraction=integration.steady_fraction, record_every=0)
+                   steady_fraction=integration.steady_fraction, record_every=0,
+                   stick_law=integration.stick_law)
     c = run.cutting
     ball = case.system.kind == "ball"
     return {"zero": c["chatter"], "bounded": c["chatter"] or c["bounded_chatter"],
@@ -142,9 +145,9 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
     """The converged criterion's runs at one speed (module doc): {depth index: result}."""
     done: dict[int, dict] = {}
 
-    def result(i: int) -> dict:
+    def result(i: int, opts=options) -> dict:
         if i not in done:
-            done[i] = growth_cut(case, rpm, options.depth(i), options, integration)
+            done[i] = growth_cut(case, rpm, options.depth(i), opts, integration)
         return done[i]
 
     n_max = options.max_index
@@ -153,11 +156,16 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
                              n_max))
     if case.system.kind == "ball" and hi <= n_max:
         # a ball that bounds its vibration within the tolerance often does so well above
-        # its onset: the search up from it starts with a step of BALL_STEP grid depths
+        # its onset: the search up from it starts with a step of BALL_STEP grid depths.
+        # Its new cuts settle to the longer cap at once; one the onset's search ran to the
+        # shorter cap, left undecided with its onset growing, is judged again.
+        longer = longer_options(options)
         rerun: set[int] = set()
 
         def settled(i: int) -> dict:
-            res = result(i)
+            if i not in done:
+                return result(i, longer)
+            res = done[i]
             if (res["verdict"] == UNDECIDED and onset_chatters(res) and RESOLVE_CAP > 1
                     and i not in rerun):
                 rerun.add(i)
@@ -167,6 +175,15 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
         column(lambda i: not_free(settled(i)), hi, n_max, options.method, options.successive,
                BALL_STEP)
     return done
+
+
+def longer_options(options):
+    """``options`` whose verdict follows a run that settles after its onset grew to the
+    longer cap (:data:`RESOLVE_CAP`; unchanged where it is 1)."""
+    if RESOLVE_CAP <= 1:
+        return options
+    cap = longer_cap_s(options.verdict.max_duration_s)
+    return replace(options, verdict=replace(options.verdict, settle_cap_s=cap))
 
 
 def run_longer(case: Case, rpm: float, depth: float, options,

@@ -98,18 +98,24 @@ from boringbar.analysis.speeds import (
     default_speeds,
 )
 from boringbar.analysis.sweep import Case, as_cases
-from boringbar.analysis.verdict import VerdictOptions
+from boringbar.analysis.verdict import (
+    VerdictOptions,
+    judged_step,
+    stick_law_text,
+    verdict_attrs,
+)
 from boringbar.execute import Execution
 from boringbar.model.cutting import CutLawFields, CuttingLaw
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import (
+    PUBLISHED_DT_S,
     Integration,
     check_cut_law,
+    check_friction_law,
     resolve_integrator,
     resolved_integrators,
     simulate,
-    stick_slip,
 )
 from boringbar.simulate.run_limits import check_delay
 from boringbar.version import __version__
@@ -277,7 +283,7 @@ def run_length_text(ds) -> str:
         ball = ("bar" in ds.coords and "ball" in ds["bar"].values
                 and lobe_search.RESOLVE_CAP > 1)
         longer = (f", {lobe_search.longer_cap_s(a['max_duration_s']):g} s for a ball's run "
-                  "left undecided above its onset" if ball else "")
+                  "settling after its onset chattered" if ball else "")
         return (f"each cut until its verdict is {a['confidence']:g}-certain (at most "
                 f"{a['max_duration_s']:g} s{longer}; {mean:.2g} s on average)")
     return f"each cut {a['duration_s']:g} s from {a['start']}"
@@ -295,7 +301,7 @@ def method_text(ds) -> str:
             "bounded": f"bounded chatter (amplitude > {a.get('bounded_fraction', 0.1):g} "
                        "h_m, or the force reaches zero)"}[a["criterion"]]
     return (f"{crit}; {a['method']} on {a['depth_grid']}; {a['integrator_used']} at dt = "
-            f"{a['dt_s']:g} s; {run_length_text(ds)}")
+            f"{a['dt_s']:g} s{stick_law_text(a)}; {run_length_text(ds)}")
 
 
 def starts_text(attrs: dict) -> str:
@@ -346,8 +352,12 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     if options.criterion is None:
         options = replace(options, criterion=criterion_for([c.system for c in cases]))
     chatter_probability.check(options.uncertainty, options.criterion)
+    # the step settled once, so the runs and the Dataset's record agree
+    integration = integration.with_step(
+        judged_step([c.system for c in cases]) if options.criterion == "growth"
+        else PUBLISHED_DT_S)
     if options.criterion == "growth":
-        _check_growth(cases, integration)
+        _check_growth(cases, integration, options.verdict.stick_law)
     rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
         check_delay(r, options.revolutions, integration.dt_s)
@@ -361,18 +371,15 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     return Plan(context, points)
 
 
-def _check_growth(cases: list[Case], integration: Integration) -> None:
+def _check_growth(cases: list[Case], integration: Integration, stick_law: str) -> None:
     """The converged verdict advances a cut window by window with the RK4 scheme."""
     if integration.integrator == "exact":
         raise ParameterError("integrator = 'exact' with criterion 'growth': the converged "
                              "verdict advances each cut window by window with the RK4 "
                              "scheme; use integrator 'rk4' or 'auto', or a fixed-length "
                              "criterion ('zero', 'bounded') with 'exact'")
-    for c in cases:
-        if stick_slip(c.system):
-            raise ParameterError(f"case {c.label!r}: true stick-slip (static_ratio > 1) needs "
-                                 "the exact integrator, which the converged verdict does "
-                                 "not run; use a fixed-length criterion ('zero', 'bounded')")
+    for c in cases:  # true stick-slip needs the stick law
+        check_friction_law(c.system, "rk4", stick_law)
 
 
 def compute(context: dict, point: tuple[int, int]) -> dict:
@@ -544,8 +551,8 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None):
 def _attrs(plan: Plan, n_runs: int) -> dict:
     """The configuration a lobes Dataset carries."""
     cases, o, integ = (plan.context[k] for k in ("cases", "options", "integration"))
-    growth = {f"{k}": (json.dumps(v) if isinstance(v, list) else v)
-              for k, v in o.verdict.to_dict().items()} if o.criterion == "growth" else {}
+    growth = (verdict_attrs(o.verdict, [c.system for c in cases]) if o.criterion == "growth"
+              else {})
     return {
         "title": "boringbar stability lobes (time domain)",
         "boringbar_version": __version__,
@@ -694,7 +701,7 @@ def _example_run(case: Case, rpm: float, depth: float, options: LobesOptions,
     run = simulate(case.system, options.forcing(depth, rpm, stop_at_zero=False),
                    duration_s=integration.duration_s, dt_s=integration.dt_s,
                    record_every=max(1, n_steps // rows), integrator=integration.integrator,
-                   steady_fraction=integration.steady_fraction)
+                   steady_fraction=integration.steady_fraction, stick_law=integration.stick_law)
     h = run.to_xarray()
     h = h.drop_vars([v for v in ("impact_time_s", "impact_wall") if v in h])
     c = run.cutting
@@ -713,7 +720,7 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     history of about ``rows`` rows, not stopped at the first zero of the force:
     one Dataset with dims (example, time_s)."""
     options = options or LobesOptions()
-    integration = integration or Integration()
+    integration = (integration or Integration()).with_step(PUBLISHED_DT_S)
     points = example_points(ds)
     parts = [_example_run(case, rpm, depth, options, integration, rows)
              for _, rpm, depth in points]

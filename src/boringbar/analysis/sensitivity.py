@@ -38,7 +38,7 @@ from boringbar.analysis.sweep import Case, SweepOptions
 from boringbar.execute import Execution
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import make_system
-from boringbar.simulate import Initial, Integration, resolved_integrators, simulate
+from boringbar.simulate import PUBLISHED_DT_S, Initial, Integration, resolved_integrators, simulate
 from boringbar.version import __version__
 
 KINDS = ("ball", "friction_number", "restitution", "initial")
@@ -153,6 +153,7 @@ def plan(options: SensitivityOptions, integration: Integration, *, preset: str =
     ``overrides`` for :func:`~boringbar.model.system.make_system`, with the value set);
     harmonic: the :func:`~boringbar.analysis.sweep.plan` of those cases; cuts: a point
     per (value, depth)."""
+    integration = integration.with_step(PUBLISHED_DT_S)
     overrides = dict(overrides or {})
     kind = options.kind
     if kind != "initial" and bar != "ball":
@@ -195,7 +196,8 @@ def sensitivity_cut(case: Case, cuts: Cuts, depth_m: float, integration: Integra
     forcing = Regenerative(depth_m, cuts.rpm, stop_at_zero=False, **cuts.options)
     c = simulate(case.system, forcing, duration_s=cuts.duration_s, dt_s=integration.dt_s,
                  initial=case.initial or integration.initial,
-                 integrator=integration.integrator, record_every=0).cutting
+                 integrator=integration.integrator, record_every=0,
+                 stick_law=integration.stick_law).cutting
     return {"chatter": c["chatter"], "bounded_chatter": c["chatter"] or c["bounded_chatter"],
             "amplitude_m": c["amplitude_m"], "max_force_n": c["max_force_n"],
             "first_zero_time_s": math.nan if c["first_zero_time_s"] is None

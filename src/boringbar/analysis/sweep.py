@@ -29,7 +29,14 @@ from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
 from boringbar.reference.stability import linear_host, natural_frequencies
-from boringbar.simulate import Initial, Integration, resolve_integrator, simulate, simulate_batch
+from boringbar.simulate import (
+    PUBLISHED_DT_S,
+    Initial,
+    Integration,
+    resolve_integrator,
+    simulate,
+    simulate_batch,
+)
 from boringbar.simulate.kernels import BMAX
 from boringbar.simulate.run_limits import check_steady_ratios
 from boringbar.version import __version__
@@ -251,6 +258,7 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
     whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind and mode
     count, in (case, force, ratio) order) or one run; the options in the context carry
     their ratios (:func:`default_ratios` of the cases if none were given)."""
+    integration = integration.with_step(PUBLISHED_DT_S)
     cases = as_cases(cases, "cases")
     if options.ratios is None:
         options = replace(options, ratios=default_ratios(cases))
@@ -283,7 +291,8 @@ def compute(context: dict, point: list) -> list[dict]:
              cases[i].initial or integ.initial) for i, j, k in point]
     if context["batched"][point[0][0]]:
         results = simulate_batch(runs, duration_s=integ.duration_s, dt_s=integ.dt_s,
-                                 steady_fraction=integ.steady_fraction)
+                                 steady_fraction=integ.steady_fraction,
+                                 stick_law=integ.stick_law)
     else:
         kw = integ.kwargs()
         results = [simulate(system, forcing, **{**kw, "initial": initial})

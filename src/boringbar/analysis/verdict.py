@@ -33,16 +33,17 @@ the tool in the cut and its peak-to-peak within ``tolerance_m``.
 from __future__ import annotations
 
 import functools
+import json
 import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import stats
 
-from boringbar._validate import check_int, check_range, check_values
+from boringbar._validate import check_choice, check_int, check_range, check_values
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
-from boringbar.simulate import CutStepper, Window, knocked_cut
+from boringbar.simulate import STICK_LAWS, CutStepper, Window, knocked_cut
 
 #: A window holds whole revolutions and at least this many periods of the host bar's
 #: first mode (a chatter near an absorber's lower peak, down to 2/3 f1, still shows
@@ -56,6 +57,13 @@ KNOCK_M = 1e-6
 TOLERANCE_M = 10e-6
 SETTLE_TOLERANCE = 0.05
 MIN_SEGMENT = 6
+#: A judged cut's RK4 step (s), and at least this many steps in the shortest period of
+#: a bar's modes and absorber (:func:`judged_step`).  With a ball held by the stick law
+#: the verdicts do not change from 5e-7 s to 1e-5 s on the carbide example's ball map,
+#: and a friction-held vibration grows at the locked bar's root at any of these steps
+#: (docs/chatter.md, "The step of a judged cut").
+JUDGED_STEP_S = 2e-6
+JUDGED_STEPS_PER_PERIOD = 25
 #: A slope still rising is extrapolated only once each rise is at most this fraction of
 #: the one before (a geometric tail that has set in).
 MAX_RISE_RATIO = 0.0
@@ -80,7 +88,14 @@ class VerdictOptions:
     too; ``settle_tolerance``: the settled peak-to-peak converged to this fraction;
     ``min_segment``: windows in each of the three segments whose slopes are compared (at
     least 4; a verdict needs three of them); ``ball_start``: where a free ball starts
-    across its gap, a fraction of the half gap from the centre (-1 and 1: on a wall).
+    across its gap, a fraction of the half gap from the centre (-1 and 1: on a wall);
+    ``stick_law``: how the RK4 cut renders a ball's friction
+    (:data:`~boringbar.simulate.STICK_LAWS`): "hold" by default, which holds a ball with
+    the bar exactly, so that a friction-held vibration grows at its linear host's rate
+    whatever the step (docs/chatter.md, "The step of a judged cut"); "sgn" the published
+    law, whose chatter about y' = 0 damps it by an amount that depends on the step;
+    ``settle_cap_s`` (s): the cap on a run that goes on settling after its onset grew
+    (None: ``max_duration_s``; the lobes' ball search gives its longer cap).
     """
 
     confidence: float = CONFIDENCE
@@ -91,6 +106,8 @@ class VerdictOptions:
     settle_tolerance: float = SETTLE_TOLERANCE
     min_segment: int = MIN_SEGMENT
     ball_start: float = 0.0
+    stick_law: str = "hold"
+    settle_cap_s: float | None = None
 
     def __post_init__(self):
         check_range("confidence", self.confidence, 0.5, 0.999999, lo_open=True)
@@ -103,12 +120,22 @@ class VerdictOptions:
         check_range("settle_tolerance", self.settle_tolerance, 0.0, 0.5, lo_open=True)
         check_int("min_segment", self.min_segment, 4, 10_000)
         check_range("ball_start", self.ball_start, -1.0, 1.0)
+        check_choice("stick_law", self.stick_law, STICK_LAWS)
+        if self.settle_cap_s is not None:
+            check_range("settle_cap_s", self.settle_cap_s, self.max_duration_s, 1000.0,
+                        unit="s")
+
+    @property
+    def settle_cap(self) -> float:
+        """The cap (s) on a run that settles after a chattering onset."""
+        return self.max_duration_s if self.settle_cap_s is None else self.settle_cap_s
 
     def to_dict(self) -> dict:
         return {"confidence": self.confidence, "max_duration_s": self.max_duration_s,
                 "knock_m": self.knock_m, "tolerance_m": self.tolerance_m,
                 "knocks_m": list(self.knocks_m), "settle_tolerance": self.settle_tolerance,
-                "min_segment": self.min_segment, "ball_start": self.ball_start}
+                "min_segment": self.min_segment, "ball_start": self.ball_start,
+                "stick_law": self.stick_law}
 
 
 @dataclass(frozen=True)
@@ -329,7 +356,7 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
             if (not values and levelled and min(pp, pp0) > options.tolerance_m
                     and -tol < fits[0][0] * span):
                 return Settled(pp, rms, False, ABOVE, duration)
-            if stepper.t_s >= options.max_duration_s:
+            if stepper.t_s >= (options.settle_cap if onset_rate > 0 else options.max_duration_s):
                 return Settled(pp, rms, False, UNDECIDED, duration)
             if onset_rate > 0 and fast_forward(stepper, windows, options):
                 windows, ends, logs = [], [], []
@@ -375,11 +402,49 @@ def _pp(windows) -> float:
 
 
 def _stepper(system: System, cut: Regenerative, dt_s: float, knock_m: float,
-             ball_start: float = 0.0) -> CutStepper:
+             options: VerdictOptions) -> CutStepper:
     cut = replace(cut, start="static", stop_at_zero=False)
     half = system.damper.gap_m / 2 if system.kind == "ball" else 0.0
     return CutStepper(system, cut, dt_s=dt_s, window_steps=window_steps(system, cut, dt_s),
-                      initial=knocked_cut(system, cut, knock_m, ball_start * half))
+                      initial=knocked_cut(system, cut, knock_m, options.ball_start * half),
+                      stick_law=options.stick_law)
+
+
+def judged_step(systems, dt_s: float | None = None) -> float:
+    """The RK4 step (s) of the judged cuts of ``systems``: ``dt_s`` where given, else
+    :data:`JUDGED_STEP_S`, or finer where a bar's highest mode or absorber would have
+    fewer than :data:`JUDGED_STEPS_PER_PERIOD` steps a period."""
+    if dt_s is not None:
+        return float(dt_s)
+    shortest = min(min(2 * math.pi / max(s.bar.omegas_rad_s), absorber_period(s))
+                   for s in systems)
+    return min(JUDGED_STEP_S, shortest / JUDGED_STEPS_PER_PERIOD)
+
+
+def absorber_period(system: System) -> float:
+    """The tuned absorber's own period (s); infinite for other bars."""
+    d = system.damper
+    if system.kind != "tmd":
+        return math.inf
+    return 2 * math.pi * math.sqrt(d.mass_kg / d.stiffness_n_m)
+
+
+def verdict_attrs(options: VerdictOptions, systems) -> dict:
+    """The verdict's options as a Dataset's attributes (lists as JSON); the stick law only
+    where one of ``systems`` has a ball with friction, the only bar it concerns."""
+    attrs = {k: (json.dumps(v) if isinstance(v, list) else v)
+             for k, v in options.to_dict().items()}
+    if not any(bounds_small(s) for s in systems):
+        del attrs["stick_law"]
+    return attrs
+
+
+def stick_law_text(attrs: dict) -> str:
+    """How a judged cut rendered a ball's friction, for a method line (from a Dataset's
+    attributes, which carry the verdict's options)."""
+    return {"hold": " (a ball's friction by the stick law)",
+            "sgn": " (a ball's friction by the published sgn() law)"}.get(
+                attrs.get("stick_law"), "")
 
 
 def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
@@ -392,13 +457,15 @@ def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
 
 
 def judge(system: System, cut: Regenerative, options: VerdictOptions | None = None, *,
-          dt_s: float = 1e-6, values: bool = False) -> CutVerdict:
-    """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``.
+          dt_s: float | None = None, values: bool = False) -> CutVerdict:
+    """The converged verdict of ``cut`` on ``system`` (module doc), RK4 at ``dt_s``
+    (None: :func:`judged_step`'s).
     ``values``: run every start until its vibration settles, even where it is already
     above the tolerance (the settled values themselves wanted, as by the chatter map);
     without it a vibration above the tolerance and not falling ends its run."""
     options = options or VerdictOptions()
-    stepper = _stepper(system, cut, dt_s, options.knock_m, options.ball_start)
+    dt_s = judged_step([system], dt_s)
+    stepper = _stepper(system, cut, dt_s, options.knock_m, options)
     if cut.force_noise > 0:
         return _noisy(system, cut, options, dt_s, stepper, values)
     verdict, rate, se, windows = onset(stepper, options)
@@ -420,7 +487,7 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
 def knocked(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float,
             values: bool) -> list:
     """The settled vibration from each large knock of ``options.knocks_m``."""
-    return [settle(_stepper(system, cut, dt_s, knock, options.ball_start), [], options, 0.0,
+    return [settle(_stepper(system, cut, dt_s, knock, options), [], options, 0.0,
                    values=values) for knock in options.knocks_m]
 
 

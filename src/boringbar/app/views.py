@@ -262,7 +262,7 @@ def simulated_lobes(design: Design, progress=None, workers: int | None = None) -
     system = design.systems["ball"]
     rpm = simulated_speeds(design)
     ds = lobes([system], LobesOptions(rpm=tuple(rpm), method="search", analytic=False),
-               integration=Integration(duration_s=SIMULATED_CUT_S, dt_s=DT_S),
+               integration=Integration(duration_s=SIMULATED_CUT_S),
                execution=Execution("threads", workers=workers), progress=progress)
     limit = ds["limit_depth_m"].values[0] * 1e3
     return {"rpm": rpm, "limit_mm": limit, "method": ds.attrs["method_text"],

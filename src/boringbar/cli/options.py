@@ -41,7 +41,9 @@ from boringbar.simulate import (
     INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
     MAX_INITIAL_VELOCITY,
+    PUBLISHED_DT_S,
     STEADY_FRACTION,
+    STICK_LAWS,
     Initial,
     Integration,
 )
@@ -132,14 +134,20 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                        help="Omega/omega_n of the host bar (default: 1.0)")
     g.add_argument("--duration-s", type=float, default=2.0, metavar="S",
                    help="simulated time in s (default: 2.0)")
-    g.add_argument("--dt-s", type=float, default=1e-6, metavar="S",
+    g.add_argument("--dt-s", type=float, metavar="S",
                    help="RK4 time step in s; with --integrator exact, the step of the "
-                        "recorded history (default: 1e-6)")
+                        "recorded history (default: the published 1e-6; a cut judged by "
+                        "the converged verdict: 5e-6, or finer for a bar with high modes)")
     g.add_argument("--integrator", choices=INTEGRATOR_CHOICES, default="auto",
                    help="auto (default): exact for harmonic runs, rk4 under the paper "
                         "preset and in cuts; rk4: the published fixed-step scheme; exact: "
                         "event-driven, exact between events (a cut: the delayed surface "
                         "from a history of step <= dt)")
+    g.add_argument("--stick-law", choices=STICK_LAWS,
+                   help="how RK4 renders a ball's friction: sgn, the published "
+                        "F_b = -F_c sgn(y'), or hold, which holds the ball exactly while "
+                        "friction can (default: sgn for runs of fixed length, hold for a "
+                        "cut judged by the converged verdict; docs/model.md, 5.1)")
 
     if initial:
         g = p.add_argument_group("initial conditions (default: at rest, ball centred)")
@@ -211,7 +219,8 @@ def verdict_options(args) -> VerdictOptions:
     check_range("--max-run-s", cap, 0.0, 1000.0, lo_open=True, unit="s")
     # divided, not multiplied: 10 um is then 1e-05 m to the bit
     return VerdictOptions(confidence=conf, max_duration_s=cap, tolerance_m=tol / 1e6,
-                          knocks_m=tuple(k / 1e6 for k in knocks))
+                          knocks_m=tuple(k / 1e6 for k in knocks),
+                          stick_law=getattr(args, "stick_law", None) or d.stick_law)
 
 
 def add_steady_fraction(group) -> None:
@@ -273,7 +282,13 @@ def check_common(args, bars: list[str]) -> None:
         check_range("--restitution", args.restitution, 0, 1)
     if args.modes is not None:
         check_range("--modes", args.modes, 1, 8)
-    check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
+    check_steps(args.duration_s, step(args), ("--duration-s", "--dt-s"))
+
+
+def step(args) -> float:
+    """--dt-s, or where it was not given the published step: the checks' step (a judged
+    cut's own is coarser, so what passes them passes it)."""
+    return PUBLISHED_DT_S if args.dt_s is None else args.dt_s
 
 
 def system_spec(args):
@@ -362,7 +377,7 @@ def check_dt(args, systems, ratio: float = 0.0) -> None:
     """--dt-s resolves the highest mode of every system and the forcing at ``ratio``
     (the largest Omega/omega_n; 0: only the modes)."""
     for system in systems:
-        check_step(system, ratio * system.reference_frequency_rad_s, args.dt_s, "--dt-s")
+        check_step(system, ratio * system.reference_frequency_rad_s, step(args), "--dt-s")
 
 
 def check_workers(workers, name: str = "--workers") -> None:
@@ -424,7 +439,7 @@ def check_rpm(rpm: float, args, name: str = "--rpm") -> float:
     history (--revolutions) within the allowed rows."""
     revolutions = 3 if args.revolutions is None else args.revolutions
     check_int("--revolutions", revolutions, 1, 50)
-    check_delay(rpm, revolutions, args.dt_s, name)
+    check_delay(rpm, revolutions, step(args), name)
     return float(rpm)
 
 
@@ -576,8 +591,10 @@ def warn_line(message: str) -> None:
 
 
 def integration(args, initial=None, steady_fraction: float = STEADY_FRACTION) -> Integration:
-    """The integration options of a command (--duration-s, --dt-s, --integrator)."""
-    return Integration(args.duration_s, args.dt_s, args.integrator, steady_fraction, initial)
+    """The integration options of a command (--duration-s, --dt-s, --integrator; a step
+    not given is left to each analysis: Integration.dt_s None)."""
+    return Integration(args.duration_s, args.dt_s, args.integrator, steady_fraction, initial,
+                       getattr(args, "stick_law", None) or "sgn")
 
 
 def execution(args) -> Execution:

@@ -18,6 +18,7 @@ from boringbar.cli.options import (
     gap_default_mm,
     initial_conditions,
     one_bar,
+    step,
     system_overrides,
     wrote,
 )
@@ -52,7 +53,8 @@ def cmd_simulate(args) -> Outcome:
     bar, friction_on = one_bar(args, "simulate")
     gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm, args)
     forcing = _simulate_forcing(args)
-    n_steps = check_steps(args.duration_s, args.dt_s, ("--duration-s", "--dt-s"))
+    dt = step(args)
+    n_steps = check_steps(args.duration_s, dt, ("--duration-s", "--dt-s"))
     record_every = None  # simulate's default: about HISTORY_ROWS rows
     if args.record_every is not None:  # every N-th step: N = 0 means nothing
         record_every = check_int("--record-every", args.record_every, 1, n_steps)
@@ -67,8 +69,9 @@ def cmd_simulate(args) -> Outcome:
         check_steady(args.duration_s, getattr(args, "steady_fraction", STEADY_FRACTION),
                      2 * math.pi / forcing.omega(system.reference_frequency_rad_s), "--duration-s")
     initial = initial_conditions(args, [gap] if bar == "ball" else [])
-    run = simulate(system, forcing, duration_s=args.duration_s, dt_s=args.dt_s, initial=initial,
-                   record_every=record_every, integrator=args.integrator)
+    run = simulate(system, forcing, duration_s=args.duration_s, dt_s=dt, initial=initial,
+                   record_every=record_every, integrator=args.integrator,
+                   stick_law=args.stick_law or "sgn")
 
 
     out = Path(args.out)

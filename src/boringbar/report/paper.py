@@ -127,9 +127,10 @@ VARIANT_ORDER = ("paper-reciprocal", "physical-paper-friction")
 COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
 
 #: The command line's defaults, as the steps' commands leave them: the time step
-#: (s), the integrator, the sampled part of each run, the ball damper's gap (mm)
-#: and a cut's description (``boringbar lobes`` and ``sensitivity``, SI).
-DT_S = 1e-6
+#: (None: each analysis's own, the published 1e-6 s or a judged cut's), the integrator,
+#: the sampled part of each run, the ball damper's gap (mm) and a cut's description
+#: (``boringbar lobes`` and ``sensitivity``, SI).
+DT_S = None
 INTEGRATOR = "auto"
 GAP_MM = 0.5
 CUT = {"kr_pa": 850.0 * 1e6, "feed_m": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",

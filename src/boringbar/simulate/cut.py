@@ -80,17 +80,18 @@ class CutStepper:
     One kernel call per window of ``window_steps`` steps of ``dt_s``; the kernel keeps
     the delay history between calls, so the windows together are one run, bit for bit
     (the core's continuation contract).  ``initial``: as :func:`simulate` takes it;
-    the forcing must not stop at the first zero of the force.
+    the forcing must not stop at the first zero of the force; ``stick_law``: as
+    :func:`simulate` takes it.
     """
 
     def __init__(self, system: System, forcing: Regenerative, *, dt_s: float, window_steps: int,
-                 initial: Initial | State | None = None):
+                 initial: Initial | State | None = None, stick_law: str = "sgn"):
         if forcing.stop_at_zero:
             raise ParameterError("a cut advanced window by window runs on after the force "
                                  "reaches zero: give stop_at_zero = False")
         check_int("window_steps", window_steps, 1, MAX_STEPS)
         self.su = setup_run(system, forcing, window_steps * dt_s, dt_s, initial, 0, 1.0, False,
-                         "rk4")
+                            "rk4", stick_law)
         self.window_steps = window_steps
         self.t_s = self.su.t0
         self.modes = np.zeros((system.bar.n_modes, 2))

@@ -31,6 +31,7 @@ from boringbar.simulate.run import (
     INTEGRATOR_CHOICES,
     MAX_EVENT_ROWS,
     STEADY_FRACTION,
+    STICK_LAWS,
     STICK_MIN_PERIODS,
     Initial,
     IntegrationError,
@@ -47,8 +48,10 @@ from boringbar.simulate.run_limits import (
 )
 
 
-def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarray:
-    """The kernel's parameter vector for ``system`` under F0 sin(omega t).
+def pack(system: System, omega: float, amplitude: float, dt: float,
+         stick_law: str = "sgn") -> np.ndarray:
+    """The kernel's parameter vector for ``system`` under F0 sin(omega t), RK4's
+    friction rendered by ``stick_law`` (:data:`STICK_LAWS`).
 
     ``omega`` = 0 (no harmonic force) refers the impact threshold to omega_n.
     """
@@ -86,6 +89,8 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
         # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
         p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force_n * dt / meff
         p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
+        if stick_law == "hold" and d.friction_force_n > 0:
+            p[L.STICK_BAND] = hold_band(p, dt)
     elif isinstance(d, TunedMassDamper):
         p[L.TMD_MASS] = d.mass_kg
         p[L.TMD_K] = d.stiffness_n_m
@@ -93,10 +98,24 @@ def pack(system: System, omega: float, amplitude: float, dt: float) -> np.ndarra
     return p
 
 
-def pack_cut(system: System, forcing: Regenerative, dt: float, w_static: float) -> np.ndarray:
+def hold_band(p: np.ndarray, dt: float) -> float:
+    """The stick law's band of y' (m/s): twice what friction and the bar's drag can
+    change y' by in one step while the ball can be held, (F_c + F_s) dt / m_eff, so that a
+    slide coming to rest ends a step inside it."""
+    if p[L.REACTION] < 0:
+        kappa = 1.0 / p[L.BALL_MASS] - (1.0 / p[L.M_EFF] - 1.0 / p[L.BALL_MASS])
+        if kappa <= 0:
+            raise ParameterError("stick_law = 'hold' with the printed friction reaction needs "
+                                 "a ball lighter than its share of the bar's modal mass; use "
+                                 "stick_law = 'sgn'")
+    return 2.0 * (p[L.FRICTION] + p[L.STATIC_FRICTION]) * dt / p[L.M_EFF]
+
+
+def pack_cut(system: System, forcing: Regenerative, dt: float, w_static: float,
+             stick_law: str = "sgn") -> np.ndarray:
     """The kernel's parameter vector for ``system`` in the cut ``forcing``: its law, noise
     and delay; ``w_static`` (m) the surface before the cut of a static start."""
-    p = pack(system, 0.0, 0.0, dt)
+    p = pack(system, 0.0, 0.0, dt, stick_law)
     p[L.FORCING] = L.REGENERATIVE
     law = forcing.law
     p[L.KR_B] = law.kernel_coefficient(forcing.depth_m)
@@ -184,12 +203,15 @@ def check_cut_law(forcing, integrator: str) -> None:
                              "integrator = 'rk4'")
 
 
-def check_friction_law(system: System, integrator: str) -> None:
-    """True stick-slip needs the exact integrator: RK4 has only the published sgn() law."""
-    if integrator == "rk4" and stick_slip(system):
+def check_friction_law(system: System, integrator: str, stick_law: str = "sgn") -> None:
+    """True stick-slip needs the exact integrator or RK4's stick law: the published sgn()
+    law has no static limit."""
+    check_choice("stick_law", stick_law, STICK_LAWS)
+    if integrator == "rk4" and stick_law == "sgn" and stick_slip(system):
         raise ParameterError(f"friction static_ratio = {system.damper.friction.static_ratio!r}: "
-                             "the rk4 integrator has only the sgn() law (static_ratio = 1); "
-                             "use integrator = 'exact' for true stick-slip")
+                             "the rk4 integrator's sgn() law has no static limit "
+                             "(static_ratio = 1); use stick_law = 'hold' or integrator = "
+                             "'exact' for true stick-slip")
 
 
 @dataclass(eq=False)
@@ -218,10 +240,11 @@ class RunSetup:
     stb: np.ndarray
     rec: np.ndarray
     met: np.ndarray
+    stick_law: str = "sgn"
 
 
 def setup_run(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
-           integrator) -> RunSetup:
+           integrator, stick_law: str = "sgn") -> RunSetup:
     """Check the arguments of :func:`simulate` and pack the run."""
     check_choice("integrator", integrator, INTEGRATOR_CHOICES)
     if not isinstance(system, System):
@@ -230,7 +253,7 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
         raise ParameterError(f"forcing = {forcing!r} must be a Harmonic or a Regenerative")
     integrator = resolve_integrator(integrator, system, isinstance(forcing, Regenerative))
     cutting = isinstance(forcing, Regenerative)
-    check_friction_law(system, integrator)
+    check_friction_law(system, integrator, stick_law)
     check_cut_law(forcing, integrator)
     check_range("steady_fraction", steady_fraction, 0.0, 1.0, lo_open=True)
     n_steps = check_steps(duration, dt)
@@ -269,11 +292,11 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
     x_start = x.copy()
 
     if cutting:
-        p = pack_cut(system, forcing, dt, w_static)
+        p = pack_cut(system, forcing, dt, w_static, stick_law)
         buf = np.zeros((check_delay(forcing.rpm, forcing.revolutions, dt), 2))
         period = 2 * math.pi / system.reference_frequency_rad_s
     else:
-        p = pack(system, omega, forcing.amplitude_n, dt)
+        p = pack(system, omega, forcing.amplitude_n, dt, stick_law)
         buf = None
         period = 2 * math.pi / omega if omega > 0 else duration
     n_periods = duration / period
@@ -300,7 +323,7 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
 
     return RunSetup(system, forcing, integrator, omega, dt, t0, n_steps, steady_steps,
                   int(record_every), cutting, period, w_static, p, x, x_start, buf, imp, stick,
-                  stb, rec, met)
+                  stb, rec, met, stick_law)
 
 
 def run_kernel(su: RunSetup) -> float:
@@ -391,6 +414,7 @@ def run_result(su: RunSetup, elapsed: float) -> Run:
         "impact_velocity_m_s": float(p[L.V_IMPACT]),
         "stick_velocity_m_s": float(p[L.V_STICK]),
         "stick_min_duration_s": float(p[L.STICK_MIN]),
+        "stick_band_m_s": float(p[L.STICK_BAND]),
     }
     return Run(
         system=system, forcing=su.forcing, omega_rad_s=su.omega, dt_s=dt, t0_s=t0,
@@ -402,7 +426,7 @@ def run_result(su: RunSetup, elapsed: float) -> Run:
         initial=State(su.x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
         elapsed_s=elapsed,
         energy=run_energy(m, stored_energy(system, su.x_start), stored_energy(system, x)),
-        thresholds=thresholds, integrator=su.integrator,
+        thresholds=thresholds, integrator=su.integrator, stick_law=su.stick_law,
     )
 
 
@@ -410,7 +434,7 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: fl
              dt_s: float = 1e-6,
              initial: Initial | State | None = None, record_every: int | None = None,
              steady_fraction: float = STEADY_FRACTION, strobe: bool = False,
-             integrator: str = "auto") -> Run:
+             integrator: str = "auto", stick_law: str = "sgn") -> Run:
     """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
 
     ``duration_s`` (s) and ``dt_s`` (s) as published by default (2 s, 1e-6 s);
@@ -438,11 +462,17 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: fl
     history of step H = tau / ceil(tau / dt_s), interpolated as
     ``forcing.interpolation`` says (cubic Hermite in W, W': error O(H^4)), and
     the first zero of the force is located in time).  True stick-slip (a static friction limit,
-    ``Friction(static_ratio > 1)``) needs ``"exact"``; a cut with Kienzle's law or with
-    force noise needs ``"rk4"`` (the exact integrator's cut is linear in the state).
+    ``Friction(static_ratio > 1)``) needs ``"exact"`` or RK4's stick law; a cut with
+    Kienzle's law or with force noise needs ``"rk4"`` (the exact integrator's cut is
+    linear in the state).
+
+    ``stick_law``: how RK4 renders the ball's friction (:data:`STICK_LAWS`): ``"sgn"``,
+    the published F_b = -F_c sgn(y'), whose chatter about y' = 0 holds the ball to first
+    order in the step, or ``"hold"``, the stick law, which holds it exactly (the exact
+    integrator always does).
     """
     su = setup_run(system, forcing, duration_s, dt_s, initial, record_every, steady_fraction,
-                   strobe, integrator)
+                   strobe, integrator, stick_law)
     return run_result(su, run_kernel(su))
 
 
@@ -465,7 +495,8 @@ def simulate_stage_loop(system: System, forcing: Harmonic, *, duration_s: float 
 
 
 def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
-                   steady_fraction: float = STEADY_FRACTION, strobe: bool = False) -> list[Run]:
+                   steady_fraction: float = STEADY_FRACTION, strobe: bool = False,
+                   stick_law: str = "sgn") -> list[Run]:
     """Several harmonic runs of the published RK4 scheme, in one call of the core.
 
     ``runs``: up to :data:`~boringbar.simulate.kernels.BMAX` triples (system,
@@ -474,7 +505,7 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
     :class:`Harmonic` (each its own amplitude and frequency) and whose initial
     conditions start at the same time (``Initial`` or ``None``: t = 0; a
     ``State``: its t_s).  ``duration_s``, ``dt_s``, ``steady_fraction`` and
-    ``strobe`` are the batch's, as in :func:`simulate`.
+    ``strobe`` and ``stick_law`` are the batch's, as in :func:`simulate`.
 
     The runs go through one call of :func:`boringbar.simulate.kernels.run_rk4_batch`, which
     advances each with the single-run kernel, the GIL released once for all: each
@@ -493,7 +524,7 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
             raise ParameterError(f"forcing = {forcing!r}: simulate_batch takes harmonic forcing "
                                  "only (regenerative cuts: simulate)")
         sus.append(setup_run(system, forcing, duration_s, dt_s, initial, 0, steady_fraction, strobe,
-                          "rk4"))
+                             "rk4", stick_law))
     first = sus[0]
     for su in sus[1:]:
         if (su.system.kind, su.system.bar.n_modes) != (first.system.kind,

@@ -8,7 +8,7 @@ import html
 import json
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -32,10 +32,18 @@ from boringbar.version import __version__
 IMPACT_THRESHOLD = 1e-3
 #: Stick intervals shorter than this fraction of the forcing period are not recorded.
 STICK_MIN_PERIODS = 0.01
+#: The published RK4 step (s): every run of fixed length takes it unless told otherwise
+#: (a judged cut takes the converged verdict's, :func:`~boringbar.analysis.verdict.judged_step`).
+PUBLISHED_DT_S = 1e-6
 #: The time integrators: the published fixed-step RK4, or exact and event-driven.
 INTEGRATORS = ("rk4", "exact")
 #: ``integrator``: "auto" (the default; :func:`resolve_integrator` chooses) or INTEGRATORS.
 INTEGRATOR_CHOICES = ("auto", *INTEGRATORS)
+#: How RK4 renders the ball's Coulomb friction (docs/model.md, section 5): "sgn", the
+#: published F_b = -F_c sgn(y') at every stage, or "hold", the stick law (Karnopp's): the
+#: ball is held with the bar while the force that carries it is at most F_s.  The exact
+#: integrator always holds (its stick mode); "hold" is the converged verdict's law.
+STICK_LAWS = ("sgn", "hold")
 
 # Resource bounds: far beyond any study (the published runs are 2e6 steps, 922
 # periods and 20000 history rows), small enough that a run's arrays fit in memory.
@@ -84,36 +92,55 @@ class Initial:
 class Integration:
     """How every run of an analysis is integrated (the options of :func:`simulate`).
 
-    ``duration_s`` and ``dt_s`` (s) as published by default (2 s, 1e-6 s);
+    ``duration_s`` (s) as published by default (2 s); ``dt_s`` (s): the RK4 step, None
+    by default: the method's own, the published 1e-6 s (:data:`PUBLISHED_DT_S`) for a
+    run of fixed length and the converged verdict's for a judged cut
+    (:func:`~boringbar.analysis.verdict.judged_step`), which an analysis settles with
+    :meth:`with_step`;
     ``integrator``: one of :data:`INTEGRATOR_CHOICES` ("auto", the default: per run,
     as :func:`resolve_integrator` says; "rk4", the published scheme; or "exact");
     ``steady_fraction``: the last part of each run over which RMS,
     patterns and Poincare samples are taken (0.8: the first 20 % dropped);
-    ``initial``: the initial conditions of every run (default: at rest).
+    ``initial``: the initial conditions of every run (default: at rest);
+    ``stick_law``: how RK4 renders the ball's friction, one of :data:`STICK_LAWS`
+    ("sgn", the published law, by default).
     """
 
     duration_s: float = 2.0
-    dt_s: float = 1e-6
+    dt_s: float | None = None
     integrator: str = "auto"
     steady_fraction: float = STEADY_FRACTION
     initial: Initial | None = None
+    stick_law: str = "sgn"
 
     def __post_init__(self):
         check_positive("duration_s", self.duration_s, "s")
-        check_positive("dt_s", self.dt_s, "s")
+        if self.dt_s is not None:
+            check_positive("dt_s", self.dt_s, "s")
         check_choice("integrator", self.integrator, INTEGRATOR_CHOICES)
         check_range("steady_fraction", self.steady_fraction, 0.0, 1.0, lo_open=True)
+        check_choice("stick_law", self.stick_law, STICK_LAWS)
+
+    @property
+    def step_s(self) -> float:
+        """The RK4 step of a run of fixed length (s): ``dt_s``, or the published one."""
+        return PUBLISHED_DT_S if self.dt_s is None else self.dt_s
+
+    def with_step(self, default_s: float) -> Integration:
+        """These options with ``dt_s`` settled: as given, or ``default_s`` (s), the
+        method's own (an analysis's entry settles it, so its runs and its record agree)."""
+        return self if self.dt_s is not None else replace(self, dt_s=float(default_s))
 
     def kwargs(self) -> dict:
         """The keyword arguments of :func:`simulate` these options stand for."""
-        return {"duration_s": self.duration_s, "dt_s": self.dt_s, "integrator": self.integrator,
+        return {"duration_s": self.duration_s, "dt_s": self.step_s, "integrator": self.integrator,
                 "steady_fraction": self.steady_fraction, "initial": self.initial,
-                "record_every": 0}
+                "record_every": 0, "stick_law": self.stick_law}
 
     def to_dict(self) -> dict:
-        return {"duration_s": self.duration_s, "dt_s": self.dt_s,
+        return {"duration_s": self.duration_s, "dt_s": self.step_s,
                 "integrator": self.integrator, "steady_fraction": self.steady_fraction,
-                "initial": (self.initial or Initial()).__dict__}
+                "initial": (self.initial or Initial()).__dict__, "stick_law": self.stick_law}
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,7 +172,8 @@ class Run:
     ``history`` (t, W, W', aux, aux', force; None unless recorded); ``initial`` and
     ``final``: the states it started from and ended at; ``pattern``: the impact
     pattern; ``energy``: the energy flows and their balance; ``thresholds``: the
-    pattern classifier's tolerances; ``integrator`` and ``elapsed_s`` (wall time).
+    pattern classifier's tolerances and the stick law's band; ``integrator``,
+    ``stick_law`` (RK4's friction law, :data:`STICK_LAWS`) and ``elapsed_s`` (wall time).
     """
 
     system: System
@@ -167,6 +195,7 @@ class Run:
     energy: dict = field(default_factory=dict)
     thresholds: dict = field(default_factory=dict)
     integrator: str = "rk4"
+    stick_law: str = "sgn"
 
     @property
     def rms_tip_m(self) -> float | None:
@@ -187,6 +216,7 @@ class Run:
             "forcing": self.forcing.to_dict(),
             "omega_rad_s": self.omega_rad_s,
             "integrator": self.integrator,
+            "stick_law": self.stick_law,
             "delay_interpolation": getattr(self.forcing, "interpolation", None),
             "dt_s": self.dt_s,
             "t0_s": self.t0_s,

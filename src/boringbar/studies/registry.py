@@ -60,7 +60,13 @@ from boringbar.analysis.verdict import VerdictOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import MAX_DEPTH, Harmonic
 from boringbar.model.system import make_system
-from boringbar.simulate import INTEGRATOR_CHOICES, Initial, Integration, check_friction_law
+from boringbar.simulate import (
+    INTEGRATOR_CHOICES,
+    PUBLISHED_DT_S,
+    Initial,
+    Integration,
+    check_friction_law,
+)
 from boringbar.simulate.run_limits import check_delay, check_step, check_steps
 from boringbar.studies.schema import SECTION_OF, SYSTEM_KEYS, Setting, Study, StudyError
 
@@ -182,6 +188,7 @@ class Analysis:
 def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
     """What :func:`~boringbar.simulate.simulate` refuses, checked before any work."""
     d = system.damper
+    dt = study.value("dt_s") or PUBLISHED_DT_S  # a judged cut's own step is coarser
     try:
         check_friction_law(system, study.value("integrator"))
     except ParameterError:
@@ -189,18 +196,17 @@ def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
                              "rk4 integrator has only the sgn() law (static_ratio = 1); set "
                              "run.integrator = 'exact' for true stick-slip") from None
     try:
-        check_step(system, omega, study.value("dt_s"))
+        check_step(system, omega, dt)
     except ParameterError as exc:
-        raise ParameterError(f"key 'run.dt_s' = {study.value('dt_s')!r}: {exc}") from None
-    check_steps(study.value("duration_s"), study.value("dt_s"),
-                ("key 'run.duration_s'", "key 'run.dt_s'"))
+        raise ParameterError(f"key 'run.dt_s' = {dt!r}: {exc}") from None
+    check_steps(study.value("duration_s"), dt, ("key 'run.duration_s'", "key 'run.dt_s'"))
     if isinstance(d, ImpactDamper):
         half = d.gap_m / 2 * 1e3
         check_range(f"key 'run.ball_position_mm' (within +-gap/2 of a {d.gap_m * 1e3:g} mm gap)",
                     study.value("ball_position_mm"), -half, half, unit="mm")
     if cutting:
-        check_delay(60.0 * omega / (2 * math.pi), study.value("revolutions"),
-                    study.value("dt_s"), "key 'forcing.rpm'")
+        check_delay(60.0 * omega / (2 * math.pi), study.value("revolutions"), dt,
+                    "key 'forcing.rpm'")
 
 
 # --- shared pieces ----------------------------------------------------------------

@@ -178,7 +178,9 @@ SETTINGS: dict[str, dict[str, Setting]] = {
     },
     "run": {
         "duration_s": _pos(2.0),
-        "dt_s": _f(1e-6, 0.0, 1e-3, lo_open=True),
+        "dt_s": _f(None, 0.0, 1e-3, lo_open=True,
+                   doc="the RK4 step in s (unset: the published 1e-6, or a judged "
+                       "cut's own)"),
         "integrator": Setting("str", "auto", doc="auto (exact for harmonic runs, rk4 "
                               "under the paper preset and in cuts), rk4 (published) or exact"),
         "steady_fraction": _f(0.8, 0.0, 1.0, lo_open=True),
