@@ -98,12 +98,7 @@ from boringbar.analysis.speeds import (
     default_speeds,
 )
 from boringbar.analysis.sweep import Case, as_cases
-from boringbar.analysis.verdict import (
-    VerdictOptions,
-    judged_step,
-    stick_law_text,
-    verdict_attrs,
-)
+from boringbar.analysis.verdict import VerdictOptions, judged_step, stick_law_text, verdict_attrs
 from boringbar.execute import Execution
 from boringbar.model.cutting import CutLawFields, CuttingLaw
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
@@ -352,12 +347,10 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     if options.criterion is None:
         options = replace(options, criterion=criterion_for([c.system for c in cases]))
     chatter_probability.check(options.uncertainty, options.criterion)
-    # the step settled once, so the runs and the Dataset's record agree
-    integration = integration.with_step(
-        judged_step([c.system for c in cases]) if options.criterion == "growth"
-        else PUBLISHED_DT_S)
-    if options.criterion == "growth":
+    if options.criterion == "growth":  # the step settled once: the runs and the record agree
+        integration = integration.with_step(judged_step([c.system for c in cases]))
         _check_growth(cases, integration, options.verdict.stick_law)
+    integration = integration.with_step(PUBLISHED_DT_S)
     rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
         check_delay(r, options.revolutions, integration.dt_s)

@@ -59,9 +59,10 @@ SETTLE_TOLERANCE = 0.05
 MIN_SEGMENT = 6
 #: A judged cut's RK4 step (s), and at least this many steps in the shortest period of
 #: a bar's modes and absorber (:func:`judged_step`).  With a ball held by the stick law
-#: the verdicts do not change from 5e-7 s to 1e-5 s on the carbide example's ball map,
-#: and a friction-held vibration grows at the locked bar's root at any of these steps
-#: (docs/chatter.md, "The step of a judged cut").
+#: a friction-held vibration grows at the locked bar's root at any step, and no
+#: chatter-free verdict changes on the carbide ball map from 5e-7 s to 1e-5 s nor on the
+#: published one from 1e-6 s to 5e-6 s; an impacting ball's bounded vibration is what
+#: stops the step at 2e-6 s (docs/chatter.md, "The step of a judged cut").
 JUDGED_STEP_S = 2e-6
 JUDGED_STEPS_PER_PERIOD = 25
 #: A slope still rising is extrapolated only once each rise is at most this fraction of

@@ -134,20 +134,12 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                        help="Omega/omega_n of the host bar (default: 1.0)")
     g.add_argument("--duration-s", type=float, default=2.0, metavar="S",
                    help="simulated time in s (default: 2.0)")
-    g.add_argument("--dt-s", type=float, metavar="S",
-                   help="RK4 time step in s; with --integrator exact, the step of the "
-                        "recorded history (default: the published 1e-6; a cut judged by "
-                        "the converged verdict: 5e-6, or finer for a bar with high modes)")
+    add_step(g)
     g.add_argument("--integrator", choices=INTEGRATOR_CHOICES, default="auto",
                    help="auto (default): exact for harmonic runs, rk4 under the paper "
                         "preset and in cuts; rk4: the published fixed-step scheme; exact: "
                         "event-driven, exact between events (a cut: the delayed surface "
                         "from a history of step <= dt)")
-    g.add_argument("--stick-law", choices=STICK_LAWS,
-                   help="how RK4 renders a ball's friction: sgn, the published "
-                        "F_b = -F_c sgn(y'), or hold, which holds the ball exactly while "
-                        "friction can (default: sgn for runs of fixed length, hold for a "
-                        "cut judged by the converged verdict; docs/model.md, 5.1)")
 
     if initial:
         g = p.add_argument_group("initial conditions (default: at rest, ball centred)")
@@ -203,6 +195,19 @@ def add_verdict(g, knocks: str = "only the small 1 um knock") -> None:
     g.add_argument("--max-run-s", type=float, metavar="S",
                    help="the longest a cut runs before it is called undecided, in s "
                         "(default: 10)")
+
+
+def add_step(g) -> None:
+    """--dt-s and --stick-law: RK4's step and its law of a ball's friction."""
+    g.add_argument("--dt-s", type=float, metavar="S",
+                   help="RK4 time step in s; with --integrator exact, the step of the "
+                        "recorded history (default: the published 1e-6; a cut judged by "
+                        "the converged verdict: 2e-6, or finer for a bar with high modes)")
+    g.add_argument("--stick-law", choices=STICK_LAWS,
+                   help="how RK4 renders a ball's friction: sgn, the published "
+                        "F_b = -F_c sgn(y'), or hold, which holds the ball exactly while "
+                        "friction can (default: sgn for runs of fixed length, hold for a "
+                        "cut judged by the converged verdict; docs/model.md, 5.1)")
 
 
 def verdict_options(args) -> VerdictOptions:
