@@ -7,10 +7,9 @@ characteristic root in a cut, the energy balance, and the exact integrator's sti
 
 from __future__ import annotations
 
-import cmath
-
 import numpy as np
 import pytest
+from delay_roots import rightmost_root
 
 import boringbar as bb
 from boringbar import Harmonic, Initial, make_system
@@ -47,26 +46,11 @@ def test_a_held_ball_moves_with_the_bar_as_the_locked_bar_does():
 
 def locked_root(system: bb.System, depth: float, rpm: float) -> complex:
     """The rightmost characteristic root of a one-mode bar's cut with its ball locked in
-    it (modal mass M + m psi_d^2): Newton's method from starts along the imaginary axis."""
+    it (modal mass M + m psi_d^2)."""
     bar = system.bar
     m = bar.mass_kg[0] + system.damper.mass_kg * bar.psi_damper[0] ** 2
-    c, k, psi2 = bar.damping_n_s_m[0], bar.stiffness_n_m[0], bar.psi_tip[0] ** 2
-    tau, kb = 60.0 / rpm, KR_ALUMINIUM * depth
-
-    def f(s):
-        return m * s * s + c * s + k + psi2 * kb * (1 - cmath.exp(-s * tau))
-
-    def df(s):
-        return 2 * m * s + c + psi2 * kb * tau * cmath.exp(-s * tau)
-
-    roots = []
-    for w in np.linspace(0.8, 1.3, 26) * np.sqrt(k / m):
-        s = complex(0.0, w)
-        for _ in range(100):
-            s -= f(s) / df(s)
-        if abs(f(s)) < 1e-8 * k:
-            roots.append(s)
-    return max(roots, key=lambda r: r.real)
+    return rightmost_root(m, bar.damping_n_s_m[0], bar.stiffness_n_m[0], bar.psi_tip[0] ** 2,
+                          KR_ALUMINIUM * depth, 60.0 / rpm)
 
 
 def held_growth(system, cut, dt, law) -> float:

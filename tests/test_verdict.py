@@ -8,12 +8,12 @@ equation's characteristic function, found by Newton's method on
 
 from __future__ import annotations
 
-import cmath
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+from delay_roots import rightmost_root
 
 import boringbar as bb
 from boringbar.analysis.frf_fit import fit_frf
@@ -107,29 +107,11 @@ def test_the_search_finds_the_limit_without_the_analytic_seed():
 
 
 # --- the verdict itself -------------------------------------------------------------------
-def rightmost_root(system: bb.System, depth: float, rpm: float) -> complex:
-    """The rightmost characteristic root of a one-mode bar's cut: Newton's method from
-    starts along the imaginary axis about the natural frequency."""
+def bar_root(system: bb.System, depth: float, rpm: float) -> complex:
+    """The rightmost characteristic root of a one-mode bar's cut (delay_roots)."""
     bar = system.bar
-    m, c, k = bar.mass_kg[0], bar.damping_n_s_m[0], bar.stiffness_n_m[0]
-    psi2 = bar.psi_tip[0] ** 2
-    tau = 60.0 / rpm
-    kb = KR_ALUMINIUM * depth
-
-    def f(s):
-        return m * s * s + c * s + k + psi2 * kb * (1 - cmath.exp(-s * tau))
-
-    def df(s):
-        return 2 * m * s + c + psi2 * kb * tau * cmath.exp(-s * tau)
-
-    roots = []
-    for w in np.linspace(0.8, 1.3, 26) * bar.natural_frequency_rad_s:
-        s = complex(0.0, w)
-        for _ in range(100):
-            s -= f(s) / df(s)
-        if abs(f(s)) < 1e-8 * k:
-            roots.append(s)
-    return max(roots, key=lambda r: r.real)
+    return rightmost_root(bar.mass_kg[0], bar.damping_n_s_m[0], bar.stiffness_n_m[0],
+                          bar.psi_tip[0] ** 2, KR_ALUMINIUM * depth, 60.0 / rpm)
 
 
 @pytest.mark.parametrize(("factor", "first", "last"), [(1.03, 60, 80), (1.1, 22, 38)])
@@ -141,7 +123,7 @@ def test_the_growth_rate_is_the_characteristic_root_s_real_part(factor, first, l
     system = bb.make_system("solid", n_modes=1)
     b = factor * float(limit_at_speeds(system, [1200.0])[0])
     cut = bb.Regenerative(depth_m=b, rpm=1200.0, start="static")
-    root = rightmost_root(system, b, 1200.0)
+    root = bar_root(system, b, 1200.0)
     v = judge(system, cut)
     assert v.onset == CHATTER and v.chatter_free is False
     assert 0 < v.growth_rate_per_s < root.real * 1.001
