@@ -64,7 +64,6 @@ from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
 from boringbar.simulate import (
-    PUBLISHED_DT_S,
     Initial,
     Integration,
     resolve_integrator,
@@ -318,7 +317,7 @@ def plan(system, options: BasinOptions, integration: Integration) -> Plan:
     ``options.forcing``, or a list of :class:`OperatingPoint`); a point is
     (operating point index, [cell indices]): a lock-step batch of ``options.batch``
     consecutive cells in grid order (RK4) or one cell."""
-    integration = integration.with_step(PUBLISHED_DT_S)
+    integration = integration.with_step()
     if isinstance(system, list | tuple):
         operating = list(system)
     elif isinstance(system, System):

@@ -42,7 +42,7 @@ from boringbar.execute import Execution
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.simulate import PUBLISHED_DT_S, Initial, Integration, State, simulate
+from boringbar.simulate import Initial, Integration, State, simulate
 from boringbar.simulate.run_limits import check_steady_ratios
 from boringbar.version import __version__
 
@@ -170,7 +170,7 @@ def plan(systems, options: BifurcationOptions, integration: Integration) -> Plan
     """One point per continuation (sequential by nature): of ``systems``, a System or
     a factory ``value -> System`` (the Dataset of one), or a list of
     :class:`~boringbar.analysis.sweep.Case` (their Datasets stacked along ``case``)."""
-    integration = integration.with_step(PUBLISHED_DT_S)
+    integration = integration.with_step()
     cases = list(systems) if isinstance(systems, list | tuple) else None
     targets = [c.system for c in cases] if cases is not None else [systems]
     if not targets:

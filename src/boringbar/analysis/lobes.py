@@ -104,7 +104,6 @@ from boringbar.model.cutting import CutLawFields, CuttingLaw
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import (
-    PUBLISHED_DT_S,
     Integration,
     check_cut_law,
     check_friction_law,
@@ -350,7 +349,7 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     if options.criterion == "growth":  # the step settled once: the runs and the record agree
         integration = integration.with_step(judged_step([c.system for c in cases]))
         _check_growth(cases, integration, options.verdict.stick_law)
-    integration = integration.with_step(PUBLISHED_DT_S)
+    integration = integration.with_step()
     rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
         check_delay(r, options.revolutions, integration.dt_s)
@@ -713,7 +712,7 @@ def examples(ds, case: Case, options: LobesOptions | None = None, *,
     history of about ``rows`` rows, not stopped at the first zero of the force:
     one Dataset with dims (example, time_s)."""
     options = options or LobesOptions()
-    integration = (integration or Integration()).with_step(PUBLISHED_DT_S)
+    integration = (integration or Integration()).with_step()
     points = example_points(ds)
     parts = [_example_run(case, rpm, depth, options, integration, rows)
              for _, rpm, depth in points]

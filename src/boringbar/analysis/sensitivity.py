@@ -38,7 +38,7 @@ from boringbar.analysis.sweep import Case, SweepOptions
 from boringbar.execute import Execution
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import make_system
-from boringbar.simulate import PUBLISHED_DT_S, Initial, Integration, resolved_integrators, simulate
+from boringbar.simulate import Initial, Integration, resolved_integrators, simulate
 from boringbar.version import __version__
 
 KINDS = ("ball", "friction_number", "restitution", "initial")
@@ -153,7 +153,7 @@ def plan(options: SensitivityOptions, integration: Integration, *, preset: str =
     ``overrides`` for :func:`~boringbar.model.system.make_system`, with the value set);
     harmonic: the :func:`~boringbar.analysis.sweep.plan` of those cases; cuts: a point
     per (value, depth)."""
-    integration = integration.with_step(PUBLISHED_DT_S)
+    integration = integration.with_step()
     overrides = dict(overrides or {})
     kind = options.kind
     if kind != "initial" and bar != "ball":

@@ -30,7 +30,6 @@ from boringbar.model.system import System, make_system
 from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
 from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import (
-    PUBLISHED_DT_S,
     Initial,
     Integration,
     resolve_integrator,
@@ -258,7 +257,7 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
     whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind and mode
     count, in (case, force, ratio) order) or one run; the options in the context carry
     their ratios (:func:`default_ratios` of the cases if none were given)."""
-    integration = integration.with_step(PUBLISHED_DT_S)
+    integration = integration.with_step()
     cases = as_cases(cases, "cases")
     if options.ratios is None:
         options = replace(options, ratios=default_ratios(cases))

@@ -44,6 +44,7 @@ from boringbar._validate import check_choice, check_int, check_range, check_valu
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
 from boringbar.simulate import STICK_LAWS, CutStepper, Window, knocked_cut
+from boringbar.simulate.run_limits import shortest_period
 
 #: A window holds whole revolutions and at least this many periods of the host bar's
 #: first mode (a chatter near an absorber's lower peak, down to 2/3 f1, still shows
@@ -417,17 +418,8 @@ def judged_step(systems, dt_s: float | None = None) -> float:
     fewer than :data:`JUDGED_STEPS_PER_PERIOD` steps a period."""
     if dt_s is not None:
         return float(dt_s)
-    shortest = min(min(2 * math.pi / max(s.bar.omegas_rad_s), absorber_period(s))
-                   for s in systems)
+    shortest = min(shortest_period(s) for s in systems)
     return min(JUDGED_STEP_S, shortest / JUDGED_STEPS_PER_PERIOD)
-
-
-def absorber_period(system: System) -> float:
-    """The tuned absorber's own period (s); infinite for other bars."""
-    d = system.damper
-    if system.kind != "tmd":
-        return math.inf
-    return 2 * math.pi * math.sqrt(d.mass_kg / d.stiffness_n_m)
 
 
 def verdict_attrs(options: VerdictOptions, systems) -> dict:

@@ -30,12 +30,12 @@ from boringbar.cli.options import (
     integration,
     many_cases,
     progress_printer,
-    step,
     verdict_options,
     wrote,
 )
 from boringbar.model.forcing import check_depth
 from boringbar.report.outputs import chatter_map_files
+from boringbar.simulate import fixed_run_step
 from boringbar.simulate.run_limits import check_steps
 
 
@@ -135,7 +135,7 @@ def map_verdict(args) -> VerdictOptions:
 def _cmd_chatter_map(args) -> Outcome:
     _check_not_for_a_map(args)
     verdict = map_verdict(args)
-    check_steps(verdict.max_duration_s, step(args), ("--max-run-s", "--dt-s"))
+    check_steps(verdict.max_duration_s, fixed_run_step(args.dt_s), ("--max-run-s", "--dt-s"))
     args.duration_s = verdict.max_duration_s  # the longest run, as the shared checks see it
     cases, _, _ = many_cases(args)
     options = map_options(args, verdict)

@@ -41,11 +41,11 @@ from boringbar.simulate import (
     INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
     MAX_INITIAL_VELOCITY,
-    PUBLISHED_DT_S,
     STEADY_FRACTION,
     STICK_LAWS,
     Initial,
     Integration,
+    fixed_run_step,
 )
 from boringbar.simulate.run_limits import check_delay, check_step, check_steps
 
@@ -287,13 +287,7 @@ def check_common(args, bars: list[str]) -> None:
         check_range("--restitution", args.restitution, 0, 1)
     if args.modes is not None:
         check_range("--modes", args.modes, 1, 8)
-    check_steps(args.duration_s, step(args), ("--duration-s", "--dt-s"))
-
-
-def step(args) -> float:
-    """--dt-s, or where it was not given the published step: the checks' step (a judged
-    cut's own is coarser, so what passes them passes it)."""
-    return PUBLISHED_DT_S if args.dt_s is None else args.dt_s
+    check_steps(args.duration_s, fixed_run_step(args.dt_s), ("--duration-s", "--dt-s"))
 
 
 def system_spec(args):
@@ -381,8 +375,9 @@ def check_gap(gap_mm: float, args) -> float:
 def check_dt(args, systems, ratio: float = 0.0) -> None:
     """--dt-s resolves the highest mode of every system and the forcing at ``ratio``
     (the largest Omega/omega_n; 0: only the modes)."""
+    dt = fixed_run_step(args.dt_s)
     for system in systems:
-        check_step(system, ratio * system.reference_frequency_rad_s, step(args), "--dt-s")
+        check_step(system, ratio * system.reference_frequency_rad_s, dt, "--dt-s")
 
 
 def check_workers(workers, name: str = "--workers") -> None:
@@ -444,7 +439,7 @@ def check_rpm(rpm: float, args, name: str = "--rpm") -> float:
     history (--revolutions) within the allowed rows."""
     revolutions = 3 if args.revolutions is None else args.revolutions
     check_int("--revolutions", revolutions, 1, 50)
-    check_delay(rpm, revolutions, step(args), name)
+    check_delay(rpm, revolutions, fixed_run_step(args.dt_s), name)
     return float(rpm)
 
 

@@ -18,7 +18,6 @@ from boringbar.cli.options import (
     gap_default_mm,
     initial_conditions,
     one_bar,
-    step,
     system_overrides,
     wrote,
 )
@@ -28,7 +27,7 @@ from boringbar.model.system import make_system
 from boringbar.model.system_file import PUBLISHED_NAME
 from boringbar.plot import plot_run
 from boringbar.plot.style import system_label
-from boringbar.simulate import HISTORY_ROWS, STEADY_FRACTION, simulate
+from boringbar.simulate import HISTORY_ROWS, STEADY_FRACTION, fixed_run_step, simulate
 from boringbar.simulate.run_limits import check_history, check_steady, check_steps
 
 
@@ -53,7 +52,7 @@ def cmd_simulate(args) -> Outcome:
     bar, friction_on = one_bar(args, "simulate")
     gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm, args)
     forcing = _simulate_forcing(args)
-    dt = step(args)
+    dt = fixed_run_step(args.dt_s)
     n_steps = check_steps(args.duration_s, dt, ("--duration-s", "--dt-s"))
     record_every = None  # simulate's default: about HISTORY_ROWS rows
     if args.record_every is not None:  # every N-th step: N = 0 means nothing

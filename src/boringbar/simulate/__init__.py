@@ -45,12 +45,13 @@ from boringbar.simulate.run import (
     IntegrationError,
     Run,
     State,
+    fixed_run_step,
 )
 
 __all__ = [
     "EXACT_STATUS_MESSAGES", "HISTORY_ROWS", "IMPACT_THRESHOLD", "INTEGRATORS",
     "INTEGRATOR_CHOICES", "MAX_EVENT_ROWS", "MAX_INITIAL_DISPLACEMENT", "MAX_INITIAL_VELOCITY",
-    "PUBLISHED_DT_S",
+    "PUBLISHED_DT_S", "fixed_run_step",
     "STEADY_FRACTION", "STICK_LAWS", "STICK_MIN_PERIODS", "CutStepper", "Initial", "Integration",
     "IntegrationError", "Run", "RunSetup", "State", "Window", "check_cut_law",
     "check_friction_law", "initial_state", "knocked_cut", "pack", "pack_cut",

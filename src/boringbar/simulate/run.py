@@ -88,6 +88,13 @@ class Initial:
         check_range("initial ball_velocity_m_s", self.ball_velocity_m_s, -v, v, unit="m/s")
 
 
+def fixed_run_step(dt_s: float | None) -> float:
+    """The RK4 step (s) of a run of fixed length: ``dt_s``, or where it is None (not
+    given) the published one (a judged cut's own step is coarser, so what this step
+    passes, that one does too)."""
+    return PUBLISHED_DT_S if dt_s is None else dt_s
+
+
 @dataclass(frozen=True)
 class Integration:
     """How every run of an analysis is integrated (the options of :func:`simulate`).
@@ -124,11 +131,12 @@ class Integration:
     @property
     def step_s(self) -> float:
         """The RK4 step of a run of fixed length (s): ``dt_s``, or the published one."""
-        return PUBLISHED_DT_S if self.dt_s is None else self.dt_s
+        return fixed_run_step(self.dt_s)
 
-    def with_step(self, default_s: float) -> Integration:
+    def with_step(self, default_s: float = PUBLISHED_DT_S) -> Integration:
         """These options with ``dt_s`` settled: as given, or ``default_s`` (s), the
-        method's own (an analysis's entry settles it, so its runs and its record agree)."""
+        method's own (the published step by default, a judged cut's for a verdict; an
+        analysis's plan settles it, so its runs and its record agree)."""
         return self if self.dt_s is not None else replace(self, dt_s=float(default_s))
 
     def kwargs(self) -> dict:

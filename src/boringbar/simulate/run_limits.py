@@ -20,15 +20,22 @@ MAX_STEPS = 10_000_000_000
 MAX_HISTORY_ROWS = 10_000_000
 
 
+def shortest_period(system: System) -> float:
+    """The shortest natural period (s) of ``system``: its highest retained mode's, or a
+    tuned absorber's own where that is shorter."""
+    periods = [2 * math.pi / w for w in system.bar.omegas_rad_s]
+    if isinstance(system.damper, TunedMassDamper):
+        periods.append(2 * math.pi * math.sqrt(system.damper.mass_kg / system.damper.stiffness_n_m))
+    return min(periods)
+
+
 def check_step(system: System, omega: float, dt: float, name: str = "dt_s") -> None:
     """The step must resolve the forcing period and the highest retained mode
     (``name``: how the caller calls dt)."""
     check_positive(name, dt, "s")
-    periods = [2 * math.pi / w for w in system.bar.omegas_rad_s]
+    periods = [shortest_period(system)]
     if omega > 0:
         periods.append(2 * math.pi / omega)
-    if isinstance(system.damper, TunedMassDamper):
-        periods.append(2 * math.pi * math.sqrt(system.damper.mass_kg / system.damper.stiffness_n_m))
     limit = min(periods) / MIN_STEPS_PER_PERIOD
     if dt > limit:
         raise ParameterError(f"{name} = {dt:g} s is too coarse: it must be in (0, {limit:.3g}] s "

@@ -62,10 +62,10 @@ from boringbar.model.forcing import MAX_DEPTH, Harmonic
 from boringbar.model.system import make_system
 from boringbar.simulate import (
     INTEGRATOR_CHOICES,
-    PUBLISHED_DT_S,
     Initial,
     Integration,
     check_friction_law,
+    fixed_run_step,
 )
 from boringbar.simulate.run_limits import check_delay, check_step, check_steps
 from boringbar.studies.schema import SECTION_OF, SYSTEM_KEYS, Setting, Study, StudyError
@@ -188,7 +188,7 @@ class Analysis:
 def _check_run(study: Study, system, omega: float, cutting: bool) -> None:
     """What :func:`~boringbar.simulate.simulate` refuses, checked before any work."""
     d = system.damper
-    dt = study.value("dt_s") or PUBLISHED_DT_S  # a judged cut's own step is coarser
+    dt = fixed_run_step(study.value("dt_s"))
     try:
         check_friction_law(system, study.value("integrator"))
     except ParameterError:
