@@ -270,7 +270,10 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         t.fb = fb;
         t.yds = yds;
         t.pdv = pdv;
-        // the stick law's band: its own F_b in place of the sgn() law's
+        // the stick law's band: its own F_b in place of the sgn() law's.  (After the
+        // published branch, not around it: with the branch about the sign mask, GCC 12
+        // stops with an internal error, gimple_expand_vec_cond_expr, in the regime
+        // matrices' copy, dynamics.cpp; so the held stage writes the modes again.)
         if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, t);
     } else if (sh.tmd()) {
         double rel = Xs[iy], reld = Xs[iyd];
