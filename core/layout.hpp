@@ -95,7 +95,9 @@ constexpr int P_SIZE = PSI_A + NMAX;
     X(STEADY_MAX_W)                                                                        \
     X(STEADY_MIN_W)                                                                        \
     X(N_EVENTS)         /* exact: events handled */                                        \
-    X(EXACT_STATUS)     /* exact: 0 done, 1 event cap reached, 2 stalled */
+    X(EXACT_STATUS)     /* exact: 0 done, 1 event cap reached, 2 stalled */              \
+    X(MAX_HOLD_FORCE)   /* RK4's stick law: largest |F_b| that held the ball (N) */        \
+    X(N_FREE_STEPS)     /* RK4's stick law: steps the ball was not held through */
 
 enum MetSlot : int { BB_METRICS(BB_ENUM_ENTRY) MET_SIZE };
 #undef BB_ENUM_ENTRY

@@ -351,10 +351,11 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 // they stay in registers (the kernel files are built without GCC's auto-vectoriser,
 // which packed them in vectors through memory, where the loads stalled on store
 // forwarding).
+// hold_max: the largest |F_b| of a stage the stick law held, raised in place.
 template <int N, int CASE, bool FAST, class Force>
 BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
                           const double* cst, const double* wst, Flows& fl,
-                          Force&& force) {
+                          double& hold_max, Force&& force) {
     const int nx = sh.nx();
     constexpr int NXC = Shape<N, CASE>::NXC;
     double sum[NXC], xs[NXC];
@@ -372,6 +373,7 @@ BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
         }
         stage_flows(q, sh, fl, terms, wst[s], f);
         held = held && terms.held;
+        hold_max = Steady::pymax(hold_max, terms.held ? std::fabs(terms.fb) : 0.0);
     }
     for (int j = 0; j < nx; ++j) X[j] += sum[j];
     return held;

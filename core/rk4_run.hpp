@@ -221,6 +221,8 @@ BB_INLINE void run_body(const RunArgs& a) {
     const double t_steady = t0 + double(a.steady_start) * dt;
     const EventLog log{met, a.imp, a.stick, t_steady};
     StickState ss;
+    // how near the stick law's hold came to slipping, and the steps it did not hold
+    double hold_max = met[L::MAX_HOLD_FORCE], n_free = met[L::N_FREE_STEPS];
 
     TipAux prev = tip_aux(q, sh, X, true);
     idx wptr = regen ? kg0 % nbuf : 0;  // the row of the newest node
@@ -257,6 +259,7 @@ BB_INLINE void run_body(const RunArgs& a) {
             map_increment(sh, mp, X, MapIn{sn, cn, fz}, dX);
             map_flows(q, sh, mp, fl, X, dX, MapIn{sn, cn, fz});
             for (int j = 0; j < nx; ++j) X[j] += dX[j];
+            if (ball && q.hold) n_free += 1.0;  // the map slides
         } else {
             auto force = [&](int s, const double* Xs) {
                 double f = fst[s];
@@ -270,11 +273,12 @@ BB_INLINE void run_body(const RunArgs& a) {
             };
             bool held;
             if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
-                held = rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, force);
+                held = rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, hold_max, force);
             else
-                held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, force);
+                held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, hold_max, force);
             // (a step held from y' = 0 keeps y' = 0 exactly: nothing to stop)
             if (ball && held && X[iyd] != 0.0) stop_slide(q, sh, X, fl);
+            if (ball && q.hold && !held) n_free += 1.0;
         }
         const bool steady = k >= a.steady_start;
 
@@ -332,6 +336,8 @@ BB_INLINE void run_body(const RunArgs& a) {
     met[L::N_REC] = double(n_rec);
     met[L::N_STROBE] = double(so.n);
     met[L::MAX_FORCE] = cut.max_force;
+    met[L::MAX_HOLD_FORCE] = hold_max;
+    met[L::N_FREE_STEPS] = n_free;
     met[L::FIRST_ZERO_T] = cut.first_zero;
     met[L::N_ZERO_STEPS] = cut.n_zero;
     met[L::STEPS_DONE] += double(steps_run);

@@ -328,6 +328,22 @@ def current_params(stored: np.ndarray, param_names) -> np.ndarray:
     return out
 
 
+def current_met(case: dict) -> np.ndarray:
+    """The stored initial metrics ``met0`` (or a batch's rows) in the core's layout today:
+    each stored slot where its name is now, the slots added since at 0, as setup_run
+    starts them."""
+    stored, names = case["met0"], case["_met_names"]
+    out = np.zeros(stored.shape[:-1] + (L.MET_SIZE,))
+    for i, name in enumerate(names):
+        out[..., getattr(L, name)] = stored[..., i]
+    return out
+
+
+def stored_met(case: dict, met: np.ndarray) -> np.ndarray:
+    """The metrics ``met`` in the stored layout: the slots the reference holds."""
+    return np.stack([met[..., getattr(L, name)] for name in case["_met_names"]], axis=-1)
+
+
 def _params(case: dict, key: str) -> np.ndarray:
     """The case's stored ``p`` (or ``P``) in the core's layout today."""
     return current_params(case[key], case["_param_names"])
@@ -337,27 +353,27 @@ def _records(case: dict) -> list[np.ndarray]:
     return [np.zeros(tuple(int(n) for n in case[f"{k}_shape"])) for k in RECORDS]
 
 
-def _outputs(x, met, records) -> dict:
-    return dict(zip(OUTPUTS, (x, met, *records), strict=True))
+def _outputs(case: dict, x, met, records) -> dict:
+    return dict(zip(OUTPUTS, (x, stored_met(case, met), *records), strict=True))
 
 
 def _replay_rk4(case: dict) -> dict:
-    x, met = case["x0"].copy(), case["met0"].copy()
+    x, met = case["x0"].copy(), current_met(case)
     rec, imp, stick, strobe = records = _records(case)
     shape = tuple(int(n) for n in case["buf_shape"])
     buf = np.zeros(shape) if shape[0] else None  # None: simulate's harmonic call
     run_rk4(_params(case, "p"), x, float(case["t0"]), float(case["dt"]),
             int(case["n_steps"]), int(case["steady_start"]), int(case["rec_every"]), rec, imp,
             stick, strobe, met, buf)
-    return _outputs(x, met, records)
+    return _outputs(case, x, met, records)
 
 
 def _replay_batch(case: dict) -> dict:
-    x, met = case["x0"].copy(), case["met0"].copy()
+    x, met = case["x0"].copy(), current_met(case)
     _, imp, stick, strobe = records = _records(case)
     run_rk4_batch(_params(case, "P"), x, float(case["t0"]), float(case["dt"]),
                   int(case["n_steps"]), int(case["steady_start"]), imp, stick, strobe, met)
-    return _outputs(x, met, records)
+    return _outputs(case, x, met, records)
 
 
 def stored_prep_of(case: dict) -> dict:
@@ -367,12 +383,12 @@ def stored_prep_of(case: dict) -> dict:
 
 
 def _replay_exact(case: dict, prep: dict | None = None) -> dict:
-    x, met = case["x0"].copy(), case["met0"].copy()
+    x, met = case["x0"].copy(), current_met(case)
     rec, imp, stick, strobe = records = _records(case)
     t = run_exact(_params(case, "p"), x, float(case["t0"]), float(case["t_end"]),
                   float(case["t_steady"]), float(case["rec_dt"]), rec, imp, stick, strobe, met,
                   prep=prep, dt=float(case["dt"]))
-    return {**_outputs(x, met, records), "t_reached": np.float64(t)}
+    return {**_outputs(case, x, met, records), "t_reached": np.float64(t)}
 
 
 _REPLAY = {"rk4": _replay_rk4, "rk4_batch": _replay_batch, "exact": _replay_exact}
@@ -391,7 +407,9 @@ def load(path: Path = DATA) -> dict:
     """{case name: {key: array}} from the reference file."""
     with np.load(path, allow_pickle=False) as z:
         param_names = tuple(str(n) for n in z["_param_names"])
-        cases = {str(n): {"_param_names": param_names} for n in z["_names"]}
+        met_names = tuple(str(n) for n in z["_met_names"])
+        cases = {str(n): {"_param_names": param_names, "_met_names": met_names}
+                 for n in z["_names"]}
         for key in z.files:
             name, _, item = key.rpartition("/")
             if name in cases:

@@ -227,3 +227,35 @@ def test_a_ball_s_settling_run_is_given_the_longer_cap(monkeypatch):
     monkeypatch.setattr(ls, "RESOLVE_CAP", 1.0)
     done = ls.growth_column(case, 1000.0, options, Integration(), seed=5)
     assert min(k for k in done if ls.not_free(done[k])) == 11
+
+
+class LevelStepper:
+    """A stand-in for a CutStepper whose tip vibrates at a level 1 um peak-to-peak, with
+    a 0.05 % jitter from window to window (a friction-bounded vibration)."""
+
+    def __init__(self, system: bb.System):
+        self.system, self.t_s, self.k = system, 0.0, 0
+
+    def advance(self):
+        from boringbar.simulate import Window
+
+        self.k += 1
+        self.t_s = 0.05 * self.k
+        half = 0.5e-6 * (1.0 + 5e-4 * math.sin(2.7 * self.k))
+        return Window(self.t_s, half, -half, 0.7 * half, False, 0, 1e-7,
+                      np.array([half, 1e-3 * half]))
+
+
+@pytest.mark.parametrize("onset_rate", [-0.03, math.nan])
+def test_a_level_vibration_after_an_onset_that_did_not_grow_settles_at_once(onset_rate):
+    """Only an onset that grew asks the settling run to stop growing at half its rate;
+    one whose rate is negative (levelled, undecided) does not (it had made a level
+    vibration 'still growing' at any slope above that negative floor, run to the cap)."""
+    from boringbar.analysis.verdict import settle
+
+    stepper = LevelStepper(bb.make_system("ball", friction=True))
+    options = VerdictOptions()
+    s = settle(stepper, [], options, 0.0, onset_rate)
+    assert s.status == "settled"
+    assert s.duration_s <= 2 * options.min_segment * 0.05 + 1e-9
+    assert s.pp_m == pytest.approx(1e-6, rel=1e-3)

@@ -342,12 +342,14 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
             b, se = slopes(t, np.array(logs[n - 2 * m:]))
             fits = list(zip(b.tolist(), se.tolist(), strict=True))
             q = t_quantile(options.confidence, 2 * m - 2)
-            # still growing: before the ball strikes, some amplitude certainly grows at half
-            # the onset's rate (the linear growth goes on); once it strikes, by more than
-            # the settling tolerance over the span (the impacts' scatter is not growth)
+            # still growing: once the ball strikes, some amplitude certainly grows by more
+            # than the settling tolerance over the span (the impacts' scatter is not
+            # growth); before, after an onset that grew, at half the onset's rate (the
+            # linear growth goes on); else only the trend below tells
             span = t[-1] - t[0]
             struck = any(w.impacts for w in windows[n - 2 * m:])
-            floor = tol / span if struck else 0.5 * onset_rate
+            floor = (tol / span if struck else 0.5 * onset_rate if onset_rate > 0
+                     else math.inf)
             growing = any(b - q * se >= floor for b, se in fits)
             trend = max(abs(b) for b, _ in fits) * span
             levelled = not growing
@@ -368,34 +370,40 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
 
 
 #: A growth that is linear is scaled up, not waited for, while its departure is below
-#: this fraction of the room it has (the tool's to leave the cut, the ball's to its walls).
+#: this fraction of the room it has (the tool's to leave the cut, a free ball's to its
+#: walls, a held ball's friction to its static limit).
 LINEAR_ROOM = 0.98
 
 
 def fast_forward(stepper: CutStepper, windows: list, options: VerdictOptions) -> bool:
-    """Jump a linear growth ahead: while a knock grows (the onset chatters), the tool has
-    never left the cut and a frictionless ball has never touched a wall, the run is
-    linear, so its departure from the steady cut is scaled up (CutStepper.scale) until it
-    fills LINEAR_ROOM of the room left: the ball's to its wall, and the chip thickness's
+    """Jump a linear growth ahead: while a knock grows (the onset chatters) and the tool
+    has never left the cut, the run is linear where a frictionless ball has never touched
+    a wall, or where the stick law has held a ball with friction through the latter half
+    of the windows (the locked bar).  Its departure from the steady cut is then scaled up
+    (CutStepper.scale) until it fills LINEAR_ROOM of the room left: the chip thickness's
     to zero (its largest departure from the feed, read off the largest force, against
-    the feed); the run is the same, reached sooner.  Whether it jumped."""
+    the feed), and the ball's to its wall, or the force that holds it to the static
+    friction F_s.  The run is the same, reached sooner.  Whether it jumped."""
     system, cut = stepper.system, stepper.forcing
-    d = system.damper
-    if system.kind != "ball" or d.friction_force_n > 0 or cut.force_noise > 0:
+    if system.kind != "ball" or cut.force_noise > 0:
         return False
     if any(w.left_cut or w.impacts for w in windows):
         return False
-    y0 = abs(stepper.x_start[2 * system.bar.n_modes])
-    last = windows[-1]
+    d, last = system.damper, windows[-1]
+    if d.friction_force_n > 0:
+        if not all(w.held for w in windows[len(windows) // 2:]) or last.max_hold_n <= 0:
+            return False
+        ball_room = d.friction_force_n * d.friction.static_ratio / last.max_hold_n
+    else:
+        y0 = abs(stepper.x_start[2 * system.bar.n_modes])
+        ball_room = (d.gap_m / 2 - y0) / max(last.max_rel_m - y0, 1e-300)
     law = cut.law
     h_max = (last.max_force_n / law.kernel_coefficient(cut.depth_m)) ** (
         1.0 / (1.0 - law.exponent))
-    room = min((d.gap_m / 2 - y0) / max(last.max_rel_m - y0, 1e-300),
-               cut.feed_m / max(h_max - cut.feed_m, 1e-300))
-    factor = LINEAR_ROOM * room
+    factor = LINEAR_ROOM * min(ball_room, cut.feed_m / max(h_max - cut.feed_m, 1e-300))
     if factor < 1.05:
         return False
-    stepper.scale(factor)
+    stepper.scale(factor, held=d.friction_force_n > 0)
     return True
 
 

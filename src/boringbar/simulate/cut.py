@@ -55,7 +55,9 @@ class Window:
     ``rms_tip_m`` (m); ``left_cut``: the chip thickness reached zero in the window;
     ``impacts``: counted ball impacts; ``max_rel_m``: the ball's largest |y| (m), or the
     absorber's largest |stroke|; ``mode_half_pp``: half the peak-to-peak of each modal
-    coordinate; ``max_force_n``: the largest cutting force (N)."""
+    coordinate; ``max_force_n``: the largest cutting force (N); ``held``: RK4's stick law
+    held the ball through every step; ``max_hold_n``: the largest friction force with
+    which it held it (N; 0 where it never did)."""
 
     t_end_s: float
     max_tip_m: float
@@ -66,6 +68,8 @@ class Window:
     max_rel_m: float
     mode_half_pp: np.ndarray  #: half the peak-to-peak of each modal coordinate u_i
     max_force_n: float = math.nan  #: the largest cutting force (N)
+    held: bool = False  #: the stick law held the ball through the window
+    max_hold_n: float = 0.0  #: the largest friction force that held it (N)
 
     @property
     def half_pp_m(self) -> float:
@@ -93,6 +97,9 @@ class CutStepper:
         self.su = setup_run(system, forcing, window_steps * dt_s, dt_s, initial, 0, 1.0, False,
                             "rk4", stick_law)
         self.window_steps = window_steps
+        #: RK4's stick law holds a ball with friction (Window.held can be True)
+        self.holds = (stick_law == "hold" and system.kind == "ball"
+                      and system.damper.friction_force_n > 0)
         self.t_s = self.su.t0
         self.modes = np.zeros((system.bar.n_modes, 2))
         self._before = 0  # steps of a given history before the run's start
@@ -100,11 +107,12 @@ class CutStepper:
     def advance(self) -> Window:
         """Run one more window; what it did."""
         su, met = self.su, self.su.met
-        for slot in (L.SUM_W2, L.SUM_W, L.N_STEADY, L.MAX_ABS_AUX, L.MAX_FORCE):
+        for slot in (L.SUM_W2, L.SUM_W, L.N_STEADY, L.MAX_ABS_AUX, L.MAX_FORCE,
+                     L.MAX_HOLD_FORCE):
             met[slot] = 0.0
         met[L.STEADY_MAX_W], met[L.STEADY_MIN_W] = -np.inf, np.inf
         self.modes[:, 0], self.modes[:, 1] = -np.inf, np.inf
-        zeros, impacts = met[L.N_ZERO_STEPS], met[L.N_IMP_ALL]
+        zeros, impacts, free = met[L.N_ZERO_STEPS], met[L.N_IMP_ALL], met[L.N_FREE_STEPS]
         run_rk4(su.p, su.x, self.t_s, su.dt, self.window_steps, 0, 0, su.rec, su.imp, su.stick,
                 su.stb, met, su.buf, self.modes)
         self.t_s = su.t0 + (met[L.STEPS_DONE] - self._before) * su.dt
@@ -114,7 +122,8 @@ class CutStepper:
                       math.sqrt(max(met[L.SUM_W2] / n - mean * mean, 0.0)),
                       bool(met[L.N_ZERO_STEPS] > zeros), int(met[L.N_IMP_ALL] - impacts),
                       float(met[L.MAX_ABS_AUX]), 0.5 * (self.modes[:, 0] - self.modes[:, 1]),
-                      float(met[L.MAX_FORCE]))
+                      float(met[L.MAX_FORCE]), self.holds and met[L.N_FREE_STEPS] == free,
+                      float(met[L.MAX_HOLD_FORCE]))
 
     def start_from(self, x: np.ndarray, history, left_cut: bool = False) -> None:
         """Start the cut (before any window) from the state ``x`` with its past:
@@ -159,19 +168,23 @@ class CutStepper:
         """The state the cut started from (a copy)."""
         return self.su.x_start.copy()
 
-    def scale(self, factor: float) -> None:
+    def scale(self, factor: float, held: bool = False) -> None:
         """Scale the run's departure from its steady cut by ``factor``: the modal state
         about the static deflection (u about u_s, u' about 0), an absorber's about the
-        bar, a ball's relative position about where it started, and the delay history
-        about the static tip deflection.  Where the run is linear (the tool in the cut, a
-        frictionless ball off the walls) the scaled state is the same run further on: a
-        mode growing at rate s is ln(factor) / s seconds ahead."""
+        bar, a ball's relative position about where it started (``held``: a ball that
+        the stick law holds stays where it is held), and the delay history about the
+        static tip deflection.  Where the run is linear (the tool in the cut, a
+        frictionless ball off the walls, a ball held by its friction) the scaled state is
+        the same run further on: a mode growing at rate s is ln(factor) / s seconds
+        ahead."""
         su, n = self.su, self.su.system.bar.n_modes
         ref = su.x_start.copy()
         ref[n:2 * n] = 0.0
         ref[2 * n + 1] = 0.0
         if su.system.kind == "tmd":
             ref[2 * n] = float(su.system.bar.psi_absorber @ ref[:n])
+        if held:
+            ref[2 * n:] = su.x[2 * n:]
         su.x[:] = ref + factor * (su.x - ref)
         su.buf[:, 0] = su.w_static + factor * (su.buf[:, 0] - su.w_static)
         su.buf[:, 1] *= factor
