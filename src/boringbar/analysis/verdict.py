@@ -38,7 +38,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
 from boringbar._validate import check_choice, check_int, check_range, check_values
 from boringbar.model.forcing import Regenerative
@@ -210,7 +210,7 @@ def slopes(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def t_quantile(confidence: float, dof: int) -> float:
     """Student's t quantile of a two-sided ``confidence`` with ``dof`` degrees of freedom
     (kept: every window of every cut asks for one of a few)."""
-    return float(stats.t.ppf(0.5 + confidence / 2, dof))
+    return float(special.stdtrit(dof, 0.5 + confidence / 2))
 
 
 def segment(n: int, min_segment: int) -> int:
