@@ -393,7 +393,7 @@ def fast_forward(stepper: CutStepper, windows: list, options: VerdictOptions) ->
     if d.friction_force_n > 0:
         if not all(w.held for w in windows[len(windows) // 2:]) or last.max_hold_n <= 0:
             return False
-        ball_room = d.friction_force_n * d.friction.static_ratio / last.max_hold_n
+        ball_room = d.static_friction_force_n / last.max_hold_n
     else:
         y0 = abs(stepper.x_start[2 * system.bar.n_modes])
         ball_room = (d.gap_m / 2 - y0) / max(last.max_rel_m - y0, 1e-300)

@@ -168,6 +168,11 @@ class ImpactDamper:
         """F_c (N)."""
         return self.friction.force(self.mass_kg, self.radius_m)
 
+    @property
+    def static_friction_force_n(self) -> float:
+        """F_s = static_ratio F_c (N): the most friction can hold the ball with."""
+        return self.friction_force_n * self.friction.static_ratio
+
     def to_dict(self) -> dict:
         return {"type": "ball", "material": self.material, "mass_kg": self.mass_kg,
                 "gap_m": self.gap_m, "restitution": self.restitution, "radius_m": self.radius_m,

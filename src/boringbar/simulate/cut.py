@@ -97,9 +97,9 @@ class CutStepper:
         self.su = setup_run(system, forcing, window_steps * dt_s, dt_s, initial, 0, 1.0, False,
                             "rk4", stick_law)
         self.window_steps = window_steps
-        #: RK4's stick law holds a ball with friction (Window.held can be True)
-        self.holds = (stick_law == "hold" and system.kind == "ball"
-                      and system.damper.friction_force_n > 0)
+        #: RK4's stick law holds a ball with friction (Window.held can be True): the run
+        #: was packed with the law's band
+        self.holds = bool(self.su.p[L.STICK_BAND] > 0)
         self.t_s = self.su.t0
         self.modes = np.zeros((system.bar.n_modes, 2))
         self._before = 0  # steps of a given history before the run's start

@@ -81,7 +81,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
         p[L.HALF_GAP] = d.gap_m / 2
         p[L.RESTITUTION] = d.restitution
         p[L.FRICTION] = d.friction_force_n
-        p[L.STATIC_FRICTION] = d.friction_force_n * d.friction.static_ratio
+        p[L.STATIC_FRICTION] = d.static_friction_force_n
         p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
         p[L.M_EFF] = meff
         ref = omega if omega > 0 else bar.natural_frequency_rad_s
