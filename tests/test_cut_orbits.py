@@ -22,6 +22,7 @@ from __future__ import annotations
 import cmath
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -71,7 +72,7 @@ def test_the_hopf_point_converges_at_fourth_order(bars):
 
 def test_the_jacobian_matches_central_differences(bars):
     model, o = _hopf(bars["tmd"], 1500.0, steps=60)
-    o = co.Orbit(o.x + 1e-7 * np.sin(np.arange(o.x.size)).reshape(o.x.shape), o.period, o.depth)
+    o = replace(o, x=o.x + 1e-7 * np.sin(np.arange(o.x.size)).reshape(o.x.shape))
     jac = co.jacobian(model, o).toarray()
     y = o.unknowns()
     for col in (0, 3, 7, y.size // 2 + 1, y.size - 3, y.size - 2, y.size - 1):
@@ -79,8 +80,7 @@ def test_the_jacobian_matches_central_differences(bars):
         up, down = y.copy(), y.copy()
         up[col] += h
         down[col] -= h
-        fd = (co.residual(model, co.Orbit.of(up, o.x.shape))
-              - co.residual(model, co.Orbit.of(down, o.x.shape))) / (2 * h)
+        fd = (co.residual(model, o.at(up)) - co.residual(model, o.at(down))) / (2 * h)
         # the nodes' columns are exact (forward mode); T's and b's are differences too
         tol = 1e-6 if col < y.size - 2 else 1e-4
         assert np.max(np.abs(fd - jac[:, col])) <= tol * np.max(np.abs(fd)), col
@@ -106,6 +106,73 @@ def test_a_linear_law_branch_stands_vertical_until_the_tool_leaves_the_cut(linea
     assert leave[0].amplitude == pytest.approx(closed, rel=1e-6)
     assert leave[0].depth == pytest.approx(hopf.depth, rel=1e-9)
     assert not [e for e in linear_branch.events if e.kind == "fold"]
+
+
+@pytest.mark.parametrize("bar, rpm, scale", [("solid", 1200.0, 1.0), ("solid", 3000.0, 1.3),
+                                             ("tmd", 6000.0, 0.95)])
+def test_in_speed_the_hopf_point_is_where_the_lobes_cross_the_depth(bars, bar, rpm, scale):
+    """At a fixed depth the Hopf point in speed sits where the frequency-domain limit
+    equals that depth, at its chatter frequency, each to 1e-6."""
+    system = bars[bar]
+    depth = scale * float(limit_at_speeds(system, rpm, 850e6))
+    forcing = bb.Regenerative(depth_m=depth, rpm=rpm)
+    model = co.cut_model(system, forcing)
+    o = cb.speed_hopf_orbit(system, forcing, model, (0.5 * rpm, 2.0 * rpm), None)
+    assert o.free == "tau" and o.depth == depth
+    b, f = limit_at_speeds(system, o.rpm, 850e6, with_frequency=True)
+    assert float(b) == pytest.approx(depth, rel=1e-6)
+    assert 1.0 / o.period == pytest.approx(float(f), rel=1e-6)
+
+
+def test_the_jacobian_in_the_delay_matches_central_differences(bars):
+    model, o = _hopf(bars["solid"], 1500.0, steps=60)
+    o = replace(o, free="tau")
+    jac = co.jacobian(model, o).toarray()
+    y = o.unknowns()
+    h = 1e-6 * y[-1]
+    fd = (co.residual(model, o.at(y + h * np.eye(y.size)[-1]))
+          - co.residual(model, o.at(y - h * np.eye(y.size)[-1]))) / (2 * h)
+    assert np.max(np.abs(fd - jac[:, -1])) <= 1e-4 * np.max(np.abs(fd))
+    assert np.max(np.abs(fd)) > 0
+
+
+@pytest.fixture(scope="module")
+def speed_branch(bars):
+    """The solid bar's branch in speed at its limit at 1200 rpm (one revolution of
+    memory): from the lobe's left flank's Hopf point to its right flank's."""
+    depth = float(limit_at_speeds(bars["solid"], 1200.0, 850e6))
+    forcing = bb.Regenerative(depth_m=depth, rpm=1150.0, revolutions=1)
+    return cb.trace(bars["solid"], forcing, (1000.0, 1400.0), free="tau"), depth
+
+
+def test_in_speed_a_linear_law_branch_joins_the_lobe_s_two_flanks(bars, speed_branch):
+    """In the cut the branch stands vertical at each flank's Hopf speed; the tool leaves
+    the cut at h_m / (2 |sin(w tau / 2)|) there; between, the clipped chip's describing
+    function holds: b N(a) is the frequency-domain limit at the orbit's speed and the
+    orbit's frequency its chatter frequency."""
+    br, depth = speed_branch
+    hopf = [e for e in br.events if e.kind == "hopf"]
+    leave = [e for e in br.events if e.detail == "tool-leaves-cut"]
+    assert len(hopf) == 2 and len(leave) == 2 and "second Hopf" in br.stop
+    assert hopf[0].rpm < 1200.0 and hopf[1].rpm == pytest.approx(1200.0, rel=1e-6)
+    for h, g in zip(hopf, leave, strict=True):
+        assert float(limit_at_speeds(bars["solid"], h.rpm, 850e6)) == pytest.approx(depth,
+                                                                                 rel=1e-6)
+        w = 2.0 * math.pi * g.frequency_hz
+        closed = 0.1e-3 / (2.0 * abs(math.sin(w * 60.0 / g.rpm / 2.0)))
+        assert g.amplitude == pytest.approx(closed, rel=1e-6)
+        assert g.rpm == pytest.approx(h.rpm, rel=1e-9)
+    in_cut = [p for p in br.points if p.min_chip > 1e-9]
+    assert all(min(abs(p.orbit.rpm / h.rpm - 1) for h in hopf) < 1e-9 for p in in_cut)
+    out = [p for p in br.points if p.min_chip < 0]
+    assert len(out) >= 10 and max(p.orbit.rpm for p in out) > hopf[0].rpm + 10.0
+    for p in out:
+        w, tau = 2.0 * math.pi / p.orbit.period, 60.0 / p.orbit.rpm
+        beta = math.asin(0.1e-3 / (2.0 * p.amplitude * abs(math.sin(w * tau / 2.0))))
+        gain = (math.pi / 2 + beta + math.sin(beta) * math.cos(beta)) / math.pi
+        b, f = limit_at_speeds(bars["solid"], p.orbit.rpm, 850e6, with_frequency=True)
+        assert depth * gain == pytest.approx(float(b), rel=1e-3)
+        assert 1.0 / p.orbit.period == pytest.approx(float(f), rel=1e-6)
 
 
 def characteristic_roots(system, depth: float, rpm: float, kr: float) -> list:
@@ -261,6 +328,31 @@ def test_continue_cut_writes_the_map_of_each_bar(tmp_path, capsys):
     assert "RK4" in summary["method"]
     with xr.open_dataset(out / "chatter_orbits.nc") as ds:
         assert ds.attrs["preset"] == "physical"  # each file says what it is
+
+
+def test_continue_cut_in_speed_writes_the_map_and_refuses_a_range_without_a_crossing(
+        tmp_path, capsys):
+    out = tmp_path / "speed"
+    base = ["continue", "--cut", "--parameter", "rpm", "--bar", "solid", "--revolutions",
+            "1", "--max-points", "8", "--json"]
+    depth = float(limit_at_speeds(bb.make_system("solid", "physical"), 1500.0, 850e6)) * 1.2
+    rc = main([*base, "--depth-mm", f"{depth * 1e3:.9g}", "--range", "1300:1700", "--rpm",
+               "1500", "--out", str(out)])
+    assert rc == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["parameter"] == "rpm" and summary["depth_mm"] == pytest.approx(depth * 1e3)
+    hopf = summary["cases"][0]["events"][0]
+    b = limit_at_speeds(bb.make_system("solid", "physical"), hopf["rpm"], 850e6)
+    assert hopf["kind"] == "hopf" and float(b) == pytest.approx(depth, rel=1e-6)
+    assert len(set(summary["cases"][0]["depth_mm"])) == 1
+    assert "in speed" in summary["method"]
+    with xr.open_dataset(out / "chatter_orbits.nc") as ds:
+        assert ds.attrs["parameter"] == "rpm" and ds["rpm"].size >= 8
+    empty = tmp_path / "none"
+    rc = main([*base, "--depth-mm", "1e-4", "--range", "1300:1700", "--out", str(empty)])
+    assert rc == 2 and not empty.exists()
+    err = capsys.readouterr().err.strip()
+    assert "crosses the depth" in err and "\n" not in err
 
 
 def test_the_return_check_refuses_what_it_cannot_start(bars, one_revolution):

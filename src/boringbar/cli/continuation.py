@@ -43,17 +43,21 @@ def add_continue(sub) -> None:
                                    "Writes DIR/continuation.nc, .json and .png.")
     groups = add_common(p, many=False, initial=False)
     g = groups["run"]
-    g.add_argument("--parameter", choices=(*PARAMETERS, "depth-mm"), default=None,
+    g.add_argument("--parameter", choices=(*PARAMETERS, "depth-mm", "rpm"), default=None,
                    help="the continued parameter (default: force-n; with --cut, depth-mm)")
     g.add_argument("--cut", action="store_true",
-                   help="the chatter orbits of a regenerative cut at --rpm instead: each "
-                        "bar's branch from its Hopf point in depth over --range A:B (mm), "
-                        "with folds, the tool leaving the cut, the ball's grazing, period "
-                        "doublings and tori; writes DIR/chatter_orbits.nc, .json and .png")
+                   help="the chatter orbits of a regenerative cut instead: each bar's branch "
+                        "from its Hopf point, in depth at --rpm over --range A:B (mm), or "
+                        "with --parameter rpm in speed at --depth-mm over --range A:B (rpm), "
+                        "from the Hopf point nearest --rpm (default: A); with folds, the tool "
+                        "leaving the cut, the ball's grazing, period doublings and tori; "
+                        "writes DIR/chatter_orbits.nc, .json and .png")
     g.add_argument("--rpm", type=float, metavar="RPM", help="with --cut: the spindle speed")
+    g.add_argument("--depth-mm", type=float, metavar="MM",
+                   help="with --cut --parameter rpm: the depth of cut")
     g.add_argument("--lobe", type=int, metavar="J",
                    help="with --cut: start from lobe J's Hopf point (default: the lowest "
-                        "at --rpm)")
+                        "lobes')")
     add_cutting(p.add_argument_group("cut (with --cut)"))
     g.add_argument("--range", required=True, metavar="START:STOP",
                    help="START sets the parameter's first value, STOP the branch's end; "
@@ -114,11 +118,11 @@ def _range(text: str) -> tuple[float, float, float | None]:
 def _cmd_continue(args) -> Outcome:
     if args.cut:
         return cut_outcome(args)
-    if args.parameter == "depth-mm":
-        raise ParameterError("--parameter depth-mm continues a cut's orbits: add --cut and "
-                             "--rpm N")
-    if args.rpm is not None or args.lobe is not None:
-        raise ParameterError("--rpm and --lobe describe a cut: add --cut")
+    if args.parameter in ("depth-mm", "rpm"):
+        raise ParameterError(f"--parameter {args.parameter} continues a cut's orbits: add "
+                             "--cut")
+    if args.rpm is not None or args.lobe is not None or args.depth_mm is not None:
+        raise ParameterError("--rpm, --depth-mm and --lobe describe a cut: add --cut")
     args.parameter = args.parameter or "force-n"
     bar, friction_on = one_bar(args, "continue")
     start, stop, other_end = _range(args.range)

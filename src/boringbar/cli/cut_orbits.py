@@ -1,9 +1,14 @@
-"""``boringbar continue --cut``: the chatter orbit map of a system's bars at one speed."""
+"""``boringbar continue --cut``: the chatter orbit map of a system's bars, in depth at one
+speed or in speed at one depth."""
 
 from __future__ import annotations
 
-from boringbar._validate import ParameterError, check_int
-from boringbar.analysis.cut_continuation import CutContinuationOptions, cut_continuation
+from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.cut_continuation import (
+    MAX_RPM,
+    CutContinuationOptions,
+    cut_continuation,
+)
 from boringbar.cli.options import (
     Outcome,
     check_common,
@@ -16,7 +21,7 @@ from boringbar.cli.options import (
     system_overrides,
     wrote,
 )
-from boringbar.model.forcing import Regenerative
+from boringbar.model.forcing import MAX_DEPTH, Regenerative
 from boringbar.model.system import BAR_KINDS, make_system
 from boringbar.orbits.cut_branch import MAX_POINTS
 from boringbar.report.outputs import chatter_orbit_files
@@ -41,47 +46,68 @@ def cut_systems(args) -> dict:
     return out
 
 
-def cut_range(text: str) -> tuple[float, float]:
-    """--range A:B of depths in mm, as (lo, hi) in m."""
+def cut_range(text: str, what: str = "depths in mm", top: float = 1000.0,
+              positive: bool = False) -> tuple[float, float]:
+    """--range A:B of ``what``, 0 <= A < B <= ``top`` (0 < A with ``positive``)."""
     try:
         lo, hi = (float(v) for v in (text or "").split(":"))
     except ValueError:
-        raise ParameterError(f"--range = {text!r} must be A:B, depths in mm (two numbers)") \
+        raise ParameterError(f"--range = {text!r} must be A:B, {what} (two numbers)") \
             from None
-    if not 0.0 <= lo < hi <= 1000.0:
-        raise ParameterError(f"--range = {text!r}: depths in mm with 0 <= A < B <= 1000")
-    return lo * 1e-3, hi * 1e-3
+    if not (0.0 < lo if positive else 0.0 <= lo) or not lo < hi <= top:
+        raise ParameterError(f"--range = {text!r}: {what} with {'0 <' if positive else '0 <='}"
+                             f" A < B <= {top:g}")
+    return lo, hi
 
 
 def cut_outcome(args) -> Outcome:
-    if args.parameter != "depth-mm":
-        raise ParameterError(f"--parameter {args.parameter} with --cut: a cut's orbits are "
-                             "continued in depth-mm")
-    if args.rpm is None:
+    parameter = args.parameter or "depth-mm"
+    if parameter not in ("depth-mm", "rpm"):
+        raise ParameterError(f"--parameter {parameter} with --cut: a cut's orbits are "
+                             "continued in depth-mm (at --rpm) or rpm (at --depth-mm)")
+    in_depth = parameter == "depth-mm"
+    if in_depth and args.rpm is None:
         raise ParameterError("--cut needs --rpm N, the spindle speed (rev/min, > 0)")
-    rpm = check_rpm(args.rpm, args)
-    depth_range = cut_range(args.range)
+    if not in_depth and args.depth_mm is None:
+        raise ParameterError("--cut --parameter rpm needs --depth-mm B, the depth of cut "
+                             "(mm, > 0)")
+    if in_depth and args.depth_mm is not None:
+        raise ParameterError("--depth-mm with --parameter depth-mm: the depths are --range's")
+    if in_depth:
+        lo, hi = cut_range(args.range)
+        window, depth = (lo * 1e-3, hi * 1e-3), hi * 1e-3
+        rpm = check_rpm(args.rpm, args)
+    else:
+        window = cut_range(args.range, "speeds in rpm", MAX_RPM, positive=True)
+        for end in window:
+            check_rpm(end, args, "--range")
+        depth = check_range("--depth-mm", args.depth_mm, 0.0, MAX_DEPTH * 1e3, lo_open=True,
+                            unit="mm") * 1e-3
+        rpm = window[0] if args.rpm is None else check_rpm(args.rpm, args)
     if args.lobe is not None:
         check_int("--lobe", args.lobe, 0, 200)
     if args.max_points is not None:
         check_int("--max-points", args.max_points, 2, 10_000)
     cut = cut_options(args)
-    forcing = Regenerative(depth_m=depth_range[1], rpm=rpm, kr_pa=cut.get("kr_pa", 850e6),
+    forcing = Regenerative(depth_m=depth, rpm=rpm, kr_pa=cut.get("kr_pa", 850e6),
                            workpiece=cut.get("workpiece"), feed_m=cut["feed_m"],
                            revolutions=cut["revolutions"])
-    options = CutContinuationOptions(depth_range_m=depth_range, lobe=args.lobe,
-                                     max_points=args.max_points or MAX_POINTS)
+    options = CutContinuationOptions(
+        depth_range_m=window if in_depth else (0.0, 1e-3), lobe=args.lobe,
+        max_points=args.max_points or MAX_POINTS, parameter="depth" if in_depth else "rpm",
+        rpm_range=None if in_depth else window)
     out = chatter_orbit_files(cut_continuation(cut_systems(args), forcing, options), args.out)
-    files = out["files"]
+    return Outcome(out, lambda say: _say(say, out))
 
-    def text(say) -> None:
-        say(f"chatter orbits at {rpm:g} rpm ({out['method']})")
-        for c in out["cases"]:
-            say(f"{c['case']}: {c['points']} orbits; {c['stop']}")
-            for e in c["events"]:
-                what = e["kind"] + (f" ({e['detail']})" if e["detail"] else "")
-                say(f"  {what} at depth {e['depth_mm']:.6g} mm, amplitude "
-                    f"{e['amplitude_mm'] * 1e3:.4g} um, {e['frequency_hz']:.6g} Hz")
-        say(wrote(files))
 
-    return Outcome(out, text)
+def _say(say, out: dict) -> None:
+    held = (f"at {out['rpm']:g} rpm" if out["parameter"] == "depth"
+            else f"at a depth of {out['depth_mm']:.6g} mm")
+    say(f"chatter orbits {held} ({out['method']})")
+    for c in out["cases"]:
+        say(f"{c['case']}: {c['points']} orbits; {c['stop']}")
+        for e in c["events"]:
+            what = e["kind"] + (f" ({e['detail']})" if e["detail"] else "")
+            say(f"  {what} at depth {e['depth_mm']:.6g} mm and {e['rpm']:.8g} rpm, amplitude "
+                f"{e['amplitude_mm'] * 1e3:.4g} um, {e['frequency_hz']:.6g} Hz")
+    say(wrote(out["files"]))

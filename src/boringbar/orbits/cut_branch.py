@@ -3,11 +3,15 @@
 It starts where the steady cut loses stability: the Hopf point of the discretised
 delay equation (:mod:`boringbar.orbits.cut_orbits`), found from the frequency-domain
 limit of lobe j as a guess and solved at a vanishing amplitude on the cut linearised
-about h_m.  It is followed by pseudo-arclength continuation in the unknowns (nodes,
-T, depth), each scaled to its size, with the Floquet multipliers at every point.
+about h_m.  In depth, the Hopf point is lobe j's (or the lowest lobe's) at the cut's
+speed; in speed, it is where the lobes' boundary crosses the cut's depth, the crossing
+within the speed range nearest the cut's speed.  The branch is followed by
+pseudo-arclength continuation in the unknowns (nodes, T, and the depth or the delay
+tau = 60 / rpm), each scaled to its size, with the Floquet multipliers at every point.
 Along it are located, each by secant iterations on the arclength to 1e-10:
 
-- ``fold``: the depth turns back (the tangent's depth component changes sign);
+- ``fold``: the depth (or the speed) turns back (the tangent's last component changes
+  sign);
 - ``grazing``: the tool first leaves the cut (the thinnest chip reaches 0), or, on a
   ball bar, the ball first reaches a wall (no friction: the bar's excursion at the
   cavity reaches half the clearance) or first slips (friction: the bar's acceleration
@@ -19,9 +23,10 @@ Along it are located, each by secant iterations on the arclength to 1e-10:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+import scipy.optimize
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -29,6 +34,7 @@ from boringbar.model.cutting import CuttingLaw
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
 from boringbar.orbits.cut_orbits import (
+    FREE,
     STEPS,
     CutModel,
     CutOrbitError,
@@ -49,7 +55,7 @@ from boringbar.reference.stability import limit_at_speeds, linear_host
 FIRST_STEP, MIN_STEP, MAX_STEP = 0.02, 1e-5, 0.25
 #: The step grows by half after a corrector of at most this many (chord) iterations.
 GROW_ITERATIONS = 5
-#: The tangent's depth component must exceed this on both sides of a fold (a linear
+#: The tangent's parameter component must exceed this on both sides of a fold (a linear
 #: bar's branch stands vertical, its component round-off about 0).
 FOLD_NOISE = 1e-7
 #: The Hopf point's orbit has a tip amplitude of this fraction of h_m.
@@ -61,6 +67,12 @@ NEUTRAL = 1e-6
 MAX_POINTS, MAX_AMPLITUDE = 200, 20.0
 #: Secant iterations locating an event, and their tolerance on the arclength.
 LOCATE_ITER, LOCATE_TOL = 30, 1e-10
+#: Chord iterations of a corrector locating an event: at the tool's leaving the chip's
+#: clipping has a corner, where the chord converges slowly.
+LOCATE_NEWTON = 30
+#: A step is halved where the tangent turns by more than acos(MIN_COS) (about 26 degrees)
+#: over it.
+MIN_COS = 0.9
 
 
 @dataclass
@@ -79,8 +91,14 @@ class CutEvent:
     depth: float  #: m
     amplitude: float  #: m
     frequency_hz: float
+    rpm: float
     detail: str = ""  #: for grazing: tool-leaves-cut, ball-wall or ball-slips
     orbit: Orbit | None = field(default=None, repr=False)  #: the located orbit
+
+    @classmethod
+    def at(cls, kind: str, o: Orbit, amp: float, detail: str = "", keep: bool = True):
+        """The event ``kind`` at orbit ``o`` of amplitude ``amp`` (m), kept with it."""
+        return cls(kind, o.depth, amp, 1.0 / o.period, o.rpm, detail, o if keep else None)
 
 
 @dataclass
@@ -125,8 +143,50 @@ def hopf_orbit(system: System, forcing: Regenerative, model: CutModel, lobe: int
                            with_frequency=True)
     if not np.isfinite(b):
         raise CutOrbitError(f"no lobe {'' if lobe is None else lobe} reaches {forcing.rpm} rpm")
-    guess = _eigen_orbit(system, lin, float(b), float(f), steps, HOPF_AMPLITUDE * model.feed)
+    guess = _eigen_orbit(system, lin, float(b), float(f), 60.0 / forcing.rpm, steps,
+                         HOPF_AMPLITUDE * model.feed)
     return fixed_amplitude(lin, guess, HOPF_AMPLITUDE * model.feed)[0]
+
+
+def speed_hopf_orbit(system: System, forcing: Regenerative, model: CutModel,
+                     rpm_range: tuple[float, float], lobe: int | None,
+                     steps: int = STEPS) -> Orbit:
+    """The discretised Hopf point in speed at ``forcing``'s depth: the depth's Hopf
+    orbit at the speed where lobe ``lobe``'s boundary (None: the lowest lobes') crosses
+    that depth (:func:`hopf_speed`), solved again for the delay at that depth exactly; its
+    free parameter is tau."""
+    lin = linearised(model)
+    rpm = hopf_speed(system, forcing.depth_m, lin.law.kr_pa, rpm_range, lobe, forcing.rpm)
+    near = hopf_orbit(system, replace(forcing, rpm=rpm), model, lobe, steps)
+    start = Orbit(near.x, near.period, forcing.depth_m, near.tau, "tau")
+    return fixed_amplitude(lin, start, HOPF_AMPLITUDE * model.feed)[0]
+
+
+#: Speeds sampled (geometrically) over a range to find where a lobe crosses a depth.
+SPEED_SAMPLES = 2001
+
+
+def hopf_speed(system: System, depth: float, kr: float, rpm_range: tuple[float, float],
+               lobe: int | None, near: float) -> float:
+    """The speed (rpm) within ``rpm_range`` where the frequency-domain limit of lobe
+    ``lobe`` (None: the lowest lobes') equals ``depth`` (m), the crossing nearest ``near``
+    in log speed; Brent's method between samples, to 1e-13 relative."""
+    lobes = None if lobe is None else [lobe]
+
+    def gap(rpm):
+        return limit_at_speeds(system, rpm, kr, lobes=lobes) - depth
+
+    r = np.geomspace(rpm_range[0], rpm_range[1], SPEED_SAMPLES)
+    g = gap(r)
+    ok = np.isfinite(g[:-1]) & np.isfinite(g[1:])
+    cross = np.flatnonzero(ok & (np.sign(g[:-1]) != np.sign(g[1:])))
+    if not cross.size:
+        raise CutOrbitError(f"no lobe {'' if lobe is None else f'{lobe} '}crosses the depth "
+                            f"{depth * 1e3:.6g} mm between {rpm_range[0]:g} and "
+                            f"{rpm_range[1]:g} rpm")
+    i = int(cross[np.argmin(np.abs(np.log(r[cross] / near)))])
+    return float(scipy.optimize.brentq(lambda x: float(gap(x)), r[i], r[i + 1],
+                                       xtol=1e-13 * r[i], rtol=1e-15))
 
 
 def linearised(model: CutModel) -> CutModel:
@@ -136,8 +196,10 @@ def linearised(model: CutModel) -> CutModel:
                        "law": CuttingLaw.linear(model.law.linear_coefficient_pa(model.feed))})
 
 
-def _eigen_orbit(system, model: CutModel, b: float, f: float, m: int, amp: float) -> Orbit:
-    """The steady cut plus ``amp`` times the tip-normalised response at f (Hz)."""
+def _eigen_orbit(system, model: CutModel, b: float, f: float, tau: float, m: int,
+                 amp: float) -> Orbit:
+    """The steady cut at delay ``tau`` (s) plus ``amp`` times the tip-normalised response
+    at f (Hz)."""
     bar, tmd, added = linear_host(system)
     w = 2.0 * math.pi * f
     z = dynamic_stiffness(bar, np.array([w]), tmd, float(added))[0]
@@ -148,7 +210,7 @@ def _eigen_orbit(system, model: CutModel, b: float, f: float, m: int, amp: float
     phi = np.concatenate([u, 1j * w * u])
     t = np.arange(m) / (m * f)
     x = static_state(model, b) + amp * np.real(phi[None, :] * np.exp(1j * w * t)[:, None])
-    return Orbit(x, 1.0 / f, b)
+    return Orbit(x, 1.0 / f, b, tau)
 
 
 def fixed_amplitude(model: CutModel, o: Orbit, amp: float) -> tuple[Orbit, int]:
@@ -168,23 +230,30 @@ def fixed_amplitude(model: CutModel, o: Orbit, amp: float) -> tuple[Orbit, int]:
 # --- pseudo-arclength --------------------------------------------------------------------
 @dataclass
 class Walk:
-    """What the walk along one branch carries."""
+    """What the walk along one branch carries: ``like`` an orbit of the branch (its
+    shape, its free parameter and the held one's value), ``window`` the range of the free
+    parameter as the branch reports it (:func:`reported`)."""
 
     system: System
     model: CutModel
     scale: np.ndarray  #: the size of every unknown: a step of 1 moves the tip about h_m
-    shape: tuple
-    depth_range: tuple[float, float]
+    like: Orbit
+    window: tuple[float, float]
+
+
+def reported(o: Orbit) -> float:
+    """The free parameter as a branch reports it: the depth (m) or the speed (rpm)."""
+    return o.depth if o.free == "depth" else o.rpm
 
 
 def _scale(hopf: Orbit) -> np.ndarray:
     """Each unknown's size: a node's components by their spread on the Hopf orbit scaled
     to a tip amplitude of h_m (over the root of the node count, so that the nodes together
-    weigh as one), T and b by their values."""
+    weigh as one), T and the free parameter by their values."""
     spread = np.max(np.abs(hopf.x - hopf.x.mean(axis=0)), axis=0) / HOPF_AMPLITUDE
     spread = np.where(spread > 0, spread, np.max(spread))
     m = hopf.steps
-    return np.concatenate([np.tile(spread * math.sqrt(m), m), [hopf.period, hopf.depth]])
+    return np.concatenate([np.tile(spread * math.sqrt(m), m), [hopf.period, hopf.parameter]])
 
 
 def tangent(w: Walk, o: Orbit, previous: np.ndarray) -> np.ndarray:
@@ -214,7 +283,7 @@ def _oriented(w: Walk, dy: np.ndarray, previous: np.ndarray) -> np.ndarray:
     return t if t @ previous >= 0 else -t
 
 
-def corrected(w: Walk, y: np.ndarray, t: np.ndarray, ds: float):
+def corrected(w: Walk, y: np.ndarray, t: np.ndarray, ds: float, max_iter: int = 8):
     """The orbit on the plane normal to ``t`` at ``ds`` from ``y`` (scaled units), the
     corrector's iterations and its last factorisation (:func:`newton`)."""
     pred = y + ds * w.scale * t
@@ -223,7 +292,7 @@ def corrected(w: Walk, y: np.ndarray, t: np.ndarray, ds: float):
     def extra(yy):
         return row @ (yy - pred), row
 
-    return newton(w.model, Orbit.of(pred, w.shape), extra, max_iter=8)
+    return newton(w.model, w.like.at(pred), extra, max_iter=max_iter)
 
 
 def point(w: Walk, o: Orbit) -> CutPoint:
@@ -239,22 +308,30 @@ def nontrivial(mu: np.ndarray) -> np.ndarray:
     return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
 
 
-def trace(system: System, forcing: Regenerative, depth_range: tuple[float, float], *,
-          lobe: int | None = None, steps: int = STEPS,
+def trace(system: System, forcing: Regenerative, window: tuple[float, float], *,
+          free: str = "depth", lobe: int | None = None, steps: int = STEPS,
           max_points: int = MAX_POINTS) -> CutBranch:
-    """The branch of chatter orbits of ``system`` at ``forcing``'s speed born at the Hopf
-    point of ``lobe`` (None: the lowest), within ``depth_range`` (m)."""
+    """The branch of chatter orbits of ``system`` under ``forcing``'s cut born at the Hopf
+    point of ``lobe`` (None: the lowest), continued in ``free`` (:data:`FREE`): "depth" at
+    ``forcing``'s speed within the depths ``window`` (m), or "tau" at ``forcing``'s depth
+    within the speeds ``window`` (rpm), from the Hopf point there nearest ``forcing``'s
+    speed."""
+    if free not in FREE:
+        raise ValueError(f"free = {free!r} must be one of {', '.join(FREE)}")
     model = cut_model(system, forcing)
-    hopf = hopf_orbit(system, forcing, model, lobe, steps)
+    if free == "depth":
+        hopf = hopf_orbit(system, forcing, model, lobe, steps)
+    else:
+        hopf = speed_hopf_orbit(system, forcing, model, window, lobe, steps)
     br = CutBranch(lobe=-1 if lobe is None else lobe)
-    br.events.append(CutEvent("hopf", hopf.depth, 0.0, 1.0 / hopf.period))
-    if not depth_range[0] <= hopf.depth <= depth_range[1]:
+    br.events.append(CutEvent.at("hopf", hopf, 0.0, keep=False))
+    if not window[0] <= reported(hopf) <= window[1]:
         br.stop = (f"the Hopf point, {hopf.depth * 1e3:.6g} mm, is outside the depth range "
-                   f"{depth_range[0] * 1e3:.6g}-{depth_range[1] * 1e3:.6g} mm")
+                   f"{window[0] * 1e3:.6g}-{window[1] * 1e3:.6g} mm")
         return br
-    w = Walk(system, model, _scale(hopf), hopf.x.shape, depth_range)
+    w = Walk(system, model, _scale(hopf), hopf, window)
     shift = static_state(model, hopf.depth) - static_state(linearised(model), hopf.depth)
-    base = Orbit(hopf.x + shift, hopf.period, hopf.depth)
+    base = replace(hopf, x=hopf.x + shift)
     a, _ = fixed_amplitude(model, base, 1e-2 * model.feed)
     b, _ = fixed_amplitude(model, a, 2e-2 * model.feed)
     t = (b.unknowns() - a.unknowns()) / w.scale
@@ -289,7 +366,7 @@ def _ball_from_hopf(w: Walk, a: Orbit, first: CutPoint) -> CutEvent:
         if abs(amp1 - amp0) < LOCATE_TOL * abs(amp1) or m == 0.0:
             break
     detail = "ball-slips" if w.system.damper.friction_force_n > 0 else "ball-wall"
-    return CutEvent("grazing", o.depth, amplitude(w.model, o), 1.0 / o.period, detail)
+    return CutEvent.at("grazing", o, amplitude(w.model, o), detail, keep=False)
 
 
 def _start_amplitude(w: Walk, o: Orbit) -> float:
@@ -309,10 +386,18 @@ def _walk(w: Walk, br: CutBranch, o: Orbit, t: np.ndarray, max_points: int) -> N
                 br.stop = "the step fell below its minimum (no orbit found ahead)"
                 return
             continue
+        if _start_amplitude(w, nxt) < 0:
+            _returned(w, br, o)
+            return
         tn = _unit(w, lu, t)
+        if _folds(t, tn) and tn @ t < MIN_COS and ds > MIN_STEP:
+            # the branch turns sharply at a fold within the step: the fold would be
+            # located along a tangent that no longer meets the branch
+            ds *= 0.5
+            continue
         pa, pb = br.points[-1], point(w, nxt)
         known = len(br.events)
-        stop = _events(w, br, (o, t, pa), (nxt, tn, pb), ds)
+        stop = _events(w, br, (o, t, pa), (nxt, tn, pb))
         # the located orbits join the branch, so that its curve passes through them
         br.points.extend(point(w, e.orbit) for e in br.events[known:] if e.orbit is not None)
         br.points.append(pb)
@@ -328,57 +413,93 @@ def _walk(w: Walk, br: CutBranch, o: Orbit, t: np.ndarray, max_points: int) -> N
     br.stop = f"{max_points} points"
 
 
+def _returned(w: Walk, br: CutBranch, o: Orbit) -> None:
+    """The step past ``o`` went through zero amplitude (the phase condition's half-period
+    shift): the branch returns to the steady cut at a second Hopf point, located as the
+    first, at an amplitude of HOPF_AMPLITUDE h_m."""
+    hopf, _ = fixed_amplitude(w.model, o, HOPF_AMPLITUDE * w.model.feed)
+    br.events.append(CutEvent.at("hopf", hopf, amplitude(w.model, hopf), "return"))
+    br.points.append(point(w, hopf))
+    br.stop = "the branch returns to the steady cut at a second Hopf point"
+
+
 def _outside(w: Walk, p: CutPoint) -> str:
-    lo, hi = w.depth_range
-    if not lo <= p.orbit.depth <= hi:
-        return "the depth left its range"
+    lo, hi = w.window
+    if not lo <= reported(p.orbit) <= hi:
+        return f"the {'depth' if w.like.free == 'depth' else 'speed'} left its range"
     if p.amplitude > MAX_AMPLITUDE * w.model.feed:
         return f"the tip amplitude passed {MAX_AMPLITUDE:g} h_m"
     return ""
 
 
 # --- events ----------------------------------------------------------------------------------
-def _events(w: Walk, br: CutBranch, a: tuple, b: tuple, ds: float) -> str:
+def _events(w: Walk, br: CutBranch, a: tuple, b: tuple) -> str:
     """Locate what happened between points ``a`` and ``b`` (orbit, tangent, CutPoint);
     a ball's leaving its linear host ends the branch: the stop's reason."""
-    (oa, ta, pa), (_, tb, pb) = a, b
-    col = -1  # depth
-    if ta[col] * tb[col] < 0 and min(abs(ta[col]), abs(tb[col])) > FOLD_NOISE:
-        br.events.append(_located(w, oa, ta, ds, "fold", "",
-                                  lambda o, t: t[col], ta[col], tb[col]))
+    (oa, ta, pa), (ob, tb, pb) = a, b
+    ends = (oa, ob, ta)
+    if _folds(ta, tb) and _folds(tangent(w, oa, ta), tangent(w, ob, tb)):
+        # (confirmed by the exact tangents: the corrector's, taken off the branch, is off
+        # by about 1e-4 in its last component, as much as a vertical branch's tilt)
+        br.events.append(_located(w, ends, "fold", "",
+                                  lambda o, t: t[-1], ta[-1], tb[-1]))
     if pa.min_chip * pb.min_chip < 0:
-        br.events.append(_located(w, oa, ta, ds, "grazing", "tool-leaves-cut",
+        br.events.append(_located(w, ends, "grazing", "tool-leaves-cut",
                                   lambda o, t: min_chip(w.model, o), pa.min_chip, pb.min_chip))
     for ev in _crossings(pa, pb):
         br.events.append(ev)
     if pa.ball_margin * pb.ball_margin < 0:
         ball = w.system.damper
         detail = "ball-slips" if ball.friction_force_n > 0 else "ball-wall"
-        br.events.append(_located(w, oa, ta, ds, "grazing", detail,
+        br.events.append(_located(w, ends, "grazing", detail,
                                   lambda o, t: ball_margin(w.system, w.model, o),
                                   pa.ball_margin, pb.ball_margin))
         return _ball_stop(w.system)
     return ""
 
 
-def _located(w: Walk, oa: Orbit, ta, ds: float, kind: str, detail: str, fn, fa: float,
+def _folds(ta: np.ndarray, tb: np.ndarray) -> bool:
+    """Whether the free parameter (the tangents' last component) turns back between
+    tangents ``ta`` and ``tb``."""
+    return bool(ta[-1] * tb[-1] < 0 and min(abs(ta[-1]), abs(tb[-1])) > FOLD_NOISE)
+
+
+def _located(w: Walk, ends: tuple, kind: str, detail: str, fn, fa: float,
              fb: float) -> CutEvent:
-    """Illinois regula falsi on the arclength s in (0, ds) for fn(orbit, tangent) = 0."""
-    lo, hi = 0.0, ds
+    """The event where fn(orbit, tangent) = 0 between two orbits of the branch, ``ends``
+    = (oa, ob, ta): sought on the planes normal to oa's tangent ``ta``, or, where those
+    miss the branch (a corner between, as where the tool re-enters the cut), on the
+    planes normal to the chord from oa to ob, which meet it between the two."""
+    oa, ob, ta = ends
     y = oa.unknowns()
-    o = oa
+    chord = (ob.unknowns() - y) / w.scale
+    try:
+        return _regula_falsi(w, oa, ta, ta, kind, detail, fn, (fa, fb), float(ta @ chord))
+    except CutOrbitError:
+        span = float(np.linalg.norm(chord))
+        return _regula_falsi(w, oa, chord / span, ta, kind, detail, fn, (fa, fb), span)
+
+
+def _regula_falsi(w: Walk, oa: Orbit, normal: np.ndarray, ta: np.ndarray, kind: str,
+                  detail: str, fn, values: tuple[float, float], span: float) -> CutEvent:
+    """Illinois regula falsi on the arclength s in (0, ``span``) along ``normal`` (scaled
+    units) from ``oa``, each orbit on the plane normal to it there; tangents oriented
+    along ``ta``."""
+    fa, fb = values
+    lo, hi = 0.0, span
+    y, o = oa.unknowns(), oa
     for _ in range(LOCATE_ITER):
         s = hi - fb * (hi - lo) / (fb - fa)
-        o = corrected(w, y, ta, s)[0]
+        o = corrected(w, y, normal, s, LOCATE_NEWTON)[0]
         f = fn(o, tangent(w, o, ta))
         if f * fb < 0:
             lo, fa = hi, fb
         else:
             fa *= 0.5
         hi, fb = s, f
-        if abs(hi - lo) < LOCATE_TOL * ds or f == 0.0:
+        if abs(hi - lo) < LOCATE_TOL * span or f == 0.0:
             break
-    return CutEvent(kind, o.depth, amplitude(w.model, o), 1.0 / o.period, detail, o)
+    return CutEvent.at(kind, o, amplitude(w.model, o), detail)
 
 
 def _crossings(pa: CutPoint, pb: CutPoint) -> list[CutEvent]:
@@ -401,5 +522,6 @@ def _crossings(pa: CutPoint, pb: CutPoint) -> list[CutEvent]:
     f = ra / (ra + rb) if ra + rb > 0 else 0.5
     at = [float(x + f * (y - x)) for x, y in ((pa.orbit.depth, pb.orbit.depth),
                                                (pa.amplitude, pb.amplitude),
-                                               (1 / pa.orbit.period, 1 / pb.orbit.period))]
+                                               (1 / pa.orbit.period, 1 / pb.orbit.period),
+                                               (pa.orbit.rpm, pb.orbit.rpm))]
     return [CutEvent(kind, *at)]

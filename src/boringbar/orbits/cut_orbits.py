@@ -70,7 +70,6 @@ class CutModel:
     g: np.ndarray  #: (s,) the force's column: (0, M^-1 p)
     c: np.ndarray  #: (s,) tip displacement W = c . x
     cv: np.ndarray  #: (s,) tip velocity W' = cv . x
-    tau: float  #: delay, one revolution (s)
     feed: float  #: h_m (m)
     revolutions: int  #: N
     law: CuttingLaw
@@ -89,8 +88,8 @@ class CutModel:
 
 
 def cut_model(system: System, forcing: Regenerative) -> CutModel:
-    """The autonomous cut of ``system``'s linear host under ``forcing``'s law, speed,
-    feed and revolutions (its depth is the continuation's parameter)."""
+    """The autonomous cut of ``system``'s linear host under ``forcing``'s law, feed and
+    revolutions (its depth and speed are the orbit's: :class:`Orbit`)."""
     bar, tmd, added = linear_host(system)
     z = dynamic_stiffness(bar, np.array([0.0, 1.0]), tmd, float(added))
     stiff = z[0].real
@@ -103,8 +102,7 @@ def cut_model(system: System, forcing: Regenerative) -> CutModel:
     a = np.block([[np.zeros((d, d)), np.eye(d)], [-inv @ stiff, -inv @ damp]])
     zero = np.zeros(d)
     return CutModel(a=a, g=np.concatenate([zero, inv @ p]), c=np.concatenate([p, zero]),
-                    cv=np.concatenate([zero, p]), tau=60.0 / forcing.rpm,
-                    feed=forcing.feed_m, revolutions=forcing.revolutions,
+                    cv=np.concatenate([zero, p]), feed=forcing.feed_m, revolutions=forcing.revolutions,
                     law=cutting_law(forcing.kr_pa, forcing.workpiece))
 
 
@@ -131,10 +129,11 @@ class Delays:
     base: np.ndarray
 
 
-def delays(model: CutModel, period: float, m: int) -> Delays:
+def delays(model: CutModel, o: Orbit) -> Delays:
+    m, period = o.steps, o.period
     i = np.arange(m)[:, None, None]
     k = np.arange(1, model.revolutions + 1)[None, None, :]
-    pos = i + STAGE_TIMES[None, :, None] - k * model.tau * m / period
+    pos = i + STAGE_TIMES[None, :, None] - k * o.tau * m / period
     base = np.floor(pos).astype(np.int64)
     w = hermite(pos - base)
     w[..., 1] *= period / m
@@ -196,39 +195,63 @@ def step(model: CutModel, b: float, x: np.ndarray, wd: np.ndarray, dt: float,
 
 
 # --- the periodic boundary-value problem ---------------------------------------------
+#: What an orbit may be continued in: the depth of cut b (m), or the delay tau (s, one
+#: revolution), which sets the spindle speed 60 / tau rpm.
+FREE = ("depth", "tau")
+
+
 @dataclass(frozen=True)
 class Orbit:
-    """A discretised periodic orbit: node states ``x`` (m, s), period ``period`` (s) at
-    depth ``depth`` (m)."""
+    """A discretised periodic orbit: node states ``x`` (m, s), period ``period`` (s) of the
+    cut at depth ``depth`` (m) and delay ``tau`` (s, one revolution); its unknowns are the
+    nodes, the period and the ``free`` one of :data:`FREE`, the other held."""
 
     x: np.ndarray
     period: float
     depth: float
+    tau: float
+    free: str = "depth"
 
     @property
     def steps(self) -> int:
         return len(self.x)
 
-    def unknowns(self) -> np.ndarray:
-        return np.concatenate([self.x.ravel(), [self.period, self.depth]])
+    @property
+    def rpm(self) -> float:
+        return 60.0 / self.tau
 
-    @classmethod
-    def of(cls, y: np.ndarray, shape: tuple) -> Orbit:
-        return cls(x=y[:-2].reshape(shape), period=float(y[-2]), depth=float(y[-1]))
+    @property
+    def parameter(self) -> float:
+        """The free parameter's value."""
+        return self.depth if self.free == "depth" else self.tau
+
+    def unknowns(self) -> np.ndarray:
+        return np.concatenate([self.x.ravel(), [self.period, self.parameter]])
+
+    def at(self, y: np.ndarray) -> Orbit:
+        """The orbit of unknowns ``y``: this one's shape, held and free parameters."""
+        values = {"depth": self.depth, "tau": self.tau, self.free: float(y[-1])}
+        return Orbit(y[:-2].reshape(self.x.shape), float(y[-2]), values["depth"],
+                     values["tau"], self.free)
+
+    def freeing(self, free: str) -> Orbit:
+        """The same orbit with ``free`` the unknown parameter."""
+        return Orbit(self.x, self.period, self.depth, self.tau, free)
 
 
 def residual(model: CutModel, o: Orbit) -> np.ndarray:
     """The m RK4 steps closed around the period, then the phase condition W'(0) = 0."""
-    dl = delays(model, o.period, o.steps)
+    dl = delays(model, o)
     nxt = step(model, o.depth, o.x, delayed_w(model, o.x, dl), o.period / o.steps)
     return np.concatenate([(np.roll(o.x, -1, axis=0) - nxt).ravel(), [o.x[0] @ model.cv]])
 
 
 def jacobian(model: CutModel, o: Orbit) -> sp.csc_matrix:
-    """d residual / d (x, T, b), sparse: the nodes' columns exactly (forward mode through
-    the RK4 stages and the Hermite weights), T's and b's by central differences."""
+    """d residual / d (x, T, p), p the free parameter, sparse: the nodes' columns exactly
+    (forward mode through the RK4 stages and the Hermite weights), T's and p's by central
+    differences."""
     m, s = o.x.shape
-    dl = delays(model, o.period, m)
+    dl = delays(model, o)
     _, d = step(model, o.depth, o.x, delayed_w(model, o.x, dl), o.period / m, tangent=True)
     rows, cols, vals = _node_blocks(model, d, dl, m, s)
     size = m * s
@@ -269,8 +292,7 @@ def _central(model: CutModel, o: Orbit, which: int) -> np.ndarray:
     up, down = y.copy(), y.copy()
     up[which] += h
     down[which] -= h
-    shape = o.x.shape
-    return (residual(model, Orbit.of(up, shape)) - residual(model, Orbit.of(down, shape))) / (2 * h)
+    return (residual(model, o.at(up)) - residual(model, o.at(down))) / (2 * h)
 
 
 # --- measures of an orbit ------------------------------------------------------------
@@ -289,7 +311,7 @@ def chip(model: CutModel, o: Orbit, t: np.ndarray) -> np.ndarray:
     """The chip thickness before the max(0, .): min_k [k h_m + W(t - k tau)] - W(t)."""
     t = np.asarray(t, dtype=float)
     k = np.arange(1, model.revolutions + 1)
-    surface = k * model.feed + w_at(model, o, t[..., None] - k * model.tau)
+    surface = k * model.feed + w_at(model, o, t[..., None] - k * o.tau)
     return surface.min(axis=-1) - w_at(model, o, t)
 
 
@@ -339,11 +361,10 @@ def newton(model: CutModel, o: Orbit, extra, tol: float = 1e-10,
     last factorised matrix.  A chord method: the matrix is factorised again only when a
     step does not at least halve the last one; the step is relative to ``o``'s scale."""
     y = o.unknowns()
-    shape = o.x.shape
     scale = _scale(model, o)
     lu, last = None, math.inf
     for it in range(1, max_iter + 1):
-        cur = Orbit.of(y, shape)
+        cur = o.at(y)
         e, row = extra(y)
         full = np.concatenate([residual(model, cur), [e]])
         if lu is None:
@@ -354,7 +375,7 @@ def newton(model: CutModel, o: Orbit, extra, tol: float = 1e-10,
             raise CutOrbitError("the orbit's Jacobian is singular")
         y = y + dy
         if size < tol:
-            return Orbit.of(y, shape), it, lu
+            return o.at(y), it, lu
         if size > 0.5 * last:
             lu = None
         last = size
@@ -395,10 +416,10 @@ def _factor(model: CutModel, o: Orbit, row: np.ndarray):
 
 
 def _scale(model: CutModel, o: Orbit) -> np.ndarray:
-    """A size for every unknown: the node states by their own spread, T and b by value."""
+    """A size for every unknown: the node states by their own spread, T and p by value."""
     spread = np.max(np.abs(o.x - o.x.mean(axis=0)), axis=0) + 1e-3 * np.max(np.abs(o.x), axis=0)
     spread = np.where(spread > 0, spread, 1.0)
-    return np.concatenate([np.tile(spread, o.steps), [o.period, o.depth]])
+    return np.concatenate([np.tile(spread, o.steps), [o.period, o.parameter]])
 
 
 # --- Floquet multipliers --------------------------------------------------------------
@@ -447,7 +468,7 @@ class HistoryMap:
     @classmethod
     def of(cls, model: CutModel, o: Orbit) -> HistoryMap:
         m, s = o.x.shape
-        dl = delays(model, o.period, m)
+        dl = delays(model, o)
         _, d = step(model, o.depth, o.x, delayed_w(model, o.x, dl), o.period / m, tangent=True)
         n = model.revolutions
         terms = [(stage, k) for stage in range(3) for k in _used_delays(d, s, n)]
