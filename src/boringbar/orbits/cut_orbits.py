@@ -11,9 +11,10 @@ p and c the mode shapes at the tip.  A periodic orbit of period T is its own his
 W(t - k tau) = W(t - k tau mod T).  It is discretised as the RK4 integrator keeps a cut:
 m steps of dt = T / m, the state x = (u, u') at each node, and the delayed W at each
 stage from the cubic Hermite through the neighbouring nodes' W and W', here the nodes
-of the orbit itself.  The unknowns are the m node states and T; the equations are the
-m RK4 steps, closed around the period, and the phase condition W'(0) = 0 (the orbit
-starts at the tip's largest excursion).  Because every node sees its delays at the
+of the orbit itself.  The unknowns are the m node states, T and the continued parameter
+(the depth b, or the delay tau, which sets the speed); the equations are the m RK4 steps,
+closed around the period, and the phase condition W'(0) = 0 (the orbit starts at the
+tip's largest excursion).  Because every node sees its delays at the
 same fraction of a step, the discretised orbit of a linear bar in the cut is an exact
 discrete harmonic, and its frequency and depth meet the frequency-domain
 characteristic equation to O(dt^4).
@@ -102,7 +103,8 @@ def cut_model(system: System, forcing: Regenerative) -> CutModel:
     a = np.block([[np.zeros((d, d)), np.eye(d)], [-inv @ stiff, -inv @ damp]])
     zero = np.zeros(d)
     return CutModel(a=a, g=np.concatenate([zero, inv @ p]), c=np.concatenate([p, zero]),
-                    cv=np.concatenate([zero, p]), feed=forcing.feed_m, revolutions=forcing.revolutions,
+                    cv=np.concatenate([zero, p]), feed=forcing.feed_m,
+                    revolutions=forcing.revolutions,
                     law=cutting_law(forcing.kr_pa, forcing.workpiece))
 
 
