@@ -73,6 +73,13 @@ BAD_OPTIONS = {
         "--feed-mm": (*NOT_FINITE, "0", "-1", "1e300"),
         "--revolutions": ("0", "-1", "51", "1.5", "abc"),
         "--parameter": ("force-n", "ratio"),
+        "--depth-mm": ("0.05",),
+    }),
+    "continue-cut-speed": (["continue", "--cut", "--bar", "solid", "--parameter", "rpm",
+                            "--depth-mm", "0.05", "--range", "1000:1400"], {
+        "--depth-mm": (*NOT_FINITE, "0", "-1", "1e6", "abc"),
+        "--range": ("0:1400", "1400:1000", "-1:1000", "1000:inf", "1000:2e6", "a", "1000"),
+        "--rpm": (*NOT_FINITE, "0", "-1", "1e-3", "1e9"),
     }),
     "sweep": (["sweep"], {
         "--ratios": (*NOT_FINITE, "0", "-1", "1e300", "0:inf:1", "0:1:1e-300", "1:0:0.1",
