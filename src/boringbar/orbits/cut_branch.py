@@ -35,6 +35,7 @@ from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
 from boringbar.orbits.cut_orbits import (
     FREE,
+    MULTIPLIERS,
     STEPS,
     CutModel,
     CutOrbitError,
@@ -296,16 +297,36 @@ def corrected(w: Walk, y: np.ndarray, t: np.ndarray, ds: float, max_iter: int = 
 
 
 def point(w: Walk, o: Orbit) -> CutPoint:
-    mu = multipliers(w.model, o)
+    mu = whole_pairs(multipliers(w.model, o, MULTIPLIERS + 1), MULTIPLIERS)
     unstable = int(np.sum(np.abs(nontrivial(mu)) > 1.0 + NEUTRAL))
     return CutPoint(orbit=o, amplitude=amplitude(w.model, o), min_chip=min_chip(w.model, o),
                     multipliers=mu, unstable=unstable,
                     ball_margin=ball_margin(w.system, w.model, o))
 
 
+def whole_pairs(mu: np.ndarray, count: int) -> np.ndarray:
+    """The ``count`` largest of the multipliers ``mu`` (by modulus, largest first, at
+    least count + 1 of them), or count + 1 where the count-th is one of a complex pair:
+    a pair is never split, so that one leaving the unit circle counts twice."""
+    last = mu[count - 1]
+    paired = (abs(last.imag) > 1e-9 * abs(last)
+              and abs(mu[count] - np.conj(last)) <= 1e-6 * abs(last))
+    return mu[: count + 1] if paired else mu[:count]
+
+
+#: The phase shift's multiplier is real and within this of 1.  (Not to round-off: a
+#: shift by part of a step is not a symmetry of the discretised orbit, and where the tool
+#: leaves the cut the clipped chip's corners put the multiplier 1e-4 to 1e-3 off 1.)
+#: Where no real multiplier is as close, it lies below those computed, which are kept.
+TRIVIAL = 1e-2
+
+
 def nontrivial(mu: np.ndarray) -> np.ndarray:
-    """The multipliers less the phase shift's, the one nearest 1."""
-    return np.delete(mu, np.argmin(np.abs(mu - 1.0)))
+    """The multipliers less the phase shift's: the real one nearest 1, within TRIVIAL."""
+    real = np.abs(mu.imag) <= 1e-9 * np.abs(mu)
+    gap = np.where(real, np.abs(mu - 1.0), np.inf)
+    i = int(np.argmin(gap))
+    return np.delete(mu, i) if gap[i] < TRIVIAL else mu
 
 
 def trace(system: System, forcing: Regenerative, window: tuple[float, float], *,

@@ -52,7 +52,7 @@ RK4_COEF, RK4_WEIGHTS, RK4_DELAY = (0.0, 0.5, 0.5, 1.0), (1.0, 2.0, 2.0, 1.0), (
 #: equation to about 1e-9 at this count; docs/continuation.md shows the order).
 STEPS = 200
 #: Multipliers computed at each orbit (the largest in modulus), and ARPACK's tolerance.
-MULTIPLIERS, EIG_TOL = 4, 1e-10
+MULTIPLIERS, EIG_TOL = 6, 1e-10
 #: Unknowns up to which the Newton matrix is factorised densely.
 DENSE_LU = 1700
 #: Relative step of the finite differences in T and b.
@@ -431,10 +431,12 @@ def multipliers(model: CutModel, o: Orbit, count: int = MULTIPLIERS) -> np.ndarr
     A delay equation's multipliers over one short period crowd near the unit circle
     (every characteristic root with a small negative real part), which ARPACK separates
     slowly; over the q periods that renew the whole history they spread to their q-th
-    powers.  So the eigenvalues nu of the q-period map (the one-period map applied q
-    times) are found, each multiplier is
-    |nu|^(1/q) in modulus, and its phase comes from the one-period map's Rayleigh
-    quotient on nu's eigenvector."""
+    powers.  So the eigenvectors of the q-period map's largest eigenvalues (the
+    one-period map applied q times) are found, and the multipliers are the eigenvalues of
+    the one-period map on the subspace they span (Rayleigh-Ritz).  The subspace is
+    invariant under the one-period map, and a pair mu, conj(mu) whose q-th powers
+    coincide (a real mu^q) is resolved there, where one eigenvector's own Rayleigh
+    quotient would mix the two."""
     hm = HistoryMap.of(model, o)
     size = hm.size
     q = max(1, -(-hm.depth // len(o.x)))
@@ -442,9 +444,10 @@ def multipliers(model: CutModel, o: Orbit, count: int = MULTIPLIERS) -> np.ndarr
     k = min(count, size - 2)
     nu, vec = spla.eigs(opq, k=k, which="LM", tol=EIG_TOL, ncv=min(max(2 * k + 1, 30),
                         size - 1), v0=np.ones(size))
-    phase = np.array([np.vdot(v, hm.apply(v.real, 1) + 1j * hm.apply(v.imag, 1))
-                      / np.vdot(v, v) for v in vec.T])
-    mu = np.abs(nu) ** (1.0 / q) * np.exp(1j * np.angle(phase))
+    basis, _ = np.linalg.qr(vec)
+    image = np.column_stack([hm.apply(v.real, 1) + 1j * hm.apply(v.imag, 1)
+                             for v in basis.T])
+    mu = np.linalg.eigvals(basis.conj().T @ image)
     return mu[np.argsort(-np.abs(mu))]
 
 
