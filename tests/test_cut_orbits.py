@@ -284,6 +284,23 @@ def test_a_stable_orbit_draws_a_knocked_cut_back_at_its_multiplier_s_rate(bars, 
     assert rate == pytest.approx(math.log(mu), rel=0.03)
 
 
+def test_a_stable_tmd_orbit_holds_a_cut_started_on_it(bars):
+    """The return check on a TMD bar (the absorber's displacement is the kernel's
+    auxiliary coordinate): the compiled cut started on a stable orbit beyond the tool's
+    leaving stays on it, and knocked 1 % off it comes back.  (Its return mixes several
+    multipliers of nearly equal modulus, the slowest a complex pair, so its rate is not
+    compared with one.)"""
+    system = bars["tmd"]
+    forcing = bb.Regenerative(depth_m=1e-5, rpm=1200.0, revolutions=1)
+    p = cb.trace(system, forcing, (0.0, 5e-3), max_points=30).points[-8]
+    assert p.unstable == 0 and p.min_chip < 0
+    on = follow(system, forcing, p.orbit, 1200)
+    assert np.max(np.abs(on - p.amplitude)) < 1e-4 * p.amplitude
+    off = follow(system, forcing, p.orbit, 1200, knock=0.01)
+    dev = np.abs(off - on) / p.amplitude
+    assert dev[0] > 5e-3 and dev[-1] < 1e-5
+
+
 def test_a_stable_orbit_is_where_a_simulated_cut_settles(bars):
     """The compiled RK4 cut, knocked from the steady cut to about the orbit's amplitude,
     settles on the branch's amplitude at that depth."""
@@ -378,8 +395,8 @@ def test_continue_cut_in_speed_writes_the_map_and_refuses_a_range_without_a_cros
 def test_the_return_check_refuses_what_it_cannot_start(bars, one_revolution):
     br, forcing = one_revolution
     o = br.points[-8].orbit
-    with pytest.raises(bb.ParameterError, match="solid"):
-        follow(bars["tmd"], forcing, o, 10)
+    with pytest.raises(bb.ParameterError, match="solid or TMD"):
+        follow(bars["ball"], forcing, o, 10)
     with pytest.raises(bb.ParameterError, match="periods"):
         follow(bars["solid"], forcing, o, 0)
     cut = bb.Regenerative(depth_m=o.depth, rpm=1200.0, revolutions=1, start="static")

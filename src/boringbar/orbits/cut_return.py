@@ -32,21 +32,20 @@ def follow(system: System, forcing: Regenerative, orbit: Orbit, periods: int,
     periods (as near as whole steps of ``dt_s`` go), ``periods`` periods in all, of
     ``system``'s cut at ``orbit.depth`` started on ``orbit`` with its own history (the
     cut of ``forcing``'s speed, law and memory), its departure from the orbit's mean
-    scaled by 1 + ``knock`` (0: on the orbit).  A solid bar's orbits only: their state
-    is the bar's modal state, as the kernel's."""
-    if system.kind != "solid":
+    scaled by 1 + ``knock`` (0: on the orbit).  A solid or TMD bar's orbits: their state
+    is the kernel's (the modes, then the absorber's absolute displacement as its
+    auxiliary coordinate); a ball bar's host carries its ball, which the kernel frees."""
+    if system.kind not in ("solid", "tmd"):
         raise ParameterError(f"system kind {system.kind!r}: the return check starts a "
-                             "solid bar's cut on its orbit")
+                             "solid or TMD bar's cut on its orbit")
     check_int("periods", periods, 1, 10**6)
     check_int("per_window", per_window, 1, periods)
     model = cut_model(system, forcing)
     cut = replace(forcing, depth_m=orbit.depth, start="static", stop_at_zero=False)
     steps = max(1, round(per_window * orbit.period / dt_s))
     stepper = CutStepper(system, cut, dt_s=dt_s, window_steps=steps)
-    n = system.bar.n_modes
     mean = orbit.x.mean(axis=0)
-    x = np.zeros(2 * n + 2)
-    x[:2 * n] = mean + (1.0 + knock) * (orbit.x[0] - mean)
+    x = kernel_state(system, mean + (1.0 + knock) * (orbit.x[0] - mean))
     w_mean = float(model.c @ mean)
 
     def history(t):
@@ -58,3 +57,15 @@ def follow(system: System, forcing: Regenerative, orbit: Orbit, periods: int,
     stepper.start_from(x, history, left_cut=min_chip(model, orbit) < 0)
     return np.array([stepper.advance().half_pp_m
                      for _ in range(math.ceil(periods / per_window))])
+
+
+def kernel_state(system: System, state: np.ndarray) -> np.ndarray:
+    """The compiled kernel's state [u, u', aux, aux'] of an orbit's node state (q, q'),
+    q the bar's modal coordinates, then a TMD's absolute displacement."""
+    n = system.bar.n_modes
+    d = len(state) // 2
+    x = np.zeros(2 * n + 2)
+    x[:n], x[n:2 * n] = state[:n], state[d:d + n]
+    if d > n:
+        x[2 * n], x[2 * n + 1] = state[n], state[d + n]
+    return x
