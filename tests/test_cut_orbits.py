@@ -390,6 +390,10 @@ def test_continue_cut_in_speed_writes_the_map_and_refuses_a_range_without_a_cros
     assert rc == 2 and not empty.exists()
     err = capsys.readouterr().err.strip()
     assert "crosses the depth" in err and "\n" not in err
+    rc = main(["continue", "--cut", "--bar", "solid", "--rpm", "1200", "--range", "0:0.01",
+               "--out", str(empty)])
+    assert rc == 2 and not empty.exists()
+    assert "outside the depth range" in capsys.readouterr().err
 
 
 def test_the_return_check_refuses_what_it_cannot_start(bars, one_revolution):
