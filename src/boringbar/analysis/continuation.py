@@ -363,7 +363,7 @@ def continuation(system: System, forcing: Harmonic | Regenerative | None = None,
     contract's (one point: the branch).
 
     Under a :class:`~boringbar.model.forcing.Regenerative` cut, the branch of chatter orbits
-    in depth from the Hopf point at its speed
+    from a Hopf point, in depth at its speed or in speed at its depth
     (:func:`boringbar.analysis.cut_continuation.cut_continuation`, options
     :class:`~boringbar.analysis.cut_continuation.CutContinuationOptions`)."""
     if isinstance(forcing, Regenerative):
