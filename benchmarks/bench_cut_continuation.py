@@ -13,7 +13,11 @@ The map: `boringbar continue --cut --rpm 1200 --parameter depth-mm --range 0:1` 
 published bar's solid, TMD and ball bars (the ball: gap 0.5 mm, friction on), its wall
 time and each bar's points and stop.
 
+In speed: the carbide solid bar's branch at 0.04 mm over 1000-1400 rpm from the Hopf
+point nearest 1150 rpm (`--parameter rpm`), which joins the lobe's two flanks.
+
     .venv/bin/python benchmarks/bench_cut_continuation.py [--points 200] [--no-map]
+        [--no-speed]
 """
 
 from __future__ import annotations
@@ -31,10 +35,26 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--points", type=int, default=200)
     ap.add_argument("--no-map", action="store_true")
+    ap.add_argument("--no-speed", action="store_true")
     args = ap.parse_args()
     branch(args.points)
     if not args.no_map:
         three_bars()
+    if not args.no_speed:
+        in_speed(args.points)
+
+
+def in_speed(points: int) -> None:
+    solid = bb.variants(bb.load_system("examples/systems/carbide_ld10_tungsten.toml"))["solid"]
+    options = bb.CutContinuationOptions(parameter="rpm", rpm_range=(1000.0, 1400.0),
+                                        max_points=points)
+    tic = time.perf_counter()
+    ds = bb.cut_continuation({"solid": solid}, bb.Regenerative(depth_m=0.04e-3, rpm=1150.0),
+                             options)
+    wall = time.perf_counter() - tic
+    s = cut_summary(ds)["cases"][0]
+    print(f"in speed (carbide solid, 0.04 mm): {s['points']} points in {wall:.1f} s "
+          f"({wall / s['points'] * 1e3:.0f} ms a point); stop: {s['stop']}")
 
 
 def branch(points: int) -> None:

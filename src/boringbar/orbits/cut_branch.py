@@ -61,9 +61,13 @@ GROW_ITERATIONS = 5
 FOLD_NOISE = 1e-7
 #: The Hopf point's orbit has a tip amplitude of this fraction of h_m.
 HOPF_AMPLITUDE = 1e-3
-#: Multipliers this close to the unit circle count as on it (the phase shift's, and a
-#: linear bar's neutral amplitude).
-NEUTRAL = 1e-6
+#: Multipliers this close to the unit circle count as on it: NEUTRAL in the cut (a linear
+#: bar's neutral amplitude), CLIPPED where the tool leaves the cut.  There the clipped
+#: chip's corners limit the discretised map's accuracy: a TMD bar's multipliers that sit
+#: on the circle (the surface left uncut, carried from revolution to revolution) scatter
+#: by up to 1.05e-4 about it from one orbit to the next (the published TMD bar at 500 rpm),
+#: where a pair that truly leaves it moves smoothly (docs/continuation.md).
+NEUTRAL, CLIPPED = 1e-6, 2e-4
 #: A branch ends at this many points, or this many h_m of tip amplitude.
 MAX_POINTS, MAX_AMPLITUDE = 200, 20.0
 #: Secant iterations locating an event, and their tolerance on the arclength.
@@ -84,6 +88,7 @@ class CutPoint:
     multipliers: np.ndarray
     unstable: int  #: multipliers outside the unit circle (the neutral ones aside)
     ball_margin: float  #: > 0 while the ball keeps off its walls (or sticks); nan: no ball
+    neutral: float = NEUTRAL  #: multipliers within this of the unit circle count as on it
 
 
 @dataclass
@@ -298,10 +303,12 @@ def corrected(w: Walk, y: np.ndarray, t: np.ndarray, ds: float, max_iter: int = 
 
 def point(w: Walk, o: Orbit) -> CutPoint:
     mu = whole_pairs(multipliers(w.model, o, MULTIPLIERS + 1), MULTIPLIERS)
-    unstable = int(np.sum(np.abs(nontrivial(mu)) > 1.0 + NEUTRAL))
-    return CutPoint(orbit=o, amplitude=amplitude(w.model, o), min_chip=min_chip(w.model, o),
+    chip = min_chip(w.model, o)
+    neutral = NEUTRAL if chip > 0 else CLIPPED
+    unstable = int(np.sum(np.abs(nontrivial(mu)) > 1.0 + neutral))
+    return CutPoint(orbit=o, amplitude=amplitude(w.model, o), min_chip=chip,
                     multipliers=mu, unstable=unstable,
-                    ball_margin=ball_margin(w.system, w.model, o))
+                    ball_margin=ball_margin(w.system, w.model, o), neutral=neutral)
 
 
 def whole_pairs(mu: np.ndarray, count: int) -> np.ndarray:
@@ -525,12 +532,13 @@ def _regula_falsi(w: Walk, oa: Orbit, normal: np.ndarray, ta: np.ndarray, kind: 
 
 def _crossings(pa: CutPoint, pb: CutPoint) -> list[CutEvent]:
     """Period doublings and Neimark-Sacker points between two points: a multiplier through
-    -1 or a complex pair through the unit circle (located by its modulus, linearly)."""
+    -1 or a complex pair through the unit circle, placed where its modulus passes 1 + the
+    neutral band (linearly between the two)."""
     if pa.unstable == pb.unstable:
         return []
     more = pa if pa.unstable > pb.unstable else pb
     mus = nontrivial(more.multipliers)
-    out = mus[np.abs(mus) > 1.0 + NEUTRAL]
+    out = mus[np.abs(mus) > 1.0 + more.neutral]
     mu = out[np.argmin(np.abs(out))]
     if abs(mu.imag) > 1e-6 * abs(mu):
         kind = "neimark-sacker"
@@ -538,9 +546,12 @@ def _crossings(pa: CutPoint, pb: CutPoint) -> list[CutEvent]:
         kind = "period-doubling"
     else:
         return []  # through +1: a fold, located from the tangent
-    ra = np.min(np.abs(np.abs(nontrivial(pa.multipliers)) - 1.0))
-    rb = np.min(np.abs(np.abs(nontrivial(pb.multipliers)) - 1.0))
-    f = ra / (ra + rb) if ra + rb > 0 else 0.5
+    # where the crossing multiplier (the k-th largest, k the larger count outside) passes
+    # the band's edge, linearly between the two points
+    edge, k = 1.0 + more.neutral, more.unstable
+    ma, mb = (float(np.sort(np.abs(nontrivial(p.multipliers)))[::-1][k - 1])
+              for p in (pa, pb))
+    f = min(1.0, max(0.0, (edge - ma) / (mb - ma))) if mb != ma else 0.5
     at = [float(x + f * (y - x)) for x, y in ((pa.orbit.depth, pb.orbit.depth),
                                                (pa.amplitude, pb.amplitude),
                                                (1 / pa.orbit.period, 1 / pb.orbit.period),
