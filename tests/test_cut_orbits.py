@@ -241,6 +241,23 @@ def test_a_torus_point_takes_a_whole_complex_pair_out_of_the_unit_circle():
         assert all(np.min(np.abs(mu - np.conj(m))) < 1e-8 for m in mu)
 
 
+@pytest.mark.slow
+def test_a_tmd_bar_s_neutral_surface_modes_are_not_read_as_tori():
+    """Beyond the tool's leaving, the published TMD bar at 500 rpm has multipliers on the
+    unit circle (the surface left uncut, carried on) that the clipped chip's
+    discretisation scatters by about 1e-4 from orbit to orbit: within the clipped band
+    they are not counted, where a band of 1e-6 read dozens of Neimark-Sacker points."""
+    br = cb.trace(bb.make_system("tmd", "physical"), bb.Regenerative(depth_m=1e-5, rpm=500.0),
+                  (0.0, 5e-3), max_points=75)
+    beyond = [p for p in br.points if p.min_chip < 0]
+    assert len(beyond) > 50 and beyond[-1].orbit.depth > 1.7e-3
+    near = [m for p in beyond for m in cb.nontrivial(p.multipliers)
+            if 0 < abs(m) - 1 < cb.CLIPPED]
+    assert near  # the scatter is there ...
+    assert all(p.unstable == 0 for p in beyond)  # ... and not counted
+    assert not [e for e in br.events if e.kind == "neimark-sacker"]
+
+
 @pytest.fixture(scope="module")
 def one_revolution(bars):
     """The solid bar's branch with one revolution of memory (30 points, through the
