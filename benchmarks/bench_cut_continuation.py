@@ -46,7 +46,7 @@ def main() -> None:
 
 def in_speed(points: int) -> None:
     solid = bb.variants(bb.load_system("examples/systems/carbide_ld10_tungsten.toml"))["solid"]
-    options = bb.CutContinuationOptions(parameter="rpm", rpm_range=(1000.0, 1400.0),
+    options = bb.CutContinuationOptions(parameter="rpm", speed_range_rpm=(1000.0, 1400.0),
                                         max_points=points)
     tic = time.perf_counter()
     ds = bb.cut_continuation({"solid": solid}, bb.Regenerative(depth_m=0.04e-3, rpm=1150.0),

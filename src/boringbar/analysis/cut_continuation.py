@@ -41,7 +41,7 @@ MAX_RPM = 1e6
 class CutContinuationOptions:
     """``parameter``: what the branch is continued in (:data:`PARAMETERS`): "depth", at
     the cut's speed within ``depth_range_m`` (lo, hi; m), or "rpm", at the cut's depth
-    within ``rpm_range`` (lo, hi; rpm), from the Hopf point there nearest the cut's
+    within ``speed_range_rpm`` (lo, hi; rpm), from the Hopf point there nearest the cut's
     speed; ``lobe``: the Hopf point's lobe number j (None: the lowest lobes'); ``steps``:
     nodes a period; ``max_points``: a branch's budget."""
 
@@ -50,7 +50,7 @@ class CutContinuationOptions:
     steps: int = STEPS
     max_points: int = MAX_POINTS
     parameter: str = "depth"
-    rpm_range: tuple[float, float] | None = None
+    speed_range_rpm: tuple[float, float] | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "depth_range_m", _pair(
@@ -58,22 +58,19 @@ class CutContinuationOptions:
         if self.parameter not in PARAMETERS:
             raise ParameterError(f"parameter = {self.parameter!r} must be one of "
                                  f"{', '.join(PARAMETERS)}")
-        if self.parameter == "rpm" and self.rpm_range is None:
-            raise ParameterError("parameter 'rpm' needs rpm_range = (lo, hi), the speeds "
-                                 "the branch stays in (rev/min, > 0)")
-        if self.rpm_range is not None:
-            pair = _pair("rpm_range", self.rpm_range, 0.0, MAX_RPM, "rev/min")
-            check_range("rpm_range low", pair[0], 0.0, MAX_RPM, lo_open=True, unit="rev/min")
-            object.__setattr__(self, "rpm_range", pair)
+        if self.parameter == "rpm" and self.speed_range_rpm is None:
+            raise ParameterError("parameter 'rpm' needs speed_range_rpm = (lo, hi), the "
+                                 "speeds the branch stays in (rev/min, > 0)")
+        if self.speed_range_rpm is not None:
+            pair = _pair("speed_range_rpm", self.speed_range_rpm, 0.0, MAX_RPM, "rev/min")
+            check_range("speed_range_rpm low", pair[0], 0.0, MAX_RPM, lo_open=True,
+                        unit="rev/min")
+            object.__setattr__(self, "speed_range_rpm", pair)
         if self.lobe is not None:
             check_int("lobe", self.lobe, 0, 200)
         check_int("steps", self.steps, 40, 2000)
         check_int("max_points", self.max_points, 2, 10_000)
 
-    @property
-    def window(self) -> tuple[float, float]:
-        """The range of the branch's parameter: depths (m) or speeds (rpm)."""
-        return self.depth_range_m if self.parameter == "depth" else self.rpm_range
 
 
 def _pair(name: str, value, lo: float, hi: float, unit: str) -> tuple[float, float]:
@@ -107,7 +104,8 @@ def cut_continuation(systems: System | dict[str, System], forcing: Regenerative,
 
 def _branch(system: System, forcing: Regenerative, o: CutContinuationOptions) -> CutBranch:
     try:
-        return trace(system, forcing, o.window, free=PARAMETERS[o.parameter][0], lobe=o.lobe,
+        window = o.depth_range_m if o.parameter == "depth" else o.speed_range_rpm
+        return trace(system, forcing, window, free=PARAMETERS[o.parameter][0], lobe=o.lobe,
                      steps=o.steps, max_points=o.max_points)
     except CutOrbitError as err:
         return CutBranch(lobe=-1 if o.lobe is None else o.lobe, stop=f"no branch: {err}")

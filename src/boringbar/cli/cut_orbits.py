@@ -95,7 +95,7 @@ def cut_outcome(args) -> Outcome:
     options = CutContinuationOptions(
         depth_range_m=window if in_depth else (0.0, 1e-3), lobe=args.lobe,
         max_points=args.max_points or MAX_POINTS, parameter="depth" if in_depth else "rpm",
-        rpm_range=None if in_depth else window)
+        speed_range_rpm=None if in_depth else window)
     out = chatter_orbit_files(cut_continuation(cut_systems(args), forcing, options), args.out)
     return Outcome(out, lambda say: _say(say, out))
 
