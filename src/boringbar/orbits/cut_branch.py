@@ -443,10 +443,11 @@ def _walk(w: Walk, br: CutBranch, o: Orbit, t: np.ndarray, max_points: int) -> N
 
 def _returned(w: Walk, br: CutBranch, o: Orbit) -> None:
     """The step past ``o`` went through zero amplitude (the phase condition's half-period
-    shift): the branch returns to the steady cut at a second Hopf point, located as the
-    first, at an amplitude of HOPF_AMPLITUDE h_m."""
+    shift): the branch returns to the steady cut at a second Hopf point, the orbit of
+    HOPF_AMPLITUDE h_m on the cut itself (the first is solved on the cut linearised about
+    h_m; at that amplitude the two differ by O(A^2), nothing for a linear law)."""
     hopf, _ = fixed_amplitude(w.model, o, HOPF_AMPLITUDE * w.model.feed)
-    br.events.append(CutEvent.at("hopf", hopf, amplitude(w.model, hopf), "return"))
+    br.events.append(CutEvent.at("hopf", hopf, 0.0, "return"))
     br.points.append(point(w, hopf))
     br.stop = "the branch returns to the steady cut at a second Hopf point"
 

@@ -236,10 +236,6 @@ class Orbit:
         return Orbit(y[:-2].reshape(self.x.shape), float(y[-2]), values["depth"],
                      values["tau"], self.free)
 
-    def freeing(self, free: str) -> Orbit:
-        """The same orbit with ``free`` the unknown parameter."""
-        return Orbit(self.x, self.period, self.depth, self.tau, free)
-
 
 def residual(model: CutModel, o: Orbit) -> np.ndarray:
     """The m RK4 steps closed around the period, then the phase condition W'(0) = 0."""
