@@ -232,7 +232,7 @@ def test_a_torus_point_takes_a_whole_complex_pair_out_of_the_unit_circle():
     clipped chip's orbit) at 0.1392 mm."""
     system = bb.make_system("solid", "physical")
     br = cb.trace(system, bb.Regenerative(depth_m=1e-5, rpm=1200.0), (0.0, 1e-3),
-                  max_points=60)
+                  max_points=50)
     ns = [e for e in br.events if e.kind == "neimark-sacker"]
     assert ns and ns[0].depth == pytest.approx(0.1392e-3, rel=2e-3)
     for p in br.points:
