@@ -52,7 +52,7 @@ RK4_COEF, RK4_WEIGHTS, RK4_DELAY = (0.0, 0.5, 0.5, 1.0), (1.0, 2.0, 2.0, 1.0), (
 #: equation to about 1e-9 at this count; docs/continuation.md shows the order).
 STEPS = 200
 #: Multipliers computed at each orbit (the largest in modulus), and ARPACK's tolerance.
-MULTIPLIERS, EIG_TOL = 6, 1e-10
+MULTIPLIERS, EIG_TOL = 4, 1e-10
 #: Unknowns up to which the Newton matrix is factorised densely.
 DENSE_LU = 1700
 #: Relative step of the finite differences in T and b.
