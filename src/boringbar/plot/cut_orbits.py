@@ -31,7 +31,8 @@ def plot_cut_orbits(ds, *, fig=None) -> Figure:
     orbits solid and unstable dashed, events marked.  In depth, the steady cut lies along
     the axis (stable below its Hopf point), and where a branch folds back below its Hopf
     point the band between is shaded: there a knock can start chatter below the linear
-    limit."""
+    limit.  In speed, a dotted stretch of the axis marks where the steady cut is
+    unstable, between a branch's two Hopf points."""
     if fig is None:
         fig = Figure(figsize=(COLUMN_WIDTH_IN, 4.6), layout="constrained")
     ax = fig.subplots()
@@ -71,6 +72,9 @@ def _branch(ax, d, color: str, label: str, in_depth: bool = True) -> None:
         if in_depth:
             ax.plot([0.0, hopf[0]], [0.0, 0.0], color=color, lw=3, alpha=0.5,
                     solid_capstyle="butt")
+        elif len(hopf) > 1:  # in speed, the steady cut is unstable between the two
+            ax.plot(hopf[:2], [0.0, 0.0], color=color, lw=4, ls=":", clip_on=False,
+                    label="steady cut unstable (between Hopf points)")
     else:
         b, a, stable = b[ok], a[ok], stable[ok]
     # one line a stretch of equal stability (a segment's stability is its far end's), so
