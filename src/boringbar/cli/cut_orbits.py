@@ -92,10 +92,10 @@ def cut_outcome(args) -> Outcome:
     forcing = Regenerative(depth_m=depth, rpm=rpm, kr_pa=cut.get("kr_pa", 850e6),
                            workpiece=cut.get("workpiece"), feed_m=cut["feed_m"],
                            revolutions=cut["revolutions"])
-    options = CutContinuationOptions(
-        depth_range_m=window if in_depth else (0.0, 1e-3), lobe=args.lobe,
-        max_points=args.max_points or MAX_POINTS, parameter="depth" if in_depth else "rpm",
-        speed_range_rpm=None if in_depth else window)
+    where = ({"depth_range_m": window} if in_depth
+             else {"parameter": "rpm", "speed_range_rpm": window})
+    options = CutContinuationOptions(**where, lobe=args.lobe,
+                                     max_points=args.max_points or MAX_POINTS)
     out = chatter_orbit_files(cut_continuation(cut_systems(args), forcing, options), args.out)
     return Outcome(out, lambda say: _say(say, out))
 

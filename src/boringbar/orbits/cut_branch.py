@@ -88,7 +88,17 @@ class CutPoint:
     multipliers: np.ndarray
     unstable: int  #: multipliers outside the unit circle (the neutral ones aside)
     ball_margin: float  #: > 0 while the ball keeps off its walls (or sticks); nan: no ball
-    neutral: float = NEUTRAL  #: multipliers within this of the unit circle count as on it
+
+    @property
+    def neutral(self) -> float:
+        """Multipliers within this of the unit circle count as on it."""
+        return neutral_band(self.min_chip)
+
+
+def neutral_band(chip: float) -> float:
+    """The band about the unit circle of an orbit whose thinnest chip is ``chip`` (m):
+    NEUTRAL in the cut, CLIPPED where the tool leaves it."""
+    return NEUTRAL if chip > 0 else CLIPPED
 
 
 @dataclass
@@ -304,11 +314,10 @@ def corrected(w: Walk, y: np.ndarray, t: np.ndarray, ds: float, max_iter: int = 
 def point(w: Walk, o: Orbit) -> CutPoint:
     mu = whole_pairs(multipliers(w.model, o, MULTIPLIERS + 1), MULTIPLIERS)
     chip = min_chip(w.model, o)
-    neutral = NEUTRAL if chip > 0 else CLIPPED
-    unstable = int(np.sum(np.abs(nontrivial(mu)) > 1.0 + neutral))
+    unstable = int(np.sum(np.abs(nontrivial(mu)) > 1.0 + neutral_band(chip)))
     return CutPoint(orbit=o, amplitude=amplitude(w.model, o), min_chip=chip,
                     multipliers=mu, unstable=unstable,
-                    ball_margin=ball_margin(w.system, w.model, o), neutral=neutral)
+                    ball_margin=ball_margin(w.system, w.model, o))
 
 
 def whole_pairs(mu: np.ndarray, count: int) -> np.ndarray:
