@@ -265,8 +265,8 @@ def test_a_study_with_draws_resumes_after_an_interruption(tmp_path, monkeypatch)
     real, calls = runner.compute_chunk, []
 
     def interrupted(*args):
-        if len(calls) == 4:
-            raise KeyboardInterrupt  # the run stops with four chunks saved
+        if len(calls) == 3:
+            raise KeyboardInterrupt  # the run stops with three chunks saved
         calls.append(args)
         return real(*args)
 
@@ -274,11 +274,12 @@ def test_a_study_with_draws_resumes_after_an_interruption(tmp_path, monkeypatch)
     out = tmp_path / "resumed.nc"
     with pytest.raises(KeyboardInterrupt):
         run_study(study_from_dict(STUDY), out, executor="serial", chunk_size=1)
-    assert not out.exists() and len(list(tmp_path.glob("resumed.nc.partial/chunk-*"))) == 4
+    assert not out.exists() and len(list(tmp_path.glob("resumed.nc.partial/chunk-*"))) == 3
     monkeypatch.setattr(runner, "compute_chunk", real)
     report = RunReport()
     ds = run_study(study_from_dict(STUDY), out, executor="serial", chunk_size=1, report=report)
-    assert report.points == 2 + 2 * 3 and report.resumed == 4 and report.computed == 4
+    # two deterministic columns, and a block of draws at each speed
+    assert report.points == 2 + 2 and report.resumed == 3 and report.computed == 1
     assert_same_data(ds, fresh)
     lobes = bb.lobes(bb.make_system("solid"), bb.LobesOptions(
         RPM, criterion="growth", analytic=False, uncertainty=Uncertainty(draws=3, seed=7)))
@@ -305,3 +306,22 @@ def test_a_noisy_draw_is_searched_on_its_settled_vibration(solid):
     noisy = float(ds["draw_limit_depth_m"].values[0, 0, 0])
     nominal = float(quiet["limit_depth_m"].values[0, 0])
     assert ds["draw_runs"].values.sum() >= 2 and noisy == pytest.approx(nominal, rel=0.1)
+
+
+# --- a free ball's draws -------------------------------------------------------------
+
+def test_a_balls_draws_without_spread_are_its_deterministic_lobes():
+    """A free ball's draw searches on whether a cut is chatter-free alone (the first draw
+    of a block from the host's limit, the next from the first's limit), not on the onset
+    first: without spread both find the deterministic lobes' chatter-free depth.  At
+    8500 and 12600 rpm the friction-held vibration levels off far below the ball's jump
+    to chatter, where the two searches differ most."""
+    ball = bb.make_system("ball")
+    options = bb.LobesOptions((8500.0, 12600.0), uncertainty=Uncertainty(
+        draws=2, seed=3, **QUIET))
+    ds = bb.lobes(ball, options, execution=bb.Execution("serial"))
+    limit = ds["limit_depth_m"].values
+    assert np.all(limit > 1.2 * ds["host_analytic_limit_m"].values)
+    assert np.array_equal(ds["draw_limit_depth_m"].values, np.repeat(limit[..., None], 2, -1))
+    runs = ds["draw_runs"].values[0]
+    assert np.all(runs[:, 1] < runs[:, 0])  # the second search starts at the first's limit

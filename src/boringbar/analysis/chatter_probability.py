@@ -18,11 +18,21 @@ per draw d = 0 .. draws - 1 on a drawn bar and cut:
 Draw d is a function of (``seed``, d) alone: each quantity has its own numpy stream
 ``default_rng([seed, d, stream])``, so a draw is the same whatever the bar, the speed,
 the executor or the other quantities drawn.  Each draw's chatter-free depth at each
-speed comes from the deterministic lobes' own search (:func:`~boringbar.analysis.
-lobe_search.growth_column`, seeded at the analytic limit of the drawn linear host) and
-their rule for the limit (:func:`draw_limit`).  A noisy cut has no growth rate to find
-(its noise keeps every mode vibrating): its column is searched on the settled vibration
-alone (:func:`noisy_column`).
+speed comes from the deterministic lobes' search over the same depth grid and their rule
+for the limit (:func:`draw_limit`):
+
+- a bar without a free ball: the onset's search (:func:`~boringbar.analysis.
+  lobe_search.growth_column`), seeded at the analytic limit of the drawn linear host;
+- a free ball: one search on whether a cut is chatter-free (:func:`~boringbar.analysis.
+  lobe_search.free_column`), which needs no onset of its own;
+- a noisy cut, which has no growth rate to find (its noise keeps every mode vibrating):
+  a search on the settled vibration alone (:func:`noisy_column`).
+
+The draws of one speed run in blocks of :data:`DRAW_BLOCK`, in order, so that a ball's or
+a noisy cut's search can start where the block's draws before it found their limits (the
+median; the first draw of a block at the host's limit).  The seed decides only where a
+search starts: where a draw's stability is monotone in depth, as the search assumes, it
+finds the same limit from any seed.
 
 P(chatter) at depth b is estimated by the fraction of draws whose chatter-free depth is
 below b (:func:`chatter_probability`).  This is the right estimator because each draw's
@@ -38,6 +48,7 @@ from __future__ import annotations
 
 import json
 import math
+import statistics
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -45,10 +56,12 @@ import numpy as np
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.design_interval import wilson
 from boringbar.analysis.lobe_search import (
+    BALL_STEP,
     CHATTER,
     STABLE,
     UNDECIDED,
     column,
+    free_column,
     growth_column,
     growth_cut,
     not_free,
@@ -90,6 +103,12 @@ WILSON_LEVEL = 0.95
 #: The stream of each drawn quantity (:meth:`Uncertainty.draw`).
 STREAMS = {"stiffness": 0, "damping": 1, "friction": 2, "restitution": 3, "ball_start": 4,
            "noise_seed": 5}
+#: Draws of one speed run in order as one point (module doc): the block's later searches
+#: start at the limits found before them.  Eight keep a speed's draws on several cores.
+DRAW_BLOCK = 8
+#: The first step (grid depths, 1 % each by default) of a search started at the block's
+#: median limit: the drawn limits of a speed scatter by some tens of per cent.
+SEEDED_STEP = 4
 
 
 @dataclass(frozen=True)
@@ -262,9 +281,11 @@ def drawn_options(options, draw: Draw, uncertainty: Uncertainty, system: System)
     return options
 
 
-def noisy_column(case: Case, rpm: float, options, integration, seed: int) -> dict:
-    """The runs of a noisy cut's column: the lobes' search (bracket from ``seed``,
-    bisection, the ``successive`` confirmation) on the settled vibration alone."""
+def noisy_column(case: Case, rpm: float, options, integration, seed: int,
+                 up_step: int = 1) -> dict:
+    """The runs of a noisy cut's column: the lobes' search (bracket from ``seed`` with a
+    first step ``up_step``, bisection, the ``successive`` confirmation) on the settled
+    vibration alone."""
     done: dict[int, dict] = {}
 
     def result(i: int) -> dict:
@@ -273,7 +294,7 @@ def noisy_column(case: Case, rpm: float, options, integration, seed: int) -> dic
         return done[i]
 
     column(lambda i: not_free(result(i)), seed, options.max_index, options.method,
-           options.successive)
+           options.successive, up_step)
     return done
 
 
@@ -314,31 +335,67 @@ def check(uncertainty, criterion: str | None) -> None:
 
 
 def points(n_cases: int, n_rpm: int, uncertainty: Uncertainty | None) -> list:
-    """The drawn points (case index, rpm index, draw) of a lobe study."""
+    """The drawn points (case index, rpm index, block of :data:`DRAW_BLOCK` draws) of a
+    lobe study."""
     if uncertainty is None:
         return []
-    return [(i, j, d) for i in range(n_cases) for j in range(n_rpm)
-            for d in range(uncertainty.draws)]
+    blocks = math.ceil(uncertainty.draws / DRAW_BLOCK)
+    return [(i, j, b) for i in range(n_cases) for j in range(n_rpm) for b in range(blocks)]
+
+
+def block_draws(point: tuple[int, int, int], draws: int) -> range:
+    """The draws of a drawn point's block."""
+    b = point[2]
+    return range(b * DRAW_BLOCK, min((b + 1) * DRAW_BLOCK, draws))
 
 
 def compute(context: dict, point: tuple[int, int, int]) -> dict:
-    """One drawn column (case index, rpm index, draw): its chatter-free depth
-    ``limit_depth_m`` (m), the runs it took and their simulated time (s)."""
-    i, j, d = point
+    """One drawn point (case index, rpm index, block): each of the block's draws in order
+    (:func:`block_draws`), with its chatter-free depth (m, ``limit_depth_m``), the runs it
+    took and their simulated time (s), as lists."""
+    out: dict[str, list] = {"limit_depth_m": [], "runs": [], "run_duration_s": []}
+    for d in block_draws(point, context["options"].uncertainty.draws):
+        found = [v for v in out["limit_depth_m"] if math.isfinite(v)]
+        for key, value in drawn_column(context, point[0], point[1], d, found).items():
+            out[key].append(value)
+    return out
+
+
+def drawn_column(context: dict, i: int, j: int, d: int, found: list) -> dict:
+    """Draw ``d``'s column of case ``i`` at speed ``j``: its chatter-free depth, the runs it
+    took and their simulated time; ``found``: the limits (m) of the block's draws before
+    it, where a ball's or a noisy cut's search starts (module doc)."""
     o, integration = context["options"], context["integration"]
     u, case, rpm = o.uncertainty, context["cases"][i], o.rpm[j]
     draw = u.draw(d, case.system.bar.n_modes)
     system = drawn_system(case.system, draw, u)
     drawn = drawn_options(o, draw, u, system)
-    seed = 1
-    if o.method == "search":
-        host = float(limit_at_speeds(system.linear_host(), [rpm], o.analytic_kr_pa)[0])
-        seed = o.index_below(host) if math.isfinite(host) else 1
     dcase = Case.of(system, case.label, case.initial)
     noisy = u.force_noise > 0
-    done = (noisy_column if noisy else growth_column)(dcase, rpm, drawn, integration, seed)
+    searched = noisy or system.kind == "ball"  # its limit is not its host's
+    seed, up_step = _seed(o, system, rpm, found if searched else [])
+    if noisy:
+        done = noisy_column(dcase, rpm, drawn, integration, seed, up_step)
+    elif system.kind == "ball":
+        done = free_column(dcase, rpm, drawn, integration, seed, up_step)
+    else:
+        done = growth_column(dcase, rpm, drawn, integration, seed)
     return {"limit_depth_m": draw_limit(done, o.depths, noisy), "runs": len(done),
             "run_duration_s": float(sum(r["run_duration_s"] for r in done.values()))}
+
+
+def _seed(options, system: System, rpm: float, found: list) -> tuple[int, int]:
+    """(grid index, first step up) where a drawn column's search starts: the median of
+    ``found`` (the block's limits so far), else the analytic limit of the drawn linear
+    host (a ball's chatter-free depth is often well above it: the first step up is then
+    the ball's, :data:`~boringbar.analysis.lobe_search.BALL_STEP`)."""
+    if options.method != "search":
+        return 1, 1
+    if found:
+        return options.index_below(statistics.median(found)), SEEDED_STEP
+    host = float(limit_at_speeds(system.linear_host(), [rpm], options.analytic_kr_pa)[0])
+    seed = options.index_below(host) if math.isfinite(host) else 1
+    return seed, BALL_STEP if system.kind == "ball" else 1
 
 
 # --- the probability arithmetic ------------------------------------------------------
@@ -397,7 +454,9 @@ def add_draws(ds, context: dict, drawn_points: list, results: list, fills: dict)
     u = o.uncertainty
     shape = (len(cases), len(o.rpm), u.draws)
     limits, runs, run_s = np.full(shape, np.nan), np.zeros(shape, np.int64), np.zeros(shape)
-    for (i, j, d), res in zip(drawn_points, results, strict=True):
+    for point, res in zip(drawn_points, results, strict=True):
+        i, j = point[:2]
+        d = list(block_draws(point, u.draws))
         limits[i, j, d], runs[i, j, d] = res["limit_depth_m"], res["runs"]
         run_s[i, j, d] = res["run_duration_s"]
     ds = _extend_depths(ds, o, limits, fills)

@@ -141,8 +141,9 @@ def bisect(chatter, lo: int, hi: int) -> tuple[int, int]:
 
 
 def growth_column(case: Case, rpm: float, options, integration: Integration,
-                  seed: int = 1) -> dict:
-    """The converged criterion's runs at one speed (module doc): {depth index: result}."""
+                  seed: int = 1, up_step: int = 1) -> dict:
+    """The converged criterion's runs at one speed (module doc): {depth index: result};
+    the onset's bracket grows from ``seed``, its first step up ``up_step``."""
     done: dict[int, dict] = {}
 
     def result(i: int, opts=options) -> dict:
@@ -153,7 +154,7 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
     n_max = options.max_index
     lo, hi = bisect(lambda i: onset_chatters(result(i)),
                     *bracket(lambda i: onset_chatters(result(i)), min(max(1, seed), n_max),
-                             n_max))
+                             n_max, up_step))
     if case.system.kind == "ball" and hi <= n_max:
         # a ball that bounds its vibration within the tolerance often does so well above
         # its onset: the search up from it starts with a step of BALL_STEP grid depths.
@@ -174,6 +175,28 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
 
         column(lambda i: not_free(settled(i)), hi, n_max, options.method, options.successive,
                BALL_STEP)
+    return done
+
+
+def free_column(case: Case, rpm: float, options, integration: Integration, seed: int,
+                up_step: int) -> dict:
+    """A free ball's runs at one speed for its chatter-free depth alone: one search
+    (:func:`column`, bracket from ``seed`` with a first step ``up_step``) on whether a
+    cut is chatter-free, every cut judged as the ball's search above its onset judges
+    (:func:`longer_options`).  A cut below the onset decays as it would in the onset's
+    search, and one above settles as it would above it, so the chatter-free depth
+    (:func:`~boringbar.analysis.chatter_probability.draw_limit`) is the lobes', without
+    the onset's own bisection (the draws of :mod:`.chatter_probability`, which need no
+    onset)."""
+    done: dict[int, dict] = {}
+    longer = longer_options(options)
+
+    def chatter(i: int) -> bool:
+        if i not in done:
+            done[i] = growth_cut(case, rpm, options.depth(i), longer, integration)
+        return not_free(done[i])
+
+    column(chatter, seed, options.max_index, options.method, options.successive, up_step)
     return done
 
 

@@ -376,7 +376,7 @@ def _check_growth(cases: list[Case], integration: Integration, stick_law: str) -
 
 def compute(context: dict, point: tuple[int, int]) -> dict:
     """The column of one (case index, rpm index): {depth index: result}; of a drawn
-    point (case index, rpm index, draw): :func:`.chatter_probability.compute`."""
+    point (case index, rpm index, block of draws): :func:`.chatter_probability.compute`."""
     if len(point) == 3:
         return chatter_probability.compute(context, point)
     i, j = point

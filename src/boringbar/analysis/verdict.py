@@ -198,12 +198,15 @@ def window_steps(system: System, cut: Regenerative, dt_s: float) -> int:
 def slopes(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares slopes of the columns of y (windows x observables) against t, and
     their standard errors."""
-    tm = t - t.mean()
+    # the means as np.mean forms them (the sum over the count), without its overhead:
+    # every window of every cut fits a few of these
+    n = len(t)
+    tm = t - np.add.reduce(t) / n
     sxx = float(tm @ tm)
-    yc = y - y.mean(axis=0)
+    yc = y - np.add.reduce(y, axis=0) / n
     b = (tm @ yc) / sxx
     r = yc - tm[:, None] * b
-    return b, np.sqrt(np.sum(r * r, axis=0) / (len(t) - 2) / sxx)
+    return b, np.sqrt(np.add.reduce(r * r, axis=0) / (n - 2) / sxx)
 
 
 @functools.lru_cache(maxsize=256)
@@ -219,10 +222,10 @@ def segment(n: int, min_segment: int) -> int:
     return max(min_segment, n // 6)
 
 
-def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions,
+def growth(t: np.ndarray, logs: np.ndarray, options: VerdictOptions,
            settles: bool = False) -> tuple[str, float, float]:
     """(verdict so far, growth rate, its standard error) from window ends ``t`` and the
-    amplitudes ``amp`` (windows x observables, :func:`observables`): CHATTER as soon as
+    log amplitudes ``logs`` (windows x observables, :meth:`Track.logs`): CHATTER as soon as
     one observable grows at the confidence over the last two segments (one alone may be
     a beat over a floor of persistent small vibration), STABLE once every one decays and
     has stopped rising, LEVELLED (with ``settles``: a bar that can bound its vibration)
@@ -232,7 +235,7 @@ def growth(t: np.ndarray, amp: np.ndarray, options: VerdictOptions,
     n, m = len(t), segment(len(t), options.min_segment)
     if n < 3 * m:
         return UNDECIDED, math.nan, math.nan
-    y = np.log(np.maximum(amp[n - 3 * m:], 1e-300))
+    y = logs[n - 3 * m:]
     q = t_quantile(options.confidence, m - 2)
     span = t[-1] - t[n - 3 * m]
     t3 = t[n - 3 * m:]
@@ -277,29 +280,84 @@ def rise_left(b0: float, b1: float, b2: float, noise: tuple[float, float]) -> fl
     return math.inf
 
 
-def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, float, list]:
+class Track:
+    """The windows of a run as the verdict reads them, kept as they come (so that a
+    window's test costs the same however long the run): each window's end time,
+    observables (:func:`observables`) and their logs in growing arrays, the tip's
+    extremes and mean square, and the last window that left the cut, struck a wall or
+    ran with the ball not held."""
+
+    def __init__(self, system: System, windows=()):
+        self.system = system
+        self.n = 0
+        self._ends = np.empty(64)
+        self._amps = self._logs = None
+        self.tops: list[float] = []
+        self.bottoms: list[float] = []
+        self.squares: list[float] = []
+        self.last_left = self.last_struck = self.last_loose = -1
+        self.last: Window | None = None
+        for w in windows:
+            self.add(w)
+
+    def add(self, w: Window) -> None:
+        amp = observables(self.system, w)
+        if self._amps is None:
+            self._amps, self._logs = np.empty((64, amp.size)), np.empty((64, amp.size))
+        if self.n == len(self._ends):
+            self._ends = np.concatenate([self._ends, np.empty_like(self._ends)])
+            self._amps = np.concatenate([self._amps, np.empty_like(self._amps)])
+            self._logs = np.concatenate([self._logs, np.empty_like(self._logs)])
+        k = self.n
+        self._ends[k], self._amps[k] = w.t_end_s, amp
+        self._logs[k] = np.log(np.maximum(amp, 1e-300))
+        self.tops.append(w.max_tip_m)
+        self.bottoms.append(w.min_tip_m)
+        self.squares.append(w.rms_tip_m**2)
+        if w.left_cut:
+            self.last_left = k
+        if w.impacts:
+            self.last_struck = k
+        if not w.held:
+            self.last_loose = k
+        self.last = w
+        self.n += 1
+
+    @property
+    def ends(self) -> np.ndarray:
+        return self._ends[:self.n]
+
+    @property
+    def amps(self) -> np.ndarray:
+        return self._amps[:self.n]
+
+    @property
+    def logs(self) -> np.ndarray:
+        return self._logs[:self.n]
+
+    def pp(self, start: int, stop: int) -> float:
+        """The tip's peak-to-peak over windows ``start`` to ``stop`` - 1."""
+        return max(self.tops[start:stop]) - min(self.bottoms[start:stop])
+
+
+def onset(stepper: CutStepper, options: VerdictOptions) -> tuple[str, float, float, Track]:
     """Advance ``stepper`` (a knocked cut) until the growth rate's sign is decided or the
     cap: (verdict, rate, its error, the windows)."""
-    windows: list[Window] = []
-    amps: list[np.ndarray] = []
-    ends: list[float] = []
-    system = stepper.system
-    settles = bounds_small(system)
+    track = Track(stepper.system)
+    settles = bounds_small(stepper.system)
     verdict, rate, se = UNDECIDED, math.nan, math.nan
     while stepper.t_s < options.max_duration_s:
-        windows.append(stepper.advance())
-        if windows[-1].left_cut:
-            return CHATTER, rate, se, windows
-        amps.append(observables(system, windows[-1]))
-        ends.append(windows[-1].t_end_s)
-        verdict, rate, se = growth(np.array(ends), np.array(amps), options, settles=settles)
+        track.add(stepper.advance())
+        if track.last_left >= 0:
+            return CHATTER, rate, se, track
+        verdict, rate, se = growth(track.ends, track.logs, options, settles=settles)
         if verdict == LEVELLED:
-            return UNDECIDED, rate, se, windows
+            return UNDECIDED, rate, se, track
         if verdict != UNDECIDED:
             break
-        if np.all(amps[-1] < DECAYED * amps[0]):
-            return STABLE, rate, se, windows  # below what a slope can be measured on
-    return verdict, rate, se, windows
+        if np.all(track.amps[-1] < DECAYED * track.amps[0]):
+            return STABLE, rate, se, track  # below what a slope can be measured on
+    return verdict, rate, se, track
 
 
 def bounds_small(system: System) -> bool:
@@ -308,7 +366,7 @@ def bounds_small(system: System) -> bool:
     return system.kind == "ball" and system.damper.friction_force_n > 0
 
 
-def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: float,
+def settle(stepper: CutStepper, windows: list | Track, options: VerdictOptions, t0_s: float,
            onset_rate: float = math.nan, values: bool = True) -> Settled:
     """Run ``stepper`` on until its vibration settles (module doc); ``windows`` so far,
     ``onset_rate`` (1/s) the growth rate of its onset where it chattered.
@@ -324,22 +382,18 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
     tolerance over both quarters, its growth levelled and not falling is "above the
     tolerance" at once."""
     tol = options.settle_tolerance
-    system = stepper.system
-    # each window's time and log amplitudes, formed once as it comes
-    ends = [w.t_end_s for w in windows]
-    logs = [np.log(np.maximum(observables(system, w), 1e-300)) for w in windows]
+    track = windows if isinstance(windows, Track) else Track(stepper.system, windows)
     while True:
-        n = len(windows)
+        n = track.n
         if n >= 2 * options.min_segment:
             m = max(options.min_segment, n // 4)
-            last, before = windows[n - m:], windows[n - 2 * m:n - m]
-            pp, pp0 = _pp(last), _pp(before)
-            rms = math.sqrt(sum(w.rms_tip_m**2 for w in last) / m)
+            pp, pp0 = track.pp(n - m, n), track.pp(n - 2 * m, n - m)
+            rms = math.sqrt(sum(track.squares[n - m:]) / m)
             duration = stepper.t_s - t0_s
-            if any(w.left_cut for w in last):
+            if track.last_left >= n - m:
                 return Settled(pp, rms, True, "left the cut", duration)
-            t = np.array(ends[n - 2 * m:])
-            b, se = slopes(t, np.array(logs[n - 2 * m:]))
+            t = track.ends[n - 2 * m:]
+            b, se = slopes(t, track.logs[n - 2 * m:])
             fits = list(zip(b.tolist(), se.tolist(), strict=True))
             q = t_quantile(options.confidence, 2 * m - 2)
             # still growing: once the ball strikes, some amplitude certainly grows by more
@@ -347,7 +401,7 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
             # growth); before, after an onset that grew, at half the onset's rate (the
             # linear growth goes on); else only the trend below tells
             span = t[-1] - t[0]
-            struck = any(w.impacts for w in windows[n - 2 * m:])
+            struck = track.last_struck >= n - 2 * m
             floor = (tol / span if struck else 0.5 * onset_rate if onset_rate > 0
                      else math.inf)
             growing = any(b - q * se >= floor for b, se in fits)
@@ -362,11 +416,9 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
                 return Settled(pp, rms, False, ABOVE, duration)
             if stepper.t_s >= (options.settle_cap if onset_rate > 0 else options.max_duration_s):
                 return Settled(pp, rms, False, UNDECIDED, duration)
-            if onset_rate > 0 and fast_forward(stepper, windows, options):
-                windows, ends, logs = [], [], []
-        windows.append(stepper.advance())
-        ends.append(windows[-1].t_end_s)
-        logs.append(np.log(np.maximum(observables(system, windows[-1]), 1e-300)))
+            if onset_rate > 0 and fast_forward(stepper, track, options):
+                track = Track(stepper.system)
+        track.add(stepper.advance())
 
 
 #: A growth that is linear is scaled up, not waited for, while its departure is below
@@ -375,7 +427,7 @@ def settle(stepper: CutStepper, windows: list, options: VerdictOptions, t0_s: fl
 LINEAR_ROOM = 0.98
 
 
-def fast_forward(stepper: CutStepper, windows: list, options: VerdictOptions) -> bool:
+def fast_forward(stepper: CutStepper, track: Track, options: VerdictOptions) -> bool:
     """Jump a linear growth ahead: while a knock grows (the onset chatters) and the tool
     has never left the cut, the run is linear where a frictionless ball has never touched
     a wall, or where the stick law has held a ball with friction through the latter half
@@ -387,11 +439,11 @@ def fast_forward(stepper: CutStepper, windows: list, options: VerdictOptions) ->
     system, cut = stepper.system, stepper.forcing
     if system.kind != "ball" or cut.force_noise > 0:
         return False
-    if any(w.left_cut or w.impacts for w in windows):
+    if track.last_left >= 0 or track.last_struck >= 0:
         return False
-    d, last = system.damper, windows[-1]
+    d, last = system.damper, track.last
     if d.friction_force_n > 0:
-        if not all(w.held for w in windows[len(windows) // 2:]) or last.max_hold_n <= 0:
+        if track.last_loose >= track.n // 2 or last.max_hold_n <= 0:
             return False
         ball_room = d.static_friction_force_n / last.max_hold_n
     else:
@@ -405,10 +457,6 @@ def fast_forward(stepper: CutStepper, windows: list, options: VerdictOptions) ->
         return False
     stepper.scale(factor, held=d.friction_force_n > 0)
     return True
-
-
-def _pp(windows) -> float:
-    return max(w.max_tip_m for w in windows) - min(w.min_tip_m for w in windows)
 
 
 def _stepper(system: System, cut: Regenerative, dt_s: float, knock_m: float,
