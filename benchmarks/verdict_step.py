@@ -6,6 +6,10 @@ or the published "sgn").
     .venv/bin/python benchmarks/verdict_step.py [--steps 5e-7,1e-6,2e-6,5e-6]
         [--stick-law hold|sgn] [--workers 2] [--keep DIR]
 
+A step may carry its onset's step ratio (``VerdictOptions.onset_step_ratio``) as
+``STEP:RATIO``, ``2e-6:1`` for a whole cut at 2e-6 s; without one, the verdict's
+default.  The finest step (the smallest ratio first) is the reference.
+
 For each step it prints the wall time and, against the finest step's map: the cells
 whose onset and whose chatter-free verdict differ, the speeds whose chatter-free depth
 differs, the minimum chatter-free depth, and the settled tip peak-to-peak of every
@@ -34,10 +38,11 @@ CARBIDE = Path(__file__).resolve().parents[1] / "examples" / "systems" / \
     "carbide_ld10_tungsten.toml"
 
 
-def one_map(ball, rpm, depths, dt: float, workers: int, stick_law: str):
+def one_map(ball, rpm, depths, dt: float, ratio: float, workers: int, stick_law: str):
     options = cm.ChatterMapOptions(rpm=rpm, depths_m=depths,
                                    verdict=VerdictOptions(knocks_m=(cm.LARGE_KNOCK_M,),
-                                                          stick_law=stick_law))
+                                                          stick_law=stick_law,
+                                                          onset_step_ratio=ratio))
     tic = time.perf_counter()
     ds = bb.chatter_map(ball, options, integration=bb.Integration(dt_s=dt),
                         execution=Execution("threads", workers))
@@ -69,21 +74,25 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--keep", type=Path)
     args = ap.parse_args()
-    steps = sorted(float(s) for s in args.steps.split(","))
+    default = VerdictOptions().onset_step_ratio
+    steps = sorted((float(dt), float(ratio[0]) if ratio else default)
+                   for dt, *ratio in (s.split(":") for s in args.steps.split(",")))
     ball = bb.variants(bb.load_system(CARBIDE))["ball"]
     case = [bb.Case.of(ball)]
     rpm = cm.map_speeds(case)
     depths = cm.map_depths(cm.host_limits(case, rpm, bb.LobesOptions().analytic_kr_pa))
     maps = {}
-    for dt in steps:
-        maps[dt], wall = one_map(ball, rpm, depths, dt, args.workers, args.stick_law)
-        print(f"dt = {dt:g} s: {wall:.1f} s wall", flush=True)
+    for dt, ratio in steps:
+        maps[dt, ratio], wall = one_map(ball, rpm, depths, dt, ratio, args.workers,
+                                        args.stick_law)
+        print(f"dt = {dt:g} s, onset ratio {ratio:g}: {wall:.1f} s wall", flush=True)
         if args.keep:
             args.keep.mkdir(parents=True, exist_ok=True)
-            write_netcdf_atomic(maps[dt], args.keep / f"map_{dt:g}.nc")
+            write_netcdf_atomic(maps[dt, ratio], args.keep / f"map_{dt:g}_{ratio:g}.nc")
     ref = maps[steps[0]]
-    for dt in steps[1:]:
-        print(f"dt = {dt:g} s against {steps[0]:g} s: {compare(ref, maps[dt])}")
+    for key in steps[1:]:
+        print(f"dt = {key[0]:g} s, onset ratio {key[1]:g} against {steps[0][0]:g} s, "
+              f"{steps[0][1]:g}: {compare(ref, maps[key])}")
 
 
 if __name__ == "__main__":

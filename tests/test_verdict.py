@@ -168,6 +168,82 @@ def test_a_cut_in_windows_is_one_run_bit_for_bit():
     assert sum(w.impacts for w in windows) == run.metrics["impacts_total"]
 
 
+def test_a_cut_refined_to_its_own_step_goes_on_bit_for_bit():
+    """CutStepper.refined carries a cut on at another step: at its own step it is the same
+    run (the history's nodes read back exactly), with its time."""
+    system = bb.make_system("ball", friction=True, gap_m=0.1e-3)
+    cut = bb.Regenerative(depth_m=0.05e-3, rpm=1200.0, start="static")
+    steps = window_steps(system, cut, 2e-6)
+
+    def stepper(dt):
+        return CutStepper(system, cut, dt_s=dt, window_steps=window_steps(system, cut, dt),
+                          initial=knocked_cut(system, cut, 20e-6), stick_law="hold")
+
+    whole = stepper(2e-6)
+    windows = [whole.advance() for _ in range(8)]
+    part = stepper(2e-6)
+    for _ in range(4):
+        part.advance()
+    part = part.refined(2e-6, steps)
+    rest = [part.advance() for _ in range(4)]
+    assert np.array_equal(part.state.x, whole.state.x)
+    assert [w.t_end_s for w in rest] == pytest.approx([w.t_end_s for w in windows[4:]],
+                                                      abs=1e-12)
+    assert [w.impacts for w in rest] == [w.impacts for w in windows[4:]]
+
+
+def test_a_cut_refined_from_a_coarser_step_is_the_fine_run():
+    """Refined from 2.5 times its step after 10 windows (the delay history interpolated by
+    the cubic Hermite the kernel reads it with), a growing linear cut's amplitude stays
+    within 1e-5 of the run at the fine step throughout (measured: 2.0e-6)."""
+    system = bb.make_system("solid")
+    rpm = 12605.0
+    cut = bb.Regenerative(depth_m=1.2 * float(limit_at_speeds(system, [rpm])[0]), rpm=rpm,
+                          start="static")
+
+    def stepper(dt):
+        return CutStepper(system, cut, dt_s=dt, window_steps=window_steps(system, cut, dt),
+                          initial=knocked_cut(system, cut, 1e-6))
+
+    fine = stepper(2e-6)
+    reference = [fine.advance() for _ in range(30)]
+    coarse = stepper(5e-6)
+    for _ in range(10):
+        coarse.advance()
+    coarse = coarse.refined(2e-6, fine.window_steps)
+    went_on = [coarse.advance() for _ in range(20)]
+    assert went_on[-1].half_pp_m > 3 * went_on[0].half_pp_m  # it grew
+    assert went_on[-1].t_end_s == pytest.approx(reference[-1].t_end_s, abs=1e-12)
+    for a, b in zip(went_on, reference[10:], strict=True):
+        assert a.half_pp_m == pytest.approx(b.half_pp_m, rel=1e-5)
+
+
+def test_the_onset_runs_at_its_coarser_step_and_the_settling_at_the_judged_step(monkeypatch):
+    """The verdict's onset steps at onset_step_ratio times the judged step; a ball's
+    settling run goes on at the judged step from where the onset stopped."""
+    import boringbar.analysis.verdict as verdict
+
+    steps = []
+    advance = CutStepper.advance
+
+    def logged(self):
+        steps.append(self.su.dt)
+        return advance(self)
+
+    monkeypatch.setattr(CutStepper, "advance", logged)
+    system = bb.make_system("ball")
+    v = judge(system, bb.Regenerative(depth_m=0.09e-3, rpm=8517.0), dt_s=2e-6)
+    assert v.onset == CHATTER and v.settled
+    assert verdict.onset_step(system, 2e-6) == pytest.approx(5e-6)
+    assert steps[0] == pytest.approx(5e-6) and steps[-1] == 2e-6
+    changed = next(k for k, dt in enumerate(steps) if dt == 2e-6)
+    assert all(dt == 2e-6 for dt in steps[changed:])
+    steps.clear()
+    judge(system, bb.Regenerative(depth_m=0.09e-3, rpm=8517.0),
+          VerdictOptions(onset_step_ratio=1.0), dt_s=2e-6)
+    assert set(steps) == {2e-6}
+
+
 def test_the_knock_sets_the_first_mode_vibrating_at_its_amplitude():
     system = bb.make_system("solid", n_modes=1)
     cut = bb.Regenerative(depth_m=0.01e-3, rpm=1200.0, start="static")

@@ -66,6 +66,12 @@ MIN_SEGMENT = 6
 #: stops the step at 2e-6 s (docs/chatter.md, "The step of a judged cut").
 JUDGED_STEP_S = 2e-6
 JUDGED_STEPS_PER_PERIOD = 25
+#: The onset runs at this multiple of the judged step, at most the step that keeps
+#: JUDGED_STEPS_PER_PERIOD steps in the shortest period (:func:`onset_step`): a small
+#: knock's vibration is linear (the bar, an absorber, a ball held by its friction or off
+#: its walls), and its growth rate is the same at either step; the walls and the
+#: settling, which the step decides, run at the judged step (docs/chatter.md).
+ONSET_STEP_RATIO = 2.5
 #: A slope still rising is extrapolated only once each rise is at most this fraction of
 #: the one before (a geometric tail that has set in).
 MAX_RISE_RATIO = 0.0
@@ -97,7 +103,9 @@ class VerdictOptions:
     whatever the step (docs/chatter.md, "The step of a judged cut"); "sgn" the published
     law, whose chatter about y' = 0 damps it by an amount that depends on the step;
     ``settle_cap_s`` (s): the cap on a run that goes on settling after its onset grew
-    (None: ``max_duration_s``; the lobes' ball search gives its longer cap).
+    (None: ``max_duration_s``; the lobes' ball search gives its longer cap);
+    ``onset_step_ratio``: the onset's RK4 step as a multiple of the judged step (1-10;
+    :func:`onset_step`; 1 runs the whole cut at the judged step).
     """
 
     confidence: float = CONFIDENCE
@@ -110,6 +118,7 @@ class VerdictOptions:
     ball_start: float = 0.0
     stick_law: str = "hold"
     settle_cap_s: float | None = None
+    onset_step_ratio: float = ONSET_STEP_RATIO
 
     def __post_init__(self):
         check_range("confidence", self.confidence, 0.5, 0.999999, lo_open=True)
@@ -126,6 +135,7 @@ class VerdictOptions:
         if self.settle_cap_s is not None:
             check_range("settle_cap_s", self.settle_cap_s, self.max_duration_s, 1000.0,
                         unit="s")
+        check_range("onset_step_ratio", self.onset_step_ratio, 1.0, 10.0)
 
     @property
     def settle_cap(self) -> float:
@@ -137,7 +147,7 @@ class VerdictOptions:
                 "knock_m": self.knock_m, "tolerance_m": self.tolerance_m,
                 "knocks_m": list(self.knocks_m), "settle_tolerance": self.settle_tolerance,
                 "min_segment": self.min_segment, "ball_start": self.ball_start,
-                "stick_law": self.stick_law}
+                "stick_law": self.stick_law, "onset_step_ratio": self.onset_step_ratio}
 
 
 @dataclass(frozen=True)
@@ -468,6 +478,14 @@ def _stepper(system: System, cut: Regenerative, dt_s: float, knock_m: float,
                       stick_law=options.stick_law)
 
 
+def onset_step(system: System, dt_s: float, ratio: float = ONSET_STEP_RATIO) -> float:
+    """The RK4 step (s) of a judged cut's onset on ``system`` whose judged step is
+    ``dt_s``: ``ratio`` times it, at most the step that keeps
+    :data:`JUDGED_STEPS_PER_PERIOD` steps in the bar's shortest period, at least
+    ``dt_s``."""
+    return max(dt_s, min(ratio * dt_s, shortest_period(system) / JUDGED_STEPS_PER_PERIOD))
+
+
 def judged_step(systems, dt_s: float | None = None) -> float:
     """The RK4 step (s) of the judged cuts of ``systems``: ``dt_s`` where given, else
     :data:`JUDGED_STEP_S`, or finer where a bar's highest mode or absorber would have
@@ -514,10 +532,16 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     without it a vibration above the tolerance and not falling ends its run."""
     options = options or VerdictOptions()
     dt_s = judged_step([system], dt_s)
-    stepper = _stepper(system, cut, dt_s, options.knock_m, options)
     if cut.force_noise > 0:
+        stepper = _stepper(system, cut, dt_s, options.knock_m, options)
         return _noisy(system, cut, options, dt_s, stepper, values)
+    stepper = _stepper(system, cut, onset_step(system, dt_s, options.onset_step_ratio),
+                       options.knock_m, options)
     verdict, rate, se, windows = onset(stepper, options)
+    if windows.last_struck >= 0 and stepper.su.dt != dt_s:
+        # the ball reached a wall, whose impacts the judged step resolves: run it again
+        stepper = _stepper(system, cut, dt_s, options.knock_m, options)
+        verdict, rate, se, windows = onset(stepper, options)
     onset_s = stepper.t_s
     settled: list[Settled] = []
     if system.kind != "ball":  # linear until the tool leaves the cut: the onset decides
@@ -525,6 +549,8 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     elif verdict == STABLE:
         ok = [True]
     else:
+        if stepper.su.dt != dt_s:
+            stepper = stepper.refined(dt_s, window_steps(system, stepper.forcing, dt_s))
         settled.append(settle(stepper, windows, options, onset_s, rate, values))
         ok = [acceptable(settled[0], options)]
     big = knocked(system, cut, options, dt_s, values)

@@ -96,11 +96,12 @@ class CutStepper:
         check_int("window_steps", window_steps, 1, MAX_STEPS)
         self.su = setup_run(system, forcing, window_steps * dt_s, dt_s, initial, 0, 1.0, False,
                             "rk4", stick_law)
+        self._made = (initial, stick_law)  # what refined() builds its stepper from
         self.window_steps = window_steps
         #: RK4's stick law holds a ball with friction (Window.held can be True): the run
         #: was packed with the law's band
         self.holds = bool(self.su.p[L.STICK_BAND] > 0)
-        self.t_s = self.su.t0
+        self.t_s = self._t_first = self.su.t0
         self.modes = np.zeros((system.bar.n_modes, 2))
         self._before = 0  # steps of a given history before the run's start
 
@@ -115,7 +116,7 @@ class CutStepper:
         zeros, impacts, free = met[L.N_ZERO_STEPS], met[L.N_IMP_ALL], met[L.N_FREE_STEPS]
         run_rk4(su.p, su.x, self.t_s, su.dt, self.window_steps, 0, 0, su.rec, su.imp, su.stick,
                 su.stb, met, su.buf, self.modes)
-        self.t_s = su.t0 + (met[L.STEPS_DONE] - self._before) * su.dt
+        self.t_s = self._t_first + (met[L.STEPS_DONE] - self._before) * su.dt
         n = met[L.N_STEADY]
         mean = met[L.SUM_W] / n
         return Window(self.t_s, float(met[L.STEADY_MAX_W]), float(met[L.STEADY_MIN_W]),
@@ -125,12 +126,14 @@ class CutStepper:
                       float(met[L.MAX_FORCE]), self.holds and met[L.N_FREE_STEPS] == free,
                       float(met[L.MAX_HOLD_FORCE]))
 
-    def start_from(self, x: np.ndarray, history, left_cut: bool = False) -> None:
+    def start_from(self, x: np.ndarray, history, left_cut: bool = False,
+                   t_s: float | None = None) -> None:
         """Start the cut (before any window) from the state ``x`` with its past:
         ``history(t)`` -> (W, W') (m, m/s) of the tip at the times t <= 0 (s) before it, as
         the surface the tool meets (a periodic orbit's own, say).  ``left_cut``: the tool
         has left the cut before, so the surface is the lowest over every revolution of
-        memory from the start (the run's first zero of the chip is then its start)."""
+        memory from the start (the run's first zero of the chip is then its start).
+        ``t_s``: the time the run goes on from (s; None: the run's start)."""
         su = self.su
         if self.t_s != su.t0 or su.met[L.STEPS_DONE] != 0:
             raise ParameterError("start_from: the cut has already run")
@@ -147,8 +150,50 @@ class CutStepper:
         su.x[:] = x
         su.met[L.STEPS_DONE] = rows - 1
         self._before = rows - 1
+        if t_s is not None:
+            self.t_s = self._t_first = float(t_s)
         if left_cut:
-            su.met[L.FIRST_ZERO_T] = su.t0
+            su.met[L.FIRST_ZERO_T] = self.t_s
+
+    def refined(self, dt_s: float, window_steps: int) -> CutStepper:
+        """This cut run on at the step ``dt_s`` in windows of ``window_steps`` steps: a
+        new stepper of the same system, cut and start (so :meth:`scale` scales about the
+        same steady cut), carried on from this one's state and time, with its delay
+        history interpolated onto the new step (:meth:`history`) and the tool's leaving
+        of the cut, if it has left."""
+        initial, stick_law = self._made
+        new = CutStepper(self.system, self.forcing, dt_s=dt_s, window_steps=window_steps,
+                         initial=initial, stick_law=stick_law)
+        new.start_from(self.su.x.copy(), self.history,
+                       left_cut=bool(self.su.met[L.FIRST_ZERO_T] >= 0), t_s=self.t_s)
+        return new
+
+    def history(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """(W, W') (m, m/s) of the tip at the times ``t`` <= 0 (s) before now, from the
+        delay history: the cubic Hermite between its nodes from W and W', as the kernel
+        reads the surface (before the cut's start, the surface before it, level)."""
+        su = self.su
+        rows, now = len(su.buf), int(su.met[L.STEPS_DONE])
+        pos = now + np.asarray(t, dtype=float) / su.dt
+        if np.any(pos > now + 1e-9) or np.any(pos < now - rows + 1 - 1e-9):
+            raise ParameterError(f"history(t): t must lie within the {rows - 1} steps of "
+                                 "memory before now")
+        i = np.minimum(np.floor(pos).astype(np.int64), now - 1)
+        f = pos - i
+        before = float(su.p[L.HIST_W0])
+
+        def node(k):
+            row = np.mod(k, rows)
+            return (np.where(k >= 0, su.buf[row, 0], before),
+                    np.where(k >= 0, su.buf[row, 1], 0.0) * su.dt)
+
+        (w0, d0), (w1, d1) = node(i), node(i + 1)
+        f2, f3 = f * f, f * f * f
+        w = ((2 * f3 - 3 * f2 + 1) * w0 + (f3 - 2 * f2 + f) * d0 + (3 * f2 - 2 * f3) * w1
+             + (f3 - f2) * d1)
+        dw = ((6 * f2 - 6 * f) * w0 + (3 * f2 - 4 * f + 1) * d0 + (6 * f - 6 * f2) * w1
+              + (3 * f2 - 2 * f) * d1) / su.dt
+        return w, dw
 
     @property
     def state(self) -> State:
