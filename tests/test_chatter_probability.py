@@ -210,6 +210,26 @@ def test_every_executor_gives_the_same_dataset(small, solid):
         assert_same_data(bb.lobes(solid, options, execution=execution), small)
 
 
+def test_judged_lobes_run_on_processes_unless_told():
+    """Execution "auto" (the default) leaves the executor to the analysis: the converged
+    verdict's lobes take a process per core (verdict.EXECUTOR: threads wait on each
+    other for the GIL between a judged cut's windows), fixed-length cuts a thread per
+    core; an executor given is kept."""
+    assert bb.Execution().executor == "auto"
+    assert bb.Execution().resolve().executor == "threads"
+    assert bb.Execution("serial").resolve("processes").executor == "serial"
+    with pytest.raises(ParameterError, match="preferred"):
+        bb.Execution().resolve("auto")
+    solid = bb.make_system("solid")
+    judged = bb.lobes(solid, bb.LobesOptions((20000.0,), analytic=False))
+    fixed = bb.lobes(solid, bb.LobesOptions((20000.0,), criterion="zero", analytic=False),
+                     integration=bb.Integration(duration_s=0.05))
+    told = bb.lobes(solid, bb.LobesOptions((20000.0,), analytic=False),
+                    execution=bb.Execution(workers=1).resolve("serial"))
+    assert (judged.attrs["executor"], fixed.attrs["executor"]) == ("processes", "threads")
+    assert told.attrs["executor"] == "serial"
+
+
 # --- the command line ----------------------------------------------------------------
 
 CLI = ["lobes", "--bar", "solid", "--rpm", "20000,24000", "--workers", "2"]

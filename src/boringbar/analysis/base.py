@@ -53,6 +53,6 @@ def run_plan(module: ModuleType, plan: Plan, execution: Execution | None = None,
 
 def execution_attrs(execution: Execution | None, wall_time_s: float) -> dict:
     """Where and how long a run took, for a Dataset's attributes."""
-    execution = execution or Execution()
+    execution = (execution or Execution()).resolve()
     return {"executor": execution.executor, "workers": execution.n_workers,
             "wall_time_s": wall_time_s}

@@ -46,8 +46,8 @@ from boringbar.analysis.lobe_search import CHATTER, STABLE, UNDECIDED, onset_dep
 from boringbar.analysis.speeds import boring_speeds, check_speeds, lobe_speeds
 from boringbar.analysis.sweep import Case, as_cases
 from boringbar.analysis.verdict import CHATTER as ONSET_CHATTER
-from boringbar.analysis.verdict import STABLE as ONSET_STABLE
 from boringbar.analysis.verdict import (
+    EXECUTOR,
     CutVerdict,
     Settled,
     VerdictOptions,
@@ -57,6 +57,7 @@ from boringbar.analysis.verdict import (
     stick_law_text,
     verdict_attrs,
 )
+from boringbar.analysis.verdict import STABLE as ONSET_STABLE
 from boringbar.execute import Execution
 from boringbar.model.cutting import KR_ALUMINIUM, CutLawFields, CuttingLaw
 from boringbar.model.forcing import MAX_DEPTH, Regenerative
@@ -529,7 +530,8 @@ def chatter_map(cases, options: ChatterMapOptions | None = None, *,
     verdict's, :func:`~boringbar.analysis.verdict.judged_step`; its duration is not used:
     each cut runs until its verdict, at most ``verdict.max_duration_s``; integrator "rk4"
     or "auto", no initial conditions); ``execution``: where the cells run (default a
-    thread per core); ``progress(done, total)`` as cells finish.
+    process per core, :data:`~boringbar.analysis.verdict.EXECUTOR`);
+    ``progress(done, total)`` as cells finish.
 
     Returns an xarray Dataset: per (case, rpm, depth_m) the onset and chatter-free codes
     (1 yes, 0 no, 2 undecided) and the growth rate; per start as well the settled tip
@@ -541,5 +543,6 @@ def chatter_map(cases, options: ChatterMapOptions | None = None, *,
     options = options or ChatterMapOptions()
     integration = integration or Integration()
     p = plan(cases, options, integration)
+    execution = (execution or Execution()).resolve(EXECUTOR)
     results, wall = run_plan(sys.modules[__name__], p, execution, progress)
     return assemble(p, results, execution_attrs(execution, wall))

@@ -98,7 +98,13 @@ from boringbar.analysis.speeds import (
     default_speeds,
 )
 from boringbar.analysis.sweep import Case, as_cases
-from boringbar.analysis.verdict import VerdictOptions, judged_step, stick_law_text, verdict_attrs
+from boringbar.analysis.verdict import (
+    EXECUTOR,
+    VerdictOptions,
+    judged_step,
+    stick_law_text,
+    verdict_attrs,
+)
 from boringbar.execute import Execution
 from boringbar.model.cutting import CutLawFields, CuttingLaw
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
@@ -588,8 +594,9 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     of each cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed
     surface from a history of step H = tau / ceil(tau / dt), the first zero of the
     force located; no initial conditions: a cut starts as ``options.start`` says);
-    ``execution``: where the (case, rpm) columns run (default a thread per core);
-    ``progress(done, total)`` as columns finish.
+    ``execution``: where the (case, rpm) columns run (default: a process per core under
+    the converged verdict, :data:`~boringbar.analysis.verdict.EXECUTOR`, else a thread
+    per core); ``progress(done, total)`` as columns finish.
 
     Returns an xarray Dataset: per (case, rpm, depth_m) the verdict of every grid
     point that was run under both criteria (1 stable, 0 chatter, -1 not run),
@@ -602,6 +609,8 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     options = options or LobesOptions()
     integration = integration or Integration()
     p = plan(cases, options, integration)
+    growth = p.context["options"].criterion == "growth"
+    execution = (execution or Execution()).resolve(EXECUTOR if growth else "threads")
     results, wall = run_plan(sys.modules[__name__], p, execution, progress)
     return assemble(p, results, execution_attrs(execution, wall))
 

@@ -66,6 +66,12 @@ MIN_SEGMENT = 6
 #: stops the step at 2e-6 s (docs/chatter.md, "The step of a judged cut").
 JUDGED_STEP_S = 2e-6
 JUDGED_STEPS_PER_PERIOD = 25
+#: Where judged cuts run when the caller leaves it to the analysis (Execution "auto"):
+#: a process per core.  A judged cut goes window by window with Python between kernel
+#: calls of a few tenths of a millisecond, where threads wait on each other for the GIL:
+#: the published ball bar's P(chatter) over its first three lobes (32 draws) took 210 s
+#: on two threads and 165 s on two processes (benchmarks/bench_chatter_probability.py).
+EXECUTOR = "processes"
 #: The onset runs at this multiple of the judged step, at most the step that keeps
 #: JUDGED_STEPS_PER_PERIOD steps in the shortest period (:func:`onset_step`): a small
 #: knock's vibration is linear (the bar, an absorber, a ball held by its friction or off

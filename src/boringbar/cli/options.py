@@ -598,5 +598,6 @@ def integration(args, initial=None, steady_fraction: float = STEADY_FRACTION) ->
 
 
 def execution(args) -> Execution:
-    """Where a command's points run: a thread per core, or --workers threads."""
-    return Execution("threads", args.workers)
+    """Where a command's points run: the analysis's choice (Execution "auto": a process
+    per core for judged cuts, else a thread), on every core or --workers."""
+    return Execution(workers=args.workers)

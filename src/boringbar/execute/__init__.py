@@ -5,9 +5,11 @@ They know no analysis.  :func:`run_points` returns the results in point order;
 keeps them in its resumable store).  Whatever runs which point, the results are
 the same, bit for bit: every point is computed by the same pure function.
 
+- ``auto`` (the default): the analysis's choice (:meth:`Execution.resolve`), a thread
+  pool where none states one;
 - ``serial``: in this process, in order;
-- ``threads`` (the default of the library's analyses): a thread pool of ``workers``
-  (every core); the compiled core releases the GIL for a whole integration;
+- ``threads``: a thread pool of ``workers`` (every core); the compiled core releases
+  the GIL for a whole integration;
 - ``processes``: a process pool (fork where there is one); a worker that dies
   breaks the pool, which is recreated and the unfinished tasks resubmitted
   (at most :data:`MAX_POOL_RESTARTS` times in a row without progress);

@@ -10,11 +10,11 @@ import uuid
 from collections.abc import Callable, Hashable
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-from boringbar._validate import ParameterError
+from boringbar._validate import ParameterError, check_choice
 
-EXECUTORS = ("serial", "threads", "processes", "dask")
+EXECUTORS = ("auto", "serial", "threads", "processes", "dask")
 #: How often a broken process pool is recreated without any task finishing.
 MAX_POOL_RESTARTS = 3
 
@@ -23,13 +23,13 @@ MAX_POOL_RESTARTS = 3
 class Execution:
     """Where the points of an analysis run.
 
-    ``executor``: one of :data:`EXECUTORS`; ``workers``: threads or processes
-    (default: every core); ``scheduler``: a Dask scheduler's address, or
-    ``dask_local``: the number of workers of a LocalCluster started for the run
-    (either one selects ``dask``).
+    ``executor``: one of :data:`EXECUTORS` ("auto": the one the analysis chooses,
+    :meth:`resolve`); ``workers``: threads or processes (default: every core);
+    ``scheduler``: a Dask scheduler's address, or ``dask_local``: the number of workers
+    of a LocalCluster started for the run (either one selects ``dask``).
     """
 
-    executor: str = "threads"
+    executor: str = "auto"
     workers: int | None = None
     scheduler: str | None = None
     dask_local: int | None = None
@@ -48,6 +48,12 @@ class Execution:
             if v is not None and (isinstance(v, bool) or not isinstance(v, int)
                                   or not 1 <= v <= 4096):
                 raise ParameterError(f"{name} = {v!r} must be an integer from 1 to 4096")
+
+    def resolve(self, preferred: str = "threads") -> Execution:
+        """This execution with "auto" made ``preferred`` (threads where an analysis states
+        no preference; the others are kept as given)."""
+        check_choice("preferred", preferred, EXECUTORS[1:])
+        return replace(self, executor=preferred) if self.executor == "auto" else self
 
     @property
     def n_workers(self) -> int:
@@ -85,7 +91,7 @@ def stream(fn: Callable, tasks: dict[Hashable, object], on_done: Callable,
     """Run ``fn(task)`` for every value of ``tasks`` and call ``on_done(key, result)``
     in this thread as each finishes (in any order).  ``on_restart(message)`` is told
     when a broken process pool is recreated.  ``task_name`` prefixes Dask task keys."""
-    execution = execution or Execution()
+    execution = (execution or Execution()).resolve()
     if not tasks:
         return
     if execution.executor == "serial":
