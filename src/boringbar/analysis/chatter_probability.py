@@ -19,7 +19,7 @@ Draw d is a function of (``seed``, d) alone: each quantity has its own numpy str
 ``default_rng([seed, d, stream])``, so a draw is the same whatever the bar, the speed,
 the executor or the other quantities drawn.  Each draw's chatter-free depth at each
 speed comes from the deterministic lobes' search over the same depth grid and their rule
-for the limit (:func:`draw_limit`):
+for the limit (:func:`~boringbar.analysis.lobe_search.free_limit`):
 
 - a bar without a free ball: the onset's search (:func:`~boringbar.analysis.
   lobe_search.growth_column`), seeded at the analytic limit of the drawn linear host;
@@ -57,15 +57,12 @@ from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.design_interval import wilson
 from boringbar.analysis.lobe_search import (
     BALL_STEP,
-    CHATTER,
-    STABLE,
-    UNDECIDED,
     column,
     free_column,
+    free_limit,
     growth_column,
     growth_cut,
     not_free,
-    onset_depth,
 )
 from boringbar.analysis.sweep import Case
 from boringbar.model.forcing import MAX_NOISE_SEED, MAX_NOISE_STD
@@ -298,29 +295,6 @@ def noisy_column(case: Case, rpm: float, options, integration, seed: int,
     return done
 
 
-def draw_limit(done: dict, depths, noisy: bool) -> float:
-    """The chatter-free depth (m) of one column's runs ``done`` ({grid index: run},
-    ``depths`` the grid's depths of indices), as the deterministic lobes take it: the
-    last chatter-free depth below the first that is not (an undecided settled vibration
-    counts by its onset), or the onset itself where the first is the onset's; a noisy
-    cut's by its settled vibration alone.  NaN: no chatter up to the deepest cut."""
-    order = sorted(done)
-    if noisy:
-        free = [CHATTER if not_free(done[k]) else STABLE for k in order]
-    else:
-        free = [done[k]["onset"] if done[k]["verdict"] == UNDECIDED else done[k]["verdict"]
-                for k in order]
-    first = next((n for n, code in enumerate(free) if code == CHATTER), None)
-    if first is None:
-        return math.nan
-    below = [order[n] for n in range(first) if free[n] == STABLE]
-    limit = float(depths(below[-1])) if below else 0.0
-    onsets = [k for k in order if done[k]["onset"] in (CHATTER, UNDECIDED)]
-    if not noisy and onsets and onsets[0] == order[first]:
-        return onset_depth(done, depths)
-    return limit
-
-
 def check(uncertainty, criterion: str | None) -> None:
     """A lobe study's ``uncertainty`` (None or an :class:`Uncertainty`) with its
     ``criterion``: draws are judged by the converged verdict alone."""
@@ -380,7 +354,7 @@ def drawn_column(context: dict, i: int, j: int, d: int, found: list) -> dict:
         done = free_column(dcase, rpm, drawn, integration, seed, up_step)
     else:
         done = growth_column(dcase, rpm, drawn, integration, seed)
-    return {"limit_depth_m": draw_limit(done, o.depths, noisy), "runs": len(done),
+    return {"limit_depth_m": free_limit(done, o.depths, noisy), "runs": len(done),
             "run_duration_s": float(sum(r["run_duration_s"] for r in done.values()))}
 
 

@@ -185,7 +185,7 @@ def free_column(case: Case, rpm: float, options, integration: Integration, seed:
     cut is chatter-free, every cut judged as the ball's search above its onset judges
     (:func:`longer_options`).  A cut below the onset decays as it would in the onset's
     search, and one above settles as it would above it, so the chatter-free depth
-    (:func:`~boringbar.analysis.chatter_probability.draw_limit`) is the lobes', without
+    (:func:`free_limit`) is the lobes', without
     the onset's own bisection (the draws of :mod:`.chatter_probability`, which need no
     onset)."""
     done: dict[int, dict] = {}
@@ -240,3 +240,27 @@ def onset_depth(done: dict, depth) -> float:
     if not (math.isfinite(a) and math.isfinite(b)) or b <= a or hi - lo > 1:
         return d_lo
     return d_lo + (d_hi - d_lo) * min(1.0, max(0.0, -a / (b - a)))
+
+
+def free_limit(done: dict, depths, noisy: bool = False) -> float:
+    """The chatter-free depth (m) of one column's runs ``done`` ({grid index: run},
+    ``depths`` the grid's depths of indices), searched on the chatter-free verdict alone
+    (:func:`free_column`, the draws' columns), as the deterministic lobes take it: the
+    last chatter-free depth below the first that is not (an undecided settled vibration
+    counts by its onset), or the onset itself where the first is the onset's; a noisy
+    cut's by its settled vibration alone.  NaN: no chatter up to the deepest cut."""
+    order = sorted(done)
+    if noisy:
+        free = [CHATTER if not_free(done[k]) else STABLE for k in order]
+    else:
+        free = [done[k]["onset"] if done[k]["verdict"] == UNDECIDED else done[k]["verdict"]
+                for k in order]
+    first = next((n for n, code in enumerate(free) if code == CHATTER), None)
+    if first is None:
+        return math.nan
+    below = [order[n] for n in range(first) if free[n] == STABLE]
+    limit = float(depths(below[-1])) if below else 0.0
+    onsets = [k for k in order if done[k]["onset"] in (CHATTER, UNDECIDED)]
+    if not noisy and onsets and onsets[0] == order[first]:
+        return onset_depth(done, depths)
+    return limit

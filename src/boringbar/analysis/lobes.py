@@ -300,8 +300,10 @@ def method_text(ds) -> str:
             "zero": "published criterion (the force reaches zero)",
             "bounded": f"bounded chatter (amplitude > {a.get('bounded_fraction', 0.1):g} "
                        "h_m, or the force reaches zero)"}[a["criterion"]]
-    return (f"{crit}; {a['method']} on {a['depth_grid']}; {a['integrator_used']} at dt = "
-            f"{a['dt_s']:g} s{stick_law_text(a)}; {run_length_text(ds)}")
+    ratio = float(a.get("onset_step_ratio", 1.0)) if a["criterion"] == "growth" else 1.0
+    onset = f" (the onset at {ratio:g} dt)" if ratio != 1.0 else ""
+    return (f"{crit}; {a['method']} on {a['depth_grid']}; {a['integrator_used']} at "
+            f"dt = {a['dt_s']:g} s{onset}{stick_law_text(a)}; {run_length_text(ds)}")
 
 
 def starts_text(attrs: dict) -> str:

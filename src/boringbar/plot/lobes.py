@@ -10,7 +10,7 @@ import textwrap
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import FixedLocator, NullFormatter, StrMethodFormatter
+from matplotlib.ticker import FixedLocator, MaxNLocator, NullFormatter, StrMethodFormatter
 
 from boringbar._validate import ParameterError
 from boringbar.plot.palette import lobe_depth_top, speed_axis
@@ -293,6 +293,8 @@ def _speed_axes(ax, rpm, top: float) -> None:
         ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlim(*ends)
     ax.set_ylim(0, top)
+    # at least four labelled depths up the axis, wherever its top falls
+    ax.yaxis.set_major_locator(MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10], min_n_ticks=4))
 
 
 def _speed_words(at_rpm: float) -> str:
