@@ -1,14 +1,14 @@
 """The chance of chatter's cost: P(chatter) over a bar's first three lobes, through
-``bb.lobes``, on threads and on Dask LocalClusters of 1 and 2 workers.
+``bb.lobes``, on its default executor and on Dask LocalClusters of 1 and 2 workers.
 
     .venv/bin/python benchmarks/bench_chatter_probability.py [--bar solid] [--draws 32]
         [--dask-draws 8] [--skip-dask] [--force-noise 0]
 
 Prints the wall time (and this process's CPU time) of the deterministic lobes alone and
 of the lobes with draws (the default Uncertainty but for --draws and --force-noise) on
-the default executor (a thread per core), the cuts run, and, on Dask, the wall time of
---dask-draws draws on one worker and on two, their ratio and whether both Datasets equal
-the threads' bit for bit.
+the default executor (Execution "auto": a process per core for judged cuts), the cuts
+run, and, on Dask, the wall time of --dask-draws draws on one worker and on two, their
+ratio and whether both Datasets equal the default executor's bit for bit.
 Numbers only, nothing is asserted.
 """
 
@@ -59,13 +59,15 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} cores; {args.bar} bar, f1 = {f1:.0f} Hz; "
           f"{len(rpm)} speeds {rpm[0]:g}..{rpm[-1]:g} rpm (lobes 1-3)")
     ds, wall = timed(system, bb.LobesOptions(rpm))
-    print(f"deterministic lobes: {wall:.1f} s ({ds.attrs['cpu_s']:.1f} CPU s), "
+    print(f"deterministic lobes, {ds.attrs['executor']}: {wall:.1f} s "
+          f"({ds.attrs['cpu_s']:.1f} CPU s in this process), "
           f"{ds.attrs['runs']} cuts")
     uncertainty = bb.Uncertainty(draws=args.draws, force_noise=args.force_noise)
     options = bb.LobesOptions(rpm, uncertainty=uncertainty)
     ds, wall = timed(system, options)
-    print(f"with {args.draws} draws (force noise {args.force_noise:g}), threads x"
-          f"{ds.attrs['workers']}: {wall:.1f} s ({ds.attrs['cpu_s']:.1f} CPU s), "
+    print(f"with {args.draws} draws (force noise {args.force_noise:g}), "
+          f"{ds.attrs['executor']} x{ds.attrs['workers']}: {wall:.1f} s "
+          f"({ds.attrs['cpu_s']:.1f} CPU s in this process), "
           f"{ds.attrs['runs']} + "
           f"{ds.attrs['draw_runs_total']} cuts, {ds.attrs['draw_mean_run_s']:.2f} s simulated "
           f"a drawn cut; min robust depth (P = {uncertainty.probability:g}) "
@@ -80,7 +82,8 @@ def main() -> None:
     for n in (1, 2):
         dsd, walls[n] = timed(system, small, bb.Execution(dask_local=n))
         print(f"Dask LocalCluster of {n} worker(s), {args.dask_draws} draws: {walls[n]:.1f} s "
-              f"(cluster start included); equal to threads bit for bit: {same(dsd, ref)}")
+              f"(cluster start included); equal to the default executor's bit for bit: "
+              f"{same(dsd, ref)}")
     print(f"Dask speed-up 2 workers / 1 worker: {walls[1] / walls[2]:.2f}")
 
 

@@ -54,7 +54,7 @@ from boringbar.analysis.verdict import (
     acceptable,
     judge,
     judged_step,
-    stick_law_text,
+    step_text,
     verdict_attrs,
 )
 from boringbar.analysis.verdict import STABLE as ONSET_STABLE
@@ -479,7 +479,7 @@ def method_text(ds) -> str:
             f"{a['confidence']:g}-certain; every start, {', '.join(starts)}, run until its tip "
             f"p-p settles to {a['settle_tolerance'] * 100:g} %); chatter-free: in the cut and "
             f"within {a['tolerance_m'] * 1e6:g} um p-p from every start; RK4, dt = "
-            f"{a['dt_s']:g} s{stick_law_text(a)}, at most {a['max_duration_s']:g} s a run "
+            f"{a['dt_s']:g} s{step_text(a)}, at most {a['max_duration_s']:g} s a run "
             f"({a['mean_run_s']:.2g} s a cell on average)")
 
 

@@ -78,7 +78,7 @@ from boringbar._validate import (
     check_positive,
     check_range,
 )
-from boringbar.analysis import chatter_probability, lobe_search
+from boringbar.analysis import chatter_probability, lobe_search, verdict
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.chatter_probability import Uncertainty
 from boringbar.analysis.lobe_search import (
@@ -93,18 +93,9 @@ from boringbar.analysis.lobe_search import (
     onset_chatters,
     onset_depth,
 )
-from boringbar.analysis.speeds import (
-    check_speeds,
-    default_speeds,
-)
+from boringbar.analysis.speeds import check_speeds, default_speeds
 from boringbar.analysis.sweep import Case, as_cases
-from boringbar.analysis.verdict import (
-    EXECUTOR,
-    VerdictOptions,
-    judged_step,
-    stick_law_text,
-    verdict_attrs,
-)
+from boringbar.analysis.verdict import VerdictOptions, judged_step, step_text, verdict_attrs
 from boringbar.execute import Execution
 from boringbar.model.cutting import CutLawFields, CuttingLaw
 from boringbar.model.forcing import INTERPOLATIONS, KR_ALUMINIUM, STARTS, Regenerative
@@ -300,10 +291,8 @@ def method_text(ds) -> str:
             "zero": "published criterion (the force reaches zero)",
             "bounded": f"bounded chatter (amplitude > {a.get('bounded_fraction', 0.1):g} "
                        "h_m, or the force reaches zero)"}[a["criterion"]]
-    ratio = float(a.get("onset_step_ratio", 1.0)) if a["criterion"] == "growth" else 1.0
-    onset = f" (the onset at {ratio:g} dt)" if ratio != 1.0 else ""
-    return (f"{crit}; {a['method']} on {a['depth_grid']}; {a['integrator_used']} at "
-            f"dt = {a['dt_s']:g} s{onset}{stick_law_text(a)}; {run_length_text(ds)}")
+    return (f"{crit}; {a['method']} on {a['depth_grid']}; {a['integrator_used']} at dt = "
+            f"{a['dt_s']:g} s{step_text(a)}; {run_length_text(ds)}")
 
 
 def starts_text(attrs: dict) -> str:
@@ -596,9 +585,8 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     of each cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed
     surface from a history of step H = tau / ceil(tau / dt), the first zero of the
     force located; no initial conditions: a cut starts as ``options.start`` says);
-    ``execution``: where the (case, rpm) columns run (default: a process per core under
-    the converged verdict, :data:`~boringbar.analysis.verdict.EXECUTOR`, else a thread
-    per core); ``progress(done, total)`` as columns finish.
+    ``execution``: where the (case, rpm) columns run (default: judged cuts a process per
+    core, :data:`.verdict.EXECUTOR`, others a thread); ``progress(done, total)`` too.
 
     Returns an xarray Dataset: per (case, rpm, depth_m) the verdict of every grid
     point that was run under both criteria (1 stable, 0 chatter, -1 not run),
@@ -612,7 +600,7 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     integration = integration or Integration()
     p = plan(cases, options, integration)
     growth = p.context["options"].criterion == "growth"
-    execution = (execution or Execution()).resolve(EXECUTOR if growth else "threads")
+    execution = (execution or Execution()).resolve(verdict.EXECUTOR if growth else "threads")
     results, wall = run_plan(sys.modules[__name__], p, execution, progress)
     return assemble(p, results, execution_attrs(execution, wall))
 

@@ -512,12 +512,15 @@ def verdict_attrs(options: VerdictOptions, systems) -> dict:
     return attrs
 
 
-def stick_law_text(attrs: dict) -> str:
-    """How a judged cut rendered a ball's friction, for a method line (from a Dataset's
-    attributes, which carry the verdict's options)."""
-    return {"hold": " (a ball's friction by the stick law)",
-            "sgn": " (a ball's friction by the published sgn() law)"}.get(
-                attrs.get("stick_law"), "")
+def step_text(attrs: dict) -> str:
+    """How a judged cut was stepped, for a method line after its step (from a Dataset's
+    attributes, which carry the verdict's options): the onset's coarser step, and how a
+    ball's friction was rendered."""
+    ratio = float(attrs.get("onset_step_ratio", 1.0))
+    onset = f" (the onset at {ratio:g} dt)" if ratio != 1.0 else ""
+    return onset + {"hold": " (a ball's friction by the stick law)",
+                    "sgn": " (a ball's friction by the published sgn() law)"}.get(
+                        attrs.get("stick_law"), "")
 
 
 def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
