@@ -18,8 +18,8 @@ per draw d = 0 .. draws - 1 on a drawn bar and cut:
 Draw d is a function of (``seed``, d) alone: each quantity has its own numpy stream
 ``default_rng([seed, d, stream])``, so a draw is the same whatever the bar, the speed,
 the executor or the other quantities drawn.  Each draw's chatter-free depth at each
-speed comes from the deterministic lobes' search over the same depth grid and their rule
-for the limit (:func:`~boringbar.analysis.lobe_search.free_limit`):
+speed comes from a search over the lobes' depth grid, by their rule for the limit
+(:func:`~boringbar.analysis.lobe_search.free_limit`):
 
 - a bar without a free ball: the onset's search (:func:`~boringbar.analysis.
   lobe_search.growth_column`), seeded at the analytic limit of the drawn linear host;
@@ -32,7 +32,8 @@ The draws of one speed run in blocks of :data:`DRAW_BLOCK`, in order, so that a 
 a noisy cut's search can start where the block's draws before it found their limits (the
 median; the first draw of a block at the host's limit).  The seed decides only where a
 search starts: where a draw's stability is monotone in depth, as the search assumes, it
-finds the same limit from any seed.
+finds the same limit from any seed (where it is not, one of the column's boundaries:
+docs/chatter_probability.md).
 
 P(chatter) at depth b is estimated by the fraction of draws whose chatter-free depth is
 below b (:func:`chatter_probability`).  This is the right estimator because each draw's

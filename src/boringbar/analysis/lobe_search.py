@@ -141,9 +141,8 @@ def bisect(chatter, lo: int, hi: int) -> tuple[int, int]:
 
 
 def growth_column(case: Case, rpm: float, options, integration: Integration,
-                  seed: int = 1, up_step: int = 1) -> dict:
-    """The converged criterion's runs at one speed (module doc): {depth index: result};
-    the onset's bracket grows from ``seed``, its first step up ``up_step``."""
+                  seed: int = 1) -> dict:
+    """The converged criterion's runs at one speed (module doc): {depth index: result}."""
     done: dict[int, dict] = {}
 
     def result(i: int, opts=options) -> dict:
@@ -154,7 +153,7 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
     n_max = options.max_index
     lo, hi = bisect(lambda i: onset_chatters(result(i)),
                     *bracket(lambda i: onset_chatters(result(i)), min(max(1, seed), n_max),
-                             n_max, up_step))
+                             n_max))
     if case.system.kind == "ball" and hi <= n_max:
         # a ball that bounds its vibration within the tolerance often does so well above
         # its onset: the search up from it starts with a step of BALL_STEP grid depths.

@@ -7,8 +7,9 @@ happened to reach a threshold:
   deflection under the mean force, the surface cut at it) and is knocked at the tip
   (:func:`~boringbar.simulate.knocked_cut`, ``knock_m``, 1 um by default).  It runs
   window by window (whole revolutions, at least :data:`WINDOW_PERIODS` periods of the
-  host bar's first mode); each window gives the tip's amplitude A_k (half its
-  peak-to-peak).  The growth rate is the slope of ln A_k against time, fitted by least
+  host bar's first mode), at ``onset_step_ratio`` times the judged step (the knock's
+  vibration is linear; :func:`onset_step`); each window gives the tip's amplitude A_k
+  (half its peak-to-peak).  The growth rate is the slope of ln A_k against time, fitted by least
   squares over the last quarter of the windows (at least 4) and over the quarter before
   it.  The log-envelope of a sum of decaying and growing modes is convex, so a slope
   only rises as the faster modes die out: a last-quarter slope above zero at the
@@ -17,10 +18,10 @@ happened to reach a threshold:
   over the quarter before still below zero, at that confidence).  The tool leaving the
   cut (h = 0) after a small knock is chatter.  A run that reaches ``max_duration_s``
   undecided is ``undecided``, its last slope the best estimate.
-- **The settled vibration**: an onset that chatters is run on until the tip's
-  peak-to-peak over the last quarter of the windows and over the quarter before agree
-  within ``settle_tolerance`` (5 %), or it decays below the tolerance, or the tool
-  leaves the cut in the last quarter.  A bar without a ball (solid, tuned mass damper,
+- **The settled vibration**: an onset that chatters is run on at the judged step until
+  the tip's peak-to-peak over the last quarter of the windows and over the quarter
+  before agree within ``settle_tolerance`` (5 %), or it decays below the tolerance, or
+  the tool leaves the cut in the last quarter.  A bar without a ball (solid, tuned mass damper,
   locked ball) is linear until the tool leaves the cut, so its vibration grows until it
   does: its onset decides.
 - **Large disturbances**: each ``knocks_m`` starts the same cut knocked that hard and

@@ -178,7 +178,7 @@ class CutStepper:
         if np.any(pos > now + 1e-9) or np.any(pos < now - rows + 1 - 1e-9):
             raise ParameterError(f"history(t): t must lie within the {rows - 1} steps of "
                                  "memory before now")
-        i = np.minimum(np.floor(pos).astype(np.int64), now - 1)
+        i = np.clip(np.floor(pos).astype(np.int64), now - rows + 1, now - 1)
         f = pos - i
         before = float(su.p[L.HIST_W0])
 
