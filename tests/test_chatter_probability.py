@@ -335,7 +335,7 @@ def test_a_balls_draws_without_spread_are_its_deterministic_lobes():
     of a block from the host's limit, the next from the first's limit), not on the onset
     first: without spread both find the deterministic lobes' chatter-free depth.  At
     8500 and 12600 rpm the friction-held vibration levels off far below the ball's jump
-    to chatter, where the two searches differ most."""
+    to chatter, where the two searches take the most different paths."""
     ball = bb.make_system("ball")
     options = bb.LobesOptions((8500.0, 12600.0), uncertainty=Uncertainty(
         draws=2, seed=3, **QUIET))

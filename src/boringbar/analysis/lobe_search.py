@@ -183,10 +183,10 @@ def free_column(case: Case, rpm: float, options, integration: Integration, seed:
     (:func:`column`, bracket from ``seed`` with a first step ``up_step``) on whether a
     cut is chatter-free, every cut judged as the ball's search above its onset judges
     (:func:`longer_options`).  A cut below the onset decays as it would in the onset's
-    search, and one above settles as it would above it, so the chatter-free depth
-    (:func:`free_limit`) is the lobes', without
-    the onset's own bisection (the draws of :mod:`.chatter_probability`, which need no
-    onset)."""
+    search, and one above settles as it would above it, so where the column's stability
+    is monotone in depth its chatter-free depth (:func:`free_limit`) is the lobes',
+    found without the onset's own bisection (the draws of :mod:`.chatter_probability`,
+    which need no onset; where it is not, the two may stop at different boundaries)."""
     done: dict[int, dict] = {}
     longer = longer_options(options)
 
