@@ -26,7 +26,8 @@ speed comes from a search over the lobes' depth grid, by their rule for the limi
 - a free ball: one search on whether a cut is chatter-free (:func:`~boringbar.analysis.
   lobe_search.free_column`), which needs no onset of its own;
 - a noisy cut, which has no growth rate to find (its noise keeps every mode vibrating):
-  a search on the settled vibration alone (:func:`noisy_column`).
+  a search on the settled vibration alone (:func:`~boringbar.analysis.lobe_search.
+  verdict_column`).
 
 The draws of one speed run in blocks of :data:`DRAW_BLOCK`, in order, so that a ball's or
 a noisy cut's search can start where the block's draws before it found their limits (the
@@ -58,12 +59,10 @@ from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.design_interval import wilson
 from boringbar.analysis.lobe_search import (
     BALL_STEP,
-    column,
     free_column,
     free_limit,
     growth_column,
-    growth_cut,
-    not_free,
+    verdict_column,
 )
 from boringbar.analysis.sweep import Case
 from boringbar.model.forcing import MAX_NOISE_SEED, MAX_NOISE_STD
@@ -279,23 +278,6 @@ def drawn_options(options, draw: Draw, uncertainty: Uncertainty, system: System)
     return options
 
 
-def noisy_column(case: Case, rpm: float, options, integration, seed: int,
-                 up_step: int = 1) -> dict:
-    """The runs of a noisy cut's column: the lobes' search (bracket from ``seed`` with a
-    first step ``up_step``, bisection, the ``successive`` confirmation) on the settled
-    vibration alone."""
-    done: dict[int, dict] = {}
-
-    def result(i: int) -> dict:
-        if i not in done:
-            done[i] = growth_cut(case, rpm, options.depth(i), options, integration)
-        return done[i]
-
-    column(lambda i: not_free(result(i)), seed, options.max_index, options.method,
-           options.successive, up_step)
-    return done
-
-
 def check(uncertainty, criterion: str | None) -> None:
     """A lobe study's ``uncertainty`` (None or an :class:`Uncertainty`) with its
     ``criterion``: draws are judged by the converged verdict alone."""
@@ -350,7 +332,7 @@ def drawn_column(context: dict, i: int, j: int, d: int, found: list) -> dict:
     searched = noisy or system.kind == "ball"  # its limit is not its host's
     seed, up_step = _seed(o, system, rpm, found if searched else [])
     if noisy:
-        done = noisy_column(dcase, rpm, drawn, integration, seed, up_step)
+        done = verdict_column(dcase, rpm, drawn, integration, seed, up_step)
     elif system.kind == "ball":
         done = free_column(dcase, rpm, drawn, integration, seed, up_step)
     else:

@@ -177,26 +177,33 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
     return done
 
 
-def free_column(case: Case, rpm: float, options, integration: Integration, seed: int,
-                up_step: int) -> dict:
-    """A free ball's runs at one speed for its chatter-free depth alone: one search
-    (:func:`column`, bracket from ``seed`` with a first step ``up_step``) on whether a
-    cut is chatter-free, every cut judged as the ball's search above its onset judges
-    (:func:`longer_options`).  A cut below the onset decays as it would in the onset's
-    search, and one above settles as it would above it, so where the column's stability
-    is monotone in depth its chatter-free depth (:func:`free_limit`) is the lobes',
-    found without the onset's own bisection (the draws of :mod:`.chatter_probability`,
-    which need no onset; where it is not, the two may stop at different boundaries)."""
+def verdict_column(case: Case, rpm: float, options, integration: Integration, seed: int,
+                   up_step: int) -> dict:
+    """One column's runs searched on whether each cut is chatter-free alone, every cut
+    judged by ``options`` as given: :func:`column` (bracket from ``seed`` with a first
+    step ``up_step``, bisection, the ``successive`` confirmation) on :func:`not_free`."""
     done: dict[int, dict] = {}
-    longer = longer_options(options)
 
     def chatter(i: int) -> bool:
         if i not in done:
-            done[i] = growth_cut(case, rpm, options.depth(i), longer, integration)
+            done[i] = growth_cut(case, rpm, options.depth(i), options, integration)
         return not_free(done[i])
 
     column(chatter, seed, options.max_index, options.method, options.successive, up_step)
     return done
+
+
+def free_column(case: Case, rpm: float, options, integration: Integration, seed: int,
+                up_step: int) -> dict:
+    """A free ball's runs at one speed for its chatter-free depth alone
+    (:func:`verdict_column`), every cut judged as the ball's search above its onset
+    judges (:func:`longer_options`).  A cut below the onset decays as it would in the
+    onset's search, and one above settles as it would above it, so where the column's
+    stability is monotone in depth its chatter-free depth (:func:`free_limit`) is the
+    lobes', found without the onset's own bisection (the draws of
+    :mod:`.chatter_probability`, which need no onset; where it is not, the two may stop
+    at different boundaries)."""
+    return verdict_column(case, rpm, longer_options(options), integration, seed, up_step)
 
 
 def longer_options(options):

@@ -548,7 +548,7 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     stepper = _stepper(system, cut, onset_step(system, dt_s, options.onset_step_ratio),
                        options.knock_m, options)
     verdict, rate, se, windows = onset(stepper, options)
-    if windows.last_struck >= 0 and stepper.su.dt != dt_s:
+    if windows.last_struck >= 0 and stepper.dt_s != dt_s:
         # the ball reached a wall, whose impacts the judged step resolves: run it again
         stepper = _stepper(system, cut, dt_s, options.knock_m, options)
         verdict, rate, se, windows = onset(stepper, options)
@@ -559,7 +559,7 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
     elif verdict == STABLE:
         ok = [True]
     else:
-        if stepper.su.dt != dt_s:
+        if stepper.dt_s != dt_s:
             stepper = stepper.refined(dt_s, window_steps(system, stepper.forcing, dt_s))
         settled.append(settle(stepper, windows, options, onset_s, rate, values))
         ok = [acceptable(settled[0], options)]

@@ -205,6 +205,11 @@ class CutStepper:
         return self.su.system
 
     @property
+    def dt_s(self) -> float:
+        """The RK4 step (s)."""
+        return self.su.dt
+
+    @property
     def forcing(self) -> Regenerative:
         return self.su.forcing
 
