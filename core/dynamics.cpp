@@ -1,10 +1,11 @@
-// boringbar.core.regime_matrix and impact_matrix: the equations of motion as matrices, for
-// the periodic orbits' shooting (src/boringbar/orbits/shooting.py).  Each is built from the
-// definitions RK4 steps with, so shooting does not write the dynamics again: the regime
-// matrix from the stage derivative (rk4.hpp's derivative_with) at the unit vectors of the
-// augmented state, which is exact because the equations are linear in it between impacts
-// and with the friction force held; the impact matrix from the wall's impact law
-// (model.hpp's impact_law and rk4.hpp's jump_modes) applied to a unit relative velocity.
+// boringbar.core.regime_matrix, impact_matrix and regime_stack: the equations of motion as
+// matrices, for the periodic orbits' shooting (src/boringbar/orbits/shooting.py) and the
+// exact integrator's regimes (src/boringbar/simulate/regimes.py).  Each is built from the
+// definitions RK4 steps with, so neither writes the dynamics again: the regime matrices
+// from the stage derivative (dynamics.hpp's derivative_with) at unit vectors of the
+// state, which is exact because the equations are linear in it between impacts and with
+// the friction force held; the impact matrix from the wall's impact law (model.hpp's
+// impact_law and dynamics.hpp's jump_modes) applied to a unit relative velocity.
 //
 // The augmented state is z = [X, sin Omega t, cos Omega t, 1], X = [u_1..u_n, u_1'..u_n',
 // aux, aux'] as the integrators keep it (aux: the ball's y or the absorber's x_a; zero
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "bind_util.hpp"
+#include "dynamics.hpp"
 #include "rk4.hpp"
 
 namespace bb::bind {
@@ -26,10 +28,11 @@ namespace L = bb::layout;
 namespace R = bb::rk4;
 using P = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Matrix = nb::ndarray<nb::numpy, double, nb::ndim<2>>;
+using Stack = nb::ndarray<nb::numpy, double, nb::ndim<3>>;
 
 // The unpacked parameters of p, once its length, mode count and case are checked (the
 // stage derivative indexes the mode blocks by the count and branches on the case).
-R::Params params_of(const P& p) {
+R::Params params_of(const P& p, bool sliding_law = true) {
     require(p.shape(0) == size_t(L::P_SIZE),
             "p must have " + std::to_string(L::P_SIZE) + " entries, got " +
                 std::to_string(p.shape(0)));
@@ -41,16 +44,23 @@ R::Params params_of(const P& p) {
                 kase <= L::LOCKED,
             "p[CASE] must be one of SOLID, BALL, TMD, LOCKED");
     // a regime's matrix is the sliding law's of its direction (sdir), not the stick law's
-    require(d[L::STICK_BAND] == 0.0, "p[STICK_BAND] must be 0 for a regime's matrix");
+    require(!sliding_law || d[L::STICK_BAND] == 0.0,
+            "p[STICK_BAND] must be 0 for a regime's matrix");
     return R::unpack(d, 1e-6);  // the step only sets the forcing's rotation, unused here
 }
 
-// A NumPy (rows, cols) array of zeros that owns its memory.
-Matrix zeros(size_t rows, size_t cols) {
-    auto* data = new std::vector<double>(rows * cols, 0.0);
+// A NumPy array of zeros of the given shape that owns its memory.
+template <class Array>
+Array zeros_of(std::initializer_list<size_t> shape) {
+    size_t size = 1;
+    for (size_t d : shape) size *= d;
+    auto* data = new std::vector<double>(size, 0.0);
     nb::capsule owner(data, [](void* v) noexcept { delete static_cast<std::vector<double>*>(v); });
-    return Matrix(data->data(), {rows, cols}, owner);
+    return Array(data->data(), shape, owner);
 }
+
+Matrix zeros(size_t rows, size_t cols) { return zeros_of<Matrix>({rows, cols}); }
+Stack zeros3(size_t n0, size_t rows, size_t cols) { return zeros_of<Stack>({n0, rows, cols}); }
 
 Matrix regime_matrix(const P& p, double sdir) {
     require(sdir == -1.0 || sdir == 0.0 || sdir == 1.0, "sdir must be -1, 0 or 1");
@@ -95,6 +105,76 @@ Matrix impact_matrix(const P& p) {
     return Rm;
 }
 
+// The exact integrator's regimes, z' = A z + B f + c F_b on its state z: the bar's 2n
+// entries (u, u'), with the absorber's 2 for a tuned bar.  A free ball is not in z (its
+// flight is solved in closed form) and acts on the bar through F_b alone (c); a ball
+// held by friction or carried on a wall moves with the bar.
+struct ExactRegime {
+    R::Params q;
+    double ysign;  // picks F_b: 0 none, -1 a unit force (q's F_c is 1)
+    bool friction_input;  // c is the response to F_b = 1
+};
+
+// One regime's rows of A, B and c, from the stage derivative at the unit vectors of the
+// state's first nz entries (the ball's y, y' zero).  In the cut (krb > 0) the tip force
+// is Kr b (S - W) with W = psi_L . u: its -Kr b W joins A, and B takes Kr b S.
+void fill_regime(const ExactRegime& g, int nz, double krb, double* A, double* B, double* c) {
+    const R::Shape<0, -1> sh(g.q);
+    double X[R::NX_MAX] = {}, Kd[R::NX_MAX];
+    auto derive = [&](double f, double ysign) {
+        R::derivative_with<0, -1>(g.q, sh, X, f, Kd, ysign);
+    };
+    for (int j = 0; j < nz; ++j) {
+        X[j] = 1.0;
+        const double w = j < sh.n() ? g.q.pL[j] : 0.0;
+        derive(-krb * w, g.ysign);
+        for (int i = 0; i < nz; ++i) A[i * nz + j] = Kd[i];
+        X[j] = 0.0;
+    }
+    derive(1.0, g.ysign);
+    for (int i = 0; i < nz; ++i) B[i] = Kd[i];
+    if (g.friction_input) derive(0.0, -1.0);
+    for (int i = 0; i < nz; ++i) c[i] = g.friction_input ? Kd[i] : 0.0;
+}
+
+// The unpacked parameters with the ball held by friction, whatever the force: y'' = 0,
+// the force that carries it on the bar with the reaction's share sr.
+R::Params held(R::Params q) {
+    q.hold = true;
+    q.band = INFINITY;
+    q.fs = INFINITY;
+    return q;
+}
+
+// The regimes of p: a ball bar's free, stuck (reaction share sr) and on a wall (share 1),
+// one regime for the others; a cut doubles them (out of the cut, then in it).
+nb::tuple regime_stack(const P& p) {
+    R::Params q = params_of(p, false);  // each regime sets its own friction law
+    q.hold = false;
+    R::set_friction(q, 1.0);
+    const R::Shape<0, -1> sh(q);
+    const int n = sh.n(), nz = sh.tmd() ? 2 * n + 2 : 2 * n;
+    std::vector<ExactRegime> regimes{{q, 0.0, sh.ball()}};
+    if (sh.ball()) {
+        regimes.push_back({held(q), 0.0, false});
+        std::vector<double> p1(p.data(), p.data() + L::P_SIZE);
+        p1[L::REACTION] = 1.0;  // on a wall the bar carries the whole ball
+        R::Params q1 = R::unpack(p1.data(), 1e-6);
+        regimes.push_back({held(q1), 0.0, false});
+    }
+    const int nreg = int(regimes.size());
+    const bool cut = int(p.data()[L::FORCING]) == L::REGENERATIVE;
+    const int R_ = cut ? 2 * nreg : nreg;
+    Stack A = zeros3(size_t(R_), size_t(nz), size_t(nz));
+    Matrix B = zeros(size_t(R_), size_t(nz)), c = zeros(size_t(R_), size_t(nz));
+    for (int r = 0; r < R_; ++r) {
+        const double krb = r >= nreg ? p.data()[L::KR_B] : 0.0;
+        fill_regime(regimes[size_t(r % nreg)], nz, krb, A.data() + size_t(r) * nz * nz,
+                    B.data() + size_t(r) * nz, c.data() + size_t(r) * nz);
+    }
+    return nb::make_tuple(A, B, c, nreg);
+}
+
 }  // namespace
 
 void bind_dynamics(nb::module_& m) {
@@ -106,6 +186,12 @@ void bind_dynamics(nb::module_& m) {
           "R, X+ = R X- at an impact of a ball bar (the identity for the other bars): "
           "y' -> -e y', u_i' -> u_i' + (1 + e) m_eff psi_d,i y' / M_i, from the wall's "
           "impact law.");
+    m.def("regime_stack", &regime_stack, nb::arg("p"),
+          "(A, B, c, nreg): the exact integrator's regimes z' = A z + B f + c F_b, stacked "
+          "(R, nz, nz), (R, nz), (R, nz); z the bar's u, u' (and the absorber's x_a, x_a'); "
+          "a ball bar's free (F_b its input c), stuck and wall regimes, one for the others; "
+          "a cut's R = 2 nreg, the regimes in the cut (f = Kr b (S - W)) after those out of "
+          "it; built from RK4's stage derivative.");
 }
 
 }  // namespace bb::bind

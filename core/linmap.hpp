@@ -22,15 +22,18 @@
 #include <cmath>
 
 #include "compiler.hpp"
+#include "dynamics.hpp"
 #include "layout.hpp"
 
 namespace bb::rk4 {
 
+// the equations of motion (dynamics.hpp) are the scheme's
+using namespace dynamics;
+
 namespace L = layout;
 
-constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2
-constexpr int NZ_MAX = NX_MAX + 3;       // state, S, C, F_b
-constexpr int NV_MAX = L::NMAX + 1;      // damped velocities: the modes and the absorber
+constexpr int NZ_MAX = NX_MAX + 3;  // state, S, C, F_b
+constexpr int NV_MAX = L::NMAX + 1;  // damped velocities: the modes and the absorber
 
 struct StepMap {
     double Pd[NX_MAX][NZ_MAX];
@@ -41,34 +44,28 @@ struct StepMap {
     double Fc[NZ_MAX];
 };
 
-// The tables of the step of dt for the first n modes of the packed parameters p.
+// The tables of the step of dt for the first n modes of the packed parameters p: the
+// stage recursion of rk4.hpp's step with the stage derivative of dynamics.hpp, F_b a
+// column of z (a unit friction force, F_b = -F_c sgn(y') with F_c = 1 and y' < 0, in its
+// column; none, y' = 0, in the others).
 inline void build_map(int n, const double* p, double dt, StepMap& mp) {
-    const int kase = int(p[L::CASE]);
-    const bool ball = kase == L::BALL;
-    const bool tmd = kase == L::TMD;
-    const bool has_aux = ball || tmd;
-    const int nx = 2 * n + 2, nz = nx + 3, iy = 2 * n, iyd = 2 * n + 1;
-    const double f0 = p[L::F0], om = p[L::OMEGA], m = p[L::BALL_MASS], sr = p[L::REACTION];
-    const double meff = p[L::M_EFF], ma = p[L::TMD_MASS], ka = p[L::TMD_K], ca = p[L::TMD_C];
-    const double* M = p + L::M_;
-    const double* K = p + L::K_;
-    const double* C = p + L::C_;
-    const double* pL = p + L::PSI_L;
-    const double* pD = p + L::PSI_D;
-    const double* pA = p + L::PSI_A;
-
-    double kappa = m > 0.0 ? 1.0 / m : 0.0;
-    for (int i = 0; i < n; ++i) kappa += pD[i] * (sr * pD[i] / M[i]);
+    Params q = unpack(p, dt);
+    q.n = n;
+    q.hold = false;  // the map is the sgn() law's step
+    set_friction(q, 1.0);
+    const Shape<0, -1> sh(q);
+    const bool ball = sh.ball(), tmd = sh.tmd();
+    const int nx = sh.nx(), nz = nx + 3, iyd = sh.iyd();
     // the forcing at the stage times t + c_s dt is F0 (alpha_s S + beta_s C)
-    const double ch = std::cos(om * 0.5 * dt), sh = std::sin(om * 0.5 * dt);
-    const double c1 = std::cos(om * dt), s1 = std::sin(om * dt);
+    const double ch = std::cos(q.om * 0.5 * dt), shh = std::sin(q.om * 0.5 * dt);
+    const double c1 = std::cos(q.om * dt), s1 = std::sin(q.om * dt);
     const double alpha[4] = {1.0, ch, ch, c1};
-    const double beta[4] = {0.0, sh, sh, s1};
+    const double beta[4] = {0.0, shh, shh, s1};
     const double cst[4] = {0.0, 0.5 * dt, 0.5 * dt, dt};
     const double wst[4] = {dt / 6.0, dt / 3.0, dt / 3.0, dt / 6.0};
     for (int s = 0; s < 4; ++s) {
-        for (int i = 0; i < n; ++i) mp.Wv[s][i] = wst[s] * C[i];
-        mp.Wv[s][n] = tmd ? wst[s] * ca : 0.0;
+        for (int i = 0; i < n; ++i) mp.Wv[s][i] = wst[s] * q.C[i];
+        mp.Wv[s][n] = tmd ? wst[s] * q.ca : 0.0;
     }
 
     double X[NX_MAX], Xs[NX_MAX], Kd[NX_MAX], acc[NX_MAX];
@@ -80,49 +77,24 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
         }
         const double S = col == nx ? 1.0 : 0.0;
         const double Cz = col == nx + 1 ? 1.0 : 0.0;
-        const double fb = col == nx + 2 ? 1.0 : 0.0;
+        const double ysign = col == nx + 2 ? -1.0 : 0.0;  // F_b = 1 in its column
         double fs = 0.0, fc = 0.0;
         for (int s = 0; s < 4; ++s) {
             for (int j = 0; j < nx; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
-            const double f = f0 * (alpha[s] * S + beta[s] * Cz);
-            // the stage derivative with F_b given (rk4.hpp's derivative), term by term
-            double sfree = 0.0, wd = 0.0;
-            for (int i = 0; i < n; ++i) {
-                const double vi = Xs[n + i];
-                Kd[i] = vi;
-                const double minv = 1.0 / M[i];
-                const double ai = (pL[i] * minv * f - K[i] * minv * Xs[i]) - C[i] * minv * vi;
-                Kd[n + i] = ai;
-                sfree += pD[i] * ai;
-                wd += pL[i] * vi;
-            }
-            double ydd = 0.0, reld = 0.0;
-            if (ball) {
-                for (int i = 0; i < n; ++i) Kd[n + i] -= sr * pD[i] / M[i] * fb;
-                ydd = kappa * fb - sfree;
-            } else if (tmd) {
-                double rel = Xs[iy];
-                reld = Xs[iyd];
-                for (int i = 0; i < n; ++i) {
-                    rel -= pA[i] * Xs[i];
-                    reld -= pA[i] * Xs[n + i];
-                }
-                const double ft = ka * rel + ca * reld;
-                for (int i = 0; i < n; ++i) Kd[n + i] += pA[i] * ft / M[i];
-                ydd = -ft / ma;
-            } else if (kase == L::LOCKED) {
-                for (int i = 0; i < n; ++i) Kd[n + i] -= meff * pD[i] / M[i] * sfree;
-            }
-            Kd[iy] = has_aux ? Xs[iyd] : 0.0;
-            Kd[iyd] = ydd;
+            const double f = q.f0 * (alpha[s] * S + beta[s] * Cz);
+            const StageTerms t = derivative_with<0, -1>(q, sh, Xs, f, Kd, ysign);
             if (s > 0) {
                 mp.Yr[s - 1][col] = ball ? Xs[iyd] : 0.0;
-                for (int i = 0; i < n; ++i) mp.Vr[s - 1][i][col] = Xs[n + i];
+                double reld = tmd ? Xs[iyd] : 0.0;  // the absorber's stroke rate
+                for (int i = 0; i < n; ++i) {
+                    mp.Vr[s - 1][i][col] = Xs[n + i];
+                    if (tmd) reld -= q.pA[i] * Xs[n + i];
+                }
                 mp.Vr[s - 1][n][col] = reld;
             }
             for (int j = 0; j < nx; ++j) acc[j] += wst[s] * Kd[j];
-            fs += wst[s] * f0 * alpha[s] * wd;
-            fc += wst[s] * f0 * beta[s] * wd;
+            fs += wst[s] * q.f0 * alpha[s] * t.wd;
+            fc += wst[s] * q.f0 * beta[s] * t.wd;
         }
         for (int j = 0; j < nx; ++j) mp.Pd[j][col] = acc[j];
         // sum_s b_s f_s W'_s with f_s = F0 (alpha_s S + beta_s C) is S (Fs . z) + C (Fc . z)

@@ -37,6 +37,10 @@ Do so only when a change of the core is meant to change its bits, and say in the
 by how much the runs changed (tests/test_kernel_reference.py otherwise holds the core to
 these bits).
 
+``--sensitivity`` replays each exact case with its setup moved by one rounding
+(:func:`sensitivity`): a rattling ball's run is chaotic, and a change of the core that
+moves any bit of its setup moves its RMS and peaks by as much as this shows.
+
 Replay (:func:`replay`; without ``--write`` the script replays every case and prints
 the differences) moves each stored ``p`` into the core's layout of today by slot name
 (:func:`current_params`; slots added since capture are 0, as the captured runs had them)
@@ -504,7 +508,7 @@ def capture(path: Path = DATA, check: bool = True) -> None:
     done = []
     for name, build in case_builders().items():
         tic = time.perf_counter()
-        case = build() | {"_param_names": L.PARAM_NAMES}
+        case = build() | {"_param_names": L.PARAM_NAMES, "_met_names": L.METRIC_NAMES}
         out = replay(case)
         if check:
             _CHECKS[case["entry"]](name, case, out)
@@ -533,6 +537,36 @@ def replay_all(path: Path = DATA) -> None:
         print(m)
 
 
+def _observed(met: np.ndarray, met_names) -> np.ndarray:
+    """The sum of W^2 (the RMS's), the steady peak-to-peak and the largest |W| of a run."""
+    m = dict(zip((str(n) for n in met_names), met, strict=True))
+    return np.array([m["SUM_W2"], m["STEADY_MAX_W"] - m["STEADY_MIN_W"], m["MAX_ABS_W"]])
+
+
+def sensitivity(path: Path = DATA) -> None:
+    """How much each exact case's RMS and peaks move when its setup moves by one rounding:
+    the case replayed with its stored preparation, the forcing's response Z scaled by
+    (1 + 2^-52), against its stored outputs.  A rattling ball's run is chaotic, so a
+    change of the core that moves any bit of its setup moves these by as much; a change
+    is judged against this, case by case."""
+    cases = load(path)
+    rows = []
+    for name, case in cases.items():
+        if str(case["entry"]) != "exact":
+            continue
+        prep = stored_prep_of(case)
+        prep["Z"] = prep["Z"] * (1.0 + 2.0**-52)
+        stored = _observed(case["out_met"], case["_met_names"])
+        moved = _observed(_replay_exact(case, prep)["met"], case["_met_names"])
+        rel = float(np.max(np.abs(moved - stored) / np.abs(stored)))
+        impacts = int(case["out_met"][list(case["_met_names"]).index("N_IMP_ALL")])
+        rows.append((rel, impacts, name))
+    for rel, impacts, name in sorted(rows):
+        print(f"{rel:9.2e} {impacts:6d} {name}")
+    print(f"{len(rows)} exact cases; {sum(r[0] > 1e-12 for r in rows)} move by more than "
+          "1e-12 (relative, RMS or peak) when Z moves by one rounding")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--write", "--capture", dest="write", action="store_true",
@@ -540,8 +574,12 @@ def main() -> None:
     ap.add_argument("--file", type=Path, default=DATA, help="the reference file")
     ap.add_argument("--no-check", action="store_true",
                     help="skip the check of each run against simulate's own call")
+    ap.add_argument("--sensitivity", action="store_true",
+                    help="how much each exact case moves when its setup moves by one rounding")
     args = ap.parse_args()
-    if args.write:
+    if args.sensitivity:
+        sensitivity(args.file)
+    elif args.write:
         capture(args.file, check=not args.no_check)
     else:
         replay_all(args.file)

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "../arrays.hpp"
+#include "../dynamics.hpp"
 #include "../layout.hpp"
 #include "../model.hpp"
 
@@ -26,7 +27,10 @@ constexpr int NB_MAX = NZ_MAX + 3;
 constexpr int NB_MAX2 = NB_MAX * NB_MAX;
 constexpr int NZB_MAX = NZ_MAX * NB_MAX;
 constexpr int NB_MAX_2 = 2 * NB_MAX;
-constexpr int NMAX6 = 6 * layout::NMAX;
+// the bar's rows mk (System::mk): M, K, C, psi_L, psi_d, psi_a, then the equations of
+// motion's premultiplied constants fm, km, cm and 1 / M (dynamics.hpp's Params)
+constexpr int MK_ROWS = 10;
+constexpr int MK_SIZE = MK_ROWS * layout::NMAX;
 constexpr int DDC = 4 * (layout::NMAX + 2);
 
 // A ball's regime: free (flying or sliding), stuck to the bore, or resting on a wall.  The
@@ -112,8 +116,8 @@ struct System {
     idx n = 0;                        // retained modes
     layout::Case kase = layout::SOLID;
     idx nreg = 1;                     // regimes outside a cut (3 for the ball bar)
-    Mat mk;   // (6, n): modal mass M, stiffness K, damping C, psi_L (tip), psi_d (damper),
-              // psi_a (absorber)
+    Mat mk;   // (MK_ROWS, n): modal mass M, stiffness K, damping C, psi_L (tip), psi_d
+              // (damper), psi_a (absorber); fm, km, cm (free_acceleration's) and 1 / M
     Mat ddc;  // (4, n + 2): a free ball's y'' and W'' from u, f and F_b (rows 0, 1), and
               // from u' (rows 2, 3)
     Ball ball;

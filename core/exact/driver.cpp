@@ -10,6 +10,7 @@
 #include <tuple>
 #include <vector>
 
+#include "../dynamics.hpp"
 #include "../model.hpp"
 #include "consts.hpp"
 #include "cut.hpp"
@@ -24,11 +25,13 @@ namespace {
 namespace L = layout;
 
 // The system from p into sys (whose rows mk and ddc are views of the work arrays, zeroed):
-// the bar's rows mk (M, K, C, psi_L, psi_d, psi_a), a free ball's y'' and W'' coefficients
-// ddc, the ball, friction and the forcing; nreg: the regimes outside a cut.
+// the bar's rows mk (M, K, C, psi_L, psi_d, psi_a and the equations of motion's constants),
+// a free ball's y'' and W'' coefficients ddc, the ball, friction and the forcing; nreg:
+// the regimes outside a cut.
 void unpack_system(Vec p, idx nreg, System& sys) {
     const idx n = sys.n;
     const Mat mk = sys.mk, ddc = sys.ddc;
+    const dynamics::Params q = dynamics::unpack(p.d, 0.0);
     sys.kase = layout::Case(int(p[L::CASE]));
     sys.nreg = nreg;
     for (idx i = 0; i < n; ++i) {
@@ -38,21 +41,27 @@ void unpack_system(Vec p, idx nreg, System& sys) {
         mk(3, i) = p[L::PSI_L + i];
         mk(4, i) = p[L::PSI_D + i];
         mk(5, i) = p[L::PSI_A + i];
+        mk(6, i) = q.fm[i];
+        mk(7, i) = q.km[i];
+        mk(8, i) = q.cm[i];
+        mk(9, i) = q.invM[i];
     }
     double m = p[L::BALL_MASS];
     double fc = p[L::FRICTION];
     double sr = p[L::REACTION];
-    double spd = 0.0;
-    for (idx i = 0; i < n; ++i) spd += mk(4, i) * mk(4, i) / mk(0, i);
     // psi . u'' of a free ball's bar from its state, force f and F_b: rows 0 (psi_d) and 1
     // (psi_L) hold the coefficients of u_i, then of f and F_b; rows 2 and 3 those of u_i'
     for (idx i = 0; i < n; ++i) {
+        // a_i per unit of u_i, u_i', f (dynamics.hpp) and of F_b (the reaction on the bar)
+        auto a = [&](double f, double u, double v) {
+            return dynamics::free_acceleration(q.fm[i], q.km[i], q.cm[i], f, u, v);
+        };
         for (idx row = 0; row < 2; ++row) {
-            double pr = mk(4 - row, i) / mk(0, i);  // psi_d,i / M_i, then psi_L,i / M_i
-            ddc(row, i) = -pr * mk(1, i);
-            ddc(row + 2, i) = -pr * mk(2, i);
-            ddc(row, n) += pr * mk(3, i);
-            ddc(row, n + 1) -= pr * sr * mk(4, i);
+            const double psi = mk(4 - row, i);  // psi_d,i, then psi_L,i
+            ddc(row, i) = psi * a(0.0, 1.0, 0.0);
+            ddc(row + 2, i) = psi * a(0.0, 0.0, 1.0);
+            ddc(row, n) += psi * a(1.0, 0.0, 0.0);
+            ddc(row, n + 1) -= psi * q.dm[i];
         }
     }
     sys.ball.half = p[L::HALF_GAP];
@@ -63,8 +72,8 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     sys.fric.fc = fc;
     sys.fric.fs = pymax(p[L::STATIC_FRICTION], fc);
     sys.fric.sr = sr;
-    sys.fric.kstick = m > 0.0 ? (1.0 / m + sr * spd) : 1.0;
-    sys.fric.kwall = m > 0.0 ? (1.0 / m + spd) : 1.0;
+    sys.fric.kstick = m > 0.0 ? dynamics::carried_kappa(q, sr) : 1.0;
+    sys.fric.kwall = m > 0.0 ? dynamics::carried_kappa(q, 1.0) : 1.0;
     sys.fric.stick_min = p[L::STICK_MIN];
     sys.force.f0 = p[L::F0];
     sys.force.om = p[L::OMEGA];
@@ -212,9 +221,7 @@ void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, const System
         double ee = std::fabs(vb) > ball.vimp ? ball.e : 0.0;  // Zeno: captured on the wall
         ImpactJump j = impact_law(vb, ee, ball.meff);
         yd = j.yd;
-        // the modes' jumps g psi_d,i / M_i, divided here (the RK4 kernels multiply by 1 / M_i:
-        // the same law, other roundings)
-        for (idx i = 0; i < n; ++i) X[n + i] += j.g * mk(4, i) / mk(0, i);
+        dynamics::jump_modes(int(n), mk.row(4), mk.row(9), X.d, j.g);
         met[L::D_IMPACT] += j.loss;
         if (std::fabs(vb) > ball.vimp) {
             count_impact(met, log.imp, t, w_, vb, steady);

@@ -140,9 +140,9 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
     double F = 0.0;
     double Fd = 0.0;
     for (idx i = 0; i < n; ++i) {
-        F += mk(4, i) * (mk(3, i) * f - mk(1, i) * X[i] - mk(2, i) * X[n + i]) / mk(0, i);
-        Fd += mk(4, i) * (mk(3, i) * fd - mk(1, i) * X[n + i] - mk(2, i) * Xd[n + i]) /
-              mk(0, i);
+        const double fm = mk(6, i), km = mk(7, i), cm = mk(8, i);
+        F += mk(4, i) * dynamics::free_acceleration(fm, km, cm, f, X[i], X[n + i]);
+        Fd += mk(4, i) * dynamics::free_acceleration(fm, km, cm, fd, X[n + i], Xd[n + i]);
     }
     F /= seg.kappa;
     Fd /= seg.kappa;

@@ -190,7 +190,8 @@ inline double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, do
 inline double freq_rhs(Vec X, double f, idx n, Mat mk, double kappa) {
     double s = 0.0;
     for (idx i = 0; i < n; ++i)
-        s += mk(4, i) * (mk(3, i) * f - mk(1, i) * X[i] - mk(2, i) * X[n + i]) / mk(0, i);
+        s += mk(4, i) *
+             dynamics::free_acceleration(mk(6, i), mk(7, i), mk(8, i), f, X[i], X[n + i]);
     return s / kappa;
 }
 
@@ -475,10 +476,9 @@ BB_ALWAYS_INLINE void _integrals_impl(const FlowsIn& in, const FlowsScratchOf<Mu
             ncplx s(0.0, 0.0);
             ncplx pv(0.0, 0.0);
             for (idx i = 0; i < n; ++i) {
-                s += mk(4, i) *
-                     (mk(3, i) * ncplx(cf[k]) - mk(1, i) * ncplx(Cx(i, k)) -
-                      mk(2, i) * ncplx(Cx(n + i, k))) /
-                     mk(0, i);
+                s += mk(4, i) * dynamics::free_acceleration(mk(6, i), mk(7, i), mk(8, i),
+                                                            ncplx(cf[k]), ncplx(Cx(i, k)),
+                                                            ncplx(Cx(n + i, k)));
                 pv += mk(4, i) * ncplx(Cx(n + i, k));
             }
             ca[k] = s / stick_k;

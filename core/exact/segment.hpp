@@ -46,7 +46,7 @@ struct Work {
     std::array<cplx, NZB_MAX> Cx_{};
     std::array<cplx, NB_MAX> cf_{}, ca_{}, cb_{};
     std::array<cplx, 3> phj_{};
-    std::array<double, NMAX6> mk_{};
+    std::array<double, MK_SIZE> mk_{};
     std::array<double, DDC> ddc_{};
 
     // --- the system (its rows mk and ddc in the scratch above) and the run's constants
@@ -113,7 +113,7 @@ struct Work {
         isc.cb = {cb_.data(), nb};
         isc.phj = {phj_.data(), 3};
         sys.n = n;
-        sys.mk = {mk_.data(), 6, n};
+        sys.mk = {mk_.data(), MK_ROWS, n};
         sys.ddc = {ddc_.data(), 4, n + 2};
     }
     Work(const Work&) = delete;

@@ -4,24 +4,18 @@ system, :func:`system_regimes`, and the forcing's part computed for each run),
 :func:`history_step` and :func:`cut_tables` (a regenerative cut's knot spacing and
 tabulated whole step); the compiled core (``boringbar.core``) takes these arrays.
 
-They give, bit for bit, the setup the integrators' reference outputs were computed with
-(tests/data/kernel_reference.npz, ``prep_*``): every operation is spelled out so that its
-rounding does not depend on how NumPy vectorises it, that is:
+The regimes' matrices come from the core (``core.regime_stack``: the stage derivative the
+RK4 steps with, at unit vectors), so the equations of motion are not written here.  What
+this module adds is spelled out so that its rounding does not depend on how NumPy
+vectorises it, as the core's own arithmetic does (core/exact/nmath.hpp):
 
-- the complex arithmetic is CPython's: a float operand promoted to complex(x, 0.0), then
-  (ac - bd, ad + bc) and CPython's division (``_Py_c_quot``), as the core's complex
-  arithmetic (core/exact/nmath.hpp; where the core lets a float act on each part of a
-  complex, the values are the same but for the sign of a zero).  Where a loop is
-  vectorised it is vectorised on the real and imaginary parts with exactly these formulas
+- complex products and quotients as (ac - bd, ad + bc) and CPython's division
+  (``_Py_c_quot``), vectorised on the real and imaginary parts where a loop is vectorised
   (NumPy's own complex multiply and divide may use other sequences and FMA);
-- ``abs(z)`` is the C library's hypot (``abs(complex)`` in CPython; *not* CPython's
-  ``math.hypot``, which is its own algorithm) and the complex exponential is
-  ``exp(x) (cos y + i sin y)`` from the C library's exp, cos, sin (``math.*`` in CPython;
-  NumPy's ufuncs may use their own SIMD versions, so they are not used for these), as the
-  core's ``cexp``;
-- the inverse of the coupled mass matrix is LAPACK's dgetrf + dgetri, called through
-  ``scipy.linalg.lapack`` (``np.linalg.inv`` solves instead, another rounding); the
-  eigen-decomposition, inverse and solves of the stacked regimes are NumPy's;
+- ``abs(z)`` is the C library's hypot and the complex exponential is
+  ``exp(x) (cos y + i sin y)`` from the C library's exp, cos, sin, as the core's ``cexp``
+  (NumPy's ufuncs may use their own SIMD versions, so they are not used for these);
+- the eigen-decomposition, inverse and solves of the stacked regimes are NumPy's;
 - sums keep their order (a loop over the summed index, vectorised over the others).
 """
 
@@ -32,7 +26,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import lapack
 
 from boringbar import core
 from boringbar.simulate import layout as L
@@ -98,98 +91,7 @@ def _cmul_parts(ar, ai, br, bi):
     return ar * br - ai * bi, ar * bi + ai * br
 
 
-def _seqsum(t: np.ndarray, axis: int = -1) -> np.ndarray:
-    """0.0 + t_0 + t_1 + ... along ``axis``, in that order (the loop ``s = 0.0; s += t``):
-    np.add.accumulate adds sequentially (np.sum may add pairwise)."""
-    zero = np.zeros_like(np.take(t, [0], axis))
-    return np.take(np.add.accumulate(np.concatenate([zero, t], axis), axis), -1, axis)
-
-
-def _inv(a: np.ndarray) -> np.ndarray:
-    """The inverse of ``a`` by LAPACK's dgetrf then dgetri (SciPy's), with np.linalg.inv's
-    errors."""
-    if not np.all(np.isfinite(a)):
-        raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
-    lu, piv, info = lapack.dgetrf(np.asfortranarray(a))
-    if info > 0:
-        raise np.linalg.LinAlgError("Matrix is singular to machine precision.")
-    inv, info = lapack.dgetri(lu, piv)
-    if info > 0:
-        raise np.linalg.LinAlgError("Matrix is singular to machine precision.")
-    return np.ascontiguousarray(inv)
-
-
 # --- the regimes ----------------------------------------------------------------------------
-def _coupled(p, n, s, A, B):
-    """A bar carrying the ball (share s of its inertia): (M + s m psi_d psi_d^T) u'' =
-    psi_L f - K u - C u', into A and B."""
-    m = float(p[L.BALL_MASS])
-    pd = p[L.PSI_D:L.PSI_D + n]
-    Mm = np.zeros((n, n))
-    Mm[np.arange(n), np.arange(n)] = p[L.M_:L.M_ + n]
-    Mm = Mm + ((s * m) * pd[:, None]) * pd[None, :]  # Mm[i, j] += s m pd_i pd_j
-    Mi = _inv(Mm)
-    A[np.arange(n), n + np.arange(n)] = 1.0
-    A[n:2 * n, 0:n] = -Mi * p[L.K_:L.K_ + n][None, :]
-    A[n:2 * n, n:2 * n] = -Mi * p[L.C_:L.C_ + n][None, :]
-    B[n:2 * n] = _seqsum(Mi * p[L.PSI_L:L.PSI_L + n][None, :])  # sum over j in order
-
-
-def _regimes(p):
-    """The regimes' X' = A X + B f + c F_b, stacked: (A, B, c, nreg)."""
-    n = int(p[L.N_MODES])
-    case = int(p[L.CASE])
-    sr = float(p[L.REACTION])
-    regen = int(p[L.FORCING]) == L.REGENERATIVE
-    nz = 2 * n + 2 if case == L.TMD else 2 * n
-    nreg = 3 if case == L.BALL else 1
-    R = 2 * nreg if regen else nreg
-    A = np.zeros((R, nz, nz))
-    B = np.zeros((R, nz))
-    c = np.zeros((R, nz))
-    Mv = p[L.M_:L.M_ + n]
-    ii = np.arange(n)
-    if case == L.LOCKED:
-        _coupled(p, n, 1.0, A[0], B[0])
-    else:
-        A[0, ii, n + ii] = 1.0
-        A[0, n + ii, ii] = -p[L.K_:L.K_ + n] / Mv
-        A[0, n + ii, n + ii] = -p[L.C_:L.C_ + n] / Mv
-        B[0, n + ii] = p[L.PSI_L:L.PSI_L + n] / Mv
-        if case == L.BALL:
-            c[0, n + ii] = -sr * p[L.PSI_D:L.PSI_D + n] / Mv  # the bar's reaction to F_b
-    if case == L.TMD:
-        ma, ka, ca = float(p[L.TMD_MASS]), float(p[L.TMD_K]), float(p[L.TMD_C])
-        pa = p[L.PSI_A:L.PSI_A + n]
-        A[0, 2 * n, 2 * n + 1] = 1.0
-        # bar: M u'' = psi_L f - K u - C u' + psi_a (k_a rel + c_a rel')
-        A[0, n:2 * n, 0:n] -= (ka * pa[:, None]) * pa[None, :] / Mv[:, None]
-        A[0, n:2 * n, n:2 * n] -= (ca * pa[:, None]) * pa[None, :] / Mv[:, None]
-        A[0, n + ii, 2 * n] = ka * pa / Mv
-        A[0, n + ii, 2 * n + 1] = ca * pa / Mv
-        A[0, 2 * n + 1, ii] = ka * pa / ma
-        A[0, 2 * n + 1, n + ii] = ca * pa / ma
-        A[0, 2 * n + 1, 2 * n] = -ka / ma
-        A[0, 2 * n + 1, 2 * n + 1] = -ca / ma
-    if case == L.BALL:
-        _coupled(p, n, sr, A[1], B[1])  # stick
-        if sr == 1.0:  # contact: s = 1, the stick regime's matrices when sr = 1
-            A[2] = A[1]
-            B[2] = B[1]
-        else:
-            _coupled(p, n, 1.0, A[2], B[2])
-    if regen:
-        # in the cut, f = Kr b (S(t) - W): -Kr b W joins the matrix, Kr b S is the input
-        krb = float(p[L.KR_B])
-        pl = p[L.PSI_L:L.PSI_L + n]
-        for r in range(nreg):
-            A[nreg + r] = A[r]
-            B[nreg + r] = B[r]
-            c[nreg + r] = c[r]
-            A[nreg + r, :, 0:n] -= (krb * B[r][:, None]) * pl[None, :]
-    return A, B, c, nreg
-
-
 def _pair_order(lr):
     """An ordering [l1, conj l1, l2, conj l2, ...] of ``lr``, or
     an empty array if its values are not all complex conjugate pairs."""
@@ -386,7 +288,7 @@ def _inverse_sums(mode_sums, lam_l, om):
 # --- the per-system part, kept -------------------------------------------------------------
 #: the slots of p the regimes read: the bar, the damper and a cut's Kr b; the forcing's
 #: frequency and amplitude (OMEGA, F0) enter only the per-forcing part
-SYSTEM_SLOTS = np.array([L.CASE, L.N_MODES, L.FORCING, L.REACTION, L.BALL_MASS, L.TMD_MASS,
+SYSTEM_SLOTS = np.array([L.CASE, L.N_MODES, L.FORCING, L.REACTION, L.BALL_MASS, L.M_EFF, L.TMD_MASS,
                          L.TMD_K, L.TMD_C, L.KR_B, *range(L.M_, L.P_SIZE)])
 
 #: systems whose regimes are kept: a sweep runs one system at many forcings, and an
@@ -453,7 +355,7 @@ def system_regimes(key: bytes) -> SystemRegimes:
     p = np.full(L.P_SIZE, np.nan)
     p[SYSTEM_SLOTS] = np.frombuffer(key)
     n, case = int(p[L.N_MODES]), int(p[L.CASE])
-    A, B, c, nreg = _regimes(p)
+    A, B, c, nreg = core.regime_stack(p)  # the equations of motion, from the core
     lam, V = np.linalg.eig(A)
     Vi = np.linalg.inv(V)
     _check_diagonalisable(V, Vi, case, nreg)

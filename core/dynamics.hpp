@@ -1,0 +1,293 @@
+// The equations of motion, written once: the bar's modes with the ball (sliding, held by
+// friction or carried on a wall), the tuned absorber or the locked ball, under a force
+// at the tip (docs/model.md, section 2).  derivative_with() is the stage derivative that
+// RK4 steps with (rk4.hpp); the step's affine map (linmap.hpp) pushes basis vectors
+// through it, and the regime matrices that shooting and the exact integrator take
+// (dynamics.cpp) are its columns at unit vectors: between impacts, with the friction
+// force held, the equations are linear in the state.
+//
+// The state is X = [u_1..u_n, u_1'..u_n', aux, aux'], aux the ball's relative
+// displacement y (BALL, LOCKED) or the absorber's displacement x_a (TMD).
+#pragma once
+
+#include <cmath>
+
+#include "compiler.hpp"
+#include "layout.hpp"
+#include "model.hpp"
+
+#ifndef BB_INLINE
+#define BB_INLINE BB_ALWAYS_INLINE
+#endif
+
+namespace bb::dynamics {
+
+namespace L = layout;
+
+constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2
+
+// Mode i's acceleration under the tip force f alone, without the damper's force, from the
+// premultiplied constants fm = psi_L,i / M_i, km = K_i / M_i, cm = C_i / M_i (Params):
+// a_i = psi_L,i f / M_i - K_i u_i / M_i - C_i u_i' / M_i.  T is real for a state, complex
+// for the exact integrator's modal coefficients.
+template <class T>
+BB_INLINE T free_acceleration(double fm, double km, double cm, T f, T u, T v) {
+    return (fm * f - km * u) - cm * v;
+}
+
+// The modes' velocity jumps when an impulse g (N s) acts on the ball's bore:
+// u_i' += g psi_d,i / M_i (invM = 1 / M_i).
+BB_INLINE void jump_modes(int n, const double* pD, const double* invM, double* X, double g) {
+    for (int i = 0; i < n; ++i) X[n + i] += g * pD[i] * invM[i];
+}
+
+// Everything a run reads from p, unpacked once, with the premultiplied modal constants
+// of the stage derivative: a_i = fm f - km u - cm v (- dm F_b for the ball).
+struct Params {
+    int n = 0, kase = 0;
+    bool regen = false, stage_loop = false;
+    double C[L::NMAX], pL[L::NMAX], pD[L::NMAX], pA[L::NMAX], invM[L::NMAX];
+    double fm[L::NMAX], km[L::NMAX], cm[L::NMAX], dm[L::NMAX], lm[L::NMAX];
+    double kappa;  // 1/m + sum psi_d dm: y'' = kappa F_b - sum psi_d a_free
+    // F_b, dm F_b and kappa F_b for y' > 0, y' = 0, y' < 0 (F_b = -F_c, 0, F_c), each in
+    // both lanes of a pair (sign_pick): the products a stage forms, computed once, so that
+    // a stage picks one instead of multiplying after its sign test
+    v2 fb[3], dmfb[L::NMAX][3], kfb[3];
+    // no kappa F_b is -0: y'' = kappa F_b - sum psi_d a_i then has the same bits whether
+    // the sum starts from 0 or from its first term (they differ only in the sign of a zero)
+    bool ydd_sum_from_first;
+    Ball ball;  // the ball and its walls (model.hpp)
+    double f0, om, fc, sr, stick_min, vstick, ma, ka, ca;
+    // the stick law (hold): inside |y'| < band the ball is held while the force that
+    // carries it with the bar is at most F_s; 0: the published F_b = -F_c sgn(y')
+    bool hold = false;
+    double band = 0.0, fs = 0.0, inv_kappa = 0.0;
+    double tstrobe, strobe_t0;
+    double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
+};
+
+// The modes' velocity jumps of an impact with impulse factor g (model.hpp's impact_law).
+BB_INLINE void jump_modes(const Params& q, int n, double* X, double g) {
+    jump_modes(n, q.pD, q.invM, X, g);
+}
+
+// kappa of a ball the bar carries with the share s of the reaction: the force that moves
+// it with the bar per unit of relative acceleration, 1/m + s sum psi_d,i^2 / M_i
+// (0 without a ball); Params::kappa is the share sr's.
+inline double carried_kappa(const Params& q, double s) {
+    double kappa = q.ball.m > 0.0 ? 1.0 / q.ball.m : 0.0;
+    for (int i = 0; i < q.n; ++i) kappa += q.pD[i] * (s * q.pD[i] * q.invM[i]);
+    return kappa;
+}
+
+// F_c and what the stage derivative picks by y''s sign (Params::fb, dmfb, kfb).
+inline void set_friction(Params& q, double fc) {
+    q.fc = fc;
+    const double fbs[3] = {-fc, 0.0, fc};
+    q.ydd_sum_from_first = true;
+    for (int b = 0; b < 3; ++b) {
+        q.fb[b] = v2{fbs[b], fbs[b]};
+        for (int i = 0; i < q.n; ++i) {
+            const double dmfb = q.dm[i] * fbs[b];
+            q.dmfb[i][b] = v2{dmfb, dmfb};
+        }
+        const double kfb = q.kappa * fbs[b];
+        q.kfb[b] = v2{kfb, kfb};
+        if (kfb == 0.0 && std::signbit(kfb)) q.ydd_sum_from_first = false;
+    }
+}
+
+inline Params unpack(const double* p, double dt) {
+    Params q;
+    q.n = int(p[L::N_MODES]);
+    q.kase = int(p[L::CASE]);
+    q.regen = int(p[L::FORCING]) == L::REGENERATIVE;
+    q.stage_loop = p[L::STAGE_LOOP] != 0.0;
+    q.f0 = p[L::F0];
+    q.om = p[L::OMEGA];
+    q.ball.half = p[L::HALF_GAP];
+    q.ball.e = p[L::RESTITUTION];
+    q.fc = p[L::FRICTION];
+    q.sr = p[L::REACTION];
+    q.ball.meff = p[L::M_EFF];
+    q.ball.vimp = p[L::V_IMPACT];
+    q.stick_min = p[L::STICK_MIN];
+    q.vstick = p[L::V_STICK];
+    q.band = p[L::STICK_BAND];
+    q.fs = p[L::STATIC_FRICTION];
+    q.hold = q.band > 0.0 && q.fc > 0.0 && q.kase == L::BALL;
+    q.ma = p[L::TMD_MASS];
+    q.ka = p[L::TMD_K];
+    q.ca = p[L::TMD_C];
+    q.tstrobe = p[L::STROBE_PERIOD];
+    q.strobe_t0 = p[L::STROBE_T0];
+    q.ball.m = p[L::BALL_MASS];
+    for (int i = 0; i < q.n; ++i) {
+        q.invM[i] = 1.0 / p[L::M_ + i];
+        q.C[i] = p[L::C_ + i];
+        q.pL[i] = p[L::PSI_L + i];
+        q.pD[i] = p[L::PSI_D + i];
+        q.pA[i] = p[L::PSI_A + i];
+        q.fm[i] = q.pL[i] * q.invM[i];
+        q.km[i] = p[L::K_ + i] * q.invM[i];
+        q.cm[i] = q.C[i] * q.invM[i];
+        q.dm[i] = q.sr * q.pD[i] * q.invM[i];
+        q.lm[i] = q.ball.meff * q.pD[i] * q.invM[i];
+    }
+    q.kappa = carried_kappa(q, q.sr);
+    q.inv_kappa = q.kappa != 0.0 ? 1.0 / q.kappa : 0.0;
+    set_friction(q, q.fc);
+    q.chh = std::cos(q.om * 0.5 * dt);
+    q.shh = std::sin(q.om * 0.5 * dt);
+    return q;
+}
+
+// The mode count and the case of a kernel: compile-time constants where the kernel is
+// specialised (N > 0, CASE >= 0), else the run's.  As constants from the start (not
+// members set to them) they bound the mode loops before GCC's early passes, which unroll
+// those loops and keep the state in registers.
+template <int N, int CASE>
+struct Shape {
+    int run_n, run_kase;
+    explicit Shape(const Params& q) : run_n(q.n), run_kase(q.kase) {}
+    int n() const { return N > 0 ? N : run_n; }
+    int kase() const { return CASE >= 0 ? CASE : run_kase; }
+    int nx() const { return 2 * n() + 2; }
+    int iy() const { return 2 * n(); }
+    int iyd() const { return 2 * n() + 1; }
+    bool ball() const { return kase() == L::BALL; }
+    bool tmd() const { return kase() == L::TMD; }
+    bool has_aux() const { return ball() || tmd(); }
+    // in the solid and ball bars a mode's rows of the map involve only its own u, u'
+    bool diag() const { return kase() == L::SOLID || ball(); }
+    // the length of the state arrays: exact where N is a template constant
+    static constexpr int NXC = N > 0 ? 2 * N + 2 : NX_MAX;
+};
+
+// The sign of y' as lane masks (all ones where y' > 0, resp. y' < 0; neither for 0 and
+// NaN) and a pick by it of one of three values (by_sign: for y' > 0, 0, < 0).  In vector
+// registers, as GCC keeps vector selects branch-free: y' changes sign from stage to
+// stage while the ball sticks, where branches are mispredicted (written with ?: on
+// doubles, GCC branched).
+struct SignMask {
+    i2 pos, neg;
+};
+
+BB_INLINE SignMask sign_mask(double y) {
+    const v2 v = {y, y}, zero = {0.0, 0.0};
+    return {v > zero, v < zero};
+}
+
+BB_INLINE double sign_pick(SignMask m, const v2* by_sign) {
+    const i2 p = as_bits(by_sign[0]), z = as_bits(by_sign[1]), g = as_bits(by_sign[2]);
+    const i2 r = (m.neg & g) | (~m.neg & ((m.pos & p) | (~m.pos & z)));
+    return as_v2(r)[0];
+}
+
+// What a stage's energy flows need besides the derivative.
+struct StageTerms {
+    double wd;     // W' = sum psi_L u'
+    double pvisc;  // sum c v^2 of the dashpots
+    double fb;     // friction force on the ball
+    double yds;    // ball's y'
+    double pdv;    // sum psi_d u'
+    bool held;     // the stick law held the ball (y'' = 0)
+};
+
+// The ball's stage under the stick law (Params::hold) inside the band |y'| < band: the
+// force that carries the ball with the bar (y'' = 0) is F = sum psi_d a_free / kappa;
+// the ball is held while |F| <= F_s, else it slides with F_c the way the bar drags it
+// (Karnopp's law; after a held step y' is zeroed, stop_slide).  The modes' accelerations
+// are written again with this F_b in place of the sgn() law's; returns y''.
+template <int N, int CASE>
+BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
+                            double* Kd, double sfree, StageTerms& t) {
+    const int n = sh.n();
+    const double carry = sfree * q.inv_kappa;
+    t.held = std::fabs(carry) <= q.fs;
+    const double fb = t.held ? carry : (carry > 0.0 ? q.fc : -q.fc);
+    for (int i = 0; i < n; ++i)
+        Kd[n + i] =
+            free_acceleration(q.fm[i], q.km[i], q.cm[i], f, Xs[i], Xs[n + i]) - q.dm[i] * fb;
+    t.fb = fb;
+    return t.held ? 0.0 : q.kappa * fb - sfree;
+}
+
+// The stage derivative Kd at the stage state Xs under the force f at the tip: the bar
+// M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f with the damper's terms (docs/model.md, 2),
+// written with premultiplied constants and the stage velocity last, so that little of
+// it waits on the previous stage.
+//
+// FAST: the ball's y'' sums psi_d a_i from its first term (q.ydd_sum_from_first), which
+// takes an addition off the stage's longest chain (a_i, y'', y' at the next stage, F_b).
+//
+// ysign: the value whose sign picks the friction force F_b = -F_c sgn(ysign) (sign_mask);
+// the stages give the stage's own y' (derivative), the regime matrices (dynamics.cpp) a
+// sliding direction of their own.  RK4's stages and the matrices that shooting
+// linearises are both built from this definition of the equations of motion (the step
+// map's tables, linmap.hpp, push basis vectors through a copy of the stage recursion).
+template <int N, int CASE, bool FAST = false>
+BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
+                                     double f, double* Kd, double ysign) {
+    const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
+    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false};
+    double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
+    for (int i = 0; i < n; ++i) {
+        const double vi = Xs[n + i];
+        Kd[i] = vi;
+        const double ai = free_acceleration(q.fm[i], q.km[i], q.cm[i], f, Xs[i], vi);
+        Kd[n + i] = ai;
+        sfree = (FAST && sh.ball() && i == 0) ? q.pD[i] * ai : sfree + q.pD[i] * ai;
+        t.wd += q.pL[i] * vi;
+        t.pvisc += q.C[i] * vi * vi;
+    }
+    double ydd = 0.0;
+    if (sh.ball()) {
+        const double yds = Xs[iyd];
+        // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), with dm F_b and kappa F_b picked by
+        // y''s sign (sign_pick)
+        const SignMask sg = sign_mask(ysign);
+        const double fb = sign_pick(sg, q.fb);
+        double pdv = 0.0;
+        for (int i = 0; i < n; ++i) {
+            // the reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
+            Kd[n + i] -= sign_pick(sg, q.dmfb[i]);
+            pdv += q.pD[i] * Xs[n + i];
+        }
+        ydd = sign_pick(sg, q.kfb) - sfree;
+        t.fb = fb;
+        t.yds = yds;
+        t.pdv = pdv;
+        // the stick law's band: its own F_b in place of the sgn() law's.  (After the
+        // published branch, not around it: with the branch about the sign mask, GCC 12
+        // stops with an internal error, gimple_expand_vec_cond_expr, in the regime
+        // matrices' copy, dynamics.cpp; so the held stage writes the modes again.)
+        if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, t);
+    } else if (sh.tmd()) {
+        double rel = Xs[iy], reld = Xs[iyd];
+        for (int i = 0; i < n; ++i) {
+            rel -= q.pA[i] * Xs[i];
+            reld -= q.pA[i] * Xs[n + i];
+        }
+        const double ft = q.ka * rel + q.ca * reld;
+        for (int i = 0; i < n; ++i) Kd[n + i] += q.pA[i] * ft * q.invM[i];
+        ydd = -ft / q.ma;
+        t.pvisc += q.ca * reld * reld;
+    } else if (sh.kase() == L::LOCKED) {
+        // the force that carries the ball with the bar, m_eff sum psi_d a_free, acts on
+        // mode i with psi_d,i
+        for (int i = 0; i < n; ++i) Kd[n + i] -= q.lm[i] * sfree;
+    }
+    Kd[iy] = sh.has_aux() ? Xs[iyd] : 0.0;
+    Kd[iyd] = ydd;
+    return t;
+}
+
+// The stage derivative at Xs, F_b picked by the sign of the stage's own y'.
+template <int N, int CASE, bool FAST = false>
+BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
+                                double* Kd) {
+    return derivative_with<N, CASE, FAST>(q, sh, Xs, f, Kd, Xs[sh.iyd()]);
+}
+
+}  // namespace bb::dynamics
