@@ -24,7 +24,6 @@ from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.simulate import layout as L
 from boringbar.simulate.kernels import BMAX, run_exact, run_rk4, run_rk4_batch
-from boringbar.simulate.patterns import classify
 from boringbar.simulate.run import (
     HISTORY_ROWS,
     IMPACT_THRESHOLD,
@@ -44,7 +43,6 @@ from boringbar.simulate.run_limits import (
     check_history,
     check_step,
     check_steps,
-    holds_a_period,
 )
 
 
@@ -405,10 +403,6 @@ def run_result(su: RunSetup, elapsed: float) -> Run:
     n_stk = min(int(m[L.N_STICK_REC]), cap_imp)
     t_end = t0 + n_steps * dt
     t_steady = t0 + su.steady_steps * dt
-    pattern = None  # none without a whole forcing period to classify
-    if system.kind == "ball" and not su.cutting and holds_a_period(t_end - t_steady, su.period):
-        pattern = classify(imp[:n_imp, 0], imp[:n_imp, 1], stick[:n_stk], (t_steady, t_end),
-                           su.period, dt=dt, contact_time=m[L.T_CONTACT])
     p = su.p
     thresholds = {
         "impact_velocity_m_s": float(p[L.V_IMPACT]),
@@ -423,7 +417,7 @@ def run_result(su: RunSetup, elapsed: float) -> Run:
         impacts=imp[:n_imp].copy(), sticks=stick[:n_stk].copy(),
         strobe=su.stb[:int(m[L.N_STROBE])].copy(),
         history=su.rec[:int(m[L.N_REC])].copy() if su.record_every else None,
-        initial=State(su.x_start, t0), final=State(x.copy(), t_end), pattern=pattern,
+        initial=State(su.x_start, t0), final=State(x.copy(), t_end),
         elapsed_s=elapsed,
         energy=run_energy(m, stored_energy(system, su.x_start), stored_energy(system, x)),
         thresholds=thresholds, integrator=su.integrator, stick_law=su.stick_law,

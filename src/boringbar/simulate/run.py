@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import functools
 import html
 import json
 import math
@@ -22,7 +23,7 @@ from boringbar._validate import (
 )
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
-from boringbar.simulate.patterns import Pattern
+from boringbar.simulate.patterns import Pattern, classify
 from boringbar.simulate.run_limits import (
     holds_a_period,
 )
@@ -198,7 +199,6 @@ class Run:
     history: np.ndarray | None  #: (n, 6): t, W, W', aux, aux', force
     initial: State
     final: State
-    pattern: Pattern | None
     elapsed_s: float
     energy: dict = field(default_factory=dict)
     thresholds: dict = field(default_factory=dict)
@@ -210,6 +210,18 @@ class Run:
         """RMS of the sampled tip displacement W over the steady part (m); None for a
         harmonic run whose steady part holds less than one forcing period."""
         return self.metrics["rms_tip_m"] if self.steady else None
+
+    @functools.cached_property
+    def pattern(self) -> Pattern | None:
+        """The impact pattern of the steady part: a ball bar's under harmonic forcing whose
+        steady part holds a forcing period, else None.  Classified when first read (an
+        analysis that reads only the metrics does not pay for it)."""
+        if self.system.kind != "ball" or not isinstance(self.forcing, Harmonic) \
+                or not self.steady:
+            return None
+        return classify(self.impacts[:, 0], self.impacts[:, 1], self.sticks,
+                        (self.steady_start_s, self.final.t_s), 2 * math.pi / self.omega_rad_s,
+                        dt=self.dt_s, contact_time=self.metrics["contact_time_s"])
 
     @property
     def steady(self) -> bool:
