@@ -44,10 +44,9 @@ def load(label: str, path: str):
 
 def use(module) -> None:
     """Route the package's kernel calls to ``module``."""
-    import boringbar.kernels
-    import boringbar.kernels.regimes
-    boringbar.kernels.core = module
-    boringbar.kernels.regimes.core = module
+    from boringbar.simulate import kernels, regimes
+    kernels.core = module
+    regimes.core = module
 
 
 def digest(*arrays) -> str:
