@@ -13,14 +13,19 @@ out, e.g.
     cmake --build /tmp/b
 
 (-DBB_NO_AVX512_CLONE: no AVX-512 copy, so an AVX-512 CPU runs the AVX2 one;
--DBB_NO_AVX2_CLONE: the baseline alone, RK4 and exact.)  All the modules are loaded into
-this one process and the workloads run through ``bb.simulate`` and ``bb.lobes`` with
-each module in turn, in a new random order every round: a slow spell of a shared
-machine (another job on the other core slows this one, CPU time included) then falls on
-every module alike.  Prints per workload and module the best and the median CPU time
-over the rounds, and against the first module the median of the rounds' ratios (> 1:
-faster than the first).  The copies compute the same bits: a workload whose result
-differs between modules stops the script.
+-DBB_NO_AVX2_CLONE: the baseline alone, RK4 and exact; or any other flags, set on a
+copy of the sources.)  Two builds of the core cannot share a process (nanobind
+registers each type once), so each round runs every module in a process of its own, in
+a new random order every round: the module is imported as ``boringbar.core`` before the
+package, and the workloads run through ``bb.simulate`` and ``bb.lobes``, each once to
+warm up and once timed.  A slow spell of a shared machine then falls on every module
+alike.  Prints per workload and module the best and the median CPU time over the
+rounds, and against the first module the median of the rounds' ratios (> 1: faster
+than the first).  Builds of the same sources compute the same bits: a workload whose
+result differs between modules is reported.  On a shared VM one build's processes run
+at two speeds, up to 1.7x apart, whichever CPU they are pinned to and with address
+randomisation off (the same module given twice, two rounds: A/B 0.58-0.64), so the ratios
+need many rounds.
 """
 
 from __future__ import annotations
@@ -28,25 +33,20 @@ from __future__ import annotations
 import argparse
 import hashlib
 import importlib.util
+import json
 import random
 import statistics
+import subprocess
 import sys
 import time
 
 
-def load(label: str, path: str):
-    # an extension's init function is found by the last part of the name: PyInit_core
-    spec = importlib.util.spec_from_file_location(f"_bench_{label}.core", path)
+def load_as_core(path: str) -> None:
+    """Import the built module at ``path`` as ``boringbar.core``, before the package."""
+    spec = importlib.util.spec_from_file_location("boringbar.core", path)
     module = importlib.util.module_from_spec(spec)
+    sys.modules["boringbar.core"] = module
     spec.loader.exec_module(module)
-    return module
-
-
-def use(module) -> None:
-    """Route the package's kernel calls to ``module``."""
-    from boringbar.simulate import kernels, regimes
-    kernels.core = module
-    regimes.core = module
 
 
 def digest(*arrays) -> str:
@@ -100,37 +100,45 @@ def workloads():
             "exact": exact, "lobes": lobes}
 
 
+def child(path: str, only) -> None:
+    """One process's round: each workload warmed up, then timed; JSON on stdout."""
+    load_as_core(path)
+    out = {}
+    for name, fn in workloads().items():
+        if only and name not in only:
+            continue
+        fn()
+        tic = time.process_time()
+        out[name] = (fn(), time.process_time() - tic)
+    print(json.dumps(out))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("modules", nargs="+", help="LABEL=PATH of a built core module")
+    ap.add_argument("modules", nargs="*", help="LABEL=PATH of a built core module")
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--only", nargs="*", help="workloads to run (default: all)")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    modules = {}
-    for item in args.modules:
-        label, _, path = item.partition("=")
-        modules[label] = load(label, path)
-    import boringbar as bb
-    use(next(iter(modules.values())))
-    # the imports and the first call's set-up
-    bb.simulate(bb.make_system(), bb.Harmonic(10.0, 1.0), duration_s=1e-3, integrator="rk4")
+    if args.child:
+        return child(args.child, args.only)
+    modules = dict(item.partition("=")[::2] for item in args.modules)
     labels = list(modules)
     rng = random.Random(0)
-    for name, fn in workloads().items():
-        if args.only and name not in args.only:
-            continue
-        times = {label: [] for label in labels}
-        checks = set()
-        for _ in range(args.rounds):
-            for label in rng.sample(labels, len(labels)):
-                use(modules[label])
-                tic = time.process_time()
-                checks.add(fn())
-                times[label].append(time.process_time() - tic)
-        if len(checks) != 1:
-            sys.exit(f"{name}: the modules gave different results: {sorted(checks)}")
+    runs = {label: [] for label in labels}
+    for _ in range(args.rounds):
+        for label in rng.sample(labels, len(labels)):
+            cmd = [sys.executable, __file__, "--child", modules[label]]
+            if args.only:
+                cmd += ["--only", *args.only]
+            out = subprocess.run(cmd, capture_output=True, text=True, check=True)
+            runs[label].append(json.loads(out.stdout.splitlines()[-1]))
+    for name in runs[labels[0]][0]:
+        results = {r[name][0] for label in labels for r in runs[label]}
+        times = {label: [r[name][1] for r in runs[label]] for label in labels}
+        same = "the same result" if len(results) == 1 else f"RESULTS DIFFER: {sorted(results)}"
+        print(f"{name} ({same}, {args.rounds} rounds)", flush=True)
         first = times[labels[0]]
-        print(f"{name} (result {checks.pop()}, {args.rounds} rounds)", flush=True)
         for label in labels:
             ratio = statistics.median(a / b for a, b in zip(first, times[label], strict=True))
             print(f"  {label:12s} best {min(times[label]):7.3f} s  median "
