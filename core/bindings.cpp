@@ -20,6 +20,7 @@ void bind_rk4(nb::module_& m);
 void bind_exact(nb::module_& m);
 void bind_dynamics(nb::module_& m);
 void bind_history_map(nb::module_& m);
+void bind_forcing_setup(nb::module_& m);
 }  // namespace bb::bind
 
 namespace {
@@ -81,4 +82,5 @@ NB_MODULE(core, m) {
     bb::bind::bind_exact(m);
     bb::bind::bind_dynamics(m);
     bb::bind::bind_history_map(m);
+    bb::bind::bind_forcing_setup(m);
 }

@@ -18,10 +18,16 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from boringbar import Harmonic, Regenerative, core, make_system
+from boringbar.simulate import engine, setup_run
 from boringbar.simulate import layout as L
-from boringbar.simulate import setup_run
 from boringbar.simulate.kernels import prepare
-from boringbar.simulate.regimes import cut_tables, history_step
+from boringbar.simulate.regimes import (
+    GRID_LEVELS,
+    SYSTEM_SLOTS,
+    cut_tables,
+    history_step,
+    system_regimes,
+)
 
 SETTINGS = settings(max_examples=150, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow])
@@ -269,3 +275,47 @@ def test_a_bad_history_map_argument_is_a_clear_error(field, value, message):
     a[field] = value(a)
     with pytest.raises(ValueError, match=message):
         core.cut_history_map(**a)
+
+
+def forcing_setup_args(omega=700.0, f0=10.0) -> dict:
+    """The per-system arrays of the published ball bar's regimes, as prepare passes them."""
+    p = engine.pack(make_system("ball"), omega, f0, 1e-6, "sgn")
+    s = system_regimes(p[SYSTEM_SLOTS].tobytes())
+    return {"A": s.A, "B": s.B, "lam": s.lam, "mode_sums": s.mode_sums,
+            "mode_bounds": s.mode_bounds, "psis": s.psi, "hi": s.hi, "lo": s.lo,
+            "omega": omega, "f0": f0, "levels": GRID_LEVELS}
+
+
+def test_the_forced_response_solves_its_equations():
+    """Z of each regime solves (i Omega I - A) Z = B F0 as well as LAPACK's solve does
+    (relative residual), and agrees with it to the problem's conditioning."""
+    a = forcing_setup_args()
+    Z = core.forcing_setup(**a)[0]
+    nz = a["A"].shape[1]
+    for r in range(a["A"].shape[0]):
+        M, b = 1j * a["omega"] * np.eye(nz) - a["A"][r], a["B"][r] * a["f0"]
+        ref = np.linalg.solve(M, b)
+        assert np.linalg.norm(M @ Z[r] - b) <= 8 * np.finfo(float).eps * np.linalg.norm(b)
+        assert np.allclose(Z[r], ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize(("field", "value", "message"), [
+    ("A", lambda a: a["A"][:, :2], "A must be"),
+    ("B", lambda a: a["B"][:2], "B must be"),
+    ("lam", lambda a: a["lam"][:, :1], "lam must be"),
+    ("mode_sums", lambda a: a["mode_sums"][:, :2], "mode_sums must be"),
+    ("mode_bounds", lambda a: a["mode_bounds"][:, :3], "mode_bounds must be"),
+    ("psis", lambda a: a["psis"][:1], "psis must be"),
+    ("hi", lambda a: a["hi"][:1], "hi and lo"),
+    ("omega", lambda a: -1.0, "Omega"),
+    ("f0", lambda a: float("nan"), "F0"),
+    ("levels", lambda a: 0, "levels"),
+    ("A", lambda a: np.zeros_like(a["A"]), "singular"),
+])
+def test_a_bad_forcing_setup_argument_is_a_clear_error(field, value, message):
+    a = forcing_setup_args()
+    if message == "singular":
+        a["omega"] = 0.0  # -A = 0 has no inverse
+    a[field] = value(a)
+    with pytest.raises(ValueError, match=message):
+        core.forcing_setup(**a)

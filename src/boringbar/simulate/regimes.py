@@ -198,34 +198,6 @@ def _mode_bounds(psis, V_l, alam, nz):
     return bnd
 
 
-def _forcing_bounds(bnd, psis, Z_l, om):
-    """``bnd`` (the mode bounds, a copy) with its last column, Omega^4 |psi . Z| and
-    Omega^3 |psi . Z|."""
-    bnd = bnd.copy()
-    for r, Zr in enumerate(Z_l):
-        for row, ps in enumerate(psis):
-            s = 0j
-            for i, p_i in enumerate(ps):
-                s += p_i * Zr[i]
-            s = abs(s)
-            bnd[r, row, -1] = om * om * om * om * s
-            bnd[r, row + 2, -1] = om * om * om * s
-    return bnd
-
-
-def _levels(hi, lo, om):
-    """The longest step worth trying per regime, 2^levmax h: ``hi`` and ``lo`` the regime's
-    largest and smallest nonzero |lambda|."""
-    levmax = np.zeros(len(hi), np.int64)
-    for r, (h_r, l_r) in enumerate(zip(hi, lo, strict=True)):
-        ratio = h_r / (om if om > l_r else l_r)
-        lv = 0
-        while lv < GRID_LEVELS - 1 and ratio >= 2.0 ** (lv + 1):
-            lv += 1
-        levmax[r] = lv
-    return levmax
-
-
 def _grid_exponentials(lam_l, h):
     """eh[r, lv, k] = exp(lambda_k h 2^lv), each as :func:`_cexp` computes it."""
     exp, cos, sin, isfinite = math.exp, math.cos, math.sin, math.isfinite
@@ -265,26 +237,6 @@ def _mode_sums(lam_l):
     return out
 
 
-def _inverse_sums(mode_sums, lam_l, om):
-    """isum[r, a, b] = 1 / (mu_a + mu_b) over the basis exponents mu = (lambda_r, i Omega,
-    -i Omega, 0) (the core's basis_exponents), 0 where the sum is 0: the entries
-    without +-i Omega from ``mode_sums`` (:func:`_mode_sums`), the rest computed here."""
-    nz = len(lam_l[0])
-    forced = [1j * om, -1j * om, 0j]
-    pairs = [(a, b) for b in (nz, nz + 1) for a in range(b + 1)] + [(nz, nz + 2),
-                                                                    (nz + 1, nz + 2)]
-    out = []
-    for lr, block in zip(lam_l, mode_sums, strict=True):
-        mu = lr + forced
-        rows = [row[:] for row in block]
-        for a, b in pairs:
-            sab = mu[a] + mu[b]
-            if sab != 0.0:
-                rows[a][b] = rows[b][a] = 1.0 / sab
-        out.append(rows)
-    return np.array(out, np.complex128)
-
-
 # --- the per-system part, kept -------------------------------------------------------------
 #: the slots of p the regimes read: the bar, the damper and a cut's Kr b; the forcing's
 #: frequency and amplitude (OMEGA, F0) enter only the per-forcing part
@@ -313,12 +265,12 @@ class SystemRegimes:
     bq: np.ndarray
     lvis: np.ndarray
     cvis: np.ndarray
-    psis: tuple  # (psi_d, psi_L) as lists
     lam_l: list
-    mode_sums: list  # isum's entries without +-i Omega (_mode_sums)
+    mode_sums: np.ndarray  # isum's entries without +-i Omega (_mode_sums)
     mode_bounds: np.ndarray  # bnd without the forcing's column
-    hi: list  # largest |lambda| of each regime
-    lo: list  # smallest nonzero |lambda| of each regime
+    psi: np.ndarray  # (psi_d, psi_L)
+    hi: np.ndarray  # largest |lambda| of each regime
+    lo: np.ndarray  # smallest nonzero |lambda| of each regime
     fastest: float  # largest |lambda| of all
     eh: np.ndarray | None  # the grid exponentials at h of ``fastest``
 
@@ -372,32 +324,33 @@ def system_regimes(key: bytes) -> SystemRegimes:
     bq = _modal_inputs(Vi.tolist(), B.tolist())
     lvis, cvis = _dashpots(p, n, case, B.shape[1])
     bounds = _mode_bounds(psis, V.tolist(), alam, B.shape[1])
-    for a in (A, B, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, bounds, eh):
+    sums = np.array(_mode_sums(lam_l), np.complex128)
+    psi, hi_a, lo_a = np.array(psis), np.array(hi), np.array(lo)
+    for a in (A, B, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, bounds, eh, sums, psi, hi_a, lo_a):
         if a is not None:
             a.flags.writeable = False
-    return SystemRegimes(A, B, nreg, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, psis, lam_l,
-                         _mode_sums(lam_l), bounds, hi, lo, fastest, eh)
+    return SystemRegimes(A, B, nreg, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, lam_l, sums,
+                         bounds, psi, hi_a, lo_a, fastest, eh)
 
 
 def prepare(p: np.ndarray) -> dict:
     """Per-run matrices of the exact kernel from the packed parameter vector ``p``: the
     same dict, bit for bit, as the setup the reference outputs were computed with
     (tests/data/kernel_reference.npz, ``prep_*``).  The system's part is kept
-    (:func:`system_regimes`); the forcing's (Z, the step h and what depends on Omega) is
-    computed here.  The arrays the runs of a system share are read-only."""
+    (:func:`system_regimes`); the forcing's (Z, the inverse sums and bounds with Omega,
+    the levels) is the core's (``core.forcing_setup``), the step h computed here.  The
+    arrays the runs of a system share are read-only."""
     s = system_regimes(p[SYSTEM_SLOTS].tobytes())
-    nz = s.B.shape[1]
-    Z = np.linalg.solve(1j * p[L.OMEGA] * np.eye(nz) - s.A,
-                        (s.B * p[L.F0])[:, :, None])[:, :, 0]
     om = float(p[L.OMEGA])
+    Z, isum, bnd, levmax = core.forcing_setup(s.A, s.B, s.lam, s.mode_sums, s.mode_bounds,
+                                              s.psi, s.hi, s.lo, om, float(p[L.F0]),
+                                              GRID_LEVELS)
     # the reference's running maximum from Omega up: Omega unless some |lambda| exceeds it
     fastest = s.fastest if s.fastest > om else om
     h = 2 * math.pi / fastest / GRID_PER_PERIOD
     eh = s.eh if fastest == s.fastest else _grid_exponentials(s.lam_l, h)
-    isum = _inverse_sums(s.mode_sums, s.lam_l, om)
-    bnd = _forcing_bounds(s.mode_bounds, s.psis, Z.tolist(), om)
     return {"lam": s.lam, "V": s.V, "Vh": s.Vh, "kstep": s.kstep,
-            "levmax": _levels(s.hi, s.lo, om), "Vi": s.Vi, "Z": Z, "D": s.D, "eh": eh, "h": h,
+            "levmax": levmax, "Vi": s.Vi, "Z": Z, "D": s.D, "eh": eh, "h": h,
             "lvis": s.lvis, "cvis": s.cvis, "isum": isum, "bq": s.bq, "nreg": s.nreg,
             "bnd": bnd}
 
