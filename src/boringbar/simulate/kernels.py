@@ -6,8 +6,9 @@ package packs what the core cannot compute itself and calls it:
 
 - :mod:`.layout`: the packed parameter vector's and the metric vector's slots, read from
   the core;
-- :mod:`.regimes`: the exact integrator's per-run setup (the regimes' matrices,
-  diagonalised with LAPACK through SciPy, kept per system) and a cut's tables;
+- :mod:`.regimes`: the exact integrator's per-run setup (the core's regime matrices,
+  diagonalised with LAPACK through NumPy, kept per system; the forcing's part from the
+  core) and a cut's tables;
 - :func:`run_rk4`, :func:`run_rk4_batch`, :func:`run_exact`: the three entry points, with
   the array contract of ``boringbar.simulate`` (their only caller in the package);
 - :func:`regime_matrix`, :func:`impact_matrix_of`: the equations of motion as matrices,
