@@ -1,6 +1,6 @@
 """The exact integrator's per-run setup: :func:`prepare` (the regimes' matrices,
 diagonalised, and their constants; the part that depends on the system alone is kept per
-system, :func:`system_regimes`, and the forcing's part computed for each run),
+system, :func:`system_regimes`, and the forcing's part taken from the core for each run),
 :func:`history_step` and :func:`cut_tables` (a regenerative cut's knot spacing and
 tabulated whole step); the compiled core (``boringbar.core``) takes these arrays.
 
