@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "arrays.hpp"
@@ -19,6 +20,15 @@
 namespace bb::bind {
 
 namespace nb = nanobind;
+
+// A NumPy array of the given shape that takes v's memory over (freed with the array).
+template <class T, int D>
+nb::ndarray<nb::numpy, T, nb::ndim<D>> owned_array(std::vector<T>&& v,
+                                                   std::initializer_list<size_t> shape) {
+    auto* data = new std::vector<T>(std::move(v));
+    nb::capsule owner(data, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
+    return nb::ndarray<nb::numpy, T, nb::ndim<D>>(data->data(), shape, owner);
+}
 
 // Any CPU array; read-only ones too (for inputs).
 using In = nb::ndarray<nb::ro, nb::device::cpu>;

@@ -49,18 +49,13 @@ R::Params params_of(const P& p, bool sliding_law = true) {
     return R::unpack(d, 1e-6);  // the step only sets the forcing's rotation, unused here
 }
 
-// A NumPy array of zeros of the given shape that owns its memory.
-template <class Array>
-Array zeros_of(std::initializer_list<size_t> shape) {
-    size_t size = 1;
-    for (size_t d : shape) size *= d;
-    auto* data = new std::vector<double>(size, 0.0);
-    nb::capsule owner(data, [](void* v) noexcept { delete static_cast<std::vector<double>*>(v); });
-    return Array(data->data(), shape, owner);
+// NumPy arrays of zeros that own their memory.
+Matrix zeros(size_t rows, size_t cols) {
+    return owned_array<double, 2>(std::vector<double>(rows * cols, 0.0), {rows, cols});
 }
-
-Matrix zeros(size_t rows, size_t cols) { return zeros_of<Matrix>({rows, cols}); }
-Stack zeros3(size_t n0, size_t rows, size_t cols) { return zeros_of<Stack>({n0, rows, cols}); }
+Stack zeros3(size_t n0, size_t rows, size_t cols) {
+    return owned_array<double, 3>(std::vector<double>(n0 * rows * cols, 0.0), {n0, rows, cols});
+}
 
 Matrix regime_matrix(const P& p, double sdir) {
     require(sdir == -1.0 || sdir == 0.0 || sdir == 1.0, "sdir must be -1, 0 or 1");

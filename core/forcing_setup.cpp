@@ -24,16 +24,6 @@ template <int D>
 using Real = nb::ndarray<const double, nb::ndim<D>, nb::c_contig, nb::device::cpu>;
 template <int D>
 using Cplx = nb::ndarray<const cd, nb::ndim<D>, nb::c_contig, nb::device::cpu>;
-template <class T, int D>
-using Owned = nb::ndarray<nb::numpy, T, nb::ndim<D>>;
-
-// A NumPy array of the given shape that owns a copy of v.
-template <class T, int D>
-Owned<T, D> owned(std::vector<T>&& v, std::initializer_list<size_t> shape) {
-    auto* data = new std::vector<T>(std::move(v));
-    nb::capsule owner(data, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-    return Owned<T, D>(data->data(), shape, owner);
-}
 
 // z = (i Omega I - A)^-1 b f0 for one regime (nz x nz, row-major), by Gaussian
 // elimination with partial pivoting on |.|; false if a pivot is zero.
@@ -134,10 +124,10 @@ nb::tuple forcing_setup(const Real<3>& A, const Real<2>& B, const Cplx<2>& lam,
         }
         levmax[r] = level(hi(r), lo(r), om, levels);
     }
-    return nb::make_tuple(owned<cd, 2>(std::move(Z), {R, nz}),
-                          owned<cd, 3>(std::move(isum), {R, nb, nb}),
-                          owned<double, 3>(std::move(bnd), {R, 4, nz + 1}),
-                          owned<std::int64_t, 1>(std::move(levmax), {R}));
+    return nb::make_tuple(owned_array<cd, 2>(std::move(Z), {R, nz}),
+                          owned_array<cd, 3>(std::move(isum), {R, nb, nb}),
+                          owned_array<double, 3>(std::move(bnd), {R, 4, nz + 1}),
+                          owned_array<std::int64_t, 1>(std::move(levmax), {R}));
 }
 
 }  // namespace

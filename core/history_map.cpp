@@ -19,7 +19,6 @@
 #include <nanobind/ndarray.h>
 
 #include <cstdint>
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -115,14 +114,13 @@ Vector cut_history_map(const Ro<double, 3>& d, const Ro<double, 3>& cols,
                        std::int64_t periods) {
     require(periods >= 1 && periods <= 1000000, "periods must be in [1, 1000000]");
     const Orbit o = checked(d, cols, base, wts, c, cv, idx(v.shape(0)));
-    auto result = std::make_unique<std::vector<double>>(v.shape(0));
+    std::vector<double> result(v.shape(0));
     {
         nb::gil_scoped_release unlocked;
-        apply(o, v.data(), idx(periods), *result);
+        apply(o, v.data(), idx(periods), result);
     }
-    auto* out = result.release();
-    nb::capsule owner(out, [](void* q) noexcept { delete static_cast<std::vector<double>*>(q); });
-    return Vector(out->data(), {out->size()}, owner);
+    const size_t n = result.size();
+    return owned_array<double, 1>(std::move(result), {n});
 }
 
 }  // namespace
