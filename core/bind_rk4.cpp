@@ -106,6 +106,15 @@ void check_cut(const double* p, double dt, std::int64_t nbuf) {
                                       "+ 3 = " + num(need));
 }
 
+// A compliant contact's constants: K >= 0 (0: the impact law) and alpha >= 0, finite.
+void check_contact(const double* p, const std::string& where) {
+    const double k = p[L::CONTACT_K], alpha = p[L::CONTACT_ALPHA];
+    require(std::isfinite(k) && k >= 0.0,
+            where + "[CONTACT_K] = " + num(k) + " must be finite and >= 0");
+    require(std::isfinite(alpha) && alpha >= 0.0,
+            where + "[CONTACT_ALPHA] = " + num(alpha) + " must be finite and >= 0");
+}
+
 }  // namespace
 
 // One RK4 run as Python describes it (boringbar.core.RK4Run): the packed parameters p, the
@@ -119,6 +128,7 @@ struct RK4Run {
     Out rec, imp, stick, strobe, met;
     Out buf;    // a cut's delay history; (0, 2) for a harmonic run
     Out modes;  // not set: not kept
+    Out contact;  // not set: not kept
 };
 
 // A lock-step batch of harmonic RK4 runs (boringbar.core.RK4Batch): one row of P, x, met
@@ -154,6 +164,9 @@ void run_rk4(const RK4Run& run) {
     a.met = span1<double>(given(r.met, "met"), "met", L::MET_SIZE);
     a.buf = span2<double>(given(r.buf, "buf"), "buf", -1, 2);
     if (r.modes.is_valid()) a.modes = span2<double>(r.modes, "modes", k.n, 2);
+    if (r.contact.is_valid())
+        a.contact = span2<double>(r.contact, "contact", -1, L::CONTACT_NCOL);
+    check_contact(a.p, "p");
     check_counts(a.met.d, "met");
     if (k.forcing == L::REGENERATIVE) check_cut(a.p, a.dt, a.buf.n0);
 
@@ -179,6 +192,7 @@ void run_rk4_batch(const RK4Batch& run) {
                     " differs from P[0])");
         require(kr.forcing == L::HARMONIC,
                 row + ": batches take harmonic forcing only (cuts: run_rk4)");
+        check_contact(a.P.row(r), row);
     }
     a.x = span2<double>(given(r.x, "x"), "x", n_runs, 2 * k.n + 2);
     a.t0 = r.t0;
@@ -223,7 +237,10 @@ void bind_rk4(nb::module_& m) {
              "a cut's delay history of W, W' ((rows, 2); (0, 2) for a harmonic run)")
         .out_or_none("modes", &RK4Run::modes,
                      "a cut's per-mode max and min of u_i over the steady steps, (n, 2), "
-                     "updated in place; None: not kept");
+                     "updated in place; None: not kept")
+        .out_or_none("contact", &RK4Run::contact,
+                     "a Hertz contact's rows (start, wall, v_in, duration, peak force, "
+                     "v_out), (n, 6); None: not kept");
     auto batch = nb::class_<RK4Batch>(
         m, "RK4Batch", "A lock-step batch for run_rk4_batch: set every field, then call it.");
     batch.def(nb::init<>());

@@ -47,6 +47,7 @@ std::map<std::string, int> layout_names() {
     out["PSI_A"] = PSI_A;
     out["P_SIZE"] = P_SIZE;
     out["MET_SIZE"] = MET_SIZE;
+    out["CONTACT_NCOL"] = CONTACT_NCOL;
     return out;
 }
 

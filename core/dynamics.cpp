@@ -46,6 +46,10 @@ R::Params params_of(const P& p, bool sliding_law = true) {
     // a regime's matrix is the sliding law's of its direction (sdir), not the stick law's
     require(!sliding_law || d[L::STICK_BAND] == 0.0,
             "p[STICK_BAND] must be 0 for a regime's matrix");
+    // the regimes are those between rigid walls: a compliant contact has none
+    // (slots a regime does not read may be NaN: only a positive K is a contact)
+    require(!(d[L::CONTACT_K] > 0.0), "p[CONTACT_K] must be 0: the regime matrices are the "
+                                      "impact law's, and a Hertz contact is not linear");
     return R::unpack(d, 1e-6);  // the step only sets the forcing's rotation, unused here
 }
 

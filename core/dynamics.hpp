@@ -64,6 +64,12 @@ struct Params {
     double band = 0.0, fs = 0.0, inv_kappa = 0.0;
     double tstrobe, strobe_t0;
     double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
+    // compliant contact in place of the impact law (docs/model.md, 2.6): past a wall the
+    // ball and the bar press each other with Hertz's K d^1.5 (1 + chi d'), Hunt and
+    // Crossley's damping chi = alpha / v_in set per contact by the run from the speed it
+    // began with; kappa1 is carried_kappa's of the (always reciprocal) contact force
+    bool hertz = false;
+    double ck = 0.0, alpha = 0.0, kappa1 = 0.0, chi = 0.0;
 };
 
 // The modes' velocity jumps of an impact with impulse factor g (model.hpp's impact_law).
@@ -78,6 +84,25 @@ inline double carried_kappa(const Params& q, double s) {
     double kappa = q.ball.m > 0.0 ? 1.0 / q.ball.m : 0.0;
     for (int i = 0; i < q.n; ++i) kappa += q.pD[i] * (s * q.pD[i] * q.invM[i]);
     return kappa;
+}
+
+// The contact force on the ball along y (N) at a stage, and the power its damping
+// dissipates (W): with the penetration d = |y| - delta/2 > 0 and its rate d',
+// F = -sgn(y) max(0, K d^1.5 (1 + chi d')) (it pushes, never pulls); the dissipated
+// power is (max(0, ...) - K d^1.5) d', the force's work beyond the elastic energy
+// (2/5) K d^2.5 it stores.  Zero off the walls.
+struct ContactForce {
+    double f, loss;
+};
+
+BB_INLINE ContactForce contact_force(const Params& q, double y, double yd) {
+    const double d = std::fabs(y) - q.ball.half;
+    if (!(d > 0.0)) return {0.0, 0.0};
+    const double s = y > 0.0 ? 1.0 : -1.0;
+    const double dd = s * yd;
+    const double elastic = q.ck * d * std::sqrt(d);
+    const double push = std::fmax(0.0, elastic * (1.0 + q.chi * dd));
+    return {-s * push, (push - elastic) * dd};
 }
 
 // F_c and what the stage derivative picks by y''s sign (Params::fb, dmfb, kfb).
@@ -135,6 +160,10 @@ inline Params unpack(const double* p, double dt) {
         q.lm[i] = q.ball.meff * q.pD[i] * q.invM[i];
     }
     q.kappa = carried_kappa(q, q.sr);
+    q.ck = p[L::CONTACT_K];
+    q.alpha = p[L::CONTACT_ALPHA];
+    q.hertz = q.ck > 0.0 && q.kase == L::BALL;
+    q.kappa1 = carried_kappa(q, 1.0);
     q.inv_kappa = q.kappa != 0.0 ? 1.0 / q.kappa : 0.0;
     set_friction(q, q.fc);
     q.chh = std::cos(q.om * 0.5 * dt);
@@ -192,6 +221,7 @@ struct StageTerms {
     double yds;    // ball's y'
     double pdv;    // sum psi_d u'
     bool held;     // the stick law held the ball (y'' = 0)
+    double pcon;   // the power a compliant contact's damping dissipates
 };
 
 // The ball's stage under the stick law (Params::hold) inside the band |y'| < band: the
@@ -199,18 +229,23 @@ struct StageTerms {
 // the ball is held while |F| <= F_s, else it slides with F_c the way the bar drags it
 // (Karnopp's law; after a held step y' is zeroed, stop_slide).  The modes' accelerations
 // are written again with this F_b in place of the sgn() law's; returns y''.
+// A compliant contact's force fcon (q.hertz) acts beside it: the friction that holds the
+// ball is then what carrying it needs less what the contact gives.
 template <int N, int CASE>
 BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
-                            double* Kd, double sfree, StageTerms& t) {
+                            double* Kd, double sfree, double fcon, StageTerms& t) {
     const int n = sh.n();
-    const double carry = sfree * q.inv_kappa;
+    const double need = q.hertz ? sfree - q.kappa1 * fcon : sfree;
+    const double carry = need * q.inv_kappa;
     t.held = std::fabs(carry) <= q.fs;
     const double fb = t.held ? carry : (carry > 0.0 ? q.fc : -q.fc);
-    for (int i = 0; i < n; ++i)
+    for (int i = 0; i < n; ++i) {
         Kd[n + i] =
             free_acceleration(q.fm[i], q.km[i], q.cm[i], f, Xs[i], Xs[n + i]) - q.dm[i] * fb;
+        if (q.hertz) Kd[n + i] -= q.pD[i] * q.invM[i] * fcon;
+    }
     t.fb = fb;
-    return t.held ? 0.0 : q.kappa * fb - sfree;
+    return t.held ? 0.0 : q.kappa * fb - need;
 }
 
 // The stage derivative Kd at the stage state Xs under the force f at the tip: the bar
@@ -230,7 +265,7 @@ template <int N, int CASE, bool FAST = false>
 BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
                                      double f, double* Kd, double ysign) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false};
+    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false, 0.0};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
     for (int i = 0; i < n; ++i) {
         const double vi = Xs[n + i];
@@ -258,11 +293,20 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         t.fb = fb;
         t.yds = yds;
         t.pdv = pdv;
+        // a compliant contact: the wall's force on the ball, its reaction on the bar
+        double fcon = 0.0;
+        if (q.hertz) {
+            const ContactForce c = contact_force(q, Xs[iy], yds);
+            fcon = c.f;
+            for (int i = 0; i < n; ++i) Kd[n + i] -= q.pD[i] * q.invM[i] * fcon;
+            ydd += q.kappa1 * fcon;
+            t.pcon = c.loss;
+        }
         // the stick law's band: its own F_b in place of the sgn() law's.  (After the
         // published branch, not around it: with the branch about the sign mask, GCC 12
         // stops with an internal error, gimple_expand_vec_cond_expr, in the regime
         // matrices' copy, dynamics.cpp; so the held stage writes the modes again.)
-        if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, t);
+        if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
     } else if (sh.tmd()) {
         double rel = Xs[iy], reld = Xs[iyd];
         for (int i = 0; i < n; ++i) {

@@ -49,7 +49,9 @@ enum Forcing : int { HARMONIC = 0, REGENERATIVE = 1 };
     X(NOISE_STD)        /* relative std of the cut's force noise eps; 0 = off */           \
     X(NOISE_INTERVAL)   /* eps is constant over this long (s), in whole steps */           \
     X(NOISE_SEED)       /* the noise's seed, an integer in [0, 2^53] */                    \
-    X(STICK_BAND)       /* RK4's stick law: |y'| below this holds the ball; 0 = sgn() (m/s) */
+    X(STICK_BAND)       /* RK4's stick law: |y'| below this holds the ball; 0 = sgn() (m/s) */ \
+    X(CONTACT_K)        /* Hertz contact K (N/m^1.5), F = K d^1.5 (1 + chi d'); 0 = impacts */ \
+    X(CONTACT_ALPHA)    /* Hunt-Crossley's chi v_in that gives the restitution e */
 
 #define BB_ENUM_ENTRY(name) name,
 enum PSlot : int { BB_P_SCALARS(BB_ENUM_ENTRY) P_SCALARS_END };
@@ -97,7 +99,15 @@ constexpr int P_SIZE = PSI_A + NMAX;
     X(N_EVENTS)         /* exact: events handled */                                        \
     X(EXACT_STATUS)     /* exact: 0 done, 1 event cap reached, 2 stalled */              \
     X(MAX_HOLD_FORCE)   /* RK4's stick law: largest |F_b| that held the ball (N) */        \
-    X(N_FREE_STEPS)     /* RK4's stick law: steps the ball was not held through */
+    X(N_FREE_STEPS)     /* RK4's stick law: steps the ball was not held through */        \
+    X(N_CONTACT_REC)    /* Hertz contact: contact rows written (counted, steady) */        \
+    X(MAX_CONTACT_FORCE) /* Hertz contact: largest contact force, whole run (N) */         \
+    X(CONTACT_ON)       /* Hertz contact: 1 while the ball presses a wall (kept between */ \
+    X(CONTACT_WALL)     /*   calls, with the contact's wall, start, speed and peak) */     \
+    X(CONTACT_T0)                                                                          \
+    X(CONTACT_VIN)                                                                         \
+    X(CONTACT_PEAK)                                                                        \
+    X(CONTACT_COUNTED)  /*   1: it began faster than V_IMPACT, an impact */
 
 enum MetSlot : int { BB_METRICS(BB_ENUM_ENTRY) MET_SIZE };
 #undef BB_ENUM_ENTRY
@@ -107,5 +117,6 @@ constexpr int REC_NCOL = 6;     // t, W, W', aux, aux', force
 constexpr int IMP_NCOL = 3;     // t, wall, v_before
 constexpr int STICK_NCOL = 2;   // start, end
 constexpr int STROBE_NCOL = 5;  // t, W, W', aux, aux'
+constexpr int CONTACT_NCOL = 6; // start, wall, v_in, duration, peak force, v_out
 
 }  // namespace bb::layout

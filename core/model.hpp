@@ -224,6 +224,9 @@ struct Steady {
 // The energy flows integrated step by step.
 struct Flows {
     double w_force, d_visc, d_fric, w_nr;
+    // lost in a compliant contact's damping in this call (added to D_IMPACT at the end:
+    // the impact law adds its losses to met as they happen)
+    double d_con = 0.0;
 
     static Flows load(const double* met) {
         return {met[L::W_FORCE], met[L::D_VISC], met[L::D_FRICTION], met[L::W_NONRECIP]};

@@ -85,6 +85,7 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
     }
     fl.w_force += w_s * f * s.wd;
     fl.d_visc += w_s * s.pvisc;
+    if (sh.ball() && q.hertz) fl.d_con += w_s * s.pcon;
 }
 
 // |v| lane by lane (the sign bit cleared, as fabs)
@@ -388,6 +389,105 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, const E
     return contact;
 }
 
+// A compliant contact of the ball with a wall (Params::hertz), from the step whose end
+// first finds the ball past the wall to the step whose end finds it back inside: its
+// wall, start (the crossing, interpolated linearly in the step), the speed it began with
+// (y' at the start of that step, which set its damping chi = alpha / v_in), its largest
+// force at step ends, and whether it counts as an impact (v_in > V_IMPACT; slower, it is
+// contact, as the impact law's micro impacts are).  Kept in met between calls.
+struct Episode {
+    bool on = false, counted = false;
+    double wall = 0.0, t0 = 0.0, vin = 0.0, peak = 0.0;
+
+    static Episode load(const double* met) {
+        Episode e;
+        e.on = met[L::CONTACT_ON] != 0.0;
+        e.counted = met[L::CONTACT_COUNTED] != 0.0;
+        e.wall = met[L::CONTACT_WALL];
+        e.t0 = met[L::CONTACT_T0];
+        e.vin = met[L::CONTACT_VIN];
+        e.peak = met[L::CONTACT_PEAK];
+        return e;
+    }
+    void store(double* met) const {
+        met[L::CONTACT_ON] = on ? 1.0 : 0.0;
+        met[L::CONTACT_COUNTED] = counted ? 1.0 : 0.0;
+        met[L::CONTACT_WALL] = wall;
+        met[L::CONTACT_T0] = t0;
+        met[L::CONTACT_VIN] = vin;
+        met[L::CONTACT_PEAK] = peak;
+    }
+};
+
+// The speed a contact's damping is referred to: y' as the step begins, at least the
+// impact threshold (a ball that creeps onto a wall is damped as one arriving at it).
+inline double contact_speed(const Params& q, double yd) {
+    const double floor = q.ball.vimp > 1e-12 ? q.ball.vimp : 1e-12;
+    return std::fabs(yd) > floor ? std::fabs(yd) : floor;
+}
+
+// Where in the step [t, t + dt] the penetration d = |y| - delta/2 crossed zero, from its
+// values d0 at the start and d1 at the end (of opposite signs), linearly.
+inline double crossing(double t, double dt, double d0, double d1) {
+    const double s = d0 != d1 ? d0 / (d0 - d1) : 0.0;
+    return t + (s > 0.0 ? (s < 1.0 ? s : 1.0) : 0.0) * dt;
+}
+
+// A contact's end: its row (start, wall, v_in, duration, peak force, v_out) for a counted
+// contact that began in the steady part, while there is room.
+inline void close_contact(const EventLog& log, Mat rows, const Episode& ep, double t_end,
+                          double vout) {
+    double* met = log.met;
+    met[L::MAX_CONTACT_FORCE] = Steady::pymax(met[L::MAX_CONTACT_FORCE], ep.peak);
+    if (!ep.counted || ep.t0 < log.t_steady) return;
+    const idx k = idx(met[L::N_CONTACT_REC]);
+    if (k < rows.n0) {
+        double* r = rows.row(k);
+        r[0] = ep.t0;
+        r[1] = ep.wall;
+        r[2] = ep.vin;
+        r[3] = t_end - ep.t0;
+        r[4] = ep.peak;
+        r[5] = vout;
+    }
+    met[L::N_CONTACT_REC] += 1;
+}
+
+// The compliant contact's bookkeeping at the step's end t1 (in place of the impact law's
+// wall rule): a contact begins (counted as an impact at its start, with y'- = wall v_in,
+// or as a micro impact), goes on (its peak force) or ends (close_contact), and the stick
+// bookkeeping off the walls.  y0: y at the step's start; v0: the contact speed the step
+// was damped with.  Returns whether the ball is in contact as the impact law means it
+// (resting on a wall: a contact that began slower than V_IMPACT).
+template <int N, int CASE>
+BB_INLINE bool contact_walls(const Params& q, Shape<N, CASE> sh, const double* X,
+                             const EventLog& log, Mat rows, Episode& ep, StickState& ss,
+                             double y0, double v0, double t, double dt, bool steady) {
+    const double y = X[sh.iy()], yd = X[sh.iyd()], half = q.ball.half;
+    const double d0 = std::fabs(y0) - half, d1 = std::fabs(y) - half;
+    if (!ep.on && d1 > 0.0) {
+        ep.on = true;
+        ep.wall = y > 0.0 ? 1.0 : -1.0;
+        ep.t0 = crossing(t, dt, d0, d1);
+        ep.vin = v0;
+        ep.peak = 0.0;
+        ep.counted = v0 > q.ball.vimp;
+        if (ep.counted)
+            count_impact(log.met, log.imp, ep.t0, ep.wall, ep.wall * v0, steady);
+        else
+            log.met[L::N_MICRO] += 1;
+    }
+    if (ep.on && d1 > 0.0) {
+        ep.peak = Steady::pymax(ep.peak, std::fabs(contact_force(q, y, yd).f));
+    } else if (ep.on) {
+        close_contact(log, rows, ep, crossing(t, dt, d0, d1), std::fabs(yd));
+        ep.on = false;
+    }
+    const bool stuck = q.fc > 0.0 && !ep.on && std::fabs(yd) < q.vstick;
+    stick_step(stuck, ss, t, t + dt, log, q.stick_min);
+    return ep.on && !ep.counted;
+}
+
 // ---- the kernels (rk4_run.hpp, rk4_batch.cpp) -----------------------------------------
 
 // One run's arguments (checked by bind_rk4.cpp).
@@ -399,6 +499,8 @@ struct RunArgs {
     Mat rec, imp, stick, strobe;
     Vec met;
     Mat buf;  // the regenerative delay history (nbuf, 2); may be empty for harmonic runs
+    // a compliant contact's rows (CONTACT_NCOL columns); empty (0 rows): not kept
+    Mat contact;
     // a cut's per-mode extremes: row i holds the max and min of u_i over the steady steps
     // (updated in place, so a caller resets them to -inf, +inf for a window of its own);
     // empty (0 rows): not kept

@@ -29,6 +29,7 @@ void run_batch(const BatchArgs& a) {
         one.strobe = a.strobe[r];
         one.met = {a.met.row(r), a.met.n1};
         one.buf = {nullptr, 0, 2};
+        one.contact = {nullptr, 0, L::CONTACT_NCOL};  // a contact's rows are not kept
         run_single(one);
     }
 }

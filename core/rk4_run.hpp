@@ -172,7 +172,7 @@ struct Cut {
 
 template <int N, int CASE, int FORCING>
 BB_INLINE void run_body(const RunArgs& a) {
-    const Params q = unpack(a.p, a.dt);
+    Params q = unpack(a.p, a.dt);  // (q.chi is set contact by contact)
     const Shape<N, CASE> sh(q);
     const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.regen;
     const int n = sh.n(), nx = sh.nx(), iyd = sh.iyd();
@@ -207,7 +207,8 @@ BB_INLINE void run_body(const RunArgs& a) {
     }
 
     // the step as an affine map where F_b cannot switch (linmap.hpp)
-    const bool linear = !regen && !q.stage_loop;
+    // (not with a compliant contact, whose force the map does not hold)
+    const bool linear = !regen && !q.stage_loop && !q.hertz;
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
     double sn = 0.0, cn = 1.0;
@@ -223,6 +224,9 @@ BB_INLINE void run_body(const RunArgs& a) {
     StickState ss;
     // how near the stick law's hold came to slipping, and the steps it did not hold
     double hold_max = met[L::MAX_HOLD_FORCE], n_free = met[L::N_FREE_STEPS];
+    // a compliant contact under way (from an earlier call) keeps its damping
+    Episode ep = Episode::load(met);
+    if (q.hertz && ep.on) q.chi = q.alpha / ep.vin;
 
     TipAux prev = tip_aux(q, sh, X, true);
     idx wptr = regen ? kg0 % nbuf : 0;  // the row of the newest node
@@ -247,6 +251,15 @@ BB_INLINE void run_body(const RunArgs& a) {
         fst[1] = q.f0 * ph.s_h;
         fst[2] = fst[1];
         fst[3] = q.f0 * ph.s_1;
+
+        // off the walls a contact's damping is set by the speed the ball has as it
+        // begins (contact_walls keeps it for the contact)
+        double y0 = 0.0, v0 = 0.0;
+        if (ball && q.hertz) {
+            y0 = X[sh.iy()];
+            v0 = contact_speed(q, X[iyd]);
+            if (!ep.on) q.chi = q.alpha / v0;
+        }
 
         // the step as an affine map if F_b keeps its sign, else the four stages
         bool use_map = linear;
@@ -284,7 +297,9 @@ BB_INLINE void run_body(const RunArgs& a) {
 
         strobe_step(q, sh, X, prev, t, t1, dt, so);
         bool contact = false;
-        if (ball)
+        if (ball && q.hertz)
+            contact = contact_walls(q, sh, X, log, a.contact, ep, ss, y0, v0, t, dt, steady);
+        else if (ball)
             contact = ball_walls(q, sh, X, log, ss, t, t1, steady);
 
         // streamed metrics
@@ -333,6 +348,10 @@ BB_INLINE void run_body(const RunArgs& a) {
     for (int j = 0; j < nx; ++j) a.x[j] = X[j];
     st.store(met);
     fl.store(met);
+    if (q.hertz) {
+        ep.store(met);
+        met[L::D_IMPACT] += fl.d_con;
+    }
     met[L::N_REC] = double(n_rec);
     met[L::N_STROBE] = double(so.n);
     met[L::MAX_FORCE] = cut.max_force;

@@ -27,6 +27,7 @@ UNIT_SUFFIXES = {
     "_kg_m3": "kg/m^3",
     "_n": "N",
     "_n_m": "N/m",
+    "_n_m1_5": "N/m^1.5",
     "_n_s_m": "N s/m",
     "_n_m_per_rad": "N m/rad",
     "_pa": "Pa",

@@ -16,6 +16,7 @@ from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cas
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
 from boringbar.io import jsonable
+from boringbar.model.contact import CONTACT_LAWS
 from boringbar.model.cutting import KR_ALUMINIUM, WORKPIECES, CuttingLaw, cutting_law
 from boringbar.model.dampers import MAX_FRICTION_FORCE
 from boringbar.model.forcing import (
@@ -54,7 +55,8 @@ PROG = "boringbar"
 MAX_WORKERS = 4096
 BALL_OPTIONS = ("gap_mm", "friction", "friction_force_n", "friction_number",
                 "friction_reading", "friction_reaction", "ball", "restitution", "locked",
-                "ball_position_mm", "ball_velocity_m_s", "static_ratio")
+                "ball_position_mm", "ball_velocity_m_s", "static_ratio", "contact",
+                "contact_stiffness")
 
 
 def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
@@ -91,28 +93,7 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
                    help=f"total ball clearance delta in mm{lst}{swept} "
                         "(default: " + ("0.5,0.1; with --system, its gap" if many
                                       else "the system file's, 0.5 published") + ")")
-    g.add_argument("--friction", metavar="on|off" + (",..." if many else ""),
-                   help=f"ball friction{lst} (default: {'off,on' if many else 'on'}); "
-                        "its size depends on the preset")
-    g.add_argument("--friction-force-n", type=float, metavar="N",
-                   help="friction force F_c in N (overrides the preset's)")
-    g.add_argument("--friction-number", type=float, metavar="X",
-                   help="published rolling-resistance number (0.6 nominal), read as the "
-                        "preset reads it")
-    g.add_argument("--friction-reading", choices=FRICTION_READINGS,
-                   help="how the published number is read: paper (as the paper computed it, "
-                        "20.4 N) or rolling (a length in mm, 0.0204 N); default: the preset's")
-    g.add_argument("--friction-reaction", choices=("reciprocal", "printed"),
-                   help="the bar's friction reaction: reciprocal (-psi_d F_b) or printed "
-                        "(+psi_d F_b, as published); default: the preset's")
-    g.add_argument("--ball", choices=BALLS, help="ball material (default: carbide)")
-    g.add_argument("--restitution", type=None if ranges else float,
-                   metavar="E|START:STOP:STEP" if ranges else "E",
-                   help=f"coefficient of restitution in [0, 1]{swept} (default: 0.7)")
-    g.add_argument("--locked", action="store_true", help="fix the ball to the bar")
-    g.add_argument("--static-ratio", type=float, metavar="X",
-                   help="static friction limit F_s/F_c >= 1 of true stick-slip (default: 1; "
-                        "other values need --integrator exact)")
+    add_ball(g, lst, swept, ranges, many)
     g.add_argument("--modes", type=int, metavar="N",
                    help="retained bending modes (default: physical 2, paper 1)")
     g.add_argument("--tmd-design", choices=("given", "published", "den-hartog", "sims"),
@@ -155,6 +136,41 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     g.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     g.add_argument("--quiet", action="store_true", help="no progress and no human summary")
     return groups
+
+
+def add_ball(g, lst: str, swept: str, ranges: bool, many: bool) -> None:
+    """The ball's options of :func:`add_common`: its friction, material, restitution,
+    lock and contact law."""
+    g.add_argument("--friction", metavar="on|off" + (",..." if many else ""),
+                   help=f"ball friction{lst} (default: {'off,on' if many else 'on'}); "
+                        "its size depends on the preset")
+    g.add_argument("--friction-force-n", type=float, metavar="N",
+                   help="friction force F_c in N (overrides the preset's)")
+    g.add_argument("--friction-number", type=float, metavar="X",
+                   help="published rolling-resistance number (0.6 nominal), read as the "
+                        "preset reads it")
+    g.add_argument("--friction-reading", choices=FRICTION_READINGS,
+                   help="how the published number is read: paper (as the paper computed it, "
+                        "20.4 N) or rolling (a length in mm, 0.0204 N); default: the preset's")
+    g.add_argument("--friction-reaction", choices=("reciprocal", "printed"),
+                   help="the bar's friction reaction: reciprocal (-psi_d F_b) or printed "
+                        "(+psi_d F_b, as published); default: the preset's")
+    g.add_argument("--ball", choices=BALLS, help="ball material (default: carbide)")
+    g.add_argument("--restitution", type=None if ranges else float,
+                   metavar="E|START:STOP:STEP" if ranges else "E",
+                   help=f"coefficient of restitution in [0, 1]{swept} (default: 0.7)")
+    g.add_argument("--locked", action="store_true", help="fix the ball to the bar")
+    g.add_argument("--static-ratio", type=float, metavar="X",
+                   help="static friction limit F_s/F_c >= 1 of true stick-slip (default: 1; "
+                        "other values need --integrator exact)")
+    g.add_argument("--contact", choices=CONTACT_LAWS,
+                   help="how the ball meets its plugs: impact (default; the published "
+                        "instantaneous law) or hertz (a compliant Hertz contact with "
+                        "Hunt-Crossley damping for the restitution; needs --integrator rk4 "
+                        "or auto; docs/model.md, section 2.6)")
+    g.add_argument("--contact-stiffness", type=float, metavar="K",
+                   help="a Hertz contact's stiffness K in N/m^1.5, > 0 (default: Hertz's "
+                        "from the ball's and the plug's materials)")
 
 
 def add_cutting(g) -> None:
@@ -285,6 +301,9 @@ def check_common(args, bars: list[str]) -> None:
         check_range("--static-ratio", args.static_ratio, 1, math.inf, hi_open=True)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, 0, 1)
+    if args.contact_stiffness is not None:
+        check_range("--contact-stiffness", args.contact_stiffness, 0, math.inf, lo_open=True,
+                    hi_open=True, unit="N/m^1.5")
     if args.modes is not None:
         check_range("--modes", args.modes, 1, 8)
     check_steps(args.duration_s, fixed_run_step(args.dt_s), ("--duration-s", "--dt-s"))
@@ -469,6 +488,7 @@ def system_overrides(args) -> dict:
           "friction_reaction": args.friction_reaction,
           "tmd_design": args.tmd_design, "locked": args.locked or None,
           "static_ratio": args.static_ratio, "spec": args.system_spec,
+          "contact": args.contact, "contact_stiffness_n_m1_5": args.contact_stiffness,
           "modal": args.frf_modal}
     return {k: v for k, v in kw.items() if v is not None}
 

@@ -153,6 +153,16 @@ def _cut_text(s: dict) -> str:
     return "\n".join(lines)
 
 
+def contact_text(c: dict) -> str:
+    """A Hertz contact's line of the summary: its impacts' durations and peak forces."""
+    head = f"  Hertz contact      K = {c['stiffness_n_m1_5']:.3g} N/m^1.5"
+    if not c["n_impacts"]:
+        return head + ", no impact in the steady part"
+    return (head + f", {c['n_impacts']} impacts: {c['duration_median_s'] * 1e6:.3g} us "
+            f"(max {c['duration_max_s'] * 1e6:.3g}), peak force {c['peak_force_median_n']:.4g} N "
+            f"(max {c['peak_force_max_n']:.4g}), v_out/v_in {c['restitution_ratio']:.3g}")
+
+
 def _simulate_text(s: dict, run) -> str:
     lines = [
         f"{_named(s)}, {s['preset']} preset: F0 = {s['force_n']:g} N, "
@@ -168,6 +178,8 @@ def _simulate_text(s: dict, run) -> str:
                      f"(walls at +-{run.system.damper.gap_m / 2 * 1e3:g} mm)")
     elif s["bar"] == "tmd":
         lines.append(f"  max stroke         {s['max_abs_rel_disp_m'] * 1e3:.4g} mm")
+    if s.get("contact"):
+        lines.append(contact_text(s["contact"]))
     if s["readings"]:
         lines.append(f"  published readings {', '.join(s['readings'])}")
     lines.append(f"  integrator         {s['integrator']}")

@@ -17,6 +17,13 @@ from boringbar._validate import (
     check_range,
 )
 from boringbar.model.bar import ModalModel
+from boringbar.model.contact import (
+    CONTACT_LAWS,
+    check_contact_stiffness,
+    effective_modulus_pa,
+    hertz_stiffness_n_m1_5,
+    hunt_crossley_alpha,
+)
 from boringbar.model.materials import MATERIALS
 
 GRAVITY = 9.81
@@ -125,6 +132,13 @@ class ImpactDamper:
     :class:`Friction`) acts while it rolls or slides along the cavity.  ``locked``
     turns it into a rigid added mass at z_d (for comparison).
     :meth:`ball` builds one from a material and a diameter.
+
+    ``contact``: how the ball meets the plugs that close its cavity
+    (docs/model.md, section 2.6): ``"impact"``, the published instantaneous law with
+    restitution e (the default), or ``"hertz"``, a compliant contact of Hertz's law with
+    Hunt and Crossley's damping tuned so that each impact restores e.  Its stiffness K
+    (N/m^1.5) is ``contact_stiffness_n_m1_5``, or if None Hertz's for this ball on a flat
+    plug of ``plug_material`` (model/materials.py).
     """
 
     mass_kg: float = PUBLISHED_CARBIDE_MASS
@@ -134,9 +148,22 @@ class ImpactDamper:
     radius_m: float = BALL_DIAMETER / 2
     locked: bool = False
     material: str = "carbide"
+    contact: str = "impact"
+    contact_stiffness_n_m1_5: float | None = None
+    plug_material: str = "steel"
 
     def __post_init__(self):
         check_positive("ball mass_kg", self.mass_kg, "kg")
+        check_choice("ball contact", self.contact, CONTACT_LAWS)
+        check_choice("plug_material", self.plug_material, tuple(MATERIALS))
+        if self.contact_stiffness_n_m1_5 is not None:
+            check_contact_stiffness(self.contact_stiffness_n_m1_5)
+        if self.contact == "hertz":
+            hunt_crossley_alpha(float(self.restitution))  # e within the law's range
+            if self.contact_stiffness_n_m1_5 is None and self.material not in MATERIALS:
+                raise ParameterError(f"ball material = {self.material!r} has no elastic "
+                                     "constants: a Hertz contact needs a "
+                                     "contact_stiffness_n_m1_5")
         check_range("gap_m", self.gap_m, 0.0, MAX_GAP, lo_open=True, unit="m")
         check_range("restitution", self.restitution, 0.0, 1.0)
         check_positive("ball radius_m", self.radius_m, "m")
@@ -147,9 +174,12 @@ class ImpactDamper:
     def ball(cls, material: str = "carbide", *, gap_m: float = 0.5e-3,
              restitution: float = 0.7, friction: Friction = Friction(),
              diameter_m: float = BALL_DIAMETER, mass_kg: float | None = None,
-             locked: bool = False) -> ImpactDamper:
+             locked: bool = False, contact: str = "impact",
+             contact_stiffness_n_m1_5: float | None = None,
+             plug_material: str = "steel") -> ImpactDamper:
         """A ball of ``material`` (carbide: 26 g as published; steel: from density) and
-        ``diameter_m`` (m); ``mass_kg`` (kg) overrides the material's mass."""
+        ``diameter_m`` (m); ``mass_kg`` (kg) overrides the material's mass; ``contact``,
+        ``contact_stiffness_n_m1_5`` (N/m^1.5) and ``plug_material`` as the class says."""
         check_choice("ball material", material, tuple(BALL_DENSITY) + ("custom",))
         check_positive("ball diameter_m", diameter_m, "m")
         diameter, mass = diameter_m, mass_kg
@@ -161,7 +191,9 @@ class ImpactDamper:
             else:
                 mass = BALL_DENSITY[material] * math.pi / 6 * diameter**3
         return cls(mass_kg=mass, gap_m=gap_m, restitution=restitution, friction=friction,
-                   radius_m=diameter / 2, locked=locked, material=material)
+                   radius_m=diameter / 2, locked=locked, material=material, contact=contact,
+                   contact_stiffness_n_m1_5=contact_stiffness_n_m1_5,
+                   plug_material=plug_material)
 
     @property
     def friction_force_n(self) -> float:
@@ -169,22 +201,39 @@ class ImpactDamper:
         return self.friction.force(self.mass_kg, self.radius_m)
 
     @property
+    def hertz_stiffness_n_m1_5(self) -> float:
+        """K (N/m^1.5) of the Hertz contact: the given one, else the ball's (its
+        material, radius) on a flat plug of ``plug_material``."""
+        if self.contact_stiffness_n_m1_5 is not None:
+            return self.contact_stiffness_n_m1_5
+        b, p = MATERIALS[self.material], MATERIALS[self.plug_material]
+        return hertz_stiffness_n_m1_5(self.radius_m, effective_modulus_pa(
+            b.youngs_modulus, b.poisson_ratio, p.youngs_modulus, p.poisson_ratio))
+
+    @property
     def static_friction_force_n(self) -> float:
         """F_s = static_ratio F_c (N): the most friction can hold the ball with."""
         return self.friction_force_n * self.friction.static_ratio
 
     def to_dict(self) -> dict:
-        return {"type": "ball", "material": self.material, "mass_kg": self.mass_kg,
-                "gap_m": self.gap_m, "restitution": self.restitution, "radius_m": self.radius_m,
-                "locked": self.locked, "friction": self.friction.to_dict(),
-                "friction_force_n": self.friction_force_n}
+        d = {"type": "ball", "material": self.material, "mass_kg": self.mass_kg,
+             "gap_m": self.gap_m, "restitution": self.restitution, "radius_m": self.radius_m,
+             "locked": self.locked, "friction": self.friction.to_dict(),
+             "friction_force_n": self.friction_force_n}
+        if self.contact != "impact":  # (the impact law's description as it always was)
+            d.update(contact=self.contact, contact_stiffness_n_m1_5=self.hertz_stiffness_n_m1_5,
+                     plug_material=self.plug_material)
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> ImpactDamper:
         """The ball :meth:`to_dict` describes."""
         return cls(mass_kg=d["mass_kg"], gap_m=d["gap_m"], restitution=d["restitution"],
                    friction=Friction.from_dict(d["friction"]), radius_m=d["radius_m"],
-                   locked=d["locked"], material=d["material"])
+                   locked=d["locked"], material=d["material"],
+                   contact=d.get("contact", "impact"),
+                   contact_stiffness_n_m1_5=d.get("contact_stiffness_n_m1_5"),
+                   plug_material=d.get("plug_material", "steel"))
 
 
 @dataclass(frozen=True)

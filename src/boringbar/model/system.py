@@ -142,7 +142,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
                 locked: bool = False,
                 tmd_mass_kg: float | None = None, z_absorber_m: float | None = None,
                 tmd_design: str | None = None, modal: ModalModel | None = None,
-                static_ratio: float | None = None, spec: SystemSpec | None = None) -> System:
+                static_ratio: float | None = None, spec: SystemSpec | None = None,
+                contact: str | None = None,
+                contact_stiffness_n_m1_5: float | None = None) -> System:
     """Build one of the three bars of a system file under a preset, with explicit
     overrides.
 
@@ -168,7 +170,10 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     "published" is the same) or "den-hartog", "sims" (Sims' equal-real-trough
     tuning, for chatter).  ``modal`` replaces the FE model (e.g.
     :meth:`ModalModel.from_tap_test`).  ``static_ratio``: F_s / F_c of true
-    stick-slip (exact integrator only; see :class:`Friction`).
+    stick-slip (exact integrator only; see :class:`Friction`).  ``contact``: the
+    ball's contact law, "impact" or "hertz", and ``contact_stiffness_n_m1_5`` (N/m^1.5)
+    a Hertz contact's K (default: the file's, else Hertz's from the materials; see
+    :class:`ImpactDamper`).
     """
     if isinstance(bar, SystemSpec):
         raise TypeError(f"bar = the system file {bar.name!r}: make_system's first argument "
@@ -198,10 +203,13 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     check_range("gap_m", gap, 0.0, spec.max_gap(), lo_open=True,
                 unit="m", why="at most the cavity's depth less the ball")
     material = b.material if ball is None else check_choice("ball", ball, BALLS)
-    damper = ImpactDamper.ball(material, gap_m=gap,
-                               restitution=b.restitution if restitution is None else restitution,
-                               friction=fr, diameter_m=b.diameter_m,
-                               mass_kg=b.mass_kg if material == b.material else None, locked=locked)
+    damper = ImpactDamper.ball(
+        material, gap_m=gap, restitution=b.restitution if restitution is None else restitution,
+        friction=fr, diameter_m=b.diameter_m,
+        mass_kg=b.mass_kg if material == b.material else None, locked=locked,
+        contact=contact or b.contact, plug_material=b.plug_material,
+        contact_stiffness_n_m1_5=(b.contact_stiffness_n_m1_5 if contact_stiffness_n_m1_5 is None
+                                  else contact_stiffness_n_m1_5))
     return System(modal, damper, preset, tuple(readings), spec)
 
 

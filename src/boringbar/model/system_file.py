@@ -29,6 +29,7 @@ import numpy as np
 
 from boringbar._validate import ParameterError, in_range, near, read_toml
 from boringbar.model.bar import ModalModel, Section, SteppedBar
+from boringbar.model.contact import CONTACT_LAWS, HERTZ_MIN_RESTITUTION
 from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
 from boringbar.model.materials import MATERIALS
 
@@ -68,7 +69,9 @@ class BallSpec:
     """The ball (``material``, ``diameter_m``, ``mass_kg`` or None: from the
     density) and its behaviour: ``gap_m``, ``restitution``, friction
     (``friction_kind`` one of FRICTION_FORMS's values, ``friction_value`` in
-    its unit, ``friction_reaction`` or None: the preset's, ``static_ratio``)."""
+    its unit, ``friction_reaction`` or None: the preset's, ``static_ratio``) and how it
+    meets the plugs: ``contact`` ("impact" or "hertz"), ``contact_stiffness_n_m1_5``
+    (N/m^1.5, or None: Hertz's from the materials) and ``plug_material``."""
 
     material: str
     diameter_m: float
@@ -79,6 +82,9 @@ class BallSpec:
     friction_value: float
     friction_reaction: str | None
     static_ratio: float
+    contact: str = "impact"
+    contact_stiffness_n_m1_5: float | None = None
+    plug_material: str = "steel"
 
 
 @dataclass(frozen=True)
@@ -498,7 +504,8 @@ def _cavity(r: _Reader, d: dict, bar: SteppedBar):
                                "section_diameter_mm": dia_mm, "depth_mm": depth}}
 
 
-_BALL_KEYS = ("material", "diameter_mm", "mass_g", "gap_mm", "restitution", "friction")
+_BALL_KEYS = ("material", "diameter_mm", "mass_g", "gap_mm", "restitution", "friction",
+              "contact", "contact_stiffness_n_m1_5", "plug_material")
 _FRICTION_KEYS = tuple(FRICTION_FORMS) + ("reaction", "static_ratio")
 
 
@@ -542,8 +549,16 @@ def _ball(r: _Reader, d: dict, bar: SteppedBar, cavity: CavitySpec | None):
                         f"{MAX_GAP * 1e3:g} mm)")
     e = r.number(t, "ball.restitution", 0, 1, default=0.7)
     kind, value, reaction, ratio = _friction(r, t)
+    contact = r.choice(t, "ball.contact", CONTACT_LAWS, default="impact")
+    stiffness = r.number(t, "ball.contact_stiffness_n_m1_5", 0, math.inf, lo_open=True,
+                         unit="N/m^1.5")
+    plug = r.choice(t, "ball.plug_material", tuple(MATERIALS), default="steel")
+    if contact == "hertz" and e < HERTZ_MIN_RESTITUTION:
+        r.fail("ball.restitution", e, f"must be in [{HERTZ_MIN_RESTITUTION}, 1] with contact = "
+                                      "'hertz' (Hunt-Crossley's damping grows without bound "
+                                      "as e -> 0)")
     ball = BallSpec(material, dia / 1000, None if mass is None else mass / 1000, gap / 1000,
-                    e, kind, value, reaction, ratio)
+                    e, kind, value, reaction, ratio, contact, stiffness, plug)
     form = next(k for k, v in FRICTION_FORMS.items() if v == kind)
     friction = {form: True if form == "none" else value, "static_ratio": ratio}
     if reaction is not None:
@@ -552,6 +567,10 @@ def _ball(r: _Reader, d: dict, bar: SteppedBar, cavity: CavitySpec | None):
             "friction": friction}
     if mass is not None:
         data["mass_g"] = mass
+    if contact != "impact":
+        data.update(contact=contact, plug_material=plug)
+        if stiffness is not None:
+            data["contact_stiffness_n_m1_5"] = stiffness
     return ball, {"ball": data}
 
 

@@ -19,6 +19,7 @@ from boringbar._validate import (
     check_int,
     check_range,
 )
+from boringbar.model.contact import hertz_contact_time_s, hunt_crossley_alpha
 from boringbar.model.dampers import ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
@@ -89,6 +90,9 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
         p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
         if stick_law == "hold" and d.friction_force_n > 0:
             p[L.STICK_BAND] = hold_band(p, dt)
+        if d.contact == "hertz" and not d.locked:
+            p[L.CONTACT_K] = d.hertz_stiffness_n_m1_5
+            p[L.CONTACT_ALPHA] = hunt_crossley_alpha(float(d.restitution))
     elif isinstance(d, TunedMassDamper):
         p[L.TMD_MASS] = d.mass_kg
         p[L.TMD_K] = d.stiffness_n_m
@@ -159,6 +163,9 @@ def stored_energy(system: System, x: np.ndarray) -> float:
     if isinstance(d, ImpactDamper):
         ud = x[2 * n + 1] + float(bar.psi_damper @ v)
         e += 0.5 * d.mass_kg * ud**2
+        depth = abs(x[2 * n]) - d.gap_m / 2
+        if hertz(system) and depth > 0:  # the contact's elastic energy, 2/5 K d^2.5
+            e += 0.4 * d.hertz_stiffness_n_m1_5 * depth**2.5
     elif isinstance(d, TunedMassDamper):
         rel = x[2 * n] - float(bar.psi_absorber @ u)
         e += 0.5 * d.mass_kg * x[2 * n + 1] ** 2 + 0.5 * d.stiffness_n_m * rel**2
@@ -171,15 +178,46 @@ def stick_slip(system: System) -> bool:
     return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force_n > 0
 
 
+def hertz(system: System) -> bool:
+    """Whether the ball of ``system`` meets its walls by a compliant (Hertz) contact."""
+    d = system.damper
+    return isinstance(d, ImpactDamper) and d.contact == "hertz" and not d.locked
+
+
 def resolve_integrator(integrator: str, system: System, cutting: bool = False) -> str:
     """``integrator``, or for "auto": "rk4" under the ``paper`` preset (the published
-    scheme) and in cuts (``cutting``: RK4 is faster there, docs/exact.md) unless
-    :func:`stick_slip`, else "exact" (exact at events, about 14x faster than RK4)."""
+    scheme), in cuts (``cutting``: RK4 is faster there, docs/exact.md) unless
+    :func:`stick_slip`, and with a Hertz contact (:func:`hertz`, RK4's alone), else
+    "exact" (exact at events, about 14x faster than RK4)."""
     check_choice("integrator", integrator, INTEGRATOR_CHOICES)
+    if integrator == "exact" and hertz(system):
+        raise ParameterError("integrator = 'exact' takes the impact law; a ball with contact "
+                             "= 'hertz' needs integrator = 'rk4' (or 'auto')")
     if integrator != "auto":
         return integrator
+    if hertz(system):
+        return "rk4"
     return "rk4" if (system.preset == "paper" or cutting) and not stick_slip(system) \
         else "exact"
+
+
+#: The least number of RK4 steps a Hertz contact at 1 m/s may last (check_contact_step).
+CONTACT_STEPS = 10
+
+
+def check_contact_step(system: System, dt: float) -> None:
+    """A Hertz contact must last :data:`CONTACT_STEPS` steps of ``dt`` (s) at least at
+    1 m/s (faster than any impact of these bars; the duration goes as v^-1/5): RK4
+    resolves it then, and stays stable on the contact's stiffness."""
+    if not hertz(system):
+        return
+    d, bar = system.damper, system.bar
+    meff = 1.0 / (1.0 / d.mass_kg + float((bar.psi_damper**2 / bar.mass_kg).sum()))
+    tc = hertz_contact_time_s(meff, d.hertz_stiffness_n_m1_5, 1.0)
+    if dt > tc / CONTACT_STEPS:
+        raise ParameterError(f"dt_s = {dt:g} s is too long for the Hertz contact: an impact "
+                             f"at 1 m/s lasts {tc:.3g} s, and RK4 needs {CONTACT_STEPS} steps "
+                             f"of it (dt_s <= {tc / CONTACT_STEPS:.3g} s)")
 
 
 def resolved_integrators(integrator: str, systems, cutting: bool = False) -> str:
@@ -239,6 +277,7 @@ class RunSetup:
     rec: np.ndarray
     met: np.ndarray
     stick_law: str = "sgn"
+    contact: np.ndarray | None = None  # a Hertz contact's rows (None: the impact law)
 
 
 def setup_run(system, forcing, duration, dt, initial, record_every, steady_fraction, strobe,
@@ -260,6 +299,7 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
     omega = (2 * math.pi / forcing.tau_s if cutting
              else forcing.omega(system.reference_frequency_rad_s))
     check_step(system, omega, dt)
+    check_contact_step(system, dt)
     if cutting:
         check_delay(forcing.rpm, forcing.revolutions, dt)
     if record_every:
@@ -319,9 +359,10 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
     met[L.STEADY_MIN_W] = np.inf
     met[L.FIRST_ZERO_T] = -1.0
 
+    contact = np.empty((cap_imp, L.CONTACT_NCOL)) if hertz(system) else None
     return RunSetup(system, forcing, integrator, omega, dt, t0, n_steps, steady_steps,
                   int(record_every), cutting, period, w_static, p, x, x_start, buf, imp, stick,
-                  stb, rec, met, stick_law)
+                  stb, rec, met, stick_law, contact)
 
 
 def run_kernel(su: RunSetup) -> float:
@@ -339,7 +380,7 @@ def run_kernel(su: RunSetup) -> float:
             raise IntegrationError(int(met[L.EXACT_STATUS]), int(met[L.N_EVENTS]), t_reached)
     else:
         run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb,
-                met, su.buf)
+                met, su.buf, contact=su.contact)
     return time.perf_counter() - tic
 
 
@@ -371,6 +412,7 @@ def run_metrics(m: list, n_imp: int, cap_imp: int, w_static: float) -> dict:
         "amplitude_m": max(0.0, (m[L.STEADY_MAX_W] - m[L.STEADY_MIN_W]) / 2) if n_st else nan,
         "static_deflection_m": w_static,
         "events": int(m[L.N_EVENTS]),
+        "max_contact_force_n": m[L.MAX_CONTACT_FORCE],
     }
 
 
@@ -421,6 +463,8 @@ def run_result(su: RunSetup, elapsed: float) -> Run:
         elapsed_s=elapsed,
         energy=run_energy(m, stored_energy(system, su.x_start), stored_energy(system, x)),
         thresholds=thresholds, integrator=su.integrator, stick_law=su.stick_law,
+        contacts=(np.zeros((0, L.CONTACT_NCOL)) if su.contact is None
+                  else su.contact[:min(int(m[L.N_CONTACT_REC]), len(su.contact))].copy()),
     )
 
 

@@ -37,7 +37,7 @@ _NO_HISTORY = np.zeros((0, 2))
 
 
 def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
-            buf=None, modes=None) -> None:
+            buf=None, modes=None, contact=None) -> None:
     """Advance ``x`` (in place) by ``n_steps`` steps of the published RK4 scheme from ``t0``.
 
     Steps with index >= ``steady_start`` are the steady part.  Outputs: ``rec`` (t, W, W',
@@ -48,7 +48,8 @@ def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     and STEADY_MIN_W = +inf, for a fresh run), ``buf`` (a regenerative cut's circular
     history of W, W' at step ends, at least N_REV TAU / dt + 3 rows), ``modes`` (a cut's,
     optional: (n_modes, 2), each mode's max and min of u_i over the steady steps, updated
-    in place).
+    in place), ``contact`` (a Hertz contact's rows, optional: start, wall, v_in, duration,
+    peak force, v_out of each counted contact that began in the steady part).
     """
     run = core.RK4Run()
     run.p, run.x, run.t0, run.dt = p, x, t0, dt
@@ -56,6 +57,7 @@ def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, str
     run.rec, run.imp, run.stick, run.strobe, run.met = rec, imp, stick, strobe, met
     run.buf = _NO_HISTORY if buf is None else buf
     run.modes = modes
+    run.contact = contact
     core.run_rk4(run)
 
 

@@ -179,7 +179,9 @@ class Run:
     and patterns begin; ``metrics``: the streamed metrics; ``impacts`` (time, wall,
     relative velocity), ``sticks`` (start, end), ``strobe`` (Poincare samples) and
     ``history`` (t, W, W', aux, aux', force; None unless recorded); ``initial`` and
-    ``final``: the states it started from and ended at; ``pattern``: the impact
+    ``final``: the states it started from and ended at; ``contacts``: a Hertz
+    contact's impacts in the steady part (start, wall, v_in, duration, peak force,
+    v_out; none under the impact law); ``pattern``: the impact
     pattern; ``energy``: the energy flows and their balance; ``thresholds``: the
     pattern classifier's tolerances and the stick law's band; ``integrator``,
     ``stick_law`` (RK4's friction law, :data:`STICK_LAWS`) and ``elapsed_s`` (wall time).
@@ -204,6 +206,35 @@ class Run:
     thresholds: dict = field(default_factory=dict)
     integrator: str = "rk4"
     stick_law: str = "sgn"
+    #: (n, 6): a Hertz contact's impacts: start (s), wall, v_in (m/s), duration (s),
+    #: peak force (N), v_out (m/s)
+    contacts: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+
+    @property
+    def hertz(self) -> bool:
+        """The ball meets its walls by a compliant (Hertz) contact."""
+        return getattr(self.system.damper, "contact", "impact") == "hertz"
+
+    @property
+    def contact(self) -> dict | None:
+        """A Hertz contact's impacts in the steady part: their count, durations (s) and
+        peak forces (N), median and largest, the restitution they gave (v_out / v_in,
+        median) and the largest contact force of the whole run (N); None under the
+        impact law."""
+        if not self.hertz:
+            return None
+        c = self.contacts
+
+        def stat(col, f):
+            return float(f(c[:, col])) if len(c) else None
+
+        return {"stiffness_n_m1_5": self.system.damper.hertz_stiffness_n_m1_5,
+                "n_impacts": len(c),
+                "duration_median_s": stat(3, np.median), "duration_max_s": stat(3, np.max),
+                "peak_force_median_n": stat(4, np.median), "peak_force_max_n": stat(4, np.max),
+                "restitution_ratio": (float(np.median(c[:, 5] / c[:, 2])) if len(c)
+                                       else None),
+                "max_force_whole_run_n": self.metrics["max_contact_force_n"]}
 
     @property
     def rms_tip_m(self) -> float | None:
@@ -289,6 +320,7 @@ class Run:
             "final_time_s": self.final.t_s,
             "final_phase_rad": (self.omega_rad_s * self.final.t_s) % (2 * math.pi),
             **({"cutting": self.cutting} if isinstance(self.forcing, Regenerative) else {}),
+            **({"contact": self.contact} if self.hertz else {}),
         }
 
     @property
@@ -370,6 +402,13 @@ class Run:
         if self.impacts.size:
             ds["impact_time_s"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
+        if self.contacts.size:
+            c = self.contacts
+            for col, name, unit in ((0, "contact_start_s", "s"), (2, "contact_speed_in_m_s", "m/s"),
+                                    (3, "contact_duration_s", "s"),
+                                    (4, "contact_peak_force_n", "N"),
+                                    (5, "contact_speed_out_m_s", "m/s")):
+                ds[name] = ("contact", c[:, col], {"units": unit})
         return ds
 
 
