@@ -107,7 +107,8 @@ constexpr int P_SIZE = PSI_A + NMAX;
     X(CONTACT_T0)                                                                          \
     X(CONTACT_VIN)                                                                         \
     X(CONTACT_PEAK)                                                                        \
-    X(CONTACT_COUNTED)  /*   1: it began faster than V_IMPACT, an impact */
+    X(CONTACT_COUNTED)  /*   1: it began faster than V_IMPACT, an impact */              \
+    X(CONTACT_STEADY)   /*   1: it began in the steady part */
 
 enum MetSlot : int { BB_METRICS(BB_ENUM_ENTRY) MET_SIZE };
 #undef BB_ENUM_ENTRY

@@ -396,13 +396,14 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, const E
 // force at step ends, and whether it counts as an impact (v_in > V_IMPACT; slower, it is
 // contact, as the impact law's micro impacts are).  Kept in met between calls.
 struct Episode {
-    bool on = false, counted = false;
+    bool on = false, counted = false, steady = false;
     double wall = 0.0, t0 = 0.0, vin = 0.0, peak = 0.0;
 
     static Episode load(const double* met) {
         Episode e;
         e.on = met[L::CONTACT_ON] != 0.0;
         e.counted = met[L::CONTACT_COUNTED] != 0.0;
+        e.steady = met[L::CONTACT_STEADY] != 0.0;
         e.wall = met[L::CONTACT_WALL];
         e.t0 = met[L::CONTACT_T0];
         e.vin = met[L::CONTACT_VIN];
@@ -412,6 +413,7 @@ struct Episode {
     void store(double* met) const {
         met[L::CONTACT_ON] = on ? 1.0 : 0.0;
         met[L::CONTACT_COUNTED] = counted ? 1.0 : 0.0;
+        met[L::CONTACT_STEADY] = steady ? 1.0 : 0.0;
         met[L::CONTACT_WALL] = wall;
         met[L::CONTACT_T0] = t0;
         met[L::CONTACT_VIN] = vin;
@@ -434,12 +436,12 @@ inline double crossing(double t, double dt, double d0, double d1) {
 }
 
 // A contact's end: its row (start, wall, v_in, duration, peak force, v_out) for a counted
-// contact that began in the steady part, while there is room.
+// contact that began in the steady part (of the call it began in), while there is room.
 inline void close_contact(const EventLog& log, Mat rows, const Episode& ep, double t_end,
                           double vout) {
     double* met = log.met;
     met[L::MAX_CONTACT_FORCE] = Steady::pymax(met[L::MAX_CONTACT_FORCE], ep.peak);
-    if (!ep.counted || ep.t0 < log.t_steady) return;
+    if (!ep.counted || !ep.steady) return;
     const idx k = idx(met[L::N_CONTACT_REC]);
     if (k < rows.n0) {
         double* r = rows.row(k);
@@ -472,6 +474,7 @@ BB_INLINE bool contact_walls(const Params& q, Shape<N, CASE> sh, const double* X
         ep.vin = v0;
         ep.peak = 0.0;
         ep.counted = v0 > q.ball.vimp;
+        ep.steady = steady;
         if (ep.counted)
             count_impact(log.met, log.imp, ep.t0, ep.wall, ep.wall * v0, steady);
         else

@@ -521,7 +521,17 @@ def step_text(attrs: dict) -> str:
     onset = f" (the onset at {ratio:g} dt)" if ratio != 1.0 else ""
     return onset + {"hold": " (a ball's friction by the stick law)",
                     "sgn": " (a ball's friction by the published sgn() law)"}.get(
-                        attrs.get("stick_law"), "")
+                        attrs.get("stick_law"), "") + contact_text(attrs)
+
+
+def contact_text(attrs: dict) -> str:
+    """" (the ball's walls by a Hertz contact)" where a system of the Dataset's attributes
+    (``systems``, as JSON) has one; else nothing (the impact law)."""
+    systems = attrs.get("systems")
+    described = json.loads(systems) if isinstance(systems, str) else systems or {}
+    hertz = any((s.get("damper") or {}).get("contact") == "hertz"
+                for s in described.values() if isinstance(s, dict))
+    return " (the ball's walls by a Hertz contact)" if hertz else ""
 
 
 def acceptable(s: Settled, options: VerdictOptions) -> bool | None:

@@ -166,6 +166,10 @@ class CutStepper:
                          initial=initial, stick_law=stick_law)
         new.start_from(self.su.x.copy(), self.history,
                        left_cut=bool(self.su.met[L.FIRST_ZERO_T] >= 0), t_s=self.t_s)
+        # a Hertz contact under way goes on with the damping it began with
+        contact = [L.CONTACT_ON, L.CONTACT_WALL, L.CONTACT_T0, L.CONTACT_VIN, L.CONTACT_PEAK,
+                   L.CONTACT_COUNTED, L.CONTACT_STEADY]
+        new.su.met[contact] = self.su.met[contact]
         return new
 
     def history(self, t) -> tuple[np.ndarray, np.ndarray]:
