@@ -21,6 +21,7 @@ void bind_exact(nb::module_& m);
 void bind_dynamics(nb::module_& m);
 void bind_history_map(nb::module_& m);
 void bind_forcing_setup(nb::module_& m);
+void bind_contact_law(nb::module_& m);
 }  // namespace bb::bind
 
 namespace {
@@ -84,4 +85,5 @@ NB_MODULE(core, m) {
     bb::bind::bind_dynamics(m);
     bb::bind::bind_history_map(m);
     bb::bind::bind_forcing_setup(m);
+    bb::bind::bind_contact_law(m);
 }

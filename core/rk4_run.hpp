@@ -207,8 +207,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     }
 
     // the step as an affine map where F_b cannot switch (linmap.hpp)
-    // (not with a compliant contact, whose force the map does not hold)
-    const bool linear = !regen && !q.stage_loop && !q.hertz;
+    const bool linear = !regen && !q.stage_loop;
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
     double sn = 0.0, cn = 1.0;
@@ -268,8 +267,13 @@ BB_INLINE void run_body(const RunArgs& a) {
             fz = map_friction(q, X[iyd]);
             use_map = map_fits(q, sh, mp, X, MapIn{sn, cn, fz}, true);
         }
+        if (use_map) map_increment(sh, mp, X, MapIn{sn, cn, fz}, dX);
+        // the map holds no contact force: a step in a compliant contact, or one that ends
+        // in one, takes the stages
+        if (use_map && q.hertz &&
+            (ep.on || !(std::fabs(X[sh.iy()] + dX[sh.iy()]) <= q.ball.half)))
+            use_map = false;
         if (use_map) {
-            map_increment(sh, mp, X, MapIn{sn, cn, fz}, dX);
             map_flows(q, sh, mp, fl, X, dX, MapIn{sn, cn, fz});
             for (int j = 0; j < nx; ++j) X[j] += dX[j];
             if (ball && q.hold) n_free += 1.0;  // the map slides

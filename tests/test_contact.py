@@ -21,18 +21,19 @@ import boringbar as bb
 from boringbar._validate import ParameterError
 from boringbar.cli.main import main
 from boringbar.model.bar import ModalModel
-from boringbar.model.contact import (
-    hertz_contact_time_s,
-    hertz_peak_force_n,
-    hunt_crossley_alpha,
-    hunt_crossley_restitution,
-)
+from boringbar.model.contact import hertz_contact_time_s, hertz_peak_force_n
 from boringbar.model.dampers import NO_FRICTION, ImpactDamper
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
 from boringbar.simulate import Initial, pack, setup_run
 from boringbar.simulate import layout as L
-from boringbar.simulate.kernels import regime_matrix, run_exact, run_rk4
+from boringbar.simulate.kernels import (
+    hunt_crossley_alpha,
+    hunt_crossley_restitution,
+    regime_matrix,
+    run_exact,
+    run_rk4,
+)
 
 GAP = 0.5e-3
 SPEED = 0.5  # m/s, the ball's start relative to the bar

@@ -6,9 +6,9 @@ Crossley's damping, F = K d^1.5 (1 + chi d'), with chi = alpha / v_in set per co
 from the speed v_in it begins with.  The restitution of such a contact depends on
 alpha = chi v_in alone: with d = L X, t = T s, L / T = v_in and m L / T^2 = K L^1.5 the
 equation m d'' = -K d^1.5 (1 + chi d') becomes X'' = -X^1.5 (1 + alpha X'), X(0) = 0,
-X'(0) = 1, and e = -X' where X returns to 0.  :func:`hunt_crossley_alpha` inverts
-that relation numerically, so that every contact of a free two-body impact restores
-exactly the restitution e the ball is given.
+X'(0) = 1, and e = -X' where X returns to 0.  The compiled core inverts that relation
+numerically (``boringbar.simulate.kernels.hunt_crossley_alpha``), so that every contact
+of a free two-body impact restores exactly the restitution e the ball is given.
 
 The closed forms of an elastic Hertz impact (Johnson, *Contact Mechanics*, 1985,
 section 11.4) are the truths the tests hold the kernel to:
@@ -18,12 +18,7 @@ t_c = (4/5) B(2/5, 1/2) d_max / v = 2.9432 d_max / v.
 
 from __future__ import annotations
 
-import functools
 import math
-
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
-from scipy.special import beta
 
 from boringbar._validate import ParameterError, check_positive
 
@@ -34,7 +29,7 @@ CONTACT_LAWS = ("impact", "hertz")
 #: step; the impact law takes any e in [0, 1].
 HERTZ_MIN_RESTITUTION = 0.05
 #: (4/5) B(2/5, 1/2): an elastic Hertz impact lasts this many d_max / v.
-HERTZ_TIME_FACTOR = 0.8 * beta(0.4, 0.5)
+HERTZ_TIME_FACTOR = 0.8 * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9)
 
 
 def effective_modulus_pa(e1_pa: float, nu1: float, e2_pa: float, nu2: float) -> float:
@@ -66,39 +61,14 @@ def hertz_peak_force_n(mass_kg: float, stiffness_n_m1_5: float, speed_m_s: float
                                                       speed_m_s) ** 1.5
 
 
-def hunt_crossley_restitution(alpha: float) -> float:
-    """The restitution of a free Hunt-Crossley impact with alpha = chi v_in (module
-    docstring), integrated to 1e-12 (the force never pulls: max(0, ...))."""
-    def rhs(_s, z):
-        x = max(z[0], 0.0)
-        return [z[1], -x**1.5 * max(0.0, 1.0 + alpha * z[1])]
-
-    def back(_s, z):
-        return z[0]
-
-    back.terminal, back.direction = True, -1
-    sol = solve_ivp(rhs, (0.0, 100.0), [0.0, 1.0], method="DOP853", rtol=1e-12, atol=1e-14,
-                    events=back, first_step=1e-6)
-    if not sol.t_events[0].size:
-        return 0.0  # held in the wall: no rebound within the span
-    return -float(sol.y_events[0][0][1])
-
-
-@functools.lru_cache(maxsize=64)
-def hunt_crossley_alpha(restitution: float) -> float:
-    """alpha = chi v_in whose free impact restores ``restitution`` (e), in
-    [HERTZ_MIN_RESTITUTION, 1]; 0 for e = 1."""
+def check_hertz_restitution(restitution) -> float:
+    """The restitution e a Hertz contact can be given, in [HERTZ_MIN_RESTITUTION, 1]."""
     e = restitution
-    if not HERTZ_MIN_RESTITUTION <= e <= 1.0:
+    if not (isinstance(e, int | float) and HERTZ_MIN_RESTITUTION <= e <= 1.0):
         raise ParameterError(f"restitution = {e!r} is outside the range a Hertz contact "
                              f"allows, [{HERTZ_MIN_RESTITUTION}, 1] (Hunt-Crossley's damping "
                              "grows without bound as e -> 0); use contact = 'impact'")
-    if e == 1.0:
-        return 0.0
-    hi = 1.0
-    while hunt_crossley_restitution(hi) > e:
-        hi *= 2.0
-    return brentq(lambda a: hunt_crossley_restitution(a) - e, 0.0, hi, xtol=1e-13, rtol=1e-13)
+    return float(e)
 
 
 def check_contact_stiffness(value) -> float:

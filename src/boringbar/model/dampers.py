@@ -20,9 +20,9 @@ from boringbar.model.bar import ModalModel
 from boringbar.model.contact import (
     CONTACT_LAWS,
     check_contact_stiffness,
+    check_hertz_restitution,
     effective_modulus_pa,
     hertz_stiffness_n_m1_5,
-    hunt_crossley_alpha,
 )
 from boringbar.model.materials import MATERIALS
 
@@ -159,7 +159,7 @@ class ImpactDamper:
         if self.contact_stiffness_n_m1_5 is not None:
             check_contact_stiffness(self.contact_stiffness_n_m1_5)
         if self.contact == "hertz":
-            hunt_crossley_alpha(float(self.restitution))  # e within the law's range
+            check_hertz_restitution(self.restitution)
             if self.contact_stiffness_n_m1_5 is None and self.material not in MATERIALS:
                 raise ParameterError(f"ball material = {self.material!r} has no elastic "
                                      "constants: a Hertz contact needs a "

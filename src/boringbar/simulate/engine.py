@@ -19,12 +19,18 @@ from boringbar._validate import (
     check_int,
     check_range,
 )
-from boringbar.model.contact import hertz_contact_time_s, hunt_crossley_alpha
+from boringbar.model.contact import hertz_contact_time_s
 from boringbar.model.dampers import ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.simulate import layout as L
-from boringbar.simulate.kernels import BMAX, run_exact, run_rk4, run_rk4_batch
+from boringbar.simulate.kernels import (
+    BMAX,
+    hunt_crossley_alpha,
+    run_exact,
+    run_rk4,
+    run_rk4_batch,
+)
 from boringbar.simulate.run import (
     HISTORY_ROWS,
     IMPACT_THRESHOLD,

@@ -14,6 +14,7 @@ package packs what the core cannot compute itself and calls it:
 - :func:`regime_matrix`, :func:`impact_matrix_of`: the equations of motion as matrices,
   built from the definitions the integrators step with (for shooting, in
   :mod:`boringbar.orbits`);
+- :func:`hunt_crossley_alpha`: a Hertz contact's damping for a restitution;
 - :func:`cut_history_map`: a periodic cut orbit's linearised map on its delay history
   (its Floquet multipliers, in :mod:`boringbar.orbits.cut_orbits`).
 
@@ -24,9 +25,12 @@ raises ``ValueError`` naming it; it releases the GIL for the whole integration, 
 run in parallel.
 """
 
+import functools
+
 import numpy as np
 
 from boringbar import core
+from boringbar.model.contact import check_hertz_restitution
 from boringbar.simulate import layout as L
 from boringbar.simulate.regimes import cut_tables, history_step, prepare
 
@@ -107,6 +111,19 @@ def impact_matrix_of(p: np.ndarray) -> np.ndarray:
     return core.impact_matrix(np.ascontiguousarray(p, float))
 
 
+@functools.lru_cache(maxsize=256)
+def hunt_crossley_alpha(restitution: float) -> float:
+    """alpha = chi v_in of the Hunt-Crossley damping whose free impact restores
+    ``restitution`` (model/contact.py), from the core; kept per restitution."""
+    return core.hunt_crossley_alpha(check_hertz_restitution(restitution))
+
+
+def hunt_crossley_restitution(alpha: float) -> float:
+    """The restitution of a free Hunt-Crossley impact with ``alpha`` = chi v_in, from the
+    core (RK4 at a dimensionless step of 1e-4)."""
+    return core.hunt_crossley_restitution(float(alpha))
+
+
 def cut_history_map(d, cols, base, weights, c, cv, v, periods: int) -> np.ndarray:
     """A periodic cut orbit's linearised map on its delay history, ``periods`` periods:
     ``v`` = [the (W, W') pairs of the history's nodes, oldest first; node 0's state].
@@ -118,5 +135,6 @@ def cut_history_map(d, cols, base, weights, c, cv, v, periods: int) -> np.ndarra
                                 np.ascontiguousarray(v, dtype=float), int(periods))
 
 
-__all__ = ["BMAX", "cut_history_map", "impact_matrix_of", "prepare", "regime_matrix",
-           "run_exact", "run_rk4", "run_rk4_batch"]
+__all__ = ["BMAX", "cut_history_map", "hunt_crossley_alpha", "hunt_crossley_restitution",
+           "impact_matrix_of", "prepare", "regime_matrix", "run_exact", "run_rk4",
+           "run_rk4_batch"]
