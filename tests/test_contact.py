@@ -25,6 +25,7 @@ from boringbar.model.contact import hertz_contact_time_s, hertz_peak_force_n
 from boringbar.model.dampers import NO_FRICTION, ImpactDamper
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
+from boringbar.orbits.shooting import make_flow
 from boringbar.simulate import Initial, pack, setup_run
 from boringbar.simulate import layout as L
 from boringbar.simulate.kernels import (
@@ -180,6 +181,8 @@ def test_python_refuses_a_bad_contact():
         ImpactDamper(contact="soft")
     with pytest.raises(ParameterError, match="integrator = 'exact'"):
         free_pair(0.7, integrator="exact")
+    with pytest.raises(ParameterError, match="contact = 'hertz'"):
+        make_flow(make_system("ball", contact="hertz"), bb.Harmonic(amplitude_n=10.0))
 
 
 def test_a_system_file_gives_the_contact():

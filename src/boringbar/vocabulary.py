@@ -105,7 +105,7 @@ UNIT_ELSEWHERE = frozenset({
     # a direction's entry under a quantity's key ({"rms_tip_m": {"forward": [...]}})
     "forward", "backward",
     # records whose columns the docstring names (time s, W m, ...)
-    "impacts", "sticks", "strobe", "history",
+    "impacts", "sticks", "strobe", "history", "contacts",
     # a design search's statistic, in its objective's unit (``objective_name``: m, m/N, 1)
     "objective_error", "published_objective", "objectives", "published_objectives",
     "published_samples", "improvement", "improvement_interval",

@@ -49,8 +49,8 @@ from threadpoolctl import threadpool_limits
 from boringbar._validate import ParameterError
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
+from boringbar.simulate import hertz, pack
 from boringbar.simulate import layout as L
-from boringbar.simulate import pack
 from boringbar.simulate.kernels import impact_matrix_of, regime_matrix
 
 #: Event-search grid steps per forcing period.
@@ -119,6 +119,9 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
     harmonic forcing."""
     if not isinstance(forcing, Harmonic):
         raise ParameterError(f"forcing = {forcing!r} must be Harmonic for shooting")
+    if hertz(system):
+        raise ParameterError("contact = 'hertz': periodic orbits are shot with the impact "
+                             "law's maps; give the ball contact = 'impact'")
     omega = forcing.omega(system.reference_frequency_rad_s)
     p = pack(system, omega, forcing.amplitude_n, 1e-6)
     bar = system.bar

@@ -13,6 +13,7 @@ from boringbar.simulate.engine import (
     RunSetup,
     check_cut_law,
     check_friction_law,
+    hertz,
     initial_state,
     pack,
     pack_cut,
@@ -54,7 +55,7 @@ __all__ = [
     "PUBLISHED_DT_S", "fixed_run_step",
     "STEADY_FRACTION", "STICK_LAWS", "STICK_MIN_PERIODS", "CutStepper", "Initial", "Integration",
     "IntegrationError", "Run", "RunSetup", "State", "Window", "check_cut_law",
-    "check_friction_law", "initial_state", "knocked_cut", "pack", "pack_cut",
+    "check_friction_law", "hertz", "initial_state", "knocked_cut", "pack", "pack_cut",
     "resolve_integrator", "resolved_integrators", "run_kernel", "run_result", "setup_run",
     "simulate", "simulate_batch", "simulate_stage_loop", "stick_slip", "stored_energy",
 ]
