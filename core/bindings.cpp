@@ -46,6 +46,7 @@ std::map<std::string, int> layout_names() {
     out["PSI_L"] = PSI_L;
     out["PSI_D"] = PSI_D;
     out["PSI_A"] = PSI_A;
+    out["PSI_F"] = PSI_F;
     out["P_SIZE"] = P_SIZE;
     out["MET_SIZE"] = MET_SIZE;
     out["CONTACT_NCOL"] = CONTACT_NCOL;
@@ -78,7 +79,7 @@ NB_MODULE(core, m) {
           "The packed parameter vector's and the metric vector's slots, by name.");
     m.def("param_names", &param_names,
           "The scalar slots of the packed parameter vector, in order; the per-mode blocks "
-          "M_, K_, C_, PSI_L, PSI_D, PSI_A of NMAX entries each follow them.");
+          "M_, K_, C_, PSI_L, PSI_D, PSI_A, PSI_F of NMAX entries each follow them.");
     m.def("metric_names", &metric_names, "The metric vector's slots, in order.");
     bb::bind::bind_rk4(m);
     bb::bind::bind_exact(m);

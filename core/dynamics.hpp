@@ -27,8 +27,8 @@ namespace L = layout;
 constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2
 
 // Mode i's acceleration under the tip force f alone, without the damper's force, from the
-// premultiplied constants fm = psi_L,i / M_i, km = K_i / M_i, cm = C_i / M_i (Params):
-// a_i = psi_L,i f / M_i - K_i u_i / M_i - C_i u_i' / M_i.  T is real for a state, complex
+// premultiplied constants fm = psi_F,i / M_i, km = K_i / M_i, cm = C_i / M_i (Params):
+// a_i = psi_F,i f / M_i - K_i u_i / M_i - C_i u_i' / M_i.  T is real for a state, complex
 // for the exact integrator's modal coefficients.
 template <class T>
 BB_INLINE T free_acceleration(double fm, double km, double cm, T f, T u, T v) {
@@ -46,7 +46,7 @@ BB_INLINE void jump_modes(int n, const double* pD, const double* invM, double* X
 struct Params {
     int n = 0, kase = 0;
     bool regen = false, stage_loop = false;
-    double C[L::NMAX], pL[L::NMAX], pD[L::NMAX], pA[L::NMAX], invM[L::NMAX];
+    double C[L::NMAX], pL[L::NMAX], pD[L::NMAX], pA[L::NMAX], pF[L::NMAX], invM[L::NMAX];
     double fm[L::NMAX], km[L::NMAX], cm[L::NMAX], dm[L::NMAX], lm[L::NMAX];
     double kappa;  // 1/m + sum psi_d dm: y'' = kappa F_b - sum psi_d a_free
     // F_b, dm F_b and kappa F_b for y' > 0, y' = 0, y' < 0 (F_b = -F_c, 0, F_c), each in
@@ -153,7 +153,8 @@ inline Params unpack(const double* p, double dt) {
         q.pL[i] = p[L::PSI_L + i];
         q.pD[i] = p[L::PSI_D + i];
         q.pA[i] = p[L::PSI_A + i];
-        q.fm[i] = q.pL[i] * q.invM[i];
+        q.pF[i] = p[L::PSI_F + i];
+        q.fm[i] = q.pF[i] * q.invM[i];
         q.km[i] = p[L::K_ + i] * q.invM[i];
         q.cm[i] = q.C[i] * q.invM[i];
         q.dm[i] = q.sr * q.pD[i] * q.invM[i];
@@ -215,7 +216,7 @@ BB_INLINE double sign_pick(SignMask m, const v2* by_sign) {
 
 // What a stage's energy flows need besides the derivative.
 struct StageTerms {
-    double wd;     // W' = sum psi_L u'
+    double wf;     // the force's point velocity sum psi_F u' (psi_F = psi_L: W')
     double pvisc;  // sum c v^2 of the dashpots
     double fb;     // friction force on the ball
     double yds;    // ball's y'
@@ -249,7 +250,8 @@ BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
 }
 
 // The stage derivative Kd at the stage state Xs under the force f at the tip: the bar
-// M_i u_i'' + C_i u_i' + K_i u_i = psi_L,i f with the damper's terms (docs/model.md, 2),
+// M_i u_i'' + C_i u_i' + K_i u_i = psi_F,i f with the damper's terms (docs/model.md, 2;
+// psi_F = psi_L but in an oriented cut, section 4.5),
 // written with premultiplied constants and the stage velocity last, so that little of
 // it waits on the previous stage.
 //
@@ -273,7 +275,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         const double ai = free_acceleration(q.fm[i], q.km[i], q.cm[i], f, Xs[i], vi);
         Kd[n + i] = ai;
         sfree = (FAST && sh.ball() && i == 0) ? q.pD[i] * ai : sfree + q.pD[i] * ai;
-        t.wd += q.pL[i] * vi;
+        t.wf += q.pF[i] * vi;
         t.pvisc += q.C[i] * vi * vi;
     }
     double ydd = 0.0;

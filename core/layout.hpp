@@ -63,7 +63,10 @@ constexpr int C_ = K_ + NMAX;
 constexpr int PSI_L = C_ + NMAX;
 constexpr int PSI_D = PSI_L + NMAX;
 constexpr int PSI_A = PSI_D + NMAX;
-constexpr int P_SIZE = PSI_A + NMAX;
+// the force's shape at the tip: psi_L of the force's direction where it differs from the
+// chip's (an oriented cut, docs/model.md, section 4.5); psi_L itself otherwise
+constexpr int PSI_F = PSI_A + NMAX;
+constexpr int P_SIZE = PSI_F + NMAX;
 
 // metric slots of met
 #define BB_METRICS(X)                                                                      \

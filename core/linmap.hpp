@@ -94,8 +94,8 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
                 mp.Vr[s - 1][n][col] = reld;
             }
             for (int j = 0; j < nx; ++j) acc[j] += wst[s] * Kd[j];
-            fs += wst[s] * q.f0 * alpha[s] * t.wd;
-            fc += wst[s] * q.f0 * beta[s] * t.wd;
+            fs += wst[s] * q.f0 * alpha[s] * t.wf;
+            fc += wst[s] * q.f0 * beta[s] * t.wf;
         }
         for (int j = 0; j < nx; ++j) mp.Pd[j][col] = acc[j];
         // sum_s b_s f_s W'_s with f_s = F0 (alpha_s S + beta_s C) is S (Fs . z) + C (Fc . z)

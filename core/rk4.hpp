@@ -83,7 +83,7 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
         fl.d_fric -= w_s * s.fb * s.yds;
         fl.w_nr += w_s * (1.0 - q.sr) * s.fb * s.pdv;
     }
-    fl.w_force += w_s * f * s.wd;
+    fl.w_force += w_s * f * s.wf;
     fl.d_visc += w_s * s.pvisc;
     if (sh.ball() && q.hertz) fl.d_con += w_s * s.pcon;
 }

@@ -317,18 +317,23 @@ def case_builders() -> dict:
 def current_params(stored: np.ndarray, param_names) -> np.ndarray:
     """A stored parameter vector (or the rows of a batch's P) in the core's layout today:
     ``param_names`` are the scalar slots of the stored layout, in order (the file's
-    ``_param_names``), followed by the per-mode blocks; each stored slot goes where its
-    name is now, and slots added since stay 0 (the linear cutting law, no force noise)."""
+    ``_param_names``), followed by the per-mode blocks (the first of L.PARAM_BLOCKS, as
+    many as it holds); each stored slot goes where its name is now, slots added since stay
+    0 (the linear cutting law, no force noise, the impact law) and a block added since
+    is the one it defaults to (PSI_F: PSI_L)."""
     stored = np.asarray(stored, dtype=float)
     nmax, ns = L.NMAX, len(param_names)
-    if stored.shape[-1] != ns + nmax * len(L.PARAM_BLOCKS):
+    nblocks = (stored.shape[-1] - ns) // nmax
+    if stored.shape[-1] != ns + nmax * nblocks or not 0 < nblocks <= len(L.PARAM_BLOCKS):
         raise ValueError(f"a stored p of {stored.shape[-1]} slots is not the stored layout")
     out = np.zeros(stored.shape[:-1] + (L.P_SIZE,))
     for i, name in enumerate(param_names):
         out[..., getattr(L, str(name))] = stored[..., i]
-    for k, name in enumerate(L.PARAM_BLOCKS):
+    for k, name in enumerate(L.PARAM_BLOCKS[:nblocks]):
         at = getattr(L, name)
         out[..., at:at + nmax] = stored[..., ns + k * nmax:ns + (k + 1) * nmax]
+    if "PSI_F" not in L.PARAM_BLOCKS[:nblocks]:  # stored before it: the force at the tip
+        out[..., L.PSI_F:L.PSI_F + nmax] = out[..., L.PSI_L:L.PSI_L + nmax]
     return out
 
 

@@ -8,7 +8,7 @@ import json
 import math
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from boringbar._validate import ParameterError, check_int, check_range
@@ -29,6 +29,7 @@ from boringbar.model.forcing import (
 )
 from boringbar.model.measured_frf import CSV_SUFFIXES, UFF_SUFFIXES, read_frf
 from boringbar.model.modal_fit import ModalFit
+from boringbar.model.oriented import CutGeometry
 from boringbar.model.system import (
     BALLS,
     BAR_KINDS,
@@ -99,6 +100,7 @@ def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
     g.add_argument("--tmd-design", choices=("given", "published", "den-hartog", "sims"),
                    help="TMD tuning: given (the system file's absorber; published: the same), "
                         "den-hartog or sims (default: physical the file's tuning, paper given)")
+    add_orientation(p)
 
     g = groups["run"] = p.add_argument_group("forcing and integration")
     if harmonic and many:
@@ -171,6 +173,64 @@ def add_ball(g, lst: str, swept: str, ranges: bool, many: bool) -> None:
     g.add_argument("--contact-stiffness", type=float, metavar="K",
                    help="a Hertz contact's stiffness K in N/m^1.5, > 0 (default: Hertz's "
                         "from the ball's and the plug's materials)")
+
+
+#: --planes and the oriented cut's options, by CutGeometry field
+ORIENTATION_OPTIONS = {"force_ratio": "--force-ratio", "lead_angle_deg": "--lead-angle-deg",
+                       "hole_angle_deg": "--hole-angle-deg",
+                       "principal_angle_deg": "--principal-angle-deg",
+                       "stiffness_ratio": "--stiffness-ratio"}
+
+
+def add_orientation(p) -> None:
+    """Two bending planes and the oriented cut (docs/model.md, section 4.5)."""
+    g = p.add_argument_group("two bending planes and an oriented cut (docs/model.md, 4.5)")
+    g.add_argument("--planes", type=int, choices=(1, 2),
+                   help="bending planes: 1 (the published one direction) or 2 (default: the "
+                        "system file's [orientation], else 1; 2 with any option below)")
+    g.add_argument("--force-ratio", type=float, metavar="KT/KR",
+                   help="tangential over edge-normal cutting coefficient, in [0, 100] "
+                        "(default 0: the published radial force)")
+    g.add_argument("--lead-angle-deg", type=float, metavar="DEG",
+                   help="the edge normal's angle from the radial direction, in [0, 90) "
+                        "(default 0: the published cut)")
+    g.add_argument("--hole-angle-deg", type=float, metavar="DEG",
+                   help="the ball cavity's axis in the section, from the radial direction, "
+                        "in [-90, 90] (default 0)")
+    g.add_argument("--principal-angle-deg", type=float, metavar="DEG",
+                   help="the bar's first principal bending plane, in [-90, 90] (default 0)")
+    g.add_argument("--stiffness-ratio", type=float, metavar="R",
+                   help="EI of the second bending plane over the first's, in (0, 1000] "
+                        "(default 1: a round bar)")
+
+
+def check_orientation(args) -> None:
+    """The oriented cut's options, each in its range (CutGeometry's)."""
+    ranges = {"force_ratio": (0, 100, False, False), "lead_angle_deg": (0, 90, False, True),
+              "hole_angle_deg": (-90, 90, False, False),
+              "principal_angle_deg": (-90, 90, False, False),
+              "stiffness_ratio": (0, 1000, True, False)}
+    for name, (lo, hi, lo_open, hi_open) in ranges.items():
+        value = getattr(args, name, None)
+        if value is not None:
+            check_range(ORIENTATION_OPTIONS[name], value, lo, hi, lo_open=lo_open,
+                        hi_open=hi_open, unit="degrees" if name.endswith("_deg") else "")
+
+
+def orientation_overrides(args) -> dict:
+    """make_system's ``planes`` and ``cut_geometry`` from the options given (the system
+    file's orientation for the rest); empty if none is given."""
+    given = {k: getattr(args, k) for k in ORIENTATION_OPTIONS
+             if getattr(args, k, None) is not None}
+    planes = getattr(args, "planes", None)
+    if not given:
+        return {} if planes is None else {"planes": planes}
+    if planes == 1:
+        raise ParameterError(f"{ORIENTATION_OPTIONS[next(iter(given))]} applies to a bar of "
+                             "two bending planes: give --planes 2 (or leave it out)")
+    spec = getattr(args, "system_spec", None)
+    base = spec.orientation if spec is not None else CutGeometry()
+    return {"planes": 2, "cut_geometry": replace(base, **given)}
 
 
 def add_cutting(g) -> None:
@@ -301,6 +361,7 @@ def check_common(args, bars: list[str]) -> None:
         check_range("--static-ratio", args.static_ratio, 1, math.inf, hi_open=True)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, 0, 1)
+    check_orientation(args)
     if args.contact_stiffness is not None:
         check_range("--contact-stiffness", args.contact_stiffness, 0, math.inf, lo_open=True,
                     hi_open=True, unit="N/m^1.5")
@@ -489,6 +550,7 @@ def system_overrides(args) -> dict:
           "tmd_design": args.tmd_design, "locked": args.locked or None,
           "static_ratio": args.static_ratio, "spec": args.system_spec,
           "contact": args.contact, "contact_stiffness_n_m1_5": args.contact_stiffness,
+          **orientation_overrides(args),
           "modal": args.frf_modal}
     return {k: v for k, v in kw.items() if v is not None}
 

@@ -90,6 +90,14 @@ class ModalModel:
     the ball ``z_damper_m`` and at the absorber ``z_absorber_m`` (m from the clamp);
     ``source``: where the model came from ("fe", "tap-test", with a calibration
     note appended); ``info``: free-form provenance.
+
+    ``psi_force``: the shape the cutting or harmonic force enters each mode by, where it
+    differs from ``psi_tip``, the shape the chip thickness and the reported tip
+    displacement W read (an oriented cut in two bending planes,
+    :func:`boringbar.model.oriented.oriented_model`; docs/model.md, section 4.5); None:
+    ``psi_tip`` (a force along the direction W is measured in).  In an oriented model a
+    mode of a bar of two planes may have psi_tip = 0 (it bends across the chip), but the
+    first may not.
     """
 
     mass_kg: np.ndarray  #: modal masses M_i (kg, in the units the mode is normalised)
@@ -102,11 +110,14 @@ class ModalModel:
     z_absorber_m: float = ABSORBER_POSITION
     source: str = "fe"  #: "fe", "tap-test", or with a calibration note appended
     info: dict = field(default_factory=dict)
+    psi_force: np.ndarray | None = None  #: the force's shape at the tip (None: psi_tip)
 
     def __post_init__(self):
         n = len(np.atleast_1d(self.mass_kg))
+        if self.psi_force is None:
+            object.__setattr__(self, "psi_force", self.psi_tip)
         for name in ("mass_kg", "stiffness_n_m", "damping_ratio", "psi_tip", "psi_damper",
-                     "psi_absorber"):
+                     "psi_absorber", "psi_force"):
             arr = np.atleast_1d(np.asarray(getattr(self, name), dtype=float)).copy()
             if arr.shape != (n,):
                 raise ValueError(f"modal model: {name} has shape {arr.shape}, expected ({n},)")
@@ -119,10 +130,18 @@ class ModalModel:
             check_positive(f"modal stiffness of mode {i + 1}", self.stiffness_n_m[i])
             check_range(f"damping ratio of mode {i + 1}", self.damping_ratio[i], 0.0, 1.0,
                         hi_open=True)
-        if n < 1 or np.any(self.psi_tip == 0.0):
+        # (a bar of two planes may have modes that bend across the chip, psi_tip = 0;
+        # the first carries the tip's normalisation)
+        planes = self.info.get("planes", 1) == 2
+        if n < 1 or self.psi_tip[0] == 0.0 or (not planes and np.any(self.psi_tip == 0.0)):
             raise ValueError("modal model: every mode needs a non-zero tip value psi_tip")
 
     # --- derived quantities -------------------------------------------------
+    @property
+    def oriented(self) -> bool:
+        """The force enters the modes by a shape of its own (psi_force != psi_tip)."""
+        return not np.array_equal(self.psi_force, self.psi_tip)
+
     @property
     def n_modes(self) -> int:
         return len(self.mass_kg)
@@ -163,7 +182,8 @@ class ModalModel:
         n = int(n_modes)
         return replace(self, mass_kg=self.mass_kg[:n], stiffness_n_m=self.stiffness_n_m[:n],
                        damping_ratio=self.damping_ratio[:n], psi_tip=self.psi_tip[:n],
-                       psi_damper=self.psi_damper[:n], psi_absorber=self.psi_absorber[:n])
+                       psi_damper=self.psi_damper[:n], psi_absorber=self.psi_absorber[:n],
+                       psi_force=self.psi_force[:n])
 
     def with_first_frequency(self, frequency_hz: float) -> ModalModel:
         """Keep masses and mode shapes, scale every K so that f1 = ``frequency_hz``.
@@ -185,7 +205,7 @@ class ModalModel:
         s = np.broadcast_to(np.asarray(scale, dtype=float), (self.n_modes,))
         return replace(self, mass_kg=self.mass_kg * s**2, stiffness_n_m=self.stiffness_n_m * s**2,
                        psi_tip=self.psi_tip * s, psi_damper=self.psi_damper * s,
-                       psi_absorber=self.psi_absorber * s)
+                       psi_absorber=self.psi_absorber * s, psi_force=self.psi_force * s)
 
     def to_dict(self) -> dict:
         return {
@@ -200,6 +220,7 @@ class ModalModel:
             "psi_absorber": self.psi_absorber.tolist(),
             "z_damper_m": self.z_damper_m,
             "z_absorber_m": self.z_absorber_m,
+            **({"psi_force": self.psi_force.tolist()} if self.oriented else {}),
             **{k: v for k, v in self.info.items()},
         }
 
@@ -209,12 +230,12 @@ class ModalModel:
         known = {"source", "n_modes", "natural_frequencies_hz", "modal_mass_kg",
                  "modal_stiffness_n_m",
                  "damping_ratio", "psi_tip", "psi_damper", "psi_absorber", "z_damper_m",
-                 "z_absorber_m"}
+                 "z_absorber_m", "psi_force"}
         return cls(mass_kg=d["modal_mass_kg"], stiffness_n_m=d["modal_stiffness_n_m"],
                    damping_ratio=d["damping_ratio"], psi_tip=d["psi_tip"],
                    psi_damper=d["psi_damper"], psi_absorber=d["psi_absorber"],
                    z_damper_m=d["z_damper_m"], z_absorber_m=d["z_absorber_m"],
-                   source=d["source"],
+                   source=d["source"], psi_force=d.get("psi_force"),
                    info={k: v for k, v in d.items() if k not in known})
 
     @classmethod

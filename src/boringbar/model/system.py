@@ -31,6 +31,7 @@ from boringbar.model.dampers import (
     sims_tuning,
 )
 from boringbar.model.materials import MATERIALS
+from boringbar.model.oriented import CutGeometry, oriented_model
 from boringbar.model.system_file import SystemSpec, parse_system, published_system
 
 PRESETS = ("physical", "paper")
@@ -144,7 +145,8 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
                 tmd_design: str | None = None, modal: ModalModel | None = None,
                 static_ratio: float | None = None, spec: SystemSpec | None = None,
                 contact: str | None = None,
-                contact_stiffness_n_m1_5: float | None = None) -> System:
+                contact_stiffness_n_m1_5: float | None = None, planes: int | None = None,
+                cut_geometry: CutGeometry | None = None) -> System:
     """Build one of the three bars of a system file under a preset, with explicit
     overrides.
 
@@ -173,7 +175,11 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     stick-slip (exact integrator only; see :class:`Friction`).  ``contact``: the
     ball's contact law, "impact" or "hertz", and ``contact_stiffness_n_m1_5`` (N/m^1.5)
     a Hertz contact's K (default: the file's, else Hertz's from the materials; see
-    :class:`ImpactDamper`).
+    :class:`ImpactDamper`).  ``planes``: 2 for the bar's modes in both bending planes
+    under the oriented cut ``cut_geometry`` (a :class:`CutGeometry`: force ratio, lead
+    angle, the cavity's and the principal planes' angles, the planes' stiffness ratio;
+    docs/model.md, section 4.5); ``n_modes`` then counts the modes of each plane.
+    Default: the file's ``[orientation]``, else one plane.
     """
     if isinstance(bar, SystemSpec):
         raise TypeError(f"bar = the system file {bar.name!r}: make_system's first argument "
@@ -184,6 +190,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
     modal, readings = _modal(spec, bar, paper, n_modes, z_absorber_m, modal)
+    modal = _planes(spec, modal, planes, cut_geometry)
     if bar == "solid":
         return System(modal, None, preset, tuple(readings), spec)
     if bar == "tmd":
@@ -211,6 +218,18 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
         contact_stiffness_n_m1_5=(b.contact_stiffness_n_m1_5 if contact_stiffness_n_m1_5 is None
                                   else contact_stiffness_n_m1_5))
     return System(modal, damper, preset, tuple(readings), spec)
+
+
+def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry) -> ModalModel:
+    """``modal`` in both bending planes under the oriented cut, where asked."""
+    planes = spec.planes if planes is None else planes
+    check_choice("planes", planes, (1, 2))
+    if planes == 1:
+        if geometry is not None:
+            raise ParameterError("cut_geometry applies to a bar of two bending planes: give "
+                                 "planes = 2")
+        return modal
+    return oriented_model(modal, spec.orientation if geometry is None else geometry)
 
 
 def _modal(spec: SystemSpec, bar: str, paper: bool, n_modes, z_absorber, modal):

@@ -32,6 +32,7 @@ from boringbar.model.bar import ModalModel, Section, SteppedBar
 from boringbar.model.contact import CONTACT_LAWS, HERTZ_MIN_RESTITUTION
 from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
 from boringbar.model.materials import MATERIALS
+from boringbar.model.oriented import CutGeometry
 
 #: The file the presets build from.
 PUBLISHED_FILE = "published.toml"
@@ -42,7 +43,8 @@ TUNINGS = ("den-hartog", "sims", "given")
 FRICTION_FORMS = {"published_number": "published-number", "rolling_mm": "rolling",
                   "coulomb": "coulomb", "force_n": "force", "none": "none"}
 REACTIONS = ("reciprocal", "printed")
-_TOP_KEYS = ("name", "description", "bar", "clamp", "cavity", "ball", "tmd", "paper")
+_TOP_KEYS = ("name", "description", "bar", "clamp", "cavity", "ball", "tmd", "paper",
+             "orientation")
 
 
 class SystemFileError(ParameterError):
@@ -108,7 +110,9 @@ class SystemSpec:
     ``damping_ratio`` one ratio per mode (a 1-tuple applies to all); ``n_modes`` None:
     the preset's; ``calibration``: f1 (Hz) by bar ("ball", "solid") that the
     paper preset calibrates to; ``name``: the bar's name; ``data``: the resolved description
-    (:meth:`to_dict`); ``source``: the file."""
+    (:meth:`to_dict`); ``source``: the file; ``planes``: 1, or 2 for the bar's modes in both
+    bending planes under the oriented cut ``orientation`` (a CutGeometry; the file's
+    ``[orientation]``)."""
 
     bar: SteppedBar
     damping_ratio: tuple[float, ...]
@@ -120,6 +124,10 @@ class SystemSpec:
     name: str
     data: dict = field(repr=False)
     source: str = "<dict>"
+    #: the bending planes (1: the published one direction; 2: docs/model.md, section
+    #: 4.5) and the oriented cut's geometry
+    planes: int = 1
+    orientation: CutGeometry = field(default_factory=CutGeometry)
 
     @property
     def ball_position_m(self) -> float:
@@ -287,13 +295,36 @@ def parse_system(d: dict, source: str = "<dict>") -> SystemSpec:
     ball, ball_data = _ball(r, d, bar, cavity)
     tmd, tmd_data = _tmd(r, d, bar)
     calibration = _paper(r, d)
+    planes, orientation, orient_data = _orientation(r, d)
     name = r.text(d, "name", Path(source).stem if source not in ("<dict>", "") else "system")
     data = {"name": name, "description": r.text(d, "description", ""), **bar_data,
-            **cav_data, **ball_data, **tmd_data}
+            **cav_data, **ball_data, **tmd_data, **orient_data}
     if calibration:
         data["paper"] = {f"first_frequency_hz_{k}": v for k, v in calibration.items()}
     return SystemSpec(bar, damping, n_modes, cavity, ball, tmd, calibration, name, data,
-                      source)
+                      source, planes, orientation)
+
+
+_ORIENTATION_KEYS = ("planes", "force_ratio", "lead_angle_deg", "hole_angle_deg",
+                     "principal_angle_deg", "stiffness_ratio")
+
+
+def _orientation(r: _Reader, d: dict):
+    """[orientation]: the bending planes and the oriented cut (model/oriented.py)."""
+    if "orientation" not in d:
+        return 1, CutGeometry(), {}
+    t = r.table(d["orientation"], "orientation", _ORIENTATION_KEYS)
+    planes = r.choice(t, "orientation.planes", (1, 2), default=2)
+    ratio = r.number(t, "orientation.force_ratio", 0, 100, default=0.0)
+    lead = r.number(t, "orientation.lead_angle_deg", 0, 90, default=0.0, hi_open=True,
+                    unit="degrees (90: no regeneration in the model)")
+    hole = r.number(t, "orientation.hole_angle_deg", -90, 90, default=0.0,
+                    unit="degrees (the cavity's axis through the section)")
+    principal = r.number(t, "orientation.principal_angle_deg", -90, 90, default=0.0,
+                         unit="degrees")
+    stiff = r.number(t, "orientation.stiffness_ratio", 0, 1e3, default=1.0, lo_open=True)
+    geometry = CutGeometry(ratio, lead, hole, principal, stiff)
+    return planes, geometry, {"orientation": {"planes": planes, **geometry.to_dict()}}
 
 
 _BAR_KEYS = ("material", "youngs_modulus_gpa", "density_kg_m3", "damping_ratio", "modes",

@@ -219,9 +219,10 @@ def _eigen_orbit(system, model: CutModel, b: float, f: float, tau: float, m: int
     bar, tmd, added = linear_host(system)
     w = 2.0 * math.pi * f
     z = dynamic_stiffness(bar, np.array([w]), tmd, float(added))[0]
-    p = np.zeros(len(z))
+    p, pf = np.zeros(len(z)), np.zeros(len(z))
     p[: bar.n_modes] = bar.psi_tip
-    u = np.linalg.solve(z, p)
+    pf[: bar.n_modes] = bar.psi_force
+    u = np.linalg.solve(z, pf)
     u = u / (p @ u)
     phi = np.concatenate([u, 1j * w * u])
     t = np.arange(m) / (m * f)

@@ -97,12 +97,13 @@ def cut_model(system: System, forcing: Regenerative) -> CutModel:
     mass = stiff - z[1].real
     damp = z[1].imag
     d = len(stiff)
-    p = np.zeros(d)
+    p, pf = np.zeros(d), np.zeros(d)
     p[: bar.n_modes] = bar.psi_tip
+    pf[: bar.n_modes] = bar.psi_force  # the force's shape (psi_tip but in an oriented cut)
     inv = np.linalg.inv(mass)
     a = np.block([[np.zeros((d, d)), np.eye(d)], [-inv @ stiff, -inv @ damp]])
     zero = np.zeros(d)
-    return CutModel(a=a, g=np.concatenate([zero, inv @ p]), c=np.concatenate([p, zero]),
+    return CutModel(a=a, g=np.concatenate([zero, inv @ pf]), c=np.concatenate([p, zero]),
                     cv=np.concatenate([zero, p]), feed=forcing.feed_m,
                     revolutions=forcing.revolutions,
                     law=cutting_law(forcing.kr_pa, forcing.workpiece))

@@ -119,6 +119,10 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
     harmonic forcing."""
     if not isinstance(forcing, Harmonic):
         raise ParameterError(f"forcing = {forcing!r} must be Harmonic for shooting")
+    if system.bar.oriented:
+        raise ParameterError("an oriented cut's bar (psi_force != psi_tip): periodic orbits "
+                             "are shot with the force along the tip's direction; use the "
+                             "bar of one bending plane")
     if hertz(system):
         raise ParameterError("contact = 'hertz': periodic orbits are shot with the impact "
                              "law's maps; give the ball contact = 'impact'")
@@ -149,7 +153,7 @@ def packed(fl: Flow) -> np.ndarray:
     p[L.F0] = fl.amplitude
     p[L.OMEGA] = fl.omega
     for slot, values in ((L.M_, fl.M), (L.K_, fl.K), (L.C_, fl.C), (L.PSI_L, fl.psi_tip),
-                         (L.PSI_D, fl.psi_d), (L.PSI_A, fl.psi_a)):
+                         (L.PSI_D, fl.psi_d), (L.PSI_A, fl.psi_a), (L.PSI_F, fl.psi_tip)):
         if values is not None:
             p[slot:slot + n] = values
     p[L.BALL_MASS] = fl.m

@@ -64,7 +64,7 @@ def tip_frf(
     check_nonnegative("added_mass_kg", added_mass_kg, "kg")
     z = dynamic_stiffness(bar, w.ravel(), tmd, float(added_mass_kg))
     rhs = np.zeros(z.shape[:2] + (1,), dtype=complex)
-    rhs[:, : bar.n_modes, 0] = bar.psi_tip
+    rhs[:, : bar.n_modes, 0] = bar.psi_force  # (psi_tip but in an oriented cut)
     u = np.linalg.solve(z, rhs)[:, : bar.n_modes, 0]
     return (u @ bar.psi_tip).reshape(w.shape)
 
@@ -98,8 +98,9 @@ def _check_position(bar, tmd) -> None:
 
 
 def static_tip_compliance(bar) -> float:
-    """Static tip compliance of the retained modes, sum_i psi_L,i^2 / K_i (m/N)."""
-    return float(np.sum(bar.psi_tip**2 / bar.stiffness_n_m))
+    """Static tip compliance of the retained modes, sum_i psi_L,i psi_F,i / K_i (m/N;
+    psi_F = psi_L but in an oriented cut)."""
+    return float(np.sum(bar.psi_tip * bar.psi_force / bar.stiffness_n_m))
 
 
 # --- the most negative real part ------------------------------------------------

@@ -38,7 +38,7 @@ def knocked_cut(system: System, forcing: Regenerative, knock_m: float,
     check_range("knock_m", knock_m, 0.0, MAX_INITIAL_DISPLACEMENT, unit="m")
     bar, n = system.bar, system.bar.n_modes
     x = initial_state(system, Initial(ball_position_m=ball_position_m))
-    x[:n] += bar.psi_tip * forcing.mean_force_n / bar.stiffness_n_m
+    x[:n] += bar.psi_force * forcing.mean_force_n / bar.stiffness_n_m
     impulse = knock_m * bar.natural_frequency_rad_s / float(np.sum(bar.psi_tip**2 / bar.mass_kg))
     x[n:2 * n] = bar.psi_tip * impulse / bar.mass_kg
     if system.kind == "tmd":

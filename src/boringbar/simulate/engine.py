@@ -75,6 +75,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
     p[L.PSI_L:L.PSI_L + n] = bar.psi_tip
     p[L.PSI_D:L.PSI_D + n] = bar.psi_damper
     p[L.PSI_A:L.PSI_A + n] = bar.psi_absorber
+    p[L.PSI_F:L.PSI_F + n] = bar.psi_force
     p[L.REACTION] = 1.0
     d = system.damper
     kind = system.kind
@@ -193,15 +194,20 @@ def hertz(system: System) -> bool:
 def resolve_integrator(integrator: str, system: System, cutting: bool = False) -> str:
     """``integrator``, or for "auto": "rk4" under the ``paper`` preset (the published
     scheme), in cuts (``cutting``: RK4 is faster there, docs/exact.md) unless
-    :func:`stick_slip`, and with a Hertz contact (:func:`hertz`, RK4's alone), else
+    :func:`stick_slip`, and with a Hertz contact (:func:`hertz`) or an oriented cut
+    (``bar.oriented``), RK4's alone, else
     "exact" (exact at events, about 14x faster than RK4)."""
     check_choice("integrator", integrator, INTEGRATOR_CHOICES)
     if integrator == "exact" and hertz(system):
         raise ParameterError("integrator = 'exact' takes the impact law; a ball with contact "
                              "= 'hertz' needs integrator = 'rk4' (or 'auto')")
+    if integrator == "exact" and system.bar.oriented:
+        raise ParameterError("integrator = 'exact' takes a force along the chip's direction; "
+                             "an oriented cut (two bending planes, psi_force != psi_tip) "
+                             "needs integrator = 'rk4' (or 'auto')")
     if integrator != "auto":
         return integrator
-    if hertz(system):
+    if hertz(system) or system.bar.oriented:
         return "rk4"
     return "rk4" if (system.preset == "paper" or cutting) and not stick_slip(system) \
         else "exact"
@@ -324,7 +330,7 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
     if cutting:
         # static deflection under the mean force, mode by mode (absorber relaxed)
         bar = system.bar
-        u_static = bar.psi_tip * forcing.mean_force_n / bar.stiffness_n_m
+        u_static = bar.psi_force * forcing.mean_force_n / bar.stiffness_n_m
         w_static = float(bar.psi_tip @ u_static)
         if forcing.start == "static" and not isinstance(initial, State):
             # the static deflection plus whatever initial motion was asked for

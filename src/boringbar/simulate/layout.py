@@ -20,7 +20,7 @@ MET_SIZE: int = _SLOTS["MET_SIZE"]
 #: the scalar slots of ``p`` in order (the per-mode blocks of NMAX entries follow them)
 PARAM_NAMES: tuple = tuple(core.param_names())
 #: the per-mode blocks of ``p``, in order
-PARAM_BLOCKS: tuple = ("M_", "K_", "C_", "PSI_L", "PSI_D", "PSI_A")
+PARAM_BLOCKS: tuple = ("M_", "K_", "C_", "PSI_L", "PSI_D", "PSI_A", "PSI_F")
 #: the slots of ``met``, in order
 METRIC_NAMES: tuple = tuple(core.metric_names())
 #: the core's case (slot CASE) of each bar, by System.kind

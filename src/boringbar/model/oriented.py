@@ -1,0 +1,116 @@
+"""Two bending planes and an oriented cut (docs/model.md, section 4.5).
+
+The bar bends in two principal planes of its section.  In the section at the tip the
+directions are measured from the radial direction r (the published model's one
+direction: the chip thickness's, and the force's, in a cut along the feed) toward the
+tangential t (the cutting speed's direction).  A mode of principal plane p moves the
+tip along d_p = (cos phi_p, sin phi_p), phi_2 = phi_1 + 90 degrees.
+
+The cut: the chip thickness changes with the tip's radial motion by cos kappa (kappa the
+lead angle, between the cutting edge's normal and the radial direction in the plane of
+the bar's axis; 0 is the published cut), and the force is
+F = b h (Kr cos kappa r + Kt t): the edge-normal force Kr b h has the radial part
+cos kappa (its axial part acts along the stiff bar), the tangential force is Kt b h.
+With rho = Kt / Kr the kernel keeps its scalar law f = Kr b h, and each mode j of plane
+p enters it by
+
+    psi_tip,j   = psi_L,j cos kappa cos phi_p              (W: what the chip reads)
+    psi_force,j = psi_L,j (cos kappa cos phi_p + rho sin phi_p)
+    psi_damper,j = psi_d,j cos(phi_p - alpha)              (the ball along the cavity)
+
+alpha the cavity's axis (``hole_angle_deg``; the absorber too moves along it).  Where
+rho = 0 and kappa = 0 and one plane is radial this is the published bar.  The
+oriented frequency response W / (Kr b h) = sum_j psi_tip,j psi_force,j / (K_j - w^2
+M_j + i w C_j) is then Tlusty's oriented transfer function, and the classical lobes
+follow from it unchanged (reference/stability.py).
+
+The second plane's modes are the first's with the bending stiffness EI scaled by
+``stiffness_ratio`` (the same masses and shapes, frequencies times its square root):
+exact for a section whose two second moments keep one ratio along the bar (a round bar:
+1; flats or a bore across the section: the ratio of their I).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from boringbar._validate import ParameterError, check_range
+from boringbar.model.bar import ModalModel
+
+#: Projections smaller than this (a cosine of 90 degrees in floating point) are zero.
+ZERO_PROJECTION = 1e-12
+
+
+@dataclass(frozen=True)
+class CutGeometry:
+    """An oriented cut on a bar of two bending planes (module docstring; angles in
+    degrees).  ``force_ratio``: Kt / Kr >= 0, the tangential over the edge-normal
+    cutting coefficient (about 2-4 in practice: Kt is the main force); ``lead_angle_deg``
+    kappa in [0, 90): 0 the published radial cut; ``hole_angle_deg`` in [-90, 90]: the
+    cavity's axis, along which the ball moves; ``principal_angle_deg`` in [-90, 90]:
+    the bar's first principal bending plane; ``stiffness_ratio`` > 0: EI of the second
+    plane over the first's."""
+
+    force_ratio: float = 0.0
+    lead_angle_deg: float = 0.0
+    hole_angle_deg: float = 0.0
+    principal_angle_deg: float = 0.0
+    stiffness_ratio: float = 1.0
+
+    def __post_init__(self):
+        check_range("force_ratio (Kt / Kr)", self.force_ratio, 0.0, 100.0)
+        check_range("lead_angle_deg", self.lead_angle_deg, 0.0, 90.0, unit="degrees")
+        if self.lead_angle_deg == 90.0:
+            raise ParameterError("lead_angle_deg = 90: the tip's radial motion then no "
+                                 "longer changes the chip, and the model has no "
+                                 "regenerative chatter; give an angle in [0, 90)")
+        check_range("hole_angle_deg", self.hole_angle_deg, -90.0, 90.0, unit="degrees",
+                    why="the cavity's axis through the section")
+        check_range("principal_angle_deg", self.principal_angle_deg, -90.0, 90.0,
+                    unit="degrees")
+        check_range("stiffness_ratio (EI_2 / EI_1)", self.stiffness_ratio, 0.0, 1e3,
+                    lo_open=True)
+
+    def to_dict(self) -> dict:
+        return {"force_ratio": self.force_ratio, "lead_angle_deg": self.lead_angle_deg,
+                "hole_angle_deg": self.hole_angle_deg,
+                "principal_angle_deg": self.principal_angle_deg,
+                "stiffness_ratio": self.stiffness_ratio}
+
+
+def _clean(values: np.ndarray) -> np.ndarray:
+    scale = max(float(np.max(np.abs(values))), 1e-300)
+    return np.where(np.abs(values) < ZERO_PROJECTION * scale, 0.0, values)
+
+
+def oriented_model(plane: ModalModel, geometry: CutGeometry) -> ModalModel:
+    """The bar of ``plane``'s modes in both principal planes under the oriented cut
+    ``geometry`` (module docstring): 2 n modes, those of the plane nearer the radial
+    direction first (its first mode carries the tip's normalisation)."""
+    g = geometry
+    if 2 * plane.n_modes > 8:
+        raise ParameterError(f"two bending planes of {plane.n_modes} modes each are "
+                             f"{2 * plane.n_modes} modes; the core takes at most 8 (give "
+                             "n_modes <= 4)")
+    kappa, alpha = math.radians(g.lead_angle_deg), math.radians(g.hole_angle_deg)
+    phis = [math.radians(g.principal_angle_deg), math.radians(g.principal_angle_deg) + math.pi / 2]
+    order = sorted(range(2), key=lambda p: -abs(math.cos(phis[p])))
+    parts = []
+    for p in order:
+        phi = phis[p]
+        k_scale = 1.0 if p == 0 else g.stiffness_ratio
+        parts.append((plane.mass_kg, plane.stiffness_n_m * k_scale, plane.damping_ratio,
+                      plane.psi_tip * math.cos(kappa) * math.cos(phi),
+                      plane.psi_tip * (math.cos(kappa) * math.cos(phi)
+                                       + g.force_ratio * math.sin(phi)),
+                      plane.psi_damper * math.cos(phi - alpha),
+                      plane.psi_absorber * math.cos(phi - alpha)))
+    columns = (np.concatenate(c) for c in zip(*parts, strict=True))
+    mass, stiff, zeta, tip, force, damper, absorber = columns
+    info = dict(plane.info, planes=2, cut_geometry=g.to_dict())
+    return ModalModel(mass, stiff, zeta, _clean(tip), _clean(damper), _clean(absorber),
+                      plane.z_damper_m, plane.z_absorber_m, f"{plane.source}+two-planes",
+                      info, _clean(force))
