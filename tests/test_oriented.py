@@ -1,0 +1,184 @@
+"""Two bending planes and an oriented cut (model/oriented.py, docs/model.md, section 4.5).
+
+Truths not from our code: the oriented transfer function built here from the section's
+2 x 2 compliance matrix and the cut's two directions; Altintas' two-degree-of-freedom
+example (*Manufacturing Automation*, 2nd ed., 2012, p. 131: modes of 250 and 150 Hz
+oriented at 30 and -45 degrees to the force, Kf = 1000 MPa), whose absolute limit and
+lobe bottoms his lab's published port (github.com/leekunhwee/Dynamics,
+Cutting/Stability/FrequencyDomain/Turning/Two DOF Example, Lobe.png) shows at about
+7.2 mm near 8,700 rpm; the one-plane bar as a special case; the converged verdict's
+simulated lobes against the closed form; the harmonic response and the energy balance.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from cli_output import assert_one_line_error
+
+import boringbar as bb
+from boringbar._validate import ParameterError
+from boringbar.cli.main import main
+from boringbar.model.bar import ModalModel
+from boringbar.model.oriented import CutGeometry, oriented_model
+from boringbar.model.system import System, make_system
+from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
+from boringbar.reference.linear import tip_frf
+from boringbar.reference.stability import analytic_lobes, min_limit
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_verdict import worst_error  # noqa: E402
+
+GEOMETRY = CutGeometry(force_ratio=2.5, lead_angle_deg=30.0, hole_angle_deg=20.0,
+                       principal_angle_deg=25.0, stiffness_ratio=0.8)
+
+
+def altintas() -> System:
+    """Altintas' two-mode example: 250 Hz, 1.2 %, 2.26e8 N/m at 30 degrees and 150 Hz,
+    1 %, 2.13e8 N/m at -45 degrees from the force and chip direction."""
+    f, zeta, k = np.array([250.0, 150.0]), np.array([0.012, 0.01]), np.array([2.26e8, 2.13e8])
+    w = 2 * np.pi * f
+    theta = np.radians([30.0, -45.0])
+    bar = ModalModel(k / w**2, k, zeta, np.cos(theta), np.zeros(2), np.zeros(2),
+                     source="altintas-2012-p131")
+    return System(bar, None, "physical")
+
+
+def book_frf(w):
+    """The example's oriented FRF as the book writes it: sum cos^2 theta_i / k_i
+    omega_i^2 / (omega_i^2 - omega^2 + 2 i zeta_i omega_i omega)."""
+    out = 0
+    for f, z, k, th in ((250.0, 0.012, 2.26e8, 30.0), (150.0, 0.01, 2.13e8, -45.0)):
+        wn = 2 * np.pi * f
+        out = out + math.cos(math.radians(th)) ** 2 / k * wn**2 / (
+            wn**2 - w**2 + 2j * z * wn * w)
+    return out
+
+
+# --- the oriented transfer function -------------------------------------------------------
+def test_the_oriented_frf_is_the_sections_compliance_projected_on_the_cut():
+    """W / F built here: the tip's 2 x 2 compliance in (radial, tangential), each plane's
+    receptance along its principal direction, loaded by F = (cos kappa, rho) and read
+    along (cos kappa, 0)."""
+    plane = make_system("solid", n_modes=2).bar
+    bar = oriented_model(plane, GEOMETRY)
+    w = np.linspace(0.5, 2.0, 301) * plane.natural_frequency_rad_s
+    g = GEOMETRY
+    kappa, phi = math.radians(g.lead_angle_deg), math.radians(g.principal_angle_deg)
+    rot = np.array([[math.cos(phi), -math.sin(phi)], [math.sin(phi), math.cos(phi)]])
+
+    def receptance(scale):
+        return sum(plane.psi_tip[i] ** 2 / (plane.stiffness_n_m[i] * scale
+                                            - w**2 * plane.mass_kg[i]
+                                            + 1j * w * plane.damping_n_s_m[i]
+                                            * math.sqrt(scale))
+                   for i in range(plane.n_modes))
+
+    h = np.zeros((len(w), 2, 2), complex)
+    h[:, 0, 0], h[:, 1, 1] = receptance(1.0), receptance(g.stiffness_ratio)
+    compliance = rot @ h @ rot.T
+    load, read = np.array([math.cos(kappa), g.force_ratio]), np.array([math.cos(kappa), 0.0])
+    expected = np.einsum("i,wij,j->w", read, compliance, load)
+    np.testing.assert_allclose(tip_frf(bar, w), expected, rtol=1e-10)
+
+
+def test_a_cut_along_one_plane_is_the_one_plane_bar():
+    plane = make_system("solid", n_modes=2)
+    two = make_system("solid", n_modes=2, planes=2, cut_geometry=CutGeometry())
+    assert two.bar.n_modes == 4 and np.all(two.bar.psi_tip[2:] == 0)
+    w = np.linspace(0.5, 2.0, 101) * plane.reference_frequency_rad_s
+    np.testing.assert_allclose(tip_frf(two.bar, w), tip_frf(plane.bar, w), rtol=1e-13)
+    forcing = bb.Harmonic(amplitude_n=10.0)
+    one_run = bb.simulate(plane, forcing, duration_s=0.05, integrator="rk4", record_every=0)
+    two_run = bb.simulate(two, forcing, duration_s=0.05, integrator="rk4", record_every=0)
+    assert two_run.metrics["rms_tip_m"] == pytest.approx(one_run.metrics["rms_tip_m"],
+                                                         rel=1e-12)
+
+
+# --- a published example ------------------------------------------------------------------
+def test_altintas_two_mode_example():
+    system = altintas()
+    w = np.linspace(0.5, 2.0, 400_001) * 2 * np.pi * 150.0
+    book = -1.0 / (2 * 1e9 * book_frf(w).real.min())
+    assert min_limit(system, 1e9) == pytest.approx(book, rel=1e-6)
+    assert min_limit(system, 1e9) == pytest.approx(7.2e-3, abs=0.15e-3)  # Lobe.png
+    # lobes 1-3 (lobe 0 bottoms at 20,265 rpm, beyond the figure's 15,000)
+    lobes = analytic_lobes(system, 1e9, lobes=range(1, 4))
+    bottoms = [lobes["rpm"][j][np.nanargmin(lobes["b_lim"][j])] for j in range(3)]
+    np.testing.assert_allclose(bottoms, [8678.0, 5521.0, 4049.0], rtol=2e-3)
+
+
+def test_the_simulated_limit_of_altintas_example_is_its_closed_form():
+    err, rpm = worst_error(altintas(), (4049.0, 5521.0, 7000.0, 8678.0, 11849.0), kr_pa=1e9,
+                           max_depth_m=0.1)
+    assert err <= 0.01, f"{err:.2%} at {rpm:g} rpm"
+
+
+def test_the_simulated_limit_of_an_oriented_bar_is_its_closed_form():
+    system = make_system("solid", n_modes=1, planes=2, cut_geometry=GEOMETRY)
+    err, rpm = worst_error(system, (3000.0, 4100.0, 5200.0, 6745.0, 9125.0))
+    assert err <= 0.01, f"{err:.2%} at {rpm:g} rpm"
+
+
+# --- runs ---------------------------------------------------------------------------------
+def test_a_harmonic_run_settles_on_the_oriented_response_and_balances():
+    system = make_system("solid", n_modes=1, planes=2, cut_geometry=GEOMETRY)
+    w = system.reference_frequency_rad_s
+    run = bb.simulate(system, bb.Harmonic(amplitude_n=10.0), duration_s=0.6, record_every=0)
+    assert run.integrator == "rk4"
+    assert run.metrics["amplitude_m"] == pytest.approx(
+        10.0 * abs(tip_frf(system.bar, np.array([w]))[0]), rel=2e-3)
+    assert abs(run.energy["balance_relative"]) < 1e-9
+
+
+def test_a_ball_moves_along_its_cavity():
+    g = CutGeometry(hole_angle_deg=90.0)
+    system = make_system("ball", n_modes=1, planes=2, cut_geometry=g)
+    # the cavity across the radial plane: its modes do not carry the ball
+    assert system.bar.psi_damper[0] == 0 and system.bar.psi_damper[1] != 0
+    assert System.from_dict(system.to_dict()).bar.psi_force.tolist() == \
+        system.bar.psi_force.tolist()
+
+
+# --- where it applies, and bad input ------------------------------------------------------
+def test_the_exact_integrator_and_shooting_refuse_an_oriented_bar():
+    system = make_system("solid", planes=2, cut_geometry=GEOMETRY)
+    with pytest.raises(ParameterError, match="oriented cut"):
+        bb.simulate(system, bb.Harmonic(amplitude_n=10.0), duration_s=0.01,
+                    integrator="exact")
+    from boringbar.orbits.shooting import make_flow
+    with pytest.raises(ParameterError, match="oriented"):
+        make_flow(system, bb.Harmonic(amplitude_n=10.0))
+
+
+@pytest.mark.parametrize("argv, name", [
+    (["--lead-angle-deg", "95"], "--lead-angle-deg"),
+    (["--lead-angle-deg", "90"], "--lead-angle-deg"),
+    (["--lead-angle-deg", "-1"], "--lead-angle-deg"),
+    (["--hole-angle-deg", "120"], "--hole-angle-deg"),
+    (["--force-ratio", "-1"], "--force-ratio"),
+    (["--stiffness-ratio", "0"], "--stiffness-ratio"),
+    (["--planes", "1", "--force-ratio", "2"], "--planes 2"),
+])
+def test_the_command_line_refuses_a_bad_orientation(argv, name, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert_one_line_error(main, ["simulate", *argv, "--out", str(out)], out, name, capsys)
+
+
+def test_a_system_file_gives_the_planes_and_refuses_a_bad_angle():
+    d = tomllib.loads(published_file_text())
+    d["orientation"] = {"force_ratio": 2.5, "lead_angle_deg": 30.0, "hole_angle_deg": 20.0}
+    spec = parse_system(d)
+    system = make_system("ball", spec=spec, n_modes=1)
+    assert spec.planes == 2 and system.bar.n_modes == 2 and system.bar.oriented
+    assert system.bar.info["cut_geometry"]["lead_angle_deg"] == 30.0
+    for key, value in (("lead_angle_deg", 90.0), ("hole_angle_deg", -91.0), ("planes", 3)):
+        bad = tomllib.loads(published_file_text())
+        bad["orientation"] = {key: value}
+        with pytest.raises(SystemFileError, match=f"orientation.{key}"):
+            parse_system(bad)
