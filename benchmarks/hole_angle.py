@@ -1,0 +1,100 @@
+"""The ball's cavity angle against the chatter-free depth (docs/model.md, section 4.5).
+
+The published ball bar in two bending planes (a round bar: equal planes), cut with
+Kt / Kr = 2.5 at a zero lead angle: the ball's chatter-free depth at one speed by the
+converged verdict (simulated cuts) as the cavity's axis turns from radial (0 degrees)
+through the section, beside the plain (solid) bar's simulated limit and the locked
+ball's closed-form one.  Then what a second plane costs: bb.simulate of the ball bar in
+one plane and in two (1 and 2 modes a plane), side by side, best of 3.
+
+    .venv/bin/python benchmarks/hole_angle.py [--rpm 3000] [--out docs/img/hole_angle.png]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+import boringbar as bb  # noqa: E402
+from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
+from boringbar.model.oriented import CutGeometry  # noqa: E402
+
+ANGLES = tuple(float(a) for a in range(-90, 91, 15))
+
+
+def geometry(hole: float) -> CutGeometry:
+    return CutGeometry(force_ratio=2.5, hole_angle_deg=hole)
+
+
+def limits(rpm: float):
+    """The chatter-free depth (m) of the ball bar at each cavity angle, the solid bar's
+    (simulated) and the locked ball's closed form at each angle."""
+    systems = {f"ball {a:g}": bb.make_system("ball", n_modes=1, planes=2,
+                                             cut_geometry=geometry(a)) for a in ANGLES}
+    systems["solid"] = bb.make_system("solid", n_modes=1, planes=2,
+                                      cut_geometry=geometry(0.0))
+    ds = lobes(systems, LobesOptions(rpm=(rpm,)))
+    depth = dict(zip(ds["case"].values.tolist(), ds["limit_depth_m"].values[:, 0], strict=True))
+    host = dict(zip(ds["case"].values.tolist(), ds["host_analytic_limit_m"].values[:, 0],
+                    strict=True))
+    return ([depth[f"ball {a:g}"] for a in ANGLES], depth["solid"],
+            [host[f"ball {a:g}"] for a in ANGLES], float(ds.attrs["wall_time_s"]))
+
+
+def cost() -> dict:
+    """Seconds of a 2 s harmonic RK4 run of the ball bar, by (modes a plane, planes), one
+    plane and two, through bb.simulate, best of 3."""
+    out = {}
+    for n in (1, 2):
+        for planes in (1, 2):
+            kw = {"planes": 2, "cut_geometry": geometry(30.0)} if planes == 2 else {}
+            system = bb.make_system("ball", n_modes=n, **kw)
+            best = math.inf
+            for _ in range(3):
+                tic = time.perf_counter()
+                bb.simulate(system, bb.Harmonic(amplitude_n=20.0), duration_s=2.0,
+                            record_every=0, integrator="rk4")
+                best = min(best, time.perf_counter() - tic)
+            out[n, planes] = best
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rpm", type=float, default=3000.0)
+    ap.add_argument("--out", default="docs/img/hole_angle.png")
+    args = ap.parse_args()
+    ball, solid, host, wall = limits(args.rpm)
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    ax.plot(ANGLES, np.array(ball) * 1e3, "o-", label="ball bar (converged verdict)")
+    ax.axhline(solid * 1e3, color="k", ls="--", label="solid bar (converged verdict)")
+    ax.plot(ANGLES, np.array(host) * 1e3, ":", color="C1",
+            label="locked ball (closed form)")
+    ax.set(xlabel="cavity axis from the radial direction (degrees)",
+           ylabel="chatter-free depth (mm)", xticks=ANGLES[::2],
+           title=f"published ball bar, two planes, Kt/Kr = 2.5, {args.rpm:g} rpm")
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(args.out, dpi=110)
+    print(f"wrote {args.out} ({wall:.0f} s of lobes)")
+    for a, d, h in zip(ANGLES, ball, host, strict=True):
+        print(f"  cavity at {a:+5.0f} deg: ball {d * 1e3:.4f} mm, locked ball (closed form) "
+              f"{h * 1e3:.4f} mm")
+    print(f"  solid bar: {solid * 1e3:.4f} mm")
+    c = cost()
+    print("2 s of the ball bar at F0 = 20 N (RK4, bb.simulate, best of 3):")
+    for n in (1, 2):
+        print(f"  {n} mode(s) a plane: one plane {c[n, 1]:.3f} s, two planes {c[n, 2]:.3f} s "
+              f"({c[n, 2] / c[n, 1]:.2f}x)")
+
+
+if __name__ == "__main__":
+    main()
