@@ -1,4 +1,4 @@
-"""The ball's cavity angle against the chatter-free depth (docs/model.md, section 4.5).
+"""The ball's cavity angle against the chatter-free depth (docs/model.md, section 4.7).
 
 The published ball bar in two bending planes (a round bar: equal planes), cut with
 Kt / Kr = 2.5 at a zero lead angle: the ball's chatter-free depth at one speed by the

@@ -251,7 +251,7 @@ BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
 
 // The stage derivative Kd at the stage state Xs under the force f at the tip: the bar
 // M_i u_i'' + C_i u_i' + K_i u_i = psi_F,i f with the damper's terms (docs/model.md, 2;
-// psi_F = psi_L but in an oriented cut, section 4.5),
+// psi_F = psi_L but in an oriented cut, section 4.7),
 // written with premultiplied constants and the stage velocity last, so that little of
 // it waits on the previous stage.
 //

@@ -64,7 +64,7 @@ constexpr int PSI_L = C_ + NMAX;
 constexpr int PSI_D = PSI_L + NMAX;
 constexpr int PSI_A = PSI_D + NMAX;
 // the force's shape at the tip: psi_L of the force's direction where it differs from the
-// chip's (an oriented cut, docs/model.md, section 4.5); psi_L itself otherwise
+// chip's (an oriented cut, docs/model.md, section 4.7); psi_L itself otherwise
 constexpr int PSI_F = PSI_A + NMAX;
 constexpr int P_SIZE = PSI_F + NMAX;
 

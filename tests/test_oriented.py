@@ -1,4 +1,4 @@
-"""Two bending planes and an oriented cut (model/oriented.py, docs/model.md, section 4.5).
+"""Two bending planes and an oriented cut (model/oriented.py, docs/model.md, section 4.7).
 
 Truths not from our code: the oriented transfer function built here from the section's
 2 x 2 compliance matrix and the cut's two directions; Altintas' two-degree-of-freedom

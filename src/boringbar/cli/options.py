@@ -183,8 +183,8 @@ ORIENTATION_OPTIONS = {"force_ratio": "--force-ratio", "lead_angle_deg": "--lead
 
 
 def add_orientation(p) -> None:
-    """Two bending planes and the oriented cut (docs/model.md, section 4.5)."""
-    g = p.add_argument_group("two bending planes and an oriented cut (docs/model.md, 4.5)")
+    """Two bending planes and the oriented cut (docs/model.md, section 4.7)."""
+    g = p.add_argument_group("two bending planes and an oriented cut (docs/model.md, 4.7)")
     g.add_argument("--planes", type=int, choices=(1, 2),
                    help="bending planes: 1 (the published one direction) or 2 (default: the "
                         "system file's [orientation], else 1; 2 with any option below)")

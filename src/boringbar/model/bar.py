@@ -94,7 +94,7 @@ class ModalModel:
     ``psi_force``: the shape the cutting or harmonic force enters each mode by, where it
     differs from ``psi_tip``, the shape the chip thickness and the reported tip
     displacement W read (an oriented cut in two bending planes,
-    :func:`boringbar.model.oriented.oriented_model`; docs/model.md, section 4.5); None:
+    :func:`boringbar.model.oriented.oriented_model`; docs/model.md, section 4.7); None:
     ``psi_tip`` (a force along the direction W is measured in).  In an oriented model a
     mode of a bar of two planes may have psi_tip = 0 (it bends across the chip), but the
     first may not.

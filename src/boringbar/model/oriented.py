@@ -1,4 +1,4 @@
-"""Two bending planes and an oriented cut (docs/model.md, section 4.5).
+"""Two bending planes and an oriented cut (docs/model.md, section 4.7).
 
 The bar bends in two principal planes of its section.  In the section at the tip the
 directions are measured from the radial direction r (the published model's one

@@ -178,7 +178,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     :class:`ImpactDamper`).  ``planes``: 2 for the bar's modes in both bending planes
     under the oriented cut ``cut_geometry`` (a :class:`CutGeometry`: force ratio, lead
     angle, the cavity's and the principal planes' angles, the planes' stiffness ratio;
-    docs/model.md, section 4.5); ``n_modes`` then counts the modes of each plane.
+    docs/model.md, section 4.7); ``n_modes`` then counts the modes of each plane.
     Default: the file's ``[orientation]``, else one plane.
     """
     if isinstance(bar, SystemSpec):

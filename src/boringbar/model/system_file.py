@@ -125,7 +125,7 @@ class SystemSpec:
     data: dict = field(repr=False)
     source: str = "<dict>"
     #: the bending planes (1: the published one direction; 2: docs/model.md, section
-    #: 4.5) and the oriented cut's geometry
+    #: 4.7) and the oriented cut's geometry
     planes: int = 1
     orientation: CutGeometry = field(default_factory=CutGeometry)
 
