@@ -26,7 +26,7 @@ import boringbar as bb  # noqa: E402
 from boringbar.analysis.lobes import LobesOptions, lobes  # noqa: E402
 from boringbar.model.oriented import CutGeometry  # noqa: E402
 
-ANGLES = tuple(float(a) for a in range(-90, 91, 15))
+ANGLES = tuple(-90.0 + 7.5 * k for k in range(25))
 
 
 def geometry(hole: float) -> CutGeometry:
@@ -78,15 +78,16 @@ def main():
     ax.plot(ANGLES, np.array(host) * 1e3, ":", color="C1",
             label="locked ball (closed form)")
     ax.set(xlabel="cavity axis from the radial direction (degrees)",
-           ylabel="chatter-free depth (mm)", xticks=ANGLES[::2],
-           title=f"published ball bar, two planes, Kt/Kr = 2.5, {args.rpm:g} rpm")
+           ylabel="chatter-free depth (mm)", xticks=ANGLES[::4],
+           title=f"published ball bar, bending along and across its cavity, Kt/Kr = 2.5, "
+                 f"{args.rpm:g} rpm")
     ax.set_ylim(bottom=0)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(args.out, dpi=110)
     print(f"wrote {args.out} ({wall:.0f} s of lobes)")
     for a, d, h in zip(ANGLES, ball, host, strict=True):
-        print(f"  cavity at {a:+5.0f} deg: ball {d * 1e3:.4f} mm, locked ball (closed form) "
+        print(f"  cavity at {a:+6.1f} deg: ball {d * 1e3:.4f} mm, locked ball (closed form) "
               f"{h * 1e3:.4f} mm")
     print(f"  solid bar: {solid * 1e3:.4f} mm")
     c = cost()

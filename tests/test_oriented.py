@@ -28,6 +28,7 @@ from boringbar.model.bar import ModalModel
 from boringbar.model.oriented import CutGeometry, oriented_model
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
+from boringbar.orbits.shooting import make_flow
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.stability import analytic_lobes, min_limit
 
@@ -151,7 +152,6 @@ def test_the_exact_integrator_and_shooting_refuse_an_oriented_bar():
     with pytest.raises(ParameterError, match="oriented cut"):
         bb.simulate(system, bb.Harmonic(amplitude_n=10.0), duration_s=0.01,
                     integrator="exact")
-    from boringbar.orbits.shooting import make_flow
     with pytest.raises(ParameterError, match="oriented"):
         make_flow(system, bb.Harmonic(amplitude_n=10.0))
 
@@ -182,3 +182,32 @@ def test_a_system_file_gives_the_planes_and_refuses_a_bad_angle():
         bad["orientation"] = {key: value}
         with pytest.raises(SystemFileError, match=f"orientation.{key}"):
             parse_system(bad)
+
+
+# --- the cavity's two planes --------------------------------------------------------------
+def test_the_cavity_section_across_the_ball_is_its_moment_about_the_other_axis():
+    """The equivalent section for bending across the ball's direction: the flexibility
+    int ds / I(s) with the strip's moment about the other axis, by adaptive quadrature."""
+    from scipy.integrate import quad
+
+    from boringbar.model.system_file import cavity_section_diameter, cut_section_moment
+    d, bore, length, depth = 0.025, 0.008, 0.0151, 0.02
+    a, h = length / 2, depth / 2
+    flex = quad(lambda t: math.cos(t) / cut_section_moment(d, bore, h, a * math.cos(t)),
+                0, math.pi / 2, limit=500, epsabs=0, epsrel=1e-13)[0]
+    expected = (64 / math.pi / flex + bore**4) ** 0.25
+    assert cavity_section_diameter(d, bore, length, depth, across=True) == pytest.approx(
+        expected, rel=1e-9)
+
+
+def test_a_ball_bar_bends_along_and_across_its_cavity():
+    """Its planes are along the cavity (the published FE bar) and across it (the cavity's
+    section about the other axis, stiffer here, with the same mass)."""
+    one = make_system("ball", n_modes=1)
+    two = make_system("ball", n_modes=1, planes=2, cut_geometry=CutGeometry(hole_angle_deg=0))
+    f = two.bar.omegas_rad_s / (2 * np.pi)
+    assert f[0] == one.bar.omegas_rad_s[0] / (2 * np.pi) and f[1] > f[0] * 1.01
+    spec = one.spec
+    along, across = spec.stepped_bar(True), spec.stepped_bar(True, across=True)
+    assert [s.area_m2 for s in along.sections] == [s.area_m2 for s in across.sections]
+    assert two.bar.psi_damper[1] == 0 and two.bar.psi_tip[1] == 0

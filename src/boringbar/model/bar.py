@@ -36,13 +36,15 @@ class Section:
     """One prismatic piece of the bar, from ``start_m`` to ``end_m`` (m, from the clamp).
 
     ``diameter_m`` is the outer (model) diameter in m; ``inner_diameter_m`` > 0
-    makes it a tube.
+    makes it a tube.  ``moment_scale`` multiplies its second moment of area alone (a
+    cavity's section bent across the ball's direction: its stiffness, with its mass).
     """
 
     start_m: float
     end_m: float
     diameter_m: float
     inner_diameter_m: float = 0.0
+    moment_scale: float = 1.0
 
     def __post_init__(self):
         check_range("section start_m", self.start_m, 0.0, math.inf)
@@ -61,7 +63,7 @@ class Section:
 
     @property
     def second_moment_m4(self) -> float:
-        return math.pi / 64.0 * (self.diameter_m**4 - self.inner_diameter_m**4)
+        return math.pi / 64.0 * (self.diameter_m**4 - self.inner_diameter_m**4) * self.moment_scale
 
 
 def published_sections(cavity: bool = True) -> tuple[Section, ...]:

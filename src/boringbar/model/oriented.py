@@ -33,7 +33,7 @@ exact for a section whose two second moments keep one ratio along the bar (a rou
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -86,28 +86,40 @@ def _clean(values: np.ndarray) -> np.ndarray:
     return np.where(np.abs(values) < ZERO_PROJECTION * scale, 0.0, values)
 
 
-def oriented_model(plane: ModalModel, geometry: CutGeometry) -> ModalModel:
+def oriented_model(plane: ModalModel, geometry: CutGeometry,
+                   across: ModalModel | None = None) -> ModalModel:
     """The bar of ``plane``'s modes in both principal planes under the oriented cut
     ``geometry`` (module docstring): 2 n modes, those of the plane nearer the radial
-    direction first (its first mode carries the tip's normalisation)."""
+    direction first (its first mode carries the tip's normalisation).
+
+    ``across``: the second plane's own modal model, for a bar whose cavity makes its
+    planes differ (the FE bar bent across the ball's direction); its planes are then
+    along and across the cavity (phi_1 = ``hole_angle_deg``; ``principal_angle_deg`` and
+    ``stiffness_ratio`` describe a bar without a cavity).  None: ``plane``'s modes with
+    EI times ``stiffness_ratio``, at ``principal_angle_deg``."""
     g = geometry
+    if across is not None and across.n_modes != plane.n_modes:
+        raise ParameterError(f"the planes' modal models have {plane.n_modes} and "
+                             f"{across.n_modes} modes; give each the same count")
     if 2 * plane.n_modes > 8:
         raise ParameterError(f"two bending planes of {plane.n_modes} modes each are "
                              f"{2 * plane.n_modes} modes; the core takes at most 8 (give "
                              "n_modes <= 4)")
     kappa, alpha = math.radians(g.lead_angle_deg), math.radians(g.hole_angle_deg)
-    phis = [math.radians(g.principal_angle_deg), math.radians(g.principal_angle_deg) + math.pi / 2]
+    first = g.hole_angle_deg if across is not None else g.principal_angle_deg
+    phis = [math.radians(first), math.radians(first) + math.pi / 2]
+    models = [plane, across if across is not None else
+              replace(plane, stiffness_n_m=plane.stiffness_n_m * g.stiffness_ratio)]
     order = sorted(range(2), key=lambda p: -abs(math.cos(phis[p])))
     parts = []
     for p in order:
-        phi = phis[p]
-        k_scale = 1.0 if p == 0 else g.stiffness_ratio
-        parts.append((plane.mass_kg, plane.stiffness_n_m * k_scale, plane.damping_ratio,
-                      plane.psi_tip * math.cos(kappa) * math.cos(phi),
-                      plane.psi_tip * (math.cos(kappa) * math.cos(phi)
-                                       + g.force_ratio * math.sin(phi)),
-                      plane.psi_damper * math.cos(phi - alpha),
-                      plane.psi_absorber * math.cos(phi - alpha)))
+        phi, m = phis[p], models[p]
+        parts.append((m.mass_kg, m.stiffness_n_m, m.damping_ratio,
+                      m.psi_tip * math.cos(kappa) * math.cos(phi),
+                      m.psi_tip * (math.cos(kappa) * math.cos(phi)
+                                   + g.force_ratio * math.sin(phi)),
+                      m.psi_damper * math.cos(phi - alpha),
+                      m.psi_absorber * math.cos(phi - alpha)))
     columns = (np.concatenate(c) for c in zip(*parts, strict=True))
     mass, stiff, zeta, tip, force, damper, absorber = columns
     info = dict(plane.info, planes=2, cut_geometry=g.to_dict())

@@ -189,8 +189,11 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     check_choice("preset", preset, PRESETS)
     spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
+    given = modal
     modal, readings = _modal(spec, bar, paper, n_modes, z_absorber_m, modal)
-    modal = _planes(spec, modal, planes, cut_geometry)
+    across = (_across(spec, modal, z_absorber_m)
+              if bar == "ball" and given is None and spec.cavity is not None else None)
+    modal = _planes(spec, modal, planes, cut_geometry, across)
     if bar == "solid":
         return System(modal, None, preset, tuple(readings), spec)
     if bar == "tmd":
@@ -220,8 +223,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     return System(modal, damper, preset, tuple(readings), spec)
 
 
-def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry) -> ModalModel:
-    """``modal`` in both bending planes under the oriented cut, where asked."""
+def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry, across) -> ModalModel:
+    """``modal`` in both bending planes under the oriented cut, where asked (``across``:
+    a cavity bar's modes bent across the ball's direction, a callable)."""
     planes = spec.planes if planes is None else planes
     check_choice("planes", planes, (1, 2))
     if planes == 1:
@@ -229,7 +233,20 @@ def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry) -> ModalModel
             raise ParameterError("cut_geometry applies to a bar of two bending planes: give "
                                  "planes = 2")
         return modal
-    return oriented_model(modal, spec.orientation if geometry is None else geometry)
+    return oriented_model(modal, spec.orientation if geometry is None else geometry,
+                          None if across is None else across())
+
+
+def _across(spec: SystemSpec, plane: ModalModel, z_absorber):
+    """The cavity bar's modes bent across the ball's direction, as ``plane`` was built
+    (its modes, damping, and the paper preset's stiffness calibration): a callable, so
+    that a bar of one plane does not compute them."""
+    def build() -> ModalModel:
+        other = spec.modal(True, plane.n_modes, z_absorber, across=True)
+        other = replace(other, damping_ratio=plane.damping_ratio)
+        scale = plane.info.get("stiffness_scale", 1.0)
+        return replace(other, stiffness_n_m=other.stiffness_n_m * scale)
+    return build
 
 
 def _modal(spec: SystemSpec, bar: str, paper: bool, n_modes, z_absorber, modal):

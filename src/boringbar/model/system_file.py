@@ -57,13 +57,16 @@ class CavitySpec:
     """The ball's cavity: its centre ``position_m`` (from the clamp), its
     ``length_m`` along the bar, the ``section_diameter_m`` of the solid round
     section with the bar's stiffness through it (its ``section_bore_m`` kept from
-    the host section), and its ``depth_m`` in the direction the ball travels."""
+    the host section), and its ``depth_m`` in the direction the ball travels;
+    ``section_diameter_across_m``: the same for bending across that direction (a bar of
+    two bending planes, docs/model.md, section 4.7)."""
 
     position_m: float
     length_m: float
     section_diameter_m: float
     section_bore_m: float
     depth_m: float
+    section_diameter_across_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -139,18 +142,21 @@ class SystemSpec:
         """z_a (m): the absorber's position (the bar's tip if there is none)."""
         return self.tmd.position_m if self.tmd else self.bar.length_m
 
-    def stepped_bar(self, cavity: bool) -> SteppedBar:
-        """The FE bar: with the cavity's section (``cavity``) or without."""
+    def stepped_bar(self, cavity: bool, across: bool = False) -> SteppedBar:
+        """The FE bar: with the cavity's section (``cavity``) or without; ``across``: the
+        cavity's section for bending across the ball's direction."""
         if not cavity or self.cavity is None:
             return self.bar
-        return _with_cavity(self.bar, self.cavity)
+        return _with_cavity(self.bar, self.cavity, across)
 
     def modal(self, cavity: bool, n_modes: int,
-              z_absorber_m: float | None = None) -> ModalModel:
+              z_absorber_m: float | None = None, across: bool = False) -> ModalModel:
         """The modal model of :meth:`stepped_bar`, ``n_modes`` retained, psi at the
-        ball and at the absorber (``z_absorber_m`` m, default the file's)."""
+        ball and at the absorber (``z_absorber_m`` m, default the file's); ``across``:
+        bending across the ball's direction."""
         za = self.absorber_position_m if z_absorber_m is None else z_absorber_m
-        model = self.stepped_bar(cavity).modal_model(n_modes, self.ball_position_m, za)
+        model = self.stepped_bar(cavity, across).modal_model(n_modes, self.ball_position_m,
+                                                             za)
         if len(self.damping_ratio) == 1:
             return model
         ratios = [self.damping_ratio[min(i, len(self.damping_ratio) - 1)] for i in range(n_modes)]
@@ -449,7 +455,7 @@ def cut_section_moment(diameter: float, bore: float, half_width: float,
 
 
 def cavity_section_diameter(diameter: float, bore: float, length: float,
-                            depth: float) -> float:
+                            depth: float, across: bool = False) -> float:
     """The outer diameter (m) of the equivalent section, with the host's ``bore``, that
     has the bending stiffness of the host section (``diameter``, ``bore``, m) through a
     cavity: a round hole of diameter ``length`` (its length along the bar) across
@@ -461,7 +467,10 @@ def cavity_section_diameter(diameter: float, bore: float, length: float,
     segment under a bending moment that changes little along it bends as one of
     constant I_eq = L / int ds / I(s) (its flexibility), here integrated with
     s = a sin(theta) by Gauss-Legendre on the pieces where I(s) is smooth.  Then
-    pi (D^4 - bore^4) / 64 = I_eq."""
+    pi (D^4 - bore^4) / 64 = I_eq.  ``across``: bending across the ball's direction, the
+    same strip's moment about the other axis (half-width and half-depth exchanged),
+    on pieces split eightfold (its kinks lie elsewhere: 1e-9 against adaptive
+    quadrature on the published cavity)."""
     a = length / 2
     if a >= diameter / 2:
         raise ParameterError(f"length = {length:g} m must be less than the section's "
@@ -471,12 +480,18 @@ def cavity_section_diameter(diameter: float, bore: float, length: float,
     kinks = [b for b in (bore / 2, math.sqrt(max((bore / 2) ** 2 - h * h, 0.0)),
                          math.sqrt(max(r * r - h * h, 0.0))) if 0.0 < b < a]
     edges = sorted({0.0, math.pi / 2, *(math.acos(b / a) for b in kinks)})
+    if across:
+        edges = sorted({t0 + (t1 - t0) * k / 8 for t0, t1 in zip(edges, edges[1:],
+                                                                 strict=False)
+                        for k in range(9)})
     nodes, weights = np.polynomial.legendre.leggauss(_GAUSS_NODES)
     flexibility = 0.0  # int_0^(pi/2) cos(theta) / I(a cos(theta)) d theta = 1 / I_eq
     for t0, t1 in zip(edges, edges[1:], strict=False):
         for x, w in zip(nodes, weights, strict=True):
             t = 0.5 * (t1 - t0) * x + 0.5 * (t0 + t1)
-            moment = cut_section_moment(diameter, bore, a * math.cos(t), h)
+            c = a * math.cos(t)
+            moment = (cut_section_moment(diameter, bore, h, c) if across
+                      else cut_section_moment(diameter, bore, c, h))
             flexibility += 0.5 * (t1 - t0) * w * math.cos(t) / moment
     # never above the host's own diameter, which a hole inside the bore leaves
     return min(float((64.0 / math.pi / flexibility + bore**4) ** 0.25), diameter)
@@ -530,7 +545,8 @@ def _cavity(r: _Reader, d: dict, bar: SteppedBar):
                    "round cavity this long cuts the section in two); give "
                    "section_diameter_mm")
     dia = dia_mm / 1000
-    cavity = CavitySpec(z, length, dia, host.inner_diameter_m, depth / 1000)
+    cavity = CavitySpec(z, length, dia, host.inner_diameter_m, depth / 1000,
+                        _across_diameter(host, length, depth / 1000, dia))
     return cavity, {"cavity": {"position_mm": z_mm, "length_mm": length_mm,
                                "section_diameter_mm": dia_mm, "depth_mm": depth}}
 
@@ -641,7 +657,36 @@ def _paper(r: _Reader, d: dict) -> dict:
     return out
 
 
-def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
+def _across_diameter(host: Section, length: float, depth: float, dia: float) -> float | None:
+    """The cavity's section across the ball's direction (m): the computed one, times the
+    given along section's stiffness over the computed one's where the file gives it
+    (the two keep their computed ratio); None where it cannot be computed."""
+    try:
+        along = cavity_section_diameter(host.diameter_m, host.inner_diameter_m, length, depth)
+        across = cavity_section_diameter(host.diameter_m, host.inner_diameter_m, length,
+                                         depth, across=True)
+    except ParameterError:
+        return None
+    bore4 = host.inner_diameter_m**4
+    scale = (dia**4 - bore4) / (along**4 - bore4)
+    return min(float((bore4 + scale * (across**4 - bore4)) ** 0.25), host.diameter_m)
+
+
+def _cavity_section(cavity: CavitySpec, start: float, end: float, across: bool) -> Section:
+    """The cavity's equivalent section; ``across``: with the along section's mass and the
+    stiffness of bending across the ball's direction."""
+    dia, bore = cavity.section_diameter_m, cavity.section_bore_m
+    if not across:
+        return Section(start, end, dia, bore)
+    if cavity.section_diameter_across_m is None:
+        raise ParameterError("the cavity's section across the ball's direction cannot be "
+                             "computed (give a cavity shorter than the section's diameter): "
+                             "a bar of two planes needs it")
+    scale = (cavity.section_diameter_across_m**4 - bore**4) / (dia**4 - bore**4)
+    return Section(start, end, dia, bore, scale)
+
+
+def _with_cavity(bar: SteppedBar, cavity: CavitySpec, across: bool = False) -> SteppedBar:
     """``bar`` with the cavity's span given the cavity's equivalent section; the
     host section is split at the cavity's ends unless they sit on its own."""
     lo, hi = cavity.position_m - cavity.length_m / 2, cavity.position_m + cavity.length_m / 2
@@ -654,7 +699,7 @@ def _with_cavity(bar: SteppedBar, cavity: CavitySpec) -> SteppedBar:
         b = s.end_m if near(hi, s.end_m, bar.length_m) else hi
         if a > s.start_m:
             out.append(Section(s.start_m, a, s.diameter_m, s.inner_diameter_m))
-        out.append(Section(a, b, cavity.section_diameter_m, cavity.section_bore_m))
+        out.append(_cavity_section(cavity, a, b, across))
         if b < s.end_m:
             out.append(Section(b, s.end_m, s.diameter_m, s.inner_diameter_m))
     return SteppedBar(tuple(out), bar.youngs_modulus_pa, bar.density_kg_m3, bar.damping_ratio,
