@@ -26,7 +26,7 @@ from boringbar.model.dampers import NO_FRICTION, ImpactDamper
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
 from boringbar.orbits.shooting import make_flow
-from boringbar.simulate import Initial, pack, setup_run
+from boringbar.simulate import Initial, pack, setup_run, simulate_batch
 from boringbar.simulate import layout as L
 from boringbar.simulate.kernels import (
     hunt_crossley_alpha,
@@ -226,3 +226,17 @@ def test_the_core_refuses_a_contact_where_it_has_none():
         with pytest.raises(ValueError, match="CONTACT_K"):
             run_rk4(q, np.zeros(6), 0.0, 1e-6, 10, 0, 0, np.zeros((0, 6)), np.zeros((10, 3)),
                     np.zeros((10, 2)), np.zeros((0, 5)), np.zeros(L.MET_SIZE))
+
+
+def test_a_batch_counts_a_hertz_contacts_impacts_and_says_it_kept_no_rows():
+    system = make_system("ball", gap_m=GAP, contact="hertz")
+    forcing = bb.Harmonic(amplitude_n=20.0)
+    start = Initial(tip_velocity_m_s=1.0)
+    one = bb.simulate(system, forcing, duration_s=0.03, record_every=0, integrator="rk4",
+                      initial=start)
+    batch, = simulate_batch([(system, forcing, start)], duration_s=0.03)
+    assert batch.metrics["impacts_total"] == one.metrics["impacts_total"] > 0
+    assert batch.final.x.tolist() == one.final.x.tolist()
+    c = batch.summary()["contact"]
+    assert c["rows_kept"] is False and c["n_impacts"] is None
+    assert c["max_force_whole_run_n"] == one.summary()["contact"]["max_force_whole_run_n"]

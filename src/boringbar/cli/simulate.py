@@ -156,6 +156,8 @@ def _cut_text(s: dict) -> str:
 def contact_text(c: dict) -> str:
     """A Hertz contact's line of the summary: its impacts' durations and peak forces."""
     head = f"  Hertz contact      K = {c['stiffness_n_m1_5']:.3g} N/m^1.5"
+    if not c["rows_kept"]:
+        return head + f", largest force {c['max_force_whole_run_n']:.4g} N"
     if not c["n_impacts"]:
         return head + ", no impact in the steady part"
     return (head + f", {c['n_impacts']} impacts: {c['duration_median_s'] * 1e6:.3g} us "

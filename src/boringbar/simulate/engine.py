@@ -447,6 +447,14 @@ def run_energy(m: list, e0: float, e1: float) -> dict:
     }
 
 
+def _contacts(su: RunSetup, m: list) -> np.ndarray | None:
+    """The contact rows of a run: none under the impact law; None where a Hertz run kept
+    none (a batch's)."""
+    if su.contact is None:
+        return None if hertz(su.system) else np.zeros((0, L.CONTACT_NCOL))
+    return su.contact[:min(int(m[L.N_CONTACT_REC]), len(su.contact))].copy()
+
+
 def run_result(su: RunSetup, elapsed: float) -> Run:
     """The labelled :class:`Run` from a finished kernel run."""
     system, dt, t0, x, imp, stick, m = su.system, su.dt, su.t0, su.x, su.imp, su.stick, \
@@ -475,8 +483,7 @@ def run_result(su: RunSetup, elapsed: float) -> Run:
         elapsed_s=elapsed,
         energy=run_energy(m, stored_energy(system, su.x_start), stored_energy(system, x)),
         thresholds=thresholds, integrator=su.integrator, stick_law=su.stick_law,
-        contacts=(np.zeros((0, L.CONTACT_NCOL)) if su.contact is None
-                  else su.contact[:min(int(m[L.N_CONTACT_REC]), len(su.contact))].copy()),
+        contacts=_contacts(su, m),
     )
 
 
@@ -604,4 +611,5 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
         su.imp[:] = imp[r, :len(su.imp)]
         su.stick[:] = stick[r, :len(su.stick)]
         su.stb[:] = stb[r, :len(su.stb)]
+        su.contact = None  # a batch keeps no contact rows
     return [run_result(su, elapsed / len(sus)) for su in sus]

@@ -207,8 +207,8 @@ class Run:
     integrator: str = "rk4"
     stick_law: str = "sgn"
     #: (n, 6): a Hertz contact's impacts: start (s), wall, v_in (m/s), duration (s),
-    #: peak force (N), v_out (m/s)
-    contacts: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    #: peak force (N), v_out (m/s); None where a Hertz run kept no rows (a batch's)
+    contacts: np.ndarray | None = field(default_factory=lambda: np.zeros((0, 6)))
 
     @property
     def hertz(self) -> bool:
@@ -220,16 +220,18 @@ class Run:
         """A Hertz contact's impacts in the steady part: their count, durations (s) and
         peak forces (N), median and largest, the restitution they gave (v_out / v_in,
         median) and the largest contact force of the whole run (N); None under the
-        impact law."""
+        impact law.  ``rows_kept``: False where the run kept no rows (a batch's: its
+        statistics are then None)."""
         if not self.hertz:
             return None
-        c = self.contacts
+        c = self.contacts if self.contacts is not None else np.full((0, 6), np.nan)
 
         def stat(col, f):
             return float(f(c[:, col])) if len(c) else None
 
         return {"stiffness_n_m1_5": self.system.damper.hertz_stiffness_n_m1_5,
-                "n_impacts": len(c),
+                "rows_kept": self.contacts is not None,
+                "n_impacts": len(c) if self.contacts is not None else None,
                 "duration_median_s": stat(3, np.median), "duration_max_s": stat(3, np.max),
                 "peak_force_median_n": stat(4, np.median), "peak_force_max_n": stat(4, np.max),
                 "restitution_ratio": (float(np.median(c[:, 5] / c[:, 2])) if len(c)
@@ -402,7 +404,7 @@ class Run:
         if self.impacts.size:
             ds["impact_time_s"] = ("impact", self.impacts[:, 0], {"units": "s"})
             ds["impact_wall"] = ("impact", self.impacts[:, 1])
-        if self.contacts.size:
+        if self.contacts is not None and self.contacts.size:
             c = self.contacts
             for col, name, unit in ((0, "contact_start_s", "s"), (2, "contact_speed_in_m_s", "m/s"),
                                     (3, "contact_duration_s", "s"),
