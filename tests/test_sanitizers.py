@@ -4,8 +4,8 @@ The core is built a second time, with ``-DBORINGBAR_SANITIZE=ON`` (CMakeLists.tx
 folder of its own, and the kernel tests run against that build in a new process: the
 stored reference outputs (every integrator, every bar), the bindings' hypothesis test
 (wrong arrays and values of every kind) and the equations of motion as matrices
-(tests/test_dynamics.py: every bar, and bad parameter vectors), and RK4's stick law
-(tests/test_stick_law.py).  An out-of-bounds
+(tests/test_dynamics.py: every bar, and bad parameter vectors), RK4's stick law
+(tests/test_stick_law.py) and the Hertz contact (tests/test_contact.py).  An out-of-bounds
 access, a use after free or undefined behaviour (signed overflow, a float cast out of
 range, ...) aborts that process, and this test fails with the sanitizer's report.  It
 needs CMake, Ninja or Make, a C++ compiler and nanobind in the environment (the test extra
@@ -25,7 +25,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 #: the tests run against the sanitized core
 KERNEL_TESTS = ("tests/test_kernel_reference.py", "tests/test_core_bindings.py",
-                "tests/test_dynamics.py", "tests/test_stick_law.py")
+                "tests/test_dynamics.py", "tests/test_stick_law.py", "tests/test_contact.py")
 
 #: imports the sanitized module as boringbar.core before anything imports the real one
 RUNNER = """
