@@ -459,12 +459,13 @@ inline void close_contact(const EventLog& log, Mat rows, const Episode& ep, doub
 // wall rule): a contact begins (counted as an impact at its start, with y'- = wall v_in,
 // or as a micro impact), goes on (its peak force) or ends (close_contact), and the stick
 // bookkeeping off the walls.  y0: y at the step's start; v0: the contact speed the step
-// was damped with.  Returns whether the ball is in contact as the impact law means it
-// (resting on a wall: a contact that began slower than V_IMPACT).
+// was damped with; the step is [t, t1] of dt.  Returns whether the ball is in contact as
+// the impact law means it (resting on a wall: a contact that began slower than V_IMPACT).
 template <int N, int CASE>
 BB_INLINE bool contact_walls(const Params& q, Shape<N, CASE> sh, const double* X,
                              const EventLog& log, Mat rows, Episode& ep, StickState& ss,
-                             double y0, double v0, double t, double dt, bool steady) {
+                             double y0, double v0, double t, double t1, bool steady) {
+    const double dt = t1 - t;
     const double y = X[sh.iy()], yd = X[sh.iyd()], half = q.ball.half;
     const double d0 = std::fabs(y0) - half, d1 = std::fabs(y) - half;
     if (!ep.on && d1 > 0.0) {
@@ -487,7 +488,7 @@ BB_INLINE bool contact_walls(const Params& q, Shape<N, CASE> sh, const double* X
         ep.on = false;
     }
     const bool stuck = q.fc > 0.0 && !ep.on && std::fabs(yd) < q.vstick;
-    stick_step(stuck, ss, t, t + dt, log, q.stick_min);
+    stick_step(stuck, ss, t, t1, log, q.stick_min);
     return ep.on && !ep.counted;
 }
 

@@ -302,7 +302,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         strobe_step(q, sh, X, prev, t, t1, dt, so);
         bool contact = false;
         if (ball && q.hertz)
-            contact = contact_walls(q, sh, X, log, a.contact, ep, ss, y0, v0, t, dt, steady);
+            contact = contact_walls(q, sh, X, log, a.contact, ep, ss, y0, v0, t, t1, steady);
         else if (ball)
             contact = ball_walls(q, sh, X, log, ss, t, t1, steady);
 
