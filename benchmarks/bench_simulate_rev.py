@@ -125,9 +125,9 @@ class Version:
             self.inner = clock() - tic
             return out
 
-        def timed_rk4(*args):
+        def timed_rk4(*args, **kwargs):
             tic = clock()
-            run_rk4(*args)
+            run_rk4(*args, **kwargs)
             self.inner = clock() - tic
 
         self.module.run_exact, self.module.run_rk4 = timed_exact, timed_rk4

@@ -192,6 +192,10 @@ struct Shape {
     bool diag() const { return kase() == L::SOLID || ball(); }
     // the length of the state arrays: exact where N is a template constant
     static constexpr int NXC = N > 0 ? 2 * N + 2 : NX_MAX;
+    // a compliant contact runs in the kernel of a run-time shape alone (rk4_run.hpp's
+    // dispatch), so that the others compile its branches away
+    static constexpr bool CONTACT = CASE < 0;
+    bool hertz(const Params& q) const { return CONTACT && q.hertz; }
 };
 
 // The sign of y' as lane masks (all ones where y' > 0, resp. y' < 0; neither for 0 and
@@ -236,14 +240,15 @@ template <int N, int CASE>
 BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
                             double* Kd, double sfree, double fcon, StageTerms& t) {
     const int n = sh.n();
-    const double need = q.hertz ? sfree - q.kappa1 * fcon : sfree;
+    const bool hertz = sh.hertz(q);
+    const double need = hertz ? sfree - q.kappa1 * fcon : sfree;
     const double carry = need * q.inv_kappa;
     t.held = std::fabs(carry) <= q.fs;
     const double fb = t.held ? carry : (carry > 0.0 ? q.fc : -q.fc);
     for (int i = 0; i < n; ++i) {
         Kd[n + i] =
             free_acceleration(q.fm[i], q.km[i], q.cm[i], f, Xs[i], Xs[n + i]) - q.dm[i] * fb;
-        if (q.hertz) Kd[n + i] -= q.pD[i] * q.invM[i] * fcon;
+        if (hertz) Kd[n + i] -= q.pD[i] * q.invM[i] * fcon;
     }
     t.fb = fb;
     return t.held ? 0.0 : q.kappa * fb - need;
@@ -297,7 +302,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         t.pdv = pdv;
         // a compliant contact: the wall's force on the ball, its reaction on the bar
         double fcon = 0.0;
-        if (q.hertz) {
+        if (sh.hertz(q)) {
             const ContactForce c = contact_force(q, Xs[iy], yds);
             fcon = c.f;
             for (int i = 0; i < n; ++i) Kd[n + i] -= q.pD[i] * q.invM[i] * fcon;

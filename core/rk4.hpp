@@ -85,7 +85,7 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
     }
     fl.w_force += w_s * f * s.wf;
     fl.d_visc += w_s * s.pvisc;
-    if (sh.ball() && q.hertz) fl.d_con += w_s * s.pcon;
+    if (sh.ball() && sh.hertz(q)) fl.d_con += w_s * s.pcon;
 }
 
 // |v| lane by lane (the sign bit cleared, as fabs)

@@ -177,6 +177,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.regen;
     const int n = sh.n(), nx = sh.nx(), iyd = sh.iyd();
     const bool ball = sh.ball(), has_aux = sh.has_aux();
+    const bool hertz = ball && sh.hertz(q);  // a compliant contact at the walls
     const double t0 = a.t0, dt = a.dt;
     double* met = a.met.d;
     const Mat buf = a.buf;
@@ -225,7 +226,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     double hold_max = met[L::MAX_HOLD_FORCE], n_free = met[L::N_FREE_STEPS];
     // a compliant contact under way (from an earlier call) keeps its damping
     Episode ep = Episode::load(met);
-    if (q.hertz && ep.on) q.chi = q.alpha / ep.vin;
+    if (hertz && ep.on) q.chi = q.alpha / ep.vin;
 
     TipAux prev = tip_aux(q, sh, X, true);
     idx wptr = regen ? kg0 % nbuf : 0;  // the row of the newest node
@@ -254,7 +255,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         // off the walls a contact's damping is set by the speed the ball has as it
         // begins (contact_walls keeps it for the contact)
         double y0 = 0.0, v0 = 0.0;
-        if (ball && q.hertz) {
+        if (hertz) {
             y0 = X[sh.iy()];
             v0 = contact_speed(q, X[iyd]);
             if (!ep.on) q.chi = q.alpha / v0;
@@ -270,7 +271,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         if (use_map) map_increment(sh, mp, X, MapIn{sn, cn, fz}, dX);
         // the map holds no contact force: a step in a compliant contact, or one that ends
         // in one, takes the stages
-        if (use_map && q.hertz &&
+        if (use_map && hertz &&
             (ep.on || !(std::fabs(X[sh.iy()] + dX[sh.iy()]) <= q.ball.half)))
             use_map = false;
         if (use_map) {
@@ -301,7 +302,7 @@ BB_INLINE void run_body(const RunArgs& a) {
 
         strobe_step(q, sh, X, prev, t, t1, dt, so);
         bool contact = false;
-        if (ball && q.hertz)
+        if (hertz)
             contact = contact_walls(q, sh, X, log, a.contact, ep, ss, y0, v0, t, t1, steady);
         else if (ball)
             contact = ball_walls(q, sh, X, log, ss, t, t1, steady);
@@ -352,7 +353,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     for (int j = 0; j < nx; ++j) a.x[j] = X[j];
     st.store(met);
     fl.store(met);
-    if (q.hertz) {
+    if (hertz) {
         ep.store(met);
         met[L::D_IMPACT] += fl.d_con;
     }
@@ -387,6 +388,9 @@ void run_modes(const RunArgs& a, int kase, int forcing) {
 
 template <class Copy>
 void run_shape(const RunArgs& a) {
+    // a compliant contact: the kernel of a run-time shape (Shape::CONTACT)
+    if (a.p[L::CONTACT_K] > 0.0 && int(a.p[L::CASE]) == L::BALL)
+        return Copy::template run<0, -1, -1>(a);
     const int n = int(a.p[L::N_MODES]);
     const int kase = int(a.p[L::CASE]);
     const int forcing = int(a.p[L::FORCING]);
