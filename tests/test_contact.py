@@ -10,6 +10,7 @@ the contact's duration sets (K^-2/5).
 
 from __future__ import annotations
 
+import json
 import math
 import tomllib
 
@@ -240,3 +241,13 @@ def test_a_batch_counts_a_hertz_contacts_impacts_and_says_it_kept_no_rows():
     c = batch.summary()["contact"]
     assert c["rows_kept"] is False and c["n_impacts"] is None
     assert c["max_force_whole_run_n"] == one.summary()["contact"]["max_force_whole_run_n"]
+
+
+def test_a_cut_with_a_hertz_ball_reports_its_contacts(tmp_path, capsys):
+    out = tmp_path / "cut"
+    assert main(["simulate", "--gap-mm", "0.1", "--contact", "hertz", "--rpm", "3000",
+                 "--depth-mm", "0.3", "--duration-s", "0.1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Hertz contact" in text and "peak force" in text
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["contact"]["n_impacts"] > 0 and summary["integrator"] == "rk4"

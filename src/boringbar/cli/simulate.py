@@ -146,6 +146,7 @@ def _cut_text(s: dict) -> str:
         f"  tip                static deflection {c['static_deflection_m'] * 1e3:.4g} mm, "
         f"max |W| {s['max_abs_tip_m'] * 1e3:.4g} mm",
         f"  delay interp.      {c['delay_interpolation']}",
+        *([contact_text(s["contact"])] if s.get("contact") else []),
         f"  integrator         {s['integrator']}",
         f"  elapsed            {s['elapsed_s']:.2f} s",
         "  " + wrote(s["files"]),
