@@ -148,6 +148,8 @@ Shape check_params(Vec p) {
     require(p[L::STROBE_PERIOD] >= 0.0, "p[STROBE_PERIOD] must be >= 0");
     require(p[L::CONTACT_K] == 0.0, "p[CONTACT_K] must be 0: the exact integrator takes the "
                                     "impact law; a Hertz contact steps with run_rk4");
+    require(p[L::ROLL] == 0.0, "p[ROLL] must be 0: the exact integrator takes a sliding "
+                               "ball; a rolling one steps with run_rk4");
     return s;
 }
 

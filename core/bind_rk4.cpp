@@ -106,6 +106,23 @@ void check_cut(const double* p, double dt, std::int64_t nbuf) {
                                       "+ 3 = " + num(need));
 }
 
+// A rolling ball's constants: ROLL 0 or 1, the friction forces and the band finite and
+// >= 0, the static force at least the kinetic one.
+void check_roll(const double* p, const std::string& where) {
+    int_slot(p, L::ROLL, "ROLL", 0, 1, where);
+    for (const auto& [slot, name] : {std::pair{L::ROLL_STATIC, "ROLL_STATIC"},
+                                     std::pair{L::ROLL_KINETIC, "ROLL_KINETIC"},
+                                     std::pair{L::ROLL_BAND, "ROLL_BAND"}})
+        require(std::isfinite(p[slot]) && p[slot] >= 0.0,
+                where + "[" + name + "] = " + num(p[slot]) + " must be finite and >= 0");
+    require(p[L::ROLL_STATIC] >= p[L::ROLL_KINETIC],
+            where + "[ROLL_STATIC] = " + num(p[L::ROLL_STATIC]) + " must be >= ROLL_KINETIC = " +
+                num(p[L::ROLL_KINETIC]));
+}
+
+// Whether p's ball rolls: its state has the spin after y', 2 n + 3 entries.
+bool rolls(const double* p, const Kind& k) { return k.kase == L::BALL && p[L::ROLL] > 0.0; }
+
 // A compliant contact's constants: K >= 0 (0: the impact law) and alpha >= 0, finite.
 void check_contact(const double* p, const std::string& where) {
     const double k = p[L::CONTACT_K], alpha = p[L::CONTACT_ALPHA];
@@ -149,7 +166,8 @@ void run_rk4(const RK4Run& run) {
     const Span1<double> p = span1<double>(given(r.p, "p"), "p", L::P_SIZE);
     a.p = p.d;
     const Kind k = kind_of(a.p, "p");
-    a.x = span1<double>(given(r.x, "x"), "x", 2 * k.n + 2);
+    check_roll(a.p, "p");
+    a.x = span1<double>(given(r.x, "x"), "x", 2 * k.n + 2 + (rolls(a.p, k) ? 1 : 0));
     a.t0 = r.t0;
     a.dt = r.dt;
     a.n_steps = r.n_steps;
@@ -193,6 +211,9 @@ void run_rk4_batch(const RK4Batch& run) {
         require(kr.forcing == L::HARMONIC,
                 row + ": batches take harmonic forcing only (cuts: run_rk4)");
         check_contact(a.P.row(r), row);
+        check_roll(a.P.row(r), row);
+        require(!rolls(a.P.row(r), kr), row + ": batches take sliding balls (a rolling one: "
+                                              "run_rk4)");
     }
     a.x = span2<double>(given(r.x, "x"), "x", n_runs, 2 * k.n + 2);
     a.t0 = r.t0;

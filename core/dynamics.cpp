@@ -50,6 +50,8 @@ R::Params params_of(const P& p, bool sliding_law = true) {
     // (slots a regime does not read may be NaN: only a positive K is a contact)
     require(!(d[L::CONTACT_K] > 0.0), "p[CONTACT_K] must be 0: the regime matrices are the "
                                       "impact law's, and a Hertz contact is not linear");
+    require(!(d[L::ROLL] > 0.0), "p[ROLL] must be 0: the regime matrices are a sliding "
+                                 "ball's");
     return R::unpack(d, 1e-6);  // the step only sets the forcing's rotation, unused here
 }
 

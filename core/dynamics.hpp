@@ -24,7 +24,7 @@ namespace bb::dynamics {
 
 namespace L = layout;
 
-constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2
+constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2 (a rolling ball's: 2n + 3)
 
 // Mode i's acceleration under the tip force f alone, without the damper's force, from the
 // premultiplied constants fm = psi_F,i / M_i, km = K_i / M_i, cm = C_i / M_i (Params):
@@ -70,6 +70,11 @@ struct Params {
     // began with; kappa1 is carried_kappa's of the (always reciprocal) contact force
     bool hertz = false;
     double ck = 0.0, alpha = 0.0, kappa1 = 0.0, chi = 0.0;
+    // a rolling ball (docs/model.md, 2.7): its spin s = r omega a state; it rolls while
+    // the floor's friction that keeps y' = s is at most mu_s N, and slips with mu_k N
+    // beyond; kroll = r^2 / I = 5 / (2 m)
+    bool roll = false;
+    double mus_n = 0.0, muk_n = 0.0, roll_band = 0.0, kroll = 0.0;
 };
 
 // The modes' velocity jumps of an impact with impulse factor g (model.hpp's impact_law).
@@ -165,6 +170,11 @@ inline Params unpack(const double* p, double dt) {
     q.alpha = p[L::CONTACT_ALPHA];
     q.hertz = q.ck > 0.0 && q.kase == L::BALL;
     q.kappa1 = carried_kappa(q, 1.0);
+    q.roll = p[L::ROLL] > 0.0 && q.kase == L::BALL;
+    q.mus_n = p[L::ROLL_STATIC];
+    q.muk_n = p[L::ROLL_KINETIC];
+    q.roll_band = p[L::ROLL_BAND];
+    q.kroll = q.ball.m > 0.0 ? 2.5 / q.ball.m : 0.0;
     q.inv_kappa = q.kappa != 0.0 ? 1.0 / q.kappa : 0.0;
     set_friction(q, q.fc);
     q.chh = std::cos(q.om * 0.5 * dt);
@@ -179,10 +189,12 @@ inline Params unpack(const double* p, double dt) {
 template <int N, int CASE>
 struct Shape {
     int run_n, run_kase;
-    explicit Shape(const Params& q) : run_n(q.n), run_kase(q.kase) {}
+    bool rolls;  // a rolling ball: the spin after y' (kernels of a run-time shape alone)
+    explicit Shape(const Params& q)
+        : run_n(q.n), run_kase(q.kase), rolls(CASE < 0 && q.roll) {}
     int n() const { return N > 0 ? N : run_n; }
     int kase() const { return CASE >= 0 ? CASE : run_kase; }
-    int nx() const { return 2 * n() + 2; }
+    int nx() const { return 2 * n() + 2 + (rolls ? 1 : 0); }
     int iy() const { return 2 * n(); }
     int iyd() const { return 2 * n() + 1; }
     bool ball() const { return kase() == L::BALL; }
@@ -190,8 +202,10 @@ struct Shape {
     bool has_aux() const { return ball() || tmd(); }
     // in the solid and ball bars a mode's rows of the map involve only its own u, u'
     bool diag() const { return kase() == L::SOLID || ball(); }
-    // the length of the state arrays: exact where N is a template constant
-    static constexpr int NXC = N > 0 ? 2 * N + 2 : NX_MAX;
+    int is() const { return 2 * n() + 2; }  // a rolling ball's spin s = r omega
+    // the length of the state arrays: exact where N is a template constant (room for a
+    // rolling ball's spin in the kernel of a run-time shape)
+    static constexpr int NXC = N > 0 ? 2 * N + 2 : NX_MAX + 1;
     // a compliant contact runs in the kernel of a run-time shape alone (rk4_run.hpp's
     // dispatch), so that the others compile its branches away
     static constexpr bool CONTACT = CASE < 0;
@@ -227,6 +241,8 @@ struct StageTerms {
     double pdv;    // sum psi_d u'
     bool held;     // the stick law held the ball (y'' = 0)
     double pcon;   // the power a compliant contact's damping dissipates
+    double pfloor; // the power a slipping roll's floor friction dissipates
+    bool rolled;   // a rolling ball rolled without slip at this stage
 };
 
 // The ball's stage under the stick law (Params::hold) inside the band |y'| < band: the
@@ -254,6 +270,28 @@ BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
     return t.held ? 0.0 : q.kappa * fb - need;
 }
 
+// A rolling ball's stage (Shape::rolls; docs/model.md, 2.7): the floor's friction F on
+// the ball (the bar feels -psi_d F) and the spin s = r omega, s' = -kroll F.  Rolling
+// (y' = s) needs F = need / (kappa1 + kroll), need = sum psi_d a_free - kappa1 (F_b +
+// the contact's force), the forces already on it; it rolls where the slip y' - s is
+// inside the band and |F| <= mu_s N, else it slips with F = -mu_k N sgn(y' - s) (at
+// zero slip, the way the need pulls).  ydd: y'' without F; returns y'' with it.
+template <int N, int CASE>
+BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double* Kd,
+                            double ydd, double need, StageTerms& t) {
+    const int n = sh.n(), is = sh.is();
+    const double slip = Xs[sh.iyd()] - Xs[is];
+    const double keep = need / (q.kappa1 + q.kroll);
+    t.rolled = std::fabs(slip) < q.roll_band && std::fabs(keep) <= q.mus_n;
+    const double dir = slip != 0.0 && !t.rolled ? (slip > 0.0 ? -1.0 : 1.0)
+                                                : (keep > 0.0 ? 1.0 : -1.0);
+    const double F = t.rolled ? keep : dir * q.muk_n;
+    for (int i = 0; i < n; ++i) Kd[n + i] -= q.pD[i] * q.invM[i] * F;
+    Kd[is] = -q.kroll * F;
+    t.pfloor = t.rolled ? 0.0 : -F * slip;
+    return ydd + q.kappa1 * F;
+}
+
 // The stage derivative Kd at the stage state Xs under the force f at the tip: the bar
 // M_i u_i'' + C_i u_i' + K_i u_i = psi_F,i f with the damper's terms (docs/model.md, 2;
 // psi_F = psi_L but in an oriented cut, section 4.7),
@@ -268,11 +306,14 @@ BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
 // sliding direction of their own.  RK4's stages and the matrices that shooting
 // linearises are both built from this definition of the equations of motion (the step
 // map's tables, linmap.hpp, push basis vectors through a copy of the stage recursion).
-template <int N, int CASE, bool FAST = false>
+// ROLL: a rolling ball's law is compiled in (RK4's stages, derivative(); the matrices and
+// the step map, a sliding ball's, leave it out: with it in their copy, GCC 12 stops with
+// the internal error above).
+template <int N, int CASE, bool FAST = false, bool ROLL = false>
 BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
                                      double f, double* Kd, double ysign) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false, 0.0};
+    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false, 0.0, 0.0, false};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
     for (int i = 0; i < n; ++i) {
         const double vi = Xs[n + i];
@@ -314,6 +355,9 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         // stops with an internal error, gimple_expand_vec_cond_expr, in the regime
         // matrices' copy, dynamics.cpp; so the held stage writes the modes again.)
         if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
+        if constexpr (ROLL) {
+            if (sh.rolls) ydd = roll_stage(q, sh, Xs, Kd, ydd, sfree - q.kappa1 * (fb + fcon), t);
+        }
     } else if (sh.tmd()) {
         double rel = Xs[iy], reld = Xs[iyd];
         for (int i = 0; i < n; ++i) {
@@ -338,7 +382,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
 template <int N, int CASE, bool FAST = false>
 BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
                                 double* Kd) {
-    return derivative_with<N, CASE, FAST>(q, sh, Xs, f, Kd, Xs[sh.iyd()]);
+    return derivative_with<N, CASE, FAST, true>(q, sh, Xs, f, Kd, Xs[sh.iyd()]);
 }
 
 }  // namespace bb::dynamics

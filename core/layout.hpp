@@ -51,7 +51,11 @@ enum Forcing : int { HARMONIC = 0, REGENERATIVE = 1 };
     X(NOISE_SEED)       /* the noise's seed, an integer in [0, 2^53] */                    \
     X(STICK_BAND)       /* RK4's stick law: |y'| below this holds the ball; 0 = sgn() (m/s) */ \
     X(CONTACT_K)        /* Hertz contact K (N/m^1.5), F = K d^1.5 (1 + chi d'); 0 = impacts */ \
-    X(CONTACT_ALPHA)    /* Hunt-Crossley's chi v_in that gives the restitution e */
+    X(CONTACT_ALPHA)    /* Hunt-Crossley's chi v_in that gives the restitution e */      \
+    X(ROLL)             /* 1: the ball rolls (its spin a state); 0 = it slides */         \
+    X(ROLL_STATIC)      /* mu_s m g: the most friction that keeps it rolling (N) */       \
+    X(ROLL_KINETIC)     /* mu_k m g: the friction of a slipping roll (N) */               \
+    X(ROLL_BAND)        /* |y' - r omega| below this may roll (m/s) */
 
 #define BB_ENUM_ENTRY(name) name,
 enum PSlot : int { BB_P_SCALARS(BB_ENUM_ENTRY) P_SCALARS_END };

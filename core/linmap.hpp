@@ -53,6 +53,7 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
     q.n = n;
     q.hold = false;  // the map is the sgn() law's step
     q.hertz = false;  // off the walls: a run with a compliant contact steps by stages
+    q.roll = false;   // a rolling ball's run steps by stages
     set_friction(q, 1.0);
     const Shape<0, -1> sh(q);
     const bool ball = sh.ball(), tmd = sh.tmd();

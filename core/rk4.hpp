@@ -86,6 +86,7 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
     fl.w_force += w_s * f * s.wf;
     fl.d_visc += w_s * s.pvisc;
     if (sh.ball() && sh.hertz(q)) fl.d_con += w_s * s.pcon;
+    if (sh.rolls) fl.d_fric += w_s * s.pfloor;
 }
 
 // |v| lane by lane (the sign bit cleared, as fabs)
@@ -124,11 +125,12 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 // they stay in registers (the kernel files are built without GCC's auto-vectoriser,
 // which packed them in vectors through memory, where the loads stalled on store
 // forwarding).
-// hold_max: the largest |F_b| of a stage the stick law held, raised in place.
+// hold_max: the largest |F_b| of a stage the stick law held, raised in place; rolled: a
+// rolling ball rolled without slip at every stage (set in place).
 template <int N, int CASE, bool FAST, class Force>
 BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
                           const double* cst, const double* wst, Flows& fl,
-                          double& hold_max, Force&& force) {
+                          double& hold_max, bool& rolled, Force&& force) {
     const int nx = sh.nx();
     constexpr int NXC = Shape<N, CASE>::NXC;
     double sum[NXC], xs[NXC];
@@ -146,6 +148,7 @@ BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
         }
         stage_flows(q, sh, fl, terms, wst[s], f);
         held = held && terms.held;
+        rolled = rolled && terms.rolled;
         hold_max = Steady::pymax(hold_max, terms.held ? std::fabs(terms.fb) : 0.0);
     }
     for (int j = 0; j < nx; ++j) X[j] += sum[j];
@@ -368,6 +371,16 @@ BB_INLINE void stop_slide(const Params& q, Shape<N, CASE> sh, double* X, Flows& 
     X[sh.iyd()] = j.yd;
     jump_modes(q, sh.n(), X, j.g);
     fl.d_fric += j.loss;
+}
+
+// After a step whose four stages rolled without slip (Shape::rolls): the spin takes y'
+// exactly, so that the slip inside the band does not drift; the spin's energy it changes,
+// (1/5) m (s^2 - y'^2), goes to friction.
+template <int N, int CASE>
+BB_INLINE void stop_roll_slip(const Params& q, Shape<N, CASE> sh, double* X, Flows& fl) {
+    const double s = X[sh.is()], yd = X[sh.iyd()];
+    fl.d_fric += 0.2 * q.ball.m * (s * s - yd * yd);
+    X[sh.is()] = yd;
 }
 
 // The ball's walls at the step's end t1 (model.hpp's wall rule; the modes jump by

@@ -208,7 +208,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     }
 
     // the step as an affine map where F_b cannot switch (linmap.hpp)
-    const bool linear = !regen && !q.stage_loop;
+    const bool linear = !regen && !q.stage_loop && !sh.rolls;  // (the map has no spin)
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
     double sn = 0.0, cn = 1.0;
@@ -289,11 +289,14 @@ BB_INLINE void run_body(const RunArgs& a) {
                 }
                 return f;
             };
-            bool held;
+            bool held, rolled = sh.rolls;
             if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
-                held = rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, hold_max, force);
+                held = rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
+                                                 force);
             else
-                held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, hold_max, force);
+                held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
+                                                  force);
+            if (rolled) stop_roll_slip(q, sh, X, fl);
             // (a step held from y' = 0 keeps y' = 0 exactly: nothing to stop)
             if (ball && held && X[iyd] != 0.0) stop_slide(q, sh, X, fl);
             if (ball && q.hold && !held) n_free += 1.0;
@@ -388,8 +391,8 @@ void run_modes(const RunArgs& a, int kase, int forcing) {
 
 template <class Copy>
 void run_shape(const RunArgs& a) {
-    // a compliant contact: the kernel of a run-time shape (Shape::CONTACT)
-    if (a.p[L::CONTACT_K] > 0.0 && int(a.p[L::CASE]) == L::BALL)
+    // a compliant contact or a rolling ball: the kernel of a run-time shape (Shape)
+    if ((a.p[L::CONTACT_K] > 0.0 || a.p[L::ROLL] > 0.0) && int(a.p[L::CASE]) == L::BALL)
         return Copy::template run<0, -1, -1>(a);
     const int n = int(a.p[L::N_MODES]);
     const int kase = int(a.p[L::CASE]);

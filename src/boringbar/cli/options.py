@@ -18,7 +18,7 @@ from boringbar.execute import Execution
 from boringbar.io import jsonable
 from boringbar.model.contact import CONTACT_LAWS
 from boringbar.model.cutting import KR_ALUMINIUM, WORKPIECES, CuttingLaw, cutting_law
-from boringbar.model.dampers import MAX_FRICTION_FORCE
+from boringbar.model.dampers import BALL_MOTIONS, MAX_FRICTION_FORCE, MU_KINETIC, MU_STATIC
 from boringbar.model.forcing import (
     INTERPOLATIONS,
     MAX_FEED,
@@ -57,7 +57,7 @@ MAX_WORKERS = 4096
 BALL_OPTIONS = ("gap_mm", "friction", "friction_force_n", "friction_number",
                 "friction_reading", "friction_reaction", "ball", "restitution", "locked",
                 "ball_position_mm", "ball_velocity_m_s", "static_ratio", "contact",
-                "contact_stiffness")
+                "contact_stiffness", "ball_motion", "mu_static", "mu_kinetic")
 
 
 def add_common(p: argparse.ArgumentParser, many: bool, harmonic: bool = True,
@@ -165,6 +165,16 @@ def add_ball(g, lst: str, swept: str, ranges: bool, many: bool) -> None:
     g.add_argument("--static-ratio", type=float, metavar="X",
                    help="static friction limit F_s/F_c >= 1 of true stick-slip (default: 1; "
                         "other values need --integrator exact)")
+    g.add_argument("--ball-motion", choices=BALL_MOTIONS,
+                   help="how the ball moves: slide (default; the published model) or roll "
+                        "(its spin a state: it rolls while --mu-static holds it, slips with "
+                        "--mu-kinetic; needs --integrator rk4 or auto; docs/model.md, 2.7)")
+    g.add_argument("--mu-static", type=float, metavar="MU",
+                   help=f"a rolling ball's static floor friction coefficient, >= --mu-kinetic "
+                        f"(default {MU_STATIC:g})")
+    g.add_argument("--mu-kinetic", type=float, metavar="MU",
+                   help=f"a rolling ball's kinetic floor friction coefficient (default "
+                        f"{MU_KINETIC:g})")
     g.add_argument("--contact", choices=CONTACT_LAWS,
                    help="how the ball meets its plugs: impact (default; the published "
                         "instantaneous law) or hertz (a compliant Hertz contact with "
@@ -202,6 +212,18 @@ def add_orientation(p) -> None:
     g.add_argument("--stiffness-ratio", type=float, metavar="R",
                    help="EI of the second bending plane over the first's, in (0, 1000] "
                         "(default 1: a round bar)")
+
+
+def check_rolling(args) -> None:
+    """--mu-static and --mu-kinetic in [0, 10], the static at least the kinetic."""
+    for name in ("mu_static", "mu_kinetic"):
+        if getattr(args, name, None) is not None:
+            check_range("--" + name.replace("_", "-"), getattr(args, name), 0, 10)
+    mus = MU_STATIC if args.mu_static is None else args.mu_static
+    muk = MU_KINETIC if args.mu_kinetic is None else args.mu_kinetic
+    if (args.mu_static is not None or args.mu_kinetic is not None) and mus < muk:
+        raise ParameterError(f"--mu-static = {mus:g} is below --mu-kinetic = {muk:g}: a ball "
+                             "that slips with mu_kinetic is held by at least as much")
 
 
 def check_orientation(args) -> None:
@@ -362,6 +384,7 @@ def check_common(args, bars: list[str]) -> None:
     if args.restitution is not None:
         check_range("--restitution", args.restitution, 0, 1)
     check_orientation(args)
+    check_rolling(args)
     if args.contact_stiffness is not None:
         check_range("--contact-stiffness", args.contact_stiffness, 0, math.inf, lo_open=True,
                     hi_open=True, unit="N/m^1.5")
@@ -550,6 +573,8 @@ def system_overrides(args) -> dict:
           "tmd_design": args.tmd_design, "locked": args.locked or None,
           "static_ratio": args.static_ratio, "spec": args.system_spec,
           "contact": args.contact, "contact_stiffness_n_m1_5": args.contact_stiffness,
+          "motion": args.ball_motion, "mu_static": args.mu_static,
+          "mu_kinetic": args.mu_kinetic,
           **orientation_overrides(args),
           "modal": args.frf_modal}
     return {k: v for k, v in kw.items() if v is not None}

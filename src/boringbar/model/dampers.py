@@ -48,6 +48,13 @@ PUBLISHED_FRICTION_NUMBER = 0.6
 #: The published absorber (docs/model.md, section 3).
 PUBLISHED_TMD = {"mass_kg": 0.39, "stiffness_n_m": 1.05e6, "damping_n_s_m": 505.0}
 FRICTION_KINDS = ("none", "rolling", "coulomb", "force", "paper-number")
+#: How the ball moves along its cavity: sliding (the published model) or rolling, its
+#: spin a state (docs/model.md, section 2.7).
+BALL_MOTIONS = ("slide", "roll")
+#: A rolling ball's floor friction coefficients, static and kinetic: typical of carbide
+#: on steel wetted by coolant (dry, 0.3-0.5; nobody measures them well in a bar, and a
+#: design search takes their spread).
+MU_STATIC, MU_KINETIC = 0.2, 0.15
 REACTIONS = ("reciprocal", "printed")
 
 
@@ -133,6 +140,11 @@ class ImpactDamper:
     turns it into a rigid added mass at z_d (for comparison).
     :meth:`ball` builds one from a material and a diameter.
 
+    ``motion``: ``"slide"`` (the published model) or ``"roll"``: the ball's spin is a
+    state; it rolls while the floor's friction that keeps it rolling is at most
+    ``mu_static`` m g and slips with ``mu_kinetic`` m g beyond (docs/model.md, section
+    2.7); ``friction`` then acts as rolling resistance, as for a sliding ball.
+
     ``contact``: how the ball meets the plugs that close its cavity
     (docs/model.md, section 2.6): ``"impact"``, the published instantaneous law with
     restitution e (the default), or ``"hertz"``, a compliant contact of Hertz's law with
@@ -151,9 +163,13 @@ class ImpactDamper:
     contact: str = "impact"
     contact_stiffness_n_m1_5: float | None = None
     plug_material: str = "steel"
+    motion: str = "slide"
+    mu_static: float = MU_STATIC
+    mu_kinetic: float = MU_KINETIC
 
     def __post_init__(self):
         check_positive("ball mass_kg", self.mass_kg, "kg")
+        self._check_motion()
         check_choice("ball contact", self.contact, CONTACT_LAWS)
         check_choice("plug_material", self.plug_material, tuple(MATERIALS))
         if self.contact_stiffness_n_m1_5 is not None:
@@ -176,10 +192,12 @@ class ImpactDamper:
              diameter_m: float = BALL_DIAMETER, mass_kg: float | None = None,
              locked: bool = False, contact: str = "impact",
              contact_stiffness_n_m1_5: float | None = None,
-             plug_material: str = "steel") -> ImpactDamper:
+             plug_material: str = "steel", motion: str = "slide",
+             mu_static: float = MU_STATIC, mu_kinetic: float = MU_KINETIC) -> ImpactDamper:
         """A ball of ``material`` (carbide: 26 g as published; steel: from density) and
         ``diameter_m`` (m); ``mass_kg`` (kg) overrides the material's mass; ``contact``,
-        ``contact_stiffness_n_m1_5`` (N/m^1.5) and ``plug_material`` as the class says."""
+        ``contact_stiffness_n_m1_5`` (N/m^1.5), ``plug_material``, ``motion``,
+        ``mu_static`` and ``mu_kinetic`` as the class says."""
         check_choice("ball material", material, tuple(BALL_DENSITY) + ("custom",))
         check_positive("ball diameter_m", diameter_m, "m")
         diameter, mass = diameter_m, mass_kg
@@ -193,12 +211,28 @@ class ImpactDamper:
         return cls(mass_kg=mass, gap_m=gap_m, restitution=restitution, friction=friction,
                    radius_m=diameter / 2, locked=locked, material=material, contact=contact,
                    contact_stiffness_n_m1_5=contact_stiffness_n_m1_5,
-                   plug_material=plug_material)
+                   plug_material=plug_material, motion=motion, mu_static=mu_static,
+                   mu_kinetic=mu_kinetic)
 
     @property
     def friction_force_n(self) -> float:
         """F_c (N)."""
         return self.friction.force(self.mass_kg, self.radius_m)
+
+    def _check_motion(self) -> None:
+        check_choice("ball motion", self.motion, BALL_MOTIONS)
+        check_range("mu_static", self.mu_static, 0.0, 10.0)
+        check_range("mu_kinetic", self.mu_kinetic, 0.0, 10.0)
+        if self.mu_static < self.mu_kinetic:
+            raise ParameterError(f"mu_static = {self.mu_static!r} is below mu_kinetic = "
+                                 f"{self.mu_kinetic!r}: a ball that slips with mu_kinetic "
+                                 "is held by at least as much")
+        if self.motion == "roll" and self.friction.reaction != "reciprocal":
+            raise ParameterError("a rolling ball takes the reciprocal friction reaction, not "
+                                 f"{self.friction.reaction!r}")
+        if self.motion == "roll" and self.friction.static_ratio != 1:
+            raise ParameterError("friction static_ratio is a sliding ball's stick-slip; a "
+                                 "rolling one has mu_static and mu_kinetic")
 
     @property
     def hertz_stiffness_n_m1_5(self) -> float:
@@ -223,6 +257,8 @@ class ImpactDamper:
         if self.contact != "impact":  # (the impact law's description as it always was)
             d.update(contact=self.contact, contact_stiffness_n_m1_5=self.hertz_stiffness_n_m1_5,
                      plug_material=self.plug_material)
+        if self.motion != "slide":  # (likewise the sliding ball's)
+            d.update(motion=self.motion, mu_static=self.mu_static, mu_kinetic=self.mu_kinetic)
         return d
 
     @classmethod
@@ -233,7 +269,9 @@ class ImpactDamper:
                    locked=d["locked"], material=d["material"],
                    contact=d.get("contact", "impact"),
                    contact_stiffness_n_m1_5=d.get("contact_stiffness_n_m1_5"),
-                   plug_material=d.get("plug_material", "steel"))
+                   plug_material=d.get("plug_material", "steel"),
+                   motion=d.get("motion", "slide"), mu_static=d.get("mu_static", MU_STATIC),
+                   mu_kinetic=d.get("mu_kinetic", MU_KINETIC))
 
 
 @dataclass(frozen=True)

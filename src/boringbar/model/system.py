@@ -95,6 +95,11 @@ class System:
         there is no friction (the ball does not act); else the system itself."""
         if self.kind != "ball":
             return self
+        if self.damper.motion == "roll" and self.damper.mu_static > 0:
+            # rolling without slip, the floor carries 2/7 of the ball with the bar
+            return System(self.bar, replace(self.damper, locked=True, motion="slide",
+                                            mass_kg=self.damper.mass_kg * 2 / 7),
+                          self.preset, self.readings)
         if self.damper.friction_force_n > 0:
             return System(self.bar, replace(self.damper, locked=True), self.preset,
                           self.readings)
@@ -146,7 +151,8 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
                 static_ratio: float | None = None, spec: SystemSpec | None = None,
                 contact: str | None = None,
                 contact_stiffness_n_m1_5: float | None = None, planes: int | None = None,
-                cut_geometry: CutGeometry | None = None) -> System:
+                cut_geometry: CutGeometry | None = None, motion: str | None = None,
+                mu_static: float | None = None, mu_kinetic: float | None = None) -> System:
     """Build one of the three bars of a system file under a preset, with explicit
     overrides.
 
@@ -179,7 +185,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     under the oriented cut ``cut_geometry`` (a :class:`CutGeometry`: force ratio, lead
     angle, the cavity's and the principal planes' angles, the planes' stiffness ratio;
     docs/model.md, section 4.7); ``n_modes`` then counts the modes of each plane.
-    Default: the file's ``[orientation]``, else one plane.
+    Default: the file's ``[orientation]``, else one plane.  ``motion``: the ball
+    "slide"s (the published model) or "roll"s, with the floor friction coefficients
+    ``mu_static`` >= ``mu_kinetic`` (docs/model.md, section 2.7); default the file's.
     """
     if isinstance(bar, SystemSpec):
         raise TypeError(f"bar = the system file {bar.name!r}: make_system's first argument "
@@ -218,6 +226,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
         friction=fr, diameter_m=b.diameter_m,
         mass_kg=b.mass_kg if material == b.material else None, locked=locked,
         contact=contact or b.contact, plug_material=b.plug_material,
+        motion=motion or b.motion,
+        mu_static=b.mu_static if mu_static is None else mu_static,
+        mu_kinetic=b.mu_kinetic if mu_kinetic is None else mu_kinetic,
         contact_stiffness_n_m1_5=(b.contact_stiffness_n_m1_5 if contact_stiffness_n_m1_5 is None
                                   else contact_stiffness_n_m1_5))
     return System(modal, damper, preset, tuple(readings), spec)

@@ -30,7 +30,13 @@ import numpy as np
 from boringbar._validate import ParameterError, in_range, near, read_toml
 from boringbar.model.bar import ModalModel, Section, SteppedBar
 from boringbar.model.contact import CONTACT_LAWS, HERTZ_MIN_RESTITUTION
-from boringbar.model.dampers import MAX_FRICTION_FORCE, MAX_GAP
+from boringbar.model.dampers import (
+    BALL_MOTIONS,
+    MAX_FRICTION_FORCE,
+    MAX_GAP,
+    MU_KINETIC,
+    MU_STATIC,
+)
 from boringbar.model.materials import MATERIALS
 from boringbar.model.oriented import CutGeometry
 
@@ -76,7 +82,8 @@ class BallSpec:
     (``friction_kind`` one of FRICTION_FORMS's values, ``friction_value`` in
     its unit, ``friction_reaction`` or None: the preset's, ``static_ratio``) and how it
     meets the plugs: ``contact`` ("impact" or "hertz"), ``contact_stiffness_n_m1_5``
-    (N/m^1.5, or None: Hertz's from the materials) and ``plug_material``."""
+    (N/m^1.5, or None: Hertz's from the materials) and ``plug_material``; how it moves:
+    ``motion`` ("slide" or "roll") with ``mu_static`` and ``mu_kinetic``."""
 
     material: str
     diameter_m: float
@@ -90,6 +97,9 @@ class BallSpec:
     contact: str = "impact"
     contact_stiffness_n_m1_5: float | None = None
     plug_material: str = "steel"
+    motion: str = "slide"
+    mu_static: float = MU_STATIC
+    mu_kinetic: float = MU_KINETIC
 
 
 @dataclass(frozen=True)
@@ -552,7 +562,8 @@ def _cavity(r: _Reader, d: dict, bar: SteppedBar):
 
 
 _BALL_KEYS = ("material", "diameter_mm", "mass_g", "gap_mm", "restitution", "friction",
-              "contact", "contact_stiffness_n_m1_5", "plug_material")
+              "contact", "contact_stiffness_n_m1_5", "plug_material", "motion", "mu_static",
+              "mu_kinetic")
 _FRICTION_KEYS = tuple(FRICTION_FORMS) + ("reaction", "static_ratio")
 
 
@@ -604,8 +615,13 @@ def _ball(r: _Reader, d: dict, bar: SteppedBar, cavity: CavitySpec | None):
         r.fail("ball.restitution", e, f"must be in [{HERTZ_MIN_RESTITUTION}, 1] with contact = "
                                       "'hertz' (Hunt-Crossley's damping grows without bound "
                                       "as e -> 0)")
+    motion = r.choice(t, "ball.motion", BALL_MOTIONS, default="slide")
+    mus = r.number(t, "ball.mu_static", 0, 10, default=MU_STATIC)
+    muk = r.number(t, "ball.mu_kinetic", 0, 10, default=MU_KINETIC)
+    if mus < muk:
+        r.fail("ball.mu_static", mus, f"must be at least mu_kinetic = {muk:g}")
     ball = BallSpec(material, dia / 1000, None if mass is None else mass / 1000, gap / 1000,
-                    e, kind, value, reaction, ratio, contact, stiffness, plug)
+                    e, kind, value, reaction, ratio, contact, stiffness, plug, motion, mus, muk)
     form = next(k for k, v in FRICTION_FORMS.items() if v == kind)
     friction = {form: True if form == "none" else value, "static_ratio": ratio}
     if reaction is not None:
@@ -614,6 +630,8 @@ def _ball(r: _Reader, d: dict, bar: SteppedBar, cavity: CavitySpec | None):
             "friction": friction}
     if mass is not None:
         data["mass_g"] = mass
+    if motion != "slide":
+        data.update(motion=motion, mu_static=mus, mu_kinetic=muk)
     if contact != "impact":
         data.update(contact=contact, plug_material=plug)
         if stiffness is not None:

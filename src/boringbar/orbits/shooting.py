@@ -49,7 +49,7 @@ from threadpoolctl import threadpool_limits
 from boringbar._validate import ParameterError
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
-from boringbar.simulate import hertz, pack
+from boringbar.simulate import hertz, pack, rolling
 from boringbar.simulate import layout as L
 from boringbar.simulate.kernels import impact_matrix_of, regime_matrix
 
@@ -123,6 +123,9 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
         raise ParameterError("an oriented cut's bar (psi_force != psi_tip): periodic orbits "
                              "are shot with the force along the tip's direction; use the "
                              "bar of one bending plane")
+    if rolling(system):
+        raise ParameterError("motion = 'roll': periodic orbits are shot with a sliding "
+                             "ball's maps; give the ball motion = 'slide'")
     if hertz(system):
         raise ParameterError("contact = 'hertz': periodic orbits are shot with the impact "
                              "law's maps; give the ball contact = 'impact'")

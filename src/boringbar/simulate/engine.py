@@ -20,7 +20,7 @@ from boringbar._validate import (
     check_range,
 )
 from boringbar.model.contact import hertz_contact_time_s
-from boringbar.model.dampers import ImpactDamper, TunedMassDamper
+from boringbar.model.dampers import GRAVITY, ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.simulate import layout as L
@@ -95,7 +95,9 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
         # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
         p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force_n * dt / meff
         p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
-        if stick_law == "hold" and d.friction_force_n > 0:
+        if rolling(system):
+            pack_roll(p, d, dt)
+        elif stick_law == "hold" and d.friction_force_n > 0:
             p[L.STICK_BAND] = hold_band(p, dt)
         if d.contact == "hertz" and not d.locked:
             p[L.CONTACT_K] = d.hertz_stiffness_n_m1_5
@@ -105,6 +107,17 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
         p[L.TMD_K] = d.stiffness_n_m
         p[L.TMD_C] = d.damping_n_s_m
     return p
+
+
+def pack_roll(p: np.ndarray, d: ImpactDamper, dt: float) -> None:
+    """A rolling ball's slots of ``p``: the friction forces mu_s m g and mu_k m g and the
+    band of slip y' - s inside which it may roll: twice what its friction can change the
+    slip by in one step, 2 (F_s + F_k) dt (1 / m_eff + 5 / (2 m)), so that a slip coming to
+    rest ends a step inside it (as :func:`hold_band`)."""
+    fs, fk = d.mu_static * d.mass_kg * GRAVITY, d.mu_kinetic * d.mass_kg * GRAVITY
+    p[L.ROLL] = 1.0
+    p[L.ROLL_STATIC], p[L.ROLL_KINETIC] = fs, fk
+    p[L.ROLL_BAND] = 2.0 * (fs + fk) * dt * (1.0 / p[L.M_EFF] + 2.5 / d.mass_kg)
 
 
 def hold_band(p: np.ndarray, dt: float) -> float:
@@ -141,11 +154,17 @@ def pack_cut(system: System, forcing: Regenerative, dt: float, w_static: float,
     return p
 
 
+def state_size(system: System) -> int:
+    """The kernel's state length: 2 n + 2, and a rolling ball's spin after it."""
+    return 2 * system.bar.n_modes + 2 + (1 if rolling(system) else 0)
+
+
 def initial_state(system: System, initial: Initial) -> np.ndarray:
-    """x = [u, u', aux, aux'] from tip and ball initial conditions."""
+    """x = [u, u', aux, aux'] from tip and ball initial conditions (a rolling ball's spin
+    r omega after them, its y': it starts rolling)."""
     bar = system.bar
     n = bar.n_modes
-    x = np.zeros(2 * n + 2)
+    x = np.zeros(state_size(system))
     x[0] = initial.tip_displacement_m / bar.psi_tip[0]
     x[n] = initial.tip_velocity_m_s / bar.psi_tip[0]
     d = system.damper
@@ -154,6 +173,8 @@ def initial_state(system: System, initial: Initial) -> np.ndarray:
                     unit="m")
         x[2 * n] = initial.ball_position_m
         x[2 * n + 1] = 0.0 if d.locked else initial.ball_velocity_m_s
+        if rolling(system):
+            x[2 * n + 2] = x[2 * n + 1]
     elif isinstance(d, TunedMassDamper):
         x[2 * n] = float(bar.psi_absorber @ x[:n])
         x[2 * n + 1] = float(bar.psi_absorber @ x[n:2 * n])
@@ -173,6 +194,8 @@ def stored_energy(system: System, x: np.ndarray) -> float:
         depth = abs(x[2 * n]) - d.gap_m / 2
         if hertz(system) and depth > 0:  # the contact's elastic energy, 2/5 K d^2.5
             e += 0.4 * d.hertz_stiffness_n_m1_5 * depth**2.5
+        if rolling(system):  # the spin's, I omega^2 / 2 = m s^2 / 5
+            e += 0.2 * d.mass_kg * x[2 * n + 2] ** 2
     elif isinstance(d, TunedMassDamper):
         rel = x[2 * n] - float(bar.psi_absorber @ u)
         e += 0.5 * d.mass_kg * x[2 * n + 1] ** 2 + 0.5 * d.stiffness_n_m * rel**2
@@ -183,6 +206,12 @@ def stick_slip(system: System) -> bool:
     """Whether the ball's friction has a static limit above the sliding one (exact only)."""
     d = system.damper
     return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force_n > 0
+
+
+def rolling(system: System) -> bool:
+    """Whether the ball of ``system`` rolls (its spin a state; docs/model.md, 2.7)."""
+    d = system.damper
+    return isinstance(d, ImpactDamper) and d.motion == "roll" and not d.locked
 
 
 def hertz(system: System) -> bool:
@@ -201,13 +230,16 @@ def resolve_integrator(integrator: str, system: System, cutting: bool = False) -
     if integrator == "exact" and hertz(system):
         raise ParameterError("integrator = 'exact' takes the impact law; a ball with contact "
                              "= 'hertz' needs integrator = 'rk4' (or 'auto')")
+    if integrator == "exact" and rolling(system):
+        raise ParameterError("integrator = 'exact' takes a sliding ball; a ball with motion = "
+                             "'roll' needs integrator = 'rk4' (or 'auto')")
     if integrator == "exact" and system.bar.oriented:
         raise ParameterError("integrator = 'exact' takes a force along the chip's direction; "
                              "an oriented cut (two bending planes, psi_force != psi_tip) "
                              "needs integrator = 'rk4' (or 'auto')")
     if integrator != "auto":
         return integrator
-    if hertz(system) or system.bar.oriented:
+    if hertz(system) or rolling(system) or system.bar.oriented:
         return "rk4"
     return "rk4" if (system.preset == "paper" or cutting) and not stick_slip(system) \
         else "exact"
@@ -319,9 +351,9 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
 
     if isinstance(initial, State):
         x = np.array(initial.x, dtype=float)
-        if x.shape != (2 * system.bar.n_modes + 2,):
+        if x.shape != (state_size(system),):
             raise ParameterError(f"initial state has {x.size} entries; this system needs "
-                                 f"{2 * system.bar.n_modes + 2}")
+                                 f"{state_size(system)}")
         t0 = float(initial.t_s)
     else:
         x = initial_state(system, initial or Initial())
@@ -580,6 +612,8 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
         if not isinstance(forcing, Harmonic):
             raise ParameterError(f"forcing = {forcing!r}: simulate_batch takes harmonic forcing "
                                  "only (regenerative cuts: simulate)")
+        if rolling(system):
+            raise ParameterError("simulate_batch takes sliding balls; a rolling one: simulate")
         sus.append(setup_run(system, forcing, duration_s, dt_s, initial, 0, steady_fraction, strobe,
                              "rk4", stick_law))
     first = sus[0]

@@ -1,0 +1,134 @@
+"""A rolling ball (docs/model.md, section 2.7): its spin a state of RK4's run.
+
+Truths: a ball rolling on a floor that accelerates at A moves at 2/7 A, so relative to
+the bar at 5/7 of a frictionless sliding ball's rate (I = 2/5 m r^2); as the floor's
+friction vanishes the rolling ball is the frictionless sliding one; with no friction at
+all no spin is excited and the run is the sliding run; the energy balances with the
+spin's (1/5) m (r omega)^2; and rolling without slip carries 2/7 of the ball with the
+bar, so a rolling ball's simulated chatter limit is the closed form of the bar with
+2/7 of the ball fixed at the cavity.
+"""
+
+from __future__ import annotations
+
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from cli_output import assert_one_line_error
+
+import boringbar as bb
+from boringbar._validate import ParameterError
+from boringbar.cli.main import main
+from boringbar.model.bar import ModalModel
+from boringbar.model.dampers import NO_FRICTION, Friction, ImpactDamper
+from boringbar.model.system import System, make_system
+from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
+from boringbar.orbits.shooting import make_flow
+from boringbar.simulate import simulate_batch
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_verdict import first_five_lobes, worst_error  # noqa: E402
+
+#: a 20 Hz mode of 1000 kg at the tip: the ball's reaction barely moves it, and the
+#: floor's acceleration (about 1 m/s^2) needs far less friction than mu_s m g
+HEAVY = ModalModel.from_tap_test(20.0, 0.01, tip_mass_kg=1000.0, damper_ratio=0.6)
+
+
+def run(motion, *, mu=1.0, friction=NO_FRICTION, bar=HEAVY, force=30.0, gap=2e-3,
+        duration=0.1):
+    ball = ImpactDamper.ball("carbide", gap_m=gap, friction=friction, motion=motion,
+                             mu_static=mu, mu_kinetic=mu)
+    return bb.simulate(System(bar, ball, "physical"), bb.Harmonic(amplitude_n=force),
+                       duration_s=duration, record_every=1, steady_fraction=1.0,
+                       integrator="rk4")
+
+
+def test_a_rolling_ball_moves_at_five_sevenths_of_a_sliding_one():
+    slide, roll = run("slide"), run("roll")
+    assert roll.integrator == "rk4" and roll.metrics["impacts_total"] == 0
+    y_slide, y_roll = slide.history[:, 3], roll.history[:, 3]
+    scale = np.abs(y_slide).max()
+    assert scale > 1e-6
+    assert np.abs(y_roll - 5 / 7 * y_slide).max() < 1e-5 * scale
+    # rolling without slip: the spin r omega is y'
+    assert roll.final.x[-1] == roll.final.x[-2]
+
+
+def test_the_sliding_ball_is_the_limit_of_a_vanishing_friction():
+    slide = run("slide")
+    errors = [np.abs(run("roll", mu=mu).history[:, 3] - slide.history[:, 3]).max()
+              for mu in (1e-5, 1e-6, 1e-7)]
+    # slipping nearly throughout, the floor's friction mu m g is what differs: first order
+    # in mu (measured: 9.58 and 9.96 a decade)
+    ratios = np.array(errors[:-1]) / errors[1:]
+    assert np.all((ratios > 9.0) & (ratios < 11.0)), ratios
+
+
+def test_with_no_friction_no_spin_is_excited_and_the_run_is_the_sliding_one():
+    """The published bar, impacts and all (the Masri-Caughey regime): the same run."""
+    bar = make_system("ball").bar
+    slide = run("slide", mu=0.0, bar=bar, force=20.0, gap=0.5e-3, duration=0.05)
+    roll = run("roll", mu=0.0, bar=bar, force=20.0, gap=0.5e-3, duration=0.05)
+    assert roll.metrics["impacts_total"] == slide.metrics["impacts_total"] > 10
+    assert roll.final.x[-1] == 0.0
+    np.testing.assert_allclose(roll.history[:, 1], slide.history[:, 1], rtol=0,
+                               atol=1e-12 * np.abs(slide.history[:, 1]).max())
+
+
+def test_the_energy_balances_with_the_spin():
+    """Rolling, slipping, rolling resistance and impacts on the published bar."""
+    bar = make_system("ball").bar
+    r = run("roll", mu=0.25, friction=Friction("rolling", 0.6e-3), bar=bar, force=20.0,
+            gap=0.5e-3, duration=0.1)
+    assert r.metrics["impacts_total"] > 10 and r.energy["dissipated_friction_j"] > 0
+    assert abs(r.energy["balance_relative"]) < 1e-9
+
+
+def test_a_rolling_ball_s_limit_is_the_bar_carrying_two_sevenths_of_it():
+    system = make_system("ball", friction=False, motion="roll", mu_static=1.0, mu_kinetic=0.8)
+    host = system.linear_host().damper
+    assert host.locked and host.mass_kg == pytest.approx(system.damper.mass_kg * 2 / 7)
+    err, rpm = worst_error(system, first_five_lobes(system)[::6])
+    assert err <= 0.01, f"{err:.2%} at {rpm:g} rpm"
+
+
+# --- where it applies, and bad input ------------------------------------------------------
+def test_the_exact_integrator_the_batch_and_shooting_refuse_a_rolling_ball():
+    system = make_system("ball", motion="roll")
+    forcing = bb.Harmonic(amplitude_n=10.0)
+    with pytest.raises(ParameterError, match="motion = 'roll'"):
+        bb.simulate(system, forcing, duration_s=0.01, integrator="exact")
+    with pytest.raises(ParameterError, match="rolling"):
+        simulate_batch([(system, forcing, None)], duration_s=0.01)
+    with pytest.raises(ParameterError, match="motion = 'roll'"):
+        make_flow(system, forcing)
+    with pytest.raises(ParameterError, match="mu_static"):
+        ImpactDamper(motion="roll", mu_static=0.1, mu_kinetic=0.2)
+
+
+@pytest.mark.parametrize("argv, name", [
+    (["--mu-static", "0.1", "--mu-kinetic", "0.2"], "--mu-static"),
+    (["--mu-kinetic", "-1"], "--mu-kinetic"),
+    (["--ball-motion", "roll", "--integrator", "exact"], "integrator = 'exact'"),
+    (["--ball-motion", "spin"], "--ball-motion"),
+])
+def test_the_command_line_refuses_a_bad_roll(argv, name, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert_one_line_error(main, ["simulate", *argv, "--out", str(out)], out, name, capsys)
+
+
+def test_a_rolling_ball_from_the_command_line_and_a_system_file(tmp_path, capsys):
+    out = tmp_path / "roll"
+    assert main(["simulate", "--ball-motion", "roll", "--duration-s", "0.05", "--out",
+                 str(out)]) == 0
+    d = tomllib.loads(published_file_text())
+    d["ball"].update(motion="roll", mu_static=0.3, mu_kinetic=0.2)
+    system = make_system("ball", spec=parse_system(d))
+    assert system.damper.motion == "roll" and system.damper.mu_static == 0.3
+    assert System.from_dict(system.to_dict()).damper == system.damper
+    d["ball"].update(mu_static=0.1)
+    with pytest.raises(SystemFileError, match="ball.mu_static"):
+        parse_system(d)
