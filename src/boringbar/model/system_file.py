@@ -63,16 +63,13 @@ class CavitySpec:
     """The ball's cavity: its centre ``position_m`` (from the clamp), its
     ``length_m`` along the bar, the ``section_diameter_m`` of the solid round
     section with the bar's stiffness through it (its ``section_bore_m`` kept from
-    the host section), and its ``depth_m`` in the direction the ball travels;
-    ``section_diameter_across_m``: the same for bending across that direction (a bar of
-    two bending planes, docs/model.md, section 4.7)."""
+    the host section), and its ``depth_m`` in the direction the ball travels."""
 
     position_m: float
     length_m: float
     section_diameter_m: float
     section_bore_m: float
     depth_m: float
-    section_diameter_across_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -555,8 +552,7 @@ def _cavity(r: _Reader, d: dict, bar: SteppedBar):
                    "round cavity this long cuts the section in two); give "
                    "section_diameter_mm")
     dia = dia_mm / 1000
-    cavity = CavitySpec(z, length, dia, host.inner_diameter_m, depth / 1000,
-                        _across_diameter(host, length, depth / 1000, dia))
+    cavity = CavitySpec(z, length, dia, host.inner_diameter_m, depth / 1000)
     return cavity, {"cavity": {"position_mm": z_mm, "length_mm": length_mm,
                                "section_diameter_mm": dia_mm, "depth_mm": depth}}
 
@@ -675,32 +671,25 @@ def _paper(r: _Reader, d: dict) -> dict:
     return out
 
 
-def _across_diameter(host: Section, length: float, depth: float, dia: float) -> float | None:
-    """The cavity's section across the ball's direction (m): the computed one, times the
-    given along section's stiffness over the computed one's where the file gives it
-    (the two keep their computed ratio); None where it cannot be computed."""
-    try:
-        along = cavity_section_diameter(host.diameter_m, host.inner_diameter_m, length, depth)
-        across = cavity_section_diameter(host.diameter_m, host.inner_diameter_m, length,
-                                         depth, across=True)
-    except ParameterError:
-        return None
-    bore4 = host.inner_diameter_m**4
-    scale = (dia**4 - bore4) / (along**4 - bore4)
-    return min(float((bore4 + scale * (across**4 - bore4)) ** 0.25), host.diameter_m)
-
-
-def _cavity_section(cavity: CavitySpec, start: float, end: float, across: bool) -> Section:
-    """The cavity's equivalent section; ``across``: with the along section's mass and the
-    stiffness of bending across the ball's direction."""
+def _cavity_section(cavity: CavitySpec, host: Section, start: float, end: float,
+                    across: bool) -> Section:
+    """The cavity's equivalent section in ``host``; ``across``: with the along section's
+    mass and the stiffness of bending across the ball's direction, the computed across
+    stiffness over the computed along one's times the along section's (so a given along
+    section keeps their ratio), at most the host's."""
     dia, bore = cavity.section_diameter_m, cavity.section_bore_m
     if not across:
         return Section(start, end, dia, bore)
-    if cavity.section_diameter_across_m is None:
+    outer = host.diameter_m
+    try:
+        along, other = (cavity_section_diameter(outer, bore, cavity.length_m, cavity.depth_m,
+                                                across=a) for a in (False, True))
+    except ParameterError:
         raise ParameterError("the cavity's section across the ball's direction cannot be "
                              "computed (give a cavity shorter than the section's diameter): "
-                             "a bar of two planes needs it")
-    scale = (cavity.section_diameter_across_m**4 - bore**4) / (dia**4 - bore**4)
+                             "a bar of two planes needs it") from None
+    scale = min((other**4 - bore**4) / (along**4 - bore**4),
+                (outer**4 - bore**4) / (dia**4 - bore**4))
     return Section(start, end, dia, bore, scale)
 
 
@@ -717,7 +706,7 @@ def _with_cavity(bar: SteppedBar, cavity: CavitySpec, across: bool = False) -> S
         b = s.end_m if near(hi, s.end_m, bar.length_m) else hi
         if a > s.start_m:
             out.append(Section(s.start_m, a, s.diameter_m, s.inner_diameter_m))
-        out.append(_cavity_section(cavity, a, b, across))
+        out.append(_cavity_section(cavity, s, a, b, across))
         if b < s.end_m:
             out.append(Section(b, s.end_m, s.diameter_m, s.inner_diameter_m))
     return SteppedBar(tuple(out), bar.youngs_modulus_pa, bar.density_kg_m3, bar.damping_ratio,
