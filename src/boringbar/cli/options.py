@@ -29,7 +29,7 @@ from boringbar.model.forcing import (
 )
 from boringbar.model.measured_frf import CSV_SUFFIXES, UFF_SUFFIXES, read_frf
 from boringbar.model.modal_fit import ModalFit
-from boringbar.model.oriented import CutGeometry
+from boringbar.model.oriented import CutGeometry, check_geometry
 from boringbar.model.system import (
     BALLS,
     BAR_KINDS,
@@ -228,15 +228,10 @@ def check_rolling(args) -> None:
 
 def check_orientation(args) -> None:
     """The oriented cut's options, each in its range (CutGeometry's)."""
-    ranges = {"force_ratio": (0, 100, False, False), "lead_angle_deg": (0, 90, False, True),
-              "hole_angle_deg": (-90, 90, False, False),
-              "principal_angle_deg": (-90, 90, False, False),
-              "stiffness_ratio": (0, 1000, True, False)}
-    for name, (lo, hi, lo_open, hi_open) in ranges.items():
-        value = getattr(args, name, None)
+    for field, option in ORIENTATION_OPTIONS.items():
+        value = getattr(args, field, None)
         if value is not None:
-            check_range(ORIENTATION_OPTIONS[name], value, lo, hi, lo_open=lo_open,
-                        hi_open=hi_open, unit="degrees" if name.endswith("_deg") else "")
+            check_geometry(field, value, option)
 
 
 def orientation_overrides(args) -> dict:

@@ -42,6 +42,26 @@ from boringbar.model.bar import ModalModel
 
 #: Projections smaller than this (a cosine of 90 degrees in floating point) are zero.
 ZERO_PROJECTION = 1e-12
+#: Each CutGeometry field's range, (low, high, low open, high open, unit, why): the one
+#: the class, the command line's options and the system file's keys check.
+GEOMETRY_RANGES = {
+    "force_ratio": (0.0, 100.0, False, False, "", "Kt / Kr"),
+    "lead_angle_deg": (0.0, 90.0, False, True, "degrees",
+                       "at 90 the tip's radial motion no longer changes the chip, and the "
+                       "model has no regenerative chatter"),
+    "hole_angle_deg": (-90.0, 90.0, False, False, "degrees",
+                       "the cavity's axis through the section"),
+    "principal_angle_deg": (-90.0, 90.0, False, False, "degrees", ""),
+    "stiffness_ratio": (0.0, 1e3, True, False, "", "EI_2 / EI_1"),
+}
+
+
+def check_geometry(field: str, value, name: str | None = None) -> float:
+    """``value`` of CutGeometry's ``field`` in its range (:data:`GEOMETRY_RANGES`), or a
+    ParameterError naming ``name`` (default: the field)."""
+    lo, hi, lo_open, hi_open, unit, why = GEOMETRY_RANGES[field]
+    return check_range(name or field, value, lo, hi, lo_open=lo_open, hi_open=hi_open,
+                       unit=unit, why=why)
 
 
 @dataclass(frozen=True)
@@ -61,18 +81,8 @@ class CutGeometry:
     stiffness_ratio: float = 1.0
 
     def __post_init__(self):
-        check_range("force_ratio (Kt / Kr)", self.force_ratio, 0.0, 100.0)
-        check_range("lead_angle_deg", self.lead_angle_deg, 0.0, 90.0, unit="degrees")
-        if self.lead_angle_deg == 90.0:
-            raise ParameterError("lead_angle_deg = 90: the tip's radial motion then no "
-                                 "longer changes the chip, and the model has no "
-                                 "regenerative chatter; give an angle in [0, 90)")
-        check_range("hole_angle_deg", self.hole_angle_deg, -90.0, 90.0, unit="degrees",
-                    why="the cavity's axis through the section")
-        check_range("principal_angle_deg", self.principal_angle_deg, -90.0, 90.0,
-                    unit="degrees")
-        check_range("stiffness_ratio (EI_2 / EI_1)", self.stiffness_ratio, 0.0, 1e3,
-                    lo_open=True)
+        for field in GEOMETRY_RANGES:
+            check_geometry(field, getattr(self, field))
 
     def to_dict(self) -> dict:
         return {"force_ratio": self.force_ratio, "lead_angle_deg": self.lead_angle_deg,

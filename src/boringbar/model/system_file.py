@@ -38,7 +38,7 @@ from boringbar.model.dampers import (
     MU_STATIC,
 )
 from boringbar.model.materials import MATERIALS
-from boringbar.model.oriented import CutGeometry
+from boringbar.model.oriented import GEOMETRY_RANGES, CutGeometry
 
 #: The file the presets build from.
 PUBLISHED_FILE = "published.toml"
@@ -328,15 +328,13 @@ def _orientation(r: _Reader, d: dict):
         return 1, CutGeometry(), {}
     t = r.table(d["orientation"], "orientation", _ORIENTATION_KEYS)
     planes = r.choice(t, "orientation.planes", (1, 2), default=2)
-    ratio = r.number(t, "orientation.force_ratio", 0, 100, default=0.0)
-    lead = r.number(t, "orientation.lead_angle_deg", 0, 90, default=0.0, hi_open=True,
-                    unit="degrees (90: no regeneration in the model)")
-    hole = r.number(t, "orientation.hole_angle_deg", -90, 90, default=0.0,
-                    unit="degrees (the cavity's axis through the section)")
-    principal = r.number(t, "orientation.principal_angle_deg", -90, 90, default=0.0,
-                         unit="degrees")
-    stiff = r.number(t, "orientation.stiffness_ratio", 0, 1e3, default=1.0, lo_open=True)
-    geometry = CutGeometry(ratio, lead, hole, principal, stiff)
+    defaults = CutGeometry()
+    values = {}
+    for key, (lo, hi, lo_open, hi_open, unit, why) in GEOMETRY_RANGES.items():
+        values[key] = r.number(t, f"orientation.{key}", lo, hi, lo_open=lo_open,
+                               hi_open=hi_open, default=getattr(defaults, key),
+                               unit=f"{unit} ({why})" if why else unit)
+    geometry = CutGeometry(**values)
     return planes, geometry, {"orientation": {"planes": planes, **geometry.to_dict()}}
 
 
