@@ -18,7 +18,13 @@ from boringbar.execute import Execution
 from boringbar.io import jsonable
 from boringbar.model.contact import CONTACT_LAWS
 from boringbar.model.cutting import KR_ALUMINIUM, WORKPIECES, CuttingLaw, cutting_law
-from boringbar.model.dampers import BALL_MOTIONS, MAX_FRICTION_FORCE, MU_KINETIC, MU_STATIC
+from boringbar.model.dampers import (
+    BALL_MOTIONS,
+    MAX_FRICTION_FORCE,
+    MU_KINETIC,
+    MU_MAX,
+    MU_STATIC,
+)
 from boringbar.model.forcing import (
     INTERPOLATIONS,
     MAX_FEED,
@@ -215,10 +221,10 @@ def add_orientation(p) -> None:
 
 
 def check_rolling(args) -> None:
-    """--mu-static and --mu-kinetic in [0, 10], the static at least the kinetic."""
+    """--mu-static and --mu-kinetic in [0, MU_MAX], the static at least the kinetic."""
     for name in ("mu_static", "mu_kinetic"):
         if getattr(args, name, None) is not None:
-            check_range("--" + name.replace("_", "-"), getattr(args, name), 0, 10)
+            check_range("--" + name.replace("_", "-"), getattr(args, name), 0, MU_MAX)
     mus = MU_STATIC if args.mu_static is None else args.mu_static
     muk = MU_KINETIC if args.mu_kinetic is None else args.mu_kinetic
     if (args.mu_static is not None or args.mu_kinetic is not None) and mus < muk:

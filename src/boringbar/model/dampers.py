@@ -55,6 +55,8 @@ BALL_MOTIONS = ("slide", "roll")
 #: on steel wetted by coolant (dry, 0.3-0.5; nobody measures them well in a bar, and a
 #: design search takes their spread).
 MU_STATIC, MU_KINETIC = 0.2, 0.15
+#: The largest friction coefficient a rolling ball may be given.
+MU_MAX = 10.0
 REACTIONS = ("reciprocal", "printed")
 
 
@@ -221,8 +223,8 @@ class ImpactDamper:
 
     def _check_motion(self) -> None:
         check_choice("ball motion", self.motion, BALL_MOTIONS)
-        check_range("mu_static", self.mu_static, 0.0, 10.0)
-        check_range("mu_kinetic", self.mu_kinetic, 0.0, 10.0)
+        check_range("mu_static", self.mu_static, 0.0, MU_MAX)
+        check_range("mu_kinetic", self.mu_kinetic, 0.0, MU_MAX)
         if self.mu_static < self.mu_kinetic:
             raise ParameterError(f"mu_static = {self.mu_static!r} is below mu_kinetic = "
                                  f"{self.mu_kinetic!r}: a ball that slips with mu_kinetic "

@@ -35,6 +35,7 @@ from boringbar.model.dampers import (
     MAX_FRICTION_FORCE,
     MAX_GAP,
     MU_KINETIC,
+    MU_MAX,
     MU_STATIC,
 )
 from boringbar.model.materials import MATERIALS
@@ -610,8 +611,8 @@ def _ball(r: _Reader, d: dict, bar: SteppedBar, cavity: CavitySpec | None):
                                       "'hertz' (Hunt-Crossley's damping grows without bound "
                                       "as e -> 0)")
     motion = r.choice(t, "ball.motion", BALL_MOTIONS, default="slide")
-    mus = r.number(t, "ball.mu_static", 0, 10, default=MU_STATIC)
-    muk = r.number(t, "ball.mu_kinetic", 0, 10, default=MU_KINETIC)
+    mus = r.number(t, "ball.mu_static", 0, MU_MAX, default=MU_STATIC)
+    muk = r.number(t, "ball.mu_kinetic", 0, MU_MAX, default=MU_KINETIC)
     if mus < muk:
         r.fail("ball.mu_static", mus, f"must be at least mu_kinetic = {muk:g}")
     ball = BallSpec(material, dia / 1000, None if mass is None else mass / 1000, gap / 1000,

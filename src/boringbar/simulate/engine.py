@@ -82,7 +82,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
     p[L.CASE] = L.CASE_OF_KIND[kind]
     if isinstance(d, ImpactDamper):
         m = d.mass_kg
-        meff = 1.0 / (1.0 / m + float((bar.psi_damper**2 / bar.mass_kg).sum()))
+        meff = impact_mass(system)
         p[L.BALL_MASS] = m
         p[L.HALF_GAP] = d.gap_m / 2
         p[L.RESTITUTION] = d.restitution
@@ -99,7 +99,7 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
             pack_roll(p, d, dt)
         elif stick_law == "hold" and d.friction_force_n > 0:
             p[L.STICK_BAND] = hold_band(p, dt)
-        if d.contact == "hertz" and not d.locked:
+        if hertz(system):
             p[L.CONTACT_K] = d.hertz_stiffness_n_m1_5
             p[L.CONTACT_ALPHA] = hunt_crossley_alpha(float(d.restitution))
     elif isinstance(d, TunedMassDamper):
@@ -118,6 +118,13 @@ def pack_roll(p: np.ndarray, d: ImpactDamper, dt: float) -> None:
     p[L.ROLL] = 1.0
     p[L.ROLL_STATIC], p[L.ROLL_KINETIC] = fs, fk
     p[L.ROLL_BAND] = 2.0 * (fs + fk) * dt * (1.0 / p[L.M_EFF] + 2.5 / d.mass_kg)
+
+
+def impact_mass(system: System) -> float:
+    """m_eff (kg) of the ball against the retained modes at the cavity,
+    1 / (1/m + sum psi_d^2 / M) (docs/model.md, section 2.4)."""
+    bar = system.bar
+    return 1.0 / (1.0 / system.damper.mass_kg + float((bar.psi_damper**2 / bar.mass_kg).sum()))
 
 
 def hold_band(p: np.ndarray, dt: float) -> float:
@@ -255,9 +262,7 @@ def check_contact_step(system: System, dt: float) -> None:
     resolves it then, and stays stable on the contact's stiffness."""
     if not hertz(system):
         return
-    d, bar = system.damper, system.bar
-    meff = 1.0 / (1.0 / d.mass_kg + float((bar.psi_damper**2 / bar.mass_kg).sum()))
-    tc = hertz_contact_time_s(meff, d.hertz_stiffness_n_m1_5, 1.0)
+    tc = hertz_contact_time_s(impact_mass(system), system.damper.hertz_stiffness_n_m1_5, 1.0)
     if dt > tc / CONTACT_STEPS:
         raise ParameterError(f"dt_s = {dt:g} s is too long for the Hertz contact: an impact "
                              f"at 1 m/s lasts {tc:.3g} s, and RK4 needs {CONTACT_STEPS} steps "
