@@ -1,11 +1,19 @@
-"""What the ball's laws cost through bb.simulate, side by side in one process.
+"""What the ball's laws and a second bending plane cost through bb.simulate, side by side
+in one process.
 
-The published ball bar (physical preset, 2 modes, gap 0.5 mm, friction on) at F0 = 20 N,
-Omega = omega_n, 2 s of RK4 at dt = 1e-6 s: the sliding ball and the impact law (the
-published model), a Hertz contact (docs/model.md, section 2.6) and a rolling ball
-(section 2.7); CPU time, best of ``--repeat``, with the ratios to the sliding ball's.
+The ball bar (physical preset, gap 0.5 mm, friction on), 2 s of RK4 at dt = 1e-6 s, CPU
+time, best of ``--repeat`` taken round robin (so that the machine's drifts in speed fall
+on every variant alike), each with its ratio to the first of its group:
 
-    .venv/bin/python benchmarks/bench_ball_laws.py [--repeat 5]
+- the ball's laws, 2 modes: the sliding ball and the impact law (the published model), a
+  Hertz contact (docs/model.md, section 2.6) and a rolling ball (section 2.7), at
+  F0 = 20 N and Omega = omega_n (the ball rattles, and a rolling one slips), at
+  F0 = 0.05 N (a rolling ball rolls and slips in turn) and in a cut at 1200 rpm and
+  0.2 mm;
+- planes (section 4.7): one plane and two (Kt / Kr = 2.5, lead angle 30 degrees), with
+  1 and 2 modes a plane, at F0 = 20 N.
+
+    .venv/bin/python benchmarks/bench_ball_laws.py [--repeat 7]
 """
 
 from __future__ import annotations
@@ -15,31 +23,52 @@ import math
 import time
 
 import boringbar as bb
+from boringbar.model.oriented import CutGeometry
 
 LAWS = {"slide, impact law": {}, "slide, Hertz contact": {"contact": "hertz"},
         "roll, impact law": {"motion": "roll"}}
+LOADS = {"F0 = 20 N": bb.Harmonic(amplitude_n=20.0),
+         "F0 = 0.05 N": bb.Harmonic(amplitude_n=0.05),
+         "cut, 0.2 mm": bb.Regenerative(depth_m=2e-4, rpm=1200.0)}
+TWO_PLANES = {"planes": 2, "cut_geometry": CutGeometry(force_ratio=2.5, lead_angle_deg=30.0)}
 
 
-def best_of(system, repeat: int) -> float:
-    forcing = bb.Harmonic(amplitude_n=20.0)
-    bb.simulate(system, forcing, duration_s=0.01, record_every=0, integrator="rk4")
-    best = math.inf
-    for _ in range(repeat):
-        tic = time.process_time()
-        bb.simulate(system, forcing, duration_s=2.0, record_every=0, integrator="rk4")
-        best = min(best, time.process_time() - tic)
-    return best
+def cases() -> dict:
+    """(group, variant) -> (system, forcing)."""
+    out = {}
+    for load, forcing in LOADS.items():
+        for law, kw in LAWS.items():
+            out[load, law] = (bb.make_system("ball", **kw), forcing)
+    for n in (1, 2):
+        for planes, kw in (("one plane", {}), ("two planes", TWO_PLANES)):
+            out[f"{n} mode(s) a plane", planes] = (bb.make_system("ball", n_modes=n, **kw),
+                                                   LOADS["F0 = 20 N"])
+    return out
+
+
+def run_once(system, forcing, duration_s: float = 2.0) -> float:
+    tic = time.process_time()
+    bb.simulate(system, forcing, duration_s=duration_s, record_every=0, integrator="rk4")
+    return time.process_time() - tic
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
-    times = {name: best_of(bb.make_system("ball", **kw), args.repeat)
-             for name, kw in LAWS.items()}
-    base = times["slide, impact law"]
-    for name, t in times.items():
-        print(f"  {name:22s} {t:.3f} s  ({t / base:.2f}x)")
+    runs = cases()
+    for system, forcing in runs.values():  # warm: the first call loads and sets up
+        run_once(system, forcing, 0.01)
+    times = dict.fromkeys(runs, math.inf)
+    for _ in range(args.repeat):
+        for key, (system, forcing) in runs.items():
+            times[key] = min(times[key], run_once(system, forcing))
+    base = {}
+    for (group, variant), t in times.items():
+        if group not in base:
+            base[group] = t
+            print(group)
+        print(f"  {variant:22s} {t:.3f} s  ({t / base[group]:.2f}x)")
 
 
 if __name__ == "__main__":

@@ -4,8 +4,7 @@ The published ball bar in two bending planes (a round bar: equal planes), cut wi
 Kt / Kr = 2.5 at a zero lead angle: the ball's chatter-free depth at one speed by the
 converged verdict (simulated cuts) as the cavity's axis turns from radial (0 degrees)
 through the section, beside the plain (solid) bar's simulated limit and the locked
-ball's closed-form one.  Then what a second plane costs: bb.simulate of the ball bar in
-one plane and in two (1 and 2 modes a plane), side by side, best of 3.
+ball's closed-form one.  What a second plane costs: benchmarks/bench_ball_laws.py.
 
     .venv/bin/python benchmarks/hole_angle.py [--rpm 3000] [--out docs/img/hole_angle.png]
 """
@@ -13,9 +12,6 @@ one plane and in two (1 and 2 modes a plane), side by side, best of 3.
 from __future__ import annotations
 
 import argparse
-import math
-import time
-
 import matplotlib
 
 matplotlib.use("Agg")
@@ -48,24 +44,6 @@ def limits(rpm: float):
             [host[f"ball {a:g}"] for a in ANGLES], float(ds.attrs["wall_time_s"]))
 
 
-def cost() -> dict:
-    """Seconds of a 2 s harmonic RK4 run of the ball bar, by (modes a plane, planes), one
-    plane and two, through bb.simulate, best of 3."""
-    out = {}
-    for n in (1, 2):
-        for planes in (1, 2):
-            kw = {"planes": 2, "cut_geometry": geometry(30.0)} if planes == 2 else {}
-            system = bb.make_system("ball", n_modes=n, **kw)
-            best = math.inf
-            for _ in range(3):
-                tic = time.perf_counter()
-                bb.simulate(system, bb.Harmonic(amplitude_n=20.0), duration_s=2.0,
-                            record_every=0, integrator="rk4")
-                best = min(best, time.perf_counter() - tic)
-            out[n, planes] = best
-    return out
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rpm", type=float, default=3000.0)
@@ -90,11 +68,6 @@ def main():
         print(f"  cavity at {a:+6.1f} deg: ball {d * 1e3:.4f} mm, locked ball (closed form) "
               f"{h * 1e3:.4f} mm")
     print(f"  solid bar: {solid * 1e3:.4f} mm")
-    c = cost()
-    print("2 s of the ball bar at F0 = 20 N (RK4, bb.simulate, best of 3):")
-    for n in (1, 2):
-        print(f"  {n} mode(s) a plane: one plane {c[n, 1]:.3f} s, two planes {c[n, 2]:.3f} s "
-              f"({c[n, 2] / c[n, 1]:.2f}x)")
 
 
 if __name__ == "__main__":

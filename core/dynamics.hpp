@@ -186,26 +186,32 @@ inline Params unpack(const double* p, double dt) {
 // specialised (N > 0, CASE >= 0), else the run's.  As constants from the start (not
 // members set to them) they bound the mode loops before GCC's early passes, which unroll
 // those loops and keep the state in registers.
+// ROLLING: a kernel's case for a rolling ball (a ball bar, the roll law compiled in).
+constexpr int ROLLING = 16;
+
 template <int N, int CASE>
 struct Shape {
     int run_n, run_kase;
-    bool rolls;  // a rolling ball: the spin after y' (kernels of a run-time shape alone)
+    // a rolling ball: the spin after y' (its own kernels and those of a run-time shape)
+    bool rolls;
     explicit Shape(const Params& q)
-        : run_n(q.n), run_kase(q.kase), rolls(CASE < 0 && q.roll) {}
+        : run_n(q.n), run_kase(q.kase), rolls(CASE == ROLLING || (CASE < 0 && q.roll)) {}
     int n() const { return N > 0 ? N : run_n; }
-    int kase() const { return CASE >= 0 ? CASE : run_kase; }
+    int kase() const { return CASE == ROLLING ? L::BALL : CASE >= 0 ? CASE : run_kase; }
     int nx() const { return 2 * n() + 2 + (rolls ? 1 : 0); }
     int iy() const { return 2 * n(); }
     int iyd() const { return 2 * n() + 1; }
     bool ball() const { return kase() == L::BALL; }
     bool tmd() const { return kase() == L::TMD; }
     bool has_aux() const { return ball() || tmd(); }
-    // in the solid and ball bars a mode's rows of the map involve only its own u, u'
-    bool diag() const { return kase() == L::SOLID || ball(); }
+    // in the solid and sliding ball bars a mode's rows of the map involve only its own
+    // u, u' (a rolling ball's floor friction couples the modes)
+    bool diag() const { return kase() == L::SOLID || (ball() && !rolls); }
+    int nxm() const { return 2 * n() + 2; }  // the step map's state: the spin aside
     int is() const { return 2 * n() + 2; }  // a rolling ball's spin s = r omega
     // the length of the state arrays: exact where N is a template constant (room for a
     // rolling ball's spin in the kernel of a run-time shape)
-    static constexpr int NXC = N > 0 ? 2 * N + 2 : NX_MAX + 1;
+    static constexpr int NXC = N > 0 ? 2 * N + 2 + (CASE == ROLLING ? 1 : 0) : NX_MAX + 1;
     // a compliant contact runs in the kernel of a run-time shape alone (rk4_run.hpp's
     // dispatch), so that the others compile its branches away
     static constexpr bool CONTACT = CASE < 0;
@@ -243,6 +249,8 @@ struct StageTerms {
     double pcon;   // the power a compliant contact's damping dissipates
     double pfloor; // the power a slipping roll's floor friction dissipates
     bool rolled;   // a rolling ball rolled without slip at this stage
+    double floor;  // a rolling ball's floor friction F
+    double sfree;  // sum psi_d a_i of the modes' free accelerations
 };
 
 // The ball's stage under the stick law (Params::hold) inside the band |y'| < band: the
@@ -289,6 +297,7 @@ BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
     for (int i = 0; i < n; ++i) Kd[n + i] -= q.pD[i] * q.invM[i] * F;
     Kd[is] = -q.kroll * F;
     t.pfloor = t.rolled ? 0.0 : -F * slip;
+    t.floor = F;
     return ydd + q.kappa1 * F;
 }
 
@@ -313,7 +322,7 @@ template <int N, int CASE, bool FAST = false, bool ROLL = false>
 BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
                                      double f, double* Kd, double ysign) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false, 0.0, 0.0, false};
+    StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false, 0.0, 0.0, false, 0.0, 0.0};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
     for (int i = 0; i < n; ++i) {
         const double vi = Xs[n + i];
@@ -324,6 +333,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         t.wf += q.pF[i] * vi;
         t.pvisc += q.C[i] * vi * vi;
     }
+    t.sfree = sfree;
     double ydd = 0.0;
     if (sh.ball()) {
         const double yds = Xs[iyd];

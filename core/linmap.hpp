@@ -12,7 +12,16 @@
 // - Yr (3, nz): the ball's y' at stages 2-4, to check that F_b did not switch;
 // - Vr (3, n + 1, nz): the velocities viscous damping acts on at stages 2-4 (modal
 //   u_i', and the absorber's stroke rate in row n), Wv (4, n + 1) their weights b_s c_k;
-// - Fs, Fc (nz): the force's work over the step is S (Fs . z) + C (Fc . z).
+// - Fs, Fc (nz): the force's work over the step is S (Fs . z) + C (Fc . z);
+// - Kr (4, nz): a rolling ball's floor friction at the four stages.
+//
+// A rolling ball (docs/model.md, 2.7) has two linear steps.  Rolling without slip at
+// every stage, its spin is its y' (each basis vector's spin is set to its y') and the
+// floor's friction the one rolling needs: that map (rolled) is built with the roll law
+// always rolling, and the kernel takes it where the ball rolls at the step's start and
+// the friction at every stage stays within mu_s N (Kr); the spin then takes the step's
+// y'.  Slipping at every stage, the floor's friction is a constant -mu_k N sgn(slip)
+// beside F_b, and the step is the sliding ball's map with the two in F_b's column.
 //
 // The tables are built by the stage recursion applied to the basis vectors, the same
 // operations in the same order at every build, so the tables (and every step taken with
@@ -42,22 +51,35 @@ struct StepMap {
     double Wv[4][NV_MAX];
     double Fs[NZ_MAX];
     double Fc[NZ_MAX];
+    double Kr[4][NZ_MAX];
 };
+
+// The roll law's stage after a sliding ball's (derivative_with): out of line, because
+// inlined into build_map's loops, GCC 12 stops with the internal error noted there.
+BB_NOINLINE inline double map_roll(const Params& q, Shape<0, -1> sh, const double* Xs,
+                                   double* Kd, StageTerms& t) {
+    return roll_stage(q, sh, Xs, Kd, Kd[sh.iyd()], t.sfree - q.kappa1 * t.fb, t);
+}
 
 // The tables of the step of dt for the first n modes of the packed parameters p: the
 // stage recursion of rk4.hpp's step with the stage derivative of dynamics.hpp, F_b a
 // column of z (a unit friction force, F_b = -F_c sgn(y') with F_c = 1 and y' < 0, in its
-// column; none, y' = 0, in the others).
-inline void build_map(int n, const double* p, double dt, StepMap& mp) {
+// column; none, y' = 0, in the others).  rolled: a rolling ball's rolled regime (else a
+// sliding ball's step, which a slipping ball takes too).
+inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolled) {
     Params q = unpack(p, dt);
     q.n = n;
     q.hold = false;  // the map is the sgn() law's step
     q.hertz = false;  // off the walls: a run with a compliant contact steps by stages
-    q.roll = false;   // a rolling ball's run steps by stages
+    q.roll = q.roll && rolled;
+    if (q.roll) {  // the roll law as rolling throughout (the kernel checks that it does)
+        q.mus_n = INFINITY;
+        q.roll_band = INFINITY;
+    }
     set_friction(q, 1.0);
     const Shape<0, -1> sh(q);
     const bool ball = sh.ball(), tmd = sh.tmd();
-    const int nx = sh.nx(), nz = nx + 3, iyd = sh.iyd();
+    const int nxs = sh.nx(), nx = sh.nxm(), nz = nx + 3, iyd = sh.iyd();
     // the forcing at the stage times t + c_s dt is F0 (alpha_s S + beta_s C)
     const double ch = std::cos(q.om * 0.5 * dt), shh = std::sin(q.om * 0.5 * dt);
     const double c1 = std::cos(q.om * dt), s1 = std::sin(q.om * dt);
@@ -70,21 +92,26 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
         mp.Wv[s][n] = tmd ? wst[s] * q.ca : 0.0;
     }
 
-    double X[NX_MAX], Xs[NX_MAX], Kd[NX_MAX], acc[NX_MAX];
+    double X[NX_MAX + 1], Xs[NX_MAX + 1], Kd[NX_MAX + 1], acc[NX_MAX + 1];
     for (int col = 0; col < nz; ++col) {  // the response to the basis vector e_col of z
-        for (int j = 0; j < nx; ++j) {
+        for (int j = 0; j < nxs; ++j) {
             X[j] = j == col ? 1.0 : 0.0;
             Kd[j] = 0.0;
             acc[j] = 0.0;
         }
+        if (sh.rolls) X[sh.is()] = X[iyd];
         const double S = col == nx ? 1.0 : 0.0;
         const double Cz = col == nx + 1 ? 1.0 : 0.0;
         const double ysign = col == nx + 2 ? -1.0 : 0.0;  // F_b = 1 in its column
         double fs = 0.0, fc = 0.0;
         for (int s = 0; s < 4; ++s) {
-            for (int j = 0; j < nx; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
+            for (int j = 0; j < nxs; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
             const double f = q.f0 * (alpha[s] * S + beta[s] * Cz);
-            const StageTerms t = derivative_with<0, -1>(q, sh, Xs, f, Kd, ysign);
+            StageTerms t = derivative_with<0, -1>(q, sh, Xs, f, Kd, ysign);
+            // the roll law after it (compiled into derivative_with's copy here, GCC 12
+            // stops with the internal error noted there)
+            if (sh.rolls) Kd[iyd] = map_roll(q, sh, Xs, Kd, t);
+            mp.Kr[s][col] = t.floor;
             if (s > 0) {
                 mp.Yr[s - 1][col] = ball ? Xs[iyd] : 0.0;
                 double reld = tmd ? Xs[iyd] : 0.0;  // the absorber's stroke rate
@@ -94,7 +121,7 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp) {
                 }
                 mp.Vr[s - 1][n][col] = reld;
             }
-            for (int j = 0; j < nx; ++j) acc[j] += wst[s] * Kd[j];
+            for (int j = 0; j < nxs; ++j) acc[j] += wst[s] * Kd[j];
             fs += wst[s] * q.f0 * alpha[s] * t.wf;
             fc += wst[s] * q.f0 * beta[s] * t.wf;
         }
@@ -140,6 +167,8 @@ struct VecMap {
     double w0[NV_MAX];  // the weights of the stage-1 velocities, Wv[0][k]
     // the force's work: lanes (Fs, Fc)
     v2 fS, fC, fF, fP[NX_MAX];
+    // a rolling ball's floor friction at stages 1-4 in lanes 0-3
+    v4 kS, kC, kF, kP[NX_MAX];
 };
 
 inline VecMap pack_map(int n, const StepMap& mp) {
@@ -180,13 +209,20 @@ inline VecMap pack_map(int n, const StepMap& mp) {
     vm.fC = v2{mp.Fs[iC], mp.Fc[iC]};
     vm.fF = v2{mp.Fs[iF], mp.Fc[iF]};
     for (int j = 0; j < nx; ++j) vm.fP[j] = v2{mp.Fs[j], mp.Fc[j]};
+    auto stages = [&mp](int c) {
+        return v4{v2{mp.Kr[0][c], mp.Kr[1][c]}, v2{mp.Kr[2][c], mp.Kr[3][c]}};
+    };
+    vm.kS = stages(iS);
+    vm.kC = stages(iC);
+    vm.kF = stages(iF);
+    for (int j = 0; j < nx; ++j) vm.kP[j] = stages(j);
     return vm;
 }
 
 // The map of the step of dt for the first n modes of p, packed for the kernels.
-inline VecMap step_map(int n, const double* p, double dt) {
+inline VecMap step_map(int n, const double* p, double dt, bool rolled = false) {
     StepMap mp;
-    build_map(n, p, dt, mp);
+    build_map(n, p, dt, mp, rolled);
     return pack_map(n, mp);
 }
 

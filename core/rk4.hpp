@@ -170,15 +170,17 @@ struct MapIn {
 // normal and finite; a NaN or infinite state fails the comparison and takes the full
 // test, so the decision is always the full test's.
 template <int N, int CASE>
-BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
-    const double sn = z.sn, cn = z.cn, fz = z.fz;
-    const int nx = sh.nx();
-    const double a = std::fabs(X[sh.iyd()]);
-    if (!(a >= 1e-150 && a <= 1e150)) return false;
-    double e = vm.yb[nx] * std::fabs(sn) + vm.yb[nx + 1] * std::fabs(cn) +
-               vm.yb[nx + 2] * std::fabs(fz);
+BB_INLINE double y_spread(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
+    const int nx = sh.nxm();
+    double e = vm.yb[nx] * std::fabs(z.sn) + vm.yb[nx + 1] * std::fabs(z.cn) +
+               vm.yb[nx + 2] * std::fabs(z.fz);
     for (int j = 0; j < nx; ++j) e += vm.yb[j] * std::fabs(X[j]);
-    return e <= 0.2 * a;
+    return e;
+}
+
+// (a = |y'_0|, spread = y_spread)
+BB_INLINE bool surely_fits(double a, double spread) {
+    return a >= 1e-150 && a <= 1e150 && spread <= 0.2 * a;
 }
 
 // May a ball with friction take the map this step: y' outside the chattering band and of
@@ -186,20 +188,62 @@ BB_INLINE bool surely_fits(Shape<N, CASE> sh, const VecMap& vm, const double* X,
 // single run and the batch wrote the test with opposite comparisons, which differ only
 // for a NaN state (nan_maps: the single run's, under which a NaN takes the map).
 template <int N, int CASE>
+// spread: set to y_spread where the test gets that far (map_slips reads it).
 BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
-                        MapIn z, bool nan_maps) {
+                        MapIn z, bool nan_maps, double& spread) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
-    const int nx = sh.nx();
+    const int nx = sh.nxm();
     const double yd0 = X[sh.iyd()];
     const bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
     if (!ok) return false;
-    if (surely_fits(sh, vm, X, z)) return true;
+    spread = y_spread(sh, vm, X, z);
+    if (surely_fits(std::fabs(yd0), spread)) return true;
     v4 ys = vm.yS * sn + vm.yC * cn + vm.yF * fz;
     for (int j = 0; j < nx; ++j) ys += vm.yP[j] * X[j];
     const v4 lhs = ys * yd0;
     const v4 rhs = 1e-12 * (yd0 * yd0 + vabs(yd0 * (ys - yd0)));
     for (int s3 = 0; s3 < 3; ++s3) {
         if (nan_maps ? lhs[s3] <= rhs[s3] : !(lhs[s3] > rhs[s3])) return false;
+    }
+    return true;
+}
+
+// May a rolling ball take its map this step (linmap.hpp): it rolls at the step's start
+// (the spin is its y', as a rolled step or a map leaves it) and the floor's friction
+// that rolling needs stays within mu_s N at the four stages (lanes 0-3).
+template <int N, int CASE>
+BB_INLINE bool map_rolls(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
+                         MapIn z) {
+    if (X[sh.is()] != X[sh.iyd()]) return false;
+    v4 k = vm.kS * z.sn + vm.kC * z.cn + vm.kF * z.fz;
+    for (int j = 0; j < sh.nxm(); ++j) k += vm.kP[j] * X[j];
+    const v4 a = vabs(k);
+    // (a NaN friction fails each comparison and takes the stages)
+    return a[0] <= q.mus_n && a[1] <= q.mus_n && a[2] <= q.mus_n && a[3] <= q.mus_n;
+}
+
+// May a slipping ball take the sliding ball's map this step, its floor friction ffl =
+// -mu_k N sgn(y' - s) beside F_b in z.fz: the slip y'_s - s_s keeps its sign at the
+// four stages and stays outside the roll band (so that the roll law slips there), with
+// s_s = s - kroll ffl c_s dt (cst) and y'_s from the map's rows (lanes 0-2: stages 2-4).
+// The floor's friction and F_b share F_b's column only where both react on the bar as
+// -psi_d F (sr = 1).  First a sufficient test (as surely_fits'): each stage's slip is
+// within y_spread + kroll mu_k N dt of the step's (plus round-off far below the margin
+// of 2x it asks for).
+// spread: map_fits' y_spread, or NaN where it did not run.
+template <int N, int CASE>
+BB_INLINE bool map_slips(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
+                         MapIn z, double ffl, const double* cst, double spread) {
+    const double s0 = X[sh.is()], slip0 = X[sh.iyd()] - s0;
+    if (q.sr != 1.0 || !(std::fabs(slip0) >= q.roll_band)) return false;
+    if (std::isnan(spread)) spread = y_spread(sh, vm, X, z);
+    spread += std::fabs(q.kroll * ffl * cst[3]);
+    if (std::fabs(slip0) >= q.roll_band + 2.0 * spread) return true;
+    v4 ys = vm.yS * z.sn + vm.yC * z.cn + vm.yF * z.fz;
+    for (int j = 0; j < sh.nxm(); ++j) ys += vm.yP[j] * X[j];
+    for (int s3 = 0; s3 < 3; ++s3) {
+        const double slip = ys[s3] - (s0 - q.kroll * ffl * cst[s3 + 1]);
+        if (!(slip * slip0 > 0.0 && std::fabs(slip) >= q.roll_band)) return false;
     }
     return true;
 }
@@ -211,7 +255,7 @@ template <int N, int CASE>
 BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z,
                              double* dX) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
-    const int n = sh.n(), nx = sh.nx();
+    const int n = sh.n(), nx = sh.nxm();
     auto full = [&](int pr) {
         v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + vm.dF[pr] * fz;
         for (int j = 0; j < nx; ++j) d += vm.dP[pr][j] * X[j];
@@ -247,7 +291,7 @@ template <int N, int CASE>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
                          const double* X, const double* dX, MapIn z) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
-    const int n = sh.n(), nx = sh.nx();
+    const int n = sh.n(), nx = sh.nxm();
     double pv = 0.0;
     for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];
     if (sh.tmd()) {

@@ -192,6 +192,9 @@ BB_INLINE void run_body(const RunArgs& a) {
     idx steps_run = a.n_steps;
 
     constexpr int NXC = Shape<N, CASE>::NXC;
+    // the stages' short forms (stages_fast: the same bits, a little sooner) but in a
+    // rolling ball's kernels, which they would take 1.5 s of compile each
+    constexpr bool SHORT_STAGES = CASE != ROLLING;
     double X[NXC], Kd[NXC], dX[NXC];
     // (unrolled here, before GCC's scalar replacement of X and Kd, which a loop with a
     // run-time index would keep in memory)
@@ -208,8 +211,10 @@ BB_INLINE void run_body(const RunArgs& a) {
     }
 
     // the step as an affine map where F_b cannot switch (linmap.hpp)
-    const bool linear = !regen && !q.stage_loop && !sh.rolls;  // (the map has no spin)
+    // (a rolling ball's map is its rolled regime's, linmap.hpp)
+    const bool linear = !regen && !q.stage_loop;
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
+    const VecMap mpr = linear && sh.rolls ? step_map(n, a.p, dt, true) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
     double sn = 0.0, cn = 1.0;
 
@@ -263,20 +268,38 @@ BB_INLINE void run_body(const RunArgs& a) {
 
         // the step as an affine map if F_b keeps its sign, else the four stages
         bool use_map = linear;
-        double fz = 0.0;
+        double fz = 0.0, ffl = 0.0;  // F_b, and a slipping ball's floor friction
+        // a rolling ball: its rolled regime's map, or the sliding ball's as it slips
+        const bool rolls_now = sh.rolls && X[sh.is()] == X[iyd];
+        const VecMap& map = rolls_now ? mpr : mp;
+        if (sh.rolls && !rolls_now) ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.muk_n : q.muk_n;
+        double spread = NAN;
         if (linear && check_fb) {
             fz = map_friction(q, X[iyd]);
-            use_map = map_fits(q, sh, mp, X, MapIn{sn, cn, fz}, true);
+            use_map = map_fits(q, sh, map, X, MapIn{sn, cn, fz + ffl}, true, spread);
         }
-        if (use_map) map_increment(sh, mp, X, MapIn{sn, cn, fz}, dX);
+        if (use_map && sh.rolls)
+            use_map = rolls_now
+                          ? map_rolls(q, sh, map, X, MapIn{sn, cn, fz})
+                          : map_slips(q, sh, map, X, MapIn{sn, cn, fz + ffl}, ffl, cst, spread);
+        fz += ffl;
+        if (use_map) map_increment(sh, map, X, MapIn{sn, cn, fz}, dX);
         // the map holds no contact force: a step in a compliant contact, or one that ends
         // in one, takes the stages
         if (use_map && hertz &&
             (ep.on || !(std::fabs(X[sh.iy()] + dX[sh.iy()]) <= q.ball.half)))
             use_map = false;
         if (use_map) {
-            map_flows(q, sh, mp, fl, X, dX, MapIn{sn, cn, fz});
-            for (int j = 0; j < nx; ++j) X[j] += dX[j];
+            map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz});
+            for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
+            if (rolls_now) {
+                X[sh.is()] = X[iyd];  // it rolled: the spin is its y'
+            } else if (sh.rolls) {
+                // it slipped: s' = -kroll ffl; the floor's loss -ffl (dy - int s dt), its
+                // -ffl dy counted with F_b's (map_flows)
+                fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
+                X[sh.is()] -= q.kroll * ffl * dt;
+            }
             if (ball && q.hold) n_free += 1.0;  // the map slides
         } else {
             auto force = [&](int s, const double* Xs) {
@@ -290,8 +313,9 @@ BB_INLINE void run_body(const RunArgs& a) {
                 return f;
             };
             bool held, rolled = sh.rolls;
-            if ((!ball || q.ydd_sum_from_first) && stages_fast(sh, X, Kd, cst[0]))
-                held = rk4_stages<N, CASE, true>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
+            if (SHORT_STAGES && (!ball || q.ydd_sum_from_first) &&
+                stages_fast(sh, X, Kd, cst[0]))
+                held = rk4_stages<N, CASE, SHORT_STAGES>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
                                                  force);
             else
                 held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
@@ -385,18 +409,21 @@ void run_modes(const RunArgs& a, int kase, int forcing) {
         case L::SOLID: return run_case<Copy, N, L::SOLID>(a, forcing);
         case L::BALL: return run_case<Copy, N, L::BALL>(a, forcing);
         case L::TMD: return run_case<Copy, N, L::TMD>(a, forcing);
+        case ROLLING: return run_case<Copy, N, ROLLING>(a, forcing);
         default: return run_case<Copy, N, L::LOCKED>(a, forcing);
     }
 }
 
 template <class Copy>
 void run_shape(const RunArgs& a) {
-    // a compliant contact or a rolling ball: the kernel of a run-time shape (Shape)
-    if ((a.p[L::CONTACT_K] > 0.0 || a.p[L::ROLL] > 0.0) && int(a.p[L::CASE]) == L::BALL)
+    // a compliant contact: the kernel of a run-time shape (Shape); a rolling ball: its
+    // own case (ROLLING), so that the others compile the roll law away
+    if (a.p[L::CONTACT_K] > 0.0 && int(a.p[L::CASE]) == L::BALL)
         return Copy::template run<0, -1, -1>(a);
     const int n = int(a.p[L::N_MODES]);
-    const int kase = int(a.p[L::CASE]);
     const int forcing = int(a.p[L::FORCING]);
+    int kase = int(a.p[L::CASE]);
+    if (kase == L::BALL && a.p[L::ROLL] > 0.0) kase = ROLLING;
     switch (n) {
         case 1: return run_modes<Copy, 1>(a, kase, forcing);
         case 2: return run_modes<Copy, 2>(a, kase, forcing);

@@ -87,6 +87,36 @@ def test_the_energy_balances_with_the_spin():
     assert abs(r.energy["balance_relative"]) < 1e-9
 
 
+@pytest.mark.parametrize("force, ball_speed, kind", [(20.0, 0.3, "slips"),
+                                                       (0.05, 0.0, "rolls")])
+def test_the_rolling_ball_s_maps_are_its_stages_step(force, ball_speed, kind):
+    """A step where the ball slips at every stage (constant floor friction) or rolls at
+    every stage (the spin its y') is affine, and the kernel takes it as a map
+    (core/linmap.hpp); simulate_stage_loop takes the four stages every step.  Over
+    20 ms they agree to round-off in the state with its spin, the impacts and every
+    energy flow, and they are two computations."""
+    from boringbar.simulate import simulate_stage_loop
+    system = bb.make_system("ball", motion="roll")
+    kw = dict(duration_s=0.02, initial=bb.Initial(tip_velocity_m_s=0.05 * force / 20.0,
+                                                  ball_velocity_m_s=ball_speed))
+    a = bb.simulate(system, bb.Harmonic(force, 1.0), integrator="rk4", **kw)
+    b = simulate_stage_loop(system, bb.Harmonic(force, 1.0), **kw)
+    x, y = a.final.x, b.final.x
+    n = system.bar.n_modes
+    assert len(x) == 2 * n + 3
+    for sl in (slice(0, n), slice(n, 2 * n), slice(2 * n, 2 * n + 1), slice(2 * n + 1, None)):
+        scale = max(np.max(np.abs(x[sl])), 1e-30)
+        assert np.max(np.abs(x[sl] - y[sl])) <= 1e-11 * scale
+    assert not np.array_equal(x, y)
+    np.testing.assert_array_equal(a.impacts[:, 1], b.impacts[:, 1])
+    total = a.energy["work_force_j"]
+    for k in ("work_force_j", "dissipated_viscous_j", "dissipated_impacts_j",
+              "dissipated_friction_j"):
+        assert abs(a.energy[k] - b.energy[k]) <= 1e-10 * abs(total), k
+    spin = x[2 * n + 2]
+    assert (spin == x[2 * n + 1]) == (kind == "rolls")  # rolling, the spin is y'
+
+
 def test_a_rolling_ball_s_limit_is_the_bar_carrying_two_sevenths_of_it():
     system = make_system("ball", friction=False, motion="roll", mu_static=1.0, mu_kinetic=0.8)
     host = system.linear_host().damper
