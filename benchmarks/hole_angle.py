@@ -12,6 +12,7 @@ ball's closed-form one.  What a second plane costs: benchmarks/bench_ball_laws.p
 from __future__ import annotations
 
 import argparse
+
 import matplotlib
 
 matplotlib.use("Agg")

@@ -28,7 +28,8 @@ def test_every_step_command_is_a_valid_command_line(quick):
                                            ("basins-10N-r1.01-on", "paper"),
                                            ("sensitivity-restitution", "paper-reciprocal"),
                                            ("sensitivity-restitution",
-                                            "physical-paper-friction")])
+                                            "physical-paper-friction"),
+                                           ("sensitivity-restitution", "physical-rolling")])
 def test_library_step_is_its_command_bit_for_bit(key, column, tmp_path):
     step, col = STEPS[key], COLUMNS[column]
     lib, cli = tmp_path / "library", tmp_path / "cli"

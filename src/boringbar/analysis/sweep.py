@@ -32,6 +32,7 @@ from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import (
     Initial,
     Integration,
+    batchable,
     resolve_integrator,
     simulate,
     simulate_batch,
@@ -267,7 +268,8 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
     integrators = [resolve_integrator(integration.integrator, c.system) for c in cases]
-    rk4 = [i == "rk4" and options.batch > 1 for i in integrators]
+    rk4 = [i == "rk4" and options.batch > 1 and batchable(c.system)
+           for i, c in zip(integrators, cases, strict=True)]
     groups: dict[tuple, list] = {}
     points = []
     for ijk in jobs:

@@ -98,7 +98,8 @@ def add_paper(sub) -> None:
                    help="columns to run, comma list: the presets paper, physical and the "
                         "audit's further columns paper-reciprocal (the printed reaction "
                         "corrected), physical-paper-friction (the published 20.4 N "
-                        "friction, reciprocal); default: all four")
+                        "friction, reciprocal), physical-rolling (a rolling ball); "
+                        "default: all five")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object (the manifest) on stdout")

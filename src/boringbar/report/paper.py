@@ -88,12 +88,16 @@ STEP_WORKERS = min(2, os.cpu_count() or 1)
 class Column:
     """One column of the study: a preset, with some of its published readings
     changed (``overrides``: :func:`~boringbar.model.system.make_system` keywords of
-    the ball damper, as ``(name, value)`` pairs; none for the two presets)."""
+    the ball damper, as ``(name, value)`` pairs; none for the two presets).
+    ``shares_frictionless``: the column's steps without friction are its preset's (a
+    friction reading changes nothing there), so it shares their records; a rolling
+    ball changes every step."""
 
     name: str
     preset: str
     overrides: tuple[tuple[str, str], ...] = ()
     description: str = ""
+    shares_frictionless: bool = True
 
     @property
     def kw(self) -> dict:
@@ -102,13 +106,19 @@ class Column:
     @property
     def flags(self) -> tuple[str, ...]:
         """The command-line flags that select this column."""
-        extra = (w for k, v in self.overrides for w in ("--" + k.replace("_", "-"), v))
+        extra = (w for k, v in self.overrides
+                 for w in (FLAG_OF.get(k, "--" + k.replace("_", "-")), v))
         return ("--preset", self.preset, *extra)
 
 
-#: The study's columns: the two presets, and two presets with one friction reading
+#: The command-line flag of an override whose flag is not its keyword's name.
+FLAG_OF = {"motion": "--ball-motion"}
+
+
+#: The study's columns: the two presets, two presets with one friction reading
 #: changed, which separate what the friction's size explains from what the printed
-#: sign of the bar's reaction explains (docs/audit.md, "The two further columns").
+#: sign of the bar's reaction explains (docs/audit.md, "The further columns"), and the
+#: physical preset with a rolling ball.
 COLUMNS = {
     "paper": Column("paper", "paper", (), "as published"),
     "physical": Column("physical", "physical", (), "as physics demands"),
@@ -122,8 +132,13 @@ COLUMNS = {
         "the physical preset with the friction force as the paper computed it (20.4 N "
         "for the carbide ball) and a reciprocal reaction"),
 }
-#: The two further columns, in order.
-VARIANT_ORDER = ("paper-reciprocal", "physical-paper-friction")
+COLUMNS["physical-rolling"] = Column(
+    "physical-rolling", "physical", (("motion", "roll"),),
+    "the physical preset with a rolling ball (docs/model.md, 2.7): its spin a state, "
+    "rolling while mu_s m g holds it and slipping with mu_k m g beyond (0.2, 0.15)",
+    shares_frictionless=False)
+#: The further columns, in order.
+VARIANT_ORDER = ("paper-reciprocal", "physical-paper-friction", "physical-rolling")
 COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
 
 #: The command line's defaults, as the steps' commands leave them: the time step
@@ -526,7 +541,8 @@ def run_paper(out, *, quick: bool = False, presets=COLUMN_ORDER, quiet: bool = F
         "variants": [{"name": c, "preset": COLUMNS[c].preset,
                       "overrides": COLUMNS[c].kw, "description": COLUMNS[c].description}
                      for c in presets if c in VARIANT_ORDER],
-        "command": "boringbar paper --out " + str(shown) + (" --quick" if quick else ""),
+        "command": "boringbar paper --out " + str(shown) + (" --quick" if quick else "") + (
+            "" if tuple(presets) == COLUMN_ORDER else " --presets " + ",".join(presets)),
         "wall_time_s": time.perf_counter() - tic,
         "compute_time_s": sum(r["wall_time_s"] for r in records if "shared_from" not in r),
         "steps": records,
@@ -604,7 +620,8 @@ def _plan(steps: list[Step], presets) -> list[tuple[str, Step, str | None]]:
             if column in PRESET_ORDER:
                 plan.append((column, step, None))
             elif step.variants:
-                shared = preset if not step.friction and preset in presets else None
+                shares = COLUMNS[column].shares_frictionless and not step.friction
+                shared = preset if shares and preset in presets else None
                 plan.append((column, step, shared))
     return plan
 

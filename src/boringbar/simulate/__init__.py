@@ -11,6 +11,7 @@ and the checks of a run before it starts (:mod:`.run_limits`).
 from boringbar.simulate.cut import CutStepper, Window, knocked_cut
 from boringbar.simulate.engine import (
     RunSetup,
+    batchable,
     check_cut_law,
     check_friction_law,
     hertz,
@@ -57,7 +58,8 @@ __all__ = [
     "PUBLISHED_DT_S", "fixed_run_step",
     "STEADY_FRACTION", "STICK_LAWS", "STICK_MIN_PERIODS", "CutStepper", "Initial", "Integration",
     "IntegrationError", "Run", "RunSetup", "State", "Window", "check_cut_law",
-    "check_friction_law", "hertz", "initial_state", "rolling", "state_size", "knocked_cut",
+    "batchable", "check_friction_law", "hertz", "initial_state", "rolling", "state_size",
+    "knocked_cut",
     "pack", "pack_cut",
     "resolve_integrator", "resolved_integrators", "run_kernel", "run_result", "setup_run",
     "simulate", "simulate_batch", "simulate_stage_loop", "stick_slip", "stored_energy",

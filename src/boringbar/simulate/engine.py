@@ -215,6 +215,12 @@ def stick_slip(system: System) -> bool:
     return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force_n > 0
 
 
+def batchable(system: System) -> bool:
+    """Whether :func:`simulate_batch` takes runs of ``system``: a rolling ball's spin
+    has no lane in the batch, so its runs go one by one (sweeps and basins)."""
+    return not rolling(system)
+
+
 def rolling(system: System) -> bool:
     """Whether the ball of ``system`` rolls (its spin a state; docs/model.md, 2.7)."""
     d = system.damper
@@ -617,7 +623,7 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
         if not isinstance(forcing, Harmonic):
             raise ParameterError(f"forcing = {forcing!r}: simulate_batch takes harmonic forcing "
                                  "only (regenerative cuts: simulate)")
-        if rolling(system):
+        if not batchable(system):
             raise ParameterError("simulate_batch takes sliding balls; a rolling one: simulate")
         sus.append(setup_run(system, forcing, duration_s, dt_s, initial, 0, steady_fraction, strobe,
                              "rk4", stick_law))
