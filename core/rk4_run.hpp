@@ -394,8 +394,9 @@ BB_INLINE void run_body(const RunArgs& a) {
     met[L::STEPS_DONE] += double(steps_run);
 }
 
-// The case and the forcing as template constants for 1-3 modes (the other cases' and the
-// cut's branches fold away: 1.3-1.5x per step over run-time ones, as measured).  Copy is
+// The case and the forcing as template constants for 1-3 modes, and for the ball and
+// solid bars in two planes of two modes (the other cases' and the cut's branches fold
+// away: 1.3-1.5x per step over run-time ones, as measured).  Copy is
 // a kernel file's struct whose run<N, CASE, FORCING> is run_body compiled for its ISA.
 template <class Copy, int N, int CASE>
 void run_case(const RunArgs& a, int forcing) {
@@ -428,6 +429,10 @@ void run_shape(const RunArgs& a) {
         case 1: return run_modes<Copy, 1>(a, kase, forcing);
         case 2: return run_modes<Copy, 2>(a, kase, forcing);
         case 3: return run_modes<Copy, 3>(a, kase, forcing);
+        case 4:  // two bending planes of two modes each (docs/model.md, 4.7)
+            if (kase == L::BALL) return run_case<Copy, 4, L::BALL>(a, forcing);
+            if (kase == L::SOLID) return run_case<Copy, 4, L::SOLID>(a, forcing);
+            return Copy::template run<0, -1, -1>(a);
         default: return Copy::template run<0, -1, -1>(a);
     }
 }
