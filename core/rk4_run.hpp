@@ -315,8 +315,8 @@ BB_INLINE void run_body(const RunArgs& a) {
             bool held, rolled = sh.rolls;
             if (SHORT_STAGES && (!ball || q.ydd_sum_from_first) &&
                 stages_fast(sh, X, Kd, cst[0]))
-                held = rk4_stages<N, CASE, SHORT_STAGES>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
-                                                 force);
+                held = rk4_stages<N, CASE, SHORT_STAGES>(q, sh, X, Kd, cst, wst, fl, hold_max,
+                                                         rolled, force);
             else
                 held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
                                                   force);
