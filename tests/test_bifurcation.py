@@ -136,10 +136,10 @@ def test_continued_state_maps_time_to_the_same_phase():
     )
 
 
-def test_two_impact_orbit_is_one_poincare_point():
-    """The closed-form symmetric two-impact orbit (Masri-Caughey) at 30 N,
-    Omega = omega_n: one stroboscopic point, one impact-map point per wall."""
-    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
+def masri_caughey_start(system, force: float):
+    """The stable symmetric two-impact orbit (Masri-Caughey, closed form) of the one-mode
+    ball bar ``system`` at ``force`` N and Omega = omega_n, and its state at t = 0
+    [u, u', y, y']."""
     b, d = system.bar, system.damper
     omega = system.reference_frequency_rad_s
     orbits = two_impact_orbit(
@@ -151,13 +151,13 @@ def test_two_impact_orbit_is_one_poincare_point():
         d.mass_kg,
         d.gap_m,
         d.restitution,
-        30.0,
+        force,
         omega,
     )
     (orbit,) = [o for o in orbits if o.admissible and o.stable]
     sign = orbit._split(0.0)[0]
     v = float(orbit.modal_velocity(0.0))
-    x0 = np.array(
+    return orbit, np.array(
         [
             float(orbit.modal_displacement(0.0)),
             v,
@@ -165,6 +165,13 @@ def test_two_impact_orbit_is_one_poincare_point():
             -float(sign) * orbit.ball_speed - b.psi_damper[0] * v,
         ]
     )
+
+
+def test_two_impact_orbit_is_one_poincare_point():
+    """The closed-form symmetric two-impact orbit (Masri-Caughey) at 30 N,
+    Omega = omega_n: one stroboscopic point, one impact-map point per wall."""
+    system = make_system("ball", "physical", n_modes=1, friction=False, gap_m=0.5e-3)
+    orbit, x0 = masri_caughey_start(system, 30.0)
     run = simulate(system, Harmonic(30.0, 1.0), duration_s=0.3, initial=State(x0, 0.0), strobe=True)
     assert run.pattern.name == "2 symmetric"
     verdict = poincare_map(run).classify()

@@ -30,6 +30,7 @@ from boringbar.orbits.shooting import make_flow
 from boringbar.simulate import simulate_batch
 
 sys.path.insert(0, str(Path(__file__).parent))
+from test_bifurcation import masri_caughey_start  # noqa: E402
 from test_verdict import first_five_lobes, worst_error  # noqa: E402
 
 #: a 20 Hz mode of 1000 kg at the tip: the ball's reaction barely moves it, and the
@@ -76,6 +77,24 @@ def test_with_no_friction_no_spin_is_excited_and_the_run_is_the_sliding_one():
     assert roll.final.x[-1] == 0.0
     np.testing.assert_allclose(roll.history[:, 1], slide.history[:, 1], rtol=0,
                                atol=1e-12 * np.abs(slide.history[:, 1]).max())
+
+
+def test_the_masri_caughey_orbit_is_unchanged_where_no_spin_is_excited():
+    """A rolling ball without friction (mu_s = mu_k = 0, no rolling resistance), started
+    on the closed-form symmetric two-impact orbit of the one-mode bar at 30 N with no
+    spin: the floor cannot spin it, and the impact law leaves the spin, so it stays on
+    the orbit: two symmetric impacts a period, the strobe at the orbit's tip (1.3e-4
+    off, the published scheme's step; a rolling ball with mu_s = 0.2 is 6.9e-3 off and
+    spins), and no spin."""
+    ball = ImpactDamper.ball("carbide", gap_m=0.5e-3, friction=NO_FRICTION, motion="roll",
+                             mu_static=0.0, mu_kinetic=0.0)
+    system = System(make_system("ball", "physical", n_modes=1).bar, ball, "physical")
+    orbit, x0 = masri_caughey_start(system, 30.0)
+    r = bb.simulate(system, bb.Harmonic(30.0, 1.0), duration_s=0.3, integrator="rk4",
+                    initial=bb.State(np.append(x0, 0.0), 0.0), strobe=True)
+    assert r.pattern.name == "2 symmetric"
+    assert r.final.x[-1] == 0.0
+    assert r.strobe[-1, 1] == pytest.approx(float(orbit.tip(0.0)), rel=1e-3)
 
 
 def test_the_energy_balances_with_the_spin():
