@@ -202,20 +202,20 @@ void run_rk4_batch(const RK4Batch& run) {
                                                   " runs: P must have 1.." +
                                                   std::to_string(R::BMAX) + " rows");
     const Kind k = kind_of(a.P.row(0), "P[0]");
+    const bool roll = rolls(a.P.row(0), k);
     for (std::int64_t r = 0; r < n_runs; ++r) {
         const std::string row = "P[" + std::to_string(r) + "]";
         const Kind kr = kind_of(a.P.row(r), row);
-        require(kr.n == k.n && kr.kase == k.kase,
-                "the runs of a batch must share the mode count and the case (" + row +
-                    " differs from P[0])");
+        // (so that the rows of x, the states, have one length)
+        require(kr.n == k.n && kr.kase == k.kase && rolls(a.P.row(r), kr) == roll,
+                "the runs of a batch must share the mode count, the case and the ball's "
+                "motion (" + row + " differs from P[0])");
         require(kr.forcing == L::HARMONIC,
                 row + ": batches take harmonic forcing only (cuts: run_rk4)");
         check_contact(a.P.row(r), row);
         check_roll(a.P.row(r), row);
-        require(!rolls(a.P.row(r), kr), row + ": batches take sliding balls (a rolling one: "
-                                              "run_rk4)");
     }
-    a.x = span2<double>(given(r.x, "x"), "x", n_runs, 2 * k.n + 2);
+    a.x = span2<double>(given(r.x, "x"), "x", n_runs, 2 * k.n + 2 + (roll ? 1 : 0));
     a.t0 = r.t0;
     a.dt = r.dt;
     a.n_steps = r.n_steps;

@@ -127,7 +127,7 @@ def test_full_batch_and_kernel_arguments():
     P = np.zeros((2, L.P_SIZE))
     P[:, L.N_MODES] = 1
     P[1, L.CASE] = L.BALL
-    with pytest.raises(ValueError, match="share the mode count and the case"):
+    with pytest.raises(ValueError, match="share the mode count, the case"):
         run_rk4_batch(P, np.zeros((2, 4)), 0.0, 1e-6, 1, 0, np.zeros((2, 1, 3)),
                       np.zeros((2, 1, 2)), np.zeros((2, 0, 5)), np.zeros((2, L.MET_SIZE)))
 

@@ -145,13 +145,30 @@ def test_a_rolling_ball_s_limit_is_the_bar_carrying_two_sevenths_of_it():
 
 
 # --- where it applies, and bad input ------------------------------------------------------
-def test_the_exact_integrator_the_batch_and_shooting_refuse_a_rolling_ball():
+def test_a_batch_of_rolling_balls_is_its_single_runs_bit_for_bit():
+    """simulate_batch takes rolling balls (their states one entry longer), each run
+    the single run bit for bit; a rolling ball and a sliding one cannot share a batch."""
+    system = make_system("ball", motion="roll")
+    runs = [(system, bb.Harmonic(f, r), bb.Initial(ball_velocity_m_s=v))
+            for f, r, v in ((20.0, 1.0, 0.3), (0.05, 1.01, 0.0), (5.0, 0.98, -0.1))]
+    batch = simulate_batch(runs, duration_s=0.05)
+    for (s, f, ini), b in zip(runs, batch, strict=True):
+        one = bb.simulate(s, f, duration_s=0.05, initial=ini, record_every=0,
+                          integrator="rk4")
+        assert len(b.final.x) == 2 * s.bar.n_modes + 3
+        np.testing.assert_array_equal(b.final.x, one.final.x)
+        np.testing.assert_array_equal(b.impacts, one.impacts)
+        assert b.energy == one.energy
+    with pytest.raises(ParameterError, match="a rolling ball"):
+        simulate_batch([runs[0], (make_system("ball"), bb.Harmonic(20.0), None)],
+                       duration_s=0.01)
+
+
+def test_the_exact_integrator_and_shooting_refuse_a_rolling_ball():
     system = make_system("ball", motion="roll")
     forcing = bb.Harmonic(amplitude_n=10.0)
     with pytest.raises(ParameterError, match="motion = 'roll'"):
         bb.simulate(system, forcing, duration_s=0.01, integrator="exact")
-    with pytest.raises(ParameterError, match="rolling"):
-        simulate_batch([(system, forcing, None)], duration_s=0.01)
     with pytest.raises(ParameterError, match="motion = 'roll'"):
         make_flow(system, forcing)
     with pytest.raises(ParameterError, match="mu_static"):

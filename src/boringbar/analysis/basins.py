@@ -66,7 +66,6 @@ from boringbar.model.system import System
 from boringbar.simulate import (
     Initial,
     Integration,
-    batchable,
     resolve_integrator,
     resolved_integrators,
     simulate,
@@ -331,7 +330,7 @@ def plan(system, options: BasinOptions, integration: Integration) -> Plan:
         check_steady_ratios(op.case.system, (op.forcing.ratio,), integration.duration_s,
                             integration.steady_fraction, "Integration.duration_s")
     initials = options.initials()
-    batched = [options.batch > 1 and batchable(op.case.system) and resolve_integrator(
+    batched = [options.batch > 1 and resolve_integrator(
         integration.integrator, op.case.system) == "rk4" for op in operating]
     points = [(i, list(range(a, min(a + size, len(initials)))))
               for i, size in enumerate(options.batch if b else 1 for b in batched)

@@ -32,7 +32,7 @@ from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import (
     Initial,
     Integration,
-    batchable,
+    batch_key,
     resolve_integrator,
     simulate,
     simulate_batch,
@@ -255,8 +255,9 @@ class SweepOptions:
 
 def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> Plan:
     """Every (case, force, ratio) run; a point is a lock-step batch of them (the runs
-    whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind and mode
-    count, in (case, force, ratio) order) or one run; the options in the context carry
+    whose integrator is RK4, ``options.batch`` > 1: runs of one bar kind, mode count
+    and ball motion, :func:`~boringbar.simulate.batch_key`, in (case, force, ratio)
+    order) or one run; the options in the context carry
     their ratios (:func:`default_ratios` of the cases if none were given)."""
     integration = integration.with_step()
     cases = as_cases(cases, "cases")
@@ -268,14 +269,13 @@ def plan(cases: list[Case], options: SweepOptions, integration: Integration) -> 
     shape = (len(cases), len(options.forces_n), len(options.ratios))
     jobs = [(i, j, k) for i in range(shape[0]) for j in range(shape[1]) for k in range(shape[2])]
     integrators = [resolve_integrator(integration.integrator, c.system) for c in cases]
-    rk4 = [i == "rk4" and options.batch > 1 and batchable(c.system)
-           for i, c in zip(integrators, cases, strict=True)]
+    rk4 = [i == "rk4" and options.batch > 1 for i in integrators]
     groups: dict[tuple, list] = {}
     points = []
     for ijk in jobs:
         system = cases[ijk[0]].system
         if rk4[ijk[0]]:
-            groups.setdefault((system.kind, system.bar.n_modes), []).append(ijk)
+            groups.setdefault(batch_key(system), []).append(ijk)
         else:
             points.append([ijk])
     points = [g[a:a + options.batch] for g in groups.values()

@@ -11,7 +11,7 @@ and the checks of a run before it starts (:mod:`.run_limits`).
 from boringbar.simulate.cut import CutStepper, Window, knocked_cut
 from boringbar.simulate.engine import (
     RunSetup,
-    batchable,
+    batch_key,
     check_cut_law,
     check_friction_law,
     hertz,
@@ -58,7 +58,7 @@ __all__ = [
     "PUBLISHED_DT_S", "fixed_run_step",
     "STEADY_FRACTION", "STICK_LAWS", "STICK_MIN_PERIODS", "CutStepper", "Initial", "Integration",
     "IntegrationError", "Run", "RunSetup", "State", "Window", "check_cut_law",
-    "batchable", "check_friction_law", "hertz", "initial_state", "rolling", "state_size",
+    "batch_key", "check_friction_law", "hertz", "initial_state", "rolling", "state_size",
     "knocked_cut",
     "pack", "pack_cut",
     "resolve_integrator", "resolved_integrators", "run_kernel", "run_result", "setup_run",

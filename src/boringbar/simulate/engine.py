@@ -215,10 +215,16 @@ def stick_slip(system: System) -> bool:
     return isinstance(d, ImpactDamper) and d.friction.static_ratio != 1 and d.friction_force_n > 0
 
 
-def batchable(system: System) -> bool:
-    """Whether :func:`simulate_batch` takes runs of ``system``: a rolling ball's spin
-    has no lane in the batch, so its runs go one by one (sweeps and basins)."""
-    return not rolling(system)
+def batch_key(system: System) -> tuple:
+    """What the runs of one :func:`simulate_batch` share: the bar's kind, its mode count
+    and whether its ball rolls (so that their states have one length)."""
+    return system.kind, system.bar.n_modes, rolling(system)
+
+
+def _batch_words(system: System) -> str:
+    """'ball bar with 2 modes (a rolling ball)': the batch key in words."""
+    return (f"{system.kind} bar with {system.bar.n_modes} modes"
+            + (" (a rolling ball)" if rolling(system) else ""))
 
 
 def rolling(system: System) -> bool:
@@ -601,7 +607,8 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
 
     ``runs``: up to :data:`~boringbar.simulate.kernels.BMAX` triples (system,
     forcing, initial), as :func:`simulate` takes them, whose systems share the
-    bar kind and the number of retained modes, whose forcings are
+    bar kind, the number of retained modes and the ball's motion (:func:`batch_key`),
+    whose forcings are
     :class:`Harmonic` (each its own amplitude and frequency) and whose initial
     conditions start at the same time (``Initial`` or ``None``: t = 0; a
     ``State``: its t_s).  ``duration_s``, ``dt_s``, ``steady_fraction`` and
@@ -623,17 +630,13 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
         if not isinstance(forcing, Harmonic):
             raise ParameterError(f"forcing = {forcing!r}: simulate_batch takes harmonic forcing "
                                  "only (regenerative cuts: simulate)")
-        if not batchable(system):
-            raise ParameterError("simulate_batch takes sliding balls; a rolling one: simulate")
         sus.append(setup_run(system, forcing, duration_s, dt_s, initial, 0, steady_fraction, strobe,
                              "rk4", stick_law))
     first = sus[0]
     for su in sus[1:]:
-        if (su.system.kind, su.system.bar.n_modes) != (first.system.kind,
-                                                       first.system.bar.n_modes):
-            raise ParameterError(f"simulate_batch: a {su.system.kind} bar with "
-                                 f"{su.system.bar.n_modes} modes cannot share a batch with a "
-                                 f"{first.system.kind} bar with {first.system.bar.n_modes}")
+        if batch_key(su.system) != batch_key(first.system):
+            raise ParameterError(f"simulate_batch: a {_batch_words(su.system)} cannot "
+                                 f"share a batch with a {_batch_words(first.system)}")
         if su.t0 != first.t0:
             raise ParameterError(f"simulate_batch: initial states at t = {su.t0:g} s and "
                                  f"{first.t0:g} s cannot share a batch")
