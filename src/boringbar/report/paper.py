@@ -131,12 +131,12 @@ COLUMNS = {
         (("friction_reading", "paper"), ("friction_reaction", "reciprocal")),
         "the physical preset with the friction force as the paper computed it (20.4 N "
         "for the carbide ball) and a reciprocal reaction"),
+    "physical-rolling": Column(
+        "physical-rolling", "physical", (("motion", "roll"),),
+        "the physical preset with a rolling ball (docs/model.md, 2.7): its spin a state, "
+        "rolling while mu_s m g holds it and slipping with mu_k m g beyond (0.2, 0.15)",
+        shares_frictionless=False),
 }
-COLUMNS["physical-rolling"] = Column(
-    "physical-rolling", "physical", (("motion", "roll"),),
-    "the physical preset with a rolling ball (docs/model.md, 2.7): its spin a state, "
-    "rolling while mu_s m g holds it and slipping with mu_k m g beyond (0.2, 0.15)",
-    shares_frictionless=False)
 #: The further columns, in order.
 VARIANT_ORDER = ("paper-reciprocal", "physical-paper-friction", "physical-rolling")
 COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
