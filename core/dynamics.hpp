@@ -182,13 +182,13 @@ inline Params unpack(const double* p, double dt) {
     return q;
 }
 
+// ROLLING: a kernel's case for a rolling ball (a ball bar, the roll law compiled in).
+constexpr int ROLLING = 16;
+
 // The mode count and the case of a kernel: compile-time constants where the kernel is
 // specialised (N > 0, CASE >= 0), else the run's.  As constants from the start (not
 // members set to them) they bound the mode loops before GCC's early passes, which unroll
 // those loops and keep the state in registers.
-// ROLLING: a kernel's case for a rolling ball (a ball bar, the roll law compiled in).
-constexpr int ROLLING = 16;
-
 template <int N, int CASE>
 struct Shape {
     int run_n, run_kase;

@@ -161,14 +161,8 @@ struct MapIn {
     double sn, cn, fz;
 };
 
-// A cheap sufficient condition for map_fits' stage test: with
 // E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
-// in exact arithmetic, E <= 0.2 |y'_0| puts every computed y'_s within |y'_0| / 4 of
-// y'_0 (the sums' rounding is below 1e-14 of their terms), so ys y'_0 >= 0.75 y'_0^2,
-// far above 1e-12 (y'_0^2 + |y'_0 (ys - y'_0)|) <= 1.3e-12 y'_0^2: the test passes for
-// every stage, as the full computation would find.  The limits on |y'_0| keep y'_0^2
-// normal and finite; a NaN or infinite state fails the comparison and takes the full
-// test, so the decision is always the full test's.
+// in exact arithmetic: how far y' may move over a step's stages.
 template <int N, int CASE>
 BB_INLINE double y_spread(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
     const int nx = sh.nxm();
@@ -178,7 +172,13 @@ BB_INLINE double y_spread(Shape<N, CASE> sh, const VecMap& vm, const double* X, 
     return e;
 }
 
-// (a = |y'_0|, spread = y_spread)
+// A cheap sufficient condition for map_fits' stage test, a = |y'_0| and spread =
+// y_spread = E: E <= 0.2 |y'_0| puts every computed y'_s within |y'_0| / 4 of
+// y'_0 (the sums' rounding is below 1e-14 of their terms), so ys y'_0 >= 0.75 y'_0^2,
+// far above 1e-12 (y'_0^2 + |y'_0 (ys - y'_0)|) <= 1.3e-12 y'_0^2: the test passes for
+// every stage, as the full computation would find.  The limits on |y'_0| keep y'_0^2
+// normal and finite; a NaN or infinite state fails the comparison and takes the full
+// test, so the decision is always the full test's.
 BB_INLINE bool surely_fits(double a, double spread) {
     return a >= 1e-150 && a <= 1e150 && spread <= 0.2 * a;
 }
@@ -187,8 +187,8 @@ BB_INLINE bool surely_fits(double a, double spread) {
 // y0's sign at stages 2-4 (the vector's lanes 0-2) by more than their round-off.  The
 // single run and the batch wrote the test with opposite comparisons, which differ only
 // for a NaN state (nan_maps: the single run's, under which a NaN takes the map).
-template <int N, int CASE>
 // spread: set to y_spread where the test gets that far (map_slips reads it).
+template <int N, int CASE>
 BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
                         MapIn z, bool nan_maps, double& spread) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
