@@ -6,7 +6,8 @@ the end.
 """
 
 #: the modules started first, longest first; then the others in file order
-FIRST = ("test_paper.py", "test_runner.py", "test_basins.py", "test_cli_nonlinear.py")
+FIRST = ("test_sanitizers.py", "test_paper.py", "test_runner.py", "test_basins.py",
+         "test_cli_nonlinear.py")
 
 
 def pytest_collection_modifyitems(items):
