@@ -30,13 +30,20 @@ from boringbar.simulate.regimes import SYSTEM_CACHE_SIZE, system_regimes
 
 
 # --- linear cases: closed forms ----------------------------------------------------------
-def test_solid_bar_transient_from_rest_is_the_closed_form():
-    """One mode from rest under F0 sin(Omega t): particular + damped free solution."""
+@pytest.mark.parametrize("duration,dt,every,tol", [(0.02, 1e-5, 7, 1e-11),
+                                                   (2.0, 1e-6, 100, 3e-12)])
+def test_solid_bar_transient_from_rest_is_the_closed_form(duration, dt, every, tol):
+    """One mode from rest under F0 sin(Omega t): particular + damped free solution.
+
+    Over 2 s the history's 20000 rows come by recurrence (a complex product a row, the
+    closed form's own every 64th row): they stay within 3e-12 of the amplitude (achieved
+    8.5e-13, the anchors' 4.6e-13, the formula's own rounding of Omega t near 1e4 rad).
+    """
     s = make_system("solid", "paper")
     bar = s.bar
     M, K, C, pl = bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0]
     om = 0.93 * bar.natural_frequency_rad_s
-    run = simulate(s, Harmonic(10.0, 0.93), duration_s=0.02, dt_s=1e-5, record_every=7,
+    run = simulate(s, Harmonic(10.0, 0.93), duration_s=duration, dt_s=dt, record_every=every,
                    integrator="exact")
     t = run.history[:, 0]
     H = 1.0 / complex(K - M * om**2, C * om)
@@ -48,7 +55,7 @@ def test_solid_bar_transient_from_rest_is_the_closed_form():
                                                               + B * np.sin(wd * t))
     w_ref = pl * u
     scale = np.max(np.abs(w_ref))
-    assert np.max(np.abs(run.history[:, 1] - w_ref)) < 1e-11 * scale  # achieved: 3e-14
+    assert np.max(np.abs(run.history[:, 1] - w_ref)) < tol * scale  # achieved: 1.3e-14
     assert run.energy["balance_relative"] == pytest.approx(0.0, abs=1e-12)
 
 

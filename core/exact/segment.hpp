@@ -32,6 +32,21 @@ namespace bb::exact {
 
 namespace L = layout;
 
+// Rows between two exact ones in history_rows: the products' rounding grows by about one
+// unit a row, so 64 keep it near 1e-14 of the state.
+constexpr idx REC_ANCHOR = 64;
+
+// history_rows' recurrence, carried from one grid step's call to the next: exp(lambda_k tau)
+// at the last row of the segment from t_seg (regime r), the forcing's phasor there, and
+// their factors over rec_dt (of regime r_step).
+struct RowRecurrence {
+    double t_seg = NAN;
+    idx r = -1, r_step = -1;
+    idx since = REC_ANCHOR;
+    ncplx ex[NZ_MAX] = {}, step[NZ_MAX] = {};
+    ncplx ph, ph_step;
+};
+
 // The driver's arrays: the scratch, owned here (zeroed once per run and reused by every
 // segment, so a segment allocates nothing), and views of the run's inputs and outputs.  The views point into this object: it is never copied or moved.
 struct Work {
@@ -65,6 +80,7 @@ struct Work {
     ncplx ex_end[2] = {};
     double tau_end = NAN;
     idx r_end = -1;
+    RowRecurrence rr;  // history_rows' recurrence through one segment
 
     Segment seg;
     RunState rs;
@@ -786,6 +802,68 @@ inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row)
     row[4] = adv;
 }
 
+// A history row's W, W', aux, aux' and tip force from the state X (in w.dX) at tau of the
+// segment from t, its forcing phasor ph = e^{i Omega (t + tau)}.
+inline void history_row(Work& w, SegCtx c, double tau, ncplx ph, double* row) {
+    auto [wv, wdv] = psi_dot(w.sys.mk, 3, w.dX, c.n);
+    auto [av, adv] = aux(w.dX, tau, w.seg, c, w.sys.mk, w.x);
+    row[1] = wv;
+    row[2] = wdv;
+    row[3] = av;
+    row[4] = adv;
+    row[5] = cut_force(w.seg, tau, w.dX, c.n, w.sys.mk, w.sys.force.f0, w.sys.force.om, ph.im);
+}
+
+// The history rows of a segment outside a cut (every rec_dt from t0, in (t, t + b], before
+// t_end, while rec has room) by recurrence: from one row to the next each exp(lambda_k tau)
+// and the forcing's phasor advance by one complex product with their values over rec_dt,
+// so a row costs no exp, sin or cos (a 2 s run keeps 20000 rows, and those functions were
+// most of its cost).  The recurrence w.rr runs on through the grid steps of one segment;
+// the segment's first row and every REC_ANCHOR-th are the closed form's own.  Returns the
+// next row's index k_rec.
+inline double history_rows(Work& w, const SegView& s, SegCtx c, double t, double b,
+                           double t_end) {
+    const idx r = s.r, ks = s.ks, nz = w.dX.n;
+    const double t0 = w.cp.t0, rec_dt = w.cp.rec_dt, om = w.sys.force.om;
+    Mat rec = w.rec;
+    RowRecurrence& rr = w.rr;
+    idx n_rec = idx(w.met[L::N_REC]);
+    double k_rec = w.ro.k_rec;
+    if (rr.t_seg != t || rr.r != r) rr.since = REC_ANCHOR;
+    while (n_rec < rec.n0 && t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt) {
+        const double ts_ = t0 + k_rec * rec_dt;
+        if (ts_ > t_end) break;
+        const double tau = ts_ - t;
+        if (rr.since == REC_ANCHOR) {
+            rr.ph = state_at(s, tau, w.qs, w.dX, rr.ex);
+            rr.since = 0;
+            rr.t_seg = t;
+            rr.r = r;
+        } else {
+            if (rr.r_step != r) {
+                for (idx kq = 0; kq < nq(nz, ks); ++kq)
+                    rr.step[kq] = cexp(ncplx(s.cf.lam(r, kq * ks)) * rec_dt);
+                rr.ph_step = cexp(ncplx(0.0, 1.0) * om * rec_dt);
+                rr.r_step = r;
+            }
+            for (idx kq = 0; kq < nq(nz, ks); ++kq) {
+                rr.ex[kq] = rr.ex[kq] * rr.step[kq];
+                w.qs[kq * ks] = ncplx(s.q0[kq * ks]) * rr.ex[kq];
+            }
+            rr.ph = rr.ph * rr.ph_step;
+            from_q(s.cf, r, ks, w.qs, rr.ph, w.seg.fb, w.dX);
+        }
+        rr.since += 1;
+        double* row = rec.row(n_rec);
+        row[0] = ts_;
+        history_row(w, c, tau, rr.ph, row);
+        n_rec += 1;
+        k_rec += 1;
+    }
+    w.met[L::N_REC] = double(n_rec);
+    return k_rec;
+}
+
 // The history rows (every rec_dt from t0) and strobe rows (every tstrobe) that fall in
 // (t + a, t + b] of the segment from t (context c, its view s), before t_end, into rec and
 // strobe while they have room; the next ones' times into w.ro.
@@ -800,6 +878,10 @@ inline void samples(Work& w, const SegView& s, SegCtx c, double t, double b, dou
     double k_rec = w.ro.k_rec;
     double t_next_strobe = w.ro.t_strobe;
     idx n_rec = idx(met[L::N_REC]);
+    if (rec_dt > 0.0 && w.seg.krb == 0.0) {
+        k_rec = history_rows(w, s, c, t, b, t_end);
+        n_rec = idx(met[L::N_REC]);
+    }
     while (rec_dt > 0.0 && n_rec < rec.n0 && t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt) {
         double ts_ = t0 + k_rec * rec_dt;
         if (ts_ > t_end) break;
