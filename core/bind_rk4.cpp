@@ -123,6 +123,10 @@ void check_roll(const double* p, const std::string& where) {
 // Whether p's ball rolls: its state has the spin after y', 2 n + 3 entries.
 bool rolls(const double* p, const Kind& k) { return k.kase == L::BALL && p[L::ROLL] > 0.0; }
 
+// The state's length: u, u', the damper's two entries and a rolling ball's spin (the twin
+// of Python's simulate.state_size).
+std::int64_t state_length(bool roll, const Kind& k) { return 2 * k.n + 2 + (roll ? 1 : 0); }
+
 // A compliant contact's constants: K >= 0 (0: the impact law) and alpha >= 0, finite.
 void check_contact(const double* p, const std::string& where) {
     const double k = p[L::CONTACT_K], alpha = p[L::CONTACT_ALPHA];
@@ -167,7 +171,7 @@ void run_rk4(const RK4Run& run) {
     a.p = p.d;
     const Kind k = kind_of(a.p, "p");
     check_roll(a.p, "p");
-    a.x = span1<double>(given(r.x, "x"), "x", 2 * k.n + 2 + (rolls(a.p, k) ? 1 : 0));
+    a.x = span1<double>(given(r.x, "x"), "x", state_length(rolls(a.p, k), k));
     a.t0 = r.t0;
     a.dt = r.dt;
     a.n_steps = r.n_steps;
@@ -215,7 +219,7 @@ void run_rk4_batch(const RK4Batch& run) {
         check_contact(a.P.row(r), row);
         check_roll(a.P.row(r), row);
     }
-    a.x = span2<double>(given(r.x, "x"), "x", n_runs, 2 * k.n + 2 + (roll ? 1 : 0));
+    a.x = span2<double>(given(r.x, "x"), "x", n_runs, state_length(roll, k));
     a.t0 = r.t0;
     a.dt = r.dt;
     a.n_steps = r.n_steps;
