@@ -115,7 +115,7 @@ nb::handle prep_entry(nb::dict prep, const char* key) {
 // The parameter vector's scalars that decide shapes and loops.
 struct Shape {
     idx n, kase, nz, nb, nreg, R;
-    bool regen;
+    bool regen, roll;
 };
 
 Shape check_params(Vec p) {
@@ -132,7 +132,8 @@ Shape check_params(Vec p) {
     s.regen = int(p[L::FORCING]) == L::REGENERATIVE;
     s.nz = s.kase == L::TMD ? 2 * s.n + 2 : 2 * s.n;
     s.nb = s.nz + 3;
-    s.nreg = s.kase == L::BALL ? 3 : 1;
+    s.roll = s.kase == L::BALL && p[L::ROLL] > 0.0;
+    s.nreg = s.kase == L::BALL ? (s.roll ? 4 : 3) : 1;
     s.R = s.regen ? 2 * s.nreg : s.nreg;
     for (idx i = 0; i < s.n; ++i) {
         require(p[L::M_ + i] > 0.0, "p[M_ + " + std::to_string(i) + "] (a modal mass) must be > 0");
@@ -148,8 +149,16 @@ Shape check_params(Vec p) {
     require(p[L::STROBE_PERIOD] >= 0.0, "p[STROBE_PERIOD] must be >= 0");
     require(p[L::CONTACT_K] == 0.0, "p[CONTACT_K] must be 0: the exact integrator takes the "
                                     "impact law; a Hertz contact steps with run_rk4");
-    require(p[L::ROLL] == 0.0, "p[ROLL] must be 0: the exact integrator takes a sliding "
-                               "ball; a rolling one steps with run_rk4");
+    if (s.roll) {
+        require(!s.regen, "p[ROLL] must be 0 in a regenerative cut: the exact integrator "
+                          "takes a rolling ball under harmonic forcing (a cut: run_rk4)");
+        require(p[L::REACTION] == 1.0, "p[REACTION] must be 1 for a rolling ball: its "
+                                       "floor's friction reacts on the bar reciprocally");
+        require(p[L::BALL_MASS] > 0.0 && p[L::ROLL_STATIC] >= p[L::ROLL_KINETIC] &&
+                    p[L::ROLL_KINETIC] >= 0.0,
+                "a rolling ball needs p[BALL_MASS] > 0 and p[ROLL_STATIC] >= "
+                "p[ROLL_KINETIC] >= 0");
+    }
     return s;
 }
 
@@ -289,7 +298,7 @@ double run_exact_py(const ExactRunPy& run) {
     a.dt_out = dt;
     a.hist_step = H;
 
-    a.x = span1<double>(given(r.x, "x"), "x", 2 * s.n + 2);
+    a.x = span1<double>(given(r.x, "x"), "x", 2 * s.n + 2 + (s.roll ? 1 : 0));
     finite_view(a.x, "x");
     a.rec = record_rows(given(r.rec, "rec"), "rec", L::REC_NCOL);
     a.imp = record_rows(given(r.imp, "imp"), "imp", L::IMP_NCOL);
@@ -314,7 +323,7 @@ void bind_exact(nb::module_& m) {
     run.def(nb::init<>());
     Fields<ExactRunPy>{run}
         .in("p", &ExactRunPy::p, "the packed parameter vector (P_SIZE float64)")
-        .out("x", &ExactRunPy::x, "the state (2 n + 2 float64), advanced in place")
+        .out("x", &ExactRunPy::x, "the state (2 n + 2 float64, a rolling ball's 2 n + 3), advanced in place")
         .real("t0", &ExactRunPy::t0, "the start time (s)")
         .real("t_end", &ExactRunPy::t_end, "the end time (s), >= t0")
         .real("t_steady", &ExactRunPy::t_steady, "the steady window's start (s)")

@@ -32,7 +32,7 @@ using Stack = nb::ndarray<nb::numpy, double, nb::ndim<3>>;
 
 // The unpacked parameters of p, once its length, mode count and case are checked (the
 // stage derivative indexes the mode blocks by the count and branches on the case).
-R::Params params_of(const P& p, bool sliding_law = true) {
+R::Params params_of(const P& p, bool sliding_law = true, bool roll_ok = false) {
     require(p.shape(0) == size_t(L::P_SIZE),
             "p must have " + std::to_string(L::P_SIZE) + " entries, got " +
                 std::to_string(p.shape(0)));
@@ -50,8 +50,8 @@ R::Params params_of(const P& p, bool sliding_law = true) {
     // (slots a regime does not read may be NaN: only a positive K is a contact)
     require(!(d[L::CONTACT_K] > 0.0), "p[CONTACT_K] must be 0: the regime matrices are the "
                                       "impact law's, and a Hertz contact is not linear");
-    require(!(d[L::ROLL] > 0.0), "p[ROLL] must be 0: the regime matrices are a sliding "
-                                 "ball's");
+    require(roll_ok || !(d[L::ROLL] > 0.0), "p[ROLL] must be 0: the regime matrices are a "
+                                            "sliding ball's");
     return R::unpack(d, 1e-6);  // the step only sets the forcing's rotation, unused here
 }
 
@@ -121,9 +121,10 @@ struct ExactRegime {
 // is Kr b (S - W) with W = psi_L . u: its -Kr b W joins A, and B takes Kr b S.
 void fill_regime(const ExactRegime& g, int nz, double krb, double* A, double* B, double* c) {
     const R::Shape<0, -1> sh(g.q);
-    double X[R::NX_MAX] = {}, Kd[R::NX_MAX];
+    double X[R::NX_MAX + 1] = {}, Kd[R::NX_MAX + 1];  // (a rolling ball's spin last)
     auto derive = [&](double f, double ysign) {
-        R::derivative_with<0, -1>(g.q, sh, X, f, Kd, ysign);
+        R::StageTerms t = R::derivative_with<0, -1>(g.q, sh, X, f, Kd, ysign);
+        if (sh.rolls) Kd[sh.iyd()] = R::map_roll(g.q, sh, X, Kd, t);  // the rolled regime
     };
     for (int j = 0; j < nz; ++j) {
         X[j] = 1.0;
@@ -147,10 +148,24 @@ R::Params held(R::Params q) {
     return q;
 }
 
+// A rolling ball's rolled regime: the roll law rolling whatever the friction it needs (the
+// exact kernel's events end the regime where it may not), so that the floor's friction is
+// the one rolling needs and the bar carries cy of the ball (docs/model.md, 2.7).
+R::Params rolled(R::Params q) {
+    q.roll = true;
+    q.mus_n = INFINITY;
+    q.roll_band = INFINITY;
+    return q;
+}
+
 // The regimes of p: a ball bar's free, stuck (reaction share sr) and on a wall (share 1),
-// one regime for the others; a cut doubles them (out of the cut, then in it).
+// and a rolling ball's rolled regime; one regime for the others; a cut doubles them (out
+// of the cut, then in it).  A rolling ball's free regime is the sliding ball's: slipping,
+// the floor's friction joins F_b.
 nb::tuple regime_stack(const P& p) {
-    R::Params q = params_of(p, false);  // each regime sets its own friction law
+    R::Params q = params_of(p, false, true);  // each regime sets its own friction law
+    const bool roll = q.roll;
+    q.roll = false;
     q.hold = false;
     R::set_friction(q, 1.0);
     const R::Shape<0, -1> sh(q);
@@ -161,7 +176,9 @@ nb::tuple regime_stack(const P& p) {
         std::vector<double> p1(p.data(), p.data() + L::P_SIZE);
         p1[L::REACTION] = 1.0;  // on a wall the bar carries the whole ball
         R::Params q1 = R::unpack(p1.data(), 1e-6);
+        q1.roll = false;  // held on a wall, a rolling ball's law is out as on the bore
         regimes.push_back({held(q1), 0.0, false});
+        if (roll) regimes.push_back({rolled(q), 0.0, true});
     }
     const int nreg = int(regimes.size());
     const bool cut = int(p.data()[L::FORCING]) == L::REGENERATIVE;

@@ -33,9 +33,10 @@ constexpr int MK_ROWS = 10;
 constexpr int MK_SIZE = MK_ROWS * layout::NMAX;
 constexpr int DDC = 4 * (layout::NMAX + 2);
 
-// A ball's regime: free (flying or sliding), stuck to the bore, or resting on a wall.  The
+// A ball's regime: free (flying or sliding; a rolling ball's slipping), stuck to the bore,
+// resting on a wall, or a rolling ball rolling without slip (docs/model.md, 2.7).  The
 // regime's index r in prepare's matrices is the regime (ball bars), plus nreg in a cut.
-enum Regime : int { FREE = 0, STICK = 1, CONTACT = 2 };
+enum Regime : int { FREE = 0, STICK = 1, CONTACT = 2, ROLL = 3 };
 
 namespace detail {
 constexpr double factorial(int k) {
@@ -68,7 +69,10 @@ constexpr idx EV_PLUS = 0, EV_MINUS = 1, EV_VSTOP = 2, EV_YEXT = 3, EV_REL_NEG =
 // regenerative cut: the tool leaves or re-enters where h = S - W crosses zero; EV_HEXT = h'
 // guards a graze of h = 0 inside a step
 constexpr idx EV_CUT = 8, EV_HEXT = 9;
-constexpr int N_EV = 10;
+// a rolling ball: its slip y' - s comes to zero (FREE); EV_SPIN0, not an event function,
+// is a stuck or walled ball's spin run down (its segment ends there)
+constexpr idx EV_SLIP = 10, EV_SPIN0 = 11;
+constexpr int N_EV = 11;
 
 // A segment's description: what the closed form on it holds constant (the regime's
 // forces, the ball's start, a cut's surface polynomial); see g_value.
@@ -87,7 +91,18 @@ struct Segment {
     double krb = 0.0;    // Kr b in the cut, 0 out of it and harmonic
     double s[4] = {0.0, 0.0, 0.0, 0.0};  // the surface S(tau) = s0 + s1 tau + s2 tau^2 + s3 tau^3
     double cdir = 0.0;   // +1 in the cut, -1 out of it, 0 harmonic
-    double acc = 0.0;    // fb / m, the ball's acceleration
+    double acc = 0.0;    // fb / m, the ball's acceleration (rolling: cy fb / m)
+    // a rolling ball (docs/model.md, 2.7): the share cy of the floor's motion that y
+    // follows (y = ud0 + vd0 tau + acc tau^2 / 2 - cy psi_d . u: 1 but rolling, 5/7), its
+    // spin s = s0 + sd tau (rolling: y'), the slip's direction (FREE: -1, 0, 1), the
+    // floor's friction ffl on it (the bar feels -psi_d ffl) and what the friction that
+    // holds or rolls it has besides the carrying force (F - foff, against fs)
+    bool rolls = false;
+    double cy = 1.0;
+    double s0 = 0.0, sd = 0.0;
+    double slip = 0.0;
+    double ffl = 0.0;
+    double foff = 0.0;
 };
 
 // Coulomb friction of the ball on the bore and what it acts against: F_c, F_s, the share s
@@ -100,6 +115,15 @@ struct Friction {
     double kstick = 0.0;     // kappa of a stuck ball
     double kwall = 0.0;      // kappa on a wall
     double stick_min = 0.0;  // shortest stick interval recorded
+};
+
+// A rolling ball (docs/model.md, 2.7): mu_s m g and mu_k m g, kroll = 5 / (2 m) (s' =
+// -kroll F), the share cy = m kroll / (m kroll + 1) of the floor's motion a rolling ball
+// follows, and kappa1 + kroll, the carrying force's kappa when it rolls.
+struct Rolling {
+    bool on = false;
+    double fs = 0.0, fk = 0.0;
+    double kroll = 0.0, cy = 1.0, kappa = 0.0;
 };
 
 // The harmonic force at the tip, F0 sin(Omega t).
@@ -122,6 +146,7 @@ struct System {
               // from u' (rows 2, 3)
     Ball ball;
     Friction fric;
+    Rolling roll;
     Forcing force;
 
     bool has_ball() const { return kase == layout::BALL; }
@@ -147,6 +172,8 @@ struct BallState {
     double wall = 0.0;
     double y = 0.0;
     double yd = 0.0;
+    double spin = 0.0;  // a rolling ball's s = r omega
+    double slip = 0.0;  // the direction of its slip y' - s (FREE; 0: none)
 };
 
 // The run's state between segments (the bar's own state is the work vector X).
@@ -198,6 +225,10 @@ struct SegSearch {
     bool ydd = false;        // y'' and W'' wanted at the grid points
     bool watch_v = false;    // a free ball's y' = 0 switch watched
     bool watch_ext = false;  // a free ball's y extremum watched against grazes
+    bool watch_slip = false;  // a slipping ball's y' = s watched
+    double slip = 0.0;        // ... the slip's direction and its spin's rate (longer steps)
+    double sd = 0.0;
+    double ydd_max = -1.0;    // a rolling ball's largest |y''| (kroll mu_s N; -1: not rolling)
 };
 
 }  // namespace bb::exact

@@ -75,6 +75,14 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     sys.fric.kstick = m > 0.0 ? dynamics::carried_kappa(q, sr) : 1.0;
     sys.fric.kwall = m > 0.0 ? dynamics::carried_kappa(q, 1.0) : 1.0;
     sys.fric.stick_min = p[L::STICK_MIN];
+    sys.roll.on = q.roll;
+    if (q.roll) {
+        sys.roll.fs = q.mus_n;
+        sys.roll.fk = q.muk_n;
+        sys.roll.kroll = q.kroll;
+        sys.roll.cy = m * q.kroll / (m * q.kroll + 1.0);
+        sys.roll.kappa = sys.fric.kwall + q.kroll;
+    }
     sys.force.f0 = p[L::F0];
     sys.force.om = p[L::OMEGA];
 }
@@ -155,6 +163,90 @@ void node_knot(History& hs, double t, double wb, double wdb, Vec X, Mat mk, doub
     add_knot(hs, t, X, X, mk, ttol, double(j_node + 1));
 }
 
+// --- a rolling ball's regimes (docs/model.md, 2.7) -----------------------------------------
+
+// The floor's friction on a ball at rest on the bore (y' = 0) that spins: mu_k N the way
+// the spin's slip -s is opposed (0 without spin).
+double spin_friction(const System& sys, double spin) {
+    return spin > 0.0 ? sys.roll.fk : (spin < 0.0 ? -sys.roll.fk : 0.0);
+}
+
+// A rolling ball at zero slip (y' = s) moving in direction d: it rolls (ROLL) if the floor's
+// friction rolling needs, F = (sum psi_d a_free - kappa1 F_b) / (kappa1 + kroll), stays
+// within mu_s N, else it slips the way that need pulls (F = mu_k N sgn(F_need)).
+void roll_or_slip(Vec X, double f, double d, const System& sys, BallState& b) {
+    const double fb = -sys.fric.fc * d;
+    const double need = freq_rhs(X, f, sys.n, sys.mk, sys.roll.kappa) -
+                        sys.fric.kwall * fb / sys.roll.kappa;
+    b.sdir = d;
+    b.spin = b.yd;
+    if (std::fabs(need) <= sys.roll.fs) {
+        b.mode = ROLL;
+        b.slip = 0.0;
+    } else {
+        b.mode = FREE;
+        b.slip = need > 0.0 ? -1.0 : 1.0;
+    }
+}
+
+// A rolling ball leaving rest (y' = 0) in direction d: from zero slip if it does not spin,
+// else slipping against its spin.
+void leave_rest(Vec X, double f, double d, const System& sys, BallState& b) {
+    b.yd = 0.0;
+    if (b.spin == 0.0) {
+        roll_or_slip(X, f, d, sys, b);
+        return;
+    }
+    b.mode = FREE;
+    b.sdir = sys.fric.fc > 0.0 ? d : 0.0;
+    b.slip = b.spin > 0.0 ? -1.0 : 1.0;
+}
+
+// A rolling ball at rest on the bore: held (STICK) while the friction that carries it with
+// the bar, less the floor's on its spin, stays within F_s (with rolling resistance, as a
+// sliding ball is held), else moving off the way the bar leaves it.
+void roll_at_rest(Vec X, double f, const System& sys, BallState& b) {
+    b.yd = 0.0;
+    const double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kstick) -
+                     spin_friction(sys, b.spin);
+    if (sys.fric.fc > 0.0 && std::fabs(F) <= sys.fric.fs) {
+        b.mode = STICK;
+        b.sdir = 0.0;
+        b.slip = 0.0;
+        return;
+    }
+    leave_rest(X, f, F > 0.0 ? -1.0 : (F < 0.0 ? 1.0 : 0.0), sys, b);
+}
+
+// A rolling ball at rest on wall w_: held there (CONTACT) while the carrying force less the
+// floor's friction on its spin pushes it into the wall (within F_s), else leaving inward.
+void roll_at_wall(Vec X, double f, double w_, const System& sys, BallState& b) {
+    b.yd = 0.0;
+    b.wall = w_;
+    const double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kwall) -
+                     spin_friction(sys, b.spin);
+    if (w_ * F <= sys.fric.fs) {
+        b.mode = CONTACT;
+        b.sdir = 0.0;
+        b.slip = 0.0;
+        return;
+    }
+    leave_rest(X, f, -w_, sys, b);
+}
+
+// A rolling ball moving at y' (not 0) with its spin: rolling or slipping from zero slip
+// where they agree, else slipping.
+void roll_moving(Vec X, double f, const System& sys, BallState& b) {
+    const double d = b.yd > 0.0 ? 1.0 : -1.0;
+    if (b.yd == b.spin) {
+        roll_or_slip(X, f, d, sys, b);
+        return;
+    }
+    b.mode = FREE;
+    b.sdir = d;
+    b.slip = b.yd > b.spin ? 1.0 : -1.0;
+}
+
 // A ball's regime at the start (into b), from its y, y' and the tip force f_t0.
 void initial_regime(Vec X, double f_t0, const System& sys, BallState& b) {
     const idx n = sys.n;
@@ -164,6 +256,17 @@ void initial_regime(Vec X, double f_t0, const System& sys, BallState& b) {
     double fs = sys.fric.fs;
     double y = b.y;
     double yd = b.yd;
+    if (sys.roll.on) {
+        if (yd != 0.0) {
+            roll_moving(X, f_t0, sys, b);
+        } else if (std::fabs(y) >= half) {
+            b.y = (y > 0.0 ? 1.0 : -1.0) * half;
+            roll_at_wall(X, f_t0, y > 0.0 ? 1.0 : -1.0, sys, b);
+        } else {
+            roll_at_rest(X, f_t0, sys, b);
+        }
+        return;
+    }
     Regime mode = FREE;
     double sdir = 0.0;
     double wall = 0.0;
@@ -235,11 +338,51 @@ void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, const System
     } else {
         yd = 0.0;
     }
-    if (yd != 0.0) {
+    if (sys.roll.on) {  // the impact leaves the spin as it was
+        if (yd != 0.0) {
+            roll_moving(X, f_ev, sys, b);
+        } else {
+            roll_at_wall(X, f_ev, w_, sys, b);
+        }
+    } else if (yd != 0.0) {
         b.mode = FREE;
         b.sdir = yd > 0.0 ? 1.0 : -1.0;
     } else {
         at_wall(X, f_ev, w_, sys, b);
+    }
+}
+
+// A rolling ball's event ev_kind at t under the tip force f_ev (not a wall's, not the cut's)
+// into b: its slip run out, its y' at zero, the friction rolling needs beyond mu_s N, its
+// release from the bore or a wall, its spin run down.
+void roll_event(idx ev_kind, Vec X, double f_ev, const System& sys, BallState& b) {
+    if (ev_kind == EV_SLIP) {
+        b.spin = b.yd;
+        if (b.yd != 0.0) {
+            roll_or_slip(X, f_ev, b.yd > 0.0 ? 1.0 : -1.0, sys, b);
+        } else {
+            roll_at_rest(X, f_ev, sys, b);
+        }
+    } else if (ev_kind == EV_VSTOP) {
+        if (b.mode == ROLL) b.spin = 0.0;  // rolling, s = y'
+        roll_at_rest(X, f_ev, sys, b);
+    } else if (b.mode == ROLL && (ev_kind == EV_REL_NEG || ev_kind == EV_REL_POS)) {
+        // the friction rolling needs passes mu_s N (EV_REL_NEG: upwards): it slips
+        b.spin = b.yd;
+        b.mode = FREE;
+        b.slip = ev_kind == EV_REL_NEG ? -1.0 : 1.0;
+    } else if (ev_kind == EV_REL_NEG || ev_kind == EV_REL_POS) {
+        leave_rest(X, f_ev, ev_kind == EV_REL_NEG ? -1.0 : 1.0, sys, b);
+    } else if (ev_kind == EV_WALL_REL) {
+        b.y = b.wall * sys.ball.half;
+        leave_rest(X, f_ev, -b.wall, sys, b);
+    } else if (ev_kind == EV_SPIN0) {
+        b.spin = 0.0;
+        if (b.mode == CONTACT) {
+            roll_at_wall(X, f_ev, b.wall, sys, b);
+        } else {
+            roll_at_rest(X, f_ev, sys, b);
+        }
     }
 }
 
@@ -260,6 +403,8 @@ void apply_event(idx ev_kind, double t, double f_ev, Vec X, const System& sys,
     if (ev_kind == EV_PLUS || ev_kind == EV_MINUS) {
         double w_ = ev_kind == EV_PLUS ? 1.0 : -1.0;
         wall_hit(w_, t, steady, X, f_ev, sys, log, b);
+    } else if (sys.roll.on && ev_kind != EV_CUT) {
+        roll_event(ev_kind, X, f_ev, sys, b);
     } else if (ev_kind == EV_VSTOP) {
         yd = 0.0;
         double F = freq_rhs(X, f_ev, sys.n, sys.mk, sys.fric.kstick);
@@ -292,7 +437,7 @@ void apply_event(idx ev_kind, double t, double f_ev, Vec X, const System& sys,
             }
         }
     }
-    if (mode == FREE && fc == 0.0 && yd == 0.0) sdir = 0.0;
+    if (mode == FREE && fc == 0.0 && yd == 0.0 && !sys.roll.on) sdir = 0.0;
     // stick intervals
     if (mode == STICK && !was_stick) {
         rs.stick_t0 = t;
@@ -332,6 +477,7 @@ void finish_run(const Work& w, bool regen, idx n_ev, int status) {
     if (w.sys.has_ball()) {
         x[2 * n] = w.rs.ball.y;
         x[2 * n + 1] = w.rs.ball.yd;
+        if (w.sys.roll.on) x[2 * n + 2] = w.rs.ball.spin;
     }
     met[L::MAX_ABS_W] = w.ro.max_abs_w;
     met[L::STEADY_MAX_W] = w.ro.max_w;
@@ -412,6 +558,7 @@ double exact_body(const ExactRun& a) {
     if (rs.incut) f_t0 += krb * (feed + w_before - hs.kn(0, 1));
     rs.ball.y = (ball || kase == L::LOCKED) ? x[2 * n] : 0.0;
     rs.ball.yd = ball ? x[2 * n + 1] : 0.0;
+    rs.ball.spin = sys.roll.on ? x[2 * n + 2] : 0.0;
 
     // the running extremes and output times (the other metrics add up in met itself)
     outputs_start(w.ro, met, p, t0, max_force);
@@ -461,6 +608,7 @@ double exact_body(const ExactRun& a) {
         double T = ev.tau;
         last_zero_step = close_segment<Regen>(w, c, t, T, ph, steady, st.pdu, last_zero_step);
         double t_new = ev.kind >= 0 ? t + T : st.t_seg_end;
+        if (ev.kind < 0 && st.spin_end) ev.kind = EV_SPIN0;  // the spin ran down at its end
         if (ev.kind < 0) {
             t = t_new;
             if constexpr (Regen) {
@@ -470,7 +618,7 @@ double exact_body(const ExactRun& a) {
         }
         n_ev += 1;
         // the next segment starts at t + T = seg.ts + T, where the event's evaluation was
-        ph_next_ok = om != 0.0;
+        ph_next_ok = om != 0.0 && ev.kind != EV_SPIN0;  // (EV_SPIN0: no evaluation there)
         double f_ev = cut_force(w.seg, T, X, n, mk, f0, om);  // the tip force at the event
         if (T <= 1e-14 * (std::fabs(t) + h)) {  // no progress: a few ulp of t
             n_zero += 1;

@@ -58,7 +58,7 @@ inline double g_value(idx kind, double tau, const SegView& s) {
         auto [sv, sd] = surface_at(seg, tau);
         return kind == EV_CUT ? seg.cdir * (w - sv) : sd - wd;
     }
-    if (kind <= EV_YEXT) {
+    if (kind <= EV_YEXT || kind == EV_SLIP) {
         double pdu = 0.0;
         double pdv = 0.0;
         for (idx i = 0; i < n; ++i) {
@@ -67,13 +67,14 @@ inline double g_value(idx kind, double tau, const SegView& s) {
         }
         double acc = seg.acc;
         if (kind == EV_PLUS || kind == EV_MINUS) {
-            double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu;
+            double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - seg.cy * pdu;
             return kind == EV_PLUS ? y - seg.half : -seg.half - y;
         }
-        double yd = seg.vd0 + acc * tau - pdv;
+        double yd = seg.vd0 + acc * tau - seg.cy * pdv;
+        if (kind == EV_SLIP) return -seg.slip * (yd - (seg.s0 + seg.sd * tau));
         return kind == EV_VSTOP ? -seg.sdir * yd : yd;
     }
-    double F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om), n, mk, seg.kappa);
+    double F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om), n, mk, seg.kappa) - seg.foff;
     if (kind == EV_REL_NEG) return F - seg.fs;
     if (kind == EV_REL_POS) return -F - seg.fs;
     return seg.wall * F - seg.fs;
@@ -110,7 +111,7 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
             return {seg.cdir * (w - sv), seg.cdir * (wd - sd), seg.cdir * (wdd - sdd)};
         return {sd - wd, sdd - wdd, nan};
     }
-    if (kind <= EV_YEXT) {
+    if (kind <= EV_YEXT || kind == EV_SLIP) {
         double pdu = 0.0;
         double pdv = 0.0;
         double pda = 0.0;
@@ -120,9 +121,11 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
             pda += mk(4, i) * Xd[n + i];
         }
         double acc = seg.acc;
-        double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu;
-        double yd = seg.vd0 + acc * tau - pdv;
-        double ydd = acc - pda;
+        double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - seg.cy * pdu;
+        double yd = seg.vd0 + acc * tau - seg.cy * pdv;
+        double ydd = acc - seg.cy * pda;
+        if (kind == EV_SLIP)
+            return {-seg.slip * (yd - (seg.s0 + seg.sd * tau)), -seg.slip * (ydd - seg.sd), nan};
         if (kind == EV_PLUS) return {y - seg.half, yd, ydd};
         if (kind == EV_MINUS) return {-seg.half - y, -yd, -ydd};
         if (kind == EV_VSTOP) return {-seg.sdir * yd, -seg.sdir * ydd, nan};
@@ -144,7 +147,7 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
         F += mk(4, i) * dynamics::free_acceleration(fm, km, cm, f, X[i], X[n + i]);
         Fd += mk(4, i) * dynamics::free_acceleration(fm, km, cm, fd, X[n + i], Xd[n + i]);
     }
-    F /= seg.kappa;
+    F = F / seg.kappa - seg.foff;
     Fd /= seg.kappa;
     if (kind == EV_REL_NEG) return {F - seg.fs, Fd, nan};
     if (kind == EV_REL_POS) return {-F - seg.fs, -Fd, nan};

@@ -512,6 +512,10 @@ BB_ALWAYS_INLINE void _integrals_impl(const FlowsIn& in, const FlowsScratchOf<Mu
     // int y^2 = int P^2 - 2 int P psi_d.u + int (psi_d.u)^2, with
     // int_0^T tau^j exp(mu tau) = T^(j+1) phi_j(mu T), phi_j(z) = int_0^1 s^j e^(z s) ds
     _psi_dot(mk, 4, Cx, 0, n, nb, cb);  // psi_d . u
+    if (seg.rolls && seg.cy != 1.0) {  // a rolling ball's y follows cy psi_d . u
+        BB_UNROLL
+        for (idx k = 0; k < nb; ++k) cb[k] = seg.cy * ncplx(cb[k]);
+    }
     double uu = _quad_sym(cb, G, nb);
     // mu = 0 (the last basis function): phi_j = 1 / (j + 1)
     double cross = (ncplx(cb[nb - 1]) * T * (p0 + T * (0.5 * p1 + T * p2 / 3.0))).re;

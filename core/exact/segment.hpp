@@ -53,7 +53,7 @@ struct Work {
     // --- scratch storage
     std::array<double, NZ_MAX> X_{}, Xa_{}, Xd_{}, dX_{};
     std::array<cplx, NZ_MAX> q0_{}, qs_{}, qg_{};
-    std::array<double, N_EV> ev_a_{}, ev_b_{}, ev_s_{}, ev_t_{};
+    std::array<double, N_EV> ev_a_{}, ev_b_{}, ev_s_{}, ev_t_{}, ev_u_{};
     std::array<double, 6> qsum_{};
     std::array<double, 7> out_{};
     std::array<cplx, NB_MAX_2> me_{};
@@ -72,6 +72,7 @@ struct Work {
     Vec X, Xa, Xd, dX;       // states: at the grid point, the step's start, X', a work vector
     CVec q0, qs, qg;         // eigen-coordinates: the segment's start, scratch, the grid's
     Vec ev_a, ev_b, ev_s, ev_t;  // event functions at a step's and a sub-step's ends
+    Vec ev_u;                    // ... and where a rolling ball's slip runs out
     Vec qsum, out;           // a cut's flow sums; a segment's integrals
     FlowsScratch isc;        // segment_integrals' scratch
 
@@ -119,6 +120,7 @@ struct Work {
         ev_b = {ev_b_.data(), N_EV};
         ev_s = {ev_s_.data(), N_EV};
         ev_t = {ev_t_.data(), N_EV};
+        ev_u = {ev_u_.data(), N_EV};
         qsum = {qsum_.data(), 6};
         out = {out_.data(), 7};
         isc.me = {me_.data(), 2, nb};
@@ -186,6 +188,10 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat 
     const idx n = mk.n1;
     const double f0 = fo.f0, om = fo.om;
     auto [pdu, pdv] = psi_dot(mk, 4, X, n);
+    if (seg.rolls) {  // a rolling ball's y follows cy of the floor's motion
+        pdu *= seg.cy;
+        pdv *= seg.cy;
+    }
     double acc = seg.acc;
     double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu;
     double yd = seg.vd0 + acc * tau - pdv;
@@ -193,6 +199,7 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat 
     ev[EV_MINUS] = -seg.half - y;
     ev[EV_VSTOP] = -seg.sdir * yd;
     ev[EV_YEXT] = yd;
+    if (seg.rolls) ev[EV_SLIP] = -seg.slip * (yd - (seg.s0 + seg.sd * tau));
     if (seg.cdir != 0.0) {
         auto [w, wd] = psi_dot(mk, 3, X, n);
         auto [sv, sd] = surface_at(seg, tau);
@@ -201,6 +208,7 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat 
     }
     if (mode != FREE) {
         double F = freq_rhs(X, cut_force(seg, tau, X, n, mk, f0, om, sn), n, mk, seg.kappa);
+        if (seg.rolls) F -= seg.foff;
         ev[EV_REL_NEG] = F - seg.fs;
         ev[EV_REL_POS] = -F - seg.fs;
         ev[EV_WALL_REL] = seg.wall * F - seg.fs;
@@ -213,8 +221,12 @@ inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, SegC
                                      Vec x) {
     const idx n = mk.n1, kase = c.kase;
     if (c.ball) {
-        if (c.mode != FREE) return {seg.y0, 0.0};
+        if (c.mode == STICK || c.mode == CONTACT) return {seg.y0, 0.0};
         auto [pdu, pdv] = psi_dot(mk, 4, X, n);
+        if (seg.rolls) {
+            pdu *= seg.cy;
+            pdv *= seg.cy;
+        }
         double acc = seg.acc;
         return {seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu, seg.vd0 + acc * tau - pdv};
     }
@@ -244,6 +256,17 @@ inline std::pair<double, double> ydd(Vec X, double f, double fb, double acc, Mat
         wv += ddc(1, i) * X[i] + ddc(3, i) * X[n + i];
     }
     return {yv, wv};
+}
+
+// (y'', W'') of a moving ball's bar state X under the tip force f: a free (or slipping)
+// ball's (ydd), or a rolling one's, y'' = -kroll F with F = sum psi_d a_free / kappa - foff
+// the floor's friction rolling needs, W'' with F + F_b on the bar (ddc's F_b column).
+inline std::pair<double, double> ball_ydd(Vec X, double f, const Segment& seg, Mat ddc, idx n,
+                                          Regime mode, double kroll) {
+    if (mode != ROLL) return ydd(X, f, seg.fb, seg.acc, ddc, n);
+    auto [yv0, wv0] = ydd(X, f, 0.0, 0.0, ddc, n);  // -sum psi_d a_free, the free W''
+    const double F = -yv0 / seg.kappa - seg.foff;
+    return {-kroll * F, wv0 + ddc(1, n + 1) * (F + seg.fb)};
 }
 
 struct GridPoint {
@@ -298,7 +321,7 @@ BB_ALWAYS_INLINE GridPoint grid_point(Work& w, SegCtx c, double b, idx lev, cons
     from_q(cf, r, ks, qg, phg, seg.fb, X);
     events(w.ev_b, X, b, seg, c.mode, mk, w.sys.force, sn);
     if (ydd_on) {
-        auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, ddc, n);
+        auto [yv, wv] = ball_ydd(X, f0 * phg.imag(), seg, ddc, n, c.mode, w.sys.roll.kroll);
         return {phg, yv, wv};
     }
     return {phg, NAN, NAN};
@@ -324,13 +347,24 @@ inline void close_flows(Work& w, SegCtx c, double T, bool steady, double pdu) {
     }
     if (c.ball) {
         auto [pdu1, pdv1] = psi_dot(w.sys.mk, 4, w.X, n);
-        if (mode == FREE) {
-            double y = w.rs.ball.y;
-            double ynew = seg.ud0 + T * (seg.vd0 + 0.5 * acc * T) - pdu1;
-            w.rs.ball.yd = seg.vd0 + acc * T - pdv1;
+        BallState& b = w.rs.ball;
+        if (mode == FREE || mode == ROLL) {
+            double y = b.y;
+            double ynew = seg.ud0 + T * (seg.vd0 + 0.5 * acc * T) - seg.cy * pdu1;
+            b.yd = seg.vd0 + acc * T - seg.cy * pdv1;
             met[L::D_FRICTION] -= fb * (ynew - y);
             met[L::W_NONRECIP] += (1.0 - w.sys.fric.sr) * fb * (pdu1 - pdu);
-            w.rs.ball.y = ynew;
+            b.y = ynew;
+        }
+        if (seg.rolls) {
+            // the spin: y' while rolling, else s0 + sd T, the floor's friction dissipating
+            // ffl int s (beside the -ffl (y_end - y_start) counted in fb above when slipping)
+            if (mode == ROLL) {
+                b.spin = b.yd;
+            } else {
+                met[L::D_FRICTION] += seg.ffl * T * (seg.s0 + 0.5 * seg.sd * T);
+                b.spin = seg.s0 + seg.sd * T;
+            }
         }
     }
 }
@@ -511,6 +545,7 @@ struct QuadRange {
 // top: the highest level allowed.
 struct LevelBounds {
     double e3y[GRID_LEVELS] = {}, e2y[GRID_LEVELS] = {}, e3w[GRID_LEVELS] = {};
+    double e1y[GRID_LEVELS] = {};  // b3y s (1 + 1e-9): how far y'' may move in a step
     const double* hl;
     idx top;
 
@@ -520,6 +555,7 @@ struct LevelBounds {
             e3y[lv] = b3y * hs * hs * hs / 6.0;
             e2y[lv] = b3y * hs * hs * (0.5 + 1e-9);
             e3w[lv] = b3w * hs * hs * hs / 6.0;
+            e1y[lv] = b3y * hs * (1.0 + 1e-9);
         }
     }
 };
@@ -553,6 +589,14 @@ BB_ALWAYS_INLINE idx level(Vec ev_a, double ydd_a, TipW wa, const LevelBounds& l
             double v1 = yda + ydd_a * hs;
             if (!((yda > e2 && v1 > e2) || (yda < -e2 && v1 < -e2))) break;
         }
+        // a rolling ball's y'' = -kroll F stays below kroll mu_s N (it keeps rolling)
+        if (sv.ydd_max >= 0.0 && !(std::fabs(ydd_a) + lb.e1y[lv] < sv.ydd_max)) break;
+        if (sv.watch_slip) {  // a slipping ball's slip keeps its sign (s is linear in tau)
+            double e2 = lb.e2y[lv];
+            double v0 = -ev_a[EV_SLIP];
+            double v1 = v0 + sv.slip * (ydd_a - sv.sd) * hs;
+            if (!(v0 > e2 && v1 > e2)) break;
+        }
         if (steady) {
             if (!qw_set) {
                 qw = QuadRange(wa.w, wa.wd, wa.wdd);
@@ -572,13 +616,14 @@ struct Found {
     double t;
 };
 
-// A ball off FREE: the first of its stick, slip and wall-release events in [a, b].
+// A ball held on the bore or a wall, or rolling: the first of its release events (a stuck
+// ball's slip, a rolling one's beyond mu_s N, a wall's release) in [a, b].
 inline Found regime_event(Work& w, SegCtx c, double a, double b) {
     const idx mode = c.mode;
     double best = b;
     idx kind = -1;
     for (idx kk : {EV_REL_NEG, EV_REL_POS, EV_WALL_REL}) {
-        if ((mode == STICK) == (kk != EV_WALL_REL)) {
+        if ((mode != CONTACT) == (kk != EV_WALL_REL)) {  // a rolling ball: its roll's limit
             if (w.ev_a[kk] <= 0.0 && 0.0 < w.ev_b[kk]) {
                 double tr = find_root_any(kk, a, w.ev_a[kk], b, w.ev_b[kk], view(w, c), -1.0);
                 if (tr < best || kind < 0) {
@@ -623,13 +668,13 @@ inline bool may_graze_m(double a, double b, Vec ev_a, Vec ev_b, double half, dou
     return hi + margin >= half || lo - margin <= -half;
 }
 
-// What wall_event does when a step shows something (see there): kept out of the loop.
-BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
-                                          bool graze, bool search) {
+// wall_event_found's search of the step st for the walls and y' = 0.
+inline Found wall_event_any(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, bool graze,
+                            bool search) {
     const double a = st.a, b = st.b;
     const bool watch_v = sv.watch_v, watch_ext = sv.watch_ext;
-    Vec ev_a = w.ev_a;
-    Vec ev_b = w.ev_b;
+    Vec ev_a = st.ev_a;
+    Vec ev_b = st.ev_b;
     double best = b;
     idx kind = -1;
     if (search) {
@@ -663,6 +708,27 @@ BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv
     return {kind, best};
 }
 
+// What wall_event does when a step shows something (see there): kept out of the loop.
+BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
+                                          bool graze, bool search) {
+    // a rolling ball's slip running out inside the step: the walls are looked for before it
+    double t_slip = -1.0;
+    if (sv.watch_slip && st.ev_a[EV_SLIP] <= 0.0 && 0.0 < st.ev_b[EV_SLIP]) {
+        t_slip = find_root_any(EV_SLIP, st.a, st.ev_a[EV_SLIP], st.b, st.ev_b[EV_SLIP],
+                               view(w, c), -1.0);
+        state_at(view(w, c), t_slip, w.qs, w.dX);
+        events(w.ev_u, w.dX, t_slip, w.seg, c.mode, w.sys.mk, w.sys.force);
+        st = StepEnds{st.a, t_slip, st.lev, st.ev_a, w.ev_u, st.ydd_a, NAN};
+        graze = st.lev == 0 && may_graze(st.a, t_slip, st.ev_a, w.ev_u, w.sys.ball.half, sv.b4);
+        search = (st.ev_a[EV_PLUS] <= 0.0 && 0.0 < w.ev_u[EV_PLUS])
+                 || (st.ev_a[EV_MINUS] <= 0.0 && 0.0 < w.ev_u[EV_MINUS])
+                 || (sv.watch_v && st.ev_a[EV_VSTOP] <= 0.0 && 0.0 < w.ev_u[EV_VSTOP]);
+    }
+    Found f = wall_event_any(w, c, sv, st, graze, search);
+    if (f.kind < 0 && t_slip >= 0.0) return {EV_SLIP, t_slip};
+    return f;
+}
+
 // A free ball's wall and friction-switch events in the step st, with the graze guard's
 // sub-steps where the bound on y^(4) allows a crossing and return inside the step.  The
 // tests on the step's ends are here, in the search's loop; the rare search out of it.
@@ -680,7 +746,8 @@ inline Found wall_event(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, Gra
     bool search = (ev_a[EV_PLUS] <= 0.0 && 0.0 < ev_b[EV_PLUS])
                   || (ev_a[EV_MINUS] <= 0.0 && 0.0 < ev_b[EV_MINUS])
                   || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
-                  || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0);
+                  || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)
+                  || (sv.watch_slip && ev_a[EV_SLIP] <= 0.0 && 0.0 < ev_b[EV_SLIP]);
     if (!search && !graze) return {-1, b};
     return wall_event_found(w, c, sv, st, graze, search);
 }
@@ -709,10 +776,14 @@ template <bool Regen>
 inline Found find_event(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, GrazeMargin& gm) {
     const double a = st.a, b = st.b;
     Found f{-1, b};
-    if (c.ball && c.mode != FREE) {
+    if (c.ball && (c.mode == STICK || c.mode == CONTACT)) {
         f = regime_event(w, c, a, b);
-    } else if (c.ball && c.mode == FREE) {
+    } else if (c.ball) {
         f = wall_event(w, c, sv, st, gm);
+        if (c.mode == ROLL) {  // and the friction rolling needs beyond mu_s N
+            Found g = regime_event(w, c, a, b);
+            if (g.kind >= 0 && (f.kind < 0 || g.t < f.t)) f = g;
+        }
     }
     if constexpr (Regen) {
         double tr = cut_event(w, c, a, b);
@@ -947,7 +1018,8 @@ BB_NOINLINE GridPoint advance_other(Work& w, double t, SegCtx c, bool ydd_on, Gr
     if (c.ball || !Regen) {
         events(w.ev_b, X, b, seg, c.mode, w.sys.mk, w.sys.force);
         if (ydd_on) {
-            auto [yv, wv] = ydd(X, f0 * phg.imag(), seg.fb, seg.acc, w.sys.ddc, n);
+            auto [yv, wv] = ball_ydd(X, f0 * phg.imag(), seg, w.sys.ddc, n, c.mode,
+                                     w.sys.roll.kroll);
             ydd_b = yv;
             wdd_b = wv;
         }
@@ -1062,8 +1134,6 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     double half = w.sys.ball.half;
     bool outputs = w.cp.rec_dt > 0.0 || w.cp.tstrobe > 0.0;
     double t_end = w.rs.t_end;
-    double fb = seg.fb;
-    double acc = seg.acc;
     double s_0 = seg.s[0];
     double s_1 = seg.s[1];
     double tlen = sv.tlen;
@@ -1107,7 +1177,9 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     double wdd_a = NAN;
     double ydd_b = NAN;
     double wdd_b = NAN;
-    if (ydd_on) std::tie(ydd_a, wdd_a) = ydd(Xa, f0 * ph.imag(), fb, acc, w.sys.ddc, n);
+    if (ydd_on)
+        std::tie(ydd_a, wdd_a) = ball_ydd(Xa, f0 * ph.imag(), seg, w.sys.ddc, n, c.mode,
+                                          w.sys.roll.kroll);
     idx top = adapt ? w.levmax[r] : 0;
     LevelBounds lb(sv.b3y, sv.b3w, w.hl, top);
     GrazeMargin gm;
@@ -1205,6 +1277,7 @@ struct SegStart {
     bool at_node;
     idx j_node;
     double pdu;
+    bool spin_end;  // the segment ends where a stuck or walled ball's spin runs down
 };
 
 // A segment from t (forcing phasor ph there, at most to t_stop) in the run's state w.rs:
@@ -1235,8 +1308,24 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     if (ball) r = mode;
     if (incut) r += sys.nreg;
     double fb = 0.0;
-    if (mode == FREE && ball) fb = -fc * sdir;
+    if ((mode == FREE || mode == ROLL) && ball) fb = -fc * sdir;
     double kap = mode == STICK ? sys.fric.kstick : sys.fric.kwall;
+    // a rolling ball: the floor's friction on it where it slips (beside F_b: the bar feels
+    // both, reciprocally) or spins at rest (inside the held regime: only its release and
+    // its spin feel it); rolling, the carrying force's kappa and offset are the roll's
+    const Rolling& rl = sys.roll;
+    double ffl = 0.0;
+    double foff = 0.0;
+    if (rl.on && mode == FREE) {
+        ffl = -rl.fk * rs.ball.slip;
+        fb += ffl;
+    } else if (rl.on && mode == ROLL) {
+        kap = rl.kappa;
+        foff = sys.fric.kwall * fb / rl.kappa;
+    } else if (rl.on) {
+        ffl = rs.ball.spin > 0.0 ? rl.fk : (rs.ball.spin < 0.0 ? -rl.fk : 0.0);
+        foff = ffl;
+    }
     idx ks = w.kstep[r];
     for (idx j = 0; j < nz; ++j) {
         dX[j] = X[j] - ((ncplx(w.cf.Z(r, j)) * ph).imag() + fb * w.cf.D(r, j));
@@ -1260,23 +1349,39 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     }
     auto [pdu, pdv] = psi_dot(sys.mk, 4, X, n);
     // bounds on |y^(4)|, |W^(4)| (steady, harmonic) and |y^(3)|, |W^(3)| (a free ball)
-    bool ydd_on = ball && mode == FREE && !Regen;
+    bool ydd_on = ball && (mode == FREE || mode == ROLL) && !Regen;
     bool adapt = ydd_on && w.levmax[r] > 0;
     Bounds bd = bounds(w, r, cq.krb, BoundsWanted{ball, incut, steady && !Regen, adapt});
     seg.ts = t;
     seg.fb = fb;
-    seg.ud0 = rs.ball.y + pdu;  // the ball's absolute position and velocity
-    seg.vd0 = rs.ball.yd + pdv;
+    seg.rolls = rl.on;
+    seg.cy = mode == ROLL ? rl.cy : 1.0;
+    seg.ud0 = rs.ball.y + seg.cy * pdu;  // the ball's absolute position and velocity
+    seg.vd0 = rs.ball.yd + seg.cy * pdv;  // (a rolling ball's: cy of the floor's)
     seg.y0 = rs.ball.y;
     seg.sdir = sdir;
     seg.wall = rs.ball.wall;
     seg.kappa = kap;
-    seg.fs = sys.fric.fs;
+    seg.fs = mode == ROLL ? rl.fs : sys.fric.fs;
     seg.half = sys.ball.half;
     seg.m = m > 0.0 ? m : 1.0;
-    seg.acc = fb / seg.m;
+    seg.acc = seg.cy * fb / seg.m;
+    seg.ffl = ffl;
+    seg.foff = foff;
+    seg.slip = mode == FREE ? rs.ball.slip : 0.0;
+    seg.s0 = rs.ball.spin;
+    seg.sd = mode == ROLL ? 0.0 : -rl.kroll * ffl;
+    // a spinning ball at rest: its spin runs down (to 0) at s0 / -sd, where the segment ends
+    bool spin_end = false;
+    if (rl.on && (mode == STICK || mode == CONTACT) && seg.sd != 0.0) {
+        double t_down = t - seg.s0 / seg.sd;
+        if (t_down < t_seg_end) {
+            t_seg_end = t_down;
+            spin_end = true;
+        }
+    }
     // which events are watched
-    bool watch_wall = ball && mode == FREE;
+    bool watch_wall = ball && (mode == FREE || mode == ROLL);
     bool watch_v = watch_wall && fc > 0.0 && sdir != 0.0;
     bool watch_ext = watch_wall && !watch_v;
     sv.tlen = t_seg_end - t;
@@ -1290,7 +1395,12 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     sv.ydd = ydd_on;
     sv.watch_v = watch_v;
     sv.watch_ext = watch_ext;
-    return {r, ks, t_seg_end, at_node, j_node, pdu};
+    // (without the floor's friction, mu_s = mu_k = 0, a slip's end changes nothing)
+    sv.watch_slip = rl.on && mode == FREE && seg.slip != 0.0 && (rl.fs > 0.0 || rl.fk > 0.0);
+    sv.slip = seg.slip;
+    sv.sd = seg.sd;
+    sv.ydd_max = mode == ROLL ? rl.kroll * rl.fs : -1.0;
+    return {r, ks, t_seg_end, at_node, j_node, pdu, spin_end};
 }
 
 // The flows of the segment [t, t + T] (context c, forcing phasor ph at t; a cut's from
@@ -1323,7 +1433,8 @@ inline idx close_segment(Work& w, SegCtx c, double t, double T, ncplx ph, bool s
         double kst = (ball && mode == STICK) ? sys.fric.kstick : 0.0;
         // what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a free
         // ball's y^2
-        idx lvl = steady ? ((ball && mode == FREE) ? 2 : 1) : 0;
+        const bool moves = mode == FREE || mode == ROLL;
+        idx lvl = steady ? ((ball && moves) ? 2 : 1) : 0;
         // the search's exp(lambda_k T), if its last state_at was at T (same regime and
         // segment: tau_end is reset at each search's start)
         const ncplx* exc =
@@ -1341,7 +1452,7 @@ inline idx close_segment(Work& w, SegCtx c, double t, double T, ncplx ph, bool s
         }
         if (ball && steady) {
             // the ball's int y^2: closed form when free, y constant otherwise
-            met[L::SUM_AUX2] += mode == FREE ? out[6] : seg.y0 * seg.y0 * T;
+            met[L::SUM_AUX2] += moves ? out[6] : seg.y0 * seg.y0 * T;
         }
     }
     close_flows(w, c, T, steady, pdu);

@@ -174,7 +174,8 @@ def add_ball(g, lst: str, swept: str, ranges: bool, many: bool) -> None:
     g.add_argument("--ball-motion", choices=BALL_MOTIONS,
                    help="how the ball moves: slide (default; the published model) or roll "
                         "(its spin a state: it rolls while --mu-static holds it, slips with "
-                        "--mu-kinetic; needs --integrator rk4 or auto; docs/model.md, 2.7)")
+                        "--mu-kinetic; the exact integrator takes it under harmonic forcing, "
+                        "RK4 in cuts; docs/model.md, 2.7)")
     g.add_argument("--mu-static", type=float, metavar="MU",
                    help=f"a rolling ball's static floor friction coefficient, >= --mu-kinetic "
                         f"(default {MU_STATIC:g})")

@@ -241,7 +241,7 @@ def _mode_sums(lam_l):
 #: the slots of p the regimes read: the bar, the damper and a cut's Kr b; the forcing's
 #: frequency and amplitude (OMEGA, F0) enter only the per-forcing part
 SYSTEM_SLOTS = np.array([L.CASE, L.N_MODES, L.FORCING, L.REACTION, L.BALL_MASS, L.M_EFF, L.TMD_MASS,
-                         L.TMD_K, L.TMD_C, L.KR_B, *range(L.M_, L.P_SIZE)])
+                         L.TMD_K, L.TMD_C, L.KR_B, L.ROLL, *range(L.M_, L.P_SIZE)])
 
 #: systems whose regimes are kept: a sweep runs one system at many forcings, and an
 #: analysis over designs or gaps meets a new system with most runs
@@ -280,7 +280,7 @@ def _check_diagonalisable(V, Vi, case, nreg):
             * np.max(np.sum(np.abs(Vi), axis=2), axis=1))  # infinity-norm condition
     for r, c in enumerate(cond):
         if not c <= 1e10:
-            what = ("free", "stick", "contact")[r % nreg] if case == L.BALL else "linear"
+            what = ("free", "stick", "contact", "rolled")[r % nreg] if case == L.BALL else "linear"
             raise ValueError(f"exact integrator: the {what} regime is not diagonalisable "
                              "(critically damped mode?)")
 
