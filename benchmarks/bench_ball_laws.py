@@ -11,7 +11,10 @@ on every variant alike), each with its ratio to the first of its group:
   F0 = 0.05 N (a rolling ball rolls and slips in turn) and in a cut at 1200 rpm and
   0.2 mm;
 - planes (section 4.7): one plane and two (Kt / Kr = 2.5, lead angle 30 degrees), with
-  1 and 2 modes a plane, at F0 = 20 N.
+  1 and 2 modes a plane, at F0 = 20 N;
+- the exact integrator's sliding and rolling ball (docs/exact.md, "A rolling ball") at
+  F0 = 20 N, 2 N (a rolling ball rolls and slips each half period) and 0.05 N, each call
+  timed five times a round (a call takes milliseconds).
 
     .venv/bin/python benchmarks/bench_ball_laws.py [--repeat 7]
 """
@@ -30,25 +33,33 @@ LAWS = {"slide, impact law": {}, "slide, Hertz contact": {"contact": "hertz"},
 LOADS = {"F0 = 20 N": bb.Harmonic(amplitude_n=20.0),
          "F0 = 0.05 N": bb.Harmonic(amplitude_n=0.05),
          "cut, 0.2 mm": bb.Regenerative(depth_m=2e-4, rpm=1200.0)}
+EXACT_LOADS = {"exact, F0 = 20 N": bb.Harmonic(amplitude_n=20.0),
+               "exact, F0 = 2 N": bb.Harmonic(amplitude_n=2.0),
+               "exact, F0 = 0.05 N": bb.Harmonic(amplitude_n=0.05)}
+EXACT_CALLS = 5  # an exact call's timings a round
 TWO_PLANES = {"planes": 2, "cut_geometry": CutGeometry(force_ratio=2.5, lead_angle_deg=30.0)}
 
 
 def cases() -> dict:
-    """(group, variant) -> (system, forcing)."""
+    """(group, variant) -> (system, forcing, integrator)."""
     out = {}
     for load, forcing in LOADS.items():
         for law, kw in LAWS.items():
-            out[load, law] = (bb.make_system("ball", **kw), forcing)
+            out[load, law] = (bb.make_system("ball", **kw), forcing, "rk4")
     for n in (1, 2):
         for planes, kw in (("one plane", {}), ("two planes", TWO_PLANES)):
             out[f"{n} mode(s) a plane", planes] = (bb.make_system("ball", n_modes=n, **kw),
-                                                   LOADS["F0 = 20 N"])
+                                                   LOADS["F0 = 20 N"], "rk4")
+    for load, forcing in EXACT_LOADS.items():
+        for law in ("slide", "roll"):
+            out[load, law + ", impact law"] = (bb.make_system("ball", motion=law), forcing,
+                                               "exact")
     return out
 
 
-def run_once(system, forcing, duration_s: float = 2.0) -> float:
+def run_once(system, forcing, integrator: str, duration_s: float = 2.0) -> float:
     tic = time.process_time()
-    bb.simulate(system, forcing, duration_s=duration_s, record_every=0, integrator="rk4")
+    bb.simulate(system, forcing, duration_s=duration_s, record_every=0, integrator=integrator)
     return time.process_time() - tic
 
 
@@ -57,18 +68,19 @@ def main():
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
     runs = cases()
-    for system, forcing in runs.values():  # warm: the first call loads and sets up
-        run_once(system, forcing, 0.01)
+    for system, forcing, integrator in runs.values():  # warm: the first call loads
+        run_once(system, forcing, integrator, 0.01)
     times = dict.fromkeys(runs, math.inf)
     for _ in range(args.repeat):
-        for key, (system, forcing) in runs.items():
-            times[key] = min(times[key], run_once(system, forcing))
+        for key, (system, forcing, integrator) in runs.items():
+            for _ in range(EXACT_CALLS if integrator == "exact" else 1):
+                times[key] = min(times[key], run_once(system, forcing, integrator))
     base = {}
     for (group, variant), t in times.items():
         if group not in base:
             base[group] = t
             print(group)
-        print(f"  {variant:22s} {t:.3f} s  ({t / base[group]:.2f}x)")
+        print(f"  {variant:22s} {t:.4f} s  ({t / base[group]:.2f}x)")
 
 
 if __name__ == "__main__":

@@ -59,11 +59,11 @@ def batch_args() -> dict:
             "met": rows(a["met"])}
 
 
-def exact_args(cut: bool = False) -> dict:
+def exact_args(cut: bool = False, motion: str = "slide") -> dict:
     # a cut that chatters with impacts and stays bounded: deeper (1 mm), a corrupted
     # t_end of 3 s grows the vibration to 1e15 m through 3.5 million events (25 s; most
     # of the sanitizer run's time), at 0.1 mm it takes 1.9 s
-    s = make_system("ball", "physical", gap_m=0.1e-3, friction=True)
+    s = make_system("ball", "physical", gap_m=0.1e-3, friction=True, motion=motion)
     f = Regenerative(depth_m=0.1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
     su = setup_run(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "exact")
     prep = prepare(su.p)
@@ -88,6 +88,7 @@ ENTRIES = {
     "run_rk4_batch": batch_args,
     "run_exact": exact_args,
     "run_exact cut": lambda: exact_args(cut=True),
+    "run_exact rolling": lambda: exact_args(motion="roll"),
 }
 BASE = {}
 
@@ -120,6 +121,7 @@ def test_a_valid_call_runs(entry):
 
 
 BAD_SCALARS = [np.nan, np.inf, -np.inf, -1.0, 0.0, 1e300, -1e300, 2.0 ** 63, -(2 ** 40)]
+BAD_INTS = [-1, 0, 3, 2 ** 40, -(2 ** 40)]
 
 
 def corrupt_array(draw, a: np.ndarray) -> object:
@@ -146,7 +148,8 @@ def corrupt_array(draw, a: np.ndarray) -> object:
         b = a.copy()
         if b.size:
             flat = b.reshape(-1)
-            flat[draw(st.integers(0, b.size - 1))] = draw(st.sampled_from(BAD_SCALARS))
+            bad = BAD_INTS if b.dtype.kind in "iu" else BAD_SCALARS  # (prep's kstep, levmax)
+            flat[draw(st.integers(0, b.size - 1))] = draw(st.sampled_from(bad))
         return b
     return [] if kind == "list" else None
 
@@ -185,7 +188,8 @@ def test_any_corrupted_argument_is_a_clear_error_or_a_run(entry, data):
 
 SLOTS = ["N_MODES", "CASE", "FORCING", "N_REV", "TAU", "OMEGA", "HALF_GAP", "BALL_MASS",
          "RESTITUTION", "M_EFF", "STROBE_PERIOD", "INTERP", "FRICTION", "STATIC_FRICTION",
-         "CUT_MC", "NOISE_STD", "NOISE_INTERVAL", "NOISE_SEED"]
+         "CUT_MC", "NOISE_STD", "NOISE_INTERVAL", "NOISE_SEED", "ROLL", "ROLL_STATIC",
+         "ROLL_KINETIC", "REACTION"]
 
 
 @pytest.mark.parametrize("entry", list(ENTRIES))
