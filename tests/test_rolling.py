@@ -22,6 +22,7 @@ import pytest
 from cli_output import assert_one_line_error
 
 import boringbar as bb
+from boringbar import core
 from boringbar._validate import ParameterError
 from boringbar.cli.main import main
 from boringbar.model.bar import ModalModel
@@ -29,7 +30,7 @@ from boringbar.model.dampers import NO_FRICTION, Friction, ImpactDamper
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
 from boringbar.orbits.shooting import make_flow
-from boringbar.simulate import simulate_batch
+from boringbar.simulate import setup_run, simulate_batch
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_bifurcation import masri_caughey_start  # noqa: E402
@@ -244,3 +245,19 @@ def test_a_rolling_ball_from_the_command_line_and_a_system_file(tmp_path, capsys
     d["ball"].update(mu_static=0.1)
     with pytest.raises(SystemFileError, match="ball.mu_static"):
         parse_system(d)
+
+
+def test_the_rolled_regime_is_the_bar_carrying_two_sevenths_of_the_ball():
+    """The exact integrator's rolled regime (core.regime_stack's fourth), built from the
+    roll law: a one-mode bar rolling its ball has omega^2 = K / (M + 2/7 m psi_d^2)."""
+    system = make_system("ball", "physical", n_modes=1, motion="roll")
+    su = setup_run(system, bb.Harmonic(1.0, 1.0), 1e-3, 1e-6, None, 0, 0.5, False, "exact")
+    A, _, _, nreg = core.regime_stack(su.p)
+    assert nreg == 4
+    bar, m = system.bar, system.damper.mass_kg
+    M, K, C, psi = (bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0],
+                    bar.psi_damper[0])
+    Me = M + 2 / 7 * m * psi**2
+    lam = np.linalg.eigvals(A[3])
+    assert np.abs(lam) ** 2 == pytest.approx([K / Me] * 2, rel=1e-12)
+    assert -2 * lam.real == pytest.approx([C / Me] * 2, rel=1e-12)
