@@ -77,16 +77,26 @@ def export(rev: str) -> Path:
 
 def rev_params(p: np.ndarray, L0) -> np.ndarray:
     """``p`` (rows of ``p``) packed by the working tree, in the layout ``L0`` of a
-    revision's kernels: a numba revision's lacks the cut law's and the force noise's slots
-    (CUT_MC, NOISE_STD, NOISE_INTERVAL, NOISE_SEED) before the mode blocks, so the run must
-    have the linear law and no noise (CUT_MC and NOISE_STD 0)."""
+    revision's kernels, slot by slot by name: each of the revision's scalar slots
+    (``L0._SCALARS``) and per-mode blocks takes the working tree's slot of that name.  The
+    tree's scalar slots the revision lacks (the cut law, the force noise, a Hertz contact,
+    a rolling ball, ...) must hold 0, and its force's mode shape PSI_F must be PSI_L (one
+    bending plane), so that the run is one the revision can make."""
     if L0.P_SIZE == L.P_SIZE:
         return p
-    plain = np.all(p[..., L.CUT_MC] == 0.0) and np.all(p[..., L.NOISE_STD] == 0.0)
-    if L0.M_ != L.CUT_MC or L0.P_SIZE != L0.M_ + L.P_SIZE - L.M_ or not plain:
-        raise ValueError("the revision's parameter layout is not the working tree's without "
-                         "the cut law's and noise's slots")
-    return np.ascontiguousarray(np.concatenate([p[..., :L.CUT_MC], p[..., L.M_:]], axis=-1))
+    lacking = [k for k in L.PARAM_NAMES if k not in L0._SCALARS]
+    n = L.NMAX
+    if (any(np.any(p[..., getattr(L, k)] != 0.0) for k in lacking) or L0.NMAX != n
+            or np.any(p[..., L.PSI_F:L.PSI_F + n] != p[..., L.PSI_L:L.PSI_L + n])):
+        raise ValueError("the run uses slots the revision's parameter layout lacks: "
+                         + ", ".join(k for k in lacking
+                                     if np.any(p[..., getattr(L, k)] != 0.0)))
+    out = np.zeros(p.shape[:-1] + (L0.P_SIZE,))
+    for k in L0._SCALARS:
+        out[..., getattr(L0, k)] = p[..., getattr(L, k)]
+    for k in ("M_", "K_", "C_", "PSI_L", "PSI_D", "PSI_A"):
+        out[..., getattr(L0, k):getattr(L0, k) + n] = p[..., getattr(L, k):getattr(L, k) + n]
+    return out
 
 
 def params(mod, p: np.ndarray) -> np.ndarray:

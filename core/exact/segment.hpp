@@ -861,10 +861,9 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
     return pymax(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb));
 }
 
-// The state at tau into the work vector dX and row[1:5]: W, W', aux, aux' (a history or
-// strobe row; its time, row[0], is the caller's); s: view(w, c), built once a segment.
-inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row) {
-    state_at(s, tau, w.qs, w.dX);
+// row[1:5] of a history or strobe row, W, W', aux, aux', from the state in the work vector
+// dX at tau (its time, row[0], is the caller's).
+inline void row_state(Work& w, SegCtx c, double tau, double* row) {
     auto [wv, wdv] = psi_dot(w.sys.mk, 3, w.dX, c.n);
     auto [av, adv] = aux(w.dX, tau, w.seg, c, w.sys.mk, w.x);
     row[1] = wv;
@@ -873,15 +872,16 @@ inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row)
     row[4] = adv;
 }
 
+// The state at tau into dX and row[1:5] (row_state); s: view(w, c), built once a segment.
+inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row) {
+    state_at(s, tau, w.qs, w.dX);
+    row_state(w, c, tau, row);
+}
+
 // A history row's W, W', aux, aux' and tip force from the state X (in w.dX) at tau of the
 // segment from t, its forcing phasor ph = e^{i Omega (t + tau)}.
 inline void history_row(Work& w, SegCtx c, double tau, ncplx ph, double* row) {
-    auto [wv, wdv] = psi_dot(w.sys.mk, 3, w.dX, c.n);
-    auto [av, adv] = aux(w.dX, tau, w.seg, c, w.sys.mk, w.x);
-    row[1] = wv;
-    row[2] = wdv;
-    row[3] = av;
-    row[4] = adv;
+    row_state(w, c, tau, row);
     row[5] = cut_force(w.seg, tau, w.dX, c.n, w.sys.mk, w.sys.force.f0, w.sys.force.om, ph.im);
 }
 
