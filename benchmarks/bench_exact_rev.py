@@ -75,16 +75,23 @@ def export(rev: str) -> Path:
     return root
 
 
+#: the working tree's slots that nothing reads unless the slot named beside them is on
+INERT = {"NOISE_INTERVAL": "NOISE_STD", "NOISE_SEED": "NOISE_STD", "ROLL_STATIC": "ROLL",
+         "ROLL_KINETIC": "ROLL", "ROLL_BAND": "ROLL", "CONTACT_ALPHA": "CONTACT_K"}
+
+
 def rev_params(p: np.ndarray, L0) -> np.ndarray:
     """``p`` (rows of ``p``) packed by the working tree, in the layout ``L0`` of a
     revision's kernels, slot by slot by name: each of the revision's scalar slots
     (``L0._SCALARS``) and per-mode blocks takes the working tree's slot of that name.  The
     tree's scalar slots the revision lacks (the cut law, the force noise, a Hertz contact,
-    a rolling ball, ...) must hold 0, and its force's mode shape PSI_F must be PSI_L (one
+    a rolling ball, ...) must hold 0 (or be :data:`INERT`, their feature off), and its
+    force's mode shape PSI_F must be PSI_L (one
     bending plane), so that the run is one the revision can make."""
     if L0.P_SIZE == L.P_SIZE:
         return p
-    lacking = [k for k in L.PARAM_NAMES if k not in L0._SCALARS]
+    lacking = [k for k in L.PARAM_NAMES if k not in L0._SCALARS
+               and not (k in INERT and np.all(p[..., getattr(L, INERT[k])] == 0.0))]
     n = L.NMAX
     if (any(np.any(p[..., getattr(L, k)] != 0.0) for k in lacking) or L0.NMAX != n
             or np.any(p[..., L.PSI_F:L.PSI_F + n] != p[..., L.PSI_L:L.PSI_L + n])):
