@@ -124,6 +124,12 @@ struct Rolling {
     bool on = false;
     double fs = 0.0, fk = 0.0;
     double kroll = 0.0, cy = 1.0, kappa = 0.0;
+
+    // The floor's friction on a ball at rest on the bore or a wall (y' = 0) that spins:
+    // mu_k N the way the spin's slip -s is opposed (0 without spin).
+    double spin_friction(double spin) const {
+        return spin > 0.0 ? fk : (spin < 0.0 ? -fk : 0.0);
+    }
 };
 
 // The harmonic force at the tip, F0 sin(Omega t).

@@ -165,12 +165,6 @@ void node_knot(History& hs, double t, double wb, double wdb, Vec X, Mat mk, doub
 
 // --- a rolling ball's regimes (docs/model.md, 2.7) -----------------------------------------
 
-// The floor's friction on a ball at rest on the bore (y' = 0) that spins: mu_k N the way
-// the spin's slip -s is opposed (0 without spin).
-double spin_friction(const System& sys, double spin) {
-    return spin > 0.0 ? sys.roll.fk : (spin < 0.0 ? -sys.roll.fk : 0.0);
-}
-
 // A rolling ball at zero slip (y' = s) moving in direction d: it rolls (ROLL) if the floor's
 // friction rolling needs, F = (sum psi_d a_free - kappa1 F_b) / (kappa1 + kroll), stays
 // within mu_s N, else it slips the way that need pulls (F = mu_k N sgn(F_need)).
@@ -208,7 +202,7 @@ void leave_rest(Vec X, double f, double d, const System& sys, BallState& b) {
 void roll_at_rest(Vec X, double f, const System& sys, BallState& b) {
     b.yd = 0.0;
     const double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kstick) -
-                     spin_friction(sys, b.spin);
+                     sys.roll.spin_friction(b.spin);
     if (sys.fric.fc > 0.0 && std::fabs(F) <= sys.fric.fs) {
         b.mode = STICK;
         b.sdir = 0.0;
@@ -224,7 +218,7 @@ void roll_at_wall(Vec X, double f, double w_, const System& sys, BallState& b) {
     b.yd = 0.0;
     b.wall = w_;
     const double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kwall) -
-                     spin_friction(sys, b.spin);
+                     sys.roll.spin_friction(b.spin);
     if (w_ * F <= sys.fric.fs) {
         b.mode = CONTACT;
         b.sdir = 0.0;

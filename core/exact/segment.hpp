@@ -885,27 +885,29 @@ inline void history_row(Work& w, SegCtx c, double tau, ncplx ph, double* row) {
     row[5] = cut_force(w.seg, tau, w.dX, c.n, w.sys.mk, w.sys.force.f0, w.sys.force.om, ph.im);
 }
 
-// The history rows of a segment outside a cut (every rec_dt from t0, in (t, t + b], before
-// t_end, while rec has room) by recurrence: from one row to the next each exp(lambda_k tau)
-// and the forcing's phasor advance by one complex product with their values over rec_dt,
-// so a row costs no exp, sin or cos (a 2 s run keeps 20000 rows, and those functions were
-// most of its cost).  The recurrence w.rr runs on through the grid steps of one segment;
-// the segment's first row and every REC_ANCHOR-th are the closed form's own.  Returns the
-// next row's index k_rec.
-inline double history_rows(Work& w, const SegView& s, SegCtx c, double t, double b,
-                           double t_end) {
+// The history rows of a segment (every rec_dt from t0, in (t, t + b], before t_end, while
+// rec has room), the next row's index into w.ro.k_rec.  Outside a cut by recurrence: from
+// one row to the next each exp(lambda_k tau) and the forcing's phasor advance by one
+// complex product with their values over rec_dt, so a row costs no exp, sin or cos (a 2 s
+// run keeps 20000 rows, and those functions were most of its cost).  The recurrence w.rr
+// runs on through the grid steps of one segment; the segment's first row and every
+// REC_ANCHOR-th are the closed form's own, as is every row in a cut (its input's
+// polynomial is no product of exponentials).
+inline void history_rows(Work& w, const SegView& s, SegCtx c, double t, double b,
+                         double t_end) {
     const idx r = s.r, ks = s.ks, nz = w.dX.n;
     const double t0 = w.cp.t0, rec_dt = w.cp.rec_dt, om = w.sys.force.om;
     Mat rec = w.rec;
     RowRecurrence& rr = w.rr;
     idx n_rec = idx(w.met[L::N_REC]);
     double k_rec = w.ro.k_rec;
+    const bool recur = w.seg.krb == 0.0;
     if (rr.t_seg != t || rr.r != r) rr.since = REC_ANCHOR;
     while (n_rec < rec.n0 && t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt) {
         const double ts_ = t0 + k_rec * rec_dt;
         if (ts_ > t_end) break;
         const double tau = ts_ - t;
-        if (rr.since == REC_ANCHOR) {
+        if (!recur || rr.since == REC_ANCHOR) {
             rr.ph = state_at(s, tau, w.qs, w.dX, rr.ex);
             rr.since = 0;
             rr.t_seg = t;
@@ -932,38 +934,18 @@ inline double history_rows(Work& w, const SegView& s, SegCtx c, double t, double
         k_rec += 1;
     }
     w.met[L::N_REC] = double(n_rec);
-    return k_rec;
+    w.ro.k_rec = k_rec;
 }
 
 // The history rows (every rec_dt from t0) and strobe rows (every tstrobe) that fall in
 // (t + a, t + b] of the segment from t (context c, its view s), before t_end, into rec and
 // strobe while they have room; the next ones' times into w.ro.
 inline void samples(Work& w, const SegView& s, SegCtx c, double t, double b, double t_end) {
-    const idx n = c.n;
-    double t0 = w.cp.t0;
-    double rec_dt = w.cp.rec_dt;
     double tstrobe = w.cp.tstrobe;
-    Mat rec = w.rec;
     Mat strobe = w.strobe;
     Vec met = w.met;
-    double k_rec = w.ro.k_rec;
     double t_next_strobe = w.ro.t_strobe;
-    idx n_rec = idx(met[L::N_REC]);
-    if (rec_dt > 0.0 && w.seg.krb == 0.0) {
-        k_rec = history_rows(w, s, c, t, b, t_end);
-        n_rec = idx(met[L::N_REC]);
-    }
-    while (rec_dt > 0.0 && n_rec < rec.n0 && t0 + k_rec * rec_dt <= t + b + 1e-9 * rec_dt) {
-        double ts_ = t0 + k_rec * rec_dt;
-        if (ts_ > t_end) break;
-        double* row = rec.row(n_rec);
-        row[0] = ts_;
-        sample(w, s, c, ts_ - t, row);
-        row[5] = cut_force(w.seg, ts_ - t, w.dX, n, w.sys.mk, w.sys.force.f0, w.sys.force.om);
-        n_rec += 1;
-        k_rec += 1;
-    }
-    met[L::N_REC] = double(n_rec);
+    if (w.cp.rec_dt > 0.0) history_rows(w, s, c, t, b, t_end);
     idx n_stb = idx(met[L::N_STROBE]);
     while (tstrobe > 0.0 && t_next_strobe <= t + b && t_next_strobe <= t_end) {
         if (n_stb < strobe.n0) {
@@ -975,7 +957,6 @@ inline void samples(Work& w, const SegView& s, SegCtx c, double t, double b, dou
         t_next_strobe += tstrobe;
     }
     met[L::N_STROBE] = double(n_stb);
-    w.ro.k_rec = k_rec;
     w.ro.t_strobe = t_next_strobe;
 }
 
@@ -1323,7 +1304,7 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
         kap = rl.kappa;
         foff = sys.fric.kwall * fb / rl.kappa;
     } else if (rl.on) {
-        ffl = rs.ball.spin > 0.0 ? rl.fk : (rs.ball.spin < 0.0 ? -rl.fk : 0.0);
+        ffl = rl.spin_friction(rs.ball.spin);
         foff = ffl;
     }
     idx ks = w.kstep[r];
