@@ -64,6 +64,7 @@ def workloads():
     ball_f = bb.make_system("ball", "physical", gap_m=0.1e-3, friction=True)
     paper = bb.make_system("ball", "paper", gap_m=0.1e-3, friction=False)
     stick = bb.make_system("ball", "paper", gap_m=0.5e-3, friction=True)
+    hertz = bb.make_system("ball", "physical", gap_m=0.1e-3, contact="hertz")
 
     def result(run):
         return digest([run.summary()["rms_tip_m"]], run.final.x)
@@ -89,6 +90,11 @@ def workloads():
         return result(bb.simulate(ball_f, bb.Harmonic(20.0, 0.97), duration_s=20.0,
                                   record_every=0, integrator="exact"))
 
+    def contact():
+        # a Hertz contact at the walls: the kernel of a run-time shape (RK4)
+        return result(bb.simulate(hertz, bb.Harmonic(20.0, 1.0), duration_s=1.0,
+                                  record_every=0, integrator="rk4"))
+
     def lobes():
         # the lobes of the ball bar with friction at one speed, serially: the converged
         # verdict's cuts (RK4)
@@ -97,7 +103,7 @@ def workloads():
         return digest(ds["min_chatter_free_depth_m"].values)
 
     return {"cut": cut, "harmonic_map": harmonic_map, "harmonic_stick": harmonic_stick,
-            "exact": exact, "lobes": lobes}
+            "exact": exact, "contact": contact, "lobes": lobes}
 
 
 def child(path: str, only) -> None:

@@ -124,7 +124,7 @@ void fill_regime(const ExactRegime& g, int nz, double krb, double* A, double* B,
     double X[R::NX_MAX + 1] = {}, Kd[R::NX_MAX + 1];  // (a rolling ball's spin last)
     auto derive = [&](double f, double ysign) {
         R::StageTerms t = R::derivative_with<0, -1>(g.q, sh, X, f, Kd, ysign);
-        if (sh.rolls) Kd[sh.iyd()] = R::map_roll(g.q, sh, X, Kd, t);  // the rolled regime
+        if (sh.rolls()) Kd[sh.iyd()] = R::map_roll(g.q, sh, X, Kd, t);  // the rolled regime
     };
     for (int j = 0; j < nz; ++j) {
         X[j] = 1.0;

@@ -192,13 +192,14 @@ constexpr int ROLLING = 16;
 template <int N, int CASE>
 struct Shape {
     int run_n, run_kase;
-    // a rolling ball: the spin after y' (its own kernels and those of a run-time shape)
-    bool rolls;
-    explicit Shape(const Params& q)
-        : run_n(q.n), run_kase(q.kase), rolls(CASE == ROLLING || (CASE < 0 && q.roll)) {}
+    bool run_roll;
+    explicit Shape(const Params& q) : run_n(q.n), run_kase(q.kase), run_roll(q.roll) {}
+    // a rolling ball: the spin after y' (its own kernels and those of a run-time shape;
+    // a constant, so that the other kernels compile the roll law away)
+    bool rolls() const { return CASE == ROLLING || (CASE < 0 && run_roll); }
     int n() const { return N > 0 ? N : run_n; }
     int kase() const { return CASE == ROLLING ? L::BALL : CASE >= 0 ? CASE : run_kase; }
-    int nx() const { return 2 * n() + 2 + (rolls ? 1 : 0); }
+    int nx() const { return 2 * n() + 2 + (rolls() ? 1 : 0); }
     int iy() const { return 2 * n(); }
     int iyd() const { return 2 * n() + 1; }
     bool ball() const { return kase() == L::BALL; }
@@ -206,7 +207,7 @@ struct Shape {
     bool has_aux() const { return ball() || tmd(); }
     // in the solid and sliding ball bars a mode's rows of the map involve only its own
     // u, u' (a rolling ball's floor friction couples the modes)
-    bool diag() const { return kase() == L::SOLID || (ball() && !rolls); }
+    bool diag() const { return kase() == L::SOLID || (ball() && !rolls()); }
     int nxm() const { return 2 * n() + 2; }  // the step map's state: the spin aside
     int is() const { return 2 * n() + 2; }  // a rolling ball's spin s = r omega
     // the length of the state arrays: exact where N is a template constant (room for a
@@ -366,7 +367,8 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         // matrices' copy, dynamics.cpp; so the held stage writes the modes again.)
         if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
         if constexpr (ROLL) {
-            if (sh.rolls) ydd = roll_stage(q, sh, Xs, Kd, ydd, sfree - q.kappa1 * (fb + fcon), t);
+            if (sh.rolls())
+                ydd = roll_stage(q, sh, Xs, Kd, ydd, sfree - q.kappa1 * (fb + fcon), t);
         }
     } else if (sh.tmd()) {
         double rel = Xs[iy], reld = Xs[iyd];

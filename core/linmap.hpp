@@ -99,7 +99,7 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolle
             Kd[j] = 0.0;
             acc[j] = 0.0;
         }
-        if (sh.rolls) X[sh.is()] = X[iyd];
+        if (sh.rolls()) X[sh.is()] = X[iyd];
         const double S = col == nx ? 1.0 : 0.0;
         const double Cz = col == nx + 1 ? 1.0 : 0.0;
         const double ysign = col == nx + 2 ? -1.0 : 0.0;  // F_b = 1 in its column
@@ -110,7 +110,7 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolle
             StageTerms t = derivative_with<0, -1>(q, sh, Xs, f, Kd, ysign);
             // the roll law after it (compiled into derivative_with's copy here, GCC 12
             // stops with the internal error noted there)
-            if (sh.rolls) Kd[iyd] = map_roll(q, sh, Xs, Kd, t);
+            if (sh.rolls()) Kd[iyd] = map_roll(q, sh, Xs, Kd, t);
             mp.Kr[s][col] = t.floor;
             if (s > 0) {
                 mp.Yr[s - 1][col] = ball ? Xs[iyd] : 0.0;

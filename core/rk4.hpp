@@ -30,17 +30,22 @@
 #include "model.hpp"
 
 
-// On x86-64 (GCC, Clang) the kernels are compiled twice, for the baseline ISA (SSE2, in
-// rk4.cpp) and for AVX2 (rk4_avx2.cpp), chosen at run time: the same IEEE operations in
-// the same order, so the same bits on every CPU (FMA, which would round differently, is
-// not enabled; -ffp-contract=off).  AVX2 gives the vector arithmetic (VecMap) 4 lanes and
-// 3-operand instructions: 1.15x on a ball bar's lobes, 1.2x on the map step through
-// bb.simulate (benchmarks/bench_isa.py).  An AVX-512 copy (32 vector registers, which
-// hold the staged step without spills) gave 1.0-1.1x over AVX2 through the same calls
-// (1.12x on a sticking ball, 1.0x on the map step and the lobes) and was the dearest of
-// the copies to compile, so it is not built.  Other targets (aarch64, MSVC) build the
-// baseline kernels alone.
-// (-DBB_NO_AVX2_CLONE builds the baseline kernels alone, to test them on an AVX2 CPU.)
+// On x86-64 (GCC, Clang) the kernels are compiled for AVX2 (rk4_avx2.cpp,
+// rk4_avx2_many.cpp) and run where the CPU has it: the same IEEE operations in the same
+// order as the baseline ISA's, so the same bits on every CPU (FMA, which would round
+// differently, is not enabled; -ffp-contract=off).  AVX2 gives the vector arithmetic
+// (VecMap) 4 lanes and 3-operand instructions: 1.15x on a ball bar's lobes, 1.2x on the
+// map step through bb.simulate (benchmarks/bench_isa.py).  An x86-64 CPU without AVX2
+// (x86-64 CPUs have had it since 2013-2015, bar some low-end Pentiums and Celerons) runs
+// the kernel of a run-time shape, compiled for the baseline ISA (SSE2, rk4.cpp), with the
+// same bits, 1.5-4x slower than the AVX2 kernels: the specialised kernels compiled a
+// second time for it took a third of the build's CPU time (docs/performance.md,
+// "Instruction-set copies").  An AVX-512 copy (32 vector registers,
+// which hold the staged step without spills) gave 1.0-1.1x over AVX2 through the same
+// calls and was the dearest of the copies to compile, so it is not built.  Other targets
+// (aarch64, MSVC) build the specialised kernels for the baseline ISA (rk4.cpp,
+// rk4_many.cpp).
+// (-DBB_NO_AVX2_CLONE builds those, to test them on an AVX2 CPU.)
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
 #define BB_AVX2_CLONE 1
 #define BB_TARGET_AVX2 __attribute__((target("avx2")))
@@ -86,7 +91,7 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
     fl.w_force += w_s * f * s.wf;
     fl.d_visc += w_s * s.pvisc;
     if (sh.ball() && sh.hertz(q)) fl.d_con += w_s * s.pcon;
-    if (sh.rolls) fl.d_fric += w_s * s.pfloor;
+    if (sh.rolls()) fl.d_fric += w_s * s.pfloor;
 }
 
 // |v| lane by lane (the sign bit cleared, as fabs)
@@ -587,8 +592,24 @@ inline bool cpu_has_avx2() {
 
 void run_single(const RunArgs& a);
 void run_batch(const BatchArgs& a);
+
+// The kernel a run takes: the one specialised on its mode count, its case (ROLLING for a
+// rolling ball) and its forcing, or (generic) the kernel of a run-time shape: a compliant
+// contact, and the shapes that have no specialised kernel.  A copy's kernels are compiled
+// in two halves, each a file of its own (rk4_run.hpp): the one- and two-mode kernels
+// (few), and the three- and four-mode ones with the kernel of a run-time shape.
+struct ShapeKey {
+    int n, kase, forcing;
+    bool generic;
+    bool few() const { return !generic && (n == 1 || n == 2); }
+};
+ShapeKey shape_key(const RunArgs& a);  // rk4.cpp
+
 #ifdef BB_AVX2_CLONE
-void run_single_avx2(const RunArgs& a);  // rk4_avx2.cpp
+void run_few_avx2(const RunArgs& a, ShapeKey k);   // rk4_avx2.cpp
+void run_many_avx2(const RunArgs& a, ShapeKey k);  // rk4_avx2_many.cpp
+#else
+void run_many_base(const RunArgs& a, ShapeKey k);  // rk4_many.cpp
 #endif
 
 }  // namespace bb::rk4

@@ -1,8 +1,8 @@
 // The RK4 run's body and its dispatch on the run's shape, for the kernel files that
-// compile it, one per instruction set: rk4.cpp (the baseline ISA, and run_single, which
-// picks a copy at run time) and rk4_avx2.cpp (rk4.hpp says what the copy gains).  Each
-// copy is a translation unit of its own, so that a parallel build compiles them side by
-// side.
+// compile it, two per instruction set (ShapeKey::few): rk4.cpp and rk4_many.cpp (the
+// baseline ISA; rk4.cpp also holds run_single, which picks a copy at run time), and
+// rk4_avx2.cpp and rk4_avx2_many.cpp (rk4.hpp says what the copy gains).  Each is a
+// translation unit of its own, so that a build on two cores compiles them side by side.
 //
 // The step's state and scratch are local arrays of the kernel function and every helper
 // is inlined into it, so nothing of the step goes through memory that the records might
@@ -214,7 +214,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     // (a rolling ball's map is its rolled regime's, linmap.hpp)
     const bool linear = !regen && !q.stage_loop;
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
-    const VecMap mpr = linear && sh.rolls ? step_map(n, a.p, dt, true) : VecMap{};
+    const VecMap mpr = linear && sh.rolls() ? step_map(n, a.p, dt, true) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
     double sn = 0.0, cn = 1.0;
 
@@ -270,15 +270,15 @@ BB_INLINE void run_body(const RunArgs& a) {
         bool use_map = linear;
         double fz = 0.0, ffl = 0.0;  // F_b, and a slipping ball's floor friction
         // a rolling ball: its rolled regime's map, or the sliding ball's as it slips
-        const bool rolls_now = sh.rolls && X[sh.is()] == X[iyd];
+        const bool rolls_now = sh.rolls() && X[sh.is()] == X[iyd];
         const VecMap& map = rolls_now ? mpr : mp;
-        if (sh.rolls && !rolls_now) ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.muk_n : q.muk_n;
+        if (sh.rolls() && !rolls_now) ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.muk_n : q.muk_n;
         double spread = NAN;
         if (linear && check_fb) {
             fz = map_friction(q, X[iyd]);
             use_map = map_fits(q, sh, map, X, MapIn{sn, cn, fz + ffl}, true, spread);
         }
-        if (use_map && sh.rolls)
+        if (use_map && sh.rolls())
             use_map = rolls_now
                           ? map_rolls(q, sh, map, X, MapIn{sn, cn, fz})
                           : map_slips(q, sh, map, X, MapIn{sn, cn, fz + ffl}, ffl, cst, spread);
@@ -294,7 +294,7 @@ BB_INLINE void run_body(const RunArgs& a) {
             for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
             if (rolls_now) {
                 X[sh.is()] = X[iyd];  // it rolled: the spin is its y'
-            } else if (sh.rolls) {
+            } else if (sh.rolls()) {
                 // it slipped: s' = -kroll ffl; the floor's loss -ffl (dy - int s dt), its
                 // -ffl dy counted with F_b's (map_flows)
                 fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
@@ -312,7 +312,7 @@ BB_INLINE void run_body(const RunArgs& a) {
                 }
                 return f;
             };
-            bool held, rolled = sh.rolls;
+            bool held, rolled = sh.rolls();
             if (SHORT_STAGES && (!ball || q.ydd_sum_from_first) &&
                 stages_fast(sh, X, Kd, cst[0]))
                 held = rk4_stages<N, CASE, SHORT_STAGES>(q, sh, X, Kd, cst, wst, fl, hold_max,
@@ -396,8 +396,8 @@ BB_INLINE void run_body(const RunArgs& a) {
 
 // The case and the forcing as template constants for 1-3 modes, and for the ball and
 // solid bars in two planes of two modes (the other cases' and the cut's branches fold
-// away: 1.3-1.5x per step over run-time ones, as measured).  Copy is
-// a kernel file's struct whose run<N, CASE, FORCING> is run_body compiled for its ISA.
+// away: 1.3-1.5x per step over run-time ones, as measured).  Copy is a struct whose
+// run<N, CASE, FORCING> is run_body compiled for its ISA (Baseline, Avx2).
 template <class Copy, int N, int CASE>
 void run_case(const RunArgs& a, int forcing) {
     if (forcing == L::REGENERATIVE) return Copy::template run<N, CASE, L::REGENERATIVE>(a);
@@ -405,37 +405,47 @@ void run_case(const RunArgs& a, int forcing) {
 }
 
 template <class Copy, int N>
-void run_modes(const RunArgs& a, int kase, int forcing) {
-    switch (kase) {
-        case L::SOLID: return run_case<Copy, N, L::SOLID>(a, forcing);
-        case L::BALL: return run_case<Copy, N, L::BALL>(a, forcing);
-        case L::TMD: return run_case<Copy, N, L::TMD>(a, forcing);
-        case ROLLING: return run_case<Copy, N, ROLLING>(a, forcing);
-        default: return run_case<Copy, N, L::LOCKED>(a, forcing);
+void run_modes(const RunArgs& a, ShapeKey k) {
+    switch (k.kase) {
+        case L::SOLID: return run_case<Copy, N, L::SOLID>(a, k.forcing);
+        case L::BALL: return run_case<Copy, N, L::BALL>(a, k.forcing);
+        case L::TMD: return run_case<Copy, N, L::TMD>(a, k.forcing);
+        case ROLLING: return run_case<Copy, N, ROLLING>(a, k.forcing);
+        default: return run_case<Copy, N, L::LOCKED>(a, k.forcing);
     }
 }
 
+// The two halves of a copy's kernels (ShapeKey::few), each compiled in a file of its own.
 template <class Copy>
-void run_shape(const RunArgs& a) {
-    // a compliant contact: the kernel of a run-time shape (Shape); a rolling ball: its
-    // own case (ROLLING), so that the others compile the roll law away
-    if (a.p[L::CONTACT_K] > 0.0 && int(a.p[L::CASE]) == L::BALL)
-        return Copy::template run<0, -1, -1>(a);
-    const int n = int(a.p[L::N_MODES]);
-    const int forcing = int(a.p[L::FORCING]);
-    int kase = int(a.p[L::CASE]);
-    if (kase == L::BALL && a.p[L::ROLL] > 0.0) kase = ROLLING;
-    switch (n) {
-        case 1: return run_modes<Copy, 1>(a, kase, forcing);
-        case 2: return run_modes<Copy, 2>(a, kase, forcing);
-        case 3: return run_modes<Copy, 3>(a, kase, forcing);
-        case 4:  // two bending planes of two modes each (docs/model.md, 4.7)
-            if (kase == L::BALL) return run_case<Copy, 4, L::BALL>(a, forcing);
-            if (kase == L::SOLID) return run_case<Copy, 4, L::SOLID>(a, forcing);
-            return Copy::template run<0, -1, -1>(a);
-        default: return Copy::template run<0, -1, -1>(a);
-    }
+void run_few(const RunArgs& a, ShapeKey k) {
+    if (k.n == 1) return run_modes<Copy, 1>(a, k);
+    run_modes<Copy, 2>(a, k);
 }
+
+template <class Copy>
+void run_many(const RunArgs& a, ShapeKey k) {
+    if (k.generic) return Copy::template run<0, -1, -1>(a);
+    if (k.n == 3) return run_modes<Copy, 3>(a, k);
+    // two bending planes of two modes each (docs/model.md, 4.7)
+    if (k.kase == L::BALL) return run_case<Copy, 4, L::BALL>(a, k.forcing);
+    run_case<Copy, 4, L::SOLID>(a, k.forcing);
+}
+
+struct Baseline {
+    template <int N, int CASE, int FORCING>
+    static void run(const RunArgs& a) {
+        run_body<N, CASE, FORCING>(a);
+    }
+};
+
+#ifdef BB_AVX2_CLONE
+struct Avx2 {
+    template <int N, int CASE, int FORCING>
+    BB_TARGET_AVX2 static void run(const RunArgs& a) {
+        run_body<N, CASE, FORCING>(a);
+    }
+};
+#endif
 
 }  // namespace
 }  // namespace bb::rk4
