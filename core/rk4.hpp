@@ -38,7 +38,7 @@
 // map step through bb.simulate (benchmarks/bench_isa.py).  An x86-64 CPU without AVX2
 // (x86-64 CPUs have had it since 2013-2015, bar some low-end Pentiums and Celerons) runs
 // the kernel of a run-time shape, compiled for the baseline ISA (SSE2, rk4.cpp), with the
-// same bits, 1.5-4x slower than the AVX2 kernels: the specialised kernels compiled a
+// same bits, 2-3.5x slower than the AVX2 kernels: the specialised kernels compiled a
 // second time for it took a third of the build's CPU time (docs/performance.md,
 // "Instruction-set copies").  An AVX-512 copy (32 vector registers,
 // which hold the staged step without spills) gave 1.0-1.1x over AVX2 through the same

@@ -396,8 +396,9 @@ BB_INLINE void run_body(const RunArgs& a) {
 
 // The case and the forcing as template constants for 1-3 modes, and for the ball and
 // solid bars in two planes of two modes (the other cases' and the cut's branches fold
-// away: 1.3-1.5x per step over run-time ones, as measured).  Copy is a struct whose
-// run<N, CASE, FORCING> is run_body compiled for its ISA (Baseline, Avx2).
+// away: 1.7-3.1x through bb.simulate over the kernel of a run-time shape,
+// docs/performance.md).  Copy is a struct whose run<N, CASE, FORCING> is run_body
+// compiled for its ISA (Baseline, Avx2).
 template <class Copy, int N, int CASE>
 void run_case(const RunArgs& a, int forcing) {
     if (forcing == L::REGENERATIVE) return Copy::template run<N, CASE, L::REGENERATIVE>(a);

@@ -105,6 +105,16 @@ struct Segment {
     double foff = 0.0;
 };
 
+// A free or rolling ball's y and y' relative to the bar at tau, from psi_d . u and
+// psi_d . u' there: its own motion (ud0, vd0, acc) less cy of the floor's (a sliding
+// ball's cy = 1 leaves pdu's bits as they are).
+inline double ball_y(const Segment& seg, double tau, double pdu) {
+    return seg.ud0 + tau * (seg.vd0 + 0.5 * seg.acc * tau) - seg.cy * pdu;
+}
+inline double ball_yd(const Segment& seg, double tau, double pdv) {
+    return seg.vd0 + seg.acc * tau - seg.cy * pdv;
+}
+
 // Coulomb friction of the ball on the bore and what it acts against: F_c, F_s, the share s
 // of the reaction on the bar, the ball's kappa (the force that carries it with the bar,
 // per unit of acceleration) when stuck and on a wall, and the shortest stick recorded.

@@ -65,12 +65,11 @@ inline double g_value(idx kind, double tau, const SegView& s) {
             pdu += mk(4, i) * X[i];
             pdv += mk(4, i) * X[n + i];
         }
-        double acc = seg.acc;
         if (kind == EV_PLUS || kind == EV_MINUS) {
-            double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - seg.cy * pdu;
+            double y = ball_y(seg, tau, pdu);
             return kind == EV_PLUS ? y - seg.half : -seg.half - y;
         }
-        double yd = seg.vd0 + acc * tau - seg.cy * pdv;
+        double yd = ball_yd(seg, tau, pdv);
         if (kind == EV_SLIP) return -seg.slip * (yd - (seg.s0 + seg.sd * tau));
         return kind == EV_VSTOP ? -seg.sdir * yd : yd;
     }
@@ -120,10 +119,9 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
             pdv += mk(4, i) * X[n + i];
             pda += mk(4, i) * Xd[n + i];
         }
-        double acc = seg.acc;
-        double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - seg.cy * pdu;
-        double yd = seg.vd0 + acc * tau - seg.cy * pdv;
-        double ydd = acc - seg.cy * pda;
+        double y = ball_y(seg, tau, pdu);
+        double yd = ball_yd(seg, tau, pdv);
+        double ydd = seg.acc - seg.cy * pda;
         if (kind == EV_SLIP)
             return {-seg.slip * (yd - (seg.s0 + seg.sd * tau)), -seg.slip * (ydd - seg.sd), nan};
         if (kind == EV_PLUS) return {y - seg.half, yd, ydd};

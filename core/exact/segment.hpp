@@ -188,13 +188,8 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat 
     const idx n = mk.n1;
     const double f0 = fo.f0, om = fo.om;
     auto [pdu, pdv] = psi_dot(mk, 4, X, n);
-    if (seg.rolls) {  // a rolling ball's y follows cy of the floor's motion
-        pdu *= seg.cy;
-        pdv *= seg.cy;
-    }
-    double acc = seg.acc;
-    double y = seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu;
-    double yd = seg.vd0 + acc * tau - pdv;
+    double y = ball_y(seg, tau, pdu);
+    double yd = ball_yd(seg, tau, pdv);
     ev[EV_PLUS] = y - seg.half;
     ev[EV_MINUS] = -seg.half - y;
     ev[EV_VSTOP] = -seg.sdir * yd;
@@ -223,12 +218,7 @@ inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, SegC
     if (c.ball) {
         if (c.mode == STICK || c.mode == CONTACT) return {seg.y0, 0.0};
         auto [pdu, pdv] = psi_dot(mk, 4, X, n);
-        if (seg.rolls) {
-            pdu *= seg.cy;
-            pdv *= seg.cy;
-        }
-        double acc = seg.acc;
-        return {seg.ud0 + tau * (seg.vd0 + 0.5 * acc * tau) - pdu, seg.vd0 + acc * tau - pdv};
+        return {ball_y(seg, tau, pdu), ball_yd(seg, tau, pdv)};
     }
     if (kase == L::TMD) {
         double a = X[2 * n];
@@ -334,7 +324,7 @@ inline void close_flows(Work& w, SegCtx c, double T, bool steady, double pdu) {
     Vec met = w.met;
     const Segment& seg = w.seg;
     const idx mode = c.mode, n = c.n;
-    const double fb = seg.fb, acc = seg.acc;
+    const double fb = seg.fb;
     met[L::W_FORCE] += out[0];
     met[L::D_VISC] += out[1];
     met[L::W_NONRECIP] += out[5];
@@ -350,8 +340,8 @@ inline void close_flows(Work& w, SegCtx c, double T, bool steady, double pdu) {
         BallState& b = w.rs.ball;
         if (mode == FREE || mode == ROLL) {
             double y = b.y;
-            double ynew = seg.ud0 + T * (seg.vd0 + 0.5 * acc * T) - seg.cy * pdu1;
-            b.yd = seg.vd0 + acc * T - seg.cy * pdv1;
+            double ynew = ball_y(seg, T, pdu1);
+            b.yd = ball_yd(seg, T, pdv1);
             met[L::D_FRICTION] -= fb * (ynew - y);
             met[L::W_NONRECIP] += (1.0 - w.sys.fric.sr) * fb * (pdu1 - pdu);
             b.y = ynew;
