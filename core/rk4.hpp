@@ -34,17 +34,16 @@
 // rk4_avx2_many.cpp) and run where the CPU has it: the same IEEE operations in the same
 // order as the baseline ISA's, so the same bits on every CPU (FMA, which would round
 // differently, is not enabled; -ffp-contract=off).  AVX2 gives the vector arithmetic
-// (VecMap) 4 lanes and 3-operand instructions: 1.15x on a ball bar's lobes, 1.2x on the
-// map step through bb.simulate (benchmarks/bench_isa.py).  An x86-64 CPU without AVX2
-// (x86-64 CPUs have had it since 2013-2015, bar some low-end Pentiums and Celerons) runs
-// the kernel of a run-time shape, compiled for the baseline ISA (SSE2, rk4.cpp), with the
-// same bits, 2-3.5x slower than the AVX2 kernels: the specialised kernels compiled a
-// second time for it took a third of the build's CPU time (docs/performance.md,
-// "Instruction-set copies").  An AVX-512 copy (32 vector registers,
-// which hold the staged step without spills) gave 1.0-1.1x over AVX2 through the same
-// calls and was the dearest of the copies to compile, so it is not built.  Other targets
-// (aarch64, MSVC) build the specialised kernels for the baseline ISA (rk4.cpp,
-// rk4_many.cpp).
+// (VecMap) 4 lanes and 3-operand instructions: 1.09-1.14x through bb.simulate and
+// bb.lobes (benchmarks/bench_isa.py).  An x86-64 CPU without AVX2 (x86-64 CPUs have had
+// it since 2013-2015, bar some low-end Pentiums and Celerons) runs the kernel of a
+// run-time shape, compiled for the baseline ISA (SSE2, rk4.cpp), with the same bits,
+// 2-3.5x slower than the AVX2 kernels: the specialised kernels compiled a second time for
+// it took a third of the build's CPU time (docs/performance.md, "Instruction-set
+// copies").  An AVX-512 copy (32 vector registers, which hold the staged step without
+// spills) gave 1.0-1.1x over AVX2 through the same calls and was the dearest of the
+// copies to compile, so it is not built.  Other targets (aarch64, MSVC) build the
+// specialised kernels for the baseline ISA (rk4.cpp, rk4_many.cpp).
 // (-DBB_NO_AVX2_CLONE builds those, to test them on an AVX2 CPU.)
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
 #define BB_AVX2_CLONE 1
