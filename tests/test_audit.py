@@ -347,6 +347,21 @@ def test_d4_on_the_cuts_words_a_depth_that_cannot_be_compared():
     assert "carbide ball chatters from the shallowest cut" in got.reason
 
 
+def test_d4_on_the_cuts_words_a_drop_below_the_shallowest_cut():
+    """Steel chatters from the shallowest cut, carbide does not: a lower depth that the
+    cuts cannot size, not a -100 % change; the direction holds, so partly."""
+    sens = next(steps for claim, steps, _ in discussion_cases() if claim == "D4")[
+        "sensitivity-ball"]
+    cuts = {r["value"]: r for r in sens["cuts"]["results"]}
+    n = len(cuts["carbide"]["chatter"])
+    cuts["carbide"]["chatter"] = [False] + [True] * (n - 1)
+    cuts["steel"]["chatter"] = [True] * n
+    got = judge("D4", {"sensitivity-ball": sens})
+    assert got.verdict == "partly" and "-100" not in got.reason
+    assert "below the shallowest cut tried" in got.reason
+    assert got.measured["depth change %"] is None
+
+
 def test_every_discussion_check_gives_each_of_its_verdicts():
     seen = {}
     for claim, steps, want in discussion_cases():

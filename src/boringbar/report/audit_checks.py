@@ -569,7 +569,10 @@ def _d4_cuts(ev: Evidence, preset: str) -> Verdict:
     cuts = {r["value"]: r for r in s["cuts"]["results"]}
     depths = s["cuts"]["depth_m"]
     d_c, d_s = (_chatter_free(cuts[v], depths) for v in ("carbide", "steel"))
-    change = (d_s / d_c - 1) * 100 if d_c > 0 else math.nan
+    # steel chatters from the shallowest cut where carbide does not: its depth is lower,
+    # by an amount below what the cuts tried can show (not -100 %)
+    below = d_s == 0 < d_c
+    change = (d_s / d_c - 1) * 100 if d_c > 0 and not below else math.nan
     if d_c == 0 and d_s == 0:  # both chatter from the shallowest cut tried
         m = {"RMS at r = 1 carbide / steel mm": [round(rms_c * 1e3, 4), round(rms_s * 1e3, 4)]}
         higher = rms_s > rms_c
@@ -584,10 +587,15 @@ def _d4_cuts(ev: Evidence, preset: str) -> Verdict:
          "depth change %": None if math.isnan(change) else round(change, 0)}
     higher = rms_s > rms_c
     drop_ok = math.isfinite(change) and -15 - 1e-9 <= change <= 0
-    moved = (f"{change:+.0f} %" if math.isfinite(change) else
-             f"up from none (the carbide ball chatters from the shallowest cut, "
-             f"{depths[0] * 1e3:g} mm; the steel ball is stable to {d_s:g} mm)")
-    return _judge(higher or drop_ok, higher and drop_ok, m,
+    if below:
+        moved = (f"down from {d_c:g} mm to below the shallowest cut tried (the steel ball "
+                 f"chatters from {depths[0] * 1e3:g} mm): a drop the cuts cannot size")
+    elif math.isfinite(change):
+        moved = f"{change:+.0f} %"
+    else:
+        moved = (f"up from none (the carbide ball chatters from the shallowest cut, "
+                 f"{depths[0] * 1e3:g} mm; the steel ball is stable to {d_s:g} mm)")
+    return _judge(higher or drop_ok or below, higher and drop_ok, m,
                   f"the steel ball's RMS is not higher ({rms_s * 1e3:.3g} against "
                   f"{rms_c * 1e3:.3g} mm) and its depth changes by {moved}",
                   f"steel RMS {'higher' if higher else 'not higher'}; chatter-free depth "
