@@ -86,18 +86,18 @@ def rev_params(p: np.ndarray, L0) -> np.ndarray:
     (``L0._SCALARS``) and per-mode blocks takes the working tree's slot of that name.  The
     tree's scalar slots the revision lacks (the cut law, the force noise, a Hertz contact,
     a rolling ball, ...) must hold 0 (or be :data:`INERT`, their feature off), and its
-    force's mode shape PSI_F must be PSI_L (one
-    bending plane), so that the run is one the revision can make."""
+    force's mode shape PSI_F must be PSI_L (one bending plane), so that the run is one the
+    revision can make."""
     if L0.P_SIZE == L.P_SIZE:
         return p
-    lacking = [k for k in L.PARAM_NAMES if k not in L0._SCALARS
-               and not (k in INERT and np.all(p[..., getattr(L, INERT[k])] == 0.0))]
+    used = [k for k in L.PARAM_NAMES if k not in L0._SCALARS
+            and not (k in INERT and np.all(p[..., getattr(L, INERT[k])] == 0.0))
+            and np.any(p[..., getattr(L, k)] != 0.0)]
     n = L.NMAX
-    if (any(np.any(p[..., getattr(L, k)] != 0.0) for k in lacking) or L0.NMAX != n
+    if (used or L0.NMAX != n
             or np.any(p[..., L.PSI_F:L.PSI_F + n] != p[..., L.PSI_L:L.PSI_L + n])):
         raise ValueError("the run uses slots the revision's parameter layout lacks: "
-                         + ", ".join(k for k in lacking
-                                     if np.any(p[..., getattr(L, k)] != 0.0)))
+                         + ", ".join(used))
     out = np.zeros(p.shape[:-1] + (L0.P_SIZE,))
     for k in L0._SCALARS:
         out[..., getattr(L0, k)] = p[..., getattr(L, k)]
