@@ -22,6 +22,7 @@ void bind_dynamics(nb::module_& m);
 void bind_history_map(nb::module_& m);
 void bind_forcing_setup(nb::module_& m);
 void bind_contact_law(nb::module_& m);
+void bind_impact_pattern(nb::module_& m);
 }  // namespace bb::bind
 
 namespace {
@@ -87,4 +88,5 @@ NB_MODULE(core, m) {
     bb::bind::bind_history_map(m);
     bb::bind::bind_forcing_setup(m);
     bb::bind::bind_contact_law(m);
+    bb::bind::bind_impact_pattern(m);
 }

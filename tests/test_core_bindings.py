@@ -326,3 +326,38 @@ def test_a_bad_forcing_setup_argument_is_a_clear_error(field, value, message):
     a[field] = value(a)
     with pytest.raises(ValueError, match=message):
         core.forcing_setup(**a)
+
+
+def impact_period_args() -> dict:
+    """A symmetric one-period sequence of a +1 and a -1 wall, as classify passes it."""
+    times = (np.arange(60)[:, None] + np.array([0.2, 0.7])[None, :]).ravel() * 1e-3
+    walls = np.tile([1.0, -1.0], 60)
+    return {"times": times, "walls": walls, "tail_start": 0.0, "tail_end": 0.06,
+            "period": 1e-3, "tol": 1e-6, "max_k": 8, "min_periods": 3}
+
+
+def test_the_impact_period_of_a_known_sequence():
+    assert core.impact_period(**impact_period_args()) == (2, 1, True)
+    a = impact_period_args()
+    a["walls"] = np.tile([1.0, 1.0], 60)  # both on one wall: periodic, not symmetric
+    assert core.impact_period(**a) == (2, 1, False)
+
+
+@pytest.mark.parametrize(("field", "value", "message"), [
+    ("times", lambda a: a["times"][::2], "non-contiguous"),
+    ("times", lambda a: a["times"].astype(np.float32), "float64"),
+    ("walls", lambda a: a["walls"][:-1], "shape"),
+    ("walls", lambda a: a["walls"].astype(np.int64), "float64"),
+    ("period", lambda a: 0.0, "period"),
+    ("period", lambda a: float("nan"), "period"),
+    ("max_k", lambda a: 0, "max_k"),
+    ("min_periods", lambda a: 1, "min_periods"),
+])
+def test_a_bad_impact_period_argument_is_a_clear_error(field, value, message):
+    a = impact_period_args()
+    a[field] = value(a)
+    with pytest.raises(ValueError, match=message):
+        core.impact_period(**a)
+    if field in ("times", "walls"):
+        with pytest.raises(ValueError, match=message):
+            core.impact_fault(a["times"], a["walls"], 0.0, 0.06)

@@ -164,3 +164,81 @@ def test_bad_arguments_name_the_parameter(kw, match):
     extra = {key: kw.pop(key) for key in ("max_k", "min_periods") if key in kw}
     with pytest.raises(ParameterError, match=match):
         classify(**{**args, **kw}, **extra)
+
+
+# The periodicity test as NumPy states it, the core's loop's truth
+# (core/impact_pattern.cpp): whole-array shifts, folds and minima.
+def numpy_periodicity(times, walls, tail, period, tol, max_k, min_periods):
+    in_tail = times >= tail[0]
+    times, walls = times[in_tail], walls[in_tail]
+    for k in range(1, max_k + 1):
+        if tail[1] - tail[0] < min_periods * k * period:
+            break
+        n = numpy_period_count(times, walls, k * period, tail, tol)
+        if n:
+            return n, k, numpy_symmetric(times[:n], walls[:n], period, k, tol)
+    return 0, 0, False
+
+
+def numpy_period_count(times, walls, span, tail, tol):
+    if times.size < 2:
+        return 0
+    n = int(np.searchsorted(times, times[0] + span - tol))
+    if n >= times.size or n == 0:
+        return 0
+    if not (times[0] <= tail[0] + span + tol and times[-1] >= tail[1] - span - tol):
+        return 0
+    if not np.array_equal(walls[n:], walls[:-n]):
+        return 0
+    return n if np.all(np.abs(times[n:] - times[:-n] - span) <= tol) else 0
+
+
+def numpy_symmetric(times, walls, period, k, tol):
+    span = k * period
+    plus, minus = np.mod(times[walls == 1], span), np.mod(times[walls == -1], span)
+    if plus.size != minus.size:
+        return False
+
+    def same(a, b):
+        gap = np.abs(np.mod(a, span)[:, None] - b[None, :])
+        gap = np.minimum(gap, span - gap)
+        return bool(np.all(gap.min(axis=0) <= tol) and np.all(gap.min(axis=1) <= tol))
+
+    return any(same(plus + s, minus) and same(minus + s, plus)
+               for s in (2 * np.arange(k) + 1) * period / 2)
+
+
+def jittered(rng, k):
+    """A k-period sequence of 1-4 impacts a period on random walls, each time moved by up
+    to about the tolerance (so that some pass and some fail), sometimes made symmetric."""
+    m = int(rng.integers(1, 5))
+    phases = np.sort(rng.uniform(0, 1, m))
+    walls = rng.choice([-1.0, 1.0], m)
+    if rng.uniform() < 0.7:  # the mirror image k T / 2 on (antisymmetric for k odd)
+        phases = np.concatenate([phases / 2, phases / 2 + 0.5])
+        walls = np.concatenate([walls, -walls])
+    times, wall = sequence(phases, walls, k=k)
+    tol = 5 * DT + 1e-3 * T
+    times = times + rng.uniform(-1.0, 1.0, times.size) * tol * rng.uniform(0, 1.5)
+    order = np.argsort(times)
+    times, wall = times[order], wall[order].astype(float)
+    inside = (times >= WINDOW[0]) & (times <= WINDOW[1])
+    return times[inside], wall[inside]
+
+
+def test_core_periodicity_is_numpy_s_on_jittered_and_random_sequences():
+    rng = np.random.default_rng(7)
+    tol = 5 * DT + 1e-3 * T
+    tail = (WINDOW[1] - 50 * T, WINDOW[1])
+    kinds = {"periodic": 0, "symmetric": 0, "none": 0}
+    for i in range(900):
+        if i % 3 == 2:  # random impacts: almost never periodic
+            times = np.sort(rng.uniform(*WINDOW, int(rng.integers(0, 300))))
+            walls = rng.choice([-1.0, 1.0], times.size)
+        else:
+            times, walls = jittered(rng, int(rng.choice([1, 1, 2, 3, 4])))
+        want = numpy_periodicity(times, walls, tail, T, tol, 8, 3)
+        p = run(times, walls)
+        assert (p.n, p.k, p.label == "symmetric") == want, i
+        kinds["none" if not want[1] else "symmetric" if want[2] else "periodic"] += 1
+    assert min(kinds.values()) >= 50, kinds  # each outcome exercised

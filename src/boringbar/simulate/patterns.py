@@ -2,7 +2,8 @@
 
 Labels the steady part of a harmonically forced run (forcing period T) from
 its counted impact times, the walls hit, the stick intervals and the time in
-contact.  Pure NumPy: it runs once per simulation on a few thousand impacts.
+contact.  It runs once for every run whose pattern is read, on a few thousand impacts;
+the loop over them is the compiled core's (core/impact_pattern.cpp).
 
 Tolerances (all stated here and in :func:`classify`):
 
@@ -28,6 +29,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from boringbar import core
 from boringbar._validate import ParameterError, check_nonnegative, check_positive
 
 PATTERN_LABELS = (
@@ -121,8 +123,6 @@ def classify(
     k -> 'non-uniform'.  Each kT-window is compared with
     the previous one, so a phase drift below ``time_tol`` per kT passes.
     """
-    times = np.asarray(impact_times, dtype=float)
-    walls = np.asarray(impact_walls)
     t_start, t_end = (float(v) for v in window)
     period = check_positive("period", period, "s")
     dt = check_nonnegative("dt", dt, "s")
@@ -133,7 +133,7 @@ def classify(
     min_periods = _check_int(
         "min_periods", DEFAULT_MIN_PERIODS if min_periods is None else min_periods, 2
     )
-    _check_impacts(times, walls, t_start, t_end)
+    times, walls = _check_impacts(impact_times, impact_walls, t_start, t_end)
     intervals = _check_intervals(stick_intervals)
 
     duration = t_end - t_start
@@ -148,6 +148,7 @@ def classify(
         n, k, symmetric = _periodicity(times, walls, (tail_start, t_end), period, tol, max_k,
                                        min_periods)
 
+    n_plus = (times.size + round(float(walls.sum()))) // 2  # the walls are +1 and -1
     if not times.size:
         label = "no impact with sticking" if sticks else "no impact"
     elif sticks:
@@ -161,8 +162,8 @@ def classify(
         n=n,
         k=k,
         impacts_per_cycle=float(times.size / cycles),
-        plus_per_cycle=float(np.count_nonzero(walls == 1) / cycles) if times.size else 0.0,
-        minus_per_cycle=float(np.count_nonzero(walls == -1) / cycles) if times.size else 0.0,
+        plus_per_cycle=float(n_plus / cycles),
+        minus_per_cycle=float((times.size - n_plus) / cycles),
         stick_fraction=stick_fraction,
         contact_fraction=float(contact_fraction),
     )
@@ -177,63 +178,18 @@ def _stick_fraction(intervals, t_start, t_end) -> float:
 def _periodicity(times, walls, tail, period, tol, max_k, min_periods):
     """(n, k, symmetric) of the impacts in the ``tail``: the smallest period k T (k <=
     ``max_k``, repeating ``min_periods`` times in the tail) with its n impacts; (0, 0,
-    False) if none."""
-    in_tail = times >= tail[0]
-    times, walls = times[in_tail], walls[in_tail]
-    for k in range(1, max_k + 1):
-        if tail[1] - tail[0] < min_periods * k * period:
-            break
-        n = _period_count(times, walls, k * period, tail, tol)
-        if n:
-            return n, k, _is_symmetric(times[:n], walls[:n], period, k, tol)
-    return 0, 0, False
-
-
-def _period_count(times, walls, span, tail, tol) -> int:
-    """Impacts per ``span`` if the sequence repeats with that span over the tail, else 0.
-
-    Shift-based, so an impact jittering across a fold boundary does not change
-    the count: n is the number of impacts before t_0 + span - tol, then impact
-    j + n must be on impact j's wall, span later within ``tol``, for every j,
-    and the sequence must reach within one span of both ends of the tail.
-    """
-    if times.size < 2:
-        return 0
-    n = int(np.searchsorted(times, times[0] + span - tol))
-    if n >= times.size:
-        return 0
-    if not (times[0] <= tail[0] + span + tol and times[-1] >= tail[1] - span - tol):
-        return 0  # the sequence does not cover the tail
-    if not np.array_equal(walls[n:], walls[:-n]):
-        return 0
-    return n if np.all(np.abs(times[n:] - times[:-n] - span) <= tol) else 0
-
-
-def _is_symmetric(times, walls, period, k, tol) -> bool:
-    """True if y(t + s) = -y(t) for some s = (2j+1) T/2, j = 0..k-1: folded modulo
-    kT, the + wall's impacts shifted by s are the - wall's and the - wall's
-    shifted by s are the + wall's, each matched within ``tol``.
-
-    Requiring both directions makes this the antisymmetry itself; for k = 1 the
-    two are one condition, for k > 1 only s = kT/2 with k odd can pass (applying
-    s twice must be a whole number of periods kT)."""
-    span = k * period
-    plus = np.mod(times[walls == 1], span)
-    minus = np.mod(times[walls == -1], span)
-    if plus.size != minus.size:
-        return False
-    return any(
-        _same_phases(plus + s, minus, span, tol) and _same_phases(minus + s, plus, span, tol)
-        for s in (2 * np.arange(k) + 1) * period / 2
-    )
-
-
-def _same_phases(a, b, span, tol) -> bool:
-    """Every phase of ``a`` has one of ``b`` within ``tol`` (circularly, modulo span)
-    and vice versa."""
-    gap = np.abs(np.mod(a, span)[:, None] - b[None, :])
-    gap = np.minimum(gap, span - gap)
-    return bool(np.all(gap.min(axis=0) <= tol) and np.all(gap.min(axis=1) <= tol))
+    False) if none.  The compiled core's loop (core/impact_pattern.cpp): every impact j
+    + n on impact j's wall, k T later within ``tol``, where n is the count before t_0 + k T
+    - tol, and the sequence reaching within k T of both ends of the tail (shift-based, so
+    an impact jittering across a fold boundary does not change the count); symmetric if
+    y(t + s) = -y(t) for some s = (2j+1) T/2, j = 0..k-1, the + wall's phases modulo k T
+    shifted by s matching the - wall's and vice versa within ``tol`` (both directions make
+    it the antisymmetry itself; for k > 1 only s = k T/2 with k odd can pass)."""
+    # k and the repeat count beyond 1e6 find nothing in a tail of TAIL_PERIODS periods
+    n, k, symmetric = core.impact_period(
+        times, walls, float(tail[0]), float(tail[1]), float(period), float(tol), min(max_k, 10**6),
+        min(min_periods, 10**6))
+    return int(n), int(k), bool(symmetric)
 
 
 def _check_int(name: str, value, lo: int) -> int:
@@ -242,23 +198,35 @@ def _check_int(name: str, value, lo: int) -> int:
     return int(value)
 
 
-def _check_impacts(times, walls, t_start, t_end) -> None:
+def _check_impacts(impact_times, impact_walls, t_start, t_end) -> tuple[np.ndarray, np.ndarray]:
+    """The impacts as contiguous float arrays, once checked (the loop over them is the
+    core's, ``core.impact_fault``)."""
     if not (math.isfinite(t_start) and math.isfinite(t_end) and t_end > t_start):
         raise ParameterError(
             f"window = ({t_start!r}, {t_end!r}) s must be finite with t_end > t_start"
         )
+    times = np.asarray(impact_times, dtype=float)
+    walls = np.asarray(impact_walls)
     if times.ndim != 1 or walls.shape != times.shape:
         raise ParameterError(
             f"impact_times (shape {times.shape}) and impact_walls "
             f"(shape {walls.shape}) must be 1-D of equal length"
         )
-    if walls.size and not np.all((walls == 1) | (walls == -1)):  # np.isin's, unsorted
+    times = np.ascontiguousarray(times)
+    try:
+        walls = np.ascontiguousarray(walls, dtype=float)
+    except (TypeError, ValueError):
+        fault = 1
+    else:
+        fault = core.impact_fault(times, walls, float(t_start), float(t_end))
+    if fault == 1:
         raise ParameterError(f"impact_walls = {np.unique(walls)!r} must hold only +1 and -1")
-    if times.size and (np.any(np.diff(times) < 0) or times[0] < t_start or times[-1] > t_end):
+    if fault == 2:
         raise ParameterError(
             f"impact_times must be ascending inside window "
             f"[{t_start:g}, {t_end:g}] s; got [{times[0]:g}, {times[-1]:g}] s"
         )
+    return times, walls
 
 
 def _check_intervals(stick_intervals) -> np.ndarray:
