@@ -12,6 +12,7 @@ directly with :meth:`ModalModel.from_tap_test`.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass, field, replace
@@ -77,6 +78,11 @@ def published_sections(cavity: bool = True) -> tuple[Section, ...]:
     )
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
 @dataclass(frozen=True, eq=False)
 class ModalModel:
     """The bar reduced to ``n`` uncoupled bending modes (modal coordinates u_i).
@@ -139,7 +145,8 @@ class ModalModel:
             raise ValueError("modal model: every mode needs a non-zero tip value psi_tip")
 
     # --- derived quantities -------------------------------------------------
-    @property
+    # (kept once computed, as every run reads them: the fields are read-only copies)
+    @functools.cached_property
     def oriented(self) -> bool:
         """The force enters the modes by a shape of its own (psi_force != psi_tip)."""
         return not np.array_equal(self.psi_force, self.psi_tip)
@@ -148,12 +155,12 @@ class ModalModel:
     def n_modes(self) -> int:
         return len(self.mass_kg)
 
-    @property
+    @functools.cached_property
     def omegas_rad_s(self) -> np.ndarray:
         """Natural frequencies of the retained modes (rad/s)."""
-        return np.sqrt(self.stiffness_n_m / self.mass_kg)
+        return _read_only(np.sqrt(self.stiffness_n_m / self.mass_kg))
 
-    @property
+    @functools.cached_property
     def natural_frequency_rad_s(self) -> float:
         """First natural frequency omega_n (rad/s)."""
         return float(self.omegas_rad_s[0])
@@ -162,10 +169,10 @@ class ModalModel:
     def natural_frequency_hz(self) -> float:
         return self.natural_frequency_rad_s / (2.0 * math.pi)
 
-    @property
+    @functools.cached_property
     def damping_n_s_m(self) -> np.ndarray:
         """Modal viscous coefficients C_i = 2 zeta_i sqrt(K_i M_i) (N s/m)."""
-        return 2.0 * self.damping_ratio * np.sqrt(self.stiffness_n_m * self.mass_kg)
+        return _read_only(2.0 * self.damping_ratio * np.sqrt(self.stiffness_n_m * self.mass_kg))
 
     @property
     def tip_stiffness_n_m(self) -> float:
