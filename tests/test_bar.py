@@ -4,9 +4,13 @@ import math
 
 import numpy as np
 import pytest
+from threadpoolctl import threadpool_info
 
+import boringbar as bb
 from boringbar._validate import ParameterError
+from boringbar.model import bar as bar_module
 from boringbar.model.bar import ModalModel, Section, SteppedBar, published_bar
+from boringbar.simulate import regimes
 
 E, RHO, D, LEN = 200e9, 7850.0, 0.025, 0.2
 
@@ -83,3 +87,28 @@ def test_bad_geometry_is_named():
         SteppedBar(sections=(Section(0.0, 0.1, D), Section(0.11, 0.2, D)))
     with pytest.raises(ParameterError, match="section diameter"):
         Section(0.0, 0.1, -0.01)
+
+
+def test_the_small_eigenproblems_run_on_one_blas_thread(monkeypatch):
+    """The bar's eigensolve and the exact integrator's regimes see one BLAS thread (a
+    thread pool only spins on matrices this small, boringbar/model/linalg.py); outside
+    them the libraries keep their own."""
+    seen = []
+
+    def blas_threads():
+        return {i["filepath"]: i["num_threads"] for i in threadpool_info()
+                if i["user_api"] == "blas"}
+
+    def recording(real):
+        def wrapper(*args, **kwargs):
+            seen.append(blas_threads())
+            return real(*args, **kwargs)
+        return wrapper
+
+    monkeypatch.setattr(bar_module.scipy.linalg, "eigh", recording(bar_module.scipy.linalg.eigh))
+    monkeypatch.setattr(regimes.np.linalg, "eig", recording(regimes.np.linalg.eig))
+    before = blas_threads()
+    system = bb.make_system("ball", gap_m=0.123e-3)
+    bb.simulate(system, bb.Harmonic(10.0), duration_s=0.01, record_every=0, integrator="exact")
+    assert len(seen) >= 2 and seen[0] and all(set(s.values()) == {1} for s in seen), seen
+    assert blas_threads() == before

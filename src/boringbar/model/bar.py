@@ -21,6 +21,7 @@ import numpy as np
 import scipy.linalg
 
 from boringbar._validate import check_positive, check_range
+from boringbar.model.linalg import one_blas_thread
 from boringbar.model.materials import MATERIALS
 
 #: Published geometry (docs/model.md, section 1), metres.
@@ -389,6 +390,7 @@ class SteppedBar:
         return K[np.ix_(keep, keep)], M[np.ix_(keep, keep)]
 
     @staticmethod
+    @one_blas_thread
     def _eig(K: np.ndarray, M: np.ndarray, n: int):
         """The first ``n`` eigenpairs (omega^2 ascending, shapes), from the flexibility
         form M phi = omega^-2 K phi reduced through K's Cholesky factor: its largest

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from boringbar.model.forcing import Harmonic
+from boringbar.model.linalg import one_blas_thread
 from boringbar.model.system import System
 from boringbar.orbits.shooting import (
     Flow,
@@ -25,7 +26,6 @@ from boringbar.orbits.shooting import (
     advance,
     make_flow,
     multipliers,
-    one_blas_thread,
     periodic_orbit,
 )
 from boringbar.simulate import State, simulate

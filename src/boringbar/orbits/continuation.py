@@ -22,6 +22,7 @@ import dataclasses
 import numpy as np
 
 from boringbar._validate import ParameterError
+from boringbar.model.linalg import one_blas_thread
 from boringbar.orbits.bifurcations import (
     at_section,
     locate_boundary,
@@ -55,7 +56,6 @@ from boringbar.orbits.shooting import (
     free_phase,
     multipliers,
     newton_step,
-    one_blas_thread,
     periodic_orbit,
 )
 

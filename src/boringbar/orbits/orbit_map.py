@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from boringbar.model.linalg import one_blas_thread
 from boringbar.orbits.branch import (
     MAX_STEP,
     Branch,
@@ -43,7 +44,6 @@ from boringbar.orbits.shooting import (
     advance,
     carry,
     multipliers,
-    one_blas_thread,
     periodic_orbit,
 )
 

@@ -44,10 +44,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import brentq
-from threadpoolctl import threadpool_limits
 
 from boringbar._validate import ParameterError
 from boringbar.model.forcing import Harmonic
+from boringbar.model.linalg import one_blas_thread
 from boringbar.model.system import System
 from boringbar.simulate import hertz, pack, rolling
 from boringbar.simulate import layout as L
@@ -99,13 +99,6 @@ class Flow:
     def period(self) -> float:
         """T = 2 pi / Omega (s)."""
         return 2.0 * math.pi / self.omega
-
-
-#: Shooting works on matrices of a few rows (expm, solve, eig of 7x7 to 9x9), where a
-#: multithreaded BLAS only wakes its thread pool to spin against the other work:
-#: 15 continuation points took 18.8 s with OpenBLAS's threads on a loaded machine,
-#: 1.46 s with one (docs/continuation.md). The entry points run under this decorator.
-one_blas_thread = threadpool_limits.wrap(limits=1, user_api="blas")
 
 
 def state_size(system: System) -> int:

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from boringbar import core
+from boringbar.model.linalg import one_blas_thread
 from boringbar.simulate import layout as L
 
 #: event-search grid points per shortest period and grid levels (core/exact/consts.hpp)
@@ -300,6 +301,7 @@ def _dashpots(p, n, case, nz):
 
 
 @functools.lru_cache(maxsize=SYSTEM_CACHE_SIZE)
+@one_blas_thread
 def system_regimes(key: bytes) -> SystemRegimes:
     """The regimes of the system whose :data:`SYSTEM_SLOTS` of p have the bytes ``key``,
     diagonalised (one stacked LAPACK call per kind, NumPy's, as the reference's setup).
