@@ -176,6 +176,14 @@ BB_INLINE double y_spread(Shape<N, CASE> sh, const VecMap& vm, const double* X, 
     return e;
 }
 
+// y' at stages 2-4 of the mapped step (lanes 0-2), from the map's rows Yr.
+template <int N, int CASE>
+BB_INLINE v4 stage_ys(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
+    v4 ys = vm.yS * z.sn + vm.yC * z.cn + vm.yF * z.fz;
+    for (int j = 0; j < sh.nxm(); ++j) ys += vm.yP[j] * X[j];
+    return ys;
+}
+
 // A cheap sufficient condition for map_fits' stage test, a = |y'_0| and spread =
 // y_spread = E: E <= 0.2 |y'_0| puts every computed y'_s within |y'_0| / 4 of
 // y'_0 (the sums' rounding is below 1e-14 of their terms), so ys y'_0 >= 0.75 y'_0^2,
@@ -187,23 +195,28 @@ BB_INLINE bool surely_fits(double a, double spread) {
     return a >= 1e-150 && a <= 1e150 && spread <= 0.2 * a;
 }
 
+// y' at stages 2-4 of a mapped step (lanes 0-2), once computed (map_fits, map_slips).
+struct YStages {
+    v4 ys;
+    bool have = false;
+};
+
 // May a ball with friction take the map this step: y' outside the chattering band and of
 // y0's sign at stages 2-4 (the vector's lanes 0-2) by more than their round-off.  The
 // single run and the batch wrote the test with opposite comparisons, which differ only
 // for a NaN state (nan_maps: the single run's, under which a NaN takes the map).
-// spread: set to y_spread where the test gets that far (map_slips reads it).
+// spread: set to y_spread where the test gets that far (map_slips reads it); yst, if
+// given: the stages' y' where the test computed them (map_slips reads them too).
 template <int N, int CASE>
 BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
-                        MapIn z, bool nan_maps, double& spread) {
-    const double sn = z.sn, cn = z.cn, fz = z.fz;
-    const int nx = sh.nxm();
+                        MapIn z, bool nan_maps, double& spread, YStages* yst = nullptr) {
     const double yd0 = X[sh.iyd()];
     const bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
     if (!ok) return false;
     spread = y_spread(sh, vm, X, z);
     if (surely_fits(std::fabs(yd0), spread)) return true;
-    v4 ys = vm.yS * sn + vm.yC * cn + vm.yF * fz;
-    for (int j = 0; j < nx; ++j) ys += vm.yP[j] * X[j];
+    const v4 ys = stage_ys(sh, vm, X, z);
+    if (yst) *yst = YStages{ys, true};
     const v4 lhs = ys * yd0;
     const v4 rhs = 1e-12 * (yd0 * yd0 + vabs(yd0 * (ys - yd0)));
     for (int s3 = 0; s3 < 3; ++s3) {
@@ -234,17 +247,18 @@ BB_INLINE bool map_rolls(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
 // -psi_d F (sr = 1).  First a sufficient test (as surely_fits'): each stage's slip is
 // within y_spread + kroll mu_k N dt of the step's (plus round-off far below the margin
 // of 2x it asks for).
-// spread: map_fits' y_spread, or NaN where it did not run.
+// spread: map_fits' y_spread, or NaN where it did not run; yst: the stages' y' where
+// map_fits computed them (with the same z).
 template <int N, int CASE>
 BB_INLINE bool map_slips(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
-                         MapIn z, double ffl, const double* cst, double spread) {
+                         MapIn z, double ffl, const double* cst, double spread,
+                         const YStages& yst) {
     const double s0 = X[sh.is()], slip0 = X[sh.iyd()] - s0;
     if (q.sr != 1.0 || !(std::fabs(slip0) >= q.roll_band)) return false;
     if (std::isnan(spread)) spread = y_spread(sh, vm, X, z);
     spread += std::fabs(q.kroll * ffl * cst[3]);
     if (std::fabs(slip0) >= q.roll_band + 2.0 * spread) return true;
-    v4 ys = vm.yS * z.sn + vm.yC * z.cn + vm.yF * z.fz;
-    for (int j = 0; j < sh.nxm(); ++j) ys += vm.yP[j] * X[j];
+    const v4 ys = yst.have ? yst.ys : stage_ys(sh, vm, X, z);
     for (int s3 = 0; s3 < 3; ++s3) {
         const double slip = ys[s3] - (s0 - q.kroll * ffl * cst[s3 + 1]);
         if (!(slip * slip0 > 0.0 && std::fabs(slip) >= q.roll_band)) return false;
@@ -253,11 +267,13 @@ BB_INLINE bool map_slips(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
 }
 
 // The increment dX of a mapped step, two rows at a time: (u_i, u_i') and (aux, aux').
-// In the solid and ball bars a mode's rows involve only its own u, u' (the modes are
-// coupled through F_b alone).
+// decoupled: a mode's rows involve only its own u, u' (the modes coupled through F_b
+// alone), as in the solid and sliding ball bars' maps and a rolling ball's as it slips
+// (the sliding ball's map); the rolled map couples them.  Skipping the other columns'
+// zeros leaves every sum's bits.
 template <int N, int CASE>
 BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z,
-                             double* dX) {
+                             double* dX, bool decoupled) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int n = sh.n(), nx = sh.nxm();
     auto full = [&](int pr) {
@@ -267,7 +283,7 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
     };
     for (int i = 0; i < n; ++i) {
         v2 d;
-        if (sh.diag()) {
+        if (decoupled) {
             d = vm.dS[i] * sn + vm.dC[i] * cn + vm.dF[i] * fz;
             d += vm.dP[i][i] * X[i];
             d += vm.dP[i][n + i] * X[n + i];

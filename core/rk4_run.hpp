@@ -274,16 +274,20 @@ BB_INLINE void run_body(const RunArgs& a) {
         const VecMap& map = rolls_now ? mpr : mp;
         if (sh.rolls() && !rolls_now) ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.muk_n : q.muk_n;
         double spread = NAN;
+        YStages yst;
         if (linear && check_fb) {
             fz = map_friction(q, X[iyd]);
-            use_map = map_fits(q, sh, map, X, MapIn{sn, cn, fz + ffl}, true, spread);
+            use_map = map_fits(q, sh, map, X, MapIn{sn, cn, fz + ffl}, true, spread, &yst);
         }
         if (use_map && sh.rolls())
-            use_map = rolls_now
-                          ? map_rolls(q, sh, map, X, MapIn{sn, cn, fz})
-                          : map_slips(q, sh, map, X, MapIn{sn, cn, fz + ffl}, ffl, cst, spread);
+            use_map = rolls_now ? map_rolls(q, sh, map, X, MapIn{sn, cn, fz})
+                                : map_slips(q, sh, map, X, MapIn{sn, cn, fz + ffl}, ffl, cst,
+                                            spread, yst);
         fz += ffl;
-        if (use_map) map_increment(sh, map, X, MapIn{sn, cn, fz}, dX);
+        // a slipping ball takes the sliding ball's map, whose modes are decoupled
+        if (use_map)
+            map_increment(sh, map, X, MapIn{sn, cn, fz}, dX,
+                          sh.diag() || (sh.rolls() && !rolls_now));
         // the map holds no contact force: a step in a compliant contact, or one that ends
         // in one, takes the stages
         if (use_map && hertz &&

@@ -1,9 +1,9 @@
 """Reference inputs and outputs of the integrator kernels: the core's bits, kept.
 
 ``tests/data/kernel_reference.npz`` holds, for each case of :func:`case_builders`
-(212 of them: the 80 published harmonic cases with each integrator, regenerative cuts,
-every bar, friction law, record and batch size), the exact arguments one kernel entry
-point was called with and everything the call wrote.  It is the compiled core's output;
+(219 of them: the 80 published harmonic cases with each integrator, regenerative cuts,
+every bar, friction law, a rolling ball, record and batch size), the exact arguments one
+kernel entry point was called with and everything the call wrote.  It is the compiled core's output;
 before it was first written from the core, the core was confirmed to reproduce the
 previous reference (captured at commit fb3fab0, before the C++ port) bit for bit.  For a
 case named ``NAME`` the file has
@@ -220,6 +220,8 @@ def _bars() -> dict:
                                     friction_reaction="printed"),
         "ball-nofric": make_system("ball", gap_m=0.5e-3, friction=False),
         "paper": make_system("ball", "paper", gap_m=0.5e-3),
+        "rolling": make_system("ball", motion="roll"),
+        "rolling-3modes": make_system("ball", n_modes=3, gap_m=0.1e-3, motion="roll"),
     }
 
 
@@ -244,6 +246,10 @@ def _feature_cases() -> dict:
         "record": (b["paper"], h10, {"record_every": 50}),
         "initial-conditions": (b["ball-nofric"], h10, {"initial": start}),
         "continued-state": (b["ball-nofric"], h20, {"initial": cont}),
+        # a rolling ball: it rattles and slips at 20 N, rolls and slips in turn at 0.05 N
+        "rolling": (b["rolling"], h20, {}),
+        "rolling-small-force": (b["rolling"], Harmonic(0.05, 1.0), {}),
+        "rolling-3modes": (b["rolling-3modes"], h20, {}),
     }
     cases = {}
     for name, (s, f, kw) in common.items():
@@ -262,6 +268,7 @@ def _rk4_only_cases(b) -> dict:
         "rk4-stage-loop-ball-nofric": lambda: _single(b["ball-nofric"], h20, stage_loop=True,
                                                       **rk4),
         "rk4-stage-loop-tmd": lambda: _single(b["tmd"], h10, stage_loop=True, **rk4),
+        "rk4-rolling-cut": lambda: _cut(b["rolling"], 2e-4, "rk4", rpm=1200.0),
         # every step recorded (20 ms): the sgn() chatter of the paper's 20.4 N friction
         "rk4-paper-stick-record-every-step": lambda: _single(b["paper"], h10, integrator="rk4",
                                                              duration_s=0.02, record_every=1),
