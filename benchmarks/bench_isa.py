@@ -65,6 +65,7 @@ def workloads():
     paper = bb.make_system("ball", "paper", gap_m=0.1e-3, friction=False)
     stick = bb.make_system("ball", "paper", gap_m=0.5e-3, friction=True)
     hertz = bb.make_system("ball", "physical", gap_m=0.1e-3, contact="hertz")
+    rolling = bb.make_system("ball", "physical", motion="roll")
 
     def result(run):
         return digest([run.summary()["rms_tip_m"]], run.final.x)
@@ -95,6 +96,12 @@ def workloads():
         return result(bb.simulate(hertz, bb.Harmonic(20.0, 1.0), duration_s=1.0,
                                   record_every=0, integrator="rk4"))
 
+    def rolling_small():
+        # a rolling ball under a small force: it rolls and slips in turn (RK4's roll law at
+        # the four stages at 40 % of the steps, the rolled map at most of the others)
+        return result(bb.simulate(rolling, bb.Harmonic(0.05, 1.0), duration_s=3.0,
+                                  record_every=0, integrator="rk4"))
+
     def lobes():
         # the lobes of the ball bar with friction at one speed, serially: the converged
         # verdict's cuts (RK4)
@@ -103,7 +110,7 @@ def workloads():
         return digest(ds["min_chatter_free_depth_m"].values)
 
     return {"cut": cut, "harmonic_map": harmonic_map, "harmonic_stick": harmonic_stick,
-            "exact": exact, "contact": contact, "lobes": lobes}
+            "exact": exact, "contact": contact, "rolling": rolling_small, "lobes": lobes}
 
 
 def child(path: str, only) -> None:
