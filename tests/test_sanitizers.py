@@ -5,11 +5,12 @@ folder of its own, and the kernel tests run against that build in a new process:
 stored reference outputs (every integrator, every bar), the bindings' hypothesis test
 (wrong arrays and values of every kind) and the equations of motion as matrices
 (tests/test_dynamics.py: every bar, and bad parameter vectors), RK4's stick law
-(tests/test_stick_law.py) and the Hertz contact (tests/test_contact.py).  An out-of-bounds
-access, a use after free or undefined behaviour (signed overflow, a float cast out of
-range, ...) aborts that process, and this test fails with the sanitizer's report.  It
-needs CMake, Ninja or Make, a C++ compiler and nanobind in the environment (the test extra
-installs nanobind).
+(tests/test_stick_law.py), the Hertz contact (tests/test_contact.py) and the impact
+pattern's loops on random, jittered and malformed sequences (tests/test_patterns.py).  An
+out-of-bounds access, a use after free or undefined behaviour (signed overflow, a float
+cast out of range, ...) aborts that process, and this test fails with the sanitizer's
+report.  It needs CMake, Ninja or Make, a C++ compiler and nanobind in the environment (the
+test extra installs nanobind).
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 #: the tests run against the sanitized core
 KERNEL_TESTS = ("tests/test_kernel_reference.py", "tests/test_core_bindings.py",
-                "tests/test_dynamics.py", "tests/test_stick_law.py", "tests/test_contact.py")
+                "tests/test_dynamics.py", "tests/test_stick_law.py", "tests/test_contact.py",
+                "tests/test_patterns.py")
 
 #: imports the sanitized module as boringbar.core before anything imports the real one
 RUNNER = """
