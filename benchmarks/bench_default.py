@@ -24,7 +24,8 @@ import time
 
 import numpy as np
 
-from boringbar.analysis.sweep import PUBLISHED_RATIOS, SweepOptions, published_cases, sweep
+from boringbar.analysis.cases import published_cases
+from boringbar.analysis.sweep import PUBLISHED_RATIOS, SweepOptions, sweep
 from boringbar.execute import Execution
 from boringbar.simulate import Integration
 

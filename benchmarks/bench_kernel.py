@@ -20,7 +20,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from boringbar import Harmonic, make_system, simulate
-from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+from boringbar.analysis.cases import published_cases
+from boringbar.analysis.sweep import SweepOptions, sweep
 from boringbar.simulate import Integration, simulate_stage_loop
 
 CASE = {"bar": "ball", "preset": "paper", "gap_m": 0.1e-3, "friction": False}

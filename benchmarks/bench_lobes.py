@@ -23,6 +23,7 @@ import os
 import time
 
 from boringbar import Harmonic, make_system, simulate
+from boringbar.analysis.cases import Case, published_cases
 from boringbar.analysis.lobes import (
     PUBLISHED_DEPTH_STEP,
     PUBLISHED_RPM,
@@ -30,7 +31,6 @@ from boringbar.analysis.lobes import (
     compare_methods,
     lobes,
 )
-from boringbar.analysis.sweep import Case, published_cases
 from boringbar.model.forcing import Regenerative
 from boringbar.reference.stability import limit_at_speeds
 

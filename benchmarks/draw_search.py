@@ -26,9 +26,9 @@ import time
 import boringbar as bb
 from boringbar.analysis import chatter_probability as cp
 from boringbar.analysis import lobes as lb
+from boringbar.analysis.cases import Case
 from boringbar.analysis.lobe_search import free_limit, growth_column
 from boringbar.analysis.speeds import lobe_speeds
-from boringbar.analysis.sweep import Case
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import Integration
 

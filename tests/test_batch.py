@@ -136,7 +136,8 @@ def test_basins_and_sweep_are_the_same_batched_or_not():
     """Batches (in grid / job order, padded) change nothing in the results, whatever
     the workers; an uneven grid leaves a partial last batch."""
     from boringbar.analysis.basins import BasinOptions, basins
-    from boringbar.analysis.sweep import published_cases, sweep
+    from boringbar.analysis.cases import published_cases
+    from boringbar.analysis.sweep import sweep
 
     system = make_system("ball", "paper", gap_m=0.5e-3, friction=True)
     grid = {"displacement_m": (-1e-3, 1e-3, 3), "velocity_m_s": (-1.0, 1.0, 5),

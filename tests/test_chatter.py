@@ -52,6 +52,7 @@ import numpy as np
 import pytest
 
 from boringbar import Initial, make_system, simulate
+from boringbar.analysis.cases import Case
 from boringbar.analysis.lobes import (
     PUBLISHED_DEPTH_STEP,
     PUBLISHED_RPM,
@@ -60,7 +61,6 @@ from boringbar.analysis.lobes import (
     lobes,
 )
 from boringbar.analysis.lobes import summary as lobes_summary
-from boringbar.analysis.sweep import Case
 from boringbar.model.forcing import KR_ALUMINIUM, Regenerative
 from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds

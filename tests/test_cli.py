@@ -137,7 +137,8 @@ def test_console_script_and_module(tmp_path):
 
 def test_the_help_lines_are_the_commands_own_and_help_imports_no_command():
     """--help lists every command with the line its module gives it, without importing
-    the modules (the design search's Optuna, the FRF fit's SciPy signal tools)."""
+    the modules (the design search's Optuna, the FRF fit's SciPy signal tools) or the
+    analyses' xarray (the shared options parse their grids with analysis/cases.py)."""
     for name, (module, add, summary) in COMMANDS.items():
         parser = argparse.ArgumentParser()
         sub = parser.add_subparsers()
@@ -147,10 +148,10 @@ def test_the_help_lines_are_the_commands_own_and_help_imports_no_command():
     code = ("import sys; from boringbar.cli.main import main; main(['--help']); "
             "print(*sorted(m for m in sys.modules if m.startswith('boringbar.cli.') "
             "and m not in ('boringbar.cli.main', 'boringbar.cli.options')), "
-            "'optuna' in sys.modules, 'scipy.signal' in sys.modules)")
+            "'optuna' in sys.modules, 'scipy.signal' in sys.modules, 'xarray' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.splitlines()[-1]
-    assert out == "False False"
+    assert out == "False False False"
 
 
 def test_commands_without_out_write_to_their_own_folders(tmp_path, monkeypatch, capsys):

@@ -14,8 +14,8 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
+from boringbar.analysis.cases import published_cases
 from boringbar.analysis.speeds import default_speeds
-from boringbar.analysis.sweep import published_cases
 from boringbar.cli.main import main
 from boringbar.model.system_file import load_system
 from boringbar.plot import plot_lobes

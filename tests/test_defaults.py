@@ -12,6 +12,7 @@ import pytest
 from scipy.signal import argrelextrema
 
 from boringbar._validate import ParameterError
+from boringbar.analysis.cases import Case, parse_range, published_cases
 from boringbar.analysis.lobes import (
     DEPTH_FLOOR,
     PUBLISHED_DEPTH_STEP,
@@ -27,15 +28,7 @@ from boringbar.analysis.speeds import (
     default_speeds,
     lobe_speeds,
 )
-from boringbar.analysis.sweep import (
-    PUBLISHED_RATIOS,
-    Case,
-    SweepOptions,
-    default_ratios,
-    parse_range,
-    published_cases,
-    tmd_window,
-)
+from boringbar.analysis.sweep import PUBLISHED_RATIOS, SweepOptions, default_ratios, tmd_window
 from boringbar.analysis.sweep import plan as sweep_plan
 from boringbar.cli.main import build_parser
 from boringbar.execute import Execution

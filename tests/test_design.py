@@ -15,6 +15,7 @@ import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
 from boringbar import ParameterError
+from boringbar.analysis.cases import Case
 from boringbar.analysis.design import (
     candidate_system,
     comparison,
@@ -40,7 +41,6 @@ from boringbar.analysis.design_options import (
     uncertain_samples,
 )
 from boringbar.analysis.lobes import DEPTH_TOLERANCE, LobesOptions, lobes
-from boringbar.analysis.sweep import Case
 from boringbar.cli.main import main
 from boringbar.execute import Execution
 from boringbar.model.dampers import den_hartog_parameters, sims_parameters

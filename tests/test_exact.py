@@ -289,7 +289,8 @@ def test_cli_refuses_what_the_integrators_cannot_do(tmp_path, capsys):
 
 
 def test_sweep_records_its_integrator():
-    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+    from boringbar.analysis.cases import published_cases
+    from boringbar.analysis.sweep import SweepOptions, sweep
     from boringbar.execute import Execution
     from boringbar.simulate import Integration
 
@@ -305,7 +306,8 @@ def test_sweep_records_its_integrator():
 def test_published_sweep_runs_exactly_and_balances_energy(preset):
     """Every published case, both forces, 11 ratios: no stall, balance to 1e-9, and the
     linear bars equal to RK4's sampled RMS to its O(dt^2) (achieved: 3e-7)."""
-    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+    from boringbar.analysis.cases import published_cases
+    from boringbar.analysis.sweep import SweepOptions, sweep
     from boringbar.simulate import Integration
 
     cases = published_cases(preset=preset)

@@ -248,8 +248,8 @@ def test_stuck_ball_with_the_printed_reaction_in_a_cut():
 
 # --- selectable everywhere --------------------------------------------------------------
 def test_lobes_run_exactly_and_agree_with_rk4():
+    from boringbar.analysis.cases import Case
     from boringbar.analysis.lobes import LobesOptions, lobes
-    from boringbar.analysis.sweep import Case
     from boringbar.execute import Execution
     from boringbar.simulate import Integration
 

@@ -7,7 +7,8 @@ import pytest
 
 from boringbar import Harmonic, Regenerative, make_system, simulate
 from boringbar._validate import ParameterError
-from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+from boringbar.analysis.cases import published_cases
+from boringbar.analysis.sweep import SweepOptions, sweep
 from boringbar.model.dampers import Friction
 from boringbar.simulate import Integration, resolve_integrator
 

@@ -11,8 +11,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Annotation
 
 from boringbar._validate import ParameterError
+from boringbar.analysis.cases import published_cases
 from boringbar.analysis.lobes import LobesOptions, lobes
-from boringbar.analysis.sweep import published_cases
 from boringbar.execute import Execution
 from boringbar.plot import plot_lobes as plot_lobes_of_plot
 from boringbar.plot.lobes import plot_analytic_lobes, plot_lobes

@@ -12,7 +12,8 @@ import pytest
 import xarray as xr
 from matplotlib.text import Text
 
-from boringbar.analysis.sweep import Case, SweepOptions, sweep
+from boringbar.analysis.cases import Case
+from boringbar.analysis.sweep import SweepOptions, sweep
 from boringbar.execute import Execution
 from boringbar.model.system import make_system
 from boringbar.model.system_file import load_system

@@ -207,11 +207,12 @@ def test_example_studies_run_shortened(path, tmp_path):
 
 def _in_process(name: str):
     """(study dict, the in-process function's Dataset) of the same tiny computation."""
-    from boringbar.analysis.sweep import Case
+    from boringbar.analysis.cases import Case
     from boringbar.model.system import make_system
 
     if name == "sweep":
-        from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+        from boringbar.analysis.cases import published_cases
+        from boringbar.analysis.sweep import SweepOptions, sweep
 
         cases = published_cases(bars=("solid", "ball"), gaps_m=(0.5e-3,))
         return ({"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02},
@@ -313,7 +314,8 @@ def test_basins_of_several_operating_points_stack_the_single_point_results(tmp_p
 
 
 def test_exact_integrator_study_equals_the_in_process_sweep(tmp_path):
-    from boringbar.analysis.sweep import SweepOptions, published_cases, sweep
+    from boringbar.analysis.cases import published_cases
+    from boringbar.analysis.sweep import SweepOptions, sweep
 
     d = {"study": {"analysis": "sweep"}, "run": {"duration_s": 0.02, "integrator": "exact"},
          "damper": {"static_ratio": 1.5}, "grid": {"ratio": [0.99, 1.01]}}

@@ -275,7 +275,7 @@ def test_a_ball_s_settling_run_is_given_the_longer_cap(monkeypatch):
     11's run the longer one (run again, or at once where the onset's search had not
     run it); without the longer cap it is 11's (the onset)."""
     from boringbar.analysis import lobe_search as ls
-    from boringbar.analysis.sweep import Case
+    from boringbar.analysis.cases import Case
 
     options = LobesOptions(rpm=(1000.0,))
     index = {options.depth(i): i for i in range(1, options.max_index + 1)}

@@ -58,8 +58,8 @@ import xarray as xr
 
 from boringbar._validate import ParameterError, check_int, check_positive, check_range
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.cases import Case
 from boringbar.analysis.poincare import poincare_map
-from boringbar.analysis.sweep import Case
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import System
@@ -223,7 +223,7 @@ class BasinOptions:
 @dataclass(frozen=True, eq=False)
 class OperatingPoint:
     """One basin map of several (a study's grid): ``label``, the ``case``
-    (:class:`~boringbar.analysis.sweep.Case`) and its ``forcing``."""
+    (:class:`~boringbar.analysis.cases.Case`) and its ``forcing``."""
 
     label: str
     case: Case

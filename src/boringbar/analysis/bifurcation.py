@@ -169,7 +169,7 @@ def _check_system(system, parameter: str) -> None:
 def plan(systems, options: BifurcationOptions, integration: Integration) -> Plan:
     """One point per continuation (sequential by nature): of ``systems``, a System or
     a factory ``value -> System`` (the Dataset of one), or a list of
-    :class:`~boringbar.analysis.sweep.Case` (their Datasets stacked along ``case``)."""
+    :class:`~boringbar.analysis.cases.Case` (their Datasets stacked along ``case``)."""
     integration = integration.with_step()
     cases = list(systems) if isinstance(systems, list | tuple) else None
     targets = [c.system for c in cases] if cases is not None else [systems]

@@ -42,9 +42,9 @@ import xarray as xr
 
 from boringbar._validate import ParameterError, check_values
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.cases import Case, as_cases
 from boringbar.analysis.lobe_search import CHATTER, STABLE, UNDECIDED, onset_depth
 from boringbar.analysis.speeds import boring_speeds, check_speeds, lobe_speeds
-from boringbar.analysis.sweep import Case, as_cases
 from boringbar.analysis.verdict import CHATTER as ONSET_CHATTER
 from boringbar.analysis.verdict import (
     EXECUTOR,
@@ -523,7 +523,7 @@ def chatter_map(cases, options: ChatterMapOptions | None = None, *,
     (module doc; docs/chatter_map.md).
 
     ``cases``: the bars: a System, a sequence of them or a mapping of label to System
-    (:func:`~boringbar.analysis.sweep.as_cases`); ``options``:
+    (:func:`~boringbar.analysis.cases.as_cases`); ``options``:
     :class:`ChatterMapOptions` (default: the boring speeds of the bars and 20 depths
     around their bare-bar limit, a small and a 20 um knock, 10 um p-p tolerance);
     ``integration``: its ``dt_s`` is the RK4 step of every cut (None, the default: the

@@ -56,6 +56,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.cases import Case
 from boringbar.analysis.design_interval import wilson
 from boringbar.analysis.lobe_search import (
     BALL_STEP,
@@ -64,7 +65,6 @@ from boringbar.analysis.lobe_search import (
     growth_column,
     verdict_column,
 )
-from boringbar.analysis.sweep import Case
 from boringbar.model.forcing import MAX_NOISE_SEED, MAX_NOISE_STD
 from boringbar.model.perturb import perturbed
 from boringbar.model.system import System

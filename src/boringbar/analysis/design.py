@@ -32,6 +32,7 @@ import pandas as pd
 import xarray as xr
 
 from boringbar._validate import ParameterError
+from boringbar.analysis.cases import Case
 from boringbar.analysis.design_interval import CONFIDENCE, improvement, wilson
 from boringbar.analysis.design_objectives import (
     FRF_LINES,
@@ -51,7 +52,6 @@ from boringbar.analysis.design_options import (
     shown,
     uncertain_samples,
 )
-from boringbar.analysis.sweep import Case
 from boringbar.execute import Execution, run_points
 from boringbar.model.dampers import TunedMassDamper
 from boringbar.model.system import System, make_system, published_system_spec

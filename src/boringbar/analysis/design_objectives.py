@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
+from boringbar.analysis.cases import Case
 from boringbar.analysis.design_options import DesignOptions
 from boringbar.analysis.lobes import lobes
-from boringbar.analysis.sweep import Case
 from boringbar.analysis.verdict import judge
 from boringbar.execute import Execution, run_points
 from boringbar.model.forcing import Harmonic, Regenerative

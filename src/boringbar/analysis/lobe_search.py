@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from boringbar.analysis.sweep import Case
+from boringbar.analysis.cases import Case
 from boringbar.analysis.verdict import CHATTER as ONSET_CHATTER
 from boringbar.analysis.verdict import STABLE as ONSET_STABLE
 from boringbar.analysis.verdict import judge

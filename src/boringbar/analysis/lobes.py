@@ -80,6 +80,7 @@ from boringbar._validate import (
 )
 from boringbar.analysis import chatter_probability, lobe_search, verdict
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.cases import Case, as_cases
 from boringbar.analysis.chatter_probability import Uncertainty
 from boringbar.analysis.lobe_search import (
     CHATTER,
@@ -94,7 +95,6 @@ from boringbar.analysis.lobe_search import (
     onset_depth,
 )
 from boringbar.analysis.speeds import check_speeds, default_speeds
-from boringbar.analysis.sweep import Case, as_cases
 from boringbar.analysis.verdict import VerdictOptions, judged_step, step_text, verdict_attrs
 from boringbar.execute import Execution
 from boringbar.model.cutting import CutLawFields, CuttingLaw
@@ -578,8 +578,8 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     """Stability lobes of every case over ``options.rpm`` by time-domain simulation.
 
     ``cases``: the bars: a System, a sequence of them or a mapping of label to System
-    (:func:`~boringbar.analysis.sweep.as_cases`; the published ones:
-    :func:`~boringbar.analysis.sweep.published_cases`); ``options``: :class:`LobesOptions`
+    (:func:`~boringbar.analysis.cases.as_cases`; the published ones:
+    :func:`~boringbar.analysis.cases.published_cases`); ``options``: :class:`LobesOptions`
     (default: the search to 1 % over the bars' first lobes; the published scan is
     ``LobesOptions(PUBLISHED_RPM, "scan")``); ``integration``: duration, step and integrator
     of each cut (:class:`~boringbar.simulate.Integration`; "exact": the delayed

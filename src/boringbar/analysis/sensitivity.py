@@ -1,7 +1,7 @@
 """Sensitivity studies (docs/model.md, section 6): one parameter varied, everything else fixed.
 
 A thin layer over the sweep: each value of the parameter becomes a
-:class:`~boringbar.analysis.sweep.Case` (built by
+:class:`~boringbar.analysis.cases.Case` (built by
 :func:`~boringbar.model.system.make_system`; for initial conditions, the same
 system with its own ``initial``), and the harmonic runs are the sweep's plan over
 all of them; cuts at a fixed spindle speed are one point per (value, depth), a
@@ -34,7 +34,8 @@ import xarray as xr
 from boringbar._validate import ParameterError, check_choice, check_positive, check_range
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
-from boringbar.analysis.sweep import Case, SweepOptions
+from boringbar.analysis.cases import Case
+from boringbar.analysis.sweep import SweepOptions
 from boringbar.execute import Execution
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import make_system

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_values
-from boringbar.analysis.sweep import Case
+from boringbar.analysis.cases import Case
 from boringbar.model.cutting import CuttingLaw, cutting_speed_range_m_s
 from boringbar.model.system import System
 from boringbar.model.system_file import SystemSpec

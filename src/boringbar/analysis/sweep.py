@@ -12,22 +12,20 @@ attributes.
 
 from __future__ import annotations
 
-import inspect
 import json
 import math
 import sys
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 import xarray as xr
 
-from boringbar._validate import ParameterError, check_range, check_values
+from boringbar._validate import check_range, check_values
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
+from boringbar.analysis.cases import Case, as_cases
 from boringbar.execute import Execution
 from boringbar.model.forcing import Harmonic
-from boringbar.model.system import System, make_system
-from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
+from boringbar.model.system import System
 from boringbar.reference.stability import linear_host, natural_frequencies
 from boringbar.simulate import (
     Initial,
@@ -53,129 +51,6 @@ PEAK_MARGIN = 0.05
 #: The numeric results of every run.
 NAMES = ("rms_tip_m", "max_abs_tip_m", "max_abs_rel_disp_m", "impacts_per_cycle",
          "energy_balance_relative")
-#: Most values of one START:STOP:STEP range or list (:func:`parse_range`; the
-#: published sweep has 11 ratios, the bifurcation 46 forces).
-MAX_GRID_VALUES = 100_000
-
-
-@dataclass(frozen=True, eq=False)
-class Case:
-    """One bar of a sweep: a ``label``, the ``system``, and what distinguishes it:
-    ``bar`` kind, ``gap_m`` (m, NaN without a ball) and ``friction`` ("on", "off",
-    "n/a"); ``initial``: this case's initial conditions (default: the
-    integration's).  :meth:`of` makes one from a system alone; the bar, gap and
-    friction given must be the system's (a ParameterError says which is not)."""
-
-    label: str
-    system: System
-    bar: str
-    gap_m: float = math.nan
-    friction: str = "n/a"
-    initial: Initial | None = None
-
-    def __post_init__(self):
-        if not isinstance(self.system, System):
-            raise TypeError(_not_a_system("Case system", self.system))
-        given = (self.bar, self.gap_m, self.friction)
-        for name, mine, value in zip(("bar", "gap_m", "friction"), given,
-                                     _describe(self.system), strict=True):
-            if not (mine == value or name == "gap_m" and math.isnan(mine) and math.isnan(value)):
-                raise ParameterError(f"Case {self.label!r}: {name} = {mine!r}, but its system "
-                                     f"has {name} = {value!r}; Case.of(system) labels it")
-
-    @classmethod
-    def of(cls, system: System, label: str | None = None,
-           initial: Initial | None = None) -> Case:
-        """The case of ``system``: its bar, gap and friction read from it, labelled
-        as :func:`published_cases` labels (or ``label``)."""
-        if not isinstance(system, System):
-            raise TypeError(_not_a_system("system", system))
-        bar, gap, friction = _describe(system)
-        auto = (f"{bar} gap={gap * 1e3:g}mm friction={friction}" if bar == "ball" else bar)
-        # a bar of one's own is named by its file (the published one's labels stay short)
-        own = system.spec is not None and system.spec.name != PUBLISHED_NAME
-        return cls(label or (f"{system.spec.name} {auto}" if own else auto), system, bar,
-                   gap, friction, initial)
-
-
-def _describe(system: System) -> tuple[str, float, str]:
-    """(bar kind, gap m or NaN, friction "on"/"off"/"n/a") of ``system``."""
-    if system.kind != "ball":
-        return system.kind, math.nan, "n/a"
-    return "ball", system.damper.gap_m, "off" if system.damper.friction.kind == "none" else "on"
-
-
-def as_cases(systems, name: str = "systems") -> list[Case]:
-    """The cases of what an analysis was given: a :class:`System` or a :class:`Case`,
-    a sequence of them, or a mapping of label to either. Labels are unique."""
-    if isinstance(systems, System | Case):
-        systems = [systems]
-    if isinstance(systems, Mapping):
-        cases = [Case.of(v, str(k)) if isinstance(v, System) else _relabel(v, str(k))
-                 for k, v in systems.items()]
-    elif isinstance(systems, Sequence) and not isinstance(systems, str):
-        cases = [v if isinstance(v, Case) else Case.of(v) for v in systems]
-    else:
-        raise TypeError(_not_a_system(name, systems, "a System, a Case, a sequence of them or "
-                                                    "a mapping of label to System"))
-    if not cases:
-        raise ParameterError(f"{name} is empty: give at least one System")
-    labels = [c.label for c in cases]
-    twice = sorted({x for x in labels if labels.count(x) > 1})
-    if twice:
-        raise ParameterError(f"{name}: the label {twice[0]!r} is given twice; give a mapping "
-                             "of label to System to name them")
-    return cases
-
-
-def _not_a_system(name: str, value, expected: str = "a System (make_system)") -> str:
-    """The TypeError's message for ``value`` given where a System is expected: a system
-    file's description (what load_system returns) is told how to get its bars."""
-    if isinstance(value, SystemSpec):
-        return (f"{name} = the system file {value.name!r} (a SystemSpec, what load_system "
-                f"returns) must be {expected}: bb.variants(spec) gives its solid, ball and "
-                "TMD bars, bb.make_system(kind, spec=spec) one of them")
-    shown = repr(value) if len(repr(value)) <= 80 else f"a {type(value).__name__}"
-    return f"{name} = {shown} must be {expected}"
-
-
-def _relabel(case, label: str) -> Case:
-    if not isinstance(case, Case):
-        raise TypeError(_not_a_system(f"systems[{label!r}]", case, "a System or a Case"))
-    return replace(case, label=label)
-
-
-#: what published_cases passes on to make_system
-_OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap_m",
-                                                                 "friction"}
-
-
-def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
-                    gaps_m: tuple[float, ...] = (0.5e-3, 0.1e-3),
-                    frictions: tuple[bool, ...] = (False, True), preset: str = "physical",
-                    **overrides) -> list[Case]:
-    """The bars of the published sweeps under ``preset``: those of ``bars`` among solid,
-    TMD, and the ball damper for every gap of ``gaps_m`` (m) x friction of ``frictions``
-    (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones;
-    the bar arguments only to the ball cases)."""
-    unknown = sorted(set(overrides) - _OVERRIDABLE)
-    if unknown:
-        raise TypeError(f"published_cases() got unexpected keyword arguments {unknown}; "
-                        f"make_system takes {sorted(_OVERRIDABLE)}")
-    cases = []
-    for bar in bars:
-        if bar == "ball":
-            for gap in gaps_m:
-                for fr in frictions:
-                    s = make_system("ball", preset, gap_m=gap, friction=fr, **overrides)
-                    label = f"ball gap={gap * 1e3:g}mm friction={'on' if fr else 'off'}"
-                    cases.append(Case.of(s, label))
-        else:
-            kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber_m",
-                                                               "tmd_mass_kg", "tmd_design",
-                                                               "modal", "spec")}
-            cases.append(Case.of(make_system(bar, preset, **kw), bar))
-    return cases
 
 
 def tmd_window(system: System) -> tuple[float, float]:
@@ -204,31 +79,6 @@ def default_ratios(cases: list[Case]) -> tuple[float, ...]:
     first = math.floor(lo / RATIO_STEP + 1e-9)
     last = math.ceil(hi / RATIO_STEP - 1e-9)
     return tuple(round(RATIO_STEP * i, 12) for i in range(max(first, 1), last + 1))
-
-
-def parse_range(text: str, name: str = "ratios") -> np.ndarray:
-    """'0.95:1.05:0.01' (inclusive) or '0.95,1.0,1.05' -> array."""
-    try:
-        if ":" in text:
-            start, stop, step = (float(v) for v in text.split(":"))
-            if not (math.isfinite(start) and math.isfinite(stop) and step > 0
-                    and stop >= start):
-                raise ValueError
-            n = math.floor((stop - start) / step + 1e-9) + 1
-            if n > MAX_GRID_VALUES:
-                raise ParameterError(f"{name} = {text!r} has {n:.3g} values; the allowed "
-                                     f"maximum is {MAX_GRID_VALUES}")
-            return np.round(start + step * np.arange(n), 12)
-        values = np.array([float(v) for v in text.split(",")])
-    except (ValueError, OverflowError) as exc:
-        if isinstance(exc, ParameterError):
-            raise
-        raise ParameterError(f"{name} = {text!r} must be START:STOP:STEP with STEP > 0 and "
-                             "STOP >= START, or a comma-separated list of numbers") from None
-    if len(values) > MAX_GRID_VALUES or not np.all(np.isfinite(values)):
-        raise ParameterError(f"{name} = {text!r} must be at most {MAX_GRID_VALUES} finite "
-                             "numbers")
-    return values
 
 
 @dataclass(frozen=True)

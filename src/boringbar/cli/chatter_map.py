@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int
+from boringbar.analysis.cases import MAX_GRID_VALUES, parse_range
 from boringbar.analysis.chatter_map import (
     LARGE_KNOCK_M,
     NOT_FOR_A_MAP,
@@ -16,7 +17,6 @@ from boringbar.analysis.chatter_map import (
     chatter_map,
 )
 from boringbar.analysis.speeds import check_speeds
-from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.cli.options import (
     Outcome,

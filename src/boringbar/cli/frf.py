@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_positive
+from boringbar.analysis.cases import parse_range
 from boringbar.analysis.frf_fit import (
     MAX_MODES,
     MAX_ORDER,
@@ -19,7 +20,6 @@ from boringbar.analysis.frf_fit import (
     stabilisation,
 )
 from boringbar.analysis.speeds import default_speeds, lobe_speeds
-from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import (
     OUT_HELP,
     Outcome,

@@ -10,8 +10,8 @@ import numpy as np
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, basins, check_cells
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.cases import parse_range
 from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
-from boringbar.analysis.sweep import parse_range
 from boringbar.cli.options import (
     CUT_ONLY,
     PATTERN_KEY,

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from boringbar._validate import ParameterError, check_int, check_range
-from boringbar.analysis.sweep import MAX_GRID_VALUES, parse_range, published_cases
+from boringbar.analysis.cases import MAX_GRID_VALUES, parse_range, published_cases
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.execute import Execution
 from boringbar.io import jsonable

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_range
+from boringbar.analysis.cases import parse_range
 from boringbar.analysis.lobes import (
     DEPTH_FLOOR,
     DEPTH_TOLERANCE,
@@ -19,7 +20,7 @@ from boringbar.analysis.lobes import (
 )
 from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.speeds import check_speeds, default_speeds
-from boringbar.analysis.sweep import SweepOptions, default_ratios, parse_range, sweep
+from boringbar.analysis.sweep import SweepOptions, default_ratios, sweep
 from boringbar.cli.draws import add_draws, draws_text, uncertainty_options
 from boringbar.cli.frf import analytic_lobes_outcome
 from boringbar.cli.options import (

@@ -37,6 +37,7 @@ import xarray as xr
 from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinOptions, basins
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
+from boringbar.analysis.cases import parse_range, published_cases
 from boringbar.analysis.continuation import ContinuationOptions, continuation
 from boringbar.analysis.cut_continuation import CutContinuationOptions, cut_continuation
 from boringbar.analysis.design import comparison, design
@@ -44,7 +45,7 @@ from boringbar.analysis.design_file import load_design
 from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, lobes
 from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity, with_cuts
-from boringbar.analysis.sweep import SweepOptions, parse_range, published_cases, sweep
+from boringbar.analysis.sweep import SweepOptions, sweep
 from boringbar.execute import Execution
 from boringbar.io import (
     jsonable,

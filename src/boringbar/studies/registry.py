@@ -50,12 +50,13 @@ from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan
 from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, OperatingPoint, check_cells
 from boringbar.analysis.bifurcation import BifurcationOptions
+from boringbar.analysis.cases import MAX_GRID_VALUES, Case
 from boringbar.analysis.chatter_map import ChatterMapOptions
 from boringbar.analysis.chatter_probability import MAX_DRAWS, Uncertainty
 from boringbar.analysis.lobes import LobesOptions
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions
 from boringbar.analysis.speeds import default_speeds
-from boringbar.analysis.sweep import MAX_GRID_VALUES, Case, SweepOptions
+from boringbar.analysis.sweep import SweepOptions
 from boringbar.analysis.verdict import VerdictOptions
 from boringbar.model.dampers import ImpactDamper
 from boringbar.model.forcing import MAX_DEPTH, Harmonic
@@ -245,7 +246,7 @@ def _fmt(v) -> str:
 
 
 def study_cases(study: Study) -> tuple[list, dict]:
-    """The cases (:class:`~boringbar.analysis.sweep.Case`) of the system axes of
+    """The cases (:class:`~boringbar.analysis.cases.Case`) of the system axes of
     ``study``, in the cartesian order of its grid, with settings that do not
     apply to a bar kind collapsed (a solid bar has no gap); and per varied key
     the value of each case (None where it does not apply)."""
