@@ -278,10 +278,16 @@ def test_the_history_map_is_its_recursion():
     ("periods", lambda a: 0, "periods"),
 ])
 def test_a_bad_history_map_argument_is_a_clear_error(field, value, message):
-    a = history_map_args()
+    assert_refused(core.cut_history_map, history_map_args(), field, value, message)
+
+
+def assert_refused(call, a: dict, field: str, value, message: str) -> dict:
+    """``call(**a)`` with ``a[field]`` replaced by ``value(a)`` is a ValueError matching
+    ``message``; returns the arguments it was given."""
     a[field] = value(a)
     with pytest.raises(ValueError, match=message):
-        core.cut_history_map(**a)
+        call(**a)
+    return a
 
 
 def forcing_setup_args(omega=700.0, f0=10.0) -> dict:
@@ -323,9 +329,7 @@ def test_a_bad_forcing_setup_argument_is_a_clear_error(field, value, message):
     a = forcing_setup_args()
     if message == "singular":
         a["omega"] = 0.0  # -A = 0 has no inverse
-    a[field] = value(a)
-    with pytest.raises(ValueError, match=message):
-        core.forcing_setup(**a)
+    assert_refused(core.forcing_setup, a, field, value, message)
 
 
 def impact_period_args() -> dict:
@@ -354,10 +358,7 @@ def test_the_impact_period_of_a_known_sequence():
     ("min_periods", lambda a: 1, "min_periods"),
 ])
 def test_a_bad_impact_period_argument_is_a_clear_error(field, value, message):
-    a = impact_period_args()
-    a[field] = value(a)
-    with pytest.raises(ValueError, match=message):
-        core.impact_period(**a)
+    a = assert_refused(core.impact_period, impact_period_args(), field, value, message)
     if field in ("times", "walls"):
         with pytest.raises(ValueError, match=message):
             core.impact_fault(a["times"], a["walls"], 0.0, 0.06)
