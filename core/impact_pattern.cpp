@@ -1,8 +1,8 @@
 // boringbar.core.impact_period and impact_fault: the period of a run's impact sequence
 // and whether it is symmetric, the part of the impact-pattern classifier
 // (src/boringbar/simulate/patterns.py, docs/model.md, section 6) that loops over the
-// impacts.  It runs once for every run whose
-// pattern is read, thousands of times in a sweep; in NumPy it cost 0.1-0.3 ms a run.
+// impacts.  It runs once for every run whose pattern is read, thousands of times in a
+// sweep; in NumPy it cost 0.1-0.3 ms a run.
 //
 // The impacts of the tail (t >= tail_start) repeat with span kT when impact j + n is on
 // impact j's wall, kT later within tol, for every j, n being the impacts before
