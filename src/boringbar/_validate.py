@@ -52,15 +52,10 @@ def check_range(name: str, value, lo: float, hi: float, *, lo_open: bool = False
     asked; a closed end up to :data:`ROUND_OFF` of itself), else raise ParameterError
     naming ``name``, the value and the range (and ``why``, where the range comes from)."""
     u = f" {unit}" if unit else ""
-    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
-        value = value.item()  # a numpy scalar, shown as the number it is
-    if isinstance(value, bool):
-        raise ParameterError(f"{name} = {value!r} is not a number (allowed range "
-                             f"{_interval(lo, hi, lo_open, hi_open, u)})")
-    try:
-        v = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"{name} = {value!r} is not a number") from None
+    if type(value) is float:  # the common case, without the conversions
+        v = value
+    else:
+        value, v = _number(name, value, lo, hi, lo_open, hi_open, u)
     if not math.isfinite(v):
         raise ParameterError(f"{name} = {value!r}{u} is not a finite number (allowed range "
                              f"{_interval(lo, hi, lo_open, hi_open, u)})")
@@ -69,6 +64,21 @@ def check_range(name: str, value, lo: float, hi: float, *, lo_open: bool = False
                              f"{_interval(lo, hi, lo_open, hi_open, u)}"
                              + (f" ({why})" if why else ""))
     return v
+
+
+def _number(name: str, value, lo, hi, lo_open: bool, hi_open: bool, u: str) -> tuple:
+    """(``value`` as an error shows it, ``value`` as a float) for a value that is not a
+    float already (a numpy scalar, an int, a numeric string), else ParameterError
+    naming ``name``."""
+    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
+        value = value.item()  # a numpy scalar, shown as the number it is
+    if isinstance(value, bool):
+        raise ParameterError(f"{name} = {value!r} is not a number (allowed range "
+                             f"{_interval(lo, hi, lo_open, hi_open, u)})")
+    try:
+        return value, float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"{name} = {value!r} is not a number") from None
 
 
 def check_finite(name: str, value, unit: str = "") -> float:

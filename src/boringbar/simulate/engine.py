@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +33,7 @@ from boringbar.simulate.kernels import (
     run_rk4_batch,
 )
 from boringbar.simulate.run import (
+    AT_REST,
     HISTORY_ROWS,
     IMPACT_THRESHOLD,
     INTEGRATOR_CHOICES,
@@ -60,15 +62,50 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
 
     ``omega`` = 0 (no harmonic force) refers the impact threshold to omega_n.
     """
+    p = system_params(system).copy()
+    p[L.FORCING] = L.HARMONIC
+    p[L.F0] = amplitude
+    p[L.OMEGA] = omega
+    d = system.damper
+    if isinstance(d, ImpactDamper):
+        meff = p[L.M_EFF]
+        ref = omega if omega > 0 else system.bar.natural_frequency_rad_s
+        p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap_m / 2
+        # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
+        p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * p[L.FRICTION] * dt / meff
+        p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
+        if rolling(system):
+            p[L.ROLL_BAND] = roll_band(p, d, dt)
+        elif stick_law == "hold" and p[L.FRICTION] > 0:
+            p[L.STICK_BAND] = hold_band(p, dt)
+    return p
+
+
+#: Each system's slots of the parameter vector (:func:`system_params`), kept while the
+#: system lives: a sweep packs one system for run after run.
+_SYSTEM_PARAMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def system_params(system: System) -> np.ndarray:
+    """The slots of the kernel's parameter vector that ``system`` alone sets (the bar's
+    modes, the damper's, the case), the others zero; read-only, kept per system (a
+    ``System`` is frozen: its fields and arrays cannot change)."""
+    p = _SYSTEM_PARAMS.get(system)
+    if p is None:
+        p = _pack_system(system)
+        p.flags.writeable = False
+        _SYSTEM_PARAMS[system] = p
+    return p
+
+
+def _pack_system(system: System) -> np.ndarray:
+    """:func:`system_params`, computed."""
     bar = system.bar
     n = bar.n_modes
     if n > L.NMAX:
         raise ParameterError(f"n_modes = {n} is outside the allowed range [1, {L.NMAX}]")
     p = L.empty_params()
     p[L.N_MODES] = n
-    p[L.FORCING] = L.HARMONIC
-    p[L.F0] = amplitude
-    p[L.OMEGA] = omega
     p[L.M_:L.M_ + n] = bar.mass_kg
     p[L.K_:L.K_ + n] = bar.stiffness_n_m
     p[L.C_:L.C_ + n] = bar.damping_n_s_m
@@ -78,27 +115,18 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
     p[L.PSI_F:L.PSI_F + n] = bar.psi_force
     p[L.REACTION] = 1.0
     d = system.damper
-    kind = system.kind
-    p[L.CASE] = L.CASE_OF_KIND[kind]
+    p[L.CASE] = L.CASE_OF_KIND[system.kind]
     if isinstance(d, ImpactDamper):
-        m = d.mass_kg
-        meff = impact_mass(system)
-        p[L.BALL_MASS] = m
+        p[L.BALL_MASS] = d.mass_kg
         p[L.HALF_GAP] = d.gap_m / 2
         p[L.RESTITUTION] = d.restitution
         p[L.FRICTION] = d.friction_force_n
         p[L.STATIC_FRICTION] = d.static_friction_force_n
         p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
-        p[L.M_EFF] = meff
-        ref = omega if omega > 0 else bar.natural_frequency_rad_s
-        p[L.V_IMPACT] = IMPACT_THRESHOLD * ref * d.gap_m / 2
-        # the sgn() law chatters about y' = 0 with steps of up to F_c dt / m_eff
-        p[L.V_STICK] = p[L.V_IMPACT] + 2.0 * d.friction_force_n * dt / meff
-        p[L.STICK_MIN] = STICK_MIN_PERIODS * 2 * math.pi / ref
+        p[L.M_EFF] = impact_mass(system)
         if rolling(system):
-            pack_roll(p, d, dt)
-        elif stick_law == "hold" and d.friction_force_n > 0:
-            p[L.STICK_BAND] = hold_band(p, dt)
+            p[L.ROLL] = 1.0
+            p[L.ROLL_STATIC], p[L.ROLL_KINETIC] = roll_forces(d)
         if hertz(system):
             p[L.CONTACT_K] = d.hertz_stiffness_n_m1_5
             p[L.CONTACT_ALPHA] = hunt_crossley_alpha(float(d.restitution))
@@ -109,22 +137,27 @@ def pack(system: System, omega: float, amplitude: float, dt: float,
     return p
 
 
-def pack_roll(p: np.ndarray, d: ImpactDamper, dt: float) -> None:
-    """A rolling ball's slots of ``p``: the friction forces mu_s m g and mu_k m g and the
-    band of slip y' - s inside which it may roll: twice what its friction can change the
-    slip by in one step, 2 (F_s + F_k) dt (1 / m_eff + 5 / (2 m)), so that a slip coming to
-    rest ends a step inside it (as :func:`hold_band`)."""
-    fs, fk = d.mu_static * d.mass_kg * GRAVITY, d.mu_kinetic * d.mass_kg * GRAVITY
-    p[L.ROLL] = 1.0
-    p[L.ROLL_STATIC], p[L.ROLL_KINETIC] = fs, fk
-    p[L.ROLL_BAND] = 2.0 * (fs + fk) * dt * (1.0 / p[L.M_EFF] + 2.5 / d.mass_kg)
+def roll_forces(d: ImpactDamper) -> tuple[float, float]:
+    """A rolling ball's friction forces mu_s m g and mu_k m g (N)."""
+    return d.mu_static * d.mass_kg * GRAVITY, d.mu_kinetic * d.mass_kg * GRAVITY
+
+
+def roll_band(p: np.ndarray, d: ImpactDamper, dt: float) -> float:
+    """The band of slip y' - s inside which a rolling ball may roll: twice what its
+    friction can change the slip by in one step, 2 (F_s + F_k) dt (1 / m_eff + 5 / (2 m)),
+    so that a slip coming to rest ends a step inside it (as :func:`hold_band`)."""
+    fs, fk = roll_forces(d)
+    return 2.0 * (fs + fk) * dt * (1.0 / p[L.M_EFF] + 2.5 / d.mass_kg)
 
 
 def impact_mass(system: System) -> float:
     """m_eff (kg) of the ball against the retained modes at the cavity,
     1 / (1/m + sum psi_d^2 / M) (docs/model.md, section 2.4)."""
     bar = system.bar
-    return 1.0 / (1.0 / system.damper.mass_kg + float((bar.psi_damper**2 / bar.mass_kg).sum()))
+    share = 0.0  # in Python floats, summed left to right from 0 as NumPy sums so few
+    for psi, mass in zip(bar.psi_damper.tolist(), bar.mass_kg.tolist(), strict=True):
+        share += psi * psi / mass
+    return 1.0 / (1.0 / system.damper.mass_kg + share)
 
 
 def hold_band(p: np.ndarray, dt: float) -> float:
@@ -189,24 +222,42 @@ def initial_state(system: System, initial: Initial) -> np.ndarray:
 
 
 def stored_energy(system: System, x: np.ndarray) -> float:
-    """Kinetic + potential energy of state x (J)."""
+    """Kinetic + potential energy of state x (J).
+
+    In Python floats (a state holds a few entries: NumPy's per-call cost was most of a
+    warm run's result), summed in NumPy's order for such short vectors (left to right
+    from 0), so the figures keep their bits."""
     bar = system.bar
     n = bar.n_modes
-    u, v = x[:n], x[n:2 * n]
-    e = 0.5 * float((bar.mass_kg * v**2).sum() + (bar.stiffness_n_m * u**2).sum())
+    xs = x.tolist()
+    u, v = xs[:n], xs[n:2 * n]
+    kinetic = strain = 0.0
+    for m, k, ui, vi in zip(bar.mass_kg.tolist(), bar.stiffness_n_m.tolist(), u, v,
+                            strict=True):
+        kinetic += m * (vi * vi)
+        strain += k * (ui * ui)
+    e = 0.5 * (kinetic + strain)
     d = system.damper
     if isinstance(d, ImpactDamper):
-        ud = x[2 * n + 1] + float(bar.psi_damper @ v)
+        ud = xs[2 * n + 1] + _dot(bar.psi_damper.tolist(), v)
         e += 0.5 * d.mass_kg * ud**2
-        depth = abs(x[2 * n]) - d.gap_m / 2
+        depth = abs(xs[2 * n]) - d.gap_m / 2
         if hertz(system) and depth > 0:  # the contact's elastic energy, 2/5 K d^2.5
             e += 0.4 * d.hertz_stiffness_n_m1_5 * depth**2.5
         if rolling(system):  # the spin's, I omega^2 / 2 = m s^2 / 5
-            e += 0.2 * d.mass_kg * x[2 * n + 2] ** 2
+            e += 0.2 * d.mass_kg * xs[2 * n + 2] ** 2
     elif isinstance(d, TunedMassDamper):
-        rel = x[2 * n] - float(bar.psi_absorber @ u)
-        e += 0.5 * d.mass_kg * x[2 * n + 1] ** 2 + 0.5 * d.stiffness_n_m * rel**2
+        rel = xs[2 * n] - _dot(bar.psi_absorber.tolist(), u)
+        e += 0.5 * d.mass_kg * xs[2 * n + 1] ** 2 + 0.5 * d.stiffness_n_m * rel**2
     return e
+
+
+def _dot(a: list, b: list) -> float:
+    """sum a_i b_i, left to right from 0."""
+    s = 0.0
+    for ai, bi in zip(a, b, strict=True):
+        s += ai * bi
+    return s
 
 
 def stick_slip(system: System) -> bool:
@@ -373,7 +424,7 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
                                  f"{state_size(system)}")
         t0 = float(initial.t_s)
     else:
-        x = initial_state(system, initial or Initial())
+        x = initial_state(system, initial or AT_REST)
         t0 = 0.0
     w_static = 0.0
     if cutting:

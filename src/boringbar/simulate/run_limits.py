@@ -23,7 +23,7 @@ MAX_HISTORY_ROWS = 10_000_000
 def shortest_period(system: System) -> float:
     """The shortest natural period (s) of ``system``: its highest retained mode's, or a
     tuned absorber's own where that is shorter."""
-    periods = [2 * math.pi / w for w in system.bar.omegas_rad_s]
+    periods = [2 * math.pi / w for w in system.bar.omegas_rad_s.tolist()]
     if isinstance(system.damper, TunedMassDamper):
         periods.append(2 * math.pi * math.sqrt(system.damper.mass_kg / system.damper.stiffness_n_m))
     return min(periods)
