@@ -109,7 +109,32 @@ def test_the_small_eigenproblems_run_on_one_blas_thread(monkeypatch):
     monkeypatch.setattr(regimes.np.linalg, "eig", recording(regimes.np.linalg.eig))
     before = blas_threads()
     regimes.system_regimes.cache_clear()  # the regimes of an earlier test's bar are kept
+    bar_module.kept_modal_model.cache_clear()  # and so is its modal model
     system = bb.make_system("ball", gap_m=0.123e-3)
     bb.simulate(system, bb.Harmonic(10.0), duration_s=0.01, record_every=0, integrator="exact")
     assert len(seen) >= 2 and seen[0] and all(set(s.values()) == {1} for s in seen), seen
     assert blas_threads() == before
+
+
+def test_a_bars_modal_model_is_solved_once_and_each_system_owns_its_info(monkeypatch):
+    """make_system solves the finite-element eigenproblem once per bar and arguments:
+    systems on one bar share the solve (the same numbers), not the mutable ``info``."""
+    calls = []
+    real = bar_module.scipy.linalg.eigh
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(bar_module.scipy.linalg, "eigh", counting)
+    bar_module.kept_modal_model.cache_clear()
+    a = bb.make_system("ball", gap_m=0.1e-3).bar
+    b = bb.make_system("ball", gap_m=0.3e-3).bar
+    assert len(calls) == 1
+    for name in ("mass_kg", "stiffness_n_m", "psi_damper", "psi_absorber"):
+        assert np.array_equal(getattr(a, name), getattr(b, name))
+    b.info["note"] = "mine"
+    assert "note" not in a.info
+    assert "note" not in bb.make_system("ball").bar.info
+    bb.make_system("ball", n_modes=3)  # another model of the bar: solved
+    assert len(calls) == 2

@@ -424,7 +424,20 @@ class SteppedBar:
     def modal_model(self, n_modes: int = 1, z_damper_m: float = BALL_POSITION,
                     z_absorber_m: float = ABSORBER_POSITION) -> ModalModel:
         """Reduce to ``n_modes`` modes, normalised to psi_i(L) = 1, with the mode shapes
-        at the ball ``z_damper_m`` and the absorber ``z_absorber_m`` (m from the clamp)."""
+        at the ball ``z_damper_m`` and the absorber ``z_absorber_m`` (m from the clamp).
+
+        Kept per bar and arguments (:func:`kept_modal_model`): a design search or the
+        page builds system after system on one bar, and the finite-element solve was
+        nearly all of ``make_system``'s time.  A bar is frozen and a modal model's arrays
+        are read-only, so a kept model cannot change; each call gets its own copy of its
+        ``info``."""
+        n = int(check_range("n_modes", n_modes, 1, math.inf))
+        kept = kept_modal_model(self, n, float(z_damper_m), float(z_absorber_m))
+        return replace(kept, info=dict(kept.info))  # its own info, the one mutable field
+
+    def solve_modal_model(self, n_modes: int, z_damper_m: float,
+                          z_absorber_m: float) -> ModalModel:
+        """:meth:`modal_model`, solved."""
         z_damper, z_absorber = z_damper_m, z_absorber_m
         nodes = self.mesh((z_damper, z_absorber))
         K, M = self.matrices(nodes)
@@ -447,6 +460,19 @@ class SteppedBar:
                           z_absorber_m=float(z_absorber), source="fe",
                           info={"n_elements": len(nodes) - 1,
                                 "bar_length_m": self.length_m})
+
+
+#: How many (bar, modes, positions) :func:`kept_modal_model` keeps.
+MODAL_CACHE_SIZE = 256
+
+
+@functools.lru_cache(maxsize=MODAL_CACHE_SIZE)
+def kept_modal_model(bar: SteppedBar, n_modes: int, z_damper_m: float,
+                     z_absorber_m: float) -> ModalModel:
+    """``bar``'s modal model (:meth:`SteppedBar.solve_modal_model`), kept (shared: a
+    caller that may change its ``info`` copies it first, as :meth:`SteppedBar.modal_model`
+    does)."""
+    return bar.solve_modal_model(n_modes, z_damper_m, z_absorber_m)
 
 
 def _element_matrices(length: float, ei: float, rho_a: float):
