@@ -7,12 +7,16 @@ The bar's finite-element eigensolve (about 90 degrees of freedom) and the exact
 integrator's regimes (``regimes.system_regimes``: eig, inv and solve of a few stacked 6 x 6
 to 10 x 10 matrices) run under ``one_blas_thread``; the baseline calls the same functions
 unwrapped (their ``__wrapped__``), so that OpenBLAS uses as many threads as it found cores.
-Each variant makes ``--systems`` ball bars (gaps 0.10-0.29 mm, each a new finite-element
-model) and runs each for 0.1 s with the exact integrator (its regimes are new for each
-system), round robin, best of ``--repeat``: wall time and the process's CPU time (all
-threads) per system.  Twice: on an otherwise idle machine, and beside a busy process on
-every other core (a pure-Python loop), as in a sweep's workers, the design page's server
-or a test run.
+Each variant makes ``--systems`` ball bars (gaps 0.10-0.29 mm, each with its finite-element
+model solved afresh: the kept models are cleared first) and runs each for 0.1 s with the
+exact integrator (its regimes are new for each system), round robin, best of ``--repeat``:
+wall time and the process's CPU time (all threads) per system. Twice: on an otherwise idle
+machine, and beside a busy process on every other core (a pure-Python loop), as in a sweep's
+workers, the design page's server or a test run.
+
+Then ``make_system`` alone on a bar whose modal model is kept (``bar.kept_modal_model``: a
+design search's or the page's next system on the same bar) against the same call with
+the kept models cleared, best of ``--repeat`` rounds of ``--systems`` calls.
 """
 
 from __future__ import annotations
@@ -67,6 +71,7 @@ def one_round(n: int, own: bool, offset: float) -> tuple[float, float]:
     with blas_threads(own):
         wall, cpu = time.perf_counter(), time.process_time()
         for i in range(n):
+            bar_module.kept_modal_model.cache_clear()
             s = bb.make_system("ball", gap_m=(0.10 + 0.01 * i + offset) * 1e-3)
             bb.simulate(s, bb.Harmonic(10.0), duration_s=0.1, record_every=0,
                         integrator="exact")
@@ -81,6 +86,17 @@ def measure(n: int, repeat: int) -> dict:
             w, c = one_round(n, own, 1e-4 * (2 * r + own + 1))
             best[own] = (min(best[own][0], w), min(best[own][1], c))
     return best
+
+
+def kept_round(n: int, kept: bool) -> float:
+    """Seconds per ``make_system`` of ``n`` ball bars on one bar, its modal model kept (or
+    cleared before each)."""
+    tic = time.perf_counter()
+    for i in range(n):
+        if not kept:
+            bar_module.kept_modal_model.cache_clear()
+        bb.make_system("ball", gap_m=(0.10 + 0.01 * i) * 1e-3)
+    return (time.perf_counter() - tic) / n
 
 
 def main() -> None:
@@ -101,6 +117,12 @@ def main() -> None:
         (w1, c1), (wn, cn) = best[False], best[True]
         print(f"{label:28s} {w1 * 1e3:7.2f} ms ({c1 * 1e3:6.2f} CPU) "
               f"{wn * 1e3:7.2f} ms ({cn * 1e3:6.2f} CPU) {wn / w1:10.2f}x")
+    best = {True: 1e9, False: 1e9}
+    for _ in range(args.repeat):
+        for kept in (True, False):
+            best[kept] = min(best[kept], kept_round(args.systems, kept))
+    print(f"make_system alone: the bar's modal model kept {best[True] * 1e3:.3f} ms, solved "
+          f"afresh {best[False] * 1e3:.3f} ms ({best[False] / best[True]:.1f}x)")
 
 
 if __name__ == "__main__":
