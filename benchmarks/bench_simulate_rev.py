@@ -1,7 +1,7 @@
 """``simulate`` of the working tree against a git revision's, through the public call.
 
     .venv/bin/python benchmarks/bench_simulate_rev.py REV [--repeat 5] [--grid-repeat 3]
-                                                      [--skip-grid] [--history]
+                                                      [--skip-grid] [--history] [--per-case]
 
 Exports ``src/boringbar`` at REV as the package ``boringbar_rev`` (``bench_exact_rev.export``;
 a numba revision such as fb3fab0 needs numba in the environment, ``pip install
@@ -31,7 +31,7 @@ least (the machine at its quietest) and the median over the calls.
 - the 48 published harmonic cases (presets paper and physical, gaps 0.1 and 0.5 mm,
   friction off and on, 10 and 20 N, Omega/omega_n 0.95, 1.00 and 1.05; the ball damper
   from rest) as totals per integrator (best of ``--grid-repeat`` each), and the RK4/exact
-  ratio of each version's calls over them.
+  ratio of each version's calls over them; ``--per-case``: each case's calls as well.
 """
 
 from __future__ import annotations
@@ -251,14 +251,19 @@ def named_table(versions, repeat) -> bool:
     return agree
 
 
-def grid_totals(versions, repeat) -> dict:
+def grid_totals(versions, repeat, per_case: bool = False) -> dict:
     """{integrator: (call totals, kernel totals)} over the 48 cases, in seconds; prints
-    them with the overhead per call (each case's least and median, averaged)."""
+    them with the overhead per call (each case's least and median, averaged), and
+    (``per_case``) each case's calls and their ratio first."""
     out = {}
     for integrator in INTEGRATORS:
         calls, kerns, ovh, same, agree = np.zeros(2), np.zeros(2), np.zeros((2, 2)), 0, 0
-        for _, *spec in GRID:
+        for label, *spec in GRID:
             t = time_case(versions, spec, integrator, repeat)
+            if per_case:
+                print(f"    {integrator:5s} {label:48s} {t.call[0] * 1e3:7.2f} "
+                      f"{t.call[1] * 1e3:7.2f} ms {t.call[0] / t.call[1]:5.2f}x  "
+                      f"{pattern_name(t.runs[1])}", flush=True)
             calls += t.call
             kerns += t.kernel
             ovh += [[t.overhead_ms(i, q) / len(GRID) for q in (0, 50)] for i in range(2)]
@@ -303,6 +308,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--grid-repeat", type=int, default=3)
     ap.add_argument("--skip-grid", action="store_true")
+    ap.add_argument("--per-case", action="store_true",
+                    help="each grid case's calls (REV's, the tree's) and their ratio")
     ap.add_argument("--history", action="store_true",
                     help="each version's default record_every (the tree's: ~20000 rows)")
     args = ap.parse_args()
@@ -317,7 +324,7 @@ def main() -> None:
     if not args.skip_grid:
         print(f"\nthe 48 published harmonic cases, best of {args.grid_repeat} each (exact: "
               f"{EXACT_REPEAT * args.grid_repeat}):")
-        grid_ratios(versions, grid_totals(versions, args.grid_repeat))
+        grid_ratios(versions, grid_totals(versions, args.grid_repeat, args.per_case))
     print(uptime())
 
 
