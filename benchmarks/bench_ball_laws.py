@@ -14,7 +14,8 @@ on every variant alike), each with its ratio to the first of its group:
   1 and 2 modes a plane, at F0 = 20 N;
 - the exact integrator's sliding and rolling ball (docs/exact.md, "A rolling ball") at
   F0 = 20 N, 2 N (a rolling ball rolls and slips each half period) and 0.05 N, each call
-  timed five times a round (a call takes milliseconds).
+  timed five times a round (a call takes milliseconds), with the run's events (impacts,
+  sticks and slips, a rolling ball's roll/slip switches) and the time per event.
 
     .venv/bin/python benchmarks/bench_ball_laws.py [--repeat 7]
 """
@@ -57,10 +58,12 @@ def cases() -> dict:
     return out
 
 
-def run_once(system, forcing, integrator: str, duration_s: float = 2.0) -> float:
+def run_once(system, forcing, integrator: str, duration_s: float = 2.0) -> tuple[float, int]:
+    """(CPU seconds, the run's events: the exact integrator's count, else 0)."""
     tic = time.process_time()
-    bb.simulate(system, forcing, duration_s=duration_s, record_every=0, integrator=integrator)
-    return time.process_time() - tic
+    run = bb.simulate(system, forcing, duration_s=duration_s, record_every=0,
+                      integrator=integrator)
+    return time.process_time() - tic, run.metrics["events"]
 
 
 def main():
@@ -70,17 +73,23 @@ def main():
     runs = cases()
     for system, forcing, integrator in runs.values():  # warm: the first call loads
         run_once(system, forcing, integrator, 0.01)
-    times = dict.fromkeys(runs, math.inf)
+    times, events = dict.fromkeys(runs, math.inf), dict.fromkeys(runs, 0)
     for _ in range(args.repeat):
         for key, (system, forcing, integrator) in runs.items():
             for _ in range(EXACT_CALLS if integrator == "exact" else 1):
-                times[key] = min(times[key], run_once(system, forcing, integrator))
+                t, events[key] = run_once(system, forcing, integrator)
+                times[key] = min(times[key], t)
     base = {}
     for (group, variant), t in times.items():
         if group not in base:
-            base[group] = t
+            base[group] = (t, events[group, variant])
             print(group)
-        print(f"  {variant:22s} {t:.4f} s  ({t / base[group]:.2f}x)")
+        line = f"  {variant:22s} {t:.4f} s  ({t / base[group][0]:.2f}x)"
+        if events[group, variant]:  # the exact integrator's cost follows its events
+            e0, e = base[group][1], events[group, variant]
+            line += (f"  {e} events ({e / e0:.2f}x), {t / e * 1e6:.2f} us an event "
+                     f"({t / e / (base[group][0] / e0):.2f}x)")
+        print(line)
 
 
 if __name__ == "__main__":
