@@ -431,8 +431,7 @@ class SteppedBar:
         nearly all of ``make_system``'s time.  A bar is frozen and a modal model's arrays
         are read-only, so a kept model cannot change; each call gets its own copy of its
         ``info``."""
-        n = int(check_range("n_modes", n_modes, 1, math.inf))
-        kept = kept_modal_model(self, n, float(z_damper_m), float(z_absorber_m))
+        kept = kept_modal_model(self, int(n_modes), float(z_damper_m), float(z_absorber_m))
         return replace(kept, info=dict(kept.info))  # its own info, the one mutable field
 
     def solve_modal_model(self, n_modes: int, z_damper_m: float,
