@@ -2,14 +2,13 @@
 
 Its matrices have a few to a few hundred rows: the bar's finite-element eigenproblem (about
 90 degrees of freedom), the exact integrator's regimes and shooting's Jacobians (7 x 7 to
-9 x 9).  On such sizes a multithreaded BLAS (OpenBLAS, as NumPy and SciPy ship it) only
-wakes its thread pool to spin.  A new system and its first exact run
-(``benchmarks/bench_make_system.py``, 2 cores) took 2.9 ms of wall time and 4.0 ms of CPU
-with one thread, 3.3 ms and 6.7 ms with OpenBLAS's two on an idle machine; beside a busy
-process, as in a sweep's workers or under the design page's server, 7.3 ms against
-13.4 ms.  15 continuation points took 18.8 s against 1.46 s on a loaded machine
-(docs/continuation.md).  The limit holds only inside the decorated calls, so a
-user's own large products keep their threads.
+9 x 9). On such sizes a multithreaded BLAS (OpenBLAS, as NumPy and SciPy ship it) only wakes
+its thread pool to spin: a new system and its first exact run take less wall time and less
+CPU with one thread than with OpenBLAS's own, most of all beside a busy process, as in a
+sweep's workers or under the design page's server (``benchmarks/bench_make_system.py``; its
+figures in docs/performance.md). 15 continuation points took 18.8 s against 1.46 s on a
+loaded machine (docs/continuation.md). The limit holds only inside the decorated calls, so
+a user's own large products keep their threads.
 """
 
 from __future__ import annotations
