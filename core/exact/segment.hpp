@@ -698,14 +698,61 @@ inline Found wall_event_any(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
     return {kind, best};
 }
 
+// Whether a slipping ball's slip may run out and come back inside the grid step st, whose
+// ends show it slipping: its event function v = -slip (y' - s) has v' = -slip (y'' - s')
+// at the ends, and |v'''| = |y^(4)| <= b4.  The cubic Hermite interpolant H of v differs
+// from v by e, with double zeros at both ends and |e'''| <= 6 b4 (H''' = 3 v'''(x1) -
+// 2 v'''(x2)), so |e| <= b4 (x - a)^2 (b - x) <= 4 b4 h^3 / 27: v may reach 0 only where
+// H does within that.  (A slip excursion shorter than a grid step otherwise goes unseen:
+// the floor's friction then keeps its sign through it.)
+inline bool slip_may_turn(const SegSearch& sv, const StepEnds& st) {
+    const double h = st.b - st.a;
+    const double p0 = st.ev_a[EV_SLIP], p1 = st.ev_b[EV_SLIP];
+    const double m0 = -sv.slip * (st.ydd_a - sv.sd) * h;
+    const double m1 = -sv.slip * (st.ydd_b - sv.sd) * h;
+    const double margin = 4.0 * sv.b4 * h * h * h / 27.0;
+    // H <= max(p0, p1) + 4/27 (|m0| + |m1|) on [0, 1]: far below zero, done
+    if (pymax(p0, p1) + 0.15 * (std::fabs(m0) + std::fabs(m1)) + margin < 0.0) return false;
+    const double hi = std::get<1>(_cubic_range(p0, p1, m0, m1));
+    return hi + margin >= 0.0;
+}
+
+// The first end of the slip in the step st looked for on NSUB sub-steps (direct
+// evaluations), where slip_may_turn allows one inside it; -1 if none.
+inline double slip_turn_root(Work& w, SegCtx c, const StepEnds& st) {
+    Vec ev_t = w.ev_t;
+    double sa = st.a;
+    double ga = st.ev_a[EV_SLIP];
+    for (idx j = 1; j <= NSUB; ++j) {
+        double sb = st.b;
+        double gb = st.ev_b[EV_SLIP];
+        if (j < NSUB) {
+            sb = st.a + (st.b - st.a) * double(j) / double(NSUB);
+            state_at(view(w, c), sb, w.qs, w.dX);
+            events(ev_t, w.dX, sb, w.seg, c.mode, w.sys.mk, w.sys.force);
+            gb = ev_t[EV_SLIP];
+        }
+        if (ga <= 0.0 && 0.0 < gb)
+            return find_root_any(EV_SLIP, sa, ga, sb, gb, view(w, c), -1.0);
+        sa = sb;
+        ga = gb;
+    }
+    return -1.0;
+}
+
 // What wall_event does when a step shows something (see there): kept out of the loop.
+// slip_turn: the slip may run out and come back inside the step (slip_may_turn).
 BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
-                                          bool graze, bool search) {
+                                          bool graze, bool search, bool slip_turn) {
     // a rolling ball's slip running out inside the step: the walls are looked for before it
     double t_slip = -1.0;
     if (sv.watch_slip && st.ev_a[EV_SLIP] <= 0.0 && 0.0 < st.ev_b[EV_SLIP]) {
         t_slip = find_root_any(EV_SLIP, st.a, st.ev_a[EV_SLIP], st.b, st.ev_b[EV_SLIP],
                                view(w, c), -1.0);
+    } else if (slip_turn) {
+        t_slip = slip_turn_root(w, c, st);
+    }
+    if (t_slip >= 0.0) {
         state_at(view(w, c), t_slip, w.qs, w.dX);
         events(w.ev_u, w.dX, t_slip, w.seg, c.mode, w.sys.mk, w.sys.force);
         st = StepEnds{st.a, t_slip, st.lev, st.ev_a, w.ev_u, st.ydd_a, NAN};
@@ -738,8 +785,10 @@ inline Found wall_event(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, Gra
                   || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
                   || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)
                   || (sv.watch_slip && ev_a[EV_SLIP] <= 0.0 && 0.0 < ev_b[EV_SLIP]);
-    if (!search && !graze) return {-1, b};
-    return wall_event_found(w, c, sv, st, graze, search);
+    // (a longer step, lev > 0, is proven free of the slip's end by level())
+    const bool slip_turn = sv.watch_slip && lev == 0 && slip_may_turn(sv, st);
+    if (!search && !graze && !slip_turn) return {-1, b};
+    return wall_event_found(w, c, sv, st, graze, search, slip_turn);
 }
 
 // The tool leaving (in the cut) or re-entering (out of it) in [a, b]: h = 0, or a graze of
