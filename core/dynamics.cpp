@@ -32,7 +32,7 @@ using Stack = nb::ndarray<nb::numpy, double, nb::ndim<3>>;
 
 // The unpacked parameters of p, once its length, mode count and case are checked (the
 // stage derivative indexes the mode blocks by the count and branches on the case).
-R::Params params_of(const P& p, bool sliding_law = true, bool roll_ok = false) {
+R::Params params_of(const P& p, bool sliding_law = true) {
     require(p.shape(0) == size_t(L::P_SIZE),
             "p must have " + std::to_string(L::P_SIZE) + " entries, got " +
                 std::to_string(p.shape(0)));
@@ -50,8 +50,6 @@ R::Params params_of(const P& p, bool sliding_law = true, bool roll_ok = false) {
     // (slots a regime does not read may be NaN: only a positive K is a contact)
     require(!(d[L::CONTACT_K] > 0.0), "p[CONTACT_K] must be 0: the regime matrices are the "
                                       "impact law's, and a Hertz contact is not linear");
-    require(roll_ok || !(d[L::ROLL] > 0.0), "p[ROLL] must be 0: the regime matrices are a "
-                                            "sliding ball's");
     return R::unpack(d, 1e-6);  // the step only sets the forcing's rotation, unused here
 }
 
@@ -63,32 +61,61 @@ Stack zeros3(size_t n0, size_t rows, size_t cols) {
     return owned_array<double, 3>(std::vector<double>(n0 * rows * cols, 0.0), {n0, rows, cols});
 }
 
-Matrix regime_matrix(const P& p, double sdir) {
+// A rolling ball's rolled regime: the roll law rolling whatever the friction it needs (the
+// exact kernel's events end the regime where it may not), so that the floor's friction is
+// the one rolling needs and the bar carries cy of the ball (docs/model.md, 2.7).
+R::Params rolled(R::Params q) {
+    q.roll = true;
+    q.mus_n = INFINITY;
+    q.roll_band = INFINITY;
+    return q;
+}
+
+// A rolling ball's regime for a matrix (fdir: -1, 1 slipping with the slip y' - s of that
+// sign, 0 rolled).  Rolled, the roll law rolls whatever the friction it needs (rolled());
+// slipping, it never rolls (a zero band) and the floor's friction is -mu_k N sgn(slip).
+R::Params roll_regime(R::Params q, double fdir) {
+    if (fdir == 0.0) return rolled(q);
+    q.roll_band = 0.0;
+    return q;
+}
+
+Matrix regime_matrix(const P& p, double sdir, double fdir) {
     require(sdir == -1.0 || sdir == 0.0 || sdir == 1.0, "sdir must be -1, 0 or 1");
-    const R::Params q = params_of(p);
+    require(fdir == -1.0 || fdir == 0.0 || fdir == 1.0, "fdir must be -1, 0 or 1");
+    R::Params q = params_of(p);
+    require(q.roll || fdir == 0.0, "fdir must be 0 for a ball that does not roll");
+    if (q.roll) q = roll_regime(q, fdir);
+    const bool slipping = q.roll && fdir != 0.0;
     const R::Shape<0, -1> sh(q);
     const int nx = sh.nx(), nz = nx + 3;
     Matrix A = zeros(size_t(nz), size_t(nz));
     auto a = A.view();
     double X[R::NX_MAX], Kd[R::NX_MAX];
-    auto column = [&](int j, double f, double ysign) {
-        R::derivative_with<0, -1>(q, sh, X, f, Kd, ysign);
+    // (a slipping ball's floor friction, constant, enters its constant column alone: the
+    // state's columns are taken with mu_k N = 0)
+    R::Params q_state = q;
+    if (slipping) q_state.muk_n = 0.0;
+    auto column = [&](const R::Params& qc, int j, double f, double ysign) {
+        R::StageTerms t = R::derivative_with<0, -1>(qc, sh, X, f, Kd, ysign);
+        if (sh.rolls()) Kd[sh.iyd()] = R::map_roll(qc, sh, X, Kd, t);
         for (int i = 0; i < nx; ++i) a(i, j) = Kd[i];
     };
     for (int j = 0; j < nx; ++j) {
         for (int i = 0; i < nx; ++i) X[i] = i == j ? 1.0 : 0.0;
-        column(j, 0.0, 0.0);  // no friction force: the linear part
+        column(q_state, j, 0.0, 0.0);  // no friction force: the linear part
     }
     for (int i = 0; i < nx; ++i) X[i] = 0.0;
-    column(nx, q.f0, 0.0);      // the force F0 sin(Omega t) at the tip
-    column(nx + 2, 0.0, sdir);  // F_b = -F_c sdir, held
-    a(nx, nx + 1) = q.om;       // (sin Omega t)' = Omega cos Omega t
+    column(q_state, nx, q.f0, 0.0);  // the force F0 sin(Omega t) at the tip
+    if (slipping) X[sh.is()] = -fdir;  // a slip y' - s of fdir's sign, X's only entry
+    column(q, nx + 2, 0.0, sdir);  // F_b = -F_c sdir held (and the floor's friction)
+    a(nx, nx + 1) = q.om;          // (sin Omega t)' = Omega cos Omega t
     a(nx + 1, nx) = -q.om;
     return A;
 }
 
 Matrix impact_matrix(const P& p) {
-    const R::Params q = params_of(p);
+    const R::Params q = params_of(p);  // a rolling ball's spin: unchanged
     const R::Shape<0, -1> sh(q);
     const int nx = sh.nx(), iyd = sh.iyd();
     Matrix Rm = zeros(size_t(nx), size_t(nx));
@@ -148,22 +175,12 @@ R::Params held(R::Params q) {
     return q;
 }
 
-// A rolling ball's rolled regime: the roll law rolling whatever the friction it needs (the
-// exact kernel's events end the regime where it may not), so that the floor's friction is
-// the one rolling needs and the bar carries cy of the ball (docs/model.md, 2.7).
-R::Params rolled(R::Params q) {
-    q.roll = true;
-    q.mus_n = INFINITY;
-    q.roll_band = INFINITY;
-    return q;
-}
-
 // The regimes of p: a ball bar's free, stuck (reaction share sr) and on a wall (share 1),
 // and a rolling ball's rolled regime; one regime for the others; a cut doubles them (out
 // of the cut, then in it).  A rolling ball's free regime is the sliding ball's: slipping,
 // the floor's friction joins F_b.
 nb::tuple regime_stack(const P& p) {
-    R::Params q = params_of(p, false, true);  // each regime sets its own friction law
+    R::Params q = params_of(p, false);  // each regime sets its own friction law
     const bool roll = q.roll;
     q.roll = false;
     q.hold = false;
@@ -197,9 +214,12 @@ nb::tuple regime_stack(const P& p) {
 
 void bind_dynamics(nb::module_& m) {
     m.def("regime_matrix", &regime_matrix, nb::arg("p"), nb::arg("sdir"),
+          nb::arg("fdir") = 0.0,
           "A of z' = A z between impacts, z = [X, sin Omega t, cos Omega t, 1] (X as the "
-          "integrators keep it, 2n + 2 entries), the ball sliding in direction sdir (-1, 0, "
-          "1: F_b = -F_c sdir held); built from RK4's stage derivative.");
+          "integrators keep it, 2n + 2 entries and a rolling ball's spin), the ball sliding "
+          "in direction sdir (-1, 0, 1: F_b = -F_c sdir held); a rolling ball slipping with "
+          "the slip's sign fdir (-1, 1: its floor's friction -mu_k N fdir held) or rolled "
+          "(fdir = 0); built from RK4's stage derivative.");
     m.def("impact_matrix", &impact_matrix, nb::arg("p"),
           "R, X+ = R X- at an impact of a ball bar (the identity for the other bars): "
           "y' -> -e y', u_i' -> u_i' + (1 + e) m_eff psi_d,i y' / M_i, from the wall's "

@@ -123,3 +123,59 @@ def test_a_sliding_direction_other_than_minus_one_zero_or_one_is_refused():
     p = pack(make_system("ball", "paper", friction=True), 1000.0, 10.0, 1e-6)
     with pytest.raises(ValueError, match="sdir"):
         regime_matrix(p, 0.5)
+
+
+def test_a_rolling_ball_s_regime_matrices_are_the_roll_law():
+    """A rolling ball's matrices (docs/model.md, 2.7) against the sliding ball's (checked
+    above against the slow reference) and the roll law written here: slipping, the
+    floor's friction F = -mu_k N sgn(y' - s) is a constant force on the ball (y'' gains
+    kappa_1 F, kappa_1 = 1/m + sum psi_d^2 / M), on the bar (u_i'' loses psi_d,i F / M_i)
+    and on the spin (s' = -5/(2m) F); rolled, F is what keeps y'' = s', so
+    F = -y''_slide / (kappa_1 + 5/(2m)) at every state."""
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=True, motion="roll")
+    omega = 0.97 * system.reference_frequency_rad_s
+    p = pack(system, omega, 12.5, 1e-6)
+    slide_p = p.copy()
+    slide_p[L.ROLL] = 0.0
+    n = int(p[L.N_MODES])
+    M, psi = p[L.M_:L.M_ + n], p[L.PSI_D:L.PSI_D + n]
+    m = p[L.BALL_MASS]
+    kappa1, kroll = 1.0 / m + float(np.sum(psi**2 / M)), 2.5 / m
+    js, nz = 2 * n + 2, 2 * n + 6  # the spin's row; the augmented size
+    keep_x = np.r_[np.arange(2 * n + 2), nz - 3 + np.arange(3)]  # z without the spin
+    rng = np.random.default_rng(11)
+    for sdir in (-1.0, 1.0):
+        S = regime_matrix(slide_p, sdir)
+        for fdir in (-1.0, 1.0):
+            A = regime_matrix(p, sdir, fdir)
+            assert A.shape == (nz, nz)
+            F = -p[L.ROLL_KINETIC] * fdir
+            want = S.copy()
+            want[n:2 * n, -1] -= psi * F / M
+            want[2 * n + 1, -1] += kappa1 * F
+            np.testing.assert_allclose(A[np.ix_(keep_x, keep_x)], want, rtol=1e-12,
+                                       atol=1e-12 * np.max(np.abs(want)))
+            assert A[js, -1] == pytest.approx(-kroll * F, rel=1e-14)
+            assert not np.any(A[js, :-1]) and not np.any(A[:, js])
+        A = regime_matrix(p, sdir, 0.0)
+        for x in _states(n, sdir, rng):
+            t = rng.uniform(0, 1e-2)
+            z = np.concatenate([x, [math.sin(omega * t), math.cos(omega * t), 1.0]])
+            zs = np.r_[z[:2 * n + 2], z[-3:]]
+            slide = S @ zs
+            F = -slide[2 * n + 1] / (kappa1 + kroll)
+            got = A @ np.r_[z[:2 * n + 2], 0.0, z[-3:]]
+            want = np.r_[slide[:2 * n + 2], -kroll * F, slide[-3:]]
+            want[n:2 * n] -= psi * F / M
+            want[2 * n + 1] += kappa1 * F
+            scale = np.max(np.abs(want[:2 * n + 3]))
+            assert np.max(np.abs(got - want)) <= 1e-12 * scale
+            assert got[js] == pytest.approx(got[2 * n + 1], rel=1e-12)  # y'' = s'
+
+
+def test_a_floor_direction_is_refused_for_a_ball_that_does_not_roll():
+    p = pack(make_system("ball", "physical", friction=True), 1000.0, 10.0, 1e-6)
+    with pytest.raises(ValueError, match="fdir must be 0"):
+        regime_matrix(p, 1.0, 1.0)
+    with pytest.raises(ValueError, match="fdir"):
+        regime_matrix(pack(make_system("ball", motion="roll"), 1000.0, 10.0, 1e-6), 1.0, 0.5)

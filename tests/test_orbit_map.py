@@ -45,7 +45,7 @@ def test_the_first_branch_stops_at_a_grazing_and_the_map_goes_on_across_it():
     """From 5 N the default steps reach the grazing at 26.53 N (the stop names it and its
     value), not a point budget; across it the orbit with one more impact reaches 35 N."""
     _, fl, br = _issue_branch()
-    assert br.stop.startswith("the impact/reversal sequence changes at force-n = 26.531"), \
+    assert br.stop.startswith("the event sequence changes at force-n = 26.531"), \
         br.stop
     assert [k for k, _ in br.events] == ["branch-point", "grazing"]
     assert len(br.points) < 100
@@ -242,7 +242,7 @@ def test_a_boundary_where_newton_jumped_to_another_orbit_is_not_a_grazing():
     seed = periodic_attractors(system, Harmonic(10.0, ratio=1.0))[0]
     at = flow_with(fl, "force-n", 10.0, fl)
     br = continue_branch(at, "force-n", seed.x, 5.0, bounds=(5.0, 35.0))
-    assert br.stop.startswith("the impact/reversal sequence changes at force-n = 8.04234"), \
+    assert br.stop.startswith("the event sequence changes at force-n = 8.04234"), \
         br.stop
     on = cross_grazing(at, br, (5.0, 35.0))
     assert on.points and sum(k.startswith("impact") for _, k in on.points[0].events) == 2

@@ -29,7 +29,6 @@ from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import NO_FRICTION, Friction, ImpactDamper
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
-from boringbar.orbits.shooting import make_flow
 from boringbar.simulate import setup_run, simulate_batch
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -205,7 +204,7 @@ def test_a_batch_of_rolling_balls_is_its_single_runs_bit_for_bit():
                        duration_s=0.01)
 
 
-def test_a_rolling_ball_s_cut_and_shooting_are_refused_where_they_do_not_take_it():
+def test_a_rolling_ball_s_cut_is_refused_where_it_is_not_taken():
     system = make_system("ball", motion="roll")
     forcing = bb.Harmonic(amplitude_n=10.0)
     with pytest.raises(ParameterError, match="motion = 'roll'"):
@@ -214,8 +213,6 @@ def test_a_rolling_ball_s_cut_and_shooting_are_refused_where_they_do_not_take_it
     assert bb.simulate(system, bb.Regenerative(depth_m=0.2e-3, rpm=1200.0),
                        duration_s=0.002).integrator == "rk4"  # auto
     assert bb.simulate(system, forcing, duration_s=0.002).integrator == "exact"  # auto
-    with pytest.raises(ParameterError, match="motion = 'roll'"):
-        make_flow(system, forcing)
     with pytest.raises(ParameterError, match="mu_static"):
         ImpactDamper(motion="roll", mu_static=0.1, mu_kinetic=0.2)
 

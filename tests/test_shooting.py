@@ -3,6 +3,7 @@ central finite differences, the map against the kernel, and the linear bar's tru
 
 import dataclasses
 import json
+import math
 
 import numpy as np
 import pytest
@@ -20,11 +21,14 @@ from boringbar.analysis.continuation import (
     summary,
 )
 from boringbar.cli.main import main
+from boringbar.model.bar import ModalModel
+from boringbar.model.dampers import NO_FRICTION, ImpactDamper
 from boringbar.model.forcing import Harmonic
-from boringbar.model.system import make_system
+from boringbar.model.system import System, make_system
 from boringbar.orbits import shooting as sh
 from boringbar.orbits.continuation import continue_branch
 from boringbar.plot.orbits import plot_continuation
+from boringbar.plot.style import system_words
 from boringbar.reference.linear import dynamic_stiffness, tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import State, simulate
@@ -60,6 +64,81 @@ def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
     assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
     # the orbit's RMS (Gauss-Legendre per segment) is the kernel's exact integral
     assert abs(pr.rms_tip - one.rms_tip_m) <= 1e-9 * one.rms_tip_m
+
+
+#: a 100 Hz mode of 5 kg at the tip: at a few newtons its cavity accelerates near
+#: 3.5 mu_s g, so a rolling ball rolls, slips and meets both walls within a period
+MEDIUM = ModalModel.from_tap_test(100.0, 0.02, tip_mass_kg=5.0, damper_ratio=0.6)
+
+
+def _settled(system, forcing, fl, periods: int, step: float):
+    """The exact integrator's state after ``periods`` whole forcing periods from rest."""
+    dt = fl.period / math.ceil(fl.period / step)
+    return simulate(system, forcing, duration_s=periods * fl.period, dt_s=dt,
+                    integrator="exact").final.x
+
+
+@pytest.mark.parametrize("force, gap, mu, stable", [(6.0, 0.03e-3, 0.5, True),
+                                                    (3.0, 0.02e-3, 0.2, False)])
+def test_a_rolling_ball_s_orbit_is_the_exact_integrators(force, gap, mu, stable):
+    """The spin a state (docs/continuation.md, "A rolling ball"): an orbit that rolls,
+    slips, reaches the roll's limit and hits both walls.  Its monodromy is the central
+    difference of the map (measured 5.8e-10 and 4.2e-10), one period of the exact
+    integrator from it lands on it (6.9e-16 and 2.9e-15), and the stable orbit is where a
+    long run settles (1.6e-12: a brute-force attractor) while the unstable one has a
+    multiplier outside the unit circle (4.25)."""
+    ball = ImpactDamper.ball("carbide", gap_m=gap, friction=NO_FRICTION, motion="roll",
+                             mu_static=mu, mu_kinetic=0.8 * mu)
+    system, forcing = System(MEDIUM, ball, "physical"), Harmonic(force, ratio=1.0)
+    fl = sh.make_flow(system, forcing)
+    assert fl.N == 2 * fl.n + 3 and fl.roll
+    start = _settled(system, forcing, fl, 300, 1e-5)
+    x, pr = sh.periodic_orbit(fl, start)
+    kinds = {k for _, k in pr.events}
+    assert {"impact+", "impact-", "slip-zero"} <= kinds, kinds
+    assert kinds & {"roll-limit+", "roll-limit-"}, kinds
+    Jfd, D = _fd_jacobian(fl, x)
+    err = np.max(np.abs((pr.jacobian - Jfd) @ D)) / np.max(np.abs(pr.jacobian @ D))
+    assert err < 1e-6
+    one = simulate(system, forcing, duration_s=fl.period, dt_s=fl.period / 2000,
+                   integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
+    assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
+    largest = abs(sh.multipliers(pr)[0])
+    if stable:
+        assert largest < 1.0
+        assert np.max(np.abs(start - x)) <= 1e-9 * np.max(np.abs(x))
+    else:
+        assert largest > 1.0
+
+
+def test_a_slip_that_runs_out_and_back_inside_a_grid_step_is_seen():
+    """The published bar's rolling ball at 20 N, ratio 1.00275 (gap 0.1 mm, rolling
+    resistance): after y' turns at phase 0.0128 it overtakes its spin and falls back
+    behind it 0.0101 periods later, inside one grid step of shooting (1/64 period) and of
+    the exact integrator (0.0127 periods).  Both see the two ends of the slip (the tests
+    of a function that turns back towards zero inside a step), agree to round-off
+    (measured 3.6e-16), and RK4 converges to them at first order (4.5e-8, 4.0e-9 and
+    5.8e-10 off at 1e5, 1e6 and 1e7 steps a period).  Missed, the floor's friction keeps
+    its sign through the excursion, and the period ends 1.5e-4 away."""
+    system = make_system("ball", "physical", gap_m=0.1e-3, friction=True, motion="roll")
+    forcing = Harmonic(20.0, ratio=1.00275)
+    fl = sh.make_flow(system, forcing)
+    x, pr = sh.periodic_orbit(fl, _settled(system, forcing, fl, 300, 1e-6))
+    window = 0.03 * fl.period
+    shot = sh.advance(fl, x, duration=window)
+    assert [k for _, k in shot.events] == ["reversal", "slip-zero", "slip-zero", "reversal"]
+    t1, t2 = (t for t, k in shot.events if k == "slip-zero")
+    assert t2 - t1 < min(fl.period / sh.GRID, fl.period / 64)
+    exact = simulate(system, forcing, duration_s=window, dt_s=window / 300,
+                     integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
+    assert exact.metrics["events"] == 4
+    scale = np.max(np.abs(x))
+    assert np.max(np.abs(exact.final.x - shot.x)) <= 1e-12 * scale
+    off = [np.max(np.abs(simulate(system, forcing, duration_s=window, dt_s=window / n,
+                                  integrator="rk4", initial=State(x, 0.0),
+                                  steady_fraction=1.0, record_every=0).final.x - shot.x))
+           for n in (3000, 30000)]
+    assert off[1] < 0.3 * off[0], off
 
 
 def test_linear_bar_orbit_is_the_forced_response():
@@ -448,3 +527,22 @@ def test_the_carrying_force_is_docs_formula(preset, modes):
         for sdir in (-1.0, 1.0):  # from the regime a friction switch leaves
             got = sh.carrying_force_in(sh.augmented(fl, sdir), z, -fl.fc * sdir, fl.n)
             assert got == pytest.approx(want, rel=1e-12, abs=1e-15)
+
+
+def test_cli_continue_takes_a_rolling_ball(tmp_path, capsys):
+    """`boringbar continue --ball-motion roll`: the orbits carry the spin (2n + 3 states),
+    the title says the ball rolls, and the return check holds on the stable points."""
+    rc = main(["continue", "--gap-mm", "0.1", "--ball-motion", "roll", "--force-n", "20",
+               "--parameter", "ratio", "--range", "1.0:1.0015", "--max-points", "3",
+               "--no-switch", "--seeds", "0", "--out", str(tmp_path), "--json"])
+    assert rc == 0
+    out = json.loads(capsys.readouterr().out)
+    points = out["branches"][0]["points"]
+    assert len(points) == 3 and all(p["stable"] for p in points)
+    assert all(len(p["multipliers_abs"]) == 2 * 2 + 3 for p in points)
+    assert not out["return_check"]["failed"]
+    with xr.open_dataset(tmp_path / "continuation.nc") as ds:
+        assert ds.sizes["state"] == 2 * 2 + 3
+    assert (tmp_path / "continuation.png").stat().st_size > 0
+    words = system_words(make_system("ball", motion="roll", contact="hertz").to_dict())
+    assert words.replace("\u00a0", " ").endswith(", rolling (mu_s 0.2, mu_k 0.15), Hertz contact")

@@ -1,4 +1,4 @@
-"""What a branch meets, located (docs/continuation.md): a change of the impact/reversal
+"""What a branch meets, located (docs/continuation.md): a change of the event
 sequence (a grazing), located by bisection in p; a pair of multipliers crossing the
 unit circle, located by bisection along the arclength: a fold (+1, the branch turns;
 where the tangent's p component vanishes), a branch point (+1, the branch goes on;

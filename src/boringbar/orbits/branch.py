@@ -22,6 +22,7 @@ from boringbar.orbits.shooting import (
     Flow,
     OrbitRefused,
     advance,
+    ball_scales,
     check_residual,
     newton_step,
 )
@@ -64,8 +65,9 @@ def flow_with(fl: Flow, name: str, value: float, ref: Flow) -> Flow:
         return dataclasses.replace(fl, fc=value, fs=value * ratio)
     if name == "ball-mass-g":
         m = value * 1e-3
+        # (a rolling ball's floor friction mu m g scales with its mass)
         return dataclasses.replace(fl, m=m, meff=1.0 / (1.0 / m + float(np.sum(
-            fl.psi_d**2 / fl.M))))
+            fl.psi_d**2 / fl.M))), mus_n=fl.mus_n * m / fl.m, muk_n=fl.muk_n * m / fl.m)
     raise ParameterError(f"parameter = {name!r} is not one of {', '.join(PARAMETERS)}")
 
 
@@ -273,7 +275,7 @@ def state_scale(fl: Flow, x, span):
     sc = np.concatenate([np.full(n, max(u, v / om)), np.full(n, max(v, om * u))])
     rest = np.abs(x[2 * n:])
     if fl.ball:
-        rest = np.maximum(rest, [fl.half, om * fl.half])
+        rest = np.maximum(rest, ball_scales(fl, om))
     sc = np.concatenate([sc, np.maximum(rest, 1e-3 * max(float(np.max(sc)), 1e-300))])
     return np.append(np.maximum(sc, 1e-300) / STATE_SHARE, span)
 

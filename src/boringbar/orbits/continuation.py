@@ -8,7 +8,8 @@ halved when Newton fails, grown by 1.3 after quick convergence.
 
 The branch stops (with the reason) at the end of the range, where the orbit is
 refused (stick, wall contact, a singular Newton matrix), or at a change of the
-impact/reversal sequence, recorded as a "grazing".  An event that comes near the
+event sequence (impacts, reversals, a rolling ball's roll/slip switches), recorded as a
+"grazing".  An event that comes near the
 Poincare section (or crosses it) moves the section instead (:func:`_move_section`; the
 point is carried to the new phase).  The multipliers of two points are paired; a pair
 crossing the unit circle is an event, located by :mod:`boringbar.orbits.bifurcations`.
@@ -286,9 +287,9 @@ def _boundary(br, w: Walk, located) -> str:
     at = flow_with(w.fl, w.name, p, w.ref)
     kind = "section" if at_section(at, br.points[-1].events, w.periods) else "grazing"
     br.events.append((kind, float(p)))
-    what = ("an impact or reversal crosses the Poincare section's phase (a section at "
+    what = ("an event crosses the Poincare section's phase (a section at "
             "another phase would carry on)" if kind == "section" else "grazing")
-    br.stop = (f"the impact/reversal sequence changes at {br.parameter} = {p:.10g} "
+    br.stop = (f"the event sequence changes at {br.parameter} = {p:.10g} "
                f"(bracket {width:.2g}; {what}): the branch is not followed across it")
     return kind
 

@@ -108,15 +108,22 @@ def smallest_text_px(fig, shown_width_px: float) -> float:
 
 
 def system_words(system: dict) -> str:
-    """'ball damper (carbide), gap 0.1 mm, friction off, e = 0.7' from System.to_dict()."""
+    """'ball damper (carbide), gap 0.1 mm, friction off, e = 0.7' from System.to_dict(),
+    with ', rolling (mu_s 0.2, mu_k 0.15)' and ', Hertz contact' where the ball has them."""
     kind = system.get("kind", "?")
     damper = system.get("damper") or {}
     if kind in ("ball", "locked"):
         fr = damper.get("friction_force_n", 0.0)
-        return (f"{'locked ball' if kind == 'locked' else 'ball damper'} "
-                f"({damper.get('material', '?')}), gap {damper.get('gap_m', math.nan) * 1e3:g} "
-                f"mm, friction {f'{fr:.3g} N' if fr else 'off'}, "
-                f"e = {damper.get('restitution', math.nan):g}")
+        words = (f"{'locked ball' if kind == 'locked' else 'ball damper'} "
+                 f"({damper.get('material', '?')}), gap {damper.get('gap_m', math.nan) * 1e3:g} "
+                 f"mm, friction {f'{fr:.3g} N' if fr else 'off'}, "
+                 f"e = {damper.get('restitution', math.nan):g}")
+        if damper.get("motion") == "roll":
+            words += (f", rolling (mu_s{NBSP}{damper.get('mu_static', math.nan):g}, "
+                      f"mu_k{NBSP}{damper.get('mu_kinetic', math.nan):g})")
+        if damper.get("contact") == "hertz":
+            words += ", Hertz contact"
+        return words
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(kind, str(kind))
 
 

@@ -97,12 +97,14 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
     return core.run_exact(run)
 
 
-def regime_matrix(p: np.ndarray, sdir: float) -> np.ndarray:
+def regime_matrix(p: np.ndarray, sdir: float, fdir: float = 0.0) -> np.ndarray:
     """A of z' = A z between impacts, z = [X (2n + 2 entries, as the integrators keep the
-    state), sin Omega t, cos Omega t, 1], for the packed parameters ``p``, the ball sliding
-    in direction ``sdir`` (-1, 0 or 1: F_b = -F_c sdir held); built from RK4's stage
-    derivative at the unit vectors."""
-    return core.regime_matrix(np.ascontiguousarray(p, float), float(sdir))
+    state, and a rolling ball's spin), sin Omega t, cos Omega t, 1], for the packed
+    parameters ``p``, the ball sliding in direction ``sdir`` (-1, 0 or 1: F_b = -F_c sdir
+    held) and a rolling ball slipping with the slip's sign ``fdir`` (-1, 1: its floor's
+    friction -mu_k N fdir held) or rolled (0); built from RK4's stage derivative at the
+    unit vectors."""
+    return core.regime_matrix(np.ascontiguousarray(p, float), float(sdir), float(fdir))
 
 
 def impact_matrix_of(p: np.ndarray) -> np.ndarray:
