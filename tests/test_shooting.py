@@ -544,5 +544,12 @@ def test_cli_continue_takes_a_rolling_ball(tmp_path, capsys):
     with xr.open_dataset(tmp_path / "continuation.nc") as ds:
         assert ds.sizes["state"] == 2 * 2 + 3
     assert (tmp_path / "continuation.png").stat().st_size > 0
+    # the closed-form start is a sliding ball's orbit: refused for a rolling one
+    assert main(["continue", "--gap-mm", "0.5", "--friction", "off", "--modes", "1",
+                 "--ball-motion", "roll", "--mu-static", "0", "--mu-kinetic", "0",
+                 "--range", "30:29", "--start-from", "masri-caughey",
+                 "--out", str(tmp_path / "mc")]) == 2
+    assert "sliding ball" in capsys.readouterr().err
+    assert not (tmp_path / "mc").exists()
     words = system_words(make_system("ball", motion="roll", contact="hertz").to_dict())
     assert words.replace("\u00a0", " ").endswith(", rolling (mu_s 0.2, mu_k 0.15), Hertz contact")

@@ -134,9 +134,9 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
         return np.asarray(o.state, float)
     if o.start == "masri-caughey":
         bar, ball = system.bar, system.damper
-        if system.kind != "ball" or bar.n_modes != 1 or fl.fc > 0:
-            raise ParameterError("start = 'masri-caughey' needs a one-mode ball damper "
-                                 "without friction")
+        if system.kind != "ball" or bar.n_modes != 1 or fl.fc > 0 or fl.roll:
+            raise ParameterError("start = 'masri-caughey' needs a one-mode sliding ball "
+                                 "damper without friction")
         orbits = [o_ for o_ in two_impact_orbit(
             bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
             bar.psi_damper[0], ball.mass_kg, ball.gap_m, ball.restitution, o.force_n, fl.omega)
