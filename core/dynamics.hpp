@@ -75,6 +75,7 @@ struct Params {
     // beyond; kroll = r^2 / I = 5 / (2 m)
     bool roll = false;
     double mus_n = 0.0, muk_n = 0.0, roll_band = 0.0, kroll = 0.0;
+    double inv_roll = 0.0;  // 1 / (kappa1 + kroll): what rolling needs, by a product
 };
 
 // The modes' velocity jumps of an impact with impulse factor g (model.hpp's impact_law).
@@ -175,6 +176,7 @@ inline Params unpack(const double* p, double dt) {
     q.muk_n = p[L::ROLL_KINETIC];
     q.roll_band = p[L::ROLL_BAND];
     q.kroll = q.ball.m > 0.0 ? 2.5 / q.ball.m : 0.0;
+    q.inv_roll = q.kappa1 + q.kroll != 0.0 ? 1.0 / (q.kappa1 + q.kroll) : 0.0;
     q.inv_kappa = q.kappa != 0.0 ? 1.0 / q.kappa : 0.0;
     set_friction(q, q.fc);
     q.chh = std::cos(q.om * 0.5 * dt);
@@ -290,7 +292,7 @@ BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
                             double ydd, double need, StageTerms& t) {
     const int n = sh.n(), is = sh.is();
     const double slip = Xs[sh.iyd()] - Xs[is];
-    const double keep = need / (q.kappa1 + q.kroll);
+    const double keep = need * q.inv_roll;
     t.rolled = std::fabs(slip) < q.roll_band && std::fabs(keep) <= q.mus_n;
     const double dir = slip != 0.0 && !t.rolled ? (slip > 0.0 ? -1.0 : 1.0)
                                                 : (keep > 0.0 ? 1.0 : -1.0);

@@ -39,10 +39,10 @@ def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
     width, and whether the bracket's far end is a boundary.  Each trial is Newton at
     fixed p from the last good orbit (an arclength corrector's iterates would cross the
     non-smooth boundary and fail).  A trial far from the last good orbit can land on
-    another orbit that coexists there (near a grazing the orbits born there are close by);
-    so a far end set by an orbit with another sequence (not by a refusal) is tried once
-    more from the last good orbit, a bracket's width beyond it: if the old sequence goes
-    on there, it is no boundary."""
+    another orbit that coexists there (near a grazing the orbits born there are close by),
+    or be refused in an iterate that strays (a slow impact on the way, where the orbit
+    itself has none); so the far end is tried once more from the last good orbit, a
+    bracket's width beyond it: if the old sequence goes on there, it is no boundary."""
     kinds = event_kinds(advance(flow_with(fl, name, y[-1], ref), y[:-1], k).events)
     lo, hi, x, last = y[-1], p_far, y[:-1], None
     width = abs(hi - lo)
@@ -53,7 +53,6 @@ def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
             return periodic_orbit(flow_with(fl, name, p, ref), x, k, max_iter=12, rms=False)
         except OrbitRefused:
             return None
-    jumped = False
     while abs(hi - lo) > max(tol * width, 4 * np.finfo(float).eps * abs(lo)):
         mid = 0.5 * (lo + hi)
         found = trial(mid)
@@ -61,8 +60,8 @@ def locate_boundary(fl, name, ref, y, p_far, k, tol=1e-10):
             lo, x, last = mid, found[0], Point(mid, found[0].copy(), multipliers(found[1]),
                                                found[1].events, fl.phase)
         else:
-            hi, jumped = mid, found is not None
-    if last is None or not jumped:
+            hi = mid
+    if last is None:
         return last, abs(hi - lo), True
     again = trial(lo + 2.0 * (hi - lo))
     return last, abs(hi - lo), again is None or event_kinds(again[1].events) != kinds

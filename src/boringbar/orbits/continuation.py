@@ -19,6 +19,7 @@ At a period doubling, :func:`switch_period_doubling` starts the period-2k branch
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -112,7 +113,8 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     or back at the start after a fold), the branch closes on itself, the event sequence
     changes (located: a grazing), the orbit is refused or w.max_points.  The step grows
     by 1.5 after a corrector of at most 3 iterations, shrinks by 0.7 after one of 7 or
-    more, is halved when the corrector fails, and is never more than w.max_step."""
+    more, is halved when the corrector fails, is held near the unit circle
+    (:func:`circle_cap`) and is never more than w.max_step."""
     fl, name, ref, k = w.fl, w.name, w.ref, w.periods
     h = min(w.step, w.max_step)
     while len(br.points) < w.max_points:
@@ -151,14 +153,35 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
         record_turn(br, w, t_old, t, kinds)
         y = yn
         w, t = _rescaled(w, y[:-1], t)
+        h_used = h
         h = min(w.max_step, h * 1.5) if its <= 3 else (h * 0.7 if its >= 7 else h)
-        h = max(h, w.min_step)
+        h = max(min(h, circle_cap(br.points[-2], pt, h_used)), w.min_step)
         if w.move_section and _near_section(flow_with(fl, name, pt.value, ref), pt.events):
             w, y, t = _move_section(br, w, t) or (w, y, t)
             fl, ref = w.fl, w.ref
     br.stop = (f"point budget of {w.max_points} reached at {name} = "
                f"{br.points[-1].value:.10g}")
     return br
+
+
+#: The least fraction of the last step that :func:`circle_cap` allows.
+CIRCLE_FLOOR = 0.125
+
+
+def circle_cap(a: Point, b: Point, h: float) -> float:
+    """The next step's cap where the largest multiplier modulus nears the unit circle:
+    it moved towards the circle by c over the last step (h, from a to b) and is d from
+    it; with d < c a step of h could carry it across and back unseen (a pair of
+    multipliers that leaves the circle and returns within one step: the published bar's
+    ball at gap 0.1 mm, friction on, has a Neimark-Sacker interval of 1.2 N, 25.8 to
+    26.96 N, which a 1.7 N step stepped over), so the step is at most h d / c (at least
+    CIRCLE_FLOOR h); moving away from the circle, or far from it, no cap (inf)."""
+    ma = float(np.max(np.abs(a.multipliers)))
+    mb = float(np.max(np.abs(b.multipliers)))
+    c, d = abs(mb - ma), abs(1.0 - mb)
+    if not ((mb - ma) * (1.0 - mb) > 0.0 and d < c):
+        return math.inf
+    return h * max(d / c, CIRCLE_FLOOR)
 
 
 def _sequence_change(w: Walk, y, t, h: float, yn, far: bool):
