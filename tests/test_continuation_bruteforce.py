@@ -352,7 +352,9 @@ def test_a_turn_the_multipliers_hide_is_still_a_fold():
     multipliers move at once (a complex pair outside splits, a real one inside joins a
     pair), so no multiplier pair shows the +1 crossing; the turn of the tangent must
     still be a fold, at the smallest F0 a fine continuation of the same branch reaches
-    (from the coarse point before the turn, 60 steps over 0.5 N)."""
+    (from the coarse point before the turn, 60 steps over 0.5 N).  Where that point lies
+    above 21.984 N the fine branch first meets a branch point: a real multiplier through
+    +1 while F0 keeps falling (measured: 0.961 at 21.9878 N, 1.016 at 21.9828 N)."""
     system = make_system("ball", "physical", gap_m=0.1e-3, friction=False)
     o = ContinuationOptions(parameter="force-n", stop=5.0, force_n=30.0)
     fl = sh.make_flow(system, Harmonic(30.0, ratio=1.0))
@@ -370,5 +372,17 @@ def test_a_turn_the_multipliers_hide_is_still_a_fold():
     # are 0.01 of 0.5 N apart in arclength; at steps of 0.002, 1.4e-7 was seen)
     assert folds[0] <= min(p) <= folds[0] * (1 + 2e-5), (folds, min(p))
     # the fine branch locates the same fold from other points
-    assert [k for k, _ in fine.events] == ["fold"]
-    assert abs(fine.events[0][1] - folds[0]) <= 1e-10 * folds[0]
+    kinds = [k for k, _ in fine.events]
+    assert kinds[-1] == "fold" and set(kinds[:-1]) <= {"branch-point"}, fine.events
+    assert abs(fine.events[-1][1] - folds[0]) <= 1e-10 * folds[0]
+    # a branch point before it (where the fine branch starts above it) is a real
+    # multiplier through +1 while the parameter keeps falling: no turn there
+    for value in (v for k, v in fine.events if k == "branch-point"):
+        i = next(i for i, q in enumerate(fine.points) if q.value < value)
+        before, after = fine.points[i - 1], fine.points[i]
+        assert before.value > value > after.value > min(p)
+        outside = [np.sort_complex(q.multipliers[np.abs(q.multipliers) > 1.0])
+                   for q in (before, after)]
+        assert len(outside[1]) == len(outside[0]) + 1
+        new = [m for m in outside[1] if abs(m.imag) < 1e-12 and m.real > 1.0]
+        assert new and min(m.real for m in new) < 1.05, outside

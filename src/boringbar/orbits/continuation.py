@@ -169,17 +169,22 @@ CIRCLE_FLOOR = 0.125
 
 
 def circle_cap(a: Point, b: Point, h: float) -> float:
-    """The next step's cap where the largest multiplier modulus nears the unit circle:
-    it moved towards the circle by c over the last step (h, from a to b) and is d from
-    it; with d < c a step of h could carry it across and back unseen (a pair of
-    multipliers that leaves the circle and returns within one step: the published bar's
-    ball at gap 0.1 mm, friction on, has a Neimark-Sacker interval of 1.2 N, 25.8 to
-    26.96 N, which a 1.7 N step stepped over), so the step is at most h d / c (at least
-    CIRCLE_FLOOR h); moving away from the circle, or far from it, no cap (inf)."""
+    """The next step's cap where a stable branch's largest multiplier, a complex pair,
+    nears the unit circle: its modulus rose by c over the last step (h, from a to b) and
+    is d below 1; with d < c a step of h could carry it out and back unseen (a pair that
+    leaves the circle and returns within one step: the published bar's ball at gap
+    0.1 mm, friction on, has a Neimark-Sacker interval of 1.2 N, 25.8 to 26.96 N, which
+    a 1.7 N step stepped over), so the step is at most h d / c (at least CIRCLE_FLOOR h).
+    Else no cap (inf): an unstable branch's short stable window, the milder miss, is
+    left to the step's own bounds (capped both ways, a branch coming down onto the
+    circle spent a quick study's ten points within 0.2 N of it), and so is a real
+    multiplier's: one that reaches +1 and comes back is a fold, which the tangent's turn
+    shows (record_turn)."""
     ma = float(np.max(np.abs(a.multipliers)))
-    mb = float(np.max(np.abs(b.multipliers)))
-    c, d = abs(mb - ma), abs(1.0 - mb)
-    if not ((mb - ma) * (1.0 - mb) > 0.0 and d < c):
+    top = b.multipliers[int(np.argmax(np.abs(b.multipliers)))]
+    mb = float(abs(top))
+    c, d = mb - ma, 1.0 - mb
+    if not (d > 0.0 and c > d and abs(top.imag) > 1e-9 * mb):
         return math.inf
     return h * max(d / c, CIRCLE_FLOOR)
 
