@@ -44,6 +44,19 @@ def _fd_jacobian(fl, x):
     return J, np.diag(sc)
 
 
+def _check_map(system, forcing, fl, x, pr):
+    """The orbit's saltation monodromy against the central difference of the map (1e-6),
+    and the map against the exact kernel: one period of simulate from x (1e-9); that
+    run."""
+    Jfd, D = _fd_jacobian(fl, x)
+    err = np.max(np.abs((pr.jacobian - Jfd) @ D)) / np.max(np.abs(pr.jacobian @ D))
+    assert err < 1e-6
+    one = simulate(system, forcing, duration_s=fl.period, dt_s=fl.period / 2000,
+                   integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
+    assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
+    return one
+
+
 @pytest.mark.parametrize("friction", [False, True])
 def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
     system = make_system("ball", "physical", gap_m=0.1e-3, friction=friction)
@@ -55,13 +68,7 @@ def test_saltation_monodromy_is_the_finite_difference_jacobian(friction):
     assert "impact+" in kinds and "impact-" in kinds
     assert ("reversal" in kinds) == friction
     assert np.max(np.abs(pr.x - x)) <= 1e-12 * np.max(np.abs(x))
-    Jfd, D = _fd_jacobian(fl, x)
-    err = np.max(np.abs((pr.jacobian - Jfd) @ D)) / np.max(np.abs(pr.jacobian @ D))
-    assert err < 1e-6
-    # the map is the exact kernel's: one period of simulate from the same state
-    one = simulate(system, forcing, duration_s=fl.period, dt_s=fl.period / 2000,
-                   integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
-    assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
+    one = _check_map(system, forcing, fl, x, pr)
     # the orbit's RMS (Gauss-Legendre per segment) is the kernel's exact integral
     assert abs(pr.rms_tip - one.rms_tip_m) <= 1e-9 * one.rms_tip_m
 
@@ -97,12 +104,7 @@ def test_a_rolling_ball_s_orbit_is_the_exact_integrators(force, gap, mu, stable)
     kinds = {k for _, k in pr.events}
     assert {"impact+", "impact-", "slip-zero"} <= kinds, kinds
     assert kinds & {"roll-limit+", "roll-limit-"}, kinds
-    Jfd, D = _fd_jacobian(fl, x)
-    err = np.max(np.abs((pr.jacobian - Jfd) @ D)) / np.max(np.abs(pr.jacobian @ D))
-    assert err < 1e-6
-    one = simulate(system, forcing, duration_s=fl.period, dt_s=fl.period / 2000,
-                   integrator="exact", initial=State(x, 0.0), steady_fraction=1.0)
-    assert np.max(np.abs(one.final.x - pr.x)) <= 1e-9 * np.max(np.abs(x))
+    _check_map(system, forcing, fl, x, pr)
     largest = abs(sh.multipliers(pr)[0])
     if stable:
         assert largest < 1.0
