@@ -56,6 +56,8 @@ from boringbar.simulate.kernels import impact_matrix_of, regime_matrix
 
 #: Event-search grid steps per forcing period.
 GRID = 64
+
+
 class OrbitRefused(ValueError):
     """The orbit leaves what the shooting method linearises (stick, wall contact)."""
 
