@@ -3,16 +3,17 @@
 The unknowns are (x, p): the orbit's state at the section's phase (0 by default)
 and the parameter.  Each step predicts along the unit tangent of the branch (null
 vector of [G_x, G_p] in scaled variables, :mod:`boringbar.orbits.branch`) and corrects
-by Newton on G = 0 plus the arclength condition, so folds are passed.  The step adapts:
-halved when Newton fails, grown by 1.3 after quick convergence.
+by Newton on G = 0 plus the arclength condition, so folds are passed.  The step adapts
+(:func:`march`): halved when Newton fails, grown by 1.5 after quick convergence, held
+where a stable branch's multipliers near the unit circle (:func:`circle_cap`).
 
 The branch stops (with the reason) at the end of the range, where the orbit is
 refused (stick, wall contact, a singular Newton matrix), or at a change of the
 event sequence (impacts, reversals, a rolling ball's roll/slip switches), recorded as a
-"grazing".  An event that comes near the
-Poincare section (or crosses it) moves the section instead (:func:`_move_section`; the
-point is carried to the new phase).  The multipliers of two points are paired; a pair
-crossing the unit circle is an event, located by :mod:`boringbar.orbits.bifurcations`.
+"grazing".  An event that comes near the Poincare section (or crosses it) moves the
+section instead (:func:`_move_section`; the point is carried to the new phase).  The
+multipliers of two points are paired; a pair crossing the unit circle is an event,
+located by :mod:`boringbar.orbits.bifurcations`.
 At a period doubling, :func:`switch_period_doubling` starts the period-2k branch.
 """
 
