@@ -76,10 +76,6 @@ class Watched:
         """[(function, rate)] at z, one pair an event (Python floats: a step's test)."""
         return list(zip((self.G @ z - self.off).tolist(), (self.GA @ z).tolist(), strict=True))
 
-    def row(self, i: int) -> np.ndarray:
-        """Event i's gradient on z."""
-        return self.G[self.idx.index(i)]
-
 
 def watched(fl, mode: tuple, keep, A: np.ndarray) -> Watched | None:
     """The :class:`Watched` events of ``mode`` (regime matrix A, rolled keep row), None if
@@ -116,15 +112,15 @@ def _quiet(fl, zk, zn, fk, fn) -> bool:
     return True
 
 
-def _turned(rel, g, A, zk, zn, step, i, row, ends, fresh):
+def _turned(rel, g, A, zk, step, i, row, ends, fresh):
     """The time in (0, step) of event i's crossing where its function crosses zero twice
     within the grid step (out and back) or, ``fresh`` (zero at the step's start, just after
     an event), leaves zero and comes back across it; None if not.  Between grid points 64
     a period apart the slip of a rolling ball can change sign and change back (a slip of
     1e-4 m/s against y' that rises through the spin and falls back), where the ends alone
-    see nothing.  ends: the function's values at zk and zn."""
-    f0, f1 = ends
-    d0, d1 = float(row @ (A @ zk)), float(row @ (A @ zn))
+    see nothing.  ends: (value, rate) of the function at the step's ends
+    (:meth:`Watched.at`)."""
+    (f0, d0), (f1, d1) = ends
     if not d0 * d1 < 0.0:
         return None
     sigma = math.copysign(1.0, d0 if fresh else f0)
@@ -173,12 +169,12 @@ def _extremum(A, z, row, step) -> float:
 
 def next_event(fl, reg, mode, z, t, t_stop, h):
     """(time, kind) of the first event after t before t_stop, or (t_stop, None); reg: the
-    mode's regime (A, expm(A h) the grid step's flow, its Relative, its keep row)."""
+    mode's regime (A, expm(A h) the grid step's flow, its Relative, its keep row, its
+    :func:`watched` events)."""
     if not fl.ball:
         return t_stop, None
-    A, E, rel, keep = reg
+    A, E, rel, keep, w = reg
     g = _event_fn(fl, mode, keep)
-    w = watched(fl, mode, keep, A)
     zk, tk = z, t
     fk = w.at(zk) if w else None
     while tk < t_stop:
@@ -198,7 +194,8 @@ def next_event(fl, reg, mode, z, t, t_stop, h):
             elif i < 2:
                 s = _through_wall(fl, rel, g, A, zk, zn, step, i)
             elif w and i in w.idx:
-                s = _turned(rel, g, A, zk, zn, step, i, w.row(i), (gk[i], gn[i]), fresh)
+                k = w.idx.index(i)
+                s = _turned(rel, g, A, zk, step, i, w.G[k], (fk[k], fn[k]), fresh)
             if s is not None:
                 hits.append((s, KINDS[i]))
         if hits:

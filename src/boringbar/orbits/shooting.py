@@ -49,7 +49,7 @@ from boringbar._validate import ParameterError
 from boringbar.model.forcing import Harmonic
 from boringbar.model.linalg import one_blas_thread
 from boringbar.model.system import System
-from boringbar.orbits.events import Relative, next_event, spin_index, unit
+from boringbar.orbits.events import Relative, next_event, spin_index, unit, watched
 from boringbar.simulate import hertz, pack, rolling
 from boringbar.simulate import layout as L
 from boringbar.simulate.kernels import impact_matrix_of, regime_matrix
@@ -250,22 +250,24 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False,
     events = []
     h = fl.period / GRID
     w2 = 0.0
-    # (sdir, fdir) -> (A, its grid step's expm, its Relative, the rolled regime's keep row):
-    # two regimes at most for a sliding ball, six for a rolling one
+    # (sdir, fdir) -> (A, its grid step's expm, its Relative, the rolled regime's keep row,
+    # its watched events): two regimes at most for a sliding ball, six for a rolling one
     regimes = {}
 
     def regime(md: tuple):
         if md not in regimes:
             A = augmented(fl, *md)
             rolled = fl.roll and md[1] == 0.0
+            keep = keep_row(fl, A) if rolled else None
             regimes[md] = (A, expm(A * h) if fl.ball else None,
-                           Relative(fl, A, closed=not rolled),
-                           keep_row(fl, A) if rolled else None)
+                           Relative(fl, A, closed=not rolled), keep,
+                           watched(fl, md, keep, A) if fl.ball else None)
         return regimes[md]
     mode = _start_mode(fl, z, t, regime) if fl.ball else (0.0, 0.0)
     while t < t_end * (1 - 1e-15):
-        A, Eh, rel, keep = regime(mode)
-        te, kind = next_event(fl, regime(mode), mode, z, t, min(t_end, t + fl.period), h)
+        reg = regime(mode)
+        A, keep = reg[0], reg[3]
+        te, kind = next_event(fl, reg, mode, z, t, min(t_end, t + fl.period), h)
         dt = min(te, t_end) - t
         E = expm(A * dt)
         if rms:
@@ -277,7 +279,7 @@ def advance(fl: Flow, x: np.ndarray, periods: int = 1, rms: bool = False,
         t += dt
         if kind is None or te > t_end:
             continue
-        z, J, mode = _apply(fl, regime(mode), kind, z, J, t, mode, regime)
+        z, J, mode = _apply(fl, reg, kind, z, J, t, mode, regime)
         events.append((t, kind))
         if len(events) > 200 * periods:
             raise OrbitRefused("more than 200 events a period: the motion is not a "
