@@ -493,6 +493,7 @@ void attach(Work& w, const ExactRun& a) {
     w.Vfull = a.Vfull;
     w.dp = {a.lvis, a.cvis};
     w.isum = a.isum;
+    w.flows.reset(a.nreg, a.lam.n1);
     w.kstep = a.kstep;
     w.bnd = a.bnd;
     w.levmax = a.levmax;

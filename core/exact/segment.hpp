@@ -25,6 +25,7 @@
 #include "consts.hpp"
 #include "cut.hpp"
 #include "events.hpp"
+#include "flows.hpp"
 #include "nmath.hpp"
 #include "propagate.hpp"
 
@@ -59,7 +60,7 @@ struct Work {
     std::array<cplx, NB_MAX_2> me_{};
     std::array<cplx, NB_MAX2> G_{};
     std::array<cplx, NZB_MAX> Cx_{};
-    std::array<cplx, NB_MAX> cf_{}, ca_{}, cb_{};
+    std::array<cplx, NB_MAX> c_{}, ce_{}, ca_{}, cb_{};
     std::array<cplx, 3> phj_{};
     std::array<double, MK_SIZE> mk_{};
     std::array<double, DDC> ddc_{};
@@ -75,6 +76,7 @@ struct Work {
     Vec ev_u;                    // ... and where a rolling ball's slip runs out
     Vec qsum, out;           // a cut's flow sums; a segment's integrals
     FlowsScratch isc;        // segment_integrals' scratch
+    FlowTables flows;        // and each regime's tables, built on its first segment
 
     // exp(lambda_k tau_end) (k = 0, ks, ...) of regime r_end, kept by the search's last
     // state_at at tau_end (outside a cut, the constant sizes) for segment_integrals
@@ -126,7 +128,8 @@ struct Work {
         isc.me = {me_.data(), 2, nb};
         isc.G = {G_.data(), nb, nb};
         isc.Cx = {Cx_.data(), nz, nb};
-        isc.cf = {cf_.data(), nb};
+        isc.c = {c_.data(), nb};
+        isc.ce = {ce_.data(), nb};
         isc.ca = {ca_.data(), nb};
         isc.cb = {cb_.data(), nb};
         isc.phj = {phj_.data(), 3};
@@ -1459,9 +1462,11 @@ inline idx close_segment(Work& w, SegCtx c, double t, double T, ncplx ph, bool s
         // segment: tau_end is reset at each search's start)
         const ncplx* exc =
             (w.r_end == r && w.tau_end == T && seg.krb == 0.0) ? w.ex_end : nullptr;
+        const FlowTable tab =
+            w.flows.of(r, FlowSources{w.Vfull, w.cf.Z, w.cf.D, w.isum, sys.mk, w.dp}, c.n, c.ks);
         const FlowsIn in{seg,       r,    w.q0,         ph,           T,
                          w.cf.lam,  w.Vfull, w.cf.Z,     w.cf.D,       w.isum,
-                         sys.mk,    w.dp, sys.force.f0, sys.force.om, kst,
+                         sys.mk,    tab, sys.force.f0, sys.force.om, kst,
                          sys.fric.sr, lvl, exc};
         if (c.sz == 1) {
             segment_integrals_1(in, w.isc.phj, out);
