@@ -30,8 +30,10 @@ least (the machine at its quietest) and the median over the calls.
   and whether their final states and metrics are the same bits;
 - the 48 published harmonic cases (presets paper and physical, gaps 0.1 and 0.5 mm,
   friction off and on, 10 and 20 N, Omega/omega_n 0.95, 1.00 and 1.05; the ball damper
-  from rest) as totals per integrator (best of ``--grid-repeat`` each), and the RK4/exact
-  ratio of each version's calls over them; ``--per-case``: each case's calls as well.
+  from rest) as totals per integrator (best of ``--grid-repeat`` each; each case's calls
+  with both integrators one after the other, so that the machine's drift weighs on both
+  alike), and the RK4/exact ratio of each version's calls over them; ``--per-case``: each
+  case's calls as well.
 """
 
 from __future__ import annotations
@@ -254,28 +256,34 @@ def named_table(versions, repeat) -> bool:
 def grid_totals(versions, repeat, per_case: bool = False) -> dict:
     """{integrator: (call totals, kernel totals)} over the 48 cases, in seconds; prints
     them with the overhead per call (each case's least and median, averaged), and
-    (``per_case``) each case's calls and their ratio first."""
-    out = {}
-    for integrator in INTEGRATORS:
-        calls, kerns, ovh, same, agree = np.zeros(2), np.zeros(2), np.zeros((2, 2)), 0, 0
-        for label, *spec in GRID:
+    (``per_case``) each case's calls and their ratio first.  Each case's calls with both
+    integrators are made one after the other, so that the machine's drift over the run
+    (up to 2x from minute to minute on a shared VM) weighs on both integrators alike."""
+    tot = {i: {"calls": np.zeros(2), "kerns": np.zeros(2), "ovh": np.zeros((2, 2)),
+               "same": 0, "agree": 0} for i in INTEGRATORS}
+    for label, *spec in GRID:
+        for integrator in INTEGRATORS:
             t = time_case(versions, spec, integrator, repeat)
             if per_case:
                 print(f"    {integrator:5s} {label:48s} {t.call[0] * 1e3:7.2f} "
                       f"{t.call[1] * 1e3:7.2f} ms {t.call[0] / t.call[1]:5.2f}x  "
                       f"{pattern_name(t.runs[1])}", flush=True)
-            calls += t.call
-            kerns += t.kernel
-            ovh += [[t.overhead_ms(i, q) / len(GRID) for q in (0, 50)] for i in range(2)]
-            same += same_bits(*t.runs)
-            agree += pattern_name(t.runs[0]) == pattern_name(t.runs[1])
+            a = tot[integrator]
+            a["calls"] += t.call
+            a["kerns"] += t.kernel
+            a["ovh"] += [[t.overhead_ms(i, q) / len(GRID) for q in (0, 50)] for i in range(2)]
+            a["same"] += same_bits(*t.runs)
+            a["agree"] += pattern_name(t.runs[0]) == pattern_name(t.runs[1])
+    out = {}
+    for integrator, a in tot.items():
+        calls, kerns, ovh = a["calls"], a["kerns"], a["ovh"]
         out[integrator] = (calls, kerns)
         print(f"  {integrator:5s} calls: {versions[0].name} {calls[0]:.3f} s, tree "
               f"{calls[1]:.3f} s ({calls[0] / calls[1]:.2f}x); kernels: {kerns[0]:.3f} s, "
               f"{kerns[1]:.3f} s ({kerns[0] / kerns[1]:.2f}x); overhead per call (least, "
               f"median): {ovh[0, 0]:.3f}, {ovh[0, 1]:.3f} ms and {ovh[1, 0]:.3f}, "
-              f"{ovh[1, 1]:.3f} ms; {same} of {len(GRID)} same bits, patterns agree on "
-              f"{agree}", flush=True)
+              f"{ovh[1, 1]:.3f} ms; {a['same']} of {len(GRID)} same bits, patterns agree on "
+              f"{a['agree']}", flush=True)
     return out
 
 
