@@ -58,7 +58,7 @@ inline double g_value(idx kind, double tau, const SegView& s) {
         auto [sv, sd] = surface_at(seg, tau);
         return kind == EV_CUT ? seg.cdir * (w - sv) : sd - wd;
     }
-    if (kind <= EV_YEXT || kind == EV_SLIP) {
+    if (kind == EV_PLUS || kind == EV_MINUS) {
         double pdu = 0.0;
         double pdv = 0.0;
         for (idx i = 0; i < n; ++i) {
@@ -85,6 +85,22 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
     [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     double ts = seg.ts;
+    if (kind == EV_VSTOP || kind == EV_YEXT || kind == EV_SLIP) {
+        // y' and y'' alone: the modes' velocity rows, as below
+        state_at2(s, tau, Rows{n, 2 * n});
+        double pdv = 0.0;
+        double pda = 0.0;
+        for (idx i = 0; i < n; ++i) {
+            pdv += mk(4, i) * X[n + i];
+            pda += mk(4, i) * Xd[n + i];
+        }
+        double yd = ball_yd(seg, tau, pdv);
+        double ydd = seg.acc - seg.cy * pda;
+        if (kind == EV_SLIP)
+            return {-seg.slip * (yd - (seg.s0 + seg.sd * tau)), -seg.slip * (ydd - seg.sd), nan};
+        if (kind == EV_VSTOP) return {-seg.sdir * yd, -seg.sdir * ydd, nan};
+        return {yd, ydd, nan};
+    }
     state_at2(s, tau);
     if (kind == EV_WEXT) {
         double g = 0.0;
@@ -110,7 +126,7 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
             return {seg.cdir * (w - sv), seg.cdir * (wd - sd), seg.cdir * (wdd - sdd)};
         return {sd - wd, sdd - wdd, nan};
     }
-    if (kind <= EV_YEXT || kind == EV_SLIP) {
+    if (kind == EV_PLUS || kind == EV_MINUS) {
         double pdu = 0.0;
         double pdv = 0.0;
         double pda = 0.0;
@@ -122,12 +138,8 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
         double y = ball_y(seg, tau, pdu);
         double yd = ball_yd(seg, tau, pdv);
         double ydd = seg.acc - seg.cy * pda;
-        if (kind == EV_SLIP)
-            return {-seg.slip * (yd - (seg.s0 + seg.sd * tau)), -seg.slip * (ydd - seg.sd), nan};
         if (kind == EV_PLUS) return {y - seg.half, yd, ydd};
-        if (kind == EV_MINUS) return {-seg.half - y, -yd, -ydd};
-        if (kind == EV_VSTOP) return {-seg.sdir * yd, -seg.sdir * ydd, nan};
-        return {yd, ydd, nan};
+        return {-seg.half - y, -yd, -ydd};  // EV_MINUS
     }
     double t = ts + tau;
     double f = f0 * std::sin(om * t);

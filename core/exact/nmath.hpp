@@ -141,6 +141,7 @@ inline ncplx cexp(const ncplx& z) {
             c = std::cos(y);
             s = std::sin(y);
 #endif
+            if (x == 0.0) return {c, s};  // a phasor: e^0 = 1, and 1 c is c
             double r = std::exp(x);
             return {r * c, r * s};
         }

@@ -5,7 +5,7 @@
 // The closed form reads the segment through a SegView (the segment, its regime and start,
 // the regimes' matrices, the sizes, the bar's rows, the forcing and the scratch):
 //   ncplx state_at(const SegView& s, double tau, CVec q, Vec X);   // returns e^{i Omega t}
-//   void state_at2(const SegView& s, double tau);                   // s.X and s.Xd
+//   void state_at2(const SegView& s, double tau, Rows rows = {});   // s.X and s.Xd
 //   void from_q(const ClosedForm& cf, idx r, idx ks, CVec q, ncplx ph, double fb, Vec X);
 //   double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, double f0,
 //                    double om);
@@ -101,10 +101,18 @@ struct SegView {
     }
 };
 
-// X from the eigen-coordinates q of regime r and the forcing phasor ph = e^{i Omega t}.
-inline void from_q(const ClosedForm& cf, idx r, idx ks, CVec q, ncplx ph, double fb, Vec X) {
+// Rows to evaluate of a state: [j0, j1), j1 < 0 for all of them.
+struct Rows {
+    idx j0 = 0, j1 = -1;
+    idx end(idx nz) const { return j1 < 0 ? nz : j1; }
+};
+
+// X from the eigen-coordinates q of regime r and the forcing phasor ph = e^{i Omega t}
+// (its rows rows only; the others are left as they were).
+inline void from_q(const ClosedForm& cf, idx r, idx ks, CVec q, ncplx ph, double fb, Vec X,
+                   Rows rows = {}) {
     idx nz = X.n;
-    for (idx j = 0; j < nz; ++j) {
+    for (idx j = rows.j0; j < rows.end(nz); ++j) {
         double s = (ncplx(cf.Z(r, j)) * ph).im + fb * cf.D(r, j);
         for (idx kq = 0; kq < nq(nz, ks); ++kq) {
             idx k = kq * ks;
@@ -119,8 +127,10 @@ inline void from_q(const ClosedForm& cf, idx r, idx ks, CVec q, ncplx ph, double
 // a cut the input Kr b S(tau) adds bq Kr b sum_j S_j j! tau^(j+1) phi_(j+1)(lambda tau) to
 // each eigen-coordinate.
 //
-// keep (if not null, and only outside a cut): receives exp(lambda_k tau), k = kq ks.
-inline ncplx state_at(const SegView& s, double tau, CVec q, Vec X, ncplx* keep = nullptr) {
+// keep (if not null, and only outside a cut): receives exp(lambda_k tau), k = kq ks; rows:
+// the rows of X to evaluate.
+inline ncplx state_at(const SegView& s, double tau, CVec q, Vec X, ncplx* keep = nullptr,
+                      Rows rows = {}) {
     const Segment& seg = s.seg;
     const idx r = s.r, ks = s.ks;
     const CVec q0 = s.q0;
@@ -150,7 +160,7 @@ inline ncplx state_at(const SegView& s, double tau, CVec q, Vec X, ncplx* keep =
             q[k] = ncplx(q0[k]) * ex;
         }
     }
-    from_q(s.cf, r, ks, q, ph, fb, X);
+    from_q(s.cf, r, ks, q, ph, fb, X, rows);
     return ph;
 }
 
@@ -189,17 +199,17 @@ inline double freq_rhs(Vec X, double f, idx n, Mat mk, double kappa) {
     return s / kappa;
 }
 
-// X and X' at ts + tau on the segment of s (see state_at), into s.X and s.Xd (and the
-// eigen-coordinates into s.q); in a cut q' = lambda q + bq Kr b S.
-inline void state_at2(const SegView& s, double tau) {
+// X and X' at ts + tau on the segment of s (see state_at), into s.X and s.Xd (their rows
+// rows only; and the eigen-coordinates into s.q); in a cut q' = lambda q + bq Kr b S.
+inline void state_at2(const SegView& s, double tau, Rows rows = {}) {
     const idx r = s.r, ks = s.ks;
     const CVec q = s.q;
     const Vec Xd = s.Xd;
     const ClosedForm& cf = s.cf;
     idx nz = s.X.n;
-    ncplx ph = state_at(s, tau, q, s.X);
+    ncplx ph = state_at(s, tau, q, s.X, nullptr, rows);
     double sin_ = s.seg.krb * std::get<0>(surface_at(s.seg, tau));
-    for (idx j = 0; j < nz; ++j) {
+    for (idx j = rows.j0; j < rows.end(nz); ++j) {
         double sd = s.om * (ncplx(cf.Z(r, j)) * ph).re;
         for (idx kq = 0; kq < nq(nz, ks); ++kq) {
             idx k = kq * ks;
