@@ -58,7 +58,7 @@ inline double g_value(idx kind, double tau, const SegView& s) {
         auto [sv, sd] = surface_at(seg, tau);
         return kind == EV_CUT ? seg.cdir * (w - sv) : sd - wd;
     }
-    if (kind == EV_PLUS || kind == EV_MINUS) {
+    if (kind <= EV_YEXT || kind == EV_SLIP) {
         double pdu = 0.0;
         double pdv = 0.0;
         for (idx i = 0; i < n; ++i) {
