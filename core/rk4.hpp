@@ -306,10 +306,10 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
 // The energy flows of a mapped step: the dashpots' loss (the RK4 weights on the stage
 // velocities squared, stages 2-4 in lanes), the force's work S (Fs . z) + C (Fc . z)
 // (lanes Fs, Fc), and for the ball sum_s b_s F_b y'_s = F_b dy and
-// sum_s b_s psi_d u'_s = psi_d du.
+// sum_s b_s psi_d u'_s = psi_d du.  decoupled: as map_increment's.
 template <int N, int CASE>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
-                         const double* X, const double* dX, MapIn z) {
+                         const double* X, const double* dX, MapIn z, bool decoupled) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
     const int n = sh.n(), nx = sh.nxm();
     double pv = 0.0;
@@ -324,6 +324,11 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
         v4 v = vm.vS[i] * sn + vm.vC[i] * cn + vm.vF[i] * fz;
         if (sh.diag()) {
             v += vm.vP[i][i] * X[i] + vm.vP[i][n + i] * X[n + i];
+        } else if (decoupled) {
+            // the loop's order below without its other columns, whose zero products
+            // change at most the sign of a zero sum, which v * v does not see
+            v += vm.vP[i][i] * X[i];
+            v += vm.vP[i][n + i] * X[n + i];
         } else {
             for (int j = 0; j < nx; ++j) v += vm.vP[i][j] * X[j];
         }

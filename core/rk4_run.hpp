@@ -285,16 +285,15 @@ BB_INLINE void run_body(const RunArgs& a) {
                                             spread, yst);
         fz += ffl;
         // a slipping ball takes the sliding ball's map, whose modes are decoupled
-        if (use_map)
-            map_increment(sh, map, X, MapIn{sn, cn, fz}, dX,
-                          sh.diag() || (sh.rolls() && !rolls_now));
+        const bool decoupled = sh.diag() || (sh.rolls() && !rolls_now);
+        if (use_map) map_increment(sh, map, X, MapIn{sn, cn, fz}, dX, decoupled);
         // the map holds no contact force: a step in a compliant contact, or one that ends
         // in one, takes the stages
         if (use_map && hertz &&
             (ep.on || !(std::fabs(X[sh.iy()] + dX[sh.iy()]) <= q.ball.half)))
             use_map = false;
         if (use_map) {
-            map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz});
+            map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz}, decoupled);
             for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
             if (rolls_now) {
                 X[sh.is()] = X[iyd];  // it rolled: the spin is its y'
