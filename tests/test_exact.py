@@ -364,6 +364,23 @@ def test_a_graze_inside_one_grid_step_is_found():
 
 
 # --- a free ball: longer grid steps where they are proven safe; int y^2 in closed form ------
+def _steady_path(system, force, dur, dt=5e-8):
+    """An exact run of ``dur`` s at Omega/omega_n = 1 recording every step of ``dt``, and
+    its history's rows over the steady half (from dur / 2 on)."""
+    run = simulate(system, Harmonic(force, 1.0), duration_s=dur, dt_s=dt, record_every=1,
+                   steady_fraction=0.5, integrator="exact")
+    h = run.history
+    h = h[h[:, 0] >= 0.5 * dur - 0.5 * dt]
+    assert h[0, 0] == pytest.approx(0.5 * dur) and h[-1, 0] == pytest.approx(dur)
+    return run, h
+
+
+def _hermite_quad(t, f, fd):
+    """int f dt by the trapezoid with its Hermite end correction, from f and f' at t."""
+    hh = np.diff(t)
+    return np.sum(0.5 * hh * (f[:-1] + f[1:]) + hh ** 2 / 12.0 * (fd[:-1] - fd[1:]))
+
+
 @pytest.mark.parametrize("preset,kw,force", [
     ("paper", {"gap_m": 0.1e-3, "friction": False}, 10.0),
     ("physical", {"gap_m": 0.1e-3, "friction": False}, 20.0),
@@ -374,17 +391,10 @@ def test_ball_mean_square_is_the_integral_of_its_path(preset, kw, force):
     against the Hermite-corrected trapezoid of the exact y, y' recorded every 5e-8 s (O(dt^2)
     at the impacts, where y' jumps) it agrees to 1e-8.  (The grid quadrature it replaced
     was 8.5e-4 off on the paper case.)"""
-    s = make_system("ball", preset, **kw)
-    dt, dur = 5e-8, 0.05
-    run = simulate(s, Harmonic(force, 1.0), duration_s=dur, dt_s=dt, record_every=1,
-                   steady_fraction=0.5, integrator="exact")
-    h = run.history
-    keep = h[:, 0] >= 0.5 * dur - 0.5 * dt
-    t, y, yd = h[keep, 0], h[keep, 3], h[keep, 4]
-    assert t[0] == pytest.approx(0.5 * dur) and t[-1] == pytest.approx(dur)
-    hh = np.diff(t)
-    quad = np.sum(0.5 * hh * (y[:-1] ** 2 + y[1:] ** 2)
-                  + hh ** 2 / 6.0 * (y[:-1] * yd[:-1] - y[1:] * yd[1:]))
+    dur = 0.05
+    run, h = _steady_path(make_system("ball", preset, **kw), force, dur)
+    t, y, yd = h[:, 0], h[:, 3], h[:, 4]
+    quad = _hermite_quad(t, y * y, 2.0 * y * yd)
     assert len(run.impacts) > 5
     assert run.metrics["rms_aux_m"] ** 2 * 0.5 * dur == pytest.approx(quad, rel=1e-8)  # 1.3e-9
 
@@ -400,24 +410,14 @@ def test_tip_mean_square_and_mean_are_the_integrals_of_its_path(bar, preset, kw,
     """The steady int W^2 and int W (rms_tip_m, mean_tip_m), summed per segment from the
     regime's tables (core/exact/flows.hpp), against the Hermite-corrected trapezoid of the
     exact W, W' recorded every 5e-8 s (O(dt^2) where an impact makes W' jump)."""
-    s = make_system(bar, preset, **kw)
-    dt, dur = 5e-8, 0.02
-    run = simulate(s, Harmonic(force, 1.0), duration_s=dur, dt_s=dt, record_every=1,
-                   steady_fraction=0.5, integrator="exact")
-    h = run.history
-    keep = h[:, 0] >= 0.5 * dur - 0.5 * dt
-    t, w, wd = h[keep, 0], h[keep, 1], h[keep, 2]
-    assert t[0] == pytest.approx(0.5 * dur) and t[-1] == pytest.approx(dur)
-
-    def quad(f, fd):
-        hh = np.diff(t)
-        return np.sum(0.5 * hh * (f[:-1] + f[1:]) + hh ** 2 / 12.0 * (fd[:-1] - fd[1:]))
-
-    w2 = quad(w * w, 2.0 * w * wd)
+    dur = 0.02
+    run, h = _steady_path(make_system(bar, preset, **kw), force, dur)
+    t, w, wd = h[:, 0], h[:, 1], h[:, 2]
+    w2 = _hermite_quad(t, w * w, 2.0 * w * wd)
     assert run.metrics["rms_tip_m"] ** 2 * 0.5 * dur == pytest.approx(w2, rel=tol)
     # the mean is near zero: against the mean square's scale
     scale = math.sqrt(w2 * 0.5 * dur)
-    assert abs(run.metrics["mean_tip_m"] * 0.5 * dur - quad(w, wd)) <= tol * scale
+    assert abs(run.metrics["mean_tip_m"] * 0.5 * dur - _hermite_quad(t, w, wd)) <= tol * scale
 
 
 def test_longer_steps_of_a_two_mode_ball_change_no_event():
