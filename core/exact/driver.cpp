@@ -493,7 +493,6 @@ void attach(Work& w, const ExactRun& a) {
     w.Vfull = a.Vfull;
     w.dp = {a.lvis, a.cvis};
     w.isum = a.isum;
-    w.flows.reset(a.nreg, a.lam.n1);
     w.kstep = a.kstep;
     w.bnd = a.bnd;
     w.levmax = a.levmax;
@@ -522,6 +521,7 @@ double exact_body(const ExactRun& a) {
     attach(w, a);
     System& sys = w.sys;
     unpack_system(p, a.nreg, sys);
+    if constexpr (!Regen) w.flows.reset(a.nreg, nz);  // a cut sums its flows by quadrature
     w.cp = run_consts(a);
     const idx kase = sys.kase;
     const bool ball = sys.has_ball();

@@ -6,6 +6,8 @@
 // regime and start, the run's eigen-data, the model's rows, the forcing and the scratch it
 // evaluates into):
 //   double g_value(idx kind, double tau, const SegView& s);          // g
+//   std::tuple<double, double> ball_rates(const Segment& seg, double tau, Mat mk, Vec X,
+//                                         Vec Xd, idx n);           // y', y''
 //   std::tuple<double, double, double> _gd(idx kind, double tau, const SegView& s);
 //                                                                    // g, g', g'' (or NaN)
 //   double hermite(double a, double b, double p0, double p1, double d0, double d1,
@@ -79,6 +81,19 @@ inline double g_value(idx kind, double tau, const SegView& s) {
     return seg.wall * F - seg.fs;
 }
 
+// The ball's y' and y'' at tau from the modes' velocity rows of X and X' (psi_d . u',
+// psi_d . u'').
+inline std::tuple<double, double> ball_rates(const Segment& seg, double tau, Mat mk, Vec X,
+                                             Vec Xd, idx n) {
+    double pdv = 0.0;
+    double pda = 0.0;
+    for (idx i = 0; i < n; ++i) {
+        pdv += mk(4, i) * X[n + i];
+        pda += mk(4, i) * Xd[n + i];
+    }
+    return {ball_yd(seg, tau, pdv), seg.acc - seg.cy * pda};
+}
+
 // Event function ``kind``, its time derivative and its second derivative at tau: the
 // second only where it comes free (the walls and the cut's h), NaN elsewhere.
 inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegView& s) {
@@ -86,16 +101,9 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     double ts = seg.ts;
     if (kind == EV_VSTOP || kind == EV_YEXT || kind == EV_SLIP) {
-        // y' and y'' alone: the modes' velocity rows, as below
+        // y' and y'' alone: the modes' velocity rows
         state_at2(s, tau, Rows{n, 2 * n});
-        double pdv = 0.0;
-        double pda = 0.0;
-        for (idx i = 0; i < n; ++i) {
-            pdv += mk(4, i) * X[n + i];
-            pda += mk(4, i) * Xd[n + i];
-        }
-        double yd = ball_yd(seg, tau, pdv);
-        double ydd = seg.acc - seg.cy * pda;
+        auto [yd, ydd] = ball_rates(seg, tau, mk, X, Xd, n);
         if (kind == EV_SLIP)
             return {-seg.slip * (yd - (seg.s0 + seg.sd * tau)), -seg.slip * (ydd - seg.sd), nan};
         if (kind == EV_VSTOP) return {-seg.sdir * yd, -seg.sdir * ydd, nan};
@@ -128,16 +136,9 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
     }
     if (kind == EV_PLUS || kind == EV_MINUS) {
         double pdu = 0.0;
-        double pdv = 0.0;
-        double pda = 0.0;
-        for (idx i = 0; i < n; ++i) {
-            pdu += mk(4, i) * X[i];
-            pdv += mk(4, i) * X[n + i];
-            pda += mk(4, i) * Xd[n + i];
-        }
+        for (idx i = 0; i < n; ++i) pdu += mk(4, i) * X[i];
         double y = ball_y(seg, tau, pdu);
-        double yd = ball_yd(seg, tau, pdv);
-        double ydd = seg.acc - seg.cy * pda;
+        auto [yd, ydd] = ball_rates(seg, tau, mk, X, Xd, n);
         if (kind == EV_PLUS) return {y - seg.half, yd, ydd};
         return {-seg.half - y, -yd, -ydd};  // EV_MINUS
     }

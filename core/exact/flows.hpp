@@ -229,11 +229,12 @@ inline void FlowTables::build(idx r, const FlowSources& src, idx n, idx ks) {
 
 // What segment_integrals integrates: the segment [ts, ts + T] (seg, its friction force
 // seg.fb) from its start q0 in regime r, with the forcing phasor ph at ts; the regimes'
-// matrices (VF: the full eigenvectors, prepare's V; isum: 1 / (mu_a + mu_b) of the basis
-// exponents) and the regime's tables (tab); the bar's rows; the forcing; a stuck ball's
-// kappa (stick_k, 0 when not stuck) and the reaction's share sr; how much to integrate
-// (level: 0 the energy flows, 1 also the steady W sums, 2 also a free ball's y^2); and
-// exp(lambda_k T) (k = 0, ks, ...) if the search kept it, else null.
+// eigenvalues lam and what their tables are built from (src: FlowSources, with isum,
+// 1 / (mu_a + mu_b) of the basis exponents, and the bar's rows) and regime r's tables
+// (tab); the forcing; a stuck ball's kappa (stick_k, 0 when not stuck) and the reaction's
+// share sr; how much to integrate (level: 0 the energy flows, 1 also the steady W sums,
+// 2 also a free ball's y^2); and exp(lambda_k T) (k = 0, ks, ...) if the search kept it,
+// else null.
 struct FlowsIn {
     const Segment& seg;
     idx r;
@@ -241,11 +242,7 @@ struct FlowsIn {
     ncplx ph;
     double T;
     CMat lam;
-    CArr3 VF;
-    CMat Z;
-    Mat D;
-    CArr3 isum;
-    Mat mk;
+    FlowSources src;
     FlowTable tab;
     double f0, om;
     double stick_k, sr;
@@ -297,7 +294,7 @@ inline void stick_work(const FlowsIn& in, const FlowsScratchOf<MuV, GM, CM, V>& 
             G(b, a) = G(a, b);
         }
     }
-    const Mat mk = in.mk;
+    const Mat mk = in.src.mk;
     CM& Cx = sc.Cx;
     V& c = sc.c;
     V& ca = sc.ca;
@@ -305,11 +302,11 @@ inline void stick_work(const FlowsIn& in, const FlowsScratchOf<MuV, GM, CM, V>& 
     BB_UNROLL
     for (idx j = 0; j < nz; ++j) {
         BB_UNROLL
-        for (idx k = 0; k < nz; ++k) Cx(j, k) = ncplx(in.VF(r, j, k)) * ncplx(c[k]);
-        ncplx zz = ncplx(in.Z(r, j)) * ncplx(c[nz]);
+        for (idx k = 0; k < nz; ++k) Cx(j, k) = ncplx(in.src.VF(r, j, k)) * ncplx(c[k]);
+        ncplx zz = ncplx(in.src.Z(r, j)) * ncplx(c[nz]);
         Cx(j, nz) = zz;
         Cx(j, nz + 1) = zz.conjugate();
-        Cx(j, nz + 2) = promote(in.seg.fb * in.D(r, j));
+        Cx(j, nz + 2) = promote(in.seg.fb * in.src.D(r, j));
     }
     for (idx k = 0; k < nb; ++k) {
         // the force's coefficients: f0 on the forcing's two terms
@@ -340,7 +337,7 @@ BB_ALWAYS_INLINE void _integrals_impl(const FlowsIn& in, const FlowsScratchOf<Mu
     const ncplx ph = in.ph;
     const double T = in.T, fb = seg.fb, om = in.om, f0 = in.f0;
     const CMat lam = in.lam;
-    const CArr3 isum = in.isum;
+    const CArr3 isum = in.src.isum;
     const FlowTable& tab = in.tab;
     const ncplx* exc = in.exc;
     MuV& mu = sc.mu;
@@ -369,13 +366,9 @@ BB_ALWAYS_INLINE void _integrals_impl(const FlowsIn& in, const FlowsScratchOf<Mu
     em[nz + 1] = ncplx(em[nz]).conjugate();
     em[nz + 2] = promote(1.0);
     double lim = 0.015625 / (T * T);  // |mu_m + mu_l| T < 1/8: the series
-    // G_ab = int_0^T exp((mu_a + mu_b) tau) dtau where it is not (e^(mu_a T) e^(mu_b T) - 1)
-    // isum_ab: where mu_a + mu_b is real (a conjugate pair, the forcing's two terms, or 0),
-    // and by its series where |mu_a + mu_b| T < 1/8
-    auto special = [&](idx a, idx b) {
-        ncplx s = ncplx(mu[a]) + ncplx(mu[b]);
-        return s.im == 0.0 || s.re * s.re + s.im * s.im < lim;
-    };
+    // G_ab = int_0^T exp((mu_a + mu_b) tau) dtau: in real arithmetic where mu_a + mu_b is
+    // real (a conjugate pair, the forcing's two terms, or 0), by its series where
+    // |mu_a + mu_b| T < 1/8, else (e^(mu_a T) e^(mu_b T) - 1) isum_ab
     auto gram = [&](idx a, idx b) {
         ncplx s = ncplx(mu[a]) + ncplx(mu[b]);
         if (s.im == 0.0) {
@@ -402,13 +395,14 @@ BB_ALWAYS_INLINE void _integrals_impl(const FlowsIn& in, const FlowsScratchOf<Mu
     double fw = 0.0, fv = 0.0, fww = 0.0, fuu = 0.0;
     for (idx o = 0; o < tab.norb; ++o) {
         idx a = tab.a[o], b = tab.b[o];
+        const ncplx s = ncplx(mu[a]) + ncplx(mu[b]);
         ncplx m;
         const ncplx* K = tab.K;
-        if (special(a, b)) {
-            m = ncplx(c[a]) * ncplx(c[b]) * gram(a, b);
-        } else {
+        if (s.im != 0.0 && s.re * s.re + s.im * s.im >= lim) {  // gram's last case
             m = ncplx(ce[a]) * ncplx(ce[b]) - ncplx(c[a]) * ncplx(c[b]);
             K = tab.Ki;
+        } else {
+            m = ncplx(c[a]) * ncplx(c[b]) * gram(a, b);
         }
         auto re = [&](FlowForm f) {
             const ncplx& k = K[f * st + o];

@@ -1462,12 +1462,10 @@ inline idx close_segment(Work& w, SegCtx c, double t, double T, ncplx ph, bool s
         // segment: tau_end is reset at each search's start)
         const ncplx* exc =
             (w.r_end == r && w.tau_end == T && seg.krb == 0.0) ? w.ex_end : nullptr;
-        const FlowTable tab =
-            w.flows.of(r, FlowSources{w.Vfull, w.cf.Z, w.cf.D, w.isum, sys.mk, w.dp}, c.n, c.ks);
-        const FlowsIn in{seg,       r,    w.q0,         ph,           T,
-                         w.cf.lam,  w.Vfull, w.cf.Z,     w.cf.D,       w.isum,
-                         sys.mk,    tab, sys.force.f0, sys.force.om, kst,
-                         sys.fric.sr, lvl, exc};
+        const FlowSources src{w.Vfull, w.cf.Z, w.cf.D, w.isum, sys.mk, w.dp};
+        const FlowsIn in{seg,          r,           w.q0, ph,  T,   w.cf.lam,
+                         src,          w.flows.of(r, src, c.n, c.ks),
+                         sys.force.f0, sys.force.om, kst,  sys.fric.sr, lvl, exc};
         if (c.sz == 1) {
             segment_integrals_1(in, w.isc.phj, out);
         } else if (c.sz == 2) {
