@@ -18,10 +18,14 @@ case named ``NAME`` the file has
 - the outputs, ``NAME/out_x`` (the final state), ``out_met``, ``out_rec``,
   ``out_imp``, ``out_stick``, ``out_strobe`` and, for exact, ``out_t_reached``;
 - for exact, ``NAME/prep_*``: what ``prepare(p)`` returned at capture (the regimes'
-  matrices, NumPy/LAPACK), for diagnosis only: :func:`replay` passes ``prep=None`` and
-  the kernel prepares the run itself, as simulate's call does;
-  ``replay(case, stored_prep=True)`` passes the stored one instead, which separates a
-  change of the preparation from a change of the kernel.
+  matrices, diagonalised by LAPACK through NumPy).  ``replay(case, stored_prep=True)``
+  hands the kernel the stored one, which holds the core alone to its bits;
+  :func:`replay` without it lets the kernel prepare the run itself, as simulate's call
+  does.  LAPACK's roundings are not the core's: OpenBLAS picks its kernels by the CPU
+  (Haswell's and SkylakeX's give eigenvectors that differ in their last bits and in
+  phase), and a rattling ball's run amplifies any rounding of its setup
+  (``--sensitivity``).  So the kernel is held to its bits given the stored preparation,
+  and ``prepare(p)`` to the stored one within roundings (:func:`prep_differences`).
 
 ``_names`` lists the cases in order, ``_met_names`` names the slots of ``met`` and
 ``_param_names`` the scalar slots of the stored ``p`` in order (simulate/layout.py),
@@ -111,7 +115,7 @@ def _single(system, forcing, *, integrator, duration_s, dt_s=DT, initial=None, r
 
 
 def _prep_arrays(p: np.ndarray) -> dict:
-    """``prepare(p)`` as arrays ``prep_*``, for diagnosis."""
+    """``prepare(p)`` as arrays ``prep_*``: the preparation an exact case replays with."""
     return {f"prep_{k}": np.asarray(v) for k, v in prepare(p.copy()).items()}
 
 
@@ -398,6 +402,42 @@ def stored_prep_of(case: dict) -> dict:
             for k, v in case.items() if k.startswith("prep_")}
 
 
+#: keys of prepare(p) that scale with an eigenvector (a column of V: V, Vh) or with its row
+#: of the inverse (Vi, bq = Vi B): LAPACK fixes each eigenvector's scale only up to a phase
+_BY_COLUMN = ("V", "Vh")
+_BY_ROW = ("Vi", "bq")
+
+
+def prep_differences(stored: dict, got: dict) -> dict:
+    """How far ``got = prepare(p)`` is from the ``stored`` one, key by key: the largest
+    difference relative to the key's largest stored magnitude per regime, with each
+    eigenvector taken at the stored one's phase first (each column k of V is the stored
+    one times a unit number c_k, row k of Vi the stored one over it); an integer key, or
+    a shape, that differs gives inf.  Without that phase, two LAPACK builds (or one
+    OpenBLAS picking its kernels by the CPU) agree to their roundings."""
+    V, Vs = np.asarray(got["V"]), np.asarray(stored["V"])
+    if V.shape != Vs.shape:
+        return {"V": np.inf}
+    c = np.einsum("rik,rik->rk", Vs.conj(), V)  # stored V's columns have unit norm
+    c = np.where(np.abs(c) > 0.5, c / np.abs(c), 1.0)
+    out = {"phase": float(np.max(np.abs(np.abs(np.einsum("rik,rik->rk", Vs.conj(), V)) - 1.0)))}
+    for k, st in stored.items():
+        g, st = np.asarray(got[k]), np.asarray(st)
+        if g.shape != st.shape or g.dtype != st.dtype:
+            out[k] = np.inf
+        elif g.dtype.kind not in "fc":
+            out[k] = 0.0 if np.array_equal(g, st) else np.inf
+        else:
+            if k in _BY_COLUMN:
+                g = g / c[:, None, :]
+            elif k in _BY_ROW:  # Vi (R, nz, nz) by its rows, bq (R, nz) by its entries
+                g = g * (c if g.ndim == 2 else c[:, :, None])
+            scale = np.max(np.abs(st).reshape(len(st), -1), axis=1) if st.ndim else abs(st)
+            d = np.abs(g - st).reshape(len(st), -1).max(axis=1) if st.ndim else abs(g - st)
+            out[k] = float(np.max(d / np.where(scale > 0, scale, 1.0)))
+    return out
+
+
 def _replay_exact(case: dict, prep: dict | None = None) -> dict:
     x, met = case["x0"].copy(), current_met(case)
     rec, imp, stick, strobe = records = _records(case)
@@ -539,14 +579,27 @@ def capture(path: Path = DATA, check: bool = True) -> None:
 
 
 def replay_all(path: Path = DATA) -> None:
-    """Replay every stored case and report differences and the time taken."""
+    """Replay every stored case (an exact one given its stored preparation) and report
+    differences and the time taken; then how far this machine's ``prepare(p)`` is from
+    the stored ones, and how many exact cases it reproduces bit for bit."""
     cases, slots = load(path), met_names(path)
     tic = time.perf_counter()
-    bad = [m for n, c in cases.items() for m in differences(n, c, replay(c), slots)]
+    bad = [m for n, c in cases.items()
+           for m in differences(n, c, replay(c, str(c["entry"]) == "exact"), slots)]
     print(f"{len(cases)} cases replayed in {time.perf_counter() - tic:.2f} s; "
           f"{len(bad)} differences")
     for m in bad:
         print(m)
+    exact = [c for c in cases.values() if str(c["entry"]) == "exact"]
+    worst, same = 0.0, 0
+    for case in exact:
+        stored = stored_prep_of(case)
+        got = prepare(current_params(case["p"], case["_param_names"]))
+        worst = max(worst, *prep_differences(stored, got).values())
+        same += all(np.asarray(got[k]).tobytes() == np.asarray(v).tobytes()
+                    for k, v in stored.items())
+    print(f"prepare(p) here: {same} of {len(exact)} exact cases the stored bits; largest "
+          f"difference {worst:.2e} (prep_differences)")
 
 
 def _observed(met: np.ndarray, met_names) -> np.ndarray:

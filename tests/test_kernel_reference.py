@@ -5,17 +5,18 @@ the cases of tests/kernel_reference.py (the published harmonic grid with both
 integrators, cuts, every bar, friction law, record and batch size).  The core was
 confirmed bit-identical to the numba kernels of commit fb3fab0 before the reference
 was regenerated from it.
-Each case is replayed through the entry points imported in kernel_reference.py and
+Each case is replayed through the entry points imported in kernel_reference.py (an
+exact case given its stored preparation, the regimes' LAPACK eigen-decomposition) and
 every output array (final state, metrics, history, impacts, sticks, strobe, and the
 exact integrator's time reached) must equal the stored one bit for bit; a failure
 names the case, the array, how many entries differ and the largest absolute and
-relative difference.
+relative difference.  The preparation itself must agree with the stored one within
+LAPACK's roundings, which depend on the CPU (kernel_reference.py).
 """
 
 from __future__ import annotations
 
 import kernel_reference as kr
-import numpy as np
 import pytest
 
 from boringbar.simulate.kernels import prepare
@@ -37,26 +38,26 @@ def test_the_reference_covers_every_entry_point(reference):
 
 @pytest.mark.parametrize("name", NAMES)
 def test_kernel_reproduces_the_reference(name, reference):
+    """An exact case is given its stored preparation: LAPACK's roundings are not the
+    core's (kernel_reference.py says why), and prepare(p) has its own test below."""
     cases, slots = reference
     case = cases[name]
-    problems = kr.differences(name, case, kr.replay(case), slots)
-    if problems and str(case["entry"]) == "exact":
-        problems.append(_with_stored_prep(name, case, slots))
+    got = kr.replay(case, stored_prep=str(case["entry"]) == "exact")
+    problems = kr.differences(name, case, got, slots)
     if problems:  # the messages alone: a traceback would print the whole reference
         pytest.fail("\n".join(problems), pytrace=False)
 
 
-def _with_stored_prep(name: str, case: dict, slots) -> str:
-    """Whether the exact kernel given the stored prepare(p) reproduces the reference:
-    tells a change of the preparation (LAPACK) from a change of the kernel."""
-    rest = kr.differences(name, case, kr.replay(case, stored_prep=True), slots)
-    verdict = "reproduces the reference" if not rest else f"still differs ({len(rest)} arrays)"
-    return f"{name}: given the stored prepare(p), the kernel {verdict}"
+#: how far prepare(p) may be from the stored one (kr.prep_differences): the largest seen
+#: between OpenBLAS's Haswell and SkylakeX kernels is 1e-11 (bq, four modes), while a
+#: real change of the setup moves entries by their own size
+PREP_TOLERANCE = 1e-9
 
 
-def test_prepare_reproduces_the_stored_preparation(reference):
-    """prepare(p) of every exact case equals the stored prep_* bit for bit, with its
-    system's part computed (the memo emptied first) and kept (the second call)."""
+def test_prepare_agrees_with_the_stored_preparation(reference):
+    """prepare(p) of every exact case is the stored one within LAPACK's roundings and the
+    eigenvectors' phases, with its system's part computed (the memo emptied first) and
+    kept (the second call)."""
     cases, _ = reference
     system_regimes.cache_clear()
     bad = []
@@ -66,7 +67,7 @@ def test_prepare_reproduces_the_stored_preparation(reference):
         stored = kr.stored_prep_of(case)
         for call in ("first", "second"):
             got = prepare(kr.current_params(case["p"], case["_param_names"]))
-            bad += [f"{name} ({call} call): {k}" for k, v in stored.items()
-                    if np.asarray(got[k]).dtype != np.asarray(v).dtype
-                    or np.asarray(got[k]).tobytes() != np.asarray(v).tobytes()]
+            bad += [f"{name} ({call} call): {k} differs by {d:.2e}"
+                    for k, d in kr.prep_differences(stored, got).items()
+                    if not d <= PREP_TOLERANCE]
     assert not bad, "\n".join(bad)

@@ -187,7 +187,10 @@ def test_the_attractor_check_finds_an_attractor_on_a_folded_branch_and_says_when
     seed = periodic_attractors(system, Harmonic(20.0, ratio=1.0))[0]
     br = continue_branch(flow_with(fl, "force-n", 20.0, fl), "force-n", seed.x, 5.0,
                          bounds=(5.0, 35.0))
-    assert [k for k, _ in br.events][-2:] == ["fold", "grazing"] or "fold" in br.stop, br.events
+    # (past the fold the branch ends at the grazing at 26.53 N, or where its corrector
+    # stalls just short of it, by the CPU's roundings: a square-root singularity)
+    folds = [v for k, v in br.events if k == "fold"]
+    assert folds == [pytest.approx(16.57, abs=0.01)] or "fold" in br.stop, br.events
     om = OrbitMap("force-n", 5.0, 35.0, [MapBranch(br, None, ("seed", 20.0), fl)])
     found = periodic_attractors(system, Harmonic(17.5, ratio=1.0))
     assert [a.impacts for a in found] == [4.0]

@@ -76,18 +76,22 @@ def test_the_sliding_ball_is_the_limit_of_a_vanishing_friction(integrator):
     assert np.all((ratios > 9.0) & (ratios < 11.0)), ratios
 
 
-@pytest.mark.parametrize("integrator", INTEGRATORS)
-def test_with_no_friction_no_spin_is_excited_and_the_run_is_the_sliding_one(integrator):
-    """The published bar, impacts and all (the Masri-Caughey regime): the same run (the
-    exact integrator's: 2.5e-13 apart, its rolling ball starting a segment of its own as
-    it leaves rest; a spin of round-off, 4e-17 m/s, where it did)."""
+@pytest.mark.parametrize(("integrator", "rel"), [("rk4", 1e-12), ("exact", 1e-9)])
+def test_with_no_friction_no_spin_is_excited_and_the_run_is_the_sliding_one(integrator, rel):
+    """The published bar, impacts and all (the Masri-Caughey regime): the same run, to
+    ``rel`` of its peak.  The exact integrator's rolling ball has regimes of its own (a
+    state of 2n + 3), diagonalised apart from the sliding ball's, so the two runs' setups
+    agree to LAPACK's roundings, which depend on the CPU (OpenBLAS picks its kernels by
+    it), and 0.05 s of impacts amplifies them: 2.5e-13 of the peak apart with the Haswell
+    kernels, 5e-11 with SkylakeX's; its rolling ball starts a segment of its own as it
+    leaves rest, with a spin of round-off, 4e-17 m/s, where it did."""
     bar = make_system("ball").bar
     kw = dict(mu=0.0, bar=bar, force=20.0, gap=0.5e-3, duration=0.05, integrator=integrator)
     slide, roll = run("slide", **kw), run("roll", **kw)
     assert roll.metrics["impacts_total"] == slide.metrics["impacts_total"] > 10
     assert abs(roll.final.x[-1]) <= 1e-15
     np.testing.assert_allclose(roll.history[:, 1], slide.history[:, 1], rtol=0,
-                               atol=1e-12 * np.abs(slide.history[:, 1]).max())
+                               atol=rel * np.abs(slide.history[:, 1]).max())
 
 
 @pytest.mark.parametrize("integrator, rel", [("rk4", 1e-3), ("exact", 1e-11)])
