@@ -49,10 +49,10 @@ struct Params {
     double C[L::NMAX], pL[L::NMAX], pD[L::NMAX], pA[L::NMAX], pF[L::NMAX], invM[L::NMAX];
     double fm[L::NMAX], km[L::NMAX], cm[L::NMAX], dm[L::NMAX], lm[L::NMAX];
     double kappa;  // 1/m + sum psi_d dm: y'' = kappa F_b - sum psi_d a_free
-    // F_b, dm F_b and kappa F_b for y' > 0, y' = 0, y' < 0 (F_b = -F_c, 0, F_c), each in
-    // both lanes of a pair (sign_pick): the products a stage forms, computed once, so that
-    // a stage picks one instead of multiplying after its sign test
-    v2 fb[3], dmfb[L::NMAX][3], kfb[3];
+    // F_b, dm F_b and kappa F_b for y' > 0, y' = 0, y' < 0 (F_b = -F_c, 0, F_c)
+    // (sign_pick): the products a stage forms, computed once, so that a stage picks one
+    // instead of multiplying after its sign test
+    double fb[3], dmfb[L::NMAX][3], kfb[3];
     // no kappa F_b is -0: y'' = kappa F_b - sum psi_d a_i then has the same bits whether
     // the sum starts from 0 or from its first term (they differ only in the sign of a zero)
     bool ydd_sum_from_first;
@@ -117,13 +117,13 @@ inline void set_friction(Params& q, double fc) {
     const double fbs[3] = {-fc, 0.0, fc};
     q.ydd_sum_from_first = true;
     for (int b = 0; b < 3; ++b) {
-        q.fb[b] = v2{fbs[b], fbs[b]};
+        q.fb[b] = fbs[b];
         for (int i = 0; i < q.n; ++i) {
             const double dmfb = q.dm[i] * fbs[b];
-            q.dmfb[i][b] = v2{dmfb, dmfb};
+            q.dmfb[i][b] = dmfb;
         }
         const double kfb = q.kappa * fbs[b];
-        q.kfb[b] = v2{kfb, kfb};
+        q.kfb[b] = kfb;
         if (kfb == 0.0 && std::signbit(kfb)) q.ydd_sum_from_first = false;
     }
 }
@@ -221,24 +221,17 @@ struct Shape {
     bool hertz(const Params& q) const { return CONTACT && q.hertz; }
 };
 
-// The sign of y' as lane masks (all ones where y' > 0, resp. y' < 0; neither for 0 and
-// NaN) and a pick by it of one of three values (by_sign: for y' > 0, 0, < 0).  In vector
-// registers, as GCC keeps vector selects branch-free: y' changes sign from stage to
-// stage while the ball sticks, where branches are mispredicted (written with ?: on
-// doubles, GCC branched).
-struct SignMask {
-    i2 pos, neg;
-};
-
-BB_INLINE SignMask sign_mask(double y) {
-    const v2 v = {y, y}, zero = {0.0, 0.0};
-    return {v > zero, v < zero};
-}
-
-BB_INLINE double sign_pick(SignMask m, const v2* by_sign) {
-    const i2 p = as_bits(by_sign[0]), z = as_bits(by_sign[1]), g = as_bits(by_sign[2]);
-    const i2 r = (m.neg & g) | (~m.neg & ((m.pos & p) | (~m.pos & z)));
-    return as_v2(r)[0];
+// One of three values by the sign of y (by_sign: for y > 0, y = 0, y < 0; NaN takes
+// the middle one), by branches.  While the ball sticks under the sgn() law its stages' y'
+// change sign in a pattern that repeats step after step, which the branch predictor
+// learns; a predicted branch takes the pick off the stage's chain of dependences, which
+// branch-free selects (vector masks) kept it on: with those the published sticking cases
+// ran 1.2-1.3x longer on an AVX-512 Xeon, and within the noise of branches on the AVX2
+// machines measured before (docs/performance.md).
+BB_INLINE double sign_pick(double y, const double* by_sign) {
+    if (y > 0.0) return by_sign[0];
+    if (y < 0.0) return by_sign[2];
+    return by_sign[1];
 }
 
 // What a stage's energy flows need besides the derivative.
@@ -313,7 +306,7 @@ BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
 // FAST: the ball's y'' sums psi_d a_i from its first term (q.ydd_sum_from_first), which
 // takes an addition off the stage's longest chain (a_i, y'', y' at the next stage, F_b).
 //
-// ysign: the value whose sign picks the friction force F_b = -F_c sgn(ysign) (sign_mask);
+// ysign: the value whose sign picks the friction force F_b = -F_c sgn(ysign) (sign_pick);
 // the stages give the stage's own y' (derivative), the regime matrices (dynamics.cpp) a
 // sliding direction of their own.  RK4's stages and the matrices that shooting
 // linearises are both built from this definition of the equations of motion (the step
@@ -342,15 +335,14 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         const double yds = Xs[iyd];
         // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), with dm F_b and kappa F_b picked by
         // y''s sign (sign_pick)
-        const SignMask sg = sign_mask(ysign);
-        const double fb = sign_pick(sg, q.fb);
+        const double fb = sign_pick(ysign, q.fb);
         double pdv = 0.0;
         for (int i = 0; i < n; ++i) {
             // the reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
-            Kd[n + i] -= sign_pick(sg, q.dmfb[i]);
+            Kd[n + i] -= sign_pick(ysign, q.dmfb[i]);
             pdv += q.pD[i] * Xs[n + i];
         }
-        ydd = sign_pick(sg, q.kfb) - sfree;
+        ydd = sign_pick(ysign, q.kfb) - sfree;
         t.fb = fb;
         t.yds = yds;
         t.pdv = pdv;
@@ -364,9 +356,10 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
             t.pcon = c.loss;
         }
         // the stick law's band: its own F_b in place of the sgn() law's.  (After the
-        // published branch, not around it: with the branch about the sign mask, GCC 12
-        // stops with an internal error, gimple_expand_vec_cond_expr, in the regime
-        // matrices' copy, dynamics.cpp; so the held stage writes the modes again.)
+        // published pick, not around it: with the branch about the pick, when that was a
+        // vector select, GCC 12 stopped with an internal error,
+        // gimple_expand_vec_cond_expr, in the regime matrices' copy, dynamics.cpp; so the
+        // held stage writes the modes again.)
         if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
         if constexpr (ROLL) {
             if (sh.rolls())
