@@ -153,7 +153,8 @@ BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
         stage_flows(q, sh, fl, terms, wst[s], f);
         held = held && terms.held;
         rolled = rolled && terms.rolled;
-        hold_max = Steady::pymax(hold_max, terms.held ? std::fabs(terms.fb) : 0.0);
+        // (only the stick law holds: the sgn() law's stages leave hold_max, off the chain)
+        if (q.hold) hold_max = Steady::pymax(hold_max, terms.held ? std::fabs(terms.fb) : 0.0);
     }
     for (int j = 0; j < nx; ++j) X[j] += sum[j];
     return held;
