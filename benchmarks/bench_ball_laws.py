@@ -26,6 +26,8 @@ import argparse
 import math
 import time
 
+from machine import describe
+
 import boringbar as bb
 from boringbar.model.oriented import CutGeometry
 
@@ -70,6 +72,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
+    print(f"machine: {describe()}")
     runs = cases()
     for system, forcing, integrator in runs.values():  # warm: the first call loads
         run_once(system, forcing, integrator, 0.01)

@@ -40,6 +40,7 @@ sys.path.insert(0, str(HERE))
 
 from bench_exact import CASES, orbit_start  # noqa: E402
 from bench_grid import cases as grid_cases  # noqa: E402
+from machine import describe  # noqa: E402
 
 from boringbar import Harmonic, make_system, simulate  # noqa: E402
 from boringbar.simulate import kernels as E  # noqa: E402
@@ -187,7 +188,7 @@ def main() -> None:
     E0 = importlib.import_module("boringbar_rev.kernels.exact")
     REV_LAYOUT["L"] = importlib.import_module("boringbar_rev.kernels.layout")
     if args.grid:
-        print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; exact kernel "
+        print(f"machine: {describe()}; exact kernel "
               f"at {args.rev} (old) against the working tree (new), best of {args.repeat}")
         grid(E0, args.repeat)
         return

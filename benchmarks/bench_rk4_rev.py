@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import os
 import sys
 import time
 from pathlib import Path
@@ -37,6 +36,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from bench_exact_rev import export, rev_params  # noqa: E402
+from machine import describe  # noqa: E402
 
 from boringbar import Harmonic, Initial, make_system  # noqa: E402
 from boringbar.model.forcing import Regenerative  # noqa: E402
@@ -217,7 +217,7 @@ def main() -> None:
     REV_LAYOUT["L"] = importlib.import_module("boringbar_rev.kernels.layout")
     B0 = importlib.import_module("boringbar_rev.kernels.rk4_batch")
 
-    print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; RK4 kernels at "
+    print(f"machine: {describe()}; RK4 kernels at "
           f"{args.rev} (old) against the working tree (new); timed by the "
           f"{'thread CPU time' if args.cpu_time else 'wall clock'}")
     if not args.skip_check:

@@ -56,6 +56,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from bench_exact_rev import export  # noqa: E402
+from machine import describe  # noqa: E402
 
 import boringbar  # noqa: E402
 from boringbar.simulate import engine, kernels  # noqa: E402
@@ -322,7 +323,7 @@ def main() -> None:
                     help="each version's default record_every (the tree's: ~20000 rows)")
     args = ap.parse_args()
     print(f"REV {args.rev} (old) against the working tree (new); thread CPU time; "
-          f"{uptime()}")
+          f"{uptime()}\nmachine: {describe()}")
     tree = tree_version(args.history)
     warm_up([tree])
     tree_alone(tree, args.repeat)

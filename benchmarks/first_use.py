@@ -20,12 +20,13 @@ Every figure is a wall time of the whole command, so process start-up counts.
 from __future__ import annotations
 
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from machine import describe
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -51,7 +52,7 @@ def main() -> None:
     subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=clone,
                           capture_output=True, text=True, check=True).stdout.strip()
-    print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; fresh clone of "
+    print(f"machine: {describe()}; fresh clone of "
           f"{head} in {clone}")
     bb = ".venv/bin/boringbar"
     timed("install: python3 -m venv .venv && pip install -e .",
