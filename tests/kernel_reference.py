@@ -25,7 +25,9 @@ case named ``NAME`` the file has
   (Haswell's and SkylakeX's give eigenvectors that differ in their last bits and in
   phase), and a rattling ball's run amplifies any rounding of its setup
   (``--sensitivity``).  So the kernel is held to its bits given the stored preparation,
-  and ``prepare(p)`` to the stored one within roundings (:func:`prep_differences`).
+  and ``prepare(p)`` to the stored one within roundings (:func:`prep_differences`);
+  with OpenBLAS's kernels of the capture, ``OPENBLAS_CORETYPE=Haswell``, every case
+  replays bit for bit as simulate runs it (``--as-simulate``).
 
 ``_names`` lists the cases in order, ``_met_names`` names the slots of ``met`` and
 ``_param_names`` the scalar slots of the stored ``p`` in order (simulate/layout.py),
@@ -61,6 +63,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_info
 
 import boringbar.reference.stability as stability
 from boringbar import Harmonic, Initial, Regenerative, State, make_system
@@ -602,6 +605,26 @@ def replay_all(path: Path = DATA) -> None:
           f"difference {worst:.2e} (prep_differences)")
 
 
+def blas_kernels() -> list[str]:
+    """The kernel sets of the BLAS libraries loaded (OpenBLAS's: "Haswell", "SkylakeX")."""
+    return sorted({f"{i.get('internal_api')} {i.get('architecture')}" for i in threadpool_info()
+                   if i.get("user_api") == "blas"})
+
+
+def replay_as_simulate(path: Path = DATA) -> int:
+    """Replay every stored case as simulate calls the kernels, an exact one preparing its
+    run itself; print the BLAS kernels and the differences; 1 if any.  With OpenBLAS's
+    kernels of the capture (``OPENBLAS_CORETYPE=Haswell``) the preparation's bits, and so
+    every run's, are the stored ones."""
+    cases, slots = load(path), met_names(path)
+    bad = [m for n, c in cases.items() for m in differences(n, c, replay(c), slots)]
+    print(f"BLAS: {', '.join(blas_kernels())}; {len(cases)} cases replayed as simulate "
+          f"calls the kernels; {len(bad)} differences")
+    for m in bad:
+        print(m)
+    return 1 if bad else 0
+
+
 def _observed(met: np.ndarray, met_names) -> np.ndarray:
     """The sum of W^2 (the RMS's), the steady peak-to-peak and the largest |W| of a run."""
     m = dict(zip((str(n) for n in met_names), met, strict=True))
@@ -641,9 +664,13 @@ def main() -> None:
                     help="skip the check of each run against simulate's own call")
     ap.add_argument("--sensitivity", action="store_true",
                     help="how much each exact case moves when its setup moves by one rounding")
+    ap.add_argument("--as-simulate", action="store_true",
+                    help="exact cases prepare their runs themselves (exit 1 on a difference)")
     args = ap.parse_args()
     if args.sensitivity:
         sensitivity(args.file)
+    elif args.as_simulate:
+        raise SystemExit(replay_as_simulate(args.file))
     elif args.write:
         capture(args.file, check=not args.no_check)
     else:

@@ -16,6 +16,11 @@ LAPACK's roundings, which depend on the CPU (kernel_reference.py).
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import kernel_reference as kr
 import numpy as np
 import pytest
@@ -88,3 +93,26 @@ def test_prepare_agrees_with_the_stored_preparation(reference):
                         "eigen-decomposition is" for k, v in stored.items()
                         if not _same_bits(got[k], v)]
     assert not bad, "\n".join(bad)
+
+
+def _haswell_kernels_available() -> bool:
+    """NumPy's BLAS is OpenBLAS and the CPU can run its Haswell kernels (AVX2, FMA)."""
+    try:
+        flags = Path("/proc/cpuinfo").read_text().split()
+    except OSError:
+        return False
+    return ("avx2" in flags and "fma" in flags
+            and any(k.startswith("openblas ") for k in kr.blas_kernels()))
+
+
+@pytest.mark.skipif(not _haswell_kernels_available(),
+                    reason="needs NumPy's OpenBLAS on an x86-64 CPU with AVX2 and FMA")
+def test_with_the_capture_s_blas_kernels_every_run_is_the_stored_bits_as_simulate_runs_it():
+    """With OpenBLAS's Haswell kernels, those of the capture, every case replays bit for
+    bit with its exact runs preparing themselves, as simulate's calls do: the package's
+    setup arithmetic held to its bits on any CPU that can run those kernels."""
+    env = {**os.environ, "OPENBLAS_CORETYPE": "Haswell"}
+    out = subprocess.run([sys.executable, str(Path(kr.__file__)), "--as-simulate"], env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert "BLAS: openblas Haswell;" in out.stdout, out.stdout + out.stderr[-2000:]
+    assert out.returncode == 0, out.stdout[-4000:]
