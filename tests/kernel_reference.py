@@ -421,9 +421,10 @@ def prep_differences(stored: dict, got: dict) -> dict:
     V, Vs = np.asarray(got["V"]), np.asarray(stored["V"])
     if V.shape != Vs.shape:
         return {"V": np.inf}
-    c = np.einsum("rik,rik->rk", Vs.conj(), V)  # stored V's columns have unit norm
-    c = np.where(np.abs(c) > 0.5, c / np.abs(c), 1.0)
-    out = {"phase": float(np.max(np.abs(np.abs(np.einsum("rik,rik->rk", Vs.conj(), V)) - 1.0)))}
+    overlap = np.einsum("rik,rik->rk", Vs.conj(), V)  # stored V's columns have unit norm
+    size = np.abs(overlap)
+    c = np.where(size > 0.5, overlap / size, 1.0)
+    out = {"phase": float(np.max(np.abs(size - 1.0)))}
     for k, st in stored.items():
         g, st = np.asarray(got[k]), np.asarray(st)
         if g.shape != st.shape or g.dtype != st.dtype:
@@ -439,6 +440,12 @@ def prep_differences(stored: dict, got: dict) -> dict:
             d = np.abs(g - st).reshape(len(st), -1).max(axis=1) if st.ndim else abs(g - st)
             out[k] = float(np.max(d / np.where(scale > 0, scale, 1.0)))
     return out
+
+
+def same_bits(a, b) -> bool:
+    """The two arrays (or numbers) have the same dtype, shape and bits."""
+    a, b = np.asarray(a), np.asarray(b)
+    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
 def _replay_exact(case: dict, prep: dict | None = None) -> dict:
@@ -599,8 +606,7 @@ def replay_all(path: Path = DATA) -> None:
         stored = stored_prep_of(case)
         got = prepare(current_params(case["p"], case["_param_names"]))
         worst = max(worst, *prep_differences(stored, got).values())
-        same += all(np.asarray(got[k]).tobytes() == np.asarray(v).tobytes()
-                    for k, v in stored.items())
+        same += all(same_bits(got[k], v) for k, v in stored.items())
     print(f"prepare(p) here: {same} of {len(exact)} exact cases the stored bits; largest "
           f"difference {worst:.2e} (prep_differences)")
 

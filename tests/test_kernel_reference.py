@@ -22,7 +22,6 @@ import sys
 from pathlib import Path
 
 import kernel_reference as kr
-import numpy as np
 import pytest
 
 from boringbar.simulate.kernels import prepare
@@ -65,11 +64,6 @@ PREP_TOLERANCE = 1e-9
 LAPACK_KEYS = ("lam", "V", "Vi")
 
 
-def _same_bits(a, b) -> bool:
-    a, b = np.asarray(a), np.asarray(b)
-    return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
-
-
 def test_prepare_agrees_with_the_stored_preparation(reference):
     """prepare(p) of every exact case is the stored one within LAPACK's roundings and the
     eigenvectors' phases, and where LAPACK gives the stored eigen-decomposition bit for
@@ -88,10 +82,10 @@ def test_prepare_agrees_with_the_stored_preparation(reference):
             bad += [f"{name} ({call} call): {k} differs by {d:.2e}"
                     for k, d in kr.prep_differences(stored, got).items()
                     if not d <= PREP_TOLERANCE]
-            if all(_same_bits(got[k], stored[k]) for k in LAPACK_KEYS):
+            if all(kr.same_bits(got[k], stored[k]) for k in LAPACK_KEYS):
                 bad += [f"{name} ({call} call): {k} is not the stored bits, though LAPACK's "
                         "eigen-decomposition is" for k, v in stored.items()
-                        if not _same_bits(got[k], v)]
+                        if not kr.same_bits(got[k], v)]
     assert not bad, "\n".join(bad)
 
 
