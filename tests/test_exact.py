@@ -21,6 +21,7 @@ import pytest
 from boringbar import Harmonic, Initial, State, make_system, simulate
 from boringbar._validate import ParameterError
 from boringbar.model.dampers import Friction
+from boringbar.orbits import shooting as sh
 from boringbar.reference.linear import tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import layout as L
@@ -361,6 +362,54 @@ def test_a_graze_inside_one_grid_step_is_found():
     run = simulate(s, Harmonic(27.334895166275178, 0.8848664733799202), duration_s=0.2,
                    initial=ini, record_every=1, integrator="exact")
     assert np.max(np.abs(run.history[:, 3])) <= 0.5e-4 * (1 + 1e-9)
+
+
+def test_a_sliding_ball_that_stops_and_turns_back_inside_a_grid_step_is_seen():
+    """A sliding ball with friction (physical preset, gap 0.2 mm, e = 0.417, mu = 1,
+    26.75 N at ratio 0.9665; the state that a run from rest reaches at 36.82 ms): its y'
+    rises through 0 and falls back 21 us later, inside one grid step (116 us).  Shooting,
+    whose event search is its own (orbits/events.py), finds the two reversals; the exact
+    integrator, whose step ends both show the ball sliding the same way, finds them by the
+    bound on y^(4) (stop_may_turn), and the two agree to round-off (measured 3.1e-15).
+    Missed, the friction kept its sign through the excursion: no event and 4.5e-5 off."""
+    system = make_system("ball", "physical", gap_m=0.2e-3, restitution=0.4169567761417031,
+                         friction_number=1.0, n_modes=1)
+    forcing = Harmonic(26.748730937015008, ratio=0.9665219247361284)
+    t0, window = 0.03682, 1e-4
+    x0 = np.array([4.8810812737720564e-05, -1.3142786371141275e+00,
+                   9.3743259175220646e-05, -6.8673652179780387e-03])
+    fl = sh.make_flow(system, forcing)
+    fl = dataclasses.replace(fl, phase=fl.omega * t0)
+    shot = sh.advance(fl, x0, duration=window)
+    assert [k for _, k in shot.events] == ["reversal", "reversal"]
+    (t1, _), (t2, _) = shot.events
+    # 21 us apart, in a window shorter than the exact integrator's grid step (116 us)
+    assert t0 < t1 < t2 < t0 + window and t2 - t1 < 0.25 * window
+    run = simulate(system, forcing, duration_s=window, dt_s=window / 100,
+                   initial=State(x0, t0), steady_fraction=1.0, integrator="exact")
+    assert run.metrics["events"] == 2
+    assert np.max(np.abs(run.final.x - shot.x)) <= 1e-12 * np.max(np.abs(shot.x))
+
+
+def test_a_sticking_orbit_with_short_reversals_is_what_rk4_converges_to():
+    """The paper preset's ball at gap 0.1 mm, 10 N, ratio 1.02 sticks twice a period, and
+    between its impacts its y' comes to zero and back within a grid step.  RK4 (the stick
+    law) converges to the exact integrator's RMS at first order: 2.1e-5, 9.6e-6, 4.0e-6
+    off at dt = 250, 125 and 62.5 ns, with the same pattern (2 impacts a period).  When
+    the exact integrator missed those reversals its RMS was 9.0e-4 above RK4's limit and its
+    pattern repeated over 5 periods."""
+    system = make_system("ball", "paper", gap_m=0.1e-3)
+    forcing = Harmonic(10.0, ratio=1.02)
+    exact = simulate(system, forcing, duration_s=1.0, integrator="exact", record_every=0)
+    assert (exact.pattern.n, exact.pattern.k) == (2, 1)
+    off = []
+    for dt in (1.25e-7, 6.25e-8):
+        run = simulate(system, forcing, duration_s=1.0, dt_s=dt, integrator="rk4",
+                       stick_law="hold", record_every=0)
+        assert (run.pattern.n, run.pattern.k) == (2, 1)
+        off.append(abs(run.rms_tip_m / exact.rms_tip_m - 1.0))
+    assert off[1] < 0.6 * off[0]
+    assert off[1] < 1e-5
 
 
 # --- a free ball: longer grid steps where they are proven safe; int y^2 in closed form ------

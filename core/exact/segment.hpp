@@ -701,71 +701,113 @@ inline Found wall_event_any(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
     return {kind, best};
 }
 
-// Whether a slipping ball's slip may run out and come back inside the grid step st, whose
-// ends show it slipping: its event function v = -slip (y' - s) has v' = -slip (y'' - s')
-// at the ends, and |v'''| = |y^(4)| <= b4.  The cubic Hermite interpolant H of v differs
-// from v by e, with double zeros at both ends and |e'''| <= 6 b4 (H''' = 3 v'''(x1) -
-// 2 v'''(x2)), so |e| <= b4 (x - a)^2 (b - x) <= 4 b4 h^3 / 27: v may reach 0 only where
-// H does within that.  (A slip excursion shorter than a grid step otherwise goes unseen:
-// the floor's friction then keeps its sign through it.)
-inline bool slip_may_turn(const SegSearch& sv, const StepEnds& st) {
-    const double h = st.b - st.a;
-    const double p0 = st.ev_a[EV_SLIP], p1 = st.ev_b[EV_SLIP];
-    const double m0 = -sv.slip * (st.ydd_a - sv.sd) * h;
-    const double m1 = -sv.slip * (st.ydd_b - sv.sd) * h;
-    const double margin = 4.0 * sv.b4 * h * h * h / 27.0;
+// Whether an event function v, below zero at both ends of a grid step of length h (p0,
+// p1) with rates d0, d1 there and |v'''| <= b4 over it, may reach zero inside the step:
+// the cubic Hermite interpolant H of v differs from v by e, with double zeros at both ends
+// and |e'''| <= 6 b4 (H''' = 3 v'''(x1) - 2 v'''(x2)), so |e| <= b4 (x - a)^2 (b - x) <=
+// 4 b4 h^3 / 27: v may reach 0 only where H does within that.  (Such an excursion,
+// shorter than a grid step, shows at neither end, and the search would pass it by.)
+inline bool may_come_back(double p0, double p1, double d0, double d1, double h, double b4) {
+    const double m0 = d0 * h;
+    const double m1 = d1 * h;
+    const double margin = 4.0 * b4 * h * h * h / 27.0;
     // H <= max(p0, p1) + 4/27 (|m0| + |m1|) on [0, 1]: far below zero, done
     if (pymax(p0, p1) + 0.15 * (std::fabs(m0) + std::fabs(m1)) + margin < 0.0) return false;
     const double hi = std::get<1>(_cubic_range(p0, p1, m0, m1));
     return hi + margin >= 0.0;
 }
 
-// The first end of the slip in the step st looked for on NSUB sub-steps (direct
-// evaluations), where slip_may_turn allows one inside it; -1 if none.
-inline double slip_turn_root(Work& w, SegCtx c, const StepEnds& st) {
+// Whether a slipping ball's slip may run out and come back inside the grid step st, whose
+// ends show it slipping: its event function v = -slip (y' - s) has v' = -slip (y'' - s')
+// at the ends, and |v'''| = |y^(4)| <= b4.  (Missed, the floor's friction keeps its sign
+// through the excursion.)
+inline bool slip_may_turn(const SegSearch& sv, const StepEnds& st) {
+    return may_come_back(st.ev_a[EV_SLIP], st.ev_b[EV_SLIP], -sv.slip * (st.ydd_a - sv.sd),
+                         -sv.slip * (st.ydd_b - sv.sd), st.b - st.a, sv.b4);
+}
+
+// Whether a sliding ball with friction may come to y' = 0 and back inside the grid step
+// st, whose ends show it sliding the way sdir says: its event function v = -sdir y' has
+// v' = -sdir y'' at the ends, and |v'''| = |y^(4)| <= b4.  (Missed, the friction keeps
+// its sign through the excursion, where the ball would have stuck or turned.)
+inline bool stop_may_turn(const SegSearch& sv, double sdir, const StepEnds& st) {
+    const double p0 = st.ev_a[EV_VSTOP], p1 = st.ev_b[EV_VSTOP];
+    if (!(p0 <= 0.0 && p1 <= 0.0)) return false;  // a crossing at the ends is searched
+    if (!(st.ydd_a == st.ydd_a && st.ydd_b == st.ydd_b)) return false;  // (a cut: no y'')
+    return may_come_back(p0, p1, -sdir * st.ydd_a, -sdir * st.ydd_b, st.b - st.a, sv.b4);
+}
+
+// The first crossing of the event function kind (EV_SLIP, EV_VSTOP) in the step st looked
+// for on NSUB sub-steps (direct evaluations), where slip_may_turn or stop_may_turn allows
+// one inside it; -1 if none.  A sliding ball's y' is sought crossing from below zero: one
+// that leaves zero the wrong way at the step's start (as only inconsistent inputs, such as
+// a massless ball, make it) is no return, and a root there would end segment after
+// segment a few ulp long.
+inline double turn_root(Work& w, SegCtx c, const StepEnds& st, idx kind) {
+    const bool strict = kind == EV_VSTOP;
     Vec ev_t = w.ev_t;
     double sa = st.a;
-    double ga = st.ev_a[EV_SLIP];
+    double ga = st.ev_a[kind];
     for (idx j = 1; j <= NSUB; ++j) {
         double sb = st.b;
-        double gb = st.ev_b[EV_SLIP];
+        double gb = st.ev_b[kind];
         if (j < NSUB) {
             sb = st.a + (st.b - st.a) * double(j) / double(NSUB);
             state_at(view(w, c), sb, w.qs, w.dX);
             events(ev_t, w.dX, sb, w.seg, c.mode, w.sys.mk, w.sys.force);
-            gb = ev_t[EV_SLIP];
+            gb = ev_t[kind];
         }
-        if (ga <= 0.0 && 0.0 < gb)
-            return find_root_any(EV_SLIP, sa, ga, sb, gb, view(w, c), -1.0);
+        if ((strict ? ga < 0.0 : ga <= 0.0) && 0.0 < gb)
+            return find_root_any(kind, sa, ga, sb, gb, view(w, c), -1.0);
         sa = sb;
         ga = gb;
     }
     return -1.0;
 }
 
-// What wall_event does when a step shows something (see there): kept out of the loop.
-// slip_turn: the slip may run out and come back inside the step (slip_may_turn).
-BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
-                                          bool graze, bool search, bool slip_turn) {
-    // a rolling ball's slip running out inside the step: the walls are looked for before it
-    double t_slip = -1.0;
+// Whether the step may hold a crossing and return of the slip (a slipping rolling ball)
+// or of y' (a sliding ball with friction) that its ends do not show (slip_may_turn,
+// stop_may_turn).
+struct Turns {
+    bool slip, stop;
+};
+
+// The friction's end inside the step st that the walls are looked for before: a rolling
+// ball's slip running out (at a crossing the ends show, or one that turns.slip allows
+// inside the step), or a sliding ball's y' coming to zero and back (turns.stop; a crossing
+// that the ends show is the wall search's own).  {-1, -1}: none.
+inline Found friction_end(Work& w, SegCtx c, const SegSearch& sv, const StepEnds& st,
+                          Turns turns) {
+    Found end{-1, -1.0};
     if (sv.watch_slip && st.ev_a[EV_SLIP] <= 0.0 && 0.0 < st.ev_b[EV_SLIP]) {
-        t_slip = find_root_any(EV_SLIP, st.a, st.ev_a[EV_SLIP], st.b, st.ev_b[EV_SLIP],
-                               view(w, c), -1.0);
-    } else if (slip_turn) {
-        t_slip = slip_turn_root(w, c, st);
+        end = {EV_SLIP, find_root_any(EV_SLIP, st.a, st.ev_a[EV_SLIP], st.b, st.ev_b[EV_SLIP],
+                                      view(w, c), -1.0)};
+    } else if (turns.slip) {
+        end = {EV_SLIP, turn_root(w, c, st, EV_SLIP)};
     }
-    if (t_slip >= 0.0) {
-        state_at(view(w, c), t_slip, w.qs, w.dX);
-        events(w.ev_u, w.dX, t_slip, w.seg, c.mode, w.sys.mk, w.sys.force);
-        st = StepEnds{st.a, t_slip, st.lev, st.ev_a, w.ev_u, st.ydd_a, NAN};
-        graze = st.lev == 0 && may_graze(st.a, t_slip, st.ev_a, w.ev_u, w.sys.ball.half, sv.b4);
+    if (turns.stop) {
+        const double t = turn_root(w, c, st, EV_VSTOP);
+        if (t >= 0.0 && !(end.t >= 0.0 && end.t <= t)) end = {EV_VSTOP, t};
+    }
+    return end;
+}
+
+// What wall_event does when a step shows something (see there): kept out of the loop.
+BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
+                                          bool graze, bool search, Turns turns) {
+    // the friction's end inside the step: the walls are looked for before it
+    const Found end = friction_end(w, c, sv, st, turns);
+    if (end.t >= 0.0) {
+        state_at(view(w, c), end.t, w.qs, w.dX);
+        events(w.ev_u, w.dX, end.t, w.seg, c.mode, w.sys.mk, w.sys.force);
+        st = StepEnds{st.a, end.t, st.lev, st.ev_a, w.ev_u, st.ydd_a, NAN};
+        graze = st.lev == 0 && may_graze(st.a, end.t, st.ev_a, w.ev_u, w.sys.ball.half, sv.b4);
         search = (st.ev_a[EV_PLUS] <= 0.0 && 0.0 < w.ev_u[EV_PLUS])
                  || (st.ev_a[EV_MINUS] <= 0.0 && 0.0 < w.ev_u[EV_MINUS])
                  || (sv.watch_v && st.ev_a[EV_VSTOP] <= 0.0 && 0.0 < w.ev_u[EV_VSTOP]);
     }
     Found f = wall_event_any(w, c, sv, st, graze, search);
-    if (f.kind < 0 && t_slip >= 0.0) return {EV_SLIP, t_slip};
+    if (f.kind < 0 && end.t >= 0.0) return end;
     return f;
 }
 
@@ -788,10 +830,11 @@ inline Found wall_event(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, Gra
                   || (watch_v && ev_a[EV_VSTOP] <= 0.0 && 0.0 < ev_b[EV_VSTOP])
                   || (graze && watch_ext && ev_a[EV_YEXT] * ev_b[EV_YEXT] < 0.0)
                   || (sv.watch_slip && ev_a[EV_SLIP] <= 0.0 && 0.0 < ev_b[EV_SLIP]);
-    // (a longer step, lev > 0, is proven free of the slip's end by level())
+    // (a longer step, lev > 0, is proven free of the slip's end and of y' = 0 by level())
     const bool slip_turn = sv.watch_slip && lev == 0 && slip_may_turn(sv, st);
-    if (!search && !graze && !slip_turn) return {-1, b};
-    return wall_event_found(w, c, sv, st, graze, search, slip_turn);
+    const bool stop_turn = watch_v && lev == 0 && stop_may_turn(sv, w.seg.sdir, st);
+    if (!search && !graze && !slip_turn && !stop_turn) return {-1, b};
+    return wall_event_found(w, c, sv, st, graze, search, Turns{slip_turn, stop_turn});
 }
 
 // The tool leaving (in the cut) or re-entering (out of it) in [a, b]: h = 0, or a graze of
