@@ -701,20 +701,48 @@ inline Found wall_event_any(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
     return {kind, best};
 }
 
+// The largest value of c0 + c1 s + c2 s^2 + c3 s^3 on [lo, hi]: at an end or where its
+// derivative is zero.
+inline double cubic_max(double c0, double c1, double c2, double c3, double lo, double hi) {
+    auto at = [&](double s) { return c0 + s * (c1 + s * (c2 + s * c3)); };
+    double best = pymax(at(lo), at(hi));
+    const double qa = 3.0 * c3, qb = 2.0 * c2, qc = c1;  // the derivative's coefficients
+    if (std::fabs(qa) > 1e-300) {
+        const double disc = qb * qb - 4.0 * qa * qc;
+        if (disc >= 0.0) {
+            const double sq = std::sqrt(disc);
+            for (double r : {(-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa)})
+                if (lo < r && r < hi) best = pymax(best, at(r));
+        }
+    } else if (std::fabs(qb) > 1e-300) {
+        const double r = -qc / qb;
+        if (lo < r && r < hi) best = pymax(best, at(r));
+    }
+    return best;
+}
+
 // Whether an event function v, below zero at both ends of a grid step of length h (p0,
-// p1) with rates d0, d1 there and |v'''| <= b4 over it, may reach zero inside the step:
-// the cubic Hermite interpolant H of v differs from v by e, with double zeros at both ends
-// and |e'''| <= 6 b4 (H''' = 3 v'''(x1) - 2 v'''(x2)), so |e| <= b4 (x - a)^2 (b - x) <=
-// 4 b4 h^3 / 27: v may reach 0 only where H does within that.  (Such an excursion,
-// shorter than a grid step, shows at neither end, and the search would pass it by.)
+// p1) with rates d0, d1 there and |v'''| <= b4 over it, may reach zero inside the step.
+// The cubic Hermite interpolant H of v differs from v by e, with double zeros at both
+// ends and |e'''| <= 6 b4 (H''' = 3 v'''(x1) - 2 v'''(x2)), so |e| <= b4 (x - a)^2 (b - x)
+// and |e| <= b4 (x - a) (b - x)^2: in s = (x - a) / h, v <= H + b4 h^3 s^2 (1 - s) on
+// [0, 1/2] and v <= H + b4 h^3 s (1 - s)^2 on [1/2, 1], two cubics whose largest values
+// say whether v may rise above 0 (a step that starts at v = 0, just after the event there,
+// is not taken for one that comes back to it).  (The bound's largest value, 4 b4 h^3 / 27,
+// rejects most steps first.  An excursion shorter than a grid step shows at neither end,
+// and the search would pass it by.)
 inline bool may_come_back(double p0, double p1, double d0, double d1, double h, double b4) {
     const double m0 = d0 * h;
     const double m1 = d1 * h;
     const double margin = 4.0 * b4 * h * h * h / 27.0;
     // H <= max(p0, p1) + 4/27 (|m0| + |m1|) on [0, 1]: far below zero, done
     if (pymax(p0, p1) + 0.15 * (std::fabs(m0) + std::fabs(m1)) + margin < 0.0) return false;
-    const double hi = std::get<1>(_cubic_range(p0, p1, m0, m1));
-    return hi + margin >= 0.0;
+    const double B = b4 * h * h * h;
+    // H in powers of s: p0 + m0 s + c2 s^2 + c3 s^3
+    const double c2 = -3.0 * p0 - 2.0 * m0 + 3.0 * p1 - m1;
+    const double c3 = 2.0 * p0 + m0 - 2.0 * p1 + m1;
+    return cubic_max(p0, m0, c2 + B, c3 - B, 0.0, 0.5) > 0.0
+           || cubic_max(p0, m0 + B, c2 - 2.0 * B, c3 + B, 0.5, 1.0) > 0.0;
 }
 
 // Whether a slipping ball's slip may run out and come back inside the grid step st, whose
@@ -730,39 +758,62 @@ inline bool slip_may_turn(const SegSearch& sv, const StepEnds& st) {
 // st, whose ends show it sliding the way sdir says: its event function v = -sdir y' has
 // v' = -sdir y'' at the ends, and |v'''| = |y^(4)| <= b4.  (Missed, the friction keeps
 // its sign through the excursion, where the ball would have stuck or turned.)
-inline bool stop_may_turn(const SegSearch& sv, double sdir, const StepEnds& st) {
+// (Out of the search's loop: inlined there, it moved GCC's inlining of the loop's other
+// helpers, and runs without friction took 5-14 % longer.)
+BB_NOINLINE inline bool stop_may_turn(const SegSearch& sv, double sdir, const StepEnds& st) {
     const double p0 = st.ev_a[EV_VSTOP], p1 = st.ev_b[EV_VSTOP];
     if (!(p0 <= 0.0 && p1 <= 0.0)) return false;  // a crossing at the ends is searched
     if (!(st.ydd_a == st.ydd_a && st.ydd_b == st.ydd_b)) return false;  // (a cut: no y'')
     return may_come_back(p0, p1, -sdir * st.ydd_a, -sdir * st.ydd_b, st.b - st.a, sv.b4);
 }
 
-// The first crossing of the event function kind (EV_SLIP, EV_VSTOP) in the step st looked
-// for on NSUB sub-steps (direct evaluations), where slip_may_turn or stop_may_turn allows
-// one inside it; -1 if none.  A sliding ball's y' is sought crossing from below zero: one
-// that leaves zero the wrong way at the step's start (as only inconsistent inputs, such as
-// a massless ball, make it) is no return, and a root there would end segment after
-// segment a few ulp long.
-inline double turn_root(Work& w, SegCtx c, const StepEnds& st, idx kind) {
-    const bool strict = kind == EV_VSTOP;
-    Vec ev_t = w.ev_t;
-    double sa = st.a;
-    double ga = st.ev_a[kind];
-    for (idx j = 1; j <= NSUB; ++j) {
-        double sb = st.b;
-        double gb = st.ev_b[kind];
-        if (j < NSUB) {
-            sb = st.a + (st.b - st.a) * double(j) / double(NSUB);
-            state_at(view(w, c), sb, w.qs, w.dX);
-            events(ev_t, w.dX, sb, w.seg, c.mode, w.sys.mk, w.sys.force);
-            gb = ev_t[kind];
-        }
-        if ((strict ? ga < 0.0 : ga <= 0.0) && 0.0 < gb)
-            return find_root_any(kind, sa, ga, sb, gb, view(w, c), -1.0);
-        sa = sb;
-        ga = gb;
+// The rate of the event function kind at tau of the segment (X the state there): -sdir
+// y'' for EV_VSTOP, -slip (y'' - s') for EV_SLIP.
+inline double turn_rate(Work& w, SegCtx c, const SegSearch& sv, idx kind, double tau, Vec X) {
+    const double f = w.sys.force.f0 * std::sin(w.sys.force.om * (w.seg.ts + tau));
+    const double ydd = ball_ydd(X, f, w.seg, w.sys.ddc, c.n, c.mode, w.sys.roll.kroll).first;
+    return kind == EV_VSTOP ? -w.seg.sdir * ydd : -sv.slip * (ydd - sv.sd);
+}
+
+// Most halvings of a step in turn_root: beyond, an excursion of v above zero would last
+// less than 2^-TURN_DEPTH of the step, and its height be below b4 (h 2^-TURN_DEPTH)^3.
+constexpr int TURN_DEPTH = 12;
+
+// An event function's value v and rate d at the time t.
+struct VEnd {
+    double t, v, d;
+};
+
+// The first crossing from below of the event function kind (EV_SLIP, EV_VSTOP) in [a.t,
+// b.t] (both ends below zero) where may_come_back allows one: the interval is halved and
+// each half tested again, left first, its bound 8 times tighter, until a half is proven
+// free, or v is above zero at a midpoint (the root then lies between it and the half's
+// start); -1 if none.  A sliding ball's y' that leaves zero the wrong way at the step's
+// start (as only inconsistent inputs, such as a massless ball, make it) is no return: a
+// root there would end segment after segment a few ulp long.
+inline double turn_root(Work& w, SegCtx c, const SegSearch& sv, idx kind, VEnd a, VEnd b,
+                        int depth) {
+    if (depth > TURN_DEPTH || !may_come_back(a.v, b.v, a.d, b.d, b.t - a.t, sv.b4)) return -1.0;
+    const double m = 0.5 * (a.t + b.t);
+    state_at(view(w, c), m, w.qs, w.dX);
+    events(w.ev_t, w.dX, m, w.seg, c.mode, w.sys.mk, w.sys.force);
+    const double vm = w.ev_t[kind];
+    if (vm > 0.0) {
+        const bool from_below = kind == EV_VSTOP ? a.v < 0.0 : a.v <= 0.0;
+        return from_below ? find_root_any(kind, a.t, a.v, m, vm, view(w, c), -1.0) : -1.0;
     }
-    return -1.0;
+    const VEnd mid{m, vm, turn_rate(w, c, sv, kind, m, w.dX)};
+    const double r = turn_root(w, c, sv, kind, a, mid, depth + 1);
+    return r >= 0.0 ? r : turn_root(w, c, sv, kind, mid, b, depth + 1);
+}
+
+// turn_root on the grid step st, whose ends' rates come from y'' there.
+inline double turn_root(Work& w, SegCtx c, const SegSearch& sv, const StepEnds& st, idx kind) {
+    const double ya = st.ydd_a, yb = st.ydd_b;
+    const double da = kind == EV_VSTOP ? -w.seg.sdir * ya : -sv.slip * (ya - sv.sd);
+    const double db = kind == EV_VSTOP ? -w.seg.sdir * yb : -sv.slip * (yb - sv.sd);
+    return turn_root(w, c, sv, kind, VEnd{st.a, st.ev_a[kind], da},
+                     VEnd{st.b, st.ev_b[kind], db}, 0);
 }
 
 // Whether the step may hold a crossing and return of the slip (a slipping rolling ball)
@@ -783,10 +834,10 @@ inline Found friction_end(Work& w, SegCtx c, const SegSearch& sv, const StepEnds
         end = {EV_SLIP, find_root_any(EV_SLIP, st.a, st.ev_a[EV_SLIP], st.b, st.ev_b[EV_SLIP],
                                       view(w, c), -1.0)};
     } else if (turns.slip) {
-        end = {EV_SLIP, turn_root(w, c, st, EV_SLIP)};
+        end = {EV_SLIP, turn_root(w, c, sv, st, EV_SLIP)};
     }
     if (turns.stop) {
-        const double t = turn_root(w, c, st, EV_VSTOP);
+        const double t = turn_root(w, c, sv, st, EV_VSTOP);
         if (t >= 0.0 && !(end.t >= 0.0 && end.t <= t)) end = {EV_VSTOP, t};
     }
     return end;
