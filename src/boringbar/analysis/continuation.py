@@ -28,7 +28,13 @@ from boringbar.execute import Execution
 from boringbar.model.dampers import Friction
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
-from boringbar.orbits.attractors import RETURN_TOL, periodic_attractors, return_distance, spread
+from boringbar.orbits.attractors import (
+    RETURN_TOL,
+    SETTLED,
+    periodic_attractors,
+    return_distance,
+    spread,
+)
 from boringbar.orbits.branch import (
     MAX_STEP,
     PARAMETERS,
@@ -63,7 +69,8 @@ class ContinuationOptions:
     to the range; ``max_points``: the point budget (None: from ``max_step``,
     :func:`boringbar.orbits.branch.point_budget`);
     ``start``: "simulation" (``settle_periods`` periods of the exact integrator from
-    rest), "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
+    rest, and as many again until the state returns to itself: SETTLE_STRETCHES),
+    "masri-caughey" or "state" (``state``, at phase 0); ``min_step``: the
     smallest step the halving goes down to before the branch stops (relative);
     ``switch``, ``seeds``, ``max_branches``: the orbit map's (docs/continuation.md, "The
     orbit map"); ``other_end``: the map covers [other_end, stop] (either order), the
@@ -149,11 +156,31 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
         dy0 = float(orb.relative_displacement(h) - orb.relative_displacement(-h)) / (2 * h)
         return np.array([float(orb.modal_displacement(0.0)), float(orb.modal_velocity(0.0)),
                          float(orb.relative_displacement(0.0)), dy0])
+    return _simulated_start(system, o, fl)
+
+
+#: A simulated start runs ``settle_periods`` forcing periods from rest, and as many again,
+#: up to this many stretches in all, until its state returns to itself over the orbit's
+#: periods within SETTLED of its size (a transient can outlast the first stretch, and
+#: Newton refuses to start from it).
+SETTLE_STRETCHES = 4
+
+
+def _simulated_start(system: System, o: ContinuationOptions, fl) -> np.ndarray:
+    """The state at phase 0 after the exact integrator's settling (SETTLE_STRETCHES)."""
     forcing = Harmonic(o.force_n, ratio=o.ratio)
     dt = fl.period / math.ceil(fl.period / 1e-6)  # whole periods: the end is at phase 0
-    run = simulate(system, forcing, duration_s=o.settle_periods * fl.period, dt_s=dt,
-                   integrator="exact", record_every=0)
-    return run.final.x[:fl.N]
+    state = None
+    for _ in range(SETTLE_STRETCHES):
+        run = simulate(system, forcing, duration_s=o.settle_periods * fl.period, dt_s=dt,
+                       integrator="exact", initial=state, record_every=0)
+        x = run.final.x[:fl.N]
+        back = simulate(system, forcing, duration_s=o.periods * fl.period, dt_s=dt,
+                        integrator="exact", initial=run.final, record_every=0)
+        if np.max(np.abs(back.final.x[:fl.N] - x)) <= SETTLED * np.max(np.abs(x)):
+            break
+        state = run.final
+    return x
 
 
 @one_blas_thread
