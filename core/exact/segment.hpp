@@ -745,13 +745,20 @@ inline bool may_come_back(double p0, double p1, double d0, double d1, double h, 
            || cubic_max(p0, m0 + B, c2 - 2.0 * B, c3 + B, 0.5, 1.0) > 0.0;
 }
 
+// The rate of the event function kind from y'' (sdir: a sliding ball's direction): -sdir
+// y'' for EV_VSTOP, -slip (y'' - s') for EV_SLIP.
+inline double rate_from_ydd(const SegSearch& sv, double sdir, idx kind, double ydd) {
+    return kind == EV_VSTOP ? -sdir * ydd : -sv.slip * (ydd - sv.sd);
+}
+
 // Whether a slipping ball's slip may run out and come back inside the grid step st, whose
 // ends show it slipping: its event function v = -slip (y' - s) has v' = -slip (y'' - s')
 // at the ends, and |v'''| = |y^(4)| <= b4.  (Missed, the floor's friction keeps its sign
 // through the excursion.)
 inline bool slip_may_turn(const SegSearch& sv, const StepEnds& st) {
-    return may_come_back(st.ev_a[EV_SLIP], st.ev_b[EV_SLIP], -sv.slip * (st.ydd_a - sv.sd),
-                         -sv.slip * (st.ydd_b - sv.sd), st.b - st.a, sv.b4);
+    return may_come_back(st.ev_a[EV_SLIP], st.ev_b[EV_SLIP],
+                         rate_from_ydd(sv, 0.0, EV_SLIP, st.ydd_a),
+                         rate_from_ydd(sv, 0.0, EV_SLIP, st.ydd_b), st.b - st.a, sv.b4);
 }
 
 // Whether a sliding ball with friction may come to y' = 0 and back inside the grid step
@@ -764,15 +771,15 @@ BB_NOINLINE inline bool stop_may_turn(const SegSearch& sv, double sdir, const St
     const double p0 = st.ev_a[EV_VSTOP], p1 = st.ev_b[EV_VSTOP];
     if (!(p0 <= 0.0 && p1 <= 0.0)) return false;  // a crossing at the ends is searched
     if (!(st.ydd_a == st.ydd_a && st.ydd_b == st.ydd_b)) return false;  // (a cut: no y'')
-    return may_come_back(p0, p1, -sdir * st.ydd_a, -sdir * st.ydd_b, st.b - st.a, sv.b4);
+    return may_come_back(p0, p1, rate_from_ydd(sv, sdir, EV_VSTOP, st.ydd_a),
+                         rate_from_ydd(sv, sdir, EV_VSTOP, st.ydd_b), st.b - st.a, sv.b4);
 }
 
-// The rate of the event function kind at tau of the segment (X the state there): -sdir
-// y'' for EV_VSTOP, -slip (y'' - s') for EV_SLIP.
+// The rate of the event function kind at tau of the segment (X the state there).
 inline double turn_rate(Work& w, SegCtx c, const SegSearch& sv, idx kind, double tau, Vec X) {
     const double f = w.sys.force.f0 * std::sin(w.sys.force.om * (w.seg.ts + tau));
     const double ydd = ball_ydd(X, f, w.seg, w.sys.ddc, c.n, c.mode, w.sys.roll.kroll).first;
-    return kind == EV_VSTOP ? -w.seg.sdir * ydd : -sv.slip * (ydd - sv.sd);
+    return rate_from_ydd(sv, w.seg.sdir, kind, ydd);
 }
 
 // Most halvings of a step in turn_root: beyond, an excursion of v above zero would last
@@ -785,15 +792,15 @@ struct VEnd {
 };
 
 // The first crossing from below of the event function kind (EV_SLIP, EV_VSTOP) in [a.t,
-// b.t] (both ends below zero) where may_come_back allows one: the interval is halved and
-// each half tested again, left first, its bound 8 times tighter, until a half is proven
-// free, or v is above zero at a midpoint (the root then lies between it and the half's
-// start); -1 if none.  A sliding ball's y' that leaves zero the wrong way at the step's
-// start (as only inconsistent inputs, such as a massless ball, make it) is no return: a
-// root there would end segment after segment a few ulp long.
+// b.t] (both ends below zero, and may_come_back allowing one): v at the midpoint, and if
+// it is not above zero each half tested again, left first, its bound 8 times tighter,
+// and searched the same way where it allows one, until the halves are proven free or v is
+// above zero at a midpoint (the root then lies between it and the half's start); -1 if
+// none.  A sliding ball's y' that leaves zero the wrong way at the step's start (as only
+// inconsistent inputs, such as a massless ball, make it) is no return: a root there would
+// end segment after segment a few ulp long.
 inline double turn_root(Work& w, SegCtx c, const SegSearch& sv, idx kind, VEnd a, VEnd b,
                         int depth) {
-    if (depth > TURN_DEPTH || !may_come_back(a.v, b.v, a.d, b.d, b.t - a.t, sv.b4)) return -1.0;
     const double m = 0.5 * (a.t + b.t);
     state_at(view(w, c), m, w.qs, w.dX);
     events(w.ev_t, w.dX, m, w.seg, c.mode, w.sys.mk, w.sys.force);
@@ -802,18 +809,24 @@ inline double turn_root(Work& w, SegCtx c, const SegSearch& sv, idx kind, VEnd a
         const bool from_below = kind == EV_VSTOP ? a.v < 0.0 : a.v <= 0.0;
         return from_below ? find_root_any(kind, a.t, a.v, m, vm, view(w, c), -1.0) : -1.0;
     }
+    if (depth == TURN_DEPTH) return -1.0;
     const VEnd mid{m, vm, turn_rate(w, c, sv, kind, m, w.dX)};
-    const double r = turn_root(w, c, sv, kind, a, mid, depth + 1);
-    return r >= 0.0 ? r : turn_root(w, c, sv, kind, mid, b, depth + 1);
+    for (const auto& [lo, hi] : {std::pair{a, mid}, std::pair{mid, b}}) {
+        if (may_come_back(lo.v, hi.v, lo.d, hi.d, hi.t - lo.t, sv.b4)) {
+            const double r = turn_root(w, c, sv, kind, lo, hi, depth + 1);
+            if (r >= 0.0) return r;
+        }
+    }
+    return -1.0;
 }
 
-// turn_root on the grid step st, whose ends' rates come from y'' there.
+// turn_root on the grid step st (slip_may_turn or stop_may_turn allowing a return inside
+// it), whose ends' rates come from y'' there.
 inline double turn_root(Work& w, SegCtx c, const SegSearch& sv, const StepEnds& st, idx kind) {
-    const double ya = st.ydd_a, yb = st.ydd_b;
-    const double da = kind == EV_VSTOP ? -w.seg.sdir * ya : -sv.slip * (ya - sv.sd);
-    const double db = kind == EV_VSTOP ? -w.seg.sdir * yb : -sv.slip * (yb - sv.sd);
-    return turn_root(w, c, sv, kind, VEnd{st.a, st.ev_a[kind], da},
-                     VEnd{st.b, st.ev_b[kind], db}, 0);
+    const double sdir = w.seg.sdir;
+    return turn_root(w, c, sv, kind,
+                     VEnd{st.a, st.ev_a[kind], rate_from_ydd(sv, sdir, kind, st.ydd_a)},
+                     VEnd{st.b, st.ev_b[kind], rate_from_ydd(sv, sdir, kind, st.ydd_b)}, 0);
 }
 
 // Whether the step may hold a crossing and return of the slip (a slipping rolling ball)
