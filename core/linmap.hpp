@@ -23,6 +23,13 @@
 // y'.  Slipping at every stage, the floor's friction is a constant -mu_k N sgn(slip)
 // beside F_b, and the step is the sliding ball's map with the two in F_b's column.
 //
+// A sliding ball that sticks under the sgn() law chatters: its y' changes sign from
+// stage to stage (+ - + -, + + + -, ... relative to stage 1), and F_b with it.  Each such
+// sign pattern is a linear step too, with F_b = -F_c sgn(y'_1) times the pattern's signs
+// at the stages: only F_b's column differs, and it is built for each of the 8 patterns
+// (fb).  The kernel takes a pattern's step where the stages' y', computed from its rows,
+// have that pattern's signs by more than their round-off.
+//
 // The tables are built by the stage recursion applied to the basis vectors, the same
 // operations in the same order at every build, so the tables (and every step taken with
 // them) have the same bits in every run, batch lane and instruction-set copy.
@@ -44,6 +51,15 @@ namespace L = layout;
 constexpr int NZ_MAX = NX_MAX + 3;  // state, S, C, F_b
 constexpr int NV_MAX = L::NMAX + 1;  // damped velocities: the modes and the absorber
 
+// One column of the tables: the step's response to one basis vector of z.
+struct Column {
+    double Pd[NX_MAX], Yr[3], Vr[3][NV_MAX], Fs, Fc, Kr[4];
+};
+
+// the sign patterns of the stages' y' relative to stage 1's: bit k set where stage k + 2
+// has the opposite sign
+constexpr int NPAT = 8;
+
 struct StepMap {
     double Pd[NX_MAX][NZ_MAX];
     double Yr[3][NZ_MAX];
@@ -52,6 +68,14 @@ struct StepMap {
     double Fs[NZ_MAX];
     double Fc[NZ_MAX];
     double Kr[4][NZ_MAX];
+    // F_b's column for each sign pattern (fb[0] that of Pd, Yr, Vr, Fs, Fc): a sliding
+    // ball's (n_patterns = NPAT), else fb[0] alone
+    Column fb[NPAT];
+    int n_patterns;
+    double ws[4];  // the RK4 weights b_s dt
+    // a pattern's friction work (rows of z): sum_s b_s sigma_s y'_s and
+    // sum_s b_s sigma_s psi_d u'_s, sigma_s = -1 at the pattern's flipped stages
+    double Gw[NPAT][2][NZ_MAX];
 };
 
 // The roll law's stage after a sliding ball's (derivative_with): out of line, because
@@ -61,11 +85,95 @@ BB_NOINLINE inline double map_roll(const Params& q, Shape<0, -1> sh, const doubl
     return roll_stage(q, sh, Xs, Kd, Kd[sh.iyd()], t.sfree - q.kappa1 * t.fb, t);
 }
 
-// The tables of the step of dt for the first n modes of the packed parameters p: the
-// stage recursion of rk4.hpp's step with the stage derivative of dynamics.hpp, F_b a
-// column of z (a unit friction force, F_b = -F_c sgn(y') with F_c = 1 and y' < 0, in its
-// column; none, y' = 0, in the others).  rolled: a rolling ball's rolled regime (else a
-// sliding ball's step, which a slipping ball takes too).
+// The step's stages: the forcing at the stage times t + c_s dt is F0 (alpha_s S +
+// beta_s C); c_s dt and the weights b_s dt.
+struct Stages {
+    double alpha[4], beta[4], cst[4], wst[4];
+
+    Stages(double om, double dt)
+        : alpha{1.0, std::cos(om * 0.5 * dt), std::cos(om * 0.5 * dt), std::cos(om * dt)},
+          beta{0.0, std::sin(om * 0.5 * dt), std::sin(om * 0.5 * dt), std::sin(om * dt)},
+          cst{0.0, 0.5 * dt, 0.5 * dt, dt},
+          wst{dt / 6.0, dt / 3.0, dt / 3.0, dt / 6.0} {}
+};
+
+// The stage recursion of rk4.hpp's step applied to the basis vector e_col of z, with the
+// stage derivative of dynamics.hpp: F_b a column of z (a unit friction force, F_b =
+// -F_c sgn(y') with F_c = 1, in its column; none, y' = 0, in the others).  flips: the
+// stages 2-4 (bits 0-2) whose y' has the sign opposite to stage 1's, so that F_b is -1
+// there in F_b's column (a sign pattern, below).
+inline Column push_column(const Params& q, const Stages& st, int col, int flips) {
+    const Shape<0, -1> sh(q);
+    const bool ball = sh.ball(), tmd = sh.tmd();
+    const int n = sh.n(), nxs = sh.nx(), nx = sh.nxm(), iyd = sh.iyd();
+    const double *alpha = st.alpha, *beta = st.beta, *cst = st.cst, *wst = st.wst;
+    Column c;
+    double X[NX_MAX + 1], Xs[NX_MAX + 1], Kd[NX_MAX + 1], acc[NX_MAX + 1];
+    for (int j = 0; j < nxs; ++j) {
+        X[j] = j == col ? 1.0 : 0.0;
+        Kd[j] = 0.0;
+        acc[j] = 0.0;
+    }
+    if (sh.rolls()) X[sh.is()] = X[iyd];
+    const double S = col == nx ? 1.0 : 0.0;
+    const double Cz = col == nx + 1 ? 1.0 : 0.0;
+    double fs = 0.0, fc = 0.0;
+    for (int s = 0; s < 4; ++s) {
+        // F_b = 1 in its column (-1 at a flipped stage)
+        const bool flip = s > 0 && ((flips >> (s - 1)) & 1);
+        const double ysign = col == nx + 2 ? (flip ? 1.0 : -1.0) : 0.0;
+        for (int j = 0; j < nxs; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
+        const double f = q.f0 * (alpha[s] * S + beta[s] * Cz);
+        StageTerms t = derivative_with<0, -1>(q, sh, Xs, f, Kd, ysign);
+        // the roll law after it (compiled into derivative_with's copy here, GCC 12
+        // stops with the internal error noted there)
+        if (sh.rolls()) Kd[iyd] = map_roll(q, sh, Xs, Kd, t);
+        c.Kr[s] = t.floor;
+        if (s > 0) {
+            c.Yr[s - 1] = ball ? Xs[iyd] : 0.0;
+            double reld = tmd ? Xs[iyd] : 0.0;  // the absorber's stroke rate
+            for (int i = 0; i < n; ++i) {
+                c.Vr[s - 1][i] = Xs[n + i];
+                if (tmd) reld -= q.pA[i] * Xs[n + i];
+            }
+            c.Vr[s - 1][n] = reld;
+        }
+        for (int j = 0; j < nxs; ++j) acc[j] += wst[s] * Kd[j];
+        fs += wst[s] * q.f0 * alpha[s] * t.wf;
+        fc += wst[s] * q.f0 * beta[s] * t.wf;
+    }
+    for (int j = 0; j < nx; ++j) c.Pd[j] = acc[j];
+    // sum_s b_s f_s W'_s with f_s = F0 (alpha_s S + beta_s C) is S (Fs . z) + C (Fc . z)
+    c.Fs = fs;
+    c.Fc = fc;
+    return c;
+}
+
+// The rows StepMap::Gw of the sign pattern flips, from the stages' y' and velocities in
+// the tables (stage 1's: the state's own).
+inline void pattern_work(const Params& q, Shape<0, -1> sh, StepMap& mp, int flips) {
+    const int n = sh.n(), nx = sh.nxm(), nz = nx + 3;
+    for (int c = 0; c < nz; ++c) {
+        const Column& fb = mp.fb[flips];
+        const bool fcol = c == nz - 1;
+        double g = c == sh.iyd() ? mp.ws[0] : 0.0;
+        double h = c >= n && c < 2 * n ? mp.ws[0] * q.pD[c - n] : 0.0;
+        for (int s3 = 0; s3 < 3; ++s3) {
+            const double w = (flips >> s3) & 1 ? -mp.ws[s3 + 1] : mp.ws[s3 + 1];
+            double pdv = 0.0;
+            for (int i = 0; i < n; ++i) pdv += q.pD[i] * (fcol ? fb.Vr[s3][i] : mp.Vr[s3][i][c]);
+            g += w * (fcol ? fb.Yr[s3] : mp.Yr[s3][c]);
+            h += w * pdv;
+        }
+        mp.Gw[flips][0][c] = g;
+        mp.Gw[flips][1][c] = h;
+    }
+}
+
+// The tables of the step of dt for the first n modes of the packed parameters p, column
+// by column (push_column).  rolled: a rolling ball's rolled regime (else a sliding ball's
+// step, which a slipping ball takes too).  A sliding ball's F_b column is also built for
+// each sign pattern of the stages' y' (StepMap::fb), with the pattern's friction work.
 inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolled) {
     Params q = unpack(p, dt);
     q.n = n;
@@ -78,57 +186,29 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolle
     }
     set_friction(q, 1.0);
     const Shape<0, -1> sh(q);
-    const bool ball = sh.ball(), tmd = sh.tmd();
-    const int nxs = sh.nx(), nx = sh.nxm(), nz = nx + 3, iyd = sh.iyd();
-    // the forcing at the stage times t + c_s dt is F0 (alpha_s S + beta_s C)
-    const double ch = std::cos(q.om * 0.5 * dt), shh = std::sin(q.om * 0.5 * dt);
-    const double c1 = std::cos(q.om * dt), s1 = std::sin(q.om * dt);
-    const double alpha[4] = {1.0, ch, ch, c1};
-    const double beta[4] = {0.0, shh, shh, s1};
-    const double cst[4] = {0.0, 0.5 * dt, 0.5 * dt, dt};
-    const double wst[4] = {dt / 6.0, dt / 3.0, dt / 3.0, dt / 6.0};
+    const int nx = sh.nxm(), nz = nx + 3;
+    const Stages st(q.om, dt);
     for (int s = 0; s < 4; ++s) {
-        for (int i = 0; i < n; ++i) mp.Wv[s][i] = wst[s] * q.C[i];
-        mp.Wv[s][n] = tmd ? wst[s] * q.ca : 0.0;
+        mp.ws[s] = st.wst[s];
+        for (int i = 0; i < n; ++i) mp.Wv[s][i] = st.wst[s] * q.C[i];
+        mp.Wv[s][n] = sh.tmd() ? st.wst[s] * q.ca : 0.0;
     }
-
-    double X[NX_MAX + 1], Xs[NX_MAX + 1], Kd[NX_MAX + 1], acc[NX_MAX + 1];
-    for (int col = 0; col < nz; ++col) {  // the response to the basis vector e_col of z
-        for (int j = 0; j < nxs; ++j) {
-            X[j] = j == col ? 1.0 : 0.0;
-            Kd[j] = 0.0;
-            acc[j] = 0.0;
+    for (int col = 0; col < nz; ++col) {
+        const Column c = push_column(q, st, col, 0);
+        for (int j = 0; j < nx; ++j) mp.Pd[j][col] = c.Pd[j];
+        for (int s3 = 0; s3 < 3; ++s3) {
+            mp.Yr[s3][col] = c.Yr[s3];
+            for (int k = 0; k <= n; ++k) mp.Vr[s3][k][col] = c.Vr[s3][k];
         }
-        if (sh.rolls()) X[sh.is()] = X[iyd];
-        const double S = col == nx ? 1.0 : 0.0;
-        const double Cz = col == nx + 1 ? 1.0 : 0.0;
-        const double ysign = col == nx + 2 ? -1.0 : 0.0;  // F_b = 1 in its column
-        double fs = 0.0, fc = 0.0;
-        for (int s = 0; s < 4; ++s) {
-            for (int j = 0; j < nxs; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
-            const double f = q.f0 * (alpha[s] * S + beta[s] * Cz);
-            StageTerms t = derivative_with<0, -1>(q, sh, Xs, f, Kd, ysign);
-            // the roll law after it (compiled into derivative_with's copy here, GCC 12
-            // stops with the internal error noted there)
-            if (sh.rolls()) Kd[iyd] = map_roll(q, sh, Xs, Kd, t);
-            mp.Kr[s][col] = t.floor;
-            if (s > 0) {
-                mp.Yr[s - 1][col] = ball ? Xs[iyd] : 0.0;
-                double reld = tmd ? Xs[iyd] : 0.0;  // the absorber's stroke rate
-                for (int i = 0; i < n; ++i) {
-                    mp.Vr[s - 1][i][col] = Xs[n + i];
-                    if (tmd) reld -= q.pA[i] * Xs[n + i];
-                }
-                mp.Vr[s - 1][n][col] = reld;
-            }
-            for (int j = 0; j < nxs; ++j) acc[j] += wst[s] * Kd[j];
-            fs += wst[s] * q.f0 * alpha[s] * t.wf;
-            fc += wst[s] * q.f0 * beta[s] * t.wf;
-        }
-        for (int j = 0; j < nx; ++j) mp.Pd[j][col] = acc[j];
-        // sum_s b_s f_s W'_s with f_s = F0 (alpha_s S + beta_s C) is S (Fs . z) + C (Fc . z)
-        mp.Fs[col] = fs;
-        mp.Fc[col] = fc;
+        for (int s = 0; s < 4; ++s) mp.Kr[s][col] = c.Kr[s];
+        mp.Fs[col] = c.Fs;
+        mp.Fc[col] = c.Fc;
+        if (col == nz - 1) mp.fb[0] = c;
+    }
+    mp.n_patterns = sh.ball() && !q.roll ? NPAT : 1;
+    for (int flips = 1; flips < mp.n_patterns; ++flips) {
+        mp.fb[flips] = push_column(q, st, nz - 1, flips);
+        pattern_work(q, sh, mp, flips);
     }
 }
 
@@ -153,20 +233,40 @@ BB_V4_OP operator-(v4 a, double s) { return {a.lo - s, a.hi - s}; }
 BB_V4_OP& operator+=(v4& a, v4 b) { return a = a + b; }
 #undef BB_V4_OP
 
+// F_b's column of the packed tables (VecMap's, one per sign pattern): d, y, v, f as
+// VecMap's dS, yS, vS, fS, and yb its bound of |y'_s - y'_0|.
+struct FbCol {
+    v2 d[NV_MAX];
+    v4 y;
+    v4 v[NV_MAX];
+    v2 f;
+    double yb;
+};
+
+// Rows of z in lanes, as VecMap's fS, fC, fP with F_b's column F.
+struct FbWork {
+    v2 S, C, F, P[NX_MAX];
+};
+
 struct VecMap {
     // the increment: row pairs (i, n + i) for mode i < n, and (iy, iyd) as pair n
-    v2 dS[NV_MAX], dC[NV_MAX], dF[NV_MAX], dP[NV_MAX][NX_MAX];
+    v2 dS[NV_MAX], dC[NV_MAX], dP[NV_MAX][NX_MAX];
     // y' at stages 2-4 in lanes 0-2 (lane 3 unused)
-    v4 yS, yC, yF, yP[NX_MAX];
-    // bounds of |y'_s - y'_0| over the stages: max_s |Yr[s][c]| per column c of z, with
-    // Yr[s][iyd] - 1 in column iyd (the step's own y')
+    v4 yS, yC, yP[NX_MAX];
+    // bounds of |y'_s - y'_0| over the stages: max_s |Yr[s][c]| per column c of z but
+    // F_b's, with Yr[s][iyd] - 1 in column iyd (the step's own y')
     double yb[NZ_MAX];
     // the damped velocities at stages 2-4 in lanes 0-2: modes k < n, the absorber k = n
-    v4 vS[NV_MAX], vC[NV_MAX], vF[NV_MAX], vP[NV_MAX][NX_MAX];
+    v4 vS[NV_MAX], vC[NV_MAX], vP[NV_MAX][NX_MAX];
     v4 wv[NV_MAX];      // their weights Wv[1 + lane][k]
     double w0[NV_MAX];  // the weights of the stage-1 velocities, Wv[0][k]
     // the force's work: lanes (Fs, Fc)
-    v2 fS, fC, fF, fP[NX_MAX];
+    v2 fS, fC, fP[NX_MAX];
+    // F_b's column by sign pattern (fb[0]: y' of one sign at every stage)
+    FbCol fb[NPAT];
+    int n_patterns;
+    double ws[4];  // the RK4 weights b_s dt
+    FbWork fw[NPAT];  // a pattern's friction work, lanes (F_b's travel, its reaction's)
     // a rolling ball's floor friction at stages 1-4 in lanes 0-3
     v4 kS, kC, kF, kP[NX_MAX];
 };
@@ -178,7 +278,6 @@ inline VecMap pack_map(int n, const StepMap& mp) {
         const int a0 = pr < n ? pr : 2 * n, a1 = pr < n ? n + pr : 2 * n + 1;
         vm.dS[pr] = v2{mp.Pd[a0][iS], mp.Pd[a1][iS]};
         vm.dC[pr] = v2{mp.Pd[a0][iC], mp.Pd[a1][iC]};
-        vm.dF[pr] = v2{mp.Pd[a0][iF], mp.Pd[a1][iF]};
         for (int j = 0; j < nx; ++j) vm.dP[pr][j] = v2{mp.Pd[a0][j], mp.Pd[a1][j]};
     }
     auto lanes = [](const double* a, const double* b, const double* c) {
@@ -186,20 +285,45 @@ inline VecMap pack_map(int n, const StepMap& mp) {
     };
     vm.yS = lanes(&mp.Yr[0][iS], &mp.Yr[1][iS], &mp.Yr[2][iS]);
     vm.yC = lanes(&mp.Yr[0][iC], &mp.Yr[1][iC], &mp.Yr[2][iC]);
-    vm.yF = lanes(&mp.Yr[0][iF], &mp.Yr[1][iF], &mp.Yr[2][iF]);
     for (int j = 0; j < nx; ++j) vm.yP[j] = lanes(&mp.Yr[0][j], &mp.Yr[1][j], &mp.Yr[2][j]);
-    for (int c = 0; c < nx + 3; ++c) {
+    // max_s |y_s| (y_s - 1 in column iyd), a NaN entry making the bound NaN
+    auto bound = [n](const double* y, int c) {
         double b = 0.0;
         for (int s3 = 0; s3 < 3; ++s3) {
-            const double y = std::fabs(c == 2 * n + 1 ? mp.Yr[s3][c] - 1.0 : mp.Yr[s3][c]);
-            b = (y > b || std::isnan(y)) ? y : b;  // a NaN entry makes the bound NaN
+            const double a = std::fabs(c == 2 * n + 1 ? y[s3] - 1.0 : y[s3]);
+            b = (a > b || std::isnan(a)) ? a : b;
         }
-        vm.yb[c] = b;
+        return b;
+    };
+    for (int c = 0; c < nx + 2; ++c) {
+        const double y[3] = {mp.Yr[0][c], mp.Yr[1][c], mp.Yr[2][c]};
+        vm.yb[c] = bound(y, c);
+    }
+    vm.n_patterns = mp.n_patterns;
+    for (int s = 0; s < 4; ++s) vm.ws[s] = mp.ws[s];
+    for (int k = 1; k < mp.n_patterns; ++k) {
+        auto row = [&mp, k](int c) { return v2{mp.Gw[k][0][c], mp.Gw[k][1][c]}; };
+        FbWork& w = vm.fw[k];
+        w.S = row(iS);
+        w.C = row(iC);
+        w.F = row(iF);
+        for (int j = 0; j < nx; ++j) w.P[j] = row(j);
+    }
+    for (int k = 0; k < mp.n_patterns; ++k) {
+        const Column& c = mp.fb[k];
+        FbCol& f = vm.fb[k];
+        for (int pr = 0; pr <= n; ++pr) {
+            const int a0 = pr < n ? pr : 2 * n, a1 = pr < n ? n + pr : 2 * n + 1;
+            f.d[pr] = v2{c.Pd[a0], c.Pd[a1]};
+        }
+        f.y = lanes(&c.Yr[0], &c.Yr[1], &c.Yr[2]);
+        for (int m = 0; m <= n; ++m) f.v[m] = lanes(&c.Vr[0][m], &c.Vr[1][m], &c.Vr[2][m]);
+        f.f = v2{c.Fs, c.Fc};
+        f.yb = bound(c.Yr, iF);
     }
     for (int k = 0; k <= n; ++k) {
         vm.vS[k] = lanes(&mp.Vr[0][k][iS], &mp.Vr[1][k][iS], &mp.Vr[2][k][iS]);
         vm.vC[k] = lanes(&mp.Vr[0][k][iC], &mp.Vr[1][k][iC], &mp.Vr[2][k][iC]);
-        vm.vF[k] = lanes(&mp.Vr[0][k][iF], &mp.Vr[1][k][iF], &mp.Vr[2][k][iF]);
         for (int j = 0; j < nx; ++j)
             vm.vP[k][j] = lanes(&mp.Vr[0][k][j], &mp.Vr[1][k][j], &mp.Vr[2][k][j]);
         vm.wv[k] = lanes(&mp.Wv[1][k], &mp.Wv[2][k], &mp.Wv[3][k]);
@@ -207,7 +331,6 @@ inline VecMap pack_map(int n, const StepMap& mp) {
     }
     vm.fS = v2{mp.Fs[iS], mp.Fc[iS]};
     vm.fC = v2{mp.Fs[iC], mp.Fc[iC]};
-    vm.fF = v2{mp.Fs[iF], mp.Fc[iF]};
     for (int j = 0; j < nx; ++j) vm.fP[j] = v2{mp.Fs[j], mp.Fc[j]};
     auto stages = [&mp](int c) {
         return v4{v2{mp.Kr[0][c], mp.Kr[1][c]}, v2{mp.Kr[2][c], mp.Kr[3][c]}};

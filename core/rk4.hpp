@@ -3,7 +3,8 @@
 //
 // 1. four RK4 stages of the smooth equations, with F_b = -F_c sgn(y') (sgn(0) = 0) and
 //    the forcing evaluated at every stage; or, under harmonic forcing when y' keeps one
-//    sign at all four stages, the same step as one affine map (linmap.hpp);
+//    sign at all four stages or changes it in a known pattern (a ball that friction
+//    holds), the same step as one affine map (linmap.hpp);
 // 2. the wall rule at the step's end (model.hpp);
 // 3. the streamed metrics (RMS, impacts, contact and stick, energy flows).
 //
@@ -162,8 +163,11 @@ BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
 
 // The affine step map's inputs beyond the state X (linmap.hpp's z): the forcing phase's
 // sine and cosine at the step's start and the ball's friction force F_b.
+// flips: the stages' sign pattern (linmap.hpp; bit k: stage k + 2's y' against stage
+// 1's), which picks F_b's column (VecMap::fb); 0: F_b the same at every stage.
 struct MapIn {
     double sn, cn, fz;
+    int flips = 0;
 };
 
 // E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
@@ -172,7 +176,7 @@ template <int N, int CASE>
 BB_INLINE double y_spread(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
     const int nx = sh.nxm();
     double e = vm.yb[nx] * std::fabs(z.sn) + vm.yb[nx + 1] * std::fabs(z.cn) +
-               vm.yb[nx + 2] * std::fabs(z.fz);
+               vm.fb[z.flips].yb * std::fabs(z.fz);
     for (int j = 0; j < nx; ++j) e += vm.yb[j] * std::fabs(X[j]);
     return e;
 }
@@ -180,7 +184,7 @@ BB_INLINE double y_spread(Shape<N, CASE> sh, const VecMap& vm, const double* X, 
 // y' at stages 2-4 of the mapped step (lanes 0-2), from the map's rows Yr.
 template <int N, int CASE>
 BB_INLINE v4 stage_ys(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z) {
-    v4 ys = vm.yS * z.sn + vm.yC * z.cn + vm.yF * z.fz;
+    v4 ys = vm.yS * z.sn + vm.yC * z.cn + vm.fb[z.flips].y * z.fz;
     for (int j = 0; j < sh.nxm(); ++j) ys += vm.yP[j] * X[j];
     return ys;
 }
@@ -267,6 +271,34 @@ BB_INLINE bool map_slips(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
     return true;
 }
 
+// May a sliding ball that the sgn() law turns within the step take a sign pattern's map
+// (linmap.hpp): y'_1 = y'_0 != 0 sets F_b at stage 1, and the stages' y' computed from
+// the pattern's rows have the pattern's signs, each farther from 0 than 1e-12 of the
+// terms it sums (|y'_0| + y_spread: their round-off is below 1e-14 of that), so that the
+// stages in exact arithmetic would pick the same F_b.  Only F_b's column differs between
+// the patterns, and stage k + 2's y' only by the pattern's bits below k, so the pattern
+// is found stage by stage from the rest of the sums.  Sets z.flips to it.
+template <int N, int CASE>
+BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn& z) {
+    const double yd0 = X[sh.iyd()];
+    if (!(std::fabs(yd0) > 0.0)) return false;  // F_b = 0 at stage 1 (or a NaN state)
+    const double s1 = yd0 > 0.0 ? 1.0 : -1.0;
+    // the stages' y' and the size of their terms, F_b's column aside
+    const MapIn rest{z.sn, z.cn, 0.0};
+    const v4 ys = stage_ys(sh, vm, X, rest);
+    const double size = std::fabs(yd0) + y_spread(sh, vm, X, rest);
+    int flips = 0;
+    for (int s3 = 0; s3 < 3; ++s3) {
+        const FbCol& col = vm.fb[flips];
+        const double y = s1 * (ys[s3] + col.y[s3] * z.fz);
+        if (!(std::fabs(y) > 1e-12 * (size + col.yb * std::fabs(z.fz))))
+            return false;  // too near 0 (or NaN): the stages
+        if (y < 0.0) flips |= 1 << s3;
+    }
+    z.flips = flips;
+    return true;
+}
+
 // The increment dX of a mapped step, two rows at a time: (u_i, u_i') and (aux, aux').
 // decoupled: a mode's rows involve only its own u, u' (the modes coupled through F_b
 // alone), as in the solid and sliding ball bars' maps and a rolling ball's as it slips
@@ -276,16 +308,17 @@ template <int N, int CASE>
 BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn z,
                              double* dX, bool decoupled) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
+    const FbCol& fbc = vm.fb[z.flips];
     const int n = sh.n(), nx = sh.nxm();
     auto full = [&](int pr) {
-        v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + vm.dF[pr] * fz;
+        v2 d = vm.dS[pr] * sn + vm.dC[pr] * cn + fbc.d[pr] * fz;
         for (int j = 0; j < nx; ++j) d += vm.dP[pr][j] * X[j];
         return d;
     };
     for (int i = 0; i < n; ++i) {
         v2 d;
         if (decoupled) {
-            d = vm.dS[i] * sn + vm.dC[i] * cn + vm.dF[i] * fz;
+            d = vm.dS[i] * sn + vm.dC[i] * cn + fbc.d[i] * fz;
             d += vm.dP[i][i] * X[i];
             d += vm.dP[i][n + i] * X[n + i];
         } else {
@@ -306,12 +339,14 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
 
 // The energy flows of a mapped step: the dashpots' loss (the RK4 weights on the stage
 // velocities squared, stages 2-4 in lanes), the force's work S (Fs . z) + C (Fc . z)
-// (lanes Fs, Fc), and for the ball sum_s b_s F_b y'_s = F_b dy and
-// sum_s b_s psi_d u'_s = psi_d du.  decoupled: as map_increment's.
+// (lanes Fs, Fc), and for the ball sum_s b_s F_b,s y'_s and sum_s b_s F_b,s psi_d u'_s:
+// with F_b the same at every stage, F_b dy and F_b psi_d du; in a sign pattern's step
+// (F_b,s = +-F_b), the rows VecMap::fw of the pattern.  decoupled: as map_increment's.
 template <int N, int CASE>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
                          const double* X, const double* dX, MapIn z, bool decoupled) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
+    const FbCol& fbc = vm.fb[z.flips];
     const int n = sh.n(), nx = sh.nxm();
     double pv = 0.0;
     for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];
@@ -322,7 +357,7 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     }
     v4 wvv[NV_MAX];  // Wv v^2 of velocity k at stages 2-4
     for (int i = 0; i < n; ++i) {
-        v4 v = vm.vS[i] * sn + vm.vC[i] * cn + vm.vF[i] * fz;
+        v4 v = vm.vS[i] * sn + vm.vC[i] * cn + fbc.v[i] * fz;
         if (sh.diag()) {
             v += vm.vP[i][i] * X[i] + vm.vP[i][n + i] * X[n + i];
         } else if (decoupled) {
@@ -344,16 +379,51 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     for (int s3 = 0; s3 < 3; ++s3) {
         for (int k = 0; k < nv; ++k) pv += wvv[k][s3];
     }
-    v2 w = vm.fS * sn + vm.fC * cn + vm.fF * fz;
+    v2 w = vm.fS * sn + vm.fC * cn + fbc.f * fz;
     for (int j = 0; j < nx; ++j) w += vm.fP[j] * X[j];
     fl.d_visc += pv;
     fl.w_force += sn * w[0] + cn * w[1];
-    if (sh.ball()) {
+    if (sh.ball() && z.flips) {
+        const FbWork& fw = vm.fw[z.flips];
+        v2 g = fw.S * sn + fw.C * cn + fw.F * fz;
+        for (int j = 0; j < nx; ++j) g += fw.P[j] * X[j];
+        fl.d_fric -= fz * g[0];
+        fl.w_nr += (1.0 - q.sr) * fz * g[1];
+    } else if (sh.ball()) {
         fl.d_fric -= fz * dX[sh.iy()];
         double pdu = 0.0;
         for (int i = 0; i < n; ++i) pdu += q.pD[i] * dX[i];
         fl.w_nr += (1.0 - q.sr) * fz * pdu;
     }
+}
+
+// A sign pattern's mapped step: the increment, the flows and the new state.
+template <int N, int CASE>
+BB_INLINE void take_pattern(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
+                            double* X, double* dX, MapIn z) {
+    map_increment(sh, vm, X, z, dX, true);
+    map_flows(q, sh, vm, fl, X, dX, z, true);
+    for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
+}
+
+// A turning step (map_pattern's z.flips; the pattern + + + + takes the run's one-sign map
+// step).  The two patterns a held ball takes most are picked by branches, each with its
+// pattern a constant: a predicted branch takes the pick off the step's chain of
+// dependences (the state, the stages' y', the pattern, its column, the state), which the
+// pattern as data keeps it on: with every pattern as data, or a switch over all 8 (which
+// GCC turns into a table of the columns), a held ball's run took 1.09x as long (the paper
+// preset at 10 N), and + + + + as data 1.10x; each pattern with a branch of its own costs
+// compile time in every ball kernel.
+template <int N, int CASE>
+BB_INLINE void pattern_step(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
+                            double* X, double* dX, MapIn z) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
+    if (z.flips == 5)  // + - + -
+        take_pattern(q, sh, vm, fl, X, dX, MapIn{sn, cn, fz, 5});
+    else if (z.flips == 4)  // + + + -
+        take_pattern(q, sh, vm, fl, X, dX, MapIn{sn, cn, fz, 4});
+    else
+        take_pattern(q, sh, vm, fl, X, dX, z);
 }
 
 // The tip's W, W' and the auxiliary coordinate (model.hpp's TipAux): the ball's y or the

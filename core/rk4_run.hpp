@@ -216,6 +216,9 @@ BB_INLINE void run_body(const RunArgs& a) {
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const VecMap mpr = linear && sh.rolls() ? step_map(n, a.p, dt, true) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
+    // a sliding ball that the sgn() law turns within a step: the sign patterns' maps
+    const bool patterns =
+        linear && check_fb && !q.hold && !sh.rolls() && !hertz && mp.n_patterns == NPAT;
     double sn = 0.0, cn = 1.0;
 
     // streamed metrics in registers, written back at the end; the events' counts and
@@ -286,13 +289,24 @@ BB_INLINE void run_body(const RunArgs& a) {
         fz += ffl;
         // a slipping ball takes the sliding ball's map, whose modes are decoupled
         const bool decoupled = sh.diag() || (sh.rolls() && !rolls_now);
+        // a sliding ball that the sgn() law turns within the step: its sign pattern's map
+        MapIn zp{sn, cn, fz};
+        bool turns = patterns && !use_map && map_pattern(sh, mp, X, zp);
+        // (y' of one sign at every stage: the map above, in the band where map_fits
+        // leaves it to the stages)
+        if (turns && zp.flips == 0) {
+            use_map = true;
+            turns = false;
+        }
         if (use_map) map_increment(sh, map, X, MapIn{sn, cn, fz}, dX, decoupled);
         // the map holds no contact force: a step in a compliant contact, or one that ends
         // in one, takes the stages
         if (use_map && hertz &&
             (ep.on || !(std::fabs(X[sh.iy()] + dX[sh.iy()]) <= q.ball.half)))
             use_map = false;
-        if (use_map) {
+        if (turns) {
+            pattern_step(q, sh, mp, fl, X, dX, zp);
+        } else if (use_map) {
             map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz}, decoupled);
             for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
             if (rolls_now) {

@@ -350,6 +350,36 @@ def test_impacting_ball_rms_converges_at_first_order():
     assert 1.3 < diffs[0] / diffs[1] < 3  # measured: 1.45
 
 
+def test_a_stuck_ball_s_turning_steps_are_maps_equal_to_the_stage_loop():
+    """A ball that friction holds under the sgn() law chatters: its y' changes sign from
+    stage to stage (+ - + -, + + + -, ...), and F_b with it.  Each sign pattern's step is
+    affine too (core/linmap.hpp), and the kernel takes it as a map.  The paper preset's
+    ball stuck at 10 N (gap 0.5 mm, no impact) turns at nearly every step: over 20 ms
+    the maps and the stage loop agree to round-off in the state, the stick time and
+    every energy flow (the printed reaction's non-reciprocal work among them), and they
+    are two computations: a kernel that took this ball's steps by stages gave the stage
+    loop's bits."""
+    from boringbar.simulate import simulate_stage_loop
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=True)
+    forcing = Harmonic(10.0, 0.95)
+    a = simulate(system, forcing, duration_s=0.02, dt_s=DT)
+    b = simulate_stage_loop(system, forcing, duration_s=0.02, dt_s=DT)
+    x, y = a.final.x, b.final.x
+    # displacements (u, y) and velocities (u', y') each on its kind's scale: the held
+    # ball's own y and y' are round-off themselves
+    for sl in ([0, 2], [1, 3]):
+        assert np.max(np.abs(x[sl] - y[sl])) <= 1e-11 * np.max(np.abs(x[sl]))  # 1.8e-14, 3.2e-15
+    assert not np.array_equal(x, y)
+    assert a.metrics["impacts_total"] == b.metrics["impacts_total"] == 0
+    assert a.metrics["stick_time_s"] == pytest.approx(b.metrics["stick_time_s"], rel=0, abs=DT)
+    assert a.metrics["stick_time_s"] == pytest.approx(0.8 * 0.02)  # the whole steady part
+    total = a.energy["work_force_j"]
+    for k in ("work_force_j", "dissipated_viscous_j", "dissipated_friction_j",
+              "work_nonreciprocal_friction_j"):
+        assert abs(a.energy[k] - b.energy[k]) <= 1e-10 * abs(total), k  # measured: <= 4.9e-15
+    assert abs(a.energy["work_nonreciprocal_friction_j"]) > 1e-6 * abs(total)
+
+
 # --- bad input ----------------------------------------------------------------------------
 def test_too_coarse_a_step_is_refused_naming_dt():
     system = make_system("ball", n_modes=2)
