@@ -23,14 +23,12 @@
 // y'.  Slipping at every stage, the floor's friction is a constant -mu_k N sgn(slip)
 // beside F_b, and the step is the sliding ball's map with the two in F_b's column.
 //
-// A ball that friction holds under the sgn() law chatters: its y' changes sign from
+// A sliding ball that sticks under the sgn() law chatters: its y' changes sign from
 // stage to stage (+ - + -, + + + -, ... relative to stage 1), and F_b with it.  Each such
 // sign pattern is a linear step too, with F_b = -F_c sgn(y'_1) times the pattern's signs
 // at the stages: only F_b's column differs, and it is built for each of the 8 patterns
-// (fb), in a rolling ball's rolled map too; a slipping ball's floor friction, the same at
-// every stage, takes the one-sign column beside it.  The kernel takes a pattern's step
-// where the stages' y', computed from its rows, have that pattern's signs by more than
-// their round-off (and a rolling ball rolls, or slips, at every stage as above).
+// (fb).  The kernel takes a pattern's step where the stages' y', computed from its rows,
+// have that pattern's signs by more than their round-off.
 //
 // The tables are built by the stage recursion applied to the basis vectors, the same
 // operations in the same order at every build, so the tables (and every step taken with
@@ -70,15 +68,14 @@ struct StepMap {
     double Fs[NZ_MAX];
     double Fc[NZ_MAX];
     double Kr[4][NZ_MAX];
-    // F_b's column for each sign pattern (fb[0] that of Pd, Yr, Vr, Fs, Fc, Kr): a
+    // F_b's column for each sign pattern (fb[0] that of Pd, Yr, Vr, Fs, Fc): a sliding
     // ball's (n_patterns = NPAT), else fb[0] alone
     Column fb[NPAT];
     int n_patterns;
     double ws[4];  // the RK4 weights b_s dt
-    // a pattern's friction work (rows of z, and in column nz the one-sign F column's
-    // entry): sum_s b_s sigma_s y'_s and sum_s b_s sigma_s psi_d u'_s, sigma_s = -1 at the
-    // pattern's flipped stages
-    double Gw[NPAT][2][NZ_MAX + 1];
+    // a pattern's friction work (rows of z): sum_s b_s sigma_s y'_s and
+    // sum_s b_s sigma_s psi_d u'_s, sigma_s = -1 at the pattern's flipped stages
+    double Gw[NPAT][2][NZ_MAX];
 };
 
 // The roll law's stage after a sliding ball's (derivative_with): out of line, because
@@ -156,9 +153,9 @@ inline Column push_column(const Params& q, const Stages& st, int col, int flips)
 // the tables (stage 1's: the state's own).
 inline void pattern_work(const Params& q, Shape<0, -1> sh, StepMap& mp, int flips) {
     const int n = sh.n(), nx = sh.nxm(), nz = nx + 3;
-    for (int c = 0; c <= nz; ++c) {
-        const Column& fb = mp.fb[c == nz ? 0 : flips];
-        const bool fcol = c >= nz - 1;
+    for (int c = 0; c < nz; ++c) {
+        const Column& fb = mp.fb[flips];
+        const bool fcol = c == nz - 1;
         double g = c == sh.iyd() ? mp.ws[0] : 0.0;
         double h = c >= n && c < 2 * n ? mp.ws[0] * q.pD[c - n] : 0.0;
         for (int s3 = 0; s3 < 3; ++s3) {
@@ -208,7 +205,7 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolle
         mp.Fc[col] = c.Fc;
         if (col == nz - 1) mp.fb[0] = c;
     }
-    mp.n_patterns = sh.ball() ? NPAT : 1;
+    mp.n_patterns = sh.ball() && !q.roll ? NPAT : 1;
     for (int flips = 1; flips < mp.n_patterns; ++flips) {
         mp.fb[flips] = push_column(q, st, nz - 1, flips);
         pattern_work(q, sh, mp, flips);
@@ -236,21 +233,19 @@ BB_V4_OP operator-(v4 a, double s) { return {a.lo - s, a.hi - s}; }
 BB_V4_OP& operator+=(v4& a, v4 b) { return a = a + b; }
 #undef BB_V4_OP
 
-// F_b's column of the packed tables (VecMap's, one per sign pattern): d, y, v, f, k as
-// VecMap's dS, yS, vS, fS, kS, and yb its bound of |y'_s - y'_0|.
+// F_b's column of the packed tables (VecMap's, one per sign pattern): d, y, v, f as
+// VecMap's dS, yS, vS, fS, and yb its bound of |y'_s - y'_0|.
 struct FbCol {
     v2 d[NV_MAX];
     v4 y;
     v4 v[NV_MAX];
     v2 f;
-    v4 k;
     double yb;
 };
 
-// Rows of z in lanes, as VecMap's fS, fC, fP with F_b's column F, and O the one-sign
-// column's (a slipping ball's floor friction beside F_b).
+// Rows of z in lanes, as VecMap's fS, fC, fP with F_b's column F.
 struct FbWork {
-    v2 S, C, F, O, P[NX_MAX];
+    v2 S, C, F, P[NX_MAX];
 };
 
 struct VecMap {
@@ -273,7 +268,7 @@ struct VecMap {
     double ws[4];  // the RK4 weights b_s dt
     FbWork fw[NPAT];  // a pattern's friction work, lanes (F_b's travel, its reaction's)
     // a rolling ball's floor friction at stages 1-4 in lanes 0-3
-    v4 kS, kC, kP[NX_MAX];
+    v4 kS, kC, kF, kP[NX_MAX];
 };
 
 inline VecMap pack_map(int n, const StepMap& mp) {
@@ -312,7 +307,6 @@ inline VecMap pack_map(int n, const StepMap& mp) {
         w.S = row(iS);
         w.C = row(iC);
         w.F = row(iF);
-        w.O = row(iF + 1);
         for (int j = 0; j < nx; ++j) w.P[j] = row(j);
     }
     for (int k = 0; k < mp.n_patterns; ++k) {
@@ -325,7 +319,6 @@ inline VecMap pack_map(int n, const StepMap& mp) {
         f.y = lanes(&c.Yr[0], &c.Yr[1], &c.Yr[2]);
         for (int m = 0; m <= n; ++m) f.v[m] = lanes(&c.Vr[0][m], &c.Vr[1][m], &c.Vr[2][m]);
         f.f = v2{c.Fs, c.Fc};
-        f.k = v4{v2{c.Kr[0], c.Kr[1]}, v2{c.Kr[2], c.Kr[3]}};
         f.yb = bound(c.Yr, iF);
     }
     for (int k = 0; k <= n; ++k) {
@@ -344,6 +337,7 @@ inline VecMap pack_map(int n, const StepMap& mp) {
     };
     vm.kS = stages(iS);
     vm.kC = stages(iC);
+    vm.kF = stages(iF);
     for (int j = 0; j < nx; ++j) vm.kP[j] = stages(j);
     return vm;
 }

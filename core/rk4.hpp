@@ -164,13 +164,10 @@ BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
 // The affine step map's inputs beyond the state X (linmap.hpp's z): the forcing phase's
 // sine and cosine at the step's start and the ball's friction force F_b.
 // flips: the stages' sign pattern (linmap.hpp; bit k: stage k + 2's y' against stage
-// 1's), which picks F_b's column (VecMap::fb); 0: F_b the same at every stage.  ffl: in a
-// pattern's step, a slipping ball's floor friction, the same at every stage (in the
-// one-sign column; a step of one sign has it in fz).
+// 1's), which picks F_b's column (VecMap::fb); 0: F_b the same at every stage.
 struct MapIn {
     double sn, cn, fz;
     int flips = 0;
-    double ffl = 0.0;
 };
 
 // E = sum_c max_s |Yr[s][c]| |z_c| (Yr[s][iyd] - 1 for y' itself) >= max_s |y'_s - y'_0|
@@ -240,7 +237,7 @@ template <int N, int CASE>
 BB_INLINE bool map_rolls(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
                          MapIn z) {
     if (X[sh.is()] != X[sh.iyd()]) return false;
-    v4 k = vm.kS * z.sn + vm.kC * z.cn + vm.fb[z.flips].k * z.fz;
+    v4 k = vm.kS * z.sn + vm.kC * z.cn + vm.kF * z.fz;
     for (int j = 0; j < sh.nxm(); ++j) k += vm.kP[j] * X[j];
     const v4 a = vabs(k);
     // (a NaN friction fails each comparison and takes the stages)
@@ -274,25 +271,22 @@ BB_INLINE bool map_slips(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
     return true;
 }
 
-// May a ball that the sgn() law turns within the step take a sign pattern's map
+// May a sliding ball that the sgn() law turns within the step take a sign pattern's map
 // (linmap.hpp): y'_1 = y'_0 != 0 sets F_b at stage 1, and the stages' y' computed from
 // the pattern's rows have the pattern's signs, each farther from 0 than 1e-12 of the
 // terms it sums (|y'_0| + y_spread: their round-off is below 1e-14 of that), so that the
 // stages in exact arithmetic would pick the same F_b.  Only F_b's column differs between
 // the patterns, and stage k + 2's y' only by the pattern's bits below k, so the pattern
-// is found stage by stage from the rest of the sums (z.ffl, a slipping ball's floor
-// friction, among them).  Sets z.flips to it, yst to the stages' y' and spread to their
-// y_spread (map_slips reads both).
+// is found stage by stage from the rest of the sums.  Sets z.flips to it.
 template <int N, int CASE>
-BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn& z,
-                           YStages& yst, double& spread) {
+BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn& z) {
     const double yd0 = X[sh.iyd()];
     if (!(std::fabs(yd0) > 0.0)) return false;  // F_b = 0 at stage 1 (or a NaN state)
     const double s1 = yd0 > 0.0 ? 1.0 : -1.0;
     // the stages' y' and the size of their terms, F_b's column aside
-    const MapIn rest{z.sn, z.cn, z.ffl};
+    const MapIn rest{z.sn, z.cn, 0.0};
     const v4 ys = stage_ys(sh, vm, X, rest);
-    const double e = y_spread(sh, vm, X, rest), size = std::fabs(yd0) + e;
+    const double size = std::fabs(yd0) + y_spread(sh, vm, X, rest);
     int flips = 0;
     for (int s3 = 0; s3 < 3; ++s3) {
         const FbCol& col = vm.fb[flips];
@@ -302,10 +296,6 @@ BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X,
         if (y < 0.0) flips |= 1 << s3;
     }
     z.flips = flips;
-    if (sh.rolls()) {  // (map_slips's inputs)
-        yst = YStages{ys + vm.fb[flips].y * z.fz, true};
-        spread = e + vm.fb[flips].yb * std::fabs(z.fz);
-    }
     return true;
 }
 
@@ -368,7 +358,6 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     v4 wvv[NV_MAX];  // Wv v^2 of velocity k at stages 2-4
     for (int i = 0; i < n; ++i) {
         v4 v = vm.vS[i] * sn + vm.vC[i] * cn + fbc.v[i] * fz;
-        if (z.ffl != 0.0) v += vm.fb[0].v[i] * z.ffl;
         if (sh.diag()) {
             v += vm.vP[i][i] * X[i] + vm.vP[i][n + i] * X[n + i];
         } else if (decoupled) {
@@ -391,20 +380,15 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
         for (int k = 0; k < nv; ++k) pv += wvv[k][s3];
     }
     v2 w = vm.fS * sn + vm.fC * cn + fbc.f * fz;
-    if (z.ffl != 0.0) w += vm.fb[0].f * z.ffl;
     for (int j = 0; j < nx; ++j) w += vm.fP[j] * X[j];
     fl.d_visc += pv;
     fl.w_force += sn * w[0] + cn * w[1];
     if (sh.ball() && z.flips) {
         const FbWork& fw = vm.fw[z.flips];
         v2 g = fw.S * sn + fw.C * cn + fw.F * fz;
-        if (z.ffl != 0.0) g += fw.O * z.ffl;
         for (int j = 0; j < nx; ++j) g += fw.P[j] * X[j];
         fl.d_fric -= fz * g[0];
         fl.w_nr += (1.0 - q.sr) * fz * g[1];
-        // a slipping ball's floor friction, the same at every stage: -ffl dy (its
-        // reaction is reciprocal, map_slips)
-        if (z.ffl != 0.0) fl.d_fric -= z.ffl * dX[sh.iy()];
     } else if (sh.ball()) {
         fl.d_fric -= fz * dX[sh.iy()];
         double pdu = 0.0;
@@ -413,21 +397,12 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     }
 }
 
-// A sign pattern's mapped step: the increment (with a slipping ball's floor friction
-// in the one-sign column), the flows and the new state.
+// A sign pattern's mapped step: the increment, the flows and the new state.
 template <int N, int CASE>
 BB_INLINE void take_pattern(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
-                            double* X, double* dX, MapIn z, bool decoupled) {
-    map_increment(sh, vm, X, z, dX, decoupled);
-    if (z.ffl != 0.0) {
-        const int n = sh.n();
-        for (int pr = 0; pr <= n; ++pr) {
-            const v2 d = vm.fb[0].d[pr] * z.ffl;
-            dX[pr < n ? pr : sh.iy()] += d[0];
-            dX[pr < n ? n + pr : sh.iyd()] += d[1];
-        }
-    }
-    map_flows(q, sh, vm, fl, X, dX, z, decoupled);
+                            double* X, double* dX, MapIn z) {
+    map_increment(sh, vm, X, z, dX, true);
+    map_flows(q, sh, vm, fl, X, dX, z, true);
     for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
 }
 
@@ -441,15 +416,14 @@ BB_INLINE void take_pattern(const Params& q, Shape<N, CASE> sh, const VecMap& vm
 // compile time in every ball kernel.
 template <int N, int CASE>
 BB_INLINE void pattern_step(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
-                            double* X, double* dX, MapIn z, bool decoupled) {
-    const double sn = z.sn, cn = z.cn, fz = z.fz, ffl = z.ffl;
-    // (a rolling ball's kernels take the one copy: each costs compile time)
-    if (!sh.rolls() && z.flips == 5)  // + - + -
-        take_pattern(q, sh, vm, fl, X, dX, MapIn{sn, cn, fz, 5, ffl}, decoupled);
-    else if (!sh.rolls() && z.flips == 4)  // + + + -
-        take_pattern(q, sh, vm, fl, X, dX, MapIn{sn, cn, fz, 4, ffl}, decoupled);
+                            double* X, double* dX, MapIn z) {
+    const double sn = z.sn, cn = z.cn, fz = z.fz;
+    if (z.flips == 5)  // + - + -
+        take_pattern(q, sh, vm, fl, X, dX, MapIn{sn, cn, fz, 5});
+    else if (z.flips == 4)  // + + + -
+        take_pattern(q, sh, vm, fl, X, dX, MapIn{sn, cn, fz, 4});
     else
-        take_pattern(q, sh, vm, fl, X, dX, z, decoupled);
+        take_pattern(q, sh, vm, fl, X, dX, z);
 }
 
 // The tip's W, W' and the auxiliary coordinate (model.hpp's TipAux): the ball's y or the
@@ -537,20 +511,6 @@ BB_INLINE void stop_slide(const Params& q, Shape<N, CASE> sh, double* X, Flows& 
     X[sh.iyd()] = j.yd;
     jump_modes(q, sh.n(), X, j.g);
     fl.d_fric += j.loss;
-}
-
-// A rolling ball's spin after a mapped step: rolled, the spin is its y'; slipped, s' =
-// -kroll ffl, and the floor's loss -ffl (dy - int s dt), its -ffl dy counted with F_b's
-// (map_flows).
-template <int N, int CASE>
-BB_INLINE void spin_after_map(const Params& q, Shape<N, CASE> sh, double* X, Flows& fl,
-                              bool rolled, double ffl, double dt) {
-    if (rolled) {
-        X[sh.is()] = X[sh.iyd()];
-    } else {
-        fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
-        X[sh.is()] -= q.kroll * ffl * dt;
-    }
 }
 
 // After a step whose four stages rolled without slip (Shape::rolls): the spin takes y'

@@ -216,8 +216,9 @@ BB_INLINE void run_body(const RunArgs& a) {
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const VecMap mpr = linear && sh.rolls() ? step_map(n, a.p, dt, true) : VecMap{};
     const bool check_fb = ball && q.fc > 0.0;
-    // a ball that the sgn() law turns within a step: the sign patterns' maps
-    const bool patterns = linear && check_fb && !q.hold && !hertz && mp.n_patterns == NPAT;
+    // a sliding ball that the sgn() law turns within a step: the sign patterns' maps
+    const bool patterns =
+        linear && check_fb && !q.hold && !sh.rolls() && !hertz && mp.n_patterns == NPAT;
     double sn = 0.0, cn = 1.0;
 
     // streamed metrics in registers, written back at the end; the events' counts and
@@ -281,21 +282,16 @@ BB_INLINE void run_body(const RunArgs& a) {
             fz = map_friction(q, X[iyd]);
             use_map = map_fits(q, sh, map, X, MapIn{sn, cn, fz + ffl}, true, spread, &yst);
         }
-        const bool fits = use_map;  // y' of one sign, outside the chatter band
         if (use_map && sh.rolls())
             use_map = rolls_now ? map_rolls(q, sh, map, X, MapIn{sn, cn, fz})
                                 : map_slips(q, sh, map, X, MapIn{sn, cn, fz + ffl}, ffl, cst,
                                             spread, yst);
-        // a ball that the sgn() law turns within the step: its sign pattern's map (a
-        // rolling ball's where it rolls, or slips, at every stage)
-        MapIn zp{sn, cn, fz, 0, ffl};
         fz += ffl;
         // a slipping ball takes the sliding ball's map, whose modes are decoupled
         const bool decoupled = sh.diag() || (sh.rolls() && !rolls_now);
-        bool turns = patterns && !fits && map_pattern(sh, map, X, zp, yst, spread);
-        if (sh.rolls() && turns)
-            turns = rolls_now ? map_rolls(q, sh, map, X, zp)
-                              : map_slips(q, sh, map, X, zp, ffl, cst, spread, yst);
+        // a sliding ball that the sgn() law turns within the step: its sign pattern's map
+        MapIn zp{sn, cn, fz};
+        bool turns = patterns && !use_map && map_pattern(sh, mp, X, zp);
         // (y' of one sign at every stage: the map above, in the band where map_fits
         // leaves it to the stages)
         if (turns && zp.flips == 0) {
@@ -309,12 +305,18 @@ BB_INLINE void run_body(const RunArgs& a) {
             (ep.on || !(std::fabs(X[sh.iy()] + dX[sh.iy()]) <= q.ball.half)))
             use_map = false;
         if (turns) {
-            pattern_step(q, sh, map, fl, X, dX, zp, decoupled);
-            if (sh.rolls()) spin_after_map(q, sh, X, fl, rolls_now, ffl, dt);
+            pattern_step(q, sh, mp, fl, X, dX, zp);
         } else if (use_map) {
             map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz}, decoupled);
             for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
-            if (sh.rolls()) spin_after_map(q, sh, X, fl, rolls_now, ffl, dt);
+            if (rolls_now) {
+                X[sh.is()] = X[iyd];  // it rolled: the spin is its y'
+            } else if (sh.rolls()) {
+                // it slipped: s' = -kroll ffl; the floor's loss -ffl (dy - int s dt), its
+                // -ffl dy counted with F_b's (map_flows)
+                fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
+                X[sh.is()] -= q.kroll * ffl * dt;
+            }
             if (ball && q.hold) n_free += 1.0;  // the map slides
         } else {
             auto force = [&](int s, const double* Xs) {
