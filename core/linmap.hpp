@@ -72,7 +72,6 @@ struct StepMap {
     // ball's (n_patterns = NPAT), else fb[0] alone
     Column fb[NPAT];
     int n_patterns;
-    double ws[4];  // the RK4 weights b_s dt
     // a pattern's friction work (rows of z): sum_s b_s sigma_s y'_s and
     // sum_s b_s sigma_s psi_d u'_s, sigma_s = -1 at the pattern's flipped stages
     double Gw[NPAT][2][NZ_MAX];
@@ -151,15 +150,17 @@ inline Column push_column(const Params& q, const Stages& st, int col, int flips)
 
 // The rows StepMap::Gw of the sign pattern flips, from the stages' y' and velocities in
 // the tables (stage 1's: the state's own).
-inline void pattern_work(const Params& q, Shape<0, -1> sh, StepMap& mp, int flips) {
+inline void pattern_work(const Params& q, Shape<0, -1> sh, const Stages& st, StepMap& mp,
+                         int flips) {
+    const double* ws = st.wst;
     const int n = sh.n(), nx = sh.nxm(), nz = nx + 3;
     for (int c = 0; c < nz; ++c) {
         const Column& fb = mp.fb[flips];
         const bool fcol = c == nz - 1;
-        double g = c == sh.iyd() ? mp.ws[0] : 0.0;
-        double h = c >= n && c < 2 * n ? mp.ws[0] * q.pD[c - n] : 0.0;
+        double g = c == sh.iyd() ? ws[0] : 0.0;
+        double h = c >= n && c < 2 * n ? ws[0] * q.pD[c - n] : 0.0;
         for (int s3 = 0; s3 < 3; ++s3) {
-            const double w = (flips >> s3) & 1 ? -mp.ws[s3 + 1] : mp.ws[s3 + 1];
+            const double w = (flips >> s3) & 1 ? -ws[s3 + 1] : ws[s3 + 1];
             double pdv = 0.0;
             for (int i = 0; i < n; ++i) pdv += q.pD[i] * (fcol ? fb.Vr[s3][i] : mp.Vr[s3][i][c]);
             g += w * (fcol ? fb.Yr[s3] : mp.Yr[s3][c]);
@@ -189,7 +190,6 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolle
     const int nx = sh.nxm(), nz = nx + 3;
     const Stages st(q.om, dt);
     for (int s = 0; s < 4; ++s) {
-        mp.ws[s] = st.wst[s];
         for (int i = 0; i < n; ++i) mp.Wv[s][i] = st.wst[s] * q.C[i];
         mp.Wv[s][n] = sh.tmd() ? st.wst[s] * q.ca : 0.0;
     }
@@ -208,7 +208,7 @@ inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolle
     mp.n_patterns = sh.ball() && !q.roll ? NPAT : 1;
     for (int flips = 1; flips < mp.n_patterns; ++flips) {
         mp.fb[flips] = push_column(q, st, nz - 1, flips);
-        pattern_work(q, sh, mp, flips);
+        pattern_work(q, sh, st, mp, flips);
     }
 }
 
@@ -265,7 +265,6 @@ struct VecMap {
     // F_b's column by sign pattern (fb[0]: y' of one sign at every stage)
     FbCol fb[NPAT];
     int n_patterns;
-    double ws[4];  // the RK4 weights b_s dt
     FbWork fw[NPAT];  // a pattern's friction work, lanes (F_b's travel, its reaction's)
     // a rolling ball's floor friction at stages 1-4 in lanes 0-3
     v4 kS, kC, kF, kP[NX_MAX];
@@ -300,7 +299,6 @@ inline VecMap pack_map(int n, const StepMap& mp) {
         vm.yb[c] = bound(y, c);
     }
     vm.n_patterns = mp.n_patterns;
-    for (int s = 0; s < 4; ++s) vm.ws[s] = mp.ws[s];
     for (int k = 1; k < mp.n_patterns; ++k) {
         auto row = [&mp, k](int c) { return v2{mp.Gw[k][0][c], mp.Gw[k][1][c]}; };
         FbWork& w = vm.fw[k];
