@@ -237,7 +237,7 @@ template <int N, int CASE>
 BB_INLINE bool map_rolls(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
                          MapIn z) {
     if (X[sh.is()] != X[sh.iyd()]) return false;
-    v4 k = vm.kS * z.sn + vm.kC * z.cn + vm.kF * z.fz;
+    v4 k = vm.kS * z.sn + vm.kC * z.cn + vm.kF[z.flips] * z.fz;
     for (int j = 0; j < sh.nxm(); ++j) k += vm.kP[j] * X[j];
     const v4 a = vabs(k);
     // (a NaN friction fails each comparison and takes the stages)
@@ -271,22 +271,26 @@ BB_INLINE bool map_slips(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
     return true;
 }
 
-// May a sliding ball that the sgn() law turns within the step take a sign pattern's map
+// May a ball that the sgn() law turns within the step take a sign pattern's map
 // (linmap.hpp): y'_1 = y'_0 != 0 sets F_b at stage 1, and the stages' y' computed from
 // the pattern's rows have the pattern's signs, each farther from 0 than 1e-12 of the
 // terms it sums (|y'_0| + y_spread: their round-off is below 1e-14 of that), so that the
 // stages in exact arithmetic would pick the same F_b.  Only F_b's column differs between
 // the patterns, and stage k + 2's y' only by the pattern's bits below k, so the pattern
-// is found stage by stage from the rest of the sums.  Sets z.flips to it.
+// is found stage by stage from the rest of the sums (a slipping rolling ball's floor
+// friction ffl, the same at every stage, among them).  Sets z.flips to it, and where
+// given, yst to the stages' y' and spread to their y_spread (map_slips reads both).
 template <int N, int CASE>
-BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn& z) {
+BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X, MapIn& z,
+                           double ffl = 0.0, YStages* yst = nullptr,
+                           double* spread = nullptr) {
     const double yd0 = X[sh.iyd()];
     if (!(std::fabs(yd0) > 0.0)) return false;  // F_b = 0 at stage 1 (or a NaN state)
     const double s1 = yd0 > 0.0 ? 1.0 : -1.0;
     // the stages' y' and the size of their terms, F_b's column aside
-    const MapIn rest{z.sn, z.cn, 0.0};
+    const MapIn rest{z.sn, z.cn, ffl};
     const v4 ys = stage_ys(sh, vm, X, rest);
-    const double size = std::fabs(yd0) + y_spread(sh, vm, X, rest);
+    const double e = y_spread(sh, vm, X, rest), size = std::fabs(yd0) + e;
     int flips = 0;
     for (int s3 = 0; s3 < 3; ++s3) {
         const FbCol& col = vm.fb[flips];
@@ -296,7 +300,26 @@ BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X,
         if (y < 0.0) flips |= 1 << s3;
     }
     z.flips = flips;
+    if (yst) {
+        *yst = YStages{ys + vm.fb[flips].y * z.fz, true};
+        *spread = e + vm.fb[flips].yb * std::fabs(z.fz);
+    }
     return true;
+}
+
+// May a rolling ball that the sgn() law turns within the step take a sign pattern's map
+// (map_pattern's, with its floor friction ffl as it slips): rolling at every stage
+// (map_rolls, with the pattern's floor friction) or slipping (map_slips, with the
+// pattern's y').  Sets z.flips to the pattern.
+template <int N, int CASE>
+BB_INLINE bool roll_pattern(const Params& q, Shape<N, CASE> sh, const VecMap& vm,
+                            const double* X, MapIn& z, double ffl, bool rolls_now,
+                            const double* cst) {
+    YStages yst;
+    double spread = NAN;
+    if (!map_pattern(sh, vm, X, z, ffl, &yst, &spread)) return false;
+    if (rolls_now) return map_rolls(q, sh, vm, X, z);
+    return map_slips(q, sh, vm, X, z, ffl, cst, spread, yst);
 }
 
 // The increment dX of a mapped step, two rows at a time: (u_i, u_i') and (aux, aux').
@@ -342,9 +365,12 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
 // (lanes Fs, Fc), and for the ball sum_s b_s F_b,s y'_s and sum_s b_s F_b,s psi_d u'_s:
 // with F_b the same at every stage, F_b dy and F_b psi_d du; in a sign pattern's step
 // (F_b,s = +-F_b), the rows VecMap::fw of the pattern.  decoupled: as map_increment's.
+// ffl: in a rolling ball's pattern step, its floor friction as it slips, the same at
+// every stage, in the one-sign column (a step of one sign has it in z.fz).
 template <int N, int CASE>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
-                         const double* X, const double* dX, MapIn z, bool decoupled) {
+                         const double* X, const double* dX, MapIn z, bool decoupled,
+                         double ffl = 0.0) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
     const FbCol& fbc = vm.fb[z.flips];
     const int n = sh.n(), nx = sh.nxm();
@@ -358,6 +384,7 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     v4 wvv[NV_MAX];  // Wv v^2 of velocity k at stages 2-4
     for (int i = 0; i < n; ++i) {
         v4 v = vm.vS[i] * sn + vm.vC[i] * cn + fbc.v[i] * fz;
+        if (ffl != 0.0) v += vm.fb[0].v[i] * ffl;
         if (sh.diag()) {
             v += vm.vP[i][i] * X[i] + vm.vP[i][n + i] * X[n + i];
         } else if (decoupled) {
@@ -380,15 +407,19 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
         for (int k = 0; k < nv; ++k) pv += wvv[k][s3];
     }
     v2 w = vm.fS * sn + vm.fC * cn + fbc.f * fz;
+    if (ffl != 0.0) w += vm.fb[0].f * ffl;
     for (int j = 0; j < nx; ++j) w += vm.fP[j] * X[j];
     fl.d_visc += pv;
     fl.w_force += sn * w[0] + cn * w[1];
     if (sh.ball() && z.flips) {
         const FbWork& fw = vm.fw[z.flips];
         v2 g = fw.S * sn + fw.C * cn + fw.F * fz;
+        if (ffl != 0.0) g += vm.fwO[z.flips] * ffl;
         for (int j = 0; j < nx; ++j) g += fw.P[j] * X[j];
         fl.d_fric -= fz * g[0];
         fl.w_nr += (1.0 - q.sr) * fz * g[1];
+        // the floor friction's -ffl dy (its reaction is reciprocal: map_slips)
+        if (ffl != 0.0) fl.d_fric -= ffl * dX[sh.iy()];
     } else if (sh.ball()) {
         fl.d_fric -= fz * dX[sh.iy()];
         double pdu = 0.0;
@@ -404,6 +435,43 @@ BB_INLINE void take_pattern(const Params& q, Shape<N, CASE> sh, const VecMap& vm
     map_increment(sh, vm, X, z, dX, true);
     map_flows(q, sh, vm, fl, X, dX, z, true);
     for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
+}
+
+// A rolling ball's spin after a mapped step: rolled, the spin is its y'; slipped, s' =
+// -kroll ffl, and the floor's loss -ffl (dy - int s dt), its -ffl dy counted with F_b's
+// (map_flows).
+template <int N, int CASE>
+BB_INLINE void spin_after_map(const Params& q, Shape<N, CASE> sh, double* X, Flows& fl,
+                              bool rolled, double ffl, double dt) {
+    if (rolled) {
+        X[sh.is()] = X[sh.iyd()];
+    } else {
+        fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
+        X[sh.is()] -= q.kroll * ffl * dt;
+    }
+}
+
+// A rolling ball's turning step (roll_pattern's z.flips, not 0): the increment, with its
+// floor friction ffl as it slips in the one-sign column, the flows and the new state with
+// its spin (spin_after_map).  One copy for every pattern: a rolling ball's kernels are
+// few, and each copy costs compile time.
+template <int N, int CASE>
+BB_INLINE void roll_pattern_step(const Params& q, Shape<N, CASE> sh, const VecMap& vm,
+                                 Flows& fl, double* X, double* dX, MapIn z, double ffl,
+                                 bool rolls_now, double dt) {
+    const bool decoupled = !rolls_now;  // (the sliding ball's map as it slips)
+    map_increment(sh, vm, X, z, dX, decoupled);
+    if (ffl != 0.0) {
+        const int n = sh.n();
+        for (int pr = 0; pr <= n; ++pr) {
+            const v2 d = vm.fb[0].d[pr] * ffl;
+            dX[pr < n ? pr : sh.iy()] += d[0];
+            dX[pr < n ? n + pr : sh.iyd()] += d[1];
+        }
+    }
+    map_flows(q, sh, vm, fl, X, dX, z, decoupled, ffl);
+    for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
+    spin_after_map(q, sh, X, fl, rolls_now, ffl, dt);
 }
 
 // A turning step (map_pattern's z.flips; the pattern + + + + takes the run's one-sign map

@@ -180,6 +180,31 @@ def test_the_rolling_ball_s_maps_are_its_stages_step(force, ball_speed, kind):
     assert (spin == x[2 * n + 1]) == (kind == "rolls")  # rolling, the spin is y'
 
 
+@pytest.mark.parametrize("mu_static, mu_kinetic", [(0.2, 0.15), (0.002, 0.001)])
+def test_a_rolling_ball_s_turning_steps_are_maps_equal_to_the_stage_loop(mu_static,
+                                                                        mu_kinetic):
+    """At 0.05 N the rolling resistance's sgn() law holds the rolling ball: its y'
+    chatters, changing sign from stage to stage, and each sign pattern's step is a map
+    too (core/linmap.hpp), rolled or, with a floor that barely grips, slipping with the
+    floor's friction beside F_b.  Over 20 ms from rest the maps and the stage loop agree
+    to round-off in the state with its spin and in every energy flow, and they are two
+    computations: a kernel that took these steps by stages gave the stage loop's bits."""
+    from boringbar.simulate import simulate_stage_loop
+    system = bb.make_system("ball", motion="roll", mu_static=mu_static, mu_kinetic=mu_kinetic)
+    forcing = bb.Harmonic(0.05, 1.0)
+    a = bb.simulate(system, forcing, duration_s=0.02, integrator="rk4")
+    b = simulate_stage_loop(system, forcing, duration_s=0.02)
+    x, y = a.final.x, b.final.x
+    n = system.bar.n_modes
+    for sl in (list(range(n)) + [2 * n], list(range(n, 2 * n)) + [2 * n + 1, 2 * n + 2]):
+        assert np.max(np.abs(x[sl] - y[sl])) <= 1e-11 * np.max(np.abs(x[sl]))
+    assert not np.array_equal(x, y)
+    assert a.pattern.name == b.pattern.name == "no impact with sticking"
+    total = a.energy["work_force_j"]
+    for k in ("work_force_j", "dissipated_viscous_j", "dissipated_friction_j"):
+        assert abs(a.energy[k] - b.energy[k]) <= 1e-10 * abs(total), k  # measured: <= 8e-14
+
+
 def test_a_rolling_ball_s_limit_is_the_bar_carrying_two_sevenths_of_it():
     system = make_system("ball", friction=False, motion="roll", mu_static=1.0, mu_kinetic=0.8)
     host = system.linear_host().damper
