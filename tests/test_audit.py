@@ -362,6 +362,29 @@ def test_d4_on_the_cuts_words_a_drop_below_the_shallowest_cut():
     assert got.measured["depth change %"] is None
 
 
+def test_d4_compares_the_rms_beyond_its_spread_over_starts():
+    """With the runs from several starts (the step's --starts), the steel ball's RMS at
+    r = 1 is higher only where the means lie apart beyond twice the standard error of
+    their difference: the own runs' 1.1e-4 against 1e-4 m, which alone read as higher,
+    are inside a spread of +-3e-5 m, so the claim's direction is not shown; with the
+    starts close together it is."""
+    sens = next(steps for claim, steps, want in discussion_cases()
+                if claim == "D4" and want == "reproduced")["sensitivity-ball"]
+    for entry in sens["harmonic"]:
+        own = entry["rms_tip_m"]
+        entry["starts"] = {"ball_position_m": [-1e-4, 0.0, 1e-4],
+                           "rms_tip_m": [[v + d for v in own] for d in (-3e-5, 0.0, 3e-5)],
+                           "pattern": [entry["pattern"]] * 3}
+    got = judge("D4", {"sensitivity-ball": sens})
+    assert got.verdict == "partly" and "not higher" in got.reason
+    assert "over 4 starts" in got.reason
+    for entry in sens["harmonic"]:
+        entry["starts"]["rms_tip_m"] = [[v + d for v in entry["rms_tip_m"]]
+                                        for d in (-1e-7, 0.0, 1e-7)]
+    got = judge("D4", {"sensitivity-ball": sens})
+    assert got.verdict == "reproduced"
+
+
 def test_every_discussion_check_gives_each_of_its_verdicts():
     seen = {}
     for claim, steps, want in discussion_cases():

@@ -123,6 +123,7 @@ BAD_OPTIONS = {
         "--cut-rpm": (*NOT_FINITE, "0", "1e-3"),
         "--depths-mm": ("nan", "0", "0:inf:1", "1e300"),
         "--workers": ("0",),
+        "--starts": ("1", "65", "-1", "2.5"),
     }),
 }
 

@@ -10,15 +10,22 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from boringbar import Harmonic, make_system
+from boringbar import Harmonic, Initial, make_system, simulate
 from boringbar._validate import ParameterError
 from boringbar.analysis.basins import BasinOptions, BasinTolerance, basins, signature
 from boringbar.analysis.basins import summary as basin_summary
-from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity
+from boringbar.analysis.sensitivity import (
+    Cuts,
+    SensitivityOptions,
+    above_spread,
+    sensitivity,
+    summary,
+)
 from boringbar.execute import Execution
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import Integration
@@ -125,6 +132,42 @@ def test_sensitivity_gives_one_result_per_value(kind, values):
     assert ds.sizes[kind] == len(values)
     assert ds["rms_tip_m"].shape == (len(values), 1, 2)
     assert np.all(np.isfinite(ds["rms_tip_m"]))
+
+
+def test_sensitivity_from_starts_repeats_each_run_from_the_ball_across_the_cavity():
+    """starts = 3: each value's runs again with the ball at rest at the centres of three
+    bins across the 0.5 mm cavity (-1/6, 0, 1/6 mm), the bar at rest; each the same bits
+    as that start's own simulate, and the study's own runs those of a study without
+    starts."""
+    kw = dict(preset="paper", gap_m=0.5e-3, integration=Integration(duration_s=0.05))
+    options = SensitivityOptions("restitution", (0.6, 0.8), ratios=(1.0, 1.01), starts=3)
+    ds = sensitivity(options, **kw)
+    assert ds["rms_tip_m_starts"].dims == ("restitution", "start", "force_n", "ratio")
+    assert ds["rms_tip_m_starts"].shape == (2, 3, 1, 2)
+    np.testing.assert_allclose(ds["ball_position_start_m"], [-0.5e-3 / 3, 0.0, 0.5e-3 / 3],
+                               atol=1e-18)
+    plain = sensitivity(replace(options, starts=0), **kw)
+    assert np.array_equal(ds["rms_tip_m"], plain["rms_tip_m"])
+    for i, e in enumerate((0.6, 0.8)):
+        system = make_system("ball", "paper", gap_m=0.5e-3, restitution=e)
+        for k, y in enumerate(ds["ball_position_start_m"].values):
+            run = simulate(system, Harmonic(10.0, 1.01), duration_s=0.05, record_every=0,
+                           initial=Initial(ball_position_m=float(y)))
+            assert ds["rms_tip_m_starts"].values[i, k, 0, 1] == run.metrics["rms_tip_m"]
+    s = summary(ds)
+    assert len(s["harmonic"][0]["starts"]["rms_tip_m"]) == 3
+    with pytest.raises(ParameterError, match="starts"):
+        SensitivityOptions("initial", starts=4)
+    with pytest.raises(ParameterError, match="starts"):
+        SensitivityOptions("ball", starts=1)
+
+
+def test_above_spread_is_the_difference_of_means_beyond_twice_its_standard_error():
+    assert above_spread([1.0, 2.0, 3.0], [0.0, 0.0, 0.0]) == (True, 2.0, pytest.approx(
+        math.sqrt(1.0 / 3.0)))
+    assert above_spread([1.0, 3.0], [2.0, 2.0])[0] is False  # equal means
+    assert above_spread([1.0, 4.0], [1.0, 2.0])[0] is False  # 1 against 2 x 1.12
+    assert above_spread([2.0], [1.0]) == (True, 1.0, 0.0)  # one value each: plain
 
 
 def test_sensitivity_of_cuts():

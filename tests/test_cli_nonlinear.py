@@ -108,6 +108,17 @@ def test_sensitivity_restitution_with_cuts(tmp_path, capsys):
         assert {"rms_tip_m", "cut_chatter", "cut_amplitude_m"} <= set(ds.data_vars)
 
 
+def test_sensitivity_from_starts_text_and_files(tmp_path, capsys):
+    rc = main(["sensitivity", "ball", "--starts", "2", "--ratios", "1.0", "--duration-s", "0.1",
+               "--preset", "paper", "--out", str(tmp_path)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "tip RMS (mm) over 3 starts: mean [least, largest]" in text
+    with xr.open_dataset(tmp_path / "sensitivity.nc") as ds:
+        assert ds["rms_tip_m_starts"].shape == (2, 2, 1, 1)
+    assert (tmp_path / "sensitivity.png").read_bytes()[:8] == PNG
+
+
 def test_sensitivity_initial_text(tmp_path, capsys):
     rc = main(["sensitivity", "initial", "--values", "0.5/0.5,0/0/0.1/0", "--ratios", "1.0",
                "--duration-s", "0.1", "--out", str(tmp_path)])
@@ -135,6 +146,7 @@ def test_sensitivity_initial_text(tmp_path, capsys):
     (["sensitivity", "ball", "--bar", "solid"], "--bar"),
     (["sensitivity", "ball", "--kr-mpa", "800"], "--kr-mpa"),
     (["sensitivity", "initial", "--values", "1,2"], "--values"),
+    (["sensitivity", "initial", "--starts", "4"], "--starts"),
     (["sensitivity", "boat"], "KIND"),
 ])
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, name):

@@ -63,7 +63,7 @@ DIMENSIONLESS = frozenset({
     "min_step", "max_step", "quantile", "u",
     # counts, indices and sizes
     "revolutions", "periods", "period", "settle_periods", "max_points", "max_branches",
-    "max_k", "batch", "workers", "chunk_size", "seed", "seeds", "samples", "trials",
+    "max_k", "batch", "workers", "chunk_size", "seed", "seeds", "samples", "trials", "starts",
     "count", "distinct", "record_every", "impacts_per_cycle", "points", "nodes",
     "attractor", "attractor_id", "attractor_period", "parent", "branch", "point",
     "sample", "event", "multiplier", "trial", "objective", "index", "case_index",

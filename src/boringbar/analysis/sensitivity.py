@@ -19,6 +19,11 @@ Parameters (``kind``) and their published values:
 - ``"restitution"``: 0.6, 0.7, 0.8;
 - ``"initial"``: initial conditions (W0 (m), W0' (m/s)[, y0 (m), y0' (m/s)])
   or :class:`~boringbar.simulate.Initial`; the system is fixed.
+
+A rattling ball's RMS depends on where it starts: ``starts`` = K runs each harmonic
+point again from K starts, the ball at rest at the centres of K equal bins across the
+cavity (the bar at rest), beside the study's own run, so that a difference between two
+values can be told from the spread over starts (:func:`starts_rms_at`).
 """
 
 from __future__ import annotations
@@ -31,7 +36,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import xarray as xr
 
-from boringbar._validate import ParameterError, check_choice, check_positive, check_range
+from boringbar._validate import (
+    ParameterError,
+    check_choice,
+    check_int,
+    check_positive,
+    check_range,
+)
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.analysis.base import Plan, execution_attrs, run_plan
 from boringbar.analysis.cases import Case
@@ -49,6 +60,17 @@ PUBLISHED_VALUES = {
     "restitution": (0.6, 0.7, 0.8),
     "initial": ((0.5e-3, 0.5), (1.0e-3, 1.0)),
 }
+
+
+#: the most starts a harmonic run is repeated from
+MAX_STARTS = 64
+
+
+def start_positions(gap_m: float, starts: int) -> list[float]:
+    """The ball's positions (m) of ``starts`` starts: the centres of ``starts`` equal
+    bins across the cavity, -delta/2 .. delta/2 (``gap_m`` = delta), none at a wall."""
+    half = 0.5 * gap_m
+    return [half * (-1.0 + (2 * k + 1) / starts) for k in range(starts)]
 
 
 @dataclass(frozen=True)
@@ -117,7 +139,9 @@ class SensitivityOptions:
 
     ``kind``: one of :data:`KINDS` (the module doc); ``values``: its values
     (default: the published ones); harmonic runs over ``forces_n`` (N) x ``ratios``
-    (Omega/omega_n), or, with ``cuts`` (a :class:`Cuts`), full-length cuts instead.
+    (Omega/omega_n), or, with ``cuts`` (a :class:`Cuts`), full-length cuts instead;
+    ``starts``: 0, or 2 to :data:`MAX_STARTS` further starts of each harmonic run
+    (:func:`start_positions`).
     """
 
     kind: str = "restitution"
@@ -125,9 +149,18 @@ class SensitivityOptions:
     forces_n: tuple[float, ...] = (10.0,)
     ratios: tuple[float, ...] = (1.0,)
     cuts: Cuts | None = None
+    starts: int = 0
 
     def __post_init__(self):
         check_choice("kind", self.kind, KINDS)
+        object.__setattr__(self, "starts", check_int("starts", self.starts, 0, MAX_STARTS))
+        if self.starts == 1:
+            raise ParameterError("starts = 1 must be 0 (the study's own start alone) or 2 to "
+                                 f"{MAX_STARTS} (a spread of starts across the cavity)")
+        if self.starts and (self.kind == "initial" or self.cuts is not None):
+            raise ParameterError(f"starts = {self.starts} applies to the harmonic runs of "
+                                 "kinds ball, friction_number and restitution (kind initial "
+                                 "gives its own starts)")
         values = PUBLISHED_VALUES[self.kind] if self.values is None else self.values
         if isinstance(values, str) or not len(values):
             raise ParameterError(f"values = {values!r} must hold at least one {self.kind}")
@@ -171,9 +204,11 @@ def plan(options: SensitivityOptions, integration: Integration, *, preset: str =
                  for label, v in zip(options.labels(), options.values, strict=True)]
     else:
         cases = sensitivity_cases(kind, options.values, bar, preset, gap_m, friction, overrides)
-    extra = {"kind": kind, "values": list(options.values), "labels": options.labels()}
+    extra = {"kind": kind, "values": list(options.values), "labels": options.labels(),
+             "starts": options.starts, "n_values": len(cases)}
     if options.cuts is None:
-        p = sweep_mod.plan(cases, SweepOptions(options.ratios, options.forces_n), integration)
+        p = sweep_mod.plan(cases + _started(cases, options.starts),
+                           SweepOptions(options.ratios, options.forces_n), integration)
         p.context["mode"] = "harmonic"
         p.extra.update(extra)
         return p
@@ -181,6 +216,13 @@ def plan(options: SensitivityOptions, integration: Integration, *, preset: str =
     context = {"mode": "cuts", "cases": cases, "cuts": options.cuts,
                "integration": integration}
     return Plan(context, points, extra)
+
+
+def _started(cases: list[Case], starts: int) -> list[Case]:
+    """Each case again from each of ``starts`` starts (:func:`start_positions`), case by
+    case: the runs after the cases' own in the sweep."""
+    return [replace(c, label=f"{c.label}, start {k}", initial=Initial(ball_position_m=y))
+            for c in cases for k, y in enumerate(start_positions(c.gap_m, starts))]
 
 
 def compute(context: dict, point):
@@ -209,9 +251,12 @@ def assemble(plan: Plan, results: list, attrs: dict | None = None):
     """The sweep Dataset (harmonic) or the cuts' verdicts over (value, depth_m), with the
     varied parameter as the leading dimension, named after its kind."""
     kind, values, labels = plan.extra["kind"], plan.extra["values"], plan.extra["labels"]
-    cases = plan.context["cases"]
+    cases = plan.context["cases"][:plan.extra["n_values"]]
+    starts = None
     if plan.context["mode"] == "harmonic":
         ds = sweep_mod.assemble(plan, results, attrs)
+        ds, starts = ds.isel(case=slice(0, len(cases))), ds.isel(case=slice(len(cases), None))
+        ds.attrs["systems"] = json.dumps({c.label: c.system.to_dict() for c in cases})
     else:
         ds = _cuts_dataset(plan, results, attrs)
     coord = labels if kind == "initial" else values
@@ -225,7 +270,22 @@ def assemble(plan: Plan, results: list, attrs: dict | None = None):
     if kind == "initial":
         ds = ds.drop_vars("case")  # the labels are the coordinate itself
     ds.attrs.update({"sensitivity": kind, "values": json.dumps([str(v) for v in values])})
+    if plan.extra["starts"]:
+        ds = _with_starts(ds, kind, starts, plan.extra["starts"], cases)
     return ds
+
+
+def _with_starts(ds, kind: str, started, k: int, cases: list[Case]):
+    """``ds`` with the runs from the starts: ``rms_tip_m_starts`` and ``pattern_starts``
+    over (kind, start, force_n, ratio), the ball's start position on ``start``."""
+    shape = (len(cases), k, ds.sizes["force_n"], ds.sizes["ratio"])
+    dims = (kind, "start", "force_n", "ratio")
+    return ds.assign(
+        rms_tip_m_starts=(dims, started["rms_tip_m"].values.reshape(shape), {"units": "m"}),
+        pattern_starts=(dims, started["pattern"].values.reshape(shape)),
+    ).assign_coords(ball_position_start_m=(
+        ("start",), np.array(start_positions(cases[0].gap_m, k)),
+        {"units": "m", "long_name": "the ball's position at rest at the start"}))
 
 
 def _cuts_dataset(plan: Plan, results: list, attrs: dict | None):
@@ -278,6 +338,25 @@ def sensitivity(options: SensitivityOptions | None = None, *, preset: str = "phy
     return assemble(p, results, execution_attrs(execution, wall))
 
 
+def rms_at_ratio(entry: dict, ratio: float) -> list[float]:
+    """The tip RMS values (m) of a summary's harmonic ``entry`` at the ratio nearest
+    ``ratio``: its own run's, then its starts' where it has them."""
+    k = int(np.argmin(np.abs(np.asarray(entry["ratio"]) - ratio)))
+    starts = entry.get("starts")
+    return [entry["rms_tip_m"][k]] + ([r[k] for r in starts["rms_tip_m"]] if starts else [])
+
+
+def above_spread(a: list[float], b: list[float]) -> tuple[bool, float, float]:
+    """Whether the values ``a`` lie above ``b`` beyond their spread: the difference of
+    their means beyond twice its standard error (from each list's sample variance; one
+    value each: the plain comparison).  Returns that, the difference and its error."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    diff = float(a.mean() - b.mean())
+    var = sum(float(np.var(x, ddof=1)) / x.size for x in (a, b) if x.size > 1)
+    se = math.sqrt(var)
+    return diff > 2.0 * se, diff, se
+
+
 def with_cuts(ds, cuts):
     """The harmonic and the cut results in one Dataset: the cut variables and
     attributes prefixed ``cut_``."""
@@ -303,6 +382,11 @@ def summary(ds) -> dict:
                              "ratio": ds["ratio"].values.tolist(),
                              "rms_tip_m": ds["rms_tip_m"].values[i, j].tolist(),
                              "pattern": [str(p) for p in ds["pattern"].values[i, j]]})
+            if "rms_tip_m_starts" in ds:  # per start, per ratio
+                harmonic[-1]["starts"] = {
+                    "ball_position_m": ds["ball_position_start_m"].values.tolist(),
+                    "rms_tip_m": ds["rms_tip_m_starts"].values[i, :, j].tolist(),
+                    "pattern": ds["pattern_starts"].values[i, :, j].tolist()}
     summary = {"kind": kind, "values": values, "preset": ds.attrs.get("preset"),
                "harmonic": harmonic, "cuts": None, "wall_time_s": ds.attrs.get("wall_time_s")}
     if kind == "initial":

@@ -11,7 +11,14 @@ from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.basins import MAX_BASIN_CELLS, BasinOptions, basins, check_cells
 from boringbar.analysis.bifurcation import BifurcationOptions, bifurcation, with_hysteresis
 from boringbar.analysis.cases import parse_range
-from boringbar.analysis.sensitivity import KINDS, Cuts, SensitivityOptions, sensitivity, with_cuts
+from boringbar.analysis.sensitivity import (
+    KINDS,
+    MAX_STARTS,
+    Cuts,
+    SensitivityOptions,
+    sensitivity,
+    with_cuts,
+)
 from boringbar.cli.options import (
     CUT_ONLY,
     PATTERN_KEY,
@@ -133,6 +140,10 @@ def add_sensitivity(sub) -> None:
     g.add_argument("--ratios", default="0.95:1.05:0.01", metavar="START:STOP:STEP",
                    help="Omega/omega_n values, START:STOP:STEP (inclusive) or comma list "
                         "(default: 0.95:1.05:0.01)")
+    g.add_argument("--starts", type=int, default=0, metavar="K",
+                   help="run each harmonic point again from K starts, the ball at rest "
+                        "across the cavity, to show a rattling ball's spread (0 or 2-64; "
+                        "default 0)")
     g.add_argument("--workers", type=int, metavar="N", help="threads (default: every core)")
     g = p.add_argument_group("regenerative cuts (only with --cut-rpm or --depths-mm)")
     g.add_argument("--cut-rpm", type=float, metavar="RPM",
@@ -370,6 +381,33 @@ KIND_OPTIONS = {"ball": ("ball", "--ball"), "restitution": ("restitution", "--re
                 "friction_number": ("friction_number", "--friction-number")}
 
 
+def _starts_table(kind: str, force: float, rows: list[dict], heads: list[str]) -> list[str]:
+    """The tip RMS of each ratio and value over its runs from every start (its own and
+    the further ones): their mean and their least and largest."""
+    width = max(26, *(len(h) + 2 for h in heads))
+    n = len(rows[0]["starts"]["rms_tip_m"]) + 1
+    lines = [f"{kind}, F0 = {force:g} N: tip RMS (mm) over {n} starts: mean [least, largest]",
+             "ratio ".rjust(8) + "".join(h.rjust(width) for h in heads)]
+    for k, ratio in enumerate(rows[0]["ratio"]):
+        cells = []
+        for h in rows:
+            runs = np.array([h["rms_tip_m"][k], *(r[k] for r in h["starts"]["rms_tip_m"])])
+            cells.append(f"{runs.mean() * 1e3:.4f} [{runs.min() * 1e3:.4f}, "
+                         f"{runs.max() * 1e3:.4f}]".rjust(width))
+        lines.append(f"{ratio:7.3f} " + "".join(cells))
+    return lines + [""]
+
+
+def _check_starts(starts: int, kind: str) -> None:
+    check_int("--starts", starts, 0, MAX_STARTS)
+    if starts == 1:
+        raise ParameterError(f"--starts = 1 must be 0 (the runs' own start alone) or 2 to "
+                             f"{MAX_STARTS}")
+    if starts and kind == "initial":
+        raise ParameterError(f"--starts = {starts} conflicts with KIND initial (its values "
+                             "are the starts)")
+
+
 def _sensitivity_values(args, bar: str, gap: float):
     """--values as the library takes them (SI), or None for the published ones."""
 
@@ -424,6 +462,7 @@ def _cmd_sensitivity(args) -> Outcome:
         raise ParameterError(f"{given} conflicts with KIND friction_number (friction on, its "
                              "size from --values)")
     gap = check_gap(gap_default_mm(args) if args.gap_mm is None else args.gap_mm, args)
+    _check_starts(args.starts, kind)
     values = _sensitivity_values(args, bar, gap)
     forces, ratios = forces_and_ratios(args)
     cuts = None
@@ -443,8 +482,10 @@ def _cmd_sensitivity(args) -> Outcome:
     common = dict(preset=args.preset, bar=bar, gap_m=gap, friction=friction_on,
                   overrides=system_overrides(args), integration=integration(args),
                   execution=execution(args))
-    ds = sensitivity(SensitivityOptions(kind, values, tuple(forces), tuple(ratios)),
-                     progress=progress_printer(args, f"sensitivity {kind}", "runs"), **common)
+    options = SensitivityOptions(kind, values, tuple(forces), tuple(ratios),
+                                 starts=args.starts)
+    ds = sensitivity(options, progress=progress_printer(args, f"sensitivity {kind}", "runs"),
+                     **common)
     if cuts is not None:
         ds = with_cuts(ds, sensitivity(SensitivityOptions(kind, values, cuts=cuts), **common))
 
@@ -474,6 +515,8 @@ def _sensitivity_text(s: dict) -> str:
                               + (f" [{pat}]" if pat else "")).rjust(width))
             lines.append(f"{ratio:7.3f} " + "".join(cells))
         lines.append("")
+        if rows[0].get("starts"):
+            lines += _starts_table(kind, force, rows, heads)
     if s["cuts"]:
         c = s["cuts"]
         lines.append(f"cuts at {c['rpm']:g} rpm: steady amplitude (mm), * = chatter (the "

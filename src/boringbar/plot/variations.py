@@ -30,7 +30,9 @@ from boringbar.plot.style import (
 def plot_sensitivity(ds, *, fig=None) -> Figure:
     """A sensitivity study (:func:`~boringbar.analysis.sensitivity.sensitivity`),
     as a Figure: one panel per force, tip RMS (mm) against Omega/omega_n,
-    one line per value of the varied parameter; with cuts (``cut_*`` variables,
+    one line per value of the varied parameter (with its runs from several starts,
+    ``rms_tip_m_starts``, a band of its colour from their least to their largest RMS,
+    the line's own among them); with cuts (``cut_*`` variables,
     as ``boringbar sensitivity`` writes them) one more panel, the steady tip
     amplitude (mm) against depth of cut (mm), chatter (the force reaches zero)
     marked by filled crosses, no chatter by open circles.
@@ -58,18 +60,27 @@ def plot_sensitivity(ds, *, fig=None) -> Figure:
             ax.plot(ratio, ds["rms_tip_m"].values[i, j] * 1e3, marker="o",
                     ms=3.5 if ratio.size > 3 else 7, lw=1.2, color=colours[i],
                     label=_value_label(kind, v), alpha=0.85)
+            if "rms_tip_m_starts" in ds:
+                runs = np.vstack([ds["rms_tip_m"].values[i, j],
+                                  ds["rms_tip_m_starts"].values[i, :, j]]) * 1e3
+                ax.fill_between(ratio, runs.min(axis=0), runs.max(axis=0), color=colours[i],
+                                alpha=0.18, lw=0)
         ax.set_xlabel(r"frequency ratio $\Omega/\omega_n$")
         ax.set_ylabel("tip RMS (mm)")
-        zero_based(ax, ds["rms_tip_m"].values[:, j] * 1e3)
+        zero_based(ax, np.concatenate([ds["rms_tip_m"].values[:, j].ravel(), *(
+            [ds["rms_tip_m_starts"].values[:, :, j].ravel()] if "rms_tip_m_starts" in ds
+            else [])]) * 1e3)
         ax.set_title(f"harmonic forcing, F0 = {force:g} N", fontsize="small")
         ax.grid(alpha=0.3)
     if cuts:
         _sensitivity_cuts(axes[n - 1], ds, colours)
     legend_below(fig, axes[:len(forces)], ncol=min(len(values), 2))
     what = "initial conditions" if kind == "initial" else kind.replace("_", " ")
+    spread = (f"; bands: {ds.sizes['start'] + 1} starts, the ball at rest across the cavity"
+              if "rms_tip_m_starts" in ds else "")
     set_title(fig, f"sensitivity to {what}, {_sensitivity_words(ds, kind)}", ds.attrs,
               f"{ds.attrs.get('duration_s', math.nan):g} s runs, "
-              f"dt = {ds.attrs.get('dt_s', math.nan):g} s")
+              f"dt = {ds.attrs.get('dt_s', math.nan):g} s{spread}")
     return fig
 
 

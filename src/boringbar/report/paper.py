@@ -149,6 +149,9 @@ COLUMN_ORDER = PRESET_ORDER + VARIANT_ORDER
 DT_S = None
 INTEGRATOR = "auto"
 GAP_MM = 0.5
+#: The sensitivity step's starts of the ball's harmonic runs (``--starts``): D4 compares the
+#: steel and carbide balls' RMS at r = 1, both rattling, beyond their spread over starts.
+BALL_STARTS = 8
 CUT = {"kr_pa": 850.0 * 1e6, "feed_m": 0.1 * 1e-3, "revolutions": 3, "interpolation": "cubic",
        "start": "rest", "bounded_fraction": 0.1}
 
@@ -338,13 +341,14 @@ def _basins_run(force: str, ratio: str, friction: bool, start: str, displacement
 
 
 def _sensitivity_run(kind: str, force: str, ratios: str, cut_rpm: str | None,
-                     depths_mm: str | None, duration_s: float):
+                     depths_mm: str | None, duration_s: float, starts: int = 0):
     def run(col: Column, out: Path) -> dict:
         common = dict(preset=col.preset, bar="ball", gap_m=GAP_MM * 1e-3, friction=True,
                       overrides=col.kw, integration=_integration(duration_s),
                       execution=Execution())
         ds = sensitivity(SensitivityOptions(kind, None, (float(force),),
-                                            tuple(parse_range(ratios, "--ratios"))), **common)
+                                            tuple(parse_range(ratios, "--ratios")),
+                                            starts=starts), **common)
         if cut_rpm is not None:
             depths = parse_range(depths_mm, "--depths-mm")
             cuts = Cuts(float(cut_rpm), tuple(float(d) * 1e-3 for d in depths), duration_s,
@@ -448,12 +452,15 @@ def published_steps(quick: bool = False) -> list[Step]:
     for kind in ("ball", "friction_number", "restitution", "initial"):
         cut = kind in ("ball", "friction_number")
         extra = ("--cut-rpm", cut_rpm, "--depths-mm", depths) if cut else ()
+        # the steel ball's RMS against the carbide's (D4), both rattling: over starts
+        starts = BALL_STARTS if kind == "ball" else 0
+        extra += ("--starts", str(starts)) if starts else ()
         steps.append(Step(f"sensitivity-{kind}", "sensitivity",
                           f"Sensitivity to {kind.replace('_', ' ')}",
                           ("sensitivity", kind, "--bar", "ball", "--gap-mm", "0.5",
                            "--force-n", "10", "--ratios", ratios, *extra, *dur),
                           _sensitivity_run(kind, "10", ratios, cut_rpm if cut else None,
-                                           depths if cut else None, duration)))
+                                           depths if cut else None, duration, starts)))
     for name, trials, title in (("ball", 6 if quick else 12,
                                  "Better designs: the ball damper's gap and material"),
                                 ("tmd", 60 if quick else 120,

@@ -624,8 +624,9 @@ class Basins(Analysis):
 # --- sensitivity ------------------------------------------------------------------
 
 class Sensitivity(Analysis):
-    """One parameter varied (``kind``): harmonic runs per (value, force, ratio), or
-    (``cuts = true``) full-length cuts per (value, depth) at ``[forcing] rpm``."""
+    """One parameter varied (``kind``): harmonic runs per (value, force, ratio), each
+    again from ``starts`` starts, or (``cuts = true``) full-length cuts per (value, depth)
+    at ``[forcing] rpm``."""
 
     name = "sensitivity"
     module = sensitivity_mod
@@ -635,6 +636,7 @@ class Sensitivity(Analysis):
         "values": Values(None),
         "cuts": Setting("bool", False),
         "depths_mm": Range((0.05, 0.06, 0.07, 0.08, 0.09, 0.1), lo=0.0, lo_open=True),
+        "starts": Setting("int", 0, 0, sensitivity_mod.MAX_STARTS),
     }
     grid_keys = ("force_n", "ratio")
 
@@ -654,7 +656,7 @@ class Sensitivity(Analysis):
                         study.value("duration_s"), _cut_options(study))
         try:
             options = SensitivityOptions(kind, o["values"], tuple(_axis(study, "force_n")),
-                                         tuple(_axis(study, "ratio")), cuts)
+                                         tuple(_axis(study, "ratio")), cuts, o["starts"])
             return sensitivity_mod.plan(
                 options, _integration(study, initial=_initial_or_none(study)),
                 preset=study.preset, bar=s["kind"], gap_m=s["gap_mm"] * 1e-3,
