@@ -23,7 +23,7 @@ Parameters (``kind``) and their published values:
 A rattling ball's RMS depends on where it starts: ``starts`` = K runs each harmonic
 point again from K starts, the ball at rest at the centres of K equal bins across the
 cavity (the bar at rest), beside the study's own run, so that a difference between two
-values can be told from the spread over starts (:func:`starts_rms_at`).
+values can be told from the spread over starts (:func:`above_spread`).
 """
 
 from __future__ import annotations
@@ -157,10 +157,12 @@ class SensitivityOptions:
         if self.starts == 1:
             raise ParameterError("starts = 1 must be 0 (the study's own start alone) or 2 to "
                                  f"{MAX_STARTS} (a spread of starts across the cavity)")
-        if self.starts and (self.kind == "initial" or self.cuts is not None):
-            raise ParameterError(f"starts = {self.starts} applies to the harmonic runs of "
-                                 "kinds ball, friction_number and restitution (kind initial "
-                                 "gives its own starts)")
+        if self.starts and self.kind == "initial":
+            raise ParameterError(f"starts = {self.starts} conflicts with kind 'initial' (its "
+                                 "values are the starts)")
+        if self.starts and self.cuts is not None:
+            raise ParameterError(f"starts = {self.starts} applies to the harmonic runs, not "
+                                 "to cuts")
         values = PUBLISHED_VALUES[self.kind] if self.values is None else self.values
         if isinstance(values, str) or not len(values):
             raise ParameterError(f"values = {values!r} must hold at least one {self.kind}")
