@@ -447,8 +447,24 @@ def published_steps(quick: bool = False) -> list[Step]:
                            *grid, *dur),
                           _basins_run(force, ratio, fr == "on", start, cells, cells, duration),
                           friction=fr == "on"))
+    steps += _sensitivity_steps(quick, dur, duration)
+    for name, trials, title in (("ball", 6 if quick else 12,
+                                 "Better designs: the ball damper's gap and material"),
+                                ("tmd", 60 if quick else 120,
+                                 "Better designs: the absorber's tuning, FRF peak against "
+                                 "chatter")):
+        steps.append(Step(f"design-{name}", "design", title,
+                          ("design", design_file(name), "--trials", str(trials)),
+                          _design_run(name, trials), variants=False))
+    return steps
+
+
+def _sensitivity_steps(quick: bool, dur: tuple, duration: float) -> list[Step]:
+    """The published study's sensitivity steps: each kind at 10 N over the ratios near
+    resonance; the ball and the friction number with cuts at 1200 rpm too."""
     ratios = "0.95:1.05:" + ("0.05" if quick else "0.01")
     cut_rpm, depths = "1200", "0.05:0.10:0.01"
+    steps = []
     for kind in ("ball", "friction_number", "restitution", "initial"):
         cut = kind in ("ball", "friction_number")
         extra = ("--cut-rpm", cut_rpm, "--depths-mm", depths) if cut else ()
@@ -461,14 +477,6 @@ def published_steps(quick: bool = False) -> list[Step]:
                            "--force-n", "10", "--ratios", ratios, *extra, *dur),
                           _sensitivity_run(kind, "10", ratios, cut_rpm if cut else None,
                                            depths if cut else None, duration, starts)))
-    for name, trials, title in (("ball", 6 if quick else 12,
-                                 "Better designs: the ball damper's gap and material"),
-                                ("tmd", 60 if quick else 120,
-                                 "Better designs: the absorber's tuning, FRF peak against "
-                                 "chatter")):
-        steps.append(Step(f"design-{name}", "design", title,
-                          ("design", design_file(name), "--trials", str(trials)),
-                          _design_run(name, trials), variants=False))
     return steps
 
 
