@@ -176,8 +176,9 @@ inline void pattern_work(const Params& q, Shape<0, -1> sh, const Stages& st, Ste
 
 // The tables of the step of dt for the first n modes of the packed parameters p, column
 // by column (push_column).  rolled: a rolling ball's rolled regime (else a sliding ball's
-// step, which a slipping ball takes too).  A sliding ball's F_b column is also built for
-// each sign pattern of the stages' y' (StepMap::fb), with the pattern's friction work.
+// step, which a slipping ball takes too).  A ball's F_b column is also built for each
+// sign pattern of the stages' y' (StepMap::fb), in either regime, with the pattern's
+// friction work.
 inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolled) {
     Params q = unpack(p, dt);
     q.n = n;
