@@ -211,3 +211,16 @@ def test_a_ball_bar_bends_along_and_across_its_cavity():
     along, across = spec.stepped_bar(True), spec.stepped_bar(True, across=True)
     assert [s.area_m2 for s in along.sections] == [s.area_m2 for s in across.sections]
     assert two.bar.psi_damper[1] == 0 and two.bar.psi_tip[1] == 0
+
+
+def test_published_cases_hold_every_bar_to_the_planes_and_the_cut():
+    """The solid and TMD bars of a comparison take the planes and the oriented cut the
+    ball takes (the command line's sweep, lobes and chatter map build their cases so)."""
+    g = CutGeometry(force_ratio=2.5, lead_angle_deg=30.0, principal_angle_deg=20.0)
+    cases = bb.published_cases(gaps_m=(0.5e-3,), frictions=(True,), planes=2,
+                               cut_geometry=g)
+    for case in cases:
+        bar = case.label.split()[0]
+        alone = make_system(bar, gap_m=0.5e-3, planes=2, cut_geometry=g)
+        assert case.system.bar.n_modes == 4
+        np.testing.assert_array_equal(case.system.bar.psi_force, alone.bar.psi_force)

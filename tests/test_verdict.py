@@ -335,3 +335,28 @@ def test_a_level_vibration_after_an_onset_that_did_not_grow_settles_at_once(onse
     assert s.status == "settled"
     assert s.duration_s <= 2 * options.min_segment * 0.05 + 1e-9
     assert s.pp_m == pytest.approx(1e-6, rel=1e-3)
+
+
+def test_an_observable_at_exactly_zero_is_no_evidence():
+    """A bending plane that neither the cut nor the ball reaches keeps its modes at exactly
+    zero; their flat logs (slope 0 +- 0) must not hold a decaying cut undecided."""
+    from boringbar.analysis.verdict import LOG_ZERO, growth
+
+    t = np.arange(1, 61) * 0.01
+    decaying = np.log(1e-6) - 3.0 * t
+    logs = np.column_stack([decaying, decaying - 1.0, np.full_like(t, LOG_ZERO)])
+    verdict, rate, _ = growth(t, logs, VerdictOptions())
+    assert verdict == STABLE and rate == pytest.approx(-3.0)
+    assert growth(t, logs[:, :2], VerdictOptions())[:2] == (verdict, rate)
+    assert growth(t, np.full((60, 2), LOG_ZERO), VerdictOptions())[0] == STABLE
+
+
+def test_a_ball_bar_in_two_planes_is_judged_as_in_one_where_the_cut_reaches_one():
+    """With no tangential force the second plane (across the cavity) is untouched: the
+    verdict is the one plane's."""
+    cut = bb.Regenerative(depth_m=0.02e-3, rpm=1200.0)
+    options = VerdictOptions(knocks_m=(), max_duration_s=3.0)
+    one = judge(bb.make_system("ball", gap_m=0.5e-3), cut, options)
+    two = judge(bb.make_system("ball", gap_m=0.5e-3, planes=2), cut, options)
+    assert one.chatter_free and two.chatter_free and two.onset == one.onset == STABLE
+    assert two.growth_rate_per_s == pytest.approx(one.growth_rate_per_s, rel=1e-9)

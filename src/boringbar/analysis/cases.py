@@ -118,6 +118,11 @@ def _relabel(case, label: str) -> Case:
 #: what published_cases passes on to make_system
 _OVERRIDABLE = set(inspect.signature(make_system).parameters) - {"bar", "preset", "gap_m",
                                                                  "friction"}
+#: those of them that describe the host bar, its absorber and the cut, which the solid and
+#: TMD bars take too (the rest are the ball's): a comparison under two planes and an
+#: oriented cut holds the three bars to the same planes and cut
+HOST_OVERRIDES = ("n_modes", "z_absorber_m", "tmd_mass_kg", "tmd_design", "modal", "spec",
+                  "planes", "cut_geometry")
 
 
 def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
@@ -126,8 +131,9 @@ def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
                     **overrides) -> list[Case]:
     """The bars of the published sweeps under ``preset``: those of ``bars`` among solid,
     TMD, and the ball damper for every gap of ``gaps_m`` (m) x friction of ``frictions``
-    (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones;
-    the bar arguments only to the ball cases)."""
+    (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones): all
+    of them to the ball cases, those of :data:`HOST_OVERRIDES` to the solid and TMD bars
+    too."""
     unknown = sorted(set(overrides) - _OVERRIDABLE)
     if unknown:
         raise TypeError(f"published_cases() got unexpected keyword arguments {unknown}; "
@@ -141,9 +147,7 @@ def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
                     label = f"ball gap={gap * 1e3:g}mm friction={'on' if fr else 'off'}"
                     cases.append(Case.of(s, label))
         else:
-            kw = {k: v for k, v in overrides.items() if k in ("n_modes", "z_absorber_m",
-                                                               "tmd_mass_kg", "tmd_design",
-                                                               "modal", "spec")}
+            kw = {k: v for k, v in overrides.items() if k in HOST_OVERRIDES}
             cases.append(Case.of(make_system(bar, preset, **kw), bar))
     return cases
 

@@ -59,6 +59,9 @@ KNOCK_M = 1e-6
 TOLERANCE_M = 10e-6
 SETTLE_TOLERANCE = 0.05
 MIN_SEGMENT = 6
+#: An observable's amplitude is logged at least at AMP_ZERO (m): at LOG_ZERO it was 0
+AMP_ZERO = 1e-300
+LOG_ZERO = math.log(AMP_ZERO)
 #: A judged cut's RK4 step (s), and at least this many steps in the shortest period of
 #: a bar's modes and absorber (:func:`judged_step`).  With a ball held by the stick law
 #: a friction-held vibration grows at the locked bar's root at any step, and no
@@ -253,6 +256,13 @@ def growth(t: np.ndarray, logs: np.ndarray, options: VerdictOptions,
     if n < 3 * m:
         return UNDECIDED, math.nan, math.nan
     y = logs[n - 3 * m:]
+    moving = np.add.reduce(y > LOG_ZERO, axis=0) > 0
+    if not moving.all():
+        # an observable at exactly zero over the segments (a bending plane that neither
+        # the cut nor the ball reaches) can neither grow nor decay: it is no evidence
+        if not moving.any():
+            return STABLE, math.nan, math.nan  # nothing moves, so nothing grows
+        y = y[:, moving]
     q = t_quantile(options.confidence, m - 2)
     span = t[-1] - t[n - 3 * m]
     t3 = t[n - 3 * m:]
@@ -327,7 +337,7 @@ class Track:
             self._logs = np.concatenate([self._logs, np.empty_like(self._logs)])
         k = self.n
         self._ends[k], self._amps[k] = w.t_end_s, amp
-        self._logs[k] = np.log(np.maximum(amp, 1e-300))
+        self._logs[k] = np.log(np.maximum(amp, AMP_ZERO))
         self.tops.append(w.max_tip_m)
         self.bottoms.append(w.min_tip_m)
         self.squares.append(w.rms_tip_m**2)
