@@ -251,10 +251,24 @@ def test_a_rolling_ball_s_cut_is_refused_where_it_is_not_taken():
         ImpactDamper(motion="roll", mu_static=0.1, mu_kinetic=0.2)
 
 
+def test_rk4_s_stick_law_is_refused_for_a_rolling_ball_and_its_judged_cuts_say_so():
+    """RK4's stick law holds a sliding ball only: asked of a rolling one it is refused,
+    not ignored, and the verdict's cuts take the sgn() law for it and name it."""
+    system = make_system("ball", motion="roll")
+    with pytest.raises(ParameterError, match="stick_law = 'hold' with a rolling ball"):
+        bb.simulate(system, bb.Harmonic(amplitude_n=0.01), duration_s=0.01,
+                    integrator="rk4", stick_law="hold")
+    ds = bb.lobes({"roll": system}, bb.LobesOptions(rpm=(1200.0,)))
+    assert "a rolling ball's by the sgn() law" in ds.attrs["method_text"]
+    sliding = bb.lobes({"slide": make_system("ball")}, bb.LobesOptions(rpm=(1200.0,)))
+    assert "rolling" not in sliding.attrs["method_text"]
+
+
 @pytest.mark.parametrize("argv, name", [
     (["--mu-static", "0.1", "--mu-kinetic", "0.2"], "--mu-static"),
     (["--mu-kinetic", "-1"], "--mu-kinetic"),
     (["--ball-motion", "spin"], "--ball-motion"),
+    (["--ball-motion", "roll", "--integrator", "rk4", "--stick-law", "hold"], "stick_law"),
 ])
 def test_the_command_line_refuses_a_bad_roll(argv, name, tmp_path, capsys):
     out = tmp_path / "out"

@@ -55,6 +55,7 @@ from boringbar.analysis.verdict import (
     judge,
     judged_step,
     step_text,
+    stick_law_of,
     verdict_attrs,
 )
 from boringbar.analysis.verdict import STABLE as ONSET_STABLE
@@ -192,7 +193,8 @@ def map_depths(limits_m: np.ndarray, n: int = DEPTHS,
     return tuple(float(d) for d in np.round(np.linspace(span[0] * b, span[1] * b, n), 7))
 
 
-def _check_integration(cases: list[Case], integration: Integration, stick_law: str) -> None:
+def _check_integration(cases: list[Case], integration: Integration,
+                       options: VerdictOptions) -> None:
     """The converged verdict advances each cut window by window with the RK4 scheme."""
     if integration.integrator == "exact":
         raise ParameterError("integrator = 'exact': the chatter map judges each cut by the "
@@ -202,7 +204,7 @@ def _check_integration(cases: list[Case], integration: Integration, stick_law: s
         raise ParameterError(f"initial = {integration.initial!r}: every cut of a chatter map "
                              "starts in progress and knocked, not from initial conditions")
     for c in cases:  # true stick-slip needs the stick law
-        check_friction_law(c.system, "rk4", stick_law)
+        check_friction_law(c.system, "rk4", stick_law_of(c.system, options))
 
 
 def resolved(cases: list[Case], options: ChatterMapOptions) -> tuple[ChatterMapOptions, dict]:
@@ -236,7 +238,7 @@ def plan(cases, options: ChatterMapOptions, integration: Integration) -> Plan:
     speeds in ``extra``."""
     cases = as_cases(cases, "cases")
     integration = integration.with_step(judged_step([c.system for c in cases]))
-    _check_integration(cases, integration, options.verdict.stick_law)
+    _check_integration(cases, integration, options.verdict)
     options, source = resolved(cases, options)
     for r in options.rpm:
         check_delay(r, options.revolutions, integration.dt_s)

@@ -345,7 +345,7 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     chatter_probability.check(options.uncertainty, options.criterion)
     if options.criterion == "growth":  # the step settled once: the runs and the record agree
         integration = integration.with_step(judged_step([c.system for c in cases]))
-        _check_growth(cases, integration, options.verdict.stick_law)
+        _check_growth(cases, integration, options.verdict)
     integration = integration.with_step()
     rpm = np.asarray(options.rpm, dtype=float)
     for r in rpm:
@@ -360,7 +360,8 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     return Plan(context, points)
 
 
-def _check_growth(cases: list[Case], integration: Integration, stick_law: str) -> None:
+def _check_growth(cases: list[Case], integration: Integration,
+                  options: VerdictOptions) -> None:
     """The converged verdict advances a cut window by window with the RK4 scheme."""
     if integration.integrator == "exact":
         raise ParameterError("integrator = 'exact' with criterion 'growth': the converged "
@@ -368,7 +369,7 @@ def _check_growth(cases: list[Case], integration: Integration, stick_law: str) -
                              "scheme; use integrator 'rk4' or 'auto', or a fixed-length "
                              "criterion ('zero', 'bounded') with 'exact'")
     for c in cases:  # true stick-slip needs the stick law
-        check_friction_law(c.system, "rk4", stick_law)
+        check_friction_law(c.system, "rk4", verdict.stick_law_of(c.system, options))
 
 
 def compute(context: dict, point: tuple[int, int]) -> dict:

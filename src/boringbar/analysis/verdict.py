@@ -44,7 +44,7 @@ from scipy import special
 from boringbar._validate import check_choice, check_int, check_range, check_values
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
-from boringbar.simulate import STICK_LAWS, CutStepper, Window, knocked_cut
+from boringbar.simulate import STICK_LAWS, CutStepper, Window, knocked_cut, rolling
 from boringbar.simulate.run_limits import shortest_period
 
 #: A window holds whole revolutions and at least this many periods of the host bar's
@@ -492,7 +492,13 @@ def _stepper(system: System, cut: Regenerative, dt_s: float, knock_m: float,
     half = system.damper.gap_m / 2 if system.kind == "ball" else 0.0
     return CutStepper(system, cut, dt_s=dt_s, window_steps=window_steps(system, cut, dt_s),
                       initial=knocked_cut(system, cut, knock_m, options.ball_start * half),
-                      stick_law=options.stick_law)
+                      stick_law=stick_law_of(system, options))
+
+
+def stick_law_of(system: System, options: VerdictOptions) -> str:
+    """The law of ``system``'s ball friction in its judged cuts: the options', but the
+    sgn() law for a rolling ball (RK4's stick law holds a sliding ball only)."""
+    return "sgn" if rolling(system) else options.stick_law
 
 
 def onset_step(system: System, dt_s: float, ratio: float = ONSET_STEP_RATIO) -> float:
@@ -529,19 +535,29 @@ def step_text(attrs: dict) -> str:
     ball's friction was rendered."""
     ratio = float(attrs.get("onset_step_ratio", 1.0))
     onset = f" (the onset at {ratio:g} dt)" if ratio != 1.0 else ""
-    return onset + {"hold": " (a ball's friction by the stick law)",
-                    "sgn": " (a ball's friction by the published sgn() law)"}.get(
-                        attrs.get("stick_law"), "") + contact_text(attrs)
+    law = {"hold": " (a ball's friction by the stick law",
+           "sgn": " (a ball's friction by the published sgn() law"}.get(
+               attrs.get("stick_law"), "")
+    if law:
+        rolls = attrs.get("stick_law") == "hold" and _dampers_have(attrs, "motion", "roll")
+        law += ", a rolling ball's by the sgn() law)" if rolls else ")"
+    return onset + law + contact_text(attrs)
+
+
+def _dampers_have(attrs: dict, key: str, value: str) -> bool:
+    """Whether a ball of the Dataset's systems (attribute ``systems``, as JSON) has
+    ``key`` = ``value``."""
+    systems = attrs.get("systems")
+    described = json.loads(systems) if isinstance(systems, str) else systems or {}
+    return any((s.get("damper") or {}).get(key) == value
+               for s in described.values() if isinstance(s, dict))
 
 
 def contact_text(attrs: dict) -> str:
     """" (the ball's walls by a Hertz contact)" where a system of the Dataset's attributes
     (``systems``, as JSON) has one; else nothing (the impact law)."""
-    systems = attrs.get("systems")
-    described = json.loads(systems) if isinstance(systems, str) else systems or {}
-    hertz = any((s.get("damper") or {}).get("contact") == "hertz"
-                for s in described.values() if isinstance(s, dict))
-    return " (the ball's walls by a Hertz contact)" if hertz else ""
+    return " (the ball's walls by a Hertz contact)" if _dampers_have(attrs, "contact",
+                                                                     "hertz") else ""
 
 
 def acceptable(s: Settled, options: VerdictOptions) -> bool | None:

@@ -353,8 +353,14 @@ def check_cut_law(forcing, integrator: str) -> None:
 
 def check_friction_law(system: System, integrator: str, stick_law: str = "sgn") -> None:
     """True stick-slip needs the exact integrator or RK4's stick law: the published sgn()
-    law has no static limit."""
+    law has no static limit.  RK4's stick law is a sliding ball's: a rolling one's rolling
+    resistance takes the sgn() law."""
     check_choice("stick_law", stick_law, STICK_LAWS)
+    if integrator == "rk4" and stick_law == "hold" and rolling(system):
+        raise ParameterError("stick_law = 'hold' with a rolling ball (motion = 'roll'): RK4 "
+                             "renders its rolling resistance by the sgn() law only; use "
+                             "stick_law = 'sgn', or integrator = 'exact' (harmonic forcing), "
+                             "which holds the ball exactly")
     if integrator == "rk4" and stick_law == "sgn" and stick_slip(system):
         raise ParameterError(f"friction static_ratio = {system.damper.friction.static_ratio!r}: "
                              "the rk4 integrator's sgn() law has no static limit "
