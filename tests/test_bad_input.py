@@ -92,13 +92,18 @@ BAD_OPTIONS = {
         "--friction": ("maybe",),
     }),
     "lobes": (["lobes", "--bar", "solid"], {
-        "--rpm": (*NOT_FINITE, "0", "-1", "1e-3", "0:inf:1", "900:1600:0"),
+        "--rpm": (*NOT_FINITE, "0", "-1", "1e-3", "5", "0:inf:1", "900:1600:0"),
+        "--at-rpm": ("1e-6", "5", "0"),
         "--depth-step-mm": (*NOT_FINITE, "0", "-1", "1e-9"),
         "--max-depth-mm": (*NOT_FINITE, "0.001", "1e6", "-1"),
         "--successive": ("0", "101", "-1", "abc"),
         "--workers": ("0", "-1"),
         "--kr-mpa": (*NOT_FINITE, "0", "1e300"),
         "--method": ("guess",),
+    }),
+    "lobes-analytic": (["lobes", "--analytic", "--bar", "solid"], {
+        "--rpm": ("1e-9", "5", "0", "-1", "nan"),
+        "--at-rpm": ("1e-6", "5", "0"),
     }),
     "basins": (["basins"], {
         "--displacement-mm": ("nan:1:3", "-1:1:0", "-1:1:1e9", "-1e300:1:3", "1:-1:3",

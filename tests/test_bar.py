@@ -138,3 +138,18 @@ def test_a_bars_modal_model_is_solved_once_and_each_system_owns_its_info(monkeyp
     assert "note" not in bb.make_system("ball").bar.info
     bb.make_system("ball", n_modes=3)  # another model of the bar: solved
     assert len(calls) == 2
+
+
+def test_a_mesh_finer_than_the_element_cap_is_refused_by_name():
+    """A mesh of millions of elements would ask for a dense eigenproblem of terabytes: at
+    most MAX_ELEMENTS, refused by name in Python and in a system file."""
+    from boringbar.model.bar import MAX_ELEMENTS
+    from boringbar.model.system_file import SystemFileError, loads_system, published_file_text
+
+    with pytest.raises(ParameterError, match="max_element_length_m"):
+        SteppedBar((Section(0.0, 0.2, 0.025),), 2e11, 7850.0, 0.01, 1e-6)
+    finest = SteppedBar((Section(0.0, 0.2, 0.025),), 2e11, 7850.0, 0.01, 0.2 / MAX_ELEMENTS)
+    assert finest.max_element_length_m == 0.2 / MAX_ELEMENTS
+    text = published_file_text().replace("element_length_mm = 5.0", "element_length_mm = 0.001")
+    with pytest.raises(SystemFileError, match="bar.element_length_mm"):
+        loads_system(text, "fine.toml")

@@ -245,6 +245,40 @@ def test_refusals():
         simulate(_stick_case(1.5), Harmonic(10.0, 1.0), duration_s=1e-3, integrator="rk4")
 
 
+@pytest.mark.parametrize("bar", ["solid", "ball"])
+def test_an_undamped_resonance_is_refused_not_run(bar):
+    """A bar without damping forced at a natural frequency of one of its regimes has no
+    steady closed form (its response grows as t): refused by name, where it ran into a
+    singular solve (solid) or stalled on events (ball); a little off it, it runs and
+    balances, and RK4 takes the resonance itself."""
+    host = make_system("solid", n_modes=2).bar
+    undamped = dataclasses.replace(host, damping_ratio=np.zeros(2))
+    system = make_system(bar, modal=undamped, friction=False)
+    with pytest.raises(ParameterError, match="undamped .* integrator = 'rk4'"):
+        simulate(system, Harmonic(10.0, 1.0), duration_s=0.01, integrator="exact")
+    near = simulate(system, Harmonic(10.0, 1.001), duration_s=0.01, integrator="exact")
+    assert abs(near.energy["balance_relative"]) < 1e-9
+    assert simulate(system, Harmonic(10.0, 1.0), duration_s=0.01,
+                    integrator="rk4").metrics["rms_tip_m"] > 0
+
+
+def test_a_run_that_cannot_finish_is_one_line_from_the_command_line(tmp_path, capsys,
+                                                                      monkeypatch):
+    """The exact integrator's IntegrationError (an event cap, a stall) ends the command
+    with one line and exit code 1, not a traceback."""
+    import boringbar.cli.simulate as cli_simulate
+    from boringbar.cli.main import main
+    from boringbar.simulate import IntegrationError
+
+    def fails(*args, **kwargs):
+        raise IntegrationError(1, 500000, 0.25)
+
+    monkeypatch.setattr(cli_simulate, "simulate", fails)
+    assert main(["simulate", "--out", str(tmp_path / "x")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("boringbar: error: exact integrator: the event")
+
+
 def test_run_records_its_integrator():
     s = make_system("ball", "paper")
     run = simulate(s, Harmonic(10.0, 1.0), duration_s=1e-2, integrator="exact")

@@ -13,6 +13,7 @@ import numpy as np
 from boringbar._validate import ParameterError, check_int, check_values
 from boringbar.analysis.cases import Case
 from boringbar.model.cutting import CuttingLaw, cutting_speed_range_m_s
+from boringbar.model.forcing import MIN_LOBE_RPM
 from boringbar.model.system import System
 from boringbar.model.system_file import SystemSpec
 
@@ -26,8 +27,8 @@ SPEEDS_PER_LOBE = 10
 
 
 def check_speeds(name: str, rpm) -> tuple[float, ...]:
-    """Spindle speeds (rev/min): positive and increasing, each once."""
-    speeds = check_values(name, np.atleast_1d(rpm).tolist(), 0.0, math.inf, lo_open=True,
+    """Spindle speeds (rev/min): at least :data:`MIN_LOBE_RPM` and increasing, each once."""
+    speeds = check_values(name, np.atleast_1d(rpm).tolist(), MIN_LOBE_RPM, math.inf,
                           unit="rev/min")
     if np.any(np.diff(speeds) <= 0):
         raise ParameterError(f"{name} = {speeds} must increase, each speed once (a "

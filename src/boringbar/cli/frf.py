@@ -32,6 +32,7 @@ from boringbar.cli.options import (
 )
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.cutting import CuttingLaw
+from boringbar.model.forcing import MIN_LOBE_RPM, check_lobe_speed
 from boringbar.model.frf_units import (
     ImplausibleFrfWarning,
     implausible_frf,
@@ -141,13 +142,14 @@ def analytic_lobes_outcome(args, law: CuttingLaw, feed_m: float) -> Outcome:
     is among the speeds (and the figure's), each case's depth there read out."""
     kr = law.linear_coefficient_pa(feed_m)
     check_positive("--kr-mpa", kr * 1e-6, "MPa")
-    at = None if args.at_rpm is None else check_positive("--at-rpm", args.at_rpm, "rev/min")
+    at = None if args.at_rpm is None else check_lobe_speed("--at-rpm", args.at_rpm)
     resolve_files(args, [])
     rpm = parse_range(args.rpm, "--rpm") if args.rpm else analytic_speeds(args)
     for r in rpm:
-        check_positive("--rpm", r, "rev/min")
+        check_lobe_speed("--rpm", r)
     rpm = np.asarray(with_speed(rpm, at), dtype=float)
-    lo, hi = (rpm.min(), rpm.max()) if len(rpm) > 1 else (0.8 * rpm[0], 1.2 * rpm[0])
+    lo, hi = ((rpm.min(), rpm.max()) if len(rpm) > 1
+              else (max(0.8 * rpm[0], MIN_LOBE_RPM), 1.2 * rpm[0]))
     # evenly in log rpm, as the figure's speed axis (linear over a narrow range, where
     # the two hardly differ): every part of the axis drawn as finely
     dense = np.asarray(with_speed(np.geomspace(lo, hi, ENVELOPE_SPEEDS), at), dtype=float)

@@ -21,6 +21,7 @@ import textwrap
 
 from boringbar.cli.options import PROG, Outcome, default_out
 from boringbar.model.system import READINGS
+from boringbar.simulate.run import IntegrationError
 from boringbar.version import __version__
 
 #: the subcommands, in the order --help lists them: name -> (module, its add_ function,
@@ -117,7 +118,7 @@ def main(argv=None) -> int:
     except ValueError as exc:  # ParameterError is a ValueError
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
-    except OSError as exc:
+    except (OSError, IntegrationError) as exc:  # a file, or a run that could not finish
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -31,6 +31,7 @@ from boringbar.model.forcing import (
     MAX_KR,
     STARTS,
     check_force,
+    check_lobe_speed,
     check_ratio,
 )
 from boringbar.model.measured_frf import CSV_SUFFIXES, UFF_SUFFIXES, read_frf
@@ -562,6 +563,7 @@ def with_speed(rpm, at_rpm: float | None) -> tuple[float, ...]:
     rpm = [float(r) for r in rpm]
     if at_rpm is None:
         return tuple(rpm)
+    at_rpm = check_lobe_speed("--at-rpm", at_rpm)
     return tuple(sorted([r for r in rpm if not math.isclose(r, at_rpm, rel_tol=1e-9)]
                         + [float(at_rpm)]))
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg
 
-from boringbar._validate import check_positive, check_range
+from boringbar._validate import ParameterError, check_positive, check_range
 from boringbar.model.linalg import one_blas_thread
 from boringbar.model.materials import MATERIALS
 
@@ -274,6 +274,12 @@ class ModalModel:
                    psi_absorber=np.array([float(absorber_ratio)]), source="tap-test")
 
 
+#: The most finite elements a bar is meshed into: its eigenproblem is dense, and 1000
+#: elements (about 2000 degrees of freedom) take seconds, where a few dozen converge the
+#: modes that are kept
+MAX_ELEMENTS = 1000
+
+
 @dataclass(frozen=True)
 class SteppedBar:
     """A stepped cantilever: clamped at z = 0, free at the end of the last section.
@@ -310,6 +316,13 @@ class SteppedBar:
         check_positive("density_kg_m3", self.density_kg_m3, "kg/m^3")
         check_range("damping_ratio", self.damping_ratio, 0.0, 1.0, hi_open=True)
         check_positive("max_element_length_m", self.max_element_length_m, "m")
+        finest = self.length_m / MAX_ELEMENTS
+        if self.max_element_length_m < finest:
+            raise ParameterError(
+                f"max_element_length_m = {self.max_element_length_m!r} m meshes the "
+                f"{self.length_m:g} m bar into more than {MAX_ELEMENTS} elements (a dense "
+                f"eigenproblem of twice as many degrees of freedom); give at least "
+                f"{finest:.3g} m (the modes kept converge long before: 5 mm is the default)")
         for name, value, unit in (
                 ("clamp_translational_stiffness_n_m", self.clamp_translational_stiffness_n_m,
                  "N/m"),

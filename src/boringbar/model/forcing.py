@@ -181,3 +181,18 @@ class Regenerative:
                 "bounded_fraction": self.bounded_fraction, "cutting_law": self.law.to_dict(),
                 "force_noise": self.force_noise, "noise_interval_s": self.noise_interval_s,
                 "noise_seed": self.noise_seed}
+
+
+#: The lowest spindle speed (rev/min) whose lobes are computed.  Below it the lobe number
+#: 60 f / rpm runs into the thousands, where process damping (which this linear model of
+#: regeneration leaves out) decides stability, and the crossings to search grow as 1 / rpm:
+#: at 10 rev/min one speed of the published bar takes about a minute and 2.5 GB.
+MIN_LOBE_RPM = 10.0
+
+
+def check_lobe_speed(name: str, rpm: float) -> float:
+    """A spindle speed (rev/min) whose lobes can be computed: at least :data:`MIN_LOBE_RPM`."""
+    return check_range(name, rpm, MIN_LOBE_RPM, math.inf, unit="rev/min",
+                       why="below it process damping, left out here, decides; and the "
+                           "lobes to search grow as 1 / rpm")
+

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from boringbar._validate import ParameterError, in_range, near, read_toml
-from boringbar.model.bar import ModalModel, Section, SteppedBar
+from boringbar.model.bar import MAX_ELEMENTS, ModalModel, Section, SteppedBar
 from boringbar.model.contact import CONTACT_LAWS, HERTZ_MIN_RESTITUTION
 from boringbar.model.dampers import (
     BALL_MOTIONS,
@@ -402,6 +402,10 @@ def _bar(r: _Reader, d: dict):
                   lo_open=True, unit="N/m")
     kr = r.number(c, "clamp.rotational_stiffness_n_m_per_rad", 0, 1e14, default=math.inf,
                   lo_open=True, unit="N m/rad")
+    length_mm = sections[-1].end_m * 1000
+    if h < length_mm / MAX_ELEMENTS:
+        r.fail("bar.element_length_mm", h, f"must be at least {length_mm / MAX_ELEMENTS:.3g} "
+               f"mm: the {length_mm:g} mm bar in at most {MAX_ELEMENTS} elements")
     bar = SteppedBar(sections, e, rho, float(ratios[0]), h / 1000, kt, kr)
     data = {"bar": {"material": material, "youngs_modulus_gpa": e / 1e9,
                     "density_kg_m3": rho, "damping_ratio": [float(z) for z in ratios],

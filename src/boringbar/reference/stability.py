@@ -42,6 +42,7 @@ from boringbar._validate import ParameterError, check_nonnegative, check_positiv
 from boringbar.model.bar import ModalModel
 from boringbar.model.cutting import KR_ALUMINIUM
 from boringbar.model.dampers import TunedMassDamper
+from boringbar.model.forcing import check_lobe_speed
 from boringbar.reference.linear import dynamic_stiffness, min_real_part, tip_frf
 
 #: Default frequency grid spans these multiples of the lowest / highest
@@ -234,7 +235,7 @@ def limit_at_speeds(
     speeds = np.asarray(rpm, dtype=float)
     flat = speeds.ravel()
     for s in flat:
-        check_positive("rpm", s, "rev/min")
+        check_lobe_speed("rpm", s)
     allowed = None if lobes is None else _lobe_numbers(lobes)
     w = _frequency_grid(bar, tmd, added_mass, n_freq, freq_range)
     g = tip_frf(bar, w, tmd=tmd, added_mass_kg=added_mass)
@@ -362,7 +363,7 @@ def sampled_limits(w, g, rpm, kr: float = KR_ALUMINIUM) -> dict:
     low = -0.5 / (kr * g.real[i]) if g.real[i] < 0.0 else math.inf
     speeds = np.atleast_1d(np.asarray(rpm, dtype=float))
     for speed in speeds.ravel():
-        check_positive("rpm", speed, "rev/min")
+        check_lobe_speed("rpm", speed)
     tau, limits = 60.0 / speeds.ravel(), np.full(speeds.size, np.inf)
     speed, a, j = _crossings(w, g, eps, tau, None)
     h_lo = (w[a] * tau[speed] - eps[a]) / TWO_PI - j

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from boringbar import core
+from boringbar._validate import ParameterError
 from boringbar.model.linalg import one_blas_thread
 from boringbar.simulate import layout as L
 
@@ -335,6 +336,33 @@ def system_regimes(key: bytes) -> SystemRegimes:
                          bounds, psi, hi_a, lo_a, fastest, eh)
 
 
+#: A forcing whose i Omega lies within this fraction of Omega of a regime's eigenvalue (an
+#: undamped mode at resonance) is refused: the forced response grows without bound, and
+#: the closed form's particular solution, 1 / that distance large, drowns the motion in its
+#: roundings
+RESONANCE_TOL = 1e-8
+_REGIME_NAMES = ("with its ball free", "holding its ball", "with its ball on a wall",
+                 "with its ball rolling")
+
+
+@functools.lru_cache(maxsize=SYSTEM_CACHE_SIZE)
+def check_resonance(key: bytes, om: float) -> None:
+    """Refuses a forcing at Omega (rad/s) at an undamped natural frequency of a regime of
+    the system of ``key`` (:data:`RESONANCE_TOL`); kept per system and Omega."""
+    s = system_regimes(key)
+    if om <= 0.0:
+        return
+    gap = np.abs(1j * om - s.lam)
+    r, k = np.unravel_index(int(np.argmin(gap)), gap.shape)
+    if gap[r, k] <= RESONANCE_TOL * om:
+        what = "bar" if s.nreg == 1 else f"bar {_REGIME_NAMES[r % s.nreg]}"
+        raise ParameterError(
+            f"exact integrator: Omega = {om:.8g} rad/s ({om / (2 * math.pi):.8g} Hz) is a "
+            f"natural frequency of the {what}, undamped (its root {s.lam[r, k]:.8g}): the "
+            "response grows without bound and has no steady closed form; give the bar "
+            "damping (damping_ratio > 0), another frequency, or integrator = 'rk4'")
+
+
 @functools.lru_cache(maxsize=SYSTEM_CACHE_SIZE)
 def forcing_exponentials(key: bytes, h: float) -> np.ndarray:
     """The grid's exponentials (:func:`_grid_exponentials`) of the system of ``key`` at a
@@ -355,6 +383,7 @@ def prepare(p: np.ndarray) -> dict:
     key = p[SYSTEM_SLOTS].tobytes()
     s = system_regimes(key)
     om = float(p[L.OMEGA])
+    check_resonance(key, om)
     Z, isum, bnd, levmax = core.forcing_setup(s.A, s.B, s.lam, s.mode_sums, s.mode_bounds,
                                               s.psi, s.hi, s.lo, om, float(p[L.F0]),
                                               GRID_LEVELS)
