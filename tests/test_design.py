@@ -615,3 +615,26 @@ def test_the_tables_have_a_row_per_trial_and_per_sample(host, tmp_path):
     file_rows = samples[samples["design"] == "file"]
     assert file_rows["trial"].isna().all()
     np.testing.assert_array_equal(file_rows["frf_peak_m_n"], ds["published_samples"].values[0])
+
+
+def test_a_design_space_that_reaches_an_impossible_system_is_refused_before_any_file(
+        tmp_path):
+    """A gap beyond the cavity's room at one end of its range, or a restitution sample a
+    Hertz contact refuses, is refused by name before the search writes its storage (it
+    was refused halfway through, design.db left behind)."""
+    from dataclasses import replace
+
+    from boringbar.model.system_file import load_system
+
+    storage = tmp_path / "out" / "design.db"
+    carbide = load_system(Path(__file__).parents[1] / "examples" / "systems"
+                          / "carbide_ld10_tungsten.toml")  # room for a gap of 1 mm
+    too_wide = DesignOptions("ball", (Variable("gap_m", 0.1e-3, 1.5e-3),), trials=2)
+    with pytest.raises(ParameterError, match="at gap = 1.5 mm: gap_m"):
+        design(too_wide, spec=carbide, storage=storage)
+    hertz = replace(carbide, ball=replace(carbide.ball, contact="hertz"))
+    soft = DesignOptions("ball", (Variable("gap_m", 0.1e-3, 0.5e-3),), trials=2, samples=8,
+                         uncertain=(Uncertain("restitution", "normal", 0.1, 0.3),))
+    with pytest.raises(ParameterError, match="with restitution = .* Hertz contact"):
+        design(soft, spec=hertz, storage=storage)
+    assert not storage.parent.exists()

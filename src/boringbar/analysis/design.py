@@ -19,6 +19,7 @@ asked again. The runs of one candidate fan out on the usual executors.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import math
 import sqlite3
@@ -100,6 +101,30 @@ def candidate_system(spec: SystemSpec, options: DesignOptions, values: dict) -> 
     return system
 
 
+def check_space(spec: SystemSpec, options: DesignOptions, samples: np.ndarray) -> None:
+    """Builds the candidate at every corner of the variables' box (each choice of a
+    categorical one) under every uncertain sample, so that a design space reaching a
+    system that cannot be built (a gap beyond the cavity's room, a restitution a Hertz
+    contact refuses, a preset the ball's motion refuses) is refused before any run or
+    file, not halfway through the search."""
+    axes = [v.choices or (v.low, v.high) for v in options.variables]
+    names = tuple(p.name for p in options.uncertain)
+    for corner in itertools.product(*axes):
+        values = dict(zip((v.name for v in options.variables), corner, strict=True))
+        row = None
+        try:
+            system = candidate_system(spec, options, values)
+            for row in samples:
+                sampled_system(system, names, row)
+        except ParameterError as exc:
+            where = ", ".join(shown(k, v) for k, v in values.items())
+            if row is not None and names:
+                where += " with " + ", ".join(f"{n} = {float(x):.4g}"
+                                              for n, x in zip(names, row, strict=True))
+            raise ParameterError(f"the design space reaches a system that cannot be built, "
+                                 f"at {where}: {exc}") from None
+
+
 def _tmd(system: System, values: dict) -> TunedMassDamper:
     """The absorber of the TMD variables: mass m, frequency ratio f = omega_a/omega_n,
     damping ratio zeta_a = c / (2 m omega_a) (the absorber's own)."""
@@ -168,6 +193,7 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
     spec = spec or published_system_spec()
     t0 = time.perf_counter()
     samples = uncertain_samples(options)
+    check_space(spec, options, samples)
     rdb = None if storage is None else _sqlite(Path(storage))
     try:
         study = _study(options, rdb, storage, _fingerprint(options, spec))

@@ -213,8 +213,8 @@ def add_orientation(p) -> None:
                    help="the edge normal's angle from the radial direction, in [0, 90) "
                         "(default 0: the published cut)")
     g.add_argument("--hole-angle-deg", type=float, metavar="DEG",
-                   help="the ball cavity's axis in the section, from the radial direction, "
-                        "in [-90, 90] (default 0)")
+                   help="the ball cavity's axis in the section (a TMD's absorber moves "
+                        "along it too), from the radial direction, in [-90, 90] (default 0)")
     g.add_argument("--principal-angle-deg", type=float, metavar="DEG",
                    help="the bar's first principal bending plane, in [-90, 90] (default 0)")
     g.add_argument("--stiffness-ratio", type=float, metavar="R",

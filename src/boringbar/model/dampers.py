@@ -231,7 +231,9 @@ class ImpactDamper:
                                  "is held by at least as much")
         if self.motion == "roll" and self.friction.reaction != "reciprocal":
             raise ParameterError("a rolling ball takes the reciprocal friction reaction, not "
-                                 f"{self.friction.reaction!r}")
+                                 f"{self.friction.reaction!r} (the paper preset's printed "
+                                 "sign): give friction_reaction = 'reciprocal' "
+                                 "(--friction-reaction reciprocal)")
         if self.motion == "roll" and self.friction.static_ratio != 1:
             raise ParameterError("friction static_ratio is a sliding ball's stick-slip; a "
                                  "rolling one has mu_static and mu_kinetic")
