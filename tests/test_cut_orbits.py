@@ -430,3 +430,21 @@ def test_the_return_check_refuses_what_it_cannot_start(bars, one_revolution):
     stepper.advance()
     with pytest.raises(bb.ParameterError, match="already run"):
         stepper.start_from(np.zeros(6), lambda t: (0 * t, 0 * t))
+
+
+def test_a_branch_s_dense_factorisations_run_on_one_blas_thread(monkeypatch):
+    """The correctors factorise up to 1700 unknowns densely: OpenBLAS's second thread gains
+    nothing there and spins a core that the other step of a study, or the user, needs."""
+    from threadpoolctl import threadpool_info
+
+    seen = []
+    real = co.scipy.linalg.lu_factor
+
+    def recording(*args, **kwargs):
+        seen.append({i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"})
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(co.scipy.linalg, "lu_factor", recording)
+    solid = bb.make_system("solid")
+    cb.trace(solid, bb.Regenerative(depth_m=1e-5, rpm=1200.0), (0.0, 1e-3), max_points=3)
+    assert seen and all(s == {1} for s in seen), seen

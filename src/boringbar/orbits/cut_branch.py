@@ -32,6 +32,7 @@ import scipy.sparse.linalg as spla
 
 from boringbar.model.cutting import CuttingLaw
 from boringbar.model.forcing import Regenerative
+from boringbar.model.linalg import one_blas_thread
 from boringbar.model.system import System
 from boringbar.orbits.cut_orbits import (
     FREE,
@@ -346,6 +347,7 @@ def nontrivial(mu: np.ndarray) -> np.ndarray:
     return np.delete(mu, i) if gap[i] < TRIVIAL else mu
 
 
+@one_blas_thread
 def trace(system: System, forcing: Regenerative, window: tuple[float, float], *,
           free: str = "depth", lobe: int | None = None, steps: int = STEPS,
           max_points: int = MAX_POINTS) -> CutBranch:
