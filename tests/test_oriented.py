@@ -177,11 +177,16 @@ def test_a_system_file_gives_the_planes_and_refuses_a_bad_angle():
     system = make_system("ball", spec=spec, n_modes=1)
     assert spec.planes == 2 and system.bar.n_modes == 2 and system.bar.oriented
     assert system.bar.info["cut_geometry"]["lead_angle_deg"] == 30.0
-    for key, value in (("lead_angle_deg", 90.0), ("hole_angle_deg", -91.0), ("planes", 3)):
+    for key, value in (("lead_angle_deg", 90.0), ("hole_angle_deg", -91.0), ("planes", 3),
+                       ("planes", True), ("planes", 2.0)):
         bad = tomllib.loads(published_file_text())
         bad["orientation"] = {key: value}
         with pytest.raises(SystemFileError, match=f"orientation.{key}"):
             parse_system(bad)
+    one = tomllib.loads(published_file_text())
+    one["orientation"] = {"planes": 1, "force_ratio": 2.5}  # was run with the cut dropped
+    with pytest.raises(SystemFileError, match="orientation.planes.*force_ratio"):
+        parse_system(one)
 
 
 # --- the cavity's two planes --------------------------------------------------------------

@@ -360,8 +360,7 @@ def plan(cases: list[Case], options: LobesOptions, integration: Integration) -> 
     return Plan(context, points)
 
 
-def _check_growth(cases: list[Case], integration: Integration,
-                  options: VerdictOptions) -> None:
+def _check_growth(cases: list[Case], integration: Integration, options: VerdictOptions) -> None:
     """The converged verdict advances a cut window by window with the RK4 scheme."""
     if integration.integrator == "exact":
         raise ParameterError("integrator = 'exact' with criterion 'growth': the converged "

@@ -282,9 +282,11 @@ class _Reader:
         name = key.rsplit(".", 1)[-1]
         if name not in d:
             return default
-        if d[name] not in choices:
-            self.fail(key, d[name], "must be one of " + ", ".join(map(repr, choices)))
-        return d[name]
+        value = d[name]
+        # true == 1 and 2.0 == 2 in Python, but neither is the whole number a key asks for
+        if not any(value == c and type(value) is type(c) for c in choices):
+            self.fail(key, value, "must be one of " + ", ".join(map(repr, choices)))
+        return value
 
     def text(self, d: dict, key: str, default: str) -> str:
         name = key.rsplit(".", 1)[-1]
@@ -335,6 +337,10 @@ def _orientation(r: _Reader, d: dict):
         values[key] = r.number(t, f"orientation.{key}", lo, hi, lo_open=lo_open,
                                hi_open=hi_open, default=getattr(defaults, key),
                                unit=f"{unit} ({why})" if why else unit)
+    given = [k for k in GEOMETRY_RANGES if k in t]
+    if planes == 1 and given:
+        r.fail("orientation.planes", 1, f"an oriented cut ({', '.join(given)}) acts on two "
+               "bending planes: give planes = 2 (or leave it out)")
     geometry = CutGeometry(**values)
     return planes, geometry, {"orientation": {"planes": planes, **geometry.to_dict()}}
 
