@@ -229,3 +229,11 @@ def test_published_cases_hold_every_bar_to_the_planes_and_the_cut():
         alone = make_system(bar, gap_m=0.5e-3, planes=2, cut_geometry=g)
         assert case.system.bar.n_modes == 4
         np.testing.assert_array_equal(case.system.bar.psi_force, alone.bar.psi_force)
+
+
+def test_make_system_refuses_planes_and_a_geometry_it_cannot_take():
+    for planes in (True, 2.5, 3):
+        with pytest.raises(ParameterError, match="planes"):
+            make_system("ball", planes=planes)
+    with pytest.raises(TypeError, match="must be a CutGeometry"):
+        make_system("ball", planes=2, cut_geometry={"force_ratio": 2.5})

@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from boringbar._validate import ParameterError, check_choice, check_range
+from boringbar._validate import ParameterError, check_choice, check_int, check_range
 from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import (
     NO_FRICTION,
@@ -237,8 +237,10 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
 def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry, across) -> ModalModel:
     """``modal`` in both bending planes under the oriented cut, where asked (``across``:
     a cavity bar's modes bent across the ball's direction, a callable)."""
-    planes = spec.planes if planes is None else planes
-    check_choice("planes", planes, (1, 2))
+    planes = spec.planes if planes is None else check_int("planes", planes, 1, 2)
+    if geometry is not None and not isinstance(geometry, CutGeometry):
+        raise TypeError(f"cut_geometry = {geometry!r} must be a CutGeometry "
+                        "(bb.CutGeometry(force_ratio=..., lead_angle_deg=..., ...))")
     if planes == 1:
         if geometry is not None:
             raise ParameterError("cut_geometry applies to a bar of two bending planes: give "
