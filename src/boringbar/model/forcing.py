@@ -195,4 +195,3 @@ def check_lobe_speed(name: str, rpm: float) -> float:
     return check_range(name, rpm, MIN_LOBE_RPM, math.inf, unit="rev/min",
                        why="below it process damping, left out here, decides; and the "
                            "lobes to search grow as 1 / rpm")
-
