@@ -35,6 +35,7 @@ UNIT_SUFFIXES = {
     "_hz": "Hz",
     "_rpm": "rev/min",
     "_rad": "rad",
+    "_deg": "degrees",  # the cut's angles, as tool makers give them (CutGeometry)
     "_rad_s": "rad/s",
     "_j": "J",
     "_w": "W",
