@@ -175,6 +175,14 @@ def test_the_command_line_refuses_a_bad_contact(argv, name, tmp_path, capsys):
                           out, name, capsys)
 
 
+def test_a_hertz_stiffness_given_to_the_impact_law_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert_one_line_error(main, ["simulate", "--contact-stiffness", "2e10", "--out", str(out)],
+                          out, "contact_stiffness_n_m1_5 = 20000000000.0 is a Hertz", capsys)
+    with pytest.raises(ParameterError, match="--contact hertz"):
+        make_system("ball", contact="impact", contact_stiffness_n_m1_5=2e10)
+
+
 def test_python_refuses_a_bad_contact():
     with pytest.raises(ParameterError, match="contact_stiffness_n_m1_5"):
         ImpactDamper(contact="hertz", contact_stiffness_n_m1_5=0.0)

@@ -12,6 +12,7 @@ simulated lobes against the closed form; the harmonic response and the energy ba
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 import tomllib
@@ -237,3 +238,29 @@ def test_make_system_refuses_planes_and_a_geometry_it_cannot_take():
             make_system("ball", planes=planes)
     with pytest.raises(TypeError, match="must be a CutGeometry"):
         make_system("ball", planes=2, cut_geometry={"force_ratio": 2.5})
+
+
+def test_modes_lists_each_plane_s_modes_in_their_own_plane(tmp_path, capsys):
+    """A plane of EI times r has the same modal masses and shapes, frequencies times
+    sqrt(r), and stiffnesses times r; the modes' table shows them unprojected."""
+    out = tmp_path / "m"
+    assert main(["modes", "--bar", "solid", "--planes", "2", "--stiffness-ratio", "0.5",
+                 "--principal-angle-deg", "30", "--modes", "2", "--json", "--out",
+                 str(out)]) == 0
+    table = json.loads(capsys.readouterr().out)
+    one = bb.describe_modes(make_system("solid", n_modes=2))
+    modes = table["modes"]
+    assert [m["plane_deg"] for m in modes] == pytest.approx([30, 30, 120, 120])
+    for i, mode in enumerate(one["modes"]):
+        a, b = modes[i], modes[i + 2]
+        assert a["frequency_hz"] == pytest.approx(mode["frequency_hz"], rel=1e-12)
+        assert b["frequency_hz"] == pytest.approx(mode["frequency_hz"] * math.sqrt(0.5),
+                                                  rel=1e-12)
+        assert b["modal_stiffness_n_m"] == pytest.approx(0.5 * a["modal_stiffness_n_m"],
+                                                         rel=1e-12)
+        assert b["psi_ball"] == a["psi_ball"] == pytest.approx(mode["psi_ball"], rel=1e-12)
+    assert table["tip_static_stiffness_n_m"] == one["tip_static_stiffness_n_m"]
+    assert table["built_plane_deg"] == pytest.approx(30)
+    assert (out / "modes.png").stat().st_size > 0
+    assert_one_line_error(main, ["modes", "--planes", "2", "--modes", "5", "--out",
+                                 str(tmp_path / "bad")], tmp_path / "bad", "--modes", capsys)

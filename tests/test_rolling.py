@@ -269,6 +269,8 @@ def test_rk4_s_stick_law_is_refused_for_a_rolling_ball_and_its_judged_cuts_say_s
     (["--mu-kinetic", "-1"], "--mu-kinetic"),
     (["--ball-motion", "spin"], "--ball-motion"),
     (["--ball-motion", "roll", "--integrator", "rk4", "--stick-law", "hold"], "stick_law"),
+    (["--mu-static", "0.3"], "mu_static = 0.3 is a rolling ball's"),
+    (["--ball-motion", "slide", "--mu-kinetic", "0.1"], "mu_kinetic = 0.1 is a rolling ball's"),
 ])
 def test_the_command_line_refuses_a_bad_roll(argv, name, tmp_path, capsys):
     out = tmp_path / "out"

@@ -6,7 +6,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from boringbar._validate import check_int
-from boringbar.cli.options import OUT_HELP, Outcome, default_bars, resolve_files, wrote
+from boringbar.cli.options import (
+    OUT_HELP,
+    Outcome,
+    add_orientation,
+    check_orientation,
+    default_bars,
+    orientation_overrides,
+    resolve_files,
+    wrote,
+)
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.system import BAR_KINDS, PRESETS, describe_modes, make_system
 from boringbar.plot.bar import plot_modes
@@ -35,7 +44,9 @@ def add_modes(sub) -> None:
                    help="paper: calibrated to the published frequencies where the file "
                         "says so")
     p.add_argument("--modes", type=int, default=3, metavar="N",
-                   help=f"modes to show, 1 to {MAX_MODES} (default: 3)")
+                   help=f"modes to show, 1 to {MAX_MODES} (default: 3); with --planes 2, "
+                        f"of each plane, 1 to {MAX_MODES // 2}")
+    add_orientation(p)
     p.add_argument("--out", metavar="DIR", help=OUT_HELP)
     p.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     p.add_argument("--quiet", action="store_true")
@@ -43,10 +54,13 @@ def add_modes(sub) -> None:
 
 
 def cmd_modes(args) -> Outcome:
-    n = check_int("--modes", args.modes, 1, MAX_MODES)
+    check_orientation(args)
     args.bar = args.bar or default_bars(args, many=False)[0]
     resolve_files(args, [args.bar])
-    kw = {"spec": args.system_spec, "modal": args.frf_modal, "n_modes": n}
+    oriented = orientation_overrides(args)
+    two = oriented.get("planes", 1 if args.system_spec is None else args.system_spec.planes) == 2
+    n = check_int("--modes", args.modes, 1, MAX_MODES // 2 if two else MAX_MODES)
+    kw = {"spec": args.system_spec, "modal": args.frf_modal, "n_modes": n, **oriented}
     if args.frf_modal is not None and args.frf_modal.n_modes < n:
         kw["n_modes"] = args.frf_modal.n_modes
     system = make_system(args.bar, args.preset, **kw)
@@ -56,8 +70,9 @@ def cmd_modes(args) -> Outcome:
     files = {"json": out / "modes.json"}
     if args.frf_modal is None:
         files["png"] = out / "modes.png"
-        save_figure_atomic(plot_modes(spec, args.bar == "ball", system.bar.n_modes,
-                                      f"{spec.name} ({args.bar} bar): mode shapes"),
+        plane = f", the plane at {table['built_plane_deg']:g} deg" if two else ""
+        save_figure_atomic(plot_modes(spec, args.bar == "ball", n,
+                                      f"{spec.name} ({args.bar} bar): mode shapes{plane}"),
                            files["png"])
     summary = {"system": spec.name if args.frf_modal is None else args.frf,
                "bar": args.bar, "preset": args.preset, **table,
@@ -68,13 +83,18 @@ def cmd_modes(args) -> Outcome:
     def text(say) -> None:
         say(f"{summary['system']} ({args.bar} bar, {args.preset} preset): "
             f"{len(table['modes'])} modes, {table['source']}")
-        say("  mode  f (Hz)      m_tip (kg)  k_tip (N/m)  zeta    psi_ball  psi_absorber")
+        say("  mode  " + ("plane (deg)  " if two else "") +
+            "f (Hz)      m_tip (kg)  k_tip (N/m)  zeta    psi_ball  psi_absorber")
         for i, m in enumerate(table["modes"]):
-            say(f"  {i + 1:<4}  {m['frequency_hz']:<10.2f}  {m['modal_mass_kg']:<10.4g}  "
+            plane = f"{m['plane_deg']:<11.4g}  " if two else ""
+            say(f"  {i + 1:<4}  {plane}{m['frequency_hz']:<10.2f}  {m['modal_mass_kg']:<10.4g}  "
                 f"{m['modal_stiffness_n_m']:<11.4g}  {m['damping_ratio']:<6.3g}  "
                 f"{_psi(m['psi_ball']):<8}  {_psi(m['psi_absorber'])}")
         say(f"  tip static stiffness {table['tip_static_stiffness_n_m']:.4g} N/m "
             f"({table['tip_static_stiffness_from']})")
+        if two:
+            say("  each mode in its own plane (degrees from the radial direction); the cut "
+                "and the ball see it projected (docs/model.md, 4.7)")
         say("  " + wrote(summary["files"]))
 
     return Outcome(summary, text)

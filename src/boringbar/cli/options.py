@@ -179,7 +179,7 @@ def add_ball(g, lst: str, swept: str, ranges: bool, many: bool) -> None:
                         "RK4 in cuts; docs/model.md, 2.7)")
     g.add_argument("--mu-static", type=float, metavar="MU",
                    help=f"a rolling ball's static floor friction coefficient, >= --mu-kinetic "
-                        f"(default {MU_STATIC:g})")
+                        f"(default {MU_STATIC:g}; refused for a sliding ball)")
     g.add_argument("--mu-kinetic", type=float, metavar="MU",
                    help=f"a rolling ball's kinetic floor friction coefficient (default "
                         f"{MU_KINETIC:g})")
@@ -190,7 +190,8 @@ def add_ball(g, lst: str, swept: str, ranges: bool, many: bool) -> None:
                         "or auto; docs/model.md, section 2.6)")
     g.add_argument("--contact-stiffness", type=float, metavar="K",
                    help="a Hertz contact's stiffness K in N/m^1.5, > 0 (default: Hertz's "
-                        "from the ball's and the plug's materials)")
+                        "from the ball's and the plug's materials; refused with the impact "
+                        "law)")
 
 
 #: --planes and the oriented cut's options, by CutGeometry field

@@ -122,8 +122,14 @@ def oriented_model(plane: ModalModel, geometry: CutGeometry,
               replace(plane, stiffness_n_m=plane.stiffness_n_m * g.stiffness_ratio)]
     order = sorted(range(2), key=lambda p: -abs(math.cos(phis[p])))
     parts = []
+    # each mode in its own plane, for the modes' table (``plane``'s at built_deg)
+    raw = {"plane_deg": [], "psi_tip": [], "psi_ball": [], "psi_absorber": [],
+           "built_deg": math.degrees(phis[0])}
     for p in order:
         phi, m = phis[p], models[p]
+        for key, values in zip(list(raw)[:4], ([math.degrees(phi)] * m.n_modes, m.psi_tip, m.psi_damper,
+                                     m.psi_absorber), strict=True):
+            raw[key] += [float(v) for v in values]
         parts.append((m.mass_kg, m.stiffness_n_m, m.damping_ratio,
                       m.psi_tip * math.cos(kappa) * math.cos(phi),
                       m.psi_tip * (math.cos(kappa) * math.cos(phi)
@@ -132,7 +138,7 @@ def oriented_model(plane: ModalModel, geometry: CutGeometry,
                       m.psi_absorber * math.cos(phi - alpha)))
     columns = (np.concatenate(c) for c in zip(*parts, strict=True))
     mass, stiff, zeta, tip, force, damper, absorber = columns
-    info = dict(plane.info, planes=2, cut_geometry=g.to_dict())
+    info = dict(plane.info, planes=2, cut_geometry=g.to_dict(), plane_modes=raw)
     return ModalModel(mass, stiff, zeta, _clean(tip), _clean(damper), _clean(absorber),
                       plane.z_damper_m, plane.z_absorber_m, f"{plane.source}+two-planes",
                       info, _clean(force))

@@ -189,12 +189,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     "slide"s (the published model) or "roll"s, with the floor friction coefficients
     ``mu_static`` >= ``mu_kinetic`` (docs/model.md, section 2.7); default the file's.
     """
-    if isinstance(bar, SystemSpec):
-        raise TypeError(f"bar = the system file {bar.name!r}: make_system's first argument "
-                        "is the bar's kind ('solid', 'ball' or 'tmd'); give the file as "
-                        "spec=, e.g. make_system('ball', spec=spec)")
-    check_choice("bar", bar, BAR_KINDS)
-    check_choice("preset", preset, PRESETS)
+    _check_kind(bar, preset)
     spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
     given = modal
@@ -231,7 +226,36 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
         mu_kinetic=b.mu_kinetic if mu_kinetic is None else mu_kinetic,
         contact_stiffness_n_m1_5=(b.contact_stiffness_n_m1_5 if contact_stiffness_n_m1_5 is None
                                   else contact_stiffness_n_m1_5))
+    _check_unused(damper, mu_static=mu_static, mu_kinetic=mu_kinetic,
+                  contact_stiffness_n_m1_5=contact_stiffness_n_m1_5)
     return System(modal, damper, preset, tuple(readings), spec)
+
+
+def _check_kind(bar, preset) -> None:
+    if isinstance(bar, SystemSpec):
+        raise TypeError(f"bar = the system file {bar.name!r}: make_system's first argument "
+                        "is the bar's kind ('solid', 'ball' or 'tmd'); give the file as "
+                        "spec=, e.g. make_system('ball', spec=spec)")
+    check_choice("bar", bar, BAR_KINDS)
+    check_choice("preset", preset, PRESETS)
+
+
+def _check_unused(damper: ImpactDamper, **given) -> None:
+    """Refuse a rolling ball's floor friction given to a sliding ball, and a Hertz
+    contact's stiffness given to the impact law: each would change nothing.  (A system
+    file may still describe them: they are the hardware's, and taken once the motion or
+    the contact law selects them.)"""
+    for name, value in given.items():
+        if value is None:
+            continue
+        if name.startswith("mu_") and damper.motion != "roll":
+            raise ParameterError(f"{name} = {value!r} is a rolling ball's floor friction, and "
+                                 "this ball slides: give motion = 'roll' (--ball-motion "
+                                 f"roll), or leave {name} out")
+        if name == "contact_stiffness_n_m1_5" and damper.contact != "hertz":
+            raise ParameterError(f"contact_stiffness_n_m1_5 = {value!r} is a Hertz contact's "
+                                 "stiffness, and this ball meets its plugs by the impact law: "
+                                 "give contact = 'hertz' (--contact hertz), or leave it out")
 
 
 def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry, across) -> ModalModel:
@@ -349,13 +373,17 @@ def describe_modes(system: System) -> dict:
     calibration) when the bar comes from a system file, else the retained
     modes' sum."""
     m = system.bar
-    scale = m.psi_tip**2
+    raw = m.info.get("plane_modes")  # two planes: each mode in its own plane
+    tip, ball, absorber = ((m.psi_tip, m.psi_damper, m.psi_absorber) if raw is None else
+                           (np.asarray(raw[k]) for k in ("psi_tip", "psi_ball", "psi_absorber")))
+    scale = tip**2
     modes = [{"frequency_hz": float(m.omegas_rad_s[i] / (2 * math.pi)),
               "modal_mass_kg": float(m.mass_kg[i] / scale[i]),
               "modal_stiffness_n_m": float(m.stiffness_n_m[i] / scale[i]),
               "damping_ratio": float(m.damping_ratio[i]),
-              "psi_tip": 1.0, "psi_ball": float(m.psi_damper[i] / m.psi_tip[i]),
-              "psi_absorber": float(m.psi_absorber[i] / m.psi_tip[i])}
+              "psi_tip": 1.0, "psi_ball": float(ball[i] / tip[i]),
+              "psi_absorber": float(absorber[i] / tip[i]),
+              **({} if raw is None else {"plane_deg": raw["plane_deg"][i]})}
              for i in range(m.n_modes)]
     spec = system.spec
     for name, missing in (("psi_ball", spec is not None and spec.cavity is None),
@@ -363,13 +391,18 @@ def describe_modes(system: System) -> dict:
         if missing and m.source.startswith("fe"):  # no such point on this bar
             for mode in modes:
                 mode[name] = None
+    built = (np.ones(m.n_modes, bool) if raw is None  # the modes of the FE bar's plane
+             else np.isclose(raw["plane_deg"], raw["built_deg"]))
     if system.spec is not None and m.source.startswith("fe"):
         fe = system.spec.stepped_bar(system.kind in ("ball", "locked"))
         static = fe.static_tip_stiffness() * m.info.get("stiffness_scale", 1.0)
         static_from = "finite-element model"
     else:
-        static = 1.0 / float(np.sum(scale / m.stiffness_n_m))
+        static = 1.0 / float(np.sum(scale[built] / m.stiffness_n_m[built]))
         static_from = "retained modes"
+    if raw is not None:
+        static_from += f", in the plane at {raw['built_deg']:g} deg"
     return {"modes": modes, "tip_static_stiffness_n_m": static,
             "tip_static_stiffness_from": static_from, "source": m.source,
-            "z_ball_m": m.z_damper_m, "z_absorber_m": m.z_absorber_m}
+            "z_ball_m": m.z_damper_m, "z_absorber_m": m.z_absorber_m,
+            **({} if raw is None else {"built_plane_deg": raw["built_deg"]})}
