@@ -4,6 +4,7 @@ and the command line."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -638,3 +639,15 @@ def test_a_design_space_that_reaches_an_impossible_system_is_refused_before_any_
     with pytest.raises(ParameterError, match="with restitution = .* Hertz contact"):
         design(soft, spec=hertz, storage=storage)
     assert not storage.parent.exists()
+
+
+def test_no_improvement_is_zero_not_minus_zero():
+    """The best design is the file's own: a maximised objective's improvement, best less
+    published, is 0, printed as 0 (not the '-0.0' that negating a difference gives)."""
+    published = 0.456e-3 + np.array([-11, -6, -2, 0, 3, 5, 9, 2]) * 1e-6
+    for direction, objective in (("maximize", "min_depth"), ("minimize", "rms_band")):
+        s = summary(_two_designs(published.copy(), published, direction=direction,
+                                 objective=objective))
+        for key in ("improvement", "improvement_percent"):
+            assert s[key] == 0 and math.copysign(1.0, s[key]) == 1.0, (direction, key)
+        assert "-0" not in summary_line(s)

@@ -202,6 +202,9 @@ def test_lobes_analytic_of_the_published_bars(tmp_path, capsys):
     (["fit-frf", str(MEASURED), "--modes", "3"], "fewer than the 3 modes"),
     (["fit-frf", str(MEASURED), "--band-hz", "900:100"], "--band-hz"),
     (["simulate", "--frf", str(MEASURED)], "fit it first"),
+    (["lobes", "--analytic", "--frf", str(MEASURED), "--planes", "2"], "measure it oriented"),
+    (["lobes", "--analytic", "--frf", str(MEASURED), "--lead-angle-deg", "30"],
+     "measure it oriented"),
 ])
 def test_bad_frf_input_is_one_line(tmp_path, capsys, argv, name):
     out = tmp_path / "out"

@@ -568,7 +568,12 @@ def test_cli_continue_takes_a_rolling_ball(tmp_path, capsys):
                  "--ball-motion", "roll", "--mu-static", "0", "--mu-kinetic", "0",
                  "--range", "30:29", "--start-from", "masri-caughey",
                  "--out", str(tmp_path / "mc")]) == 2
-    assert "sliding ball" in capsys.readouterr().err
+    assert "this system has a rolling ball" in capsys.readouterr().err
     assert not (tmp_path / "mc").exists()
+    # one mode in each of two planes is two modes: the message names the planes
+    assert main(["continue", "--gap-mm", "0.5", "--friction", "off", "--modes", "1",
+                 "--planes", "2", "--range", "30:29", "--start-from", "masri-caughey",
+                 "--out", str(tmp_path / "mc")]) == 2
+    assert capsys.readouterr().err.rstrip().endswith("this system has two bending planes")
     words = system_words(make_system("ball", motion="roll", contact="hertz").to_dict())
     assert words.replace("\u00a0", " ").endswith(", rolling (mu_s 0.2, mu_k 0.15), Hertz contact")

@@ -132,6 +132,21 @@ def plan(system: System, options: ContinuationOptions) -> Plan:
     return Plan({"system": system, "options": options}, [0])
 
 
+def _check_masri_caughey(system: System, fl) -> None:
+    """Masri and Caughey's orbit is a frictionless sliding ball's on a bar of one mode."""
+    bar = system.bar
+    two = bar.info.get("planes", 1) == 2
+    wrong = [what for what, bad in (
+        (f"a {system.kind} bar", system.kind != "ball"),
+        ("two bending planes", two),
+        (f"{bar.n_modes} modes", not two and bar.n_modes != 1),
+        ("friction", fl.fc > 0), ("a rolling ball", fl.roll)) if bad]
+    if wrong:
+        raise ParameterError("start = 'masri-caughey' needs a sliding ball on one mode of one "
+                             f"bending plane, without friction; this system has "
+                             f"{', '.join(wrong)}")
+
+
 def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
     """The first guess of the orbit's state at phase 0 (see the module docstring)."""
     if o.start == "state":
@@ -141,9 +156,7 @@ def start_state(system: System, o: ContinuationOptions, fl) -> np.ndarray:
         return np.asarray(o.state, float)
     if o.start == "masri-caughey":
         bar, ball = system.bar, system.damper
-        if system.kind != "ball" or bar.n_modes != 1 or fl.fc > 0 or fl.roll:
-            raise ParameterError("start = 'masri-caughey' needs a one-mode sliding ball "
-                                 "damper without friction")
+        _check_masri_caughey(system, fl)
         orbits = [o_ for o_ in two_impact_orbit(
             bar.mass_kg[0], bar.stiffness_n_m[0], bar.damping_n_s_m[0], bar.psi_tip[0],
             bar.psi_damper[0], ball.mass_kg, ball.gap_m, ball.restitution, o.force_n, fl.omega)

@@ -396,10 +396,10 @@ def summary(ds: xr.Dataset) -> dict:
     interval = imp["interval"]
 
     def percent(v):  # no relative change from zero (a probability of chatter of 0)
-        return None if pub == 0 else 100 * v / abs(pub)
+        return None if pub == 0 else 100 * v / abs(pub) + 0.0  # + 0.0: no "-0.0"
 
     out = {"best": values(b), "objective": obj, "objective_error": float(ds["error"].values[b, 0]),
-           "published_objective": pub, "improvement": imp["improvement"],
+           "published_objective": pub, "improvement": imp["improvement"] + 0.0,
            "improvement_percent": percent(imp["improvement"]),
            "improvement_interval": None if interval is None else list(interval),
            "improvement_interval_percent": (None if interval is None or pub == 0

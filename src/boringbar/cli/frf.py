@@ -24,6 +24,7 @@ from boringbar.cli.options import (
     OUT_HELP,
     Outcome,
     many_cases,
+    orientation_overrides,
     resolve_files,
     system_spec,
     warn_line,
@@ -144,6 +145,12 @@ def analytic_lobes_outcome(args, law: CuttingLaw, feed_m: float) -> Outcome:
     check_positive("--kr-mpa", kr * 1e-6, "MPa")
     at = None if args.at_rpm is None else check_lobe_speed("--at-rpm", args.at_rpm)
     resolve_files(args, [])
+    if (getattr(args, "frf_measured", None) is not None
+            and orientation_overrides(args).get("planes", 1) == 2):
+        raise ParameterError("--planes and the oriented cut's options apply to a bar's "
+                             "modes; a measured FRF is used as it is: measure it oriented "
+                             "(tap along the cutting force, read the response along the "
+                             "chip's thickness), or fit its modes (boringbar fit-frf)")
     rpm = parse_range(args.rpm, "--rpm") if args.rpm else analytic_speeds(args)
     for r in rpm:
         check_lobe_speed("--rpm", r)

@@ -127,8 +127,8 @@ def oriented_model(plane: ModalModel, geometry: CutGeometry,
            "built_deg": math.degrees(phis[0])}
     for p in order:
         phi, m = phis[p], models[p]
-        for key, values in zip(list(raw)[:4], ([math.degrees(phi)] * m.n_modes, m.psi_tip, m.psi_damper,
-                                     m.psi_absorber), strict=True):
+        shapes = ([math.degrees(phi)] * m.n_modes, m.psi_tip, m.psi_damper, m.psi_absorber)
+        for key, values in zip(list(raw)[:4], shapes, strict=True):
             raw[key] += [float(v) for v in values]
         parts.append((m.mass_kg, m.stiffness_n_m, m.damping_ratio,
                       m.psi_tip * math.cos(kappa) * math.cos(phi),
