@@ -371,7 +371,10 @@ def describe_modes(system: System) -> dict:
     ``tip_static_stiffness_n_m``: from the full
     finite-element model (every mode, the clamp's springs, the paper preset's
     calibration) when the bar comes from a system file, else the retained
-    modes' sum."""
+    modes' sum.  A bar of two planes gives each mode in its own plane (``plane_deg``, from
+    the radial direction; its shapes before the cut and the ball project them) and
+    ``built_plane_deg``, the plane the finite-element bar was built in, whose static
+    stiffness it is."""
     m = system.bar
     raw = m.info.get("plane_modes")  # two planes: each mode in its own plane
     tip, ball, absorber = ((m.psi_tip, m.psi_damper, m.psi_absorber) if raw is None else
