@@ -21,6 +21,7 @@ from boringbar.analysis.design import (
     candidate_system,
     comparison,
     design,
+    design_storage,
     evaluate,
     sample_table,
     summary,
@@ -143,12 +144,14 @@ def test_a_killed_search_resumes_to_the_same_trial_table(host, tmp_path):
     options = DesignOptions("tmd", TUNING, objective="frf_peak", trials=14, seed=7,
                             samples=3, uncertain=(Uncertain("damping_ratio", "uniform",
                                                             0.0, 0.02),))
-    whole = design(options, spec=host, storage=tmp_path / "a.db")
-    design(options, spec=host, storage=tmp_path / "b.db", stop_after=6)  # the kill
-    study = optuna.load_study(study_name="boringbar-design",
-                              storage=f"sqlite:///{tmp_path / 'b.db'}")
+    whole = design(options, spec=host, storage=tmp_path / "a.journal")
+    stored = tmp_path / "b.journal"
+    design(options, spec=host, storage=stored, stop_after=6)  # the kill
+    study = optuna.load_study(study_name="boringbar-design", storage=design_storage(stored))
     study.ask()  # a trial that was running when the process died
-    resumed = design(options, spec=host, storage=tmp_path / "b.db")
+    with open(stored, "ab") as f:  # and the line it was writing when it died
+        f.write(b'{"op_code":5,"worker_id":"x","trial_id":6,"us')
+    resumed = design(options, spec=host, storage=stored)
     for name in ("tmd_frequency_ratio", "tmd_damping_ratio", "statistic"):
         np.testing.assert_array_equal(resumed[name].values, whole[name].values)
     # trials.csv numbers the trials as Optuna does, the one killed mid-run failed
@@ -159,7 +162,7 @@ def test_a_killed_search_resumes_to_the_same_trial_table(host, tmp_path):
                                   whole["objective_samples"].values)
     other = DesignOptions("tmd", TUNING, objective="min_real", trials=14, seed=7)
     with pytest.raises(ValueError, match="another design study"):
-        design(other, spec=host, storage=tmp_path / "b.db")
+        design(other, spec=host, storage=stored)
 
 
 def test_candidates_run_on_a_dask_cluster_as_on_threads():
@@ -201,7 +204,7 @@ def test_design_command_on_the_tmd_example(tmp_path, capsys):
     assert {"best", "objective", "published_objective", "trials", "wall_time_s"} <= s.keys()
     assert s["trials"] == 12 and s["objective"] > 0
     assert "best design" in s["summary"]
-    for f in ("design.nc", "trials.csv", "samples.csv", "design.png", "best.png", "design.db",
+    for f in ("design.nc", "trials.csv", "samples.csv", "design.png", "best.png", "design.journal",
               "summary.json"):
         assert (out / f).stat().st_size > 0
     assert not list(out.glob(".*.tmp"))  # each written atomically
@@ -622,12 +625,12 @@ def test_a_design_space_that_reaches_an_impossible_system_is_refused_before_any_
         tmp_path):
     """A gap beyond the cavity's room at one end of its range, or a restitution sample a
     Hertz contact refuses, is refused by name before the search writes its storage (it
-    was refused halfway through, design.db left behind)."""
+    was refused halfway through, the trials' file left behind)."""
     from dataclasses import replace
 
     from boringbar.model.system_file import load_system
 
-    storage = tmp_path / "out" / "design.db"
+    storage = tmp_path / "out" / "design.journal"
     carbide = load_system(Path(__file__).parents[1] / "examples" / "systems"
                           / "carbide_ld10_tungsten.toml")  # room for a gap of 1 mm
     too_wide = DesignOptions("ball", (Variable("gap_m", 0.1e-3, 1.5e-3),), trials=2)

@@ -22,7 +22,7 @@ import hashlib
 import itertools
 import json
 import math
-import sqlite3
+import os
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -31,6 +31,7 @@ import numpy as np
 import optuna
 import pandas as pd
 import xarray as xr
+from optuna.storages.journal import JournalFileBackend, JournalFileOpenLock
 
 from boringbar._validate import ParameterError
 from boringbar.analysis.cases import Case
@@ -181,12 +182,14 @@ def _suggest(trial, variables) -> dict:
 
 
 def design(options: DesignOptions, *, spec: SystemSpec | None = None,
-           storage: str | Path | None = None, execution: Execution | None = None,
+           storage: str | Path | optuna.storages.BaseStorage | None = None,
+           execution: Execution | None = None,
            progress=None, stop_after: int | None = None) -> xr.Dataset:
     """Search ``options.variables`` for the best statistic of the objective.
 
-    ``spec``: the bar (default the published one); ``storage``: an SQLite file
-    that keeps the trials (a rerun resumes it); ``execution``: where each
+    ``spec``: the bar (default the published one); ``storage``: a file that keeps the
+    trials (Optuna's journal, :func:`design_storage`; a rerun resumes it), or an Optuna
+    storage of your own (``optuna.storages.RDBStorage("sqlite:///trials.db")``); ``execution``: where each
     candidate's runs go; ``progress(done, total)``; ``stop_after``: end after this
     many new trials (tests of resume). Returns the trial table as a Dataset with
     the best design and the published design under the same objective."""
@@ -194,15 +197,12 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
     t0 = time.perf_counter()
     samples = uncertain_samples(options)
     check_space(spec, options, samples)
-    rdb = None if storage is None else _sqlite(Path(storage))
-    try:
-        study = _study(options, rdb, storage, _fingerprint(options, spec))
-        done = _search(study, spec, options, samples, execution, progress, stop_after)
-        # trials a killed run left failed: trials.csv lists them, so no number is missing
-        failed = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.FAIL,))
-    finally:
-        if rdb is not None:
-            rdb.engine.dispose()  # closes the file: SQLite folds its write-ahead log back
+    kept = (storage if storage is None or isinstance(storage, optuna.storages.BaseStorage)
+            else design_storage(storage))
+    study = _study(options, kept, storage, _fingerprint(options, spec))
+    done = _search(study, spec, options, samples, execution, progress, stop_after)
+    # trials a killed run left failed: trials.csv lists them, so no number is missing
+    failed = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.FAIL,))
     published = _published_candidate(spec, options, samples, execution)
     return assemble(options, done, published, time.perf_counter() - t0, samples=samples,
                     failed=failed)
@@ -230,20 +230,29 @@ def _search(study, spec, options, samples, execution, progress, stop_after) -> l
     return done
 
 
-def _sqlite(path: Path) -> optuna.storages.RDBStorage:
-    """Optuna's storage in the SQLite file ``path``, written ahead to a log and synced
-    at checkpoints rather than at every one of a trial's dozen commits (a crash can
-    lose the last trials, never the file's consistency; a rerun resumes from it)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+def design_storage(path: str | Path, *, writer: bool = True) -> optuna.storages.JournalStorage:
+    """The search's trials in the file ``path``: Optuna's journal, each ask and tell a
+    line appended and synced, so that a rerun resumes from every trial that finished.
+    For the ``writer`` (the search), a line that a killed run left half written, never
+    acknowledged, is cut off first: the next line appended to it would make the file
+    unreadable.  A reader beside a running search (the design page) leaves it be."""
+    path = Path(path)
+    if writer:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _cut_torn_tail(path)
+    name = str(path)
+    return optuna.storages.JournalStorage(
+        JournalFileBackend(name, lock_obj=JournalFileOpenLock(name)))
 
-    def connect() -> sqlite3.Connection:
-        connection = sqlite3.connect(path, check_same_thread=False)
-        connection.execute("PRAGMA journal_mode=WAL")
-        connection.execute("PRAGMA synchronous=NORMAL")
-        return connection
 
-    return optuna.storages.RDBStorage(f"sqlite:///{path.resolve()}",
-                                      engine_kwargs={"creator": connect})
+def _cut_torn_tail(path: Path) -> None:
+    if not path.exists():
+        return
+    with open(path, "rb+") as f:
+        data = f.read()
+        if data and not data.endswith(b"\n"):
+            f.truncate(data.rfind(b"\n") + 1)
+            os.fsync(f.fileno())
 
 
 def _fingerprint(options: DesignOptions, spec: SystemSpec) -> str:
@@ -253,11 +262,11 @@ def _fingerprint(options: DesignOptions, spec: SystemSpec) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _study(options: DesignOptions, rdb, storage, fingerprint: str) -> optuna.Study:
-    """The search's study in ``rdb`` (None: in memory), checked to be this one's
-    (``fingerprint``), its trials killed mid-run failed."""
+def _study(options: DesignOptions, kept, storage, fingerprint: str) -> optuna.Study:
+    """The search's study in the Optuna storage ``kept`` (None: in memory), checked to
+    be this one's (``fingerprint``), its trials killed mid-run failed."""
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    study = optuna.create_study(storage=rdb, study_name="boringbar-design",
+    study = optuna.create_study(storage=kept, study_name="boringbar-design",
                                 directions=options.directions, load_if_exists=True,
                                 sampler=_sampler(options, 0))
     stored = study.user_attrs.get("fingerprint")

@@ -4,7 +4,7 @@ trials shown as they finish, the best design applied to the page on request.
 The search is a design file (lengths in mm, as the page's controls and every input
 file give them), read by :func:`~boringbar.analysis.design_file.options_from_dict`, so
 the file the page shows reruns the same search.  It runs :func:`boringbar.design` in
-a thread of its own with an SQLite storage in a folder of the session's; the page
+a thread of its own with its journal (Optuna's) in a folder of the session's; the page
 reads the finished trials from that storage as they come (Optuna's own records, the
 same the command keeps).
 """
@@ -12,6 +12,7 @@ same the command keeps).
 from __future__ import annotations
 
 import asyncio
+import itertools
 import shutil
 import tempfile
 import threading
@@ -26,7 +27,13 @@ import tomli_w
 from bokeh.models import ColumnDataSource
 
 from boringbar._validate import ParameterError
-from boringbar.analysis.design import candidate_system, design, summary, summary_line
+from boringbar.analysis.design import (
+    candidate_system,
+    design,
+    design_storage,
+    summary,
+    summary_line,
+)
 from boringbar.analysis.design_file import MM_PER_M, options_from_dict, to_file
 from boringbar.analysis.design_options import OBJECTIVES as DESIGN_OBJECTIVES
 from boringbar.analysis.design_options import objective_reading, shown
@@ -272,7 +279,7 @@ class SearchPanel:
             return  # read the storage only once the search made it (it has a trial)
         if self.study is None:
             self.study = optuna.load_study(study_name=STUDY,
-                                           storage=f"sqlite:///{self.storage}")
+                                           storage=design_storage(self.storage, writer=False))
         done = self.study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
         if len(done) == self.seen:
             return
@@ -288,13 +295,14 @@ class SearchPanel:
             + f": {best.values[0] * factor:.4g} {unit}")
 
     def storage_path(self) -> Path:
-        """A new SQLite file for a search, in the session's folder: made at the first
+        """A new journal file for a search, in the session's folder: made at the first
         search (a page that never searches leaves nothing on disk) and removed when the
         session closes or, at the latest, when the interpreter exits."""
         if self.folder is None:
             self.folder = Path(tempfile.mkdtemp(prefix="boringbar-app-"))
             weakref.finalize(self, shutil.rmtree, self.folder, True)
-        return self.folder / f"search{len(list(self.folder.iterdir()))}.sqlite"
+        return next(path for k in itertools.count()
+                    if not (path := self.folder / f"search{k}.journal").exists())
 
     def close(self) -> None:
         self.stop.set()

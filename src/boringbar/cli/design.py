@@ -23,7 +23,7 @@ def add_design(sub) -> None:
                                    "and Monte Carlo sample, and the file's own design's), "
                                    "DIR/design.png, DIR/best.png (the best design beside "
                                    "the file's in the objective's own figure), "
-                                   "DIR/summary.json and DIR/design.db (the trials: a "
+                                   "DIR/summary.json and DIR/design.journal (the trials: a "
                                    "rerun resumes). The summary gives the improvement on "
                                    "the file's own design with its 95 %% confidence "
                                    "interval over the paired samples, and says 'within "
@@ -48,7 +48,7 @@ def cmd_design(args) -> Outcome:
     check_workers(args.workers)
     execution = Execution("threads", args.workers)
     out = Path(args.out)
-    ds = design(options, spec=spec, storage=out / "design.db", execution=execution,
+    ds = design(options, spec=spec, storage=out / "design.journal", execution=execution,
                 progress=progress_printer(args, "design", "trials"))
     s = design_files(ds, comparison(spec, options, ds, execution=execution), out)
 

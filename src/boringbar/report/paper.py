@@ -363,7 +363,7 @@ def _design_run(name: str, trials: int):
         options, spec = load_design(design_file(name))
         options = replace(options, trials=trials, preset=col.preset)
         execution = Execution("threads")
-        ds = design(options, spec=spec, storage=out / "design.db", execution=execution)
+        ds = design(options, spec=spec, storage=out / "design.journal", execution=execution)
         return design_files(ds, comparison(spec, options, ds, execution=execution), out)
     return run
 
