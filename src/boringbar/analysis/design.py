@@ -9,7 +9,7 @@ parameters whose Monte Carlo samples every candidate shares (common random
 numbers), and a statistic of those samples with its error.
 
 Optuna searches: TPE, CMA-ES, or NSGA-II for several objectives (a Pareto
-front), the seed fixed. Its SQLite storage beside the result makes the search
+front), the seed fixed. Its journal beside the result makes the search
 resumable: each trial's sampler is seeded by the number of trials finished
 before it, so a search killed and run again asks for the same candidates as an
 uninterrupted one. A trial still marked running after a kill is failed and
@@ -189,9 +189,9 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
 
     ``spec``: the bar (default the published one); ``storage``: a file that keeps the
     trials (Optuna's journal, :func:`design_storage`; a rerun resumes it), or an Optuna
-    storage of your own (``optuna.storages.RDBStorage("sqlite:///trials.db")``); ``execution``: where each
-    candidate's runs go; ``progress(done, total)``; ``stop_after``: end after this
-    many new trials (tests of resume). Returns the trial table as a Dataset with
+    storage of your own (``optuna.storages.RDBStorage("sqlite:///trials.db")``);
+    ``execution``: where each candidate's runs go; ``progress(done, total)``;
+    ``stop_after``: end after this many new trials (tests of resume). Returns the trial table as a Dataset with
     the best design and the published design under the same objective."""
     spec = spec or published_system_spec()
     t0 = time.perf_counter()
