@@ -80,6 +80,44 @@ def test_a_linear_bar_s_limit_holds_at_every_speed_of_its_first_five_lobes(name)
     assert err <= 0.01, f"{name}: {err:.2%} at {rpm:g} rpm"
 
 
+def test_a_large_knock_that_keeps_the_tool_in_the_cut_leaves_the_limit_at_the_onset():
+    """A bar without a ball is linear while the tool stays in the cut, so a 20 um knock
+    that never takes it out dies out wherever the small knock does, however slowly (at
+    1200 rpm, 0.3 % below the limit, at 0.02 1/s): the limit stays the frequency
+    domain's, and the knock's vibration is decaying, not settled above the tolerance."""
+    system = linear_bars()["carbide example solid"]
+    big = VerdictOptions(knocks_m=(20e-6,))
+    err, rpm = worst_error(system, [1100.0, 1200.0, 1300.0], verdict=big)
+    assert err <= 0.01, f"{err:.2%} at {rpm:g} rpm"
+    limit = limit_at_speeds(system, [1200.0], KR_ALUMINIUM)[0]
+    v = judge(system, bb.Regenerative(depth_m=0.997 * limit, rpm=1200.0, stop_at_zero=False),
+              big, values=True)
+    assert v.onset == STABLE and v.chatter_free is True
+    assert v.settled[-1].status == "decaying" and not v.settled[-1].left_cut
+    assert v.settled[-1].pp_m > big.tolerance_m  # above the budget, and dying out
+
+
+def test_below_the_onset_a_knock_that_takes_the_tool_out_is_searched_down():
+    """A 200 um knock takes the tool out of the cut, and below the onset the cut can
+    keep it leaving (a finite-amplitude chatter): the chatter-free depth is searched
+    down from the onset, and each side of it is what the verdict says of it."""
+    system = linear_bars()["carbide example solid"]
+    big = VerdictOptions(knocks_m=(200e-6,))
+    ds = lobes({"bar": system}, LobesOptions(rpm=(1200.0,), verdict=big))
+    limit, first = (float(ds[k].values[0, 0]) for k in ("limit_depth_m",
+                                                         "first_unstable_depth_m"))
+    onset = float(ds["onset_depth_m"].values[0, 0])
+    assert 0.8 * onset < limit < first < onset
+    assert first / limit < 1.02  # adjacent depths of the 1 % grid
+
+    def judged(depth):
+        return judge(system, bb.Regenerative(depth_m=depth, rpm=1200.0, stop_at_zero=False),
+                     big)
+    assert judged(limit).chatter_free is True
+    below = judged(first)
+    assert below.onset == STABLE and below.chatter_free is False and below.settled[-1].left_cut
+
+
 def test_the_fixed_two_second_criterion_fails_the_same_check():
     """The published criterion (the force reaches zero within a 2 s run from rest) places
     the carbide bar's limit a third too high at 1200 rpm: the check above would fail."""

@@ -89,8 +89,8 @@ NOT_FOR_A_MAP = ("duration_s", "start", "bounded_fraction")
 SMALL_KNOCK = "small knock"
 #: The settled statuses: a small knock's that dies out, then the verdict's own
 #: (:class:`~boringbar.analysis.verdict.Settled`).
-DIED_OUT, SETTLED, DECAYING, LEFT_CUT, UNDECIDED_STATUS = (
-    "died out", "settled", "decaying", "left the cut", "undecided")
+DIED_OUT, SETTLED, LEFT_CUT, UNDECIDED_STATUS = (
+    "died out", "settled", "left the cut", "undecided")
 CODES = "1 chatter-free (stable), 0 not (chatter), 2 undecided (the cap came first)"
 
 
@@ -368,7 +368,9 @@ def _cell_variables(cells: dict, per_start: dict) -> dict:
                                        "not run on, see settled_status)"}),
         "settled_rms_m": (sdims, per_start["rms_m"], {"units": "m"}),
         "settled_status": (sdims, per_start["status"].astype(str), {
-            "long_name": "died out, settled, decaying (below the tolerance, still falling), "
+            "long_name": "died out, settled, decaying (still falling: below the tolerance, or "
+                         "a bar without a ball whose small knock dies out, the tool in the "
+                         "cut), "
                          "left the cut (for a bar without a ball whose small knock grows: "
                          "linear until it leaves the cut, not run on), undecided"}),
         "left_cut": (sdims, per_start["left_cut"], {

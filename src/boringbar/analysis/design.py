@@ -191,8 +191,9 @@ def design(options: DesignOptions, *, spec: SystemSpec | None = None,
     trials (Optuna's journal, :func:`design_storage`; a rerun resumes it), or an Optuna
     storage of your own (``optuna.storages.RDBStorage("sqlite:///trials.db")``);
     ``execution``: where each candidate's runs go; ``progress(done, total)``;
-    ``stop_after``: end after this many new trials (tests of resume). Returns the trial table as a Dataset with
-    the best design and the published design under the same objective."""
+    ``stop_after``: end after this many new trials (tests of resume). Returns the trial
+    table as a Dataset with the best design and the published design under the same
+    objective."""
     spec = spec or published_system_spec()
     t0 = time.perf_counter()
     samples = uncertain_samples(options)

@@ -154,6 +154,14 @@ def growth_column(case: Case, rpm: float, options, integration: Integration,
     lo, hi = bisect(lambda i: onset_chatters(result(i)),
                     *bracket(lambda i: onset_chatters(result(i)), min(max(1, seed), n_max),
                              n_max))
+    if lo > 0 and not_free(result(lo)):
+        # below the onset a large knock keeps the tool leaving the cut (or a ball's
+        # vibration above the tolerance): the chatter-free depth lies deeper down
+        def chatter(i: int) -> bool:
+            return not_free(result(i))
+
+        bisect(chatter, *bracket(chatter, lo, n_max))
+        return done
     if case.system.kind == "ball" and hi <= n_max:
         # a ball that bounds its vibration within the tolerance often does so well above
         # its onset: the search up from it starts with a step of BALL_STEP grid depths.

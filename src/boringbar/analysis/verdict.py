@@ -91,6 +91,8 @@ MAX_RISE_RATIO = 0.0
 DECAYED = 1e-3
 #: A settled status: above the tolerance and not falling (a verdict that needs no more).
 ABOVE = "above the tolerance"
+#: A settled status: falling (below the tolerance, or a linear bar's stable knock).
+DECAYING = "decaying"
 #: Verdicts (LEVELLED: a vibration neither growing nor decaying, for the settling to judge).
 STABLE, CHATTER, UNDECIDED, LEVELLED = "stable", "chatter", "undecided", "levelled"
 
@@ -164,7 +166,8 @@ class VerdictOptions:
 class Settled:
     """The settled vibration of one start: ``pp_m`` and ``rms_m`` (m) of the tip over the
     last quarter of the windows, ``left_cut`` (the tool left the cut there), ``status``
-    ("settled", "decaying": below the tolerance and still falling, "left the cut",
+    ("settled", "decaying": below the tolerance and still falling, or on a bar without
+    a ball whose onset is stable and the tool in the cut, "left the cut",
     "undecided": the cap came first), ``duration_s`` (s) run."""
 
     pp_m: float
@@ -394,7 +397,8 @@ def bounds_small(system: System) -> bool:
 
 
 def settle(stepper: CutStepper, windows: list | Track, options: VerdictOptions, t0_s: float,
-           onset_rate: float = math.nan, values: bool = True) -> Settled:
+           onset_rate: float = math.nan, values: bool = True,
+           linear_stable: bool = False) -> Settled:
     """Run ``stepper`` on until its vibration settles (module doc); ``windows`` so far,
     ``onset_rate`` (1/s) the growth rate of its onset where it chattered.
 
@@ -407,7 +411,9 @@ def settle(stepper: CutStepper, windows: list | Track, options: VerdictOptions, 
     observable falling at the confidence.  Without ``values`` (a verdict that needs only
     which side of the tolerance the vibration settles on) a vibration above the
     tolerance over both quarters, its growth levelled and not falling is "above the
-    tolerance" at once."""
+    tolerance" at once.  ``linear_stable``: a knock on a bar without a ball whose onset
+    is stable: linear while the tool stays in the cut, so decaying, however slowly it
+    shows, once the tool stays in the cut over both quarters and nothing grows."""
     tol = options.settle_tolerance
     track = windows if isinstance(windows, Track) else Track(stepper.system, windows)
     while True:
@@ -434,10 +440,13 @@ def settle(stepper: CutStepper, windows: list | Track, options: VerdictOptions, 
             growing = any(b - q * se >= floor for b, se in fits)
             trend = max(abs(b) for b, _ in fits) * span
             levelled = not growing
+            if (linear_stable and track.last_left < n - 2 * m
+                    and all(b - q * se < 0 for b, se in fits)):
+                return Settled(pp, rms, False, DECAYING, duration)
             if levelled and abs(pp - pp0) <= tol * max(pp, pp0) and trend <= tol:
                 return Settled(pp, rms, False, "settled", duration)
             if pp < options.tolerance_m and all(b + q * se < 0 for b, se in fits):
-                return Settled(pp, rms, False, "decaying", duration)
+                return Settled(pp, rms, False, DECAYING, duration)
             if (not values and levelled and min(pp, pp0) > options.tolerance_m
                     and -tol < fits[0][0] * span):
                 return Settled(pp, rms, False, ABOVE, duration)
@@ -566,7 +575,7 @@ def acceptable(s: Settled, options: VerdictOptions) -> bool | None:
         return False
     if s.status in (UNDECIDED, ABOVE):
         return False if s.pp_m > options.tolerance_m else None
-    return s.pp_m <= options.tolerance_m
+    return s.status == DECAYING or s.pp_m <= options.tolerance_m
 
 
 def judge(system: System, cut: Regenerative, options: VerdictOptions | None = None, *,
@@ -599,17 +608,19 @@ def judge(system: System, cut: Regenerative, options: VerdictOptions | None = No
             stepper = stepper.refined(dt_s, window_steps(system, stepper.forcing, dt_s))
         settled.append(settle(stepper, windows, options, onset_s, rate, values))
         ok = [acceptable(settled[0], options)]
-    big = knocked(system, cut, options, dt_s, values)
+    big = knocked(system, cut, options, dt_s, values,
+                  linear_stable=system.kind != "ball" and verdict == STABLE)
     settled += big
     ok += [acceptable(x, options) for x in big]
     return CutVerdict(verdict, rate, se, onset_s, _all_of(ok), tuple(settled))
 
 
 def knocked(system: System, cut: Regenerative, options: VerdictOptions, dt_s: float,
-            values: bool) -> list:
-    """The settled vibration from each large knock of ``options.knocks_m``."""
+            values: bool, linear_stable: bool = False) -> list:
+    """The settled vibration from each large knock of ``options.knocks_m``
+    (``linear_stable``: as :func:`settle` says)."""
     return [settle(_stepper(system, cut, dt_s, knock, options), [], options, 0.0,
-                   values=values) for knock in options.knocks_m]
+                   values=values, linear_stable=linear_stable) for knock in options.knocks_m]
 
 
 def _all_of(ok: list) -> bool | None:

@@ -22,7 +22,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from boringbar.analysis.chatter_map import DECAYING, UNDECIDED
+from boringbar.analysis.chatter_map import UNDECIDED
+from boringbar.analysis.verdict import DECAYING
 from boringbar.plot.style import COLUMN_WIDTH_IN, DARK_GREY, GREY, OKABE_ITO, case_title, set_title
 
 #: The colour scale's sequence (light: small vibration, dark: large) and the fill of a
