@@ -173,6 +173,50 @@ def test_sigkill_then_resume_equals_uninterrupted_run(tmp_path):
         assert_same_run(resumed.load(), fresh)
 
 
+def _group_alive(pgid: int) -> bool:
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["TERM", "KILL"])
+def test_a_stop_sent_to_the_main_process_alone_ends_its_workers(tmp_path, sig):
+    """A scheduler or `kill PID` stops the main process alone.  SIGTERM is taken as
+    Ctrl-C (exit 143, the workers ended with it); after SIGKILL each worker sees its
+    parent gone and ends itself.  Either way no worker is left behind, and the finished
+    chunks are kept."""
+    study = _study_file(tmp_path)
+    part = tmp_path / "kill.nc.partial"
+    cmd = [sys.executable, "-m", "boringbar", "run", str(study), "--out",
+           str(tmp_path / "kill.nc"), "--executor", "processes", "--workers", "2",
+           "--chunk-size", "1", "--quiet"]
+    env = dict(os.environ, BORINGBAR_FAULT_STALL_CHUNK="35")
+    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=env)
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(part.glob("chunk-*.pkl"))) < 2:
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < deadline, "no chunk finished in 120 s"
+            time.sleep(0.05)
+        os.kill(proc.pid, sig)
+        _, err = proc.communicate(timeout=60)
+        if sig == signal.SIGTERM:
+            assert proc.returncode == 143 and err.decode().strip() == "boringbar: terminated"
+        else:
+            assert proc.returncode == -signal.SIGKILL
+        deadline = time.monotonic() + 15
+        while _group_alive(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not _group_alive(proc.pid), "a worker outlived its stopped parent"
+        assert len(list(part.glob("chunk-*.pkl"))) >= 2
+    finally:
+        if _group_alive(proc.pid):
+            os.killpg(proc.pid, signal.SIGKILL)
+
+
 EXAMPLES = sorted((Path(__file__).parent.parent / "examples" / "studies").glob("*.toml"))
 
 

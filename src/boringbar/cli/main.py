@@ -14,10 +14,13 @@ builds its subparser and a ``_cmd_<name>(args) -> int`` handler.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import re
+import signal
 import sys
 import textwrap
+import threading
 
 from boringbar.cli.options import PROG, Outcome, default_out
 from boringbar.model.system import READINGS
@@ -99,8 +102,37 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (a job scheduler's or a container's stop), taken as Ctrl-C is: the work
+    finished so far is kept, the worker processes end, and the command exits."""
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM raises :class:`Terminated` while the command runs (the main thread only:
+    Python delivers signals there)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Terminated
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv=None) -> int:
-    """Run the command line; returns the exit code (0 ok, 2 bad input, 1 I/O error)."""
+    """Run the command line; returns the exit code (0 ok, 2 bad input, 1 I/O error, 130
+    interrupted, 143 terminated)."""
+    with _sigterm_as_interrupt():
+        return _run(argv)
+
+
+def _run(argv) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
     try:
@@ -121,9 +153,10 @@ def main(argv=None) -> int:
     except (OSError, IntegrationError) as exc:  # a file, or a run that could not finish
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        stop = isinstance(exc, Terminated)
+        print(f"{PROG}: {'terminated' if stop else 'interrupted'}", file=sys.stderr)
+        return 143 if stop else 130
 
 
 def _one_line(exc: BaseException) -> str:

@@ -6,6 +6,9 @@ import contextlib
 import logging
 import multiprocessing as mp
 import os
+import signal
+import threading
+import time
 import uuid
 from collections.abc import Callable, Hashable
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
@@ -17,6 +20,8 @@ from boringbar._validate import ParameterError, check_choice
 EXECUTORS = ("auto", "serial", "threads", "processes", "dask")
 #: How often a broken process pool is recreated without any task finishing.
 MAX_POOL_RESTARTS = 3
+#: How often (s) a pool worker checks that its parent is still there.
+ORPHAN_POLL_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -124,12 +129,39 @@ def _mp_context():
     return mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
 
 
+def _worker_start(parent: int) -> None:
+    """A pool worker's initializer.  Its parent ends it (Ctrl-C and SIGTERM reach the
+    parent, which terminates its workers): the worker ignores Ctrl-C, and SIGTERM ends
+    it at once whatever handler it inherited.  And it ends itself once its parent is gone
+    (killed outright, as SIGKILL does), rather than wait for ever on a queue nobody
+    closes."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(ORPHAN_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="boringbar-orphan-watch", daemon=True).start()
+
+
+def _end_workers(workers: set) -> None:
+    """Terminate the pool's worker processes at once and reap them."""
+    for p in workers:
+        p.terminate()
+    for p in workers:
+        p.join(timeout=5.0)
+
+
 def _processes(fn, tasks, on_done, workers, on_restart):
     pending = dict(tasks)
     restarts = 0
     while pending:
+        before = set(mp.active_children())
         pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)),
-                                   mp_context=_mp_context())
+                                   mp_context=_mp_context(), initializer=_worker_start,
+                                   initargs=(os.getpid(),))
         progressed = False
         futs: dict = {}
         try:
@@ -149,6 +181,12 @@ def _processes(fn, tasks, on_done, workers, on_restart):
                 raise ChildProcessError(
                     f"worker processes died {restarts} times in a row without finishing a "
                     "task; giving up") from None
+        except BaseException:
+            # interrupted (Ctrl-C, SIGTERM) or a task failed: the workers end now.  An
+            # interrupt that lands while the pool starts them can cut them off from their
+            # queue, and a graceful shutdown would then wait for them for ever.
+            _end_workers(set(mp.active_children()) - before)
+            raise
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
 
