@@ -13,6 +13,8 @@ import numbers
 import tomllib
 from pathlib import Path
 
+import numpy as np
+
 
 class ParameterError(ValueError):
     """A parameter outside its allowed range. The message is one line."""
@@ -104,6 +106,14 @@ def check_int(name: str, value, lo: int, hi: float) -> int:
                              f"[{lo:g}, {hi:g}])")
     check_range(name, value, lo, hi)
     return int(value)
+
+
+def check_bool(name: str, value) -> bool:
+    """``value`` if it is a bool (NumPy's too): a string such as "off" is true to Python,
+    so it is refused rather than read as on."""
+    if not isinstance(value, bool | np.bool_):
+        raise ParameterError(f"{name} = {value!r} must be True or False")
+    return bool(value)
 
 
 def check_choice(name: str, value, choices) -> str:

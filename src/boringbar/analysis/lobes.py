@@ -605,13 +605,21 @@ def lobes(cases: list[Case], options: LobesOptions | None = None, *,
     return assemble(p, results, execution_attrs(execution, wall))
 
 
+#: The analytic curve about a single speed spans this fraction of it either side.
+ONE_SPEED_SPAN = 0.1
+
+
 def _add_analytic(ds, cases: list[Case], rpm: np.ndarray, kr: float) -> None:
     """The frequency-domain limit of the linear bars (NaN for the free ball), and of
     every case's linear host (System.linear_host: for the free ball the bar a small
     vibration sees, the ball held by its friction or, without friction, not acting)."""
 
-    # evenly spaced in 1/rpm, the lobe number's axis: every lobe drawn as finely
-    fine = 1.0 / np.linspace(1.0 / rpm.max(), 1.0 / rpm.min(), max(200, 20 * len(rpm)))[::-1]
+    # evenly spaced in 1/rpm, the lobe number's axis: every lobe drawn as finely (about
+    # one speed, over ONE_SPEED_SPAN of it either side)
+    lo, hi = rpm.min(), rpm.max()
+    if lo == hi:
+        lo, hi = lo * (1 - ONE_SPEED_SPAN), hi * (1 + ONE_SPEED_SPAN)
+    fine = 1.0 / np.linspace(1.0 / hi, 1.0 / lo, max(200, 20 * len(rpm)))[::-1]
     on_grid = np.full((len(cases), len(rpm)), np.nan)
     curve = np.full((len(cases), len(fine)), np.nan)
     host_grid = np.full((len(cases), len(rpm)), np.nan)

@@ -446,8 +446,8 @@ def resolve_files(args, bars: list[str]) -> None:
 #: --out's help: each command and each bar writes to its own folder by default, so that
 #: no run overwrites another's files
 OUT_HELP = ("output directory (default: out/COMMAND/NAME: NAME the input file's, or "
-            "published, and the bars given with --bar; a rerun with other options writes "
-            "over it)")
+            "published, and the bars given with --bar where the command takes it; a rerun "
+            "with other options writes over it)")
 
 
 def default_out(args) -> Path:

@@ -21,7 +21,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from boringbar._validate import ParameterError, check_choice, check_int, check_range
+from boringbar._validate import (
+    ParameterError,
+    check_bool,
+    check_choice,
+    check_int,
+    check_range,
+)
 from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import (
     NO_FRICTION,
@@ -190,6 +196,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     ``mu_static`` >= ``mu_kinetic`` (docs/model.md, section 2.7); default the file's.
     """
     _check_kind(bar, preset)
+    friction, locked = check_bool("friction", friction), check_bool("locked", locked)
     spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
     given = modal
