@@ -85,6 +85,12 @@ def test_options_validate_themselves():
         bb.SweepOptions(ratios=(1.0, -1.0))
     with pytest.raises(bb.ParameterError, match="ratios is empty"):
         bb.SweepOptions(ratios=())
+    # a string is true to Python: "off" must not read as friction on
+    with pytest.raises(bb.ParameterError, match="friction = 'off' must be True or False"):
+        bb.make_system("ball", friction="off")
+    with pytest.raises(bb.ParameterError, match="locked = 1 must be True or False"):
+        bb.make_system("ball", locked=1)
+    assert bb.make_system("ball", friction=np.bool_(False)).damper.friction_force_n == 0
 
 
 def test_a_run_is_frozen():

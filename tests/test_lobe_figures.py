@@ -242,3 +242,17 @@ def test_a_limit_line_breaks_across_a_gap_no_cut_ran(simulated):
     assert list(line.get_xdata()[:3]) == [1000, 1100, AT] and line.get_xdata()[-1] == 3000
     assert np.isnan(line.get_ydata()[3])
     assert not np.isnan(limit_line([1000.0, 1100.0, 1150.0, AT]).get_ydata()).any()
+
+
+def test_lobes_at_one_speed_draw_the_analytic_curve_about_it():
+    """One speed: the analytic curve spans 10 % either side of it (not 200 copies of the
+    speed, which drew nothing while the legend listed it)."""
+    cases = _cases(("solid",))
+    ds = lobes(cases, LobesOptions(rpm=(AT,), method="scan", depth_step_m=0.05e-3,
+                                   max_depth_m=1.0e-3),
+               integration=Integration(duration_s=0.3), execution=Execution("serial"))
+    fine = ds["fine_rpm"].values
+    assert fine[0] == pytest.approx(0.9 * AT) and fine[-1] == pytest.approx(1.1 * AT)
+    assert np.all(np.diff(fine) > 0) and np.isfinite(ds["analytic_curve_m"].values).all()
+    lines = plot_lobes(ds).axes[0].get_lines()
+    assert any(len(np.unique(line.get_xdata())) > 100 for line in lines)
