@@ -136,6 +136,23 @@ def test_a_default_run_keeps_a_bounded_history_to_plot_and_write():
         bare.to_xarray()
 
 
+def test_a_ball_run_s_figure_marks_the_impacts_its_sampled_record_may_miss():
+    """The zoom on the ball's row marks each impact of the run's log in it at the wall it
+    struck (the sampled record may pass between an impact's samples)."""
+    system = bb.make_system("ball", "physical")
+    run = bb.simulate(system, bb.Harmonic(20.0, 1.0), duration_s=0.5)
+    ds = run.to_xarray()
+    zoom = run.plot().axes[3]
+    marks, = (line for line in zoom.get_lines() if line.get_label().startswith("impacts"))
+    t0 = zoom.get_xlim()[0]
+    shown = ds["impact_time_s"].values >= t0 - 1e-12
+    assert shown.sum() >= 2
+    np.testing.assert_array_equal(marks.get_xdata(), ds["impact_time_s"].values[shown])
+    half = system.damper.gap_m / 2 * 1e3
+    np.testing.assert_allclose(np.abs(marks.get_ydata()), half)
+    assert "long_name" in ds["impact_wall"].attrs
+
+
 def test_the_analyses_take_a_system_a_list_or_a_mapping():
     """sweep and lobes take what a user has: one System, a list of them or a mapping
     of label to System, labelled from the system; anything else is a TypeError that

@@ -64,9 +64,11 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     axes[0, 1].set_title(f"last {zoom_periods:g} periods", fontsize="medium")
     _run_guides(axes, summary.get("rms_tip_m"), damper.get("gap_m") if kind == "ball" else None,
                 config.get("steady_start_s"))
+    if kind == "ball" and "impact_time_s" in ds:
+        _impact_marks(axes[1, 1], ds, t_zoom, damper.get("gap_m"))
     for ax in axes.flat:
         ax.grid(alpha=0.3)
-    legend_below(fig, axes[:, 0])
+    legend_below(fig, [*axes[:, 0], axes[1, 1]])
     what, details = _run_title(summary, damper)
     set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")}, details)
     return fig
@@ -102,6 +104,18 @@ def _run_guides(axes, rms, gap, steady) -> None:
         for ax in axes[:, 0]:
             ax.axvline(steady, color="#555555", ls=":", lw=1.2,
                        label="start of steady part" if ax is axes[0, 0] else None)
+
+
+def _impact_marks(ax, ds, t_from: float, gap) -> None:
+    """The impacts of the run's log on the zoomed ball row, at the wall each struck: the
+    record is sampled (HISTORY_ROWS rows a run), so its line may pass between an impact's
+    samples and seem to stop short of the wall."""
+    t = ds["impact_time_s"].values
+    sel = t >= t_from
+    if gap is None or not sel.any():
+        return
+    ax.plot(t[sel], ds["impact_wall"].values[sel] * gap / 2 * 1e3, ls="none", marker="x",
+            ms=7, mew=1.5, color="black", label="impacts (the run's log)", zorder=4)
 
 
 def _run_title(summary: dict, damper: dict) -> tuple[str, str]:

@@ -407,8 +407,10 @@ class Run:
                    "summary": json.dumps(self.summary(), default=_plain)},
         )
         if self.impacts.size:
-            ds["impact_time_s"] = ("impact", self.impacts[:, 0], {"units": "s"})
-            ds["impact_wall"] = ("impact", self.impacts[:, 1])
+            ds["impact_time_s"] = ("impact", self.impacts[:, 0], {
+                "units": "s", "long_name": "time of each impact in the steady part"})
+            ds["impact_wall"] = ("impact", self.impacts[:, 1], {
+                "long_name": "the wall struck: +1 at y = +gap/2, -1 at y = -gap/2"})
         if self.contacts is not None and self.contacts.size:
             c = self.contacts
             for col, name, unit in ((0, "contact_start_s", "s"), (2, "contact_speed_in_m_s", "m/s"),
