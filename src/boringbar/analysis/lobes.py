@@ -561,10 +561,11 @@ def _attrs(plan: Plan, n_runs: int) -> dict:
         "analytic_kr_pa": o.analytic_kr_pa,
         "feed_m": o.feed_m,
         "revolutions": o.revolutions,
-        "bounded_fraction": o.bounded_fraction,
-        "duration_s": integ.duration_s,
+        # a fixed-length cut's settings; the verdict runs each cut until it decides
+        **({} if o.criterion == "growth" else {
+            "bounded_fraction": o.bounded_fraction, "duration_s": integ.duration_s,
+            "steady_fraction": integ.steady_fraction}),
         "dt_s": integ.dt_s,
-        "steady_fraction": integ.steady_fraction,
         "runs": n_runs,
         "preset": ",".join(sorted({c.system.preset for c in cases})),
         "systems": json.dumps({c.label: c.system.to_dict() for c in cases}),
