@@ -91,6 +91,11 @@ def test_options_validate_themselves():
     with pytest.raises(bb.ParameterError, match="locked = 1 must be True or False"):
         bb.make_system("ball", locked=1)
     assert bb.make_system("ball", friction=np.bool_(False)).damper.friction_force_n == 0
+    # another bar's argument would do nothing: refused, as the command line refuses it
+    with pytest.raises(bb.ParameterError, match="gap_m = 0.0001 applies to the ball bar"):
+        bb.make_system("solid", gap_m=1e-4)
+    with pytest.raises(bb.ParameterError, match="tmd_mass_kg = 0.1 applies to the tmd bar"):
+        bb.make_system("ball", tmd_mass_kg=0.1)
 
 
 def test_a_run_is_frozen():

@@ -8,6 +8,7 @@ import numpy as np
 
 from boringbar._validate import ParameterError, check_int, check_range
 from boringbar.analysis.cases import parse_range
+from boringbar.analysis.lobe_examples import examples as lobe_examples
 from boringbar.analysis.lobes import (
     DEPTH_FLOOR,
     DEPTH_TOLERANCE,
@@ -18,7 +19,6 @@ from boringbar.analysis.lobes import (
     grid_index,
     lobes,
 )
-from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.speeds import check_speeds, default_speeds
 from boringbar.analysis.sweep import SweepOptions, default_ratios, sweep
 from boringbar.cli.draws import add_draws, draws_text, uncertainty_options

@@ -194,9 +194,10 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     Default: the file's ``[orientation]``, else one plane.  ``motion``: the ball
     "slide"s (the published model) or "roll"s, with the floor friction coefficients
     ``mu_static`` >= ``mu_kinetic`` (docs/model.md, section 2.7); default the file's.
+    Another bar's argument (``gap_m`` for the solid bar) is refused: it would do nothing.
     """
     _check_kind(bar, preset)
-    friction, locked = check_bool("friction", friction), check_bool("locked", locked)
+    _check_bar_args(bar, locals())
     spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
     given = modal
@@ -245,6 +246,26 @@ def _check_kind(bar, preset) -> None:
                         "spec=, e.g. make_system('ball', spec=spec)")
     check_choice("bar", bar, BAR_KINDS)
     check_choice("preset", preset, PRESETS)
+
+
+#: make_system's arguments of one bar's damper alone (None: not given).
+BALL_ARGS = ("gap_m", "ball", "restitution", "friction_number", "friction_force_n",
+             "friction_reaction", "friction_reading", "static_ratio", "contact",
+             "contact_stiffness_n_m1_5", "motion", "mu_static", "mu_kinetic")
+TMD_ARGS = ("tmd_mass_kg", "tmd_design")
+
+
+def _check_bar_args(bar: str, args: dict) -> None:
+    """Refuse an argument of another bar's damper (a gap given to the solid bar): it
+    would change nothing.  ``friction`` and ``locked`` must be bools."""
+    check_bool("friction", args["friction"])
+    if check_bool("locked", args["locked"]) and bar != "ball":
+        raise ParameterError(f"locked = True applies to the ball bar, not bar = {bar!r}")
+    for name in (BALL_ARGS if bar != "ball" else ()) + (TMD_ARGS if bar != "tmd" else ()):
+        if args[name] is not None:
+            owner = "ball" if name in BALL_ARGS else "tmd"
+            raise ParameterError(f"{name} = {args[name]!r} applies to the {owner} bar, not "
+                                 f"bar = {bar!r}")
 
 
 def _check_unused(damper: ImpactDamper, **given) -> None:

@@ -22,7 +22,7 @@ from boringbar.analysis.continuation import summary as continuation_summary
 from boringbar.analysis.cut_continuation import cut_summary
 from boringbar.analysis.design import sample_table, summary_line, trial_table
 from boringbar.analysis.design import summary as design_summary
-from boringbar.analysis.lobes import examples_summary
+from boringbar.analysis.lobe_examples import examples_summary
 from boringbar.analysis.lobes import summary as lobes_summary
 from boringbar.analysis.sensitivity import summary as sensitivity_summary
 from boringbar.analysis.sweep import summary as sweep_summary
@@ -70,7 +70,7 @@ def sweep_files(ds, out) -> dict:
 
 def lobes_files(ds, out, examples=None) -> dict:
     """``out/lobes.nc``, ``out/lobes.png`` and, given the ``examples`` dataset
-    (:func:`boringbar.analysis.lobes.examples`), ``out/examples.nc`` and
+    (:func:`boringbar.analysis.lobe_examples.examples`), ``out/examples.nc`` and
     ``out/examples.png``; the summary (with ``"examples"`` when given)."""
     out = Path(out)
     files = {"netcdf": write_netcdf_atomic(ds, out / "lobes.nc"),

@@ -42,8 +42,8 @@ from boringbar.analysis.continuation import ContinuationOptions, continuation
 from boringbar.analysis.cut_continuation import CutContinuationOptions, cut_continuation
 from boringbar.analysis.design import comparison, design
 from boringbar.analysis.design_file import load_design
+from boringbar.analysis.lobe_examples import examples as lobe_examples
 from boringbar.analysis.lobes import PUBLISHED_RPM, LobesOptions, lobes
-from boringbar.analysis.lobes import examples as lobe_examples
 from boringbar.analysis.sensitivity import Cuts, SensitivityOptions, sensitivity, with_cuts
 from boringbar.analysis.sweep import SweepOptions, sweep
 from boringbar.execute import Execution
