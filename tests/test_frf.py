@@ -173,6 +173,16 @@ def test_fit_frf_command(tmp_path, capsys):
     assert main(["simulate", "--frf", str(out / "modal_fit.json"), "--frf-ball-ratio", "0.55",
                  "--duration-s", "0.02", "--out", str(tmp_path / "run"), "--json"]) == 0
     assert json_out(capsys)["natural_frequency_hz"] == pytest.approx(got[0])
+    # a comparison from the fit takes the bars whose ratios are given: the solid bar
+    # alone without them, and the ball beside it with its ratio
+    fit = str(out / "modal_fit.json")
+    assert main(["lobes", "--analytic", "--frf", fit, "--rpm", "1200", "--out",
+                 str(tmp_path / "la"), "--json"]) == 0
+    assert [c["case"] for c in json_out(capsys)["cases"]] == ["solid"]
+    assert main(["lobes", "--analytic", "--frf", fit, "--frf-ball-ratio", "0.55", "--rpm",
+                 "1200", "--out", str(tmp_path / "lb"), "--json"]) == 0
+    cases = [c["case"].split(" ")[0] for c in json_out(capsys)["cases"]]
+    assert cases[0] == "solid" and "ball" in cases and "tmd" not in cases
 
 
 def test_lobes_analytic_from_the_measured_frf(tmp_path, capsys):

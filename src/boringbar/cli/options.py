@@ -406,11 +406,17 @@ def system_spec(args):
 
 def default_bars(args, many: bool) -> list[str]:
     """The bars a command runs when --bar is not given: the ball damper (``many``:
-    the solid bar, the TMD and the ball damper), of those the system file has."""
+    the solid bar, the TMD and the ball damper), of those the system file has.  With a
+    fitted FRF (--frf FIT.json) a comparison takes the TMD and the ball only where their
+    mode-shape ratio is given (a tip FRF cannot know them)."""
     spec = system_spec(args) or published_system_spec()
     have = ["solid"] + (["tmd"] if spec.tmd else []) + (["ball"] if spec.ball else [])
     if many:
-        return have
+        fitted = getattr(args, "frf", None) is not None and (
+            Path(args.frf).suffix.lower() not in CSV_SUFFIXES + UFF_SUFFIXES)
+        given = {"tmd": getattr(args, "frf_absorber_ratio", None),
+                 "ball": getattr(args, "frf_ball_ratio", None)}
+        return [b for b in have if not fitted or given.get(b, 0.0) is not None]
     return [have[-1]]
 
 
