@@ -288,3 +288,35 @@ def test_the_system_at_a_value_is_the_flow_the_branch_uses(name, value):
     got = sh.make_flow(*system_at(system, o, value))
     for field in ("amplitude", "omega", "half", "e", "fc", "fs", "m", "meff", "v_impact"):
         assert getattr(got, field) == pytest.approx(getattr(want, field), rel=1e-12), field
+
+
+def test_a_period_two_branch_ends_where_it_meets_its_period_one_parent():
+    """The friction ball at gap 0.1 mm: a period-2 attractor at 38.45 N, continued down,
+    reaches the period doubling (38.15 N) it was born at; past it the corrector finds the
+    period-1 orbit traversed twice, a fixed point of P^2 too.  The branch ends there
+    instead of following that orbit as if it were period 2, and every point it kept
+    returns only after two periods; a period-2 continuation started on a period-1 orbit
+    is refused by name."""
+    system = make_system("ball", gap_m=0.1e-3)
+    forcing = Harmonic(38.0, ratio=1.0)
+    options = ContinuationOptions(parameter="force-n", stop=38.6, force_n=38.0, seeds=2,
+                                  step=0.05, max_step=0.1, max_points=12)
+    ds = bb.continuation(system, forcing, options=options)
+    stops = json.loads(ds.attrs["stop_reasons"])
+    down = [b for b in range(ds.sizes["branch"]) if int(ds["periods"][b]) == 2
+            and stops[b].startswith("period 1 at force-n = ")]
+    assert len(down) == 1, stops
+    d = ds.isel(branch=down[0])
+    kept = np.flatnonzero(np.isfinite(d["value"].values))
+    end = float(stops[down[0]].split("= ")[1].split(":")[0])
+    assert 38.0 < end < d["value"].values[kept].min() < 38.2  # just past the doubling
+    base = sh.make_flow(system, forcing)
+    for p in kept:
+        fl = flow_with(base, "force-n", float(d["value"][p]), base)
+        x = d["state"].values[p]  # carried to phase 0
+        once, twice = sh.advance(fl, x, 1).x, sh.advance(fl, x, 2).x
+        assert np.max(np.abs(once - x)) > 1e3 * np.max(np.abs(twice - x))
+    wrong = bb.continuation(system, Harmonic(38.3333, ratio=1.0), options=dataclasses.replace(
+        options, stop=37.0, force_n=38.3333, periods=2, switch=False, seeds=0))
+    assert "the orbit found is of period 1, not 2" in json.loads(
+        wrong.attrs["stop_reasons"])[0]

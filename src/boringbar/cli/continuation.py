@@ -165,8 +165,9 @@ def _cmd_continue(args) -> Outcome:
         files["overlay"] = str(write_netcdf_atomic(bf, f"{args.out}/overlay.nc"))
     files["figure"] = str(save_figure_atomic(plot_continuation(ds, overlay=bf),
                                              f"{args.out}/continuation.png", dpi=130))
+    files["json"] = f"{args.out}/continuation.json"
     out["files"] = files
-    write_json_atomic(out, f"{args.out}/continuation.json")
+    write_json_atomic(out, files["json"])
 
     def text(say) -> None:
         for i, b in enumerate(out["branches"]):

@@ -35,6 +35,7 @@ from boringbar.orbits.bifurcations import (
 )
 from boringbar.orbits.branch import (
     MAX_STEP,
+    STATE_SHARE,
     Branch,
     Point,
     Walk,
@@ -97,7 +98,13 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
     t = np.zeros(fl.N + 1)
     t[-1] = np.sign(stop - p0)
     t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)
-    br.points.append(Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events, fl.phase))
+    first = Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events, fl.phase)
+    j = shorter_period(w, first) if periods > 1 else 0
+    if j:
+        br.stop = (f"refused at the start: the orbit found is of period {j}, not "
+                   f"{periods} (continue it with periods = {j})")
+        return br
+    br.points.append(first)
     return march(w, br, y, t)
 
 
@@ -146,6 +153,8 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             fl, ref = w.fl, w.ref
             continue
         pt = Point(yn[-1], yn[:-1].copy(), multipliers(prn), prn.events, fl.phase)
+        if _shorter_period(br, w, pt):
+            return br
         kinds = record_crossing(br, br.points[-1], pt, w)
         br.points.append(pt)
         if _left_range(br, w) or _closed(br, w, yn, h):
@@ -163,6 +172,40 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     br.stop = (f"point budget of {w.max_points} reached at {name} = "
                f"{br.points[-1].value:.10g}")
     return br
+
+
+#: A point of a period-k branch whose state returns after j < k periods to this fraction
+#: of its size (each block's: the modes' u and u', the ball's or absorber's) is a
+#: period-j orbit.  A true period-k orbit near the period doubling it was born at differs
+#: from its period-j parent by about the square root of the distance to it, far above
+#: this; the corrector's tolerance is 1e-11.
+SHORTER_PERIOD_TOL = 1e-8
+
+
+def _shorter_period(br: Branch, w: Walk, pt: Point) -> bool:
+    """Whether the new point ``pt`` of a period-k branch (k > 1) is an orbit of a period
+    j that divides k: the branch went through the period doubling it was born at onto
+    the period-j family, which it would follow traversed k / j times over.  The branch
+    stops there, before the point."""
+    j = shorter_period(w, pt)
+    if j:
+        br.stop = (f"period {j} at {w.name} = {pt.value:.10g}: the branch went through its "
+                   f"period doubling onto the period-{j} orbits (ended before them)")
+    return bool(j)
+
+
+def shorter_period(w: Walk, pt: Point) -> int:
+    """The least period j < k, dividing k = w.periods, after which ``pt``'s state returns
+    (SHORTER_PERIOD_TOL); 0 if none."""
+    k = w.periods
+    if k == 1:
+        return 0
+    fl = flow_with(w.fl, w.name, pt.value, w.ref)
+    size = w.scale[:-1] * STATE_SHARE
+    for j in (j for j in range(1, k) if k % j == 0):
+        if np.max(np.abs(advance(fl, pt.x, j).x - pt.x) / size) < SHORTER_PERIOD_TOL:
+            return j
+    return 0
 
 
 #: The least fraction of the last step that :func:`circle_cap` allows.

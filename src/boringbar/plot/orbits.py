@@ -43,30 +43,37 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
             ok = np.isfinite(w)
             top.scatter(xx[ok], w[ok], s=6, color=DARK_GREY, lw=0, rasterized=True, zorder=5)
         top.scatter([], [], s=12, color=DARK_GREY, label="brute force (strobe samples)")
+    styles = set()
     for b in range(ds.sizes["branch"]):
         d = ds.isel(branch=b)
         v = d["value"].values
         ok = np.isfinite(v)
         stable = d["stable"].values.astype(bool)
+        styles |= set(stable[ok].tolist())
+        colour = branch_colour(b, ds.sizes["branch"])
         for ax, name in ((top, "strobe_tip_m"), (bottom, "rms_tip_m")):
             y = d[name].values * 1e3
-            _stability_lines(ax, v[ok], y[ok], stable[ok], label=(b == 0 and ax is top),
-                             color=branch_colour(b, ds.sizes["branch"]))
-        for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
-            if not str(kind) or not np.isfinite(value):  # padding of a stacked branch
-                continue
-            y = np.interp(value, *_sorted(v[ok], d["strobe_tip_m"].values[ok] * 1e3))
-            top.plot([value], [y], ls="none", marker=EVENT_MARKERS.get(str(kind), "o"),
-                     ms=9, mfc="none", color=OKABE_ITO["black"], mew=1.4, label=str(kind))
+            _stability_lines(ax, v[ok], y[ok], stable[ok], color=colour)
+        if ok.any() and ds.sizes["branch"] <= MAX_BRANCH_KEYS:
+            top.plot([], [], color=colour, lw=3,
+                     label=f"branch {b} (period {int(d['periods'])})" if "periods" in d
+                     else f"branch {b}")
+        _events(top, d, v[ok])
+    for is_stable in sorted(styles, reverse=True):  # one key for the line styles
+        top.plot([], [], color=DARK_GREY, lw=1.6, ls="-" if is_stable else "--",
+                 label="stable" if is_stable else "unstable")
     top.set_ylabel("tip displacement W (mm)\nat $\\Omega t = 0$ mod $2\\pi$")
     bottom.set_ylabel("tip RMS (mm)")
     bottom.set_xlabel(PARAMETER_NAMES.get(ds.attrs.get("parameter"), ds.attrs.get("parameter")))
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
     handles, labels = top.get_legend_handles_labels()
-    if handles:  # one entry a label (each stretch and event labels itself)
+    if handles:  # one entry a label: the branches, then the events and the line styles
         unique = dict(zip(labels, handles, strict=True))
-        top.legend(unique.values(), unique.keys(), fontsize="small")
+        order = sorted(unique, key=lambda k: (not k.startswith("branch "),
+                                              k in ("stable", "unstable")))
+        fig.legend([unique[k] for k in order], order, loc="outside lower center",
+                   ncol=min(3, len(order)), fontsize="small", frameon=False)
     if not np.isfinite(ds["value"].values).any():  # every branch refused at its start
         reasons = json.loads(ds.attrs.get("stop_reasons", "[]"))
         top.text(0.5, 0.5, "\n".join(textwrap.wrap("; ".join(dict.fromkeys(reasons)), 90)),
@@ -86,6 +93,10 @@ def branch_colour(b: int, count: int):
     return series_colour(b) if count <= len(CYCLE) else colormaps["tab20"](b % 20)
 
 
+#: Branches are keyed by number and period in the legend up to this many.
+MAX_BRANCH_KEYS = 10
+
+
 #: Axis labels of the continuation parameters.
 PARAMETER_NAMES = {"force-n": "F0 (N)", "ratio": "$\\Omega/\\omega_n$", "gap-mm": "gap (mm)",
                    "restitution": "restitution e", "friction-force-n": "friction force (N)",
@@ -97,7 +108,7 @@ def _sorted(x, y):
     return x[order], y[order]
 
 
-def _stability_lines(ax, x, y, stable, label: bool, color: str = "C0") -> None:
+def _stability_lines(ax, x, y, stable, color: str = "C0") -> None:
     """Consecutive stretches of one stability: solid if stable, dashed if not (one colour
     a branch)."""
     start = 0
@@ -105,6 +116,20 @@ def _stability_lines(ax, x, y, stable, label: bool, color: str = "C0") -> None:
         if i == len(x) or stable[i] != stable[start]:
             j = min(i + 1, len(x))
             ax.plot(x[start:j], y[start:j], color=color, lw=1.6,
-                    ls="-" if stable[start] else "--",
-                    label=("stable" if stable[start] else "unstable") if label else None)
+                    ls="-" if stable[start] else "--")
             start = i
+
+
+def _events(ax, d, v) -> None:
+    """The branch ``d``'s events on its curve (``v`` its finite parameter values): an event
+    outside them (a child's birth, which it inherits, short of its first point) is drawn
+    on the branch that passes through it."""
+    y = d["strobe_tip_m"].values[np.isfinite(d["value"].values)] * 1e3
+    for kind, value in zip(d["event_kind"].values, d["event_value"].values, strict=True):
+        if not str(kind) or not np.isfinite(value):  # padding of a stacked branch
+            continue
+        if not (v.size and v.min() <= value <= v.max()):
+            continue
+        ax.plot([value], [np.interp(value, *_sorted(v, y))], ls="none",
+                marker=EVENT_MARKERS.get(str(kind), "o"), ms=9, mfc="none",
+                color=OKABE_ITO["black"], mew=1.4, label=str(kind))
