@@ -275,3 +275,18 @@ def test_ratio_sweep_shows_the_no_impact_impact_hysteresis():
     low = ds.sel(value=[0.9, 0.91, 0.92, 0.93])
     assert np.all(low["pattern"].sel(direction="forward").values == "no impact")
     assert np.all(low["pattern"].sel(direction="backward").values == "2 symmetric")
+
+
+def test_two_orbits_of_a_different_impact_count_are_hysteresis_however_near():
+    """The friction ball at gap 0.1 mm swept over 30-40 N and back: from 33 to 38 N the
+    sweep up stays on a four-impact orbit and the sweep down on a six-impact one (two
+    attractors, as its basins and its continuation find), their Poincare points only
+    2-4 % apart; the differing impact count marks every one of those values."""
+    system = make_system("ball", gap_m=0.1e-3)
+    ds = bifurcation(system, BifurcationOptions("force", tuple(np.arange(30.0, 40.5)), 30.0,
+                                                1.0), integration=Integration(duration_s=0.5))
+    both = ds["impacts_per_cycle"].sel(value=np.arange(33.0, 38.5))
+    assert np.all(np.abs(both.sel(direction="forward").values - 4) < 0.1)
+    assert np.all(np.abs(both.sel(direction="backward").values - 6) < 0.1)
+    (lo, hi), = hysteresis_ranges(ds)
+    assert lo == 33.0 and hi >= 38.0
