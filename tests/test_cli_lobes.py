@@ -14,6 +14,7 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
+import boringbar as bb
 from boringbar.analysis.cases import published_cases
 from boringbar.analysis.speeds import default_speeds
 from boringbar.cli.main import main
@@ -218,3 +219,16 @@ def test_simulate_cut_text(tmp_path, capsys):
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, name):
     out = tmp_path / "out"
     assert_one_line_error(main, argv + ["--out", str(out)], out, name, capsys)
+
+
+def test_a_free_ball_s_table_gives_its_linear_host_s_analytic_limit(tmp_path, capsys):
+    """The free ball has no analytic limit of its own; its row gives its linear host's
+    (here, without friction, the bare cavity bar), starred and explained."""
+    assert main(["lobes", "--bar", "ball", "--friction", "off", "--rpm", "1200", "--out",
+                 str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    host = bb.make_system("ball", friction=False).linear_host()
+    limit = float(limit_at_speeds(host, [1200.0])[0])
+    row = next(line for line in text.splitlines() if line.strip().startswith("1200"))
+    assert row.split()[3] == f"{limit * 1e3:.4g}*"
+    assert "*: the free ball's linear host" in text

@@ -259,6 +259,8 @@ def _at_rpm_summary(ds, summary: dict) -> dict:
 def _lobes_text(ds, summary: dict) -> str:
     lines = []
     analytic = ds["analytic_limit_m"].values if "analytic_limit_m" in ds else None
+    host = ds["host_analytic_limit_m"].values if "host_analytic_limit_m" in ds else None
+    hosted = False
     depths = ds["depth_m"].values
     chosen = ds["verdict_bounded" if ds.attrs["criterion"] == "bounded" else "verdict"].values
     onset = ds["onset_depth_m"].values if "onset_depth_m" in ds else None
@@ -284,7 +286,10 @@ def _lobes_text(ds, summary: dict) -> str:
         islands = []
         for j, r in enumerate(ds["rpm"].values):
             a = math.nan if analytic is None else float(analytic[i, j])
-            lines.append(f"{r:8g} {mm(limit[j]):>12} {mm(first[j]):>20} {mm(a):>14}"
+            star = ""
+            if not math.isfinite(a) and host is not None and math.isfinite(host[i, j]):
+                a, star, hosted = float(host[i, j]), "*", True
+            lines.append(f"{r:8g} {mm(limit[j]):>12} {mm(first[j]):>20} {mm(a) + star:>14}"
                          + (f" {mm(onset[i, j]):>12}" if onset is not None else ""))
             above = (depths > first[j]) & (chosen[i, j] == 1)
             if math.isfinite(first[j]) and above.any():
@@ -294,6 +299,10 @@ def _lobes_text(ds, summary: dict) -> str:
                          f"{', '.join(islands)} rpm")
         lines.append("")
     lines.append("'-': no chatter up to the deepest cut tried (or no analytic limit)")
+    if hosted:
+        lines.append("*: the free ball's linear host (the bar with the ball held by its "
+                     "friction, or without friction not acting): where a small vibration "
+                     "starts to grow; the ball's own limit is simulated")
     lines.append(f"{ds.attrs.get('cutting_law', 'linear law')}; method: "
                  f"{ds.attrs['method_text']}; {ds.attrs['runs']} runs in "
                  f"{ds.attrs['wall_time_s']:.1f} s")
