@@ -262,6 +262,7 @@ def test_modes_lists_each_plane_s_modes_in_their_own_plane(tmp_path, capsys):
         assert b["psi_ball"] == a["psi_ball"] == pytest.approx(mode["psi_ball"], rel=1e-12)
     assert table["tip_static_stiffness_n_m"] == one["tip_static_stiffness_n_m"]
     assert table["built_plane_deg"] == pytest.approx(30)
+    assert table["runs_retain"] == 4  # the physical preset's 2 a plane
     assert (out / "modes.png").stat().st_size > 0
     assert_one_line_error(main, ["modes", "--planes", "2", "--modes", "5", "--out",
                                  str(tmp_path / "bad")], tmp_path / "bad", "--modes", capsys)

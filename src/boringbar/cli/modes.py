@@ -66,6 +66,7 @@ def cmd_modes(args) -> Outcome:
     system = make_system(args.bar, args.preset, **kw)
     spec = system.spec
     table = describe_modes(system)
+    retained = make_system(args.bar, args.preset, **{**kw, "n_modes": None}).bar.n_modes
     out = Path(args.out)
     files = {"json": out / "modes.json"}
     if args.frf_modal is None:
@@ -75,7 +76,7 @@ def cmd_modes(args) -> Outcome:
                                       f"{spec.name} ({args.bar} bar): mode shapes{plane}"),
                            files["png"])
     summary = {"system": spec.name if args.frf_modal is None else args.frf,
-               "bar": args.bar, "preset": args.preset, **table,
+               "bar": args.bar, "preset": args.preset, **table, "runs_retain": retained,
                "system_file": spec.to_dict() if args.frf_modal is None else None,
                "files": {k: str(v) for k, v in files.items()}}
     write_json_atomic(summary, files["json"])
@@ -92,6 +93,8 @@ def cmd_modes(args) -> Outcome:
                 f"{_psi(m['psi_ball']):<8}  {_psi(m['psi_absorber'])}")
         say(f"  tip static stiffness {table['tip_static_stiffness_n_m']:.4g} N/m "
             f"({table['tip_static_stiffness_from']})")
+        say(f"  the other commands retain {retained} of these modes by default (--modes "
+            "changes it)")
         if two:
             say("  each mode in its own plane (degrees from the radial direction); the cut "
                 "and the ball see it projected (docs/model.md, 4.7)")
