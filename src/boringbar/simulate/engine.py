@@ -609,7 +609,9 @@ def simulate(system: System, forcing: Harmonic | Regenerative, *, duration_s: fl
              integrator: str = "auto", stick_law: str = "sgn") -> Run:
     """Integrate ``system`` under ``forcing`` with the published RK4 scheme or exactly.
 
-    ``duration_s`` (s) and ``dt_s`` (s) as published by default (2 s, 1e-6 s);
+    ``duration_s`` (s) and ``dt_s`` (s) as published by default (2 s, 1e-6 s); the run
+    takes the whole number of steps nearest duration_s / dt_s (its config records the
+    duration run: to continue whole forcing periods, give a dt_s that divides them);
     RMS and patterns use the last ``steady_fraction`` of the record.
     ``initial``: :class:`Initial`, or a previous run's ``final`` :class:`State`
     to continue it (time, hence forcing phase, runs on).  ``record_every`` N
