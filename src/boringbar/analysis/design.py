@@ -46,6 +46,7 @@ from boringbar.analysis.design_objectives import (
 )
 from boringbar.analysis.design_options import (
     OBJECTIVE_SI,
+    OBJECTIVES,
     DesignOptions,
     nominal_sample,
     nominal_words,
@@ -289,12 +290,15 @@ def _complete(study) -> list:
 def _published_candidate(spec, options, samples, execution) -> Candidate:
     """The file's own design (the published one for the published bar)."""
     system = make_system(options.bar, options.preset, spec=spec)
-    values = {}
-    for v in options.variables:
-        if v.name == "gap_m":
-            values[v.name] = system.damper.gap_m
-        elif v.name == "ball_material":
-            values[v.name] = system.damper.material
+    d = system.damper
+    own = {"gap_m": lambda: d.gap_m, "ball_material": lambda: d.material,
+           "tmd_mass_kg": lambda: d.mass_kg,
+           # as _tmd reads them: omega_a / omega_n, and c / (2 m omega_a)
+           "tmd_frequency_ratio": lambda: math.sqrt(d.stiffness_n_m / d.mass_kg)
+           / system.bar.natural_frequency_rad_s,
+           "tmd_damping_ratio": lambda: d.damping_n_s_m / (2 * math.sqrt(d.stiffness_n_m
+                                                                        * d.mass_kg))}
+    values = {v.name: own[v.name]() for v in options.variables if v.name in own}
     return evaluate(spec, options, values, samples, execution)
 
 
@@ -621,7 +625,26 @@ def summary_line(s: dict) -> str:
     objective by Y % over the file's own design', 'no design better than the file's own
     found in N trials', or, when the improvement's interval holds 0, 'best design X: a
     against b, improvement g (95 % CI lo to hi): within noise'; without an interval (one
-    sample, or no spread) it says so."""
+    sample, or no spread) it says so.  A search of several objectives is judged in its
+    first, and the line says what its Pareto front holds in all of them."""
+    return _first_objective_line(s) + (_front_words(s) if "pareto" in s else "")
+
+
+def _front_words(s: dict) -> str:
+    """'; judged in its first objective ...: the Pareto front ... holds N designs, M of
+    them better than the file's own in at least one objective'."""
+    def better(values) -> bool:
+        return any(a < b if OBJECTIVES[name][1] == "minimize" else a > b for name, a, b
+                   in zip(s["objectives"], values, s["published_objectives"], strict=True))
+
+    m = sum(better(p["objectives"]) for p in s["pareto"])
+    return (f"; judged in its first objective, {s['objective_name']}: the Pareto front of "
+            f"{' and '.join(s['objectives'])} holds {len(s['pareto'])} design"
+            f"{'s' if len(s['pareto']) != 1 else ''}, {m} of them better than the file's "
+            "own in at least one (design.png)")
+
+
+def _first_objective_line(s: dict) -> str:
     best = ", ".join(shown(k, v) for k, v in s["best"].items())
     unit, k = objective_reading(s["objective_name"], s["statistic_name"])
     u = f" {unit}" if unit else ""

@@ -265,7 +265,7 @@ class _Report:
             return {"images": [self.img(s["files"]["png"], f"{key} {preset}"),
                                self.img(s["files"]["best_png"], f"{key} best {preset}")],
                     "table": _table(["", "best design" if found else "best design tried",
-                                     "published design"], rows),
+                                     "the file's design"], rows),
                     "line": s["summary"]}
         return self.per_key("design", body)
 
