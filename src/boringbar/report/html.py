@@ -132,8 +132,9 @@ class _Report:
                              f"{c['ratio'][top]:g}", f"{c['ratio'][k]:g}",
                              _mm(c["rms_tip_m"][k]), c["pattern"][k]])
             return {"images": [self.img(p, f"sweep {preset}") for p in s["files"]["png"]],
-                    "table": _table(["case", "F0 (N)", "peak RMS (mm)", "peak at r",
-                                     "r nearest 1", "RMS there (mm)", "pattern there"], rows)}
+                    "table": _table(["case", "F0 (N)", "largest RMS of the sweep (mm)",
+                                     "at r", "r nearest 1", "RMS there (mm)",
+                                     "pattern there"], rows)}
         return {"columns": self.pair("sweep", body), "sticking": self._sweep_sticking()}
 
     def _sweep_sticking(self) -> list[dict]:
@@ -341,8 +342,9 @@ class _Report:
         result = audit(self.out)
         rows = []
         for c in result["claims"]:
-            published = "; ".join(f"{p['name']} {p['value']}{' ' + p['unit'] if p['unit'] else ''}"
-                                  for p in c["published"])
+            published = "; ".join(  # a ratio's unit "1" left out
+                f"{p['name']} {p['value']}{' ' + p['unit'] if p['unit'] not in ('', '1') else ''}"
+                for p in c["published"])
             cells = [{"verdict": c["verdict"][p], "css": _VERDICT_CSS[c["verdict"][p]],
                       "reason": c["reason"][p], "figure": self._figure_link(c["figure"][p]),
                       "measured": "; ".join(f"{k} {v}" for k, v in c["measured"][p].items())}
