@@ -4,7 +4,9 @@ and the command line."""
 
 from __future__ import annotations
 
+import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +30,7 @@ from boringbar.analysis.design import (
     summary_line,
     trial_table,
 )
-from boringbar.analysis.design_file import DesignFileError, design_from_dict
+from boringbar.analysis.design_file import DesignFileError, design_from_dict, load_design
 from boringbar.analysis.design_interval import (
     improvement,
     newcombe_paired,
@@ -51,6 +53,7 @@ from boringbar.model.system_file import parse_system
 from boringbar.plot.design import plot_best
 from boringbar.reference.stability import system_receptance
 from boringbar.report.html import improvement_cell
+from boringbar.report.paper import design_file
 from boringbar.simulate import Integration
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -626,7 +629,6 @@ def test_a_design_space_that_reaches_an_impossible_system_is_refused_before_any_
     """A gap beyond the cavity's room at one end of its range, or a restitution sample a
     Hertz contact refuses, is refused by name before the search writes its storage (it
     was refused halfway through, the trials' file left behind)."""
-    from dataclasses import replace
 
     from boringbar.model.system_file import load_system
 
@@ -654,3 +656,22 @@ def test_no_improvement_is_zero_not_minus_zero():
         for key in ("improvement", "improvement_percent"):
             assert s[key] == 0 and math.copysign(1.0, s[key]) == 1.0, (direction, key)
         assert "-0" not in summary_line(s)
+
+
+def test_a_tuning_search_shows_the_file_s_tuning_and_its_pareto_front():
+    """The report's absorber search: the file's own design carries its tuning (as _tmd
+    reads it: omega_a / omega_n, c / (2 m omega_a)), its objectives those of the file's
+    absorber as given; the summary line, judged in the first objective, says what the
+    Pareto front of both holds."""
+    options, spec = load_design(design_file("tmd"))
+    ds = design(replace(options, trials=8, preset="paper"), spec=spec)
+    own = json.loads(ds.attrs["published_values"])
+    tmd = make_system("tmd", "paper").damper
+    wn = make_system("tmd", "paper").bar.natural_frequency_rad_s
+    assert own["tmd_frequency_ratio"] == pytest.approx(
+        math.sqrt(tmd.stiffness_n_m / tmd.mass_kg) / wn, rel=1e-12)
+    assert own["tmd_damping_ratio"] == pytest.approx(
+        tmd.damping_n_s_m / (2 * math.sqrt(tmd.stiffness_n_m * tmd.mass_kg)), rel=1e-12)
+    line = summary_line(summary(ds))
+    assert "judged in its first objective, frf_peak: the Pareto front of frf_peak and " \
+           "min_real holds" in line

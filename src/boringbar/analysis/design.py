@@ -299,7 +299,10 @@ def _published_candidate(spec, options, samples, execution) -> Candidate:
            "tmd_damping_ratio": lambda: d.damping_n_s_m / (2 * math.sqrt(d.stiffness_n_m
                                                                         * d.mass_kg))}
     values = {v.name: own[v.name]() for v in options.variables if v.name in own}
-    return evaluate(spec, options, values, samples, execution)
+    # run as the file gives it (an absorber rebuilt from its ratios would differ in its
+    # last bits); its tuning is read out for the tables
+    run = {k: v for k, v in values.items() if not k.startswith("tmd_")}
+    return replace(evaluate(spec, options, run, samples, execution), values=values)
 
 
 def assemble(options: DesignOptions, trials: list, published: Candidate,
