@@ -320,3 +320,13 @@ def test_a_period_two_branch_ends_where_it_meets_its_period_one_parent():
         options, stop=37.0, force_n=38.3333, periods=2, switch=False, seeds=0))
     assert "the orbit found is of period 1, not 2" in json.loads(
         wrong.attrs["stop_reasons"])[0]
+
+
+def test_a_map_whose_start_is_refused_says_why_once():
+    """The paper preset's friction holds the ball at 30 N (gap 0.1 mm): the map's start
+    is refused in both directions for the same reason, which its stop gives once."""
+    system = make_system("ball", "paper", gap_m=0.1e-3)
+    ds = bb.continuation(system, Harmonic(30.0, ratio=1.0), options=ContinuationOptions(
+        parameter="force-n", stop=35.0, force_n=30.0, seeds=0, max_points=5))
+    (stop,) = json.loads(ds.attrs["stop_reasons"])
+    assert stop.count("stick phases are not linearised") == 1, stop

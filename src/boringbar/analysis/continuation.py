@@ -342,7 +342,7 @@ def _empty(r: dict) -> dict:
     """A branch without points (the map's start refused) for a map without branches."""
     return {"value": [], "state": [], "strobe_tip_m": [], "rms_tip_m": [], "multipliers": [],
             "stable": [], "events": [], "start": r["start"], "born_value": r["start"],
-            "stop": "; ".join(r["notes"]) or "no branch"}
+            "stop": "; ".join(dict.fromkeys(r["notes"])) or "no branch"}  # each once
 
 
 def summary(ds: xr.Dataset) -> dict:
