@@ -135,7 +135,7 @@ def plan(system: System, options: ContinuationOptions) -> Plan:
 def _check_masri_caughey(system: System, fl) -> None:
     """Masri and Caughey's orbit is a frictionless sliding ball's on a bar of one mode."""
     bar = system.bar
-    two = bar.info.get("planes", 1) == 2
+    two = bar.planes == 2
     wrong = [what for what, bad in (
         (f"a {system.kind} bar", system.kind != "ball"),
         ("two bending planes", two),

@@ -129,15 +129,23 @@ def check_space(spec: SystemSpec, options: DesignOptions, samples: np.ndarray) -
 
 def _tmd(system: System, values: dict) -> TunedMassDamper:
     """The absorber of the TMD variables: mass m, frequency ratio f = omega_a/omega_n,
-    damping ratio zeta_a = c / (2 m omega_a) (the absorber's own)."""
+    damping ratio zeta_a = c / (2 m omega_a) (the absorber's own); the system's own
+    (:func:`tmd_tuning`) where a variable is not given."""
+    own = {**tmd_tuning(system), **values}
+    m = float(own["tmd_mass_kg"])
+    wa = float(own["tmd_frequency_ratio"]) * system.bar.natural_frequency_rad_s
+    zeta = float(own["tmd_damping_ratio"])
+    return TunedMassDamper(m, m * wa**2, 2 * zeta * m * wa, system.damper.position_m, "design")
+
+
+def tmd_tuning(system: System) -> dict:
+    """The TMD bar's absorber as the design variables read it: its mass, omega_a /
+    omega_n and c / (2 m omega_a)."""
     d = system.damper
-    m = float(values.get("tmd_mass_kg", d.mass_kg))
-    wn = system.bar.natural_frequency_rad_s
-    f = float(values.get("tmd_frequency_ratio", math.sqrt(d.stiffness_n_m / d.mass_kg) / wn))
-    wa = f * wn
-    zeta = float(values.get("tmd_damping_ratio", d.damping_n_s_m / (2 * d.mass_kg * math.sqrt(
-        d.stiffness_n_m / d.mass_kg))))
-    return TunedMassDamper(m, m * wa**2, 2 * zeta * m * wa, d.position_m, "design")
+    wa = math.sqrt(d.stiffness_n_m / d.mass_kg)
+    return {"tmd_mass_kg": d.mass_kg,
+            "tmd_frequency_ratio": wa / system.bar.natural_frequency_rad_s,
+            "tmd_damping_ratio": d.damping_n_s_m / (2 * d.mass_kg * wa)}
 
 
 # --- one candidate -------------------------------------------------------------------
@@ -291,14 +299,9 @@ def _published_candidate(spec, options, samples, execution) -> Candidate:
     """The file's own design (the published one for the published bar)."""
     system = make_system(options.bar, options.preset, spec=spec)
     d = system.damper
-    own = {"gap_m": lambda: d.gap_m, "ball_material": lambda: d.material,
-           "tmd_mass_kg": lambda: d.mass_kg,
-           # as _tmd reads them: omega_a / omega_n, and c / (2 m omega_a)
-           "tmd_frequency_ratio": lambda: math.sqrt(d.stiffness_n_m / d.mass_kg)
-           / system.bar.natural_frequency_rad_s,
-           "tmd_damping_ratio": lambda: d.damping_n_s_m / (2 * math.sqrt(d.stiffness_n_m
-                                                                        * d.mass_kg))}
-    values = {v.name: own[v.name]() for v in options.variables if v.name in own}
+    own = (tmd_tuning(system) if options.bar == "tmd" else
+           {"gap_m": d.gap_m, "ball_material": d.material})
+    values = {v.name: own[v.name] for v in options.variables if v.name in own}
     # run as the file gives it (an absorber rebuilt from its ratios would differ in its
     # last bits); its tuning is read out for the tables
     run = {k: v for k, v in values.items() if not k.startswith("tmd_")}

@@ -412,12 +412,16 @@ def default_bars(args, many: bool) -> list[str]:
     spec = system_spec(args) or published_system_spec()
     have = ["solid"] + (["tmd"] if spec.tmd else []) + (["ball"] if spec.ball else [])
     if many:
-        fitted = getattr(args, "frf", None) is not None and (
-            Path(args.frf).suffix.lower() not in CSV_SUFFIXES + UFF_SUFFIXES)
+        fitted = getattr(args, "frf", None) is not None and not _measured(args.frf)
         given = {"tmd": getattr(args, "frf_absorber_ratio", None),
                  "ball": getattr(args, "frf_ball_ratio", None)}
         return [b for b in have if not fitted or given.get(b, 0.0) is not None]
     return [have[-1]]
+
+
+def _measured(frf: str) -> bool:
+    """Whether --frf names a measured FRF (CSV or UFF), not a fit's modal_fit.json."""
+    return Path(frf).suffix.lower() in CSV_SUFFIXES + UFF_SUFFIXES
 
 
 def resolve_files(args, bars: list[str]) -> None:
@@ -431,7 +435,7 @@ def resolve_files(args, bars: list[str]) -> None:
         if given:
             raise ParameterError(f"{given[0]} applies only with --frf")
         return
-    if Path(args.frf).suffix.lower() in CSV_SUFFIXES + UFF_SUFFIXES:
+    if _measured(args.frf):
         if not getattr(args, "analytic", False):
             raise ParameterError(f"--frf = {args.frf!r} is a measured FRF: fit it first "
                                  f"(boringbar fit-frf {args.frf}) and give its modal_fit.json, "

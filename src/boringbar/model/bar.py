@@ -141,8 +141,7 @@ class ModalModel:
                         hi_open=True)
         # (a bar of two planes may have modes that bend across the chip, psi_tip = 0;
         # the first carries the tip's normalisation)
-        planes = self.info.get("planes", 1) == 2
-        if n < 1 or self.psi_tip[0] == 0.0 or (not planes and np.any(self.psi_tip == 0.0)):
+        if n < 1 or self.psi_tip[0] == 0.0 or (self.planes == 1 and np.any(self.psi_tip == 0.0)):
             raise ValueError("modal model: every mode needs a non-zero tip value psi_tip")
 
     # --- derived quantities -------------------------------------------------
@@ -151,6 +150,11 @@ class ModalModel:
     def oriented(self) -> bool:
         """The force enters the modes by a shape of its own (psi_force != psi_tip)."""
         return not np.array_equal(self.psi_force, self.psi_tip)
+
+    @property
+    def planes(self) -> int:
+        """The bending planes its modes lie in: 2 for an oriented model (model/oriented.py)."""
+        return self.info.get("planes", 1)
 
     @property
     def n_modes(self) -> int:

@@ -99,7 +99,7 @@ def continue_branch(fl: Flow, name: str, x0: np.ndarray, stop: float, *, periods
     t[-1] = np.sign(stop - p0)
     t = tangent_at(fl, name, fl, y, pr, w.scale, periods, t)
     first = Point(y[-1], y[:-1].copy(), multipliers(pr), pr.events, fl.phase)
-    j = shorter_period(w, first) if periods > 1 else 0
+    j = shorter_period(w, first)
     if j:
         br.stop = (f"refused at the start: the orbit found is of period {j}, not "
                    f"{periods} (continue it with periods = {j})")

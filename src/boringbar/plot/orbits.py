@@ -15,6 +15,7 @@ from boringbar.plot.style import (
     CYCLE,
     DARK_GREY,
     OKABE_ITO,
+    legend_below,
     series_colour,
     set_title,
     system_words,
@@ -67,13 +68,9 @@ def plot_continuation(ds, *, overlay=None, fig=None) -> Figure:
     bottom.set_xlabel(PARAMETER_NAMES.get(ds.attrs.get("parameter"), ds.attrs.get("parameter")))
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
-    handles, labels = top.get_legend_handles_labels()
-    if handles:  # one entry a label: the branches, then the events and the line styles
-        unique = dict(zip(labels, handles, strict=True))
-        order = sorted(unique, key=lambda k: (not k.startswith("branch "),
-                                              k in ("stable", "unstable")))
-        fig.legend([unique[k] for k in order], order, loc="outside lower center",
-                   ncol=min(3, len(order)), fontsize="small", frameon=False)
+    # the branches, then the events and the line styles
+    legend_below(fig, [top], ncol=3, order=lambda k: (not k.startswith("branch "),
+                                                      k in ("stable", "unstable")))
     if not np.isfinite(ds["value"].values).any():  # every branch refused at its start
         reasons = json.loads(ds.attrs.get("stop_reasons", "[]"))
         top.text(0.5, 0.5, "\n".join(textwrap.wrap("; ".join(dict.fromkeys(reasons)), 90)),

@@ -134,15 +134,18 @@ def case_title(label: str, bar: str, gap: float, friction: str) -> str:
     return {"solid": "solid bar", "tmd": "TMD bar"}.get(bar, str(label))
 
 
-def legend_below(fig, axes, ncol: int | None = None) -> None:
-    """One legend below the panels, each label once, from every axis in ``axes``."""
+def legend_below(fig, axes, ncol: int | None = None, order=None) -> None:
+    """One legend below the panels, each label once, from every axis in ``axes``, in the
+    order drawn or sorted by the key ``order`` of a label; ``ncol`` columns (default: one
+    row)."""
     entries: dict[str, object] = {}
     for ax in np.ravel(axes):
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
             entries.setdefault(lab, h)
-    if entries:
-        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
-                   ncol=ncol or len(entries), fontsize="small", frameon=False)
+    labels = list(entries) if order is None else sorted(entries, key=order)
+    if labels:
+        fig.legend([entries[k] for k in labels], labels, loc="outside lower center",
+                   ncol=ncol or len(labels), fontsize="small", frameon=False)
 
 
 def zero_based(ax, values) -> None:
