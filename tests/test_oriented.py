@@ -26,7 +26,7 @@ import boringbar as bb
 from boringbar._validate import ParameterError
 from boringbar.cli.main import main
 from boringbar.model.bar import ModalModel
-from boringbar.model.oriented import CutGeometry, oriented_model
+from boringbar.model.oriented import CutGeometry, for_bar, oriented_model
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
 from boringbar.orbits.shooting import make_flow
@@ -38,6 +38,8 @@ from test_verdict import worst_error  # noqa: E402
 
 GEOMETRY = CutGeometry(force_ratio=2.5, lead_angle_deg=30.0, hole_angle_deg=20.0,
                        principal_angle_deg=25.0, stiffness_ratio=0.8)
+#: the solid bar's: no cavity, so no hole angle
+SOLID = for_bar(GEOMETRY, "solid", CutGeometry())
 
 
 def altintas() -> System:
@@ -122,14 +124,14 @@ def test_the_simulated_limit_of_altintas_example_is_its_closed_form():
 
 
 def test_the_simulated_limit_of_an_oriented_bar_is_its_closed_form():
-    system = make_system("solid", n_modes=1, planes=2, cut_geometry=GEOMETRY)
+    system = make_system("solid", n_modes=1, planes=2, cut_geometry=SOLID)
     err, rpm = worst_error(system, (3000.0, 4100.0, 5200.0, 6745.0, 9125.0))
     assert err <= 0.01, f"{err:.2%} at {rpm:g} rpm"
 
 
 # --- runs ---------------------------------------------------------------------------------
 def test_a_harmonic_run_settles_on_the_oriented_response_and_balances():
-    system = make_system("solid", n_modes=1, planes=2, cut_geometry=GEOMETRY)
+    system = make_system("solid", n_modes=1, planes=2, cut_geometry=SOLID)
     w = system.reference_frequency_rad_s
     run = bb.simulate(system, bb.Harmonic(amplitude_n=10.0), duration_s=0.6, record_every=0)
     assert run.integrator == "rk4"
@@ -149,7 +151,7 @@ def test_a_ball_moves_along_its_cavity():
 
 # --- where it applies, and bad input ------------------------------------------------------
 def test_the_exact_integrator_and_shooting_refuse_an_oriented_bar():
-    system = make_system("solid", planes=2, cut_geometry=GEOMETRY)
+    system = make_system("solid", planes=2, cut_geometry=SOLID)
     with pytest.raises(ParameterError, match="oriented cut"):
         bb.simulate(system, bb.Harmonic(amplitude_n=10.0), duration_s=0.01,
                     integrator="exact")
@@ -165,10 +167,49 @@ def test_the_exact_integrator_and_shooting_refuse_an_oriented_bar():
     (["--force-ratio", "-1"], "--force-ratio"),
     (["--stiffness-ratio", "0"], "--stiffness-ratio"),
     (["--planes", "1", "--force-ratio", "2"], "--planes 2"),
+    (["--bar", "ball", "--stiffness-ratio", "0.5"], "--stiffness-ratio = 0.5 applies to the "
+     "solid and tmd"),
+    (["--bar", "ball", "--principal-angle-deg", "20"], "--principal-angle-deg"),
+    (["--bar", "solid", "--planes", "2", "--hole-angle-deg", "30"], "--hole-angle-deg"),
 ])
 def test_the_command_line_refuses_a_bad_orientation(argv, name, tmp_path, capsys):
     out = tmp_path / "out"
     assert_one_line_error(main, ["simulate", *argv, "--out", str(out)], out, name, capsys)
+
+
+def test_modes_refuses_a_key_its_bar_does_not_use(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert_one_line_error(main, ["modes", "--stiffness-ratio", "0.5", "--out", str(out)],
+                          out, "--stiffness-ratio", capsys)
+
+
+def test_a_key_a_bar_does_not_use_is_refused_where_it_is_given():
+    """The ball bar's planes are its cavity's section bent each way, and nothing moves in
+    a solid bar: given to make_system, those keys are refused; a system file describes
+    the hardware, and each bar it builds, alone or in a comparison, takes its own keys."""
+    with pytest.raises(ParameterError, match="stiffness_ratio = 0.5 applies to the solid"):
+        make_system("ball", planes=2, cut_geometry=CutGeometry(stiffness_ratio=0.5))
+    with pytest.raises(ParameterError, match="hole_angle_deg = 30 applies to the ball"):
+        make_system("solid", planes=2, cut_geometry=CutGeometry(hole_angle_deg=30.0))
+    tmd = make_system("tmd", planes=2, cut_geometry=CutGeometry(hole_angle_deg=30.0,
+                                                                stiffness_ratio=0.5))
+    assert tmd.bar.info["cut_geometry"]["stiffness_ratio"] == 0.5
+    d = tomllib.loads(published_file_text())
+    d["orientation"] = {"lead_angle_deg": 30.0, "stiffness_ratio": 0.5}
+    spec = parse_system(d)
+    plain = make_system("ball", planes=2, cut_geometry=CutGeometry(lead_angle_deg=30.0))
+    for ball in (make_system("ball", spec=spec),
+                 make_system("ball", spec=spec, cut_geometry=spec.orientation)):
+        np.testing.assert_array_equal(ball.bar.omegas_rad_s, plain.bar.omegas_rad_s)
+    g = CutGeometry(lead_angle_deg=30.0, hole_angle_deg=20.0, stiffness_ratio=0.5)
+    cases = {c.label.split()[0]: c.system for c in bb.published_cases(
+        gaps_m=(0.5e-3,), frictions=(True,), planes=2, cut_geometry=g)}
+    solid = make_system("solid", planes=2, cut_geometry=CutGeometry(lead_angle_deg=30.0,
+                                                                    stiffness_ratio=0.5))
+    np.testing.assert_array_equal(cases["solid"].bar.omegas_rad_s, solid.bar.omegas_rad_s)
+    ball = make_system("ball", planes=2, cut_geometry=CutGeometry(lead_angle_deg=30.0,
+                                                                  hole_angle_deg=20.0))
+    np.testing.assert_array_equal(cases["ball"].bar.psi_damper, ball.bar.psi_damper)
 
 
 def test_a_system_file_gives_the_planes_and_refuses_a_bad_angle():
@@ -228,7 +269,7 @@ def test_published_cases_hold_every_bar_to_the_planes_and_the_cut():
     for case in cases:
         bar = case.label.split()[0]
         gap = {"gap_m": 0.5e-3} if bar == "ball" else {}
-        alone = make_system(bar, planes=2, cut_geometry=g, **gap)
+        alone = make_system(bar, planes=2, cut_geometry=for_bar(g, bar, CutGeometry()), **gap)
         assert case.system.bar.n_modes == 4
         np.testing.assert_array_equal(case.system.bar.psi_force, alone.bar.psi_force)
 

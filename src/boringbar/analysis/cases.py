@@ -19,7 +19,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from boringbar._validate import ParameterError
-from boringbar.model.system import System, make_system
+from boringbar.model.oriented import CutGeometry, for_bar
+from boringbar.model.system import System, make_system, published_system_spec
 from boringbar.model.system_file import PUBLISHED_NAME, SystemSpec
 from boringbar.simulate import Initial
 
@@ -133,23 +134,37 @@ def published_cases(bars: tuple[str, ...] = ("solid", "tmd", "ball"),
     TMD, and the ball damper for every gap of ``gaps_m`` (m) x friction of ``frictions``
     (off/on).  ``overrides`` go to :func:`make_system` (which refuses unknown ones): all
     of them to the ball cases, those of :data:`HOST_OVERRIDES` to the solid and TMD bars
-    too."""
+    too; each bar takes the keys of ``cut_geometry`` that it uses (the hole's angle the
+    ball and TMD bars, the principal plane and the stiffness ratio the solid and TMD
+    bars)."""
     unknown = sorted(set(overrides) - _OVERRIDABLE)
     if unknown:
         raise TypeError(f"published_cases() got unexpected keyword arguments {unknown}; "
                         f"make_system takes {sorted(_OVERRIDABLE)}")
     cases = []
     for bar in bars:
+        kw = _bar_overrides(bar, overrides)
         if bar == "ball":
             for gap in gaps_m:
                 for fr in frictions:
-                    s = make_system("ball", preset, gap_m=gap, friction=fr, **overrides)
+                    s = make_system("ball", preset, gap_m=gap, friction=fr, **kw)
                     label = f"ball gap={gap * 1e3:g}mm friction={'on' if fr else 'off'}"
                     cases.append(Case.of(s, label))
         else:
-            kw = {k: v for k, v in overrides.items() if k in HOST_OVERRIDES}
             cases.append(Case.of(make_system(bar, preset, **kw), bar))
     return cases
+
+
+def _bar_overrides(bar: str, overrides: dict) -> dict:
+    """The overrides ``bar`` takes: all of them for the ball, :data:`HOST_OVERRIDES` for
+    the others; the oriented cut's keys that ``bar`` uses (a comparison's one cut,
+    :func:`~boringbar.model.oriented.for_bar`)."""
+    kw = dict(overrides) if bar == "ball" else {
+        k: v for k, v in overrides.items() if k in HOST_OVERRIDES}
+    if isinstance(kw.get("cut_geometry"), CutGeometry):
+        base = (kw.get("spec") or published_system_spec()).orientation
+        kw["cut_geometry"] = for_bar(kw["cut_geometry"], bar, base)
+    return kw
 
 
 def parse_range(text: str, name: str = "ratios") -> np.ndarray:

@@ -54,8 +54,8 @@ def add_modes(sub) -> None:
 
 
 def cmd_modes(args) -> Outcome:
-    check_orientation(args)
     args.bar = args.bar or default_bars(args, many=False)[0]
+    check_orientation(args, [args.bar])
     resolve_files(args, [args.bar])
     oriented = orientation_overrides(args)
     two = oriented.get("planes", 1 if args.system_spec is None else args.system_spec.planes) == 2

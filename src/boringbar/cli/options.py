@@ -36,7 +36,7 @@ from boringbar.model.forcing import (
 )
 from boringbar.model.measured_frf import CSV_SUFFIXES, UFF_SUFFIXES, read_frf
 from boringbar.model.modal_fit import ModalFit
-from boringbar.model.oriented import CutGeometry, check_geometry
+from boringbar.model.oriented import APPLIES_TO, CutGeometry, check_geometry
 from boringbar.model.system import (
     BALLS,
     BAR_KINDS,
@@ -235,12 +235,18 @@ def check_rolling(args) -> None:
                              "that slips with mu_kinetic is held by at least as much")
 
 
-def check_orientation(args) -> None:
-    """The oriented cut's options, each in its range (CutGeometry's)."""
+def check_orientation(args, bars: list[str]) -> None:
+    """The oriented cut's options, each in its range (CutGeometry's) and used by one of
+    ``bars`` at least (oriented.APPLIES_TO)."""
     for field, option in ORIENTATION_OPTIONS.items():
         value = getattr(args, field, None)
-        if value is not None:
-            check_geometry(field, value, option)
+        if value is None:
+            continue
+        check_geometry(field, value, option)
+        users = APPLIES_TO.get(field, bars)
+        if not set(users) & set(bars):
+            raise ParameterError(f"{option} = {value:g} applies to the {' and '.join(users)} "
+                                 f"bars, and --bar is {','.join(bars)}")
 
 
 def orientation_overrides(args) -> dict:
@@ -387,7 +393,7 @@ def check_common(args, bars: list[str]) -> None:
         check_range("--static-ratio", args.static_ratio, 1, math.inf, hi_open=True)
     if args.restitution is not None:
         check_range("--restitution", args.restitution, 0, 1)
-    check_orientation(args)
+    check_orientation(args, bars)
     check_rolling(args)
     if args.contact_stiffness is not None:
         check_range("--contact-stiffness", args.contact_stiffness, 0, math.inf, lo_open=True,

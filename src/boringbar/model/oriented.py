@@ -91,6 +91,28 @@ class CutGeometry:
                 "stiffness_ratio": self.stiffness_ratio}
 
 
+#: The bars each of the section's keys describes: a ball bar's planes are its cavity's
+#: section bent each way (along and across the cavity), so the principal plane and the
+#: stiffness ratio describe a bar without one; the cavity's axis concerns a bar with
+#: something moving in it (the ball, or the absorber of a TMD).
+APPLIES_TO = {"hole_angle_deg": ("ball", "tmd"), "principal_angle_deg": ("solid", "tmd"),
+              "stiffness_ratio": ("solid", "tmd")}
+
+
+def unused_keys(geometry: CutGeometry, bar: str) -> list[str]:
+    """The keys of ``geometry`` set away from their defaults that ``bar`` does not use
+    (:data:`APPLIES_TO`)."""
+    default = CutGeometry()
+    return [k for k, bars in APPLIES_TO.items()
+            if bar not in bars and getattr(geometry, k) != getattr(default, k)]
+
+
+def for_bar(geometry: CutGeometry, bar: str, base: CutGeometry) -> CutGeometry:
+    """``geometry`` with the keys ``bar`` does not use as ``base`` (the system file's
+    orientation) has them: the one cut of a comparison of bars, as each bar takes it."""
+    return replace(geometry, **{k: getattr(base, k) for k in unused_keys(geometry, bar)})
+
+
 def _clean(values: np.ndarray) -> np.ndarray:
     scale = max(float(np.max(np.abs(values))), 1e-300)
     return np.where(np.abs(values) < ZERO_PROJECTION * scale, 0.0, values)

@@ -37,7 +37,7 @@ from boringbar.model.dampers import (
     sims_tuning,
 )
 from boringbar.model.materials import MATERIALS
-from boringbar.model.oriented import CutGeometry, oriented_model
+from boringbar.model.oriented import APPLIES_TO, CutGeometry, oriented_model, unused_keys
 from boringbar.model.system_file import SystemSpec, parse_system, published_system
 
 PRESETS = ("physical", "paper")
@@ -188,9 +188,9 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     ball's contact law, "impact" or "hertz", and ``contact_stiffness_n_m1_5`` (N/m^1.5)
     a Hertz contact's K (default: the file's, else Hertz's from the materials; see
     :class:`ImpactDamper`).  ``planes``: 2 for the bar's modes in both bending planes
-    under the oriented cut ``cut_geometry`` (a :class:`CutGeometry`: force ratio, lead
-    angle, the cavity's and the principal planes' angles, the planes' stiffness ratio;
-    docs/model.md, section 4.7); ``n_modes`` then counts the modes of each plane.
+    under the oriented cut ``cut_geometry`` (a :class:`CutGeometry`, docs/model.md,
+    section 4.7; a key the bar does not use is refused, unless it is the file's:
+    oriented.APPLIES_TO); ``n_modes`` then counts the modes of each plane.
     Default: the file's ``[orientation]``, else one plane.  ``motion``: the ball
     "slide"s (the published model) or "roll"s, with the floor friction coefficients
     ``mu_static`` >= ``mu_kinetic`` (docs/model.md, section 2.7); default the file's.
@@ -204,7 +204,7 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     modal, readings = _modal(spec, bar, paper, n_modes, z_absorber_m, modal)
     across = (_across(spec, modal, z_absorber_m)
               if bar == "ball" and given is None and spec.cavity is not None else None)
-    modal = _planes(spec, modal, planes, cut_geometry, across)
+    modal = _planes(spec, bar, modal, planes, cut_geometry, across)
     if bar == "solid":
         return System(modal, None, preset, tuple(readings), spec)
     if bar == "tmd":
@@ -286,13 +286,15 @@ def _check_unused(damper: ImpactDamper, **given) -> None:
                                  "give contact = 'hertz' (--contact hertz), or leave it out")
 
 
-def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry, across) -> ModalModel:
+def _planes(spec: SystemSpec, bar: str, modal: ModalModel, planes, geometry,
+            across) -> ModalModel:
     """``modal`` in both bending planes under the oriented cut, where asked (``across``:
     a cavity bar's modes bent across the ball's direction, a callable)."""
     planes = spec.planes if planes is None else check_int("planes", planes, 1, 2)
     if geometry is not None and not isinstance(geometry, CutGeometry):
         raise TypeError(f"cut_geometry = {geometry!r} must be a CutGeometry "
                         "(bb.CutGeometry(force_ratio=..., lead_angle_deg=..., ...))")
+    _check_geometry_keys(spec, bar, geometry)
     if planes == 1:
         if geometry is not None:
             raise ParameterError("cut_geometry applies to a bar of two bending planes: give "
@@ -300,6 +302,20 @@ def _planes(spec: SystemSpec, modal: ModalModel, planes, geometry, across) -> Mo
         return modal
     return oriented_model(modal, spec.orientation if geometry is None else geometry,
                           None if across is None else across())
+
+
+def _check_geometry_keys(spec: SystemSpec, bar: str, geometry) -> None:
+    """Refuse a key of ``geometry`` that ``bar`` does not use (oriented.APPLIES_TO), where
+    it is given and not as the system file describes the hardware (the file's keys
+    describe every bar it builds, each taking its own)."""
+    for key in unused_keys(geometry or spec.orientation, bar):
+        value = getattr(geometry or spec.orientation, key)
+        if geometry is not None and value != getattr(spec.orientation, key):
+            users = " and ".join(APPLIES_TO[key])
+            why = (" (the ball bar's planes are its cavity's section bent along and across "
+                   "the cavity)" if bar == "ball" else " (nothing moves in a solid bar)")
+            raise ParameterError(f"cut_geometry's {key} = {value:g} applies to the {users} "
+                                 f"bars, not to bar = {bar!r}{why}; leave it out")
 
 
 def _across(spec: SystemSpec, plane: ModalModel, z_absorber):
