@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -21,6 +22,7 @@ from boringbar import ParameterError
 from boringbar.analysis.cases import Case
 from boringbar.analysis.design import (
     candidate_system,
+    check_space,
     comparison,
     design,
     design_storage,
@@ -49,7 +51,7 @@ from boringbar.cli.main import main
 from boringbar.execute import Execution
 from boringbar.model.dampers import den_hartog_parameters, sims_parameters
 from boringbar.model.system import make_system, published_system_spec
-from boringbar.model.system_file import parse_system
+from boringbar.model.system_file import parse_system, published_file_text
 from boringbar.plot.design import plot_best
 from boringbar.reference.stability import system_receptance
 from boringbar.report.html import improvement_cell
@@ -346,6 +348,34 @@ def test_an_uncertain_friction_number_is_read_as_the_preset_reads_it():
         assert sampled.damper.friction_force_n == pytest.approx(force, rel=1e-12)
         assert sampled.damper.friction_force_n == pytest.approx(system.damper.friction_force_n,
                                                               rel=1e-12)
+
+
+def _rolling_spec():
+    d = tomllib.loads(published_file_text())
+    d["ball"]["motion"] = "roll"
+    return parse_system(d)
+
+
+def test_a_rolling_ball_s_floor_friction_is_an_uncertain_parameter():
+    """mu_static and mu_kinetic are drawn for a rolling ball, each clipped to [0, 10]; a
+    kinetic one drawn above the static one slips at the static one; a sliding ball's
+    design space refuses them before any run."""
+    system = make_system("ball", spec=_rolling_spec())
+    names = ("mu_static", "mu_kinetic")
+    for row, expected in (([0.3, 0.1], (0.3, 0.1)), ([0.2, 0.5], (0.2, 0.2)),
+                          ([-0.1, 0.1], (0.0, 0.0)), ([12.0, 0.05], (10.0, 0.05))):
+        d = sampled_system(system, names, row)[0].damper
+        assert (d.mu_static, d.mu_kinetic) == expected
+    assert sampled_system(system, ("mu_kinetic",), [0.1])[0].damper.mu_static == 0.2
+    options = DesignOptions("ball", (Variable("gap_m", 0.2e-3, 0.6e-3),), samples=2,
+                            ratios=(1.0,), forces_n=(2.0,), duration_s=0.3, trials=2,
+                            uncertain=(Uncertain("mu_static", "uniform", 0.05, 0.6),))
+    with pytest.raises(ParameterError, match="uncertain mu_static is a rolling ball's"):
+        check_space(published_system_spec(), options, uncertain_samples(options))
+    check_space(_rolling_spec(), options, uncertain_samples(options))
+    c = evaluate(_rolling_spec(), options, {"gap_m": 0.5e-3}, np.array([[0.05], [0.6]]))
+    low, high = c.samples[0]
+    assert low != high  # a ball held by 0.6 rolls where one held by 0.05 slips
 
 
 def _line(**kw) -> dict:

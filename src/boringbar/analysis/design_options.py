@@ -12,7 +12,7 @@ import scipy.special
 from boringbar._validate import ParameterError, check_choice, check_int, check_range
 from boringbar.analysis.lobes import DEPTH_FLOOR, DEPTH_TOLERANCE, LobesOptions
 from boringbar.analysis.speeds import check_speeds
-from boringbar.model.dampers import MAX_GAP
+from boringbar.model.dampers import MAX_GAP, MU_MAX, ImpactDamper
 from boringbar.model.forcing import MAX_DEPTH
 from boringbar.model.materials import MATERIALS
 from boringbar.model.perturb import perturbed
@@ -41,7 +41,9 @@ VARIABLES = {
     "tmd_damping_ratio": (("tmd",), "", 0.0, 2.0),
 }
 UNCERTAIN = ("friction_force_n", "friction_number", "restitution", "ball_position_m",
-             "ball_velocity_m_s", "damping_ratio")
+             "ball_velocity_m_s", "damping_ratio", "mu_static", "mu_kinetic")
+#: a rolling ball's floor friction coefficients (docs/model.md, section 2.7)
+FLOOR_FRICTION = ("mu_static", "mu_kinetic")
 DISTRIBUTIONS = ("uniform", "normal")
 #: an uncertain parameter as a person reads it: (words, unit, factor from SI)
 UNCERTAIN_READ = {"friction_force_n": ("friction force", "N", 1.0),
@@ -49,7 +51,9 @@ UNCERTAIN_READ = {"friction_force_n": ("friction force", "N", 1.0),
                   "restitution": ("restitution", "", 1.0),
                   "ball_position_m": ("ball position", "mm", 1e3),
                   "ball_velocity_m_s": ("ball velocity", "m/s", 1.0),
-                  "damping_ratio": ("damping ratio", "", 1.0)}
+                  "damping_ratio": ("damping ratio", "", 1.0),
+                  "mu_static": ("static floor friction", "", 1.0),
+                  "mu_kinetic": ("kinetic floor friction", "", 1.0)}
 #: The unit a person reads a quantity of an SI unit in (figures, summary lines, the
 #: report): lengths in mm, as the design files give them; factor from SI.
 READ_AS = {"m": ("mm", 1e3)}
@@ -304,7 +308,7 @@ def nominal_words(options: DesignOptions) -> str:
 
 def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
     """``system`` and the initial state with one sample of the uncertain parameters."""
-    ini = {}
+    ini, floor = {}, {}
     for name, v in zip(names, row, strict=True):
         if name in ("friction_force_n", "restitution", "damping_ratio"):
             system = perturbed(system, **{name: float(v)})
@@ -319,4 +323,22 @@ def sampled_system(system: System, names: tuple, row) -> tuple[System, Initial]:
             ini["ball_position_m"] = float(np.clip(v, -half, half))
         elif name == "ball_velocity_m_s":
             ini["ball_velocity_m_s"] = float(v)
+        elif name in FLOOR_FRICTION:
+            floor[name] = float(v)
+    if floor:
+        system = floor_friction(system, floor)
     return system, Initial(**ini)
+
+
+def floor_friction(system: System, drawn: dict) -> System:
+    """``system`` with a rolling ball's floor friction coefficients as ``drawn`` (name ->
+    value), each clipped to [0, MU_MAX]; a kinetic one drawn above the static one slips
+    at the static one (the ball is held by at least what it slips with)."""
+    d = system.damper
+    if not isinstance(d, ImpactDamper) or d.motion != "roll":
+        raise ParameterError(f"uncertain {next(iter(drawn))} is a rolling ball's floor "
+                             "friction, and this bar has no rolling ball (a system file's "
+                             "ball.motion = 'roll')")
+    mus = float(np.clip(drawn.get("mu_static", d.mu_static), 0.0, MU_MAX))
+    muk = float(np.clip(drawn.get("mu_kinetic", d.mu_kinetic), 0.0, mus))
+    return replace(system, damper=replace(d, mu_static=mus, mu_kinetic=muk))
