@@ -19,8 +19,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+import boringbar as bb
 from boringbar._validate import ParameterError
 from boringbar.model.bar import published_bar
+from boringbar.orbits.shooting import make_flow, multipliers, periodic_orbit
 from boringbar.reference.masri_caughey import (
     ImpactSystem,
     phase_equation,
@@ -277,3 +279,89 @@ def test_undamped_bar_has_orbits_that_balance_energy_without_viscous_loss():
     m_eff = sys.ball_mass / (1 + sys.effective_ratio)
     impact = 0.5 * (1 - E**2) * m_eff * (o.ball_speed - o.bar_velocity_before) ** 2
     assert work == pytest.approx(impact, rel=1e-9)
+
+
+# --- the gallery's figure (docs/validation.md): their orbit against our exact integrator ---
+#: the gallery's bar: the physical preset, one mode, frictionless ball, gap 0.5 mm
+GALLERY = {"n_modes": 1, "friction": False, "gap_m": GAP}
+#: forcing periods run from the start near the orbit, the last half read as the steady state
+SETTLE_PERIODS = 300
+
+
+def gallery_system():
+    return bb.make_system("ball", "physical", **GALLERY)
+
+
+def closed_form(system, force: float, ratio: float) -> list:
+    """The admissible symmetric two-impact orbits of ``system`` at F0 = ``force``,
+    Omega = ``ratio`` omega_n (Masri and Caughey's closed form)."""
+    b, d = system.bar, system.damper
+    return admissible(two_impact_orbit(
+        b.mass_kg[0], b.stiffness_n_m[0], b.damping_n_s_m[0], b.psi_tip[0], b.psi_damper[0],
+        d.mass_kg, d.gap_m, d.restitution, force, ratio * system.reference_frequency_rad_s))
+
+
+def start_on(orbit, rel: float = 1e-3) -> bb.State:
+    """The state just after the orbit's + wall impact, [u, u', y, y'], u off by ``rel``."""
+    sys = orbit.system
+    u0 = float(orbit.modal_displacement(orbit.impact_time))
+    v0 = orbit.bar_velocity_after / sys.psi_ball
+    y_dot = -orbit.ball_speed - orbit.bar_velocity_after
+    return bb.State(np.array([u0 * (1 + rel), v0, sys.gap / 2, y_dot]), orbit.impact_time)
+
+
+def settle(system, orbit, force: float, ratio: float, rel: float = 1e-3):
+    """Our exact integrator from ``start_on(orbit, rel)``: SETTLE_PERIODS periods, the last
+    half steady.  (run, its steady RMS of W, the mean |y'-| of its steady impacts)."""
+    period = 2 * orbit.system.half_period
+    run = bb.simulate(system, bb.Harmonic(force, ratio), duration_s=SETTLE_PERIODS * period,
+                      dt_s=period / 2000, initial=start_on(orbit, rel), steady_fraction=0.5,
+                      integrator="exact", record_every=0)
+    steady = run.impacts[run.impacts[:, 0] >= run.steady_start_s]
+    return run, run.rms_tip_m, float(np.mean(np.abs(steady[:, 2])))
+
+
+def shooting_multiplier(system, orbit, force: float, ratio: float) -> float:
+    """The largest |Floquet multiplier| of the orbit by our shooting (boringbar.orbits),
+    Newton started from the closed form's state at phase 0."""
+    fl = make_flow(system, bb.Harmonic(force, ratio))
+    h = 1e-9
+    dy0 = float(orbit.relative_displacement(h) - orbit.relative_displacement(-h)) / (2 * h)
+    x0 = np.array([float(orbit.modal_displacement(0.0)), float(orbit.modal_velocity(0.0)),
+                   float(orbit.relative_displacement(0.0)), dy0])
+    _, period = periodic_orbit(fl, x0, rms=False)
+    return float(np.abs(multipliers(period)[0]))
+
+
+def impact_speed(orbit) -> float:
+    """|y'-| at each impact of the orbit (m/s): the ball's approach to the wall."""
+    return orbit.ball_speed - orbit.bar_velocity_before
+
+
+@pytest.mark.parametrize("force,ratio", [(30.0, 1.0), (40.0, 1.0), (30.0, 0.9)])
+def test_exact_integrator_settles_on_their_orbit_where_our_shooting_finds_it_stable(
+        force, ratio):
+    """The gallery's stable points: our shooting's largest multiplier is the square of the
+    closed form's half-period impact map's (1e-6: its finite differences) and below 1, and
+    the exact integrator, started 1e-3 off, ends on their orbit: RMS of W and impact speed
+    to 1e-9 (measured: 1e-11)."""
+    system = gallery_system()
+    orbit = next(o for o in closed_form(system, force, ratio) if o.stable)
+    mult = shooting_multiplier(system, orbit, force, ratio)
+    assert mult == pytest.approx(max(np.abs(orbit.multipliers)) ** 2, rel=1e-6) and mult < 1
+    run, rms, speed = settle(system, orbit, force, ratio)
+    assert run.pattern.name == "2 symmetric"
+    assert rms == pytest.approx(orbit.rms_tip(), rel=1e-9, abs=0)  # W ~ 1e-4 m
+    assert speed == pytest.approx(impact_speed(orbit), rel=1e-9, abs=0)
+
+
+@pytest.mark.parametrize("force,ratio", [(20.0, 1.0), (30.0, 1.05), (50.0, 1.0)])
+def test_exact_integrator_leaves_their_orbit_where_our_shooting_finds_it_unstable(
+        force, ratio):
+    """Where their orbit is unstable (a multiplier above 1 by our shooting) ours, started
+    1e-3 off it, ends elsewhere: the steady RMS of W differs from theirs by over 5 %."""
+    system = gallery_system()
+    orbit = closed_form(system, force, ratio)[-1]
+    assert not orbit.stable and shooting_multiplier(system, orbit, force, ratio) > 1
+    _, rms, _ = settle(system, orbit, force, ratio)
+    assert abs(rms / orbit.rms_tip() - 1) > 0.05
