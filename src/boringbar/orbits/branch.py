@@ -18,6 +18,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from boringbar._validate import ParameterError, check_range
+from boringbar.model.bar import impact_mass
 from boringbar.orbits.shooting import (
     Flow,
     OrbitRefused,
@@ -66,8 +67,8 @@ def flow_with(fl: Flow, name: str, value: float, ref: Flow) -> Flow:
     if name == "ball-mass-g":
         m = value * 1e-3
         # (a rolling ball's floor friction mu m g scales with its mass)
-        return dataclasses.replace(fl, m=m, meff=1.0 / (1.0 / m + float(np.sum(
-            fl.psi_d**2 / fl.M))), mus_n=fl.mus_n * m / fl.m, muk_n=fl.muk_n * m / fl.m)
+        return dataclasses.replace(fl, m=m, meff=impact_mass(m, fl.psi_d, fl.M),
+                                   mus_n=fl.mus_n * m / fl.m, muk_n=fl.muk_n * m / fl.m)
     raise ParameterError(f"parameter = {name!r} is not one of {', '.join(PARAMETERS)}")
 
 

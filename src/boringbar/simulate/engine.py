@@ -20,6 +20,7 @@ from boringbar._validate import (
     check_int,
     check_range,
 )
+from boringbar.model.bar import impact_mass
 from boringbar.model.contact import hertz_contact_time_s
 from boringbar.model.dampers import GRAVITY, ImpactDamper, TunedMassDamper
 from boringbar.model.forcing import Harmonic, Regenerative
@@ -123,7 +124,7 @@ def _pack_system(system: System) -> np.ndarray:
         p[L.FRICTION] = d.friction_force_n
         p[L.STATIC_FRICTION] = d.static_friction_force_n
         p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
-        p[L.M_EFF] = impact_mass(system)
+        p[L.M_EFF] = system_impact_mass(system)
         if rolling(system):
             p[L.ROLL] = 1.0
             p[L.ROLL_STATIC], p[L.ROLL_KINETIC] = roll_forces(d)
@@ -150,14 +151,9 @@ def roll_band(p: np.ndarray, d: ImpactDamper, dt: float) -> float:
     return 2.0 * (fs + fk) * dt * (1.0 / p[L.M_EFF] + 2.5 / d.mass_kg)
 
 
-def impact_mass(system: System) -> float:
-    """m_eff (kg) of the ball against the retained modes at the cavity,
-    1 / (1/m + sum psi_d^2 / M) (docs/model.md, section 2.4)."""
-    bar = system.bar
-    share = 0.0  # in Python floats, summed left to right from 0 as NumPy sums so few
-    for psi, mass in zip(bar.psi_damper.tolist(), bar.mass_kg.tolist(), strict=True):
-        share += psi * psi / mass
-    return 1.0 / (1.0 / system.damper.mass_kg + share)
+def system_impact_mass(system: System) -> float:
+    """m_eff (kg) of the system's ball against the retained modes at the cavity."""
+    return impact_mass(system.damper.mass_kg, system.bar.psi_damper, system.bar.mass_kg)
 
 
 def hold_band(p: np.ndarray, dt: float) -> float:
@@ -325,7 +321,8 @@ def check_contact_step(system: System, dt: float) -> None:
     resolves it then, and stays stable on the contact's stiffness."""
     if not hertz(system):
         return
-    tc = hertz_contact_time_s(impact_mass(system), system.damper.hertz_stiffness_n_m1_5, 1.0)
+    tc = hertz_contact_time_s(system_impact_mass(system),
+                              system.damper.hertz_stiffness_n_m1_5, 1.0)
     if dt > tc / CONTACT_STEPS:
         raise ParameterError(f"dt_s = {dt:g} s is too long for the Hertz contact: an impact "
                              f"at 1 m/s lasts {tc:.3g} s, and RK4 needs {CONTACT_STEPS} steps "
