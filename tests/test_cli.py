@@ -171,3 +171,16 @@ def test_commands_without_out_write_to_their_own_folders(tmp_path, monkeypatch, 
                        "out/simulate/published/summary.json",
                        "out/simulate/steel_coolant_tmd-solid/summary.json",
                        "out/simulate/steel_coolant_tmd-tmd/summary.json"]
+
+
+@pytest.mark.parametrize("command", [["simulate"], ["paper", "--quick"], ["sweep"]])
+def test_an_out_that_is_a_file_is_refused_before_any_run(command, tmp_path, capsys):
+    """--out naming a file, or a folder inside one, is bad input (exit 2, one line), found
+    before the work runs, not an I/O error once it is done."""
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    for out in (afile, afile / "sub"):
+        assert main([*command, "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("boringbar: error: --out = ") and len(err.splitlines()) == 1
+    assert afile.read_text() == "mine"

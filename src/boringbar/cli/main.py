@@ -16,12 +16,15 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import os
 import re
 import signal
 import sys
 import textwrap
 import threading
+from pathlib import Path
 
+from boringbar._validate import ParameterError
 from boringbar.cli.options import PROG, Outcome, default_out
 from boringbar.model.system import READINGS
 from boringbar.simulate.run import IntegrationError
@@ -142,6 +145,7 @@ def _run(argv) -> int:
     if getattr(args, "out", "") is None and args.command != "run":  # run: the study's own
         args.out = default_out(args)
     try:
+        _check_out(getattr(args, "out", None))
         outcome = args.func(args)
         if isinstance(outcome, Outcome):
             outcome.report(args)
@@ -157,6 +161,20 @@ def _run(argv) -> int:
         stop = isinstance(exc, Terminated)
         print(f"{PROG}: {'terminated' if stop else 'interrupted'}", file=sys.stderr)
         return 143 if stop else 130
+
+
+def _check_out(out) -> None:
+    """--out names a folder, or one that can be made: refused before any run, not as an
+    I/O error once the work is done."""
+    if out is None:
+        return
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        raise ParameterError(f"--out = {str(out)!r} is a file; give a folder (made if missing)")
+    parent = next(p for p in (path, *path.parents) if p.exists())
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise ParameterError(f"--out = {str(out)!r} cannot be made: {str(parent)!r} is not a "
+                             "folder this user may write in")
 
 
 def _one_line(exc: BaseException) -> str:
