@@ -104,6 +104,10 @@ BAD_OPTIONS = {
     "lobes-analytic": (["lobes", "--analytic", "--bar", "solid"], {
         "--rpm": ("1e-9", "5", "0", "-1", "nan"),
         "--at-rpm": ("1e-6", "5", "0"),
+        # a simulated cut's options, which the closed form would leave unread
+        "--tolerance-um": ("-1", "5"),
+        "--knock-um": ("1",),
+        "--depth-step-mm": ("0.01",),
     }),
     "basins": (["basins"], {
         "--displacement-mm": ("nan:1:3", "-1:1:0", "-1:1:1e9", "-1e300:1:3", "1:-1:3",

@@ -215,6 +215,9 @@ def test_simulate_cut_text(tmp_path, capsys):
     (["lobes", "--at-rpm", "fast"], "--at-rpm"),
     (["lobes", "--at-rpm", "0.01"], "--at-rpm"),  # a delay history past the allowed rows
     (["lobes", "--analytic", "--at-rpm", "0"], "--at-rpm = 0"),
+    # a simulated cut's option, which the closed form would leave unread
+    (["lobes", "--analytic", "--tolerance-um", "-1"], "--tolerance-um with --analytic"),
+    (["lobes", "--analytic", "--examples"], "--examples with --analytic"),
 ])
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, name):
     out = tmp_path / "out"

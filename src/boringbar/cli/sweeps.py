@@ -168,11 +168,22 @@ def _sweep_text(ds) -> str:
     return "\n".join(lines)
 
 
+#: lobes options (dest names, default None or False) that concern simulated cuts alone:
+#: given with --analytic, which runs none, they are refused rather than left unread
+SIMULATED_ONLY = ("dt_s", "stick_law", "depth_step_mm", "depth_tolerance", "criterion",
+                  "tolerance_um", "knock_um", "confidence", "max_run_s", "draws", "seed",
+                  "stiffness_cov", "damping_cov", "friction_spread", "restitution_spread",
+                  "force_noise", "fixed_ball_start", "probability", "revolutions",
+                  "delay_interp", "start", "bounded_fraction", "workers", "examples")
+
+
 def _cmd_lobes(args) -> Outcome:
     if args.analytic:
-        if args.draws is not None:
-            raise ParameterError(f"--draws = {args.draws!r} with --analytic: the chance of "
-                                 "chatter is of simulated cuts; leave out --analytic")
+        given = [d for d in SIMULATED_ONLY if getattr(args, d, None) not in (None, False)]
+        if given:
+            option = "--" + given[0].replace("_", "-")
+            raise ParameterError(f"{option} with --analytic: it concerns simulated cuts, and "
+                                 "the closed form runs none; leave out one of them")
         cut = cut_options(args)
         return analytic_lobes_outcome(args, cut_law(cut), cut["feed_m"])
     cases, _, _ = many_cases(args)
