@@ -151,8 +151,8 @@ def add_ball(g, lst: str, swept: str, ranges: bool, many: bool) -> None:
     """The ball's options of :func:`add_common`: its friction, material, restitution,
     lock and contact law."""
     g.add_argument("--friction", metavar="on|off" + (",..." if many else ""),
-                   help=f"ball friction{lst} (default: {'off,on' if many else 'on'}); "
-                        "its size depends on the preset")
+                   help=f"ball friction{lst} (default: {'off,on' if many else 'on'}; with "
+                        "--system, the file's ball's); its size depends on the preset")
     g.add_argument("--friction-force-n", type=float, metavar="N",
                    help="friction force F_c in N (overrides the preset's)")
     g.add_argument("--friction-number", type=float, metavar="X",
@@ -487,6 +487,15 @@ def gap_default_mm(args) -> float:
     return spec.data["ball"]["gap_mm"] if spec.ball is not None else 0.5
 
 
+def friction_default(args) -> list[str] | None:
+    """--friction when not given with --system: the file's ball's (``on`` unless its
+    friction is ``none``), as its gap is; None without a file's ball (the study's)."""
+    spec = system_spec(args)
+    if spec is None or spec.ball is None:
+        return None
+    return ["off" if spec.ball.friction_kind == "none" else "on"]
+
+
 def check_gap(gap_mm: float, args) -> float:
     """--gap-mm (mm) checked against the room the bar's cavity leaves; returns metres."""
     spec = system_spec(args) or published_system_spec()
@@ -609,7 +618,8 @@ def one_bar(args, command: str) -> tuple[str, bool]:
         raise ParameterError(f"--bar = {','.join(bars)!r}: {command} runs one bar "
                              f"(one of {', '.join(BAR_KINDS)})")
     check_common(args, bars)
-    friction = parse_words(args.friction, "--friction", ("on", "off"), ["on"])
+    friction = parse_words(args.friction, "--friction", ("on", "off"),
+                           friction_default(args) or ["on"])
     if len(friction) != 1:
         raise ParameterError(f"--friction = {args.friction!r} must be one of on, off")
     friction_on = friction[0] == "on"
@@ -654,7 +664,7 @@ def many_cases(args) -> tuple[list, list[str], list[float]]:
     default = "0.5,0.1" if args.system is None else repr(gap_default_mm(args))
     gaps = [check_gap(g, args) for g in parse_numbers(args.gap_mm or default, "--gap-mm")]
     frictions = [w == "on" for w in parse_words(args.friction, "--friction", ("on", "off"),
-                                           ["off", "on"])]
+                                           friction_default(args) or ["off", "on"])]
     if not any(frictions) and (args.friction_force_n is not None
                                or args.friction_number is not None):
         raise ParameterError("--friction off conflicts with --friction-force-n / "
