@@ -124,6 +124,9 @@ def test_lobes_at_rpm_outside_the_grid_joins_it_and_is_read_out(tmp_path, capsys
     assert [v["rpm"] for v in case["speeds"]] == [1000, 1050, 1100, 1150]
     assert case["depth_at_rpm_m"] == case["speeds"][3]["limit_depth_m"]
     assert 0 < case["depth_at_rpm_m"] < 0.2e-3
+    # the grid's speed beside it (the last speed has one), for a speed that drifts
+    assert case["at_rpm_neighbours"] == [{"rpm": 1100.0,
+                                          "limit_depth_m": case["speeds"][2]["limit_depth_m"]}]
     with xr.open_dataset(out / "lobes.nc") as ds:
         assert ds.attrs["at_rpm"] == 1150
         readout = plot_lobes(ds.load()).axes[0].texts[0].get_text()
@@ -136,6 +139,9 @@ def test_lobes_at_rpm_in_the_summary_line(tmp_path, capsys):
     line = capsys.readouterr().out.splitlines()[0]
     assert line.startswith("solid: minimum chatter-free depth ")
     assert line.endswith(" at 1100 rpm; at your speed 1100 rpm: " + line.split()[4] + " mm")
+    assert main(["lobes", *SMALL, "--at-rpm", "1050", "--out", str(tmp_path / "b")]) == 0
+    line = capsys.readouterr().out.splitlines()[0]
+    assert " (grid neighbours 1000 rpm: " in line and ", 1100 rpm: " in line
 
 
 def test_analytic_lobes_at_rpm_below_the_default_speeds_joins_them(tmp_path, capsys):

@@ -262,9 +262,24 @@ def _at_rpm_summary(ds, summary: dict) -> dict:
         return summary
     at = float(ds.attrs["at_rpm"])
     j = int(np.flatnonzero(ds["rpm"].values == at)[0])
+    # a lobe's depth can change sharply within a few rpm: the grid's speeds either side
+    # say how far the answer holds if the spindle's speed drifts
+    near = [k for k in (j - 1, j + 1) if 0 <= k < ds.sizes["rpm"]]
     for case in summary["cases"]:
         case["depth_at_rpm_m"] = case["speeds"][j]["limit_depth_m"]
+        case["at_rpm_neighbours"] = [{"rpm": float(case["speeds"][k]["rpm"]),
+                                      "limit_depth_m": case["speeds"][k]["limit_depth_m"]}
+                                     for k in near]
     return {**summary, "at_rpm": at}
+
+
+def _neighbour_words(near: list, mm) -> str:
+    """" (grid neighbours 1488 rpm: 0.0653 mm, 1508 rpm: 0.0705 mm)", or "" without."""
+    if not near:
+        return ""
+    return " (grid neighbours " + ", ".join(
+        f"{n['rpm']:g} rpm: " + (f"{mm(n['limit_depth_m'])} mm" if n["limit_depth_m"]
+                                 is not None else "-") for n in near) + ")"
 
 
 def _lobes_text(ds, summary: dict) -> str:
@@ -289,7 +304,8 @@ def _lobes_text(ds, summary: dict) -> str:
         if "at_rpm" in summary:
             d = summary["cases"][i]["depth_at_rpm_m"]
             mine = (f"; at your speed {summary['at_rpm']:g} rpm: "
-                    + (f"{mm(d)} mm" if d is not None else "no chatter up to the deepest cut"))
+                    + (f"{mm(d)} mm" if d is not None else "no chatter up to the deepest cut")
+                    + _neighbour_words(summary["cases"][i]["at_rpm_neighbours"], mm))
         lines.append(f"{label}: minimum chatter-free depth {mm(mcf)} mm{at}{mine}")
         lines.append(f"{'rpm':>8} {'limit (mm)':>12} {'first unstable (mm)':>20} "
                      f"{'analytic (mm)':>14}" + (f" {'onset (mm)':>12}" if onset is not None
