@@ -184,3 +184,20 @@ def test_an_out_that_is_a_file_is_refused_before_any_run(command, tmp_path, caps
         err = capsys.readouterr().err
         assert err.startswith("boringbar: error: --out = ") and len(err.splitlines()) == 1
     assert afile.read_text() == "mine"
+
+
+def test_an_unknown_option_points_to_its_command_s_help_and_a_near_name(capsys):
+    assert main(["simulate", "--gapmm", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert err == ("boringbar: error: unrecognized arguments: --gapmm 0.1; did you mean "
+                   "--gap-mm? (see 'boringbar simulate --help')\n")
+    assert main(["lobes", "--frobnicate", "3"]) == 2
+    assert capsys.readouterr().err.endswith("--frobnicate 3 (see 'boringbar lobes --help')\n")
+
+
+def test_a_missing_fit_is_named_by_its_option(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["lobes", "--analytic", "--frf", str(tmp_path / "nosuch.json"), "--out",
+                 str(out)]) == 2
+    assert capsys.readouterr().err.startswith("boringbar: error: --frf = ")
+    assert not out.exists()

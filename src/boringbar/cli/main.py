@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import difflib
 import importlib
 import os
 import re
@@ -80,8 +81,18 @@ class _Parser(argparse.ArgumentParser):
         # pattern only knows plain negative numbers before Python 3.13)
         self._negative_number_matcher = re.compile(r"^-\.?\d")
 
+    #: the subcommand this parser was built for (build_parser), whose help an unknown
+    #: option points to, and the options it takes, for a suggestion
+    command: str | None = None
+    command_options: tuple[str, ...] = ()
+
     def error(self, message):
-        self.exit(2, f"{PROG}: error: {message} (see '{self.prog} --help')\n")
+        where = f"{PROG} {self.command}" if self.command and self.prog == PROG else self.prog
+        unknown = re.match(r"unrecognized arguments: (--[\w-]+)", message)
+        close = (difflib.get_close_matches(unknown.group(1), self.command_options, n=1,
+                                           cutoff=0.8) if unknown else [])
+        hint = f"; did you mean {close[0]}?" if close else ""
+        self.exit(2, f"{PROG}: error: {message}{hint} (see '{where} --help')\n")
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -100,6 +111,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     for name, (module, add, summary) in COMMANDS.items():
         if command == name:
             getattr(importlib.import_module(module), add)(sub)
+            parser.command = name
+            parser.command_options = tuple(
+                o for a in sub.choices[name]._actions for o in a.option_strings)
         elif command is None:
             sub.add_parser(name, help=summary)  # for the list; a command builds its own
     return parser

@@ -455,7 +455,7 @@ def resolve_files(args, bars: list[str]) -> None:
     for opt, value in ratios.values():
         if value is not None:
             check_range(opt, value, -10, 10)
-    args.frf_modal = ModalFit.read(args.frf).to_modal_model(
+    args.frf_modal = ModalFit.read(args.frf, "--frf").to_modal_model(
         *(1.0 if r is None else r for r in (args.frf_ball_ratio, args.frf_absorber_ratio)))
 
 

@@ -147,13 +147,15 @@ class ModalFit:
                    source=data.get("source", {}), quality=data.get("quality", {}))
 
     @classmethod
-    def read(cls, path) -> ModalFit:
-        """Read a fit written by :meth:`to_dict` (``boringbar fit-frf``)."""
+    def read(cls, path, name: str = "frf") -> ModalFit:
+        """Read a fit written by :meth:`to_dict` (``boringbar fit-frf``); an error names
+        the file as ``name`` (the command line: "--frf")."""
         p = Path(path)
         try:
             data = json.loads(p.read_text())
         except FileNotFoundError:
-            raise ParameterError(f"frf = {str(p)!r}: no such file") from None
+            raise ParameterError(f"{name} = {str(p)!r}: no such file") from None
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ParameterError(f"frf = {str(p)!r} is not a JSON modal fit ({exc})") from None
-        return cls.from_dict(data, where=f"frf = {str(p)!r}")
+            raise ParameterError(f"{name} = {str(p)!r} is not a JSON modal fit ({exc})") \
+                from None
+        return cls.from_dict(data, where=f"{name} = {str(p)!r}")
