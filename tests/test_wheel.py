@@ -57,7 +57,7 @@ def test_the_sdist_builds_a_wheel_that_installs_and_runs_without_a_compiler(tmp_
         extra = {"filter": "data"} if hasattr(tarfile, "data_filter") else {}
         tar.extractall(tmp_path / "src", **extra)
     needed = tracked("core", "src/boringbar") | {"CMakeLists.txt", "pyproject.toml",
-                                                 "README.md"}
+                                                 "README.md", "LICENSE"}
     assert needed - names == set()
 
     # 2. the wheel, built from the unpacked sdist
@@ -71,6 +71,7 @@ def test_the_sdist_builds_a_wheel_that_installs_and_runs_without_a_compiler(tmp_
             if not name.endswith(".py")}
     assert data and data - in_wheel == set()
     assert any(name.startswith("boringbar/core.") for name in in_wheel)
+    assert any(".dist-info/" in name and name.endswith("/LICENSE") for name in in_wheel)
 
     # 3. a fresh venv, and the install with no compiler and no index
     venv = tmp_path / "venv"
