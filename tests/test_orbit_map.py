@@ -10,7 +10,14 @@ import numpy as np
 import pytest
 
 import boringbar as bb
-from boringbar.analysis.continuation import ContinuationOptions, start_state, system_at
+from boringbar.analysis.continuation import (
+    ContinuationOptions,
+    continuation,
+    start_state,
+    summary,
+    system_at,
+)
+from boringbar.cli.continuation import _branch_line
 from boringbar.cli.main import main
 from boringbar.model.forcing import Harmonic
 from boringbar.model.system import make_system
@@ -27,6 +34,7 @@ from boringbar.orbits.orbit_map import (
     switch_branch_point,
 )
 from boringbar.reference.masri_caughey import two_impact_orbit
+from boringbar.report.html import _branch_row
 from boringbar.simulate import simulate
 
 
@@ -330,3 +338,26 @@ def test_a_map_whose_start_is_refused_says_why_once():
         parameter="force-n", stop=35.0, force_n=30.0, seeds=0, max_points=5))
     (stop,) = json.loads(ds.attrs["stop_reasons"])
     assert stop.count("stick phases are not linearised") == 1, stop
+
+
+def test_a_map_names_each_branch_s_mirror_image(tmp_path):
+    """Two seeds at 42.5 N (the paper preset, gap 0.5 mm, no friction) settle on an
+    asymmetric orbit and its mirror image: two branches of the same RMS over the same
+    range, distinct orbits, each named the other's mirror in the file, the summary and
+    the report's row, so that a reader does not take them for a branch listed twice."""
+    system = make_system("ball", "paper", gap_m=0.5e-3, friction=False)
+    options = ContinuationOptions(parameter="force-n", stop=50.0, other_end=5.0, force_n=30.0,
+                                  ratio=1.0, step=0.05, max_step=0.1, max_points=10, seeds=3,
+                                  max_branches=8)
+    ds = continuation(system, options=options)
+    mirror = ds["mirror"].values
+    pairs = [(i, int(j)) for i, j in enumerate(mirror) if j >= 0]
+    assert pairs and all(mirror[j] == i for i, j in pairs)
+    for i, j in pairs:
+        np.testing.assert_allclose(ds["rms_tip_m"][i], ds["rms_tip_m"][j], rtol=1e-9)
+        assert not np.allclose(ds["state"][i, 0], ds["state"][j, 0])
+    branches = summary(ds)["branches"]
+    i, j = pairs[0]
+    assert branches[i]["mirror"] == j
+    assert f"the mirror image of branch {j}" in _branch_line(i, branches[i], "force-n")
+    assert f"mirror of {j}" in _branch_row("case", i, branches[i])[1]

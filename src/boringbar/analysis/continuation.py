@@ -209,8 +209,9 @@ def compute(context: dict, point: int) -> dict:
                     o.max_points)
     om = orbit_map(fl, o.parameter, x0, o.stop, seeds=seeds, periods=o.periods,
                    other_end=o.other_end, options=mo)
-    branches = [_branch_result(mb, fl, o) | {"return_distance_relative": _returns(system, o, mb)}
-                for mb in om.branches]
+    branches = [_branch_result(mb, fl, o) | {"return_distance_relative": _returns(system, o, mb),
+                                             "mirror": om.mirrors.get(i, -1)}
+                for i, mb in enumerate(om.branches)]
     # checked where no seed was taken (between the seeds' values), so that an attractor
     # on the map is not there merely because it started a branch
     check = [attractor_check(om, v, a.x, a.periods) | {"impacts": a.impacts}
@@ -330,6 +331,9 @@ def assemble(plan: Plan, results: list[dict], attrs: dict | None = None) -> xr.D
          "periods": (("branch",), [r.get("periods", o.periods)]),
          "parent": (("branch",), [r.get("parent", -1)]),
          "born_kind": (("branch",), [r.get("born_kind", "start")]),
+         # the branch of this one's mirror image (y -> -y, W -> -W half a period later):
+         # a distinct orbit of the same RMS and range; -1: none on the map
+         "mirror": (("branch",), [r.get("mirror", -1)]),
          "born_value": (("branch",), [r.get("born_value", r.get("start", math.nan))])},
         attrs={"boringbar_version": __version__, "parameter": o.parameter,
                "config": json.dumps({"system": plan.context["system"].to_dict(),
@@ -389,8 +393,10 @@ def _tree(d: xr.Dataset) -> dict:
     if "parent" not in d:
         return {}
     parent = int(d["parent"])
+    mirror = int(d["mirror"]) if "mirror" in d else -1  # (files written before it)
     return {"periods": int(d["periods"]), "parent": None if parent < 0 else parent,
-            "born": {"kind": str(d["born_kind"].values), "value": float(d["born_value"])}}
+            "born": {"kind": str(d["born_kind"].values), "value": float(d["born_value"])},
+            "mirror": None if mirror < 0 else mirror}
 
 
 def continuation(system: System, forcing: Harmonic | Regenerative | None = None, *,

@@ -204,9 +204,11 @@ def _branch_line(i: int, b: dict, name: str) -> str:
     vals = [p["value"] for p in pts]
     born = b.get("born", {"kind": "start", "value": vals[0]})
     parent = "" if b.get("parent") is None else f" on branch {b['parent']}"
+    mirror = "" if b.get("mirror") is None else f", the mirror image of branch {b['mirror']}"
     return (f"branch {i} (period {b.get('periods', 1)}, born at {born['kind']} "
-            f"{born['value']:.6g}{parent}): {len(pts)} points, {name} {min(vals):.6g} .. "
-            f"{max(vals):.6g}, {sum(p['stable'] for p in pts)} stable; stop: {b['stop']}")
+            f"{born['value']:.6g}{parent}{mirror}): {len(pts)} points, {name} "
+            f"{min(vals):.6g} .. {max(vals):.6g}, {sum(p['stable'] for p in pts)} stable; "
+            f"stop: {b['stop']}")
 
 
 def _check_line(c: dict, name: str) -> str:

@@ -24,13 +24,13 @@ from boringbar.cli.options import (
     OUT_HELP,
     Outcome,
     many_cases,
-    orientation_overrides,
     resolve_files,
     system_spec,
     warn_line,
     with_speed,
     wrote,
 )
+from boringbar.cli.orientation import orientation_overrides
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.cutting import CuttingLaw
 from boringbar.model.forcing import MIN_LOBE_RPM, check_lobe_speed

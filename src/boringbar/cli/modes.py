@@ -6,16 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from boringbar._validate import check_int
-from boringbar.cli.options import (
-    OUT_HELP,
-    Outcome,
-    add_orientation,
-    check_orientation,
-    default_bars,
-    orientation_overrides,
-    resolve_files,
-    wrote,
-)
+from boringbar.cli.options import OUT_HELP, Outcome, default_bars, resolve_files, wrote
+from boringbar.cli.orientation import add_orientation, check_orientation, orientation_overrides
 from boringbar.io import save_figure_atomic, write_json_atomic
 from boringbar.model.system import BAR_KINDS, PRESETS, describe_modes, make_system
 from boringbar.plot.bar import plot_modes

@@ -515,7 +515,8 @@ def _branch_row(key: str, i: int, b: dict) -> list:
     events = ", ".join(f"{e['kind']} {e['value']:.4g}" for e in b["events"]) or "-"
     born = b.get("born", {"kind": "start", "value": math.nan})
     parent = "" if b.get("parent") is None else f" of {b['parent']}"
-    name = f"{i} ({b.get('periods', 1)}, {born['kind']}{parent} {born['value']:.4g})"
+    mirror = "" if b.get("mirror") is None else f", mirror of {b['mirror']}"
+    name = f"{i} ({b.get('periods', 1)}, {born['kind']}{parent} {born['value']:.4g}{mirror})"
     return [key, name, len(pts), covered, _stable_stretches(pts), events, b["stop"]]
 
 
