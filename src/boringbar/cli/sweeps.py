@@ -52,8 +52,9 @@ from boringbar.simulate import HISTORY_ROWS
 
 def add_sweep(sub) -> None:
     p = sub.add_parser("sweep", help="tip RMS and impact pattern against Omega/omega_n",
-                       description="Frequency sweep of the published study (docs/model.md, section "
-                                   "6); writes DIR/sweep.nc and DIR/sweep.png (one "
+                       description="Frequency sweep of the bars (docs/model.md, section 6: "
+                                   "the published study's on the published bar; yours with "
+                                   "--system); writes DIR/sweep.nc and DIR/sweep.png (one "
                                    "DIR/sweep_F<F0>N.png per force when several).")
     groups = add_common(p, many=True)
     groups["run"].add_argument("--workers", type=int, metavar="N",
@@ -63,8 +64,10 @@ def add_sweep(sub) -> None:
 
 def add_lobes(sub) -> None:
     p = sub.add_parser("lobes", help="stability lobes by time-domain simulation of cuts",
-                       description="Stability lobes of the published study (docs/model.md, section "
-                                   "6): depth of cut against spindle speed, every grid point a "
+                       description="Stability lobes of the bars (docs/model.md, section 6: "
+                                   "the published study's on the published bar; yours with "
+                                   "--system): depth of cut against spindle speed, every grid "
+                                   "point a "
                                    "regenerative cut; writes DIR/lobes.nc and DIR/lobes.png "
                                    "(with --examples also DIR/examples.nc and "
                                    "DIR/examples.png).")
