@@ -7,7 +7,8 @@ layers behind them.
   :class:`Friction`, :class:`TunedMassDamper`, :class:`System` and
   :func:`make_system` (the two presets), :func:`variants` (the solid, ball and TMD
   bars of one system file, side by side); your own bar: :func:`load_system`
-  (system files) -> :class:`SystemSpec`, :func:`describe_modes`, :class:`ModalFit`
+  (system files; :func:`loads_system` their text, :func:`parse_system` a dict of the
+  same keys) -> :class:`SystemSpec`, :func:`describe_modes`, :class:`ModalFit`
   (a fitted tip FRF); forcing: :class:`Harmonic`,
   :class:`Regenerative` and its :class:`CuttingLaw`.
 - One run: :func:`simulate` -> :class:`Run`.
@@ -68,7 +69,8 @@ _HOMES = {
     "boringbar.model.oriented": ("CutGeometry",),
     "boringbar.model.system": ("PRESETS", "READINGS", "System", "describe_modes",
                                "make_system", "variants"),
-    "boringbar.model.system_file": ("SystemSpec", "load_system"),
+    "boringbar.model.system_file": ("SystemSpec", "load_system", "loads_system",
+                                    "parse_system"),
     "boringbar.reference.linear": ("min_real_part", "tip_frf"),
     "boringbar.studies.load": ("load_study",),
     "boringbar.studies.runner": ("run_study",),
@@ -142,9 +144,11 @@ __all__ = [
     "load_design",
     "load_study",
     "load_system",
+    "loads_system",
     "lobes",
     "make_system",
     "min_real_part",
+    "parse_system",
     "poincare_map",
     "published_bar",
     "published_cases",

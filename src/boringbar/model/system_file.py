@@ -297,7 +297,8 @@ class _Reader:
 
 
 def parse_system(d: dict, source: str = "<dict>") -> SystemSpec:
-    """Check the system description ``d`` (a parsed TOML file) into a SystemSpec."""
+    """Check the system description ``d`` (a system file's tables as a dict: docs/
+    systems.md) into a SystemSpec; ``source`` names it in messages."""
     r = _Reader(source)
     if not isinstance(d, dict):
         raise SystemFileError(f"{source}: a system file is a table, not {type(d).__name__}")
