@@ -121,9 +121,23 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
     return (ok[0] & ok[1]) != 0;
 }
 
+// A step's four RK4 stages: their times c_s dt after the step's start and their weights
+// b_s dt (the run's own arrays, computed once), and the tip force at each,
+// force(s, Xs) (the harmonic forcing, or the cutting law at the stage's chip thickness).
+// (c and w point to the run's arrays and force is a reference: a table of values, or
+// rk4_stages returning held and rolled together, changed GCC's code for the kernels, its
+// registers and spills, where this leaves it instruction for instruction as before.)
+template <class Force>
+struct StepStages {
+    const double *c, *w;
+    Force& force;
+};
+template <class Force>
+StepStages(const double*, const double*, Force&) -> StepStages<Force>;
+
 // The four RK4 stages of a step, X advanced in place: the stage derivative Kd (carried
 // over from the previous staged step, where only 0 * Kd enters) updated, and the stages'
-// energy flows.  force(s, Xs) is the tip force of stage s.
+// energy flows.  Returns whether the stick law held the ball at every stage.
 // FAST: stage 1 at X, the sums from their first terms (stages_fast) and the
 // derivative's FAST form (ydd_sum_from_first).
 // The stage values are scalars sized by the mode count, so with N a template constant
@@ -134,16 +148,17 @@ BB_INLINE bool stages_fast(Shape<N, CASE> sh, const double* X, const double* Kd,
 // rolling ball rolled without slip at every stage (set in place).
 template <int N, int CASE, bool FAST, class Force>
 BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double* Kd,
-                          const double* cst, const double* wst, Flows& fl,
-                          double& hold_max, bool& rolled, Force&& force) {
+                          const StepStages<Force>& stages, Flows& fl, double& hold_max,
+                          bool& rolled) {
     const int nx = sh.nx();
     constexpr int NXC = Shape<N, CASE>::NXC;
+    const double *cst = stages.c, *wst = stages.w;
     double sum[NXC], xs[NXC];
     bool held = true;
 #pragma GCC unroll 4
     for (int s = 0; s < 4; ++s) {
         for (int j = 0; j < nx; ++j) xs[j] = (FAST && s == 0) ? X[j] : X[j] + cst[s] * Kd[j];
-        const double f = force(s, xs);
+        const double f = stages.force(s, xs);
         const StageTerms terms = derivative<N, CASE, FAST>(q, sh, xs, f, Kd);
         for (int j = 0; j < nx; ++j) {
             if (s == 0)
@@ -307,19 +322,27 @@ BB_INLINE bool map_pattern(Shape<N, CASE> sh, const VecMap& vm, const double* X,
     return true;
 }
 
+// A rolling ball on the floor through a step of dt: it rolls (its spin is its y' as the
+// step begins, ffl = 0) or it slips, the floor's friction ffl = -mu_k N sgn(y' - s)
+// acting on it the whole step, which turns its spin by -kroll ffl dt.
+struct FloorStep {
+    bool rolls;
+    double ffl, dt;
+};
+
 // May a rolling ball that the sgn() law turns within the step take a sign pattern's map
-// (map_pattern's, with its floor friction ffl as it slips): rolling at every stage
+// (map_pattern's, with its floor friction as it slips): rolling at every stage
 // (map_rolls, with the pattern's floor friction) or slipping (map_slips, with the
-// pattern's y').  Sets z.flips to the pattern.
+// pattern's y'; cst: the stage times).  Sets z.flips to the pattern.
 template <int N, int CASE>
 BB_INLINE bool roll_pattern(const Params& q, Shape<N, CASE> sh, const VecMap& vm,
-                            const double* X, MapIn& z, double ffl, bool rolls_now,
+                            const double* X, MapIn& z, const FloorStep& fls,
                             const double* cst) {
     YStages yst;
     double spread = NAN;
-    if (!map_pattern(sh, vm, X, z, ffl, &yst, &spread)) return false;
-    if (rolls_now) return map_rolls(q, sh, vm, X, z);
-    return map_slips(q, sh, vm, X, z, ffl, cst, spread, yst);
+    if (!map_pattern(sh, vm, X, z, fls.ffl, &yst, &spread)) return false;
+    if (fls.rolls) return map_rolls(q, sh, vm, X, z);
+    return map_slips(q, sh, vm, X, z, fls.ffl, cst, spread, yst);
 }
 
 // The increment dX of a mapped step, two rows at a time: (u_i, u_i') and (aux, aux').
@@ -442,8 +465,9 @@ BB_INLINE void take_pattern(const Params& q, Shape<N, CASE> sh, const VecMap& vm
 // (map_flows).
 template <int N, int CASE>
 BB_INLINE void spin_after_map(const Params& q, Shape<N, CASE> sh, double* X, Flows& fl,
-                              bool rolled, double ffl, double dt) {
-    if (rolled) {
+                              const FloorStep& fls) {
+    const double ffl = fls.ffl, dt = fls.dt;
+    if (fls.rolls) {
         X[sh.is()] = X[sh.iyd()];
     } else {
         fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
@@ -452,14 +476,15 @@ BB_INLINE void spin_after_map(const Params& q, Shape<N, CASE> sh, double* X, Flo
 }
 
 // A rolling ball's turning step (roll_pattern's z.flips, not 0): the increment, with its
-// floor friction ffl as it slips in the one-sign column, the flows and the new state with
+// floor friction as it slips in the one-sign column, the flows and the new state with
 // its spin (spin_after_map).  One copy for every pattern: a rolling ball's kernels are
 // few, and each copy costs compile time.
 template <int N, int CASE>
 BB_INLINE void roll_pattern_step(const Params& q, Shape<N, CASE> sh, const VecMap& vm,
-                                 Flows& fl, double* X, double* dX, MapIn z, double ffl,
-                                 bool rolls_now, double dt) {
-    const bool decoupled = !rolls_now;  // (the sliding ball's map as it slips)
+                                 Flows& fl, double* X, double* dX, MapIn z,
+                                 const FloorStep& fls) {
+    const double ffl = fls.ffl;
+    const bool decoupled = !fls.rolls;  // (the sliding ball's map as it slips)
     map_increment(sh, vm, X, z, dX, decoupled);
     if (ffl != 0.0) {
         const int n = sh.n();
@@ -471,7 +496,7 @@ BB_INLINE void roll_pattern_step(const Params& q, Shape<N, CASE> sh, const VecMa
     }
     map_flows(q, sh, vm, fl, X, dX, z, decoupled, ffl);
     for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
-    spin_after_map(q, sh, X, fl, rolls_now, ffl, dt);
+    spin_after_map(q, sh, X, fl, fls);
 }
 
 // A turning step (map_pattern's z.flips; the pattern + + + + takes the run's one-sign map
@@ -591,14 +616,23 @@ BB_INLINE void stop_roll_slip(const Params& q, Shape<N, CASE> sh, double* X, Flo
     X[sh.is()] = yd;
 }
 
+// A step as the walls' and the stick's bookkeeping see it: its start t and end t1 (each
+// t0 + k dt, so that event times stay within the run: t1 - t may differ from dt in its
+// last bit), and whether it is in the steady part, whose events are recorded.
+struct StepSpan {
+    double t, t1;
+    bool steady;
+};
+
 // The ball's walls at the step's end t1 (model.hpp's wall rule; the modes jump by
 // g psi_d,i / M_i) and the stick bookkeeping.  Returns whether the ball is in contact
 // (on a wall at rest, or a sub-threshold impact).
 template <int N, int CASE>
 BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, const EventLog& log,
-                          StickState& ss, double t, double t1, bool steady) {
+                          StickState& ss, const StepSpan& step) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
-    const WallResult w = wall_rule(log.met, log.imp, X[iy], X[iyd], t1, steady, q.ball);
+    const double t = step.t, t1 = step.t1;
+    const WallResult w = wall_rule(log.met, log.imp, X[iy], X[iyd], t1, step.steady, q.ball);
     X[iy] = w.y;
     X[iyd] = w.yd;
     if (w.outcome == IMPACT || w.outcome == MICRO_IMPACT) jump_modes(q, n, X, w.g);
@@ -642,6 +676,20 @@ struct Episode {
     }
 };
 
+// A run's compliant contacts: the episode under way and the rows the counted ones are
+// written to as they end (close_contact).
+struct Contacts {
+    Episode& ep;
+    Mat rows;
+};
+
+// The ball as a step begins, as a compliant contact reads it: its y0 (a contact that
+// begins in the step crossed the wall between y0 and the step's end) and the speed v0 a
+// contact that begins in the step is damped for (contact_speed).
+struct Approach {
+    double y0, v0;
+};
+
 // The speed a contact's damping is referred to: y' as the step begins, at least the
 // impact threshold (a ball that creeps onto a wall is damped as one arriving at it).
 inline double contact_speed(const Params& q, double yd) {
@@ -679,14 +727,17 @@ inline void close_contact(const EventLog& log, Mat rows, const Episode& ep, doub
 // The compliant contact's bookkeeping at the step's end t1 (in place of the impact law's
 // wall rule): a contact begins (counted as an impact at its start, with y'- = wall v_in,
 // or as a micro impact), goes on (its peak force) or ends (close_contact), and the stick
-// bookkeeping off the walls.  y0: y at the step's start; v0: the contact speed the step
-// was damped with; the step is [t, t1] of dt.  Returns whether the ball is in contact as
+// bookkeeping off the walls.  from: the ball as the step began; the crossing is
+// interpolated over the span's own t1 - t.  Returns whether the ball is in contact as
 // the impact law means it (resting on a wall: a contact that began slower than V_IMPACT).
 template <int N, int CASE>
 BB_INLINE bool contact_walls(const Params& q, Shape<N, CASE> sh, const double* X,
-                             const EventLog& log, Mat rows, Episode& ep, StickState& ss,
-                             double y0, double v0, double t, double t1, bool steady) {
-    const double dt = t1 - t;
+                             const EventLog& log, const Contacts& cs, StickState& ss,
+                             const Approach& from, const StepSpan& step) {
+    const double t = step.t, t1 = step.t1, dt = t1 - t;
+    const double y0 = from.y0, v0 = from.v0;
+    const bool steady = step.steady;
+    Episode& ep = cs.ep;
     const double y = X[sh.iy()], yd = X[sh.iyd()], half = q.ball.half;
     const double d0 = std::fabs(y0) - half, d1 = std::fabs(y) - half;
     if (!ep.on && d1 > 0.0) {
@@ -705,7 +756,7 @@ BB_INLINE bool contact_walls(const Params& q, Shape<N, CASE> sh, const double* X
     if (ep.on && d1 > 0.0) {
         ep.peak = Steady::pymax(ep.peak, std::fabs(contact_force(q, y, yd).f));
     } else if (ep.on) {
-        close_contact(log, rows, ep, crossing(t, dt, d0, d1), std::fabs(yd));
+        close_contact(log, cs.rows, ep, crossing(t, dt, d0, d1), std::fabs(yd));
         ep.on = false;
     }
     const bool stuck = q.fc > 0.0 && !ep.on && std::fabs(yd) < q.vstick;

@@ -305,7 +305,7 @@ BB_INLINE void run_body(const RunArgs& a) {
             // a rolling ball's, where it rolls, or slips, at every stage
             if (roll_patterns && !fits) {
                 zp = MapIn{sn, cn, fb};
-                turns = roll_pattern(q, sh, map, X, zp, ffl, rolls_now, cst);
+                turns = roll_pattern(q, sh, map, X, zp, FloorStep{rolls_now, ffl, dt}, cst);
             }
         }
         // (y' of one sign at every stage: the map above, in the band where map_fits
@@ -323,7 +323,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         if (turns) {
             if constexpr (ROLL_MAPS) {
                 if (sh.rolls())
-                    roll_pattern_step(q, sh, map, fl, X, dX, zp, ffl, rolls_now, dt);
+                    roll_pattern_step(q, sh, map, fl, X, dX, zp, FloorStep{rolls_now, ffl, dt});
                 else
                     pattern_step(q, sh, mp, fl, X, dX, zp);
             } else {
@@ -356,11 +356,11 @@ BB_INLINE void run_body(const RunArgs& a) {
             bool held, rolled = sh.rolls();
             if (SHORT_STAGES && (!ball || q.ydd_sum_from_first) &&
                 stages_fast(sh, X, Kd, cst[0]))
-                held = rk4_stages<N, CASE, SHORT_STAGES>(q, sh, X, Kd, cst, wst, fl, hold_max,
-                                                         rolled, force);
+                held = rk4_stages<N, CASE, SHORT_STAGES>(q, sh, X, Kd, StepStages{cst, wst, force},
+                                                         fl, hold_max, rolled);
             else
-                held = rk4_stages<N, CASE, false>(q, sh, X, Kd, cst, wst, fl, hold_max, rolled,
-                                                  force);
+                held = rk4_stages<N, CASE, false>(q, sh, X, Kd, StepStages{cst, wst, force}, fl,
+                                                  hold_max, rolled);
             if (rolled) stop_roll_slip(q, sh, X, fl);
             // (a step held from y' = 0 keeps y' = 0 exactly: nothing to stop)
             if (ball && held && X[iyd] != 0.0) stop_slide(q, sh, X, fl);
@@ -369,11 +369,14 @@ BB_INLINE void run_body(const RunArgs& a) {
         const bool steady = k >= a.steady_start;
 
         strobe_step(q, sh, X, prev, t, t1, dt, so);
+        // (the walls' arguments are built at the calls: a StepSpan, Approach or Contacts
+        // kept as a named local changed GCC's code for the kernels, registers and spills)
         bool contact = false;
         if (hertz)
-            contact = contact_walls(q, sh, X, log, a.contact, ep, ss, y0, v0, t, t1, steady);
+            contact = contact_walls(q, sh, X, log, Contacts{ep, a.contact}, ss, Approach{y0, v0},
+                                    StepSpan{t, t1, steady});
         else if (ball)
-            contact = ball_walls(q, sh, X, log, ss, t, t1, steady);
+            contact = ball_walls(q, sh, X, log, ss, StepSpan{t, t1, steady});
 
         // streamed metrics
         prev = tip_aux(q, sh, X, false);
