@@ -87,42 +87,56 @@ std::int64_t level(double hi, double lo, double om, int levels) {
     return lv;
 }
 
-nb::tuple forcing_setup(const Real<3>& A, const Real<2>& B, const Cplx<2>& lam,
-                        const Cplx<3>& msum, const Real<3>& bnd0, const Real<2>& psis,
-                        const Real<1>& hi, const Real<1>& lo, double om, double f0,
-                        int levels) {
-    const size_t R = A.shape(0), nz = A.shape(1), nb = nz + 3;
-    require(A.shape(2) == nz && nz >= 1, "A must be (R, nz, nz)");
-    require(B.shape(0) == R && B.shape(1) == nz, "B must be (R, nz) as A");
-    require(lam.shape(0) == R && lam.shape(1) == nz, "lam must be (R, nz) as A");
+// A system's regimes as the forcing's setup reads them (boringbar.core.Regimes; the
+// per-system part that regimes.py's system_regimes keeps): each regime's state matrix A,
+// forcing input B and eigenvalues lam, the inverse sums and derivative bounds without the
+// forcing's entries, the bar's (psi_d, psi_L), and each regime's largest and smallest
+// nonzero |lambda|.  Its arrays are checked against each other where it is used.
+struct Regimes {
+    Real<3> A;
+    Real<2> B;
+    Cplx<2> lam;
+    Cplx<3> mode_sums;
+    Real<3> mode_bounds;
+    Real<2> psis;
+    Real<1> hi, lo;
+};
+
+nb::tuple forcing_setup(const Regimes& g, double om, double f0, int levels) {
+    const size_t R = g.A.shape(0), nz = g.A.shape(1), nb = nz + 3;
+    require(g.A.shape(2) == nz && nz >= 1, "A must be (R, nz, nz)");
+    require(g.B.shape(0) == R && g.B.shape(1) == nz, "B must be (R, nz) as A");
+    require(g.lam.shape(0) == R && g.lam.shape(1) == nz, "lam must be (R, nz) as A");
+    const Cplx<3>& msum = g.mode_sums;
     require(msum.shape(0) == R && msum.shape(1) == nb && msum.shape(2) == nb,
             "mode_sums must be (R, nz + 3, nz + 3)");
+    const Real<3>& bnd0 = g.mode_bounds;
     require(bnd0.shape(0) == R && bnd0.shape(1) == 4 && bnd0.shape(2) == nz + 1,
             "mode_bounds must be (R, 4, nz + 1)");
-    require(psis.shape(0) == 2 && psis.shape(1) <= nz, "psis must be (2, n), n <= nz");
-    require(hi.shape(0) == R && lo.shape(0) == R, "hi and lo must have R entries");
+    require(g.psis.shape(0) == 2 && g.psis.shape(1) <= nz, "psis must be (2, n), n <= nz");
+    require(g.hi.shape(0) == R && g.lo.shape(0) == R, "hi and lo must have R entries");
     require(std::isfinite(om) && om >= 0.0 && std::isfinite(f0), "Omega >= 0 and F0 finite");
     require(levels >= 1 && levels <= 62, "levels must be in [1, 62]");
-    const size_t n = psis.shape(1);
+    const size_t n = g.psis.shape(1);
     std::vector<cd> Z(R * nz), isum(R * nb * nb);
     std::vector<double> bnd(bnd0.data(), bnd0.data() + R * 4 * (nz + 1));
     std::vector<std::int64_t> levmax(R);
     std::vector<ncplx> z(nz);
     for (size_t r = 0; r < R; ++r) {
-        require(forced_response(A.data() + r * nz * nz, B.data() + r * nz, int(nz), om, f0,
+        require(forced_response(g.A.data() + r * nz * nz, g.B.data() + r * nz, int(nz), om, f0,
                                 z.data()),
                 "regime " + std::to_string(r) + ": i Omega I - A is singular");
         for (size_t k = 0; k < nz; ++k) Z[r * nz + k] = z[k];
-        inverse_sums(msum.data() + r * nb * nb, lam.data() + r * nz, int(nz), om,
+        inverse_sums(msum.data() + r * nb * nb, g.lam.data() + r * nz, int(nz), om,
                      isum.data() + r * nb * nb);
         for (size_t row = 0; row < 2; ++row) {  // psi_d . Z, then psi_L . Z
             ncplx s(0.0, 0.0);
-            for (size_t i = 0; i < n; ++i) s += exact::promote(psis(row, i)) * z[i];
+            for (size_t i = 0; i < n; ++i) s += exact::promote(g.psis(row, i)) * z[i];
             const double a = exact::abs(s);
             bnd[(r * 4 + row) * (nz + 1) + nz] = om * om * om * om * a;
             bnd[(r * 4 + row + 2) * (nz + 1) + nz] = om * om * om * a;
         }
-        levmax[r] = level(hi(r), lo(r), om, levels);
+        levmax[r] = level(g.hi(r), g.lo(r), om, levels);
     }
     return nb::make_tuple(owned_array<cd, 2>(std::move(Z), {R, nz}),
                           owned_array<cd, 3>(std::move(isum), {R, nb, nb}),
@@ -133,13 +147,20 @@ nb::tuple forcing_setup(const Real<3>& A, const Real<2>& B, const Cplx<2>& lam,
 }  // namespace
 
 void bind_forcing_setup(nb::module_& m) {
-    m.def("forcing_setup", &forcing_setup, nb::arg("A"), nb::arg("B"), nb::arg("lam"),
-          nb::arg("mode_sums"), nb::arg("mode_bounds"), nb::arg("psis"), nb::arg("hi"),
-          nb::arg("lo"), nb::arg("omega"), nb::arg("f0"), nb::arg("levels"),
+    nb::class_<Regimes>(m, "Regimes",
+                        "A system's regimes as forcing_setup reads them: each regime's A "
+                        "(R, nz, nz), B (R, nz) and eigenvalues lam (R, nz), the per-system "
+                        "mode_sums (R, nz + 3, nz + 3) and mode_bounds (R, 4, nz + 1) "
+                        "(simulate/regimes.py), psis = (psi_d, psi_L) (2, n), and hi, lo (R,) "
+                        "the regimes' largest and smallest nonzero |lambda|.")
+        .def(nb::init<Real<3>, Real<2>, Cplx<2>, Cplx<3>, Real<3>, Real<2>, Real<1>, Real<1>>(),
+             nb::arg("A"), nb::arg("B"), nb::arg("lam"), nb::arg("mode_sums"),
+             nb::arg("mode_bounds"), nb::arg("psis"), nb::arg("hi"), nb::arg("lo"));
+    m.def("forcing_setup", &forcing_setup, nb::arg("regimes"), nb::arg("omega"), nb::arg("f0"),
+          nb::arg("levels"),
           "(Z, isum, bnd, levmax): the exact integrator's setup that depends on the forcing "
-          "F0 sin(Omega t), from each regime's A, B and eigenvalues lam and the per-system "
-          "mode_sums and mode_bounds (simulate/regimes.py); psis = (psi_d, psi_L); hi, lo "
-          "the regimes' largest and smallest nonzero |lambda|.");
+          "F0 sin(Omega t), for a system's regimes (Regimes) and the forcing's Omega and F0; "
+          "levels: the grid's levels (GRID_LEVELS).");
 }
 
 }  // namespace bb::bind

@@ -311,11 +311,16 @@ def forcing_setup_args(omega=700.0, f0=10.0) -> dict:
             "omega": omega, "f0": f0, "levels": GRID_LEVELS}
 
 
+def forcing_setup(omega, f0, levels, **regimes):
+    """core.forcing_setup of the regimes whose arrays (core.Regimes's) are given by name."""
+    return core.forcing_setup(core.Regimes(**regimes), omega=omega, f0=f0, levels=levels)
+
+
 def test_the_forced_response_solves_its_equations():
     """Z of each regime solves (i Omega I - A) Z = B F0 as well as LAPACK's solve does
     (relative residual), and agrees with it to the problem's conditioning."""
     a = forcing_setup_args()
-    Z = core.forcing_setup(**a)[0]
+    Z = forcing_setup(**a)[0]
     nz = a["A"].shape[1]
     for r in range(a["A"].shape[0]):
         M, b = 1j * a["omega"] * np.eye(nz) - a["A"][r], a["B"][r] * a["f0"]
@@ -341,7 +346,7 @@ def test_a_bad_forcing_setup_argument_is_a_clear_error(field, value, message):
     a = forcing_setup_args()
     if message == "singular":
         a["omega"] = 0.0  # -A = 0 has no inverse
-    assert_refused(core.forcing_setup, a, field, value, message)
+    assert_refused(forcing_setup, a, field, value, message)
 
 
 def impact_period_args() -> dict:

@@ -384,9 +384,10 @@ def prepare(p: np.ndarray) -> dict:
     s = system_regimes(key)
     om = float(p[L.OMEGA])
     check_resonance(key, om)
-    Z, isum, bnd, levmax = core.forcing_setup(s.A, s.B, s.lam, s.mode_sums, s.mode_bounds,
-                                              s.psi, s.hi, s.lo, om, float(p[L.F0]),
-                                              GRID_LEVELS)
+    regimes = core.Regimes(A=s.A, B=s.B, lam=s.lam, mode_sums=s.mode_sums,
+                           mode_bounds=s.mode_bounds, psis=s.psi, hi=s.hi, lo=s.lo)
+    Z, isum, bnd, levmax = core.forcing_setup(regimes, omega=om, f0=float(p[L.F0]),
+                                              levels=GRID_LEVELS)
     # the reference's running maximum from Omega up: Omega unless some |lambda| exceeds it
     fastest = s.fastest if s.fastest > om else om
     h = 2 * math.pi / fastest / GRID_PER_PERIOD
