@@ -275,6 +275,7 @@ class SystemRegimes:
     lo: np.ndarray  # smallest nonzero |lambda| of each regime
     fastest: float  # largest |lambda| of all
     eh: np.ndarray | None  # the grid exponentials at h of ``fastest``
+    core_regimes: object  # the arrays forcing_setup reads, as one core.Regimes, built once
 
 
 def _check_diagonalisable(V, Vi, case, nreg):
@@ -332,8 +333,10 @@ def system_regimes(key: bytes) -> SystemRegimes:
     for a in (A, B, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, bounds, eh, sums, psi, hi_a, lo_a):
         if a is not None:
             a.flags.writeable = False
+    regimes = core.Regimes(A=A, B=B, lam=lam, mode_sums=sums, mode_bounds=bounds, psis=psi,
+                           hi=hi_a, lo=lo_a)
     return SystemRegimes(A, B, nreg, lam, V, Vi, Vh, kstep, D, bq, lvis, cvis, lam_l, sums,
-                         bounds, psi, hi_a, lo_a, fastest, eh)
+                         bounds, psi, hi_a, lo_a, fastest, eh, regimes)
 
 
 #: A forcing whose i Omega lies within this fraction of Omega of a regime's eigenvalue (an
@@ -384,9 +387,7 @@ def prepare(p: np.ndarray) -> dict:
     s = system_regimes(key)
     om = float(p[L.OMEGA])
     check_resonance(key, om)
-    regimes = core.Regimes(A=s.A, B=s.B, lam=s.lam, mode_sums=s.mode_sums,
-                           mode_bounds=s.mode_bounds, psis=s.psi, hi=s.hi, lo=s.lo)
-    Z, isum, bnd, levmax = core.forcing_setup(regimes, omega=om, f0=float(p[L.F0]),
+    Z, isum, bnd, levmax = core.forcing_setup(s.core_regimes, omega=om, f0=float(p[L.F0]),
                                               levels=GRID_LEVELS)
     # the reference's running maximum from Omega up: Omega unless some |lambda| exceeds it
     fastest = s.fastest if s.fastest > om else om
