@@ -95,7 +95,7 @@ BAD_OPTIONS = {
         "--rpm": (*NOT_FINITE, "0", "-1", "1e-3", "5", "0:inf:1", "900:1600:0"),
         "--at-rpm": ("1e-6", "5", "0"),
         "--depth-step-mm": (*NOT_FINITE, "0", "-1", "1e-9"),
-        "--max-depth-mm": (*NOT_FINITE, "0.001", "1e6", "-1"),
+        "--max-depth-mm": (*NOT_FINITE, "0.0005", "1e6", "-1"),
         "--successive": ("0", "101", "-1", "abc"),
         "--workers": ("0", "-1"),
         "--kr-mpa": (*NOT_FINITE, "0", "1e300"),

@@ -66,7 +66,7 @@ DIMENSIONLESS = frozenset({
     "revolutions", "periods", "period", "settle_periods", "max_points", "max_branches",
     "max_k", "batch", "workers", "chunk_size", "seed", "seeds", "samples", "trials", "starts",
     "count", "distinct", "record_every", "impacts_per_cycle", "points", "nodes",
-    "attractor", "attractor_id", "attractor_period", "parent", "branch", "point",
+    "attractor", "attractor_id", "attractor_period", "parent", "mirror", "branch", "point",
     "sample", "event", "multiplier", "trial", "objective", "index", "case_index",
     "periodicity", "pareto", "successive", "poincare_from",
     "stop_after", "poincare_sample", "status", "events", "impact_wall", "direction",
