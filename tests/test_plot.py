@@ -23,6 +23,7 @@ from boringbar.plot.style import (
     BAR_STYLE,
     OKABE_ITO,
     bar_name,
+    method_words,
     smallest_text_px,
     wrap_title,
 )
@@ -133,3 +134,16 @@ def test_smallest_text_px_reads_the_drawn_text(own_bar_sweep):
                    if t.get_visible() and t.get_text().strip())
     assert px == pytest.approx(smallest)
     assert 650 / (72 * 7.2) * smallest >= 10  # readable in one of the report's columns
+
+
+def test_a_verdict_s_method_in_a_title_is_a_few_words():
+    """The converged verdict's title says what a cut must do to be chatter-free, from which
+    knocks, and how it is integrated; the rest of the method (caps, confidence) stays in
+    the file's method_text, which a title takes as it is for another criterion."""
+    a = {"criterion": "growth", "tolerance_m": 1e-5, "knock_m": 1e-6, "knocks_m": "[]",
+         "integrator_used": "rk4", "dt_s": 2e-6, "method_text": "x" * 400}
+    assert method_words(a) == ("converged verdict: settled within 10 um p-p with the tool in "
+                               "the cut, after a 1 um knock; RK4, dt = 2 us")
+    two = method_words({**a, "knocks_m": "[2e-05]"})
+    assert "after knocks of 1 and 20 um;" in two
+    assert method_words({**a, "criterion": "zero"}) == a["method_text"]

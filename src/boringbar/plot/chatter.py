@@ -24,7 +24,15 @@ from matplotlib.patches import Patch
 
 from boringbar.analysis.chatter_map import UNDECIDED
 from boringbar.analysis.verdict import DECAYING
-from boringbar.plot.style import COLUMN_WIDTH_IN, DARK_GREY, GREY, OKABE_ITO, case_title, set_title
+from boringbar.plot.style import (
+    COLUMN_WIDTH_IN,
+    DARK_GREY,
+    GREY,
+    OKABE_ITO,
+    case_title,
+    method_words,
+    set_title,
+)
 
 #: The colour scale's sequence (light: small vibration, dark: large) and the fill of a
 #: cell whose vibration is not known (undecided, or a linear bar not run on).
@@ -101,7 +109,7 @@ def plot_chatter_map(ds, *, fig=None) -> Figure:
     _legend(fig, ds)
     a = ds.attrs
     set_title(fig, "chatter amplitude map", a,
-              f"{a['method_text']}; {a['cutting_law']}, feed {a['feed_m'] * 1e3:g} mm/rev")
+              f"{method_words(a)}; {a['cutting_law']}, feed {a['feed_m'] * 1e3:g} mm/rev")
     return fig
 
 

@@ -21,6 +21,7 @@ from boringbar.plot.style import (
     OKABE_ITO,
     TITLE_PT,
     case_title,
+    method_words,
     series_colour,
     set_title,
     wrap_title,
@@ -99,7 +100,7 @@ def plot_lobes(ds, at_rpm: float | None = None, *, fig=None) -> Figure:
     law = a.get("cutting_law") or f"Kr {a.get('kr_pa', math.nan) / 1e6:g} MPa"
     note = _cut_note(top, peak)
     set_title(fig, f"stability lobes by time-domain simulation ({a.get('method', '?')})", a,
-              f"{a.get('method_text', '')}; {law}, feed {a.get('feed_m', math.nan) * 1e3:g} "
+              f"{method_words(a)}; {law}, feed {a.get('feed_m', math.nan) * 1e3:g} "
               "mm/rev" + (f"\n{note}" if note else ""))
     return fig
 

@@ -180,3 +180,21 @@ def dropped_percent(attrs) -> float:
         return 100 * (1.0 - attrs["steady_fraction"])
     return 100 * attrs.get("drop", math.nan)
 
+
+#: the integrators as a title names them
+INTEGRATOR_WORDS = {"rk4": "RK4", "exact": "the exact integrator"}
+
+
+def method_words(a: dict) -> str:
+    """The converged verdict's method in a few words for a figure's title (the whole of
+    it, every cap and confidence, is the file's ``method_text`` and the command's summary
+    line); another criterion's method as it is."""
+    if a.get("criterion") != "growth" or "tolerance_m" not in a or "knock_m" not in a:
+        return a.get("method_text", "")
+    dt = f", dt = {a['dt_s'] * 1e6:g} us" if "dt_s" in a else ""
+    used = str(a.get("integrator_used", a.get("integrator", "?")))
+    knocks = [float(a["knock_m"]), *json.loads(a.get("knocks_m", "[]"))]
+    sizes = " and ".join(f"{k * 1e6:g}" for k in knocks)
+    after = f"a {sizes} um knock" if len(knocks) == 1 else f"knocks of {sizes} um"
+    return (f"converged verdict: settled within {a['tolerance_m'] * 1e6:g} um p-p with the "
+            f"tool in the cut, after {after}; {INTEGRATOR_WORDS.get(used, used)}{dt}")
