@@ -1,5 +1,5 @@
 """Parameter checks at the boundary: every error names the parameter, its value
-and the allowed range (STYLE.md rule 6).
+and the allowed range, so that a user knows what to change.
 
 Every number checked here must be finite: NaN and +-inf are refused by every
 helper, whatever the range (a NaN compares False with every bound, so a range
