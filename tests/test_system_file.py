@@ -397,3 +397,12 @@ def test_a_cavity_that_ends_at_the_tip_is_inside_the_bar():
     assert spec.cavity.position_m + spec.cavity.length_m / 2 > spec.bar.length_m
     ends = [s.end_m for s in spec.stepped_bar(True).sections]
     assert ends[-1] == spec.bar.length_m and len(ends) == 2
+
+
+def test_the_rolling_oriented_example_describes_what_the_published_model_leaves_out():
+    system = make_system("ball", spec=load_system(EXAMPLES / "carbide_rolling_oriented.toml"))
+    d = system.damper
+    assert (d.motion, d.contact, d.mu_static, d.mu_kinetic) == ("roll", "hertz", 0.2, 0.15)
+    assert system.bar.planes == 2 and system.bar.info["cut_geometry"]["hole_angle_deg"] == 20.0
+    run = simulate(system, Harmonic(20.0, 1.0), duration_s=0.05, record_every=0)
+    assert run.integrator == "rk4" and abs(run.energy["balance_relative"]) < 1e-6
