@@ -202,3 +202,17 @@ def test_a_missing_fit_is_named_by_its_option(tmp_path, capsys):
                  str(out)]) == 2
     assert capsys.readouterr().err.startswith("boringbar: error: --frf = ")
     assert not out.exists()
+
+
+def test_run_s_out_is_its_result_file_and_a_finished_one_is_kept(tmp_path, capsys):
+    """run's --out names the result file (.nc), not a folder: a second run of a finished
+    study keeps it (nothing recomputed), where the other commands refuse a file."""
+    study = tmp_path / "s.toml"
+    study.write_text('[study]\nanalysis = "sweep"\nname = "tiny"\n[run]\nduration_s = 0.01\n'
+                     '[grid]\ngap_mm = [0.5]\nfriction = ["off"]\nforce_n = [10.0]\n'
+                     'ratio = [1.0]\n')
+    out = tmp_path / "r.nc"
+    for _ in range(2):
+        assert main(["run", str(study), "--out", str(out), "--executor", "serial",
+                     "--quiet"]) == 0
+    assert out.is_file()

@@ -159,7 +159,8 @@ def _run(argv) -> int:
     if getattr(args, "out", "") is None and args.command != "run":  # run: the study's own
         args.out = default_out(args)
     try:
-        _check_out(getattr(args, "out", None))
+        if args.command != "run":  # run's --out is its result file (.nc), made anew
+            _check_out(getattr(args, "out", None))
         outcome = args.func(args)
         if isinstance(outcome, Outcome):
             outcome.report(args)
