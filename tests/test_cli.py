@@ -216,3 +216,18 @@ def test_run_s_out_is_its_result_file_and_a_finished_one_is_kept(tmp_path, capsy
         assert main(["run", str(study), "--out", str(out), "--executor", "serial",
                      "--quiet"]) == 0
     assert out.is_file()
+
+
+def test_a_log_gets_a_progress_line_at_each_tenth_and_quiet_gets_none(tmp_path, capsys):
+    """Where stderr is not a terminal (a job's log), a long command says how far it is in
+    plain lines, about one a tenth of the work, the last at the end; --quiet says
+    nothing."""
+    argv = ["lobes", "--bar", "solid", "--rpm", "1000:1400:20", "--out", str(tmp_path)]
+    assert main(argv) == 0
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert 2 <= len(lines) <= 12
+    assert all(line.startswith("boringbar lobes: ") and " (case, speed) columns, " in line
+               for line in lines)
+    assert lines[-1].startswith("boringbar lobes: 21/21 ")
+    assert main([*argv, "--quiet"]) == 0
+    assert capsys.readouterr().err == ""

@@ -45,7 +45,7 @@ from boringbar.model.system import (
     published_system_spec,
 )
 from boringbar.model.system_file import load_system
-from boringbar.progress import ProgressCallback
+from boringbar.progress import LineProgress, ProgressCallback
 from boringbar.simulate import (
     INTEGRATOR_CHOICES,
     MAX_INITIAL_DISPLACEMENT,
@@ -591,9 +591,13 @@ def forces_and_ratios(args):
 
 
 def progress_printer(args, command: str, what: str):
-    """A progress(done, total) bar on a terminal's stderr, else None."""
-    if args.quiet or not sys.stderr.isatty():
+    """A progress(done, total) callback: a bar on a terminal's stderr, a line at each tenth
+    of the work where stderr is a log (a long job's file or a scheduler's), None with
+    --quiet."""
+    if args.quiet:
         return None
+    if not sys.stderr.isatty():
+        return LineProgress(f"{PROG} {command}", what)
     return ProgressCallback(f"{PROG} {command}", what)
 
 
