@@ -8,6 +8,7 @@ JSON, its exit codes and its one-line errors.
 import argparse
 import importlib
 import json
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -16,7 +17,7 @@ import pytest
 import xarray as xr
 from cli_output import assert_one_line_error, json_out
 
-from boringbar.cli.main import COMMANDS, main
+from boringbar.cli.main import COMMANDS, TERM_GRACE_S, main
 
 SIMULATE_KEYS = {"natural_frequency_hz", "rms_tip_m", "pattern", "impacts_per_cycle",
                  "max_abs_rel_disp_m", "preset", "integrator", "elapsed_s", "files"}
@@ -233,3 +234,27 @@ def test_a_log_gets_a_progress_line_at_each_tenth_and_quiet_gets_none(tmp_path, 
     assert lines[-1].startswith("boringbar lobes: 21/21 ")
     assert main([*argv, "--quiet"]) == 0
     assert capsys.readouterr().err == ""
+
+
+SWALLOWER = """
+import sys, time
+from boringbar.cli.main import _sigterm_as_interrupt
+with _sigterm_as_interrupt():
+    print("ready", flush=True)
+    while True:
+        try:
+            time.sleep(0.05)
+        except BaseException:  # as a weakref callback or a __del__ loses it
+            pass
+"""
+
+
+def test_a_sigterm_whose_interruption_is_lost_still_ends_the_process():
+    """The interruption a SIGTERM raises can land where Python drops it (a weakref callback:
+    a page's server kept serving); the default SIGTERM then ends the process after the
+    grace period."""
+    proc = subprocess.Popen([sys.executable, "-c", SWALLOWER], stdout=subprocess.PIPE,
+                            text=True)
+    assert proc.stdout.readline().strip() == "ready"
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=TERM_GRACE_S + 10) == -signal.SIGTERM

@@ -119,6 +119,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+#: How long a SIGTERM's interruption may take to end the command (its workers stopped,
+#: its finished work kept) before the default SIGTERM ends the process.
+TERM_GRACE_S = 5.0
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM (a job scheduler's or a container's stop), taken as Ctrl-C is: the work
     finished so far is kept, the worker processes end, and the command exits."""
@@ -133,6 +138,15 @@ def _sigterm_as_interrupt():
         return
 
     def handler(signum, frame):
+        # An exception raised in a signal handler is lost where it lands in a weakref
+        # callback or a __del__ (Python prints "Exception ignored" and goes on: a page's
+        # server kept serving).  So the first SIGTERM also restores the default action
+        # and sends itself a second one after TERM_GRACE_S, which ends the process if
+        # the interruption did not.
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        timer = threading.Timer(TERM_GRACE_S, os.kill, (os.getpid(), signal.SIGTERM))
+        timer.daemon = True  # a command that ends in time ends with it
+        timer.start()
         raise Terminated
 
     previous = signal.signal(signal.SIGTERM, handler)
