@@ -170,10 +170,12 @@ def _run(argv) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors
         return exc.code if isinstance(exc.code, int) else 0
-    if getattr(args, "out", "") is None and args.command != "run":  # run: the study's own
+    # every --out is a folder but run's, its result file (default: the study's own)
+    folder_out = args.command != "run"
+    if folder_out and getattr(args, "out", "") is None:
         args.out = default_out(args)
     try:
-        if args.command != "run":  # run's --out is its result file (.nc), made anew
+        if folder_out:
             _check_out(getattr(args, "out", None))
         outcome = args.func(args)
         if isinstance(outcome, Outcome):

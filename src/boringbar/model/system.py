@@ -308,9 +308,11 @@ def _check_geometry_keys(spec: SystemSpec, bar: str, geometry) -> None:
     """Refuse a key of ``geometry`` that ``bar`` does not use (oriented.APPLIES_TO), where
     it is given and not as the system file describes the hardware (the file's keys
     describe every bar it builds, each taking its own)."""
-    for key in unused_keys(geometry or spec.orientation, bar):
-        value = getattr(geometry or spec.orientation, key)
-        if geometry is not None and value != getattr(spec.orientation, key):
+    if geometry is None:
+        return
+    for key in unused_keys(geometry, bar):
+        value = getattr(geometry, key)
+        if value != getattr(spec.orientation, key):
             users = " and ".join(APPLIES_TO[key])
             why = (" (the ball bar's planes are its cavity's section bent along and across "
                    "the cavity)" if bar == "ball" else " (nothing moves in a solid bar)")
