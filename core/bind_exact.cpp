@@ -150,8 +150,6 @@ Shape check_params(Vec p) {
     require(p[L::CONTACT_K] == 0.0, "p[CONTACT_K] must be 0: the exact integrator takes the "
                                     "impact law; a Hertz contact steps with run_rk4");
     if (s.roll) {
-        require(!s.regen, "p[ROLL] must be 0 in a regenerative cut: the exact integrator "
-                          "takes a rolling ball under harmonic forcing (a cut: run_rk4)");
         require(p[L::REACTION] == 1.0, "p[REACTION] must be 1 for a rolling ball: its "
                                        "floor's friction reacts on the bar reciprocally");
         require(p[L::BALL_MASS] > 0.0 && p[L::ROLL_STATIC] >= p[L::ROLL_KINETIC] &&
