@@ -13,7 +13,8 @@ on every variant alike), each with its ratio to the first of its group:
 - planes (section 4.7): one plane and two (Kt / Kr = 2.5, lead angle 30 degrees), with
   1 and 2 modes a plane, at F0 = 20 N;
 - the exact integrator's sliding and rolling ball (docs/exact.md, "A rolling ball") at
-  F0 = 20 N, 2 N (a rolling ball rolls and slips each half period) and 0.05 N, each call
+  F0 = 20 N, 2 N (a rolling ball rolls and slips each half period), 0.05 N and in the
+  cut, each call
   timed five times a round (a call takes milliseconds), with the run's events (impacts,
   sticks and slips, a rolling ball's roll/slip switches) and the time per event.
 
@@ -38,7 +39,8 @@ LOADS = {"F0 = 20 N": bb.Harmonic(amplitude_n=20.0),
          "cut, 0.2 mm": bb.Regenerative(depth_m=2e-4, rpm=1200.0)}
 EXACT_LOADS = {"exact, F0 = 20 N": bb.Harmonic(amplitude_n=20.0),
                "exact, F0 = 2 N": bb.Harmonic(amplitude_n=2.0),
-               "exact, F0 = 0.05 N": bb.Harmonic(amplitude_n=0.05)}
+               "exact, F0 = 0.05 N": bb.Harmonic(amplitude_n=0.05),
+               "exact, cut, 0.2 mm": LOADS["cut, 0.2 mm"]}
 EXACT_CALLS = 5  # an exact call's timings a round
 TWO_PLANES = {"planes": 2, "cut_geometry": CutGeometry(force_ratio=2.5, lead_angle_deg=30.0)}
 
