@@ -298,7 +298,7 @@ double run_exact_py(const ExactRunPy& run) {
 
     a.x = span1<double>(given(r.x, "x"), "x", 2 * s.n + 2 + (s.roll ? 1 : 0));
     finite_view(a.x, "x");
-    a.rec = record_rows(given(r.rec, "rec"), "rec", L::REC_NCOL);
+    a.rec = record_rows(given(r.rec, "rec"), "rec", rec_columns(r.rec, s.roll));
     a.imp = record_rows(given(r.imp, "imp"), "imp", L::IMP_NCOL);
     a.stick = record_rows(given(r.stick, "stick"), "stick", L::STICK_NCOL);
     a.strobe = record_rows(given(r.strobe, "strobe"), "strobe", L::STROBE_NCOL);
@@ -326,7 +326,8 @@ void bind_exact(nb::module_& m) {
         .real("t_end", &ExactRunPy::t_end, "the end time (s), >= t0")
         .real("t_steady", &ExactRunPy::t_steady, "the steady window's start (s)")
         .real("rec_dt", &ExactRunPy::rec_dt, "the history's sampling step (s); 0: none")
-        .out("rec", &ExactRunPy::rec, "the history rows (t, W, W', aux, aux', f), (n, 6)")
+        .out("rec", &ExactRunPy::rec, "the history rows (t, W, W', aux, aux', f), (n, 6); a "
+                                      "rolling ball's (n, 7) adds its spin")
         .out("imp", &ExactRunPy::imp, "the impact rows (t, wall, y'-), (n, 3)")
         .out("stick", &ExactRunPy::stick, "the stick intervals (start, end), (n, 2)")
         .out("strobe", &ExactRunPy::strobe, "the Poincare rows (t, W, W', aux, aux'), (n, 5)")

@@ -179,7 +179,7 @@ void run_rk4(const RK4Run& run) {
     a.rec_every = r.rec_every;
     check_time(a.t0, a.dt, a.n_steps, a.steady_start);
     require(a.rec_every >= 0, "rec_every = " + std::to_string(a.rec_every) + " must be >= 0");
-    a.rec = span2<double>(given(r.rec, "rec"), "rec", -1, L::REC_NCOL);
+    a.rec = span2<double>(given(r.rec, "rec"), "rec", -1, rec_columns(r.rec, rolls(a.p, k)));
     a.imp = span2<double>(given(r.imp, "imp"), "imp", -1, L::IMP_NCOL);
     a.stick = span2<double>(given(r.stick, "stick"), "stick", -1, L::STICK_NCOL);
     a.strobe = span2<double>(given(r.strobe, "strobe"), "strobe", -1, L::STROBE_NCOL);
@@ -253,7 +253,8 @@ void bind_rk4(nb::module_& m) {
         .integer("steady_start", &RK4Run::steady_start,
                  "the first step of the steady part, in [0, n_steps]")
         .integer("rec_every", &RK4Run::rec_every, "a history row every this many steps; 0: none")
-        .out("rec", &RK4Run::rec, "the history rows (t, W, W', aux, aux', f), (n, 6)")
+        .out("rec", &RK4Run::rec, "the history rows (t, W, W', aux, aux', f), (n, 6); a "
+                                  "rolling ball's (n, 7) adds its spin")
         .out("imp", &RK4Run::imp, "the impact rows (t, wall, y'-), (n, 3)")
         .out("stick", &RK4Run::stick, "the stick intervals (start, end), (n, 2)")
         .out("strobe", &RK4Run::strobe, "the Poincare rows (t, W, W', aux, aux'), (n, 5)")

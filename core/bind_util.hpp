@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "arrays.hpp"
+#include "layout.hpp"
 
 namespace bb::bind {
 
@@ -120,6 +121,15 @@ Span4<T> span4(const A& a, const char* name, std::int64_t n0 = -1, std::int64_t 
     T* d = checked<T>(a, name, {n0, n1, n2, n3});
     return {d, std::int64_t(a.shape(0)), std::int64_t(a.shape(1)), std::int64_t(a.shape(2)),
             std::int64_t(a.shape(3))};
+}
+
+// The history's columns: REC_NCOL, or one more (the spin) for a rolling ball whose rec
+// has it.
+template <class A>
+std::int64_t rec_columns(const A& rec, bool roll) {
+    constexpr std::int64_t ncol = layout::REC_NCOL;
+    const bool spin = roll && rec.ndim() == 2 && std::int64_t(rec.shape(1)) == ncol + 1;
+    return spin ? ncol + 1 : ncol;
 }
 
 // A scalar argument outside its range is a ValueError that names it.

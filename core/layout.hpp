@@ -121,7 +121,8 @@ enum MetSlot : int { BB_METRICS(BB_ENUM_ENTRY) MET_SIZE };
 #undef BB_ENUM_ENTRY
 
 // columns of the record arrays
-constexpr int REC_NCOL = 6;     // t, W, W', aux, aux', force
+constexpr int REC_NCOL = 6;     // t, W, W', aux, aux', force; a rolling ball's run may
+                                // give rec one column more, for its spin s = r omega
 constexpr int IMP_NCOL = 3;     // t, wall, v_before
 constexpr int STICK_NCOL = 2;   // start, end
 constexpr int STROBE_NCOL = 5;  // t, W, W', aux, aux'

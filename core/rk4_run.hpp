@@ -407,6 +407,8 @@ BB_INLINE void run_body(const RunArgs& a) {
             row[3] = prev.aux;
             row[4] = prev.auxd;
             row[5] = fst[3];
+            // a rolling ball's spin where rec has its column
+            if (sh.rolls() && a.rec.n1 > L::REC_NCOL) row[L::REC_NCOL] = X[sh.is()];
             n_rec += 1;
         }
         sn = ph.s_1;

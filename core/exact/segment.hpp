@@ -1032,6 +1032,8 @@ inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row)
 inline void history_row(Work& w, SegCtx c, double tau, ncplx ph, double* row) {
     row_state(w, c, tau, row);
     row[5] = cut_force(w.seg, tau, w.dX, c.n, w.sys.mk, w.sys.force.f0, w.sys.force.om, ph.im);
+    // a rolling ball's spin where rec has its column: y' while rolling, else s0 + sd tau
+    if (w.rec.n1 > L::REC_NCOL) row[L::REC_NCOL] = c.mode == ROLL ? row[4] : w.seg.s0 + w.seg.sd * tau;
 }
 
 // The history rows of a segment (every rec_dt from t0, in (t, t + b], before t_end, while

@@ -465,7 +465,7 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
     stick = np.empty((cap_imp, 2))
     stb = np.empty((int(n_periods) + 2 if strobe else 0, 5))
     n_rec = n_steps // record_every if record_every else 0
-    rec = np.empty((n_rec, 6))
+    rec = np.empty((n_rec, 7 if rolling(system) else 6))  # a rolling ball's spin last
     met = np.zeros(L.MET_SIZE)
     met[L.STEADY_MAX_W] = -np.inf
     met[L.STEADY_MIN_W] = np.inf

@@ -183,7 +183,8 @@ class Run:
     (rad/s); ``dt_s``, ``t0_s``, ``duration_s`` (s) and ``steady_start_s`` (s), where RMS
     and patterns begin; ``metrics``: the streamed metrics; ``impacts`` (time, wall,
     relative velocity), ``sticks`` (start, end), ``strobe`` (Poincare samples) and
-    ``history`` (t, W, W', aux, aux', force; None unless recorded); ``initial`` and
+    ``history`` (t, W, W', aux, aux', force, and a rolling ball's spin; None unless
+    recorded); ``initial`` and
     ``final``: the states it started from and ended at; ``contacts``: a Hertz
     contact's impacts in the steady part (start, wall, v_in, duration, peak force,
     v_out; none under the impact law); ``pattern``: the impact
@@ -203,7 +204,8 @@ class Run:
     impacts: np.ndarray  #: (n, 3): time, wall (+1/-1), relative velocity before
     sticks: np.ndarray  #: (n, 2): start, end of stick intervals in the steady part
     strobe: np.ndarray  #: (n, 5): Poincare samples t, W, W', aux, aux'
-    history: np.ndarray | None  #: (n, 6): t, W, W', aux, aux', force
+    #: (n, 6): t, W, W', aux, aux', force; a rolling ball's (n, 7), its spin r omega last
+    history: np.ndarray | None
     initial: State
     final: State
     elapsed_s: float
@@ -401,6 +403,10 @@ class Run:
                 f"{aux}_m": (time, h[:, 3], {"units": "m"}),
                 f"{aux}_velocity_m_s": (time, h[:, 4], {"units": "m/s"}),
                 "force_n": (time, h[:, 5], {"units": "N"}),
+                **({"ball_spin_m_s": (time, h[:, 6], {
+                    "units": "m/s", "long_name": "the rolling ball's spin r omega: its "
+                    "surface's speed about its centre (y' while it rolls without slip)"})}
+                   if h.shape[1] > 6 else {}),
             },
             coords={"time_s": (time, h[:, 0], {"units": "s"})},
             attrs={"config": json.dumps(self.config(), default=_plain),
