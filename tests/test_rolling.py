@@ -29,6 +29,7 @@ from boringbar.model.bar import ModalModel
 from boringbar.model.dampers import NO_FRICTION, Friction, ImpactDamper
 from boringbar.model.system import System, make_system
 from boringbar.model.system_file import SystemFileError, parse_system, published_file_text
+from boringbar.plot import plot_run
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import setup_run, simulate_batch
 
@@ -402,3 +403,17 @@ def test_the_history_records_the_spin(integrator, tmp_path):
     sliding = bb.simulate(make_system("ball"), bb.Harmonic(2.0), duration_s=0.01,
                           integrator=integrator)
     assert sliding.history.shape[1] == 6 and "ball_spin_m_s" not in sliding.to_xarray()
+
+
+def test_a_rolling_ball_s_run_figure_shows_its_spin():
+    """run.png of a rolling ball has a third row, its y' and spin, read from the run's
+    file as from the run; a sliding ball's has two."""
+    roll = bb.simulate(make_system("ball", motion="roll"), bb.Harmonic(2.0), duration_s=0.05)
+    for source in (roll, roll.to_xarray()):
+        fig = plot_run(source)
+        lower = fig.axes[4]
+        assert len(fig.axes) == 6 and "spin" in lower.get_ylabel()
+        np.testing.assert_array_equal(lower.lines[1].get_ydata(), roll.history[:, 6] * 1e3)
+        assert "rolling ball (mu_s 0.2, mu_k 0.15)" in "".join(t.get_text() for t in fig.texts)
+    slide = bb.simulate(make_system("ball"), bb.Harmonic(2.0), duration_s=0.05)
+    assert len(plot_run(slide).axes) == 4

@@ -29,6 +29,8 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     tip displacement W (mm); below it the ball's displacement y relative to
     the bar (mm) with the walls at +-delta/2 dashed (ball bar), the absorber
     stroke (mm) (TMD bar), or the force at the tip (N) (solid bar, locked ball).
+    A rolling ball's run has a third row: its velocity y' and its spin r omega
+    (mm/s), one line where it rolls without slip.
     A regenerative cut is drawn by :func:`_cut_figure` instead: tip
     displacement and cutting force, the chatter verdict in the title.
     The left column is the whole record (a dotted line marks the start of the
@@ -46,9 +48,10 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
     t = ds["time_s"].values
     w = ds["tip_displacement_m"].values * 1e3
     lower, lower_label, colour = _run_lower(ds, kind)
+    spin = "ball_spin_m_s" in ds
     if fig is None:
-        fig = Figure(figsize=(12, 6.5), layout="constrained")
-    axes = fig.subplots(2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
+        fig = Figure(figsize=(12, 8.5 if spin else 6.5), layout="constrained")
+    axes = fig.subplots(3 if spin else 2, 2, sharex="col", sharey="row", width_ratios=(3, 1))
     freq = summary.get("forcing_frequency_hz") or 0.0
     t_zoom = t[-1] - zoom_periods / freq if freq > 0 and t.size else -np.inf
     zoom = t >= t_zoom
@@ -56,7 +59,9 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
         axes[0, col].plot(t[sel], w[sel], lw=0.6 if col == 0 else 1.0,
                           color=CUT_COLOURS["tip"])
         axes[1, col].plot(t[sel], lower[sel], lw=0.6 if col == 0 else 1.0, color=colour)
-        axes[1, col].set_xlabel("time t (s)")
+        if spin:
+            _spin_row(axes[2, col], ds, sel, whole=col == 0)
+        axes[-1, col].set_xlabel("time t (s)")
         if t[sel].size:
             axes[0, col].set_xlim(t[sel][0], t[sel][-1])
     axes[0, 0].set_ylabel("tip displacement W (mm)")
@@ -68,6 +73,8 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
         _impact_marks(axes[1, 1], ds, t_zoom, damper.get("gap_m"))
     for ax in axes.flat:
         ax.grid(alpha=0.3)
+    if spin:
+        axes[2, 0].set_ylabel("ball velocity y' and\nspin r$\\omega$ (mm/s)")
     legend_below(fig, [*axes[:, 0], axes[1, 1]])
     what, details = _run_title(summary, damper)
     set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")}, details)
@@ -83,6 +90,20 @@ def _run_lower(ds, kind: str) -> tuple[np.ndarray, str, str]:
     if kind == "tmd" and "absorber_stroke_m" in ds:
         return ds["absorber_stroke_m"].values * 1e3, "absorber stroke (mm)", bar_colour("tmd")
     return ds["force_n"].values, "tip force f (N)", CUT_COLOURS["force"]
+
+
+def _spin_row(ax, ds, sel, whole: bool) -> None:
+    """A rolling ball's velocity y' relative to the bar and its spin r omega (mm/s): they
+    are one line where it rolls without slip, and apart by its slip where it slips
+    (``whole``: the whole record's panel, which carries the labels)."""
+    t = ds["time_s"].values[sel]
+    lw = 0.6 if whole else 1.0
+    ax.plot(t, ds["y_velocity_m_s"].values[sel] * 1e3, lw=lw, color=bar_colour("ball"),
+            label="ball velocity y' relative to bar" if whole else None)
+    ax.plot(t, ds["ball_spin_m_s"].values[sel] * 1e3, lw=lw, ls="--",
+            color=OKABE_ITO["reddish purple"],
+            label=r"spin r$\omega$ (on y' where the ball rolls without slip)" if whole
+            else None)
 
 
 def _run_guides(axes, rms, gap, steady) -> None:
@@ -130,6 +151,9 @@ def _run_title(summary: dict, damper: dict) -> tuple[str, str]:
         parts.append(f"gap {damper.get('gap_m', math.nan) * 1e3:g} mm")
         parts.append(f"friction {damper.get('friction_force_n', 0.0):.3g} N")
         parts.append(f"e = {damper.get('restitution', math.nan):g}")
+        if damper.get("motion") == "roll":
+            parts.append(f"rolling ball (mu_s {damper.get('mu_static', math.nan):g}, "
+                         f"mu_k {damper.get('mu_kinetic', math.nan):g})")
     if summary.get("pattern"):
         ipc = summary.get("impacts_per_cycle")
         parts.append(f"pattern: {summary['pattern']}"
