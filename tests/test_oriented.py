@@ -237,7 +237,7 @@ def test_the_cavity_section_across_the_ball_is_its_moment_about_the_other_axis()
     int ds / I(s) with the strip's moment about the other axis, by adaptive quadrature."""
     from scipy.integrate import quad
 
-    from boringbar.model.system_file import cavity_section_diameter, cut_section_moment
+    from boringbar.model.cavity_section import cavity_section_diameter, cut_section_moment
     d, bore, length, depth = 0.025, 0.008, 0.0151, 0.02
     a, h = length / 2, depth / 2
     flex = quad(lambda t: math.cos(t) / cut_section_moment(d, bore, h, a * math.cos(t)),

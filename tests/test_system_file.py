@@ -18,12 +18,11 @@ from boringbar import Harmonic, simulate
 from boringbar._validate import ROUND_OFF, in_range, near
 from boringbar.cli.main import build_parser, main
 from boringbar.cli.options import many_cases
+from boringbar.model.cavity_section import cavity_section_diameter, cut_section_moment
 from boringbar.model.materials import MATERIALS
 from boringbar.model.system import System, describe_modes, make_system
 from boringbar.model.system_file import (
     SystemFileError,
-    cavity_section_diameter,
-    cut_section_moment,
     load_system,
     parse_system,
     published_file_text,

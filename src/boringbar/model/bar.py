@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg
 
-from boringbar._validate import ParameterError, check_positive, check_range
+from boringbar._validate import ParameterError, check_choice, check_positive, check_range
 from boringbar.model.linalg import one_blas_thread
 from boringbar.model.materials import MATERIALS
 
@@ -40,6 +40,11 @@ class Section:
     ``diameter_m`` is the outer (model) diameter in m; ``inner_diameter_m`` > 0
     makes it a tube.  ``moment_scale`` multiplies its second moment of area alone (a
     cavity's section bent across the ball's direction: its stiffness, with its mass).
+    A section that is not round (flats, an off-centre bore) gives its own
+    ``given_moments_m4``, its second moments of area (m^4) for bending in the bar's
+    first and second planes, each at most the round section's; ``plane`` (0 or 1) is
+    the plane its bar is bent in.  ``given_area_m2`` (m^2): its area, at most the round
+    section's; None: the round section's.
     """
 
     start_m: float
@@ -47,6 +52,9 @@ class Section:
     diameter_m: float
     inner_diameter_m: float = 0.0
     moment_scale: float = 1.0
+    given_moments_m4: tuple[float, float] | None = None
+    given_area_m2: float | None = None
+    plane: int = 0
 
     def __post_init__(self):
         check_range("section start_m", self.start_m, 0.0, math.inf)
@@ -58,14 +66,37 @@ class Section:
         check_positive("section diameter_m", self.diameter_m, "m")
         check_range("section inner_diameter_m", self.inner_diameter_m, 0.0, self.diameter_m,
                     hi_open=True)
+        check_choice("section plane", self.plane, (0, 1))
+        if self.given_moments_m4 is not None:
+            if len(self.given_moments_m4) != 2:
+                raise ParameterError(f"section given_moments_m4 = {self.given_moments_m4!r} "
+                                     "must be two second moments (m^4), one a plane")
+            for k, moment in enumerate(self.given_moments_m4):
+                check_range(f"section given_moments_m4[{k}]", moment, 0.0, self.round_moment_m4,
+                            lo_open=True, unit="m^4", why="at most the round section's")
+        if self.given_area_m2 is not None:
+            check_range("section given_area_m2", self.given_area_m2, 0.0, self.round_area_m2,
+                        lo_open=True, unit="m^2", why="at most the round section's")
 
     @property
-    def area_m2(self) -> float:
+    def round_area_m2(self) -> float:
+        """The round section's (or tube's) area (m^2)."""
         return math.pi / 4.0 * (self.diameter_m**2 - self.inner_diameter_m**2)
 
     @property
+    def round_moment_m4(self) -> float:
+        """The round section's (or tube's) second moment of area (m^4)."""
+        return math.pi / 64.0 * (self.diameter_m**4 - self.inner_diameter_m**4)
+
+    @property
+    def area_m2(self) -> float:
+        return self.round_area_m2 if self.given_area_m2 is None else self.given_area_m2
+
+    @property
     def second_moment_m4(self) -> float:
-        return math.pi / 64.0 * (self.diameter_m**4 - self.inner_diameter_m**4) * self.moment_scale
+        if self.given_moments_m4 is not None:
+            return self.given_moments_m4[self.plane]
+        return self.round_moment_m4 * self.moment_scale
 
 
 def published_sections(cavity: bool = True) -> tuple[Section, ...]:
@@ -334,6 +365,16 @@ class SteppedBar:
                  self.clamp_rotational_stiffness_n_m_per_rad, "N m/rad")):
             if value != math.inf:  # inf: rigid
                 check_positive(name, value, unit)
+
+    @property
+    def plane_moments(self) -> bool:
+        """Whether a section gives its own second moments a plane (not round)."""
+        return any(s.given_moments_m4 is not None for s in self.sections)
+
+    def in_plane(self, plane: int) -> SteppedBar:
+        """This bar bent in its ``plane`` (0: the first, 1: the second): each section with
+        given second moments takes that plane's."""
+        return replace(self, sections=tuple(replace(s, plane=plane) for s in self.sections))
 
     @property
     def rigid_clamp(self) -> bool:

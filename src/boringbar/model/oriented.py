@@ -119,16 +119,18 @@ def _clean(values: np.ndarray) -> np.ndarray:
 
 
 def oriented_model(plane: ModalModel, geometry: CutGeometry,
-                   across: ModalModel | None = None) -> ModalModel:
+                   across: ModalModel | None = None, cavity: bool = True) -> ModalModel:
     """The bar of ``plane``'s modes in both principal planes under the oriented cut
     ``geometry`` (module docstring): 2 n modes, those of the plane nearer the radial
     direction first (its first mode carries the tip's normalisation).
 
-    ``across``: the second plane's own modal model, for a bar whose cavity makes its
-    planes differ (the FE bar bent across the ball's direction); its planes are then
-    along and across the cavity (phi_1 = ``hole_angle_deg``; ``principal_angle_deg`` and
-    ``stiffness_ratio`` describe a bar without a cavity).  None: ``plane``'s modes with
-    EI times ``stiffness_ratio``, at ``principal_angle_deg``."""
+    ``across``: the second plane's own modal model, for a bar whose sections make its
+    planes differ: with ``cavity``, the FE bar bent across the ball's direction, its
+    planes along and across the cavity (phi_1 = ``hole_angle_deg``;
+    ``principal_angle_deg`` and ``stiffness_ratio`` describe a bar without a cavity);
+    without, a bar whose sections give their second moments a plane, at
+    ``principal_angle_deg``.  None: ``plane``'s modes with EI times
+    ``stiffness_ratio``, at ``principal_angle_deg``."""
     g = geometry
     if across is not None and across.n_modes != plane.n_modes:
         raise ParameterError(f"the planes' modal models have {plane.n_modes} and "
@@ -138,7 +140,7 @@ def oriented_model(plane: ModalModel, geometry: CutGeometry,
                              f"{2 * plane.n_modes} modes; the core takes at most 8 (give "
                              "n_modes <= 4)")
     kappa, alpha = math.radians(g.lead_angle_deg), math.radians(g.hole_angle_deg)
-    first = g.hole_angle_deg if across is not None else g.principal_angle_deg
+    first = g.hole_angle_deg if across is not None and cavity else g.principal_angle_deg
     phis = [math.radians(first), math.radians(first) + math.pi / 2]
     models = [plane, across if across is not None else
               replace(plane, stiffness_n_m=plane.stiffness_n_m * g.stiffness_ratio)]

@@ -200,11 +200,8 @@ def make_system(bar: str = "ball", preset: str = "physical", *, gap_m: float | N
     _check_bar_args(bar, locals())
     spec = published_system_spec() if spec is None else spec
     paper = preset == "paper"
-    given = modal
-    modal, readings = _modal(spec, bar, paper, n_modes, z_absorber_m, modal)
-    across = (_across(spec, modal, z_absorber_m)
-              if bar == "ball" and given is None and spec.cavity is not None else None)
-    modal = _planes(spec, bar, modal, planes, cut_geometry, across)
+    built, readings = _modal(spec, bar, paper, n_modes, z_absorber_m, modal)
+    modal = _planes(spec, bar, built, planes, cut_geometry, modal is None, z_absorber_m)
     if bar == "solid":
         return System(modal, None, preset, tuple(readings), spec)
     if bar == "tmd":
@@ -286,10 +283,13 @@ def _check_unused(damper: ImpactDamper, **given) -> None:
                                  "give contact = 'hertz' (--contact hertz), or leave it out")
 
 
-def _planes(spec: SystemSpec, bar: str, modal: ModalModel, planes, geometry,
-            across) -> ModalModel:
-    """``modal`` in both bending planes under the oriented cut, where asked (``across``:
-    a cavity bar's modes bent across the ball's direction, a callable)."""
+def _planes(spec: SystemSpec, bar: str, modal: ModalModel, planes, geometry, own: bool,
+            z_absorber) -> ModalModel:
+    """``modal`` in both bending planes under the oriented cut, where asked.  Its second
+    plane is a finite-element bar of its own where ``modal`` is the file's (``own``, built
+    with the absorber at ``z_absorber``) and the planes differ by more than a stiffness
+    ratio: the ball bar's across its cavity, or a bar's whose sections give their second
+    moments a plane."""
     planes = spec.planes if planes is None else check_int("planes", planes, 1, 2)
     if geometry is not None and not isinstance(geometry, CutGeometry):
         raise TypeError(f"cut_geometry = {geometry!r} must be a CutGeometry "
@@ -300,8 +300,15 @@ def _planes(spec: SystemSpec, bar: str, modal: ModalModel, planes, geometry,
             raise ParameterError("cut_geometry applies to a bar of two bending planes: give "
                                  "planes = 2")
         return modal
-    return oriented_model(modal, spec.orientation if geometry is None else geometry,
-                          None if across is None else across())
+    geometry = spec.orientation if geometry is None else geometry
+    cavity = bar == "ball" and spec.cavity is not None
+    across = (_across(spec, modal, z_absorber, cavity)
+              if own and (cavity or spec.bar.plane_moments) else None)
+    if across is not None and not cavity and geometry.stiffness_ratio != 1.0:
+        raise ParameterError(f"cut_geometry's stiffness_ratio = {geometry.stiffness_ratio:g}: "
+                             f"the sections of {spec.name!r} give each plane's second moments "
+                             "(second_moments_mm4); leave stiffness_ratio out")
+    return oriented_model(modal, geometry, None if across is None else across(), cavity)
 
 
 def _check_geometry_keys(spec: SystemSpec, bar: str, geometry) -> None:
@@ -320,12 +327,13 @@ def _check_geometry_keys(spec: SystemSpec, bar: str, geometry) -> None:
                                  f"bars, not to bar = {bar!r}{why}; leave it out")
 
 
-def _across(spec: SystemSpec, plane: ModalModel, z_absorber):
-    """The cavity bar's modes bent across the ball's direction, as ``plane`` was built
-    (its modes, damping, and the paper preset's stiffness calibration): a callable, so
-    that a bar of one plane does not compute them."""
+def _across(spec: SystemSpec, plane: ModalModel, z_absorber, cavity: bool):
+    """The bar's modes bent in its second plane (a ``cavity`` bar's across the ball's
+    direction), as ``plane`` was built (its modes, damping, and the paper preset's
+    stiffness calibration): a callable, so that a bar of one plane does not compute
+    them."""
     def build() -> ModalModel:
-        other = spec.modal(True, plane.n_modes, z_absorber, across=True)
+        other = spec.modal(cavity, plane.n_modes, z_absorber, across=True)
         other = replace(other, damping_ratio=plane.damping_ratio)
         scale = plane.info.get("stiffness_scale", 1.0)
         return replace(other, stiffness_n_m=other.stiffness_n_m * scale)

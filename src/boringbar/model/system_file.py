@@ -25,10 +25,9 @@ from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
-
 from boringbar._validate import ParameterError, in_range, near, read_toml
 from boringbar.model.bar import MAX_ELEMENTS, ModalModel, Section, SteppedBar
+from boringbar.model.cavity_section import cavity_section_diameter
 from boringbar.model.contact import CONTACT_LAWS, HERTZ_MIN_RESTITUTION
 from boringbar.model.dampers import (
     BALL_MOTIONS,
@@ -151,11 +150,13 @@ class SystemSpec:
         return self.tmd.position_m if self.tmd else self.bar.length_m
 
     def stepped_bar(self, cavity: bool, across: bool = False) -> SteppedBar:
-        """The FE bar: with the cavity's section (``cavity``) or without; ``across``: the
-        cavity's section for bending across the ball's direction."""
+        """The FE bar: with the cavity's section (``cavity``) or without; ``across``: bent
+        in the second plane (the cavity's section across the ball's direction, and the
+        sections' second moments of the second plane where they give their own)."""
+        bar = self.bar.in_plane(1) if across and self.bar.plane_moments else self.bar
         if not cavity or self.cavity is None:
-            return self.bar
-        return _with_cavity(self.bar, self.cavity, across)
+            return bar
+        return _with_cavity(bar, self.cavity, across)
 
     def modal(self, cavity: bool, n_modes: int,
               z_absorber_m: float | None = None, across: bool = False) -> ModalModel:
@@ -205,12 +206,16 @@ def loads_system(text: str, source: str) -> SystemSpec:
 
 
 def merged_sections(sections: list[dict]) -> list[dict]:
-    """A description's sections (dicts with end_mm, diameter_mm, bore_mm) with
-    neighbours of one diameter and bore merged: the spans a cavity may move along."""
+    """A description's sections (dicts with end_mm, diameter_mm, bore_mm and maybe
+    second_moments_mm4, area_mm2) with neighbours of one shape merged: the spans a
+    cavity may move along."""
+    def shape(s: dict) -> tuple:
+        return (s["diameter_mm"], s.get("bore_mm", 0.0), s.get("second_moments_mm4"),
+                s.get("area_mm2"))
+
     merged = []
     for s in sections:
-        if merged and (merged[-1]["diameter_mm"], merged[-1].get("bore_mm", 0.0)) == (
-                s["diameter_mm"], s.get("bore_mm", 0.0)):
+        if merged and shape(merged[-1]) == shape(s):
             merged[-1] = dict(merged[-1], end_mm=s["end_mm"])
         else:
             merged.append(dict(s))
@@ -313,6 +318,9 @@ def parse_system(d: dict, source: str = "<dict>") -> SystemSpec:
     tmd, tmd_data = _tmd(r, d, bar)
     calibration = _paper(r, d)
     planes, orientation, orient_data = _orientation(r, d)
+    if bar.plane_moments and orientation.stiffness_ratio != 1.0:
+        r.fail("orientation.stiffness_ratio", orientation.stiffness_ratio, "the sections give "
+               "each plane's second moments (second_moments_mm4): leave stiffness_ratio out")
     name = r.text(d, "name", Path(source).stem if source not in ("<dict>", "") else "system")
     data = {"name": name, "description": r.text(d, "description", ""), **bar_data,
             **cav_data, **ball_data, **tmd_data, **orient_data}
@@ -348,7 +356,7 @@ def _orientation(r: _Reader, d: dict):
 
 _BAR_KEYS = ("material", "youngs_modulus_gpa", "density_kg_m3", "damping_ratio", "modes",
              "element_length_mm", "sections")
-_SECTION_KEYS = ("end_mm", "diameter_mm", "bore_mm")
+_SECTION_KEYS = ("end_mm", "diameter_mm", "bore_mm", "second_moments_mm4", "area_mm2")
 _CLAMP_KEYS = ("translational_stiffness_n_m", "rotational_stiffness_n_m_per_rad")
 
 
@@ -382,10 +390,36 @@ def _sections(r: _Reader, t: dict) -> tuple[Section, ...]:
         end = r.required(row, f"{key}.end_mm", start * 1e3, 10_000, lo_open=True, unit="mm")
         dia = r.required(row, f"{key}.diameter_mm", 0, 1000, lo_open=True, unit="mm")
         bore = r.number(row, f"{key}.bore_mm", 0, dia, default=0.0, hi_open=True, unit="mm")
-        sections.append(Section(start, end / 1000, dia / 1000, bore / 1000))
-        data.append({"end_mm": end, "diameter_mm": dia, "bore_mm": bore})
+        round_section = Section(start, end / 1000, dia / 1000, bore / 1000)
+        moments, area = _section_shape(r, row, key, round_section)
+        sections.append(replace(
+            round_section,
+            given_moments_m4=None if moments is None else tuple(m * 1e-12 for m in moments),
+            given_area_m2=None if area is None else area * 1e-6))
+        data.append({"end_mm": end, "diameter_mm": dia, "bore_mm": bore}
+                    | ({"second_moments_mm4": list(moments)} if moments else {})
+                    | ({"area_mm2": area} if area is not None else {}))
         start = end / 1000
     return tuple(sections), data
+
+
+def _section_shape(r: _Reader, row: dict, key: str, round_section: Section):
+    """A section's own second moments a plane (mm^4) and area (mm^2), as the file gives
+    them, each None where the row leaves them to its round shape: at most the round
+    section's (flats and an off-centre bore only take material away)."""
+    moments = row.get("second_moments_mm4")
+    top = round_section.round_moment_m4 * 1e12
+    if moments is not None:
+        if not isinstance(moments, list) or len(moments) != 2:
+            r.fail(f"{key}.second_moments_mm4", moments, "must be two second moments of "
+                   "area (mm^4): [first plane, second plane]")
+        moments = tuple(r.number({f"second_moments_mm4[{k}]": m},
+                                 f"{key}.second_moments_mm4[{k}]", 0, top, lo_open=True,
+                                 unit="mm^4 (at most the round section's)")
+                        for k, m in enumerate(moments))
+    area = r.number(row, f"{key}.area_mm2", 0, round_section.round_area_m2 * 1e6, lo_open=True,
+                    unit="mm^2 (at most the round section's)")
+    return moments, area
 
 
 def _bar(r: _Reader, d: dict):
@@ -431,89 +465,6 @@ def _bar(r: _Reader, d: dict):
 
 
 _CAVITY_KEYS = ("position_mm", "length_mm", "section_diameter_mm", "depth_mm")
-#: Gauss-Legendre nodes on each smooth piece of the integral along the cavity.
-_GAUSS_NODES = 24
-
-
-def _column_integral(radius: float, x: float) -> float:
-    """The closed form of int_0^x (radius^2 - t^2)^(3/2) dt, 0 <= x <= radius."""
-    x = min(x, radius)
-    q = math.sqrt(max(radius * radius - x * x, 0.0))
-    return (x * q**3 / 4 + 3 * radius**2 * x * q / 8
-            + 3 * radius**4 / 8 * math.asin(x / radius))
-
-
-def cut_section_moment(diameter: float, bore: float, half_width: float,
-                       half_depth: float) -> float:
-    """The second moment of area (m^4), about the bending axis, of a round section of
-    ``diameter`` with a concentric ``bore`` (m), less the rectangle |x| < half_width,
-    |y| < half_depth that a cavity cuts from it (y: the bending direction; docs/systems.md).
-
-    I = int (2/3) (Y^3 - m^3) dx over the section's width, Y = sqrt(R^2 - x^2) the
-    solid half-height and m(x) = min(Y, max(half_depth if |x| < half_width, the bore's
-    half-chord)) the removed one, in closed form between the points where m changes
-    branch."""
-    big, small, h, c = diameter / 2, bore / 2, half_depth, half_width
-    breaks = {0.0, big, min(c, big), min(small, big)}
-    breaks |= {math.sqrt(r * r - h * h) for r in (small, big) if r > h}
-    points = sorted(b for b in breaks if b <= big)
-    removed = 0.0
-    for x0, x1 in zip(points, points[1:], strict=False):
-        xm = 0.5 * (x0 + x1)
-        cut = h if xm < c else 0.0
-        chord = math.sqrt(small * small - xm * xm) if xm < small else 0.0
-        if cut >= math.sqrt(big * big - xm * xm):
-            removed += _column_integral(big, x1) - _column_integral(big, x0)
-        elif cut >= chord:
-            removed += cut**3 * (x1 - x0)
-        else:
-            removed += _column_integral(small, x1) - _column_integral(small, x0)
-    return 4.0 / 3.0 * (_column_integral(big, big) - removed)
-
-
-def cavity_section_diameter(diameter: float, bore: float, length: float,
-                            depth: float, across: bool = False) -> float:
-    """The outer diameter (m) of the equivalent section, with the host's ``bore``, that
-    has the bending stiffness of the host section (``diameter``, ``bore``, m) through a
-    cavity: a round hole of diameter ``length`` (its length along the bar) across
-    the bar in the ball's direction of travel, ``depth`` (m) deep, centred on the bar's
-    axis (docs/systems.md).
-
-    At a distance s from the cavity's centre the hole cuts a strip of half-width
-    c(s) = sqrt(a^2 - s^2), a = length / 2 (:func:`cut_section_moment` gives I(s)); a
-    segment under a bending moment that changes little along it bends as one of
-    constant I_eq = L / int ds / I(s) (its flexibility), here integrated with
-    s = a sin(theta) by Gauss-Legendre on the pieces where I(s) is smooth.  Then
-    pi (D^4 - bore^4) / 64 = I_eq.  ``across``: bending across the ball's direction, the
-    same strip's moment about the other axis (half-width and half-depth exchanged),
-    on pieces split eightfold (its kinks lie elsewhere: 1e-9 against adaptive
-    quadrature on the published cavity)."""
-    a = length / 2
-    if a >= diameter / 2:
-        raise ParameterError(f"length = {length:g} m must be less than the section's "
-                             f"diameter {diameter:g} m: a round cavity this wide cuts "
-                             "the section in two")
-    r, h = diameter / 2, depth / 2
-    kinks = [b for b in (bore / 2, math.sqrt(max((bore / 2) ** 2 - h * h, 0.0)),
-                         math.sqrt(max(r * r - h * h, 0.0))) if 0.0 < b < a]
-    edges = sorted({0.0, math.pi / 2, *(math.acos(b / a) for b in kinks)})
-    if across:
-        edges = sorted({t0 + (t1 - t0) * k / 8 for t0, t1 in zip(edges, edges[1:],
-                                                                 strict=False)
-                        for k in range(9)})
-    nodes, weights = np.polynomial.legendre.leggauss(_GAUSS_NODES)
-    flexibility = 0.0  # int_0^(pi/2) cos(theta) / I(a cos(theta)) d theta = 1 / I_eq
-    for t0, t1 in zip(edges, edges[1:], strict=False):
-        for x, w in zip(nodes, weights, strict=True):
-            t = 0.5 * (t1 - t0) * x + 0.5 * (t0 + t1)
-            c = a * math.cos(t)
-            moment = (cut_section_moment(diameter, bore, h, c) if across
-                      else cut_section_moment(diameter, bore, c, h))
-            flexibility += 0.5 * (t1 - t0) * w * math.cos(t) / moment
-    # never above the host's own diameter, which a hole inside the bore leaves
-    return min(float((64.0 / math.pi / flexibility + bore**4) ** 0.25), diameter)
-
-
 def _within(lo: float, hi: float, start: float, end: float, length: float) -> bool:
     """Whether [lo, hi] lies in [start, end] (m, on a bar ``length`` long; the ends
     computed from mm are equal up to round-off: :func:`~boringbar._validate.in_range`)."""
@@ -529,6 +480,11 @@ def _host_section(r: _Reader, bar: SteppedBar, lo: float, hi: float, z: float) -
                f"[0, {bar.length_m * 1e3:g}] mm")
     for s in bar.sections:
         if _within(lo, hi, s.start_m, s.end_m, bar.length_m):
+            if s.given_moments_m4 is not None or s.given_area_m2 is not None:
+                r.fail("cavity.position_mm", z * 1e3, "the cavity lies in a section that "
+                       "gives its own second_moments_mm4 or area_mm2, and the cavity's "
+                       "section is computed from a round host: give the cavity's span a "
+                       "round section of its own")
             return s
     edge = next(s.end_m for s in bar.sections if lo < s.end_m < hi)
     r.fail("cavity.position_mm", z * 1e3,
@@ -715,10 +671,10 @@ def _with_cavity(bar: SteppedBar, cavity: CavitySpec, across: bool = False) -> S
         a = s.start_m if near(lo, s.start_m, bar.length_m) else lo
         b = s.end_m if near(hi, s.end_m, bar.length_m) else hi
         if a > s.start_m:
-            out.append(Section(s.start_m, a, s.diameter_m, s.inner_diameter_m))
+            out.append(replace(s, end_m=a))
         out.append(_cavity_section(cavity, s, a, b, across))
         if b < s.end_m:
-            out.append(Section(b, s.end_m, s.diameter_m, s.inner_diameter_m))
+            out.append(replace(s, start_m=b))
     return SteppedBar(tuple(out), bar.youngs_modulus_pa, bar.density_kg_m3, bar.damping_ratio,
                       bar.max_element_length_m, bar.clamp_translational_stiffness_n_m,
                       bar.clamp_rotational_stiffness_n_m_per_rad)
