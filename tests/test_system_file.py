@@ -27,6 +27,7 @@ from boringbar.model.system_file import (
     parse_system,
     published_file_text,
 )
+from boringbar.plot import plot_run
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples" / "systems"
@@ -405,3 +406,21 @@ def test_the_rolling_oriented_example_describes_what_the_published_model_leaves_
     assert system.bar.planes == 2 and system.bar.info["cut_geometry"]["hole_angle_deg"] == 20.0
     run = simulate(system, Harmonic(20.0, 1.0), duration_s=0.05, record_every=0)
     assert run.integrator == "rk4" and abs(run.energy["balance_relative"]) < 1e-6
+
+
+def test_a_run_of_the_rolling_oriented_example_says_what_its_bar_has(tmp_path, capsys):
+    """The summary and run.png's title name the rolling ball, the Hertz contact and the
+    two planes with their geometry; run.png's legend takes three columns."""
+    path = str(EXAMPLES / "carbide_rolling_oriented.toml")
+    assert main(["simulate", "--system", path, "--duration-s", "0.02", "--out",
+                 str(tmp_path / "r")]) == 0
+    text = capsys.readouterr().out
+    assert "rolling, mu_s 0.2, mu_k 0.15" in text
+    assert "two planes         Kt/Kr 2.5, lead angle 30 deg, cavity at 20 deg" in text
+    assert "Hertz contact" in text
+    run = simulate(make_system("ball", spec=load_system(path)), Harmonic(10.0), duration_s=0.02)
+    fig = plot_run(run)
+    title = "".join(t.get_text() for t in fig.texts)
+    for words in ("rolling ball", "Hertz contact", "two planes: Kt/Kr 2.5"):
+        assert words in title
+    assert fig.legends[0]._ncols == 3

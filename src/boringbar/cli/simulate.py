@@ -23,6 +23,7 @@ from boringbar.cli.options import (
 )
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
 from boringbar.model.forcing import Harmonic, Regenerative, check_depth, check_force, check_ratio
+from boringbar.model.oriented import geometry_words
 from boringbar.model.system import make_system
 from boringbar.model.system_file import PUBLISHED_NAME
 from boringbar.plot import plot_run
@@ -85,7 +86,7 @@ def cmd_simulate(args) -> Outcome:
     write_json_atomic({**summary, "config": run.config()}, files["summary"])
 
     def text(say) -> None:
-        say(_cut_text(summary) if "cutting" in summary else _simulate_text(summary, run))
+        say(_cut_text(summary, run) if "cutting" in summary else _simulate_text(summary, run))
 
     return Outcome(summary, text)
 
@@ -122,7 +123,7 @@ def _named(s: dict) -> str:
     return f"{s['bar']} bar of {system_label(s['system_name'])}"
 
 
-def _cut_text(s: dict) -> str:
+def _cut_text(s: dict, run) -> str:
     c = s["cutting"]
     cfg = "static start" if c["start"] == "static" else "from rest"
     lines = [
@@ -146,6 +147,7 @@ def _cut_text(s: dict) -> str:
         f"  tip                static deflection {c['static_deflection_m'] * 1e3:.4g} mm, "
         f"max |W| {s['max_abs_tip_m'] * 1e3:.4g} mm",
         f"  delay interp.      {c['delay_interpolation']}",
+        *_hardware_lines(run),
         *([contact_text(s["contact"])] if s.get("contact") else []),
         f"  integrator         {s['integrator']}",
         f"  elapsed            {s['elapsed_s']:.2f} s",
@@ -166,6 +168,17 @@ def contact_text(c: dict) -> str:
             f"(max {c['peak_force_max_n']:.4g}), v_out/v_in {c['restitution_ratio']:.3g}")
 
 
+def _hardware_lines(run) -> list[str]:
+    """What the run's bar has beyond the published one: a rolling ball, two planes."""
+    d, lines = run.system.damper, []
+    if getattr(d, "motion", "slide") == "roll" and not d.locked:
+        lines.append(f"  ball               rolling, mu_s {d.mu_static:g}, mu_k {d.mu_kinetic:g}")
+    geometry = run.system.bar.info.get("cut_geometry")
+    if geometry:
+        lines.append(f"  two planes         {geometry_words(geometry, run.system.kind)}")
+    return lines
+
+
 def _simulate_text(s: dict, run) -> str:
     lines = [
         f"{_named(s)}, {s['preset']} preset: F0 = {s['force_n']:g} N, "
@@ -181,6 +194,7 @@ def _simulate_text(s: dict, run) -> str:
                      f"(walls at +-{run.system.damper.gap_m / 2 * 1e3:g} mm)")
     elif s["bar"] == "tmd":
         lines.append(f"  max stroke         {s['max_abs_rel_disp_m'] * 1e3:.4g} mm")
+    lines += _hardware_lines(run)
     if s.get("contact"):
         lines.append(contact_text(s["contact"]))
     if s["readings"]:

@@ -98,6 +98,21 @@ class CutGeometry:
 APPLIES_TO = {"hole_angle_deg": ("ball", "tmd"), "principal_angle_deg": ("solid", "tmd"),
               "stiffness_ratio": ("solid", "tmd")}
 
+#: The section's keys in words (geometry_words).
+_WORDS = {"force_ratio": "Kt/Kr {:g}", "lead_angle_deg": "lead angle {:g} deg",
+          "hole_angle_deg": "cavity at {:g} deg",
+          "principal_angle_deg": "principal plane at {:g} deg", "stiffness_ratio": "EI ratio {:g}"}
+
+
+def geometry_words(geometry: dict, bar: str) -> str:
+    """'Kt/Kr 2.5, lead angle 30 deg, cavity at 20 deg': an oriented cut's geometry
+    (:meth:`CutGeometry.to_dict`) as ``bar`` uses it, for titles and summaries (the
+    stiffness ratio where it is not 1)."""
+    used = [fmt.format(geometry[k]) for k, fmt in _WORDS.items()
+            if k in geometry and bar in APPLIES_TO.get(k, (bar,))
+            and not (k == "stiffness_ratio" and geometry[k] == 1.0)]
+    return ", ".join(used)
+
 
 def unused_keys(geometry: CutGeometry, bar: str) -> list[str]:
     """The keys of ``geometry`` set away from their defaults that ``bar`` does not use

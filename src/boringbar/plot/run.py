@@ -9,6 +9,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from boringbar.model.oriented import geometry_words
 from boringbar.plot.style import (
     COLUMN_WIDTH_IN,
     OKABE_ITO,
@@ -75,8 +76,8 @@ def plot_run(run_or_ds, zoom_periods: float = 5, *, fig=None) -> Figure:
         ax.grid(alpha=0.3)
     if spin:
         axes[2, 0].set_ylabel("ball velocity y' and\nspin r$\\omega$ (mm/s)")
-    legend_below(fig, [*axes[:, 0], axes[1, 1]])
-    what, details = _run_title(summary, damper)
+    legend_below(fig, [*axes[:, 0], axes[1, 1]], ncol=3 if spin else None)
+    what, details = _run_title(summary, damper, (config.get("system") or {}).get("bar") or {})
     set_title(fig, what, {**ds.attrs, "preset": summary.get("preset", "?")}, details)
     return fig
 
@@ -139,8 +140,9 @@ def _impact_marks(ax, ds, t_from: float, gap) -> None:
             ms=7, mew=1.5, color="black", label="impacts (the run's log)", zorder=4)
 
 
-def _run_title(summary: dict, damper: dict) -> tuple[str, str]:
-    """(what, details) of a run's title."""
+def _run_title(summary: dict, damper: dict, bar: dict) -> tuple[str, str]:
+    """(what, details) of a run's title (``bar``: the modal model's record, for its
+    planes)."""
     kind = summary.get("bar", "?")
     name = "ball bar (ball locked)" if kind == "locked" else f"{kind} bar"
     line1 = (f"{name}, F0 = {summary.get('force_n', math.nan):g} N, "
@@ -154,6 +156,10 @@ def _run_title(summary: dict, damper: dict) -> tuple[str, str]:
         if damper.get("motion") == "roll":
             parts.append(f"rolling ball (mu_s {damper.get('mu_static', math.nan):g}, "
                          f"mu_k {damper.get('mu_kinetic', math.nan):g})")
+        if damper.get("contact") == "hertz":
+            parts.append("Hertz contact")
+    if bar.get("cut_geometry"):
+        parts.append("two planes: " + geometry_words(bar["cut_geometry"], kind))
     if summary.get("pattern"):
         ipc = summary.get("impacts_per_cycle")
         parts.append(f"pattern: {summary['pattern']}"
