@@ -11,7 +11,7 @@ on every variant alike), each with its ratio to the first of its group:
   F0 = 0.05 N (a rolling ball rolls and slips in turn) and in a cut at 1200 rpm and
   0.2 mm;
 - planes (section 4.7): one plane and two (Kt / Kr = 2.5, lead angle 30 degrees), with
-  1 and 2 modes a plane, at F0 = 20 N;
+  1 and 2 modes a plane, at F0 = 20 N, with RK4 and with the exact integrator;
 - the exact integrator's sliding and rolling ball (docs/exact.md, "A rolling ball") at
   F0 = 20 N, 2 N (a rolling ball rolls and slips each half period), 0.05 N and in the
   cut, each call
@@ -51,10 +51,12 @@ def cases() -> dict:
     for load, forcing in LOADS.items():
         for law, kw in LAWS.items():
             out[load, law] = (bb.make_system("ball", **kw), forcing, "rk4")
-    for n in (1, 2):
-        for planes, kw in (("one plane", {}), ("two planes", TWO_PLANES)):
-            out[f"{n} mode(s) a plane", planes] = (bb.make_system("ball", n_modes=n, **kw),
-                                                   LOADS["F0 = 20 N"], "rk4")
+    for integrator, group in (("rk4", "{} mode(s) a plane"),
+                              ("exact", "exact, {} mode(s) a plane")):
+        for n in (1, 2):
+            for planes, kw in (("one plane", {}), ("two planes", TWO_PLANES)):
+                out[group.format(n), planes] = (bb.make_system("ball", n_modes=n, **kw),
+                                                LOADS["F0 = 20 N"], integrator)
     for load, forcing in EXACT_LOADS.items():
         for law in ("slide", "roll"):
             out[load, law + ", impact law"] = (bb.make_system("ball", motion=law), forcing,

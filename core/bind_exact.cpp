@@ -137,10 +137,6 @@ Shape check_params(Vec p) {
     s.R = s.regen ? 2 * s.nreg : s.nreg;
     for (idx i = 0; i < s.n; ++i) {
         require(p[L::M_ + i] > 0.0, "p[M_ + " + std::to_string(i) + "] (a modal mass) must be > 0");
-        require(p[L::PSI_F + i] == p[L::PSI_L + i],
-                "p[PSI_F + " + std::to_string(i) + "] must equal p[PSI_L + " +
-                    std::to_string(i) + "]: the exact integrator takes a force along the "
-                    "chip's direction (an oriented cut steps with run_rk4)");
     }
     if (s.kase == L::BALL) {
         require(p[L::HALF_GAP] > 0.0, "p[HALF_GAP] must be > 0 for a ball damper");

@@ -86,7 +86,9 @@ inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp,
         double f = cut_force(seg, tau, X, n, mk, s.f0, s.om);
         fmax = pymax(fmax, f);
         auto [w, wd] = tip_w_wd(mk, X, n);
-        acc[0] += wg * f * wd;
+        double wdf = 0.0;  // psi_F . u', where the force works (W' but in an oriented cut)
+        for (idx i = 0; i < n; ++i) wdf += mk(MK_PSI_F, i) * X[n + i];
+        acc[0] += wg * f * wdf;
         double dv = 0.0;
         for (idx d = 0; d < lvis.n0; ++d) {
             double v = 0.0;

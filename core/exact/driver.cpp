@@ -45,6 +45,7 @@ void unpack_system(Vec p, idx nreg, System& sys) {
         mk(7, i) = q.km[i];
         mk(8, i) = q.cm[i];
         mk(9, i) = q.invM[i];
+        mk(MK_PSI_F, i) = p[L::PSI_F + i];
     }
     double m = p[L::BALL_MASS];
     double fc = p[L::FRICTION];

@@ -97,7 +97,7 @@ inline double _quad(AV& a, AV& b, GM& G, idx nb) {
     return s;
 }
 
-// The quadratic forms of a segment's integrals: the work of the force (f psi_L . u'), the
+// The quadratic forms of a segment's integrals: the work of the force (f psi_F . u'), the
 // viscous loss (sum_d c_d (l_d . X)^2), W^2 and (psi_d . u)^2.
 enum FlowForm : idx { FF_WORK = 0, FF_VISC = 1, FF_WW = 2, FF_UU = 3, FF_FORMS = 4 };
 
@@ -188,7 +188,7 @@ inline void FlowTables::build(idx r, const FlowSources& src, idx n, idx ks) {
         for (idx i = 0; i < n; ++i) l[size_t(off + i)] = src.mk(m, i);
         project(l.data(), r, src.VF, src.Z, src.D, nz, P);
     };
-    row(3, n, Pwork.data());  // psi_L . u'
+    row(MK_PSI_F, n, Pwork.data());  // psi_F . u'
     row(3, 0, PW);            // W = psi_L . u
     row(4, 0, Pd);            // psi_d . u
     for (idx d = 0; d < nd; ++d) project(src.dp.l.row(d), r, src.VF, src.Z, src.D, nz,
@@ -210,7 +210,7 @@ inline void FlowTables::build(idx r, const FlowSources& src, idx n, idx ks) {
             }
             oa[no] = a;
             ob[no] = b;
-            // f psi_L . u' with f = f0 (c_nz e^{..} + c_nz+1 e^{..}): the forcing's rows
+            // f psi_F . u' with f = f0 (c_nz e^{..} + c_nz+1 e^{..}): the forcing's rows
             K[FF_WORK * stride_ + no] =
                 0.5 * wgt * (forcing(a) * Pwork[size_t(b)] + forcing(b) * Pwork[size_t(a)]);
             ncplx v(0.0, 0.0);
@@ -277,7 +277,7 @@ struct FlowsScratch {
 };
 
 // A stuck ball's share of the reaction's work, (1 - sr) int F_stick psi_d . u', into out[5]:
-// F_stick = psi_d . a_0 / kappa, a_0,i = (psi_L,i f - K_i u_i - C_i u_i') / M_i, from the
+// F_stick = psi_d . a_0 / kappa, a_0,i = (psi_F,i f - K_i u_i - C_i u_i') / M_i, from the
 // state's coefficients Cx (the reaction is not a fixed row of the state).
 template <class MuV, class GM, class CM, class V, class Gram>
 inline void stick_work(const FlowsIn& in, const FlowsScratchOf<MuV, GM, CM, V>& sc, Vec out,
@@ -324,7 +324,7 @@ inline void stick_work(const FlowsIn& in, const FlowsScratchOf<MuV, GM, CM, V>& 
     out[5] = (1.0 - in.sr) * _quad(ca, cb, G, nb);
 }
 
-// Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_L.u',
+// Closed-form integrals over a segment [ts, ts + T]: out = [int f psi_F.u',
 // sum_d c_d int (l_d.X)^2, int W^2, int W, int f, (1-s) int F_stick psi_d.u', int y^2]
 // (2-4 and 6 only if level >= 1; 6 only if level = 2, a free ball).  The sizes n, ks, nz
 // are given (constants in the copies for one and two modes).

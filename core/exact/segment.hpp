@@ -986,7 +986,8 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
             double fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq);
             max_force = pymax(max_force, fq);
             double wg = GL_W[g] * b;
-            qsum[0] += wg * fq * wdq;
+            // the force works on psi_F . u' (W' but in an oriented cut)
+            qsum[0] += wg * fq * psi_dot(mk, MK_PSI_F, dX, n).second;
             double dv = 0.0;
             for (idx d = 0; d < w.dp.l.n0; ++d) {
                 double vv = 0.0;

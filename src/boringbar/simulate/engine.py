@@ -289,20 +289,15 @@ def hertz(system: System) -> bool:
 def resolve_integrator(integrator: str, system: System, cutting: bool = False) -> str:
     """``integrator``, or for "auto": "rk4" under the ``paper`` preset (the published
     scheme), in cuts (``cutting``: RK4 is faster there, docs/exact.md) unless
-    :func:`stick_slip`, and with a Hertz contact (:func:`hertz`) or an oriented cut
-    (``bar.oriented``), RK4's alone, else "exact" (exact at events, about 14x faster than
-    RK4; a rolling ball's about 10x)."""
+    :func:`stick_slip`, and with a Hertz contact (:func:`hertz`), RK4's alone, else
+    "exact" (exact at events, about 14x faster than RK4; a rolling ball's about 10x)."""
     check_choice("integrator", integrator, INTEGRATOR_CHOICES)
     if integrator == "exact" and hertz(system):
         raise ParameterError("integrator = 'exact' takes the impact law; a ball with contact "
                              "= 'hertz' needs integrator = 'rk4' (or 'auto')")
-    if integrator == "exact" and system.bar.oriented:
-        raise ParameterError("integrator = 'exact' takes a force along the chip's direction; "
-                             "an oriented cut (two bending planes, psi_force != psi_tip) "
-                             "needs integrator = 'rk4' (or 'auto')")
     if integrator != "auto":
         return integrator
-    if hertz(system) or system.bar.oriented:
+    if hertz(system):
         return "rk4"
     return "rk4" if (system.preset == "paper" or cutting) and not stick_slip(system) \
         else "exact"
