@@ -27,7 +27,7 @@ namespace L = layout;
 constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2 (a rolling ball's: 2n + 3)
 
 // Mode i's acceleration under the tip force f alone, without the damper's force, from the
-// premultiplied constants fm = psi_F,i / M_i, km = K_i / M_i, cm = C_i / M_i (Params):
+// premultiplied constants fm = psi_F,i / M_i, km = K_i / M_i, cm = C_i / M_i (Modes):
 // a_i = psi_F,i f / M_i - K_i u_i / M_i - C_i u_i' / M_i.  T is real for a state, complex
 // for the exact integrator's modal coefficients.
 template <class T>
@@ -131,10 +131,11 @@ BB_INLINE void jump_modes(const Params& q, int n, double* X, double g) {
 
 // kappa of a ball the bar carries with the share s of the reaction: the force that moves
 // it with the bar per unit of relative acceleration, 1/m + s sum psi_d,i^2 / M_i
-// (0 without a ball); Params::kappa is the share sr's.
+// (0 without a ball); Friction::kappa is the share sr's, Params::kappa1 the share 1's.
 inline double carried_kappa(const Params& q, double s) {
+    const Modes& md = q.modes;
     double kappa = q.ball.m > 0.0 ? 1.0 / q.ball.m : 0.0;
-    for (int i = 0; i < q.modes.n; ++i) kappa += q.modes.pD[i] * (s * q.modes.pD[i] * q.modes.invM[i]);
+    for (int i = 0; i < md.n; ++i) kappa += md.pD[i] * (s * md.pD[i] * md.invM[i]);
     return kappa;
 }
 
@@ -157,76 +158,91 @@ BB_INLINE ContactForce contact_force(const Params& q, double y, double yd) {
     return {-s * push, (push - elastic) * dd};
 }
 
-// F_c and what the stage derivative picks by y''s sign (Params::fb, dmfb, kfb).
+// F_c and what the stage derivative picks by y''s sign (Friction::fb, dmfb, kfb).
 inline void set_friction(Params& q, double fc) {
-    q.fric.fc = fc;
+    Friction& fr = q.fric;
+    fr.fc = fc;
     const double fbs[3] = {-fc, 0.0, fc};
-    q.fric.ydd_sum_from_first = true;
+    fr.ydd_sum_from_first = true;
     for (int b = 0; b < 3; ++b) {
-        q.fric.fb[b] = fbs[b];
+        fr.fb[b] = fbs[b];
         for (int i = 0; i < q.modes.n; ++i) {
             const double dmfb = q.modes.dm[i] * fbs[b];
-            q.fric.dmfb[i][b] = dmfb;
+            fr.dmfb[i][b] = dmfb;
         }
-        const double kfb = q.fric.kappa * fbs[b];
-        q.fric.kfb[b] = kfb;
-        if (kfb == 0.0 && std::signbit(kfb)) q.fric.ydd_sum_from_first = false;
+        const double kfb = fr.kappa * fbs[b];
+        fr.kfb[b] = kfb;
+        if (kfb == 0.0 && std::signbit(kfb)) fr.ydd_sum_from_first = false;
     }
 }
 
+// The system of the packed parameters p (layout.hpp), for RK4's step dt (the forcing's
+// half-step rotation; any dt where no step is taken).
 inline Params unpack(const double* p, double dt) {
     Params q;
-    q.modes.n = int(p[L::N_MODES]);
     q.kase = int(p[L::CASE]);
-    q.force.regen = int(p[L::FORCING]) == L::REGENERATIVE;
     q.stage_loop = p[L::STAGE_LOOP] != 0.0;
-    q.force.f0 = p[L::F0];
-    q.force.om = p[L::OMEGA];
+    const bool ball = q.kase == L::BALL;
     q.ball.half = p[L::HALF_GAP];
     q.ball.e = p[L::RESTITUTION];
-    q.fric.fc = p[L::FRICTION];
-    q.fric.sr = p[L::REACTION];
     q.ball.meff = p[L::M_EFF];
     q.ball.vimp = p[L::V_IMPACT];
-    q.fric.stick_min = p[L::STICK_MIN];
-    q.fric.vstick = p[L::V_STICK];
-    q.fric.band = p[L::STICK_BAND];
-    q.fric.fs = p[L::STATIC_FRICTION];
-    q.fric.hold = q.fric.band > 0.0 && q.fric.fc > 0.0 && q.kase == L::BALL;
+    q.ball.m = p[L::BALL_MASS];
+
+    Friction& fr = q.fric;
+    fr.fc = p[L::FRICTION];
+    fr.sr = p[L::REACTION];
+    fr.stick_min = p[L::STICK_MIN];
+    fr.vstick = p[L::V_STICK];
+    fr.band = p[L::STICK_BAND];
+    fr.fs = p[L::STATIC_FRICTION];
+    fr.hold = fr.band > 0.0 && fr.fc > 0.0 && ball;
+
+    Modes& md = q.modes;
+    md.n = int(p[L::N_MODES]);
+    for (int i = 0; i < md.n; ++i) {
+        md.invM[i] = 1.0 / p[L::M_ + i];
+        md.C[i] = p[L::C_ + i];
+        md.pL[i] = p[L::PSI_L + i];
+        md.pD[i] = p[L::PSI_D + i];
+        md.pA[i] = p[L::PSI_A + i];
+        md.pF[i] = p[L::PSI_F + i];
+        md.fm[i] = md.pF[i] * md.invM[i];
+        md.km[i] = p[L::K_ + i] * md.invM[i];
+        md.cm[i] = md.C[i] * md.invM[i];
+        md.dm[i] = fr.sr * md.pD[i] * md.invM[i];
+        md.lm[i] = q.ball.meff * md.pD[i] * md.invM[i];
+    }
+    fr.kappa = carried_kappa(q, fr.sr);
+    fr.inv_kappa = fr.kappa != 0.0 ? 1.0 / fr.kappa : 0.0;
+    set_friction(q, fr.fc);
+    q.kappa1 = carried_kappa(q, 1.0);
+
+    q.contact.k = p[L::CONTACT_K];
+    q.contact.alpha = p[L::CONTACT_ALPHA];
+    q.contact.on = q.contact.k > 0.0 && ball;
+
+    Rolling& rl = q.roll;
+    rl.on = p[L::ROLL] > 0.0 && ball;
+    rl.mus_n = p[L::ROLL_STATIC];
+    rl.muk_n = p[L::ROLL_KINETIC];
+    rl.band = p[L::ROLL_BAND];
+    rl.kroll = q.ball.m > 0.0 ? 2.5 / q.ball.m : 0.0;
+    rl.inv_kappa = q.kappa1 + rl.kroll != 0.0 ? 1.0 / (q.kappa1 + rl.kroll) : 0.0;
+
     q.tmd.m = p[L::TMD_MASS];
     q.tmd.k = p[L::TMD_K];
     q.tmd.c = p[L::TMD_C];
+
+    Forcing& fo = q.force;
+    fo.regen = int(p[L::FORCING]) == L::REGENERATIVE;
+    fo.f0 = p[L::F0];
+    fo.om = p[L::OMEGA];
+    fo.chh = std::cos(fo.om * 0.5 * dt);
+    fo.shh = std::sin(fo.om * 0.5 * dt);
+
     q.strobe.period = p[L::STROBE_PERIOD];
     q.strobe.t0 = p[L::STROBE_T0];
-    q.ball.m = p[L::BALL_MASS];
-    for (int i = 0; i < q.modes.n; ++i) {
-        q.modes.invM[i] = 1.0 / p[L::M_ + i];
-        q.modes.C[i] = p[L::C_ + i];
-        q.modes.pL[i] = p[L::PSI_L + i];
-        q.modes.pD[i] = p[L::PSI_D + i];
-        q.modes.pA[i] = p[L::PSI_A + i];
-        q.modes.pF[i] = p[L::PSI_F + i];
-        q.modes.fm[i] = q.modes.pF[i] * q.modes.invM[i];
-        q.modes.km[i] = p[L::K_ + i] * q.modes.invM[i];
-        q.modes.cm[i] = q.modes.C[i] * q.modes.invM[i];
-        q.modes.dm[i] = q.fric.sr * q.modes.pD[i] * q.modes.invM[i];
-        q.modes.lm[i] = q.ball.meff * q.modes.pD[i] * q.modes.invM[i];
-    }
-    q.fric.kappa = carried_kappa(q, q.fric.sr);
-    q.contact.k = p[L::CONTACT_K];
-    q.contact.alpha = p[L::CONTACT_ALPHA];
-    q.contact.on = q.contact.k > 0.0 && q.kase == L::BALL;
-    q.kappa1 = carried_kappa(q, 1.0);
-    q.roll.on = p[L::ROLL] > 0.0 && q.kase == L::BALL;
-    q.roll.mus_n = p[L::ROLL_STATIC];
-    q.roll.muk_n = p[L::ROLL_KINETIC];
-    q.roll.band = p[L::ROLL_BAND];
-    q.roll.kroll = q.ball.m > 0.0 ? 2.5 / q.ball.m : 0.0;
-    q.roll.inv_kappa = q.kappa1 + q.roll.kroll != 0.0 ? 1.0 / (q.kappa1 + q.roll.kroll) : 0.0;
-    q.fric.inv_kappa = q.fric.kappa != 0.0 ? 1.0 / q.fric.kappa : 0.0;
-    set_friction(q, q.fric.fc);
-    q.force.chh = std::cos(q.force.om * 0.5 * dt);
-    q.force.shh = std::sin(q.force.om * 0.5 * dt);
     return q;
 }
 
@@ -295,29 +311,31 @@ struct StageTerms {
     double sfree;  // sum psi_d a_i of the modes' free accelerations
 };
 
-// The ball's stage under the stick law (Params::hold) inside the band |y'| < band: the
+// The ball's stage under the stick law (Friction::hold) inside the band |y'| < band: the
 // force that carries the ball with the bar (y'' = 0) is F = sum psi_d a_free / kappa;
 // the ball is held while |F| <= F_s, else it slides with F_c the way the bar drags it
 // (Karnopp's law; after a held step y' is zeroed, stop_slide).  The modes' accelerations
 // are written again with this F_b in place of the sgn() law's; returns y''.
-// A compliant contact's force fcon (q.contact.on) acts beside it: the friction that holds the
-// ball is then what carrying it needs less what the contact gives.
+// A compliant contact's force fcon (Contact::on) acts beside it: the friction that holds
+// the ball is then what carrying it needs less what the contact gives.
 template <int N, int CASE>
 BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
                             double* Kd, double sfree, double fcon, StageTerms& t) {
     const int n = sh.n();
+    const Modes& md = q.modes;
+    const Friction& fr = q.fric;
     const bool hertz = sh.hertz(q);
     const double need = hertz ? sfree - q.kappa1 * fcon : sfree;
-    const double carry = need * q.fric.inv_kappa;
-    t.held = std::fabs(carry) <= q.fric.fs;
-    const double fb = t.held ? carry : (carry > 0.0 ? q.fric.fc : -q.fric.fc);
+    const double carry = need * fr.inv_kappa;
+    t.held = std::fabs(carry) <= fr.fs;
+    const double fb = t.held ? carry : (carry > 0.0 ? fr.fc : -fr.fc);
     for (int i = 0; i < n; ++i) {
-        Kd[n + i] =
-            free_acceleration(q.modes.fm[i], q.modes.km[i], q.modes.cm[i], f, Xs[i], Xs[n + i]) - q.modes.dm[i] * fb;
-        if (hertz) Kd[n + i] -= q.modes.pD[i] * q.modes.invM[i] * fcon;
+        Kd[n + i] = free_acceleration(md.fm[i], md.km[i], md.cm[i], f, Xs[i], Xs[n + i]) -
+                    md.dm[i] * fb;
+        if (hertz) Kd[n + i] -= md.pD[i] * md.invM[i] * fcon;
     }
     t.fb = fb;
-    return t.held ? 0.0 : q.fric.kappa * fb - need;
+    return t.held ? 0.0 : fr.kappa * fb - need;
 }
 
 // A rolling ball's stage (Shape::rolls; docs/model.md, 2.7): the floor's friction F on
@@ -330,14 +348,15 @@ template <int N, int CASE>
 BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double* Kd,
                             double ydd, double need, StageTerms& t) {
     const int n = sh.n(), is = sh.is();
+    const Rolling& rl = q.roll;
     const double slip = Xs[sh.iyd()] - Xs[is];
-    const double keep = need * q.roll.inv_kappa;
-    t.rolled = std::fabs(slip) < q.roll.band && std::fabs(keep) <= q.roll.mus_n;
+    const double keep = need * rl.inv_kappa;
+    t.rolled = std::fabs(slip) < rl.band && std::fabs(keep) <= rl.mus_n;
     const double dir = slip != 0.0 && !t.rolled ? (slip > 0.0 ? -1.0 : 1.0)
                                                 : (keep > 0.0 ? 1.0 : -1.0);
-    const double F = t.rolled ? keep : dir * q.roll.muk_n;
+    const double F = t.rolled ? keep : dir * rl.muk_n;
     for (int i = 0; i < n; ++i) Kd[n + i] -= q.modes.pD[i] * q.modes.invM[i] * F;
-    Kd[is] = -q.roll.kroll * F;
+    Kd[is] = -rl.kroll * F;
     t.pfloor = t.rolled ? 0.0 : -F * slip;
     t.floor = F;
     return ydd + q.kappa1 * F;
@@ -349,8 +368,9 @@ BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
 // written with premultiplied constants and the stage velocity last, so that little of
 // it waits on the previous stage.
 //
-// FAST: the ball's y'' sums psi_d a_i from its first term (q.fric.ydd_sum_from_first), which
-// takes an addition off the stage's longest chain (a_i, y'', y' at the next stage, F_b).
+// FAST: the ball's y'' sums psi_d a_i from its first term (Friction::ydd_sum_from_first),
+// which takes an addition off the stage's longest chain (a_i, y'', y' at the next stage,
+// F_b).
 //
 // ysign: the value whose sign picks the friction force F_b = -F_c sgn(ysign) (sign_pick);
 // the stages give the stage's own y' (derivative), the regime matrices (dynamics.cpp) a
@@ -364,16 +384,17 @@ template <int N, int CASE, bool FAST = false, bool ROLL = false>
 BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
                                      double f, double* Kd, double ysign) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
+    const Modes& md = q.modes;
     StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false, 0.0, 0.0, false, 0.0, 0.0};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
     for (int i = 0; i < n; ++i) {
         const double vi = Xs[n + i];
         Kd[i] = vi;
-        const double ai = free_acceleration(q.modes.fm[i], q.modes.km[i], q.modes.cm[i], f, Xs[i], vi);
+        const double ai = free_acceleration(md.fm[i], md.km[i], md.cm[i], f, Xs[i], vi);
         Kd[n + i] = ai;
-        sfree = (FAST && sh.ball() && i == 0) ? q.modes.pD[i] * ai : sfree + q.modes.pD[i] * ai;
-        t.wf += q.modes.pF[i] * vi;
-        t.pvisc += q.modes.C[i] * vi * vi;
+        sfree = (FAST && sh.ball() && i == 0) ? md.pD[i] * ai : sfree + md.pD[i] * ai;
+        t.wf += md.pF[i] * vi;
+        t.pvisc += md.C[i] * vi * vi;
     }
     t.sfree = sfree;
     double ydd = 0.0;
@@ -386,7 +407,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         for (int i = 0; i < n; ++i) {
             // the reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
             Kd[n + i] -= sign_pick(ysign, q.fric.dmfb[i]);
-            pdv += q.modes.pD[i] * Xs[n + i];
+            pdv += md.pD[i] * Xs[n + i];
         }
         ydd = sign_pick(ysign, q.fric.kfb) - sfree;
         t.fb = fb;
@@ -397,7 +418,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         if (sh.hertz(q)) {
             const ContactForce c = contact_force(q, Xs[iy], yds);
             fcon = c.f;
-            for (int i = 0; i < n; ++i) Kd[n + i] -= q.modes.pD[i] * q.modes.invM[i] * fcon;
+            for (int i = 0; i < n; ++i) Kd[n + i] -= md.pD[i] * md.invM[i] * fcon;
             ydd += q.kappa1 * fcon;
             t.pcon = c.loss;
         }
@@ -406,7 +427,8 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         // vector select, GCC 12 stopped with an internal error,
         // gimple_expand_vec_cond_expr, in the regime matrices' copy, dynamics.cpp; so the
         // held stage writes the modes again.)
-        if (q.fric.hold && std::fabs(ysign) < q.fric.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
+        if (q.fric.hold && std::fabs(ysign) < q.fric.band)
+            ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
         if constexpr (ROLL) {
             if (sh.rolls())
                 ydd = roll_stage(q, sh, Xs, Kd, ydd, sfree - q.kappa1 * (fb + fcon), t);
@@ -414,17 +436,17 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
     } else if (sh.tmd()) {
         double rel = Xs[iy], reld = Xs[iyd];
         for (int i = 0; i < n; ++i) {
-            rel -= q.modes.pA[i] * Xs[i];
-            reld -= q.modes.pA[i] * Xs[n + i];
+            rel -= md.pA[i] * Xs[i];
+            reld -= md.pA[i] * Xs[n + i];
         }
         const double ft = q.tmd.k * rel + q.tmd.c * reld;
-        for (int i = 0; i < n; ++i) Kd[n + i] += q.modes.pA[i] * ft * q.modes.invM[i];
+        for (int i = 0; i < n; ++i) Kd[n + i] += md.pA[i] * ft * md.invM[i];
         ydd = -ft / q.tmd.m;
         t.pvisc += q.tmd.c * reld * reld;
     } else if (sh.kase() == L::LOCKED) {
         // the force that carries the ball with the bar, m_eff sum psi_d a_free, acts on
         // mode i with psi_d,i
-        for (int i = 0; i < n; ++i) Kd[n + i] -= q.modes.lm[i] * sfree;
+        for (int i = 0; i < n; ++i) Kd[n + i] -= md.lm[i] * sfree;
     }
     Kd[iy] = sh.has_aux() ? Xs[iyd] : 0.0;
     Kd[iyd] = ydd;

@@ -102,7 +102,9 @@ BB_INLINE v2 vabs(v2 v) {
 BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
 
 // F_b of a mapped step: the sign y' has at the step's start.
-BB_INLINE double map_friction(const Params& q, double yd0) { return yd0 > 0.0 ? -q.fric.fc : q.fric.fc; }
+BB_INLINE double map_friction(const Params& q, double yd0) {
+    return yd0 > 0.0 ? -q.fric.fc : q.fric.fc;
+}
 
 // Whether a step's stages may take their short forms (rk4_stages, FAST): stage 1
 // (c = 0) at X itself and each sum of b_s dt Kd from its first term.  With c0 Kd = +-0
@@ -256,7 +258,8 @@ BB_INLINE bool map_rolls(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
     for (int j = 0; j < sh.nxm(); ++j) k += vm.kP[j] * X[j];
     const v4 a = vabs(k);
     // (a NaN friction fails each comparison and takes the stages)
-    return a[0] <= q.roll.mus_n && a[1] <= q.roll.mus_n && a[2] <= q.roll.mus_n && a[3] <= q.roll.mus_n;
+    const double mus = q.roll.mus_n;
+    return a[0] <= mus && a[1] <= mus && a[2] <= mus && a[3] <= mus;
 }
 
 // May a slipping ball take the sliding ball's map this step, its floor friction ffl =
@@ -644,7 +647,7 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, const E
     return contact;
 }
 
-// A compliant contact of the ball with a wall (Params::hertz), from the step whose end
+// A compliant contact of the ball with a wall (Contact::on), from the step whose end
 // first finds the ball past the wall to the step whose end finds it back inside: its
 // wall, start (the crossing, interpolated linearly in the step), the speed it began with
 // (y' at the start of that step, which set its damping chi = alpha / v_in), its largest

@@ -282,7 +282,8 @@ BB_INLINE void run_body(const RunArgs& a) {
         // a rolling ball: its rolled regime's map, or the sliding ball's as it slips
         const bool rolls_now = sh.rolls() && X[sh.is()] == X[iyd];
         const VecMap& map = rolls_now ? mpr : mp;
-        if (sh.rolls() && !rolls_now) ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.roll.muk_n : q.roll.muk_n;
+        if (sh.rolls() && !rolls_now)
+            ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.roll.muk_n : q.roll.muk_n;
         double spread = NAN;
         YStages yst;
         if (linear && check_fb) {

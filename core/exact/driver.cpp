@@ -32,6 +32,7 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     const idx n = sys.n;
     const Mat mk = sys.mk, ddc = sys.ddc;
     const dynamics::Params q = dynamics::unpack(p.d, 0.0);
+    const dynamics::Modes& md = q.modes;
     sys.kase = layout::Case(int(p[L::CASE]));
     sys.nreg = nreg;
     for (idx i = 0; i < n; ++i) {
@@ -41,10 +42,10 @@ void unpack_system(Vec p, idx nreg, System& sys) {
         mk(3, i) = p[L::PSI_L + i];
         mk(4, i) = p[L::PSI_D + i];
         mk(5, i) = p[L::PSI_A + i];
-        mk(6, i) = q.modes.fm[i];
-        mk(7, i) = q.modes.km[i];
-        mk(8, i) = q.modes.cm[i];
-        mk(9, i) = q.modes.invM[i];
+        mk(6, i) = md.fm[i];
+        mk(7, i) = md.km[i];
+        mk(8, i) = md.cm[i];
+        mk(9, i) = md.invM[i];
     }
     double m = p[L::BALL_MASS];
     double fc = p[L::FRICTION];
@@ -54,14 +55,14 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     for (idx i = 0; i < n; ++i) {
         // a_i per unit of u_i, u_i', f (dynamics.hpp) and of F_b (the reaction on the bar)
         auto a = [&](double f, double u, double v) {
-            return dynamics::free_acceleration(q.modes.fm[i], q.modes.km[i], q.modes.cm[i], f, u, v);
+            return dynamics::free_acceleration(md.fm[i], md.km[i], md.cm[i], f, u, v);
         };
         for (idx row = 0; row < 2; ++row) {
             const double psi = mk(4 - row, i);  // psi_d,i, then psi_L,i
             ddc(row, i) = psi * a(0.0, 1.0, 0.0);
             ddc(row + 2, i) = psi * a(0.0, 0.0, 1.0);
             ddc(row, n) += psi * a(1.0, 0.0, 0.0);
-            ddc(row, n + 1) -= psi * q.modes.dm[i];
+            ddc(row, n + 1) -= psi * md.dm[i];
         }
     }
     sys.ball.half = p[L::HALF_GAP];
