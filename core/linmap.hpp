@@ -157,16 +157,16 @@ inline void pattern_work(const Params& q, Shape<0, -1> sh, const Stages& st, Ste
                          int flips) {
     const double* ws = st.wst;
     const int n = sh.n(), nx = sh.nxm(), nz = nx + 3;
-    const double* pD = q.modes.pD;
     for (int c = 0; c <= nz; ++c) {
         const Column& fb = mp.fb[c == nz ? 0 : flips];
         const bool fcol = c >= nz - 1;
         double g = c == sh.iyd() ? ws[0] : 0.0;
-        double h = c >= n && c < 2 * n ? ws[0] * pD[c - n] : 0.0;
+        double h = c >= n && c < 2 * n ? ws[0] * q.modes.pD[c - n] : 0.0;
         for (int s3 = 0; s3 < 3; ++s3) {
             const double w = (flips >> s3) & 1 ? -ws[s3 + 1] : ws[s3 + 1];
             double pdv = 0.0;
-            for (int i = 0; i < n; ++i) pdv += pD[i] * (fcol ? fb.Vr[s3][i] : mp.Vr[s3][i][c]);
+            for (int i = 0; i < n; ++i)
+                pdv += q.modes.pD[i] * (fcol ? fb.Vr[s3][i] : mp.Vr[s3][i][c]);
             g += w * (fcol ? fb.Yr[s3] : mp.Yr[s3][c]);
             h += w * pdv;
         }
