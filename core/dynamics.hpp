@@ -107,14 +107,14 @@ struct Strobe {
 };
 
 // The system a run integrates, unpacked from p once (unpack): the case, the modes, the
-// ball and what acts on it, the absorber and the force at the tip.
+// ball and what acts on it, the absorber, the force at the tip and the strobe.
 struct Params {
     int kase = 0;
-    bool stage_loop = false;  // every RK4 step by the stages, no affine map (tests)
+    bool stage_loop = false;  // every RK4 step by the stages, no affine map (tests, benchmarks)
     Modes modes;
     Ball ball;  // the ball and its walls (model.hpp)
-    // kappa of the ball carried whole (carried_kappa's share 1): the share with which a
-    // compliant contact's force and a rolling ball's floor friction act on it
+    // carried_kappa at the share 1: the kappa with which a compliant contact's force
+    // (always reciprocal) and a rolling ball's floor friction move the ball on the bar
     double kappa1 = 0.0;
     Friction fric;
     Contact contact;
