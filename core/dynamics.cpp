@@ -65,9 +65,9 @@ Stack zeros3(size_t n0, size_t rows, size_t cols) {
 // exact kernel's events end the regime where it may not), so that the floor's friction is
 // the one rolling needs and the bar carries cy of the ball (docs/model.md, 2.7).
 R::Params rolled(R::Params q) {
-    q.roll = true;
-    q.mus_n = INFINITY;
-    q.roll_band = INFINITY;
+    q.roll.on = true;
+    q.roll.mus_n = INFINITY;
+    q.roll.band = INFINITY;
     return q;
 }
 
@@ -76,7 +76,7 @@ R::Params rolled(R::Params q) {
 // slipping, it never rolls (a zero band) and the floor's friction is -mu_k N sgn(slip).
 R::Params roll_regime(R::Params q, double fdir) {
     if (fdir == 0.0) return rolled(q);
-    q.roll_band = 0.0;
+    q.roll.band = 0.0;
     return q;
 }
 
@@ -84,9 +84,9 @@ Matrix regime_matrix(const P& p, double sdir, double fdir) {
     require(sdir == -1.0 || sdir == 0.0 || sdir == 1.0, "sdir must be -1, 0 or 1");
     require(fdir == -1.0 || fdir == 0.0 || fdir == 1.0, "fdir must be -1, 0 or 1");
     R::Params q = params_of(p);
-    require(q.roll || fdir == 0.0, "fdir must be 0 for a ball that does not roll");
-    if (q.roll) q = roll_regime(q, fdir);
-    const bool slipping = q.roll && fdir != 0.0;
+    require(q.roll.on || fdir == 0.0, "fdir must be 0 for a ball that does not roll");
+    if (q.roll.on) q = roll_regime(q, fdir);
+    const bool slipping = q.roll.on && fdir != 0.0;
     const R::Shape<0, -1> sh(q);
     const int nx = sh.nx(), nz = nx + 3;
     Matrix A = zeros(size_t(nz), size_t(nz));
@@ -95,7 +95,7 @@ Matrix regime_matrix(const P& p, double sdir, double fdir) {
     // (a slipping ball's floor friction, constant, enters its constant column alone: the
     // state's columns are taken with mu_k N = 0)
     R::Params q_state = q;
-    if (slipping) q_state.muk_n = 0.0;
+    if (slipping) q_state.roll.muk_n = 0.0;
     auto column = [&](const R::Params& qc, int j, double f, double ysign) {
         R::StageTerms t = R::derivative_with<0, -1>(qc, sh, X, f, Kd, ysign);
         if (sh.rolls()) Kd[sh.iyd()] = R::map_roll(qc, sh, X, Kd, t);
@@ -106,11 +106,11 @@ Matrix regime_matrix(const P& p, double sdir, double fdir) {
         column(q_state, j, 0.0, 0.0);  // no friction force: the linear part
     }
     for (int i = 0; i < nx; ++i) X[i] = 0.0;
-    column(q_state, nx, q.f0, 0.0);  // the force F0 sin(Omega t) at the tip
+    column(q_state, nx, q.force.f0, 0.0);  // the force F0 sin(Omega t) at the tip
     if (slipping) X[sh.is()] = -fdir;  // a slip y' - s of fdir's sign, X's only entry
     column(q, nx + 2, 0.0, sdir);  // F_b = -F_c sdir held (and the floor's friction)
-    a(nx, nx + 1) = q.om;          // (sin Omega t)' = Omega cos Omega t
-    a(nx + 1, nx) = -q.om;
+    a(nx, nx + 1) = q.force.om;          // (sin Omega t)' = Omega cos Omega t
+    a(nx + 1, nx) = -q.force.om;
     return A;
 }
 
@@ -155,7 +155,7 @@ void fill_regime(const ExactRegime& g, int nz, double krb, double* A, double* B,
     };
     for (int j = 0; j < nz; ++j) {
         X[j] = 1.0;
-        const double w = j < sh.n() ? g.q.pL[j] : 0.0;
+        const double w = j < sh.n() ? g.q.modes.pL[j] : 0.0;
         derive(-krb * w, g.ysign);
         for (int i = 0; i < nz; ++i) A[i * nz + j] = Kd[i];
         X[j] = 0.0;
@@ -169,9 +169,9 @@ void fill_regime(const ExactRegime& g, int nz, double krb, double* A, double* B,
 // The unpacked parameters with the ball held by friction, whatever the force: y'' = 0,
 // the force that carries it on the bar with the reaction's share sr.
 R::Params held(R::Params q) {
-    q.hold = true;
-    q.band = INFINITY;
-    q.fs = INFINITY;
+    q.fric.hold = true;
+    q.fric.band = INFINITY;
+    q.fric.fs = INFINITY;
     return q;
 }
 
@@ -181,9 +181,9 @@ R::Params held(R::Params q) {
 // the floor's friction joins F_b.
 nb::tuple regime_stack(const P& p) {
     R::Params q = params_of(p, false);  // each regime sets its own friction law
-    const bool roll = q.roll;
-    q.roll = false;
-    q.hold = false;
+    const bool roll = q.roll.on;
+    q.roll.on = false;
+    q.fric.hold = false;
     R::set_friction(q, 1.0);
     const R::Shape<0, -1> sh(q);
     const int n = sh.n(), nz = sh.tmd() ? 2 * n + 2 : 2 * n;
@@ -193,7 +193,7 @@ nb::tuple regime_stack(const P& p) {
         std::vector<double> p1(p.data(), p.data() + L::P_SIZE);
         p1[L::REACTION] = 1.0;  // on a wall the bar carries the whole ball
         R::Params q1 = R::unpack(p1.data(), 1e-6);
-        q1.roll = false;  // held on a wall, a rolling ball's law is out as on the bore
+        q1.roll.on = false;  // held on a wall, a rolling ball's law is out as on the bore
         regimes.push_back({held(q1), 0.0, false});
         if (roll) regimes.push_back({rolled(q), 0.0, true});
     }

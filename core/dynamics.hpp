@@ -27,7 +27,7 @@ namespace L = layout;
 constexpr int NX_MAX = 2 * L::NMAX + 2;  // state length 2n + 2 (a rolling ball's: 2n + 3)
 
 // Mode i's acceleration under the tip force f alone, without the damper's force, from the
-// premultiplied constants fm = psi_F,i / M_i, km = K_i / M_i, cm = C_i / M_i (Params):
+// premultiplied constants fm = psi_F,i / M_i, km = K_i / M_i, cm = C_i / M_i (Modes):
 // a_i = psi_F,i f / M_i - K_i u_i / M_i - C_i u_i' / M_i.  T is real for a state, complex
 // for the exact integrator's modal coefficients.
 template <class T>
@@ -41,13 +41,27 @@ BB_INLINE void jump_modes(int n, const double* pD, const double* invM, double* X
     for (int i = 0; i < n; ++i) X[n + i] += g * pD[i] * invM[i];
 }
 
-// Everything a run reads from p, unpacked once, with the premultiplied modal constants
-// of the stage derivative: a_i = fm f - km u - cm v (- dm F_b for the ball).
-struct Params {
-    int n = 0, kase = 0;
-    bool regen = false, stage_loop = false;
+// The bar's retained modes (docs/model.md, 2): modal damping C_i, 1 / M_i and the mode
+// shapes at the tip (psi_L), the damper (psi_d), the absorber (psi_a) and where the force
+// acts (psi_F), with the premultiplied constants of the stage derivative:
+// a_i = fm f - km u - cm v (- dm F_b for the ball, - lm sum psi_d a for the locked ball).
+struct Modes {
+    int n = 0;
     double C[L::NMAX], pL[L::NMAX], pD[L::NMAX], pA[L::NMAX], pF[L::NMAX], invM[L::NMAX];
     double fm[L::NMAX], km[L::NMAX], cm[L::NMAX], dm[L::NMAX], lm[L::NMAX];
+};
+
+// The force at the tip: F0 sin(Omega t), or a regenerative cut's (regen, rk4_run.hpp).
+struct Forcing {
+    bool regen = false;
+    double f0, om;
+    double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
+};
+
+// Coulomb friction of the ball on the bore, F_b = -F_c sgn(y'), its reaction on the bar
+// (the share sr), the stick law that may hold the ball, and the stick bookkeeping.
+struct Friction {
+    double fc, sr;
     double kappa;  // 1/m + sum psi_d dm: y'' = kappa F_b - sum psi_d a_free
     // F_b, dm F_b and kappa F_b for y' > 0, y' = 0, y' < 0 (F_b = -F_c, 0, F_c)
     // (sign_pick): the products a stage forms, computed once, so that a stage picks one
@@ -56,39 +70,72 @@ struct Params {
     // no kappa F_b is -0: y'' = kappa F_b - sum psi_d a_i then has the same bits whether
     // the sum starts from 0 or from its first term (they differ only in the sign of a zero)
     bool ydd_sum_from_first;
-    Ball ball;  // the ball and its walls (model.hpp)
-    double f0, om, fc, sr, stick_min, vstick, ma, ka, ca;
     // the stick law (hold): inside |y'| < band the ball is held while the force that
     // carries it with the bar is at most F_s; 0: the published F_b = -F_c sgn(y')
     bool hold = false;
     double band = 0.0, fs = 0.0, inv_kappa = 0.0;
-    double tstrobe, strobe_t0;
-    double chh, shh;  // cos, sin of Omega dt / 2: the forcing phase's half-step rotation
-    // compliant contact in place of the impact law (docs/model.md, 2.6): past a wall the
-    // ball and the bar press each other with Hertz's K d^1.5 (1 + chi d'), Hunt and
-    // Crossley's damping chi = alpha / v_in set per contact by the run from the speed it
-    // began with; kappa1 is carried_kappa's of the (always reciprocal) contact force
-    bool hertz = false;
-    double ck = 0.0, alpha = 0.0, kappa1 = 0.0, chi = 0.0;
-    // a rolling ball (docs/model.md, 2.7): its spin s = r omega a state; it rolls while
-    // the floor's friction that keeps y' = s is at most mu_s N, and slips with mu_k N
-    // beyond; kroll = r^2 / I = 5 / (2 m)
-    bool roll = false;
-    double mus_n = 0.0, muk_n = 0.0, roll_band = 0.0, kroll = 0.0;
-    double inv_roll = 0.0;  // 1 / (kappa1 + kroll): what rolling needs, by a product
+    // the stick records' shortest interval, and |y'| below which the ball counts as stuck
+    double stick_min, vstick;
+};
+
+// The tuned absorber: its mass, stiffness and damping on the bar at psi_a.
+struct Absorber {
+    double m, k, c;
+};
+
+// A compliant contact in place of the impact law (docs/model.md, 2.6): past a wall the
+// ball and the bar press each other with Hertz's K d^1.5 (1 + chi d'), Hunt and
+// Crossley's damping chi = alpha / v_in set per contact by the run from the speed it
+// began with.
+struct Contact {
+    bool on = false;
+    double k = 0.0, alpha = 0.0, chi = 0.0;
+};
+
+// A rolling ball (docs/model.md, 2.7): its spin s = r omega a state; it rolls while the
+// floor's friction that keeps y' = s is at most mu_s N (and the slip is inside band), and
+// slips with mu_k N beyond; kroll = r^2 / I = 5 / (2 m).
+struct Rolling {
+    bool on = false;
+    double mus_n = 0.0, muk_n = 0.0, band = 0.0, kroll = 0.0;
+    double inv_kappa = 0.0;  // 1 / (kappa1 + kroll): what rolling needs, by a product
+};
+
+// The Poincare strobe: its period (0: none) and a time it samples.
+struct Strobe {
+    double period, t0;
+};
+
+// The system a run integrates, unpacked from p once (unpack): the case, the modes, the
+// ball and what acts on it, the absorber, the force at the tip and the strobe.
+struct Params {
+    int kase = 0;
+    bool stage_loop = false;  // every RK4 step by the stages, no affine map (tests, benchmarks)
+    Modes modes;
+    Ball ball;  // the ball and its walls (model.hpp)
+    // carried_kappa at the share 1: the kappa with which a compliant contact's force
+    // (always reciprocal) and a rolling ball's floor friction move the ball on the bar
+    double kappa1 = 0.0;
+    Friction fric;
+    Contact contact;
+    Rolling roll;
+    Absorber tmd;
+    Forcing force;
+    Strobe strobe;
 };
 
 // The modes' velocity jumps of an impact with impulse factor g (model.hpp's impact_law).
 BB_INLINE void jump_modes(const Params& q, int n, double* X, double g) {
-    jump_modes(n, q.pD, q.invM, X, g);
+    jump_modes(n, q.modes.pD, q.modes.invM, X, g);
 }
 
 // kappa of a ball the bar carries with the share s of the reaction: the force that moves
 // it with the bar per unit of relative acceleration, 1/m + s sum psi_d,i^2 / M_i
-// (0 without a ball); Params::kappa is the share sr's.
+// (0 without a ball); Friction::kappa is the share sr's, Params::kappa1 the share 1's.
 inline double carried_kappa(const Params& q, double s) {
+    const Modes& md = q.modes;
     double kappa = q.ball.m > 0.0 ? 1.0 / q.ball.m : 0.0;
-    for (int i = 0; i < q.n; ++i) kappa += q.pD[i] * (s * q.pD[i] * q.invM[i]);
+    for (int i = 0; i < md.n; ++i) kappa += md.pD[i] * (s * md.pD[i] * md.invM[i]);
     return kappa;
 }
 
@@ -106,81 +153,87 @@ BB_INLINE ContactForce contact_force(const Params& q, double y, double yd) {
     if (!(d > 0.0)) return {0.0, 0.0};
     const double s = y > 0.0 ? 1.0 : -1.0;
     const double dd = s * yd;
-    const double elastic = q.ck * d * std::sqrt(d);
-    const double push = std::fmax(0.0, elastic * (1.0 + q.chi * dd));
+    const double elastic = q.contact.k * d * std::sqrt(d);
+    const double push = std::fmax(0.0, elastic * (1.0 + q.contact.chi * dd));
     return {-s * push, (push - elastic) * dd};
 }
 
-// F_c and what the stage derivative picks by y''s sign (Params::fb, dmfb, kfb).
+// F_c and what the stage derivative picks by y''s sign (Friction::fb, dmfb, kfb).
 inline void set_friction(Params& q, double fc) {
-    q.fc = fc;
+    Friction& fr = q.fric;
+    fr.fc = fc;
     const double fbs[3] = {-fc, 0.0, fc};
-    q.ydd_sum_from_first = true;
+    fr.ydd_sum_from_first = true;
     for (int b = 0; b < 3; ++b) {
-        q.fb[b] = fbs[b];
-        for (int i = 0; i < q.n; ++i) {
-            const double dmfb = q.dm[i] * fbs[b];
-            q.dmfb[i][b] = dmfb;
+        fr.fb[b] = fbs[b];
+        for (int i = 0; i < q.modes.n; ++i) {
+            const double dmfb = q.modes.dm[i] * fbs[b];
+            fr.dmfb[i][b] = dmfb;
         }
-        const double kfb = q.kappa * fbs[b];
-        q.kfb[b] = kfb;
-        if (kfb == 0.0 && std::signbit(kfb)) q.ydd_sum_from_first = false;
+        const double kfb = fr.kappa * fbs[b];
+        fr.kfb[b] = kfb;
+        if (kfb == 0.0 && std::signbit(kfb)) fr.ydd_sum_from_first = false;
     }
 }
 
+// The system of the packed parameters p (layout.hpp), for RK4's step dt (the forcing's
+// half-step rotation; any dt where no step is taken).  (Set in this order, not struct by
+// struct: GCC's code for the RK4 kernels, into which this is inlined, follows the order
+// of these stores; set struct by struct, the kernels came out up to 6 % larger, with
+// other registers and spills.)
 inline Params unpack(const double* p, double dt) {
     Params q;
-    q.n = int(p[L::N_MODES]);
+    q.modes.n = int(p[L::N_MODES]);
     q.kase = int(p[L::CASE]);
-    q.regen = int(p[L::FORCING]) == L::REGENERATIVE;
+    q.force.regen = int(p[L::FORCING]) == L::REGENERATIVE;
     q.stage_loop = p[L::STAGE_LOOP] != 0.0;
-    q.f0 = p[L::F0];
-    q.om = p[L::OMEGA];
+    q.force.f0 = p[L::F0];
+    q.force.om = p[L::OMEGA];
     q.ball.half = p[L::HALF_GAP];
     q.ball.e = p[L::RESTITUTION];
-    q.fc = p[L::FRICTION];
-    q.sr = p[L::REACTION];
+    q.fric.fc = p[L::FRICTION];
+    q.fric.sr = p[L::REACTION];
     q.ball.meff = p[L::M_EFF];
     q.ball.vimp = p[L::V_IMPACT];
-    q.stick_min = p[L::STICK_MIN];
-    q.vstick = p[L::V_STICK];
-    q.band = p[L::STICK_BAND];
-    q.fs = p[L::STATIC_FRICTION];
-    q.hold = q.band > 0.0 && q.fc > 0.0 && q.kase == L::BALL;
-    q.ma = p[L::TMD_MASS];
-    q.ka = p[L::TMD_K];
-    q.ca = p[L::TMD_C];
-    q.tstrobe = p[L::STROBE_PERIOD];
-    q.strobe_t0 = p[L::STROBE_T0];
+    q.fric.stick_min = p[L::STICK_MIN];
+    q.fric.vstick = p[L::V_STICK];
+    q.fric.band = p[L::STICK_BAND];
+    q.fric.fs = p[L::STATIC_FRICTION];
+    q.fric.hold = q.fric.band > 0.0 && q.fric.fc > 0.0 && q.kase == L::BALL;
+    q.tmd.m = p[L::TMD_MASS];
+    q.tmd.k = p[L::TMD_K];
+    q.tmd.c = p[L::TMD_C];
+    q.strobe.period = p[L::STROBE_PERIOD];
+    q.strobe.t0 = p[L::STROBE_T0];
     q.ball.m = p[L::BALL_MASS];
-    for (int i = 0; i < q.n; ++i) {
-        q.invM[i] = 1.0 / p[L::M_ + i];
-        q.C[i] = p[L::C_ + i];
-        q.pL[i] = p[L::PSI_L + i];
-        q.pD[i] = p[L::PSI_D + i];
-        q.pA[i] = p[L::PSI_A + i];
-        q.pF[i] = p[L::PSI_F + i];
-        q.fm[i] = q.pF[i] * q.invM[i];
-        q.km[i] = p[L::K_ + i] * q.invM[i];
-        q.cm[i] = q.C[i] * q.invM[i];
-        q.dm[i] = q.sr * q.pD[i] * q.invM[i];
-        q.lm[i] = q.ball.meff * q.pD[i] * q.invM[i];
+    for (int i = 0; i < q.modes.n; ++i) {
+        q.modes.invM[i] = 1.0 / p[L::M_ + i];
+        q.modes.C[i] = p[L::C_ + i];
+        q.modes.pL[i] = p[L::PSI_L + i];
+        q.modes.pD[i] = p[L::PSI_D + i];
+        q.modes.pA[i] = p[L::PSI_A + i];
+        q.modes.pF[i] = p[L::PSI_F + i];
+        q.modes.fm[i] = q.modes.pF[i] * q.modes.invM[i];
+        q.modes.km[i] = p[L::K_ + i] * q.modes.invM[i];
+        q.modes.cm[i] = q.modes.C[i] * q.modes.invM[i];
+        q.modes.dm[i] = q.fric.sr * q.modes.pD[i] * q.modes.invM[i];
+        q.modes.lm[i] = q.ball.meff * q.modes.pD[i] * q.modes.invM[i];
     }
-    q.kappa = carried_kappa(q, q.sr);
-    q.ck = p[L::CONTACT_K];
-    q.alpha = p[L::CONTACT_ALPHA];
-    q.hertz = q.ck > 0.0 && q.kase == L::BALL;
+    q.fric.kappa = carried_kappa(q, q.fric.sr);
+    q.contact.k = p[L::CONTACT_K];
+    q.contact.alpha = p[L::CONTACT_ALPHA];
+    q.contact.on = q.contact.k > 0.0 && q.kase == L::BALL;
     q.kappa1 = carried_kappa(q, 1.0);
-    q.roll = p[L::ROLL] > 0.0 && q.kase == L::BALL;
-    q.mus_n = p[L::ROLL_STATIC];
-    q.muk_n = p[L::ROLL_KINETIC];
-    q.roll_band = p[L::ROLL_BAND];
-    q.kroll = q.ball.m > 0.0 ? 2.5 / q.ball.m : 0.0;
-    q.inv_roll = q.kappa1 + q.kroll != 0.0 ? 1.0 / (q.kappa1 + q.kroll) : 0.0;
-    q.inv_kappa = q.kappa != 0.0 ? 1.0 / q.kappa : 0.0;
-    set_friction(q, q.fc);
-    q.chh = std::cos(q.om * 0.5 * dt);
-    q.shh = std::sin(q.om * 0.5 * dt);
+    q.roll.on = p[L::ROLL] > 0.0 && q.kase == L::BALL;
+    q.roll.mus_n = p[L::ROLL_STATIC];
+    q.roll.muk_n = p[L::ROLL_KINETIC];
+    q.roll.band = p[L::ROLL_BAND];
+    q.roll.kroll = q.ball.m > 0.0 ? 2.5 / q.ball.m : 0.0;
+    q.roll.inv_kappa = q.kappa1 + q.roll.kroll != 0.0 ? 1.0 / (q.kappa1 + q.roll.kroll) : 0.0;
+    q.fric.inv_kappa = q.fric.kappa != 0.0 ? 1.0 / q.fric.kappa : 0.0;
+    set_friction(q, q.fric.fc);
+    q.force.chh = std::cos(q.force.om * 0.5 * dt);
+    q.force.shh = std::sin(q.force.om * 0.5 * dt);
     return q;
 }
 
@@ -195,7 +248,7 @@ template <int N, int CASE>
 struct Shape {
     int run_n, run_kase;
     bool run_roll;
-    explicit Shape(const Params& q) : run_n(q.n), run_kase(q.kase), run_roll(q.roll) {}
+    explicit Shape(const Params& q) : run_n(q.modes.n), run_kase(q.kase), run_roll(q.roll.on) {}
     // a rolling ball: the spin after y' (its own kernels and those of a run-time shape;
     // a constant, so that the other kernels compile the roll law away)
     bool rolls() const { return CASE == ROLLING || (CASE < 0 && run_roll); }
@@ -218,7 +271,7 @@ struct Shape {
     // a compliant contact runs in the kernel of a run-time shape alone (rk4_run.hpp's
     // dispatch), so that the others compile its branches away
     static constexpr bool CONTACT = CASE < 0;
-    bool hertz(const Params& q) const { return CONTACT && q.hertz; }
+    bool hertz(const Params& q) const { return CONTACT && q.contact.on; }
 };
 
 // One of three values by the sign of y (by_sign: for y > 0, y = 0, y < 0; NaN takes
@@ -249,29 +302,31 @@ struct StageTerms {
     double sfree;  // sum psi_d a_i of the modes' free accelerations
 };
 
-// The ball's stage under the stick law (Params::hold) inside the band |y'| < band: the
+// The ball's stage under the stick law (Friction::hold) inside the band |y'| < band: the
 // force that carries the ball with the bar (y'' = 0) is F = sum psi_d a_free / kappa;
 // the ball is held while |F| <= F_s, else it slides with F_c the way the bar drags it
 // (Karnopp's law; after a held step y' is zeroed, stop_slide).  The modes' accelerations
 // are written again with this F_b in place of the sgn() law's; returns y''.
-// A compliant contact's force fcon (q.hertz) acts beside it: the friction that holds the
-// ball is then what carrying it needs less what the contact gives.
+// A compliant contact's force fcon (Contact::on) acts beside it: the friction that holds
+// the ball is then what carrying it needs less what the contact gives.
 template <int N, int CASE>
 BB_INLINE double hold_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,
                             double* Kd, double sfree, double fcon, StageTerms& t) {
     const int n = sh.n();
+    const Modes& md = q.modes;
+    const Friction& fr = q.fric;
     const bool hertz = sh.hertz(q);
     const double need = hertz ? sfree - q.kappa1 * fcon : sfree;
-    const double carry = need * q.inv_kappa;
-    t.held = std::fabs(carry) <= q.fs;
-    const double fb = t.held ? carry : (carry > 0.0 ? q.fc : -q.fc);
+    const double carry = need * fr.inv_kappa;
+    t.held = std::fabs(carry) <= fr.fs;
+    const double fb = t.held ? carry : (carry > 0.0 ? fr.fc : -fr.fc);
     for (int i = 0; i < n; ++i) {
-        Kd[n + i] =
-            free_acceleration(q.fm[i], q.km[i], q.cm[i], f, Xs[i], Xs[n + i]) - q.dm[i] * fb;
-        if (hertz) Kd[n + i] -= q.pD[i] * q.invM[i] * fcon;
+        Kd[n + i] = free_acceleration(md.fm[i], md.km[i], md.cm[i], f, Xs[i], Xs[n + i]) -
+                    md.dm[i] * fb;
+        if (hertz) Kd[n + i] -= md.pD[i] * md.invM[i] * fcon;
     }
     t.fb = fb;
-    return t.held ? 0.0 : q.kappa * fb - need;
+    return t.held ? 0.0 : fr.kappa * fb - need;
 }
 
 // A rolling ball's stage (Shape::rolls; docs/model.md, 2.7): the floor's friction F on
@@ -284,14 +339,15 @@ template <int N, int CASE>
 BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs, double* Kd,
                             double ydd, double need, StageTerms& t) {
     const int n = sh.n(), is = sh.is();
+    const Rolling& rl = q.roll;
     const double slip = Xs[sh.iyd()] - Xs[is];
-    const double keep = need * q.inv_roll;
-    t.rolled = std::fabs(slip) < q.roll_band && std::fabs(keep) <= q.mus_n;
+    const double keep = need * rl.inv_kappa;
+    t.rolled = std::fabs(slip) < rl.band && std::fabs(keep) <= rl.mus_n;
     const double dir = slip != 0.0 && !t.rolled ? (slip > 0.0 ? -1.0 : 1.0)
                                                 : (keep > 0.0 ? 1.0 : -1.0);
-    const double F = t.rolled ? keep : dir * q.muk_n;
-    for (int i = 0; i < n; ++i) Kd[n + i] -= q.pD[i] * q.invM[i] * F;
-    Kd[is] = -q.kroll * F;
+    const double F = t.rolled ? keep : dir * rl.muk_n;
+    for (int i = 0; i < n; ++i) Kd[n + i] -= q.modes.pD[i] * q.modes.invM[i] * F;
+    Kd[is] = -rl.kroll * F;
     t.pfloor = t.rolled ? 0.0 : -F * slip;
     t.floor = F;
     return ydd + q.kappa1 * F;
@@ -303,8 +359,9 @@ BB_INLINE double roll_stage(const Params& q, Shape<N, CASE> sh, const double* Xs
 // written with premultiplied constants and the stage velocity last, so that little of
 // it waits on the previous stage.
 //
-// FAST: the ball's y'' sums psi_d a_i from its first term (q.ydd_sum_from_first), which
-// takes an addition off the stage's longest chain (a_i, y'', y' at the next stage, F_b).
+// FAST: the ball's y'' sums psi_d a_i from its first term (Friction::ydd_sum_from_first),
+// which takes an addition off the stage's longest chain (a_i, y'', y' at the next stage,
+// F_b).
 //
 // ysign: the value whose sign picks the friction force F_b = -F_c sgn(ysign) (sign_pick);
 // the stages give the stage's own y' (derivative), the regime matrices (dynamics.cpp) a
@@ -318,16 +375,17 @@ template <int N, int CASE, bool FAST = false, bool ROLL = false>
 BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const double* Xs,
                                      double f, double* Kd, double ysign) {
     const int n = sh.n(), iy = sh.iy(), iyd = sh.iyd();
+    const Modes& md = q.modes;
     StageTerms t{0.0, 0.0, 0.0, 0.0, 0.0, false, 0.0, 0.0, false, 0.0, 0.0};
     double sfree = 0.0;  // sum_i psi_d,i a_i of the free accelerations
     for (int i = 0; i < n; ++i) {
         const double vi = Xs[n + i];
         Kd[i] = vi;
-        const double ai = free_acceleration(q.fm[i], q.km[i], q.cm[i], f, Xs[i], vi);
+        const double ai = free_acceleration(md.fm[i], md.km[i], md.cm[i], f, Xs[i], vi);
         Kd[n + i] = ai;
-        sfree = (FAST && sh.ball() && i == 0) ? q.pD[i] * ai : sfree + q.pD[i] * ai;
-        t.wf += q.pF[i] * vi;
-        t.pvisc += q.C[i] * vi * vi;
+        sfree = (FAST && sh.ball() && i == 0) ? md.pD[i] * ai : sfree + md.pD[i] * ai;
+        t.wf += md.pF[i] * vi;
+        t.pvisc += md.C[i] * vi * vi;
     }
     t.sfree = sfree;
     double ydd = 0.0;
@@ -335,14 +393,14 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         const double yds = Xs[iyd];
         // F_b = -F_c sgn(y'), sgn(0) = 0 (and NaN), with dm F_b and kappa F_b picked by
         // y''s sign (sign_pick)
-        const double fb = sign_pick(ysign, q.fb);
+        const double fb = sign_pick(ysign, q.fric.fb);
         double pdv = 0.0;
         for (int i = 0; i < n; ++i) {
             // the reaction on the bar: -psi_d F_b (sr = 1) or as printed (sr = -1)
-            Kd[n + i] -= sign_pick(ysign, q.dmfb[i]);
-            pdv += q.pD[i] * Xs[n + i];
+            Kd[n + i] -= sign_pick(ysign, q.fric.dmfb[i]);
+            pdv += md.pD[i] * Xs[n + i];
         }
-        ydd = sign_pick(ysign, q.kfb) - sfree;
+        ydd = sign_pick(ysign, q.fric.kfb) - sfree;
         t.fb = fb;
         t.yds = yds;
         t.pdv = pdv;
@@ -351,7 +409,7 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         if (sh.hertz(q)) {
             const ContactForce c = contact_force(q, Xs[iy], yds);
             fcon = c.f;
-            for (int i = 0; i < n; ++i) Kd[n + i] -= q.pD[i] * q.invM[i] * fcon;
+            for (int i = 0; i < n; ++i) Kd[n + i] -= md.pD[i] * md.invM[i] * fcon;
             ydd += q.kappa1 * fcon;
             t.pcon = c.loss;
         }
@@ -360,7 +418,8 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
         // vector select, GCC 12 stopped with an internal error,
         // gimple_expand_vec_cond_expr, in the regime matrices' copy, dynamics.cpp; so the
         // held stage writes the modes again.)
-        if (q.hold && std::fabs(ysign) < q.band) ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
+        if (q.fric.hold && std::fabs(ysign) < q.fric.band)
+            ydd = hold_stage(q, sh, Xs, f, Kd, sfree, fcon, t);
         if constexpr (ROLL) {
             if (sh.rolls())
                 ydd = roll_stage(q, sh, Xs, Kd, ydd, sfree - q.kappa1 * (fb + fcon), t);
@@ -368,17 +427,17 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
     } else if (sh.tmd()) {
         double rel = Xs[iy], reld = Xs[iyd];
         for (int i = 0; i < n; ++i) {
-            rel -= q.pA[i] * Xs[i];
-            reld -= q.pA[i] * Xs[n + i];
+            rel -= md.pA[i] * Xs[i];
+            reld -= md.pA[i] * Xs[n + i];
         }
-        const double ft = q.ka * rel + q.ca * reld;
-        for (int i = 0; i < n; ++i) Kd[n + i] += q.pA[i] * ft * q.invM[i];
-        ydd = -ft / q.ma;
-        t.pvisc += q.ca * reld * reld;
+        const double ft = q.tmd.k * rel + q.tmd.c * reld;
+        for (int i = 0; i < n; ++i) Kd[n + i] += md.pA[i] * ft * md.invM[i];
+        ydd = -ft / q.tmd.m;
+        t.pvisc += q.tmd.c * reld * reld;
     } else if (sh.kase() == L::LOCKED) {
         // the force that carries the ball with the bar, m_eff sum psi_d a_free, acts on
         // mode i with psi_d,i
-        for (int i = 0; i < n; ++i) Kd[n + i] -= q.lm[i] * sfree;
+        for (int i = 0; i < n; ++i) Kd[n + i] -= md.lm[i] * sfree;
     }
     Kd[iy] = sh.has_aux() ? Xs[iyd] : 0.0;
     Kd[iyd] = ydd;

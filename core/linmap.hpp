@@ -125,7 +125,7 @@ inline Column push_column(const Params& q, const Stages& st, int col, int flips)
         const bool flip = s > 0 && ((flips >> (s - 1)) & 1);
         const double ysign = col == nx + 2 ? (flip ? 1.0 : -1.0) : 0.0;
         for (int j = 0; j < nxs; ++j) Xs[j] = X[j] + cst[s] * Kd[j];
-        const double f = q.f0 * (alpha[s] * S + beta[s] * Cz);
+        const double f = q.force.f0 * (alpha[s] * S + beta[s] * Cz);
         StageTerms t = derivative_with<0, -1>(q, sh, Xs, f, Kd, ysign);
         // the roll law after it (compiled into derivative_with's copy here, GCC 12
         // stops with the internal error noted there)
@@ -136,13 +136,13 @@ inline Column push_column(const Params& q, const Stages& st, int col, int flips)
             double reld = tmd ? Xs[iyd] : 0.0;  // the absorber's stroke rate
             for (int i = 0; i < n; ++i) {
                 c.Vr[s - 1][i] = Xs[n + i];
-                if (tmd) reld -= q.pA[i] * Xs[n + i];
+                if (tmd) reld -= q.modes.pA[i] * Xs[n + i];
             }
             c.Vr[s - 1][n] = reld;
         }
         for (int j = 0; j < nxs; ++j) acc[j] += wst[s] * Kd[j];
-        fs += wst[s] * q.f0 * alpha[s] * t.wf;
-        fc += wst[s] * q.f0 * beta[s] * t.wf;
+        fs += wst[s] * q.force.f0 * alpha[s] * t.wf;
+        fc += wst[s] * q.force.f0 * beta[s] * t.wf;
     }
     for (int j = 0; j < nx; ++j) c.Pd[j] = acc[j];
     // sum_s b_s f_s W'_s with f_s = F0 (alpha_s S + beta_s C) is S (Fs . z) + C (Fc . z)
@@ -161,11 +161,12 @@ inline void pattern_work(const Params& q, Shape<0, -1> sh, const Stages& st, Ste
         const Column& fb = mp.fb[c == nz ? 0 : flips];
         const bool fcol = c >= nz - 1;
         double g = c == sh.iyd() ? ws[0] : 0.0;
-        double h = c >= n && c < 2 * n ? ws[0] * q.pD[c - n] : 0.0;
+        double h = c >= n && c < 2 * n ? ws[0] * q.modes.pD[c - n] : 0.0;
         for (int s3 = 0; s3 < 3; ++s3) {
             const double w = (flips >> s3) & 1 ? -ws[s3 + 1] : ws[s3 + 1];
             double pdv = 0.0;
-            for (int i = 0; i < n; ++i) pdv += q.pD[i] * (fcol ? fb.Vr[s3][i] : mp.Vr[s3][i][c]);
+            for (int i = 0; i < n; ++i)
+                pdv += q.modes.pD[i] * (fcol ? fb.Vr[s3][i] : mp.Vr[s3][i][c]);
             g += w * (fcol ? fb.Yr[s3] : mp.Yr[s3][c]);
             h += w * pdv;
         }
@@ -181,21 +182,21 @@ inline void pattern_work(const Params& q, Shape<0, -1> sh, const Stages& st, Ste
 // friction work.
 inline void build_map(int n, const double* p, double dt, StepMap& mp, bool rolled) {
     Params q = unpack(p, dt);
-    q.n = n;
-    q.hold = false;  // the map is the sgn() law's step
-    q.hertz = false;  // off the walls: a run with a compliant contact steps by stages
-    q.roll = q.roll && rolled;
-    if (q.roll) {  // the roll law as rolling throughout (the kernel checks that it does)
-        q.mus_n = INFINITY;
-        q.roll_band = INFINITY;
+    q.modes.n = n;
+    q.fric.hold = false;  // the map is the sgn() law's step
+    q.contact.on = false;  // off the walls: a run with a compliant contact steps by stages
+    q.roll.on = q.roll.on && rolled;
+    if (q.roll.on) {  // the roll law as rolling throughout (the kernel checks that it does)
+        q.roll.mus_n = INFINITY;
+        q.roll.band = INFINITY;
     }
     set_friction(q, 1.0);
     const Shape<0, -1> sh(q);
     const int nx = sh.nxm(), nz = nx + 3;
-    const Stages st(q.om, dt);
+    const Stages st(q.force.om, dt);
     for (int s = 0; s < 4; ++s) {
-        for (int i = 0; i < n; ++i) mp.Wv[s][i] = st.wst[s] * q.C[i];
-        mp.Wv[s][n] = sh.tmd() ? st.wst[s] * q.ca : 0.0;
+        for (int i = 0; i < n; ++i) mp.Wv[s][i] = st.wst[s] * q.modes.C[i];
+        mp.Wv[s][n] = sh.tmd() ? st.wst[s] * q.tmd.c : 0.0;
     }
     for (int col = 0; col < nz; ++col) {
         const Column c = push_column(q, st, col, 0);

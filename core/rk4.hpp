@@ -86,7 +86,7 @@ BB_INLINE void stage_flows(const Params& q, Shape<N, CASE> sh, Flows& fl, const 
                            double w_s, double f) {
     if (sh.ball()) {
         fl.d_fric -= w_s * s.fb * s.yds;
-        fl.w_nr += w_s * (1.0 - q.sr) * s.fb * s.pdv;
+        fl.w_nr += w_s * (1.0 - q.fric.sr) * s.fb * s.pdv;
     }
     fl.w_force += w_s * f * s.wf;
     fl.d_visc += w_s * s.pvisc;
@@ -102,7 +102,9 @@ BB_INLINE v2 vabs(v2 v) {
 BB_INLINE v4 vabs(v4 v) { return {vabs(v.lo), vabs(v.hi)}; }
 
 // F_b of a mapped step: the sign y' has at the step's start.
-BB_INLINE double map_friction(const Params& q, double yd0) { return yd0 > 0.0 ? -q.fc : q.fc; }
+BB_INLINE double map_friction(const Params& q, double yd0) {
+    return yd0 > 0.0 ? -q.fric.fc : q.fric.fc;
+}
 
 // Whether a step's stages may take their short forms (rk4_stages, FAST): stage 1
 // (c = 0) at X itself and each sum of b_s dt Kd from its first term.  With c0 Kd = +-0
@@ -170,7 +172,7 @@ BB_INLINE bool rk4_stages(const Params& q, Shape<N, CASE> sh, double* X, double*
         held = held && terms.held;
         rolled = rolled && terms.rolled;
         // (only the stick law holds: the sgn() law's stages leave hold_max, off the chain)
-        if (q.hold) hold_max = Steady::pymax(hold_max, terms.held ? std::fabs(terms.fb) : 0.0);
+        if (q.fric.hold) hold_max = Steady::pymax(hold_max, terms.held ? std::fabs(terms.fb) : 0.0);
     }
     for (int j = 0; j < nx; ++j) X[j] += sum[j];
     return held;
@@ -231,7 +233,7 @@ template <int N, int CASE>
 BB_INLINE bool map_fits(const Params& q, Shape<N, CASE> sh, const VecMap& vm, const double* X,
                         MapIn z, bool nan_maps, double& spread, YStages* yst = nullptr) {
     const double yd0 = X[sh.iyd()];
-    const bool ok = nan_maps ? !(std::fabs(yd0) < q.vstick) : std::fabs(yd0) >= q.vstick;
+    const bool ok = nan_maps ? !(std::fabs(yd0) < q.fric.vstick) : std::fabs(yd0) >= q.fric.vstick;
     if (!ok) return false;
     spread = y_spread(sh, vm, X, z);
     if (surely_fits(std::fabs(yd0), spread)) return true;
@@ -256,7 +258,8 @@ BB_INLINE bool map_rolls(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
     for (int j = 0; j < sh.nxm(); ++j) k += vm.kP[j] * X[j];
     const v4 a = vabs(k);
     // (a NaN friction fails each comparison and takes the stages)
-    return a[0] <= q.mus_n && a[1] <= q.mus_n && a[2] <= q.mus_n && a[3] <= q.mus_n;
+    const double mus = q.roll.mus_n;
+    return a[0] <= mus && a[1] <= mus && a[2] <= mus && a[3] <= mus;
 }
 
 // May a slipping ball take the sliding ball's map this step, its floor friction ffl =
@@ -274,14 +277,14 @@ BB_INLINE bool map_slips(const Params& q, Shape<N, CASE> sh, const VecMap& vm, c
                          MapIn z, double ffl, const double* cst, double spread,
                          const YStages& yst) {
     const double s0 = X[sh.is()], slip0 = X[sh.iyd()] - s0;
-    if (q.sr != 1.0 || !(std::fabs(slip0) >= q.roll_band)) return false;
+    if (q.fric.sr != 1.0 || !(std::fabs(slip0) >= q.roll.band)) return false;
     if (std::isnan(spread)) spread = y_spread(sh, vm, X, z);
-    spread += std::fabs(q.kroll * ffl * cst[3]);
-    if (std::fabs(slip0) >= q.roll_band + 2.0 * spread) return true;
+    spread += std::fabs(q.roll.kroll * ffl * cst[3]);
+    if (std::fabs(slip0) >= q.roll.band + 2.0 * spread) return true;
     const v4 ys = yst.have ? yst.ys : stage_ys(sh, vm, X, z);
     for (int s3 = 0; s3 < 3; ++s3) {
-        const double slip = ys[s3] - (s0 - q.kroll * ffl * cst[s3 + 1]);
-        if (!(slip * slip0 > 0.0 && std::fabs(slip) >= q.roll_band)) return false;
+        const double slip = ys[s3] - (s0 - q.roll.kroll * ffl * cst[s3 + 1]);
+        if (!(slip * slip0 > 0.0 && std::fabs(slip) >= q.roll.band)) return false;
     }
     return true;
 }
@@ -401,7 +404,7 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     for (int i = 0; i < n; ++i) pv += vm.w0[i] * X[n + i] * X[n + i];
     if (sh.tmd()) {
         double rd = X[sh.iyd()];
-        for (int i = 0; i < n; ++i) rd -= q.pA[i] * X[n + i];
+        for (int i = 0; i < n; ++i) rd -= q.modes.pA[i] * X[n + i];
         pv += vm.w0[n] * rd * rd;
     }
     v4 wvv[NV_MAX];  // Wv v^2 of velocity k at stages 2-4
@@ -440,14 +443,14 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
         if (ffl != 0.0) g += vm.fwO[z.flips] * ffl;
         for (int j = 0; j < nx; ++j) g += fw.P[j] * X[j];
         fl.d_fric -= fz * g[0];
-        fl.w_nr += (1.0 - q.sr) * fz * g[1];
+        fl.w_nr += (1.0 - q.fric.sr) * fz * g[1];
         // the floor friction's -ffl dy (its reaction is reciprocal: map_slips)
         if (ffl != 0.0) fl.d_fric -= ffl * dX[sh.iy()];
     } else if (sh.ball()) {
         fl.d_fric -= fz * dX[sh.iy()];
         double pdu = 0.0;
-        for (int i = 0; i < n; ++i) pdu += q.pD[i] * dX[i];
-        fl.w_nr += (1.0 - q.sr) * fz * pdu;
+        for (int i = 0; i < n; ++i) pdu += q.modes.pD[i] * dX[i];
+        fl.w_nr += (1.0 - q.fric.sr) * fz * pdu;
     }
 }
 
@@ -470,8 +473,8 @@ BB_INLINE void spin_after_map(const Params& q, Shape<N, CASE> sh, double* X, Flo
     if (fls.rolls) {
         X[sh.is()] = X[sh.iyd()];
     } else {
-        fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
-        X[sh.is()] -= q.kroll * ffl * dt;
+        fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.roll.kroll * ffl * dt * dt);
+        X[sh.is()] -= q.roll.kroll * ffl * dt;
     }
 }
 
@@ -528,14 +531,14 @@ BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bo
     const int n = sh.n();
     TipAux a{0.0, 0.0, 0.0, 0.0};
     if (n == 1) {
-        a.w += q.pL[0] * X[0];
-        a.wd += q.pL[0] * X[1];
+        a.w += q.modes.pL[0] * X[0];
+        a.wd += q.modes.pL[0] * X[1];
     } else {
         // (W, W') as one pair of (u_i, u_i'): left to itself GCC summed pairs (u_i, u_i+1)
         // loaded from memory just stored one by one, a store-forwarding stall (1.25x
         // slower with 2 modes); with 1 mode (u, u') are adjacent and that pair stalled
         v2 wwd = {0.0, 0.0};
-        for (int i = 0; i < n; ++i) wwd += q.pL[i] * v2{X[i], X[n + i]};
+        for (int i = 0; i < n; ++i) wwd += q.modes.pL[i] * v2{X[i], X[n + i]};
         a.w = wwd[0];
         a.wd = wwd[1];
     }
@@ -544,8 +547,8 @@ BB_INLINE TipAux tip_aux(const Params& q, Shape<N, CASE> sh, const double* X, bo
         a.auxd = X[sh.iyd()];
         if (sh.tmd()) {
             for (int i = 0; i < n; ++i) {
-                a.aux -= q.pA[i] * X[i];
-                a.auxd -= q.pA[i] * X[n + i];
+                a.aux -= q.modes.pA[i] * X[i];
+                a.auxd -= q.modes.pA[i] * X[n + i];
             }
         }
     }
@@ -563,9 +566,9 @@ inline double ceil_int64(double v) {
 // The first strobe time at or after t0.
 inline double first_strobe(const Params& q, double t0) {
     double t_next = 0.0;
-    if (q.tstrobe > 0.0) {
-        t_next = q.strobe_t0;
-        if (t_next < t0) t_next += ceil_int64((t0 - t_next) / q.tstrobe) * q.tstrobe;
+    if (q.strobe.period > 0.0) {
+        t_next = q.strobe.t0;
+        if (t_next < t0) t_next += ceil_int64((t0 - t_next) / q.strobe.period) * q.strobe.period;
     }
     return t_next;
 }
@@ -583,13 +586,13 @@ struct StrobeOut {
 template <int N, int CASE>
 BB_INLINE void strobe_step(const Params& q, Shape<N, CASE> sh, const double* X,
                            const TipAux& prev, double t, double t1, double dt, StrobeOut& so) {
-    if (q.tstrobe > 0.0 && so.t_next <= t1) {
+    if (q.strobe.period > 0.0 && so.t_next <= t1) {
         if (so.t_next > t && so.n < so.rows.n0) {
             const TipAux a = tip_aux(q, sh, X, true);
             strobe_row(so.rows.row(so.n), so.t_next, t, dt, prev, a);
             so.n += 1;
         }
-        so.t_next = so.t_next + q.tstrobe;
+        so.t_next = so.t_next + q.strobe.period;
     }
 }
 
@@ -639,12 +642,12 @@ BB_INLINE bool ball_walls(const Params& q, Shape<N, CASE> sh, double* X, const E
     const bool contact = w.outcome == MICRO_IMPACT || w.outcome == ON_WALL;
     // stuck: off the walls with |y'| inside the band where the sgn() law chatters
     // (V_STICK = V_IMPACT + 2 F_c dt / m_eff)
-    const bool stuck = q.fc > 0.0 && !contact && std::fabs(X[iyd]) < q.vstick;
-    stick_step(stuck, ss, t, t1, log, q.stick_min);
+    const bool stuck = q.fric.fc > 0.0 && !contact && std::fabs(X[iyd]) < q.fric.vstick;
+    stick_step(stuck, ss, t, t1, log, q.fric.stick_min);
     return contact;
 }
 
-// A compliant contact of the ball with a wall (Params::hertz), from the step whose end
+// A compliant contact of the ball with a wall (Contact::on), from the step whose end
 // first finds the ball past the wall to the step whose end finds it back inside: its
 // wall, start (the crossing, interpolated linearly in the step), the speed it began with
 // (y' at the start of that step, which set its damping chi = alpha / v_in), its largest
@@ -759,8 +762,8 @@ BB_INLINE bool contact_walls(const Params& q, Shape<N, CASE> sh, const double* X
         close_contact(log, cs.rows, ep, crossing(t, dt, d0, d1), std::fabs(yd));
         ep.on = false;
     }
-    const bool stuck = q.fc > 0.0 && !ep.on && std::fabs(yd) < q.vstick;
-    stick_step(stuck, ss, t, t1, log, q.stick_min);
+    const bool stuck = q.fric.fc > 0.0 && !ep.on && std::fabs(yd) < q.fric.vstick;
+    stick_step(stuck, ss, t, t1, log, q.fric.stick_min);
     return ep.on && !ep.counted;
 }
 

@@ -172,9 +172,9 @@ struct Cut {
 
 template <int N, int CASE, int FORCING>
 BB_INLINE void run_body(const RunArgs& a) {
-    Params q = unpack(a.p, a.dt);  // (q.chi is set contact by contact)
+    Params q = unpack(a.p, a.dt);  // (q.contact.chi is set contact by contact)
     const Shape<N, CASE> sh(q);
-    const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.regen;
+    const bool regen = FORCING >= 0 ? FORCING == L::REGENERATIVE : q.force.regen;
     const int n = sh.n(), nx = sh.nx(), iyd = sh.iyd();
     const bool ball = sh.ball(), has_aux = sh.has_aux();
     const bool hertz = ball && sh.hertz(q);  // a compliant contact at the walls
@@ -215,16 +215,16 @@ BB_INLINE void run_body(const RunArgs& a) {
     const bool linear = !regen && !q.stage_loop;
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const VecMap mpr = linear && sh.rolls() ? step_map(n, a.p, dt, true) : VecMap{};
-    const bool check_fb = ball && q.fc > 0.0;
+    const bool check_fb = ball && q.fric.fc > 0.0;
     // a sliding ball that the sgn() law turns within a step: the sign patterns' maps
     const bool patterns =
-        linear && check_fb && !q.hold && !sh.rolls() && !hertz && mp.n_patterns == NPAT;
+        linear && check_fb && !q.fric.hold && !sh.rolls() && !hertz && mp.n_patterns == NPAT;
     // and a rolling ball's, in the kernels that can roll alone: GCC's code for a kernel
     // follows its source even where lines fold away, and with the rolling ball's pattern
     // code in them the sliding ball's kernels ran the held paper cases 4-8 % longer;
     // without it their instructions are the same as before it was written (objdump)
     constexpr bool ROLL_MAPS = CASE == ROLLING || CASE < 0;
-    const bool roll_patterns = ROLL_MAPS && linear && check_fb && !q.hold && sh.rolls() &&
+    const bool roll_patterns = ROLL_MAPS && linear && check_fb && !q.fric.hold && sh.rolls() &&
                                !hertz && mp.n_patterns == NPAT && mpr.n_patterns == NPAT;
     double sn = 0.0, cn = 1.0;
 
@@ -241,7 +241,7 @@ BB_INLINE void run_body(const RunArgs& a) {
     double hold_max = met[L::MAX_HOLD_FORCE], n_free = met[L::N_FREE_STEPS];
     // a compliant contact under way (from an earlier call) keeps its damping
     Episode ep = Episode::load(met);
-    if (hertz && ep.on) q.chi = q.alpha / ep.vin;
+    if (hertz && ep.on) q.contact.chi = q.contact.alpha / ep.vin;
 
     TipAux prev = tip_aux(q, sh, X, true);
     idx wptr = regen ? kg0 % nbuf : 0;  // the row of the newest node
@@ -255,17 +255,17 @@ BB_INLINE void run_body(const RunArgs& a) {
         const double t = t0 + double(k) * dt;
         const double t1 = t0 + double(k + 1) * dt;  // not t + dt: event times in [t0, t_end]
         if (k % RESYNC == 0) {
-            sn = std::sin(q.om * t);
-            cn = std::cos(q.om * t);
+            sn = std::sin(q.force.om * t);
+            cn = std::cos(q.force.om * t);
         }
         cut.cut_zero = false;
         if (regen) delay.surface(buf, kg0 + k, cut.first_zero >= 0.0, hsurf);
         if (regen && cut.noisy) cut.noise_at(kg0 + k);
-        const Phase ph = rotate(sn, cn, q.chh, q.shh);
-        fst[0] = q.f0 * sn;
-        fst[1] = q.f0 * ph.s_h;
+        const Phase ph = rotate(sn, cn, q.force.chh, q.force.shh);
+        fst[0] = q.force.f0 * sn;
+        fst[1] = q.force.f0 * ph.s_h;
         fst[2] = fst[1];
-        fst[3] = q.f0 * ph.s_1;
+        fst[3] = q.force.f0 * ph.s_1;
 
         // off the walls a contact's damping is set by the speed the ball has as it
         // begins (contact_walls keeps it for the contact)
@@ -273,7 +273,7 @@ BB_INLINE void run_body(const RunArgs& a) {
         if (hertz) {
             y0 = X[sh.iy()];
             v0 = contact_speed(q, X[iyd]);
-            if (!ep.on) q.chi = q.alpha / v0;
+            if (!ep.on) q.contact.chi = q.contact.alpha / v0;
         }
 
         // the step as an affine map if F_b keeps its sign, else the four stages
@@ -282,7 +282,8 @@ BB_INLINE void run_body(const RunArgs& a) {
         // a rolling ball: its rolled regime's map, or the sliding ball's as it slips
         const bool rolls_now = sh.rolls() && X[sh.is()] == X[iyd];
         const VecMap& map = rolls_now ? mpr : mp;
-        if (sh.rolls() && !rolls_now) ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.muk_n : q.muk_n;
+        if (sh.rolls() && !rolls_now)
+            ffl = X[iyd] - X[sh.is()] > 0.0 ? -q.roll.muk_n : q.roll.muk_n;
         double spread = NAN;
         YStages yst;
         if (linear && check_fb) {
@@ -338,23 +339,23 @@ BB_INLINE void run_body(const RunArgs& a) {
             } else if (sh.rolls()) {
                 // it slipped: s' = -kroll ffl; the floor's loss -ffl (dy - int s dt), its
                 // -ffl dy counted with F_b's (map_flows)
-                fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.kroll * ffl * dt * dt);
-                X[sh.is()] -= q.kroll * ffl * dt;
+                fl.d_fric += ffl * (X[sh.is()] * dt - 0.5 * q.roll.kroll * ffl * dt * dt);
+                X[sh.is()] -= q.roll.kroll * ffl * dt;
             }
-            if (ball && q.hold) n_free += 1.0;  // the map slides
+            if (ball && q.fric.hold) n_free += 1.0;  // the map slides
         } else {
             auto force = [&](int s, const double* Xs) {
                 double f = fst[s];
                 if (regen) {  // the cutting law at h = max(0, surface - W(t_s))
                     double ws = 0.0;
-                    for (int i = 0; i < n; ++i) ws += q.pL[i] * Xs[i];
+                    for (int i = 0; i < n; ++i) ws += q.modes.pL[i] * Xs[i];
                     f = cut.force(hsurf[s], ws, t + C_FRAC[s] * dt);
                     fst[s] = f;
                 }
                 return f;
             };
             bool held, rolled = sh.rolls();
-            if (SHORT_STAGES && (!ball || q.ydd_sum_from_first) &&
+            if (SHORT_STAGES && (!ball || q.fric.ydd_sum_from_first) &&
                 stages_fast(sh, X, Kd, cst[0]))
                 held = rk4_stages<N, CASE, SHORT_STAGES>(q, sh, X, Kd, StepStages{cst, wst, force},
                                                          fl, hold_max, rolled);
@@ -364,7 +365,7 @@ BB_INLINE void run_body(const RunArgs& a) {
             if (rolled) stop_roll_slip(q, sh, X, fl);
             // (a step held from y' = 0 keeps y' = 0 exactly: nothing to stop)
             if (ball && held && X[iyd] != 0.0) stop_slide(q, sh, X, fl);
-            if (ball && q.hold && !held) n_free += 1.0;
+            if (ball && q.fric.hold && !held) n_free += 1.0;
         }
         const bool steady = k >= a.steady_start;
 
@@ -421,7 +422,7 @@ BB_INLINE void run_body(const RunArgs& a) {
 
     // a stick interval still open at the end is closed there
     if (ss.in_stick)
-        close_stick(met, a.stick, ss.t0, t0 + double(steps_run) * dt, t_steady, q.stick_min);
+        close_stick(met, a.stick, ss.t0, t0 + double(steps_run) * dt, t_steady, q.fric.stick_min);
 #pragma GCC unroll 8
     for (int j = 0; j < nx; ++j) a.x[j] = X[j];
     st.store(met);

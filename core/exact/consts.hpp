@@ -28,7 +28,7 @@ constexpr int NB_MAX2 = NB_MAX * NB_MAX;
 constexpr int NZB_MAX = NZ_MAX * NB_MAX;
 constexpr int NB_MAX_2 = 2 * NB_MAX;
 // the bar's rows mk (System::mk): M, K, C, psi_L, psi_d, psi_a, then the equations of
-// motion's premultiplied constants fm, km, cm and 1 / M (dynamics.hpp's Params), and
+// motion's premultiplied constants fm, km, cm and 1 / M (dynamics.hpp's Modes), and
 // psi_F, where the tip force acts (psi_L, where the chip reads W, but in an oriented cut)
 constexpr int MK_ROWS = 11;
 constexpr int MK_PSI_F = 10;

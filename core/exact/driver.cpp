@@ -32,6 +32,7 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     const idx n = sys.n;
     const Mat mk = sys.mk, ddc = sys.ddc;
     const dynamics::Params q = dynamics::unpack(p.d, 0.0);
+    const dynamics::Modes& md = q.modes;
     sys.kase = layout::Case(int(p[L::CASE]));
     sys.nreg = nreg;
     for (idx i = 0; i < n; ++i) {
@@ -41,10 +42,10 @@ void unpack_system(Vec p, idx nreg, System& sys) {
         mk(3, i) = p[L::PSI_L + i];
         mk(4, i) = p[L::PSI_D + i];
         mk(5, i) = p[L::PSI_A + i];
-        mk(6, i) = q.fm[i];
-        mk(7, i) = q.km[i];
-        mk(8, i) = q.cm[i];
-        mk(9, i) = q.invM[i];
+        mk(6, i) = md.fm[i];
+        mk(7, i) = md.km[i];
+        mk(8, i) = md.cm[i];
+        mk(9, i) = md.invM[i];
         mk(MK_PSI_F, i) = p[L::PSI_F + i];
     }
     double m = p[L::BALL_MASS];
@@ -55,14 +56,14 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     for (idx i = 0; i < n; ++i) {
         // a_i per unit of u_i, u_i', f (dynamics.hpp) and of F_b (the reaction on the bar)
         auto a = [&](double f, double u, double v) {
-            return dynamics::free_acceleration(q.fm[i], q.km[i], q.cm[i], f, u, v);
+            return dynamics::free_acceleration(md.fm[i], md.km[i], md.cm[i], f, u, v);
         };
         for (idx row = 0; row < 2; ++row) {
             const double psi = mk(4 - row, i);  // psi_d,i, then psi_L,i
             ddc(row, i) = psi * a(0.0, 1.0, 0.0);
             ddc(row + 2, i) = psi * a(0.0, 0.0, 1.0);
             ddc(row, n) += psi * a(1.0, 0.0, 0.0);
-            ddc(row, n + 1) -= psi * q.dm[i];
+            ddc(row, n + 1) -= psi * md.dm[i];
         }
     }
     sys.ball.half = p[L::HALF_GAP];
@@ -76,13 +77,13 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     sys.fric.kstick = m > 0.0 ? dynamics::carried_kappa(q, sr) : 1.0;
     sys.fric.kwall = m > 0.0 ? dynamics::carried_kappa(q, 1.0) : 1.0;
     sys.fric.stick_min = p[L::STICK_MIN];
-    sys.roll.on = q.roll;
-    if (q.roll) {
-        sys.roll.fs = q.mus_n;
-        sys.roll.fk = q.muk_n;
-        sys.roll.kroll = q.kroll;
-        sys.roll.cy = m * q.kroll / (m * q.kroll + 1.0);
-        sys.roll.kappa = sys.fric.kwall + q.kroll;
+    sys.roll.on = q.roll.on;
+    if (q.roll.on) {
+        sys.roll.fs = q.roll.mus_n;
+        sys.roll.fk = q.roll.muk_n;
+        sys.roll.kroll = q.roll.kroll;
+        sys.roll.cy = m * q.roll.kroll / (m * q.roll.kroll + 1.0);
+        sys.roll.kappa = sys.fric.kwall + q.roll.kroll;
     }
     sys.force.f0 = p[L::F0];
     sys.force.om = p[L::OMEGA];
