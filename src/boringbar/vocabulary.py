@@ -54,7 +54,7 @@ DIMENSIONLESS = frozenset({
     # ratios and numbers of the model
     "ratio", "ratios", "restitution", "friction_number", "static_ratio", "damping_ratio",
     "mass_ratio", "frequency_ratio", "psi_tip", "psi_damper", "psi_absorber", "psi_force",
-    "planes", "moment_scale", "mu", "mu_static", "mu_kinetic",
+    "planes", "plane", "moment_scale", "mu", "mu_static", "mu_kinetic",
     "zeta", "quality", "multiplier_real", "multiplier_imag", "section_phase",
     "statistic", "error", "published_statistic", "published_error", "objective_samples",
     "stable",
