@@ -223,7 +223,7 @@ def test_a_refused_field_is_named(entry):
     run = DESCRIPTIONS[entry]()
     readonly = np.zeros(3)
     readonly.flags.writeable = False
-    with pytest.raises(ValueError, match="'x' must be a writable array"):
+    with pytest.raises(ValueError, match="'x' must be a writable float64 array"):
         run.x = readonly
     with pytest.raises(ValueError, match="'t0' must be a number"):
         run.t0 = "x"
