@@ -59,6 +59,7 @@ inline std::string dtype_of(nb::dlpack::dtype d) {
                        : d.code == uint8_t(nb::dlpack::dtype_code::Complex) ? "complex"
                        : d.code == uint8_t(nb::dlpack::dtype_code::Bool)    ? "bool"
                                                                             : "other";
+    if (d.code == uint8_t(nb::dlpack::dtype_code::Bool)) return kind;  // NumPy's name
     return std::string(kind) + std::to_string(int(d.bits));
 }
 
