@@ -87,16 +87,16 @@ inline std::string wanted(std::initializer_list<std::int64_t> shape) {
 // (-1: any length; a length given as lo..hi through ``min_len`` is checked by the caller).
 template <class T, class A>
 T* checked(const A& a, const char* name, std::initializer_list<std::int64_t> shape) {
-    // a typed field is read as its own dtype (its dtype test below then always passes)
-    static_assert(std::is_void_v<typename A::Scalar> ||
-                      std::is_same_v<std::remove_const_t<typename A::Scalar>, T>,
+    // a typed field is read as its own dtype (its setter refused any other)
+    constexpr bool typed = !std::is_void_v<std::remove_const_t<typename A::Scalar>>;
+    static_assert(!typed || std::is_same_v<std::remove_const_t<typename A::Scalar>, T>,
                   "an array field read as another dtype than its own");
     auto fail = [&](const std::string& why) {
         throw nb::value_error(("core: array '" + std::string(name) + "' must be a C-contiguous " +
                                dtype_name<T>() + " array of shape " + wanted(shape) + "; " + why)
                                   .c_str());
     };
-    if (a.dtype() != nb::dtype<T>()) fail("got dtype " + dtype_of(a.dtype()));
+    if (!typed && a.dtype() != nb::dtype<T>()) fail("got dtype " + dtype_of(a.dtype()));
     if (a.ndim() != shape.size()) fail("got shape " + shape_of(a));
     size_t i = 0;
     for (auto n : shape) {
