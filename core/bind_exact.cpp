@@ -1,11 +1,13 @@
 // boringbar.core.run_exact: the exact event-driven integrator's entry point (the harmonic
 // and the cut kernel, exact/driver.hpp), which takes one run description (ExactRun, its
-// fields set from Python; bind_util.hpp's Fields).  Everything from Python is checked
-// here, before the GIL is released: every array's dtype, shape, contiguity and (outputs)
-// writability, every scalar's finiteness and range, and what the kernel indexes with (the
-// case, the mode count, prepare's regime count and step patterns, the record counters), so
-// that no input can make the core read or write out of bounds; a wrong one is a ValueError
-// that names it.
+// fields set from Python; bind_util.hpp's Fields: each array field's dtype, float64 or
+// complex128 for a cut's tables, and an output's writability are checked when it is set).
+// Everything else from Python is checked here, before the GIL is released: every array's
+// shape and contiguity, prepare's dict's arrays' dtypes too (a dict's entries can change
+// after it is set, so they are read when the run starts), every scalar's finiteness and
+// range, and what the kernel indexes with (the case, the mode count, prepare's regime count
+// and step patterns, the record counters), so that no input can make the core read or
+// write out of bounds; a wrong one is a ValueError that names it.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
@@ -37,13 +39,13 @@ constexpr double MAX_TIME_PER_TAU = 1e12;         // |t0| + |t_end| in delays ta
 // The arrays of prepare's dict handed to the kernel, held until it returns (a dict's entry
 // could otherwise be dropped by another thread while the GIL is released)
 struct Held {
-    std::vector<In> arrays;
+    std::vector<AnyArray> arrays;
 
     Held() { arrays.reserve(32); }  // no reallocation: array_of's reference stays valid
 
     // obj as an array of any dtype (not converted)
-    const In& array_of(nb::handle obj, const char* name) {
-        In a;
+    const AnyArray& array_of(nb::handle obj, const char* name) {
+        AnyArray a;
         require(nb::try_cast(obj, a, false),
                 "'" + std::string(name) + "' must be a NumPy array (CPU, native byte order)");
         arrays.push_back(a);
@@ -219,7 +221,7 @@ void attach_prep(exact::ExactRun& a, Held& held, nb::dict prep, const Shape& s, 
     a.h = scalar(prep_entry(prep, "h"), "prep['h']");
     require(std::isfinite(a.h) && a.h > 0.0, "prep['h'] must be finite and > 0");
     require((t_end - t0) / a.h <= MAX_GRID, "the run spans more than 1e13 grid steps prep['h']");
-    auto arr = [&](const char* key) -> const In& {
+    auto arr = [&](const char* key) -> const AnyArray& {
         return held.array_of(prep_entry(prep, key), key);
     };
     a.lam = finite_view(span2<cplx>(arr("lam"), "lam", R, nz), "lam");
@@ -240,7 +242,8 @@ void attach_prep(exact::ExactRun& a, Held& held, nb::dict prep, const Shape& s, 
     check_steps(a.kstep, a.levmax);
 }
 
-void attach_tables(exact::ExactRun& a, const In& tabE, const In& tabP, const Shape& s) {
+void attach_tables(exact::ExactRun& a, const In<cplx>& tabE, const In<cplx>& tabP,
+                   const Shape& s) {
     if (s.regen) {
         a.tabE = finite_view(span3<cplx>(given(tabE, "tabE"), "tabE", s.R, 5, s.nz), "tabE");
         a.tabP = finite_view(span4<cplx>(given(tabP, "tabP"), "tabP", s.R, 5, 4, s.nz), "tabP");
@@ -256,14 +259,14 @@ void attach_tables(exact::ExactRun& a, const In& tabE, const In& tabP, const Sha
 // the state x (advanced in place), the span, the history's sampling, the records and
 // metrics (written in place), prepare(p)'s dict and a cut's step, history step and tables.
 struct ExactRunPy {
-    In p;
-    Out x;
+    In<double> p;
+    Out<double> x;
     double t0 = 0.0, t_end = 0.0, t_steady = 0.0, rec_dt = 0.0;
-    Out rec, imp, stick, strobe, met;
+    Out<double> rec, imp, stick, strobe, met;
     nb::dict prep;
     double dt = 0.0, H = 0.0;
-    In tabE, tabP;  // a cut's tables; not set (or zeros of shape (1, 5, 1), (1, 5, 4, 1)):
-                    // a harmonic run
+    In<cplx> tabE, tabP;  // a cut's tables; not set (or zeros of shape (1, 5, 1),
+                          // (1, 5, 4, 1)): a harmonic run
 };
 
 namespace {

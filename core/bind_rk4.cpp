@@ -1,10 +1,10 @@
 // boringbar.core.run_rk4 and run_rk4_batch: the RK4 kernels' boundary.
 //
 // Each takes one run description (RK4Run, RK4Batch: its fields set from Python, each
-// setter checking that it is given an array, a writable one for an output, a number or an
-// integer).  Everything is checked here, before the integration starts: each array's
-// dtype (float64), shape and C-contiguity, and each scalar's range, including the slots of
-// p and met the kernel uses to index or to choose its path.
+// setter checking that it is given a float64 array, a writable one for an output, a number
+// or an integer).  Everything else is checked here, before the integration starts: each
+// array's shape and C-contiguity, and each scalar's range, including the slots of p and
+// met the kernel uses to index or to choose its path.
 // A bad one is a ValueError that names it and says what is allowed; past these checks
 // every write of the kernel stays inside its array (the kernel tests the record counts
 // against the arrays' lengths before writing a row).  The integration runs without the GIL.
@@ -142,24 +142,24 @@ void check_contact(const double* p, const std::string& where) {
 // state x (advanced in place), the time grid, the history's sampling, the records and
 // metrics (written in place), a cut's delay history and, optionally, its modes' extremes.
 struct RK4Run {
-    In p;
-    Out x;
+    In<double> p;
+    Out<double> x;
     double t0 = 0.0, dt = 0.0;
     std::int64_t n_steps = 0, steady_start = 0, rec_every = 0;
-    Out rec, imp, stick, strobe, met;
-    Out buf;    // a cut's delay history; (0, 2) for a harmonic run
-    Out modes;  // not set: not kept
-    Out contact;  // not set: not kept
+    Out<double> rec, imp, stick, strobe, met;
+    Out<double> buf;      // a cut's delay history; (0, 2) for a harmonic run
+    Out<double> modes;    // not set: not kept
+    Out<double> contact;  // not set: not kept
 };
 
 // A lock-step batch of harmonic RK4 runs (boringbar.core.RK4Batch): one row of P, x, met
 // and one block of imp, stick, strobe per run, the time grid shared.
 struct RK4Batch {
-    In P;
-    Out x;
+    In<double> P;
+    Out<double> x;
     double t0 = 0.0, dt = 0.0;
     std::int64_t n_steps = 0, steady_start = 0;
-    Out imp, stick, strobe, met;
+    Out<double> imp, stick, strobe, met;
 };
 
 namespace {

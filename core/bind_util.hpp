@@ -6,12 +6,15 @@
 
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 
 #include <cmath>
 #include <complex>
 #include <cstdint>
 #include <initializer_list>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -31,10 +34,18 @@ nb::ndarray<nb::numpy, T, nb::ndim<D>> owned_array(std::vector<T>&& v,
     return nb::ndarray<nb::numpy, T, nb::ndim<D>>(data->data(), shape, owner);
 }
 
-// Any CPU array; read-only ones too (for inputs).
-using In = nb::ndarray<nb::ro, nb::device::cpu>;
-// Any writable CPU array (for outputs and states updated in place).
-using Out = nb::ndarray<nb::device::cpu>;
+// The run descriptions' array fields carry their dtype in their type, so that a field
+// refuses an array of another dtype when it is set and the signatures show what it takes:
+// In<T> takes a read-only array too (the run only reads it), Out<T> only a writable one
+// (the run writes into it: an output, a state advanced in place).  Their shapes and
+// contiguity depend on each other (the mode count is in p), so they are checked when the
+// run starts (checked, span1...).
+template <class T> using In = nb::ndarray<const T, nb::device::cpu>;
+template <class T> using Out = nb::ndarray<T, nb::device::cpu>;
+// Any CPU array, read-only ones too: what a refused value is described from, the
+// arguments of the functions that check their dtype themselves (impact_period) and
+// prepare's dict's entries (bind_exact.cpp).
+using AnyArray = nb::ndarray<nb::ro, nb::device::cpu>;
 
 template <class T> inline const char* dtype_name();
 template <> inline const char* dtype_name<double>() { return "float64"; }
@@ -48,6 +59,7 @@ inline std::string dtype_of(nb::dlpack::dtype d) {
                        : d.code == uint8_t(nb::dlpack::dtype_code::Complex) ? "complex"
                        : d.code == uint8_t(nb::dlpack::dtype_code::Bool)    ? "bool"
                                                                             : "other";
+    if (d.code == uint8_t(nb::dlpack::dtype_code::Bool)) return kind;  // NumPy's name
     return std::string(kind) + std::to_string(int(d.bits));
 }
 
@@ -75,12 +87,16 @@ inline std::string wanted(std::initializer_list<std::int64_t> shape) {
 // (-1: any length; a length given as lo..hi through ``min_len`` is checked by the caller).
 template <class T, class A>
 T* checked(const A& a, const char* name, std::initializer_list<std::int64_t> shape) {
+    // a typed field is read as its own dtype (its setter refused any other)
+    constexpr bool typed = !std::is_void_v<std::remove_const_t<typename A::Scalar>>;
+    static_assert(!typed || std::is_same_v<std::remove_const_t<typename A::Scalar>, T>,
+                  "an array field read as another dtype than its own");
     auto fail = [&](const std::string& why) {
         throw nb::value_error(("core: array '" + std::string(name) + "' must be a C-contiguous " +
                                dtype_name<T>() + " array of shape " + wanted(shape) + "; " + why)
                                   .c_str());
     };
-    if (a.dtype() != nb::dtype<T>()) fail("got dtype " + dtype_of(a.dtype()));
+    if (!typed && a.dtype() != nb::dtype<T>()) fail("got dtype " + dtype_of(a.dtype()));
     if (a.ndim() != shape.size()) fail("got shape " + shape_of(a));
     size_t i = 0;
     for (auto n : shape) {
@@ -143,27 +159,50 @@ inline bool finite(double v) { return std::isfinite(v); }
 //
 // A run description (RK4Run, RK4Batch, ExactRun) is a small class whose fields Python sets
 // one by one; each field's setter checks what it is given and names the field when it
-// refuses it (a NumPy array; writable for an output; a number; an integer).  The arrays'
-// dtype, shape and contiguity are checked when the run starts, against each other.
+// refuses it: an array of the field's dtype (In<T>, Out<T>), writable for an output; a
+// number; an integer.  An array is never converted: a converted copy of an output would
+// take the run's writes and lose them, and an input is held to the same rule (a float64
+// array is what every caller has; a field then always is the caller's own array).  The
+// arrays' shapes and contiguity are checked when the run starts, against each other.
 
-// h as a NumPy array (read-only allowed), or a ValueError naming it
-inline In input_array(nb::handle h, const char* name) {
-    In a;
-    if (!nb::try_cast(h, a, false))
-        throw nb::value_error(("core: '" + std::string(name) + "' must be a NumPy array").c_str());
+// Why h cannot be a field of dtype T (writable for an output): a ValueError naming it.
+template <class T>
+[[noreturn]] void refuse_array(nb::handle h, const char* name, bool writable) {
+    std::string got;
+    AnyArray any;
+    if (!nb::try_cast(h, any, false)) {
+        got = h.is_none() ? std::string("None")
+                          : "type " + std::string(nb::type_name(h.type()).c_str());
+    } else {
+        nb::ndarray<nb::device::cpu> rw;
+        const bool read_only = writable && !nb::try_cast(h, rw, false);
+        if (any.dtype() != nb::dtype<T>())
+            got = "dtype " + dtype_of(any.dtype()) + (read_only ? ", read-only" : "");
+        else if (read_only)
+            got = "a read-only array";
+        else
+            got = "an array it cannot take";
+    }
+    throw nb::value_error(("core: '" + std::string(name) + "' must be a " +
+                           (writable ? "writable " : "") + dtype_name<T>() + " array; got " +
+                           got)
+                              .c_str());
+}
+
+// h as an input of dtype T (read-only allowed, not converted), or a ValueError naming it
+template <class T>
+In<T> input_array(nb::handle h, const char* name) {
+    In<T> a;
+    if (!nb::try_cast(h, a, false)) refuse_array<T>(h, name, false);
     return a;
 }
 
-// h as a writable NumPy array (the run writes into it), or a ValueError naming it
-inline Out output_array(nb::handle h, const char* name) {
-    Out a;
-    if (!nb::try_cast(h, a, false)) {
-        In ro;
-        const bool is_array = nb::try_cast(h, ro, false);
-        throw nb::value_error(("core: '" + std::string(name) + "' must be a " +
-                               (is_array ? "writable" : "NumPy") + " array")
-                                  .c_str());
-    }
+// h as a writable array of dtype T (the run writes into it; not converted), or a
+// ValueError naming it
+template <class T>
+Out<T> output_array(nb::handle h, const char* name) {
+    Out<T> a;
+    if (!nb::try_cast(h, a, false)) refuse_array<T>(h, name, true);
     return a;
 }
 
@@ -192,31 +231,29 @@ template <class C>
 struct Fields {
     nb::class_<C>& cls;
 
-    // an input array (read-only allowed)
-    Fields& in(const char* name, In C::*m, const char* doc) {
-        cls.def_prop_rw(
-            name, [m](const C& c) { return c.*m; },
-            [m, name](C& c, nb::handle h) { c.*m = input_array(h, name); }, nb::arg("value").none(),
-            doc);
-        return *this;
+    // an input array of dtype T (read-only allowed)
+    template <class T>
+    Fields& in(const char* name, In<T> C::*m, const char* doc) {
+        return array(name, m, doc, [name](nb::handle h) { return input_array<T>(h, name); });
     }
-    // an output array (written in place: writable)
-    Fields& out(const char* name, Out C::*m, const char* doc) {
-        cls.def_prop_rw(
-            name, [m](const C& c) { return c.*m; },
-            [m, name](C& c, nb::handle h) { c.*m = output_array(h, name); },
-            nb::arg("value").none(), doc);
-        return *this;
+    // an output array of dtype T (written in place: writable)
+    template <class T>
+    Fields& out(const char* name, Out<T> C::*m, const char* doc) {
+        return array(name, m, doc, [name](nb::handle h) { return output_array<T>(h, name); });
     }
-    // an optional output array (None: not kept)
-    Fields& out_or_none(const char* name, Out C::*m, const char* doc) {
+    // an optional output array of dtype T (None: not kept)
+    template <class T>
+    Fields& out_or_none(const char* name, Out<T> C::*m, const char* doc) {
+        using A = Out<T>;
+        const std::string type = type_text<A>() + " | None";
         cls.def_prop_rw(
-            name, [m](const C& c) -> nb::object {
-                if (!(c.*m).is_valid()) return nb::none();
-                return nb::cast(c.*m);
+            name, [m](const C& c) -> std::optional<A> {
+                if (!(c.*m).is_valid()) return std::nullopt;
+                return c.*m;
             },
-            [m, name](C& c, nb::handle h) { c.*m = h.is_none() ? Out() : output_array(h, name); },
-            nb::arg("value").none(), doc);
+            [m, name](C& c, nb::handle h) { c.*m = h.is_none() ? A() : output_array<T>(h, name); },
+            nb::arg("value").none(), nb::for_setter(nb::sig(setter_sig(name, type).c_str())),
+            (std::string(doc) + "\n\n" + type).c_str());
         return *this;
     }
     Fields& real(const char* name, double C::*m, const char* doc) {
@@ -231,6 +268,30 @@ struct Fields {
             name, [m](const C& c) { return c.*m; },
             [m, name](C& c, nb::handle h) { c.*m = int_value(h, name); }, nb::arg("value").none(),
             doc);
+        return *this;
+    }
+
+  private:
+    // nanobind's name of the array type A, as its signatures show it
+    template <class A>
+    static std::string type_text() {
+        return nb::detail::make_caster<A>::Name.text;
+    }
+    // the setter's signature: it takes an object (None too: refused with the field's name
+    // rather than by nanobind's dispatch), but only a value of ``type`` is kept
+    static std::string setter_sig(const char* name, const std::string& type) {
+        return "def " + std::string(name) + "(self, value: " + type + ", /) -> None";
+    }
+    // a required array field of type A, set through ``convert``; its type closes its doc
+    // (help() shows a property's doc only)
+    template <class A, class Convert>
+    Fields& array(const char* name, A C::*m, const char* doc, Convert convert) {
+        const std::string type = type_text<A>();
+        cls.def_prop_rw(
+            name, [m](const C& c) { return c.*m; },
+            [m, convert](C& c, nb::handle h) { c.*m = convert(h); }, nb::arg("value").none(),
+            nb::for_setter(nb::sig(setter_sig(name, type).c_str())),
+            (std::string(doc) + "\n\n" + type).c_str());
         return *this;
     }
 };

@@ -104,7 +104,7 @@ bool symmetric(const Impacts& s, std::int64_t n, double period, int k, double to
     return false;
 }
 
-std::tuple<std::int64_t, int, bool> impact_period(In times, In walls, double tail_start,
+std::tuple<std::int64_t, int, bool> impact_period(AnyArray times, AnyArray walls, double tail_start,
                                                   double tail_end, double period, double tol,
                                                   int max_k, int min_periods) {
     const Span1<double> t = span1<double>(times, "times");
@@ -132,7 +132,7 @@ std::tuple<std::int64_t, int, bool> impact_period(In times, In walls, double tai
 // 0 if the impacts can be classified; 1 if a wall is neither +1 nor -1; 2 if the times
 // are not ascending inside [t_start, t_end] (a NaN time passes, as NumPy's comparisons
 // let it: its impacts then fail every match).
-int impact_fault(In times, In walls, double t_start, double t_end) {
+int impact_fault(AnyArray times, AnyArray walls, double t_start, double t_end) {
     const Span1<double> t = span1<double>(times, "times");
     const Span1<double> w = span1<double>(walls, "walls", t.n);
     for (std::int64_t j = 0; j < w.n; ++j)

@@ -223,13 +223,98 @@ def test_a_refused_field_is_named(entry):
     run = DESCRIPTIONS[entry]()
     readonly = np.zeros(3)
     readonly.flags.writeable = False
-    with pytest.raises(ValueError, match="'x' must be a writable array"):
+    with pytest.raises(ValueError, match="'x' must be a writable float64 array"):
         run.x = readonly
     with pytest.raises(ValueError, match="'t0' must be a number"):
         run.t0 = "x"
     with pytest.raises(ValueError, match="'p' was not set" if entry != "run_rk4_batch"
                        else "'P' was not set"):
         getattr(core, entry)(run)
+
+
+def read_only(a: np.ndarray) -> np.ndarray:
+    b = a.copy()
+    b.flags.writeable = False
+    return b
+
+
+#: (entry, field, the value given from the valid one, what the refusal says): each array
+#: field declares its dtype, and is never converted (a converted output would take the
+#: run's writes and drop them)
+REFUSED_WHEN_SET = [
+    ("run_rk4", "p", lambda v: v.astype(np.float32),
+     r"'p' must be a float64 array; got dtype float32"),
+    ("run_rk4", "p", lambda v: v.astype(np.int64), r"'p' must be a float64 array; got dtype int64"),
+    ("run_rk4", "x", read_only, r"'x' must be a writable float64 array; got a read-only array"),
+    ("run_rk4", "met", lambda v: read_only(np.zeros(v.shape, np.int32)),
+     r"'met' must be a writable float64 array; got dtype int32, read-only"),
+    ("run_rk4", "rec", lambda v: v.astype(complex),
+     r"'rec' must be a writable float64 array; got dtype complex128"),
+    ("run_rk4", "buf", lambda v: v.tolist(),
+     r"'buf' must be a writable float64 array; got type list"),
+    ("run_rk4", "modes", lambda v: read_only(np.zeros((3, 2))),
+     r"'modes' must be a writable float64 array; got a read-only array"),
+    ("run_rk4", "contact", lambda v: np.zeros((4, 6), np.int64),
+     r"'contact' must be a writable float64 array; got dtype int64"),
+    ("run_rk4_batch", "P", lambda v: v.astype(np.int64),
+     r"'P' must be a float64 array; got dtype int64"),
+    ("run_rk4_batch", "strobe", read_only,
+     r"'strobe' must be a writable float64 array; got a read-only array"),
+    ("run_exact", "p", lambda v: None, r"'p' must be a float64 array; got None"),
+    ("run_exact", "imp", lambda v: v.astype(bool),
+     r"'imp' must be a writable float64 array; got dtype bool"),
+    ("run_exact", "tabE", lambda v: v.real.copy(),
+     r"'tabE' must be a complex128 array; got dtype float64"),
+    ("run_exact", "tabP", lambda v: v.astype(np.complex64),
+     r"'tabP' must be a complex128 array; got dtype complex64"),
+]
+
+
+@pytest.mark.parametrize(("entry", "field", "value", "message"), REFUSED_WHEN_SET)
+def test_an_array_of_another_dtype_or_read_only_output_is_refused_when_set(entry, field,
+                                                                           value, message):
+    """The refusal comes at the assignment, names the field, what it must be and what it
+    got; the description keeps the array it had."""
+    args = fresh(entry)
+    run = DESCRIPTIONS[entry]()
+    valid = args.get(field)
+    if valid is not None:
+        setattr(run, field, valid)
+    with pytest.raises(ValueError, match="^core: " + message + "$"):
+        setattr(run, field, value(valid))
+    if valid is not None:
+        assert getattr(run, field) is valid
+
+
+@pytest.mark.parametrize("entry", ["run_rk4", "run_exact"])
+def test_a_field_is_the_callers_own_array(entry):
+    """An input may be read-only; neither an input nor an output is copied, so the run
+    writes into the caller's arrays."""
+    args = fresh(entry)
+    args["p"] = read_only(args["p"])
+    run = DESCRIPTIONS[entry]()
+    for field, value in args.items():
+        setattr(run, field, value)
+        if isinstance(value, np.ndarray):
+            assert getattr(run, field) is value, field
+    getattr(core, entry)(run)
+    assert args["met"][L.STEPS_DONE] > 0 or entry == "run_exact"
+    assert not np.array_equal(args["x"], fresh(entry)["x"])
+
+
+def test_the_signatures_show_the_fields_dtypes():
+    """help() shows a property's doc, the stubs its getter's and setter's signatures: each
+    gives the field's dtype, and whether it may be read-only (an input) or None."""
+    field = lambda cls, name: vars(cls)[name]  # noqa: E731
+    p, x, modes = (field(core.RK4Run, k) for k in ("p", "x", "modes"))
+    assert "ndarray[dtype=float64, device='cpu', writable=False]" in p.__doc__
+    assert "dtype=float64" in x.__doc__ and "writable" not in x.__doc__
+    assert modes.__doc__.endswith("ndarray[dtype=float64, device='cpu'] | None")
+    assert "dtype=complex128" in field(core.ExactRun, "tabE").__doc__
+    assert "dtype=float64" in field(core.RK4Batch, "P").__doc__
+    sig = x.fset.__nb_signature__[0][0]
+    assert sig == "def x(self, value: ndarray[dtype=float64, device='cpu'], /) -> None"
+    assert p.fget.__nb_signature__[0][0].endswith("writable=False]")
 
 
 def test_a_scalar_out_of_range_names_its_value_and_range():

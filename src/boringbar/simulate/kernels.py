@@ -19,10 +19,12 @@ package packs what the core cannot compute itself and calls it:
   (its Floquet multipliers, in :mod:`boringbar.orbits.cut_orbits`).
 
 Each entry point of the core takes one run description (``core.RK4Run``, ``core.RK4Batch``,
-``core.ExactRun``), whose fields the functions here set.  The core checks every array it is
-handed (dtype, shape, contiguity; writable for an output) and every scalar's range, and
-raises ``ValueError`` naming it; it releases the GIL for the whole integration, so threads
-run in parallel.
+``core.ExactRun``), whose fields the functions here set.  Each array field declares its
+dtype (float64; complex128 for a cut's tables) and refuses, when it is set, an array of
+another dtype or a read-only output: arrays are never converted, so the run writes into the
+caller's own.  When the run starts the core checks every array's shape and contiguity and
+every scalar's range; it raises ``ValueError`` naming what it refuses, and releases the GIL
+for the whole integration, so threads run in parallel.
 """
 
 import functools
