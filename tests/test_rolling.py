@@ -35,6 +35,7 @@ from boringbar.simulate import setup_run, simulate_batch
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_bifurcation import masri_caughey_start  # noqa: E402
+from test_exact_regen import rk4_cut_errors  # noqa: E402
 from test_verdict import first_five_lobes, worst_error  # noqa: E402
 
 #: a 20 Hz mode of 1000 kg at the tip: the ball's reaction barely moves it, and the
@@ -289,16 +290,7 @@ def test_rk4_converges_to_the_exact_rolling_ball_s_cut(rolling_cuts):
     law: its impact times, impact loss and RMS of W go to the exact integrator's as dt
     falls (measured at 0.25 and 0.0625 us: 7.5e-5 and 8.2e-6 s, 4.7e-3 and 3.0e-4 of the
     loss, 7.0e-4 and 2.8e-5 of the RMS)."""
-    ex = rolling_cuts["exact", 1e-6]
-    errs = []
-    for dt in (2.5e-7, 6.25e-8):
-        rk = rolling_cuts["rk4", dt]
-        assert rk.metrics["impacts_total"] == ex.metrics["impacts_total"]
-        errs.append((np.max(np.abs(rk.impacts[:, 0] - ex.impacts[:, 0])),
-                     abs(rk.energy["dissipated_impacts_j"]
-                         / ex.energy["dissipated_impacts_j"] - 1),
-                     abs(rk.metrics["rms_tip_m"] / ex.metrics["rms_tip_m"] - 1)))
-    (t1, d1, r1), (t2, d2, r2) = errs
+    (t1, d1, r1), (t2, d2, r2) = rk4_cut_errors(rolling_cuts)
     assert t2 < 2e-5 and d2 < 1e-3 and r2 < 1e-4
     assert t2 < t1 and d2 < d1 and r2 < r1
 
