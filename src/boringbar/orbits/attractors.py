@@ -52,7 +52,7 @@ class Attractor:
 def initial_states(fl: Flow) -> list[np.ndarray]:
     """The spread of initial conditions (module docstring), each a state at phase 0."""
     n = fl.n
-    h = fl.psi_tip * fl.amplitude / (fl.K - fl.M * fl.omega**2 + 1j * fl.C * fl.omega)
+    h = fl.force_shape * fl.amplitude / (fl.K - fl.M * fl.omega**2 + 1j * fl.C * fl.omega)
     lin = np.concatenate([h.imag, fl.omega * h.real])  # u(0), u'(0) of Im(H F e^{i w t})
     out = []
     for c in (0.0, 0.5, 1.0):

@@ -98,6 +98,14 @@ class Flow:
     roll: bool = False
     mus_n: float = 0.0
     muk_n: float = 0.0
+    #: Where the force acts on the modes (psi_F): psi_tip but under an oriented cut (two
+    #: bending planes, docs/model.md, 4.7), whose tip reads W = psi_tip . u; None: psi_tip.
+    psi_force: np.ndarray | None = None
+
+    @property
+    def force_shape(self) -> np.ndarray:
+        """psi_F: where the tip force acts on the modes."""
+        return self.psi_tip if self.psi_force is None else self.psi_force
 
     @property
     def period(self) -> float:
@@ -116,10 +124,6 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
     or rolling) under harmonic forcing."""
     if not isinstance(forcing, Harmonic):
         raise ParameterError(f"forcing = {forcing!r} must be Harmonic for shooting")
-    if system.bar.oriented:
-        raise ParameterError("an oriented cut's bar (psi_force != psi_tip): periodic orbits "
-                             "are shot with the force along the tip's direction; use the "
-                             "bar of one bending plane")
     if hertz(system):
         raise ParameterError("contact = 'hertz': periodic orbits are shot with the impact "
                              "law's maps; give the ball contact = 'impact'")
@@ -136,7 +140,8 @@ def make_flow(system: System, forcing: Harmonic) -> Flow:
                 float(p[L.V_IMPACT]), float(p[L.M_EFF]), float(system.reference_frequency_rad_s),
                 (float(p[L.TMD_MASS]), float(p[L.TMD_K]), float(p[L.TMD_C])),
                 np.asarray(bar.psi_absorber, float), 0.0, bool(p[L.ROLL] > 0.0),
-                float(p[L.ROLL_STATIC]), float(p[L.ROLL_KINETIC]))
+                float(p[L.ROLL_STATIC]), float(p[L.ROLL_KINETIC]),
+                np.asarray(bar.psi_force, float) if bar.oriented else None)
 
 
 def packed(fl: Flow) -> np.ndarray:
@@ -151,7 +156,7 @@ def packed(fl: Flow) -> np.ndarray:
     p[L.F0] = fl.amplitude
     p[L.OMEGA] = fl.omega
     for slot, values in ((L.M_, fl.M), (L.K_, fl.K), (L.C_, fl.C), (L.PSI_L, fl.psi_tip),
-                         (L.PSI_D, fl.psi_d), (L.PSI_A, fl.psi_a), (L.PSI_F, fl.psi_tip)):
+                         (L.PSI_D, fl.psi_d), (L.PSI_A, fl.psi_a), (L.PSI_F, fl.force_shape)):
         if values is not None:
             p[slot:slot + n] = values
     p[L.BALL_MASS] = fl.m
