@@ -981,7 +981,7 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
         // a whole step: tabulated values
         for (idx g = 0; g < 4; ++g) {
             tab_state(w, r, g, ks, qs, dX);
-            auto [wq, wdq] = psi_dot(mk, 3, dX, n);
+            const double wq = psi_dot(mk, 3, dX, n).first;  // W, which the chip reads
             double xg = GL_X[g] * b;
             double fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq);
             max_force = pymax(max_force, fq);
@@ -1034,7 +1034,8 @@ inline void history_row(Work& w, SegCtx c, double tau, ncplx ph, double* row) {
     row_state(w, c, tau, row);
     row[5] = cut_force(w.seg, tau, w.dX, c.n, w.sys.mk, w.sys.force.f0, w.sys.force.om, ph.im);
     // a rolling ball's spin where rec has its column: y' while rolling, else s0 + sd tau
-    if (w.rec.n1 > L::REC_NCOL) row[L::REC_NCOL] = c.mode == ROLL ? row[4] : w.seg.s0 + w.seg.sd * tau;
+    if (w.rec.n1 > L::REC_NCOL)
+        row[L::REC_NCOL] = c.mode == ROLL ? row[4] : w.seg.s0 + w.seg.sd * tau;
 }
 
 // The history rows of a segment (every rec_dt from t0, in (t, t + b], before t_end, while
