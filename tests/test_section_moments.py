@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,6 +31,7 @@ from boringbar.model.system_file import SystemFileError, load_system, parse_syst
 #: beta_i L of a clamped-free beam, i = 1, 2 (Blevins, table 8-1)
 BETA_L = (1.8751040687119611, 4.694091132974175)
 ROUND = math.pi * 25.0**4 / 64  # mm^4 of the 25 mm round bar
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "systems"
 
 
 def double_d(diameter: float, flats: float) -> tuple[float, float, float]:
@@ -85,7 +87,7 @@ def test_a_ball_bar_s_sections_give_their_planes_beside_its_cavity():
     """The carbide example with a flat shank before its cavity: its planes, along and
     across the cavity, each take their sections' own moments there (the first plane is
     the cavity's), and the cavity's span stays the computed round host's."""
-    base = load_system("examples/systems/carbide_ld10_tungsten.toml").data
+    base = load_system(EXAMPLES / "carbide_ld10_tungsten.toml").data
     flat = math.pi * 32.0**4 / 64
     base["bar"]["sections"] = [{"end_mm": 200.0, "diameter_mm": 32.0,
                                 "second_moments_mm4": [0.9 * flat, 0.7 * flat]},
