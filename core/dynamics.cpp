@@ -1,11 +1,12 @@
-// boringbar.core.regime_matrix, impact_matrix and regime_stack: the equations of motion as
-// matrices, for the periodic orbits' shooting (src/boringbar/orbits/shooting.py) and the
-// exact integrator's regimes (src/boringbar/simulate/regimes.py).  Each is built from the
-// definitions RK4 steps with, so neither writes the dynamics again: the regime matrices
-// from the stage derivative (dynamics.hpp's derivative_with) at unit vectors of the
-// state, which is exact because the equations are linear in it between impacts and with
-// the friction force held; the impact matrix from the wall's impact law (model.hpp's
-// impact_law and dynamics.hpp's jump_modes) applied to a unit relative velocity.
+// boringbar.core.regime_matrix, impact_matrix, regime_stack and dashpots: the equations of
+// motion as matrices, for the periodic orbits' shooting (src/boringbar/orbits/shooting.py)
+// and the exact integrator's regimes (src/boringbar/simulate/regimes.py).  Each is built
+// from the definitions RK4 steps with, so none writes the dynamics again: the regime
+// matrices from the stage derivative (dynamics.hpp's derivative_with) at unit vectors of
+// the state, which is exact because the equations are linear in it between impacts and
+// with the friction force held; the impact matrix from the wall's impact law (model.hpp's
+// impact_law and dynamics.hpp's jump_modes) applied to a unit relative velocity; the
+// dashpots from dynamics.hpp's rows of the stage's dissipated power.
 //
 // The augmented state is z = [X, sin Omega t, cos Omega t, 1], X = [u_1..u_n, u_1'..u_n',
 // aux, aux'] as the integrators keep it (aux: the ball's y or the absorber's x_a; zero
@@ -210,6 +211,17 @@ nb::tuple regime_stack(const P& p) {
     return nb::make_tuple(A, B, c, nreg);
 }
 
+// The bar's dashpots on the exact integrator's state (regime_stack's z): (l, c).
+nb::tuple dashpot_rows(const P& p) {
+    const R::Params q = params_of(p, false);
+    const R::Shape<0, -1> sh(q);
+    const int n = sh.n(), nz = sh.tmd() ? 2 * n + 2 : 2 * n, nd = R::dashpot_count(sh);
+    Matrix l = zeros(size_t(nd), size_t(nz));
+    std::vector<double> c(size_t(nd), 0.0);
+    R::dashpots(q, sh, nz, l.data(), c.data());
+    return nb::make_tuple(l, owned_array<double, 1>(std::move(c), {size_t(nd)}));
+}
+
 }  // namespace
 
 void bind_dynamics(nb::module_& m) {
@@ -230,6 +242,10 @@ void bind_dynamics(nb::module_& m) {
           "a ball bar's free (F_b its input c), stuck and wall regimes, one for the others; "
           "a cut's R = 2 nreg, the regimes in the cut (f = Kr b (S - W)) after those out of "
           "it; built from RK4's stage derivative.");
+    m.def("dashpots", &dashpot_rows, nb::arg("p"),
+          "(l, c): the bar's dashpots on regime_stack's state z, the power they dissipate "
+          "sum_d c_d (l_d . z)^2 (RK4's stage power): each mode's on its velocity u_i', a "
+          "tuned absorber's on x_a' - psi_a . u'; l (nd, nz), c (nd).");
 }
 
 }  // namespace bb::bind

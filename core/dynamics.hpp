@@ -444,6 +444,30 @@ BB_INLINE StageTerms derivative_with(const Params& q, Shape<N, CASE> sh, const d
     return t;
 }
 
+// The dashpots whose power derivative_with sums (StageTerms::pvisc = sum_d c_d v_d^2), as
+// rows of the state: v_d = l_d . X.  Mode i's acts on its velocity u_i'; a tuned
+// absorber's on the absorber's velocity relative to the bar's at its seat, x_a' - psi_a .
+// u' (derivative_with's reld).  l (nd rows of nz, zeroed by the caller, nz >= 2n, and
+// 2n + 2 with an absorber) and c (nd): nd = n, and n + 1 with an absorber (dashpot_count).
+template <int N, int CASE>
+int dashpot_count(Shape<N, CASE> sh) {
+    return sh.tmd() ? sh.n() + 1 : sh.n();
+}
+template <int N, int CASE>
+void dashpots(const Params& q, Shape<N, CASE> sh, int nz, double* l, double* c) {
+    const int n = sh.n();
+    for (int i = 0; i < n; ++i) {
+        l[i * nz + n + i] = 1.0;
+        c[i] = q.modes.C[i];
+    }
+    if (sh.tmd()) {
+        double* row = l + n * nz;
+        row[sh.iyd()] = 1.0;
+        for (int i = 0; i < n; ++i) row[n + i] = -q.modes.pA[i];
+        c[n] = q.tmd.c;
+    }
+}
+
 // The stage derivative at Xs, F_b picked by the sign of the stage's own y'.
 template <int N, int CASE, bool FAST = false>
 BB_INLINE StageTerms derivative(const Params& q, Shape<N, CASE> sh, const double* Xs, double f,

@@ -14,7 +14,7 @@ import naive
 import numpy as np
 import pytest
 
-from boringbar import Harmonic, make_system
+from boringbar import Harmonic, core, make_system
 from boringbar.orbits import shooting as sh
 from boringbar.simulate import layout as L
 from boringbar.simulate import pack
@@ -117,6 +117,8 @@ def test_a_bad_parameter_vector_is_a_value_error(bad, match):
         regime_matrix(p, 0.0)
     with pytest.raises(ValueError, match=match):
         impact_matrix_of(p)
+    with pytest.raises(ValueError, match=match):
+        core.dashpots(p)
 
 
 def test_a_sliding_direction_other_than_minus_one_zero_or_one_is_refused():

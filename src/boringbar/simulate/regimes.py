@@ -288,20 +288,6 @@ def _check_diagonalisable(V, Vi, case, nreg):
                              "(critically damped mode?)")
 
 
-def _dashpots(p, n, case, nz):
-    """D_visc = sum_d c_d int (l_d . X)^2 dt: the rows l_d and the c_d."""
-    nd = n + 1 if case == L.TMD else n
-    lv = np.zeros((nd, nz))
-    cv = np.zeros(nd)
-    lv[np.arange(n), n + np.arange(n)] = 1.0
-    cv[:n] = p[L.C_:L.C_ + n]
-    if case == L.TMD:
-        lv[n, 2 * n + 1] = 1.0
-        lv[n, n:2 * n] = -p[L.PSI_A:L.PSI_A + n]
-        cv[n] = p[L.TMD_C]
-    return lv, cv
-
-
 @functools.lru_cache(maxsize=SYSTEM_CACHE_SIZE)
 @one_blas_thread
 def system_regimes(key: bytes) -> SystemRegimes:
@@ -326,7 +312,7 @@ def system_regimes(key: bytes) -> SystemRegimes:
     eh = (_grid_exponentials(lam_l, 2 * math.pi / fastest / GRID_PER_PERIOD)
           if fastest > 0.0 else None)
     bq = _modal_inputs(Vi.tolist(), B.tolist())
-    lvis, cvis = _dashpots(p, n, case, B.shape[1])
+    lvis, cvis = core.dashpots(p)  # their rows, from the core as well
     bounds = _mode_bounds(psis, V.tolist(), alam, B.shape[1])
     sums = np.array(_mode_sums(lam_l), np.complex128)
     psi, hi_a, lo_a = np.array(psis), np.array(hi), np.array(lo)
