@@ -1,6 +1,6 @@
 """RK4 against the exact integrator over the held-out grid of 80 published harmonic cases.
 
-    .venv/bin/python benchmarks/bench_grid.py [--repeat 1] [--duration 2.0]
+    .venv/bin/python benchmarks/bench_grid.py [--repeat 1] [--duration 2.0] [--no-history]
 
 The grid: presets paper and physical x gaps 0.1 and 0.5 mm x friction off and on x
 forces 10 and 20 N x Omega/omega_n 0.95, 0.98, 1.00, 1.02, 1.05; the ball damper, each
@@ -10,6 +10,9 @@ compiled (or loaded from the cache) before timing; then, case by case, RK4 and e
 alternately (their order swapped every case, so that a burst of load on a shared
 machine slows both sides), best of ``--repeat`` each, the kernel's wall time
 (``Run.elapsed_s``; the exact integrator's includes its per-run preparation).
+
+Each call keeps its default history (about 20000 rows); ``--no-history`` gives both
+``record_every = 0``, what the analyses (sweeps, lobes, designs) ask for.
 
 Prints each case's times and ratio RK4/exact, then the total ratio (sum of RK4 times
 over sum of exact times), the median and the worst (smallest) per-case ratio.
@@ -51,10 +54,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--duration", type=float, default=2.0)
+    ap.add_argument("--no-history", action="store_true", help="record_every = 0 for both")
     args = ap.parse_args()
+    kw = {"record_every": 0} if args.no_history else {}
     grid = cases()
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}; {len(grid)} cases, "
-          f"{args.duration:g} s runs, dt = 1e-6, best of {args.repeat}")
+          f"{args.duration:g} s runs, dt = 1e-6, best of {args.repeat}, "
+          f"{'no history' if args.no_history else 'default history'}")
     tic = time.perf_counter()
     for _, s, f in {(c[1].preset, c[1].bar.n_modes): c for c in grid}.values():
         for integrator in ("rk4", "exact"):  # compile or load from the cache
@@ -68,7 +74,8 @@ def main() -> None:
         order = ("rk4", "exact") if i % 2 == 0 else ("exact", "rk4")
         for _ in range(args.repeat):
             for integrator in order:
-                run = simulate(s, f, duration_s=args.duration, dt_s=1e-6, integrator=integrator)
+                run = simulate(s, f, duration_s=args.duration, dt_s=1e-6, integrator=integrator,
+                               **kw)
                 runs[integrator] = run
                 best[integrator] = min(best[integrator], run.elapsed_s)
         ratio = best["rk4"] / best["exact"]
