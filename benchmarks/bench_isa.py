@@ -66,6 +66,8 @@ def workloads():
     stick = bb.make_system("ball", "paper", gap_m=0.5e-3, friction=True)
     hertz = bb.make_system("ball", "physical", gap_m=0.1e-3, contact="hertz")
     rolling = bb.make_system("ball", "physical", motion="roll")
+    ball5 = bb.make_system("ball", "physical", gap_m=0.1e-3, n_modes=5)
+    absorber5 = bb.make_system("tmd", "physical", n_modes=5)
 
     def result(run):
         return digest([run.summary()["rms_tip_m"]], run.final.x)
@@ -96,6 +98,20 @@ def workloads():
         return result(bb.simulate(hertz, bb.Harmonic(20.0, 1.0), duration_s=1.0,
                                   record_every=0, integrator="rk4"))
 
+    def modes5():
+        # a five-mode ball bar (the kernel of a run-time shape), harmonic and in a cut
+        return result(bb.simulate(ball5, bb.Harmonic(20.0, 1.0), duration_s=2.0,
+                                  record_every=0, integrator="rk4"))
+
+    def modes5_cut():
+        return result(bb.simulate(ball5, bb.Regenerative(depth_m=0.4e-3, rpm=1200.0),
+                                  duration_s=1.0, record_every=0))
+
+    def tmd5():
+        # a five-mode bar with its tuned absorber (the kernel of a run-time shape)
+        return result(bb.simulate(absorber5, bb.Harmonic(20.0, 1.0), duration_s=2.0,
+                                  record_every=0, integrator="rk4"))
+
     def rolling_small():
         # a rolling ball under a small force: it rolls and slips in turn (RK4's roll law at
         # the four stages at 40 % of the steps, the rolled map at most of the others)
@@ -110,7 +126,8 @@ def workloads():
         return digest(ds["min_chatter_free_depth_m"].values)
 
     return {"cut": cut, "harmonic_map": harmonic_map, "harmonic_stick": harmonic_stick,
-            "exact": exact, "contact": contact, "rolling": rolling_small, "lobes": lobes}
+            "exact": exact, "contact": contact, "modes5": modes5, "modes5_cut": modes5_cut,
+            "tmd5": tmd5, "rolling": rolling_small, "lobes": lobes}
 
 
 def child(path: str, only) -> None:

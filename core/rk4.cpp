@@ -21,7 +21,8 @@ ShapeKey shape_key(const RunArgs& a) {
 void run_single(const RunArgs& a) {
     const ShapeKey k = shape_key(a);
 #ifdef BB_AVX2_CLONE
-    if (cpu_has_avx2()) return k.few() ? run_few_avx2(a, k) : run_many_avx2(a, k);
+    // (the kernel of a run-time shape: the baseline's on every CPU, rk4.hpp)
+    if (cpu_has_avx2() && !k.generic) return k.few() ? run_few_avx2(a, k) : run_many_avx2(a, k);
     Baseline::run<0, -1, -1>(a);
 #else
     if (k.few()) return run_few<Baseline>(a, k);

@@ -31,19 +31,20 @@
 #include "model.hpp"
 
 
-// On x86-64 (GCC, Clang) the kernels are compiled for AVX2 (rk4_avx2.cpp,
+// On x86-64 (GCC, Clang) the specialised kernels are compiled for AVX2 (rk4_avx2.cpp,
 // rk4_avx2_many.cpp) and run where the CPU has it: the same IEEE operations in the same
 // order as the baseline ISA's, so the same bits on every CPU (FMA, which would round
 // differently, is not enabled; -ffp-contract=off).  AVX2 gives the vector arithmetic
 // (VecMap) 4 lanes and 3-operand instructions: 1.09-1.14x through bb.simulate and
-// bb.lobes (benchmarks/bench_isa.py).  An x86-64 CPU without AVX2 (x86-64 CPUs have had
-// it since 2013-2015, bar some low-end Pentiums and Celerons) runs the kernel of a
-// run-time shape, compiled for the baseline ISA (SSE2, rk4.cpp), with the same bits,
-// 2-3.5x slower than the AVX2 kernels: the specialised kernels compiled a second time for
-// it took a third of the build's CPU time (docs/performance.md, "Instruction-set
-// copies").  An AVX-512 copy (32 vector registers, which hold the staged step without
-// spills) gave 1.0-1.1x over AVX2 through the same calls and was the dearest of the
-// copies to compile, so it is not built.  Other targets (aarch64, MSVC) build the
+// bb.lobes (benchmarks/bench_isa.py).  The kernel of a run-time shape is compiled for the
+// baseline ISA alone (SSE2, rk4.cpp), on every x86-64 CPU: its AVX2 copy gave 1.00-1.10x
+// for 9 s of compile (docs/performance.md, "Instruction-set copies").  An x86-64 CPU
+// without AVX2 (x86-64 CPUs have had it since 2013-2015, bar some low-end Pentiums and
+// Celerons) runs that kernel for every shape, with the same bits, 2-3.5x slower than the
+// AVX2 kernels: the specialised kernels compiled a second time for it took a third of
+// the build's CPU time.  An AVX-512 copy (32 vector registers, which hold the staged step
+// without spills) gave 1.0-1.1x over AVX2 through the same calls and was the dearest of
+// the copies to compile, so it is not built.  Other targets (aarch64, MSVC) build the
 // specialised kernels for the baseline ISA (rk4.cpp, rk4_many.cpp).
 // (-DBB_NO_AVX2_CLONE builds those, to test them on an AVX2 CPU.)
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(BB_NO_AVX2_CLONE)
@@ -810,7 +811,8 @@ void run_batch(const BatchArgs& a);
 // rolling ball) and its forcing, or (generic) the kernel of a run-time shape: a compliant
 // contact, and the shapes that have no specialised kernel.  A copy's kernels are compiled
 // in two halves, each a file of its own (rk4_run.hpp): the one- and two-mode kernels
-// (few), and the three- and four-mode ones with the kernel of a run-time shape.
+// (few), and the three- and four-mode ones (with the kernel of a run-time shape in the
+// baseline's).
 struct ShapeKey {
     int n, kase, forcing;
     bool generic;

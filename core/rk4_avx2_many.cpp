@@ -1,5 +1,5 @@
-// The three- and four-mode RK4 kernels and the kernel of a run-time shape (rk4_run.hpp)
-// compiled for AVX2; run_single (rk4.cpp) calls them where the CPU has it (rk4.hpp).
+// The three- and four-mode RK4 kernels (rk4_run.hpp) compiled for AVX2; run_single
+// (rk4.cpp) calls them where the CPU has it (rk4.hpp).
 // Empty where the copy is not built.
 #include "rk4_run.hpp"
 

@@ -13,6 +13,8 @@
 // functions it marks for its ISA are compiled for it; the rest stays baseline code.)
 #pragma once
 
+#include <type_traits>
+
 #include "noise.hpp"
 #include "rk4.hpp"
 
@@ -470,9 +472,15 @@ void run_few(const RunArgs& a, ShapeKey k) {
     run_modes<Copy, 2>(a, k);
 }
 
+struct Baseline;
+
+// (the kernel of a run-time shape is the baseline's alone, rk4.hpp: no other copy
+// compiles it)
 template <class Copy>
 void run_many(const RunArgs& a, ShapeKey k) {
-    if (k.generic) return Copy::template run<0, -1, -1>(a);
+    if constexpr (std::is_same_v<Copy, Baseline>) {
+        if (k.generic) return Copy::template run<0, -1, -1>(a);
+    }
     if (k.n == 3) return run_modes<Copy, 3>(a, k);
     // two bending planes of two modes each (docs/model.md, 4.7)
     if (k.kase == L::BALL) return run_case<Copy, 4, L::BALL>(a, k.forcing);
