@@ -99,7 +99,7 @@ def workloads():
                                   record_every=0, integrator="rk4"))
 
     def modes5():
-        # a five-mode ball bar (the kernel of a run-time shape), harmonic and in a cut
+        # a five-mode ball bar (the kernel of a run-time shape): harmonic, then in a cut
         return result(bb.simulate(ball5, bb.Harmonic(20.0, 1.0), duration_s=2.0,
                                   record_every=0, integrator="rk4"))
 

@@ -37,7 +37,7 @@
 // differently, is not enabled; -ffp-contract=off).  AVX2 gives the vector arithmetic
 // (VecMap) 4 lanes and 3-operand instructions: 1.09-1.14x through bb.simulate and
 // bb.lobes (benchmarks/bench_isa.py).  The kernel of a run-time shape is compiled for the
-// baseline ISA alone (SSE2, rk4.cpp), on every x86-64 CPU: its AVX2 copy gave 1.00-1.10x
+// baseline ISA alone (SSE2, rk4.cpp), on every x86-64 CPU: its AVX2 copy gave 1.01-1.12x
 // for 9 s of compile (docs/performance.md, "Instruction-set copies").  An x86-64 CPU
 // without AVX2 (x86-64 CPUs have had it since 2013-2015, bar some low-end Pentiums and
 // Celerons) runs that kernel for every shape, with the same bits, 2-3.5x slower than the
