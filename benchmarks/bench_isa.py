@@ -72,21 +72,23 @@ def workloads():
     def result(run):
         return digest([run.summary()["rms_tip_m"]], run.final.x)
 
+    def rk4(system, forcing, duration_s):
+        # (in a cut "auto" takes RK4 as well)
+        return result(bb.simulate(system, forcing, duration_s=duration_s, record_every=0,
+                                  integrator="rk4"))
+
     def cut():
         # the published ball bar with friction in a cut: RK4 with the delay, the ball
         # sticking and slipping (the four stages) and the map step
-        return result(bb.simulate(ball_f, bb.Regenerative(depth_m=0.4e-3, rpm=1200.0),
-                                  duration_s=3.0, record_every=0))
+        return rk4(ball_f, bb.Regenerative(depth_m=0.4e-3, rpm=1200.0), 3.0)
 
     def harmonic_map():
         # paper preset, no friction: every step one affine map (linmap.hpp)
-        return result(bb.simulate(paper, bb.Harmonic(10.0, 1.0), duration_s=10.0,
-                                  record_every=0, integrator="rk4"))
+        return rk4(paper, bb.Harmonic(10.0, 1.0), 10.0)
 
     def harmonic_stick():
         # a sticking ball with friction: the four RK4 stages at most steps
-        return result(bb.simulate(stick, bb.Harmonic(10.0, 1.0), duration_s=5.0,
-                                  record_every=0, integrator="rk4"))
+        return rk4(stick, bb.Harmonic(10.0, 1.0), 5.0)
 
     def exact():
         # the exact integrator (a harmonic run: its AVX2 copy where built), a rattling ball
@@ -95,28 +97,23 @@ def workloads():
 
     def contact():
         # a Hertz contact at the walls: the kernel of a run-time shape (RK4)
-        return result(bb.simulate(hertz, bb.Harmonic(20.0, 1.0), duration_s=1.0,
-                                  record_every=0, integrator="rk4"))
+        return rk4(hertz, bb.Harmonic(20.0, 1.0), 1.0)
 
     def modes5():
         # a five-mode ball bar (the kernel of a run-time shape): harmonic, then in a cut
-        return result(bb.simulate(ball5, bb.Harmonic(20.0, 1.0), duration_s=2.0,
-                                  record_every=0, integrator="rk4"))
+        return rk4(ball5, bb.Harmonic(20.0, 1.0), 2.0)
 
     def modes5_cut():
-        return result(bb.simulate(ball5, bb.Regenerative(depth_m=0.4e-3, rpm=1200.0),
-                                  duration_s=1.0, record_every=0))
+        return rk4(ball5, bb.Regenerative(depth_m=0.4e-3, rpm=1200.0), 1.0)
 
     def tmd5():
         # a five-mode bar with its tuned absorber (the kernel of a run-time shape)
-        return result(bb.simulate(absorber5, bb.Harmonic(20.0, 1.0), duration_s=2.0,
-                                  record_every=0, integrator="rk4"))
+        return rk4(absorber5, bb.Harmonic(20.0, 1.0), 2.0)
 
     def rolling_small():
         # a rolling ball under a small force: it rolls and slips in turn (RK4's roll law at
         # the four stages at 40 % of the steps, the rolled map at most of the others)
-        return result(bb.simulate(rolling, bb.Harmonic(0.05, 1.0), duration_s=3.0,
-                                  record_every=0, integrator="rk4"))
+        return rk4(rolling, bb.Harmonic(0.05, 1.0), 3.0)
 
     def lobes():
         # the lobes of the ball bar with friction at one speed, serially: the converged
