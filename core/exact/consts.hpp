@@ -30,8 +30,9 @@ constexpr int NB_MAX_2 = 2 * NB_MAX;
 // the bar's rows mk (System::mk): M, K, C, psi_L, psi_d, psi_a, then the equations of
 // motion's premultiplied constants fm, km, cm and 1 / M (dynamics.hpp's Modes), and
 // psi_F, where the tip force acts (psi_L, where the chip reads W, but in an oriented cut)
+constexpr int MK_M = 0, MK_K = 1, MK_C = 2, MK_PSI_L = 3, MK_PSI_D = 4, MK_PSI_A = 5;
+constexpr int MK_FM = 6, MK_KM = 7, MK_CM = 8, MK_INV_M = 9, MK_PSI_F = 10;
 constexpr int MK_ROWS = 11;
-constexpr int MK_PSI_F = 10;
 constexpr int MK_SIZE = MK_ROWS * layout::NMAX;
 constexpr int DDC = 4 * (layout::NMAX + 2);
 

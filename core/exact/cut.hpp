@@ -103,7 +103,7 @@ inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp,
         }
         if (stick && sr != 1.0) {
             double pdv = 0.0;
-            for (idx i = 0; i < n; ++i) pdv += mk(4, i) * X[n + i];
+            for (idx i = 0; i < n; ++i) pdv += mk(MK_PSI_D, i) * X[n + i];
             acc[5] += wg * (1.0 - sr) * freq_rhs(X, f, n, mk, kappa) * pdv;
         }
     }
@@ -169,9 +169,9 @@ inline void add_knot(History& hs, double t, Vec Xm, Vec Xp, Mat mk, double ttol,
     double wdm = 0.0;
     double wdp = 0.0;
     for (idx i = 0; i < n; ++i) {
-        w += mk(3, i) * Xp[i];
-        wdm += mk(3, i) * Xm[n + i];
-        wdp += mk(3, i) * Xp[n + i];
+        w += mk(MK_PSI_L, i) * Xp[i];
+        wdm += mk(MK_PSI_L, i) * Xm[n + i];
+        wdp += mk(MK_PSI_L, i) * Xp[n + i];
     }
     if (nk > 0 && t <= kn(nk - 1, 0) + ttol) {
         kn(nk - 1, 1) = w;

@@ -36,16 +36,16 @@ void unpack_system(Vec p, idx nreg, System& sys) {
     sys.kase = layout::Case(int(p[L::CASE]));
     sys.nreg = nreg;
     for (idx i = 0; i < n; ++i) {
-        mk(0, i) = p[L::M_ + i];
-        mk(1, i) = p[L::K_ + i];
-        mk(2, i) = p[L::C_ + i];
-        mk(3, i) = p[L::PSI_L + i];
-        mk(4, i) = p[L::PSI_D + i];
-        mk(5, i) = p[L::PSI_A + i];
-        mk(6, i) = md.fm[i];
-        mk(7, i) = md.km[i];
-        mk(8, i) = md.cm[i];
-        mk(9, i) = md.invM[i];
+        mk(MK_M, i) = p[L::M_ + i];
+        mk(MK_K, i) = p[L::K_ + i];
+        mk(MK_C, i) = p[L::C_ + i];
+        mk(MK_PSI_L, i) = p[L::PSI_L + i];
+        mk(MK_PSI_D, i) = p[L::PSI_D + i];
+        mk(MK_PSI_A, i) = p[L::PSI_A + i];
+        mk(MK_FM, i) = md.fm[i];
+        mk(MK_KM, i) = md.km[i];
+        mk(MK_CM, i) = md.cm[i];
+        mk(MK_INV_M, i) = md.invM[i];
         mk(MK_PSI_F, i) = p[L::PSI_F + i];
     }
     double m = p[L::BALL_MASS];
@@ -59,7 +59,7 @@ void unpack_system(Vec p, idx nreg, System& sys) {
             return dynamics::free_acceleration(md.fm[i], md.km[i], md.cm[i], f, u, v);
         };
         for (idx row = 0; row < 2; ++row) {
-            const double psi = mk(4 - row, i);  // psi_d,i, then psi_L,i
+            const double psi = mk(row == 0 ? MK_PSI_D : MK_PSI_L, i);
             ddc(row, i) = psi * a(0.0, 1.0, 0.0);
             ddc(row + 2, i) = psi * a(0.0, 0.0, 1.0);
             ddc(row, n) += psi * a(1.0, 0.0, 0.0);
@@ -132,8 +132,8 @@ double cut_start(History& hs, Vec X, Mat mk, const CutConsts& cq, RunState& rs,
     double w_ = 0.0;
     double wd_ = 0.0;
     for (idx i = 0; i < n; ++i) {
-        w_ += mk(3, i) * X[i];
-        wd_ += mk(3, i) * X[n + i];
+        w_ += mk(MK_PSI_L, i) * X[i];
+        wd_ += mk(MK_PSI_L, i) * X[n + i];
     }
     kn(0, 0) = t0;
     kn(0, 1) = w_;
@@ -320,7 +320,7 @@ void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, const System
         double ee = std::fabs(vb) > ball.vimp ? ball.e : 0.0;  // Zeno: captured on the wall
         ImpactJump j = impact_law(vb, ee, ball.meff);
         yd = j.yd;
-        dynamics::jump_modes(int(n), mk.row(4), mk.row(9), X.d, j.g);
+        dynamics::jump_modes(int(n), mk.row(MK_PSI_D), mk.row(MK_INV_M), X.d, j.g);
         met[L::D_IMPACT] += j.loss;
         if (std::fabs(vb) > ball.vimp) {
             count_impact(met, log.imp, t, w_, vb, steady);

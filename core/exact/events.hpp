@@ -52,7 +52,7 @@ inline double g_value(idx kind, double tau, const SegView& s) {
     state_at(s, tau, q, X);
     if (kind == EV_WEXT) {
         double s = 0.0;
-        for (idx i = 0; i < n; ++i) s += mk(3, i) * X[n + i];
+        for (idx i = 0; i < n; ++i) s += mk(MK_PSI_L, i) * X[n + i];
         return s;
     }
     if (kind == EV_CUT || kind == EV_HEXT) {
@@ -64,8 +64,8 @@ inline double g_value(idx kind, double tau, const SegView& s) {
         double pdu = 0.0;
         double pdv = 0.0;
         for (idx i = 0; i < n; ++i) {
-            pdu += mk(4, i) * X[i];
-            pdv += mk(4, i) * X[n + i];
+            pdu += mk(MK_PSI_D, i) * X[i];
+            pdv += mk(MK_PSI_D, i) * X[n + i];
         }
         if (kind == EV_PLUS || kind == EV_MINUS) {
             double y = ball_y(seg, tau, pdu);
@@ -88,8 +88,8 @@ inline std::tuple<double, double> ball_rates(const Segment& seg, double tau, Mat
     double pdv = 0.0;
     double pda = 0.0;
     for (idx i = 0; i < n; ++i) {
-        pdv += mk(4, i) * X[n + i];
-        pda += mk(4, i) * Xd[n + i];
+        pdv += mk(MK_PSI_D, i) * X[n + i];
+        pda += mk(MK_PSI_D, i) * Xd[n + i];
     }
     return {ball_yd(seg, tau, pdv), seg.acc - seg.cy * pda};
 }
@@ -114,8 +114,8 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
         double g = 0.0;
         double dg = 0.0;
         for (idx i = 0; i < n; ++i) {
-            g += mk(3, i) * X[n + i];
-            dg += mk(3, i) * Xd[n + i];
+            g += mk(MK_PSI_L, i) * X[n + i];
+            dg += mk(MK_PSI_L, i) * Xd[n + i];
         }
         return {g, dg, nan};
     }
@@ -124,9 +124,9 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
         double wd = 0.0;
         double wdd = 0.0;
         for (idx i = 0; i < n; ++i) {
-            w += mk(3, i) * X[i];
-            wd += mk(3, i) * X[n + i];
-            wdd += mk(3, i) * Xd[n + i];
+            w += mk(MK_PSI_L, i) * X[i];
+            wd += mk(MK_PSI_L, i) * X[n + i];
+            wdd += mk(MK_PSI_L, i) * Xd[n + i];
         }
         auto [sv, sd] = surface_at(seg, tau);
         double sdd = 2.0 * seg.s[2] + 6.0 * seg.s[3] * tau;
@@ -136,7 +136,7 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
     }
     if (kind == EV_PLUS || kind == EV_MINUS) {
         double pdu = 0.0;
-        for (idx i = 0; i < n; ++i) pdu += mk(4, i) * X[i];
+        for (idx i = 0; i < n; ++i) pdu += mk(MK_PSI_D, i) * X[i];
         double y = ball_y(seg, tau, pdu);
         auto [yd, ydd] = ball_rates(seg, tau, mk, X, Xd, n);
         if (kind == EV_PLUS) return {y - seg.half, yd, ydd};
@@ -154,9 +154,9 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
     double F = 0.0;
     double Fd = 0.0;
     for (idx i = 0; i < n; ++i) {
-        const double fm = mk(6, i), km = mk(7, i), cm = mk(8, i);
-        F += mk(4, i) * dynamics::free_acceleration(fm, km, cm, f, X[i], X[n + i]);
-        Fd += mk(4, i) * dynamics::free_acceleration(fm, km, cm, fd, X[n + i], Xd[n + i]);
+        const double fm = mk(MK_FM, i), km = mk(MK_KM, i), cm = mk(MK_CM, i);
+        F += mk(MK_PSI_D, i) * dynamics::free_acceleration(fm, km, cm, f, X[i], X[n + i]);
+        Fd += mk(MK_PSI_D, i) * dynamics::free_acceleration(fm, km, cm, fd, X[n + i], Xd[n + i]);
     }
     F = F / seg.kappa - seg.foff;
     Fd /= seg.kappa;
@@ -367,9 +367,9 @@ inline double _w_extremum_body(double a, double ga, double b, double gb, double 
         double wd = 0.0;
         double wdd = 0.0;
         for (idx i = 0; i < n; ++i) {
-            w += mk(3, i) * Xn[i];
-            wd += mk(3, i) * Xn[n + i];
-            wdd += mk(3, i) * Xdn[n + i];
+            w += mk(MK_PSI_L, i) * Xn[i];
+            wd += mk(MK_PSI_L, i) * Xn[n + i];
+            wdd += mk(MK_PSI_L, i) * Xdn[n + i];
         }
         if (wd == 0.0) return w;
         double step = wdd != 0.0 ? -wd / wdd : b - a;

@@ -189,8 +189,8 @@ inline void FlowTables::build(idx r, const FlowSources& src, idx n, idx ks) {
         project(l.data(), r, src.VF, src.Z, src.D, nz, P);
     };
     row(MK_PSI_F, n, Pwork.data());  // psi_F . u'
-    row(3, 0, PW);            // W = psi_L . u
-    row(4, 0, Pd);            // psi_d . u
+    row(MK_PSI_L, 0, PW);            // W = psi_L . u
+    row(MK_PSI_D, 0, Pd);            // psi_d . u
     for (idx d = 0; d < nd; ++d) project(src.dp.l.row(d), r, src.VF, src.Z, src.D, nz,
                                          Pvis[size_t(d)].data());
     idx* oa = ab_.data() + size_t(r) * 2 * size_t(stride_);
@@ -314,9 +314,10 @@ inline void stick_work(const FlowsIn& in, const FlowsScratchOf<MuV, GM, CM, V>& 
         ncplx s(0.0, 0.0);
         ncplx pv(0.0, 0.0);
         for (idx i = 0; i < n; ++i) {
-            s += mk(4, i) * dynamics::free_acceleration(mk(6, i), mk(7, i), mk(8, i), fk,
-                                                        ncplx(Cx(i, k)), ncplx(Cx(n + i, k)));
-            pv += mk(4, i) * ncplx(Cx(n + i, k));
+            s += mk(MK_PSI_D, i) *
+                 dynamics::free_acceleration(mk(MK_FM, i), mk(MK_KM, i), mk(MK_CM, i), fk,
+                                             ncplx(Cx(i, k)), ncplx(Cx(n + i, k)));
+            pv += mk(MK_PSI_D, i) * ncplx(Cx(n + i, k));
         }
         ca[k] = s / in.stick_k;
         cb[k] = pv;

@@ -170,8 +170,8 @@ inline std::tuple<double, double> tip_w_wd(Mat mk, Vec X, idx n) {
     double w = 0.0;
     double wd = 0.0;
     for (idx i = 0; i < n; ++i) {
-        w += mk(3, i) * X[i];
-        wd += mk(3, i) * X[n + i];
+        w += mk(MK_PSI_L, i) * X[i];
+        wd += mk(MK_PSI_L, i) * X[n + i];
     }
     return {w, wd};
 }
@@ -183,7 +183,7 @@ inline double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, do
     double f = f0 * (sn == sn ? sn : std::sin(om * (seg.ts + tau)));
     if (seg.krb != 0.0) {
         double w = 0.0;
-        for (idx i = 0; i < n; ++i) w += mk(3, i) * X[i];
+        for (idx i = 0; i < n; ++i) w += mk(MK_PSI_L, i) * X[i];
         f += seg.krb * (std::get<0>(surface_at(seg, tau)) - w);
     }
     return f;
@@ -194,8 +194,8 @@ inline double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, do
 inline double freq_rhs(Vec X, double f, idx n, Mat mk, double kappa) {
     double s = 0.0;
     for (idx i = 0; i < n; ++i)
-        s += mk(4, i) *
-             dynamics::free_acceleration(mk(6, i), mk(7, i), mk(8, i), f, X[i], X[n + i]);
+        s += mk(MK_PSI_D, i) * dynamics::free_acceleration(mk(MK_FM, i), mk(MK_KM, i),
+                                                           mk(MK_CM, i), f, X[i], X[n + i]);
     return s / kappa;
 }
 

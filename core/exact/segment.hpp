@@ -162,8 +162,8 @@ inline SegView view(Work& w, SegCtx c) {
 
 namespace kernel {
 
-// X[i] and X[n + i] weighed by row ``row`` of mk: psi . u and psi . u' (row 3: psi_L, W and
-// W'; row 4: psi_d)
+// X[i] and X[n + i] weighed by row ``row`` of mk: psi . u and psi . u' (MK_PSI_L: W and
+// W'; MK_PSI_D: the ball's seat)
 inline std::pair<double, double> psi_dot(Mat mk, idx row, Vec X, idx n) {
     double u = 0.0;
     double v = 0.0;
@@ -190,7 +190,7 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat 
                    const Forcing& fo, double sn = NAN) {
     const idx n = mk.n1;
     const double f0 = fo.f0, om = fo.om;
-    auto [pdu, pdv] = psi_dot(mk, 4, X, n);
+    auto [pdu, pdv] = psi_dot(mk, MK_PSI_D, X, n);
     double y = ball_y(seg, tau, pdu);
     double yd = ball_yd(seg, tau, pdv);
     ev[EV_PLUS] = y - seg.half;
@@ -199,7 +199,7 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat 
     ev[EV_YEXT] = yd;
     if (seg.rolls) ev[EV_SLIP] = -seg.slip * (yd - (seg.s0 + seg.sd * tau));
     if (seg.cdir != 0.0) {
-        auto [w, wd] = psi_dot(mk, 3, X, n);
+        auto [w, wd] = psi_dot(mk, MK_PSI_L, X, n);
         auto [sv, sd] = surface_at(seg, tau);
         ev[EV_CUT] = seg.cdir * (w - sv);
         ev[EV_HEXT] = sd - wd;
@@ -220,15 +220,15 @@ inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, SegC
     const idx n = mk.n1, kase = c.kase;
     if (c.ball) {
         if (c.mode == STICK || c.mode == CONTACT) return {seg.y0, 0.0};
-        auto [pdu, pdv] = psi_dot(mk, 4, X, n);
+        auto [pdu, pdv] = psi_dot(mk, MK_PSI_D, X, n);
         return {ball_y(seg, tau, pdu), ball_yd(seg, tau, pdv)};
     }
     if (kase == L::TMD) {
         double a = X[2 * n];
         double ad = X[2 * n + 1];
         for (idx i = 0; i < n; ++i) {
-            a -= mk(5, i) * X[i];
-            ad -= mk(5, i) * X[n + i];
+            a -= mk(MK_PSI_A, i) * X[i];
+            ad -= mk(MK_PSI_A, i) * X[n + i];
         }
         return {a, ad};
     }
@@ -339,7 +339,7 @@ inline void close_flows(Work& w, SegCtx c, double T, bool steady, double pdu) {
         if (mode == CONTACT) met[L::T_CONTACT] += T;
     }
     if (c.ball) {
-        auto [pdu1, pdv1] = psi_dot(w.sys.mk, 4, w.X, n);
+        auto [pdu1, pdv1] = psi_dot(w.sys.mk, MK_PSI_D, w.X, n);
         BallState& b = w.rs.ball;
         if (mode == FREE || mode == ROLL) {
             double y = b.y;
@@ -981,7 +981,7 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
         // a whole step: tabulated values
         for (idx g = 0; g < 4; ++g) {
             tab_state(w, r, g, ks, qs, dX);
-            const double wq = psi_dot(mk, 3, dX, n).first;  // W, which the chip reads
+            const double wq = psi_dot(mk, MK_PSI_L, dX, n).first;  // W, which the chip reads
             double xg = GL_X[g] * b;
             double fq = krb_seg * (s_0 + xg * (s_1 + xg * (s_2 + xg * s_3)) - wq);
             max_force = pymax(max_force, fq);
@@ -1014,7 +1014,7 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
 // row[1:5] of a history or strobe row, W, W', aux, aux', from the state in the work vector
 // dX at tau (its time, row[0], is the caller's).
 inline void row_state(Work& w, SegCtx c, double tau, double* row) {
-    auto [wv, wdv] = psi_dot(w.sys.mk, 3, w.dX, c.n);
+    auto [wv, wdv] = psi_dot(w.sys.mk, MK_PSI_L, w.dX, c.n);
     auto [av, adv] = aux(w.dX, tau, w.seg, c, w.sys.mk, w.x);
     row[1] = wv;
     row[2] = wdv;
@@ -1159,7 +1159,7 @@ BB_NOINLINE GridPoint advance_other(Work& w, double t, SegCtx c, bool ydd_on, Gr
         }
     } else {
         double s_0 = seg.s[0], s_1 = seg.s[1], s_2 = seg.s[2], s_3 = seg.s[3];
-        auto [wq, wdq] = psi_dot(w.sys.mk, 3, X, n);
+        auto [wq, wdq] = psi_dot(w.sys.mk, MK_PSI_L, X, n);
         w.ev_b[EV_CUT] = seg.cdir * (wq - (s_0 + b * (s_1 + b * (s_2 + b * s_3))));
         w.ev_b[EV_HEXT] = s_1 + b * (2.0 * s_2 + 3.0 * b * s_3) - wdq;
     }
@@ -1290,7 +1290,7 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     double tau_ev = tlen;
     idx istep = 0;
     // the values at a (carried over from the previous grid point)
-    auto [wa, wda] = psi_dot(mk, 3, Xa, n);
+    auto [wa, wda] = psi_dot(mk, MK_PSI_L, Xa, n);
     if (ball || !Regen) {
         events(ev_a, Xa, a, seg, mode, mk, w.sys.force);
     } else {  // only h matters
@@ -1353,7 +1353,7 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
             tau_ev = b;
         }
         // --- outputs on (a, b]
-        std::tie(wb, wdb) = psi_dot(mk, 3, X, n);
+        std::tie(wb, wdb) = psi_dot(mk, MK_PSI_L, X, n);
         if (steady) {
             w_extremes(w, e, c, sv, StepEnds{a, b, lev, ev_a, ev_b, ydd_a, ydd_b}, kind,
                        TipW{wa, wda, wdd_a}, TipW{wb, wdb, wdd_b});
@@ -1481,7 +1481,7 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
         // a whole step H from node to node, inside one grid step: tabulated values
         whole = at_node && cs.from_node && cq.h <= cp.h;
     }
-    auto [pdu, pdv] = psi_dot(sys.mk, 4, X, n);
+    auto [pdu, pdv] = psi_dot(sys.mk, MK_PSI_D, X, n);
     // bounds on |y^(4)|, |W^(4)| (steady, harmonic) and |y^(3)|, |W^(3)| (a free ball)
     bool ydd_on = ball && (mode == FREE || mode == ROLL) && !Regen;
     bool adapt = ydd_on && w.levmax[r] > 0;
