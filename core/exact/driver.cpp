@@ -525,7 +525,7 @@ double exact_body(const ExactRun& a) {
     unpack_system(p, a.nreg, sys);
     if constexpr (!Regen) w.flows.reset(a.nreg, nz);  // a cut sums its flows by quadrature
     w.cp = run_consts(a);
-    const idx kase = sys.kase;
+    const layout::Case kase = sys.kase;
     const bool ball = sys.has_ball();
     Mat mk = sys.mk;
     double f0 = sys.force.f0;

@@ -148,7 +148,7 @@ struct Work {
 // stay constants where the search has them so.
 struct SegCtx {
     idx r, ks, sz, n;
-    idx kase;
+    layout::Case kase;
     Regime mode;
     bool ball;
 };
@@ -186,7 +186,7 @@ inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks)
 
 // All event functions from the state X at tau (see g_value): the ball's regime mode, the
 // bar's rows mk (n = mk.n1 modes), the forcing fo; sn: sin(Omega (ts + tau)) if known.
-inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat mk,
+inline void events(Vec ev, Vec X, double tau, const Segment& seg, Regime mode, Mat mk,
                    const Forcing& fo, double sn = NAN) {
     const idx n = mk.n1;
     const double f0 = fo.f0, om = fo.om;
@@ -217,7 +217,8 @@ inline void events(Vec ev, Vec X, double tau, const Segment& seg, idx mode, Mat 
 // y, from the run's state x); mk: the bar's rows (n = mk.n1 modes).
 inline std::pair<double, double> aux(Vec X, double tau, const Segment& seg, SegCtx c, Mat mk,
                                      Vec x) {
-    const idx n = mk.n1, kase = c.kase;
+    const idx n = mk.n1;
+    const layout::Case kase = c.kase;
     if (c.ball) {
         if (c.mode == STICK || c.mode == CONTACT) return {seg.y0, 0.0};
         auto [pdu, pdv] = psi_dot(mk, MK_PSI_D, X, n);
@@ -326,7 +327,8 @@ inline void close_flows(Work& w, SegCtx c, double T, bool steady, double pdu) {
     Vec out = w.out;
     Vec met = w.met;
     const Segment& seg = w.seg;
-    const idx mode = c.mode, n = c.n;
+    const Regime mode = c.mode;
+    const idx n = c.n;
     const double fb = seg.fb;
     met[L::W_FORCE] += out[0];
     met[L::D_VISC] += out[1];
@@ -612,7 +614,7 @@ struct Found {
 // A ball held on the bore or a wall, or rolling: the first of its release events (a stuck
 // ball's slip, a rolling one's beyond mu_s N, a wall's release) in [a, b].
 inline Found regime_event(Work& w, SegCtx c, double a, double b) {
-    const idx mode = c.mode;
+    const Regime mode = c.mode;
     double best = b;
     idx kind = -1;
     for (idx kk : {EV_REL_NEG, EV_REL_POS, EV_WALL_REL}) {
@@ -1236,7 +1238,8 @@ BB_ALWAYS_INLINE void w_extremes(Work& w, Extremes& e, SegCtx c, const SegSearch
 template <bool Regen, idx NZ = 0>
 inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const SegSearch& sv) {
     idx r = c_in.r, ks = c_in.ks, sz = c_in.sz, n = c_in.n;
-    const idx kase = c_in.kase, mode = c_in.mode;
+    const layout::Case kase = c_in.kase;
+    const Regime mode = c_in.mode;
     Vec X = w.X;
     Vec Xa = w.Xa;
     CVec q0 = w.q0;
@@ -1261,7 +1264,7 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     }
     bool ball = kase == L::BALL;
     // the context with the sizes as the search has them (constants in the copies)
-    const SegCtx c{r, ks, sz, n, kase, Regime(mode), ball};
+    const SegCtx c{r, ks, sz, n, kase, mode, ball};
     const SegView out_view = view(w, c);  // the history's and the strobe's samples
     double f0 = w.sys.force.f0;
     double om = w.sys.force.om;
@@ -1433,7 +1436,7 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     bool ball = sys.has_ball();
     double fc = sys.fric.fc;
     double m = sys.ball.m;
-    idx mode = rs.ball.mode;
+    Regime mode = rs.ball.mode;
     double sdir = rs.ball.sdir;
     bool incut = rs.incut;
     double t_seg_end = t_stop;
