@@ -332,6 +332,12 @@ class TunedMassDamper:
                    d["position_m"], d["design"])
 
 
+def spin_gain(mass_kg: float) -> float:
+    """r^2 / I = 5 / (2 m) of a solid ball of ``mass_kg`` (1/kg, I = 2/5 m r^2): a friction
+    F at its rim turns its spin r omega at -F r^2 / I (docs/model.md, 2.7)."""
+    return 2.5 / mass_kg
+
+
 def den_hartog_parameters(mass_kg: float, bar: ModalModel) -> dict:
     """Den Hartog's formulas (docs/model.md, section 3) for an absorber of ``mass_kg``
     (kg) on mode 1 of ``bar`` (a ModalModel): mass ratio, frequency and damping ratios,

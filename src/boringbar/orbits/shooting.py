@@ -46,6 +46,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from boringbar._validate import ParameterError
+from boringbar.model.dampers import spin_gain
 from boringbar.model.forcing import Harmonic
 from boringbar.model.linalg import one_blas_thread
 from boringbar.model.system import System
@@ -193,7 +194,7 @@ def augmented(fl: Flow, sdir: float, fdir: float = 0.0) -> np.ndarray:
 def keep_row(fl: Flow, A: np.ndarray) -> np.ndarray:
     """The floor's friction F that rolling needs, as a row on the augmented z, from the
     rolled regime's matrix ``A``: the spin's s' = -5/(2m) F (the core's roll law)."""
-    return -A[spin_index(fl)] / (2.5 / fl.m)
+    return -A[spin_index(fl)] / spin_gain(fl.m)
 
 
 def field(A: np.ndarray, z: np.ndarray) -> np.ndarray:

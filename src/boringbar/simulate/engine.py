@@ -22,7 +22,7 @@ from boringbar._validate import (
 )
 from boringbar.model.bar import impact_mass
 from boringbar.model.contact import hertz_contact_time_s
-from boringbar.model.dampers import GRAVITY, ImpactDamper, TunedMassDamper
+from boringbar.model.dampers import GRAVITY, ImpactDamper, TunedMassDamper, spin_gain
 from boringbar.model.forcing import Harmonic, Regenerative
 from boringbar.model.system import System
 from boringbar.simulate import layout as L
@@ -148,7 +148,7 @@ def roll_band(p: np.ndarray, d: ImpactDamper, dt: float) -> float:
     friction can change the slip by in one step, 2 (F_s + F_k) dt (1 / m_eff + 5 / (2 m)),
     so that a slip coming to rest ends a step inside it (as :func:`hold_band`)."""
     fs, fk = roll_forces(d)
-    return 2.0 * (fs + fk) * dt * (1.0 / p[L.M_EFF] + 2.5 / d.mass_kg)
+    return 2.0 * (fs + fk) * dt * (1.0 / p[L.M_EFF] + spin_gain(d.mass_kg))
 
 
 def system_impact_mass(system: System) -> float:
