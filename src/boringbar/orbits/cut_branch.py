@@ -50,8 +50,7 @@ from boringbar.orbits.cut_orbits import (
     node_forces,
     static_state,
 )
-from boringbar.reference.linear import dynamic_stiffness
-from boringbar.reference.stability import limit_at_speeds, linear_host
+from boringbar.reference.stability import limit_at_speeds
 
 #: Arclength steps (scaled units: a tip amplitude of h_m is about one unit).
 FIRST_STEP, MIN_STEP, MAX_STEP = 0.02, 1e-5, 0.25
@@ -160,7 +159,7 @@ def hopf_orbit(system: System, forcing: Regenerative, model: CutModel, lobe: int
                            with_frequency=True)
     if not np.isfinite(b):
         raise CutOrbitError(f"no lobe {'' if lobe is None else lobe} reaches {forcing.rpm} rpm")
-    guess = _eigen_orbit(system, lin, float(b), float(f), 60.0 / forcing.rpm, steps,
+    guess = _eigen_orbit(lin, float(b), float(f), 60.0 / forcing.rpm, steps,
                          HOPF_AMPLITUDE * model.feed)
     return fixed_amplitude(lin, guess, HOPF_AMPLITUDE * model.feed)[0]
 
@@ -213,19 +212,13 @@ def linearised(model: CutModel) -> CutModel:
                        "law": CuttingLaw.linear(model.law.linear_coefficient_pa(model.feed))})
 
 
-def _eigen_orbit(system, model: CutModel, b: float, f: float, tau: float, m: int,
+def _eigen_orbit(model: CutModel, b: float, f: float, tau: float, m: int,
                  amp: float) -> Orbit:
     """The steady cut at delay ``tau`` (s) plus ``amp`` times the tip-normalised response
-    at f (Hz)."""
-    bar, tmd, added = linear_host(system)
+    at f (Hz), (i w - a) phi = g of the model's own matrices."""
     w = 2.0 * math.pi * f
-    z = dynamic_stiffness(bar, np.array([w]), tmd, float(added))[0]
-    p, pf = np.zeros(len(z)), np.zeros(len(z))
-    p[: bar.n_modes] = bar.psi_tip
-    pf[: bar.n_modes] = bar.psi_force
-    u = np.linalg.solve(z, pf)
-    u = u / (p @ u)
-    phi = np.concatenate([u, 1j * w * u])
+    phi = np.linalg.solve(1j * w * np.eye(model.size) - model.a, model.g)
+    phi = phi / (model.c @ phi)
     t = np.arange(m) / (m * f)
     x = static_state(model, b) + amp * np.real(phi[None, :] * np.exp(1j * w * t)[:, None])
     return Orbit(x, 1.0 / f, b, tau)

@@ -39,9 +39,8 @@ import scipy.sparse.linalg as spla
 from boringbar.model.cutting import CuttingLaw, cutting_law
 from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
-from boringbar.reference.linear import dynamic_stiffness
-from boringbar.reference.stability import linear_host
-from boringbar.simulate.kernels import cut_history_map
+from boringbar.simulate import pack
+from boringbar.simulate.kernels import cut_history_map, regime_matrix
 
 #: RK4 stages' times within a step; stages 2 and 3 share the middle one.
 STAGE_TIMES = np.array([0.0, 0.5, 1.0])
@@ -90,22 +89,23 @@ class CutModel:
 
 def cut_model(system: System, forcing: Regenerative) -> CutModel:
     """The autonomous cut of ``system``'s linear host under ``forcing``'s law, feed and
-    revolutions (its depth and speed are the orbit's: :class:`Orbit`)."""
-    bar, tmd, added = linear_host(system)
-    z = dynamic_stiffness(bar, np.array([0.0, 1.0]), tmd, float(added))
-    stiff = z[0].real
-    mass = stiff - z[1].real
-    damp = z[1].imag
-    d = len(stiff)
-    p, pf = np.zeros(d), np.zeros(d)
-    p[: bar.n_modes] = bar.psi_tip
-    pf[: bar.n_modes] = bar.psi_force  # the force's shape (psi_tip but in an oriented cut)
-    inv = np.linalg.inv(mass)
-    a = np.block([[np.zeros((d, d)), np.eye(d)], [-inv @ stiff, -inv @ damp]])
+    revolutions (its depth and speed are the orbit's: :class:`Orbit`).  The state matrix
+    and the force's column are the core's (``regime_matrix``: the equations RK4 steps
+    with; a locked ball's carrying term, an absorber), taken on x = (u, x_a, u', x_a')."""
+    host = system.linear_host()
+    n, absorber = host.bar.n_modes, host.kind == "tmd"
+    # the core's state is [u, u', aux, aux', sin, cos, 1]; F0 = 1 puts the force's column
+    # (0, M^-1 psi_F) where the harmonic force would be
+    A = regime_matrix(pack(host, 0.0, 1.0, 1e-6), 0.0)  # (the step is not read)
+    aux = [2 * n] if absorber else []
+    kept = [*range(n), *aux, *range(n, 2 * n), *[i + 1 for i in aux]]
+    d = len(kept) // 2
+    p = np.zeros(d)
+    p[:n] = host.bar.psi_tip
     zero = np.zeros(d)
-    return CutModel(a=a, g=np.concatenate([zero, inv @ pf]), c=np.concatenate([p, zero]),
-                    cv=np.concatenate([zero, p]), feed=forcing.feed_m,
-                    revolutions=forcing.revolutions,
+    return CutModel(a=A[np.ix_(kept, kept)], g=A[kept, len(A) - 3],
+                    c=np.concatenate([p, zero]), cv=np.concatenate([zero, p]),
+                    feed=forcing.feed_m, revolutions=forcing.revolutions,
                     law=cutting_law(forcing.kr_pa, forcing.workpiece))
 
 
