@@ -22,6 +22,7 @@ from boringbar.cli.options import (
     wrote,
 )
 from boringbar.io import save_figure_atomic, write_json_atomic, write_netcdf_atomic
+from boringbar.model.dampers import roll_words
 from boringbar.model.forcing import Harmonic, Regenerative, check_depth, check_force, check_ratio
 from boringbar.model.oriented import geometry_words
 from boringbar.model.system import make_system
@@ -172,7 +173,7 @@ def _hardware_lines(run) -> list[str]:
     """What the run's bar has beyond the published one: a rolling ball, two planes."""
     d, lines = run.system.damper, []
     if getattr(d, "motion", "slide") == "roll" and not d.locked:
-        lines.append(f"  ball               rolling, mu_s {d.mu_static:g}, mu_k {d.mu_kinetic:g}")
+        lines.append(f"  ball               rolling, {roll_words(d.mu_static, d.mu_kinetic)}")
     geometry = run.system.bar.info.get("cut_geometry")
     if geometry:
         lines.append(f"  two planes         {geometry_words(geometry, run.system.kind)}")

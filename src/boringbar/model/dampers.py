@@ -332,6 +332,12 @@ class TunedMassDamper:
                    d["position_m"], d["design"])
 
 
+def roll_words(mu_static: float, mu_kinetic: float) -> str:
+    """'mu_s 0.2, mu_k 0.15': a rolling ball's friction coefficients, as a run's summary
+    and its figure's title name them."""
+    return f"mu_s {mu_static:g}, mu_k {mu_kinetic:g}"
+
+
 def spin_gain(mass_kg: float) -> float:
     """r^2 / I = 5 / (2 m) of a solid ball of ``mass_kg`` (1/kg, I = 2/5 m r^2): a friction
     F at its rim turns its spin r omega at -F r^2 / I (docs/model.md, 2.7)."""

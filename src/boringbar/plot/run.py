@@ -9,6 +9,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from boringbar.model.dampers import roll_words
 from boringbar.model.oriented import geometry_words
 from boringbar.plot.style import (
     COLUMN_WIDTH_IN,
@@ -154,8 +155,8 @@ def _run_title(summary: dict, damper: dict, bar: dict) -> tuple[str, str]:
         parts.append(f"friction {damper.get('friction_force_n', 0.0):.3g} N")
         parts.append(f"e = {damper.get('restitution', math.nan):g}")
         if damper.get("motion") == "roll":
-            parts.append(f"rolling ball (mu_s {damper.get('mu_static', math.nan):g}, "
-                         f"mu_k {damper.get('mu_kinetic', math.nan):g})")
+            mus = (damper.get("mu_static", math.nan), damper.get("mu_kinetic", math.nan))
+            parts.append(f"rolling ball ({roll_words(*mus)})")
         if damper.get("contact") == "hertz":
             parts.append("Hertz contact")
     if bar.get("cut_geometry"):
