@@ -118,44 +118,27 @@ inline double ball_yd(const Segment& seg, double tau, double pdv) {
     return seg.vd0 + seg.acc * tau - seg.cy * pdv;
 }
 
-// Coulomb friction of the ball on the bore and what it acts against: F_c, F_s, the share s
-// of the reaction on the bar, the ball's kappa (the force that carries it with the bar,
-// per unit of acceleration) when stuck and on a wall, and the shortest stick recorded.
-struct Friction {
-    double fc = 0.0;         // kinetic friction F_c
-    double fs = 0.0;         // static friction max(F_s, F_c)
-    double sr = 0.0;         // reaction share s (+1 reciprocal, -1 the printed reaction)
-    double kstick = 0.0;     // kappa of a stuck ball
-    double kwall = 0.0;      // kappa on a wall
-    double stick_min = 0.0;  // shortest stick interval recorded
+// What the exact integrator derives from the system to hold, carry and roll the ball: the
+// static friction a held ball can take, max(F_s, F_c), and the kappa of the force that
+// carries it with the bar (per unit of relative acceleration) when stuck (the share s of
+// the reaction) and on a wall (the share 1), 1 without a ball's mass; a rolling ball's
+// share cy = m kroll / (m kroll + 1) of the floor's motion it follows and its carrying
+// force's kappa, kwall + kroll (docs/model.md, 2.7).
+struct Carrying {
+    double fs = 0.0;
+    double kstick = 1.0;
+    double kwall = 1.0;
+    double roll_cy = 1.0;
+    double roll_kappa = 0.0;
 };
 
-// A rolling ball (docs/model.md, 2.7): mu_s m g and mu_k m g, kroll = 5 / (2 m) (s' =
-// -kroll F), the share cy = m kroll / (m kroll + 1) of the floor's motion a rolling ball
-// follows, and kappa1 + kroll, the carrying force's kappa when it rolls.
-struct Rolling {
-    bool on = false;
-    double fs = 0.0, fk = 0.0;
-    double kroll = 0.0, cy = 1.0, kappa = 0.0;
-
-    // The floor's friction on a ball at rest on the bore or a wall (y' = 0) that spins:
-    // mu_k N the way the spin's slip -s is opposed (0 without spin).
-    double spin_friction(double spin) const {
-        return spin > 0.0 ? fk : (spin < 0.0 ? -fk : 0.0);
-    }
-};
-
-// The harmonic force at the tip, F0 sin(Omega t).
-struct Forcing {
-    double f0 = 0.0;  // amplitude F0
-    double om = 0.0;  // circular frequency Omega
-};
-
-// The system a run integrates, unpacked from p once: the modes (the bar's rows), the case,
-// a free ball's y'' and W'' coefficients, the ball, friction and the forcing.  A tuned
-// absorber enters through the regimes' matrices and its row psi_a; a cut through
-// CutConsts.
+// The system a run integrates: the one description every integrator unpacks from p
+// (dynamics::Params: the modes, the ball, its friction and rolling, the absorber, the
+// forcing), with what the exact integrator derives from it: the bar's rows mk, a free
+// ball's y'' and W'' coefficients ddc and the ball's carrying.  A tuned absorber enters
+// through the regimes' matrices and its row psi_a; a cut through CutConsts.
 struct System {
+    dynamics::Params q;
     idx n = 0;                        // retained modes
     layout::Case kase = layout::SOLID;
     idx nreg = 1;                     // regimes outside a cut (3 for the ball bar)
@@ -163,13 +146,16 @@ struct System {
               // (damper), psi_a (absorber); fm, km, cm (free_acceleration's) and 1 / M
     Mat ddc;  // (4, n + 2): a free ball's y'' and W'' from u, f and F_b (rows 0, 1), and
               // from u' (rows 2, 3)
-    Ball ball;
-    Friction fric;
-    Rolling roll;
-    Forcing force;
+    Carrying carry;
 
     bool has_ball() const { return kase == layout::BALL; }
 };
+
+// The floor's friction on a rolling ball at rest on the bore or a wall (y' = 0) that
+// spins: mu_k N the way the spin's slip -s is opposed (0 without spin).
+inline double spin_friction(const dynamics::Rolling& roll, double spin) {
+    return spin > 0.0 ? roll.muk_n : (spin < 0.0 ? -roll.muk_n : 0.0);
+}
 
 // The run's span and outputs: its start, the steady window's start, a cut's step, the
 // event-search grid step, the history's and the strobe's sampling.

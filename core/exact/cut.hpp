@@ -9,7 +9,7 @@
 //                  double t1, double p1, double d1, double x0, bool cubic);
 //   constexpr double GL_X[4], GL_W[4];
 //   double quad_cut(double a, double b, const SegView& s, const Dashpots& dp, bool stick,
-//                   const Friction& fr, Vec acc, bool steady);
+//                   const System& sys, Vec acc, bool steady);
 //   struct Knots, struct History
 //   void add_knot(History& hs, double t, Vec Xm, Vec Xp, Mat mk, double ttol, double node);
 //   double surface_piece(double t, double t_end, History& hs, const CutConsts& cq,
@@ -69,14 +69,14 @@ constexpr double GL_W[4] = {0.17392742256872692, 0.3260725774312731, 0.326072577
 // (the slots of segment_integrals' ``out``) by 4-point Gauss-Legendre; returns the largest
 // force at the nodes.  stick: the ball is stuck (its friction's work on the bar counted).
 inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp, bool stick,
-                       const Friction& fr, Vec acc, bool steady) {
+                       const System& sys, Vec acc, bool steady) {
     const Segment& seg = s.seg;
     const CVec q = s.q;
     const Vec X = s.X;
     const idx n = s.n;
     const Mat mk = s.mk, lvis = dp.l;
     const Vec cvis = dp.c;
-    const double kappa = fr.kstick, sr = fr.sr;
+    const double kappa = sys.carry.kstick, sr = sys.q.fric.sr;
     double fmax = 0.0;
     double hh = b - a;
     for (int g = 0; g < 4; ++g) {

@@ -25,15 +25,16 @@ namespace {
 namespace L = layout;
 
 // The system from p into sys (whose rows mk and ddc are views of the work arrays, zeroed):
-// the bar's rows mk (M, K, C, psi_L, psi_d, psi_a and the equations of motion's constants),
-// a free ball's y'' and W'' coefficients ddc, the ball, friction and the forcing; nreg:
-// the regimes outside a cut.
+// the system as every integrator unpacks it (dynamics::unpack), the bar's rows mk (M, K,
+// C, psi_L, psi_d, psi_a and the equations of motion's constants), a free ball's y'' and
+// W'' coefficients ddc and the ball's carrying; nreg: the regimes outside a cut.
 void unpack_system(Vec p, idx nreg, System& sys) {
     const idx n = sys.n;
     const Mat mk = sys.mk, ddc = sys.ddc;
-    const dynamics::Params q = dynamics::unpack(p.d, 0.0);
+    sys.q = dynamics::unpack(p.d, 0.0);
+    const dynamics::Params& q = sys.q;
     const dynamics::Modes& md = q.modes;
-    sys.kase = layout::Case(int(p[L::CASE]));
+    sys.kase = layout::Case(q.kase);
     sys.nreg = nreg;
     for (idx i = 0; i < n; ++i) {
         mk(MK_M, i) = p[L::M_ + i];
@@ -48,9 +49,6 @@ void unpack_system(Vec p, idx nreg, System& sys) {
         mk(MK_INV_M, i) = md.invM[i];
         mk(MK_PSI_F, i) = p[L::PSI_F + i];
     }
-    double m = p[L::BALL_MASS];
-    double fc = p[L::FRICTION];
-    double sr = p[L::REACTION];
     // psi . u'' of a free ball's bar from its state, force f and F_b: rows 0 (psi_d) and 1
     // (psi_L) hold the coefficients of u_i, then of f and F_b; rows 2 and 3 those of u_i'
     for (idx i = 0; i < n; ++i) {
@@ -66,27 +64,15 @@ void unpack_system(Vec p, idx nreg, System& sys) {
             ddc(row, n + 1) -= psi * md.dm[i];
         }
     }
-    sys.ball.half = p[L::HALF_GAP];
-    sys.ball.e = p[L::RESTITUTION];
-    sys.ball.meff = p[L::M_EFF];
-    sys.ball.vimp = p[L::V_IMPACT];
-    sys.ball.m = m;
-    sys.fric.fc = fc;
-    sys.fric.fs = pymax(p[L::STATIC_FRICTION], fc);
-    sys.fric.sr = sr;
-    sys.fric.kstick = m > 0.0 ? dynamics::carried_kappa(q, sr) : 1.0;
-    sys.fric.kwall = m > 0.0 ? dynamics::carried_kappa(q, 1.0) : 1.0;
-    sys.fric.stick_min = p[L::STICK_MIN];
-    sys.roll.on = q.roll.on;
+    const double m = q.ball.m;
+    Carrying& cr = sys.carry;
+    cr.fs = pymax(q.fric.fs, q.fric.fc);
+    cr.kstick = m > 0.0 ? q.fric.kappa : 1.0;
+    cr.kwall = m > 0.0 ? q.kappa1 : 1.0;
     if (q.roll.on) {
-        sys.roll.fs = q.roll.mus_n;
-        sys.roll.fk = q.roll.muk_n;
-        sys.roll.kroll = q.roll.kroll;
-        sys.roll.cy = m * q.roll.kroll / (m * q.roll.kroll + 1.0);
-        sys.roll.kappa = sys.fric.kwall + q.roll.kroll;
+        cr.roll_cy = m * q.roll.kroll / (m * q.roll.kroll + 1.0);
+        cr.roll_kappa = cr.kwall + q.roll.kroll;
     }
-    sys.force.f0 = p[L::F0];
-    sys.force.om = p[L::OMEGA];
 }
 
 // The run's span and outputs from its arguments.
@@ -171,12 +157,12 @@ void node_knot(History& hs, double t, double wb, double wdb, Vec X, Mat mk, doub
 // friction rolling needs, F = (sum psi_d a_free - kappa1 F_b) / (kappa1 + kroll), stays
 // within mu_s N, else it slips the way that need pulls (F = mu_k N sgn(F_need)).
 void roll_or_slip(Vec X, double f, double d, const System& sys, BallState& b) {
-    const double fb = -sys.fric.fc * d;
-    const double need = freq_rhs(X, f, sys.n, sys.mk, sys.roll.kappa) -
-                        sys.fric.kwall * fb / sys.roll.kappa;
+    const double fb = -sys.q.fric.fc * d;
+    const double need = freq_rhs(X, f, sys.n, sys.mk, sys.carry.roll_kappa) -
+                        sys.carry.kwall * fb / sys.carry.roll_kappa;
     b.sdir = d;
     b.spin = b.yd;
-    if (std::fabs(need) <= sys.roll.fs) {
+    if (std::fabs(need) <= sys.q.roll.mus_n) {
         b.mode = ROLL;
         b.slip = 0.0;
     } else {
@@ -194,7 +180,7 @@ void leave_rest(Vec X, double f, double d, const System& sys, BallState& b) {
         return;
     }
     b.mode = FREE;
-    b.sdir = sys.fric.fc > 0.0 ? d : 0.0;
+    b.sdir = sys.q.fric.fc > 0.0 ? d : 0.0;
     b.slip = b.spin > 0.0 ? -1.0 : 1.0;
 }
 
@@ -203,9 +189,9 @@ void leave_rest(Vec X, double f, double d, const System& sys, BallState& b) {
 // sliding ball is held), else moving off the way the bar leaves it.
 void roll_at_rest(Vec X, double f, const System& sys, BallState& b) {
     b.yd = 0.0;
-    const double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kstick) -
-                     sys.roll.spin_friction(b.spin);
-    if (sys.fric.fc > 0.0 && std::fabs(F) <= sys.fric.fs) {
+    const double F = freq_rhs(X, f, sys.n, sys.mk, sys.carry.kstick) -
+                     spin_friction(sys.q.roll, b.spin);
+    if (sys.q.fric.fc > 0.0 && std::fabs(F) <= sys.carry.fs) {
         b.mode = STICK;
         b.sdir = 0.0;
         b.slip = 0.0;
@@ -219,9 +205,9 @@ void roll_at_rest(Vec X, double f, const System& sys, BallState& b) {
 void roll_at_wall(Vec X, double f, double w_, const System& sys, BallState& b) {
     b.yd = 0.0;
     b.wall = w_;
-    const double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kwall) -
-                     sys.roll.spin_friction(b.spin);
-    if (w_ * F <= sys.fric.fs) {
+    const double F = freq_rhs(X, f, sys.n, sys.mk, sys.carry.kwall) -
+                     spin_friction(sys.q.roll, b.spin);
+    if (w_ * F <= sys.carry.fs) {
         b.mode = CONTACT;
         b.sdir = 0.0;
         b.slip = 0.0;
@@ -247,12 +233,12 @@ void roll_moving(Vec X, double f, const System& sys, BallState& b) {
 void initial_regime(Vec X, double f_t0, const System& sys, BallState& b) {
     const idx n = sys.n;
     const Mat mk = sys.mk;
-    double half = sys.ball.half;
-    double fc = sys.fric.fc;
-    double fs = sys.fric.fs;
+    double half = sys.q.ball.half;
+    double fc = sys.q.fric.fc;
+    double fs = sys.carry.fs;
     double y = b.y;
     double yd = b.yd;
-    if (sys.roll.on) {
+    if (sys.q.roll.on) {
         if (yd != 0.0) {
             roll_moving(X, f_t0, sys, b);
         } else if (std::fabs(y) >= half) {
@@ -271,14 +257,14 @@ void initial_regime(Vec X, double f_t0, const System& sys, BallState& b) {
     } else if (std::fabs(y) >= half) {
         wall = y > 0.0 ? 1.0 : -1.0;
         y = wall * half;
-        double F = freq_rhs(X, f_t0, n, mk, sys.fric.kwall);
+        double F = freq_rhs(X, f_t0, n, mk, sys.carry.kwall);
         if (wall * F <= fs) {
             mode = CONTACT;
         } else if (fc > 0.0) {
             sdir = -wall;
         }
     } else if (fc > 0.0) {
-        double F = freq_rhs(X, f_t0, n, mk, sys.fric.kstick);
+        double F = freq_rhs(X, f_t0, n, mk, sys.carry.kstick);
         if (std::fabs(F) <= fs) {
             mode = STICK;
         } else {
@@ -294,14 +280,14 @@ void initial_regime(Vec X, double f_t0, const System& sys, BallState& b) {
 // Regime of a ball at rest on wall w_ under the tip force f (the bar's state X): held
 // (CONTACT) or leaving inward (FREE), into b.
 void at_wall(Vec X, double f, double w_, const System& sys, BallState& b) {
-    double F = freq_rhs(X, f, sys.n, sys.mk, sys.fric.kwall);
+    double F = freq_rhs(X, f, sys.n, sys.mk, sys.carry.kwall);
     b.wall = w_;
-    if (w_ * F <= sys.fric.fs) {
+    if (w_ * F <= sys.carry.fs) {
         b.mode = CONTACT;
         b.sdir = 0.0;
     } else {
         b.mode = FREE;
-        b.sdir = sys.fric.fc > 0.0 ? -w_ : 0.0;
+        b.sdir = sys.q.fric.fc > 0.0 ? -w_ : 0.0;
     }
 }
 
@@ -311,7 +297,7 @@ void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, const System
               const EventLog& log, BallState& b) {
     const idx n = sys.n;
     const Mat mk = sys.mk;
-    const Ball& ball = sys.ball;
+    const Ball& ball = sys.q.ball;
     double* met = log.met;
     b.y = w_ * ball.half;
     double vb = b.yd;
@@ -334,7 +320,7 @@ void wall_hit(double w_, double t, bool steady, Vec X, double f_ev, const System
     } else {
         yd = 0.0;
     }
-    if (sys.roll.on) {  // the impact leaves the spin as it was
+    if (sys.q.roll.on) {  // the impact leaves the spin as it was
         if (yd != 0.0) {
             roll_moving(X, f_ev, sys, b);
         } else {
@@ -370,7 +356,7 @@ void roll_event(idx ev_kind, Vec X, double f_ev, const System& sys, BallState& b
     } else if (ev_kind == EV_REL_NEG || ev_kind == EV_REL_POS) {
         leave_rest(X, f_ev, ev_kind == EV_REL_NEG ? -1.0 : 1.0, sys, b);
     } else if (ev_kind == EV_WALL_REL) {
-        b.y = b.wall * sys.ball.half;
+        b.y = b.wall * sys.q.ball.half;
         leave_rest(X, f_ev, -b.wall, sys, b);
     } else if (ev_kind == EV_SPIN0) {
         b.spin = 0.0;
@@ -394,17 +380,17 @@ void apply_event(idx ev_kind, double t, double f_ev, Vec X, const System& sys,
     double& wall = b.wall;
     double& y = b.y;
     double& yd = b.yd;
-    double fc = sys.fric.fc;
+    double fc = sys.q.fric.fc;
     bool was_stick = mode == STICK;
     if (ev_kind == EV_PLUS || ev_kind == EV_MINUS) {
         double w_ = ev_kind == EV_PLUS ? 1.0 : -1.0;
         wall_hit(w_, t, steady, X, f_ev, sys, log, b);
-    } else if (sys.roll.on && ev_kind != EV_CUT) {
+    } else if (sys.q.roll.on && ev_kind != EV_CUT) {
         roll_event(ev_kind, X, f_ev, sys, b);
     } else if (ev_kind == EV_VSTOP) {
         yd = 0.0;
-        double F = freq_rhs(X, f_ev, sys.n, sys.mk, sys.fric.kstick);
-        if (std::fabs(F) <= sys.fric.fs) {
+        double F = freq_rhs(X, f_ev, sys.n, sys.mk, sys.carry.kstick);
+        if (std::fabs(F) <= sys.carry.fs) {
             mode = STICK;
             sdir = 0.0;
         } else {
@@ -419,7 +405,7 @@ void apply_event(idx ev_kind, double t, double f_ev, Vec X, const System& sys,
         mode = FREE;
         yd = 0.0;
         sdir = fc > 0.0 ? -wall : 0.0;
-        y = wall * sys.ball.half;
+        y = wall * sys.q.ball.half;
     } else if (ev_kind == EV_CUT) {
         bool incut = !rs.incut;
         rs.incut = incut;
@@ -433,12 +419,12 @@ void apply_event(idx ev_kind, double t, double f_ev, Vec X, const System& sys,
             }
         }
     }
-    if (mode == FREE && fc == 0.0 && yd == 0.0 && !sys.roll.on) sdir = 0.0;
+    if (mode == FREE && fc == 0.0 && yd == 0.0 && !sys.q.roll.on) sdir = 0.0;
     // stick intervals
     if (mode == STICK && !was_stick) {
         rs.stick_t0 = t;
     } else if (was_stick && mode != STICK) {
-        close_stick(log.met, log.stick, rs.stick_t0, t, log.t_steady, sys.fric.stick_min);
+        close_stick(log.met, log.stick, rs.stick_t0, t, log.t_steady, sys.q.fric.stick_min);
     }
     rs.ball = b;
 }
@@ -473,7 +459,7 @@ void finish_run(const Work& w, bool regen, idx n_ev, int status) {
     if (w.sys.has_ball()) {
         x[2 * n] = w.rs.ball.y;
         x[2 * n + 1] = w.rs.ball.yd;
-        if (w.sys.roll.on) x[2 * n + 2] = w.rs.ball.spin;
+        if (w.sys.q.roll.on) x[2 * n + 2] = w.rs.ball.spin;
     }
     met[L::MAX_ABS_W] = w.ro.max_abs_w;
     met[L::STEADY_MAX_W] = w.ro.max_w;
@@ -528,8 +514,8 @@ double exact_body(const ExactRun& a) {
     const layout::Case kase = sys.kase;
     const bool ball = sys.has_ball();
     Mat mk = sys.mk;
-    double f0 = sys.force.f0;
-    double om = sys.force.om;
+    double f0 = sys.q.force.f0;
+    double om = sys.q.force.om;
     const EventLog log{met.d, a.imp, a.stick, t_steady};
     Vec X = w.X;
     for (idx j = 0; j < nz; ++j) X[j] = x[j];
@@ -555,7 +541,7 @@ double exact_body(const ExactRun& a) {
     if (rs.incut) f_t0 += krb * (feed + w_before - hs.kn(0, 1));
     rs.ball.y = (ball || kase == L::LOCKED) ? x[2 * n] : 0.0;
     rs.ball.yd = ball ? x[2 * n + 1] : 0.0;
-    rs.ball.spin = sys.roll.on ? x[2 * n + 2] : 0.0;
+    rs.ball.spin = sys.q.roll.on ? x[2 * n + 2] : 0.0;
 
     // the running extremes and output times (the other metrics add up in met itself)
     outputs_start(w.ro, met, p, t0, max_force);
@@ -635,7 +621,7 @@ double exact_body(const ExactRun& a) {
         if constexpr (Regen) add_knot(hs, t, w.Xa, X, mk, ttol, -1.0);
     }
     if (rs.ball.mode == STICK) {
-        close_stick(met.d, a.stick, rs.stick_t0, t, w.cp.t_steady, sys.fric.stick_min);
+        close_stick(met.d, a.stick, rs.stick_t0, t, w.cp.t_steady, sys.q.fric.stick_min);
     }
     finish_run(w, Regen, n_ev, status);
     return t;

@@ -156,8 +156,8 @@ struct SegCtx {
 // The segment's closed form in the context c as the event functions read it, evaluated
 // into the work vectors qs, dX and Xd.
 inline SegView view(Work& w, SegCtx c) {
-    return {w.seg, c.r, w.q0, w.cf, c.ks, w.qs, w.dX, w.Xd, c.n, w.sys.mk, w.sys.force.f0,
-            w.sys.force.om};
+    return {w.seg, c.r, w.q0, w.cf, c.ks, w.qs, w.dX, w.Xd, c.n, w.sys.mk, w.sys.q.force.f0,
+            w.sys.q.force.om};
 }
 
 namespace kernel {
@@ -187,7 +187,7 @@ inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks)
 // All event functions from the state X at tau (see g_value): the ball's regime mode, the
 // bar's rows mk (n = mk.n1 modes), the forcing fo; sn: sin(Omega (ts + tau)) if known.
 inline void events(Vec ev, Vec X, double tau, const Segment& seg, Regime mode, Mat mk,
-                   const Forcing& fo, double sn = NAN) {
+                   const dynamics::Forcing& fo, double sn = NAN) {
     const idx n = mk.n1;
     const double f0 = fo.f0, om = fo.om;
     auto [pdu, pdv] = psi_dot(mk, MK_PSI_D, X, n);
@@ -280,7 +280,7 @@ template <idx NZ>
 BB_ALWAYS_INLINE GridPoint grid_point(Work& w, SegCtx c, double b, idx lev, const ncplx& phg_a,
                                       const ncplx& rot, bool ydd_on, idx nz) {
     idx r = c.r, ks = c.ks, n = c.n;
-    const double f0 = w.sys.force.f0, om = w.sys.force.om;
+    const double f0 = w.sys.q.force.f0, om = w.sys.q.force.om;
     // the regime's tables seen with their row lengths as constants where the sizes are (the
     // shapes the bindings checked: eh (R, GRID_LEVELS, nz), Vh (R, nz, nz), Z and D (R, nz),
     // mk (6, n), ddc (4, n + 2)): an element's offset without multiplications by run-time
@@ -313,9 +313,9 @@ BB_ALWAYS_INLINE GridPoint grid_point(Work& w, SegCtx c, double b, idx lev, cons
     ncplx phg = phg_a * rot;
     Vec X{w.X.d, nz};
     from_q(cf, r, ks, qg, phg, seg.fb, X);
-    events(w.ev_b, X, b, seg, c.mode, mk, w.sys.force, sn);
+    events(w.ev_b, X, b, seg, c.mode, mk, w.sys.q.force, sn);
     if (ydd_on) {
-        auto [yv, wv] = ball_ydd(X, f0 * phg.imag(), seg, ddc, n, c.mode, w.sys.roll.kroll);
+        auto [yv, wv] = ball_ydd(X, f0 * phg.imag(), seg, ddc, n, c.mode, w.sys.q.roll.kroll);
         return {phg, yv, wv};
     }
     return {phg, NAN, NAN};
@@ -348,7 +348,7 @@ inline void close_flows(Work& w, SegCtx c, double T, bool steady, double pdu) {
             double ynew = ball_y(seg, T, pdu1);
             b.yd = ball_yd(seg, T, pdv1);
             met[L::D_FRICTION] -= fb * (ynew - y);
-            met[L::W_NONRECIP] += (1.0 - w.sys.fric.sr) * fb * (pdu1 - pdu);
+            met[L::W_NONRECIP] += (1.0 - w.sys.q.fric.sr) * fb * (pdu1 - pdu);
             b.y = ynew;
         }
         if (seg.rolls) {
@@ -687,7 +687,7 @@ inline Found wall_event_any(Work& w, SegCtx c, const SegSearch& sv, StepEnds st,
             double sb = j < NSUB ? a + (b - a) * double(j) / double(NSUB) : b;
             if (j < NSUB) {
                 state_at(view(w, c), sb, w.qs, w.dX);
-                events(ev_t, w.dX, sb, w.seg, c.mode, w.sys.mk, w.sys.force);
+                events(ev_t, w.dX, sb, w.seg, c.mode, w.sys.mk, w.sys.q.force);
             } else {
                 for (idx kk = 0; kk < N_EV; ++kk) ev_t[kk] = ev_b[kk];
             }
@@ -779,8 +779,8 @@ BB_NOINLINE inline bool stop_may_turn(const SegSearch& sv, double sdir, const St
 
 // The rate of the event function kind at tau of the segment (X the state there).
 inline double turn_rate(Work& w, SegCtx c, const SegSearch& sv, idx kind, double tau, Vec X) {
-    const double f = w.sys.force.f0 * std::sin(w.sys.force.om * (w.seg.ts + tau));
-    const double ydd = ball_ydd(X, f, w.seg, w.sys.ddc, c.n, c.mode, w.sys.roll.kroll).first;
+    const double f = w.sys.q.force.f0 * std::sin(w.sys.q.force.om * (w.seg.ts + tau));
+    const double ydd = ball_ydd(X, f, w.seg, w.sys.ddc, c.n, c.mode, w.sys.q.roll.kroll).first;
     return rate_from_ydd(sv, w.seg.sdir, kind, ydd);
 }
 
@@ -805,7 +805,7 @@ inline double turn_root(Work& w, SegCtx c, const SegSearch& sv, idx kind, VEnd a
                         int depth) {
     const double m = 0.5 * (a.t + b.t);
     state_at(view(w, c), m, w.qs, w.dX);
-    events(w.ev_t, w.dX, m, w.seg, c.mode, w.sys.mk, w.sys.force);
+    events(w.ev_t, w.dX, m, w.seg, c.mode, w.sys.mk, w.sys.q.force);
     const double vm = w.ev_t[kind];
     if (vm > 0.0) {
         const bool from_below = kind == EV_VSTOP ? a.v < 0.0 : a.v <= 0.0;
@@ -865,9 +865,9 @@ BB_NOINLINE inline Found wall_event_found(Work& w, SegCtx c, const SegSearch& sv
     const Found end = friction_end(w, c, sv, st, turns);
     if (end.t >= 0.0) {
         state_at(view(w, c), end.t, w.qs, w.dX);
-        events(w.ev_u, w.dX, end.t, w.seg, c.mode, w.sys.mk, w.sys.force);
+        events(w.ev_u, w.dX, end.t, w.seg, c.mode, w.sys.mk, w.sys.q.force);
         st = StepEnds{st.a, end.t, st.lev, st.ev_a, w.ev_u, st.ydd_a, NAN};
-        graze = st.lev == 0 && may_graze(st.a, end.t, st.ev_a, w.ev_u, w.sys.ball.half, sv.b4);
+        graze = st.lev == 0 && may_graze(st.a, end.t, st.ev_a, w.ev_u, w.sys.q.ball.half, sv.b4);
         search = (st.ev_a[EV_PLUS] <= 0.0 && 0.0 < w.ev_u[EV_PLUS])
                  || (st.ev_a[EV_MINUS] <= 0.0 && 0.0 < w.ev_u[EV_MINUS])
                  || (sv.watch_v && st.ev_a[EV_VSTOP] <= 0.0 && 0.0 < w.ev_u[EV_VSTOP]);
@@ -887,7 +887,7 @@ inline Found wall_event(Work& w, SegCtx c, const SegSearch& sv, StepEnds st, Gra
     const double b4 = sv.b4;
     Vec ev_a = w.ev_a;
     Vec ev_b = w.ev_b;
-    double half = w.sys.ball.half;
+    double half = w.sys.q.ball.half;
     // call the search only when an end value shows something, or y' changes sign and the
     // bound on y lets the ball reach a wall (a longer step than h holds no wall event)
     bool graze = lev == 0 && may_graze_m(a, b, ev_a, ev_b, half, b4, gm);
@@ -971,7 +971,7 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
     Vec qsum = w.qsum;
     Mat mk = w.sys.mk;
     idx nz = q0.size();
-    double sr = w.sys.fric.sr;
+    double sr = w.sys.q.fric.sr;
     double krb_seg = seg.krb;
     double s_0 = seg.s[0];
     double s_1 = seg.s[1];
@@ -1008,7 +1008,7 @@ inline double cut_flows(Work& w, SegCtx c, double a, double b, bool whole, bool 
         SegView s = view(w, c);
         s.f0 = 0.0;
         s.om = 0.0;
-        max_force = pymax(max_force, quad_cut(a, b, s, w.dp, sticking, w.sys.fric, qsum, steady));
+        max_force = pymax(max_force, quad_cut(a, b, s, w.dp, sticking, w.sys, qsum, steady));
     }
     return pymax(max_force, krb_seg * (s_0 + b * (s_1 + b * (s_2 + b * s_3)) - wb));
 }
@@ -1034,7 +1034,7 @@ inline void sample(Work& w, const SegView& s, SegCtx c, double tau, double* row)
 // segment from t, its forcing phasor ph = e^{i Omega (t + tau)}.
 inline void history_row(Work& w, SegCtx c, double tau, ncplx ph, double* row) {
     row_state(w, c, tau, row);
-    row[5] = cut_force(w.seg, tau, w.dX, c.n, w.sys.mk, w.sys.force.f0, w.sys.force.om, ph.im);
+    row[5] = cut_force(w.seg, tau, w.dX, c.n, w.sys.mk, w.sys.q.force.f0, w.sys.q.force.om, ph.im);
     // a rolling ball's spin where rec has its column: y' while rolling, else s0 + sd tau
     if (w.rec.n1 > L::REC_NCOL)
         row[L::REC_NCOL] = c.mode == ROLL ? row[4] : w.seg.s0 + w.seg.sd * tau;
@@ -1051,7 +1051,7 @@ inline void history_row(Work& w, SegCtx c, double tau, ncplx ph, double* row) {
 inline void history_rows(Work& w, const SegView& s, SegCtx c, double t, double b,
                          double t_end) {
     const idx r = s.r, ks = s.ks, nz = w.dX.n;
-    const double t0 = w.cp.t0, rec_dt = w.cp.rec_dt, om = w.sys.force.om;
+    const double t0 = w.cp.t0, rec_dt = w.cp.rec_dt, om = w.sys.q.force.om;
     Mat rec = w.rec;
     RowRecurrence& rr = w.rr;
     idx n_rec = idx(w.met[L::N_REC]);
@@ -1136,8 +1136,8 @@ BB_NOINLINE GridPoint advance_other(Work& w, double t, SegCtx c, bool ydd_on, Gr
     const double b = g.b;
     const Segment& seg = w.seg;
     Vec X = w.X;
-    double f0 = w.sys.force.f0;
-    double om = w.sys.force.om;
+    double f0 = w.sys.q.force.f0;
+    double om = w.sys.q.force.om;
     ncplx phg = phg_a;
     if (g.tab_end) {
         tab_state(w, r, 4, ks, w.qg, X);
@@ -1152,10 +1152,10 @@ BB_NOINLINE GridPoint advance_other(Work& w, double t, SegCtx c, bool ydd_on, Gr
         phg = phasor(om, t + b);
     }
     if (c.ball || !Regen) {
-        events(w.ev_b, X, b, seg, c.mode, w.sys.mk, w.sys.force);
+        events(w.ev_b, X, b, seg, c.mode, w.sys.mk, w.sys.q.force);
         if (ydd_on) {
             auto [yv, wv] = ball_ydd(X, f0 * phg.imag(), seg, w.sys.ddc, n, c.mode,
-                                     w.sys.roll.kroll);
+                                     w.sys.q.roll.kroll);
             ydd_b = yv;
             wdd_b = wv;
         }
@@ -1266,9 +1266,9 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     // the context with the sizes as the search has them (constants in the copies)
     const SegCtx c{r, ks, sz, n, kase, mode, ball};
     const SegView out_view = view(w, c);  // the history's and the strobe's samples
-    double f0 = w.sys.force.f0;
-    double om = w.sys.force.om;
-    double half = w.sys.ball.half;
+    double f0 = w.sys.q.force.f0;
+    double om = w.sys.q.force.om;
+    double half = w.sys.q.ball.half;
     bool outputs = w.cp.rec_dt > 0.0 || w.cp.tstrobe > 0.0;
     double t_end = w.rs.t_end;
     double s_0 = seg.s[0];
@@ -1295,7 +1295,7 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     // the values at a (carried over from the previous grid point)
     auto [wa, wda] = psi_dot(mk, MK_PSI_L, Xa, n);
     if (ball || !Regen) {
-        events(ev_a, Xa, a, seg, mode, mk, w.sys.force);
+        events(ev_a, Xa, a, seg, mode, mk, w.sys.q.force);
     } else {  // only h matters
         ev_a[EV_CUT] = seg.cdir * (wa - s_0);
         ev_a[EV_HEXT] = s_1 - wda;
@@ -1316,7 +1316,7 @@ inline SegEvent search_segment(Work& w, double t, SegCtx c_in, ncplx ph, const S
     double wdd_b = NAN;
     if (ydd_on)
         std::tie(ydd_a, wdd_a) = ball_ydd(Xa, f0 * ph.imag(), seg, w.sys.ddc, n, c.mode,
-                                          w.sys.roll.kroll);
+                                          w.sys.q.roll.kroll);
     idx top = adapt ? w.levmax[r] : 0;
     LevelBounds lb(sv.b3y, sv.b3w, w.hl, top);
     GrazeMargin gm;
@@ -1434,8 +1434,8 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     const idx n = sys.n;
     idx nz = q0.size();
     bool ball = sys.has_ball();
-    double fc = sys.fric.fc;
-    double m = sys.ball.m;
+    double fc = sys.q.fric.fc;
+    double m = sys.q.ball.m;
     Regime mode = rs.ball.mode;
     double sdir = rs.ball.sdir;
     bool incut = rs.incut;
@@ -1446,21 +1446,21 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     if (incut) r += sys.nreg;
     double fb = 0.0;
     if ((mode == FREE || mode == ROLL) && ball) fb = -fc * sdir;
-    double kap = mode == STICK ? sys.fric.kstick : sys.fric.kwall;
+    double kap = mode == STICK ? sys.carry.kstick : sys.carry.kwall;
     // a rolling ball: the floor's friction on it where it slips (beside F_b: the bar feels
     // both, reciprocally) or spins at rest (inside the held regime: only its release and
     // its spin feel it); rolling, the carrying force's kappa and offset are the roll's
-    const Rolling& rl = sys.roll;
+    const dynamics::Rolling& rl = sys.q.roll;
     double ffl = 0.0;
     double foff = 0.0;
     if (rl.on && mode == FREE) {
-        ffl = -rl.fk * rs.ball.slip;
+        ffl = -rl.muk_n * rs.ball.slip;
         fb += ffl;
     } else if (rl.on && mode == ROLL) {
-        kap = rl.kappa;
-        foff = sys.fric.kwall * fb / rl.kappa;
+        kap = sys.carry.roll_kappa;
+        foff = sys.carry.kwall * fb / sys.carry.roll_kappa;
     } else if (rl.on) {
-        ffl = rl.spin_friction(rs.ball.spin);
+        ffl = spin_friction(rl, rs.ball.spin);
         foff = ffl;
     }
     idx ks = w.kstep[r];
@@ -1492,15 +1492,15 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     seg.ts = t;
     seg.fb = fb;
     seg.rolls = rl.on;
-    seg.cy = mode == ROLL ? rl.cy : 1.0;
+    seg.cy = mode == ROLL ? sys.carry.roll_cy : 1.0;
     seg.ud0 = rs.ball.y + seg.cy * pdu;  // the ball's absolute position and velocity
     seg.vd0 = rs.ball.yd + seg.cy * pdv;  // (a rolling ball's: cy of the floor's)
     seg.y0 = rs.ball.y;
     seg.sdir = sdir;
     seg.wall = rs.ball.wall;
     seg.kappa = kap;
-    seg.fs = mode == ROLL ? rl.fs : sys.fric.fs;
-    seg.half = sys.ball.half;
+    seg.fs = mode == ROLL ? rl.mus_n : sys.carry.fs;
+    seg.half = sys.q.ball.half;
     seg.m = m > 0.0 ? m : 1.0;
     seg.acc = seg.cy * fb / seg.m;
     seg.ffl = ffl;
@@ -1533,10 +1533,10 @@ inline SegStart start_segment(Work& w, double t, double t_stop, ncplx ph, Histor
     sv.watch_v = watch_v;
     sv.watch_ext = watch_ext;
     // (without the floor's friction, mu_s = mu_k = 0, a slip's end changes nothing)
-    sv.watch_slip = rl.on && mode == FREE && seg.slip != 0.0 && (rl.fs > 0.0 || rl.fk > 0.0);
+    sv.watch_slip = rl.on && mode == FREE && seg.slip != 0.0 && (rl.mus_n > 0.0 || rl.muk_n > 0.0);
     sv.slip = seg.slip;
     sv.sd = seg.sd;
-    sv.ydd_max = mode == ROLL ? rl.kroll * rl.fs : -1.0;
+    sv.ydd_max = mode == ROLL ? rl.kroll * rl.mus_n : -1.0;
     return {r, ks, t_seg_end, at_node, j_node, pdu, spin_end};
 }
 
@@ -1567,7 +1567,7 @@ inline idx close_segment(Work& w, SegCtx c, double t, double T, ncplx ph, bool s
             }
         }
     } else {
-        double kst = (ball && mode == STICK) ? sys.fric.kstick : 0.0;
+        double kst = (ball && mode == STICK) ? sys.carry.kstick : 0.0;
         // what to integrate: 0 the energy flows, 1 also the steady W sums, 2 also a free
         // ball's y^2
         const bool moves = mode == FREE || mode == ROLL;
@@ -1579,7 +1579,7 @@ inline idx close_segment(Work& w, SegCtx c, double t, double T, ncplx ph, bool s
         const FlowSources src{w.Vfull, w.cf.Z, w.cf.D, w.isum, sys.mk, w.dp};
         const FlowsIn in{seg,          r,           w.q0, ph,  T,   w.cf.lam,
                          src,          w.flows.of(r, src, c.n, c.ks),
-                         sys.force.f0, sys.force.om, kst,  sys.fric.sr, lvl, exc};
+                         sys.q.force.f0, sys.q.force.om, kst,  sys.q.fric.sr, lvl, exc};
         if (c.sz == 1) {
             segment_integrals_1(in, w.isc.phj, out);
         } else if (c.sz == 2) {
