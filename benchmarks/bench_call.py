@@ -8,7 +8,7 @@ does), calls whose integration is empty, so that what is timed is the boundary i
 building the run description, setting its fields (each setter converting and checking
 its value) and the checks when the run starts:
 
-- ``kernels.run_rk4``, ``run_rk4_batch`` (4 runs) and ``run_exact`` (``prepare``'s dict
+- ``kernels.run_rk4``, ``run_rk4_batch`` (4 runs) and ``run_exact`` (``prepare``'s setup
   given, harmonic and a cut) with zero steps (``t_end = t0`` for the exact integrator);
 - ``simulate`` of the published ball bar for 10 steps with each integrator: the whole
   public call (the checks, the packing, the result).

@@ -3,17 +3,18 @@
 // fields set from Python; bind_util.hpp's Fields: each array field's dtype, float64 or
 // complex128 for a cut's tables, and an output's writability are checked when it is set).
 // Everything else from Python is checked here, before the GIL is released: every array's
-// shape and contiguity, prepare's dict's arrays' dtypes too (a dict's entries can change
-// after it is set, so they are read when the run starts), every scalar's finiteness and
-// range, and what the kernel indexes with (the case, the mode count, prepare's regime count
-// and step patterns, the record counters), so that no input can make the core read or
-// write out of bounds; a wrong one is a ValueError that names it.
+// shape and contiguity (prepare's ExactSetup's too: its fields can change after it is
+// given, so they are read when the run starts), every scalar's finiteness and range, and
+// what the kernel indexes with (the case, the mode count, prepare's regime count and step
+// patterns, the record counters), so that no input can make the core read or write out of
+// bounds; a wrong one is a ValueError that names it.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
 #include <cmath>
+#include <cstdint>
+#include <optional>
 #include <string>
-#include <vector>
 
 #include "bind_util.hpp"
 #include "exact/consts.hpp"
@@ -36,23 +37,6 @@ constexpr double MAX_KNOTS = 1e8;                 // knots a cut's history start
 constexpr double MAX_REV = 1e6;                   // revolutions in a cut's minimum
 constexpr double MAX_TIME_PER_TAU = 1e12;         // |t0| + |t_end| in delays tau
 
-// The arrays of prepare's dict handed to the kernel, held until it returns (a dict's entry
-// could otherwise be dropped by another thread while the GIL is released)
-struct Held {
-    std::vector<AnyArray> arrays;
-
-    Held() { arrays.reserve(32); }  // no reallocation: array_of's reference stays valid
-
-    // obj as an array of any dtype (not converted)
-    const AnyArray& array_of(nb::handle obj, const char* name) {
-        AnyArray a;
-        require(nb::try_cast(obj, a, false),
-                "'" + std::string(name) + "' must be a NumPy array (CPU, native byte order)");
-        arrays.push_back(a);
-        return arrays.back();
-    }
-};
-
 // A record array (rows of ncol floats) that may be empty: NumPy gives a zero-size array the
 // strides (0, 0), which bind_util's contiguity test would refuse; no row of it is ever
 // touched, so its dtype and shape are all that matter.
@@ -63,13 +47,6 @@ Mat record_rows(const A& a, const char* name, idx ncol) {
         return {nullptr, 0, ncol};
     }
     return span2<double>(a, name, -1, ncol);
-}
-
-// obj as a float (a Python number; prep's step h)
-double scalar(nb::handle obj, const char* name) {
-    double v;
-    require(nb::try_cast(obj, v), "'" + std::string(name) + "' must be a number");
-    return v;
 }
 
 template <class T>
@@ -106,12 +83,6 @@ S finite_view(S v, const char* name) {
 
 bool is_int(double v, double lo, double hi) {
     return std::isfinite(v) && v == std::floor(v) && v >= lo && v <= hi;
-}
-
-// prepare(p)'s entry ``key``
-nb::handle prep_entry(nb::dict prep, const char* key) {
-    require(prep.contains(key), std::string("prep has no entry '") + key + "'");
-    return prep[key];
 }
 
 // The parameter vector's scalars that decide shapes and loops.
@@ -204,41 +175,54 @@ void check_met(Vec met) {
 // Integer per-regime arrays: kstep in {1, 2}, levmax in [0, GRID_LEVELS)
 void check_steps(Span1<idx> kstep, Span1<idx> levmax) {
     for (idx r = 0; r < kstep.n; ++r) {
-        require(kstep[r] == 1 || kstep[r] == 2, "prep['kstep'] entries must be 1 or 2");
+        require(kstep[r] == 1 || kstep[r] == 2, "prep.kstep's entries must be 1 or 2");
         require(levmax[r] >= 0 && levmax[r] < GRID_LEVELS,
-                "prep['levmax'] entries must be in [0, " + std::to_string(GRID_LEVELS - 1) + "]");
+                "prep.levmax's entries must be in [0, " + std::to_string(GRID_LEVELS - 1) + "]");
     }
 }
 
-// prepare's dict as the kernel's views, with the shapes this bar and forcing need
-void attach_prep(exact::ExactRun& a, Held& held, nb::dict prep, const Shape& s, double t0,
+}  // namespace
+
+// The exact kernel's per-run matrices as prepare(p) sets them (boringbar.core.ExactSetup):
+// each regime's eigenvalues lam, eigenvectors V (Vh: for a real state, a conjugate pair's
+// first doubled and its second zero), their inverse Vi, the forced response Z and the steady response D to a unit F_b, the grid's exponentials eh, the
+// dashpots' rows lvis and constants cvis, the inverse sums isum, the modal inputs bq, the
+// derivative bounds bnd, the step patterns kstep and grid levels levmax; the regime count
+// nreg and the grid step h.
+struct ExactSetupPy {
+    In<cplx> lam, V, Vh, Vi, Z, eh, isum, bq;
+    In<double> D, lvis, cvis, bnd;
+    In<std::int64_t> kstep, levmax;
+    std::int64_t nreg = -1;
+    double h = 0.0;
+};
+
+namespace {
+
+// prepare's matrices as the kernel's views, with the shapes this bar and forcing need
+void attach_prep(exact::ExactRun& a, const ExactSetupPy& g, const Shape& s, double t0,
                  double t_end) {
     const idx R = s.R, nz = s.nz, nb = s.nb;
-    idx nreg = -1;
-    require(nb::try_cast(prep_entry(prep, "nreg"), nreg) && nreg == s.nreg,
-            "prep['nreg'] must be the integer " + std::to_string(s.nreg) + " for this bar");
+    require(g.nreg == s.nreg, "prep.nreg must be " + std::to_string(s.nreg) + " for this bar");
     a.nreg = s.nreg;
-    a.h = scalar(prep_entry(prep, "h"), "prep['h']");
-    require(std::isfinite(a.h) && a.h > 0.0, "prep['h'] must be finite and > 0");
-    require((t_end - t0) / a.h <= MAX_GRID, "the run spans more than 1e13 grid steps prep['h']");
-    auto arr = [&](const char* key) -> const AnyArray& {
-        return held.array_of(prep_entry(prep, key), key);
-    };
-    a.lam = finite_view(span2<cplx>(arr("lam"), "lam", R, nz), "lam");
-    a.V = finite_view(span3<cplx>(arr("Vh"), "Vh", R, nz, nz), "Vh");
-    a.Vi = finite_view(span3<cplx>(arr("Vi"), "Vi", R, nz, nz), "Vi");
-    a.Vfull = finite_view(span3<cplx>(arr("V"), "V", R, nz, nz), "V");
-    a.Z = finite_view(span2<cplx>(arr("Z"), "Z", R, nz), "Z");
-    a.D = finite_view(span2<double>(arr("D"), "D", R, nz), "D");
-    a.eh = finite_view(span3<cplx>(arr("eh"), "eh", R, GRID_LEVELS, nz), "eh");
+    a.h = g.h;
+    require(std::isfinite(a.h) && a.h > 0.0, "prep.h must be finite and > 0");
+    require((t_end - t0) / a.h <= MAX_GRID, "the run spans more than 1e13 grid steps prep.h");
+    a.lam = finite_view(span2<cplx>(given(g.lam, "lam"), "lam", R, nz), "lam");
+    a.V = finite_view(span3<cplx>(given(g.Vh, "Vh"), "Vh", R, nz, nz), "Vh");
+    a.Vi = finite_view(span3<cplx>(given(g.Vi, "Vi"), "Vi", R, nz, nz), "Vi");
+    a.Vfull = finite_view(span3<cplx>(given(g.V, "V"), "V", R, nz, nz), "V");
+    a.Z = finite_view(span2<cplx>(given(g.Z, "Z"), "Z", R, nz), "Z");
+    a.D = finite_view(span2<double>(given(g.D, "D"), "D", R, nz), "D");
+    a.eh = finite_view(span3<cplx>(given(g.eh, "eh"), "eh", R, GRID_LEVELS, nz), "eh");
     idx nd = s.kase == L::TMD ? s.n + 1 : s.n;  // the dashpots
-    a.lvis = finite_view(span2<double>(arr("lvis"), "lvis", nd, nz), "lvis");
-    a.cvis = finite_view(span1<double>(arr("cvis"), "cvis", nd), "cvis");
-    a.isum = finite_view(span3<cplx>(arr("isum"), "isum", R, nb, nb), "isum");
-    a.bq = finite_view(span2<cplx>(arr("bq"), "bq", R, nz), "bq");
-    a.bnd = finite_view(span3<double>(arr("bnd"), "bnd", R, 4, nz + 1), "bnd");
-    a.kstep = span1<idx>(arr("kstep"), "kstep", R);
-    a.levmax = span1<idx>(arr("levmax"), "levmax", R);
+    a.lvis = finite_view(span2<double>(given(g.lvis, "lvis"), "lvis", nd, nz), "lvis");
+    a.cvis = finite_view(span1<double>(given(g.cvis, "cvis"), "cvis", nd), "cvis");
+    a.isum = finite_view(span3<cplx>(given(g.isum, "isum"), "isum", R, nb, nb), "isum");
+    a.bq = finite_view(span2<cplx>(given(g.bq, "bq"), "bq", R, nz), "bq");
+    a.bnd = finite_view(span3<double>(given(g.bnd, "bnd"), "bnd", R, 4, nz + 1), "bnd");
+    a.kstep = span1<idx>(given(g.kstep, "kstep"), "kstep", R);
+    a.levmax = span1<idx>(given(g.levmax, "levmax"), "levmax", R);
     check_steps(a.kstep, a.levmax);
 }
 
@@ -257,13 +241,13 @@ void attach_tables(exact::ExactRun& a, const In<cplx>& tabE, const In<cplx>& tab
 
 // One exact run as Python describes it (boringbar.core.ExactRun): the packed parameters p,
 // the state x (advanced in place), the span, the history's sampling, the records and
-// metrics (written in place), prepare(p)'s dict and a cut's step, history step and tables.
+// metrics (written in place), prepare(p)'s setup and a cut's step, history step and tables.
 struct ExactRunPy {
     In<double> p;
     Out<double> x;
     double t0 = 0.0, t_end = 0.0, t_steady = 0.0, rec_dt = 0.0;
     Out<double> rec, imp, stick, strobe, met;
-    nb::dict prep;
+    std::optional<ExactSetupPy> prep;
     double dt = 0.0, H = 0.0;
     In<cplx> tabE, tabP;  // a cut's tables; not set (or zeros of shape (1, 5, 1),
                           // (1, 5, 4, 1)): a harmonic run
@@ -272,13 +256,11 @@ struct ExactRunPy {
 namespace {
 
 double run_exact_py(const ExactRunPy& run) {
-    const ExactRunPy r = run;  // the arrays and prep held for the run
-    Held held;
+    const ExactRunPy r = run;  // its arrays, prep's too, held for the run
     exact::ExactRun a;
     a.p = span1<double>(given(r.p, "p"), "p", L::P_SIZE);
     const double t0 = r.t0, t_end = r.t_end, t_steady = r.t_steady, rec_dt = r.rec_dt;
     const double dt = r.dt, H = r.H;
-    const nb::dict prep = r.prep;
     Shape s = check_params(a.p);
     require(std::isfinite(t0) && std::isfinite(t_end) && std::isfinite(t_steady),
             "t0, t_end and t_steady must be finite");
@@ -304,7 +286,8 @@ double run_exact_py(const ExactRunPy& run) {
     a.met = span1<double>(given(r.met, "met"), "met", L::MET_SIZE);
     check_met(a.met);
 
-    attach_prep(a, held, prep, s, t0, t_end);
+    require(r.prep.has_value(), "'prep' was not set");
+    attach_prep(a, *r.prep, s, t0, t_end);
     attach_tables(a, r.tabE, r.tabP, s);
 
     nb::gil_scoped_release release;
@@ -314,6 +297,30 @@ double run_exact_py(const ExactRunPy& run) {
 }  // namespace
 
 void bind_exact(nb::module_& m) {
+    auto setup = nb::class_<ExactSetupPy>(
+        m, "ExactSetup",
+        "The exact kernel's per-run matrices, as prepare(p) sets them (R regimes, nz state "
+        "entries, nb = nz + 3): their shapes are checked against the run's when it starts.");
+    setup.def(nb::init<>());
+    Fields<ExactSetupPy>{setup}
+        .in("lam", &ExactSetupPy::lam, "each regime's eigenvalues, (R, nz) complex")
+        .in("V", &ExactSetupPy::V, "their eigenvectors, (R, nz, nz) complex")
+        .in("Vh", &ExactSetupPy::Vh, "V for a real state (a conjugate pair's first doubled, its "
+             "second zero), (R, nz, nz) complex")
+        .in("Vi", &ExactSetupPy::Vi, "the inverse of V, (R, nz, nz) complex")
+        .in("Z", &ExactSetupPy::Z, "the forced response to F0 sin(Omega t), (R, nz) complex")
+        .in("D", &ExactSetupPy::D, "the steady response to a unit F_b, (R, nz)")
+        .in("eh", &ExactSetupPy::eh, "exp(lambda 2^l h) of the grid's levels, (R, GRID_LEVELS, nz)")
+        .in("lvis", &ExactSetupPy::lvis, "the dashpots' rows, (n or n + 1, nz)")
+        .in("cvis", &ExactSetupPy::cvis, "the dashpots' constants, (n or n + 1,)")
+        .in("isum", &ExactSetupPy::isum, "the flows' inverse sums, (R, nb, nb) complex")
+        .in("bq", &ExactSetupPy::bq, "the modal inputs, (R, nz) complex")
+        .in("bnd", &ExactSetupPy::bnd, "the derivative bounds, (R, 4, nz + 1)")
+        .in("kstep", &ExactSetupPy::kstep, "each regime's step pattern, 1 or 2, (R,) int64")
+        .in("levmax", &ExactSetupPy::levmax, "each regime's top grid level, (R,) int64")
+        .integer("nreg", &ExactSetupPy::nreg, "the regimes outside a cut (1, 3 or 4)")
+        .real("h", &ExactSetupPy::h, "the event-search grid step (s)");
+
     auto run = nb::class_<ExactRunPy>(m, "ExactRun",
                                       "One exact run for run_exact: set its fields, then call "
                                       "run_exact (tabE, tabP only for a cut).");
@@ -338,10 +345,12 @@ void bind_exact(nb::module_& m) {
     run.def_prop_rw(
         "prep", [](const ExactRunPy& r) { return r.prep; },
         [](ExactRunPy& r, nb::handle h) {
-            require(nb::isinstance<nb::dict>(h), "'prep' must be the dict of prepare(p)");
-            r.prep = nb::borrow<nb::dict>(h);
+            ExactSetupPy* g = nullptr;
+            require(nb::try_cast(h, g) && g != nullptr,
+                    "'prep' must be an ExactSetup (prepare(p)'s)");
+            r.prep = *g;
         },
-        nb::arg("value").none(), "prepare(p)'s dict: the regimes' matrices");
+        nb::arg("value").none(), "prepare(p)'s ExactSetup: the regimes' matrices");
     m.def("run_exact", &run_exact_py, nb::arg("run"),
           "Advance run.x exactly from run.t0 to run.t_end (the exact event-driven integrator), "
           "writing the records and metrics in place; returns the time reached.  The GIL is "

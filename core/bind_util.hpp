@@ -42,9 +42,8 @@ nb::ndarray<nb::numpy, T, nb::ndim<D>> owned_array(std::vector<T>&& v,
 // run starts (checked, span1...).
 template <class T> using In = nb::ndarray<const T, nb::device::cpu>;
 template <class T> using Out = nb::ndarray<T, nb::device::cpu>;
-// Any CPU array, read-only ones too: what a refused value is described from, the
-// arguments of the functions that check their dtype themselves (impact_period) and
-// prepare's dict's entries (bind_exact.cpp).
+// Any CPU array, read-only ones too: what a refused value is described from, and the
+// arguments of the functions that check their dtype themselves (impact_period).
 using AnyArray = nb::ndarray<nb::ro, nb::device::cpu>;
 
 template <class T> inline const char* dtype_name();
@@ -183,9 +182,9 @@ template <class T>
         else
             got = "an array it cannot take";
     }
-    throw nb::value_error(("core: '" + std::string(name) + "' must be a " +
-                           (writable ? "writable " : "") + dtype_name<T>() + " array; got " +
-                           got)
+    const char* article = writable ? "a writable " : dtype_name<T>()[0] == 'i' ? "an " : "a ";
+    throw nb::value_error(("core: '" + std::string(name) + "' must be " + article +
+                           dtype_name<T>() + " array; got " + got)
                               .c_str());
 }
 

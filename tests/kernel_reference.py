@@ -71,6 +71,7 @@ from boringbar.simulate import layout as L
 
 # the kernels under test: repoint these names to swap the implementation
 from boringbar.simulate.kernels import prepare, run_exact, run_rk4, run_rk4_batch
+from boringbar.simulate.regimes import exact_setup, setup_fields
 
 # the module (boringbar.simulate is also the name of its function), for capture only
 sim = importlib.import_module("boringbar.simulate")
@@ -119,7 +120,7 @@ def _single(system, forcing, *, integrator, duration_s, dt_s=DT, initial=None, r
 
 def _prep_arrays(p: np.ndarray) -> dict:
     """``prepare(p)`` as arrays ``prep_*``: the preparation an exact case replays with."""
-    return {f"prep_{k}": np.asarray(v) for k, v in prepare(p.copy()).items()}
+    return {f"prep_{k}": np.asarray(v) for k, v in setup_fields(prepare(p.copy())).items()}
 
 
 def _shapes(rec, imp, stick, strobe) -> dict:
@@ -400,7 +401,8 @@ def _replay_batch(case: dict) -> dict:
 
 
 def stored_prep_of(case: dict) -> dict:
-    """The stored result of ``prepare(p)`` of an exact case, as ``run_exact`` takes it."""
+    """The stored result of ``prepare(p)`` of an exact case, its fields by name
+    (:func:`exact_setup` makes it the ``core.ExactSetup`` that ``run_exact`` takes)."""
     return {k.removeprefix("prep_"): v.item() if v.ndim == 0 else v.copy()
             for k, v in case.items() if k.startswith("prep_")}
 
@@ -453,7 +455,7 @@ def _replay_exact(case: dict, prep: dict | None = None) -> dict:
     rec, imp, stick, strobe = records = _records(case)
     t = run_exact(_params(case, "p"), x, float(case["t0"]), float(case["t_end"]),
                   float(case["t_steady"]), float(case["rec_dt"]), rec, imp, stick, strobe, met,
-                  prep=prep, dt=float(case["dt"]))
+                  prep=None if prep is None else exact_setup(prep), dt=float(case["dt"]))
     return {**_outputs(case, x, met, records), "t_reached": np.float64(t)}
 
 
@@ -604,7 +606,7 @@ def replay_all(path: Path = DATA) -> None:
     worst, same = 0.0, 0
     for case in exact:
         stored = stored_prep_of(case)
-        got = prepare(current_params(case["p"], case["_param_names"]))
+        got = setup_fields(prepare(current_params(case["p"], case["_param_names"])))
         worst = max(worst, *prep_differences(stored, got).values())
         same += all(same_bits(got[k], v) for k, v in stored.items())
     print(f"prepare(p) here: {same} of {len(exact)} exact cases the stored bits; largest "

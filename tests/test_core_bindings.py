@@ -25,7 +25,9 @@ from boringbar.simulate.regimes import (
     GRID_LEVELS,
     SYSTEM_SLOTS,
     cut_tables,
+    exact_setup,
     history_step,
+    setup_fields,
     system_regimes,
 )
 
@@ -74,7 +76,7 @@ def exact_args(cut: bool = False, motion: str = "slide") -> dict:
     return {"p": su.p, "x": su.x, "t0": su.t0, "t_end": t_end,
             "t_steady": su.t0 + su.steady_steps * su.dt, "rec_dt": su.record_every * su.dt,
             "rec": su.rec, "imp": su.imp, "stick": su.stick, "strobe": su.stb, "met": su.met,
-            "prep": prep, "dt": su.dt, "H": H, "tabE": tab_e, "tabP": tab_p}
+            "prep": setup_fields(prep), "dt": su.dt, "H": H, "tabE": tab_e, "tabP": tab_p}
 
 
 #: each entry point's run description
@@ -98,7 +100,8 @@ def call(entry: str, args: dict):
     name = entry.split()[0]
     run = DESCRIPTIONS[name]()
     for field, value in args.items():
-        setattr(run, field, value)
+        # prep's fields, each set on its ExactSetup (a refused one is the same clear error)
+        setattr(run, field, exact_setup(value) if isinstance(value, dict) else value)
     return getattr(core, name)(run)
 
 
@@ -232,6 +235,25 @@ def test_a_refused_field_is_named(entry):
         getattr(core, entry)(run)
 
 
+def test_the_exact_setup_is_typed_field_by_field():
+    """prepare's setup is a typed description as the runs are: a field refuses a value of
+    another type when it is set, naming it; a run refuses a setup with a field unset, and a
+    prep that is not a setup (a dict of its fields, as the setup once was)."""
+    args = fresh("run_exact")
+    setup = exact_setup(args["prep"])
+    with pytest.raises(ValueError, match="'kstep' must be an int64 array; got dtype float64"):
+        setup.kstep = np.ones(3)
+    with pytest.raises(ValueError, match="'lam' must be a complex128 array; got dtype float64"):
+        setup.lam = np.zeros((3, 4))
+    with pytest.raises(ValueError, match="'nreg' must be an integer"):
+        setup.nreg = 2.5
+    with pytest.raises(ValueError, match="'prep' must be an ExactSetup"):
+        call("run_exact", {**args, "prep": setup_fields(setup).items()})
+    del args["prep"]["bnd"]
+    with pytest.raises(ValueError, match="'bnd' was not set"):
+        call("run_exact", args)
+
+
 def read_only(a: np.ndarray) -> np.ndarray:
     b = a.copy()
     b.flags.writeable = False
@@ -294,7 +316,8 @@ def test_a_field_is_the_callers_own_array(entry):
     args["p"] = read_only(args["p"])
     run = DESCRIPTIONS[entry]()
     for field, value in args.items():
-        setattr(run, field, value)
+        # prep's fields, each set on its ExactSetup (a refused one is the same clear error)
+        setattr(run, field, exact_setup(value) if isinstance(value, dict) else value)
         if isinstance(value, np.ndarray):
             assert getattr(run, field) is value, field
     getattr(core, entry)(run)

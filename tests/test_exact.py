@@ -27,7 +27,7 @@ from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import layout as L
 from boringbar.simulate import setup_run
 from boringbar.simulate.kernels import prepare, run_exact
-from boringbar.simulate.regimes import SYSTEM_CACHE_SIZE, system_regimes
+from boringbar.simulate.regimes import SYSTEM_CACHE_SIZE, setup_fields, system_regimes
 
 
 # --- linear cases: closed forms ----------------------------------------------------------
@@ -107,7 +107,7 @@ def test_overdamped_absorber_mode_is_integrated_without_conjugate_pairs():
         d, damping_n_s_m=3.0 * 2.0 * math.sqrt(d.stiffness_n_m * d.mass_kg)))
     f = Harmonic(10.0, 1.0)
     prep = prepare(setup_run(s, f, 0.01, 1e-6, None, 0, 0.8, False, "exact").p)
-    assert list(prep["kstep"]) == [1] and np.any(prep["lam"][0].imag != 0.0)
+    assert list(prep.kstep) == [1] and np.any(prep.lam[0].imag != 0.0)
     run = simulate(s, f, duration_s=2.0, steady_fraction=0.1, integrator="exact")
     g = abs(complex(tip_frf(s.bar, s.reference_frequency_rad_s, tmd=s.damper)))
     assert run.metrics["max_abs_tip_m"] == pytest.approx(10.0 * g, rel=1e-10)  # 3e-16
@@ -547,9 +547,9 @@ def test_longer_steps_of_a_two_mode_ball_change_no_event():
         su = setup_run(s, f, 0.2, 1e-6, init, 0, 1.0, False, "exact")
         prep = prepare(su.p)
         if levels == "h only":
-            prep = dict(prep, levmax=np.zeros_like(prep["levmax"]))
+            prep.levmax = np.zeros_like(prep.levmax)
         else:
-            assert prep["levmax"][0] == 2
+            assert prep.levmax[0] == 2
         run_exact(su.p, su.x, su.t0, su.t0 + su.n_steps * su.dt, su.t0, 0.0, su.rec, su.imp,
                   su.stick, su.stb, su.met, prep=prep, dt=su.dt)
         out.append((su.met.copy(), su.imp[:int(su.met[L.N_IMP_REC])].copy()))
@@ -576,7 +576,7 @@ def test_prepare_keeps_one_read_only_part_per_system_and_computes_the_forcing_pa
     ps = [setup_run(s, Harmonic(force, ratio), 0.01, 1e-6, None, 0, 0.8, False, "exact").p
           for force, ratio in ((10.0, 0.95), (20.0, 1.0), (10.0, 1.05))]
     system_regimes.cache_clear()
-    a, b, c = (prepare(p) for p in ps)
+    a, b, c = (setup_fields(prepare(p)) for p in ps)
     assert system_regimes.cache_info().currsize == 1
     assert system_regimes.cache_info().maxsize == SYSTEM_CACHE_SIZE
     for key in ("lam", "V", "Vi", "Vh", "kstep", "D", "bq", "lvis", "cvis"):
@@ -584,7 +584,7 @@ def test_prepare_keeps_one_read_only_part_per_system_and_computes_the_forcing_pa
     assert a["eh"] is b["eh"] and c["eh"] is not a["eh"] and c["h"] < a["h"]
     assert not _same_bits(a["Z"], b["Z"]) and not _same_bits(a["isum"], b["isum"])
     system_regimes.cache_clear()
-    fresh = prepare(ps[1])
+    fresh = setup_fields(prepare(ps[1]))
     assert all(_same_bits(fresh[k], b[k]) for k in b)
 
 
@@ -594,9 +594,9 @@ def test_prepare_from_threads_gives_the_same_bits():
     s = make_system("ball", "physical", gap_m=0.1e-3, friction=True)
     ps = [setup_run(s, Harmonic(10.0, r), 0.01, 1e-6, None, 0, 0.8, False, "exact").p
           for r in (0.95, 1.0, 1.05)]
-    ref = [prepare(p) for p in ps]
+    ref = [setup_fields(prepare(p)) for p in ps]
     system_regimes.cache_clear()
     with ThreadPoolExecutor(4) as pool:
-        got = list(pool.map(prepare, ps * 8))
+        got = [setup_fields(g) for g in pool.map(prepare, ps * 8)]
     for i, out in enumerate(got):
         assert all(_same_bits(out[k], ref[i % 3][k]) for k in out)

@@ -83,7 +83,7 @@ def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, p
               dt=0.0) -> float:
     """Advance ``x`` exactly from ``t0`` to ``t_end``; the outputs as :func:`run_rk4`'s, but
     the steady sums are integrals (docs/exact.md).  ``prep``: :func:`.regimes.prepare`'s
-    result, computed here if not given.  ``dt``: a regenerative cut's history step (H =
+    ``core.ExactSetup``, computed here if not given.  ``dt``: a regenerative cut's history step (H =
     tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the unit
     of N_ZERO_STEPS.  Returns the time reached."""
     run = core.ExactRun()

@@ -362,9 +362,30 @@ def forcing_exponentials(key: bytes, h: float) -> np.ndarray:
     return eh
 
 
-def prepare(p: np.ndarray) -> dict:
+#: the fields of the exact kernel's per-run setup (``core.ExactSetup``), as :func:`prepare`
+#: sets them
+SETUP_FIELDS = ("lam", "V", "Vh", "kstep", "levmax", "Vi", "Z", "D", "eh", "h", "lvis", "cvis",
+                "isum", "bq", "nreg", "bnd")
+
+
+def exact_setup(fields: dict) -> core.ExactSetup:
+    """A ``core.ExactSetup`` with ``fields`` (names of :data:`SETUP_FIELDS`): each field
+    refuses a value of another type when it is set, and a run refuses one left unset or of
+    the wrong shape when it starts."""
+    setup = core.ExactSetup()
+    for name, value in fields.items():
+        setattr(setup, name, value)
+    return setup
+
+
+def setup_fields(setup: core.ExactSetup) -> dict:
+    """The fields of ``setup`` by name (the arrays themselves, not copies)."""
+    return {name: getattr(setup, name) for name in SETUP_FIELDS}
+
+
+def prepare(p: np.ndarray) -> core.ExactSetup:
     """Per-run matrices of the exact kernel from the packed parameter vector ``p``: the
-    same dict, bit for bit, as the setup the reference outputs were computed with
+    same, bit for bit, as the setup the reference outputs were computed with
     (tests/data/kernel_reference.npz, ``prep_*``).  The system's part is kept
     (:func:`system_regimes`); the forcing's (Z, the inverse sums and bounds with Omega,
     the levels) is the core's (``core.forcing_setup``), the step h computed here.  The
@@ -379,10 +400,10 @@ def prepare(p: np.ndarray) -> dict:
     fastest = s.fastest if s.fastest > om else om
     h = 2 * math.pi / fastest / GRID_PER_PERIOD
     eh = s.eh if fastest == s.fastest else forcing_exponentials(key, h)
-    return {"lam": s.lam, "V": s.V, "Vh": s.Vh, "kstep": s.kstep,
-            "levmax": levmax, "Vi": s.Vi, "Z": Z, "D": s.D, "eh": eh, "h": h,
-            "lvis": s.lvis, "cvis": s.cvis, "isum": isum, "bq": s.bq, "nreg": s.nreg,
-            "bnd": bnd}
+    return exact_setup({"lam": s.lam, "V": s.V, "Vh": s.Vh, "kstep": s.kstep,
+                        "levmax": levmax, "Vi": s.Vi, "Z": Z, "D": s.D, "eh": eh, "h": h,
+                        "lvis": s.lvis, "cvis": s.cvis, "isum": isum, "bq": s.bq,
+                        "nreg": s.nreg, "bnd": bnd})
 
 
 # --- a regenerative cut ---------------------------------------------------------------------
@@ -391,12 +412,12 @@ def history_step(tau: float, dt: float) -> float:
     return tau / max(2, int(math.ceil(tau / dt - 1e-9)))
 
 
-def cut_tables(prep: dict, p: np.ndarray, H: float):
+def cut_tables(prep: core.ExactSetup, p: np.ndarray, H: float):
     """exp(lambda tau_p) and Kr b bq j! tau_p^(j+1) phi_(j+1)(lambda tau_p) at the Gauss
     nodes and the end of a whole step H, per regime (the out-of-cut ones have no input):
     the tables a cut's whole step reads instead of the closed form (the core's tab_state,
     core/exact/segment.hpp)."""
-    lam = prep["lam"]
+    lam, nreg, bq = prep.lam, prep.nreg, prep.bq
     R, nz = lam.shape
     taus = [x * H for x in GL_X] + [H]
     tabE = np.zeros((R, 5, nz), complex)
@@ -407,8 +428,8 @@ def cut_tables(prep: dict, p: np.ndarray, H: float):
             for k in range(nz):
                 ex, *ph = _phis(complex(lam[r, k] * tau))
                 tabE[r, i, k] = ex
-                if r >= prep["nreg"]:
+                if r >= nreg:
                     for j in range(4):
-                        tabP[r, i, j, k] = (krb * prep["bq"][r, k] * math.factorial(j)
+                        tabP[r, i, j, k] = (krb * bq[r, k] * math.factorial(j)
                                             * tau ** (j + 1) * ph[j])
     return tabE, tabP
