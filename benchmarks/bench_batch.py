@@ -30,7 +30,7 @@ from boringbar.analysis import basins as basins_mod
 from boringbar.analysis import sweep as sweep_mod
 from boringbar.simulate import Integration, initial_state, pack
 from boringbar.simulate import layout as L
-from boringbar.simulate.kernels import run_rk4, run_rk4_batch
+from boringbar.simulate.kernels import Records, Steps, run_rk4, run_rk4_batch
 
 FORCE, RATIO, DT = 10.0, 1.01, 1e-6
 
@@ -54,13 +54,15 @@ def kernel_figures(preset: str, n_modes: int, steps: int, rounds: int = 3) -> No
         return P, X
 
     def single(P, X):
-        run_rk4(P[0], X[0].copy(), 0.0, DT, steps, steps // 5, 0, np.zeros((0, 6)),
-                np.zeros((20000, 3)), np.zeros((20000, 2)), np.zeros((0, 5)), fresh(()))
+        run_rk4(P[0], X[0].copy(), Steps(0.0, DT, steps, steps // 5),
+                Records(np.zeros((0, 6)), np.zeros((20000, 3)), np.zeros((20000, 2)),
+                        np.zeros((0, 5)), fresh(())))
 
     def batch(P, X):
         nb = len(P)
-        run_rk4_batch(P, X.copy(), 0.0, DT, steps, steps // 5, np.zeros((nb, 20000, 3)),
-                      np.zeros((nb, 20000, 2)), np.zeros((nb, 0, 5)), fresh((nb,)))
+        run_rk4_batch(P, X.copy(), Steps(0.0, DT, steps, steps // 5),
+                      Records(np.zeros((nb, 0, 6)), np.zeros((nb, 20000, 3)),
+                              np.zeros((nb, 20000, 2)), np.zeros((nb, 0, 5)), fresh((nb,))))
 
     configs = [("single", single, batch_of(1))] + [(nb, batch, batch_of(nb))
                                                     for nb in (1, 2, 4, 8, 16)]

@@ -34,14 +34,16 @@ def rk4_args(cut: bool = False) -> tuple:
     s = make_system("ball", "paper", gap_m=0.1e-3, friction=True)
     f = Regenerative(depth_m=1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
     su = setup_run(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "rk4")
-    return (su.p, su.x, su.t0, su.dt, 0, 0, su.record_every, su.rec, su.imp, su.stick,
-            su.stb, su.met, su.buf)
+    return (su.p, su.x, kernels.Steps(su.t0, su.dt, 0, 0, su.record_every),
+            kernels.Records(su.rec, su.imp, su.stick, su.stb, su.met), su.buf)
 
 
 def batch_args(n: int = 4) -> tuple:
-    p, x, t0, dt, _, _, _, _, imp, stick, strobe, met, _ = rk4_args()
+    p, x, steps, out, _ = rk4_args()
     rows = lambda v: np.ascontiguousarray(np.repeat(v[None], n, axis=0))  # noqa: E731
-    return rows(p), rows(x), t0, dt, 0, 0, rows(imp), rows(stick), rows(strobe), rows(met)
+    return (rows(p), rows(x), kernels.Steps(steps.t0, steps.dt, 0, 0),
+            kernels.Records(np.zeros((n, 0, 6)), rows(out.imp), rows(out.stick),
+                            rows(out.strobe), rows(out.met)))
 
 
 def exact_args(cut: bool = False) -> tuple:
@@ -49,9 +51,9 @@ def exact_args(cut: bool = False) -> tuple:
     f = Regenerative(depth_m=0.1e-3, rpm=1200.0) if cut else Harmonic(10.0, 1.0)
     su = setup_run(s, f, 2e-3, 1e-6, None, 10, 0.5, True, "exact")
     prep = kernels.prepare(su.p)
-    args = (su.p, su.x, su.t0, su.t0, su.t0, su.record_every * su.dt, su.rec, su.imp, su.stick,
-            su.stb, su.met)
-    return args, {"prep": prep, "dt": su.dt if cut else 0.0}
+    args = (su.p, su.x, kernels.Steps(su.t0, su.dt, 0, 0, su.record_every),
+            kernels.Records(su.rec, su.imp, su.stick, su.stb, su.met))
+    return args, {"prep": prep}
 
 
 def per_call_us(fn, repeat: int, rounds: int) -> float:

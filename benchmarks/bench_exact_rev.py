@@ -132,11 +132,23 @@ def fresh(su, mod=E):
             np.zeros_like(su.stick), np.zeros_like(su.stb), su.met.copy())
 
 
+def exact_call(mod, su, inputs, prep, record_every: int) -> None:
+    """``mod``'s run_exact over the span of ``su`` on ``inputs`` (:func:`fresh`'s): the
+    working tree's given its Steps and Records, a revision's its times and arrays."""
+    p, x, rec, imp, stick, stb, met = inputs
+    if mod is E:
+        E.run_exact(p, x, E.Steps(su.t0, su.dt, su.n_steps, su.steady_steps, record_every),
+                    E.Records(rec, imp, stick, stb, met), prep=prep)
+    else:
+        mod.run_exact(p, x, su.t0, su.t0 + su.n_steps * su.dt, su.t0 + su.steady_steps * su.dt,
+                      record_every * su.dt, rec, imp, stick, stb, met, prep=prep, dt=su.dt)
+
+
 def run(mod, su, prep):
-    p, x, rec, imp, stick, stb, met = fresh(su, mod)
+    inputs = fresh(su, mod)
     tic = time.perf_counter()
-    mod.run_exact(p, x, su.t0, su.t0 + su.n_steps * su.dt, su.t0 + su.steady_steps * su.dt,
-                  su.record_every * su.dt, rec, imp, stick, stb, met, prep=prep, dt=su.dt)
+    exact_call(mod, su, inputs, prep, su.record_every)
+    _, x, _, imp, _, _, met = inputs
     return time.perf_counter() - tic, met, x, imp
 
 
@@ -144,16 +156,16 @@ def rk4(su):
     s2 = setup_run(su.system, su.forcing, 2.0, 1e-6, None, 0, 0.8, False, "rk4")
     p, x, rec, imp, stick, stb, met = fresh(s2)
     tic = time.perf_counter()
-    run_rk4(p, x, s2.t0, s2.dt, s2.n_steps, s2.steady_steps, 0, rec, imp, stick, stb, met,
-            s2.buf)
+    run_rk4(p, x, E.Steps(s2.t0, s2.dt, s2.n_steps, s2.steady_steps),
+            E.Records(rec, imp, stick, stb, met), s2.buf)
     return time.perf_counter() - tic
 
 
 def cpu_run(mod, su, prep):
-    p, x, rec, imp, stick, stb, met = fresh(su, mod)
+    inputs = fresh(su, mod)
     tic = time.process_time()
-    mod.run_exact(p, x, su.t0, su.t0 + su.n_steps * su.dt, su.t0 + su.steady_steps * su.dt,
-                  0.0, rec, imp, stick, stb, met, prep=prep, dt=su.dt)
+    exact_call(mod, su, inputs, prep, 0)
+    _, x, _, imp, stick, stb, met = inputs
     return time.process_time() - tic, (x, met, imp, stick, stb)
 
 

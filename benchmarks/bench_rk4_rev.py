@@ -101,8 +101,12 @@ def run_single(mod, su, stage_loop=False):
     x, rec, imp, stick, stb, met = out
     buf = None if su.buf is None else su.buf.copy()
     tic = clock()
-    mod.run_rk4(p, x, su.t0, su.dt, su.n_steps, su.steady_steps, su.record_every, rec, imp,
-                stick, stb, met, buf)
+    if mod is R1:  # the working tree's: the span and the records, each one description
+        R1.run_rk4(p, x, R1.Steps(su.t0, su.dt, su.n_steps, su.steady_steps, su.record_every),
+                   R1.Records(rec, imp, stick, stb, met), buf)
+    else:
+        mod.run_rk4(p, x, su.t0, su.dt, su.n_steps, su.steady_steps, su.record_every, rec, imp,
+                    stick, stb, met, buf)
     return clock() - tic, out
 
 
@@ -125,7 +129,11 @@ def run_batch(mod, su, arrays):
     size = REV_LAYOUT["L"].MET_SIZE if mod is not B1 else met.shape[1]
     m = np.ascontiguousarray(met[:, :size])
     tic = clock()
-    mod.run_rk4_batch(P, X, su.t0, su.dt, su.n_steps, su.steady_steps, imp, stick, stb, m)
+    if mod is B1:
+        B1.run_rk4_batch(P, X, B1.Steps(su.t0, su.dt, su.n_steps, su.steady_steps),
+                         B1.Records(np.zeros((len(P), 0, 6)), imp, stick, stb, m))
+    else:
+        mod.run_rk4_batch(P, X, su.t0, su.dt, su.n_steps, su.steady_steps, imp, stick, stb, m)
     elapsed = clock() - tic
     met[:, :size] = m
     return elapsed, [X, imp, stick, stb, met]

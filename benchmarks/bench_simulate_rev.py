@@ -121,10 +121,10 @@ class Version:
         the very call, so that call - kernel is that call's overhead."""
         run_exact, run_rk4, prepare = self.module.run_exact, self.module.run_rk4, self.prepare
 
-        def timed_exact(p, *args, prep=None, dt=0.0):
+        def timed_exact(p, *args, prep=None, **kwargs):  # (a revision's takes dt too)
             prep = prepare(p) if prep is None else prep
             tic = clock()
-            out = run_exact(p, *args, prep=prep, dt=dt)
+            out = run_exact(p, *args, prep=prep, **kwargs)
             self.inner = clock() - tic
             return out
 

@@ -70,7 +70,14 @@ from boringbar import Harmonic, Initial, Regenerative, State, make_system
 from boringbar.simulate import layout as L
 
 # the kernels under test: repoint these names to swap the implementation
-from boringbar.simulate.kernels import prepare, run_exact, run_rk4, run_rk4_batch
+from boringbar.simulate.kernels import (
+    Records,
+    Steps,
+    prepare,
+    run_exact,
+    run_rk4,
+    run_rk4_batch,
+)
 from boringbar.simulate.regimes import exact_setup, setup_fields
 
 # the module (boringbar.simulate is also the name of its function), for capture only
@@ -386,17 +393,18 @@ def _replay_rk4(case: dict) -> dict:
     rec, imp, stick, strobe = records = _records(case)
     shape = tuple(int(n) for n in case["buf_shape"])
     buf = np.zeros(shape) if shape[0] else None  # None: simulate's harmonic call
-    run_rk4(_params(case, "p"), x, float(case["t0"]), float(case["dt"]),
-            int(case["n_steps"]), int(case["steady_start"]), int(case["rec_every"]), rec, imp,
-            stick, strobe, met, buf)
+    steps = Steps(float(case["t0"]), float(case["dt"]), int(case["n_steps"]),
+                  int(case["steady_start"]), int(case["rec_every"]))
+    run_rk4(_params(case, "p"), x, steps, Records(rec, imp, stick, strobe, met), buf)
     return _outputs(case, x, met, records)
 
 
 def _replay_batch(case: dict) -> dict:
     x, met = case["x0"].copy(), current_met(case)
     _, imp, stick, strobe = records = _records(case)
-    run_rk4_batch(_params(case, "P"), x, float(case["t0"]), float(case["dt"]),
-                  int(case["n_steps"]), int(case["steady_start"]), imp, stick, strobe, met)
+    steps = Steps(float(case["t0"]), float(case["dt"]), int(case["n_steps"]),
+                  int(case["steady_start"]))
+    run_rk4_batch(_params(case, "P"), x, steps, Records(records[0], imp, stick, strobe, met))
     return _outputs(case, x, met, records)
 
 
@@ -453,10 +461,21 @@ def same_bits(a, b) -> bool:
 def _replay_exact(case: dict, prep: dict | None = None) -> dict:
     x, met = case["x0"].copy(), current_met(case)
     rec, imp, stick, strobe = records = _records(case)
-    t = run_exact(_params(case, "p"), x, float(case["t0"]), float(case["t_end"]),
-                  float(case["t_steady"]), float(case["rec_dt"]), rec, imp, stick, strobe, met,
-                  prep=None if prep is None else exact_setup(prep), dt=float(case["dt"]))
+    t = run_exact(_params(case, "p"), x, exact_steps(case), Records(rec, imp, stick, strobe, met),
+                  prep=None if prep is None else exact_setup(prep))
     return {**_outputs(case, x, met, records), "t_reached": np.float64(t)}
+
+
+def exact_steps(case: dict) -> Steps:
+    """The span of an exact case, stored as times (t_end, t_steady, rec_dt), in steps of
+    its dt, as simulate gave them; refused if they do not give back the stored times."""
+    t0, dt = float(case["t0"]), float(case["dt"])
+    count = [round((float(case[k]) - t0) / dt) for k in ("t_end", "t_steady")]
+    steps = Steps(t0, dt, *count, round(float(case["rec_dt"]) / dt))
+    times = (t0 + steps.n_steps * dt, t0 + steps.steady_start * dt, steps.record_every * dt)
+    if times != tuple(float(case[k]) for k in ("t_end", "t_steady", "rec_dt")):
+        raise ValueError(f"the stored times {times} are not whole steps of dt = {dt}")
+    return steps
 
 
 _REPLAY = {"rk4": _replay_rk4, "rk4_batch": _replay_batch, "exact": _replay_exact}

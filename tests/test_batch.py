@@ -21,7 +21,7 @@ from boringbar.execute import Execution
 from boringbar.model.forcing import Regenerative
 from boringbar.simulate import Integration, simulate_batch
 from boringbar.simulate import layout as L
-from boringbar.simulate.kernels import BMAX, run_rk4_batch
+from boringbar.simulate.kernels import BMAX, Records, Steps, run_rk4_batch
 
 DURATION = 0.06  # 60,000 steps: several hundred impacts, stick, 25+ strobe periods
 
@@ -128,8 +128,9 @@ def test_full_batch_and_kernel_arguments():
     P[:, L.N_MODES] = 1
     P[1, L.CASE] = L.BALL
     with pytest.raises(ValueError, match="share the mode count, the case"):
-        run_rk4_batch(P, np.zeros((2, 4)), 0.0, 1e-6, 1, 0, np.zeros((2, 1, 3)),
-                      np.zeros((2, 1, 2)), np.zeros((2, 0, 5)), np.zeros((2, L.MET_SIZE)))
+        run_rk4_batch(P, np.zeros((2, 4)), Steps(0.0, 1e-6, 1, 0),
+                      Records(np.zeros((2, 0, 6)), np.zeros((2, 1, 3)), np.zeros((2, 1, 2)),
+                              np.zeros((2, 0, 5)), np.zeros((2, L.MET_SIZE))))
 
 
 def test_basins_and_sweep_are_the_same_batched_or_not():

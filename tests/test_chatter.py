@@ -66,7 +66,7 @@ from boringbar.model.system import System
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import layout as L
 from boringbar.simulate import pack
-from boringbar.simulate.kernels import run_rk4
+from boringbar.simulate.kernels import Records, Steps, run_rk4
 
 KR = KR_ALUMINIUM
 FEED = 0.1e-3
@@ -235,8 +235,9 @@ def kernel_in_chunks(p, x0, dt: float, n_steps: int, chunk: int) -> np.ndarray:
     done = 0
     while done < n_steps:
         k = min(chunk, n_steps - done)
-        run_rk4(p, x, done * dt, dt, k, 0, 0, np.zeros((0, 6)), np.zeros((1, 3)),
-                np.zeros((1, 2)), np.zeros((0, 5)), met, buf)
+        run_rk4(p, x, Steps(done * dt, dt, k, 0),
+                Records(np.zeros((0, 6)), np.zeros((1, 3)), np.zeros((1, 2)), np.zeros((0, 5)),
+                        met), buf)
         done += k
     return x, met
 

@@ -30,6 +30,8 @@ from boringbar.orbits.shooting import make_flow
 from boringbar.simulate import Initial, pack, setup_run, simulate_batch
 from boringbar.simulate import layout as L
 from boringbar.simulate.kernels import (
+    Records,
+    Steps,
     hunt_crossley_alpha,
     hunt_crossley_restitution,
     regime_matrix,
@@ -38,6 +40,11 @@ from boringbar.simulate.kernels import (
 )
 
 GAP = 0.5e-3
+
+
+def records(su) -> Records:
+    """The arrays a packed run writes, its contact rows among them."""
+    return Records(su.rec, su.imp, su.stick, su.stb, su.met, contact=su.contact)
 SPEED = 0.5  # m/s, the ball's start relative to the bar
 
 
@@ -147,14 +154,12 @@ def test_a_run_in_two_calls_is_one_run_through_a_contact():
     forcing = bb.Harmonic(amplitude_n=0.0)
     start = Initial(tip_velocity_m_s=1.0)
     whole = setup_run(system, forcing, 0.01, 1e-6, start, 0, 1.0, False, "rk4")
-    run_rk4(whole.p, whole.x, 0.0, 1e-6, 10_000, 0, 0, whole.rec, whole.imp, whole.stick,
-            whole.stb, whole.met, contact=whole.contact)
+    run_rk4(whole.p, whole.x, Steps(0.0, 1e-6, 10_000, 0), records(whole))
     rows = whole.contact[:int(whole.met[L.N_CONTACT_REC])]
     split = int(round((rows[1, 0] + rows[1, 3] / 2) / 1e-6))  # inside the second contact
     parts = setup_run(system, forcing, 0.01, 1e-6, start, 0, 1.0, False, "rk4")
     for t0, steps in ((0, split), (split, 10_000 - split)):
-        run_rk4(parts.p, parts.x, t0 * 1e-6, 1e-6, steps, 0, 0, parts.rec, parts.imp,
-                parts.stick, parts.stb, parts.met, contact=parts.contact)
+        run_rk4(parts.p, parts.x, Steps(t0 * 1e-6, 1e-6, steps, 0), records(parts))
     assert np.array_equal(parts.x, whole.x)
     assert parts.met[L.N_CONTACT_REC] == len(rows) and len(rows) > 2
     # (a time is t0 + k dt, rounded once per call: the rows' times agree to round-off)
@@ -228,13 +233,14 @@ def test_the_core_refuses_a_contact_where_it_has_none():
                    None, 0, 1.0, False, "exact")
     su.p[L.CONTACT_K] = 1e10
     with pytest.raises(ValueError, match="CONTACT_K"):
-        run_exact(su.p, su.x, 0.0, 1e-3, 0.0, 0.0, su.rec, su.imp, su.stick, su.stb, su.met)
+        run_exact(su.p, su.x, Steps(0.0, 1e-6, 1000, 0), records(su))
     for bad in (-1.0, math.nan, math.inf):
         q = p.copy()
         q[L.CONTACT_K] = bad
         with pytest.raises(ValueError, match="CONTACT_K"):
-            run_rk4(q, np.zeros(6), 0.0, 1e-6, 10, 0, 0, np.zeros((0, 6)), np.zeros((10, 3)),
-                    np.zeros((10, 2)), np.zeros((0, 5)), np.zeros(L.MET_SIZE))
+            run_rk4(q, np.zeros(6), Steps(0.0, 1e-6, 10, 0),
+                    Records(np.zeros((0, 6)), np.zeros((10, 3)), np.zeros((10, 2)),
+                            np.zeros((0, 5)), np.zeros(L.MET_SIZE)))
 
 
 def test_a_batch_counts_a_hertz_contacts_impacts_and_says_it_kept_no_rows():

@@ -36,7 +36,7 @@ from boringbar.model.forcing import Regenerative
 from boringbar.reference.stability import limit_at_speeds
 from boringbar.simulate import Integration, pack_cut
 from boringbar.simulate import layout as L
-from boringbar.simulate.kernels import run_exact, run_rk4
+from boringbar.simulate.kernels import Records, Steps, run_exact, run_rk4
 from boringbar.studies.load import study_from_dict
 from boringbar.studies.schema import StudyError
 
@@ -61,14 +61,18 @@ def fresh_met() -> np.ndarray:
     return met
 
 
+def scratch(met: np.ndarray) -> Records:
+    """Records that keep no history, no strobe and one impact and stick row, with ``met``."""
+    return Records(np.zeros((0, 6)), np.zeros((1, 3)), np.zeros((1, 2)), np.zeros((0, 5)), met)
+
+
 def kernel_in_chunks(p, x0, n_steps: int, chunks) -> tuple[np.ndarray, np.ndarray]:
     """The kernel called once per chunk length in ``chunks`` on one history buffer."""
     x, met = np.array(x0, dtype=float), fresh_met()
     buf = np.zeros((int(math.ceil(p[L.N_REV] * p[L.TAU] / DT)) + 3, 2))
     done = 0
     for k in chunks:
-        run_rk4(p, x, done * DT, DT, k, 0, 0, np.zeros((0, 6)), np.zeros((1, 3)),
-                np.zeros((1, 2)), np.zeros((0, 5)), met, buf)
+        run_rk4(p, x, Steps(done * DT, DT, k, 0), scratch(met), buf)
         done += k
     assert done == n_steps
     return x, met
@@ -282,8 +286,7 @@ def test_the_exact_integrator_refuses_kienzle_and_noise():
     p[L.CUT_MC] = 0.2
     x = np.zeros(2 * system.bar.n_modes + 2)
     with pytest.raises(ValueError, match="CUT_MC"):
-        run_exact(p, x, 0.0, 1e-3, 0.0, 0.0, np.zeros((0, 6)), np.zeros((1, 3)),
-                  np.zeros((1, 2)), np.zeros((0, 5)), fresh_met(), dt=DT)
+        run_exact(p, x, Steps(0.0, DT, round(1e-3 / DT), 0), scratch(fresh_met()))
 
 
 @pytest.mark.parametrize("slot, value, message", [
@@ -295,8 +298,8 @@ def test_the_core_checks_the_law_and_noise_slots(slot, value, message):
     p[getattr(L, slot)] = value
     buf = np.zeros((int(math.ceil(3 * p[L.TAU] / DT)) + 3, 2))
     with pytest.raises(ValueError, match=message):
-        run_rk4(p, np.zeros(2 * system.bar.n_modes + 2), 0.0, DT, 10, 0, 0, np.zeros((0, 6)),
-                np.zeros((1, 3)), np.zeros((1, 2)), np.zeros((0, 5)), fresh_met(), buf)
+        run_rk4(p, np.zeros(2 * system.bar.n_modes + 2), Steps(0.0, DT, 10, 0),
+                scratch(fresh_met()), buf)
 
 
 # --- boring speeds -------------------------------------------------------------------------

@@ -26,7 +26,7 @@ from boringbar.reference.linear import tip_frf
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import layout as L
 from boringbar.simulate import setup_run
-from boringbar.simulate.kernels import prepare, run_exact
+from boringbar.simulate.kernels import Records, Steps, prepare, run_exact
 from boringbar.simulate.regimes import SYSTEM_CACHE_SIZE, setup_fields, system_regimes
 
 
@@ -550,8 +550,8 @@ def test_longer_steps_of_a_two_mode_ball_change_no_event():
             prep.levmax = np.zeros_like(prep.levmax)
         else:
             assert prep.levmax[0] == 2
-        run_exact(su.p, su.x, su.t0, su.t0 + su.n_steps * su.dt, su.t0, 0.0, su.rec, su.imp,
-                  su.stick, su.stb, su.met, prep=prep, dt=su.dt)
+        run_exact(su.p, su.x, Steps(su.t0, su.dt, su.n_steps, 0),
+                  Records(su.rec, su.imp, su.stick, su.stb, su.met), prep=prep)
         out.append((su.met.copy(), su.imp[:int(su.met[L.N_IMP_REC])].copy()))
     (m1, i1), (m0, i0) = out
     assert len(i1) == len(i0) > 100

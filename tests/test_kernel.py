@@ -22,7 +22,7 @@ from boringbar._validate import ParameterError
 from boringbar.reference.masri_caughey import two_impact_orbit
 from boringbar.simulate import initial_state, pack, stored_energy
 from boringbar.simulate import layout as L
-from boringbar.simulate.kernels import run_rk4
+from boringbar.simulate.kernels import Records, Steps, run_rk4
 
 #: every run here is the RK4 kernel's (the default, "auto", takes the exact
 #: integrator for the physical preset's harmonic runs)
@@ -51,8 +51,8 @@ def kernel_run(p, x0, t0: float, dt: float, n_steps: int, chunk: int = CHUNK):
         k = min(chunk, n_steps - done)
         rec, imp = np.zeros((k, 6)), np.zeros((200, 3))
         met[L.N_REC] = met[L.N_IMP_REC] = met[L.N_STICK_REC] = 0
-        run_rk4(p, x, t0 + done * dt, dt, k, 0, 1, rec, imp, np.zeros((200, 2)),
-                np.zeros((0, 5)), met)
+        run_rk4(p, x, Steps(t0 + done * dt, dt, k, 0, 1),
+                Records(rec, imp, np.zeros((200, 2)), np.zeros((0, 5)), met))
         recs.append(rec[:int(met[L.N_REC])])
         imps.append(imp[:int(met[L.N_IMP_REC])].copy())
         states.append(x.copy())
@@ -65,8 +65,8 @@ def one_step(system: System, x, dt: float, force: float = 0.0):
     p = pack(system, system.reference_frequency_rad_s, force, dt)
     x = np.array(x, dtype=float)
     met = fresh_metrics()
-    run_rk4(p, x, 0.0, dt, 1, 0, 0, np.zeros((0, 6)), np.zeros((4, 3)), np.zeros((4, 2)),
-            np.zeros((0, 5)), met)
+    run_rk4(p, x, Steps(0.0, dt, 1, 0),
+            Records(np.zeros((0, 6)), np.zeros((4, 3)), np.zeros((4, 2)), np.zeros((0, 5)), met))
     return x, met
 
 

@@ -18,7 +18,7 @@ from boringbar.model.forcing import Regenerative
 from boringbar.model.system import System
 from boringbar.simulate import layout as L
 from boringbar.simulate.engine import initial_state, setup_run
-from boringbar.simulate.kernels import run_rk4
+from boringbar.simulate.kernels import Records, Steps, run_rk4
 from boringbar.simulate.run import MAX_INITIAL_DISPLACEMENT, Initial, State
 from boringbar.simulate.run_limits import (
     MAX_STEPS,
@@ -114,8 +114,8 @@ class CutStepper:
         met[L.STEADY_MAX_W], met[L.STEADY_MIN_W] = -np.inf, np.inf
         self.modes[:, 0], self.modes[:, 1] = -np.inf, np.inf
         zeros, impacts, free = met[L.N_ZERO_STEPS], met[L.N_IMP_ALL], met[L.N_FREE_STEPS]
-        run_rk4(su.p, su.x, self.t_s, su.dt, self.window_steps, 0, 0, su.rec, su.imp, su.stick,
-                su.stb, met, su.buf, self.modes)
+        run_rk4(su.p, su.x, Steps(self.t_s, su.dt, self.window_steps, 0),
+                Records(su.rec, su.imp, su.stick, su.stb, met, modes=self.modes), su.buf)
         self.t_s = self._t_first + (met[L.STEPS_DONE] - self._before) * su.dt
         n = met[L.N_STEADY]
         mean = met[L.SUM_W] / n

@@ -28,6 +28,8 @@ from boringbar.model.system import System
 from boringbar.simulate import layout as L
 from boringbar.simulate.kernels import (
     BMAX,
+    Records,
+    Steps,
     hunt_crossley_alpha,
     run_exact,
     run_rk4,
@@ -474,20 +476,18 @@ def setup_run(system, forcing, duration, dt, initial, record_every, steady_fract
 
 def run_kernel(su: RunSetup) -> float:
     """Run the kernel of ``su`` in place; the wall time (s)."""
-    p, x, t0, dt, n_steps, steady_steps = su.p, su.x, su.t0, su.dt, su.n_steps, su.steady_steps
-    record_every, rec, imp, stick, stb, met = (su.record_every, su.rec, su.imp, su.stick, su.stb,
-                                               su.met)
+    met = su.met
+    steps = Steps(su.t0, su.dt, su.n_steps, su.steady_steps, int(su.record_every))
+    out = Records(su.rec, su.imp, su.stick, su.stb, met, contact=su.contact)
     tic = time.perf_counter()
     if su.integrator == "exact":
-        t_reached = run_exact(p, x, t0, t0 + n_steps * dt, t0 + steady_steps * dt,
-                              record_every * dt, rec, imp, stick, stb, met, dt=dt)
+        t_reached = run_exact(su.p, su.x, steps, out)
         # a cut stopped at its first zero finishes that step of dt
-        met[L.STEPS_DONE] = min(n_steps, int(round((t_reached - t0) / dt)))
+        met[L.STEPS_DONE] = min(su.n_steps, int(round((t_reached - su.t0) / su.dt)))
         if met[L.EXACT_STATUS] != 0:
             raise IntegrationError(int(met[L.EXACT_STATUS]), int(met[L.N_EVENTS]), t_reached)
     else:
-        run_rk4(p, x, t0, dt, n_steps, steady_steps, int(record_every), rec, imp, stick, stb,
-                met, su.buf, contact=su.contact)
+        run_rk4(su.p, su.x, steps, out, su.buf)
     return time.perf_counter() - tic
 
 
@@ -707,8 +707,8 @@ def simulate_batch(runs, *, duration_s: float = 2.0, dt_s: float = 1e-6,
     stick = np.zeros((nb, max(len(su.stick) for su in sus), 2))
     stb = np.zeros((nb, max(len(su.stb) for su in sus), 5))
     tic = time.perf_counter()
-    run_rk4_batch(P, X, first.t0, first.dt, first.n_steps, first.steady_steps, imp, stick, stb,
-                  met)
+    run_rk4_batch(P, X, Steps(first.t0, first.dt, first.n_steps, first.steady_steps),
+                  Records(np.zeros((0, 6)), imp, stick, stb, met))
     elapsed = time.perf_counter() - tic
     for r, su in enumerate(sus):
         su.x[:] = X[r]

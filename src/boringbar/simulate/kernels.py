@@ -9,7 +9,8 @@ package packs what the core cannot compute itself and calls it:
 - :mod:`.regimes`: the exact integrator's per-run setup (the core's regime matrices,
   diagonalised with LAPACK through NumPy, kept per system; the forcing's part from the
   core) and a cut's tables;
-- :func:`run_rk4`, :func:`run_rk4_batch`, :func:`run_exact`: the three entry points, with
+- :func:`run_rk4`, :func:`run_rk4_batch`, :func:`run_exact`: the three entry points, each
+  given a run's span (:class:`Steps`) and the arrays it writes (:class:`Records`), with
   the array contract of ``boringbar.simulate`` (their only caller in the package);
 - :func:`regime_matrix`, :func:`impact_matrix_of`: the equations of motion as matrices,
   built from the definitions the integrators step with (for shooting, in
@@ -27,6 +28,7 @@ every scalar's range; it raises ``ValueError`` naming what it refuses, and relea
 for the whole integration, so threads run in parallel.
 """
 
+import dataclasses
 import functools
 
 import numpy as np
@@ -42,59 +44,89 @@ BMAX: int = core.BMAX
 _NO_HISTORY = np.zeros((0, 2))
 
 
-def run_rk4(p, x, t0, dt, n_steps, steady_start, rec_every, rec, imp, stick, strobe, met,
-            buf=None, modes=None, contact=None) -> None:
-    """Advance ``x`` (in place) by ``n_steps`` steps of the published RK4 scheme from ``t0``.
+@dataclasses.dataclass(slots=True)
+class Steps:
+    """A run's span in steps of ``dt`` from ``t0``: ``n_steps`` steps, the steady part from
+    step ``steady_start`` on, the history every ``record_every`` steps (0: none).  The exact
+    integrator takes the same span as times: it ends at t0 + n_steps dt, its steady part
+    starts at t0 + steady_start dt, it records every record_every dt."""
 
-    Steps with index >= ``steady_start`` are the steady part.  Outputs: ``rec`` (t, W, W',
-    aux, aux', f every ``rec_every`` steps; 0 = none), ``imp`` (t, wall, y'- of counted
-    impacts in the steady part), ``stick`` (start, end of stick intervals in the steady
-    part), ``strobe`` (Poincare samples t, W, W', aux, aux' at t = STROBE_T0 + j
-    STROBE_PERIOD), ``met`` (metrics, see :mod:`.layout`; zeros, with STEADY_MAX_W = -inf
-    and STEADY_MIN_W = +inf, for a fresh run), ``buf`` (a regenerative cut's circular
-    history of W, W' at step ends, at least N_REV TAU / dt + 3 rows), ``modes`` (a cut's,
-    optional: (n_modes, 2), each mode's max and min of u_i over the steady steps, updated
-    in place), ``contact`` (a Hertz contact's rows, optional: start, wall, v_in, duration,
-    peak force, v_out of each counted contact that began in the steady part).
-    """
+    t0: float
+    dt: float
+    n_steps: int
+    steady_start: int
+    record_every: int = 0
+
+
+@dataclasses.dataclass(slots=True)
+class Records:
+    """What a run writes in place: ``rec`` (t, W, W', aux, aux', f every record_every steps;
+    a rolling ball's spin after them), ``imp`` (t, wall, y'- of counted impacts in the
+    steady part), ``stick`` (start, end of stick intervals in the steady part), ``strobe``
+    (Poincare samples t, W, W', aux, aux' at t = STROBE_T0 + j STROBE_PERIOD), ``met``
+    (metrics, see :mod:`.layout`; zeros, with STEADY_MAX_W = -inf and STEADY_MIN_W = +inf,
+    for a fresh run); RK4's optional ``modes`` (a cut's (n_modes, 2): each mode's max and
+    min of u_i over the steady steps, updated in place) and ``contact`` (a Hertz contact's
+    rows: start, wall, v_in, duration, peak force, v_out of each counted contact that
+    began in the steady part).  A batch's arrays have one leading row per run."""
+
+    rec: np.ndarray
+    imp: np.ndarray
+    stick: np.ndarray
+    strobe: np.ndarray
+    met: np.ndarray
+    modes: np.ndarray | None = None
+    contact: np.ndarray | None = None
+
+
+def run_rk4(p, x, steps: Steps, out: Records, buf=None) -> None:
+    """Advance ``x`` (in place) by ``steps`` of the published RK4 scheme, writing ``out``.
+    ``buf``: a regenerative cut's circular history of W, W' at step ends, at least
+    N_REV TAU / dt + 3 rows."""
     run = core.RK4Run()
-    run.p, run.x, run.t0, run.dt = p, x, t0, dt
-    run.n_steps, run.steady_start, run.rec_every = n_steps, steady_start, rec_every
-    run.rec, run.imp, run.stick, run.strobe, run.met = rec, imp, stick, strobe, met
+    run.p, run.x, run.t0, run.dt = p, x, steps.t0, steps.dt
+    run.n_steps, run.steady_start, run.rec_every = (steps.n_steps, steps.steady_start,
+                                                    steps.record_every)
+    run.rec, run.imp, run.stick, run.strobe, run.met = (out.rec, out.imp, out.stick,
+                                                        out.strobe, out.met)
     run.buf = _NO_HISTORY if buf is None else buf
-    run.modes = modes
-    run.contact = contact
+    run.modes = out.modes
+    run.contact = out.contact
     core.run_rk4(run)
 
 
-def run_rk4_batch(P, x, t0, dt, n_steps, steady_start, imp, stick, strobe, met) -> None:
-    """Advance the rows of ``x`` by ``n_steps`` RK4 steps: every row of ``P`` a harmonic run
-    of the same mode count and case, at most :data:`BMAX` rows, each advanced as
-    :func:`run_rk4` would (the same bits); the outputs as :func:`run_rk4`'s with one leading
-    row per run."""
+def run_rk4_batch(P, X, steps: Steps, out: Records) -> None:
+    """Advance the rows of ``X`` by ``steps`` of RK4 (no history): every row of ``P`` a
+    harmonic run of the same mode count and case, at most :data:`BMAX` rows, each advanced
+    as :func:`run_rk4` would (the same bits); ``out``'s arrays with one leading row per
+    run."""
     run = core.RK4Batch()
-    run.P, run.x, run.t0, run.dt = P, x, t0, dt
-    run.n_steps, run.steady_start = n_steps, steady_start
-    run.imp, run.stick, run.strobe, run.met = imp, stick, strobe, met
+    run.P, run.x, run.t0, run.dt = P, X, steps.t0, steps.dt
+    run.n_steps, run.steady_start = steps.n_steps, steps.steady_start
+    run.imp, run.stick, run.strobe, run.met = out.imp, out.stick, out.strobe, out.met
     core.run_rk4_batch(run)
 
 
-def run_exact(p, x, t0, t_end, t_steady, rec_dt, rec, imp, stick, strobe, met, prep=None,
-              dt=0.0) -> float:
-    """Advance ``x`` exactly from ``t0`` to ``t_end``; the outputs as :func:`run_rk4`'s, but
-    the steady sums are integrals (docs/exact.md).  ``prep``: :func:`.regimes.prepare`'s
-    ``core.ExactSetup``, computed here if not given.  ``dt``: a regenerative cut's history step (H =
-    tau / ceil(tau / dt)), the step a cut stopped at its first zero finishes, and the unit
-    of N_ZERO_STEPS.  Returns the time reached."""
+def run_exact(p, x, steps: Steps, out: Records, prep=None) -> float:
+    """Advance ``x`` exactly over the span of ``steps``, writing ``out`` as :func:`run_rk4`
+    does, but the steady sums are integrals (docs/exact.md).  ``prep``:
+    :func:`.regimes.prepare`'s ``core.ExactSetup``, computed here if not given.  A
+    regenerative cut's history step is H = tau / ceil(tau / dt); a cut stopped at its
+    first zero finishes that step of dt, the unit of N_ZERO_STEPS.  Returns the time
+    reached."""
     run = core.ExactRun()
     run.prep = prepare(p) if prep is None else prep
+    t0, dt = steps.t0, steps.dt
     if int(p[L.FORCING]) == L.REGENERATIVE:
         if not dt > 0.0:
             raise ValueError(f"exact integrator: a regenerative cut needs dt > 0, not {dt}")
         run.H = history_step(float(p[L.TAU]), float(dt))
         run.tabE, run.tabP = cut_tables(run.prep, p, run.H)
-    run.p, run.x, run.t0, run.t_end, run.t_steady, run.rec_dt = p, x, t0, t_end, t_steady, rec_dt
-    run.rec, run.imp, run.stick, run.strobe, run.met = rec, imp, stick, strobe, met
+    run.p, run.x, run.t0 = p, x, t0
+    run.t_end, run.t_steady = t0 + steps.n_steps * dt, t0 + steps.steady_start * dt
+    run.rec_dt = steps.record_every * dt
+    run.rec, run.imp, run.stick, run.strobe, run.met = (out.rec, out.imp, out.stick,
+                                                        out.strobe, out.met)
     run.dt = dt
     return core.run_exact(run)
 
@@ -139,6 +171,6 @@ def cut_history_map(d, cols, base, weights, c, cv, v, periods: int) -> np.ndarra
                                 np.ascontiguousarray(v, dtype=float), int(periods))
 
 
-__all__ = ["BMAX", "cut_history_map", "hunt_crossley_alpha", "hunt_crossley_restitution",
-           "impact_matrix_of", "prepare", "regime_matrix", "run_exact", "run_rk4",
-           "run_rk4_batch"]
+__all__ = ["BMAX", "Records", "Steps", "cut_history_map", "hunt_crossley_alpha",
+           "hunt_crossley_restitution", "impact_matrix_of", "prepare", "regime_matrix",
+           "run_exact", "run_rk4", "run_rk4_batch"]
