@@ -54,6 +54,7 @@ from boringbar.orbits.branch import (
 from boringbar.orbits.shooting import (
     Flow,
     OrbitRefused,
+    SlowImpact,
     advance,
     carry,
     check_residual,
@@ -126,11 +127,12 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     fl, name, ref, k = w.fl, w.name, w.ref, w.periods
     h = min(w.step, w.max_step)
     while len(br.points) < w.max_points:
+        slow = False
         try:
             yn, prn, its = correct(fl, name, ref, y + h * t * w.scale, t, w.scale, k)
             same = event_kinds(prn.events) == event_kinds(br.points[-1].events)
         except OrbitRefused as err:
-            yn, same, why = None, False, str(err)
+            yn, same, why, slow = None, False, str(err), isinstance(err, SlowImpact)
         far = yn is not None and np.linalg.norm((yn - y) / w.scale) > 2.0 * h
         if far and same:
             # the corrector went to another orbit, far from the prediction: as a failure
@@ -140,11 +142,19 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             if located is None and h / 2 >= w.min_step:
                 h /= 2
                 continue
+            if located is None and slow:
+                # an impact slowed below the capture threshold within the smallest step:
+                # it vanishes there, at its grazing as the model resolves it (the impact's
+                # speed falls to zero at the grazing; below the threshold the simulation
+                # catches the ball on the wall)
+                located = (None, abs(h * t[-1] * w.scale[-1]))
             if located is None:
                 br.stop = (f"failure at {name} = {y[-1]:.10g}: {why} (step {h:.2g} of the "
                            "range)")
                 return br
             kind = _boundary(br, w, located)
+            if slow:
+                br.stop += f"; one step on, {why}"
             moved = _move_section(br, w, t) if kind == "section" and w.move_section else None
             if moved is None:
                 return br

@@ -225,7 +225,8 @@ class Relative:
     def __init__(self, fl, A: np.ndarray, closed: bool = True):
         n, N = fl.n, fl.N
         self.fl = fl
-        w2, c = fl.K / fl.M, fl.C / fl.M
+        # K / M and C / M as the core's equations of motion give them, A's diagonal
+        w2, c = -np.diagonal(A[n:2 * n, :n]), -np.diagonal(A[n:2 * n, n:2 * n])
         alpha, beta2 = -0.5 * c, w2 - 0.25 * c * c
         self.ok = closed and bool(np.all(beta2 > 0.0))
         self.lam = alpha + 1j * np.sqrt(np.maximum(beta2, 0.0))

@@ -63,6 +63,12 @@ class OrbitRefused(ValueError):
     """The orbit leaves what the shooting method linearises (stick, wall contact)."""
 
 
+class SlowImpact(OrbitRefused):
+    """An impact slower than the capture threshold: the simulation takes it as the ball
+    caught on the wall (wall contact, a Zeno sequence), which the shooting refuses.  A
+    branch meets one as an impact vanishes at a grazing, its speed falling to zero."""
+
+
 @dataclass(frozen=True)
 class Flow:
     """The linear regimes of ``system`` under ``forcing`` (see the module docstring)."""
@@ -439,7 +445,7 @@ def _impact(fl, kind, z, J, t, f_minus, regime):
     N, j = fl.N, 2 * fl.n
     x = z[:N]
     if abs(x[j + 1]) <= fl.v_impact:
-        raise OrbitRefused(f"impact at t = {t:.6g} s slower than the capture threshold "
+        raise SlowImpact(f"impact at t = {t:.6g} s slower than the capture threshold "
                            f"({abs(x[j + 1]):.3g} m/s): wall contact/Zeno (refused)")
     wall = 1.0 if kind == "impact+" else -1.0
     R = impact_matrix(fl)
