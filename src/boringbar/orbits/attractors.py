@@ -24,6 +24,7 @@ from boringbar.orbits.shooting import (
     Flow,
     OrbitRefused,
     advance,
+    augmented,
     make_flow,
     multipliers,
     periodic_orbit,
@@ -49,16 +50,27 @@ class Attractor:
     radius: float
 
 
+def linear_response(fl: Flow) -> np.ndarray:
+    """The state at phase 0 of the bar's forced response without impacts, Im(X e^{i Omega
+    t}) at t = 0: x' = A x + b sin(Omega t) with the core's A and b of the free ball (in
+    flight the modes do not feel it; a rolling ball as it slips; the absorber and the
+    locked ball as they act), so (i Omega - A) X = b."""
+    N = fl.N
+    A = augmented(fl, 0.0, 1.0 if fl.roll else 0.0)
+    return np.linalg.solve(1j * fl.omega * np.eye(N) - A[:N, :N], A[:N, N]).imag
+
+
 def initial_states(fl: Flow) -> list[np.ndarray]:
     """The spread of initial conditions (module docstring), each a state at phase 0."""
     n = fl.n
-    h = fl.force_shape * fl.amplitude / (fl.K - fl.M * fl.omega**2 + 1j * fl.C * fl.omega)
-    lin = np.concatenate([h.imag, fl.omega * h.real])  # u(0), u'(0) of Im(H F e^{i w t})
+    lin = linear_response(fl)
     out = []
     for c in (0.0, 0.5, 1.0):
         for y in ((-0.5, 0.0, 0.5) if fl.ball else (0.0,)):
             x = np.zeros(fl.N)
-            x[:2 * n] = c * lin
+            x[:2 * n] = c * lin[:2 * n]
+            if fl.kind == "tmd":
+                x[2 * n:] = c * lin[2 * n:]  # the absorber's part of the response
             if fl.ball:
                 x[2 * n] = y * fl.half
                 x[2 * n + 1] = -fl.psi_d @ x[n:2 * n]  # the ball at rest in space
