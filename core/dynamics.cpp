@@ -1,12 +1,15 @@
-// boringbar.core.regime_matrix, impact_matrix, regime_stack and dashpots: the equations of
-// motion as matrices, for the periodic orbits' shooting (src/boringbar/orbits/shooting.py)
-// and the exact integrator's regimes (src/boringbar/simulate/regimes.py).  Each is built
+// boringbar.core.regime_matrix, impact_matrix, regime_stack, dashpots and carried_kappa:
+// the equations of motion as matrices, for the periodic orbits' shooting
+// (src/boringbar/orbits/shooting.py) and the exact integrator's regimes
+// (src/boringbar/simulate/regimes.py), and the ball's carrying term, whose inverse the
+// packing stores as the impact's effective mass (simulate/engine.py).  Each is built
 // from the definitions RK4 steps with, so none writes the dynamics again: the regime
 // matrices from the stage derivative (dynamics.hpp's derivative_with) at unit vectors of
 // the state, which is exact because the equations are linear in it between impacts and
 // with the friction force held; the impact matrix from the wall's impact law (model.hpp's
 // impact_law and dynamics.hpp's jump_modes) applied to a unit relative velocity; the
-// dashpots from dynamics.hpp's rows of the stage's dissipated power.
+// dashpots from dynamics.hpp's rows of the stage's dissipated power; carried_kappa is
+// dynamics.hpp's, which the integrators hold and roll the ball with.
 //
 // The augmented state is z = [X, sin Omega t, cos Omega t, 1], X = [u_1..u_n, u_1'..u_n',
 // aux, aux'] as the integrators keep it (aux: the ball's y or the absorber's x_a; zero
@@ -31,9 +34,9 @@ using P = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 using Matrix = nb::ndarray<nb::numpy, double, nb::ndim<2>>;
 using Stack = nb::ndarray<nb::numpy, double, nb::ndim<3>>;
 
-// The unpacked parameters of p, once its length, mode count and case are checked (the
-// stage derivative indexes the mode blocks by the count and branches on the case).
-R::Params params_of(const P& p, bool sliding_law = true) {
+// p's entries, once its length, mode count and case are checked (unpack indexes the mode
+// blocks by the count, and the stage derivative branches on the case).
+const double* shaped(const P& p) {
     require(p.shape(0) == size_t(L::P_SIZE),
             "p must have " + std::to_string(L::P_SIZE) + " entries, got " +
                 std::to_string(p.shape(0)));
@@ -44,6 +47,12 @@ R::Params params_of(const P& p, bool sliding_law = true) {
     require(std::isfinite(kase) && kase == std::floor(kase) && kase >= L::SOLID &&
                 kase <= L::LOCKED,
             "p[CASE] must be one of SOLID, BALL, TMD, LOCKED");
+    return d;
+}
+
+// The unpacked parameters of p, once it is shaped (above) and has regimes.
+R::Params params_of(const P& p, bool sliding_law = true) {
+    const double* d = shaped(p);
     // a regime's matrix is the sliding law's of its direction (sdir), not the stick law's
     require(!sliding_law || d[L::STICK_BAND] == 0.0,
             "p[STICK_BAND] must be 0 for a regime's matrix");
@@ -222,6 +231,16 @@ nb::tuple dashpot_rows(const P& p) {
     return nb::make_tuple(l, owned_array<double, 1>(std::move(c), {size_t(nd)}));
 }
 
+// kappa of the ball the bar carries with the share s of the reaction (dynamics.hpp): the
+// one definition of the carrying term, whose inverse at the full share is the impact's
+// effective mass.
+double carried_kappa_of(const P& p, double share) {
+    const double* d = shaped(p);
+    require(std::isfinite(share), "share must be finite");
+    require(d[L::BALL_MASS] > 0.0, "p[BALL_MASS] must be > 0: the carried ball's mass");
+    return R::carried_kappa(R::unpack(d, 1e-6), share);
+}
+
 }  // namespace
 
 void bind_dynamics(nb::module_& m) {
@@ -242,6 +261,11 @@ void bind_dynamics(nb::module_& m) {
           "a ball bar's free (F_b its input c), stuck and wall regimes, one for the others; "
           "a cut's R = 2 nreg, the regimes in the cut (f = Kr b (S - W)) after those out of "
           "it; built from RK4's stage derivative.");
+    m.def("carried_kappa", &carried_kappa_of, nb::arg("p"), nb::arg("share"),
+          "kappa = 1/m + share sum psi_d,i^2 / M_i of the ball of p carried with the bar, "
+          "the force that moves it per unit of relative acceleration, with the share of the "
+          "reaction on the bar (1: reciprocal; its inverse is the impact's effective mass "
+          "m_eff).");
     m.def("dashpots", &dashpot_rows, nb::arg("p"),
           "(l, c): the bar's dashpots on regime_stack's state z, the power they dissipate "
           "sum_d c_d (l_d . z)^2 (RK4's stage power): each mode's on its velocity u_i', a "

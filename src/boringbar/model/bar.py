@@ -519,17 +519,6 @@ class SteppedBar:
                                 "bar_length_m": self.length_m})
 
 
-def impact_mass(ball_mass_kg: float, psi_damper, modal_mass_kg) -> float:
-    """m_eff (kg) of a ball of ``ball_mass_kg`` against the modes of shapes ``psi_damper``
-    at the cavity and masses ``modal_mass_kg``: 1 / (1/m + sum psi_d^2 / M), the inverse
-    of the carrying term at the reaction's full share (docs/model.md, section 2.4)."""
-    share = 0.0  # in Python floats, summed left to right from 0 as NumPy sums so few
-    for psi, mass in zip(np.asarray(psi_damper).tolist(), np.asarray(modal_mass_kg).tolist(),
-                         strict=True):
-        share += psi * psi / mass
-    return 1.0 / (1.0 / ball_mass_kg + share)
-
-
 #: How many (bar, modes, positions) :func:`kept_modal_model` keeps.
 MODAL_CACHE_SIZE = 256
 

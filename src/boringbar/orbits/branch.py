@@ -18,7 +18,6 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from boringbar._validate import ParameterError, check_range
-from boringbar.model.bar import impact_mass
 from boringbar.orbits.shooting import (
     Flow,
     OrbitRefused,
@@ -26,7 +25,9 @@ from boringbar.orbits.shooting import (
     ball_scales,
     check_residual,
     newton_step,
+    packed,
 )
+from boringbar.simulate.kernels import impact_mass
 
 #: The parameters a branch can follow (the CLI's names).
 PARAMETERS = ("force-n", "ratio", "gap-mm", "restitution", "friction-force-n", "ball-mass-g")
@@ -67,8 +68,9 @@ def flow_with(fl: Flow, name: str, value: float, ref: Flow) -> Flow:
     if name == "ball-mass-g":
         m = value * 1e-3
         # (a rolling ball's floor friction mu m g scales with its mass)
-        return dataclasses.replace(fl, m=m, meff=impact_mass(m, fl.psi_d, fl.M),
-                                   mus_n=fl.mus_n * m / fl.m, muk_n=fl.muk_n * m / fl.m)
+        moved = dataclasses.replace(fl, m=m, mus_n=fl.mus_n * m / fl.m,
+                                    muk_n=fl.muk_n * m / fl.m)
+        return dataclasses.replace(moved, meff=impact_mass(packed(moved)))
     raise ParameterError(f"parameter = {name!r} is not one of {', '.join(PARAMETERS)}")
 
 

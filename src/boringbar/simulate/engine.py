@@ -20,7 +20,6 @@ from boringbar._validate import (
     check_int,
     check_range,
 )
-from boringbar.model.bar import impact_mass
 from boringbar.model.contact import hertz_contact_time_s
 from boringbar.model.dampers import GRAVITY, ImpactDamper, TunedMassDamper, spin_gain
 from boringbar.model.forcing import Harmonic, Regenerative
@@ -30,7 +29,9 @@ from boringbar.simulate.kernels import (
     BMAX,
     Records,
     Steps,
+    carried_kappa,
     hunt_crossley_alpha,
+    impact_mass,
     run_exact,
     run_rk4,
     run_rk4_batch,
@@ -126,7 +127,7 @@ def _pack_system(system: System) -> np.ndarray:
         p[L.FRICTION] = d.friction_force_n
         p[L.STATIC_FRICTION] = d.static_friction_force_n
         p[L.REACTION] = 1.0 if d.friction.reaction == "reciprocal" else -1.0
-        p[L.M_EFF] = system_impact_mass(system)
+        p[L.M_EFF] = impact_mass(p)  # the core's carrying term, inverted
         if rolling(system):
             p[L.ROLL] = 1.0
             p[L.ROLL_STATIC], p[L.ROLL_KINETIC] = roll_forces(d)
@@ -154,8 +155,9 @@ def roll_band(p: np.ndarray, d: ImpactDamper, dt: float) -> float:
 
 
 def system_impact_mass(system: System) -> float:
-    """m_eff (kg) of the system's ball against the retained modes at the cavity."""
-    return impact_mass(system.damper.mass_kg, system.bar.psi_damper, system.bar.mass_kg)
+    """m_eff (kg) of the system's ball against the retained modes at the cavity, as the
+    kernels take it (:func:`system_params`)."""
+    return float(system_params(system)[L.M_EFF])
 
 
 def hold_band(p: np.ndarray, dt: float) -> float:
@@ -163,8 +165,7 @@ def hold_band(p: np.ndarray, dt: float) -> float:
     change y' by in one step while the ball can be held, (F_c + F_s) dt / m_eff, so that a
     slide coming to rest ends a step inside it."""
     if p[L.REACTION] < 0:
-        kappa = 1.0 / p[L.BALL_MASS] - (1.0 / p[L.M_EFF] - 1.0 / p[L.BALL_MASS])
-        if kappa <= 0:
+        if carried_kappa(p, p[L.REACTION]) <= 0:
             raise ParameterError("stick_law = 'hold' with the printed friction reaction needs "
                                  "a ball lighter than its share of the bar's modal mass; use "
                                  "stick_law = 'sgn'")

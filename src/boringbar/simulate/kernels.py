@@ -15,6 +15,8 @@ package packs what the core cannot compute itself and calls it:
 - :func:`regime_matrix`, :func:`impact_matrix_of`: the equations of motion as matrices,
   built from the definitions the integrators step with (for shooting, in
   :mod:`boringbar.orbits`);
+- :func:`carried_kappa`, :func:`impact_mass`: the ball's carrying term and the impact's
+  effective mass, from the core;
 - :func:`hunt_crossley_alpha`: a Hertz contact's damping for a restitution;
 - :func:`cut_history_map`: a periodic cut orbit's linearised map on its delay history
   (its Floquet multipliers, in :mod:`boringbar.orbits.cut_orbits`).
@@ -147,6 +149,20 @@ def impact_matrix_of(p: np.ndarray) -> np.ndarray:
     return core.impact_matrix(np.ascontiguousarray(p, float))
 
 
+def carried_kappa(p: np.ndarray, share: float) -> float:
+    """kappa = 1/m + share sum psi_d,i^2 / M_i (1/kg) of the ball of the packed ``p``
+    carried with the bar, with the ``share`` of the reaction on it (1: reciprocal): the
+    force that moves it per unit of relative acceleration, from the core's equations of
+    motion (which hold and roll the ball with it)."""
+    return core.carried_kappa(np.ascontiguousarray(p, float), float(share))
+
+
+def impact_mass(p: np.ndarray) -> float:
+    """m_eff (kg) of an impact of the ball of the packed ``p`` (docs/model.md, 2.4): the
+    inverse of its carrying term at the reaction's full share."""
+    return 1.0 / carried_kappa(p, 1.0)
+
+
 @functools.lru_cache(maxsize=256)
 def hunt_crossley_alpha(restitution: float) -> float:
     """alpha = chi v_in of the Hunt-Crossley damping whose free impact restores
@@ -171,6 +187,7 @@ def cut_history_map(d, cols, base, weights, c, cv, v, periods: int) -> np.ndarra
                                 np.ascontiguousarray(v, dtype=float), int(periods))
 
 
-__all__ = ["BMAX", "Records", "Steps", "cut_history_map", "hunt_crossley_alpha",
-           "hunt_crossley_restitution", "impact_matrix_of", "prepare", "regime_matrix",
-           "run_exact", "run_rk4", "run_rk4_batch"]
+__all__ = ["BMAX", "Records", "Steps", "carried_kappa", "cut_history_map",
+           "hunt_crossley_alpha", "hunt_crossley_restitution", "impact_mass",
+           "impact_matrix_of", "prepare", "regime_matrix", "run_exact", "run_rk4",
+           "run_rk4_batch"]
