@@ -86,6 +86,11 @@ def workloads():
         # paper preset, no friction: every step one affine map (linmap.hpp)
         return rk4(paper, bb.Harmonic(10.0, 1.0), 10.0)
 
+    def harmonic_map_history():
+        # the same with simulate's default history (20000 rows: one every 500 steps)
+        return result(bb.simulate(paper, bb.Harmonic(10.0, 1.0), duration_s=10.0,
+                                  integrator="rk4"))
+
     def harmonic_stick():
         # a sticking ball with friction: the four RK4 stages at most steps
         return rk4(stick, bb.Harmonic(10.0, 1.0), 5.0)
@@ -122,7 +127,8 @@ def workloads():
                       execution=Execution("serial"))
         return digest(ds["min_chatter_free_depth_m"].values)
 
-    return {"cut": cut, "harmonic_map": harmonic_map, "harmonic_stick": harmonic_stick,
+    return {"cut": cut, "harmonic_map": harmonic_map,
+            "harmonic_map_history": harmonic_map_history, "harmonic_stick": harmonic_stick,
             "exact": exact, "contact": contact, "modes5": modes5, "modes5_cut": modes5_cut,
             "tmd5": tmd5, "rolling": rolling_small, "lobes": lobes}
 

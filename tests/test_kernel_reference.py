@@ -22,9 +22,11 @@ import sys
 from pathlib import Path
 
 import kernel_reference as kr
+import numpy as np
 import pytest
 
-from boringbar.simulate.kernels import prepare
+from boringbar.simulate import layout as L
+from boringbar.simulate.kernels import impact_mass, prepare
 from boringbar.simulate.regimes import setup_fields, system_regimes
 
 NAMES = kr.names()
@@ -39,6 +41,22 @@ def test_the_reference_covers_every_entry_point(reference):
     cases, _ = reference
     entries = {str(c["entry"]) for c in cases.values()}
     assert entries == {"rk4", "rk4_batch", "exact"}
+
+
+def test_the_stored_impact_masses_are_the_cores_carrying_term(reference):
+    """Every stored ball's m_eff (p[M_EFF]) is the inverse of the core's carrying term at
+    the full share, bit for bit, as the packing computes it now: the reference's inputs
+    are what simulate packs (229 parameter vectors; a changed rounding of the carrying term
+    would move every impacting run's bits)."""
+    cases, _ = reference
+    checked = 0
+    for name, case in cases.items():
+        P = kr.current_params(case["P" if "P" in case else "p"], case["_param_names"])
+        for p in np.atleast_2d(P):
+            if p[L.BALL_MASS] > 0 and int(p[L.CASE]) in (L.BALL, L.LOCKED):
+                assert impact_mass(p) == p[L.M_EFF], name
+                checked += 1
+    assert checked > 200
 
 
 @pytest.mark.parametrize("name", NAMES)
