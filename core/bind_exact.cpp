@@ -13,7 +13,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <optional>
 #include <string>
 
 #include "bind_util.hpp"
@@ -185,10 +184,11 @@ void check_steps(Span1<idx> kstep, Span1<idx> levmax) {
 
 // The exact kernel's per-run matrices as prepare(p) sets them (boringbar.core.ExactSetup):
 // each regime's eigenvalues lam, eigenvectors V (Vh: for a real state, a conjugate pair's
-// first doubled and its second zero), their inverse Vi, the forced response Z and the steady response D to a unit F_b, the grid's exponentials eh, the
-// dashpots' rows lvis and constants cvis, the inverse sums isum, the modal inputs bq, the
-// derivative bounds bnd, the step patterns kstep and grid levels levmax; the regime count
-// nreg and the grid step h.
+// first doubled and its second zero), their inverse Vi, the forced response Z and the
+// steady response D to a unit F_b, the grid's exponentials eh, the dashpots' rows lvis
+// and constants cvis, the inverse sums isum, the modal inputs bq, the derivative bounds
+// bnd, the step patterns kstep and grid levels levmax; the regime count nreg and the grid
+// step h.
 struct ExactSetupPy {
     In<cplx> lam, V, Vh, Vi, Z, eh, isum, bq;
     In<double> D, lvis, cvis, bnd;
@@ -247,7 +247,7 @@ struct ExactRunPy {
     Out<double> x;
     double t0 = 0.0, t_end = 0.0, t_steady = 0.0, rec_dt = 0.0;
     Out<double> rec, imp, stick, strobe, met;
-    std::optional<ExactSetupPy> prep;
+    nb::object prep;  // prepare(p)'s ExactSetup, the object itself (its fields read at the run)
     double dt = 0.0, H = 0.0;
     In<cplx> tabE, tabP;  // a cut's tables; not set (or zeros of shape (1, 5, 1),
                           // (1, 5, 4, 1)): a harmonic run
@@ -286,8 +286,9 @@ double run_exact_py(const ExactRunPy& run) {
     a.met = span1<double>(given(r.met, "met"), "met", L::MET_SIZE);
     check_met(a.met);
 
-    require(r.prep.has_value(), "'prep' was not set");
-    attach_prep(a, *r.prep, s, t0, t_end);
+    require(r.prep.is_valid(), "'prep' was not set");
+    const ExactSetupPy setup = nb::cast<const ExactSetupPy&>(r.prep);  // its arrays held
+    attach_prep(a, setup, s, t0, t_end);
     attach_tables(a, r.tabE, r.tabP, s);
 
     nb::gil_scoped_release release;
@@ -343,12 +344,10 @@ void bind_exact(nb::module_& m) {
         .in("tabE", &ExactRunPy::tabE, "a cut's tables exp(lambda tau_p), (R, 5, nz) complex")
         .in("tabP", &ExactRunPy::tabP, "a cut's input tables, (R, 5, 4, nz) complex");
     run.def_prop_rw(
-        "prep", [](const ExactRunPy& r) { return r.prep; },
+        "prep", [](const ExactRunPy& r) { return r.prep.is_valid() ? r.prep : nb::none(); },
         [](ExactRunPy& r, nb::handle h) {
-            ExactSetupPy* g = nullptr;
-            require(nb::try_cast(h, g) && g != nullptr,
-                    "'prep' must be an ExactSetup (prepare(p)'s)");
-            r.prep = *g;
+            require(nb::isinstance<ExactSetupPy>(h), "'prep' must be an ExactSetup (prepare(p)'s)");
+            r.prep = nb::borrow(h);
         },
         nb::arg("value").none(), "prepare(p)'s ExactSetup: the regimes' matrices");
     m.def("run_exact", &run_exact_py, nb::arg("run"),

@@ -237,8 +237,9 @@ def test_a_refused_field_is_named(entry):
 
 def test_the_exact_setup_is_typed_field_by_field():
     """prepare's setup is a typed description as the runs are: a field refuses a value of
-    another type when it is set, naming it; a run refuses a setup with a field unset, and a
-    prep that is not a setup (a dict of its fields, as the setup once was)."""
+    another type when it is set, naming it; a run holds the setup it is given and reads its
+    fields when it starts; it refuses a setup with a field unset, and a prep that is not a
+    setup (a dict of its fields, as the setup once was)."""
     args = fresh("run_exact")
     setup = exact_setup(args["prep"])
     with pytest.raises(ValueError, match="'kstep' must be an int64 array; got dtype float64"):
@@ -249,6 +250,16 @@ def test_the_exact_setup_is_typed_field_by_field():
         setup.nreg = 2.5
     with pytest.raises(ValueError, match="'prep' must be an ExactSetup"):
         call("run_exact", {**args, "prep": setup_fields(setup).items()})
+    # the run holds the setup itself, and reads its fields when it starts
+    run = core.ExactRun()
+    run.prep = setup
+    assert run.prep is setup
+    setup.levmax = np.full_like(args["prep"]["levmax"], 9)
+    for name, value in args.items():
+        if name != "prep":
+            setattr(run, name, value)
+    with pytest.raises(ValueError, match="prep.levmax's entries must be in"):
+        core.run_exact(run)
     del args["prep"]["bnd"]
     with pytest.raises(ValueError, match="'bnd' was not set"):
         call("run_exact", args)

@@ -16,9 +16,15 @@ import pytest
 
 from boringbar import Harmonic, core, make_system
 from boringbar.orbits import shooting as sh
+from boringbar.orbits.branch import flow_with
 from boringbar.simulate import layout as L
 from boringbar.simulate import pack
-from boringbar.simulate.kernels import impact_matrix_of, regime_matrix
+from boringbar.simulate.kernels import (
+    carried_kappa,
+    impact_mass,
+    impact_matrix_of,
+    regime_matrix,
+)
 
 SYSTEMS = {
     "solid, 1 mode": lambda: make_system("solid", "paper", n_modes=1),
@@ -96,6 +102,32 @@ def test_shooting_reads_the_cores_matrices_for_a_changed_flow():
     A0, A1 = sh.augmented(fl, 1.0), sh.augmented(changed, 1.0)
     col = fl.N + 2  # the held friction force's column
     assert np.allclose(A1[:, col], 2 * A0[:, col], rtol=1e-14, atol=0)
+
+
+def test_the_carrying_term_is_the_cores_and_m_eff_its_inverse():
+    """kappa = 1/m + share sum psi_d^2 / M (docs/model.md, 2.4 and 2.7) from the core, against
+    the sum over three modes in NumPy; the packed m_eff is its inverse at the full share,
+    and a continuation in the ball's mass takes its m_eff from it too; a step to a
+    massless ball is a refused orbit, and the core refuses a massless ball or a share
+    that is not a number."""
+    system = SYSTEMS["ball with friction, 3 modes"]()
+    p = pack(system, 1000.0, 10.0, 1e-6)
+    m, psi, M = system.damper.mass_kg, system.bar.psi_damper, system.bar.mass_kg
+    for share in (1.0, -1.0, 0.5):
+        assert carried_kappa(p, share) == pytest.approx(1 / m + share * np.sum(psi**2 / M),
+                                                        rel=1e-14)
+    assert p[L.M_EFF] == impact_mass(p) == 1.0 / carried_kappa(p, 1.0)
+    fl = sh.make_flow(system, Harmonic(10.0, 1.0))
+    half = flow_with(fl, "ball-mass-g", m * 1e3 / 2, fl)
+    assert half.meff == pytest.approx(1 / (2 / m + np.sum(psi**2 / M)), rel=1e-14)
+    with pytest.raises(sh.OrbitRefused, match="positive mass"):
+        flow_with(fl, "ball-mass-g", -1.0, fl)
+    q = p.copy()
+    q[L.BALL_MASS] = 0.0
+    with pytest.raises(ValueError, match="BALL_MASS"):
+        carried_kappa(q, 1.0)
+    with pytest.raises(ValueError, match="share"):
+        carried_kappa(p, math.nan)
 
 
 @pytest.mark.parametrize("bad, match", [

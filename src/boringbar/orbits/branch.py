@@ -67,6 +67,8 @@ def flow_with(fl: Flow, name: str, value: float, ref: Flow) -> Flow:
         return dataclasses.replace(fl, fc=value, fs=value * ratio)
     if name == "ball-mass-g":
         m = value * 1e-3
+        if not m > 0.0:  # (a predictor's step past zero: no ball to carry)
+            raise OrbitRefused(f"ball-mass-g = {value:.6g}: a ball needs a positive mass")
         # (a rolling ball's floor friction mu m g scales with its mass)
         moved = dataclasses.replace(fl, m=m, mus_n=fl.mus_n * m / fl.m,
                                     muk_n=fl.muk_n * m / fl.m)

@@ -127,12 +127,11 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
     fl, name, ref, k = w.fl, w.name, w.ref, w.periods
     h = min(w.step, w.max_step)
     while len(br.points) < w.max_points:
-        slow = False
         try:
             yn, prn, its = correct(fl, name, ref, y + h * t * w.scale, t, w.scale, k)
             same = event_kinds(prn.events) == event_kinds(br.points[-1].events)
         except OrbitRefused as err:
-            yn, same, why, slow = None, False, str(err), isinstance(err, SlowImpact)
+            yn, same, why = None, False, str(err)
         far = yn is not None and np.linalg.norm((yn - y) / w.scale) > 2.0 * h
         if far and same:
             # the corrector went to another orbit, far from the prediction: as a failure
@@ -142,19 +141,17 @@ def march(w: Walk, br: Branch, y: np.ndarray, t: np.ndarray) -> Branch:
             if located is None and h / 2 >= w.min_step:
                 h /= 2
                 continue
-            if located is None and slow:
-                # an impact slowed below the capture threshold within the smallest step:
-                # it vanishes there, at its grazing as the model resolves it (the impact's
-                # speed falls to zero at the grazing; below the threshold the simulation
-                # catches the ball on the wall)
+            slowed = (_slowed_impact(w, br, y + h * t * w.scale)
+                      if located is None and h / 2 < w.min_step else None)
+            if slowed is not None:
                 located = (None, abs(h * t[-1] * w.scale[-1]))
             if located is None:
                 br.stop = (f"failure at {name} = {y[-1]:.10g}: {why} (step {h:.2g} of the "
                            "range)")
                 return br
             kind = _boundary(br, w, located)
-            if slow:
-                br.stop += f"; one step on, {why}"
+            if slowed is not None:
+                br.stop += f"; one step on, {slowed}"
             moved = _move_section(br, w, t) if kind == "section" and w.move_section else None
             if moved is None:
                 return br
@@ -255,6 +252,25 @@ def _sequence_change(w: Walk, y, t, h: float, yn, far: bool):
     if h / 2 >= w.min_step:
         return None
     return _beyond(w, y, y[-1] + 4.0 * h * t[-1] * w.scale[-1])
+
+
+def _slowed_impact(w: Walk, br: Branch, pred) -> SlowImpact | None:
+    """The impact of the last orbit that slows below the capture threshold one smallest
+    step on, or None: the map from the prediction ``pred`` (no Newton iterate, which may
+    wander) refused at an impact of the last orbit's kind and time (to 1e-3 of the
+    period).  Its speed falls to zero at its grazing, and below the threshold the
+    simulation catches the ball: the branch ends at that grazing as the model resolves
+    it.  Any other refusal is a failure."""
+    try:
+        residual(w.fl, w.name, w.ref, pred[:-1], pred[-1], w.periods)
+    except SlowImpact as err:
+        tol = 1e-3 * 2 * math.pi / w.fl.omega
+        if any(kind == err.kind and abs(te - err.t) <= tol
+               for te, kind in br.points[-1].events):
+            return err
+    except OrbitRefused:
+        pass
+    return None
 
 
 def _beyond(w: Walk, y, p_far: float):

@@ -66,7 +66,12 @@ class OrbitRefused(ValueError):
 class SlowImpact(OrbitRefused):
     """An impact slower than the capture threshold: the simulation takes it as the ball
     caught on the wall (wall contact, a Zeno sequence), which the shooting refuses.  A
-    branch meets one as an impact vanishes at a grazing, its speed falling to zero."""
+    branch meets one as an impact vanishes at a grazing, its speed falling to zero.
+    ``t`` and ``kind``: the impact's time in the map's span and its event kind."""
+
+    def __init__(self, message: str, t: float, kind: str):
+        super().__init__(message)
+        self.t, self.kind = t, kind
 
 
 @dataclass(frozen=True)
@@ -446,7 +451,7 @@ def _impact(fl, kind, z, J, t, f_minus, regime):
     x = z[:N]
     if abs(x[j + 1]) <= fl.v_impact:
         raise SlowImpact(f"impact at t = {t:.6g} s slower than the capture threshold "
-                           f"({abs(x[j + 1]):.3g} m/s): wall contact/Zeno (refused)")
+                         f"({abs(x[j + 1]):.3g} m/s): wall contact/Zeno (refused)", t, kind)
     wall = 1.0 if kind == "impact+" else -1.0
     R = impact_matrix(fl)
     xp = R @ x

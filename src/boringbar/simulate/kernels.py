@@ -102,6 +102,9 @@ def run_rk4_batch(P, X, steps: Steps, out: Records) -> None:
     harmonic run of the same mode count and case, at most :data:`BMAX` rows, each advanced
     as :func:`run_rk4` would (the same bits); ``out``'s arrays with one leading row per
     run."""
+    if steps.record_every or out.modes is not None or out.contact is not None:
+        raise ValueError("run_rk4_batch keeps no history, no modes' extremes and no contact "
+                         "rows (run_rk4's)")
     run = core.RK4Batch()
     run.P, run.x, run.t0, run.dt = P, X, steps.t0, steps.dt
     run.n_steps, run.steady_start = steps.n_steps, steps.steady_start
@@ -116,14 +119,16 @@ def run_exact(p, x, steps: Steps, out: Records, prep=None) -> float:
     regenerative cut's history step is H = tau / ceil(tau / dt); a cut stopped at its
     first zero finishes that step of dt, the unit of N_ZERO_STEPS.  Returns the time
     reached."""
+    if out.modes is not None or out.contact is not None:
+        raise ValueError("run_exact keeps no modes' extremes and no contact rows (RK4's)")
     run = core.ExactRun()
-    run.prep = prepare(p) if prep is None else prep
+    run.prep = setup = prepare(p) if prep is None else prep
     t0, dt = steps.t0, steps.dt
     if int(p[L.FORCING]) == L.REGENERATIVE:
         if not dt > 0.0:
             raise ValueError(f"exact integrator: a regenerative cut needs dt > 0, not {dt}")
         run.H = history_step(float(p[L.TAU]), float(dt))
-        run.tabE, run.tabP = cut_tables(run.prep, p, run.H)
+        run.tabE, run.tabP = cut_tables(setup, p, run.H)
     run.p, run.x, run.t0 = p, x, t0
     run.t_end, run.t_steady = t0 + steps.n_steps * dt, t0 + steps.steady_start * dt
     run.rec_dt = steps.record_every * dt
