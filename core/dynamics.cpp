@@ -189,6 +189,12 @@ R::Params held(R::Params q) {
 // and a rolling ball's rolled regime; one regime for the others; a cut doubles them (out
 // of the cut, then in it).  A rolling ball's free regime is the sliding ball's: slipping,
 // the floor's friction joins F_b.
+// The length of the exact integrator's state z: the bar's u, u', and the absorber's x_a,
+// x_a' (a ball's y, y' and spin are its own, outside z).
+int exact_state_size(const R::Shape<0, -1>& sh) {
+    return sh.tmd() ? 2 * sh.n() + 2 : 2 * sh.n();
+}
+
 nb::tuple regime_stack(const P& p) {
     R::Params q = params_of(p, false);  // each regime sets its own friction law
     const bool roll = q.roll.on;
@@ -196,7 +202,7 @@ nb::tuple regime_stack(const P& p) {
     q.fric.hold = false;
     R::set_friction(q, 1.0);
     const R::Shape<0, -1> sh(q);
-    const int n = sh.n(), nz = sh.tmd() ? 2 * n + 2 : 2 * n;
+    const int n = sh.n(), nz = exact_state_size(sh);
     std::vector<ExactRegime> regimes{{q, 0.0, sh.ball()}};
     if (sh.ball()) {
         regimes.push_back({held(q), 0.0, false});
@@ -224,7 +230,7 @@ nb::tuple regime_stack(const P& p) {
 nb::tuple dashpot_rows(const P& p) {
     const R::Params q = params_of(p, false);
     const R::Shape<0, -1> sh(q);
-    const int n = sh.n(), nz = sh.tmd() ? 2 * n + 2 : 2 * n, nd = R::dashpot_count(sh);
+    const int nz = exact_state_size(sh), nd = R::dashpot_count(sh);
     Matrix l = zeros(size_t(nd), size_t(nz));
     std::vector<double> c(size_t(nd), 0.0);
     R::dashpots(q, sh, nz, l.data(), c.data());
