@@ -202,7 +202,7 @@ nb::tuple regime_stack(const P& p) {
     q.fric.hold = false;
     R::set_friction(q, 1.0);
     const R::Shape<0, -1> sh(q);
-    const int n = sh.n(), nz = exact_state_size(sh);
+    const int nz = exact_state_size(sh);
     std::vector<ExactRegime> regimes{{q, 0.0, sh.ball()}};
     if (sh.ball()) {
         regimes.push_back({held(q), 0.0, false});
