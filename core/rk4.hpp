@@ -22,6 +22,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <type_traits>
 
 #include "arrays.hpp"
 #include "compiler.hpp"
@@ -34,9 +36,10 @@
 // On x86-64 (GCC, Clang) the specialised kernels are compiled for AVX2 (rk4_avx2.cpp,
 // rk4_avx2_many.cpp) and run where the CPU has it: the same IEEE operations in the same
 // order as the baseline ISA's, so the same bits on every CPU (FMA, which would round
-// differently, is not enabled; -ffp-contract=off).  AVX2 gives the vector arithmetic
-// (VecMap) 4 lanes and 3-operand instructions: 1.09-1.14x through bb.simulate and
-// bb.lobes (benchmarks/bench_isa.py).  The kernel of a run-time shape is compiled for the
+// differently, is not enabled; -ffp-contract=off).  AVX2 gives 3-operand instructions:
+// 1.09-1.14x through bb.simulate and bb.lobes (benchmarks/bench_isa.py); and 4 lanes in
+// one register, which the one-mode ball's mapped step takes (WideMap: the paper preset's
+// map step 1.04x).  The kernel of a run-time shape is compiled for the
 // baseline ISA alone (SSE2, rk4.cpp), on every x86-64 CPU: its AVX2 copy gave 1.01-1.12x
 // for 9 s of compile (docs/performance.md, "Instruction-set copies").  An x86-64 CPU
 // without AVX2 (x86-64 CPUs have had it since 2013-2015, bar some low-end Pentiums and
@@ -387,6 +390,59 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
     }
 }
 
+// Four lanes as one 32-byte vector, for the AVX2 copy's mapped step (WideMap): one
+// instruction where v4's two pairs take two.  Its lanes do v4's operations in v4's order,
+// so the same bits.  (Built from v4 through memory, by reference: a 32-byte vector passed
+// by value outside AVX code would change the calling convention.)
+#ifdef BB_AVX2_CLONE
+typedef double v4w __attribute__((vector_size(32)));
+#else
+using v4w = v4;  // (WideMap's arithmetic as v4's, where no AVX2 copy is built)
+#endif
+BB_INLINE void widen(v4w& w, const v4& a) { std::memcpy(&w, &a, sizeof w); }
+
+// The one-mode ball's mapped step in lanes (u, u', y, y'), the order of X: the map's
+// increment rows and the damped velocity's stages, packed once per run from its VecMap.
+// The mode's row has zeros in the ball's columns (its skipped columns, map_increment), so
+// each lane's sum is map_increment's: adding a zero product moves at most a zero's sign.
+struct WideMap {
+    v4w S, C, F, P[4];
+    v4w vS, vC, vF, vP[2], wv;
+
+    explicit WideMap(const VecMap& vm) {
+        auto pair = [](v4w& w, v2 lo, v2 hi) { widen(w, v4{lo, hi}); };
+        pair(S, vm.dS[0], vm.dS[1]);
+        pair(C, vm.dC[0], vm.dC[1]);
+        pair(F, vm.fb[0].d[0], vm.fb[0].d[1]);
+        for (int j = 0; j < 4; ++j) pair(P[j], j < 2 ? vm.dP[0][j] : v2{0.0, 0.0}, vm.dP[1][j]);
+        widen(vS, vm.vS[0]);
+        widen(vC, vm.vC[0]);
+        widen(vF, vm.fb[0].v[0]);
+        widen(vP[0], vm.vP[0][0]);
+        widen(vP[1], vm.vP[0][1]);
+        widen(wv, vm.wv[0]);
+    }
+
+    // map_increment's dX, all four lanes at once
+    BB_ALWAYS_INLINE void increment(const double* X, MapIn z, double* dX) const {
+        v4w d = S * z.sn + C * z.cn + F * z.fz;
+        for (int j = 0; j < 4; ++j) d += P[j] * X[j];
+        for (int j = 0; j < 4; ++j) dX[j] = d[j];
+    }
+
+    // map_flows' Wv v^2 of the mode's velocity at stages 2-4 (lanes 0-2)
+    BB_ALWAYS_INLINE void stage_loss(const double* X, MapIn z, v4w& out) const {
+        v4w v = vS * z.sn + vC * z.cn + vF * z.fz;
+        v += vP[0] * X[0] + vP[1] * X[1];
+        out = wv * v * v;
+    }
+};
+// (in WideMap's place where the step is not its)
+struct NoWide {
+    NoWide() = default;
+    explicit NoWide(const VecMap&) {}
+};
+
 // The energy flows of a mapped step: the dashpots' loss (the RK4 weights on the stage
 // velocities squared, stages 2-4 in lanes), the force's work S (Fs . z) + C (Fc . z)
 // (lanes Fs, Fc), and for the ball sum_s b_s F_b,s y'_s and sum_s b_s F_b,s psi_d u'_s:
@@ -394,10 +450,10 @@ BB_INLINE void map_increment(Shape<N, CASE> sh, const VecMap& vm, const double* 
 // (F_b,s = +-F_b), the rows VecMap::fw of the pattern.  decoupled: as map_increment's.
 // ffl: in a rolling ball's pattern step, its floor friction as it slips, the same at
 // every stage, in the one-sign column (a step of one sign has it in z.fz).
-template <int N, int CASE>
+template <int N, int CASE, class Wide = NoWide>
 BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, Flows& fl,
                          const double* X, const double* dX, MapIn z, bool decoupled,
-                         double ffl = 0.0) {
+                         double ffl = 0.0, const Wide& wide = {}) {
     const double sn = z.sn, cn = z.cn, fz = z.fz;
     const FbCol& fbc = vm.fb[z.flips];
     const int n = sh.n(), nx = sh.nxm();
@@ -410,6 +466,12 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
     }
     v4 wvv[NV_MAX];  // Wv v^2 of velocity k at stages 2-4
     for (int i = 0; i < n; ++i) {
+        if constexpr (std::is_same_v<Wide, WideMap>) {  // the one-mode ball's, in one vector
+            v4w o;
+            wide.stage_loss(X, z, o);
+            std::memcpy(&wvv[i], &o, sizeof o);
+            continue;
+        }
         v4 v = vm.vS[i] * sn + vm.vC[i] * cn + fbc.v[i] * fz;
         if (ffl != 0.0) v += vm.fb[0].v[i] * ffl;
         if (sh.diag()) {
@@ -447,7 +509,9 @@ BB_INLINE void map_flows(const Params& q, Shape<N, CASE> sh, const VecMap& vm, F
         fl.w_nr += (1.0 - q.fric.sr) * fz * g[1];
         // the floor friction's -ffl dy (its reaction is reciprocal: map_slips)
         if (ffl != 0.0) fl.d_fric -= ffl * dX[sh.iy()];
-    } else if (sh.ball()) {
+    } else if (sh.ball() && fz != 0.0) {
+        // (no friction force, a frictionless ball's: it does no work, and its terms are
+        // not formed; they would add zeros to sums that start at +0 and never reach -0)
         fl.d_fric -= fz * dX[sh.iy()];
         double pdu = 0.0;
         for (int i = 0; i < n; ++i) pdu += q.modes.pD[i] * dX[i];

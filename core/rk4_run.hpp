@@ -172,7 +172,7 @@ struct Cut {
     }
 };
 
-template <int N, int CASE, int FORCING>
+template <int N, int CASE, int FORCING, bool WIDE = false>
 BB_INLINE void run_body(const RunArgs& a) {
     Params q = unpack(a.p, a.dt);  // (q.contact.chi is set contact by contact)
     const Shape<N, CASE> sh(q);
@@ -217,6 +217,9 @@ BB_INLINE void run_body(const RunArgs& a) {
     const bool linear = !regen && !q.stage_loop;
     const VecMap mp = linear ? step_map(n, a.p, dt) : VecMap{};
     const VecMap mpr = linear && sh.rolls() ? step_map(n, a.p, dt, true) : VecMap{};
+    // the one-mode ball's mapped step in one 32-byte vector (the AVX2 copy: WideMap)
+    constexpr bool WIDE1 = WIDE && N == 1 && CASE == L::BALL;
+    const std::conditional_t<WIDE1, WideMap, NoWide> wide(mp);
     const bool check_fb = ball && q.fric.fc > 0.0;
     // a sliding ball that the sgn() law turns within a step: the sign patterns' maps
     const bool patterns =
@@ -317,7 +320,12 @@ BB_INLINE void run_body(const RunArgs& a) {
             use_map = true;
             turns = false;
         }
-        if (use_map) map_increment(sh, map, X, MapIn{sn, cn, fz}, dX, decoupled);
+        if (use_map) {
+            if constexpr (WIDE1)
+                wide.increment(X, MapIn{sn, cn, fz}, dX);
+            else
+                map_increment(sh, map, X, MapIn{sn, cn, fz}, dX, decoupled);
+        }
         // the map holds no contact force: a step in a compliant contact, or one that ends
         // in one, takes the stages
         if (use_map && hertz &&
@@ -333,7 +341,10 @@ BB_INLINE void run_body(const RunArgs& a) {
                 pattern_step(q, sh, mp, fl, X, dX, zp);
             }
         } else if (use_map) {
-            map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz}, decoupled);
+            if constexpr (WIDE1)
+                map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz}, true, 0.0, wide);
+            else
+                map_flows(q, sh, map, fl, X, dX, MapIn{sn, cn, fz}, decoupled);
             for (int j = 0; j < sh.nxm(); ++j) X[j] += dX[j];
             // (spin_after_map's, written out: the sliding ball's kernels, see ROLL_MAPS)
             if (rolls_now) {
@@ -498,7 +509,7 @@ struct Baseline {
 struct Avx2 {
     template <int N, int CASE, int FORCING>
     BB_TARGET_AVX2 static void run(const RunArgs& a) {
-        run_body<N, CASE, FORCING>(a);
+        run_body<N, CASE, FORCING, true>(a);
     }
 };
 #endif
