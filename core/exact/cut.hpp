@@ -85,7 +85,7 @@ inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp,
         state_at(s, tau, q, X);
         double f = cut_force(seg, tau, X, n, mk, s.f0, s.om);
         fmax = pymax(fmax, f);
-        auto [w, wd] = tip_w_wd(mk, X, n);
+        auto [w, wd] = psi_dot(mk, MK_PSI_L, X, n);
         double wdf = 0.0;  // psi_F . u', where the force works (W' but in an oriented cut)
         for (idx i = 0; i < n; ++i) wdf += mk(MK_PSI_F, i) * X[n + i];
         acc[0] += wg * f * wdf;
@@ -102,8 +102,7 @@ inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp,
             acc[4] += wg * f;
         }
         if (stick && sr != 1.0) {
-            double pdv = 0.0;
-            for (idx i = 0; i < n; ++i) pdv += mk(MK_PSI_D, i) * X[n + i];
+            const double pdv = psi_dot(mk, MK_PSI_D, X, n).second;
             acc[5] += wg * (1.0 - sr) * freq_rhs(X, f, n, mk, kappa) * pdv;
         }
     }

@@ -115,12 +115,7 @@ double cut_start(History& hs, Vec X, Mat mk, const CutConsts& cq, RunState& rs,
     const idx n = mk.n1;
     const double t0 = cq.t0, krb = cq.krb, feed = cq.feed, w_before = cq.w0;
     Knots& kn = hs.kn;
-    double w_ = 0.0;
-    double wd_ = 0.0;
-    for (idx i = 0; i < n; ++i) {
-        w_ += mk(MK_PSI_L, i) * X[i];
-        wd_ += mk(MK_PSI_L, i) * X[n + i];
-    }
+    const auto [w_, wd_] = psi_dot(mk, MK_PSI_L, X, n);
     kn(0, 0) = t0;
     kn(0, 1) = w_;
     kn(0, 2) = wd_;

@@ -50,23 +50,14 @@ namespace bb::exact {
 inline double g_value(idx kind, double tau, const SegView& s) {
     [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
     state_at(s, tau, q, X);
-    if (kind == EV_WEXT) {
-        double s = 0.0;
-        for (idx i = 0; i < n; ++i) s += mk(MK_PSI_L, i) * X[n + i];
-        return s;
-    }
+    if (kind == EV_WEXT) return psi_dot(mk, MK_PSI_L, X, n).second;  // W
     if (kind == EV_CUT || kind == EV_HEXT) {
-        auto [w, wd] = tip_w_wd(mk, X, n);
+        auto [w, wd] = psi_dot(mk, MK_PSI_L, X, n);
         auto [sv, sd] = surface_at(seg, tau);
         return kind == EV_CUT ? seg.cdir * (w - sv) : sd - wd;
     }
     if (kind <= EV_YEXT || kind == EV_SLIP) {
-        double pdu = 0.0;
-        double pdv = 0.0;
-        for (idx i = 0; i < n; ++i) {
-            pdu += mk(MK_PSI_D, i) * X[i];
-            pdv += mk(MK_PSI_D, i) * X[n + i];
-        }
+        auto [pdu, pdv] = psi_dot(mk, MK_PSI_D, X, n);
         if (kind == EV_PLUS || kind == EV_MINUS) {
             double y = ball_y(seg, tau, pdu);
             return kind == EV_PLUS ? y - seg.half : -seg.half - y;
@@ -135,9 +126,7 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
         return {sd - wd, sdd - wdd, nan};
     }
     if (kind == EV_PLUS || kind == EV_MINUS) {
-        double pdu = 0.0;
-        for (idx i = 0; i < n; ++i) pdu += mk(MK_PSI_D, i) * X[i];
-        double y = ball_y(seg, tau, pdu);
+        double y = ball_y(seg, tau, psi_dot(mk, MK_PSI_D, X, n).first);
         auto [yd, ydd] = ball_rates(seg, tau, mk, X, Xd, n);
         if (kind == EV_PLUS) return {y - seg.half, yd, ydd};
         return {-seg.half - y, -yd, -ydd};  // EV_MINUS
@@ -146,7 +135,7 @@ inline std::tuple<double, double, double> _gd(idx kind, double tau, const SegVie
     double f = f0 * std::sin(om * t);
     double fd = f0 * om * std::cos(om * t);
     if (seg.krb != 0.0) {
-        auto [w, wd] = tip_w_wd(mk, X, n);
+        auto [w, wd] = psi_dot(mk, MK_PSI_L, X, n);
         auto [sv, sd] = surface_at(seg, tau);
         f += seg.krb * (sv - w);
         fd += seg.krb * (sd - wd);

@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <tuple>
+#include <utility>
 
 #include "../arrays.hpp"
 #include "consts.hpp"
@@ -164,16 +165,16 @@ inline ncplx state_at(const SegView& s, double tau, CVec q, Vec X, ncplx* keep =
     return ph;
 }
 
-// The tip's displacement W and velocity W' of the modal state X (psi_L . u, psi_L . u'):
-// the sums in index order, as every caller had them.
-inline std::tuple<double, double> tip_w_wd(Mat mk, Vec X, idx n) {
-    double w = 0.0;
-    double wd = 0.0;
+// X[i] and X[n + i] weighed by row ``row`` of mk: psi . u and psi . u' (MK_PSI_L: the
+// tip's W and W'; MK_PSI_D: the ball's seat), the sums in index order.
+inline std::pair<double, double> psi_dot(Mat mk, idx row, Vec X, idx n) {
+    double u = 0.0;
+    double v = 0.0;
     for (idx i = 0; i < n; ++i) {
-        w += mk(MK_PSI_L, i) * X[i];
-        wd += mk(MK_PSI_L, i) * X[n + i];
+        u += mk(row, i) * X[i];
+        v += mk(row, i) * X[n + i];
     }
-    return {w, wd};
+    return {u, v};
 }
 
 // The force at the tip at ts + tau: F0 sin(Omega t), or Kr b (S(tau) - W) in a cut.
@@ -182,8 +183,7 @@ inline double cut_force(const Segment& seg, double tau, Vec X, idx n, Mat mk, do
                         double om, double sn = NAN) {
     double f = f0 * (sn == sn ? sn : std::sin(om * (seg.ts + tau)));
     if (seg.krb != 0.0) {
-        double w = 0.0;
-        for (idx i = 0; i < n; ++i) w += mk(MK_PSI_L, i) * X[i];
+        const double w = psi_dot(mk, MK_PSI_L, X, n).first;
         f += seg.krb * (std::get<0>(surface_at(seg, tau)) - w);
     }
     return f;

@@ -162,18 +162,6 @@ inline SegView view(Work& w, SegCtx c) {
 
 namespace kernel {
 
-// X[i] and X[n + i] weighed by row ``row`` of mk: psi . u and psi . u' (MK_PSI_L: W and
-// W'; MK_PSI_D: the ball's seat)
-inline std::pair<double, double> psi_dot(Mat mk, idx row, Vec X, idx n) {
-    double u = 0.0;
-    double v = 0.0;
-    for (idx i = 0; i < n; ++i) {
-        u += mk(row, i) * X[i];
-        v += mk(row, i) * X[n + i];
-    }
-    return {u, v};
-}
-
 // Re(V[r, j, :] q) over the evaluated eigen-coordinates, added to s one at a time in k's
 // order (a conjugate pair's second member is not evaluated: ks = 2)
 inline double add_modes(double s, CArr3 V, idx r, idx j, CVec q, idx nz, idx ks) {
