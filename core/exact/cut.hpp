@@ -86,8 +86,8 @@ inline double quad_cut(double a, double b, const SegView& s, const Dashpots& dp,
         double f = cut_force(seg, tau, X, n, mk, s.f0, s.om);
         fmax = pymax(fmax, f);
         auto [w, wd] = psi_dot(mk, MK_PSI_L, X, n);
-        double wdf = 0.0;  // psi_F . u', where the force works (W' but in an oriented cut)
-        for (idx i = 0; i < n; ++i) wdf += mk(MK_PSI_F, i) * X[n + i];
+        // psi_F . u', where the force works (W' but in an oriented cut)
+        const double wdf = psi_dot(mk, MK_PSI_F, X, n).second;
         acc[0] += wg * f * wdf;
         double dv = 0.0;
         for (idx d = 0; d < lvis.n0; ++d) {

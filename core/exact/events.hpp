@@ -50,7 +50,7 @@ namespace bb::exact {
 inline double g_value(idx kind, double tau, const SegView& s) {
     [[maybe_unused]] const auto& [seg, r, q0, cf, ks, q, X, Xd, n, mk, f0, om] = s;
     state_at(s, tau, q, X);
-    if (kind == EV_WEXT) return psi_dot(mk, MK_PSI_L, X, n).second;  // W
+    if (kind == EV_WEXT) return psi_dot(mk, MK_PSI_L, X, n).second;  // W'
     if (kind == EV_CUT || kind == EV_HEXT) {
         auto [w, wd] = psi_dot(mk, MK_PSI_L, X, n);
         auto [sv, sd] = surface_at(seg, tau);
