@@ -333,12 +333,7 @@ void bind_exact(nb::module_& m) {
         .real("t_end", &ExactRunPy::t_end, "the end time (s), >= t0")
         .real("t_steady", &ExactRunPy::t_steady, "the steady window's start (s)")
         .real("rec_dt", &ExactRunPy::rec_dt, "the history's sampling step (s); 0: none")
-        .out("rec", &ExactRunPy::rec, "the history rows (t, W, W', aux, aux', f), (n, 6); a "
-                                      "rolling ball's (n, 7) adds its spin")
-        .out("imp", &ExactRunPy::imp, "the impact rows (t, wall, y'-), (n, 3)")
-        .out("stick", &ExactRunPy::stick, "the stick intervals (start, end), (n, 2)")
-        .out("strobe", &ExactRunPy::strobe, "the Poincare rows (t, W, W', aux, aux'), (n, 5)")
-        .out("met", &ExactRunPy::met, "the metrics (MET_SIZE float64), updated in place")
+        .records()
         .real("dt", &ExactRunPy::dt, "a cut's step (s): the unit of N_ZERO_STEPS")
         .real("H", &ExactRunPy::H, "a cut's history step (s); 0 for harmonic forcing")
         .in("tabE", &ExactRunPy::tabE, "a cut's tables exp(lambda tau_p), (R, 5, nz) complex")

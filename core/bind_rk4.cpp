@@ -253,12 +253,7 @@ void bind_rk4(nb::module_& m) {
         .integer("steady_start", &RK4Run::steady_start,
                  "the first step of the steady part, in [0, n_steps]")
         .integer("rec_every", &RK4Run::rec_every, "a history row every this many steps; 0: none")
-        .out("rec", &RK4Run::rec, "the history rows (t, W, W', aux, aux', f), (n, 6); a "
-                                  "rolling ball's (n, 7) adds its spin")
-        .out("imp", &RK4Run::imp, "the impact rows (t, wall, y'-), (n, 3)")
-        .out("stick", &RK4Run::stick, "the stick intervals (start, end), (n, 2)")
-        .out("strobe", &RK4Run::strobe, "the Poincare rows (t, W, W', aux, aux'), (n, 5)")
-        .out("met", &RK4Run::met, "the metrics (MET_SIZE float64), updated in place")
+        .records()
         .out("buf", &RK4Run::buf,
              "a cut's delay history of W, W' ((rows, 2); (0, 2) for a harmonic run)")
         .out_or_none("modes", &RK4Run::modes,

@@ -255,6 +255,17 @@ struct Fields {
             (std::string(doc) + "\n\n" + type).c_str());
         return *this;
     }
+    // the records a single run writes, RK4's and the exact integrator's alike (the same
+    // rows: model.hpp): members rec, imp, stick, strobe and met of C
+    Fields& records() {
+        return out("rec", &C::rec,
+                   "the history rows (t, W, W', aux, aux', f), (n, 6); a rolling ball's (n, 7) "
+                   "adds its spin")
+            .out("imp", &C::imp, "the impact rows (t, wall, y'-), (n, 3)")
+            .out("stick", &C::stick, "the stick intervals (start, end), (n, 2)")
+            .out("strobe", &C::strobe, "the Poincare rows (t, W, W', aux, aux'), (n, 5)")
+            .out("met", &C::met, "the metrics (MET_SIZE float64), updated in place");
+    }
     Fields& real(const char* name, double C::*m, const char* doc) {
         cls.def_prop_rw(
             name, [m](const C& c) { return c.*m; },
