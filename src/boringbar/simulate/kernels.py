@@ -81,6 +81,13 @@ class Records:
     contact: np.ndarray | None = None
 
 
+def _write_records(run, out: Records) -> None:
+    """A single run's records (``core.RK4Run``'s and ``core.ExactRun``'s alike) from
+    ``out``."""
+    run.rec, run.imp, run.stick, run.strobe, run.met = (out.rec, out.imp, out.stick,
+                                                        out.strobe, out.met)
+
+
 def run_rk4(p, x, steps: Steps, out: Records, buf=None) -> None:
     """Advance ``x`` (in place) by ``steps`` of the published RK4 scheme, writing ``out``.
     ``buf``: a regenerative cut's circular history of W, W' at step ends, at least
@@ -89,8 +96,7 @@ def run_rk4(p, x, steps: Steps, out: Records, buf=None) -> None:
     run.p, run.x, run.t0, run.dt = p, x, steps.t0, steps.dt
     run.n_steps, run.steady_start, run.rec_every = (steps.n_steps, steps.steady_start,
                                                     steps.record_every)
-    run.rec, run.imp, run.stick, run.strobe, run.met = (out.rec, out.imp, out.stick,
-                                                        out.strobe, out.met)
+    _write_records(run, out)
     run.buf = _NO_HISTORY if buf is None else buf
     run.modes = out.modes
     run.contact = out.contact
@@ -132,8 +138,7 @@ def run_exact(p, x, steps: Steps, out: Records, prep=None) -> float:
     run.p, run.x, run.t0 = p, x, t0
     run.t_end, run.t_steady = t0 + steps.n_steps * dt, t0 + steps.steady_start * dt
     run.rec_dt = steps.record_every * dt
-    run.rec, run.imp, run.stick, run.strobe, run.met = (out.rec, out.imp, out.stick,
-                                                        out.strobe, out.met)
+    _write_records(run, out)
     run.dt = dt
     return core.run_exact(run)
 
